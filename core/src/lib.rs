@@ -1,0 +1,8 @@
+//! cadr core: the scene model, its loaders and generators, and the Vulkan renderer.
+//!
+//! Data flows from a [`scene::Scene`] (loaded by [`load`] or made by [`generate`]) through
+//! [`scene::flatten`] into draw items, which a [`render::Renderer`] draws with one of its
+//! techniques into an offscreen target via the thin Vulkan layer in [`vk`].
+
+pub mod scene;
+pub mod vk;

@@ -1,0 +1,250 @@
+//! The scene model: geometries with parts, materials, and a node hierarchy in which a node may
+//! be shared by several parents (a DAG). [`flatten`] turns it into one draw item per path to a
+//! drawable part.
+
+mod bounds;
+mod flatten;
+mod stats;
+
+pub use bounds::Aabb;
+pub use flatten::{flatten, DrawItem, FlatScene, Instance};
+pub use stats::SceneStats;
+
+use glam::DMat4;
+
+/// One vertex as the GPU reads it: position and normal, 24 bytes.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct Vertex {
+    /// Object-space position.
+    pub position: [f32; 3],
+    /// Object-space unit normal.
+    pub normal: [f32; 3],
+}
+
+/// A sub-range of a geometry's index buffer drawn with one material (a glTF primitive, a CSF
+/// geometry part).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Part {
+    /// First index in the geometry's index buffer.
+    pub first_index: u32,
+    /// Number of indices (a multiple of 3: triangle lists).
+    pub index_count: u32,
+}
+
+impl Part {
+    /// Number of triangles.
+    pub fn triangle_count(&self) -> u32 {
+        self.index_count / 3
+    }
+}
+
+/// Vertices, 32-bit triangle-list indices and the parts they are split into.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Geometry {
+    /// Name from the file or generator.
+    pub name: String,
+    /// Vertex data.
+    pub vertices: Vec<Vertex>,
+    /// Triangle-list indices into `vertices`.
+    pub indices: Vec<u32>,
+    /// Index ranges, each drawn with its own material.
+    pub parts: Vec<Part>,
+}
+
+impl Geometry {
+    /// Bounds of the vertices.
+    pub fn bounds(&self) -> Aabb {
+        Aabb::from_points(self.vertices.iter().map(|v| v.position))
+    }
+
+    /// Number of triangles over all parts.
+    pub fn triangle_count(&self) -> u64 {
+        self.parts.iter().map(|p| u64::from(p.triangle_count())).sum()
+    }
+}
+
+/// Surface parameters of a material (metallic-roughness, as glTF; Blinn-Phong hosts map onto it).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Material {
+    /// Name from the file or generator.
+    pub name: String,
+    /// Linear RGBA base color.
+    pub base_color: [f32; 4],
+    /// 0 = dielectric, 1 = metal.
+    pub metallic: f32,
+    /// 0 = mirror, 1 = fully rough.
+    pub roughness: f32,
+}
+
+impl Default for Material {
+    fn default() -> Self {
+        Self { name: "default".into(), base_color: [0.8, 0.8, 0.8, 1.0], metallic: 0.0, roughness: 0.5 }
+    }
+}
+
+/// Index of a node in [`Scene::nodes`].
+pub type NodeIndex = u32;
+
+/// A geometry drawn by a node, with one material per part.
+#[derive(Clone, Debug, PartialEq)]
+pub struct MeshRef {
+    /// Index in [`Scene::geometries`].
+    pub geometry: u32,
+    /// Material index for each part of the geometry (same length as its parts).
+    pub part_materials: Vec<u32>,
+}
+
+/// A node: a local transform (double precision), children, and optionally a mesh.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Node {
+    /// Name from the file or generator.
+    pub name: String,
+    /// Transform from this node's space to its parent's.
+    pub local: DMat4,
+    /// Child node indices (a child may have several parents).
+    pub children: Vec<NodeIndex>,
+    /// What the node draws, if anything.
+    pub mesh: Option<MeshRef>,
+}
+
+impl Node {
+    /// A node with an identity transform and nothing attached.
+    pub fn new(name: impl Into<String>) -> Self {
+        Self { name: name.into(), local: DMat4::IDENTITY, children: Vec::new(), mesh: None }
+    }
+}
+
+/// A whole scene.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Scene {
+    /// Name (file name or generator).
+    pub name: String,
+    /// Shared geometries.
+    pub geometries: Vec<Geometry>,
+    /// Materials.
+    pub materials: Vec<Material>,
+    /// All nodes.
+    pub nodes: Vec<Node>,
+    /// The nodes drawn at the top level.
+    pub roots: Vec<NodeIndex>,
+}
+
+/// A scene that breaks the model's rules; the message names the item and field.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+#[error("invalid scene: {0}")]
+pub struct SceneError(pub String);
+
+impl Scene {
+    /// Checks every reference and range: indices within vertices, parts within indices, node,
+    /// geometry and material references in range, finite values, no cycles in the node graph.
+    /// Everything downstream (flattening, rendering) relies on a validated scene.
+    pub fn validate(&self) -> Result<(), SceneError> {
+        let fail = |text: String| Err(SceneError(text));
+        for (g, geometry) in self.geometries.iter().enumerate() {
+            let vertex_count = geometry.vertices.len();
+            if let Some((i, v)) = geometry
+                .vertices
+                .iter()
+                .enumerate()
+                .find(|(_, v)| !v.position.iter().chain(&v.normal).all(|c| c.is_finite()))
+            {
+                return fail(format!("geometry {g} ('{}') vertex {i} is not finite: {v:?}", geometry.name));
+            }
+            if let Some((i, index)) =
+                geometry.indices.iter().enumerate().find(|(_, &x)| x as usize >= vertex_count)
+            {
+                return fail(format!(
+                    "geometry {g} ('{}') index {i} is {index}, but there are {vertex_count} vertices",
+                    geometry.name
+                ));
+            }
+            for (p, part) in geometry.parts.iter().enumerate() {
+                let end = u64::from(part.first_index) + u64::from(part.index_count);
+                if end > geometry.indices.len() as u64 || part.index_count % 3 != 0 {
+                    return fail(format!(
+                        "geometry {g} ('{}') part {p} covers indices {}..{end} (a multiple of 3 within {} indices is required)",
+                        geometry.name,
+                        part.first_index,
+                        geometry.indices.len()
+                    ));
+                }
+            }
+        }
+        for (m, material) in self.materials.iter().enumerate() {
+            let values = material.base_color.iter().chain([&material.metallic, &material.roughness]);
+            if !values.into_iter().all(|c| c.is_finite()) {
+                return fail(format!("material {m} ('{}') has a non-finite value", material.name));
+            }
+        }
+        for (n, node) in self.nodes.iter().enumerate() {
+            if !node.local.to_cols_array().iter().all(|c| c.is_finite()) {
+                return fail(format!("node {n} ('{}') has a non-finite matrix", node.name));
+            }
+            if let Some(&child) = node.children.iter().find(|&&c| c as usize >= self.nodes.len()) {
+                return fail(format!("node {n} ('{}') has child {child}, but there are {} nodes", node.name, self.nodes.len()));
+            }
+            if let Some(mesh) = &node.mesh {
+                let Some(geometry) = self.geometries.get(mesh.geometry as usize) else {
+                    return fail(format!("node {n} ('{}') uses geometry {}, but there are {}", node.name, mesh.geometry, self.geometries.len()));
+                };
+                if mesh.part_materials.len() != geometry.parts.len() {
+                    return fail(format!(
+                        "node {n} ('{}') gives {} part materials for geometry {} with {} parts",
+                        node.name,
+                        mesh.part_materials.len(),
+                        mesh.geometry,
+                        geometry.parts.len()
+                    ));
+                }
+                if let Some(&m) = mesh.part_materials.iter().find(|&&m| m as usize >= self.materials.len()) {
+                    return fail(format!("node {n} ('{}') uses material {m}, but there are {}", node.name, self.materials.len()));
+                }
+            }
+        }
+        if let Some(&root) = self.roots.iter().find(|&&r| r as usize >= self.nodes.len()) {
+            return fail(format!("root {root} is not a node (there are {})", self.nodes.len()));
+        }
+        if let Some(node) = self.find_cycle() {
+            return fail(format!("the node graph has a cycle through node {node} ('{}')", self.nodes[node as usize].name));
+        }
+        Ok(())
+    }
+
+    /// A node on a cycle of the child graph, if there is one (iterative three-colour DFS).
+    fn find_cycle(&self) -> Option<NodeIndex> {
+        #[derive(Clone, Copy, PartialEq)]
+        enum Mark {
+            New,
+            OnPath,
+            Done,
+        }
+        let mut marks = vec![Mark::New; self.nodes.len()];
+        let mut stack: Vec<(NodeIndex, usize)> = Vec::new();
+        for start in 0..self.nodes.len() as NodeIndex {
+            if marks[start as usize] != Mark::New {
+                continue;
+            }
+            marks[start as usize] = Mark::OnPath;
+            stack.push((start, 0));
+            while let Some((node, next_child)) = stack.last_mut() {
+                let children = &self.nodes[*node as usize].children;
+                if let Some(&child) = children.get(*next_child) {
+                    *next_child += 1;
+                    match marks.get(child as usize) {
+                        Some(Mark::OnPath) => return Some(child),
+                        Some(Mark::New) => {
+                            marks[child as usize] = Mark::OnPath;
+                            stack.push((child, 0));
+                        }
+                        _ => {}
+                    }
+                } else {
+                    marks[*node as usize] = Mark::Done;
+                    stack.pop();
+                }
+            }
+        }
+        None
+    }
+}

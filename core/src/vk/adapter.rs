@@ -1,0 +1,134 @@
+//! Choosing the physical device: a discrete GPU first, overridable by `CADR_DEVICE`.
+
+use ash::vk;
+
+use super::error::{VkError, VkResult, VkResultExt};
+use super::instance::Instance;
+
+/// The environment variable that overrides the device choice: a device index (as listed by
+/// `cadr devices`) or a case-insensitive substring of the device name.
+pub const DEVICE_ENV: &str = "CADR_DEVICE";
+
+/// A physical device that cadr can use, with the queue family it renders on.
+#[derive(Clone, Debug)]
+pub struct Adapter {
+    pub(crate) physical: vk::PhysicalDevice,
+    /// Index in the instance's device list.
+    pub index: usize,
+    /// The driver's device name.
+    pub name: String,
+    /// Discrete, integrated, virtual or CPU.
+    pub device_type: vk::PhysicalDeviceType,
+    /// The queue family with graphics and compute.
+    pub queue_family: u32,
+    /// The supported Vulkan version.
+    pub api_version: u32,
+}
+
+/// How a device is chosen.
+#[derive(Clone, Debug, Default)]
+pub enum DeviceChoice {
+    /// `CADR_DEVICE` if set, else the best device by type.
+    #[default]
+    Auto,
+    /// The device with this index.
+    Index(usize),
+    /// The first device whose name contains this text (case-insensitive).
+    NameContains(String),
+}
+
+impl DeviceChoice {
+    /// Parses a choice the way `CADR_DEVICE` is written: a number is an index, anything else a
+    /// name substring.
+    pub fn parse(text: &str) -> Self {
+        match text.trim().parse::<usize>() {
+            Ok(index) => Self::Index(index),
+            Err(_) => Self::NameContains(text.trim().to_owned()),
+        }
+    }
+
+    /// The choice from `CADR_DEVICE`, or `Auto` when it is unset or empty.
+    pub fn from_env() -> Self {
+        match std::env::var(DEVICE_ENV) {
+            Ok(text) if !text.trim().is_empty() => Self::parse(&text),
+            _ => Self::Auto,
+        }
+    }
+}
+
+fn type_rank(device_type: vk::PhysicalDeviceType) -> u32 {
+    match device_type {
+        vk::PhysicalDeviceType::DISCRETE_GPU => 0,
+        vk::PhysicalDeviceType::INTEGRATED_GPU => 1,
+        vk::PhysicalDeviceType::VIRTUAL_GPU => 2,
+        vk::PhysicalDeviceType::CPU => 3,
+        _ => 4,
+    }
+}
+
+/// Every physical device with a graphics+compute queue and Vulkan 1.3.
+pub fn enumerate(instance: &Instance) -> VkResult<Vec<Adapter>> {
+    // SAFETY: the instance is alive for the call.
+    let physicals = unsafe { instance.raw.enumerate_physical_devices() }
+        .or_vk("vkEnumeratePhysicalDevices")?;
+    let mut adapters = Vec::new();
+    for (index, physical) in physicals.into_iter().enumerate() {
+        // SAFETY: physical comes from this instance.
+        let properties = unsafe { instance.raw.get_physical_device_properties(physical) };
+        let name = properties
+            .device_name_as_c_str()
+            .map(|n| n.to_string_lossy().into_owned())
+            .unwrap_or_else(|_| format!("device {index}"));
+        // SAFETY: physical comes from this instance.
+        let families =
+            unsafe { instance.raw.get_physical_device_queue_family_properties(physical) };
+        let wanted = vk::QueueFlags::GRAPHICS | vk::QueueFlags::COMPUTE;
+        let Some(queue_family) = families.iter().position(|f| f.queue_flags.contains(wanted))
+        else {
+            continue;
+        };
+        if properties.api_version < vk::API_VERSION_1_3 {
+            continue;
+        }
+        adapters.push(Adapter {
+            physical,
+            index,
+            name,
+            device_type: properties.device_type,
+            queue_family: queue_family as u32,
+            api_version: properties.api_version,
+        });
+    }
+    Ok(adapters)
+}
+
+/// Picks a device according to `choice`.
+pub fn choose(instance: &Instance, choice: &DeviceChoice) -> VkResult<Adapter> {
+    let adapters = enumerate(instance)?;
+    let listing = || {
+        adapters.iter().map(|a| format!("{}: {}", a.index, a.name)).collect::<Vec<_>>().join(", ")
+    };
+    let choice = match choice {
+        DeviceChoice::Auto => DeviceChoice::from_env(),
+        other => other.clone(),
+    };
+    let chosen = match &choice {
+        DeviceChoice::Auto => adapters.iter().min_by_key(|a| (type_rank(a.device_type), a.index)),
+        DeviceChoice::Index(index) => adapters.iter().find(|a| a.index == *index),
+        DeviceChoice::NameContains(text) => {
+            let text = text.to_lowercase();
+            adapters.iter().find(|a| a.name.to_lowercase().contains(&text))
+        }
+    };
+    match chosen {
+        Some(adapter) => Ok(adapter.clone()),
+        None if adapters.is_empty() => Err(VkError::NoDevice(
+            " with Vulkan 1.3 and a graphics queue (install mesa-vulkan-drivers for a CPU device)"
+                .into(),
+        )),
+        None => Err(VkError::NoDevice(format!(
+            " matching {choice:?} (from {DEVICE_ENV} or the options); available: {}",
+            listing()
+        ))),
+    }
+}

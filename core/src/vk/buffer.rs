@@ -1,0 +1,150 @@
+//! Buffers with their memory, and uploads through a staging buffer.
+
+use std::sync::Arc;
+
+use ash::vk;
+use gpu_allocator::vulkan::{Allocation, AllocationCreateDesc, AllocationScheme};
+pub use gpu_allocator::MemoryLocation;
+
+use super::command::OneShot;
+use super::device::Device;
+use super::error::{VkError, VkResult, VkResultExt};
+
+/// A buffer and its memory; freed on drop.
+pub struct Buffer {
+    device: Arc<Device>,
+    raw: vk::Buffer,
+    allocation: Option<Allocation>,
+    size: u64,
+}
+
+impl Buffer {
+    /// Creates a buffer of `size` bytes in `location`, named `name`.
+    pub fn new(
+        device: &Arc<Device>,
+        name: &str,
+        size: u64,
+        usage: vk::BufferUsageFlags,
+        location: MemoryLocation,
+    ) -> VkResult<Self> {
+        let info = vk::BufferCreateInfo::default()
+            .size(size.max(4))
+            .usage(usage)
+            .sharing_mode(vk::SharingMode::EXCLUSIVE);
+        // SAFETY: info is valid and lives until the call returns.
+        let raw = unsafe { device.raw.create_buffer(&info, None) }.or_vk("vkCreateBuffer")?;
+        // From here on, Drop cleans up the buffer if allocation fails.
+        let mut buffer = Self { device: Arc::clone(device), raw, allocation: None, size };
+        // SAFETY: raw is a live buffer of this device.
+        let requirements = unsafe { device.raw.get_buffer_memory_requirements(raw) };
+        let allocation = device
+            .allocator()
+            .as_mut()
+            .ok_or_else(|| VkError::DeviceLost("buffer allocation after shutdown"))?
+            .allocate(&AllocationCreateDesc {
+                name,
+                requirements,
+                location,
+                linear: true,
+                allocation_scheme: AllocationScheme::GpuAllocatorManaged,
+            })
+            .map_err(|source| VkError::Allocation { what: name.to_owned(), source })?;
+        // SAFETY: the allocation satisfies the buffer's requirements and is not bound elsewhere.
+        let bound =
+            unsafe { device.raw.bind_buffer_memory(raw, allocation.memory(), allocation.offset()) };
+        buffer.allocation = Some(allocation);
+        bound.or_vk("vkBindBufferMemory")?;
+        device.set_name(raw, name);
+        Ok(buffer)
+    }
+
+    /// Creates a device-local buffer holding `data`, uploaded through a staging buffer.
+    pub fn with_data(
+        device: &Arc<Device>,
+        name: &str,
+        data: &[u8],
+        usage: vk::BufferUsageFlags,
+    ) -> VkResult<Self> {
+        let buffer = Self::new(
+            device,
+            name,
+            data.len() as u64,
+            usage | vk::BufferUsageFlags::TRANSFER_DST,
+            MemoryLocation::GpuOnly,
+        )?;
+        if data.is_empty() {
+            return Ok(buffer);
+        }
+        let mut staging = Self::new(
+            device,
+            &format!("{name} (staging)"),
+            data.len() as u64,
+            vk::BufferUsageFlags::TRANSFER_SRC,
+            MemoryLocation::CpuToGpu,
+        )?;
+        staging.write(0, data)?;
+        let mut one_shot = OneShot::begin(device, "staging upload")?;
+        let region = [vk::BufferCopy::default().size(data.len() as u64)];
+        // SAFETY: both buffers are alive until the submission below has completed.
+        unsafe {
+            device.raw.cmd_copy_buffer(one_shot.command_buffer(), staging.raw, buffer.raw, &region)
+        };
+        one_shot.submit_and_wait()?;
+        Ok(buffer)
+    }
+
+    /// Writes `data` at `offset` into a host-visible buffer.
+    pub fn write(&mut self, offset: u64, data: &[u8]) -> VkResult<()> {
+        let size = self.size;
+        let slice = self.mapped_mut()?;
+        let start = offset as usize;
+        let end = start + data.len();
+        if end as u64 > size {
+            return Err(VkError::Call { call: "Buffer::write (out of range)", result: vk::Result::ERROR_UNKNOWN });
+        }
+        slice[start..end].copy_from_slice(data);
+        Ok(())
+    }
+
+    /// The mapped bytes of a host-visible buffer.
+    pub fn mapped(&self) -> VkResult<&[u8]> {
+        let size = self.size as usize;
+        self.allocation
+            .as_ref()
+            .and_then(|a| a.mapped_slice())
+            .map(|s| &s[..size])
+            .ok_or(VkError::Call { call: "Buffer::mapped (not host-visible)", result: vk::Result::ERROR_MEMORY_MAP_FAILED })
+    }
+
+    fn mapped_mut(&mut self) -> VkResult<&mut [u8]> {
+        let size = self.size as usize;
+        self.allocation
+            .as_mut()
+            .and_then(|a| a.mapped_slice_mut())
+            .map(|s| &mut s[..size])
+            .ok_or(VkError::Call { call: "Buffer::write (not host-visible)", result: vk::Result::ERROR_MEMORY_MAP_FAILED })
+    }
+
+    /// The Vulkan handle.
+    pub fn raw(&self) -> vk::Buffer {
+        self.raw
+    }
+
+    /// Size in bytes.
+    pub fn size(&self) -> u64 {
+        self.size
+    }
+}
+
+impl Drop for Buffer {
+    fn drop(&mut self) {
+        // SAFETY: users keep buffers alive until the GPU is done with them (renderers wait on
+        // their frame fences before dropping); the handle is destroyed once.
+        unsafe { self.device.raw.destroy_buffer(self.raw, None) };
+        if let Some(allocation) = self.allocation.take() {
+            if let Some(allocator) = self.device.allocator().as_mut() {
+                let _ = allocator.free(allocation);
+            }
+        }
+    }
+}

@@ -1,0 +1,130 @@
+//! Command pools and one-shot submissions (uploads, readbacks).
+
+use std::sync::Arc;
+
+use ash::vk;
+
+use super::device::Device;
+use super::error::{VkResult, VkResultExt};
+
+/// A command pool with one primary command buffer and a fence: record, submit, wait.
+pub struct CommandContext {
+    device: Arc<Device>,
+    pool: vk::CommandPool,
+    command_buffer: vk::CommandBuffer,
+    fence: vk::Fence,
+}
+
+impl CommandContext {
+    /// Creates the pool, its command buffer and a signalled fence.
+    pub fn new(device: &Arc<Device>, name: &str) -> VkResult<Self> {
+        let pool_info = vk::CommandPoolCreateInfo::default()
+            .queue_family_index(device.queue_family())
+            .flags(vk::CommandPoolCreateFlags::TRANSIENT);
+        // SAFETY: pool_info is valid for this device.
+        let pool = unsafe { device.raw.create_command_pool(&pool_info, None) }
+            .or_vk("vkCreateCommandPool")?;
+        let mut context = Self {
+            device: Arc::clone(device),
+            pool,
+            command_buffer: vk::CommandBuffer::null(),
+            fence: vk::Fence::null(),
+        };
+        let alloc_info = vk::CommandBufferAllocateInfo::default()
+            .command_pool(pool)
+            .level(vk::CommandBufferLevel::PRIMARY)
+            .command_buffer_count(1);
+        // SAFETY: the pool is alive; one buffer is requested.
+        context.command_buffer = unsafe { device.raw.allocate_command_buffers(&alloc_info) }
+            .or_vk("vkAllocateCommandBuffers")?[0];
+        let fence_info = vk::FenceCreateInfo::default().flags(vk::FenceCreateFlags::SIGNALED);
+        // SAFETY: fence_info is valid.
+        context.fence =
+            unsafe { device.raw.create_fence(&fence_info, None) }.or_vk("vkCreateFence")?;
+        device.set_name(pool, &format!("{name} pool"));
+        device.set_name(context.command_buffer, name);
+        device.set_name(context.fence, &format!("{name} fence"));
+        Ok(context)
+    }
+
+    /// Waits for the previous submission, resets the pool and begins recording.
+    pub fn begin(&mut self) -> VkResult<vk::CommandBuffer> {
+        self.wait()?;
+        // SAFETY: the fence is signalled, so the GPU no longer uses the pool's buffers.
+        unsafe {
+            self.device.raw.reset_fences(&[self.fence]).or_vk("vkResetFences")?;
+            self.device
+                .raw
+                .reset_command_pool(self.pool, vk::CommandPoolResetFlags::empty())
+                .or_vk("vkResetCommandPool")?;
+        }
+        let begin =
+            vk::CommandBufferBeginInfo::default().flags(vk::CommandBufferUsageFlags::ONE_TIME_SUBMIT);
+        // SAFETY: the command buffer is reset and not in use.
+        unsafe { self.device.raw.begin_command_buffer(self.command_buffer, &begin) }
+            .or_vk("vkBeginCommandBuffer")?;
+        Ok(self.command_buffer)
+    }
+
+    /// Ends recording and submits; the fence signals when the GPU is done.
+    pub fn submit(&mut self) -> VkResult<()> {
+        // SAFETY: the command buffer is recording (begin was called).
+        unsafe { self.device.raw.end_command_buffer(self.command_buffer) }
+            .or_vk("vkEndCommandBuffer")?;
+        let buffers = [self.command_buffer];
+        let submit = [vk::SubmitInfo::default().command_buffers(&buffers)];
+        // SAFETY: the buffer is executable, the fence unsignalled; the queue is used from one
+        // thread at a time (Device users serialise submissions).
+        unsafe { self.device.raw.queue_submit(self.device.queue, &submit, self.fence) }
+            .or_vk("vkQueueSubmit")
+    }
+
+    /// Waits until the last submission has finished.
+    pub fn wait(&self) -> VkResult<()> {
+        // SAFETY: the fence belongs to this device.
+        unsafe { self.device.raw.wait_for_fences(&[self.fence], true, u64::MAX) }
+            .or_vk("vkWaitForFences")
+    }
+
+    /// The command buffer being recorded.
+    pub fn command_buffer(&self) -> vk::CommandBuffer {
+        self.command_buffer
+    }
+}
+
+impl Drop for CommandContext {
+    fn drop(&mut self) {
+        // SAFETY: waiting first makes sure the GPU no longer uses the buffer; the handles are
+        // destroyed once (null handles are ignored by Vulkan).
+        unsafe {
+            let _ = self.device.raw.wait_for_fences(&[self.fence], true, u64::MAX);
+            self.device.raw.destroy_fence(self.fence, None);
+            self.device.raw.destroy_command_pool(self.pool, None);
+        }
+    }
+}
+
+/// A command buffer for one transfer that is submitted and waited for at once.
+pub struct OneShot {
+    context: CommandContext,
+}
+
+impl OneShot {
+    /// Starts recording.
+    pub fn begin(device: &Arc<Device>, name: &str) -> VkResult<Self> {
+        let mut context = CommandContext::new(device, name)?;
+        context.begin()?;
+        Ok(Self { context })
+    }
+
+    /// The command buffer to record into.
+    pub fn command_buffer(&self) -> vk::CommandBuffer {
+        self.context.command_buffer()
+    }
+
+    /// Submits and waits until the GPU has finished.
+    pub fn submit_and_wait(&mut self) -> VkResult<()> {
+        self.context.submit()?;
+        self.context.wait()
+    }
+}

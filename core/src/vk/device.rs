@@ -1,0 +1,229 @@
+//! The logical device: queue, memory allocator, debug names and capability flags.
+
+use std::ffi::CString;
+use std::sync::{Arc, Mutex, MutexGuard};
+
+use ash::vk;
+use gpu_allocator::vulkan::{Allocator, AllocatorCreateDesc};
+
+use super::adapter::{self, Adapter, DeviceChoice};
+use super::error::{VkError, VkResult, VkResultExt};
+use super::instance::{Instance, InstanceOptions, ValidationLog};
+
+/// Optional device features cadr uses when present. Required ones (dynamic rendering,
+/// synchronization2) are not listed: a device without them is refused.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Capabilities {
+    /// `multiDrawIndirect`: many indirect draws in one call.
+    pub multi_draw_indirect: bool,
+    /// `drawIndirectFirstInstance`: per-draw indices through firstInstance.
+    pub draw_indirect_first_instance: bool,
+    /// `shaderDrawParameters`: gl_DrawID and gl_BaseInstance in shaders.
+    pub shader_draw_parameters: bool,
+    /// `bufferDeviceAddress`: GPU pointers to buffers.
+    pub buffer_device_address: bool,
+    /// `pipelineStatisticsQuery`.
+    pub pipeline_statistics_query: bool,
+    /// Timestamps are supported on the render queue.
+    pub timestamps: bool,
+}
+
+/// How to create a [`Device`].
+#[derive(Clone, Debug, Default)]
+pub struct DeviceOptions {
+    /// Instance options (validation layers, extra extensions).
+    pub instance: InstanceOptions,
+    /// Which physical device to use.
+    pub choice: DeviceChoice,
+}
+
+/// The Vulkan device everything else is created on. Child objects hold an `Arc<Device>`.
+pub struct Device {
+    pub(crate) instance: Arc<Instance>,
+    adapter: Adapter,
+    pub(crate) raw: ash::Device,
+    pub(crate) queue: vk::Queue,
+    allocator: Mutex<Option<Allocator>>,
+    debug_utils: Option<ash::ext::debug_utils::Device>,
+    capabilities: Capabilities,
+    limits: vk::PhysicalDeviceLimits,
+    queue_timestamp_bits: u32,
+}
+
+impl Device {
+    /// Creates an instance and a device according to `options`.
+    pub fn new(options: &DeviceOptions) -> VkResult<Arc<Self>> {
+        let instance = Arc::new(Instance::new(&options.instance)?);
+        Self::with_instance(instance, &options.choice)
+    }
+
+    /// Creates a device on an existing instance.
+    pub fn with_instance(instance: Arc<Instance>, choice: &DeviceChoice) -> VkResult<Arc<Self>> {
+        let adapter = adapter::choose(&instance, choice)?;
+        let physical = adapter.physical;
+        // SAFETY: physical comes from this instance.
+        let properties = unsafe { instance.raw.get_physical_device_properties(physical) };
+
+        let mut supported13 = vk::PhysicalDeviceVulkan13Features::default();
+        let mut supported12 = vk::PhysicalDeviceVulkan12Features::default();
+        let mut supported11 = vk::PhysicalDeviceVulkan11Features::default();
+        let mut supported = vk::PhysicalDeviceFeatures2::default()
+            .push_next(&mut supported13)
+            .push_next(&mut supported12)
+            .push_next(&mut supported11);
+        // SAFETY: physical comes from this instance; the chain lives on this stack frame.
+        unsafe { instance.raw.get_physical_device_features2(physical, &mut supported) };
+        let core = supported.features;
+        let (dynamic_rendering, synchronization2) =
+            (supported13.dynamic_rendering == vk::TRUE, supported13.synchronization2 == vk::TRUE);
+        if !dynamic_rendering || !synchronization2 {
+            return Err(VkError::Unsupported {
+                device: adapter.name.clone(),
+                reason: "Vulkan 1.3 dynamicRendering and synchronization2 are required".into(),
+            });
+        }
+        // SAFETY: physical comes from this instance.
+        let families =
+            unsafe { instance.raw.get_physical_device_queue_family_properties(physical) };
+        let queue_timestamp_bits = families[adapter.queue_family as usize].timestamp_valid_bits;
+        let capabilities = Capabilities {
+            multi_draw_indirect: core.multi_draw_indirect == vk::TRUE,
+            draw_indirect_first_instance: core.draw_indirect_first_instance == vk::TRUE,
+            shader_draw_parameters: supported11.shader_draw_parameters == vk::TRUE,
+            buffer_device_address: supported12.buffer_device_address == vk::TRUE,
+            pipeline_statistics_query: core.pipeline_statistics_query == vk::TRUE,
+            timestamps: queue_timestamp_bits > 0 && properties.limits.timestamp_period > 0.0,
+        };
+
+        let enabled_core = vk::PhysicalDeviceFeatures::default()
+            .multi_draw_indirect(capabilities.multi_draw_indirect)
+            .draw_indirect_first_instance(capabilities.draw_indirect_first_instance)
+            .pipeline_statistics_query(capabilities.pipeline_statistics_query);
+        let mut enabled13 =
+            vk::PhysicalDeviceVulkan13Features::default().dynamic_rendering(true).synchronization2(true);
+        let mut enabled12 = vk::PhysicalDeviceVulkan12Features::default()
+            .buffer_device_address(capabilities.buffer_device_address)
+            .host_query_reset(supported12.host_query_reset == vk::TRUE);
+        let mut enabled11 = vk::PhysicalDeviceVulkan11Features::default()
+            .shader_draw_parameters(capabilities.shader_draw_parameters);
+        let priorities = [1.0_f32];
+        let queue_info = [vk::DeviceQueueCreateInfo::default()
+            .queue_family_index(adapter.queue_family)
+            .queue_priorities(&priorities)];
+        let mut enabled = vk::PhysicalDeviceFeatures2::default()
+            .features(enabled_core)
+            .push_next(&mut enabled13)
+            .push_next(&mut enabled12)
+            .push_next(&mut enabled11);
+        let create_info =
+            vk::DeviceCreateInfo::default().queue_create_infos(&queue_info).push_next(&mut enabled);
+        // SAFETY: create_info and its chain live until the call returns; only supported
+        // features are enabled.
+        let raw = unsafe { instance.raw.create_device(physical, &create_info, None) }
+            .or_vk("vkCreateDevice")?;
+        // SAFETY: the family and index 0 were requested in create_info.
+        let queue = unsafe { raw.get_device_queue(adapter.queue_family, 0) };
+
+        let allocator = Allocator::new(&AllocatorCreateDesc {
+            instance: instance.raw.clone(),
+            device: raw.clone(),
+            physical_device: physical,
+            debug_settings: {
+                let mut settings = gpu_allocator::AllocatorDebugSettings::default();
+                settings.log_leaks_on_shutdown = true;
+                settings
+            },
+            buffer_device_address: capabilities.buffer_device_address,
+            allocation_sizes: gpu_allocator::AllocationSizes::default(),
+        })
+        .map_err(|source| VkError::Allocation { what: "the allocator itself".into(), source })?;
+        let debug_utils = instance
+            .debug_utils
+            .as_ref()
+            .map(|_| ash::ext::debug_utils::Device::new(&instance.raw, &raw));
+
+        let device = Arc::new(Self {
+            instance,
+            adapter,
+            raw,
+            queue,
+            allocator: Mutex::new(Some(allocator)),
+            debug_utils,
+            capabilities,
+            limits: properties.limits,
+            queue_timestamp_bits,
+        });
+        device.set_name(device.queue, "cadr render queue");
+        Ok(device)
+    }
+
+    /// The chosen physical device.
+    pub fn adapter(&self) -> &Adapter {
+        &self.adapter
+    }
+
+    /// Optional features that are enabled.
+    pub fn capabilities(&self) -> Capabilities {
+        self.capabilities
+    }
+
+    /// The device limits.
+    pub fn limits(&self) -> &vk::PhysicalDeviceLimits {
+        &self.limits
+    }
+
+    /// Nanoseconds per timestamp tick, and the number of valid timestamp bits.
+    pub fn timestamp_info(&self) -> (f64, u32) {
+        (f64::from(self.limits.timestamp_period), self.queue_timestamp_bits)
+    }
+
+    /// Validation messages recorded so far.
+    pub fn validation_log(&self) -> &Arc<ValidationLog> {
+        self.instance.validation_log()
+    }
+
+    /// The ash device, for code that needs raw Vulkan.
+    pub fn raw(&self) -> &ash::Device {
+        &self.raw
+    }
+
+    /// The queue family index of the render queue.
+    pub fn queue_family(&self) -> u32 {
+        self.adapter.queue_family
+    }
+
+    /// Locks the memory allocator.
+    pub(crate) fn allocator(&self) -> MutexGuard<'_, Option<Allocator>> {
+        self.allocator.lock().unwrap_or_else(|poisoned| poisoned.into_inner())
+    }
+
+    /// Gives `handle` a debug name (shown by validation messages and capture tools).
+    pub fn set_name<H: vk::Handle>(&self, handle: H, name: &str) {
+        let Some(debug_utils) = &self.debug_utils else { return };
+        let Ok(name) = CString::new(name.replace('\0', " ")) else { return };
+        let info = vk::DebugUtilsObjectNameInfoEXT::default().object_handle(handle).object_name(&name);
+        // SAFETY: handle is a live object of this device; info lives until the call returns.
+        // A failure only loses a debug name, so it is ignored.
+        let _ = unsafe { debug_utils.set_debug_utils_object_name(&info) };
+    }
+
+    /// Waits until the device is idle.
+    pub fn wait_idle(&self) -> VkResult<()> {
+        // SAFETY: the device is alive; the caller does not record concurrently on our queue.
+        unsafe { self.raw.device_wait_idle() }.or_vk("vkDeviceWaitIdle")
+    }
+}
+
+impl Drop for Device {
+    fn drop(&mut self) {
+        // SAFETY: every child object holds an Arc<Device>, so none is alive any more; waiting
+        // makes sure the GPU is done before memory and the device go away.
+        unsafe {
+            let _ = self.raw.device_wait_idle();
+        }
+        // The allocator frees its memory blocks through the device: drop it first.
+        drop(self.allocator().take());
+        // SAFETY: no child object remains (see above).
+        unsafe { self.raw.destroy_device(None) };
+    }
+}

@@ -1,0 +1,232 @@
+//! Images and the offscreen color + depth target, with readback to RGBA8.
+
+use std::sync::Arc;
+
+use ash::vk;
+use gpu_allocator::vulkan::{Allocation, AllocationCreateDesc, AllocationScheme};
+use gpu_allocator::MemoryLocation;
+
+use super::buffer::Buffer;
+use super::command::OneShot;
+use super::device::Device;
+use super::error::{VkError, VkResult, VkResultExt};
+
+/// A 2D image with one view; freed on drop.
+pub struct Image {
+    device: Arc<Device>,
+    raw: vk::Image,
+    view: vk::ImageView,
+    allocation: Option<Allocation>,
+    format: vk::Format,
+    extent: vk::Extent2D,
+}
+
+impl Image {
+    /// Creates a device-local 2D image with one mip level and a view of it.
+    pub fn new(
+        device: &Arc<Device>,
+        name: &str,
+        extent: vk::Extent2D,
+        format: vk::Format,
+        usage: vk::ImageUsageFlags,
+        aspect: vk::ImageAspectFlags,
+    ) -> VkResult<Self> {
+        let info = vk::ImageCreateInfo::default()
+            .image_type(vk::ImageType::TYPE_2D)
+            .format(format)
+            .extent(vk::Extent3D { width: extent.width, height: extent.height, depth: 1 })
+            .mip_levels(1)
+            .array_layers(1)
+            .samples(vk::SampleCountFlags::TYPE_1)
+            .tiling(vk::ImageTiling::OPTIMAL)
+            .usage(usage)
+            .sharing_mode(vk::SharingMode::EXCLUSIVE)
+            .initial_layout(vk::ImageLayout::UNDEFINED);
+        // SAFETY: info is valid and lives until the call returns.
+        let raw = unsafe { device.raw.create_image(&info, None) }.or_vk("vkCreateImage")?;
+        let mut image = Self {
+            device: Arc::clone(device),
+            raw,
+            view: vk::ImageView::null(),
+            allocation: None,
+            format,
+            extent,
+        };
+        // SAFETY: raw is a live image of this device.
+        let requirements = unsafe { device.raw.get_image_memory_requirements(raw) };
+        let allocation = device
+            .allocator()
+            .as_mut()
+            .ok_or(VkError::DeviceLost("image allocation after shutdown"))?
+            .allocate(&AllocationCreateDesc {
+                name,
+                requirements,
+                location: MemoryLocation::GpuOnly,
+                linear: false,
+                allocation_scheme: AllocationScheme::GpuAllocatorManaged,
+            })
+            .map_err(|source| VkError::Allocation { what: name.to_owned(), source })?;
+        // SAFETY: the allocation satisfies the image's requirements.
+        let bound =
+            unsafe { device.raw.bind_image_memory(raw, allocation.memory(), allocation.offset()) };
+        image.allocation = Some(allocation);
+        bound.or_vk("vkBindImageMemory")?;
+        let view_info = vk::ImageViewCreateInfo::default()
+            .image(raw)
+            .view_type(vk::ImageViewType::TYPE_2D)
+            .format(format)
+            .subresource_range(subresource_range(aspect));
+        // SAFETY: the image is bound to memory; view_info matches it.
+        image.view = unsafe { device.raw.create_image_view(&view_info, None) }
+            .or_vk("vkCreateImageView")?;
+        device.set_name(raw, name);
+        device.set_name(image.view, &format!("{name} view"));
+        Ok(image)
+    }
+
+    /// The Vulkan image.
+    pub fn raw(&self) -> vk::Image {
+        self.raw
+    }
+
+    /// The image view.
+    pub fn view(&self) -> vk::ImageView {
+        self.view
+    }
+
+    /// The pixel format.
+    pub fn format(&self) -> vk::Format {
+        self.format
+    }
+
+    /// Width and height.
+    pub fn extent(&self) -> vk::Extent2D {
+        self.extent
+    }
+}
+
+impl Drop for Image {
+    fn drop(&mut self) {
+        // SAFETY: owners wait for the GPU before dropping images; handles are destroyed once.
+        unsafe {
+            self.device.raw.destroy_image_view(self.view, None);
+            self.device.raw.destroy_image(self.raw, None);
+        }
+        if let Some(allocation) = self.allocation.take() {
+            if let Some(allocator) = self.device.allocator().as_mut() {
+                let _ = allocator.free(allocation);
+            }
+        }
+    }
+}
+
+/// The whole of a single-mip, single-layer image.
+pub fn subresource_range(aspect: vk::ImageAspectFlags) -> vk::ImageSubresourceRange {
+    vk::ImageSubresourceRange::default().aspect_mask(aspect).level_count(1).layer_count(1)
+}
+
+/// An image layout transition with synchronization2.
+pub fn transition(
+    device: &Device,
+    command_buffer: vk::CommandBuffer,
+    image: vk::Image,
+    aspect: vk::ImageAspectFlags,
+    (old_layout, src_stage, src_access): (vk::ImageLayout, vk::PipelineStageFlags2, vk::AccessFlags2),
+    (new_layout, dst_stage, dst_access): (vk::ImageLayout, vk::PipelineStageFlags2, vk::AccessFlags2),
+) {
+    let barrier = [vk::ImageMemoryBarrier2::default()
+        .src_stage_mask(src_stage)
+        .src_access_mask(src_access)
+        .dst_stage_mask(dst_stage)
+        .dst_access_mask(dst_access)
+        .old_layout(old_layout)
+        .new_layout(new_layout)
+        .image(image)
+        .subresource_range(subresource_range(aspect))];
+    let dependency = vk::DependencyInfo::default().image_memory_barriers(&barrier);
+    // SAFETY: command_buffer is recording; image is alive for the command buffer's lifetime.
+    unsafe { device.raw.cmd_pipeline_barrier2(command_buffer, &dependency) };
+}
+
+/// The color format of offscreen targets: 8-bit RGBA, read back as is.
+pub const COLOR_FORMAT: vk::Format = vk::Format::R8G8B8A8_UNORM;
+/// The depth format of offscreen targets.
+pub const DEPTH_FORMAT: vk::Format = vk::Format::D32_SFLOAT;
+
+/// An offscreen color + depth target that can be read back.
+pub struct OffscreenTarget {
+    /// The color attachment (left in TRANSFER_SRC_OPTIMAL after a frame).
+    pub color: Image,
+    /// The depth attachment.
+    pub depth: Image,
+}
+
+impl OffscreenTarget {
+    /// Creates a target of `width` × `height` pixels.
+    pub fn new(device: &Arc<Device>, width: u32, height: u32) -> VkResult<Self> {
+        let limit = device.limits().max_image_dimension2_d;
+        if width == 0 || height == 0 || width > limit || height > limit {
+            return Err(VkError::Unsupported {
+                device: device.adapter().name.clone(),
+                reason: format!("a {width}x{height} target (each side must be 1 to {limit})"),
+            });
+        }
+        let extent = vk::Extent2D { width, height };
+        let color = Image::new(
+            device,
+            "offscreen color",
+            extent,
+            COLOR_FORMAT,
+            vk::ImageUsageFlags::COLOR_ATTACHMENT | vk::ImageUsageFlags::TRANSFER_SRC,
+            vk::ImageAspectFlags::COLOR,
+        )?;
+        let depth = Image::new(
+            device,
+            "offscreen depth",
+            extent,
+            DEPTH_FORMAT,
+            vk::ImageUsageFlags::DEPTH_STENCIL_ATTACHMENT,
+            vk::ImageAspectFlags::DEPTH,
+        )?;
+        Ok(Self { color, depth })
+    }
+
+    /// Width and height in pixels.
+    pub fn extent(&self) -> vk::Extent2D {
+        self.color.extent()
+    }
+
+    /// Copies the color image (in TRANSFER_SRC_OPTIMAL) to the host as tightly packed RGBA8 rows.
+    pub fn read_rgba8(&self, device: &Arc<Device>) -> VkResult<Vec<u8>> {
+        let extent = self.extent();
+        let size = u64::from(extent.width) * u64::from(extent.height) * 4;
+        let readback = Buffer::new(
+            device,
+            "offscreen readback",
+            size,
+            vk::BufferUsageFlags::TRANSFER_DST,
+            MemoryLocation::GpuToCpu,
+        )?;
+        let mut one_shot = OneShot::begin(device, "offscreen readback")?;
+        let region = [vk::BufferImageCopy::default()
+            .image_subresource(
+                vk::ImageSubresourceLayers::default()
+                    .aspect_mask(vk::ImageAspectFlags::COLOR)
+                    .layer_count(1),
+            )
+            .image_extent(vk::Extent3D { width: extent.width, height: extent.height, depth: 1 })];
+        // SAFETY: the image is in TRANSFER_SRC_OPTIMAL (the renderer leaves it so) and both
+        // resources outlive the submission, which is waited for below.
+        unsafe {
+            device.raw.cmd_copy_image_to_buffer(
+                one_shot.command_buffer(),
+                self.color.raw(),
+                vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
+                readback.raw(),
+                &region,
+            )
+        };
+        one_shot.submit_and_wait()?;
+        Ok(readback.mapped()?.to_vec())
+    }
+}

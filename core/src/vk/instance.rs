@@ -1,0 +1,211 @@
+//! The Vulkan instance, its validation layer and the debug messenger that collects validation
+//! messages so that tests can fail on any error.
+
+use std::ffi::{c_void, CStr};
+use std::sync::{Arc, Mutex};
+
+use ash::vk;
+
+use super::error::{VkError, VkResult, VkResultExt};
+
+const VALIDATION_LAYER: &CStr = c"VK_LAYER_KHRONOS_validation";
+
+/// How to create the instance.
+#[derive(Clone, Debug, Default)]
+pub struct InstanceOptions {
+    /// Enables `VK_LAYER_KHRONOS_validation` and a debug messenger. Tests always set it.
+    pub validation: bool,
+    /// Extra instance extensions (for example the ones a host's window system needs).
+    pub extra_extensions: Vec<std::ffi::CString>,
+}
+
+/// Validation messages seen so far, shared with the debug messenger callback.
+#[derive(Debug, Default)]
+pub struct ValidationLog {
+    messages: Mutex<Vec<ValidationMessage>>,
+}
+
+/// One message from the validation layer.
+#[derive(Clone, Debug)]
+pub struct ValidationMessage {
+    /// `true` for severity error, `false` for warning.
+    pub is_error: bool,
+    /// The message text, with its VUID.
+    pub text: String,
+}
+
+impl ValidationLog {
+    /// The messages of severity error recorded so far.
+    pub fn errors(&self) -> Vec<String> {
+        self.lock().iter().filter(|m| m.is_error).map(|m| m.text.clone()).collect()
+    }
+
+    /// Number of warnings recorded so far.
+    pub fn warning_count(&self) -> usize {
+        self.lock().iter().filter(|m| !m.is_error).count()
+    }
+
+    fn lock(&self) -> std::sync::MutexGuard<'_, Vec<ValidationMessage>> {
+        // A panic while holding this lock cannot leave the Vec inconsistent: take it anyway.
+        self.messages.lock().unwrap_or_else(|poisoned| poisoned.into_inner())
+    }
+
+    fn record(&self, is_error: bool, text: String) {
+        self.lock().push(ValidationMessage { is_error, text });
+    }
+}
+
+/// The loaded Vulkan library, the instance and (with validation) the debug messenger.
+pub struct Instance {
+    pub(crate) entry: ash::Entry,
+    pub(crate) raw: ash::Instance,
+    pub(crate) debug_utils: Option<ash::ext::debug_utils::Instance>,
+    messenger: vk::DebugUtilsMessengerEXT,
+    validation_log: Arc<ValidationLog>,
+    /// Keeps the callback's user data alive as long as the messenger exists.
+    _callback_data: Option<Arc<ValidationLog>>,
+}
+
+impl Instance {
+    /// Loads Vulkan and creates an instance for API version 1.3.
+    pub fn new(options: &InstanceOptions) -> VkResult<Self> {
+        // SAFETY: loading the system Vulkan loader runs its initialisers; it is the library
+        // this process is meant to use, and the Entry keeps it loaded while in use.
+        let entry = unsafe { ash::Entry::load() }.map_err(|e| VkError::LoaderMissing(e.to_string()))?;
+
+        let mut layers = Vec::new();
+        let mut extensions: Vec<*const i8> =
+            options.extra_extensions.iter().map(|e| e.as_ptr()).collect();
+        let available_extensions =
+            // SAFETY: entry is a loaded Vulkan entry; no layer name is passed.
+            unsafe { entry.enumerate_instance_extension_properties(None) }
+                .or_vk("vkEnumerateInstanceExtensionProperties")?;
+        let has_debug_utils = available_extensions.iter().any(|e| {
+            e.extension_name_as_c_str().is_ok_and(|name| name == ash::ext::debug_utils::NAME)
+        });
+        if options.validation {
+            // SAFETY: entry is a loaded Vulkan entry.
+            let available = unsafe { entry.enumerate_instance_layer_properties() }
+                .or_vk("vkEnumerateInstanceLayerProperties")?;
+            let present = available
+                .iter()
+                .any(|l| l.layer_name_as_c_str().is_ok_and(|name| name == VALIDATION_LAYER));
+            if !present {
+                return Err(VkError::ValidationLayerMissing);
+            }
+            layers.push(VALIDATION_LAYER.as_ptr());
+        }
+        if has_debug_utils {
+            extensions.push(ash::ext::debug_utils::NAME.as_ptr());
+        }
+
+        let app_info = vk::ApplicationInfo::default()
+            .application_name(c"cadr")
+            .application_version(vk::make_api_version(0, 0, 1, 0))
+            .engine_name(c"cadr")
+            .api_version(vk::API_VERSION_1_3);
+        let create_info = vk::InstanceCreateInfo::default()
+            .application_info(&app_info)
+            .enabled_layer_names(&layers)
+            .enabled_extension_names(&extensions);
+        // SAFETY: create_info and everything it points to live until the call returns.
+        let raw = unsafe { entry.create_instance(&create_info, None) }.or_vk("vkCreateInstance")?;
+
+        let validation_log = Arc::new(ValidationLog::default());
+        let debug_utils = has_debug_utils.then(|| ash::ext::debug_utils::Instance::new(&entry, &raw));
+        let mut messenger = vk::DebugUtilsMessengerEXT::null();
+        let mut callback_data = None;
+        if let (true, Some(debug_utils)) = (options.validation, &debug_utils) {
+            let user_data = Arc::clone(&validation_log);
+            let messenger_info = vk::DebugUtilsMessengerCreateInfoEXT::default()
+                .message_severity(
+                    vk::DebugUtilsMessageSeverityFlagsEXT::ERROR
+                        | vk::DebugUtilsMessageSeverityFlagsEXT::WARNING,
+                )
+                .message_type(
+                    vk::DebugUtilsMessageTypeFlagsEXT::GENERAL
+                        | vk::DebugUtilsMessageTypeFlagsEXT::VALIDATION
+                        | vk::DebugUtilsMessageTypeFlagsEXT::PERFORMANCE,
+                )
+                .pfn_user_callback(Some(debug_callback))
+                .user_data(Arc::as_ptr(&user_data) as *mut c_void);
+            // SAFETY: the user data points to a ValidationLog kept alive by callback_data
+            // until after the messenger is destroyed in Drop.
+            messenger = unsafe { debug_utils.create_debug_utils_messenger(&messenger_info, None) }
+                .or_vk("vkCreateDebugUtilsMessengerEXT")?;
+            callback_data = Some(user_data);
+        }
+
+        Ok(Self { entry, raw, debug_utils, messenger, validation_log, _callback_data: callback_data })
+    }
+
+    /// The validation messages recorded by the debug messenger (empty without validation).
+    pub fn validation_log(&self) -> &Arc<ValidationLog> {
+        &self.validation_log
+    }
+
+    /// The ash instance, for code that needs raw Vulkan (plugins, window systems).
+    pub fn raw(&self) -> &ash::Instance {
+        &self.raw
+    }
+
+    /// The ash entry (loader functions).
+    pub fn entry(&self) -> &ash::Entry {
+        &self.entry
+    }
+}
+
+impl Drop for Instance {
+    fn drop(&mut self) {
+        if let Some(debug_utils) = &self.debug_utils {
+            if self.messenger != vk::DebugUtilsMessengerEXT::null() {
+                // SAFETY: the messenger was created from this instance and is destroyed once.
+                unsafe { debug_utils.destroy_debug_utils_messenger(self.messenger, None) };
+            }
+        }
+        // SAFETY: every child object (devices) is dropped before the instance: Device holds
+        // an Arc<Instance>.
+        unsafe { self.raw.destroy_instance(None) };
+    }
+}
+
+/// Validation messages that are known false positives of the layer version Debian 12 ships.
+fn is_known_false_positive(_message: &str) -> bool {
+    false
+}
+
+unsafe extern "system" fn debug_callback(
+    severity: vk::DebugUtilsMessageSeverityFlagsEXT,
+    _types: vk::DebugUtilsMessageTypeFlagsEXT,
+    data: *const vk::DebugUtilsMessengerCallbackDataEXT<'_>,
+    user_data: *mut c_void,
+) -> vk::Bool32 {
+    // Never unwind into the Vulkan loader.
+    let _ = std::panic::catch_unwind(|| {
+        if data.is_null() || user_data.is_null() {
+            return;
+        }
+        // SAFETY: the layer passes a valid callback-data struct for the duration of the call.
+        let data = unsafe { &*data };
+        let text = if data.p_message.is_null() {
+            String::from("(no message)")
+        } else {
+            // SAFETY: p_message is a NUL-terminated string owned by the layer during the call.
+            unsafe { CStr::from_ptr(data.p_message) }.to_string_lossy().into_owned()
+        };
+        if is_known_false_positive(&text) {
+            return;
+        }
+        // SAFETY: user_data is the ValidationLog that Instance keeps alive while the messenger exists.
+        let log = unsafe { &*(user_data as *const ValidationLog) };
+        let is_error = severity.contains(vk::DebugUtilsMessageSeverityFlagsEXT::ERROR);
+        if is_error {
+            log::error!("vulkan validation: {text}");
+            eprintln!("[vulkan validation error] {text}");
+        } else {
+            log::warn!("vulkan validation: {text}");
+        }
+        log.record(is_error, text);
+    });
+    vk::FALSE
+}

@@ -1,0 +1,30 @@
+//! The Vulkan layer: a thin, named, unsafe-contained layer over `ash`.
+//!
+//! Nothing above this module calls ash directly. Every object here holds an `Arc<Device>` so
+//! the device (and its instance) outlives all children; owners of GPU resources wait for the
+//! GPU before dropping them. Errors are [`VkError`]s naming the failing call; out-of-memory and
+//! device loss are reported as such, everything else means the configuration is unsupported.
+//! With validation on, the debug messenger records every message in a [`ValidationLog`]; tests
+//! fail when it holds an error.
+
+mod adapter;
+mod buffer;
+mod command;
+mod device;
+mod error;
+mod image;
+mod instance;
+mod shader;
+mod timer;
+
+pub use adapter::{enumerate as enumerate_adapters, Adapter, DeviceChoice, DEVICE_ENV};
+pub use buffer::{Buffer, MemoryLocation};
+pub use command::{CommandContext, OneShot};
+pub use device::{Capabilities, Device, DeviceOptions};
+pub use error::{map_result, VkError, VkResult, VkResultExt};
+pub use image::{subresource_range, transition, Image, OffscreenTarget, COLOR_FORMAT, DEPTH_FORMAT};
+pub use instance::{Instance, InstanceOptions, ValidationLog, ValidationMessage};
+pub use shader::{compile_glsl, IncludeFile, ShaderModule, ShaderStage};
+pub use timer::GpuTimer;
+
+pub use ash::vk as raw;

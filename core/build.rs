@@ -24,7 +24,9 @@ const COMPANION_ARCHIVES: &[&str] = &[
 
 fn main() {
     println!("cargo:rerun-if-env-changed={LIB_DIR_ENV}");
-    let Ok(dir) = std::env::var(LIB_DIR_ENV) else { return };
+    let Ok(dir) = std::env::var(LIB_DIR_ENV) else {
+        return;
+    };
     let dir = Path::new(&dir);
     let combined_has_glslang = !dir.join("libglslang.a").exists();
     if combined_has_glslang {

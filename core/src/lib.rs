@@ -4,5 +4,9 @@
 //! [`scene::flatten`] into draw items, which a [`render::Renderer`] draws with one of its
 //! techniques into an offscreen target via the thin Vulkan layer in [`vk`].
 
+pub mod generate;
+pub mod load;
+pub mod render;
 pub mod scene;
+pub mod shaders;
 pub mod vk;

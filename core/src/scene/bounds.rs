@@ -19,13 +19,20 @@ impl Default for Aabb {
 
 impl Aabb {
     /// The box that contains nothing.
-    pub const EMPTY: Self = Self { min: DVec3::splat(f64::INFINITY), max: DVec3::splat(f64::NEG_INFINITY) };
+    pub const EMPTY: Self = Self {
+        min: DVec3::splat(f64::INFINITY),
+        max: DVec3::splat(f64::NEG_INFINITY),
+    };
 
     /// The bounds of `points`.
     pub fn from_points(points: impl IntoIterator<Item = [f32; 3]>) -> Self {
         let mut bounds = Self::EMPTY;
         for p in points {
-            bounds.add_point(DVec3::new(f64::from(p[0]), f64::from(p[1]), f64::from(p[2])));
+            bounds.add_point(DVec3::new(
+                f64::from(p[0]),
+                f64::from(p[1]),
+                f64::from(p[2]),
+            ));
         }
         bounds
     }
@@ -57,9 +64,21 @@ impl Aabb {
         let mut out = Self::EMPTY;
         for corner in 0..8 {
             let p = DVec3::new(
-                if corner & 1 == 0 { self.min.x } else { self.max.x },
-                if corner & 2 == 0 { self.min.y } else { self.max.y },
-                if corner & 4 == 0 { self.min.z } else { self.max.z },
+                if corner & 1 == 0 {
+                    self.min.x
+                } else {
+                    self.max.x
+                },
+                if corner & 2 == 0 {
+                    self.min.y
+                } else {
+                    self.max.y
+                },
+                if corner & 4 == 0 {
+                    self.min.z
+                } else {
+                    self.max.z
+                },
             );
             out.add_point(matrix.transform_point3(p));
         }

@@ -59,13 +59,19 @@ fn draw_counts(scene: &Scene) -> Vec<u64> {
                 continue;
             }
             let children = &scene.nodes[node as usize].children;
-            let pending: Vec<NodeIndex> =
-                children.iter().copied().filter(|&c| counts[c as usize].is_none()).collect();
+            let pending: Vec<NodeIndex> = children
+                .iter()
+                .copied()
+                .filter(|&c| counts[c as usize].is_none())
+                .collect();
             if pending.is_empty() {
-                let own = scene.nodes[node as usize].mesh.as_ref().map_or(0, |m| m.part_materials.len() as u64);
-                let total = children
-                    .iter()
-                    .fold(own, |sum, &c| sum.saturating_add(counts[c as usize].unwrap_or(0)));
+                let own = scene.nodes[node as usize]
+                    .mesh
+                    .as_ref()
+                    .map_or(0, |m| m.part_materials.len() as u64);
+                let total = children.iter().fold(own, |sum, &c| {
+                    sum.saturating_add(counts[c as usize].unwrap_or(0))
+                });
                 counts[node as usize] = Some(total);
                 stack.pop();
             } else {
@@ -80,25 +86,42 @@ fn draw_counts(scene: &Scene) -> Vec<u64> {
 pub fn flatten(scene: &Scene) -> Result<FlatScene, SceneError> {
     scene.validate()?;
     let counts = draw_counts(scene);
-    let total = scene.roots.iter().fold(0_u64, |sum, &r| sum.saturating_add(counts[r as usize]));
+    let total = scene
+        .roots
+        .iter()
+        .fold(0_u64, |sum, &r| sum.saturating_add(counts[r as usize]));
     if total > MAX_DRAW_ITEMS {
         return Err(SceneError(format!(
             "the scene expands to {total} drawn parts through shared subgraphs (at most {MAX_DRAW_ITEMS})"
         )));
     }
     let geometry_bounds: Vec<Aabb> = scene.geometries.iter().map(|g| g.bounds()).collect();
-    let mut flat = FlatScene { draws: Vec::with_capacity(total as usize), ..FlatScene::default() };
-    let mut stack: Vec<(NodeIndex, DMat4)> =
-        scene.roots.iter().rev().map(|&r| (r, DMat4::IDENTITY)).collect();
+    let mut flat = FlatScene {
+        draws: Vec::with_capacity(total as usize),
+        ..FlatScene::default()
+    };
+    let mut stack: Vec<(NodeIndex, DMat4)> = scene
+        .roots
+        .iter()
+        .rev()
+        .map(|&r| (r, DMat4::IDENTITY))
+        .collect();
     while let Some((node_index, parent_world)) = stack.pop() {
         let node = &scene.nodes[node_index as usize];
         let world = parent_world * node.local;
         if let Some(mesh) = &node.mesh {
             let instance = flat.instances.len() as u32;
-            flat.instances.push(Instance { node: node_index, geometry: mesh.geometry, world });
-            flat.bounds.add_box(&geometry_bounds[mesh.geometry as usize].transformed(&world));
+            flat.instances.push(Instance {
+                node: node_index,
+                geometry: mesh.geometry,
+                world,
+            });
+            flat.bounds
+                .add_box(&geometry_bounds[mesh.geometry as usize].transformed(&world));
             let geometry = &scene.geometries[mesh.geometry as usize];
-            for (part_index, (part, &material)) in geometry.parts.iter().zip(&mesh.part_materials).enumerate() {
+            for (part_index, (part, &material)) in
+                geometry.parts.iter().zip(&mesh.part_materials).enumerate()
+            {
                 flat.draws.push(DrawItem {
                     instance,
                     geometry: mesh.geometry,

@@ -60,7 +60,10 @@ impl Geometry {
 
     /// Number of triangles over all parts.
     pub fn triangle_count(&self) -> u64 {
-        self.parts.iter().map(|p| u64::from(p.triangle_count())).sum()
+        self.parts
+            .iter()
+            .map(|p| u64::from(p.triangle_count()))
+            .sum()
     }
 }
 
@@ -79,7 +82,12 @@ pub struct Material {
 
 impl Default for Material {
     fn default() -> Self {
-        Self { name: "default".into(), base_color: [0.8, 0.8, 0.8, 1.0], metallic: 0.0, roughness: 0.5 }
+        Self {
+            name: "default".into(),
+            base_color: [0.8, 0.8, 0.8, 1.0],
+            metallic: 0.0,
+            roughness: 0.5,
+        }
     }
 }
 
@@ -111,7 +119,12 @@ pub struct Node {
 impl Node {
     /// A node with an identity transform and nothing attached.
     pub fn new(name: impl Into<String>) -> Self {
-        Self { name: name.into(), local: DMat4::IDENTITY, children: Vec::new(), mesh: None }
+        Self {
+            name: name.into(),
+            local: DMat4::IDENTITY,
+            children: Vec::new(),
+            mesh: None,
+        }
     }
 }
 
@@ -149,10 +162,16 @@ impl Scene {
                 .enumerate()
                 .find(|(_, v)| !v.position.iter().chain(&v.normal).all(|c| c.is_finite()))
             {
-                return fail(format!("geometry {g} ('{}') vertex {i} is not finite: {v:?}", geometry.name));
+                return fail(format!(
+                    "geometry {g} ('{}') vertex {i} is not finite: {v:?}",
+                    geometry.name
+                ));
             }
-            if let Some((i, index)) =
-                geometry.indices.iter().enumerate().find(|(_, &x)| x as usize >= vertex_count)
+            if let Some((i, index)) = geometry
+                .indices
+                .iter()
+                .enumerate()
+                .find(|(_, &x)| x as usize >= vertex_count)
             {
                 return fail(format!(
                     "geometry {g} ('{}') index {i} is {index}, but there are {vertex_count} vertices",
@@ -172,21 +191,43 @@ impl Scene {
             }
         }
         for (m, material) in self.materials.iter().enumerate() {
-            let values = material.base_color.iter().chain([&material.metallic, &material.roughness]);
+            let values = material
+                .base_color
+                .iter()
+                .chain([&material.metallic, &material.roughness]);
             if !values.into_iter().all(|c| c.is_finite()) {
-                return fail(format!("material {m} ('{}') has a non-finite value", material.name));
+                return fail(format!(
+                    "material {m} ('{}') has a non-finite value",
+                    material.name
+                ));
             }
         }
         for (n, node) in self.nodes.iter().enumerate() {
             if !node.local.to_cols_array().iter().all(|c| c.is_finite()) {
-                return fail(format!("node {n} ('{}') has a non-finite matrix", node.name));
+                return fail(format!(
+                    "node {n} ('{}') has a non-finite matrix",
+                    node.name
+                ));
             }
-            if let Some(&child) = node.children.iter().find(|&&c| c as usize >= self.nodes.len()) {
-                return fail(format!("node {n} ('{}') has child {child}, but there are {} nodes", node.name, self.nodes.len()));
+            if let Some(&child) = node
+                .children
+                .iter()
+                .find(|&&c| c as usize >= self.nodes.len())
+            {
+                return fail(format!(
+                    "node {n} ('{}') has child {child}, but there are {} nodes",
+                    node.name,
+                    self.nodes.len()
+                ));
             }
             if let Some(mesh) = &node.mesh {
                 let Some(geometry) = self.geometries.get(mesh.geometry as usize) else {
-                    return fail(format!("node {n} ('{}') uses geometry {}, but there are {}", node.name, mesh.geometry, self.geometries.len()));
+                    return fail(format!(
+                        "node {n} ('{}') uses geometry {}, but there are {}",
+                        node.name,
+                        mesh.geometry,
+                        self.geometries.len()
+                    ));
                 };
                 if mesh.part_materials.len() != geometry.parts.len() {
                     return fail(format!(
@@ -197,16 +238,30 @@ impl Scene {
                         geometry.parts.len()
                     ));
                 }
-                if let Some(&m) = mesh.part_materials.iter().find(|&&m| m as usize >= self.materials.len()) {
-                    return fail(format!("node {n} ('{}') uses material {m}, but there are {}", node.name, self.materials.len()));
+                if let Some(&m) = mesh
+                    .part_materials
+                    .iter()
+                    .find(|&&m| m as usize >= self.materials.len())
+                {
+                    return fail(format!(
+                        "node {n} ('{}') uses material {m}, but there are {}",
+                        node.name,
+                        self.materials.len()
+                    ));
                 }
             }
         }
         if let Some(&root) = self.roots.iter().find(|&&r| r as usize >= self.nodes.len()) {
-            return fail(format!("root {root} is not a node (there are {})", self.nodes.len()));
+            return fail(format!(
+                "root {root} is not a node (there are {})",
+                self.nodes.len()
+            ));
         }
         if let Some(node) = self.find_cycle() {
-            return fail(format!("the node graph has a cycle through node {node} ('{}')", self.nodes[node as usize].name));
+            return fail(format!(
+                "the node graph has a cycle through node {node} ('{}')",
+                self.nodes[node as usize].name
+            ));
         }
         Ok(())
     }

@@ -42,8 +42,16 @@ impl SceneStats {
             mesh_instances: flat.instances.len(),
             instances: flat.draws.len(),
             stored_triangles: scene.geometries.iter().map(|g| g.triangle_count()).sum(),
-            stored_vertices: scene.geometries.iter().map(|g| g.vertices.len() as u64).sum(),
-            triangles: flat.draws.iter().map(|d| u64::from(d.index_count / 3)).sum(),
+            stored_vertices: scene
+                .geometries
+                .iter()
+                .map(|g| g.vertices.len() as u64)
+                .sum(),
+            triangles: flat
+                .draws
+                .iter()
+                .map(|d| u64::from(d.index_count / 3))
+                .sum(),
             vertices: flat
                 .instances
                 .iter()
@@ -60,10 +68,26 @@ impl fmt::Display for SceneStats {
         writeln!(f, "geometries:       {}", self.geometries)?;
         writeln!(f, "parts:            {} (in the geometries)", self.parts)?;
         writeln!(f, "materials:        {}", self.materials)?;
-        writeln!(f, "mesh instances:   {} (paths to nodes with a geometry)", self.mesh_instances)?;
-        writeln!(f, "instances:        {} (paths to drawable parts)", self.instances)?;
-        writeln!(f, "triangles:        {} drawn, {} stored", self.triangles, self.stored_triangles)?;
-        writeln!(f, "vertices:         {} drawn, {} stored", self.vertices, self.stored_vertices)?;
+        writeln!(
+            f,
+            "mesh instances:   {} (paths to nodes with a geometry)",
+            self.mesh_instances
+        )?;
+        writeln!(
+            f,
+            "instances:        {} (paths to drawable parts)",
+            self.instances
+        )?;
+        writeln!(
+            f,
+            "triangles:        {} drawn, {} stored",
+            self.triangles, self.stored_triangles
+        )?;
+        writeln!(
+            f,
+            "vertices:         {} drawn, {} stored",
+            self.vertices, self.stored_vertices
+        )?;
         if self.bounds.is_empty() {
             writeln!(f, "bounds:           empty")
         } else {

@@ -69,8 +69,8 @@ fn type_rank(device_type: vk::PhysicalDeviceType) -> u32 {
 /// Every physical device with a graphics+compute queue and Vulkan 1.3.
 pub fn enumerate(instance: &Instance) -> VkResult<Vec<Adapter>> {
     // SAFETY: the instance is alive for the call.
-    let physicals = unsafe { instance.raw.enumerate_physical_devices() }
-        .or_vk("vkEnumeratePhysicalDevices")?;
+    let physicals =
+        unsafe { instance.raw.enumerate_physical_devices() }.or_vk("vkEnumeratePhysicalDevices")?;
     let mut adapters = Vec::new();
     for (index, physical) in physicals.into_iter().enumerate() {
         // SAFETY: physical comes from this instance.
@@ -80,8 +80,11 @@ pub fn enumerate(instance: &Instance) -> VkResult<Vec<Adapter>> {
             .map(|n| n.to_string_lossy().into_owned())
             .unwrap_or_else(|_| format!("device {index}"));
         // SAFETY: physical comes from this instance.
-        let families =
-            unsafe { instance.raw.get_physical_device_queue_family_properties(physical) };
+        let families = unsafe {
+            instance
+                .raw
+                .get_physical_device_queue_family_properties(physical)
+        };
         let wanted = vk::QueueFlags::GRAPHICS | vk::QueueFlags::COMPUTE;
         let Some(queue_family) = families.iter().position(|f| f.queue_flags.contains(wanted))
         else {
@@ -106,18 +109,26 @@ pub fn enumerate(instance: &Instance) -> VkResult<Vec<Adapter>> {
 pub fn choose(instance: &Instance, choice: &DeviceChoice) -> VkResult<Adapter> {
     let adapters = enumerate(instance)?;
     let listing = || {
-        adapters.iter().map(|a| format!("{}: {}", a.index, a.name)).collect::<Vec<_>>().join(", ")
+        adapters
+            .iter()
+            .map(|a| format!("{}: {}", a.index, a.name))
+            .collect::<Vec<_>>()
+            .join(", ")
     };
     let choice = match choice {
         DeviceChoice::Auto => DeviceChoice::from_env(),
         other => other.clone(),
     };
     let chosen = match &choice {
-        DeviceChoice::Auto => adapters.iter().min_by_key(|a| (type_rank(a.device_type), a.index)),
+        DeviceChoice::Auto => adapters
+            .iter()
+            .min_by_key(|a| (type_rank(a.device_type), a.index)),
         DeviceChoice::Index(index) => adapters.iter().find(|a| a.index == *index),
         DeviceChoice::NameContains(text) => {
             let text = text.to_lowercase();
-            adapters.iter().find(|a| a.name.to_lowercase().contains(&text))
+            adapters
+                .iter()
+                .find(|a| a.name.to_lowercase().contains(&text))
         }
     };
     match chosen {

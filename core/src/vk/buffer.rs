@@ -34,7 +34,12 @@ impl Buffer {
         // SAFETY: info is valid and lives until the call returns.
         let raw = unsafe { device.raw.create_buffer(&info, None) }.or_vk("vkCreateBuffer")?;
         // From here on, Drop cleans up the buffer if allocation fails.
-        let mut buffer = Self { device: Arc::clone(device), raw, allocation: None, size };
+        let mut buffer = Self {
+            device: Arc::clone(device),
+            raw,
+            allocation: None,
+            size,
+        };
         // SAFETY: raw is a live buffer of this device.
         let requirements = unsafe { device.raw.get_buffer_memory_requirements(raw) };
         let allocation = device
@@ -48,10 +53,16 @@ impl Buffer {
                 linear: true,
                 allocation_scheme: AllocationScheme::GpuAllocatorManaged,
             })
-            .map_err(|source| VkError::Allocation { what: name.to_owned(), source })?;
+            .map_err(|source| VkError::Allocation {
+                what: name.to_owned(),
+                source,
+            })?;
         // SAFETY: the allocation satisfies the buffer's requirements and is not bound elsewhere.
-        let bound =
-            unsafe { device.raw.bind_buffer_memory(raw, allocation.memory(), allocation.offset()) };
+        let bound = unsafe {
+            device
+                .raw
+                .bind_buffer_memory(raw, allocation.memory(), allocation.offset())
+        };
         buffer.allocation = Some(allocation);
         bound.or_vk("vkBindBufferMemory")?;
         device.set_name(raw, name);
@@ -87,7 +98,9 @@ impl Buffer {
         let region = [vk::BufferCopy::default().size(data.len() as u64)];
         // SAFETY: both buffers are alive until the submission below has completed.
         unsafe {
-            device.raw.cmd_copy_buffer(one_shot.command_buffer(), staging.raw, buffer.raw, &region)
+            device
+                .raw
+                .cmd_copy_buffer(one_shot.command_buffer(), staging.raw, buffer.raw, &region)
         };
         one_shot.submit_and_wait()?;
         Ok(buffer)
@@ -100,7 +113,10 @@ impl Buffer {
         let start = offset as usize;
         let end = start + data.len();
         if end as u64 > size {
-            return Err(VkError::Call { call: "Buffer::write (out of range)", result: vk::Result::ERROR_UNKNOWN });
+            return Err(VkError::Call {
+                call: "Buffer::write (out of range)",
+                result: vk::Result::ERROR_UNKNOWN,
+            });
         }
         slice[start..end].copy_from_slice(data);
         Ok(())
@@ -113,7 +129,10 @@ impl Buffer {
             .as_ref()
             .and_then(|a| a.mapped_slice())
             .map(|s| &s[..size])
-            .ok_or(VkError::Call { call: "Buffer::mapped (not host-visible)", result: vk::Result::ERROR_MEMORY_MAP_FAILED })
+            .ok_or(VkError::Call {
+                call: "Buffer::mapped (not host-visible)",
+                result: vk::Result::ERROR_MEMORY_MAP_FAILED,
+            })
     }
 
     fn mapped_mut(&mut self) -> VkResult<&mut [u8]> {
@@ -122,7 +141,10 @@ impl Buffer {
             .as_mut()
             .and_then(|a| a.mapped_slice_mut())
             .map(|s| &mut s[..size])
-            .ok_or(VkError::Call { call: "Buffer::write (not host-visible)", result: vk::Result::ERROR_MEMORY_MAP_FAILED })
+            .ok_or(VkError::Call {
+                call: "Buffer::write (not host-visible)",
+                result: vk::Result::ERROR_MEMORY_MAP_FAILED,
+            })
     }
 
     /// The Vulkan handle.

@@ -52,17 +52,24 @@ impl CommandContext {
         self.wait()?;
         // SAFETY: the fence is signalled, so the GPU no longer uses the pool's buffers.
         unsafe {
-            self.device.raw.reset_fences(&[self.fence]).or_vk("vkResetFences")?;
+            self.device
+                .raw
+                .reset_fences(&[self.fence])
+                .or_vk("vkResetFences")?;
             self.device
                 .raw
                 .reset_command_pool(self.pool, vk::CommandPoolResetFlags::empty())
                 .or_vk("vkResetCommandPool")?;
         }
-        let begin =
-            vk::CommandBufferBeginInfo::default().flags(vk::CommandBufferUsageFlags::ONE_TIME_SUBMIT);
+        let begin = vk::CommandBufferBeginInfo::default()
+            .flags(vk::CommandBufferUsageFlags::ONE_TIME_SUBMIT);
         // SAFETY: the command buffer is reset and not in use.
-        unsafe { self.device.raw.begin_command_buffer(self.command_buffer, &begin) }
-            .or_vk("vkBeginCommandBuffer")?;
+        unsafe {
+            self.device
+                .raw
+                .begin_command_buffer(self.command_buffer, &begin)
+        }
+        .or_vk("vkBeginCommandBuffer")?;
         Ok(self.command_buffer)
     }
 
@@ -75,15 +82,23 @@ impl CommandContext {
         let submit = [vk::SubmitInfo::default().command_buffers(&buffers)];
         // SAFETY: the buffer is executable, the fence unsignalled; the queue is used from one
         // thread at a time (Device users serialise submissions).
-        unsafe { self.device.raw.queue_submit(self.device.queue, &submit, self.fence) }
-            .or_vk("vkQueueSubmit")
+        unsafe {
+            self.device
+                .raw
+                .queue_submit(self.device.queue, &submit, self.fence)
+        }
+        .or_vk("vkQueueSubmit")
     }
 
     /// Waits until the last submission has finished.
     pub fn wait(&self) -> VkResult<()> {
         // SAFETY: the fence belongs to this device.
-        unsafe { self.device.raw.wait_for_fences(&[self.fence], true, u64::MAX) }
-            .or_vk("vkWaitForFences")
+        unsafe {
+            self.device
+                .raw
+                .wait_for_fences(&[self.fence], true, u64::MAX)
+        }
+        .or_vk("vkWaitForFences")
     }
 
     /// The command buffer being recorded.
@@ -97,7 +112,10 @@ impl Drop for CommandContext {
         // SAFETY: waiting first makes sure the GPU no longer uses the buffer; the handles are
         // destroyed once (null handles are ignored by Vulkan).
         unsafe {
-            let _ = self.device.raw.wait_for_fences(&[self.fence], true, u64::MAX);
+            let _ = self
+                .device
+                .raw
+                .wait_for_fences(&[self.fence], true, u64::MAX);
             self.device.raw.destroy_fence(self.fence, None);
             self.device.raw.destroy_command_pool(self.pool, None);
         }

@@ -72,10 +72,16 @@ impl Device {
             .push_next(&mut supported12)
             .push_next(&mut supported11);
         // SAFETY: physical comes from this instance; the chain lives on this stack frame.
-        unsafe { instance.raw.get_physical_device_features2(physical, &mut supported) };
+        unsafe {
+            instance
+                .raw
+                .get_physical_device_features2(physical, &mut supported)
+        };
         let core = supported.features;
-        let (dynamic_rendering, synchronization2) =
-            (supported13.dynamic_rendering == vk::TRUE, supported13.synchronization2 == vk::TRUE);
+        let (dynamic_rendering, synchronization2) = (
+            supported13.dynamic_rendering == vk::TRUE,
+            supported13.synchronization2 == vk::TRUE,
+        );
         if !dynamic_rendering || !synchronization2 {
             return Err(VkError::Unsupported {
                 device: adapter.name.clone(),
@@ -83,8 +89,11 @@ impl Device {
             });
         }
         // SAFETY: physical comes from this instance.
-        let families =
-            unsafe { instance.raw.get_physical_device_queue_family_properties(physical) };
+        let families = unsafe {
+            instance
+                .raw
+                .get_physical_device_queue_family_properties(physical)
+        };
         let queue_timestamp_bits = families[adapter.queue_family as usize].timestamp_valid_bits;
         let capabilities = Capabilities {
             multi_draw_indirect: core.multi_draw_indirect == vk::TRUE,
@@ -99,8 +108,9 @@ impl Device {
             .multi_draw_indirect(capabilities.multi_draw_indirect)
             .draw_indirect_first_instance(capabilities.draw_indirect_first_instance)
             .pipeline_statistics_query(capabilities.pipeline_statistics_query);
-        let mut enabled13 =
-            vk::PhysicalDeviceVulkan13Features::default().dynamic_rendering(true).synchronization2(true);
+        let mut enabled13 = vk::PhysicalDeviceVulkan13Features::default()
+            .dynamic_rendering(true)
+            .synchronization2(true);
         let mut enabled12 = vk::PhysicalDeviceVulkan12Features::default()
             .buffer_device_address(capabilities.buffer_device_address)
             .host_query_reset(supported12.host_query_reset == vk::TRUE);
@@ -115,8 +125,9 @@ impl Device {
             .push_next(&mut enabled13)
             .push_next(&mut enabled12)
             .push_next(&mut enabled11);
-        let create_info =
-            vk::DeviceCreateInfo::default().queue_create_infos(&queue_info).push_next(&mut enabled);
+        let create_info = vk::DeviceCreateInfo::default()
+            .queue_create_infos(&queue_info)
+            .push_next(&mut enabled);
         // SAFETY: create_info and its chain live until the call returns; only supported
         // features are enabled.
         let raw = unsafe { instance.raw.create_device(physical, &create_info, None) }
@@ -136,7 +147,10 @@ impl Device {
             buffer_device_address: capabilities.buffer_device_address,
             allocation_sizes: gpu_allocator::AllocationSizes::default(),
         })
-        .map_err(|source| VkError::Allocation { what: "the allocator itself".into(), source })?;
+        .map_err(|source| VkError::Allocation {
+            what: "the allocator itself".into(),
+            source,
+        })?;
         let debug_utils = instance
             .debug_utils
             .as_ref()
@@ -174,7 +188,10 @@ impl Device {
 
     /// Nanoseconds per timestamp tick, and the number of valid timestamp bits.
     pub fn timestamp_info(&self) -> (f64, u32) {
-        (f64::from(self.limits.timestamp_period), self.queue_timestamp_bits)
+        (
+            f64::from(self.limits.timestamp_period),
+            self.queue_timestamp_bits,
+        )
     }
 
     /// Validation messages recorded so far.
@@ -194,14 +211,22 @@ impl Device {
 
     /// Locks the memory allocator.
     pub(crate) fn allocator(&self) -> MutexGuard<'_, Option<Allocator>> {
-        self.allocator.lock().unwrap_or_else(|poisoned| poisoned.into_inner())
+        self.allocator
+            .lock()
+            .unwrap_or_else(|poisoned| poisoned.into_inner())
     }
 
     /// Gives `handle` a debug name (shown by validation messages and capture tools).
     pub fn set_name<H: vk::Handle>(&self, handle: H, name: &str) {
-        let Some(debug_utils) = &self.debug_utils else { return };
-        let Ok(name) = CString::new(name.replace('\0', " ")) else { return };
-        let info = vk::DebugUtilsObjectNameInfoEXT::default().object_handle(handle).object_name(&name);
+        let Some(debug_utils) = &self.debug_utils else {
+            return;
+        };
+        let Ok(name) = CString::new(name.replace('\0', " ")) else {
+            return;
+        };
+        let info = vk::DebugUtilsObjectNameInfoEXT::default()
+            .object_handle(handle)
+            .object_name(&name);
         // SAFETY: handle is a live object of this device; info lives until the call returns.
         // A failure only loses a debug name, so it is ignored.
         let _ = unsafe { debug_utils.set_debug_utils_object_name(&info) };

@@ -34,7 +34,11 @@ impl Image {
         let info = vk::ImageCreateInfo::default()
             .image_type(vk::ImageType::TYPE_2D)
             .format(format)
-            .extent(vk::Extent3D { width: extent.width, height: extent.height, depth: 1 })
+            .extent(vk::Extent3D {
+                width: extent.width,
+                height: extent.height,
+                depth: 1,
+            })
             .mip_levels(1)
             .array_layers(1)
             .samples(vk::SampleCountFlags::TYPE_1)
@@ -65,10 +69,16 @@ impl Image {
                 linear: false,
                 allocation_scheme: AllocationScheme::GpuAllocatorManaged,
             })
-            .map_err(|source| VkError::Allocation { what: name.to_owned(), source })?;
+            .map_err(|source| VkError::Allocation {
+                what: name.to_owned(),
+                source,
+            })?;
         // SAFETY: the allocation satisfies the image's requirements.
-        let bound =
-            unsafe { device.raw.bind_image_memory(raw, allocation.memory(), allocation.offset()) };
+        let bound = unsafe {
+            device
+                .raw
+                .bind_image_memory(raw, allocation.memory(), allocation.offset())
+        };
         image.allocation = Some(allocation);
         bound.or_vk("vkBindImageMemory")?;
         let view_info = vk::ImageViewCreateInfo::default()
@@ -77,8 +87,8 @@ impl Image {
             .format(format)
             .subresource_range(subresource_range(aspect));
         // SAFETY: the image is bound to memory; view_info matches it.
-        image.view = unsafe { device.raw.create_image_view(&view_info, None) }
-            .or_vk("vkCreateImageView")?;
+        image.view =
+            unsafe { device.raw.create_image_view(&view_info, None) }.or_vk("vkCreateImageView")?;
         device.set_name(raw, name);
         device.set_name(image.view, &format!("{name} view"));
         Ok(image)
@@ -122,7 +132,10 @@ impl Drop for Image {
 
 /// The whole of a single-mip, single-layer image.
 pub fn subresource_range(aspect: vk::ImageAspectFlags) -> vk::ImageSubresourceRange {
-    vk::ImageSubresourceRange::default().aspect_mask(aspect).level_count(1).layer_count(1)
+    vk::ImageSubresourceRange::default()
+        .aspect_mask(aspect)
+        .level_count(1)
+        .layer_count(1)
 }
 
 /// An image layout transition with synchronization2.
@@ -131,8 +144,16 @@ pub fn transition(
     command_buffer: vk::CommandBuffer,
     image: vk::Image,
     aspect: vk::ImageAspectFlags,
-    (old_layout, src_stage, src_access): (vk::ImageLayout, vk::PipelineStageFlags2, vk::AccessFlags2),
-    (new_layout, dst_stage, dst_access): (vk::ImageLayout, vk::PipelineStageFlags2, vk::AccessFlags2),
+    (old_layout, src_stage, src_access): (
+        vk::ImageLayout,
+        vk::PipelineStageFlags2,
+        vk::AccessFlags2,
+    ),
+    (new_layout, dst_stage, dst_access): (
+        vk::ImageLayout,
+        vk::PipelineStageFlags2,
+        vk::AccessFlags2,
+    ),
 ) {
     let barrier = [vk::ImageMemoryBarrier2::default()
         .src_stage_mask(src_stage)
@@ -145,7 +166,11 @@ pub fn transition(
         .subresource_range(subresource_range(aspect))];
     let dependency = vk::DependencyInfo::default().image_memory_barriers(&barrier);
     // SAFETY: command_buffer is recording; image is alive for the command buffer's lifetime.
-    unsafe { device.raw.cmd_pipeline_barrier2(command_buffer, &dependency) };
+    unsafe {
+        device
+            .raw
+            .cmd_pipeline_barrier2(command_buffer, &dependency)
+    };
 }
 
 /// The color format of offscreen targets: 8-bit RGBA, read back as is.
@@ -214,7 +239,11 @@ impl OffscreenTarget {
                     .aspect_mask(vk::ImageAspectFlags::COLOR)
                     .layer_count(1),
             )
-            .image_extent(vk::Extent3D { width: extent.width, height: extent.height, depth: 1 })];
+            .image_extent(vk::Extent3D {
+                width: extent.width,
+                height: extent.height,
+                depth: 1,
+            })];
         // SAFETY: the image is in TRANSFER_SRC_OPTIMAL (the renderer leaves it so) and both
         // resources outlive the submission, which is waited for below.
         unsafe {

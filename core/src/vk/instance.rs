@@ -37,7 +37,11 @@ pub struct ValidationMessage {
 impl ValidationLog {
     /// The messages of severity error recorded so far.
     pub fn errors(&self) -> Vec<String> {
-        self.lock().iter().filter(|m| m.is_error).map(|m| m.text.clone()).collect()
+        self.lock()
+            .iter()
+            .filter(|m| m.is_error)
+            .map(|m| m.text.clone())
+            .collect()
     }
 
     /// Number of warnings recorded so far.
@@ -47,7 +51,9 @@ impl ValidationLog {
 
     fn lock(&self) -> std::sync::MutexGuard<'_, Vec<ValidationMessage>> {
         // A panic while holding this lock cannot leave the Vec inconsistent: take it anyway.
-        self.messages.lock().unwrap_or_else(|poisoned| poisoned.into_inner())
+        self.messages
+            .lock()
+            .unwrap_or_else(|poisoned| poisoned.into_inner())
     }
 
     fn record(&self, is_error: bool, text: String) {
@@ -71,25 +77,31 @@ impl Instance {
     pub fn new(options: &InstanceOptions) -> VkResult<Self> {
         // SAFETY: loading the system Vulkan loader runs its initialisers; it is the library
         // this process is meant to use, and the Entry keeps it loaded while in use.
-        let entry = unsafe { ash::Entry::load() }.map_err(|e| VkError::LoaderMissing(e.to_string()))?;
+        let entry =
+            unsafe { ash::Entry::load() }.map_err(|e| VkError::LoaderMissing(e.to_string()))?;
 
         let mut layers = Vec::new();
-        let mut extensions: Vec<*const i8> =
-            options.extra_extensions.iter().map(|e| e.as_ptr()).collect();
+        let mut extensions: Vec<*const i8> = options
+            .extra_extensions
+            .iter()
+            .map(|e| e.as_ptr())
+            .collect();
         let available_extensions =
             // SAFETY: entry is a loaded Vulkan entry; no layer name is passed.
             unsafe { entry.enumerate_instance_extension_properties(None) }
                 .or_vk("vkEnumerateInstanceExtensionProperties")?;
         let has_debug_utils = available_extensions.iter().any(|e| {
-            e.extension_name_as_c_str().is_ok_and(|name| name == ash::ext::debug_utils::NAME)
+            e.extension_name_as_c_str()
+                .is_ok_and(|name| name == ash::ext::debug_utils::NAME)
         });
         if options.validation {
             // SAFETY: entry is a loaded Vulkan entry.
             let available = unsafe { entry.enumerate_instance_layer_properties() }
                 .or_vk("vkEnumerateInstanceLayerProperties")?;
-            let present = available
-                .iter()
-                .any(|l| l.layer_name_as_c_str().is_ok_and(|name| name == VALIDATION_LAYER));
+            let present = available.iter().any(|l| {
+                l.layer_name_as_c_str()
+                    .is_ok_and(|name| name == VALIDATION_LAYER)
+            });
             if !present {
                 return Err(VkError::ValidationLayerMissing);
             }
@@ -112,7 +124,8 @@ impl Instance {
         let raw = unsafe { entry.create_instance(&create_info, None) }.or_vk("vkCreateInstance")?;
 
         let validation_log = Arc::new(ValidationLog::default());
-        let debug_utils = has_debug_utils.then(|| ash::ext::debug_utils::Instance::new(&entry, &raw));
+        let debug_utils =
+            has_debug_utils.then(|| ash::ext::debug_utils::Instance::new(&entry, &raw));
         let mut messenger = vk::DebugUtilsMessengerEXT::null();
         let mut callback_data = None;
         if let (true, Some(debug_utils)) = (options.validation, &debug_utils) {
@@ -136,7 +149,14 @@ impl Instance {
             callback_data = Some(user_data);
         }
 
-        Ok(Self { entry, raw, debug_utils, messenger, validation_log, _callback_data: callback_data })
+        Ok(Self {
+            entry,
+            raw,
+            debug_utils,
+            messenger,
+            validation_log,
+            _callback_data: callback_data,
+        })
     }
 
     /// The validation messages recorded by the debug messenger (empty without validation).
@@ -191,7 +211,9 @@ unsafe extern "system" fn debug_callback(
             String::from("(no message)")
         } else {
             // SAFETY: p_message is a NUL-terminated string owned by the layer during the call.
-            unsafe { CStr::from_ptr(data.p_message) }.to_string_lossy().into_owned()
+            unsafe { CStr::from_ptr(data.p_message) }
+                .to_string_lossy()
+                .into_owned()
         };
         if is_known_false_positive(&text) {
             return;

@@ -62,10 +62,17 @@ pub fn compile_glsl(
     stage: ShaderStage,
     includes: &[IncludeFile],
 ) -> VkResult<Vec<u32>> {
-    let failure = |log: String| VkError::ShaderCompile { name: name.to_owned(), log };
+    let failure = |log: String| VkError::ShaderCompile {
+        name: name.to_owned(),
+        log,
+    };
     let compiler = shaderc::Compiler::new().map_err(|e| failure(format!("shaderc: {e}")))?;
-    let mut options = shaderc::CompileOptions::new().map_err(|e| failure(format!("shaderc: {e}")))?;
-    options.set_target_env(shaderc::TargetEnv::Vulkan, shaderc::EnvVersion::Vulkan1_3 as u32);
+    let mut options =
+        shaderc::CompileOptions::new().map_err(|e| failure(format!("shaderc: {e}")))?;
+    options.set_target_env(
+        shaderc::TargetEnv::Vulkan,
+        shaderc::EnvVersion::Vulkan1_3 as u32,
+    );
     options.set_optimization_level(shaderc::OptimizationLevel::Performance);
     options.set_warnings_as_errors();
     let includes: Vec<IncludeFile> = includes.to_vec();
@@ -107,7 +114,11 @@ impl ShaderModule {
         let raw = unsafe { device.raw.create_shader_module(&info, None) }
             .or_vk("vkCreateShaderModule")?;
         device.set_name(raw, name);
-        Ok(Self { device: Arc::clone(device), raw, stage })
+        Ok(Self {
+            device: Arc::clone(device),
+            raw,
+            stage,
+        })
     }
 
     /// The Vulkan handle.

@@ -20,18 +20,27 @@ impl GpuTimer {
         if !device.capabilities().timestamps {
             return Ok(None);
         }
-        let info = vk::QueryPoolCreateInfo::default().query_type(vk::QueryType::TIMESTAMP).query_count(2);
+        let info = vk::QueryPoolCreateInfo::default()
+            .query_type(vk::QueryType::TIMESTAMP)
+            .query_count(2);
         // SAFETY: info is valid.
-        let pool = unsafe { device.raw.create_query_pool(&info, None) }.or_vk("vkCreateQueryPool")?;
+        let pool =
+            unsafe { device.raw.create_query_pool(&info, None) }.or_vk("vkCreateQueryPool")?;
         device.set_name(pool, name);
-        Ok(Some(Self { device: Arc::clone(device), pool, written: false }))
+        Ok(Some(Self {
+            device: Arc::clone(device),
+            pool,
+            written: false,
+        }))
     }
 
     /// Records the reset and the start timestamp; call before the measured commands.
     pub fn begin(&mut self, command_buffer: vk::CommandBuffer) {
         // SAFETY: command_buffer is recording outside a render pass; the pool is alive.
         unsafe {
-            self.device.raw.cmd_reset_query_pool(command_buffer, self.pool, 0, 2);
+            self.device
+                .raw
+                .cmd_reset_query_pool(command_buffer, self.pool, 0, 2);
             self.device.raw.cmd_write_timestamp2(
                 command_buffer,
                 vk::PipelineStageFlags2::TOP_OF_PIPE,
@@ -72,7 +81,11 @@ impl GpuTimer {
         }
         .or_vk("vkGetQueryPoolResults")?;
         let (period_ns, valid_bits) = self.device.timestamp_info();
-        let mask = if valid_bits >= 64 { u64::MAX } else { (1_u64 << valid_bits) - 1 };
+        let mask = if valid_bits >= 64 {
+            u64::MAX
+        } else {
+            (1_u64 << valid_bits) - 1
+        };
         let delta = (ticks[1] & mask).wrapping_sub(ticks[0] & mask) & mask;
         Ok(Some(delta as f64 * period_ns / 1000.0))
     }

@@ -1,0 +1,154 @@
+//! Procedural CAD-like assemblies, so that benchmarks reproduce the seeds' scenes without files.
+//!
+//! | source | what |
+//! |---|---|
+//! | `gen:demo` | a small machine room: 160 objects, 12 components, 16 materials |
+//! | `gen:graphicscard` | the seeds' "Graphicscard" statistics: ~68 000 parts of ~10 triangles, 2 500 objects, 110 geometries, 66 materials |
+//! | `gen:racecar` | ~98 000 parts of ~37 triangles |
+//! | `gen:grid:parts=N[,tris=T]` | exactly N parts (T triangles each, default 12) in a cube of objects |
+//!
+//! Generators are deterministic: the same source gives the same scene on every run.
+
+mod assembly;
+mod component;
+mod grid;
+mod rng;
+mod shapes;
+
+pub use assembly::{assembly, AssemblySpec};
+pub use grid::grid;
+pub use rng::Rng;
+pub use shapes::{prism_triangles, GeometryBuilder};
+
+use crate::scene::Scene;
+
+/// The most parts `gen:grid` generates.
+pub const MAX_GRID_PARTS: u64 = 50_000_000;
+
+/// A built-in generator and its parameters.
+#[derive(Clone, Debug, PartialEq)]
+pub enum GeneratorSpec {
+    /// `gen:demo`.
+    Demo,
+    /// `gen:graphicscard`.
+    GraphicsCard,
+    /// `gen:racecar`.
+    RaceCar,
+    /// `gen:grid:parts=N[,tris=T]`.
+    Grid {
+        /// Exact number of parts.
+        parts: u64,
+        /// Average triangles per part.
+        triangles_per_part: f64,
+    },
+}
+
+/// The generator names, for help texts.
+pub const GENERATOR_NAMES: &str = "demo, graphicscard, racecar, grid:parts=N[,tris=T]";
+
+impl GeneratorSpec {
+    /// Parses what follows `gen:`.
+    pub fn parse(text: &str) -> Result<Self, String> {
+        let (name, params) = text.split_once(':').unwrap_or((text, ""));
+        let params: Vec<(&str, &str)> = params
+            .split([',', ':'])
+            .filter(|p| !p.is_empty())
+            .map(|p| {
+                p.split_once('=')
+                    .ok_or_else(|| format!("gen:{name}: parameter '{p}' is not KEY=VALUE"))
+            })
+            .collect::<Result<_, _>>()?;
+        let no_params = |spec: Self| match params.first() {
+            Some((key, _)) => Err(format!("gen:{name} takes no parameters (got '{key}')")),
+            None => Ok(spec),
+        };
+        match name {
+            "demo" => no_params(Self::Demo),
+            "graphicscard" => no_params(Self::GraphicsCard),
+            "racecar" => no_params(Self::RaceCar),
+            "grid" => {
+                let mut parts = None;
+                let mut triangles_per_part = 12.0;
+                for (key, value) in params {
+                    match key {
+                        "parts" => {
+                            let n: u64 = value.replace('_', "").parse().map_err(|_| {
+                                format!("gen:grid: parts={value} is not a whole number")
+                            })?;
+                            if n == 0 || n > MAX_GRID_PARTS {
+                                return Err(format!(
+                                    "gen:grid: parts={n} is out of range (1 to {MAX_GRID_PARTS})"
+                                ));
+                            }
+                            parts = Some(n);
+                        }
+                        "tris" => {
+                            let t: f64 = value
+                                .parse()
+                                .map_err(|_| format!("gen:grid: tris={value} is not a number"))?;
+                            if !(8.0..=400.0).contains(&t) {
+                                return Err(format!(
+                                    "gen:grid: tris={t} is out of range (8 to 400)"
+                                ));
+                            }
+                            triangles_per_part = t;
+                        }
+                        other => {
+                            return Err(format!(
+                                "gen:grid: unknown parameter '{other}' (known: parts, tris)"
+                            ))
+                        }
+                    }
+                }
+                let parts = parts.ok_or("gen:grid needs parts=N, e.g. gen:grid:parts=100000")?;
+                Ok(Self::Grid {
+                    parts,
+                    triangles_per_part,
+                })
+            }
+            other => Err(format!(
+                "unknown generator 'gen:{other}' (known: {GENERATOR_NAMES})"
+            )),
+        }
+    }
+}
+
+/// Generates the scene for `spec`.
+pub fn generate(spec: &GeneratorSpec) -> Scene {
+    match spec {
+        GeneratorSpec::Demo => assembly(&AssemblySpec {
+            name: "demo".into(),
+            objects: 160,
+            geometries: 12,
+            materials: 16,
+            parts_per_geometry: 9.0,
+            triangles_per_part: 28.0,
+            objects_per_module: 40,
+            seed: 7,
+        }),
+        GeneratorSpec::GraphicsCard => assembly(&AssemblySpec {
+            name: "graphicscard".into(),
+            objects: 2497,
+            geometries: 110,
+            materials: 66,
+            parts_per_geometry: 27.4,
+            triangles_per_part: 10.0,
+            objects_per_module: 50,
+            seed: 2014,
+        }),
+        GeneratorSpec::RaceCar => assembly(&AssemblySpec {
+            name: "racecar".into(),
+            objects: 3500,
+            geometries: 180,
+            materials: 80,
+            parts_per_geometry: 28.0,
+            triangles_per_part: 37.0,
+            objects_per_module: 60,
+            seed: 2015,
+        }),
+        GeneratorSpec::Grid {
+            parts,
+            triangles_per_part,
+        } => grid(*parts, *triangles_per_part),
+    }
+}

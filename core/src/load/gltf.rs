@@ -1,0 +1,450 @@
+//! glTF 2.0 loading (`.gltf` with external or embedded buffers, `.glb`).
+//!
+//! Every byte range is checked before it is read, so a truncated or inconsistent file gives a
+//! [`LoadError`] that names the buffer, view, accessor, mesh or node, never a panic. Meshes
+//! become geometries (primitives are their parts), nodes keep their hierarchy and sharing, and
+//! PBR factors become materials. Textures are not used yet; files with them load.
+
+use std::path::{Path, PathBuf};
+
+use base64::Engine as _;
+use glam::{DMat4, DQuat, DVec3};
+use gltf::accessor::{DataType, Dimensions};
+use gltf::mesh::Mode;
+
+use super::LoadError;
+use crate::scene::{Geometry, Material, MeshRef, Node, Part, Scene, Vertex};
+
+/// Loads a `.gltf` or `.glb` file.
+pub fn load_gltf(path: &Path) -> Result<Scene, LoadError> {
+    let bytes = std::fs::read(path).map_err(|source| LoadError::Io {
+        path: path.to_owned(),
+        source,
+    })?;
+    load_gltf_bytes(&bytes, path)
+}
+
+/// Loads glTF from `bytes`; `path` names the file in errors and locates external buffers.
+pub fn load_gltf_bytes(bytes: &[u8], path: &Path) -> Result<Scene, LoadError> {
+    let invalid = |message: String| LoadError::Invalid {
+        path: path.to_owned(),
+        message,
+    };
+    let gltf = gltf::Gltf::from_slice(bytes).map_err(|source| LoadError::Gltf {
+        path: path.to_owned(),
+        message: source.to_string(),
+    })?;
+    let base_dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
+    let buffers = resolve_buffers(&gltf, &base_dir).map_err(invalid)?;
+    check_views(&gltf.document, &buffers).map_err(invalid)?;
+
+    let mut scene = Scene {
+        name: path
+            .file_name()
+            .map(|n| n.to_string_lossy().into_owned())
+            .unwrap_or_default(),
+        ..Scene::default()
+    };
+    scene.materials = gltf
+        .document
+        .materials()
+        .enumerate()
+        .map(|(i, m)| {
+            let pbr = m.pbr_metallic_roughness();
+            Material {
+                name: m
+                    .name()
+                    .map_or_else(|| format!("material {i}"), str::to_owned),
+                base_color: pbr.base_color_factor(),
+                metallic: pbr.metallic_factor(),
+                roughness: pbr.roughness_factor(),
+            }
+        })
+        .collect();
+    let mut default_material = None;
+    let mut mesh_refs: Vec<Option<MeshRef>> = Vec::new();
+    for mesh in gltf.document.meshes() {
+        let (geometry, materials) = load_mesh(&mesh, &buffers).map_err(invalid)?;
+        if geometry.parts.is_empty() {
+            mesh_refs.push(None);
+            continue;
+        }
+        let part_materials = materials
+            .into_iter()
+            .map(|m| {
+                m.unwrap_or_else(|| {
+                    *default_material.get_or_insert_with(|| {
+                        scene.materials.push(Material::default());
+                        scene.materials.len() as u32 - 1
+                    })
+                })
+            })
+            .collect();
+        mesh_refs.push(Some(MeshRef {
+            geometry: scene.geometries.len() as u32,
+            part_materials,
+        }));
+        scene.geometries.push(geometry);
+    }
+
+    for node in gltf.document.nodes() {
+        let name = node
+            .name()
+            .map_or_else(|| format!("node {}", node.index()), str::to_owned);
+        let local = node_matrix(&node);
+        if !local.to_cols_array().iter().all(|c| c.is_finite()) {
+            return Err(invalid(format!(
+                "node {} ('{name}') has a non-finite transform",
+                node.index()
+            )));
+        }
+        scene.nodes.push(Node {
+            name,
+            local,
+            children: node.children().map(|c| c.index() as u32).collect(),
+            mesh: node.mesh().and_then(|m| mesh_refs[m.index()].clone()),
+        });
+    }
+    let chosen_scene = gltf
+        .document
+        .default_scene()
+        .or_else(|| gltf.document.scenes().next());
+    scene.roots = match chosen_scene {
+        Some(s) => s.nodes().map(|n| n.index() as u32).collect(),
+        None => {
+            // No scene: draw every node that is nobody's child.
+            let mut is_child = vec![false; scene.nodes.len()];
+            for node in &scene.nodes {
+                for &c in &node.children {
+                    is_child[c as usize] = true;
+                }
+            }
+            (0..scene.nodes.len() as u32)
+                .filter(|&n| !is_child[n as usize])
+                .collect()
+        }
+    };
+    scene.validate().map_err(|e| invalid(e.0))?;
+    Ok(scene)
+}
+
+fn node_matrix(node: &gltf::Node<'_>) -> DMat4 {
+    match node.transform() {
+        gltf::scene::Transform::Matrix { matrix } => {
+            DMat4::from_cols_array_2d(&matrix.map(|col| col.map(f64::from)))
+        }
+        gltf::scene::Transform::Decomposed {
+            translation,
+            rotation,
+            scale,
+        } => {
+            let [x, y, z, w] = rotation.map(f64::from);
+            let rotation = DQuat::from_xyzw(x, y, z, w);
+            // A non-unit quaternion from a file is normalised; a zero one stays non-finite.
+            let rotation = if rotation.length_squared() > 0.0 {
+                rotation.normalize()
+            } else {
+                rotation * f64::NAN
+            };
+            DMat4::from_scale_rotation_translation(
+                DVec3::from(scale.map(f64::from)),
+                rotation,
+                DVec3::from(translation.map(f64::from)),
+            )
+        }
+    }
+}
+
+/// Reads every buffer: the GLB binary chunk, a data URI or a file beside the glTF.
+fn resolve_buffers(gltf: &gltf::Gltf, base_dir: &Path) -> Result<Vec<Vec<u8>>, String> {
+    let mut buffers = Vec::new();
+    for buffer in gltf.document.buffers() {
+        let index = buffer.index();
+        let (data, origin) = match buffer.source() {
+            gltf::buffer::Source::Bin => {
+                let blob = gltf.blob.as_ref().ok_or_else(|| {
+                    format!("buffer {index} refers to the GLB binary chunk, but the file has none")
+                })?;
+                (blob.clone(), "the GLB binary chunk".to_owned())
+            }
+            gltf::buffer::Source::Uri(uri) if uri.starts_with("data:") => {
+                let (_, payload) = uri
+                    .split_once(";base64,")
+                    .ok_or_else(|| format!("buffer {index} has a data URI that is not base64"))?;
+                let data = base64::engine::general_purpose::STANDARD
+                    .decode(payload)
+                    .map_err(|e| format!("buffer {index} has invalid base64 data: {e}"))?;
+                (data, "its data URI".to_owned())
+            }
+            gltf::buffer::Source::Uri(uri) => {
+                let file = base_dir.join(percent_decode(uri));
+                let data = std::fs::read(&file).map_err(|e| {
+                    format!(
+                        "buffer {index} refers to '{}', which cannot be read: {e}",
+                        file.display()
+                    )
+                })?;
+                (data, format!("'{}'", file.display()))
+            }
+        };
+        if data.len() < buffer.length() {
+            return Err(format!(
+                "buffer {index} declares {} bytes, but {origin} holds only {} (truncated?)",
+                buffer.length(),
+                data.len()
+            ));
+        }
+        buffers.push(data);
+    }
+    Ok(buffers)
+}
+
+fn percent_decode(uri: &str) -> PathBuf {
+    let bytes = uri.as_bytes();
+    let mut out = Vec::with_capacity(bytes.len());
+    let mut i = 0;
+    while i < bytes.len() {
+        let hex = |b: u8| (b as char).to_digit(16);
+        if bytes[i] == b'%' && i + 2 < bytes.len() {
+            if let (Some(h), Some(l)) = (hex(bytes[i + 1]), hex(bytes[i + 2])) {
+                out.push((h * 16 + l) as u8);
+                i += 3;
+                continue;
+            }
+        }
+        out.push(bytes[i]);
+        i += 1;
+    }
+    PathBuf::from(String::from_utf8_lossy(&out).into_owned())
+}
+
+fn check_views(document: &gltf::Document, buffers: &[Vec<u8>]) -> Result<(), String> {
+    for view in document.views() {
+        let end = view.offset() as u64 + view.length() as u64;
+        let available = buffers[view.buffer().index()].len() as u64;
+        if end > available {
+            return Err(format!(
+                "bufferView {} covers bytes {}..{end} of buffer {}, which has {available}",
+                view.index(),
+                view.offset(),
+                view.buffer().index()
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// Checks that `accessor`'s elements lie within its view, and that it has the expected type.
+fn check_accessor(
+    accessor: &gltf::Accessor<'_>,
+    usage: &str,
+    types: &[DataType],
+    dimensions: Dimensions,
+) -> Result<(), String> {
+    let index = accessor.index();
+    if !types.contains(&accessor.data_type()) || accessor.dimensions() != dimensions {
+        return Err(format!(
+            "accessor {index} used as {usage} is {:?} {:?}; expected {types:?} {dimensions:?}",
+            accessor.data_type(),
+            accessor.dimensions()
+        ));
+    }
+    let element = accessor.size() as u64;
+    let count = accessor.count() as u64;
+    if let Some(view) = accessor.view() {
+        let stride = view.stride().map_or(element, |s| s as u64);
+        let needed = if count == 0 {
+            0
+        } else {
+            accessor.offset() as u64 + stride * (count - 1) + element
+        };
+        if needed > view.length() as u64 {
+            return Err(format!(
+                "accessor {index} ({usage}, {count} elements) needs {needed} bytes of bufferView {}, which has {}",
+                view.index(),
+                view.length()
+            ));
+        }
+    }
+    if let Some(sparse) = accessor.sparse() {
+        let sparse_count = sparse.count() as u64;
+        let index_size = match sparse.indices().index_type() {
+            gltf::accessor::sparse::IndexType::U8 => 1,
+            gltf::accessor::sparse::IndexType::U16 => 2,
+            gltf::accessor::sparse::IndexType::U32 => 4,
+        };
+        for (what, view, offset, size) in [
+            (
+                "indices",
+                sparse.indices().view(),
+                sparse.indices().offset() as u64,
+                index_size,
+            ),
+            (
+                "values",
+                sparse.values().view(),
+                sparse.values().offset() as u64,
+                element,
+            ),
+        ] {
+            if offset + size * sparse_count > view.length() as u64 {
+                return Err(format!(
+                    "accessor {index} ({usage}) has sparse {what} beyond the end of bufferView {}",
+                    view.index()
+                ));
+            }
+        }
+    }
+    Ok(())
+}
+
+/// One mesh as a geometry whose parts are its triangle primitives, with each part's material
+/// (`None` = the glTF default material).
+fn load_mesh(
+    mesh: &gltf::Mesh<'_>,
+    buffers: &[Vec<u8>],
+) -> Result<(Geometry, Vec<Option<u32>>), String> {
+    let mesh_name = mesh
+        .name()
+        .map_or_else(|| format!("mesh {}", mesh.index()), str::to_owned);
+    let mut geometry = Geometry {
+        name: mesh_name.clone(),
+        ..Geometry::default()
+    };
+    let mut materials = Vec::new();
+    for primitive in mesh.primitives() {
+        let at = format!(
+            "mesh {} ('{mesh_name}') primitive {}",
+            mesh.index(),
+            primitive.index()
+        );
+        let mode = primitive.mode();
+        if !matches!(
+            mode,
+            Mode::Triangles | Mode::TriangleStrip | Mode::TriangleFan
+        ) {
+            log::warn!("{at}: {mode:?} primitives are not drawn yet");
+            continue;
+        }
+        let positions_accessor = primitive
+            .get(&gltf::Semantic::Positions)
+            .ok_or_else(|| format!("{at} has no POSITION"))?;
+        check_accessor(
+            &positions_accessor,
+            "POSITION",
+            &[DataType::F32],
+            Dimensions::Vec3,
+        )
+        .map_err(|e| format!("{at}: {e}"))?;
+        if let Some(normals) = primitive.get(&gltf::Semantic::Normals) {
+            check_accessor(&normals, "NORMAL", &[DataType::F32], Dimensions::Vec3)
+                .map_err(|e| format!("{at}: {e}"))?;
+        }
+        if let Some(indices) = primitive.indices() {
+            check_accessor(
+                &indices,
+                "indices",
+                &[DataType::U8, DataType::U16, DataType::U32],
+                Dimensions::Scalar,
+            )
+            .map_err(|e| format!("{at}: {e}"))?;
+        }
+        let reader = primitive.reader(|b| buffers.get(b.index()).map(Vec::as_slice));
+        let positions: Vec<[f32; 3]> = reader
+            .read_positions()
+            .ok_or_else(|| format!("{at}: POSITION cannot be read"))?
+            .collect();
+        if let Some((i, p)) = positions
+            .iter()
+            .enumerate()
+            .find(|(_, p)| !p.iter().all(|c| c.is_finite()))
+        {
+            return Err(format!("{at}: POSITION {i} is not finite: {p:?}"));
+        }
+        let normals: Option<Vec<[f32; 3]>> = reader.read_normals().map(Iterator::collect);
+        if let Some(normals) = &normals {
+            if let Some((i, n)) = normals
+                .iter()
+                .enumerate()
+                .find(|(_, n)| !n.iter().all(|c| c.is_finite()))
+            {
+                return Err(format!("{at}: NORMAL {i} is not finite: {n:?}"));
+            }
+        }
+        let raw_indices: Vec<u32> = match reader.read_indices() {
+            Some(indices) => indices.into_u32().collect(),
+            None => (0..positions.len() as u32).collect(),
+        };
+        if let Some((i, &index)) = raw_indices
+            .iter()
+            .enumerate()
+            .find(|(_, &x)| x as usize >= positions.len())
+        {
+            return Err(format!(
+                "{at}: index {i} is {index}, but the primitive has {} vertices",
+                positions.len()
+            ));
+        }
+        let triangles = triangle_list(&raw_indices, mode);
+        let base = geometry.vertices.len() as u32;
+        let first_index = geometry.indices.len() as u32;
+        match normals {
+            Some(normals) => {
+                geometry.vertices.extend(
+                    positions
+                        .iter()
+                        .zip(&normals)
+                        .map(|(&position, &normal)| Vertex { position, normal }),
+                );
+                geometry.indices.extend(triangles.iter().map(|&i| base + i));
+            }
+            None => {
+                // glTF: without normals, flat shading. Each triangle gets its own vertices.
+                for (t, triangle) in triangles.chunks_exact(3).enumerate() {
+                    let [a, b, c] = [0, 1, 2]
+                        .map(|k| DVec3::from(positions[triangle[k] as usize].map(f64::from)));
+                    let normal = (b - a)
+                        .cross(c - a)
+                        .normalize_or_zero()
+                        .as_vec3()
+                        .to_array();
+                    for &index in triangle {
+                        geometry.vertices.push(Vertex {
+                            position: positions[index as usize],
+                            normal,
+                        });
+                    }
+                    geometry
+                        .indices
+                        .extend((0..3).map(|k| base + 3 * t as u32 + k));
+                }
+            }
+        }
+        let index_count = geometry.indices.len() as u32 - first_index;
+        geometry.parts.push(Part {
+            first_index,
+            index_count,
+        });
+        materials.push(primitive.material().index().map(|m| m as u32));
+    }
+    Ok((geometry, materials))
+}
+
+/// Converts strip and fan indices to a triangle list.
+fn triangle_list(indices: &[u32], mode: Mode) -> Vec<u32> {
+    match mode {
+        Mode::TriangleStrip => (2..indices.len())
+            .flat_map(|i| {
+                if i % 2 == 0 {
+                    [indices[i - 2], indices[i - 1], indices[i]]
+                } else {
+                    [indices[i - 1], indices[i - 2], indices[i]]
+                }
+            })
+            .collect(),
+        Mode::TriangleFan => (2..indices.len())
+            .flat_map(|i| [indices[0], indices[i - 1], indices[i]])
+            .collect(),
+        _ => indices[..indices.len() / 3 * 3].to_vec(),
+    }
+}

@@ -1,0 +1,82 @@
+//! Cameras in double precision; what reaches the GPU is relative to the eye.
+
+use glam::{DMat4, DVec3};
+
+use crate::scene::Aabb;
+
+/// A perspective camera: view (world → eye) and projection (eye → Vulkan clip space).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Camera {
+    /// World to view space, right-handed, looking down -Z.
+    pub view: DMat4,
+    /// View to clip space with Vulkan conventions (y down, depth 0..1).
+    pub projection: DMat4,
+}
+
+/// The default viewing direction for fitted cameras: from front-right, above.
+pub const DEFAULT_DIRECTION: DVec3 = DVec3::new(0.8, 0.7, 1.2);
+
+/// Vertical field of view of fitted cameras, in degrees.
+pub const DEFAULT_FOV_DEGREES: f64 = 40.0;
+
+impl Camera {
+    /// A camera at `eye` looking at `target` with the +Y axis up.
+    pub fn look_at(
+        eye: DVec3,
+        target: DVec3,
+        fov_y_degrees: f64,
+        aspect: f64,
+        near: f64,
+        far: f64,
+    ) -> Self {
+        let forward = (target - eye).normalize_or_zero();
+        let up = if forward.cross(DVec3::Y).length_squared() < 1e-12 {
+            DVec3::Z
+        } else {
+            DVec3::Y
+        };
+        let view = DMat4::look_at_rh(eye, target, up);
+        let mut projection = DMat4::perspective_rh(fov_y_degrees.to_radians(), aspect, near, far);
+        projection.y_axis.y *= -1.0;
+        Self { view, projection }
+    }
+
+    /// A camera that sees all of `bounds` from `direction`, for an image of `aspect` (width/height):
+    /// the eye moves back along `direction` until every corner of the box is inside the view.
+    pub fn fit(bounds: &Aabb, aspect: f64, direction: DVec3) -> Self {
+        let (center, radius) = if bounds.is_empty() {
+            (DVec3::ZERO, 1.0)
+        } else {
+            (bounds.center(), bounds.radius().max(1e-6))
+        };
+        let backward = direction.normalize_or(DVec3::Z);
+        let up_hint = if backward.cross(DVec3::Y).length_squared() < 1e-12 {
+            DVec3::Z
+        } else {
+            DVec3::Y
+        };
+        let right = up_hint.cross(backward).normalize();
+        let up = backward.cross(right);
+        let tan_y = (DEFAULT_FOV_DEGREES.to_radians() * 0.5).tan();
+        let tan_x = tan_y * aspect;
+        let mut distance: f64 = 0.0;
+        let extent = if bounds.is_empty() {
+            DVec3::splat(1.0)
+        } else {
+            bounds.max - center
+        };
+        for corner in 0..8 {
+            let sign = |bit: i32| if corner & bit == 0 { -1.0 } else { 1.0 };
+            let p = DVec3::new(sign(1) * extent.x, sign(2) * extent.y, sign(4) * extent.z);
+            // The eye must be far enough back that the corner falls within both half-angles.
+            let needed =
+                (p.dot(right).abs() / tan_x).max(p.dot(up).abs() / tan_y) + p.dot(backward);
+            distance = distance.max(needed);
+        }
+        let distance = (distance * 1.05).max(radius * 1e-3);
+        let eye = center + backward * distance;
+        let near = (distance - radius * 1.05).max(distance * 1e-3);
+        let far = distance + radius * 1.05;
+        Self::look_at(eye, center, DEFAULT_FOV_DEGREES, aspect, near, far)
+    }
+}

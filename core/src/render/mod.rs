@@ -1,0 +1,353 @@
+//! The renderer: draws a [`GpuScene`] into an offscreen target and reports what a frame cost.
+//!
+//! This is the seeds' simplest technique and the baseline later techniques are measured
+//! against: one draw per part, its matrix (relative to the eye, computed in f64) and material
+//! pushed as push constants per draw, vertex and index buffers re-bound only when the geometry
+//! changes.
+
+mod camera;
+mod gpu_scene;
+mod pipeline;
+
+pub use camera::{Camera, DEFAULT_DIRECTION, DEFAULT_FOV_DEGREES};
+pub use gpu_scene::{GeometryRange, GpuScene, UploadError};
+pub use pipeline::{BaselinePipeline, DrawParameters, FrameUniforms};
+
+use std::path::Path;
+use std::sync::Arc;
+use std::time::Instant;
+
+use ash::vk;
+
+use crate::vk::{
+    transition, Buffer, CommandContext, Device, GpuTimer, MemoryLocation, OffscreenTarget, VkError,
+    VkResult,
+};
+
+/// The background colour of rendered images (linear RGBA).
+pub const CLEAR_COLOR: [f32; 4] = [0.80, 0.84, 0.88, 1.0];
+
+/// What one frame cost and drew.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct FrameStats {
+    /// CPU time spent recording the command buffer, in microseconds.
+    pub cpu_record_us: f64,
+    /// CPU time of the queue submission, in microseconds.
+    pub cpu_submit_us: f64,
+    /// GPU time between the frame's first and last command, in microseconds (if timestamps work).
+    pub gpu_us: Option<f64>,
+    /// Draw calls issued.
+    pub draw_calls: u64,
+    /// Triangles drawn.
+    pub triangles: u64,
+    /// Pipeline binds.
+    pub pipeline_binds: u64,
+    /// Vertex/index buffer binds.
+    pub vertex_binds: u64,
+    /// Parameter updates (push constant writes, descriptor binds).
+    pub parameter_updates: u64,
+}
+
+impl FrameStats {
+    /// CPU time of recording and submission.
+    pub fn cpu_us(&self) -> f64 {
+        self.cpu_record_us + self.cpu_submit_us
+    }
+}
+
+/// Renders scenes into an offscreen color + depth target.
+pub struct Renderer {
+    device: Arc<Device>,
+    target: OffscreenTarget,
+    frame_uniforms: Buffer,
+    pipeline: BaselinePipeline,
+    commands: CommandContext,
+    timer: Option<GpuTimer>,
+}
+
+impl Renderer {
+    /// Creates a renderer with a `width` × `height` target.
+    pub fn new(device: &Arc<Device>, width: u32, height: u32) -> VkResult<Self> {
+        let target = OffscreenTarget::new(device, width, height)?;
+        let frame_uniforms = Buffer::new(
+            device,
+            "frame uniforms",
+            std::mem::size_of::<FrameUniforms>() as u64,
+            vk::BufferUsageFlags::UNIFORM_BUFFER,
+            MemoryLocation::CpuToGpu,
+        )?;
+        let pipeline = BaselinePipeline::new(device, frame_uniforms.raw())?;
+        let commands = CommandContext::new(device, "frame commands")?;
+        let timer = GpuTimer::new(device, "frame timer")?;
+        Ok(Self {
+            device: Arc::clone(device),
+            target,
+            frame_uniforms,
+            pipeline,
+            commands,
+            timer,
+        })
+    }
+
+    /// The device.
+    pub fn device(&self) -> &Arc<Device> {
+        &self.device
+    }
+
+    /// Width and height of the target.
+    pub fn size(&self) -> (u32, u32) {
+        let extent = self.target.extent();
+        (extent.width, extent.height)
+    }
+
+    /// Renders one frame of `scene` seen by `camera`, waits for it, and reports its cost.
+    pub fn render(&mut self, scene: &GpuScene, camera: &Camera) -> VkResult<FrameStats> {
+        let uniforms = FrameUniforms {
+            projection: camera.projection.as_mat4().to_cols_array_2d(),
+            light: [0.22, 0.68, 0.35, 0.0],
+        };
+        self.commands.wait()?;
+        self.frame_uniforms
+            .write(0, bytemuck::bytes_of(&uniforms))?;
+
+        let record_start = Instant::now();
+        let command_buffer = self.commands.begin()?;
+        let mut stats = self.record(command_buffer, scene, camera);
+        let submit_start = Instant::now();
+        stats.cpu_record_us = (submit_start - record_start).as_secs_f64() * 1e6;
+        self.commands.submit()?;
+        stats.cpu_submit_us = submit_start.elapsed().as_secs_f64() * 1e6;
+        self.commands.wait()?;
+        stats.gpu_us = match &self.timer {
+            Some(timer) => timer.elapsed_us()?,
+            None => None,
+        };
+        Ok(stats)
+    }
+
+    fn record(
+        &mut self,
+        command_buffer: vk::CommandBuffer,
+        scene: &GpuScene,
+        camera: &Camera,
+    ) -> FrameStats {
+        let device = &*self.device;
+        let raw = device.raw();
+        let extent = self.target.extent();
+        let mut stats = FrameStats {
+            pipeline_binds: 1,
+            parameter_updates: 1,
+            ..FrameStats::default()
+        };
+        if let Some(timer) = &mut self.timer {
+            timer.begin(command_buffer);
+        }
+        transition(
+            device,
+            command_buffer,
+            self.target.color.raw(),
+            vk::ImageAspectFlags::COLOR,
+            (
+                vk::ImageLayout::UNDEFINED,
+                vk::PipelineStageFlags2::TOP_OF_PIPE,
+                vk::AccessFlags2::NONE,
+            ),
+            (
+                vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL,
+                vk::PipelineStageFlags2::COLOR_ATTACHMENT_OUTPUT,
+                vk::AccessFlags2::COLOR_ATTACHMENT_WRITE,
+            ),
+        );
+        transition(
+            device,
+            command_buffer,
+            self.target.depth.raw(),
+            vk::ImageAspectFlags::DEPTH,
+            (
+                vk::ImageLayout::UNDEFINED,
+                vk::PipelineStageFlags2::TOP_OF_PIPE,
+                vk::AccessFlags2::NONE,
+            ),
+            (
+                vk::ImageLayout::DEPTH_ATTACHMENT_OPTIMAL,
+                vk::PipelineStageFlags2::EARLY_FRAGMENT_TESTS
+                    | vk::PipelineStageFlags2::LATE_FRAGMENT_TESTS,
+                vk::AccessFlags2::DEPTH_STENCIL_ATTACHMENT_WRITE
+                    | vk::AccessFlags2::DEPTH_STENCIL_ATTACHMENT_READ,
+            ),
+        );
+        let color_attachment = [vk::RenderingAttachmentInfo::default()
+            .image_view(self.target.color.view())
+            .image_layout(vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL)
+            .load_op(vk::AttachmentLoadOp::CLEAR)
+            .store_op(vk::AttachmentStoreOp::STORE)
+            .clear_value(vk::ClearValue {
+                color: vk::ClearColorValue {
+                    float32: CLEAR_COLOR,
+                },
+            })];
+        let depth_attachment = vk::RenderingAttachmentInfo::default()
+            .image_view(self.target.depth.view())
+            .image_layout(vk::ImageLayout::DEPTH_ATTACHMENT_OPTIMAL)
+            .load_op(vk::AttachmentLoadOp::CLEAR)
+            .store_op(vk::AttachmentStoreOp::DONT_CARE)
+            .clear_value(vk::ClearValue {
+                depth_stencil: vk::ClearDepthStencilValue {
+                    depth: 1.0,
+                    stencil: 0,
+                },
+            });
+        let area = vk::Rect2D {
+            offset: vk::Offset2D::default(),
+            extent,
+        };
+        let rendering = vk::RenderingInfo::default()
+            .render_area(area)
+            .layer_count(1)
+            .color_attachments(&color_attachment)
+            .depth_attachment(&depth_attachment);
+        let viewport = [vk::Viewport {
+            x: 0.0,
+            y: 0.0,
+            width: extent.width as f32,
+            height: extent.height as f32,
+            min_depth: 0.0,
+            max_depth: 1.0,
+        }];
+        // SAFETY: command_buffer is recording; every handle used below (target, pipeline,
+        // descriptor set, arenas) outlives the submission, which render() waits for.
+        unsafe {
+            raw.cmd_begin_rendering(command_buffer, &rendering);
+            raw.cmd_bind_pipeline(
+                command_buffer,
+                vk::PipelineBindPoint::GRAPHICS,
+                self.pipeline.pipeline,
+            );
+            raw.cmd_set_viewport(command_buffer, 0, &viewport);
+            raw.cmd_set_scissor(command_buffer, 0, &[area]);
+            raw.cmd_bind_descriptor_sets(
+                command_buffer,
+                vk::PipelineBindPoint::GRAPHICS,
+                self.pipeline.layout,
+                0,
+                &[self.pipeline.frame_set],
+                &[],
+            );
+        }
+        let mut bound_geometry = u32::MAX;
+        let mut current_instance = u32::MAX;
+        let mut parameters = DrawParameters::default();
+        let push_stages = vk::ShaderStageFlags::VERTEX | vk::ShaderStageFlags::FRAGMENT;
+        for draw in &scene.draws {
+            if draw.geometry != bound_geometry {
+                let range = scene.geometry_ranges[draw.geometry as usize];
+                // SAFETY: as above; offsets lie within the arenas by construction.
+                unsafe {
+                    raw.cmd_bind_vertex_buffers(
+                        command_buffer,
+                        0,
+                        &[scene.vertex_arena.raw()],
+                        &[range.vertex_offset_bytes],
+                    );
+                    raw.cmd_bind_index_buffer(
+                        command_buffer,
+                        scene.index_arena.raw(),
+                        range.index_offset_bytes,
+                        vk::IndexType::UINT32,
+                    );
+                }
+                bound_geometry = draw.geometry;
+                stats.vertex_binds += 1;
+            }
+            if draw.instance != current_instance {
+                let model_view = camera.view * scene.instance_worlds[draw.instance as usize];
+                parameters.model_view = model_view.as_mat4().to_cols_array_2d();
+                current_instance = draw.instance;
+            }
+            let [base_color, surface] = scene.material_parameters[draw.material as usize];
+            parameters.base_color = base_color;
+            parameters.surface = surface;
+            // SAFETY: as above; the push range matches the pipeline layout.
+            unsafe {
+                raw.cmd_push_constants(
+                    command_buffer,
+                    self.pipeline.layout,
+                    push_stages,
+                    0,
+                    bytemuck::bytes_of(&parameters),
+                );
+                raw.cmd_draw_indexed(command_buffer, draw.index_count, 1, draw.first_index, 0, 0);
+            }
+            stats.parameter_updates += 1;
+            stats.draw_calls += 1;
+            stats.triangles += u64::from(draw.index_count / 3);
+        }
+        // SAFETY: rendering was begun above on this command buffer.
+        unsafe { raw.cmd_end_rendering(command_buffer) };
+        transition(
+            device,
+            command_buffer,
+            self.target.color.raw(),
+            vk::ImageAspectFlags::COLOR,
+            (
+                vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL,
+                vk::PipelineStageFlags2::COLOR_ATTACHMENT_OUTPUT,
+                vk::AccessFlags2::COLOR_ATTACHMENT_WRITE,
+            ),
+            (
+                vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
+                vk::PipelineStageFlags2::COPY,
+                vk::AccessFlags2::TRANSFER_READ,
+            ),
+        );
+        if let Some(timer) = &mut self.timer {
+            timer.end(command_buffer);
+        }
+        stats
+    }
+
+    /// Reads the last frame back as tightly packed RGBA8 rows.
+    pub fn read_rgba8(&self) -> VkResult<image::RgbaImage> {
+        let (width, height) = self.size();
+        let pixels = self.target.read_rgba8(&self.device)?;
+        image::RgbaImage::from_raw(width, height, pixels).ok_or(VkError::Call {
+            call: "read_rgba8 (size mismatch)",
+            result: vk::Result::ERROR_UNKNOWN,
+        })
+    }
+
+    /// Writes the last frame to a PNG file.
+    pub fn save_png(&self, path: &Path) -> Result<(), SaveError> {
+        let image = self.read_rgba8()?;
+        image
+            .save_with_format(path, image::ImageFormat::Png)
+            .map_err(|source| SaveError::Write {
+                path: path.to_owned(),
+                source,
+            })
+    }
+}
+
+impl Drop for Renderer {
+    fn drop(&mut self) {
+        // Resources are destroyed by their own Drop; make sure the GPU is done with them.
+        let _ = self.commands.wait();
+    }
+}
+
+/// Why an image could not be saved.
+#[derive(Debug, thiserror::Error)]
+pub enum SaveError {
+    /// Reading the image back failed.
+    #[error(transparent)]
+    Vulkan(#[from] VkError),
+    /// Writing the file failed.
+    #[error("cannot write {}: {source}", path.display())]
+    Write {
+        /// The file.
+        path: std::path::PathBuf,
+        /// The encoder's or OS's error.
+        #[source]
+        source: image::ImageError,
+    },
+}

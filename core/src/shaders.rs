@@ -1,0 +1,36 @@
+//! The GLSL sources in `shaders/`, embedded so that the library needs no files at run time.
+
+use crate::vk::{IncludeFile, ShaderStage};
+
+/// Files that `#include` resolves to.
+pub const INCLUDES: &[IncludeFile] = &[
+    ("frame.glsl", include_str!("../../shaders/frame.glsl")),
+    ("shading.glsl", include_str!("../../shaders/shading.glsl")),
+];
+
+/// A complete shader: name (file name), stage and source.
+#[derive(Clone, Copy, Debug)]
+pub struct ShaderSource {
+    /// File name in `shaders/`.
+    pub name: &'static str,
+    /// Pipeline stage.
+    pub stage: ShaderStage,
+    /// GLSL text.
+    pub source: &'static str,
+}
+
+/// Baseline vertex shader.
+pub const BASELINE_VERT: ShaderSource = ShaderSource {
+    name: "baseline.vert",
+    stage: ShaderStage::Vertex,
+    source: include_str!("../../shaders/baseline.vert"),
+};
+/// Baseline fragment shader.
+pub const BASELINE_FRAG: ShaderSource = ShaderSource {
+    name: "baseline.frag",
+    stage: ShaderStage::Fragment,
+    source: include_str!("../../shaders/baseline.frag"),
+};
+
+/// Every complete shader, for validation.
+pub const ALL: &[ShaderSource] = &[BASELINE_VERT, BASELINE_FRAG];

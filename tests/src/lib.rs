@@ -1,1 +1,68 @@
+//! Helpers shared by cadr's integration tests: a device with validation on, reference images
+//! compared with a perceptual metric, and small glTF files to break on purpose.
 
+pub mod fixtures;
+pub mod images;
+
+use std::sync::Arc;
+
+use cadr_core::render::{Camera, GpuScene, Renderer, DEFAULT_DIRECTION};
+use cadr_core::scene::Scene;
+use cadr_core::vk::{Device, DeviceOptions, InstanceOptions};
+
+/// A device with the validation layers on. Tests never skip: without Vulkan they fail here.
+pub fn test_device() -> Arc<Device> {
+    let options = DeviceOptions {
+        instance: InstanceOptions {
+            validation: true,
+            ..InstanceOptions::default()
+        },
+        ..DeviceOptions::default()
+    };
+    match Device::new(&options) {
+        Ok(device) => device,
+        Err(error) => {
+            panic!("cannot create a Vulkan device with validation (run scripts/setup.sh): {error}")
+        }
+    }
+}
+
+/// Fails the test if the validation layer reported any error on `device`.
+pub fn assert_no_validation_errors(device: &Device) {
+    let errors = device.validation_log().errors();
+    assert!(
+        errors.is_empty(),
+        "{} Vulkan validation errors:\n{}",
+        errors.len(),
+        errors.join("\n")
+    );
+}
+
+/// Renders `scene` with the camera fitted to its bounds and returns the image; checks validation.
+pub fn render_scene(scene: &Scene, width: u32, height: u32) -> image::RgbaImage {
+    let device = test_device();
+    let gpu_scene = GpuScene::upload(&device, scene).expect("upload the scene");
+    let mut renderer = Renderer::new(&device, width, height).expect("create the renderer");
+    let camera = Camera::fit(
+        &gpu_scene.stats.bounds,
+        f64::from(width) / f64::from(height),
+        DEFAULT_DIRECTION,
+    );
+    let stats = renderer
+        .render(&gpu_scene, &camera)
+        .expect("render a frame");
+    assert_eq!(
+        stats.draw_calls,
+        gpu_scene.draws.len() as u64,
+        "one draw per part"
+    );
+    let image = renderer.read_rgba8().expect("read the frame back");
+    drop(renderer);
+    drop(gpu_scene);
+    assert_no_validation_errors(&device);
+    image
+}
+
+/// The path of the Khronos "2CylinderEngine" sample shipped by Debian's assimp-testmodels.
+pub const CYLINDER_ENGINE_GLB: &str =
+    "/usr/share/assimp/models/glTF2/2CylinderEngine-glTF-Binary/2CylinderEngine.glb";

@@ -107,6 +107,7 @@ pub fn assembly(spec: &AssemblySpec) -> Scene {
     let pitch = 1.5;
     let module_size = per_row as f64 * pitch + 1.5;
     let mut placed = 0;
+    let mut placed_parts = 0;
     for m in 0..modules {
         let (mx, mz) = (m % modules_per_side, m / modules_per_side);
         let quarter_turns = rng.below(4) as f64;
@@ -154,33 +155,51 @@ pub fn assembly(spec: &AssemblySpec) -> Scene {
             );
             scene.nodes[module as usize].children.push(row);
             for c in 0..per_row.min(in_module - r * per_row) {
-                let geometry = theme[rng.below(theme.len())];
+                // Of two candidates from the theme, take the one that keeps the running part
+                // count closest to the target, so totals match the requested statistics.
+                let target = (placed + 1) as f64 * spec.parts_per_geometry;
+                let geometry = [theme[rng.below(theme.len())], theme[rng.below(theme.len())]]
+                    .into_iter()
+                    .min_by_key(|&g| {
+                        let total = (placed_parts + scene.geometries[g].parts.len()) as f64;
+                        ((total - target).abs() * 1000.0) as u64
+                    })
+                    .unwrap_or(theme[0]);
+                placed_parts += scene.geometries[geometry].parts.len();
                 let scale = rng.range(0.75, 1.25);
                 let lift = if rng.unit() < 0.15 {
                     rng.range(0.3, 0.8)
                 } else {
                     0.0
                 };
-                let local = DMat4::from_translation(DVec3::new(c as f64 * pitch, lift, 0.0))
-                    * DMat4::from_rotation_y(rng.below(4) as f64 * std::f64::consts::FRAC_PI_2)
-                    * DMat4::from_scale(DVec3::splat(scale));
+                // As in CAD files: a placement node per object, its shape node beneath.
+                let placement = push_node(
+                    &mut scene,
+                    Node {
+                        local: DMat4::from_translation(DVec3::new(c as f64 * pitch, lift, 0.0)),
+                        ..Node::new(format!("object {placed}"))
+                    },
+                );
+                scene.nodes[row as usize].children.push(placement);
                 let part_materials = material_runs(
                     scene.geometries[geometry].parts.len(),
                     scene.materials.len(),
                     &mut rng,
                 );
-                let object = push_node(
+                let shape = push_node(
                     &mut scene,
                     Node {
-                        local,
+                        local: DMat4::from_rotation_y(
+                            rng.below(4) as f64 * std::f64::consts::FRAC_PI_2,
+                        ) * DMat4::from_scale(DVec3::splat(scale)),
                         mesh: Some(MeshRef {
                             geometry: geometry as u32,
                             part_materials,
                         }),
-                        ..Node::new(format!("object {placed}"))
+                        ..Node::new(format!("object {placed} shape"))
                     },
                 );
-                scene.nodes[row as usize].children.push(object);
+                scene.nodes[placement as usize].children.push(shape);
                 placed += 1;
             }
         }

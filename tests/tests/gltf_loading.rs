@@ -1,0 +1,241 @@
+//! glTF loading: valid files in every container, the 2CylinderEngine CAD model, and bad files
+//! that must give errors naming the problem.
+
+use cadr_core::load::{load_file, load_gltf_bytes, LoadError};
+use cadr_core::scene::{flatten, SceneStats};
+use cadr_tests::fixtures::{
+    scratch_dir, CubeGltf, INDICES_OFFSET, NORMALS_OFFSET, POSITIONS_OFFSET,
+};
+use cadr_tests::CYLINDER_ENGINE_GLB;
+use std::path::Path;
+
+fn stats_of(path: &Path) -> SceneStats {
+    let scene = load_file(path).unwrap_or_else(|e| panic!("{e}"));
+    let flat = flatten(&scene).expect("flatten");
+    SceneStats::new(&scene, &flat)
+}
+
+#[test]
+fn cube_loads_the_same_from_every_container() {
+    let dir = scratch_dir("containers");
+    let cube = CubeGltf::new();
+    let separate = stats_of(&cube.write_separate(&dir, "separate"));
+    let embedded = stats_of(&cube.write_embedded(&dir, "embedded"));
+    let glb = stats_of(&cube.write_glb(&dir, "binary"));
+    assert_eq!(separate, embedded);
+    assert_eq!(separate, glb);
+    assert_eq!(separate.nodes, 3);
+    assert_eq!(separate.geometries, 1);
+    assert_eq!(separate.parts, 2, "two primitives become two parts");
+    assert_eq!(separate.materials, 2);
+    assert_eq!(separate.mesh_instances, 2, "the mesh is instanced twice");
+    assert_eq!(separate.instances, 4);
+    assert_eq!(separate.triangles, 24);
+    assert_eq!(separate.stored_triangles, 12);
+}
+
+#[test]
+fn shared_nodes_are_instanced_on_every_path() {
+    let dir = scratch_dir("shared");
+    let mut cube = CubeGltf::new();
+    // The bolt node 3 hangs under both 1 and 2: drawn twice, stored once.
+    cube.nodes = r#"[
+        {"children": [1, 2]},
+        {"children": [3], "translation": [-2, 0, 0]},
+        {"children": [3], "translation": [2, 0, 0]},
+        {"mesh": 0, "scale": [1, 2, 1]}
+    ]"#
+    .into();
+    let scene = load_file(&cube.write_glb(&dir, "shared")).expect("load");
+    let flat = flatten(&scene).expect("flatten");
+    assert_eq!(flat.instances.len(), 2);
+    let xs: Vec<f64> = flat.instances.iter().map(|i| i.world.w_axis.x).collect();
+    assert_eq!(xs, vec![-2.0, 2.0]);
+    assert_eq!(
+        flat.instances[0].world.y_axis.y, 2.0,
+        "scale of the shared node applies on each path"
+    );
+}
+
+#[test]
+fn cylinder_engine_has_the_expected_statistics() {
+    let stats = stats_of(Path::new(CYLINDER_ENGINE_GLB));
+    assert_eq!(stats.nodes, 82);
+    assert_eq!(stats.parts, 34, "34 primitives");
+    assert_eq!(
+        stats.triangles, 121_496,
+        "triangles drawn over all instances"
+    );
+    assert_eq!(stats.stored_triangles, 75_730);
+    assert!(!stats.bounds.is_empty());
+}
+
+fn load_error(name: &str, write: impl FnOnce(&Path) -> std::path::PathBuf) -> String {
+    let dir = scratch_dir(name);
+    let path = write(&dir);
+    match load_file(&path) {
+        Ok(_) => panic!("{name}: a bad file loaded without error"),
+        Err(error) => {
+            let text = error.to_string();
+            assert!(
+                text.contains(&path.file_name().unwrap().to_string_lossy().to_string()),
+                "error names the file: {text}"
+            );
+            text
+        }
+    }
+}
+
+#[test]
+fn truncated_glb_is_refused() {
+    let text = load_error("truncated", |dir| {
+        let bytes = CubeGltf::new().glb();
+        let path = dir.join("truncated.glb");
+        std::fs::write(&path, &bytes[..bytes.len() - 100]).unwrap();
+        path
+    });
+    assert!(
+        text.contains("not a valid glTF") || text.contains("buffer 0"),
+        "{text}"
+    );
+}
+
+#[test]
+fn truncated_external_buffer_is_refused() {
+    let text = load_error("short_bin", |dir| {
+        let path = CubeGltf::new().write_separate(dir, "short");
+        let bin = dir.join("short.bin");
+        let data = std::fs::read(&bin).unwrap();
+        std::fs::write(&bin, &data[..500]).unwrap();
+        path
+    });
+    assert!(
+        text.contains("buffer 0 declares 720 bytes") && text.contains("500"),
+        "{text}"
+    );
+}
+
+#[test]
+fn missing_buffer_file_is_refused() {
+    let text = load_error("missing", |dir| {
+        let path = CubeGltf::new().write_separate(dir, "lonely");
+        std::fs::remove_file(dir.join("lonely.bin")).unwrap();
+        path
+    });
+    assert!(
+        text.contains("buffer 0 refers to") && text.contains("lonely.bin"),
+        "{text}"
+    );
+}
+
+#[test]
+fn index_out_of_range_is_refused() {
+    let text = load_error("index", |dir| {
+        let mut cube = CubeGltf::new();
+        cube.set_u32(INDICES_OFFSET + 4 * 20, 999);
+        cube.write_glb(dir, "index")
+    });
+    assert!(
+        text.contains(
+            "mesh 0 ('cube') primitive 1: index 2 is 999, but the primitive has 24 vertices"
+        ),
+        "{text}"
+    );
+}
+
+#[test]
+fn non_finite_position_is_refused() {
+    let text = load_error("nan", |dir| {
+        let mut cube = CubeGltf::new();
+        cube.set_f32(POSITIONS_OFFSET + 12 * 5 + 4, f32::NAN);
+        cube.write_glb(dir, "nan")
+    });
+    assert!(text.contains("POSITION 5 is not finite"), "{text}");
+}
+
+#[test]
+fn non_finite_normal_is_refused() {
+    let text = load_error("inf", |dir| {
+        let mut cube = CubeGltf::new();
+        cube.set_f32(NORMALS_OFFSET, f32::INFINITY);
+        cube.write_glb(dir, "inf")
+    });
+    assert!(text.contains("NORMAL 0 is not finite"), "{text}");
+}
+
+#[test]
+fn non_finite_node_transform_is_refused() {
+    // JSON has no NaN literal, but 1e39 overflows f32 to infinity.
+    let text = load_error("node_inf", |dir| {
+        let mut cube = CubeGltf::new();
+        cube.nodes = r#"[{"children": [1]}, {"mesh": 0, "translation": [1e39, 0, 0]}]"#.into();
+        cube.write_glb(dir, "node_inf")
+    });
+    assert!(
+        text.contains("node 1") && text.contains("non-finite"),
+        "{text}"
+    );
+}
+
+#[test]
+fn node_cycle_is_refused() {
+    let text = load_error("cycle", |dir| {
+        let mut cube = CubeGltf::new();
+        cube.nodes = r#"[{"name": "a", "children": [1]}, {"name": "b", "children": [2]}, {"name": "c", "mesh": 0, "children": [1]}]"#.into();
+        cube.write_glb(dir, "cycle")
+    });
+    assert!(text.contains("cycle through node"), "{text}");
+}
+
+#[test]
+fn accessor_beyond_its_view_is_refused() {
+    let text = load_error("accessor", |dir| {
+        let cube = CubeGltf::new();
+        let json = cube.json(Some("accessor.bin")).replace(
+            r#""count": 24, "type": "VEC3", "min""#,
+            r#""count": 2400, "type": "VEC3", "min""#,
+        );
+        std::fs::write(dir.join("accessor.bin"), &cube.bin).unwrap();
+        let path = dir.join("accessor.gltf");
+        std::fs::write(&path, json).unwrap();
+        path
+    });
+    assert!(
+        text.contains("accessor 0 (POSITION, 2400 elements)"),
+        "{text}"
+    );
+}
+
+#[test]
+fn garbage_and_unsupported_files_are_refused() {
+    let text = load_error("garbage", |dir| {
+        let path = dir.join("garbage.gltf");
+        std::fs::write(&path, b"\x00\x01 this is not json").unwrap();
+        path
+    });
+    assert!(text.contains("not a valid glTF"), "{text}");
+    let text = load_error("required_extension", |dir| {
+        let mut cube = CubeGltf::new();
+        cube.extra = r#""extensionsRequired": ["KHR_draco_mesh_compression"], "extensionsUsed": ["KHR_draco_mesh_compression"],"#.into();
+        cube.write_glb(dir, "draco")
+    });
+    assert!(text.contains("KHR_draco_mesh_compression"), "{text}");
+    let err = load_file(Path::new("/nonexistent/dir/model.glb")).unwrap_err();
+    assert!(matches!(err, LoadError::Io { .. }), "{err}");
+    let err = load_file(Path::new("model.obj")).unwrap_err();
+    assert!(err.to_string().contains("unknown scene format"), "{err}");
+}
+
+#[test]
+fn every_truncation_of_a_glb_fails_cleanly() {
+    // Whatever the cut, the loader reports an error and never panics.
+    let bytes = CubeGltf::new().glb();
+    for cut in (0..bytes.len()).step_by(7) {
+        let result = load_gltf_bytes(&bytes[..cut], Path::new("cut.glb"));
+        assert!(
+            result.is_err(),
+            "a GLB cut at {cut} of {} bytes loaded",
+            bytes.len()
+        );
+    }
+}

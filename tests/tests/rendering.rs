@@ -1,0 +1,130 @@
+//! Image tests against references made on lavapipe, with validation on.
+
+use std::path::Path;
+
+use cadr_core::generate::{generate, GeneratorSpec};
+use cadr_core::load::load_file;
+use cadr_core::render::{Camera, GpuScene, Renderer, CLEAR_COLOR, DEFAULT_DIRECTION};
+use cadr_core::scene::Scene;
+use cadr_tests::fixtures::{scratch_dir, CubeGltf};
+use cadr_tests::images::{assert_matches_reference, compare, covered_fraction, DEFAULT_TOLERANCE};
+use cadr_tests::{assert_no_validation_errors, render_scene, test_device, CYLINDER_ENGINE_GLB};
+
+#[test]
+fn demo_matches_reference() {
+    let image = render_scene(&generate(&GeneratorSpec::Demo), 320, 240);
+    assert_matches_reference("demo", &image, DEFAULT_TOLERANCE);
+}
+
+#[test]
+fn cylinder_engine_matches_reference_and_is_plausible() {
+    let scene = load_file(Path::new(CYLINDER_ENGINE_GLB)).expect("load 2CylinderEngine");
+    let image = render_scene(&scene, 320, 240);
+    // The fitted camera shows the whole engine: it covers a good part of the frame but not all.
+    let covered = covered_fraction(&image);
+    assert!(
+        (0.15..0.9).contains(&covered),
+        "engine covers {covered:.2} of the image"
+    );
+    assert_matches_reference("cylinder_engine", &image, DEFAULT_TOLERANCE);
+}
+
+#[test]
+fn cube_fixture_matches_reference() {
+    let dir = scratch_dir("render_cube");
+    let scene = load_file(&CubeGltf::new().write_glb(&dir, "cube")).expect("load cube");
+    let image = render_scene(&scene, 160, 120);
+    assert_matches_reference("cubes", &image, DEFAULT_TOLERANCE);
+}
+
+#[test]
+fn materials_reach_the_image() {
+    // The cube's two materials are red and blue: both hues must appear.
+    let dir = scratch_dir("render_colors");
+    let scene = load_file(&CubeGltf::new().write_glb(&dir, "cube")).expect("load cube");
+    let image = render_scene(&scene, 160, 120);
+    let reddish = image
+        .pixels()
+        .filter(|p| p[0] > 120 && p[1] < 90 && p[2] < 90)
+        .count();
+    let bluish = image.pixels().filter(|p| p[2] > 120 && p[0] < 100).count();
+    assert!(reddish > 200, "red pixels: {reddish}");
+    assert!(bluish > 200, "blue pixels: {bluish}");
+}
+
+#[test]
+fn empty_scene_renders_the_background() {
+    let image = render_scene(&Scene::default(), 64, 48);
+    let expected = CLEAR_COLOR.map(|c| (c * 255.0).round() as u8);
+    assert!(
+        image.pixels().all(|p| p.0 == expected),
+        "an empty scene is all background"
+    );
+}
+
+#[test]
+fn moving_a_part_changes_the_image_beyond_tolerance() {
+    // The metric must see a real change: move one instance and compare.
+    let dir = scratch_dir("render_move");
+    let path = CubeGltf::new().write_glb(&dir, "cube");
+    let scene = load_file(&path).expect("load cube");
+    let before = render_scene(&scene, 160, 120);
+    let mut moved = scene.clone();
+    moved.nodes[2].local.w_axis.y += 0.4;
+    let after = render_scene(&moved, 160, 120);
+    let difference = compare(&before, &after).expect("same size");
+    assert!(
+        difference.mean > DEFAULT_TOLERANCE.mean || difference.p99 > DEFAULT_TOLERANCE.p99,
+        "{difference:?}"
+    );
+    assert_eq!(compare(&before, &before).expect("same size").max, 0.0);
+}
+
+#[test]
+fn repeated_frames_are_identical_and_report_costs() {
+    let device = test_device();
+    let scene = generate(&GeneratorSpec::Grid {
+        parts: 2_000,
+        triangles_per_part: 12.0,
+    });
+    let gpu_scene = GpuScene::upload(&device, &scene).expect("upload");
+    let mut renderer = Renderer::new(&device, 128, 96).expect("renderer");
+    let camera = Camera::fit(&gpu_scene.stats.bounds, 128.0 / 96.0, DEFAULT_DIRECTION);
+    let first = renderer.render(&gpu_scene, &camera).expect("frame 1");
+    let image1 = renderer.read_rgba8().expect("read 1");
+    let second = renderer.render(&gpu_scene, &camera).expect("frame 2");
+    let image2 = renderer.read_rgba8().expect("read 2");
+    assert_eq!(image1, image2);
+    assert_eq!(first.draw_calls, 2_000);
+    assert_eq!(first.triangles, gpu_scene.stats.triangles);
+    assert_eq!(
+        first.parameter_updates, 2_001,
+        "one push per draw plus the frame's descriptor set"
+    );
+    assert!(first.vertex_binds <= first.draw_calls && first.vertex_binds > 0);
+    assert!(second.cpu_record_us > 0.0);
+    assert!(
+        second.gpu_us.is_some_and(|us| us > 0.0),
+        "lavapipe has timestamps"
+    );
+    drop(renderer);
+    drop(gpu_scene);
+    assert_no_validation_errors(&device);
+}
+
+#[test]
+fn far_from_origin_scene_renders_like_one_at_the_origin() {
+    // Matrices are made relative to the eye in f64, so a model 100 km away looks the same.
+    let dir = scratch_dir("render_far");
+    let scene = load_file(&CubeGltf::new().write_glb(&dir, "cube")).expect("load cube");
+    let mut far = scene.clone();
+    far.nodes[0].local =
+        glam::DMat4::from_translation(glam::DVec3::new(100_000.0, -50_000.0, 80_000.0));
+    let near_image = render_scene(&scene, 160, 120);
+    let far_image = render_scene(&far, 160, 120);
+    let difference = compare(&near_image, &far_image).expect("same size");
+    assert!(
+        difference.mean < 0.5 && difference.p99 < 8.0,
+        "{difference:?}"
+    );
+}

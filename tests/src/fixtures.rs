@@ -145,11 +145,11 @@ impl CubeGltf {
     /// The scene as GLB bytes.
     pub fn glb(&self) -> Vec<u8> {
         let mut json = self.json(None).into_bytes();
-        while json.len() % 4 != 0 {
+        while !json.len().is_multiple_of(4) {
             json.push(b' ');
         }
         let mut bin = self.bin.clone();
-        while bin.len() % 4 != 0 {
+        while !bin.len().is_multiple_of(4) {
             bin.push(0);
         }
         let total = 12 + 8 + json.len() + 8 + bin.len();

@@ -1,4 +1,5 @@
 //! Generators: the seeds' statistics, exact grid sizes, determinism, parameter errors.
+#![allow(clippy::unwrap_used)] // Test code: a failed unwrap is a failed test.
 
 use cadr_core::generate::{generate, GeneratorSpec};
 use cadr_core::load::{load_scene, SceneSource};

@@ -1,5 +1,6 @@
 //! glTF loading: valid files in every container, the 2CylinderEngine CAD model, and bad files
 //! that must give errors naming the problem.
+#![allow(clippy::unwrap_used)] // Test code: a failed unwrap is a failed test.
 
 use cadr_core::load::{load_file, load_gltf_bytes, LoadError};
 use cadr_core::scene::{flatten, SceneStats};

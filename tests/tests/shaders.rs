@@ -1,4 +1,5 @@
 //! Every shader compiles and validates; the Rust mirrors of shader structs match their layout.
+#![allow(clippy::unwrap_used)] // Test code: a failed unwrap is a failed test.
 
 use cadr_core::render::{DrawParameters, FrameUniforms, GpuScene, Renderer};
 use cadr_core::shaders::{ALL, INCLUDES};

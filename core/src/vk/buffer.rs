@@ -45,7 +45,7 @@ impl Buffer {
         let allocation = device
             .allocator()
             .as_mut()
-            .ok_or_else(|| VkError::DeviceLost("buffer allocation after shutdown"))?
+            .ok_or(VkError::DeviceLost("buffer allocation after shutdown"))?
             .allocate(&AllocationCreateDesc {
                 name,
                 requirements,

@@ -1,0 +1,120 @@
+//! Result codes, the per-thread last error message and the panic guard.
+
+use std::cell::RefCell;
+use std::ffi::c_char;
+use std::panic::{catch_unwind, AssertUnwindSafe};
+
+/// The result of every fallible cadr function.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum CadrResult {
+    /// Success.
+    Ok = 0,
+    /// A required pointer argument was NULL.
+    NullArgument = 1,
+    /// An argument had a value outside its range (size, flag, string encoding).
+    InvalidArgument = 2,
+    /// A scene file or generator could not be loaded; the message names the file and item.
+    LoadFailed = 3,
+    /// Vulkan failed: no device, out of memory, device lost, or a validation error.
+    Vulkan = 4,
+    /// A file could not be written.
+    Io = 5,
+    /// The output buffer is too small; the needed size was written to the length out-parameter.
+    BufferTooSmall = 6,
+    /// An internal error (a bug): cadr caught a panic. The message says where.
+    Panic = 7,
+}
+
+thread_local! {
+    static LAST_ERROR: RefCell<String> = const { RefCell::new(String::new()) };
+}
+
+/// A failed call: its code and message.
+#[derive(Debug)]
+pub(crate) struct Failure {
+    code: CadrResult,
+    message: String,
+}
+
+impl Failure {
+    pub(crate) fn new(code: CadrResult, message: String) -> Self {
+        Self { code, message }
+    }
+}
+
+/// Runs `body`, turning its failure or panic into a result code and the thread's last error.
+pub(crate) fn guard(body: impl FnOnce() -> Result<(), Failure>) -> CadrResult {
+    let outcome = catch_unwind(AssertUnwindSafe(body)).unwrap_or_else(|panic| {
+        let text = panic
+            .downcast_ref::<&str>()
+            .map(|s| (*s).to_owned())
+            .or_else(|| panic.downcast_ref::<String>().cloned())
+            .unwrap_or_else(|| "unknown panic".to_owned());
+        Err(Failure::new(
+            CadrResult::Panic,
+            format!("internal error: {text}"),
+        ))
+    });
+    let (code, message) = match outcome {
+        Ok(()) => (CadrResult::Ok, String::new()),
+        Err(failure) => (failure.code, failure.message),
+    };
+    LAST_ERROR.with(|last| *last.borrow_mut() = message);
+    code
+}
+
+/// A static, NUL-terminated English name of `result`, e.g. "null argument".
+///
+/// Ownership: static; do not free. Thread-safety: callable from any thread.
+#[no_mangle]
+pub extern "C" fn cadr_result_string(result: CadrResult) -> *const c_char {
+    let text: &'static str = match result {
+        CadrResult::Ok => "ok\0",
+        CadrResult::NullArgument => "null argument\0",
+        CadrResult::InvalidArgument => "invalid argument\0",
+        CadrResult::LoadFailed => "scene could not be loaded\0",
+        CadrResult::Vulkan => "Vulkan error\0",
+        CadrResult::Io => "file could not be written\0",
+        CadrResult::BufferTooSmall => "buffer too small\0",
+        CadrResult::Panic => "internal error\0",
+    };
+    text.as_ptr().cast()
+}
+
+/// Copies the message of the last failed call on this thread (empty after a success) into
+/// `buffer` as a NUL-terminated string, and its length without the NUL into `*length`.
+///
+/// With `buffer` NULL or `capacity` too small, writes only the needed capacity (length + 1)
+/// into `*length` and returns `CADR_RESULT_BUFFER_TOO_SMALL`. `length` must not be NULL.
+///
+/// Ownership: `buffer` is the caller's. Thread-safety: each thread has its own message.
+///
+/// # Safety
+/// `buffer` is null or writable for `capacity` bytes; `length` is null or writable.
+#[no_mangle]
+pub unsafe extern "C" fn cadr_last_error_message(
+    buffer: *mut c_char,
+    capacity: usize,
+    length: *mut usize,
+) -> CadrResult {
+    if length.is_null() {
+        return CadrResult::NullArgument;
+    }
+    let outcome = catch_unwind(|| LAST_ERROR.with(|last| last.borrow().clone()));
+    let message = outcome.unwrap_or_default();
+    let bytes = message.as_bytes();
+    if buffer.is_null() || capacity < bytes.len() + 1 {
+        // SAFETY: length is non-null and writable (the caller's contract).
+        unsafe { *length = bytes.len() + 1 };
+        return CadrResult::BufferTooSmall;
+    }
+    // SAFETY: buffer is writable for capacity >= len + 1 bytes; the regions cannot overlap
+    // (ours is a private String).
+    unsafe {
+        std::ptr::copy_nonoverlapping(bytes.as_ptr(), buffer.cast::<u8>(), bytes.len());
+        *buffer.add(bytes.len()) = 0;
+        *length = bytes.len();
+    }
+    CadrResult::Ok
+}

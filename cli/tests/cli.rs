@@ -4,7 +4,10 @@
 use std::process::{Command, Output};
 
 fn cadr(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_cadr")).args(args).output().expect("run cadr")
+    Command::new(env!("CARGO_BIN_EXE_cadr"))
+        .args(args)
+        .output()
+        .expect("run cadr")
 }
 
 fn stdout(output: &Output) -> String {
@@ -20,16 +23,37 @@ fn info_prints_the_statistics() {
     let output = cadr(&["info", "gen:grid:parts=1000"]);
     assert!(output.status.success(), "{}", stderr(&output));
     let text = stdout(&output);
-    for expected in ["nodes:", "geometries:", "parts:", "materials:", "triangles:", "vertices:", "bounds:"] {
+    for expected in [
+        "nodes:",
+        "geometries:",
+        "parts:",
+        "materials:",
+        "triangles:",
+        "vertices:",
+        "bounds:",
+    ] {
         assert!(text.contains(expected), "missing {expected} in:\n{text}");
     }
-    assert!(text.contains("instances:        1000 (paths to drawable parts)"), "{text}");
+    assert!(
+        text.contains("instances:        1000 (paths to drawable parts)"),
+        "{text}"
+    );
 }
 
 #[test]
 fn render_writes_a_png_and_reports_the_frame() {
     let path = std::env::temp_dir().join(format!("cadr-cli-{}.png", std::process::id()));
-    let output = cadr(&["render", "gen:grid:parts=300", "-o", path.to_str().unwrap(), "--size", "80x60", "--frames", "3", "--validation"]);
+    let output = cadr(&[
+        "render",
+        "gen:grid:parts=300",
+        "-o",
+        path.to_str().unwrap(),
+        "--size",
+        "80x60",
+        "--frames",
+        "3",
+        "--validation",
+    ]);
     assert!(output.status.success(), "{}", stderr(&output));
     let text = stdout(&output);
     assert!(text.contains("300 parts"), "{text}");
@@ -45,19 +69,34 @@ fn render_writes_a_png_and_reports_the_frame() {
 #[test]
 fn bad_input_gives_a_clear_error_and_exit_code() {
     for (args, expected) in [
-        (vec!["render", "/nonexistent/engine.glb"], "/nonexistent/engine.glb"),
-        (vec!["render", "gen:demo", "--size", "big"], "expected WIDTHxHEIGHT"),
+        (
+            vec!["render", "/nonexistent/engine.glb"],
+            "/nonexistent/engine.glb",
+        ),
+        (
+            vec!["render", "gen:demo", "--size", "big"],
+            "expected WIDTHxHEIGHT",
+        ),
         (vec!["render", "gen:demo", "--frames", "0"], "--frames 0"),
-        (vec!["render", "gen:demo", "--colour", "red"], "unknown option --colour"),
+        (
+            vec!["render", "gen:demo", "--colour", "red"],
+            "unknown option --colour",
+        ),
         (vec!["info", "gen:grid:parts=-5"], "not a whole number"),
-        (vec!["info", "a.glb", "b.glb"], "unexpected argument 'b.glb'"),
+        (
+            vec!["info", "a.glb", "b.glb"],
+            "unexpected argument 'b.glb'",
+        ),
         (vec!["explode"], "unknown command 'explode'"),
         (vec!["render", "gen:demo", "-o"], "-o needs a value"),
     ] {
         let output = cadr(&args);
         assert_eq!(output.status.code(), Some(1), "{args:?} should fail");
         let text = stderr(&output);
-        assert!(text.starts_with("error: ") && text.contains(expected), "{args:?}: {text}");
+        assert!(
+            text.starts_with("error: ") && text.contains(expected),
+            "{args:?}: {text}"
+        );
     }
 }
 
@@ -66,7 +105,13 @@ fn help_lists_the_commands_and_generators() {
     let output = cadr(&["--help"]);
     assert!(output.status.success());
     let text = stdout(&output);
-    for expected in ["cadr render", "cadr info", "gen:graphicscard", "gen:racecar", "gen:grid:parts=N"] {
+    for expected in [
+        "cadr render",
+        "cadr info",
+        "gen:graphicscard",
+        "gen:racecar",
+        "gen:grid:parts=N",
+    ] {
         assert!(text.contains(expected), "{expected}");
     }
 }

@@ -26,7 +26,7 @@ pub struct Adapter {
 }
 
 /// How a device is chosen.
-#[derive(Clone, Debug, Default)]
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
 pub enum DeviceChoice {
     /// `CADR_DEVICE` if set, else the best device by type.
     #[default]

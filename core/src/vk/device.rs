@@ -171,6 +171,11 @@ impl Device {
         Ok(device)
     }
 
+    /// The instance the device was created on.
+    pub fn instance(&self) -> &Arc<Instance> {
+        &self.instance
+    }
+
     /// The chosen physical device.
     pub fn adapter(&self) -> &Adapter {
         &self.adapter

@@ -94,6 +94,93 @@ impl Image {
         Ok(image)
     }
 
+    /// Creates an RGBA8 image holding `pixels` (tightly packed rows), uploaded through a
+    /// staging buffer and left in `SHADER_READ_ONLY_OPTIMAL` for sampling.
+    pub fn with_rgba8(
+        device: &Arc<Device>,
+        name: &str,
+        extent: vk::Extent2D,
+        pixels: &[u8],
+        usage: vk::ImageUsageFlags,
+    ) -> VkResult<Self> {
+        let expected = u64::from(extent.width) * u64::from(extent.height) * 4;
+        if pixels.len() as u64 != expected {
+            return Err(VkError::Unsupported {
+                device: device.adapter().name.clone(),
+                reason: format!(
+                    "image '{name}': {} bytes of pixels for {}x{} RGBA8 (needs {expected})",
+                    pixels.len(),
+                    extent.width,
+                    extent.height
+                ),
+            });
+        }
+        let image = Self::new(
+            device,
+            name,
+            extent,
+            vk::Format::R8G8B8A8_UNORM,
+            usage | vk::ImageUsageFlags::TRANSFER_DST | vk::ImageUsageFlags::SAMPLED,
+            vk::ImageAspectFlags::COLOR,
+        )?;
+        let mut staging = Buffer::new(
+            device,
+            &format!("{name} (staging)"),
+            expected,
+            vk::BufferUsageFlags::TRANSFER_SRC,
+            MemoryLocation::CpuToGpu,
+        )?;
+        staging.write(0, pixels)?;
+        let mut one_shot = OneShot::begin(device, "image upload")?;
+        let command_buffer = one_shot.command_buffer();
+        transition(
+            device,
+            command_buffer,
+            image.raw,
+            vk::ImageAspectFlags::COLOR,
+            (
+                vk::ImageLayout::UNDEFINED,
+                vk::PipelineStageFlags2::TOP_OF_PIPE,
+                vk::AccessFlags2::NONE,
+            ),
+            (
+                vk::ImageLayout::TRANSFER_DST_OPTIMAL,
+                vk::PipelineStageFlags2::COPY,
+                vk::AccessFlags2::TRANSFER_WRITE,
+            ),
+        );
+        let region = [full_copy_region(extent)];
+        // SAFETY: the image is in TRANSFER_DST_OPTIMAL; both resources outlive the submission,
+        // which is waited for below.
+        unsafe {
+            device.raw.cmd_copy_buffer_to_image(
+                command_buffer,
+                staging.raw(),
+                image.raw,
+                vk::ImageLayout::TRANSFER_DST_OPTIMAL,
+                &region,
+            )
+        };
+        transition(
+            device,
+            command_buffer,
+            image.raw,
+            vk::ImageAspectFlags::COLOR,
+            (
+                vk::ImageLayout::TRANSFER_DST_OPTIMAL,
+                vk::PipelineStageFlags2::COPY,
+                vk::AccessFlags2::TRANSFER_WRITE,
+            ),
+            (
+                vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL,
+                vk::PipelineStageFlags2::FRAGMENT_SHADER,
+                vk::AccessFlags2::SHADER_SAMPLED_READ,
+            ),
+        );
+        one_shot.submit_and_wait()?;
+        Ok(image)
+    }
+
     /// The Vulkan image.
     pub fn raw(&self) -> vk::Image {
         self.raw
@@ -223,39 +310,87 @@ impl OffscreenTarget {
 
     /// Copies the color image (in TRANSFER_SRC_OPTIMAL) to the host as tightly packed RGBA8 rows.
     pub fn read_rgba8(&self, device: &Arc<Device>) -> VkResult<Vec<u8>> {
-        let extent = self.extent();
-        let size = u64::from(extent.width) * u64::from(extent.height) * 4;
-        let readback = Buffer::new(
-            device,
-            "offscreen readback",
-            size,
-            vk::BufferUsageFlags::TRANSFER_DST,
-            MemoryLocation::GpuToCpu,
-        )?;
-        let mut one_shot = OneShot::begin(device, "offscreen readback")?;
-        let region = [vk::BufferImageCopy::default()
-            .image_subresource(
-                vk::ImageSubresourceLayers::default()
-                    .aspect_mask(vk::ImageAspectFlags::COLOR)
-                    .layer_count(1),
-            )
-            .image_extent(vk::Extent3D {
-                width: extent.width,
-                height: extent.height,
-                depth: 1,
-            })];
-        // SAFETY: the image is in TRANSFER_SRC_OPTIMAL (the renderer leaves it so) and both
-        // resources outlive the submission, which is waited for below.
-        unsafe {
-            device.raw.cmd_copy_image_to_buffer(
-                one_shot.command_buffer(),
-                self.color.raw(),
-                vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
-                readback.raw(),
-                &region,
-            )
-        };
-        one_shot.submit_and_wait()?;
-        Ok(readback.mapped()?.to_vec())
+        read_rgba8(device, &self.color, vk::ImageLayout::TRANSFER_SRC_OPTIMAL)
     }
+}
+
+fn full_copy_region(extent: vk::Extent2D) -> vk::BufferImageCopy {
+    vk::BufferImageCopy::default()
+        .image_subresource(
+            vk::ImageSubresourceLayers::default()
+                .aspect_mask(vk::ImageAspectFlags::COLOR)
+                .layer_count(1),
+        )
+        .image_extent(vk::Extent3D {
+            width: extent.width,
+            height: extent.height,
+            depth: 1,
+        })
+}
+
+/// Copies an RGBA8 `image` that is in `layout` (and has TRANSFER_SRC usage) to the host as
+/// tightly packed rows; the image is back in `layout` afterwards.
+pub fn read_rgba8(
+    device: &Arc<Device>,
+    image: &Image,
+    layout: vk::ImageLayout,
+) -> VkResult<Vec<u8>> {
+    let extent = image.extent();
+    let size = u64::from(extent.width) * u64::from(extent.height) * 4;
+    let readback = Buffer::new(
+        device,
+        "image readback",
+        size,
+        vk::BufferUsageFlags::TRANSFER_DST,
+        MemoryLocation::GpuToCpu,
+    )?;
+    let mut one_shot = OneShot::begin(device, "image readback")?;
+    let command_buffer = one_shot.command_buffer();
+    let source_layout = vk::ImageLayout::TRANSFER_SRC_OPTIMAL;
+    let all = (
+        vk::PipelineStageFlags2::ALL_COMMANDS,
+        vk::AccessFlags2::MEMORY_READ | vk::AccessFlags2::MEMORY_WRITE,
+    );
+    if layout != source_layout {
+        transition(
+            device,
+            command_buffer,
+            image.raw(),
+            vk::ImageAspectFlags::COLOR,
+            (layout, all.0, all.1),
+            (
+                source_layout,
+                vk::PipelineStageFlags2::COPY,
+                vk::AccessFlags2::TRANSFER_READ,
+            ),
+        );
+    }
+    let region = [full_copy_region(extent)];
+    // SAFETY: the image is in TRANSFER_SRC_OPTIMAL; both resources outlive the submission,
+    // which is waited for below.
+    unsafe {
+        device.raw.cmd_copy_image_to_buffer(
+            command_buffer,
+            image.raw(),
+            source_layout,
+            readback.raw(),
+            &region,
+        )
+    };
+    if layout != source_layout {
+        transition(
+            device,
+            command_buffer,
+            image.raw(),
+            vk::ImageAspectFlags::COLOR,
+            (
+                source_layout,
+                vk::PipelineStageFlags2::COPY,
+                vk::AccessFlags2::TRANSFER_READ,
+            ),
+            (layout, all.0, all.1),
+        );
+    }
+    one_shot.submit_and_wait()?;
+    Ok(readback.mapped()?.to_vec())
 }

@@ -23,7 +23,7 @@ pub use command::{CommandContext, OneShot};
 pub use device::{Capabilities, Device, DeviceOptions};
 pub use error::{map_result, VkError, VkResult, VkResultExt};
 pub use image::{
-    subresource_range, transition, Image, OffscreenTarget, COLOR_FORMAT, DEPTH_FORMAT,
+    read_rgba8, subresource_range, transition, Image, OffscreenTarget, COLOR_FORMAT, DEPTH_FORMAT,
 };
 pub use instance::{Instance, InstanceOptions, ValidationLog, ValidationMessage};
 pub use shader::{compile_glsl, IncludeFile, ShaderModule, ShaderStage};

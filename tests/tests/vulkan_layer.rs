@@ -121,3 +121,27 @@ fn offscreen_target_sizes_are_checked() {
     assert_eq!((target.extent().width, target.extent().height), (3, 2));
     assert_no_validation_errors(&device);
 }
+
+#[test]
+fn buffer_misuse_is_an_error_not_a_panic() {
+    let device = test_device();
+    let mut host = Buffer::new(
+        &device,
+        "host",
+        16,
+        vk::BufferUsageFlags::UNIFORM_BUFFER,
+        MemoryLocation::CpuToGpu,
+    )
+    .expect("host buffer");
+    host.write(8, &[1; 8]).expect("in range");
+    let error = host
+        .write(12, &[1; 8])
+        .expect_err("out of range is refused");
+    assert!(
+        error
+            .to_string()
+            .contains("bytes 12..20 of a 16-byte buffer"),
+        "{error}"
+    );
+    assert_no_validation_errors(&device);
+}

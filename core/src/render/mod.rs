@@ -310,9 +310,8 @@ impl Renderer {
     pub fn read_rgba8(&self) -> VkResult<image::RgbaImage> {
         let (width, height) = self.size();
         let pixels = self.target.read_rgba8(&self.device)?;
-        image::RgbaImage::from_raw(width, height, pixels).ok_or(VkError::Call {
-            call: "read_rgba8 (size mismatch)",
-            result: vk::Result::ERROR_UNKNOWN,
+        image::RgbaImage::from_raw(width, height, pixels).ok_or_else(|| {
+            VkError::InvalidUse(format!("read back fewer pixels than {width}x{height}"))
         })
     }
 

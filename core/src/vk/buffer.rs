@@ -113,10 +113,9 @@ impl Buffer {
         let start = offset as usize;
         let end = start + data.len();
         if end as u64 > size {
-            return Err(VkError::Call {
-                call: "Buffer::write (out of range)",
-                result: vk::Result::ERROR_UNKNOWN,
-            });
+            return Err(VkError::InvalidUse(format!(
+                "writing bytes {start}..{end} of a {size}-byte buffer"
+            )));
         }
         slice[start..end].copy_from_slice(data);
         Ok(())
@@ -129,10 +128,7 @@ impl Buffer {
             .as_ref()
             .and_then(|a| a.mapped_slice())
             .map(|s| &s[..size])
-            .ok_or(VkError::Call {
-                call: "Buffer::mapped (not host-visible)",
-                result: vk::Result::ERROR_MEMORY_MAP_FAILED,
-            })
+            .ok_or_else(|| VkError::InvalidUse("mapping a buffer that is not host-visible".into()))
     }
 
     fn mapped_mut(&mut self) -> VkResult<&mut [u8]> {
@@ -141,10 +137,7 @@ impl Buffer {
             .as_mut()
             .and_then(|a| a.mapped_slice_mut())
             .map(|s| &mut s[..size])
-            .ok_or(VkError::Call {
-                call: "Buffer::write (not host-visible)",
-                result: vk::Result::ERROR_MEMORY_MAP_FAILED,
-            })
+            .ok_or_else(|| VkError::InvalidUse("writing a buffer that is not host-visible".into()))
     }
 
     /// The Vulkan handle.

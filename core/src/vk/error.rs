@@ -51,6 +51,9 @@ pub enum VkError {
         #[source]
         source: gpu_allocator::AllocationError,
     },
+    /// A resource was used against its contract (a caller's bug, reported instead of panicking).
+    #[error("invalid use: {0}")]
+    InvalidUse(String),
     /// A shader failed to compile.
     #[error("shader '{name}' failed to compile:\n{log}")]
     ShaderCompile {

@@ -105,15 +105,12 @@ impl Image {
     ) -> VkResult<Self> {
         let expected = u64::from(extent.width) * u64::from(extent.height) * 4;
         if pixels.len() as u64 != expected {
-            return Err(VkError::Unsupported {
-                device: device.adapter().name.clone(),
-                reason: format!(
-                    "image '{name}': {} bytes of pixels for {}x{} RGBA8 (needs {expected})",
-                    pixels.len(),
-                    extent.width,
-                    extent.height
-                ),
-            });
+            return Err(VkError::InvalidUse(format!(
+                "image '{name}': {} bytes of pixels for {}x{} RGBA8 (needs {expected})",
+                pixels.len(),
+                extent.width,
+                extent.height
+            )));
         }
         let image = Self::new(
             device,

@@ -189,11 +189,6 @@ impl Drop for Instance {
     }
 }
 
-/// Validation messages that are known false positives of the layer version Debian 12 ships.
-fn is_known_false_positive(_message: &str) -> bool {
-    false
-}
-
 unsafe extern "system" fn debug_callback(
     severity: vk::DebugUtilsMessageSeverityFlagsEXT,
     _types: vk::DebugUtilsMessageTypeFlagsEXT,
@@ -215,9 +210,6 @@ unsafe extern "system" fn debug_callback(
                 .to_string_lossy()
                 .into_owned()
         };
-        if is_known_false_positive(&text) {
-            return;
-        }
         // SAFETY: user_data is the ValidationLog that Instance keeps alive while the messenger exists.
         let log = unsafe { &*(user_data as *const ValidationLog) };
         let is_error = severity.contains(vk::DebugUtilsMessageSeverityFlagsEXT::ERROR);

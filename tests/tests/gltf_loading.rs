@@ -240,3 +240,23 @@ fn every_truncation_of_a_glb_fails_cleanly() {
         );
     }
 }
+
+#[test]
+fn textures_do_not_break_loading() {
+    // Textures are not drawn yet; a material with one (even a missing image file) still loads
+    // with its factors.
+    let dir = scratch_dir("textured");
+    let mut cube = CubeGltf::new();
+    cube.extra =
+        r#""images": [{"uri": "missing-texture.png"}], "textures": [{"source": 0}],"#.into();
+    let json = cube.json(Some("textured.bin")).replace(
+        r#""baseColorFactor": [0.8, 0.1, 0.1, 1.0],"#,
+        r#""baseColorFactor": [0.8, 0.1, 0.1, 1.0], "baseColorTexture": {"index": 0},"#,
+    );
+    assert!(json.contains("baseColorTexture"));
+    std::fs::write(dir.join("textured.bin"), &cube.bin).unwrap();
+    let path = dir.join("textured.gltf");
+    std::fs::write(&path, json).unwrap();
+    let scene = load_file(&path).unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!(scene.materials[0].base_color, [0.8, 0.1, 0.1, 1.0]);
+}

@@ -4,6 +4,7 @@
 //! [`scene::flatten`] into draw items, which a [`render::Renderer`] draws with one of its
 //! techniques into an offscreen target via the thin Vulkan layer in [`vk`].
 
+pub mod csf;
 pub mod generate;
 pub mod load;
 pub mod render;

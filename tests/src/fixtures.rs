@@ -4,6 +4,10 @@
 use std::path::{Path, PathBuf};
 
 use base64::Engine as _;
+use cadr_core::csf::{
+    CsfFile, CsfGeometry, CsfGeometryPart, CsfMaterial, CsfMeta, CsfNode, CsfNodePart,
+    FLAG_UNIQUE_NODES,
+};
 
 /// Byte offsets in the cube's binary buffer.
 pub const POSITIONS_OFFSET: usize = 0;
@@ -180,4 +184,143 @@ pub fn scratch_dir(test: &str) -> PathBuf {
     let _ = std::fs::remove_dir_all(&dir);
     std::fs::create_dir_all(&dir).expect("create scratch dir");
     dir
+}
+
+/// A file using what cadr does not draw: texture, aux and per-part channels, metas, payloads,
+/// a hidden part, a part placed by a child's matrix, a geometry without normals.
+pub fn rich_csf_file() -> CsfFile {
+    let vertices = vec![0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 1.0, 1.0, 0.0];
+    let mut perpart = Vec::new();
+    for p in 0..2_u32 {
+        for v in [0.0_f32, 0.0, 0.0, 1.0, 1.0, 0.0] {
+            perpart.extend_from_slice(&(v + p as f32).to_le_bytes());
+        }
+    }
+    for (begin, count) in [(0_u32, 4_u32), (0, 4)] {
+        perpart.extend_from_slice(&begin.to_le_bytes());
+        perpart.extend_from_slice(&count.to_le_bytes());
+    }
+    let geometry = CsfGeometry {
+        vertices,
+        normals: [0.0, 0.0, 1.0].repeat(4),
+        normal_channels: 1,
+        tex: vec![0.0, 0.0, 1.0, 0.0, 0.0, 1.0, 1.0, 1.0],
+        tex_channels: 1,
+        aux: vec![0.5; 16],
+        aux_storage_order: vec![1],
+        perpart,
+        perpart_storage_order: vec![0, 1],
+        index_solid: vec![0, 1, 2, 1, 3, 2],
+        index_wire: vec![0, 1, 1, 3, 3, 2, 2, 0],
+        parts: vec![
+            CsfGeometryPart {
+                deprecated: 0,
+                num_index_solid: 3,
+                num_index_wire: 4,
+            },
+            CsfGeometryPart {
+                deprecated: 0,
+                num_index_solid: 3,
+                num_index_wire: 4,
+            },
+        ],
+    };
+    let bare = CsfGeometry {
+        vertices: vec![0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0],
+        index_solid: vec![0, 1, 2],
+        parts: vec![CsfGeometryPart {
+            deprecated: 0,
+            num_index_solid: 3,
+            num_index_wire: 0,
+        }],
+        ..CsfGeometry::default()
+    };
+    let translate = |x: f32| {
+        let mut m = [0.0_f32; 16];
+        m[0] = 1.0;
+        m[5] = 1.0;
+        m[10] = 1.0;
+        m[15] = 1.0;
+        m[12] = x;
+        m
+    };
+    let packet = {
+        let mut p = vec![0_u8; 28];
+        p[0..4].copy_from_slice(&7_u32.to_le_bytes());
+        p[16..20].copy_from_slice(&28_u32.to_le_bytes());
+        p
+    };
+    CsfFile {
+        version: 6,
+        file_flags: FLAG_UNIQUE_NODES,
+        root: 0,
+        geometries: vec![geometry, bare],
+        materials: vec![
+            CsfMaterial {
+                name: "plain".into(),
+                color: [0.2, 0.4, 0.6, 1.0],
+                kind: 3,
+                bytes: packet.clone(),
+            },
+            CsfMaterial {
+                name: "other".into(),
+                color: [0.9, 0.1, 0.1, 1.0],
+                kind: 0,
+                bytes: Vec::new(),
+            },
+        ],
+        nodes: vec![
+            CsfNode {
+                object_tm: translate(0.0),
+                world_tm: translate(0.0),
+                geometry: 0,
+                parts: vec![
+                    CsfNodePart {
+                        active: 1,
+                        material: 0,
+                        node: 1,
+                    },
+                    CsfNodePart {
+                        active: 0,
+                        material: 1,
+                        node: -1,
+                    },
+                ],
+                children: vec![1, 2],
+            },
+            CsfNode {
+                object_tm: translate(5.0),
+                world_tm: translate(5.0),
+                geometry: -1,
+                parts: vec![],
+                children: vec![],
+            },
+            CsfNode {
+                object_tm: translate(-3.0),
+                world_tm: translate(-3.0),
+                geometry: 1,
+                parts: vec![CsfNodePart {
+                    active: 1,
+                    material: 1,
+                    node: -1,
+                }],
+                children: vec![],
+            },
+        ],
+        node_metas: vec![
+            CsfMeta {
+                name: "assembly".into(),
+                flags: 1,
+                bytes: packet.clone(),
+            },
+            CsfMeta::default(),
+            CsfMeta::default(),
+        ],
+        geometry_metas: Vec::new(),
+        file_meta: Some(CsfMeta {
+            name: "file".into(),
+            flags: 0,
+            bytes: packet,
+        }),
+    }
 }

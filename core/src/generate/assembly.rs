@@ -133,10 +133,7 @@ pub fn assembly(spec: &AssemblySpec) -> Scene {
             Node {
                 local: DMat4::from_translation(DVec3::new(0.15, 0.0, 0.15))
                     * DMat4::from_scale(DVec3::new(module_size - 0.3, 1.0, module_size - 0.3)),
-                mesh: Some(MeshRef {
-                    geometry: 0,
-                    part_materials: vec![bed_material],
-                }),
+                mesh: Some(MeshRef::new(0, vec![bed_material])),
                 ..Node::new(format!("module {m} bed"))
             },
         );
@@ -192,10 +189,7 @@ pub fn assembly(spec: &AssemblySpec) -> Scene {
                         local: DMat4::from_rotation_y(
                             rng.below(4) as f64 * std::f64::consts::FRAC_PI_2,
                         ) * DMat4::from_scale(DVec3::splat(scale)),
-                        mesh: Some(MeshRef {
-                            geometry: geometry as u32,
-                            part_materials,
-                        }),
+                        mesh: Some(MeshRef::new(geometry as u32, part_materials)),
                         ..Node::new(format!("object {placed} shape"))
                     },
                 );

@@ -88,10 +88,7 @@ pub fn grid(parts: u64, triangles_per_part: f64) -> Scene {
                 let object = scene.nodes.len() as u32;
                 scene.nodes.push(Node {
                     local,
-                    mesh: Some(MeshRef {
-                        geometry: geometry as u32,
-                        part_materials,
-                    }),
+                    mesh: Some(MeshRef::new(geometry as u32, part_materials)),
                     ..Node::new(format!("object {placed}"))
                 });
                 scene.nodes[row as usize].children.push(object);

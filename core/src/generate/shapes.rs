@@ -37,6 +37,7 @@ impl GeometryBuilder {
         let sides = sides.max(3);
         let normal_matrix = DMat3::from_mat4(transform).inverse().transpose();
         let first_index = self.geometry.indices.len() as u32;
+        let first_wire_index = self.geometry.wire_indices.len() as u32;
         let corner = |k: u32, y: f64| {
             let angle = std::f64::consts::TAU * (f64::from(k) + 0.5) / f64::from(sides);
             DVec3::new(angle.cos(), y, angle.sin())
@@ -59,6 +60,8 @@ impl GeometryBuilder {
             let c = push(geometry, corner(k + 1, 0.5), normal);
             let d = push(geometry, corner(k, 0.5), normal);
             geometry.indices.extend([a, c, b, a, d, c]);
+            // Feature edges: bottom, top and the vertical edge where two faces meet.
+            geometry.wire_indices.extend([a, b, d, c, a, d]);
         }
         for (y, normal) in [(0.5, DVec3::Y), (-0.5, DVec3::NEG_Y)] {
             let ring: Vec<u32> = (0..sides)
@@ -73,9 +76,12 @@ impl GeometryBuilder {
             }
         }
         let index_count = geometry.indices.len() as u32 - first_index;
+        let wire_index_count = geometry.wire_indices.len() as u32 - first_wire_index;
         geometry.parts.push(Part {
             first_index,
             index_count,
+            first_wire_index,
+            wire_index_count,
         });
     }
 

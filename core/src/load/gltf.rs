@@ -80,10 +80,10 @@ pub fn load_gltf_bytes(bytes: &[u8], path: &Path) -> Result<Scene, LoadError> {
                 })
             })
             .collect();
-        mesh_refs.push(Some(MeshRef {
-            geometry: scene.geometries.len() as u32,
+        mesh_refs.push(Some(MeshRef::new(
+            scene.geometries.len() as u32,
             part_materials,
-        }));
+        )));
         scene.geometries.push(geometry);
     }
 
@@ -424,6 +424,7 @@ fn load_mesh(
         geometry.parts.push(Part {
             first_index,
             index_count,
+            ..Part::default()
         });
         materials.push(primitive.material().index().map(|m| m as u32));
     }

@@ -41,8 +41,11 @@ pub enum LoadError {
         /// What is wrong, naming the item.
         message: String,
     },
+    /// A CSF file could not be read or is malformed.
+    #[error(transparent)]
+    Csf(#[from] crate::csf::CsfFileError),
     /// The file's extension is not one cadr reads.
-    #[error("{}: unknown scene format (expected .gltf or .glb, or gen:NAME for a generator)", path.display())]
+    #[error("{}: unknown scene format (expected .gltf, .glb, .csf or .csf.gz, or gen:NAME for a generator)", path.display())]
     UnknownFormat {
         /// The file.
         path: PathBuf,
@@ -81,15 +84,58 @@ impl SceneSource {
     }
 }
 
+/// Scene file formats cadr reads and writes.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum SceneFormat {
+    /// glTF 2.0 JSON with external or embedded buffers.
+    Gltf,
+    /// glTF 2.0 binary.
+    Glb,
+    /// CSF, uncompressed.
+    Csf,
+    /// CSF, gzip-compressed.
+    CsfGz,
+}
+
+impl SceneFormat {
+    /// The format a file name's extension says (`.gltf`, `.glb`, `.csf`, `.csf.gz`).
+    pub fn from_path(path: &Path) -> Option<Self> {
+        let name = path.file_name()?.to_string_lossy().to_lowercase();
+        [
+            (".csf.gz", Self::CsfGz),
+            (".csf", Self::Csf),
+            (".gltf", Self::Gltf),
+            (".glb", Self::Glb),
+        ]
+        .into_iter()
+        .find(|(suffix, _)| name.ends_with(suffix))
+        .map(|(_, format)| format)
+    }
+}
+
 /// Loads a scene file, choosing the format by extension.
 pub fn load_file(path: &Path) -> Result<Scene, LoadError> {
-    let extension = path
-        .extension()
-        .map(|e| e.to_string_lossy().to_lowercase())
-        .unwrap_or_default();
-    match extension.as_str() {
-        "gltf" | "glb" => load_gltf(path),
-        _ => Err(LoadError::UnknownFormat {
+    match SceneFormat::from_path(path) {
+        Some(SceneFormat::Gltf | SceneFormat::Glb) => load_gltf(path),
+        Some(SceneFormat::Csf | SceneFormat::CsfGz) => {
+            let file = crate::csf::load_csf(path)?;
+            let name = path
+                .file_name()
+                .map(|n| n.to_string_lossy().into_owned())
+                .unwrap_or_default();
+            let scene = crate::csf::scene_from_csf(&file, &name).map_err(|source| {
+                crate::csf::CsfFileError::Malformed {
+                    path: path.to_owned(),
+                    source,
+                }
+            })?;
+            scene.validate().map_err(|e| LoadError::Invalid {
+                path: path.to_owned(),
+                message: e.0,
+            })?;
+            Ok(scene)
+        }
+        None => Err(LoadError::UnknownFormat {
             path: path.to_owned(),
         }),
     }

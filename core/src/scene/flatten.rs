@@ -116,14 +116,31 @@ pub fn flatten(scene: &Scene) -> Result<FlatScene, SceneError> {
                 geometry: mesh.geometry,
                 world,
             });
-            flat.bounds
-                .add_box(&geometry_bounds[mesh.geometry as usize].transformed(&world));
+            let bounds = &geometry_bounds[mesh.geometry as usize];
+            flat.bounds.add_box(&bounds.transformed(&world));
             let geometry = &scene.geometries[mesh.geometry as usize];
             for (part_index, (part, &material)) in
                 geometry.parts.iter().zip(&mesh.part_materials).enumerate()
             {
+                let mut part_instance = instance;
+                if let Some(part_override) = mesh.part_override(part_index as u32) {
+                    if !part_override.visible {
+                        continue;
+                    }
+                    if let Some(child) = part_override.transform_child {
+                        // The part is placed by a child's matrix: it gets an instance of its own.
+                        let part_world = world * scene.nodes[child as usize].local;
+                        part_instance = flat.instances.len() as u32;
+                        flat.instances.push(Instance {
+                            node: node_index,
+                            geometry: mesh.geometry,
+                            world: part_world,
+                        });
+                        flat.bounds.add_box(&bounds.transformed(&part_world));
+                    }
+                }
                 flat.draws.push(DrawItem {
-                    instance,
+                    instance: part_instance,
                     geometry: mesh.geometry,
                     part: part_index as u32,
                     material,

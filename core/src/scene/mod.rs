@@ -4,6 +4,7 @@
 
 mod bounds;
 mod flatten;
+pub mod graph;
 mod stats;
 
 pub use bounds::Aabb;
@@ -23,13 +24,17 @@ pub struct Vertex {
 }
 
 /// A sub-range of a geometry's index buffer drawn with one material (a glTF primitive, a CSF
-/// geometry part).
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+/// geometry part), and its sub-range of edge (wire) indices.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct Part {
-    /// First index in the geometry's index buffer.
+    /// First index in the geometry's triangle index buffer.
     pub first_index: u32,
     /// Number of indices (a multiple of 3: triangle lists).
     pub index_count: u32,
+    /// First index in the geometry's wire index buffer.
+    pub first_wire_index: u32,
+    /// Number of wire indices (a multiple of 2: line lists); 0 when the part has no edges.
+    pub wire_index_count: u32,
 }
 
 impl Part {
@@ -48,6 +53,9 @@ pub struct Geometry {
     pub vertices: Vec<Vertex>,
     /// Triangle-list indices into `vertices`.
     pub indices: Vec<u32>,
+    /// Line-list indices into `vertices`: the edges a CAD file stores for the "solid with
+    /// edges" shade mode (CSF wire indices). Empty when the source has none.
+    pub wire_indices: Vec<u32>,
     /// Index ranges, each drawn with its own material.
     pub parts: Vec<Part>,
 }
@@ -95,12 +103,42 @@ impl Default for Material {
 pub type NodeIndex = u32;
 
 /// A geometry drawn by a node, with one material per part.
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug, Default, PartialEq)]
 pub struct MeshRef {
     /// Index in [`Scene::geometries`].
     pub geometry: u32,
     /// Material index for each part of the geometry (same length as its parts).
     pub part_materials: Vec<u32>,
+    /// Parts drawn differently from the rest (rare; CSF files have them): hidden parts and
+    /// parts placed by a child node's matrix. Empty for most meshes.
+    pub part_overrides: Vec<PartOverride>,
+}
+
+impl MeshRef {
+    /// A mesh of `geometry` with these part materials and no overrides.
+    pub fn new(geometry: u32, part_materials: Vec<u32>) -> Self {
+        Self {
+            geometry,
+            part_materials,
+            part_overrides: Vec::new(),
+        }
+    }
+
+    /// The override of `part`, if any.
+    pub fn part_override(&self, part: u32) -> Option<&PartOverride> {
+        self.part_overrides.iter().find(|o| o.part == part)
+    }
+}
+
+/// How one part of a [`MeshRef`] differs from the others.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct PartOverride {
+    /// The part's index in its geometry.
+    pub part: u32,
+    /// `false` hides the part.
+    pub visible: bool,
+    /// A child of the owning node whose local matrix places this part (CSF `nodeIDX`).
+    pub transform_child: Option<NodeIndex>,
 }
 
 /// A node: a local transform (double precision), children, and optionally a mesh.
@@ -178,6 +216,17 @@ impl Scene {
                     geometry.name
                 ));
             }
+            if let Some((i, index)) = geometry
+                .wire_indices
+                .iter()
+                .enumerate()
+                .find(|(_, &x)| x as usize >= vertex_count)
+            {
+                return fail(format!(
+                    "geometry {g} ('{}') wire index {i} is {index}, but there are {vertex_count} vertices",
+                    geometry.name
+                ));
+            }
             for (p, part) in geometry.parts.iter().enumerate() {
                 let end = u64::from(part.first_index) + u64::from(part.index_count);
                 if end > geometry.indices.len() as u64 || part.index_count % 3 != 0 {
@@ -186,6 +235,15 @@ impl Scene {
                         geometry.name,
                         part.first_index,
                         geometry.indices.len()
+                    ));
+                }
+                let wire_end = u64::from(part.first_wire_index) + u64::from(part.wire_index_count);
+                if wire_end > geometry.wire_indices.len() as u64 || part.wire_index_count % 2 != 0 {
+                    return fail(format!(
+                        "geometry {g} ('{}') part {p} covers wire indices {}..{wire_end} (a multiple of 2 within {} wire indices is required)",
+                        geometry.name,
+                        part.first_wire_index,
+                        geometry.wire_indices.len()
                     ));
                 }
             }
@@ -238,6 +296,23 @@ impl Scene {
                         geometry.parts.len()
                     ));
                 }
+                for o in &mesh.part_overrides {
+                    if o.part as usize >= geometry.parts.len() {
+                        return fail(format!(
+                            "node {n} ('{}') overrides part {}, but geometry {} has {} parts",
+                            node.name,
+                            o.part,
+                            mesh.geometry,
+                            geometry.parts.len()
+                        ));
+                    }
+                    if let Some(child) = o.transform_child.filter(|c| !node.children.contains(c)) {
+                        return fail(format!(
+                            "node {n} ('{}') part {} is placed by node {child}, which is not its child",
+                            node.name, o.part
+                        ));
+                    }
+                }
                 if let Some(&m) = mesh
                     .part_materials
                     .iter()
@@ -266,40 +341,11 @@ impl Scene {
         Ok(())
     }
 
-    /// A node on a cycle of the child graph, if there is one (iterative three-colour DFS).
+    /// A node on a cycle of the child graph, if there is one.
     fn find_cycle(&self) -> Option<NodeIndex> {
-        #[derive(Clone, Copy, PartialEq)]
-        enum Mark {
-            New,
-            OnPath,
-            Done,
-        }
-        let mut marks = vec![Mark::New; self.nodes.len()];
-        let mut stack: Vec<(NodeIndex, usize)> = Vec::new();
-        for start in 0..self.nodes.len() as NodeIndex {
-            if marks[start as usize] != Mark::New {
-                continue;
-            }
-            marks[start as usize] = Mark::OnPath;
-            stack.push((start, 0));
-            while let Some((node, next_child)) = stack.last_mut() {
-                let children = &self.nodes[*node as usize].children;
-                if let Some(&child) = children.get(*next_child) {
-                    *next_child += 1;
-                    match marks.get(child as usize) {
-                        Some(Mark::OnPath) => return Some(child),
-                        Some(Mark::New) => {
-                            marks[child as usize] = Mark::OnPath;
-                            stack.push((child, 0));
-                        }
-                        _ => {}
-                    }
-                } else {
-                    marks[*node as usize] = Mark::Done;
-                    stack.pop();
-                }
-            }
-        }
-        None
+        graph::first_cycle(self.nodes.len(), |node, i| {
+            self.nodes[node].children.get(i).map(|&c| c as usize)
+        })
+        .map(|(_, child)| child as NodeIndex)
     }
 }

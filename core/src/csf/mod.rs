@@ -1,0 +1,273 @@
+//! CSF, the nvpro "cadscene file" of the seed samples (`.csf`, `.csf.gz`), versions 2 to 6.
+//!
+//! [`CsfFile`] mirrors the file's structures faithfully (so a file read and written again keeps
+//! what cadr does not use: texture coordinates, aux channels, per-part channels, material and
+//! meta payloads). [`read_csf`] parses it by schema, checking every offset, count and alignment
+//! against the file and naming the structure, index and field of any problem; the file's
+//! pointer table is not needed for that and is ignored. [`write_csf`] writes the reference
+//! layout of version 6 (depth-first, the same alignments, the pointer table at the end), or an
+//! older version's layout for compatibility tests. [`scene_from_csf`] and [`csf_from_scene`]
+//! convert to and from cadr's [`Scene`](crate::scene::Scene).
+
+mod convert;
+mod read;
+mod write;
+
+pub use convert::{csf_from_scene, scene_from_csf};
+pub use read::read_csf;
+pub use write::write_csf;
+
+use std::io::Read as _;
+use std::path::Path;
+
+/// `CADSCENEFILE_MAGIC`.
+pub const MAGIC: i32 = 1_567_262_451;
+/// The newest version, the one [`write_csf`] writes by default.
+pub const VERSION: i32 = 6;
+/// The oldest version a reader accepts (version 1 is a binary break).
+pub const VERSION_COMPAT: i32 = 2;
+/// File flag: every node is referenced once (a tree).
+pub const FLAG_UNIQUE_NODES: u32 = 1;
+/// File flag: triangle strips (never set by the reference writers; not supported).
+pub const FLAG_STRIPS: u32 = 2;
+/// File flag: parts own vertex sub-ranges (given by the VERTEXRANGE part channel).
+pub const FLAG_PER_PART_VERTICES: u32 = 32;
+/// GUID of the glTF 2 material packet in material payloads.
+pub const GUID_MATERIAL_GLTF2: [u32; 4] = [0, 0, 0, 2];
+/// Part channel enum: per-part bounding box (24 bytes).
+pub const PART_CHANNEL_BBOX: i32 = 0;
+/// Part channel enum: per-part vertex range (8 bytes).
+pub const PART_CHANNEL_VERTEXRANGE: i32 = 1;
+
+/// A whole CSF file.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct CsfFile {
+    /// Format version (2..=6) the file was read as; writing uses the version asked for.
+    pub version: i32,
+    /// `fileFlags` (after the v<3 fix-up, a bit field).
+    pub file_flags: u32,
+    /// Root node, or negative for a flat list of instances.
+    pub root: i32,
+    /// Geometries.
+    pub geometries: Vec<CsfGeometry>,
+    /// Materials.
+    pub materials: Vec<CsfMaterial>,
+    /// Nodes.
+    pub nodes: Vec<CsfNode>,
+    /// Per-node metadata (v ≥ 5), empty or one per node.
+    pub node_metas: Vec<CsfMeta>,
+    /// Per-geometry metadata (v ≥ 5), empty or one per geometry.
+    pub geometry_metas: Vec<CsfMeta>,
+    /// File metadata (v ≥ 5).
+    pub file_meta: Option<CsfMeta>,
+}
+
+/// `CSFGeometry`: vertex channels, solid (triangle) and wire (line) indices, parts.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct CsfGeometry {
+    /// Positions, 3 floats per vertex.
+    pub vertices: Vec<f32>,
+    /// Normal channels, channel-major, 3 floats per vertex each.
+    pub normals: Vec<f32>,
+    /// Number of normal channels in `normals`.
+    pub normal_channels: i32,
+    /// Texture coordinate channels, channel-major, 2 floats per vertex each.
+    pub tex: Vec<f32>,
+    /// Number of texture coordinate channels.
+    pub tex_channels: i32,
+    /// Aux channels (vec4 per vertex each), in `aux_storage_order`.
+    pub aux: Vec<f32>,
+    /// Which aux channel (RADIANCE 0, TANGENT 1) each stored aux array is.
+    pub aux_storage_order: Vec<i32>,
+    /// Per-part channel bytes, channel after channel in `perpart_storage_order`.
+    pub perpart: Vec<u8>,
+    /// Which per-part channel (BBOX 0, VERTEXRANGE 1) each stored array is.
+    pub perpart_storage_order: Vec<i32>,
+    /// Triangle-list indices.
+    pub index_solid: Vec<u32>,
+    /// Line-list indices (edges).
+    pub index_wire: Vec<u32>,
+    /// Parts: consecutive ranges of the solid and wire indices.
+    pub parts: Vec<CsfGeometryPart>,
+}
+
+impl CsfGeometry {
+    /// Number of vertices.
+    pub fn vertex_count(&self) -> usize {
+        self.vertices.len() / 3
+    }
+
+    /// The per-part vertex ranges `(begin, count)`, when the VERTEXRANGE channel is stored.
+    pub fn part_vertex_ranges(&self) -> Option<Vec<(u32, u32)>> {
+        let parts = self.parts.len();
+        let mut offset = 0;
+        for &channel in &self.perpart_storage_order {
+            let size = part_channel_size(channel)?;
+            if channel == PART_CHANNEL_VERTEXRANGE {
+                let bytes = self.perpart.get(offset..offset + size * parts)?;
+                return Some(
+                    bytes
+                        .chunks_exact(8)
+                        .map(|c| (le_u32(&c[0..4]), le_u32(&c[4..8])))
+                        .collect(),
+                );
+            }
+            offset += size * parts;
+        }
+        None
+    }
+}
+
+/// Bytes per part of a part channel, `None` for an unknown channel.
+pub fn part_channel_size(channel: i32) -> Option<usize> {
+    match channel {
+        PART_CHANNEL_BBOX => Some(24),
+        PART_CHANNEL_VERTEXRANGE => Some(8),
+        _ => None,
+    }
+}
+
+fn le_u32(bytes: &[u8]) -> u32 {
+    u32::from_le_bytes([bytes[0], bytes[1], bytes[2], bytes[3]])
+}
+
+/// `CSFGeometryPart`.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct CsfGeometryPart {
+    /// Deprecated per-part vertex count, kept for round trips.
+    pub deprecated: i32,
+    /// Solid indices of the part.
+    pub num_index_solid: i32,
+    /// Wire indices of the part.
+    pub num_index_wire: i32,
+}
+
+/// `CSFMaterial`.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct CsfMaterial {
+    /// Name (at most 127 bytes are stored).
+    pub name: String,
+    /// RGBA colour (the samples use it as diffuse).
+    pub color: [f32; 4],
+    /// User data.
+    pub kind: i32,
+    /// Payload: a sequence of byte packets (see [`GUID_MATERIAL_GLTF2`]).
+    pub bytes: Vec<u8>,
+}
+
+/// `CSFMeta`.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct CsfMeta {
+    /// Name (at most 127 bytes are stored).
+    pub name: String,
+    /// User flags.
+    pub flags: i32,
+    /// Payload: a sequence of byte packets.
+    pub bytes: Vec<u8>,
+}
+
+/// `CSFNode`.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct CsfNode {
+    /// Local transform, column-major.
+    pub object_tm: [f32; 16],
+    /// World transform as stored (recomputable from the tree).
+    pub world_tm: [f32; 16],
+    /// Geometry index or -1.
+    pub geometry: i32,
+    /// One per geometry part.
+    pub parts: Vec<CsfNodePart>,
+    /// Child node indices.
+    pub children: Vec<i32>,
+}
+
+/// `CSFNodePart`.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct CsfNodePart {
+    /// 1 when drawn ("should always be 1").
+    pub active: i32,
+    /// Material index.
+    pub material: i32,
+    /// -1, or a child node whose matrix the part uses instead of the owning node's.
+    pub node: i32,
+}
+
+/// A malformed CSF file: names the structure (with its index), the field and what is wrong.
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+#[error("{structure} {field}: {problem}")]
+pub struct CsfError {
+    /// The structure, e.g. "header" or "geometry 3".
+    pub structure: String,
+    /// The field, e.g. "indexSolidOFFSET".
+    pub field: &'static str,
+    /// What is wrong.
+    pub problem: String,
+}
+
+/// Why a CSF file could not be loaded or saved.
+#[derive(Debug, thiserror::Error)]
+pub enum CsfFileError {
+    /// Reading, decompressing or writing failed.
+    #[error("{}: {source}", path.display())]
+    Io {
+        /// The file.
+        path: std::path::PathBuf,
+        /// The error.
+        #[source]
+        source: std::io::Error,
+    },
+    /// The content is malformed.
+    #[error("{}: {source}", path.display())]
+    Malformed {
+        /// The file.
+        path: std::path::PathBuf,
+        /// The problem.
+        #[source]
+        source: CsfError,
+    },
+}
+
+/// Whether `path` names a gzip-compressed CSF (`.csf.gz`, or any `.gz`).
+pub fn is_gzip_path(path: &Path) -> bool {
+    path.extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("gz"))
+}
+
+/// Reads a `.csf` or `.csf.gz` file.
+pub fn load_csf(path: &Path) -> Result<CsfFile, CsfFileError> {
+    let io = |source| CsfFileError::Io {
+        path: path.to_owned(),
+        source,
+    };
+    let raw = std::fs::read(path).map_err(io)?;
+    let bytes = if is_gzip_path(path) {
+        let mut out = Vec::new();
+        flate2::read::GzDecoder::new(&raw[..])
+            .read_to_end(&mut out)
+            .map_err(io)?;
+        out
+    } else {
+        raw
+    };
+    read_csf(&bytes).map_err(|source| CsfFileError::Malformed {
+        path: path.to_owned(),
+        source,
+    })
+}
+
+/// Writes `file` as version 6 to `path`, gzip-compressed when the name ends in `.gz`.
+pub fn save_csf(file: &CsfFile, path: &Path) -> Result<(), CsfFileError> {
+    let io = |source| CsfFileError::Io {
+        path: path.to_owned(),
+        source,
+    };
+    let bytes = write_csf(file, VERSION);
+    if is_gzip_path(path) {
+        use std::io::Write as _;
+        let mut encoder = flate2::write::GzEncoder::new(Vec::new(), flate2::Compression::default());
+        encoder.write_all(&bytes).map_err(io)?;
+        std::fs::write(path, encoder.finish().map_err(io)?).map_err(io)
+    } else {
+        std::fs::write(path, bytes).map_err(io)
+    }
+}

@@ -20,9 +20,10 @@ cadr — a Vulkan renderer for very large CAD assemblies
 USAGE:
     cadr render SCENE [-o OUT.png] [--size WxH] [--frames N] [--validation]
     cadr info SCENE
+    cadr convert SCENE OUT
     cadr devices
 
-SCENE is a .gltf or .glb file, or a generator:
+SCENE is a .gltf, .glb, .csf or .csf.gz file, or a generator:
     gen:demo           the built-in demo (default)
     gen:graphicscard   ~68 000 parts of ~10 triangles (the seeds' Graphicscard)
     gen:racecar        ~98 000 parts of ~37 triangles
@@ -32,6 +33,8 @@ render: draws the scene offscreen with the camera fitted to its bounds, writes a
         (default out.png, 1024x768) and prints what it drew and the frame's CPU and GPU time.
         --frames N renders N frames after one warm-up and reports medians.
 info:   prints nodes, geometries, parts, materials, instances, triangles, vertices, bounds.
+convert: writes SCENE as OUT (.gltf with a .bin beside it, .glb, .csf, .csf.gz) and says what
+        the target format cannot hold.
 devices: lists the Vulkan devices; CADR_DEVICE=INDEX|NAME picks one.
 
 Validation layers are on with --validation or CADR_VALIDATION=1.
@@ -68,9 +71,10 @@ fn run(command: &str, args: &Args) -> Result<(), String> {
     match command {
         "render" => render(args),
         "info" => info(args),
+        "convert" => convert(args),
         "devices" => devices(args),
         other => Err(format!(
-            "unknown command '{other}' (commands: render, info, devices; see cadr --help)"
+            "unknown command '{other}' (commands: render, info, convert, devices; see cadr --help)"
         )),
     }
 }
@@ -104,6 +108,36 @@ fn info(args: &Args) -> Result<(), String> {
         "loaded in:        {:.1} ms",
         started.elapsed().as_secs_f64() * 1e3
     );
+    Ok(())
+}
+
+fn convert(args: &Args) -> Result<(), String> {
+    args.reject_unknown("convert", &[])?;
+    let [input, output] = args.positionals() else {
+        return Err(
+            "cadr convert needs SCENE and OUT, e.g. cadr convert model.glb model.csf.gz".into(),
+        );
+    };
+    let started = Instant::now();
+    let scene = SceneSource::parse(input)
+        .and_then(|s| s.load())
+        .map_err(|e| e.to_string())?;
+    let notes = cadr_core::save::save_scene(&scene, std::path::Path::new(output))
+        .map_err(|e| e.to_string())?;
+    let flat = flatten(&scene).map_err(|e| e.to_string())?;
+    let stats = SceneStats::new(&scene, &flat);
+    println!(
+        "wrote {output}: {} nodes, {} geometries, {} materials, {} parts drawn, {} triangles ({:.0} ms)",
+        stats.nodes,
+        stats.geometries,
+        stats.materials,
+        stats.instances,
+        stats.triangles,
+        started.elapsed().as_secs_f64() * 1e3
+    );
+    for note in notes {
+        println!("note: {note}");
+    }
     Ok(())
 }
 

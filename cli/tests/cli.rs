@@ -101,6 +101,47 @@ fn bad_input_gives_a_clear_error_and_exit_code() {
 }
 
 #[test]
+fn convert_writes_csf_and_gltf_that_info_reads() {
+    let dir = std::env::temp_dir().join(format!("cadr-cli-convert-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let csf = dir.join("grid.csf.gz");
+    let output = cadr(&["convert", "gen:grid:parts=120", csf.to_str().unwrap()]);
+    assert!(output.status.success(), "{}", stderr(&output));
+    assert!(
+        stdout(&output).contains("120 parts drawn"),
+        "{}",
+        stdout(&output)
+    );
+    let glb = dir.join("grid.glb");
+    let output = cadr(&["convert", csf.to_str().unwrap(), glb.to_str().unwrap()]);
+    assert!(output.status.success(), "{}", stderr(&output));
+    assert!(
+        stdout(&output).contains("note: ") && stdout(&output).contains("edges"),
+        "{}",
+        stdout(&output)
+    );
+    let output = cadr(&["info", glb.to_str().unwrap()]);
+    assert!(
+        stdout(&output).contains("instances:        120 "),
+        "{}",
+        stdout(&output)
+    );
+    let output = cadr(&["convert", "gen:demo"]);
+    assert_eq!(output.status.code(), Some(1));
+    assert!(
+        stderr(&output).contains("needs SCENE and OUT"),
+        "{}",
+        stderr(&output)
+    );
+    let output = cadr(&["convert", "gen:demo", "out.stl"]);
+    assert!(
+        stderr(&output).contains("unknown output format"),
+        "{}",
+        stderr(&output)
+    );
+}
+
+#[test]
 fn help_lists_the_commands_and_generators() {
     let output = cadr(&["--help"]);
     assert!(output.status.success());

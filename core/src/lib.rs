@@ -8,6 +8,7 @@ pub mod csf;
 pub mod generate;
 pub mod load;
 pub mod render;
+pub mod save;
 pub mod scene;
 pub mod shaders;
 pub mod vk;

@@ -7,7 +7,7 @@ pub mod images;
 use std::sync::Arc;
 
 use cadr_core::render::{Camera, GpuScene, Renderer, DEFAULT_DIRECTION};
-use cadr_core::scene::Scene;
+use cadr_core::scene::{flatten, Scene, SceneStats};
 use cadr_core::vk::{Device, DeviceOptions, InstanceOptions};
 
 /// A device with the validation layers on. Tests never skip: without Vulkan they fail here.
@@ -66,3 +66,50 @@ pub fn render_scene(scene: &Scene, width: u32, height: u32) -> image::RgbaImage 
 /// The path of the Khronos "2CylinderEngine" sample shipped by Debian's assimp-testmodels.
 pub const CYLINDER_ENGINE_GLB: &str =
     "/usr/share/assimp/models/glTF2/2CylinderEngine-glTF-Binary/2CylinderEngine.glb";
+
+/// Draw items and world matrices agree (to f32 precision, as CSF stores f32 matrices).
+pub fn assert_same_drawing(a: &Scene, b: &Scene) {
+    let (fa, fb) = (
+        flatten(a).expect("flatten a"),
+        flatten(b).expect("flatten b"),
+    );
+    assert_eq!(fa.draws.len(), fb.draws.len());
+    for (da, db) in fa.draws.iter().zip(&fb.draws) {
+        assert_eq!(
+            (da.part, da.material, da.index_count),
+            (db.part, db.material, db.index_count)
+        );
+        // Geometries may be numbered differently after a conversion: compare what they hold.
+        let (ga, gb) = (
+            &a.geometries[da.geometry as usize],
+            &b.geometries[db.geometry as usize],
+        );
+        let part_indices = |g: &cadr_core::scene::Geometry, first: u32, count: u32| {
+            g.indices[first as usize..(first + count) as usize]
+                .iter()
+                .map(|&i| g.vertices[i as usize].position)
+                .collect::<Vec<_>>()
+        };
+        assert_eq!(
+            part_indices(ga, da.first_index, da.index_count),
+            part_indices(gb, db.first_index, db.index_count),
+            "part {} of geometry '{}' holds other triangles",
+            da.part,
+            ga.name
+        );
+
+        let (wa, wb) = (
+            fa.instances[da.instance as usize].world,
+            fb.instances[db.instance as usize].world,
+        );
+        let scale = wa
+            .to_cols_array()
+            .iter()
+            .fold(1.0_f64, |m, v| m.max(v.abs()));
+        assert!(wa.abs_diff_eq(wb, 1e-5 * scale), "{wa:?} vs {wb:?}");
+    }
+    assert_eq!(
+        SceneStats::new(a, &fa).triangles,
+        SceneStats::new(b, &fb).triangles
+    );
+}

@@ -8,7 +8,8 @@ use cadr_core::csf::{
 };
 use cadr_core::generate::{generate, GeneratorSpec};
 use cadr_core::load::load_file;
-use cadr_core::scene::{flatten, Scene, SceneStats};
+use cadr_core::scene::{flatten, Scene};
+use cadr_tests::assert_same_drawing;
 use cadr_tests::fixtures::{rich_csf_file as rich_file, scratch_dir, CubeGltf};
 
 fn cube_scene() -> Scene {
@@ -34,31 +35,6 @@ fn put_u32(bytes: &mut [u8], at: usize, value: u32) {
 
 fn put_u64(bytes: &mut [u8], at: usize, value: u64) {
     bytes[at..at + 8].copy_from_slice(&value.to_le_bytes());
-}
-
-/// Draw items and world matrices agree (to f32 precision, as CSF stores f32 matrices).
-fn assert_same_drawing(a: &Scene, b: &Scene) {
-    let (fa, fb) = (flatten(a).unwrap(), flatten(b).unwrap());
-    assert_eq!(fa.draws.len(), fb.draws.len());
-    for (da, db) in fa.draws.iter().zip(&fb.draws) {
-        assert_eq!(
-            (da.geometry, da.part, da.material, da.index_count),
-            (db.geometry, db.part, db.material, db.index_count)
-        );
-        let (wa, wb) = (
-            fa.instances[da.instance as usize].world,
-            fb.instances[db.instance as usize].world,
-        );
-        let scale = wa
-            .to_cols_array()
-            .iter()
-            .fold(1.0_f64, |m, v| m.max(v.abs()));
-        assert!(wa.abs_diff_eq(wb, 1e-5 * scale), "{wa:?} vs {wb:?}");
-    }
-    assert_eq!(
-        SceneStats::new(a, &fa).triangles,
-        SceneStats::new(b, &fb).triangles
-    );
 }
 
 #[test]

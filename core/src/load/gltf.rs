@@ -5,6 +5,7 @@
 //! become geometries (primitives are their parts), nodes keep their hierarchy and sharing, and
 //! PBR factors become materials. Textures are not used yet; files with them load.
 
+use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 
 use base64::Engine as _;
@@ -63,7 +64,11 @@ pub fn load_gltf_bytes(bytes: &[u8], path: &Path) -> Result<Scene, LoadError> {
         .collect();
     let mut default_material = None;
     let mut mesh_refs: Vec<Option<MeshRef>> = Vec::new();
+    // Meshes made of the same accessors (the same geometry under other materials, as cadr and
+    // CSF exporters write them) share one geometry.
+    let mut geometry_by_accessors: HashMap<Vec<[Option<usize>; 4]>, u32> = HashMap::new();
     for mesh in gltf.document.meshes() {
+        let key = accessor_key(&mesh);
         let (geometry, materials) = load_mesh(&mesh, &buffers).map_err(invalid)?;
         if geometry.parts.is_empty() {
             mesh_refs.push(None);
@@ -80,11 +85,11 @@ pub fn load_gltf_bytes(bytes: &[u8], path: &Path) -> Result<Scene, LoadError> {
                 })
             })
             .collect();
-        mesh_refs.push(Some(MeshRef::new(
-            scene.geometries.len() as u32,
-            part_materials,
-        )));
-        scene.geometries.push(geometry);
+        let geometry_index = *geometry_by_accessors.entry(key).or_insert_with(|| {
+            scene.geometries.push(geometry);
+            scene.geometries.len() as u32 - 1
+        });
+        mesh_refs.push(Some(MeshRef::new(geometry_index, part_materials)));
     }
 
     for node in gltf.document.nodes() {
@@ -126,6 +131,27 @@ pub fn load_gltf_bytes(bytes: &[u8], path: &Path) -> Result<Scene, LoadError> {
     };
     scene.validate().map_err(|e| invalid(e.0))?;
     Ok(scene)
+}
+
+/// What a mesh's geometry is made of: per triangle primitive, its POSITION, NORMAL and index
+/// accessors and its mode.
+fn accessor_key(mesh: &gltf::Mesh<'_>) -> Vec<[Option<usize>; 4]> {
+    mesh.primitives()
+        .filter(|p| {
+            matches!(
+                p.mode(),
+                Mode::Triangles | Mode::TriangleStrip | Mode::TriangleFan
+            )
+        })
+        .map(|p| {
+            [
+                p.get(&gltf::Semantic::Positions).map(|a| a.index()),
+                p.get(&gltf::Semantic::Normals).map(|a| a.index()),
+                p.indices().map(|a| a.index()),
+                Some(p.mode() as usize),
+            ]
+        })
+        .collect()
 }
 
 fn node_matrix(node: &gltf::Node<'_>) -> DMat4 {

@@ -1,0 +1,109 @@
+//! Saving scenes: glTF 2.0 (`.gltf` with a `.bin` beside it, or `.glb`) and CSF (`.csf`,
+//! `.csf.gz`). Each save reports what the target format cannot hold.
+
+mod gltf;
+
+use std::path::{Path, PathBuf};
+
+use crate::csf::{csf_from_scene, save_csf, CsfFileError};
+use crate::load::SceneFormat;
+use crate::scene::{flatten, Scene, SceneError};
+
+pub use self::gltf::{gltf_document, GltfDocument};
+
+/// Why a scene could not be saved.
+#[derive(Debug, thiserror::Error)]
+pub enum SaveError {
+    /// The scene is invalid.
+    #[error(transparent)]
+    Scene(#[from] SceneError),
+    /// Writing failed.
+    #[error("{}: {source}", path.display())]
+    Io {
+        /// The file.
+        path: PathBuf,
+        /// The OS error.
+        #[source]
+        source: std::io::Error,
+    },
+    /// Writing the CSF file failed.
+    #[error(transparent)]
+    Csf(#[from] CsfFileError),
+    /// The extension names no format cadr writes.
+    #[error("{}: unknown output format (expected .gltf, .glb, .csf or .csf.gz)", path.display())]
+    UnknownFormat {
+        /// The file.
+        path: PathBuf,
+    },
+}
+
+/// Writes `scene` to `path` in the format its extension names; returns notes on what the
+/// format could not keep (empty when nothing was lost).
+pub fn save_scene(scene: &Scene, path: &Path) -> Result<Vec<String>, SaveError> {
+    let io = |source| SaveError::Io {
+        path: path.to_owned(),
+        source,
+    };
+    let mut notes = Vec::new();
+    let paths = flatten(scene)?.instances.len();
+    let meshes = scene.nodes.iter().filter(|n| n.mesh.is_some()).count();
+    match SceneFormat::from_path(path) {
+        Some(format @ (SceneFormat::Gltf | SceneFormat::Glb)) => {
+            let document = gltf_document(scene)?;
+            if document.unfolded_nodes > scene.nodes.len() {
+                notes.push(format!(
+                    "glTF nodes have one parent: shared subgraphs were unfolded ({} nodes became {}); meshes stay shared",
+                    scene.nodes.len(),
+                    document.unfolded_nodes
+                ));
+            }
+            let wire: usize = scene
+                .geometries
+                .iter()
+                .map(|g| g.wire_indices.len() / 2)
+                .sum();
+            if wire > 0 {
+                notes.push(format!(
+                    "{wire} edges (wire indices) are not written: glTF has no place for them"
+                ));
+            }
+            if format == SceneFormat::Glb {
+                std::fs::write(path, document.to_glb()).map_err(io)?;
+            } else {
+                let bin_name = format!(
+                    "{}.bin",
+                    path.file_stem()
+                        .map(|s| s.to_string_lossy().into_owned())
+                        .unwrap_or_else(|| "scene".into())
+                );
+                let bin_path = path.with_file_name(&bin_name);
+                std::fs::write(&bin_path, &document.binary).map_err(|source| SaveError::Io {
+                    path: bin_path.clone(),
+                    source,
+                })?;
+                std::fs::write(path, document.json_with_uri(&bin_name)).map_err(io)?;
+            }
+        }
+        Some(SceneFormat::Csf | SceneFormat::CsfGz) => {
+            let file = csf_from_scene(scene)?;
+            if file.nodes.len() > scene.nodes.len() + 1 {
+                notes.push(format!(
+                    "CSF nodes are a tree: shared subgraphs were unfolded ({} nodes became {}); geometries stay shared",
+                    scene.nodes.len(),
+                    file.nodes.len()
+                ));
+            }
+            save_csf(&file, path)?;
+        }
+        None => {
+            return Err(SaveError::UnknownFormat {
+                path: path.to_owned(),
+            })
+        }
+    }
+    log::debug!(
+        "saved {} ({meshes} mesh nodes, {paths} instances)",
+        path.display()
+    );
+    Ok(notes)
+}

@@ -6,9 +6,11 @@
 
 pub mod csf;
 pub mod generate;
+pub mod graph;
 pub mod load;
 pub mod render;
 pub mod save;
 pub mod scene;
 pub mod shaders;
+pub mod tree;
 pub mod vk;

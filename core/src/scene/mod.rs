@@ -186,6 +186,70 @@ pub struct Scene {
 #[error("invalid scene: {0}")]
 pub struct SceneError(pub String);
 
+impl Geometry {
+    /// Checks that indices refer to vertices, parts lie within the index buffers (whole
+    /// triangles and lines), and values are finite; `g` numbers the geometry in messages.
+    pub fn validate(&self, g: usize) -> Result<(), SceneError> {
+        let geometry = self;
+        let fail = |text: String| Err(SceneError(text));
+        let vertex_count = geometry.vertices.len();
+        if let Some((i, v)) = geometry
+            .vertices
+            .iter()
+            .enumerate()
+            .find(|(_, v)| !v.position.iter().chain(&v.normal).all(|c| c.is_finite()))
+        {
+            return fail(format!(
+                "geometry {g} ('{}') vertex {i} is not finite: {v:?}",
+                geometry.name
+            ));
+        }
+        if let Some((i, index)) = geometry
+            .indices
+            .iter()
+            .enumerate()
+            .find(|(_, &x)| x as usize >= vertex_count)
+        {
+            return fail(format!(
+                "geometry {g} ('{}') index {i} is {index}, but there are {vertex_count} vertices",
+                geometry.name
+            ));
+        }
+        if let Some((i, index)) = geometry
+            .wire_indices
+            .iter()
+            .enumerate()
+            .find(|(_, &x)| x as usize >= vertex_count)
+        {
+            return fail(format!(
+                "geometry {g} ('{}') wire index {i} is {index}, but there are {vertex_count} vertices",
+                geometry.name
+            ));
+        }
+        for (p, part) in geometry.parts.iter().enumerate() {
+            let end = u64::from(part.first_index) + u64::from(part.index_count);
+            if end > geometry.indices.len() as u64 || part.index_count % 3 != 0 {
+                return fail(format!(
+                    "geometry {g} ('{}') part {p} covers indices {}..{end} (a multiple of 3 within {} indices is required)",
+                    geometry.name,
+                    part.first_index,
+                    geometry.indices.len()
+                ));
+            }
+            let wire_end = u64::from(part.first_wire_index) + u64::from(part.wire_index_count);
+            if wire_end > geometry.wire_indices.len() as u64 || part.wire_index_count % 2 != 0 {
+                return fail(format!(
+                    "geometry {g} ('{}') part {p} covers wire indices {}..{wire_end} (a multiple of 2 within {} wire indices is required)",
+                    geometry.name,
+                    part.first_wire_index,
+                    geometry.wire_indices.len()
+                ));
+            }
+        }
+        Ok(())
+    }
+}
+
 impl Scene {
     /// Checks every reference and range: indices within vertices, parts within indices, node,
     /// geometry and material references in range, finite values, no cycles in the node graph.
@@ -193,60 +257,7 @@ impl Scene {
     pub fn validate(&self) -> Result<(), SceneError> {
         let fail = |text: String| Err(SceneError(text));
         for (g, geometry) in self.geometries.iter().enumerate() {
-            let vertex_count = geometry.vertices.len();
-            if let Some((i, v)) = geometry
-                .vertices
-                .iter()
-                .enumerate()
-                .find(|(_, v)| !v.position.iter().chain(&v.normal).all(|c| c.is_finite()))
-            {
-                return fail(format!(
-                    "geometry {g} ('{}') vertex {i} is not finite: {v:?}",
-                    geometry.name
-                ));
-            }
-            if let Some((i, index)) = geometry
-                .indices
-                .iter()
-                .enumerate()
-                .find(|(_, &x)| x as usize >= vertex_count)
-            {
-                return fail(format!(
-                    "geometry {g} ('{}') index {i} is {index}, but there are {vertex_count} vertices",
-                    geometry.name
-                ));
-            }
-            if let Some((i, index)) = geometry
-                .wire_indices
-                .iter()
-                .enumerate()
-                .find(|(_, &x)| x as usize >= vertex_count)
-            {
-                return fail(format!(
-                    "geometry {g} ('{}') wire index {i} is {index}, but there are {vertex_count} vertices",
-                    geometry.name
-                ));
-            }
-            for (p, part) in geometry.parts.iter().enumerate() {
-                let end = u64::from(part.first_index) + u64::from(part.index_count);
-                if end > geometry.indices.len() as u64 || part.index_count % 3 != 0 {
-                    return fail(format!(
-                        "geometry {g} ('{}') part {p} covers indices {}..{end} (a multiple of 3 within {} indices is required)",
-                        geometry.name,
-                        part.first_index,
-                        geometry.indices.len()
-                    ));
-                }
-                let wire_end = u64::from(part.first_wire_index) + u64::from(part.wire_index_count);
-                if wire_end > geometry.wire_indices.len() as u64 || part.wire_index_count % 2 != 0 {
-                    return fail(format!(
-                        "geometry {g} ('{}') part {p} covers wire indices {}..{wire_end} (a multiple of 2 within {} wire indices is required)",
-                        geometry.name,
-                        part.first_wire_index,
-                        geometry.wire_indices.len()
-                    ));
-                }
-            }
+            geometry.validate(g)?;
         }
         for (m, material) in self.materials.iter().enumerate() {
             let values = material

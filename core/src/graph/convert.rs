@@ -1,0 +1,127 @@
+//! Between the scene graph and the flat [`Scene`] model of loaders, savers and the baseline.
+
+use std::collections::HashMap;
+
+use glam::DMat4;
+
+use super::{GraphError, NodeHandle, NodeKind, SceneGraph};
+use crate::scene::{MeshRef, Node, Scene};
+
+/// The scene the graph shows: hidden nodes and inactive Switch children are left out, a LOD
+/// shows its first (most detailed) child and a Billboard does not turn (both depend on the
+/// eye, which a scene does not have).
+pub(super) fn graph_to_scene(graph: &SceneGraph) -> Scene {
+    let mut scene = Scene {
+        name: "scene graph".into(),
+        ..Scene::default()
+    };
+    let mut geometry_index = HashMap::new();
+    for (handle, entry) in graph.geometries.iter() {
+        geometry_index.insert(handle, scene.geometries.len() as u32);
+        scene.geometries.push(entry.geometry.clone());
+    }
+    let mut material_index = HashMap::new();
+    for (handle, entry) in graph.materials.iter() {
+        material_index.insert(handle, scene.materials.len() as u32);
+        scene.materials.push(entry.material.clone());
+    }
+    let mut node_index: HashMap<NodeHandle, u32> = HashMap::new();
+    for (handle, _) in graph.nodes.iter() {
+        node_index.insert(handle, node_index.len() as u32);
+    }
+    for (_, node) in graph.nodes.iter() {
+        let shown = |link: &&super::ChildLink| {
+            link.active && graph.nodes.get(link.node).is_some_and(|c| c.flags.visible)
+        };
+        let mut children: Vec<u32> = node
+            .children
+            .iter()
+            .filter(shown)
+            .map(|l| node_index[&l.node])
+            .collect();
+        if matches!(node.kind, NodeKind::Lod { .. }) {
+            children.truncate(1);
+        }
+        let mesh = match &node.kind {
+            NodeKind::Geo {
+                geometry,
+                part_materials,
+            } => Some(MeshRef::new(
+                geometry_index[geometry],
+                part_materials.iter().map(|m| material_index[m]).collect(),
+            )),
+            _ => None,
+        };
+        scene.nodes.push(Node {
+            name: node.name.clone(),
+            local: node.local_matrix(),
+            children,
+            mesh,
+        });
+    }
+    if graph.node(graph.root).is_ok_and(|r| r.flags.visible) {
+        scene.roots.push(node_index[&graph.root]);
+    }
+    scene
+}
+
+/// A graph equivalent to `scene`: each scene node becomes a Transform (a Group when its
+/// matrix is the identity) with, for a mesh, a Geo node as its first child; the scene's roots
+/// hang under the graph's root. Returns the handle of each scene node. The new graph has no
+/// pending events.
+pub(super) fn scene_to_graph(scene: &Scene) -> Result<(SceneGraph, Vec<NodeHandle>), GraphError> {
+    scene.validate().map_err(|e| GraphError::Invalid(e.0))?;
+    if let Some(node) = scene.nodes.iter().find(|n| {
+        n.mesh
+            .as_ref()
+            .is_some_and(|m| !m.part_overrides.is_empty())
+    }) {
+        return Err(GraphError::Invalid(format!(
+            "node '{}' hides parts or places them by a child's matrix, which the scene graph cannot express yet",
+            node.name
+        )));
+    }
+    let mut graph = SceneGraph::new();
+    let geometries = scene
+        .geometries
+        .iter()
+        .map(|g| graph.create_geometry(g.clone()))
+        .collect::<Result<Vec<_>, _>>()?;
+    let materials = scene
+        .materials
+        .iter()
+        .map(|m| graph.create_material(m.clone()))
+        .collect::<Result<Vec<_>, _>>()?;
+    let mut handles = Vec::with_capacity(scene.nodes.len());
+    for node in &scene.nodes {
+        let handle = if node.local == DMat4::IDENTITY {
+            graph.create_group(&node.name)
+        } else {
+            graph.create_transform(&node.name, node.local)?
+        };
+        if let Some(mesh) = &node.mesh {
+            let part_materials: Vec<_> = mesh
+                .part_materials
+                .iter()
+                .map(|&m| materials[m as usize])
+                .collect();
+            let geo = graph.create_geo(
+                &format!("{} geometry", node.name),
+                geometries[mesh.geometry as usize],
+                &part_materials,
+            )?;
+            graph.add_child(handle, geo)?;
+        }
+        handles.push(handle);
+    }
+    for (node, &handle) in scene.nodes.iter().zip(&handles) {
+        for &child in &node.children {
+            graph.add_child(handle, handles[child as usize])?;
+        }
+    }
+    for &root in &scene.roots {
+        graph.add_child(graph.root, handles[root as usize])?;
+    }
+    graph.events.clear();
+    Ok((graph, handles))
+}

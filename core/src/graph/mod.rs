@@ -1,0 +1,882 @@
+//! The scene graph: the model a CAD host edits. Nodes of several kinds (group, transform,
+//! geometry, switch, LOD, billboard) with flags, shared by any number of parents (a DAG, never
+//! a cycle); geometries and materials shared by nodes. Every object is reached through a
+//! generation-checked [`Handle`], so a destroyed or foreign handle is an error, never undefined
+//! behaviour. Every edit is recorded as a [`GraphEvent`]; the scene tree
+//! ([`crate::tree::SceneTree`]) applies them incrementally.
+//!
+//! Local matrices are `f64`: CAD assemblies span kilometres with micrometre detail.
+
+mod convert;
+mod slots;
+
+pub use slots::{Handle, Slots};
+
+use glam::DMat4;
+
+use crate::scene::{Geometry, Material, Scene};
+
+/// A node of the graph.
+pub type NodeHandle = Handle<GraphNode>;
+/// A geometry of the graph.
+pub type GeometryHandle = Handle<GeometryEntry>;
+/// A material of the graph.
+pub type MaterialHandle = Handle<MaterialEntry>;
+
+/// What a node does.
+#[derive(Clone, Debug, PartialEq)]
+pub enum NodeKind {
+    /// Groups its children.
+    Group,
+    /// Places its children with a local matrix (double precision).
+    Transform {
+        /// Child space to parent space.
+        matrix: DMat4,
+    },
+    /// Draws a geometry with one material per part.
+    Geo {
+        /// The geometry.
+        geometry: GeometryHandle,
+        /// One material per part of the geometry.
+        part_materials: Vec<MaterialHandle>,
+    },
+    /// Shows only its active children (see [`SceneGraph::set_switch_mask`]).
+    Switch,
+    /// Shows one child by distance from the eye: child `i` when the distance lies between
+    /// `distances[i - 1]` and `distances[i]`, the last child beyond the last distance.
+    Lod {
+        /// Increasing switch distances, one fewer than the children that are chosen from.
+        distances: Vec<f64>,
+    },
+    /// Turns its children about their local origin to face the eye (rotation about +Y).
+    Billboard,
+}
+
+impl NodeKind {
+    fn name(&self) -> &'static str {
+        match self {
+            Self::Group => "Group",
+            Self::Transform { .. } => "Transform",
+            Self::Geo { .. } => "Geo",
+            Self::Switch => "Switch",
+            Self::Lod { .. } => "Lod",
+            Self::Billboard => "Billboard",
+        }
+    }
+}
+
+/// Per-node flags a CAD host needs.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct NodeFlags {
+    /// Drawn (with its subtree) when set.
+    pub visible: bool,
+    /// Can be picked by selection.
+    pub pickable: bool,
+    /// Drawn highlighted (selection feedback).
+    pub highlighted: bool,
+}
+
+impl Default for NodeFlags {
+    fn default() -> Self {
+        Self {
+            visible: true,
+            pickable: true,
+            highlighted: false,
+        }
+    }
+}
+
+/// A link from a parent to a child; `active` is the switch mask bit (always set for other kinds).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct ChildLink {
+    /// The child.
+    pub node: NodeHandle,
+    /// Whether a Switch parent shows this child.
+    pub active: bool,
+}
+
+/// A node: kind, name, flags and children. Its parents are counted for sharing.
+#[derive(Clone, Debug)]
+pub struct GraphNode {
+    /// Name (for hosts and tools).
+    pub name: String,
+    /// What the node does.
+    pub kind: NodeKind,
+    /// Flags.
+    pub flags: NodeFlags,
+    children: Vec<ChildLink>,
+    parents: Vec<NodeHandle>,
+}
+
+impl GraphNode {
+    /// The children, in drawing order.
+    pub fn children(&self) -> &[ChildLink] {
+        &self.children
+    }
+
+    /// The parents (a parent appears once per link).
+    pub fn parents(&self) -> &[NodeHandle] {
+        &self.parents
+    }
+
+    /// The local matrix (identity for every kind but Transform).
+    pub fn local_matrix(&self) -> DMat4 {
+        match self.kind {
+            NodeKind::Transform { matrix } => matrix,
+            _ => DMat4::IDENTITY,
+        }
+    }
+}
+
+/// A geometry and how many Geo nodes use it.
+#[derive(Clone, Debug)]
+pub struct GeometryEntry {
+    /// The data.
+    pub geometry: Geometry,
+    users: u32,
+}
+
+/// A material and how many Geo node parts use it.
+#[derive(Clone, Debug)]
+pub struct MaterialEntry {
+    /// The parameters.
+    pub material: Material,
+    users: u32,
+}
+
+/// An edit, as the scene tree consumes it.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum GraphEvent {
+    /// `child` was inserted into `parent`'s children at `position`.
+    ChildInserted {
+        /// The parent.
+        parent: NodeHandle,
+        /// Where.
+        position: u32,
+        /// The child.
+        child: NodeHandle,
+    },
+    /// The child at `position` of `parent` was removed.
+    ChildRemoved {
+        /// The parent.
+        parent: NodeHandle,
+        /// Where it was.
+        position: u32,
+    },
+    /// A Transform's matrix changed.
+    MatrixChanged(NodeHandle),
+    /// A node's flags changed.
+    FlagsChanged(NodeHandle),
+    /// A Switch's mask or a LOD's distances changed.
+    SelectionChanged(NodeHandle),
+    /// A Geo node's part material changed.
+    PartMaterialChanged {
+        /// The Geo node.
+        node: NodeHandle,
+        /// The part.
+        part: u32,
+    },
+    /// A geometry's data was replaced.
+    GeometryReplaced(GeometryHandle),
+    /// A material's parameters changed.
+    MaterialChanged(MaterialHandle),
+}
+
+/// Why an edit was refused. Nothing is changed by a refused edit.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+pub enum GraphError {
+    /// The node handle is destroyed or from another graph.
+    #[error("node handle {index}:{generation} is destroyed or belongs to another graph")]
+    StaleNode {
+        /// Slot.
+        index: u32,
+        /// Generation.
+        generation: u32,
+    },
+    /// The geometry handle is destroyed or from another graph.
+    #[error("geometry handle {index}:{generation} is destroyed or belongs to another graph")]
+    StaleGeometry {
+        /// Slot.
+        index: u32,
+        /// Generation.
+        generation: u32,
+    },
+    /// The material handle is destroyed or from another graph.
+    #[error("material handle {index}:{generation} is destroyed or belongs to another graph")]
+    StaleMaterial {
+        /// Slot.
+        index: u32,
+        /// Generation.
+        generation: u32,
+    },
+    /// The edit needs another kind of node.
+    #[error("node '{name}' is a {actual}; {operation} needs a {expected}")]
+    WrongKind {
+        /// The node's name.
+        name: String,
+        /// Its kind.
+        actual: &'static str,
+        /// The kind the operation needs.
+        expected: &'static str,
+        /// The operation.
+        operation: &'static str,
+    },
+    /// Adding the child would make the node its own ancestor.
+    #[error("adding '{child}' under '{parent}' would create a cycle")]
+    Cycle {
+        /// The parent's name.
+        parent: String,
+        /// The child's name.
+        child: String,
+    },
+    /// An index is out of range.
+    #[error("{what} {index} is out of range (0..{len})")]
+    OutOfRange {
+        /// What was indexed.
+        what: &'static str,
+        /// The index.
+        index: usize,
+        /// The number of items.
+        len: usize,
+    },
+    /// The object is still used.
+    #[error("{what} is still used by {users} node(s)")]
+    InUse {
+        /// What.
+        what: String,
+        /// How many users.
+        users: u32,
+    },
+    /// Other invalid input (bad geometry data, the root, wrong counts).
+    #[error("{0}")]
+    Invalid(String),
+}
+
+/// The scene graph. It has one root Group, created with it.
+pub struct SceneGraph {
+    nodes: Slots<GraphNode>,
+    geometries: Slots<GeometryEntry>,
+    materials: Slots<MaterialEntry>,
+    root: NodeHandle,
+    events: Vec<GraphEvent>,
+}
+
+impl Default for SceneGraph {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+fn stale_node(h: NodeHandle) -> GraphError {
+    GraphError::StaleNode {
+        index: h.index(),
+        generation: h.generation(),
+    }
+}
+
+fn stale_geometry(h: GeometryHandle) -> GraphError {
+    GraphError::StaleGeometry {
+        index: h.index(),
+        generation: h.generation(),
+    }
+}
+
+fn stale_material(h: MaterialHandle) -> GraphError {
+    GraphError::StaleMaterial {
+        index: h.index(),
+        generation: h.generation(),
+    }
+}
+
+impl SceneGraph {
+    /// An empty graph: just the root Group.
+    pub fn new() -> Self {
+        let mut nodes = Slots::default();
+        let root = nodes.insert(GraphNode {
+            name: "root".into(),
+            kind: NodeKind::Group,
+            flags: NodeFlags::default(),
+            children: Vec::new(),
+            parents: Vec::new(),
+        });
+        Self {
+            nodes,
+            geometries: Slots::default(),
+            materials: Slots::default(),
+            root,
+            events: Vec::new(),
+        }
+    }
+
+    /// The root Group.
+    pub fn root(&self) -> NodeHandle {
+        self.root
+    }
+
+    /// The node, or an error for a stale handle.
+    pub fn node(&self, node: NodeHandle) -> Result<&GraphNode, GraphError> {
+        self.nodes.get(node).ok_or_else(|| stale_node(node))
+    }
+
+    /// The node in slot `index` (for the scene tree, which stores slot indices).
+    pub fn node_at(&self, index: u32) -> Option<&GraphNode> {
+        self.nodes.get_by_index(index)
+    }
+
+    /// The current handle of the node in slot `index`.
+    pub fn node_handle_at(&self, index: u32) -> Option<NodeHandle> {
+        self.nodes.handle_at(index)
+    }
+
+    /// The geometry, or an error for a stale handle.
+    pub fn geometry(&self, geometry: GeometryHandle) -> Result<&Geometry, GraphError> {
+        self.geometries
+            .get(geometry)
+            .map(|e| &e.geometry)
+            .ok_or_else(|| stale_geometry(geometry))
+    }
+
+    /// The geometry in slot `index`.
+    pub fn geometry_at(&self, index: u32) -> Option<&Geometry> {
+        self.geometries.get_by_index(index).map(|e| &e.geometry)
+    }
+
+    /// The material, or an error for a stale handle.
+    pub fn material(&self, material: MaterialHandle) -> Result<&Material, GraphError> {
+        self.materials
+            .get(material)
+            .map(|e| &e.material)
+            .ok_or_else(|| stale_material(material))
+    }
+
+    /// The material in slot `index`.
+    pub fn material_at(&self, index: u32) -> Option<&Material> {
+        self.materials.get_by_index(index).map(|e| &e.material)
+    }
+
+    /// Bounds of node, geometry and material slot indices.
+    pub fn capacities(&self) -> (usize, usize, usize) {
+        (
+            self.nodes.capacity(),
+            self.geometries.capacity(),
+            self.materials.capacity(),
+        )
+    }
+
+    /// Live counts of nodes, geometries and materials.
+    pub fn counts(&self) -> (usize, usize, usize) {
+        (
+            self.nodes.len(),
+            self.geometries.len(),
+            self.materials.len(),
+        )
+    }
+
+    /// Takes the events recorded since the last call.
+    pub fn take_events(&mut self) -> Vec<GraphEvent> {
+        std::mem::take(&mut self.events)
+    }
+
+    /// Number of events waiting.
+    pub fn pending_events(&self) -> usize {
+        self.events.len()
+    }
+
+    // ---- creation and destruction -------------------------------------------------------
+
+    fn create(&mut self, name: &str, kind: NodeKind) -> NodeHandle {
+        self.nodes.insert(GraphNode {
+            name: name.to_owned(),
+            kind,
+            flags: NodeFlags::default(),
+            children: Vec::new(),
+            parents: Vec::new(),
+        })
+    }
+
+    /// A new Group (not attached anywhere yet).
+    pub fn create_group(&mut self, name: &str) -> NodeHandle {
+        self.create(name, NodeKind::Group)
+    }
+
+    /// A new Transform with `matrix`; non-finite matrices are refused.
+    pub fn create_transform(
+        &mut self,
+        name: &str,
+        matrix: DMat4,
+    ) -> Result<NodeHandle, GraphError> {
+        check_matrix(name, &matrix)?;
+        Ok(self.create(name, NodeKind::Transform { matrix }))
+    }
+
+    /// A new Geo node drawing `geometry` with one material per part.
+    pub fn create_geo(
+        &mut self,
+        name: &str,
+        geometry: GeometryHandle,
+        part_materials: &[MaterialHandle],
+    ) -> Result<NodeHandle, GraphError> {
+        let parts = self.geometry(geometry)?.parts.len();
+        if part_materials.len() != parts {
+            return Err(GraphError::Invalid(format!(
+                "Geo node '{name}': {} part materials for a geometry with {parts} parts",
+                part_materials.len()
+            )));
+        }
+        for &m in part_materials {
+            self.material(m)?;
+        }
+        for &m in part_materials {
+            if let Some(entry) = self.materials.get_mut(m) {
+                entry.users += 1;
+            }
+        }
+        if let Some(entry) = self.geometries.get_mut(geometry) {
+            entry.users += 1;
+        }
+        Ok(self.create(
+            name,
+            NodeKind::Geo {
+                geometry,
+                part_materials: part_materials.to_vec(),
+            },
+        ))
+    }
+
+    /// A new Switch (children active until a mask says otherwise).
+    pub fn create_switch(&mut self, name: &str) -> NodeHandle {
+        self.create(name, NodeKind::Switch)
+    }
+
+    /// A new LOD with increasing, finite, positive switch `distances`.
+    pub fn create_lod(&mut self, name: &str, distances: &[f64]) -> Result<NodeHandle, GraphError> {
+        check_distances(name, distances)?;
+        Ok(self.create(
+            name,
+            NodeKind::Lod {
+                distances: distances.to_vec(),
+            },
+        ))
+    }
+
+    /// A new Billboard.
+    pub fn create_billboard(&mut self, name: &str) -> NodeHandle {
+        self.create(name, NodeKind::Billboard)
+    }
+
+    /// Destroys `node`: it is removed from every parent; its children stay (they may have
+    /// other parents, or be attached again). The root cannot be destroyed.
+    pub fn destroy_node(&mut self, node: NodeHandle) -> Result<(), GraphError> {
+        if node == self.root {
+            return Err(GraphError::Invalid("the root cannot be destroyed".into()));
+        }
+        let parents: Vec<NodeHandle> = self.node(node)?.parents.clone();
+        let mut unique_parents = parents;
+        unique_parents.sort_by_key(|p| p.index());
+        unique_parents.dedup();
+        for parent in unique_parents {
+            while let Some(position) = self
+                .node(parent)?
+                .children
+                .iter()
+                .rposition(|c| c.node == node)
+            {
+                self.remove_child_at(parent, position)?;
+            }
+        }
+        let removed = self.nodes.remove(node).ok_or_else(|| stale_node(node))?;
+        for link in &removed.children {
+            if let Some(child) = self.nodes.get_mut(link.node) {
+                if let Some(i) = child.parents.iter().position(|&p| p == node) {
+                    child.parents.swap_remove(i);
+                }
+            }
+        }
+        if let NodeKind::Geo {
+            geometry,
+            part_materials,
+        } = removed.kind
+        {
+            if let Some(entry) = self.geometries.get_mut(geometry) {
+                entry.users -= 1;
+            }
+            for m in part_materials {
+                if let Some(entry) = self.materials.get_mut(m) {
+                    entry.users -= 1;
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// A new geometry; its data is validated (indices, parts, finite values).
+    pub fn create_geometry(&mut self, geometry: Geometry) -> Result<GeometryHandle, GraphError> {
+        check_geometry(&geometry)?;
+        Ok(self.geometries.insert(GeometryEntry { geometry, users: 0 }))
+    }
+
+    /// Destroys a geometry no Geo node uses.
+    pub fn destroy_geometry(&mut self, geometry: GeometryHandle) -> Result<(), GraphError> {
+        let entry = self
+            .geometries
+            .get(geometry)
+            .ok_or_else(|| stale_geometry(geometry))?;
+        if entry.users > 0 {
+            return Err(GraphError::InUse {
+                what: format!("geometry '{}'", entry.geometry.name),
+                users: entry.users,
+            });
+        }
+        self.geometries.remove(geometry);
+        Ok(())
+    }
+
+    /// Replaces a geometry's data. While Geo nodes use it, the part count must stay the same.
+    pub fn replace_geometry(
+        &mut self,
+        geometry: GeometryHandle,
+        data: Geometry,
+    ) -> Result<(), GraphError> {
+        check_geometry(&data)?;
+        let entry = self
+            .geometries
+            .get_mut(geometry)
+            .ok_or_else(|| stale_geometry(geometry))?;
+        if entry.users > 0 && entry.geometry.parts.len() != data.parts.len() {
+            return Err(GraphError::Invalid(format!(
+                "geometry '{}' has {} parts and is in use; its replacement has {}",
+                entry.geometry.name,
+                entry.geometry.parts.len(),
+                data.parts.len()
+            )));
+        }
+        entry.geometry = data;
+        self.events.push(GraphEvent::GeometryReplaced(geometry));
+        Ok(())
+    }
+
+    /// A new material; its values must be finite.
+    pub fn create_material(&mut self, material: Material) -> Result<MaterialHandle, GraphError> {
+        check_material(&material)?;
+        Ok(self.materials.insert(MaterialEntry { material, users: 0 }))
+    }
+
+    /// Changes a material's parameters.
+    pub fn set_material(
+        &mut self,
+        handle: MaterialHandle,
+        material: Material,
+    ) -> Result<(), GraphError> {
+        check_material(&material)?;
+        let entry = self
+            .materials
+            .get_mut(handle)
+            .ok_or_else(|| stale_material(handle))?;
+        entry.material = material;
+        self.events.push(GraphEvent::MaterialChanged(handle));
+        Ok(())
+    }
+
+    /// Destroys a material no part uses.
+    pub fn destroy_material(&mut self, material: MaterialHandle) -> Result<(), GraphError> {
+        let entry = self
+            .materials
+            .get(material)
+            .ok_or_else(|| stale_material(material))?;
+        if entry.users > 0 {
+            return Err(GraphError::InUse {
+                what: format!("material '{}'", entry.material.name),
+                users: entry.users,
+            });
+        }
+        self.materials.remove(material);
+        Ok(())
+    }
+
+    // ---- structure ------------------------------------------------------------------------
+
+    /// Appends `child` to `parent`'s children.
+    pub fn add_child(&mut self, parent: NodeHandle, child: NodeHandle) -> Result<(), GraphError> {
+        let position = self.node(parent)?.children.len();
+        self.insert_child(parent, position, child)
+    }
+
+    /// Inserts `child` at `position` of `parent`'s children. A node may have many parents, and
+    /// the same child may appear twice; a cycle is refused.
+    pub fn insert_child(
+        &mut self,
+        parent: NodeHandle,
+        position: usize,
+        child: NodeHandle,
+    ) -> Result<(), GraphError> {
+        let len = self.node(parent)?.children.len();
+        self.node(child)?;
+        if position > len {
+            return Err(GraphError::OutOfRange {
+                what: "child position",
+                index: position,
+                len: len + 1,
+            });
+        }
+        if self.is_ancestor_or_self(child, parent) {
+            return Err(GraphError::Cycle {
+                parent: self.node(parent)?.name.clone(),
+                child: self.node(child)?.name.clone(),
+            });
+        }
+        if let Some(p) = self.nodes.get_mut(parent) {
+            p.children.insert(
+                position,
+                ChildLink {
+                    node: child,
+                    active: true,
+                },
+            );
+        }
+        if let Some(c) = self.nodes.get_mut(child) {
+            c.parents.push(parent);
+        }
+        self.events.push(GraphEvent::ChildInserted {
+            parent,
+            position: position as u32,
+            child,
+        });
+        Ok(())
+    }
+
+    /// Removes the first link from `parent` to `child`.
+    pub fn remove_child(
+        &mut self,
+        parent: NodeHandle,
+        child: NodeHandle,
+    ) -> Result<(), GraphError> {
+        let position = self
+            .node(parent)?
+            .children
+            .iter()
+            .position(|c| c.node == child)
+            .ok_or_else(|| {
+                GraphError::Invalid(format!(
+                    "'{}' is not a child of '{}'",
+                    self.nodes
+                        .get(child)
+                        .map_or("(destroyed node)", |n| n.name.as_str()),
+                    self.nodes.get(parent).map_or("", |n| n.name.as_str())
+                ))
+            })?;
+        self.remove_child_at(parent, position)
+    }
+
+    /// Removes the child at `position` of `parent`.
+    pub fn remove_child_at(
+        &mut self,
+        parent: NodeHandle,
+        position: usize,
+    ) -> Result<(), GraphError> {
+        let len = self.node(parent)?.children.len();
+        if position >= len {
+            return Err(GraphError::OutOfRange {
+                what: "child position",
+                index: position,
+                len,
+            });
+        }
+        let link = self
+            .nodes
+            .get_mut(parent)
+            .map(|p| p.children.remove(position));
+        if let Some(link) = link {
+            if let Some(c) = self.nodes.get_mut(link.node) {
+                if let Some(i) = c.parents.iter().position(|&p| p == parent) {
+                    c.parents.swap_remove(i);
+                }
+            }
+        }
+        self.events.push(GraphEvent::ChildRemoved {
+            parent,
+            position: position as u32,
+        });
+        Ok(())
+    }
+
+    /// Whether `ancestor` is `node` or lies above it (walks up through every parent).
+    fn is_ancestor_or_self(&self, ancestor: NodeHandle, node: NodeHandle) -> bool {
+        let mut stack = vec![node];
+        let mut seen = std::collections::HashSet::new();
+        while let Some(n) = stack.pop() {
+            if n == ancestor {
+                return true;
+            }
+            if seen.insert(n) {
+                if let Some(node) = self.nodes.get(n) {
+                    stack.extend(node.parents.iter().copied());
+                }
+            }
+        }
+        false
+    }
+
+    // ---- properties ---------------------------------------------------------------------
+
+    fn node_mut(&mut self, node: NodeHandle) -> Result<&mut GraphNode, GraphError> {
+        self.nodes.get_mut(node).ok_or_else(|| stale_node(node))
+    }
+
+    fn wrong_kind(node: &GraphNode, expected: &'static str, operation: &'static str) -> GraphError {
+        GraphError::WrongKind {
+            name: node.name.clone(),
+            actual: node.kind.name(),
+            expected,
+            operation,
+        }
+    }
+
+    /// Sets a Transform's matrix.
+    pub fn set_matrix(&mut self, node: NodeHandle, matrix: DMat4) -> Result<(), GraphError> {
+        let n = self.node_mut(node)?;
+        check_matrix(&n.name, &matrix)?;
+        match &mut n.kind {
+            NodeKind::Transform { matrix: m } => *m = matrix,
+            _ => return Err(Self::wrong_kind(n, "Transform", "set_matrix")),
+        }
+        self.events.push(GraphEvent::MatrixChanged(node));
+        Ok(())
+    }
+
+    /// Sets which children of a Switch are shown: one flag per child, in order.
+    pub fn set_switch_mask(&mut self, node: NodeHandle, mask: &[bool]) -> Result<(), GraphError> {
+        let n = self.node_mut(node)?;
+        if !matches!(n.kind, NodeKind::Switch) {
+            return Err(Self::wrong_kind(n, "Switch", "set_switch_mask"));
+        }
+        if mask.len() != n.children.len() {
+            return Err(GraphError::Invalid(format!(
+                "Switch '{}' has {} children; the mask has {} flags",
+                n.name,
+                n.children.len(),
+                mask.len()
+            )));
+        }
+        for (link, &active) in n.children.iter_mut().zip(mask) {
+            link.active = active;
+        }
+        self.events.push(GraphEvent::SelectionChanged(node));
+        Ok(())
+    }
+
+    /// Sets a LOD's switch distances.
+    pub fn set_lod_distances(
+        &mut self,
+        node: NodeHandle,
+        distances: &[f64],
+    ) -> Result<(), GraphError> {
+        let n = self.node_mut(node)?;
+        check_distances(&n.name, distances)?;
+        match &mut n.kind {
+            NodeKind::Lod { distances: d } => *d = distances.to_vec(),
+            _ => return Err(Self::wrong_kind(n, "Lod", "set_lod_distances")),
+        }
+        self.events.push(GraphEvent::SelectionChanged(node));
+        Ok(())
+    }
+
+    /// Sets a node's flags.
+    pub fn set_flags(&mut self, node: NodeHandle, flags: NodeFlags) -> Result<(), GraphError> {
+        let n = self.node_mut(node)?;
+        if n.flags != flags {
+            n.flags = flags;
+            self.events.push(GraphEvent::FlagsChanged(node));
+        }
+        Ok(())
+    }
+
+    /// Sets the material of one part of a Geo node.
+    pub fn set_part_material(
+        &mut self,
+        node: NodeHandle,
+        part: usize,
+        material: MaterialHandle,
+    ) -> Result<(), GraphError> {
+        self.material(material)?;
+        let n = self.nodes.get_mut(node).ok_or_else(|| stale_node(node))?;
+        let old = match &mut n.kind {
+            NodeKind::Geo { part_materials, .. } => {
+                let len = part_materials.len();
+                let slot = part_materials.get_mut(part).ok_or(GraphError::OutOfRange {
+                    what: "part",
+                    index: part,
+                    len,
+                })?;
+                std::mem::replace(slot, material)
+            }
+            _ => return Err(Self::wrong_kind(n, "Geo", "set_part_material")),
+        };
+        if let Some(e) = self.materials.get_mut(old) {
+            e.users -= 1;
+        }
+        if let Some(e) = self.materials.get_mut(material) {
+            e.users += 1;
+        }
+        self.events.push(GraphEvent::PartMaterialChanged {
+            node,
+            part: part as u32,
+        });
+        Ok(())
+    }
+
+    /// The scene this graph describes, with dense indices (for loaders, savers, rendering
+    /// with the baseline, and comparisons). Handles map to indices in slot order.
+    pub fn to_scene(&self) -> Scene {
+        convert::graph_to_scene(self)
+    }
+
+    /// Builds a graph from a scene; returns it with the handles of the scene's nodes.
+    pub fn from_scene(scene: &Scene) -> Result<(Self, Vec<NodeHandle>), GraphError> {
+        convert::scene_to_graph(scene)
+    }
+
+    /// Live nodes with handles.
+    pub fn nodes(&self) -> impl Iterator<Item = (NodeHandle, &GraphNode)> {
+        self.nodes.iter()
+    }
+}
+
+fn check_matrix(name: &str, matrix: &DMat4) -> Result<(), GraphError> {
+    if matrix.to_cols_array().iter().all(|c| c.is_finite()) {
+        Ok(())
+    } else {
+        Err(GraphError::Invalid(format!(
+            "the matrix of '{name}' has a non-finite value"
+        )))
+    }
+}
+
+fn check_distances(name: &str, distances: &[f64]) -> Result<(), GraphError> {
+    let increasing = distances.windows(2).all(|w| w[0] < w[1]);
+    if distances.iter().all(|d| d.is_finite() && *d > 0.0) && increasing {
+        Ok(())
+    } else {
+        Err(GraphError::Invalid(format!(
+            "LOD '{name}': distances must be finite, positive and increasing: {distances:?}"
+        )))
+    }
+}
+
+fn check_geometry(geometry: &Geometry) -> Result<(), GraphError> {
+    geometry.validate(0).map_err(|e| GraphError::Invalid(e.0))
+}
+
+fn check_material(material: &Material) -> Result<(), GraphError> {
+    let values = material
+        .base_color
+        .iter()
+        .chain([&material.metallic, &material.roughness]);
+    if values.into_iter().all(|v| v.is_finite()) {
+        Ok(())
+    } else {
+        Err(GraphError::Invalid(format!(
+            "material '{}' has a non-finite value",
+            material.name
+        )))
+    }
+}

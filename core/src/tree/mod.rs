@@ -1,0 +1,667 @@
+//! The scene tree (the seeds' XBAR): the render model generated from the scene graph. One
+//! tree node per path from the root (so a shared subgraph appears once per path), one instance
+//! per path to a drawable part, both stored as structure-of-arrays with dense, reused ids.
+//! World matrices are cached per path in f64.
+//!
+//! [`SceneTree::update`] applies the graph's events with work proportional to what changed:
+//! structural edits reconcile only the children of the parents that changed; a matrix, flag or
+//! selection edit refreshes only the subtrees of the paths through that node. What changed is
+//! kept in bit arrays and handed out by [`SceneTree::take_changes`]. LOD selection and
+//! billboards depend on the eye: [`SceneTree::update_view`] refreshes only their subtrees.
+
+mod bits;
+
+pub use bits::BitSet;
+
+use glam::{DMat4, DVec3};
+
+use crate::graph::{ChildLink, GraphEvent, GraphNode, NodeHandle, NodeKind, SceneGraph};
+
+const NONE: u32 = u32::MAX;
+
+/// What changed since the last [`SceneTree::take_changes`]. Ids are dense and reused: apply
+/// `removed` before `added`.
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct TreeChanges {
+    /// Instances created (alive now).
+    pub added: Vec<u32>,
+    /// Instance ids whose instance was destroyed (the id may be alive again in `added`).
+    pub removed: Vec<u32>,
+    /// Live instances, not added, whose material or geometry changed.
+    pub changed: Vec<u32>,
+    /// Live instances, not added, whose visibility changed.
+    pub visibility_changed: Vec<u32>,
+    /// Live tree nodes whose world matrix changed (the matrix slots to upload).
+    pub dirty_matrices: Vec<u32>,
+    /// Material slots whose parameters changed.
+    pub dirty_materials: Vec<u32>,
+    /// Geometry slots whose data was replaced.
+    pub dirty_geometries: Vec<u32>,
+}
+
+impl TreeChanges {
+    /// Whether nothing changed.
+    pub fn is_empty(&self) -> bool {
+        self.added.is_empty()
+            && self.removed.is_empty()
+            && self.changed.is_empty()
+            && self.visibility_changed.is_empty()
+            && self.dirty_matrices.is_empty()
+            && self.dirty_materials.is_empty()
+            && self.dirty_geometries.is_empty()
+    }
+}
+
+/// One drawable part on one path.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct InstanceRef {
+    /// The tree node (path) whose world matrix places it: its matrix slot.
+    pub tree_node: u32,
+    /// Part index in the geometry.
+    pub part: u32,
+    /// Geometry slot in the graph.
+    pub geometry: u32,
+    /// Material slot in the graph.
+    pub material: u32,
+    /// Effectively visible (flags, switches, LOD along the path).
+    pub visible: bool,
+}
+
+/// The scene tree.
+#[derive(Default)]
+pub struct SceneTree {
+    node_graph: Vec<NodeHandle>,
+    node_parent: Vec<u32>,
+    node_children: Vec<Vec<u32>>,
+    node_world: Vec<DMat4>,
+    node_instances: Vec<Vec<u32>>,
+    node_visible: BitSet,
+    node_alive: BitSet,
+    free_nodes: Vec<u32>,
+    /// Tree nodes of each graph node slot (may hold paths of a destroyed node until reconciled).
+    paths_of: Vec<Vec<u32>>,
+    view_dependent: BitSet,
+    inst_node: Vec<u32>,
+    inst_part: Vec<u32>,
+    inst_geometry: Vec<u32>,
+    inst_material: Vec<u32>,
+    inst_alive: BitSet,
+    inst_visible: BitSet,
+    free_instances: Vec<u32>,
+    created: BitSet,
+    destroyed: BitSet,
+    changed: BitSet,
+    visibility_changed: BitSet,
+    dirty_matrices: BitSet,
+    dirty_materials: BitSet,
+    dirty_geometries: BitSet,
+    eye: DVec3,
+    root: u32,
+    live_instances: usize,
+}
+
+/// The transform a node applies to its subtree, given its parent's world matrix and the eye.
+fn local_transform(node: &GraphNode, parent_world: &DMat4, eye: DVec3) -> DMat4 {
+    match node.kind {
+        NodeKind::Transform { matrix } => matrix,
+        NodeKind::Billboard => {
+            // Turn about the local +Y axis so that local +Z points at the eye.
+            let local_eye = parent_world.inverse().transform_point3(eye);
+            if local_eye.x == 0.0 && local_eye.z == 0.0 || !local_eye.is_finite() {
+                DMat4::IDENTITY
+            } else {
+                DMat4::from_rotation_y(local_eye.x.atan2(local_eye.z))
+            }
+        }
+        _ => DMat4::IDENTITY,
+    }
+}
+
+/// The child a LOD shows, given its world matrix and the eye.
+fn lod_selection(distances: &[f64], world: &DMat4, eye: DVec3) -> usize {
+    let distance = (world.w_axis.truncate() - eye).length();
+    distances.iter().take_while(|&&d| d <= distance).count()
+}
+
+/// Whether `node` shows its child link at `position`, given the node's world matrix.
+fn shows_child(
+    node: &GraphNode,
+    position: usize,
+    link: &ChildLink,
+    world: &DMat4,
+    eye: DVec3,
+) -> bool {
+    match &node.kind {
+        NodeKind::Lod { distances } => {
+            let last = node.children().len().saturating_sub(1);
+            link.active && position == lod_selection(distances, world, eye).min(last)
+        }
+        _ => link.active,
+    }
+}
+
+impl SceneTree {
+    /// Builds the tree of `graph` from scratch (and discards the graph's pending events, which
+    /// the new tree already reflects).
+    pub fn build(graph: &mut SceneGraph) -> Self {
+        Self::build_with_eye(graph, DVec3::ZERO)
+    }
+
+    /// Builds the tree with LOD and billboards evaluated for `eye`.
+    pub fn build_with_eye(graph: &mut SceneGraph, eye: DVec3) -> Self {
+        graph.take_events();
+        let mut tree = Self {
+            eye,
+            ..Self::default()
+        };
+        let root = graph.root();
+        tree.root = tree.build_subtree(graph, NONE, 0, root, true);
+        tree
+    }
+
+    /// The eye LOD and billboards were last evaluated for.
+    pub fn eye(&self) -> DVec3 {
+        self.eye
+    }
+
+    fn alloc_node(&mut self, handle: NodeHandle, parent: u32) -> u32 {
+        let id = match self.free_nodes.pop() {
+            Some(id) => id,
+            None => {
+                self.node_graph.push(handle);
+                self.node_parent.push(NONE);
+                self.node_children.push(Vec::new());
+                self.node_world.push(DMat4::IDENTITY);
+                self.node_instances.push(Vec::new());
+                self.node_graph.len() as u32 - 1
+            }
+        };
+        let i = id as usize;
+        self.node_graph[i] = handle;
+        self.node_parent[i] = parent;
+        self.node_alive.insert(id);
+        let slot = handle.index() as usize;
+        if slot >= self.paths_of.len() {
+            self.paths_of.resize(slot + 1, Vec::new());
+        }
+        self.paths_of[slot].push(id);
+        id
+    }
+
+    fn alloc_instance(
+        &mut self,
+        node: u32,
+        part: u32,
+        geometry: u32,
+        material: u32,
+        visible: bool,
+    ) -> u32 {
+        let id = match self.free_instances.pop() {
+            Some(id) => id,
+            None => {
+                self.inst_node.push(0);
+                self.inst_part.push(0);
+                self.inst_geometry.push(0);
+                self.inst_material.push(0);
+                self.inst_node.len() as u32 - 1
+            }
+        };
+        let i = id as usize;
+        (
+            self.inst_node[i],
+            self.inst_part[i],
+            self.inst_geometry[i],
+            self.inst_material[i],
+        ) = (node, part, geometry, material);
+        self.inst_alive.insert(id);
+        self.inst_visible.set(id, visible);
+        self.created.insert(id);
+        self.live_instances += 1;
+        id
+    }
+
+    /// Builds the subtree of graph node `handle` as child `position` of tree node `parent`
+    /// (`NONE` for the root); `link_shown` says whether the parent shows it. Iterative.
+    fn build_subtree(
+        &mut self,
+        graph: &SceneGraph,
+        parent: u32,
+        position: usize,
+        handle: NodeHandle,
+        link_shown: bool,
+    ) -> u32 {
+        let mut first = NONE;
+        // (parent tree node, insert position or NONE to append, graph node, link shown)
+        let mut stack: Vec<(u32, u32, NodeHandle, bool)> =
+            vec![(parent, position as u32, handle, link_shown)];
+        while let Some((parent, position, handle, link_shown)) = stack.pop() {
+            let Ok(node) = graph.node(handle) else {
+                continue;
+            };
+            let id = self.alloc_node(handle, parent);
+            if first == NONE {
+                first = id;
+            }
+            let (parent_world, parent_visible) = if parent == NONE {
+                (DMat4::IDENTITY, true)
+            } else {
+                (
+                    self.node_world[parent as usize],
+                    self.node_visible.contains(parent),
+                )
+            };
+            let world = parent_world * local_transform(node, &parent_world, self.eye);
+            let visible = parent_visible && link_shown && node.flags.visible;
+            self.node_world[id as usize] = world;
+            self.node_visible.set(id, visible);
+            self.dirty_matrices.insert(id);
+            if matches!(node.kind, NodeKind::Lod { .. } | NodeKind::Billboard) {
+                self.view_dependent.insert(id);
+            }
+            if parent != NONE {
+                let siblings = &mut self.node_children[parent as usize];
+                if position == NONE {
+                    siblings.push(id);
+                } else {
+                    siblings.insert(position as usize, id);
+                }
+            }
+            if let NodeKind::Geo {
+                geometry,
+                part_materials,
+            } = &node.kind
+            {
+                let instances = part_materials
+                    .iter()
+                    .enumerate()
+                    .map(|(part, m)| {
+                        self.alloc_instance(id, part as u32, geometry.index(), m.index(), visible)
+                    })
+                    .collect();
+                self.node_instances[id as usize] = instances;
+            }
+            // Children are appended in order: push them reversed.
+            for (i, link) in node.children().iter().enumerate().rev() {
+                stack.push((
+                    id,
+                    NONE,
+                    link.node,
+                    shows_child(node, i, link, &world, self.eye),
+                ));
+            }
+        }
+        first
+    }
+
+    /// Removes tree node `id` and everything below it.
+    fn remove_subtree(&mut self, id: u32) {
+        let mut stack = vec![id];
+        while let Some(t) = stack.pop() {
+            let i = t as usize;
+            stack.extend(std::mem::take(&mut self.node_children[i]));
+            for instance in std::mem::take(&mut self.node_instances[i]) {
+                self.inst_alive.remove(instance);
+                self.destroyed.insert(instance);
+                self.live_instances -= 1;
+                self.free_instances.push(instance);
+            }
+            let slot = self.node_graph[i].index() as usize;
+            if let Some(position) = self.paths_of[slot].iter().position(|&p| p == t) {
+                self.paths_of[slot].swap_remove(position);
+            }
+            self.node_alive.remove(t);
+            self.node_visible.remove(t);
+            self.view_dependent.remove(t);
+            self.dirty_matrices.remove(t);
+            self.free_nodes.push(t);
+        }
+    }
+
+    /// Whether the parent of tree node `t` shows it (switch mask, LOD choice).
+    fn link_shown(&self, graph: &SceneGraph, t: u32) -> bool {
+        let parent = self.node_parent[t as usize];
+        if parent == NONE {
+            return true;
+        }
+        let Ok(parent_node) = graph.node(self.node_graph[parent as usize]) else {
+            return false;
+        };
+        let Some(position) = self.node_children[parent as usize]
+            .iter()
+            .position(|&c| c == t)
+        else {
+            return false;
+        };
+        parent_node.children().get(position).is_some_and(|link| {
+            shows_child(
+                parent_node,
+                position,
+                link,
+                &self.node_world[parent as usize],
+                self.eye,
+            )
+        })
+    }
+
+    /// Recomputes world matrices and visibility below (and including) tree node `id`,
+    /// recording what changed.
+    fn refresh_subtree(&mut self, graph: &SceneGraph, id: u32) {
+        let mut stack = vec![(id, self.link_shown(graph, id))];
+        while let Some((t, link_shown)) = stack.pop() {
+            let i = t as usize;
+            let Ok(node) = graph.node(self.node_graph[i]) else {
+                continue;
+            };
+            let parent = self.node_parent[i];
+            let (parent_world, parent_visible) = if parent == NONE {
+                (DMat4::IDENTITY, true)
+            } else {
+                (
+                    self.node_world[parent as usize],
+                    self.node_visible.contains(parent),
+                )
+            };
+            let world = parent_world * local_transform(node, &parent_world, self.eye);
+            let visible = parent_visible && link_shown && node.flags.visible;
+            if world != self.node_world[i] {
+                self.node_world[i] = world;
+                self.dirty_matrices.insert(t);
+            }
+            if visible != self.node_visible.contains(t) {
+                self.node_visible.set(t, visible);
+                for &instance in &self.node_instances[i] {
+                    self.inst_visible.set(instance, visible);
+                    self.visibility_changed.insert(instance);
+                }
+            }
+            for (position, (&child, link)) in self.node_children[i]
+                .iter()
+                .zip(node.children())
+                .enumerate()
+            {
+                stack.push((child, shows_child(node, position, link, &world, self.eye)));
+            }
+        }
+    }
+
+    /// Makes the children of every path through `parent` match the graph again: the common
+    /// prefix and suffix of the old and new child lists are kept, the middle rebuilt.
+    fn reconcile(&mut self, graph: &SceneGraph, parent: NodeHandle) {
+        let Ok(node) = graph.node(parent) else { return };
+        let paths: Vec<u32> = self
+            .paths_of
+            .get(parent.index() as usize)
+            .map(|p| {
+                p.iter()
+                    .copied()
+                    .filter(|&t| self.node_graph[t as usize] == parent)
+                    .collect()
+            })
+            .unwrap_or_default();
+        let new: &[ChildLink] = node.children();
+        for t in paths {
+            let old: Vec<NodeHandle> = self.node_children[t as usize]
+                .iter()
+                .map(|&c| self.node_graph[c as usize])
+                .collect();
+            let prefix = old
+                .iter()
+                .zip(new)
+                .take_while(|(o, n)| **o == n.node)
+                .count();
+            let max_suffix = old.len().min(new.len()) - prefix;
+            let suffix = old
+                .iter()
+                .rev()
+                .zip(new.iter().rev())
+                .take(max_suffix)
+                .take_while(|(o, n)| **o == n.node)
+                .count();
+            if prefix + suffix == old.len() && old.len() == new.len() {
+                continue;
+            }
+            let removed: Vec<u32> = self.node_children[t as usize]
+                .drain(prefix..old.len() - suffix)
+                .collect();
+            for child in removed {
+                self.remove_subtree(child);
+            }
+            let world = self.node_world[t as usize];
+            for (position, link) in new.iter().enumerate().take(new.len() - suffix).skip(prefix) {
+                let shown = shows_child(node, position, link, &world, self.eye);
+                self.build_subtree(graph, t, position, link.node, shown);
+            }
+            if matches!(node.kind, NodeKind::Lod { .. }) {
+                // A LOD chooses by position: kept children may have moved into or out of view.
+                self.refresh_subtree(graph, t);
+            }
+        }
+    }
+
+    /// Applies the graph's pending events.
+    pub fn update(&mut self, graph: &mut SceneGraph) {
+        let events = graph.take_events();
+        let mut structural: Vec<NodeHandle> = events
+            .iter()
+            .filter_map(|e| match *e {
+                GraphEvent::ChildInserted { parent, .. }
+                | GraphEvent::ChildRemoved { parent, .. } => Some(parent),
+                _ => None,
+            })
+            .collect();
+        structural.sort_by_key(|h| (h.index(), h.generation()));
+        structural.dedup();
+        for parent in structural {
+            self.reconcile(graph, parent);
+        }
+        let mut refresh: Vec<u32> = Vec::new();
+        for event in &events {
+            match *event {
+                GraphEvent::MatrixChanged(n)
+                | GraphEvent::FlagsChanged(n)
+                | GraphEvent::SelectionChanged(n) => {
+                    refresh.extend(self.current_paths(n));
+                }
+                GraphEvent::PartMaterialChanged { node, part } => {
+                    let material = match graph.node(node).map(|n| &n.kind) {
+                        Ok(NodeKind::Geo { part_materials, .. }) => {
+                            part_materials.get(part as usize).map(|m| m.index())
+                        }
+                        _ => None,
+                    };
+                    if let Some(material) = material {
+                        for t in self.current_paths(node) {
+                            if let Some(&instance) =
+                                self.node_instances[t as usize].get(part as usize)
+                            {
+                                self.inst_material[instance as usize] = material;
+                                self.changed.insert(instance);
+                            }
+                        }
+                    }
+                }
+                GraphEvent::GeometryReplaced(g) => {
+                    self.dirty_geometries.insert(g.index());
+                    for instance in self
+                        .inst_alive
+                        .iter()
+                        .filter(|&i| self.inst_geometry[i as usize] == g.index())
+                        .collect::<Vec<_>>()
+                    {
+                        self.changed.insert(instance);
+                    }
+                }
+                GraphEvent::MaterialChanged(m) => self.dirty_materials.insert(m.index()),
+                GraphEvent::ChildInserted { .. } | GraphEvent::ChildRemoved { .. } => {}
+            }
+        }
+        refresh.sort_unstable();
+        refresh.dedup();
+        for t in refresh {
+            if self.node_alive.contains(t) {
+                self.refresh_subtree(graph, t);
+            }
+        }
+    }
+
+    /// Moves the eye: refreshes the subtrees of LOD and billboard paths (only).
+    pub fn update_view(&mut self, graph: &SceneGraph, eye: DVec3) {
+        if eye == self.eye {
+            return;
+        }
+        self.eye = eye;
+        let view_dependent: Vec<u32> = self.view_dependent.iter().collect();
+        for t in view_dependent {
+            if self.node_alive.contains(t) {
+                self.refresh_subtree(graph, t);
+            }
+        }
+    }
+
+    fn current_paths(&self, node: NodeHandle) -> Vec<u32> {
+        self.paths_of
+            .get(node.index() as usize)
+            .map(|p| {
+                p.iter()
+                    .copied()
+                    .filter(|&t| self.node_graph[t as usize] == node)
+                    .collect()
+            })
+            .unwrap_or_default()
+    }
+
+    /// Hands out what changed since the last call and starts recording afresh.
+    pub fn take_changes(&mut self) -> TreeChanges {
+        let alive = &self.inst_alive;
+        let created = &self.created;
+        let changes = TreeChanges {
+            added: created.iter().filter(|&i| alive.contains(i)).collect(),
+            removed: self.destroyed.iter().collect(),
+            changed: self
+                .changed
+                .iter()
+                .filter(|&i| alive.contains(i) && !created.contains(i))
+                .collect(),
+            visibility_changed: self
+                .visibility_changed
+                .iter()
+                .filter(|&i| alive.contains(i) && !created.contains(i))
+                .collect(),
+            dirty_matrices: self
+                .dirty_matrices
+                .iter()
+                .filter(|&t| self.node_alive.contains(t))
+                .collect(),
+            dirty_materials: self.dirty_materials.iter().collect(),
+            dirty_geometries: self.dirty_geometries.iter().collect(),
+        };
+        for bits in [
+            &mut self.created,
+            &mut self.destroyed,
+            &mut self.changed,
+            &mut self.visibility_changed,
+            &mut self.dirty_matrices,
+            &mut self.dirty_materials,
+            &mut self.dirty_geometries,
+        ] {
+            bits.clear();
+        }
+        changes
+    }
+
+    // ---- queries ------------------------------------------------------------------------------
+
+    /// Number of live instances.
+    pub fn instance_count(&self) -> usize {
+        self.live_instances
+    }
+
+    /// Bound of instance ids.
+    pub fn instance_capacity(&self) -> usize {
+        self.inst_node.len()
+    }
+
+    /// Number of live tree nodes (paths).
+    pub fn node_count(&self) -> usize {
+        self.node_alive.count()
+    }
+
+    /// Bound of tree node ids (matrix slots).
+    pub fn node_capacity(&self) -> usize {
+        self.node_graph.len()
+    }
+
+    /// The instance `id`, if alive.
+    pub fn instance(&self, id: u32) -> Option<InstanceRef> {
+        self.inst_alive.contains(id).then(|| {
+            let i = id as usize;
+            InstanceRef {
+                tree_node: self.inst_node[i],
+                part: self.inst_part[i],
+                geometry: self.inst_geometry[i],
+                material: self.inst_material[i],
+                visible: self.inst_visible.contains(id),
+            }
+        })
+    }
+
+    /// Live instance ids, ascending.
+    pub fn instances(&self) -> impl Iterator<Item = u32> + '_ {
+        self.inst_alive.iter()
+    }
+
+    /// The world matrix of tree node `id`.
+    pub fn world(&self, id: u32) -> DMat4 {
+        self.node_world[id as usize]
+    }
+
+    /// The graph nodes along the path of tree node `id`, from the root.
+    pub fn path(&self, id: u32) -> Vec<NodeHandle> {
+        let mut path = Vec::new();
+        let mut t = id;
+        while t != NONE {
+            path.push(self.node_graph[t as usize]);
+            t = self.node_parent[t as usize];
+        }
+        path.reverse();
+        path
+    }
+
+    /// Bytes held by the tree, split into (world matrices, everything else).
+    pub fn memory_bytes(&self) -> (usize, usize) {
+        let matrices = self.node_world.capacity() * std::mem::size_of::<DMat4>();
+        let vec_heap = |v: &Vec<Vec<u32>>| {
+            v.iter().map(|c| c.capacity() * 4).sum::<usize>() + v.capacity() * 24
+        };
+        let other = self.node_graph.capacity() * 8
+            + self.node_parent.capacity() * 4
+            + vec_heap(&self.node_children)
+            + vec_heap(&self.node_instances)
+            + vec_heap(&self.paths_of)
+            + self.free_nodes.capacity() * 4
+            + (self.inst_node.capacity()
+                + self.inst_part.capacity()
+                + self.inst_geometry.capacity()
+                + self.inst_material.capacity())
+                * 4
+            + self.free_instances.capacity() * 4
+            + [
+                &self.node_visible,
+                &self.node_alive,
+                &self.view_dependent,
+                &self.inst_alive,
+                &self.inst_visible,
+                &self.created,
+                &self.destroyed,
+                &self.changed,
+                &self.visibility_changed,
+                &self.dirty_matrices,
+                &self.dirty_materials,
+                &self.dirty_geometries,
+            ]
+            .iter()
+            .map(|b| b.memory_bytes())
+            .sum::<usize>();
+        (matrices, other)
+    }
+}

@@ -1,0 +1,439 @@
+//! The incremental scene tree equals a full rebuild after any sequence of edits, and the
+//! changes it hands out are enough for a consumer to stay exactly in sync.
+#![allow(clippy::unwrap_used)] // Test code: a failed unwrap is a failed test.
+
+use std::collections::HashMap;
+
+use cadr_core::generate::GeometryBuilder;
+use cadr_core::graph::{
+    GeometryHandle, GraphError, MaterialHandle, NodeFlags, NodeHandle, SceneGraph,
+};
+use cadr_core::scene::Material;
+use cadr_core::tree::SceneTree;
+use glam::{DMat4, DVec3};
+use proptest::prelude::*;
+
+type Snapshot = Vec<(Vec<(u32, u32)>, u32, u32, u32, [u64; 16], bool)>;
+
+/// Every live instance: its path (as handle parts), part, geometry, material, world bits, visibility.
+fn snapshot(tree: &SceneTree) -> Snapshot {
+    let mut out: Snapshot = tree
+        .instances()
+        .map(|id| {
+            let i = tree.instance(id).unwrap();
+            let path = tree
+                .path(i.tree_node)
+                .into_iter()
+                .map(|h| (h.index(), h.generation()))
+                .collect();
+            let world = tree.world(i.tree_node).to_cols_array().map(f64::to_bits);
+            (path, i.part, i.geometry, i.material, world, i.visible)
+        })
+        .collect();
+    out.sort();
+    out
+}
+
+/// What a renderer keeps, updated only from `take_changes`.
+#[derive(Default)]
+struct Consumer {
+    instances: HashMap<u32, (u32, u32, u32, u32, bool)>,
+    matrices: HashMap<u32, DMat4>,
+}
+
+impl Consumer {
+    fn apply(&mut self, tree: &mut SceneTree) {
+        let changes = tree.take_changes();
+        for id in &changes.removed {
+            self.instances.remove(id);
+        }
+        for &id in changes
+            .added
+            .iter()
+            .chain(&changes.changed)
+            .chain(&changes.visibility_changed)
+        {
+            let i = tree.instance(id).unwrap();
+            self.instances
+                .insert(id, (i.tree_node, i.part, i.geometry, i.material, i.visible));
+        }
+        for &t in &changes.dirty_matrices {
+            self.matrices.insert(t, tree.world(t));
+        }
+    }
+
+    fn check(&self, tree: &SceneTree) {
+        assert_eq!(
+            self.instances.len(),
+            tree.instance_count(),
+            "consumer has the live instances"
+        );
+        for id in tree.instances() {
+            let i = tree.instance(id).unwrap();
+            assert_eq!(
+                self.instances.get(&id),
+                Some(&(i.tree_node, i.part, i.geometry, i.material, i.visible)),
+                "instance {id}"
+            );
+            assert_eq!(
+                self.matrices.get(&i.tree_node),
+                Some(&tree.world(i.tree_node)),
+                "matrix of instance {id}"
+            );
+        }
+    }
+}
+
+#[derive(Clone, Debug)]
+enum Op {
+    CreateGroup,
+    CreateTransform(i8, i8),
+    CreateGeo(u8, u8),
+    CreateSwitch,
+    CreateLod,
+    CreateBillboard,
+    AddChild(u8, u8),
+    InsertChild(u8, u8, u8),
+    RemoveChildAt(u8, u8),
+    Destroy(u8),
+    SetMatrix(u8, i8, i8),
+    SetVisible(u8, bool),
+    SetMask(u8, u32),
+    SetPartMaterial(u8, u8, u8),
+    SetMaterial(u8),
+    MoveEye(i8, i8),
+    Update,
+}
+
+fn op() -> impl Strategy<Value = Op> {
+    prop_oneof![
+        1 => Just(Op::CreateGroup),
+        1 => (any::<i8>(), any::<i8>()).prop_map(|(x, z)| Op::CreateTransform(x, z)),
+        1 => (any::<u8>(), any::<u8>()).prop_map(|(g, m)| Op::CreateGeo(g, m)),
+        1 => Just(Op::CreateSwitch),
+        1 => Just(Op::CreateLod),
+        1 => Just(Op::CreateBillboard),
+        4 => (any::<u8>(), any::<u8>()).prop_map(|(p, c)| Op::AddChild(p, c)),
+        1 => (any::<u8>(), any::<u8>(), any::<u8>()).prop_map(|(p, i, c)| Op::InsertChild(p, i, c)),
+        2 => (any::<u8>(), any::<u8>()).prop_map(|(p, i)| Op::RemoveChildAt(p, i)),
+        1 => any::<u8>().prop_map(Op::Destroy),
+        3 => (any::<u8>(), any::<i8>(), any::<i8>()).prop_map(|(n, x, z)| Op::SetMatrix(n, x, z)),
+        1 => (any::<u8>(), any::<bool>()).prop_map(|(n, v)| Op::SetVisible(n, v)),
+        1 => (any::<u8>(), any::<u32>()).prop_map(|(n, m)| Op::SetMask(n, m)),
+        1 => (any::<u8>(), any::<u8>(), any::<u8>()).prop_map(|(n, p, m)| Op::SetPartMaterial(n, p, m)),
+        1 => any::<u8>().prop_map(Op::SetMaterial),
+        1 => (any::<i8>(), any::<i8>()).prop_map(|(x, z)| Op::MoveEye(x, z)),
+        2 => Just(Op::Update),
+    ]
+}
+
+const MAX_PATHS: u64 = 4096;
+
+fn cases_from_env(default: u32) -> u32 {
+    std::env::var("PROPTEST_CASES")
+        .ok()
+        .and_then(|v| v.parse().ok())
+        .unwrap_or(default)
+}
+
+/// Number of paths from `node` down (memoised over the DAG).
+fn path_count(graph: &SceneGraph, node: NodeHandle) -> u64 {
+    fn count(graph: &SceneGraph, node: NodeHandle, memo: &mut HashMap<NodeHandle, u64>) -> u64 {
+        if let Some(&n) = memo.get(&node) {
+            return n;
+        }
+        let children: Vec<NodeHandle> = graph
+            .node(node)
+            .unwrap()
+            .children()
+            .iter()
+            .map(|l| l.node)
+            .collect();
+        let n = children
+            .into_iter()
+            .fold(1_u64, |sum, c| sum.saturating_add(count(graph, c, memo)));
+        memo.insert(node, n);
+        n
+    }
+    count(graph, node, &mut HashMap::new())
+}
+
+struct World {
+    graph: SceneGraph,
+    geometries: Vec<GeometryHandle>,
+    materials: Vec<MaterialHandle>,
+    eye: DVec3,
+}
+
+impl World {
+    fn new() -> Self {
+        let mut graph = SceneGraph::new();
+        let geometries = (1..=3)
+            .map(|parts| {
+                let mut builder = GeometryBuilder::new(format!("g{parts}"));
+                for p in 0..parts {
+                    builder.prism(
+                        3 + p,
+                        DMat4::from_translation(DVec3::new(f64::from(p), 0.0, 0.0)),
+                    );
+                }
+                graph.create_geometry(builder.finish()).unwrap()
+            })
+            .collect();
+        let materials = (0..4)
+            .map(|i| {
+                graph
+                    .create_material(Material {
+                        name: format!("m{i}"),
+                        ..Material::default()
+                    })
+                    .unwrap()
+            })
+            .collect();
+        Self {
+            graph,
+            geometries,
+            materials,
+            eye: DVec3::new(0.0, 0.0, 10.0),
+        }
+    }
+
+    /// Links `child` under `parent`, undone when sharing would multiply the paths past
+    /// `MAX_PATHS` (a chain of nodes each linked twice doubles them at every level).
+    fn link_bounded(
+        &mut self,
+        parent: NodeHandle,
+        position: usize,
+        child: NodeHandle,
+    ) -> Result<(), GraphError> {
+        self.graph.insert_child(parent, position, child)?;
+        if path_count(&self.graph, self.graph.root()) > MAX_PATHS {
+            self.graph.remove_child_at(parent, position)?;
+        }
+        Ok(())
+    }
+
+    fn nodes(&self) -> Vec<NodeHandle> {
+        self.graph.nodes().map(|(h, _)| h).collect()
+    }
+
+    fn pick(&self, i: u8) -> NodeHandle {
+        let nodes = self.nodes();
+        nodes[i as usize % nodes.len()]
+    }
+
+    /// Applies an edit; refused edits (cycles, wrong kinds) must leave everything consistent.
+    fn apply(&mut self, op: &Op, tree: &mut SceneTree, consumer: &mut Consumer) {
+        let g = &mut self.graph;
+        let _ = match *op {
+            Op::CreateGroup => Ok(drop(g.create_group("group"))),
+            Op::CreateTransform(x, z) => g
+                .create_transform(
+                    "transform",
+                    DMat4::from_translation(DVec3::new(f64::from(x), 0.5, f64::from(z))),
+                )
+                .map(drop),
+            Op::CreateGeo(geometry, material) => {
+                let geometry = self.geometries[geometry as usize % 3];
+                let parts = g.geometry(geometry).unwrap().parts.len();
+                let materials: Vec<_> = (0..parts)
+                    .map(|p| self.materials[(material as usize + p) % 4])
+                    .collect();
+                g.create_geo("geo", geometry, &materials).map(drop)
+            }
+            Op::CreateSwitch => Ok(drop(g.create_switch("switch"))),
+            Op::CreateLod => g.create_lod("lod", &[5.0, 20.0]).map(drop),
+            Op::CreateBillboard => Ok(drop(g.create_billboard("billboard"))),
+            Op::AddChild(p, c) => {
+                let (p, c) = (self.pick(p), self.pick(c));
+                let position = self.graph.node(p).unwrap().children().len();
+                self.link_bounded(p, position, c)
+            }
+            Op::InsertChild(p, i, c) => {
+                let (p, c) = (self.pick(p), self.pick(c));
+                let len = self.graph.node(p).unwrap().children().len();
+                self.link_bounded(p, i as usize % (len + 1), c)
+            }
+            Op::RemoveChildAt(p, i) => {
+                let p = self.pick(p);
+                let len = self.graph.node(p).unwrap().children().len();
+                if len == 0 {
+                    Ok(())
+                } else {
+                    self.graph.remove_child_at(p, i as usize % len)
+                }
+            }
+            Op::Destroy(n) => {
+                let n = self.pick(n);
+                self.graph.destroy_node(n)
+            }
+            Op::SetMatrix(n, x, z) => {
+                let n = self.pick(n);
+                let m = DMat4::from_rotation_y(f64::from(x) * 0.1)
+                    * DMat4::from_translation(DVec3::new(f64::from(z), 0.0, 1.0));
+                self.graph.set_matrix(n, m)
+            }
+            Op::SetVisible(n, visible) => {
+                let n = self.pick(n);
+                self.graph.set_flags(
+                    n,
+                    NodeFlags {
+                        visible,
+                        ..NodeFlags::default()
+                    },
+                )
+            }
+            Op::SetMask(n, bits) => {
+                let n = self.pick(n);
+                let len = self.graph.node(n).unwrap().children().len();
+                let mask: Vec<bool> = (0..len).map(|i| bits >> (i % 32) & 1 == 1).collect();
+                self.graph.set_switch_mask(n, &mask)
+            }
+            Op::SetPartMaterial(n, part, m) => {
+                let n = self.pick(n);
+                self.graph
+                    .set_part_material(n, part as usize % 3, self.materials[m as usize % 4])
+            }
+            Op::SetMaterial(m) => {
+                let handle = self.materials[m as usize % 4];
+                self.graph.set_material(
+                    handle,
+                    Material {
+                        name: "changed".into(),
+                        base_color: [0.1, 0.2, 0.3, 1.0],
+                        ..Material::default()
+                    },
+                )
+            }
+            Op::MoveEye(x, z) => {
+                self.eye = DVec3::new(f64::from(x), 1.0, f64::from(z));
+                tree.update(&mut self.graph);
+                tree.update_view(&self.graph, self.eye);
+                consumer.apply(tree);
+                Ok(())
+            }
+            Op::Update => {
+                tree.update(&mut self.graph);
+                consumer.apply(tree);
+                Ok(())
+            }
+        };
+    }
+}
+
+fn check_against_rebuild(world: &mut World, tree: &mut SceneTree, consumer: &mut Consumer) {
+    tree.update(&mut world.graph);
+    consumer.apply(tree);
+    let rebuilt = SceneTree::build_with_eye(&mut world.graph, world.eye);
+    assert_eq!(
+        snapshot(tree),
+        snapshot(&rebuilt),
+        "incremental tree differs from a rebuild"
+    );
+    assert_eq!(tree.node_count(), rebuilt.node_count());
+    consumer.check(tree);
+}
+
+proptest! {
+    // PROPTEST_CASES overrides the count for longer local runs.
+    #![proptest_config(ProptestConfig { cases: cases_from_env(1000), ..ProptestConfig::default() })]
+
+    #[test]
+    fn incremental_updates_equal_a_rebuild(ops in prop::collection::vec(op(), 1..80)) {
+        let mut world = World::new();
+        let mut tree = SceneTree::build_with_eye(&mut world.graph, world.eye);
+        let mut consumer = Consumer::default();
+        consumer.apply(&mut tree);
+        for op in &ops {
+            world.apply(op, &mut tree, &mut consumer);
+        }
+        check_against_rebuild(&mut world, &mut tree, &mut consumer);
+    }
+}
+
+#[test]
+fn shared_subgraphs_appear_once_per_path_and_edits_reach_every_path() {
+    let mut world = World::new();
+    let g = &mut world.graph;
+    let bolt_geometry = world.geometries[0];
+    let bolt = g
+        .create_geo("bolt", bolt_geometry, &[world.materials[0]])
+        .unwrap();
+    let places: Vec<NodeHandle> = (0..500)
+        .map(|i| {
+            let place = g
+                .create_transform(
+                    "place",
+                    DMat4::from_translation(DVec3::new(f64::from(i), 0.0, 0.0)),
+                )
+                .unwrap();
+            g.add_child(place, bolt).unwrap();
+            g.add_child(g.root(), place).unwrap();
+            place
+        })
+        .collect();
+    let mut tree = SceneTree::build(g);
+    assert_eq!(
+        tree.instance_count(),
+        500,
+        "a bolt used 500 times is drawn on 500 paths"
+    );
+    tree.take_changes();
+    // Moving one placement touches one path and nothing else.
+    g.set_matrix(
+        places[7],
+        DMat4::from_translation(DVec3::new(7.0, 1.0, 0.0)),
+    )
+    .unwrap();
+    tree.update(g);
+    let changes = tree.take_changes();
+    assert_eq!(
+        changes.dirty_matrices.len(),
+        2,
+        "the placement and the bolt beneath it"
+    );
+    assert!(changes.added.is_empty() && changes.removed.is_empty() && changes.changed.is_empty());
+    // A material change of the shared node reaches every path.
+    g.set_part_material(bolt, 0, world.materials[1]).unwrap();
+    tree.update(g);
+    assert_eq!(tree.take_changes().changed.len(), 500);
+}
+
+#[test]
+fn cycles_and_stale_handles_are_errors() {
+    let mut world = World::new();
+    let g = &mut world.graph;
+    let a = g.create_group("a");
+    let b = g.create_group("b");
+    g.add_child(a, b).unwrap();
+    let error = g.add_child(b, a).unwrap_err().to_string();
+    assert!(
+        error.contains("'a' under 'b' would create a cycle"),
+        "{error}"
+    );
+    assert!(g.add_child(a, a).is_err());
+    g.destroy_node(b).unwrap();
+    let error = g.add_child(a, b).unwrap_err().to_string();
+    assert!(
+        error.contains("destroyed or belongs to another graph"),
+        "{error}"
+    );
+    let other = SceneGraph::new();
+    assert!(other.node(a).is_err(), "a handle from another graph");
+    let error = g.set_matrix(a, DMat4::IDENTITY).unwrap_err().to_string();
+    assert!(
+        error.contains("'a' is a Group; set_matrix needs a Transform"),
+        "{error}"
+    );
+    assert!(g.destroy_node(g.root()).is_err());
+    let error = g
+        .destroy_geometry(world.geometries[0])
+        .map(|_| ())
+        .and_then(|_| {
+            let geo = g.create_geo("x", world.geometries[0], &[world.materials[0]])?;
+            g.destroy_geometry(world.geometries[0]).map(|_| drop(geo))
+        });
+    assert!(error.is_err());
+    let nan = DMat4::from_translation(DVec3::new(f64::NAN, 0.0, 0.0));
+    assert!(g.create_transform("bad", nan).is_err());
+}

@@ -226,24 +226,24 @@ impl World {
     fn apply(&mut self, op: &Op, tree: &mut SceneTree, consumer: &mut Consumer) {
         let g = &mut self.graph;
         let _ = match *op {
-            Op::CreateGroup => Ok(drop(g.create_group("group"))),
+            Op::CreateGroup => Ok(g.create_group("group")).map(|_| ()),
             Op::CreateTransform(x, z) => g
                 .create_transform(
                     "transform",
                     DMat4::from_translation(DVec3::new(f64::from(x), 0.5, f64::from(z))),
                 )
-                .map(drop),
+                .map(|_| ()),
             Op::CreateGeo(geometry, material) => {
                 let geometry = self.geometries[geometry as usize % 3];
                 let parts = g.geometry(geometry).unwrap().parts.len();
                 let materials: Vec<_> = (0..parts)
                     .map(|p| self.materials[(material as usize + p) % 4])
                     .collect();
-                g.create_geo("geo", geometry, &materials).map(drop)
+                g.create_geo("geo", geometry, &materials).map(|_| ())
             }
-            Op::CreateSwitch => Ok(drop(g.create_switch("switch"))),
-            Op::CreateLod => g.create_lod("lod", &[5.0, 20.0]).map(drop),
-            Op::CreateBillboard => Ok(drop(g.create_billboard("billboard"))),
+            Op::CreateSwitch => Ok(g.create_switch("switch")).map(|_| ()),
+            Op::CreateLod => g.create_lod("lod", &[5.0, 20.0]).map(|_| ()),
+            Op::CreateBillboard => Ok(g.create_billboard("billboard")).map(|_| ()),
             Op::AddChild(p, c) => {
                 let (p, c) = (self.pick(p), self.pick(c));
                 let position = self.graph.node(p).unwrap().children().len();
@@ -426,14 +426,22 @@ fn cycles_and_stale_handles_are_errors() {
         "{error}"
     );
     assert!(g.destroy_node(g.root()).is_err());
+    let _in_use = g
+        .create_geo("user", world.geometries[0], &[world.materials[0]])
+        .unwrap();
     let error = g
         .destroy_geometry(world.geometries[0])
-        .map(|_| ())
-        .and_then(|_| {
-            let geo = g.create_geo("x", world.geometries[0], &[world.materials[0]])?;
-            g.destroy_geometry(world.geometries[0]).map(|_| drop(geo))
-        });
-    assert!(error.is_err());
+        .unwrap_err()
+        .to_string();
+    assert!(
+        error.contains("geometry 'g1' is still used by 1 node(s)"),
+        "{error}"
+    );
+    let error = g
+        .destroy_material(world.materials[0])
+        .unwrap_err()
+        .to_string();
+    assert!(error.contains("material 'm0' is still used"), "{error}");
     let nan = DMat4::from_translation(DVec3::new(f64::NAN, 0.0, 0.0));
     assert!(g.create_transform("bad", nan).is_err());
 }

@@ -400,6 +400,11 @@ impl SceneTree {
             .unwrap_or_default();
         let new: &[ChildLink] = node.children();
         for t in paths {
+            // Reconciling an earlier parent may have removed this path (it lay in a subtree
+            // that no longer exists): skip it.
+            if !self.node_alive.contains(t) || self.node_graph[t as usize] != parent {
+                continue;
+            }
             let old: Vec<NodeHandle> = self.node_children[t as usize]
                 .iter()
                 .map(|&c| self.node_graph[c as usize])

@@ -32,5 +32,30 @@ pub const BASELINE_FRAG: ShaderSource = ShaderSource {
     source: include_str!("../../shaders/baseline.frag"),
 };
 
+/// Resident-parameters vertex shader.
+pub const RESIDENT_VERT: ShaderSource = ShaderSource {
+    name: "resident.vert",
+    stage: ShaderStage::Vertex,
+    source: include_str!("../../shaders/resident.vert"),
+};
+/// Resident-parameters fragment shader.
+pub const RESIDENT_FRAG: ShaderSource = ShaderSource {
+    name: "resident.frag",
+    stage: ShaderStage::Fragment,
+    source: include_str!("../../shaders/resident.frag"),
+};
+/// Sparse matrix scatter.
+pub const SCATTER_COMP: ShaderSource = ShaderSource {
+    name: "scatter.comp",
+    stage: ShaderStage::Compute,
+    source: include_str!("../../shaders/scatter.comp"),
+};
+
 /// Every complete shader, for validation.
-pub const ALL: &[ShaderSource] = &[BASELINE_VERT, BASELINE_FRAG];
+pub const ALL: &[ShaderSource] = &[
+    BASELINE_VERT,
+    BASELINE_FRAG,
+    RESIDENT_VERT,
+    RESIDENT_FRAG,
+    SCATTER_COMP,
+];

@@ -1,7 +1,10 @@
 //! Every shader compiles and validates; the Rust mirrors of shader structs match their layout.
 #![allow(clippy::unwrap_used)] // Test code: a failed unwrap is a failed test.
 
-use cadr_core::render::{DrawParameters, FrameUniforms, GpuScene, Renderer};
+use cadr_core::render::{
+    DrawIndices, DrawParameters, FrameUniforms, GpuScene, MaterialParameters, MatrixUpdate,
+    Renderer,
+};
 use cadr_core::shaders::{ALL, INCLUDES};
 use cadr_core::vk::{compile_glsl, ShaderStage, VkError};
 use cadr_tests::{assert_no_validation_errors, test_device};
@@ -54,8 +57,18 @@ fn every_shader_file_is_listed() {
 
 #[test]
 fn shader_struct_mirrors_have_std140_layout() {
-    assert_eq!(std::mem::size_of::<FrameUniforms>(), 80);
-    assert_eq!(std::mem::offset_of!(FrameUniforms, light), 64);
+    assert_eq!(std::mem::size_of::<FrameUniforms>(), 144);
+    assert_eq!(std::mem::offset_of!(FrameUniforms, view_from_origin), 64);
+    assert_eq!(std::mem::offset_of!(FrameUniforms, light), 128);
+    assert_eq!(
+        std::mem::size_of::<MatrixUpdate>(),
+        80,
+        "std430: uint + 3 pad, then mat4"
+    );
+    assert_eq!(std::mem::offset_of!(MatrixUpdate, matrix), 16);
+    assert_eq!(std::mem::size_of::<MaterialParameters>(), 32);
+    assert_eq!(std::mem::size_of::<DrawIndices>(), 8);
+
     assert_eq!(std::mem::size_of::<DrawParameters>(), 96);
     assert_eq!(std::mem::offset_of!(DrawParameters, base_color), 64);
     assert_eq!(std::mem::offset_of!(DrawParameters, surface), 80);

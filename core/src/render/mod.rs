@@ -8,16 +8,23 @@
 mod camera;
 mod gpu_scene;
 mod pipeline;
+mod resident;
 
 pub use camera::{Camera, DEFAULT_DIRECTION, DEFAULT_FOV_DEGREES};
 pub use gpu_scene::{GeometryRange, GpuScene, UploadError};
-pub use pipeline::{BaselinePipeline, DrawParameters, FrameUniforms};
+pub use pipeline::{
+    DrawIndices, DrawParameters, FrameUniforms, MaterialParameters, MatrixUpdate, Pipelines,
+};
+pub use resident::{ResidentDraw, ResidentScene, UploadStats};
 
 use std::path::Path;
 use std::sync::Arc;
 use std::time::Instant;
 
 use ash::vk;
+use glam::{DMat4, DVec3};
+
+use pipeline::DescriptorSets;
 
 use crate::vk::{
     transition, Buffer, CommandContext, Device, GpuTimer, MemoryLocation, OffscreenTarget, VkError,
@@ -46,6 +53,8 @@ pub struct FrameStats {
     pub vertex_binds: u64,
     /// Parameter updates (push constant writes, descriptor binds).
     pub parameter_updates: u64,
+    /// Bytes uploaded to the GPU for this frame (matrices, materials).
+    pub bytes_uploaded: u64,
 }
 
 impl FrameStats {
@@ -60,10 +69,14 @@ pub struct Renderer {
     device: Arc<Device>,
     target: OffscreenTarget,
     frame_uniforms: Buffer,
-    pipeline: BaselinePipeline,
+    pipelines: Pipelines,
+    frame_sets: DescriptorSets,
     commands: CommandContext,
     timer: Option<GpuTimer>,
 }
+
+/// What a technique records inside the frame: (before the render pass, inside it).
+type Recorder<'a> = dyn FnMut(&Renderer, vk::CommandBuffer, &mut FrameStats) -> VkResult<()> + 'a;
 
 impl Renderer {
     /// Creates a renderer with a `width` × `height` target.
@@ -76,14 +89,30 @@ impl Renderer {
             vk::BufferUsageFlags::UNIFORM_BUFFER,
             MemoryLocation::CpuToGpu,
         )?;
-        let pipeline = BaselinePipeline::new(device, frame_uniforms.raw())?;
+        let pipelines = Pipelines::new(device)?;
+        let frame_sets = DescriptorSets::new(
+            device,
+            "frame",
+            &[pipelines.frame_set_layout],
+            &[vk::DescriptorPoolSize::default()
+                .ty(vk::DescriptorType::UNIFORM_BUFFER)
+                .descriptor_count(1)],
+        )?;
+        frame_sets.write_buffer(
+            0,
+            0,
+            vk::DescriptorType::UNIFORM_BUFFER,
+            frame_uniforms.raw(),
+            vk::WHOLE_SIZE,
+        );
         let commands = CommandContext::new(device, "frame commands")?;
         let timer = GpuTimer::new(device, "frame timer")?;
         Ok(Self {
             device: Arc::clone(device),
             target,
             frame_uniforms,
-            pipeline,
+            pipelines,
+            frame_sets,
             commands,
             timer,
         })
@@ -94,16 +123,66 @@ impl Renderer {
         &self.device
     }
 
+    /// The pipelines (to create resident scenes with).
+    pub fn pipelines(&self) -> &Pipelines {
+        &self.pipelines
+    }
+
     /// Width and height of the target.
     pub fn size(&self) -> (u32, u32) {
         let extent = self.target.extent();
         (extent.width, extent.height)
     }
 
-    /// Renders one frame of `scene` seen by `camera`, waits for it, and reports its cost.
+    /// Renders one frame of `scene` with the baseline technique (one draw per part, matrix and
+    /// material pushed per draw), waits for it, and reports its cost.
     pub fn render(&mut self, scene: &GpuScene, camera: &Camera) -> VkResult<FrameStats> {
+        let mut before = |_: &Renderer, _: vk::CommandBuffer, _: &mut FrameStats| Ok(());
+        let mut inside =
+            |renderer: &Renderer, command_buffer: vk::CommandBuffer, stats: &mut FrameStats| {
+                renderer.record_baseline(command_buffer, scene, camera, stats);
+                Ok(())
+            };
+        self.frame(camera, DVec3::ZERO, &mut before, &mut inside)
+    }
+
+    /// Renders one frame of a resident scene: uploads its pending changes (compute scatter),
+    /// then one draw per visible part with two indices pushed per draw.
+    pub fn render_resident(
+        &mut self,
+        scene: &mut ResidentScene,
+        camera: &Camera,
+    ) -> VkResult<FrameStats> {
+        let origin = scene.origin();
+        let scene = std::cell::RefCell::new(scene);
+        let mut before =
+            |renderer: &Renderer, command_buffer: vk::CommandBuffer, stats: &mut FrameStats| {
+                stats.bytes_uploaded = scene
+                    .borrow_mut()
+                    .record_uploads(&renderer.pipelines, command_buffer)?;
+                Ok(())
+            };
+        let mut inside =
+            |renderer: &Renderer, command_buffer: vk::CommandBuffer, stats: &mut FrameStats| {
+                renderer.record_resident(command_buffer, &scene.borrow(), stats);
+                Ok(())
+            };
+        self.frame(camera, origin, &mut before, &mut inside)
+    }
+
+    /// Runs a frame: uniforms, command buffer, target transitions, the technique's commands
+    /// before and inside the render pass, submission, wait, timings.
+    fn frame(
+        &mut self,
+        camera: &Camera,
+        origin: DVec3,
+        before: &mut Recorder<'_>,
+        inside: &mut Recorder<'_>,
+    ) -> VkResult<FrameStats> {
+        let view_from_origin = camera.view * DMat4::from_translation(origin);
         let uniforms = FrameUniforms {
             projection: camera.projection.as_mat4().to_cols_array_2d(),
+            view_from_origin: view_from_origin.as_mat4().to_cols_array_2d(),
             light: [0.22, 0.68, 0.35, 0.0],
         };
         self.commands.wait()?;
@@ -112,7 +191,17 @@ impl Renderer {
 
         let record_start = Instant::now();
         let command_buffer = self.commands.begin()?;
-        let mut stats = self.record(command_buffer, scene, camera);
+        let mut stats = FrameStats::default();
+        if let Some(timer) = &mut self.timer {
+            timer.begin(command_buffer);
+        }
+        before(self, command_buffer, &mut stats)?;
+        self.begin_pass(command_buffer);
+        inside(self, command_buffer, &mut stats)?;
+        self.end_pass(command_buffer);
+        if let Some(timer) = &mut self.timer {
+            timer.end(command_buffer);
+        }
         let submit_start = Instant::now();
         stats.cpu_record_us = (submit_start - record_start).as_secs_f64() * 1e6;
         self.commands.submit()?;
@@ -125,23 +214,10 @@ impl Renderer {
         Ok(stats)
     }
 
-    fn record(
-        &mut self,
-        command_buffer: vk::CommandBuffer,
-        scene: &GpuScene,
-        camera: &Camera,
-    ) -> FrameStats {
+    fn begin_pass(&self, command_buffer: vk::CommandBuffer) {
         let device = &*self.device;
         let raw = device.raw();
         let extent = self.target.extent();
-        let mut stats = FrameStats {
-            pipeline_binds: 1,
-            parameter_updates: 1,
-            ..FrameStats::default()
-        };
-        if let Some(timer) = &mut self.timer {
-            timer.begin(command_buffer);
-        }
         transition(
             device,
             command_buffer,
@@ -214,26 +290,62 @@ impl Renderer {
             min_depth: 0.0,
             max_depth: 1.0,
         }];
-        // SAFETY: command_buffer is recording; every handle used below (target, pipeline,
-        // descriptor set, arenas) outlives the submission, which render() waits for.
+        // SAFETY: command_buffer is recording; the target outlives the submission.
         unsafe {
             raw.cmd_begin_rendering(command_buffer, &rendering);
+            raw.cmd_set_viewport(command_buffer, 0, &viewport);
+            raw.cmd_set_scissor(command_buffer, 0, &[area]);
+        }
+    }
+
+    fn end_pass(&self, command_buffer: vk::CommandBuffer) {
+        // SAFETY: rendering was begun by begin_pass on this command buffer.
+        unsafe { self.device.raw().cmd_end_rendering(command_buffer) };
+        transition(
+            &self.device,
+            command_buffer,
+            self.target.color.raw(),
+            vk::ImageAspectFlags::COLOR,
+            (
+                vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL,
+                vk::PipelineStageFlags2::COLOR_ATTACHMENT_OUTPUT,
+                vk::AccessFlags2::COLOR_ATTACHMENT_WRITE,
+            ),
+            (
+                vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
+                vk::PipelineStageFlags2::COPY,
+                vk::AccessFlags2::TRANSFER_READ,
+            ),
+        );
+    }
+
+    fn record_baseline(
+        &self,
+        command_buffer: vk::CommandBuffer,
+        scene: &GpuScene,
+        camera: &Camera,
+        stats: &mut FrameStats,
+    ) {
+        let raw = self.device.raw();
+        let layout = self.pipelines.baseline_layout;
+        // SAFETY: recording inside the pass; pipeline, set and arenas outlive the submission.
+        unsafe {
             raw.cmd_bind_pipeline(
                 command_buffer,
                 vk::PipelineBindPoint::GRAPHICS,
-                self.pipeline.pipeline,
+                self.pipelines.baseline,
             );
-            raw.cmd_set_viewport(command_buffer, 0, &viewport);
-            raw.cmd_set_scissor(command_buffer, 0, &[area]);
             raw.cmd_bind_descriptor_sets(
                 command_buffer,
                 vk::PipelineBindPoint::GRAPHICS,
-                self.pipeline.layout,
+                layout,
                 0,
-                &[self.pipeline.frame_set],
+                &[self.frame_sets.sets[0]],
                 &[],
             );
         }
+        stats.pipeline_binds += 1;
+        stats.parameter_updates += 1;
         let mut bound_geometry = u32::MAX;
         let mut current_instance = u32::MAX;
         let mut parameters = DrawParameters::default();
@@ -271,7 +383,7 @@ impl Renderer {
             unsafe {
                 raw.cmd_push_constants(
                     command_buffer,
-                    self.pipeline.layout,
+                    layout,
                     push_stages,
                     0,
                     bytemuck::bytes_of(&parameters),
@@ -282,28 +394,75 @@ impl Renderer {
             stats.draw_calls += 1;
             stats.triangles += u64::from(draw.index_count / 3);
         }
-        // SAFETY: rendering was begun above on this command buffer.
-        unsafe { raw.cmd_end_rendering(command_buffer) };
-        transition(
-            device,
-            command_buffer,
-            self.target.color.raw(),
-            vk::ImageAspectFlags::COLOR,
-            (
-                vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL,
-                vk::PipelineStageFlags2::COLOR_ATTACHMENT_OUTPUT,
-                vk::AccessFlags2::COLOR_ATTACHMENT_WRITE,
-            ),
-            (
-                vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
-                vk::PipelineStageFlags2::COPY,
-                vk::AccessFlags2::TRANSFER_READ,
-            ),
-        );
-        if let Some(timer) = &mut self.timer {
-            timer.end(command_buffer);
+    }
+
+    fn record_resident(
+        &self,
+        command_buffer: vk::CommandBuffer,
+        scene: &ResidentScene,
+        stats: &mut FrameStats,
+    ) {
+        let raw = self.device.raw();
+        let layout = self.pipelines.resident_layout;
+        let (vertex_arena, index_arena) = scene.arenas();
+        // SAFETY: recording inside the pass; pipeline, sets and arenas outlive the submission.
+        unsafe {
+            raw.cmd_bind_pipeline(
+                command_buffer,
+                vk::PipelineBindPoint::GRAPHICS,
+                self.pipelines.resident,
+            );
+            raw.cmd_bind_descriptor_sets(
+                command_buffer,
+                vk::PipelineBindPoint::GRAPHICS,
+                layout,
+                0,
+                &[self.frame_sets.sets[0], scene.parameter_set()],
+                &[],
+            );
         }
-        stats
+        stats.pipeline_binds += 1;
+        stats.parameter_updates += 1;
+        let mut bound_geometry = u32::MAX;
+        for draw in scene.draws() {
+            if draw.geometry != bound_geometry {
+                let Some((vertex_offset, index_offset)) = scene.geometry_offsets(draw.geometry)
+                else {
+                    continue;
+                };
+                // SAFETY: offsets lie within the arenas by construction.
+                unsafe {
+                    raw.cmd_bind_vertex_buffers(
+                        command_buffer,
+                        0,
+                        &[vertex_arena],
+                        &[vertex_offset],
+                    );
+                    raw.cmd_bind_index_buffer(
+                        command_buffer,
+                        index_arena,
+                        index_offset,
+                        vk::IndexType::UINT32,
+                    );
+                }
+                bound_geometry = draw.geometry;
+                stats.vertex_binds += 1;
+            }
+            // SAFETY: the push range matches the resident layout.
+            unsafe {
+                raw.cmd_push_constants(
+                    command_buffer,
+                    layout,
+                    vk::ShaderStageFlags::VERTEX,
+                    0,
+                    bytemuck::bytes_of(&draw.indices),
+                );
+                raw.cmd_draw_indexed(command_buffer, draw.index_count, 1, draw.first_index, 0, 0);
+            }
+            stats.parameter_updates += 1;
+            stats.draw_calls += 1;
+            stats.triangles += u64::from(draw.index_count / 3);
+        }
     }
 
     /// Reads the last frame back as tightly packed RGBA8 rows.

@@ -1,12 +1,13 @@
-//! The baseline graphics pipeline: vertex buffers, per-frame uniforms in set 0, per-draw matrix
-//! and material in push constants.
+//! Pipelines and their layouts: the per-frame descriptor set shared by every technique, the
+//! baseline pipeline (per-draw push constants), the resident pipeline (per-draw indices into
+//! storage buffers) and the scatter compute pipeline.
 
 use std::sync::Arc;
 
 use ash::vk;
 
 use crate::scene::Vertex;
-use crate::shaders;
+use crate::shaders::{self, ShaderSource};
 use crate::vk::{Device, ShaderModule, VkResult, VkResultExt, COLOR_FORMAT, DEPTH_FORMAT};
 
 /// Per-frame uniform data; mirrors `FrameUniforms` in `shaders/frame.glsl` (std140).
@@ -15,11 +16,13 @@ use crate::vk::{Device, ShaderModule, VkResult, VkResultExt, COLOR_FORMAT, DEPTH
 pub struct FrameUniforms {
     /// View to clip space.
     pub projection: [[f32; 4]; 4],
+    /// Scene-origin-relative world space to view space.
+    pub view_from_origin: [[f32; 4]; 4],
     /// Ambient, diffuse and specular strength of the head light.
     pub light: [f32; 4],
 }
 
-/// Per-draw push constants; mirrors `DrawParameters` in `shaders/baseline.vert`.
+/// Per-draw push constants of the baseline; mirrors `DrawParameters` in `shaders/baseline.vert`.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
 pub struct DrawParameters {
@@ -31,101 +34,336 @@ pub struct DrawParameters {
     pub surface: [f32; 4],
 }
 
-/// Pipeline, layouts and the descriptor set of the per-frame uniforms.
-pub struct BaselinePipeline {
-    device: Arc<Device>,
-    set_layout: vk::DescriptorSetLayout,
-    descriptor_pool: vk::DescriptorPool,
-    /// The set holding the frame uniform buffer.
-    pub frame_set: vk::DescriptorSet,
-    /// The pipeline layout.
-    pub layout: vk::PipelineLayout,
-    /// The graphics pipeline.
-    pub pipeline: vk::Pipeline,
+/// Per-draw push constants of the resident pipeline; mirrors `DrawIndices` in `resident.vert`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct DrawIndices {
+    /// Matrix slot.
+    pub matrix: u32,
+    /// Material slot.
+    pub material: u32,
 }
 
-impl BaselinePipeline {
-    /// Compiles the shaders and creates the pipeline; `frame_buffer` is the uniform buffer
-    /// bound in set 0.
-    pub fn new(device: &Arc<Device>, frame_buffer: vk::Buffer) -> VkResult<Self> {
-        let raw = device.raw();
+/// One entry of the compact matrix upload; mirrors `MatrixUpdate` in `scatter.comp` (std430).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct MatrixUpdate {
+    /// Destination slot.
+    pub slot: u32,
+    /// Padding to the matrix's 16-byte alignment.
+    pub padding: [u32; 3],
+    /// The matrix.
+    pub matrix: [[f32; 4]; 4],
+}
+
+/// Material parameters in the resident material buffer; mirrors `MaterialParameters`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct MaterialParameters {
+    /// Linear RGBA.
+    pub base_color: [f32; 4],
+    /// x: metallic, y: roughness.
+    pub surface: [f32; 4],
+}
+
+fn set_layout(
+    device: &Device,
+    name: &str,
+    bindings: &[(vk::DescriptorType, vk::ShaderStageFlags)],
+) -> VkResult<vk::DescriptorSetLayout> {
+    let bindings: Vec<vk::DescriptorSetLayoutBinding<'_>> = bindings
+        .iter()
+        .enumerate()
+        .map(|(i, &(ty, stages))| {
+            vk::DescriptorSetLayoutBinding::default()
+                .binding(i as u32)
+                .descriptor_type(ty)
+                .descriptor_count(1)
+                .stage_flags(stages)
+        })
+        .collect();
+    let info = vk::DescriptorSetLayoutCreateInfo::default().bindings(&bindings);
+    // SAFETY: the info lives for the call.
+    let layout = unsafe { device.raw().create_descriptor_set_layout(&info, None) }
+        .or_vk("vkCreateDescriptorSetLayout")?;
+    device.set_name(layout, name);
+    Ok(layout)
+}
+
+fn pipeline_layout(
+    device: &Device,
+    name: &str,
+    sets: &[vk::DescriptorSetLayout],
+    push_size: u32,
+    push_stages: vk::ShaderStageFlags,
+) -> VkResult<vk::PipelineLayout> {
+    let push = [vk::PushConstantRange::default()
+        .stage_flags(push_stages)
+        .size(push_size)];
+    let info = vk::PipelineLayoutCreateInfo::default()
+        .set_layouts(sets)
+        .push_constant_ranges(&push);
+    // SAFETY: the info lives for the call.
+    let layout = unsafe { device.raw().create_pipeline_layout(&info, None) }
+        .or_vk("vkCreatePipelineLayout")?;
+    device.set_name(layout, name);
+    Ok(layout)
+}
+
+/// A descriptor pool, its sets and the layouts it was made for; destroyed together.
+pub struct DescriptorSets {
+    device: Arc<Device>,
+    pool: vk::DescriptorPool,
+    /// The sets, one per layout given.
+    pub sets: Vec<vk::DescriptorSet>,
+}
+
+impl DescriptorSets {
+    /// Allocates one set per layout from a pool sized for them.
+    pub fn new(
+        device: &Arc<Device>,
+        name: &str,
+        layouts: &[vk::DescriptorSetLayout],
+        sizes: &[vk::DescriptorPoolSize],
+    ) -> VkResult<Self> {
+        let info = vk::DescriptorPoolCreateInfo::default()
+            .max_sets(layouts.len() as u32)
+            .pool_sizes(sizes);
+        // SAFETY: the info lives for the call.
+        let pool = unsafe { device.raw().create_descriptor_pool(&info, None) }
+            .or_vk("vkCreateDescriptorPool")?;
+        device.set_name(pool, name);
         let mut this = Self {
             device: Arc::clone(device),
-            set_layout: vk::DescriptorSetLayout::null(),
-            descriptor_pool: vk::DescriptorPool::null(),
-            frame_set: vk::DescriptorSet::null(),
-            layout: vk::PipelineLayout::null(),
-            pipeline: vk::Pipeline::null(),
+            pool,
+            sets: Vec::new(),
         };
-        let bindings = [vk::DescriptorSetLayoutBinding::default()
-            .binding(0)
-            .descriptor_type(vk::DescriptorType::UNIFORM_BUFFER)
-            .descriptor_count(1)
-            .stage_flags(vk::ShaderStageFlags::VERTEX | vk::ShaderStageFlags::FRAGMENT)];
-        let set_layout_info = vk::DescriptorSetLayoutCreateInfo::default().bindings(&bindings);
-        // SAFETY: the info is valid and lives for the call; Drop destroys what is created.
-        this.set_layout = unsafe { raw.create_descriptor_set_layout(&set_layout_info, None) }
-            .or_vk("vkCreateDescriptorSetLayout")?;
-        device.set_name(this.set_layout, "baseline frame set layout");
-        let pool_sizes = [vk::DescriptorPoolSize::default()
-            .ty(vk::DescriptorType::UNIFORM_BUFFER)
-            .descriptor_count(1)];
-        let pool_info = vk::DescriptorPoolCreateInfo::default()
-            .max_sets(1)
-            .pool_sizes(&pool_sizes);
-        // SAFETY: as above.
-        this.descriptor_pool = unsafe { raw.create_descriptor_pool(&pool_info, None) }
-            .or_vk("vkCreateDescriptorPool")?;
-        device.set_name(this.descriptor_pool, "baseline descriptor pool");
-        let set_layouts = [this.set_layout];
-        let alloc_info = vk::DescriptorSetAllocateInfo::default()
-            .descriptor_pool(this.descriptor_pool)
-            .set_layouts(&set_layouts);
-        // SAFETY: the pool has room for exactly this set.
-        this.frame_set = unsafe { raw.allocate_descriptor_sets(&alloc_info) }
-            .or_vk("vkAllocateDescriptorSets")?[0];
-        device.set_name(this.frame_set, "baseline frame set");
-        let buffer_info = [vk::DescriptorBufferInfo::default()
-            .buffer(frame_buffer)
-            .range(std::mem::size_of::<FrameUniforms>() as u64)];
-        let write = [vk::WriteDescriptorSet::default()
-            .dst_set(this.frame_set)
-            .dst_binding(0)
-            .descriptor_type(vk::DescriptorType::UNIFORM_BUFFER)
-            .buffer_info(&buffer_info)];
-        // SAFETY: the set is not in use by any command buffer yet.
-        unsafe { raw.update_descriptor_sets(&write, &[]) };
+        let alloc = vk::DescriptorSetAllocateInfo::default()
+            .descriptor_pool(pool)
+            .set_layouts(layouts);
+        // SAFETY: the pool was sized for exactly these sets.
+        this.sets = unsafe { device.raw().allocate_descriptor_sets(&alloc) }
+            .or_vk("vkAllocateDescriptorSets")?;
+        for (i, &set) in this.sets.iter().enumerate() {
+            device.set_name(set, &format!("{name} set {i}"));
+        }
+        Ok(this)
+    }
 
-        let push_ranges = [vk::PushConstantRange::default()
-            .stage_flags(vk::ShaderStageFlags::VERTEX | vk::ShaderStageFlags::FRAGMENT)
-            .size(std::mem::size_of::<DrawParameters>() as u32)];
-        let layout_info = vk::PipelineLayoutCreateInfo::default()
-            .set_layouts(&set_layouts)
-            .push_constant_ranges(&push_ranges);
-        // SAFETY: as above.
-        this.layout = unsafe { raw.create_pipeline_layout(&layout_info, None) }
-            .or_vk("vkCreatePipelineLayout")?;
-        device.set_name(this.layout, "baseline pipeline layout");
-        this.pipeline = create_pipeline(device, this.layout)?;
+    /// Points `binding` of set `set` at `buffer` (whole range).
+    pub fn write_buffer(
+        &self,
+        set: usize,
+        binding: u32,
+        ty: vk::DescriptorType,
+        buffer: vk::Buffer,
+        range: u64,
+    ) {
+        let info = [vk::DescriptorBufferInfo::default()
+            .buffer(buffer)
+            .range(range)];
+        let write = [vk::WriteDescriptorSet::default()
+            .dst_set(self.sets[set])
+            .dst_binding(binding)
+            .descriptor_type(ty)
+            .buffer_info(&info)];
+        // SAFETY: callers update sets only while no submitted command buffer uses them (frames
+        // are waited for before the next is recorded).
+        unsafe { self.device.raw().update_descriptor_sets(&write, &[]) };
+    }
+}
+
+impl Drop for DescriptorSets {
+    fn drop(&mut self) {
+        // SAFETY: owners drop their sets after the GPU is done with them; sets go with the pool.
+        unsafe { self.device.raw().destroy_descriptor_pool(self.pool, None) };
+    }
+}
+
+/// Every pipeline and layout the renderer uses.
+pub struct Pipelines {
+    device: Arc<Device>,
+    /// Set 0: the frame uniform buffer.
+    pub frame_set_layout: vk::DescriptorSetLayout,
+    /// Set 1 of the resident pipeline: matrices and materials.
+    pub resident_set_layout: vk::DescriptorSetLayout,
+    /// The scatter pipeline's set: updates and matrices.
+    pub scatter_set_layout: vk::DescriptorSetLayout,
+    /// Baseline layout: set 0 and 96 bytes of push constants.
+    pub baseline_layout: vk::PipelineLayout,
+    /// Baseline pipeline.
+    pub baseline: vk::Pipeline,
+    /// Resident layout: sets 0 and 1 and 8 bytes of push constants.
+    pub resident_layout: vk::PipelineLayout,
+    /// Resident pipeline.
+    pub resident: vk::Pipeline,
+    /// Scatter layout.
+    pub scatter_layout: vk::PipelineLayout,
+    /// Scatter compute pipeline.
+    pub scatter: vk::Pipeline,
+}
+
+impl Pipelines {
+    /// Compiles every shader and creates the pipelines.
+    pub fn new(device: &Arc<Device>) -> VkResult<Self> {
+        let graphics = vk::ShaderStageFlags::VERTEX | vk::ShaderStageFlags::FRAGMENT;
+        let mut this = Self {
+            device: Arc::clone(device),
+            frame_set_layout: vk::DescriptorSetLayout::null(),
+            resident_set_layout: vk::DescriptorSetLayout::null(),
+            scatter_set_layout: vk::DescriptorSetLayout::null(),
+            baseline_layout: vk::PipelineLayout::null(),
+            baseline: vk::Pipeline::null(),
+            resident_layout: vk::PipelineLayout::null(),
+            resident: vk::Pipeline::null(),
+            scatter_layout: vk::PipelineLayout::null(),
+            scatter: vk::Pipeline::null(),
+        };
+        this.frame_set_layout = set_layout(
+            device,
+            "frame set layout",
+            &[(vk::DescriptorType::UNIFORM_BUFFER, graphics)],
+        )?;
+        this.resident_set_layout = set_layout(
+            device,
+            "resident set layout",
+            &[
+                (
+                    vk::DescriptorType::STORAGE_BUFFER,
+                    vk::ShaderStageFlags::VERTEX,
+                ),
+                (
+                    vk::DescriptorType::STORAGE_BUFFER,
+                    vk::ShaderStageFlags::VERTEX,
+                ),
+            ],
+        )?;
+        let compute = vk::ShaderStageFlags::COMPUTE;
+        this.scatter_set_layout = set_layout(
+            device,
+            "scatter set layout",
+            &[
+                (vk::DescriptorType::STORAGE_BUFFER, compute),
+                (vk::DescriptorType::STORAGE_BUFFER, compute),
+            ],
+        )?;
+        this.baseline_layout = pipeline_layout(
+            device,
+            "baseline layout",
+            &[this.frame_set_layout],
+            std::mem::size_of::<DrawParameters>() as u32,
+            graphics,
+        )?;
+        this.baseline = graphics_pipeline(
+            device,
+            this.baseline_layout,
+            &shaders::BASELINE_VERT,
+            &shaders::BASELINE_FRAG,
+            "baseline pipeline",
+        )?;
+        this.resident_layout = pipeline_layout(
+            device,
+            "resident layout",
+            &[this.frame_set_layout, this.resident_set_layout],
+            std::mem::size_of::<DrawIndices>() as u32,
+            vk::ShaderStageFlags::VERTEX,
+        )?;
+        this.resident = graphics_pipeline(
+            device,
+            this.resident_layout,
+            &shaders::RESIDENT_VERT,
+            &shaders::RESIDENT_FRAG,
+            "resident pipeline",
+        )?;
+        this.scatter_layout = pipeline_layout(
+            device,
+            "scatter layout",
+            &[this.scatter_set_layout],
+            4,
+            compute,
+        )?;
+        this.scatter = compute_pipeline(
+            device,
+            this.scatter_layout,
+            &shaders::SCATTER_COMP,
+            "scatter pipeline",
+        )?;
         Ok(this)
     }
 }
 
-fn create_pipeline(device: &Arc<Device>, layout: vk::PipelineLayout) -> VkResult<vk::Pipeline> {
-    let vertex = ShaderModule::from_glsl(
+impl Drop for Pipelines {
+    fn drop(&mut self) {
+        let raw = self.device.raw();
+        // SAFETY: the renderer waits for its last frame before dropping the pipelines; null
+        // handles (from a failed constructor) are ignored by Vulkan.
+        unsafe {
+            for pipeline in [self.baseline, self.resident, self.scatter] {
+                raw.destroy_pipeline(pipeline, None);
+            }
+            for layout in [
+                self.baseline_layout,
+                self.resident_layout,
+                self.scatter_layout,
+            ] {
+                raw.destroy_pipeline_layout(layout, None);
+            }
+            for layout in [
+                self.frame_set_layout,
+                self.resident_set_layout,
+                self.scatter_set_layout,
+            ] {
+                raw.destroy_descriptor_set_layout(layout, None);
+            }
+        }
+    }
+}
+
+fn module(device: &Arc<Device>, shader: &ShaderSource) -> VkResult<ShaderModule> {
+    ShaderModule::from_glsl(
         device,
-        shaders::BASELINE_VERT.name,
-        shaders::BASELINE_VERT.source,
-        shaders::BASELINE_VERT.stage,
+        shader.name,
+        shader.source,
+        shader.stage,
         shaders::INCLUDES,
-    )?;
-    let fragment = ShaderModule::from_glsl(
-        device,
-        shaders::BASELINE_FRAG.name,
-        shaders::BASELINE_FRAG.source,
-        shaders::BASELINE_FRAG.stage,
-        shaders::INCLUDES,
-    )?;
+    )
+}
+
+fn compute_pipeline(
+    device: &Arc<Device>,
+    layout: vk::PipelineLayout,
+    shader: &ShaderSource,
+    name: &str,
+) -> VkResult<vk::Pipeline> {
+    let module = module(device, shader)?;
+    let stage = vk::PipelineShaderStageCreateInfo::default()
+        .stage(vk::ShaderStageFlags::COMPUTE)
+        .module(module.raw())
+        .name(c"main");
+    let info = [vk::ComputePipelineCreateInfo::default()
+        .stage(stage)
+        .layout(layout)];
+    // SAFETY: the info and the module live for the call.
+    let pipelines = unsafe {
+        device
+            .raw()
+            .create_compute_pipelines(vk::PipelineCache::null(), &info, None)
+    }
+    .map_err(|(_, result)| result)
+    .or_vk("vkCreateComputePipelines")?;
+    device.set_name(pipelines[0], name);
+    Ok(pipelines[0])
+}
+
+fn graphics_pipeline(
+    device: &Arc<Device>,
+    layout: vk::PipelineLayout,
+    vertex: &ShaderSource,
+    fragment: &ShaderSource,
+    name: &str,
+) -> VkResult<vk::Pipeline> {
+    let vertex = module(device, vertex)?;
+    let fragment = module(device, fragment)?;
     let stages = [
         vk::PipelineShaderStageCreateInfo::default()
             .stage(vk::ShaderStageFlags::VERTEX)
@@ -201,20 +439,6 @@ fn create_pipeline(device: &Arc<Device>, layout: vk::PipelineLayout) -> VkResult
     }
     .map_err(|(_, result)| result)
     .or_vk("vkCreateGraphicsPipelines")?;
-    device.set_name(pipelines[0], "baseline pipeline");
+    device.set_name(pipelines[0], name);
     Ok(pipelines[0])
-}
-
-impl Drop for BaselinePipeline {
-    fn drop(&mut self) {
-        let raw = self.device.raw();
-        // SAFETY: the renderer waits for its last frame before dropping the pipeline; null
-        // handles (from a failed constructor) are ignored by Vulkan.
-        unsafe {
-            raw.destroy_pipeline(self.pipeline, None);
-            raw.destroy_pipeline_layout(self.layout, None);
-            raw.destroy_descriptor_pool(self.descriptor_pool, None);
-            raw.destroy_descriptor_set_layout(self.set_layout, None);
-        }
-    }
 }

@@ -615,8 +615,14 @@ impl SceneTree {
         self.inst_alive.iter()
     }
 
+    /// Whether tree node `id` is alive and carries instances (a Geo path).
+    pub fn has_instances(&self, id: u32) -> bool {
+        self.node_alive.contains(id) && !self.node_instances[id as usize].is_empty()
+    }
+
     /// The world matrix of tree node `id`.
-    pub fn world(&self, id: u32) -> DMat4 {
+    pub fn world
+(&self, id: u32) -> DMat4 {
         self.node_world[id as usize]
     }
 

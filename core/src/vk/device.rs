@@ -110,7 +110,10 @@ impl Device {
             .pipeline_statistics_query(capabilities.pipeline_statistics_query);
         let mut enabled13 = vk::PhysicalDeviceVulkan13Features::default()
             .dynamic_rendering(true)
-            .synchronization2(true);
+            .synchronization2(true)
+            // Required by Vulkan 1.3; shaderc emits LocalSizeId for 1.3 targets, which needs it.
+            .maintenance4(supported13.maintenance4 == vk::TRUE);
+
         let mut enabled12 = vk::PhysicalDeviceVulkan12Features::default()
             .buffer_device_address(capabilities.buffer_device_address)
             .host_query_reset(supported12.host_query_reset == vk::TRUE);

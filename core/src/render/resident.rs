@@ -1,0 +1,506 @@
+//! The scene kept on the GPU and updated from the scene tree's changes: world matrices (one
+//! slot per tree node, relative to a fixed scene origin) and materials live in storage
+//! buffers; each frame only the changed matrices are gathered into a compact buffer and
+//! scattered into place by `scatter.comp`, and only changed materials are copied. The draw
+//! list is sorted by geometry and material and rebuilt only when instances are added, removed,
+//! changed or shown/hidden, never for matrix edits.
+
+use std::sync::Arc;
+
+use ash::vk;
+use glam::{DMat4, DVec3};
+
+use super::pipeline::{DescriptorSets, DrawIndices, MaterialParameters, MatrixUpdate, Pipelines};
+use crate::graph::SceneGraph;
+use crate::scene::{Aabb, Part, Vertex};
+use crate::tree::SceneTree;
+use crate::vk::{Buffer, Device, MemoryLocation, VkResult};
+
+/// One draw of the resident technique.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct ResidentDraw {
+    /// Geometry slot.
+    pub geometry: u32,
+    /// First index of the part.
+    pub first_index: u32,
+    /// Index count of the part.
+    pub index_count: u32,
+    /// Indices pushed with the draw.
+    pub indices: DrawIndices,
+}
+
+/// What the last [`ResidentScene::sync`] will upload.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct UploadStats {
+    /// Matrices in the compact upload.
+    pub matrices: u64,
+    /// Materials copied.
+    pub materials: u64,
+    /// Bytes written to upload buffers (matrices with their slots, materials, geometry).
+    pub bytes: u64,
+    /// Whether the draw list was rebuilt.
+    pub draw_list_rebuilt: bool,
+}
+
+struct GeometrySlot {
+    vertex_offset_bytes: u64,
+    index_offset_bytes: u64,
+    parts: Vec<Part>,
+}
+
+/// The GPU-resident scene.
+pub struct ResidentScene {
+    device: Arc<Device>,
+    origin: DVec3,
+    vertex_arena: Buffer,
+    index_arena: Buffer,
+    geometries: Vec<Option<GeometrySlot>>,
+    matrices: Buffer,
+    matrix_capacity: u32,
+    materials: Buffer,
+    material_capacity: u32,
+    updates: Buffer,
+    update_capacity: u32,
+    material_staging: Buffer,
+    sets: DescriptorSets,
+    draws: Vec<ResidentDraw>,
+    pending_matrices: Vec<MatrixUpdate>,
+    pending_materials: Vec<(u32, MaterialParameters)>,
+    last_upload: UploadStats,
+}
+
+const MATRIX_BYTES: u64 = 64;
+const MATERIAL_BYTES: u64 = std::mem::size_of::<MaterialParameters>() as u64;
+const UPDATE_BYTES: u64 = std::mem::size_of::<MatrixUpdate>() as u64;
+
+fn storage(
+    device: &Arc<Device>,
+    name: &str,
+    size: u64,
+    location: MemoryLocation,
+    extra: vk::BufferUsageFlags,
+) -> VkResult<Buffer> {
+    Buffer::new(
+        device,
+        name,
+        size,
+        vk::BufferUsageFlags::STORAGE_BUFFER | extra,
+        location,
+    )
+}
+
+impl ResidentScene {
+    /// Puts the tree's scene on the GPU. The origin matrices are stored relative to is the
+    /// centre of the current bounds, fixed from now on so that edits never force a re-upload.
+    pub fn new(
+        device: &Arc<Device>,
+        pipelines: &Pipelines,
+        graph: &SceneGraph,
+        tree: &mut SceneTree,
+    ) -> VkResult<Self> {
+        let (_, geometry_slots, _) = graph.capacities();
+        let geometry_bounds: Vec<Aabb> = (0..geometry_slots as u32)
+            .map(|slot| graph.geometry_at(slot).map_or(Aabb::EMPTY, |g| g.bounds()))
+            .collect();
+        let mut bounds = Aabb::EMPTY;
+        for instance in tree.instances().filter_map(|id| tree.instance(id)) {
+            bounds.add_box(
+                &geometry_bounds[instance.geometry as usize]
+                    .transformed(&tree.world(instance.tree_node)),
+            );
+        }
+
+        let origin = if bounds.is_empty() {
+            DVec3::ZERO
+        } else {
+            bounds.center()
+        };
+        let placeholder = |name: &str| {
+            storage(
+                device,
+                name,
+                64,
+                MemoryLocation::GpuOnly,
+                vk::BufferUsageFlags::TRANSFER_DST,
+            )
+        };
+        let sets = DescriptorSets::new(
+            device,
+            "resident scene",
+            &[pipelines.resident_set_layout, pipelines.scatter_set_layout],
+            &[vk::DescriptorPoolSize::default()
+                .ty(vk::DescriptorType::STORAGE_BUFFER)
+                .descriptor_count(4)],
+        )?;
+        let mut scene = Self {
+            device: Arc::clone(device),
+            origin,
+            vertex_arena: placeholder("vertex arena")?,
+            index_arena: placeholder("index arena")?,
+            geometries: Vec::new(),
+            matrices: placeholder("resident matrices")?,
+            matrix_capacity: 0,
+            materials: placeholder("resident materials")?,
+            material_capacity: 0,
+            updates: placeholder("matrix updates")?,
+            update_capacity: 0,
+            material_staging: placeholder("material staging")?,
+            sets,
+            draws: Vec::new(),
+            pending_matrices: Vec::new(),
+            pending_materials: Vec::new(),
+            last_upload: UploadStats::default(),
+        };
+        scene.upload_geometries(graph)?;
+        tree.take_changes();
+        scene.grow_matrices(tree)?;
+        scene.grow_materials(graph)?;
+        scene.rebuild_draws(tree);
+        scene.last_upload.draw_list_rebuilt = true;
+        Ok(scene)
+    }
+
+    /// The origin world matrices are made relative to.
+    pub fn origin(&self) -> DVec3 {
+        self.origin
+    }
+
+    /// The draws, sorted by geometry and material.
+    pub fn draws(&self) -> &[ResidentDraw] {
+        &self.draws
+    }
+
+    /// What the last sync prepared for upload.
+    pub fn last_upload(&self) -> UploadStats {
+        self.last_upload
+    }
+
+    fn upload_geometries(&mut self, graph: &SceneGraph) -> VkResult<()> {
+        let (_, geometry_slots, _) = graph.capacities();
+        let mut vertices: Vec<u8> = Vec::new();
+        let mut indices: Vec<u8> = Vec::new();
+        self.geometries = (0..geometry_slots as u32)
+            .map(|slot| {
+                graph.geometry_at(slot).map(|g| {
+                    let entry = GeometrySlot {
+                        vertex_offset_bytes: vertices.len() as u64,
+                        index_offset_bytes: indices.len() as u64,
+                        parts: g.parts.clone(),
+                    };
+                    vertices.extend_from_slice(bytemuck::cast_slice::<Vertex, u8>(&g.vertices));
+                    indices.extend_from_slice(bytemuck::cast_slice(&g.indices));
+                    entry
+                })
+            })
+            .collect();
+        self.vertex_arena = Buffer::with_data(
+            &self.device,
+            "vertex arena",
+            &vertices,
+            vk::BufferUsageFlags::VERTEX_BUFFER,
+        )?;
+        self.index_arena = Buffer::with_data(
+            &self.device,
+            "index arena",
+            &indices,
+            vk::BufferUsageFlags::INDEX_BUFFER,
+        )?;
+        self.last_upload.bytes += (vertices.len() + indices.len()) as u64;
+        Ok(())
+    }
+
+    fn relative_matrix(&self, tree: &SceneTree, t: u32) -> [[f32; 4]; 4] {
+        (DMat4::from_translation(-self.origin) * tree.world(t))
+            .as_mat4()
+            .to_cols_array_2d()
+    }
+
+    fn queue_matrix(&mut self, tree: &SceneTree, t: u32) {
+        let matrix = self.relative_matrix(tree, t);
+        self.pending_matrices.push(MatrixUpdate {
+            slot: t,
+            padding: [0; 3],
+            matrix,
+        });
+    }
+
+    /// Makes room for every matrix slot of the tree; after growing, every matrix is uploaded.
+    fn grow_matrices(&mut self, tree: &SceneTree) -> VkResult<bool> {
+        let needed = tree.node_capacity().max(1) as u32;
+        if needed <= self.matrix_capacity {
+            return Ok(false);
+        }
+        self.matrix_capacity = needed.next_power_of_two().max(64);
+        self.matrices = storage(
+            &self.device,
+            "resident matrices",
+            u64::from(self.matrix_capacity) * MATRIX_BYTES,
+            MemoryLocation::GpuOnly,
+            vk::BufferUsageFlags::TRANSFER_DST,
+        )?;
+        self.write_sets();
+        self.pending_matrices.clear();
+        let slots: Vec<u32> = tree
+            .instances()
+            .filter_map(|i| tree.instance(i))
+            .map(|i| i.tree_node)
+            .collect();
+        let mut queued = crate::tree::BitSet::default();
+        for t in slots {
+            if !queued.contains(t) {
+                queued.insert(t);
+                self.queue_matrix(tree, t);
+            }
+        }
+        Ok(true)
+    }
+
+    fn grow_materials(&mut self, graph: &SceneGraph) -> VkResult<bool> {
+        let (_, _, material_slots) = graph.capacities();
+        let needed = material_slots.max(1) as u32;
+        if needed <= self.material_capacity {
+            return Ok(false);
+        }
+        self.material_capacity = needed.next_power_of_two().max(16);
+        self.materials = storage(
+            &self.device,
+            "resident materials",
+            u64::from(self.material_capacity) * MATERIAL_BYTES,
+            MemoryLocation::GpuOnly,
+            vk::BufferUsageFlags::TRANSFER_DST,
+        )?;
+        self.write_sets();
+        self.pending_materials = (0..material_slots as u32)
+            .filter_map(|slot| Some((slot, material_parameters(graph, slot)?)))
+            .collect();
+        Ok(true)
+    }
+
+    fn write_sets(&self) {
+        let ssbo = vk::DescriptorType::STORAGE_BUFFER;
+        self.sets
+            .write_buffer(0, 0, ssbo, self.matrices.raw(), vk::WHOLE_SIZE);
+        self.sets
+            .write_buffer(0, 1, ssbo, self.materials.raw(), vk::WHOLE_SIZE);
+        self.sets
+            .write_buffer(1, 0, ssbo, self.updates.raw(), vk::WHOLE_SIZE);
+        self.sets
+            .write_buffer(1, 1, ssbo, self.matrices.raw(), vk::WHOLE_SIZE);
+    }
+
+    fn rebuild_draws(&mut self, tree: &SceneTree) {
+        self.draws.clear();
+        for id in tree.instances() {
+            let Some(instance) = tree.instance(id).filter(|i| i.visible) else {
+                continue;
+            };
+            let Some(Some(geometry)) = self.geometries.get(instance.geometry as usize) else {
+                continue;
+            };
+            let Some(part) = geometry.parts.get(instance.part as usize) else {
+                continue;
+            };
+            if part.index_count == 0 {
+                continue;
+            }
+            self.draws.push(ResidentDraw {
+                geometry: instance.geometry,
+                first_index: part.first_index,
+                index_count: part.index_count,
+                indices: DrawIndices {
+                    matrix: instance.tree_node,
+                    material: instance.material,
+                },
+            });
+        }
+        self.draws.sort_unstable_by_key(|d| {
+            (
+                d.geometry,
+                d.indices.material,
+                d.first_index,
+                d.indices.matrix,
+            )
+        });
+    }
+
+    /// Applies the tree's changes since the last sync: queues the changed matrices and
+    /// materials for upload and rebuilds the draw list if instances changed.
+    pub fn sync(&mut self, graph: &SceneGraph, tree: &mut SceneTree) -> VkResult<()> {
+        let changes = tree.take_changes();
+        self.last_upload = UploadStats::default();
+        if !changes.dirty_geometries.is_empty() {
+            self.upload_geometries(graph)?;
+        }
+        if !self.grow_matrices(tree)? {
+            for &t in &changes.dirty_matrices {
+                // Only paths that carry instances have a matrix on the GPU.
+                if tree.has_instances(t) {
+                    self.queue_matrix(tree, t);
+                }
+            }
+        }
+        if !self.grow_materials(graph)? {
+            for &slot in &changes.dirty_materials {
+                if let Some(parameters) = material_parameters(graph, slot) {
+                    self.pending_materials.push((slot, parameters));
+                }
+            }
+        }
+        let instances_changed = !(changes.added.is_empty()
+            && changes.removed.is_empty()
+            && changes.changed.is_empty()
+            && changes.visibility_changed.is_empty()
+            && changes.dirty_geometries.is_empty());
+        if instances_changed {
+            self.rebuild_draws(tree);
+            self.last_upload.draw_list_rebuilt = true;
+        }
+        Ok(())
+    }
+
+    /// Records the pending uploads (before the render pass) and clears them. Returns the
+    /// bytes uploaded.
+    pub fn record_uploads(
+        &mut self,
+        pipelines: &Pipelines,
+        command_buffer: vk::CommandBuffer,
+    ) -> VkResult<u64> {
+        let raw = self.device.raw();
+        let mut bytes = 0;
+        let mut barriers = Vec::new();
+        if !self.pending_materials.is_empty() {
+            let data: Vec<u8> = self
+                .pending_materials
+                .iter()
+                .flat_map(|(_, p)| bytemuck::bytes_of(p).to_vec())
+                .collect();
+            if self.material_staging.size() < data.len() as u64 {
+                self.material_staging = Buffer::new(
+                    &self.device,
+                    "material staging",
+                    (data.len() as u64).next_power_of_two(),
+                    vk::BufferUsageFlags::TRANSFER_SRC,
+                    MemoryLocation::CpuToGpu,
+                )?;
+            }
+            self.material_staging.write(0, &data)?;
+            let regions: Vec<vk::BufferCopy> = self
+                .pending_materials
+                .iter()
+                .enumerate()
+                .map(|(i, &(slot, _))| {
+                    vk::BufferCopy::default()
+                        .src_offset(i as u64 * MATERIAL_BYTES)
+                        .dst_offset(u64::from(slot) * MATERIAL_BYTES)
+                        .size(MATERIAL_BYTES)
+                })
+                .collect();
+            // SAFETY: both buffers outlive the frame, which is waited for before the next one;
+            // regions lie within both (slots < capacity).
+            unsafe {
+                raw.cmd_copy_buffer(
+                    command_buffer,
+                    self.material_staging.raw(),
+                    self.materials.raw(),
+                    &regions,
+                )
+            };
+            bytes += data.len() as u64;
+            self.last_upload.materials += self.pending_materials.len() as u64;
+            self.pending_materials.clear();
+            barriers.push((
+                vk::PipelineStageFlags2::COPY,
+                vk::AccessFlags2::TRANSFER_WRITE,
+            ));
+        }
+        if !self.pending_matrices.is_empty() {
+            let count = self.pending_matrices.len() as u32;
+            if count > self.update_capacity {
+                self.update_capacity = count.next_power_of_two().max(64);
+                self.updates = storage(
+                    &self.device,
+                    "matrix updates",
+                    u64::from(self.update_capacity) * UPDATE_BYTES,
+                    MemoryLocation::CpuToGpu,
+                    vk::BufferUsageFlags::empty(),
+                )?;
+                self.write_sets();
+            }
+            let data: &[u8] = bytemuck::cast_slice(&self.pending_matrices);
+            self.updates.write(0, data)?;
+            // SAFETY: the set points at live buffers; the dispatch covers `count` updates.
+            unsafe {
+                raw.cmd_bind_pipeline(
+                    command_buffer,
+                    vk::PipelineBindPoint::COMPUTE,
+                    pipelines.scatter,
+                );
+                raw.cmd_bind_descriptor_sets(
+                    command_buffer,
+                    vk::PipelineBindPoint::COMPUTE,
+                    pipelines.scatter_layout,
+                    0,
+                    &[self.sets.sets[1]],
+                    &[],
+                );
+                raw.cmd_push_constants(
+                    command_buffer,
+                    pipelines.scatter_layout,
+                    vk::ShaderStageFlags::COMPUTE,
+                    0,
+                    &count.to_le_bytes(),
+                );
+                raw.cmd_dispatch(command_buffer, count.div_ceil(64), 1, 1);
+            }
+            bytes += data.len() as u64;
+            self.last_upload.matrices += u64::from(count);
+            self.pending_matrices.clear();
+            barriers.push((
+                vk::PipelineStageFlags2::COMPUTE_SHADER,
+                vk::AccessFlags2::SHADER_STORAGE_WRITE,
+            ));
+        }
+        if !barriers.is_empty() {
+            let memory: Vec<vk::MemoryBarrier2> = barriers
+                .iter()
+                .map(|&(stage, access)| {
+                    vk::MemoryBarrier2::default()
+                        .src_stage_mask(stage)
+                        .src_access_mask(access)
+                        .dst_stage_mask(vk::PipelineStageFlags2::VERTEX_SHADER)
+                        .dst_access_mask(vk::AccessFlags2::SHADER_STORAGE_READ)
+                })
+                .collect();
+            let dependency = vk::DependencyInfo::default().memory_barriers(&memory);
+            // SAFETY: recording, outside a render pass.
+            unsafe { raw.cmd_pipeline_barrier2(command_buffer, &dependency) };
+        }
+        self.last_upload.bytes += bytes;
+        Ok(bytes)
+    }
+
+    /// The set with the matrix and material buffers (set 1 of the resident pipeline).
+    pub fn parameter_set(&self) -> vk::DescriptorSet {
+        self.sets.sets[0]
+    }
+
+    /// Vertex and index arena offsets of a geometry slot.
+    pub fn geometry_offsets(&self, slot: u32) -> Option<(u64, u64)> {
+        self.geometries
+            .get(slot as usize)?
+            .as_ref()
+            .map(|g| (g.vertex_offset_bytes, g.index_offset_bytes))
+    }
+
+    /// The vertex and index arenas.
+    pub fn arenas(&self) -> (vk::Buffer, vk::Buffer) {
+        (self.vertex_arena.raw(), self.index_arena.raw())
+    }
+}
+
+fn material_parameters(graph: &SceneGraph, slot: u32) -> Option<MaterialParameters> {
+    graph.material_at(slot).map(|m| MaterialParameters {
+        base_color: m.base_color,
+        surface: [m.metallic, m.roughness, 0.0, 0.0],
+    })
+}

@@ -1,0 +1,38 @@
+#version 460
+// GPU-resident parameters: world matrices (relative to the scene origin) and materials live in
+// storage buffers, updated sparsely by scatter.comp; each draw pushes two indices.
+#include "frame.glsl"
+
+struct MaterialParameters {
+    vec4 base_color;
+    vec4 surface;          // x: metallic, y: roughness
+};
+
+layout(set = 1, binding = 0, std430) readonly buffer Matrices { mat4 world_from_object[]; };
+layout(set = 1, binding = 1, std430) readonly buffer Materials { MaterialParameters materials[]; };
+
+layout(push_constant) uniform DrawIndices {
+    uint matrix;
+    uint material;
+} draw;
+
+layout(location = 0) in vec3 in_position;
+layout(location = 1) in vec3 in_normal;
+
+layout(location = 0) out vec3 out_view_position;
+layout(location = 1) out vec3 out_view_normal;
+layout(location = 2) flat out vec4 out_base_color;
+layout(location = 3) flat out vec2 out_surface;
+
+void main() {
+    mat4 model_view = frame.view_from_origin * world_from_object[draw.matrix];
+    vec4 view_position = model_view * vec4(in_position, 1.0);
+    mat3 linear = mat3(model_view);
+    mat3 cofactor = mat3(cross(linear[1], linear[2]), cross(linear[2], linear[0]), cross(linear[0], linear[1]));
+    out_view_position = view_position.xyz;
+    out_view_normal = cofactor * in_normal;
+    MaterialParameters material = materials[draw.material];
+    out_base_color = material.base_color;
+    out_surface = material.surface.xy;
+    gl_Position = frame.projection * view_position;
+}

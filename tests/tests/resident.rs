@@ -1,0 +1,207 @@
+//! The GPU-resident scene follows the scene graph through the tree's changes: it renders what a
+//! fresh baseline render of the same scene shows, and uploads only what changed.
+#![allow(clippy::unwrap_used)] // Test code: a failed unwrap is a failed test.
+
+use cadr_core::generate::{generate, GeneratorSpec};
+use cadr_core::graph::{NodeFlags, NodeHandle, NodeKind, SceneGraph};
+use cadr_core::render::{Camera, GpuScene, Renderer, ResidentScene, DEFAULT_DIRECTION};
+use cadr_core::scene::{Material, Scene};
+use cadr_core::tree::SceneTree;
+use cadr_tests::images::{compare, ImageDifference};
+use cadr_tests::{assert_no_validation_errors, test_device};
+use glam::{DMat4, DVec3};
+
+const SIZE: (u32, u32) = (200, 150);
+
+struct Fixture {
+    renderer: Renderer,
+    graph: SceneGraph,
+    tree: SceneTree,
+    resident: ResidentScene,
+    camera: Camera,
+}
+
+impl Fixture {
+    fn new(scene: &Scene) -> Self {
+        let device = test_device();
+        let renderer = Renderer::new(&device, SIZE.0, SIZE.1).unwrap();
+        let (mut graph, _) = SceneGraph::from_scene(scene).unwrap();
+        let mut tree = SceneTree::build(&mut graph);
+        let resident =
+            ResidentScene::new(&device, renderer.pipelines(), &graph, &mut tree).unwrap();
+        let bounds = cadr_core::scene::flatten(scene).unwrap().bounds;
+        let camera = Camera::fit(
+            &bounds,
+            f64::from(SIZE.0) / f64::from(SIZE.1),
+            DEFAULT_DIRECTION,
+        );
+        Self {
+            renderer,
+            graph,
+            tree,
+            resident,
+            camera,
+        }
+    }
+
+    fn render_resident(&mut self) -> image::RgbaImage {
+        self.tree.update(&mut self.graph);
+        self.resident.sync(&self.graph, &mut self.tree).unwrap();
+        self.renderer
+            .render_resident(&mut self.resident, &self.camera)
+            .unwrap();
+        self.renderer.read_rgba8().unwrap()
+    }
+
+    /// The baseline's image of the scene the graph describes now, loaded afresh.
+    fn render_fresh_baseline(&mut self) -> image::RgbaImage {
+        let scene = self.graph.to_scene();
+        let gpu_scene = GpuScene::upload(self.renderer.device(), &scene).unwrap();
+        self.renderer.render(&gpu_scene, &self.camera).unwrap();
+        self.renderer.read_rgba8().unwrap()
+    }
+
+    /// Transform nodes whose only child is a Geo node: the objects' shapes.
+    fn shape_transforms(&self) -> Vec<NodeHandle> {
+        self.graph
+            .nodes()
+            .filter(|(_, n)| {
+                matches!(n.kind, NodeKind::Transform { .. }) && n.children().len() == 1
+            })
+            .filter(|(_, n)| {
+                matches!(
+                    self.graph.node(n.children()[0].node).unwrap().kind,
+                    NodeKind::Geo { .. }
+                )
+            })
+            .map(|(h, _)| h)
+            .collect()
+    }
+}
+
+fn assert_close(difference: ImageDifference, what: &str) {
+    assert!(
+        difference.mean < 0.3 && difference.p99 < 6.0,
+        "{what}: {difference:?}"
+    );
+}
+
+#[test]
+fn resident_rendering_matches_the_baseline_and_follows_edits() {
+    let mut f = Fixture::new(&generate(&GeneratorSpec::Demo));
+    let resident = f.render_resident();
+    let baseline = f.render_fresh_baseline();
+    assert_close(compare(&resident, &baseline).unwrap(), "before edits");
+
+    let shapes = f.shape_transforms();
+    for (i, &shape) in shapes.iter().enumerate().take(40) {
+        let matrix = f.graph.node(shape).unwrap().local_matrix();
+        f.graph
+            .set_matrix(
+                shape,
+                DMat4::from_translation(DVec3::new(0.0, 0.4 + 0.05 * i as f64, 0.0)) * matrix,
+            )
+            .unwrap();
+    }
+    for &shape in shapes.iter().skip(40).take(10) {
+        f.graph
+            .set_flags(
+                shape,
+                NodeFlags {
+                    visible: false,
+                    ..NodeFlags::default()
+                },
+            )
+            .unwrap();
+    }
+    let red = f
+        .graph
+        .create_material(Material {
+            name: "red".into(),
+            base_color: [0.9, 0.05, 0.05, 1.0],
+            ..Material::default()
+        })
+        .unwrap();
+    let geo = f.graph.node(shapes[60]).unwrap().children()[0].node;
+    f.graph.set_part_material(geo, 0, red).unwrap();
+    let module = f
+        .graph
+        .node(f.graph.node(f.graph.root()).unwrap().children()[0].node)
+        .unwrap()
+        .children()[1]
+        .node;
+    let root_child = f.graph.node(f.graph.root()).unwrap().children()[0].node;
+    f.graph.remove_child(root_child, module).unwrap();
+    let edited = f.render_resident();
+    let fresh = f.render_fresh_baseline();
+    assert_close(compare(&edited, &fresh).unwrap(), "after edits");
+    let changed = compare(&edited, &resident).unwrap();
+    assert!(changed.mean > 0.5, "the edits are visible: {changed:?}");
+    assert_no_validation_errors(f.renderer.device());
+}
+
+#[test]
+fn only_what_changed_is_uploaded() {
+    let mut f = Fixture::new(&generate(&GeneratorSpec::Demo));
+    f.render_resident();
+    // Nothing changed: nothing is uploaded and the draw list stays.
+    f.render_resident();
+    assert_eq!(f.resident.last_upload().bytes, 0);
+    assert!(!f.resident.last_upload().draw_list_rebuilt);
+
+    let shapes = f.shape_transforms();
+    for &shape in shapes.iter().take(10) {
+        let matrix = f.graph.node(shape).unwrap().local_matrix();
+        f.graph
+            .set_matrix(shape, DMat4::from_translation(DVec3::Y) * matrix)
+            .unwrap();
+    }
+    f.render_resident();
+    let upload = f.resident.last_upload();
+    assert_eq!(
+        upload.matrices, 10,
+        "changing 10 matrices uploads 10 matrices"
+    );
+    assert_eq!(upload.bytes, 10 * 80, "slot and matrix, nothing else");
+    assert!(
+        !upload.draw_list_rebuilt,
+        "moving parts does not touch the draw list"
+    );
+
+    let material = f.graph.nodes().find_map(|(_, n)| match &n.kind {
+        NodeKind::Geo { part_materials, .. } => Some(part_materials[0]),
+        _ => None,
+    });
+    f.graph
+        .set_material(
+            material.unwrap(),
+            Material {
+                name: "blue".into(),
+                base_color: [0.0, 0.0, 1.0, 1.0],
+                ..Material::default()
+            },
+        )
+        .unwrap();
+    f.render_resident();
+    let upload = f.resident.last_upload();
+    assert_eq!(
+        (upload.matrices, upload.materials, upload.bytes),
+        (0, 1, 32)
+    );
+    assert_no_validation_errors(f.renderer.device());
+}
+
+#[test]
+fn a_scene_far_from_the_origin_renders_like_one_at_the_origin() {
+    // A 3 cm assembly (features of a tenth of a millimetre): at 100 km, f32 coordinates are
+    // 8 mm apart, so only origin-relative matrices keep it intact.
+    let mut scene = generate(&GeneratorSpec::Demo);
+    scene.nodes[0].local = DMat4::from_scale(DVec3::splat(0.001)) * scene.nodes[0].local;
+    let mut far = scene.clone();
+    far.nodes[0].local =
+        DMat4::from_translation(DVec3::new(100_000.0, 20_000.0, -100_000.0)) * far.nodes[0].local;
+
+    let near_image = Fixture::new(&scene).render_resident();
+    let far_image = Fixture::new(&far).render_resident();
+    assert_close(compare(&near_image, &far_image).unwrap(), "100 km away");
+}

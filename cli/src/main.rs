@@ -1,6 +1,7 @@
 //! `cadr`: render, inspect and benchmark CAD scenes from the command line.
 
 mod args;
+mod bench_tree;
 
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -21,6 +22,7 @@ USAGE:
     cadr render SCENE [-o OUT.png] [--size WxH] [--frames N] [--validation]
     cadr info SCENE
     cadr convert SCENE OUT
+    cadr bench-tree [SCENE] [--runs N]
     cadr devices
 
 SCENE is a .gltf, .glb, .csf or .csf.gz file, or a generator:
@@ -35,7 +37,11 @@ render: draws the scene offscreen with the camera fitted to its bounds, writes a
 info:   prints nodes, geometries, parts, materials, instances, triangles, vertices, bounds.
 convert: writes SCENE as OUT (.gltf with a .bin beside it, .glb, .csf, .csf.gz) and says what
         the target format cannot hold.
+bench-tree: builds the incremental scene tree of SCENE (default gen:graphicscard) and measures
+        edits (1 transform, 1% and 100% of part placements, a material, hiding 1%) against a
+        full rebuild in the same run, memory per instance and bytes uploaded per frame.
 devices: lists the Vulkan devices; CADR_DEVICE=INDEX|NAME picks one.
+
 
 Validation layers are on with --validation or CADR_VALIDATION=1.
 ";
@@ -72,9 +78,23 @@ fn run(command: &str, args: &Args) -> Result<(), String> {
         "render" => render(args),
         "info" => info(args),
         "convert" => convert(args),
+        "bench-tree" => {
+            args.reject_unknown("bench-tree", &["--runs"])?;
+            let runs = match args.value(&["--runs"]).map(str::parse::<usize>) {
+                None => 5,
+                Some(Ok(n)) if (1..=1000).contains(&n) => n,
+                Some(_) => return Err("--runs: expected a number from 1 to 1000".into()),
+            };
+            let scene = match args.positionals() {
+                [] => "gen:graphicscard",
+                [scene] => scene.as_str(),
+                [_, extra, ..] => return Err(format!("cadr bench-tree: unexpected argument '{extra}'")),
+            };
+            bench_tree::bench_tree(scene, runs)
+        }
         "devices" => devices(args),
         other => Err(format!(
-            "unknown command '{other}' (commands: render, info, convert, devices; see cadr --help)"
+            "unknown command '{other}' (commands: render, info, convert, bench-tree, devices; see cadr --help)"
         )),
     }
 }

@@ -142,6 +142,32 @@ fn convert_writes_csf_and_gltf_that_info_reads() {
 }
 
 #[test]
+fn bench_tree_prints_ratios_memory_and_uploads() {
+    let output = cadr(&["bench-tree", "gen:grid:parts=2000", "--runs", "3"]);
+    assert!(output.status.success(), "{}", stderr(&output));
+    let text = stdout(&output);
+    for expected in [
+        "build tree:",
+        "bytes per instance besides matrices",
+        "1 transform (1)",
+        "1% of transforms",
+        "100% of transforms",
+        "goal 1% of transforms",
+    ] {
+        assert!(text.contains(expected), "missing {expected} in:\n{text}");
+    }
+    // One moved part uploads one matrix: 80 bytes, draw list kept.
+    let one = text
+        .lines()
+        .find(|l| l.starts_with("1 transform (1)"))
+        .unwrap();
+    assert!(
+        one.contains(" 1 ") && one.contains(" 80 ") && one.ends_with("kept"),
+        "{one}"
+    );
+}
+
+#[test]
 fn help_lists_the_commands_and_generators() {
     let output = cadr(&["--help"]);
     assert!(output.status.success());

@@ -15,7 +15,10 @@ pub use gpu_scene::{GeometryRange, GpuScene, UploadError};
 pub use pipeline::{
     DrawIndices, DrawParameters, FrameUniforms, MaterialParameters, MatrixUpdate, Pipelines,
 };
-pub use resident::{ResidentDraw, ResidentScene, UploadStats};
+pub use resident::{
+    uploaded_matrix_slots, ResidentDraw, ResidentScene, UploadStats, MATERIAL_UPLOAD_BYTES,
+    MATRIX_UPLOAD_BYTES,
+};
 
 use std::path::Path;
 use std::sync::Arc;

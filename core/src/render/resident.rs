@@ -13,7 +13,7 @@ use glam::{DMat4, DVec3};
 use super::pipeline::{DescriptorSets, DrawIndices, MaterialParameters, MatrixUpdate, Pipelines};
 use crate::graph::SceneGraph;
 use crate::scene::{Aabb, Part, Vertex};
-use crate::tree::SceneTree;
+use crate::tree::{SceneTree, TreeChanges};
 use crate::vk::{Buffer, Device, MemoryLocation, VkResult};
 
 /// One draw of the resident technique.
@@ -332,11 +332,8 @@ impl ResidentScene {
             self.upload_geometries(graph)?;
         }
         if !self.grow_matrices(tree)? {
-            for &t in &changes.dirty_matrices {
-                // Only paths that carry instances have a matrix on the GPU.
-                if tree.has_instances(t) {
-                    self.queue_matrix(tree, t);
-                }
+            for t in uploaded_matrix_slots(tree, &changes) {
+                self.queue_matrix(tree, t);
             }
         }
         if !self.grow_materials(graph)? {
@@ -497,6 +494,25 @@ impl ResidentScene {
         (self.vertex_arena.raw(), self.index_arena.raw())
     }
 }
+
+/// The matrix slots a resident scene uploads for `changes`: dirty paths that carry instances
+/// (only those have a matrix on the GPU).
+pub fn uploaded_matrix_slots<'a>(
+    tree: &'a SceneTree,
+    changes: &'a TreeChanges,
+) -> impl Iterator<Item = u32> + 'a {
+    changes
+        .dirty_matrices
+        .iter()
+        .copied()
+        .filter(|&t| tree.has_instances(t))
+}
+
+/// Bytes one uploaded matrix costs (slot, padding, matrix).
+pub const MATRIX_UPLOAD_BYTES: u64 = UPDATE_BYTES;
+
+/// Bytes one uploaded material costs.
+pub const MATERIAL_UPLOAD_BYTES: u64 = MATERIAL_BYTES;
 
 fn material_parameters(graph: &SceneGraph, slot: u32) -> Option<MaterialParameters> {
     graph.material_at(slot).map(|m| MaterialParameters {

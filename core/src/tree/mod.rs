@@ -621,8 +621,7 @@ impl SceneTree {
     }
 
     /// The world matrix of tree node `id`.
-    pub fn world
-(&self, id: u32) -> DMat4 {
+    pub fn world(&self, id: u32) -> DMat4 {
         self.node_world[id as usize]
     }
 

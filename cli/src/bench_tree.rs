@@ -1,0 +1,221 @@
+//! `cadr bench-tree`: what the incremental scene tree costs against a full rebuild, measured
+//! in one run on one scene, and what each kind of edit uploads to the GPU.
+
+use std::time::Instant;
+
+use cadr_core::graph::{NodeFlags, NodeHandle, NodeKind, SceneGraph};
+use cadr_core::load::SceneSource;
+use cadr_core::render::{uploaded_matrix_slots, MATERIAL_UPLOAD_BYTES, MATRIX_UPLOAD_BYTES};
+use cadr_core::scene::Material;
+use cadr_core::tree::SceneTree;
+use glam::{DMat4, DVec3};
+
+/// Median of `runs` timings of `f`, in milliseconds.
+fn median_ms(runs: usize, mut f: impl FnMut()) -> f64 {
+    let mut samples: Vec<f64> = (0..runs)
+        .map(|_| {
+            let start = Instant::now();
+            f();
+            start.elapsed().as_secs_f64() * 1e3
+        })
+        .collect();
+    samples.sort_by(f64::total_cmp);
+    samples[samples.len() / 2]
+}
+
+/// The Transforms that place parts: those with a Geo child.
+fn part_placements(graph: &SceneGraph) -> Vec<NodeHandle> {
+    graph
+        .nodes()
+        .filter(|(_, n)| matches!(n.kind, NodeKind::Transform { .. }))
+        .filter(|(_, n)| {
+            n.children().iter().any(|l| {
+                graph
+                    .node(l.node)
+                    .is_ok_and(|c| matches!(c.kind, NodeKind::Geo { .. }))
+            })
+        })
+        .map(|(h, _)| h)
+        .collect()
+}
+
+/// Every `len / count`-th item: a deterministic spread-out sample.
+fn spread<T: Copy>(items: &[T], count: usize) -> Vec<T> {
+    let count = count.clamp(1, items.len().max(1));
+    (0..count)
+        .filter_map(|i| items.get(i * items.len() / count).copied())
+        .collect()
+}
+
+struct Row {
+    edit: String,
+    edit_ms: f64,
+    update_ms: f64,
+    matrices: u64,
+    bytes: u64,
+    draw_list: bool,
+}
+
+pub fn bench_tree(scene_text: &str, runs: usize) -> Result<(), String> {
+    let scene = SceneSource::parse(scene_text)
+        .and_then(|s| s.load())
+        .map_err(|e| e.to_string())?;
+    let (mut graph, _) = SceneGraph::from_scene(&scene).map_err(|e| e.to_string())?;
+    let build_ms = median_ms(runs, || {
+        SceneTree::build(&mut graph);
+    });
+    let mut tree = SceneTree::build(&mut graph);
+    tree.take_changes();
+    let instances = tree.instance_count();
+    let placements = part_placements(&graph);
+    let mut rows = Vec::new();
+    let mut measure = |edit: String,
+                       graph: &mut SceneGraph,
+                       tree: &mut SceneTree,
+                       apply: &mut dyn FnMut(&mut SceneGraph, usize)| {
+        let (mut edit_samples, mut update_samples) = (Vec::new(), Vec::new());
+        let (mut matrices, mut bytes, mut draw_list) = (0, 0, false);
+        for run in 0..runs {
+            let start = Instant::now();
+            apply(graph, run);
+            edit_samples.push(start.elapsed().as_secs_f64() * 1e3);
+            let start = Instant::now();
+            tree.update(graph);
+            let changes = tree.take_changes();
+            update_samples.push(start.elapsed().as_secs_f64() * 1e3);
+            matrices = uploaded_matrix_slots(tree, &changes).count() as u64;
+            bytes = matrices * MATRIX_UPLOAD_BYTES
+                + changes.dirty_materials.len() as u64 * MATERIAL_UPLOAD_BYTES;
+            draw_list = !(changes.added.is_empty()
+                && changes.removed.is_empty()
+                && changes.changed.is_empty()
+                && changes.visibility_changed.is_empty());
+        }
+        edit_samples.sort_by(f64::total_cmp);
+        update_samples.sort_by(f64::total_cmp);
+        rows.push(Row {
+            edit,
+            edit_ms: edit_samples[runs / 2],
+            update_ms: update_samples[runs / 2],
+            matrices,
+            bytes,
+            draw_list,
+        });
+    };
+    let n = placements.len();
+    for (label, count) in [
+        ("1 transform", 1),
+        ("1% of transforms", n.div_ceil(100)),
+        ("100% of transforms", n),
+    ] {
+        let sample = spread(&placements, count);
+        let originals: Vec<DMat4> = sample
+            .iter()
+            .map(|&h| graph.node(h).map(|n| n.local_matrix()).unwrap_or_default())
+            .collect();
+        measure(
+            format!("{label} ({})", sample.len()),
+            &mut graph,
+            &mut tree,
+            &mut |graph, run| {
+                let lift = DMat4::from_translation(DVec3::new(0.0, 0.01 * (run + 1) as f64, 0.0));
+                for (&h, original) in sample.iter().zip(&originals) {
+                    let _ = graph.set_matrix(h, lift * *original);
+                }
+            },
+        );
+    }
+    let material = graph.nodes().find_map(|(_, n)| match &n.kind {
+        NodeKind::Geo { part_materials, .. } => part_materials.first().copied(),
+        _ => None,
+    });
+    if let Some(material) = material {
+        measure(
+            "1 material".into(),
+            &mut graph,
+            &mut tree,
+            &mut |graph, run| {
+                let shade = 0.2 + 0.1 * (run % 5) as f32;
+                let _ = graph.set_material(
+                    material,
+                    Material {
+                        name: "bench".into(),
+                        base_color: [shade, 0.3, 0.4, 1.0],
+                        ..Material::default()
+                    },
+                );
+            },
+        );
+    }
+    let hidden = spread(&placements, n.div_ceil(100));
+    measure(
+        format!("hide/show 1% ({})", hidden.len()),
+        &mut graph,
+        &mut tree,
+        &mut |graph, run| {
+            for &h in &hidden {
+                let _ = graph.set_flags(
+                    h,
+                    NodeFlags {
+                        visible: run % 2 == 1,
+                        ..NodeFlags::default()
+                    },
+                );
+            }
+        },
+    );
+
+    let (matrix_bytes, other_bytes) = tree.memory_bytes();
+    println!(
+        "scene:        {} ({} instances on {} paths, {} part placements)",
+        scene.name,
+        instances,
+        tree.node_count(),
+        n
+    );
+    println!("build tree:   {build_ms:.2} ms (median of {runs})");
+    println!(
+        "memory:       {:.1} bytes per instance besides matrices, {:.1} bytes per instance of f64 world matrices",
+        other_bytes as f64 / instances.max(1) as f64,
+        matrix_bytes as f64 / instances.max(1) as f64
+    );
+    println!();
+    println!(
+        "{:<26} {:>10} {:>11} {:>10} {:>10} {:>12} {:>10}",
+        "edit", "edit ms", "update ms", "/ rebuild", "matrices", "bytes/frame", "draw list"
+    );
+    for row in &rows {
+        println!(
+            "{:<26} {:>10.3} {:>11.3} {:>9.2}% {:>10} {:>12} {:>10}",
+            row.edit,
+            row.edit_ms,
+            row.update_ms,
+            100.0 * row.update_ms / build_ms,
+            row.matrices,
+            row.bytes,
+            if row.draw_list { "rebuilt" } else { "kept" }
+        );
+    }
+    if let Some(one_percent) = rows.iter().find(|r| r.edit.starts_with("1% of")) {
+        println!();
+        println!(
+            "goal 1% of transforms <= 5% of a rebuild: {:.2}% ({})",
+            100.0 * one_percent.update_ms / build_ms,
+            if one_percent.update_ms <= 0.05 * build_ms {
+                "met"
+            } else {
+                "missed"
+            }
+        );
+    }
+    println!(
+        "goal <= 64 bytes per instance besides matrices: {:.1} ({})",
+        other_bytes as f64 / instances.max(1) as f64,
+        if other_bytes <= 64 * instances.max(1) {
+            "met"
+        } else {
+            "missed"
+        }
+    );
+    Ok(())
+}

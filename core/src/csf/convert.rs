@@ -9,24 +9,13 @@
 use glam::{DMat4, DVec3};
 
 use super::{
-    CsfError, CsfFile, CsfGeometry, CsfGeometryPart, CsfMaterial, CsfMeta, CsfNode, CsfNodePart,
-    FLAG_PER_PART_VERTICES, FLAG_STRIPS, FLAG_UNIQUE_NODES, GUID_MATERIAL_GLTF2, VERSION,
+    error, CsfError, CsfFile, CsfGeometry, CsfGeometryPart, CsfMaterial, CsfMeta, CsfNode,
+    CsfNodePart, FLAG_PER_PART_VERTICES, FLAG_STRIPS, FLAG_UNIQUE_NODES, GUID_MATERIAL_GLTF2,
+    VERSION,
 };
 use crate::scene::{
     Geometry, Material, MeshRef, Node, NodeIndex, Part, PartOverride, Scene, Vertex,
 };
-
-fn error(
-    structure: impl Into<String>,
-    field: &'static str,
-    problem: impl Into<String>,
-) -> CsfError {
-    CsfError {
-        structure: structure.into(),
-        field,
-        problem: problem.into(),
-    }
-}
 
 /// Size of `CSFMaterialGLTF2Meta`, the glTF 2 material packet.
 const GLTF2_PACKET_SIZE: usize = 940;

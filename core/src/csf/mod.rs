@@ -204,6 +204,19 @@ pub struct CsfError {
     pub problem: String,
 }
 
+/// A [`CsfError`] for `field` of `structure`.
+pub(crate) fn error(
+    structure: impl Into<String>,
+    field: &'static str,
+    problem: impl Into<String>,
+) -> CsfError {
+    CsfError {
+        structure: structure.into(),
+        field,
+        problem: problem.into(),
+    }
+}
+
 /// Why a CSF file could not be loaded or saved.
 #[derive(Debug, thiserror::Error)]
 pub enum CsfFileError {

@@ -4,8 +4,8 @@
 use crate::scene::graph::first_cycle;
 
 use super::{
-    part_channel_size, CsfError, CsfFile, CsfGeometry, CsfGeometryPart, CsfMaterial, CsfMeta,
-    CsfNode, CsfNodePart, FLAG_PER_PART_VERTICES, FLAG_UNIQUE_NODES, MAGIC, VERSION,
+    error, part_channel_size, CsfError, CsfFile, CsfGeometry, CsfGeometryPart, CsfMaterial,
+    CsfMeta, CsfNode, CsfNodePart, FLAG_PER_PART_VERTICES, FLAG_UNIQUE_NODES, MAGIC, VERSION,
     VERSION_COMPAT,
 };
 
@@ -16,18 +16,6 @@ const MATERIAL_SIZE: usize = 160;
 const META_SIZE: usize = 152;
 const NODE_SIZE: usize = 160;
 const PART_SIZE: usize = 12;
-
-fn error(
-    structure: impl Into<String>,
-    field: &'static str,
-    problem: impl Into<String>,
-) -> CsfError {
-    CsfError {
-        structure: structure.into(),
-        field,
-        problem: problem.into(),
-    }
-}
 
 /// Little-endian access to a slice whose length the caller has checked.
 struct Fields<'a>(&'a [u8]);

@@ -242,16 +242,7 @@ impl SceneTree {
             if first == NONE {
                 first = id;
             }
-            let (parent_world, parent_visible) = if parent == NONE {
-                (DMat4::IDENTITY, true)
-            } else {
-                (
-                    self.node_world[parent as usize],
-                    self.node_visible.contains(parent),
-                )
-            };
-            let world = parent_world * local_transform(node, &parent_world, self.eye);
-            let visible = parent_visible && link_shown && node.flags.visible;
+            let (world, visible) = self.placement(parent, node, link_shown);
             self.node_world[id as usize] = world;
             self.node_visible.set(id, visible);
             self.dirty_matrices.insert(id);
@@ -291,6 +282,21 @@ impl SceneTree {
             }
         }
         first
+    }
+
+    /// World matrix and visibility of a path to `node` below tree node `parent` (`NONE` for
+    /// the root), shown by its parent or not.
+    fn placement(&self, parent: u32, node: &GraphNode, link_shown: bool) -> (DMat4, bool) {
+        let (parent_world, parent_visible) = if parent == NONE {
+            (DMat4::IDENTITY, true)
+        } else {
+            (
+                self.node_world[parent as usize],
+                self.node_visible.contains(parent),
+            )
+        };
+        let world = parent_world * local_transform(node, &parent_world, self.eye);
+        (world, parent_visible && link_shown && node.flags.visible)
     }
 
     /// Removes tree node `id` and everything below it.
@@ -353,16 +359,7 @@ impl SceneTree {
                 continue;
             };
             let parent = self.node_parent[i];
-            let (parent_world, parent_visible) = if parent == NONE {
-                (DMat4::IDENTITY, true)
-            } else {
-                (
-                    self.node_world[parent as usize],
-                    self.node_visible.contains(parent),
-                )
-            };
-            let world = parent_world * local_transform(node, &parent_world, self.eye);
-            let visible = parent_visible && link_shown && node.flags.visible;
+            let (world, visible) = self.placement(parent, node, link_shown);
             if world != self.node_world[i] {
                 self.node_world[i] = world;
                 self.dirty_matrices.insert(t);

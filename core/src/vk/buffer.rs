@@ -3,7 +3,7 @@
 use std::sync::Arc;
 
 use ash::vk;
-use gpu_allocator::vulkan::{Allocation, AllocationCreateDesc, AllocationScheme};
+use gpu_allocator::vulkan::Allocation;
 pub use gpu_allocator::MemoryLocation;
 
 use super::command::OneShot;
@@ -42,21 +42,7 @@ impl Buffer {
         };
         // SAFETY: raw is a live buffer of this device.
         let requirements = unsafe { device.raw.get_buffer_memory_requirements(raw) };
-        let allocation = device
-            .allocator()
-            .as_mut()
-            .ok_or(VkError::DeviceLost("buffer allocation after shutdown"))?
-            .allocate(&AllocationCreateDesc {
-                name,
-                requirements,
-                location,
-                linear: true,
-                allocation_scheme: AllocationScheme::GpuAllocatorManaged,
-            })
-            .map_err(|source| VkError::Allocation {
-                what: name.to_owned(),
-                source,
-            })?;
+        let allocation = device.allocate(name, requirements, location, true)?;
         // SAFETY: the allocation satisfies the buffer's requirements and is not bound elsewhere.
         let bound = unsafe {
             device
@@ -157,9 +143,7 @@ impl Drop for Buffer {
         // their frame fences before dropping); the handle is destroyed once.
         unsafe { self.device.raw.destroy_buffer(self.raw, None) };
         if let Some(allocation) = self.allocation.take() {
-            if let Some(allocator) = self.device.allocator().as_mut() {
-                let _ = allocator.free(allocation);
-            }
+            self.device.free(allocation);
         }
     }
 }

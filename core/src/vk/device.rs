@@ -4,7 +4,10 @@ use std::ffi::CString;
 use std::sync::{Arc, Mutex, MutexGuard};
 
 use ash::vk;
-use gpu_allocator::vulkan::{Allocator, AllocatorCreateDesc};
+use gpu_allocator::vulkan::{
+    Allocation, AllocationCreateDesc, AllocationScheme, Allocator, AllocatorCreateDesc,
+};
+use gpu_allocator::MemoryLocation;
 
 use super::adapter::{self, Adapter, DeviceChoice};
 use super::error::{VkError, VkResult, VkResultExt};
@@ -222,6 +225,37 @@ impl Device {
         self.allocator
             .lock()
             .unwrap_or_else(|poisoned| poisoned.into_inner())
+    }
+
+    /// Allocates memory for `requirements` in `location`; `name` labels it in leak reports.
+    pub(crate) fn allocate(
+        &self,
+        name: &str,
+        requirements: vk::MemoryRequirements,
+        location: MemoryLocation,
+        linear: bool,
+    ) -> VkResult<Allocation> {
+        self.allocator()
+            .as_mut()
+            .ok_or(VkError::DeviceLost("memory allocation after shutdown"))?
+            .allocate(&AllocationCreateDesc {
+                name,
+                requirements,
+                location,
+                linear,
+                allocation_scheme: AllocationScheme::GpuAllocatorManaged,
+            })
+            .map_err(|source| VkError::Allocation {
+                what: name.to_owned(),
+                source,
+            })
+    }
+
+    /// Returns memory to the allocator.
+    pub(crate) fn free(&self, allocation: Allocation) {
+        if let Some(allocator) = self.allocator().as_mut() {
+            let _ = allocator.free(allocation);
+        }
     }
 
     /// Gives `handle` a debug name (shown by validation messages and capture tools).

@@ -3,7 +3,7 @@
 use std::sync::Arc;
 
 use ash::vk;
-use gpu_allocator::vulkan::{Allocation, AllocationCreateDesc, AllocationScheme};
+use gpu_allocator::vulkan::Allocation;
 use gpu_allocator::MemoryLocation;
 
 use super::buffer::Buffer;
@@ -58,21 +58,7 @@ impl Image {
         };
         // SAFETY: raw is a live image of this device.
         let requirements = unsafe { device.raw.get_image_memory_requirements(raw) };
-        let allocation = device
-            .allocator()
-            .as_mut()
-            .ok_or(VkError::DeviceLost("image allocation after shutdown"))?
-            .allocate(&AllocationCreateDesc {
-                name,
-                requirements,
-                location: MemoryLocation::GpuOnly,
-                linear: false,
-                allocation_scheme: AllocationScheme::GpuAllocatorManaged,
-            })
-            .map_err(|source| VkError::Allocation {
-                what: name.to_owned(),
-                source,
-            })?;
+        let allocation = device.allocate(name, requirements, MemoryLocation::GpuOnly, false)?;
         // SAFETY: the allocation satisfies the image's requirements.
         let bound = unsafe {
             device
@@ -207,9 +193,7 @@ impl Drop for Image {
             self.device.raw.destroy_image(self.raw, None);
         }
         if let Some(allocation) = self.allocation.take() {
-            if let Some(allocator) = self.device.allocator().as_mut() {
-                let _ = allocator.free(allocation);
-            }
+            self.device.free(allocation);
         }
     }
 }

@@ -14,7 +14,11 @@ layout(set = 1, binding = 1, std430) readonly buffer Materials { MaterialParamet
 layout(push_constant) uniform DrawIndices {
     uint matrix;
     uint material;
+    uint flags;            // bit 0: highlighted
 } draw;
+
+const uint DRAW_HIGHLIGHTED = 1u;
+const vec3 HIGHLIGHT_COLOR = vec3(1.0, 0.55, 0.05);
 
 layout(location = 0) in vec3 in_position;
 layout(location = 1) in vec3 in_normal;
@@ -33,6 +37,10 @@ void main() {
     out_view_normal = cofactor * in_normal;
     MaterialParameters material = materials[draw.material];
     out_base_color = material.base_color;
+    if ((draw.flags & DRAW_HIGHLIGHTED) != 0u) {
+        out_base_color.rgb = mix(out_base_color.rgb, HIGHLIGHT_COLOR, 0.65);
+    }
+
     out_surface = material.surface.xy;
     gl_Position = frame.projection * view_position;
 }

@@ -205,3 +205,59 @@ fn a_scene_far_from_the_origin_renders_like_one_at_the_origin() {
     let far_image = Fixture::new(&far).render_resident();
     assert_close(compare(&near_image, &far_image).unwrap(), "100 km away");
 }
+
+#[test]
+fn highlighted_parts_are_drawn_tinted_until_cleared() {
+    let mut f = Fixture::new(&generate(&GeneratorSpec::Demo));
+    let plain = f.render_resident();
+    let module = f
+        .graph
+        .node(f.graph.node(f.graph.root()).unwrap().children()[0].node)
+        .unwrap()
+        .children()[0]
+        .node;
+
+    f.graph
+        .set_flags(
+            module,
+            NodeFlags {
+                highlighted: true,
+                ..NodeFlags::default()
+            },
+        )
+        .unwrap();
+    let highlighted = f.render_resident();
+    assert!(
+        f.resident.last_upload().draw_list_rebuilt,
+        "the highlight reaches the draws"
+    );
+    // The module's pixels change, and turn warmer (red minus blue grows, towards orange).
+    let changed: Vec<(i32, i32)> = plain
+        .pixels()
+        .zip(highlighted.pixels())
+        .filter(|(a, b)| a != b)
+        .map(|(a, b)| {
+            (
+                i32::from(a[0]) - i32::from(a[2]),
+                i32::from(b[0]) - i32::from(b[2]),
+            )
+        })
+        .collect();
+    assert!(changed.len() > 1000, "{} pixels changed", changed.len());
+    let warmth =
+        |pick: fn(&(i32, i32)) -> i32| changed.iter().map(pick).sum::<i32>() / changed.len() as i32;
+    assert!(
+        warmth(|c| c.1) > warmth(|c| c.0) + 60,
+        "red-blue {} -> {}",
+        warmth(|c| c.0),
+        warmth(|c| c.1)
+    );
+    f.graph.set_flags(module, NodeFlags::default()).unwrap();
+    let cleared = f.render_resident();
+    assert_eq!(
+        compare(&cleared, &plain).unwrap().max,
+        0.0,
+        "clearing the highlight restores the image"
+    );
+    assert_no_validation_errors(f.renderer.device());
+}

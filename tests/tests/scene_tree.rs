@@ -13,7 +13,7 @@ use cadr_core::tree::SceneTree;
 use glam::{DMat4, DVec3};
 use proptest::prelude::*;
 
-type Snapshot = Vec<(Vec<(u32, u32)>, u32, u32, u32, [u64; 16], bool)>;
+type Snapshot = Vec<(Vec<(u32, u32)>, u32, u32, u32, [u64; 16], bool, bool)>;
 
 /// Every live instance: its path (as handle parts), part, geometry, material, world bits, visibility.
 fn snapshot(tree: &SceneTree) -> Snapshot {
@@ -27,7 +27,15 @@ fn snapshot(tree: &SceneTree) -> Snapshot {
                 .map(|h| (h.index(), h.generation()))
                 .collect();
             let world = tree.world(i.tree_node).to_cols_array().map(f64::to_bits);
-            (path, i.part, i.geometry, i.material, world, i.visible)
+            (
+                path,
+                i.part,
+                i.geometry,
+                i.material,
+                world,
+                i.visible,
+                i.highlighted,
+            )
         })
         .collect();
     out.sort();
@@ -37,7 +45,7 @@ fn snapshot(tree: &SceneTree) -> Snapshot {
 /// What a renderer keeps, updated only from `take_changes`.
 #[derive(Default)]
 struct Consumer {
-    instances: HashMap<u32, (u32, u32, u32, u32, bool)>,
+    instances: HashMap<u32, (u32, u32, u32, u32, bool, bool)>,
     matrices: HashMap<u32, DMat4>,
 }
 
@@ -54,8 +62,17 @@ impl Consumer {
             .chain(&changes.visibility_changed)
         {
             let i = tree.instance(id).unwrap();
-            self.instances
-                .insert(id, (i.tree_node, i.part, i.geometry, i.material, i.visible));
+            self.instances.insert(
+                id,
+                (
+                    i.tree_node,
+                    i.part,
+                    i.geometry,
+                    i.material,
+                    i.visible,
+                    i.highlighted,
+                ),
+            );
         }
         for &t in &changes.dirty_matrices {
             self.matrices.insert(t, tree.world(t));
@@ -72,7 +89,14 @@ impl Consumer {
             let i = tree.instance(id).unwrap();
             assert_eq!(
                 self.instances.get(&id),
-                Some(&(i.tree_node, i.part, i.geometry, i.material, i.visible)),
+                Some(&(
+                    i.tree_node,
+                    i.part,
+                    i.geometry,
+                    i.material,
+                    i.visible,
+                    i.highlighted
+                )),
                 "instance {id}"
             );
             assert_eq!(
@@ -97,7 +121,7 @@ enum Op {
     RemoveChildAt(u8, u8),
     Destroy(u8),
     SetMatrix(u8, i8, i8),
-    SetVisible(u8, bool),
+    SetFlags(u8, bool, bool),
     SetMask(u8, u32),
     SetPartMaterial(u8, u8, u8),
     SetMaterial(u8),
@@ -118,7 +142,7 @@ fn op() -> impl Strategy<Value = Op> {
         2 => (any::<u8>(), any::<u8>()).prop_map(|(p, i)| Op::RemoveChildAt(p, i)),
         1 => any::<u8>().prop_map(Op::Destroy),
         3 => (any::<u8>(), any::<i8>(), any::<i8>()).prop_map(|(n, x, z)| Op::SetMatrix(n, x, z)),
-        1 => (any::<u8>(), any::<bool>()).prop_map(|(n, v)| Op::SetVisible(n, v)),
+        1 => (any::<u8>(), any::<bool>(), any::<bool>()).prop_map(|(n, v, h)| Op::SetFlags(n, v, h)),
         1 => (any::<u8>(), any::<u32>()).prop_map(|(n, m)| Op::SetMask(n, m)),
         1 => (any::<u8>(), any::<u8>(), any::<u8>()).prop_map(|(n, p, m)| Op::SetPartMaterial(n, p, m)),
         1 => any::<u8>().prop_map(Op::SetMaterial),
@@ -273,12 +297,13 @@ impl World {
                     * DMat4::from_translation(DVec3::new(f64::from(z), 0.0, 1.0));
                 self.graph.set_matrix(n, m)
             }
-            Op::SetVisible(n, visible) => {
+            Op::SetFlags(n, visible, highlighted) => {
                 let n = self.pick(n);
                 self.graph.set_flags(
                     n,
                     NodeFlags {
                         visible,
+                        highlighted,
                         ..NodeFlags::default()
                     },
                 )

@@ -67,7 +67,7 @@ fn shader_struct_mirrors_have_std140_layout() {
     );
     assert_eq!(std::mem::offset_of!(MatrixUpdate, matrix), 16);
     assert_eq!(std::mem::size_of::<MaterialParameters>(), 32);
-    assert_eq!(std::mem::size_of::<DrawIndices>(), 8);
+    assert_eq!(std::mem::size_of::<DrawIndices>(), 12);
 
     assert_eq!(std::mem::size_of::<DrawParameters>(), 96);
     assert_eq!(std::mem::offset_of!(DrawParameters, base_color), 64);

@@ -42,6 +42,13 @@ pub struct DrawIndices {
     pub matrix: u32,
     /// Material slot.
     pub material: u32,
+    /// Bit 0: highlighted ([`DrawIndices::HIGHLIGHTED`]).
+    pub flags: u32,
+}
+
+impl DrawIndices {
+    /// Flag bit of highlighted parts (drawn tinted orange).
+    pub const HIGHLIGHTED: u32 = 1;
 }
 
 /// One entry of the compact matrix upload; mirrors `MatrixUpdate` in `scatter.comp` (std430).

@@ -310,6 +310,11 @@ impl ResidentScene {
                 indices: DrawIndices {
                     matrix: instance.tree_node,
                     material: instance.material,
+                    flags: if instance.highlighted {
+                        DrawIndices::HIGHLIGHTED
+                    } else {
+                        0
+                    },
                 },
             });
         }

@@ -65,6 +65,8 @@ pub struct InstanceRef {
     pub material: u32,
     /// Effectively visible (flags, switches, LOD along the path).
     pub visible: bool,
+    /// Highlighted (the flag of any node along the path).
+    pub highlighted: bool,
 }
 
 /// The scene tree.
@@ -76,6 +78,7 @@ pub struct SceneTree {
     node_world: Vec<DMat4>,
     node_instances: Vec<Vec<u32>>,
     node_visible: BitSet,
+    node_highlighted: BitSet,
     node_alive: BitSet,
     free_nodes: Vec<u32>,
     /// Tree nodes of each graph node slot (may hold paths of a destroyed node until reconciled).
@@ -87,6 +90,7 @@ pub struct SceneTree {
     inst_material: Vec<u32>,
     inst_alive: BitSet,
     inst_visible: BitSet,
+    inst_highlighted: BitSet,
     free_instances: Vec<u32>,
     created: BitSet,
     destroyed: BitSet,
@@ -194,7 +198,7 @@ impl SceneTree {
         part: u32,
         geometry: u32,
         material: u32,
-        visible: bool,
+        (visible, highlighted): (bool, bool),
     ) -> u32 {
         let id = match self.free_instances.pop() {
             Some(id) => id,
@@ -215,6 +219,7 @@ impl SceneTree {
         ) = (node, part, geometry, material);
         self.inst_alive.insert(id);
         self.inst_visible.set(id, visible);
+        self.inst_highlighted.set(id, highlighted);
         self.created.insert(id);
         self.live_instances += 1;
         id
@@ -242,9 +247,10 @@ impl SceneTree {
             if first == NONE {
                 first = id;
             }
-            let (world, visible) = self.placement(parent, node, link_shown);
+            let (world, visible, highlighted) = self.placement(parent, node, link_shown);
             self.node_world[id as usize] = world;
             self.node_visible.set(id, visible);
+            self.node_highlighted.set(id, highlighted);
             self.dirty_matrices.insert(id);
             if matches!(node.kind, NodeKind::Lod { .. } | NodeKind::Billboard) {
                 self.view_dependent.insert(id);
@@ -266,7 +272,13 @@ impl SceneTree {
                     .iter()
                     .enumerate()
                     .map(|(part, m)| {
-                        self.alloc_instance(id, part as u32, geometry.index(), m.index(), visible)
+                        self.alloc_instance(
+                            id,
+                            part as u32,
+                            geometry.index(),
+                            m.index(),
+                            (visible, highlighted),
+                        )
                     })
                     .collect();
                 self.node_instances[id as usize] = instances;
@@ -284,19 +296,21 @@ impl SceneTree {
         first
     }
 
-    /// World matrix and visibility of a path to `node` below tree node `parent` (`NONE` for
-    /// the root), shown by its parent or not.
-    fn placement(&self, parent: u32, node: &GraphNode, link_shown: bool) -> (DMat4, bool) {
-        let (parent_world, parent_visible) = if parent == NONE {
-            (DMat4::IDENTITY, true)
+    /// World matrix, visibility and highlight of a path to `node` below tree node `parent`
+    /// (`NONE` for the root), shown by its parent or not.
+    fn placement(&self, parent: u32, node: &GraphNode, link_shown: bool) -> (DMat4, bool, bool) {
+        let (parent_world, parent_visible, parent_highlighted) = if parent == NONE {
+            (DMat4::IDENTITY, true, false)
         } else {
             (
                 self.node_world[parent as usize],
                 self.node_visible.contains(parent),
+                self.node_highlighted.contains(parent),
             )
         };
         let world = parent_world * local_transform(node, &parent_world, self.eye);
-        (world, parent_visible && link_shown && node.flags.visible)
+        let visible = parent_visible && link_shown && node.flags.visible;
+        (world, visible, parent_highlighted || node.flags.highlighted)
     }
 
     /// Removes tree node `id` and everything below it.
@@ -317,6 +331,7 @@ impl SceneTree {
             }
             self.node_alive.remove(t);
             self.node_visible.remove(t);
+            self.node_highlighted.remove(t);
             self.view_dependent.remove(t);
             self.dirty_matrices.remove(t);
             self.free_nodes.push(t);
@@ -359,7 +374,14 @@ impl SceneTree {
                 continue;
             };
             let parent = self.node_parent[i];
-            let (world, visible) = self.placement(parent, node, link_shown);
+            let (world, visible, highlighted) = self.placement(parent, node, link_shown);
+            if highlighted != self.node_highlighted.contains(t) {
+                self.node_highlighted.set(t, highlighted);
+                for &instance in &self.node_instances[i] {
+                    self.inst_highlighted.set(instance, highlighted);
+                    self.changed.insert(instance);
+                }
+            }
             if world != self.node_world[i] {
                 self.node_world[i] = world;
                 self.dirty_matrices.insert(t);
@@ -603,6 +625,7 @@ impl SceneTree {
                 geometry: self.inst_geometry[i],
                 material: self.inst_material[i],
                 visible: self.inst_visible.contains(id),
+                highlighted: self.inst_highlighted.contains(id),
             }
         })
     }
@@ -654,6 +677,8 @@ impl SceneTree {
             + self.free_instances.capacity() * 4
             + [
                 &self.node_visible,
+                &self.node_highlighted,
+                &self.inst_highlighted,
                 &self.node_alive,
                 &self.view_dependent,
                 &self.inst_alive,

@@ -53,7 +53,7 @@ struct Row {
     update_ms: f64,
     matrices: u64,
     bytes: u64,
-    draw_list: bool,
+    draws_updated: usize,
 }
 
 pub fn bench_tree(scene_text: &str, runs: usize) -> Result<(), String> {
@@ -74,7 +74,7 @@ pub fn bench_tree(scene_text: &str, runs: usize) -> Result<(), String> {
                        tree: &mut SceneTree,
                        apply: &mut dyn FnMut(&mut SceneGraph, usize)| {
         let (mut edit_samples, mut update_samples) = (Vec::new(), Vec::new());
-        let (mut matrices, mut bytes, mut draw_list) = (0, 0, false);
+        let (mut matrices, mut bytes, mut draws_updated) = (0, 0, 0);
         for run in 0..runs {
             let start = Instant::now();
             apply(graph, run);
@@ -86,10 +86,10 @@ pub fn bench_tree(scene_text: &str, runs: usize) -> Result<(), String> {
             matrices = uploaded_matrix_slots(tree, &changes).count() as u64;
             bytes = matrices * MATRIX_UPLOAD_BYTES
                 + changes.dirty_materials.len() as u64 * MATERIAL_UPLOAD_BYTES;
-            draw_list = !(changes.added.is_empty()
-                && changes.removed.is_empty()
-                && changes.changed.is_empty()
-                && changes.visibility_changed.is_empty());
+            draws_updated = changes.added.len()
+                + changes.removed.len()
+                + changes.changed.len()
+                + changes.visibility_changed.len();
         }
         edit_samples.sort_by(f64::total_cmp);
         update_samples.sort_by(f64::total_cmp);
@@ -99,7 +99,7 @@ pub fn bench_tree(scene_text: &str, runs: usize) -> Result<(), String> {
             update_ms: update_samples[runs / 2],
             matrices,
             bytes,
-            draw_list,
+            draws_updated,
         });
     };
     let n = placements.len();
@@ -182,7 +182,7 @@ pub fn bench_tree(scene_text: &str, runs: usize) -> Result<(), String> {
     println!();
     println!(
         "{:<26} {:>10} {:>11} {:>10} {:>10} {:>12} {:>10}",
-        "edit", "edit ms", "update ms", "/ rebuild", "matrices", "bytes/frame", "draw list"
+        "edit", "edit ms", "update ms", "/ rebuild", "matrices", "bytes/frame", "draws upd."
     );
     for row in &rows {
         println!(
@@ -193,7 +193,7 @@ pub fn bench_tree(scene_text: &str, runs: usize) -> Result<(), String> {
             100.0 * row.update_ms / build_ms,
             row.matrices,
             row.bytes,
-            if row.draw_list { "rebuilt" } else { "kept" }
+            row.draws_updated
         );
     }
     if let Some(one_percent) = rows.iter().find(|r| r.edit.starts_with("1% of")) {

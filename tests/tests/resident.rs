@@ -147,7 +147,7 @@ fn only_what_changed_is_uploaded() {
     // Nothing changed: nothing is uploaded and the draw list stays.
     f.render_resident();
     assert_eq!(f.resident.last_upload().bytes, 0);
-    assert!(!f.resident.last_upload().draw_list_rebuilt);
+    assert_eq!(f.resident.last_upload().draws_updated, 0);
 
     let shapes = f.shape_transforms();
     for &shape in shapes.iter().take(10) {
@@ -164,7 +164,7 @@ fn only_what_changed_is_uploaded() {
     );
     assert_eq!(upload.bytes, 10 * 80, "slot and matrix, nothing else");
     assert!(
-        !upload.draw_list_rebuilt,
+        upload.draws_updated == 0,
         "moving parts does not touch the draw list"
     );
 
@@ -228,7 +228,7 @@ fn highlighted_parts_are_drawn_tinted_until_cleared() {
         .unwrap();
     let highlighted = f.render_resident();
     assert!(
-        f.resident.last_upload().draw_list_rebuilt,
+        f.resident.last_upload().draws_updated > 0,
         "the highlight reaches the draws"
     );
     // The module's pixels change, and turn warmer (red minus blue grows, towards orange).

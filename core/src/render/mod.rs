@@ -6,6 +6,7 @@
 //! changes.
 
 mod camera;
+mod draw_list;
 mod gpu_scene;
 mod pipeline;
 mod resident;

@@ -2,14 +2,15 @@
 //! slot per tree node, relative to a fixed scene origin) and materials live in storage
 //! buffers; each frame only the changed matrices are gathered into a compact buffer and
 //! scattered into place by `scatter.comp`, and only changed materials are copied. The draw
-//! list is sorted by geometry and material and rebuilt only when instances are added, removed,
-//! changed or shown/hidden, never for matrix edits.
+//! list is grouped by geometry and material and updated per changed instance in O(1) (never
+//! re-sorted); matrix edits do not touch it.
 
 use std::sync::Arc;
 
 use ash::vk;
 use glam::{DMat4, DVec3};
 
+use super::draw_list::DrawBuckets;
 use super::pipeline::{DescriptorSets, DrawIndices, MaterialParameters, MatrixUpdate, Pipelines};
 use crate::graph::SceneGraph;
 use crate::scene::{Aabb, Part, Vertex};
@@ -38,8 +39,8 @@ pub struct UploadStats {
     pub materials: u64,
     /// Bytes written to upload buffers (matrices with their slots, materials, geometry).
     pub bytes: u64,
-    /// Whether the draw list was rebuilt.
-    pub draw_list_rebuilt: bool,
+    /// Draw list entries added, removed or changed (each O(1); the list is never re-sorted).
+    pub draws_updated: u64,
 }
 
 struct GeometrySlot {
@@ -63,7 +64,7 @@ pub struct ResidentScene {
     update_capacity: u32,
     material_staging: Buffer,
     sets: DescriptorSets,
-    draws: Vec<ResidentDraw>,
+    draws: DrawBuckets<ResidentDraw>,
     pending_matrices: Vec<MatrixUpdate>,
     pending_materials: Vec<(u32, MaterialParameters)>,
     last_upload: UploadStats,
@@ -146,7 +147,7 @@ impl ResidentScene {
             update_capacity: 0,
             material_staging: placeholder("material staging")?,
             sets,
-            draws: Vec::new(),
+            draws: DrawBuckets::default(),
             pending_matrices: Vec::new(),
             pending_materials: Vec::new(),
             last_upload: UploadStats::default(),
@@ -156,7 +157,7 @@ impl ResidentScene {
         scene.grow_matrices(tree)?;
         scene.grow_materials(graph)?;
         scene.rebuild_draws(tree);
-        scene.last_upload.draw_list_rebuilt = true;
+        scene.last_upload.draws_updated = scene.draws.len() as u64;
         Ok(scene)
     }
 
@@ -165,9 +166,14 @@ impl ResidentScene {
         self.origin
     }
 
-    /// The draws, sorted by geometry and material.
-    pub fn draws(&self) -> &[ResidentDraw] {
-        &self.draws
+    /// The draws, grouped by geometry and material.
+    pub fn draws(&self) -> impl Iterator<Item = &ResidentDraw> {
+        self.draws.iter()
+    }
+
+    /// Number of draws.
+    pub fn draw_count(&self) -> usize {
+        self.draws.len()
     }
 
     /// What the last sync prepared for upload.
@@ -288,44 +294,46 @@ impl ResidentScene {
             .write_buffer(1, 1, ssbo, self.matrices.raw(), vk::WHOLE_SIZE);
     }
 
+    /// The draw of an instance, if it is visible and its part has triangles.
+    fn draw_for(&self, tree: &SceneTree, id: u32) -> Option<ResidentDraw> {
+        let instance = tree.instance(id).filter(|i| i.visible)?;
+        let part = self
+            .geometries
+            .get(instance.geometry as usize)?
+            .as_ref()?
+            .parts
+            .get(instance.part as usize)?;
+        (part.index_count > 0).then_some(ResidentDraw {
+            geometry: instance.geometry,
+            first_index: part.first_index,
+            index_count: part.index_count,
+            indices: DrawIndices {
+                matrix: instance.tree_node,
+                material: instance.material,
+                flags: if instance.highlighted {
+                    DrawIndices::HIGHLIGHTED
+                } else {
+                    0
+                },
+            },
+        })
+    }
+
+    /// Sets (or removes) the draw of instance `id` from the tree's current state.
+    fn refresh_draw(&mut self, tree: &SceneTree, id: u32) {
+        match self.draw_for(tree, id) {
+            Some(draw) => self
+                .draws
+                .insert(id, (draw.geometry, draw.indices.material), draw),
+            None => self.draws.remove(id),
+        }
+    }
+
     fn rebuild_draws(&mut self, tree: &SceneTree) {
         self.draws.clear();
         for id in tree.instances() {
-            let Some(instance) = tree.instance(id).filter(|i| i.visible) else {
-                continue;
-            };
-            let Some(Some(geometry)) = self.geometries.get(instance.geometry as usize) else {
-                continue;
-            };
-            let Some(part) = geometry.parts.get(instance.part as usize) else {
-                continue;
-            };
-            if part.index_count == 0 {
-                continue;
-            }
-            self.draws.push(ResidentDraw {
-                geometry: instance.geometry,
-                first_index: part.first_index,
-                index_count: part.index_count,
-                indices: DrawIndices {
-                    matrix: instance.tree_node,
-                    material: instance.material,
-                    flags: if instance.highlighted {
-                        DrawIndices::HIGHLIGHTED
-                    } else {
-                        0
-                    },
-                },
-            });
+            self.refresh_draw(tree, id);
         }
-        self.draws.sort_unstable_by_key(|d| {
-            (
-                d.geometry,
-                d.indices.material,
-                d.first_index,
-                d.indices.matrix,
-            )
-        });
     }
 
     /// Applies the tree's changes since the last sync: queues the changed matrices and
@@ -348,14 +356,27 @@ impl ResidentScene {
                 }
             }
         }
-        let instances_changed = !(changes.added.is_empty()
-            && changes.removed.is_empty()
-            && changes.changed.is_empty()
-            && changes.visibility_changed.is_empty()
-            && changes.dirty_geometries.is_empty());
-        if instances_changed {
+        if !changes.dirty_geometries.is_empty() {
             self.rebuild_draws(tree);
-            self.last_upload.draw_list_rebuilt = true;
+            self.last_upload.draws_updated = self.draws.len() as u64;
+        } else {
+            // Removed ids first: an id may be reused by an added instance.
+            for &id in &changes.removed {
+                self.draws.remove(id);
+            }
+            let touched = changes
+                .added
+                .iter()
+                .chain(&changes.changed)
+                .chain(&changes.visibility_changed);
+            for &id in touched {
+                self.refresh_draw(tree, id);
+            }
+            self.last_upload.draws_updated = (changes.removed.len()
+                + changes.added.len()
+                + changes.changed.len()
+                + changes.visibility_changed.len())
+                as u64;
         }
         Ok(())
     }

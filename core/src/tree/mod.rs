@@ -405,7 +405,7 @@ impl SceneTree {
 
     /// Makes the children of every path through `parent` match the graph again: the common
     /// prefix and suffix of the old and new child lists are kept, the middle rebuilt.
-    fn reconcile(&mut self, graph: &SceneGraph, parent: NodeHandle) {
+    fn reconcile(&mut self, graph: &SceneGraph, parent: NodeHandle, refresh: &mut Vec<u32>) {
         let Ok(node) = graph.node(parent) else { return };
         let paths: Vec<u32> = self
             .paths_of
@@ -457,7 +457,8 @@ impl SceneTree {
             }
             if matches!(node.kind, NodeKind::Lod { .. }) {
                 // A LOD chooses by position: kept children may have moved into or out of view.
-                self.refresh_subtree(graph, t);
+                // Refreshed after every parent is reconciled (positions are consistent then).
+                refresh.push(t);
             }
         }
     }
@@ -475,10 +476,10 @@ impl SceneTree {
             .collect();
         structural.sort_by_key(|h| (h.index(), h.generation()));
         structural.dedup();
-        for parent in structural {
-            self.reconcile(graph, parent);
-        }
         let mut refresh: Vec<u32> = Vec::new();
+        for parent in structural {
+            self.reconcile(graph, parent, &mut refresh);
+        }
         for event in &events {
             match *event {
                 GraphEvent::MatrixChanged(n)

@@ -125,6 +125,8 @@ enum Op {
     SetMask(u8, u32),
     SetPartMaterial(u8, u8, u8),
     SetMaterial(u8),
+    ReplaceGeometry(u8, i8),
+    SetLodDistances(u8, u8),
     MoveEye(i8, i8),
     Update,
 }
@@ -146,6 +148,8 @@ fn op() -> impl Strategy<Value = Op> {
         1 => (any::<u8>(), any::<u32>()).prop_map(|(n, m)| Op::SetMask(n, m)),
         1 => (any::<u8>(), any::<u8>(), any::<u8>()).prop_map(|(n, p, m)| Op::SetPartMaterial(n, p, m)),
         1 => any::<u8>().prop_map(Op::SetMaterial),
+        1 => (any::<u8>(), any::<i8>()).prop_map(|(g, y)| Op::ReplaceGeometry(g, y)),
+        1 => (any::<u8>(), any::<u8>()).prop_map(|(n, d)| Op::SetLodDistances(n, d)),
         1 => (any::<i8>(), any::<i8>()).prop_map(|(x, z)| Op::MoveEye(x, z)),
         2 => Just(Op::Update),
     ]
@@ -329,6 +333,20 @@ impl World {
                         ..Material::default()
                     },
                 )
+            }
+            Op::ReplaceGeometry(g, y) => {
+                // Same part count (required while in use), moved vertices.
+                let handle = self.geometries[g as usize % 3];
+                let mut data = self.graph.geometry(handle).unwrap().clone();
+                for v in &mut data.vertices {
+                    v.position[1] += f32::from(y) * 0.01;
+                }
+                self.graph.replace_geometry(handle, data)
+            }
+            Op::SetLodDistances(n, d) => {
+                let n = self.pick(n);
+                let near = 1.0 + f64::from(d % 16);
+                self.graph.set_lod_distances(n, &[near, near * 3.0])
             }
             Op::MoveEye(x, z) => {
                 self.eye = DVec3::new(f64::from(x), 1.0, f64::from(z));

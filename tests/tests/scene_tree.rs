@@ -488,3 +488,46 @@ fn cycles_and_stale_handles_are_errors() {
     let nan = DMat4::from_translation(DVec3::new(f64::NAN, 0.0, 0.0));
     assert!(g.create_transform("bad", nan).is_err());
 }
+
+#[test]
+fn links_that_multiply_paths_beyond_the_limit_are_refused() {
+    // A chain of groups, each linked twice to the next, doubles the paths at every level.
+    let mut graph = SceneGraph::new();
+    let chain: Vec<NodeHandle> = (0..40)
+        .map(|i| graph.create_group(&format!("g{i}")))
+        .collect();
+    for pair in chain.windows(2) {
+        graph.add_child(pair[0], pair[1]).unwrap();
+        graph.add_child(pair[0], pair[1]).unwrap();
+    }
+    let error = graph
+        .add_child(graph.root(), chain[0])
+        .unwrap_err()
+        .to_string();
+    assert!(
+        error.contains("would add") && error.contains("shared subgraphs multiply paths"),
+        "{error}"
+    );
+    assert!(
+        graph.node(graph.root()).unwrap().children().is_empty(),
+        "a refused edit changes nothing"
+    );
+
+    // Built from the root down, the limit is met part way.
+    let mut graph = SceneGraph::new();
+    let mut parent = graph.root();
+    let mut refused_at = None;
+    for i in 0..40 {
+        let next = graph.create_group(&format!("g{i}"));
+        let linked = graph
+            .add_child(parent, next)
+            .and_then(|()| graph.add_child(parent, next));
+        if linked.is_err() {
+            refused_at = Some(i);
+            break;
+        }
+        parent = next;
+    }
+    // Level i has 2^i paths: the link that would add 2^28 is the first one refused.
+    assert_eq!(refused_at, Some(28));
+}

@@ -12,12 +12,19 @@ mod slots;
 
 pub use slots::{Handle, Slots};
 
+use std::collections::HashMap;
+
 use glam::DMat4;
 
 use crate::scene::{Geometry, Material, Scene};
 
+/// The most paths (scene tree nodes) one link may add: sharing multiplies paths, and a chain
+/// of nodes each linked twice would otherwise expand to billions.
+pub const MAX_NEW_PATHS: u64 = 1 << 27;
+
 /// A node of the graph.
 pub type NodeHandle = Handle<GraphNode>;
+
 /// A geometry of the graph.
 pub type GeometryHandle = Handle<GeometryEntry>;
 /// A material of the graph.
@@ -624,6 +631,18 @@ impl SceneGraph {
                 child: self.node(child)?.name.clone(),
             });
         }
+        // Sharing multiplies paths: a link adds (paths to the parent) × (nodes the child expands
+        // to) paths to the scene tree. Refuse links that would add more than MAX_NEW_PATHS.
+        let new_paths = self
+            .paths_from_root(parent)
+            .saturating_mul(self.expanded_size(child));
+        if new_paths > MAX_NEW_PATHS {
+            return Err(GraphError::Invalid(format!(
+                "adding '{}' under '{}' would add {new_paths} paths to the scene (shared subgraphs multiply paths; at most {MAX_NEW_PATHS} per edit)",
+                self.node(child)?.name,
+                self.node(parent)?.name
+            )));
+        }
         if let Some(p) = self.nodes.get_mut(parent) {
             p.children.insert(
                 position,
@@ -697,6 +716,68 @@ impl SceneGraph {
             position: position as u32,
         });
         Ok(())
+    }
+
+    /// Number of paths from the root to `node` (0 for a node not attached to the root);
+    /// walks up through the ancestors, counting each once. Saturates.
+    fn paths_from_root(&self, node: NodeHandle) -> u64 {
+        let mut memo: HashMap<NodeHandle, u64> = HashMap::new();
+        let mut stack = vec![node];
+        while let Some(&n) = stack.last() {
+            if memo.contains_key(&n) {
+                stack.pop();
+                continue;
+            }
+            let parents = self.nodes.get(n).map_or(&[][..], |g| &g.parents[..]);
+            let pending: Vec<NodeHandle> = parents
+                .iter()
+                .copied()
+                .filter(|p| !memo.contains_key(p))
+                .collect();
+            if pending.is_empty() {
+                let count = if n == self.root {
+                    1
+                } else {
+                    parents
+                        .iter()
+                        .fold(0_u64, |sum, p| sum.saturating_add(memo[p]))
+                };
+                memo.insert(n, count);
+                stack.pop();
+            } else {
+                stack.extend(pending);
+            }
+        }
+        memo[&node]
+    }
+
+    /// Number of tree nodes one path to `node` expands to (itself and everything below, each
+    /// shared subgraph counted once per link); each distinct node is visited once. Saturates.
+    fn expanded_size(&self, node: NodeHandle) -> u64 {
+        let mut memo: HashMap<NodeHandle, u64> = HashMap::new();
+        let mut stack = vec![node];
+        while let Some(&n) = stack.last() {
+            if memo.contains_key(&n) {
+                stack.pop();
+                continue;
+            }
+            let children = self.nodes.get(n).map_or(&[][..], |g| &g.children[..]);
+            let pending: Vec<NodeHandle> = children
+                .iter()
+                .map(|l| l.node)
+                .filter(|c| !memo.contains_key(c))
+                .collect();
+            if pending.is_empty() {
+                let count = children
+                    .iter()
+                    .fold(1_u64, |sum, l| sum.saturating_add(memo[&l.node]));
+                memo.insert(n, count);
+                stack.pop();
+            } else {
+                stack.extend(pending);
+            }
+        }
+        memo[&node]
     }
 
     /// Whether `ancestor` is `node` or lies above it (walks up through every parent).

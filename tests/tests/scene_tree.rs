@@ -115,6 +115,7 @@ enum Op {
     CreateGeo(u8, u8),
     CreateSwitch,
     CreateLod,
+    CreateLodByScreenSize(u8),
     CreateBillboard,
     AddChild(u8, u8),
     InsertChild(u8, u8, u8),
@@ -138,6 +139,7 @@ fn op() -> impl Strategy<Value = Op> {
         1 => (any::<u8>(), any::<u8>()).prop_map(|(g, m)| Op::CreateGeo(g, m)),
         1 => Just(Op::CreateSwitch),
         1 => Just(Op::CreateLod),
+        1 => any::<u8>().prop_map(Op::CreateLodByScreenSize),
         1 => Just(Op::CreateBillboard),
         4 => (any::<u8>(), any::<u8>()).prop_map(|(p, c)| Op::AddChild(p, c)),
         1 => (any::<u8>(), any::<u8>(), any::<u8>()).prop_map(|(p, i, c)| Op::InsertChild(p, i, c)),
@@ -271,6 +273,9 @@ impl World {
             }
             Op::CreateSwitch => Ok(g.create_switch("switch")).map(|_| ()),
             Op::CreateLod => g.create_lod("lod", &[5.0, 20.0]).map(|_| ()),
+            Op::CreateLodByScreenSize(r) => g
+                .create_lod_by_screen_size("lod by size", 0.5 + f64::from(r % 8), &[0.5, 0.1])
+                .map(|_| ()),
             Op::CreateBillboard => Ok(g.create_billboard("billboard")).map(|_| ()),
             Op::AddChild(p, c) => {
                 let (p, c) = (self.pick(p), self.pick(c));
@@ -346,7 +351,10 @@ impl World {
             Op::SetLodDistances(n, d) => {
                 let n = self.pick(n);
                 let near = 1.0 + f64::from(d % 16);
-                self.graph.set_lod_distances(n, &[near, near * 3.0])
+                // Increasing distances, or for a screen-size LOD decreasing angles.
+                self.graph
+                    .set_lod_thresholds(n, &[near, near * 3.0])
+                    .or_else(|_| self.graph.set_lod_thresholds(n, &[1.0 / near, 0.3 / near]))
             }
             Op::MoveEye(x, z) => {
                 self.eye = DVec3::new(f64::from(x), 1.0, f64::from(z));
@@ -530,4 +538,55 @@ fn links_that_multiply_paths_beyond_the_limit_are_refused() {
     }
     // Level i has 2^i paths: the link that would add 2^28 is the first one refused.
     assert_eq!(refused_at, Some(28));
+}
+
+#[test]
+fn screen_size_lod_switches_to_coarser_children_as_parts_shrink_on_screen() {
+    let mut world = World::new();
+    let g = &mut world.graph;
+    let (fine, coarse) = (world.geometries[2], world.geometries[0]);
+    let material = world.materials[0];
+    // A LOD of radius 1 showing 3 parts while it spans more than 0.2 rad, then 1 part.
+    let lod = g.create_lod_by_screen_size("lod", 1.0, &[0.2]).unwrap();
+    let detailed = g.create_geo("fine", fine, &[material; 3]).unwrap();
+    let simple = g.create_geo("coarse", coarse, &[material]).unwrap();
+    g.add_child(lod, detailed).unwrap();
+    g.add_child(lod, simple).unwrap();
+    // The same LOD scaled by 4: it looks bigger, so it switches farther away.
+    let big = g
+        .create_transform("big", DMat4::from_scale(DVec3::splat(4.0)))
+        .unwrap();
+    g.add_child(big, lod).unwrap();
+    g.add_child(g.root(), lod).unwrap();
+    g.add_child(g.root(), big).unwrap();
+    let visible_parts = |tree: &SceneTree| -> Vec<usize> {
+        // Visible instances per path through the LOD: [unscaled, scaled].
+        let mut counts = vec![0, 0];
+        for id in tree.instances() {
+            let i = tree.instance(id).unwrap();
+            if i.visible {
+                counts[usize::from(tree.path(i.tree_node).len() > 3)] += 1;
+            }
+        }
+        counts
+    };
+    let mut tree = SceneTree::build_with_eye(g, DVec3::new(0.0, 0.0, 5.0));
+    assert_eq!(
+        visible_parts(&tree),
+        vec![3, 3],
+        "close: both detailed (0.4 and 1.7 rad)"
+    );
+    tree.update_view(g, DVec3::new(0.0, 0.0, 20.0));
+    assert_eq!(
+        visible_parts(&tree),
+        vec![1, 3],
+        "at 20: 0.1 rad and 0.4 rad"
+    );
+    tree.update_view(g, DVec3::new(0.0, 0.0, 100.0));
+    assert_eq!(visible_parts(&tree), vec![1, 1], "far: both coarse");
+    let error = g
+        .create_lod_by_screen_size("bad", 1.0, &[0.1, 0.2])
+        .unwrap_err()
+        .to_string();
+    assert!(error.contains("decreasing"), "{error}");
 }

@@ -49,11 +49,15 @@ pub enum NodeKind {
     },
     /// Shows only its active children (see [`SceneGraph::set_switch_mask`]).
     Switch,
-    /// Shows one child by distance from the eye: child `i` when the distance lies between
-    /// `distances[i - 1]` and `distances[i]`, the last child beyond the last distance.
+    /// Shows one child chosen by its distance from the eye or its size on screen: child `i`
+    /// while the measure lies between `thresholds[i - 1]` and `thresholds[i]` (the last child
+    /// beyond the last threshold). See [`LodMetric`].
     Lod {
-        /// Increasing switch distances, one fewer than the children that are chosen from.
-        distances: Vec<f64>,
+        /// Switch points, one fewer than the children chosen from: increasing distances, or
+        /// decreasing angular sizes.
+        thresholds: Vec<f64>,
+        /// What the thresholds measure.
+        metric: LodMetric,
     },
     /// Turns its children about their local origin to face the eye (rotation about +Y).
     Billboard,
@@ -70,6 +74,21 @@ impl NodeKind {
             Self::Billboard => "Billboard",
         }
     }
+}
+
+/// What a LOD node measures to choose its child.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum LodMetric {
+    /// Distance from the eye to the LOD's origin (world units); thresholds increase.
+    Distance,
+    /// Size on screen: the angle, in radians, that a sphere of `radius` (in the LOD's own
+    /// units, scaled with its world matrix) at the LOD's origin subtends at the eye; thresholds
+    /// decrease, so the first (most detailed) child shows while the part looks big. Independent
+    /// of the image's resolution.
+    ScreenSize {
+        /// Bounding radius of the LOD's content.
+        radius: f64,
+    },
 }
 
 /// Per-node flags a CAD host needs.
@@ -455,13 +474,33 @@ impl SceneGraph {
         self.create(name, NodeKind::Switch)
     }
 
-    /// A new LOD with increasing, finite, positive switch `distances`.
+    /// A new LOD choosing by distance, with increasing, finite, positive switch `distances`.
     pub fn create_lod(&mut self, name: &str, distances: &[f64]) -> Result<NodeHandle, GraphError> {
-        check_distances(name, distances)?;
+        check_thresholds(name, distances, LodMetric::Distance)?;
         Ok(self.create(
             name,
             NodeKind::Lod {
-                distances: distances.to_vec(),
+                thresholds: distances.to_vec(),
+                metric: LodMetric::Distance,
+            },
+        ))
+    }
+
+    /// A new LOD choosing by size on screen: content of bounding `radius`, switching at the
+    /// decreasing angular `sizes` (radians, each below pi).
+    pub fn create_lod_by_screen_size(
+        &mut self,
+        name: &str,
+        radius: f64,
+        sizes: &[f64],
+    ) -> Result<NodeHandle, GraphError> {
+        let metric = LodMetric::ScreenSize { radius };
+        check_thresholds(name, sizes, metric)?;
+        Ok(self.create(
+            name,
+            NodeKind::Lod {
+                thresholds: sizes.to_vec(),
+                metric,
             },
         ))
     }
@@ -845,17 +884,23 @@ impl SceneGraph {
         Ok(())
     }
 
-    /// Sets a LOD's switch distances.
-    pub fn set_lod_distances(
+    /// Sets a LOD's switch points (distances or angular sizes, as its metric says).
+    pub fn set_lod_thresholds(
         &mut self,
         node: NodeHandle,
-        distances: &[f64],
+        thresholds: &[f64],
     ) -> Result<(), GraphError> {
         let n = self.node_mut(node)?;
-        check_distances(&n.name, distances)?;
+        let name = n.name.clone();
         match &mut n.kind {
-            NodeKind::Lod { distances: d } => *d = distances.to_vec(),
-            _ => return Err(Self::wrong_kind(n, "Lod", "set_lod_distances")),
+            NodeKind::Lod {
+                thresholds: t,
+                metric,
+            } => {
+                check_thresholds(&name, thresholds, *metric)?;
+                *t = thresholds.to_vec();
+            }
+            _ => return Err(Self::wrong_kind(n, "Lod", "set_lod_thresholds")),
         }
         self.events.push(GraphEvent::SelectionChanged(node));
         Ok(())
@@ -932,13 +977,28 @@ fn check_matrix(name: &str, matrix: &DMat4) -> Result<(), GraphError> {
     }
 }
 
-fn check_distances(name: &str, distances: &[f64]) -> Result<(), GraphError> {
-    let increasing = distances.windows(2).all(|w| w[0] < w[1]);
-    if distances.iter().all(|d| d.is_finite() && *d > 0.0) && increasing {
+fn check_thresholds(name: &str, thresholds: &[f64], metric: LodMetric) -> Result<(), GraphError> {
+    let positive = thresholds.iter().all(|t| t.is_finite() && *t > 0.0);
+    let ordered = match metric {
+        LodMetric::Distance => thresholds.windows(2).all(|w| w[0] < w[1]),
+        LodMetric::ScreenSize { radius } => {
+            radius.is_finite()
+                && radius > 0.0
+                && thresholds.windows(2).all(|w| w[0] > w[1])
+                && thresholds.iter().all(|&t| t < std::f64::consts::PI)
+        }
+    };
+    if positive && ordered {
         Ok(())
     } else {
+        let rule = match metric {
+            LodMetric::Distance => "distances must be finite, positive and increasing".to_owned(),
+            LodMetric::ScreenSize { radius } => {
+                format!("angular sizes must be positive, below pi and decreasing, and the radius ({radius}) positive")
+            }
+        };
         Err(GraphError::Invalid(format!(
-            "LOD '{name}': distances must be finite, positive and increasing: {distances:?}"
+            "LOD '{name}': {rule}: {thresholds:?}"
         )))
     }
 }

@@ -15,7 +15,7 @@ pub use bits::BitSet;
 
 use glam::{DMat4, DVec3};
 
-use crate::graph::{ChildLink, GraphEvent, GraphNode, NodeHandle, NodeKind, SceneGraph};
+use crate::graph::{ChildLink, GraphEvent, GraphNode, LodMetric, NodeHandle, NodeKind, SceneGraph};
 
 const NONE: u32 = u32::MAX;
 
@@ -122,9 +122,27 @@ fn local_transform(node: &GraphNode, parent_world: &DMat4, eye: DVec3) -> DMat4 
 }
 
 /// The child a LOD shows, given its world matrix and the eye.
-fn lod_selection(distances: &[f64], world: &DMat4, eye: DVec3) -> usize {
+fn lod_selection(thresholds: &[f64], metric: LodMetric, world: &DMat4, eye: DVec3) -> usize {
     let distance = (world.w_axis.truncate() - eye).length();
-    distances.iter().take_while(|&&d| d <= distance).count()
+    match metric {
+        LodMetric::Distance => thresholds.iter().take_while(|&&d| d <= distance).count(),
+        LodMetric::ScreenSize { radius } => {
+            // The sphere subtends 2·asin(r/d) (the whole view when the eye is inside it).
+            let scale = world
+                .x_axis
+                .truncate()
+                .length()
+                .max(world.y_axis.truncate().length())
+                .max(world.z_axis.truncate().length());
+            let world_radius = radius * scale;
+            let angle = if distance <= world_radius {
+                std::f64::consts::PI
+            } else {
+                2.0 * (world_radius / distance).asin()
+            };
+            thresholds.iter().take_while(|&&size| angle < size).count()
+        }
+    }
 }
 
 /// Whether `node` shows its child link at `position`, given the node's world matrix.
@@ -136,9 +154,9 @@ fn shows_child(
     eye: DVec3,
 ) -> bool {
     match &node.kind {
-        NodeKind::Lod { distances } => {
+        NodeKind::Lod { thresholds, metric } => {
             let last = node.children().len().saturating_sub(1);
-            link.active && position == lod_selection(distances, world, eye).min(last)
+            link.active && position == lod_selection(thresholds, *metric, world, eye).min(last)
         }
         _ => link.active,
     }

@@ -1,6 +1,8 @@
 #version 460
-// GPU-resident parameters: world matrices (relative to the scene origin) and materials live in
-// storage buffers, updated sparsely by scatter.comp; each draw pushes two indices.
+// GPU-resident parameters: world matrices and materials live in storage buffers, updated
+// sparsely by scatter.comp; each draw pushes indices. Positions are made relative to the eye on
+// the GPU with translations split into high and low f32 parts (from f64), so parts far from the
+// world origin keep their precision whatever the scene's units.
 #include "frame.glsl"
 
 struct MaterialParameters {
@@ -10,6 +12,7 @@ struct MaterialParameters {
 
 layout(set = 1, binding = 0, std430) readonly buffer Matrices { mat4 world_from_object[]; };
 layout(set = 1, binding = 1, std430) readonly buffer Materials { MaterialParameters materials[]; };
+layout(set = 1, binding = 2, std430) readonly buffer TranslationLows { vec4 translation_low[]; };
 
 layout(push_constant) uniform DrawIndices {
     uint matrix;
@@ -29,9 +32,13 @@ layout(location = 2) flat out vec4 out_base_color;
 layout(location = 3) flat out vec2 out_surface;
 
 void main() {
-    mat4 model_view = frame.view_from_origin * world_from_object[draw.matrix];
-    vec4 view_position = model_view * vec4(in_position, 1.0);
-    mat3 linear = mat3(model_view);
+    mat4 world = world_from_object[draw.matrix];
+    // Subtract high from high and low from low: both differences are exact or tiny, and
+    // `precise` keeps the compiler from reassociating them away.
+    precise vec3 eye_relative = (world[3].xyz - frame.eye_high.xyz) + (translation_low[draw.matrix].xyz - frame.eye_low.xyz);
+    vec3 world_offset = mat3(world) * in_position + eye_relative;
+    vec4 view_position = frame.view_rotation * vec4(world_offset, 1.0);
+    mat3 linear = mat3(frame.view_rotation) * mat3(world);
     mat3 cofactor = mat3(cross(linear[1], linear[2]), cross(linear[2], linear[0]), cross(linear[0], linear[1]));
     out_view_position = view_position.xyz;
     out_view_normal = cofactor * in_normal;

@@ -156,13 +156,13 @@ fn bench_tree_prints_ratios_memory_and_uploads() {
     ] {
         assert!(text.contains(expected), "missing {expected} in:\n{text}");
     }
-    // One moved part uploads one matrix: 80 bytes, no draw list entry touched.
+    // One moved part uploads one matrix: 96 bytes, no draw list entry touched.
     let one = text
         .lines()
         .find(|l| l.starts_with("1 transform (1)"))
         .unwrap();
     assert!(
-        one.contains(" 1 ") && one.contains(" 80 ") && one.ends_with(" 0"),
+        one.contains(" 1 ") && one.contains(" 96 ") && one.ends_with(" 0"),
         "{one}"
     );
 }

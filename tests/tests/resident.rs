@@ -4,7 +4,9 @@
 
 use cadr_core::generate::{generate, GeneratorSpec};
 use cadr_core::graph::{NodeFlags, NodeHandle, NodeKind, SceneGraph};
-use cadr_core::render::{Camera, GpuScene, Renderer, ResidentScene, DEFAULT_DIRECTION};
+use cadr_core::render::{
+    Camera, GpuScene, Renderer, ResidentScene, DEFAULT_DIRECTION, MATRIX_UPLOAD_BYTES,
+};
 use cadr_core::scene::{Material, Scene};
 use cadr_core::tree::SceneTree;
 use cadr_tests::images::{compare, ImageDifference};
@@ -42,6 +44,15 @@ impl Fixture {
             resident,
             camera,
         }
+    }
+
+    /// Aims the camera at `bounds` (instead of the whole scene).
+    fn look_at(&mut self, bounds: &cadr_core::scene::Aabb) {
+        self.camera = Camera::fit(
+            bounds,
+            f64::from(SIZE.0) / f64::from(SIZE.1),
+            DEFAULT_DIRECTION,
+        );
     }
 
     fn render_resident(&mut self) -> image::RgbaImage {
@@ -162,7 +173,11 @@ fn only_what_changed_is_uploaded() {
         upload.matrices, 10,
         "changing 10 matrices uploads 10 matrices"
     );
-    assert_eq!(upload.bytes, 10 * 80, "slot and matrix, nothing else");
+    assert_eq!(
+        upload.bytes,
+        10 * MATRIX_UPLOAD_BYTES,
+        "slot, matrix and low translation, nothing else"
+    );
     assert!(
         upload.draws_updated == 0,
         "moving parts does not touch the draw list"
@@ -259,5 +274,38 @@ fn highlighted_parts_are_drawn_tinted_until_cleared() {
         0.0,
         "clearing the highlight restores the image"
     );
+    assert_no_validation_errors(f.renderer.device());
+}
+
+#[test]
+fn a_scene_spanning_200_km_keeps_millimetre_parts_intact_at_both_ends() {
+    // Two 3 cm assemblies 200 km apart: one origin for the whole scene would leave each 100 km
+    // from it, where f32 coordinates are 8 mm apart. Relative-to-eye keeps both exact.
+    let mut part = generate(&GeneratorSpec::Demo);
+    part.nodes[0].local = DMat4::from_scale(DVec3::splat(0.001)) * part.nodes[0].local;
+    let part_bounds = cadr_core::scene::flatten(&part).unwrap().bounds;
+    let mut site = part.clone();
+    let root = site.roots[0];
+    let (west, east) = (
+        DVec3::new(-100_000.0, 0.0, 0.0),
+        DVec3::new(100_000.0, 0.0, 35.0),
+    );
+    let mut far_copy = site.nodes[root as usize].clone();
+    far_copy.local = DMat4::from_translation(east) * far_copy.local;
+    site.nodes[root as usize].local =
+        DMat4::from_translation(west) * site.nodes[root as usize].local;
+    site.nodes.push(far_copy);
+    site.roots.push(site.nodes.len() as u32 - 1);
+
+    let reference = Fixture::new(&part).render_resident();
+    let mut f = Fixture::new(&site);
+    for offset in [west, east] {
+        f.look_at(&part_bounds.transformed(&DMat4::from_translation(offset)));
+        let image = f.render_resident();
+        assert_close(
+            compare(&image, &reference).unwrap(),
+            &format!("the assembly at {offset:?}"),
+        );
+    }
     assert_no_validation_errors(f.renderer.device());
 }

@@ -57,14 +57,17 @@ fn every_shader_file_is_listed() {
 
 #[test]
 fn shader_struct_mirrors_have_std140_layout() {
-    assert_eq!(std::mem::size_of::<FrameUniforms>(), 144);
-    assert_eq!(std::mem::offset_of!(FrameUniforms, view_from_origin), 64);
-    assert_eq!(std::mem::offset_of!(FrameUniforms, light), 128);
+    assert_eq!(std::mem::size_of::<FrameUniforms>(), 176);
+    assert_eq!(std::mem::offset_of!(FrameUniforms, view_rotation), 64);
+    assert_eq!(std::mem::offset_of!(FrameUniforms, eye_high), 128);
+    assert_eq!(std::mem::offset_of!(FrameUniforms, eye_low), 144);
+    assert_eq!(std::mem::offset_of!(FrameUniforms, light), 160);
     assert_eq!(
         std::mem::size_of::<MatrixUpdate>(),
-        80,
-        "std430: uint + 3 pad, then mat4"
+        96,
+        "std430: slot, 3 pad, mat4, vec4"
     );
+    assert_eq!(std::mem::offset_of!(MatrixUpdate, translation_low), 80);
     assert_eq!(std::mem::offset_of!(MatrixUpdate, matrix), 16);
     assert_eq!(std::mem::size_of::<MaterialParameters>(), 32);
     assert_eq!(std::mem::size_of::<DrawIndices>(), 12);

@@ -17,8 +17,8 @@ pub use pipeline::{
     DrawIndices, DrawParameters, FrameUniforms, MaterialParameters, MatrixUpdate, Pipelines,
 };
 pub use resident::{
-    uploaded_matrix_slots, ResidentDraw, ResidentScene, UploadStats, MATERIAL_UPLOAD_BYTES,
-    MATRIX_UPLOAD_BYTES,
+    split_f64, uploaded_matrix_slots, ResidentDraw, ResidentScene, UploadStats,
+    MATERIAL_UPLOAD_BYTES, MATRIX_UPLOAD_BYTES,
 };
 
 use std::path::Path;
@@ -26,7 +26,6 @@ use std::sync::Arc;
 use std::time::Instant;
 
 use ash::vk;
-use glam::{DMat4, DVec3};
 
 use pipeline::DescriptorSets;
 
@@ -147,7 +146,7 @@ impl Renderer {
                 renderer.record_baseline(command_buffer, scene, camera, stats);
                 Ok(())
             };
-        self.frame(camera, DVec3::ZERO, &mut before, &mut inside)
+        self.frame(camera, &mut before, &mut inside)
     }
 
     /// Renders one frame of a resident scene: uploads its pending changes (compute scatter),
@@ -157,7 +156,6 @@ impl Renderer {
         scene: &mut ResidentScene,
         camera: &Camera,
     ) -> VkResult<FrameStats> {
-        let origin = scene.origin();
         let scene = std::cell::RefCell::new(scene);
         let mut before =
             |renderer: &Renderer, command_buffer: vk::CommandBuffer, stats: &mut FrameStats| {
@@ -171,7 +169,7 @@ impl Renderer {
                 renderer.record_resident(command_buffer, &scene.borrow(), stats);
                 Ok(())
             };
-        self.frame(camera, origin, &mut before, &mut inside)
+        self.frame(camera, &mut before, &mut inside)
     }
 
     /// Runs a frame: uniforms, command buffer, target transitions, the technique's commands
@@ -179,14 +177,19 @@ impl Renderer {
     fn frame(
         &mut self,
         camera: &Camera,
-        origin: DVec3,
         before: &mut Recorder<'_>,
         inside: &mut Recorder<'_>,
     ) -> VkResult<FrameStats> {
-        let view_from_origin = camera.view * DMat4::from_translation(origin);
+        // The eye in f64, split for relative-to-eye positions on the GPU (resident technique).
+        let eye = camera.view.inverse().w_axis.truncate();
+        let (eye_high, eye_low) = split_f64(eye);
+        let mut view_rotation = camera.view;
+        view_rotation.w_axis = glam::DVec4::W;
         let uniforms = FrameUniforms {
             projection: camera.projection.as_mat4().to_cols_array_2d(),
-            view_from_origin: view_from_origin.as_mat4().to_cols_array_2d(),
+            view_rotation: view_rotation.as_mat4().to_cols_array_2d(),
+            eye_high: [eye_high[0], eye_high[1], eye_high[2], 0.0],
+            eye_low: [eye_low[0], eye_low[1], eye_low[2], 0.0],
             light: [0.22, 0.68, 0.35, 0.0],
         };
         self.commands.wait()?;

@@ -16,8 +16,12 @@ use crate::vk::{Device, ShaderModule, VkResult, VkResultExt, COLOR_FORMAT, DEPTH
 pub struct FrameUniforms {
     /// View to clip space.
     pub projection: [[f32; 4]; 4],
-    /// Scene-origin-relative world space to view space.
-    pub view_from_origin: [[f32; 4]; 4],
+    /// World to view space without the translation (the eye at the origin).
+    pub view_rotation: [[f32; 4]; 4],
+    /// The eye's world position, f32 high part (xyz).
+    pub eye_high: [f32; 4],
+    /// The eye's world position, f32 remainder (xyz).
+    pub eye_low: [f32; 4],
     /// Ambient, diffuse and specular strength of the head light.
     pub light: [f32; 4],
 }
@@ -59,8 +63,10 @@ pub struct MatrixUpdate {
     pub slot: u32,
     /// Padding to the matrix's 16-byte alignment.
     pub padding: [u32; 3],
-    /// The matrix.
+    /// The matrix, its translation the f32 high part.
     pub matrix: [[f32; 4]; 4],
+    /// The f32 remainder of the translation (xyz).
+    pub translation_low: [f32; 4],
 }
 
 /// Material parameters in the resident material buffer; mirrors `MaterialParameters`.
@@ -192,9 +198,9 @@ pub struct Pipelines {
     device: Arc<Device>,
     /// Set 0: the frame uniform buffer.
     pub frame_set_layout: vk::DescriptorSetLayout,
-    /// Set 1 of the resident pipeline: matrices and materials.
+    /// Set 1 of the resident pipeline: matrices, materials, low translations.
     pub resident_set_layout: vk::DescriptorSetLayout,
-    /// The scatter pipeline's set: updates and matrices.
+    /// The scatter pipeline's set: updates, matrices, low translations.
     pub scatter_set_layout: vk::DescriptorSetLayout,
     /// Baseline layout: set 0 and 96 bytes of push constants.
     pub baseline_layout: vk::PipelineLayout,
@@ -231,29 +237,14 @@ impl Pipelines {
             "frame set layout",
             &[(vk::DescriptorType::UNIFORM_BUFFER, graphics)],
         )?;
-        this.resident_set_layout = set_layout(
-            device,
-            "resident set layout",
-            &[
-                (
-                    vk::DescriptorType::STORAGE_BUFFER,
-                    vk::ShaderStageFlags::VERTEX,
-                ),
-                (
-                    vk::DescriptorType::STORAGE_BUFFER,
-                    vk::ShaderStageFlags::VERTEX,
-                ),
-            ],
-        )?;
+        let vertex_storage = (
+            vk::DescriptorType::STORAGE_BUFFER,
+            vk::ShaderStageFlags::VERTEX,
+        );
+        this.resident_set_layout = set_layout(device, "resident set layout", &[vertex_storage; 3])?;
         let compute = vk::ShaderStageFlags::COMPUTE;
-        this.scatter_set_layout = set_layout(
-            device,
-            "scatter set layout",
-            &[
-                (vk::DescriptorType::STORAGE_BUFFER, compute),
-                (vk::DescriptorType::STORAGE_BUFFER, compute),
-            ],
-        )?;
+        let compute_storage = (vk::DescriptorType::STORAGE_BUFFER, compute);
+        this.scatter_set_layout = set_layout(device, "scatter set layout", &[compute_storage; 3])?;
         this.baseline_layout = pipeline_layout(
             device,
             "baseline layout",

@@ -1,5 +1,5 @@
 //! The scene kept on the GPU and updated from the scene tree's changes: world matrices (one
-//! slot per tree node, relative to a fixed scene origin) and materials live in storage
+//! slot per tree node, translations split into high and low f32 parts) and materials live in storage
 //! buffers; each frame only the changed matrices are gathered into a compact buffer and
 //! scattered into place by `scatter.comp`, and only changed materials are copied. The draw
 //! list is grouped by geometry and material and updated per changed instance in O(1) (never
@@ -8,12 +8,12 @@
 use std::sync::Arc;
 
 use ash::vk;
-use glam::{DMat4, DVec3};
+use glam::DVec3;
 
 use super::draw_list::DrawBuckets;
 use super::pipeline::{DescriptorSets, DrawIndices, MaterialParameters, MatrixUpdate, Pipelines};
 use crate::graph::SceneGraph;
-use crate::scene::{Aabb, Part, Vertex};
+use crate::scene::{Part, Vertex};
 use crate::tree::{SceneTree, TreeChanges};
 use crate::vk::{Buffer, Device, MemoryLocation, VkResult};
 
@@ -52,11 +52,11 @@ struct GeometrySlot {
 /// The GPU-resident scene.
 pub struct ResidentScene {
     device: Arc<Device>,
-    origin: DVec3,
     vertex_arena: Buffer,
     index_arena: Buffer,
     geometries: Vec<Option<GeometrySlot>>,
     matrices: Buffer,
+    translation_lows: Buffer,
     matrix_capacity: u32,
     materials: Buffer,
     material_capacity: u32,
@@ -91,31 +91,13 @@ fn storage(
 }
 
 impl ResidentScene {
-    /// Puts the tree's scene on the GPU. The origin matrices are stored relative to is the
-    /// centre of the current bounds, fixed from now on so that edits never force a re-upload.
+    /// Puts the tree's scene on the GPU.
     pub fn new(
         device: &Arc<Device>,
         pipelines: &Pipelines,
         graph: &SceneGraph,
         tree: &mut SceneTree,
     ) -> VkResult<Self> {
-        let (_, geometry_slots, _) = graph.capacities();
-        let geometry_bounds: Vec<Aabb> = (0..geometry_slots as u32)
-            .map(|slot| graph.geometry_at(slot).map_or(Aabb::EMPTY, |g| g.bounds()))
-            .collect();
-        let mut bounds = Aabb::EMPTY;
-        for instance in tree.instances().filter_map(|id| tree.instance(id)) {
-            bounds.add_box(
-                &geometry_bounds[instance.geometry as usize]
-                    .transformed(&tree.world(instance.tree_node)),
-            );
-        }
-
-        let origin = if bounds.is_empty() {
-            DVec3::ZERO
-        } else {
-            bounds.center()
-        };
         let placeholder = |name: &str| {
             storage(
                 device,
@@ -131,15 +113,15 @@ impl ResidentScene {
             &[pipelines.resident_set_layout, pipelines.scatter_set_layout],
             &[vk::DescriptorPoolSize::default()
                 .ty(vk::DescriptorType::STORAGE_BUFFER)
-                .descriptor_count(4)],
+                .descriptor_count(6)],
         )?;
         let mut scene = Self {
             device: Arc::clone(device),
-            origin,
             vertex_arena: placeholder("vertex arena")?,
             index_arena: placeholder("index arena")?,
             geometries: Vec::new(),
             matrices: placeholder("resident matrices")?,
+            translation_lows: placeholder("translation lows")?,
             matrix_capacity: 0,
             materials: placeholder("resident materials")?,
             material_capacity: 0,
@@ -159,11 +141,6 @@ impl ResidentScene {
         scene.rebuild_draws(tree);
         scene.last_upload.draws_updated = scene.draws.len() as u64;
         Ok(scene)
-    }
-
-    /// The origin world matrices are made relative to.
-    pub fn origin(&self) -> DVec3 {
-        self.origin
     }
 
     /// The draws, grouped by geometry and material.
@@ -215,18 +192,18 @@ impl ResidentScene {
         Ok(())
     }
 
-    fn relative_matrix(&self, tree: &SceneTree, t: u32) -> [[f32; 4]; 4] {
-        (DMat4::from_translation(-self.origin) * tree.world(t))
-            .as_mat4()
-            .to_cols_array_2d()
-    }
-
+    /// Queues the matrix of slot `t`: rotation and scale in f32, the translation split into an
+    /// f32 high part and the f32 remainder (see `split_f64`).
     fn queue_matrix(&mut self, tree: &SceneTree, t: u32) {
-        let matrix = self.relative_matrix(tree, t);
+        let world = tree.world(t);
+        let (high, low) = split_f64(world.w_axis.truncate());
+        let mut matrix = world.as_mat4().to_cols_array_2d();
+        matrix[3] = [high[0], high[1], high[2], 1.0];
         self.pending_matrices.push(MatrixUpdate {
             slot: t,
             padding: [0; 3],
             matrix,
+            translation_low: [low[0], low[1], low[2], 0.0],
         });
     }
 
@@ -241,6 +218,13 @@ impl ResidentScene {
             &self.device,
             "resident matrices",
             u64::from(self.matrix_capacity) * MATRIX_BYTES,
+            MemoryLocation::GpuOnly,
+            vk::BufferUsageFlags::TRANSFER_DST,
+        )?;
+        self.translation_lows = storage(
+            &self.device,
+            "translation lows",
+            u64::from(self.matrix_capacity) * 16,
             MemoryLocation::GpuOnly,
             vk::BufferUsageFlags::TRANSFER_DST,
         )?;
@@ -284,14 +268,21 @@ impl ResidentScene {
 
     fn write_sets(&self) {
         let ssbo = vk::DescriptorType::STORAGE_BUFFER;
-        self.sets
-            .write_buffer(0, 0, ssbo, self.matrices.raw(), vk::WHOLE_SIZE);
-        self.sets
-            .write_buffer(0, 1, ssbo, self.materials.raw(), vk::WHOLE_SIZE);
-        self.sets
-            .write_buffer(1, 0, ssbo, self.updates.raw(), vk::WHOLE_SIZE);
-        self.sets
-            .write_buffer(1, 1, ssbo, self.matrices.raw(), vk::WHOLE_SIZE);
+        let whole = vk::WHOLE_SIZE;
+        for (binding, buffer) in [&self.matrices, &self.materials, &self.translation_lows]
+            .into_iter()
+            .enumerate()
+        {
+            self.sets
+                .write_buffer(0, binding as u32, ssbo, buffer.raw(), whole);
+        }
+        for (binding, buffer) in [&self.updates, &self.matrices, &self.translation_lows]
+            .into_iter()
+            .enumerate()
+        {
+            self.sets
+                .write_buffer(1, binding as u32, ssbo, buffer.raw(), whole);
+        }
     }
 
     /// The draw of an instance, if it is visible and its part has triangles.
@@ -381,14 +372,15 @@ impl ResidentScene {
         Ok(())
     }
 
-    /// Records the pending uploads (before the render pass) and clears them. Returns the
-    /// bytes uploaded.
+    /// Records the pending uploads (before the render pass) and clears them. Returns the bytes
+    /// uploaded.
     pub fn record_uploads(
         &mut self,
         pipelines: &Pipelines,
         command_buffer: vk::CommandBuffer,
     ) -> VkResult<u64> {
-        let raw = self.device.raw();
+        let device = Arc::clone(&self.device);
+        let raw = device.raw();
         let mut bytes = 0;
         let mut barriers = Vec::new();
         if !self.pending_materials.is_empty() {
@@ -534,11 +526,20 @@ pub fn uploaded_matrix_slots<'a>(
         .filter(|&t| tree.has_instances(t))
 }
 
-/// Bytes one uploaded matrix costs (slot, padding, matrix).
+/// Bytes one uploaded matrix costs (slot, padding, matrix, low translation).
 pub const MATRIX_UPLOAD_BYTES: u64 = UPDATE_BYTES;
 
 /// Bytes one uploaded material costs.
 pub const MATERIAL_UPLOAD_BYTES: u64 = MATERIAL_BYTES;
+
+/// Splits f64 coordinates into an f32 high part and the f32 remainder: `high + low` equals the
+/// input to about 2^-48 of its size, and the shader subtracts the eye's parts separately so
+/// that positions relative to the eye keep that precision on the GPU.
+pub fn split_f64(v: DVec3) -> ([f32; 3], [f32; 3]) {
+    let high = v.as_vec3();
+    let low = (v - high.as_dvec3()).as_vec3();
+    (high.to_array(), low.to_array())
+}
 
 fn material_parameters(graph: &SceneGraph, slot: u32) -> Option<MaterialParameters> {
     graph.material_at(slot).map(|m| MaterialParameters {

@@ -32,7 +32,7 @@ fn graphicscard_has_the_seed_statistics() {
     assert_eq!(s.materials, 66);
     let per_part = s.triangles as f64 / s.instances as f64;
     assert!(
-        within(per_part, 10.0, 0.25),
+        within(per_part, 10.0, 0.05),
         "triangles per part: {per_part}"
     );
     // The seed file has 5 004 nodes: a placement node above each object's shape.
@@ -49,7 +49,7 @@ fn racecar_has_the_seed_statistics() {
     );
     let per_part = s.triangles as f64 / s.instances as f64;
     assert!(
-        within(per_part, 37.0, 0.15),
+        within(per_part, 37.0, 0.05),
         "triangles per part: {per_part}"
     );
 }

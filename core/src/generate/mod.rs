@@ -136,13 +136,15 @@ pub fn generate(spec: &GeneratorSpec) -> Scene {
             objects_per_module: 50,
             seed: 2014,
         }),
+        // Machine beds and boxy features have 12 triangles; round features are tuned up so
+        // that parts average the seed's 37.
         GeneratorSpec::RaceCar => assembly(&AssemblySpec {
             name: "racecar".into(),
             objects: 3500,
             geometries: 180,
             materials: 80,
             parts_per_geometry: 28.0,
-            triangles_per_part: 37.0,
+            triangles_per_part: 40.5,
             objects_per_module: 60,
             seed: 2015,
         }),

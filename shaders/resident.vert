@@ -18,6 +18,7 @@ layout(push_constant) uniform DrawIndices {
     uint matrix;
     uint material;
     uint flags;            // bit 0: highlighted
+    uint instance;         // scene tree instance id, written by the pick pass
 } draw;
 
 const uint DRAW_HIGHLIGHTED = 1u;
@@ -30,6 +31,7 @@ layout(location = 0) out vec3 out_view_position;
 layout(location = 1) out vec3 out_view_normal;
 layout(location = 2) flat out vec4 out_base_color;
 layout(location = 3) flat out vec2 out_surface;
+layout(location = 4) flat out uint out_pick_id;  // instance + 1 (0 means nothing)
 
 void main() {
     mat4 world = world_from_object[draw.matrix];
@@ -49,5 +51,6 @@ void main() {
     }
 
     out_surface = material.surface.xy;
+    out_pick_id = draw.instance + 1u;
     gl_Position = frame.projection * view_position;
 }

@@ -44,6 +44,12 @@ pub const RESIDENT_FRAG: ShaderSource = ShaderSource {
     stage: ShaderStage::Fragment,
     source: include_str!("../../shaders/resident.frag"),
 };
+/// The pick pass's fragment shader.
+pub const PICK_FRAG: ShaderSource = ShaderSource {
+    name: "pick.frag",
+    stage: ShaderStage::Fragment,
+    source: include_str!("../../shaders/pick.frag"),
+};
 /// Sparse matrix scatter.
 pub const SCATTER_COMP: ShaderSource = ShaderSource {
     name: "scatter.comp",
@@ -57,5 +63,6 @@ pub const ALL: &[ShaderSource] = &[
     BASELINE_FRAG,
     RESIDENT_VERT,
     RESIDENT_FRAG,
+    PICK_FRAG,
     SCATTER_COMP,
 ];

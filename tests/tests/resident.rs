@@ -309,3 +309,56 @@ fn a_scene_spanning_200_km_keeps_millimetre_parts_intact_at_both_ends() {
     }
     assert_no_validation_errors(f.renderer.device());
 }
+
+#[test]
+fn picking_finds_the_part_under_a_pixel_and_passes_through_unpickable_ones() {
+    let mut f = Fixture::new(&generate(&GeneratorSpec::Demo));
+    let image = f.render_resident();
+    let (x, y) = (SIZE.0 / 2, SIZE.1 / 2);
+    assert_ne!(
+        image.get_pixel(x, y).0,
+        image.get_pixel(0, 0).0,
+        "the centre shows a part"
+    );
+    assert_eq!(
+        f.renderer.pick(&mut f.resident, &f.camera, 0, 0).unwrap(),
+        None,
+        "background"
+    );
+
+    let hit = f
+        .renderer
+        .pick(&mut f.resident, &f.camera, x, y)
+        .unwrap()
+        .expect("a part at the centre");
+    let instance = f.tree.instance(hit).expect("a live instance");
+    assert!(instance.visible && instance.pickable);
+    let path = f.tree.path(instance.tree_node);
+    let geo = *path.last().unwrap();
+    assert!(
+        matches!(f.graph.node(geo).unwrap().kind, NodeKind::Geo { .. }),
+        "the path ends in the part's Geo node"
+    );
+
+    // Not pickable: the click passes through to whatever lies behind (or nothing).
+    f.graph
+        .set_flags(
+            geo,
+            NodeFlags {
+                pickable: false,
+                ..NodeFlags::default()
+            },
+        )
+        .unwrap();
+    f.tree.update(&mut f.graph);
+    f.resident.sync(&f.graph, &mut f.tree).unwrap();
+    let behind = f.renderer.pick(&mut f.resident, &f.camera, x, y).unwrap();
+    assert_ne!(behind, Some(hit));
+    let error = f
+        .renderer
+        .pick(&mut f.resident, &f.camera, SIZE.0, 0)
+        .unwrap_err()
+        .to_string();
+    assert!(error.contains("outside the 200x150 target"), "{error}");
+    assert_no_validation_errors(f.renderer.device());
+}

@@ -13,7 +13,7 @@ use cadr_core::tree::SceneTree;
 use glam::{DMat4, DVec3};
 use proptest::prelude::*;
 
-type Snapshot = Vec<(Vec<(u32, u32)>, u32, u32, u32, [u64; 16], bool, bool)>;
+type Snapshot = Vec<(Vec<(u32, u32)>, u32, u32, u32, [u64; 16], bool, bool, bool)>;
 
 /// Every live instance: its path (as handle parts), part, geometry, material, world bits, visibility.
 fn snapshot(tree: &SceneTree) -> Snapshot {
@@ -35,6 +35,7 @@ fn snapshot(tree: &SceneTree) -> Snapshot {
                 world,
                 i.visible,
                 i.highlighted,
+                i.pickable,
             )
         })
         .collect();
@@ -45,7 +46,7 @@ fn snapshot(tree: &SceneTree) -> Snapshot {
 /// What a renderer keeps, updated only from `take_changes`.
 #[derive(Default)]
 struct Consumer {
-    instances: HashMap<u32, (u32, u32, u32, u32, bool, bool)>,
+    instances: HashMap<u32, (u32, u32, u32, u32, bool, bool, bool)>,
     matrices: HashMap<u32, DMat4>,
 }
 
@@ -71,6 +72,7 @@ impl Consumer {
                     i.material,
                     i.visible,
                     i.highlighted,
+                    i.pickable,
                 ),
             );
         }
@@ -95,7 +97,8 @@ impl Consumer {
                     i.geometry,
                     i.material,
                     i.visible,
-                    i.highlighted
+                    i.highlighted,
+                    i.pickable
                 )),
                 "instance {id}"
             );
@@ -122,7 +125,7 @@ enum Op {
     RemoveChildAt(u8, u8),
     Destroy(u8),
     SetMatrix(u8, i8, i8),
-    SetFlags(u8, bool, bool),
+    SetFlags(u8, bool, bool, bool),
     SetMask(u8, u32),
     SetPartMaterial(u8, u8, u8),
     SetMaterial(u8),
@@ -146,7 +149,7 @@ fn op() -> impl Strategy<Value = Op> {
         2 => (any::<u8>(), any::<u8>()).prop_map(|(p, i)| Op::RemoveChildAt(p, i)),
         1 => any::<u8>().prop_map(Op::Destroy),
         3 => (any::<u8>(), any::<i8>(), any::<i8>()).prop_map(|(n, x, z)| Op::SetMatrix(n, x, z)),
-        1 => (any::<u8>(), any::<bool>(), any::<bool>()).prop_map(|(n, v, h)| Op::SetFlags(n, v, h)),
+        1 => (any::<u8>(), any::<bool>(), any::<bool>(), any::<bool>()).prop_map(|(n, v, h, p)| Op::SetFlags(n, v, h, p)),
         1 => (any::<u8>(), any::<u32>()).prop_map(|(n, m)| Op::SetMask(n, m)),
         1 => (any::<u8>(), any::<u8>(), any::<u8>()).prop_map(|(n, p, m)| Op::SetPartMaterial(n, p, m)),
         1 => any::<u8>().prop_map(Op::SetMaterial),
@@ -306,14 +309,14 @@ impl World {
                     * DMat4::from_translation(DVec3::new(f64::from(z), 0.0, 1.0));
                 self.graph.set_matrix(n, m)
             }
-            Op::SetFlags(n, visible, highlighted) => {
+            Op::SetFlags(n, visible, highlighted, pickable) => {
                 let n = self.pick(n);
                 self.graph.set_flags(
                     n,
                     NodeFlags {
                         visible,
                         highlighted,
-                        ..NodeFlags::default()
+                        pickable,
                     },
                 )
             }

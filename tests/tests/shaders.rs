@@ -70,7 +70,7 @@ fn shader_struct_mirrors_have_std140_layout() {
     assert_eq!(std::mem::offset_of!(MatrixUpdate, translation_low), 80);
     assert_eq!(std::mem::offset_of!(MatrixUpdate, matrix), 16);
     assert_eq!(std::mem::size_of::<MaterialParameters>(), 32);
-    assert_eq!(std::mem::size_of::<DrawIndices>(), 12);
+    assert_eq!(std::mem::size_of::<DrawIndices>(), 16);
 
     assert_eq!(std::mem::size_of::<DrawParameters>(), 96);
     assert_eq!(std::mem::offset_of!(DrawParameters, base_color), 64);

@@ -15,6 +15,7 @@ pub use camera::{Camera, DEFAULT_DIRECTION, DEFAULT_FOV_DEGREES};
 pub use gpu_scene::{GeometryRange, GpuScene, UploadError};
 pub use pipeline::{
     DrawIndices, DrawParameters, FrameUniforms, MaterialParameters, MatrixUpdate, Pipelines,
+    PICK_FORMAT,
 };
 pub use resident::{
     split_f64, uploaded_matrix_slots, ResidentDraw, ResidentScene, UploadStats,
@@ -30,8 +31,8 @@ use ash::vk;
 use pipeline::DescriptorSets;
 
 use crate::vk::{
-    transition, Buffer, CommandContext, Device, GpuTimer, MemoryLocation, OffscreenTarget, VkError,
-    VkResult,
+    transition, Buffer, CommandContext, Device, GpuTimer, Image, MemoryLocation, OffscreenTarget,
+    VkError, VkResult,
 };
 
 /// The background colour of rendered images (linear RGBA).
@@ -76,6 +77,17 @@ pub struct Renderer {
     frame_sets: DescriptorSets,
     commands: CommandContext,
     timer: Option<GpuTimer>,
+    /// The id target and a 4-byte readback buffer, created on the first pick.
+    pick: Option<(Image, Buffer)>,
+}
+
+/// Which image a pass draws into.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum PassTarget {
+    /// The colour target (shaded image).
+    Color,
+    /// The R32_UINT pick target (instance id + 1, 0 for nothing).
+    Pick,
 }
 
 /// What a technique records inside the frame: (before the render pass, inside it).
@@ -118,6 +130,7 @@ impl Renderer {
             frame_sets,
             commands,
             timer,
+            pick: None,
         })
     }
 
@@ -146,7 +159,13 @@ impl Renderer {
                 renderer.record_baseline(command_buffer, scene, camera, stats);
                 Ok(())
             };
-        self.frame(camera, &mut before, &mut inside)
+        self.frame(
+            camera,
+            PassTarget::Color,
+            &mut before,
+            &mut inside,
+            &mut |_, _, _| Ok(()),
+        )
     }
 
     /// Renders one frame of a resident scene: uploads its pending changes (compute scatter),
@@ -166,10 +185,116 @@ impl Renderer {
             };
         let mut inside =
             |renderer: &Renderer, command_buffer: vk::CommandBuffer, stats: &mut FrameStats| {
-                renderer.record_resident(command_buffer, &scene.borrow(), stats);
+                let pipeline = renderer.pipelines.resident;
+                renderer.record_resident(command_buffer, &scene.borrow(), stats, pipeline, false);
                 Ok(())
             };
-        self.frame(camera, &mut before, &mut inside)
+        self.frame(
+            camera,
+            PassTarget::Color,
+            &mut before,
+            &mut inside,
+            &mut |_, _, _| Ok(()),
+        )
+    }
+
+    /// Finds the pickable part under pixel (`x`, `y`) of a resident scene seen by `camera`
+    /// (uploading the scene's pending changes first): the pick pass renders instance ids into
+    /// an R32_UINT target and that one pixel is read back. Returns the scene tree instance, or
+    /// `None` where there is only background or parts that are not pickable.
+    pub fn pick(
+        &mut self,
+        scene: &mut ResidentScene,
+        camera: &Camera,
+        x: u32,
+        y: u32,
+    ) -> VkResult<Option<u32>> {
+        let (width, height) = self.size();
+        if x >= width || y >= height {
+            return Err(VkError::InvalidUse(format!(
+                "pixel ({x}, {y}) is outside the {width}x{height} target"
+            )));
+        }
+        if self.pick.is_none() {
+            let image = Image::new(
+                &self.device,
+                "pick ids",
+                self.target.extent(),
+                PICK_FORMAT,
+                vk::ImageUsageFlags::COLOR_ATTACHMENT | vk::ImageUsageFlags::TRANSFER_SRC,
+                vk::ImageAspectFlags::COLOR,
+            )?;
+            let readback = Buffer::new(
+                &self.device,
+                "pick readback",
+                4,
+                vk::BufferUsageFlags::TRANSFER_DST,
+                MemoryLocation::GpuToCpu,
+            )?;
+            self.pick = Some((image, readback));
+        }
+        let scene = std::cell::RefCell::new(scene);
+        let mut before =
+            |renderer: &Renderer, command_buffer: vk::CommandBuffer, stats: &mut FrameStats| {
+                stats.bytes_uploaded = scene
+                    .borrow_mut()
+                    .record_uploads(&renderer.pipelines, command_buffer)?;
+                Ok(())
+            };
+        let mut inside =
+            |renderer: &Renderer, command_buffer: vk::CommandBuffer, stats: &mut FrameStats| {
+                let pipeline = renderer.pipelines.pick;
+                renderer.record_resident(command_buffer, &scene.borrow(), stats, pipeline, true);
+                Ok(())
+            };
+        let mut after =
+            |renderer: &Renderer, command_buffer: vk::CommandBuffer, _: &mut FrameStats| {
+                if let Some((image, readback)) = &renderer.pick {
+                    let region = [vk::BufferImageCopy::default()
+                        .image_subresource(
+                            vk::ImageSubresourceLayers::default()
+                                .aspect_mask(vk::ImageAspectFlags::COLOR)
+                                .layer_count(1),
+                        )
+                        .image_offset(vk::Offset3D {
+                            x: x as i32,
+                            y: y as i32,
+                            z: 0,
+                        })
+                        .image_extent(vk::Extent3D {
+                            width: 1,
+                            height: 1,
+                            depth: 1,
+                        })];
+                    // SAFETY: the pick image is in TRANSFER_SRC_OPTIMAL after the pass; the pixel
+                    // lies inside it (checked above); both outlive the submission, which is waited for.
+                    unsafe {
+                        renderer.device.raw().cmd_copy_image_to_buffer(
+                            command_buffer,
+                            image.raw(),
+                            vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
+                            readback.raw(),
+                            &region,
+                        )
+                    };
+                }
+                Ok(())
+            };
+        self.frame(
+            camera,
+            PassTarget::Pick,
+            &mut before,
+            &mut inside,
+            &mut after,
+        )?;
+        let id = match &self.pick {
+            Some((_, readback)) => {
+                let bytes = readback.mapped()?;
+                u32::from_le_bytes([bytes[0], bytes[1], bytes[2], bytes[3]])
+            }
+            None => 0,
+        };
+        Ok(id.checked_sub(1))
     }
 
     /// Runs a frame: uniforms, command buffer, target transitions, the technique's commands
@@ -177,8 +302,10 @@ impl Renderer {
     fn frame(
         &mut self,
         camera: &Camera,
+        pass: PassTarget,
         before: &mut Recorder<'_>,
         inside: &mut Recorder<'_>,
+        after: &mut Recorder<'_>,
     ) -> VkResult<FrameStats> {
         // The eye in f64, split for relative-to-eye positions on the GPU (resident technique).
         let eye = camera.view.inverse().w_axis.truncate();
@@ -203,9 +330,10 @@ impl Renderer {
             timer.begin(command_buffer);
         }
         before(self, command_buffer, &mut stats)?;
-        self.begin_pass(command_buffer);
+        self.begin_pass(command_buffer, pass);
         inside(self, command_buffer, &mut stats)?;
-        self.end_pass(command_buffer);
+        self.end_pass(command_buffer, pass);
+        after(self, command_buffer, &mut stats)?;
         if let Some(timer) = &mut self.timer {
             timer.end(command_buffer);
         }
@@ -221,14 +349,28 @@ impl Renderer {
         Ok(stats)
     }
 
-    fn begin_pass(&self, command_buffer: vk::CommandBuffer) {
+    /// The image and clear value of a pass target.
+    fn pass_image(&self, pass: PassTarget) -> (&Image, vk::ClearColorValue) {
+        match (pass, &self.pick) {
+            (PassTarget::Pick, Some((image, _))) => (image, vk::ClearColorValue { uint32: [0; 4] }),
+            _ => (
+                &self.target.color,
+                vk::ClearColorValue {
+                    float32: CLEAR_COLOR,
+                },
+            ),
+        }
+    }
+
+    fn begin_pass(&self, command_buffer: vk::CommandBuffer, pass: PassTarget) {
         let device = &*self.device;
         let raw = device.raw();
         let extent = self.target.extent();
+        let (color_image, clear) = self.pass_image(pass);
         transition(
             device,
             command_buffer,
-            self.target.color.raw(),
+            color_image.raw(),
             vk::ImageAspectFlags::COLOR,
             (
                 vk::ImageLayout::UNDEFINED,
@@ -260,15 +402,11 @@ impl Renderer {
             ),
         );
         let color_attachment = [vk::RenderingAttachmentInfo::default()
-            .image_view(self.target.color.view())
+            .image_view(color_image.view())
             .image_layout(vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL)
             .load_op(vk::AttachmentLoadOp::CLEAR)
             .store_op(vk::AttachmentStoreOp::STORE)
-            .clear_value(vk::ClearValue {
-                color: vk::ClearColorValue {
-                    float32: CLEAR_COLOR,
-                },
-            })];
+            .clear_value(vk::ClearValue { color: clear })];
         let depth_attachment = vk::RenderingAttachmentInfo::default()
             .image_view(self.target.depth.view())
             .image_layout(vk::ImageLayout::DEPTH_ATTACHMENT_OPTIMAL)
@@ -305,13 +443,14 @@ impl Renderer {
         }
     }
 
-    fn end_pass(&self, command_buffer: vk::CommandBuffer) {
+    fn end_pass(&self, command_buffer: vk::CommandBuffer, pass: PassTarget) {
+        let (color_image, _) = self.pass_image(pass);
         // SAFETY: rendering was begun by begin_pass on this command buffer.
         unsafe { self.device.raw().cmd_end_rendering(command_buffer) };
         transition(
             &self.device,
             command_buffer,
-            self.target.color.raw(),
+            color_image.raw(),
             vk::ImageAspectFlags::COLOR,
             (
                 vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL,
@@ -403,22 +542,22 @@ impl Renderer {
         }
     }
 
+    /// Records the resident draws with `pipeline` (the shaded or the pick pipeline); with
+    /// `only_pickable`, parts that cannot be picked are left out (picking passes through them).
     fn record_resident(
         &self,
         command_buffer: vk::CommandBuffer,
         scene: &ResidentScene,
         stats: &mut FrameStats,
+        pipeline: vk::Pipeline,
+        only_pickable: bool,
     ) {
         let raw = self.device.raw();
         let layout = self.pipelines.resident_layout;
         let (vertex_arena, index_arena) = scene.arenas();
         // SAFETY: recording inside the pass; pipeline, sets and arenas outlive the submission.
         unsafe {
-            raw.cmd_bind_pipeline(
-                command_buffer,
-                vk::PipelineBindPoint::GRAPHICS,
-                self.pipelines.resident,
-            );
+            raw.cmd_bind_pipeline(command_buffer, vk::PipelineBindPoint::GRAPHICS, pipeline);
             raw.cmd_bind_descriptor_sets(
                 command_buffer,
                 vk::PipelineBindPoint::GRAPHICS,
@@ -431,7 +570,8 @@ impl Renderer {
         stats.pipeline_binds += 1;
         stats.parameter_updates += 1;
         let mut bound_geometry = u32::MAX;
-        for draw in scene.draws() {
+        let pickable = |draw: &&ResidentDraw| draw.indices.flags & DrawIndices::PICKABLE != 0;
+        for draw in scene.draws().filter(|d| !only_pickable || pickable(d)) {
             if draw.geometry != bound_geometry {
                 let Some((vertex_offset, index_offset)) = scene.geometry_offsets(draw.geometry)
                 else {

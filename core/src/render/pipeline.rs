@@ -10,6 +10,9 @@ use crate::scene::Vertex;
 use crate::shaders::{self, ShaderSource};
 use crate::vk::{Device, ShaderModule, VkResult, VkResultExt, COLOR_FORMAT, DEPTH_FORMAT};
 
+/// Format of the pick target: one instance id (+1) per pixel.
+pub const PICK_FORMAT: vk::Format = vk::Format::R32_UINT;
+
 /// Per-frame uniform data; mirrors `FrameUniforms` in `shaders/frame.glsl` (std140).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
@@ -46,13 +49,17 @@ pub struct DrawIndices {
     pub matrix: u32,
     /// Material slot.
     pub material: u32,
-    /// Bit 0: highlighted ([`DrawIndices::HIGHLIGHTED`]).
+    /// Bit 0: highlighted ([`DrawIndices::HIGHLIGHTED`]); bit 1: pickable.
     pub flags: u32,
+    /// The scene tree instance drawn (reported by picking).
+    pub instance: u32,
 }
 
 impl DrawIndices {
     /// Flag bit of highlighted parts (drawn tinted orange).
     pub const HIGHLIGHTED: u32 = 1;
+    /// Flag bit of parts the pick pass draws.
+    pub const PICKABLE: u32 = 2;
 }
 
 /// One entry of the compact matrix upload; mirrors `MatrixUpdate` in `scatter.comp` (std430).
@@ -210,6 +217,8 @@ pub struct Pipelines {
     pub resident_layout: vk::PipelineLayout,
     /// Resident pipeline.
     pub resident: vk::Pipeline,
+    /// The pick pipeline: the resident layout and vertex shader, instance ids into R32_UINT.
+    pub pick: vk::Pipeline,
     /// Scatter layout.
     pub scatter_layout: vk::PipelineLayout,
     /// Scatter compute pipeline.
@@ -229,6 +238,7 @@ impl Pipelines {
             baseline: vk::Pipeline::null(),
             resident_layout: vk::PipelineLayout::null(),
             resident: vk::Pipeline::null(),
+            pick: vk::Pipeline::null(),
             scatter_layout: vk::PipelineLayout::null(),
             scatter: vk::Pipeline::null(),
         };
@@ -257,6 +267,7 @@ impl Pipelines {
             this.baseline_layout,
             &shaders::BASELINE_VERT,
             &shaders::BASELINE_FRAG,
+            COLOR_FORMAT,
             "baseline pipeline",
         )?;
         this.resident_layout = pipeline_layout(
@@ -271,7 +282,16 @@ impl Pipelines {
             this.resident_layout,
             &shaders::RESIDENT_VERT,
             &shaders::RESIDENT_FRAG,
+            COLOR_FORMAT,
             "resident pipeline",
+        )?;
+        this.pick = graphics_pipeline(
+            device,
+            this.resident_layout,
+            &shaders::RESIDENT_VERT,
+            &shaders::PICK_FRAG,
+            PICK_FORMAT,
+            "pick pipeline",
         )?;
         this.scatter_layout = pipeline_layout(
             device,
@@ -296,7 +316,7 @@ impl Drop for Pipelines {
         // SAFETY: the renderer waits for its last frame before dropping the pipelines; null
         // handles (from a failed constructor) are ignored by Vulkan.
         unsafe {
-            for pipeline in [self.baseline, self.resident, self.scatter] {
+            for pipeline in [self.baseline, self.resident, self.pick, self.scatter] {
                 raw.destroy_pipeline(pipeline, None);
             }
             for layout in [
@@ -358,6 +378,7 @@ fn graphics_pipeline(
     layout: vk::PipelineLayout,
     vertex: &ShaderSource,
     fragment: &ShaderSource,
+    color_format: vk::Format,
     name: &str,
 ) -> VkResult<vk::Pipeline> {
     let vertex = module(device, vertex)?;
@@ -412,7 +433,7 @@ fn graphics_pipeline(
     let blend = vk::PipelineColorBlendStateCreateInfo::default().attachments(&blend_attachments);
     let dynamic_states = [vk::DynamicState::VIEWPORT, vk::DynamicState::SCISSOR];
     let dynamic = vk::PipelineDynamicStateCreateInfo::default().dynamic_states(&dynamic_states);
-    let color_formats = [COLOR_FORMAT];
+    let color_formats = [color_format];
     let mut rendering = vk::PipelineRenderingCreateInfo::default()
         .color_attachment_formats(&color_formats)
         .depth_attachment_format(DEPTH_FORMAT);

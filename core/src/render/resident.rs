@@ -305,7 +305,12 @@ impl ResidentScene {
                     DrawIndices::HIGHLIGHTED
                 } else {
                     0
+                } | if instance.pickable {
+                    DrawIndices::PICKABLE
+                } else {
+                    0
                 },
+                instance: id,
             },
         })
     }

@@ -52,6 +52,14 @@ impl TreeChanges {
     }
 }
 
+/// What a path inherits from the nodes along it.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+struct PathState {
+    visible: bool,
+    highlighted: bool,
+    pickable: bool,
+}
+
 /// One drawable part on one path.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct InstanceRef {
@@ -67,6 +75,8 @@ pub struct InstanceRef {
     pub visible: bool,
     /// Highlighted (the flag of any node along the path).
     pub highlighted: bool,
+    /// Pickable (the flag of every node along the path).
+    pub pickable: bool,
 }
 
 /// The scene tree.
@@ -79,6 +89,7 @@ pub struct SceneTree {
     node_instances: Vec<Vec<u32>>,
     node_visible: BitSet,
     node_highlighted: BitSet,
+    node_unpickable: BitSet,
     node_alive: BitSet,
     free_nodes: Vec<u32>,
     /// Tree nodes of each graph node slot (may hold paths of a destroyed node until reconciled).
@@ -91,6 +102,8 @@ pub struct SceneTree {
     inst_alive: BitSet,
     inst_visible: BitSet,
     inst_highlighted: BitSet,
+    inst_unpickable: BitSet,
+
     free_instances: Vec<u32>,
     created: BitSet,
     destroyed: BitSet,
@@ -216,7 +229,7 @@ impl SceneTree {
         part: u32,
         geometry: u32,
         material: u32,
-        (visible, highlighted): (bool, bool),
+        state: PathState,
     ) -> u32 {
         let id = match self.free_instances.pop() {
             Some(id) => id,
@@ -236,8 +249,9 @@ impl SceneTree {
             self.inst_material[i],
         ) = (node, part, geometry, material);
         self.inst_alive.insert(id);
-        self.inst_visible.set(id, visible);
-        self.inst_highlighted.set(id, highlighted);
+        self.inst_visible.set(id, state.visible);
+        self.inst_highlighted.set(id, state.highlighted);
+        self.inst_unpickable.set(id, !state.pickable);
         self.created.insert(id);
         self.live_instances += 1;
         id
@@ -265,10 +279,9 @@ impl SceneTree {
             if first == NONE {
                 first = id;
             }
-            let (world, visible, highlighted) = self.placement(parent, node, link_shown);
+            let (world, state) = self.placement(parent, node, link_shown);
             self.node_world[id as usize] = world;
-            self.node_visible.set(id, visible);
-            self.node_highlighted.set(id, highlighted);
+            self.set_node_state(id, state);
             self.dirty_matrices.insert(id);
             if matches!(node.kind, NodeKind::Lod { .. } | NodeKind::Billboard) {
                 self.view_dependent.insert(id);
@@ -290,13 +303,7 @@ impl SceneTree {
                     .iter()
                     .enumerate()
                     .map(|(part, m)| {
-                        self.alloc_instance(
-                            id,
-                            part as u32,
-                            geometry.index(),
-                            m.index(),
-                            (visible, highlighted),
-                        )
+                        self.alloc_instance(id, part as u32, geometry.index(), m.index(), state)
                     })
                     .collect();
                 self.node_instances[id as usize] = instances;
@@ -314,21 +321,42 @@ impl SceneTree {
         first
     }
 
-    /// World matrix, visibility and highlight of a path to `node` below tree node `parent`
-    /// (`NONE` for the root), shown by its parent or not.
-    fn placement(&self, parent: u32, node: &GraphNode, link_shown: bool) -> (DMat4, bool, bool) {
-        let (parent_world, parent_visible, parent_highlighted) = if parent == NONE {
-            (DMat4::IDENTITY, true, false)
-        } else {
+    /// World matrix and state of a path to `node` below tree node `parent` (`NONE` for the
+    /// root), shown by its parent or not.
+    fn placement(&self, parent: u32, node: &GraphNode, link_shown: bool) -> (DMat4, PathState) {
+        let (parent_world, parent_state) = if parent == NONE {
             (
-                self.node_world[parent as usize],
-                self.node_visible.contains(parent),
-                self.node_highlighted.contains(parent),
+                DMat4::IDENTITY,
+                PathState {
+                    visible: true,
+                    highlighted: false,
+                    pickable: true,
+                },
             )
+        } else {
+            (self.node_world[parent as usize], self.node_state(parent))
         };
         let world = parent_world * local_transform(node, &parent_world, self.eye);
-        let visible = parent_visible && link_shown && node.flags.visible;
-        (world, visible, parent_highlighted || node.flags.highlighted)
+        let state = PathState {
+            visible: parent_state.visible && link_shown && node.flags.visible,
+            highlighted: parent_state.highlighted || node.flags.highlighted,
+            pickable: parent_state.pickable && node.flags.pickable,
+        };
+        (world, state)
+    }
+
+    fn node_state(&self, t: u32) -> PathState {
+        PathState {
+            visible: self.node_visible.contains(t),
+            highlighted: self.node_highlighted.contains(t),
+            pickable: !self.node_unpickable.contains(t),
+        }
+    }
+
+    fn set_node_state(&mut self, t: u32, state: PathState) {
+        self.node_visible.set(t, state.visible);
+        self.node_highlighted.set(t, state.highlighted);
+        self.node_unpickable.set(t, !state.pickable);
     }
 
     /// Removes tree node `id` and everything below it.
@@ -350,6 +378,7 @@ impl SceneTree {
             self.node_alive.remove(t);
             self.node_visible.remove(t);
             self.node_highlighted.remove(t);
+            self.node_unpickable.remove(t);
             self.view_dependent.remove(t);
             self.dirty_matrices.remove(t);
             self.free_nodes.push(t);
@@ -392,24 +421,25 @@ impl SceneTree {
                 continue;
             };
             let parent = self.node_parent[i];
-            let (world, visible, highlighted) = self.placement(parent, node, link_shown);
-            if highlighted != self.node_highlighted.contains(t) {
-                self.node_highlighted.set(t, highlighted);
+            let (world, state) = self.placement(parent, node, link_shown);
+            let old = self.node_state(t);
+            if state != old {
+                self.set_node_state(t, state);
                 for &instance in &self.node_instances[i] {
-                    self.inst_highlighted.set(instance, highlighted);
-                    self.changed.insert(instance);
+                    self.inst_visible.set(instance, state.visible);
+                    self.inst_highlighted.set(instance, state.highlighted);
+                    self.inst_unpickable.set(instance, !state.pickable);
+                    if state.visible != old.visible {
+                        self.visibility_changed.insert(instance);
+                    }
+                    if state.highlighted != old.highlighted || state.pickable != old.pickable {
+                        self.changed.insert(instance);
+                    }
                 }
             }
             if world != self.node_world[i] {
                 self.node_world[i] = world;
                 self.dirty_matrices.insert(t);
-            }
-            if visible != self.node_visible.contains(t) {
-                self.node_visible.set(t, visible);
-                for &instance in &self.node_instances[i] {
-                    self.inst_visible.set(instance, visible);
-                    self.visibility_changed.insert(instance);
-                }
             }
             for (position, (&child, link)) in self.node_children[i]
                 .iter()
@@ -645,6 +675,7 @@ impl SceneTree {
                 material: self.inst_material[i],
                 visible: self.inst_visible.contains(id),
                 highlighted: self.inst_highlighted.contains(id),
+                pickable: !self.inst_unpickable.contains(id),
             }
         })
     }
@@ -698,6 +729,8 @@ impl SceneTree {
                 &self.node_visible,
                 &self.node_highlighted,
                 &self.inst_highlighted,
+                &self.node_unpickable,
+                &self.inst_unpickable,
                 &self.node_alive,
                 &self.view_dependent,
                 &self.inst_alive,

@@ -9,7 +9,7 @@ use cadr_core::graph::{
     GeometryHandle, GraphError, MaterialHandle, NodeFlags, NodeHandle, SceneGraph,
 };
 use cadr_core::scene::Material;
-use cadr_core::tree::SceneTree;
+use cadr_core::tree::{InstanceRef, SceneTree};
 use glam::{DMat4, DVec3};
 use proptest::prelude::*;
 
@@ -46,7 +46,7 @@ fn snapshot(tree: &SceneTree) -> Snapshot {
 /// What a renderer keeps, updated only from `take_changes`.
 #[derive(Default)]
 struct Consumer {
-    instances: HashMap<u32, (u32, u32, u32, u32, bool, bool, bool)>,
+    instances: HashMap<u32, InstanceRef>,
     matrices: HashMap<u32, DMat4>,
 }
 
@@ -63,18 +63,7 @@ impl Consumer {
             .chain(&changes.visibility_changed)
         {
             let i = tree.instance(id).unwrap();
-            self.instances.insert(
-                id,
-                (
-                    i.tree_node,
-                    i.part,
-                    i.geometry,
-                    i.material,
-                    i.visible,
-                    i.highlighted,
-                    i.pickable,
-                ),
-            );
+            self.instances.insert(id, i);
         }
         for &t in &changes.dirty_matrices {
             self.matrices.insert(t, tree.world(t));
@@ -89,19 +78,7 @@ impl Consumer {
         );
         for id in tree.instances() {
             let i = tree.instance(id).unwrap();
-            assert_eq!(
-                self.instances.get(&id),
-                Some(&(
-                    i.tree_node,
-                    i.part,
-                    i.geometry,
-                    i.material,
-                    i.visible,
-                    i.highlighted,
-                    i.pickable
-                )),
-                "instance {id}"
-            );
+            assert_eq!(self.instances.get(&id), Some(&i), "instance {id}");
             assert_eq!(
                 self.matrices.get(&i.tree_node),
                 Some(&tree.world(i.tree_node)),

@@ -362,3 +362,74 @@ fn picking_finds_the_part_under_a_pixel_and_passes_through_unpickable_ones() {
     assert!(error.contains("outside the 200x150 target"), "{error}");
     assert_no_validation_errors(f.renderer.device());
 }
+
+#[test]
+fn replacing_a_geometry_uploads_only_that_geometry_and_touches_only_its_users() {
+    let mut f = Fixture::new(&generate(&GeneratorSpec::Demo));
+    f.render_resident();
+    let (handle, users) = {
+        let geo = f.shape_transforms()[3];
+        let geo = f.graph.node(geo).unwrap().children()[0].node;
+        match &f.graph.node(geo).unwrap().kind {
+            NodeKind::Geo { geometry, .. } => {
+                (*geometry, f.graph.geometry_users(*geometry).unwrap().len())
+            }
+            _ => unreachable!("shape transforms hold a Geo node"),
+        }
+    };
+    // Same size, raised vertices: written in place.
+    let mut data = f.graph.geometry(handle).unwrap().clone();
+    for v in &mut data.vertices {
+        v.position[1] += 0.3;
+    }
+    let bytes = (std::mem::size_of_val(&data.vertices[..])
+        + std::mem::size_of_val(&data.indices[..])) as u64;
+    f.graph.replace_geometry(handle, data.clone()).unwrap();
+    let edited = f.render_resident();
+    let upload = f.resident.last_upload();
+    assert_eq!(
+        upload.bytes, bytes,
+        "only the replaced geometry is uploaded"
+    );
+    let parts = data.parts.len();
+    assert_eq!(
+        upload.draws_updated as usize,
+        users * parts,
+        "only its users' draws are touched"
+    );
+    assert_close(
+        compare(&edited, &f.render_fresh_baseline()).unwrap(),
+        "after an in-place replacement",
+    );
+
+    // Bigger than its room: a raised copy of every vertex and index is appended and the parts
+    // point at the copy. The arenas are laid out again, and the image is still right.
+    let mut bigger = data;
+    let (vertex_count, index_count) = (bigger.vertices.len() as u32, bigger.indices.len() as u32);
+    let copy: Vec<_> = bigger
+        .vertices
+        .iter()
+        .map(|v| {
+            let mut v = *v;
+            v.position[1] += 0.2;
+            v
+        })
+        .collect();
+    bigger.vertices.extend(copy);
+    let copied: Vec<u32> = bigger.indices.iter().map(|i| i + vertex_count).collect();
+    bigger.indices.extend(copied);
+    for part in &mut bigger.parts {
+        part.first_index += index_count;
+    }
+    f.graph.replace_geometry(handle, bigger).unwrap();
+    let edited = f.render_resident();
+    assert!(
+        f.resident.last_upload().bytes > bytes,
+        "the whole arena was laid out again"
+    );
+    assert_close(
+        compare(&edited, &f.render_fresh_baseline()).unwrap(),
+        "after the arenas were laid out again",
+    );
+    assert_no_validation_errors(f.renderer.device());
+}

@@ -154,12 +154,12 @@ impl GraphNode {
     }
 }
 
-/// A geometry and how many Geo nodes use it.
+/// A geometry and the Geo nodes that use it.
 #[derive(Clone, Debug)]
 pub struct GeometryEntry {
     /// The data.
     pub geometry: Geometry,
-    users: u32,
+    users: Vec<NodeHandle>,
 }
 
 /// A material and how many Geo node parts use it.
@@ -362,6 +362,14 @@ impl SceneGraph {
             .ok_or_else(|| stale_geometry(geometry))
     }
 
+    /// The Geo nodes that draw `geometry`.
+    pub fn geometry_users(&self, geometry: GeometryHandle) -> Result<&[NodeHandle], GraphError> {
+        self.geometries
+            .get(geometry)
+            .map(|e| &e.users[..])
+            .ok_or_else(|| stale_geometry(geometry))
+    }
+
     /// The geometry in slot `index`.
     pub fn geometry_at(&self, index: u32) -> Option<&Geometry> {
         self.geometries.get_by_index(index).map(|e| &e.geometry)
@@ -457,16 +465,17 @@ impl SceneGraph {
                 entry.users += 1;
             }
         }
-        if let Some(entry) = self.geometries.get_mut(geometry) {
-            entry.users += 1;
-        }
-        Ok(self.create(
+        let node = self.create(
             name,
             NodeKind::Geo {
                 geometry,
                 part_materials: part_materials.to_vec(),
             },
-        ))
+        );
+        if let Some(entry) = self.geometries.get_mut(geometry) {
+            entry.users.push(node);
+        }
+        Ok(node)
     }
 
     /// A new Switch (children active until a mask says otherwise).
@@ -544,7 +553,9 @@ impl SceneGraph {
         } = removed.kind
         {
             if let Some(entry) = self.geometries.get_mut(geometry) {
-                entry.users -= 1;
+                if let Some(i) = entry.users.iter().position(|&u| u == node) {
+                    entry.users.swap_remove(i);
+                }
             }
             for m in part_materials {
                 if let Some(entry) = self.materials.get_mut(m) {
@@ -558,7 +569,10 @@ impl SceneGraph {
     /// A new geometry; its data is validated (indices, parts, finite values).
     pub fn create_geometry(&mut self, geometry: Geometry) -> Result<GeometryHandle, GraphError> {
         check_geometry(&geometry)?;
-        Ok(self.geometries.insert(GeometryEntry { geometry, users: 0 }))
+        Ok(self.geometries.insert(GeometryEntry {
+            geometry,
+            users: Vec::new(),
+        }))
     }
 
     /// Destroys a geometry no Geo node uses.
@@ -567,10 +581,10 @@ impl SceneGraph {
             .geometries
             .get(geometry)
             .ok_or_else(|| stale_geometry(geometry))?;
-        if entry.users > 0 {
+        if !entry.users.is_empty() {
             return Err(GraphError::InUse {
                 what: format!("geometry '{}'", entry.geometry.name),
-                users: entry.users,
+                users: entry.users.len() as u32,
             });
         }
         self.geometries.remove(geometry);
@@ -588,7 +602,7 @@ impl SceneGraph {
             .geometries
             .get_mut(geometry)
             .ok_or_else(|| stale_geometry(geometry))?;
-        if entry.users > 0 && entry.geometry.parts.len() != data.parts.len() {
+        if !entry.users.is_empty() && entry.geometry.parts.len() != data.parts.len() {
             return Err(GraphError::Invalid(format!(
                 "geometry '{}' has {} parts and is in use; its replacement has {}",
                 entry.geometry.name,

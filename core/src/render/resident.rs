@@ -46,6 +46,9 @@ pub struct UploadStats {
 struct GeometrySlot {
     vertex_offset_bytes: u64,
     index_offset_bytes: u64,
+    /// Room the slot has in the arenas: a replacement that fits is written in place.
+    vertex_capacity_bytes: u64,
+    index_capacity_bytes: u64,
     parts: Vec<Part>,
 }
 
@@ -168,6 +171,8 @@ impl ResidentScene {
                     let entry = GeometrySlot {
                         vertex_offset_bytes: vertices.len() as u64,
                         index_offset_bytes: indices.len() as u64,
+                        vertex_capacity_bytes: std::mem::size_of_val(&g.vertices[..]) as u64,
+                        index_capacity_bytes: std::mem::size_of_val(&g.indices[..]) as u64,
                         parts: g.parts.clone(),
                     };
                     vertices.extend_from_slice(bytemuck::cast_slice::<Vertex, u8>(&g.vertices));
@@ -190,6 +195,30 @@ impl ResidentScene {
         )?;
         self.last_upload.bytes += (vertices.len() + indices.len()) as u64;
         Ok(())
+    }
+
+    /// Writes a replaced geometry into its own place in the arenas when it fits; returns
+    /// `false` when it does not (or the slot is new), so the arenas must be laid out again.
+    fn replace_geometry_in_place(&mut self, graph: &SceneGraph, slot: u32) -> VkResult<bool> {
+        let (Some(Some(entry)), Some(geometry)) = (
+            self.geometries.get_mut(slot as usize),
+            graph.geometry_at(slot),
+        ) else {
+            return Ok(false);
+        };
+        let vertices: &[u8] = bytemuck::cast_slice(&geometry.vertices);
+        let indices: &[u8] = bytemuck::cast_slice(&geometry.indices);
+        if vertices.len() as u64 > entry.vertex_capacity_bytes
+            || indices.len() as u64 > entry.index_capacity_bytes
+        {
+            return Ok(false);
+        }
+        entry.parts = geometry.parts.clone();
+        let (vertex_offset, index_offset) = (entry.vertex_offset_bytes, entry.index_offset_bytes);
+        self.vertex_arena.upload_at(vertex_offset, vertices)?;
+        self.index_arena.upload_at(index_offset, indices)?;
+        self.last_upload.bytes += (vertices.len() + indices.len()) as u64;
+        Ok(true)
     }
 
     /// Queues the matrix of slot `t`: rotation and scale in f32, the translation split into an
@@ -337,8 +366,14 @@ impl ResidentScene {
     pub fn sync(&mut self, graph: &SceneGraph, tree: &mut SceneTree) -> VkResult<()> {
         let changes = tree.take_changes();
         self.last_upload = UploadStats::default();
-        if !changes.dirty_geometries.is_empty() {
-            self.upload_geometries(graph)?;
+        let mut arenas_rebuilt = false;
+        for &slot in &changes.dirty_geometries {
+            if !self.replace_geometry_in_place(graph, slot)? {
+                // Grown past its room (or new): lay the arenas out again.
+                self.upload_geometries(graph)?;
+                arenas_rebuilt = true;
+                break;
+            }
         }
         if !self.grow_matrices(tree)? {
             for t in uploaded_matrix_slots(tree, &changes) {
@@ -352,7 +387,7 @@ impl ResidentScene {
                 }
             }
         }
-        if !changes.dirty_geometries.is_empty() {
+        if arenas_rebuilt {
             self.rebuild_draws(tree);
             self.last_upload.draws_updated = self.draws.len() as u64;
         } else {

@@ -555,13 +555,17 @@ impl SceneTree {
                 }
                 GraphEvent::GeometryReplaced(g) => {
                     self.dirty_geometries.insert(g.index());
-                    for instance in self
-                        .inst_alive
-                        .iter()
-                        .filter(|&i| self.inst_geometry[i as usize] == g.index())
-                        .collect::<Vec<_>>()
-                    {
-                        self.changed.insert(instance);
+                    // Only the paths of the Geo nodes that draw it: proportional to the change.
+                    let users = graph
+                        .geometry_users(g)
+                        .map(<[NodeHandle]>::to_vec)
+                        .unwrap_or_default();
+                    for user in users {
+                        for t in self.current_paths(user) {
+                            for &instance in &self.node_instances[t as usize] {
+                                self.changed.insert(instance);
+                            }
+                        }
                     }
                 }
                 GraphEvent::MaterialChanged(m) => self.dirty_materials.insert(m.index()),

@@ -69,27 +69,44 @@ impl Buffer {
             usage | vk::BufferUsageFlags::TRANSFER_DST,
             MemoryLocation::GpuOnly,
         )?;
+        buffer.upload_at(0, data)?;
+        Ok(buffer)
+    }
+
+    /// Copies `data` to `offset` of this buffer (which needs TRANSFER_DST usage) through a
+    /// staging buffer, and waits. The caller makes sure the GPU is not using that range.
+    pub fn upload_at(&self, offset: u64, data: &[u8]) -> VkResult<()> {
         if data.is_empty() {
-            return Ok(buffer);
+            return Ok(());
         }
+        if offset + data.len() as u64 > self.size {
+            return Err(VkError::InvalidUse(format!(
+                "uploading bytes {offset}..{} into a {}-byte buffer",
+                offset + data.len() as u64,
+                self.size
+            )));
+        }
+        let device = &self.device;
         let mut staging = Self::new(
             device,
-            &format!("{name} (staging)"),
+            "staging",
             data.len() as u64,
             vk::BufferUsageFlags::TRANSFER_SRC,
             MemoryLocation::CpuToGpu,
         )?;
         staging.write(0, data)?;
         let mut one_shot = OneShot::begin(device, "staging upload")?;
-        let region = [vk::BufferCopy::default().size(data.len() as u64)];
-        // SAFETY: both buffers are alive until the submission below has completed.
+        let region = [vk::BufferCopy::default()
+            .dst_offset(offset)
+            .size(data.len() as u64)];
+        // SAFETY: both buffers are alive until the submission below has completed; the region
+        // lies within both (checked above).
         unsafe {
             device
                 .raw
-                .cmd_copy_buffer(one_shot.command_buffer(), staging.raw, buffer.raw, &region)
+                .cmd_copy_buffer(one_shot.command_buffer(), staging.raw, self.raw, &region)
         };
-        one_shot.submit_and_wait()?;
-        Ok(buffer)
+        one_shot.submit_and_wait()
     }
 
     /// Writes `data` at `offset` into a host-visible buffer.

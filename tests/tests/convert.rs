@@ -105,3 +105,21 @@ fn unknown_output_formats_are_refused() {
         "{error}"
     );
 }
+
+#[test]
+fn csf_part_overrides_become_an_editable_graph_that_draws_the_same() {
+    // Hidden parts and parts placed by a child's matrix survive the trip into the scene graph
+    // (hidden parts, and a Transform + Geo node of their own) and back.
+    let scene = scene_from_csf(&rich_csf_file(), "rich").unwrap();
+    let (mut graph, _) = cadr_core::graph::SceneGraph::from_scene(&scene).unwrap();
+    assert_same_drawing(&scene, &graph.to_scene());
+    let tree = cadr_core::tree::SceneTree::build(&mut graph);
+    let visible = tree
+        .instances()
+        .filter(|&i| tree.instance(i).unwrap().visible)
+        .count();
+    assert_eq!(
+        visible, 2,
+        "the inactive part stays hidden, the placed part shows once"
+    );
+}

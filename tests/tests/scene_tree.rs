@@ -106,6 +106,7 @@ enum Op {
     SetMask(u8, u32),
     SetPartMaterial(u8, u8, u8),
     SetMaterial(u8),
+    SetPartVisible(u8, u8, bool),
     ReplaceGeometry(u8, i8),
     SetLodDistances(u8, u8),
     MoveEye(i8, i8),
@@ -130,6 +131,7 @@ fn op() -> impl Strategy<Value = Op> {
         1 => (any::<u8>(), any::<u32>()).prop_map(|(n, m)| Op::SetMask(n, m)),
         1 => (any::<u8>(), any::<u8>(), any::<u8>()).prop_map(|(n, p, m)| Op::SetPartMaterial(n, p, m)),
         1 => any::<u8>().prop_map(Op::SetMaterial),
+        2 => (any::<u8>(), any::<u8>(), any::<bool>()).prop_map(|(n, p, v)| Op::SetPartVisible(n, p, v)),
         1 => (any::<u8>(), any::<i8>()).prop_map(|(g, y)| Op::ReplaceGeometry(g, y)),
         1 => (any::<u8>(), any::<u8>()).prop_map(|(n, d)| Op::SetLodDistances(n, d)),
         1 => (any::<i8>(), any::<i8>()).prop_map(|(x, z)| Op::MoveEye(x, z)),
@@ -318,6 +320,10 @@ impl World {
                         ..Material::default()
                     },
                 )
+            }
+            Op::SetPartVisible(n, part, visible) => {
+                let n = self.pick(n);
+                self.graph.set_part_visible(n, part as usize % 3, visible)
             }
             Op::ReplaceGeometry(g, y) => {
                 // Same part count (required while in use), moved vertices.

@@ -5,7 +5,7 @@ use std::collections::HashMap;
 use glam::DMat4;
 
 use super::{GraphError, NodeHandle, NodeKind, SceneGraph};
-use crate::scene::{MeshRef, Node, Scene};
+use crate::scene::{MeshRef, Node, PartOverride, Scene};
 
 /// The scene the graph shows: hidden nodes and inactive Switch children are left out, a LOD
 /// shows its first (most detailed) child and a Billboard does not turn (both depend on the
@@ -46,10 +46,21 @@ pub(super) fn graph_to_scene(graph: &SceneGraph) -> Scene {
             NodeKind::Geo {
                 geometry,
                 part_materials,
-            } => Some(MeshRef::new(
-                geometry_index[geometry],
-                part_materials.iter().map(|m| material_index[m]).collect(),
-            )),
+                part_visible,
+            } => Some(MeshRef {
+                geometry: geometry_index[geometry],
+                part_materials: part_materials.iter().map(|m| material_index[m]).collect(),
+                part_overrides: part_visible
+                    .iter()
+                    .enumerate()
+                    .filter(|(_, &shown)| !shown)
+                    .map(|(part, _)| PartOverride {
+                        part: part as u32,
+                        visible: false,
+                        transform_child: None,
+                    })
+                    .collect(),
+            }),
             _ => None,
         };
         scene.nodes.push(Node {
@@ -66,21 +77,12 @@ pub(super) fn graph_to_scene(graph: &SceneGraph) -> Scene {
 }
 
 /// A graph equivalent to `scene`: each scene node becomes a Transform (a Group when its
-/// matrix is the identity) with, for a mesh, a Geo node as its first child; the scene's roots
+/// matrix is the identity) with, for a mesh, a Geo node as its first child (hidden parts hidden;
+/// a part placed by a child's matrix gets a Transform and Geo node of its own); the scene's roots
 /// hang under the graph's root. Returns the handle of each scene node. The new graph has no
 /// pending events.
 pub(super) fn scene_to_graph(scene: &Scene) -> Result<(SceneGraph, Vec<NodeHandle>), GraphError> {
     scene.validate().map_err(|e| GraphError::Invalid(e.0))?;
-    if let Some(node) = scene.nodes.iter().find(|n| {
-        n.mesh
-            .as_ref()
-            .is_some_and(|m| !m.part_overrides.is_empty())
-    }) {
-        return Err(GraphError::Invalid(format!(
-            "node '{}' hides parts or places them by a child's matrix, which the scene graph cannot express yet",
-            node.name
-        )));
-    }
     let mut graph = SceneGraph::new();
     let geometries = scene
         .geometries
@@ -105,12 +107,36 @@ pub(super) fn scene_to_graph(scene: &Scene) -> Result<(SceneGraph, Vec<NodeHandl
                 .iter()
                 .map(|&m| materials[m as usize])
                 .collect();
+            let geometry = geometries[mesh.geometry as usize];
             let geo = graph.create_geo(
                 &format!("{} geometry", node.name),
-                geometries[mesh.geometry as usize],
+                geometry,
                 &part_materials,
             )?;
             graph.add_child(handle, geo)?;
+            for o in &mesh.part_overrides {
+                // Hidden here: either hidden outright, or drawn below by a node of its own.
+                graph.set_part_visible(geo, o.part as usize, false)?;
+                let (true, Some(child)) = (o.visible, o.transform_child) else {
+                    continue;
+                };
+                // A part placed by a child's matrix: a Transform with that matrix holding a
+                // Geo node that shows only this part.
+                let placed = graph.create_transform(
+                    &format!("{} part {}", node.name, o.part),
+                    scene.nodes[child as usize].local,
+                )?;
+                let part_geo = graph.create_geo(
+                    &format!("{} part {} geometry", node.name, o.part),
+                    geometry,
+                    &part_materials,
+                )?;
+                for p in (0..part_materials.len()).filter(|&p| p != o.part as usize) {
+                    graph.set_part_visible(part_geo, p, false)?;
+                }
+                graph.add_child(placed, part_geo)?;
+                graph.add_child(handle, placed)?;
+            }
         }
         handles.push(handle);
     }

@@ -46,6 +46,8 @@ pub enum NodeKind {
         geometry: GeometryHandle,
         /// One material per part of the geometry.
         part_materials: Vec<MaterialHandle>,
+        /// Whether each part is shown (a CAD host hides single faces or features).
+        part_visible: Vec<bool>,
     },
     /// Shows only its active children (see [`SceneGraph::set_switch_mask`]).
     Switch,
@@ -135,6 +137,14 @@ pub struct GraphNode {
 }
 
 impl GraphNode {
+    /// Whether part `part` of a Geo node is shown (always for other kinds).
+    pub fn part_shown(&self, part: usize) -> bool {
+        match &self.kind {
+            NodeKind::Geo { part_visible, .. } => part_visible.get(part).copied().unwrap_or(true),
+            _ => true,
+        }
+    }
+
     /// The children, in drawing order.
     pub fn children(&self) -> &[ChildLink] {
         &self.children
@@ -197,6 +207,13 @@ pub enum GraphEvent {
     SelectionChanged(NodeHandle),
     /// A Geo node's part material changed.
     PartMaterialChanged {
+        /// The Geo node.
+        node: NodeHandle,
+        /// The part.
+        part: u32,
+    },
+    /// A Geo node's part was shown or hidden.
+    PartVisibilityChanged {
         /// The Geo node.
         node: NodeHandle,
         /// The part.
@@ -470,6 +487,7 @@ impl SceneGraph {
             NodeKind::Geo {
                 geometry,
                 part_materials: part_materials.to_vec(),
+                part_visible: vec![true; parts],
             },
         );
         if let Some(entry) = self.geometries.get_mut(geometry) {
@@ -550,6 +568,7 @@ impl SceneGraph {
         if let NodeKind::Geo {
             geometry,
             part_materials,
+            ..
         } = removed.kind
         {
             if let Some(entry) = self.geometries.get_mut(geometry) {
@@ -927,6 +946,36 @@ impl SceneGraph {
             n.flags = flags;
             self.events.push(GraphEvent::FlagsChanged(node));
         }
+        Ok(())
+    }
+
+    /// Shows or hides one part of a Geo node.
+    pub fn set_part_visible(
+        &mut self,
+        node: NodeHandle,
+        part: usize,
+        visible: bool,
+    ) -> Result<(), GraphError> {
+        let n = self.node_mut(node)?;
+        match &mut n.kind {
+            NodeKind::Geo { part_visible, .. } => {
+                let len = part_visible.len();
+                let slot = part_visible.get_mut(part).ok_or(GraphError::OutOfRange {
+                    what: "part",
+                    index: part,
+                    len,
+                })?;
+                if *slot == visible {
+                    return Ok(());
+                }
+                *slot = visible;
+            }
+            _ => return Err(Self::wrong_kind(n, "Geo", "set_part_visible")),
+        }
+        self.events.push(GraphEvent::PartVisibilityChanged {
+            node,
+            part: part as u32,
+        });
         Ok(())
     }
 

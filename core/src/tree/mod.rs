@@ -297,13 +297,23 @@ impl SceneTree {
             if let NodeKind::Geo {
                 geometry,
                 part_materials,
+                ..
             } = &node.kind
             {
                 let instances = part_materials
                     .iter()
                     .enumerate()
                     .map(|(part, m)| {
-                        self.alloc_instance(id, part as u32, geometry.index(), m.index(), state)
+                        self.alloc_instance(
+                            id,
+                            part as u32,
+                            geometry.index(),
+                            m.index(),
+                            PathState {
+                                visible: state.visible && node.part_shown(part),
+                                ..state
+                            },
+                        )
                     })
                     .collect();
                 self.node_instances[id as usize] = instances;
@@ -425,13 +435,14 @@ impl SceneTree {
             let old = self.node_state(t);
             if state != old {
                 self.set_node_state(t, state);
-                for &instance in &self.node_instances[i] {
-                    self.inst_visible.set(instance, state.visible);
-                    self.inst_highlighted.set(instance, state.highlighted);
-                    self.inst_unpickable.set(instance, !state.pickable);
-                    if state.visible != old.visible {
+                for (part, &instance) in self.node_instances[i].iter().enumerate() {
+                    let visible = state.visible && node.part_shown(part);
+                    if visible != self.inst_visible.contains(instance) {
+                        self.inst_visible.set(instance, visible);
                         self.visibility_changed.insert(instance);
                     }
+                    self.inst_highlighted.set(instance, state.highlighted);
+                    self.inst_unpickable.set(instance, !state.pickable);
                     if state.highlighted != old.highlighted || state.pickable != old.pickable {
                         self.changed.insert(instance);
                     }
@@ -565,6 +576,23 @@ impl SceneTree {
                             for &instance in &self.node_instances[t as usize] {
                                 self.changed.insert(instance);
                             }
+                        }
+                    }
+                }
+                GraphEvent::PartVisibilityChanged { node, part } => {
+                    let Ok(graph_node) = graph.node(node) else {
+                        continue;
+                    };
+                    let shown = graph_node.part_shown(part as usize);
+                    for t in self.current_paths(node) {
+                        let Some(&instance) = self.node_instances[t as usize].get(part as usize)
+                        else {
+                            continue;
+                        };
+                        let visible = shown && self.node_visible.contains(t);
+                        if visible != self.inst_visible.contains(instance) {
+                            self.inst_visible.set(instance, visible);
+                            self.visibility_changed.insert(instance);
                         }
                     }
                 }

@@ -793,63 +793,48 @@ impl SceneGraph {
     /// Number of paths from the root to `node` (0 for a node not attached to the root);
     /// walks up through the ancestors, counting each once. Saturates.
     fn paths_from_root(&self, node: NodeHandle) -> u64 {
-        let mut memo: HashMap<NodeHandle, u64> = HashMap::new();
-        let mut stack = vec![node];
-        while let Some(&n) = stack.last() {
-            if memo.contains_key(&n) {
-                stack.pop();
-                continue;
-            }
-            let parents = self.nodes.get(n).map_or(&[][..], |g| &g.parents[..]);
-            let pending: Vec<NodeHandle> = parents
-                .iter()
-                .copied()
-                .filter(|p| !memo.contains_key(p))
-                .collect();
-            if pending.is_empty() {
-                let count = if n == self.root {
-                    1
-                } else {
-                    parents
-                        .iter()
-                        .fold(0_u64, |sum, p| sum.saturating_add(memo[p]))
-                };
-                memo.insert(n, count);
-                stack.pop();
-            } else {
-                stack.extend(pending);
-            }
-        }
-        memo[&node]
+        let root = self.root;
+        self.dag_sum(node, |n| n.parents.clone(), |h| u64::from(h == root))
     }
 
     /// Number of tree nodes one path to `node` expands to (itself and everything below, each
     /// shared subgraph counted once per link); each distinct node is visited once. Saturates.
     fn expanded_size(&self, node: NodeHandle) -> u64 {
+        self.dag_sum(node, |n| n.children.iter().map(|l| l.node).collect(), |_| 1)
+    }
+
+    /// `value(start)` where `value(n) = base(n) + Σ value(m)` over the nodes `next(n)` lists
+    /// (with repeats): a memoised, iterative walk that visits each distinct node once.
+    fn dag_sum(
+        &self,
+        start: NodeHandle,
+        next: impl Fn(&GraphNode) -> Vec<NodeHandle>,
+        base: impl Fn(NodeHandle) -> u64,
+    ) -> u64 {
         let mut memo: HashMap<NodeHandle, u64> = HashMap::new();
-        let mut stack = vec![node];
+        let mut stack = vec![start];
         while let Some(&n) = stack.last() {
             if memo.contains_key(&n) {
                 stack.pop();
                 continue;
             }
-            let children = self.nodes.get(n).map_or(&[][..], |g| &g.children[..]);
-            let pending: Vec<NodeHandle> = children
+            let neighbours = self.nodes.get(n).map(&next).unwrap_or_default();
+            let pending: Vec<NodeHandle> = neighbours
                 .iter()
-                .map(|l| l.node)
-                .filter(|c| !memo.contains_key(c))
+                .copied()
+                .filter(|m| !memo.contains_key(m))
                 .collect();
             if pending.is_empty() {
-                let count = children
+                let value = neighbours
                     .iter()
-                    .fold(1_u64, |sum, l| sum.saturating_add(memo[&l.node]));
-                memo.insert(n, count);
+                    .fold(base(n), |sum, m| sum.saturating_add(memo[m]));
+                memo.insert(n, value);
                 stack.pop();
             } else {
                 stack.extend(pending);
             }
         }
-        memo[&node]
+        memo[&start]
     }
 
     /// Whether `ancestor` is `node` or lies above it (walks up through every parent).

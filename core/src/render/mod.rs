@@ -81,6 +81,18 @@ pub struct Renderer {
     pick: Option<(Image, Buffer)>,
 }
 
+/// The recorder that uploads a resident scene's pending changes before the pass.
+fn upload_recorder<'a, 's>(
+    scene: &'a std::cell::RefCell<&'s mut ResidentScene>,
+) -> impl FnMut(&Renderer, vk::CommandBuffer, &mut FrameStats) -> VkResult<()> + use<'a, 's> {
+    move |renderer, command_buffer, stats| {
+        stats.bytes_uploaded = scene
+            .borrow_mut()
+            .record_uploads(&renderer.pipelines, command_buffer)?;
+        Ok(())
+    }
+}
+
 /// Which image a pass draws into.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 enum PassTarget {
@@ -176,13 +188,7 @@ impl Renderer {
         camera: &Camera,
     ) -> VkResult<FrameStats> {
         let scene = std::cell::RefCell::new(scene);
-        let mut before =
-            |renderer: &Renderer, command_buffer: vk::CommandBuffer, stats: &mut FrameStats| {
-                stats.bytes_uploaded = scene
-                    .borrow_mut()
-                    .record_uploads(&renderer.pipelines, command_buffer)?;
-                Ok(())
-            };
+        let mut before = upload_recorder(&scene);
         let mut inside =
             |renderer: &Renderer, command_buffer: vk::CommandBuffer, stats: &mut FrameStats| {
                 let pipeline = renderer.pipelines.resident;
@@ -234,13 +240,7 @@ impl Renderer {
             self.pick = Some((image, readback));
         }
         let scene = std::cell::RefCell::new(scene);
-        let mut before =
-            |renderer: &Renderer, command_buffer: vk::CommandBuffer, stats: &mut FrameStats| {
-                stats.bytes_uploaded = scene
-                    .borrow_mut()
-                    .record_uploads(&renderer.pipelines, command_buffer)?;
-                Ok(())
-            };
+        let mut before = upload_recorder(&scene);
         let mut inside =
             |renderer: &Renderer, command_buffer: vk::CommandBuffer, stats: &mut FrameStats| {
                 let pipeline = renderer.pipelines.pick;

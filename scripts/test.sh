@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Every test: set up, check formatting and lints, run all tests (validation layers on) on lavapipe
+# Every test: set up, check formatting, lints and docs, run all tests (validation layers on) on lavapipe
 # or whatever Vulkan device is present.
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -7,6 +7,8 @@ scripts/setup.sh
 export CARGO_TERM_COLOR=never
 cargo fmt --all -- --check
 cargo clippy --workspace --all-targets --locked -- -D warnings
+RUSTDOCFLAGS="-D warnings" cargo doc --workspace --no-deps --locked
+
 if cargo nextest --version >/dev/null 2>&1; then
   cargo nextest run --workspace --locked --no-fail-fast
 else

@@ -5,14 +5,16 @@
 //! pushed as push constants per draw, vertex and index buffers re-bound only when the geometry
 //! changes.
 
+mod arena;
 mod camera;
 mod draw_list;
 mod gpu_scene;
 mod pipeline;
 mod resident;
 
+pub use arena::{GeometryArena, GeometryRange};
 pub use camera::{Camera, DEFAULT_DIRECTION, DEFAULT_FOV_DEGREES};
-pub use gpu_scene::{GeometryRange, GpuScene, UploadError};
+pub use gpu_scene::{GpuScene, UploadError};
 pub use pipeline::{
     DrawIndices, DrawParameters, FrameUniforms, MaterialParameters, MatrixUpdate, Pipelines,
     PICK_FORMAT,
@@ -102,7 +104,7 @@ enum PassTarget {
     Pick,
 }
 
-/// What a technique records inside the frame: (before the render pass, inside it).
+/// What a technique records at one point of the frame: before the pass, inside it, or after it.
 type Recorder<'a> = dyn FnMut(&Renderer, vk::CommandBuffer, &mut FrameStats) -> VkResult<()> + 'a;
 
 impl Renderer {
@@ -181,7 +183,8 @@ impl Renderer {
     }
 
     /// Renders one frame of a resident scene: uploads its pending changes (compute scatter),
-    /// then one draw per visible part with two indices pushed per draw.
+    /// then one draw per visible part with its indices (matrix, material, flags, instance)
+    /// pushed per draw.
     pub fn render_resident(
         &mut self,
         scene: &mut ResidentScene,
@@ -498,21 +501,11 @@ impl Renderer {
         let push_stages = vk::ShaderStageFlags::VERTEX | vk::ShaderStageFlags::FRAGMENT;
         for draw in &scene.draws {
             if draw.geometry != bound_geometry {
-                let range = scene.geometry_ranges[draw.geometry as usize];
-                // SAFETY: as above; offsets lie within the arenas by construction.
-                unsafe {
-                    raw.cmd_bind_vertex_buffers(
-                        command_buffer,
-                        0,
-                        &[scene.vertex_arena.raw()],
-                        &[range.vertex_offset_bytes],
-                    );
-                    raw.cmd_bind_index_buffer(
-                        command_buffer,
-                        scene.index_arena.raw(),
-                        range.index_offset_bytes,
-                        vk::IndexType::UINT32,
-                    );
+                if !scene
+                    .arena
+                    .bind(&self.device, command_buffer, draw.geometry)
+                {
+                    continue;
                 }
                 bound_geometry = draw.geometry;
                 stats.vertex_binds += 1;
@@ -554,7 +547,6 @@ impl Renderer {
     ) {
         let raw = self.device.raw();
         let layout = self.pipelines.resident_layout;
-        let (vertex_arena, index_arena) = scene.arenas();
         // SAFETY: recording inside the pass; pipeline, sets and arenas outlive the submission.
         unsafe {
             raw.cmd_bind_pipeline(command_buffer, vk::PipelineBindPoint::GRAPHICS, pipeline);
@@ -573,24 +565,11 @@ impl Renderer {
         let pickable = |draw: &&ResidentDraw| draw.indices.flags & DrawIndices::PICKABLE != 0;
         for draw in scene.draws().filter(|d| !only_pickable || pickable(d)) {
             if draw.geometry != bound_geometry {
-                let Some((vertex_offset, index_offset)) = scene.geometry_offsets(draw.geometry)
-                else {
+                if !scene
+                    .arena()
+                    .bind(&self.device, command_buffer, draw.geometry)
+                {
                     continue;
-                };
-                // SAFETY: offsets lie within the arenas by construction.
-                unsafe {
-                    raw.cmd_bind_vertex_buffers(
-                        command_buffer,
-                        0,
-                        &[vertex_arena],
-                        &[vertex_offset],
-                    );
-                    raw.cmd_bind_index_buffer(
-                        command_buffer,
-                        index_arena,
-                        index_offset,
-                        vk::IndexType::UINT32,
-                    );
                 }
                 bound_geometry = draw.geometry;
                 stats.vertex_binds += 1;

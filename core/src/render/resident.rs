@@ -10,10 +10,11 @@ use std::sync::Arc;
 use ash::vk;
 use glam::DVec3;
 
+use super::arena::GeometryArena;
 use super::draw_list::DrawBuckets;
 use super::pipeline::{DescriptorSets, DrawIndices, MaterialParameters, MatrixUpdate, Pipelines};
 use crate::graph::SceneGraph;
-use crate::scene::{Part, Vertex};
+use crate::scene::Part;
 use crate::tree::{SceneTree, TreeChanges};
 use crate::vk::{Buffer, Device, MemoryLocation, VkResult};
 
@@ -43,21 +44,12 @@ pub struct UploadStats {
     pub draws_updated: u64,
 }
 
-struct GeometrySlot {
-    vertex_offset_bytes: u64,
-    index_offset_bytes: u64,
-    /// Room the slot has in the arenas: a replacement that fits is written in place.
-    vertex_capacity_bytes: u64,
-    index_capacity_bytes: u64,
-    parts: Vec<Part>,
-}
-
 /// The GPU-resident scene.
 pub struct ResidentScene {
     device: Arc<Device>,
-    vertex_arena: Buffer,
-    index_arena: Buffer,
-    geometries: Vec<Option<GeometrySlot>>,
+    arena: GeometryArena,
+    /// The parts of each geometry slot (the draws read their index ranges).
+    geometry_parts: Vec<Option<Vec<Part>>>,
     matrices: Buffer,
     translation_lows: Buffer,
     matrix_capacity: u32,
@@ -120,9 +112,8 @@ impl ResidentScene {
         )?;
         let mut scene = Self {
             device: Arc::clone(device),
-            vertex_arena: placeholder("vertex arena")?,
-            index_arena: placeholder("index arena")?,
-            geometries: Vec::new(),
+            arena: GeometryArena::upload(device, std::iter::empty())?,
+            geometry_parts: Vec::new(),
             matrices: placeholder("resident matrices")?,
             translation_lows: placeholder("translation lows")?,
             matrix_capacity: 0,
@@ -163,61 +154,26 @@ impl ResidentScene {
 
     fn upload_geometries(&mut self, graph: &SceneGraph) -> VkResult<()> {
         let (_, geometry_slots, _) = graph.capacities();
-        let mut vertices: Vec<u8> = Vec::new();
-        let mut indices: Vec<u8> = Vec::new();
-        self.geometries = (0..geometry_slots as u32)
-            .map(|slot| {
-                graph.geometry_at(slot).map(|g| {
-                    let entry = GeometrySlot {
-                        vertex_offset_bytes: vertices.len() as u64,
-                        index_offset_bytes: indices.len() as u64,
-                        vertex_capacity_bytes: std::mem::size_of_val(&g.vertices[..]) as u64,
-                        index_capacity_bytes: std::mem::size_of_val(&g.indices[..]) as u64,
-                        parts: g.parts.clone(),
-                    };
-                    vertices.extend_from_slice(bytemuck::cast_slice::<Vertex, u8>(&g.vertices));
-                    indices.extend_from_slice(bytemuck::cast_slice(&g.indices));
-                    entry
-                })
-            })
-            .collect();
-        self.vertex_arena = Buffer::with_data(
-            &self.device,
-            "vertex arena",
-            &vertices,
-            vk::BufferUsageFlags::VERTEX_BUFFER,
-        )?;
-        self.index_arena = Buffer::with_data(
-            &self.device,
-            "index arena",
-            &indices,
-            vk::BufferUsageFlags::INDEX_BUFFER,
-        )?;
-        self.last_upload.bytes += (vertices.len() + indices.len()) as u64;
+        let slots = || (0..geometry_slots as u32).map(|slot| graph.geometry_at(slot));
+        self.arena = GeometryArena::upload(&self.device, slots())?;
+        self.geometry_parts = slots().map(|g| g.map(|g| g.parts.clone())).collect();
+        self.last_upload.bytes += self.arena.bytes();
         Ok(())
     }
 
     /// Writes a replaced geometry into its own place in the arenas when it fits; returns
     /// `false` when it does not (or the slot is new), so the arenas must be laid out again.
     fn replace_geometry_in_place(&mut self, graph: &SceneGraph, slot: u32) -> VkResult<bool> {
-        let (Some(Some(entry)), Some(geometry)) = (
-            self.geometries.get_mut(slot as usize),
-            graph.geometry_at(slot),
-        ) else {
+        let Some(geometry) = graph.geometry_at(slot) else {
             return Ok(false);
         };
-        let vertices: &[u8] = bytemuck::cast_slice(&geometry.vertices);
-        let indices: &[u8] = bytemuck::cast_slice(&geometry.indices);
-        if vertices.len() as u64 > entry.vertex_capacity_bytes
-            || indices.len() as u64 > entry.index_capacity_bytes
-        {
+        let Some(written) = self.arena.write_in_place(slot, geometry)? else {
             return Ok(false);
+        };
+        if let Some(parts) = self.geometry_parts.get_mut(slot as usize) {
+            *parts = Some(geometry.parts.clone());
         }
-        entry.parts = geometry.parts.clone();
-        let (vertex_offset, index_offset) = (entry.vertex_offset_bytes, entry.index_offset_bytes);
-        self.vertex_arena.upload_at(vertex_offset, vertices)?;
-        self.index_arena.upload_at(index_offset, indices)?;
-        self.last_upload.bytes += (vertices.len() + indices.len()) as u64;
+        self.last_upload.bytes += written;
         Ok(true)
     }
 
@@ -318,10 +274,9 @@ impl ResidentScene {
     fn draw_for(&self, tree: &SceneTree, id: u32) -> Option<ResidentDraw> {
         let instance = tree.instance(id).filter(|i| i.visible)?;
         let part = self
-            .geometries
+            .geometry_parts
             .get(instance.geometry as usize)?
             .as_ref()?
-            .parts
             .get(instance.part as usize)?;
         (part.index_count > 0).then_some(ResidentDraw {
             geometry: instance.geometry,
@@ -424,11 +379,9 @@ impl ResidentScene {
         let mut bytes = 0;
         let mut barriers = Vec::new();
         if !self.pending_materials.is_empty() {
-            let data: Vec<u8> = self
-                .pending_materials
-                .iter()
-                .flat_map(|(_, p)| bytemuck::bytes_of(p).to_vec())
-                .collect();
+            let parameters: Vec<MaterialParameters> =
+                self.pending_materials.iter().map(|&(_, p)| p).collect();
+            let data: &[u8] = bytemuck::cast_slice(&parameters);
             if self.material_staging.size() < data.len() as u64 {
                 self.material_staging = Buffer::new(
                     &self.device,
@@ -438,7 +391,7 @@ impl ResidentScene {
                     MemoryLocation::CpuToGpu,
                 )?;
             }
-            self.material_staging.write(0, &data)?;
+            self.material_staging.write(0, data)?;
             let regions: Vec<vk::BufferCopy> = self
                 .pending_materials
                 .iter()
@@ -539,17 +492,9 @@ impl ResidentScene {
         self.sets.sets[0]
     }
 
-    /// Vertex and index arena offsets of a geometry slot.
-    pub fn geometry_offsets(&self, slot: u32) -> Option<(u64, u64)> {
-        self.geometries
-            .get(slot as usize)?
-            .as_ref()
-            .map(|g| (g.vertex_offset_bytes, g.index_offset_bytes))
-    }
-
-    /// The vertex and index arenas.
-    pub fn arenas(&self) -> (vk::Buffer, vk::Buffer) {
-        (self.vertex_arena.raw(), self.index_arena.raw())
+    /// The geometry arena the draws read.
+    pub fn arena(&self) -> &GeometryArena {
+        &self.arena
     }
 }
 

@@ -12,5 +12,6 @@ pub mod render;
 pub mod save;
 pub mod scene;
 pub mod shaders;
+pub mod technique;
 pub mod tree;
 pub mod vk;

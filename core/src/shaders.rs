@@ -57,6 +57,20 @@ pub const SCATTER_COMP: ShaderSource = ShaderSource {
     source: include_str!("../../shaders/scatter.comp"),
 };
 
+/// The technique vertex shader's frame: the host pastes the vertex and parameter paths'
+/// snippets in (see `technique::pipeline`), so it is not complete by itself.
+pub const TECHNIQUE_VERT: ShaderSource = ShaderSource {
+    name: "technique.vert",
+    stage: ShaderStage::Vertex,
+    source: include_str!("../../shaders/technique.vert"),
+};
+/// Edge lines of the "solid with edges" shade mode.
+pub const EDGES_FRAG: ShaderSource = ShaderSource {
+    name: "edges.frag",
+    stage: ShaderStage::Fragment,
+    source: include_str!("../../shaders/edges.frag"),
+};
+
 /// Every complete shader, for validation.
 pub const ALL: &[ShaderSource] = &[
     BASELINE_VERT,
@@ -65,4 +79,5 @@ pub const ALL: &[ShaderSource] = &[
     RESIDENT_FRAG,
     PICK_FRAG,
     SCATTER_COMP,
+    EDGES_FRAG,
 ];

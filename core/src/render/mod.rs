@@ -49,8 +49,10 @@ pub struct FrameStats {
     pub cpu_submit_us: f64,
     /// GPU time between the frame's first and last command, in microseconds (if timestamps work).
     pub gpu_us: Option<f64>,
-    /// Draw calls issued.
+    /// Draw calls issued (an indirect or multi-draw call counts once).
     pub draw_calls: u64,
+    /// Parts or index ranges those calls drew.
+    pub draws: u64,
     /// Triangles drawn.
     pub triangles: u64,
     /// Pipeline binds.
@@ -97,7 +99,7 @@ fn upload_recorder<'a, 's>(
 
 /// Which image a pass draws into.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-enum PassTarget {
+pub(crate) enum PassTarget {
     /// The colour target (shaded image).
     Color,
     /// The R32_UINT pick target (instance id + 1, 0 for nothing).
@@ -105,7 +107,8 @@ enum PassTarget {
 }
 
 /// What a technique records at one point of the frame: before the pass, inside it, or after it.
-type Recorder<'a> = dyn FnMut(&Renderer, vk::CommandBuffer, &mut FrameStats) -> VkResult<()> + 'a;
+pub(crate) type Recorder<'a> =
+    dyn FnMut(&Renderer, vk::CommandBuffer, &mut FrameStats) -> VkResult<()> + 'a;
 
 impl Renderer {
     /// Creates a renderer with a `width` × `height` target.
@@ -175,7 +178,7 @@ impl Renderer {
             };
         self.frame(
             camera,
-            PassTarget::Color,
+            (PassTarget::Color, false),
             &mut before,
             &mut inside,
             &mut |_, _, _| Ok(()),
@@ -200,7 +203,7 @@ impl Renderer {
             };
         self.frame(
             camera,
-            PassTarget::Color,
+            (PassTarget::Color, false),
             &mut before,
             &mut inside,
             &mut |_, _, _| Ok(()),
@@ -285,7 +288,7 @@ impl Renderer {
             };
         self.frame(
             camera,
-            PassTarget::Pick,
+            (PassTarget::Pick, false),
             &mut before,
             &mut inside,
             &mut after,
@@ -302,10 +305,10 @@ impl Renderer {
 
     /// Runs a frame: uniforms, command buffer, target transitions, the technique's commands
     /// before and inside the render pass, submission, wait, timings.
-    fn frame(
+    pub(crate) fn frame(
         &mut self,
         camera: &Camera,
-        pass: PassTarget,
+        (pass, secondary): (PassTarget, bool),
         before: &mut Recorder<'_>,
         inside: &mut Recorder<'_>,
         after: &mut Recorder<'_>,
@@ -333,7 +336,7 @@ impl Renderer {
             timer.begin(command_buffer);
         }
         before(self, command_buffer, &mut stats)?;
-        self.begin_pass(command_buffer, pass);
+        self.begin_pass(command_buffer, pass, secondary);
         inside(self, command_buffer, &mut stats)?;
         self.end_pass(command_buffer, pass);
         after(self, command_buffer, &mut stats)?;
@@ -365,7 +368,14 @@ impl Renderer {
         }
     }
 
-    fn begin_pass(&self, command_buffer: vk::CommandBuffer, pass: PassTarget) {
+    /// The frame uniforms' descriptor set (set 0 of every pipeline).
+    pub(crate) fn frame_set(&self) -> vk::DescriptorSet {
+        self.frame_sets.sets[0]
+    }
+
+    /// Begins rendering into the pass target; with `secondary`, the pass's contents come from
+    /// secondary command buffers, which set their own viewport and scissor.
+    fn begin_pass(&self, command_buffer: vk::CommandBuffer, pass: PassTarget, secondary: bool) {
         let device = &*self.device;
         let raw = device.raw();
         let extent = self.target.extent();
@@ -425,7 +435,13 @@ impl Renderer {
             offset: vk::Offset2D::default(),
             extent,
         };
+        let flags = if secondary {
+            vk::RenderingFlags::CONTENTS_SECONDARY_COMMAND_BUFFERS
+        } else {
+            vk::RenderingFlags::empty()
+        };
         let rendering = vk::RenderingInfo::default()
+            .flags(flags)
             .render_area(area)
             .layer_count(1)
             .color_attachments(&color_attachment)
@@ -441,8 +457,10 @@ impl Renderer {
         // SAFETY: command_buffer is recording; the target outlives the submission.
         unsafe {
             raw.cmd_begin_rendering(command_buffer, &rendering);
-            raw.cmd_set_viewport(command_buffer, 0, &viewport);
-            raw.cmd_set_scissor(command_buffer, 0, &[area]);
+            if !secondary {
+                raw.cmd_set_viewport(command_buffer, 0, &viewport);
+                raw.cmd_set_scissor(command_buffer, 0, &[area]);
+            }
         }
     }
 
@@ -531,6 +549,7 @@ impl Renderer {
             }
             stats.parameter_updates += 1;
             stats.draw_calls += 1;
+            stats.draws += 1;
             stats.triangles += u64::from(draw.index_count / 3);
         }
     }
@@ -587,6 +606,7 @@ impl Renderer {
             }
             stats.parameter_updates += 1;
             stats.draw_calls += 1;
+            stats.draws += 1;
             stats.triangles += u64::from(draw.index_count / 3);
         }
     }

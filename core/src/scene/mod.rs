@@ -3,6 +3,7 @@
 //! drawable part.
 
 mod bounds;
+pub mod edges;
 mod flatten;
 pub mod graph;
 mod stats;

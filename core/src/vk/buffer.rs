@@ -55,6 +55,22 @@ impl Buffer {
         Ok(buffer)
     }
 
+    /// The buffer's device address (it must have been created with `SHADER_DEVICE_ADDRESS`
+    /// usage on a device with `bufferDeviceAddress`).
+    pub fn device_address(&self) -> u64 {
+        let info = vk::BufferDeviceAddressInfo::default().buffer(self.raw);
+        // SAFETY: the buffer is live; callers only ask for buffers made with the usage.
+        unsafe { self.device.raw.get_buffer_device_address(&info) }
+    }
+
+    /// The host pointer of a mapped (host-visible) buffer, or null.
+    pub fn mapped_ptr(&self) -> *mut std::ffi::c_void {
+        self.allocation
+            .as_ref()
+            .and_then(|a| a.mapped_ptr())
+            .map_or(std::ptr::null_mut(), |p| p.as_ptr())
+    }
+
     /// Creates a device-local buffer holding `data`, uploaded through a staging buffer.
     pub fn with_data(
         device: &Arc<Device>,

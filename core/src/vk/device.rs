@@ -25,6 +25,10 @@ pub struct Capabilities {
     pub shader_draw_parameters: bool,
     /// `bufferDeviceAddress`: GPU pointers to buffers.
     pub buffer_device_address: bool,
+    /// `drawIndirectCount`: indirect draws whose count the GPU reads.
+    pub draw_indirect_count: bool,
+    /// `VK_EXT_multi_draw`: many index ranges in one call.
+    pub multi_draw: bool,
     /// `pipelineStatisticsQuery`.
     pub pipeline_statistics_query: bool,
     /// Timestamps are supported on the render queue.
@@ -98,11 +102,19 @@ impl Device {
                 .get_physical_device_queue_family_properties(physical)
         };
         let queue_timestamp_bits = families[adapter.queue_family as usize].timestamp_valid_bits;
+        // SAFETY: physical comes from this instance.
+        let extensions = unsafe { instance.raw.enumerate_device_extension_properties(physical) }
+            .or_vk("vkEnumerateDeviceExtensionProperties")?;
+        let has_multi_draw = extensions
+            .iter()
+            .any(|e| e.extension_name_as_c_str() == Ok(ash::ext::multi_draw::NAME));
         let capabilities = Capabilities {
             multi_draw_indirect: core.multi_draw_indirect == vk::TRUE,
             draw_indirect_first_instance: core.draw_indirect_first_instance == vk::TRUE,
             shader_draw_parameters: supported11.shader_draw_parameters == vk::TRUE,
             buffer_device_address: supported12.buffer_device_address == vk::TRUE,
+            draw_indirect_count: supported12.draw_indirect_count == vk::TRUE,
+            multi_draw: has_multi_draw,
             pipeline_statistics_query: core.pipeline_statistics_query == vk::TRUE,
             timestamps: queue_timestamp_bits > 0 && properties.limits.timestamp_period > 0.0,
         };
@@ -119,6 +131,7 @@ impl Device {
 
         let mut enabled12 = vk::PhysicalDeviceVulkan12Features::default()
             .buffer_device_address(capabilities.buffer_device_address)
+            .draw_indirect_count(capabilities.draw_indirect_count)
             .host_query_reset(supported12.host_query_reset == vk::TRUE);
         let mut enabled11 = vk::PhysicalDeviceVulkan11Features::default()
             .shader_draw_parameters(capabilities.shader_draw_parameters);
@@ -131,9 +144,18 @@ impl Device {
             .push_next(&mut enabled13)
             .push_next(&mut enabled12)
             .push_next(&mut enabled11);
-        let create_info = vk::DeviceCreateInfo::default()
+        let mut multi_draw = vk::PhysicalDeviceMultiDrawFeaturesEXT::default().multi_draw(true);
+        let mut extension_names = Vec::new();
+        if capabilities.multi_draw {
+            extension_names.push(ash::ext::multi_draw::NAME.as_ptr());
+        }
+        let mut create_info = vk::DeviceCreateInfo::default()
             .queue_create_infos(&queue_info)
+            .enabled_extension_names(&extension_names)
             .push_next(&mut enabled);
+        if capabilities.multi_draw {
+            create_info = create_info.push_next(&mut multi_draw);
+        }
         // SAFETY: create_info and its chain live until the call returns; only supported
         // features are enabled.
         let raw = unsafe { instance.raw.create_device(physical, &create_info, None) }

@@ -1,0 +1,146 @@
+//! Feature edges for the "solid with edges" shade mode when a file stores none: an edge is
+//! drawn where only one triangle uses it (a border) or where the two faces meeting at it bend
+//! by more than the crease angle. Vertices are matched by position, so meshes whose vertices are
+//! split at creases (per-face normals) find their edges too.
+
+use std::collections::HashMap;
+
+use super::{Geometry, Part};
+
+/// The default crease angle in degrees: CAD tessellations bend less than this between
+/// neighbouring facets of a smooth surface.
+pub const DEFAULT_CREASE_DEGREES: f32 = 30.0;
+
+type PositionKey = [u32; 3];
+
+fn key(position: [f32; 3]) -> PositionKey {
+    // +0.0 and -0.0 are the same point.
+    position.map(|c| (c + 0.0).to_bits())
+}
+
+fn face_normal(a: [f32; 3], b: [f32; 3], c: [f32; 3]) -> [f32; 3] {
+    let u = [b[0] - a[0], b[1] - a[1], b[2] - a[2]];
+    let v = [c[0] - a[0], c[1] - a[1], c[2] - a[2]];
+    let n = [
+        u[1] * v[2] - u[2] * v[1],
+        u[2] * v[0] - u[0] * v[2],
+        u[0] * v[1] - u[1] * v[0],
+    ];
+    let length = (n[0] * n[0] + n[1] * n[1] + n[2] * n[2]).sqrt();
+    if length > 0.0 {
+        n.map(|c| c / length)
+    } else {
+        [0.0; 3]
+    }
+}
+
+/// Derives feature edges per part. Returns the line-list indices and the parts with their
+/// wire ranges set; parts keep their triangle ranges.
+pub fn feature_edges(geometry: &Geometry, crease_degrees: f32) -> (Vec<u32>, Vec<Part>) {
+    let cos_crease = crease_degrees.to_radians().cos();
+    let mut wire = Vec::new();
+    let mut parts = Vec::with_capacity(geometry.parts.len());
+    let position = |i: u32| {
+        geometry
+            .vertices
+            .get(i as usize)
+            .map_or([0.0; 3], |v| v.position)
+    };
+    for part in &geometry.parts {
+        let first_wire_index = wire.len() as u32;
+        // Edge (by position keys, ordered) -> its first vertex pair and the faces' normals.
+        let mut edges: HashMap<(PositionKey, PositionKey), ((u32, u32), Vec<[f32; 3]>)> =
+            HashMap::new();
+        let start = part.first_index as usize;
+        let end = (start + part.index_count as usize).min(geometry.indices.len());
+        for triangle in geometry.indices[start.min(end)..end].chunks_exact(3) {
+            let normal = face_normal(
+                position(triangle[0]),
+                position(triangle[1]),
+                position(triangle[2]),
+            );
+            if normal == [0.0; 3] {
+                continue; // degenerate: no face to bend
+            }
+            for (a, b) in [
+                (triangle[0], triangle[1]),
+                (triangle[1], triangle[2]),
+                (triangle[2], triangle[0]),
+            ] {
+                let (ka, kb) = (key(position(a)), key(position(b)));
+                if ka == kb {
+                    continue;
+                }
+                let edge = if ka < kb { (ka, kb) } else { (kb, ka) };
+                edges
+                    .entry(edge)
+                    .or_insert_with(|| ((a, b), Vec::new()))
+                    .1
+                    .push(normal);
+            }
+        }
+        let mut found: Vec<(u32, u32)> = edges
+            .into_values()
+            .filter(|(_, normals)| match normals.as_slice() {
+                [_] => true,
+                [n, m] => n[0] * m[0] + n[1] * m[1] + n[2] * m[2] < cos_crease,
+                // Non-manifold: three or more faces meet; always a visible edge.
+                _ => true,
+            })
+            .map(|(pair, _)| pair)
+            .collect();
+        found.sort_unstable(); // deterministic output
+        for (a, b) in found {
+            wire.extend([a, b]);
+        }
+        parts.push(Part {
+            first_wire_index,
+            wire_index_count: wire.len() as u32 - first_wire_index,
+            ..part.clone()
+        });
+    }
+    (wire, parts)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::scene::Vertex;
+
+    fn vertex(position: [f32; 3]) -> Vertex {
+        Vertex {
+            position,
+            normal: [0.0, 0.0, 1.0],
+        }
+    }
+
+    #[test]
+    fn a_flat_quad_has_its_border_and_a_folded_one_its_fold() {
+        // Two triangles sharing the diagonal 0-2.
+        let mut quad = Geometry {
+            vertices: [
+                [0.0, 0.0, 0.0],
+                [1.0, 0.0, 0.0],
+                [1.0, 1.0, 0.0],
+                [0.0, 1.0, 0.0],
+            ]
+            .map(vertex)
+            .to_vec(),
+            indices: vec![0, 1, 2, 0, 2, 3],
+            parts: vec![Part {
+                first_index: 0,
+                index_count: 6,
+                first_wire_index: 0,
+                wire_index_count: 0,
+            }],
+            ..Geometry::default()
+        };
+        let (wire, parts) = feature_edges(&quad, DEFAULT_CREASE_DEGREES);
+        assert_eq!(wire.len(), 8, "four border edges, not the flat diagonal");
+        assert_eq!(parts[0].wire_index_count, 8);
+        // Fold vertex 3 up by 90 degrees: the diagonal becomes a crease.
+        quad.vertices[3].position = [0.0, 0.0, 1.0];
+        let (wire, _) = feature_edges(&quad, DEFAULT_CREASE_DEGREES);
+        assert_eq!(wire.len(), 10);
+    }
+}

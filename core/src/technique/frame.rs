@@ -1,0 +1,243 @@
+//! A frame drawn by the active techniques: culling on the CPU (only changed bits applied),
+//! uploads and the techniques' preparations before the pass, the submission's recording
+//! inside it.
+
+use std::cell::RefCell;
+use std::ffi::c_void;
+use std::time::Instant;
+
+use ash::vk::{self, Handle};
+use cadr_plugin_abi as abi;
+use glam::DMat4;
+
+use super::registry::TechniqueKind;
+use super::scene::TechniqueScene;
+use super::set::{status, Message, Techniques};
+use crate::render::{Camera, FrameStats, PassTarget, Renderer};
+use crate::vk::{VkError, VkResult};
+
+/// World-space frustum planes of `camera` (normals point inside; Vulkan depth 0..1).
+pub fn frustum_planes(camera: &Camera) -> [[f64; 4]; 6] {
+    let m: DMat4 = camera.projection * camera.view;
+    let (r0, r1, r2, r3) = (m.row(0), m.row(1), m.row(2), m.row(3));
+    [r3 + r0, r3 - r0, r3 + r1, r3 - r1, r2, r3 - r2].map(|p| {
+        let length = p.truncate().length();
+        let p = if length > 0.0 { p / length } else { p };
+        p.to_array()
+    })
+}
+
+fn mix(key: u64, value: u64) -> u64 {
+    (key ^ value).wrapping_mul(0x100_0000_01b3).rotate_left(17)
+}
+
+impl Renderer {
+    /// Renders one frame of `scene` with the active techniques and reports its cost. The CPU
+    /// time covers culling, the techniques' preparation, recording and submission.
+    pub fn render_techniques(
+        &mut self,
+        scene: &mut TechniqueScene,
+        techniques: &mut Techniques,
+        camera: &Camera,
+    ) -> VkResult<FrameStats> {
+        techniques.ensure_pipelines()?;
+        let cull_start = Instant::now();
+        cull(scene, techniques, camera)?;
+        let cull_us = cull_start.elapsed().as_secs_f64() * 1e6;
+
+        let submission = techniques.get(TechniqueKind::Submission)?;
+        let parameters = techniques.get(TechniqueKind::Parameters)?;
+        let secondary = submission.entry.provides & abi::CADR_TRAIT_SECONDARY_COMMAND_BUFFERS != 0;
+        let values_in_commands =
+            parameters.entry.provides & abi::CADR_TRAIT_PARAMETERS_IN_COMMANDS != 0;
+        let (width, height) = self.size();
+        let view = scene.view();
+        let mut key = mix(techniques.epoch, view.draws_generation);
+        key = mix(key, view.buffers_generation);
+        key = mix(key, u64::from(width) << 32 | u64::from(height));
+        if values_in_commands {
+            key = mix(key, view.parameters_generation);
+        }
+        let frame_set = self.frame_set().as_raw();
+        let shared = RefCell::new((scene, abi::CadrStats::default()));
+        let techniques = &*techniques;
+        let context = |command_buffer: vk::CommandBuffer,
+                       view: &abi::CadrSceneView,
+                       stats: *mut abi::CadrStats|
+         -> VkResult<abi::CadrRecordContext> {
+            let vertex = techniques.get(TechniqueKind::Vertex)?;
+            let parameters = techniques.get(TechniqueKind::Parameters)?;
+            let pipelines = techniques
+                .pipelines
+                .as_ref()
+                .ok_or_else(|| VkError::InvalidUse("technique pipelines were not built".into()))?;
+            Ok(abi::CadrRecordContext {
+                size: std::mem::size_of::<abi::CadrRecordContext>() as u32,
+                command_buffer: command_buffer.as_raw() as *mut c_void,
+                pipeline_layout: pipelines.layout.as_raw(),
+                frame_set,
+                pass_count: pipelines.passes.len() as u32,
+                passes: pipelines.passes.as_ptr(),
+                width,
+                height,
+                scene: view,
+                vertex: abi::CadrPathRef {
+                    instance: vertex.instance,
+                    vtable: vertex.vtable(),
+                },
+                parameters: abi::CadrPathRef {
+                    instance: parameters.instance,
+                    vtable: parameters.vtable(),
+                },
+                commands_key: key,
+                stats,
+            })
+        };
+        let mut before = |renderer: &Renderer,
+                          command_buffer: vk::CommandBuffer,
+                          stats: &mut FrameStats|
+         -> VkResult<()> {
+            let mut guard = shared.borrow_mut();
+            let (scene, counters) = &mut *guard;
+            stats.bytes_uploaded = scene.record_uploads(command_buffer)?;
+            barrier(renderer, command_buffer);
+            let view = scene.view();
+            let raw_command_buffer = command_buffer.as_raw() as *mut c_void;
+            for kind in [TechniqueKind::Vertex, TechniqueKind::Parameters] {
+                let active = techniques.get(kind)?;
+                let prepare = match kind {
+                    TechniqueKind::Vertex => active.vtable::<abi::CadrVertexPathVtable>().prepare,
+                    _ => active.vtable::<abi::CadrParameterPathVtable>().prepare,
+                };
+                if let Some(prepare) = prepare {
+                    let mut message = Message::new();
+                    // SAFETY: a live instance; the view and command buffer are valid for the call.
+                    let result = unsafe {
+                        prepare(active.instance, &view, raw_command_buffer, message.raw())
+                    };
+                    status(&active.entry, "prepare", result, &message)?;
+                }
+            }
+            let submission = techniques.get(TechniqueKind::Submission)?;
+            if let Some(prepare) = submission.vtable::<abi::CadrSubmissionVtable>().prepare {
+                let record = context(command_buffer, &view, counters)?;
+                let mut message = Message::new();
+                // SAFETY: as above.
+                let result = unsafe { prepare(submission.instance, &record, message.raw()) };
+                status(&submission.entry, "prepare", result, &message)?;
+            }
+            barrier(renderer, command_buffer);
+            Ok(())
+        };
+        let mut inside =
+            |_: &Renderer, command_buffer: vk::CommandBuffer, _: &mut FrameStats| -> VkResult<()> {
+                let mut guard = shared.borrow_mut();
+                let (scene, counters) = &mut *guard;
+                let view = scene.view();
+                let submission = techniques.get(TechniqueKind::Submission)?;
+                let record_fn = submission
+                    .vtable::<abi::CadrSubmissionVtable>()
+                    .record
+                    .ok_or_else(|| VkError::Technique {
+                        technique: format!("submit '{}'", submission.entry.name),
+                        message: "its vtable has no record function".into(),
+                    })?;
+                let record = context(command_buffer, &view, counters)?;
+                let mut message = Message::new();
+                // SAFETY: a live instance; the context is valid for the call.
+                let result = unsafe { record_fn(submission.instance, &record, message.raw()) };
+                status(&submission.entry, "record", result, &message)
+            };
+        let mut stats = self.frame(
+            camera,
+            (PassTarget::Color, secondary),
+            &mut before,
+            &mut inside,
+            &mut |_, _, _| Ok(()),
+        )?;
+        let (scene, counters) = shared.into_inner();
+        if counters.failures > 0 {
+            return Err(VkError::Technique {
+                technique: techniques.combination().to_string(),
+                message: format!("{} bind calls panicked while recording", counters.failures),
+            });
+        }
+        stats.cpu_record_us += cull_us;
+        stats.draw_calls = counters.draw_calls;
+        stats.draws = counters.draws;
+        stats.triangles = scene.drawn_triangles();
+        stats.pipeline_binds = counters.pipeline_binds;
+        stats.vertex_binds = counters.vertex_binds;
+        stats.parameter_updates = counters.parameter_binds;
+        Ok(stats)
+    }
+}
+
+/// Makes transfer, compute and host writes before the pass visible to vertex input, shaders
+/// and indirect reads.
+fn barrier(renderer: &Renderer, command_buffer: vk::CommandBuffer) {
+    let memory = [vk::MemoryBarrier2::default()
+        .src_stage_mask(
+            vk::PipelineStageFlags2::ALL_TRANSFER
+                | vk::PipelineStageFlags2::COMPUTE_SHADER
+                | vk::PipelineStageFlags2::HOST,
+        )
+        .src_access_mask(
+            vk::AccessFlags2::TRANSFER_WRITE
+                | vk::AccessFlags2::SHADER_WRITE
+                | vk::AccessFlags2::HOST_WRITE,
+        )
+        .dst_stage_mask(
+            vk::PipelineStageFlags2::VERTEX_INPUT
+                | vk::PipelineStageFlags2::VERTEX_SHADER
+                | vk::PipelineStageFlags2::DRAW_INDIRECT
+                | vk::PipelineStageFlags2::ALL_TRANSFER,
+        )
+        .dst_access_mask(
+            vk::AccessFlags2::VERTEX_ATTRIBUTE_READ
+                | vk::AccessFlags2::INDEX_READ
+                | vk::AccessFlags2::SHADER_READ
+                | vk::AccessFlags2::UNIFORM_READ
+                | vk::AccessFlags2::INDIRECT_COMMAND_READ
+                | vk::AccessFlags2::TRANSFER_READ
+                | vk::AccessFlags2::TRANSFER_WRITE,
+        )];
+    let dependency = vk::DependencyInfo::default().memory_barriers(&memory);
+    // SAFETY: recording, outside rendering.
+    unsafe {
+        renderer
+            .device()
+            .raw()
+            .cmd_pipeline_barrier2(command_buffer, &dependency)
+    };
+}
+
+/// Runs the culling technique and applies the bits that changed.
+fn cull(scene: &mut TechniqueScene, techniques: &Techniques, camera: &Camera) -> VkResult<()> {
+    let culling = techniques.get(TechniqueKind::Culling)?;
+    let Some(cull_fn) = culling.vtable::<abi::CadrCullingVtable>().cull else {
+        return Ok(());
+    };
+    let view = scene.view();
+    let mut visible = scene.culled_bits().to_vec();
+    let mut changed = vec![0u64; visible.len()];
+    let input = abi::CadrCullInput {
+        size: std::mem::size_of::<abi::CadrCullInput>() as u32,
+        scene: &view,
+        candidate_bits: scene.candidate_bits().as_ptr(),
+        world_matrices: scene.worlds().as_ptr().cast(),
+        planes: frustum_planes(camera),
+    };
+    let mut output = abi::CadrCullOutput {
+        size: std::mem::size_of::<abi::CadrCullOutput>() as u32,
+        word_count: visible.len() as u32,
+        visible_bits: visible.as_mut_ptr(),
+        changed_bits: changed.as_mut_ptr(),
+    };
+    let mut message = Message::new();
+    // SAFETY: a live instance; input and output are valid and unaliased for the call.
+    let result = unsafe { cull_fn(culling.instance, &input, &mut output, message.raw()) };
+    status(&culling.entry, "cull", result, &message)?;
+    scene.apply_culling(&visible, &changed);
+    Ok(())
+}

@@ -1,0 +1,300 @@
+//! What the host offers plugin instances: buffers it allocates and frees for them, and
+//! counting `VkAllocationCallbacks` for the objects they create, so that a test can prove that
+//! swapping techniques leaks nothing.
+
+use std::alloc::Layout;
+use std::collections::HashMap;
+use std::ffi::{c_char, c_void, CStr};
+use std::sync::atomic::{AtomicI64, Ordering};
+use std::sync::{Arc, Mutex};
+
+use ash::vk;
+use ash::vk::Handle;
+use cadr_plugin_abi as abi;
+
+use crate::vk::{Buffer, Device, MemoryLocation};
+
+/// Live counts of what plugins hold.
+#[derive(Debug, Default)]
+pub struct PluginAllocations {
+    /// Live host allocations made through the allocation callbacks (Vulkan objects' memory).
+    pub object_allocations: AtomicI64,
+    /// Live buffers created through the host API.
+    pub buffers: AtomicI64,
+    /// Bytes of those buffers.
+    pub buffer_bytes: AtomicI64,
+}
+
+/// A snapshot of [`PluginAllocations`].
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct AllocationCounts {
+    /// Live allocations of plugin-created Vulkan objects.
+    pub object_allocations: i64,
+    /// Live plugin buffers.
+    pub buffers: i64,
+    /// Their bytes.
+    pub buffer_bytes: i64,
+}
+
+/// The host side of [`abi::CadrHostApi`]; boxed so that its address stays put.
+pub(crate) struct HostServices {
+    device: Arc<Device>,
+    buffers: Mutex<HashMap<u64, Buffer>>,
+    next_id: std::sync::atomic::AtomicU64,
+    pub(crate) counts: Arc<PluginAllocations>,
+    api: abi::CadrHostApi,
+    callbacks: vk::AllocationCallbacks<'static>,
+}
+
+// SAFETY: the raw pointers in `api` and `callbacks` point at this struct itself; every field
+// behind them is synchronised (mutex, atomics).
+unsafe impl Send for HostServices {}
+// SAFETY: as above.
+unsafe impl Sync for HostServices {}
+
+/// Alignment and size kept in front of each callback allocation.
+const HEADER: usize = 16;
+
+unsafe extern "system" fn allocate(
+    user: *mut c_void,
+    size: usize,
+    alignment: usize,
+    _scope: vk::SystemAllocationScope,
+) -> *mut c_void {
+    let alignment = alignment.max(HEADER);
+    let Ok(layout) = Layout::from_size_align(size + alignment, alignment) else {
+        return std::ptr::null_mut();
+    };
+    // SAFETY: the layout has a non-zero size.
+    let base = unsafe { std::alloc::alloc(layout) };
+    if base.is_null() {
+        return base.cast();
+    }
+    // SAFETY: `alignment >= 16` bytes precede the returned pointer: size and alignment go there.
+    unsafe {
+        let user_pointer = base.add(alignment);
+        user_pointer.cast::<usize>().sub(1).write_unaligned(size);
+        user_pointer
+            .cast::<usize>()
+            .sub(2)
+            .write_unaligned(alignment);
+        if let Some(counts) = user.cast::<PluginAllocations>().as_ref() {
+            counts.object_allocations.fetch_add(1, Ordering::Relaxed);
+        }
+        user_pointer.cast()
+    }
+}
+
+unsafe extern "system" fn free(user: *mut c_void, memory: *mut c_void) {
+    if memory.is_null() {
+        return;
+    }
+    // SAFETY: `memory` came from `allocate`, which stored size and alignment in front.
+    unsafe {
+        let size = memory.cast::<usize>().sub(1).read_unaligned();
+        let alignment = memory.cast::<usize>().sub(2).read_unaligned();
+        let base = memory.cast::<u8>().sub(alignment);
+        std::alloc::dealloc(
+            base,
+            Layout::from_size_align_unchecked(size + alignment, alignment),
+        );
+        if let Some(counts) = user.cast::<PluginAllocations>().as_ref() {
+            counts.object_allocations.fetch_sub(1, Ordering::Relaxed);
+        }
+    }
+}
+
+unsafe extern "system" fn reallocate(
+    user: *mut c_void,
+    original: *mut c_void,
+    size: usize,
+    alignment: usize,
+    scope: vk::SystemAllocationScope,
+) -> *mut c_void {
+    if original.is_null() {
+        // SAFETY: forwarded.
+        return unsafe { allocate(user, size, alignment, scope) };
+    }
+    if size == 0 {
+        // SAFETY: forwarded.
+        unsafe { free(user, original) };
+        return std::ptr::null_mut();
+    }
+    // SAFETY: forwarded; `original` came from `allocate`.
+    unsafe {
+        let fresh = allocate(user, size, alignment, scope);
+        if !fresh.is_null() {
+            let old_size = original.cast::<usize>().sub(1).read_unaligned();
+            std::ptr::copy_nonoverlapping(
+                original.cast::<u8>(),
+                fresh.cast::<u8>(),
+                old_size.min(size),
+            );
+            free(user, original);
+        }
+        fresh
+    }
+}
+
+unsafe extern "C" fn create_buffer(
+    user: *mut c_void,
+    size_bytes: u64,
+    usage: u32,
+    location: abi::CadrMemoryLocation,
+    name: *const c_char,
+    out: *mut abi::CadrBuffer,
+    message: *mut abi::CadrMessage,
+) -> abi::CadrStatus {
+    let result = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+        // SAFETY: `user` is the HostServices this API belongs to.
+        let services = unsafe { &*user.cast::<HostServices>() };
+        let name = if name.is_null() {
+            "plugin buffer".to_owned()
+        } else {
+            // SAFETY: the plugin passes a NUL-terminated string.
+            unsafe { CStr::from_ptr(name) }
+                .to_string_lossy()
+                .into_owned()
+        };
+        services.create_buffer(size_bytes, usage, location, &name)
+    }));
+    match result {
+        Ok(Ok(buffer)) if !out.is_null() => {
+            // SAFETY: checked non-null; the plugin passes a writable struct.
+            unsafe { *out = buffer };
+            abi::CADR_STATUS_OK
+        }
+        Ok(Ok(_)) => abi::CADR_STATUS_ERROR,
+        Ok(Err(text)) => {
+            write_message(message, &text);
+            abi::CADR_STATUS_ERROR
+        }
+        Err(_) => abi::CADR_STATUS_PANICKED,
+    }
+}
+
+unsafe extern "C" fn destroy_buffer(user: *mut c_void, buffer: *const abi::CadrBuffer) {
+    let _ = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+        // SAFETY: `user` is the HostServices this API belongs to; `buffer` is the plugin's.
+        let (services, buffer) = unsafe { (&*user.cast::<HostServices>(), buffer.as_ref()) };
+        if let Some(buffer) = buffer {
+            services.destroy_buffer(buffer.id);
+        }
+    }));
+}
+
+/// Writes `text` into a plugin's message buffer.
+pub(crate) fn write_message(message: *mut abi::CadrMessage, text: &str) {
+    // SAFETY: a message buffer from a plugin, or null.
+    let Some(message) = (unsafe { message.as_mut() }) else {
+        return;
+    };
+    if message.text.is_null() || message.capacity == 0 {
+        return;
+    }
+    let length = text.len().min(message.capacity - 1);
+    // SAFETY: `capacity` bytes are writable at `text`.
+    unsafe {
+        std::ptr::copy_nonoverlapping(text.as_ptr(), message.text.cast::<u8>(), length);
+        *message.text.add(length) = 0;
+    }
+}
+
+impl HostServices {
+    pub(crate) fn new(device: &Arc<Device>) -> Box<Self> {
+        let counts = Arc::new(PluginAllocations::default());
+        let mut services = Box::new(Self {
+            device: Arc::clone(device),
+            buffers: Mutex::new(HashMap::new()),
+            next_id: std::sync::atomic::AtomicU64::new(1),
+            counts,
+            api: abi::CadrHostApi {
+                size: std::mem::size_of::<abi::CadrHostApi>() as u32,
+                user: std::ptr::null_mut(),
+                create_buffer: Some(create_buffer),
+                destroy_buffer: Some(destroy_buffer),
+            },
+            callbacks: vk::AllocationCallbacks::default(),
+        });
+        let user: *mut HostServices = &mut *services;
+        services.api.user = user.cast();
+        services.callbacks = vk::AllocationCallbacks {
+            p_user_data: Arc::as_ptr(&services.counts).cast_mut().cast(),
+            pfn_allocation: Some(allocate),
+            pfn_reallocation: Some(reallocate),
+            pfn_free: Some(free),
+            pfn_internal_allocation: None,
+            pfn_internal_free: None,
+            _marker: std::marker::PhantomData,
+        };
+        services
+    }
+
+    pub(crate) fn api(&self) -> *const abi::CadrHostApi {
+        &self.api
+    }
+
+    pub(crate) fn callbacks(&self) -> *const vk::AllocationCallbacks<'static> {
+        &self.callbacks
+    }
+
+    fn create_buffer(
+        &self,
+        size_bytes: u64,
+        usage: u32,
+        location: abi::CadrMemoryLocation,
+        name: &str,
+    ) -> Result<abi::CadrBuffer, String> {
+        let mut usage = vk::BufferUsageFlags::from_raw(usage);
+        if !self.device.capabilities().buffer_device_address {
+            usage &= !vk::BufferUsageFlags::SHADER_DEVICE_ADDRESS;
+        }
+        let memory = match location {
+            abi::CADR_MEMORY_GPU_ONLY => MemoryLocation::GpuOnly,
+            abi::CADR_MEMORY_CPU_TO_GPU => MemoryLocation::CpuToGpu,
+            other => return Err(format!("unknown memory location {other}")),
+        };
+        let buffer = Buffer::new(&self.device, name, size_bytes, usage, memory)
+            .map_err(|e| format!("cannot create buffer '{name}' of {size_bytes} bytes: {e}"))?;
+        let address = if usage.contains(vk::BufferUsageFlags::SHADER_DEVICE_ADDRESS) {
+            buffer.device_address()
+        } else {
+            0
+        };
+        let id = self.next_id.fetch_add(1, Ordering::Relaxed);
+        let described = abi::CadrBuffer {
+            buffer: buffer.raw().as_raw(),
+            size_bytes,
+            address,
+            mapped: buffer.mapped_ptr(),
+            id,
+        };
+        self.counts.buffers.fetch_add(1, Ordering::Relaxed);
+        self.counts
+            .buffer_bytes
+            .fetch_add(size_bytes as i64, Ordering::Relaxed);
+        self.buffers
+            .lock()
+            .map_err(|_| "the host's buffer table is poisoned")?
+            .insert(id, buffer);
+        Ok(described)
+    }
+
+    fn destroy_buffer(&self, id: u64) {
+        let removed = self.buffers.lock().ok().and_then(|mut b| b.remove(&id));
+        if let Some(buffer) = removed {
+            self.counts.buffers.fetch_sub(1, Ordering::Relaxed);
+            self.counts
+                .buffer_bytes
+                .fetch_sub(buffer.size() as i64, Ordering::Relaxed);
+        }
+    }
+
+    pub(crate) fn snapshot(&self) -> AllocationCounts {
+        AllocationCounts {
+            object_allocations: self.counts.object_allocations.load(Ordering::Relaxed),
+            buffers: self.counts.buffers.load(Ordering::Relaxed),
+            buffer_bytes: self.counts.buffer_bytes.load(Ordering::Relaxed),
+        }
+    }
+}

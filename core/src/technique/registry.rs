@@ -1,0 +1,431 @@
+//! Finding and loading technique plugins: every library in the plugin directories is opened,
+//! its ABI version negotiated before any struct is read, its techniques listed and checked
+//! against the device. Libraries are never unloaded (their code may still be referenced by
+//! techniques alive or destroyed). What cannot be used is kept as a [`Refusal`] that says why.
+
+use std::ffi::{c_char, CStr};
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+
+use cadr_plugin_abi as abi;
+
+use crate::vk::Capabilities;
+
+/// The environment variable with extra plugin directories (separated like `PATH`).
+pub const PLUGIN_PATH_VARIABLE: &str = "CADR_PLUGIN_PATH";
+
+/// Which of the four technique kinds.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub enum TechniqueKind {
+    /// How vertices reach the shader.
+    Vertex,
+    /// How matrices and materials reach the shader.
+    Parameters,
+    /// Which draws are issued and how.
+    Submission,
+    /// Which instances are drawn.
+    Culling,
+}
+
+impl TechniqueKind {
+    /// Every kind, in the order combinations are written.
+    pub const ALL: [TechniqueKind; 4] = [
+        TechniqueKind::Vertex,
+        TechniqueKind::Parameters,
+        TechniqueKind::Submission,
+        TechniqueKind::Culling,
+    ];
+
+    /// The name used on the command line and in messages.
+    pub fn name(self) -> &'static str {
+        match self {
+            TechniqueKind::Vertex => "vertex",
+            TechniqueKind::Parameters => "params",
+            TechniqueKind::Submission => "submit",
+            TechniqueKind::Culling => "cull",
+        }
+    }
+
+    fn from_abi(kind: abi::CadrTechniqueKind) -> Option<Self> {
+        match kind {
+            abi::CADR_KIND_VERTEX_PATH => Some(TechniqueKind::Vertex),
+            abi::CADR_KIND_PARAMETER_PATH => Some(TechniqueKind::Parameters),
+            abi::CADR_KIND_SUBMISSION => Some(TechniqueKind::Submission),
+            abi::CADR_KIND_CULLING => Some(TechniqueKind::Culling),
+            _ => None,
+        }
+    }
+
+    /// The size a vtable of this kind must have at least.
+    fn vtable_size(self) -> usize {
+        match self {
+            TechniqueKind::Vertex => std::mem::size_of::<abi::CadrVertexPathVtable>(),
+            TechniqueKind::Parameters => std::mem::size_of::<abi::CadrParameterPathVtable>(),
+            TechniqueKind::Submission => std::mem::size_of::<abi::CadrSubmissionVtable>(),
+            TechniqueKind::Culling => std::mem::size_of::<abi::CadrCullingVtable>(),
+        }
+    }
+}
+
+/// One technique a library offers.
+#[derive(Debug)]
+pub struct TechniqueEntry {
+    /// Its kind.
+    pub kind: TechniqueKind,
+    /// Its name (unique within the kind).
+    pub name: String,
+    /// What it does.
+    pub description: String,
+    /// The library it comes from.
+    pub library: PathBuf,
+    /// Device features it needs (`CADR_FEATURE_*`).
+    pub required_features: u64,
+    /// What it offers its partners (`CADR_TRAIT_*`).
+    pub provides: u64,
+    /// What it needs from its partners (`CADR_TRAIT_*`).
+    pub needs: u64,
+    /// `Err(why)` when this device cannot run it.
+    pub support: Result<(), String>,
+    pub(crate) vtable: *const std::ffi::c_void,
+}
+
+// SAFETY: the vtable is immutable data of a library that is never unloaded.
+unsafe impl Send for TechniqueEntry {}
+// SAFETY: as above.
+unsafe impl Sync for TechniqueEntry {}
+
+impl TechniqueEntry {
+    /// The common part of the vtable.
+    pub(crate) fn common(&self) -> &abi::CadrCommonVtable {
+        // SAFETY: every kind's vtable starts with the common part; checked non-null and at
+        // least the kind's size when loaded.
+        unsafe { &*self.vtable.cast::<abi::CadrCommonVtable>() }
+    }
+}
+
+/// A library or technique that cannot be used, and why.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Refusal {
+    /// The library.
+    pub library: PathBuf,
+    /// The technique, when the refusal is about one technique.
+    pub technique: Option<String>,
+    /// Why.
+    pub reason: String,
+}
+
+impl std::fmt::Display for Refusal {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match &self.technique {
+            Some(name) => write!(f, "{} ({name}): {}", self.library.display(), self.reason),
+            None => write!(f, "{}: {}", self.library.display(), self.reason),
+        }
+    }
+}
+
+/// Every technique found, and what was refused.
+#[derive(Debug, Default)]
+pub struct PluginRegistry {
+    techniques: Vec<Arc<TechniqueEntry>>,
+    refusals: Vec<Refusal>,
+}
+
+/// The `CADR_FEATURE_*` bits a device has enabled.
+pub fn feature_bits(capabilities: Capabilities) -> u64 {
+    let mut bits = 0;
+    for (has, bit) in [
+        (
+            capabilities.multi_draw_indirect,
+            abi::CADR_FEATURE_MULTI_DRAW_INDIRECT,
+        ),
+        (
+            capabilities.draw_indirect_first_instance,
+            abi::CADR_FEATURE_DRAW_INDIRECT_FIRST_INSTANCE,
+        ),
+        (
+            capabilities.draw_indirect_count,
+            abi::CADR_FEATURE_DRAW_INDIRECT_COUNT,
+        ),
+        (capabilities.multi_draw, abi::CADR_FEATURE_MULTI_DRAW),
+        (
+            capabilities.buffer_device_address,
+            abi::CADR_FEATURE_BUFFER_DEVICE_ADDRESS,
+        ),
+        (
+            capabilities.shader_draw_parameters,
+            abi::CADR_FEATURE_SHADER_DRAW_PARAMETERS,
+        ),
+    ] {
+        if has {
+            bits |= bit;
+        }
+    }
+    bits
+}
+
+/// Names of `CADR_FEATURE_*` bits, for messages.
+pub fn feature_names(bits: u64) -> Vec<&'static str> {
+    [
+        (abi::CADR_FEATURE_MULTI_DRAW_INDIRECT, "multiDrawIndirect"),
+        (
+            abi::CADR_FEATURE_DRAW_INDIRECT_FIRST_INSTANCE,
+            "drawIndirectFirstInstance",
+        ),
+        (abi::CADR_FEATURE_DRAW_INDIRECT_COUNT, "drawIndirectCount"),
+        (abi::CADR_FEATURE_MULTI_DRAW, "VK_EXT_multi_draw"),
+        (
+            abi::CADR_FEATURE_BUFFER_DEVICE_ADDRESS,
+            "bufferDeviceAddress",
+        ),
+        (
+            abi::CADR_FEATURE_SHADER_DRAW_PARAMETERS,
+            "shaderDrawParameters",
+        ),
+        (abi::CADR_FEATURE_MESH_SHADER, "VK_EXT_mesh_shader"),
+        (
+            abi::CADR_FEATURE_DEVICE_GENERATED_COMMANDS,
+            "VK_NV_device_generated_commands",
+        ),
+    ]
+    .into_iter()
+    .filter(|&(bit, _)| bits & bit != 0)
+    .map(|(_, name)| name)
+    .collect()
+}
+
+/// The default plugin directories: beside the executable (and its `plugins/` folder), then
+/// the directories in [`PLUGIN_PATH_VARIABLE`].
+pub fn default_plugin_dirs() -> Vec<PathBuf> {
+    let mut dirs = Vec::new();
+    if let Some(exe_dir) = std::env::current_exe()
+        .ok()
+        .and_then(|exe| exe.parent().map(Path::to_path_buf))
+    {
+        dirs.push(exe_dir.join("plugins"));
+        dirs.push(exe_dir);
+    }
+    if let Some(paths) = std::env::var_os(PLUGIN_PATH_VARIABLE) {
+        dirs.extend(std::env::split_paths(&paths).filter(|p| !p.as_os_str().is_empty()));
+    }
+    dirs
+}
+
+/// Whether `path` looks like a cadr plugin library (`*cadr_plugin_*` with the platform's
+/// dynamic-library extension).
+fn is_plugin_file(path: &Path) -> bool {
+    let Some(name) = path.file_name().and_then(|n| n.to_str()) else {
+        return false;
+    };
+    name.contains("cadr_plugin_") && name.ends_with(std::env::consts::DLL_SUFFIX)
+}
+
+fn c_text(pointer: *const c_char) -> Option<String> {
+    // SAFETY: plugins hand out NUL-terminated strings that live as long as the library.
+    (!pointer.is_null()).then(|| {
+        unsafe { CStr::from_ptr(pointer) }
+            .to_string_lossy()
+            .into_owned()
+    })
+}
+
+impl PluginRegistry {
+    /// Loads every plugin library in `dirs` (missing directories are skipped) and checks its
+    /// techniques against a device with `device_features` (`CADR_FEATURE_*`).
+    pub fn discover(dirs: &[PathBuf], device_features: u64) -> Self {
+        let mut registry = Self::default();
+        let mut seen = std::collections::HashSet::new();
+        for dir in dirs {
+            let Ok(entries) = std::fs::read_dir(dir) else {
+                continue;
+            };
+            let mut files: Vec<PathBuf> = entries
+                .filter_map(|e| e.ok().map(|e| e.path()))
+                .filter(|p| is_plugin_file(p))
+                .collect();
+            files.sort();
+            for file in files {
+                let canonical = file.canonicalize().unwrap_or_else(|_| file.clone());
+                let key = canonical.file_name().map(|n| n.to_owned());
+                if !seen.insert(key) {
+                    continue; // the same library found in two directories: the first wins
+                }
+                registry.load(&file, device_features);
+            }
+        }
+        registry
+    }
+
+    /// Loads one library.
+    pub fn load(&mut self, file: &Path, device_features: u64) {
+        let refuse = |reason: String| Refusal {
+            library: file.to_owned(),
+            technique: None,
+            reason,
+        };
+        // SAFETY: opening a library runs its initialisers; cadr plugins are trusted code the
+        // user installed (as any native plugin).
+        let library = match unsafe { libloading::Library::new(file) } {
+            Ok(library) => library,
+            Err(error) => {
+                self.refusals
+                    .push(refuse(format!("cannot be opened: {error}")));
+                return;
+            }
+        };
+        // Never unloaded: techniques keep pointers into it.
+        let library: &'static libloading::Library = Box::leak(Box::new(library));
+        // SAFETY: the symbol's type is fixed by the ABI.
+        let version = match unsafe {
+            library.get::<abi::CadrPluginVersionFn>(abi::CADR_PLUGIN_VERSION_SYMBOL.as_bytes())
+        } {
+            Ok(symbol) => *symbol,
+            Err(_) => {
+                self.refusals.push(refuse(format!(
+                    "is not a cadr plugin: it exports no `{}`",
+                    abi::CADR_PLUGIN_VERSION_SYMBOL
+                )));
+                return;
+            }
+        };
+        // SAFETY: takes nothing, returns an integer.
+        let version = unsafe { version() };
+        let (major, minor) = (version >> 16, version & 0xffff);
+        if major != abi::CADR_PLUGIN_ABI_MAJOR || minor > abi::CADR_PLUGIN_ABI_MINOR {
+            self.refusals.push(refuse(format!(
+                "was built for plugin ABI {major}.{minor}; this cadr speaks {}.{}",
+                abi::CADR_PLUGIN_ABI_MAJOR,
+                abi::CADR_PLUGIN_ABI_MINOR
+            )));
+            return;
+        }
+        // SAFETY: the symbol's type is fixed by the ABI, whose version matched.
+        let entry = match unsafe {
+            library.get::<abi::CadrPluginEntryFn>(abi::CADR_PLUGIN_ENTRY_SYMBOL.as_bytes())
+        } {
+            Ok(symbol) => *symbol,
+            Err(_) => {
+                self.refusals.push(refuse(format!(
+                    "exports no `{}`",
+                    abi::CADR_PLUGIN_ENTRY_SYMBOL
+                )));
+                return;
+            }
+        };
+        let mut described = abi::CadrPluginLibrary {
+            size: std::mem::size_of::<abi::CadrPluginLibrary>() as u32,
+            abi_major: 0,
+            abi_minor: 0,
+            name: std::ptr::null(),
+            technique_count: 0,
+            techniques: std::ptr::null(),
+        };
+        // SAFETY: `described` is writable and its size set.
+        let status = unsafe { entry(&mut described) };
+        if status != abi::CADR_STATUS_OK {
+            let why = if status == abi::CADR_STATUS_PANICKED {
+                "panicked in its entry point"
+            } else {
+                "its entry point failed"
+            };
+            self.refusals.push(refuse(why.into()));
+            return;
+        }
+        if (described.size as usize) < std::mem::size_of::<abi::CadrPluginLibrary>()
+            || (described.technique_count > 0 && described.techniques.is_null())
+        {
+            self.refusals
+                .push(refuse("described itself with a truncated struct".into()));
+            return;
+        }
+        // SAFETY: the library promises `technique_count` entries that live forever.
+        let techniques = unsafe {
+            std::slice::from_raw_parts(described.techniques, described.technique_count as usize)
+        };
+        for info in techniques {
+            let name = c_text(info.name).unwrap_or_default();
+            let refuse_technique = |reason: String| Refusal {
+                library: file.to_owned(),
+                technique: Some(name.clone()),
+                reason,
+            };
+            if (info.size as usize) < std::mem::size_of::<abi::CadrTechniqueInfo>() {
+                self.refusals
+                    .push(refuse_technique("its description is truncated".into()));
+                continue;
+            }
+            let Some(kind) = TechniqueKind::from_abi(info.kind) else {
+                self.refusals
+                    .push(refuse_technique(format!("unknown kind {}", info.kind)));
+                continue;
+            };
+            if name.is_empty() {
+                self.refusals
+                    .push(refuse_technique("it has no name".into()));
+                continue;
+            }
+            // SAFETY: checked non-null before reading its size.
+            let vtable_size = (!info.vtable.is_null())
+                .then(|| unsafe { (*info.vtable.cast::<abi::CadrCommonVtable>()).size });
+            if vtable_size.is_none_or(|size| (size as usize) < kind.vtable_size()) {
+                self.refusals.push(refuse_technique(format!(
+                    "its {} vtable is missing or truncated",
+                    kind.name()
+                )));
+                continue;
+            }
+            if self
+                .techniques
+                .iter()
+                .any(|t| t.kind == kind && t.name == name)
+            {
+                self.refusals.push(refuse_technique(format!(
+                    "another library already offers a {} technique named '{name}'",
+                    kind.name()
+                )));
+                continue;
+            }
+            let missing = info.required_features & !device_features;
+            let support = if missing == 0 {
+                Ok(())
+            } else {
+                Err(format!(
+                    "the device lacks {}",
+                    feature_names(missing).join(", ")
+                ))
+            };
+            self.techniques.push(Arc::new(TechniqueEntry {
+                kind,
+                name,
+                description: c_text(info.description).unwrap_or_default(),
+                library: file.to_owned(),
+                required_features: info.required_features,
+                provides: info.provides,
+                needs: info.needs,
+                support,
+                vtable: info.vtable,
+            }));
+        }
+    }
+
+    /// Every technique found (supported or not), in discovery order.
+    pub fn techniques(&self) -> &[Arc<TechniqueEntry>] {
+        &self.techniques
+    }
+
+    /// Libraries and techniques that were refused while loading.
+    pub fn refusals(&self) -> &[Refusal] {
+        &self.refusals
+    }
+
+    /// The technique of `kind` named `name`.
+    pub fn find(&self, kind: TechniqueKind, name: &str) -> Option<&Arc<TechniqueEntry>> {
+        self.techniques
+            .iter()
+            .find(|t| t.kind == kind && t.name == name)
+    }
+
+    /// The techniques of one kind.
+    pub fn of_kind(&self, kind: TechniqueKind) -> impl Iterator<Item = &Arc<TechniqueEntry>> {
+        self.techniques.iter().filter(move |t| t.kind == kind)
+    }
+}

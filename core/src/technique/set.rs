@@ -1,0 +1,490 @@
+//! The combination of techniques a renderer uses, one of each kind, swappable between frames.
+//! Swapping creates the new instance first (so a refusal leaves the old combination working),
+//! waits for the GPU, then destroys the old one.
+
+use std::ffi::{c_char, c_void, CStr};
+use std::sync::Arc;
+
+use ash::vk::{self, Handle};
+use cadr_plugin_abi as abi;
+
+use super::host_api::{AllocationCounts, HostServices};
+use super::pipeline::{
+    assemble_vertex_shader, PipelineInputs, ShadeMode, ShaderCache, TechniquePipelines,
+};
+use super::registry::{feature_bits, PluginRegistry, TechniqueEntry, TechniqueKind};
+use crate::vk::{Device, VkError, VkResult, COLOR_FORMAT, DEPTH_FORMAT};
+
+/// Technique names, one per kind.
+#[derive(Clone, Debug, PartialEq, Eq, Hash)]
+pub struct Combination {
+    /// Vertex path.
+    pub vertex: String,
+    /// Parameter path.
+    pub parameters: String,
+    /// Submission.
+    pub submission: String,
+    /// Culling.
+    pub culling: String,
+}
+
+impl Combination {
+    /// The defaults: the simplest technique of each kind.
+    pub fn simplest() -> Self {
+        Self {
+            vertex: "per-geometry".into(),
+            parameters: "push".into(),
+            submission: "individual".into(),
+            culling: "none".into(),
+        }
+    }
+
+    /// The name of `kind`.
+    pub fn get(&self, kind: TechniqueKind) -> &str {
+        match kind {
+            TechniqueKind::Vertex => &self.vertex,
+            TechniqueKind::Parameters => &self.parameters,
+            TechniqueKind::Submission => &self.submission,
+            TechniqueKind::Culling => &self.culling,
+        }
+    }
+
+    /// Sets the name of `kind`.
+    pub fn set(&mut self, kind: TechniqueKind, name: &str) {
+        let slot = match kind {
+            TechniqueKind::Vertex => &mut self.vertex,
+            TechniqueKind::Parameters => &mut self.parameters,
+            TechniqueKind::Submission => &mut self.submission,
+            TechniqueKind::Culling => &mut self.culling,
+        };
+        name.clone_into(slot);
+    }
+}
+
+impl std::fmt::Display for Combination {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(
+            f,
+            "{} / {} / {} / {}",
+            self.vertex, self.parameters, self.submission, self.culling
+        )
+    }
+}
+
+/// Names of `CADR_TRAIT_*` bits, for messages.
+fn trait_name(bit: u64) -> &'static str {
+    match bit {
+        abi::CADR_TRAIT_GEOMETRY_SHARES_BINDING => {
+            "a vertex path whose parts of a geometry share one binding"
+        }
+        abi::CADR_TRAIT_SCENE_SHARES_BINDING => {
+            "a vertex path that binds the whole scene once (offsets in the draw)"
+        }
+        abi::CADR_TRAIT_PARAMETERS_FROM_INSTANCE_INDEX => {
+            "a parameter path that finds parameters from the instance index (no per-draw commands)"
+        }
+        abi::CADR_TRAIT_PARAMETERS_IN_COMMANDS => {
+            "a parameter path that writes values into commands"
+        }
+        abi::CADR_TRAIT_SECONDARY_COMMAND_BUFFERS => "secondary command buffers",
+        _ => "an unknown trait",
+    }
+}
+
+/// Why a combination cannot work, or `Ok` when it can.
+pub fn check_combination(entries: &[&TechniqueEntry]) -> Result<(), String> {
+    for entry in entries {
+        entry.support.as_ref().map_err(|why| {
+            format!(
+                "{} '{}' is not supported: {why}",
+                entry.kind.name(),
+                entry.name
+            )
+        })?;
+        let others: u64 = entries
+            .iter()
+            .filter(|o| o.kind != entry.kind)
+            .fold(0, |bits, o| bits | o.provides);
+        let missing = entry.needs & !others;
+        if missing != 0 {
+            let bit = 1u64 << missing.trailing_zeros();
+            return Err(format!(
+                "{} '{}' needs {}, which the others do not offer",
+                entry.kind.name(),
+                entry.name,
+                trait_name(bit)
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// A created technique instance; destroyed on drop (after the GPU is done, see `Techniques`).
+pub(crate) struct Active {
+    pub(crate) entry: Arc<TechniqueEntry>,
+    pub(crate) instance: *mut c_void,
+}
+
+impl Drop for Active {
+    fn drop(&mut self) {
+        if let Some(destroy) = self.entry.common().destroy {
+            // SAFETY: the instance came from this vtable's create and is destroyed once.
+            unsafe { destroy(self.instance) };
+        }
+    }
+}
+
+impl Active {
+    pub(crate) fn vtable<V>(&self) -> &V {
+        // SAFETY: the registry checked the vtable's size for its kind; callers ask for the
+        // vtable type of the entry's kind.
+        unsafe { &*self.entry.vtable.cast::<V>() }
+    }
+}
+
+/// A message buffer for plugin calls.
+pub(crate) struct Message {
+    bytes: Vec<u8>,
+    raw: abi::CadrMessage,
+}
+
+impl Message {
+    pub(crate) fn new() -> Self {
+        let mut bytes = vec![0u8; 1024];
+        let raw = abi::CadrMessage {
+            text: bytes.as_mut_ptr().cast::<c_char>(),
+            capacity: bytes.len(),
+        };
+        Self { bytes, raw }
+    }
+
+    pub(crate) fn raw(&mut self) -> *mut abi::CadrMessage {
+        &mut self.raw
+    }
+
+    pub(crate) fn text(&self) -> String {
+        CStr::from_bytes_until_nul(&self.bytes)
+            .map(|s| s.to_string_lossy().into_owned())
+            .unwrap_or_default()
+    }
+}
+
+/// Checks a plugin call's status.
+pub(crate) fn status(
+    entry: &TechniqueEntry,
+    what: &str,
+    status: abi::CadrStatus,
+    message: &Message,
+) -> VkResult<()> {
+    match status {
+        abi::CADR_STATUS_OK => Ok(()),
+        abi::CADR_STATUS_PANICKED => Err(VkError::Technique {
+            technique: format!("{} '{}'", entry.kind.name(), entry.name),
+            message: format!("{what} panicked ({})", message.text()),
+        }),
+        _ => Err(VkError::Technique {
+            technique: format!("{} '{}'", entry.kind.name(), entry.name),
+            message: format!("{what} failed: {}", message.text()),
+        }),
+    }
+}
+
+/// The active techniques, the plugin registry they come from, and their pipelines.
+pub struct Techniques {
+    device: Arc<Device>,
+    registry: Arc<PluginRegistry>,
+    services: Box<HostServices>,
+    vulkan: Box<abi::CadrVulkan>,
+    pub(crate) active: [Option<Active>; 4],
+    shade: ShadeMode,
+    pub(crate) pipelines: Option<TechniquePipelines>,
+    shaders: ShaderCache,
+    frame_set_layout: vk::DescriptorSetLayout,
+    /// Bumped whenever techniques, pipelines or the target change (part of the commands key).
+    pub(crate) epoch: u64,
+    worker_threads: u32,
+}
+
+fn index(kind: TechniqueKind) -> usize {
+    kind as usize
+}
+
+impl Techniques {
+    /// Creates an empty set over `registry` for renderers on `device` whose frame set layout
+    /// is `frame_set_layout`.
+    pub fn new(
+        device: &Arc<Device>,
+        registry: Arc<PluginRegistry>,
+        frame_set_layout: vk::DescriptorSetLayout,
+    ) -> Self {
+        let services = HostServices::new(device);
+        let instance = device.instance();
+        let limits = device.limits();
+        let vulkan = Box::new(abi::CadrVulkan {
+            size: std::mem::size_of::<abi::CadrVulkan>() as u32,
+            api_version: vk::API_VERSION_1_3,
+            instance: instance.raw().handle().as_raw() as *mut c_void,
+            physical_device: device.adapter().physical.as_raw() as *mut c_void,
+            device: device.raw().handle().as_raw() as *mut c_void,
+            queue_family: device.adapter().queue_family,
+            color_format: COLOR_FORMAT.as_raw(),
+            depth_format: DEPTH_FORMAT.as_raw(),
+            // SAFETY: the loader's function has the ABI's signature (handles as pointers).
+            get_instance_proc_addr: Some(unsafe {
+                std::mem::transmute::<vk::PFN_vkGetInstanceProcAddr, abi::CadrGetInstanceProcAddr>(
+                    instance.entry().static_fn().get_instance_proc_addr,
+                )
+            }),
+            features: feature_bits(device.capabilities()),
+            min_uniform_buffer_offset_alignment: limits.min_uniform_buffer_offset_alignment,
+            max_push_constants_size: limits.max_push_constants_size,
+            allocation_callbacks: services.callbacks().cast(),
+        });
+        let worker_threads = std::thread::available_parallelism()
+            .map(|n| n.get() as u32)
+            .unwrap_or(1)
+            .clamp(1, 8);
+        Self {
+            device: Arc::clone(device),
+            registry,
+            services,
+            vulkan,
+            active: [None, None, None, None],
+            shade: ShadeMode::Solid,
+            pipelines: None,
+            shaders: ShaderCache::default(),
+            frame_set_layout,
+            epoch: 1,
+            worker_threads,
+        }
+    }
+
+    /// The registry.
+    pub fn registry(&self) -> &Arc<PluginRegistry> {
+        &self.registry
+    }
+
+    /// The current combination (empty names for kinds not chosen yet).
+    pub fn combination(&self) -> Combination {
+        let name = |kind: TechniqueKind| {
+            self.active[index(kind)]
+                .as_ref()
+                .map(|a| a.entry.name.clone())
+                .unwrap_or_default()
+        };
+        Combination {
+            vertex: name(TechniqueKind::Vertex),
+            parameters: name(TechniqueKind::Parameters),
+            submission: name(TechniqueKind::Submission),
+            culling: name(TechniqueKind::Culling),
+        }
+    }
+
+    /// The shade mode.
+    pub fn shade_mode(&self) -> ShadeMode {
+        self.shade
+    }
+
+    /// Sets the shade mode (pipelines are rebuilt before the next frame).
+    pub fn set_shade_mode(&mut self, mode: ShadeMode) -> VkResult<()> {
+        if mode != self.shade {
+            self.wait_idle()?;
+            self.shade = mode;
+            self.pipelines = None;
+            self.epoch += 1;
+        }
+        Ok(())
+    }
+
+    /// What plugins hold now (objects through the allocation callbacks, buffers).
+    pub fn plugin_allocations(&self) -> AllocationCounts {
+        self.services.snapshot()
+    }
+
+    /// Whether `combination` can be used here; `Err` says why not.
+    pub fn check(&self, combination: &Combination) -> Result<(), String> {
+        let entries = self.entries(combination)?;
+        check_combination(&entries.iter().map(|e| &**e).collect::<Vec<_>>())
+    }
+
+    fn entries(&self, combination: &Combination) -> Result<Vec<Arc<TechniqueEntry>>, String> {
+        TechniqueKind::ALL
+            .iter()
+            .map(|&kind| {
+                let name = combination.get(kind);
+                self.registry.find(kind, name).cloned().ok_or_else(|| {
+                    let known: Vec<&str> = self.registry.of_kind(kind).map(|t| t.name.as_str()).collect();
+                    if known.is_empty() {
+                        format!("no {} technique named '{name}': no plugin offers any (are the plugins installed? see CADR_PLUGIN_PATH)", kind.name())
+                    } else {
+                        format!("no {} technique named '{name}' (known: {})", kind.name(), known.join(", "))
+                    }
+                })
+            })
+            .collect()
+    }
+
+    fn wait_idle(&self) -> VkResult<()> {
+        // SAFETY: the device is alive; nothing else submits while the owner swaps.
+        unsafe { self.device.raw().device_wait_idle() }.map_err(|result| VkError::Call {
+            call: "vkDeviceWaitIdle",
+            result,
+        })
+    }
+
+    fn create(&self, entry: &Arc<TechniqueEntry>) -> VkResult<Active> {
+        let create = entry.common().create.ok_or_else(|| VkError::Technique {
+            technique: format!("{} '{}'", entry.kind.name(), entry.name),
+            message: "its vtable has no create function".into(),
+        })?;
+        let info = abi::CadrCreateInfo {
+            size: std::mem::size_of::<abi::CadrCreateInfo>() as u32,
+            vulkan: &*self.vulkan,
+            host: self.services.api(),
+            worker_threads: self.worker_threads,
+        };
+        let mut instance: *mut c_void = std::ptr::null_mut();
+        let mut message = Message::new();
+        // SAFETY: every pointer is valid for the call; the plugin's ABI version was negotiated.
+        let result = unsafe { create(&info, &mut instance, message.raw()) };
+        status(entry, "create", result, &message)?;
+        if instance.is_null() {
+            return Err(VkError::Technique {
+                technique: format!("{} '{}'", entry.kind.name(), entry.name),
+                message: "create returned no instance".into(),
+            });
+        }
+        Ok(Active {
+            entry: Arc::clone(entry),
+            instance,
+        })
+    }
+
+    /// Switches to `combination`: refuses it (keeping the current one) when a name is unknown,
+    /// a technique is unsupported, the techniques do not fit together, or a plugin fails to
+    /// create its instance. Kinds whose technique does not change keep their instance.
+    pub fn select(&mut self, combination: &Combination) -> VkResult<()> {
+        let refuse = |message: String| VkError::Technique {
+            technique: combination.to_string(),
+            message,
+        };
+        let entries = self.entries(combination).map_err(refuse)?;
+        check_combination(&entries.iter().map(|e| &**e).collect::<Vec<_>>()).map_err(refuse)?;
+        let mut created: Vec<(usize, Active)> = Vec::new();
+        for entry in &entries {
+            let slot = index(entry.kind);
+            let same = self.active[slot]
+                .as_ref()
+                .is_some_and(|a| Arc::ptr_eq(&a.entry, entry));
+            if !same {
+                // A failure drops what was created so far; the current set stays.
+                created.push((slot, self.create(entry)?));
+            }
+        }
+        if created.is_empty() {
+            return Ok(());
+        }
+        self.wait_idle()?;
+        self.pipelines = None;
+        for (slot, active) in created {
+            // The old instance drops here, after the GPU finished with it.
+            self.active[slot] = Some(active);
+        }
+        self.epoch += 1;
+        Ok(())
+    }
+
+    /// Replaces one kind's technique.
+    pub fn swap(&mut self, kind: TechniqueKind, name: &str) -> VkResult<()> {
+        let mut combination = self.combination();
+        combination.set(kind, name);
+        self.select(&combination)
+    }
+
+    pub(crate) fn get(&self, kind: TechniqueKind) -> VkResult<&Active> {
+        self.active[index(kind)]
+            .as_ref()
+            .ok_or_else(|| VkError::InvalidUse(format!("no {} technique selected", kind.name())))
+    }
+
+    /// Builds the pipelines of the current combination and shade mode if needed.
+    pub(crate) fn ensure_pipelines(&mut self) -> VkResult<()> {
+        if self.pipelines.is_some() {
+            return Ok(());
+        }
+        let vertex = self.get(TechniqueKind::Vertex)?;
+        let parameters = self.get(TechniqueKind::Parameters)?;
+        let vertex_table: &abi::CadrVertexPathVtable = vertex.vtable();
+        let parameter_table: &abi::CadrParameterPathVtable = parameters.vtable();
+        let snippet = |f: Option<abi::CadrShaderSnippetFn>, instance: *mut c_void| -> String {
+            f.map(|f| {
+                // SAFETY: a live instance; the string lives as long as it.
+                let text = unsafe { f(instance) };
+                if text.is_null() {
+                    String::new()
+                } else {
+                    // SAFETY: NUL-terminated per the ABI.
+                    unsafe { CStr::from_ptr(text) }
+                        .to_string_lossy()
+                        .into_owned()
+                }
+            })
+            .unwrap_or_default()
+        };
+        let vertex_snippet = snippet(vertex_table.shader_snippet, vertex.instance);
+        let parameter_snippet = snippet(parameter_table.shader_snippet, parameters.instance);
+        let mut input = abi::CadrVertexInput::default();
+        if let Some(f) = vertex_table.vertex_input {
+            // SAFETY: a live instance; `input` is writable.
+            unsafe { f(vertex.instance, &mut input) };
+        }
+        let vertex_set = vertex_table
+            .set_layout
+            // SAFETY: a live instance.
+            .map_or(0, |f| unsafe { f(vertex.instance) });
+        let mut parameter_sets = [0u64; 2];
+        let mut push_bytes = 0u32;
+        if let Some(f) = parameter_table.layout {
+            // SAFETY: a live instance; room for two layouts and a count.
+            unsafe {
+                f(
+                    parameters.instance,
+                    parameter_sets.as_mut_ptr(),
+                    &mut push_bytes,
+                )
+            };
+        }
+        let key = (vertex.entry.name.clone(), parameters.entry.name.clone());
+        let spirv = self.shaders.vertex(key, || {
+            assemble_vertex_shader(&vertex_snippet, &parameter_snippet)
+        })?;
+        let inputs = PipelineInputs {
+            frame_set_layout: self.frame_set_layout,
+            path_set_layouts: [
+                vk::DescriptorSetLayout::from_raw(parameter_sets[0]),
+                vk::DescriptorSetLayout::from_raw(parameter_sets[1]),
+                vk::DescriptorSetLayout::from_raw(vertex_set),
+            ],
+            vertex_input: input,
+            vertex_spirv: &spirv,
+            mode: self.shade,
+        };
+        self.pipelines = Some(TechniquePipelines::new(
+            &self.device,
+            &mut self.shaders,
+            &inputs,
+        )?);
+        self.epoch += 1;
+        Ok(())
+    }
+}
+
+impl Drop for Techniques {
+    fn drop(&mut self) {
+        let _ = self.wait_idle();
+        self.pipelines = None;
+        for slot in &mut self.active {
+            *slot = None;
+        }
+    }
+}

@@ -1,0 +1,757 @@
+//! The C ABI between cadr (the host) and its technique plugins.
+//!
+//! Only `#[repr(C)]` types, plain integers and function pointers cross the boundary; Rust trait
+//! objects never do. The order of events:
+//!
+//! 1. The host opens a library and calls [`CADR_PLUGIN_VERSION_SYMBOL`]
+//!    (a [`CadrPluginVersionFn`]) before reading any struct. A library whose major version
+//!    differs from [`CADR_PLUGIN_ABI_MAJOR`], or whose minor version is newer than the host's,
+//!    is refused.
+//! 2. The host calls [`CADR_PLUGIN_ENTRY_SYMBOL`] (a [`CadrPluginEntryFn`]), which fills a
+//!    [`CadrPluginLibrary`]: the techniques it offers, each a [`CadrTechniqueInfo`] with the
+//!    device features it needs and a vtable for its kind.
+//! 3. Per technique instance the host calls the vtable's `create` with a [`CadrCreateInfo`]
+//!    (raw Vulkan handles, `vkGetInstanceProcAddr`, and host services), then the kind's
+//!    functions every frame, and `destroy` once the GPU has finished with the instance.
+//!
+//! Rules on both sides: every struct starts with its `size` in bytes (a reader ignores fields
+//! beyond the size the writer gave, and defaults fields the writer did not know); whoever
+//! allocates frees (buffers a plugin asks the host for go back through the host); strings are
+//! NUL-terminated UTF-8 owned by the side that returns them, valid as long as the library
+//! (descriptions) or the instance (shader snippets); no function unwinds across the boundary
+//! (the SDK's shims catch panics and return [`CADR_STATUS_PANICKED`]); libraries are never
+//! unloaded. Functions marked "thread-safe" may be called from several threads at once on the
+//! same instance; all others are called from one thread at a time.
+
+#![allow(non_camel_case_types)]
+
+use std::ffi::{c_char, c_void};
+
+/// Major version of this ABI: a library built for another major version is refused.
+pub const CADR_PLUGIN_ABI_MAJOR: u32 = 1;
+/// Minor version of this ABI: additions that older readers may ignore.
+pub const CADR_PLUGIN_ABI_MINOR: u32 = 0;
+/// `(major << 16) | minor`, what [`CadrPluginVersionFn`] returns.
+pub const CADR_PLUGIN_ABI_VERSION: u32 = (CADR_PLUGIN_ABI_MAJOR << 16) | CADR_PLUGIN_ABI_MINOR;
+
+/// Name of the version-negotiation symbol every plugin library exports.
+pub const CADR_PLUGIN_VERSION_SYMBOL: &str = "cadr_plugin_abi_version";
+/// Name of the entry point every plugin library exports.
+pub const CADR_PLUGIN_ENTRY_SYMBOL: &str = "cadr_plugin_entry";
+
+/// Returns the ABI version the library was built for, `(major << 16) | minor`. Called first,
+/// before any struct is exchanged.
+pub type CadrPluginVersionFn = unsafe extern "C" fn() -> u32;
+
+/// Fills `library` (whose `size` the host has set) with what the library offers. The pointers
+/// written stay valid for the life of the process.
+pub type CadrPluginEntryFn = unsafe extern "C" fn(library: *mut CadrPluginLibrary) -> CadrStatus;
+
+/// Result of a plugin function: one of the `CADR_STATUS_*` constants.
+pub type CadrStatus = i32;
+/// Success.
+pub const CADR_STATUS_OK: CadrStatus = 0;
+/// Failure; the plugin wrote a message into the [`CadrMessage`] it was given.
+pub const CADR_STATUS_ERROR: CadrStatus = 1;
+/// The plugin panicked (or threw); the SDK's shim caught it. The instance must not be used again.
+pub const CADR_STATUS_PANICKED: CadrStatus = 2;
+
+/// Technique kind: one of the `CADR_KIND_*` constants.
+pub type CadrTechniqueKind = u32;
+/// How vertices and indices reach the vertex shader ([`CadrVertexPathVtable`]).
+pub const CADR_KIND_VERTEX_PATH: CadrTechniqueKind = 1;
+/// How matrices and materials reach the shaders ([`CadrParameterPathVtable`]).
+pub const CADR_KIND_PARAMETER_PATH: CadrTechniqueKind = 2;
+/// Which draws are issued and how ([`CadrSubmissionVtable`]).
+pub const CADR_KIND_SUBMISSION: CadrTechniqueKind = 3;
+/// Which instances are drawn at all ([`CadrCullingVtable`]).
+pub const CADR_KIND_CULLING: CadrTechniqueKind = 4;
+
+/// Device features, as bits of a `u64`: what a technique needs ([`CadrTechniqueInfo`]) and
+/// what the host's device has enabled ([`CadrVulkan::features`]).
+pub type CadrFeatureBits = u64;
+/// `multiDrawIndirect`.
+pub const CADR_FEATURE_MULTI_DRAW_INDIRECT: CadrFeatureBits = 1 << 0;
+/// `drawIndirectFirstInstance`.
+pub const CADR_FEATURE_DRAW_INDIRECT_FIRST_INSTANCE: CadrFeatureBits = 1 << 1;
+/// `drawIndirectCount` (Vulkan 1.2).
+pub const CADR_FEATURE_DRAW_INDIRECT_COUNT: CadrFeatureBits = 1 << 2;
+/// `VK_EXT_multi_draw`.
+pub const CADR_FEATURE_MULTI_DRAW: CadrFeatureBits = 1 << 3;
+/// `bufferDeviceAddress` (Vulkan 1.2).
+pub const CADR_FEATURE_BUFFER_DEVICE_ADDRESS: CadrFeatureBits = 1 << 4;
+/// `shaderDrawParameters` (Vulkan 1.1).
+pub const CADR_FEATURE_SHADER_DRAW_PARAMETERS: CadrFeatureBits = 1 << 5;
+/// `VK_EXT_mesh_shader` (no technique uses it yet; listed so that requirements can name it).
+pub const CADR_FEATURE_MESH_SHADER: CadrFeatureBits = 1 << 6;
+/// `VK_NV_device_generated_commands` (as above).
+pub const CADR_FEATURE_DEVICE_GENERATED_COMMANDS: CadrFeatureBits = 1 << 7;
+
+/// What a technique offers to, or needs from, the techniques it is combined with, as bits of
+/// a `u64` ([`CadrTechniqueInfo::provides`], [`CadrTechniqueInfo::needs`]). The host refuses a
+/// combination where some technique needs a bit that none of the others provides.
+pub type CadrTraitBits = u64;
+/// Vertex path: the parts of one geometry share one binding (draws differ only in
+/// `firstIndex`), so one draw call may cover several parts of a geometry.
+pub const CADR_TRAIT_GEOMETRY_SHARES_BINDING: CadrTraitBits = 1 << 0;
+/// Vertex path: every geometry shares one binding (offsets in the draw), so one call may
+/// cover the whole scene (multi-draw-indirect).
+pub const CADR_TRAIT_SCENE_SHARES_BINDING: CadrTraitBits = 1 << 1;
+/// Parameter path: the shader finds a draw's parameters from `gl_InstanceIndex` (the draw's
+/// `firstInstance` is the instance id), so draws need no per-draw commands.
+pub const CADR_TRAIT_PARAMETERS_FROM_INSTANCE_INDEX: CadrTraitBits = 1 << 2;
+/// Parameter path: per-draw commands carry the parameters' values (push constants), so
+/// recorded command buffers go stale when a matrix or material changes.
+pub const CADR_TRAIT_PARAMETERS_IN_COMMANDS: CadrTraitBits = 1 << 3;
+/// Submission: records into secondary command buffers; the host begins rendering with
+/// `VK_RENDERING_CONTENTS_SECONDARY_COMMAND_BUFFERS_BIT` and records nothing inline.
+pub const CADR_TRAIT_SECONDARY_COMMAND_BUFFERS: CadrTraitBits = 1 << 4;
+
+/// A message buffer the host hands to functions that can fail: the plugin writes a
+/// NUL-terminated UTF-8 message of at most `capacity` bytes (including the NUL).
+#[repr(C)]
+#[derive(Debug)]
+pub struct CadrMessage {
+    /// Where to write.
+    pub text: *mut c_char,
+    /// Bytes available at `text`.
+    pub capacity: usize,
+}
+
+/// What a library offers, filled by [`CadrPluginEntryFn`].
+#[repr(C)]
+#[derive(Debug)]
+pub struct CadrPluginLibrary {
+    /// Size of this struct as the writer knows it.
+    pub size: u32,
+    /// The ABI major version the library was built for.
+    pub abi_major: u32,
+    /// The ABI minor version the library was built for.
+    pub abi_minor: u32,
+    /// The library's name (its family of techniques).
+    pub name: *const c_char,
+    /// Number of entries at `techniques`.
+    pub technique_count: u32,
+    /// The techniques.
+    pub techniques: *const CadrTechniqueInfo,
+}
+
+/// One technique a library offers.
+#[repr(C)]
+#[derive(Debug)]
+pub struct CadrTechniqueInfo {
+    /// Size of this struct as the writer knows it.
+    pub size: u32,
+    /// One of the `CADR_KIND_*` constants; says which vtable `vtable` points at.
+    pub kind: CadrTechniqueKind,
+    /// Short unique name within its kind (what `--vertex NAME` and friends take).
+    pub name: *const c_char,
+    /// One sentence saying what it does (what `cadr techniques` prints).
+    pub description: *const c_char,
+    /// `CADR_FEATURE_*` bits the device must have enabled.
+    pub required_features: CadrFeatureBits,
+    /// `CADR_TRAIT_*` bits this technique offers its partners.
+    pub provides: CadrTraitBits,
+    /// `CADR_TRAIT_*` bits this technique needs from its partners.
+    pub needs: CadrTraitBits,
+    /// The kind's vtable: [`CadrVertexPathVtable`], [`CadrParameterPathVtable`],
+    /// [`CadrSubmissionVtable`] or [`CadrCullingVtable`].
+    pub vtable: *const c_void,
+}
+
+/// `vkGetInstanceProcAddr`, from which a plugin loads every other Vulkan function.
+pub type CadrGetInstanceProcAddr = unsafe extern "system" fn(
+    instance: *mut c_void,
+    name: *const c_char,
+)
+    -> Option<unsafe extern "system" fn()>;
+
+/// The host's Vulkan objects, as raw handles (dispatchable ones as pointers, the others as
+/// 64-bit integers, as in `vulkan_core.h`).
+#[repr(C)]
+#[derive(Debug)]
+pub struct CadrVulkan {
+    /// Size of this struct.
+    pub size: u32,
+    /// The instance's API version (`VK_MAKE_API_VERSION`).
+    pub api_version: u32,
+    /// `VkInstance`.
+    pub instance: *mut c_void,
+    /// `VkPhysicalDevice`.
+    pub physical_device: *mut c_void,
+    /// `VkDevice`.
+    pub device: *mut c_void,
+    /// The queue family the host renders on.
+    pub queue_family: u32,
+    /// `VkFormat` of the colour target.
+    pub color_format: i32,
+    /// `VkFormat` of the depth target.
+    pub depth_format: i32,
+    /// Loader for every Vulkan function.
+    pub get_instance_proc_addr: Option<CadrGetInstanceProcAddr>,
+    /// `CADR_FEATURE_*` bits enabled on the device.
+    pub features: CadrFeatureBits,
+    /// `minUniformBufferOffsetAlignment`.
+    pub min_uniform_buffer_offset_alignment: u64,
+    /// `maxPushConstantsSize`.
+    pub max_push_constants_size: u32,
+    /// `VkAllocationCallbacks*` to pass to every `vkCreate*`/`vkDestroy*` (the host counts
+    /// live objects with them); may be null.
+    pub allocation_callbacks: *const c_void,
+}
+
+/// Where a host buffer lives.
+pub type CadrMemoryLocation = u32;
+/// Device-local; written by transfers or shaders.
+pub const CADR_MEMORY_GPU_ONLY: CadrMemoryLocation = 0;
+/// Host-visible and mapped; written by the CPU, read by the GPU.
+pub const CADR_MEMORY_CPU_TO_GPU: CadrMemoryLocation = 1;
+
+/// A buffer the host created for a plugin ([`CadrHostApi::create_buffer`]).
+#[repr(C)]
+#[derive(Clone, Copy, Debug)]
+pub struct CadrBuffer {
+    /// `VkBuffer` (0 for none).
+    pub buffer: u64,
+    /// Size in bytes.
+    pub size_bytes: u64,
+    /// Device address, when the buffer was created with `SHADER_DEVICE_ADDRESS` usage.
+    pub address: u64,
+    /// Host pointer to its memory for [`CADR_MEMORY_CPU_TO_GPU`]; null otherwise.
+    pub mapped: *mut c_void,
+    /// The host's id for it (passed back to destroy it).
+    pub id: u64,
+}
+
+/// Services the host offers a plugin instance. Thread-safe.
+#[repr(C)]
+#[derive(Debug)]
+pub struct CadrHostApi {
+    /// Size of this struct.
+    pub size: u32,
+    /// Passed back to every function here.
+    pub user: *mut c_void,
+    /// Creates a buffer of `size_bytes` with `VkBufferUsageFlags` `usage` in `location`, named
+    /// `name` for debuggers. The host owns its memory; give it back with `destroy_buffer`.
+    pub create_buffer: Option<
+        unsafe extern "C" fn(
+            user: *mut c_void,
+            size_bytes: u64,
+            usage: u32,
+            location: CadrMemoryLocation,
+            name: *const c_char,
+            buffer: *mut CadrBuffer,
+            message: *mut CadrMessage,
+        ) -> CadrStatus,
+    >,
+    /// Destroys a buffer from `create_buffer` (the caller makes sure the GPU is done with it).
+    pub destroy_buffer: Option<unsafe extern "C" fn(user: *mut c_void, buffer: *const CadrBuffer)>,
+}
+
+/// What `create` receives.
+#[repr(C)]
+#[derive(Debug)]
+pub struct CadrCreateInfo {
+    /// Size of this struct.
+    pub size: u32,
+    /// The device and its loader.
+    pub vulkan: *const CadrVulkan,
+    /// Host services.
+    pub host: *const CadrHostApi,
+    /// Worker threads the technique may use (at least 1).
+    pub worker_threads: u32,
+}
+
+/// A buffer of the scene the host keeps on the GPU.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default)]
+pub struct CadrBufferRef {
+    /// `VkBuffer`.
+    pub buffer: u64,
+    /// Size in bytes.
+    pub size_bytes: u64,
+    /// Device address (0 without `bufferDeviceAddress`).
+    pub address: u64,
+}
+
+/// Flag bits of [`CadrInstance::flags`].
+pub type CadrInstanceFlags = u32;
+/// Drawn with a highlight tint.
+pub const CADR_INSTANCE_HIGHLIGHTED: CadrInstanceFlags = 1 << 0;
+/// Drawn by the pick pass.
+pub const CADR_INSTANCE_PICKABLE: CadrInstanceFlags = 1 << 1;
+/// The instance id is alive.
+pub const CADR_INSTANCE_ALIVE: CadrInstanceFlags = 1 << 2;
+
+/// One drawable part on one path of the scene tree (the unit of "individual" drawing). Index
+/// positions are absolute element offsets in the scene's index buffers; indices are relative
+/// to the geometry's first vertex, `vertex_base`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct CadrInstance {
+    /// Matrix slot (the scene tree node placing it).
+    pub matrix: u32,
+    /// Material slot.
+    pub material: u32,
+    /// Geometry slot.
+    pub geometry: u32,
+    /// Part index within the geometry.
+    pub part: u32,
+    /// `CADR_INSTANCE_*` bits.
+    pub flags: CadrInstanceFlags,
+    /// The geometry's first vertex in the vertex buffer.
+    pub vertex_base: u32,
+    /// The geometry's first index in the index buffer.
+    pub geometry_first_index: u32,
+    /// The geometry's first index in the wire index buffer.
+    pub geometry_first_wire_index: u32,
+    /// The part's first triangle index (absolute).
+    pub first_index: u32,
+    /// The part's triangle index count.
+    pub index_count: u32,
+    /// The part's first edge index (absolute) in the wire index buffer.
+    pub first_wire_index: u32,
+    /// The part's edge index count (line list).
+    pub wire_index_count: u32,
+    /// The part's bounding sphere in object space: centre xyz, radius w.
+    pub sphere: [f32; 4],
+}
+
+/// A matrix slot as the host keeps it on the CPU and in [`CadrSceneView::matrix_buffer`]:
+/// column-major, the translation (column 3) split into an f32 high part (in column 3) and the
+/// f32 remainder (in the `w` of columns 0–2), so that positions relative to the eye keep f64
+/// precision on the GPU.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct CadrMatrix {
+    /// Columns.
+    pub columns: [[f32; 4]; 4],
+}
+
+/// A material slot as kept on the CPU and in [`CadrSceneView::material_buffer`].
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct CadrMaterial {
+    /// Linear RGBA.
+    pub base_color: [f32; 4],
+    /// x: metallic, y: roughness.
+    pub surface: [f32; 4],
+}
+
+/// The per-instance record in [`CadrSceneView::instance_buffer`], indexed by instance id
+/// (what `gl_InstanceIndex` finds under [`CADR_TRAIT_PARAMETERS_FROM_INSTANCE_INDEX`]).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct CadrInstanceRecord {
+    /// Matrix slot.
+    pub matrix: u32,
+    /// Material slot.
+    pub material: u32,
+    /// `CADR_INSTANCE_*` bits.
+    pub flags: u32,
+    /// The instance id.
+    pub instance: u32,
+}
+
+/// The scene as techniques see it during one frame. Everything it points at stays valid and
+/// unchanged until the frame's last call.
+#[repr(C)]
+#[derive(Debug)]
+pub struct CadrSceneView {
+    /// Size of this struct.
+    pub size: u32,
+    /// Instance ids in use are below this.
+    pub instance_count: u32,
+    /// Per instance id (`instance_count` entries; dead ids lack [`CADR_INSTANCE_ALIVE`]).
+    pub instances: *const CadrInstance,
+    /// One bit per instance id: drawn this frame (alive, visible, not culled, has triangles).
+    pub drawn_bits: *const u64,
+    /// Changes whenever an instance or a drawn bit changed (structure, materials, culling).
+    pub draws_generation: u64,
+    /// Changes whenever a matrix or material value changed.
+    pub parameters_generation: u64,
+    /// Number of matrix slots.
+    pub matrix_count: u32,
+    /// The matrices on the CPU (`matrix_count`).
+    pub matrices: *const CadrMatrix,
+    /// Number of material slots.
+    pub material_count: u32,
+    /// The materials on the CPU (`material_count`).
+    pub materials: *const CadrMaterial,
+    /// Matrix slots changed since the last frame.
+    pub dirty_matrices: *const u32,
+    /// Number of entries at `dirty_matrices`.
+    pub dirty_matrix_count: u32,
+    /// Material slots changed since the last frame.
+    pub dirty_materials: *const u32,
+    /// Number of entries at `dirty_materials`.
+    pub dirty_material_count: u32,
+    /// Changes whenever one of the buffers below was replaced.
+    pub buffers_generation: u64,
+    /// Vertices: position xyz and normal xyz as f32, `vertex_stride` bytes each.
+    pub vertex_buffer: CadrBufferRef,
+    /// Bytes per vertex.
+    pub vertex_stride: u32,
+    /// Triangle indices (u32).
+    pub index_buffer: CadrBufferRef,
+    /// Edge indices (u32 line list).
+    pub wire_index_buffer: CadrBufferRef,
+    /// [`CadrMatrix`] per matrix slot.
+    pub matrix_buffer: CadrBufferRef,
+    /// [`CadrMaterial`] per material slot.
+    pub material_buffer: CadrBufferRef,
+    /// [`CadrInstanceRecord`] per instance id.
+    pub instance_buffer: CadrBufferRef,
+}
+
+/// What a draw pass draws.
+pub type CadrPassKind = u32;
+/// Triangles (solid shading).
+pub const CADR_PASS_TRIANGLES: CadrPassKind = 0;
+/// Edge lines from the wire index buffer.
+pub const CADR_PASS_EDGES: CadrPassKind = 1;
+
+/// One pass of the frame: its pipeline and what it draws.
+#[repr(C)]
+#[derive(Clone, Copy, Debug)]
+pub struct CadrPass {
+    /// `VkPipeline` to bind.
+    pub pipeline: u64,
+    /// `CADR_PASS_*`.
+    pub kind: CadrPassKind,
+}
+
+/// Counters a frame's recording adds to.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct CadrStats {
+    /// Draw commands recorded (`vkCmdDraw*` calls, each indirect or multi-draw call counts once).
+    pub draw_calls: u64,
+    /// Parts or ranges those commands draw.
+    pub draws: u64,
+    /// Primitives (triangles or lines) drawn.
+    pub primitives: u64,
+    /// Pipeline binds.
+    pub pipeline_binds: u64,
+    /// Vertex and index buffer binds (and vertex-pulling descriptor or address changes).
+    pub vertex_binds: u64,
+    /// Parameter binds: push constants, descriptor sets, buffer updates.
+    pub parameter_binds: u64,
+    /// Bind calls that panicked (their shims caught it); the host treats the frame as failed.
+    pub failures: u64,
+}
+
+/// What a vertex or parameter path binds with: the command buffer being recorded and the pass.
+#[repr(C)]
+#[derive(Debug)]
+pub struct CadrBindContext {
+    /// Size of this struct.
+    pub size: u32,
+    /// `VkCommandBuffer` being recorded (primary or secondary).
+    pub command_buffer: *mut c_void,
+    /// `VkPipelineLayout` of the pass's pipeline.
+    pub pipeline_layout: u64,
+    /// `CADR_PASS_*`.
+    pub pass_kind: CadrPassKind,
+    /// The scene.
+    pub scene: *const CadrSceneView,
+    /// Counters to add to (one per recording thread).
+    pub stats: *mut CadrStats,
+}
+
+/// Scratch a recording keeps per command buffer so that a path re-issues a binding only when
+/// it changes. Zeroed (`valid == 0`) at the start of each command buffer.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default)]
+pub struct CadrBindState {
+    /// 0 until the path has bound something in this command buffer.
+    pub valid: u32,
+    /// Free for the path.
+    pub words: [u64; 3],
+}
+
+/// Element offsets the vertex path's current binding starts at: a draw of an instance uses
+/// `firstIndex = first_index - index_base` and `vertexOffset = vertex_base - vertex_base_bound`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct CadrDrawBase {
+    /// First index element of the bound index buffer range.
+    pub index_base: u32,
+    /// First vertex of the bound vertex range.
+    pub vertex_base: u32,
+    /// 0 when the instance cannot be drawn (nothing bound).
+    pub ok: u32,
+}
+
+/// Vertex input a pipeline is built with.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default)]
+pub struct CadrVertexInput {
+    /// Stride of binding 0, or 0 for no vertex input (vertex pulling).
+    pub stride: u32,
+    /// Number of attributes (at most 4): location i has format `formats[i]` at `offsets[i]`.
+    pub attribute_count: u32,
+    /// `VkFormat` per attribute.
+    pub formats: [i32; 4],
+    /// Byte offset per attribute.
+    pub offsets: [u32; 4],
+}
+
+/// Functions every technique has at the start of its vtable.
+#[repr(C)]
+#[derive(Debug)]
+pub struct CadrCommonVtable {
+    /// Size of the whole vtable.
+    pub size: u32,
+    /// Creates an instance into `*instance`. On failure writes `message`.
+    pub create: Option<
+        unsafe extern "C" fn(
+            info: *const CadrCreateInfo,
+            instance: *mut *mut c_void,
+            message: *mut CadrMessage,
+        ) -> CadrStatus,
+    >,
+    /// Destroys an instance (the GPU has finished with everything it recorded).
+    pub destroy: Option<unsafe extern "C" fn(instance: *mut c_void)>,
+}
+
+/// GLSL the host pastes into the vertex shader. Push-constant bytes 0–95 belong to the
+/// parameter path and 96–127 to the vertex path; descriptor set 1 and 2 to the parameter path,
+/// set 3 to the vertex path (set 0 is the host's frame uniforms).
+pub type CadrShaderSnippetFn = unsafe extern "C" fn(instance: *mut c_void) -> *const c_char;
+
+/// Prepares for a frame before the pass (uploads, descriptor writes); may record transfer or
+/// compute commands into `command_buffer` (a primary outside rendering).
+pub type CadrPrepareFn = unsafe extern "C" fn(
+    instance: *mut c_void,
+    scene: *const CadrSceneView,
+    command_buffer: *mut c_void,
+    message: *mut CadrMessage,
+) -> CadrStatus;
+
+/// Vertex path vtable ([`CADR_KIND_VERTEX_PATH`]). Its snippet defines
+/// `vec3 cadr_vertex_position()` and `vec3 cadr_vertex_normal()`.
+#[repr(C)]
+#[derive(Debug)]
+pub struct CadrVertexPathVtable {
+    /// Size, create, destroy.
+    pub common: CadrCommonVtable,
+    /// The GLSL snippet.
+    pub shader_snippet: Option<CadrShaderSnippetFn>,
+    /// The vertex input state.
+    pub vertex_input:
+        Option<unsafe extern "C" fn(instance: *mut c_void, input: *mut CadrVertexInput)>,
+    /// `VkDescriptorSetLayout` for set 3, or 0.
+    pub set_layout: Option<unsafe extern "C" fn(instance: *mut c_void) -> u64>,
+    /// Before the pass.
+    pub prepare: Option<CadrPrepareFn>,
+    /// Binds what stays bound for the whole pass. Thread-safe.
+    pub bind_pass: Option<
+        unsafe extern "C" fn(
+            instance: *mut c_void,
+            context: *const CadrBindContext,
+            state: *mut CadrBindState,
+        ),
+    >,
+    /// Binds what the draw of `drawn` needs unless `state` says it is bound; returns where
+    /// the binding starts. Thread-safe.
+    pub bind_draw: Option<
+        unsafe extern "C" fn(
+            instance: *mut c_void,
+            context: *const CadrBindContext,
+            drawn: *const CadrInstance,
+            state: *mut CadrBindState,
+        ) -> CadrDrawBase,
+    >,
+}
+
+/// Parameter path vtable ([`CADR_KIND_PARAMETER_PATH`]). Its snippet defines
+/// `CadrObject cadr_object()` (the host declares `struct CadrObject { mat4 world; vec4
+/// base_color; vec2 surface; uint flags; uint instance; }`, `world` laid out as
+/// [`CadrMatrix`]).
+#[repr(C)]
+#[derive(Debug)]
+pub struct CadrParameterPathVtable {
+    /// Size, create, destroy.
+    pub common: CadrCommonVtable,
+    /// The GLSL snippet.
+    pub shader_snippet: Option<CadrShaderSnippetFn>,
+    /// `VkDescriptorSetLayout`s for sets 1 and 2 (0 for none), and the push-constant bytes used.
+    pub layout: Option<
+        unsafe extern "C" fn(
+            instance: *mut c_void,
+            set_layouts: *mut u64,
+            push_constant_bytes: *mut u32,
+        ),
+    >,
+    /// Before the pass.
+    pub prepare: Option<CadrPrepareFn>,
+    /// Binds what stays bound for the whole pass. Thread-safe.
+    pub bind_pass: Option<
+        unsafe extern "C" fn(
+            instance: *mut c_void,
+            context: *const CadrBindContext,
+            state: *mut CadrBindState,
+        ),
+    >,
+    /// Binds the parameters of instance `id` unless `state` says they are bound; returns the
+    /// `firstInstance` the draw must use. Thread-safe.
+    pub bind_draw: Option<
+        unsafe extern "C" fn(
+            instance: *mut c_void,
+            context: *const CadrBindContext,
+            id: u32,
+            drawn: *const CadrInstance,
+            state: *mut CadrBindState,
+        ) -> u32,
+    >,
+}
+
+/// A technique the submission drives: instance and vtable.
+#[repr(C)]
+#[derive(Debug)]
+pub struct CadrPathRef<V> {
+    /// The path's instance.
+    pub instance: *mut c_void,
+    /// The path's vtable.
+    pub vtable: *const V,
+}
+
+impl<V> Clone for CadrPathRef<V> {
+    fn clone(&self) -> Self {
+        *self
+    }
+}
+
+impl<V> Copy for CadrPathRef<V> {}
+
+/// What a submission records with.
+#[repr(C)]
+#[derive(Debug)]
+pub struct CadrRecordContext {
+    /// Size of this struct.
+    pub size: u32,
+    /// The primary `VkCommandBuffer`, inside dynamic rendering during `record`.
+    pub command_buffer: *mut c_void,
+    /// `VkPipelineLayout` shared by the passes.
+    pub pipeline_layout: u64,
+    /// `VkDescriptorSet` of the frame uniforms, for set 0.
+    pub frame_set: u64,
+    /// Number of passes.
+    pub pass_count: u32,
+    /// The passes, in order.
+    pub passes: *const CadrPass,
+    /// Target width and height (viewport and scissor of secondary command buffers).
+    pub width: u32,
+    /// Target height.
+    pub height: u32,
+    /// The scene.
+    pub scene: *const CadrSceneView,
+    /// The vertex path.
+    pub vertex: CadrPathRef<CadrVertexPathVtable>,
+    /// The parameter path.
+    pub parameters: CadrPathRef<CadrParameterPathVtable>,
+    /// Changes whenever anything recorded commands depend on changed (draws, passes, target,
+    /// and parameter values under [`CADR_TRAIT_PARAMETERS_IN_COMMANDS`]): a technique that
+    /// replays recorded commands re-records when it differs from last time.
+    pub commands_key: u64,
+    /// Counters to add to.
+    pub stats: *mut CadrStats,
+}
+
+/// Submission vtable ([`CADR_KIND_SUBMISSION`]).
+#[repr(C)]
+#[derive(Debug)]
+pub struct CadrSubmissionVtable {
+    /// Size, create, destroy.
+    pub common: CadrCommonVtable,
+    /// Before the pass (outside rendering): e.g. writes indirect commands.
+    pub prepare: Option<
+        unsafe extern "C" fn(
+            instance: *mut c_void,
+            context: *const CadrRecordContext,
+            message: *mut CadrMessage,
+        ) -> CadrStatus,
+    >,
+    /// Inside rendering: records (or replays) the passes' draws.
+    pub record: Option<
+        unsafe extern "C" fn(
+            instance: *mut c_void,
+            context: *const CadrRecordContext,
+            message: *mut CadrMessage,
+        ) -> CadrStatus,
+    >,
+}
+
+/// What culling reads.
+#[repr(C)]
+#[derive(Debug)]
+pub struct CadrCullInput {
+    /// Size of this struct.
+    pub size: u32,
+    /// The scene (instances with their spheres, candidates in `drawn_bits` before culling).
+    pub scene: *const CadrSceneView,
+    /// Candidate bits: alive, visible in the tree, with triangles.
+    pub candidate_bits: *const u64,
+    /// World matrices in f64 per matrix slot (column-major, 16 each).
+    pub world_matrices: *const f64,
+    /// World-space frustum planes (xyz normal pointing inside, w distance): a point p is
+    /// inside when `dot(n, p) + w >= 0` for all six.
+    pub planes: [[f64; 4]; 6],
+}
+
+/// What culling writes: `word_count` words each.
+#[repr(C)]
+#[derive(Debug)]
+pub struct CadrCullOutput {
+    /// Size of this struct.
+    pub size: u32,
+    /// Words at each pointer.
+    pub word_count: u32,
+    /// Bit per instance id: passes culling (the culler keeps these between frames).
+    pub visible_bits: *mut u64,
+    /// Bits that differ from the last frame's `visible_bits` (the XOR), so the host applies
+    /// only the changes.
+    pub changed_bits: *mut u64,
+}
+
+/// Culling vtable ([`CADR_KIND_CULLING`]).
+#[repr(C)]
+#[derive(Debug)]
+pub struct CadrCullingVtable {
+    /// Size, create, destroy.
+    pub common: CadrCommonVtable,
+    /// Culls on the CPU before the frame is recorded.
+    pub cull: Option<
+        unsafe extern "C" fn(
+            instance: *mut c_void,
+            input: *const CadrCullInput,
+            output: *mut CadrCullOutput,
+            message: *mut CadrMessage,
+        ) -> CadrStatus,
+    >,
+    /// Reserved for GPU culling (must be null in ABI 1.0): records compute work that writes
+    /// indirect commands and counts for the submission to draw.
+    pub record_gpu: Option<
+        unsafe extern "C" fn(
+            instance: *mut c_void,
+            context: *const CadrRecordContext,
+        ) -> CadrStatus,
+    >,
+}
+
+/// Makes sure the structs really are what the C side sees.
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn structs_have_their_c_sizes() {
+        assert_eq!(std::mem::size_of::<CadrInstance>(), 64);
+        assert_eq!(std::mem::size_of::<CadrMatrix>(), 64);
+        assert_eq!(std::mem::size_of::<CadrMaterial>(), 32);
+        assert_eq!(std::mem::size_of::<CadrInstanceRecord>(), 16);
+        assert_eq!(std::mem::size_of::<CadrBindState>(), 32);
+        assert_eq!(CADR_PLUGIN_ABI_VERSION >> 16, CADR_PLUGIN_ABI_MAJOR);
+    }
+}

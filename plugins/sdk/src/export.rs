@@ -1,0 +1,427 @@
+//! The `extern "C"` shims [`export_plugin!`](crate::export_plugin) generates vtables from.
+//! Every shim catches panics: a panic never unwinds into the host.
+
+use std::ffi::c_void;
+use std::panic::{catch_unwind, AssertUnwindSafe};
+use std::sync::OnceLock;
+
+use ash::vk;
+use ash::vk::Handle;
+use cadr_plugin_abi as abi;
+
+use crate::gpu::Gpu;
+use crate::message::write_message;
+use crate::views::{Bind, CullInput, CullOutput, Record, Scene};
+use crate::{Culling, ParameterPath, Submission, Technique, VertexPath};
+
+/// How a technique describes itself (strings NUL-terminated).
+#[derive(Clone, Copy, Debug)]
+pub struct Describe {
+    /// Name.
+    pub name: &'static str,
+    /// Description.
+    pub description: &'static str,
+    /// `CADR_FEATURE_*` bits needed.
+    pub features: abi::CadrFeatureBits,
+    /// `CADR_TRAIT_*` bits provided.
+    pub provides: abi::CadrTraitBits,
+    /// `CADR_TRAIT_*` bits needed.
+    pub needs: abi::CadrTraitBits,
+}
+
+struct Library(abi::CadrPluginLibrary);
+// SAFETY: the library's pointers are to leaked, immutable data.
+unsafe impl Send for Library {}
+// SAFETY: as above.
+unsafe impl Sync for Library {}
+
+static LIBRARY: OnceLock<Library> = OnceLock::new();
+
+fn panic_text(payload: &(dyn std::any::Any + Send)) -> String {
+    payload
+        .downcast_ref::<&str>()
+        .map(|s| (*s).to_owned())
+        .or_else(|| payload.downcast_ref::<String>().cloned())
+        .unwrap_or_else(|| "a panic without a message".into())
+}
+
+/// Runs `f`, turning its error into a message and a panic into [`abi::CADR_STATUS_PANICKED`].
+fn guarded(
+    message: *mut abi::CadrMessage,
+    f: impl FnOnce() -> Result<(), String>,
+) -> abi::CadrStatus {
+    match catch_unwind(AssertUnwindSafe(f)) {
+        Ok(Ok(())) => abi::CADR_STATUS_OK,
+        Ok(Err(text)) => {
+            // SAFETY: the host passes a valid message buffer or null.
+            unsafe { write_message(message, &text) };
+            abi::CADR_STATUS_ERROR
+        }
+        Err(payload) => {
+            // SAFETY: as above.
+            unsafe { write_message(message, &format!("panicked: {}", panic_text(&*payload))) };
+            abi::CADR_STATUS_PANICKED
+        }
+    }
+}
+
+/// The body of `cadr_plugin_entry`.
+///
+/// # Safety
+/// `library` is null or writable.
+pub unsafe fn entry(
+    library: *mut abi::CadrPluginLibrary,
+    name: &'static str,
+    techniques: impl FnOnce() -> Vec<abi::CadrTechniqueInfo>,
+) -> abi::CadrStatus {
+    if library.is_null() {
+        return abi::CADR_STATUS_ERROR;
+    }
+    let built = catch_unwind(AssertUnwindSafe(|| {
+        LIBRARY.get_or_init(|| {
+            let techniques: &'static [abi::CadrTechniqueInfo] = Vec::leak(techniques());
+            Library(abi::CadrPluginLibrary {
+                size: std::mem::size_of::<abi::CadrPluginLibrary>() as u32,
+                abi_major: abi::CADR_PLUGIN_ABI_MAJOR,
+                abi_minor: abi::CADR_PLUGIN_ABI_MINOR,
+                name: name.as_ptr().cast(),
+                technique_count: techniques.len() as u32,
+                techniques: techniques.as_ptr(),
+            })
+        })
+    }));
+    let Ok(built) = built else {
+        return abi::CADR_STATUS_PANICKED;
+    };
+    // SAFETY: checked non-null; the host set `size` to what it can hold.
+    unsafe {
+        let room = ((*library).size as usize).min(std::mem::size_of::<abi::CadrPluginLibrary>());
+        std::ptr::copy_nonoverlapping(
+            (&built.0 as *const abi::CadrPluginLibrary).cast::<u8>(),
+            library.cast::<u8>(),
+            room,
+        );
+        (*library).size = room as u32;
+    }
+    abi::CADR_STATUS_OK
+}
+
+fn info<V>(kind: abi::CadrTechniqueKind, describe: Describe, vtable: V) -> abi::CadrTechniqueInfo {
+    abi::CadrTechniqueInfo {
+        size: std::mem::size_of::<abi::CadrTechniqueInfo>() as u32,
+        kind,
+        name: describe.name.as_ptr().cast(),
+        description: describe.description.as_ptr().cast(),
+        required_features: describe.features,
+        provides: describe.provides,
+        needs: describe.needs,
+        vtable: Box::leak(Box::new(vtable)) as *const V as *const c_void,
+    }
+}
+
+fn common<T: Technique, V>() -> abi::CadrCommonVtable {
+    abi::CadrCommonVtable {
+        size: std::mem::size_of::<V>() as u32,
+        create: Some(create::<T>),
+        destroy: Some(destroy::<T>),
+    }
+}
+
+unsafe extern "C" fn create<T: Technique>(
+    info: *const abi::CadrCreateInfo,
+    instance: *mut *mut c_void,
+    message: *mut abi::CadrMessage,
+) -> abi::CadrStatus {
+    guarded(message, || {
+        // SAFETY: the host passes a valid create info or null.
+        let info = unsafe { info.as_ref() }.ok_or("no create info")?;
+        if instance.is_null() {
+            return Err("no place for the instance".into());
+        }
+        // SAFETY: the create info is the host's.
+        let gpu = unsafe { Gpu::from_create_info(info) }?;
+        let created = T::create(gpu)?;
+        // SAFETY: checked non-null above.
+        unsafe { *instance = Box::into_raw(Box::new(created)).cast() };
+        Ok(())
+    })
+}
+
+unsafe extern "C" fn destroy<T: Technique>(instance: *mut c_void) {
+    if instance.is_null() {
+        return;
+    }
+    let _ = catch_unwind(AssertUnwindSafe(|| {
+        // SAFETY: the instance came from `create::<T>` and is destroyed once.
+        drop(unsafe { Box::from_raw(instance.cast::<T>()) })
+    }));
+}
+
+/// # Safety
+/// `instance` came from `create::<T>`; the host does not call `&mut` functions concurrently.
+unsafe fn this<'a, T>(instance: *mut c_void) -> &'a mut T {
+    // SAFETY: per the contract.
+    unsafe { &mut *instance.cast::<T>() }
+}
+
+fn count_failure(context: *const abi::CadrBindContext) {
+    // SAFETY: the context is valid for the call; its counters belong to this recording.
+    if let Some(stats) = unsafe { context.as_ref().and_then(|c| c.stats.as_mut()) } {
+        stats.failures += 1;
+    }
+}
+
+/// The technique info of a vertex path.
+pub fn vertex<T: VertexPath>(describe: Describe) -> abi::CadrTechniqueInfo {
+    unsafe extern "C" fn snippet<T: VertexPath>(instance: *mut c_void) -> *const std::ffi::c_char {
+        // SAFETY: see `this`.
+        catch_unwind(AssertUnwindSafe(|| {
+            unsafe { this::<T>(instance) }.shader_snippet().as_ptr()
+        }))
+        .unwrap_or(std::ptr::null())
+    }
+    unsafe extern "C" fn input<T: VertexPath>(
+        instance: *mut c_void,
+        out: *mut abi::CadrVertexInput,
+    ) {
+        let _ = catch_unwind(AssertUnwindSafe(|| {
+            // SAFETY: see `this`; `out` is the host's.
+            unsafe { *out = this::<T>(instance).vertex_input() }
+        }));
+    }
+    unsafe extern "C" fn set_layout<T: VertexPath>(instance: *mut c_void) -> u64 {
+        // SAFETY: see `this`.
+        catch_unwind(AssertUnwindSafe(|| {
+            unsafe { this::<T>(instance) }.set_layout().as_raw()
+        }))
+        .unwrap_or(0)
+    }
+    unsafe extern "C" fn prepare<T: VertexPath>(
+        instance: *mut c_void,
+        scene: *const abi::CadrSceneView,
+        command_buffer: *mut c_void,
+        message: *mut abi::CadrMessage,
+    ) -> abi::CadrStatus {
+        guarded(message, || {
+            // SAFETY: the host's scene view for the frame.
+            let scene = unsafe { Scene::from_raw(scene) }.ok_or("no scene")?;
+            // SAFETY: see `this`.
+            unsafe { this::<T>(instance) }
+                .prepare(&scene, vk::CommandBuffer::from_raw(command_buffer as u64))
+        })
+    }
+    unsafe extern "C" fn bind_pass<T: VertexPath>(
+        instance: *mut c_void,
+        context: *const abi::CadrBindContext,
+        state: *mut abi::CadrBindState,
+    ) {
+        let result = catch_unwind(AssertUnwindSafe(|| {
+            // SAFETY: valid for the call; `this` only read (thread-safe function).
+            unsafe {
+                if let (Some(bind), Some(state)) = (Bind::from_raw(context), state.as_mut()) {
+                    (*instance.cast::<T>()).bind_pass(&bind, state);
+                }
+            }
+        }));
+        if result.is_err() {
+            count_failure(context);
+        }
+    }
+    unsafe extern "C" fn bind_draw<T: VertexPath>(
+        instance: *mut c_void,
+        context: *const abi::CadrBindContext,
+        drawn: *const abi::CadrInstance,
+        state: *mut abi::CadrBindState,
+    ) -> abi::CadrDrawBase {
+        let result = catch_unwind(AssertUnwindSafe(|| {
+            // SAFETY: valid for the call; `this` only read (thread-safe function).
+            unsafe {
+                match (Bind::from_raw(context), drawn.as_ref(), state.as_mut()) {
+                    (Some(bind), Some(drawn), Some(state)) => {
+                        (*instance.cast::<T>()).bind_draw(&bind, drawn, state)
+                    }
+                    _ => abi::CadrDrawBase::default(),
+                }
+            }
+        }));
+        result.unwrap_or_else(|_| {
+            count_failure(context);
+            abi::CadrDrawBase::default()
+        })
+    }
+    info(
+        abi::CADR_KIND_VERTEX_PATH,
+        describe,
+        abi::CadrVertexPathVtable {
+            common: common::<T, abi::CadrVertexPathVtable>(),
+            shader_snippet: Some(snippet::<T>),
+            vertex_input: Some(input::<T>),
+            set_layout: Some(set_layout::<T>),
+            prepare: Some(prepare::<T>),
+            bind_pass: Some(bind_pass::<T>),
+            bind_draw: Some(bind_draw::<T>),
+        },
+    )
+}
+
+/// The technique info of a parameter path.
+pub fn parameters<T: ParameterPath>(describe: Describe) -> abi::CadrTechniqueInfo {
+    unsafe extern "C" fn snippet<T: ParameterPath>(
+        instance: *mut c_void,
+    ) -> *const std::ffi::c_char {
+        // SAFETY: see `this`.
+        catch_unwind(AssertUnwindSafe(|| {
+            unsafe { this::<T>(instance) }.shader_snippet().as_ptr()
+        }))
+        .unwrap_or(std::ptr::null())
+    }
+    unsafe extern "C" fn layout<T: ParameterPath>(
+        instance: *mut c_void,
+        sets: *mut u64,
+        push: *mut u32,
+    ) {
+        let _ = catch_unwind(AssertUnwindSafe(|| {
+            // SAFETY: see `this`; the host passes room for two layouts and one count.
+            unsafe {
+                let (layouts, bytes) = this::<T>(instance).layout();
+                *sets = layouts[0].as_raw();
+                *sets.add(1) = layouts[1].as_raw();
+                *push = bytes;
+            }
+        }));
+    }
+    unsafe extern "C" fn prepare<T: ParameterPath>(
+        instance: *mut c_void,
+        scene: *const abi::CadrSceneView,
+        command_buffer: *mut c_void,
+        message: *mut abi::CadrMessage,
+    ) -> abi::CadrStatus {
+        guarded(message, || {
+            // SAFETY: the host's scene view for the frame.
+            let scene = unsafe { Scene::from_raw(scene) }.ok_or("no scene")?;
+            // SAFETY: see `this`.
+            unsafe { this::<T>(instance) }
+                .prepare(&scene, vk::CommandBuffer::from_raw(command_buffer as u64))
+        })
+    }
+    unsafe extern "C" fn bind_pass<T: ParameterPath>(
+        instance: *mut c_void,
+        context: *const abi::CadrBindContext,
+        state: *mut abi::CadrBindState,
+    ) {
+        let result = catch_unwind(AssertUnwindSafe(|| {
+            // SAFETY: valid for the call; `this` only read (thread-safe function).
+            unsafe {
+                if let (Some(bind), Some(state)) = (Bind::from_raw(context), state.as_mut()) {
+                    (*instance.cast::<T>()).bind_pass(&bind, state);
+                }
+            }
+        }));
+        if result.is_err() {
+            count_failure(context);
+        }
+    }
+    unsafe extern "C" fn bind_draw<T: ParameterPath>(
+        instance: *mut c_void,
+        context: *const abi::CadrBindContext,
+        id: u32,
+        drawn: *const abi::CadrInstance,
+        state: *mut abi::CadrBindState,
+    ) -> u32 {
+        let result = catch_unwind(AssertUnwindSafe(|| {
+            // SAFETY: valid for the call; `this` only read (thread-safe function).
+            unsafe {
+                match (Bind::from_raw(context), drawn.as_ref(), state.as_mut()) {
+                    (Some(bind), Some(drawn), Some(state)) => {
+                        (*instance.cast::<T>()).bind_draw(&bind, id, drawn, state)
+                    }
+                    _ => id,
+                }
+            }
+        }));
+        result.unwrap_or_else(|_| {
+            count_failure(context);
+            id
+        })
+    }
+    info(
+        abi::CADR_KIND_PARAMETER_PATH,
+        describe,
+        abi::CadrParameterPathVtable {
+            common: common::<T, abi::CadrParameterPathVtable>(),
+            shader_snippet: Some(snippet::<T>),
+            layout: Some(layout::<T>),
+            prepare: Some(prepare::<T>),
+            bind_pass: Some(bind_pass::<T>),
+            bind_draw: Some(bind_draw::<T>),
+        },
+    )
+}
+
+/// The technique info of a submission.
+pub fn submission<T: Submission>(describe: Describe) -> abi::CadrTechniqueInfo {
+    unsafe extern "C" fn prepare<T: Submission>(
+        instance: *mut c_void,
+        context: *const abi::CadrRecordContext,
+        message: *mut abi::CadrMessage,
+    ) -> abi::CadrStatus {
+        guarded(message, || {
+            // SAFETY: the host's context for the call.
+            let record = unsafe { Record::from_raw(context) }.ok_or("no record context")?;
+            // SAFETY: see `this`.
+            unsafe { this::<T>(instance) }.prepare(&record)
+        })
+    }
+    unsafe extern "C" fn record<T: Submission>(
+        instance: *mut c_void,
+        context: *const abi::CadrRecordContext,
+        message: *mut abi::CadrMessage,
+    ) -> abi::CadrStatus {
+        guarded(message, || {
+            // SAFETY: the host's context for the call.
+            let record = unsafe { Record::from_raw(context) }.ok_or("no record context")?;
+            // SAFETY: see `this`.
+            unsafe { this::<T>(instance) }.record(&record)
+        })
+    }
+    info(
+        abi::CADR_KIND_SUBMISSION,
+        describe,
+        abi::CadrSubmissionVtable {
+            common: common::<T, abi::CadrSubmissionVtable>(),
+            prepare: Some(prepare::<T>),
+            record: Some(record::<T>),
+        },
+    )
+}
+
+/// The technique info of a culling technique.
+pub fn culling<T: Culling>(describe: Describe) -> abi::CadrTechniqueInfo {
+    unsafe extern "C" fn cull<T: Culling>(
+        instance: *mut c_void,
+        input: *const abi::CadrCullInput,
+        output: *mut abi::CadrCullOutput,
+        message: *mut abi::CadrMessage,
+    ) -> abi::CadrStatus {
+        guarded(message, || {
+            // SAFETY: the host's input and output for the call.
+            let (input, mut output) = unsafe {
+                (
+                    CullInput::from_raw(input).ok_or("no cull input")?,
+                    CullOutput::from_raw(output).ok_or("no cull output")?,
+                )
+            };
+            // SAFETY: see `this`.
+            unsafe { this::<T>(instance) }.cull(&input, &mut output)
+        })
+    }
+    info(
+        abi::CADR_KIND_CULLING,
+        describe,
+        abi::CadrCullingVtable {
+            common: common::<T, abi::CadrCullingVtable>(),
+            cull: Some(cull::<T>),
+            record_gpu: None,
+        },
+    )
+}

@@ -1,0 +1,209 @@
+//! The host's device as a plugin sees it: ash function tables loaded from the raw handles and
+//! `vkGetInstanceProcAddr` the host passed, and buffers the host allocates.
+
+use std::ffi::CString;
+use std::sync::Arc;
+
+use ash::vk;
+use ash::vk::Handle;
+use cadr_plugin_abi as abi;
+
+use crate::message::MessageBuffer;
+
+/// The device and the host services, shared by a plugin instance and its buffers.
+pub struct Gpu {
+    /// Instance-level functions.
+    pub instance: ash::Instance,
+    /// Device-level functions.
+    pub device: ash::Device,
+    /// `VK_EXT_multi_draw` functions (present when the feature bit is).
+    pub multi_draw: Option<ash::ext::multi_draw::Device>,
+    /// `CADR_FEATURE_*` bits enabled on the device.
+    pub features: abi::CadrFeatureBits,
+    /// `minUniformBufferOffsetAlignment`.
+    pub min_uniform_buffer_offset_alignment: u64,
+    /// Colour and depth formats of the target.
+    pub formats: (vk::Format, vk::Format),
+    /// Worker threads the technique may use.
+    pub worker_threads: u32,
+    allocation_callbacks: *const vk::AllocationCallbacks<'static>,
+    host: *const abi::CadrHostApi,
+}
+
+// SAFETY: the host guarantees its API struct and allocation callbacks are thread-safe and
+// outlive every instance; the ash tables are plain function pointers.
+unsafe impl Send for Gpu {}
+// SAFETY: as above.
+unsafe impl Sync for Gpu {}
+
+impl std::fmt::Debug for Gpu {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Gpu")
+            .field("features", &self.features)
+            .finish()
+    }
+}
+
+impl Gpu {
+    /// Loads the function tables from what `create` received.
+    ///
+    /// # Safety
+    /// `info` must be the host's valid create info.
+    pub unsafe fn from_create_info(info: &abi::CadrCreateInfo) -> Result<Arc<Self>, String> {
+        // SAFETY: the host passes valid pointers for the life of the instance.
+        let vulkan = unsafe { info.vulkan.as_ref() }.ok_or("the host passed no Vulkan handles")?;
+        let get_instance_proc_addr = vulkan
+            .get_instance_proc_addr
+            .ok_or("the host passed no vkGetInstanceProcAddr")?;
+        let static_fn = ash::StaticFn {
+            // SAFETY: same signature; VkInstance is a pointer-sized handle on both sides.
+            get_instance_proc_addr: unsafe {
+                std::mem::transmute::<abi::CadrGetInstanceProcAddr, vk::PFN_vkGetInstanceProcAddr>(
+                    get_instance_proc_addr,
+                )
+            },
+        };
+        let instance_handle = vk::Instance::from_raw(vulkan.instance as u64);
+        // SAFETY: the handle and loader are the host's live instance.
+        let instance = unsafe { ash::Instance::load(&static_fn, instance_handle) };
+        let device_handle = vk::Device::from_raw(vulkan.device as u64);
+        // SAFETY: the device was created from that instance.
+        let device = unsafe { ash::Device::load(instance.fp_v1_0(), device_handle) };
+        let multi_draw = (vulkan.features & abi::CADR_FEATURE_MULTI_DRAW != 0)
+            .then(|| ash::ext::multi_draw::Device::new(&instance, &device));
+        Ok(Arc::new(Self {
+            instance,
+            device,
+            multi_draw,
+            features: vulkan.features,
+            min_uniform_buffer_offset_alignment: vulkan.min_uniform_buffer_offset_alignment.max(1),
+            formats: (
+                vk::Format::from_raw(vulkan.color_format),
+                vk::Format::from_raw(vulkan.depth_format),
+            ),
+            worker_threads: info.worker_threads.max(1),
+            allocation_callbacks: vulkan.allocation_callbacks.cast(),
+            host: info.host,
+        }))
+    }
+
+    /// The allocation callbacks to pass to every `vkCreate*` and `vkDestroy*`.
+    pub fn allocator(&self) -> Option<&vk::AllocationCallbacks<'static>> {
+        // SAFETY: the host keeps its callbacks alive for the life of the device.
+        unsafe { self.allocation_callbacks.as_ref() }
+    }
+
+    /// Asks the host for a buffer.
+    pub fn create_buffer(
+        self: &Arc<Self>,
+        name: &str,
+        size_bytes: u64,
+        usage: vk::BufferUsageFlags,
+        location: abi::CadrMemoryLocation,
+    ) -> Result<HostBuffer, String> {
+        // SAFETY: the host API outlives the instance.
+        let host = unsafe { self.host.as_ref() }.ok_or("the host passed no services")?;
+        let create = host.create_buffer.ok_or("the host cannot create buffers")?;
+        let name = CString::new(name).unwrap_or_default();
+        let mut buffer = abi::CadrBuffer {
+            buffer: 0,
+            size_bytes: 0,
+            address: 0,
+            mapped: std::ptr::null_mut(),
+            id: 0,
+        };
+        let mut message = MessageBuffer::new();
+        // SAFETY: every pointer is valid for the call.
+        let status = unsafe {
+            create(
+                host.user,
+                size_bytes.max(4),
+                usage.as_raw(),
+                location,
+                name.as_ptr(),
+                &mut buffer,
+                message.as_abi(),
+            )
+        };
+        if status != abi::CADR_STATUS_OK {
+            return Err(message.text());
+        }
+        Ok(HostBuffer {
+            gpu: Arc::clone(self),
+            raw: buffer,
+        })
+    }
+}
+
+/// A buffer the host allocated for a plugin; given back on drop (the owner makes sure the GPU
+/// is done with it).
+pub struct HostBuffer {
+    gpu: Arc<Gpu>,
+    raw: abi::CadrBuffer,
+}
+
+impl std::fmt::Debug for HostBuffer {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("HostBuffer")
+            .field("size", &self.raw.size_bytes)
+            .finish()
+    }
+}
+
+// SAFETY: the mapped pointer is only written through &mut self.
+unsafe impl Send for HostBuffer {}
+// SAFETY: as above.
+unsafe impl Sync for HostBuffer {}
+
+impl HostBuffer {
+    /// The `VkBuffer`.
+    pub fn raw(&self) -> vk::Buffer {
+        vk::Buffer::from_raw(self.raw.buffer)
+    }
+
+    /// Size in bytes.
+    pub fn size(&self) -> u64 {
+        self.raw.size_bytes
+    }
+
+    /// Device address (0 without the usage).
+    pub fn address(&self) -> u64 {
+        self.raw.address
+    }
+
+    /// Copies `data` to byte `offset` of a host-visible buffer.
+    pub fn write(&mut self, offset: u64, data: &[u8]) -> Result<(), String> {
+        if self.raw.mapped.is_null() {
+            return Err("the buffer is not host-visible".into());
+        }
+        if offset + data.len() as u64 > self.raw.size_bytes {
+            return Err(format!(
+                "writing {} bytes at {offset} overruns a {}-byte buffer",
+                data.len(),
+                self.raw.size_bytes
+            ));
+        }
+        // SAFETY: the range lies inside the mapping (checked above); &mut self excludes
+        // concurrent writers.
+        unsafe {
+            std::ptr::copy_nonoverlapping(
+                data.as_ptr(),
+                self.raw.mapped.cast::<u8>().add(offset as usize),
+                data.len(),
+            )
+        };
+        Ok(())
+    }
+}
+
+impl Drop for HostBuffer {
+    fn drop(&mut self) {
+        // SAFETY: the host API outlives the instance; the buffer came from it.
+        if let Some(host) = unsafe { self.gpu.host.as_ref() } {
+            if let Some(destroy) = host.destroy_buffer {
+                // SAFETY: as above.
+                unsafe { destroy(host.user, &self.raw) };
+            }
+        }
+    }
+}

@@ -1,0 +1,163 @@
+//! The SDK for writing cadr technique plugins in Rust.
+//!
+//! Implement [`Technique`] and one kind trait ([`VertexPath`], [`ParameterPath`],
+//! [`Submission`], [`Culling`]) per technique, then list them in [`export_plugin!`], which
+//! generates the two exported symbols and the `extern "C"` shims (each catching panics) that
+//! the host calls. The views ([`Scene`], [`Bind`], [`Record`], …) turn the ABI's raw pointers
+//! into slices and safe calls.
+
+pub mod export;
+mod gpu;
+mod message;
+mod views;
+
+pub use ash;
+pub use ash::vk;
+pub use cadr_plugin_abi as abi;
+pub use gpu::{Gpu, HostBuffer};
+pub use message::write_message;
+pub use views::{buffer, Bind, CullInput, CullOutput, Path, Record, Scene};
+
+use std::ffi::CStr;
+use std::sync::Arc;
+
+/// What every technique is: created on the host's device, dropped when the host destroys it.
+pub trait Technique: Sized + Send + Sync + 'static {
+    /// Creates an instance on `gpu`.
+    fn create(gpu: Arc<Gpu>) -> Result<Self, String>;
+}
+
+/// A vertex path: how vertices and indices reach the vertex shader.
+pub trait VertexPath: Technique {
+    /// GLSL defining `vec3 cadr_vertex_position()` and `vec3 cadr_vertex_normal()` (set 3 and
+    /// push-constant bytes 96–127 are the vertex path's).
+    fn shader_snippet(&self) -> &CStr;
+    /// The pipeline's vertex input.
+    fn vertex_input(&self) -> abi::CadrVertexInput;
+    /// The layout of set 3, if the path uses one.
+    fn set_layout(&self) -> vk::DescriptorSetLayout {
+        vk::DescriptorSetLayout::null()
+    }
+    /// Before the pass (outside rendering).
+    fn prepare(
+        &mut self,
+        _scene: &Scene<'_>,
+        _command_buffer: vk::CommandBuffer,
+    ) -> Result<(), String> {
+        Ok(())
+    }
+    /// Binds what stays bound for the pass. Called from several threads at once.
+    fn bind_pass(&self, _bind: &Bind<'_>, _state: &mut abi::CadrBindState) {}
+    /// Binds what the draw of `drawn` needs unless `state` says it is bound. Called from
+    /// several threads at once.
+    fn bind_draw(
+        &self,
+        bind: &Bind<'_>,
+        drawn: &abi::CadrInstance,
+        state: &mut abi::CadrBindState,
+    ) -> abi::CadrDrawBase;
+}
+
+/// A parameter path: how matrices and materials reach the shaders.
+pub trait ParameterPath: Technique {
+    /// GLSL defining `CadrObject cadr_object()` (sets 1 and 2 and push-constant bytes 0–95 are
+    /// the parameter path's).
+    fn shader_snippet(&self) -> &CStr;
+    /// Layouts of sets 1 and 2 (null for none) and the push-constant bytes used.
+    fn layout(&self) -> ([vk::DescriptorSetLayout; 2], u32);
+    /// Before the pass (outside rendering): uploads.
+    fn prepare(
+        &mut self,
+        _scene: &Scene<'_>,
+        _command_buffer: vk::CommandBuffer,
+    ) -> Result<(), String> {
+        Ok(())
+    }
+    /// Binds what stays bound for the pass. Called from several threads at once.
+    fn bind_pass(&self, _bind: &Bind<'_>, _state: &mut abi::CadrBindState) {}
+    /// Binds instance `id`'s parameters unless `state` says they are bound; returns the
+    /// `firstInstance` to draw with. Called from several threads at once.
+    fn bind_draw(
+        &self,
+        bind: &Bind<'_>,
+        id: u32,
+        drawn: &abi::CadrInstance,
+        state: &mut abi::CadrBindState,
+    ) -> u32;
+}
+
+/// A draw submission: which draws are issued and how.
+pub trait Submission: Technique {
+    /// Before the pass (outside rendering).
+    fn prepare(&mut self, _record: &Record<'_>) -> Result<(), String> {
+        Ok(())
+    }
+    /// Inside rendering: records (or replays) the passes.
+    fn record(&mut self, record: &Record<'_>) -> Result<(), String>;
+}
+
+/// Culling: which candidate instances are drawn.
+pub trait Culling: Technique {
+    /// Writes the visible bits and their XOR with the last frame's.
+    fn cull(&mut self, input: &CullInput<'_>, output: &mut CullOutput<'_>) -> Result<(), String>;
+}
+
+/// Lists a library's techniques and exports the symbols the host looks for.
+///
+/// ```ignore
+/// cadr_plugin_sdk::export_plugin! {
+///     library: "my-techniques",
+///     techniques: [
+///         vertex MyVertexPath {
+///             name: "mine", description: "what it does",
+///             features: 0, provides: 0, needs: 0,
+///         },
+///     ]
+/// }
+/// ```
+/// Kinds: `vertex`, `parameters`, `submission`, `culling`.
+#[macro_export]
+macro_rules! export_plugin {
+    (
+        library: $library:literal,
+        techniques: [
+            $( $kind:ident $ty:ty {
+                name: $name:literal,
+                description: $description:literal,
+                features: $features:expr,
+                provides: $provides:expr,
+                needs: $needs:expr $(,)?
+            } ),* $(,)?
+        ] $(,)?
+    ) => {
+        /// The ABI version this library was built for (see `cadr-plugin-abi`).
+        #[no_mangle]
+        pub extern "C" fn cadr_plugin_abi_version() -> u32 {
+            $crate::abi::CADR_PLUGIN_ABI_VERSION
+        }
+
+        /// Fills `library` with this library's techniques.
+        ///
+        /// # Safety
+        /// `library` is null or points at a writable `CadrPluginLibrary`.
+        #[no_mangle]
+        pub unsafe extern "C" fn cadr_plugin_entry(
+            library: *mut $crate::abi::CadrPluginLibrary,
+        ) -> $crate::abi::CadrStatus {
+            // SAFETY: forwarded contract.
+            unsafe {
+                $crate::export::entry(library, concat!($library, "\0"), || {
+                    vec![$(
+                        $crate::export::$kind::<$ty>($crate::export::Describe {
+                            name: concat!($name, "\0"),
+                            description: concat!($description, "\0"),
+                            features: $features,
+                            provides: $provides,
+                            needs: $needs,
+                        })
+                    ),*]
+                })
+            }
+        }
+    };
+}

@@ -1,0 +1,391 @@
+//! Safe views of the ABI structs a technique receives.
+
+use std::ffi::c_void;
+
+use ash::vk;
+use ash::vk::Handle;
+use cadr_plugin_abi as abi;
+
+fn slice<'a, T>(pointer: *const T, count: usize) -> &'a [T] {
+    if pointer.is_null() || count == 0 {
+        &[]
+    } else {
+        // SAFETY: the host guarantees `count` valid entries for the frame.
+        unsafe { std::slice::from_raw_parts(pointer, count) }
+    }
+}
+
+/// The scene during one frame.
+#[derive(Clone, Copy, Debug)]
+pub struct Scene<'a> {
+    raw: &'a abi::CadrSceneView,
+}
+
+impl<'a> Scene<'a> {
+    /// Wraps the host's view.
+    ///
+    /// # Safety
+    /// `raw` is null or a valid scene view for the frame.
+    pub unsafe fn from_raw(raw: *const abi::CadrSceneView) -> Option<Self> {
+        // SAFETY: per the contract.
+        unsafe { raw.as_ref() }.map(|raw| Self { raw })
+    }
+
+    /// The raw view (to pass on).
+    pub fn raw(&self) -> &'a abi::CadrSceneView {
+        self.raw
+    }
+
+    /// Every instance id's instance.
+    pub fn instances(&self) -> &'a [abi::CadrInstance] {
+        slice(self.raw.instances, self.raw.instance_count as usize)
+    }
+
+    /// The drawn bits (one per instance id).
+    pub fn drawn_bits(&self) -> &'a [u64] {
+        slice(
+            self.raw.drawn_bits,
+            (self.raw.instance_count as usize).div_ceil(64),
+        )
+    }
+
+    /// Whether instance `id` is drawn this frame.
+    pub fn is_drawn(&self, id: u32) -> bool {
+        self.drawn_bits()
+            .get(id as usize / 64)
+            .is_some_and(|word| word >> (id % 64) & 1 == 1)
+    }
+
+    /// The drawn instance ids, ascending (walked by trailing zeros).
+    pub fn drawn_ids(&self) -> impl Iterator<Item = u32> + 'a {
+        self.drawn_bits()
+            .iter()
+            .enumerate()
+            .flat_map(|(index, &word)| {
+                let mut bits = word;
+                std::iter::from_fn(move || {
+                    (bits != 0).then(|| {
+                        let bit = bits.trailing_zeros();
+                        bits &= bits - 1;
+                        index as u32 * 64 + bit
+                    })
+                })
+            })
+    }
+
+    /// Matrices on the CPU.
+    pub fn matrices(&self) -> &'a [abi::CadrMatrix] {
+        slice(self.raw.matrices, self.raw.matrix_count as usize)
+    }
+
+    /// Materials on the CPU.
+    pub fn materials(&self) -> &'a [abi::CadrMaterial] {
+        slice(self.raw.materials, self.raw.material_count as usize)
+    }
+
+    /// Matrix slots changed since the last frame.
+    pub fn dirty_matrices(&self) -> &'a [u32] {
+        slice(
+            self.raw.dirty_matrices,
+            self.raw.dirty_matrix_count as usize,
+        )
+    }
+
+    /// Material slots changed since the last frame.
+    pub fn dirty_materials(&self) -> &'a [u32] {
+        slice(
+            self.raw.dirty_materials,
+            self.raw.dirty_material_count as usize,
+        )
+    }
+}
+
+/// A `VkBuffer` from a buffer reference.
+pub fn buffer(reference: &abi::CadrBufferRef) -> vk::Buffer {
+    vk::Buffer::from_raw(reference.buffer)
+}
+
+/// What a path binds with.
+#[derive(Debug)]
+pub struct Bind<'a> {
+    raw: &'a abi::CadrBindContext,
+}
+
+impl<'a> Bind<'a> {
+    /// Wraps the host's (or submission's) bind context.
+    ///
+    /// # Safety
+    /// `raw` is a valid bind context for the call.
+    pub unsafe fn from_raw(raw: *const abi::CadrBindContext) -> Option<Self> {
+        // SAFETY: per the contract.
+        unsafe { raw.as_ref() }.map(|raw| Self { raw })
+    }
+
+    /// The command buffer.
+    pub fn command_buffer(&self) -> vk::CommandBuffer {
+        vk::CommandBuffer::from_raw(self.raw.command_buffer as u64)
+    }
+
+    /// The pipeline layout.
+    pub fn layout(&self) -> vk::PipelineLayout {
+        vk::PipelineLayout::from_raw(self.raw.pipeline_layout)
+    }
+
+    /// `CADR_PASS_*`.
+    pub fn pass_kind(&self) -> abi::CadrPassKind {
+        self.raw.pass_kind
+    }
+
+    /// The scene.
+    pub fn scene(&self) -> Scene<'a> {
+        Scene {
+            // SAFETY: the context's scene is valid for the frame.
+            raw: unsafe { &*self.raw.scene },
+        }
+    }
+
+    /// Adds to this recording's counters.
+    pub fn count(&self, add: impl FnOnce(&mut abi::CadrStats)) {
+        // SAFETY: each recording thread has its own counters, valid for the call.
+        if let Some(stats) = unsafe { self.raw.stats.as_mut() } {
+            add(stats);
+        }
+    }
+}
+
+/// A path (vertex or parameter) the submission drives, called through its vtable.
+#[derive(Clone, Copy, Debug)]
+pub struct Path<V> {
+    raw: abi::CadrPathRef<V>,
+}
+
+// SAFETY: the ABI requires the bind functions to be thread-safe.
+unsafe impl<V> Send for Path<V> {}
+// SAFETY: as above.
+unsafe impl<V> Sync for Path<V> {}
+
+impl Path<abi::CadrVertexPathVtable> {
+    /// Binds what stays bound for the pass.
+    pub fn bind_pass(&self, bind: &abi::CadrBindContext, state: &mut abi::CadrBindState) {
+        // SAFETY: the host passes a live instance and its vtable.
+        if let Some(f) = unsafe { (*self.raw.vtable).bind_pass } {
+            // SAFETY: as above; the pointers are valid for the call.
+            unsafe { f(self.raw.instance, bind, state) }
+        }
+    }
+
+    /// Binds for the draw of `drawn`; where the binding starts.
+    pub fn bind_draw(
+        &self,
+        bind: &abi::CadrBindContext,
+        drawn: &abi::CadrInstance,
+        state: &mut abi::CadrBindState,
+    ) -> abi::CadrDrawBase {
+        // SAFETY: as in bind_pass.
+        match unsafe { (*self.raw.vtable).bind_draw } {
+            // SAFETY: as above.
+            Some(f) => unsafe { f(self.raw.instance, bind, drawn, state) },
+            None => abi::CadrDrawBase::default(),
+        }
+    }
+}
+
+impl Path<abi::CadrParameterPathVtable> {
+    /// Binds what stays bound for the pass.
+    pub fn bind_pass(&self, bind: &abi::CadrBindContext, state: &mut abi::CadrBindState) {
+        // SAFETY: the host passes a live instance and its vtable.
+        if let Some(f) = unsafe { (*self.raw.vtable).bind_pass } {
+            // SAFETY: as above; the pointers are valid for the call.
+            unsafe { f(self.raw.instance, bind, state) }
+        }
+    }
+
+    /// Binds instance `id`'s parameters; the `firstInstance` to draw with.
+    pub fn bind_draw(
+        &self,
+        bind: &abi::CadrBindContext,
+        id: u32,
+        drawn: &abi::CadrInstance,
+        state: &mut abi::CadrBindState,
+    ) -> u32 {
+        // SAFETY: as in bind_pass.
+        match unsafe { (*self.raw.vtable).bind_draw } {
+            // SAFETY: as above.
+            Some(f) => unsafe { f(self.raw.instance, bind, id, drawn, state) },
+            None => id,
+        }
+    }
+}
+
+/// What a submission records with.
+#[derive(Debug)]
+pub struct Record<'a> {
+    raw: &'a abi::CadrRecordContext,
+}
+
+impl<'a> Record<'a> {
+    /// Wraps the host's record context.
+    ///
+    /// # Safety
+    /// `raw` is a valid record context for the call.
+    pub unsafe fn from_raw(raw: *const abi::CadrRecordContext) -> Option<Self> {
+        // SAFETY: per the contract.
+        unsafe { raw.as_ref() }.map(|raw| Self { raw })
+    }
+
+    /// The primary command buffer.
+    pub fn command_buffer(&self) -> vk::CommandBuffer {
+        vk::CommandBuffer::from_raw(self.raw.command_buffer as u64)
+    }
+
+    /// The pipeline layout.
+    pub fn layout(&self) -> vk::PipelineLayout {
+        vk::PipelineLayout::from_raw(self.raw.pipeline_layout)
+    }
+
+    /// The frame uniforms' set (set 0).
+    pub fn frame_set(&self) -> vk::DescriptorSet {
+        vk::DescriptorSet::from_raw(self.raw.frame_set)
+    }
+
+    /// The passes.
+    pub fn passes(&self) -> &'a [abi::CadrPass] {
+        slice(self.raw.passes, self.raw.pass_count as usize)
+    }
+
+    /// Target size.
+    pub fn extent(&self) -> vk::Extent2D {
+        vk::Extent2D {
+            width: self.raw.width,
+            height: self.raw.height,
+        }
+    }
+
+    /// The scene.
+    pub fn scene(&self) -> Scene<'a> {
+        Scene {
+            // SAFETY: the context's scene is valid for the frame.
+            raw: unsafe { &*self.raw.scene },
+        }
+    }
+
+    /// The vertex path.
+    pub fn vertex(&self) -> Path<abi::CadrVertexPathVtable> {
+        Path {
+            raw: self.raw.vertex,
+        }
+    }
+
+    /// The parameter path.
+    pub fn parameters(&self) -> Path<abi::CadrParameterPathVtable> {
+        Path {
+            raw: self.raw.parameters,
+        }
+    }
+
+    /// Changes whenever recorded commands would differ.
+    pub fn commands_key(&self) -> u64 {
+        self.raw.commands_key
+    }
+
+    /// A bind context for recording `pass_kind` into `command_buffer`, counting into `stats`
+    /// (which must outlive its use).
+    pub fn bind_context(
+        &self,
+        command_buffer: vk::CommandBuffer,
+        pass_kind: abi::CadrPassKind,
+        stats: *mut abi::CadrStats,
+    ) -> abi::CadrBindContext {
+        abi::CadrBindContext {
+            size: std::mem::size_of::<abi::CadrBindContext>() as u32,
+            command_buffer: command_buffer.as_raw() as *mut c_void,
+            pipeline_layout: self.raw.pipeline_layout,
+            pass_kind,
+            scene: self.raw.scene,
+            stats,
+        }
+    }
+
+    /// Adds to the frame's counters.
+    pub fn count(&self, add: impl FnOnce(&mut abi::CadrStats)) {
+        // SAFETY: the host's counters are valid for the call and not shared during it.
+        if let Some(stats) = unsafe { self.raw.stats.as_mut() } {
+            add(stats);
+        }
+    }
+}
+
+/// What culling reads.
+#[derive(Debug)]
+pub struct CullInput<'a> {
+    raw: &'a abi::CadrCullInput,
+}
+
+impl<'a> CullInput<'a> {
+    /// Wraps the host's input.
+    ///
+    /// # Safety
+    /// `raw` is a valid cull input for the call.
+    pub unsafe fn from_raw(raw: *const abi::CadrCullInput) -> Option<Self> {
+        // SAFETY: per the contract.
+        unsafe { raw.as_ref() }.map(|raw| Self { raw })
+    }
+
+    /// The scene.
+    pub fn scene(&self) -> Scene<'a> {
+        Scene {
+            // SAFETY: valid for the call.
+            raw: unsafe { &*self.raw.scene },
+        }
+    }
+
+    /// Candidate bits.
+    pub fn candidate_bits(&self) -> &'a [u64] {
+        let words = (self.scene().raw.instance_count as usize).div_ceil(64);
+        slice(self.raw.candidate_bits, words)
+    }
+
+    /// World matrices (f64, column-major) per matrix slot.
+    pub fn world_matrices(&self) -> &'a [[f64; 16]] {
+        slice(
+            self.raw.world_matrices.cast::<[f64; 16]>(),
+            self.scene().raw.matrix_count as usize,
+        )
+    }
+
+    /// The frustum planes.
+    pub fn planes(&self) -> &'a [[f64; 4]; 6] {
+        &self.raw.planes
+    }
+}
+
+/// What culling writes.
+#[derive(Debug)]
+pub struct CullOutput<'a> {
+    /// Bits of instances that pass.
+    pub visible_bits: &'a mut [u64],
+    /// Bits that changed since the last frame.
+    pub changed_bits: &'a mut [u64],
+}
+
+impl<'a> CullOutput<'a> {
+    /// Wraps the host's output.
+    ///
+    /// # Safety
+    /// `raw` is a valid cull output for the call, its arrays not aliased.
+    pub unsafe fn from_raw(raw: *mut abi::CadrCullOutput) -> Option<Self> {
+        // SAFETY: per the contract.
+        let raw = unsafe { raw.as_mut() }?;
+        let words = raw.word_count as usize;
+        if raw.visible_bits.is_null() || raw.changed_bits.is_null() {
+            return None;
+        }
+        // SAFETY: `words` valid, unaliased words each.
+        Some(unsafe {
+            Self {
+                visible_bits: std::slice::from_raw_parts_mut(raw.visible_bits, words),
+                changed_bits: std::slice::from_raw_parts_mut(raw.changed_bits, words),
+            }
+        })
+    }
+}

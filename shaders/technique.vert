@@ -1,0 +1,47 @@
+// The vertex shader every technique combination shares. The host assembles it: the vertex
+// path's snippet (cadr_vertex_position, cadr_vertex_normal) and the parameter path's snippet
+// (cadr_object) replace the two markers below. Positions are made relative to the eye with
+// the translation split into f32 high and low parts, as in resident.vert.
+#include "frame.glsl"
+
+struct CadrObject {
+    mat4 world;            // column 3: translation high part; w of columns 0-2: low part
+    vec4 base_color;
+    vec2 surface;
+    uint flags;            // CADR_INSTANCE_* bits
+    uint instance;
+};
+
+const uint CADR_INSTANCE_HIGHLIGHTED = 1u;
+const vec3 HIGHLIGHT_COLOR = vec3(1.0, 0.55, 0.05);
+
+//@VERTEX_PATH@
+
+//@PARAMETER_PATH@
+
+layout(location = 0) out vec3 out_view_position;
+layout(location = 1) out vec3 out_view_normal;
+layout(location = 2) flat out vec4 out_base_color;
+layout(location = 3) flat out vec2 out_surface;
+layout(location = 4) flat out uint out_pick_id;
+
+void main() {
+    CadrObject object = cadr_object();
+    mat4 world = object.world;
+    vec3 translation_low = vec3(world[0].w, world[1].w, world[2].w);
+    mat3 linear_world = mat3(world[0].xyz, world[1].xyz, world[2].xyz);
+    precise vec3 eye_relative = (world[3].xyz - frame.eye_high.xyz) + (translation_low - frame.eye_low.xyz);
+    vec3 world_offset = linear_world * cadr_vertex_position() + eye_relative;
+    vec4 view_position = frame.view_rotation * vec4(world_offset, 1.0);
+    mat3 linear = mat3(frame.view_rotation) * linear_world;
+    mat3 cofactor = mat3(cross(linear[1], linear[2]), cross(linear[2], linear[0]), cross(linear[0], linear[1]));
+    out_view_position = view_position.xyz;
+    out_view_normal = cofactor * cadr_vertex_normal();
+    out_base_color = object.base_color;
+    if ((object.flags & CADR_INSTANCE_HIGHLIGHTED) != 0u) {
+        out_base_color.rgb = mix(out_base_color.rgb, HIGHLIGHT_COLOR, 0.65);
+    }
+    out_surface = object.surface;
+    out_pick_id = object.instance + 1u;
+    gl_Position = frame.projection * view_position;
+}

@@ -15,6 +15,13 @@ struct CadrObject {
 const uint CADR_INSTANCE_HIGHLIGHTED = 1u;
 const vec3 HIGHLIGHT_COLOR = vec3(1.0, 0.55, 0.05);
 
+// Push constants: bytes 0-95 belong to the parameter path, 96-127 to the vertex path.
+layout(push_constant) uniform CadrPushConstants {
+    mat4 matrix;
+    vec4 vectors[2];
+    uvec4 words[2];
+} cadr_push;
+
 //@VERTEX_PATH@
 
 //@PARAMETER_PATH@

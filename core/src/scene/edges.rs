@@ -13,6 +13,9 @@ pub const DEFAULT_CREASE_DEGREES: f32 = 30.0;
 
 type PositionKey = [u32; 3];
 
+/// Per edge (its ends' position keys, ordered): its first vertex pair and its faces' normals.
+type EdgeFaces = HashMap<(PositionKey, PositionKey), ((u32, u32), Vec<[f32; 3]>)>;
+
 fn key(position: [f32; 3]) -> PositionKey {
     // +0.0 and -0.0 are the same point.
     position.map(|c| (c + 0.0).to_bits())
@@ -48,9 +51,7 @@ pub fn feature_edges(geometry: &Geometry, crease_degrees: f32) -> (Vec<u32>, Vec
     };
     for part in &geometry.parts {
         let first_wire_index = wire.len() as u32;
-        // Edge (by position keys, ordered) -> its first vertex pair and the faces' normals.
-        let mut edges: HashMap<(PositionKey, PositionKey), ((u32, u32), Vec<[f32; 3]>)> =
-            HashMap::new();
+        let mut edges: EdgeFaces = HashMap::new();
         let start = part.first_index as usize;
         let end = (start + part.index_count as usize).min(geometry.indices.len());
         for triangle in geometry.indices[start.min(end)..end].chunks_exact(3) {
@@ -96,7 +97,7 @@ pub fn feature_edges(geometry: &Geometry, crease_degrees: f32) -> (Vec<u32>, Vec
         parts.push(Part {
             first_wire_index,
             wire_index_count: wire.len() as u32 - first_wire_index,
-            ..part.clone()
+            ..*part
         });
     }
     (wire, parts)

@@ -68,11 +68,18 @@ pub fn assemble_vertex_shader(vertex_snippet: &str, parameter_snippet: &str) -> 
     format!("#version 460\n{}\n{body}", extensions.join("\n"))
 }
 
+/// SPIR-V of the fragment shaders: shaded triangles and edge lines.
+#[derive(Clone)]
+struct FragmentShaders {
+    solid: Arc<Vec<u32>>,
+    edges: Arc<Vec<u32>>,
+}
+
 /// SPIR-V of assembled shaders, by (vertex path, parameter path) name.
 #[derive(Default)]
 pub struct ShaderCache {
     vertex: HashMap<(String, String), Arc<Vec<u32>>>,
-    fragment: HashMap<ShadeMode, (Arc<Vec<u32>>, Arc<Vec<u32>>)>,
+    fragments: Option<FragmentShaders>,
 }
 
 impl ShaderCache {
@@ -96,19 +103,19 @@ impl ShaderCache {
         Ok(words)
     }
 
-    fn fragments(&mut self, mode: ShadeMode) -> VkResult<(Arc<Vec<u32>>, Arc<Vec<u32>>)> {
-        if let Some(pair) = self.fragment.get(&mode) {
-            return Ok(pair.clone());
+    fn fragments(&mut self) -> VkResult<FragmentShaders> {
+        if let Some(shaders) = &self.fragments {
+            return Ok(shaders.clone());
         }
         let compile = |shader: &shaders::ShaderSource| {
             compile_glsl(shader.name, shader.source, shader.stage, shaders::INCLUDES).map(Arc::new)
         };
-        let pair = (
-            compile(&shaders::RESIDENT_FRAG)?,
-            compile(&shaders::EDGES_FRAG)?,
-        );
-        self.fragment.insert(mode, pair.clone());
-        Ok(pair)
+        let shaders = FragmentShaders {
+            solid: compile(&shaders::RESIDENT_FRAG)?,
+            edges: compile(&shaders::EDGES_FRAG)?,
+        };
+        self.fragments = Some(shaders.clone());
+        Ok(shaders)
     }
 }
 
@@ -193,12 +200,12 @@ impl TechniquePipelines {
         // SAFETY: the info lives for the call.
         this.layout = unsafe { raw.create_pipeline_layout(&layout_info, None) }
             .or_vk("vkCreatePipelineLayout")?;
-        let (solid_fragment, edge_fragment) = cache.fragments(inputs.mode)?;
+        let fragments = cache.fragments()?;
         match inputs.mode {
             ShadeMode::Solid => {
                 let pipeline = this.pipeline(
                     inputs,
-                    &solid_fragment,
+                    &fragments.solid,
                     vk::PrimitiveTopology::TRIANGLE_LIST,
                     false,
                 )?;
@@ -207,14 +214,14 @@ impl TechniquePipelines {
             ShadeMode::Edges => {
                 let triangles = this.pipeline(
                     inputs,
-                    &solid_fragment,
+                    &fragments.solid,
                     vk::PrimitiveTopology::TRIANGLE_LIST,
                     true,
                 )?;
                 this.add(triangles, abi::CADR_PASS_TRIANGLES);
                 let lines = this.pipeline(
                     inputs,
-                    &edge_fragment,
+                    &fragments.edges,
                     vk::PrimitiveTopology::LINE_LIST,
                     false,
                 )?;

@@ -515,9 +515,12 @@ pub struct CadrCommonVtable {
     pub destroy: Option<unsafe extern "C" fn(instance: *mut c_void)>,
 }
 
-/// GLSL the host pastes into the vertex shader. Push-constant bytes 0–95 belong to the
-/// parameter path and 96–127 to the vertex path; descriptor set 1 and 2 to the parameter path,
-/// set 3 to the vertex path (set 0 is the host's frame uniforms).
+/// GLSL the host pastes into the vertex shader (`shaders/technique.vert`). The host declares
+/// `struct CadrObject` and the push-constant block `cadr_push { mat4 matrix; vec4 vectors[2];
+/// uvec4 words[2]; }`: `matrix` and `vectors` (bytes 0–95) belong to the parameter path,
+/// `words` (bytes 96–127) to the vertex path; descriptor sets 1 and 2 belong to the parameter
+/// path, set 3 to the vertex path (set 0 is the host's frame uniforms). Lines starting with
+/// `#extension` are moved to the top of the shader.
 pub type CadrShaderSnippetFn = unsafe extern "C" fn(instance: *mut c_void) -> *const c_char;
 
 /// Prepares for a frame before the pass (uploads, descriptor writes); may record transfer or

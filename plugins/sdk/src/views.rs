@@ -306,6 +306,11 @@ impl<'a> Record<'a> {
         }
     }
 
+    /// The frame's counters, to pass to bind contexts recorded on this thread.
+    pub fn stats(&self) -> *mut abi::CadrStats {
+        self.raw.stats
+    }
+
     /// Adds to the frame's counters.
     pub fn count(&self, add: impl FnOnce(&mut abi::CadrStats)) {
         // SAFETY: the host's counters are valid for the call and not shared during it.

@@ -1,0 +1,364 @@
+//! Recording the passes' draws into a command buffer, and the secondary command buffers that
+//! replayed and threaded recording use.
+
+use std::ops::Range;
+use std::sync::Arc;
+
+use cadr_plugin_sdk::abi::{self, CadrBindState, CadrStats};
+use cadr_plugin_sdk::vk::{self, Handle};
+use cadr_plugin_sdk::{Gpu, Record};
+
+use crate::lists::PassList;
+
+/// How draws are issued.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Api {
+    /// `vkCmdDrawIndexed` per range.
+    Direct,
+    /// `vkCmdDrawMultiIndexedEXT` per batch.
+    MultiDraw,
+    /// `vkCmdDrawIndexedIndirect` per pass.
+    Indirect,
+    /// `vkCmdDrawIndexedIndirectCount` per pass.
+    IndirectCount,
+}
+
+/// Everything a recording thread needs.
+pub struct Recorder<'a> {
+    pub gpu: &'a Gpu,
+    pub record: &'a Record<'a>,
+    pub api: Api,
+    pub lists: &'a [PassList; 2],
+    /// Per pass slot: indirect commands, count buffer, number of commands.
+    pub indirect: [(vk::Buffer, vk::Buffer, u32); 2],
+}
+
+/// A `Record` shared with worker threads: every function it leads to is thread-safe per the
+/// ABI (bind functions), and the data it points at is immutable during recording.
+struct Shared<'a>(&'a Recorder<'a>);
+// SAFETY: see above.
+unsafe impl Send for Shared<'_> {}
+// SAFETY: see above.
+unsafe impl Sync for Shared<'_> {}
+
+impl Recorder<'_> {
+    /// Records every pass's share `part` of `parts` (of its batches) into `command_buffer`,
+    /// counting into `stats`.
+    pub fn record_passes(
+        &self,
+        command_buffer: vk::CommandBuffer,
+        part: Range<usize>,
+        parts: usize,
+        stats: *mut CadrStats,
+    ) {
+        let device = &self.gpu.device;
+        for pass in self.record.passes() {
+            let slot = usize::from(pass.kind == abi::CADR_PASS_EDGES);
+            let list = &self.lists[slot];
+            let batch_range = if part.end == usize::MAX {
+                0..list.batches.len()
+            } else {
+                let per = list.batches.len().div_ceil(parts.max(1));
+                (part.start * per).min(list.batches.len())..(part.end * per).min(list.batches.len())
+            };
+            let indirect = self.indirect[slot];
+            let gpu_draws = matches!(self.api, Api::Indirect | Api::IndirectCount);
+            if batch_range.is_empty() && !(gpu_draws && part.start == 0 && indirect.2 > 0) {
+                continue;
+            }
+            let bind = self.record.bind_context(command_buffer, pass.kind, stats);
+            let count = |add: &dyn Fn(&mut CadrStats)| {
+                // SAFETY: each recording thread has its own counters.
+                if let Some(stats) = unsafe { stats.as_mut() } {
+                    add(stats);
+                }
+            };
+            // SAFETY: recording; the pipeline, layout and set outlive the frame.
+            unsafe {
+                device.cmd_bind_pipeline(
+                    command_buffer,
+                    vk::PipelineBindPoint::GRAPHICS,
+                    vk::Pipeline::from_raw(pass.pipeline),
+                );
+                device.cmd_bind_descriptor_sets(
+                    command_buffer,
+                    vk::PipelineBindPoint::GRAPHICS,
+                    self.record.layout(),
+                    0,
+                    &[self.record.frame_set()],
+                    &[],
+                );
+            }
+            count(&|s| {
+                s.pipeline_binds += 1;
+                s.parameter_binds += 1;
+            });
+            let vertex = self.record.vertex();
+            let parameters = self.record.parameters();
+            let mut vertex_state = CadrBindState::default();
+            let mut parameter_state = CadrBindState::default();
+            vertex.bind_pass(&bind, &mut vertex_state);
+            parameters.bind_pass(&bind, &mut parameter_state);
+            if gpu_draws {
+                if part.start != 0 || indirect.2 == 0 {
+                    continue;
+                }
+                // SAFETY: recording; the indirect buffers hold `indirect.2` commands of 20 bytes.
+                unsafe {
+                    if self.api == Api::Indirect {
+                        device.cmd_draw_indexed_indirect(
+                            command_buffer,
+                            indirect.0,
+                            0,
+                            indirect.2,
+                            20,
+                        );
+                    } else {
+                        device.cmd_draw_indexed_indirect_count(
+                            command_buffer,
+                            indirect.0,
+                            0,
+                            indirect.1,
+                            0,
+                            indirect.2,
+                            20,
+                        );
+                    }
+                }
+                count(&|s| {
+                    s.draw_calls += 1;
+                    s.draws += u64::from(indirect.2);
+                });
+                continue;
+            }
+            let instances = self.record.scene().instances();
+            let mut multi: Vec<vk::MultiDrawIndexedInfoEXT> = Vec::new();
+            for batch in &list.batches[batch_range] {
+                let Some(first) = instances.get(batch.instance as usize) else {
+                    continue;
+                };
+                let first_instance =
+                    parameters.bind_draw(&bind, batch.instance, first, &mut parameter_state);
+                let ranges = &list.ranges[batch.ranges.clone()];
+                match self.api {
+                    Api::MultiDraw => {
+                        let base = vertex.bind_draw(&bind, first, &mut vertex_state);
+                        if base.ok == 0 {
+                            continue;
+                        }
+                        multi.clear();
+                        multi.extend(ranges.iter().map(|r| vk::MultiDrawIndexedInfoEXT {
+                            first_index: r.first - base.index_base,
+                            index_count: r.count,
+                            vertex_offset: instances[r.instance as usize].vertex_base as i32
+                                - base.vertex_base as i32,
+                        }));
+                        if let Some(multi_draw) = &self.gpu.multi_draw {
+                            // SAFETY: recording; `multi` holds `len` tightly packed entries.
+                            unsafe {
+                                (multi_draw.fp().cmd_draw_multi_indexed_ext)(
+                                    command_buffer,
+                                    multi.len() as u32,
+                                    multi.as_ptr(),
+                                    1,
+                                    first_instance,
+                                    std::mem::size_of::<vk::MultiDrawIndexedInfoEXT>() as u32,
+                                    std::ptr::null(),
+                                )
+                            };
+                        }
+                        count(&|s| {
+                            s.draw_calls += 1;
+                            s.draws += ranges.len() as u64;
+                        });
+                    }
+                    _ => {
+                        for range in ranges {
+                            let instance = &instances[range.instance as usize];
+                            let base = vertex.bind_draw(&bind, instance, &mut vertex_state);
+                            if base.ok == 0 {
+                                continue;
+                            }
+                            // SAFETY: recording; the range lies in the bound buffers.
+                            unsafe {
+                                device.cmd_draw_indexed(
+                                    command_buffer,
+                                    range.count,
+                                    1,
+                                    range.first - base.index_base,
+                                    instance.vertex_base as i32 - base.vertex_base as i32,
+                                    first_instance,
+                                )
+                            };
+                        }
+                        count(&|s| {
+                            s.draw_calls += ranges.len() as u64;
+                            s.draws += ranges.len() as u64;
+                        });
+                    }
+                }
+            }
+        }
+    }
+}
+
+/// Secondary command buffers, one pool each (pools are externally synchronised, so each
+/// worker thread gets its own).
+pub struct SecondaryBuffers {
+    gpu: Arc<Gpu>,
+    pools: Vec<vk::CommandPool>,
+    buffers: Vec<vk::CommandBuffer>,
+}
+
+impl SecondaryBuffers {
+    pub fn new(gpu: &Arc<Gpu>, count: u32) -> Result<Self, String> {
+        let mut this = Self {
+            gpu: Arc::clone(gpu),
+            pools: Vec::new(),
+            buffers: Vec::new(),
+        };
+        for _ in 0..count {
+            let info =
+                vk::CommandPoolCreateInfo::default().flags(vk::CommandPoolCreateFlags::TRANSIENT);
+            // SAFETY: the info lives for the call; the pool is destroyed in Drop.
+            let pool = unsafe { gpu.device.create_command_pool(&info, gpu.allocator()) }
+                .map_err(|e| format!("vkCreateCommandPool: {e}"))?;
+            this.pools.push(pool);
+            let alloc = vk::CommandBufferAllocateInfo::default()
+                .command_pool(pool)
+                .level(vk::CommandBufferLevel::SECONDARY)
+                .command_buffer_count(1);
+            // SAFETY: as above.
+            let buffers = unsafe { gpu.device.allocate_command_buffers(&alloc) }
+                .map_err(|e| format!("vkAllocateCommandBuffers: {e}"))?;
+            this.buffers.extend(buffers);
+        }
+        Ok(this)
+    }
+
+    pub fn len(&self) -> usize {
+        self.buffers.len()
+    }
+
+    /// Records the first `workers` buffers, each with its share of the batches, on as many
+    /// threads; adds their counters to `stats`.
+    pub fn record_all(
+        &self,
+        recorder: &Recorder<'_>,
+        stats: &mut CadrStats,
+        workers: usize,
+    ) -> Result<(), String> {
+        let workers = workers.clamp(1, self.buffers.len());
+        let shared = Shared(recorder);
+        let extent = recorder.record.extent();
+        let results: Vec<Result<CadrStats, String>> = std::thread::scope(|scope| {
+            let handles: Vec<_> = (0..workers)
+                .map(|worker| {
+                    let shared = &shared;
+                    let (pool, buffer) = (self.pools[worker], self.buffers[worker]);
+                    let gpu = &self.gpu;
+                    let work = move || -> Result<CadrStats, String> {
+                        let mut local = CadrStats::default();
+                        begin_secondary(gpu, pool, buffer, extent)?;
+                        let part = if workers == 1 {
+                            0..usize::MAX
+                        } else {
+                            worker..worker + 1
+                        };
+                        shared.0.record_passes(buffer, part, workers, &mut local);
+                        // SAFETY: the buffer is recording.
+                        unsafe { gpu.device.end_command_buffer(buffer) }
+                            .map_err(|e| format!("vkEndCommandBuffer: {e}"))?;
+                        Ok(local)
+                    };
+                    if workers == 1 {
+                        Err(work)
+                    } else {
+                        Ok(scope.spawn(work))
+                    }
+                })
+                .collect();
+            handles
+                .into_iter()
+                .map(|handle| match handle {
+                    Ok(thread) => thread
+                        .join()
+                        .unwrap_or_else(|_| Err("a recording thread panicked".into())),
+                    Err(work) => work(),
+                })
+                .collect()
+        });
+        for result in results {
+            crate::add(stats, &result?);
+        }
+        Ok(())
+    }
+
+    /// Executes the first `count` buffers in `primary`.
+    pub fn execute(&self, primary: vk::CommandBuffer, count: usize) {
+        let count = count.min(self.buffers.len());
+        // SAFETY: recording inside rendering begun for secondary contents; the buffers were
+        // recorded for it and stay alive until the frame finishes.
+        unsafe {
+            self.gpu
+                .device
+                .cmd_execute_commands(primary, &self.buffers[..count])
+        };
+    }
+}
+
+fn begin_secondary(
+    gpu: &Gpu,
+    pool: vk::CommandPool,
+    buffer: vk::CommandBuffer,
+    extent: vk::Extent2D,
+) -> Result<(), String> {
+    let formats = [gpu.formats.0];
+    let mut rendering = vk::CommandBufferInheritanceRenderingInfo::default()
+        .color_attachment_formats(&formats)
+        .depth_attachment_format(gpu.formats.1)
+        .rasterization_samples(vk::SampleCountFlags::TYPE_1);
+    let inheritance = vk::CommandBufferInheritanceInfo::default().push_next(&mut rendering);
+    let begin = vk::CommandBufferBeginInfo::default()
+        .flags(vk::CommandBufferUsageFlags::RENDER_PASS_CONTINUE)
+        .inheritance_info(&inheritance);
+    let area = vk::Rect2D {
+        offset: vk::Offset2D::default(),
+        extent,
+    };
+    let viewport = vk::Viewport {
+        x: 0.0,
+        y: 0.0,
+        width: extent.width as f32,
+        height: extent.height as f32,
+        min_depth: 0.0,
+        max_depth: 1.0,
+    };
+    // SAFETY: the pool is used by this thread only; the GPU finished the buffer's last use
+    // (the host waits for every frame before the next).
+    unsafe {
+        gpu.device
+            .reset_command_pool(pool, vk::CommandPoolResetFlags::empty())
+            .map_err(|e| format!("vkResetCommandPool: {e}"))?;
+        gpu.device
+            .begin_command_buffer(buffer, &begin)
+            .map_err(|e| format!("vkBeginCommandBuffer: {e}"))?;
+        gpu.device.cmd_set_viewport(buffer, 0, &[viewport]);
+        gpu.device.cmd_set_scissor(buffer, 0, &[area]);
+    }
+    Ok(())
+}
+
+impl Drop for SecondaryBuffers {
+    fn drop(&mut self) {
+        // SAFETY: the host destroys instances after the GPU is done with them; buffers go
+        // with their pools.
+        unsafe {
+            for &pool in &self.pools {
+                self.gpu
+                    .device
+                    .destroy_command_pool(pool, self.gpu.allocator());
+            }
+        }
+    }
+}

@@ -49,12 +49,16 @@ struct Fixture {
 
 impl Fixture {
     fn new(source: &Scene) -> Self {
+        Self::with_size(source, SIZE)
+    }
+
+    fn with_size(source: &Scene, size: (u32, u32)) -> Self {
         let device = test_device();
-        let mut renderer = Renderer::new(&device, SIZE.0, SIZE.1).unwrap();
+        let mut renderer = Renderer::new(&device, size.0, size.1).unwrap();
         let bounds = flatten(source).unwrap().bounds;
         let camera = Camera::fit(
             &bounds,
-            f64::from(SIZE.0) / f64::from(SIZE.1),
+            f64::from(size.0) / f64::from(size.1),
             DEFAULT_DIRECTION,
         );
         let gpu_scene = GpuScene::upload(&device, source).unwrap();
@@ -81,14 +85,25 @@ impl Fixture {
         }
     }
 
-    fn render(&mut self) -> (image::RgbaImage, cadr_core::render::FrameStats) {
+    fn try_render(&mut self) -> Result<cadr_core::render::FrameStats, cadr_core::vk::VkError> {
         self.tree.update(&mut self.graph);
         self.scene.sync(&self.graph, &mut self.tree).unwrap();
-        let stats = self
-            .renderer
+        self.renderer
             .render_techniques(&mut self.scene, &mut self.techniques, &self.camera)
-            .unwrap();
+    }
+
+    fn render(&mut self) -> (image::RgbaImage, cadr_core::render::FrameStats) {
+        let stats = self.try_render().unwrap();
         (self.renderer.read_rgba8().unwrap(), stats)
+    }
+
+    fn assert_matches_baseline(&mut self, what: &str) {
+        let (image, _) = self.render();
+        let difference = compare(&image, &self.baseline).unwrap();
+        assert!(
+            difference.mean < 0.3 && difference.p99 < 6.0,
+            "{what}: {difference:?}"
+        );
     }
 }
 
@@ -209,4 +224,238 @@ fn every_valid_combination_renders_the_demo_like_the_baseline() {
 fn every_valid_combination_renders_the_cylinder_engine_like_the_baseline() {
     let scene = load_file(Path::new(CYLINDER_ENGINE_GLB)).unwrap();
     every_combination_matches(&scene, "2CylinderEngine");
+}
+
+fn fixture_library(name: &str) -> std::path::PathBuf {
+    let dir = std::env::current_exe()
+        .unwrap()
+        .parent()
+        .unwrap()
+        .to_path_buf();
+    dir.join(format!(
+        "{}{name}{}",
+        std::env::consts::DLL_PREFIX,
+        std::env::consts::DLL_SUFFIX
+    ))
+}
+
+#[test]
+fn libraries_that_cannot_be_used_are_refused_with_the_reason() {
+    let features = feature_bits(test_device().capabilities());
+    let mut registry = PluginRegistry::default();
+    registry.load(&fixture_library("cadr_fixture_future_abi"), features);
+    registry.load(
+        Path::new("/nonexistent/libcadr_plugin_missing.so"),
+        features,
+    );
+    // A shared library that is not a plugin: the C API library.
+    registry.load(&fixture_library("cadr"), features);
+    let reasons: Vec<String> = registry
+        .refusals()
+        .iter()
+        .map(ToString::to_string)
+        .collect();
+    assert_eq!(reasons.len(), 3, "{reasons:?}");
+    assert!(
+        reasons[0].contains("built for plugin ABI 2.0; this cadr speaks 1.0"),
+        "{}",
+        reasons[0]
+    );
+    assert!(
+        reasons[1].contains("libcadr_plugin_missing.so") && reasons[1].contains("cannot be opened"),
+        "{}",
+        reasons[1]
+    );
+    assert!(
+        reasons[2].contains("is not a cadr plugin"),
+        "{}",
+        reasons[2]
+    );
+    assert!(registry.techniques().is_empty());
+}
+
+#[test]
+fn failing_techniques_are_refused_and_the_renderer_keeps_working() {
+    let mut f = Fixture::with_size(&generate(&GeneratorSpec::Demo), (96, 72));
+    let mut registry = PluginRegistry::discover(
+        &[std::env::current_exe()
+            .unwrap()
+            .parent()
+            .unwrap()
+            .to_path_buf()],
+        feature_bits(f.device.capabilities()),
+    );
+    registry.load(
+        &fixture_library("cadr_fixture_faulty"),
+        feature_bits(f.device.capabilities()),
+    );
+    let registry = Arc::new(registry);
+    let lacking = registry
+        .find(TechniqueKind::Vertex, "needs-mesh-shaders")
+        .unwrap();
+    assert_eq!(
+        lacking.support,
+        Err("the device lacks VK_EXT_mesh_shader".to_owned())
+    );
+    f.techniques = Techniques::new(&f.device, registry, f.renderer.pipelines().frame_set_layout);
+    f.techniques.select(&Combination::simplest()).unwrap();
+    f.assert_matches_baseline("before");
+
+    let error = f
+        .techniques
+        .swap(TechniqueKind::Vertex, "needs-mesh-shaders")
+        .unwrap_err()
+        .to_string();
+    assert!(
+        error.contains(
+            "vertex 'needs-mesh-shaders' is not supported: the device lacks VK_EXT_mesh_shader"
+        ),
+        "{error}"
+    );
+    let error = f
+        .techniques
+        .swap(TechniqueKind::Vertex, "panics-on-create")
+        .unwrap_err()
+        .to_string();
+    assert!(
+        error.contains("create panicked") && error.contains("this vertex path always panics"),
+        "{error}"
+    );
+    let error = f
+        .techniques
+        .swap(TechniqueKind::Vertex, "no-such-path")
+        .unwrap_err()
+        .to_string();
+    assert!(
+        error.contains("no vertex technique named 'no-such-path' (known: per-part"),
+        "{error}"
+    );
+    assert_eq!(
+        f.techniques.combination(),
+        Combination::simplest(),
+        "refusals keep the combination"
+    );
+    f.assert_matches_baseline("after refused swaps");
+
+    f.techniques
+        .swap(TechniqueKind::Culling, "panics-on-cull")
+        .unwrap();
+    let error = f.try_render().unwrap_err().to_string();
+    assert!(
+        error.contains("cull panicked") && error.contains("this culler always panics"),
+        "{error}"
+    );
+    f.techniques.swap(TechniqueKind::Culling, "none").unwrap();
+    f.assert_matches_baseline("after a panicking culler");
+
+    f.techniques
+        .swap(TechniqueKind::Parameters, "panics-in-bind")
+        .unwrap();
+    let error = f.try_render().unwrap_err().to_string();
+    assert!(error.contains("bind calls panicked"), "{error}");
+    f.techniques
+        .swap(TechniqueKind::Parameters, "push")
+        .unwrap();
+    f.assert_matches_baseline("after a panicking parameter path");
+    drop(f.techniques);
+    assert_no_validation_errors(&f.device);
+}
+
+#[test]
+fn a_thousand_swaps_leak_nothing() {
+    let mut f = Fixture::with_size(&generate(&GeneratorSpec::Demo), (64, 48));
+    let start = Combination {
+        vertex: "pulling".into(),
+        parameters: "ubo-dynamic".into(),
+        submission: "groups-replay".into(),
+        culling: "frustum".into(),
+    };
+    f.techniques.select(&start).unwrap();
+    f.render();
+    let before = f.techniques.plugin_allocations();
+    assert!(
+        before.object_allocations > 0,
+        "plugins' Vulkan objects are counted: {before:?}"
+    );
+    assert!(
+        before.buffers > 0,
+        "plugins' buffers are counted: {before:?}"
+    );
+    // Each kind in turn goes to another technique and back, a frame after every swap.
+    let others = [
+        (TechniqueKind::Vertex, "arena"),
+        (TechniqueKind::Parameters, "ssbo-index"),
+        (TechniqueKind::Submission, "groups-multidraw"),
+        (TechniqueKind::Culling, "none"),
+        (TechniqueKind::Submission, "individual-threads"),
+    ];
+    for swap in 0..1000 {
+        let (kind, other) = others[(swap / 2) % others.len()];
+        let name = if swap % 2 == 0 {
+            other
+        } else {
+            start.get(kind)
+        };
+        f.techniques.swap(kind, name).unwrap();
+        if swap % 2 == 0 {
+            f.techniques
+                .set_shade_mode(if swap % 4 == 0 {
+                    ShadeMode::Edges
+                } else {
+                    ShadeMode::Solid
+                })
+                .unwrap();
+        }
+        f.try_render().unwrap();
+    }
+    f.techniques.set_shade_mode(ShadeMode::Solid).unwrap();
+    assert_eq!(f.techniques.combination(), start);
+    f.assert_matches_baseline("after 1000 swaps");
+    assert_eq!(
+        f.techniques.plugin_allocations(),
+        before,
+        "plugin objects and buffers after 1000 swaps"
+    );
+    drop(f.techniques);
+    assert_no_validation_errors(&f.device);
+}
+
+#[test]
+fn frustum_culling_draws_only_what_the_camera_sees() {
+    let mut f = Fixture::with_size(&generate(&GeneratorSpec::Demo), SIZE);
+    let combination = Combination {
+        culling: "frustum".into(),
+        ..Combination::simplest()
+    };
+    f.techniques.select(&combination).unwrap();
+    let (_, all) = f.render();
+    // Look at one corner of the scene from close by: most parts fall outside the frustum.
+    let bounds = flatten(&f.graph.to_scene()).unwrap().bounds;
+    let corner = cadr_core::scene::Aabb {
+        min: bounds.min,
+        max: bounds.min + (bounds.max - bounds.min) * 0.25,
+    };
+    f.camera = Camera::fit(
+        &corner,
+        f64::from(SIZE.0) / f64::from(SIZE.1),
+        DEFAULT_DIRECTION,
+    );
+    let (culled_image, culled) = f.render();
+    assert!(
+        culled.draws < all.draws / 2,
+        "culled {} of {} draws",
+        all.draws - culled.draws,
+        all.draws
+    );
+    let gpu_scene = GpuScene::upload(&f.device, &f.graph.to_scene()).unwrap();
+    f.renderer.render(&gpu_scene, &f.camera).unwrap();
+    let baseline = f.renderer.read_rgba8().unwrap();
+    let difference = compare(&culled_image, &baseline).unwrap();
+    assert!(
+        difference.mean < 0.3 && difference.p99 < 6.0,
+        "culling removes only unseen parts: {difference:?}"
+    );
+    drop(gpu_scene);
+    drop(f.techniques);
+    assert_no_validation_errors(&f.device);
 }

@@ -8,11 +8,26 @@ pub struct Args {
 }
 
 /// Flags that take no value.
-const SWITCHES: &[&str] = &["--validation", "--no-validation", "--help", "-h", "--quiet"];
+const SWITCHES: &[&str] = &[
+    "--validation",
+    "--no-validation",
+    "--help",
+    "-h",
+    "--quiet",
+    "--baseline",
+    "--all",
+    "--sweep",
+];
 
 impl Args {
-    /// Splits `args` (without the program and command names).
-    pub fn parse(args: impl IntoIterator<Item = String>) -> Result<Self, String> {
+    /// Splits `args` (without the program and command names) of `command`.
+    pub fn parse(command: &str, args: impl IntoIterator<Item = String>) -> Result<Self, String> {
+        // `cadr techniques --json` prints JSON; elsewhere `--json FILE` names a file.
+        let command_switches: &[&str] = if command == "techniques" {
+            &["--json"]
+        } else {
+            &[]
+        };
         let mut parsed = Self::default();
         let mut iter = args.into_iter();
         while let Some(arg) = iter.next() {
@@ -20,7 +35,7 @@ impl Args {
                 parsed
                     .options
                     .push((name.to_owned(), Some(value.to_owned())));
-            } else if SWITCHES.contains(&arg.as_str()) {
+            } else if SWITCHES.contains(&arg.as_str()) || command_switches.contains(&arg.as_str()) {
                 parsed.options.push((arg, None));
             } else if arg.starts_with('-') && arg.len() > 1 {
                 let value = iter.next().ok_or_else(|| format!("{arg} needs a value"))?;

@@ -1,7 +1,9 @@
 //! `cadr`: render, inspect and benchmark CAD scenes from the command line.
 
 mod args;
+mod bench;
 mod bench_tree;
+mod techniques;
 
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -58,7 +60,7 @@ fn main() -> ExitCode {
             println!("cadr {}", env!("CARGO_PKG_VERSION"));
             Ok(())
         }
-        Some(command) => Args::parse(argv).and_then(|args| run(command, &args)),
+        Some(command) => Args::parse(command, argv).and_then(|args| run(command, &args)),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
@@ -93,8 +95,10 @@ fn run(command: &str, args: &Args) -> Result<(), String> {
             bench_tree::bench_tree(scene, runs)
         }
         "devices" => devices(args),
+        "techniques" => techniques::techniques(args),
+        "bench" => bench::bench(args),
         other => Err(format!(
-            "unknown command '{other}' (commands: render, info, convert, bench-tree, devices; see cadr --help)"
+            "unknown command '{other}' (commands: render, info, convert, techniques, bench, bench-tree, devices; see cadr --help)"
         )),
     }
 }
@@ -107,7 +111,7 @@ fn scene_argument(args: &Args, command: &str) -> Result<SceneSource, String> {
     }
 }
 
-fn validation_requested(args: &Args) -> bool {
+pub(crate) fn validation_requested(args: &Args) -> bool {
     if args.flag("--no-validation") {
         return false;
     }
@@ -197,8 +201,20 @@ fn render(args: &Args) -> Result<(), String> {
             "--frames",
             "--validation",
             "--no-validation",
+            "--vertex",
+            "--params",
+            "--submit",
+            "--cull",
+            "--shade",
+            "--baseline",
         ],
     )?;
+    let (combination, shade) = techniques::combination_from_args(args)?;
+    if args.flag("--baseline") && techniques::technique_requested(args) {
+        return Err(
+            "--baseline draws with the built-in baseline; it takes no technique options".into(),
+        );
+    }
     let process_start = Instant::now();
     let source = scene_argument(args, "render")?;
     let output = PathBuf::from(args.value(&["-o", "--output"]).unwrap_or("out.png"));
@@ -228,45 +244,85 @@ fn render(args: &Args) -> Result<(), String> {
     };
     let device = Device::new(&options).map_err(|e| e.to_string())?;
     let upload_start = Instant::now();
-    let gpu_scene = GpuScene::upload(&device, &scene).map_err(|e| e.to_string())?;
-    let upload_ms = upload_start.elapsed().as_secs_f64() * 1e3;
+    let flat = flatten(&scene).map_err(|e| e.to_string())?;
+    let stats = SceneStats::new(&scene, &flat);
+    drop(flat);
     let mut renderer = Renderer::new(&device, width, height).map_err(|e| e.to_string())?;
+    let mut session = None;
+    let mut technique_line = "built-in baseline (--baseline)".to_owned();
+    if !args.flag("--baseline") {
+        let (registry, dirs) = techniques::load_registry(&device);
+        if registry.techniques().is_empty() {
+            if techniques::technique_requested(args) {
+                return Err(techniques::no_plugins_message(&dirs));
+            }
+            technique_line = format!(
+                "built-in baseline ({})",
+                techniques::no_plugins_message(&dirs)
+            );
+        } else {
+            let mut created =
+                techniques::TechniqueSession::new(&device, &renderer, &scene, registry)?;
+            created
+                .techniques
+                .select(&combination)
+                .map_err(|e| e.to_string())?;
+            created
+                .techniques
+                .set_shade_mode(shade)
+                .map_err(|e| e.to_string())?;
+            technique_line = format!("{combination}, {}", shade.name());
+            session = Some(created);
+        }
+    }
+    let gpu_scene = match session {
+        Some(_) => None,
+        None => Some(GpuScene::upload(&device, &scene).map_err(|e| e.to_string())?),
+    };
+    let upload_ms = upload_start.elapsed().as_secs_f64() * 1e3;
     let camera = Camera::fit(
-        &gpu_scene.stats.bounds,
+        &stats.bounds,
         f64::from(width) / f64::from(height),
         DEFAULT_DIRECTION,
     );
+    let mut draw = |renderer: &mut Renderer| -> Result<FrameStats, String> {
+        match session.as_mut() {
+            Some(s) => renderer
+                .render_techniques(&mut s.scene, &mut s.techniques, &camera)
+                .map_err(|e| e.to_string()),
+            None => match &gpu_scene {
+                Some(gpu_scene) => renderer
+                    .render(gpu_scene, &camera)
+                    .map_err(|e| e.to_string()),
+                None => Err("nothing to draw with".into()),
+            },
+        }
+    };
 
     // One warm-up frame when measuring several, so that first-use costs do not count.
-    let mut first = renderer
-        .render(&gpu_scene, &camera)
-        .map_err(|e| e.to_string())?;
+    let mut first = draw(&mut renderer)?;
     let mut samples: Vec<FrameStats> = Vec::with_capacity(frames);
     if frames == 1 {
         samples.push(first);
     } else {
         for _ in 0..frames {
-            samples.push(
-                renderer
-                    .render(&gpu_scene, &camera)
-                    .map_err(|e| e.to_string())?,
-            );
+            samples.push(draw(&mut renderer)?);
         }
         first = samples[0];
     }
     renderer.save_png(&output).map_err(|e| e.to_string())?;
 
     let validation_errors = device.validation_log().errors().len();
-    let stats = &gpu_scene.stats;
     let adapter = device.adapter();
     println!(
         "scene:       {} ({} nodes, {} geometries, {} materials)",
         scene.name, stats.nodes, stats.geometries, stats.materials
     );
     println!("device:      {} ({:?})", adapter.name, adapter.device_type);
+    println!("techniques:  {technique_line}");
     println!(
-        "drawn:       {} parts, {} triangles, {} draw calls",
-        stats.instances, first.triangles, first.draw_calls
+        "drawn:       {} parts, {} triangles, {} draw calls ({} ranges)",
+        stats.instances, first.triangles, first.draw_calls, first.draws
     );
     println!(
         "state:       {} pipeline binds, {} vertex/index binds, {} parameter updates",

@@ -202,7 +202,8 @@ pub fn assembly(spec: &AssemblySpec) -> Scene {
 }
 
 /// Materials for `parts` parts: the first part (the body) has its own, the features follow in
-/// runs of about six parts that alternate between two or three materials.
+/// runs of about eight parts that alternate between two materials (which gives the seeds'
+/// proportion of material-group ranges to parts on the Graphicscard statistics).
 fn material_runs(parts: usize, materials: usize, rng: &mut Rng) -> Vec<u32> {
     let choices: Vec<u32> = (0..3).map(|_| rng.below(materials) as u32).collect();
     let mut out = Vec::with_capacity(parts);
@@ -215,7 +216,7 @@ fn material_runs(parts: usize, materials: usize, rng: &mut Rng) -> Vec<u32> {
         }
         if run == 0 {
             current = 1 + (current % 2);
-            run = 4 + rng.below(5);
+            run = 6 + rng.below(5);
         }
         out.push(choices[current]);
         run -= 1;

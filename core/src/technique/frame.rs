@@ -43,6 +43,7 @@ impl Renderer {
         techniques.ensure_pipelines()?;
         let cull_start = Instant::now();
         cull(scene, techniques, camera)?;
+        let techniques = &*techniques;
         let cull_us = cull_start.elapsed().as_secs_f64() * 1e6;
 
         let submission = techniques.get(TechniqueKind::Submission)?;
@@ -60,7 +61,6 @@ impl Renderer {
         }
         let frame_set = self.frame_set().as_raw();
         let shared = RefCell::new((scene, abi::CadrStats::default()));
-        let techniques = &*techniques;
         let context = |command_buffer: vk::CommandBuffer,
                        view: &abi::CadrSceneView,
                        stats: *mut abi::CadrStats|
@@ -212,8 +212,25 @@ fn barrier(renderer: &Renderer, command_buffer: vk::CommandBuffer) {
     };
 }
 
-/// Runs the culling technique and applies the bits that changed.
-fn cull(scene: &mut TechniqueScene, techniques: &Techniques, camera: &Camera) -> VkResult<()> {
+/// What a culling result depends on: the culler, the scene and the view.
+fn cull_key(epoch: u64, view: &abi::CadrSceneView, planes: &[[f64; 4]; 6]) -> u64 {
+    let mut key = mix(epoch, view.draws_generation);
+    key = mix(key, view.parameters_generation);
+    key = mix(key, view.buffers_generation);
+    for value in planes.iter().flatten() {
+        key = mix(key, value.to_bits());
+    }
+    key
+}
+
+/// Runs the culling technique and applies the bits that changed. Culling depends only on the
+/// view and the scene, so it runs again only when one of them (or the culler) changed.
+fn cull(scene: &mut TechniqueScene, techniques: &mut Techniques, camera: &Camera) -> VkResult<()> {
+    let planes = frustum_planes(camera);
+    let key = cull_key(techniques.epoch, &scene.view(), &planes);
+    if techniques.cull_key == Some(key) {
+        return Ok(());
+    }
     let culling = techniques.get(TechniqueKind::Culling)?;
     let Some(cull_fn) = culling.vtable::<abi::CadrCullingVtable>().cull else {
         return Ok(());
@@ -226,7 +243,7 @@ fn cull(scene: &mut TechniqueScene, techniques: &Techniques, camera: &Camera) ->
         scene: &view,
         candidate_bits: scene.candidate_bits().as_ptr(),
         world_matrices: scene.worlds().as_ptr().cast(),
-        planes: frustum_planes(camera),
+        planes,
     };
     let mut output = abi::CadrCullOutput {
         size: std::mem::size_of::<abi::CadrCullOutput>() as u32,
@@ -239,5 +256,7 @@ fn cull(scene: &mut TechniqueScene, techniques: &Techniques, camera: &Camera) ->
     let result = unsafe { cull_fn(culling.instance, &input, &mut output, message.raw()) };
     status(&culling.entry, "cull", result, &message)?;
     scene.apply_culling(&visible, &changed);
+    // The draws generation moved if anything changed: key on what the scene is now.
+    techniques.cull_key = Some(cull_key(techniques.epoch, &scene.view(), &planes));
     Ok(())
 }

@@ -202,6 +202,8 @@ pub struct Techniques {
     frame_set_layout: vk::DescriptorSetLayout,
     /// Bumped whenever techniques, pipelines or the target change (part of the commands key).
     pub(crate) epoch: u64,
+    /// What culling last ran for (see `frame::cull`).
+    pub(crate) cull_key: Option<u64>,
     worker_threads: u32,
 }
 
@@ -255,6 +257,7 @@ impl Techniques {
             shaders: ShaderCache::default(),
             frame_set_layout,
             epoch: 1,
+            cull_key: None,
             worker_threads,
         }
     }

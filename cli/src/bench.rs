@@ -1,0 +1,517 @@
+//! `cadr bench`: renders a scene with the built-in baseline and with technique combinations
+//! in one run, and prints a table like the seeds' (CPU and GPU microseconds per frame, draw
+//! calls, state changes, triangles, speedup over the baseline), optionally as JSON and over a
+//! growing grid (`--sweep`).
+
+use std::sync::Arc;
+
+use cadr_core::load::SceneSource;
+use cadr_core::render::{Camera, FrameStats, GpuScene, Renderer, DEFAULT_DIRECTION};
+use cadr_core::scene::{flatten, Scene, SceneStats};
+use cadr_core::technique::{Combination, PluginRegistry, ShadeMode, TechniqueKind, Techniques};
+use cadr_core::vk::{Device, DeviceOptions, InstanceOptions};
+
+use crate::args::{parse_size, Args};
+use crate::techniques::{load_registry, no_plugins_message, TechniqueSession, KIND_OPTIONS};
+
+/// The (vertex, parameter) pairs the default selection tries with every submission: the
+/// classic binds, then the GPU-resident indexed path.
+const DEFAULT_PATHS: [(&str, &str); 2] = [("per-geometry", "push"), ("arena", "ssbo-index")];
+
+/// What the sweep measures by default.
+const SWEEP_SET: [(&str, &str, &str); 7] = [
+    ("per-geometry", "push", "individual"),
+    ("per-geometry", "push", "groups"),
+    ("per-geometry", "push", "individual-replay"),
+    ("per-geometry", "push", "groups-replay"),
+    ("arena", "ssbo-index", "individual-mdi"),
+    ("arena", "ssbo-index", "groups-mdi-replay"),
+    ("per-geometry", "push", "individual-threads"),
+];
+
+/// Medians over the measured frames of one row.
+#[derive(Clone, Debug)]
+struct Row {
+    label: String,
+    shade: &'static str,
+    cpu_us: f64,
+    gpu_us: Option<f64>,
+    stats: FrameStats,
+}
+
+fn median(mut values: Vec<f64>) -> f64 {
+    values.sort_by(f64::total_cmp);
+    match values.len() {
+        0 => 0.0,
+        n if n % 2 == 1 => values[n / 2],
+        n => 0.5 * (values[n / 2 - 1] + values[n / 2]),
+    }
+}
+
+/// Renders `warmup` frames, then `frames` measured ones.
+fn measure(
+    frames: usize,
+    mut draw: impl FnMut() -> Result<FrameStats, String>,
+) -> Result<(f64, Option<f64>, FrameStats), String> {
+    for _ in 0..2 {
+        draw()?;
+    }
+    let mut samples = Vec::with_capacity(frames);
+    for _ in 0..frames {
+        samples.push(draw()?);
+    }
+    let cpu = median(samples.iter().map(FrameStats::cpu_us).collect());
+    let gpu: Vec<f64> = samples.iter().filter_map(|s| s.gpu_us).collect();
+    let gpu = (!gpu.is_empty()).then(|| median(gpu));
+    Ok((cpu, gpu, samples[0]))
+}
+
+fn list(args: &Args, option: &str) -> Option<Vec<String>> {
+    args.value(&[option]).map(|v| {
+        v.split(',')
+            .map(|s| s.trim().to_owned())
+            .filter(|s| !s.is_empty())
+            .collect()
+    })
+}
+
+/// The combinations to measure: every supported one with `--all`; those the options name
+/// (each option a comma-separated list, others defaulting to every technique); or the default
+/// selection: every submission with the [`DEFAULT_PATHS`] that fit it, culling `none`.
+fn selection(args: &Args, techniques: &Techniques) -> Result<Vec<Combination>, String> {
+    let registry = techniques.registry();
+    let names = |kind: TechniqueKind| -> Vec<String> {
+        registry
+            .of_kind(kind)
+            .filter(|t| t.support.is_ok())
+            .map(|t| t.name.clone())
+            .collect()
+    };
+    let chosen =
+        |kind: TechniqueKind, option: &str, default: Vec<String>| -> Result<Vec<String>, String> {
+            match list(args, option) {
+                None => Ok(default),
+                Some(wanted) => {
+                    for name in &wanted {
+                        if registry.find(kind, name).is_none() {
+                            return Err(format!(
+                                "{option} {name}: no such {} technique (see cadr techniques)",
+                                kind.name()
+                            ));
+                        }
+                    }
+                    Ok(wanted)
+                }
+            }
+        };
+    let any_filter = KIND_OPTIONS.iter().any(|(_, o)| args.value(&[o]).is_some());
+    let mut combinations = Vec::new();
+    if args.flag("--all") || any_filter {
+        for vertex in chosen(
+            TechniqueKind::Vertex,
+            "--vertex",
+            names(TechniqueKind::Vertex),
+        )? {
+            for parameters in chosen(
+                TechniqueKind::Parameters,
+                "--params",
+                names(TechniqueKind::Parameters),
+            )? {
+                for submission in chosen(
+                    TechniqueKind::Submission,
+                    "--submit",
+                    names(TechniqueKind::Submission),
+                )? {
+                    let cull_default = if args.flag("--all") {
+                        names(TechniqueKind::Culling)
+                    } else {
+                        vec!["none".to_owned()]
+                    };
+                    for culling in chosen(TechniqueKind::Culling, "--cull", cull_default)? {
+                        combinations.push(Combination {
+                            vertex: vertex.clone(),
+                            parameters: parameters.clone(),
+                            submission: submission.clone(),
+                            culling,
+                        });
+                    }
+                }
+            }
+        }
+    } else {
+        for submission in names(TechniqueKind::Submission) {
+            for (vertex, parameters) in DEFAULT_PATHS {
+                combinations.push(Combination {
+                    vertex: vertex.into(),
+                    parameters: parameters.into(),
+                    submission: submission.clone(),
+                    culling: "none".into(),
+                });
+            }
+        }
+    }
+    Ok(combinations
+        .into_iter()
+        .filter(|c| techniques.check(c).is_ok())
+        .collect())
+}
+
+fn shade_modes(args: &Args) -> Result<Vec<ShadeMode>, String> {
+    match args.value(&["--shade"]) {
+        None => Ok(vec![ShadeMode::Solid]),
+        Some("all") => Ok(ShadeMode::ALL.to_vec()),
+        Some(name) => ShadeMode::parse(name)
+            .map(|m| vec![m])
+            .ok_or_else(|| format!("--shade {name}: expected solid, edges or all")),
+    }
+}
+
+fn frames_option(args: &Args, default: usize) -> Result<usize, String> {
+    match args.value(&["--frames"]) {
+        None => Ok(default),
+        Some(text) => match text.parse::<usize>() {
+            Ok(n) if (1..=10_000).contains(&n) => Ok(n),
+            _ => Err(format!(
+                "--frames {text}: expected a number from 1 to 10000"
+            )),
+        },
+    }
+}
+
+struct Bench {
+    device: Arc<Device>,
+    registry: Arc<PluginRegistry>,
+    size: (u32, u32),
+    frames: usize,
+}
+
+impl Bench {
+    /// Measures the baseline and `combinations` (per shade mode) on `scene`.
+    fn run(
+        &self,
+        scene: &Scene,
+        combinations: Option<&[Combination]>,
+        args: &Args,
+        quiet: bool,
+    ) -> Result<(SceneStats, Vec<Row>), String> {
+        let flat = flatten(scene).map_err(|e| e.to_string())?;
+        let stats = SceneStats::new(scene, &flat);
+        drop(flat);
+        let mut renderer =
+            Renderer::new(&self.device, self.size.0, self.size.1).map_err(|e| e.to_string())?;
+        let camera = Camera::fit(
+            &stats.bounds,
+            f64::from(self.size.0) / f64::from(self.size.1),
+            DEFAULT_DIRECTION,
+        );
+        let mut rows = Vec::new();
+        let gpu_scene = GpuScene::upload(&self.device, scene).map_err(|e| e.to_string())?;
+        let (cpu_us, gpu_us, first) = measure(self.frames, || {
+            renderer
+                .render(&gpu_scene, &camera)
+                .map_err(|e| e.to_string())
+        })?;
+        drop(gpu_scene);
+        let baseline = Row {
+            label: "baseline (built-in)".into(),
+            shade: "solid",
+            cpu_us,
+            gpu_us,
+            stats: first,
+        };
+        if !quiet {
+            print_header();
+            print_row(&baseline, baseline.cpu_us);
+        }
+        rows.push(baseline);
+        let mut session =
+            TechniqueSession::new(&self.device, &renderer, scene, Arc::clone(&self.registry))?;
+        let combinations = match combinations {
+            Some(list) => list.to_vec(),
+            None => selection(args, &session.techniques)?,
+        };
+        for mode in shade_modes(args)? {
+            for combination in &combinations {
+                session
+                    .techniques
+                    .select(combination)
+                    .map_err(|e| e.to_string())?;
+                session
+                    .techniques
+                    .set_shade_mode(mode)
+                    .map_err(|e| e.to_string())?;
+                let (cpu_us, gpu_us, first) = measure(self.frames, || {
+                    renderer
+                        .render_techniques(&mut session.scene, &mut session.techniques, &camera)
+                        .map_err(|e| e.to_string())
+                })?;
+                let row = Row {
+                    label: combination.to_string(),
+                    shade: mode.name(),
+                    cpu_us,
+                    gpu_us,
+                    stats: first,
+                };
+                if !quiet {
+                    print_row(&row, rows[0].cpu_us);
+                }
+                rows.push(row);
+            }
+        }
+        Ok((stats, rows))
+    }
+}
+
+fn print_header() {
+    println!(
+        "{:<58} {:>6} {:>10} {:>10} {:>8} {:>8} {:>6} {:>7} {:>7} {:>10} {:>9}",
+        "technique (vertex / params / submit / cull)",
+        "shade",
+        "CPU µs",
+        "GPU µs",
+        "calls",
+        "ranges",
+        "pipe",
+        "vertex",
+        "param",
+        "triangles",
+        "speedup"
+    );
+}
+
+fn print_row(row: &Row, baseline_cpu: f64) {
+    let gpu = row.gpu_us.map_or("n/a".to_owned(), |g| format!("{g:.0}"));
+    let s = &row.stats;
+    println!(
+        "{:<58} {:>6} {:>10.1} {:>10} {:>8} {:>8} {:>6} {:>7} {:>7} {:>10} {:>8.1}x",
+        row.label,
+        row.shade,
+        row.cpu_us,
+        gpu,
+        s.draw_calls,
+        s.draws,
+        s.pipeline_binds,
+        s.vertex_binds,
+        s.parameter_updates,
+        s.triangles,
+        baseline_cpu / row.cpu_us.max(0.001)
+    );
+}
+
+fn json_text(text: &str) -> String {
+    let escaped: String = text
+        .chars()
+        .flat_map(|c| match c {
+            '"' => vec!['\\', '"'],
+            '\\' => vec!['\\', '\\'],
+            c => vec![c],
+        })
+        .collect();
+    format!("\"{escaped}\"")
+}
+
+fn row_json(row: &Row, baseline_cpu: f64) -> String {
+    let s = &row.stats;
+    format!(
+        "{{\"technique\": {}, \"shade\": {}, \"cpu_us\": {:.2}, \"gpu_us\": {}, \"draw_calls\": {}, \"draws\": {}, \"pipeline_binds\": {}, \"vertex_binds\": {}, \"parameter_binds\": {}, \"triangles\": {}, \"speedup\": {:.3}}}",
+        json_text(&row.label),
+        json_text(row.shade),
+        row.cpu_us,
+        row.gpu_us.map_or("null".to_owned(), |g| format!("{g:.2}")),
+        s.draw_calls,
+        s.draws,
+        s.pipeline_binds,
+        s.vertex_binds,
+        s.parameter_updates,
+        s.triangles,
+        baseline_cpu / row.cpu_us.max(0.001)
+    )
+}
+
+fn stats_json(name: &str, stats: &SceneStats) -> String {
+    format!(
+        "{{\"name\": {}, \"nodes\": {}, \"geometries\": {}, \"materials\": {}, \"parts\": {}, \"triangles\": {}, \"vertices\": {}}}",
+        json_text(name),
+        stats.nodes,
+        stats.geometries,
+        stats.materials,
+        stats.instances,
+        stats.triangles,
+        stats.vertices
+    )
+}
+
+/// `cadr bench`.
+pub fn bench(args: &Args) -> Result<(), String> {
+    args.reject_unknown(
+        "bench",
+        &[
+            "--frames",
+            "--json",
+            "--size",
+            "--shade",
+            "--vertex",
+            "--params",
+            "--submit",
+            "--cull",
+            "--all",
+            "--sweep",
+            "--sweep-parts",
+            "--validation",
+            "--no-validation",
+        ],
+    )?;
+    let sweep = args.flag("--sweep") || args.value(&["--sweep-parts"]).is_some();
+    let frames = frames_option(args, if sweep { 5 } else { 10 })?;
+    let size = parse_size(args.value(&["--size"]).unwrap_or("640x480"))?;
+    let options = DeviceOptions {
+        instance: InstanceOptions {
+            validation: crate::validation_requested(args),
+            ..InstanceOptions::default()
+        },
+        ..DeviceOptions::default()
+    };
+    let device = Device::new(&options).map_err(|e| e.to_string())?;
+    let (registry, dirs) = load_registry(&device);
+    if registry.techniques().is_empty() {
+        return Err(no_plugins_message(&dirs));
+    }
+    let bench = Bench {
+        device: Arc::clone(&device),
+        registry,
+        size,
+        frames,
+    };
+    println!(
+        "device: {} — {} measured frames after 2 warm-up frames, {}x{}, medians",
+        device.adapter().name,
+        frames,
+        size.0,
+        size.1
+    );
+    let json = if sweep {
+        run_sweep(&bench, args)?
+    } else {
+        let name = args
+            .positionals()
+            .first()
+            .map_or("gen:demo", String::as_str);
+        if args.positionals().len() > 1 {
+            return Err(format!(
+                "cadr bench: unexpected argument '{}'",
+                args.positionals()[1]
+            ));
+        }
+        let scene = SceneSource::parse(name)
+            .and_then(|s| s.load())
+            .map_err(|e| e.to_string())?;
+        let (stats, rows) = bench.run(&scene, None, args, false)?;
+        println!(
+            "scene: {name}: {} parts, {} triangles, {} materials, {} geometries",
+            stats.instances, stats.triangles, stats.materials, stats.geometries
+        );
+        let baseline_cpu = rows[0].cpu_us;
+        let rows_json: Vec<String> = rows
+            .iter()
+            .map(|r| format!("    {}", row_json(r, baseline_cpu)))
+            .collect();
+        format!(
+            "{{\n  \"device\": {},\n  \"frames\": {frames},\n  \"size\": [{}, {}],\n  \"scene\": {},\n  \"rows\": [\n{}\n  ]\n}}\n",
+            json_text(&device.adapter().name),
+            size.0,
+            size.1,
+            stats_json(name, &stats),
+            rows_json.join(",\n")
+        )
+    };
+    if let Some(path) = args.value(&["--json"]) {
+        std::fs::write(path, json).map_err(|e| format!("cannot write {path}: {e}"))?;
+        println!("wrote {path}");
+    }
+    let errors = device.validation_log().errors().len();
+    if errors > 0 {
+        return Err(format!("{errors} Vulkan validation errors"));
+    }
+    Ok(())
+}
+
+/// Measures the sweep set over gen:grid scenes of growing size.
+fn run_sweep(bench: &Bench, args: &Args) -> Result<String, String> {
+    let parts: Vec<u64> = match args.value(&["--sweep-parts"]) {
+        None => vec![10_000, 100_000, 1_000_000],
+        Some(text) => text
+            .split(',')
+            .map(|p| {
+                p.trim()
+                    .parse::<u64>()
+                    .ok()
+                    .filter(|&n| (1..=50_000_000).contains(&n))
+            })
+            .collect::<Option<Vec<_>>>()
+            .ok_or_else(|| {
+                format!("--sweep-parts {text}: expected part counts like 10000,100000,1000000")
+            })?,
+    };
+    let combinations: Vec<Combination> = SWEEP_SET
+        .iter()
+        .map(|&(vertex, parameters, submission)| Combination {
+            vertex: vertex.into(),
+            parameters: parameters.into(),
+            submission: submission.into(),
+            culling: "none".into(),
+        })
+        .collect();
+    let mut columns: Vec<(u64, SceneStats, Vec<Row>)> = Vec::new();
+    for &n in &parts {
+        let name = format!("gen:grid:parts={n}");
+        println!("measuring {name} ...");
+        let scene = SceneSource::parse(&name)
+            .and_then(|s| s.load())
+            .map_err(|e| e.to_string())?;
+        let (stats, rows) = bench.run(&scene, Some(&combinations), args, true)?;
+        columns.push((n, stats, rows));
+    }
+    let Some((_, _, first_rows)) = columns.first() else {
+        return Err("no sweep sizes".into());
+    };
+    print!(
+        "{:<58}",
+        "CPU µs per frame (vertex / params / submit / cull)"
+    );
+    for (n, _, _) in &columns {
+        print!(" {:>12}", format!("{n} parts"));
+    }
+    println!(" {:>10}", "last/first");
+    for (i, row) in first_rows.iter().enumerate() {
+        print!("{:<58}", format!("{} [{}]", row.label, row.shade));
+        for (_, _, rows) in &columns {
+            print!(" {:>12.1}", rows[i].cpu_us);
+        }
+        let (first, last) = (
+            columns[0].2[i].cpu_us,
+            columns[columns.len() - 1].2[i].cpu_us,
+        );
+        println!(" {:>9.2}x", last / first.max(0.001));
+    }
+    let sizes: Vec<String> = columns
+        .iter()
+        .map(|(n, stats, rows)| {
+            let baseline_cpu = rows[0].cpu_us;
+            let rows_json: Vec<String> = rows
+                .iter()
+                .map(|r| format!("        {}", row_json(r, baseline_cpu)))
+                .collect();
+            format!(
+                "    {{\"parts\": {n}, \"scene\": {}, \"rows\": [\n{}\n    ]}}",
+                stats_json(&format!("gen:grid:parts={n}"), stats),
+                rows_json.join(",\n")
+            )
+        })
+        .collect();
+    Ok(format!(
+        "{{\n  \"device\": {},\n  \"frames\": {},\n  \"sweep\": [\n{}\n  ]\n}}\n",
+        json_text(&bench.device.adapter().name),
+        bench.frames,
+        sizes.join(",\n")
+    ))
+}

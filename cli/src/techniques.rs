@@ -1,0 +1,168 @@
+//! `cadr techniques` and what the commands that render with technique plugins share: finding
+//! the plugins, choosing a combination from the command line, and a scene ready for them.
+
+use std::path::PathBuf;
+use std::sync::Arc;
+
+use cadr_core::graph::SceneGraph;
+use cadr_core::render::Renderer;
+use cadr_core::scene::Scene;
+use cadr_core::technique::{
+    default_plugin_dirs, feature_bits, feature_names, Combination, PluginRegistry, ShadeMode,
+    TechniqueKind, TechniqueScene, Techniques, PLUGIN_PATH_VARIABLE,
+};
+use cadr_core::tree::SceneTree;
+use cadr_core::vk::{Device, DeviceOptions, InstanceOptions};
+
+use crate::args::Args;
+
+/// The command-line option of each technique kind.
+pub const KIND_OPTIONS: [(TechniqueKind, &str); 4] = [
+    (TechniqueKind::Vertex, "--vertex"),
+    (TechniqueKind::Parameters, "--params"),
+    (TechniqueKind::Submission, "--submit"),
+    (TechniqueKind::Culling, "--cull"),
+];
+
+/// The plugins for `device`, from the default directories.
+pub fn load_registry(device: &Device) -> (Arc<PluginRegistry>, Vec<PathBuf>) {
+    let dirs = default_plugin_dirs();
+    let registry = PluginRegistry::discover(&dirs, feature_bits(device.capabilities()));
+    (Arc::new(registry), dirs)
+}
+
+/// A message for when no plugin was found.
+pub fn no_plugins_message(dirs: &[PathBuf]) -> String {
+    let searched: Vec<String> = dirs.iter().map(|d| d.display().to_string()).collect();
+    format!(
+        "no technique plugins found (searched {}; build them with `cargo build --workspace` or set {PLUGIN_PATH_VARIABLE})",
+        searched.join(", ")
+    )
+}
+
+/// The combination and shade mode the options choose (defaults for kinds not given).
+pub fn combination_from_args(args: &Args) -> Result<(Combination, ShadeMode), String> {
+    let mut combination = Combination::simplest();
+    for (kind, option) in KIND_OPTIONS {
+        if let Some(name) = args.value(&[option]) {
+            combination.set(kind, name);
+        }
+    }
+    let shade = match args.value(&["--shade"]) {
+        None => ShadeMode::Solid,
+        Some(name) => ShadeMode::parse(name)
+            .ok_or_else(|| format!("--shade {name}: expected solid or edges"))?,
+    };
+    Ok((combination, shade))
+}
+
+/// Whether any technique option was given.
+pub fn technique_requested(args: &Args) -> bool {
+    KIND_OPTIONS
+        .iter()
+        .any(|(_, option)| args.value(&[option]).is_some())
+        || args.value(&["--shade"]).is_some()
+}
+
+/// A scene ready for technique plugins: the GPU scene they read and the active techniques.
+pub struct TechniqueSession {
+    pub scene: TechniqueScene,
+    pub techniques: Techniques,
+}
+
+impl TechniqueSession {
+    pub fn new(
+        device: &Arc<Device>,
+        renderer: &Renderer,
+        source: &Scene,
+        registry: Arc<PluginRegistry>,
+    ) -> Result<Self, String> {
+        let (mut graph, _) = SceneGraph::from_scene(source).map_err(|e| e.to_string())?;
+        let mut tree = SceneTree::build(&mut graph);
+        let scene = TechniqueScene::new(device, &graph, &mut tree).map_err(|e| e.to_string())?;
+        let techniques = Techniques::new(device, registry, renderer.pipelines().frame_set_layout);
+        Ok(Self { scene, techniques })
+    }
+}
+
+fn json_string(text: &str) -> String {
+    let mut out = String::from("\"");
+    for c in text.chars() {
+        match c {
+            '"' => out.push_str("\\\""),
+            '\\' => out.push_str("\\\\"),
+            c if (c as u32) < 0x20 => out.push_str(&format!("\\u{:04x}", c as u32)),
+            c => out.push(c),
+        }
+    }
+    out.push('"');
+    out
+}
+
+/// `cadr techniques [--json]`.
+pub fn techniques(args: &Args) -> Result<(), String> {
+    args.reject_unknown("techniques", &["--json"])?;
+    let options = DeviceOptions {
+        instance: InstanceOptions::default(),
+        ..DeviceOptions::default()
+    };
+    let device = Device::new(&options).map_err(|e| e.to_string())?;
+    let (registry, dirs) = load_registry(&device);
+    let device_name = device.adapter().name.clone();
+    if args.flag("--json") {
+        let mut entries = Vec::new();
+        for t in registry.techniques() {
+            let (supported, reason) = match &t.support {
+                Ok(()) => ("true", "null".to_owned()),
+                Err(why) => ("false", json_string(why)),
+            };
+            let needs: Vec<String> = feature_names(t.required_features)
+                .iter()
+                .map(|n| json_string(n))
+                .collect();
+            entries.push(format!(
+                "    {{\"kind\": {}, \"name\": {}, \"description\": {}, \"library\": {}, \"required_features\": [{}], \"supported\": {supported}, \"reason\": {reason}}}",
+                json_string(t.kind.name()),
+                json_string(&t.name),
+                json_string(&t.description),
+                json_string(&t.library.display().to_string()),
+                needs.join(", ")
+            ));
+        }
+        let refusals: Vec<String> = registry
+            .refusals()
+            .iter()
+            .map(|r| format!("    {}", json_string(&r.to_string())))
+            .collect();
+        println!(
+            "{{\n  \"device\": {},\n  \"techniques\": [\n{}\n  ],\n  \"refused\": [\n{}\n  ]\n}}",
+            json_string(&device_name),
+            entries.join(",\n"),
+            refusals.join(",\n")
+        );
+        return Ok(());
+    }
+    if registry.techniques().is_empty() {
+        println!("{}", no_plugins_message(&dirs));
+    }
+    println!("device: {device_name}");
+    for (kind, option) in KIND_OPTIONS {
+        println!(
+            "\n{} techniques ({option} NAME; default {}):",
+            kind.name(),
+            Combination::simplest().get(kind)
+        );
+        for t in registry.of_kind(kind) {
+            let support = match &t.support {
+                Ok(()) => String::new(),
+                Err(why) => format!(" [unsupported: {why}]"),
+            };
+            println!("  {:<26} {}{support}", t.name, t.description);
+        }
+    }
+    println!("\nshade modes (--shade): solid (default), edges");
+    for refusal in registry.refusals() {
+        println!("refused: {refusal}");
+    }
+    Ok(())
+}

@@ -459,3 +459,66 @@ fn frustum_culling_draws_only_what_the_camera_sees() {
     drop(f.techniques);
     assert_no_validation_errors(&f.device);
 }
+
+#[test]
+fn a_technique_written_in_c_plugs_in() {
+    let dir = cadr_tests::fixtures::scratch_dir("c-plugin");
+    let library = dir.join(format!(
+        "{}cadr_fixture_c{}",
+        std::env::consts::DLL_PREFIX,
+        std::env::consts::DLL_SUFFIX
+    ));
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
+    let output = std::process::Command::new("cc")
+        .args([
+            "-std=c99",
+            "-Wall",
+            "-Wextra",
+            "-Wpedantic",
+            "-Werror",
+            "-shared",
+            "-fPIC",
+            "-I",
+        ])
+        .arg(root.join("include"))
+        .arg(root.join("tests/c-plugin/cull_everything_visible.c"))
+        .arg("-o")
+        .arg(&library)
+        .output()
+        .expect("cc is needed (build-essential)");
+    assert!(
+        output.status.success(),
+        "{}",
+        String::from_utf8_lossy(&output.stderr)
+    );
+
+    let mut f = Fixture::with_size(&generate(&GeneratorSpec::Demo), (96, 72));
+    let features = feature_bits(f.device.capabilities());
+    let mut registry = PluginRegistry::discover(
+        &[std::env::current_exe()
+            .unwrap()
+            .parent()
+            .unwrap()
+            .to_path_buf()],
+        features,
+    );
+    registry.load(&library, features);
+    assert!(registry.refusals().is_empty(), "{:?}", registry.refusals());
+    let c_culler = registry
+        .find(TechniqueKind::Culling, "c-candidates")
+        .unwrap();
+    assert_eq!(c_culler.description, "Written in C: draws every candidate.");
+    f.techniques = Techniques::new(
+        &f.device,
+        Arc::new(registry),
+        f.renderer.pipelines().frame_set_layout,
+    );
+    let combination = Combination {
+        culling: "c-candidates".into(),
+        ..Combination::simplest()
+    };
+    f.techniques.select(&combination).unwrap();
+    f.assert_matches_baseline("culled by the C plugin");
+    drop(f.techniques);
+    assert_no_validation_errors(&f.device);
+}

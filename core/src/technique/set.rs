@@ -232,11 +232,11 @@ impl Techniques {
             color_format: COLOR_FORMAT.as_raw(),
             depth_format: DEPTH_FORMAT.as_raw(),
             // SAFETY: the loader's function has the ABI's signature (handles as pointers).
-            get_instance_proc_addr: Some(unsafe {
+            get_instance_proc_addr: unsafe {
                 std::mem::transmute::<vk::PFN_vkGetInstanceProcAddr, abi::CadrGetInstanceProcAddr>(
                     instance.entry().static_fn().get_instance_proc_addr,
                 )
-            }),
+            },
             features: feature_bits(device.capabilities()),
             min_uniform_buffer_offset_alignment: limits.min_uniform_buffer_offset_alignment,
             max_push_constants_size: limits.max_push_constants_size,
@@ -419,7 +419,7 @@ impl Techniques {
         let parameters = self.get(TechniqueKind::Parameters)?;
         let vertex_table: &abi::CadrVertexPathVtable = vertex.vtable();
         let parameter_table: &abi::CadrParameterPathVtable = parameters.vtable();
-        let snippet = |f: Option<abi::CadrShaderSnippetFn>, instance: *mut c_void| -> String {
+        let snippet = |f: abi::CadrShaderSnippetFn, instance: *mut c_void| -> String {
             f.map(|f| {
                 // SAFETY: a live instance; the string lives as long as it.
                 let text = unsafe { f(instance) };

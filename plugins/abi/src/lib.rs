@@ -160,11 +160,12 @@ pub struct CadrTechniqueInfo {
 }
 
 /// `vkGetInstanceProcAddr`, from which a plugin loads every other Vulkan function.
-pub type CadrGetInstanceProcAddr = unsafe extern "system" fn(
-    instance: *mut c_void,
-    name: *const c_char,
-)
-    -> Option<unsafe extern "system" fn()>;
+pub type CadrGetInstanceProcAddr = Option<
+    unsafe extern "system" fn(
+        instance: *mut c_void,
+        name: *const c_char,
+    ) -> Option<unsafe extern "system" fn()>,
+>;
 
 /// The host's Vulkan objects, as raw handles (dispatchable ones as pointers, the others as
 /// 64-bit integers, as in `vulkan_core.h`).
@@ -188,7 +189,7 @@ pub struct CadrVulkan {
     /// `VkFormat` of the depth target.
     pub depth_format: i32,
     /// Loader for every Vulkan function.
-    pub get_instance_proc_addr: Option<CadrGetInstanceProcAddr>,
+    pub get_instance_proc_addr: CadrGetInstanceProcAddr,
     /// `CADR_FEATURE_*` bits enabled on the device.
     pub features: CadrFeatureBits,
     /// `minUniformBufferOffsetAlignment`.
@@ -521,16 +522,18 @@ pub struct CadrCommonVtable {
 /// `words` (bytes 96–127) to the vertex path; descriptor sets 1 and 2 belong to the parameter
 /// path, set 3 to the vertex path (set 0 is the host's frame uniforms). Lines starting with
 /// `#extension` are moved to the top of the shader.
-pub type CadrShaderSnippetFn = unsafe extern "C" fn(instance: *mut c_void) -> *const c_char;
+pub type CadrShaderSnippetFn = Option<unsafe extern "C" fn(instance: *mut c_void) -> *const c_char>;
 
 /// Prepares for a frame before the pass (uploads, descriptor writes); may record transfer or
 /// compute commands into `command_buffer` (a primary outside rendering).
-pub type CadrPrepareFn = unsafe extern "C" fn(
-    instance: *mut c_void,
-    scene: *const CadrSceneView,
-    command_buffer: *mut c_void,
-    message: *mut CadrMessage,
-) -> CadrStatus;
+pub type CadrPrepareFn = Option<
+    unsafe extern "C" fn(
+        instance: *mut c_void,
+        scene: *const CadrSceneView,
+        command_buffer: *mut c_void,
+        message: *mut CadrMessage,
+    ) -> CadrStatus,
+>;
 
 /// Vertex path vtable ([`CADR_KIND_VERTEX_PATH`]). Its snippet defines
 /// `vec3 cadr_vertex_position()` and `vec3 cadr_vertex_normal()`.
@@ -540,14 +543,14 @@ pub struct CadrVertexPathVtable {
     /// Size, create, destroy.
     pub common: CadrCommonVtable,
     /// The GLSL snippet.
-    pub shader_snippet: Option<CadrShaderSnippetFn>,
+    pub shader_snippet: CadrShaderSnippetFn,
     /// The vertex input state.
     pub vertex_input:
         Option<unsafe extern "C" fn(instance: *mut c_void, input: *mut CadrVertexInput)>,
     /// `VkDescriptorSetLayout` for set 3, or 0.
     pub set_layout: Option<unsafe extern "C" fn(instance: *mut c_void) -> u64>,
     /// Before the pass.
-    pub prepare: Option<CadrPrepareFn>,
+    pub prepare: CadrPrepareFn,
     /// Binds what stays bound for the whole pass. Thread-safe.
     pub bind_pass: Option<
         unsafe extern "C" fn(
@@ -578,7 +581,7 @@ pub struct CadrParameterPathVtable {
     /// Size, create, destroy.
     pub common: CadrCommonVtable,
     /// The GLSL snippet.
-    pub shader_snippet: Option<CadrShaderSnippetFn>,
+    pub shader_snippet: CadrShaderSnippetFn,
     /// `VkDescriptorSetLayout`s for sets 1 and 2 (0 for none), and the push-constant bytes used.
     pub layout: Option<
         unsafe extern "C" fn(
@@ -588,7 +591,7 @@ pub struct CadrParameterPathVtable {
         ),
     >,
     /// Before the pass.
-    pub prepare: Option<CadrPrepareFn>,
+    pub prepare: CadrPrepareFn,
     /// Binds what stays bound for the whole pass. Thread-safe.
     pub bind_pass: Option<
         unsafe extern "C" fn(

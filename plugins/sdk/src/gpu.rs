@@ -58,9 +58,7 @@ impl Gpu {
         let static_fn = ash::StaticFn {
             // SAFETY: same signature; VkInstance is a pointer-sized handle on both sides.
             get_instance_proc_addr: unsafe {
-                std::mem::transmute::<abi::CadrGetInstanceProcAddr, vk::PFN_vkGetInstanceProcAddr>(
-                    get_instance_proc_addr,
-                )
+                std::mem::transmute::<_, vk::PFN_vkGetInstanceProcAddr>(get_instance_proc_addr)
             },
         };
         let instance_handle = vk::Instance::from_raw(vulkan.instance as u64);

@@ -52,14 +52,14 @@ impl Gpu {
     pub unsafe fn from_create_info(info: &abi::CadrCreateInfo) -> Result<Arc<Self>, String> {
         // SAFETY: the host passes valid pointers for the life of the instance.
         let vulkan = unsafe { info.vulkan.as_ref() }.ok_or("the host passed no Vulkan handles")?;
-        let get_instance_proc_addr = vulkan
-            .get_instance_proc_addr
-            .ok_or("the host passed no vkGetInstanceProcAddr")?;
+        // SAFETY: same signature; VkInstance is a pointer-sized handle on both sides.
+        let loader = unsafe {
+            std::mem::transmute::<abi::CadrGetInstanceProcAddr, Option<vk::PFN_vkGetInstanceProcAddr>>(
+                vulkan.get_instance_proc_addr,
+            )
+        };
         let static_fn = ash::StaticFn {
-            // SAFETY: same signature; VkInstance is a pointer-sized handle on both sides.
-            get_instance_proc_addr: unsafe {
-                std::mem::transmute::<_, vk::PFN_vkGetInstanceProcAddr>(get_instance_proc_addr)
-            },
+            get_instance_proc_addr: loader.ok_or("the host passed no vkGetInstanceProcAddr")?,
         };
         let instance_handle = vk::Instance::from_raw(vulkan.instance as u64);
         // SAFETY: the handle and loader are the host's live instance.

@@ -22,6 +22,12 @@ cadr — a Vulkan renderer for very large CAD assemblies
 
 USAGE:
     cadr render SCENE [-o OUT.png] [--size WxH] [--frames N] [--validation]
+                [--vertex NAME] [--params NAME] [--submit NAME] [--cull NAME]
+                [--shade solid|edges] [--baseline]
+    cadr techniques [--json]
+    cadr bench [SCENE] [--frames N] [--json FILE] [--size WxH] [--shade solid|edges|all]
+               [--vertex A,B] [--params A,B] [--submit A,B] [--cull A,B] [--all]
+    cadr bench --sweep [--sweep-parts N,N,...]
     cadr info SCENE
     cadr convert SCENE OUT
     cadr bench-tree [SCENE] [--runs N]
@@ -35,7 +41,16 @@ SCENE is a .gltf, .glb, .csf or .csf.gz file, or a generator:
 
 render: draws the scene offscreen with the camera fitted to its bounds, writes a PNG
         (default out.png, 1024x768) and prints what it drew and the frame's CPU and GPU time.
-        --frames N renders N frames after one warm-up and reports medians.
+        --frames N renders N frames after one warm-up and reports medians. It draws with the
+        technique plugins: one per kind (defaults per-geometry, push, individual, none), solid
+        or with edges; --baseline uses the built-in baseline instead.
+techniques: lists every technique plugin, its description and whether this device runs it.
+bench:  renders the built-in baseline and technique combinations (by default every submission
+        with per-geometry/push and arena/ssbo-index; --all for every supported one; lists to
+        choose) for N frames after 2 warm-up frames and prints CPU and GPU µs, draw calls,
+        state changes, triangles and the speedup over the baseline; --json FILE writes them
+        with the scene statistics. --sweep measures a set over gen:grid of 10 000 to 1 000 000
+        parts to show how each technique's CPU cost grows.
 info:   prints nodes, geometries, parts, materials, instances, triangles, vertices, bounds.
 convert: writes SCENE as OUT (.gltf with a .bin beside it, .glb, .csf, .csf.gz) and says what
         the target format cannot hold.
@@ -45,7 +60,8 @@ bench-tree: builds the incremental scene tree of SCENE (default gen:graphicscard
 devices: lists the Vulkan devices; CADR_DEVICE=INDEX|NAME picks one.
 
 
-Validation layers are on with --validation or CADR_VALIDATION=1.
+Validation layers are on with --validation or CADR_VALIDATION=1. Plugins are found beside the
+executable (and in its plugins/ folder) and in the directories of CADR_PLUGIN_PATH.
 ";
 
 fn main() -> ExitCode {

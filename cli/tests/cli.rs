@@ -3,9 +3,14 @@
 
 use std::process::{Command, Output};
 
+/// Runs `cadr` with the plugins cargo built (in `deps/` beside the binary: the test build makes
+/// them as dependencies of the integration tests).
 fn cadr(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_cadr"))
+    let exe = std::path::Path::new(env!("CARGO_BIN_EXE_cadr"));
+    let deps = exe.parent().unwrap().join("deps");
+    Command::new(exe)
         .args(args)
+        .env("CADR_PLUGIN_PATH", deps)
         .output()
         .expect("run cadr")
 }
@@ -181,4 +186,145 @@ fn help_lists_the_commands_and_generators() {
     ] {
         assert!(text.contains(expected), "{expected}");
     }
+}
+
+#[test]
+fn techniques_lists_every_kind_with_support() {
+    let output = cadr(&["techniques", "--json"]);
+    assert!(output.status.success(), "{}", stderr(&output));
+    let json: serde_json::Value = serde_json::from_str(&stdout(&output)).unwrap();
+    let techniques = json["techniques"].as_array().unwrap();
+    for (kind, name) in [
+        ("vertex", "pulling"),
+        ("params", "ssbo-index"),
+        ("submit", "groups-replay"),
+        ("cull", "frustum"),
+    ] {
+        let found = techniques
+            .iter()
+            .find(|t| t["kind"] == kind && t["name"] == name)
+            .unwrap_or_else(|| panic!("{kind} {name} missing"));
+        assert_eq!(found["supported"], true, "{found}");
+        assert!(!found["description"].as_str().unwrap().is_empty());
+    }
+    let text = stdout(&cadr(&["techniques"]));
+    assert!(
+        text.contains("submit techniques (--submit NAME; default individual)"),
+        "{text}"
+    );
+}
+
+#[test]
+fn render_uses_the_chosen_techniques_and_refuses_bad_combinations() {
+    let path = std::env::temp_dir().join(format!("cadr-cli-techniques-{}.png", std::process::id()));
+    let output = cadr(&[
+        "render",
+        "gen:demo",
+        "-o",
+        path.to_str().unwrap(),
+        "--size",
+        "96x72",
+        "--vertex",
+        "arena",
+        "--params",
+        "ssbo-index",
+        "--submit",
+        "groups-mdi",
+        "--shade",
+        "edges",
+        "--validation",
+    ]);
+    assert!(output.status.success(), "{}", stderr(&output));
+    let text = stdout(&output);
+    assert!(
+        text.contains("techniques:  arena / ssbo-index / groups-mdi / none, edges"),
+        "{text}"
+    );
+    assert!(
+        text.contains("2 draw calls"),
+        "one indirect call per pass: {text}"
+    );
+    assert!(text.contains("validation:  0 errors"), "{text}");
+    assert!(path.exists());
+
+    let output = cadr(&[
+        "render",
+        "gen:demo",
+        "-o",
+        path.to_str().unwrap(),
+        "--submit",
+        "individual-mdi",
+    ]);
+    assert!(!output.status.success());
+    assert!(
+        stderr(&output).contains("submit 'individual-mdi' needs"),
+        "{}",
+        stderr(&output)
+    );
+    let output = cadr(&[
+        "render",
+        "gen:demo",
+        "-o",
+        path.to_str().unwrap(),
+        "--vertex",
+        "wobbly",
+    ]);
+    assert!(!output.status.success());
+    assert!(
+        stderr(&output).contains("no vertex technique named 'wobbly' (known: per-part"),
+        "{}",
+        stderr(&output)
+    );
+    let output = cadr(&[
+        "render",
+        "gen:demo",
+        "-o",
+        path.to_str().unwrap(),
+        "--shade",
+        "toon",
+    ]);
+    assert!(
+        stderr(&output).contains("--shade toon: expected solid or edges"),
+        "{}",
+        stderr(&output)
+    );
+}
+
+#[test]
+fn bench_prints_the_table_and_writes_json() {
+    let path = std::env::temp_dir().join(format!("cadr-cli-bench-{}.json", std::process::id()));
+    let output = cadr(&[
+        "bench",
+        "gen:grid:parts=500",
+        "--frames",
+        "2",
+        "--size",
+        "64x48",
+        "--vertex",
+        "per-geometry",
+        "--params",
+        "push",
+        "--submit",
+        "individual,groups-replay",
+        "--json",
+        path.to_str().unwrap(),
+    ]);
+    assert!(output.status.success(), "{}", stderr(&output));
+    let text = stdout(&output);
+    assert!(text.contains("baseline (built-in)"), "{text}");
+    assert!(
+        text.contains("per-geometry / push / groups-replay / none"),
+        "{text}"
+    );
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&path).unwrap()).unwrap();
+    let rows = json["rows"].as_array().unwrap();
+    assert_eq!(rows.len(), 3, "baseline and two combinations");
+    assert_eq!(json["scene"]["parts"], 500);
+    assert_eq!(rows[0]["speedup"], 1.0);
+    for row in rows {
+        assert!(row["cpu_us"].as_f64().unwrap() > 0.0, "{row}");
+        assert_eq!(row["triangles"], rows[0]["triangles"], "{row}");
+    }
+    assert_eq!(rows[1]["draw_calls"], 500, "individual: one call per part");
 }

@@ -25,7 +25,7 @@ pub struct PluginAllocations {
     pub buffer_bytes: AtomicI64,
 }
 
-/// A snapshot of [`PluginAllocations`].
+/// What plugins hold at one moment: a snapshot of the host's counters.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct AllocationCounts {
     /// Live allocations of plugin-created Vulkan objects.

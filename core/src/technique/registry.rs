@@ -193,16 +193,38 @@ pub fn feature_names(bits: u64) -> Vec<&'static str> {
     .collect()
 }
 
-/// The default plugin directories: beside the executable (and its `plugins/` folder), then
-/// the directories in [`PLUGIN_PATH_VARIABLE`].
+/// The directory of the file this code was loaded from: the executable, or the shared library
+/// (such as the C API's `libcadr.so`) that cadr-core is linked into. Linux only (read from
+/// `/proc/self/maps`); `None` elsewhere.
+fn loaded_from_dir() -> Option<PathBuf> {
+    let address = loaded_from_dir as usize;
+    let maps = std::fs::read_to_string("/proc/self/maps").ok()?;
+    maps.lines().find_map(|line| {
+        let mut fields = line.split_whitespace();
+        let (start, end) = fields.next()?.split_once('-')?;
+        let start = usize::from_str_radix(start, 16).ok()?;
+        let end = usize::from_str_radix(end, 16).ok()?;
+        let path = fields.nth(4)?;
+        ((start..end).contains(&address) && path.starts_with('/'))
+            .then(|| Path::new(path).parent().map(Path::to_path_buf))
+            .flatten()
+    })
+}
+
+/// The default plugin directories: beside the library cadr is linked into and beside the
+/// executable (each with its `plugins/` folder first), then the directories in
+/// [`PLUGIN_PATH_VARIABLE`].
 pub fn default_plugin_dirs() -> Vec<PathBuf> {
-    let mut dirs = Vec::new();
-    if let Some(exe_dir) = std::env::current_exe()
+    let mut dirs: Vec<PathBuf> = Vec::new();
+    let exe_dir = std::env::current_exe()
         .ok()
-        .and_then(|exe| exe.parent().map(Path::to_path_buf))
-    {
-        dirs.push(exe_dir.join("plugins"));
-        dirs.push(exe_dir);
+        .and_then(|exe| exe.parent().map(Path::to_path_buf));
+    for dir in [loaded_from_dir(), exe_dir].into_iter().flatten() {
+        for candidate in [dir.join("plugins"), dir] {
+            if !dirs.contains(&candidate) {
+                dirs.push(candidate);
+            }
+        }
     }
     if let Some(paths) = std::env::var_os(PLUGIN_PATH_VARIABLE) {
         dirs.extend(std::env::split_paths(&paths).filter(|p| !p.as_os_str().is_empty()));
@@ -427,5 +449,33 @@ impl PluginRegistry {
     /// The techniques of one kind.
     pub fn of_kind(&self, kind: TechniqueKind) -> impl Iterator<Item = &Arc<TechniqueEntry>> {
         self.techniques.iter().filter(move |t| t.kind == kind)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn plugin_dirs_start_beside_the_binary_and_end_with_the_variable() {
+        let dirs = default_plugin_dirs();
+        let exe_dir = std::env::current_exe().unwrap_or_default();
+        let exe_dir = exe_dir.parent().unwrap_or(Path::new("/"));
+        assert!(dirs.contains(&exe_dir.to_path_buf()), "{dirs:?}");
+        assert!(dirs.contains(&exe_dir.join("plugins")), "{dirs:?}");
+        assert!(is_plugin_file(Path::new("/x/libcadr_plugin_vertex.so")));
+        assert!(!is_plugin_file(Path::new("/x/libcadr.so")));
+        assert!(!is_plugin_file(Path::new(
+            "/x/libcadr_plugin_vertex.so.txt"
+        )));
+    }
+
+    #[test]
+    fn missing_features_are_named() {
+        let bits = abi::CADR_FEATURE_MULTI_DRAW | abi::CADR_FEATURE_MESH_SHADER;
+        assert_eq!(
+            feature_names(bits),
+            vec!["VK_EXT_multi_draw", "VK_EXT_mesh_shader"]
+        );
     }
 }

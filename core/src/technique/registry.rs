@@ -197,7 +197,7 @@ pub fn feature_names(bits: u64) -> Vec<&'static str> {
 /// (such as the C API's `libcadr.so`) that cadr-core is linked into. Linux only (read from
 /// `/proc/self/maps`); `None` elsewhere.
 fn loaded_from_dir() -> Option<PathBuf> {
-    let address = loaded_from_dir as usize;
+    let address = loaded_from_dir as fn() -> Option<PathBuf> as usize;
     let maps = std::fs::read_to_string("/proc/self/maps").ok()?;
     maps.lines().find_map(|line| {
         let mut fields = line.split_whitespace();

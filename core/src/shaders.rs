@@ -71,6 +71,9 @@ pub const EDGES_FRAG: ShaderSource = ShaderSource {
     source: include_str!("../../shaders/edges.frag"),
 };
 
+/// Shaders that are templates: plugins' snippets complete them (see `technique::pipeline`).
+pub const TEMPLATES: &[ShaderSource] = &[TECHNIQUE_VERT];
+
 /// Every complete shader, for validation.
 pub const ALL: &[ShaderSource] = &[
     BASELINE_VERT,

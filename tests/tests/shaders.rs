@@ -5,7 +5,7 @@ use cadr_core::render::{
     DrawIndices, DrawParameters, FrameUniforms, GpuScene, MaterialParameters, MatrixUpdate,
     Renderer,
 };
-use cadr_core::shaders::{ALL, INCLUDES};
+use cadr_core::shaders::{ALL, INCLUDES, TEMPLATES};
 use cadr_core::vk::{compile_glsl, ShaderStage, VkError};
 use cadr_tests::{assert_no_validation_errors, test_device};
 
@@ -43,8 +43,8 @@ fn every_shader_file_is_listed() {
             .into_owned();
         if ShaderStage::from_file_name(&name).is_some() {
             assert!(
-                ALL.iter().any(|s| s.name == name),
-                "{name} is not in cadr_core::shaders::ALL"
+                ALL.iter().chain(TEMPLATES).any(|s| s.name == name),
+                "{name} is not in cadr_core::shaders::ALL or TEMPLATES"
             );
         } else if name.ends_with(".glsl") {
             assert!(

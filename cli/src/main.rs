@@ -259,11 +259,11 @@ fn render(args: &Args) -> Result<(), String> {
         ..DeviceOptions::default()
     };
     let device = Device::new(&options).map_err(|e| e.to_string())?;
+    let mut renderer = Renderer::new(&device, width, height).map_err(|e| e.to_string())?;
     let upload_start = Instant::now();
     let flat = flatten(&scene).map_err(|e| e.to_string())?;
     let stats = SceneStats::new(&scene, &flat);
     drop(flat);
-    let mut renderer = Renderer::new(&device, width, height).map_err(|e| e.to_string())?;
     let mut session = None;
     let mut technique_line = "built-in baseline (--baseline)".to_owned();
     if !args.flag("--baseline") {

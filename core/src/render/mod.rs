@@ -173,8 +173,7 @@ impl Renderer {
         let mut before = |_: &Renderer, _: vk::CommandBuffer, _: &mut FrameStats| Ok(());
         let mut inside =
             |renderer: &Renderer, command_buffer: vk::CommandBuffer, stats: &mut FrameStats| {
-                renderer.record_baseline(command_buffer, scene, camera, stats);
-                Ok(())
+                renderer.record_baseline(command_buffer, scene, camera, stats)
             };
         self.frame(
             camera,
@@ -197,7 +196,7 @@ impl Renderer {
         let mut before = upload_recorder(&scene);
         let mut inside =
             |renderer: &Renderer, command_buffer: vk::CommandBuffer, stats: &mut FrameStats| {
-                let pipeline = renderer.pipelines.resident;
+                let pipeline = renderer.pipelines.resident()?;
                 renderer.record_resident(command_buffer, &scene.borrow(), stats, pipeline, false);
                 Ok(())
             };
@@ -249,7 +248,7 @@ impl Renderer {
         let mut before = upload_recorder(&scene);
         let mut inside =
             |renderer: &Renderer, command_buffer: vk::CommandBuffer, stats: &mut FrameStats| {
-                let pipeline = renderer.pipelines.pick;
+                let pipeline = renderer.pipelines.pick()?;
                 renderer.record_resident(command_buffer, &scene.borrow(), stats, pipeline, true);
                 Ok(())
             };
@@ -492,16 +491,13 @@ impl Renderer {
         scene: &GpuScene,
         camera: &Camera,
         stats: &mut FrameStats,
-    ) {
+    ) -> VkResult<()> {
         let raw = self.device.raw();
         let layout = self.pipelines.baseline_layout;
+        let pipeline = self.pipelines.baseline()?;
         // SAFETY: recording inside the pass; pipeline, set and arenas outlive the submission.
         unsafe {
-            raw.cmd_bind_pipeline(
-                command_buffer,
-                vk::PipelineBindPoint::GRAPHICS,
-                self.pipelines.baseline,
-            );
+            raw.cmd_bind_pipeline(command_buffer, vk::PipelineBindPoint::GRAPHICS, pipeline);
             raw.cmd_bind_descriptor_sets(
                 command_buffer,
                 vk::PipelineBindPoint::GRAPHICS,
@@ -552,6 +548,7 @@ impl Renderer {
             stats.draws += 1;
             stats.triangles += u64::from(draw.index_count / 3);
         }
+        Ok(())
     }
 
     /// Records the resident draws with `pipeline` (the shaded or the pick pipeline); with

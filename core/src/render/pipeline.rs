@@ -2,13 +2,13 @@
 //! baseline pipeline (per-draw push constants), the resident pipeline (per-draw indices into
 //! storage buffers) and the scatter compute pipeline.
 
-use std::sync::Arc;
+use std::sync::{Arc, OnceLock};
 
 use ash::vk;
 
 use crate::scene::Vertex;
 use crate::shaders::{self, ShaderSource};
-use crate::vk::{Device, ShaderModule, VkResult, VkResultExt, COLOR_FORMAT, DEPTH_FORMAT};
+use crate::vk::{Device, ShaderModule, VkError, VkResult, VkResultExt, COLOR_FORMAT, DEPTH_FORMAT};
 
 /// Format of the pick target: one instance id (+1) per pixel.
 pub const PICK_FORMAT: vk::Format = vk::Format::R32_UINT;
@@ -212,17 +212,17 @@ pub struct Pipelines {
     /// Baseline layout: set 0 and 96 bytes of push constants.
     pub baseline_layout: vk::PipelineLayout,
     /// Baseline pipeline.
-    pub baseline: vk::Pipeline,
+    baseline: OnceLock<vk::Pipeline>,
     /// Resident layout: sets 0 and 1 and 8 bytes of push constants.
     pub resident_layout: vk::PipelineLayout,
     /// Resident pipeline.
-    pub resident: vk::Pipeline,
+    resident: OnceLock<vk::Pipeline>,
     /// The pick pipeline: the resident layout and vertex shader, instance ids into R32_UINT.
-    pub pick: vk::Pipeline,
+    pick: OnceLock<vk::Pipeline>,
     /// Scatter layout.
     pub scatter_layout: vk::PipelineLayout,
     /// Scatter compute pipeline.
-    pub scatter: vk::Pipeline,
+    scatter: OnceLock<vk::Pipeline>,
 }
 
 impl Pipelines {
@@ -235,12 +235,12 @@ impl Pipelines {
             resident_set_layout: vk::DescriptorSetLayout::null(),
             scatter_set_layout: vk::DescriptorSetLayout::null(),
             baseline_layout: vk::PipelineLayout::null(),
-            baseline: vk::Pipeline::null(),
+            baseline: OnceLock::new(),
             resident_layout: vk::PipelineLayout::null(),
-            resident: vk::Pipeline::null(),
-            pick: vk::Pipeline::null(),
+            resident: OnceLock::new(),
+            pick: OnceLock::new(),
             scatter_layout: vk::PipelineLayout::null(),
-            scatter: vk::Pipeline::null(),
+            scatter: OnceLock::new(),
         };
         this.frame_set_layout = set_layout(
             device,
@@ -262,36 +262,12 @@ impl Pipelines {
             std::mem::size_of::<DrawParameters>() as u32,
             graphics,
         )?;
-        this.baseline = graphics_pipeline(
-            device,
-            this.baseline_layout,
-            &shaders::BASELINE_VERT,
-            &shaders::BASELINE_FRAG,
-            COLOR_FORMAT,
-            "baseline pipeline",
-        )?;
         this.resident_layout = pipeline_layout(
             device,
             "resident layout",
             &[this.frame_set_layout, this.resident_set_layout],
             std::mem::size_of::<DrawIndices>() as u32,
             vk::ShaderStageFlags::VERTEX,
-        )?;
-        this.resident = graphics_pipeline(
-            device,
-            this.resident_layout,
-            &shaders::RESIDENT_VERT,
-            &shaders::RESIDENT_FRAG,
-            COLOR_FORMAT,
-            "resident pipeline",
-        )?;
-        this.pick = graphics_pipeline(
-            device,
-            this.resident_layout,
-            &shaders::RESIDENT_VERT,
-            &shaders::PICK_FRAG,
-            PICK_FORMAT,
-            "pick pipeline",
         )?;
         this.scatter_layout = pipeline_layout(
             device,
@@ -300,13 +276,81 @@ impl Pipelines {
             4,
             compute,
         )?;
-        this.scatter = compute_pipeline(
-            device,
-            this.scatter_layout,
-            &shaders::SCATTER_COMP,
-            "scatter pipeline",
-        )?;
         Ok(this)
+    }
+
+    /// `cell`'s pipeline, created by `make` on first use (each pipeline costs a shader compile
+    /// and, on lavapipe, a JIT compile of 60–150 ms, so only what a renderer draws with is made).
+    fn lazy(
+        &self,
+        cell: &OnceLock<vk::Pipeline>,
+        make: impl FnOnce() -> VkResult<vk::Pipeline>,
+    ) -> VkResult<vk::Pipeline> {
+        if let Some(&pipeline) = cell.get() {
+            return Ok(pipeline);
+        }
+        let pipeline = make()?;
+        if let Err(unused) = cell.set(pipeline) {
+            // SAFETY: made just now and never used.
+            unsafe { self.device.raw().destroy_pipeline(unused, None) };
+        }
+        cell.get()
+            .copied()
+            .ok_or_else(|| VkError::InvalidUse("pipeline cell empty".into()))
+    }
+
+    /// The baseline pipeline (set 0 and 96 bytes of push constants).
+    pub fn baseline(&self) -> VkResult<vk::Pipeline> {
+        self.lazy(&self.baseline, || {
+            graphics_pipeline(
+                &self.device,
+                self.baseline_layout,
+                &shaders::BASELINE_VERT,
+                &shaders::BASELINE_FRAG,
+                COLOR_FORMAT,
+                "baseline pipeline",
+            )
+        })
+    }
+
+    /// The resident pipeline.
+    pub fn resident(&self) -> VkResult<vk::Pipeline> {
+        self.lazy(&self.resident, || {
+            graphics_pipeline(
+                &self.device,
+                self.resident_layout,
+                &shaders::RESIDENT_VERT,
+                &shaders::RESIDENT_FRAG,
+                COLOR_FORMAT,
+                "resident pipeline",
+            )
+        })
+    }
+
+    /// The pick pipeline: the resident layout and vertex shader, instance ids into R32_UINT.
+    pub fn pick(&self) -> VkResult<vk::Pipeline> {
+        self.lazy(&self.pick, || {
+            graphics_pipeline(
+                &self.device,
+                self.resident_layout,
+                &shaders::RESIDENT_VERT,
+                &shaders::PICK_FRAG,
+                PICK_FORMAT,
+                "pick pipeline",
+            )
+        })
+    }
+
+    /// The scatter compute pipeline.
+    pub fn scatter(&self) -> VkResult<vk::Pipeline> {
+        self.lazy(&self.scatter, || {
+            compute_pipeline(
+                &self.device,
+                self.scatter_layout,
+                &shaders::SCATTER_COMP,
+                "scatter pipeline",
+            )
+        })
     }
 }
 
@@ -316,8 +360,10 @@ impl Drop for Pipelines {
         // SAFETY: the renderer waits for its last frame before dropping the pipelines; null
         // handles (from a failed constructor) are ignored by Vulkan.
         unsafe {
-            for pipeline in [self.baseline, self.resident, self.pick, self.scatter] {
-                raw.destroy_pipeline(pipeline, None);
+            for cell in [&self.baseline, &self.resident, &self.pick, &self.scatter] {
+                if let Some(&pipeline) = cell.get() {
+                    raw.destroy_pipeline(pipeline, None);
+                }
             }
             for layout in [
                 self.baseline_layout,

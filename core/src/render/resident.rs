@@ -436,13 +436,10 @@ impl ResidentScene {
             }
             let data: &[u8] = bytemuck::cast_slice(&self.pending_matrices);
             self.updates.write(0, data)?;
+            let scatter = pipelines.scatter()?;
             // SAFETY: the set points at live buffers; the dispatch covers `count` updates.
             unsafe {
-                raw.cmd_bind_pipeline(
-                    command_buffer,
-                    vk::PipelineBindPoint::COMPUTE,
-                    pipelines.scatter,
-                );
+                raw.cmd_bind_pipeline(command_buffer, vk::PipelineBindPoint::COMPUTE, scatter);
                 raw.cmd_bind_descriptor_sets(
                     command_buffer,
                     vk::PipelineBindPoint::COMPUTE,

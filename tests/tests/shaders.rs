@@ -26,7 +26,16 @@ fn shaders_compile_and_validate() {
     let device = test_device();
     let scene = cadr_core::scene::Scene::default();
     let gpu_scene = GpuScene::upload(&device, &scene).expect("upload");
-    let renderer = Renderer::new(&device, 8, 8).expect("pipelines");
+    let renderer = Renderer::new(&device, 8, 8).expect("renderer");
+    let pipelines = renderer.pipelines();
+    for (name, pipeline) in [
+        ("baseline", pipelines.baseline()),
+        ("resident", pipelines.resident()),
+        ("pick", pipelines.pick()),
+        ("scatter", pipelines.scatter()),
+    ] {
+        pipeline.unwrap_or_else(|e| panic!("{name} pipeline: {e}"));
+    }
     drop(renderer);
     drop(gpu_scene);
     assert_no_validation_errors(&device);

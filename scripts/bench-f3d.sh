@@ -33,11 +33,11 @@ elapsed_ms() {
 median() { sort -n | awk '{ v[NR] = $1 } END { if (NR % 2) print v[(NR + 1) / 2]; else print (v[NR / 2] + v[NR / 2 + 1]) / 2 }'; }
 
 # One warm-up each (disk cache, shader caches), then alternate.
-elapsed_ms "$cadr" render "$model" -o "$out/cadr.png" --size "$size_cadr" >/dev/null
+elapsed_ms "$cadr" render "$model" -o "$out/cadr.png" --size "$size_cadr" --baseline >/dev/null
 DISPLAY="$display" elapsed_ms f3d --output="$out/f3d.png" --resolution="$size_f3d" "$model" >/dev/null
 : > "$out/cadr.ms"; : > "$out/f3d.ms"
 for _ in $(seq "$runs"); do
-  elapsed_ms "$cadr" render "$model" -o "$out/cadr.png" --size "$size_cadr" >> "$out/cadr.ms"
+  elapsed_ms "$cadr" render "$model" -o "$out/cadr.png" --size "$size_cadr" --baseline >> "$out/cadr.ms"
   DISPLAY="$display" elapsed_ms f3d --output="$out/f3d.png" --resolution="$size_f3d" "$model" >> "$out/f3d.ms"
 done
 cadr_median=$(median < "$out/cadr.ms")

@@ -154,7 +154,7 @@ fn every_combination_matches(source: &Scene, what: &str) {
     let mut f = Fixture::new(source);
     let combinations = all_combinations(f.techniques.registry());
     assert!(
-        combinations.len() >= 5 * 4 * 17 * 2,
+        combinations.len() >= 5 * 4 * 18 * 2,
         "{} combinations",
         combinations.len()
     );

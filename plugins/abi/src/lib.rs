@@ -14,8 +14,14 @@
 //!    (raw Vulkan handles, `vkGetInstanceProcAddr`, and host services), then the kind's
 //!    functions every frame, and `destroy` once the GPU has finished with the instance.
 //!
-//! Rules on both sides: every struct starts with its `size` in bytes (a reader ignores fields
-//! beyond the size the writer gave, and defaults fields the writer did not know); whoever
+//! Rules on both sides: every struct that carries a step of the protocol (library and
+//! technique descriptions, vtables, create info, Vulkan handles, host API, scene view, bind,
+//! record and cull contexts) starts with its `size` in bytes (a reader ignores fields beyond the
+//! size the writer gave, and defaults fields the writer did not know); the small value records
+//! laid out in arrays or passed by value ([`CadrInstance`], [`CadrMatrix`], [`CadrMaterial`],
+//! [`CadrInstanceRecord`], [`CadrPass`], [`CadrBuffer`], [`CadrBufferRef`], [`CadrStats`],
+//! [`CadrBindState`], [`CadrDrawBase`], [`CadrVertexInput`], [`CadrMessage`]) are fixed for a
+//! major version; whoever
 //! allocates frees (buffers a plugin asks the host for go back through the host); strings are
 //! NUL-terminated UTF-8 owned by the side that returns them, valid as long as the library
 //! (descriptions) or the instance (shader snippets); no function unwinds across the boundary

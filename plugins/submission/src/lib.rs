@@ -335,6 +335,11 @@ export_plugin! {
             description: "Indirect commands with the count read from a buffer (where GPU culling will write it).",
             features: COUNT_FEATURES, provides: 0, needs: GPU_DRAWS,
         },
+        submission Submit<JOIN, INDIRECT_COUNT, INLINE> {
+            name: "join-indirect-count",
+            description: "Joined ranges, indirect with the count read from a buffer.",
+            features: COUNT_FEATURES, provides: 0, needs: GPU_DRAWS,
+        },
         submission Submit<GROUPS, INDIRECT_COUNT, INLINE> {
             name: "groups-indirect-count",
             description: "Material-group ranges, indirect with the count read from a buffer.",

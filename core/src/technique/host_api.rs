@@ -166,7 +166,8 @@ unsafe extern "C" fn create_buffer(
         }
         Ok(Ok(_)) => abi::CADR_STATUS_ERROR,
         Ok(Err(text)) => {
-            write_message(message, &text);
+            // SAFETY: the plugin passes a valid message buffer or null.
+            unsafe { abi::CadrMessage::write(message, &text) };
             abi::CADR_STATUS_ERROR
         }
         Err(_) => abi::CADR_STATUS_PANICKED,
@@ -181,23 +182,6 @@ unsafe extern "C" fn destroy_buffer(user: *mut c_void, buffer: *const abi::CadrB
             services.destroy_buffer(buffer.id);
         }
     }));
-}
-
-/// Writes `text` into a plugin's message buffer.
-pub(crate) fn write_message(message: *mut abi::CadrMessage, text: &str) {
-    // SAFETY: a message buffer from a plugin, or null.
-    let Some(message) = (unsafe { message.as_mut() }) else {
-        return;
-    };
-    if message.text.is_null() || message.capacity == 0 {
-        return;
-    }
-    let length = text.len().min(message.capacity - 1);
-    // SAFETY: `capacity` bytes are writable at `text`.
-    unsafe {
-        std::ptr::copy_nonoverlapping(text.as_ptr(), message.text.cast::<u8>(), length);
-        *message.text.add(length) = 0;
-    }
 }
 
 impl HostServices {

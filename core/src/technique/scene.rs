@@ -486,7 +486,7 @@ impl TechniqueScene {
             data.extend_from_slice(bytes);
         };
         for &t in &self.pending_matrices {
-            let bytes = matrix_bytes(&self.matrices[t as usize]);
+            let bytes = self.matrices[t as usize].to_le_bytes();
             queue(
                 &mut data,
                 self.matrix_gpu.buffer.raw(),
@@ -495,7 +495,7 @@ impl TechniqueScene {
             );
         }
         for &m in &self.pending_materials {
-            let bytes = material_bytes(&self.materials[m as usize]);
+            let bytes = self.materials[m as usize].to_le_bytes();
             queue(
                 &mut data,
                 self.material_gpu.buffer.raw(),
@@ -504,11 +504,7 @@ impl TechniqueScene {
             );
         }
         for &id in &self.pending_records {
-            let r = &self.records[id as usize];
-            let bytes: Vec<u8> = [r.matrix, r.material, r.flags, r.instance]
-                .iter()
-                .flat_map(|v| v.to_le_bytes())
-                .collect();
+            let bytes = self.records[id as usize].to_le_bytes();
             queue(
                 &mut data,
                 self.record_gpu.buffer.raw(),
@@ -616,27 +612,6 @@ impl TechniqueScene {
     pub fn instance_capacity(&self) -> usize {
         self.instances.len()
     }
-}
-
-fn matrix_bytes(matrix: &abi::CadrMatrix) -> [u8; 64] {
-    let mut bytes = [0; 64];
-    for (i, value) in matrix.columns.iter().flatten().enumerate() {
-        bytes[i * 4..i * 4 + 4].copy_from_slice(&value.to_le_bytes());
-    }
-    bytes
-}
-
-fn material_bytes(material: &abi::CadrMaterial) -> [u8; 32] {
-    let mut bytes = [0; 32];
-    for (i, value) in material
-        .base_color
-        .iter()
-        .chain(&material.surface)
-        .enumerate()
-    {
-        bytes[i * 4..i * 4 + 4].copy_from_slice(&value.to_le_bytes());
-    }
-    bytes
 }
 
 fn material_of(graph: &SceneGraph, slot: u32) -> abi::CadrMaterial {

@@ -124,6 +124,32 @@ pub struct CadrMessage {
     pub capacity: usize,
 }
 
+impl CadrMessage {
+    /// Writes `text`, cut at a character boundary to fit, NUL-terminated. Used by both sides
+    /// (the Rust SDK and the host); C authors write the buffer directly.
+    ///
+    /// # Safety
+    /// `message` is null or points at a message whose `text` has `capacity` writable bytes.
+    pub unsafe fn write(message: *mut CadrMessage, text: &str) {
+        // SAFETY: per the contract.
+        let Some(message) = (unsafe { message.as_mut() }) else {
+            return;
+        };
+        if message.text.is_null() || message.capacity == 0 {
+            return;
+        }
+        let mut length = text.len().min(message.capacity - 1);
+        while !text.is_char_boundary(length) {
+            length -= 1;
+        }
+        // SAFETY: length + 1 <= capacity bytes are writable at `text`.
+        unsafe {
+            std::ptr::copy_nonoverlapping(text.as_ptr(), message.text.cast::<u8>(), length);
+            *message.text.add(length) = 0;
+        }
+    }
+}
+
 /// What a library offers, filled by [`CadrPluginEntryFn`].
 #[repr(C)]
 #[derive(Debug)]
@@ -335,6 +361,17 @@ pub struct CadrMatrix {
     pub columns: [[f32; 4]; 4],
 }
 
+impl CadrMatrix {
+    /// The GPU layout: 16 little-endian f32, column after column.
+    pub fn to_le_bytes(&self) -> [u8; 64] {
+        let mut bytes = [0; 64];
+        for (i, value) in self.columns.iter().flatten().enumerate() {
+            bytes[i * 4..i * 4 + 4].copy_from_slice(&value.to_le_bytes());
+        }
+        bytes
+    }
+}
+
 /// A material slot as kept on the CPU and in [`CadrSceneView::material_buffer`].
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -343,6 +380,17 @@ pub struct CadrMaterial {
     pub base_color: [f32; 4],
     /// x: metallic, y: roughness.
     pub surface: [f32; 4],
+}
+
+impl CadrMaterial {
+    /// The GPU layout: base colour then surface, 8 little-endian f32.
+    pub fn to_le_bytes(&self) -> [u8; 32] {
+        let mut bytes = [0; 32];
+        for (i, value) in self.base_color.iter().chain(&self.surface).enumerate() {
+            bytes[i * 4..i * 4 + 4].copy_from_slice(&value.to_le_bytes());
+        }
+        bytes
+    }
 }
 
 /// The per-instance record in [`CadrSceneView::instance_buffer`], indexed by instance id
@@ -752,6 +800,20 @@ pub struct CadrCullingVtable {
     >,
 }
 
+impl CadrInstanceRecord {
+    /// The GPU layout: 4 little-endian u32.
+    pub fn to_le_bytes(&self) -> [u8; 16] {
+        let mut bytes = [0; 16];
+        for (i, value) in [self.matrix, self.material, self.flags, self.instance]
+            .iter()
+            .enumerate()
+        {
+            bytes[i * 4..i * 4 + 4].copy_from_slice(&value.to_le_bytes());
+        }
+        bytes
+    }
+}
+
 /// Makes sure the structs really are what the C side sees.
 #[cfg(test)]
 mod tests {
@@ -765,5 +827,21 @@ mod tests {
         assert_eq!(std::mem::size_of::<CadrInstanceRecord>(), 16);
         assert_eq!(std::mem::size_of::<CadrBindState>(), 32);
         assert_eq!(CADR_PLUGIN_ABI_VERSION >> 16, CADR_PLUGIN_ABI_MAJOR);
+    }
+
+    #[test]
+    fn messages_are_cut_at_a_character_boundary() {
+        let mut bytes = [0xffu8; 5];
+        let mut message = CadrMessage {
+            text: bytes.as_mut_ptr().cast(),
+            capacity: bytes.len(),
+        };
+        // SAFETY: the message points at 5 writable bytes.
+        unsafe { CadrMessage::write(&mut message, "ab→c") };
+        assert_eq!(
+            &bytes[..3],
+            b"ab\0",
+            "the 3-byte arrow does not fit in 2 bytes"
+        );
     }
 }

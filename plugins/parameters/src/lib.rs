@@ -14,27 +14,6 @@ use cadr_plugin_sdk::abi::{self, CadrBindState, CadrInstance};
 use cadr_plugin_sdk::vk;
 use cadr_plugin_sdk::{export_plugin, Bind, Gpu, HostBuffer, ParameterPath, Scene, Technique};
 
-fn matrix_bytes(matrix: &abi::CadrMatrix) -> [u8; 64] {
-    let mut bytes = [0; 64];
-    for (i, value) in matrix.columns.iter().flatten().enumerate() {
-        bytes[i * 4..i * 4 + 4].copy_from_slice(&value.to_le_bytes());
-    }
-    bytes
-}
-
-fn material_bytes(material: &abi::CadrMaterial) -> [u8; 32] {
-    let mut bytes = [0; 32];
-    for (i, value) in material
-        .base_color
-        .iter()
-        .chain(&material.surface)
-        .enumerate()
-    {
-        bytes[i * 4..i * 4 + 4].copy_from_slice(&value.to_le_bytes());
-    }
-    bytes
-}
-
 fn push(gpu: &Gpu, bind: &Bind<'_>, offset: u32, bytes: &[u8]) {
     // SAFETY: recording; the range lies in the layout's 128-byte vertex range.
     unsafe {
@@ -109,8 +88,8 @@ impl ParameterPath for Push {
             .copied()
             .unwrap_or_default();
         let mut bytes = [0u8; 96];
-        bytes[..64].copy_from_slice(&matrix_bytes(&matrix));
-        bytes[64..88].copy_from_slice(&material_bytes(&material)[..24]);
+        bytes[..64].copy_from_slice(&matrix.to_le_bytes());
+        bytes[64..88].copy_from_slice(&material.to_le_bytes()[..24]);
         bytes[88..].copy_from_slice(&flags_and_instance(drawn, id));
         push(&self.gpu, bind, 0, &bytes);
         state.valid = 1;
@@ -309,7 +288,7 @@ impl ParameterPath for UboDynamic {
         };
         for slot in matrix_slots {
             if let Some(matrix) = matrices.get(slot as usize) {
-                matrix_buffer.write(u64::from(slot) * self.matrix_stride, &matrix_bytes(matrix))?;
+                matrix_buffer.write(u64::from(slot) * self.matrix_stride, &matrix.to_le_bytes())?;
             }
         }
         let material_slots: Box<dyn Iterator<Item = u32>> = if rewrite_all {
@@ -321,7 +300,7 @@ impl ParameterPath for UboDynamic {
             if let Some(material) = materials.get(slot as usize) {
                 material_buffer.write(
                     u64::from(slot) * self.material_stride,
-                    &material_bytes(material),
+                    &material.to_le_bytes(),
                 )?;
             }
         }

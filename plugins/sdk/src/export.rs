@@ -10,7 +10,6 @@ use ash::vk::Handle;
 use cadr_plugin_abi as abi;
 
 use crate::gpu::Gpu;
-use crate::message::write_message;
 use crate::views::{Bind, CullInput, CullOutput, Record, Scene};
 use crate::{Culling, ParameterPath, Submission, Technique, VertexPath};
 
@@ -54,12 +53,14 @@ fn guarded(
         Ok(Ok(())) => abi::CADR_STATUS_OK,
         Ok(Err(text)) => {
             // SAFETY: the host passes a valid message buffer or null.
-            unsafe { write_message(message, &text) };
+            unsafe { abi::CadrMessage::write(message, &text) };
             abi::CADR_STATUS_ERROR
         }
         Err(payload) => {
             // SAFETY: as above.
-            unsafe { write_message(message, &format!("panicked: {}", panic_text(&*payload))) };
+            unsafe {
+                abi::CadrMessage::write(message, &format!("panicked: {}", panic_text(&*payload)))
+            };
             abi::CADR_STATUS_PANICKED
         }
     }

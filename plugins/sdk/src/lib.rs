@@ -15,7 +15,6 @@ pub use ash;
 pub use ash::vk;
 pub use cadr_plugin_abi as abi;
 pub use gpu::{Gpu, HostBuffer};
-pub use message::write_message;
 pub use views::{buffer, Bind, CullInput, CullOutput, Path, Record, Scene};
 
 use std::ffi::CStr;

@@ -1,7 +1,8 @@
 //! The `extern "C"` shims [`export_plugin!`](crate::export_plugin) generates vtables from.
 //! Every shim catches panics: a panic never unwinds into the host.
 
-use std::ffi::c_void;
+use std::ffi::{c_void, CStr};
+use std::marker::PhantomData;
 use std::panic::{catch_unwind, AssertUnwindSafe};
 use std::sync::OnceLock;
 
@@ -172,15 +173,107 @@ fn count_failure(context: *const abi::CadrBindContext) {
     }
 }
 
+/// What vertex and parameter paths have in common (snippet, prepare, bind_pass), so that one
+/// set of shims serves both kinds.
+trait PathKind {
+    type Path: Technique;
+    fn snippet(path: &Self::Path) -> &CStr;
+    fn prepare(
+        path: &mut Self::Path,
+        scene: &Scene<'_>,
+        command_buffer: vk::CommandBuffer,
+    ) -> Result<(), String>;
+    fn bind_pass(path: &Self::Path, bind: &Bind<'_>, state: &mut abi::CadrBindState);
+}
+
+struct VertexKind<T>(PhantomData<T>);
+struct ParameterKind<T>(PhantomData<T>);
+
+impl<T: VertexPath> PathKind for VertexKind<T> {
+    type Path = T;
+    fn snippet(path: &T) -> &CStr {
+        path.shader_snippet()
+    }
+    fn prepare(
+        path: &mut T,
+        scene: &Scene<'_>,
+        command_buffer: vk::CommandBuffer,
+    ) -> Result<(), String> {
+        path.prepare(scene, command_buffer)
+    }
+    fn bind_pass(path: &T, bind: &Bind<'_>, state: &mut abi::CadrBindState) {
+        path.bind_pass(bind, state)
+    }
+}
+
+impl<T: ParameterPath> PathKind for ParameterKind<T> {
+    type Path = T;
+    fn snippet(path: &T) -> &CStr {
+        path.shader_snippet()
+    }
+    fn prepare(
+        path: &mut T,
+        scene: &Scene<'_>,
+        command_buffer: vk::CommandBuffer,
+    ) -> Result<(), String> {
+        path.prepare(scene, command_buffer)
+    }
+    fn bind_pass(path: &T, bind: &Bind<'_>, state: &mut abi::CadrBindState) {
+        path.bind_pass(bind, state)
+    }
+}
+
+unsafe extern "C" fn snippet<K: PathKind>(instance: *mut c_void) -> *const std::ffi::c_char {
+    // SAFETY: see `this`.
+    catch_unwind(AssertUnwindSafe(|| {
+        K::snippet(unsafe { this::<K::Path>(instance) }).as_ptr()
+    }))
+    .unwrap_or(std::ptr::null())
+}
+
+unsafe extern "C" fn prepare<K: PathKind>(
+    instance: *mut c_void,
+    scene: *const abi::CadrSceneView,
+    command_buffer: *mut c_void,
+    message: *mut abi::CadrMessage,
+) -> abi::CadrStatus {
+    guarded(message, || {
+        // SAFETY: the host's scene view for the frame.
+        let scene = unsafe { Scene::from_raw(scene) }.ok_or("no scene")?;
+        let command_buffer = vk::CommandBuffer::from_raw(command_buffer as u64);
+        // SAFETY: see `this`.
+        K::prepare(unsafe { this::<K::Path>(instance) }, &scene, command_buffer)
+    })
+}
+
+unsafe extern "C" fn bind_pass<K: PathKind>(
+    instance: *mut c_void,
+    context: *const abi::CadrBindContext,
+    state: *mut abi::CadrBindState,
+) {
+    let result = catch_unwind(AssertUnwindSafe(|| {
+        // SAFETY: valid for the call; the instance is only read (a thread-safe function).
+        unsafe {
+            if let (Some(bind), Some(state)) = (Bind::from_raw(context), state.as_mut()) {
+                K::bind_pass(&*instance.cast::<K::Path>(), &bind, state);
+            }
+        }
+    }));
+    if result.is_err() {
+        count_failure(context);
+    }
+}
+
+/// Runs a per-draw bind, counting a panic as a failure and answering `fallback` instead.
+fn bind_guarded<R>(context: *const abi::CadrBindContext, fallback: R, f: impl FnOnce() -> R) -> R {
+    catch_unwind(AssertUnwindSafe(f)).unwrap_or_else(|_| {
+        count_failure(context);
+        fallback
+    })
+}
+
 /// The technique info of a vertex path.
 pub fn vertex<T: VertexPath>(describe: Describe) -> abi::CadrTechniqueInfo {
-    unsafe extern "C" fn snippet<T: VertexPath>(instance: *mut c_void) -> *const std::ffi::c_char {
-        // SAFETY: see `this`.
-        catch_unwind(AssertUnwindSafe(|| {
-            unsafe { this::<T>(instance) }.shader_snippet().as_ptr()
-        }))
-        .unwrap_or(std::ptr::null())
-    }
     unsafe extern "C" fn input<T: VertexPath>(
         instance: *mut c_void,
         out: *mut abi::CadrVertexInput,
@@ -197,45 +290,14 @@ pub fn vertex<T: VertexPath>(describe: Describe) -> abi::CadrTechniqueInfo {
         }))
         .unwrap_or(0)
     }
-    unsafe extern "C" fn prepare<T: VertexPath>(
-        instance: *mut c_void,
-        scene: *const abi::CadrSceneView,
-        command_buffer: *mut c_void,
-        message: *mut abi::CadrMessage,
-    ) -> abi::CadrStatus {
-        guarded(message, || {
-            // SAFETY: the host's scene view for the frame.
-            let scene = unsafe { Scene::from_raw(scene) }.ok_or("no scene")?;
-            // SAFETY: see `this`.
-            unsafe { this::<T>(instance) }
-                .prepare(&scene, vk::CommandBuffer::from_raw(command_buffer as u64))
-        })
-    }
-    unsafe extern "C" fn bind_pass<T: VertexPath>(
-        instance: *mut c_void,
-        context: *const abi::CadrBindContext,
-        state: *mut abi::CadrBindState,
-    ) {
-        let result = catch_unwind(AssertUnwindSafe(|| {
-            // SAFETY: valid for the call; `this` only read (thread-safe function).
-            unsafe {
-                if let (Some(bind), Some(state)) = (Bind::from_raw(context), state.as_mut()) {
-                    (*instance.cast::<T>()).bind_pass(&bind, state);
-                }
-            }
-        }));
-        if result.is_err() {
-            count_failure(context);
-        }
-    }
     unsafe extern "C" fn bind_draw<T: VertexPath>(
         instance: *mut c_void,
         context: *const abi::CadrBindContext,
         drawn: *const abi::CadrInstance,
         state: *mut abi::CadrBindState,
     ) -> abi::CadrDrawBase {
-        let result = catch_unwind(AssertUnwindSafe(|| {
-            // SAFETY: valid for the call; `this` only read (thread-safe function).
+        bind_guarded(context, abi::CadrDrawBase::default(), || {
+            // SAFETY: valid for the call; the instance is only read (a thread-safe function).
             unsafe {
                 match (Bind::from_raw(context), drawn.as_ref(), state.as_mut()) {
                     (Some(bind), Some(drawn), Some(state)) => {
@@ -244,10 +306,6 @@ pub fn vertex<T: VertexPath>(describe: Describe) -> abi::CadrTechniqueInfo {
                     _ => abi::CadrDrawBase::default(),
                 }
             }
-        }));
-        result.unwrap_or_else(|_| {
-            count_failure(context);
-            abi::CadrDrawBase::default()
         })
     }
     info(
@@ -255,11 +313,11 @@ pub fn vertex<T: VertexPath>(describe: Describe) -> abi::CadrTechniqueInfo {
         describe,
         abi::CadrVertexPathVtable {
             common: common::<T, abi::CadrVertexPathVtable>(),
-            shader_snippet: Some(snippet::<T>),
+            shader_snippet: Some(snippet::<VertexKind<T>>),
             vertex_input: Some(input::<T>),
             set_layout: Some(set_layout::<T>),
-            prepare: Some(prepare::<T>),
-            bind_pass: Some(bind_pass::<T>),
+            prepare: Some(prepare::<VertexKind<T>>),
+            bind_pass: Some(bind_pass::<VertexKind<T>>),
             bind_draw: Some(bind_draw::<T>),
         },
     )
@@ -267,15 +325,6 @@ pub fn vertex<T: VertexPath>(describe: Describe) -> abi::CadrTechniqueInfo {
 
 /// The technique info of a parameter path.
 pub fn parameters<T: ParameterPath>(describe: Describe) -> abi::CadrTechniqueInfo {
-    unsafe extern "C" fn snippet<T: ParameterPath>(
-        instance: *mut c_void,
-    ) -> *const std::ffi::c_char {
-        // SAFETY: see `this`.
-        catch_unwind(AssertUnwindSafe(|| {
-            unsafe { this::<T>(instance) }.shader_snippet().as_ptr()
-        }))
-        .unwrap_or(std::ptr::null())
-    }
     unsafe extern "C" fn layout<T: ParameterPath>(
         instance: *mut c_void,
         sets: *mut u64,
@@ -291,37 +340,6 @@ pub fn parameters<T: ParameterPath>(describe: Describe) -> abi::CadrTechniqueInf
             }
         }));
     }
-    unsafe extern "C" fn prepare<T: ParameterPath>(
-        instance: *mut c_void,
-        scene: *const abi::CadrSceneView,
-        command_buffer: *mut c_void,
-        message: *mut abi::CadrMessage,
-    ) -> abi::CadrStatus {
-        guarded(message, || {
-            // SAFETY: the host's scene view for the frame.
-            let scene = unsafe { Scene::from_raw(scene) }.ok_or("no scene")?;
-            // SAFETY: see `this`.
-            unsafe { this::<T>(instance) }
-                .prepare(&scene, vk::CommandBuffer::from_raw(command_buffer as u64))
-        })
-    }
-    unsafe extern "C" fn bind_pass<T: ParameterPath>(
-        instance: *mut c_void,
-        context: *const abi::CadrBindContext,
-        state: *mut abi::CadrBindState,
-    ) {
-        let result = catch_unwind(AssertUnwindSafe(|| {
-            // SAFETY: valid for the call; `this` only read (thread-safe function).
-            unsafe {
-                if let (Some(bind), Some(state)) = (Bind::from_raw(context), state.as_mut()) {
-                    (*instance.cast::<T>()).bind_pass(&bind, state);
-                }
-            }
-        }));
-        if result.is_err() {
-            count_failure(context);
-        }
-    }
     unsafe extern "C" fn bind_draw<T: ParameterPath>(
         instance: *mut c_void,
         context: *const abi::CadrBindContext,
@@ -329,8 +347,8 @@ pub fn parameters<T: ParameterPath>(describe: Describe) -> abi::CadrTechniqueInf
         drawn: *const abi::CadrInstance,
         state: *mut abi::CadrBindState,
     ) -> u32 {
-        let result = catch_unwind(AssertUnwindSafe(|| {
-            // SAFETY: valid for the call; `this` only read (thread-safe function).
+        bind_guarded(context, id, || {
+            // SAFETY: valid for the call; the instance is only read (a thread-safe function).
             unsafe {
                 match (Bind::from_raw(context), drawn.as_ref(), state.as_mut()) {
                     (Some(bind), Some(drawn), Some(state)) => {
@@ -339,10 +357,6 @@ pub fn parameters<T: ParameterPath>(describe: Describe) -> abi::CadrTechniqueInf
                     _ => id,
                 }
             }
-        }));
-        result.unwrap_or_else(|_| {
-            count_failure(context);
-            id
         })
     }
     info(
@@ -350,10 +364,10 @@ pub fn parameters<T: ParameterPath>(describe: Describe) -> abi::CadrTechniqueInf
         describe,
         abi::CadrParameterPathVtable {
             common: common::<T, abi::CadrParameterPathVtable>(),
-            shader_snippet: Some(snippet::<T>),
+            shader_snippet: Some(snippet::<ParameterKind<T>>),
             layout: Some(layout::<T>),
-            prepare: Some(prepare::<T>),
-            bind_pass: Some(bind_pass::<T>),
+            prepare: Some(prepare::<ParameterKind<T>>),
+            bind_pass: Some(bind_pass::<ParameterKind<T>>),
             bind_draw: Some(bind_draw::<T>),
         },
     )

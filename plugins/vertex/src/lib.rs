@@ -72,18 +72,19 @@ fn bind_buffers(gpu: &Gpu, bind: &Bind<'_>, index: (vk::Buffer, u32), vertex_bas
     bind.count(|s| s.vertex_binds += 1);
 }
 
-/// Binds at each part's offsets.
-pub struct PerPart {
+/// Binds vertex and index buffers per draw at each part's offsets (`PER_PART`) or at each
+/// geometry's; a binding equal to the bound one (same index start and vertex base) is skipped.
+pub struct Bound<const PER_PART: bool> {
     gpu: Arc<Gpu>,
 }
 
-impl Technique for PerPart {
+impl<const PER_PART: bool> Technique for Bound<PER_PART> {
     fn create(gpu: Arc<Gpu>) -> Result<Self, String> {
         Ok(Self { gpu })
     }
 }
 
-impl VertexPath for PerPart {
+impl<const PER_PART: bool> VertexPath for Bound<PER_PART> {
     fn shader_snippet(&self) -> &CStr {
         ATTRIBUTES_SNIPPET
     }
@@ -96,47 +97,8 @@ impl VertexPath for PerPart {
         drawn: &CadrInstance,
         state: &mut CadrBindState,
     ) -> CadrDrawBase {
-        let index = index_source(bind, drawn, true);
+        let index = index_source(bind, drawn, PER_PART);
         let key = u64::from(index.1) << 32 | u64::from(drawn.vertex_base);
-        if state.valid == 0 || state.words[0] != key {
-            bind_buffers(&self.gpu, bind, index, drawn.vertex_base);
-            state.valid = 1;
-            state.words[0] = key;
-        }
-        CadrDrawBase {
-            index_base: index.1,
-            vertex_base: drawn.vertex_base,
-            ok: 1,
-        }
-    }
-}
-
-/// Binds at each geometry's offsets.
-pub struct PerGeometry {
-    gpu: Arc<Gpu>,
-}
-
-impl Technique for PerGeometry {
-    fn create(gpu: Arc<Gpu>) -> Result<Self, String> {
-        Ok(Self { gpu })
-    }
-}
-
-impl VertexPath for PerGeometry {
-    fn shader_snippet(&self) -> &CStr {
-        ATTRIBUTES_SNIPPET
-    }
-    fn vertex_input(&self) -> CadrVertexInput {
-        attributes()
-    }
-    fn bind_draw(
-        &self,
-        bind: &Bind<'_>,
-        drawn: &CadrInstance,
-        state: &mut CadrBindState,
-    ) -> CadrDrawBase {
-        let index = index_source(bind, drawn, false);
-        let key = u64::from(drawn.geometry);
         if state.valid == 0 || state.words[0] != key {
             bind_buffers(&self.gpu, bind, index, drawn.vertex_base);
             state.valid = 1;
@@ -422,12 +384,12 @@ const SCENE: u64 = abi::CADR_TRAIT_GEOMETRY_SHARES_BINDING | abi::CADR_TRAIT_SCE
 export_plugin! {
     library: "cadr vertex paths",
     techniques: [
-        vertex PerPart {
+        vertex Bound<true> {
             name: "per-part",
             description: "Vertex and index buffers bound at every part's offsets (the seeds' VBO, no state reuse).",
             features: 0, provides: 0, needs: 0,
         },
-        vertex PerGeometry {
+        vertex Bound<false> {
             name: "per-geometry",
             description: "Vertex and index buffers bound per geometry, re-bound only when the geometry changes.",
             features: 0, provides: GEOMETRY, needs: 0,

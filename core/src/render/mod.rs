@@ -15,6 +15,7 @@ mod resident;
 pub use arena::{GeometryArena, GeometryRange};
 pub use camera::{Camera, DEFAULT_DIRECTION, DEFAULT_FOV_DEGREES};
 pub use gpu_scene::{GpuScene, UploadError};
+pub(crate) use pipeline::{create_graphics_pipeline, GraphicsPipelineDesc, VertexLayout};
 pub use pipeline::{
     DrawIndices, DrawParameters, FrameUniforms, MaterialParameters, MatrixUpdate, Pipelines,
     PICK_FORMAT,

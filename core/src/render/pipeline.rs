@@ -427,39 +427,94 @@ fn graphics_pipeline(
     color_format: vk::Format,
     name: &str,
 ) -> VkResult<vk::Pipeline> {
-    let vertex = module(device, vertex)?;
-    let fragment = module(device, fragment)?;
+    let (vertex, fragment) = (module(device, vertex)?, module(device, fragment)?);
+    create_graphics_pipeline(
+        device,
+        &GraphicsPipelineDesc {
+            layout,
+            vertex: &vertex,
+            fragment: &fragment,
+            vertex_layout: Some(VertexLayout {
+                stride: std::mem::size_of::<Vertex>() as u32,
+                attributes: &[
+                    (vk::Format::R32G32B32_SFLOAT, 0),
+                    (vk::Format::R32G32B32_SFLOAT, 12),
+                ],
+            }),
+            topology: vk::PrimitiveTopology::TRIANGLE_LIST,
+            depth_bias: false,
+            color_format,
+            name,
+        },
+    )
+}
+
+/// Binding 0's stride and its attributes (format, offset) at locations 0, 1, ….
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct VertexLayout<'a> {
+    pub stride: u32,
+    pub attributes: &'a [(vk::Format, u32)],
+}
+
+/// What cadr's graphics pipelines differ in. The rest is shared: dynamic viewport and scissor,
+/// no face culling, depth test and write with LESS_OR_EQUAL, one colour target, dynamic
+/// rendering with [`DEPTH_FORMAT`].
+pub(crate) struct GraphicsPipelineDesc<'a> {
+    pub layout: vk::PipelineLayout,
+    pub vertex: &'a ShaderModule,
+    pub fragment: &'a ShaderModule,
+    /// `None` for no vertex input (vertex pulling).
+    pub vertex_layout: Option<VertexLayout<'a>>,
+    pub topology: vk::PrimitiveTopology,
+    /// Pushes triangles back (constant and slope factor 1) so that edge lines win the depth test.
+    pub depth_bias: bool,
+    pub color_format: vk::Format,
+    pub name: &'a str,
+}
+
+/// Creates a graphics pipeline.
+pub(crate) fn create_graphics_pipeline(
+    device: &Arc<Device>,
+    desc: &GraphicsPipelineDesc<'_>,
+) -> VkResult<vk::Pipeline> {
     let stages = [
         vk::PipelineShaderStageCreateInfo::default()
             .stage(vk::ShaderStageFlags::VERTEX)
-            .module(vertex.raw())
+            .module(desc.vertex.raw())
             .name(c"main"),
         vk::PipelineShaderStageCreateInfo::default()
             .stage(vk::ShaderStageFlags::FRAGMENT)
-            .module(fragment.raw())
+            .module(desc.fragment.raw())
             .name(c"main"),
     ];
+    let layout = desc.vertex_layout.unwrap_or(VertexLayout {
+        stride: 0,
+        attributes: &[],
+    });
     let vertex_bindings = [vk::VertexInputBindingDescription::default()
         .binding(0)
-        .stride(std::mem::size_of::<Vertex>() as u32)
+        .stride(layout.stride)
         .input_rate(vk::VertexInputRate::VERTEX)];
-    let vertex_attributes = [
-        vk::VertexInputAttributeDescription::default()
-            .location(0)
-            .binding(0)
-            .format(vk::Format::R32G32B32_SFLOAT)
-            .offset(0),
-        vk::VertexInputAttributeDescription::default()
-            .location(1)
-            .binding(0)
-            .format(vk::Format::R32G32B32_SFLOAT)
-            .offset(12),
-    ];
-    let vertex_input = vk::PipelineVertexInputStateCreateInfo::default()
-        .vertex_binding_descriptions(&vertex_bindings)
-        .vertex_attribute_descriptions(&vertex_attributes);
-    let input_assembly = vk::PipelineInputAssemblyStateCreateInfo::default()
-        .topology(vk::PrimitiveTopology::TRIANGLE_LIST);
+    let vertex_attributes: Vec<vk::VertexInputAttributeDescription> = layout
+        .attributes
+        .iter()
+        .enumerate()
+        .map(|(location, &(format, offset))| {
+            vk::VertexInputAttributeDescription::default()
+                .location(location as u32)
+                .binding(0)
+                .format(format)
+                .offset(offset)
+        })
+        .collect();
+    let vertex_input = match desc.vertex_layout {
+        Some(_) => vk::PipelineVertexInputStateCreateInfo::default()
+            .vertex_binding_descriptions(&vertex_bindings)
+            .vertex_attribute_descriptions(&vertex_attributes),
+        None => vk::PipelineVertexInputStateCreateInfo::default(),
+    };
+    let input_assembly =
+        vk::PipelineInputAssemblyStateCreateInfo::default().topology(desc.topology);
     let viewport = vk::PipelineViewportStateCreateInfo::default()
         .viewport_count(1)
         .scissor_count(1);
@@ -467,6 +522,9 @@ fn graphics_pipeline(
         .polygon_mode(vk::PolygonMode::FILL)
         .cull_mode(vk::CullModeFlags::NONE)
         .front_face(vk::FrontFace::COUNTER_CLOCKWISE)
+        .depth_bias_enable(desc.depth_bias)
+        .depth_bias_constant_factor(1.0)
+        .depth_bias_slope_factor(1.0)
         .line_width(1.0);
     let multisample = vk::PipelineMultisampleStateCreateInfo::default()
         .rasterization_samples(vk::SampleCountFlags::TYPE_1);
@@ -479,7 +537,7 @@ fn graphics_pipeline(
     let blend = vk::PipelineColorBlendStateCreateInfo::default().attachments(&blend_attachments);
     let dynamic_states = [vk::DynamicState::VIEWPORT, vk::DynamicState::SCISSOR];
     let dynamic = vk::PipelineDynamicStateCreateInfo::default().dynamic_states(&dynamic_states);
-    let color_formats = [color_format];
+    let color_formats = [desc.color_format];
     let mut rendering = vk::PipelineRenderingCreateInfo::default()
         .color_attachment_formats(&color_formats)
         .depth_attachment_format(DEPTH_FORMAT);
@@ -493,7 +551,7 @@ fn graphics_pipeline(
         .depth_stencil_state(&depth)
         .color_blend_state(&blend)
         .dynamic_state(&dynamic)
-        .layout(layout)
+        .layout(desc.layout)
         .push_next(&mut rendering)];
     // SAFETY: every struct the info points to lives until the call returns; the modules are
     // alive during the call (pipelines do not keep them).
@@ -504,6 +562,6 @@ fn graphics_pipeline(
     }
     .map_err(|(_, result)| result)
     .or_vk("vkCreateGraphicsPipelines")?;
-    device.set_name(pipelines[0], name);
+    device.set_name(pipelines[0], desc.name);
     Ok(pipelines[0])
 }

@@ -9,9 +9,10 @@ use std::sync::Arc;
 use ash::vk;
 use cadr_plugin_abi as abi;
 
+use crate::render::{create_graphics_pipeline, GraphicsPipelineDesc, VertexLayout};
 use crate::shaders;
 use crate::vk::{
-    compile_glsl, Device, ShaderStage, VkError, VkResult, VkResultExt, COLOR_FORMAT, DEPTH_FORMAT,
+    compile_glsl, Device, ShaderModule, ShaderStage, VkResult, VkResultExt, COLOR_FORMAT,
 };
 
 /// The shade modes of the seeds.
@@ -247,107 +248,38 @@ impl TechniquePipelines {
         topology: vk::PrimitiveTopology,
         depth_bias: bool,
     ) -> VkResult<vk::Pipeline> {
-        let raw = self.device.raw();
-        let module = |words: &[u32]| {
-            let info = vk::ShaderModuleCreateInfo::default().code(words);
-            // SAFETY: SPIR-V from shaderc; the info lives for the call.
-            unsafe { raw.create_shader_module(&info, None) }.or_vk("vkCreateShaderModule")
-        };
-        let vertex_module = module(inputs.vertex_spirv)?;
-        let fragment_module = match module(fragment) {
-            Ok(m) => m,
-            Err(e) => {
-                // SAFETY: created above, unused.
-                unsafe { raw.destroy_shader_module(vertex_module, None) };
-                return Err(e);
-            }
-        };
-        let stages = [
-            vk::PipelineShaderStageCreateInfo::default()
-                .stage(vk::ShaderStageFlags::VERTEX)
-                .module(vertex_module)
-                .name(c"main"),
-            vk::PipelineShaderStageCreateInfo::default()
-                .stage(vk::ShaderStageFlags::FRAGMENT)
-                .module(fragment_module)
-                .name(c"main"),
-        ];
+        let vertex = ShaderModule::from_spirv(
+            &self.device,
+            "technique.vert",
+            inputs.vertex_spirv,
+            ShaderStage::Vertex,
+        )?;
+        let fragment = ShaderModule::from_spirv(
+            &self.device,
+            "technique fragment",
+            fragment,
+            ShaderStage::Fragment,
+        )?;
         let input = inputs.vertex_input;
-        let bindings = [vk::VertexInputBindingDescription::default()
-            .binding(0)
-            .stride(input.stride)
-            .input_rate(vk::VertexInputRate::VERTEX)];
-        let attribute_count = (input.attribute_count as usize).min(4);
-        let attributes: Vec<vk::VertexInputAttributeDescription> = (0..attribute_count)
-            .map(|i| {
-                vk::VertexInputAttributeDescription::default()
-                    .location(i as u32)
-                    .binding(0)
-                    .format(vk::Format::from_raw(input.formats[i]))
-                    .offset(input.offsets[i])
-            })
+        let count = (input.attribute_count as usize).min(input.formats.len());
+        let attributes: Vec<(vk::Format, u32)> = (0..count)
+            .map(|i| (vk::Format::from_raw(input.formats[i]), input.offsets[i]))
             .collect();
-        let vertex_input = if input.stride == 0 {
-            vk::PipelineVertexInputStateCreateInfo::default()
-        } else {
-            vk::PipelineVertexInputStateCreateInfo::default()
-                .vertex_binding_descriptions(&bindings)
-                .vertex_attribute_descriptions(&attributes)
-        };
-        let input_assembly = vk::PipelineInputAssemblyStateCreateInfo::default().topology(topology);
-        let viewport = vk::PipelineViewportStateCreateInfo::default()
-            .viewport_count(1)
-            .scissor_count(1);
-        let rasterization = vk::PipelineRasterizationStateCreateInfo::default()
-            .polygon_mode(vk::PolygonMode::FILL)
-            .cull_mode(vk::CullModeFlags::NONE)
-            .front_face(vk::FrontFace::COUNTER_CLOCKWISE)
-            .depth_bias_enable(depth_bias)
-            .depth_bias_constant_factor(1.0)
-            .depth_bias_slope_factor(1.0)
-            .line_width(1.0);
-        let multisample = vk::PipelineMultisampleStateCreateInfo::default()
-            .rasterization_samples(vk::SampleCountFlags::TYPE_1);
-        let depth = vk::PipelineDepthStencilStateCreateInfo::default()
-            .depth_test_enable(true)
-            .depth_write_enable(true)
-            .depth_compare_op(vk::CompareOp::LESS_OR_EQUAL);
-        let blend_attachments = [vk::PipelineColorBlendAttachmentState::default()
-            .color_write_mask(vk::ColorComponentFlags::RGBA)];
-        let blend =
-            vk::PipelineColorBlendStateCreateInfo::default().attachments(&blend_attachments);
-        let dynamic_states = [vk::DynamicState::VIEWPORT, vk::DynamicState::SCISSOR];
-        let dynamic = vk::PipelineDynamicStateCreateInfo::default().dynamic_states(&dynamic_states);
-        let color_formats = [COLOR_FORMAT];
-        let mut rendering = vk::PipelineRenderingCreateInfo::default()
-            .color_attachment_formats(&color_formats)
-            .depth_attachment_format(DEPTH_FORMAT);
-        let info = [vk::GraphicsPipelineCreateInfo::default()
-            .stages(&stages)
-            .vertex_input_state(&vertex_input)
-            .input_assembly_state(&input_assembly)
-            .viewport_state(&viewport)
-            .rasterization_state(&rasterization)
-            .multisample_state(&multisample)
-            .depth_stencil_state(&depth)
-            .color_blend_state(&blend)
-            .dynamic_state(&dynamic)
-            .layout(self.layout)
-            .push_next(&mut rendering)];
-        // SAFETY: every struct the info points to lives until the call returns.
-        let created =
-            unsafe { raw.create_graphics_pipelines(vk::PipelineCache::null(), &info, None) };
-        // SAFETY: pipelines keep their own copy of the code.
-        unsafe {
-            raw.destroy_shader_module(vertex_module, None);
-            raw.destroy_shader_module(fragment_module, None);
-        }
-        let pipelines = created
-            .map_err(|(_, result)| result)
-            .or_vk("vkCreateGraphicsPipelines")?;
-        pipelines
-            .first()
-            .copied()
-            .ok_or_else(|| VkError::InvalidUse("no pipeline created".into()))
+        create_graphics_pipeline(
+            &self.device,
+            &GraphicsPipelineDesc {
+                layout: self.layout,
+                vertex: &vertex,
+                fragment: &fragment,
+                vertex_layout: (input.stride != 0).then_some(VertexLayout {
+                    stride: input.stride,
+                    attributes: &attributes,
+                }),
+                topology,
+                depth_bias,
+                color_format: COLOR_FORMAT,
+                name: "technique pipeline",
+            },
+        )
     }
 }

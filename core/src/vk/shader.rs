@@ -109,8 +109,18 @@ impl ShaderModule {
         includes: &[IncludeFile],
     ) -> VkResult<Self> {
         let words = compile_glsl(name, source, stage, includes)?;
-        let info = vk::ShaderModuleCreateInfo::default().code(&words);
-        // SAFETY: words is valid SPIR-V from shaderc; info lives until the call returns.
+        Self::from_spirv(device, name, &words, stage)
+    }
+
+    /// Creates a module from SPIR-V `words` (from [`compile_glsl`]).
+    pub fn from_spirv(
+        device: &Arc<Device>,
+        name: &str,
+        words: &[u32],
+        stage: ShaderStage,
+    ) -> VkResult<Self> {
+        let info = vk::ShaderModuleCreateInfo::default().code(words);
+        // SAFETY: words is SPIR-V from shaderc; info lives until the call returns.
         let raw = unsafe { device.raw.create_shader_module(&info, None) }
             .or_vk("vkCreateShaderModule")?;
         device.set_name(raw, name);

@@ -60,6 +60,8 @@ pub struct TechniqueScene {
     parameters_generation: u64,
     buffers_generation: u64,
     triangles: u64,
+    /// The buffers as techniques see them (with device addresses), refreshed when replaced.
+    buffer_refs: [abi::CadrBufferRef; 6],
 }
 
 fn usage(device: &Device, base: vk::BufferUsageFlags) -> vk::BufferUsageFlags {
@@ -155,6 +157,7 @@ impl TechniqueScene {
             parameters_generation: 1,
             buffers_generation: 1,
             triangles: 0,
+            buffer_refs: Default::default(),
         };
         tree.take_changes();
         scene.upload_geometries(graph)?;
@@ -225,7 +228,29 @@ impl TechniqueScene {
             vk::BufferUsageFlags::INDEX_BUFFER,
         )?;
         self.buffers_generation += 1;
+        self.refresh_buffer_refs();
         Ok(())
+    }
+
+    fn refresh_buffer_refs(&mut self) {
+        let with_address = self.device.capabilities().buffer_device_address;
+        self.buffer_refs = [
+            &self.vertices,
+            &self.indices,
+            &self.wire_indices,
+            &self.matrix_gpu.buffer,
+            &self.material_gpu.buffer,
+            &self.record_gpu.buffer,
+        ]
+        .map(|buffer| abi::CadrBufferRef {
+            buffer: buffer.raw().as_raw(),
+            size_bytes: buffer.size(),
+            address: if with_address {
+                buffer.device_address()
+            } else {
+                0
+            },
+        });
     }
 
     /// Grows a GPU array to hold `count` items of `item` bytes; true when it was replaced.
@@ -272,10 +297,10 @@ impl TechniqueScene {
         self.candidate_bits = vec![0; words];
         self.drawn_bits = vec![0; words];
         self.culled_bits = vec![u64::MAX; words];
+        self.triangles = 0;
         for id in 0..count as u32 {
             self.refresh_instance(tree, id);
         }
-        self.triangles = self.count_triangles();
         let device = Arc::clone(&self.device);
         Self::ensure(
             &device,
@@ -308,16 +333,25 @@ impl TechniqueScene {
         self.buffers_generation += 1;
         self.draws_generation += 1;
         self.parameters_generation += 1;
+        self.refresh_buffer_refs();
         Ok(())
     }
 
-    fn count_triangles(&self) -> u64 {
-        self.instances
-            .iter()
-            .enumerate()
-            .filter(|&(id, _)| self.drawn_bits[id / 64] >> (id % 64) & 1 == 1)
-            .map(|(_, i)| u64::from(i.index_count / 3))
-            .sum()
+    fn is_drawn(&self, id: u32) -> bool {
+        self.drawn_bits[id as usize / 64] >> (id % 64) & 1 == 1
+    }
+
+    /// Sets instance `id`'s drawn bit, keeping the drawn triangle count in step.
+    fn set_drawn(&mut self, id: u32, drawn: bool) {
+        if self.is_drawn(id) != drawn {
+            let triangles = u64::from(self.instances[id as usize].index_count / 3);
+            if drawn {
+                self.triangles += triangles;
+            } else {
+                self.triangles -= triangles;
+            }
+            Self::set_bit(&mut self.drawn_bits, id, drawn);
+        }
     }
 
     fn set_matrix(&mut self, tree: &SceneTree, t: u32) {
@@ -379,6 +413,8 @@ impl TechniqueScene {
             None => (abi::CadrInstance::default(), false),
         };
         let i = id as usize;
+        // Out of the drawn set with its old entry, back in with the new one.
+        self.set_drawn(id, false);
         self.instances[i] = entry;
         self.records[i] = abi::CadrInstanceRecord {
             matrix: entry.matrix,
@@ -388,7 +424,7 @@ impl TechniqueScene {
         };
         Self::set_bit(&mut self.candidate_bits, id, candidate);
         let culled_in = self.culled_bits[i / 64] >> (i % 64) & 1 == 1;
-        Self::set_bit(&mut self.drawn_bits, id, candidate && culled_in);
+        self.set_drawn(id, candidate && culled_in);
     }
 
     /// Applies the tree's changes since the last sync.
@@ -439,7 +475,6 @@ impl TechniqueScene {
         }
         if !touched.is_empty() {
             self.draws_generation += 1;
-            self.triangles = self.count_triangles();
         }
         Ok(())
     }
@@ -460,13 +495,12 @@ impl TechniqueScene {
                 let on = visible.get(word).is_some_and(|w| w >> bit & 1 == 1);
                 Self::set_bit(&mut self.culled_bits, id, on);
                 let candidate = self.candidate_bits[word] >> bit & 1 == 1;
-                Self::set_bit(&mut self.drawn_bits, id, candidate && on);
+                self.set_drawn(id, candidate && on);
                 any = true;
             }
         }
         if any {
             self.draws_generation += 1;
-            self.triangles = self.count_triangles();
         }
     }
 
@@ -545,15 +579,8 @@ impl TechniqueScene {
 
     /// The view techniques read this frame. Valid while `self` is not changed.
     pub(crate) fn view(&self) -> abi::CadrSceneView {
-        let reference = |buffer: &Buffer| abi::CadrBufferRef {
-            buffer: buffer.raw().as_raw(),
-            size_bytes: buffer.size(),
-            address: if self.device.capabilities().buffer_device_address {
-                buffer.device_address()
-            } else {
-                0
-            },
-        };
+        let [vertex_buffer, index_buffer, wire_index_buffer, matrix_buffer, material_buffer, instance_buffer] =
+            self.buffer_refs;
         abi::CadrSceneView {
             size: std::mem::size_of::<abi::CadrSceneView>() as u32,
             instance_count: self.instances.len() as u32,
@@ -570,13 +597,13 @@ impl TechniqueScene {
             dirty_materials: self.frame_dirty_materials.as_ptr(),
             dirty_material_count: self.frame_dirty_materials.len() as u32,
             buffers_generation: self.buffers_generation,
-            vertex_buffer: reference(&self.vertices),
+            vertex_buffer,
             vertex_stride: std::mem::size_of::<Vertex>() as u32,
-            index_buffer: reference(&self.indices),
-            wire_index_buffer: reference(&self.wire_indices),
-            matrix_buffer: reference(&self.matrix_gpu.buffer),
-            material_buffer: reference(&self.material_gpu.buffer),
-            instance_buffer: reference(&self.record_gpu.buffer),
+            index_buffer,
+            wire_index_buffer,
+            matrix_buffer,
+            material_buffer,
+            instance_buffer,
         }
     }
 

@@ -66,6 +66,18 @@ fn state_key(instance: &CadrInstance) -> (u32, u32, u32, u32) {
     )
 }
 
+/// A batch of its own for every range.
+fn one_batch_per_range(ranges: &[Range]) -> Vec<Batch> {
+    ranges
+        .iter()
+        .enumerate()
+        .map(|(i, r)| Batch {
+            instance: r.instance,
+            ranges: i..i + 1,
+        })
+        .collect()
+}
+
 /// Builds the list of `pass` with `strategy`.
 pub fn build(scene: &Scene<'_>, pass: abi::CadrPassKind, strategy: Strategy) -> PassList {
     let instances = scene.instances();
@@ -88,15 +100,7 @@ pub fn build(scene: &Scene<'_>, pass: abi::CadrPassKind, strategy: Strategy) -> 
                     (i.geometry, i.material, i.matrix, r.first)
                 });
             }
-            list.batches = list
-                .ranges
-                .iter()
-                .enumerate()
-                .map(|(i, r)| Batch {
-                    instance: r.instance,
-                    ranges: i..i + 1,
-                })
-                .collect();
+            list.batches = one_batch_per_range(&list.ranges);
         }
         Strategy::Join => {
             for range in drawn {
@@ -111,15 +115,7 @@ pub fn build(scene: &Scene<'_>, pass: abi::CadrPassKind, strategy: Strategy) -> 
                 }
                 list.ranges.push(range);
             }
-            list.batches = list
-                .ranges
-                .iter()
-                .enumerate()
-                .map(|(i, r)| Batch {
-                    instance: r.instance,
-                    ranges: i..i + 1,
-                })
-                .collect();
+            list.batches = one_batch_per_range(&list.ranges);
         }
         Strategy::Groups => {
             let mut groups: Vec<(u32, Vec<Range>)> = Vec::new();

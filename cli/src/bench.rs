@@ -39,16 +39,7 @@ struct Row {
     stats: FrameStats,
 }
 
-fn median(mut values: Vec<f64>) -> f64 {
-    values.sort_by(f64::total_cmp);
-    match values.len() {
-        0 => 0.0,
-        n if n % 2 == 1 => values[n / 2],
-        n => 0.5 * (values[n / 2 - 1] + values[n / 2]),
-    }
-}
-
-/// Renders `warmup` frames, then `frames` measured ones.
+/// Renders 2 warm-up frames, then `frames` measured ones; medians of CPU and GPU time.
 fn measure(
     frames: usize,
     mut draw: impl FnMut() -> Result<FrameStats, String>,
@@ -60,9 +51,9 @@ fn measure(
     for _ in 0..frames {
         samples.push(draw()?);
     }
-    let cpu = median(samples.iter().map(FrameStats::cpu_us).collect());
-    let gpu: Vec<f64> = samples.iter().filter_map(|s| s.gpu_us).collect();
-    let gpu = (!gpu.is_empty()).then(|| median(gpu));
+    let cpu = crate::median(&mut samples.iter().map(FrameStats::cpu_us).collect::<Vec<_>>());
+    let mut gpu: Vec<f64> = samples.iter().filter_map(|s| s.gpu_us).collect();
+    let gpu = (!gpu.is_empty()).then(|| crate::median(&mut gpu));
     Ok((cpu, gpu, samples[0]))
 }
 
@@ -298,47 +289,38 @@ fn print_row(row: &Row, baseline_cpu: f64) {
     );
 }
 
-fn json_text(text: &str) -> String {
-    let escaped: String = text
-        .chars()
-        .flat_map(|c| match c {
-            '"' => vec!['\\', '"'],
-            '\\' => vec!['\\', '\\'],
-            c => vec![c],
-        })
-        .collect();
-    format!("\"{escaped}\"")
-}
-
-fn row_json(row: &Row, baseline_cpu: f64) -> String {
+fn row_json(row: &Row, baseline_cpu: f64) -> serde_json::Value {
     let s = &row.stats;
-    format!(
-        "{{\"technique\": {}, \"shade\": {}, \"cpu_us\": {:.2}, \"gpu_us\": {}, \"draw_calls\": {}, \"draws\": {}, \"pipeline_binds\": {}, \"vertex_binds\": {}, \"parameter_binds\": {}, \"triangles\": {}, \"speedup\": {:.3}}}",
-        json_text(&row.label),
-        json_text(row.shade),
-        row.cpu_us,
-        row.gpu_us.map_or("null".to_owned(), |g| format!("{g:.2}")),
-        s.draw_calls,
-        s.draws,
-        s.pipeline_binds,
-        s.vertex_binds,
-        s.parameter_updates,
-        s.triangles,
-        baseline_cpu / row.cpu_us.max(0.001)
-    )
+    serde_json::json!({
+        "technique": row.label,
+        "shade": row.shade,
+        "cpu_us": row.cpu_us,
+        "gpu_us": row.gpu_us,
+        "draw_calls": s.draw_calls,
+        "draws": s.draws,
+        "pipeline_binds": s.pipeline_binds,
+        "vertex_binds": s.vertex_binds,
+        "parameter_binds": s.parameter_updates,
+        "triangles": s.triangles,
+        "speedup": baseline_cpu / row.cpu_us.max(0.001),
+    })
 }
 
-fn stats_json(name: &str, stats: &SceneStats) -> String {
-    format!(
-        "{{\"name\": {}, \"nodes\": {}, \"geometries\": {}, \"materials\": {}, \"parts\": {}, \"triangles\": {}, \"vertices\": {}}}",
-        json_text(name),
-        stats.nodes,
-        stats.geometries,
-        stats.materials,
-        stats.instances,
-        stats.triangles,
-        stats.vertices
-    )
+fn stats_json(name: &str, stats: &SceneStats) -> serde_json::Value {
+    serde_json::json!({
+        "name": name,
+        "nodes": stats.nodes,
+        "geometries": stats.geometries,
+        "materials": stats.materials,
+        "parts": stats.instances,
+        "triangles": stats.triangles,
+        "vertices": stats.vertices,
+    })
+}
+
+fn rows_json(rows: &[Row]) -> Vec<serde_json::Value> {
+    let baseline_cpu = rows.first().map_or(1.0, |r| r.cpu_us);
+    rows.iter().map(|r| row_json(r, baseline_cpu)).collect()
 }
 
 /// `cadr bench`.
@@ -410,22 +392,17 @@ pub fn bench(args: &Args) -> Result<(), String> {
             "scene: {name}: {} parts, {} triangles, {} materials, {} geometries",
             stats.instances, stats.triangles, stats.materials, stats.geometries
         );
-        let baseline_cpu = rows[0].cpu_us;
-        let rows_json: Vec<String> = rows
-            .iter()
-            .map(|r| format!("    {}", row_json(r, baseline_cpu)))
-            .collect();
-        format!(
-            "{{\n  \"device\": {},\n  \"frames\": {frames},\n  \"size\": [{}, {}],\n  \"scene\": {},\n  \"rows\": [\n{}\n  ]\n}}\n",
-            json_text(&device.adapter().name),
-            size.0,
-            size.1,
-            stats_json(name, &stats),
-            rows_json.join(",\n")
-        )
+        serde_json::json!({
+            "device": device.adapter().name,
+            "frames": frames,
+            "size": [size.0, size.1],
+            "scene": stats_json(name, &stats),
+            "rows": rows_json(&rows),
+        })
     };
     if let Some(path) = args.value(&["--json"]) {
-        std::fs::write(path, json).map_err(|e| format!("cannot write {path}: {e}"))?;
+        let text = serde_json::to_string_pretty(&json).map_err(|e| e.to_string())?;
+        std::fs::write(path, text + "\n").map_err(|e| format!("cannot write {path}: {e}"))?;
         println!("wrote {path}");
     }
     let errors = device.validation_log().errors().len();
@@ -436,7 +413,7 @@ pub fn bench(args: &Args) -> Result<(), String> {
 }
 
 /// Measures the sweep set over gen:grid scenes of growing size.
-fn run_sweep(bench: &Bench, args: &Args) -> Result<String, String> {
+fn run_sweep(bench: &Bench, args: &Args) -> Result<serde_json::Value, String> {
     let parts: Vec<u64> = match args.value(&["--sweep-parts"]) {
         None => vec![10_000, 100_000, 1_000_000],
         Some(text) => text
@@ -493,25 +470,19 @@ fn run_sweep(bench: &Bench, args: &Args) -> Result<String, String> {
         );
         println!(" {:>9.2}x", last / first.max(0.001));
     }
-    let sizes: Vec<String> = columns
+    let sizes: Vec<serde_json::Value> = columns
         .iter()
         .map(|(n, stats, rows)| {
-            let baseline_cpu = rows[0].cpu_us;
-            let rows_json: Vec<String> = rows
-                .iter()
-                .map(|r| format!("        {}", row_json(r, baseline_cpu)))
-                .collect();
-            format!(
-                "    {{\"parts\": {n}, \"scene\": {}, \"rows\": [\n{}\n    ]}}",
-                stats_json(&format!("gen:grid:parts={n}"), stats),
-                rows_json.join(",\n")
-            )
+            serde_json::json!({
+                "parts": n,
+                "scene": stats_json(&format!("gen:grid:parts={n}"), stats),
+                "rows": rows_json(rows),
+            })
         })
         .collect();
-    Ok(format!(
-        "{{\n  \"device\": {},\n  \"frames\": {},\n  \"sweep\": [\n{}\n  ]\n}}\n",
-        json_text(&bench.device.adapter().name),
-        bench.frames,
-        sizes.join(",\n")
-    ))
+    Ok(serde_json::json!({
+        "device": bench.device.adapter().name,
+        "frames": bench.frames,
+        "sweep": sizes,
+    }))
 }

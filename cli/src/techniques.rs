@@ -85,20 +85,6 @@ impl TechniqueSession {
     }
 }
 
-fn json_string(text: &str) -> String {
-    let mut out = String::from("\"");
-    for c in text.chars() {
-        match c {
-            '"' => out.push_str("\\\""),
-            '\\' => out.push_str("\\\\"),
-            c if (c as u32) < 0x20 => out.push_str(&format!("\\u{:04x}", c as u32)),
-            c => out.push(c),
-        }
-    }
-    out.push('"');
-    out
-}
-
 /// `cadr techniques [--json]`.
 pub fn techniques(args: &Args) -> Result<(), String> {
     args.reject_unknown("techniques", &["--json"])?;
@@ -110,35 +96,34 @@ pub fn techniques(args: &Args) -> Result<(), String> {
     let (registry, dirs) = load_registry(&device);
     let device_name = device.adapter().name.clone();
     if args.flag("--json") {
-        let mut entries = Vec::new();
-        for t in registry.techniques() {
-            let (supported, reason) = match &t.support {
-                Ok(()) => ("true", "null".to_owned()),
-                Err(why) => ("false", json_string(why)),
-            };
-            let needs: Vec<String> = feature_names(t.required_features)
-                .iter()
-                .map(|n| json_string(n))
-                .collect();
-            entries.push(format!(
-                "    {{\"kind\": {}, \"name\": {}, \"description\": {}, \"library\": {}, \"required_features\": [{}], \"supported\": {supported}, \"reason\": {reason}}}",
-                json_string(t.kind.name()),
-                json_string(&t.name),
-                json_string(&t.description),
-                json_string(&t.library.display().to_string()),
-                needs.join(", ")
-            ));
-        }
-        let refusals: Vec<String> = registry
+        let techniques: Vec<serde_json::Value> = registry
+            .techniques()
+            .iter()
+            .map(|t| {
+                serde_json::json!({
+                    "kind": t.kind.name(),
+                    "name": t.name,
+                    "description": t.description,
+                    "library": t.library.display().to_string(),
+                    "required_features": feature_names(t.required_features),
+                    "supported": t.support.is_ok(),
+                    "reason": t.support.as_ref().err(),
+                })
+            })
+            .collect();
+        let refused: Vec<String> = registry
             .refusals()
             .iter()
-            .map(|r| format!("    {}", json_string(&r.to_string())))
+            .map(ToString::to_string)
             .collect();
+        let report = serde_json::json!({
+            "device": device_name,
+            "techniques": techniques,
+            "refused": refused,
+        });
         println!(
-            "{{\n  \"device\": {},\n  \"techniques\": [\n{}\n  ],\n  \"refused\": [\n{}\n  ]\n}}",
-            json_string(&device_name),
-            entries.join(",\n"),
-            refusals.join(",\n")
+            "{}",
+            serde_json::to_string_pretty(&report).map_err(|e| e.to_string())?
         );
         return Ok(());
     }

@@ -44,7 +44,8 @@ typedef uint32_t CadrPassKind;
 // before any struct is exchanged.
 typedef uint32_t (*CadrPluginVersionFn)(void);
 
-// One technique a library offers.
+// One technique a library offers. Owned by the library, with its strings and vtable; they
+// live as long as the process.
 typedef struct CadrTechniqueInfo {
   // Size of this struct as the writer knows it.
   uint32_t size;
@@ -65,7 +66,8 @@ typedef struct CadrTechniqueInfo {
   const void *vtable;
 } CadrTechniqueInfo;
 
-// What a library offers, filled by [`CadrPluginEntryFn`].
+// What a library offers, filled by [`CadrPluginEntryFn`]. The host owns the struct; the
+// library owns everything it points at, which lives as long as the process.
 typedef struct CadrPluginLibrary {
   // Size of this struct as the writer knows it.
   uint32_t size;
@@ -98,7 +100,8 @@ typedef struct CadrMessage {
 typedef void (*(*CadrGetInstanceProcAddr)(void *instance, const char *name))(void);
 
 // The host's Vulkan objects, as raw handles (dispatchable ones as pointers, the others as
-// 64-bit integers, as in `vulkan_core.h`).
+// 64-bit integers, as in `vulkan_core.h`). Owned by the host; the struct and the objects
+// outlive every technique instance. Plugins destroy only objects they created.
 typedef struct CadrVulkan {
   // Size of this struct.
   uint32_t size;
@@ -162,7 +165,8 @@ typedef struct CadrHostApi {
   void (*destroy_buffer)(void *user, const struct CadrBuffer *buffer);
 } CadrHostApi;
 
-// What `create` receives.
+// What `create` receives. Owned by the host; the struct is valid for the call, the `vulkan`
+// and `host` structs it points at for the life of the instance.
 typedef struct CadrCreateInfo {
   // Size of this struct.
   uint32_t size;
@@ -233,8 +237,9 @@ typedef struct CadrMaterial {
   float surface[4];
 } CadrMaterial;
 
-// The scene as techniques see it during one frame. Everything it points at stays valid and
-// unchanged until the frame's last call.
+// The scene as techniques see it during one frame. Owned by the host, read-only for plugins;
+// everything it points at stays valid and unchanged until the frame's last call (copy what
+// must outlive the frame).
 typedef struct CadrSceneView {
   // Size of this struct.
   uint32_t size;
@@ -322,6 +327,7 @@ typedef struct CadrStats {
 } CadrStats;
 
 // What a vertex or parameter path binds with: the command buffer being recorded and the pass.
+// Owned by its caller (the submission), valid for the call.
 typedef struct CadrBindContext {
   // Size of this struct.
   uint32_t size;
@@ -463,7 +469,8 @@ typedef struct CadrPathRef_CadrParameterPathVtable {
   const struct CadrParameterPathVtable *vtable;
 } CadrPathRef_CadrParameterPathVtable;
 
-// What a submission records with.
+// What a submission records with. Owned by the host, valid for the call; the command
+// buffer is the host's (secondary command buffers the submission records are its own).
 typedef struct CadrRecordContext {
   // Size of this struct.
   uint32_t size;
@@ -509,7 +516,7 @@ typedef struct CadrSubmissionVtable {
                        struct CadrMessage *message);
 } CadrSubmissionVtable;
 
-// What culling reads.
+// What culling reads. Owned by the host, read-only, valid for the call.
 typedef struct CadrCullInput {
   // Size of this struct.
   uint32_t size;
@@ -524,7 +531,8 @@ typedef struct CadrCullInput {
   double planes[6][4];
 } CadrCullInput;
 
-// What culling writes: `word_count` words each.
+// What culling writes: `word_count` words each. The host owns both arrays; the culler
+// writes every word during the call and keeps no pointer to them.
 typedef struct CadrCullOutput {
   // Size of this struct.
   uint32_t size;

@@ -150,7 +150,8 @@ impl CadrMessage {
     }
 }
 
-/// What a library offers, filled by [`CadrPluginEntryFn`].
+/// What a library offers, filled by [`CadrPluginEntryFn`]. The host owns the struct; the
+/// library owns everything it points at, which lives as long as the process.
 #[repr(C)]
 #[derive(Debug)]
 pub struct CadrPluginLibrary {
@@ -168,7 +169,8 @@ pub struct CadrPluginLibrary {
     pub techniques: *const CadrTechniqueInfo,
 }
 
-/// One technique a library offers.
+/// One technique a library offers. Owned by the library, with its strings and vtable; they
+/// live as long as the process.
 #[repr(C)]
 #[derive(Debug)]
 pub struct CadrTechniqueInfo {
@@ -200,7 +202,8 @@ pub type CadrGetInstanceProcAddr = Option<
 >;
 
 /// The host's Vulkan objects, as raw handles (dispatchable ones as pointers, the others as
-/// 64-bit integers, as in `vulkan_core.h`).
+/// 64-bit integers, as in `vulkan_core.h`). Owned by the host; the struct and the objects
+/// outlive every technique instance. Plugins destroy only objects they created.
 #[repr(C)]
 #[derive(Debug)]
 pub struct CadrVulkan {
@@ -281,7 +284,8 @@ pub struct CadrHostApi {
     pub destroy_buffer: Option<unsafe extern "C" fn(user: *mut c_void, buffer: *const CadrBuffer)>,
 }
 
-/// What `create` receives.
+/// What `create` receives. Owned by the host; the struct is valid for the call, the `vulkan`
+/// and `host` structs it points at for the life of the instance.
 #[repr(C)]
 #[derive(Debug)]
 pub struct CadrCreateInfo {
@@ -408,8 +412,9 @@ pub struct CadrInstanceRecord {
     pub instance: u32,
 }
 
-/// The scene as techniques see it during one frame. Everything it points at stays valid and
-/// unchanged until the frame's last call.
+/// The scene as techniques see it during one frame. Owned by the host, read-only for plugins;
+/// everything it points at stays valid and unchanged until the frame's last call (copy what
+/// must outlive the frame).
 #[repr(C)]
 #[derive(Debug)]
 pub struct CadrSceneView {
@@ -497,6 +502,7 @@ pub struct CadrStats {
 }
 
 /// What a vertex or parameter path binds with: the command buffer being recorded and the pass.
+/// Owned by its caller (the submission), valid for the call.
 #[repr(C)]
 #[derive(Debug)]
 pub struct CadrBindContext {
@@ -685,7 +691,8 @@ impl<V> Clone for CadrPathRef<V> {
 
 impl<V> Copy for CadrPathRef<V> {}
 
-/// What a submission records with.
+/// What a submission records with. Owned by the host, valid for the call; the command
+/// buffer is the host's (secondary command buffers the submission records are its own).
 #[repr(C)]
 #[derive(Debug)]
 pub struct CadrRecordContext {
@@ -743,7 +750,7 @@ pub struct CadrSubmissionVtable {
     >,
 }
 
-/// What culling reads.
+/// What culling reads. Owned by the host, read-only, valid for the call.
 #[repr(C)]
 #[derive(Debug)]
 pub struct CadrCullInput {
@@ -760,7 +767,8 @@ pub struct CadrCullInput {
     pub planes: [[f64; 4]; 6],
 }
 
-/// What culling writes: `word_count` words each.
+/// What culling writes: `word_count` words each. The host owns both arrays; the culler
+/// writes every word during the call and keeps no pointer to them.
 #[repr(C)]
 #[derive(Debug)]
 pub struct CadrCullOutput {

@@ -112,6 +112,14 @@ impl<const PER_PART: bool> VertexPath for Bound<PER_PART> {
     }
 }
 
+/// What the paths that bind the whole scene once answer for every draw: the binding starts at
+/// element 0, so draws use absolute offsets.
+const SCENE_BOUND_AT_ZERO: CadrDrawBase = CadrDrawBase {
+    index_base: 0,
+    vertex_base: 0,
+    ok: 1,
+};
+
 /// Binds the scene's buffers once per pass.
 pub struct Arena {
     gpu: Arc<Gpu>,
@@ -169,11 +177,7 @@ impl VertexPath for Arena {
         _drawn: &CadrInstance,
         _state: &mut CadrBindState,
     ) -> CadrDrawBase {
-        CadrDrawBase {
-            index_base: 0,
-            vertex_base: 0,
-            ok: 1,
-        }
+        SCENE_BOUND_AT_ZERO
     }
 }
 
@@ -308,11 +312,7 @@ impl VertexPath for Pulling {
         _drawn: &CadrInstance,
         _state: &mut CadrBindState,
     ) -> CadrDrawBase {
-        CadrDrawBase {
-            index_base: 0,
-            vertex_base: 0,
-            ok: 1,
-        }
+        SCENE_BOUND_AT_ZERO
     }
 }
 
@@ -370,11 +370,7 @@ impl VertexPath for PullingAddress {
         _drawn: &CadrInstance,
         _state: &mut CadrBindState,
     ) -> CadrDrawBase {
-        CadrDrawBase {
-            index_base: 0,
-            vertex_base: 0,
-            ok: 1,
-        }
+        SCENE_BOUND_AT_ZERO
     }
 }
 

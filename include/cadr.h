@@ -7,6 +7,30 @@
 #include <stddef.h>
 #include <stdint.h>
 
+// The library's major version (from the crate's metadata).
+#define CADR_VERSION_MAJOR 0
+
+// The library's minor version.
+#define CADR_VERSION_MINOR 1
+
+// The library's patch version.
+#define CADR_VERSION_PATCH 0
+
+// Shaded triangles only.
+#define CADR_SHADE_SOLID 0
+
+// Shaded triangles with their edges drawn as lines.
+#define CADR_SHADE_EDGES 1
+
+// Node flag: the node and its subtree are drawn.
+#define CADR_NODE_VISIBLE 1
+
+// Node flag: the node's parts can be picked.
+#define CADR_NODE_PICKABLE 2
+
+// Node flag: the node's parts are drawn highlighted.
+#define CADR_NODE_HIGHLIGHTED 4
+
 // The result of every fallible cadr function.
 typedef enum CadrResult {
   // Success.
@@ -25,16 +49,344 @@ typedef enum CadrResult {
   CADR_RESULT_BUFFER_TOO_SMALL = 6,
   // An internal error (a bug): cadr caught a panic. The message says where.
   CADR_RESULT_PANIC = 7,
+  // The handle was valid once but its object has been destroyed.
+  CADR_RESULT_DESTROYED_HANDLE = 8,
+  // The value is not a handle of the expected type (another type's handle, or garbage).
+  CADR_RESULT_FOREIGN_HANDLE = 9,
+  // No item has this name or index (a technique, a list entry).
+  CADR_RESULT_NOT_FOUND = 10,
+  // The techniques chosen cannot work together; the message says which need is unmet.
+  CADR_RESULT_INVALID_COMBINATION = 11,
+  // The device or the platform cannot do this (missing feature, extension or technique).
+  CADR_RESULT_UNSUPPORTED = 12,
+  // The object is still used (a geometry or material referenced by nodes).
+  CADR_RESULT_IN_USE = 13,
+  // A technique plugin failed (its create, prepare or record call returned an error or
+  // panicked); the renderer keeps its previous techniques.
+  CADR_RESULT_PLUGIN_FAILED = 14,
 } CadrResult;
+
+// The kind of a physical device.
+typedef enum CadrDeviceType {
+  // Something else.
+  CADR_DEVICE_TYPE_OTHER = 0,
+  // A GPU sharing memory with the CPU.
+  CADR_DEVICE_TYPE_INTEGRATED_GPU = 1,
+  // A GPU of its own.
+  CADR_DEVICE_TYPE_DISCRETE_GPU = 2,
+  // A virtualised GPU.
+  CADR_DEVICE_TYPE_VIRTUAL_GPU = 3,
+  // A CPU implementation such as lavapipe.
+  CADR_DEVICE_TYPE_CPU = 4,
+} CadrDeviceType;
+
+// A technique kind.
+typedef enum CadrTechniqueKind {
+  // How vertices reach the shader.
+  CADR_TECHNIQUE_KIND_VERTEX = 0,
+  // How matrices and materials reach the shader.
+  CADR_TECHNIQUE_KIND_PARAMETERS = 1,
+  // Which draws are issued and how.
+  CADR_TECHNIQUE_KIND_SUBMISSION = 2,
+  // Which instances are drawn.
+  CADR_TECHNIQUE_KIND_CULLING = 3,
+} CadrTechniqueKind;
+
+// Opaque type behind [`CadrContext`]; never dereferenced by the host or by cadr.
+typedef struct CadrContextObject CadrContextObject;
+
+// Opaque type behind [`CadrRenderer`].
+typedef struct CadrRendererObject CadrRendererObject;
+
+// Opaque type behind [`CadrScene`].
+typedef struct CadrSceneObject CadrSceneObject;
+
+// A camera: world-to-view and view-to-clip matrices, column-major doubles. The view looks
+// down -Z (right-handed); the projection follows Vulkan (y down, depth 0..1). Hosts may fill
+// it with their own matrices.
+typedef struct CadrCamera {
+  // World to view space.
+  double view[16];
+  // View to clip space.
+  double projection[16];
+} CadrCamera;
+
+// An axis-aligned box in world space; `min` > `max` when empty.
+typedef struct CadrBounds {
+  // Smallest corner.
+  double min[3];
+  // Largest corner.
+  double max[3];
+} CadrBounds;
+
+// How to create a context. Fill it with `cadr_context_options_default` first, then change
+// what you need; `size` lets later versions add fields.
+typedef struct CadrContextOptions {
+  // `sizeof(CadrContextOptions)`, set by `cadr_context_options_default`.
+  uint32_t size;
+  // Enables the Vulkan validation layer (`VK_LAYER_KHRONOS_validation`); its error messages
+  // are counted by `cadr_context_validation_error_count`. Default: false.
+  bool validation;
+  // The physical device's index as `cadr devices` lists it, or -1 (default) to choose by
+  // `device_name`, then by the `CADR_DEVICE` variable, then a discrete GPU first.
+  int32_t device_index;
+  // NULL (default), or a case-insensitive part of the device's name.
+  const char *device_name;
+  // Extra instance extensions, e.g. what `glfwGetRequiredInstanceExtensions` returns. When
+  // `VK_KHR_surface` is among them, the device gets `VK_KHR_swapchain` so that renderers can
+  // present to the host's windows.
+  const char *const *instance_extensions;
+  // Number of `instance_extensions`.
+  uint32_t instance_extension_count;
+  // Extra device extensions.
+  const char *const *device_extensions;
+  // Number of `device_extensions`.
+  uint32_t device_extension_count;
+  // Directories searched for technique plugins (`*cadr_plugin_*.so`) before the defaults.
+  const char *const *plugin_dirs;
+  // Number of `plugin_dirs`.
+  uint32_t plugin_dir_count;
+  // Also search the default directories: beside `libcadr.so` (and its `cadr/plugins/`),
+  // beside the executable, and `CADR_PLUGIN_PATH`. Default: true.
+  bool default_plugin_dirs;
+} CadrContextOptions;
+
+// A context: one Vulkan instance and device, and the technique plugins found for them.
+// Created by `cadr_context_create`, released by `cadr_context_destroy`.
+typedef struct CadrContextObject *CadrContext;
+
+// Optional device features the techniques use.
+typedef struct CadrDeviceFeatures {
+  // Many indirect draws in one call (`multiDrawIndirect`).
+  bool multi_draw_indirect;
+  // Per-draw indices through firstInstance in indirect draws.
+  bool draw_indirect_first_instance;
+  // `gl_DrawID` and `gl_BaseInstance` in shaders.
+  bool shader_draw_parameters;
+  // GPU pointers to buffers.
+  bool buffer_device_address;
+  // Indirect draws whose count the GPU reads.
+  bool draw_indirect_count;
+  // `VK_EXT_multi_draw`.
+  bool multi_draw;
+  // GPU timestamps on the render queue (frame GPU times).
+  bool timestamps;
+  // Renderers can present to windows (`VK_KHR_swapchain` enabled).
+  bool presentation;
+} CadrDeviceFeatures;
+
+// The device a context renders with.
+typedef struct CadrDeviceInfo {
+  // The driver's device name, NUL-terminated (cut to fit).
+  char name[256];
+  // Its kind.
+  enum CadrDeviceType device_type;
+  // Its Vulkan version (`VK_MAKE_API_VERSION` packing).
+  uint32_t api_version;
+  // Index in the instance's device list.
+  uint32_t index;
+  // The queue family cadr renders and presents on.
+  uint32_t queue_family;
+  // Optional features.
+  struct CadrDeviceFeatures features;
+  // Whether the validation layer is on.
+  bool validation;
+} CadrDeviceInfo;
+
+// One technique offered by the plugins. The strings belong to the context and stay valid
+// until it is destroyed.
+typedef struct CadrTechniqueInfo {
+  // Its kind.
+  enum CadrTechniqueKind kind;
+  // Its name, unique within the kind (e.g. "groups-mdi-replay").
+  const char *name;
+  // What it does.
+  const char *description;
+  // The plugin library it comes from.
+  const char *library;
+  // Whether this device can run it.
+  bool supported;
+  // Why not, when `supported` is false (empty otherwise).
+  const char *unsupported_reason;
+} CadrTechniqueInfo;
+
+// A plugin library (or one of its techniques) that was refused. The strings belong to the
+// context.
+typedef struct CadrPluginRefusal {
+  // The library.
+  const char *library;
+  // Why (another ABI version, a missing symbol, a panic, …), with the technique's name when
+  // only one technique was refused.
+  const char *reason;
+} CadrPluginRefusal;
+
+// A scene: a scene graph with one root Group, and the scene tree flattened from it.
+// Created by `cadr_scene_create`, released by `cadr_scene_destroy`. A scene needs no context:
+// any renderer can draw it.
+typedef struct CadrSceneObject *CadrScene;
+
+// A range of a geometry's indices drawn with one material, and its range of edge indices.
+typedef struct CadrPart {
+  // First index in `indices`.
+  uint32_t first_index;
+  // Number of indices (a multiple of 3).
+  uint32_t index_count;
+  // First index in `wire_indices`.
+  uint32_t first_wire_index;
+  // Number of wire indices (a multiple of 2; 0 when the part has no stored edges).
+  uint32_t wire_index_count;
+} CadrPart;
+
+// Geometry in the host's arrays. Everything is copied; the arrays can be freed after the
+// call.
+typedef struct CadrGeometryDesc {
+  // Name (NULL: empty).
+  const char *name;
+  // `vertex_count` × 3 floats: object-space positions.
+  const float *positions;
+  // NULL, or `vertex_count` × 3 floats: unit normals. NULL computes smooth normals from the
+  // triangles (area-weighted).
+  const float *normals;
+  // Number of vertices.
+  uint32_t vertex_count;
+  // Triangle-list indices into the vertices.
+  const uint32_t *indices;
+  // Number of indices (a multiple of 3).
+  uint32_t index_count;
+  // NULL, or line-list indices: the edges drawn by the "edges" shade mode. Without them,
+  // edges are derived from the triangles by crease angle.
+  const uint32_t *wire_indices;
+  // Number of wire indices (a multiple of 2).
+  uint32_t wire_index_count;
+  // The parts; NULL with `part_count` 0 makes one part of all indices (and wire indices).
+  const struct CadrPart *parts;
+  // Number of parts.
+  uint32_t part_count;
+} CadrGeometryDesc;
+
+// A geometry of a scene (0 is never valid).
+typedef uint64_t CadrGeometry;
+
+// Material parameters (metallic-roughness, as glTF).
+typedef struct CadrMaterialDesc {
+  // Name (NULL: empty).
+  const char *name;
+  // Linear RGBA base color, each 0..1.
+  float base_color[4];
+  // 0 = dielectric, 1 = metal.
+  float metallic;
+  // 0 = mirror, 1 = fully rough.
+  float roughness;
+} CadrMaterialDesc;
+
+// A material of a scene (0 is never valid).
+typedef uint64_t CadrMaterial;
+
+// A renderer: draws scenes with the chosen techniques into an offscreen image, or into a host
+// window through a swapchain. Created by `cadr_renderer_create` or
+// `cadr_renderer_create_for_surface`, released by `cadr_renderer_destroy`.
+typedef struct CadrRendererObject *CadrRenderer;
+
+// One technique name per kind; NULL keeps the renderer's current technique of that kind.
+typedef struct CadrTechniqueSelection {
+  // Vertex path, e.g. "arena".
+  const char *vertex;
+  // Parameter path, e.g. "ssbo-index".
+  const char *parameters;
+  // Submission, e.g. "groups-mdi-replay".
+  const char *submission;
+  // Culling, e.g. "frustum".
+  const char *culling;
+} CadrTechniqueSelection;
+
+// What one frame cost and drew: the figures `cadr bench` prints.
+typedef struct CadrFrameStats {
+  // Whether the frame was drawn and, for a window, presented (false while minimized or
+  // while the swapchain was being recreated).
+  bool presented;
+  // CPU time of the frame: culling, the techniques' preparation, recording, submission.
+  double cpu_us;
+  // CPU time spent recording commands.
+  double cpu_record_us;
+  // CPU time of the queue submission.
+  double cpu_submit_us;
+  // CPU time to bring the scene tree and the GPU scene up to date with the host's edits.
+  double scene_update_us;
+  // CPU time to hand the image to the window (0 offscreen).
+  double present_us;
+  // GPU time of the frame, or -1 where the device has no timestamps.
+  double gpu_us;
+  // Draw calls (an indirect or multi-draw call counts once).
+  uint64_t draw_calls;
+  // Parts or index ranges drawn.
+  uint64_t draws;
+  // Triangles drawn.
+  uint64_t triangles;
+  // Pipeline binds.
+  uint64_t pipeline_binds;
+  // Vertex and index buffer binds.
+  uint64_t vertex_binds;
+  // Parameter updates (push constants, descriptor binds).
+  uint64_t parameter_updates;
+  // Bytes uploaded for this frame.
+  uint64_t bytes_uploaded;
+} CadrFrameStats;
+
+// A node of a scene (0 is never a valid node). Generation-checked: a destroyed node's handle
+// gives `CADR_RESULT_DESTROYED_HANDLE`.
+typedef uint64_t CadrNode;
+
+// What `cadr_scene_load` created. Free the arrays with `cadr_load_result_free`.
+typedef struct CadrLoadResult {
+  // The new Group, named after the file, that holds the file's content.
+  CadrNode root;
+  // Every node created, `root` first.
+  CadrNode *nodes;
+  // Number of `nodes`.
+  size_t node_count;
+  // The file's geometries, in the file's order.
+  CadrGeometry *geometries;
+  // Number of `geometries`.
+  size_t geometry_count;
+  // The file's materials, in the file's order.
+  CadrMaterial *materials;
+  // Number of `materials`.
+  size_t material_count;
+} CadrLoadResult;
+
+// Counts of a scene.
+typedef struct CadrSceneStatistics {
+  // Live nodes, the root included.
+  uint64_t nodes;
+  // Live geometries.
+  uint64_t geometries;
+  // Live materials.
+  uint64_t materials;
+  // Drawable parts over all paths (a shared subgraph counts once per path).
+  uint64_t instances;
+  // Of those, the ones shown (flags, switches, LOD).
+  uint64_t visible_instances;
+  // Triangles of the shown instances.
+  uint64_t visible_triangles;
+} CadrSceneStatistics;
 
 #ifdef __cplusplus
 extern "C" {
 #endif // __cplusplus
 
-// The library version as a static NUL-terminated string such as "0.1.0".
+// The version as a static NUL-terminated string such as "0.1.0".
 //
 // Ownership: the string is static; do not free it. Thread-safety: callable from any thread.
 const char *cadr_version_string(void);
+
+// Writes the version of the library actually loaded (compare with `CADR_VERSION_MAJOR`…);
+// any pointer may be NULL.
+//
+// Ownership: the outputs are the caller's. Thread-safety: callable from any thread.
+//
+// # Safety
+// Each pointer is null or writable.
+void cadr_version(uint32_t *major, uint32_t *minor, uint32_t *patch);
 
 // Renders `scene` (a .gltf/.glb path or a generator such as "gen:demo") with the camera
 // fitted to its bounds into a `width` × `height` PNG at `png_path`.
@@ -55,10 +407,151 @@ enum CadrResult cadr_render_scene_to_png(const char *scene,
                                          uint32_t height,
                                          bool validation);
 
-// A static, NUL-terminated English name of `result`, e.g. "null argument".
+// A perspective camera at `eye` looking at `target` (+Y up, or +Z when looking along Y) with a
+// vertical field of view in degrees, `aspect` = width / height, and near and far distances.
+//
+// Returns `CADR_RESULT_OK`, `CADR_RESULT_NULL_ARGUMENT` or `CADR_RESULT_INVALID_ARGUMENT` (eye
+// equal to target, field of view outside 0..180, aspect or near not positive, far not beyond
+// near, non-finite values).
+// Ownership: the arrays are read during the call. Thread-safety: callable from any thread.
+//
+// # Safety
+// `eye` and `target` are null or 3 readable doubles; `camera` is null or writable.
+enum CadrResult cadr_camera_look_at(const double *eye,
+                                    const double *target,
+                                    double fov_y_degrees,
+                                    double aspect,
+                                    double near,
+                                    double far,
+                                    struct CadrCamera *camera);
+
+// A camera that sees all of `bounds` from `direction` (NULL: front-right, above) for an image
+// of `aspect` = width / height. Empty bounds give a camera on the unit sphere.
+//
+// Returns `CADR_RESULT_OK`, `CADR_RESULT_NULL_ARGUMENT` or `CADR_RESULT_INVALID_ARGUMENT`.
+// Ownership: the inputs are read during the call. Thread-safety: callable from any thread.
+//
+// # Safety
+// `bounds` is null or readable; `direction` null or 3 readable doubles; `camera` null or
+// writable.
+enum CadrResult cadr_camera_fit(const struct CadrBounds *bounds,
+                                double aspect,
+                                const double *direction,
+                                struct CadrCamera *camera);
+
+// Fills `*options` with the defaults: no validation, automatic device choice, no extra
+// extensions, default plugin directories.
+//
+// Returns `CADR_RESULT_NULL_ARGUMENT` when `options` is NULL.
+// Ownership: `options` is the caller's. Thread-safety: callable from any thread.
+//
+// # Safety
+// `options` is null or writable.
+enum CadrResult cadr_context_options_default(struct CadrContextOptions *options);
+
+// Creates a context: the Vulkan instance (with the host's extensions), the device, and the
+// technique plugins found for it. `options` may be NULL for the defaults.
+//
+// Returns `CADR_RESULT_OK` and writes `*context`, or `CADR_RESULT_NULL_ARGUMENT`,
+// `CADR_RESULT_INVALID_ARGUMENT` (bad `size`, bad strings), `CADR_RESULT_UNSUPPORTED` (no
+// device with Vulkan 1.3, a missing extension) or `CADR_RESULT_VULKAN`.
+//
+// Ownership: the options and their strings are read during the call only; the context is
+// the caller's until `cadr_context_destroy`. Thread-safety: callable from any thread; a
+// context may be used from several threads (calls are serialised where they share the
+// device's queue).
+//
+// # Safety
+// `options` is null or a valid options struct whose pointers are null or valid for their
+// counts; `context` is null or writable.
+enum CadrResult cadr_context_create(const struct CadrContextOptions *options, CadrContext *context);
+
+// Destroys a context handle. Renderers made from it keep the device alive until they are
+// destroyed too. NULL is a no-op.
+//
+// Returns `CADR_RESULT_OK`, `CADR_RESULT_DESTROYED_HANDLE` or `CADR_RESULT_FOREIGN_HANDLE`.
+// Ownership: the handle is invalid afterwards. Thread-safety: callable from any thread, but
+// not while another thread still uses this handle.
+enum CadrResult cadr_context_destroy(CadrContext context);
+
+// Describes the context's device: name, type, Vulkan version and optional features.
+//
+// Returns `CADR_RESULT_OK`, `CADR_RESULT_NULL_ARGUMENT` or a handle error.
+// Ownership: `*info` is the caller's. Thread-safety: callable from any thread.
+//
+// # Safety
+// `info` is null or writable.
+enum CadrResult cadr_context_device_info(CadrContext context, struct CadrDeviceInfo *info);
+
+// Writes the context's `VkInstance` into `*instance`, for creating a window surface on it
+// (e.g. `glfwCreateWindowSurface`). Cast it to `VkInstance`.
+//
+// Returns `CADR_RESULT_OK`, `CADR_RESULT_NULL_ARGUMENT` or a handle error.
+// Ownership: the instance belongs to cadr and lives as long as the context or any of its
+// renderers; do not destroy it. Thread-safety: callable from any thread.
+//
+// # Safety
+// `instance` is null or writable.
+enum CadrResult cadr_context_vulkan_instance(CadrContext context, void **instance);
+
+// Writes how many validation messages of severity error the context's device has reported
+// so far (0 when validation is off).
+//
+// Returns `CADR_RESULT_OK`, `CADR_RESULT_NULL_ARGUMENT` or a handle error.
+// Thread-safety: callable from any thread.
+//
+// # Safety
+// `count` is null or writable.
+enum CadrResult cadr_context_validation_error_count(CadrContext context, uint64_t *count);
+
+// Writes the number of techniques the plugins offer (supported or not).
+//
+// Returns `CADR_RESULT_OK`, `CADR_RESULT_NULL_ARGUMENT` or a handle error.
+// Thread-safety: callable from any thread.
+//
+// # Safety
+// `count` is null or writable.
+enum CadrResult cadr_context_technique_count(CadrContext context, uint32_t *count);
+
+// Describes technique `index` (0 to count - 1).
+//
+// Returns `CADR_RESULT_OK`, `CADR_RESULT_NOT_FOUND` (index out of range),
+// `CADR_RESULT_NULL_ARGUMENT` or a handle error.
+// Ownership: the strings in `*info` belong to the context and live until it and its
+// renderers are destroyed. Thread-safety: callable from any thread.
+//
+// # Safety
+// `info` is null or writable.
+enum CadrResult cadr_context_technique(CadrContext context,
+                                       uint32_t index,
+                                       struct CadrTechniqueInfo *info);
+
+// Writes the number of refused plugin libraries and techniques.
+//
+// Returns `CADR_RESULT_OK`, `CADR_RESULT_NULL_ARGUMENT` or a handle error.
+// Thread-safety: callable from any thread.
+//
+// # Safety
+// `count` is null or writable.
+enum CadrResult cadr_context_refusal_count(CadrContext context, uint32_t *count);
+
+// Describes refusal `index` (0 to count - 1).
+//
+// Returns `CADR_RESULT_OK`, `CADR_RESULT_NOT_FOUND` (index out of range),
+// `CADR_RESULT_NULL_ARGUMENT` or a handle error.
+// Ownership: the strings belong to the context. Thread-safety: callable from any thread.
+//
+// # Safety
+// `refusal` is null or writable.
+enum CadrResult cadr_context_refusal(CadrContext context,
+                                     uint32_t index,
+                                     struct CadrPluginRefusal *refusal);
+
+// A static, NUL-terminated English name of `result` (a `CadrResult` value), e.g.
+// "null argument"; "unknown result" for values that are none.
 //
 // Ownership: static; do not free. Thread-safety: callable from any thread.
-const char *cadr_result_string(enum CadrResult result);
+const char *cadr_result_string(int32_t result);
 
 // Copies the message of the last failed call on this thread (empty after a success) into
 // `buffer` as a NUL-terminated string, and its length without the NUL into `*length`.
@@ -71,6 +564,496 @@ const char *cadr_result_string(enum CadrResult result);
 // # Safety
 // `buffer` is null or writable for `capacity` bytes; `length` is null or writable.
 enum CadrResult cadr_last_error_message(char *buffer, size_t capacity, size_t *length);
+
+// Creates a geometry from the host's arrays (copied).
+//
+// Returns `CADR_RESULT_OK` and writes `*geometry`, `CADR_RESULT_NULL_ARGUMENT`,
+// `CADR_RESULT_INVALID_ARGUMENT` (the message names the field and index: an index beyond the
+// vertices, a part beyond the indices, a count not a multiple of 3, a non-finite position) or
+// a handle error.
+// Ownership: the geometry belongs to the scene. Thread-safety: as `cadr_scene_create`.
+//
+// # Safety
+// `desc` is null or valid with arrays valid for their counts; `geometry` null or writable.
+enum CadrResult cadr_scene_create_geometry(CadrScene scene,
+                                           const struct CadrGeometryDesc *desc,
+                                           CadrGeometry *geometry);
+
+// Replaces a geometry's data; Geo nodes that use it draw the new data. The part count must
+// stay the same (their part materials are kept).
+//
+// Returns as `cadr_scene_create_geometry`. Thread-safety: as `cadr_scene_create`.
+//
+// # Safety
+// As `cadr_scene_create_geometry`.
+enum CadrResult cadr_scene_replace_geometry(CadrScene scene,
+                                            CadrGeometry geometry,
+                                            const struct CadrGeometryDesc *desc);
+
+// Destroys a geometry that no Geo node uses.
+//
+// Returns `CADR_RESULT_OK`, `CADR_RESULT_IN_USE` or a handle error.
+// Thread-safety: as `cadr_scene_create`.
+enum CadrResult cadr_scene_destroy_geometry(CadrScene scene, CadrGeometry geometry);
+
+// Writes the object-space bounds of a geometry's vertices.
+//
+// Returns `CADR_RESULT_OK`, `CADR_RESULT_NULL_ARGUMENT` or a handle error.
+// Thread-safety: as `cadr_scene_create`.
+//
+// # Safety
+// `bounds` is null or writable.
+enum CadrResult cadr_scene_geometry_bounds(CadrScene scene,
+                                           CadrGeometry geometry,
+                                           struct CadrBounds *bounds);
+
+// Creates a material.
+//
+// Returns `CADR_RESULT_OK` and writes `*material`, `CADR_RESULT_NULL_ARGUMENT`,
+// `CADR_RESULT_INVALID_ARGUMENT` (a value outside 0..1, named) or a handle error.
+// Ownership: the material belongs to the scene. Thread-safety: as `cadr_scene_create`.
+//
+// # Safety
+// `desc` is null or valid; `material` null or writable.
+enum CadrResult cadr_scene_create_material(CadrScene scene,
+                                           const struct CadrMaterialDesc *desc,
+                                           CadrMaterial *material);
+
+// Changes a material's parameters; every part using it is drawn with them.
+//
+// Returns as `cadr_scene_create_material`. Thread-safety: as `cadr_scene_create`.
+//
+// # Safety
+// `desc` is null or valid.
+enum CadrResult cadr_scene_set_material(CadrScene scene,
+                                        CadrMaterial material,
+                                        const struct CadrMaterialDesc *desc);
+
+// Destroys a material that no part uses.
+//
+// Returns `CADR_RESULT_OK`, `CADR_RESULT_IN_USE` or a handle error.
+// Thread-safety: as `cadr_scene_create`.
+enum CadrResult cadr_scene_destroy_material(CadrScene scene, CadrMaterial material);
+
+// Creates a renderer that draws into an offscreen `width` × `height` image, with the fastest
+// technique combination the device and plugins allow (see `cadr_renderer_technique`).
+//
+// Returns `CADR_RESULT_OK` and writes `*renderer`, `CADR_RESULT_NULL_ARGUMENT`,
+// `CADR_RESULT_INVALID_ARGUMENT` (size 0 or above 16384), `CADR_RESULT_NOT_FOUND` (no plugins:
+// the message lists the directories searched), `CADR_RESULT_VULKAN` or a handle error.
+// Ownership: the renderer is the caller's until `cadr_renderer_destroy`; it keeps the
+// context's device alive. Thread-safety: callable from any thread; one renderer is used by
+// one call at a time (an internal lock), and renderers of one context take turns on its queue.
+//
+// # Safety
+// `renderer` is null or writable.
+enum CadrResult cadr_renderer_create(CadrContext context,
+                                     uint32_t width,
+                                     uint32_t height,
+                                     CadrRenderer *renderer);
+
+// Creates a renderer that presents into a host window: `surface` is a `VkSurfaceKHR` the host
+// created on the context's instance (`cadr_context_vulkan_instance`), e.g. with
+// `glfwCreateWindowSurface`; pass it as `(uint64_t)surface`. cadr owns the swapchain,
+// recreates it when the window's size changes (call `cadr_renderer_resize` from the host's
+// resize callback) and presents nothing while the window is minimized.
+//
+// Returns as `cadr_renderer_create`, and `CADR_RESULT_UNSUPPORTED` when the context was made
+// without the window system's instance extensions or cannot present to this surface.
+// Ownership: on success the renderer owns the surface and destroys it with itself; on failure
+// the surface stays the caller's. Thread-safety: as `cadr_renderer_create`.
+//
+// # Safety
+// `surface` is 0 or a live surface of the context's instance not used by another swapchain;
+// `renderer` is null or writable.
+enum CadrResult cadr_renderer_create_for_surface(CadrContext context,
+                                                 uint64_t surface,
+                                                 uint32_t width,
+                                                 uint32_t height,
+                                                 CadrRenderer *renderer);
+
+// Destroys a renderer (waiting for its last frame) and, for a window renderer, its swapchain
+// and surface. NULL is a no-op.
+//
+// Returns `CADR_RESULT_OK` or a handle error.
+// Thread-safety: not while another thread uses this renderer.
+enum CadrResult cadr_renderer_destroy(CadrRenderer renderer);
+
+// Gives the renderer a new size: for a window, call it from the framebuffer-size callback
+// (0 × 0 while minimized is accepted: frames are skipped until the window has area again).
+//
+// Returns `CADR_RESULT_OK`, `CADR_RESULT_INVALID_ARGUMENT` (above 16384, or 0 offscreen),
+// `CADR_RESULT_VULKAN` or a handle error. Thread-safety: as `cadr_renderer_create`.
+enum CadrResult cadr_renderer_resize(CadrRenderer renderer, uint32_t width, uint32_t height);
+
+// Writes the size of the renderer's image (for a window: of the swapchain, 0 × 0 while
+// minimized).
+//
+// Returns `CADR_RESULT_OK`, `CADR_RESULT_NULL_ARGUMENT` or a handle error.
+// Thread-safety: as `cadr_renderer_create`.
+//
+// # Safety
+// `width` and `height` are null or writable.
+enum CadrResult cadr_renderer_size(CadrRenderer renderer, uint32_t *width, uint32_t *height);
+
+// Checks whether a technique selection would work, without changing anything.
+//
+// Returns `CADR_RESULT_OK`, `CADR_RESULT_NOT_FOUND` (unknown name), `CADR_RESULT_UNSUPPORTED`
+// (the device cannot run a technique), `CADR_RESULT_INVALID_COMBINATION` (techniques that do
+// not fit; the message says which need is unmet), `CADR_RESULT_NULL_ARGUMENT` or a handle
+// error. Ownership: the strings are read during the call.
+// Thread-safety: as `cadr_renderer_create`.
+//
+// # Safety
+// `selection` is null or valid with null or valid strings.
+enum CadrResult cadr_renderer_check_techniques(CadrRenderer renderer,
+                                               const struct CadrTechniqueSelection *selection);
+
+// Switches to a technique selection at run time. A refused selection keeps the current one;
+// a plugin that fails to create its instance also keeps it (`CADR_RESULT_PLUGIN_FAILED`).
+//
+// Returns as `cadr_renderer_check_techniques`, and `CADR_RESULT_PLUGIN_FAILED`.
+// Ownership and thread-safety: as `cadr_renderer_check_techniques`.
+//
+// # Safety
+// As `cadr_renderer_check_techniques`.
+enum CadrResult cadr_renderer_set_techniques(CadrRenderer renderer,
+                                             const struct CadrTechniqueSelection *selection);
+
+// Replaces the technique of one kind (`CADR_TECHNIQUE_KIND_*`) by name.
+//
+// Returns as `cadr_renderer_set_techniques`, and `CADR_RESULT_INVALID_ARGUMENT` for an
+// unknown kind. Thread-safety: as `cadr_renderer_create`.
+//
+// # Safety
+// `name` is null or a valid string.
+enum CadrResult cadr_renderer_set_technique(CadrRenderer renderer, uint32_t kind, const char *name);
+
+// Writes the name of the renderer's current technique of `kind` (`CADR_TECHNIQUE_KIND_*`).
+//
+// Returns `CADR_RESULT_OK`, `CADR_RESULT_INVALID_ARGUMENT` (unknown kind),
+// `CADR_RESULT_NULL_ARGUMENT` or a handle error.
+// Ownership: the string belongs to the context (valid while it or a renderer of it lives).
+// Thread-safety: as `cadr_renderer_create`.
+//
+// # Safety
+// `name` is null or writable.
+enum CadrResult cadr_renderer_technique(CadrRenderer renderer, uint32_t kind, const char **name);
+
+// Sets the shade mode: `CADR_SHADE_SOLID` or `CADR_SHADE_EDGES`.
+//
+// Returns `CADR_RESULT_OK`, `CADR_RESULT_INVALID_ARGUMENT` (unknown mode), `CADR_RESULT_VULKAN`
+// or a handle error. Thread-safety: as `cadr_renderer_create`.
+enum CadrResult cadr_renderer_set_shade_mode(CadrRenderer renderer, uint32_t mode);
+
+// Writes the shade mode (`CADR_SHADE_SOLID` or `CADR_SHADE_EDGES`).
+//
+// Returns `CADR_RESULT_OK`, `CADR_RESULT_NULL_ARGUMENT` or a handle error.
+// Thread-safety: as `cadr_renderer_create`.
+//
+// # Safety
+// `mode` is null or writable.
+enum CadrResult cadr_renderer_shade_mode(CadrRenderer renderer, uint32_t *mode);
+
+// Renders one frame of `scene` seen by `camera`: applies the host's edits since the last
+// frame (incrementally), culls, draws with the current techniques and, for a window, presents.
+// `stats` may be NULL.
+//
+// Returns `CADR_RESULT_OK`, `CADR_RESULT_NULL_ARGUMENT`, `CADR_RESULT_INVALID_ARGUMENT`
+// (non-finite camera), `CADR_RESULT_VULKAN`, `CADR_RESULT_PLUGIN_FAILED` or a handle error.
+// Ownership: the camera is read during the call. Thread-safety: as `cadr_renderer_create`; the
+// scene is locked during the call. A scene drawn alternately by two renderers is uploaded
+// afresh at each change of renderer.
+//
+// # Safety
+// `camera` is null or readable; `stats` null or writable.
+enum CadrResult cadr_renderer_render(CadrRenderer renderer,
+                                     CadrScene scene,
+                                     const struct CadrCamera *camera,
+                                     struct CadrFrameStats *stats);
+
+// Copies the last frame into `rgba` as tightly packed RGBA8 rows, top row first
+// (width × height × 4 bytes; see `cadr_renderer_size`).
+//
+// Returns `CADR_RESULT_OK`, `CADR_RESULT_NULL_ARGUMENT`, `CADR_RESULT_BUFFER_TOO_SMALL`
+// (nothing is written; the message gives the size needed), `CADR_RESULT_VULKAN` or a handle
+// error. Ownership: `rgba` is the caller's. Thread-safety: as `cadr_renderer_create`.
+//
+// # Safety
+// `rgba` is null or writable for `capacity` bytes.
+enum CadrResult cadr_renderer_read_pixels(CadrRenderer renderer, uint8_t *rgba, size_t capacity);
+
+// Writes the last frame to a PNG file.
+//
+// Returns `CADR_RESULT_OK`, `CADR_RESULT_NULL_ARGUMENT`, `CADR_RESULT_IO` (the message names
+// the file), `CADR_RESULT_VULKAN` or a handle error. Ownership: `path` is read during the call.
+// Thread-safety: as `cadr_renderer_create`.
+//
+// # Safety
+// `path` is null or a valid string.
+enum CadrResult cadr_renderer_save_png(CadrRenderer renderer, const char *path);
+
+// Creates an empty scene (a root Group only).
+//
+// Returns `CADR_RESULT_OK` and writes `*scene`, or `CADR_RESULT_NULL_ARGUMENT`.
+// Ownership: the scene is the caller's until `cadr_scene_destroy`. Thread-safety: callable
+// from any thread; a scene may be used from several threads, one call at a time (an internal
+// lock serialises them).
+//
+// # Safety
+// `scene` is null or writable.
+enum CadrResult cadr_scene_create(CadrScene *scene);
+
+// Destroys a scene and everything in it; its node, geometry and material handles become
+// invalid. NULL is a no-op.
+//
+// Returns `CADR_RESULT_OK` or a handle error.
+// Thread-safety: not while another thread uses the scene.
+enum CadrResult cadr_scene_destroy(CadrScene scene);
+
+// Writes the scene's root Group.
+//
+// Returns `CADR_RESULT_OK`, `CADR_RESULT_NULL_ARGUMENT` or a handle error.
+// Thread-safety: as `cadr_scene_create`.
+//
+// # Safety
+// `root` is null or writable.
+enum CadrResult cadr_scene_root(CadrScene scene, CadrNode *root);
+
+// Creates a Group (not attached yet). `name` may be NULL.
+//
+// Returns `CADR_RESULT_OK` and writes `*node`, `CADR_RESULT_NULL_ARGUMENT` or a handle error.
+// Ownership: the node belongs to the scene; `name` is copied. Thread-safety: as
+// `cadr_scene_create`.
+//
+// # Safety
+// `name` is null or a valid string; `node` is null or writable.
+enum CadrResult cadr_scene_create_group(CadrScene scene, const char *name, CadrNode *node);
+
+// Creates a Transform with a 4×4 column-major double matrix (child space to parent space).
+//
+// Returns `CADR_RESULT_OK`, `CADR_RESULT_NULL_ARGUMENT`, `CADR_RESULT_INVALID_ARGUMENT`
+// (non-finite values) or a handle error.
+// Ownership: as `cadr_scene_create_group`; the matrix is copied.
+// Thread-safety: as `cadr_scene_create`.
+//
+// # Safety
+// `matrix` is null or 16 readable doubles; as `cadr_scene_create_group` otherwise.
+enum CadrResult cadr_scene_create_transform(CadrScene scene,
+                                            const char *name,
+                                            const double *matrix,
+                                            CadrNode *node);
+
+// Creates a Geo node that draws `geometry` with one material per part
+// (`part_material_count` must equal the geometry's part count).
+//
+// Returns `CADR_RESULT_OK`, `CADR_RESULT_NULL_ARGUMENT`, `CADR_RESULT_INVALID_ARGUMENT`
+// (wrong count) or a handle error naming the bad handle.
+// Ownership: as `cadr_scene_create_group`; the array is copied.
+// Thread-safety: as `cadr_scene_create`.
+//
+// # Safety
+// `part_materials` is null or `part_material_count` readable handles; as
+// `cadr_scene_create_group` otherwise.
+enum CadrResult cadr_scene_create_geo(CadrScene scene,
+                                      const char *name,
+                                      CadrGeometry geometry,
+                                      const CadrMaterial *part_materials,
+                                      uint32_t part_material_count,
+                                      CadrNode *node);
+
+// Creates a Switch: it shows only the children its mask enables (all, until
+// `cadr_scene_set_switch_mask`).
+//
+// Returns and ownership as `cadr_scene_create_group`. Thread-safety: as `cadr_scene_create`.
+//
+// # Safety
+// As `cadr_scene_create_group`.
+enum CadrResult cadr_scene_create_switch(CadrScene scene, const char *name, CadrNode *node);
+
+// Creates a Billboard: its children turn about +Y to face the eye.
+//
+// Returns and ownership as `cadr_scene_create_group`. Thread-safety: as `cadr_scene_create`.
+//
+// # Safety
+// As `cadr_scene_create_group`.
+enum CadrResult cadr_scene_create_billboard(CadrScene scene, const char *name, CadrNode *node);
+
+// Creates a LOD node that shows child `i` while the eye's distance lies between
+// `distances[i - 1]` and `distances[i]` (increasing; one fewer than the children).
+//
+// Returns `CADR_RESULT_OK`, `CADR_RESULT_NULL_ARGUMENT`, `CADR_RESULT_INVALID_ARGUMENT` (not
+// increasing, not finite) or a handle error.
+// Ownership: as `cadr_scene_create_group`; the array is copied.
+// Thread-safety: as `cadr_scene_create`.
+//
+// # Safety
+// `distances` is null or `distance_count` readable doubles; as `cadr_scene_create_group`.
+enum CadrResult cadr_scene_create_lod(CadrScene scene,
+                                      const char *name,
+                                      const double *distances,
+                                      uint32_t distance_count,
+                                      CadrNode *node);
+
+// Creates a LOD node chosen by size on screen: the angle (radians) that a sphere of `radius`
+// at the node's origin subtends at the eye; child `i` shows while the angle lies between
+// `angles[i - 1]` and `angles[i]` (decreasing).
+//
+// Returns, ownership and thread-safety as `cadr_scene_create_lod`.
+//
+// # Safety
+// As `cadr_scene_create_lod`.
+enum CadrResult cadr_scene_create_lod_by_screen_size(CadrScene scene,
+                                                     const char *name,
+                                                     double radius,
+                                                     const double *angles,
+                                                     uint32_t angle_count,
+                                                     CadrNode *node);
+
+// Destroys a node: it is removed from all its parents; its children stay alive (they are
+// detached from it). The root cannot be destroyed.
+//
+// Returns `CADR_RESULT_OK`, `CADR_RESULT_INVALID_ARGUMENT` (the root) or a handle error.
+// Thread-safety: as `cadr_scene_create`.
+enum CadrResult cadr_scene_destroy_node(CadrScene scene, CadrNode node);
+
+// Appends `child` to `parent`'s children. A node may have several parents (shared
+// subgraphs); cycles are refused.
+//
+// Returns `CADR_RESULT_OK`, `CADR_RESULT_INVALID_ARGUMENT` (a cycle) or a handle error.
+// Thread-safety: as `cadr_scene_create`.
+enum CadrResult cadr_scene_add_child(CadrScene scene, CadrNode parent, CadrNode child);
+
+// Inserts `child` at `position` (0 to the child count) of `parent`'s children.
+//
+// Returns as `cadr_scene_add_child`, and `CADR_RESULT_INVALID_ARGUMENT` for a position out of
+// range. Thread-safety: as `cadr_scene_create`.
+enum CadrResult cadr_scene_insert_child(CadrScene scene,
+                                        CadrNode parent,
+                                        uint32_t position,
+                                        CadrNode child);
+
+// Removes `child` from `parent`'s children (its first occurrence). The child stays alive.
+//
+// Returns `CADR_RESULT_OK`, `CADR_RESULT_INVALID_ARGUMENT` (not a child) or a handle error.
+// Thread-safety: as `cadr_scene_create`.
+enum CadrResult cadr_scene_remove_child(CadrScene scene, CadrNode parent, CadrNode child);
+
+// Writes the number of children of `node`.
+//
+// Returns `CADR_RESULT_OK`, `CADR_RESULT_NULL_ARGUMENT` or a handle error.
+// Thread-safety: as `cadr_scene_create`.
+//
+// # Safety
+// `count` is null or writable.
+enum CadrResult cadr_scene_child_count(CadrScene scene, CadrNode node, uint32_t *count);
+
+// Writes child `index` of `node`.
+//
+// Returns `CADR_RESULT_OK`, `CADR_RESULT_NOT_FOUND` (index out of range),
+// `CADR_RESULT_NULL_ARGUMENT` or a handle error. Thread-safety: as `cadr_scene_create`.
+//
+// # Safety
+// `child` is null or writable.
+enum CadrResult cadr_scene_child(CadrScene scene, CadrNode node, uint32_t index, CadrNode *child);
+
+// Sets a Transform's 4×4 column-major double matrix.
+//
+// Returns `CADR_RESULT_OK`, `CADR_RESULT_NULL_ARGUMENT`, `CADR_RESULT_INVALID_ARGUMENT` (not
+// a Transform, non-finite values) or a handle error. Thread-safety: as `cadr_scene_create`.
+//
+// # Safety
+// `matrix` is null or 16 readable doubles.
+enum CadrResult cadr_scene_set_matrix(CadrScene scene, CadrNode node, const double *matrix);
+
+// Sets which children of a Switch are shown: `mask[i]` for child `i`; `count` must equal the
+// child count.
+//
+// Returns `CADR_RESULT_OK`, `CADR_RESULT_NULL_ARGUMENT`, `CADR_RESULT_INVALID_ARGUMENT` (not a
+// Switch, wrong count) or a handle error. Thread-safety: as `cadr_scene_create`.
+//
+// # Safety
+// `mask` is null or `count` readable bools.
+enum CadrResult cadr_scene_set_switch_mask(CadrScene scene,
+                                           CadrNode node,
+                                           const bool *mask,
+                                           uint32_t count);
+
+// Sets a node's flags (`CADR_NODE_VISIBLE | CADR_NODE_PICKABLE | CADR_NODE_HIGHLIGHTED`).
+//
+// Returns `CADR_RESULT_OK`, `CADR_RESULT_INVALID_ARGUMENT` (unknown bits) or a handle error.
+// Thread-safety: as `cadr_scene_create`.
+enum CadrResult cadr_scene_set_flags(CadrScene scene, CadrNode node, uint32_t flags);
+
+// Writes a node's flags.
+//
+// Returns `CADR_RESULT_OK`, `CADR_RESULT_NULL_ARGUMENT` or a handle error.
+// Thread-safety: as `cadr_scene_create`.
+//
+// # Safety
+// `flags` is null or writable.
+enum CadrResult cadr_scene_flags(CadrScene scene, CadrNode node, uint32_t *flags);
+
+// Gives part `part` of a Geo node another material.
+//
+// Returns `CADR_RESULT_OK`, `CADR_RESULT_INVALID_ARGUMENT` (not a Geo node, part out of range)
+// or a handle error. Thread-safety: as `cadr_scene_create`.
+enum CadrResult cadr_scene_set_part_material(CadrScene scene,
+                                             CadrNode node,
+                                             uint32_t part,
+                                             CadrMaterial material);
+
+// Shows or hides part `part` of a Geo node.
+//
+// Returns as `cadr_scene_set_part_material`. Thread-safety: as `cadr_scene_create`.
+enum CadrResult cadr_scene_set_part_visible(CadrScene scene,
+                                            CadrNode node,
+                                            uint32_t part,
+                                            bool visible);
+
+// Loads a scene file (`.gltf`, `.glb`, `.csf`, `.csf.gz`) or a built-in generator
+// (`gen:demo`, `gen:grid:parts=N`, …) and adds it below `parent` under a new Group named after
+// it. On success `*result` lists what was created; free it with `cadr_load_result_free`.
+//
+// Returns `CADR_RESULT_OK`, `CADR_RESULT_NULL_ARGUMENT`, `CADR_RESULT_LOAD_FAILED` (the
+// message names the file and the bad item; nothing is added) or a handle error.
+// Ownership: `path` is read during the call; the arrays in `*result` are the caller's until
+// `cadr_load_result_free`. Thread-safety: as `cadr_scene_create`; the file is read while the
+// scene is not locked.
+//
+// # Safety
+// `path` is null or a valid string; `result` is null or writable.
+enum CadrResult cadr_scene_load(CadrScene scene,
+                                const char *path,
+                                CadrNode parent,
+                                struct CadrLoadResult *result);
+
+// Frees the arrays of a load result and zeroes it. NULL, or a zeroed result, is a no-op.
+//
+// Ownership: takes back what `cadr_scene_load` handed out; free each result once.
+// Thread-safety: callable from any thread.
+//
+// # Safety
+// `result` is null or a result filled by `cadr_scene_load` (or zeroed).
+void cadr_load_result_free(struct CadrLoadResult *result);
+
+// Writes the world-space bounds of everything the scene shows (empty: `min` > `max`).
+//
+// Returns `CADR_RESULT_OK`, `CADR_RESULT_NULL_ARGUMENT` or a handle error.
+// Thread-safety: as `cadr_scene_create`.
+//
+// # Safety
+// `bounds` is null or writable.
+enum CadrResult cadr_scene_bounds(CadrScene scene, struct CadrBounds *bounds);
+
+// Writes the scene's counts: nodes, geometries, materials, instances and what is shown.
+//
+// Returns `CADR_RESULT_OK`, `CADR_RESULT_NULL_ARGUMENT` or a handle error.
+// Thread-safety: as `cadr_scene_create`.
+//
+// # Safety
+// `statistics` is null or writable.
+enum CadrResult cadr_scene_statistics(CadrScene scene, struct CadrSceneStatistics *statistics);
 
 #ifdef __cplusplus
 }  // extern "C"

@@ -24,6 +24,21 @@ pub enum CadrResult {
     BufferTooSmall = 6,
     /// An internal error (a bug): cadr caught a panic. The message says where.
     Panic = 7,
+    /// The handle was valid once but its object has been destroyed.
+    DestroyedHandle = 8,
+    /// The value is not a handle of the expected type (another type's handle, or garbage).
+    ForeignHandle = 9,
+    /// No item has this name or index (a technique, a list entry).
+    NotFound = 10,
+    /// The techniques chosen cannot work together; the message says which need is unmet.
+    InvalidCombination = 11,
+    /// The device or the platform cannot do this (missing feature, extension or technique).
+    Unsupported = 12,
+    /// The object is still used (a geometry or material referenced by nodes).
+    InUse = 13,
+    /// A technique plugin failed (its create, prepare or record call returned an error or
+    /// panicked); the renderer keeps its previous techniques.
+    PluginFailed = 14,
 }
 
 thread_local! {
@@ -40,6 +55,21 @@ pub(crate) struct Failure {
 impl Failure {
     pub(crate) fn new(code: CadrResult, message: String) -> Self {
         Self { code, message }
+    }
+
+    /// A failure with `CADR_RESULT_INVALID_ARGUMENT`.
+    pub(crate) fn invalid(message: impl Into<String>) -> Self {
+        Self::new(CadrResult::InvalidArgument, message.into())
+    }
+}
+
+impl From<cadr_core::vk::VkError> for Failure {
+    fn from(error: cadr_core::vk::VkError) -> Self {
+        let code = match error {
+            cadr_core::vk::VkError::Unsupported { .. } => CadrResult::Unsupported,
+            _ => CadrResult::Vulkan,
+        };
+        Self::new(code, error.to_string())
     }
 }
 
@@ -64,20 +94,46 @@ pub(crate) fn guard(body: impl FnOnce() -> Result<(), Failure>) -> CadrResult {
     code
 }
 
-/// A static, NUL-terminated English name of `result`, e.g. "null argument".
+/// A static, NUL-terminated English name of `result` (a `CadrResult` value), e.g.
+/// "null argument"; "unknown result" for values that are none.
 ///
 /// Ownership: static; do not free. Thread-safety: callable from any thread.
 #[no_mangle]
-pub extern "C" fn cadr_result_string(result: CadrResult) -> *const c_char {
-    let text: &'static str = match result {
-        CadrResult::Ok => "ok\0",
-        CadrResult::NullArgument => "null argument\0",
-        CadrResult::InvalidArgument => "invalid argument\0",
-        CadrResult::LoadFailed => "scene could not be loaded\0",
-        CadrResult::Vulkan => "Vulkan error\0",
-        CadrResult::Io => "file could not be written\0",
-        CadrResult::BufferTooSmall => "buffer too small\0",
-        CadrResult::Panic => "internal error\0",
+pub extern "C" fn cadr_result_string(result: i32) -> *const c_char {
+    const ALL: [CadrResult; 15] = [
+        CadrResult::Ok,
+        CadrResult::NullArgument,
+        CadrResult::InvalidArgument,
+        CadrResult::LoadFailed,
+        CadrResult::Vulkan,
+        CadrResult::Io,
+        CadrResult::BufferTooSmall,
+        CadrResult::Panic,
+        CadrResult::DestroyedHandle,
+        CadrResult::ForeignHandle,
+        CadrResult::NotFound,
+        CadrResult::InvalidCombination,
+        CadrResult::Unsupported,
+        CadrResult::InUse,
+        CadrResult::PluginFailed,
+    ];
+    let text: &'static str = match ALL.iter().find(|r| **r as i32 == result) {
+        None => "unknown result\0",
+        Some(CadrResult::Ok) => "ok\0",
+        Some(CadrResult::NullArgument) => "null argument\0",
+        Some(CadrResult::InvalidArgument) => "invalid argument\0",
+        Some(CadrResult::LoadFailed) => "scene could not be loaded\0",
+        Some(CadrResult::Vulkan) => "Vulkan error\0",
+        Some(CadrResult::Io) => "file could not be written\0",
+        Some(CadrResult::BufferTooSmall) => "buffer too small\0",
+        Some(CadrResult::Panic) => "internal error\0",
+        Some(CadrResult::DestroyedHandle) => "destroyed handle\0",
+        Some(CadrResult::ForeignHandle) => "foreign handle\0",
+        Some(CadrResult::NotFound) => "not found\0",
+        Some(CadrResult::InvalidCombination) => "invalid technique combination\0",
+        Some(CadrResult::Unsupported) => "unsupported\0",
+        Some(CadrResult::InUse) => "still in use\0",
+        Some(CadrResult::PluginFailed) => "technique plugin failed\0",
     };
     text.as_ptr().cast()
 }

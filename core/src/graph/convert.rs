@@ -4,7 +4,7 @@ use std::collections::HashMap;
 
 use glam::DMat4;
 
-use super::{GraphError, NodeHandle, NodeKind, SceneGraph};
+use super::{GeometryHandle, GraphError, MaterialHandle, NodeHandle, NodeKind, SceneGraph};
 use crate::scene::{MeshRef, Node, PartOverride, Scene};
 
 /// The scene the graph shows: hidden nodes and inactive Switch children are left out, a LOD
@@ -76,14 +76,66 @@ pub(super) fn graph_to_scene(graph: &SceneGraph) -> Scene {
     scene
 }
 
-/// A graph equivalent to `scene`: each scene node becomes a Transform (a Group when its
-/// matrix is the identity) with, for a mesh, a Geo node as its first child (hidden parts hidden;
-/// a part placed by a child's matrix gets a Transform and Geo node of its own); the scene's roots
-/// hang under the graph's root. Returns the handle of each scene node. The new graph has no
-/// pending events.
+/// What [`SceneGraph::import`] created: the Group holding the scene's roots, and every node,
+/// geometry and material made for it.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Imported {
+    /// The new Group (named after the scene) that holds the scene's roots.
+    pub root: NodeHandle,
+    /// Every node created, the root first.
+    pub nodes: Vec<NodeHandle>,
+    /// One geometry per scene geometry, in the scene's order.
+    pub geometries: Vec<GeometryHandle>,
+    /// One material per scene material, in the scene's order.
+    pub materials: Vec<MaterialHandle>,
+}
+
+/// A graph equivalent to `scene`: see [`import_scene`]; the scene's roots hang directly under
+/// the graph's root. Returns the handle of each scene node. The new graph has no pending events.
 pub(super) fn scene_to_graph(scene: &Scene) -> Result<(SceneGraph, Vec<NodeHandle>), GraphError> {
     scene.validate().map_err(|e| GraphError::Invalid(e.0))?;
     let mut graph = SceneGraph::new();
+    let root = graph.root;
+    let (handles, _) = add_scene(&mut graph, scene, root)?;
+    graph.events.clear();
+    Ok((graph, handles))
+}
+
+/// Adds `scene` under a new Group (named after the scene) below `parent`: each scene node
+/// becomes a Transform (a Group when its matrix is the identity) with, for a mesh, a Geo node as
+/// its first child (hidden parts hidden; a part placed by a child's matrix gets a Transform and
+/// Geo node of its own). The scene is validated first, so a refused import changes nothing.
+pub(super) fn import_scene(
+    graph: &mut SceneGraph,
+    scene: &Scene,
+    parent: NodeHandle,
+) -> Result<Imported, GraphError> {
+    scene.validate().map_err(|e| GraphError::Invalid(e.0))?;
+    graph.node(parent)?;
+    let root = graph.create_group(&scene.name);
+    let (_, created) = add_scene(graph, scene, root)?;
+    graph.add_child(parent, root)?;
+    Ok(Imported {
+        root,
+        nodes: std::iter::once(root).chain(created.nodes).collect(),
+        geometries: created.geometries,
+        materials: created.materials,
+    })
+}
+
+/// Creates the scene's objects and hangs its roots under `parent`; returns the handle of each
+/// scene node and everything created.
+fn add_scene(
+    graph: &mut SceneGraph,
+    scene: &Scene,
+    parent: NodeHandle,
+) -> Result<(Vec<NodeHandle>, Imported), GraphError> {
+    let mut created = Imported {
+        root: parent,
+        nodes: Vec::new(),
+        geometries: Vec::new(),
+        materials: Vec::new(),
+    };
     let geometries = scene
         .geometries
         .iter()
@@ -94,6 +146,8 @@ pub(super) fn scene_to_graph(scene: &Scene) -> Result<(SceneGraph, Vec<NodeHandl
         .iter()
         .map(|m| graph.create_material(m.clone()))
         .collect::<Result<Vec<_>, _>>()?;
+    created.geometries.clone_from(&geometries);
+    created.materials.clone_from(&materials);
     let mut handles = Vec::with_capacity(scene.nodes.len());
     for node in &scene.nodes {
         let handle = if node.local == DMat4::IDENTITY {
@@ -101,6 +155,7 @@ pub(super) fn scene_to_graph(scene: &Scene) -> Result<(SceneGraph, Vec<NodeHandl
         } else {
             graph.create_transform(&node.name, node.local)?
         };
+        created.nodes.push(handle);
         if let Some(mesh) = &node.mesh {
             let part_materials: Vec<_> = mesh
                 .part_materials
@@ -113,6 +168,7 @@ pub(super) fn scene_to_graph(scene: &Scene) -> Result<(SceneGraph, Vec<NodeHandl
                 geometry,
                 &part_materials,
             )?;
+            created.nodes.push(geo);
             graph.add_child(handle, geo)?;
             for o in &mesh.part_overrides {
                 // Hidden here: either hidden outright, or drawn below by a node of its own.
@@ -134,6 +190,7 @@ pub(super) fn scene_to_graph(scene: &Scene) -> Result<(SceneGraph, Vec<NodeHandl
                 for p in (0..part_materials.len()).filter(|&p| p != o.part as usize) {
                     graph.set_part_visible(part_geo, p, false)?;
                 }
+                created.nodes.extend([placed, part_geo]);
                 graph.add_child(placed, part_geo)?;
                 graph.add_child(handle, placed)?;
             }
@@ -146,8 +203,7 @@ pub(super) fn scene_to_graph(scene: &Scene) -> Result<(SceneGraph, Vec<NodeHandl
         }
     }
     for &root in &scene.roots {
-        graph.add_child(graph.root, handles[root as usize])?;
+        graph.add_child(parent, handles[root as usize])?;
     }
-    graph.events.clear();
-    Ok((graph, handles))
+    Ok((handles, created))
 }

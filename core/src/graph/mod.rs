@@ -10,6 +10,7 @@
 mod convert;
 mod slots;
 
+pub use convert::Imported;
 pub use slots::{Handle, Slots};
 
 use std::collections::HashMap;
@@ -1007,6 +1008,23 @@ impl SceneGraph {
     /// Builds a graph from a scene; returns it with the handles of the scene's nodes.
     pub fn from_scene(scene: &Scene) -> Result<(Self, Vec<NodeHandle>), GraphError> {
         convert::scene_to_graph(scene)
+    }
+
+    /// Adds `scene` (from a loader or generator) below `parent` under a new Group named after
+    /// it, and returns everything created. The scene is checked first: a refused import
+    /// changes nothing.
+    pub fn import(&mut self, scene: &Scene, parent: NodeHandle) -> Result<Imported, GraphError> {
+        convert::import_scene(self, scene, parent)
+    }
+
+    /// The live geometry in slot `index`, if any.
+    pub fn geometry_handle_at(&self, index: u32) -> Option<GeometryHandle> {
+        self.geometries.handle_at(index)
+    }
+
+    /// The live material in slot `index`, if any.
+    pub fn material_handle_at(&self, index: u32) -> Option<MaterialHandle> {
+        self.materials.handle_at(index)
     }
 
     /// Live nodes with handles.

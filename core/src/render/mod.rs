@@ -168,6 +168,23 @@ impl Renderer {
         (extent.width, extent.height)
     }
 
+    /// Gives the target a new size (a window was resized); the next frame draws at that size.
+    pub fn resize(&mut self, width: u32, height: u32) -> VkResult<()> {
+        if (width, height) == self.size() {
+            return Ok(());
+        }
+        self.commands.wait()?;
+        self.target = OffscreenTarget::new(&self.device, width, height)?;
+        self.pick = None;
+        Ok(())
+    }
+
+    /// The color image of the last frame (in TRANSFER_SRC_OPTIMAL between frames), for
+    /// presenting it.
+    pub fn color_image(&self) -> &Image {
+        &self.target.color
+    }
+
     /// Renders one frame of `scene` with the baseline technique (one draw per part, matrix and
     /// material pushed per draw), waits for it, and reports its cost.
     pub fn render(&mut self, scene: &GpuScene, camera: &Camera) -> VkResult<FrameStats> {

@@ -212,7 +212,8 @@ fn loaded_from_dir() -> Option<PathBuf> {
 }
 
 /// The default plugin directories: beside the library cadr is linked into and beside the
-/// executable (each with its `plugins/` folder first), then the directories in
+/// executable (each with its `plugins/` and `cadr/plugins/` folders first; an installed
+/// `lib/libcadr.so` finds `lib/cadr/plugins/`), then the directories in
 /// [`PLUGIN_PATH_VARIABLE`].
 pub fn default_plugin_dirs() -> Vec<PathBuf> {
     let mut dirs: Vec<PathBuf> = Vec::new();
@@ -220,7 +221,7 @@ pub fn default_plugin_dirs() -> Vec<PathBuf> {
         .ok()
         .and_then(|exe| exe.parent().map(Path::to_path_buf));
     for dir in [loaded_from_dir(), exe_dir].into_iter().flatten() {
-        for candidate in [dir.join("plugins"), dir] {
+        for candidate in [dir.join("plugins"), dir.join("cadr").join("plugins"), dir] {
             if !dirs.contains(&candidate) {
                 dirs.push(candidate);
             }

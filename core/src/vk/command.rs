@@ -90,6 +90,33 @@ impl CommandContext {
         .or_vk("vkQueueSubmit")
     }
 
+    /// Ends recording and submits after each `wait` semaphore (at its stage) has been
+    /// signalled; `signal` semaphores are signalled when the commands are done, and so is the
+    /// fence.
+    pub fn submit_with_semaphores(
+        &mut self,
+        wait: &[(vk::Semaphore, vk::PipelineStageFlags)],
+        signal: &[vk::Semaphore],
+    ) -> VkResult<()> {
+        // SAFETY: the command buffer is recording (begin was called).
+        unsafe { self.device.raw.end_command_buffer(self.command_buffer) }
+            .or_vk("vkEndCommandBuffer")?;
+        let buffers = [self.command_buffer];
+        let (wait_semaphores, wait_stages): (Vec<_>, Vec<_>) = wait.iter().copied().unzip();
+        let submit = [vk::SubmitInfo::default()
+            .command_buffers(&buffers)
+            .wait_semaphores(&wait_semaphores)
+            .wait_dst_stage_mask(&wait_stages)
+            .signal_semaphores(signal)];
+        // SAFETY: as in submit; the semaphores belong to this device.
+        unsafe {
+            self.device
+                .raw
+                .queue_submit(self.device.queue, &submit, self.fence)
+        }
+        .or_vk("vkQueueSubmit")
+    }
+
     /// Waits until the last submission has finished.
     pub fn wait(&self) -> VkResult<()> {
         // SAFETY: the fence belongs to this device.

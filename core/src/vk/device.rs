@@ -42,6 +42,8 @@ pub struct DeviceOptions {
     pub instance: InstanceOptions,
     /// Which physical device to use.
     pub choice: DeviceChoice,
+    /// Extra device extensions (for example `VK_KHR_swapchain` for a host's window).
+    pub extra_extensions: Vec<CString>,
 }
 
 /// The Vulkan device everything else is created on. Child objects hold an `Arc<Device>`.
@@ -61,11 +63,21 @@ impl Device {
     /// Creates an instance and a device according to `options`.
     pub fn new(options: &DeviceOptions) -> VkResult<Arc<Self>> {
         let instance = Arc::new(Instance::new(&options.instance)?);
-        Self::with_instance(instance, &options.choice)
+        Self::with_instance_and_extensions(instance, &options.choice, &options.extra_extensions)
     }
 
     /// Creates a device on an existing instance.
     pub fn with_instance(instance: Arc<Instance>, choice: &DeviceChoice) -> VkResult<Arc<Self>> {
+        Self::with_instance_and_extensions(instance, choice, &[])
+    }
+
+    /// Creates a device on an existing instance with extra device extensions; a missing
+    /// extension is refused by name.
+    pub fn with_instance_and_extensions(
+        instance: Arc<Instance>,
+        choice: &DeviceChoice,
+        extra_extensions: &[CString],
+    ) -> VkResult<Arc<Self>> {
         let adapter = adapter::choose(&instance, choice)?;
         let physical = adapter.physical;
         // SAFETY: physical comes from this instance.
@@ -105,6 +117,20 @@ impl Device {
         // SAFETY: physical comes from this instance.
         let extensions = unsafe { instance.raw.enumerate_device_extension_properties(physical) }
             .or_vk("vkEnumerateDeviceExtensionProperties")?;
+        for wanted in extra_extensions {
+            let present = extensions
+                .iter()
+                .any(|e| e.extension_name_as_c_str() == Ok(wanted.as_c_str()));
+            if !present {
+                return Err(VkError::Unsupported {
+                    device: adapter.name.clone(),
+                    reason: format!(
+                        "device extension {} is not supported",
+                        wanted.to_string_lossy()
+                    ),
+                });
+            }
+        }
         let has_multi_draw = extensions
             .iter()
             .any(|e| e.extension_name_as_c_str() == Ok(ash::ext::multi_draw::NAME));
@@ -148,6 +174,13 @@ impl Device {
         let mut extension_names = Vec::new();
         if capabilities.multi_draw {
             extension_names.push(ash::ext::multi_draw::NAME.as_ptr());
+        }
+        for wanted in extra_extensions {
+            let already =
+                capabilities.multi_draw && wanted.as_c_str() == ash::ext::multi_draw::NAME;
+            if !already {
+                extension_names.push(wanted.as_ptr());
+            }
         }
         let mut create_info = vk::DeviceCreateInfo::default()
             .queue_create_infos(&queue_info)

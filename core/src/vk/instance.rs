@@ -159,6 +159,11 @@ impl Instance {
         })
     }
 
+    /// Whether the validation layer reports into the log (validation was asked for).
+    pub fn validation_enabled(&self) -> bool {
+        self.messenger != vk::DebugUtilsMessengerEXT::null()
+    }
+
     /// The validation messages recorded by the debug messenger (empty without validation).
     pub fn validation_log(&self) -> &Arc<ValidationLog> {
         &self.validation_log

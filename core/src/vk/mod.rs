@@ -15,6 +15,7 @@ mod error;
 mod image;
 mod instance;
 mod shader;
+mod swapchain;
 mod timer;
 
 pub use adapter::{enumerate as enumerate_adapters, Adapter, DeviceChoice, DEVICE_ENV};
@@ -27,6 +28,7 @@ pub use image::{
 };
 pub use instance::{Instance, InstanceOptions, ValidationLog, ValidationMessage};
 pub use shader::{compile_glsl, IncludeFile, ShaderModule, ShaderStage};
+pub use swapchain::{PresentOutcome, Swapchain};
 pub use timer::GpuTimer;
 
 pub use ash::vk as raw;

@@ -1,0 +1,121 @@
+//! Reading the C caller's arguments: strings, arrays and out-parameters, with the argument's
+//! name in every error.
+
+use std::ffi::{c_char, CStr};
+
+use crate::error::{CadrResult, Failure};
+
+/// Fails with `CADR_RESULT_NULL_ARGUMENT` when `pointer` is null.
+pub(crate) fn non_null<T>(pointer: *const T, name: &str) -> Result<(), Failure> {
+    if pointer.is_null() {
+        Err(Failure::new(
+            CadrResult::NullArgument,
+            format!("{name} is NULL"),
+        ))
+    } else {
+        Ok(())
+    }
+}
+
+/// Reads a required C string argument.
+///
+/// # Safety
+/// `text` is null or points to a NUL-terminated string that stays valid during the call.
+pub(crate) unsafe fn required_str<'a>(text: *const c_char, name: &str) -> Result<&'a str, Failure> {
+    non_null(text, name)?;
+    // SAFETY: non-null, and the caller guarantees a valid NUL-terminated string.
+    unsafe { CStr::from_ptr(text) }
+        .to_str()
+        .map_err(|_| Failure::invalid(format!("{name} is not valid UTF-8")))
+}
+
+/// Reads an optional C string argument (NULL gives `None`).
+///
+/// # Safety
+/// As [`required_str`].
+pub(crate) unsafe fn optional_str<'a>(
+    text: *const c_char,
+    name: &str,
+) -> Result<Option<&'a str>, Failure> {
+    if text.is_null() {
+        return Ok(None);
+    }
+    // SAFETY: forwarded contract.
+    unsafe { required_str(text, name) }.map(Some)
+}
+
+/// Reads an array argument of `count` items; NULL is allowed only with `count` 0.
+///
+/// # Safety
+/// `items` is null or points to `count` readable, initialised items valid during the call.
+pub(crate) unsafe fn slice<'a, T>(
+    items: *const T,
+    count: usize,
+    name: &str,
+) -> Result<&'a [T], Failure> {
+    if count == 0 {
+        return Ok(&[]);
+    }
+    non_null(items, name)?;
+    // SAFETY: non-null with `count` items (the caller's contract).
+    Ok(unsafe { std::slice::from_raw_parts(items, count) })
+}
+
+/// Reads a list of C strings.
+///
+/// # Safety
+/// `items` is null or points to `count` pointers, each null or a valid NUL-terminated string.
+pub(crate) unsafe fn string_list(
+    items: *const *const c_char,
+    count: usize,
+    name: &str,
+) -> Result<Vec<String>, Failure> {
+    // SAFETY: forwarded contract.
+    let pointers = unsafe { slice(items, count, name) }?;
+    pointers
+        .iter()
+        .enumerate()
+        // SAFETY: each pointer is null or a valid string (forwarded contract).
+        .map(|(i, &p)| unsafe { required_str(p, &format!("{name}[{i}]")) }.map(str::to_owned))
+        .collect()
+}
+
+/// Writes an out-parameter that was checked to be non-null.
+///
+/// # Safety
+/// `out` is non-null, aligned and writable.
+pub(crate) unsafe fn write<T>(out: *mut T, value: T) {
+    // SAFETY: the caller's contract; `write` does not read or drop the old contents.
+    unsafe { out.write(value) }
+}
+
+/// A 4×4 double matrix from 16 column-major values; non-finite values are refused by name.
+///
+/// # Safety
+/// `values` is null or points to 16 readable doubles.
+pub(crate) unsafe fn matrix(values: *const f64, name: &str) -> Result<glam::DMat4, Failure> {
+    // SAFETY: forwarded contract.
+    let values = unsafe { slice(values, 16, name) }?;
+    if let Some(i) = values.iter().position(|v| !v.is_finite()) {
+        return Err(Failure::invalid(format!(
+            "{name}[{i}] is {} (matrices must be finite)",
+            values[i]
+        )));
+    }
+    let mut columns = [0.0; 16];
+    columns.copy_from_slice(values);
+    Ok(glam::DMat4::from_cols_array(&columns))
+}
+
+/// Three doubles as a vector; non-finite values are refused by name.
+///
+/// # Safety
+/// `values` is null or points to 3 readable doubles.
+pub(crate) unsafe fn vector3(values: *const f64, name: &str) -> Result<glam::DVec3, Failure> {
+    // SAFETY: forwarded contract.
+    let values = unsafe { slice(values, 3, name) }?;
+    if let Some(i) = values.iter().position(|v| !v.is_finite()) {
+        return Err(Failure::invalid(format!("{name}[{i}] is not finite")));
+    }
+    Ok(glam::DVec3::new(values[0], values[1], values[2]))
+}

@@ -1,0 +1,647 @@
+//! The context: the Vulkan instance and device, and the technique plugins found for them.
+
+use std::ffi::{c_char, c_void, CString};
+use std::path::PathBuf;
+use std::sync::{Arc, Mutex};
+
+use cadr_core::technique::{default_plugin_dirs, feature_bits, PluginRegistry, TechniqueKind};
+use cadr_core::vk::{raw::Handle, Device, DeviceChoice, DeviceOptions, InstanceOptions};
+
+use crate::args::{non_null, optional_str, string_list, write};
+use crate::error::{guard, CadrResult, Failure};
+use crate::handles::{lock, Registry};
+
+/// Opaque type behind [`CadrContext`]; never dereferenced by the host or by cadr.
+pub struct CadrContextObject {
+    _private: (),
+}
+
+/// A context: one Vulkan instance and device, and the technique plugins found for them.
+/// Created by `cadr_context_create`, released by `cadr_context_destroy`.
+pub type CadrContext = *mut CadrContextObject;
+
+/// How to create a context. Fill it with `cadr_context_options_default` first, then change
+/// what you need; `size` lets later versions add fields.
+#[repr(C)]
+#[derive(Clone, Copy, Debug)]
+pub struct CadrContextOptions {
+    /// `sizeof(CadrContextOptions)`, set by `cadr_context_options_default`.
+    pub size: u32,
+    /// Enables the Vulkan validation layer (`VK_LAYER_KHRONOS_validation`); its error messages
+    /// are counted by `cadr_context_validation_error_count`. Default: false.
+    pub validation: bool,
+    /// The physical device's index as `cadr devices` lists it, or -1 (default) to choose by
+    /// `device_name`, then by the `CADR_DEVICE` variable, then a discrete GPU first.
+    pub device_index: i32,
+    /// NULL (default), or a case-insensitive part of the device's name.
+    pub device_name: *const c_char,
+    /// Extra instance extensions, e.g. what `glfwGetRequiredInstanceExtensions` returns. When
+    /// `VK_KHR_surface` is among them, the device gets `VK_KHR_swapchain` so that renderers can
+    /// present to the host's windows.
+    pub instance_extensions: *const *const c_char,
+    /// Number of `instance_extensions`.
+    pub instance_extension_count: u32,
+    /// Extra device extensions.
+    pub device_extensions: *const *const c_char,
+    /// Number of `device_extensions`.
+    pub device_extension_count: u32,
+    /// Directories searched for technique plugins (`*cadr_plugin_*.so`) before the defaults.
+    pub plugin_dirs: *const *const c_char,
+    /// Number of `plugin_dirs`.
+    pub plugin_dir_count: u32,
+    /// Also search the default directories: beside `libcadr.so` (and its `cadr/plugins/`),
+    /// beside the executable, and `CADR_PLUGIN_PATH`. Default: true.
+    pub default_plugin_dirs: bool,
+}
+
+/// The kind of a physical device.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum CadrDeviceType {
+    /// Something else.
+    Other = 0,
+    /// A GPU sharing memory with the CPU.
+    IntegratedGpu = 1,
+    /// A GPU of its own.
+    DiscreteGpu = 2,
+    /// A virtualised GPU.
+    VirtualGpu = 3,
+    /// A CPU implementation such as lavapipe.
+    Cpu = 4,
+}
+
+/// Optional device features the techniques use.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default)]
+pub struct CadrDeviceFeatures {
+    /// Many indirect draws in one call (`multiDrawIndirect`).
+    pub multi_draw_indirect: bool,
+    /// Per-draw indices through firstInstance in indirect draws.
+    pub draw_indirect_first_instance: bool,
+    /// `gl_DrawID` and `gl_BaseInstance` in shaders.
+    pub shader_draw_parameters: bool,
+    /// GPU pointers to buffers.
+    pub buffer_device_address: bool,
+    /// Indirect draws whose count the GPU reads.
+    pub draw_indirect_count: bool,
+    /// `VK_EXT_multi_draw`.
+    pub multi_draw: bool,
+    /// GPU timestamps on the render queue (frame GPU times).
+    pub timestamps: bool,
+    /// Renderers can present to windows (`VK_KHR_swapchain` enabled).
+    pub presentation: bool,
+}
+
+/// The device a context renders with.
+#[repr(C)]
+#[derive(Clone, Copy, Debug)]
+pub struct CadrDeviceInfo {
+    /// The driver's device name, NUL-terminated (cut to fit).
+    pub name: [c_char; 256],
+    /// Its kind.
+    pub device_type: CadrDeviceType,
+    /// Its Vulkan version (`VK_MAKE_API_VERSION` packing).
+    pub api_version: u32,
+    /// Index in the instance's device list.
+    pub index: u32,
+    /// The queue family cadr renders and presents on.
+    pub queue_family: u32,
+    /// Optional features.
+    pub features: CadrDeviceFeatures,
+    /// Whether the validation layer is on.
+    pub validation: bool,
+}
+
+/// A technique kind.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum CadrTechniqueKind {
+    /// How vertices reach the shader.
+    Vertex = 0,
+    /// How matrices and materials reach the shader.
+    Parameters = 1,
+    /// Which draws are issued and how.
+    Submission = 2,
+    /// Which instances are drawn.
+    Culling = 3,
+}
+
+impl CadrTechniqueKind {
+    pub(crate) fn core(self) -> TechniqueKind {
+        match self {
+            Self::Vertex => TechniqueKind::Vertex,
+            Self::Parameters => TechniqueKind::Parameters,
+            Self::Submission => TechniqueKind::Submission,
+            Self::Culling => TechniqueKind::Culling,
+        }
+    }
+
+    fn from_core(kind: TechniqueKind) -> Self {
+        match kind {
+            TechniqueKind::Vertex => Self::Vertex,
+            TechniqueKind::Parameters => Self::Parameters,
+            TechniqueKind::Submission => Self::Submission,
+            TechniqueKind::Culling => Self::Culling,
+        }
+    }
+
+    /// Reads a kind from its raw value (C callers can pass any integer).
+    pub(crate) fn from_raw(value: u32) -> Result<Self, Failure> {
+        Ok(match value {
+            0 => Self::Vertex,
+            1 => Self::Parameters,
+            2 => Self::Submission,
+            3 => Self::Culling,
+            _ => {
+                return Err(Failure::invalid(format!(
+                    "technique kind {value} is not 0..3"
+                )))
+            }
+        })
+    }
+}
+
+/// One technique offered by the plugins. The strings belong to the context and stay valid
+/// until it is destroyed.
+#[repr(C)]
+#[derive(Clone, Copy, Debug)]
+pub struct CadrTechniqueInfo {
+    /// Its kind.
+    pub kind: CadrTechniqueKind,
+    /// Its name, unique within the kind (e.g. "groups-mdi-replay").
+    pub name: *const c_char,
+    /// What it does.
+    pub description: *const c_char,
+    /// The plugin library it comes from.
+    pub library: *const c_char,
+    /// Whether this device can run it.
+    pub supported: bool,
+    /// Why not, when `supported` is false (empty otherwise).
+    pub unsupported_reason: *const c_char,
+}
+
+/// A plugin library (or one of its techniques) that was refused. The strings belong to the
+/// context.
+#[repr(C)]
+#[derive(Clone, Copy, Debug)]
+pub struct CadrPluginRefusal {
+    /// The library.
+    pub library: *const c_char,
+    /// Why (another ABI version, a missing symbol, a panic, …), with the technique's name when
+    /// only one technique was refused.
+    pub reason: *const c_char,
+}
+
+/// The strings of one technique, kept NUL-terminated for the host.
+pub(crate) struct TechniqueText {
+    pub(crate) kind: TechniqueKind,
+    pub(crate) name: CString,
+    description: CString,
+    library: CString,
+    supported: bool,
+    reason: CString,
+}
+
+/// What a context holds. Renderers keep it alive after the context handle is destroyed.
+pub(crate) struct ContextState {
+    pub(crate) device: Arc<Device>,
+    pub(crate) registry: Arc<PluginRegistry>,
+    pub(crate) plugin_dirs: Vec<PathBuf>,
+    pub(crate) techniques: Vec<TechniqueText>,
+    refusals: Vec<(CString, CString)>,
+    pub(crate) presentation: bool,
+    /// The device's queue is used by one renderer at a time.
+    pub(crate) queue: Mutex<()>,
+}
+
+impl ContextState {
+    /// The context-owned name of a technique, for handing out to the host.
+    pub(crate) fn technique_name(&self, kind: TechniqueKind, name: &str) -> *const c_char {
+        self.techniques
+            .iter()
+            .find(|t| t.kind == kind && t.name.to_bytes() == name.as_bytes())
+            .map_or(c"".as_ptr(), |t| t.name.as_ptr())
+    }
+}
+
+pub(crate) static CONTEXTS: Registry<Arc<ContextState>> = Registry::new(0xC1, "context");
+
+/// The state behind a context handle.
+pub(crate) fn context_state(context: CadrContext) -> Result<Arc<ContextState>, Failure> {
+    let object = CONTEXTS.get(context as u64, "context")?;
+    let state = Arc::clone(&lock(&object));
+    Ok(state)
+}
+
+fn c_string(text: &str) -> CString {
+    CString::new(text.replace('\0', " ")).unwrap_or_default()
+}
+
+/// Fills `*options` with the defaults: no validation, automatic device choice, no extra
+/// extensions, default plugin directories.
+///
+/// Returns `CADR_RESULT_NULL_ARGUMENT` when `options` is NULL.
+/// Ownership: `options` is the caller's. Thread-safety: callable from any thread.
+///
+/// # Safety
+/// `options` is null or writable.
+#[no_mangle]
+pub unsafe extern "C" fn cadr_context_options_default(
+    options: *mut CadrContextOptions,
+) -> CadrResult {
+    guard(|| {
+        non_null(options, "options")?;
+        let defaults = CadrContextOptions {
+            size: std::mem::size_of::<CadrContextOptions>() as u32,
+            validation: false,
+            device_index: -1,
+            device_name: std::ptr::null(),
+            instance_extensions: std::ptr::null(),
+            instance_extension_count: 0,
+            device_extensions: std::ptr::null(),
+            device_extension_count: 0,
+            plugin_dirs: std::ptr::null(),
+            plugin_dir_count: 0,
+            default_plugin_dirs: true,
+        };
+        // SAFETY: checked non-null; writable by contract.
+        unsafe { write(options, defaults) };
+        Ok(())
+    })
+}
+
+fn c_strings(names: Vec<String>, what: &str) -> Result<Vec<CString>, Failure> {
+    names
+        .into_iter()
+        .enumerate()
+        .map(|(i, n)| {
+            CString::new(n).map_err(|_| Failure::invalid(format!("{what}[{i}] contains NUL")))
+        })
+        .collect()
+}
+
+/// Creates a context: the Vulkan instance (with the host's extensions), the device, and the
+/// technique plugins found for it. `options` may be NULL for the defaults.
+///
+/// Returns `CADR_RESULT_OK` and writes `*context`, or `CADR_RESULT_NULL_ARGUMENT`,
+/// `CADR_RESULT_INVALID_ARGUMENT` (bad `size`, bad strings), `CADR_RESULT_UNSUPPORTED` (no
+/// device with Vulkan 1.3, a missing extension) or `CADR_RESULT_VULKAN`.
+///
+/// Ownership: the options and their strings are read during the call only; the context is
+/// the caller's until `cadr_context_destroy`. Thread-safety: callable from any thread; a
+/// context may be used from several threads (calls are serialised where they share the
+/// device's queue).
+///
+/// # Safety
+/// `options` is null or a valid options struct whose pointers are null or valid for their
+/// counts; `context` is null or writable.
+#[no_mangle]
+pub unsafe extern "C" fn cadr_context_create(
+    options: *const CadrContextOptions,
+    context: *mut CadrContext,
+) -> CadrResult {
+    guard(|| {
+        non_null(context, "context")?;
+        let mut defaults = std::mem::MaybeUninit::<CadrContextOptions>::uninit();
+        let options = if options.is_null() {
+            // SAFETY: the pointer is a local, writable MaybeUninit.
+            unsafe { cadr_context_options_default(defaults.as_mut_ptr()) };
+            // SAFETY: just initialised by cadr_context_options_default.
+            unsafe { defaults.assume_init() }
+        } else {
+            // SAFETY: non-null and valid by contract.
+            unsafe { *options }
+        };
+        let expected = std::mem::size_of::<CadrContextOptions>() as u32;
+        if options.size != expected {
+            return Err(Failure::invalid(format!(
+                "options.size is {} but this library's CadrContextOptions has {expected} bytes (fill it with cadr_context_options_default)",
+                options.size
+            )));
+        }
+        // SAFETY: the pointers are valid for their counts (the caller's contract).
+        let (instance_extensions, device_extensions, plugin_dirs, device_name) = unsafe {
+            (
+                string_list(
+                    options.instance_extensions,
+                    options.instance_extension_count as usize,
+                    "options.instance_extensions",
+                )?,
+                string_list(
+                    options.device_extensions,
+                    options.device_extension_count as usize,
+                    "options.device_extensions",
+                )?,
+                string_list(
+                    options.plugin_dirs,
+                    options.plugin_dir_count as usize,
+                    "options.plugin_dirs",
+                )?,
+                optional_str(options.device_name, "options.device_name")?,
+            )
+        };
+        let presentation = instance_extensions.iter().any(|e| e == "VK_KHR_surface");
+        let mut device_extensions = c_strings(device_extensions, "options.device_extensions")?;
+        if presentation
+            && !device_extensions
+                .iter()
+                .any(|e| e.as_bytes() == b"VK_KHR_swapchain")
+        {
+            device_extensions.push(c"VK_KHR_swapchain".to_owned());
+        }
+        let choice = match (options.device_index, device_name) {
+            (index, _) if index >= 0 => DeviceChoice::Index(index as usize),
+            (_, Some(name)) => DeviceChoice::NameContains(name.to_owned()),
+            _ => DeviceChoice::from_env(),
+        };
+        let device = Device::new(&DeviceOptions {
+            instance: InstanceOptions {
+                validation: options.validation,
+                extra_extensions: c_strings(instance_extensions, "options.instance_extensions")?,
+            },
+            choice,
+            extra_extensions: device_extensions,
+        })?;
+        let mut dirs: Vec<PathBuf> = plugin_dirs.into_iter().map(PathBuf::from).collect();
+        if options.default_plugin_dirs {
+            dirs.extend(default_plugin_dirs());
+        }
+        let registry = PluginRegistry::discover(&dirs, feature_bits(device.capabilities()));
+        let techniques = registry
+            .techniques()
+            .iter()
+            .map(|t| TechniqueText {
+                kind: t.kind,
+                name: c_string(&t.name),
+                description: c_string(&t.description),
+                library: c_string(&t.library.display().to_string()),
+                supported: t.support.is_ok(),
+                reason: c_string(t.support.as_ref().err().map_or("", String::as_str)),
+            })
+            .collect();
+        let refusals = registry
+            .refusals()
+            .iter()
+            .map(|r| {
+                let reason = match &r.technique {
+                    Some(name) => format!("{name}: {}", r.reason),
+                    None => r.reason.clone(),
+                };
+                (
+                    c_string(&r.library.display().to_string()),
+                    c_string(&reason),
+                )
+            })
+            .collect();
+        let state = ContextState {
+            device,
+            registry: Arc::new(registry),
+            plugin_dirs: dirs,
+            techniques,
+            refusals,
+            presentation,
+            queue: Mutex::new(()),
+        };
+        let handle = CONTEXTS.insert(Arc::new(state))?;
+        // SAFETY: checked non-null; writable by contract.
+        unsafe { write(context, handle as CadrContext) };
+        Ok(())
+    })
+}
+
+/// Destroys a context handle. Renderers made from it keep the device alive until they are
+/// destroyed too. NULL is a no-op.
+///
+/// Returns `CADR_RESULT_OK`, `CADR_RESULT_DESTROYED_HANDLE` or `CADR_RESULT_FOREIGN_HANDLE`.
+/// Ownership: the handle is invalid afterwards. Thread-safety: callable from any thread, but
+/// not while another thread still uses this handle.
+#[no_mangle]
+pub extern "C" fn cadr_context_destroy(context: CadrContext) -> CadrResult {
+    guard(|| {
+        let removed = CONTEXTS.remove(context as u64, "context")?;
+        drop(removed);
+        Ok(())
+    })
+}
+
+fn device_type(raw: cadr_core::vk::raw::PhysicalDeviceType) -> CadrDeviceType {
+    use cadr_core::vk::raw::PhysicalDeviceType as T;
+    match raw {
+        T::INTEGRATED_GPU => CadrDeviceType::IntegratedGpu,
+        T::DISCRETE_GPU => CadrDeviceType::DiscreteGpu,
+        T::VIRTUAL_GPU => CadrDeviceType::VirtualGpu,
+        T::CPU => CadrDeviceType::Cpu,
+        _ => CadrDeviceType::Other,
+    }
+}
+
+/// Describes the context's device: name, type, Vulkan version and optional features.
+///
+/// Returns `CADR_RESULT_OK`, `CADR_RESULT_NULL_ARGUMENT` or a handle error.
+/// Ownership: `*info` is the caller's. Thread-safety: callable from any thread.
+///
+/// # Safety
+/// `info` is null or writable.
+#[no_mangle]
+pub unsafe extern "C" fn cadr_context_device_info(
+    context: CadrContext,
+    info: *mut CadrDeviceInfo,
+) -> CadrResult {
+    guard(|| {
+        let state = context_state(context)?;
+        non_null(info, "info")?;
+        let adapter = state.device.adapter();
+        let capabilities = state.device.capabilities();
+        let mut name = [0 as c_char; 256];
+        for (slot, byte) in name.iter_mut().zip(adapter.name.bytes().take(255)) {
+            *slot = byte as c_char;
+        }
+        let value = CadrDeviceInfo {
+            name,
+            device_type: device_type(adapter.device_type),
+            api_version: adapter.api_version,
+            index: adapter.index as u32,
+            queue_family: adapter.queue_family,
+            features: CadrDeviceFeatures {
+                multi_draw_indirect: capabilities.multi_draw_indirect,
+                draw_indirect_first_instance: capabilities.draw_indirect_first_instance,
+                shader_draw_parameters: capabilities.shader_draw_parameters,
+                buffer_device_address: capabilities.buffer_device_address,
+                draw_indirect_count: capabilities.draw_indirect_count,
+                multi_draw: capabilities.multi_draw,
+                timestamps: capabilities.timestamps,
+                presentation: state.presentation,
+            },
+            validation: state.device.instance().validation_enabled(),
+        };
+        // SAFETY: checked non-null; writable by contract.
+        unsafe { write(info, value) };
+        Ok(())
+    })
+}
+
+/// Writes the context's `VkInstance` into `*instance`, for creating a window surface on it
+/// (e.g. `glfwCreateWindowSurface`). Cast it to `VkInstance`.
+///
+/// Returns `CADR_RESULT_OK`, `CADR_RESULT_NULL_ARGUMENT` or a handle error.
+/// Ownership: the instance belongs to cadr and lives as long as the context or any of its
+/// renderers; do not destroy it. Thread-safety: callable from any thread.
+///
+/// # Safety
+/// `instance` is null or writable.
+#[no_mangle]
+pub unsafe extern "C" fn cadr_context_vulkan_instance(
+    context: CadrContext,
+    instance: *mut *mut c_void,
+) -> CadrResult {
+    guard(|| {
+        let state = context_state(context)?;
+        non_null(instance, "instance")?;
+        let raw = state.device.instance().raw().handle().as_raw() as *mut c_void;
+        // SAFETY: checked non-null; writable by contract.
+        unsafe { write(instance, raw) };
+        Ok(())
+    })
+}
+
+/// Writes how many validation messages of severity error the context's device has reported
+/// so far (0 when validation is off).
+///
+/// Returns `CADR_RESULT_OK`, `CADR_RESULT_NULL_ARGUMENT` or a handle error.
+/// Thread-safety: callable from any thread.
+///
+/// # Safety
+/// `count` is null or writable.
+#[no_mangle]
+pub unsafe extern "C" fn cadr_context_validation_error_count(
+    context: CadrContext,
+    count: *mut u64,
+) -> CadrResult {
+    guard(|| {
+        let state = context_state(context)?;
+        non_null(count, "count")?;
+        let errors = state.device.validation_log().errors().len() as u64;
+        // SAFETY: checked non-null; writable by contract.
+        unsafe { write(count, errors) };
+        Ok(())
+    })
+}
+
+/// Writes the number of techniques the plugins offer (supported or not).
+///
+/// Returns `CADR_RESULT_OK`, `CADR_RESULT_NULL_ARGUMENT` or a handle error.
+/// Thread-safety: callable from any thread.
+///
+/// # Safety
+/// `count` is null or writable.
+#[no_mangle]
+pub unsafe extern "C" fn cadr_context_technique_count(
+    context: CadrContext,
+    count: *mut u32,
+) -> CadrResult {
+    guard(|| {
+        let state = context_state(context)?;
+        non_null(count, "count")?;
+        // SAFETY: checked non-null; writable by contract.
+        unsafe { write(count, state.techniques.len() as u32) };
+        Ok(())
+    })
+}
+
+/// Describes technique `index` (0 to count - 1).
+///
+/// Returns `CADR_RESULT_OK`, `CADR_RESULT_NOT_FOUND` (index out of range),
+/// `CADR_RESULT_NULL_ARGUMENT` or a handle error.
+/// Ownership: the strings in `*info` belong to the context and live until it and its
+/// renderers are destroyed. Thread-safety: callable from any thread.
+///
+/// # Safety
+/// `info` is null or writable.
+#[no_mangle]
+pub unsafe extern "C" fn cadr_context_technique(
+    context: CadrContext,
+    index: u32,
+    info: *mut CadrTechniqueInfo,
+) -> CadrResult {
+    guard(|| {
+        let state = context_state(context)?;
+        non_null(info, "info")?;
+        let technique = state.techniques.get(index as usize).ok_or_else(|| {
+            Failure::new(
+                CadrResult::NotFound,
+                format!(
+                    "technique index {index} is out of range (0..{})",
+                    state.techniques.len()
+                ),
+            )
+        })?;
+        let value = CadrTechniqueInfo {
+            kind: CadrTechniqueKind::from_core(technique.kind),
+            name: technique.name.as_ptr(),
+            description: technique.description.as_ptr(),
+            library: technique.library.as_ptr(),
+            supported: technique.supported,
+            unsupported_reason: technique.reason.as_ptr(),
+        };
+        // SAFETY: checked non-null; writable by contract.
+        unsafe { write(info, value) };
+        Ok(())
+    })
+}
+
+/// Writes the number of refused plugin libraries and techniques.
+///
+/// Returns `CADR_RESULT_OK`, `CADR_RESULT_NULL_ARGUMENT` or a handle error.
+/// Thread-safety: callable from any thread.
+///
+/// # Safety
+/// `count` is null or writable.
+#[no_mangle]
+pub unsafe extern "C" fn cadr_context_refusal_count(
+    context: CadrContext,
+    count: *mut u32,
+) -> CadrResult {
+    guard(|| {
+        let state = context_state(context)?;
+        non_null(count, "count")?;
+        // SAFETY: checked non-null; writable by contract.
+        unsafe { write(count, state.refusals.len() as u32) };
+        Ok(())
+    })
+}
+
+/// Describes refusal `index` (0 to count - 1).
+///
+/// Returns `CADR_RESULT_OK`, `CADR_RESULT_NOT_FOUND` (index out of range),
+/// `CADR_RESULT_NULL_ARGUMENT` or a handle error.
+/// Ownership: the strings belong to the context. Thread-safety: callable from any thread.
+///
+/// # Safety
+/// `refusal` is null or writable.
+#[no_mangle]
+pub unsafe extern "C" fn cadr_context_refusal(
+    context: CadrContext,
+    index: u32,
+    refusal: *mut CadrPluginRefusal,
+) -> CadrResult {
+    guard(|| {
+        let state = context_state(context)?;
+        non_null(refusal, "refusal")?;
+        let (library, reason) = state.refusals.get(index as usize).ok_or_else(|| {
+            Failure::new(
+                CadrResult::NotFound,
+                format!(
+                    "refusal index {index} is out of range (0..{})",
+                    state.refusals.len()
+                ),
+            )
+        })?;
+        let value = CadrPluginRefusal {
+            library: library.as_ptr(),
+            reason: reason.as_ptr(),
+        };
+        // SAFETY: checked non-null; writable by contract.
+        unsafe { write(refusal, value) };
+        Ok(())
+    })
+}

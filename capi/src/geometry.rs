@@ -1,0 +1,371 @@
+//! Geometry from the host's arrays, and materials from parameters.
+
+use std::ffi::c_char;
+
+use cadr_core::scene::{Geometry, Material, Part, Vertex};
+
+use crate::args::{non_null, optional_str, slice, write};
+use crate::error::{guard, Failure};
+use crate::scene::{
+    geometry_of, geometry_value, graph_failure, material_of, material_value, with_scene,
+    CadrBounds, CadrGeometry, CadrMaterial, CadrScene,
+};
+
+/// A range of a geometry's indices drawn with one material, and its range of edge indices.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default)]
+pub struct CadrPart {
+    /// First index in `indices`.
+    pub first_index: u32,
+    /// Number of indices (a multiple of 3).
+    pub index_count: u32,
+    /// First index in `wire_indices`.
+    pub first_wire_index: u32,
+    /// Number of wire indices (a multiple of 2; 0 when the part has no stored edges).
+    pub wire_index_count: u32,
+}
+
+/// Geometry in the host's arrays. Everything is copied; the arrays can be freed after the
+/// call.
+#[repr(C)]
+#[derive(Clone, Copy, Debug)]
+pub struct CadrGeometryDesc {
+    /// Name (NULL: empty).
+    pub name: *const c_char,
+    /// `vertex_count` × 3 floats: object-space positions.
+    pub positions: *const f32,
+    /// NULL, or `vertex_count` × 3 floats: unit normals. NULL computes smooth normals from the
+    /// triangles (area-weighted).
+    pub normals: *const f32,
+    /// Number of vertices.
+    pub vertex_count: u32,
+    /// Triangle-list indices into the vertices.
+    pub indices: *const u32,
+    /// Number of indices (a multiple of 3).
+    pub index_count: u32,
+    /// NULL, or line-list indices: the edges drawn by the "edges" shade mode. Without them,
+    /// edges are derived from the triangles by crease angle.
+    pub wire_indices: *const u32,
+    /// Number of wire indices (a multiple of 2).
+    pub wire_index_count: u32,
+    /// The parts; NULL with `part_count` 0 makes one part of all indices (and wire indices).
+    pub parts: *const CadrPart,
+    /// Number of parts.
+    pub part_count: u32,
+}
+
+/// Material parameters (metallic-roughness, as glTF).
+#[repr(C)]
+#[derive(Clone, Copy, Debug)]
+pub struct CadrMaterialDesc {
+    /// Name (NULL: empty).
+    pub name: *const c_char,
+    /// Linear RGBA base color, each 0..1.
+    pub base_color: [f32; 4],
+    /// 0 = dielectric, 1 = metal.
+    pub metallic: f32,
+    /// 0 = mirror, 1 = fully rough.
+    pub roughness: f32,
+}
+
+fn smooth_normals(positions: &[[f32; 3]], indices: &[u32]) -> Vec<[f32; 3]> {
+    let mut sums = vec![glam::Vec3::ZERO; positions.len()];
+    for triangle in indices.chunks_exact(3) {
+        let [a, b, c] = [0, 1, 2].map(|k| triangle[k] as usize);
+        let (pa, pb, pc) = (
+            glam::Vec3::from(positions[a]),
+            glam::Vec3::from(positions[b]),
+            glam::Vec3::from(positions[c]),
+        );
+        // The cross product's length is twice the area: bigger triangles weigh more.
+        let normal = (pb - pa).cross(pc - pa);
+        for v in [a, b, c] {
+            sums[v] += normal;
+        }
+    }
+    sums.into_iter()
+        .map(|n| n.try_normalize().unwrap_or(glam::Vec3::Z).to_array())
+        .collect()
+}
+
+/// Copies and checks a geometry description; errors name the field and the index.
+///
+/// # Safety
+/// Every pointer in `desc` is null or valid for its count.
+unsafe fn geometry_from(desc: *const CadrGeometryDesc) -> Result<Geometry, Failure> {
+    non_null(desc, "desc")?;
+    // SAFETY: non-null and valid by contract.
+    let desc = unsafe { *desc };
+    let vertices = desc.vertex_count as usize;
+    // SAFETY: the pointers are valid for their counts (the caller's contract).
+    let (name, positions, normals, indices, wire_indices, parts) = unsafe {
+        (
+            optional_str(desc.name, "desc.name")?.unwrap_or(""),
+            slice(desc.positions, vertices * 3, "desc.positions")?,
+            if desc.normals.is_null() {
+                None
+            } else {
+                Some(slice(desc.normals, vertices * 3, "desc.normals")?)
+            },
+            slice(desc.indices, desc.index_count as usize, "desc.indices")?,
+            slice(
+                desc.wire_indices,
+                desc.wire_index_count as usize,
+                "desc.wire_indices",
+            )?,
+            slice(desc.parts, desc.part_count as usize, "desc.parts")?,
+        )
+    };
+    if let Some(i) = positions.iter().position(|v| !v.is_finite()) {
+        return Err(Failure::invalid(format!(
+            "desc.positions[{i}] (vertex {}) is not finite",
+            i / 3
+        )));
+    }
+    if let Some(i) = indices.iter().position(|&v| v as usize >= vertices) {
+        return Err(Failure::invalid(format!(
+            "desc.indices[{i}] = {} is not below vertex_count {vertices}",
+            indices[i]
+        )));
+    }
+    let points: Vec<[f32; 3]> = positions
+        .chunks_exact(3)
+        .map(|p| [p[0], p[1], p[2]])
+        .collect();
+    let normals: Vec<[f32; 3]> = match normals {
+        Some(n) => n.chunks_exact(3).map(|n| [n[0], n[1], n[2]]).collect(),
+        None => smooth_normals(&points, indices),
+    };
+    let parts: Vec<Part> = if parts.is_empty() {
+        vec![Part {
+            first_index: 0,
+            index_count: desc.index_count,
+            first_wire_index: 0,
+            wire_index_count: desc.wire_index_count,
+        }]
+    } else {
+        parts
+            .iter()
+            .map(|p| Part {
+                first_index: p.first_index,
+                index_count: p.index_count,
+                first_wire_index: p.first_wire_index,
+                wire_index_count: p.wire_index_count,
+            })
+            .collect()
+    };
+    let geometry = Geometry {
+        name: name.to_owned(),
+        vertices: points
+            .into_iter()
+            .zip(normals)
+            .map(|(position, normal)| Vertex { position, normal })
+            .collect(),
+        indices: indices.to_vec(),
+        wire_indices: wire_indices.to_vec(),
+        parts,
+    };
+    geometry
+        .validate(0)
+        .map_err(|e| Failure::invalid(format!("desc: {}", e.0)))?;
+    Ok(geometry)
+}
+
+/// Copies and checks material parameters.
+///
+/// # Safety
+/// `desc` is null or valid, its name null or a valid string.
+unsafe fn material_from(desc: *const CadrMaterialDesc) -> Result<Material, Failure> {
+    non_null(desc, "desc")?;
+    // SAFETY: non-null and valid by contract.
+    let desc = unsafe { *desc };
+    // SAFETY: as above.
+    let name = unsafe { optional_str(desc.name, "desc.name") }?.unwrap_or("");
+    let values = [
+        ("base_color[0]", desc.base_color[0]),
+        ("base_color[1]", desc.base_color[1]),
+        ("base_color[2]", desc.base_color[2]),
+        ("base_color[3]", desc.base_color[3]),
+        ("metallic", desc.metallic),
+        ("roughness", desc.roughness),
+    ];
+    if let Some((field, value)) = values.iter().find(|(_, v)| !(0.0..=1.0).contains(v)) {
+        return Err(Failure::invalid(format!(
+            "desc.{field} is {value}; it must lie in 0..1"
+        )));
+    }
+    Ok(Material {
+        name: name.to_owned(),
+        base_color: desc.base_color,
+        metallic: desc.metallic,
+        roughness: desc.roughness,
+    })
+}
+
+/// Creates a geometry from the host's arrays (copied).
+///
+/// Returns `CADR_RESULT_OK` and writes `*geometry`, `CADR_RESULT_NULL_ARGUMENT`,
+/// `CADR_RESULT_INVALID_ARGUMENT` (the message names the field and index: an index beyond the
+/// vertices, a part beyond the indices, a count not a multiple of 3, a non-finite position) or
+/// a handle error.
+/// Ownership: the geometry belongs to the scene. Thread-safety: as `cadr_scene_create`.
+///
+/// # Safety
+/// `desc` is null or valid with arrays valid for their counts; `geometry` null or writable.
+#[no_mangle]
+pub unsafe extern "C" fn cadr_scene_create_geometry(
+    scene: CadrScene,
+    desc: *const CadrGeometryDesc,
+    geometry: *mut CadrGeometry,
+) -> crate::CadrResult {
+    guard(|| {
+        non_null(geometry, "geometry")?;
+        // SAFETY: forwarded contract.
+        let data = unsafe { geometry_from(desc) }?;
+        let value = with_scene(scene, |s| {
+            s.graph
+                .create_geometry(data)
+                .map(geometry_value)
+                .map_err(graph_failure)
+        })?;
+        // SAFETY: checked non-null; writable by contract.
+        unsafe { write(geometry, value) };
+        Ok(())
+    })
+}
+
+/// Replaces a geometry's data; Geo nodes that use it draw the new data. The part count must
+/// stay the same (their part materials are kept).
+///
+/// Returns as `cadr_scene_create_geometry`. Thread-safety: as `cadr_scene_create`.
+///
+/// # Safety
+/// As `cadr_scene_create_geometry`.
+#[no_mangle]
+pub unsafe extern "C" fn cadr_scene_replace_geometry(
+    scene: CadrScene,
+    geometry: CadrGeometry,
+    desc: *const CadrGeometryDesc,
+) -> crate::CadrResult {
+    guard(|| {
+        // SAFETY: forwarded contract.
+        let data = unsafe { geometry_from(desc) }?;
+        with_scene(scene, |s| {
+            let handle = geometry_of(&s.graph, geometry, "geometry")?;
+            s.graph
+                .replace_geometry(handle, data)
+                .map_err(graph_failure)
+        })
+    })
+}
+
+/// Destroys a geometry that no Geo node uses.
+///
+/// Returns `CADR_RESULT_OK`, `CADR_RESULT_IN_USE` or a handle error.
+/// Thread-safety: as `cadr_scene_create`.
+#[no_mangle]
+pub extern "C" fn cadr_scene_destroy_geometry(
+    scene: CadrScene,
+    geometry: CadrGeometry,
+) -> crate::CadrResult {
+    guard(|| {
+        with_scene(scene, |s| {
+            let handle = geometry_of(&s.graph, geometry, "geometry")?;
+            s.graph.destroy_geometry(handle).map_err(graph_failure)
+        })
+    })
+}
+
+/// Writes the object-space bounds of a geometry's vertices.
+///
+/// Returns `CADR_RESULT_OK`, `CADR_RESULT_NULL_ARGUMENT` or a handle error.
+/// Thread-safety: as `cadr_scene_create`.
+///
+/// # Safety
+/// `bounds` is null or writable.
+#[no_mangle]
+pub unsafe extern "C" fn cadr_scene_geometry_bounds(
+    scene: CadrScene,
+    geometry: CadrGeometry,
+    bounds: *mut CadrBounds,
+) -> crate::CadrResult {
+    guard(|| {
+        let value = with_scene(scene, |s| {
+            let handle = geometry_of(&s.graph, geometry, "geometry")?;
+            Ok(s.graph.geometry(handle).map_err(graph_failure)?.bounds())
+        })?;
+        non_null(bounds, "bounds")?;
+        // SAFETY: checked non-null; writable by contract.
+        unsafe { write(bounds, value.into()) };
+        Ok(())
+    })
+}
+
+/// Creates a material.
+///
+/// Returns `CADR_RESULT_OK` and writes `*material`, `CADR_RESULT_NULL_ARGUMENT`,
+/// `CADR_RESULT_INVALID_ARGUMENT` (a value outside 0..1, named) or a handle error.
+/// Ownership: the material belongs to the scene. Thread-safety: as `cadr_scene_create`.
+///
+/// # Safety
+/// `desc` is null or valid; `material` null or writable.
+#[no_mangle]
+pub unsafe extern "C" fn cadr_scene_create_material(
+    scene: CadrScene,
+    desc: *const CadrMaterialDesc,
+    material: *mut CadrMaterial,
+) -> crate::CadrResult {
+    guard(|| {
+        non_null(material, "material")?;
+        // SAFETY: forwarded contract.
+        let data = unsafe { material_from(desc) }?;
+        let value = with_scene(scene, |s| {
+            s.graph
+                .create_material(data)
+                .map(material_value)
+                .map_err(graph_failure)
+        })?;
+        // SAFETY: checked non-null; writable by contract.
+        unsafe { write(material, value) };
+        Ok(())
+    })
+}
+
+/// Changes a material's parameters; every part using it is drawn with them.
+///
+/// Returns as `cadr_scene_create_material`. Thread-safety: as `cadr_scene_create`.
+///
+/// # Safety
+/// `desc` is null or valid.
+#[no_mangle]
+pub unsafe extern "C" fn cadr_scene_set_material(
+    scene: CadrScene,
+    material: CadrMaterial,
+    desc: *const CadrMaterialDesc,
+) -> crate::CadrResult {
+    guard(|| {
+        // SAFETY: forwarded contract.
+        let data = unsafe { material_from(desc) }?;
+        with_scene(scene, |s| {
+            let handle = material_of(&s.graph, material, "material")?;
+            s.graph.set_material(handle, data).map_err(graph_failure)
+        })
+    })
+}
+
+/// Destroys a material that no part uses.
+///
+/// Returns `CADR_RESULT_OK`, `CADR_RESULT_IN_USE` or a handle error.
+/// Thread-safety: as `cadr_scene_create`.
+#[no_mangle]
+pub extern "C" fn cadr_scene_destroy_material(
+    scene: CadrScene,
+    material: CadrMaterial,
+) -> crate::CadrResult {
+    guard(|| {
+        with_scene(scene, |s| {
+            let handle = material_of(&s.graph, material, "material")?;
+            s.graph.destroy_material(handle).map_err(graph_failure)
+        })
+    })
+}

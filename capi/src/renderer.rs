@@ -1,0 +1,759 @@
+//! Renderers: an offscreen target or a host window's swapchain, the techniques that draw into
+//! it, frames and their statistics, pixels and PNGs.
+
+use std::ffi::c_char;
+use std::path::Path;
+use std::sync::atomic::{AtomicU64, Ordering};
+use std::sync::Arc;
+use std::time::Instant;
+
+use cadr_core::render::Renderer;
+use cadr_core::technique::{Combination, ShadeMode, TechniqueKind, TechniqueScene, Techniques};
+use cadr_core::vk::{raw, raw::Handle, PresentOutcome, Swapchain};
+
+use crate::args::{non_null, optional_str, required_str, write};
+use crate::camera::CadrCamera;
+use crate::context::{context_state, CadrContext, CadrTechniqueKind, ContextState};
+use crate::error::{guard, CadrResult, Failure};
+use crate::handles::{lock, Registry};
+use crate::scene::{CadrScene, SCENES};
+
+/// Opaque type behind [`CadrRenderer`].
+pub struct CadrRendererObject {
+    _private: (),
+}
+
+/// A renderer: draws scenes with the chosen techniques into an offscreen image, or into a host
+/// window through a swapchain. Created by `cadr_renderer_create` or
+/// `cadr_renderer_create_for_surface`, released by `cadr_renderer_destroy`.
+pub type CadrRenderer = *mut CadrRendererObject;
+
+/// Shaded triangles only.
+pub const CADR_SHADE_SOLID: u32 = 0;
+/// Shaded triangles with their edges drawn as lines.
+pub const CADR_SHADE_EDGES: u32 = 1;
+
+/// One technique name per kind; NULL keeps the renderer's current technique of that kind.
+#[repr(C)]
+#[derive(Clone, Copy, Debug)]
+pub struct CadrTechniqueSelection {
+    /// Vertex path, e.g. "arena".
+    pub vertex: *const c_char,
+    /// Parameter path, e.g. "ssbo-index".
+    pub parameters: *const c_char,
+    /// Submission, e.g. "groups-mdi-replay".
+    pub submission: *const c_char,
+    /// Culling, e.g. "frustum".
+    pub culling: *const c_char,
+}
+
+/// What one frame cost and drew: the figures `cadr bench` prints.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default)]
+pub struct CadrFrameStats {
+    /// Whether the frame was drawn and, for a window, presented (false while minimized or
+    /// while the swapchain was being recreated).
+    pub presented: bool,
+    /// CPU time of the frame: culling, the techniques' preparation, recording, submission.
+    pub cpu_us: f64,
+    /// CPU time spent recording commands.
+    pub cpu_record_us: f64,
+    /// CPU time of the queue submission.
+    pub cpu_submit_us: f64,
+    /// CPU time to bring the scene tree and the GPU scene up to date with the host's edits.
+    pub scene_update_us: f64,
+    /// CPU time to hand the image to the window (0 offscreen).
+    pub present_us: f64,
+    /// GPU time of the frame, or -1 where the device has no timestamps.
+    pub gpu_us: f64,
+    /// Draw calls (an indirect or multi-draw call counts once).
+    pub draw_calls: u64,
+    /// Parts or index ranges drawn.
+    pub draws: u64,
+    /// Triangles drawn.
+    pub triangles: u64,
+    /// Pipeline binds.
+    pub pipeline_binds: u64,
+    /// Vertex and index buffer binds.
+    pub vertex_binds: u64,
+    /// Parameter updates (push constants, descriptor binds).
+    pub parameter_updates: u64,
+    /// Bytes uploaded for this frame.
+    pub bytes_uploaded: u64,
+}
+
+/// What a renderer holds, dropped in this order: the uploaded scene and the techniques before
+/// the renderer whose layouts they use.
+struct RendererState {
+    scene: Option<(u64, TechniqueScene)>,
+    techniques: Techniques,
+    swapchain: Option<Swapchain>,
+    renderer: Renderer,
+    context: Arc<ContextState>,
+    id: u64,
+}
+
+/// A renderer's state, movable between threads.
+struct ThreadBound(RendererState);
+
+// SAFETY: the raw pointers inside (plugin instances and the Vulkan description handed to
+// plugins) are only used while the renderer's mutex is held, so by one thread at a time, which
+// the plugin ABI allows ("all others are called from one thread at a time", cadr_plugin.h);
+// the Vulkan objects are externally synchronised by the same mutex and the context's queue lock.
+unsafe impl Send for ThreadBound {}
+
+static RENDERERS: Registry<ThreadBound> = Registry::new(0xC3, "renderer");
+static NEXT_RENDERER_ID: AtomicU64 = AtomicU64::new(1);
+
+/// Technique combinations tried for a new renderer, fastest first; the first the device and
+/// the plugins can run is chosen.
+const PREFERRED: [[&str; 4]; 4] = [
+    ["arena", "ssbo-index", "groups-mdi-replay", "frustum"],
+    ["per-geometry", "push", "groups-replay", "frustum"],
+    ["per-geometry", "push", "individual", "frustum"],
+    ["per-geometry", "push", "individual", "none"],
+];
+
+fn combination(names: [&str; 4]) -> Combination {
+    Combination {
+        vertex: names[0].into(),
+        parameters: names[1].into(),
+        submission: names[2].into(),
+        culling: names[3].into(),
+    }
+}
+
+fn check_size(width: u32, height: u32) -> Result<(), Failure> {
+    if width == 0 || height == 0 || width > 16384 || height > 16384 {
+        return Err(Failure::invalid(format!(
+            "size {width}x{height}: each side must be 1 to 16384"
+        )));
+    }
+    Ok(())
+}
+
+fn new_renderer(
+    context: CadrContext,
+    width: u32,
+    height: u32,
+    surface: Option<raw::SurfaceKHR>,
+    renderer: *mut CadrRenderer,
+) -> Result<(), Failure> {
+    let context = context_state(context)?;
+    non_null(renderer, "renderer")?;
+    check_size(width, height)?;
+    if surface.is_some() && !context.presentation {
+        return Err(Failure::new(
+            CadrResult::Unsupported,
+            "the context cannot present: create it with the window system's instance extensions (VK_KHR_surface and the platform's, e.g. from glfwGetRequiredInstanceExtensions)".into(),
+        ));
+    }
+    let _queue = lock(&context.queue);
+    let device = &context.device;
+    let core = Renderer::new(device, width, height)?;
+    let mut techniques = Techniques::new(
+        device,
+        Arc::clone(&context.registry),
+        core.pipelines().frame_set_layout,
+    );
+    let chosen = PREFERRED
+        .iter()
+        .map(|&names| combination(names))
+        .find(|c| techniques.check(c).is_ok())
+        .ok_or_else(|| {
+            let dirs: Vec<String> = context
+                .plugin_dirs
+                .iter()
+                .map(|d| d.display().to_string())
+                .collect();
+            Failure::new(
+                CadrResult::NotFound,
+                format!(
+                    "no usable technique plugins ({} techniques found) in: {}; install them in lib/cadr/plugins beside libcadr.so, or name their directory in the context options or CADR_PLUGIN_PATH",
+                    context.techniques.len(),
+                    dirs.join(", ")
+                ),
+            )
+        })?;
+    techniques.select(&chosen)?;
+    let swapchain = match surface {
+        Some(surface) => Some(Swapchain::new(device, surface, width, height)?),
+        None => None,
+    };
+    drop(_queue);
+    let state = RendererState {
+        scene: None,
+        techniques,
+        swapchain,
+        renderer: core,
+        context: Arc::clone(&context),
+        id: NEXT_RENDERER_ID.fetch_add(1, Ordering::Relaxed),
+    };
+    let handle = RENDERERS.insert(ThreadBound(state))?;
+    // SAFETY: checked non-null; writable by contract.
+    unsafe { write(renderer, handle as CadrRenderer) };
+    Ok(())
+}
+
+/// Runs `body` on a renderer's state with the device's queue reserved for it.
+fn with_renderer<R>(
+    renderer: CadrRenderer,
+    body: impl FnOnce(&mut RendererState) -> Result<R, Failure>,
+) -> Result<R, Failure> {
+    let object = RENDERERS.get(renderer as u64, "renderer")?;
+    let mut guard = lock(&object);
+    let state = &mut guard.0;
+    let context = Arc::clone(&state.context);
+    let _queue = lock(&context.queue);
+    body(state)
+}
+
+/// Creates a renderer that draws into an offscreen `width` × `height` image, with the fastest
+/// technique combination the device and plugins allow (see `cadr_renderer_technique`).
+///
+/// Returns `CADR_RESULT_OK` and writes `*renderer`, `CADR_RESULT_NULL_ARGUMENT`,
+/// `CADR_RESULT_INVALID_ARGUMENT` (size 0 or above 16384), `CADR_RESULT_NOT_FOUND` (no plugins:
+/// the message lists the directories searched), `CADR_RESULT_VULKAN` or a handle error.
+/// Ownership: the renderer is the caller's until `cadr_renderer_destroy`; it keeps the
+/// context's device alive. Thread-safety: callable from any thread; one renderer is used by
+/// one call at a time (an internal lock), and renderers of one context take turns on its queue.
+///
+/// # Safety
+/// `renderer` is null or writable.
+#[no_mangle]
+pub unsafe extern "C" fn cadr_renderer_create(
+    context: CadrContext,
+    width: u32,
+    height: u32,
+    renderer: *mut CadrRenderer,
+) -> CadrResult {
+    guard(|| new_renderer(context, width, height, None, renderer))
+}
+
+/// Creates a renderer that presents into a host window: `surface` is a `VkSurfaceKHR` the host
+/// created on the context's instance (`cadr_context_vulkan_instance`), e.g. with
+/// `glfwCreateWindowSurface`; pass it as `(uint64_t)surface`. cadr owns the swapchain,
+/// recreates it when the window's size changes (call `cadr_renderer_resize` from the host's
+/// resize callback) and presents nothing while the window is minimized.
+///
+/// Returns as `cadr_renderer_create`, and `CADR_RESULT_UNSUPPORTED` when the context was made
+/// without the window system's instance extensions or cannot present to this surface.
+/// Ownership: on success the renderer owns the surface and destroys it with itself; on failure
+/// the surface stays the caller's. Thread-safety: as `cadr_renderer_create`.
+///
+/// # Safety
+/// `surface` is 0 or a live surface of the context's instance not used by another swapchain;
+/// `renderer` is null or writable.
+#[no_mangle]
+pub unsafe extern "C" fn cadr_renderer_create_for_surface(
+    context: CadrContext,
+    surface: u64,
+    width: u32,
+    height: u32,
+    renderer: *mut CadrRenderer,
+) -> CadrResult {
+    guard(|| {
+        if surface == 0 {
+            return Err(Failure::new(
+                CadrResult::NullArgument,
+                "surface is VK_NULL_HANDLE".into(),
+            ));
+        }
+        new_renderer(
+            context,
+            width,
+            height,
+            Some(raw::SurfaceKHR::from_raw(surface)),
+            renderer,
+        )
+    })
+}
+
+/// Destroys a renderer (waiting for its last frame) and, for a window renderer, its swapchain
+/// and surface. NULL is a no-op.
+///
+/// Returns `CADR_RESULT_OK` or a handle error.
+/// Thread-safety: not while another thread uses this renderer.
+#[no_mangle]
+pub extern "C" fn cadr_renderer_destroy(renderer: CadrRenderer) -> CadrResult {
+    guard(|| {
+        let Some(object) = RENDERERS.remove(renderer as u64, "renderer")? else {
+            return Ok(());
+        };
+        let context = Arc::clone(&lock(&object).0.context);
+        let _queue = lock(&context.queue);
+        drop(object);
+        Ok(())
+    })
+}
+
+/// Gives the renderer a new size: for a window, call it from the framebuffer-size callback
+/// (0 × 0 while minimized is accepted: frames are skipped until the window has area again).
+///
+/// Returns `CADR_RESULT_OK`, `CADR_RESULT_INVALID_ARGUMENT` (above 16384, or 0 offscreen),
+/// `CADR_RESULT_VULKAN` or a handle error. Thread-safety: as `cadr_renderer_create`.
+#[no_mangle]
+pub extern "C" fn cadr_renderer_resize(
+    renderer: CadrRenderer,
+    width: u32,
+    height: u32,
+) -> CadrResult {
+    guard(|| {
+        with_renderer(renderer, |state| {
+            match &mut state.swapchain {
+                Some(swapchain) => {
+                    if width > 16384 || height > 16384 {
+                        check_size(width, height)?;
+                    }
+                    swapchain.resize(width, height)?;
+                    let extent = swapchain.extent();
+                    if extent.width > 0 && extent.height > 0 {
+                        state.renderer.resize(extent.width, extent.height)?;
+                    }
+                }
+                None => {
+                    check_size(width, height)?;
+                    state.renderer.resize(width, height)?;
+                }
+            }
+            Ok(())
+        })
+    })
+}
+
+/// Writes the size of the renderer's image (for a window: of the swapchain, 0 × 0 while
+/// minimized).
+///
+/// Returns `CADR_RESULT_OK`, `CADR_RESULT_NULL_ARGUMENT` or a handle error.
+/// Thread-safety: as `cadr_renderer_create`.
+///
+/// # Safety
+/// `width` and `height` are null or writable.
+#[no_mangle]
+pub unsafe extern "C" fn cadr_renderer_size(
+    renderer: CadrRenderer,
+    width: *mut u32,
+    height: *mut u32,
+) -> CadrResult {
+    guard(|| {
+        non_null(width, "width")?;
+        non_null(height, "height")?;
+        let (w, h) = with_renderer(renderer, |state| {
+            Ok(match &state.swapchain {
+                Some(swapchain) => (swapchain.extent().width, swapchain.extent().height),
+                None => state.renderer.size(),
+            })
+        })?;
+        // SAFETY: checked non-null; writable by contract.
+        unsafe {
+            write(width, w);
+            write(height, h);
+        }
+        Ok(())
+    })
+}
+
+/// The combination `selection` asks for, with the current techniques where it says NULL.
+///
+/// # Safety
+/// `selection` is null or valid with null or valid strings.
+unsafe fn requested(
+    state: &RendererState,
+    selection: *const CadrTechniqueSelection,
+) -> Result<Combination, Failure> {
+    non_null(selection, "selection")?;
+    // SAFETY: non-null and valid by contract.
+    let selection = unsafe { *selection };
+    let mut wanted = state.techniques.combination();
+    for (kind, pointer, name) in [
+        (TechniqueKind::Vertex, selection.vertex, "selection.vertex"),
+        (
+            TechniqueKind::Parameters,
+            selection.parameters,
+            "selection.parameters",
+        ),
+        (
+            TechniqueKind::Submission,
+            selection.submission,
+            "selection.submission",
+        ),
+        (
+            TechniqueKind::Culling,
+            selection.culling,
+            "selection.culling",
+        ),
+    ] {
+        // SAFETY: forwarded contract.
+        if let Some(text) = unsafe { optional_str(pointer, name) }? {
+            wanted.set(kind, text);
+        }
+    }
+    Ok(wanted)
+}
+
+/// Why `combination` cannot be used, as a result code: an unknown name, a technique the
+/// device cannot run, or techniques that do not fit together.
+fn refusal(state: &RendererState, combination: &Combination) -> Result<(), Failure> {
+    let registry = state.techniques.registry();
+    for kind in TechniqueKind::ALL {
+        let name = combination.get(kind);
+        match registry.find(kind, name) {
+            None => {
+                let known: Vec<&str> = registry.of_kind(kind).map(|t| t.name.as_str()).collect();
+                return Err(Failure::new(
+                    CadrResult::NotFound,
+                    format!(
+                        "no {} technique named '{name}' (known: {})",
+                        kind.name(),
+                        known.join(", ")
+                    ),
+                ));
+            }
+            Some(entry) => {
+                if let Err(why) = &entry.support {
+                    return Err(Failure::new(
+                        CadrResult::Unsupported,
+                        format!(
+                            "{} technique '{name}' cannot run on this device: {why}",
+                            kind.name()
+                        ),
+                    ));
+                }
+            }
+        }
+    }
+    state.techniques.check(combination).map_err(|why| {
+        Failure::new(
+            CadrResult::InvalidCombination,
+            format!("{combination}: {why}"),
+        )
+    })
+}
+
+fn select(state: &mut RendererState, combination: &Combination) -> Result<(), Failure> {
+    refusal(state, combination)?;
+    state.techniques.select(combination).map_err(|e| match e {
+        cadr_core::vk::VkError::Technique { .. } => {
+            Failure::new(CadrResult::PluginFailed, e.to_string())
+        }
+        other => other.into(),
+    })
+}
+
+/// Checks whether a technique selection would work, without changing anything.
+///
+/// Returns `CADR_RESULT_OK`, `CADR_RESULT_NOT_FOUND` (unknown name), `CADR_RESULT_UNSUPPORTED`
+/// (the device cannot run a technique), `CADR_RESULT_INVALID_COMBINATION` (techniques that do
+/// not fit; the message says which need is unmet), `CADR_RESULT_NULL_ARGUMENT` or a handle
+/// error. Ownership: the strings are read during the call.
+/// Thread-safety: as `cadr_renderer_create`.
+///
+/// # Safety
+/// `selection` is null or valid with null or valid strings.
+#[no_mangle]
+pub unsafe extern "C" fn cadr_renderer_check_techniques(
+    renderer: CadrRenderer,
+    selection: *const CadrTechniqueSelection,
+) -> CadrResult {
+    guard(|| {
+        with_renderer(renderer, |state| {
+            // SAFETY: forwarded contract.
+            let wanted = unsafe { requested(state, selection) }?;
+            refusal(state, &wanted)
+        })
+    })
+}
+
+/// Switches to a technique selection at run time. A refused selection keeps the current one;
+/// a plugin that fails to create its instance also keeps it (`CADR_RESULT_PLUGIN_FAILED`).
+///
+/// Returns as `cadr_renderer_check_techniques`, and `CADR_RESULT_PLUGIN_FAILED`.
+/// Ownership and thread-safety: as `cadr_renderer_check_techniques`.
+///
+/// # Safety
+/// As `cadr_renderer_check_techniques`.
+#[no_mangle]
+pub unsafe extern "C" fn cadr_renderer_set_techniques(
+    renderer: CadrRenderer,
+    selection: *const CadrTechniqueSelection,
+) -> CadrResult {
+    guard(|| {
+        with_renderer(renderer, |state| {
+            // SAFETY: forwarded contract.
+            let wanted = unsafe { requested(state, selection) }?;
+            select(state, &wanted)
+        })
+    })
+}
+
+/// Replaces the technique of one kind (`CADR_TECHNIQUE_KIND_*`) by name.
+///
+/// Returns as `cadr_renderer_set_techniques`, and `CADR_RESULT_INVALID_ARGUMENT` for an
+/// unknown kind. Thread-safety: as `cadr_renderer_create`.
+///
+/// # Safety
+/// `name` is null or a valid string.
+#[no_mangle]
+pub unsafe extern "C" fn cadr_renderer_set_technique(
+    renderer: CadrRenderer,
+    kind: u32,
+    name: *const c_char,
+) -> CadrResult {
+    guard(|| {
+        let kind = CadrTechniqueKind::from_raw(kind)?.core();
+        // SAFETY: forwarded contract.
+        let name = unsafe { required_str(name, "name") }?;
+        with_renderer(renderer, |state| {
+            let mut wanted = state.techniques.combination();
+            wanted.set(kind, name);
+            select(state, &wanted)
+        })
+    })
+}
+
+/// Writes the name of the renderer's current technique of `kind` (`CADR_TECHNIQUE_KIND_*`).
+///
+/// Returns `CADR_RESULT_OK`, `CADR_RESULT_INVALID_ARGUMENT` (unknown kind),
+/// `CADR_RESULT_NULL_ARGUMENT` or a handle error.
+/// Ownership: the string belongs to the context (valid while it or a renderer of it lives).
+/// Thread-safety: as `cadr_renderer_create`.
+///
+/// # Safety
+/// `name` is null or writable.
+#[no_mangle]
+pub unsafe extern "C" fn cadr_renderer_technique(
+    renderer: CadrRenderer,
+    kind: u32,
+    name: *mut *const c_char,
+) -> CadrResult {
+    guard(|| {
+        let kind = CadrTechniqueKind::from_raw(kind)?.core();
+        non_null(name, "name")?;
+        let value = with_renderer(renderer, |state| {
+            let current = state.techniques.combination();
+            Ok(state.context.technique_name(kind, current.get(kind)))
+        })?;
+        // SAFETY: checked non-null; writable by contract.
+        unsafe { write(name, value) };
+        Ok(())
+    })
+}
+
+/// Sets the shade mode: `CADR_SHADE_SOLID` or `CADR_SHADE_EDGES`.
+///
+/// Returns `CADR_RESULT_OK`, `CADR_RESULT_INVALID_ARGUMENT` (unknown mode), `CADR_RESULT_VULKAN`
+/// or a handle error. Thread-safety: as `cadr_renderer_create`.
+#[no_mangle]
+pub extern "C" fn cadr_renderer_set_shade_mode(renderer: CadrRenderer, mode: u32) -> CadrResult {
+    guard(|| {
+        let mode = match mode {
+            CADR_SHADE_SOLID => ShadeMode::Solid,
+            CADR_SHADE_EDGES => ShadeMode::Edges,
+            other => {
+                return Err(Failure::invalid(format!(
+                    "shade mode {other} is not 0 (solid) or 1 (edges)"
+                )))
+            }
+        };
+        with_renderer(renderer, |state| {
+            Ok(state.techniques.set_shade_mode(mode)?)
+        })
+    })
+}
+
+/// Writes the shade mode (`CADR_SHADE_SOLID` or `CADR_SHADE_EDGES`).
+///
+/// Returns `CADR_RESULT_OK`, `CADR_RESULT_NULL_ARGUMENT` or a handle error.
+/// Thread-safety: as `cadr_renderer_create`.
+///
+/// # Safety
+/// `mode` is null or writable.
+#[no_mangle]
+pub unsafe extern "C" fn cadr_renderer_shade_mode(
+    renderer: CadrRenderer,
+    mode: *mut u32,
+) -> CadrResult {
+    guard(|| {
+        non_null(mode, "mode")?;
+        let value = with_renderer(renderer, |state| {
+            Ok(match state.techniques.shade_mode() {
+                ShadeMode::Solid => CADR_SHADE_SOLID,
+                ShadeMode::Edges => CADR_SHADE_EDGES,
+            })
+        })?;
+        // SAFETY: checked non-null; writable by contract.
+        unsafe { write(mode, value) };
+        Ok(())
+    })
+}
+
+/// Renders one frame of `scene` seen by `camera`: applies the host's edits since the last
+/// frame (incrementally), culls, draws with the current techniques and, for a window, presents.
+/// `stats` may be NULL.
+///
+/// Returns `CADR_RESULT_OK`, `CADR_RESULT_NULL_ARGUMENT`, `CADR_RESULT_INVALID_ARGUMENT`
+/// (non-finite camera), `CADR_RESULT_VULKAN`, `CADR_RESULT_PLUGIN_FAILED` or a handle error.
+/// Ownership: the camera is read during the call. Thread-safety: as `cadr_renderer_create`; the
+/// scene is locked during the call. A scene drawn alternately by two renderers is uploaded
+/// afresh at each change of renderer.
+///
+/// # Safety
+/// `camera` is null or readable; `stats` null or writable.
+#[no_mangle]
+pub unsafe extern "C" fn cadr_renderer_render(
+    renderer: CadrRenderer,
+    scene: CadrScene,
+    camera: *const CadrCamera,
+    stats: *mut CadrFrameStats,
+) -> CadrResult {
+    guard(|| {
+        non_null(camera, "camera")?;
+        // SAFETY: non-null and readable by contract.
+        let camera = unsafe { *camera }.to_core()?;
+        let scene_object = SCENES.get(scene as u64, "scene")?;
+        let value = with_renderer(renderer, |state| {
+            let mut frame = CadrFrameStats::default();
+            if let Some(swapchain) = &state.swapchain {
+                let extent = swapchain.extent();
+                if extent.width == 0 || extent.height == 0 {
+                    // Minimized: ask the surface again, draw nothing.
+                    let swapchain = state
+                        .swapchain
+                        .as_mut()
+                        .ok_or_else(|| Failure::invalid("no swapchain"))?;
+                    swapchain.recreate()?;
+                    if swapchain.extent().width == 0 || swapchain.extent().height == 0 {
+                        return Ok(frame);
+                    }
+                }
+                let extent = state
+                    .swapchain
+                    .as_ref()
+                    .map(Swapchain::extent)
+                    .unwrap_or(extent);
+                state.renderer.resize(extent.width, extent.height)?;
+            }
+            let mut scene_state = lock(&scene_object);
+            let update_start = Instant::now();
+            scene_state.update();
+            let device = Arc::clone(&state.context.device);
+            let current = match state.scene.take() {
+                Some((id, mut uploaded))
+                    if id == scene_state.id && scene_state.consumer == state.id =>
+                {
+                    let s = &mut *scene_state;
+                    uploaded.sync(&s.graph, &mut s.tree)?;
+                    uploaded
+                }
+                _ => {
+                    let s = &mut *scene_state;
+                    TechniqueScene::new(&device, &s.graph, &mut s.tree)?
+                }
+            };
+            scene_state.consumer = state.id;
+            let scene_id = scene_state.id;
+            drop(scene_state);
+            let uploaded = &mut state.scene.insert((scene_id, current)).1;
+            frame.scene_update_us = update_start.elapsed().as_secs_f64() * 1e6;
+            let drawn = state
+                .renderer
+                .render_techniques(uploaded, &mut state.techniques, &camera)
+                .map_err(|e| match e {
+                    cadr_core::vk::VkError::Technique { .. } => {
+                        Failure::new(CadrResult::PluginFailed, e.to_string())
+                    }
+                    other => other.into(),
+                })?;
+            frame.presented = true;
+            if let Some(swapchain) = &mut state.swapchain {
+                let present_start = Instant::now();
+                frame.presented =
+                    swapchain.present(state.renderer.color_image())? == PresentOutcome::Presented;
+                frame.present_us = present_start.elapsed().as_secs_f64() * 1e6;
+            }
+            frame.cpu_us = drawn.cpu_us();
+            frame.cpu_record_us = drawn.cpu_record_us;
+            frame.cpu_submit_us = drawn.cpu_submit_us;
+            frame.gpu_us = drawn.gpu_us.unwrap_or(-1.0);
+            frame.draw_calls = drawn.draw_calls;
+            frame.draws = drawn.draws;
+            frame.triangles = drawn.triangles;
+            frame.pipeline_binds = drawn.pipeline_binds;
+            frame.vertex_binds = drawn.vertex_binds;
+            frame.parameter_updates = drawn.parameter_updates;
+            frame.bytes_uploaded = drawn.bytes_uploaded;
+            Ok(frame)
+        })?;
+        if !stats.is_null() {
+            // SAFETY: non-null; writable by contract.
+            unsafe { write(stats, value) };
+        }
+        Ok(())
+    })
+}
+
+/// Copies the last frame into `rgba` as tightly packed RGBA8 rows, top row first
+/// (width × height × 4 bytes; see `cadr_renderer_size`).
+///
+/// Returns `CADR_RESULT_OK`, `CADR_RESULT_NULL_ARGUMENT`, `CADR_RESULT_BUFFER_TOO_SMALL`
+/// (nothing is written; the message gives the size needed), `CADR_RESULT_VULKAN` or a handle
+/// error. Ownership: `rgba` is the caller's. Thread-safety: as `cadr_renderer_create`.
+///
+/// # Safety
+/// `rgba` is null or writable for `capacity` bytes.
+#[no_mangle]
+pub unsafe extern "C" fn cadr_renderer_read_pixels(
+    renderer: CadrRenderer,
+    rgba: *mut u8,
+    capacity: usize,
+) -> CadrResult {
+    guard(|| {
+        non_null(rgba, "rgba")?;
+        with_renderer(renderer, |state| {
+            let (width, height) = state.renderer.size();
+            let needed = width as usize * height as usize * 4;
+            if capacity < needed {
+                return Err(Failure::new(
+                    CadrResult::BufferTooSmall,
+                    format!("capacity {capacity} is below the {needed} bytes of a {width}x{height} RGBA8 image"),
+                ));
+            }
+            let image = state.renderer.read_rgba8()?;
+            let bytes = image.as_raw();
+            // SAFETY: rgba is writable for capacity >= needed == bytes.len() bytes; the image is
+            // our own allocation, so the regions do not overlap.
+            unsafe { std::ptr::copy_nonoverlapping(bytes.as_ptr(), rgba, bytes.len().min(needed)) };
+            Ok(())
+        })
+    })
+}
+
+/// Writes the last frame to a PNG file.
+///
+/// Returns `CADR_RESULT_OK`, `CADR_RESULT_NULL_ARGUMENT`, `CADR_RESULT_IO` (the message names
+/// the file), `CADR_RESULT_VULKAN` or a handle error. Ownership: `path` is read during the call.
+/// Thread-safety: as `cadr_renderer_create`.
+///
+/// # Safety
+/// `path` is null or a valid string.
+#[no_mangle]
+pub unsafe extern "C" fn cadr_renderer_save_png(
+    renderer: CadrRenderer,
+    path: *const c_char,
+) -> CadrResult {
+    guard(|| {
+        // SAFETY: forwarded contract.
+        let path = unsafe { required_str(path, "path") }?;
+        with_renderer(renderer, |state| {
+            state
+                .renderer
+                .save_png(Path::new(path))
+                .map_err(|e| match e {
+                    cadr_core::render::SaveError::Write { .. } => {
+                        Failure::new(CadrResult::Io, e.to_string())
+                    }
+                    cadr_core::render::SaveError::Vulkan(v) => v.into(),
+                })
+        })
+    })
+}

@@ -55,12 +55,24 @@ unsafe impl Sync for HostServices {}
 /// Alignment and size kept in front of each callback allocation.
 const HEADER: usize = 16;
 
+/// Zero-byte requests get no memory: they are answered with the (aligned, never mapped) address
+/// equal to the alignment, which `free` recognises. Some layers ask for zero bytes and never
+/// free them; nothing is then lost.
+const ZERO_SIZE_LIMIT: usize = 1 << 16;
+
+fn is_zero_size(memory: *mut c_void) -> bool {
+    (memory as usize) <= ZERO_SIZE_LIMIT
+}
+
 unsafe extern "system" fn allocate(
     user: *mut c_void,
     size: usize,
     alignment: usize,
     _scope: vk::SystemAllocationScope,
 ) -> *mut c_void {
+    if size == 0 && alignment <= ZERO_SIZE_LIMIT {
+        return std::ptr::without_provenance_mut(alignment.max(1));
+    }
     let alignment = alignment.max(HEADER);
     let Ok(layout) = Layout::from_size_align(size + alignment, alignment) else {
         return std::ptr::null_mut();
@@ -86,7 +98,7 @@ unsafe extern "system" fn allocate(
 }
 
 unsafe extern "system" fn free(user: *mut c_void, memory: *mut c_void) {
-    if memory.is_null() {
+    if memory.is_null() || is_zero_size(memory) {
         return;
     }
     // SAFETY: `memory` came from `allocate`, which stored size and alignment in front.
@@ -111,8 +123,8 @@ unsafe extern "system" fn reallocate(
     alignment: usize,
     scope: vk::SystemAllocationScope,
 ) -> *mut c_void {
-    if original.is_null() {
-        // SAFETY: forwarded.
+    if original.is_null() || is_zero_size(original) {
+        // SAFETY: forwarded (a zero-size original holds nothing to copy).
         return unsafe { allocate(user, size, alignment, scope) };
     }
     if size == 0 {

@@ -211,6 +211,10 @@ fn loaded_from_dir() -> Option<PathBuf> {
     })
 }
 
+/// Every plugin library opened by this process; they stay loaded until it exits.
+static KEPT_LIBRARIES: std::sync::Mutex<Vec<&'static libloading::Library>> =
+    std::sync::Mutex::new(Vec::new());
+
 /// The default plugin directories: beside the library cadr is linked into and beside the
 /// executable (each with its `plugins/` and `cadr/plugins/` folders first; an installed
 /// `lib/libcadr.so` finds `lib/cadr/plugins/`), then the directories in
@@ -295,8 +299,13 @@ impl PluginRegistry {
                 return;
             }
         };
-        // Never unloaded: techniques keep pointers into it.
+        // Never unloaded: techniques keep pointers into it. The list keeps it reachable, so
+        // leak checkers see a library that is kept, not lost.
         let library: &'static libloading::Library = Box::leak(Box::new(library));
+        KEPT_LIBRARIES
+            .lock()
+            .unwrap_or_else(std::sync::PoisonError::into_inner)
+            .push(library);
         // SAFETY: the symbol's type is fixed by the ABI.
         let version = match unsafe {
             library.get::<abi::CadrPluginVersionFn>(abi::CADR_PLUGIN_VERSION_SYMBOL.as_bytes())

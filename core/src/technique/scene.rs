@@ -109,9 +109,16 @@ fn matrix_of(world: &DMat4) -> abi::CadrMatrix {
     abi::CadrMatrix { columns }
 }
 
+/// The first generation of the next technique scene (each scene counts within its own 2^32).
+static NEXT_GENERATIONS: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(1);
+
 impl TechniqueScene {
     /// Puts the tree's scene on the GPU.
     pub fn new(device: &Arc<Device>, graph: &SceneGraph, tree: &mut SceneTree) -> VkResult<Self> {
+        // Generations are unique across scenes: techniques that cached a previous scene's
+        // buffers or commands see that this one differs.
+        let first_generation =
+            NEXT_GENERATIONS.fetch_add(1 << 32, std::sync::atomic::Ordering::Relaxed);
         let empty = |name: &str| {
             Buffer::new(
                 device,
@@ -153,9 +160,9 @@ impl TechniqueScene {
             pending_records: Vec::new(),
             frame_dirty_matrices: Vec::new(),
             frame_dirty_materials: Vec::new(),
-            draws_generation: 1,
-            parameters_generation: 1,
-            buffers_generation: 1,
+            draws_generation: first_generation,
+            parameters_generation: first_generation,
+            buffers_generation: first_generation,
             triangles: 0,
             buffer_refs: Default::default(),
         };

@@ -1,0 +1,28 @@
+/* Helpers shared by the cadr sample programs: failing with cadr's message, matrices, and
+ * simple CAD-like shapes built as host arrays. */
+#ifndef CADR_SAMPLE_H
+#define CADR_SAMPLE_H
+
+#include "cadr.h"
+
+/* Exits with the call, the result's name and cadr's message when `call` fails. */
+#define CADR_CHECK(call) sample_check((call), #call, __FILE__, __LINE__)
+
+void sample_check(enum CadrResult result, const char *call, const char *file, int line);
+
+/* Column-major 4x4 matrices. */
+void sample_identity(double m[16]);
+void sample_translation(double m[16], double x, double y, double z);
+/* Rotation about +Z by `radians`, then translation. */
+void sample_rotate_z_translate(double m[16], double radians, double x, double y, double z);
+
+/* A box of the given half sizes, one part per pair of opposite faces (3 parts). */
+CadrGeometry sample_box(CadrScene scene, const char *name, float hx, float hy, float hz);
+/* A cylinder along +Z of `radius` and `height` with `segments` sides: side and caps (2 parts). */
+CadrGeometry sample_cylinder(CadrScene scene, const char *name, float radius, float height,
+                             int segments);
+/* A material of a linear RGB color. */
+CadrMaterial sample_material(CadrScene scene, const char *name, float r, float g, float b,
+                             float metallic, float roughness);
+
+#endif

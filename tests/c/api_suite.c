@@ -1,0 +1,584 @@
+/* Every function of the C API called the way a C host calls it: the successful path and each
+ * error path (NULL arguments, destroyed and foreign handles, bad files, invalid technique
+ * combinations, wrong sizes). Exits non-zero on the first failed check.
+ *
+ * Built by tests/tests/c_api.rs with -std=c99 -Wall -Wextra -Wpedantic -Werror, and again under
+ * AddressSanitizer (leaks included). */
+#include "cadr.h"
+
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+static int checks = 0;
+
+static const char *last_error(void) {
+  static char text[4096];
+  size_t length = 0;
+  if (cadr_last_error_message(text, sizeof text, &length) != CADR_RESULT_OK) {
+    return "(message too long)";
+  }
+  return text;
+}
+
+#define EXPECT(call, expected)                                                                \
+  do {                                                                                        \
+    enum CadrResult result_ = (call);                                                         \
+    ++checks;                                                                                 \
+    if (result_ != (expected)) {                                                              \
+      fprintf(stderr, "%s:%d: %s gave %s (%d), expected %s: %s\n", __FILE__, __LINE__, #call, \
+              cadr_result_string((int32_t)result_), (int)result_, #expected, last_error());  \
+      exit(1);                                                                                \
+    }                                                                                         \
+  } while (0)
+
+#define OK(call) EXPECT(call, CADR_RESULT_OK)
+
+#define CHECK(condition)                                                           \
+  do {                                                                             \
+    ++checks;                                                                      \
+    if (!(condition)) {                                                            \
+      fprintf(stderr, "%s:%d: check failed: %s\n", __FILE__, __LINE__, #condition); \
+      exit(1);                                                                     \
+    }                                                                              \
+  } while (0)
+
+/* The last error message contains `part`. */
+#define MESSAGE_HAS(part)                                                                \
+  do {                                                                                   \
+    ++checks;                                                                            \
+    if (strstr(last_error(), (part)) == NULL) {                                          \
+      fprintf(stderr, "%s:%d: message \"%s\" lacks \"%s\"\n", __FILE__, __LINE__,        \
+              last_error(), (part));                                                     \
+      exit(1);                                                                           \
+    }                                                                                    \
+  } while (0)
+
+static const double identity[16] = {1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1};
+
+static void translation(double matrix[16], double x, double y, double z) {
+  memcpy(matrix, identity, sizeof identity);
+  matrix[12] = x;
+  matrix[13] = y;
+  matrix[14] = z;
+}
+
+/* A unit cube with two parts (top+bottom faces, and the four sides). */
+static const float cube_positions[] = {
+    -0.5f, -0.5f, -0.5f, 0.5f, -0.5f, -0.5f, 0.5f, 0.5f, -0.5f, -0.5f, 0.5f, -0.5f,
+    -0.5f, -0.5f, 0.5f,  0.5f, -0.5f, 0.5f,  0.5f, 0.5f, 0.5f,  -0.5f, 0.5f, 0.5f};
+static const uint32_t cube_indices[] = {
+    /* bottom, top */
+    0, 2, 1, 0, 3, 2, 4, 5, 6, 4, 6, 7,
+    /* sides */
+    0, 1, 5, 0, 5, 4, 1, 2, 6, 1, 6, 5, 2, 3, 7, 2, 7, 6, 3, 0, 4, 3, 4, 7};
+static const struct CadrPart cube_parts[] = {{0, 12, 0, 0}, {12, 24, 0, 0}};
+
+static struct CadrGeometryDesc cube_desc(void) {
+  struct CadrGeometryDesc desc;
+  memset(&desc, 0, sizeof desc);
+  desc.name = "cube";
+  desc.positions = cube_positions;
+  desc.vertex_count = 8;
+  desc.indices = cube_indices;
+  desc.index_count = 36;
+  desc.parts = cube_parts;
+  desc.part_count = 2;
+  return desc;
+}
+
+static void test_basics(void) {
+  uint32_t major = 99, minor = 99, patch = 99;
+  char expected[64];
+  cadr_version(&major, &minor, &patch);
+  CHECK(major == CADR_VERSION_MAJOR && minor == CADR_VERSION_MINOR && patch == CADR_VERSION_PATCH);
+  cadr_version(NULL, NULL, NULL);
+  snprintf(expected, sizeof expected, "%u.%u.%u", major, minor, patch);
+  CHECK(strcmp(cadr_version_string(), expected) == 0);
+
+  CHECK(strcmp(cadr_result_string(CADR_RESULT_OK), "ok") == 0);
+  CHECK(strcmp(cadr_result_string(CADR_RESULT_DESTROYED_HANDLE), "destroyed handle") == 0);
+  CHECK(strcmp(cadr_result_string(CADR_RESULT_PLUGIN_FAILED), "technique plugin failed") == 0);
+  CHECK(strcmp(cadr_result_string(1234), "unknown result") == 0);
+
+  /* The last error: size query, too small a buffer, NULL length. */
+  {
+    size_t needed = 0;
+    char small[4];
+    EXPECT(cadr_scene_create(NULL), CADR_RESULT_NULL_ARGUMENT);
+    EXPECT(cadr_last_error_message(NULL, 0, &needed), CADR_RESULT_BUFFER_TOO_SMALL);
+    CHECK(needed == strlen("scene is NULL") + 1);
+    EXPECT(cadr_last_error_message(small, sizeof small, &needed), CADR_RESULT_BUFFER_TOO_SMALL);
+    EXPECT(cadr_last_error_message(small, sizeof small, NULL), CADR_RESULT_NULL_ARGUMENT);
+    CHECK(strcmp(last_error(), "scene is NULL") == 0);
+  }
+}
+
+static void test_camera(void) {
+  struct CadrCamera camera;
+  const double eye[3] = {0, 0, 5}, target[3] = {0, 0, 0}, nan_eye[3] = {0, NAN, 5};
+  struct CadrBounds bounds = {{-1, -1, -1}, {1, 1, 1}};
+  const double direction[3] = {0, 0, 1}, zero[3] = {0, 0, 0};
+  OK(cadr_camera_look_at(eye, target, 45, 1.5, 0.1, 100, &camera));
+  CHECK(fabs(camera.view[14] + 5.0) < 1e-12); /* the origin is 5 units in front of the eye */
+  EXPECT(cadr_camera_look_at(NULL, target, 45, 1.5, 0.1, 100, &camera), CADR_RESULT_NULL_ARGUMENT);
+  EXPECT(cadr_camera_look_at(eye, target, 45, 1.5, 0.1, 100, NULL), CADR_RESULT_NULL_ARGUMENT);
+  EXPECT(cadr_camera_look_at(nan_eye, target, 45, 1.5, 0.1, 100, &camera),
+         CADR_RESULT_INVALID_ARGUMENT);
+  MESSAGE_HAS("eye[1]");
+  EXPECT(cadr_camera_look_at(eye, eye, 45, 1.5, 0.1, 100, &camera), CADR_RESULT_INVALID_ARGUMENT);
+  EXPECT(cadr_camera_look_at(eye, target, 180, 1.5, 0.1, 100, &camera),
+         CADR_RESULT_INVALID_ARGUMENT);
+  EXPECT(cadr_camera_look_at(eye, target, 45, 0, 0.1, 100, &camera), CADR_RESULT_INVALID_ARGUMENT);
+  EXPECT(cadr_camera_look_at(eye, target, 45, 1, 1, 0.5, &camera), CADR_RESULT_INVALID_ARGUMENT);
+  OK(cadr_camera_fit(&bounds, 1.0, direction, &camera));
+  CHECK(camera.view[14] < -1.0); /* the box's centre is in front of the eye */
+  OK(cadr_camera_fit(&bounds, 1.0, NULL, &camera));
+  EXPECT(cadr_camera_fit(NULL, 1.0, NULL, &camera), CADR_RESULT_NULL_ARGUMENT);
+  EXPECT(cadr_camera_fit(&bounds, 1.0, zero, &camera), CADR_RESULT_INVALID_ARGUMENT);
+  EXPECT(cadr_camera_fit(&bounds, -1.0, NULL, &camera), CADR_RESULT_INVALID_ARGUMENT);
+}
+
+static CadrContext test_context(void) {
+  struct CadrContextOptions options;
+  CadrContext context = NULL;
+  struct CadrDeviceInfo info;
+  void *instance = NULL;
+  uint32_t count = 0, i;
+  struct CadrTechniqueInfo technique;
+  struct CadrPluginRefusal refusal;
+  const char *bad_extension[1] = {"VK_cadr_no_such_extension"};
+
+  EXPECT(cadr_context_options_default(NULL), CADR_RESULT_NULL_ARGUMENT);
+  OK(cadr_context_options_default(&options));
+  CHECK(options.size == sizeof options && options.device_index == -1 && options.default_plugin_dirs);
+  EXPECT(cadr_context_create(&options, NULL), CADR_RESULT_NULL_ARGUMENT);
+  options.size = 8;
+  EXPECT(cadr_context_create(&options, &context), CADR_RESULT_INVALID_ARGUMENT);
+  MESSAGE_HAS("options.size");
+  CHECK(context == NULL); /* nothing written on failure */
+  OK(cadr_context_options_default(&options));
+  options.device_extensions = bad_extension;
+  options.device_extension_count = 1;
+  EXPECT(cadr_context_create(&options, &context), CADR_RESULT_UNSUPPORTED);
+  MESSAGE_HAS("VK_cadr_no_such_extension");
+  options.device_extensions = NULL;
+  EXPECT(cadr_context_create(&options, &context), CADR_RESULT_NULL_ARGUMENT);
+  MESSAGE_HAS("options.device_extensions");
+  OK(cadr_context_options_default(&options));
+  options.device_index = 999;
+  EXPECT(cadr_context_create(&options, &context), CADR_RESULT_VULKAN);
+  OK(cadr_context_options_default(&options));
+  options.validation = true;
+  OK(cadr_context_create(&options, &context));
+  CHECK(context != NULL);
+
+  OK(cadr_context_device_info(context, &info));
+  CHECK(strlen(info.name) > 0 && info.validation && !info.features.presentation);
+  CHECK(info.api_version >= ((1u << 22) | (3u << 12)));
+  EXPECT(cadr_context_device_info(context, NULL), CADR_RESULT_NULL_ARGUMENT);
+  OK(cadr_context_vulkan_instance(context, &instance));
+  CHECK(instance != NULL);
+  EXPECT(cadr_context_vulkan_instance(context, NULL), CADR_RESULT_NULL_ARGUMENT);
+
+  OK(cadr_context_technique_count(context, &count));
+  CHECK(count >= 20);
+  for (i = 0; i < count; ++i) {
+    OK(cadr_context_technique(context, i, &technique));
+    CHECK(technique.kind <= CADR_TECHNIQUE_KIND_CULLING);
+    CHECK(strlen(technique.name) > 0 && strlen(technique.description) > 0);
+    CHECK(strstr(technique.library, "cadr_plugin_") != NULL);
+    CHECK(technique.supported == (technique.unsupported_reason[0] == '\0'));
+  }
+  EXPECT(cadr_context_technique(context, count, &technique), CADR_RESULT_NOT_FOUND);
+  EXPECT(cadr_context_technique(context, 0, NULL), CADR_RESULT_NULL_ARGUMENT);
+  OK(cadr_context_refusal_count(context, &count));
+  for (i = 0; i < count; ++i) {
+    OK(cadr_context_refusal(context, i, &refusal));
+    CHECK(strlen(refusal.library) > 0 && strlen(refusal.reason) > 0);
+  }
+  EXPECT(cadr_context_refusal(context, count, &refusal), CADR_RESULT_NOT_FOUND);
+  EXPECT(cadr_context_refusal_count(context, NULL), CADR_RESULT_NULL_ARGUMENT);
+  EXPECT(cadr_context_technique_count(NULL, &count), CADR_RESULT_NULL_ARGUMENT);
+  return context;
+}
+
+struct Built {
+  CadrScene scene;
+  CadrNode root, mover, geo, switch_node;
+  CadrGeometry cube;
+  CadrMaterial red, blue;
+};
+
+static struct Built test_scene(void) {
+  struct Built b;
+  struct CadrGeometryDesc desc = cube_desc();
+  struct CadrMaterialDesc red = {"red", {0.8f, 0.1f, 0.1f, 1.0f}, 0.0f, 0.5f};
+  struct CadrMaterialDesc blue = {"blue", {0.1f, 0.2f, 0.9f, 1.0f}, 0.5f, 0.3f};
+  CadrMaterial parts[2];
+  CadrNode group, lod, lod_screen, billboard, child, second;
+  double matrix[16];
+  const double distances[2] = {10.0, 100.0}, angles[1] = {0.1}, bad_distances[2] = {5.0, 1.0};
+  bool mask[2] = {true, false};
+  uint32_t count = 0, flags = 0;
+  uint32_t bad_indices[3] = {0, 1, 8};
+  struct CadrSceneStatistics statistics;
+  struct CadrBounds bounds;
+
+  OK(cadr_scene_create(&b.scene));
+  OK(cadr_scene_root(b.scene, &b.root));
+  EXPECT(cadr_scene_root(b.scene, NULL), CADR_RESULT_NULL_ARGUMENT);
+  CHECK(b.root != 0);
+
+  /* Geometry and materials from the host's arrays. */
+  OK(cadr_scene_create_geometry(b.scene, &desc, &b.cube));
+  OK(cadr_scene_geometry_bounds(b.scene, b.cube, &bounds));
+  CHECK(bounds.min[0] == -0.5 && bounds.max[2] == 0.5);
+  EXPECT(cadr_scene_create_geometry(b.scene, NULL, &b.cube), CADR_RESULT_NULL_ARGUMENT);
+  desc.indices = bad_indices;
+  desc.index_count = 3;
+  desc.parts = NULL;
+  desc.part_count = 0;
+  EXPECT(cadr_scene_create_geometry(b.scene, &desc, &b.cube), CADR_RESULT_INVALID_ARGUMENT);
+  MESSAGE_HAS("desc.indices[2]");
+  desc = cube_desc();
+  desc.index_count = 35;
+  desc.parts = NULL;
+  desc.part_count = 0;
+  EXPECT(cadr_scene_create_geometry(b.scene, &desc, &b.cube), CADR_RESULT_INVALID_ARGUMENT);
+  desc = cube_desc();
+  desc.positions = NULL;
+  EXPECT(cadr_scene_create_geometry(b.scene, &desc, &b.cube), CADR_RESULT_NULL_ARGUMENT);
+  MESSAGE_HAS("desc.positions");
+  desc = cube_desc();
+  OK(cadr_scene_create_material(b.scene, &red, &b.red));
+  OK(cadr_scene_create_material(b.scene, &blue, &b.blue));
+  red.base_color[1] = 2.0f;
+  EXPECT(cadr_scene_create_material(b.scene, &red, &parts[0]), CADR_RESULT_INVALID_ARGUMENT);
+  MESSAGE_HAS("base_color[1]");
+  EXPECT(cadr_scene_set_material(b.scene, b.red, &red), CADR_RESULT_INVALID_ARGUMENT);
+  red.base_color[1] = 0.1f;
+  OK(cadr_scene_set_material(b.scene, b.red, &red));
+
+  /* Nodes of every kind. */
+  parts[0] = b.red;
+  parts[1] = b.blue;
+  OK(cadr_scene_create_geo(b.scene, "cube", b.cube, parts, 2, &b.geo));
+  EXPECT(cadr_scene_create_geo(b.scene, "cube", b.cube, parts, 1, &child),
+         CADR_RESULT_INVALID_ARGUMENT);
+  MESSAGE_HAS("part materials");
+  EXPECT(cadr_scene_create_geo(b.scene, "cube", b.cube, NULL, 2, &child), CADR_RESULT_NULL_ARGUMENT);
+  OK(cadr_scene_create_group(b.scene, NULL, &group));
+  translation(matrix, 0.25, 0, 0);
+  OK(cadr_scene_create_transform(b.scene, "mover", matrix, &b.mover));
+  matrix[5] = NAN;
+  EXPECT(cadr_scene_create_transform(b.scene, "bad", matrix, &child), CADR_RESULT_INVALID_ARGUMENT);
+  MESSAGE_HAS("matrix[5]");
+  EXPECT(cadr_scene_create_transform(b.scene, "bad", NULL, &child), CADR_RESULT_NULL_ARGUMENT);
+  OK(cadr_scene_create_switch(b.scene, "switch", &b.switch_node));
+  OK(cadr_scene_create_lod(b.scene, "lod", distances, 2, &lod));
+  EXPECT(cadr_scene_create_lod(b.scene, "lod", bad_distances, 2, &child),
+         CADR_RESULT_INVALID_ARGUMENT);
+  OK(cadr_scene_create_lod_by_screen_size(b.scene, "lod by size", 1.0, angles, 1, &lod_screen));
+  OK(cadr_scene_create_billboard(b.scene, "billboard", &billboard));
+  EXPECT(cadr_scene_create_billboard(b.scene, "billboard", NULL), CADR_RESULT_NULL_ARGUMENT);
+
+  /* root -> group -> mover -> switch -> [geo, second]; lod, billboard under group. */
+  OK(cadr_scene_add_child(b.scene, b.root, group));
+  OK(cadr_scene_add_child(b.scene, group, b.mover));
+  OK(cadr_scene_add_child(b.scene, b.mover, b.switch_node));
+  OK(cadr_scene_add_child(b.scene, b.switch_node, b.geo));
+  OK(cadr_scene_create_geo(b.scene, "second", b.cube, parts, 2, &second));
+  OK(cadr_scene_insert_child(b.scene, b.switch_node, 1, second));
+  EXPECT(cadr_scene_insert_child(b.scene, b.switch_node, 7, second), CADR_RESULT_INVALID_ARGUMENT);
+  OK(cadr_scene_add_child(b.scene, group, lod));
+  OK(cadr_scene_add_child(b.scene, group, lod_screen));
+  OK(cadr_scene_add_child(b.scene, group, billboard));
+  EXPECT(cadr_scene_add_child(b.scene, b.mover, group), CADR_RESULT_INVALID_ARGUMENT);
+  MESSAGE_HAS("cycle");
+  OK(cadr_scene_child_count(b.scene, b.switch_node, &count));
+  CHECK(count == 2);
+  OK(cadr_scene_child(b.scene, b.switch_node, 1, &child));
+  CHECK(child == second);
+  EXPECT(cadr_scene_child(b.scene, b.switch_node, 2, &child), CADR_RESULT_NOT_FOUND);
+  EXPECT(cadr_scene_child_count(b.scene, b.switch_node, NULL), CADR_RESULT_NULL_ARGUMENT);
+
+  /* Edits. */
+  OK(cadr_scene_set_switch_mask(b.scene, b.switch_node, mask, 2));
+  EXPECT(cadr_scene_set_switch_mask(b.scene, b.switch_node, mask, 1), CADR_RESULT_INVALID_ARGUMENT);
+  EXPECT(cadr_scene_set_switch_mask(b.scene, b.geo, mask, 2), CADR_RESULT_INVALID_ARGUMENT);
+  OK(cadr_scene_set_flags(b.scene, group, CADR_NODE_VISIBLE | CADR_NODE_HIGHLIGHTED));
+  OK(cadr_scene_flags(b.scene, group, &flags));
+  CHECK(flags == (CADR_NODE_VISIBLE | CADR_NODE_HIGHLIGHTED));
+  OK(cadr_scene_set_flags(b.scene, group, CADR_NODE_VISIBLE | CADR_NODE_PICKABLE));
+  EXPECT(cadr_scene_set_flags(b.scene, group, 64), CADR_RESULT_INVALID_ARGUMENT);
+  EXPECT(cadr_scene_flags(b.scene, group, NULL), CADR_RESULT_NULL_ARGUMENT);
+  OK(cadr_scene_set_part_material(b.scene, b.geo, 1, b.red));
+  OK(cadr_scene_set_part_material(b.scene, b.geo, 1, b.blue));
+  EXPECT(cadr_scene_set_part_material(b.scene, b.geo, 2, b.red), CADR_RESULT_INVALID_ARGUMENT);
+  EXPECT(cadr_scene_set_part_material(b.scene, b.mover, 0, b.red), CADR_RESULT_INVALID_ARGUMENT);
+  OK(cadr_scene_set_part_visible(b.scene, b.geo, 0, false));
+  OK(cadr_scene_set_part_visible(b.scene, b.geo, 0, true));
+  EXPECT(cadr_scene_set_part_visible(b.scene, b.geo, 5, false), CADR_RESULT_INVALID_ARGUMENT);
+  translation(matrix, 0, 0, 0);
+  OK(cadr_scene_set_matrix(b.scene, b.mover, matrix));
+  EXPECT(cadr_scene_set_matrix(b.scene, b.geo, matrix), CADR_RESULT_INVALID_ARGUMENT);
+  EXPECT(cadr_scene_set_matrix(b.scene, b.mover, NULL), CADR_RESULT_NULL_ARGUMENT);
+  OK(cadr_scene_replace_geometry(b.scene, b.cube, &desc));
+  desc.part_count = 1;
+  EXPECT(cadr_scene_replace_geometry(b.scene, b.cube, &desc), CADR_RESULT_INVALID_ARGUMENT);
+  desc = cube_desc();
+
+  /* Only the geo shows (the switch hides `second`): 2 instances, 12 triangles. */
+  OK(cadr_scene_statistics(b.scene, &statistics));
+  CHECK(statistics.geometries == 1 && statistics.materials == 2);
+  CHECK(statistics.instances == 4 && statistics.visible_instances == 2);
+  CHECK(statistics.visible_triangles == 12);
+  OK(cadr_scene_bounds(b.scene, &bounds));
+  CHECK(bounds.min[0] == -0.5 && bounds.max[0] == 0.5);
+  EXPECT(cadr_scene_bounds(b.scene, NULL), CADR_RESULT_NULL_ARGUMENT);
+
+  /* In use: refused; unused after removal: destroyed. */
+  EXPECT(cadr_scene_destroy_geometry(b.scene, b.cube), CADR_RESULT_IN_USE);
+  EXPECT(cadr_scene_destroy_material(b.scene, b.red), CADR_RESULT_IN_USE);
+  OK(cadr_scene_remove_child(b.scene, b.switch_node, second));
+  EXPECT(cadr_scene_remove_child(b.scene, b.switch_node, second), CADR_RESULT_INVALID_ARGUMENT);
+  OK(cadr_scene_destroy_node(b.scene, second));
+  EXPECT(cadr_scene_destroy_node(b.scene, b.root), CADR_RESULT_INVALID_ARGUMENT);
+
+  /* Destroyed and foreign handles. */
+  EXPECT(cadr_scene_add_child(b.scene, group, second), CADR_RESULT_DESTROYED_HANDLE);
+  EXPECT(cadr_scene_destroy_node(b.scene, second), CADR_RESULT_DESTROYED_HANDLE);
+  EXPECT(cadr_scene_add_child(b.scene, group, 0x1234), CADR_RESULT_FOREIGN_HANDLE);
+  EXPECT(cadr_scene_add_child(b.scene, group, 0), CADR_RESULT_NULL_ARGUMENT);
+  EXPECT(cadr_scene_destroy_geometry(b.scene, b.red), CADR_RESULT_FOREIGN_HANDLE);
+  EXPECT(cadr_scene_set_part_material(b.scene, b.geo, 0, b.cube), CADR_RESULT_FOREIGN_HANDLE);
+  EXPECT(cadr_scene_create_geo(b.scene, "x", b.red, parts, 2, &child), CADR_RESULT_FOREIGN_HANDLE);
+  EXPECT(cadr_scene_root((CadrScene)(uintptr_t)0x5151, &child), CADR_RESULT_FOREIGN_HANDLE);
+  return b;
+}
+
+static void test_loading(CadrScene scene, CadrNode root) {
+  struct CadrLoadResult loaded;
+  struct CadrSceneStatistics statistics;
+  const char *missing = "/nonexistent/cadr/engine.gltf";
+  memset(&loaded, 0, sizeof loaded);
+  EXPECT(cadr_scene_load(scene, missing, root, &loaded), CADR_RESULT_LOAD_FAILED);
+  MESSAGE_HAS(missing);
+  EXPECT(cadr_scene_load(scene, "model.obj", root, &loaded), CADR_RESULT_LOAD_FAILED);
+  MESSAGE_HAS("unknown scene format");
+  EXPECT(cadr_scene_load(scene, "gen:no-such-generator", root, &loaded), CADR_RESULT_LOAD_FAILED);
+  EXPECT(cadr_scene_load(scene, NULL, root, &loaded), CADR_RESULT_NULL_ARGUMENT);
+  EXPECT(cadr_scene_load(scene, "gen:demo", root, NULL), CADR_RESULT_NULL_ARGUMENT);
+  EXPECT(cadr_scene_load(scene, "gen:demo", 0x4e00000000000042ull, &loaded),
+         CADR_RESULT_FOREIGN_HANDLE);
+  CHECK(loaded.nodes == NULL); /* nothing written on failure */
+
+  OK(cadr_scene_load(scene, "gen:grid:parts=40", root, &loaded));
+  CHECK(loaded.root != 0 && loaded.node_count > 1 && loaded.nodes[0] == loaded.root);
+  CHECK(loaded.geometry_count >= 1 && loaded.material_count >= 1);
+  OK(cadr_scene_statistics(scene, &statistics));
+  CHECK(statistics.visible_instances >= 40);
+  /* What was loaded can be edited through its handles. */
+  OK(cadr_scene_set_flags(scene, loaded.root, 0));
+  OK(cadr_scene_statistics(scene, &statistics));
+  CHECK(statistics.visible_instances == 2);
+  OK(cadr_scene_destroy_node(scene, loaded.root));
+  cadr_load_result_free(&loaded);
+  CHECK(loaded.nodes == NULL && loaded.node_count == 0);
+  cadr_load_result_free(&loaded);
+  cadr_load_result_free(NULL);
+}
+
+static unsigned pixel_difference(const uint8_t *a, const uint8_t *b, size_t size) {
+  unsigned differing = 0;
+  size_t i;
+  for (i = 0; i < size; i += 4) {
+    if (abs(a[i] - b[i]) + abs(a[i + 1] - b[i + 1]) + abs(a[i + 2] - b[i + 2]) > 30) {
+      ++differing;
+    }
+  }
+  return differing;
+}
+
+static void test_renderer(CadrContext context, struct Built *b) {
+  enum { W = 96, H = 64 };
+  CadrRenderer renderer = NULL, other = NULL;
+  struct CadrCamera camera;
+  struct CadrFrameStats stats;
+  struct CadrBounds bounds;
+  uint8_t *first = (uint8_t *)malloc(W * H * 4), *second = (uint8_t *)malloc(W * H * 4);
+  uint32_t width = 0, height = 0, mode = 99, kind;
+  int step;
+  const char *name = NULL;
+  double matrix[16];
+  struct CadrTechniqueSelection selection = {NULL, NULL, NULL, NULL};
+  const char *kinds[4][2] = {{"arena", "per-geometry"},
+                             {"ssbo-index", "push"},
+                             {"groups-mdi-replay", "individual"},
+                             {"frustum", "none"}};
+  CHECK(first != NULL && second != NULL);
+
+  EXPECT(cadr_renderer_create(context, 0, 64, &renderer), CADR_RESULT_INVALID_ARGUMENT);
+  EXPECT(cadr_renderer_create(context, 96, 20000, &renderer), CADR_RESULT_INVALID_ARGUMENT);
+  EXPECT(cadr_renderer_create(context, W, H, NULL), CADR_RESULT_NULL_ARGUMENT);
+  EXPECT(cadr_renderer_create((CadrContext)b->scene, W, H, &renderer), CADR_RESULT_FOREIGN_HANDLE);
+  EXPECT(cadr_renderer_create_for_surface(context, 0, W, H, &renderer), CADR_RESULT_NULL_ARGUMENT);
+  EXPECT(cadr_renderer_create_for_surface(context, 0x1234, W, H, &renderer),
+         CADR_RESULT_UNSUPPORTED);
+  MESSAGE_HAS("VK_KHR_surface");
+  OK(cadr_renderer_create(context, W, H, &renderer));
+  OK(cadr_renderer_size(renderer, &width, &height));
+  CHECK(width == W && height == H);
+  EXPECT(cadr_renderer_size(renderer, NULL, &height), CADR_RESULT_NULL_ARGUMENT);
+
+  /* The fastest combination the plugins offer is chosen by default. */
+  OK(cadr_renderer_technique(renderer, CADR_TECHNIQUE_KIND_SUBMISSION, &name));
+  CHECK(strcmp(name, "groups-mdi-replay") == 0);
+  EXPECT(cadr_renderer_technique(renderer, 9, &name), CADR_RESULT_INVALID_ARGUMENT);
+  EXPECT(cadr_renderer_technique(renderer, CADR_TECHNIQUE_KIND_VERTEX, NULL),
+         CADR_RESULT_NULL_ARGUMENT);
+
+  OK(cadr_scene_bounds(b->scene, &bounds));
+  OK(cadr_camera_fit(&bounds, (double)W / H, NULL, &camera));
+  EXPECT(cadr_renderer_render(renderer, b->scene, NULL, &stats), CADR_RESULT_NULL_ARGUMENT);
+  EXPECT(cadr_renderer_render(renderer, NULL, &camera, &stats), CADR_RESULT_NULL_ARGUMENT);
+  EXPECT(cadr_renderer_render(renderer, (CadrScene)renderer, &camera, &stats),
+         CADR_RESULT_FOREIGN_HANDLE);
+  camera.view[3] = INFINITY;
+  EXPECT(cadr_renderer_render(renderer, b->scene, &camera, &stats), CADR_RESULT_INVALID_ARGUMENT);
+  MESSAGE_HAS("camera.view[3]");
+  OK(cadr_camera_fit(&bounds, (double)W / H, NULL, &camera));
+  OK(cadr_renderer_render(renderer, b->scene, &camera, &stats));
+  CHECK(stats.presented && stats.draws == 2 && stats.triangles == 12 && stats.cpu_us > 0);
+  OK(cadr_renderer_render(renderer, b->scene, &camera, NULL));
+
+  /* Pixels: wrong sizes are refused, the cube is in the middle. */
+  EXPECT(cadr_renderer_read_pixels(renderer, first, W * H * 4 - 1), CADR_RESULT_BUFFER_TOO_SMALL);
+  MESSAGE_HAS("24576");
+  EXPECT(cadr_renderer_read_pixels(renderer, NULL, W * H * 4), CADR_RESULT_NULL_ARGUMENT);
+  OK(cadr_renderer_read_pixels(renderer, first, W * H * 4));
+  CHECK(pixel_difference(first, first + 0, 4) == 0);
+  {
+    const uint8_t *corner = first, *centre = first + ((H / 2) * W + W / 2) * 4;
+    CHECK(abs(corner[0] - centre[0]) + abs(corner[1] - centre[1]) + abs(corner[2] - centre[2]) > 30);
+  }
+  EXPECT(cadr_renderer_save_png(renderer, "/nonexistent/dir/frame.png"), CADR_RESULT_IO);
+  MESSAGE_HAS("/nonexistent/dir/frame.png");
+  EXPECT(cadr_renderer_save_png(renderer, NULL), CADR_RESULT_NULL_ARGUMENT);
+
+  /* An edit moves the cube; the next frame shows it. */
+  translation(matrix, 0.6, 0, 0);
+  OK(cadr_scene_set_matrix(b->scene, b->mover, matrix));
+  OK(cadr_renderer_render(renderer, b->scene, &camera, &stats));
+  OK(cadr_renderer_read_pixels(renderer, second, W * H * 4));
+  CHECK(pixel_difference(first, second, W * H * 4) > 100);
+  translation(matrix, 0, 0, 0);
+  OK(cadr_scene_set_matrix(b->scene, b->mover, matrix));
+
+  /* Every kind swapped at run time renders the same image: down to the simplest techniques
+   * (culling first: the fast submission needs the fast paths), then back up. */
+  for (step = 0; step < 8; ++step) {
+    int which = step < 4 ? 1 : 0;
+    kind = step < 4 ? 3 - (uint32_t)step : (uint32_t)step - 4;
+    OK(cadr_renderer_set_technique(renderer, kind, kinds[kind][which]));
+    OK(cadr_renderer_technique(renderer, kind, &name));
+    CHECK(strcmp(name, kinds[kind][which]) == 0);
+    OK(cadr_renderer_render(renderer, b->scene, &camera, &stats));
+    OK(cadr_renderer_read_pixels(renderer, second, W * H * 4));
+    CHECK(pixel_difference(first, second, W * H * 4) < 20);
+  }
+  EXPECT(cadr_renderer_set_technique(renderer, CADR_TECHNIQUE_KIND_SUBMISSION, "no-such"),
+         CADR_RESULT_NOT_FOUND);
+  MESSAGE_HAS("known:");
+  EXPECT(cadr_renderer_set_technique(renderer, 7, "none"), CADR_RESULT_INVALID_ARGUMENT);
+  EXPECT(cadr_renderer_set_technique(renderer, CADR_TECHNIQUE_KIND_CULLING, NULL),
+         CADR_RESULT_NULL_ARGUMENT);
+  /* Multi-draw-indirect needs a vertex path that binds the whole scene once. */
+  selection.vertex = "per-part";
+  selection.submission = "individual-mdi";
+  EXPECT(cadr_renderer_check_techniques(renderer, &selection), CADR_RESULT_INVALID_COMBINATION);
+  EXPECT(cadr_renderer_set_techniques(renderer, &selection), CADR_RESULT_INVALID_COMBINATION);
+  OK(cadr_renderer_technique(renderer, CADR_TECHNIQUE_KIND_VERTEX, &name));
+  CHECK(strcmp(name, "arena") == 0); /* the refused selection changed nothing */
+  selection.vertex = "pulling";
+  OK(cadr_renderer_check_techniques(renderer, &selection));
+  OK(cadr_renderer_set_techniques(renderer, &selection));
+  OK(cadr_renderer_render(renderer, b->scene, &camera, &stats));
+  CHECK(stats.draw_calls <= 2 && stats.draws == 2);
+  EXPECT(cadr_renderer_set_techniques(renderer, NULL), CADR_RESULT_NULL_ARGUMENT);
+
+  /* Shade modes. */
+  OK(cadr_renderer_shade_mode(renderer, &mode));
+  CHECK(mode == CADR_SHADE_SOLID);
+  OK(cadr_renderer_set_shade_mode(renderer, CADR_SHADE_EDGES));
+  OK(cadr_renderer_shade_mode(renderer, &mode));
+  CHECK(mode == CADR_SHADE_EDGES);
+  OK(cadr_renderer_render(renderer, b->scene, &camera, &stats));
+  EXPECT(cadr_renderer_set_shade_mode(renderer, 5), CADR_RESULT_INVALID_ARGUMENT);
+  EXPECT(cadr_renderer_shade_mode(renderer, NULL), CADR_RESULT_NULL_ARGUMENT);
+  OK(cadr_renderer_set_shade_mode(renderer, CADR_SHADE_SOLID));
+
+  /* Resizing. */
+  OK(cadr_renderer_resize(renderer, 48, 32));
+  OK(cadr_renderer_size(renderer, &width, &height));
+  CHECK(width == 48 && height == 32);
+  EXPECT(cadr_renderer_resize(renderer, 0, 32), CADR_RESULT_INVALID_ARGUMENT);
+  OK(cadr_renderer_render(renderer, b->scene, &camera, &stats));
+  EXPECT(cadr_renderer_read_pixels(renderer, second, 48 * 32 * 4 - 4), CADR_RESULT_BUFFER_TOO_SMALL);
+  OK(cadr_renderer_read_pixels(renderer, second, 48 * 32 * 4));
+
+  /* A second renderer draws the same scene (uploaded afresh), then the first again. */
+  OK(cadr_renderer_create(context, W, H, &other));
+  OK(cadr_renderer_render(other, b->scene, &camera, &stats));
+  OK(cadr_renderer_read_pixels(other, second, W * H * 4));
+  CHECK(pixel_difference(first, second, W * H * 4) < 20);
+  OK(cadr_renderer_render(renderer, b->scene, &camera, &stats));
+
+  /* Destroyed and foreign renderer handles; destroy(NULL). */
+  OK(cadr_renderer_destroy(other));
+  EXPECT(cadr_renderer_destroy(other), CADR_RESULT_DESTROYED_HANDLE);
+  EXPECT(cadr_renderer_render(other, b->scene, &camera, &stats), CADR_RESULT_DESTROYED_HANDLE);
+  EXPECT(cadr_renderer_destroy((CadrRenderer)context), CADR_RESULT_FOREIGN_HANDLE);
+  OK(cadr_renderer_destroy(NULL));
+  OK(cadr_renderer_destroy(renderer));
+  free(first);
+  free(second);
+}
+
+int main(void) {
+  CadrContext context;
+  struct Built built;
+  uint64_t validation_errors = 99;
+  char path[512];
+  const char *out_dir = getenv("CADR_TEST_OUT");
+
+  test_basics();
+  test_camera();
+  context = test_context();
+  built = test_scene();
+  test_loading(built.scene, built.root);
+  test_renderer(context, &built);
+
+  /* The one-call path. */
+  snprintf(path, sizeof path, "%s/one-call.png", out_dir ? out_dir : "/tmp");
+  OK(cadr_render_scene_to_png("gen:grid:parts=20", path, 32, 32, true));
+  EXPECT(cadr_render_scene_to_png("gen:grid:parts=20", path, 0, 32, false),
+         CADR_RESULT_INVALID_ARGUMENT);
+
+  OK(cadr_context_validation_error_count(context, &validation_errors));
+  CHECK(validation_errors == 0);
+  EXPECT(cadr_context_validation_error_count(context, NULL), CADR_RESULT_NULL_ARGUMENT);
+
+  OK(cadr_scene_destroy(built.scene));
+  EXPECT(cadr_scene_destroy(built.scene), CADR_RESULT_DESTROYED_HANDLE);
+  EXPECT(cadr_scene_root(built.scene, &built.root), CADR_RESULT_DESTROYED_HANDLE);
+  OK(cadr_scene_destroy(NULL));
+  OK(cadr_context_destroy(context));
+  EXPECT(cadr_context_destroy(context), CADR_RESULT_DESTROYED_HANDLE);
+  EXPECT(cadr_context_device_info(context, NULL), CADR_RESULT_DESTROYED_HANDLE);
+  OK(cadr_context_destroy(NULL));
+  printf("api suite: %d checks passed\n", checks);
+  return 0;
+}

@@ -1,0 +1,69 @@
+//! Building and running the C and C++ programs of the tests and samples against the
+//! `libcadr.so` of this build, with the strict flags hosts are promised to compile with.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+/// The flags every C program is built with.
+pub const STRICT_C: [&str; 5] = ["-std=c99", "-Wall", "-Wextra", "-Wpedantic", "-Werror"];
+
+/// The repository's root.
+pub fn repository() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("..")
+}
+
+/// The build's output directory (`target/debug`), where `libcadr.so` and the plugins lie.
+pub fn build_dir() -> PathBuf {
+    let exe = std::env::current_exe().expect("the test's own path");
+    // target/debug/deps/<test> -> target/debug
+    exe.parent()
+        .and_then(Path::parent)
+        .map(Path::to_path_buf)
+        .expect("the test runs from target/<profile>/deps")
+}
+
+/// A fresh, empty directory for one test's files.
+pub fn scratch_dir(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("cadr-{name}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).expect("create a scratch directory");
+    dir
+}
+
+/// Compiles C `sources` into the executable `output`, linked with `libcadr.so` of this build
+/// (its directory recorded as the run path) plus `extra` flags; panics with the compiler's
+/// messages on failure.
+pub fn build_c_program(sources: &[PathBuf], output: &Path, extra: &[&str]) {
+    let lib_dir = build_dir();
+    let mut command = Command::new("cc");
+    command
+        .args(STRICT_C)
+        .arg("-g")
+        .arg("-I")
+        .arg(repository().join("include"))
+        .args(sources)
+        .args(extra)
+        .arg("-o")
+        .arg(output)
+        .arg("-L")
+        .arg(&lib_dir)
+        .arg(format!("-Wl,-rpath,{}", lib_dir.display()))
+        .args(["-lcadr", "-lm"]);
+    let result = command.output().expect("run cc (build-essential)");
+    assert!(
+        result.status.success(),
+        "cc failed for {}:\n{}",
+        output.display(),
+        String::from_utf8_lossy(&result.stderr)
+    );
+}
+
+/// The combined output of a finished program, for messages.
+pub fn describe(output: &Output) -> String {
+    format!(
+        "status {:?}\n--- stdout\n{}\n--- stderr\n{}",
+        output.status,
+        String::from_utf8_lossy(&output.stdout),
+        String::from_utf8_lossy(&output.stderr)
+    )
+}

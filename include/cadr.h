@@ -1055,6 +1055,17 @@ enum CadrResult cadr_scene_bounds(CadrScene scene, struct CadrBounds *bounds);
 // `statistics` is null or writable.
 enum CadrResult cadr_scene_statistics(CadrScene scene, struct CadrSceneStatistics *statistics);
 
+// Writes the world-space bounds of what `node` shows, over every path it is reached by
+// (empty: `min` > `max`). Walks all instances of the scene: meant for occasional queries
+// (framing a selection, exploded views), not for every frame.
+//
+// Returns `CADR_RESULT_OK`, `CADR_RESULT_NULL_ARGUMENT` or a handle error.
+// Thread-safety: as `cadr_scene_create`.
+//
+// # Safety
+// `bounds` is null or writable.
+enum CadrResult cadr_scene_node_bounds(CadrScene scene, CadrNode node, struct CadrBounds *bounds);
+
 #ifdef __cplusplus
 }  // extern "C"
 #endif  // __cplusplus

@@ -904,8 +904,8 @@ pub unsafe extern "C" fn cadr_load_result_free(result: *mut CadrLoadResult) {
     };
 }
 
-/// World bounds of what the scene shows, and its statistics.
-fn shown(state: &mut SceneState) -> (Aabb, CadrSceneStatistics) {
+/// World bounds of what the scene shows (only below `below` when given), and its statistics.
+fn shown(state: &mut SceneState, below: Option<NodeHandle>) -> (Aabb, CadrSceneStatistics) {
     state.update();
     let (graph, tree) = (&state.graph, &state.tree);
     let mut geometry_bounds: std::collections::HashMap<u32, Aabb> = Default::default();
@@ -921,6 +921,11 @@ fn shown(state: &mut SceneState) -> (Aabb, CadrSceneStatistics) {
         let Some(instance) = tree.instance(id) else {
             continue;
         };
+        if let Some(node) = below {
+            if !tree.path(instance.tree_node).contains(&node) {
+                continue;
+            }
+        }
         statistics.instances += 1;
         if !instance.visible {
             continue;
@@ -954,7 +959,7 @@ pub unsafe extern "C" fn cadr_scene_bounds(
 ) -> CadrResult {
     guard(|| {
         non_null(bounds, "bounds")?;
-        let value = with_scene(scene, |s| Ok(shown(s).0))?;
+        let value = with_scene(scene, |s| Ok(shown(s, None).0))?;
         // SAFETY: checked non-null; writable by contract.
         unsafe { write(bounds, value.into()) };
         Ok(())
@@ -975,9 +980,36 @@ pub unsafe extern "C" fn cadr_scene_statistics(
 ) -> CadrResult {
     guard(|| {
         non_null(statistics, "statistics")?;
-        let value = with_scene(scene, |s| Ok(shown(s).1))?;
+        let value = with_scene(scene, |s| Ok(shown(s, None).1))?;
         // SAFETY: checked non-null; writable by contract.
         unsafe { write(statistics, value) };
+        Ok(())
+    })
+}
+
+/// Writes the world-space bounds of what `node` shows, over every path it is reached by
+/// (empty: `min` > `max`). Walks all instances of the scene: meant for occasional queries
+/// (framing a selection, exploded views), not for every frame.
+///
+/// Returns `CADR_RESULT_OK`, `CADR_RESULT_NULL_ARGUMENT` or a handle error.
+/// Thread-safety: as `cadr_scene_create`.
+///
+/// # Safety
+/// `bounds` is null or writable.
+#[no_mangle]
+pub unsafe extern "C" fn cadr_scene_node_bounds(
+    scene: CadrScene,
+    node: CadrNode,
+    bounds: *mut CadrBounds,
+) -> CadrResult {
+    guard(|| {
+        let value = with_scene(scene, |s| {
+            let node = node_of(&s.graph, node, "node")?;
+            Ok(shown(s, Some(node)).0)
+        })?;
+        non_null(bounds, "bounds")?;
+        // SAFETY: checked non-null; writable by contract.
+        unsafe { write(bounds, value.into()) };
         Ok(())
     })
 }

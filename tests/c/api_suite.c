@@ -337,6 +337,11 @@ static struct Built test_scene(void) {
   CHECK(statistics.visible_triangles == 12);
   OK(cadr_scene_bounds(b.scene, &bounds));
   CHECK(bounds.min[0] == -0.5 && bounds.max[0] == 0.5);
+  OK(cadr_scene_node_bounds(b.scene, b.geo, &bounds));
+  CHECK(bounds.min[1] == -0.5 && bounds.max[1] == 0.5);
+  OK(cadr_scene_node_bounds(b.scene, second, &bounds));
+  CHECK(bounds.min[0] > bounds.max[0]); /* hidden by the switch: empty */
+  EXPECT(cadr_scene_node_bounds(b.scene, b.geo, NULL), CADR_RESULT_NULL_ARGUMENT);
   EXPECT(cadr_scene_bounds(b.scene, NULL), CADR_RESULT_NULL_ARGUMENT);
 
   /* In use: refused; unused after removal: destroyed. */

@@ -1,0 +1,342 @@
+/* viewer: a GLFW window showing a scene through cadr's swapchain.
+ *
+ *   viewer [scene]                   (default gen:demo; .gltf/.glb/.csf/.csf.gz or gen:NAME)
+ *   viewer [scene] --self-test DIR   scripted run for the tests (see below)
+ *
+ * Mouse: left drag orbits, right or middle drag pans, the wheel zooms.
+ * Keys:  V, P, S, C cycle the vertex path, parameter path, submission and culling technique;
+ *        E toggles solid / solid with edges; F fits the view; Esc quits.
+ * The window title shows the techniques and the frame's figures; they are also printed once a
+ * second. Resizing and minimizing are handled by cadr (swapchain recreated, frames skipped).
+ *
+ * --self-test DIR renders frames, cycles every technique kind once, toggles the shade mode,
+ * resizes the window, then renders a fixed view both into the window and offscreen
+ * (DIR/offscreen.png), prints "screenshot ready WxH" and keeps presenting until a line arrives
+ * on stdin, so that a test can grab the window and compare. */
+#define _POSIX_C_SOURCE 199309L
+#define GLFW_INCLUDE_VULKAN
+#include <GLFW/glfw3.h>
+
+#include "common/sample.h"
+
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+
+static const char *const kind_names[4] = {"vertex", "params", "submit", "cull"};
+
+struct Viewer {
+  GLFWwindow *window;
+  CadrContext context;
+  CadrScene scene;
+  CadrRenderer renderer;
+  struct CadrBounds bounds;
+  double target[3], distance, yaw, pitch, radius;
+  double last_x, last_y;
+  int dragging; /* 0 none, 1 orbit, 2 pan */
+  uint32_t shade;
+  struct CadrFrameStats stats;
+};
+
+static double now_seconds(void) {
+  struct timespec t;
+  clock_gettime(CLOCK_MONOTONIC, &t);
+  return (double)t.tv_sec + (double)t.tv_nsec / 1e9;
+}
+
+static void fit_view(struct Viewer *v) {
+  int axis;
+  double extent = 0;
+  for (axis = 0; axis < 3; ++axis) {
+    double size = v->bounds.max[axis] - v->bounds.min[axis];
+    v->target[axis] = size >= 0 ? 0.5 * (v->bounds.min[axis] + v->bounds.max[axis]) : 0.0;
+    extent += size >= 0 ? size * size : 0.0;
+  }
+  v->radius = extent > 0 ? 0.5 * sqrt(extent) : 1.0;
+  v->distance = v->radius / sin(0.5 * 40.0 * 3.14159265358979 / 180.0) * 1.05;
+  v->yaw = 0.6;
+  v->pitch = 0.45;
+}
+
+static void camera_of(const struct Viewer *v, uint32_t width, uint32_t height,
+                      struct CadrCamera *camera) {
+  double eye[3];
+  eye[0] = v->target[0] + v->distance * cos(v->pitch) * sin(v->yaw);
+  eye[1] = v->target[1] + v->distance * sin(v->pitch);
+  eye[2] = v->target[2] + v->distance * cos(v->pitch) * cos(v->yaw);
+  CADR_CHECK(cadr_camera_look_at(eye, v->target, 40.0, (double)width / (height ? height : 1),
+                                 v->distance * 1e-3, v->distance + 4.0 * v->radius, camera));
+}
+
+/* Switches the technique of `kind` to the next one (in the context's list) that the device can
+ * run and that fits the other three; prints what it chose or why none did. */
+static void cycle_technique(struct Viewer *v, uint32_t kind) {
+  const char *current = NULL;
+  uint32_t count = 0, i, start = 0, step;
+  struct CadrTechniqueInfo info;
+  CADR_CHECK(cadr_renderer_technique(v->renderer, kind, &current));
+  CADR_CHECK(cadr_context_technique_count(v->context, &count));
+  for (i = 0; i < count; ++i) {
+    CADR_CHECK(cadr_context_technique(v->context, i, &info));
+    if (info.kind == (enum CadrTechniqueKind)kind && strcmp(info.name, current) == 0) {
+      start = i;
+    }
+  }
+  for (step = 1; step <= count; ++step) {
+    CADR_CHECK(cadr_context_technique(v->context, (start + step) % count, &info));
+    if (info.kind != (enum CadrTechniqueKind)kind || !info.supported) {
+      continue;
+    }
+    if (cadr_renderer_set_technique(v->renderer, kind, info.name) == CADR_RESULT_OK) {
+      printf("%s technique: %s\n", kind_names[kind], info.name);
+      return;
+    }
+  }
+  printf("%s technique: no other one fits the current combination\n", kind_names[kind]);
+}
+
+static void toggle_shade(struct Viewer *v) {
+  v->shade = v->shade == CADR_SHADE_SOLID ? CADR_SHADE_EDGES : CADR_SHADE_SOLID;
+  CADR_CHECK(cadr_renderer_set_shade_mode(v->renderer, v->shade));
+  printf("shade mode: %s\n", v->shade == CADR_SHADE_SOLID ? "solid" : "edges");
+}
+
+static void describe(struct Viewer *v, char *text, size_t size) {
+  const char *names[4];
+  uint32_t kind;
+  for (kind = 0; kind < 4; ++kind) {
+    CADR_CHECK(cadr_renderer_technique(v->renderer, kind, &names[kind]));
+  }
+  snprintf(text, size, "cadr viewer | %s / %s / %s / %s | %s | %llu draws in %llu calls | CPU %.0f us, GPU %.0f us",
+           names[0], names[1], names[2], names[3], v->shade == CADR_SHADE_SOLID ? "solid" : "edges",
+           (unsigned long long)v->stats.draws, (unsigned long long)v->stats.draw_calls,
+           v->stats.cpu_us, v->stats.gpu_us);
+}
+
+static void render(struct Viewer *v) {
+  uint32_t width = 0, height = 0;
+  struct CadrCamera camera;
+  CADR_CHECK(cadr_renderer_size(v->renderer, &width, &height));
+  if (width == 0 || height == 0) {
+    /* Minimized: cadr skips the frame; ask again after the next events. */
+    width = height = 1;
+  }
+  camera_of(v, width, height, &camera);
+  CADR_CHECK(cadr_renderer_render(v->renderer, v->scene, &camera, &v->stats));
+}
+
+static void on_key(GLFWwindow *window, int key, int scancode, int action, int mods) {
+  struct Viewer *v = (struct Viewer *)glfwGetWindowUserPointer(window);
+  (void)scancode;
+  (void)mods;
+  if (action != GLFW_PRESS) {
+    return;
+  }
+  switch (key) {
+  case GLFW_KEY_V: cycle_technique(v, CADR_TECHNIQUE_KIND_VERTEX); break;
+  case GLFW_KEY_P: cycle_technique(v, CADR_TECHNIQUE_KIND_PARAMETERS); break;
+  case GLFW_KEY_S: cycle_technique(v, CADR_TECHNIQUE_KIND_SUBMISSION); break;
+  case GLFW_KEY_C: cycle_technique(v, CADR_TECHNIQUE_KIND_CULLING); break;
+  case GLFW_KEY_E: toggle_shade(v); break;
+  case GLFW_KEY_F: fit_view(v); break;
+  case GLFW_KEY_ESCAPE: glfwSetWindowShouldClose(window, GLFW_TRUE); break;
+  default: break;
+  }
+}
+
+static void on_button(GLFWwindow *window, int button, int action, int mods) {
+  struct Viewer *v = (struct Viewer *)glfwGetWindowUserPointer(window);
+  (void)mods;
+  if (action == GLFW_PRESS) {
+    glfwGetCursorPos(window, &v->last_x, &v->last_y);
+    v->dragging = button == GLFW_MOUSE_BUTTON_LEFT ? 1 : 2;
+  } else {
+    v->dragging = 0;
+  }
+}
+
+static void on_cursor(GLFWwindow *window, double x, double y) {
+  struct Viewer *v = (struct Viewer *)glfwGetWindowUserPointer(window);
+  double dx = x - v->last_x, dy = y - v->last_y;
+  v->last_x = x;
+  v->last_y = y;
+  if (v->dragging == 1) {
+    v->yaw -= dx * 0.01;
+    v->pitch += dy * 0.01;
+    if (v->pitch > 1.5) v->pitch = 1.5;
+    if (v->pitch < -1.5) v->pitch = -1.5;
+  } else if (v->dragging == 2) {
+    /* Pan in the view plane: right = (cos yaw, 0, -sin yaw), up ~ world Y. */
+    double scale = v->distance * 0.0015;
+    v->target[0] -= (cos(v->yaw) * dx) * scale;
+    v->target[2] -= (-sin(v->yaw) * dx) * scale;
+    v->target[1] += dy * scale;
+  }
+}
+
+static void on_scroll(GLFWwindow *window, double dx, double dy) {
+  struct Viewer *v = (struct Viewer *)glfwGetWindowUserPointer(window);
+  (void)dx;
+  v->distance *= pow(0.9, dy);
+  if (v->distance < v->radius * 1e-3) v->distance = v->radius * 1e-3;
+}
+
+static void on_framebuffer_size(GLFWwindow *window, int width, int height) {
+  struct Viewer *v = (struct Viewer *)glfwGetWindowUserPointer(window);
+  CADR_CHECK(cadr_renderer_resize(v->renderer, (uint32_t)width, (uint32_t)height));
+}
+
+/* The scripted run of --self-test. */
+static int self_test(struct Viewer *v, const char *dir) {
+  uint32_t kind, width = 0, height = 0;
+  int frame, fb_width = 0, fb_height = 0;
+  char path[1024], line[64];
+  CadrRenderer offscreen;
+  struct CadrCamera camera;
+  uint64_t errors = 0;
+  for (frame = 0; frame < 3; ++frame) {
+    glfwPollEvents();
+    render(v);
+  }
+  printf("rendered 3 frames: %llu draws, CPU %.1f us\n", (unsigned long long)v->stats.draws,
+         v->stats.cpu_us);
+  for (kind = 0; kind < 4; ++kind) {
+    cycle_technique(v, kind);
+    render(v);
+  }
+  toggle_shade(v);
+  render(v);
+  toggle_shade(v);
+  glfwSetWindowSize(v->window, 480, 360);
+  for (frame = 0; frame < 200 && (fb_width != 480 || fb_height != 360); ++frame) {
+    glfwPollEvents();
+    glfwGetFramebufferSize(v->window, &fb_width, &fb_height);
+  }
+  /* The callback may not have run yet: tell the renderer directly as well. */
+  CADR_CHECK(cadr_renderer_resize(v->renderer, (uint32_t)fb_width, (uint32_t)fb_height));
+  render(v);
+  CADR_CHECK(cadr_renderer_size(v->renderer, &width, &height));
+  printf("resized to %ux%u\n", width, height);
+  if (width != 480 || height != 360) {
+    fprintf(stderr, "the swapchain is %ux%u after resizing the window to 480x360\n", width, height);
+    return 1;
+  }
+  render(v);
+  /* The same view, offscreen. */
+  camera_of(v, width, height, &camera);
+  CADR_CHECK(cadr_renderer_create(v->context, width, height, &offscreen));
+  CADR_CHECK(cadr_renderer_render(offscreen, v->scene, &camera, NULL));
+  snprintf(path, sizeof path, "%s/offscreen.png", dir);
+  CADR_CHECK(cadr_renderer_save_png(offscreen, path));
+  CADR_CHECK(cadr_renderer_destroy(offscreen));
+  render(v);
+  printf("screenshot ready %ux%u\n", width, height);
+  fflush(stdout);
+  /* Keep the window's content current while the test grabs it. */
+  if (fgets(line, sizeof line, stdin) == NULL) {
+    line[0] = '\0';
+  }
+  CADR_CHECK(cadr_context_validation_error_count(v->context, &errors));
+  printf("validation errors: %llu\n", (unsigned long long)errors);
+  return errors == 0 ? 0 : 1;
+}
+
+int main(int argc, char **argv) {
+  struct Viewer v;
+  struct CadrContextOptions options;
+  struct CadrLoadResult loaded;
+  const char *source = "gen:demo", *test_dir = NULL, **extensions;
+  uint32_t extension_count = 0;
+  void *instance = NULL;
+  VkSurfaceKHR surface = VK_NULL_HANDLE;
+  CadrNode root;
+  int i, width, height, status = 0;
+  double last_print;
+  char title[512];
+
+  for (i = 1; i < argc; ++i) {
+    if (strcmp(argv[i], "--self-test") == 0 && i + 1 < argc) {
+      test_dir = argv[++i];
+    } else {
+      source = argv[i];
+    }
+  }
+  memset(&v, 0, sizeof v);
+  v.shade = CADR_SHADE_SOLID;
+  if (!glfwInit()) {
+    fprintf(stderr, "viewer: GLFW cannot open a display (is DISPLAY set?)\n");
+    return 1;
+  }
+  if (!glfwVulkanSupported()) {
+    fprintf(stderr, "viewer: GLFW finds no Vulkan loader\n");
+    return 1;
+  }
+  glfwWindowHint(GLFW_CLIENT_API, GLFW_NO_API);
+  v.window = glfwCreateWindow(960, 640, "cadr viewer", NULL, NULL);
+  if (v.window == NULL) {
+    fprintf(stderr, "viewer: cannot create a window\n");
+    return 1;
+  }
+  glfwSetWindowPos(v.window, 0, 0);
+
+  /* A context with the window system's instance extensions. */
+  extensions = glfwGetRequiredInstanceExtensions(&extension_count);
+  CADR_CHECK(cadr_context_options_default(&options));
+  options.instance_extensions = extensions;
+  options.instance_extension_count = extension_count;
+  options.validation = test_dir != NULL;
+  CADR_CHECK(cadr_context_create(&options, &v.context));
+  CADR_CHECK(cadr_context_vulkan_instance(v.context, &instance));
+  if (glfwCreateWindowSurface((VkInstance)instance, v.window, NULL, &surface) != VK_SUCCESS) {
+    fprintf(stderr, "viewer: cannot create a Vulkan surface for the window\n");
+    return 1;
+  }
+  glfwGetFramebufferSize(v.window, &width, &height);
+  CADR_CHECK(cadr_renderer_create_for_surface(v.context, (uint64_t)surface, (uint32_t)width,
+                                              (uint32_t)height, &v.renderer));
+
+  CADR_CHECK(cadr_scene_create(&v.scene));
+  CADR_CHECK(cadr_scene_root(v.scene, &root));
+  CADR_CHECK(cadr_scene_load(v.scene, source, root, &loaded));
+  cadr_load_result_free(&loaded);
+  CADR_CHECK(cadr_scene_bounds(v.scene, &v.bounds));
+  fit_view(&v);
+
+  glfwSetWindowUserPointer(v.window, &v);
+  glfwSetKeyCallback(v.window, on_key);
+  glfwSetMouseButtonCallback(v.window, on_button);
+  glfwSetCursorPosCallback(v.window, on_cursor);
+  glfwSetScrollCallback(v.window, on_scroll);
+  glfwSetFramebufferSizeCallback(v.window, on_framebuffer_size);
+  printf("viewer: %s (V/P/S/C cycle techniques, E edges, F fit, Esc quit)\n", source);
+
+  if (test_dir != NULL) {
+    status = self_test(&v, test_dir);
+  } else {
+    int frames = 0;
+    last_print = now_seconds();
+    while (!glfwWindowShouldClose(v.window)) {
+      glfwPollEvents();
+      render(&v);
+      ++frames;
+      if (now_seconds() - last_print >= 1.0) {
+        describe(&v, title, sizeof title);
+        glfwSetWindowTitle(v.window, title);
+        printf("%s | %d frames/s\n", title, frames);
+        frames = 0;
+        last_print = now_seconds();
+      }
+      if (!v.stats.presented) {
+        glfwWaitEventsTimeout(0.05); /* minimized: sleep instead of spinning */
+      }
+    }
+  }
+  CADR_CHECK(cadr_renderer_destroy(v.renderer)); /* destroys the swapchain and the surface */
+  CADR_CHECK(cadr_scene_destroy(v.scene));
+  CADR_CHECK(cadr_context_destroy(v.context));
+  glfwDestroyWindow(v.window);
+  glfwTerminate();
+  return status;
+}

@@ -1,0 +1,264 @@
+//! The C sample programs, built with the strict flags and run: `headless` writes its PNG,
+//! `animate` explodes a scene and reports its costs, and `viewer` runs under Xvfb on lavapipe:
+//! it opens, renders, swaps every technique kind, resizes, and a screenshot of its window
+//! matches the offscreen render of the same view.
+#![allow(clippy::unwrap_used)] // Test code: a failed unwrap is a failed test.
+
+use std::io::{BufRead, BufReader, Write};
+use std::path::{Path, PathBuf};
+use std::process::{Child, Command, Stdio};
+use std::time::{Duration, Instant};
+
+use cadr_tests::c_programs::{build_c_program, describe, repository, scratch_dir};
+
+fn sample(name: &str, dir: &Path, extra: &[&str]) -> PathBuf {
+    let program = dir.join(name);
+    let sources = [
+        repository().join(format!("samples/{name}.c")),
+        repository().join("samples/common/sample.c"),
+    ];
+    let include = format!("-I{}", repository().join("samples").display());
+    let mut flags = vec![include.as_str()];
+    flags.extend_from_slice(extra);
+    build_c_program(&sources, &program, &flags);
+    program
+}
+
+/// Pixels that differ from the top-left (background) pixel.
+fn foreground_fraction(image: &image::RgbaImage) -> f64 {
+    let background = *image.get_pixel(0, 0);
+    let differing = image
+        .pixels()
+        .filter(|p| {
+            (0..3)
+                .map(|c| p[c].abs_diff(background[c]) as u32)
+                .sum::<u32>()
+                > 30
+        })
+        .count();
+    differing as f64 / f64::from(image.width() * image.height())
+}
+
+#[test]
+fn headless_builds_an_assembly_and_writes_a_png() {
+    let dir = scratch_dir("sample-headless");
+    let program = sample("headless", &dir, &[]);
+    let png = dir.join("assembly.png");
+    let output = Command::new(&program)
+        .args([png.to_str().unwrap(), "320", "240"])
+        .output()
+        .unwrap();
+    assert!(output.status.success(), "{}", describe(&output));
+    let stdout = String::from_utf8_lossy(&output.stdout);
+    assert!(stdout.contains("53 parts shown"), "{}", describe(&output));
+    let image = image::open(&png).unwrap().to_rgba8();
+    assert_eq!(image.dimensions(), (320, 240));
+    let fraction = foreground_fraction(&image);
+    assert!(
+        fraction > 0.1,
+        "only {fraction:.3} of the image shows the assembly"
+    );
+}
+
+#[test]
+fn animate_moves_parts_every_frame_and_reports_costs() {
+    let dir = scratch_dir("sample-animate");
+    let program = sample("animate", &dir, &[]);
+    let png = dir.join("last.png");
+    let output = Command::new(&program)
+        .args(["gen:demo", "30", png.to_str().unwrap()])
+        .output()
+        .unwrap();
+    assert!(output.status.success(), "{}", describe(&output));
+    let stdout = String::from_utf8_lossy(&output.stdout);
+    assert!(stdout.contains("pieces explode"), "{}", describe(&output));
+    let frame_line = stdout
+        .lines()
+        .find(|l| l.starts_with("frame 30:"))
+        .unwrap_or_else(|| panic!("no report for frame 30\n{}", describe(&output)));
+    // The edits upload matrices: something must have been uploaded on a moving frame.
+    assert!(
+        !frame_line.contains(" 0 bytes uploaded"),
+        "a frame with moved parts uploaded nothing: {frame_line}"
+    );
+    assert!(stdout.contains("mean per frame"), "{}", describe(&output));
+    assert!(foreground_fraction(&image::open(&png).unwrap().to_rgba8()) > 0.01);
+}
+
+/// An X server for one test; killed when dropped.
+struct VirtualDisplay {
+    server: Child,
+    name: String,
+}
+
+impl VirtualDisplay {
+    fn start() -> Self {
+        for number in (60 + std::process::id() % 200)..(60 + std::process::id() % 200 + 40) {
+            if Path::new(&format!("/tmp/.X{number}-lock")).exists() {
+                continue;
+            }
+            let mut server = Command::new("Xvfb")
+                .args([
+                    &format!(":{number}"),
+                    "-screen",
+                    "0",
+                    "1024x768x24",
+                    "-nolisten",
+                    "tcp",
+                ])
+                .stdout(Stdio::null())
+                .stderr(Stdio::null())
+                .spawn()
+                .expect("run Xvfb (scripts/setup.sh installs xvfb)");
+            let socket = format!("/tmp/.X11-unix/X{number}");
+            let start = Instant::now();
+            while start.elapsed() < Duration::from_secs(10) {
+                if Path::new(&socket).exists() {
+                    return Self {
+                        server,
+                        name: format!(":{number}"),
+                    };
+                }
+                if let Ok(Some(_)) = server.try_wait() {
+                    break;
+                }
+                std::thread::sleep(Duration::from_millis(50));
+            }
+            let _ = server.kill();
+        }
+        panic!("no Xvfb display could be started");
+    }
+}
+
+impl Drop for VirtualDisplay {
+    fn drop(&mut self) {
+        let _ = self.server.kill();
+        let _ = self.server.wait();
+    }
+}
+
+/// The top-left `width` × `height` pixels of an XWD screen dump (ZPixmap, 24-bit colour, as
+/// Xvfb's `xwd -root` writes them).
+fn xwd_region(bytes: &[u8], width: u32, height: u32) -> image::RgbaImage {
+    let field = |i: usize| u32::from_be_bytes(bytes[i * 4..i * 4 + 4].try_into().unwrap());
+    let (header_size, format, screen_width, screen_height) =
+        (field(0), field(2), field(4), field(5));
+    let (byte_order, bytes_per_line, colors) = (field(7), field(12), field(19));
+    let (red_mask, green_mask, blue_mask) = (field(14), field(15), field(16));
+    assert_eq!(format, 2, "XWD is not a ZPixmap");
+    assert!(width <= screen_width && height <= screen_height);
+    // Xvfb's depth-24 dumps say 24 bits per pixel (packed) with 32-bit-padded line lengths.
+    let bytes_per_pixel = (field(11) / 8) as usize;
+    assert!(
+        (3..=4).contains(&bytes_per_pixel),
+        "expected 24- or 32-bit pixels"
+    );
+    let pixels = &bytes[(header_size + colors * 12) as usize..];
+    let channel = |value: u32, mask: u32| ((value & mask) >> mask.trailing_zeros()) as u8;
+    image::RgbaImage::from_fn(width, height, |x, y| {
+        let at = y as usize * bytes_per_line as usize + x as usize * bytes_per_pixel;
+        let raw = &pixels[at..at + bytes_per_pixel];
+        let value = if byte_order == 0 {
+            raw.iter().rev().fold(0, |v, &b| v << 8 | u32::from(b))
+        } else {
+            raw.iter().fold(0, |v, &b| v << 8 | u32::from(b))
+        };
+        image::Rgba([
+            channel(value, red_mask),
+            channel(value, green_mask),
+            channel(value, blue_mask),
+            255,
+        ])
+    })
+}
+
+#[test]
+fn viewer_under_xvfb_swaps_techniques_resizes_and_shows_the_offscreen_image() {
+    let dir = scratch_dir("sample-viewer");
+    let program = sample("viewer", &dir, &["-lglfw"]);
+    let display = VirtualDisplay::start();
+    let mut viewer = Command::new(&program)
+        .args(["gen:demo", "--self-test", dir.to_str().unwrap()])
+        .env("DISPLAY", &display.name)
+        .stdin(Stdio::piped())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let mut lines = BufReader::new(viewer.stdout.take().unwrap()).lines();
+    let mut transcript = Vec::new();
+    let size = loop {
+        let Some(Ok(line)) = lines.next() else {
+            let status = viewer.wait().unwrap();
+            let mut stderr = String::new();
+            std::io::Read::read_to_string(&mut viewer.stderr.take().unwrap(), &mut stderr).unwrap();
+            panic!(
+                "viewer ended early ({status}):\n{}\n{stderr}",
+                transcript.join("\n")
+            );
+        };
+        transcript.push(line.clone());
+        if let Some(size) = line.strip_prefix("screenshot ready ") {
+            let (w, h) = size.split_once('x').unwrap();
+            break (w.parse::<u32>().unwrap(), h.parse::<u32>().unwrap());
+        }
+    };
+    let text = transcript.join("\n");
+    for expected in [
+        "rendered 3 frames",
+        "vertex technique: ",
+        "params technique: ",
+        "submit technique: ",
+        "cull technique: ",
+        "shade mode: edges",
+        "resized to 480x360",
+    ] {
+        assert!(text.contains(expected), "no '{expected}' in:\n{text}");
+    }
+    assert!(
+        !text.contains("no other one fits"),
+        "a kind could not be swapped:\n{text}"
+    );
+    // Grab the screen while the viewer keeps its window (at 0,0, no window manager) presented.
+    let dump = Command::new("xwd")
+        .args(["-root", "-silent", "-display", &display.name])
+        .output()
+        .expect("run xwd (scripts/setup.sh installs x11-apps)");
+    assert!(dump.status.success(), "{}", describe(&dump));
+    viewer.stdin.take().unwrap().write_all(b"done\n").unwrap();
+    let rest: Vec<String> = lines.map_while(Result::ok).collect();
+    let status = viewer.wait().unwrap();
+    assert!(
+        status.success(),
+        "viewer failed ({status}):\n{text}\n{}",
+        rest.join("\n")
+    );
+    assert!(
+        rest.iter().any(|l| l == "validation errors: 0"),
+        "{}",
+        rest.join("\n")
+    );
+
+    let window = xwd_region(&dump.stdout, size.0, size.1);
+    window.save(dir.join("window.png")).unwrap();
+    let offscreen = image::open(dir.join("offscreen.png")).unwrap().to_rgba8();
+    assert_eq!(offscreen.dimensions(), size);
+    assert!(
+        foreground_fraction(&offscreen) > 0.05,
+        "the offscreen view shows nothing"
+    );
+    let mut total = 0_u64;
+    let mut differing = 0_u32;
+    for (a, b) in window.pixels().zip(offscreen.pixels()) {
+        let difference: u32 = (0..3).map(|c| u32::from(a[c].abs_diff(b[c]))).sum();
+        total += u64::from(difference);
+        differing += u32::from(difference > 48);
+    }
+    let pixels = size.0 * size.1;
+    let mean = total as f64 / f64::from(pixels) / 3.0;
+    assert!(
+        mean < 2.0 && differing < pixels / 100,
+        "window and offscreen render differ: mean {mean:.2} per channel, {differing} of {pixels} pixels (images in {})",
+        dir.display()
+    );
+}

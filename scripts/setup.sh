@@ -13,8 +13,10 @@ packages=(
   assimp-testmodels
   # Build tools for crates with C parts.
   build-essential pkg-config
-  # Windows for the GLFW sample programs, run under Xvfb.
-  xvfb libglfw3-dev
+  # Windows for the GLFW sample programs, run under Xvfb; xwd grabs the viewer's window.
+  xvfb libglfw3-dev x11-apps
+  # The installed package is tested from a C++ host with CMake and with pkg-config.
+  cmake
 )
 if [[ "${1:-}" == "--bench" ]]; then
   packages+=(f3d hyperfine xauth)

@@ -34,7 +34,7 @@ pub fn scratch_dir(name: &str) -> PathBuf {
 /// (its directory recorded as the run path) plus `extra` flags; panics with the compiler's
 /// messages on failure.
 pub fn build_c_program(sources: &[PathBuf], output: &Path, extra: &[&str]) {
-    let lib_dir = build_dir();
+    let lib_dir = linkable_library_dir(output.parent().unwrap_or(Path::new(".")));
     let mut command = Command::new("cc");
     command
         .args(STRICT_C)
@@ -56,6 +56,22 @@ pub fn build_c_program(sources: &[PathBuf], output: &Path, extra: &[&str]) {
         output.display(),
         String::from_utf8_lossy(&result.stderr)
     );
+}
+
+/// A directory holding `libcadr.so` and its SONAME link `libcadr.so.MAJOR`, both pointing at
+/// this build's library (the build directory itself has no SONAME link). Plugins are still
+/// found beside the real file.
+fn linkable_library_dir(scratch: &Path) -> PathBuf {
+    let dir = scratch.join("lib");
+    std::fs::create_dir_all(&dir).expect("create the library link directory");
+    let library = build_dir().join("libcadr.so");
+    let soname = format!("libcadr.so.{}", env!("CARGO_PKG_VERSION_MAJOR"));
+    for name in ["libcadr.so", soname.as_str()] {
+        let link = dir.join(name);
+        let _ = std::fs::remove_file(&link);
+        std::os::unix::fs::symlink(&library, &link).expect("link libcadr.so");
+    }
+    dir
 }
 
 /// The combined output of a finished program, for messages.

@@ -739,9 +739,10 @@ pub unsafe extern "C" fn cadr_scene_flags(
         let value = with_scene(scene, |s| {
             let node = node_of(&s.graph, node, "node")?;
             let f = s.graph.node(node).map_err(graph_failure)?.flags;
-            Ok(u32::from(f.visible) * CADR_NODE_VISIBLE
-                | u32::from(f.pickable) * CADR_NODE_PICKABLE
-                | u32::from(f.highlighted) * CADR_NODE_HIGHLIGHTED)
+            let bit = |set: bool, flag: u32| if set { flag } else { 0 };
+            Ok(bit(f.visible, CADR_NODE_VISIBLE)
+                | bit(f.pickable, CADR_NODE_PICKABLE)
+                | bit(f.highlighted, CADR_NODE_HIGHLIGHTED))
         })?;
         non_null(flags, "flags")?;
         // SAFETY: checked non-null; writable by contract.

@@ -97,7 +97,7 @@ fn every_result_has_a_name() {
         CadrResult::Panic,
     ] {
         // SAFETY: the function returns a static NUL-terminated string.
-        let name = unsafe { CStr::from_ptr(cadr_result_string(result)) }
+        let name = unsafe { CStr::from_ptr(cadr_result_string(result as i32)) }
             .to_str()
             .unwrap();
         assert!(!name.is_empty());

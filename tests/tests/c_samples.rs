@@ -125,6 +125,7 @@ impl VirtualDisplay {
                 std::thread::sleep(Duration::from_millis(50));
             }
             let _ = server.kill();
+            let _ = server.wait();
         }
         panic!("no Xvfb display could be started");
     }

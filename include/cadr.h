@@ -498,6 +498,7 @@ enum CadrResult cadr_context_vulkan_instance(CadrContext context, void **instanc
 // so far (0 when validation is off).
 //
 // Returns `CADR_RESULT_OK`, `CADR_RESULT_NULL_ARGUMENT` or a handle error.
+// Ownership: the outputs are the caller's; cadr keeps no pointer to them.
 // Thread-safety: callable from any thread.
 //
 // # Safety
@@ -507,6 +508,7 @@ enum CadrResult cadr_context_validation_error_count(CadrContext context, uint64_
 // Writes the number of techniques the plugins offer (supported or not).
 //
 // Returns `CADR_RESULT_OK`, `CADR_RESULT_NULL_ARGUMENT` or a handle error.
+// Ownership: the outputs are the caller's; cadr keeps no pointer to them.
 // Thread-safety: callable from any thread.
 //
 // # Safety
@@ -529,6 +531,7 @@ enum CadrResult cadr_context_technique(CadrContext context,
 // Writes the number of refused plugin libraries and techniques.
 //
 // Returns `CADR_RESULT_OK`, `CADR_RESULT_NULL_ARGUMENT` or a handle error.
+// Ownership: the outputs are the caller's; cadr keeps no pointer to them.
 // Thread-safety: callable from any thread.
 //
 // # Safety
@@ -582,6 +585,7 @@ enum CadrResult cadr_scene_create_geometry(CadrScene scene,
 // Replaces a geometry's data; Geo nodes that use it draw the new data. The part count must
 // stay the same (their part materials are kept).
 //
+// Ownership: nothing changes hands; the arguments are read during the call only.
 // Returns as `cadr_scene_create_geometry`. Thread-safety: as `cadr_scene_create`.
 //
 // # Safety
@@ -593,12 +597,14 @@ enum CadrResult cadr_scene_replace_geometry(CadrScene scene,
 // Destroys a geometry that no Geo node uses.
 //
 // Returns `CADR_RESULT_OK`, `CADR_RESULT_IN_USE` or a handle error.
+// Ownership: the handle (or item) is given back to cadr and invalid afterwards.
 // Thread-safety: as `cadr_scene_create`.
 enum CadrResult cadr_scene_destroy_geometry(CadrScene scene, CadrGeometry geometry);
 
 // Writes the object-space bounds of a geometry's vertices.
 //
 // Returns `CADR_RESULT_OK`, `CADR_RESULT_NULL_ARGUMENT` or a handle error.
+// Ownership: the outputs are the caller's; cadr keeps no pointer to them.
 // Thread-safety: as `cadr_scene_create`.
 //
 // # Safety
@@ -621,6 +627,7 @@ enum CadrResult cadr_scene_create_material(CadrScene scene,
 
 // Changes a material's parameters; every part using it is drawn with them.
 //
+// Ownership: nothing changes hands; the arguments are read during the call only.
 // Returns as `cadr_scene_create_material`. Thread-safety: as `cadr_scene_create`.
 //
 // # Safety
@@ -632,6 +639,7 @@ enum CadrResult cadr_scene_set_material(CadrScene scene,
 // Destroys a material that no part uses.
 //
 // Returns `CADR_RESULT_OK`, `CADR_RESULT_IN_USE` or a handle error.
+// Ownership: the handle (or item) is given back to cadr and invalid afterwards.
 // Thread-safety: as `cadr_scene_create`.
 enum CadrResult cadr_scene_destroy_material(CadrScene scene, CadrMaterial material);
 
@@ -676,6 +684,7 @@ enum CadrResult cadr_renderer_create_for_surface(CadrContext context,
 // and surface. NULL is a no-op.
 //
 // Returns `CADR_RESULT_OK` or a handle error.
+// Ownership: the handle (or item) is given back to cadr and invalid afterwards.
 // Thread-safety: not while another thread uses this renderer.
 enum CadrResult cadr_renderer_destroy(CadrRenderer renderer);
 
@@ -683,6 +692,7 @@ enum CadrResult cadr_renderer_destroy(CadrRenderer renderer);
 // (0 × 0 while minimized is accepted: frames are skipped until the window has area again).
 //
 // Returns `CADR_RESULT_OK`, `CADR_RESULT_INVALID_ARGUMENT` (above 16384, or 0 offscreen),
+// Ownership: nothing changes hands; the arguments are read during the call only.
 // `CADR_RESULT_VULKAN` or a handle error. Thread-safety: as `cadr_renderer_create`.
 enum CadrResult cadr_renderer_resize(CadrRenderer renderer, uint32_t width, uint32_t height);
 
@@ -690,6 +700,7 @@ enum CadrResult cadr_renderer_resize(CadrRenderer renderer, uint32_t width, uint
 // minimized).
 //
 // Returns `CADR_RESULT_OK`, `CADR_RESULT_NULL_ARGUMENT` or a handle error.
+// Ownership: the outputs are the caller's; cadr keeps no pointer to them.
 // Thread-safety: as `cadr_renderer_create`.
 //
 // # Safety
@@ -723,6 +734,7 @@ enum CadrResult cadr_renderer_set_techniques(CadrRenderer renderer,
 // Replaces the technique of one kind (`CADR_TECHNIQUE_KIND_*`) by name.
 //
 // Returns as `cadr_renderer_set_techniques`, and `CADR_RESULT_INVALID_ARGUMENT` for an
+// Ownership: nothing changes hands; the arguments are read during the call only.
 // unknown kind. Thread-safety: as `cadr_renderer_create`.
 //
 // # Safety
@@ -743,12 +755,14 @@ enum CadrResult cadr_renderer_technique(CadrRenderer renderer, uint32_t kind, co
 // Sets the shade mode: `CADR_SHADE_SOLID` or `CADR_SHADE_EDGES`.
 //
 // Returns `CADR_RESULT_OK`, `CADR_RESULT_INVALID_ARGUMENT` (unknown mode), `CADR_RESULT_VULKAN`
+// Ownership: nothing changes hands; the arguments are read during the call only.
 // or a handle error. Thread-safety: as `cadr_renderer_create`.
 enum CadrResult cadr_renderer_set_shade_mode(CadrRenderer renderer, uint32_t mode);
 
 // Writes the shade mode (`CADR_SHADE_SOLID` or `CADR_SHADE_EDGES`).
 //
 // Returns `CADR_RESULT_OK`, `CADR_RESULT_NULL_ARGUMENT` or a handle error.
+// Ownership: the outputs are the caller's; cadr keeps no pointer to them.
 // Thread-safety: as `cadr_renderer_create`.
 //
 // # Safety
@@ -808,12 +822,14 @@ enum CadrResult cadr_scene_create(CadrScene *scene);
 // invalid. NULL is a no-op.
 //
 // Returns `CADR_RESULT_OK` or a handle error.
+// Ownership: the handle (or item) is given back to cadr and invalid afterwards.
 // Thread-safety: not while another thread uses the scene.
 enum CadrResult cadr_scene_destroy(CadrScene scene);
 
 // Writes the scene's root Group.
 //
 // Returns `CADR_RESULT_OK`, `CADR_RESULT_NULL_ARGUMENT` or a handle error.
+// Ownership: the outputs are the caller's; cadr keeps no pointer to them.
 // Thread-safety: as `cadr_scene_create`.
 //
 // # Safety
@@ -914,6 +930,7 @@ enum CadrResult cadr_scene_create_lod_by_screen_size(CadrScene scene,
 // detached from it). The root cannot be destroyed.
 //
 // Returns `CADR_RESULT_OK`, `CADR_RESULT_INVALID_ARGUMENT` (the root) or a handle error.
+// Ownership: the handle (or item) is given back to cadr and invalid afterwards.
 // Thread-safety: as `cadr_scene_create`.
 enum CadrResult cadr_scene_destroy_node(CadrScene scene, CadrNode node);
 
@@ -921,12 +938,14 @@ enum CadrResult cadr_scene_destroy_node(CadrScene scene, CadrNode node);
 // subgraphs); cycles are refused.
 //
 // Returns `CADR_RESULT_OK`, `CADR_RESULT_INVALID_ARGUMENT` (a cycle) or a handle error.
+// Ownership: nothing changes hands; the arguments are read during the call only.
 // Thread-safety: as `cadr_scene_create`.
 enum CadrResult cadr_scene_add_child(CadrScene scene, CadrNode parent, CadrNode child);
 
 // Inserts `child` at `position` (0 to the child count) of `parent`'s children.
 //
 // Returns as `cadr_scene_add_child`, and `CADR_RESULT_INVALID_ARGUMENT` for a position out of
+// Ownership: nothing changes hands; the arguments are read during the call only.
 // range. Thread-safety: as `cadr_scene_create`.
 enum CadrResult cadr_scene_insert_child(CadrScene scene,
                                         CadrNode parent,
@@ -936,12 +955,14 @@ enum CadrResult cadr_scene_insert_child(CadrScene scene,
 // Removes `child` from `parent`'s children (its first occurrence). The child stays alive.
 //
 // Returns `CADR_RESULT_OK`, `CADR_RESULT_INVALID_ARGUMENT` (not a child) or a handle error.
+// Ownership: nothing changes hands; the arguments are read during the call only.
 // Thread-safety: as `cadr_scene_create`.
 enum CadrResult cadr_scene_remove_child(CadrScene scene, CadrNode parent, CadrNode child);
 
 // Writes the number of children of `node`.
 //
 // Returns `CADR_RESULT_OK`, `CADR_RESULT_NULL_ARGUMENT` or a handle error.
+// Ownership: the outputs are the caller's; cadr keeps no pointer to them.
 // Thread-safety: as `cadr_scene_create`.
 //
 // # Safety
@@ -951,6 +972,7 @@ enum CadrResult cadr_scene_child_count(CadrScene scene, CadrNode node, uint32_t 
 // Writes child `index` of `node`.
 //
 // Returns `CADR_RESULT_OK`, `CADR_RESULT_NOT_FOUND` (index out of range),
+// Ownership: the outputs are the caller's; cadr keeps no pointer to them.
 // `CADR_RESULT_NULL_ARGUMENT` or a handle error. Thread-safety: as `cadr_scene_create`.
 //
 // # Safety
@@ -960,6 +982,7 @@ enum CadrResult cadr_scene_child(CadrScene scene, CadrNode node, uint32_t index,
 // Sets a Transform's 4×4 column-major double matrix.
 //
 // Returns `CADR_RESULT_OK`, `CADR_RESULT_NULL_ARGUMENT`, `CADR_RESULT_INVALID_ARGUMENT` (not
+// Ownership: nothing changes hands; the arguments are read during the call only.
 // a Transform, non-finite values) or a handle error. Thread-safety: as `cadr_scene_create`.
 //
 // # Safety
@@ -970,6 +993,7 @@ enum CadrResult cadr_scene_set_matrix(CadrScene scene, CadrNode node, const doub
 // child count.
 //
 // Returns `CADR_RESULT_OK`, `CADR_RESULT_NULL_ARGUMENT`, `CADR_RESULT_INVALID_ARGUMENT` (not a
+// Ownership: nothing changes hands; the arguments are read during the call only.
 // Switch, wrong count) or a handle error. Thread-safety: as `cadr_scene_create`.
 //
 // # Safety
@@ -982,12 +1006,14 @@ enum CadrResult cadr_scene_set_switch_mask(CadrScene scene,
 // Sets a node's flags (`CADR_NODE_VISIBLE | CADR_NODE_PICKABLE | CADR_NODE_HIGHLIGHTED`).
 //
 // Returns `CADR_RESULT_OK`, `CADR_RESULT_INVALID_ARGUMENT` (unknown bits) or a handle error.
+// Ownership: nothing changes hands; the arguments are read during the call only.
 // Thread-safety: as `cadr_scene_create`.
 enum CadrResult cadr_scene_set_flags(CadrScene scene, CadrNode node, uint32_t flags);
 
 // Writes a node's flags.
 //
 // Returns `CADR_RESULT_OK`, `CADR_RESULT_NULL_ARGUMENT` or a handle error.
+// Ownership: the outputs are the caller's; cadr keeps no pointer to them.
 // Thread-safety: as `cadr_scene_create`.
 //
 // # Safety
@@ -997,6 +1023,7 @@ enum CadrResult cadr_scene_flags(CadrScene scene, CadrNode node, uint32_t *flags
 // Gives part `part` of a Geo node another material.
 //
 // Returns `CADR_RESULT_OK`, `CADR_RESULT_INVALID_ARGUMENT` (not a Geo node, part out of range)
+// Ownership: nothing changes hands; the arguments are read during the call only.
 // or a handle error. Thread-safety: as `cadr_scene_create`.
 enum CadrResult cadr_scene_set_part_material(CadrScene scene,
                                              CadrNode node,
@@ -1005,6 +1032,7 @@ enum CadrResult cadr_scene_set_part_material(CadrScene scene,
 
 // Shows or hides part `part` of a Geo node.
 //
+// Ownership: nothing changes hands; the arguments are read during the call only.
 // Returns as `cadr_scene_set_part_material`. Thread-safety: as `cadr_scene_create`.
 enum CadrResult cadr_scene_set_part_visible(CadrScene scene,
                                             CadrNode node,
@@ -1040,6 +1068,7 @@ void cadr_load_result_free(struct CadrLoadResult *result);
 // Writes the world-space bounds of everything the scene shows (empty: `min` > `max`).
 //
 // Returns `CADR_RESULT_OK`, `CADR_RESULT_NULL_ARGUMENT` or a handle error.
+// Ownership: the outputs are the caller's; cadr keeps no pointer to them.
 // Thread-safety: as `cadr_scene_create`.
 //
 // # Safety
@@ -1049,6 +1078,7 @@ enum CadrResult cadr_scene_bounds(CadrScene scene, struct CadrBounds *bounds);
 // Writes the scene's counts: nodes, geometries, materials, instances and what is shown.
 //
 // Returns `CADR_RESULT_OK`, `CADR_RESULT_NULL_ARGUMENT` or a handle error.
+// Ownership: the outputs are the caller's; cadr keeps no pointer to them.
 // Thread-safety: as `cadr_scene_create`.
 //
 // # Safety
@@ -1060,6 +1090,7 @@ enum CadrResult cadr_scene_statistics(CadrScene scene, struct CadrSceneStatistic
 // (framing a selection, exploded views), not for every frame.
 //
 // Returns `CADR_RESULT_OK`, `CADR_RESULT_NULL_ARGUMENT` or a handle error.
+// Ownership: the outputs are the caller's; cadr keeps no pointer to them.
 // Thread-safety: as `cadr_scene_create`.
 //
 // # Safety

@@ -508,6 +508,7 @@ pub unsafe extern "C" fn cadr_context_vulkan_instance(
 /// so far (0 when validation is off).
 ///
 /// Returns `CADR_RESULT_OK`, `CADR_RESULT_NULL_ARGUMENT` or a handle error.
+/// Ownership: the outputs are the caller's; cadr keeps no pointer to them.
 /// Thread-safety: callable from any thread.
 ///
 /// # Safety
@@ -530,6 +531,7 @@ pub unsafe extern "C" fn cadr_context_validation_error_count(
 /// Writes the number of techniques the plugins offer (supported or not).
 ///
 /// Returns `CADR_RESULT_OK`, `CADR_RESULT_NULL_ARGUMENT` or a handle error.
+/// Ownership: the outputs are the caller's; cadr keeps no pointer to them.
 /// Thread-safety: callable from any thread.
 ///
 /// # Safety
@@ -592,6 +594,7 @@ pub unsafe extern "C" fn cadr_context_technique(
 /// Writes the number of refused plugin libraries and techniques.
 ///
 /// Returns `CADR_RESULT_OK`, `CADR_RESULT_NULL_ARGUMENT` or a handle error.
+/// Ownership: the outputs are the caller's; cadr keeps no pointer to them.
 /// Thread-safety: callable from any thread.
 ///
 /// # Safety

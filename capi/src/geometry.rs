@@ -237,6 +237,7 @@ pub unsafe extern "C" fn cadr_scene_create_geometry(
 /// Replaces a geometry's data; Geo nodes that use it draw the new data. The part count must
 /// stay the same (their part materials are kept).
 ///
+/// Ownership: nothing changes hands; the arguments are read during the call only.
 /// Returns as `cadr_scene_create_geometry`. Thread-safety: as `cadr_scene_create`.
 ///
 /// # Safety
@@ -262,6 +263,7 @@ pub unsafe extern "C" fn cadr_scene_replace_geometry(
 /// Destroys a geometry that no Geo node uses.
 ///
 /// Returns `CADR_RESULT_OK`, `CADR_RESULT_IN_USE` or a handle error.
+/// Ownership: the handle (or item) is given back to cadr and invalid afterwards.
 /// Thread-safety: as `cadr_scene_create`.
 #[no_mangle]
 pub extern "C" fn cadr_scene_destroy_geometry(
@@ -279,6 +281,7 @@ pub extern "C" fn cadr_scene_destroy_geometry(
 /// Writes the object-space bounds of a geometry's vertices.
 ///
 /// Returns `CADR_RESULT_OK`, `CADR_RESULT_NULL_ARGUMENT` or a handle error.
+/// Ownership: the outputs are the caller's; cadr keeps no pointer to them.
 /// Thread-safety: as `cadr_scene_create`.
 ///
 /// # Safety
@@ -333,6 +336,7 @@ pub unsafe extern "C" fn cadr_scene_create_material(
 
 /// Changes a material's parameters; every part using it is drawn with them.
 ///
+/// Ownership: nothing changes hands; the arguments are read during the call only.
 /// Returns as `cadr_scene_create_material`. Thread-safety: as `cadr_scene_create`.
 ///
 /// # Safety
@@ -356,6 +360,7 @@ pub unsafe extern "C" fn cadr_scene_set_material(
 /// Destroys a material that no part uses.
 ///
 /// Returns `CADR_RESULT_OK`, `CADR_RESULT_IN_USE` or a handle error.
+/// Ownership: the handle (or item) is given back to cadr and invalid afterwards.
 /// Thread-safety: as `cadr_scene_create`.
 #[no_mangle]
 pub extern "C" fn cadr_scene_destroy_material(

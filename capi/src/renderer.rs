@@ -273,6 +273,7 @@ pub unsafe extern "C" fn cadr_renderer_create_for_surface(
 /// and surface. NULL is a no-op.
 ///
 /// Returns `CADR_RESULT_OK` or a handle error.
+/// Ownership: the handle (or item) is given back to cadr and invalid afterwards.
 /// Thread-safety: not while another thread uses this renderer.
 #[no_mangle]
 pub extern "C" fn cadr_renderer_destroy(renderer: CadrRenderer) -> CadrResult {
@@ -291,6 +292,7 @@ pub extern "C" fn cadr_renderer_destroy(renderer: CadrRenderer) -> CadrResult {
 /// (0 × 0 while minimized is accepted: frames are skipped until the window has area again).
 ///
 /// Returns `CADR_RESULT_OK`, `CADR_RESULT_INVALID_ARGUMENT` (above 16384, or 0 offscreen),
+/// Ownership: nothing changes hands; the arguments are read during the call only.
 /// `CADR_RESULT_VULKAN` or a handle error. Thread-safety: as `cadr_renderer_create`.
 #[no_mangle]
 pub extern "C" fn cadr_renderer_resize(
@@ -325,6 +327,7 @@ pub extern "C" fn cadr_renderer_resize(
 /// minimized).
 ///
 /// Returns `CADR_RESULT_OK`, `CADR_RESULT_NULL_ARGUMENT` or a handle error.
+/// Ownership: the outputs are the caller's; cadr keeps no pointer to them.
 /// Thread-safety: as `cadr_renderer_create`.
 ///
 /// # Safety
@@ -489,6 +492,7 @@ pub unsafe extern "C" fn cadr_renderer_set_techniques(
 /// Replaces the technique of one kind (`CADR_TECHNIQUE_KIND_*`) by name.
 ///
 /// Returns as `cadr_renderer_set_techniques`, and `CADR_RESULT_INVALID_ARGUMENT` for an
+/// Ownership: nothing changes hands; the arguments are read during the call only.
 /// unknown kind. Thread-safety: as `cadr_renderer_create`.
 ///
 /// # Safety
@@ -542,6 +546,7 @@ pub unsafe extern "C" fn cadr_renderer_technique(
 /// Sets the shade mode: `CADR_SHADE_SOLID` or `CADR_SHADE_EDGES`.
 ///
 /// Returns `CADR_RESULT_OK`, `CADR_RESULT_INVALID_ARGUMENT` (unknown mode), `CADR_RESULT_VULKAN`
+/// Ownership: nothing changes hands; the arguments are read during the call only.
 /// or a handle error. Thread-safety: as `cadr_renderer_create`.
 #[no_mangle]
 pub extern "C" fn cadr_renderer_set_shade_mode(renderer: CadrRenderer, mode: u32) -> CadrResult {
@@ -564,6 +569,7 @@ pub extern "C" fn cadr_renderer_set_shade_mode(renderer: CadrRenderer, mode: u32
 /// Writes the shade mode (`CADR_SHADE_SOLID` or `CADR_SHADE_EDGES`).
 ///
 /// Returns `CADR_RESULT_OK`, `CADR_RESULT_NULL_ARGUMENT` or a handle error.
+/// Ownership: the outputs are the caller's; cadr keeps no pointer to them.
 /// Thread-safety: as `cadr_renderer_create`.
 ///
 /// # Safety

@@ -265,6 +265,7 @@ pub unsafe extern "C" fn cadr_scene_create(scene: *mut CadrScene) -> CadrResult 
 /// invalid. NULL is a no-op.
 ///
 /// Returns `CADR_RESULT_OK` or a handle error.
+/// Ownership: the handle (or item) is given back to cadr and invalid afterwards.
 /// Thread-safety: not while another thread uses the scene.
 #[no_mangle]
 pub extern "C" fn cadr_scene_destroy(scene: CadrScene) -> CadrResult {
@@ -278,6 +279,7 @@ pub extern "C" fn cadr_scene_destroy(scene: CadrScene) -> CadrResult {
 /// Writes the scene's root Group.
 ///
 /// Returns `CADR_RESULT_OK`, `CADR_RESULT_NULL_ARGUMENT` or a handle error.
+/// Ownership: the outputs are the caller's; cadr keeps no pointer to them.
 /// Thread-safety: as `cadr_scene_create`.
 ///
 /// # Safety
@@ -513,6 +515,7 @@ pub unsafe extern "C" fn cadr_scene_create_lod_by_screen_size(
 /// detached from it). The root cannot be destroyed.
 ///
 /// Returns `CADR_RESULT_OK`, `CADR_RESULT_INVALID_ARGUMENT` (the root) or a handle error.
+/// Ownership: the handle (or item) is given back to cadr and invalid afterwards.
 /// Thread-safety: as `cadr_scene_create`.
 #[no_mangle]
 pub extern "C" fn cadr_scene_destroy_node(scene: CadrScene, node: CadrNode) -> CadrResult {
@@ -528,6 +531,7 @@ pub extern "C" fn cadr_scene_destroy_node(scene: CadrScene, node: CadrNode) -> C
 /// subgraphs); cycles are refused.
 ///
 /// Returns `CADR_RESULT_OK`, `CADR_RESULT_INVALID_ARGUMENT` (a cycle) or a handle error.
+/// Ownership: nothing changes hands; the arguments are read during the call only.
 /// Thread-safety: as `cadr_scene_create`.
 #[no_mangle]
 pub extern "C" fn cadr_scene_add_child(
@@ -547,6 +551,7 @@ pub extern "C" fn cadr_scene_add_child(
 /// Inserts `child` at `position` (0 to the child count) of `parent`'s children.
 ///
 /// Returns as `cadr_scene_add_child`, and `CADR_RESULT_INVALID_ARGUMENT` for a position out of
+/// Ownership: nothing changes hands; the arguments are read during the call only.
 /// range. Thread-safety: as `cadr_scene_create`.
 #[no_mangle]
 pub extern "C" fn cadr_scene_insert_child(
@@ -569,6 +574,7 @@ pub extern "C" fn cadr_scene_insert_child(
 /// Removes `child` from `parent`'s children (its first occurrence). The child stays alive.
 ///
 /// Returns `CADR_RESULT_OK`, `CADR_RESULT_INVALID_ARGUMENT` (not a child) or a handle error.
+/// Ownership: nothing changes hands; the arguments are read during the call only.
 /// Thread-safety: as `cadr_scene_create`.
 #[no_mangle]
 pub extern "C" fn cadr_scene_remove_child(
@@ -588,6 +594,7 @@ pub extern "C" fn cadr_scene_remove_child(
 /// Writes the number of children of `node`.
 ///
 /// Returns `CADR_RESULT_OK`, `CADR_RESULT_NULL_ARGUMENT` or a handle error.
+/// Ownership: the outputs are the caller's; cadr keeps no pointer to them.
 /// Thread-safety: as `cadr_scene_create`.
 ///
 /// # Safety
@@ -613,6 +620,7 @@ pub unsafe extern "C" fn cadr_scene_child_count(
 /// Writes child `index` of `node`.
 ///
 /// Returns `CADR_RESULT_OK`, `CADR_RESULT_NOT_FOUND` (index out of range),
+/// Ownership: the outputs are the caller's; cadr keeps no pointer to them.
 /// `CADR_RESULT_NULL_ARGUMENT` or a handle error. Thread-safety: as `cadr_scene_create`.
 ///
 /// # Safety
@@ -651,6 +659,7 @@ pub unsafe extern "C" fn cadr_scene_child(
 /// Sets a Transform's 4×4 column-major double matrix.
 ///
 /// Returns `CADR_RESULT_OK`, `CADR_RESULT_NULL_ARGUMENT`, `CADR_RESULT_INVALID_ARGUMENT` (not
+/// Ownership: nothing changes hands; the arguments are read during the call only.
 /// a Transform, non-finite values) or a handle error. Thread-safety: as `cadr_scene_create`.
 ///
 /// # Safety
@@ -675,6 +684,7 @@ pub unsafe extern "C" fn cadr_scene_set_matrix(
 /// child count.
 ///
 /// Returns `CADR_RESULT_OK`, `CADR_RESULT_NULL_ARGUMENT`, `CADR_RESULT_INVALID_ARGUMENT` (not a
+/// Ownership: nothing changes hands; the arguments are read during the call only.
 /// Switch, wrong count) or a handle error. Thread-safety: as `cadr_scene_create`.
 ///
 /// # Safety
@@ -699,6 +709,7 @@ pub unsafe extern "C" fn cadr_scene_set_switch_mask(
 /// Sets a node's flags (`CADR_NODE_VISIBLE | CADR_NODE_PICKABLE | CADR_NODE_HIGHLIGHTED`).
 ///
 /// Returns `CADR_RESULT_OK`, `CADR_RESULT_INVALID_ARGUMENT` (unknown bits) or a handle error.
+/// Ownership: nothing changes hands; the arguments are read during the call only.
 /// Thread-safety: as `cadr_scene_create`.
 #[no_mangle]
 pub extern "C" fn cadr_scene_set_flags(scene: CadrScene, node: CadrNode, flags: u32) -> CadrResult {
@@ -725,6 +736,7 @@ pub extern "C" fn cadr_scene_set_flags(scene: CadrScene, node: CadrNode, flags: 
 /// Writes a node's flags.
 ///
 /// Returns `CADR_RESULT_OK`, `CADR_RESULT_NULL_ARGUMENT` or a handle error.
+/// Ownership: the outputs are the caller's; cadr keeps no pointer to them.
 /// Thread-safety: as `cadr_scene_create`.
 ///
 /// # Safety
@@ -754,6 +766,7 @@ pub unsafe extern "C" fn cadr_scene_flags(
 /// Gives part `part` of a Geo node another material.
 ///
 /// Returns `CADR_RESULT_OK`, `CADR_RESULT_INVALID_ARGUMENT` (not a Geo node, part out of range)
+/// Ownership: nothing changes hands; the arguments are read during the call only.
 /// or a handle error. Thread-safety: as `cadr_scene_create`.
 #[no_mangle]
 pub extern "C" fn cadr_scene_set_part_material(
@@ -775,6 +788,7 @@ pub extern "C" fn cadr_scene_set_part_material(
 
 /// Shows or hides part `part` of a Geo node.
 ///
+/// Ownership: nothing changes hands; the arguments are read during the call only.
 /// Returns as `cadr_scene_set_part_material`. Thread-safety: as `cadr_scene_create`.
 #[no_mangle]
 pub extern "C" fn cadr_scene_set_part_visible(
@@ -949,6 +963,7 @@ fn shown(state: &mut SceneState, below: Option<NodeHandle>) -> (Aabb, CadrSceneS
 /// Writes the world-space bounds of everything the scene shows (empty: `min` > `max`).
 ///
 /// Returns `CADR_RESULT_OK`, `CADR_RESULT_NULL_ARGUMENT` or a handle error.
+/// Ownership: the outputs are the caller's; cadr keeps no pointer to them.
 /// Thread-safety: as `cadr_scene_create`.
 ///
 /// # Safety
@@ -970,6 +985,7 @@ pub unsafe extern "C" fn cadr_scene_bounds(
 /// Writes the scene's counts: nodes, geometries, materials, instances and what is shown.
 ///
 /// Returns `CADR_RESULT_OK`, `CADR_RESULT_NULL_ARGUMENT` or a handle error.
+/// Ownership: the outputs are the caller's; cadr keeps no pointer to them.
 /// Thread-safety: as `cadr_scene_create`.
 ///
 /// # Safety
@@ -993,6 +1009,7 @@ pub unsafe extern "C" fn cadr_scene_statistics(
 /// (framing a selection, exploded views), not for every frame.
 ///
 /// Returns `CADR_RESULT_OK`, `CADR_RESULT_NULL_ARGUMENT` or a handle error.
+/// Ownership: the outputs are the caller's; cadr keeps no pointer to them.
 /// Thread-safety: as `cadr_scene_create`.
 ///
 /// # Safety

@@ -12,14 +12,19 @@ pub fn repository() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("..")
 }
 
-/// The build's output directory (`target/debug`), where `libcadr.so` and the plugins lie.
-pub fn build_dir() -> PathBuf {
+/// The directory holding this build's `libcadr.so`, `libcadr.a` and technique plugins:
+/// `target/<profile>/deps`, where cargo puts them as dependencies of the tests (they are copied
+/// up to `target/<profile>` only by some builds).
+pub fn library_dir() -> PathBuf {
     let exe = std::env::current_exe().expect("the test's own path");
-    // target/debug/deps/<test> -> target/debug
-    exe.parent()
-        .and_then(Path::parent)
+    let deps = exe
+        .parent()
         .map(Path::to_path_buf)
-        .expect("the test runs from target/<profile>/deps")
+        .expect("the test runs from target/<profile>/deps");
+    if deps.join("libcadr.so").exists() {
+        return deps;
+    }
+    deps.parent().map(Path::to_path_buf).unwrap_or(deps)
 }
 
 /// A fresh, empty directory for one test's files.
@@ -64,7 +69,7 @@ pub fn build_c_program(sources: &[PathBuf], output: &Path, extra: &[&str]) {
 fn linkable_library_dir(scratch: &Path) -> PathBuf {
     let dir = scratch.join("lib");
     std::fs::create_dir_all(&dir).expect("create the library link directory");
-    let library = build_dir().join("libcadr.so");
+    let library = library_dir().join("libcadr.so");
     let soname = format!("libcadr.so.{}", env!("CARGO_PKG_VERSION_MAJOR"));
     for name in ["libcadr.so", soname.as_str()] {
         let link = dir.join(name);

@@ -7,7 +7,7 @@
 use std::path::Path;
 use std::process::Command;
 
-use cadr_tests::c_programs::{build_dir, describe, repository, scratch_dir};
+use cadr_tests::c_programs::{describe, library_dir, repository, scratch_dir};
 
 fn run(command: &mut Command) -> String {
     let output = command.output().unwrap();
@@ -37,7 +37,7 @@ fn cpp_host_builds_against_the_installed_package_with_cmake() {
     let prefix = dir.join("prefix");
     run(Command::new(repository().join("scripts/install.sh"))
         .args(["--prefix", prefix.to_str().unwrap(), "--from"])
-        .arg(build_dir()));
+        .arg(library_dir()));
     for installed in [
         "include/cadr/cadr.h",
         "include/cadr/cadr_plugin.h",

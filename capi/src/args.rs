@@ -80,6 +80,18 @@ pub(crate) unsafe fn string_list(
         .collect()
 }
 
+/// Writes an out-parameter once the call has succeeded; NULL gives
+/// `CADR_RESULT_NULL_ARGUMENT` naming it.
+///
+/// # Safety
+/// `out` is null, or aligned and writable.
+pub(crate) unsafe fn deliver<T>(out: *mut T, name: &str, value: T) -> Result<(), Failure> {
+    non_null(out, name)?;
+    // SAFETY: non-null here; aligned and writable by the caller's contract.
+    unsafe { write(out, value) };
+    Ok(())
+}
+
 /// Writes an out-parameter that was checked to be non-null.
 ///
 /// # Safety

@@ -5,7 +5,7 @@ use cadr_core::render::{Camera, DEFAULT_DIRECTION};
 use cadr_core::scene::Aabb;
 use glam::{DMat4, DVec3};
 
-use crate::args::{non_null, vector3, write};
+use crate::args::{deliver, non_null, vector3};
 use crate::error::{guard, CadrResult, Failure};
 use crate::scene::CadrBounds;
 
@@ -71,7 +71,6 @@ pub unsafe extern "C" fn cadr_camera_look_at(
     guard(|| {
         // SAFETY: forwarded contract.
         let (eye, target) = unsafe { (vector3(eye, "eye")?, vector3(target, "target")?) };
-        non_null(camera, "camera")?;
         if eye.distance(target) <= 0.0 {
             return Err(Failure::invalid("eye and target are the same point"));
         }
@@ -91,9 +90,8 @@ pub unsafe extern "C" fn cadr_camera_look_at(
             )));
         }
         let value = Camera::look_at(eye, target, fov_y_degrees, aspect, near, far);
-        // SAFETY: checked non-null; writable by contract.
-        unsafe { write(camera, value.into()) };
-        Ok(())
+        // SAFETY: camera is null or writable (the caller's contract).
+        unsafe { deliver(camera, "camera", value.into()) }
     })
 }
 
@@ -115,7 +113,6 @@ pub unsafe extern "C" fn cadr_camera_fit(
 ) -> CadrResult {
     guard(|| {
         non_null(bounds, "bounds")?;
-        non_null(camera, "camera")?;
         // SAFETY: non-null and readable by contract.
         let bounds = unsafe { *bounds };
         let direction = if direction.is_null() {
@@ -142,8 +139,7 @@ pub unsafe extern "C" fn cadr_camera_fit(
             Aabb::EMPTY
         };
         let value = Camera::fit(&aabb, aspect, direction);
-        // SAFETY: checked non-null; writable by contract.
-        unsafe { write(camera, value.into()) };
-        Ok(())
+        // SAFETY: camera is null or writable (the caller's contract).
+        unsafe { deliver(camera, "camera", value.into()) }
     })
 }

@@ -7,7 +7,7 @@ use std::sync::{Arc, Mutex};
 use cadr_core::technique::{default_plugin_dirs, feature_bits, PluginRegistry, TechniqueKind};
 use cadr_core::vk::{raw::Handle, Device, DeviceChoice, DeviceOptions, InstanceOptions};
 
-use crate::args::{non_null, optional_str, string_list, write};
+use crate::args::{deliver, non_null, optional_str, string_list};
 use crate::error::{guard, CadrResult, Failure};
 use crate::handles::{lock, Registry};
 
@@ -233,6 +233,17 @@ pub(crate) fn context_state(context: CadrContext) -> Result<Arc<ContextState>, F
     Ok(state)
 }
 
+/// Item `index` of a list the host walks by count and index; out of range is
+/// `CADR_RESULT_NOT_FOUND`.
+fn list_item<'a, T>(items: &'a [T], index: u32, what: &str) -> Result<&'a T, Failure> {
+    items.get(index as usize).ok_or_else(|| {
+        Failure::new(
+            CadrResult::NotFound,
+            format!("{what} index {index} is out of range (0..{})", items.len()),
+        )
+    })
+}
+
 fn c_string(text: &str) -> CString {
     CString::new(text.replace('\0', " ")).unwrap_or_default()
 }
@@ -264,9 +275,8 @@ pub unsafe extern "C" fn cadr_context_options_default(
             plugin_dir_count: 0,
             default_plugin_dirs: true,
         };
-        // SAFETY: checked non-null; writable by contract.
-        unsafe { write(options, defaults) };
-        Ok(())
+        // SAFETY: options is null or writable (the caller's contract).
+        unsafe { deliver(options, "options", defaults) }
     })
 }
 
@@ -403,9 +413,8 @@ pub unsafe extern "C" fn cadr_context_create(
             queue: Mutex::new(()),
         };
         let handle = CONTEXTS.insert(Arc::new(state))?;
-        // SAFETY: checked non-null; writable by contract.
-        unsafe { write(context, handle as CadrContext) };
-        Ok(())
+        // SAFETY: context is null or writable (the caller's contract).
+        unsafe { deliver(context, "context", handle as CadrContext) }
     })
 }
 
@@ -449,7 +458,6 @@ pub unsafe extern "C" fn cadr_context_device_info(
 ) -> CadrResult {
     guard(|| {
         let state = context_state(context)?;
-        non_null(info, "info")?;
         let adapter = state.device.adapter();
         let capabilities = state.device.capabilities();
         let mut name = [0 as c_char; 256];
@@ -474,9 +482,8 @@ pub unsafe extern "C" fn cadr_context_device_info(
             },
             validation: state.device.instance().validation_enabled(),
         };
-        // SAFETY: checked non-null; writable by contract.
-        unsafe { write(info, value) };
-        Ok(())
+        // SAFETY: info is null or writable (the caller's contract).
+        unsafe { deliver(info, "info", value) }
     })
 }
 
@@ -496,11 +503,9 @@ pub unsafe extern "C" fn cadr_context_vulkan_instance(
 ) -> CadrResult {
     guard(|| {
         let state = context_state(context)?;
-        non_null(instance, "instance")?;
         let raw = state.device.instance().raw().handle().as_raw() as *mut c_void;
-        // SAFETY: checked non-null; writable by contract.
-        unsafe { write(instance, raw) };
-        Ok(())
+        // SAFETY: instance is null or writable (the caller's contract).
+        unsafe { deliver(instance, "instance", raw) }
     })
 }
 
@@ -520,11 +525,9 @@ pub unsafe extern "C" fn cadr_context_validation_error_count(
 ) -> CadrResult {
     guard(|| {
         let state = context_state(context)?;
-        non_null(count, "count")?;
         let errors = state.device.validation_log().errors().len() as u64;
-        // SAFETY: checked non-null; writable by contract.
-        unsafe { write(count, errors) };
-        Ok(())
+        // SAFETY: count is null or writable (the caller's contract).
+        unsafe { deliver(count, "count", errors) }
     })
 }
 
@@ -543,10 +546,8 @@ pub unsafe extern "C" fn cadr_context_technique_count(
 ) -> CadrResult {
     guard(|| {
         let state = context_state(context)?;
-        non_null(count, "count")?;
-        // SAFETY: checked non-null; writable by contract.
-        unsafe { write(count, state.techniques.len() as u32) };
-        Ok(())
+        // SAFETY: count is null or writable (the caller's contract).
+        unsafe { deliver(count, "count", state.techniques.len() as u32) }
     })
 }
 
@@ -567,16 +568,7 @@ pub unsafe extern "C" fn cadr_context_technique(
 ) -> CadrResult {
     guard(|| {
         let state = context_state(context)?;
-        non_null(info, "info")?;
-        let technique = state.techniques.get(index as usize).ok_or_else(|| {
-            Failure::new(
-                CadrResult::NotFound,
-                format!(
-                    "technique index {index} is out of range (0..{})",
-                    state.techniques.len()
-                ),
-            )
-        })?;
+        let technique = list_item(&state.techniques, index, "technique")?;
         let value = CadrTechniqueInfo {
             kind: CadrTechniqueKind::from_core(technique.kind),
             name: technique.name.as_ptr(),
@@ -585,9 +577,8 @@ pub unsafe extern "C" fn cadr_context_technique(
             supported: technique.supported,
             unsupported_reason: technique.reason.as_ptr(),
         };
-        // SAFETY: checked non-null; writable by contract.
-        unsafe { write(info, value) };
-        Ok(())
+        // SAFETY: info is null or writable (the caller's contract).
+        unsafe { deliver(info, "info", value) }
     })
 }
 
@@ -606,10 +597,8 @@ pub unsafe extern "C" fn cadr_context_refusal_count(
 ) -> CadrResult {
     guard(|| {
         let state = context_state(context)?;
-        non_null(count, "count")?;
-        // SAFETY: checked non-null; writable by contract.
-        unsafe { write(count, state.refusals.len() as u32) };
-        Ok(())
+        // SAFETY: count is null or writable (the caller's contract).
+        unsafe { deliver(count, "count", state.refusals.len() as u32) }
     })
 }
 
@@ -629,22 +618,12 @@ pub unsafe extern "C" fn cadr_context_refusal(
 ) -> CadrResult {
     guard(|| {
         let state = context_state(context)?;
-        non_null(refusal, "refusal")?;
-        let (library, reason) = state.refusals.get(index as usize).ok_or_else(|| {
-            Failure::new(
-                CadrResult::NotFound,
-                format!(
-                    "refusal index {index} is out of range (0..{})",
-                    state.refusals.len()
-                ),
-            )
-        })?;
+        let (library, reason) = list_item(&state.refusals, index, "refusal")?;
         let value = CadrPluginRefusal {
             library: library.as_ptr(),
             reason: reason.as_ptr(),
         };
-        // SAFETY: checked non-null; writable by contract.
-        unsafe { write(refusal, value) };
-        Ok(())
+        // SAFETY: refusal is null or writable (the caller's contract).
+        unsafe { deliver(refusal, "refusal", value) }
     })
 }

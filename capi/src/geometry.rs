@@ -4,7 +4,7 @@ use std::ffi::c_char;
 
 use cadr_core::scene::{Geometry, Material, Part, Vertex};
 
-use crate::args::{non_null, optional_str, slice, write};
+use crate::args::{deliver, non_null, optional_str, slice};
 use crate::error::{guard, Failure};
 use crate::scene::{
     geometry_of, geometry_value, graph_failure, material_of, material_value, with_scene,
@@ -219,7 +219,6 @@ pub unsafe extern "C" fn cadr_scene_create_geometry(
     geometry: *mut CadrGeometry,
 ) -> crate::CadrResult {
     guard(|| {
-        non_null(geometry, "geometry")?;
         // SAFETY: forwarded contract.
         let data = unsafe { geometry_from(desc) }?;
         let value = with_scene(scene, |s| {
@@ -228,9 +227,8 @@ pub unsafe extern "C" fn cadr_scene_create_geometry(
                 .map(geometry_value)
                 .map_err(graph_failure)
         })?;
-        // SAFETY: checked non-null; writable by contract.
-        unsafe { write(geometry, value) };
-        Ok(())
+        // SAFETY: geometry is null or writable (the caller's contract).
+        unsafe { deliver(geometry, "geometry", value) }
     })
 }
 
@@ -297,10 +295,8 @@ pub unsafe extern "C" fn cadr_scene_geometry_bounds(
             let handle = geometry_of(&s.graph, geometry, "geometry")?;
             Ok(s.graph.geometry(handle).map_err(graph_failure)?.bounds())
         })?;
-        non_null(bounds, "bounds")?;
-        // SAFETY: checked non-null; writable by contract.
-        unsafe { write(bounds, value.into()) };
-        Ok(())
+        // SAFETY: bounds is null or writable (the caller's contract).
+        unsafe { deliver(bounds, "bounds", value.into()) }
     })
 }
 
@@ -319,7 +315,6 @@ pub unsafe extern "C" fn cadr_scene_create_material(
     material: *mut CadrMaterial,
 ) -> crate::CadrResult {
     guard(|| {
-        non_null(material, "material")?;
         // SAFETY: forwarded contract.
         let data = unsafe { material_from(desc) }?;
         let value = with_scene(scene, |s| {
@@ -328,9 +323,8 @@ pub unsafe extern "C" fn cadr_scene_create_material(
                 .map(material_value)
                 .map_err(graph_failure)
         })?;
-        // SAFETY: checked non-null; writable by contract.
-        unsafe { write(material, value) };
-        Ok(())
+        // SAFETY: material is null or writable (the caller's contract).
+        unsafe { deliver(material, "material", value) }
     })
 }
 

@@ -11,7 +11,7 @@ use cadr_core::render::Renderer;
 use cadr_core::technique::{Combination, ShadeMode, TechniqueKind, TechniqueScene, Techniques};
 use cadr_core::vk::{raw, raw::Handle, PresentOutcome, Swapchain};
 
-use crate::args::{non_null, optional_str, required_str, write};
+use crate::args::{deliver, non_null, optional_str, required_str, write};
 use crate::camera::CadrCamera;
 use crate::context::{context_state, CadrContext, CadrTechniqueKind, ContextState};
 use crate::error::{guard, CadrResult, Failure};
@@ -190,9 +190,8 @@ fn new_renderer(
         id: NEXT_RENDERER_ID.fetch_add(1, Ordering::Relaxed),
     };
     let handle = RENDERERS.insert(ThreadBound(state))?;
-    // SAFETY: checked non-null; writable by contract.
-    unsafe { write(renderer, handle as CadrRenderer) };
-    Ok(())
+    // SAFETY: renderer is null or writable (the caller's contract).
+    unsafe { deliver(renderer, "renderer", handle as CadrRenderer) }
 }
 
 /// Runs `body` on a renderer's state with the device's queue reserved for it.
@@ -532,14 +531,12 @@ pub unsafe extern "C" fn cadr_renderer_technique(
 ) -> CadrResult {
     guard(|| {
         let kind = CadrTechniqueKind::from_raw(kind)?.core();
-        non_null(name, "name")?;
         let value = with_renderer(renderer, |state| {
             let current = state.techniques.combination();
             Ok(state.context.technique_name(kind, current.get(kind)))
         })?;
-        // SAFETY: checked non-null; writable by contract.
-        unsafe { write(name, value) };
-        Ok(())
+        // SAFETY: name is null or writable (the caller's contract).
+        unsafe { deliver(name, "name", value) }
     })
 }
 
@@ -580,16 +577,14 @@ pub unsafe extern "C" fn cadr_renderer_shade_mode(
     mode: *mut u32,
 ) -> CadrResult {
     guard(|| {
-        non_null(mode, "mode")?;
         let value = with_renderer(renderer, |state| {
             Ok(match state.techniques.shade_mode() {
                 ShadeMode::Solid => CADR_SHADE_SOLID,
                 ShadeMode::Edges => CADR_SHADE_EDGES,
             })
         })?;
-        // SAFETY: checked non-null; writable by contract.
-        unsafe { write(mode, value) };
-        Ok(())
+        // SAFETY: mode is null or writable (the caller's contract).
+        unsafe { deliver(mode, "mode", value) }
     })
 }
 
@@ -619,24 +614,15 @@ pub unsafe extern "C" fn cadr_renderer_render(
         let scene_object = SCENES.get(scene as u64, "scene")?;
         let value = with_renderer(renderer, |state| {
             let mut frame = CadrFrameStats::default();
-            if let Some(swapchain) = &state.swapchain {
+            if let Some(swapchain) = &mut state.swapchain {
+                if swapchain.extent().width == 0 || swapchain.extent().height == 0 {
+                    // Minimized until now: ask the surface again.
+                    swapchain.recreate()?;
+                }
                 let extent = swapchain.extent();
                 if extent.width == 0 || extent.height == 0 {
-                    // Minimized: ask the surface again, draw nothing.
-                    let swapchain = state
-                        .swapchain
-                        .as_mut()
-                        .ok_or_else(|| Failure::invalid("no swapchain"))?;
-                    swapchain.recreate()?;
-                    if swapchain.extent().width == 0 || swapchain.extent().height == 0 {
-                        return Ok(frame);
-                    }
+                    return Ok(frame); // still minimized: draw nothing
                 }
-                let extent = state
-                    .swapchain
-                    .as_ref()
-                    .map(Swapchain::extent)
-                    .unwrap_or(extent);
                 state.renderer.resize(extent.width, extent.height)?;
             }
             let mut scene_state = lock(&scene_object);

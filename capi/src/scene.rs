@@ -11,7 +11,7 @@ use cadr_core::load::SceneSource;
 use cadr_core::scene::Aabb;
 use cadr_core::tree::SceneTree;
 
-use crate::args::{matrix, non_null, optional_str, required_str, slice, write};
+use crate::args::{deliver, matrix, non_null, optional_str, required_str, slice};
 use crate::error::{guard, CadrResult, Failure};
 use crate::handles::{lock, Registry};
 
@@ -245,7 +245,6 @@ pub(crate) fn with_scene<R>(
 #[no_mangle]
 pub unsafe extern "C" fn cadr_scene_create(scene: *mut CadrScene) -> CadrResult {
     guard(|| {
-        non_null(scene, "scene")?;
         let mut graph = SceneGraph::new();
         let tree = SceneTree::build(&mut graph);
         let state = SceneState {
@@ -255,9 +254,8 @@ pub unsafe extern "C" fn cadr_scene_create(scene: *mut CadrScene) -> CadrResult 
             consumer: 0,
         };
         let handle = SCENES.insert(state)?;
-        // SAFETY: checked non-null; writable by contract.
-        unsafe { write(scene, handle as CadrScene) };
-        Ok(())
+        // SAFETY: scene is null or writable (the caller's contract).
+        unsafe { deliver(scene, "scene", handle as CadrScene) }
     })
 }
 
@@ -288,10 +286,8 @@ pub extern "C" fn cadr_scene_destroy(scene: CadrScene) -> CadrResult {
 pub unsafe extern "C" fn cadr_scene_root(scene: CadrScene, root: *mut CadrNode) -> CadrResult {
     guard(|| {
         let value = with_scene(scene, |s| Ok(node_value(s.graph.root())))?;
-        non_null(root, "root")?;
-        // SAFETY: checked non-null; writable by contract.
-        unsafe { write(root, value) };
-        Ok(())
+        // SAFETY: root is null or writable (the caller's contract).
+        unsafe { deliver(root, "root", value) }
     })
 }
 
@@ -316,7 +312,6 @@ unsafe fn create_node(
     kind: NewNode<'_>,
     node: *mut CadrNode,
 ) -> Result<(), Failure> {
-    non_null(node, "node")?;
     // SAFETY: forwarded contract.
     let name = unsafe { optional_str(name, "name")? }.unwrap_or("");
     let value = with_scene(scene, |s| {
@@ -350,9 +345,8 @@ unsafe fn create_node(
         };
         Ok(node_value(handle))
     })?;
-    // SAFETY: checked non-null; writable by contract.
-    unsafe { write(node, value) };
-    Ok(())
+    // SAFETY: node is null or writable (the caller's contract).
+    unsafe { deliver(node, "node", value) }
 }
 
 /// Creates a Group (not attached yet). `name` may be NULL.
@@ -610,10 +604,8 @@ pub unsafe extern "C" fn cadr_scene_child_count(
             let node = node_of(&s.graph, node, "node")?;
             Ok(s.graph.node(node).map_err(graph_failure)?.children().len() as u32)
         })?;
-        non_null(count, "count")?;
-        // SAFETY: checked non-null; writable by contract.
-        unsafe { write(count, value) };
-        Ok(())
+        // SAFETY: count is null or writable (the caller's contract).
+        unsafe { deliver(count, "count", value) }
     })
 }
 
@@ -649,10 +641,8 @@ pub unsafe extern "C" fn cadr_scene_child(
                     )
                 })
         })?;
-        non_null(child, "child")?;
-        // SAFETY: checked non-null; writable by contract.
-        unsafe { write(child, value) };
-        Ok(())
+        // SAFETY: child is null or writable (the caller's contract).
+        unsafe { deliver(child, "child", value) }
     })
 }
 
@@ -756,10 +746,8 @@ pub unsafe extern "C" fn cadr_scene_flags(
                 | bit(f.pickable, CADR_NODE_PICKABLE)
                 | bit(f.highlighted, CADR_NODE_HIGHLIGHTED))
         })?;
-        non_null(flags, "flags")?;
-        // SAFETY: checked non-null; writable by contract.
-        unsafe { write(flags, value) };
-        Ok(())
+        // SAFETY: flags is null or writable (the caller's contract).
+        unsafe { deliver(flags, "flags", value) }
     })
 }
 
@@ -875,9 +863,8 @@ pub unsafe extern "C" fn cadr_scene_load(
             materials,
             material_count,
         };
-        // SAFETY: checked non-null; writable by contract.
-        unsafe { write(result, value) };
-        Ok(())
+        // SAFETY: result is null or writable (the caller's contract).
+        unsafe { deliver(result, "result", value) }
     })
 }
 
@@ -974,11 +961,9 @@ pub unsafe extern "C" fn cadr_scene_bounds(
     bounds: *mut CadrBounds,
 ) -> CadrResult {
     guard(|| {
-        non_null(bounds, "bounds")?;
         let value = with_scene(scene, |s| Ok(shown(s, None).0))?;
-        // SAFETY: checked non-null; writable by contract.
-        unsafe { write(bounds, value.into()) };
-        Ok(())
+        // SAFETY: bounds is null or writable (the caller's contract).
+        unsafe { deliver(bounds, "bounds", value.into()) }
     })
 }
 
@@ -996,11 +981,9 @@ pub unsafe extern "C" fn cadr_scene_statistics(
     statistics: *mut CadrSceneStatistics,
 ) -> CadrResult {
     guard(|| {
-        non_null(statistics, "statistics")?;
         let value = with_scene(scene, |s| Ok(shown(s, None).1))?;
-        // SAFETY: checked non-null; writable by contract.
-        unsafe { write(statistics, value) };
-        Ok(())
+        // SAFETY: statistics is null or writable (the caller's contract).
+        unsafe { deliver(statistics, "statistics", value) }
     })
 }
 
@@ -1025,9 +1008,7 @@ pub unsafe extern "C" fn cadr_scene_node_bounds(
             let node = node_of(&s.graph, node, "node")?;
             Ok(shown(s, Some(node)).0)
         })?;
-        non_null(bounds, "bounds")?;
-        // SAFETY: checked non-null; writable by contract.
-        unsafe { write(bounds, value.into()) };
-        Ok(())
+        // SAFETY: bounds is null or writable (the caller's contract).
+        unsafe { deliver(bounds, "bounds", value.into()) }
     })
 }

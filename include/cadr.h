@@ -287,6 +287,41 @@ typedef uint64_t CadrMaterial;
 // `cadr_renderer_create_for_surface`, released by `cadr_renderer_destroy`.
 typedef struct CadrRendererObject *CadrRenderer;
 
+// A node of a scene (0 is never a valid node). Generation-checked: a destroyed node's handle
+// gives `CADR_RESULT_DESTROYED_HANDLE`.
+typedef uint64_t CadrNode;
+
+// One picked occurrence of a part.
+typedef struct CadrPickHit {
+  // The geo node drawn.
+  CadrNode node;
+  // The part of its geometry.
+  uint32_t part;
+  // The pixel's column (for a rectangle: the part's nearest pixel in it).
+  uint32_t x;
+  // The pixel's row.
+  uint32_t y;
+  // Depth at the pixel: 0 at the near plane, 1 at the far plane.
+  float depth;
+  // The surface point under the pixel's centre, in world space (double precision).
+  double position[3];
+  // The occurrence: the nodes from the scene's root to `node` (a shared subgraph is drawn
+  // once per path; this says which). Owned by the result.
+  const CadrNode *path;
+  // Number of nodes in `path`.
+  size_t path_length;
+} CadrPickHit;
+
+// What a pick found: hits nearest first (none where only background or parts that cannot be
+// picked are). Filled by `cadr_renderer_pick` or `cadr_renderer_pick_rect`, released by
+// `cadr_pick_result_free`.
+typedef struct CadrPickResult {
+  // The hits, nearest first.
+  struct CadrPickHit *hits;
+  // Number of `hits`.
+  size_t hit_count;
+} CadrPickResult;
+
 // One technique name per kind; NULL keeps the renderer's current technique of that kind.
 typedef struct CadrTechniqueSelection {
   // Vertex path, e.g. "arena".
@@ -331,10 +366,6 @@ typedef struct CadrFrameStats {
   // Bytes uploaded for this frame.
   uint64_t bytes_uploaded;
 } CadrFrameStats;
-
-// A node of a scene (0 is never a valid node). Generation-checked: a destroyed node's handle
-// gives `CADR_RESULT_DESTROYED_HANDLE`.
-typedef uint64_t CadrNode;
 
 // What `cadr_scene_load` created. Free the arrays with `cadr_load_result_free`.
 typedef struct CadrLoadResult {
@@ -642,6 +673,56 @@ enum CadrResult cadr_scene_set_material(CadrScene scene,
 // Ownership: the handle (or item) is given back to cadr and invalid afterwards.
 // Thread-safety: as `cadr_scene_create`.
 enum CadrResult cadr_scene_destroy_material(CadrScene scene, CadrMaterial material);
+
+// Picks what lies under pixel (`x`, `y`) of the renderer's image (column, row from the top
+// left) when drawing `scene` seen by `camera` with the current techniques: at most one hit,
+// with the geo node, part, occurrence path, depth and world position. Parts that are hidden
+// are not drawn; parts that are not pickable (`CADR_NODE_PICKABLE` cleared on a node of their
+// path) let the click through to what is behind them.
+//
+// Returns `CADR_RESULT_OK` and writes `*result` (no hits over background),
+// `CADR_RESULT_NULL_ARGUMENT`, `CADR_RESULT_INVALID_ARGUMENT` (a pixel outside the image, a
+// camera that is not finite), `CADR_RESULT_VULKAN`, `CADR_RESULT_PLUGIN_FAILED` or a handle
+// error. Ownership: the result's arrays are cadr's until `cadr_pick_result_free`; the camera
+// is read during the call. Thread-safety: as `cadr_renderer_render` (the scene is locked
+// during the call).
+//
+// # Safety
+// `camera` is null or readable; `result` is null or writable.
+enum CadrResult cadr_renderer_pick(CadrRenderer renderer,
+                                   CadrScene scene,
+                                   const struct CadrCamera *camera,
+                                   uint32_t x,
+                                   uint32_t y,
+                                   struct CadrPickResult *result);
+
+// Box selection: every pickable part with a visible pixel in the `width` × `height`
+// rectangle whose top-left pixel is (`x`, `y`), one hit per occurrence and part (at its
+// nearest pixel), nearest first.
+//
+// Returns as `cadr_renderer_pick` (`CADR_RESULT_INVALID_ARGUMENT` also for an empty
+// rectangle or one that leaves the image). Ownership and thread-safety: as
+// `cadr_renderer_pick`.
+//
+// # Safety
+// As `cadr_renderer_pick`.
+enum CadrResult cadr_renderer_pick_rect(CadrRenderer renderer,
+                                        CadrScene scene,
+                                        const struct CadrCamera *camera,
+                                        uint32_t x,
+                                        uint32_t y,
+                                        uint32_t width,
+                                        uint32_t height,
+                                        struct CadrPickResult *result);
+
+// Frees the arrays of a pick result and zeroes it. NULL, or a zeroed result, is a no-op.
+//
+// Ownership: takes back what `cadr_renderer_pick` or `cadr_renderer_pick_rect` handed out;
+// free each result once. Thread-safety: callable from any thread.
+//
+// # Safety
+// `result` is null or a result filled by a pick (or zeroed).
+void cadr_pick_result_free(struct CadrPickResult *result);
 
 // Creates a renderer that draws into an offscreen `width` × `height` image, with the fastest
 // technique combination the device and plugins allow (see `cadr_renderer_technique`).

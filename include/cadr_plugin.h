@@ -11,7 +11,7 @@
 #define CADR_PLUGIN_ABI_MAJOR 1
 
 // Minor version of this ABI: additions that older readers may ignore.
-#define CADR_PLUGIN_ABI_MINOR 0
+#define CADR_PLUGIN_ABI_MINOR 1
 
 // `(major << 16) | minor`, what [`CadrPluginVersionFn`] returns.
 #define CADR_PLUGIN_ABI_VERSION ((CADR_PLUGIN_ABI_MAJOR << 16) | CADR_PLUGIN_ABI_MINOR)
@@ -500,6 +500,10 @@ typedef struct CadrRecordContext {
   uint64_t commands_key;
   // Counters to add to.
   struct CadrStats *stats;
+  // Since ABI 1.1: the `VkFormat` of the pass's colour attachment (the pick pass draws
+  // instance ids into `VK_FORMAT_R32_UINT`); secondary command buffers must inherit it.
+  // Read it only when `size` covers it; 0 means [`CadrVulkan::color_format`].
+  int32_t color_format;
 } CadrRecordContext;
 
 // Submission vtable ([`CADR_KIND_SUBMISSION`]).

@@ -1,27 +1,27 @@
 #version 460
 // Sparse upload (seed 000: "gathers all updates, uploads them as compact buffer and scatters on
-// the GPU"): the CPU packs only the changed matrices with their slots; this moves each into place.
+// the GPU"): the CPU packs only the changed items of one array, each as its slot followed by
+// its words; this moves every word into place. One shader serves every array of the GPU scene
+// (matrices, materials, instance records): the item size is a push constant.
 layout(local_size_x = 64) in;
 
-struct MatrixUpdate {
-    uint slot;
-    uint pad0;
-    uint pad1;
-    uint pad2;
-    mat4 matrix;           // its translation: the f32 high part
-    vec4 translation_low;  // the f32 remainder of the translation
-};
+layout(set = 0, binding = 0, std430) readonly buffer Updates { uint update_words[]; };
+layout(set = 0, binding = 1, std430) writeonly buffer Target { uint target_words[]; };
 
-layout(set = 0, binding = 0, std430) readonly buffer Updates { MatrixUpdate updates[]; };
-layout(set = 0, binding = 1, std430) writeonly buffer Matrices { mat4 world_from_object[]; };
-layout(set = 0, binding = 2, std430) writeonly buffer TranslationLows { vec4 translation_low[]; };
-
-layout(push_constant) uniform Count { uint update_count; } pc;
+layout(push_constant) uniform Scatter {
+    uint item_count;       // items in this dispatch
+    uint item_words;       // 32-bit words per item (without its slot)
+    uint first_word;       // where this dispatch's items start in update_words
+} scatter;
 
 void main() {
-    uint i = gl_GlobalInvocationID.x;
-    if (i < pc.update_count) {
-        world_from_object[updates[i].slot] = updates[i].matrix;
-        translation_low[updates[i].slot] = updates[i].translation_low;
+    uint word = gl_GlobalInvocationID.x;
+    uint item = word / scatter.item_words;
+    if (item >= scatter.item_count) {
+        return;
     }
+    uint within = word % scatter.item_words;
+    uint source = scatter.first_word + item * (scatter.item_words + 1u);
+    uint slot = update_words[source];
+    target_words[slot * scatter.item_words + within] = update_words[source + 1u + within];
 }

@@ -1,7 +1,7 @@
 // The vertex shader every technique combination shares. The host assembles it: the vertex
 // path's snippet (cadr_vertex_position, cadr_vertex_normal) and the parameter path's snippet
 // (cadr_object) replace the two markers below. Positions are made relative to the eye with
-// the translation split into f32 high and low parts, as in resident.vert.
+// the translation split into f32 high and low parts.
 #include "frame.glsl"
 
 struct CadrObject {
@@ -13,6 +13,7 @@ struct CadrObject {
 };
 
 const uint CADR_INSTANCE_HIGHLIGHTED = 1u;
+const uint CADR_INSTANCE_PICKABLE = 2u;
 const vec3 HIGHLIGHT_COLOR = vec3(1.0, 0.55, 0.05);
 
 // Push constants: bytes 0-95 belong to the parameter path, 96-127 to the vertex path.
@@ -49,6 +50,7 @@ void main() {
         out_base_color.rgb = mix(out_base_color.rgb, HIGHLIGHT_COLOR, 0.65);
     }
     out_surface = object.surface;
-    out_pick_id = object.instance + 1u;
+    // The pick pass writes instance + 1; 0 (nothing) lets the click through unpickable parts.
+    out_pick_id = (object.flags & CADR_INSTANCE_PICKABLE) != 0u ? object.instance + 1u : 0u;
     gl_Position = frame.projection * view_position;
 }

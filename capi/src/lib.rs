@@ -20,6 +20,7 @@ mod context;
 mod error;
 mod geometry;
 mod handles;
+mod pick;
 mod renderer;
 mod scene;
 
@@ -27,6 +28,7 @@ pub use camera::{cadr_camera_fit, cadr_camera_look_at, CadrCamera};
 pub use context::*;
 pub use error::{cadr_last_error_message, cadr_result_string, CadrResult};
 pub use geometry::*;
+pub use pick::*;
 pub use renderer::*;
 pub use scene::*;
 
@@ -34,7 +36,7 @@ use std::ffi::c_char;
 use std::path::PathBuf;
 
 use cadr_core::load::SceneSource;
-use cadr_core::render::{Camera, GpuScene, Renderer, DEFAULT_DIRECTION};
+use cadr_core::render::{BaselineScene, Camera, Renderer, DEFAULT_DIRECTION};
 use cadr_core::vk::{Device, DeviceOptions, InstanceOptions};
 
 use args::required_str;
@@ -127,7 +129,7 @@ pub unsafe extern "C" fn cadr_render_scene_to_png(
             ..DeviceOptions::default()
         };
         let device = Device::new(&options).map_err(|e| vulkan(&e))?;
-        let gpu_scene = GpuScene::upload(&device, &scene).map_err(|e| match e {
+        let gpu_scene = BaselineScene::upload(&device, &scene).map_err(|e| match e {
             cadr_core::render::UploadError::Scene(e) => {
                 Failure::new(CadrResult::LoadFailed, e.to_string())
             }

@@ -3,12 +3,11 @@
 
 use std::ffi::c_char;
 use std::path::Path;
-use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::Arc;
 use std::time::Instant;
 
-use cadr_core::render::Renderer;
-use cadr_core::technique::{Combination, ShadeMode, TechniqueKind, TechniqueScene, Techniques};
+use cadr_core::technique::{Combination, ShadeMode, TechniqueKind};
+use cadr_core::view::View;
 use cadr_core::vk::{raw, raw::Handle, PresentOutcome, Swapchain};
 
 use crate::args::{deliver, non_null, optional_str, required_str, write};
@@ -82,15 +81,12 @@ pub struct CadrFrameStats {
     pub bytes_uploaded: u64,
 }
 
-/// What a renderer holds, dropped in this order: the uploaded scene and the techniques before
-/// the renderer whose layouts they use.
-struct RendererState {
-    scene: Option<(u64, TechniqueScene)>,
-    techniques: Techniques,
+/// What a renderer holds: the view (its GPU scene, techniques and target), the window's
+/// swapchain, and the context that keeps the device alive.
+pub(crate) struct RendererState {
+    pub(crate) view: View,
     swapchain: Option<Swapchain>,
-    renderer: Renderer,
     context: Arc<ContextState>,
-    id: u64,
 }
 
 /// A renderer's state, movable between threads.
@@ -103,7 +99,6 @@ struct ThreadBound(RendererState);
 unsafe impl Send for ThreadBound {}
 
 static RENDERERS: Registry<ThreadBound> = Registry::new(0xC3, "renderer");
-static NEXT_RENDERER_ID: AtomicU64 = AtomicU64::new(1);
 
 /// Technique combinations tried for a new renderer, fastest first; the first the device and
 /// the plugins can run is chosen.
@@ -150,12 +145,8 @@ fn new_renderer(
     }
     let _queue = lock(&context.queue);
     let device = &context.device;
-    let core = Renderer::new(device, width, height)?;
-    let mut techniques = Techniques::new(
-        device,
-        Arc::clone(&context.registry),
-        core.pipelines().frame_set_layout,
-    );
+    let mut view = View::new(device, Arc::clone(&context.registry), width, height)?;
+    let techniques = view.techniques_mut();
     let chosen = PREFERRED
         .iter()
         .map(|&names| combination(names))
@@ -182,12 +173,9 @@ fn new_renderer(
     };
     drop(_queue);
     let state = RendererState {
-        scene: None,
-        techniques,
+        view,
         swapchain,
-        renderer: core,
         context: Arc::clone(&context),
-        id: NEXT_RENDERER_ID.fetch_add(1, Ordering::Relaxed),
     };
     let handle = RENDERERS.insert(ThreadBound(state))?;
     // SAFETY: renderer is null or writable (the caller's contract).
@@ -195,7 +183,7 @@ fn new_renderer(
 }
 
 /// Runs `body` on a renderer's state with the device's queue reserved for it.
-fn with_renderer<R>(
+pub(crate) fn with_renderer<R>(
     renderer: CadrRenderer,
     body: impl FnOnce(&mut RendererState) -> Result<R, Failure>,
 ) -> Result<R, Failure> {
@@ -309,12 +297,15 @@ pub extern "C" fn cadr_renderer_resize(
                     swapchain.resize(width, height)?;
                     let extent = swapchain.extent();
                     if extent.width > 0 && extent.height > 0 {
-                        state.renderer.resize(extent.width, extent.height)?;
+                        state
+                            .view
+                            .renderer_mut()
+                            .resize(extent.width, extent.height)?;
                     }
                 }
                 None => {
                     check_size(width, height)?;
-                    state.renderer.resize(width, height)?;
+                    state.view.renderer_mut().resize(width, height)?;
                 }
             }
             Ok(())
@@ -343,7 +334,7 @@ pub unsafe extern "C" fn cadr_renderer_size(
         let (w, h) = with_renderer(renderer, |state| {
             Ok(match &state.swapchain {
                 Some(swapchain) => (swapchain.extent().width, swapchain.extent().height),
-                None => state.renderer.size(),
+                None => state.view.renderer().size(),
             })
         })?;
         // SAFETY: checked non-null; writable by contract.
@@ -366,7 +357,7 @@ unsafe fn requested(
     non_null(selection, "selection")?;
     // SAFETY: non-null and valid by contract.
     let selection = unsafe { *selection };
-    let mut wanted = state.techniques.combination();
+    let mut wanted = state.view.techniques().combination();
     for (kind, pointer, name) in [
         (TechniqueKind::Vertex, selection.vertex, "selection.vertex"),
         (
@@ -396,7 +387,7 @@ unsafe fn requested(
 /// Why `combination` cannot be used, as a result code: an unknown name, a technique the
 /// device cannot run, or techniques that do not fit together.
 fn refusal(state: &RendererState, combination: &Combination) -> Result<(), Failure> {
-    let registry = state.techniques.registry();
+    let registry = state.view.techniques().registry();
     for kind in TechniqueKind::ALL {
         let name = combination.get(kind);
         match registry.find(kind, name) {
@@ -424,7 +415,7 @@ fn refusal(state: &RendererState, combination: &Combination) -> Result<(), Failu
             }
         }
     }
-    state.techniques.check(combination).map_err(|why| {
+    state.view.techniques().check(combination).map_err(|why| {
         Failure::new(
             CadrResult::InvalidCombination,
             format!("{combination}: {why}"),
@@ -432,14 +423,23 @@ fn refusal(state: &RendererState, combination: &Combination) -> Result<(), Failu
     })
 }
 
-fn select(state: &mut RendererState, combination: &Combination) -> Result<(), Failure> {
-    refusal(state, combination)?;
-    state.techniques.select(combination).map_err(|e| match e {
+/// A technique's failure as `CADR_RESULT_PLUGIN_FAILED`; Vulkan's as itself.
+pub(crate) fn technique_failure(error: cadr_core::vk::VkError) -> Failure {
+    match error {
         cadr_core::vk::VkError::Technique { .. } => {
-            Failure::new(CadrResult::PluginFailed, e.to_string())
+            Failure::new(CadrResult::PluginFailed, error.to_string())
         }
         other => other.into(),
-    })
+    }
+}
+
+fn select(state: &mut RendererState, combination: &Combination) -> Result<(), Failure> {
+    refusal(state, combination)?;
+    state
+        .view
+        .techniques_mut()
+        .select(combination)
+        .map_err(technique_failure)
 }
 
 /// Checks whether a technique selection would work, without changing anything.
@@ -507,7 +507,7 @@ pub unsafe extern "C" fn cadr_renderer_set_technique(
         // SAFETY: forwarded contract.
         let name = unsafe { required_str(name, "name") }?;
         with_renderer(renderer, |state| {
-            let mut wanted = state.techniques.combination();
+            let mut wanted = state.view.techniques().combination();
             wanted.set(kind, name);
             select(state, &wanted)
         })
@@ -532,7 +532,7 @@ pub unsafe extern "C" fn cadr_renderer_technique(
     guard(|| {
         let kind = CadrTechniqueKind::from_raw(kind)?.core();
         let value = with_renderer(renderer, |state| {
-            let current = state.techniques.combination();
+            let current = state.view.techniques().combination();
             Ok(state.context.technique_name(kind, current.get(kind)))
         })?;
         // SAFETY: name is null or writable (the caller's contract).
@@ -558,7 +558,7 @@ pub extern "C" fn cadr_renderer_set_shade_mode(renderer: CadrRenderer, mode: u32
             }
         };
         with_renderer(renderer, |state| {
-            Ok(state.techniques.set_shade_mode(mode)?)
+            Ok(state.view.techniques_mut().set_shade_mode(mode)?)
         })
     })
 }
@@ -578,7 +578,7 @@ pub unsafe extern "C" fn cadr_renderer_shade_mode(
 ) -> CadrResult {
     guard(|| {
         let value = with_renderer(renderer, |state| {
-            Ok(match state.techniques.shade_mode() {
+            Ok(match state.view.techniques().shade_mode() {
                 ShadeMode::Solid => CADR_SHADE_SOLID,
                 ShadeMode::Edges => CADR_SHADE_EDGES,
             })
@@ -623,44 +623,27 @@ pub unsafe extern "C" fn cadr_renderer_render(
                 if extent.width == 0 || extent.height == 0 {
                     return Ok(frame); // still minimized: draw nothing
                 }
-                state.renderer.resize(extent.width, extent.height)?;
+                state
+                    .view
+                    .renderer_mut()
+                    .resize(extent.width, extent.height)?;
             }
             let mut scene_state = lock(&scene_object);
             let update_start = Instant::now();
             scene_state.update();
-            let device = Arc::clone(&state.context.device);
-            let current = match state.scene.take() {
-                Some((id, mut uploaded))
-                    if id == scene_state.id && scene_state.consumer == state.id =>
-                {
-                    let s = &mut *scene_state;
-                    uploaded.sync(&s.graph, &mut s.tree)?;
-                    uploaded
-                }
-                _ => {
-                    let s = &mut *scene_state;
-                    TechniqueScene::new(&device, &s.graph, &mut s.tree)?
-                }
-            };
-            scene_state.consumer = state.id;
-            let scene_id = scene_state.id;
-            drop(scene_state);
-            let uploaded = &mut state.scene.insert((scene_id, current)).1;
+            let s = &mut *scene_state;
+            state.view.sync(&s.graph, &mut s.tree)?;
             frame.scene_update_us = update_start.elapsed().as_secs_f64() * 1e6;
             let drawn = state
-                .renderer
-                .render_techniques(uploaded, &mut state.techniques, &camera)
-                .map_err(|e| match e {
-                    cadr_core::vk::VkError::Technique { .. } => {
-                        Failure::new(CadrResult::PluginFailed, e.to_string())
-                    }
-                    other => other.into(),
-                })?;
+                .view
+                .render(&s.graph, &mut s.tree, &camera)
+                .map_err(technique_failure)?;
+            drop(scene_state);
             frame.presented = true;
             if let Some(swapchain) = &mut state.swapchain {
                 let present_start = Instant::now();
-                frame.presented =
-                    swapchain.present(state.renderer.color_image())? == PresentOutcome::Presented;
+                frame.presented = swapchain.present(state.view.renderer().color_image())?
+                    == PresentOutcome::Presented;
                 frame.present_us = present_start.elapsed().as_secs_f64() * 1e6;
             }
             frame.cpu_us = drawn.cpu_us();
@@ -702,7 +685,7 @@ pub unsafe extern "C" fn cadr_renderer_read_pixels(
     guard(|| {
         non_null(rgba, "rgba")?;
         with_renderer(renderer, |state| {
-            let (width, height) = state.renderer.size();
+            let (width, height) = state.view.renderer().size();
             let needed = width as usize * height as usize * 4;
             if capacity < needed {
                 return Err(Failure::new(
@@ -710,7 +693,7 @@ pub unsafe extern "C" fn cadr_renderer_read_pixels(
                     format!("capacity {capacity} is below the {needed} bytes of a {width}x{height} RGBA8 image"),
                 ));
             }
-            let image = state.renderer.read_rgba8()?;
+            let image = state.view.renderer().read_rgba8()?;
             let bytes = image.as_raw();
             // SAFETY: rgba is writable for capacity >= needed == bytes.len() bytes; the image is
             // our own allocation, so the regions do not overlap.
@@ -738,7 +721,8 @@ pub unsafe extern "C" fn cadr_renderer_save_png(
         let path = unsafe { required_str(path, "path") }?;
         with_renderer(renderer, |state| {
             state
-                .renderer
+                .view
+                .renderer()
                 .save_png(Path::new(path))
                 .map_err(|e| match e {
                     cadr_core::render::SaveError::Write { .. } => {

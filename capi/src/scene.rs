@@ -2,7 +2,6 @@
 //! files) and the scene tree that flattens it incrementally for renderers.
 
 use std::ffi::c_char;
-use std::sync::atomic::{AtomicU64, Ordering};
 
 use cadr_core::graph::{
     GeometryHandle, GraphError, MaterialHandle, NodeFlags, NodeHandle, SceneGraph,
@@ -99,17 +98,12 @@ pub struct CadrLoadResult {
     pub material_count: usize,
 }
 
-static NEXT_SCENE_ID: AtomicU64 = AtomicU64::new(1);
-
 /// What a scene holds.
 pub(crate) struct SceneState {
     pub(crate) graph: SceneGraph,
+    /// The scene tree; each renderer that draws the scene reads its changes as a reader of
+    /// its own, so renderers drawing one scene alternately upload only what changed.
     pub(crate) tree: SceneTree,
-    /// Unique for the process: renderers remember which scene they uploaded.
-    pub(crate) id: u64,
-    /// The renderer that took the tree's changes last (0: none); another renderer must upload
-    /// the scene afresh.
-    pub(crate) consumer: u64,
 }
 
 impl SceneState {
@@ -247,12 +241,7 @@ pub unsafe extern "C" fn cadr_scene_create(scene: *mut CadrScene) -> CadrResult 
     guard(|| {
         let mut graph = SceneGraph::new();
         let tree = SceneTree::build(&mut graph);
-        let state = SceneState {
-            graph,
-            tree,
-            id: NEXT_SCENE_ID.fetch_add(1, Ordering::Relaxed),
-            consumer: 0,
-        };
+        let state = SceneState { graph, tree };
         let handle = SCENES.insert(state)?;
         // SAFETY: scene is null or writable (the caller's contract).
         unsafe { deliver(scene, "scene", handle as CadrScene) }

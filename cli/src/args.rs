@@ -22,8 +22,9 @@ const SWITCHES: &[&str] = &[
 impl Args {
     /// Splits `args` (without the program and command names) of `command`.
     pub fn parse(command: &str, args: impl IntoIterator<Item = String>) -> Result<Self, String> {
-        // `cadr techniques --json` prints JSON; elsewhere `--json FILE` names a file.
-        let command_switches: &[&str] = if command == "techniques" {
+        // `cadr techniques --json` and `cadr pick --json` print JSON; elsewhere `--json FILE`
+        // names a file.
+        let command_switches: &[&str] = if command == "techniques" || command == "pick" {
             &["--json"]
         } else {
             &[]

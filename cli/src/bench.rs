@@ -6,7 +6,7 @@
 use std::sync::Arc;
 
 use cadr_core::load::SceneSource;
-use cadr_core::render::{Camera, FrameStats, GpuScene, Renderer, DEFAULT_DIRECTION};
+use cadr_core::render::{BaselineScene, Camera, FrameStats, Renderer, DEFAULT_DIRECTION};
 use cadr_core::scene::{flatten, Scene, SceneStats};
 use cadr_core::technique::{Combination, PluginRegistry, ShadeMode, TechniqueKind, Techniques};
 use cadr_core::vk::{Device, DeviceOptions, InstanceOptions};
@@ -196,13 +196,15 @@ impl Bench {
             DEFAULT_DIRECTION,
         );
         let mut rows = Vec::new();
-        let gpu_scene = GpuScene::upload(&self.device, scene).map_err(|e| e.to_string())?;
+        let baseline_scene =
+            BaselineScene::upload(&self.device, scene).map_err(|e| e.to_string())?;
         let (cpu_us, gpu_us, first) = measure(self.frames, || {
             renderer
-                .render(&gpu_scene, &camera)
+                .render(&baseline_scene, &camera)
                 .map_err(|e| e.to_string())
         })?;
-        drop(gpu_scene);
+        drop(baseline_scene);
+        drop(renderer);
         let baseline = Row {
             label: "baseline (built-in)".into(),
             shade: "solid",
@@ -216,26 +218,22 @@ impl Bench {
         }
         rows.push(baseline);
         let mut session =
-            TechniqueSession::new(&self.device, &renderer, scene, Arc::clone(&self.registry))?;
+            TechniqueSession::new(&self.device, scene, Arc::clone(&self.registry), self.size)?;
         let combinations = match combinations {
             Some(list) => list.to_vec(),
-            None => selection(args, &session.techniques)?,
+            None => selection(args, session.techniques())?,
         };
         for mode in shade_modes(args)? {
             for combination in &combinations {
                 session
-                    .techniques
+                    .techniques()
                     .select(combination)
                     .map_err(|e| e.to_string())?;
                 session
-                    .techniques
+                    .techniques()
                     .set_shade_mode(mode)
                     .map_err(|e| e.to_string())?;
-                let (cpu_us, gpu_us, first) = measure(self.frames, || {
-                    renderer
-                        .render_techniques(&mut session.scene, &mut session.techniques, &camera)
-                        .map_err(|e| e.to_string())
-                })?;
+                let (cpu_us, gpu_us, first) = measure(self.frames, || session.render(&camera))?;
                 let row = Row {
                     label: combination.to_string(),
                     shade: mode.name(),

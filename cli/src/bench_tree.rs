@@ -1,13 +1,16 @@
 //! `cadr bench-tree`: what the incremental scene tree costs against a full rebuild, measured
-//! in one run on one scene, and what each kind of edit uploads to the GPU.
+//! in one run on one scene, and what each kind of edit uploads to the GPU, measured on the one
+//! GPU scene every renderer draws from.
 
 use std::time::Instant;
 
+use cadr_core::gpu_scene::GpuScene;
 use cadr_core::graph::{NodeFlags, NodeHandle, NodeKind, SceneGraph};
 use cadr_core::load::SceneSource;
-use cadr_core::render::{uploaded_matrix_slots, MATERIAL_UPLOAD_BYTES, MATRIX_UPLOAD_BYTES};
+use cadr_core::render::Renderer;
 use cadr_core::scene::Material;
 use cadr_core::tree::SceneTree;
+use cadr_core::vk::{Device, DeviceOptions};
 use glam::{DMat4, DVec3};
 
 /// Median of `runs` timings of `f`, in milliseconds.
@@ -52,8 +55,8 @@ struct Row {
     edit_ms: f64,
     update_ms: f64,
     matrices: u64,
+    records: u64,
     bytes: u64,
-    draws_updated: usize,
 }
 
 pub fn bench_tree(scene_text: &str, runs: usize) -> Result<(), String> {
@@ -66,30 +69,40 @@ pub fn bench_tree(scene_text: &str, runs: usize) -> Result<(), String> {
     });
     let mut tree = SceneTree::build(&mut graph);
     tree.take_changes();
+    let device = Device::new(&DeviceOptions::default()).map_err(|e| e.to_string())?;
+    let renderer = Renderer::new(&device, 1, 1).map_err(|e| e.to_string())?;
+    let mut gpu_scene = GpuScene::new(&device, &graph, &mut tree).map_err(|e| e.to_string())?;
+    gpu_scene
+        .flush_uploads(renderer.pipelines())
+        .map_err(|e| e.to_string())?;
+    let initial_upload = gpu_scene.last_upload();
     let instances = tree.instance_count();
     let placements = part_placements(&graph);
     let mut rows = Vec::new();
+    let mut upload_error = None;
     let mut measure = |edit: String,
                        graph: &mut SceneGraph,
                        tree: &mut SceneTree,
                        apply: &mut dyn FnMut(&mut SceneGraph, usize)| {
         let (mut edit_samples, mut update_samples) = (Vec::new(), Vec::new());
-        let (mut matrices, mut bytes, mut draws_updated) = (0, 0, 0);
+        let (mut matrices, mut records, mut bytes) = (0, 0, 0);
         for run in 0..runs {
             let start = Instant::now();
             apply(graph, run);
             edit_samples.push(start.elapsed().as_secs_f64() * 1e3);
             let start = Instant::now();
             tree.update(graph);
-            let changes = tree.take_changes();
+            tree.take_changes();
             update_samples.push(start.elapsed().as_secs_f64() * 1e3);
-            matrices = uploaded_matrix_slots(tree, &changes).count() as u64;
-            bytes = matrices * MATRIX_UPLOAD_BYTES
-                + changes.dirty_materials.len() as u64 * MATERIAL_UPLOAD_BYTES;
-            draws_updated = changes.added.len()
-                + changes.removed.len()
-                + changes.changed.len()
-                + changes.visibility_changed.len();
+            // What the GPU scene uploads for this edit.
+            let synced = gpu_scene
+                .sync(graph, tree)
+                .and_then(|()| gpu_scene.flush_uploads(renderer.pipelines()));
+            if let Err(e) = synced {
+                upload_error.get_or_insert(e.to_string());
+            }
+            let upload = gpu_scene.last_upload();
+            (matrices, records, bytes) = (upload.matrices, upload.records, upload.bytes);
         }
         edit_samples.sort_by(f64::total_cmp);
         update_samples.sort_by(f64::total_cmp);
@@ -98,8 +111,8 @@ pub fn bench_tree(scene_text: &str, runs: usize) -> Result<(), String> {
             edit_ms: edit_samples[runs / 2],
             update_ms: update_samples[runs / 2],
             matrices,
+            records,
             bytes,
-            draws_updated,
         });
     };
     let n = placements.len();
@@ -147,6 +160,19 @@ pub fn bench_tree(scene_text: &str, runs: usize) -> Result<(), String> {
             },
         );
     }
+    let geometry = graph
+        .geometry_handle_at(0)
+        .and_then(|h| Some((h, graph.geometry(h).ok()?.clone())));
+    if let Some((handle, original)) = geometry {
+        measure(
+            format!("1 geometry ({} triangles)", original.indices.len() / 3),
+            &mut graph,
+            &mut tree,
+            &mut |graph, _| {
+                let _ = graph.replace_geometry(handle, original.clone());
+            },
+        );
+    }
     let hidden = spread(&placements, n.div_ceil(100));
     measure(
         format!("hide/show 1% ({})", hidden.len()),
@@ -165,6 +191,9 @@ pub fn bench_tree(scene_text: &str, runs: usize) -> Result<(), String> {
         },
     );
 
+    if let Some(error) = upload_error {
+        return Err(format!("uploading to the GPU scene: {error}"));
+    }
     let (matrix_bytes, other_bytes) = tree.memory_bytes();
     println!(
         "scene:        {} ({} instances on {} paths, {} part placements)",
@@ -175,6 +204,12 @@ pub fn bench_tree(scene_text: &str, runs: usize) -> Result<(), String> {
     );
     println!("build tree:   {build_ms:.2} ms (median of {runs})");
     println!(
+        "GPU scene:    {} bytes uploaded at creation ({} of geometry), on {}",
+        initial_upload.bytes,
+        initial_upload.geometry_bytes,
+        device.adapter().name
+    );
+    println!(
         "memory:       {:.1} bytes per instance besides matrices, {:.1} bytes per instance of f64 world matrices",
         other_bytes as f64 / instances.max(1) as f64,
         matrix_bytes as f64 / instances.max(1) as f64
@@ -182,7 +217,7 @@ pub fn bench_tree(scene_text: &str, runs: usize) -> Result<(), String> {
     println!();
     println!(
         "{:<26} {:>10} {:>11} {:>10} {:>10} {:>12} {:>10}",
-        "edit", "edit ms", "update ms", "/ rebuild", "matrices", "bytes/frame", "draws upd."
+        "edit", "edit ms", "update ms", "/ rebuild", "matrices", "records", "bytes/frame"
     );
     for row in &rows {
         println!(
@@ -192,8 +227,8 @@ pub fn bench_tree(scene_text: &str, runs: usize) -> Result<(), String> {
             row.update_ms,
             100.0 * row.update_ms / build_ms,
             row.matrices,
-            row.bytes,
-            row.draws_updated
+            row.records,
+            row.bytes
         );
     }
     if let Some(one_percent) = rows.iter().find(|r| r.edit.starts_with("1% of")) {

@@ -3,6 +3,7 @@
 mod args;
 mod bench;
 mod bench_tree;
+mod pick;
 mod techniques;
 
 use std::path::PathBuf;
@@ -11,7 +12,7 @@ use std::time::Instant;
 
 use cadr_core::generate::GENERATOR_NAMES;
 use cadr_core::load::SceneSource;
-use cadr_core::render::{Camera, FrameStats, GpuScene, Renderer, DEFAULT_DIRECTION};
+use cadr_core::render::{BaselineScene, Camera, FrameStats, Renderer, DEFAULT_DIRECTION};
 use cadr_core::scene::{flatten, SceneStats};
 use cadr_core::vk::{self as cvk, Device, DeviceOptions, InstanceOptions};
 
@@ -28,6 +29,7 @@ USAGE:
     cadr bench [SCENE] [--frames N] [--json FILE] [--size WxH] [--shade solid|edges|all]
                [--vertex A,B] [--params A,B] [--submit A,B] [--cull A,B] [--all]
     cadr bench --sweep [--sweep-parts N,N,...]
+    cadr pick SCENE X Y [--size WxH] [--rect X2,Y2] [--json] [technique options]
     cadr info SCENE
     cadr convert SCENE OUT
     cadr bench-tree [SCENE] [--runs N]
@@ -51,6 +53,11 @@ bench:  renders the built-in baseline and technique combinations (by default eve
         state changes, triangles and the speedup over the baseline; --json FILE writes them
         with the scene statistics. --sweep measures a set over gen:grid of 10 000 to 1 000 000
         parts to show how each technique's CPU cost grows.
+pick:   what lies under pixel (X, Y) of the view `render` draws (same size, camera and
+        technique options): the geo node and part, its path of nodes from the root (a shared
+        part has one per occurrence), the depth and the world position (f64). --rect X2,Y2
+        lists every pickable part with a visible pixel in the rectangle from (X, Y) to
+        (X2, Y2). --json prints hit, node, part, path, depth, position (and hits for --rect).
 info:   prints nodes, geometries, parts, materials, instances, triangles, vertices, bounds.
 convert: writes SCENE as OUT (.gltf with a .bin beside it, .glb, .csf, .csf.gz) and says what
         the target format cannot hold.
@@ -94,6 +101,7 @@ fn run(command: &str, args: &Args) -> Result<(), String> {
     }
     match command {
         "render" => render(args),
+        "pick" => pick::pick(args),
         "info" => info(args),
         "convert" => convert(args),
         "bench-tree" => {
@@ -114,7 +122,7 @@ fn run(command: &str, args: &Args) -> Result<(), String> {
         "techniques" => techniques::techniques(args),
         "bench" => bench::bench(args),
         other => Err(format!(
-            "unknown command '{other}' (commands: render, info, convert, techniques, bench, bench-tree, devices; see cadr --help)"
+            "unknown command '{other}' (commands: render, pick, info, convert, techniques, bench, bench-tree, devices; see cadr --help)"
         )),
     }
 }
@@ -259,12 +267,11 @@ fn render(args: &Args) -> Result<(), String> {
         ..DeviceOptions::default()
     };
     let device = Device::new(&options).map_err(|e| e.to_string())?;
-    let mut renderer = Renderer::new(&device, width, height).map_err(|e| e.to_string())?;
     let upload_start = Instant::now();
     let flat = flatten(&scene).map_err(|e| e.to_string())?;
     let stats = SceneStats::new(&scene, &flat);
     drop(flat);
-    let mut session = None;
+    let mut drawer = None;
     let mut technique_line = "built-in baseline (--baseline)".to_owned();
     if !args.flag("--baseline") {
         let (registry, dirs) = techniques::load_registry(&device);
@@ -277,23 +284,26 @@ fn render(args: &Args) -> Result<(), String> {
                 techniques::no_plugins_message(&dirs)
             );
         } else {
-            let mut created =
-                techniques::TechniqueSession::new(&device, &renderer, &scene, registry)?;
-            created
-                .techniques
+            let mut session =
+                techniques::TechniqueSession::new(&device, &scene, registry, (width, height))?;
+            session
+                .techniques()
                 .select(&combination)
                 .map_err(|e| e.to_string())?;
-            created
-                .techniques
+            session
+                .techniques()
                 .set_shade_mode(shade)
                 .map_err(|e| e.to_string())?;
             technique_line = format!("{combination}, {}", shade.name());
-            session = Some(created);
+            drawer = Some(Drawer::Techniques(Box::new(session)));
         }
     }
-    let gpu_scene = match session {
-        Some(_) => None,
-        None => Some(GpuScene::upload(&device, &scene).map_err(|e| e.to_string())?),
+    let mut drawer = match drawer {
+        Some(drawer) => drawer,
+        None => Drawer::Baseline(
+            Renderer::new(&device, width, height).map_err(|e| e.to_string())?,
+            BaselineScene::upload(&device, &scene).map_err(|e| e.to_string())?,
+        ),
     };
     let upload_ms = upload_start.elapsed().as_secs_f64() * 1e3;
     let camera = Camera::fit(
@@ -301,32 +311,22 @@ fn render(args: &Args) -> Result<(), String> {
         f64::from(width) / f64::from(height),
         DEFAULT_DIRECTION,
     );
-    let mut draw = |renderer: &mut Renderer| -> Result<FrameStats, String> {
-        match session.as_mut() {
-            Some(s) => renderer
-                .render_techniques(&mut s.scene, &mut s.techniques, &camera)
-                .map_err(|e| e.to_string()),
-            None => match &gpu_scene {
-                Some(gpu_scene) => renderer
-                    .render(gpu_scene, &camera)
-                    .map_err(|e| e.to_string()),
-                None => Err("nothing to draw with".into()),
-            },
-        }
-    };
 
     // One warm-up frame when measuring several, so that first-use costs do not count.
-    let mut first = draw(&mut renderer)?;
+    let mut first = drawer.draw(&camera)?;
     let mut samples: Vec<FrameStats> = Vec::with_capacity(frames);
     if frames == 1 {
         samples.push(first);
     } else {
         for _ in 0..frames {
-            samples.push(draw(&mut renderer)?);
+            samples.push(drawer.draw(&camera)?);
         }
         first = samples[0];
     }
-    renderer.save_png(&output).map_err(|e| e.to_string())?;
+    drawer
+        .renderer()
+        .save_png(&output)
+        .map_err(|e| e.to_string())?;
 
     let validation_errors = device.validation_log().errors().len();
     let adapter = device.adapter();
@@ -377,4 +377,28 @@ fn render(args: &Args) -> Result<(), String> {
         ));
     }
     Ok(())
+}
+
+/// What `render` draws with: the technique plugins, or the built-in baseline.
+enum Drawer {
+    Techniques(Box<techniques::TechniqueSession>),
+    Baseline(Renderer, BaselineScene),
+}
+
+impl Drawer {
+    fn draw(&mut self, camera: &Camera) -> Result<FrameStats, String> {
+        match self {
+            Drawer::Techniques(session) => session.render(camera),
+            Drawer::Baseline(renderer, scene) => {
+                renderer.render(scene, camera).map_err(|e| e.to_string())
+            }
+        }
+    }
+
+    fn renderer(&self) -> &Renderer {
+        match self {
+            Drawer::Techniques(session) => session.view.renderer(),
+            Drawer::Baseline(renderer, _) => renderer,
+        }
+    }
 }

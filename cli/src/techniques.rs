@@ -5,13 +5,14 @@ use std::path::PathBuf;
 use std::sync::Arc;
 
 use cadr_core::graph::SceneGraph;
-use cadr_core::render::Renderer;
+use cadr_core::render::{Camera, FrameStats};
 use cadr_core::scene::Scene;
 use cadr_core::technique::{
     default_plugin_dirs, feature_bits, feature_names, Combination, PluginRegistry, ShadeMode,
-    TechniqueKind, TechniqueScene, Techniques, PLUGIN_PATH_VARIABLE,
+    TechniqueKind, Techniques, PLUGIN_PATH_VARIABLE,
 };
 use cadr_core::tree::SceneTree;
+use cadr_core::view::View;
 use cadr_core::vk::{Device, DeviceOptions, InstanceOptions};
 
 use crate::args::Args;
@@ -64,24 +65,39 @@ pub fn technique_requested(args: &Args) -> bool {
         || args.value(&["--shade"]).is_some()
 }
 
-/// A scene ready for technique plugins: the GPU scene they read and the active techniques.
+/// A scene ready for technique plugins: its graph and tree, and the view that draws them.
 pub struct TechniqueSession {
-    pub scene: TechniqueScene,
-    pub techniques: Techniques,
+    pub graph: SceneGraph,
+    pub tree: SceneTree,
+    pub view: View,
 }
 
 impl TechniqueSession {
+    /// Builds the scene's graph and tree and a `width` × `height` view of it (its GPU scene is
+    /// uploaded now).
     pub fn new(
         device: &Arc<Device>,
-        renderer: &Renderer,
         source: &Scene,
         registry: Arc<PluginRegistry>,
+        (width, height): (u32, u32),
     ) -> Result<Self, String> {
         let (mut graph, _) = SceneGraph::from_scene(source).map_err(|e| e.to_string())?;
         let mut tree = SceneTree::build(&mut graph);
-        let scene = TechniqueScene::new(device, &graph, &mut tree).map_err(|e| e.to_string())?;
-        let techniques = Techniques::new(device, registry, renderer.pipelines().frame_set_layout);
-        Ok(Self { scene, techniques })
+        let mut view = View::new(device, registry, width, height).map_err(|e| e.to_string())?;
+        view.sync(&graph, &mut tree).map_err(|e| e.to_string())?;
+        Ok(Self { graph, tree, view })
+    }
+
+    /// The active techniques.
+    pub fn techniques(&mut self) -> &mut Techniques {
+        self.view.techniques_mut()
+    }
+
+    /// Draws one frame.
+    pub fn render(&mut self, camera: &Camera) -> Result<FrameStats, String> {
+        self.view
+            .render(&self.graph, &mut self.tree, camera)
+            .map_err(|e| e.to_string())
     }
 }
 

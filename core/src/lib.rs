@@ -6,6 +6,7 @@
 
 pub mod csf;
 pub mod generate;
+pub mod gpu_scene;
 pub mod graph;
 pub mod load;
 pub mod render;
@@ -14,4 +15,5 @@ pub mod scene;
 pub mod shaders;
 pub mod technique;
 pub mod tree;
+pub mod view;
 pub mod vk;

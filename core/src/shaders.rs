@@ -32,17 +32,11 @@ pub const BASELINE_FRAG: ShaderSource = ShaderSource {
     source: include_str!("../../shaders/baseline.frag"),
 };
 
-/// Resident-parameters vertex shader.
-pub const RESIDENT_VERT: ShaderSource = ShaderSource {
-    name: "resident.vert",
-    stage: ShaderStage::Vertex,
-    source: include_str!("../../shaders/resident.vert"),
-};
-/// Resident-parameters fragment shader.
-pub const RESIDENT_FRAG: ShaderSource = ShaderSource {
-    name: "resident.frag",
+/// Shaded triangles of every technique combination.
+pub const SHADED_FRAG: ShaderSource = ShaderSource {
+    name: "shaded.frag",
     stage: ShaderStage::Fragment,
-    source: include_str!("../../shaders/resident.frag"),
+    source: include_str!("../../shaders/shaded.frag"),
 };
 /// The pick pass's fragment shader.
 pub const PICK_FRAG: ShaderSource = ShaderSource {
@@ -50,7 +44,7 @@ pub const PICK_FRAG: ShaderSource = ShaderSource {
     stage: ShaderStage::Fragment,
     source: include_str!("../../shaders/pick.frag"),
 };
-/// Sparse matrix scatter.
+/// The GPU scene's sparse upload: compact updates scattered into place.
 pub const SCATTER_COMP: ShaderSource = ShaderSource {
     name: "scatter.comp",
     stage: ShaderStage::Compute,
@@ -78,8 +72,7 @@ pub const TEMPLATES: &[ShaderSource] = &[TECHNIQUE_VERT];
 pub const ALL: &[ShaderSource] = &[
     BASELINE_VERT,
     BASELINE_FRAG,
-    RESIDENT_VERT,
-    RESIDENT_FRAG,
+    SHADED_FRAG,
     PICK_FRAG,
     SCATTER_COMP,
     EDGES_FRAG,

@@ -7,7 +7,7 @@ pub mod images;
 
 use std::sync::Arc;
 
-use cadr_core::render::{Camera, GpuScene, Renderer, DEFAULT_DIRECTION};
+use cadr_core::render::{BaselineScene, Camera, Renderer, DEFAULT_DIRECTION};
 use cadr_core::scene::{flatten, Scene, SceneStats};
 use cadr_core::vk::{Device, DeviceOptions, InstanceOptions};
 
@@ -42,7 +42,7 @@ pub fn assert_no_validation_errors(device: &Device) {
 /// Renders `scene` with the camera fitted to its bounds and returns the image; checks validation.
 pub fn render_scene(scene: &Scene, width: u32, height: u32) -> image::RgbaImage {
     let device = test_device();
-    let gpu_scene = GpuScene::upload(&device, scene).expect("upload the scene");
+    let gpu_scene = BaselineScene::upload(&device, scene).expect("upload the scene");
     let mut renderer = Renderer::new(&device, width, height).expect("create the renderer");
     let camera = Camera::fit(
         &gpu_scene.stats.bounds,

@@ -4,7 +4,7 @@ use std::path::Path;
 
 use cadr_core::generate::{generate, GeneratorSpec};
 use cadr_core::load::load_file;
-use cadr_core::render::{Camera, GpuScene, Renderer, CLEAR_COLOR, DEFAULT_DIRECTION};
+use cadr_core::render::{BaselineScene, Camera, Renderer, CLEAR_COLOR, DEFAULT_DIRECTION};
 use cadr_core::scene::Scene;
 use cadr_tests::fixtures::{scratch_dir, CubeGltf};
 use cadr_tests::images::{assert_matches_reference, compare, covered_fraction, DEFAULT_TOLERANCE};
@@ -87,7 +87,7 @@ fn repeated_frames_are_identical_and_report_costs() {
         parts: 2_000,
         triangles_per_part: 12.0,
     });
-    let gpu_scene = GpuScene::upload(&device, &scene).expect("upload");
+    let gpu_scene = BaselineScene::upload(&device, &scene).expect("upload");
     let mut renderer = Renderer::new(&device, 128, 96).expect("renderer");
     let camera = Camera::fit(&gpu_scene.stats.bounds, 128.0 / 96.0, DEFAULT_DIRECTION);
     let first = renderer.render(&gpu_scene, &camera).expect("frame 1");

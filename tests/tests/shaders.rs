@@ -2,8 +2,7 @@
 #![allow(clippy::unwrap_used)] // Test code: a failed unwrap is a failed test.
 
 use cadr_core::render::{
-    DrawIndices, DrawParameters, FrameUniforms, GpuScene, MaterialParameters, MatrixUpdate,
-    Renderer,
+    BaselineScene, DrawParameters, FrameUniforms, Renderer, ScatterParameters,
 };
 use cadr_core::shaders::{ALL, INCLUDES, TEMPLATES};
 use cadr_core::vk::{compile_glsl, ShaderStage, VkError};
@@ -25,13 +24,11 @@ fn shaders_compile_and_validate() {
     // Creating the pipelines runs the layer's SPIR-V validation and interface checks.
     let device = test_device();
     let scene = cadr_core::scene::Scene::default();
-    let gpu_scene = GpuScene::upload(&device, &scene).expect("upload");
+    let gpu_scene = BaselineScene::upload(&device, &scene).expect("upload");
     let renderer = Renderer::new(&device, 8, 8).expect("renderer");
     let pipelines = renderer.pipelines();
     for (name, pipeline) in [
         ("baseline", pipelines.baseline()),
-        ("resident", pipelines.resident()),
-        ("pick", pipelines.pick()),
         ("scatter", pipelines.scatter()),
     ] {
         pipeline.unwrap_or_else(|e| panic!("{name} pipeline: {e}"));
@@ -71,15 +68,9 @@ fn shader_struct_mirrors_have_std140_layout() {
     assert_eq!(std::mem::offset_of!(FrameUniforms, eye_high), 128);
     assert_eq!(std::mem::offset_of!(FrameUniforms, eye_low), 144);
     assert_eq!(std::mem::offset_of!(FrameUniforms, light), 160);
-    assert_eq!(
-        std::mem::size_of::<MatrixUpdate>(),
-        96,
-        "std430: slot, 3 pad, mat4, vec4"
-    );
-    assert_eq!(std::mem::offset_of!(MatrixUpdate, translation_low), 80);
-    assert_eq!(std::mem::offset_of!(MatrixUpdate, matrix), 16);
-    assert_eq!(std::mem::size_of::<MaterialParameters>(), 32);
-    assert_eq!(std::mem::size_of::<DrawIndices>(), 16);
+    // scatter.comp's push constants: item count, words per item, first word.
+    assert_eq!(std::mem::size_of::<ScatterParameters>(), 12);
+    assert_eq!(std::mem::offset_of!(ScatterParameters, first_word), 8);
 
     assert_eq!(std::mem::size_of::<DrawParameters>(), 96);
     assert_eq!(std::mem::offset_of!(DrawParameters, base_color), 64);

@@ -6,12 +6,13 @@ use std::path::Path;
 use std::sync::Arc;
 
 use cadr_core::generate::{generate, GeneratorSpec};
+use cadr_core::gpu_scene::GpuScene;
 use cadr_core::graph::SceneGraph;
 use cadr_core::load::load_file;
-use cadr_core::render::{Camera, GpuScene, Renderer, DEFAULT_DIRECTION};
+use cadr_core::render::{BaselineScene, Camera, Renderer, DEFAULT_DIRECTION};
 use cadr_core::scene::{flatten, Scene};
 use cadr_core::technique::{
-    feature_bits, Combination, PluginRegistry, ShadeMode, TechniqueKind, TechniqueScene, Techniques,
+    feature_bits, Combination, PluginRegistry, ShadeMode, TechniqueKind, Techniques,
 };
 use cadr_core::tree::SceneTree;
 use cadr_core::vk::Device;
@@ -41,7 +42,7 @@ struct Fixture {
     renderer: Renderer,
     graph: SceneGraph,
     tree: SceneTree,
-    scene: TechniqueScene,
+    scene: GpuScene,
     techniques: Techniques,
     camera: Camera,
     baseline: image::RgbaImage,
@@ -61,13 +62,13 @@ impl Fixture {
             f64::from(size.0) / f64::from(size.1),
             DEFAULT_DIRECTION,
         );
-        let gpu_scene = GpuScene::upload(&device, source).unwrap();
+        let gpu_scene = BaselineScene::upload(&device, source).unwrap();
         renderer.render(&gpu_scene, &camera).unwrap();
         let baseline = renderer.read_rgba8().unwrap();
         drop(gpu_scene);
         let (mut graph, _) = SceneGraph::from_scene(source).unwrap();
         let mut tree = SceneTree::build(&mut graph);
-        let scene = TechniqueScene::new(&device, &graph, &mut tree).unwrap();
+        let scene = GpuScene::new(&device, &graph, &mut tree).unwrap();
         let techniques = Techniques::new(
             &device,
             registry(&device),
@@ -447,7 +448,7 @@ fn frustum_culling_draws_only_what_the_camera_sees() {
         all.draws - culled.draws,
         all.draws
     );
-    let gpu_scene = GpuScene::upload(&f.device, &f.graph.to_scene()).unwrap();
+    let gpu_scene = BaselineScene::upload(&f.device, &f.graph.to_scene()).unwrap();
     f.renderer.render(&gpu_scene, &f.camera).unwrap();
     let baseline = f.renderer.read_rgba8().unwrap();
     let difference = compare(&culled_image, &baseline).unwrap();

@@ -1,29 +1,26 @@
-//! The renderer: draws a [`GpuScene`] into an offscreen target and reports what a frame cost.
+//! The renderer: an offscreen target and the frame that draws into it (uniforms, command
+//! buffer, pass, submission, timings). The techniques record into its frames
+//! (`Renderer::render_techniques`, `Renderer::pick_techniques`); the pick pass draws instance
+//! ids and depth into their own target and reads a rectangle of them back ([`pick`]).
 //!
-//! This is the seeds' simplest technique and the baseline later techniques are measured
-//! against: one draw per part, its matrix (relative to the eye, computed in f64) and material
-//! pushed as push constants per draw, vertex and index buffers re-bound only when the geometry
-//! changes.
+//! It also holds the built-in baseline, the seeds' simplest technique that later ones are
+//! measured against: one draw per part of a flat [`BaselineScene`], its matrix (relative to the
+//! eye, computed in f64) and material pushed as push constants per draw, vertex and index
+//! buffers re-bound only when the geometry changes.
 
 mod arena;
+mod baseline_scene;
 mod camera;
-mod draw_list;
-mod gpu_scene;
+pub mod pick;
 mod pipeline;
-mod resident;
 
 pub use arena::{GeometryArena, GeometryRange};
+pub use baseline_scene::{BaselineScene, UploadError};
 pub use camera::{Camera, DEFAULT_DIRECTION, DEFAULT_FOV_DEGREES};
-pub use gpu_scene::{GpuScene, UploadError};
-pub(crate) use pipeline::{create_graphics_pipeline, GraphicsPipelineDesc, VertexLayout};
-pub use pipeline::{
-    DrawIndices, DrawParameters, FrameUniforms, MaterialParameters, MatrixUpdate, Pipelines,
-    PICK_FORMAT,
+pub(crate) use pipeline::{
+    create_graphics_pipeline, DescriptorSets, GraphicsPipelineDesc, VertexLayout,
 };
-pub use resident::{
-    split_f64, uploaded_matrix_slots, ResidentDraw, ResidentScene, UploadStats,
-    MATERIAL_UPLOAD_BYTES, MATRIX_UPLOAD_BYTES,
-};
+pub use pipeline::{DrawParameters, FrameUniforms, Pipelines, ScatterParameters, PICK_FORMAT};
 
 use std::path::Path;
 use std::sync::Arc;
@@ -31,12 +28,12 @@ use std::time::Instant;
 
 use ash::vk;
 
-use pipeline::DescriptorSets;
-
+use crate::gpu_scene::split_f64;
 use crate::vk::{
     transition, Buffer, CommandContext, Device, GpuTimer, Image, MemoryLocation, OffscreenTarget,
     VkError, VkResult,
 };
+use pick::{PickTarget, PixelRect};
 
 /// The background colour of rendered images (linear RGBA).
 pub const CLEAR_COLOR: [f32; 4] = [0.80, 0.84, 0.88, 1.0];
@@ -82,20 +79,8 @@ pub struct Renderer {
     frame_sets: DescriptorSets,
     commands: CommandContext,
     timer: Option<GpuTimer>,
-    /// The id target and a 4-byte readback buffer, created on the first pick.
-    pick: Option<(Image, Buffer)>,
-}
-
-/// The recorder that uploads a resident scene's pending changes before the pass.
-fn upload_recorder<'a, 's>(
-    scene: &'a std::cell::RefCell<&'s mut ResidentScene>,
-) -> impl FnMut(&Renderer, vk::CommandBuffer, &mut FrameStats) -> VkResult<()> + use<'a, 's> {
-    move |renderer, command_buffer, stats| {
-        stats.bytes_uploaded = scene
-            .borrow_mut()
-            .record_uploads(&renderer.pipelines, command_buffer)?;
-        Ok(())
-    }
+    /// The id target and its readback, created on the first pick.
+    pick: Option<PickTarget>,
 }
 
 /// Which image a pass draws into.
@@ -187,7 +172,7 @@ impl Renderer {
 
     /// Renders one frame of `scene` with the baseline technique (one draw per part, matrix and
     /// material pushed per draw), waits for it, and reports its cost.
-    pub fn render(&mut self, scene: &GpuScene, camera: &Camera) -> VkResult<FrameStats> {
+    pub fn render(&mut self, scene: &BaselineScene, camera: &Camera) -> VkResult<FrameStats> {
         let mut before = |_: &Renderer, _: vk::CommandBuffer, _: &mut FrameStats| Ok(());
         let mut inside =
             |renderer: &Renderer, command_buffer: vk::CommandBuffer, stats: &mut FrameStats| {
@@ -202,122 +187,42 @@ impl Renderer {
         )
     }
 
-    /// Renders one frame of a resident scene: uploads its pending changes (compute scatter),
-    /// then one draw per visible part with its indices (matrix, material, flags, instance)
-    /// pushed per draw.
-    pub fn render_resident(
-        &mut self,
-        scene: &mut ResidentScene,
-        camera: &Camera,
-    ) -> VkResult<FrameStats> {
-        let scene = std::cell::RefCell::new(scene);
-        let mut before = upload_recorder(&scene);
-        let mut inside =
-            |renderer: &Renderer, command_buffer: vk::CommandBuffer, stats: &mut FrameStats| {
-                let pipeline = renderer.pipelines.resident()?;
-                renderer.record_resident(command_buffer, &scene.borrow(), stats, pipeline, false);
-                Ok(())
-            };
-        self.frame(
-            camera,
-            (PassTarget::Color, false),
-            &mut before,
-            &mut inside,
-            &mut |_, _, _| Ok(()),
-        )
-    }
-
-    /// Finds the pickable part under pixel (`x`, `y`) of a resident scene seen by `camera`
-    /// (uploading the scene's pending changes first): the pick pass renders instance ids into
-    /// an R32_UINT target and that one pixel is read back. Returns the scene tree instance, or
-    /// `None` where there is only background or parts that are not pickable.
-    pub fn pick(
-        &mut self,
-        scene: &mut ResidentScene,
-        camera: &Camera,
-        x: u32,
-        y: u32,
-    ) -> VkResult<Option<u32>> {
+    /// Makes the pick target ready to read back `rect` (inside the target) after the next pick
+    /// pass.
+    pub(crate) fn prepare_pick(&mut self, rect: PixelRect) -> VkResult<()> {
         let (width, height) = self.size();
-        if x >= width || y >= height {
+        if rect.width == 0
+            || rect.height == 0
+            || u64::from(rect.x) + u64::from(rect.width) > u64::from(width)
+            || u64::from(rect.y) + u64::from(rect.height) > u64::from(height)
+        {
             return Err(VkError::InvalidUse(format!(
-                "pixel ({x}, {y}) is outside the {width}x{height} target"
+                "pixels {rect} are not inside the {width}x{height} target"
             )));
         }
-        if self.pick.is_none() {
-            let image = Image::new(
-                &self.device,
-                "pick ids",
-                self.target.extent(),
-                PICK_FORMAT,
-                vk::ImageUsageFlags::COLOR_ATTACHMENT | vk::ImageUsageFlags::TRANSFER_SRC,
-                vk::ImageAspectFlags::COLOR,
-            )?;
-            let readback = Buffer::new(
-                &self.device,
-                "pick readback",
-                4,
-                vk::BufferUsageFlags::TRANSFER_DST,
-                MemoryLocation::GpuToCpu,
-            )?;
-            self.pick = Some((image, readback));
-        }
-        let scene = std::cell::RefCell::new(scene);
-        let mut before = upload_recorder(&scene);
-        let mut inside =
-            |renderer: &Renderer, command_buffer: vk::CommandBuffer, stats: &mut FrameStats| {
-                let pipeline = renderer.pipelines.pick()?;
-                renderer.record_resident(command_buffer, &scene.borrow(), stats, pipeline, true);
+        match &mut self.pick {
+            Some(target) => target.prepare(rect),
+            None => {
+                self.pick = Some(PickTarget::new(&self.device, self.target.extent(), rect)?);
                 Ok(())
-            };
-        let mut after =
-            |renderer: &Renderer, command_buffer: vk::CommandBuffer, _: &mut FrameStats| {
-                if let Some((image, readback)) = &renderer.pick {
-                    let region = [vk::BufferImageCopy::default()
-                        .image_subresource(
-                            vk::ImageSubresourceLayers::default()
-                                .aspect_mask(vk::ImageAspectFlags::COLOR)
-                                .layer_count(1),
-                        )
-                        .image_offset(vk::Offset3D {
-                            x: x as i32,
-                            y: y as i32,
-                            z: 0,
-                        })
-                        .image_extent(vk::Extent3D {
-                            width: 1,
-                            height: 1,
-                            depth: 1,
-                        })];
-                    // SAFETY: the pick image is in TRANSFER_SRC_OPTIMAL after the pass; the pixel
-                    // lies inside it (checked above); both outlive the submission, which is waited for.
-                    unsafe {
-                        renderer.device.raw().cmd_copy_image_to_buffer(
-                            command_buffer,
-                            image.raw(),
-                            vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
-                            readback.raw(),
-                            &region,
-                        )
-                    };
-                }
-                Ok(())
-            };
-        self.frame(
-            camera,
-            (PassTarget::Pick, false),
-            &mut before,
-            &mut inside,
-            &mut after,
-        )?;
-        let id = match &self.pick {
-            Some((_, readback)) => {
-                let bytes = readback.mapped()?;
-                u32::from_le_bytes([bytes[0], bytes[1], bytes[2], bytes[3]])
             }
-            None => 0,
-        };
-        Ok(id.checked_sub(1))
+        }
+    }
+
+    /// Records the copy of the prepared rectangle's ids and depths (after the pick pass).
+    pub(crate) fn record_pick_readback(&self, command_buffer: vk::CommandBuffer) {
+        if let Some(target) = &self.pick {
+            target.record_readback(&self.device, command_buffer, &self.target.depth);
+        }
+    }
+
+    /// The prepared rectangle's samples from the last pick pass: the pixels covered by a
+    /// pickable instance.
+    pub(crate) fn pick_samples(&self) -> VkResult<Vec<pick::PickSample>> {
+        match &self.pick {
+            Some(target) => target.samples(),
+            None => Ok(Vec::new()),
+        }
     }
 
     /// Runs a frame: uniforms, command buffer, target transitions, the technique's commands
@@ -330,7 +235,7 @@ impl Renderer {
         inside: &mut Recorder<'_>,
         after: &mut Recorder<'_>,
     ) -> VkResult<FrameStats> {
-        // The eye in f64, split for relative-to-eye positions on the GPU (resident technique).
+        // The eye in f64, split for relative-to-eye positions on the GPU.
         let eye = camera.view.inverse().w_axis.truncate();
         let (eye_high, eye_low) = split_f64(eye);
         let mut view_rotation = camera.view;
@@ -375,7 +280,9 @@ impl Renderer {
     /// The image and clear value of a pass target.
     fn pass_image(&self, pass: PassTarget) -> (&Image, vk::ClearColorValue) {
         match (pass, &self.pick) {
-            (PassTarget::Pick, Some((image, _))) => (image, vk::ClearColorValue { uint32: [0; 4] }),
+            (PassTarget::Pick, Some(target)) => {
+                (target.ids(), vk::ClearColorValue { uint32: [0; 4] })
+            }
             _ => (
                 &self.target.color,
                 vk::ClearColorValue {
@@ -441,7 +348,12 @@ impl Renderer {
             .image_view(self.target.depth.view())
             .image_layout(vk::ImageLayout::DEPTH_ATTACHMENT_OPTIMAL)
             .load_op(vk::AttachmentLoadOp::CLEAR)
-            .store_op(vk::AttachmentStoreOp::DONT_CARE)
+            .store_op(if pass == PassTarget::Pick {
+                // Picking reads the depth under the cursor.
+                vk::AttachmentStoreOp::STORE
+            } else {
+                vk::AttachmentStoreOp::DONT_CARE
+            })
             .clear_value(vk::ClearValue {
                 depth_stencil: vk::ClearDepthStencilValue {
                     depth: 1.0,
@@ -501,12 +413,30 @@ impl Renderer {
                 vk::AccessFlags2::TRANSFER_READ,
             ),
         );
+        if pass == PassTarget::Pick {
+            transition(
+                &self.device,
+                command_buffer,
+                self.target.depth.raw(),
+                vk::ImageAspectFlags::DEPTH,
+                (
+                    vk::ImageLayout::DEPTH_ATTACHMENT_OPTIMAL,
+                    vk::PipelineStageFlags2::LATE_FRAGMENT_TESTS,
+                    vk::AccessFlags2::DEPTH_STENCIL_ATTACHMENT_WRITE,
+                ),
+                (
+                    vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
+                    vk::PipelineStageFlags2::COPY,
+                    vk::AccessFlags2::TRANSFER_READ,
+                ),
+            );
+        }
     }
 
     fn record_baseline(
         &self,
         command_buffer: vk::CommandBuffer,
-        scene: &GpuScene,
+        scene: &BaselineScene,
         camera: &Camera,
         stats: &mut FrameStats,
     ) -> VkResult<()> {
@@ -567,63 +497,6 @@ impl Renderer {
             stats.triangles += u64::from(draw.index_count / 3);
         }
         Ok(())
-    }
-
-    /// Records the resident draws with `pipeline` (the shaded or the pick pipeline); with
-    /// `only_pickable`, parts that cannot be picked are left out (picking passes through them).
-    fn record_resident(
-        &self,
-        command_buffer: vk::CommandBuffer,
-        scene: &ResidentScene,
-        stats: &mut FrameStats,
-        pipeline: vk::Pipeline,
-        only_pickable: bool,
-    ) {
-        let raw = self.device.raw();
-        let layout = self.pipelines.resident_layout;
-        // SAFETY: recording inside the pass; pipeline, sets and arenas outlive the submission.
-        unsafe {
-            raw.cmd_bind_pipeline(command_buffer, vk::PipelineBindPoint::GRAPHICS, pipeline);
-            raw.cmd_bind_descriptor_sets(
-                command_buffer,
-                vk::PipelineBindPoint::GRAPHICS,
-                layout,
-                0,
-                &[self.frame_sets.sets[0], scene.parameter_set()],
-                &[],
-            );
-        }
-        stats.pipeline_binds += 1;
-        stats.parameter_updates += 1;
-        let mut bound_geometry = u32::MAX;
-        let pickable = |draw: &&ResidentDraw| draw.indices.flags & DrawIndices::PICKABLE != 0;
-        for draw in scene.draws().filter(|d| !only_pickable || pickable(d)) {
-            if draw.geometry != bound_geometry {
-                if !scene
-                    .arena()
-                    .bind(&self.device, command_buffer, draw.geometry)
-                {
-                    continue;
-                }
-                bound_geometry = draw.geometry;
-                stats.vertex_binds += 1;
-            }
-            // SAFETY: the push range matches the resident layout.
-            unsafe {
-                raw.cmd_push_constants(
-                    command_buffer,
-                    layout,
-                    vk::ShaderStageFlags::VERTEX,
-                    0,
-                    bytemuck::bytes_of(&draw.indices),
-                );
-                raw.cmd_draw_indexed(command_buffer, draw.index_count, 1, draw.first_index, 0, 0);
-            }
-            stats.parameter_updates += 1;
-            stats.draw_calls += 1;
-            stats.draws += 1;
-            stats.triangles += u64::from(draw.index_count / 3);
-        }
     }
 
     /// Reads the last frame back as tightly packed RGBA8 rows.

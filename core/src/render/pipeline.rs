@@ -1,6 +1,5 @@
 //! Pipelines and their layouts: the per-frame descriptor set shared by every technique, the
-//! baseline pipeline (per-draw push constants), the resident pipeline (per-draw indices into
-//! storage buffers) and the scatter compute pipeline.
+//! baseline pipeline (per-draw push constants) and the GPU scene's scatter compute pipeline.
 
 use std::sync::{Arc, OnceLock};
 
@@ -41,49 +40,16 @@ pub struct DrawParameters {
     pub surface: [f32; 4],
 }
 
-/// Per-draw push constants of the resident pipeline; mirrors `DrawIndices` in `resident.vert`.
+/// Push constants of `scatter.comp`: one dispatch scatters the items of one array.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, bytemuck::Pod, bytemuck::Zeroable)]
-pub struct DrawIndices {
-    /// Matrix slot.
-    pub matrix: u32,
-    /// Material slot.
-    pub material: u32,
-    /// Bit 0: highlighted ([`DrawIndices::HIGHLIGHTED`]); bit 1: pickable.
-    pub flags: u32,
-    /// The scene tree instance drawn (reported by picking).
-    pub instance: u32,
-}
-
-impl DrawIndices {
-    /// Flag bit of highlighted parts (drawn tinted orange).
-    pub const HIGHLIGHTED: u32 = 1;
-    /// Flag bit of parts the pick pass draws.
-    pub const PICKABLE: u32 = 2;
-}
-
-/// One entry of the compact matrix upload; mirrors `MatrixUpdate` in `scatter.comp` (std430).
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
-pub struct MatrixUpdate {
-    /// Destination slot.
-    pub slot: u32,
-    /// Padding to the matrix's 16-byte alignment.
-    pub padding: [u32; 3],
-    /// The matrix, its translation the f32 high part.
-    pub matrix: [[f32; 4]; 4],
-    /// The f32 remainder of the translation (xyz).
-    pub translation_low: [f32; 4],
-}
-
-/// Material parameters in the resident material buffer; mirrors `MaterialParameters`.
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
-pub struct MaterialParameters {
-    /// Linear RGBA.
-    pub base_color: [f32; 4],
-    /// x: metallic, y: roughness.
-    pub surface: [f32; 4],
+pub struct ScatterParameters {
+    /// Items in the dispatch.
+    pub item_count: u32,
+    /// 32-bit words per item, without its slot.
+    pub item_words: u32,
+    /// The index of the dispatch's first word in the update buffer.
+    pub first_word: u32,
 }
 
 fn set_layout(
@@ -205,20 +171,12 @@ pub struct Pipelines {
     device: Arc<Device>,
     /// Set 0: the frame uniform buffer.
     pub frame_set_layout: vk::DescriptorSetLayout,
-    /// Set 1 of the resident pipeline: matrices, materials, low translations.
-    pub resident_set_layout: vk::DescriptorSetLayout,
-    /// The scatter pipeline's set: updates, matrices, low translations.
+    /// The scatter pipeline's set: the compact updates and the array they go into.
     pub scatter_set_layout: vk::DescriptorSetLayout,
     /// Baseline layout: set 0 and 96 bytes of push constants.
     pub baseline_layout: vk::PipelineLayout,
     /// Baseline pipeline.
     baseline: OnceLock<vk::Pipeline>,
-    /// Resident layout: sets 0 and 1 and 8 bytes of push constants.
-    pub resident_layout: vk::PipelineLayout,
-    /// Resident pipeline.
-    resident: OnceLock<vk::Pipeline>,
-    /// The pick pipeline: the resident layout and vertex shader, instance ids into R32_UINT.
-    pick: OnceLock<vk::Pipeline>,
     /// Scatter layout.
     pub scatter_layout: vk::PipelineLayout,
     /// Scatter compute pipeline.
@@ -232,13 +190,9 @@ impl Pipelines {
         let mut this = Self {
             device: Arc::clone(device),
             frame_set_layout: vk::DescriptorSetLayout::null(),
-            resident_set_layout: vk::DescriptorSetLayout::null(),
             scatter_set_layout: vk::DescriptorSetLayout::null(),
             baseline_layout: vk::PipelineLayout::null(),
             baseline: OnceLock::new(),
-            resident_layout: vk::PipelineLayout::null(),
-            resident: OnceLock::new(),
-            pick: OnceLock::new(),
             scatter_layout: vk::PipelineLayout::null(),
             scatter: OnceLock::new(),
         };
@@ -247,14 +201,9 @@ impl Pipelines {
             "frame set layout",
             &[(vk::DescriptorType::UNIFORM_BUFFER, graphics)],
         )?;
-        let vertex_storage = (
-            vk::DescriptorType::STORAGE_BUFFER,
-            vk::ShaderStageFlags::VERTEX,
-        );
-        this.resident_set_layout = set_layout(device, "resident set layout", &[vertex_storage; 3])?;
         let compute = vk::ShaderStageFlags::COMPUTE;
         let compute_storage = (vk::DescriptorType::STORAGE_BUFFER, compute);
-        this.scatter_set_layout = set_layout(device, "scatter set layout", &[compute_storage; 3])?;
+        this.scatter_set_layout = set_layout(device, "scatter set layout", &[compute_storage; 2])?;
         this.baseline_layout = pipeline_layout(
             device,
             "baseline layout",
@@ -262,18 +211,11 @@ impl Pipelines {
             std::mem::size_of::<DrawParameters>() as u32,
             graphics,
         )?;
-        this.resident_layout = pipeline_layout(
-            device,
-            "resident layout",
-            &[this.frame_set_layout, this.resident_set_layout],
-            std::mem::size_of::<DrawIndices>() as u32,
-            vk::ShaderStageFlags::VERTEX,
-        )?;
         this.scatter_layout = pipeline_layout(
             device,
             "scatter layout",
             &[this.scatter_set_layout],
-            4,
+            std::mem::size_of::<ScatterParameters>() as u32,
             compute,
         )?;
         Ok(this)
@@ -313,34 +255,6 @@ impl Pipelines {
         })
     }
 
-    /// The resident pipeline.
-    pub fn resident(&self) -> VkResult<vk::Pipeline> {
-        self.lazy(&self.resident, || {
-            graphics_pipeline(
-                &self.device,
-                self.resident_layout,
-                &shaders::RESIDENT_VERT,
-                &shaders::RESIDENT_FRAG,
-                COLOR_FORMAT,
-                "resident pipeline",
-            )
-        })
-    }
-
-    /// The pick pipeline: the resident layout and vertex shader, instance ids into R32_UINT.
-    pub fn pick(&self) -> VkResult<vk::Pipeline> {
-        self.lazy(&self.pick, || {
-            graphics_pipeline(
-                &self.device,
-                self.resident_layout,
-                &shaders::RESIDENT_VERT,
-                &shaders::PICK_FRAG,
-                PICK_FORMAT,
-                "pick pipeline",
-            )
-        })
-    }
-
     /// The scatter compute pipeline.
     pub fn scatter(&self) -> VkResult<vk::Pipeline> {
         self.lazy(&self.scatter, || {
@@ -360,23 +274,15 @@ impl Drop for Pipelines {
         // SAFETY: the renderer waits for its last frame before dropping the pipelines; null
         // handles (from a failed constructor) are ignored by Vulkan.
         unsafe {
-            for cell in [&self.baseline, &self.resident, &self.pick, &self.scatter] {
+            for cell in [&self.baseline, &self.scatter] {
                 if let Some(&pipeline) = cell.get() {
                     raw.destroy_pipeline(pipeline, None);
                 }
             }
-            for layout in [
-                self.baseline_layout,
-                self.resident_layout,
-                self.scatter_layout,
-            ] {
+            for layout in [self.baseline_layout, self.scatter_layout] {
                 raw.destroy_pipeline_layout(layout, None);
             }
-            for layout in [
-                self.frame_set_layout,
-                self.resident_set_layout,
-                self.scatter_set_layout,
-            ] {
+            for layout in [self.frame_set_layout, self.scatter_set_layout] {
                 raw.destroy_descriptor_set_layout(layout, None);
             }
         }

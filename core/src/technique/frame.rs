@@ -1,6 +1,7 @@
 //! A frame drawn by the active techniques: culling on the CPU (only changed bits applied),
 //! uploads and the techniques' preparations before the pass, the submission's recording
-//! inside it.
+//! inside it. The pick pass is the same frame with the pick pipelines (the same vertex shader,
+//! instance ids into the pick target) and a readback of the picked rectangle after it.
 
 use std::cell::RefCell;
 use std::ffi::c_void;
@@ -10,9 +11,11 @@ use ash::vk::{self, Handle};
 use cadr_plugin_abi as abi;
 use glam::DMat4;
 
+use super::pipeline::PassSet;
 use super::registry::TechniqueKind;
-use super::scene::TechniqueScene;
 use super::set::{status, Message, Techniques};
+use crate::gpu_scene::GpuScene;
+use crate::render::pick::{PickSample, PixelRect};
 use crate::render::{Camera, FrameStats, PassTarget, Renderer};
 use crate::vk::{VkError, VkResult};
 
@@ -36,11 +39,37 @@ impl Renderer {
     /// time covers culling, the techniques' preparation, recording and submission.
     pub fn render_techniques(
         &mut self,
-        scene: &mut TechniqueScene,
+        scene: &mut GpuScene,
         techniques: &mut Techniques,
         camera: &Camera,
     ) -> VkResult<FrameStats> {
-        techniques.ensure_pipelines()?;
+        let passes = PassSet::Shaded(techniques.shade_mode());
+        self.draw_techniques(scene, techniques, camera, passes)
+    }
+
+    /// Runs the pick pass of the active techniques over `scene` and reads `rect` back: the
+    /// pixels covered by pickable instances, with their instance and depth. Hidden instances
+    /// are not drawn and instances that are not pickable let the click through.
+    pub fn pick_techniques(
+        &mut self,
+        scene: &mut GpuScene,
+        techniques: &mut Techniques,
+        camera: &Camera,
+        rect: PixelRect,
+    ) -> VkResult<Vec<PickSample>> {
+        self.prepare_pick(rect)?;
+        self.draw_techniques(scene, techniques, camera, PassSet::Pick)?;
+        self.pick_samples()
+    }
+
+    fn draw_techniques(
+        &mut self,
+        scene: &mut GpuScene,
+        techniques: &mut Techniques,
+        camera: &Camera,
+        passes: PassSet,
+    ) -> VkResult<FrameStats> {
+        techniques.ensure_pipelines(passes)?;
         let cull_start = Instant::now();
         cull(scene, techniques, camera)?;
         let techniques = &*techniques;
@@ -53,9 +82,12 @@ impl Renderer {
             parameters.entry.provides & abi::CADR_TRAIT_PARAMETERS_IN_COMMANDS != 0;
         let (width, height) = self.size();
         let view = scene.view();
+        let pipelines = techniques.pipelines_for(passes)?;
+        let color_format = pipelines.color_format;
         let mut key = mix(techniques.epoch, view.draws_generation);
         key = mix(key, view.buffers_generation);
         key = mix(key, u64::from(width) << 32 | u64::from(height));
+        key = mix(key, color_format.as_raw() as u64);
         if values_in_commands {
             key = mix(key, view.parameters_generation);
         }
@@ -67,10 +99,6 @@ impl Renderer {
          -> VkResult<abi::CadrRecordContext> {
             let vertex = techniques.get(TechniqueKind::Vertex)?;
             let parameters = techniques.get(TechniqueKind::Parameters)?;
-            let pipelines = techniques
-                .pipelines
-                .as_ref()
-                .ok_or_else(|| VkError::InvalidUse("technique pipelines were not built".into()))?;
             Ok(abi::CadrRecordContext {
                 size: std::mem::size_of::<abi::CadrRecordContext>() as u32,
                 command_buffer: command_buffer.as_raw() as *mut c_void,
@@ -91,6 +119,7 @@ impl Renderer {
                 },
                 commands_key: key,
                 stats,
+                color_format: color_format.as_raw(),
             })
         };
         let mut before = |renderer: &Renderer,
@@ -99,7 +128,7 @@ impl Renderer {
          -> VkResult<()> {
             let mut guard = shared.borrow_mut();
             let (scene, counters) = &mut *guard;
-            stats.bytes_uploaded = scene.record_uploads(command_buffer)?;
+            stats.bytes_uploaded = scene.record_uploads(renderer.pipelines(), command_buffer)?;
             barrier(renderer, command_buffer);
             let view = scene.view();
             let raw_command_buffer = command_buffer.as_raw() as *mut c_void;
@@ -148,12 +177,23 @@ impl Renderer {
                 let result = unsafe { record_fn(submission.instance, &record, message.raw()) };
                 status(&submission.entry, "record", result, &message)
             };
+        let target = match passes {
+            PassSet::Shaded(_) => PassTarget::Color,
+            PassSet::Pick => PassTarget::Pick,
+        };
+        let mut after =
+            |renderer: &Renderer, command_buffer: vk::CommandBuffer, _: &mut FrameStats| {
+                if target == PassTarget::Pick {
+                    renderer.record_pick_readback(command_buffer);
+                }
+                Ok(())
+            };
         let mut stats = self.frame(
             camera,
-            (PassTarget::Color, secondary),
+            (target, secondary),
             &mut before,
             &mut inside,
-            &mut |_, _, _| Ok(()),
+            &mut after,
         )?;
         let (scene, counters) = shared.into_inner();
         if counters.failures > 0 {
@@ -225,7 +265,7 @@ fn cull_key(epoch: u64, view: &abi::CadrSceneView, planes: &[[f64; 4]; 6]) -> u6
 
 /// Runs the culling technique and applies the bits that changed. Culling depends only on the
 /// view and the scene, so it runs again only when one of them (or the culler) changed.
-fn cull(scene: &mut TechniqueScene, techniques: &mut Techniques, camera: &Camera) -> VkResult<()> {
+fn cull(scene: &mut GpuScene, techniques: &mut Techniques, camera: &Camera) -> VkResult<()> {
     let planes = frustum_planes(camera);
     let key = cull_key(techniques.epoch, &scene.view(), &planes);
     if techniques.cull_key == Some(key) {

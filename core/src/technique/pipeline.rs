@@ -9,7 +9,7 @@ use std::sync::Arc;
 use ash::vk;
 use cadr_plugin_abi as abi;
 
-use crate::render::{create_graphics_pipeline, GraphicsPipelineDesc, VertexLayout};
+use crate::render::{create_graphics_pipeline, GraphicsPipelineDesc, VertexLayout, PICK_FORMAT};
 use crate::shaders;
 use crate::vk::{
     compile_glsl, Device, ShaderModule, ShaderStage, VkResult, VkResultExt, COLOR_FORMAT,
@@ -43,6 +43,15 @@ impl ShadeMode {
     }
 }
 
+/// The passes a set of pipelines draws: the shaded frame in a shade mode, or the pick pass.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum PassSet {
+    /// Shaded triangles (and edges in [`ShadeMode::Edges`]) into the colour target.
+    Shaded(ShadeMode),
+    /// Triangles of pickable instances, their ids into the pick target.
+    Pick,
+}
+
 /// Assembles the technique vertex shader from the two snippets. Lines of a snippet starting
 /// with `#extension` are moved to the top, where GLSL wants them.
 pub fn assemble_vertex_shader(vertex_snippet: &str, parameter_snippet: &str) -> String {
@@ -69,11 +78,12 @@ pub fn assemble_vertex_shader(vertex_snippet: &str, parameter_snippet: &str) -> 
     format!("#version 460\n{}\n{body}", extensions.join("\n"))
 }
 
-/// SPIR-V of the fragment shaders: shaded triangles and edge lines.
+/// SPIR-V of the fragment shaders: shaded triangles, edge lines and instance ids.
 #[derive(Clone)]
 struct FragmentShaders {
     solid: Arc<Vec<u32>>,
     edges: Arc<Vec<u32>>,
+    pick: Arc<Vec<u32>>,
 }
 
 /// SPIR-V of assembled shaders, by (vertex path, parameter path) name.
@@ -112,8 +122,9 @@ impl ShaderCache {
             compile_glsl(shader.name, shader.source, shader.stage, shaders::INCLUDES).map(Arc::new)
         };
         let shaders = FragmentShaders {
-            solid: compile(&shaders::RESIDENT_FRAG)?,
+            solid: compile(&shaders::SHADED_FRAG)?,
             edges: compile(&shaders::EDGES_FRAG)?,
+            pick: compile(&shaders::PICK_FRAG)?,
         };
         self.fragments = Some(shaders.clone());
         Ok(shaders)
@@ -129,6 +140,8 @@ pub struct TechniquePipelines {
     /// The passes, in order.
     pub passes: Vec<abi::CadrPass>,
     pipelines: Vec<vk::Pipeline>,
+    /// The colour attachment's format (the pick pass draws ids).
+    pub color_format: vk::Format,
 }
 
 impl Drop for TechniquePipelines {
@@ -155,8 +168,8 @@ pub struct PipelineInputs<'a> {
     pub vertex_input: abi::CadrVertexInput,
     /// Assembled vertex shader.
     pub vertex_spirv: &'a [u32],
-    /// Shade mode.
-    pub mode: ShadeMode,
+    /// The passes to build.
+    pub passes: PassSet,
 }
 
 impl TechniquePipelines {
@@ -177,6 +190,10 @@ impl TechniquePipelines {
             empty_set_layout,
             passes: Vec::new(),
             pipelines: Vec::new(),
+            color_format: match inputs.passes {
+                PassSet::Pick => PICK_FORMAT,
+                PassSet::Shaded(_) => COLOR_FORMAT,
+            },
         };
         let used = inputs
             .path_set_layouts
@@ -202,31 +219,22 @@ impl TechniquePipelines {
         this.layout = unsafe { raw.create_pipeline_layout(&layout_info, None) }
             .or_vk("vkCreatePipelineLayout")?;
         let fragments = cache.fragments()?;
-        match inputs.mode {
-            ShadeMode::Solid => {
-                let pipeline = this.pipeline(
-                    inputs,
-                    &fragments.solid,
-                    vk::PrimitiveTopology::TRIANGLE_LIST,
-                    false,
-                )?;
+        let triangles = vk::PrimitiveTopology::TRIANGLE_LIST;
+        match inputs.passes {
+            PassSet::Shaded(ShadeMode::Solid) => {
+                let pipeline = this.pipeline(inputs, &fragments.solid, triangles, false)?;
                 this.add(pipeline, abi::CADR_PASS_TRIANGLES);
             }
-            ShadeMode::Edges => {
-                let triangles = this.pipeline(
-                    inputs,
-                    &fragments.solid,
-                    vk::PrimitiveTopology::TRIANGLE_LIST,
-                    true,
-                )?;
-                this.add(triangles, abi::CADR_PASS_TRIANGLES);
-                let lines = this.pipeline(
-                    inputs,
-                    &fragments.edges,
-                    vk::PrimitiveTopology::LINE_LIST,
-                    false,
-                )?;
-                this.add(lines, abi::CADR_PASS_EDGES);
+            PassSet::Shaded(ShadeMode::Edges) => {
+                let pipeline = this.pipeline(inputs, &fragments.solid, triangles, true)?;
+                this.add(pipeline, abi::CADR_PASS_TRIANGLES);
+                let lines = vk::PrimitiveTopology::LINE_LIST;
+                let pipeline = this.pipeline(inputs, &fragments.edges, lines, false)?;
+                this.add(pipeline, abi::CADR_PASS_EDGES);
+            }
+            PassSet::Pick => {
+                let pipeline = this.pipeline(inputs, &fragments.pick, triangles, false)?;
+                this.add(pipeline, abi::CADR_PASS_TRIANGLES);
             }
         }
         Ok(this)
@@ -277,7 +285,7 @@ impl TechniquePipelines {
                 }),
                 topology,
                 depth_bias,
-                color_format: COLOR_FORMAT,
+                color_format: self.color_format,
                 name: "technique pipeline",
             },
         )

@@ -10,7 +10,7 @@ use cadr_plugin_abi as abi;
 
 use super::host_api::{AllocationCounts, HostServices};
 use super::pipeline::{
-    assemble_vertex_shader, PipelineInputs, ShadeMode, ShaderCache, TechniquePipelines,
+    assemble_vertex_shader, PassSet, PipelineInputs, ShadeMode, ShaderCache, TechniquePipelines,
 };
 use super::registry::{feature_bits, PluginRegistry, TechniqueEntry, TechniqueKind};
 use crate::vk::{Device, VkError, VkResult, COLOR_FORMAT, DEPTH_FORMAT};
@@ -198,6 +198,9 @@ pub struct Techniques {
     pub(crate) active: [Option<Active>; 4],
     shade: ShadeMode,
     pub(crate) pipelines: Option<TechniquePipelines>,
+    /// The pick pass's pipelines (same vertex shader, instance ids into the pick target),
+    /// built on the first pick.
+    pub(crate) pick_pipelines: Option<TechniquePipelines>,
     shaders: ShaderCache,
     frame_set_layout: vk::DescriptorSetLayout,
     /// Bumped whenever techniques, pipelines or the target change (part of the commands key).
@@ -254,6 +257,7 @@ impl Techniques {
             active: [None, None, None, None],
             shade: ShadeMode::Solid,
             pipelines: None,
+            pick_pipelines: None,
             shaders: ShaderCache::default(),
             frame_set_layout,
             epoch: 1,
@@ -389,6 +393,7 @@ impl Techniques {
         }
         self.wait_idle()?;
         self.pipelines = None;
+        self.pick_pipelines = None;
         for (slot, active) in created {
             // The old instance drops here, after the GPU finished with it.
             self.active[slot] = Some(active);
@@ -410,11 +415,34 @@ impl Techniques {
             .ok_or_else(|| VkError::InvalidUse(format!("no {} technique selected", kind.name())))
     }
 
-    /// Builds the pipelines of the current combination and shade mode if needed.
-    pub(crate) fn ensure_pipelines(&mut self) -> VkResult<()> {
-        if self.pipelines.is_some() {
-            return Ok(());
+    /// Builds the pipelines of the current combination for `passes` (the shade mode's, or the
+    /// pick pass's) if needed.
+    pub(crate) fn ensure_pipelines(&mut self, passes: PassSet) -> VkResult<()> {
+        let slot = match passes {
+            PassSet::Shaded(_) => &self.pipelines,
+            PassSet::Pick => &self.pick_pipelines,
+        };
+        if slot.is_none() {
+            let pipelines = Some(self.build_pipelines(passes)?);
+            match passes {
+                PassSet::Shaded(_) => self.pipelines = pipelines,
+                PassSet::Pick => self.pick_pipelines = pipelines,
+            }
+            self.epoch += 1;
         }
+        Ok(())
+    }
+
+    /// The pipelines built for `passes` (see `ensure_pipelines`).
+    pub(crate) fn pipelines_for(&self, passes: PassSet) -> VkResult<&TechniquePipelines> {
+        match passes {
+            PassSet::Shaded(_) => self.pipelines.as_ref(),
+            PassSet::Pick => self.pick_pipelines.as_ref(),
+        }
+        .ok_or_else(|| VkError::InvalidUse("technique pipelines were not built".into()))
+    }
+
+    fn build_pipelines(&mut self, passes: PassSet) -> VkResult<TechniquePipelines> {
         let vertex = self.get(TechniqueKind::Vertex)?;
         let parameters = self.get(TechniqueKind::Parameters)?;
         let vertex_table: &abi::CadrVertexPathVtable = vertex.vtable();
@@ -470,15 +498,9 @@ impl Techniques {
             ],
             vertex_input: input,
             vertex_spirv: &spirv,
-            mode: self.shade,
+            passes,
         };
-        self.pipelines = Some(TechniquePipelines::new(
-            &self.device,
-            &mut self.shaders,
-            &inputs,
-        )?);
-        self.epoch += 1;
-        Ok(())
+        TechniquePipelines::new(&self.device, &mut self.shaders, &inputs)
     }
 }
 
@@ -486,6 +508,7 @@ impl Drop for Techniques {
     fn drop(&mut self) {
         let _ = self.wait_idle();
         self.pipelines = None;
+        self.pick_pipelines = None;
         for slot in &mut self.active {
             *slot = None;
         }

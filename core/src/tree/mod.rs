@@ -6,51 +6,22 @@
 //! [`SceneTree::update`] applies the graph's events with work proportional to what changed:
 //! structural edits reconcile only the children of the parents that changed; a matrix, flag or
 //! selection edit refreshes only the subtrees of the paths through that node. What changed is
-//! kept in bit arrays and handed out by [`SceneTree::take_changes`]. LOD selection and
+//! kept in bit arrays and handed to each reader ([`SceneTree::subscribe`], [`SceneTree::changes_for`]). LOD selection and
 //! billboards depend on the eye: [`SceneTree::update_view`] refreshes only their subtrees.
 
 mod bits;
+mod changes;
 
 pub use bits::BitSet;
+pub use changes::{ChangeReader, TreeChanges};
+
+use changes::ChangeLogs;
 
 use glam::{DMat4, DVec3};
 
 use crate::graph::{ChildLink, GraphEvent, GraphNode, LodMetric, NodeHandle, NodeKind, SceneGraph};
 
 const NONE: u32 = u32::MAX;
-
-/// What changed since the last [`SceneTree::take_changes`]. Ids are dense and reused: apply
-/// `removed` before `added`.
-#[derive(Clone, Debug, Default, PartialEq, Eq)]
-pub struct TreeChanges {
-    /// Instances created (alive now).
-    pub added: Vec<u32>,
-    /// Instance ids whose instance was destroyed (the id may be alive again in `added`).
-    pub removed: Vec<u32>,
-    /// Live instances, not added, whose material or geometry changed.
-    pub changed: Vec<u32>,
-    /// Live instances, not added, whose visibility changed.
-    pub visibility_changed: Vec<u32>,
-    /// Live tree nodes whose world matrix changed (the matrix slots to upload).
-    pub dirty_matrices: Vec<u32>,
-    /// Material slots whose parameters changed.
-    pub dirty_materials: Vec<u32>,
-    /// Geometry slots whose data was replaced.
-    pub dirty_geometries: Vec<u32>,
-}
-
-impl TreeChanges {
-    /// Whether nothing changed.
-    pub fn is_empty(&self) -> bool {
-        self.added.is_empty()
-            && self.removed.is_empty()
-            && self.changed.is_empty()
-            && self.visibility_changed.is_empty()
-            && self.dirty_matrices.is_empty()
-            && self.dirty_materials.is_empty()
-            && self.dirty_geometries.is_empty()
-    }
-}
 
 /// What a path inherits from the nodes along it.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -105,13 +76,8 @@ pub struct SceneTree {
     inst_unpickable: BitSet,
 
     free_instances: Vec<u32>,
-    created: BitSet,
-    destroyed: BitSet,
-    changed: BitSet,
-    visibility_changed: BitSet,
-    dirty_matrices: BitSet,
-    dirty_materials: BitSet,
-    dirty_geometries: BitSet,
+    /// What changed, for each reader.
+    changes: ChangeLogs,
     eye: DVec3,
     root: u32,
     live_instances: usize,
@@ -252,7 +218,7 @@ impl SceneTree {
         self.inst_visible.set(id, state.visible);
         self.inst_highlighted.set(id, state.highlighted);
         self.inst_unpickable.set(id, !state.pickable);
-        self.created.insert(id);
+        self.changes.pending.created.insert(id);
         self.live_instances += 1;
         id
     }
@@ -282,7 +248,7 @@ impl SceneTree {
             let (world, state) = self.placement(parent, node, link_shown);
             self.node_world[id as usize] = world;
             self.set_node_state(id, state);
-            self.dirty_matrices.insert(id);
+            self.changes.pending.dirty_matrices.insert(id);
             if matches!(node.kind, NodeKind::Lod { .. } | NodeKind::Billboard) {
                 self.view_dependent.insert(id);
             }
@@ -377,7 +343,7 @@ impl SceneTree {
             stack.extend(std::mem::take(&mut self.node_children[i]));
             for instance in std::mem::take(&mut self.node_instances[i]) {
                 self.inst_alive.remove(instance);
-                self.destroyed.insert(instance);
+                self.changes.pending.destroyed.insert(instance);
                 self.live_instances -= 1;
                 self.free_instances.push(instance);
             }
@@ -390,7 +356,7 @@ impl SceneTree {
             self.node_highlighted.remove(t);
             self.node_unpickable.remove(t);
             self.view_dependent.remove(t);
-            self.dirty_matrices.remove(t);
+            self.changes.pending.dirty_matrices.remove(t);
             self.free_nodes.push(t);
         }
     }
@@ -439,18 +405,18 @@ impl SceneTree {
                     let visible = state.visible && node.part_shown(part);
                     if visible != self.inst_visible.contains(instance) {
                         self.inst_visible.set(instance, visible);
-                        self.visibility_changed.insert(instance);
+                        self.changes.pending.visibility_changed.insert(instance);
                     }
                     self.inst_highlighted.set(instance, state.highlighted);
                     self.inst_unpickable.set(instance, !state.pickable);
                     if state.highlighted != old.highlighted || state.pickable != old.pickable {
-                        self.changed.insert(instance);
+                        self.changes.pending.changed.insert(instance);
                     }
                 }
             }
             if world != self.node_world[i] {
                 self.node_world[i] = world;
-                self.dirty_matrices.insert(t);
+                self.changes.pending.dirty_matrices.insert(t);
             }
             for (position, (&child, link)) in self.node_children[i]
                 .iter()
@@ -559,13 +525,13 @@ impl SceneTree {
                                 self.node_instances[t as usize].get(part as usize)
                             {
                                 self.inst_material[instance as usize] = material;
-                                self.changed.insert(instance);
+                                self.changes.pending.changed.insert(instance);
                             }
                         }
                     }
                 }
                 GraphEvent::GeometryReplaced(g) => {
-                    self.dirty_geometries.insert(g.index());
+                    self.changes.pending.dirty_geometries.insert(g.index());
                     // Only the paths of the Geo nodes that draw it: proportional to the change.
                     let users = graph
                         .geometry_users(g)
@@ -574,7 +540,7 @@ impl SceneTree {
                     for user in users {
                         for t in self.current_paths(user) {
                             for &instance in &self.node_instances[t as usize] {
-                                self.changed.insert(instance);
+                                self.changes.pending.changed.insert(instance);
                             }
                         }
                     }
@@ -592,11 +558,13 @@ impl SceneTree {
                         let visible = shown && self.node_visible.contains(t);
                         if visible != self.inst_visible.contains(instance) {
                             self.inst_visible.set(instance, visible);
-                            self.visibility_changed.insert(instance);
+                            self.changes.pending.visibility_changed.insert(instance);
                         }
                     }
                 }
-                GraphEvent::MaterialChanged(m) => self.dirty_materials.insert(m.index()),
+                GraphEvent::MaterialChanged(m) => {
+                    self.changes.pending.dirty_materials.insert(m.index())
+                }
                 GraphEvent::ChildInserted { .. } | GraphEvent::ChildRemoved { .. } => {}
             }
         }
@@ -635,43 +603,29 @@ impl SceneTree {
             .unwrap_or_default()
     }
 
-    /// Hands out what changed since the last call and starts recording afresh.
+    /// Hands out what changed since the tree's own reader last looked (the tree is a reader of
+    /// itself, for hosts with one consumer) and starts recording afresh.
     pub fn take_changes(&mut self) -> TreeChanges {
-        let alive = &self.inst_alive;
-        let created = &self.created;
-        let changes = TreeChanges {
-            added: created.iter().filter(|&i| alive.contains(i)).collect(),
-            removed: self.destroyed.iter().collect(),
-            changed: self
-                .changed
-                .iter()
-                .filter(|&i| alive.contains(i) && !created.contains(i))
-                .collect(),
-            visibility_changed: self
-                .visibility_changed
-                .iter()
-                .filter(|&i| alive.contains(i) && !created.contains(i))
-                .collect(),
-            dirty_matrices: self
-                .dirty_matrices
-                .iter()
-                .filter(|&t| self.node_alive.contains(t))
-                .collect(),
-            dirty_materials: self.dirty_materials.iter().collect(),
-            dirty_geometries: self.dirty_geometries.iter().collect(),
-        };
-        for bits in [
-            &mut self.created,
-            &mut self.destroyed,
-            &mut self.changed,
-            &mut self.visibility_changed,
-            &mut self.dirty_matrices,
-            &mut self.dirty_materials,
-            &mut self.dirty_geometries,
-        ] {
-            bits.clear();
-        }
-        changes
+        let (instances, nodes) = (&self.inst_alive, &self.node_alive);
+        self.changes.own_log().take(instances, nodes)
+    }
+
+    /// A new reader of this tree's changes: it sees what changes from now on (the state up to
+    /// now it reads from the tree itself).
+    pub fn subscribe(&mut self) -> ChangeReader {
+        self.changes.subscribe()
+    }
+
+    /// What changed since `reader` last looked; `None` when `reader` does not read this tree
+    /// (it was subscribed to another one).
+    pub fn changes_for(&mut self, reader: &ChangeReader) -> Option<TreeChanges> {
+        let (instances, nodes) = (&self.inst_alive, &self.node_alive);
+        Some(self.changes.log_of(reader)?.take(instances, nodes))
+    }
+
+    /// Number of live readers subscribed (the tree's own not counted).
+    pub fn reader_count(&self) -> usize {
+        self.changes.reader_count()
     }
 
     // ---- queries ------------------------------------------------------------------------------
@@ -767,17 +721,11 @@ impl SceneTree {
                 &self.view_dependent,
                 &self.inst_alive,
                 &self.inst_visible,
-                &self.created,
-                &self.destroyed,
-                &self.changed,
-                &self.visibility_changed,
-                &self.dirty_matrices,
-                &self.dirty_materials,
-                &self.dirty_geometries,
             ]
             .iter()
             .map(|b| b.memory_bytes())
-            .sum::<usize>();
+            .sum::<usize>()
+            + self.changes.memory_bytes();
         (matrices, other)
     }
 }

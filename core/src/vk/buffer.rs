@@ -125,6 +125,40 @@ impl Buffer {
         one_shot.submit_and_wait()
     }
 
+    /// Copies `size` bytes from `offset` of this buffer (which needs TRANSFER_SRC usage) to the
+    /// host through a readback buffer, and waits. The caller makes sure the GPU is done writing.
+    pub fn download(&self, offset: u64, size: u64) -> VkResult<Vec<u8>> {
+        if size == 0 {
+            return Ok(Vec::new());
+        }
+        if offset + size > self.size {
+            return Err(VkError::InvalidUse(format!(
+                "reading bytes {offset}..{} of a {}-byte buffer",
+                offset + size,
+                self.size
+            )));
+        }
+        let device = &self.device;
+        let readback = Self::new(
+            device,
+            "readback",
+            size,
+            vk::BufferUsageFlags::TRANSFER_DST,
+            MemoryLocation::GpuToCpu,
+        )?;
+        let mut one_shot = OneShot::begin(device, "buffer readback")?;
+        let region = [vk::BufferCopy::default().src_offset(offset).size(size)];
+        // SAFETY: both buffers are alive until the submission below has completed; the region
+        // lies within both (checked above).
+        unsafe {
+            device
+                .raw
+                .cmd_copy_buffer(one_shot.command_buffer(), self.raw, readback.raw, &region)
+        };
+        one_shot.submit_and_wait()?;
+        Ok(readback.mapped()?.to_vec())
+    }
+
     /// Writes `data` at `offset` into a host-visible buffer.
     pub fn write(&mut self, offset: u64, data: &[u8]) -> VkResult<()> {
         let size = self.size;

@@ -173,3 +173,38 @@ impl OneShot {
         self.context.wait()
     }
 }
+
+/// Records a compute dispatch into `command_buffer` (recording, outside rendering): binds
+/// `pipeline` with its `layout`, `set` as set 0 and `push` as its push constants, and
+/// dispatches `groups` × 1 × 1 work groups.
+pub fn record_dispatch(
+    device: &Device,
+    command_buffer: vk::CommandBuffer,
+    (pipeline, layout): (vk::Pipeline, vk::PipelineLayout),
+    set: vk::DescriptorSet,
+    push: &[u8],
+    groups: u32,
+) {
+    let raw = device.raw();
+    // SAFETY: the caller records outside rendering; pipeline, layout and set are live and
+    // compatible (the set's layout is set 0 of `layout`); `push` fits the layout's range.
+    unsafe {
+        raw.cmd_bind_pipeline(command_buffer, vk::PipelineBindPoint::COMPUTE, pipeline);
+        raw.cmd_bind_descriptor_sets(
+            command_buffer,
+            vk::PipelineBindPoint::COMPUTE,
+            layout,
+            0,
+            &[set],
+            &[],
+        );
+        raw.cmd_push_constants(
+            command_buffer,
+            layout,
+            vk::ShaderStageFlags::COMPUTE,
+            0,
+            push,
+        );
+        raw.cmd_dispatch(command_buffer, groups, 1, 1);
+    }
+}

@@ -164,6 +164,11 @@ impl Image {
         Ok(image)
     }
 
+    /// The device that owns the image.
+    pub fn device(&self) -> &Arc<Device> {
+        &self.device
+    }
+
     /// The Vulkan image.
     pub fn raw(&self) -> vk::Image {
         self.raw
@@ -241,6 +246,52 @@ pub fn transition(
     };
 }
 
+/// Records a copy of the pixels `(x, y, width, height)` of `image` (in TRANSFER_SRC_OPTIMAL,
+/// one aspect: colour, or depth for a depth format) into `buffer` at `offset`, tightly packed.
+pub fn record_image_copy(
+    device: &Device,
+    command_buffer: vk::CommandBuffer,
+    image: &Image,
+    (x, y, width, height): (u32, u32, u32, u32),
+    buffer: &Buffer,
+    offset: u64,
+) {
+    let aspect = if image.format() == DEPTH_FORMAT {
+        vk::ImageAspectFlags::DEPTH
+    } else {
+        vk::ImageAspectFlags::COLOR
+    };
+    let region = [vk::BufferImageCopy::default()
+        .buffer_offset(offset)
+        .image_subresource(
+            vk::ImageSubresourceLayers::default()
+                .aspect_mask(aspect)
+                .layer_count(1),
+        )
+        .image_offset(vk::Offset3D {
+            x: x as i32,
+            y: y as i32,
+            z: 0,
+        })
+        .image_extent(vk::Extent3D {
+            width,
+            height,
+            depth: 1,
+        })];
+    // SAFETY: the caller records outside rendering with the image in TRANSFER_SRC_OPTIMAL; the
+    // region lies inside the image and the buffer (the caller sized both), and both outlive
+    // the submission.
+    unsafe {
+        device.raw().cmd_copy_image_to_buffer(
+            command_buffer,
+            image.raw(),
+            vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
+            buffer.raw(),
+            &region,
+        )
+    };
+}
+
 /// The color format of offscreen targets: 8-bit RGBA, read back as is.
 pub const COLOR_FORMAT: vk::Format = vk::Format::R8G8B8A8_UNORM;
 /// The depth format of offscreen targets.
@@ -278,7 +329,8 @@ impl OffscreenTarget {
             "offscreen depth",
             extent,
             DEPTH_FORMAT,
-            vk::ImageUsageFlags::DEPTH_STENCIL_ATTACHMENT,
+            // Read back under the cursor by the pick pass.
+            vk::ImageUsageFlags::DEPTH_STENCIL_ATTACHMENT | vk::ImageUsageFlags::TRANSFER_SRC,
             vk::ImageAspectFlags::DEPTH,
         )?;
         Ok(Self { color, depth })

@@ -20,11 +20,12 @@ mod timer;
 
 pub use adapter::{enumerate as enumerate_adapters, Adapter, DeviceChoice, DEVICE_ENV};
 pub use buffer::{Buffer, MemoryLocation};
-pub use command::{CommandContext, OneShot};
+pub use command::{record_dispatch, CommandContext, OneShot};
 pub use device::{Capabilities, Device, DeviceOptions};
 pub use error::{map_result, VkError, VkResult, VkResultExt};
 pub use image::{
-    read_rgba8, subresource_range, transition, Image, OffscreenTarget, COLOR_FORMAT, DEPTH_FORMAT,
+    read_rgba8, record_image_copy, subresource_range, transition, Image, OffscreenTarget,
+    COLOR_FORMAT, DEPTH_FORMAT,
 };
 pub use instance::{Instance, InstanceOptions, ValidationLog, ValidationMessage};
 pub use shader::{compile_glsl, IncludeFile, ShaderModule, ShaderStage};

@@ -36,7 +36,7 @@ use std::ffi::{c_char, c_void};
 /// Major version of this ABI: a library built for another major version is refused.
 pub const CADR_PLUGIN_ABI_MAJOR: u32 = 1;
 /// Minor version of this ABI: additions that older readers may ignore.
-pub const CADR_PLUGIN_ABI_MINOR: u32 = 0;
+pub const CADR_PLUGIN_ABI_MINOR: u32 = 1;
 /// `(major << 16) | minor`, what [`CadrPluginVersionFn`] returns.
 pub const CADR_PLUGIN_ABI_VERSION: u32 = (CADR_PLUGIN_ABI_MAJOR << 16) | CADR_PLUGIN_ABI_MINOR;
 
@@ -724,6 +724,10 @@ pub struct CadrRecordContext {
     pub commands_key: u64,
     /// Counters to add to.
     pub stats: *mut CadrStats,
+    /// Since ABI 1.1: the `VkFormat` of the pass's colour attachment (the pick pass draws
+    /// instance ids into `VK_FORMAT_R32_UINT`); secondary command buffers must inherit it.
+    /// Read it only when `size` covers it; 0 means [`CadrVulkan::color_format`].
+    pub color_format: i32,
 }
 
 /// Submission vtable ([`CADR_KIND_SUBMISSION`]).

@@ -253,6 +253,15 @@ impl<'a> Record<'a> {
         slice(self.raw.passes, self.raw.pass_count as usize)
     }
 
+    /// The format of the pass's colour attachment, where the host says it (ABI 1.1 and later;
+    /// the pick pass draws ids into R32_UINT): secondary command buffers inherit it. `None`
+    /// means the device's colour format (`CadrVulkan::color_format`).
+    pub fn color_format(&self) -> Option<vk::Format> {
+        let end = std::mem::offset_of!(abi::CadrRecordContext, color_format) + 4;
+        (self.raw.size as usize >= end && self.raw.color_format != 0)
+            .then(|| vk::Format::from_raw(self.raw.color_format))
+    }
+
     /// Target size.
     pub fn extent(&self) -> vk::Extent2D {
         vk::Extent2D {

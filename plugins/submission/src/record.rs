@@ -251,6 +251,7 @@ impl SecondaryBuffers {
         let workers = workers.clamp(1, self.buffers.len());
         let shared = Shared(recorder);
         let extent = recorder.record.extent();
+        let color_format = recorder.record.color_format().unwrap_or(self.gpu.formats.0);
         let results: Vec<Result<CadrStats, String>> = std::thread::scope(|scope| {
             let handles: Vec<_> = (0..workers)
                 .map(|worker| {
@@ -259,7 +260,7 @@ impl SecondaryBuffers {
                     let gpu = &self.gpu;
                     let work = move || -> Result<CadrStats, String> {
                         let mut local = CadrStats::default();
-                        begin_secondary(gpu, pool, buffer, extent)?;
+                        begin_secondary(gpu, pool, buffer, (extent, color_format))?;
                         let part = if workers == 1 {
                             0..usize::MAX
                         } else {
@@ -311,9 +312,9 @@ fn begin_secondary(
     gpu: &Gpu,
     pool: vk::CommandPool,
     buffer: vk::CommandBuffer,
-    extent: vk::Extent2D,
+    (extent, color_format): (vk::Extent2D, vk::Format),
 ) -> Result<(), String> {
-    let formats = [gpu.formats.0];
+    let formats = [color_format];
     let mut rendering = vk::CommandBufferInheritanceRenderingInfo::default()
         .color_attachment_formats(&formats)
         .depth_attachment_format(gpu.formats.1)

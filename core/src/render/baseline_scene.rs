@@ -1,5 +1,7 @@
-//! A scene on the GPU: every geometry's vertices and indices in two arenas, plus the flattened
-//! draw items, world matrices and material parameters the techniques read.
+//! The flat scene of the built-in baseline: every geometry's vertices and indices in two
+//! arenas, plus the flattened draw items, world matrices and material parameters it pushes per
+//! draw. It reads a [`Scene`] directly (not the scene tree), so it also serves the tests as an
+//! independent oracle for the one GPU scene's techniques.
 
 use std::sync::Arc;
 
@@ -20,8 +22,8 @@ pub enum UploadError {
     Vulkan(#[from] VkError),
 }
 
-/// The GPU copy of a scene.
-pub struct GpuScene {
+/// The baseline's copy of a scene.
+pub struct BaselineScene {
     /// Every geometry's vertices and indices, in scene order.
     pub arena: GeometryArena,
     /// Draw items in traversal order.
@@ -34,7 +36,7 @@ pub struct GpuScene {
     pub stats: SceneStats,
 }
 
-impl GpuScene {
+impl BaselineScene {
     /// Validates, flattens and uploads `scene`.
     pub fn upload(device: &Arc<Device>, scene: &Scene) -> Result<Self, UploadError> {
         let flat = flatten(scene)?;

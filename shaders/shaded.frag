@@ -1,4 +1,5 @@
 #version 460
+// Shaded triangles of every technique combination: a head light on the material colour.
 #include "frame.glsl"
 #include "shading.glsl"
 

@@ -1,0 +1,577 @@
+//! The one GPU scene, fed by the scene tree, that every technique, the pick pass and every
+//! product path draws from ([`abi::CadrSceneView`] is how plugins see it): geometry in shared
+//! arenas ([`geometry`]), per-instance entries and records, matrices (f64 on the CPU for
+//! culling; on the GPU with translations split into f32 high and low parts) and materials.
+//!
+//! It reads the tree as one of its readers ([`SceneTree::subscribe`]): each sync applies what
+//! changed since this scene's own last sync, with work and uploads in proportion to the change
+//! (changed slots gathered and scattered on the GPU by [`upload`]; a replaced geometry written
+//! in place when it fits; only the touched instances' entries refreshed). Two scenes of one
+//! tree (two renderers) each see every change.
+
+mod geometry;
+mod upload;
+
+pub use upload::UploadStats;
+
+use std::sync::Arc;
+
+use ash::vk;
+use ash::vk::Handle;
+use cadr_plugin_abi as abi;
+use glam::DMat4;
+
+use crate::graph::SceneGraph;
+use crate::render::Pipelines;
+use crate::scene::Vertex;
+use crate::tree::{ChangeReader, InstanceRef, SceneTree, TreeChanges};
+use crate::vk::{Device, OneShot, VkResult};
+use geometry::GeometryArenas;
+use upload::{GpuArray, SparseUploader};
+
+/// Bytes of one matrix on the GPU ([`abi::CadrMatrix`]).
+pub const MATRIX_BYTES: usize = 64;
+/// Bytes of one material on the GPU ([`abi::CadrMaterial`]).
+pub const MATERIAL_BYTES: usize = 32;
+/// Bytes of one instance record on the GPU ([`abi::CadrInstanceRecord`]).
+pub const RECORD_BYTES: usize = 16;
+
+/// Splits f64 coordinates into an f32 high part and the f32 remainder: `high + low` equals the
+/// input to about 2^-48 of its size, and the shader subtracts the eye's parts separately so
+/// that positions relative to the eye keep that precision on the GPU.
+pub fn split_f64(v: glam::DVec3) -> ([f32; 3], [f32; 3]) {
+    let high = v.as_vec3();
+    let low = (v - high.as_dvec3()).as_vec3();
+    (high.to_array(), low.to_array())
+}
+
+/// A world matrix as the GPU holds it: rotation and scale in f32, the translation's high part
+/// in column 3 and its low part in the w of columns 0–2.
+pub fn gpu_matrix(world: &DMat4) -> abi::CadrMatrix {
+    let (high, low) = split_f64(world.w_axis.truncate());
+    let mut columns = world.as_mat4().to_cols_array_2d();
+    for axis in 0..3 {
+        columns[axis][3] = low[axis];
+    }
+    columns[3] = [high[0], high[1], high[2], 1.0];
+    abi::CadrMatrix { columns }
+}
+
+/// A material as the GPU holds it.
+pub fn gpu_material(graph: &SceneGraph, slot: u32) -> abi::CadrMaterial {
+    graph
+        .material_at(slot)
+        .map(|m| abi::CadrMaterial {
+            base_color: m.base_color,
+            surface: [m.metallic, m.roughness, 0.0, 0.0],
+        })
+        .unwrap_or_default()
+}
+
+/// The first generation of the next GPU scene (each scene counts within its own 2^32).
+static NEXT_GENERATIONS: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(1);
+
+/// The GPU scene.
+pub struct GpuScene {
+    device: Arc<Device>,
+    reader: ChangeReader,
+    arenas: GeometryArenas,
+    instances: Vec<abi::CadrInstance>,
+    records: Vec<abi::CadrInstanceRecord>,
+    candidate_bits: Vec<u64>,
+    culled_bits: Vec<u64>,
+    drawn_bits: Vec<u64>,
+    matrices: Vec<abi::CadrMatrix>,
+    worlds: Vec<[f64; 16]>,
+    materials: Vec<abi::CadrMaterial>,
+    matrix_gpu: GpuArray,
+    material_gpu: GpuArray,
+    record_gpu: GpuArray,
+    uploader: SparseUploader,
+    frame_dirty_matrices: Vec<u32>,
+    frame_dirty_materials: Vec<u32>,
+    draws_generation: u64,
+    parameters_generation: u64,
+    buffers_generation: u64,
+    triangles: u64,
+    /// What the last sync and upload wrote.
+    last_upload: UploadStats,
+    /// Instance entries refreshed by the last sync.
+    last_touched: u64,
+    /// The buffers as techniques see them (with device addresses), refreshed when replaced.
+    buffer_refs: [abi::CadrBufferRef; 6],
+}
+
+impl GpuScene {
+    /// Puts the tree's scene on the GPU and subscribes to the tree's changes.
+    pub fn new(device: &Arc<Device>, graph: &SceneGraph, tree: &mut SceneTree) -> VkResult<Self> {
+        // Generations are unique across scenes: techniques that cached a previous scene's
+        // buffers or commands see that this one differs.
+        let first_generation =
+            NEXT_GENERATIONS.fetch_add(1 << 32, std::sync::atomic::Ordering::Relaxed);
+        let reader = tree.subscribe();
+        let (arenas, geometry_bytes) = GeometryArenas::upload(device, graph)?;
+        let mut scene = Self {
+            device: Arc::clone(device),
+            reader,
+            arenas,
+            instances: Vec::new(),
+            records: Vec::new(),
+            candidate_bits: Vec::new(),
+            culled_bits: Vec::new(),
+            drawn_bits: Vec::new(),
+            matrices: Vec::new(),
+            worlds: Vec::new(),
+            materials: Vec::new(),
+            matrix_gpu: GpuArray::new(device, "scene matrices", MATRIX_BYTES)?,
+            material_gpu: GpuArray::new(device, "scene materials", MATERIAL_BYTES)?,
+            record_gpu: GpuArray::new(device, "scene instance records", RECORD_BYTES)?,
+            uploader: SparseUploader::default(),
+            frame_dirty_matrices: Vec::new(),
+            frame_dirty_materials: Vec::new(),
+            draws_generation: first_generation,
+            parameters_generation: first_generation,
+            buffers_generation: first_generation,
+            triangles: 0,
+            last_upload: UploadStats {
+                geometry_bytes,
+                bytes: geometry_bytes,
+                ..UploadStats::default()
+            },
+            last_touched: 0,
+            buffer_refs: Default::default(),
+        };
+        scene.refresh_all(graph, tree)?;
+        Ok(scene)
+    }
+
+    fn refresh_buffer_refs(&mut self) {
+        let with_address = self.device.capabilities().buffer_device_address;
+        self.buffer_refs = [
+            &self.arenas.vertices,
+            &self.arenas.indices,
+            &self.arenas.wire_indices,
+            &self.matrix_gpu.buffer,
+            &self.material_gpu.buffer,
+            &self.record_gpu.buffer,
+        ]
+        .map(|buffer| abi::CadrBufferRef {
+            buffer: buffer.raw().as_raw(),
+            size_bytes: buffer.size(),
+            address: if with_address {
+                buffer.device_address()
+            } else {
+                0
+            },
+        });
+    }
+
+    /// Rebuilds every entry from the tree and graph and queues every array for upload.
+    fn refresh_all(&mut self, graph: &SceneGraph, tree: &SceneTree) -> VkResult<()> {
+        let nodes = tree.node_capacity();
+        self.worlds = vec![[0.0; 16]; nodes];
+        self.matrices = vec![abi::CadrMatrix::default(); nodes];
+        for t in 0..nodes as u32 {
+            if tree.has_instances(t) {
+                self.set_matrix(tree, t);
+            }
+        }
+        let (_, _, material_slots) = graph.capacities();
+        self.materials = (0..material_slots as u32)
+            .map(|slot| gpu_material(graph, slot))
+            .collect();
+        let count = tree.instance_capacity();
+        self.instances = vec![abi::CadrInstance::default(); count];
+        self.records = vec![abi::CadrInstanceRecord::default(); count];
+        let words = count.div_ceil(64);
+        self.candidate_bits = vec![0; words];
+        self.drawn_bits = vec![0; words];
+        self.culled_bits = vec![u64::MAX; words];
+        self.triangles = 0;
+        for id in 0..count as u32 {
+            self.refresh_instance(tree, id);
+        }
+        let device = Arc::clone(&self.device);
+        self.matrix_gpu.reserve(&device, nodes.max(1))?;
+        self.material_gpu.reserve(&device, material_slots.max(1))?;
+        self.record_gpu.reserve(&device, count.max(1))?;
+        for array in [
+            &mut self.matrix_gpu,
+            &mut self.material_gpu,
+            &mut self.record_gpu,
+        ] {
+            array.queue_all();
+        }
+        self.frame_dirty_matrices = (0..nodes as u32)
+            .filter(|&t| tree.has_instances(t))
+            .collect();
+        self.frame_dirty_materials = (0..material_slots as u32).collect();
+        self.last_touched = count as u64;
+        self.buffers_generation += 1;
+        self.draws_generation += 1;
+        self.parameters_generation += 1;
+        self.refresh_buffer_refs();
+        Ok(())
+    }
+
+    fn is_drawn(&self, id: u32) -> bool {
+        self.drawn_bits[id as usize / 64] >> (id % 64) & 1 == 1
+    }
+
+    /// Sets instance `id`'s drawn bit, keeping the drawn triangle count in step.
+    fn set_drawn(&mut self, id: u32, drawn: bool) {
+        if self.is_drawn(id) != drawn {
+            let triangles = u64::from(self.instances[id as usize].index_count / 3);
+            if drawn {
+                self.triangles += triangles;
+            } else {
+                self.triangles -= triangles;
+            }
+            set_bit(&mut self.drawn_bits, id, drawn);
+        }
+    }
+
+    fn set_matrix(&mut self, tree: &SceneTree, t: u32) {
+        let world = tree.world(t);
+        self.worlds[t as usize] = world.to_cols_array();
+        self.matrices[t as usize] = gpu_matrix(&world);
+    }
+
+    /// The entry of a live instance whose geometry and part are in the arenas.
+    fn entry_of(&self, instance: &InstanceRef) -> Option<(abi::CadrInstance, bool)> {
+        let place = self
+            .arenas
+            .places
+            .get(instance.geometry as usize)?
+            .as_ref()?;
+        let ([first, count, first_wire, wire_count], sphere) =
+            *place.parts.get(instance.part as usize)?;
+        let flags = abi::CADR_INSTANCE_ALIVE
+            | if instance.highlighted {
+                abi::CADR_INSTANCE_HIGHLIGHTED
+            } else {
+                0
+            }
+            | if instance.pickable {
+                abi::CADR_INSTANCE_PICKABLE
+            } else {
+                0
+            };
+        let entry = abi::CadrInstance {
+            matrix: instance.tree_node,
+            material: instance.material,
+            geometry: instance.geometry,
+            part: instance.part,
+            flags,
+            vertex_base: place.vertex_base,
+            geometry_first_index: place.first_index,
+            geometry_first_wire_index: place.first_wire_index,
+            first_index: place.first_index + first,
+            index_count: count,
+            first_wire_index: place.first_wire_index + first_wire,
+            wire_index_count: wire_count,
+            sphere,
+        };
+        Some((entry, instance.visible && count > 0))
+    }
+
+    fn refresh_instance(&mut self, tree: &SceneTree, id: u32) {
+        let (entry, candidate) = tree
+            .instance(id)
+            .and_then(|instance| self.entry_of(&instance))
+            .unwrap_or((abi::CadrInstance::default(), false));
+        let i = id as usize;
+        // Out of the drawn set with its old entry, back in with the new one.
+        self.set_drawn(id, false);
+        self.instances[i] = entry;
+        self.records[i] = abi::CadrInstanceRecord {
+            matrix: entry.matrix,
+            material: entry.material,
+            flags: entry.flags,
+            instance: id,
+        };
+        set_bit(&mut self.candidate_bits, id, candidate);
+        let culled_in = self.culled_bits[i / 64] >> (i % 64) & 1 == 1;
+        self.set_drawn(id, candidate && culled_in);
+    }
+
+    /// Applies the tree's changes since this scene's last sync. The tree must be up to date
+    /// with the graph (`SceneTree::update`).
+    pub fn sync(&mut self, graph: &SceneGraph, tree: &mut SceneTree) -> VkResult<()> {
+        self.frame_dirty_matrices.clear();
+        self.frame_dirty_materials.clear();
+        self.last_upload = UploadStats::default();
+        self.last_touched = 0;
+        let Some(changes) = tree.changes_for(&self.reader) else {
+            // A tree this scene does not read: start over from it.
+            self.reader = tree.subscribe();
+            return self.relayout(graph, tree);
+        };
+        if changes.is_empty() {
+            return Ok(());
+        }
+        let grown = tree.node_capacity() > self.matrices.len()
+            || tree.instance_capacity() > self.instances.len()
+            || graph.capacities().2 > self.materials.len();
+        let mut replaced_in_place = true;
+        for &slot in &changes.dirty_geometries {
+            match self.arenas.replace_in_place(graph, slot)? {
+                Some(bytes) => {
+                    self.last_upload.geometry_bytes += bytes;
+                    self.last_upload.bytes += bytes;
+                }
+                None => {
+                    replaced_in_place = false;
+                    break;
+                }
+            }
+        }
+        if !replaced_in_place {
+            // Grown past its room (or new): lay the arenas out again.
+            return self.relayout(graph, tree);
+        }
+        if grown {
+            return self.refresh_all(graph, tree);
+        }
+        self.apply(graph, tree, &changes);
+        Ok(())
+    }
+
+    /// Lays the arenas out again and rebuilds every entry.
+    fn relayout(&mut self, graph: &SceneGraph, tree: &SceneTree) -> VkResult<()> {
+        let (arenas, bytes) = GeometryArenas::upload(&self.device, graph)?;
+        self.arenas = arenas;
+        self.last_upload.geometry_bytes += bytes;
+        self.last_upload.bytes += bytes;
+        self.refresh_all(graph, tree)
+    }
+
+    /// Applies changes that fit the current arrays.
+    fn apply(&mut self, graph: &SceneGraph, tree: &SceneTree, changes: &TreeChanges) {
+        for &t in &changes.dirty_matrices {
+            if tree.has_instances(t) {
+                self.set_matrix(tree, t);
+                self.matrix_gpu.queue(t);
+                self.frame_dirty_matrices.push(t);
+            }
+        }
+        for &slot in &changes.dirty_materials {
+            if (slot as usize) < self.materials.len() {
+                self.materials[slot as usize] = gpu_material(graph, slot);
+                self.material_gpu.queue(slot);
+                self.frame_dirty_materials.push(slot);
+            }
+        }
+        if !changes.dirty_matrices.is_empty() || !changes.dirty_materials.is_empty() {
+            self.parameters_generation += 1;
+        }
+        let touched: Vec<u32> = changes
+            .removed
+            .iter()
+            .chain(&changes.added)
+            .chain(&changes.changed)
+            .chain(&changes.visibility_changed)
+            .copied()
+            .collect();
+        for &id in &touched {
+            self.refresh_instance(tree, id);
+            self.record_gpu.queue(id);
+        }
+        self.last_touched = touched.len() as u64;
+        if !touched.is_empty() {
+            self.draws_generation += 1;
+        }
+    }
+
+    /// Applies culling's result: `visible` bits and the bits that `changed` since last frame;
+    /// only changed ids are touched.
+    pub(crate) fn apply_culling(&mut self, visible: &[u64], changed: &[u64]) {
+        let mut any = false;
+        for (word, &bits) in changed.iter().enumerate() {
+            let mut bits = bits;
+            while bits != 0 {
+                let bit = bits.trailing_zeros();
+                bits &= bits - 1;
+                let id = word as u32 * 64 + bit;
+                if id as usize >= self.instances.len() {
+                    continue;
+                }
+                let on = visible.get(word).is_some_and(|w| w >> bit & 1 == 1);
+                set_bit(&mut self.culled_bits, id, on);
+                let candidate = self.candidate_bits[word] >> bit & 1 == 1;
+                self.set_drawn(id, candidate && on);
+                any = true;
+            }
+        }
+        if any {
+            self.draws_generation += 1;
+        }
+    }
+
+    /// Records the pending uploads (before the pass) and clears them; returns the bytes sent.
+    pub(crate) fn record_uploads(
+        &mut self,
+        pipelines: &Pipelines,
+        command_buffer: vk::CommandBuffer,
+    ) -> VkResult<u64> {
+        let matrices = &self.matrices;
+        let materials = &self.materials;
+        let records = &self.records;
+        let matrix_bytes = |slot: u32, out: &mut Vec<u8>| {
+            let item = matrices.get(slot as usize).copied().unwrap_or_default();
+            out.extend_from_slice(&item.to_le_bytes());
+        };
+        let material_bytes = |slot: u32, out: &mut Vec<u8>| {
+            let item = materials.get(slot as usize).copied().unwrap_or_default();
+            out.extend_from_slice(&item.to_le_bytes());
+        };
+        let record_bytes = |slot: u32, out: &mut Vec<u8>| {
+            let item = records.get(slot as usize).copied().unwrap_or_default();
+            out.extend_from_slice(&item.to_le_bytes());
+        };
+        let ([matrix_count, material_count, record_count], bytes) = self.uploader.record(
+            &self.device,
+            pipelines,
+            command_buffer,
+            [
+                (&mut self.matrix_gpu, &matrix_bytes),
+                (&mut self.material_gpu, &material_bytes),
+                (&mut self.record_gpu, &record_bytes),
+            ],
+        )?;
+        self.last_upload.matrices += matrix_count;
+        self.last_upload.materials += material_count;
+        self.last_upload.records += record_count;
+        self.last_upload.bytes += bytes;
+        Ok(bytes)
+    }
+
+    /// Uploads what is pending now, outside a frame (one submission, waited for); returns the
+    /// bytes sent. Frames upload by themselves; this serves measurements and tests.
+    pub fn flush_uploads(&mut self, pipelines: &Pipelines) -> VkResult<u64> {
+        let mut one_shot = OneShot::begin(&self.device, "scene upload")?;
+        let bytes = self.record_uploads(pipelines, one_shot.command_buffer())?;
+        one_shot.submit_and_wait()?;
+        Ok(bytes)
+    }
+
+    /// What the last sync and the frame after it uploaded.
+    pub fn last_upload(&self) -> UploadStats {
+        self.last_upload
+    }
+
+    /// Instance entries the last sync refreshed.
+    pub fn last_touched(&self) -> u64 {
+        self.last_touched
+    }
+
+    /// The view techniques read this frame. Valid while `self` is not changed.
+    pub(crate) fn view(&self) -> abi::CadrSceneView {
+        let [vertex_buffer, index_buffer, wire_index_buffer, matrix_buffer, material_buffer, instance_buffer] =
+            self.buffer_refs;
+        abi::CadrSceneView {
+            size: std::mem::size_of::<abi::CadrSceneView>() as u32,
+            instance_count: self.instances.len() as u32,
+            instances: self.instances.as_ptr(),
+            drawn_bits: self.drawn_bits.as_ptr(),
+            draws_generation: self.draws_generation,
+            parameters_generation: self.parameters_generation,
+            matrix_count: self.matrices.len() as u32,
+            matrices: self.matrices.as_ptr(),
+            material_count: self.materials.len() as u32,
+            materials: self.materials.as_ptr(),
+            dirty_matrices: self.frame_dirty_matrices.as_ptr(),
+            dirty_matrix_count: self.frame_dirty_matrices.len() as u32,
+            dirty_materials: self.frame_dirty_materials.as_ptr(),
+            dirty_material_count: self.frame_dirty_materials.len() as u32,
+            buffers_generation: self.buffers_generation,
+            vertex_buffer,
+            vertex_stride: std::mem::size_of::<Vertex>() as u32,
+            index_buffer,
+            wire_index_buffer,
+            matrix_buffer,
+            material_buffer,
+            instance_buffer,
+        }
+    }
+
+    /// Culling's bits as last applied.
+    pub(crate) fn culled_bits(&self) -> &[u64] {
+        &self.culled_bits
+    }
+
+    /// Candidate bits (alive, visible, with triangles) for culling.
+    pub(crate) fn candidate_bits(&self) -> &[u64] {
+        &self.candidate_bits
+    }
+
+    /// World matrices (f64) per matrix slot.
+    pub(crate) fn worlds(&self) -> &[[f64; 16]] {
+        &self.worlds
+    }
+
+    /// Instances drawn this frame.
+    pub fn drawn_count(&self) -> usize {
+        self.drawn_bits
+            .iter()
+            .map(|w| w.count_ones() as usize)
+            .sum()
+    }
+
+    /// Triangles of the drawn instances.
+    pub fn drawn_triangles(&self) -> u64 {
+        self.triangles
+    }
+
+    /// Instance ids in use are below this.
+    pub fn instance_capacity(&self) -> usize {
+        self.instances.len()
+    }
+
+    /// The CPU copy of the GPU-side content: instance entries and records, matrices and
+    /// materials (for comparing an incrementally synced scene with a fresh one).
+    pub fn content(&self) -> SceneContent<'_> {
+        SceneContent {
+            instances: &self.instances,
+            records: &self.records,
+            matrices: &self.matrices,
+            materials: &self.materials,
+            drawn_bits: &self.drawn_bits,
+        }
+    }
+
+    /// Reads back the GPU's matrix, material and record arrays (for tests: the sparse uploads
+    /// must leave them equal to the CPU copy). Waits for the device.
+    pub fn read_back_arrays(&self) -> VkResult<[Vec<u8>; 3]> {
+        let read = |array: &GpuArray, bytes: usize| array.buffer.download(0, bytes as u64);
+        Ok([
+            read(&self.matrix_gpu, self.matrices.len() * MATRIX_BYTES)?,
+            read(&self.material_gpu, self.materials.len() * MATERIAL_BYTES)?,
+            read(&self.record_gpu, self.records.len() * RECORD_BYTES)?,
+        ])
+    }
+}
+
+/// The CPU copy of a GPU scene's content (see [`GpuScene::content`]).
+#[derive(Debug)]
+pub struct SceneContent<'a> {
+    /// Instance entries by instance id.
+    pub instances: &'a [abi::CadrInstance],
+    /// Instance records by instance id.
+    pub records: &'a [abi::CadrInstanceRecord],
+    /// Matrices by tree node.
+    pub matrices: &'a [abi::CadrMatrix],
+    /// Materials by slot.
+    pub materials: &'a [abi::CadrMaterial],
+    /// Drawn bits by instance id.
+    pub drawn_bits: &'a [u64],
+}
+
+fn set_bit(bits: &mut [u64], id: u32, on: bool) {
+    let (word, bit) = (id as usize / 64, id % 64);
+    if on {
+        bits[word] |= 1 << bit;
+    } else {
+        bits[word] &= !(1 << bit);
+    }
+}

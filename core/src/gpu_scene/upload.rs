@@ -1,0 +1,217 @@
+//! Sparse uploads (seed 000): the GPU scene's arrays (matrices, materials, instance records)
+//! change a few items at a time. Each frame the changed items of every array are gathered on the
+//! CPU into one compact buffer, each item behind its slot, and `scatter.comp` moves them into
+//! place on the GPU: the bytes uploaded are those of the changed items. An array that was
+//! (re)created is uploaded whole instead.
+
+use std::sync::Arc;
+
+use ash::vk;
+
+use super::geometry::usage;
+use crate::render::{DescriptorSets, Pipelines, ScatterParameters};
+use crate::vk::{record_dispatch, Buffer, Device, MemoryLocation, VkResult};
+
+/// One array of the GPU scene: fixed-size items in a device buffer, following a CPU copy.
+pub(super) struct GpuArray {
+    pub(super) buffer: Buffer,
+    name: &'static str,
+    item_bytes: usize,
+    capacity: usize,
+    /// Slots changed since the last upload.
+    pending: Vec<u32>,
+    /// The whole array must be uploaded (it was created or grown).
+    whole: bool,
+}
+
+impl GpuArray {
+    /// An empty array of `item_bytes`-byte items (a multiple of 4).
+    pub(super) fn new(
+        device: &Arc<Device>,
+        name: &'static str,
+        item_bytes: usize,
+    ) -> VkResult<Self> {
+        Ok(Self {
+            buffer: Buffer::new(
+                device,
+                name,
+                64,
+                usage(device, vk::BufferUsageFlags::empty()),
+                MemoryLocation::GpuOnly,
+            )?,
+            name,
+            item_bytes,
+            capacity: 0,
+            pending: Vec::new(),
+            whole: true,
+        })
+    }
+
+    /// Makes room for `count` items; a new buffer is uploaded whole. True when the buffer was
+    /// replaced.
+    pub(super) fn reserve(&mut self, device: &Arc<Device>, count: usize) -> VkResult<bool> {
+        if count <= self.capacity && self.capacity > 0 {
+            return Ok(false);
+        }
+        let capacity = count.next_power_of_two().max(64);
+        self.buffer = Buffer::new(
+            device,
+            self.name,
+            (capacity * self.item_bytes) as u64,
+            usage(device, vk::BufferUsageFlags::empty()),
+            MemoryLocation::GpuOnly,
+        )?;
+        self.capacity = capacity;
+        self.whole = true;
+        Ok(true)
+    }
+
+    /// Queues slot `slot` for the next upload.
+    pub(super) fn queue(&mut self, slot: u32) {
+        if !self.whole {
+            self.pending.push(slot);
+        }
+    }
+
+    /// Queues the whole array for the next upload.
+    pub(super) fn queue_all(&mut self) {
+        self.whole = true;
+        self.pending.clear();
+    }
+}
+
+/// What one upload wrote.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct UploadStats {
+    /// Matrices uploaded.
+    pub matrices: u64,
+    /// Materials uploaded.
+    pub materials: u64,
+    /// Instance records uploaded.
+    pub records: u64,
+    /// Bytes of geometry written (arenas laid out, or geometries replaced in place).
+    pub geometry_bytes: u64,
+    /// Every byte sent to the GPU: geometry, whole arrays, and the compact updates with their
+    /// slots.
+    pub bytes: u64,
+}
+
+/// The compact update buffer and the descriptor sets that point the scatter pipeline at it and
+/// at each array.
+#[derive(Default)]
+pub(super) struct SparseUploader {
+    updates: Option<Buffer>,
+    sets: Option<DescriptorSets>,
+    /// The buffers the sets were written for (updates, then each array).
+    written: Vec<vk::Buffer>,
+}
+
+/// An array with a function that appends the bytes of its item at a slot.
+pub(super) type ArrayItems<'a> = (&'a mut GpuArray, &'a dyn Fn(u32, &mut Vec<u8>));
+
+impl SparseUploader {
+    /// Uploads what changed in `arrays` (at most three): whole arrays through a staging copy,
+    /// changed items gathered and scattered by `scatter.comp`, recorded into `command_buffer`
+    /// (before the frame's pass; the frame's barrier makes the writes visible to drawing).
+    /// Returns the items uploaded per array and the bytes sent.
+    pub(super) fn record(
+        &mut self,
+        device: &Arc<Device>,
+        pipelines: &Pipelines,
+        command_buffer: vk::CommandBuffer,
+        mut arrays: [ArrayItems<'_>; 3],
+    ) -> VkResult<([u64; 3], u64)> {
+        let mut counts = [0u64; 3];
+        let mut bytes = 0u64;
+        let mut gathered: Vec<u8> = Vec::new();
+        // Per array: its first word in `gathered` and its item count.
+        let mut dispatches: Vec<(usize, u32, u32)> = Vec::new();
+        for (index, (array, item)) in arrays.iter().enumerate() {
+            if array.whole {
+                let mut data = Vec::with_capacity(array.capacity * array.item_bytes);
+                for slot in 0..array.capacity as u32 {
+                    item(slot, &mut data);
+                }
+                array.buffer.upload_at(0, &data)?;
+                counts[index] = array.capacity as u64;
+                bytes += data.len() as u64;
+            } else if !array.pending.is_empty() {
+                let first_word = (gathered.len() / 4) as u32;
+                let mut slots = array.pending.clone();
+                slots.sort_unstable();
+                slots.dedup();
+                for &slot in &slots {
+                    gathered.extend_from_slice(&slot.to_le_bytes());
+                    item(slot, &mut gathered);
+                }
+                counts[index] = slots.len() as u64;
+                dispatches.push((index, first_word, slots.len() as u32));
+            }
+        }
+        for (array, _) in arrays.iter_mut() {
+            array.whole = false;
+            array.pending.clear();
+        }
+        if gathered.is_empty() {
+            return Ok((counts, bytes));
+        }
+        bytes += gathered.len() as u64;
+        let needed = gathered.len() as u64;
+        if self.updates.as_ref().is_none_or(|u| u.size() < needed) {
+            self.updates = Some(Buffer::new(
+                device,
+                "scene updates",
+                needed.next_power_of_two().max(256),
+                vk::BufferUsageFlags::STORAGE_BUFFER,
+                MemoryLocation::CpuToGpu,
+            )?);
+        }
+        let Some(updates) = self.updates.as_mut() else {
+            return Ok((counts, bytes));
+        };
+        updates.write(0, &gathered)?;
+        let targets: Vec<vk::Buffer> = std::iter::once(updates.raw())
+            .chain(arrays.iter().map(|(a, _)| a.buffer.raw()))
+            .collect();
+        if self.sets.is_none() {
+            let layouts = [pipelines.scatter_set_layout; 3];
+            self.sets = Some(DescriptorSets::new(
+                device,
+                "scatter",
+                &layouts,
+                &[vk::DescriptorPoolSize::default()
+                    .ty(vk::DescriptorType::STORAGE_BUFFER)
+                    .descriptor_count(6)],
+            )?);
+        }
+        let Some(sets) = &self.sets else {
+            return Ok((counts, bytes));
+        };
+        if self.written != targets {
+            let ssbo = vk::DescriptorType::STORAGE_BUFFER;
+            for set in 0..3 {
+                sets.write_buffer(set, 0, ssbo, targets[0], vk::WHOLE_SIZE);
+                sets.write_buffer(set, 1, ssbo, targets[set + 1], vk::WHOLE_SIZE);
+            }
+            self.written = targets;
+        }
+        let scatter = pipelines.scatter()?;
+        for (index, first_word, item_count) in dispatches {
+            let item_words = (arrays[index].0.item_bytes / 4) as u32;
+            let parameters = ScatterParameters {
+                item_count,
+                item_words,
+                first_word,
+            };
+            record_dispatch(
+                device,
+                command_buffer,
+                (scatter, pipelines.scatter_layout),
+                sets.sets[index],
+                bytemuck::bytes_of(&parameters),
+                (item_count * item_words).div_ceil(64),
+            );
+        }
+        Ok((counts, bytes))
+    }
+}

@@ -1,0 +1,196 @@
+//! The one frame loop: a [`View`] owns a renderer (its target and frames), the active
+//! techniques and the GPU scene they draw, and takes a scene graph with its tree each frame.
+//! The command line, the C API and the tests draw and pick through it, so a scene reaches the
+//! GPU by one road: graph → tree → [`GpuScene`] → techniques → Vulkan.
+
+use std::collections::HashMap;
+use std::sync::Arc;
+
+use glam::{DVec3, DVec4};
+
+use crate::gpu_scene::GpuScene;
+use crate::graph::{NodeHandle, SceneGraph};
+use crate::render::pick::{PickSample, PixelRect};
+use crate::render::{Camera, FrameStats, Renderer};
+use crate::technique::{PluginRegistry, Techniques};
+use crate::tree::SceneTree;
+use crate::vk::{Device, VkResult};
+
+/// What a pick found under one pixel (or, for a rectangle, the nearest pixel of one part).
+#[derive(Clone, Debug, PartialEq)]
+pub struct PickHit {
+    /// The scene tree instance (the occurrence of a part on one path).
+    pub instance: u32,
+    /// The geo node drawn.
+    pub node: NodeHandle,
+    /// The part of its geometry.
+    pub part: u32,
+    /// The occurrence: graph nodes from the root to `node` (a shared subgraph appears on
+    /// several paths; this says which).
+    pub path: Vec<NodeHandle>,
+    /// The pixel (column, row).
+    pub pixel: (u32, u32),
+    /// Depth at the pixel (0 near plane, 1 far plane).
+    pub depth: f32,
+    /// The surface point under the pixel's centre, in world space.
+    pub position: DVec3,
+}
+
+/// The world position of a pixel's centre at `depth`, seen by `camera` on a `width` × `height`
+/// target (the inverse of what the frame does, in f64).
+pub fn unproject(
+    camera: &Camera,
+    (width, height): (u32, u32),
+    (x, y): (u32, u32),
+    depth: f32,
+) -> DVec3 {
+    let ndc = DVec4::new(
+        (f64::from(x) + 0.5) / f64::from(width) * 2.0 - 1.0,
+        (f64::from(y) + 0.5) / f64::from(height) * 2.0 - 1.0,
+        f64::from(depth),
+        1.0,
+    );
+    let view = camera.projection.inverse() * ndc;
+    let view = view / view.w;
+    camera.view.inverse().transform_point3(view.truncate())
+}
+
+/// A renderer with its techniques and GPU scene.
+pub struct View {
+    // Dropped in this order: the scene and the techniques before the renderer whose layouts
+    // they use.
+    scene: Option<GpuScene>,
+    techniques: Techniques,
+    renderer: Renderer,
+}
+
+impl View {
+    /// A view of `width` × `height` pixels drawing with techniques from `registry` (none chosen
+    /// yet: see [`View::techniques_mut`]).
+    pub fn new(
+        device: &Arc<Device>,
+        registry: Arc<PluginRegistry>,
+        width: u32,
+        height: u32,
+    ) -> VkResult<Self> {
+        let renderer = Renderer::new(device, width, height)?;
+        let techniques = Techniques::new(device, registry, renderer.pipelines().frame_set_layout);
+        Ok(Self {
+            scene: None,
+            techniques,
+            renderer,
+        })
+    }
+
+    /// The renderer (target size, pixels, PNG).
+    pub fn renderer(&self) -> &Renderer {
+        &self.renderer
+    }
+
+    /// The renderer, to resize it.
+    pub fn renderer_mut(&mut self) -> &mut Renderer {
+        &mut self.renderer
+    }
+
+    /// The active techniques.
+    pub fn techniques(&self) -> &Techniques {
+        &self.techniques
+    }
+
+    /// The active techniques, to choose or swap them.
+    pub fn techniques_mut(&mut self) -> &mut Techniques {
+        &mut self.techniques
+    }
+
+    /// The GPU scene last drawn, if any.
+    pub fn scene(&self) -> Option<&GpuScene> {
+        self.scene.as_ref()
+    }
+
+    /// Brings the GPU scene up to date with `tree` (which must be up to date with `graph`):
+    /// created on first use, then synced with the changes since this view's last frame (a
+    /// tree this view has not read before is uploaded afresh).
+    pub fn sync(&mut self, graph: &SceneGraph, tree: &mut SceneTree) -> VkResult<&mut GpuScene> {
+        match &mut self.scene {
+            Some(scene) => {
+                scene.sync(graph, tree)?;
+            }
+            None => {
+                self.scene = Some(GpuScene::new(self.renderer.device(), graph, tree)?);
+            }
+        }
+        self.scene
+            .as_mut()
+            .ok_or_else(|| crate::vk::VkError::InvalidUse("no GPU scene".into()))
+    }
+
+    /// Draws one frame of `tree` seen by `camera` with the active techniques.
+    pub fn render(
+        &mut self,
+        graph: &SceneGraph,
+        tree: &mut SceneTree,
+        camera: &Camera,
+    ) -> VkResult<FrameStats> {
+        self.sync(graph, tree)?;
+        let Self {
+            scene,
+            techniques,
+            renderer,
+        } = self;
+        let scene = scene
+            .as_mut()
+            .ok_or_else(|| crate::vk::VkError::InvalidUse("no GPU scene".into()))?;
+        renderer.render_techniques(scene, techniques, camera)
+    }
+
+    /// Picks the pickable parts with visible pixels in `rect`, seen by `camera`: one hit per
+    /// occurrence and part (its nearest pixel), nearest first. For one pixel, at most one hit.
+    pub fn pick(
+        &mut self,
+        graph: &SceneGraph,
+        tree: &mut SceneTree,
+        camera: &Camera,
+        rect: PixelRect,
+    ) -> VkResult<Vec<PickHit>> {
+        self.sync(graph, tree)?;
+        let Self {
+            scene,
+            techniques,
+            renderer,
+        } = self;
+        let scene = scene
+            .as_mut()
+            .ok_or_else(|| crate::vk::VkError::InvalidUse("no GPU scene".into()))?;
+        let samples = renderer.pick_techniques(scene, techniques, camera, rect)?;
+        let size = renderer.size();
+        let mut nearest: HashMap<u32, PickSample> = HashMap::new();
+        for sample in samples {
+            let best = nearest.entry(sample.instance).or_insert(sample);
+            if sample.depth < best.depth {
+                *best = sample;
+            }
+        }
+        let mut hits: Vec<PickHit> = nearest
+            .into_values()
+            .filter_map(|sample| {
+                let instance = tree.instance(sample.instance)?;
+                let path = tree.path(instance.tree_node);
+                Some(PickHit {
+                    instance: sample.instance,
+                    node: *path.last()?,
+                    part: instance.part,
+                    path,
+                    pixel: (sample.x, sample.y),
+                    depth: sample.depth,
+                    position: unproject(camera, size, (sample.x, sample.y), sample.depth),
+                })
+            })
+            .collect();
+        hits.sort_by(|a, b| {
+            a.depth
+                .total_cmp(&b.depth)
+                .then(a.instance.cmp(&b.instance))
+        });
+        Ok(hits)
+    }
+}

@@ -1,0 +1,534 @@
+//! The one GPU scene and picking through the technique path: picks agree with what is drawn in
+//! every valid combination, occurrences of a shared part are told apart, unpickable and hidden
+//! parts let the click through, world positions are exact far from the origin; several
+//! readers of one tree upload only what changed; a replaced geometry is written in place; any
+//! sequence of edits leaves the GPU scene equal to a fresh upload.
+#![allow(clippy::unwrap_used)] // Test code: a failed unwrap is a failed test.
+
+use std::sync::Arc;
+
+use cadr_core::generate::{generate, GeneratorSpec, GeometryBuilder};
+use cadr_core::gpu_scene::{GpuScene, MATRIX_BYTES};
+use cadr_core::graph::{GeometryHandle, MaterialHandle, NodeFlags, NodeHandle, SceneGraph};
+use cadr_core::render::pick::PixelRect;
+use cadr_core::render::{Camera, Renderer, CLEAR_COLOR, DEFAULT_DIRECTION};
+use cadr_core::scene::{flatten, Material};
+use cadr_core::technique::{feature_bits, Combination, PluginRegistry, TechniqueKind};
+use cadr_core::tree::SceneTree;
+use cadr_core::view::View;
+use cadr_core::vk::Device;
+use cadr_tests::{assert_no_validation_errors, test_device};
+use glam::{DMat4, DVec3};
+use proptest::prelude::*;
+
+const SIZE: (u32, u32) = (96, 72);
+
+fn registry(device: &Device) -> Arc<PluginRegistry> {
+    let dir = std::env::current_exe()
+        .unwrap()
+        .parent()
+        .unwrap()
+        .to_path_buf();
+    Arc::new(PluginRegistry::discover(
+        &[dir],
+        feature_bits(device.capabilities()),
+    ))
+}
+
+fn view(device: &Arc<Device>, combination: &Combination) -> View {
+    let mut view = View::new(device, registry(device), SIZE.0, SIZE.1).unwrap();
+    view.techniques_mut().select(combination).unwrap();
+    view
+}
+
+/// A unit cube (one part) and a grey material.
+fn cube(graph: &mut SceneGraph) -> (GeometryHandle, MaterialHandle) {
+    let mut builder = GeometryBuilder::new("cube");
+    builder.cuboid(DVec3::splat(-0.5), DVec3::splat(0.5), DMat4::IDENTITY);
+    let geometry = graph.create_geometry(builder.finish()).unwrap();
+    let material = graph.create_material(Material::default()).unwrap();
+    (geometry, material)
+}
+
+/// A transform placing one cube at `at`, below `parent`.
+fn place(
+    graph: &mut SceneGraph,
+    parent: NodeHandle,
+    name: &str,
+    at: DVec3,
+    shape: (GeometryHandle, MaterialHandle),
+) -> (NodeHandle, NodeHandle) {
+    let transform = graph
+        .create_transform(name, DMat4::from_translation(at))
+        .unwrap();
+    let geo = graph
+        .create_geo(&format!("{name} geo"), shape.0, &[shape.1])
+        .unwrap();
+    graph.add_child(parent, transform).unwrap();
+    graph.add_child(transform, geo).unwrap();
+    (transform, geo)
+}
+
+/// A camera at `eye` looking down -Z at `target`.
+fn camera_at(eye: DVec3, target: DVec3) -> Camera {
+    Camera::look_at(
+        eye,
+        target,
+        40.0,
+        f64::from(SIZE.0) / f64::from(SIZE.1),
+        0.1,
+        100.0,
+    )
+}
+
+fn centre() -> PixelRect {
+    PixelRect::pixel(SIZE.0 / 2, SIZE.1 / 2)
+}
+
+#[test]
+fn every_valid_combination_picks_what_it_draws() {
+    let device = test_device();
+    let source = generate(&GeneratorSpec::parse("demo").unwrap());
+    let (mut graph, _) = SceneGraph::from_scene(&source).unwrap();
+    let mut tree = SceneTree::build(&mut graph);
+    let bounds = flatten(&source).unwrap().bounds;
+    let camera = Camera::fit(
+        &bounds,
+        f64::from(SIZE.0) / f64::from(SIZE.1),
+        DEFAULT_DIRECTION,
+    );
+    let registry = registry(&device);
+    let names = |kind| -> Vec<String> {
+        registry
+            .of_kind(kind)
+            .filter(|t| t.support.is_ok())
+            .map(|t| t.name.clone())
+            .collect()
+    };
+    let mut view = View::new(&device, Arc::clone(&registry), SIZE.0, SIZE.1).unwrap();
+    view.techniques_mut()
+        .select(&Combination::simplest())
+        .unwrap();
+    let whole = PixelRect {
+        x: 0,
+        y: 0,
+        width: SIZE.0,
+        height: SIZE.1,
+    };
+    // The reference: the simplest combination's box selection of the whole image, checked
+    // against its own drawing: a covered pixel is never background, and every hit's world
+    // position lies on its part (within its bounding sphere).
+    let reference = view.pick(&graph, &mut tree, &camera, whole).unwrap();
+    assert!(reference.len() > 50, "{} parts picked", reference.len());
+    view.render(&graph, &mut tree, &camera).unwrap();
+    let image = view.renderer().read_rgba8().unwrap();
+    let background = CLEAR_COLOR.map(|c| (c * 255.0).round() as i32);
+    for hit in &reference {
+        let pixel = image.get_pixel(hit.pixel.0, hit.pixel.1).0;
+        let is_background = (0..3).all(|c| (i32::from(pixel[c]) - background[c]).abs() <= 1);
+        assert!(!is_background, "{hit:?} picks a background pixel");
+        let instance = tree.instance(hit.instance).unwrap();
+        let world = tree.world(instance.tree_node);
+        let geometry = graph.geometry_at(instance.geometry).unwrap();
+        let part = geometry.parts[hit.part as usize];
+        let local = world.inverse().transform_point3(hit.position);
+        let indices = &geometry.indices
+            [part.first_index as usize..(part.first_index + part.index_count) as usize];
+        let nearest = indices
+            .iter()
+            .map(|&i| DVec3::from(geometry.vertices[i as usize].position.map(f64::from)))
+            .fold(None::<(DVec3, DVec3)>, |b, p| match b {
+                None => Some((p, p)),
+                Some((lo, hi)) => Some((lo.min(p), hi.max(p))),
+            })
+            .unwrap();
+        let slack = 0.02 * (nearest.1 - nearest.0).length() + 1e-3;
+        assert!(
+            local.cmpge(nearest.0 - slack).all() && local.cmple(nearest.1 + slack).all(),
+            "{hit:?}: world position {local} (part space) is off the part's box {nearest:?}"
+        );
+    }
+    // What a combination must pick: the same parts, except that submissions joining several
+    // parts of one object into one draw (join, material groups) report the object (its
+    // occurrence) with the first part of the joined range.
+    let occurrence = |tree: &SceneTree, instance: u32| tree.instance(instance).unwrap().tree_node;
+    let mut reference_parts: Vec<(u32, u32)> =
+        reference.iter().map(|h| (h.instance, h.part)).collect();
+    reference_parts.sort_unstable();
+    let mut reference_occurrences: Vec<u32> = reference
+        .iter()
+        .map(|h| occurrence(&tree, h.instance))
+        .collect();
+    reference_occurrences.sort_unstable();
+    reference_occurrences.dedup();
+    let mut checked = 0;
+    for vertex in names(TechniqueKind::Vertex) {
+        for parameters in names(TechniqueKind::Parameters) {
+            for submission in names(TechniqueKind::Submission) {
+                let combination = Combination {
+                    vertex: vertex.clone(),
+                    parameters: parameters.clone(),
+                    submission: submission.clone(),
+                    culling: "none".into(),
+                };
+                if view.techniques().check(&combination).is_err() {
+                    continue;
+                }
+                view.techniques_mut().select(&combination).unwrap();
+                let hits = view.pick(&graph, &mut tree, &camera, whole).unwrap();
+                let mut occurrences: Vec<u32> =
+                    hits.iter().map(|h| occurrence(&tree, h.instance)).collect();
+                occurrences.sort_unstable();
+                occurrences.dedup();
+                assert_eq!(occurrences, reference_occurrences, "{combination}");
+                if !submission.starts_with("join") && !submission.starts_with("groups") {
+                    let mut parts: Vec<(u32, u32)> =
+                        hits.iter().map(|h| (h.instance, h.part)).collect();
+                    parts.sort_unstable();
+                    assert_eq!(parts, reference_parts, "{combination}");
+                }
+                checked += 1;
+            }
+        }
+    }
+    assert!(checked >= 20, "only {checked} combinations checked");
+    assert_no_validation_errors(&device);
+}
+
+#[test]
+fn occurrences_pickable_flags_and_hidden_parts() {
+    let device = test_device();
+    let mut graph = SceneGraph::new();
+    let root = graph.root();
+    let shape = cube(&mut graph);
+    // One bolt subgraph shared by two transforms: two occurrences of one Geo node.
+    let bolt = graph.create_group("bolt");
+    let bolt_geo = graph.create_geo("bolt geo", shape.0, &[shape.1]).unwrap();
+    graph.add_child(bolt, bolt_geo).unwrap();
+    let left = graph
+        .create_transform("left", DMat4::from_translation(DVec3::new(-1.0, 0.0, 0.0)))
+        .unwrap();
+    let right = graph
+        .create_transform("right", DMat4::from_translation(DVec3::new(1.0, 0.0, 0.0)))
+        .unwrap();
+    for side in [left, right] {
+        graph.add_child(root, side).unwrap();
+        graph.add_child(side, bolt).unwrap();
+    }
+    // A cube in front of a cube, on the axis.
+    let (front, _) = place(&mut graph, root, "front", DVec3::new(0.0, 3.0, 1.0), shape);
+    let (_, back_geo) = place(&mut graph, root, "back", DVec3::new(0.0, 3.0, -1.0), shape);
+    let mut tree = SceneTree::build(&mut graph);
+    let mut view = view(&device, &Combination::simplest());
+
+    let pick_at = |view: &mut View, graph: &SceneGraph, tree: &mut SceneTree, target: DVec3| {
+        let camera = camera_at(target + DVec3::new(0.0, 0.0, 6.0), target);
+        view.pick(graph, tree, &camera, centre()).unwrap()
+    };
+    let on_left = pick_at(&mut view, &graph, &mut tree, DVec3::new(-1.0, 0.0, 0.0));
+    let on_right = pick_at(&mut view, &graph, &mut tree, DVec3::new(1.0, 0.0, 0.0));
+    assert_eq!(on_left.len(), 1);
+    assert_eq!(on_right.len(), 1);
+    assert_eq!(on_left[0].node, bolt_geo);
+    assert_eq!(on_right[0].node, bolt_geo);
+    assert_eq!(on_left[0].path, vec![root, left, bolt, bolt_geo]);
+    assert_eq!(on_right[0].path, vec![root, right, bolt, bolt_geo]);
+    // The front face of the left bolt is at z = 0.5.
+    // (within a pixel: the centre pixel is half a pixel off the image centre)
+    assert!((on_left[0].position - DVec3::new(-1.0, 0.0, 0.5)).length() < 0.06);
+
+    let behind = DVec3::new(0.0, 3.0, 0.0);
+    let hit = pick_at(&mut view, &graph, &mut tree, behind);
+    assert_eq!(hit[0].path[1], front, "the front cube is hit first");
+    let unpickable = NodeFlags {
+        pickable: false,
+        ..NodeFlags::default()
+    };
+    graph.set_flags(front, unpickable).unwrap();
+    tree.update(&mut graph);
+    let hit = pick_at(&mut view, &graph, &mut tree, behind);
+    assert_eq!(
+        hit[0].node, back_geo,
+        "an unpickable part lets the click through"
+    );
+    graph.set_flags(front, NodeFlags::default()).unwrap();
+    let hidden = NodeFlags {
+        visible: false,
+        ..NodeFlags::default()
+    };
+    graph.set_flags(front, hidden).unwrap();
+    tree.update(&mut graph);
+    let hit = pick_at(&mut view, &graph, &mut tree, behind);
+    assert_eq!(hit[0].node, back_geo, "a hidden part is not picked");
+    let nothing = pick_at(&mut view, &graph, &mut tree, DVec3::new(0.0, -20.0, 0.0));
+    assert!(nothing.is_empty(), "background gives no hit: {nothing:?}");
+
+    // Box selection over the two bolts: exactly the two occurrences.
+    let camera = camera_at(DVec3::new(0.0, 0.0, 8.0), DVec3::ZERO);
+    let boxed = view
+        .pick(
+            &graph,
+            &mut tree,
+            &camera,
+            PixelRect::spanning((0, SIZE.1 / 2 - 2), (SIZE.0 - 1, SIZE.1 / 2 + 2)),
+        )
+        .unwrap();
+    let mut paths: Vec<Vec<NodeHandle>> = boxed.into_iter().map(|h| h.path).collect();
+    paths.sort_by_key(|p| p[1].index());
+    assert_eq!(
+        paths,
+        vec![
+            vec![root, left, bolt, bolt_geo],
+            vec![root, right, bolt, bolt_geo]
+        ]
+    );
+    assert_no_validation_errors(&device);
+}
+
+#[test]
+fn world_positions_stay_exact_100_km_from_the_origin() {
+    let device = test_device();
+    let far = DVec3::new(100_000.0, -100_000.0, 100_000.0);
+    let mut graph = SceneGraph::new();
+    let root = graph.root();
+    let shape = cube(&mut graph);
+    place(&mut graph, root, "far cube", far, shape);
+    let mut tree = SceneTree::build(&mut graph);
+    let mut view = view(&device, &Combination::simplest());
+    let eye = far + DVec3::new(0.0, 0.0, 4.0);
+    let camera = camera_at(eye, far);
+    for (x, y) in [(SIZE.0 / 2, SIZE.1 / 2), (SIZE.0 / 2 + 7, SIZE.1 / 2 - 5)] {
+        let hits = view
+            .pick(&graph, &mut tree, &camera, PixelRect::pixel(x, y))
+            .unwrap();
+        let hit = hits.first().expect("the cube is under the pixel");
+        // The true surface is the cube's front face, z = far.z + 0.5; a pixel there spans
+        // 2 * 3.5 * tan(20°) / 72 ≈ 0.035 units.
+        let footprint = 2.0 * 3.5 * (20.0_f64).to_radians().tan() / f64::from(SIZE.1);
+        assert!(
+            (hit.position.z - (far.z + 0.5)).abs() < footprint,
+            "{:?} is off the front face",
+            hit.position
+        );
+        let offset = hit.position - far;
+        assert!(offset.x.abs() < 0.5 + footprint && offset.y.abs() < 0.5 + footprint);
+    }
+    assert_no_validation_errors(&device);
+}
+
+#[test]
+fn two_views_of_one_tree_upload_only_what_changed() {
+    let device = test_device();
+    let mut graph = SceneGraph::new();
+    let root = graph.root();
+    let shape = cube(&mut graph);
+    let (mover, _) = place(&mut graph, root, "mover", DVec3::ZERO, shape);
+    for i in 0..20 {
+        place(
+            &mut graph,
+            root,
+            &format!("cube {i}"),
+            DVec3::new(f64::from(i), 2.0, 0.0),
+            shape,
+        );
+    }
+    let mut tree = SceneTree::build(&mut graph);
+    let camera = camera_at(DVec3::new(0.0, 0.0, 30.0), DVec3::ZERO);
+    let mut a = view(&device, &Combination::simplest());
+    let mut b = view(&device, &Combination::simplest());
+    a.render(&graph, &mut tree, &camera).unwrap();
+    b.render(&graph, &mut tree, &camera).unwrap();
+    for step in 1..4 {
+        graph
+            .set_matrix(
+                mover,
+                DMat4::from_translation(DVec3::new(0.0, f64::from(step), 0.0)),
+            )
+            .unwrap();
+        tree.update(&mut graph);
+        for v in [&mut a, &mut b] {
+            let stats = v.render(&graph, &mut tree, &camera).unwrap();
+            // One matrix behind its slot: 4 + 64 bytes, nothing else.
+            assert_eq!(stats.bytes_uploaded, 4 + MATRIX_BYTES as u64, "step {step}");
+            let upload = v.scene().unwrap().last_upload();
+            assert_eq!(
+                (upload.matrices, upload.records, upload.geometry_bytes),
+                (1, 0, 0)
+            );
+        }
+    }
+    // A frame with nothing changed uploads nothing.
+    assert_eq!(
+        a.render(&graph, &mut tree, &camera).unwrap().bytes_uploaded,
+        0
+    );
+    assert_eq!(tree.reader_count(), 2);
+    drop(b);
+    tree.take_changes();
+    a.render(&graph, &mut tree, &camera).unwrap();
+    assert_eq!(tree.reader_count(), 1, "a dropped view stops reading");
+    assert_no_validation_errors(&device);
+}
+
+#[test]
+fn a_replaced_geometry_is_written_in_place() {
+    let device = test_device();
+    let mut graph = SceneGraph::new();
+    let root = graph.root();
+    let shape = cube(&mut graph);
+    let other = cube(&mut graph);
+    for i in 0..3 {
+        place(
+            &mut graph,
+            root,
+            &format!("user {i}"),
+            DVec3::new(f64::from(i) * 2.0, 0.0, 0.0),
+            shape,
+        );
+    }
+    for i in 0..5 {
+        place(
+            &mut graph,
+            root,
+            &format!("other {i}"),
+            DVec3::new(f64::from(i) * 2.0, 3.0, 0.0),
+            other,
+        );
+    }
+    let mut tree = SceneTree::build(&mut graph);
+    let camera = camera_at(DVec3::new(4.0, 1.0, 20.0), DVec3::new(4.0, 1.0, 0.0));
+    let mut v = view(&device, &Combination::simplest());
+    v.render(&graph, &mut tree, &camera).unwrap();
+    let mut smaller = GeometryBuilder::new("smaller cube");
+    smaller.cuboid(DVec3::splat(-0.25), DVec3::splat(0.25), DMat4::IDENTITY);
+    let smaller = smaller.finish();
+    let bytes = (smaller.vertices.len() * std::mem::size_of::<cadr_core::scene::Vertex>()
+        + smaller.indices.len() * 4) as u64;
+    graph.replace_geometry(shape.0, smaller.clone()).unwrap();
+    tree.update(&mut graph);
+    v.render(&graph, &mut tree, &camera).unwrap();
+    let scene = v.scene().unwrap();
+    let upload = scene.last_upload();
+    assert!(
+        upload.geometry_bytes >= bytes && upload.geometry_bytes < 2 * bytes,
+        "{upload:?}: only the replaced geometry's vertices, indices and edges ({bytes} B + edges)"
+    );
+    assert_eq!(upload.records, 3, "only its 3 users' records");
+    assert_eq!(scene.last_touched(), 3);
+    // The result equals a fresh upload.
+    let fresh = GpuScene::new(&device, &graph, &mut tree).unwrap();
+    assert_eq!(scene.content().records, fresh.content().records);
+    assert_no_validation_errors(&device);
+}
+
+/// Edits for the property test.
+#[derive(Clone, Debug)]
+enum Edit {
+    Move(u8, i8),
+    Flags(u8, bool, bool, bool),
+    Material(u8),
+    Add(u8),
+    Remove(u8),
+    Replace(bool),
+}
+
+fn edit() -> impl Strategy<Value = Edit> {
+    prop_oneof![
+        3 => (any::<u8>(), any::<i8>()).prop_map(|(n, y)| Edit::Move(n, y)),
+        2 => (any::<u8>(), any::<bool>(), any::<bool>(), any::<bool>()).prop_map(|(n, v, p, h)| Edit::Flags(n, v, p, h)),
+        1 => any::<u8>().prop_map(Edit::Material),
+        2 => any::<u8>().prop_map(Edit::Add),
+        2 => any::<u8>().prop_map(Edit::Remove),
+        1 => any::<bool>().prop_map(Edit::Replace),
+    ]
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(24))]
+    #[test]
+    fn incremental_syncs_equal_a_fresh_upload(edits in prop::collection::vec(edit(), 1..24)) {
+        let device = test_device();
+        let mut graph = SceneGraph::new();
+        let root = graph.root();
+        let shape = cube(&mut graph);
+        let mut transforms: Vec<NodeHandle> = (0..6)
+            .map(|i| place(&mut graph, root, &format!("t{i}"), DVec3::new(f64::from(i), 0.0, 0.0), shape).0)
+            .collect();
+        let mut tree = SceneTree::build(&mut graph);
+        let renderer = Renderer::new(&device, 1, 1).unwrap();
+        let mut scene = GpuScene::new(&device, &graph, &mut tree).unwrap();
+        scene.flush_uploads(renderer.pipelines()).unwrap();
+        for (step, edit) in edits.iter().enumerate() {
+            let pick = |n: u8| transforms[n as usize % transforms.len()];
+            match *edit {
+                Edit::Move(n, y) => {
+                    let m = DMat4::from_translation(DVec3::new(f64::from(n % 7), f64::from(y) * 0.1, 1e5));
+                    graph.set_matrix(pick(n), m).unwrap();
+                }
+                Edit::Flags(n, visible, pickable, highlighted) => {
+                    graph.set_flags(pick(n), NodeFlags { visible, pickable, highlighted }).unwrap();
+                }
+                Edit::Material(shade) => {
+                    let material = Material { base_color: [f32::from(shade) / 255.0, 0.5, 0.5, 1.0], ..Material::default() };
+                    graph.set_material(shape.1, material).unwrap();
+                }
+                Edit::Add(n) => {
+                    // Share an existing transform once more (a new occurrence).
+                    let _ = graph.add_child(root, pick(n));
+                    let (t, _) = place(&mut graph, root, &format!("added {step}"), DVec3::new(0.0, f64::from(n), 0.0), shape);
+                    transforms.push(t);
+                }
+                Edit::Remove(n) => {
+                    let _ = graph.remove_child_at(root, usize::from(n) % 6);
+                }
+                Edit::Replace(grow) => {
+                    let mut builder = GeometryBuilder::new("replacement");
+                    builder.cuboid(DVec3::splat(-0.3), DVec3::splat(0.3), DMat4::IDENTITY);
+                    if grow {
+                        // Twice the size: no longer fits in place.
+                        let mut two = GeometryBuilder::new("grown");
+                        two.cuboid(DVec3::splat(-0.3), DVec3::splat(0.3), DMat4::IDENTITY);
+                        two.cuboid(DVec3::splat(0.3), DVec3::splat(0.6), DMat4::IDENTITY);
+                        let mut grown = two.finish();
+                        let whole = grown.indices.len() as u32;
+                        grown.parts.truncate(1);
+                        grown.parts[0].index_count = whole;
+                        grown.parts[0].wire_index_count = 0;
+                        graph.replace_geometry(shape.0, grown).unwrap();
+                    } else {
+                        graph.replace_geometry(shape.0, builder.finish()).unwrap();
+                    }
+                }
+            }
+            tree.update(&mut graph);
+            scene.sync(&graph, &mut tree).unwrap();
+            scene.flush_uploads(renderer.pipelines()).unwrap();
+        }
+        let mut fresh = GpuScene::new(&device, &graph, &mut tree).unwrap();
+        fresh.flush_uploads(renderer.pipelines()).unwrap();
+        let (synced, expected) = (scene.content(), fresh.content());
+        prop_assert_eq!(synced.records, expected.records);
+        prop_assert_eq!(synced.instances, expected.instances);
+        prop_assert_eq!(synced.drawn_bits, expected.drawn_bits);
+        prop_assert_eq!(synced.materials, expected.materials);
+        for (slot, (a, b)) in synced.matrices.iter().zip(expected.matrices).enumerate() {
+            if tree.has_instances(slot as u32) {
+                prop_assert_eq!(a, b, "matrix slot {}", slot);
+            }
+        }
+        // What the GPU holds equals the CPU copy (the scatter put every item in place).
+        let [matrices, materials, records] = scene.read_back_arrays().unwrap();
+        let [fresh_matrices, fresh_materials, fresh_records] = fresh.read_back_arrays().unwrap();
+        prop_assert_eq!(records, fresh_records);
+        prop_assert_eq!(materials, fresh_materials);
+        for slot in 0..synced.matrices.len() {
+            if tree.has_instances(slot as u32) {
+                let range = slot * MATRIX_BYTES..(slot + 1) * MATRIX_BYTES;
+                prop_assert_eq!(&matrices[range.clone()], &fresh_matrices[range], "GPU matrix slot {}", slot);
+            }
+        }
+        drop(scene);
+        drop(fresh);
+        assert_no_validation_errors(&device);
+    }
+}

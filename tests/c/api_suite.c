@@ -459,6 +459,44 @@ static void test_renderer(CadrContext context, struct Built *b) {
   CHECK(stats.presented && stats.draws == 2 && stats.triangles == 12 && stats.cpu_us > 0);
   OK(cadr_renderer_render(renderer, b->scene, &camera, NULL));
 
+  /* Picking: the cube under the centre with its occurrence path, background in the corner,
+     box selection, and every error path. */
+  {
+    CadrPickResult picked = {NULL, 0};
+    OK(cadr_renderer_pick(renderer, b->scene, &camera, W / 2, H / 2, &picked));
+    CHECK(picked.hit_count == 1 && picked.hits != NULL);
+    CHECK(picked.hits[0].node != 0 && picked.hits[0].path_length >= 2);
+    CHECK(picked.hits[0].path[0] == b->root);
+    CHECK(picked.hits[0].path[picked.hits[0].path_length - 1] == picked.hits[0].node);
+    CHECK(picked.hits[0].depth > 0.0f && picked.hits[0].depth < 1.0f);
+    CHECK(picked.hits[0].x == W / 2 && picked.hits[0].y == H / 2);
+    CHECK(fabs(picked.hits[0].position[0]) < 1.0 && fabs(picked.hits[0].position[1]) < 1.0);
+    cadr_pick_result_free(&picked);
+    CHECK(picked.hits == NULL && picked.hit_count == 0);
+    cadr_pick_result_free(&picked); /* a zeroed result is a no-op */
+    cadr_pick_result_free(NULL);
+    OK(cadr_renderer_pick(renderer, b->scene, &camera, 0, 0, &picked));
+    CHECK(picked.hit_count == 0 && picked.hits == NULL);
+    OK(cadr_renderer_pick_rect(renderer, b->scene, &camera, 0, 0, W, H, &picked));
+    CHECK(picked.hit_count >= 1);
+    cadr_pick_result_free(&picked);
+    EXPECT(cadr_renderer_pick(renderer, b->scene, &camera, W, 0, &picked),
+           CADR_RESULT_INVALID_ARGUMENT);
+    MESSAGE_HAS("not inside");
+    EXPECT(cadr_renderer_pick_rect(renderer, b->scene, &camera, 0, 0, 0, 1, &picked),
+           CADR_RESULT_INVALID_ARGUMENT);
+    EXPECT(cadr_renderer_pick_rect(renderer, b->scene, &camera, W - 1, 0, 2, 1, &picked),
+           CADR_RESULT_INVALID_ARGUMENT);
+    EXPECT(cadr_renderer_pick(renderer, b->scene, NULL, 0, 0, &picked), CADR_RESULT_NULL_ARGUMENT);
+    EXPECT(cadr_renderer_pick(renderer, b->scene, &camera, 0, 0, NULL), CADR_RESULT_NULL_ARGUMENT);
+    EXPECT(cadr_renderer_pick(renderer, NULL, &camera, 0, 0, &picked), CADR_RESULT_NULL_ARGUMENT);
+    EXPECT(cadr_renderer_pick(renderer, (CadrScene)renderer, &camera, 0, 0, &picked),
+           CADR_RESULT_FOREIGN_HANDLE);
+    EXPECT(cadr_renderer_pick((CadrRenderer)b->scene, b->scene, &camera, 0, 0, &picked),
+           CADR_RESULT_FOREIGN_HANDLE);
+    CHECK(picked.hit_count == 0 && picked.hits == NULL); /* nothing written on failure */
+  }
+
   /* Pixels: wrong sizes are refused, the cube is in the middle. */
   EXPECT(cadr_renderer_read_pixels(renderer, first, W * H * 4 - 1), CADR_RESULT_BUFFER_TOO_SMALL);
   MESSAGE_HAS("24576");

@@ -155,6 +155,7 @@ pub unsafe extern "C" fn cadr_renderer_pick(
 /// # Safety
 /// As `cadr_renderer_pick`.
 #[no_mangle]
+#[allow(clippy::too_many_arguments)] // A C function: the rectangle is four plain integers.
 pub unsafe extern "C" fn cadr_renderer_pick_rect(
     renderer: CadrRenderer,
     scene: CadrScene,

@@ -300,10 +300,10 @@ fn render(args: &Args) -> Result<(), String> {
     }
     let mut drawer = match drawer {
         Some(drawer) => drawer,
-        None => Drawer::Baseline(
+        None => Drawer::Baseline(Box::new((
             Renderer::new(&device, width, height).map_err(|e| e.to_string())?,
             BaselineScene::upload(&device, &scene).map_err(|e| e.to_string())?,
-        ),
+        ))),
     };
     let upload_ms = upload_start.elapsed().as_secs_f64() * 1e3;
     let camera = Camera::fit(
@@ -382,14 +382,15 @@ fn render(args: &Args) -> Result<(), String> {
 /// What `render` draws with: the technique plugins, or the built-in baseline.
 enum Drawer {
     Techniques(Box<techniques::TechniqueSession>),
-    Baseline(Renderer, BaselineScene),
+    Baseline(Box<(Renderer, BaselineScene)>),
 }
 
 impl Drawer {
     fn draw(&mut self, camera: &Camera) -> Result<FrameStats, String> {
         match self {
             Drawer::Techniques(session) => session.render(camera),
-            Drawer::Baseline(renderer, scene) => {
+            Drawer::Baseline(baseline) => {
+                let (renderer, scene) = &mut **baseline;
                 renderer.render(scene, camera).map_err(|e| e.to_string())
             }
         }
@@ -398,7 +399,7 @@ impl Drawer {
     fn renderer(&self) -> &Renderer {
         match self {
             Drawer::Techniques(session) => session.view.renderer(),
-            Drawer::Baseline(renderer, _) => renderer,
+            Drawer::Baseline(baseline) => &baseline.0,
         }
     }
 }

@@ -1,11 +1,11 @@
 //! The one GPU scene, fed by the scene tree, that every technique, the pick pass and every
 //! product path draws from ([`abi::CadrSceneView`] is how plugins see it): geometry in shared
-//! arenas ([`geometry`]), per-instance entries and records, matrices (f64 on the CPU for
+//! arenas (`geometry.rs`), per-instance entries and records, matrices (f64 on the CPU for
 //! culling; on the GPU with translations split into f32 high and low parts) and materials.
 //!
 //! It reads the tree as one of its readers ([`SceneTree::subscribe`]): each sync applies what
 //! changed since this scene's own last sync, with work and uploads in proportion to the change
-//! (changed slots gathered and scattered on the GPU by [`upload`]; a replaced geometry written
+//! (changed slots gathered and scattered on the GPU by `upload.rs`; a replaced geometry written
 //! in place when it fits; only the touched instances' entries refreshed). Two scenes of one
 //! tree (two renderers) each see every change.
 

@@ -45,7 +45,9 @@ impl PixelRect {
 
 impl std::fmt::Display for PixelRect {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        if self.width == 1 && self.height == 1 {
+        if self.width == 0 || self.height == 0 {
+            write!(f, "an empty rectangle at ({}, {})", self.x, self.y)
+        } else if self.width == 1 && self.height == 1 {
             write!(f, "({}, {})", self.x, self.y)
         } else {
             write!(

@@ -9,7 +9,7 @@ use cadr_core::load::SceneSource;
 use cadr_core::render::{BaselineScene, Camera, FrameStats, Renderer, DEFAULT_DIRECTION};
 use cadr_core::scene::{flatten, Scene, SceneStats};
 use cadr_core::technique::{Combination, PluginRegistry, ShadeMode, TechniqueKind, Techniques};
-use cadr_core::vk::{Device, DeviceOptions, InstanceOptions};
+use cadr_core::vk::Device;
 
 use crate::args::{parse_size, Args};
 use crate::techniques::{load_registry, no_plugins_message, TechniqueSession, KIND_OPTIONS};
@@ -225,14 +225,7 @@ impl Bench {
         };
         for mode in shade_modes(args)? {
             for combination in &combinations {
-                session
-                    .techniques()
-                    .select(combination)
-                    .map_err(|e| e.to_string())?;
-                session
-                    .techniques()
-                    .set_shade_mode(mode)
-                    .map_err(|e| e.to_string())?;
+                session.choose(combination, mode)?;
                 let (cpu_us, gpu_us, first) = measure(self.frames, || session.render(&camera))?;
                 let row = Row {
                     label: combination.to_string(),
@@ -344,14 +337,7 @@ pub fn bench(args: &Args) -> Result<(), String> {
     let sweep = args.flag("--sweep") || args.value(&["--sweep-parts"]).is_some();
     let frames = frames_option(args, if sweep { 5 } else { 10 })?;
     let size = parse_size(args.value(&["--size"]).unwrap_or("640x480"))?;
-    let options = DeviceOptions {
-        instance: InstanceOptions {
-            validation: crate::validation_requested(args),
-            ..InstanceOptions::default()
-        },
-        ..DeviceOptions::default()
-    };
-    let device = Device::new(&options).map_err(|e| e.to_string())?;
+    let device = crate::open_device(args)?;
     let (registry, dirs) = load_registry(&device);
     if registry.techniques().is_empty() {
         return Err(no_plugins_message(&dirs));

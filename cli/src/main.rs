@@ -135,6 +135,18 @@ fn scene_argument(args: &Args, command: &str) -> Result<SceneSource, String> {
     }
 }
 
+/// The Vulkan device, with the validation layers when the options or the environment ask.
+pub(crate) fn open_device(args: &Args) -> Result<std::sync::Arc<Device>, String> {
+    let options = DeviceOptions {
+        instance: InstanceOptions {
+            validation: validation_requested(args),
+            ..InstanceOptions::default()
+        },
+        ..DeviceOptions::default()
+    };
+    Device::new(&options).map_err(|e| e.to_string())
+}
+
 pub(crate) fn validation_requested(args: &Args) -> bool {
     if args.flag("--no-validation") {
         return false;
@@ -259,14 +271,7 @@ fn render(args: &Args) -> Result<(), String> {
     let scene = source.load().map_err(|e| e.to_string())?;
     let load_ms = load_start.elapsed().as_secs_f64() * 1e3;
 
-    let options = DeviceOptions {
-        instance: InstanceOptions {
-            validation: validation_requested(args),
-            ..InstanceOptions::default()
-        },
-        ..DeviceOptions::default()
-    };
-    let device = Device::new(&options).map_err(|e| e.to_string())?;
+    let device = open_device(args)?;
     let upload_start = Instant::now();
     let flat = flatten(&scene).map_err(|e| e.to_string())?;
     let stats = SceneStats::new(&scene, &flat);
@@ -286,14 +291,7 @@ fn render(args: &Args) -> Result<(), String> {
         } else {
             let mut session =
                 techniques::TechniqueSession::new(&device, &scene, registry, (width, height))?;
-            session
-                .techniques()
-                .select(&combination)
-                .map_err(|e| e.to_string())?;
-            session
-                .techniques()
-                .set_shade_mode(shade)
-                .map_err(|e| e.to_string())?;
+            session.choose(&combination, shade)?;
             technique_line = format!("{combination}, {}", shade.name());
             drawer = Some(Drawer::Techniques(Box::new(session)));
         }
@@ -363,7 +361,7 @@ fn render(args: &Args) -> Result<(), String> {
         median(&mut record)
     );
     println!("setup:       load {load_ms:.1} ms, upload {upload_ms:.1} ms");
-    if options.instance.validation {
+    if validation_requested(args) {
         println!("validation:  {validation_errors} errors");
     }
     println!(

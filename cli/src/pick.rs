@@ -7,7 +7,6 @@ use cadr_core::render::pick::PixelRect;
 use cadr_core::render::{Camera, DEFAULT_DIRECTION};
 use cadr_core::scene::{flatten, SceneStats};
 use cadr_core::view::PickHit;
-use cadr_core::vk::{Device, DeviceOptions, InstanceOptions};
 
 use crate::args::{parse_size, Args};
 use crate::techniques::{self, TechniqueSession};
@@ -103,27 +102,13 @@ pub fn pick(args: &Args) -> Result<(), String> {
     let flat = flatten(&scene).map_err(|e| e.to_string())?;
     let stats = SceneStats::new(&scene, &flat);
     drop(flat);
-    let options = DeviceOptions {
-        instance: InstanceOptions {
-            validation: crate::validation_requested(args),
-            ..InstanceOptions::default()
-        },
-        ..DeviceOptions::default()
-    };
-    let device = Device::new(&options).map_err(|e| e.to_string())?;
+    let device = crate::open_device(args)?;
     let (registry, dirs) = techniques::load_registry(&device);
     if registry.techniques().is_empty() {
         return Err(techniques::no_plugins_message(&dirs));
     }
     let mut session = TechniqueSession::new(&device, &scene, registry, (width, height))?;
-    session
-        .techniques()
-        .select(&combination)
-        .map_err(|e| e.to_string())?;
-    session
-        .techniques()
-        .set_shade_mode(shade)
-        .map_err(|e| e.to_string())?;
+    session.choose(&combination, shade)?;
     // The view `cadr render` draws: the camera fitted to the scene's bounds.
     let camera = Camera::fit(
         &stats.bounds,

@@ -93,6 +93,13 @@ impl TechniqueSession {
         self.view.techniques_mut()
     }
 
+    /// Switches to `combination` in `shade` mode.
+    pub fn choose(&mut self, combination: &Combination, shade: ShadeMode) -> Result<(), String> {
+        let techniques = self.view.techniques_mut();
+        techniques.select(combination).map_err(|e| e.to_string())?;
+        techniques.set_shade_mode(shade).map_err(|e| e.to_string())
+    }
+
     /// Draws one frame.
     pub fn render(&mut self, camera: &Camera) -> Result<FrameStats, String> {
         self.view

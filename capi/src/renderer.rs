@@ -634,11 +634,8 @@ pub unsafe extern "C" fn cadr_renderer_render(
             let s = &mut *scene_state;
             state.view.sync(&s.graph, &mut s.tree)?;
             frame.scene_update_us = update_start.elapsed().as_secs_f64() * 1e6;
-            let drawn = state
-                .view
-                .render(&s.graph, &mut s.tree, &camera)
-                .map_err(technique_failure)?;
             drop(scene_state);
+            let drawn = state.view.draw(&camera).map_err(technique_failure)?;
             frame.presented = true;
             if let Some(swapchain) = &mut state.swapchain {
                 let present_start = Instant::now();

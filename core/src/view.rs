@@ -110,21 +110,18 @@ impl View {
     /// Brings the GPU scene up to date with `tree` (which must be up to date with `graph`):
     /// created on first use, then synced with the changes since this view's last frame (a
     /// tree this view has not read before is uploaded afresh).
-    pub fn sync(&mut self, graph: &SceneGraph, tree: &mut SceneTree) -> VkResult<&mut GpuScene> {
+    pub fn sync(&mut self, graph: &SceneGraph, tree: &mut SceneTree) -> VkResult<()> {
         match &mut self.scene {
-            Some(scene) => {
-                scene.sync(graph, tree)?;
-            }
+            Some(scene) => scene.sync(graph, tree),
             None => {
                 self.scene = Some(GpuScene::new(self.renderer.device(), graph, tree)?);
+                Ok(())
             }
         }
-        self.scene
-            .as_mut()
-            .ok_or_else(|| crate::vk::VkError::InvalidUse("no GPU scene".into()))
     }
 
-    /// Draws one frame of `tree` seen by `camera` with the active techniques.
+    /// Draws one frame of `tree` seen by `camera` with the active techniques (syncing the GPU
+    /// scene first).
     pub fn render(
         &mut self,
         graph: &SceneGraph,
@@ -132,15 +129,22 @@ impl View {
         camera: &Camera,
     ) -> VkResult<FrameStats> {
         self.sync(graph, tree)?;
-        let Self {
-            scene,
-            techniques,
-            renderer,
-        } = self;
-        let scene = scene
-            .as_mut()
-            .ok_or_else(|| crate::vk::VkError::InvalidUse("no GPU scene".into()))?;
+        self.draw(camera)
+    }
+
+    /// Draws one frame of the GPU scene as last synced (see [`View::sync`]).
+    pub fn draw(&mut self, camera: &Camera) -> VkResult<FrameStats> {
+        let (scene, techniques, renderer) = self.parts()?;
         renderer.render_techniques(scene, techniques, camera)
+    }
+
+    /// The GPU scene, the techniques and the renderer, borrowed together for a frame.
+    fn parts(&mut self) -> VkResult<(&mut GpuScene, &mut Techniques, &mut Renderer)> {
+        let scene = self
+            .scene
+            .as_mut()
+            .ok_or_else(|| crate::vk::VkError::InvalidUse("no GPU scene: sync first".into()))?;
+        Ok((scene, &mut self.techniques, &mut self.renderer))
     }
 
     /// Picks the pickable parts with visible pixels in `rect`, seen by `camera`: one hit per
@@ -153,14 +157,7 @@ impl View {
         rect: PixelRect,
     ) -> VkResult<Vec<PickHit>> {
         self.sync(graph, tree)?;
-        let Self {
-            scene,
-            techniques,
-            renderer,
-        } = self;
-        let scene = scene
-            .as_mut()
-            .ok_or_else(|| crate::vk::VkError::InvalidUse("no GPU scene".into()))?;
+        let (scene, techniques, renderer) = self.parts()?;
         let samples = renderer.pick_techniques(scene, techniques, camera, rect)?;
         let size = renderer.size();
         let mut nearest: HashMap<u32, PickSample> = HashMap::new();

@@ -103,7 +103,9 @@ pub(super) struct SparseUploader {
     updates: Option<Buffer>,
     sets: Option<DescriptorSets>,
     /// The buffers the sets were written for (updates, then each array).
-    written: Vec<vk::Buffer>,
+    written: [vk::Buffer; 4],
+    /// The compact updates of a frame, kept to be refilled without allocating.
+    gathered: Vec<u8>,
 }
 
 /// An array with a function that appends the bytes of its item at a slot.
@@ -123,10 +125,11 @@ impl SparseUploader {
     ) -> VkResult<([u64; 3], u64)> {
         let mut counts = [0u64; 3];
         let mut bytes = 0u64;
-        let mut gathered: Vec<u8> = Vec::new();
+        let mut gathered = std::mem::take(&mut self.gathered);
+        gathered.clear();
         // Per array: its first word in `gathered` and its item count.
         let mut dispatches: Vec<(usize, u32, u32)> = Vec::new();
-        for (index, (array, item)) in arrays.iter().enumerate() {
+        for (index, (array, item)) in arrays.iter_mut().enumerate() {
             if array.whole {
                 let mut data = Vec::with_capacity(array.capacity * array.item_bytes);
                 for slot in 0..array.capacity as u32 {
@@ -137,25 +140,47 @@ impl SparseUploader {
                 bytes += data.len() as u64;
             } else if !array.pending.is_empty() {
                 let first_word = (gathered.len() / 4) as u32;
-                let mut slots = array.pending.clone();
-                slots.sort_unstable();
-                slots.dedup();
-                for &slot in &slots {
+                array.pending.sort_unstable();
+                array.pending.dedup();
+                for &slot in &array.pending {
                     gathered.extend_from_slice(&slot.to_le_bytes());
                     item(slot, &mut gathered);
                 }
-                counts[index] = slots.len() as u64;
-                dispatches.push((index, first_word, slots.len() as u32));
+                counts[index] = array.pending.len() as u64;
+                dispatches.push((index, first_word, array.pending.len() as u32));
             }
         }
         for (array, _) in arrays.iter_mut() {
             array.whole = false;
             array.pending.clear();
         }
+        let result = self.scatter(
+            device,
+            pipelines,
+            command_buffer,
+            &arrays,
+            &gathered,
+            &dispatches,
+        );
+        self.gathered = gathered;
+        result?;
+        Ok((counts, bytes + self.gathered.len() as u64))
+    }
+
+    /// Writes `gathered` into the update buffer and records one scatter dispatch per array
+    /// with changed items: `(array, first word, item count)`.
+    fn scatter(
+        &mut self,
+        device: &Arc<Device>,
+        pipelines: &Pipelines,
+        command_buffer: vk::CommandBuffer,
+        arrays: &[ArrayItems<'_>; 3],
+        gathered: &[u8],
+        dispatches: &[(usize, u32, u32)],
+    ) -> VkResult<()> {
         if gathered.is_empty() {
-            return Ok((counts, bytes));
+            return Ok(());
         }
-        bytes += gathered.len() as u64;
         let needed = gathered.len() as u64;
         if self.updates.as_ref().is_none_or(|u| u.size() < needed) {
             self.updates = Some(Buffer::new(
@@ -167,12 +192,15 @@ impl SparseUploader {
             )?);
         }
         let Some(updates) = self.updates.as_mut() else {
-            return Ok((counts, bytes));
+            return Ok(());
         };
-        updates.write(0, &gathered)?;
-        let targets: Vec<vk::Buffer> = std::iter::once(updates.raw())
-            .chain(arrays.iter().map(|(a, _)| a.buffer.raw()))
-            .collect();
+        updates.write(0, gathered)?;
+        let targets = [
+            updates.raw(),
+            arrays[0].0.buffer.raw(),
+            arrays[1].0.buffer.raw(),
+            arrays[2].0.buffer.raw(),
+        ];
         if self.sets.is_none() {
             let layouts = [pipelines.scatter_set_layout; 3];
             self.sets = Some(DescriptorSets::new(
@@ -185,7 +213,7 @@ impl SparseUploader {
             )?);
         }
         let Some(sets) = &self.sets else {
-            return Ok((counts, bytes));
+            return Ok(());
         };
         if self.written != targets {
             let ssbo = vk::DescriptorType::STORAGE_BUFFER;
@@ -196,7 +224,7 @@ impl SparseUploader {
             self.written = targets;
         }
         let scatter = pipelines.scatter()?;
-        for (index, first_word, item_count) in dispatches {
+        for &(index, first_word, item_count) in dispatches {
             let item_words = (arrays[index].0.item_bytes / 4) as u32;
             let parameters = ScatterParameters {
                 item_count,
@@ -212,6 +240,6 @@ impl SparseUploader {
                 (item_count * item_words).div_ceil(64),
             );
         }
-        Ok((counts, bytes))
+        Ok(())
     }
 }

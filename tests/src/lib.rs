@@ -9,6 +9,7 @@ use std::sync::Arc;
 
 use cadr_core::render::{BaselineScene, Camera, Renderer, DEFAULT_DIRECTION};
 use cadr_core::scene::{flatten, Scene, SceneStats};
+use cadr_core::technique::{feature_bits, PluginRegistry};
 use cadr_core::vk::{Device, DeviceOptions, InstanceOptions};
 
 /// A device with the validation layers on. Tests never skip: without Vulkan they fail here.
@@ -26,6 +27,23 @@ pub fn test_device() -> Arc<Device> {
             panic!("cannot create a Vulkan device with validation (run scripts/setup.sh): {error}")
         }
     }
+}
+
+/// The technique plugins cargo built next to the running test binary, for `device`; fails the
+/// test if any library there is refused.
+pub fn plugin_registry(device: &Device) -> Arc<PluginRegistry> {
+    let exe = std::env::current_exe().expect("the test binary's path");
+    let dir = exe
+        .parent()
+        .expect("the test binary's directory")
+        .to_path_buf();
+    let registry = PluginRegistry::discover(&[dir], feature_bits(device.capabilities()));
+    assert!(
+        registry.refusals().is_empty(),
+        "refused: {:?}",
+        registry.refusals()
+    );
+    Arc::new(registry)
 }
 
 /// Fails the test if the validation layer reported any error on `device`.

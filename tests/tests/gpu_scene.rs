@@ -13,30 +13,18 @@ use cadr_core::graph::{GeometryHandle, MaterialHandle, NodeFlags, NodeHandle, Sc
 use cadr_core::render::pick::PixelRect;
 use cadr_core::render::{Camera, Renderer, CLEAR_COLOR, DEFAULT_DIRECTION};
 use cadr_core::scene::{flatten, Material};
-use cadr_core::technique::{feature_bits, Combination, PluginRegistry, TechniqueKind};
+use cadr_core::technique::{Combination, TechniqueKind};
 use cadr_core::tree::SceneTree;
 use cadr_core::view::View;
 use cadr_core::vk::Device;
-use cadr_tests::{assert_no_validation_errors, test_device};
+use cadr_tests::{assert_no_validation_errors, plugin_registry, test_device};
 use glam::{DMat4, DVec3};
 use proptest::prelude::*;
 
 const SIZE: (u32, u32) = (96, 72);
 
-fn registry(device: &Device) -> Arc<PluginRegistry> {
-    let dir = std::env::current_exe()
-        .unwrap()
-        .parent()
-        .unwrap()
-        .to_path_buf();
-    Arc::new(PluginRegistry::discover(
-        &[dir],
-        feature_bits(device.capabilities()),
-    ))
-}
-
 fn view(device: &Arc<Device>, combination: &Combination) -> View {
-    let mut view = View::new(device, registry(device), SIZE.0, SIZE.1).unwrap();
+    let mut view = View::new(device, plugin_registry(device), SIZE.0, SIZE.1).unwrap();
     view.techniques_mut().select(combination).unwrap();
     view
 }
@@ -97,7 +85,7 @@ fn every_valid_combination_picks_what_it_draws() {
         f64::from(SIZE.0) / f64::from(SIZE.1),
         DEFAULT_DIRECTION,
     );
-    let registry = registry(&device);
+    let registry = plugin_registry(&device);
     let names = |kind| -> Vec<String> {
         registry
             .of_kind(kind)

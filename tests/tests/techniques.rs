@@ -17,25 +17,9 @@ use cadr_core::technique::{
 use cadr_core::tree::SceneTree;
 use cadr_core::vk::Device;
 use cadr_tests::images::compare;
-use cadr_tests::{assert_no_validation_errors, test_device, CYLINDER_ENGINE_GLB};
+use cadr_tests::{assert_no_validation_errors, plugin_registry, test_device, CYLINDER_ENGINE_GLB};
 
 const SIZE: (u32, u32) = (160, 120);
-
-/// The plugins cargo built next to this test binary.
-fn registry(device: &Device) -> Arc<PluginRegistry> {
-    let dir = std::env::current_exe()
-        .unwrap()
-        .parent()
-        .unwrap()
-        .to_path_buf();
-    let registry = PluginRegistry::discover(&[dir], feature_bits(device.capabilities()));
-    assert!(
-        registry.refusals().is_empty(),
-        "refused: {:?}",
-        registry.refusals()
-    );
-    Arc::new(registry)
-}
 
 struct Fixture {
     device: Arc<Device>,
@@ -71,7 +55,7 @@ impl Fixture {
         let scene = GpuScene::new(&device, &graph, &mut tree).unwrap();
         let techniques = Techniques::new(
             &device,
-            registry(&device),
+            plugin_registry(&device),
             renderer.pipelines().frame_set_layout,
         );
         Self {
@@ -257,11 +241,12 @@ fn libraries_that_cannot_be_used_are_refused_with_the_reason() {
         .map(ToString::to_string)
         .collect();
     assert_eq!(reasons.len(), 3, "{reasons:?}");
-    assert!(
-        reasons[0].contains("built for plugin ABI 2.0; this cadr speaks 1.0"),
-        "{}",
-        reasons[0]
+    let speaks = format!(
+        "built for plugin ABI 2.0; this cadr speaks {}.{}",
+        cadr_plugin_abi::CADR_PLUGIN_ABI_MAJOR,
+        cadr_plugin_abi::CADR_PLUGIN_ABI_MINOR
     );
+    assert!(reasons[0].contains(&speaks), "{}", reasons[0]);
     assert!(
         reasons[1].contains("libcadr_plugin_missing.so") && reasons[1].contains("cannot be opened"),
         "{}",

@@ -202,7 +202,8 @@ typedef struct CadrTechniqueInfo {
   const char *name;
   // What it does.
   const char *description;
-  // The plugin library it comes from.
+  // The plugin library it comes from, or "built-in" for the built-in techniques (listed
+  // first; they need no library).
   const char *library;
   // Whether this device can run it.
   bool supported;
@@ -420,7 +421,8 @@ const char *cadr_version_string(void);
 void cadr_version(uint32_t *major, uint32_t *minor, uint32_t *patch);
 
 // Renders `scene` (a .gltf/.glb path or a generator such as "gen:demo") with the camera
-// fitted to its bounds into a `width` × `height` PNG at `png_path`.
+// fitted to its bounds into a `width` × `height` PNG at `png_path`, drawn with the built-in
+// technique combination (no plugin library is needed or loaded).
 //
 // `validation` turns the Vulkan validation layers on; a validation error then fails the call.
 // Returns `CADR_RESULT_OK`, or `CADR_RESULT_NULL_ARGUMENT`, `CADR_RESULT_INVALID_ARGUMENT`

@@ -45,7 +45,8 @@ typedef uint32_t CadrPassKind;
 typedef uint32_t (*CadrPluginVersionFn)(void);
 
 // One technique a library offers. Owned by the library, with its strings and vtable; they
-// live as long as the process.
+// live as long as the process. The host copies the vtable (the `size` bytes its library
+// wrote) into its own layout; functions added by later minors are none for older libraries.
 typedef struct CadrTechniqueInfo {
   // Size of this struct as the writer knows it.
   uint32_t size;
@@ -79,7 +80,8 @@ typedef struct CadrPluginLibrary {
   const char *name;
   // Number of entries at `techniques`.
   uint32_t technique_count;
-  // The techniques.
+  // The techniques: `technique_count` entries, each `size` bytes long (the size of
+  // [`CadrTechniqueInfo`] in the library's minor version), one after the other.
   const struct CadrTechniqueInfo *techniques;
 } CadrPluginLibrary;
 

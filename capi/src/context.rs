@@ -172,7 +172,8 @@ pub struct CadrTechniqueInfo {
     pub name: *const c_char,
     /// What it does.
     pub description: *const c_char,
-    /// The plugin library it comes from.
+    /// The plugin library it comes from, or "built-in" for the built-in techniques (listed
+    /// first; they need no library).
     pub library: *const c_char,
     /// Whether this device can run it.
     pub supported: bool,

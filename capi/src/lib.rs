@@ -36,7 +36,14 @@ use std::ffi::c_char;
 use std::path::PathBuf;
 
 use cadr_core::load::SceneSource;
-use cadr_core::render::{BaselineScene, Camera, Renderer, DEFAULT_DIRECTION};
+use std::sync::Arc;
+
+use cadr_core::graph::SceneGraph;
+use cadr_core::render::{Camera, DEFAULT_DIRECTION};
+use cadr_core::scene::{flatten, SceneStats};
+use cadr_core::technique::{feature_bits, PluginRegistry};
+use cadr_core::tree::SceneTree;
+use cadr_core::view::View;
 use cadr_core::vk::{Device, DeviceOptions, InstanceOptions};
 
 use args::required_str;
@@ -80,7 +87,8 @@ pub unsafe extern "C" fn cadr_version(major: *mut u32, minor: *mut u32, patch: *
 }
 
 /// Renders `scene` (a .gltf/.glb path or a generator such as "gen:demo") with the camera
-/// fitted to its bounds into a `width` × `height` PNG at `png_path`.
+/// fitted to its bounds into a `width` × `height` PNG at `png_path`, drawn with the built-in
+/// technique combination (no plugin library is needed or loaded).
 ///
 /// `validation` turns the Vulkan validation layers on; a validation error then fails the call.
 /// Returns `CADR_RESULT_OK`, or `CADR_RESULT_NULL_ARGUMENT`, `CADR_RESULT_INVALID_ARGUMENT`
@@ -129,21 +137,23 @@ pub unsafe extern "C" fn cadr_render_scene_to_png(
             ..DeviceOptions::default()
         };
         let device = Device::new(&options).map_err(|e| vulkan(&e))?;
-        let gpu_scene = BaselineScene::upload(&device, &scene).map_err(|e| match e {
-            cadr_core::render::UploadError::Scene(e) => {
-                Failure::new(CadrResult::LoadFailed, e.to_string())
-            }
-            other => vulkan(&other),
-        })?;
-        let mut renderer = Renderer::new(&device, width, height).map_err(|e| vulkan(&e))?;
+        let scene_error = |e: &dyn std::fmt::Display| {
+            Failure::new(CadrResult::LoadFailed, format!("{}: {e}", scene.name))
+        };
+        let stats = SceneStats::new(&scene, &flatten(&scene).map_err(|e| scene_error(&e))?);
+        let (mut graph, _) = SceneGraph::from_scene(&scene).map_err(|e| scene_error(&e))?;
+        let mut tree = SceneTree::build(&mut graph);
+        let registry = PluginRegistry::built_in(feature_bits(device.capabilities()));
+        let mut view =
+            View::new(&device, Arc::new(registry), width, height).map_err(|e| vulkan(&e))?;
         let camera = Camera::fit(
-            &gpu_scene.stats.bounds,
+            &stats.bounds,
             f64::from(width) / f64::from(height),
             DEFAULT_DIRECTION,
         );
-        renderer
-            .render(&gpu_scene, &camera)
+        view.render(&graph, &mut tree, &camera)
             .map_err(|e| vulkan(&e))?;
+        let renderer = view.renderer();
         renderer
             .save_png(&PathBuf::from(png_path))
             .map_err(|e| match e {

@@ -1,18 +1,18 @@
-//! `cadr bench`: renders a scene with the built-in baseline and with technique combinations
-//! in one run, and prints a table like the seeds' (CPU and GPU microseconds per frame, draw
+//! `cadr bench`: renders a scene with the built-in combination (the baseline) and with
+//! technique combinations in one run, all through one view of the one GPU scene, and prints a table like the seeds' (CPU and GPU microseconds per frame, draw
 //! calls, state changes, triangles, speedup over the baseline), optionally as JSON and over a
 //! growing grid (`--sweep`).
 
 use std::sync::Arc;
 
 use cadr_core::load::SceneSource;
-use cadr_core::render::{BaselineScene, Camera, FrameStats, Renderer, DEFAULT_DIRECTION};
+use cadr_core::render::{Camera, FrameStats, DEFAULT_DIRECTION};
 use cadr_core::scene::{flatten, Scene, SceneStats};
 use cadr_core::technique::{Combination, PluginRegistry, ShadeMode, TechniqueKind, Techniques};
 use cadr_core::vk::Device;
 
 use crate::args::{parse_size, Args};
-use crate::techniques::{load_registry, no_plugins_message, TechniqueSession, KIND_OPTIONS};
+use crate::techniques::{load_registry, TechniqueSession, KIND_OPTIONS};
 
 /// The (vertex, parameter) pairs the default selection tries with every submission: the
 /// classic binds, then the GPU-resident indexed path.
@@ -188,23 +188,16 @@ impl Bench {
         let flat = flatten(scene).map_err(|e| e.to_string())?;
         let stats = SceneStats::new(scene, &flat);
         drop(flat);
-        let mut renderer =
-            Renderer::new(&self.device, self.size.0, self.size.1).map_err(|e| e.to_string())?;
         let camera = Camera::fit(
             &stats.bounds,
             f64::from(self.size.0) / f64::from(self.size.1),
             DEFAULT_DIRECTION,
         );
         let mut rows = Vec::new();
-        let baseline_scene =
-            BaselineScene::upload(&self.device, scene).map_err(|e| e.to_string())?;
-        let (cpu_us, gpu_us, first) = measure(self.frames, || {
-            renderer
-                .render(&baseline_scene, &camera)
-                .map_err(|e| e.to_string())
-        })?;
-        drop(baseline_scene);
-        drop(renderer);
+        let mut session =
+            TechniqueSession::new(&self.device, scene, Arc::clone(&self.registry), self.size)?;
+        session.choose(&Combination::built_in(), ShadeMode::Solid)?;
+        let (cpu_us, gpu_us, first) = measure(self.frames, || session.render(&camera))?;
         let baseline = Row {
             label: "baseline (built-in)".into(),
             shade: "solid",
@@ -217,8 +210,6 @@ impl Bench {
             print_row(&baseline, baseline.cpu_us);
         }
         rows.push(baseline);
-        let mut session =
-            TechniqueSession::new(&self.device, scene, Arc::clone(&self.registry), self.size)?;
         let combinations = match combinations {
             Some(list) => list.to_vec(),
             None => selection(args, session.techniques())?,
@@ -338,10 +329,7 @@ pub fn bench(args: &Args) -> Result<(), String> {
     let frames = frames_option(args, if sweep { 5 } else { 10 })?;
     let size = parse_size(args.value(&["--size"]).unwrap_or("640x480"))?;
     let device = crate::open_device(args)?;
-    let (registry, dirs) = load_registry(&device);
-    if registry.techniques().is_empty() {
-        return Err(no_plugins_message(&dirs));
-    }
+    let (registry, _) = load_registry(&device);
     let bench = Bench {
         device: Arc::clone(&device),
         registry,

@@ -12,7 +12,7 @@ use std::time::Instant;
 
 use cadr_core::generate::GENERATOR_NAMES;
 use cadr_core::load::SceneSource;
-use cadr_core::render::{BaselineScene, Camera, FrameStats, Renderer, DEFAULT_DIRECTION};
+use cadr_core::render::{Camera, FrameStats, DEFAULT_DIRECTION};
 use cadr_core::scene::{flatten, SceneStats};
 use cadr_core::vk::{self as cvk, Device, DeviceOptions, InstanceOptions};
 
@@ -43,11 +43,13 @@ SCENE is a .gltf, .glb, .csf or .csf.gz file, or a generator:
 
 render: draws the scene offscreen with the camera fitted to its bounds, writes a PNG
         (default out.png, 1024x768) and prints what it drew and the frame's CPU and GPU time.
-        --frames N renders N frames after one warm-up and reports medians. It draws with the
-        technique plugins: one per kind (defaults per-geometry, push, individual, none), solid
-        or with edges; --baseline uses the built-in baseline instead.
-techniques: lists every technique plugin, its description and whether this device runs it.
-bench:  renders the built-in baseline and technique combinations (by default every submission
+        --frames N renders N frames after one warm-up and reports medians. It draws with one
+        technique per kind, solid or with edges; the default is the built-in combination
+        (per-geometry, push, individual, none), which needs no plugin library; --baseline
+        asks for it explicitly.
+techniques: lists every technique (built in or from a plugin library), its description and
+        whether this device runs it.
+bench:  renders the built-in combination (the baseline) and technique combinations (by default every submission
         with per-geometry/push and arena/ssbo-index; --all for every supported one; lists to
         choose) for N frames after 2 warm-up frames and prints CPU and GPU µs, draw calls,
         state changes, triangles and the speedup over the baseline; --json FILE writes them
@@ -248,7 +250,7 @@ fn render(args: &Args) -> Result<(), String> {
     let (combination, shade) = techniques::combination_from_args(args)?;
     if args.flag("--baseline") && techniques::technique_requested(args) {
         return Err(
-            "--baseline draws with the built-in baseline; it takes no technique options".into(),
+            "--baseline draws with the built-in combination; it takes no technique options".into(),
         );
     }
     let process_start = Instant::now();
@@ -276,33 +278,11 @@ fn render(args: &Args) -> Result<(), String> {
     let flat = flatten(&scene).map_err(|e| e.to_string())?;
     let stats = SceneStats::new(&scene, &flat);
     drop(flat);
-    let mut drawer = None;
-    let mut technique_line = "built-in baseline (--baseline)".to_owned();
-    if !args.flag("--baseline") {
-        let (registry, dirs) = techniques::load_registry(&device);
-        if registry.techniques().is_empty() {
-            if techniques::technique_requested(args) {
-                return Err(techniques::no_plugins_message(&dirs));
-            }
-            technique_line = format!(
-                "built-in baseline ({})",
-                techniques::no_plugins_message(&dirs)
-            );
-        } else {
-            let mut session =
-                techniques::TechniqueSession::new(&device, &scene, registry, (width, height))?;
-            session.choose(&combination, shade)?;
-            technique_line = format!("{combination}, {}", shade.name());
-            drawer = Some(Drawer::Techniques(Box::new(session)));
-        }
-    }
-    let mut drawer = match drawer {
-        Some(drawer) => drawer,
-        None => Drawer::Baseline(Box::new((
-            Renderer::new(&device, width, height).map_err(|e| e.to_string())?,
-            BaselineScene::upload(&device, &scene).map_err(|e| e.to_string())?,
-        ))),
-    };
+    let (registry, _) = techniques::load_registry(&device);
+    let mut session =
+        techniques::TechniqueSession::new(&device, &scene, registry, (width, height))?;
+    session.choose(&combination, shade)?;
+    let technique_line = format!("{combination}, {}", shade.name());
     let upload_ms = upload_start.elapsed().as_secs_f64() * 1e3;
     let camera = Camera::fit(
         &stats.bounds,
@@ -311,17 +291,18 @@ fn render(args: &Args) -> Result<(), String> {
     );
 
     // One warm-up frame when measuring several, so that first-use costs do not count.
-    let mut first = drawer.draw(&camera)?;
+    let mut first = session.render(&camera)?;
     let mut samples: Vec<FrameStats> = Vec::with_capacity(frames);
     if frames == 1 {
         samples.push(first);
     } else {
         for _ in 0..frames {
-            samples.push(drawer.draw(&camera)?);
+            samples.push(session.render(&camera)?);
         }
         first = samples[0];
     }
-    drawer
+    session
+        .view
         .renderer()
         .save_png(&output)
         .map_err(|e| e.to_string())?;
@@ -375,29 +356,4 @@ fn render(args: &Args) -> Result<(), String> {
         ));
     }
     Ok(())
-}
-
-/// What `render` draws with: the technique plugins, or the built-in baseline.
-enum Drawer {
-    Techniques(Box<techniques::TechniqueSession>),
-    Baseline(Box<(Renderer, BaselineScene)>),
-}
-
-impl Drawer {
-    fn draw(&mut self, camera: &Camera) -> Result<FrameStats, String> {
-        match self {
-            Drawer::Techniques(session) => session.render(camera),
-            Drawer::Baseline(baseline) => {
-                let (renderer, scene) = &mut **baseline;
-                renderer.render(scene, camera).map_err(|e| e.to_string())
-            }
-        }
-    }
-
-    fn renderer(&self) -> &Renderer {
-        match self {
-            Drawer::Techniques(session) => session.view.renderer(),
-            Drawer::Baseline(baseline) => &baseline.0,
-        }
-    }
 }

@@ -32,18 +32,18 @@ pub fn load_registry(device: &Device) -> (Arc<PluginRegistry>, Vec<PathBuf>) {
     (Arc::new(registry), dirs)
 }
 
-/// A message for when no plugin was found.
+/// A message for when no plugin library was found.
 pub fn no_plugins_message(dirs: &[PathBuf]) -> String {
     let searched: Vec<String> = dirs.iter().map(|d| d.display().to_string()).collect();
     format!(
-        "no technique plugins found (searched {}; build them with `cargo build --workspace` or set {PLUGIN_PATH_VARIABLE})",
+        "no technique plugin library found, only the built-in techniques (searched {}; build them with `cargo build --workspace` or set {PLUGIN_PATH_VARIABLE})",
         searched.join(", ")
     )
 }
 
 /// The combination and shade mode the options choose (defaults for kinds not given).
 pub fn combination_from_args(args: &Args) -> Result<(Combination, ShadeMode), String> {
-    let mut combination = Combination::simplest();
+    let mut combination = Combination::built_in();
     for (kind, option) in KIND_OPTIONS {
         if let Some(name) = args.value(&[option]) {
             combination.set(kind, name);
@@ -93,10 +93,25 @@ impl TechniqueSession {
         self.view.techniques_mut()
     }
 
-    /// Switches to `combination` in `shade` mode.
+    /// Switches to `combination` in `shade` mode. When it fails and no plugin library was
+    /// found, the message says where they were looked for.
     pub fn choose(&mut self, combination: &Combination, shade: ShadeMode) -> Result<(), String> {
         let techniques = self.view.techniques_mut();
-        techniques.select(combination).map_err(|e| e.to_string())?;
+        let only_built_in = techniques
+            .registry()
+            .techniques()
+            .iter()
+            .all(|t| t.is_built_in());
+        let explain = |error: String| {
+            if only_built_in {
+                format!("{error}; {}", no_plugins_message(&default_plugin_dirs()))
+            } else {
+                error
+            }
+        };
+        techniques
+            .select(combination)
+            .map_err(|e| explain(e.to_string()))?;
         techniques.set_shade_mode(shade).map_err(|e| e.to_string())
     }
 
@@ -128,6 +143,8 @@ pub fn techniques(args: &Args) -> Result<(), String> {
                     "name": t.name,
                     "description": t.description,
                     "library": t.library.display().to_string(),
+                    "built_in": t.is_built_in(),
+                    "abi": format!("{}.{}", t.abi_version.0, t.abi_version.1),
                     "required_features": feature_names(t.required_features),
                     "supported": t.support.is_ok(),
                     "reason": t.support.as_ref().err(),
@@ -150,7 +167,7 @@ pub fn techniques(args: &Args) -> Result<(), String> {
         );
         return Ok(());
     }
-    if registry.techniques().is_empty() {
+    if registry.techniques().iter().all(|t| t.is_built_in()) {
         println!("{}", no_plugins_message(&dirs));
     }
     println!("device: {device_name}");
@@ -158,14 +175,15 @@ pub fn techniques(args: &Args) -> Result<(), String> {
         println!(
             "\n{} techniques ({option} NAME; default {}):",
             kind.name(),
-            Combination::simplest().get(kind)
+            Combination::built_in().get(kind)
         );
         for t in registry.of_kind(kind) {
             let support = match &t.support {
                 Ok(()) => String::new(),
                 Err(why) => format!(" [unsupported: {why}]"),
             };
-            println!("  {:<26} {}{support}", t.name, t.description);
+            let origin = if t.is_built_in() { " (built in)" } else { "" };
+            println!("  {:<26} {}{origin}{support}", t.name, t.description);
         }
     }
     println!("\nshade modes (--shade): solid (default), edges");

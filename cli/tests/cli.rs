@@ -274,7 +274,8 @@ fn render_uses_the_chosen_techniques_and_refuses_bad_combinations() {
     ]);
     assert!(!output.status.success());
     assert!(
-        stderr(&output).contains("no vertex technique named 'wobbly' (known: per-part"),
+        stderr(&output)
+            .contains("no vertex technique named 'wobbly' (known: per-geometry, per-part"),
         "{}",
         stderr(&output)
     );

@@ -19,19 +19,6 @@ pub struct ShaderSource {
     pub source: &'static str,
 }
 
-/// Baseline vertex shader.
-pub const BASELINE_VERT: ShaderSource = ShaderSource {
-    name: "baseline.vert",
-    stage: ShaderStage::Vertex,
-    source: include_str!("../../shaders/baseline.vert"),
-};
-/// Baseline fragment shader.
-pub const BASELINE_FRAG: ShaderSource = ShaderSource {
-    name: "baseline.frag",
-    stage: ShaderStage::Fragment,
-    source: include_str!("../../shaders/baseline.frag"),
-};
-
 /// Shaded triangles of every technique combination.
 pub const SHADED_FRAG: ShaderSource = ShaderSource {
     name: "shaded.frag",
@@ -69,11 +56,4 @@ pub const EDGES_FRAG: ShaderSource = ShaderSource {
 pub const TEMPLATES: &[ShaderSource] = &[TECHNIQUE_VERT];
 
 /// Every complete shader, for validation.
-pub const ALL: &[ShaderSource] = &[
-    BASELINE_VERT,
-    BASELINE_FRAG,
-    SHADED_FRAG,
-    PICK_FRAG,
-    SCATTER_COMP,
-    EDGES_FRAG,
-];
+pub const ALL: &[ShaderSource] = &[SHADED_FRAG, PICK_FRAG, SCATTER_COMP, EDGES_FRAG];

@@ -12,7 +12,7 @@ use crate::gpu_scene::GpuScene;
 use crate::graph::{NodeHandle, SceneGraph};
 use crate::render::pick::{PickSample, PixelRect};
 use crate::render::{Camera, FrameStats, Renderer};
-use crate::technique::{PluginRegistry, Techniques};
+use crate::technique::{Combination, PluginRegistry, Techniques};
 use crate::tree::SceneTree;
 use crate::vk::{Device, VkResult};
 
@@ -65,8 +65,9 @@ pub struct View {
 }
 
 impl View {
-    /// A view of `width` × `height` pixels drawing with techniques from `registry` (none chosen
-    /// yet: see [`View::techniques_mut`]).
+    /// A view of `width` × `height` pixels drawing with techniques from `registry`, starting
+    /// with the built-in combination ([`Combination::built_in`]; choose another with
+    /// [`View::techniques_mut`]).
     pub fn new(
         device: &Arc<Device>,
         registry: Arc<PluginRegistry>,
@@ -74,7 +75,9 @@ impl View {
         height: u32,
     ) -> VkResult<Self> {
         let renderer = Renderer::new(device, width, height)?;
-        let techniques = Techniques::new(device, registry, renderer.pipelines().frame_set_layout);
+        let mut techniques =
+            Techniques::new(device, registry, renderer.pipelines().frame_set_layout);
+        techniques.select(&Combination::built_in())?;
         Ok(Self {
             scene: None,
             techniques,

@@ -7,9 +7,12 @@ pub mod images;
 
 use std::sync::Arc;
 
-use cadr_core::render::{BaselineScene, Camera, Renderer, DEFAULT_DIRECTION};
+use cadr_core::graph::SceneGraph;
+use cadr_core::render::{Camera, DEFAULT_DIRECTION};
 use cadr_core::scene::{flatten, Scene, SceneStats};
 use cadr_core::technique::{feature_bits, PluginRegistry};
+use cadr_core::tree::SceneTree;
+use cadr_core::view::View;
 use cadr_core::vk::{Device, DeviceOptions, InstanceOptions};
 
 /// A device with the validation layers on. Tests never skip: without Vulkan they fail here.
@@ -57,27 +60,30 @@ pub fn assert_no_validation_errors(device: &Device) {
     );
 }
 
-/// Renders `scene` with the camera fitted to its bounds and returns the image; checks validation.
+/// Renders `scene` with the built-in combination (no plugin library), the camera fitted to its
+/// bounds, and returns the image; checks one draw per part and validation.
 pub fn render_scene(scene: &Scene, width: u32, height: u32) -> image::RgbaImage {
     let device = test_device();
-    let gpu_scene = BaselineScene::upload(&device, scene).expect("upload the scene");
-    let mut renderer = Renderer::new(&device, width, height).expect("create the renderer");
+    let flat = flatten(scene).expect("flatten the scene");
+    let (mut graph, _) = SceneGraph::from_scene(scene).expect("build the scene graph");
+    let mut tree = SceneTree::build(&mut graph);
+    let registry = PluginRegistry::built_in(feature_bits(device.capabilities()));
+    let mut view = View::new(&device, Arc::new(registry), width, height).expect("create the view");
     let camera = Camera::fit(
-        &gpu_scene.stats.bounds,
+        &flat.bounds,
         f64::from(width) / f64::from(height),
         DEFAULT_DIRECTION,
     );
-    let stats = renderer
-        .render(&gpu_scene, &camera)
+    let stats = view
+        .render(&graph, &mut tree, &camera)
         .expect("render a frame");
     assert_eq!(
         stats.draw_calls,
-        gpu_scene.draws.len() as u64,
+        flat.draws.len() as u64,
         "one draw per part"
     );
-    let image = renderer.read_rgba8().expect("read the frame back");
-    drop(renderer);
-    drop(gpu_scene);
+    let image = view.renderer().read_rgba8().expect("read the frame back");
+    drop(view);
     assert_no_validation_errors(&device);
     image
 }

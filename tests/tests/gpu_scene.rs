@@ -95,7 +95,7 @@ fn every_valid_combination_picks_what_it_draws() {
     };
     let mut view = View::new(&device, Arc::clone(&registry), SIZE.0, SIZE.1).unwrap();
     view.techniques_mut()
-        .select(&Combination::simplest())
+        .select(&Combination::built_in())
         .unwrap();
     let whole = PixelRect {
         x: 0,
@@ -207,7 +207,7 @@ fn occurrences_pickable_flags_and_hidden_parts() {
     let (front, _) = place(&mut graph, root, "front", DVec3::new(0.0, 3.0, 1.0), shape);
     let (_, back_geo) = place(&mut graph, root, "back", DVec3::new(0.0, 3.0, -1.0), shape);
     let mut tree = SceneTree::build(&mut graph);
-    let mut view = view(&device, &Combination::simplest());
+    let mut view = view(&device, &Combination::built_in());
 
     let pick_at = |view: &mut View, graph: &SceneGraph, tree: &mut SceneTree, target: DVec3| {
         let camera = camera_at(target + DVec3::new(0.0, 0.0, 6.0), target);
@@ -282,7 +282,7 @@ fn world_positions_stay_exact_100_km_from_the_origin() {
     let shape = cube(&mut graph);
     place(&mut graph, root, "far cube", far, shape);
     let mut tree = SceneTree::build(&mut graph);
-    let mut view = view(&device, &Combination::simplest());
+    let mut view = view(&device, &Combination::built_in());
     let eye = far + DVec3::new(0.0, 0.0, 4.0);
     let camera = camera_at(eye, far);
     for (x, y) in [(SIZE.0 / 2, SIZE.1 / 2), (SIZE.0 / 2 + 7, SIZE.1 / 2 - 5)] {
@@ -322,8 +322,8 @@ fn two_views_of_one_tree_upload_only_what_changed() {
     }
     let mut tree = SceneTree::build(&mut graph);
     let camera = camera_at(DVec3::new(0.0, 0.0, 30.0), DVec3::ZERO);
-    let mut a = view(&device, &Combination::simplest());
-    let mut b = view(&device, &Combination::simplest());
+    let mut a = view(&device, &Combination::built_in());
+    let mut b = view(&device, &Combination::built_in());
     a.render(&graph, &mut tree, &camera).unwrap();
     b.render(&graph, &mut tree, &camera).unwrap();
     for step in 1..4 {
@@ -385,7 +385,7 @@ fn a_replaced_geometry_is_written_in_place() {
     }
     let mut tree = SceneTree::build(&mut graph);
     let camera = camera_at(DVec3::new(4.0, 1.0, 20.0), DVec3::new(4.0, 1.0, 0.0));
-    let mut v = view(&device, &Combination::simplest());
+    let mut v = view(&device, &Combination::built_in());
     v.render(&graph, &mut tree, &camera).unwrap();
     let mut smaller = GeometryBuilder::new("smaller cube");
     smaller.cuboid(DVec3::splat(-0.25), DVec3::splat(0.25), DMat4::IDENTITY);

@@ -1,4 +1,5 @@
-//! Technique plugins: every valid combination renders what the baseline renders, invalid ones
+//! Technique plugins: every valid combination renders what the built-in combination (the
+//! baseline, itself checked against reference images in `rendering.rs`) renders, invalid ones
 //! are refused with a reason, and broken plugins are refused without taking the renderer down.
 #![allow(clippy::unwrap_used)] // Test code: a failed unwrap is a failed test.
 
@@ -9,7 +10,7 @@ use cadr_core::generate::{generate, GeneratorSpec};
 use cadr_core::gpu_scene::GpuScene;
 use cadr_core::graph::SceneGraph;
 use cadr_core::load::load_file;
-use cadr_core::render::{BaselineScene, Camera, Renderer, DEFAULT_DIRECTION};
+use cadr_core::render::{Camera, Renderer, DEFAULT_DIRECTION};
 use cadr_core::scene::{flatten, Scene};
 use cadr_core::technique::{
     feature_bits, Combination, PluginRegistry, ShadeMode, TechniqueKind, Techniques,
@@ -46,18 +47,19 @@ impl Fixture {
             f64::from(size.0) / f64::from(size.1),
             DEFAULT_DIRECTION,
         );
-        let gpu_scene = BaselineScene::upload(&device, source).unwrap();
-        renderer.render(&gpu_scene, &camera).unwrap();
-        let baseline = renderer.read_rgba8().unwrap();
-        drop(gpu_scene);
         let (mut graph, _) = SceneGraph::from_scene(source).unwrap();
         let mut tree = SceneTree::build(&mut graph);
-        let scene = GpuScene::new(&device, &graph, &mut tree).unwrap();
-        let techniques = Techniques::new(
+        let mut scene = GpuScene::new(&device, &graph, &mut tree).unwrap();
+        let mut techniques = Techniques::new(
             &device,
             plugin_registry(&device),
             renderer.pipelines().frame_set_layout,
         );
+        techniques.select(&Combination::built_in()).unwrap();
+        renderer
+            .render_techniques(&mut scene, &mut techniques, &camera)
+            .unwrap();
+        let baseline = renderer.read_rgba8().unwrap();
         Self {
             device,
             renderer,
@@ -93,16 +95,40 @@ impl Fixture {
 }
 
 #[test]
-fn the_simplest_combination_matches_the_baseline() {
+fn the_built_in_combination_needs_no_library_and_draws_each_part_once() {
     let mut f = Fixture::new(&generate(&GeneratorSpec::Demo));
-    f.techniques.select(&Combination::simplest()).unwrap();
-    let (image, stats) = f.render();
-    let difference = compare(&image, &f.baseline).unwrap();
-    assert!(
-        difference.mean < 0.3 && difference.p99 < 6.0,
-        "{difference:?}"
+    let built_in = PluginRegistry::built_in(feature_bits(f.device.capabilities()));
+    let names: Vec<(TechniqueKind, &str)> = built_in
+        .techniques()
+        .iter()
+        .map(|t| (t.kind, t.name.as_str()))
+        .collect();
+    let combination = Combination::built_in();
+    assert_eq!(
+        names,
+        TechniqueKind::ALL
+            .iter()
+            .map(|&kind| (kind, combination.get(kind)))
+            .collect::<Vec<_>>()
     );
-    assert!(stats.draw_calls > 0);
+    assert!(built_in.techniques().iter().all(|t| t.is_built_in()));
+    assert!(built_in.refusals().is_empty(), "{:?}", built_in.refusals());
+    f.techniques = Techniques::new(
+        &f.device,
+        Arc::new(built_in),
+        f.renderer.pipelines().frame_set_layout,
+    );
+    f.techniques.select(&combination).unwrap();
+    let (image, stats) = f.render();
+    assert_eq!(
+        image, f.baseline,
+        "the same techniques from the built-in registry"
+    );
+    let parts = flatten(&f.graph.to_scene()).unwrap().draws.len() as u64;
+    assert_eq!((stats.draw_calls, stats.draws), (parts, parts));
+    assert!(stats.vertex_binds > 0 && stats.vertex_binds < parts);
+    assert!(stats.parameter_updates >= parts, "pushed per draw");
+    drop(f.techniques);
     assert_no_validation_errors(&f.device);
 }
 
@@ -146,7 +172,7 @@ fn every_combination_matches(source: &Scene, what: &str) {
     let (mut rendered, mut refused) = (0, 0);
     let mut failures = Vec::new();
     for mode in ShadeMode::ALL {
-        f.techniques.select(&Combination::simplest()).unwrap();
+        f.techniques.select(&Combination::built_in()).unwrap();
         f.techniques.set_shade_mode(mode).unwrap();
         let reference = match mode {
             ShadeMode::Solid => f.baseline.clone(),
@@ -284,7 +310,7 @@ fn failing_techniques_are_refused_and_the_renderer_keeps_working() {
         Err("the device lacks VK_EXT_mesh_shader".to_owned())
     );
     f.techniques = Techniques::new(&f.device, registry, f.renderer.pipelines().frame_set_layout);
-    f.techniques.select(&Combination::simplest()).unwrap();
+    f.techniques.select(&Combination::built_in()).unwrap();
     f.assert_matches_baseline("before");
 
     let error = f
@@ -313,12 +339,12 @@ fn failing_techniques_are_refused_and_the_renderer_keeps_working() {
         .unwrap_err()
         .to_string();
     assert!(
-        error.contains("no vertex technique named 'no-such-path' (known: per-part"),
+        error.contains("no vertex technique named 'no-such-path' (known: per-geometry, per-part"),
         "{error}"
     );
     assert_eq!(
         f.techniques.combination(),
-        Combination::simplest(),
+        Combination::built_in(),
         "refusals keep the combination"
     );
     f.assert_matches_baseline("after refused swaps");
@@ -411,7 +437,7 @@ fn frustum_culling_draws_only_what_the_camera_sees() {
     let mut f = Fixture::with_size(&generate(&GeneratorSpec::Demo), SIZE);
     let combination = Combination {
         culling: "frustum".into(),
-        ..Combination::simplest()
+        ..Combination::built_in()
     };
     f.techniques.select(&combination).unwrap();
     let (_, all) = f.render();
@@ -433,78 +459,106 @@ fn frustum_culling_draws_only_what_the_camera_sees() {
         all.draws - culled.draws,
         all.draws
     );
-    let gpu_scene = BaselineScene::upload(&f.device, &f.graph.to_scene()).unwrap();
-    f.renderer.render(&gpu_scene, &f.camera).unwrap();
-    let baseline = f.renderer.read_rgba8().unwrap();
+    f.techniques.select(&Combination::built_in()).unwrap();
+    let (baseline, _) = f.render();
     let difference = compare(&culled_image, &baseline).unwrap();
     assert!(
         difference.mean < 0.3 && difference.p99 < 6.0,
         "culling removes only unseen parts: {difference:?}"
     );
-    drop(gpu_scene);
     drop(f.techniques);
     assert_no_validation_errors(&f.device);
 }
 
 #[test]
-fn a_technique_written_in_c_plugs_in() {
-    let dir = cadr_tests::fixtures::scratch_dir("c-plugin");
-    let library = dir.join(format!(
-        "{}cadr_fixture_c{}",
-        std::env::consts::DLL_PREFIX,
-        std::env::consts::DLL_SUFFIX
-    ));
+fn a_technique_written_in_c_plugs_in_also_built_for_an_older_abi_minor() {
     let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
-    let output = std::process::Command::new("cc")
-        .args([
-            "-std=c99",
-            "-Wall",
-            "-Wextra",
-            "-Wpedantic",
-            "-Werror",
-            "-shared",
-            "-fPIC",
-            "-I",
-        ])
-        .arg(root.join("include"))
-        .arg(root.join("tests/c-plugin/cull_everything_visible.c"))
-        .arg("-o")
-        .arg(&library)
-        .output()
-        .expect("cc is needed (build-essential)");
-    assert!(
-        output.status.success(),
-        "{}",
-        String::from_utf8_lossy(&output.stderr)
-    );
-
-    let mut f = Fixture::with_size(&generate(&GeneratorSpec::Demo), (96, 72));
-    let features = feature_bits(f.device.capabilities());
-    let mut registry = PluginRegistry::discover(
-        &[std::env::current_exe()
-            .unwrap()
-            .parent()
-            .unwrap()
-            .to_path_buf()],
-        features,
-    );
-    registry.load(&library, features);
-    assert!(registry.refusals().is_empty(), "{:?}", registry.refusals());
-    let c_culler = registry
-        .find(TechniqueKind::Culling, "c-candidates")
-        .unwrap();
-    assert_eq!(c_culler.description, "Written in C: draws every candidate.");
-    f.techniques = Techniques::new(
-        &f.device,
-        Arc::new(registry),
-        f.renderer.pipelines().frame_set_layout,
-    );
-    let combination = Combination {
-        culling: "c-candidates".into(),
-        ..Combination::simplest()
+    // The current header, and the header as released for ABI 1.0: a library built for an
+    // older minor version is loaded and run, not refused.
+    let builds = [
+        (
+            "cadr_fixture_c",
+            root.join("include"),
+            (
+                cadr_plugin_abi::CADR_PLUGIN_ABI_MAJOR,
+                cadr_plugin_abi::CADR_PLUGIN_ABI_MINOR,
+            ),
+        ),
+        (
+            "cadr_fixture_c_abi_1_0",
+            root.join("tests/c-plugin/abi-1.0"),
+            (1, 0),
+        ),
+    ];
+    const {
+        assert!(
+            cadr_plugin_abi::CADR_PLUGIN_ABI_MINOR > 0,
+            "1.0 is an older minor"
+        )
     };
-    f.techniques.select(&combination).unwrap();
-    f.assert_matches_baseline("culled by the C plugin");
-    drop(f.techniques);
-    assert_no_validation_errors(&f.device);
+    let dir = cadr_tests::fixtures::scratch_dir("c-plugin");
+    for (name, include, version) in builds {
+        let library = dir.join(format!(
+            "{}{name}{}",
+            std::env::consts::DLL_PREFIX,
+            std::env::consts::DLL_SUFFIX
+        ));
+        let output = std::process::Command::new("cc")
+            .args([
+                "-std=c99",
+                "-Wall",
+                "-Wextra",
+                "-Wpedantic",
+                "-Werror",
+                "-shared",
+                "-fPIC",
+                "-I",
+            ])
+            .arg(include)
+            .arg(root.join("tests/c-plugin/cull_everything_visible.c"))
+            .arg("-o")
+            .arg(&library)
+            .output()
+            .expect("cc is needed (build-essential)");
+        assert!(
+            output.status.success(),
+            "{name}: {}",
+            String::from_utf8_lossy(&output.stderr)
+        );
+
+        let mut f = Fixture::with_size(&generate(&GeneratorSpec::Demo), (96, 72));
+        let features = feature_bits(f.device.capabilities());
+        let mut registry = PluginRegistry::discover(
+            &[std::env::current_exe()
+                .unwrap()
+                .parent()
+                .unwrap()
+                .to_path_buf()],
+            features,
+        );
+        registry.load(&library, features);
+        assert!(
+            registry.refusals().is_empty(),
+            "{name}: {:?}",
+            registry.refusals()
+        );
+        let c_culler = registry
+            .find(TechniqueKind::Culling, "c-candidates")
+            .unwrap();
+        assert_eq!(c_culler.description, "Written in C: draws every candidate.");
+        assert_eq!(c_culler.abi_version, version, "{name}");
+        f.techniques = Techniques::new(
+            &f.device,
+            Arc::new(registry),
+            f.renderer.pipelines().frame_set_layout,
+        );
+        let combination = Combination {
+            culling: "c-candidates".into(),
+            ..Combination::built_in()
+        };
+        f.techniques.select(&combination).unwrap();
+        f.assert_matches_baseline(name);
+        drop(f.techniques);
+        assert_no_validation_errors(&f.device);
+    }
 }

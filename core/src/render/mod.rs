@@ -2,25 +2,16 @@
 //! buffer, pass, submission, timings). The techniques record into its frames
 //! (`Renderer::render_techniques`, `Renderer::pick_techniques`); the pick pass draws instance
 //! ids and depth into their own target and reads a rectangle of them back ([`pick`]).
-//!
-//! It also holds the built-in baseline, the seeds' simplest technique that later ones are
-//! measured against: one draw per part of a flat [`BaselineScene`], its matrix (relative to the
-//! eye, computed in f64) and material pushed as push constants per draw, vertex and index
-//! buffers re-bound only when the geometry changes.
 
-mod arena;
-mod baseline_scene;
 mod camera;
 pub mod pick;
 mod pipeline;
 
-pub use arena::{GeometryArena, GeometryRange};
-pub use baseline_scene::{BaselineScene, UploadError};
 pub use camera::{Camera, DEFAULT_DIRECTION, DEFAULT_FOV_DEGREES};
 pub(crate) use pipeline::{
     create_graphics_pipeline, DescriptorSets, GraphicsPipelineDesc, VertexLayout,
 };
-pub use pipeline::{DrawParameters, FrameUniforms, Pipelines, ScatterParameters, PICK_FORMAT};
+pub use pipeline::{FrameUniforms, Pipelines, ScatterParameters, PICK_FORMAT};
 
 use std::path::Path;
 use std::sync::Arc;
@@ -168,23 +159,6 @@ impl Renderer {
     /// presenting it.
     pub fn color_image(&self) -> &Image {
         &self.target.color
-    }
-
-    /// Renders one frame of `scene` with the baseline technique (one draw per part, matrix and
-    /// material pushed per draw), waits for it, and reports its cost.
-    pub fn render(&mut self, scene: &BaselineScene, camera: &Camera) -> VkResult<FrameStats> {
-        let mut before = |_: &Renderer, _: vk::CommandBuffer, _: &mut FrameStats| Ok(());
-        let mut inside =
-            |renderer: &Renderer, command_buffer: vk::CommandBuffer, stats: &mut FrameStats| {
-                renderer.record_baseline(command_buffer, scene, camera, stats)
-            };
-        self.frame(
-            camera,
-            (PassTarget::Color, false),
-            &mut before,
-            &mut inside,
-            &mut |_, _, _| Ok(()),
-        )
     }
 
     /// Makes the pick target ready to read back `rect` (inside the target) after the next pick
@@ -431,72 +405,6 @@ impl Renderer {
                 ),
             );
         }
-    }
-
-    fn record_baseline(
-        &self,
-        command_buffer: vk::CommandBuffer,
-        scene: &BaselineScene,
-        camera: &Camera,
-        stats: &mut FrameStats,
-    ) -> VkResult<()> {
-        let raw = self.device.raw();
-        let layout = self.pipelines.baseline_layout;
-        let pipeline = self.pipelines.baseline()?;
-        // SAFETY: recording inside the pass; pipeline, set and arenas outlive the submission.
-        unsafe {
-            raw.cmd_bind_pipeline(command_buffer, vk::PipelineBindPoint::GRAPHICS, pipeline);
-            raw.cmd_bind_descriptor_sets(
-                command_buffer,
-                vk::PipelineBindPoint::GRAPHICS,
-                layout,
-                0,
-                &[self.frame_sets.sets[0]],
-                &[],
-            );
-        }
-        stats.pipeline_binds += 1;
-        stats.parameter_updates += 1;
-        let mut bound_geometry = u32::MAX;
-        let mut current_instance = u32::MAX;
-        let mut parameters = DrawParameters::default();
-        let push_stages = vk::ShaderStageFlags::VERTEX | vk::ShaderStageFlags::FRAGMENT;
-        for draw in &scene.draws {
-            if draw.geometry != bound_geometry {
-                if !scene
-                    .arena
-                    .bind(&self.device, command_buffer, draw.geometry)
-                {
-                    continue;
-                }
-                bound_geometry = draw.geometry;
-                stats.vertex_binds += 1;
-            }
-            if draw.instance != current_instance {
-                let model_view = camera.view * scene.instance_worlds[draw.instance as usize];
-                parameters.model_view = model_view.as_mat4().to_cols_array_2d();
-                current_instance = draw.instance;
-            }
-            let [base_color, surface] = scene.material_parameters[draw.material as usize];
-            parameters.base_color = base_color;
-            parameters.surface = surface;
-            // SAFETY: as above; the push range matches the pipeline layout.
-            unsafe {
-                raw.cmd_push_constants(
-                    command_buffer,
-                    layout,
-                    push_stages,
-                    0,
-                    bytemuck::bytes_of(&parameters),
-                );
-                raw.cmd_draw_indexed(command_buffer, draw.index_count, 1, draw.first_index, 0, 0);
-            }
-            stats.parameter_updates += 1;
-            stats.draw_calls += 1;
-            stats.draws += 1;
-            stats.triangles += u64::from(draw.index_count / 3);
-        }
-        Ok(())
     }
 
     /// Reads the last frame back as tightly packed RGBA8 rows.

@@ -1,13 +1,12 @@
-//! Pipelines and their layouts: the per-frame descriptor set shared by every technique, the
-//! baseline pipeline (per-draw push constants) and the GPU scene's scatter compute pipeline.
+//! Pipelines and their layouts: the per-frame descriptor set shared by every technique and the
+//! GPU scene's scatter compute pipeline.
 
 use std::sync::{Arc, OnceLock};
 
 use ash::vk;
 
-use crate::scene::Vertex;
 use crate::shaders::{self, ShaderSource};
-use crate::vk::{Device, ShaderModule, VkError, VkResult, VkResultExt, COLOR_FORMAT, DEPTH_FORMAT};
+use crate::vk::{Device, ShaderModule, VkError, VkResult, VkResultExt, DEPTH_FORMAT};
 
 /// Format of the pick target: one instance id (+1) per pixel.
 pub const PICK_FORMAT: vk::Format = vk::Format::R32_UINT;
@@ -26,18 +25,6 @@ pub struct FrameUniforms {
     pub eye_low: [f32; 4],
     /// Ambient, diffuse and specular strength of the head light.
     pub light: [f32; 4],
-}
-
-/// Per-draw push constants of the baseline; mirrors `DrawParameters` in `shaders/baseline.vert`.
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
-pub struct DrawParameters {
-    /// Object to view space.
-    pub model_view: [[f32; 4]; 4],
-    /// Linear RGBA.
-    pub base_color: [f32; 4],
-    /// x: metallic, y: roughness.
-    pub surface: [f32; 4],
 }
 
 /// Push constants of `scatter.comp`: one dispatch scatters the items of one array.
@@ -173,10 +160,6 @@ pub struct Pipelines {
     pub frame_set_layout: vk::DescriptorSetLayout,
     /// The scatter pipeline's set: the compact updates and the array they go into.
     pub scatter_set_layout: vk::DescriptorSetLayout,
-    /// Baseline layout: set 0 and 96 bytes of push constants.
-    pub baseline_layout: vk::PipelineLayout,
-    /// Baseline pipeline.
-    baseline: OnceLock<vk::Pipeline>,
     /// Scatter layout.
     pub scatter_layout: vk::PipelineLayout,
     /// Scatter compute pipeline.
@@ -191,8 +174,6 @@ impl Pipelines {
             device: Arc::clone(device),
             frame_set_layout: vk::DescriptorSetLayout::null(),
             scatter_set_layout: vk::DescriptorSetLayout::null(),
-            baseline_layout: vk::PipelineLayout::null(),
-            baseline: OnceLock::new(),
             scatter_layout: vk::PipelineLayout::null(),
             scatter: OnceLock::new(),
         };
@@ -204,13 +185,6 @@ impl Pipelines {
         let compute = vk::ShaderStageFlags::COMPUTE;
         let compute_storage = (vk::DescriptorType::STORAGE_BUFFER, compute);
         this.scatter_set_layout = set_layout(device, "scatter set layout", &[compute_storage; 2])?;
-        this.baseline_layout = pipeline_layout(
-            device,
-            "baseline layout",
-            &[this.frame_set_layout],
-            std::mem::size_of::<DrawParameters>() as u32,
-            graphics,
-        )?;
         this.scatter_layout = pipeline_layout(
             device,
             "scatter layout",
@@ -241,20 +215,6 @@ impl Pipelines {
             .ok_or_else(|| VkError::InvalidUse("pipeline cell empty".into()))
     }
 
-    /// The baseline pipeline (set 0 and 96 bytes of push constants).
-    pub fn baseline(&self) -> VkResult<vk::Pipeline> {
-        self.lazy(&self.baseline, || {
-            graphics_pipeline(
-                &self.device,
-                self.baseline_layout,
-                &shaders::BASELINE_VERT,
-                &shaders::BASELINE_FRAG,
-                COLOR_FORMAT,
-                "baseline pipeline",
-            )
-        })
-    }
-
     /// The scatter compute pipeline.
     pub fn scatter(&self) -> VkResult<vk::Pipeline> {
         self.lazy(&self.scatter, || {
@@ -274,14 +234,10 @@ impl Drop for Pipelines {
         // SAFETY: the renderer waits for its last frame before dropping the pipelines; null
         // handles (from a failed constructor) are ignored by Vulkan.
         unsafe {
-            for cell in [&self.baseline, &self.scatter] {
-                if let Some(&pipeline) = cell.get() {
-                    raw.destroy_pipeline(pipeline, None);
-                }
+            if let Some(&pipeline) = self.scatter.get() {
+                raw.destroy_pipeline(pipeline, None);
             }
-            for layout in [self.baseline_layout, self.scatter_layout] {
-                raw.destroy_pipeline_layout(layout, None);
-            }
+            raw.destroy_pipeline_layout(self.scatter_layout, None);
             for layout in [self.frame_set_layout, self.scatter_set_layout] {
                 raw.destroy_descriptor_set_layout(layout, None);
             }
@@ -323,36 +279,6 @@ fn compute_pipeline(
     .or_vk("vkCreateComputePipelines")?;
     device.set_name(pipelines[0], name);
     Ok(pipelines[0])
-}
-
-fn graphics_pipeline(
-    device: &Arc<Device>,
-    layout: vk::PipelineLayout,
-    vertex: &ShaderSource,
-    fragment: &ShaderSource,
-    color_format: vk::Format,
-    name: &str,
-) -> VkResult<vk::Pipeline> {
-    let (vertex, fragment) = (module(device, vertex)?, module(device, fragment)?);
-    create_graphics_pipeline(
-        device,
-        &GraphicsPipelineDesc {
-            layout,
-            vertex: &vertex,
-            fragment: &fragment,
-            vertex_layout: Some(VertexLayout {
-                stride: std::mem::size_of::<Vertex>() as u32,
-                attributes: &[
-                    (vk::Format::R32G32B32_SFLOAT, 0),
-                    (vk::Format::R32G32B32_SFLOAT, 12),
-                ],
-            }),
-            topology: vk::PrimitiveTopology::TRIANGLE_LIST,
-            depth_bias: false,
-            color_format,
-            name,
-        },
-    )
 }
 
 /// Binding 0's stride and its attributes (format, offset) at locations 0, 1, ….

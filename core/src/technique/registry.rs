@@ -1,6 +1,8 @@
-//! Finding and loading technique plugins: every library in the plugin directories is opened,
-//! its ABI version negotiated before any struct is read, its techniques listed and checked
-//! against the device. Libraries are never unloaded (their code may still be referenced by
+//! Finding and loading technique plugins: the built-in library (the simplest technique of
+//! each kind, linked statically) comes first, then every library in the plugin directories is
+//! opened, its ABI version negotiated before any struct is read, its techniques listed and
+//! checked against the device. Both go through one registration, so a built-in technique is
+//! read through the ABI exactly as a plugin's. Libraries are never unloaded (their code may still be referenced by
 //! techniques alive or destroyed). What cannot be used is kept as a [`Refusal`] that says why.
 
 use std::ffi::{c_char, CStr};
@@ -13,6 +15,9 @@ use crate::vk::Capabilities;
 
 /// The environment variable with extra plugin directories (separated like `PATH`).
 pub const PLUGIN_PATH_VARIABLE: &str = "CADR_PLUGIN_PATH";
+
+/// What [`TechniqueEntry::library`] says for the built-in techniques.
+pub const BUILT_IN_LIBRARY: &str = "built-in";
 
 /// Which of the four technique kinds.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
@@ -56,7 +61,7 @@ impl TechniqueKind {
         }
     }
 
-    /// The size a vtable of this kind must have at least.
+    /// The size of this kind's vtable in this host's ABI.
     fn vtable_size(self) -> usize {
         match self {
             TechniqueKind::Vertex => std::mem::size_of::<abi::CadrVertexPathVtable>(),
@@ -64,6 +69,69 @@ impl TechniqueKind {
             TechniqueKind::Submission => std::mem::size_of::<abi::CadrSubmissionVtable>(),
             TechniqueKind::Culling => std::mem::size_of::<abi::CadrCullingVtable>(),
         }
+    }
+
+    /// The size this kind's vtable had in ABI 1.0, the least a library of this major version
+    /// may hand out (fields added by later minors default to none).
+    fn first_vtable_size(self) -> usize {
+        match self {
+            TechniqueKind::Vertex => size_through!(abi::CadrVertexPathVtable, bind_draw),
+            TechniqueKind::Parameters => size_through!(abi::CadrParameterPathVtable, bind_draw),
+            TechniqueKind::Submission => size_through!(abi::CadrSubmissionVtable, record),
+            TechniqueKind::Culling => size_through!(abi::CadrCullingVtable, cull),
+        }
+    }
+}
+
+/// The size of `$type` up to and including `$field`: what a writer that knew `$field` as the
+/// last field wrote.
+macro_rules! size_through {
+    ($type:ty, $field:ident) => {{
+        fn field_size<T, F>(_: impl Fn(&T) -> &F) -> usize {
+            std::mem::size_of::<F>()
+        }
+        std::mem::offset_of!($type, $field) + field_size(|s: &$type| &s.$field)
+    }};
+}
+use size_through;
+
+/// The size of [`abi::CadrPluginLibrary`] in ABI 1.0.
+fn first_library_size() -> usize {
+    size_through!(abi::CadrPluginLibrary, techniques)
+}
+
+/// The size of [`abi::CadrTechniqueInfo`] in ABI 1.0.
+fn first_info_size() -> usize {
+    size_through!(abi::CadrTechniqueInfo, vtable)
+}
+
+/// A plugin's vtable copied into this host's layout: the bytes the plugin wrote, and none for
+/// the functions of later minors it did not know. 8-byte words, as the vtables hold pointers.
+#[derive(Debug)]
+struct VtableCopy(Box<[u64]>);
+
+impl VtableCopy {
+    /// Copies `written` bytes of the vtable at `source` into a zeroed vtable of `full` bytes.
+    ///
+    /// # Safety
+    /// `source` points at least `written` readable bytes.
+    unsafe fn new(source: *const std::ffi::c_void, written: usize, full: usize) -> Self {
+        let mut words = vec![0u64; full.div_ceil(8)].into_boxed_slice();
+        // SAFETY: the caller vouches for `written` bytes at `source`; the copy takes at most
+        // `full` of them, which the zeroed words hold. Every vtable field is an integer or an
+        // optional function pointer, for which zero is valid (none).
+        unsafe {
+            std::ptr::copy_nonoverlapping(
+                source.cast::<u8>(),
+                words.as_mut_ptr().cast::<u8>(),
+                written.min(full),
+            );
+        }
+        Self(words)
+    }
+
+    fn as_ptr(&self) -> *const std::ffi::c_void {
+        self.0.as_ptr().cast()
     }
 }
 
@@ -76,8 +144,11 @@ pub struct TechniqueEntry {
     pub name: String,
     /// What it does.
     pub description: String,
-    /// The library it comes from.
+    /// The library it comes from ([`BUILT_IN_LIBRARY`] for the built-in techniques).
     pub library: PathBuf,
+    /// The plugin ABI version (major, minor) its library was built for; an older minor's
+    /// structs are read by their size, the fields it did not know taking defaults.
+    pub abi_version: (u32, u32),
     /// Device features it needs (`CADR_FEATURE_*`).
     pub required_features: u64,
     /// What it offers its partners (`CADR_TRAIT_*`).
@@ -86,20 +157,32 @@ pub struct TechniqueEntry {
     pub needs: u64,
     /// `Err(why)` when this device cannot run it.
     pub support: Result<(), String>,
-    pub(crate) vtable: *const std::ffi::c_void,
+    vtable: VtableCopy,
 }
 
-// SAFETY: the vtable is immutable data of a library that is never unloaded.
+// SAFETY: the vtable copy is immutable; its function pointers point into a library that is
+// never unloaded.
 unsafe impl Send for TechniqueEntry {}
 // SAFETY: as above.
 unsafe impl Sync for TechniqueEntry {}
 
 impl TechniqueEntry {
+    /// Whether it is one of the built-in techniques (no plugin library needed).
+    pub fn is_built_in(&self) -> bool {
+        self.library.as_os_str() == BUILT_IN_LIBRARY
+    }
+
+    /// The vtable, in this host's layout for the entry's kind (fields the plugin's ABI minor
+    /// did not have are none).
+    pub(crate) fn vtable(&self) -> *const std::ffi::c_void {
+        self.vtable.as_ptr()
+    }
+
     /// The common part of the vtable.
     pub(crate) fn common(&self) -> &abi::CadrCommonVtable {
-        // SAFETY: every kind's vtable starts with the common part; checked non-null and at
-        // least the kind's size when loaded.
-        unsafe { &*self.vtable.cast::<abi::CadrCommonVtable>() }
+        // SAFETY: every kind's vtable starts with the common part; the copy is as large as
+        // this host's vtable of the entry's kind.
+        unsafe { &*self.vtable().cast::<abi::CadrCommonVtable>() }
     }
 }
 
@@ -258,8 +341,9 @@ fn c_text(pointer: *const c_char) -> Option<String> {
 impl PluginRegistry {
     /// Loads every plugin library in `dirs` (missing directories are skipped) and checks its
     /// techniques against a device with `device_features` (`CADR_FEATURE_*`).
+    /// The built-in techniques are registered first.
     pub fn discover(dirs: &[PathBuf], device_features: u64) -> Self {
-        let mut registry = Self::default();
+        let mut registry = Self::built_in(device_features);
         let mut seen = std::collections::HashSet::new();
         for dir in dirs {
             let Ok(entries) = std::fs::read_dir(dir) else {
@@ -279,6 +363,18 @@ impl PluginRegistry {
                 registry.load(&file, device_features);
             }
         }
+        registry
+    }
+
+    /// Only the built-in techniques, checked against a device with `device_features`.
+    pub fn built_in(device_features: u64) -> Self {
+        let mut registry = Self::default();
+        registry.register(
+            Path::new(BUILT_IN_LIBRARY),
+            abi::CADR_PLUGIN_ABI_VERSION,
+            cadr_techniques::builtin::entry,
+            device_features,
+        );
         registry
     }
 
@@ -321,16 +417,8 @@ impl PluginRegistry {
         };
         // SAFETY: takes nothing, returns an integer.
         let version = unsafe { version() };
-        let (major, minor) = (version >> 16, version & 0xffff);
-        if major != abi::CADR_PLUGIN_ABI_MAJOR || minor > abi::CADR_PLUGIN_ABI_MINOR {
-            self.refusals.push(refuse(format!(
-                "was built for plugin ABI {major}.{minor}; this cadr speaks {}.{}",
-                abi::CADR_PLUGIN_ABI_MAJOR,
-                abi::CADR_PLUGIN_ABI_MINOR
-            )));
-            return;
-        }
-        // SAFETY: the symbol's type is fixed by the ABI, whose version matched.
+        // SAFETY: the symbol's type is fixed by the ABI (whose version `register` checks before
+        // calling it).
         let entry = match unsafe {
             library.get::<abi::CadrPluginEntryFn>(abi::CADR_PLUGIN_ENTRY_SYMBOL.as_bytes())
         } {
@@ -343,6 +431,32 @@ impl PluginRegistry {
                 return;
             }
         };
+        self.register(file, version, entry, device_features);
+    }
+
+    /// Registers the techniques of a library described by `entry`, built for ABI `version`
+    /// (major in the high 16 bits): a loaded plugin or the built-in library.
+    fn register(
+        &mut self,
+        file: &Path,
+        version: u32,
+        entry: abi::CadrPluginEntryFn,
+        device_features: u64,
+    ) {
+        let refuse = |reason: String| Refusal {
+            library: file.to_owned(),
+            technique: None,
+            reason,
+        };
+        let (major, minor) = (version >> 16, version & 0xffff);
+        if major != abi::CADR_PLUGIN_ABI_MAJOR || minor > abi::CADR_PLUGIN_ABI_MINOR {
+            self.refusals.push(refuse(format!(
+                "was built for plugin ABI {major}.{minor}; this cadr speaks {}.{}",
+                abi::CADR_PLUGIN_ABI_MAJOR,
+                abi::CADR_PLUGIN_ABI_MINOR
+            )));
+            return;
+        }
         let mut described = abi::CadrPluginLibrary {
             size: std::mem::size_of::<abi::CadrPluginLibrary>() as u32,
             abi_major: 0,
@@ -362,27 +476,50 @@ impl PluginRegistry {
             self.refusals.push(refuse(why.into()));
             return;
         }
-        if (described.size as usize) < std::mem::size_of::<abi::CadrPluginLibrary>()
+        // The host's struct was zeroed and its size set: a library of an older minor writes
+        // a prefix of it, and the fields it did not know stay empty.
+        if (described.size as usize) < first_library_size()
             || (described.technique_count > 0 && described.techniques.is_null())
         {
             self.refusals
                 .push(refuse("described itself with a truncated struct".into()));
             return;
         }
-        // SAFETY: the library promises `technique_count` entries that live forever.
-        let techniques = unsafe {
-            std::slice::from_raw_parts(described.techniques, described.technique_count as usize)
+        // Entries lie `size` bytes apart, the size the library's ABI minor gave them.
+        let stride = if described.technique_count == 0 {
+            0
+        } else {
+            // SAFETY: checked non-null; the library promises `technique_count` entries.
+            unsafe { (*described.techniques).size as usize }
         };
-        for info in techniques {
+        if described.technique_count > 0 && stride < first_info_size() {
+            self.refusals
+                .push(refuse("its technique descriptions are truncated".into()));
+            return;
+        }
+        for index in 0..described.technique_count as usize {
+            // SAFETY: the library promises `technique_count` entries of `stride` bytes that
+            // live forever; a copy of the bytes it wrote over a zeroed description leaves the
+            // fields of later minors empty (every field is an integer or a pointer).
+            let info = unsafe {
+                let mut info: abi::CadrTechniqueInfo = std::mem::zeroed();
+                std::ptr::copy_nonoverlapping(
+                    described.techniques.cast::<u8>().add(index * stride),
+                    (&mut info as *mut abi::CadrTechniqueInfo).cast::<u8>(),
+                    stride.min(std::mem::size_of::<abi::CadrTechniqueInfo>()),
+                );
+                info
+            };
             let name = c_text(info.name).unwrap_or_default();
             let refuse_technique = |reason: String| Refusal {
                 library: file.to_owned(),
                 technique: Some(name.clone()),
                 reason,
             };
-            if (info.size as usize) < std::mem::size_of::<abi::CadrTechniqueInfo>() {
-                self.refusals
-                    .push(refuse_technique("its description is truncated".into()));
+            if info.size as usize != stride {
+                self.refusals.push(refuse_technique(
+                    "its description's size differs from the library's first one".into(),
+                ));
                 continue;
             }
             let Some(kind) = TechniqueKind::from_abi(info.kind) else {
@@ -398,13 +535,18 @@ impl PluginRegistry {
             // SAFETY: checked non-null before reading its size.
             let vtable_size = (!info.vtable.is_null())
                 .then(|| unsafe { (*info.vtable.cast::<abi::CadrCommonVtable>()).size });
-            if vtable_size.is_none_or(|size| (size as usize) < kind.vtable_size()) {
+            let Some(vtable_size) =
+                vtable_size.filter(|&size| size as usize >= kind.first_vtable_size())
+            else {
                 self.refusals.push(refuse_technique(format!(
                     "its {} vtable is missing or truncated",
                     kind.name()
                 )));
                 continue;
-            }
+            };
+            // SAFETY: the vtable's size says how many bytes the library wrote.
+            let vtable =
+                unsafe { VtableCopy::new(info.vtable, vtable_size as usize, kind.vtable_size()) };
             if self
                 .techniques
                 .iter()
@@ -430,11 +572,12 @@ impl PluginRegistry {
                 name,
                 description: c_text(info.description).unwrap_or_default(),
                 library: file.to_owned(),
+                abi_version: (major, minor),
                 required_features: info.required_features,
                 provides: info.provides,
                 needs: info.needs,
                 support,
-                vtable: info.vtable,
+                vtable,
             }));
         }
     }

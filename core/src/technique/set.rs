@@ -29,8 +29,10 @@ pub struct Combination {
 }
 
 impl Combination {
-    /// The defaults: the simplest technique of each kind.
-    pub fn simplest() -> Self {
+    /// The built-in combination, the default: the simplest technique of each kind, linked
+    /// into cadr (no plugin library needed), the seeds' baseline every other combination is
+    /// measured against.
+    pub fn built_in() -> Self {
         Self {
             vertex: "per-geometry".into(),
             parameters: "push".into(),
@@ -136,9 +138,9 @@ impl Drop for Active {
 
 impl Active {
     pub(crate) fn vtable<V>(&self) -> &V {
-        // SAFETY: the registry checked the vtable's size for its kind; callers ask for the
-        // vtable type of the entry's kind.
-        unsafe { &*self.entry.vtable.cast::<V>() }
+        // SAFETY: the registry copied the vtable into this host's layout for its kind; callers
+        // ask for the vtable type of the entry's kind.
+        unsafe { &*self.entry.vtable().cast::<V>() }
     }
 }
 

@@ -165,12 +165,14 @@ pub struct CadrPluginLibrary {
     pub name: *const c_char,
     /// Number of entries at `techniques`.
     pub technique_count: u32,
-    /// The techniques.
+    /// The techniques: `technique_count` entries, each `size` bytes long (the size of
+    /// [`CadrTechniqueInfo`] in the library's minor version), one after the other.
     pub techniques: *const CadrTechniqueInfo,
 }
 
 /// One technique a library offers. Owned by the library, with its strings and vtable; they
-/// live as long as the process.
+/// live as long as the process. The host copies the vtable (the `size` bytes its library
+/// wrote) into its own layout; functions added by later minors are none for older libraries.
 #[repr(C)]
 #[derive(Debug)]
 pub struct CadrTechniqueInfo {

@@ -1,4 +1,4 @@
-//! The `extern "C"` shims [`export_plugin!`](crate::export_plugin) generates vtables from.
+//! The `extern "C"` shims [`technique_library!`](crate::technique_library) builds vtables from.
 //! Every shim catches panics: a panic never unwinds into the host.
 
 use std::ffi::{c_void, CStr};
@@ -35,7 +35,17 @@ unsafe impl Send for Library {}
 // SAFETY: as above.
 unsafe impl Sync for Library {}
 
-static LIBRARY: OnceLock<Library> = OnceLock::new();
+/// The description of one technique library, built on its first entry call and kept for the
+/// life of the process ([`technique_library!`](crate::technique_library) makes one per library).
+#[derive(Default)]
+pub struct DescribedLibrary(OnceLock<Library>);
+
+impl DescribedLibrary {
+    /// Not described yet.
+    pub const fn new() -> Self {
+        Self(OnceLock::new())
+    }
+}
 
 fn panic_text(payload: &(dyn std::any::Any + Send)) -> String {
     payload
@@ -72,6 +82,7 @@ fn guarded(
 /// # Safety
 /// `library` is null or writable.
 pub unsafe fn entry(
+    described: &'static DescribedLibrary,
     library: *mut abi::CadrPluginLibrary,
     name: &'static str,
     techniques: impl FnOnce() -> Vec<abi::CadrTechniqueInfo>,
@@ -80,7 +91,7 @@ pub unsafe fn entry(
         return abi::CADR_STATUS_ERROR;
     }
     let built = catch_unwind(AssertUnwindSafe(|| {
-        LIBRARY.get_or_init(|| {
+        described.0.get_or_init(|| {
             let techniques: &'static [abi::CadrTechniqueInfo] = Vec::leak(techniques());
             Library(abi::CadrPluginLibrary {
                 size: std::mem::size_of::<abi::CadrPluginLibrary>() as u32,

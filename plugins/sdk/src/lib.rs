@@ -1,9 +1,11 @@
 //! The SDK for writing cadr technique plugins in Rust.
 //!
 //! Implement [`Technique`] and one kind trait ([`VertexPath`], [`ParameterPath`],
-//! [`Submission`], [`Culling`]) per technique, then list them in [`export_plugin!`], which
-//! generates the two exported symbols and the `extern "C"` shims (each catching panics) that
-//! the host calls. The views ([`Scene`], [`Bind`], [`Record`], …) turn the ABI's raw pointers
+//! [`Submission`], [`Culling`]) per technique, then list them in [`technique_library!`], which
+//! generates the `extern "C"` shims (each catching panics) that the host calls, and export the
+//! library from a dynamic library with [`export_plugin!`] (the two symbols the host looks for).
+//! A library that is not exported can be linked into a host statically: cadr's built-in
+//! techniques are such a library. The views ([`Scene`], [`Bind`], [`Record`], …) turn the ABI's raw pointers
 //! into slices and safe calls.
 
 pub mod export;
@@ -101,10 +103,14 @@ pub trait Culling: Technique {
     fn cull(&mut self, input: &CullInput<'_>, output: &mut CullOutput<'_>) -> Result<(), String>;
 }
 
-/// Lists a library's techniques and exports the symbols the host looks for.
+/// Defines a technique library: a Rust function `$entry` with the signature of
+/// `cadr_plugin_entry` that describes the listed techniques. Nothing is exported, so several
+/// libraries can be linked into one binary (the host's built-in techniques are one); hand the
+/// function to [`export_plugin!`] to make a dynamic library of it.
 ///
 /// ```ignore
-/// cadr_plugin_sdk::export_plugin! {
+/// cadr_plugin_sdk::technique_library! {
+///     pub fn entry;
 ///     library: "my-techniques",
 ///     techniques: [
 ///         vertex MyVertexPath {
@@ -116,8 +122,9 @@ pub trait Culling: Technique {
 /// ```
 /// Kinds: `vertex`, `parameters`, `submission`, `culling`.
 #[macro_export]
-macro_rules! export_plugin {
+macro_rules! technique_library {
     (
+        $vis:vis fn $entry:ident;
         library: $library:literal,
         techniques: [
             $( $kind:ident $ty:ty {
@@ -129,6 +136,59 @@ macro_rules! export_plugin {
             } ),* $(,)?
         ] $(,)?
     ) => {
+        /// Fills `library` with this library's techniques (the body of `cadr_plugin_entry`).
+        /// Any thread may call it; what it hands out lives as long as the process.
+        ///
+        /// # Safety
+        /// `library` is null or points at a writable `CadrPluginLibrary` whose `size` says how
+        /// much of it the caller can hold.
+        $vis unsafe extern "C" fn $entry(
+            library: *mut $crate::abi::CadrPluginLibrary,
+        ) -> $crate::abi::CadrStatus {
+            static DESCRIBED: $crate::export::DescribedLibrary =
+                $crate::export::DescribedLibrary::new();
+            // SAFETY: forwarded contract.
+            unsafe {
+                $crate::export::entry(&DESCRIBED, library, concat!($library, "\0"), || {
+                    vec![$(
+                        $crate::export::$kind::<$ty>($crate::export::Describe {
+                            name: concat!($name, "\0"),
+                            description: concat!($description, "\0"),
+                            features: $features,
+                            provides: $provides,
+                            needs: $needs,
+                        })
+                    ),*]
+                })
+            }
+        }
+    };
+}
+
+/// Exports the two symbols the host looks for in a dynamic library: the ABI version and
+/// `cadr_plugin_entry`, which forwards to a library defined by [`technique_library!`].
+/// Use it once per dynamic library.
+///
+/// ```ignore
+/// cadr_plugin_sdk::export_plugin!(entry: my_techniques::entry);
+/// ```
+///
+/// The one-step form takes what [`technique_library!`] takes, without the `fn` line:
+///
+/// ```ignore
+/// cadr_plugin_sdk::export_plugin! {
+///     library: "my-techniques",
+///     techniques: [
+///         culling MyCulling {
+///             name: "mine", description: "what it does",
+///             features: 0, provides: 0, needs: 0,
+///         },
+///     ]
+/// }
+/// ```
+#[macro_export]
+macro_rules! export_plugin {
+    (entry: $entry:path $(,)?) => {
         /// The ABI version this library was built for (see `cadr-plugin-abi`).
         #[no_mangle]
         pub extern "C" fn cadr_plugin_abi_version() -> u32 {
@@ -144,19 +204,14 @@ macro_rules! export_plugin {
             library: *mut $crate::abi::CadrPluginLibrary,
         ) -> $crate::abi::CadrStatus {
             // SAFETY: forwarded contract.
-            unsafe {
-                $crate::export::entry(library, concat!($library, "\0"), || {
-                    vec![$(
-                        $crate::export::$kind::<$ty>($crate::export::Describe {
-                            name: concat!($name, "\0"),
-                            description: concat!($description, "\0"),
-                            features: $features,
-                            provides: $provides,
-                            needs: $needs,
-                        })
-                    ),*]
-                })
-            }
+            unsafe { $entry(library) }
         }
+    };
+    (library: $($rest:tt)*) => {
+        $crate::technique_library! {
+            fn cadr_plugin_library_entry;
+            library: $($rest)*
+        }
+        $crate::export_plugin!(entry: cadr_plugin_library_entry);
     };
 }

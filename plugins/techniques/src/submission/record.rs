@@ -8,7 +8,7 @@ use cadr_plugin_sdk::abi::{self, CadrBindState, CadrStats};
 use cadr_plugin_sdk::vk::{self, Handle};
 use cadr_plugin_sdk::{Gpu, Record};
 
-use crate::lists::PassList;
+use super::lists::PassList;
 
 /// How draws are issued.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -290,7 +290,7 @@ impl SecondaryBuffers {
                 .collect()
         });
         for result in results {
-            crate::add(stats, &result?);
+            super::add(stats, &result?);
         }
         Ok(())
     }

@@ -1,0 +1,42 @@
+//! The built-in technique library: the simplest technique of each kind, the seeds' baseline
+//! (one draw per part, vertex buffers re-bound per geometry, matrix and material pushed per
+//! draw, no culling). Hosts register it statically, so it works without any plugin library;
+//! every other technique is measured against it.
+
+use cadr_plugin_sdk::abi;
+use cadr_plugin_sdk::technique_library;
+
+use crate::culling::NoCulling;
+use crate::parameters::Push;
+use crate::submission::Individual;
+use crate::vertex::{PerGeometry, GEOMETRY};
+
+/// The name the built-in library describes itself with.
+pub const LIBRARY_NAME: &str = "cadr built-in techniques";
+
+technique_library! {
+    pub fn entry;
+    library: "cadr built-in techniques",
+    techniques: [
+        vertex PerGeometry {
+            name: "per-geometry",
+            description: "Vertex and index buffers bound per geometry, re-bound only when the geometry changes.",
+            features: 0, provides: GEOMETRY, needs: 0,
+        },
+        parameters Push {
+            name: "push",
+            description: "Matrix and material values pushed with every draw (push constants; the seeds' glUniform/ubosub).",
+            features: 0, provides: abi::CADR_TRAIT_PARAMETERS_IN_COMMANDS, needs: 0,
+        },
+        submission Individual {
+            name: "individual",
+            description: "One vkCmdDrawIndexed per part in scene order, recorded every frame (the seeds' baseline strategy).",
+            features: 0, provides: 0, needs: 0,
+        },
+        culling NoCulling {
+            name: "none",
+            description: "No culling: every visible part is drawn.",
+            features: 0, provides: 0, needs: 0,
+        },
+    ]
+}

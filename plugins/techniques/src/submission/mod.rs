@@ -1,0 +1,373 @@
+//! Draw submission: which draws are issued and how (the seeds' strategies and their
+//! glMultiDraw*, MDI and token-buffer rows in Vulkan form).
+//!
+//! A technique is a strategy ([`lists::Strategy`]: individual, sorted, join, material groups),
+//! an API (direct `vkCmdDrawIndexed`, `VK_EXT_multi_draw`, multi-draw-indirect, indirect with
+//! count) and a recording mode: inline every frame, recorded once into a secondary command
+//! buffer and replayed while nothing changed (the Vulkan form of the seeds' token buffer), or
+//! recorded every frame in parallel on worker threads. Bindings are filtered by the vertex and
+//! parameter paths' bind states, so an unchanged binding is never re-issued.
+
+pub mod lists;
+mod record;
+
+use std::sync::Arc;
+
+use cadr_plugin_sdk::abi;
+use cadr_plugin_sdk::vk;
+use cadr_plugin_sdk::{technique_library, Gpu, HostBuffer, Record, Submission, Technique};
+
+use lists::{PassList, Strategy};
+use record::{Api, Recorder, SecondaryBuffers};
+
+/// The recording mode.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Mode {
+    Inline,
+    Replay,
+    Threads,
+}
+
+const INDIVIDUAL: u8 = 0;
+const SORTED: u8 = 1;
+const JOIN: u8 = 2;
+const GROUPS: u8 = 3;
+const DIRECT: u8 = 0;
+const MULTI_DRAW: u8 = 1;
+const INDIRECT: u8 = 2;
+const INDIRECT_COUNT: u8 = 3;
+const INLINE: u8 = 0;
+const REPLAY: u8 = 1;
+const THREADS: u8 = 2;
+
+fn strategy(code: u8) -> Strategy {
+    match code {
+        SORTED => Strategy::Sorted,
+        JOIN => Strategy::Join,
+        GROUPS => Strategy::Groups,
+        _ => Strategy::Individual,
+    }
+}
+
+fn api(code: u8) -> Api {
+    match code {
+        MULTI_DRAW => Api::MultiDraw,
+        INDIRECT => Api::Indirect,
+        INDIRECT_COUNT => Api::IndirectCount,
+        _ => Api::Direct,
+    }
+}
+
+fn mode(code: u8) -> Mode {
+    match code {
+        REPLAY => Mode::Replay,
+        THREADS => Mode::Threads,
+        _ => Mode::Inline,
+    }
+}
+
+/// Indirect commands of one pass, on the GPU.
+#[derive(Default)]
+struct IndirectPass {
+    commands: Option<HostBuffer>,
+    count: Option<HostBuffer>,
+    draws: u32,
+}
+
+/// One submission technique.
+pub struct Submit<const STRATEGY: u8, const API: u8, const MODE: u8> {
+    gpu: Arc<Gpu>,
+    lists: [PassList; 2],
+    lists_key: Option<(u64, u64)>,
+    indirect: [IndirectPass; 2],
+    secondary: Option<SecondaryBuffers>,
+    recorded_key: Option<u64>,
+    recorded_stats: abi::CadrStats,
+}
+
+impl<const S: u8, const A: u8, const M: u8> Technique for Submit<S, A, M> {
+    fn create(gpu: Arc<Gpu>) -> Result<Self, String> {
+        let buffers = match mode(M) {
+            Mode::Inline => 0,
+            Mode::Replay => 1,
+            Mode::Threads => gpu.worker_threads,
+        };
+        let secondary = if buffers > 0 {
+            Some(SecondaryBuffers::new(&gpu, buffers)?)
+        } else {
+            None
+        };
+        Ok(Self {
+            gpu,
+            lists: [PassList::default(), PassList::default()],
+            lists_key: None,
+            indirect: [IndirectPass::default(), IndirectPass::default()],
+            secondary,
+            recorded_key: None,
+            recorded_stats: abi::CadrStats::default(),
+        })
+    }
+}
+
+fn pass_slot(kind: abi::CadrPassKind) -> usize {
+    usize::from(kind == abi::CADR_PASS_EDGES)
+}
+
+impl<const S: u8, const A: u8, const M: u8> Submit<S, A, M> {
+    /// Rebuilds the lists when the draws changed; true when they did.
+    fn refresh_lists(&mut self, record: &Record<'_>) -> bool {
+        let scene = record.scene();
+        let key = (scene.raw().draws_generation, scene.raw().buffers_generation);
+        if self.lists_key == Some(key) {
+            return false;
+        }
+        for pass in record.passes() {
+            self.lists[pass_slot(pass.kind)] = lists::build(&scene, pass.kind, strategy(S));
+        }
+        self.lists_key = Some(key);
+        true
+    }
+
+    /// Writes the indirect commands of every pass.
+    fn write_indirect(&mut self, record: &Record<'_>) -> Result<(), String> {
+        let instances = record.scene().instances();
+        for pass in record.passes() {
+            let slot = pass_slot(pass.kind);
+            let list = &self.lists[slot];
+            let mut bytes: Vec<u8> = Vec::with_capacity(list.ranges.len() * 20);
+            for batch in &list.batches {
+                for range in &list.ranges[batch.ranges.clone()] {
+                    let vertex_base = instances
+                        .get(range.instance as usize)
+                        .map_or(0, |i| i.vertex_base);
+                    for word in [range.count, 1, range.first, vertex_base, batch.instance] {
+                        bytes.extend_from_slice(&word.to_le_bytes());
+                    }
+                }
+            }
+            let draws = (bytes.len() / 20) as u32;
+            let indirect = &mut self.indirect[slot];
+            let needed = (bytes.len() as u64).max(20);
+            if indirect.commands.as_ref().is_none_or(|b| b.size() < needed) {
+                indirect.commands = Some(self.gpu.create_buffer(
+                    "indirect commands",
+                    needed.next_power_of_two(),
+                    vk::BufferUsageFlags::INDIRECT_BUFFER,
+                    abi::CADR_MEMORY_CPU_TO_GPU,
+                )?);
+            }
+            if let Some(commands) = indirect.commands.as_mut() {
+                commands.write(0, &bytes)?;
+            }
+            if api(A) == Api::IndirectCount {
+                if indirect.count.is_none() {
+                    indirect.count = Some(self.gpu.create_buffer(
+                        "indirect count",
+                        4,
+                        vk::BufferUsageFlags::INDIRECT_BUFFER,
+                        abi::CADR_MEMORY_CPU_TO_GPU,
+                    )?);
+                }
+                if let Some(count) = indirect.count.as_mut() {
+                    count.write(0, &draws.to_le_bytes())?;
+                }
+            }
+            indirect.draws = draws;
+        }
+        Ok(())
+    }
+
+    fn recorder<'a>(&'a self, record: &'a Record<'a>) -> Recorder<'a> {
+        Recorder {
+            gpu: &self.gpu,
+            record,
+            api: api(A),
+            lists: &self.lists,
+            indirect: [0, 1].map(|slot| {
+                let pass = &self.indirect[slot];
+                (
+                    pass.commands
+                        .as_ref()
+                        .map_or(vk::Buffer::null(), HostBuffer::raw),
+                    pass.count
+                        .as_ref()
+                        .map_or(vk::Buffer::null(), HostBuffer::raw),
+                    pass.draws,
+                )
+            }),
+        }
+    }
+}
+
+impl<const S: u8, const A: u8, const M: u8> Submission for Submit<S, A, M> {
+    fn prepare(&mut self, record: &Record<'_>) -> Result<(), String> {
+        let changed = self.refresh_lists(record);
+        if changed && matches!(api(A), Api::Indirect | Api::IndirectCount) {
+            self.write_indirect(record)?;
+        }
+        Ok(())
+    }
+
+    fn record(&mut self, record: &Record<'_>) -> Result<(), String> {
+        // A host that skipped prepare still gets the right lists.
+        if self.refresh_lists(record) && matches!(api(A), Api::Indirect | Api::IndirectCount) {
+            return Err("the draws changed after prepare".into());
+        }
+        match mode(M) {
+            Mode::Inline => {
+                self.recorder(record).record_passes(
+                    record.command_buffer(),
+                    0..usize::MAX,
+                    1,
+                    record.stats(),
+                );
+                Ok(())
+            }
+            Mode::Replay => {
+                if self.recorded_key != Some(record.commands_key()) {
+                    let mut stats = abi::CadrStats::default();
+                    let secondary = self
+                        .secondary
+                        .as_ref()
+                        .ok_or("no secondary command buffer")?;
+                    secondary.record_all(&self.recorder(record), &mut stats, 1)?;
+                    self.recorded_stats = stats;
+                    self.recorded_key = Some(record.commands_key());
+                }
+                let secondary = self
+                    .secondary
+                    .as_ref()
+                    .ok_or("no secondary command buffer")?;
+                secondary.execute(record.command_buffer(), 1);
+                let recorded = self.recorded_stats;
+                record.count(|s| add(s, &recorded));
+                Ok(())
+            }
+            Mode::Threads => {
+                let secondary = self
+                    .secondary
+                    .as_ref()
+                    .ok_or("no secondary command buffers")?;
+                let workers = secondary.len();
+                let mut stats = abi::CadrStats::default();
+                secondary.record_all(&self.recorder(record), &mut stats, workers)?;
+                secondary.execute(record.command_buffer(), workers);
+                record.count(|s| add(s, &stats));
+                Ok(())
+            }
+        }
+    }
+}
+
+fn add(total: &mut abi::CadrStats, more: &abi::CadrStats) {
+    total.draw_calls += more.draw_calls;
+    total.draws += more.draws;
+    total.primitives += more.primitives;
+    total.pipeline_binds += more.pipeline_binds;
+    total.vertex_binds += more.vertex_binds;
+    total.parameter_binds += more.parameter_binds;
+    total.failures += more.failures;
+}
+
+const GEOMETRY: u64 = abi::CADR_TRAIT_GEOMETRY_SHARES_BINDING;
+
+/// `individual`, the built-in submission.
+pub type Individual = Submit<INDIVIDUAL, DIRECT, INLINE>;
+const GPU_DRAWS: u64 =
+    abi::CADR_TRAIT_SCENE_SHARES_BINDING | abi::CADR_TRAIT_PARAMETERS_FROM_INSTANCE_INDEX;
+const SECONDARY: u64 = abi::CADR_TRAIT_SECONDARY_COMMAND_BUFFERS;
+const MDI_FEATURES: u64 =
+    abi::CADR_FEATURE_MULTI_DRAW_INDIRECT | abi::CADR_FEATURE_DRAW_INDIRECT_FIRST_INSTANCE;
+const COUNT_FEATURES: u64 = MDI_FEATURES | abi::CADR_FEATURE_DRAW_INDIRECT_COUNT;
+
+technique_library! {
+    pub fn entry;
+    library: "cadr draw submission",
+    techniques: [
+        submission Submit<SORTED, DIRECT, INLINE> {
+            name: "individual-sorted",
+            description: "One draw per part, globally sorted by geometry and material so bindings change least.",
+            features: 0, provides: 0, needs: 0,
+        },
+        submission Submit<JOIN, DIRECT, INLINE> {
+            name: "join",
+            description: "Adjacent parts of an object with equal state joined into one draw.",
+            features: 0, provides: 0, needs: 0,
+        },
+        submission Submit<GROUPS, DIRECT, INLINE> {
+            name: "groups",
+            description: "Per object, one parameter binding per material group; one draw per range.",
+            features: 0, provides: 0, needs: 0,
+        },
+        submission Submit<INDIVIDUAL, MULTI_DRAW, INLINE> {
+            name: "individual-multidraw",
+            description: "One vkCmdDrawMultiIndexedEXT per part (the call shape of glMultiDrawElements, one range each).",
+            features: abi::CADR_FEATURE_MULTI_DRAW, provides: 0, needs: GEOMETRY,
+        },
+        submission Submit<JOIN, MULTI_DRAW, INLINE> {
+            name: "join-multidraw",
+            description: "Joined ranges, each through VK_EXT_multi_draw.",
+            features: abi::CADR_FEATURE_MULTI_DRAW, provides: 0, needs: GEOMETRY,
+        },
+        submission Submit<GROUPS, MULTI_DRAW, INLINE> {
+            name: "groups-multidraw",
+            description: "Material groups: every range of a group in one vkCmdDrawMultiIndexedEXT (the seeds' glMultiDrawElements).",
+            features: abi::CADR_FEATURE_MULTI_DRAW, provides: 0, needs: GEOMETRY,
+        },
+        submission Submit<INDIVIDUAL, INDIRECT, INLINE> {
+            name: "individual-mdi",
+            description: "Every part as an indirect command; one vkCmdDrawIndexedIndirect per pass (the seeds' indexedmdi).",
+            features: MDI_FEATURES, provides: 0, needs: GPU_DRAWS,
+        },
+        submission Submit<JOIN, INDIRECT, INLINE> {
+            name: "join-mdi",
+            description: "Joined ranges as indirect commands; one multi-draw-indirect call per pass.",
+            features: MDI_FEATURES, provides: 0, needs: GPU_DRAWS,
+        },
+        submission Submit<GROUPS, INDIRECT, INLINE> {
+            name: "groups-mdi",
+            description: "Material-group ranges as indirect commands; one multi-draw-indirect call per pass.",
+            features: MDI_FEATURES, provides: 0, needs: GPU_DRAWS,
+        },
+        submission Submit<INDIVIDUAL, INDIRECT_COUNT, INLINE> {
+            name: "individual-indirect-count",
+            description: "Indirect commands with the count read from a buffer (where GPU culling will write it).",
+            features: COUNT_FEATURES, provides: 0, needs: GPU_DRAWS,
+        },
+        submission Submit<JOIN, INDIRECT_COUNT, INLINE> {
+            name: "join-indirect-count",
+            description: "Joined ranges, indirect with the count read from a buffer.",
+            features: COUNT_FEATURES, provides: 0, needs: GPU_DRAWS,
+        },
+        submission Submit<GROUPS, INDIRECT_COUNT, INLINE> {
+            name: "groups-indirect-count",
+            description: "Material-group ranges, indirect with the count read from a buffer.",
+            features: COUNT_FEATURES, provides: 0, needs: GPU_DRAWS,
+        },
+        submission Submit<INDIVIDUAL, DIRECT, REPLAY> {
+            name: "individual-replay",
+            description: "One draw per part recorded once into a secondary command buffer and replayed while nothing changes (the seeds' token buffer).",
+            features: 0, provides: SECONDARY, needs: 0,
+        },
+        submission Submit<GROUPS, DIRECT, REPLAY> {
+            name: "groups-replay",
+            description: "Material groups recorded once and replayed while nothing changes.",
+            features: 0, provides: SECONDARY, needs: 0,
+        },
+        submission Submit<GROUPS, INDIRECT, REPLAY> {
+            name: "groups-mdi-replay",
+            description: "Material-group multi-draw-indirect recorded once and replayed; changes rewrite only the indirect buffer's contents.",
+            features: MDI_FEATURES, provides: SECONDARY, needs: GPU_DRAWS,
+        },
+        submission Submit<INDIVIDUAL, DIRECT, THREADS> {
+            name: "individual-threads",
+            description: "One draw per part, recorded every frame in parallel into secondary command buffers on worker threads.",
+            features: 0, provides: SECONDARY, needs: 0,
+        },
+        submission Submit<GROUPS, DIRECT, THREADS> {
+            name: "groups-threads",
+            description: "Material groups recorded every frame in parallel on worker threads.",
+            features: 0, provides: SECONDARY, needs: 0,
+        },
+    ]
+}

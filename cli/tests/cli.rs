@@ -332,3 +332,61 @@ fn bench_prints_the_table_and_writes_json() {
     }
     assert_eq!(rows[1]["draw_calls"], 500, "individual: one call per part");
 }
+
+#[test]
+fn without_plugin_libraries_the_built_in_combination_draws_and_others_are_explained() {
+    // A copy of the binary in a directory of its own finds no plugin library.
+    let dir = std::env::temp_dir().join(format!("cadr-cli-alone-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let exe = dir.join("cadr");
+    std::fs::copy(env!("CARGO_BIN_EXE_cadr"), &exe).unwrap();
+    let alone = |args: &[&str]| {
+        Command::new(&exe)
+            .args(args)
+            .env_remove("CADR_PLUGIN_PATH")
+            .output()
+            .expect("run the copied cadr")
+    };
+    let png = dir.join("built-in.png");
+    let output = alone(&[
+        "render",
+        "gen:demo",
+        "-o",
+        png.to_str().unwrap(),
+        "--size",
+        "64x48",
+    ]);
+    assert!(output.status.success(), "{}", stderr(&output));
+    assert!(
+        stdout(&output).contains("techniques:  per-geometry / push / individual / none, solid"),
+        "{}",
+        stdout(&output)
+    );
+    assert!(png.exists());
+
+    let output = alone(&[
+        "render",
+        "gen:demo",
+        "-o",
+        png.to_str().unwrap(),
+        "--submit",
+        "groups",
+    ]);
+    assert!(!output.status.success());
+    let text = stderr(&output);
+    assert!(
+        text.contains("no submit technique named 'groups' (known: individual)")
+            && text.contains("no technique plugin library found, only the built-in techniques"),
+        "{text}"
+    );
+
+    let output = alone(&["techniques", "--json"]);
+    assert!(output.status.success(), "{}", stderr(&output));
+    let listing: serde_json::Value = serde_json::from_slice(&output.stdout).unwrap();
+    let techniques = listing["techniques"].as_array().unwrap();
+    assert_eq!(techniques.len(), 4, "{listing}");
+    assert!(techniques
+        .iter()
+        .all(|t| t["built_in"] == true && t["library"] == "built-in" && t["supported"] == true));
+    std::fs::remove_dir_all(&dir).unwrap();
+}

@@ -11,7 +11,7 @@
 #define CADR_PLUGIN_ABI_MAJOR 1
 
 // Minor version of this ABI: additions that older readers may ignore.
-#define CADR_PLUGIN_ABI_MINOR 1
+#define CADR_PLUGIN_ABI_MINOR 2
 
 // `(major << 16) | minor`, what [`CadrPluginVersionFn`] returns.
 #define CADR_PLUGIN_ABI_VERSION ((CADR_PLUGIN_ABI_MAJOR << 16) | CADR_PLUGIN_ABI_MINOR)
@@ -650,5 +650,12 @@ typedef struct CadrCullingVtable {
 
 // Edge lines from the wire index buffer.
 #define CADR_PASS_EDGES 1
+
+// Since ABI 1.2: the pick pass. Triangles, as [`CADR_PASS_TRIANGLES`], but every pixel must
+// name its own part: draw each part with its own instance's parameters (never join several
+// parts into one range or one parameter binding; sorting is fine). The host passes it only
+// when every active technique was built for ABI 1.2 or later; older libraries get
+// [`CADR_PASS_TRIANGLES`] for the pick pass instead.
+#define CADR_PASS_PICK 2
 
 #endif  /* CADR_PLUGIN_H */

@@ -170,6 +170,9 @@ pub struct PipelineInputs<'a> {
     pub vertex_spirv: &'a [u32],
     /// The passes to build.
     pub passes: PassSet,
+    /// The kind the pick pass is given: [`abi::CADR_PASS_PICK`] when every active technique
+    /// knows it (ABI 1.2 or later), else [`abi::CADR_PASS_TRIANGLES`].
+    pub pick_kind: abi::CadrPassKind,
 }
 
 impl TechniquePipelines {
@@ -234,7 +237,7 @@ impl TechniquePipelines {
             }
             PassSet::Pick => {
                 let pipeline = this.pipeline(inputs, &fragments.pick, triangles, false)?;
-                this.add(pipeline, abi::CADR_PASS_TRIANGLES);
+                this.add(pipeline, inputs.pick_kind);
             }
         }
         Ok(this)

@@ -444,6 +444,22 @@ impl Techniques {
         .ok_or_else(|| VkError::InvalidUse("technique pipelines were not built".into()))
     }
 
+    /// [`abi::CADR_PASS_PICK`] when every active technique was built for ABI 1.2 or later
+    /// (which knows that the pick pass must not join parts), else the triangles kind older
+    /// libraries know.
+    fn pick_pass_kind(&self) -> abi::CadrPassKind {
+        let knows_pick = self
+            .active
+            .iter()
+            .flatten()
+            .all(|active| active.entry.abi_version >= (1, 2));
+        if knows_pick {
+            abi::CADR_PASS_PICK
+        } else {
+            abi::CADR_PASS_TRIANGLES
+        }
+    }
+
     fn build_pipelines(&mut self, passes: PassSet) -> VkResult<TechniquePipelines> {
         let vertex = self.get(TechniqueKind::Vertex)?;
         let parameters = self.get(TechniqueKind::Parameters)?;
@@ -501,6 +517,7 @@ impl Techniques {
             vertex_input: input,
             vertex_spirv: &spirv,
             passes,
+            pick_kind: self.pick_pass_kind(),
         };
         TechniquePipelines::new(&self.device, &mut self.shaders, &inputs)
     }

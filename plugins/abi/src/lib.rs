@@ -36,7 +36,7 @@ use std::ffi::{c_char, c_void};
 /// Major version of this ABI: a library built for another major version is refused.
 pub const CADR_PLUGIN_ABI_MAJOR: u32 = 1;
 /// Minor version of this ABI: additions that older readers may ignore.
-pub const CADR_PLUGIN_ABI_MINOR: u32 = 1;
+pub const CADR_PLUGIN_ABI_MINOR: u32 = 2;
 /// `(major << 16) | minor`, what [`CadrPluginVersionFn`] returns.
 pub const CADR_PLUGIN_ABI_VERSION: u32 = (CADR_PLUGIN_ABI_MAJOR << 16) | CADR_PLUGIN_ABI_MINOR;
 
@@ -472,6 +472,12 @@ pub type CadrPassKind = u32;
 pub const CADR_PASS_TRIANGLES: CadrPassKind = 0;
 /// Edge lines from the wire index buffer.
 pub const CADR_PASS_EDGES: CadrPassKind = 1;
+/// Since ABI 1.2: the pick pass. Triangles, as [`CADR_PASS_TRIANGLES`], but every pixel must
+/// name its own part: draw each part with its own instance's parameters (never join several
+/// parts into one range or one parameter binding; sorting is fine). The host passes it only
+/// when every active technique was built for ABI 1.2 or later; older libraries get
+/// [`CADR_PASS_TRIANGLES`] for the pick pass instead.
+pub const CADR_PASS_PICK: CadrPassKind = 2;
 
 /// One pass of the frame: its pipeline and what it draws.
 #[repr(C)]

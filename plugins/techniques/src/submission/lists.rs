@@ -78,8 +78,13 @@ fn one_batch_per_range(ranges: &[Range]) -> Vec<Batch> {
         .collect()
 }
 
-/// Builds the list of `pass` with `strategy`.
+/// Builds the list of `pass` with `strategy`. The pick pass never joins parts (each pixel must
+/// name its part): joining strategies draw it one part per range and binding, in scene order.
 pub fn build(scene: &Scene<'_>, pass: abi::CadrPassKind, strategy: Strategy) -> PassList {
+    let strategy = match strategy {
+        Strategy::Join | Strategy::Groups if pass == abi::CADR_PASS_PICK => Strategy::Individual,
+        other => other,
+    };
     let instances = scene.instances();
     let drawn = scene.drawn_ids().filter_map(|id| {
         let instance = instances.get(id as usize)?;

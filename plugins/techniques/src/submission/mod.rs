@@ -77,9 +77,10 @@ struct IndirectPass {
 /// One submission technique.
 pub struct Submit<const STRATEGY: u8, const API: u8, const MODE: u8> {
     gpu: Arc<Gpu>,
-    lists: [PassList; 2],
-    lists_key: Option<(u64, u64)>,
-    indirect: [IndirectPass; 2],
+    lists: [PassList; PASS_SLOTS],
+    /// Per slot, the scene generations its list was built for.
+    lists_key: [Option<(u64, u64)>; PASS_SLOTS],
+    indirect: [IndirectPass; PASS_SLOTS],
     secondary: Option<SecondaryBuffers>,
     recorded_key: Option<u64>,
     recorded_stats: abi::CadrStats,
@@ -99,9 +100,9 @@ impl<const S: u8, const A: u8, const M: u8> Technique for Submit<S, A, M> {
         };
         Ok(Self {
             gpu,
-            lists: [PassList::default(), PassList::default()],
-            lists_key: None,
-            indirect: [IndirectPass::default(), IndirectPass::default()],
+            lists: Default::default(),
+            lists_key: [None; PASS_SLOTS],
+            indirect: Default::default(),
             secondary,
             recorded_key: None,
             recorded_stats: abi::CadrStats::default(),
@@ -109,23 +110,34 @@ impl<const S: u8, const A: u8, const M: u8> Technique for Submit<S, A, M> {
     }
 }
 
-fn pass_slot(kind: abi::CadrPassKind) -> usize {
-    usize::from(kind == abi::CADR_PASS_EDGES)
+/// Triangles, edges and the pick pass each keep their own list and indirect commands.
+pub(crate) const PASS_SLOTS: usize = 3;
+
+/// The list and indirect-command slot of a pass kind (unknown kinds draw as triangles).
+pub(crate) fn pass_slot(kind: abi::CadrPassKind) -> usize {
+    match kind {
+        abi::CADR_PASS_EDGES => 1,
+        abi::CADR_PASS_PICK => 2,
+        _ => 0,
+    }
 }
 
 impl<const S: u8, const A: u8, const M: u8> Submit<S, A, M> {
-    /// Rebuilds the lists when the draws changed; true when they did.
+    /// Rebuilds the lists of the record's passes whose draws changed since they were built;
+    /// true when any was.
     fn refresh_lists(&mut self, record: &Record<'_>) -> bool {
         let scene = record.scene();
         let key = (scene.raw().draws_generation, scene.raw().buffers_generation);
-        if self.lists_key == Some(key) {
-            return false;
-        }
+        let mut changed = false;
         for pass in record.passes() {
-            self.lists[pass_slot(pass.kind)] = lists::build(&scene, pass.kind, strategy(S));
+            let slot = pass_slot(pass.kind);
+            if self.lists_key[slot] != Some(key) {
+                self.lists[slot] = lists::build(&scene, pass.kind, strategy(S));
+                self.lists_key[slot] = Some(key);
+                changed = true;
+            }
         }
-        self.lists_key = Some(key);
-        true
+        changed
     }
 
     /// Writes the indirect commands of every pass.
@@ -183,7 +195,7 @@ impl<const S: u8, const A: u8, const M: u8> Submit<S, A, M> {
             record,
             api: api(A),
             lists: &self.lists,
-            indirect: [0, 1].map(|slot| {
+            indirect: std::array::from_fn(|slot| {
                 let pass = &self.indirect[slot];
                 (
                     pass.commands

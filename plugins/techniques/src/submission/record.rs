@@ -4,7 +4,7 @@
 use std::ops::Range;
 use std::sync::Arc;
 
-use cadr_plugin_sdk::abi::{self, CadrBindState, CadrStats};
+use cadr_plugin_sdk::abi::{CadrBindState, CadrStats};
 use cadr_plugin_sdk::vk::{self, Handle};
 use cadr_plugin_sdk::{Gpu, Record};
 
@@ -28,9 +28,9 @@ pub struct Recorder<'a> {
     pub gpu: &'a Gpu,
     pub record: &'a Record<'a>,
     pub api: Api,
-    pub lists: &'a [PassList; 2],
+    pub lists: &'a [PassList; super::PASS_SLOTS],
     /// Per pass slot: indirect commands, count buffer, number of commands.
-    pub indirect: [(vk::Buffer, vk::Buffer, u32); 2],
+    pub indirect: [(vk::Buffer, vk::Buffer, u32); super::PASS_SLOTS],
 }
 
 /// A `Record` shared with worker threads: every function it leads to is thread-safe per the
@@ -53,7 +53,7 @@ impl Recorder<'_> {
     ) {
         let device = &self.gpu.device;
         for pass in self.record.passes() {
-            let slot = usize::from(pass.kind == abi::CADR_PASS_EDGES);
+            let slot = super::pass_slot(pass.kind);
             let list = &self.lists[slot];
             let batch_range = if part.end == usize::MAX {
                 0..list.batches.len()

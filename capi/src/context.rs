@@ -2,7 +2,7 @@
 
 use std::ffi::{c_char, c_void, CString};
 use std::path::PathBuf;
-use std::sync::{Arc, Mutex};
+use std::sync::Arc;
 
 use cadr_core::technique::{default_plugin_dirs, feature_bits, PluginRegistry, TechniqueKind};
 use cadr_core::vk::{raw::Handle, Device, DeviceChoice, DeviceOptions, InstanceOptions};
@@ -211,8 +211,6 @@ pub(crate) struct ContextState {
     pub(crate) techniques: Vec<TechniqueText>,
     refusals: Vec<(CString, CString)>,
     pub(crate) presentation: bool,
-    /// The device's queue is used by one renderer at a time.
-    pub(crate) queue: Mutex<()>,
 }
 
 impl ContextState {
@@ -300,8 +298,8 @@ fn c_strings(names: Vec<String>, what: &str) -> Result<Vec<CString>, Failure> {
 ///
 /// Ownership: the options and their strings are read during the call only; the context is
 /// the caller's until `cadr_context_destroy`. Thread-safety: callable from any thread; a
-/// context may be used from several threads (calls are serialised where they share the
-/// device's queue).
+/// context may be used from several threads (its renderers take turns on the device's queue,
+/// which the device guards itself).
 ///
 /// # Safety
 /// `options` is null or a valid options struct whose pointers are null or valid for their
@@ -411,7 +409,6 @@ pub unsafe extern "C" fn cadr_context_create(
             techniques,
             refusals,
             presentation,
-            queue: Mutex::new(()),
         };
         let handle = CONTEXTS.insert(Arc::new(state))?;
         // SAFETY: context is null or writable (the caller's contract).

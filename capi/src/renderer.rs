@@ -95,7 +95,8 @@ struct ThreadBound(RendererState);
 // SAFETY: the raw pointers inside (plugin instances and the Vulkan description handed to
 // plugins) are only used while the renderer's mutex is held, so by one thread at a time, which
 // the plugin ABI allows ("all others are called from one thread at a time", cadr_plugin.h);
-// the Vulkan objects are externally synchronised by the same mutex and the context's queue lock.
+// the renderer's Vulkan objects are externally synchronised by the same mutex, and the shared
+// queue by the device's own lock.
 unsafe impl Send for ThreadBound {}
 
 static RENDERERS: Registry<ThreadBound> = Registry::new(0xC3, "renderer");
@@ -143,7 +144,6 @@ fn new_renderer(
             "the context cannot present: create it with the window system's instance extensions (VK_KHR_surface and the platform's, e.g. from glfwGetRequiredInstanceExtensions)".into(),
         ));
     }
-    let _queue = lock(&context.queue);
     let device = &context.device;
     let mut view = View::new(device, Arc::clone(&context.registry), width, height)?;
     let techniques = view.techniques_mut();
@@ -171,7 +171,6 @@ fn new_renderer(
         Some(surface) => Some(Swapchain::new(device, surface, width, height)?),
         None => None,
     };
-    drop(_queue);
     let state = RendererState {
         view,
         swapchain,
@@ -182,17 +181,14 @@ fn new_renderer(
     unsafe { deliver(renderer, "renderer", handle as CadrRenderer) }
 }
 
-/// Runs `body` on a renderer's state with the device's queue reserved for it.
+/// Runs `body` on a renderer's state, the renderer locked for it.
 pub(crate) fn with_renderer<R>(
     renderer: CadrRenderer,
     body: impl FnOnce(&mut RendererState) -> Result<R, Failure>,
 ) -> Result<R, Failure> {
     let object = RENDERERS.get(renderer as u64, "renderer")?;
     let mut guard = lock(&object);
-    let state = &mut guard.0;
-    let context = Arc::clone(&state.context);
-    let _queue = lock(&context.queue);
-    body(state)
+    body(&mut guard.0)
 }
 
 /// Creates a renderer that draws into an offscreen `width` × `height` image, with the fastest
@@ -268,8 +264,6 @@ pub extern "C" fn cadr_renderer_destroy(renderer: CadrRenderer) -> CadrResult {
         let Some(object) = RENDERERS.remove(renderer as u64, "renderer")? else {
             return Ok(());
         };
-        let context = Arc::clone(&lock(&object).0.context);
-        let _queue = lock(&context.queue);
         drop(object);
         Ok(())
     })

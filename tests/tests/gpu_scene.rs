@@ -523,3 +523,53 @@ proptest! {
         assert_no_validation_errors(&device);
     }
 }
+
+#[test]
+fn views_on_two_threads_share_one_device_and_its_queue() {
+    // The device guards its queue: two views rendering at once on two threads never submit
+    // together (the validation layer's thread-safety checks would report it) and both draw the
+    // same picture.
+    let device = test_device();
+    let registry = plugin_registry(&device);
+    let source = generate(&GeneratorSpec::Demo);
+    let bounds = flatten(&source).unwrap().bounds;
+    let camera = Camera::fit(
+        &bounds,
+        f64::from(SIZE.0) / f64::from(SIZE.1),
+        DEFAULT_DIRECTION,
+    );
+    let combinations = [
+        Combination::built_in(),
+        Combination {
+            vertex: "arena".into(),
+            parameters: "ssbo-index".into(),
+            submission: "individual-mdi".into(),
+            culling: "none".into(),
+        },
+    ];
+    let images: Vec<image::RgbaImage> = std::thread::scope(|scope| {
+        let workers: Vec<_> = combinations
+            .iter()
+            .map(|combination| {
+                let (device, registry, source) = (&device, &registry, &source);
+                scope.spawn(move || {
+                    let (mut graph, _) = SceneGraph::from_scene(source).unwrap();
+                    let mut tree = SceneTree::build(&mut graph);
+                    let mut view = View::new(device, Arc::clone(registry), SIZE.0, SIZE.1).unwrap();
+                    view.techniques_mut().select(combination).unwrap();
+                    for _ in 0..50 {
+                        view.render(&graph, &mut tree, &camera).unwrap();
+                    }
+                    view.renderer().read_rgba8().unwrap()
+                })
+            })
+            .collect();
+        workers.into_iter().map(|w| w.join().unwrap()).collect()
+    });
+    let difference = cadr_tests::images::compare(&images[0], &images[1]).unwrap();
+    assert!(
+        difference.mean < 0.3 && difference.p99 < 6.0,
+        "{difference:?}"
+    );
+    assert_no_validation_errors(&device);
+}

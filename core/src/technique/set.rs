@@ -334,11 +334,7 @@ impl Techniques {
     }
 
     fn wait_idle(&self) -> VkResult<()> {
-        // SAFETY: the device is alive; nothing else submits while the owner swaps.
-        unsafe { self.device.raw().device_wait_idle() }.map_err(|result| VkError::Call {
-            call: "vkDeviceWaitIdle",
-            result,
-        })
+        self.device.wait_idle()
     }
 
     fn create(&self, entry: &Arc<TechniqueEntry>) -> VkResult<Active> {

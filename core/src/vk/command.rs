@@ -80,14 +80,7 @@ impl CommandContext {
             .or_vk("vkEndCommandBuffer")?;
         let buffers = [self.command_buffer];
         let submit = [vk::SubmitInfo::default().command_buffers(&buffers)];
-        // SAFETY: the buffer is executable, the fence unsignalled; the queue is used from one
-        // thread at a time (Device users serialise submissions).
-        unsafe {
-            self.device
-                .raw
-                .queue_submit(self.device.queue, &submit, self.fence)
-        }
-        .or_vk("vkQueueSubmit")
+        self.device.submit(&submit, self.fence)
     }
 
     /// Ends recording and submits after each `wait` semaphore (at its stage) has been
@@ -108,13 +101,7 @@ impl CommandContext {
             .wait_semaphores(&wait_semaphores)
             .wait_dst_stage_mask(&wait_stages)
             .signal_semaphores(signal)];
-        // SAFETY: as in submit; the semaphores belong to this device.
-        unsafe {
-            self.device
-                .raw
-                .queue_submit(self.device.queue, &submit, self.fence)
-        }
-        .or_vk("vkQueueSubmit")
+        self.device.submit(&submit, self.fence)
     }
 
     /// Waits until the last submission has finished.

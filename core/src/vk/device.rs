@@ -1,7 +1,7 @@
 //! The logical device: queue, memory allocator, debug names and capability flags.
 
 use std::ffi::CString;
-use std::sync::{Arc, Mutex, MutexGuard};
+use std::sync::{Arc, Mutex, MutexGuard, PoisonError};
 
 use ash::vk;
 use gpu_allocator::vulkan::{
@@ -51,7 +51,10 @@ pub struct Device {
     pub(crate) instance: Arc<Instance>,
     adapter: Adapter,
     pub(crate) raw: ash::Device,
-    pub(crate) queue: vk::Queue,
+    /// The render queue. Vulkan wants submissions, presents and device-wide waits on it
+    /// externally synchronised: every use goes through [`Device::with_queue`], so renderers
+    /// on several threads sharing this device take turns.
+    queue: Mutex<vk::Queue>,
     allocator: Mutex<Option<Allocator>>,
     debug_utils: Option<ash::ext::debug_utils::Device>,
     capabilities: Capabilities,
@@ -221,14 +224,14 @@ impl Device {
             instance,
             adapter,
             raw,
-            queue,
+            queue: Mutex::new(queue),
             allocator: Mutex::new(Some(allocator)),
             debug_utils,
             capabilities,
             limits: properties.limits,
             queue_timestamp_bits,
         });
-        device.set_name(device.queue, "cadr render queue");
+        device.set_name(queue, "cadr render queue");
         Ok(device)
     }
 
@@ -329,10 +332,30 @@ impl Device {
         let _ = unsafe { debug_utils.set_debug_utils_object_name(&info) };
     }
 
-    /// Waits until the device is idle.
+    /// Runs `use_queue` with the render queue reserved for it: no other thread submits,
+    /// presents or waits for the device meanwhile.
+    pub(crate) fn with_queue<R>(&self, use_queue: impl FnOnce(vk::Queue) -> R) -> R {
+        let queue = self.queue.lock().unwrap_or_else(PoisonError::into_inner);
+        use_queue(*queue)
+    }
+
+    /// Submits `submits` to the render queue, signalling `fence` when they are done.
+    pub(crate) fn submit(&self, submits: &[vk::SubmitInfo<'_>], fence: vk::Fence) -> VkResult<()> {
+        self.with_queue(|queue| {
+            // SAFETY: the queue is reserved for this call; the caller passes executable
+            // command buffers, semaphores and an unsignalled fence of this device.
+            unsafe { self.raw.queue_submit(queue, submits, fence) }
+        })
+        .or_vk("vkQueueSubmit")
+    }
+
+    /// Waits until the device is idle (the queue reserved meanwhile, as Vulkan requires).
     pub fn wait_idle(&self) -> VkResult<()> {
-        // SAFETY: the device is alive; the caller does not record concurrently on our queue.
-        unsafe { self.raw.device_wait_idle() }.or_vk("vkDeviceWaitIdle")
+        self.with_queue(|_| {
+            // SAFETY: the device is alive and its only queue is reserved for the wait.
+            unsafe { self.raw.device_wait_idle() }
+        })
+        .or_vk("vkDeviceWaitIdle")
     }
 }
 

@@ -349,9 +349,11 @@ impl Swapchain {
             .wait_semaphores(&waits)
             .swapchains(&swapchains)
             .image_indices(&indices);
-        // SAFETY: the image was acquired and its blit submitted with `ready` signalled; the
-        // queue is used from one thread at a time (Device users serialise submissions).
-        let presented = unsafe { self.swapchain_fn.queue_present(device.queue, &present_info) };
+        let presented = device.with_queue(|queue| {
+            // SAFETY: the image was acquired and its blit submitted with `ready` signalled;
+            // the queue is reserved for the call.
+            unsafe { self.swapchain_fn.queue_present(queue, &present_info) }
+        });
         let outcome = match presented {
             Ok(suboptimal) => {
                 self.stale |= suboptimal;

@@ -101,6 +101,39 @@ typedef struct CadrRendererObject CadrRendererObject;
 // Opaque type behind [`CadrScene`].
 typedef struct CadrSceneObject CadrSceneObject;
 
+// A scene: a scene graph with one root Group, and the scene tree flattened from it.
+// Created by `cadr_scene_create`, released by `cadr_scene_destroy`. A scene needs no context:
+// any renderer can draw it.
+typedef struct CadrSceneObject *CadrScene;
+
+// An axis-aligned box in world space; `min` > `max` when empty.
+typedef struct CadrBounds {
+  // Smallest corner.
+  double min[3];
+  // Largest corner.
+  double max[3];
+} CadrBounds;
+
+// Counts of a scene.
+typedef struct CadrSceneStatistics {
+  // Live nodes, the root included.
+  uint64_t nodes;
+  // Live geometries.
+  uint64_t geometries;
+  // Live materials.
+  uint64_t materials;
+  // Drawable parts over all paths (a shared subgraph counts once per path).
+  uint64_t instances;
+  // Of those, the ones shown (flags, switches, LOD).
+  uint64_t visible_instances;
+  // Triangles of the shown instances.
+  uint64_t visible_triangles;
+} CadrSceneStatistics;
+
+// A node of a scene (0 is never a valid node). Generation-checked: a destroyed node's handle
+// gives `CADR_RESULT_DESTROYED_HANDLE`.
+typedef uint64_t CadrNode;
+
 // A camera: world-to-view and view-to-clip matrices, column-major doubles. The view looks
 // down -Z (right-handed); the projection follows Vulkan (y down, depth 0..1). Hosts may fill
 // it with their own matrices.
@@ -110,14 +143,6 @@ typedef struct CadrCamera {
   // View to clip space.
   double projection[16];
 } CadrCamera;
-
-// An axis-aligned box in world space; `min` > `max` when empty.
-typedef struct CadrBounds {
-  // Smallest corner.
-  double min[3];
-  // Largest corner.
-  double max[3];
-} CadrBounds;
 
 // How to create a context. Fill it with `cadr_context_options_default` first, then change
 // what you need; `size` lets later versions add fields.
@@ -221,11 +246,6 @@ typedef struct CadrPluginRefusal {
   const char *reason;
 } CadrPluginRefusal;
 
-// A scene: a scene graph with one root Group, and the scene tree flattened from it.
-// Created by `cadr_scene_create`, released by `cadr_scene_destroy`. A scene needs no context:
-// any renderer can draw it.
-typedef struct CadrSceneObject *CadrScene;
-
 // A range of a geometry's indices drawn with one material, and its range of edge indices.
 typedef struct CadrPart {
   // First index in `indices`.
@@ -283,14 +303,28 @@ typedef struct CadrMaterialDesc {
 // A material of a scene (0 is never valid).
 typedef uint64_t CadrMaterial;
 
+// What `cadr_scene_load` created. Free the arrays with `cadr_load_result_free`.
+typedef struct CadrLoadResult {
+  // The new Group, named after the file, that holds the file's content.
+  CadrNode root;
+  // Every node created, `root` first.
+  CadrNode *nodes;
+  // Number of `nodes`.
+  size_t node_count;
+  // The file's geometries, in the file's order.
+  CadrGeometry *geometries;
+  // Number of `geometries`.
+  size_t geometry_count;
+  // The file's materials, in the file's order.
+  CadrMaterial *materials;
+  // Number of `materials`.
+  size_t material_count;
+} CadrLoadResult;
+
 // A renderer: draws scenes with the chosen techniques into an offscreen image, or into a host
 // window through a swapchain. Created by `cadr_renderer_create` or
 // `cadr_renderer_create_for_surface`, released by `cadr_renderer_destroy`.
 typedef struct CadrRendererObject *CadrRenderer;
-
-// A node of a scene (0 is never a valid node). Generation-checked: a destroyed node's handle
-// gives `CADR_RESULT_DESTROYED_HANDLE`.
-typedef uint64_t CadrNode;
 
 // One picked occurrence of a part.
 typedef struct CadrPickHit {
@@ -368,40 +402,6 @@ typedef struct CadrFrameStats {
   uint64_t bytes_uploaded;
 } CadrFrameStats;
 
-// What `cadr_scene_load` created. Free the arrays with `cadr_load_result_free`.
-typedef struct CadrLoadResult {
-  // The new Group, named after the file, that holds the file's content.
-  CadrNode root;
-  // Every node created, `root` first.
-  CadrNode *nodes;
-  // Number of `nodes`.
-  size_t node_count;
-  // The file's geometries, in the file's order.
-  CadrGeometry *geometries;
-  // Number of `geometries`.
-  size_t geometry_count;
-  // The file's materials, in the file's order.
-  CadrMaterial *materials;
-  // Number of `materials`.
-  size_t material_count;
-} CadrLoadResult;
-
-// Counts of a scene.
-typedef struct CadrSceneStatistics {
-  // Live nodes, the root included.
-  uint64_t nodes;
-  // Live geometries.
-  uint64_t geometries;
-  // Live materials.
-  uint64_t materials;
-  // Drawable parts over all paths (a shared subgraph counts once per path).
-  uint64_t instances;
-  // Of those, the ones shown (flags, switches, LOD).
-  uint64_t visible_instances;
-  // Triangles of the shown instances.
-  uint64_t visible_triangles;
-} CadrSceneStatistics;
-
 #ifdef __cplusplus
 extern "C" {
 #endif // __cplusplus
@@ -439,6 +439,38 @@ enum CadrResult cadr_render_scene_to_png(const char *scene,
                                          uint32_t width,
                                          uint32_t height,
                                          bool validation);
+
+// Writes the world-space bounds of everything the scene shows (empty: `min` > `max`).
+//
+// Returns `CADR_RESULT_OK`, `CADR_RESULT_NULL_ARGUMENT` or a handle error.
+// Ownership: the outputs are the caller's; cadr keeps no pointer to them.
+// Thread-safety: as `cadr_scene_create`.
+//
+// # Safety
+// `bounds` is null or writable.
+enum CadrResult cadr_scene_bounds(CadrScene scene, struct CadrBounds *bounds);
+
+// Writes the scene's counts: nodes, geometries, materials, instances and what is shown.
+//
+// Returns `CADR_RESULT_OK`, `CADR_RESULT_NULL_ARGUMENT` or a handle error.
+// Ownership: the outputs are the caller's; cadr keeps no pointer to them.
+// Thread-safety: as `cadr_scene_create`.
+//
+// # Safety
+// `statistics` is null or writable.
+enum CadrResult cadr_scene_statistics(CadrScene scene, struct CadrSceneStatistics *statistics);
+
+// Writes the world-space bounds of what `node` shows, over every path it is reached by
+// (empty: `min` > `max`). Walks all instances of the scene: meant for occasional queries
+// (framing a selection, exploded views), not for every frame.
+//
+// Returns `CADR_RESULT_OK`, `CADR_RESULT_NULL_ARGUMENT` or a handle error.
+// Ownership: the outputs are the caller's; cadr keeps no pointer to them.
+// Thread-safety: as `cadr_scene_create`.
+//
+// # Safety
+// `bounds` is null or writable.
+enum CadrResult cadr_scene_node_bounds(CadrScene scene, CadrNode node, struct CadrBounds *bounds);
 
 // A perspective camera at `eye` looking at `target` (+Y up, or +Z when looking along Y) with a
 // vertical field of view in degrees, `aspect` = width / height, and near and far distances.
@@ -491,8 +523,8 @@ enum CadrResult cadr_context_options_default(struct CadrContextOptions *options)
 //
 // Ownership: the options and their strings are read during the call only; the context is
 // the caller's until `cadr_context_destroy`. Thread-safety: callable from any thread; a
-// context may be used from several threads (calls are serialised where they share the
-// device's queue).
+// context may be used from several threads (its renderers take turns on the device's queue,
+// which the device guards itself).
 //
 // # Safety
 // `options` is null or a valid options struct whose pointers are null or valid for their
@@ -676,248 +708,31 @@ enum CadrResult cadr_scene_set_material(CadrScene scene,
 // Thread-safety: as `cadr_scene_create`.
 enum CadrResult cadr_scene_destroy_material(CadrScene scene, CadrMaterial material);
 
-// Picks what lies under pixel (`x`, `y`) of the renderer's image (column, row from the top
-// left) when drawing `scene` seen by `camera` with the current techniques: at most one hit,
-// with the geo node, part, occurrence path, depth and world position. Parts that are hidden
-// are not drawn; parts that are not pickable (`CADR_NODE_PICKABLE` cleared on a node of their
-// path) let the click through to what is behind them.
+// Loads a scene file (`.gltf`, `.glb`, `.csf`, `.csf.gz`) or a built-in generator
+// (`gen:demo`, `gen:grid:parts=N`, …) and adds it below `parent` under a new Group named after
+// it. On success `*result` lists what was created; free it with `cadr_load_result_free`.
 //
-// Returns `CADR_RESULT_OK` and writes `*result` (no hits over background),
-// `CADR_RESULT_NULL_ARGUMENT`, `CADR_RESULT_INVALID_ARGUMENT` (a pixel outside the image, a
-// camera that is not finite), `CADR_RESULT_VULKAN`, `CADR_RESULT_PLUGIN_FAILED` or a handle
-// error. Ownership: the result's arrays are cadr's until `cadr_pick_result_free`; the camera
-// is read during the call. Thread-safety: as `cadr_renderer_render` (the scene is locked
-// during the call).
+// Returns `CADR_RESULT_OK`, `CADR_RESULT_NULL_ARGUMENT`, `CADR_RESULT_LOAD_FAILED` (the
+// message names the file and the bad item; nothing is added) or a handle error.
+// Ownership: `path` is read during the call; the arrays in `*result` are the caller's until
+// `cadr_load_result_free`. Thread-safety: as `cadr_scene_create`; the file is read while the
+// scene is not locked.
 //
 // # Safety
-// `camera` is null or readable; `result` is null or writable.
-enum CadrResult cadr_renderer_pick(CadrRenderer renderer,
-                                   CadrScene scene,
-                                   const struct CadrCamera *camera,
-                                   uint32_t x,
-                                   uint32_t y,
-                                   struct CadrPickResult *result);
+// `path` is null or a valid string; `result` is null or writable.
+enum CadrResult cadr_scene_load(CadrScene scene,
+                                const char *path,
+                                CadrNode parent,
+                                struct CadrLoadResult *result);
 
-// Box selection: every pickable part with a visible pixel in the `width` × `height`
-// rectangle whose top-left pixel is (`x`, `y`), one hit per occurrence and part (at its
-// nearest pixel), nearest first.
+// Frees the arrays of a load result and zeroes it. NULL, or a zeroed result, is a no-op.
 //
-// Returns as `cadr_renderer_pick` (`CADR_RESULT_INVALID_ARGUMENT` also for an empty
-// rectangle or one that leaves the image). Ownership and thread-safety: as
-// `cadr_renderer_pick`.
+// Ownership: takes back what `cadr_scene_load` handed out; free each result once.
+// Thread-safety: callable from any thread.
 //
 // # Safety
-// As `cadr_renderer_pick`.
-enum CadrResult cadr_renderer_pick_rect(CadrRenderer renderer,
-                                        CadrScene scene,
-                                        const struct CadrCamera *camera,
-                                        uint32_t x,
-                                        uint32_t y,
-                                        uint32_t width,
-                                        uint32_t height,
-                                        struct CadrPickResult *result);
-
-// Frees the arrays of a pick result and zeroes it. NULL, or a zeroed result, is a no-op.
-//
-// Ownership: takes back what `cadr_renderer_pick` or `cadr_renderer_pick_rect` handed out;
-// free each result once. Thread-safety: callable from any thread.
-//
-// # Safety
-// `result` is null or a result filled by a pick (or zeroed).
-void cadr_pick_result_free(struct CadrPickResult *result);
-
-// Creates a renderer that draws into an offscreen `width` × `height` image, with the fastest
-// technique combination the device and plugins allow (see `cadr_renderer_technique`).
-//
-// Returns `CADR_RESULT_OK` and writes `*renderer`, `CADR_RESULT_NULL_ARGUMENT`,
-// `CADR_RESULT_INVALID_ARGUMENT` (size 0 or above 16384), `CADR_RESULT_NOT_FOUND` (no plugins:
-// the message lists the directories searched), `CADR_RESULT_VULKAN` or a handle error.
-// Ownership: the renderer is the caller's until `cadr_renderer_destroy`; it keeps the
-// context's device alive. Thread-safety: callable from any thread; one renderer is used by
-// one call at a time (an internal lock), and renderers of one context take turns on its queue.
-//
-// # Safety
-// `renderer` is null or writable.
-enum CadrResult cadr_renderer_create(CadrContext context,
-                                     uint32_t width,
-                                     uint32_t height,
-                                     CadrRenderer *renderer);
-
-// Creates a renderer that presents into a host window: `surface` is a `VkSurfaceKHR` the host
-// created on the context's instance (`cadr_context_vulkan_instance`), e.g. with
-// `glfwCreateWindowSurface`; pass it as `(uint64_t)surface`. cadr owns the swapchain,
-// recreates it when the window's size changes (call `cadr_renderer_resize` from the host's
-// resize callback) and presents nothing while the window is minimized.
-//
-// Returns as `cadr_renderer_create`, and `CADR_RESULT_UNSUPPORTED` when the context was made
-// without the window system's instance extensions or cannot present to this surface.
-// Ownership: on success the renderer owns the surface and destroys it with itself; on failure
-// the surface stays the caller's. Thread-safety: as `cadr_renderer_create`.
-//
-// # Safety
-// `surface` is 0 or a live surface of the context's instance not used by another swapchain;
-// `renderer` is null or writable.
-enum CadrResult cadr_renderer_create_for_surface(CadrContext context,
-                                                 uint64_t surface,
-                                                 uint32_t width,
-                                                 uint32_t height,
-                                                 CadrRenderer *renderer);
-
-// Destroys a renderer (waiting for its last frame) and, for a window renderer, its swapchain
-// and surface. NULL is a no-op.
-//
-// Returns `CADR_RESULT_OK` or a handle error.
-// Ownership: the handle (or item) is given back to cadr and invalid afterwards.
-// Thread-safety: not while another thread uses this renderer.
-enum CadrResult cadr_renderer_destroy(CadrRenderer renderer);
-
-// Gives the renderer a new size: for a window, call it from the framebuffer-size callback
-// (0 × 0 while minimized is accepted: frames are skipped until the window has area again).
-//
-// Returns `CADR_RESULT_OK`, `CADR_RESULT_INVALID_ARGUMENT` (above 16384, or 0 offscreen),
-// Ownership: nothing changes hands; the arguments are read during the call only.
-// `CADR_RESULT_VULKAN` or a handle error. Thread-safety: as `cadr_renderer_create`.
-enum CadrResult cadr_renderer_resize(CadrRenderer renderer, uint32_t width, uint32_t height);
-
-// Writes the size of the renderer's image (for a window: of the swapchain, 0 × 0 while
-// minimized).
-//
-// Returns `CADR_RESULT_OK`, `CADR_RESULT_NULL_ARGUMENT` or a handle error.
-// Ownership: the outputs are the caller's; cadr keeps no pointer to them.
-// Thread-safety: as `cadr_renderer_create`.
-//
-// # Safety
-// `width` and `height` are null or writable.
-enum CadrResult cadr_renderer_size(CadrRenderer renderer, uint32_t *width, uint32_t *height);
-
-// Checks whether a technique selection would work, without changing anything.
-//
-// Returns `CADR_RESULT_OK`, `CADR_RESULT_NOT_FOUND` (unknown name), `CADR_RESULT_UNSUPPORTED`
-// (the device cannot run a technique), `CADR_RESULT_INVALID_COMBINATION` (techniques that do
-// not fit; the message says which need is unmet), `CADR_RESULT_NULL_ARGUMENT` or a handle
-// error. Ownership: the strings are read during the call.
-// Thread-safety: as `cadr_renderer_create`.
-//
-// # Safety
-// `selection` is null or valid with null or valid strings.
-enum CadrResult cadr_renderer_check_techniques(CadrRenderer renderer,
-                                               const struct CadrTechniqueSelection *selection);
-
-// Switches to a technique selection at run time. A refused selection keeps the current one;
-// a plugin that fails to create its instance also keeps it (`CADR_RESULT_PLUGIN_FAILED`).
-//
-// Returns as `cadr_renderer_check_techniques`, and `CADR_RESULT_PLUGIN_FAILED`.
-// Ownership and thread-safety: as `cadr_renderer_check_techniques`.
-//
-// # Safety
-// As `cadr_renderer_check_techniques`.
-enum CadrResult cadr_renderer_set_techniques(CadrRenderer renderer,
-                                             const struct CadrTechniqueSelection *selection);
-
-// Replaces the technique of one kind (`CADR_TECHNIQUE_KIND_*`) by name.
-//
-// Returns as `cadr_renderer_set_techniques`, and `CADR_RESULT_INVALID_ARGUMENT` for an
-// Ownership: nothing changes hands; the arguments are read during the call only.
-// unknown kind. Thread-safety: as `cadr_renderer_create`.
-//
-// # Safety
-// `name` is null or a valid string.
-enum CadrResult cadr_renderer_set_technique(CadrRenderer renderer, uint32_t kind, const char *name);
-
-// Writes the name of the renderer's current technique of `kind` (`CADR_TECHNIQUE_KIND_*`).
-//
-// Returns `CADR_RESULT_OK`, `CADR_RESULT_INVALID_ARGUMENT` (unknown kind),
-// `CADR_RESULT_NULL_ARGUMENT` or a handle error.
-// Ownership: the string belongs to the context (valid while it or a renderer of it lives).
-// Thread-safety: as `cadr_renderer_create`.
-//
-// # Safety
-// `name` is null or writable.
-enum CadrResult cadr_renderer_technique(CadrRenderer renderer, uint32_t kind, const char **name);
-
-// Sets the shade mode: `CADR_SHADE_SOLID` or `CADR_SHADE_EDGES`.
-//
-// Returns `CADR_RESULT_OK`, `CADR_RESULT_INVALID_ARGUMENT` (unknown mode), `CADR_RESULT_VULKAN`
-// Ownership: nothing changes hands; the arguments are read during the call only.
-// or a handle error. Thread-safety: as `cadr_renderer_create`.
-enum CadrResult cadr_renderer_set_shade_mode(CadrRenderer renderer, uint32_t mode);
-
-// Writes the shade mode (`CADR_SHADE_SOLID` or `CADR_SHADE_EDGES`).
-//
-// Returns `CADR_RESULT_OK`, `CADR_RESULT_NULL_ARGUMENT` or a handle error.
-// Ownership: the outputs are the caller's; cadr keeps no pointer to them.
-// Thread-safety: as `cadr_renderer_create`.
-//
-// # Safety
-// `mode` is null or writable.
-enum CadrResult cadr_renderer_shade_mode(CadrRenderer renderer, uint32_t *mode);
-
-// Renders one frame of `scene` seen by `camera`: applies the host's edits since the last
-// frame (incrementally), culls, draws with the current techniques and, for a window, presents.
-// `stats` may be NULL.
-//
-// Returns `CADR_RESULT_OK`, `CADR_RESULT_NULL_ARGUMENT`, `CADR_RESULT_INVALID_ARGUMENT`
-// (non-finite camera), `CADR_RESULT_VULKAN`, `CADR_RESULT_PLUGIN_FAILED` or a handle error.
-// Ownership: the camera is read during the call. Thread-safety: as `cadr_renderer_create`; the
-// scene is locked during the call. A scene drawn alternately by two renderers is uploaded
-// afresh at each change of renderer.
-//
-// # Safety
-// `camera` is null or readable; `stats` null or writable.
-enum CadrResult cadr_renderer_render(CadrRenderer renderer,
-                                     CadrScene scene,
-                                     const struct CadrCamera *camera,
-                                     struct CadrFrameStats *stats);
-
-// Copies the last frame into `rgba` as tightly packed RGBA8 rows, top row first
-// (width × height × 4 bytes; see `cadr_renderer_size`).
-//
-// Returns `CADR_RESULT_OK`, `CADR_RESULT_NULL_ARGUMENT`, `CADR_RESULT_BUFFER_TOO_SMALL`
-// (nothing is written; the message gives the size needed), `CADR_RESULT_VULKAN` or a handle
-// error. Ownership: `rgba` is the caller's. Thread-safety: as `cadr_renderer_create`.
-//
-// # Safety
-// `rgba` is null or writable for `capacity` bytes.
-enum CadrResult cadr_renderer_read_pixels(CadrRenderer renderer, uint8_t *rgba, size_t capacity);
-
-// Writes the last frame to a PNG file.
-//
-// Returns `CADR_RESULT_OK`, `CADR_RESULT_NULL_ARGUMENT`, `CADR_RESULT_IO` (the message names
-// the file), `CADR_RESULT_VULKAN` or a handle error. Ownership: `path` is read during the call.
-// Thread-safety: as `cadr_renderer_create`.
-//
-// # Safety
-// `path` is null or a valid string.
-enum CadrResult cadr_renderer_save_png(CadrRenderer renderer, const char *path);
-
-// Creates an empty scene (a root Group only).
-//
-// Returns `CADR_RESULT_OK` and writes `*scene`, or `CADR_RESULT_NULL_ARGUMENT`.
-// Ownership: the scene is the caller's until `cadr_scene_destroy`. Thread-safety: callable
-// from any thread; a scene may be used from several threads, one call at a time (an internal
-// lock serialises them).
-//
-// # Safety
-// `scene` is null or writable.
-enum CadrResult cadr_scene_create(CadrScene *scene);
-
-// Destroys a scene and everything in it; its node, geometry and material handles become
-// invalid. NULL is a no-op.
-//
-// Returns `CADR_RESULT_OK` or a handle error.
-// Ownership: the handle (or item) is given back to cadr and invalid afterwards.
-// Thread-safety: not while another thread uses the scene.
-enum CadrResult cadr_scene_destroy(CadrScene scene);
-
-// Writes the scene's root Group.
-//
-// Returns `CADR_RESULT_OK`, `CADR_RESULT_NULL_ARGUMENT` or a handle error.
-// Ownership: the outputs are the caller's; cadr keeps no pointer to them.
-// Thread-safety: as `cadr_scene_create`.
-//
-// # Safety
-// `root` is null or writable.
-enum CadrResult cadr_scene_root(CadrScene scene, CadrNode *root);
+// `result` is null or a result filled by `cadr_scene_load` (or zeroed).
+void cadr_load_result_free(struct CadrLoadResult *result);
 
 // Creates a Group (not attached yet). `name` may be NULL.
 //
@@ -1028,8 +843,9 @@ enum CadrResult cadr_scene_add_child(CadrScene scene, CadrNode parent, CadrNode 
 // Inserts `child` at `position` (0 to the child count) of `parent`'s children.
 //
 // Returns as `cadr_scene_add_child`, and `CADR_RESULT_INVALID_ARGUMENT` for a position out of
+// range.
 // Ownership: nothing changes hands; the arguments are read during the call only.
-// range. Thread-safety: as `cadr_scene_create`.
+// Thread-safety: as `cadr_scene_create`.
 enum CadrResult cadr_scene_insert_child(CadrScene scene,
                                         CadrNode parent,
                                         uint32_t position,
@@ -1055,8 +871,9 @@ enum CadrResult cadr_scene_child_count(CadrScene scene, CadrNode node, uint32_t 
 // Writes child `index` of `node`.
 //
 // Returns `CADR_RESULT_OK`, `CADR_RESULT_NOT_FOUND` (index out of range),
+// `CADR_RESULT_NULL_ARGUMENT` or a handle error.
 // Ownership: the outputs are the caller's; cadr keeps no pointer to them.
-// `CADR_RESULT_NULL_ARGUMENT` or a handle error. Thread-safety: as `cadr_scene_create`.
+// Thread-safety: as `cadr_scene_create`.
 //
 // # Safety
 // `child` is null or writable.
@@ -1065,8 +882,9 @@ enum CadrResult cadr_scene_child(CadrScene scene, CadrNode node, uint32_t index,
 // Sets a Transform's 4×4 column-major double matrix.
 //
 // Returns `CADR_RESULT_OK`, `CADR_RESULT_NULL_ARGUMENT`, `CADR_RESULT_INVALID_ARGUMENT` (not
+// a Transform, non-finite values) or a handle error.
 // Ownership: nothing changes hands; the arguments are read during the call only.
-// a Transform, non-finite values) or a handle error. Thread-safety: as `cadr_scene_create`.
+// Thread-safety: as `cadr_scene_create`.
 //
 // # Safety
 // `matrix` is null or 16 readable doubles.
@@ -1076,8 +894,9 @@ enum CadrResult cadr_scene_set_matrix(CadrScene scene, CadrNode node, const doub
 // child count.
 //
 // Returns `CADR_RESULT_OK`, `CADR_RESULT_NULL_ARGUMENT`, `CADR_RESULT_INVALID_ARGUMENT` (not a
+// Switch, wrong count) or a handle error.
 // Ownership: nothing changes hands; the arguments are read during the call only.
-// Switch, wrong count) or a handle error. Thread-safety: as `cadr_scene_create`.
+// Thread-safety: as `cadr_scene_create`.
 //
 // # Safety
 // `mask` is null or `count` readable bools.
@@ -1122,63 +941,250 @@ enum CadrResult cadr_scene_set_part_visible(CadrScene scene,
                                             uint32_t part,
                                             bool visible);
 
-// Loads a scene file (`.gltf`, `.glb`, `.csf`, `.csf.gz`) or a built-in generator
-// (`gen:demo`, `gen:grid:parts=N`, …) and adds it below `parent` under a new Group named after
-// it. On success `*result` lists what was created; free it with `cadr_load_result_free`.
+// Picks what lies under pixel (`x`, `y`) of the renderer's image (column, row from the top
+// left) when drawing `scene` seen by `camera` with the current techniques: at most one hit,
+// with the geo node, part, occurrence path, depth and world position. Parts that are hidden
+// are not drawn; parts that are not pickable (`CADR_NODE_PICKABLE` cleared on a node of their
+// path) let the click through to what is behind them.
 //
-// Returns `CADR_RESULT_OK`, `CADR_RESULT_NULL_ARGUMENT`, `CADR_RESULT_LOAD_FAILED` (the
-// message names the file and the bad item; nothing is added) or a handle error.
-// Ownership: `path` is read during the call; the arrays in `*result` are the caller's until
-// `cadr_load_result_free`. Thread-safety: as `cadr_scene_create`; the file is read while the
-// scene is not locked.
-//
-// # Safety
-// `path` is null or a valid string; `result` is null or writable.
-enum CadrResult cadr_scene_load(CadrScene scene,
-                                const char *path,
-                                CadrNode parent,
-                                struct CadrLoadResult *result);
-
-// Frees the arrays of a load result and zeroes it. NULL, or a zeroed result, is a no-op.
-//
-// Ownership: takes back what `cadr_scene_load` handed out; free each result once.
-// Thread-safety: callable from any thread.
+// Returns `CADR_RESULT_OK` and writes `*result` (no hits over background),
+// `CADR_RESULT_NULL_ARGUMENT`, `CADR_RESULT_INVALID_ARGUMENT` (a pixel outside the image, a
+// camera that is not finite), `CADR_RESULT_VULKAN`, `CADR_RESULT_PLUGIN_FAILED` or a handle
+// error. Ownership: the result's arrays are cadr's until `cadr_pick_result_free`; the camera
+// is read during the call. Thread-safety: as `cadr_renderer_render` (the scene is locked
+// during the call).
 //
 // # Safety
-// `result` is null or a result filled by `cadr_scene_load` (or zeroed).
-void cadr_load_result_free(struct CadrLoadResult *result);
+// `camera` is null or readable; `result` is null or writable.
+enum CadrResult cadr_renderer_pick(CadrRenderer renderer,
+                                   CadrScene scene,
+                                   const struct CadrCamera *camera,
+                                   uint32_t x,
+                                   uint32_t y,
+                                   struct CadrPickResult *result);
 
-// Writes the world-space bounds of everything the scene shows (empty: `min` > `max`).
+// Box selection: every pickable part with a visible pixel in the `width` × `height`
+// rectangle whose top-left pixel is (`x`, `y`), one hit per occurrence and part (at its
+// nearest pixel), nearest first.
+//
+// Returns as `cadr_renderer_pick` (`CADR_RESULT_INVALID_ARGUMENT` also for an empty
+// rectangle or one that leaves the image). Ownership and thread-safety: as
+// `cadr_renderer_pick`.
+//
+// # Safety
+// As `cadr_renderer_pick`.
+enum CadrResult cadr_renderer_pick_rect(CadrRenderer renderer,
+                                        CadrScene scene,
+                                        const struct CadrCamera *camera,
+                                        uint32_t x,
+                                        uint32_t y,
+                                        uint32_t width,
+                                        uint32_t height,
+                                        struct CadrPickResult *result);
+
+// Frees the arrays of a pick result and zeroes it. NULL, or a zeroed result, is a no-op.
+//
+// Ownership: takes back what `cadr_renderer_pick` or `cadr_renderer_pick_rect` handed out;
+// free each result once. Thread-safety: callable from any thread.
+//
+// # Safety
+// `result` is null or a result filled by a pick (or zeroed).
+void cadr_pick_result_free(struct CadrPickResult *result);
+
+// Creates a renderer that draws into an offscreen `width` × `height` image, with the fastest
+// technique combination the device and plugins allow (see `cadr_renderer_technique`).
+//
+// Returns `CADR_RESULT_OK` and writes `*renderer`, `CADR_RESULT_NULL_ARGUMENT`,
+// `CADR_RESULT_INVALID_ARGUMENT` (size 0 or above 16384), `CADR_RESULT_NOT_FOUND` (no plugins:
+// the message lists the directories searched), `CADR_RESULT_VULKAN` or a handle error.
+// Ownership: the renderer is the caller's until `cadr_renderer_destroy`; it keeps the
+// context's device alive. Thread-safety: callable from any thread; one renderer is used by
+// one call at a time (an internal lock), and renderers of one context take turns on its queue.
+//
+// # Safety
+// `renderer` is null or writable.
+enum CadrResult cadr_renderer_create(CadrContext context,
+                                     uint32_t width,
+                                     uint32_t height,
+                                     CadrRenderer *renderer);
+
+// Creates a renderer that presents into a host window: `surface` is a `VkSurfaceKHR` the host
+// created on the context's instance (`cadr_context_vulkan_instance`), e.g. with
+// `glfwCreateWindowSurface`; pass it as `(uint64_t)surface`. cadr owns the swapchain,
+// recreates it when the window's size changes (call `cadr_renderer_resize` from the host's
+// resize callback) and presents nothing while the window is minimized.
+//
+// Returns as `cadr_renderer_create`, and `CADR_RESULT_UNSUPPORTED` when the context was made
+// without the window system's instance extensions or cannot present to this surface.
+// Ownership: on success the renderer owns the surface and destroys it with itself; on failure
+// the surface stays the caller's. Thread-safety: as `cadr_renderer_create`.
+//
+// # Safety
+// `surface` is 0 or a live surface of the context's instance not used by another swapchain;
+// `renderer` is null or writable.
+enum CadrResult cadr_renderer_create_for_surface(CadrContext context,
+                                                 uint64_t surface,
+                                                 uint32_t width,
+                                                 uint32_t height,
+                                                 CadrRenderer *renderer);
+
+// Destroys a renderer (waiting for its last frame) and, for a window renderer, its swapchain
+// and surface. NULL is a no-op.
+//
+// Returns `CADR_RESULT_OK` or a handle error.
+// Ownership: the handle (or item) is given back to cadr and invalid afterwards.
+// Thread-safety: not while another thread uses this renderer.
+enum CadrResult cadr_renderer_destroy(CadrRenderer renderer);
+
+// Gives the renderer a new size: for a window, call it from the framebuffer-size callback
+// (0 × 0 while minimized is accepted: frames are skipped until the window has area again).
+//
+// Returns `CADR_RESULT_OK`, `CADR_RESULT_INVALID_ARGUMENT` (above 16384, or 0 offscreen),
+// `CADR_RESULT_VULKAN` or a handle error.
+// Ownership: nothing changes hands; the arguments are read during the call only.
+// Thread-safety: as `cadr_renderer_create`.
+enum CadrResult cadr_renderer_resize(CadrRenderer renderer, uint32_t width, uint32_t height);
+
+// Writes the size of the renderer's image (for a window: of the swapchain, 0 × 0 while
+// minimized).
+//
+// Returns `CADR_RESULT_OK`, `CADR_RESULT_NULL_ARGUMENT` or a handle error.
+// Ownership: the outputs are the caller's; cadr keeps no pointer to them.
+// Thread-safety: as `cadr_renderer_create`.
+//
+// # Safety
+// `width` and `height` are null or writable.
+enum CadrResult cadr_renderer_size(CadrRenderer renderer, uint32_t *width, uint32_t *height);
+
+// Checks whether a technique selection would work, without changing anything.
+//
+// Returns `CADR_RESULT_OK`, `CADR_RESULT_NOT_FOUND` (unknown name), `CADR_RESULT_UNSUPPORTED`
+// (the device cannot run a technique), `CADR_RESULT_INVALID_COMBINATION` (techniques that do
+// not fit; the message says which need is unmet), `CADR_RESULT_NULL_ARGUMENT` or a handle
+// error. Ownership: the strings are read during the call.
+// Thread-safety: as `cadr_renderer_create`.
+//
+// # Safety
+// `selection` is null or valid with null or valid strings.
+enum CadrResult cadr_renderer_check_techniques(CadrRenderer renderer,
+                                               const struct CadrTechniqueSelection *selection);
+
+// Switches to a technique selection at run time. A refused selection keeps the current one;
+// a plugin that fails to create its instance also keeps it (`CADR_RESULT_PLUGIN_FAILED`).
+//
+// Returns as `cadr_renderer_check_techniques`, and `CADR_RESULT_PLUGIN_FAILED`.
+// Ownership and thread-safety: as `cadr_renderer_check_techniques`.
+//
+// # Safety
+// As `cadr_renderer_check_techniques`.
+enum CadrResult cadr_renderer_set_techniques(CadrRenderer renderer,
+                                             const struct CadrTechniqueSelection *selection);
+
+// Replaces the technique of one kind (`CADR_TECHNIQUE_KIND_*`) by name.
+//
+// Returns as `cadr_renderer_set_techniques`, and `CADR_RESULT_INVALID_ARGUMENT` for an
+// unknown kind.
+// Ownership: nothing changes hands; the arguments are read during the call only.
+// Thread-safety: as `cadr_renderer_create`.
+//
+// # Safety
+// `name` is null or a valid string.
+enum CadrResult cadr_renderer_set_technique(CadrRenderer renderer, uint32_t kind, const char *name);
+
+// Writes the name of the renderer's current technique of `kind` (`CADR_TECHNIQUE_KIND_*`).
+//
+// Returns `CADR_RESULT_OK`, `CADR_RESULT_INVALID_ARGUMENT` (unknown kind),
+// `CADR_RESULT_NULL_ARGUMENT` or a handle error.
+// Ownership: the string belongs to the context (valid while it or a renderer of it lives).
+// Thread-safety: as `cadr_renderer_create`.
+//
+// # Safety
+// `name` is null or writable.
+enum CadrResult cadr_renderer_technique(CadrRenderer renderer, uint32_t kind, const char **name);
+
+// Sets the shade mode: `CADR_SHADE_SOLID` or `CADR_SHADE_EDGES`.
+//
+// Returns `CADR_RESULT_OK`, `CADR_RESULT_INVALID_ARGUMENT` (unknown mode), `CADR_RESULT_VULKAN`
+// Ownership: nothing changes hands; the arguments are read during the call only.
+// or a handle error. Thread-safety: as `cadr_renderer_create`.
+enum CadrResult cadr_renderer_set_shade_mode(CadrRenderer renderer, uint32_t mode);
+
+// Writes the shade mode (`CADR_SHADE_SOLID` or `CADR_SHADE_EDGES`).
+//
+// Returns `CADR_RESULT_OK`, `CADR_RESULT_NULL_ARGUMENT` or a handle error.
+// Ownership: the outputs are the caller's; cadr keeps no pointer to them.
+// Thread-safety: as `cadr_renderer_create`.
+//
+// # Safety
+// `mode` is null or writable.
+enum CadrResult cadr_renderer_shade_mode(CadrRenderer renderer, uint32_t *mode);
+
+// Renders one frame of `scene` seen by `camera`: applies the host's edits since the last
+// frame (incrementally), culls, draws with the current techniques and, for a window, presents.
+// `stats` may be NULL.
+//
+// Returns `CADR_RESULT_OK`, `CADR_RESULT_NULL_ARGUMENT`, `CADR_RESULT_INVALID_ARGUMENT`
+// (non-finite camera), `CADR_RESULT_VULKAN`, `CADR_RESULT_PLUGIN_FAILED` or a handle error.
+// Ownership: the camera is read during the call. Thread-safety: as `cadr_renderer_create`; the
+// scene is locked during the call. A scene drawn alternately by two renderers is uploaded
+// afresh at each change of renderer.
+//
+// # Safety
+// `camera` is null or readable; `stats` null or writable.
+enum CadrResult cadr_renderer_render(CadrRenderer renderer,
+                                     CadrScene scene,
+                                     const struct CadrCamera *camera,
+                                     struct CadrFrameStats *stats);
+
+// Copies the last frame into `rgba` as tightly packed RGBA8 rows, top row first
+// (width × height × 4 bytes; see `cadr_renderer_size`).
+//
+// Returns `CADR_RESULT_OK`, `CADR_RESULT_NULL_ARGUMENT`, `CADR_RESULT_BUFFER_TOO_SMALL`
+// (nothing is written; the message gives the size needed), `CADR_RESULT_VULKAN` or a handle
+// error. Ownership: `rgba` is the caller's. Thread-safety: as `cadr_renderer_create`.
+//
+// # Safety
+// `rgba` is null or writable for `capacity` bytes.
+enum CadrResult cadr_renderer_read_pixels(CadrRenderer renderer, uint8_t *rgba, size_t capacity);
+
+// Writes the last frame to a PNG file.
+//
+// Returns `CADR_RESULT_OK`, `CADR_RESULT_NULL_ARGUMENT`, `CADR_RESULT_IO` (the message names
+// the file), `CADR_RESULT_VULKAN` or a handle error. Ownership: `path` is read during the call.
+// Thread-safety: as `cadr_renderer_create`.
+//
+// # Safety
+// `path` is null or a valid string.
+enum CadrResult cadr_renderer_save_png(CadrRenderer renderer, const char *path);
+
+// Creates an empty scene (a root Group only).
+//
+// Returns `CADR_RESULT_OK` and writes `*scene`, or `CADR_RESULT_NULL_ARGUMENT`.
+// Ownership: the scene is the caller's until `cadr_scene_destroy`. Thread-safety: callable
+// from any thread; a scene may be used from several threads, one call at a time (an internal
+// lock serialises them).
+//
+// # Safety
+// `scene` is null or writable.
+enum CadrResult cadr_scene_create(CadrScene *scene);
+
+// Destroys a scene and everything in it; its node, geometry and material handles become
+// invalid. NULL is a no-op.
+//
+// Returns `CADR_RESULT_OK` or a handle error.
+// Ownership: the handle (or item) is given back to cadr and invalid afterwards.
+// Thread-safety: not while another thread uses the scene.
+enum CadrResult cadr_scene_destroy(CadrScene scene);
+
+// Writes the scene's root Group.
 //
 // Returns `CADR_RESULT_OK`, `CADR_RESULT_NULL_ARGUMENT` or a handle error.
 // Ownership: the outputs are the caller's; cadr keeps no pointer to them.
 // Thread-safety: as `cadr_scene_create`.
 //
 // # Safety
-// `bounds` is null or writable.
-enum CadrResult cadr_scene_bounds(CadrScene scene, struct CadrBounds *bounds);
-
-// Writes the scene's counts: nodes, geometries, materials, instances and what is shown.
-//
-// Returns `CADR_RESULT_OK`, `CADR_RESULT_NULL_ARGUMENT` or a handle error.
-// Ownership: the outputs are the caller's; cadr keeps no pointer to them.
-// Thread-safety: as `cadr_scene_create`.
-//
-// # Safety
-// `statistics` is null or writable.
-enum CadrResult cadr_scene_statistics(CadrScene scene, struct CadrSceneStatistics *statistics);
-
-// Writes the world-space bounds of what `node` shows, over every path it is reached by
-// (empty: `min` > `max`). Walks all instances of the scene: meant for occasional queries
-// (framing a selection, exploded views), not for every frame.
-//
-// Returns `CADR_RESULT_OK`, `CADR_RESULT_NULL_ARGUMENT` or a handle error.
-// Ownership: the outputs are the caller's; cadr keeps no pointer to them.
-// Thread-safety: as `cadr_scene_create`.
-//
-// # Safety
-// `bounds` is null or writable.
-enum CadrResult cadr_scene_node_bounds(CadrScene scene, CadrNode node, struct CadrBounds *bounds);
+// `root` is null or writable.
+enum CadrResult cadr_scene_root(CadrScene scene, CadrNode *root);
 
 #ifdef __cplusplus
 }  // extern "C"

@@ -6,8 +6,8 @@ use cadr_core::scene::Aabb;
 use glam::{DMat4, DVec3};
 
 use crate::args::{deliver, non_null, vector3};
+use crate::bounds::CadrBounds;
 use crate::error::{guard, CadrResult, Failure};
-use crate::scene::CadrBounds;
 
 /// A camera: world-to-view and view-to-clip matrices, column-major doubles. The view looks
 /// down -Z (right-handed); the projection follows Vulkan (y down, depth 0..1). Hosts may fill

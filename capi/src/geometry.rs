@@ -5,10 +5,11 @@ use std::ffi::c_char;
 use cadr_core::scene::{Geometry, Material, Part, Vertex};
 
 use crate::args::{deliver, non_null, optional_str, slice};
+use crate::bounds::CadrBounds;
 use crate::error::{guard, Failure};
 use crate::scene::{
     geometry_of, geometry_value, graph_failure, material_of, material_value, with_scene,
-    CadrBounds, CadrGeometry, CadrMaterial, CadrScene,
+    CadrGeometry, CadrMaterial, CadrScene,
 };
 
 /// A range of a geometry's indices drawn with one material, and its range of edge indices.

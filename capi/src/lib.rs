@@ -15,19 +15,25 @@
 //!   called.
 
 mod args;
+mod bounds;
 mod camera;
 mod context;
 mod error;
 mod geometry;
 mod handles;
+mod load;
+mod nodes;
 mod pick;
 mod renderer;
 mod scene;
 
+pub use bounds::*;
 pub use camera::{cadr_camera_fit, cadr_camera_look_at, CadrCamera};
 pub use context::*;
 pub use error::{cadr_last_error_message, cadr_result_string, CadrResult};
 pub use geometry::*;
+pub use load::*;
+pub use nodes::*;
 pub use pick::*;
 pub use renderer::*;
 pub use scene::*;

@@ -273,8 +273,9 @@ pub extern "C" fn cadr_renderer_destroy(renderer: CadrRenderer) -> CadrResult {
 /// (0 × 0 while minimized is accepted: frames are skipped until the window has area again).
 ///
 /// Returns `CADR_RESULT_OK`, `CADR_RESULT_INVALID_ARGUMENT` (above 16384, or 0 offscreen),
+/// `CADR_RESULT_VULKAN` or a handle error.
 /// Ownership: nothing changes hands; the arguments are read during the call only.
-/// `CADR_RESULT_VULKAN` or a handle error. Thread-safety: as `cadr_renderer_create`.
+/// Thread-safety: as `cadr_renderer_create`.
 #[no_mangle]
 pub extern "C" fn cadr_renderer_resize(
     renderer: CadrRenderer,
@@ -485,8 +486,9 @@ pub unsafe extern "C" fn cadr_renderer_set_techniques(
 /// Replaces the technique of one kind (`CADR_TECHNIQUE_KIND_*`) by name.
 ///
 /// Returns as `cadr_renderer_set_techniques`, and `CADR_RESULT_INVALID_ARGUMENT` for an
+/// unknown kind.
 /// Ownership: nothing changes hands; the arguments are read during the call only.
-/// unknown kind. Thread-safety: as `cadr_renderer_create`.
+/// Thread-safety: as `cadr_renderer_create`.
 ///
 /// # Safety
 /// `name` is null or a valid string.

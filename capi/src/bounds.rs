@@ -1,0 +1,152 @@
+//! What a scene shows: world bounds (of the scene or below a node) and counts.
+
+use cadr_core::graph::NodeHandle;
+use cadr_core::scene::Aabb;
+
+use crate::args::deliver;
+use crate::error::{guard, CadrResult};
+use crate::scene::{node_of, with_scene, CadrNode, CadrScene, SceneState};
+
+/// An axis-aligned box in world space; `min` > `max` when empty.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default)]
+pub struct CadrBounds {
+    /// Smallest corner.
+    pub min: [f64; 3],
+    /// Largest corner.
+    pub max: [f64; 3],
+}
+
+impl From<Aabb> for CadrBounds {
+    fn from(bounds: Aabb) -> Self {
+        Self {
+            min: bounds.min.to_array(),
+            max: bounds.max.to_array(),
+        }
+    }
+}
+
+/// Counts of a scene.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default)]
+pub struct CadrSceneStatistics {
+    /// Live nodes, the root included.
+    pub nodes: u64,
+    /// Live geometries.
+    pub geometries: u64,
+    /// Live materials.
+    pub materials: u64,
+    /// Drawable parts over all paths (a shared subgraph counts once per path).
+    pub instances: u64,
+    /// Of those, the ones shown (flags, switches, LOD).
+    pub visible_instances: u64,
+    /// Triangles of the shown instances.
+    pub visible_triangles: u64,
+}
+
+/// World bounds of what the scene shows (only below `below` when given), and its statistics.
+fn shown(state: &mut SceneState, below: Option<NodeHandle>) -> (Aabb, CadrSceneStatistics) {
+    state.update();
+    let (graph, tree) = (&state.graph, &state.tree);
+    let mut geometry_bounds: std::collections::HashMap<u32, Aabb> = Default::default();
+    let mut bounds = Aabb::default();
+    let (nodes, geometries, materials) = graph.counts();
+    let mut statistics = CadrSceneStatistics {
+        nodes: nodes as u64,
+        geometries: geometries as u64,
+        materials: materials as u64,
+        ..CadrSceneStatistics::default()
+    };
+    for id in tree.instances() {
+        let Some(instance) = tree.instance(id) else {
+            continue;
+        };
+        if let Some(node) = below {
+            if !tree.path(instance.tree_node).contains(&node) {
+                continue;
+            }
+        }
+        statistics.instances += 1;
+        if !instance.visible {
+            continue;
+        }
+        let Some(geometry) = graph.geometry_at(instance.geometry) else {
+            continue;
+        };
+        statistics.visible_instances += 1;
+        if let Some(part) = geometry.parts.get(instance.part as usize) {
+            statistics.visible_triangles += u64::from(part.triangle_count());
+        }
+        let local = *geometry_bounds
+            .entry(instance.geometry)
+            .or_insert_with(|| geometry.bounds());
+        bounds.add_box(&local.transformed(&tree.world(instance.tree_node)));
+    }
+    (bounds, statistics)
+}
+
+/// Writes the world-space bounds of everything the scene shows (empty: `min` > `max`).
+///
+/// Returns `CADR_RESULT_OK`, `CADR_RESULT_NULL_ARGUMENT` or a handle error.
+/// Ownership: the outputs are the caller's; cadr keeps no pointer to them.
+/// Thread-safety: as `cadr_scene_create`.
+///
+/// # Safety
+/// `bounds` is null or writable.
+#[no_mangle]
+pub unsafe extern "C" fn cadr_scene_bounds(
+    scene: CadrScene,
+    bounds: *mut CadrBounds,
+) -> CadrResult {
+    guard(|| {
+        let value = with_scene(scene, |s| Ok(shown(s, None).0))?;
+        // SAFETY: bounds is null or writable (the caller's contract).
+        unsafe { deliver(bounds, "bounds", value.into()) }
+    })
+}
+
+/// Writes the scene's counts: nodes, geometries, materials, instances and what is shown.
+///
+/// Returns `CADR_RESULT_OK`, `CADR_RESULT_NULL_ARGUMENT` or a handle error.
+/// Ownership: the outputs are the caller's; cadr keeps no pointer to them.
+/// Thread-safety: as `cadr_scene_create`.
+///
+/// # Safety
+/// `statistics` is null or writable.
+#[no_mangle]
+pub unsafe extern "C" fn cadr_scene_statistics(
+    scene: CadrScene,
+    statistics: *mut CadrSceneStatistics,
+) -> CadrResult {
+    guard(|| {
+        let value = with_scene(scene, |s| Ok(shown(s, None).1))?;
+        // SAFETY: statistics is null or writable (the caller's contract).
+        unsafe { deliver(statistics, "statistics", value) }
+    })
+}
+
+/// Writes the world-space bounds of what `node` shows, over every path it is reached by
+/// (empty: `min` > `max`). Walks all instances of the scene: meant for occasional queries
+/// (framing a selection, exploded views), not for every frame.
+///
+/// Returns `CADR_RESULT_OK`, `CADR_RESULT_NULL_ARGUMENT` or a handle error.
+/// Ownership: the outputs are the caller's; cadr keeps no pointer to them.
+/// Thread-safety: as `cadr_scene_create`.
+///
+/// # Safety
+/// `bounds` is null or writable.
+#[no_mangle]
+pub unsafe extern "C" fn cadr_scene_node_bounds(
+    scene: CadrScene,
+    node: CadrNode,
+    bounds: *mut CadrBounds,
+) -> CadrResult {
+    guard(|| {
+        let value = with_scene(scene, |s| {
+            let node = node_of(&s.graph, node, "node")?;
+            Ok(shown(s, Some(node)).0)
+        })?;
+        // SAFETY: bounds is null or writable (the caller's contract).
+        unsafe { deliver(bounds, "bounds", value.into()) }
+    })
+}

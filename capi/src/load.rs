@@ -1,0 +1,143 @@
+//! Loading a file or a generator into a scene, and the list of what it created.
+
+use std::ffi::c_char;
+
+use cadr_core::load::SceneSource;
+
+use crate::args::{deliver, non_null, required_str};
+use crate::error::{guard, CadrResult, Failure};
+use crate::scene::{
+    geometry_value, material_value, node_of, node_value, with_scene, CadrGeometry, CadrMaterial,
+    CadrNode, CadrScene,
+};
+
+/// What `cadr_scene_load` created. Free the arrays with `cadr_load_result_free`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug)]
+pub struct CadrLoadResult {
+    /// The new Group, named after the file, that holds the file's content.
+    pub root: CadrNode,
+    /// Every node created, `root` first.
+    pub nodes: *mut CadrNode,
+    /// Number of `nodes`.
+    pub node_count: usize,
+    /// The file's geometries, in the file's order.
+    pub geometries: *mut CadrGeometry,
+    /// Number of `geometries`.
+    pub geometry_count: usize,
+    /// The file's materials, in the file's order.
+    pub materials: *mut CadrMaterial,
+    /// Number of `materials`.
+    pub material_count: usize,
+}
+
+/// Loads a scene file (`.gltf`, `.glb`, `.csf`, `.csf.gz`) or a built-in generator
+/// (`gen:demo`, `gen:grid:parts=N`, …) and adds it below `parent` under a new Group named after
+/// it. On success `*result` lists what was created; free it with `cadr_load_result_free`.
+///
+/// Returns `CADR_RESULT_OK`, `CADR_RESULT_NULL_ARGUMENT`, `CADR_RESULT_LOAD_FAILED` (the
+/// message names the file and the bad item; nothing is added) or a handle error.
+/// Ownership: `path` is read during the call; the arrays in `*result` are the caller's until
+/// `cadr_load_result_free`. Thread-safety: as `cadr_scene_create`; the file is read while the
+/// scene is not locked.
+///
+/// # Safety
+/// `path` is null or a valid string; `result` is null or writable.
+#[no_mangle]
+pub unsafe extern "C" fn cadr_scene_load(
+    scene: CadrScene,
+    path: *const c_char,
+    parent: CadrNode,
+    result: *mut CadrLoadResult,
+) -> CadrResult {
+    guard(|| {
+        // SAFETY: forwarded contract.
+        let path = unsafe { required_str(path, "path") }?;
+        non_null(result, "result")?;
+        // Check the handles before the (possibly long) load.
+        with_scene(scene, |s| node_of(&s.graph, parent, "parent").map(|_| ()))?;
+        let load =
+            |e: cadr_core::load::LoadError| Failure::new(CadrResult::LoadFailed, e.to_string());
+        let loaded = SceneSource::parse(path)
+            .map_err(load)?
+            .load()
+            .map_err(load)?;
+        let imported = with_scene(scene, |s| {
+            let parent = node_of(&s.graph, parent, "parent")?;
+            s.graph
+                .import(&loaded, parent)
+                .map_err(|e| Failure::new(CadrResult::LoadFailed, format!("{path}: {e}")))
+        })?;
+        let boxed = |values: Vec<u64>| -> (*mut u64, usize) {
+            let count = values.len();
+            (
+                Box::into_raw(values.into_boxed_slice()).cast::<u64>(),
+                count,
+            )
+        };
+        let (nodes, node_count) = boxed(imported.nodes.iter().map(|&n| node_value(n)).collect());
+        let (geometries, geometry_count) = boxed(
+            imported
+                .geometries
+                .iter()
+                .map(|&g| geometry_value(g))
+                .collect(),
+        );
+        let (materials, material_count) = boxed(
+            imported
+                .materials
+                .iter()
+                .map(|&m| material_value(m))
+                .collect(),
+        );
+        let value = CadrLoadResult {
+            root: node_value(imported.root),
+            nodes,
+            node_count,
+            geometries,
+            geometry_count,
+            materials,
+            material_count,
+        };
+        // SAFETY: result is null or writable (the caller's contract).
+        unsafe { deliver(result, "result", value) }
+    })
+}
+
+/// Frees the arrays of a load result and zeroes it. NULL, or a zeroed result, is a no-op.
+///
+/// Ownership: takes back what `cadr_scene_load` handed out; free each result once.
+/// Thread-safety: callable from any thread.
+///
+/// # Safety
+/// `result` is null or a result filled by `cadr_scene_load` (or zeroed).
+#[no_mangle]
+pub unsafe extern "C" fn cadr_load_result_free(result: *mut CadrLoadResult) {
+    if result.is_null() {
+        return;
+    }
+    // SAFETY: non-null and filled by cadr_scene_load or zeroed (the caller's contract).
+    let taken = unsafe { result.read() };
+    let free = |items: *mut u64, count: usize| {
+        if !items.is_null() {
+            // SAFETY: made by Box::into_raw of a boxed slice of `count` items in
+            // cadr_scene_load, and freed once (the result is zeroed below).
+            drop(unsafe { Box::from_raw(std::ptr::slice_from_raw_parts_mut(items, count)) });
+        }
+    };
+    free(taken.nodes, taken.node_count);
+    free(taken.geometries, taken.geometry_count);
+    free(taken.materials, taken.material_count);
+    // SAFETY: non-null and writable.
+    unsafe {
+        result.write(CadrLoadResult {
+            root: 0,
+            nodes: std::ptr::null_mut(),
+            node_count: 0,
+            geometries: std::ptr::null_mut(),
+            geometry_count: 0,
+            materials: std::ptr::null_mut(),
+            material_count: 0,
+        })
+    };
+}

@@ -1,0 +1,45 @@
+//! The rendered image, read back into host memory or written to a PNG file.
+
+use std::path::Path;
+
+use super::Renderer;
+use crate::vk::{VkError, VkResult};
+
+impl Renderer {
+    /// Reads the last frame back as tightly packed RGBA8 rows.
+    pub fn read_rgba8(&self) -> VkResult<image::RgbaImage> {
+        let (width, height) = self.size();
+        let pixels = self.target.read_rgba8(&self.device)?;
+        image::RgbaImage::from_raw(width, height, pixels).ok_or_else(|| {
+            VkError::InvalidUse(format!("read back fewer pixels than {width}x{height}"))
+        })
+    }
+
+    /// Writes the last frame to a PNG file.
+    pub fn save_png(&self, path: &Path) -> Result<(), SaveError> {
+        let image = self.read_rgba8()?;
+        image
+            .save_with_format(path, image::ImageFormat::Png)
+            .map_err(|source| SaveError::Write {
+                path: path.to_owned(),
+                source,
+            })
+    }
+}
+
+/// Why an image could not be saved.
+#[derive(Debug, thiserror::Error)]
+pub enum SaveError {
+    /// Reading the image back failed.
+    #[error(transparent)]
+    Vulkan(#[from] VkError),
+    /// Writing the file failed.
+    #[error("cannot write {}: {source}", path.display())]
+    Write {
+        /// The file.
+        path: std::path::PathBuf,
+        /// The encoder's or OS's error.
+        #[source]
+        source: image::ImageError,
+    },
+}

@@ -1,0 +1,33 @@
+//! What one frame cost and drew.
+
+/// What one frame cost and drew.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct FrameStats {
+    /// CPU time spent recording the command buffer, in microseconds.
+    pub cpu_record_us: f64,
+    /// CPU time of the queue submission, in microseconds.
+    pub cpu_submit_us: f64,
+    /// GPU time between the frame's first and last command, in microseconds (if timestamps work).
+    pub gpu_us: Option<f64>,
+    /// Draw calls issued (an indirect or multi-draw call counts once).
+    pub draw_calls: u64,
+    /// Parts or index ranges those calls drew.
+    pub draws: u64,
+    /// Triangles drawn.
+    pub triangles: u64,
+    /// Pipeline binds.
+    pub pipeline_binds: u64,
+    /// Vertex/index buffer binds.
+    pub vertex_binds: u64,
+    /// Parameter updates (push constant writes, descriptor binds).
+    pub parameter_updates: u64,
+    /// Bytes uploaded to the GPU for this frame (matrices, materials).
+    pub bytes_uploaded: u64,
+}
+
+impl FrameStats {
+    /// CPU time of recording and submission.
+    pub fn cpu_us(&self) -> f64 {
+        self.cpu_record_us + self.cpu_submit_us
+    }
+}

@@ -76,7 +76,7 @@ impl View {
     ) -> VkResult<Self> {
         let renderer = Renderer::new(device, width, height)?;
         let mut techniques =
-            Techniques::new(device, registry, renderer.pipelines().frame_set_layout);
+            Techniques::new(device, registry, renderer.pipelines().frame_set_layout());
         techniques.select(&Combination::built_in())?;
         Ok(Self {
             scene: None,

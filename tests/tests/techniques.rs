@@ -53,7 +53,7 @@ impl Fixture {
         let mut techniques = Techniques::new(
             &device,
             plugin_registry(&device),
-            renderer.pipelines().frame_set_layout,
+            renderer.pipelines().frame_set_layout(),
         );
         techniques.select(&Combination::built_in()).unwrap();
         renderer
@@ -116,7 +116,7 @@ fn the_built_in_combination_needs_no_library_and_draws_each_part_once() {
     f.techniques = Techniques::new(
         &f.device,
         Arc::new(built_in),
-        f.renderer.pipelines().frame_set_layout,
+        f.renderer.pipelines().frame_set_layout(),
     );
     f.techniques.select(&combination).unwrap();
     let (image, stats) = f.render();
@@ -309,7 +309,11 @@ fn failing_techniques_are_refused_and_the_renderer_keeps_working() {
         lacking.support,
         Err("the device lacks VK_EXT_mesh_shader".to_owned())
     );
-    f.techniques = Techniques::new(&f.device, registry, f.renderer.pipelines().frame_set_layout);
+    f.techniques = Techniques::new(
+        &f.device,
+        registry,
+        f.renderer.pipelines().frame_set_layout(),
+    );
     f.techniques.select(&Combination::built_in()).unwrap();
     f.assert_matches_baseline("before");
 
@@ -550,7 +554,7 @@ fn a_technique_written_in_c_plugs_in_also_built_for_an_older_abi_minor() {
         f.techniques = Techniques::new(
             &f.device,
             Arc::new(registry),
-            f.renderer.pipelines().frame_set_layout,
+            f.renderer.pipelines().frame_set_layout(),
         );
         let combination = Combination {
             culling: "c-candidates".into(),

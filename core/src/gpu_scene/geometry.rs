@@ -5,7 +5,7 @@
 
 use std::sync::Arc;
 
-use ash::vk;
+use crate::vk::raw as vk;
 
 use crate::graph::SceneGraph;
 use crate::scene::edges::{feature_edges, DEFAULT_CREASE_DEGREES};

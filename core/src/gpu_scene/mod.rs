@@ -16,8 +16,8 @@ pub use upload::UploadStats;
 
 use std::sync::Arc;
 
-use ash::vk;
-use ash::vk::Handle;
+use crate::vk::raw as vk;
+use crate::vk::raw::Handle;
 use cadr_plugin_abi as abi;
 use glam::DMat4;
 

@@ -6,11 +6,11 @@
 
 use std::sync::Arc;
 
-use ash::vk;
+use crate::vk::raw as vk;
 
 use super::geometry::usage;
-use crate::render::{DescriptorSets, Pipelines, ScatterParameters};
-use crate::vk::{record_dispatch, Buffer, Device, MemoryLocation, VkResult};
+use crate::render::{Pipelines, ScatterParameters};
+use crate::vk::{record_dispatch, Buffer, DescriptorSets, Device, MemoryLocation, VkResult};
 
 /// One array of the GPU scene: fixed-size items in a device buffer, following a CPU copy.
 pub(super) struct GpuArray {
@@ -202,7 +202,7 @@ impl SparseUploader {
             arrays[2].0.buffer.raw(),
         ];
         if self.sets.is_none() {
-            let layouts = [pipelines.scatter_set_layout; 3];
+            let layouts = [pipelines.scatter_set_layout(); 3];
             self.sets = Some(DescriptorSets::new(
                 device,
                 "scatter",
@@ -234,7 +234,7 @@ impl SparseUploader {
             record_dispatch(
                 device,
                 command_buffer,
-                (scatter, pipelines.scatter_layout),
+                (scatter, pipelines.scatter_layout()),
                 sets.sets[index],
                 bytemuck::bytes_of(&parameters),
                 (item_count * item_words).div_ceil(64),

@@ -1,65 +1,34 @@
 //! The renderer: an offscreen target and the frame that draws into it (uniforms, command
-//! buffer, pass, submission, timings). The techniques record into its frames
+//! buffer, pass, submission, timings; `stats.rs` says what a frame cost, `output.rs` reads the
+//! image back and writes PNGs). The techniques record into its frames
 //! (`Renderer::render_techniques`, `Renderer::pick_techniques`); the pick pass draws instance
 //! ids and depth into their own target and reads a rectangle of them back ([`pick`]).
 
 mod camera;
+mod output;
 pub mod pick;
 mod pipeline;
+mod stats;
 
 pub use camera::{Camera, DEFAULT_DIRECTION, DEFAULT_FOV_DEGREES};
-pub(crate) use pipeline::{
-    create_graphics_pipeline, DescriptorSets, GraphicsPipelineDesc, VertexLayout,
-};
+pub use output::SaveError;
 pub use pipeline::{FrameUniforms, Pipelines, ScatterParameters, PICK_FORMAT};
+pub use stats::FrameStats;
 
-use std::path::Path;
 use std::sync::Arc;
 use std::time::Instant;
 
-use ash::vk;
+use crate::vk::raw as vk;
 
 use crate::gpu_scene::split_f64;
 use crate::vk::{
-    transition, Buffer, CommandContext, Device, GpuTimer, Image, MemoryLocation, OffscreenTarget,
-    VkError, VkResult,
+    begin_rendering, end_rendering, Buffer, CommandContext, DescriptorSets, Device, GpuTimer,
+    Image, MemoryLocation, OffscreenTarget, RenderingTarget, VkError, VkResult,
 };
 use pick::{PickTarget, PixelRect};
 
 /// The background colour of rendered images (linear RGBA).
 pub const CLEAR_COLOR: [f32; 4] = [0.80, 0.84, 0.88, 1.0];
-
-/// What one frame cost and drew.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
-pub struct FrameStats {
-    /// CPU time spent recording the command buffer, in microseconds.
-    pub cpu_record_us: f64,
-    /// CPU time of the queue submission, in microseconds.
-    pub cpu_submit_us: f64,
-    /// GPU time between the frame's first and last command, in microseconds (if timestamps work).
-    pub gpu_us: Option<f64>,
-    /// Draw calls issued (an indirect or multi-draw call counts once).
-    pub draw_calls: u64,
-    /// Parts or index ranges those calls drew.
-    pub draws: u64,
-    /// Triangles drawn.
-    pub triangles: u64,
-    /// Pipeline binds.
-    pub pipeline_binds: u64,
-    /// Vertex/index buffer binds.
-    pub vertex_binds: u64,
-    /// Parameter updates (push constant writes, descriptor binds).
-    pub parameter_updates: u64,
-    /// Bytes uploaded to the GPU for this frame (matrices, materials).
-    pub bytes_uploaded: u64,
-}
-
-impl FrameStats {
-    /// CPU time of recording and submission.
-    pub fn cpu_us(&self) -> f64 {
-        self.cpu_record_us + self.cpu_submit_us
-    }
-}
 
 /// Renders scenes into an offscreen color + depth target.
 pub struct Renderer {
@@ -102,7 +71,7 @@ impl Renderer {
         let frame_sets = DescriptorSets::new(
             device,
             "frame",
-            &[pipelines.frame_set_layout],
+            &[pipelines.frame_set_layout()],
             &[vk::DescriptorPoolSize::default()
                 .ty(vk::DescriptorType::UNIFORM_BUFFER)
                 .descriptor_count(1)],
@@ -274,157 +243,29 @@ impl Renderer {
     /// Begins rendering into the pass target; with `secondary`, the pass's contents come from
     /// secondary command buffers, which set their own viewport and scissor.
     fn begin_pass(&self, command_buffer: vk::CommandBuffer, pass: PassTarget, secondary: bool) {
-        let device = &*self.device;
-        let raw = device.raw();
-        let extent = self.target.extent();
-        let (color_image, clear) = self.pass_image(pass);
-        transition(
-            device,
+        begin_rendering(
+            &self.device,
             command_buffer,
-            color_image.raw(),
-            vk::ImageAspectFlags::COLOR,
-            (
-                vk::ImageLayout::UNDEFINED,
-                vk::PipelineStageFlags2::TOP_OF_PIPE,
-                vk::AccessFlags2::NONE,
-            ),
-            (
-                vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL,
-                vk::PipelineStageFlags2::COLOR_ATTACHMENT_OUTPUT,
-                vk::AccessFlags2::COLOR_ATTACHMENT_WRITE,
-            ),
+            &self.pass_target(pass, secondary),
         );
-        transition(
-            device,
-            command_buffer,
-            self.target.depth.raw(),
-            vk::ImageAspectFlags::DEPTH,
-            (
-                vk::ImageLayout::UNDEFINED,
-                vk::PipelineStageFlags2::TOP_OF_PIPE,
-                vk::AccessFlags2::NONE,
-            ),
-            (
-                vk::ImageLayout::DEPTH_ATTACHMENT_OPTIMAL,
-                vk::PipelineStageFlags2::EARLY_FRAGMENT_TESTS
-                    | vk::PipelineStageFlags2::LATE_FRAGMENT_TESTS,
-                vk::AccessFlags2::DEPTH_STENCIL_ATTACHMENT_WRITE
-                    | vk::AccessFlags2::DEPTH_STENCIL_ATTACHMENT_READ,
-            ),
-        );
-        let color_attachment = [vk::RenderingAttachmentInfo::default()
-            .image_view(color_image.view())
-            .image_layout(vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL)
-            .load_op(vk::AttachmentLoadOp::CLEAR)
-            .store_op(vk::AttachmentStoreOp::STORE)
-            .clear_value(vk::ClearValue { color: clear })];
-        let depth_attachment = vk::RenderingAttachmentInfo::default()
-            .image_view(self.target.depth.view())
-            .image_layout(vk::ImageLayout::DEPTH_ATTACHMENT_OPTIMAL)
-            .load_op(vk::AttachmentLoadOp::CLEAR)
-            .store_op(if pass == PassTarget::Pick {
-                // Picking reads the depth under the cursor.
-                vk::AttachmentStoreOp::STORE
-            } else {
-                vk::AttachmentStoreOp::DONT_CARE
-            })
-            .clear_value(vk::ClearValue {
-                depth_stencil: vk::ClearDepthStencilValue {
-                    depth: 1.0,
-                    stencil: 0,
-                },
-            });
-        let area = vk::Rect2D {
-            offset: vk::Offset2D::default(),
-            extent,
-        };
-        let flags = if secondary {
-            vk::RenderingFlags::CONTENTS_SECONDARY_COMMAND_BUFFERS
-        } else {
-            vk::RenderingFlags::empty()
-        };
-        let rendering = vk::RenderingInfo::default()
-            .flags(flags)
-            .render_area(area)
-            .layer_count(1)
-            .color_attachments(&color_attachment)
-            .depth_attachment(&depth_attachment);
-        let viewport = [vk::Viewport {
-            x: 0.0,
-            y: 0.0,
-            width: extent.width as f32,
-            height: extent.height as f32,
-            min_depth: 0.0,
-            max_depth: 1.0,
-        }];
-        // SAFETY: command_buffer is recording; the target outlives the submission.
-        unsafe {
-            raw.cmd_begin_rendering(command_buffer, &rendering);
-            if !secondary {
-                raw.cmd_set_viewport(command_buffer, 0, &viewport);
-                raw.cmd_set_scissor(command_buffer, 0, &[area]);
-            }
-        }
     }
 
     fn end_pass(&self, command_buffer: vk::CommandBuffer, pass: PassTarget) {
-        let (color_image, _) = self.pass_image(pass);
-        // SAFETY: rendering was begun by begin_pass on this command buffer.
-        unsafe { self.device.raw().cmd_end_rendering(command_buffer) };
-        transition(
-            &self.device,
-            command_buffer,
-            color_image.raw(),
-            vk::ImageAspectFlags::COLOR,
-            (
-                vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL,
-                vk::PipelineStageFlags2::COLOR_ATTACHMENT_OUTPUT,
-                vk::AccessFlags2::COLOR_ATTACHMENT_WRITE,
-            ),
-            (
-                vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
-                vk::PipelineStageFlags2::COPY,
-                vk::AccessFlags2::TRANSFER_READ,
-            ),
-        );
-        if pass == PassTarget::Pick {
-            transition(
-                &self.device,
-                command_buffer,
-                self.target.depth.raw(),
-                vk::ImageAspectFlags::DEPTH,
-                (
-                    vk::ImageLayout::DEPTH_ATTACHMENT_OPTIMAL,
-                    vk::PipelineStageFlags2::LATE_FRAGMENT_TESTS,
-                    vk::AccessFlags2::DEPTH_STENCIL_ATTACHMENT_WRITE,
-                ),
-                (
-                    vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
-                    vk::PipelineStageFlags2::COPY,
-                    vk::AccessFlags2::TRANSFER_READ,
-                ),
-            );
+        end_rendering(&self.device, command_buffer, &self.pass_target(pass, false));
+    }
+
+    /// What a pass renders into: the colour or id image, cleared, and the depth, kept for the
+    /// pick pass (picking reads the depth under the cursor).
+    fn pass_target(&self, pass: PassTarget, secondary: bool) -> RenderingTarget<'_> {
+        let (color, clear_color) = self.pass_image(pass);
+        RenderingTarget {
+            color,
+            clear_color,
+            depth: &self.target.depth,
+            keep_depth: pass == PassTarget::Pick,
+            extent: self.target.extent(),
+            secondary,
         }
-    }
-
-    /// Reads the last frame back as tightly packed RGBA8 rows.
-    pub fn read_rgba8(&self) -> VkResult<image::RgbaImage> {
-        let (width, height) = self.size();
-        let pixels = self.target.read_rgba8(&self.device)?;
-        image::RgbaImage::from_raw(width, height, pixels).ok_or_else(|| {
-            VkError::InvalidUse(format!("read back fewer pixels than {width}x{height}"))
-        })
-    }
-
-    /// Writes the last frame to a PNG file.
-    pub fn save_png(&self, path: &Path) -> Result<(), SaveError> {
-        let image = self.read_rgba8()?;
-        image
-            .save_with_format(path, image::ImageFormat::Png)
-            .map_err(|source| SaveError::Write {
-                path: path.to_owned(),
-                source,
-            })
     }
 }
 
@@ -433,21 +274,4 @@ impl Drop for Renderer {
         // Resources are destroyed by their own Drop; make sure the GPU is done with them.
         let _ = self.commands.wait();
     }
-}
-
-/// Why an image could not be saved.
-#[derive(Debug, thiserror::Error)]
-pub enum SaveError {
-    /// Reading the image back failed.
-    #[error(transparent)]
-    Vulkan(#[from] VkError),
-    /// Writing the file failed.
-    #[error("cannot write {}: {source}", path.display())]
-    Write {
-        /// The file.
-        path: std::path::PathBuf,
-        /// The encoder's or OS's error.
-        #[source]
-        source: image::ImageError,
-    },
 }

@@ -3,7 +3,7 @@
 
 use std::sync::Arc;
 
-use ash::vk;
+use crate::vk::raw as vk;
 
 use super::pipeline::PICK_FORMAT;
 use crate::vk::{record_image_copy, Buffer, Device, Image, MemoryLocation, VkResult};

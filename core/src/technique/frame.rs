@@ -7,7 +7,7 @@ use std::cell::RefCell;
 use std::ffi::c_void;
 use std::time::Instant;
 
-use ash::vk::{self, Handle};
+use crate::vk::raw::{self as vk, Handle};
 use cadr_plugin_abi as abi;
 use glam::DMat4;
 
@@ -17,7 +17,7 @@ use super::set::{status, Message, Techniques};
 use crate::gpu_scene::GpuScene;
 use crate::render::pick::{PickSample, PixelRect};
 use crate::render::{Camera, FrameStats, PassTarget, Renderer};
-use crate::vk::{VkError, VkResult};
+use crate::vk::{memory_barrier, VkError, VkResult};
 
 /// World-space frustum planes of `camera` (normals point inside; Vulkan depth 0..1).
 pub fn frustum_planes(camera: &Camera) -> [[f64; 4]; 6] {
@@ -102,7 +102,7 @@ impl Renderer {
             Ok(abi::CadrRecordContext {
                 size: std::mem::size_of::<abi::CadrRecordContext>() as u32,
                 command_buffer: command_buffer.as_raw() as *mut c_void,
-                pipeline_layout: pipelines.layout.as_raw(),
+                pipeline_layout: pipelines.layout.raw().as_raw(),
                 frame_set,
                 pass_count: pipelines.passes.len() as u32,
                 passes: pipelines.passes.as_ptr(),
@@ -216,24 +216,22 @@ impl Renderer {
 /// Makes transfer, compute and host writes before the pass visible to vertex input, shaders
 /// and indirect reads.
 fn barrier(renderer: &Renderer, command_buffer: vk::CommandBuffer) {
-    let memory = [vk::MemoryBarrier2::default()
-        .src_stage_mask(
+    memory_barrier(
+        renderer.device(),
+        command_buffer,
+        (
             vk::PipelineStageFlags2::ALL_TRANSFER
                 | vk::PipelineStageFlags2::COMPUTE_SHADER
                 | vk::PipelineStageFlags2::HOST,
-        )
-        .src_access_mask(
             vk::AccessFlags2::TRANSFER_WRITE
                 | vk::AccessFlags2::SHADER_WRITE
                 | vk::AccessFlags2::HOST_WRITE,
-        )
-        .dst_stage_mask(
+        ),
+        (
             vk::PipelineStageFlags2::VERTEX_INPUT
                 | vk::PipelineStageFlags2::VERTEX_SHADER
                 | vk::PipelineStageFlags2::DRAW_INDIRECT
                 | vk::PipelineStageFlags2::ALL_TRANSFER,
-        )
-        .dst_access_mask(
             vk::AccessFlags2::VERTEX_ATTRIBUTE_READ
                 | vk::AccessFlags2::INDEX_READ
                 | vk::AccessFlags2::SHADER_READ
@@ -241,15 +239,8 @@ fn barrier(renderer: &Renderer, command_buffer: vk::CommandBuffer) {
                 | vk::AccessFlags2::INDIRECT_COMMAND_READ
                 | vk::AccessFlags2::TRANSFER_READ
                 | vk::AccessFlags2::TRANSFER_WRITE,
-        )];
-    let dependency = vk::DependencyInfo::default().memory_barriers(&memory);
-    // SAFETY: recording, outside rendering.
-    unsafe {
-        renderer
-            .device()
-            .raw()
-            .cmd_pipeline_barrier2(command_buffer, &dependency)
-    };
+        ),
+    );
 }
 
 /// What a culling result depends on: the culler, the scene and the view.

@@ -8,8 +8,8 @@ use std::ffi::{c_char, c_void, CStr};
 use std::sync::atomic::{AtomicI64, Ordering};
 use std::sync::{Arc, Mutex};
 
-use ash::vk;
-use ash::vk::Handle;
+use crate::vk::raw as vk;
+use crate::vk::raw::Handle;
 use cadr_plugin_abi as abi;
 
 use crate::vk::{Buffer, Device, MemoryLocation};

@@ -6,13 +6,14 @@
 use std::collections::HashMap;
 use std::sync::Arc;
 
-use ash::vk;
+use crate::vk::raw as vk;
 use cadr_plugin_abi as abi;
 
-use crate::render::{create_graphics_pipeline, GraphicsPipelineDesc, VertexLayout, PICK_FORMAT};
+use crate::render::PICK_FORMAT;
 use crate::shaders;
 use crate::vk::{
-    compile_glsl, Device, ShaderModule, ShaderStage, VkResult, VkResultExt, COLOR_FORMAT,
+    compile_glsl, DescriptorSetLayout, Device, GraphicsPipelineDesc, Pipeline, PipelineLayout,
+    ShaderModule, ShaderStage, VertexLayout, VkResult, COLOR_FORMAT,
 };
 
 /// The shade modes of the seeds.
@@ -134,28 +135,16 @@ impl ShaderCache {
 /// The pipelines and layout of one combination and shade mode; destroyed together.
 pub struct TechniquePipelines {
     device: Arc<Device>,
+    // Dropped in this order: the pipelines, then the layouts they were made with.
+    pipelines: Vec<Pipeline>,
     /// The shared layout.
-    pub layout: vk::PipelineLayout,
-    empty_set_layout: vk::DescriptorSetLayout,
+    pub layout: PipelineLayout,
+    /// Stands in for the sets a path does not use below one it does.
+    _empty_set_layout: DescriptorSetLayout,
     /// The passes, in order.
     pub passes: Vec<abi::CadrPass>,
-    pipelines: Vec<vk::Pipeline>,
     /// The colour attachment's format (the pick pass draws ids).
     pub color_format: vk::Format,
-}
-
-impl Drop for TechniquePipelines {
-    fn drop(&mut self) {
-        let raw = self.device.raw();
-        // SAFETY: dropped after the GPU finished the frames using them (the owner waits).
-        unsafe {
-            for &pipeline in &self.pipelines {
-                raw.destroy_pipeline(pipeline, None);
-            }
-            raw.destroy_pipeline_layout(self.layout, None);
-            raw.destroy_descriptor_set_layout(self.empty_set_layout, None);
-        }
-    }
 }
 
 /// What a combination's pipelines are built from.
@@ -182,22 +171,7 @@ impl TechniquePipelines {
         cache: &mut ShaderCache,
         inputs: &PipelineInputs<'_>,
     ) -> VkResult<Self> {
-        let raw = device.raw();
-        let info = vk::DescriptorSetLayoutCreateInfo::default();
-        // SAFETY: the info lives for the call.
-        let empty_set_layout = unsafe { raw.create_descriptor_set_layout(&info, None) }
-            .or_vk("vkCreateDescriptorSetLayout")?;
-        let mut this = Self {
-            device: Arc::clone(device),
-            layout: vk::PipelineLayout::null(),
-            empty_set_layout,
-            passes: Vec::new(),
-            pipelines: Vec::new(),
-            color_format: match inputs.passes {
-                PassSet::Pick => PICK_FORMAT,
-                PassSet::Shaded(_) => COLOR_FORMAT,
-            },
-        };
+        let empty_set_layout = DescriptorSetLayout::new(device, "empty set layout", &[])?;
         let used = inputs
             .path_set_layouts
             .iter()
@@ -206,21 +180,30 @@ impl TechniquePipelines {
         let mut sets = vec![inputs.frame_set_layout];
         sets.extend(inputs.path_set_layouts.iter().map(|&l| {
             if l == vk::DescriptorSetLayout::null() {
-                empty_set_layout
+                empty_set_layout.raw()
             } else {
                 l
             }
         }));
         sets.truncate(used);
-        let push = [vk::PushConstantRange::default()
-            .stage_flags(vk::ShaderStageFlags::VERTEX)
-            .size(128)];
-        let layout_info = vk::PipelineLayoutCreateInfo::default()
-            .set_layouts(&sets)
-            .push_constant_ranges(&push);
-        // SAFETY: the info lives for the call.
-        this.layout = unsafe { raw.create_pipeline_layout(&layout_info, None) }
-            .or_vk("vkCreatePipelineLayout")?;
+        let layout = PipelineLayout::new(
+            device,
+            "technique layout",
+            &sets,
+            128,
+            vk::ShaderStageFlags::VERTEX,
+        )?;
+        let mut this = Self {
+            device: Arc::clone(device),
+            pipelines: Vec::new(),
+            layout,
+            _empty_set_layout: empty_set_layout,
+            passes: Vec::new(),
+            color_format: match inputs.passes {
+                PassSet::Pick => PICK_FORMAT,
+                PassSet::Shaded(_) => COLOR_FORMAT,
+            },
+        };
         let fragments = cache.fragments()?;
         let triangles = vk::PrimitiveTopology::TRIANGLE_LIST;
         match inputs.passes {
@@ -243,13 +226,13 @@ impl TechniquePipelines {
         Ok(this)
     }
 
-    fn add(&mut self, pipeline: vk::Pipeline, kind: abi::CadrPassKind) {
-        use ash::vk::Handle;
-        self.pipelines.push(pipeline);
+    fn add(&mut self, pipeline: Pipeline, kind: abi::CadrPassKind) {
+        use crate::vk::raw::Handle;
         self.passes.push(abi::CadrPass {
-            pipeline: pipeline.as_raw(),
+            pipeline: pipeline.raw().as_raw(),
             kind,
         });
+        self.pipelines.push(pipeline);
     }
 
     fn pipeline(
@@ -258,7 +241,7 @@ impl TechniquePipelines {
         fragment: &[u32],
         topology: vk::PrimitiveTopology,
         depth_bias: bool,
-    ) -> VkResult<vk::Pipeline> {
+    ) -> VkResult<Pipeline> {
         let vertex = ShaderModule::from_spirv(
             &self.device,
             "technique.vert",
@@ -276,10 +259,10 @@ impl TechniquePipelines {
         let attributes: Vec<(vk::Format, u32)> = (0..count)
             .map(|i| (vk::Format::from_raw(input.formats[i]), input.offsets[i]))
             .collect();
-        create_graphics_pipeline(
+        Pipeline::graphics(
             &self.device,
             &GraphicsPipelineDesc {
-                layout: self.layout,
+                layout: &self.layout,
                 vertex: &vertex,
                 fragment: &fragment,
                 vertex_layout: (input.stride != 0).then_some(VertexLayout {

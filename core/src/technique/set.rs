@@ -5,7 +5,7 @@
 use std::ffi::{c_char, c_void, CStr};
 use std::sync::Arc;
 
-use ash::vk::{self, Handle};
+use crate::vk::raw::{self as vk, Handle};
 use cadr_plugin_abi as abi;
 
 use super::host_api::{AllocationCounts, HostServices};
@@ -225,21 +225,21 @@ impl Techniques {
         frame_set_layout: vk::DescriptorSetLayout,
     ) -> Self {
         let services = HostServices::new(device);
-        let instance = device.instance();
+        let handles = device.raw_handles();
         let limits = device.limits();
         let vulkan = Box::new(abi::CadrVulkan {
             size: std::mem::size_of::<abi::CadrVulkan>() as u32,
             api_version: vk::API_VERSION_1_3,
-            instance: instance.raw().handle().as_raw() as *mut c_void,
-            physical_device: device.adapter().physical.as_raw() as *mut c_void,
-            device: device.raw().handle().as_raw() as *mut c_void,
+            instance: handles.instance.as_raw() as *mut c_void,
+            physical_device: handles.physical_device.as_raw() as *mut c_void,
+            device: handles.device.as_raw() as *mut c_void,
             queue_family: device.adapter().queue_family,
             color_format: COLOR_FORMAT.as_raw(),
             depth_format: DEPTH_FORMAT.as_raw(),
             // SAFETY: the loader's function has the ABI's signature (handles as pointers).
             get_instance_proc_addr: unsafe {
                 std::mem::transmute::<vk::PFN_vkGetInstanceProcAddr, abi::CadrGetInstanceProcAddr>(
-                    instance.entry().static_fn().get_instance_proc_addr,
+                    handles.get_instance_proc_addr,
                 )
             },
             features: feature_bits(device.capabilities()),

@@ -46,6 +46,19 @@ pub struct DeviceOptions {
     pub extra_extensions: Vec<CString>,
 }
 
+/// The raw handles of a device, for code that loads Vulkan itself (the technique plugins).
+#[derive(Clone, Copy, Debug)]
+pub struct RawHandles {
+    /// The instance.
+    pub instance: vk::Instance,
+    /// The physical device.
+    pub physical_device: vk::PhysicalDevice,
+    /// The logical device.
+    pub device: vk::Device,
+    /// The loader's `vkGetInstanceProcAddr`.
+    pub get_instance_proc_addr: vk::PFN_vkGetInstanceProcAddr,
+}
+
 /// The Vulkan device everything else is created on. Child objects hold an `Arc<Device>`.
 pub struct Device {
     pub(crate) instance: Arc<Instance>,
@@ -330,6 +343,16 @@ impl Device {
         // SAFETY: handle is a live object of this device; info lives until the call returns.
         // A failure only loses a debug name, so it is ignored.
         let _ = unsafe { debug_utils.set_debug_utils_object_name(&info) };
+    }
+
+    /// The raw handles plugins load Vulkan from.
+    pub fn raw_handles(&self) -> RawHandles {
+        RawHandles {
+            instance: self.instance.raw().handle(),
+            physical_device: self.adapter.physical,
+            device: self.raw.handle(),
+            get_instance_proc_addr: self.instance.entry().static_fn().get_instance_proc_addr,
+        }
     }
 
     /// Runs `use_queue` with the render queue reserved for it: no other thread submits,

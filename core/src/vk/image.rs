@@ -211,6 +211,28 @@ pub fn subresource_range(aspect: vk::ImageAspectFlags) -> vk::ImageSubresourceRa
         .layer_count(1)
 }
 
+/// Records a global memory barrier: writes of `src` (stages, accesses) before it become
+/// visible to the accesses of `dst` after it.
+pub fn memory_barrier(
+    device: &Device,
+    command_buffer: vk::CommandBuffer,
+    (src_stage, src_access): (vk::PipelineStageFlags2, vk::AccessFlags2),
+    (dst_stage, dst_access): (vk::PipelineStageFlags2, vk::AccessFlags2),
+) {
+    let memory = [vk::MemoryBarrier2::default()
+        .src_stage_mask(src_stage)
+        .src_access_mask(src_access)
+        .dst_stage_mask(dst_stage)
+        .dst_access_mask(dst_access)];
+    let dependency = vk::DependencyInfo::default().memory_barriers(&memory);
+    // SAFETY: command_buffer is recording, outside rendering.
+    unsafe {
+        device
+            .raw
+            .cmd_pipeline_barrier2(command_buffer, &dependency)
+    };
+}
+
 /// An image layout transition with synchronization2.
 pub fn transition(
     device: &Device,

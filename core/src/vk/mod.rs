@@ -14,6 +14,8 @@ mod device;
 mod error;
 mod image;
 mod instance;
+mod pipeline;
+mod rendering;
 mod shader;
 mod swapchain;
 mod timer;
@@ -21,13 +23,18 @@ mod timer;
 pub use adapter::{enumerate as enumerate_adapters, Adapter, DeviceChoice, DEVICE_ENV};
 pub use buffer::{Buffer, MemoryLocation};
 pub use command::{record_dispatch, CommandContext, OneShot};
-pub use device::{Capabilities, Device, DeviceOptions};
+pub use device::{Capabilities, Device, DeviceOptions, RawHandles};
 pub use error::{map_result, VkError, VkResult, VkResultExt};
 pub use image::{
-    read_rgba8, record_image_copy, subresource_range, transition, Image, OffscreenTarget,
-    COLOR_FORMAT, DEPTH_FORMAT,
+    memory_barrier, read_rgba8, record_image_copy, subresource_range, transition, Image,
+    OffscreenTarget, COLOR_FORMAT, DEPTH_FORMAT,
 };
 pub use instance::{Instance, InstanceOptions, ValidationLog, ValidationMessage};
+pub use pipeline::{
+    DescriptorSetLayout, DescriptorSets, GraphicsPipelineDesc, Pipeline, PipelineLayout,
+    VertexLayout,
+};
+pub use rendering::{begin_rendering, end_rendering, RenderingTarget};
 pub use shader::{compile_glsl, IncludeFile, ShaderModule, ShaderStage};
 pub use swapchain::{PresentOutcome, Swapchain};
 pub use timer::GpuTimer;

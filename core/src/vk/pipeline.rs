@@ -1,0 +1,350 @@
+//! Pipeline objects, each owning its Vulkan handle and destroying it when dropped: descriptor
+//! set layouts, pipeline layouts, descriptor sets with their pool, and graphics and compute
+//! pipelines built the way cadr builds them (dynamic rendering, dynamic viewport and scissor).
+
+use std::sync::Arc;
+
+use ash::vk;
+
+use super::{Device, ShaderModule, VkResult, VkResultExt, DEPTH_FORMAT};
+
+/// A descriptor set layout.
+pub struct DescriptorSetLayout {
+    device: Arc<Device>,
+    raw: vk::DescriptorSetLayout,
+}
+
+impl DescriptorSetLayout {
+    /// A layout with one descriptor per binding: binding `i` is `bindings[i]` (type, stages).
+    pub fn new(
+        device: &Arc<Device>,
+        name: &str,
+        bindings: &[(vk::DescriptorType, vk::ShaderStageFlags)],
+    ) -> VkResult<Self> {
+        let bindings: Vec<vk::DescriptorSetLayoutBinding<'_>> = bindings
+            .iter()
+            .enumerate()
+            .map(|(i, &(ty, stages))| {
+                vk::DescriptorSetLayoutBinding::default()
+                    .binding(i as u32)
+                    .descriptor_type(ty)
+                    .descriptor_count(1)
+                    .stage_flags(stages)
+            })
+            .collect();
+        let info = vk::DescriptorSetLayoutCreateInfo::default().bindings(&bindings);
+        // SAFETY: the info lives for the call.
+        let raw = unsafe { device.raw().create_descriptor_set_layout(&info, None) }
+            .or_vk("vkCreateDescriptorSetLayout")?;
+        device.set_name(raw, name);
+        Ok(Self {
+            device: Arc::clone(device),
+            raw,
+        })
+    }
+
+    /// The Vulkan handle.
+    pub fn raw(&self) -> vk::DescriptorSetLayout {
+        self.raw
+    }
+}
+
+impl Drop for DescriptorSetLayout {
+    fn drop(&mut self) {
+        // SAFETY: owners drop layouts after the pipelines and sets made from them are done.
+        unsafe {
+            self.device
+                .raw()
+                .destroy_descriptor_set_layout(self.raw, None)
+        };
+    }
+}
+
+/// A pipeline layout: descriptor set layouts and one push-constant range.
+pub struct PipelineLayout {
+    device: Arc<Device>,
+    raw: vk::PipelineLayout,
+}
+
+impl PipelineLayout {
+    /// Sets `sets` (set `i` is `sets[i]`) and `push_bytes` of push constants for `push_stages`.
+    pub fn new(
+        device: &Arc<Device>,
+        name: &str,
+        sets: &[vk::DescriptorSetLayout],
+        push_bytes: u32,
+        push_stages: vk::ShaderStageFlags,
+    ) -> VkResult<Self> {
+        let push = [vk::PushConstantRange::default()
+            .stage_flags(push_stages)
+            .size(push_bytes)];
+        let info = vk::PipelineLayoutCreateInfo::default()
+            .set_layouts(sets)
+            .push_constant_ranges(&push);
+        // SAFETY: the info lives for the call.
+        let raw = unsafe { device.raw().create_pipeline_layout(&info, None) }
+            .or_vk("vkCreatePipelineLayout")?;
+        device.set_name(raw, name);
+        Ok(Self {
+            device: Arc::clone(device),
+            raw,
+        })
+    }
+
+    /// The Vulkan handle.
+    pub fn raw(&self) -> vk::PipelineLayout {
+        self.raw
+    }
+}
+
+impl Drop for PipelineLayout {
+    fn drop(&mut self) {
+        // SAFETY: owners drop the layout after the GPU is done with its pipelines.
+        unsafe { self.device.raw().destroy_pipeline_layout(self.raw, None) };
+    }
+}
+
+/// A graphics or compute pipeline.
+pub struct Pipeline {
+    device: Arc<Device>,
+    raw: vk::Pipeline,
+}
+
+impl Pipeline {
+    /// A graphics pipeline as [`GraphicsPipelineDesc`] describes it.
+    pub fn graphics(device: &Arc<Device>, desc: &GraphicsPipelineDesc<'_>) -> VkResult<Self> {
+        let stages = [
+            vk::PipelineShaderStageCreateInfo::default()
+                .stage(vk::ShaderStageFlags::VERTEX)
+                .module(desc.vertex.raw())
+                .name(c"main"),
+            vk::PipelineShaderStageCreateInfo::default()
+                .stage(vk::ShaderStageFlags::FRAGMENT)
+                .module(desc.fragment.raw())
+                .name(c"main"),
+        ];
+        let layout = desc.vertex_layout.unwrap_or(VertexLayout {
+            stride: 0,
+            attributes: &[],
+        });
+        let vertex_bindings = [vk::VertexInputBindingDescription::default()
+            .binding(0)
+            .stride(layout.stride)
+            .input_rate(vk::VertexInputRate::VERTEX)];
+        let vertex_attributes: Vec<vk::VertexInputAttributeDescription> = layout
+            .attributes
+            .iter()
+            .enumerate()
+            .map(|(location, &(format, offset))| {
+                vk::VertexInputAttributeDescription::default()
+                    .location(location as u32)
+                    .binding(0)
+                    .format(format)
+                    .offset(offset)
+            })
+            .collect();
+        let vertex_input = match desc.vertex_layout {
+            Some(_) => vk::PipelineVertexInputStateCreateInfo::default()
+                .vertex_binding_descriptions(&vertex_bindings)
+                .vertex_attribute_descriptions(&vertex_attributes),
+            None => vk::PipelineVertexInputStateCreateInfo::default(),
+        };
+        let input_assembly =
+            vk::PipelineInputAssemblyStateCreateInfo::default().topology(desc.topology);
+        let viewport = vk::PipelineViewportStateCreateInfo::default()
+            .viewport_count(1)
+            .scissor_count(1);
+        let rasterization = vk::PipelineRasterizationStateCreateInfo::default()
+            .polygon_mode(vk::PolygonMode::FILL)
+            .cull_mode(vk::CullModeFlags::NONE)
+            .front_face(vk::FrontFace::COUNTER_CLOCKWISE)
+            .depth_bias_enable(desc.depth_bias)
+            .depth_bias_constant_factor(1.0)
+            .depth_bias_slope_factor(1.0)
+            .line_width(1.0);
+        let multisample = vk::PipelineMultisampleStateCreateInfo::default()
+            .rasterization_samples(vk::SampleCountFlags::TYPE_1);
+        let depth = vk::PipelineDepthStencilStateCreateInfo::default()
+            .depth_test_enable(true)
+            .depth_write_enable(true)
+            .depth_compare_op(vk::CompareOp::LESS_OR_EQUAL);
+        let blend_attachments = [vk::PipelineColorBlendAttachmentState::default()
+            .color_write_mask(vk::ColorComponentFlags::RGBA)];
+        let blend =
+            vk::PipelineColorBlendStateCreateInfo::default().attachments(&blend_attachments);
+        let dynamic_states = [vk::DynamicState::VIEWPORT, vk::DynamicState::SCISSOR];
+        let dynamic = vk::PipelineDynamicStateCreateInfo::default().dynamic_states(&dynamic_states);
+        let color_formats = [desc.color_format];
+        let mut rendering = vk::PipelineRenderingCreateInfo::default()
+            .color_attachment_formats(&color_formats)
+            .depth_attachment_format(DEPTH_FORMAT);
+        let info = [vk::GraphicsPipelineCreateInfo::default()
+            .stages(&stages)
+            .vertex_input_state(&vertex_input)
+            .input_assembly_state(&input_assembly)
+            .viewport_state(&viewport)
+            .rasterization_state(&rasterization)
+            .multisample_state(&multisample)
+            .depth_stencil_state(&depth)
+            .color_blend_state(&blend)
+            .dynamic_state(&dynamic)
+            .layout(desc.layout.raw())
+            .push_next(&mut rendering)];
+        // SAFETY: every struct the info points to lives until the call returns; the modules are
+        // alive during the call (pipelines do not keep them).
+        let pipelines = unsafe {
+            device
+                .raw()
+                .create_graphics_pipelines(vk::PipelineCache::null(), &info, None)
+        }
+        .map_err(|(_, result)| result)
+        .or_vk("vkCreateGraphicsPipelines")?;
+        device.set_name(pipelines[0], desc.name);
+        Ok(Self {
+            device: Arc::clone(device),
+            raw: pipelines[0],
+        })
+    }
+
+    /// A compute pipeline running `shader`'s `main`.
+    pub fn compute(
+        device: &Arc<Device>,
+        layout: &PipelineLayout,
+        shader: &ShaderModule,
+        name: &str,
+    ) -> VkResult<Self> {
+        let stage = vk::PipelineShaderStageCreateInfo::default()
+            .stage(vk::ShaderStageFlags::COMPUTE)
+            .module(shader.raw())
+            .name(c"main");
+        let info = [vk::ComputePipelineCreateInfo::default()
+            .stage(stage)
+            .layout(layout.raw())];
+        // SAFETY: the info and the module live for the call.
+        let pipelines = unsafe {
+            device
+                .raw()
+                .create_compute_pipelines(vk::PipelineCache::null(), &info, None)
+        }
+        .map_err(|(_, result)| result)
+        .or_vk("vkCreateComputePipelines")?;
+        device.set_name(pipelines[0], name);
+        Ok(Self {
+            device: Arc::clone(device),
+            raw: pipelines[0],
+        })
+    }
+
+    /// The Vulkan handle.
+    pub fn raw(&self) -> vk::Pipeline {
+        self.raw
+    }
+}
+
+impl Drop for Pipeline {
+    fn drop(&mut self) {
+        // SAFETY: owners drop pipelines after the GPU finished the frames that use them.
+        unsafe { self.device.raw().destroy_pipeline(self.raw, None) };
+    }
+}
+
+/// Binding 0's stride and its attributes (format, offset) at locations 0, 1, ….
+#[derive(Clone, Copy, Debug)]
+pub struct VertexLayout<'a> {
+    /// Bytes from one vertex to the next.
+    pub stride: u32,
+    /// Format and offset of each attribute, at locations 0, 1, ….
+    pub attributes: &'a [(vk::Format, u32)],
+}
+
+/// What cadr's graphics pipelines differ in. The rest is shared: dynamic viewport and scissor,
+/// no face culling, depth test and write with LESS_OR_EQUAL, one colour target, dynamic
+/// rendering with [`DEPTH_FORMAT`].
+pub struct GraphicsPipelineDesc<'a> {
+    /// The pipeline layout.
+    pub layout: &'a PipelineLayout,
+    /// The vertex shader.
+    pub vertex: &'a ShaderModule,
+    /// The fragment shader.
+    pub fragment: &'a ShaderModule,
+    /// `None` for no vertex input (vertex pulling).
+    pub vertex_layout: Option<VertexLayout<'a>>,
+    /// Triangles or lines.
+    pub topology: vk::PrimitiveTopology,
+    /// Pushes triangles back (constant and slope factor 1) so that edge lines win the depth test.
+    pub depth_bias: bool,
+    /// The colour attachment's format.
+    pub color_format: vk::Format,
+    /// The debug name.
+    pub name: &'a str,
+}
+
+/// A descriptor pool, its sets and the layouts it was made for; destroyed together.
+pub struct DescriptorSets {
+    device: Arc<Device>,
+    pool: vk::DescriptorPool,
+    /// The sets, one per layout given.
+    pub sets: Vec<vk::DescriptorSet>,
+}
+
+impl DescriptorSets {
+    /// Allocates one set per layout from a pool sized for them.
+    pub fn new(
+        device: &Arc<Device>,
+        name: &str,
+        layouts: &[vk::DescriptorSetLayout],
+        sizes: &[vk::DescriptorPoolSize],
+    ) -> VkResult<Self> {
+        let info = vk::DescriptorPoolCreateInfo::default()
+            .max_sets(layouts.len() as u32)
+            .pool_sizes(sizes);
+        // SAFETY: the info lives for the call.
+        let pool = unsafe { device.raw().create_descriptor_pool(&info, None) }
+            .or_vk("vkCreateDescriptorPool")?;
+        device.set_name(pool, name);
+        let mut this = Self {
+            device: Arc::clone(device),
+            pool,
+            sets: Vec::new(),
+        };
+        let alloc = vk::DescriptorSetAllocateInfo::default()
+            .descriptor_pool(pool)
+            .set_layouts(layouts);
+        // SAFETY: the pool was sized for exactly these sets.
+        this.sets = unsafe { device.raw().allocate_descriptor_sets(&alloc) }
+            .or_vk("vkAllocateDescriptorSets")?;
+        for (i, &set) in this.sets.iter().enumerate() {
+            device.set_name(set, &format!("{name} set {i}"));
+        }
+        Ok(this)
+    }
+
+    /// Points `binding` of set `set` at `buffer` (whole range).
+    pub fn write_buffer(
+        &self,
+        set: usize,
+        binding: u32,
+        ty: vk::DescriptorType,
+        buffer: vk::Buffer,
+        range: u64,
+    ) {
+        let info = [vk::DescriptorBufferInfo::default()
+            .buffer(buffer)
+            .range(range)];
+        let write = [vk::WriteDescriptorSet::default()
+            .dst_set(self.sets[set])
+            .dst_binding(binding)
+            .descriptor_type(ty)
+            .buffer_info(&info)];
+        // SAFETY: callers update sets only while no submitted command buffer uses them (frames
+        // are waited for before the next is recorded).
+        unsafe { self.device.raw().update_descriptor_sets(&write, &[]) };
+    }
+}
+
+impl Drop for DescriptorSets {
+    fn drop(&mut self) {
+        // SAFETY: owners drop their sets after the GPU is done with them; sets go with the pool.
+        unsafe { self.device.raw().destroy_descriptor_pool(self.pool, None) };
+    }
+}

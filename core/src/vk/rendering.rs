@@ -1,0 +1,166 @@
+//! Dynamic rendering into one colour and one depth image: the layout transitions before and
+//! after, the cleared attachments, and the viewport covering the target.
+
+use ash::vk;
+
+use super::{transition, Device, Image};
+
+/// What a pass renders into. Both images are cleared when it begins; the colour image ends in
+/// `TRANSFER_SRC_OPTIMAL` for readback or presentation, the depth image too when it is kept.
+pub struct RenderingTarget<'a> {
+    /// The colour (or id) attachment.
+    pub color: &'a Image,
+    /// Its clear value.
+    pub clear_color: vk::ClearColorValue,
+    /// The depth attachment (cleared to 1.0).
+    pub depth: &'a Image,
+    /// Whether the depth is stored and made readable after the pass.
+    pub keep_depth: bool,
+    /// The area rendered.
+    pub extent: vk::Extent2D,
+    /// Whether the pass's contents come from secondary command buffers (which set their own
+    /// viewport and scissor).
+    pub secondary: bool,
+}
+
+/// Transitions the target's images for rendering and begins rendering into them.
+pub fn begin_rendering(
+    device: &Device,
+    command_buffer: vk::CommandBuffer,
+    target: &RenderingTarget<'_>,
+) {
+    transition(
+        device,
+        command_buffer,
+        target.color.raw(),
+        vk::ImageAspectFlags::COLOR,
+        (
+            vk::ImageLayout::UNDEFINED,
+            vk::PipelineStageFlags2::TOP_OF_PIPE,
+            vk::AccessFlags2::NONE,
+        ),
+        (
+            vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL,
+            vk::PipelineStageFlags2::COLOR_ATTACHMENT_OUTPUT,
+            vk::AccessFlags2::COLOR_ATTACHMENT_WRITE,
+        ),
+    );
+    transition(
+        device,
+        command_buffer,
+        target.depth.raw(),
+        vk::ImageAspectFlags::DEPTH,
+        (
+            vk::ImageLayout::UNDEFINED,
+            vk::PipelineStageFlags2::TOP_OF_PIPE,
+            vk::AccessFlags2::NONE,
+        ),
+        (
+            vk::ImageLayout::DEPTH_ATTACHMENT_OPTIMAL,
+            vk::PipelineStageFlags2::EARLY_FRAGMENT_TESTS
+                | vk::PipelineStageFlags2::LATE_FRAGMENT_TESTS,
+            vk::AccessFlags2::DEPTH_STENCIL_ATTACHMENT_WRITE
+                | vk::AccessFlags2::DEPTH_STENCIL_ATTACHMENT_READ,
+        ),
+    );
+    let color_attachment = [vk::RenderingAttachmentInfo::default()
+        .image_view(target.color.view())
+        .image_layout(vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL)
+        .load_op(vk::AttachmentLoadOp::CLEAR)
+        .store_op(vk::AttachmentStoreOp::STORE)
+        .clear_value(vk::ClearValue {
+            color: target.clear_color,
+        })];
+    let depth_attachment = vk::RenderingAttachmentInfo::default()
+        .image_view(target.depth.view())
+        .image_layout(vk::ImageLayout::DEPTH_ATTACHMENT_OPTIMAL)
+        .load_op(vk::AttachmentLoadOp::CLEAR)
+        .store_op(if target.keep_depth {
+            vk::AttachmentStoreOp::STORE
+        } else {
+            vk::AttachmentStoreOp::DONT_CARE
+        })
+        .clear_value(vk::ClearValue {
+            depth_stencil: vk::ClearDepthStencilValue {
+                depth: 1.0,
+                stencil: 0,
+            },
+        });
+    let area = vk::Rect2D {
+        offset: vk::Offset2D::default(),
+        extent: target.extent,
+    };
+    let flags = if target.secondary {
+        vk::RenderingFlags::CONTENTS_SECONDARY_COMMAND_BUFFERS
+    } else {
+        vk::RenderingFlags::empty()
+    };
+    let rendering = vk::RenderingInfo::default()
+        .flags(flags)
+        .render_area(area)
+        .layer_count(1)
+        .color_attachments(&color_attachment)
+        .depth_attachment(&depth_attachment);
+    let viewport = [vk::Viewport {
+        x: 0.0,
+        y: 0.0,
+        width: target.extent.width as f32,
+        height: target.extent.height as f32,
+        min_depth: 0.0,
+        max_depth: 1.0,
+    }];
+    let raw = device.raw();
+    // SAFETY: command_buffer is recording; the target's images outlive the submission.
+    unsafe {
+        raw.cmd_begin_rendering(command_buffer, &rendering);
+        if !target.secondary {
+            raw.cmd_set_viewport(command_buffer, 0, &viewport);
+            raw.cmd_set_scissor(command_buffer, 0, &[area]);
+        }
+    }
+}
+
+/// Ends rendering begun by [`begin_rendering`] on `command_buffer` and makes the colour image
+/// (and the depth, when kept) ready to be copied from.
+pub fn end_rendering(
+    device: &Device,
+    command_buffer: vk::CommandBuffer,
+    target: &RenderingTarget<'_>,
+) {
+    // SAFETY: rendering was begun by begin_rendering on this command buffer.
+    unsafe { device.raw().cmd_end_rendering(command_buffer) };
+    transition(
+        device,
+        command_buffer,
+        target.color.raw(),
+        vk::ImageAspectFlags::COLOR,
+        (
+            vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL,
+            vk::PipelineStageFlags2::COLOR_ATTACHMENT_OUTPUT,
+            vk::AccessFlags2::COLOR_ATTACHMENT_WRITE,
+        ),
+        (
+            vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
+            vk::PipelineStageFlags2::COPY,
+            vk::AccessFlags2::TRANSFER_READ,
+        ),
+    );
+    if target.keep_depth {
+        transition(
+            device,
+            command_buffer,
+            target.depth.raw(),
+            vk::ImageAspectFlags::DEPTH,
+            (
+                vk::ImageLayout::DEPTH_ATTACHMENT_OPTIMAL,
+                vk::PipelineStageFlags2::LATE_FRAGMENT_TESTS,
+                vk::AccessFlags2::DEPTH_STENCIL_ATTACHMENT_WRITE,
+            ),
+            (
+                vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
+                vk::PipelineStageFlags2::COPY,
+                vk::AccessFlags2::TRANSFER_READ,
+            ),
+        );
+    }
+}

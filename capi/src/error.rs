@@ -73,6 +73,21 @@ impl From<cadr_core::vk::VkError> for Failure {
     }
 }
 
+impl From<cadr_core::error::RenderError> for Failure {
+    fn from(error: cadr_core::error::RenderError) -> Self {
+        use cadr_core::error::RenderError;
+        match error {
+            RenderError::Vulkan(vulkan) => vulkan.into(),
+            // A technique's own failure, or its shader snippet failing to compile in the
+            // assembled shader.
+            RenderError::Technique { .. } | RenderError::ShaderCompile(_) => {
+                Self::new(CadrResult::PluginFailed, error.to_string())
+            }
+            RenderError::InvalidUse(_) => Self::new(CadrResult::InvalidArgument, error.to_string()),
+        }
+    }
+}
+
 /// Runs `body`, turning its failure or panic into a result code and the thread's last error.
 pub(crate) fn guard(body: impl FnOnce() -> Result<(), Failure>) -> CadrResult {
     let outcome = catch_unwind(AssertUnwindSafe(body)).unwrap_or_else(|panic| {

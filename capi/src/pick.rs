@@ -8,7 +8,7 @@ use crate::args::{deliver, non_null};
 use crate::camera::CadrCamera;
 use crate::error::{guard, CadrResult, Failure};
 use crate::handles::lock;
-use crate::renderer::{technique_failure, with_renderer, CadrRenderer};
+use crate::renderer::{with_renderer, CadrRenderer};
 use crate::scene::{node_value, CadrNode, CadrScene, SCENES};
 
 /// One picked occurrence of a part.
@@ -110,7 +110,7 @@ unsafe fn pick(
         state
             .view
             .pick(&s.graph, &mut s.tree, &camera, rect)
-            .map_err(technique_failure)
+            .map_err(Failure::from)
     })?;
     // SAFETY: result is non-null and writable (the caller's contract).
     unsafe { deliver(result, "result", result_of(hits)) }

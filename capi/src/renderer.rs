@@ -418,23 +418,13 @@ fn refusal(state: &RendererState, combination: &Combination) -> Result<(), Failu
     })
 }
 
-/// A technique's failure as `CADR_RESULT_PLUGIN_FAILED`; Vulkan's as itself.
-pub(crate) fn technique_failure(error: cadr_core::vk::VkError) -> Failure {
-    match error {
-        cadr_core::vk::VkError::Technique { .. } => {
-            Failure::new(CadrResult::PluginFailed, error.to_string())
-        }
-        other => other.into(),
-    }
-}
-
 fn select(state: &mut RendererState, combination: &Combination) -> Result<(), Failure> {
     refusal(state, combination)?;
     state
         .view
         .techniques_mut()
         .select(combination)
-        .map_err(technique_failure)
+        .map_err(Failure::from)
 }
 
 /// Checks whether a technique selection would work, without changing anything.
@@ -631,7 +621,7 @@ pub unsafe extern "C" fn cadr_renderer_render(
             state.view.sync(&s.graph, &mut s.tree)?;
             frame.scene_update_us = update_start.elapsed().as_secs_f64() * 1e6;
             drop(scene_state);
-            let drawn = state.view.draw(&camera).map_err(technique_failure)?;
+            let drawn = state.view.draw(&camera).map_err(Failure::from)?;
             frame.presented = true;
             if let Some(swapchain) = &mut state.swapchain {
                 let present_start = Instant::now();
@@ -721,7 +711,7 @@ pub unsafe extern "C" fn cadr_renderer_save_png(
                     cadr_core::render::SaveError::Write { .. } => {
                         Failure::new(CadrResult::Io, e.to_string())
                     }
-                    cadr_core::render::SaveError::Vulkan(v) => v.into(),
+                    cadr_core::render::SaveError::Render(render) => render.into(),
                 })
         })
     })

@@ -5,6 +5,7 @@
 //! techniques into an offscreen target via the thin Vulkan layer in [`vk`].
 
 pub mod csf;
+pub mod error;
 pub mod generate;
 pub mod gpu_scene;
 pub mod graph;

@@ -1,6 +1,71 @@
-//! The GLSL sources in `shaders/`, embedded so that the library needs no files at run time.
+//! The GLSL sources in `shaders/`, embedded so that the library needs no files at run time, and
+//! their compiler: GLSL → SPIR-V at run time with shaderc (linked to the system libshaderc).
+//!
+//! Run-time compilation is deliberate: technique plugins contribute GLSL snippets (parameter
+//! accessors, vertex fetch) that are assembled into complete shaders when a combination is
+//! chosen, so a build-time compiler could not know every permutation.
 
-use crate::vk::{IncludeFile, ShaderStage};
+use crate::vk::ShaderStage;
+
+/// A shader that failed to compile: a renderer error (a broken source or snippet), not a
+/// Vulkan one.
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+#[error("shader '{name}' failed to compile:\n{log}")]
+pub struct ShaderCompileError {
+    /// The shader's name.
+    pub name: String,
+    /// The compiler's messages.
+    pub log: String,
+}
+
+fn shaderc_kind(stage: ShaderStage) -> shaderc::ShaderKind {
+    match stage {
+        ShaderStage::Vertex => shaderc::ShaderKind::Vertex,
+        ShaderStage::Fragment => shaderc::ShaderKind::Fragment,
+        ShaderStage::Compute => shaderc::ShaderKind::Compute,
+    }
+}
+
+/// A virtual file that `#include "name"` resolves to.
+pub type IncludeFile = (&'static str, &'static str);
+
+/// Compiles GLSL `source` (named `name` in messages) for Vulkan 1.3, resolving `#include`
+/// against `includes`. Returns the SPIR-V words.
+pub fn compile_glsl(
+    name: &str,
+    source: &str,
+    stage: ShaderStage,
+    includes: &[IncludeFile],
+) -> Result<Vec<u32>, ShaderCompileError> {
+    let failure = |log: String| ShaderCompileError {
+        name: name.to_owned(),
+        log,
+    };
+    let compiler = shaderc::Compiler::new().map_err(|e| failure(format!("shaderc: {e}")))?;
+    let mut options =
+        shaderc::CompileOptions::new().map_err(|e| failure(format!("shaderc: {e}")))?;
+    options.set_target_env(
+        shaderc::TargetEnv::Vulkan,
+        shaderc::EnvVersion::Vulkan1_3 as u32,
+    );
+    options.set_optimization_level(shaderc::OptimizationLevel::Performance);
+    options.set_warnings_as_errors();
+    let includes: Vec<IncludeFile> = includes.to_vec();
+    options.set_include_callback(move |requested, _type, requester, _depth| {
+        includes
+            .iter()
+            .find(|(file, _)| *file == requested)
+            .map(|(file, content)| shaderc::ResolvedInclude {
+                resolved_name: (*file).to_owned(),
+                content: (*content).to_owned(),
+            })
+            .ok_or_else(|| format!("{requester}: no include file named '{requested}'"))
+    });
+    let artifact = compiler
+        .compile_into_spirv(source, shaderc_kind(stage), name, "main", Some(&options))
+        .map_err(|e| failure(e.to_string()))?;
+    Ok(artifact.as_binary().to_vec())
+}
 
 /// Files that `#include` resolves to.
 pub const INCLUDES: &[IncludeFile] = &[

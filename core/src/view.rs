@@ -8,13 +8,14 @@ use std::sync::Arc;
 
 use glam::{DVec3, DVec4};
 
+use crate::error::{RenderError, RenderResult};
 use crate::gpu_scene::GpuScene;
 use crate::graph::{NodeHandle, SceneGraph};
 use crate::render::pick::{PickSample, PixelRect};
 use crate::render::{Camera, FrameStats, Renderer};
 use crate::technique::{Combination, PluginRegistry, Techniques};
 use crate::tree::SceneTree;
-use crate::vk::{Device, VkResult};
+use crate::vk::Device;
 
 /// What a pick found under one pixel (or, for a rectangle, the nearest pixel of one part).
 #[derive(Clone, Debug, PartialEq)]
@@ -73,7 +74,7 @@ impl View {
         registry: Arc<PluginRegistry>,
         width: u32,
         height: u32,
-    ) -> VkResult<Self> {
+    ) -> RenderResult<Self> {
         let renderer = Renderer::new(device, width, height)?;
         let mut techniques =
             Techniques::new(device, registry, renderer.pipelines().frame_set_layout());
@@ -113,7 +114,7 @@ impl View {
     /// Brings the GPU scene up to date with `tree` (which must be up to date with `graph`):
     /// created on first use, then synced with the changes since this view's last frame (a
     /// tree this view has not read before is uploaded afresh).
-    pub fn sync(&mut self, graph: &SceneGraph, tree: &mut SceneTree) -> VkResult<()> {
+    pub fn sync(&mut self, graph: &SceneGraph, tree: &mut SceneTree) -> RenderResult<()> {
         match &mut self.scene {
             Some(scene) => scene.sync(graph, tree),
             None => {
@@ -130,23 +131,23 @@ impl View {
         graph: &SceneGraph,
         tree: &mut SceneTree,
         camera: &Camera,
-    ) -> VkResult<FrameStats> {
+    ) -> RenderResult<FrameStats> {
         self.sync(graph, tree)?;
         self.draw(camera)
     }
 
     /// Draws one frame of the GPU scene as last synced (see [`View::sync`]).
-    pub fn draw(&mut self, camera: &Camera) -> VkResult<FrameStats> {
+    pub fn draw(&mut self, camera: &Camera) -> RenderResult<FrameStats> {
         let (scene, techniques, renderer) = self.parts()?;
         renderer.render_techniques(scene, techniques, camera)
     }
 
     /// The GPU scene, the techniques and the renderer, borrowed together for a frame.
-    fn parts(&mut self) -> VkResult<(&mut GpuScene, &mut Techniques, &mut Renderer)> {
+    fn parts(&mut self) -> RenderResult<(&mut GpuScene, &mut Techniques, &mut Renderer)> {
         let scene = self
             .scene
             .as_mut()
-            .ok_or_else(|| crate::vk::VkError::InvalidUse("no GPU scene: sync first".into()))?;
+            .ok_or_else(|| RenderError::InvalidUse("no GPU scene: sync first".into()))?;
         Ok((scene, &mut self.techniques, &mut self.renderer))
     }
 
@@ -158,7 +159,7 @@ impl View {
         tree: &mut SceneTree,
         camera: &Camera,
         rect: PixelRect,
-    ) -> VkResult<Vec<PickHit>> {
+    ) -> RenderResult<Vec<PickHit>> {
         self.sync(graph, tree)?;
         let (scene, techniques, renderer) = self.parts()?;
         let samples = renderer.pick_techniques(scene, techniques, camera, rect)?;

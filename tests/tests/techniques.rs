@@ -72,7 +72,9 @@ impl Fixture {
         }
     }
 
-    fn try_render(&mut self) -> Result<cadr_core::render::FrameStats, cadr_core::vk::VkError> {
+    fn try_render(
+        &mut self,
+    ) -> Result<cadr_core::render::FrameStats, cadr_core::error::RenderError> {
         self.tree.update(&mut self.graph);
         self.scene.sync(&self.graph, &mut self.tree).unwrap();
         self.renderer
@@ -331,8 +333,12 @@ fn failing_techniques_are_refused_and_the_renderer_keeps_working() {
     let error = f
         .techniques
         .swap(TechniqueKind::Vertex, "panics-on-create")
-        .unwrap_err()
-        .to_string();
+        .unwrap_err();
+    assert!(
+        matches!(error, cadr_core::error::RenderError::Technique { .. }),
+        "a technique's failure is not a Vulkan error: {error:?}"
+    );
+    let error = error.to_string();
     assert!(
         error.contains("create panicked") && error.contains("this vertex path always panics"),
         "{error}"

@@ -5,12 +5,13 @@
 
 use std::sync::Arc;
 
+use crate::error::RenderResult;
 use crate::vk::raw as vk;
 
 use crate::graph::SceneGraph;
 use crate::scene::edges::{feature_edges, DEFAULT_CREASE_DEGREES};
 use crate::scene::{Geometry, Part, Vertex};
-use crate::vk::{Buffer, Device, VkResult};
+use crate::vk::{Buffer, Device};
 
 /// Where one geometry lies in the arenas and how much room it has there.
 #[derive(Clone, Debug)]
@@ -119,7 +120,7 @@ pub(super) struct GeometryArenas {
 
 impl GeometryArenas {
     /// Lays out and uploads every geometry of `graph`; returns the arenas and the bytes uploaded.
-    pub(super) fn upload(device: &Arc<Device>, graph: &SceneGraph) -> VkResult<(Self, u64)> {
+    pub(super) fn upload(device: &Arc<Device>, graph: &SceneGraph) -> RenderResult<(Self, u64)> {
         let (_, geometry_slots, _) = graph.capacities();
         let mut vertices: Vec<Vertex> = Vec::new();
         let mut indices: Vec<u32> = Vec::new();
@@ -180,7 +181,7 @@ impl GeometryArenas {
         &mut self,
         graph: &SceneGraph,
         slot: u32,
-    ) -> VkResult<Option<u64>> {
+    ) -> RenderResult<Option<u64>> {
         let Some(geometry) = graph.geometry_at(slot) else {
             return Ok(None);
         };

@@ -16,6 +16,7 @@ pub use upload::UploadStats;
 
 use std::sync::Arc;
 
+use crate::error::RenderResult;
 use crate::vk::raw as vk;
 use crate::vk::raw::Handle;
 use cadr_plugin_abi as abi;
@@ -25,7 +26,7 @@ use crate::graph::SceneGraph;
 use crate::render::Pipelines;
 use crate::scene::Vertex;
 use crate::tree::{ChangeReader, InstanceRef, SceneTree, TreeChanges};
-use crate::vk::{Device, OneShot, VkResult};
+use crate::vk::{Device, OneShot};
 use geometry::GeometryArenas;
 use upload::{GpuArray, SparseUploader};
 
@@ -104,7 +105,11 @@ pub struct GpuScene {
 
 impl GpuScene {
     /// Puts the tree's scene on the GPU and subscribes to the tree's changes.
-    pub fn new(device: &Arc<Device>, graph: &SceneGraph, tree: &mut SceneTree) -> VkResult<Self> {
+    pub fn new(
+        device: &Arc<Device>,
+        graph: &SceneGraph,
+        tree: &mut SceneTree,
+    ) -> RenderResult<Self> {
         // Generations are unique across scenes: techniques that cached a previous scene's
         // buffers or commands see that this one differs.
         let first_generation =
@@ -167,7 +172,7 @@ impl GpuScene {
     }
 
     /// Rebuilds every entry from the tree and graph and queues every array for upload.
-    fn refresh_all(&mut self, graph: &SceneGraph, tree: &SceneTree) -> VkResult<()> {
+    fn refresh_all(&mut self, graph: &SceneGraph, tree: &SceneTree) -> RenderResult<()> {
         let nodes = tree.node_capacity();
         self.worlds = vec![[0.0; 16]; nodes];
         self.matrices = vec![abi::CadrMatrix::default(); nodes];
@@ -297,7 +302,7 @@ impl GpuScene {
 
     /// Applies the tree's changes since this scene's last sync. The tree must be up to date
     /// with the graph (`SceneTree::update`).
-    pub fn sync(&mut self, graph: &SceneGraph, tree: &mut SceneTree) -> VkResult<()> {
+    pub fn sync(&mut self, graph: &SceneGraph, tree: &mut SceneTree) -> RenderResult<()> {
         self.frame_dirty_matrices.clear();
         self.frame_dirty_materials.clear();
         self.last_upload = UploadStats::default();
@@ -338,7 +343,7 @@ impl GpuScene {
     }
 
     /// Lays the arenas out again and rebuilds every entry.
-    fn relayout(&mut self, graph: &SceneGraph, tree: &SceneTree) -> VkResult<()> {
+    fn relayout(&mut self, graph: &SceneGraph, tree: &SceneTree) -> RenderResult<()> {
         let (arenas, bytes) = GeometryArenas::upload(&self.device, graph)?;
         self.arenas = arenas;
         self.last_upload.geometry_bytes += bytes;
@@ -413,7 +418,7 @@ impl GpuScene {
         &mut self,
         pipelines: &Pipelines,
         command_buffer: vk::CommandBuffer,
-    ) -> VkResult<u64> {
+    ) -> RenderResult<u64> {
         let matrices = &self.matrices;
         let materials = &self.materials;
         let records = &self.records;
@@ -448,7 +453,7 @@ impl GpuScene {
 
     /// Uploads what is pending now, outside a frame (one submission, waited for); returns the
     /// bytes sent. Frames upload by themselves; this serves measurements and tests.
-    pub fn flush_uploads(&mut self, pipelines: &Pipelines) -> VkResult<u64> {
+    pub fn flush_uploads(&mut self, pipelines: &Pipelines) -> RenderResult<u64> {
         let mut one_shot = OneShot::begin(&self.device, "scene upload")?;
         let bytes = self.record_uploads(pipelines, one_shot.command_buffer())?;
         one_shot.submit_and_wait()?;
@@ -542,7 +547,7 @@ impl GpuScene {
 
     /// Reads back the GPU's matrix, material and record arrays (for tests: the sparse uploads
     /// must leave them equal to the CPU copy). Waits for the device.
-    pub fn read_back_arrays(&self) -> VkResult<[Vec<u8>; 3]> {
+    pub fn read_back_arrays(&self) -> RenderResult<[Vec<u8>; 3]> {
         let read = |array: &GpuArray, bytes: usize| array.buffer.download(0, bytes as u64);
         Ok([
             read(&self.matrix_gpu, self.matrices.len() * MATRIX_BYTES)?,

@@ -6,11 +6,12 @@
 
 use std::sync::Arc;
 
+use crate::error::RenderResult;
 use crate::vk::raw as vk;
 
 use super::geometry::usage;
 use crate::render::{Pipelines, ScatterParameters};
-use crate::vk::{record_dispatch, Buffer, DescriptorSets, Device, MemoryLocation, VkResult};
+use crate::vk::{record_dispatch, Buffer, DescriptorSets, Device, MemoryLocation};
 
 /// One array of the GPU scene: fixed-size items in a device buffer, following a CPU copy.
 pub(super) struct GpuArray {
@@ -30,7 +31,7 @@ impl GpuArray {
         device: &Arc<Device>,
         name: &'static str,
         item_bytes: usize,
-    ) -> VkResult<Self> {
+    ) -> RenderResult<Self> {
         Ok(Self {
             buffer: Buffer::new(
                 device,
@@ -49,7 +50,7 @@ impl GpuArray {
 
     /// Makes room for `count` items; a new buffer is uploaded whole. True when the buffer was
     /// replaced.
-    pub(super) fn reserve(&mut self, device: &Arc<Device>, count: usize) -> VkResult<bool> {
+    pub(super) fn reserve(&mut self, device: &Arc<Device>, count: usize) -> RenderResult<bool> {
         if count <= self.capacity && self.capacity > 0 {
             return Ok(false);
         }
@@ -122,7 +123,7 @@ impl SparseUploader {
         pipelines: &Pipelines,
         command_buffer: vk::CommandBuffer,
         mut arrays: [ArrayItems<'_>; 3],
-    ) -> VkResult<([u64; 3], u64)> {
+    ) -> RenderResult<([u64; 3], u64)> {
         let mut counts = [0u64; 3];
         let mut bytes = 0u64;
         let mut gathered = std::mem::take(&mut self.gathered);
@@ -177,7 +178,7 @@ impl SparseUploader {
         arrays: &[ArrayItems<'_>; 3],
         gathered: &[u8],
         dispatches: &[(usize, u32, u32)],
-    ) -> VkResult<()> {
+    ) -> RenderResult<()> {
         if gathered.is_empty() {
             return Ok(());
         }

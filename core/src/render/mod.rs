@@ -18,12 +18,13 @@ pub use stats::FrameStats;
 use std::sync::Arc;
 use std::time::Instant;
 
+use crate::error::{RenderError, RenderResult};
 use crate::vk::raw as vk;
 
 use crate::gpu_scene::split_f64;
 use crate::vk::{
     begin_rendering, end_rendering, Buffer, CommandContext, DescriptorSets, Device, GpuTimer,
-    Image, MemoryLocation, OffscreenTarget, RenderingTarget, VkError, VkResult,
+    Image, MemoryLocation, OffscreenTarget, RenderingTarget,
 };
 use pick::{PickTarget, PixelRect};
 
@@ -54,11 +55,11 @@ pub(crate) enum PassTarget {
 
 /// What a technique records at one point of the frame: before the pass, inside it, or after it.
 pub(crate) type Recorder<'a> =
-    dyn FnMut(&Renderer, vk::CommandBuffer, &mut FrameStats) -> VkResult<()> + 'a;
+    dyn FnMut(&Renderer, vk::CommandBuffer, &mut FrameStats) -> RenderResult<()> + 'a;
 
 impl Renderer {
     /// Creates a renderer with a `width` × `height` target.
-    pub fn new(device: &Arc<Device>, width: u32, height: u32) -> VkResult<Self> {
+    pub fn new(device: &Arc<Device>, width: u32, height: u32) -> RenderResult<Self> {
         let target = OffscreenTarget::new(device, width, height)?;
         let frame_uniforms = Buffer::new(
             device,
@@ -114,7 +115,7 @@ impl Renderer {
     }
 
     /// Gives the target a new size (a window was resized); the next frame draws at that size.
-    pub fn resize(&mut self, width: u32, height: u32) -> VkResult<()> {
+    pub fn resize(&mut self, width: u32, height: u32) -> RenderResult<()> {
         if (width, height) == self.size() {
             return Ok(());
         }
@@ -132,14 +133,14 @@ impl Renderer {
 
     /// Makes the pick target ready to read back `rect` (inside the target) after the next pick
     /// pass.
-    pub(crate) fn prepare_pick(&mut self, rect: PixelRect) -> VkResult<()> {
+    pub(crate) fn prepare_pick(&mut self, rect: PixelRect) -> RenderResult<()> {
         let (width, height) = self.size();
         if rect.width == 0
             || rect.height == 0
             || u64::from(rect.x) + u64::from(rect.width) > u64::from(width)
             || u64::from(rect.y) + u64::from(rect.height) > u64::from(height)
         {
-            return Err(VkError::InvalidUse(format!(
+            return Err(RenderError::InvalidUse(format!(
                 "pixels {rect} are not inside the {width}x{height} target"
             )));
         }
@@ -161,7 +162,7 @@ impl Renderer {
 
     /// The prepared rectangle's samples from the last pick pass: the pixels covered by a
     /// pickable instance.
-    pub(crate) fn pick_samples(&self) -> VkResult<Vec<pick::PickSample>> {
+    pub(crate) fn pick_samples(&self) -> RenderResult<Vec<pick::PickSample>> {
         match &self.pick {
             Some(target) => target.samples(),
             None => Ok(Vec::new()),
@@ -177,7 +178,7 @@ impl Renderer {
         before: &mut Recorder<'_>,
         inside: &mut Recorder<'_>,
         after: &mut Recorder<'_>,
-    ) -> VkResult<FrameStats> {
+    ) -> RenderResult<FrameStats> {
         // The eye in f64, split for relative-to-eye positions on the GPU.
         let eye = camera.view.inverse().w_axis.truncate();
         let (eye_high, eye_low) = split_f64(eye);

@@ -3,15 +3,15 @@
 use std::path::Path;
 
 use super::Renderer;
-use crate::vk::{VkError, VkResult};
+use crate::error::{RenderError, RenderResult};
 
 impl Renderer {
     /// Reads the last frame back as tightly packed RGBA8 rows.
-    pub fn read_rgba8(&self) -> VkResult<image::RgbaImage> {
+    pub fn read_rgba8(&self) -> RenderResult<image::RgbaImage> {
         let (width, height) = self.size();
         let pixels = self.target.read_rgba8(&self.device)?;
         image::RgbaImage::from_raw(width, height, pixels).ok_or_else(|| {
-            VkError::InvalidUse(format!("read back fewer pixels than {width}x{height}"))
+            RenderError::InvalidUse(format!("read back fewer pixels than {width}x{height}"))
         })
     }
 
@@ -32,7 +32,7 @@ impl Renderer {
 pub enum SaveError {
     /// Reading the image back failed.
     #[error(transparent)]
-    Vulkan(#[from] VkError),
+    Render(#[from] RenderError),
     /// Writing the file failed.
     #[error("cannot write {}: {source}", path.display())]
     Write {

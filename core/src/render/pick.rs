@@ -3,10 +3,11 @@
 
 use std::sync::Arc;
 
+use crate::error::RenderResult;
 use crate::vk::raw as vk;
 
 use super::pipeline::PICK_FORMAT;
-use crate::vk::{record_image_copy, Buffer, Device, Image, MemoryLocation, VkResult};
+use crate::vk::{record_image_copy, Buffer, Device, Image, MemoryLocation};
 
 /// A rectangle of pixels, x to the right and y down from the top-left corner.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -82,16 +83,16 @@ pub(crate) struct PickTarget {
     rect: PixelRect,
 }
 
-fn readback_buffer(device: &Arc<Device>, rect: PixelRect) -> VkResult<Buffer> {
+fn readback_buffer(device: &Arc<Device>, rect: PixelRect) -> RenderResult<Buffer> {
     // Ids, then depths: four bytes each per pixel.
     let pixels = u64::from(rect.width) * u64::from(rect.height);
-    Buffer::new(
+    Ok(Buffer::new(
         device,
         "pick readback",
         pixels * 8,
         vk::BufferUsageFlags::TRANSFER_DST,
         MemoryLocation::GpuToCpu,
-    )
+    )?)
 }
 
 impl PickTarget {
@@ -100,7 +101,7 @@ impl PickTarget {
         device: &Arc<Device>,
         extent: vk::Extent2D,
         rect: PixelRect,
-    ) -> VkResult<Self> {
+    ) -> RenderResult<Self> {
         let ids = Image::new(
             device,
             "pick ids",
@@ -117,7 +118,7 @@ impl PickTarget {
     }
 
     /// Reads `rect` back after the next pass (a larger readback buffer when needed).
-    pub(crate) fn prepare(&mut self, rect: PixelRect) -> VkResult<()> {
+    pub(crate) fn prepare(&mut self, rect: PixelRect) -> RenderResult<()> {
         let needed = u64::from(rect.width) * u64::from(rect.height) * 8;
         if self.readback.size() < needed {
             self.readback = readback_buffer(self.ids.device(), rect)?;
@@ -154,7 +155,7 @@ impl PickTarget {
     }
 
     /// The covered pixels of the last readback.
-    pub(crate) fn samples(&self) -> VkResult<Vec<PickSample>> {
+    pub(crate) fn samples(&self) -> RenderResult<Vec<PickSample>> {
         let bytes = self.readback.mapped()?;
         let rect = self.rect;
         let pixels = rect.width as usize * rect.height as usize;

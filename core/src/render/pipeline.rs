@@ -3,10 +3,11 @@
 
 use std::sync::{Arc, OnceLock};
 
+use crate::error::RenderResult;
 use crate::vk::raw as vk;
 
 use crate::shaders::{self, ShaderSource};
-use crate::vk::{DescriptorSetLayout, Device, Pipeline, PipelineLayout, ShaderModule, VkResult};
+use crate::vk::{DescriptorSetLayout, Device, Pipeline, PipelineLayout, ShaderModule};
 
 /// Format of the pick target: one instance id (+1) per pixel.
 pub const PICK_FORMAT: vk::Format = vk::Format::R32_UINT;
@@ -54,7 +55,7 @@ pub struct Pipelines {
 
 impl Pipelines {
     /// Creates the layouts; pipelines are made on first use.
-    pub fn new(device: &Arc<Device>) -> VkResult<Self> {
+    pub fn new(device: &Arc<Device>) -> RenderResult<Self> {
         let graphics = vk::ShaderStageFlags::VERTEX | vk::ShaderStageFlags::FRAGMENT;
         let frame_set_layout = DescriptorSetLayout::new(
             device,
@@ -97,7 +98,7 @@ impl Pipelines {
     }
 
     /// The scatter compute pipeline.
-    pub fn scatter(&self) -> VkResult<vk::Pipeline> {
+    pub fn scatter(&self) -> RenderResult<vk::Pipeline> {
         if let Some(pipeline) = self.scatter.get() {
             return Ok(pipeline.raw());
         }
@@ -113,12 +114,12 @@ impl Pipelines {
     }
 }
 
-fn module(device: &Arc<Device>, shader: &ShaderSource) -> VkResult<ShaderModule> {
-    ShaderModule::from_glsl(
+fn module(device: &Arc<Device>, shader: &ShaderSource) -> RenderResult<ShaderModule> {
+    let words = shaders::compile_glsl(shader.name, shader.source, shader.stage, shaders::INCLUDES)?;
+    Ok(ShaderModule::from_spirv(
         device,
         shader.name,
-        shader.source,
+        &words,
         shader.stage,
-        shaders::INCLUDES,
-    )
+    )?)
 }

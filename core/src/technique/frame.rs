@@ -7,6 +7,7 @@ use std::cell::RefCell;
 use std::ffi::c_void;
 use std::time::Instant;
 
+use crate::error::{RenderError, RenderResult};
 use crate::vk::raw::{self as vk, Handle};
 use cadr_plugin_abi as abi;
 use glam::DMat4;
@@ -17,7 +18,7 @@ use super::set::{status, Message, Techniques};
 use crate::gpu_scene::GpuScene;
 use crate::render::pick::{PickSample, PixelRect};
 use crate::render::{Camera, FrameStats, PassTarget, Renderer};
-use crate::vk::{memory_barrier, VkError, VkResult};
+use crate::vk::memory_barrier;
 
 /// World-space frustum planes of `camera` (normals point inside; Vulkan depth 0..1).
 pub fn frustum_planes(camera: &Camera) -> [[f64; 4]; 6] {
@@ -42,7 +43,7 @@ impl Renderer {
         scene: &mut GpuScene,
         techniques: &mut Techniques,
         camera: &Camera,
-    ) -> VkResult<FrameStats> {
+    ) -> RenderResult<FrameStats> {
         let passes = PassSet::Shaded(techniques.shade_mode());
         self.draw_techniques(scene, techniques, camera, passes)
     }
@@ -56,7 +57,7 @@ impl Renderer {
         techniques: &mut Techniques,
         camera: &Camera,
         rect: PixelRect,
-    ) -> VkResult<Vec<PickSample>> {
+    ) -> RenderResult<Vec<PickSample>> {
         self.prepare_pick(rect)?;
         self.draw_techniques(scene, techniques, camera, PassSet::Pick)?;
         self.pick_samples()
@@ -68,7 +69,7 @@ impl Renderer {
         techniques: &mut Techniques,
         camera: &Camera,
         passes: PassSet,
-    ) -> VkResult<FrameStats> {
+    ) -> RenderResult<FrameStats> {
         techniques.ensure_pipelines(passes)?;
         let cull_start = Instant::now();
         cull(scene, techniques, camera)?;
@@ -96,7 +97,7 @@ impl Renderer {
         let context = |command_buffer: vk::CommandBuffer,
                        view: &abi::CadrSceneView,
                        stats: *mut abi::CadrStats|
-         -> VkResult<abi::CadrRecordContext> {
+         -> RenderResult<abi::CadrRecordContext> {
             let vertex = techniques.get(TechniqueKind::Vertex)?;
             let parameters = techniques.get(TechniqueKind::Parameters)?;
             Ok(abi::CadrRecordContext {
@@ -125,7 +126,7 @@ impl Renderer {
         let mut before = |renderer: &Renderer,
                           command_buffer: vk::CommandBuffer,
                           stats: &mut FrameStats|
-         -> VkResult<()> {
+         -> RenderResult<()> {
             let mut guard = shared.borrow_mut();
             let (scene, counters) = &mut *guard;
             stats.bytes_uploaded = scene.record_uploads(renderer.pipelines(), command_buffer)?;
@@ -158,25 +159,27 @@ impl Renderer {
             barrier(renderer, command_buffer);
             Ok(())
         };
-        let mut inside =
-            |_: &Renderer, command_buffer: vk::CommandBuffer, _: &mut FrameStats| -> VkResult<()> {
-                let mut guard = shared.borrow_mut();
-                let (scene, counters) = &mut *guard;
-                let view = scene.view();
-                let submission = techniques.get(TechniqueKind::Submission)?;
-                let record_fn = submission
-                    .vtable::<abi::CadrSubmissionVtable>()
-                    .record
-                    .ok_or_else(|| VkError::Technique {
-                        technique: format!("submit '{}'", submission.entry.name),
-                        message: "its vtable has no record function".into(),
-                    })?;
-                let record = context(command_buffer, &view, counters)?;
-                let mut message = Message::new();
-                // SAFETY: a live instance; the context is valid for the call.
-                let result = unsafe { record_fn(submission.instance, &record, message.raw()) };
-                status(&submission.entry, "record", result, &message)
-            };
+        let mut inside = |_: &Renderer,
+                          command_buffer: vk::CommandBuffer,
+                          _: &mut FrameStats|
+         -> RenderResult<()> {
+            let mut guard = shared.borrow_mut();
+            let (scene, counters) = &mut *guard;
+            let view = scene.view();
+            let submission = techniques.get(TechniqueKind::Submission)?;
+            let record_fn = submission
+                .vtable::<abi::CadrSubmissionVtable>()
+                .record
+                .ok_or_else(|| RenderError::Technique {
+                    technique: format!("submit '{}'", submission.entry.name),
+                    message: "its vtable has no record function".into(),
+                })?;
+            let record = context(command_buffer, &view, counters)?;
+            let mut message = Message::new();
+            // SAFETY: a live instance; the context is valid for the call.
+            let result = unsafe { record_fn(submission.instance, &record, message.raw()) };
+            status(&submission.entry, "record", result, &message)
+        };
         let target = match passes {
             PassSet::Shaded(_) => PassTarget::Color,
             PassSet::Pick => PassTarget::Pick,
@@ -197,7 +200,7 @@ impl Renderer {
         )?;
         let (scene, counters) = shared.into_inner();
         if counters.failures > 0 {
-            return Err(VkError::Technique {
+            return Err(RenderError::Technique {
                 technique: techniques.combination().to_string(),
                 message: format!("{} bind calls panicked while recording", counters.failures),
             });
@@ -256,7 +259,7 @@ fn cull_key(epoch: u64, view: &abi::CadrSceneView, planes: &[[f64; 4]; 6]) -> u6
 
 /// Runs the culling technique and applies the bits that changed. Culling depends only on the
 /// view and the scene, so it runs again only when one of them (or the culler) changed.
-fn cull(scene: &mut GpuScene, techniques: &mut Techniques, camera: &Camera) -> VkResult<()> {
+fn cull(scene: &mut GpuScene, techniques: &mut Techniques, camera: &Camera) -> RenderResult<()> {
     let planes = frustum_planes(camera);
     let key = cull_key(techniques.epoch, &scene.view(), &planes);
     if techniques.cull_key == Some(key) {

@@ -6,14 +6,15 @@
 use std::collections::HashMap;
 use std::sync::Arc;
 
+use crate::error::RenderResult;
 use crate::vk::raw as vk;
 use cadr_plugin_abi as abi;
 
 use crate::render::PICK_FORMAT;
 use crate::shaders;
 use crate::vk::{
-    compile_glsl, DescriptorSetLayout, Device, GraphicsPipelineDesc, Pipeline, PipelineLayout,
-    ShaderModule, ShaderStage, VertexLayout, VkResult, COLOR_FORMAT,
+    DescriptorSetLayout, Device, GraphicsPipelineDesc, Pipeline, PipelineLayout, ShaderModule,
+    ShaderStage, VertexLayout, COLOR_FORMAT,
 };
 
 /// The shade modes of the seeds.
@@ -100,12 +101,12 @@ impl ShaderCache {
         &mut self,
         key: (String, String),
         source: impl FnOnce() -> String,
-    ) -> VkResult<Arc<Vec<u32>>> {
+    ) -> RenderResult<Arc<Vec<u32>>> {
         if let Some(words) = self.vertex.get(&key) {
             return Ok(Arc::clone(words));
         }
         let name = format!("technique.vert [{} + {}]", key.0, key.1);
-        let words = Arc::new(compile_glsl(
+        let words = Arc::new(shaders::compile_glsl(
             &name,
             &source(),
             ShaderStage::Vertex,
@@ -115,12 +116,13 @@ impl ShaderCache {
         Ok(words)
     }
 
-    fn fragments(&mut self) -> VkResult<FragmentShaders> {
+    fn fragments(&mut self) -> RenderResult<FragmentShaders> {
         if let Some(shaders) = &self.fragments {
             return Ok(shaders.clone());
         }
         let compile = |shader: &shaders::ShaderSource| {
-            compile_glsl(shader.name, shader.source, shader.stage, shaders::INCLUDES).map(Arc::new)
+            shaders::compile_glsl(shader.name, shader.source, shader.stage, shaders::INCLUDES)
+                .map(Arc::new)
         };
         let shaders = FragmentShaders {
             solid: compile(&shaders::SHADED_FRAG)?,
@@ -170,7 +172,7 @@ impl TechniquePipelines {
         device: &Arc<Device>,
         cache: &mut ShaderCache,
         inputs: &PipelineInputs<'_>,
-    ) -> VkResult<Self> {
+    ) -> RenderResult<Self> {
         let empty_set_layout = DescriptorSetLayout::new(device, "empty set layout", &[])?;
         let used = inputs
             .path_set_layouts
@@ -241,7 +243,7 @@ impl TechniquePipelines {
         fragment: &[u32],
         topology: vk::PrimitiveTopology,
         depth_bias: bool,
-    ) -> VkResult<Pipeline> {
+    ) -> RenderResult<Pipeline> {
         let vertex = ShaderModule::from_spirv(
             &self.device,
             "technique.vert",
@@ -259,7 +261,7 @@ impl TechniquePipelines {
         let attributes: Vec<(vk::Format, u32)> = (0..count)
             .map(|i| (vk::Format::from_raw(input.formats[i]), input.offsets[i]))
             .collect();
-        Pipeline::graphics(
+        Ok(Pipeline::graphics(
             &self.device,
             &GraphicsPipelineDesc {
                 layout: &self.layout,
@@ -274,6 +276,6 @@ impl TechniquePipelines {
                 color_format: self.color_format,
                 name: "technique pipeline",
             },
-        )
+        )?)
     }
 }

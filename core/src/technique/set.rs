@@ -5,6 +5,7 @@
 use std::ffi::{c_char, c_void, CStr};
 use std::sync::Arc;
 
+use crate::error::{RenderError, RenderResult};
 use crate::vk::raw::{self as vk, Handle};
 use cadr_plugin_abi as abi;
 
@@ -13,7 +14,7 @@ use super::pipeline::{
     assemble_vertex_shader, PassSet, PipelineInputs, ShadeMode, ShaderCache, TechniquePipelines,
 };
 use super::registry::{feature_bits, PluginRegistry, TechniqueEntry, TechniqueKind};
-use crate::vk::{Device, VkError, VkResult, COLOR_FORMAT, DEPTH_FORMAT};
+use crate::vk::{Device, COLOR_FORMAT, DEPTH_FORMAT};
 
 /// Technique names, one per kind.
 #[derive(Clone, Debug, PartialEq, Eq, Hash)]
@@ -177,14 +178,14 @@ pub(crate) fn status(
     what: &str,
     status: abi::CadrStatus,
     message: &Message,
-) -> VkResult<()> {
+) -> RenderResult<()> {
     match status {
         abi::CADR_STATUS_OK => Ok(()),
-        abi::CADR_STATUS_PANICKED => Err(VkError::Technique {
+        abi::CADR_STATUS_PANICKED => Err(RenderError::Technique {
             technique: format!("{} '{}'", entry.kind.name(), entry.name),
             message: format!("{what} panicked ({})", message.text()),
         }),
-        _ => Err(VkError::Technique {
+        _ => Err(RenderError::Technique {
             technique: format!("{} '{}'", entry.kind.name(), entry.name),
             message: format!("{what} failed: {}", message.text()),
         }),
@@ -295,7 +296,7 @@ impl Techniques {
     }
 
     /// Sets the shade mode (pipelines are rebuilt before the next frame).
-    pub fn set_shade_mode(&mut self, mode: ShadeMode) -> VkResult<()> {
+    pub fn set_shade_mode(&mut self, mode: ShadeMode) -> RenderResult<()> {
         if mode != self.shade {
             self.wait_idle()?;
             self.shade = mode;
@@ -333,15 +334,18 @@ impl Techniques {
             .collect()
     }
 
-    fn wait_idle(&self) -> VkResult<()> {
-        self.device.wait_idle()
+    fn wait_idle(&self) -> RenderResult<()> {
+        Ok(self.device.wait_idle()?)
     }
 
-    fn create(&self, entry: &Arc<TechniqueEntry>) -> VkResult<Active> {
-        let create = entry.common().create.ok_or_else(|| VkError::Technique {
-            technique: format!("{} '{}'", entry.kind.name(), entry.name),
-            message: "its vtable has no create function".into(),
-        })?;
+    fn create(&self, entry: &Arc<TechniqueEntry>) -> RenderResult<Active> {
+        let create = entry
+            .common()
+            .create
+            .ok_or_else(|| RenderError::Technique {
+                technique: format!("{} '{}'", entry.kind.name(), entry.name),
+                message: "its vtable has no create function".into(),
+            })?;
         let info = abi::CadrCreateInfo {
             size: std::mem::size_of::<abi::CadrCreateInfo>() as u32,
             vulkan: &*self.vulkan,
@@ -354,7 +358,7 @@ impl Techniques {
         let result = unsafe { create(&info, &mut instance, message.raw()) };
         status(entry, "create", result, &message)?;
         if instance.is_null() {
-            return Err(VkError::Technique {
+            return Err(RenderError::Technique {
                 technique: format!("{} '{}'", entry.kind.name(), entry.name),
                 message: "create returned no instance".into(),
             });
@@ -368,8 +372,8 @@ impl Techniques {
     /// Switches to `combination`: refuses it (keeping the current one) when a name is unknown,
     /// a technique is unsupported, the techniques do not fit together, or a plugin fails to
     /// create its instance. Kinds whose technique does not change keep their instance.
-    pub fn select(&mut self, combination: &Combination) -> VkResult<()> {
-        let refuse = |message: String| VkError::Technique {
+    pub fn select(&mut self, combination: &Combination) -> RenderResult<()> {
+        let refuse = |message: String| RenderError::Technique {
             technique: combination.to_string(),
             message,
         };
@@ -401,21 +405,21 @@ impl Techniques {
     }
 
     /// Replaces one kind's technique.
-    pub fn swap(&mut self, kind: TechniqueKind, name: &str) -> VkResult<()> {
+    pub fn swap(&mut self, kind: TechniqueKind, name: &str) -> RenderResult<()> {
         let mut combination = self.combination();
         combination.set(kind, name);
         self.select(&combination)
     }
 
-    pub(crate) fn get(&self, kind: TechniqueKind) -> VkResult<&Active> {
-        self.active[index(kind)]
-            .as_ref()
-            .ok_or_else(|| VkError::InvalidUse(format!("no {} technique selected", kind.name())))
+    pub(crate) fn get(&self, kind: TechniqueKind) -> RenderResult<&Active> {
+        self.active[index(kind)].as_ref().ok_or_else(|| {
+            RenderError::InvalidUse(format!("no {} technique selected", kind.name()))
+        })
     }
 
     /// Builds the pipelines of the current combination for `passes` (the shade mode's, or the
     /// pick pass's) if needed.
-    pub(crate) fn ensure_pipelines(&mut self, passes: PassSet) -> VkResult<()> {
+    pub(crate) fn ensure_pipelines(&mut self, passes: PassSet) -> RenderResult<()> {
         let slot = match passes {
             PassSet::Shaded(_) => &self.pipelines,
             PassSet::Pick => &self.pick_pipelines,
@@ -432,12 +436,12 @@ impl Techniques {
     }
 
     /// The pipelines built for `passes` (see `ensure_pipelines`).
-    pub(crate) fn pipelines_for(&self, passes: PassSet) -> VkResult<&TechniquePipelines> {
+    pub(crate) fn pipelines_for(&self, passes: PassSet) -> RenderResult<&TechniquePipelines> {
         match passes {
             PassSet::Shaded(_) => self.pipelines.as_ref(),
             PassSet::Pick => self.pick_pipelines.as_ref(),
         }
-        .ok_or_else(|| VkError::InvalidUse("technique pipelines were not built".into()))
+        .ok_or_else(|| RenderError::InvalidUse("technique pipelines were not built".into()))
     }
 
     /// [`abi::CADR_PASS_PICK`] when every active technique was built for ABI 1.2 or later
@@ -456,7 +460,7 @@ impl Techniques {
         }
     }
 
-    fn build_pipelines(&mut self, passes: PassSet) -> VkResult<TechniquePipelines> {
+    fn build_pipelines(&mut self, passes: PassSet) -> RenderResult<TechniquePipelines> {
         let vertex = self.get(TechniqueKind::Vertex)?;
         let parameters = self.get(TechniqueKind::Parameters)?;
         let vertex_table: &abi::CadrVertexPathVtable = vertex.vtable();

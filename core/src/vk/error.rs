@@ -54,22 +54,6 @@ pub enum VkError {
     /// A resource was used against its contract (a caller's bug, reported instead of panicking).
     #[error("invalid use: {0}")]
     InvalidUse(String),
-    /// A technique plugin failed, or a technique (combination) cannot be used.
-    #[error("technique {technique}: {message}")]
-    Technique {
-        /// `kind name` of the technique.
-        technique: String,
-        /// What went wrong.
-        message: String,
-    },
-    /// A shader failed to compile.
-    #[error("shader '{name}' failed to compile:\n{log}")]
-    ShaderCompile {
-        /// The shader's name.
-        name: String,
-        /// The compiler's messages.
-        log: String,
-    },
 }
 
 /// Turns a `vk::Result` of the call `call` into the matching [`VkError`].

@@ -35,7 +35,7 @@ pub use pipeline::{
     VertexLayout,
 };
 pub use rendering::{begin_rendering, end_rendering, RenderingTarget};
-pub use shader::{compile_glsl, IncludeFile, ShaderModule, ShaderStage};
+pub use shader::{ShaderModule, ShaderStage};
 pub use swapchain::{PresentOutcome, Swapchain};
 pub use timer::GpuTimer;
 

@@ -1,0 +1,32 @@
+//! What can go wrong while rendering: Vulkan failing, a shader failing to compile, a technique
+//! failing or being refused, or a renderer being used against its contract. Only the first is
+//! a Vulkan error.
+
+use crate::shaders::ShaderCompileError;
+use crate::vk::VkError;
+
+/// An error of the renderer, its techniques or the Vulkan layer below them.
+#[derive(Debug, thiserror::Error)]
+pub enum RenderError {
+    /// Vulkan failed (out of memory, device lost, a failed call…).
+    #[error(transparent)]
+    Vulkan(#[from] VkError),
+    /// A shader (an assembled technique shader included) failed to compile.
+    #[error(transparent)]
+    ShaderCompile(#[from] ShaderCompileError),
+    /// A technique plugin failed, or a technique (combination) cannot be used.
+    #[error("technique {technique}: {message}")]
+    Technique {
+        /// `kind name` of the technique, or the combination.
+        technique: String,
+        /// What went wrong.
+        message: String,
+    },
+    /// The renderer was used against its contract (a caller's bug, reported instead of
+    /// panicking).
+    #[error("invalid use: {0}")]
+    InvalidUse(String),
+}
+
+/// Result of the renderer and its techniques.
+pub type RenderResult<T> = Result<T, RenderError>;

@@ -49,9 +49,10 @@ render: draws the scene offscreen with the camera fitted to its bounds, writes a
         asks for it explicitly.
 techniques: lists every technique (built in or from a plugin library), its description and
         whether this device runs it.
-bench:  renders the built-in combination (the baseline) and technique combinations (by default every submission
-        with per-geometry/push and arena/ssbo-index; --all for every supported one; lists to
-        choose) for N frames after 2 warm-up frames and prints CPU and GPU µs, draw calls,
+bench:  renders the built-in combination (the baseline) and technique combinations (by
+        default every submission with per-geometry/push and arena/ssbo-index; --all for every
+        supported one; lists to choose) for N frames after 2 warm-up frames and prints CPU
+        and GPU µs, draw calls,
         state changes, triangles and the speedup over the baseline; --json FILE writes them
         with the scene statistics. --sweep measures a set over gen:grid of 10 000 to 1 000 000
         parts to show how each technique's CPU cost grows.

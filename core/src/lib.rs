@@ -1,8 +1,12 @@
 //! cadr core: the scene model, its loaders and generators, and the Vulkan renderer.
 //!
-//! Data flows from a [`scene::Scene`] (loaded by [`load`] or made by [`generate`]) through
-//! [`scene::flatten`] into draw items, which a [`render::Renderer`] draws with one of its
-//! techniques into an offscreen target via the thin Vulkan layer in [`vk`].
+//! One road from the files to the GPU: a [`scene::Scene`] (loaded by [`load`] or [`csf`], made
+//! by [`generate`]) becomes a [`graph::SceneGraph`] (what hosts edit), flattened incrementally
+//! into a [`tree::SceneTree`]; each [`view::View`] keeps a [`gpu_scene::GpuScene`] in step with
+//! the tree and draws it, and its pick pass, with the active [`technique`] combination (the
+//! built-in one or plugins) into a [`render::Renderer`]'s target. [`vk`] is the thin Vulkan
+//! layer under all of it, the only code that calls ash; [`error::RenderError`] is what the
+//! layers above it report.
 
 pub mod csf;
 pub mod error;

@@ -32,15 +32,19 @@ pub fn test_device() -> Arc<Device> {
     }
 }
 
+/// The directory of the running test binary, where cargo puts the plugin libraries it built.
+pub fn test_binary_dir() -> std::path::PathBuf {
+    let exe = std::env::current_exe().expect("the test binary's path");
+    exe.parent()
+        .expect("the test binary's directory")
+        .to_path_buf()
+}
+
 /// The technique plugins cargo built next to the running test binary, for `device`; fails the
 /// test if any library there is refused.
 pub fn plugin_registry(device: &Device) -> Arc<PluginRegistry> {
-    let exe = std::env::current_exe().expect("the test binary's path");
-    let dir = exe
-        .parent()
-        .expect("the test binary's directory")
-        .to_path_buf();
-    let registry = PluginRegistry::discover(&[dir], feature_bits(device.capabilities()));
+    let registry =
+        PluginRegistry::discover(&[test_binary_dir()], feature_bits(device.capabilities()));
     assert!(
         registry.refusals().is_empty(),
         "refused: {:?}",

@@ -165,6 +165,23 @@ fn all_combinations(registry: &PluginRegistry) -> Vec<Combination> {
 /// where no edges are drawn). Invalid combinations must be refused with a reason.
 fn every_combination_matches(source: &Scene, what: &str) {
     let mut f = Fixture::new(source);
+    // Highlight the geo node of every third instance, so that every combination must show
+    // highlighted and plain parts side by side.
+    let geo_nodes: Vec<_> = f
+        .tree
+        .instances()
+        .step_by(3)
+        .filter_map(|id| f.tree.path(f.tree.instance(id)?.tree_node).last().copied())
+        .collect();
+    for node in geo_nodes {
+        let mut flags = f.graph.node(node).unwrap().flags;
+        flags.highlighted = true;
+        f.graph.set_flags(node, flags).unwrap();
+    }
+    let (highlighted, _) = f.render();
+    let tint = compare(&highlighted, &f.baseline).unwrap();
+    assert!(tint.mean > 0.2, "{what}: the highlight shows: {tint:?}");
+    f.baseline = highlighted;
     let combinations = all_combinations(f.techniques.registry());
     assert!(
         combinations.len() >= 5 * 4 * 18 * 2,
@@ -240,12 +257,7 @@ fn every_valid_combination_renders_the_cylinder_engine_like_the_baseline() {
 }
 
 fn fixture_library(name: &str) -> std::path::PathBuf {
-    let dir = std::env::current_exe()
-        .unwrap()
-        .parent()
-        .unwrap()
-        .to_path_buf();
-    dir.join(format!(
+    cadr_tests::test_binary_dir().join(format!(
         "{}{name}{}",
         std::env::consts::DLL_PREFIX,
         std::env::consts::DLL_SUFFIX
@@ -292,11 +304,7 @@ fn libraries_that_cannot_be_used_are_refused_with_the_reason() {
 fn failing_techniques_are_refused_and_the_renderer_keeps_working() {
     let mut f = Fixture::with_size(&generate(&GeneratorSpec::Demo), (96, 72));
     let mut registry = PluginRegistry::discover(
-        &[std::env::current_exe()
-            .unwrap()
-            .parent()
-            .unwrap()
-            .to_path_buf()],
+        &[cadr_tests::test_binary_dir()],
         feature_bits(f.device.capabilities()),
     );
     registry.load(
@@ -538,14 +546,7 @@ fn a_technique_written_in_c_plugs_in_also_built_for_an_older_abi_minor() {
 
         let mut f = Fixture::with_size(&generate(&GeneratorSpec::Demo), (96, 72));
         let features = feature_bits(f.device.capabilities());
-        let mut registry = PluginRegistry::discover(
-            &[std::env::current_exe()
-                .unwrap()
-                .parent()
-                .unwrap()
-                .to_path_buf()],
-            features,
-        );
+        let mut registry = PluginRegistry::discover(&[cadr_tests::test_binary_dir()], features);
         registry.load(&library, features);
         assert!(
             registry.refusals().is_empty(),

@@ -1,4 +1,4 @@
-//! Between the scene graph and the flat [`Scene`] model of loaders, savers and the baseline.
+//! Between the scene graph and the flat [`Scene`] model of loaders and savers.
 
 use std::collections::HashMap;
 

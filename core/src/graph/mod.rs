@@ -999,8 +999,8 @@ impl SceneGraph {
         Ok(())
     }
 
-    /// The scene this graph describes, with dense indices (for loaders, savers, rendering
-    /// with the baseline, and comparisons). Handles map to indices in slot order.
+    /// The scene this graph describes, with dense indices (for savers, statistics and
+    /// comparisons). Handles map to indices in slot order.
     pub fn to_scene(&self) -> Scene {
         convert::graph_to_scene(self)
     }

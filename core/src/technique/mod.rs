@@ -14,6 +14,6 @@ pub use host_api::AllocationCounts;
 pub use pipeline::{assemble_vertex_shader, PassSet, ShadeMode};
 pub use registry::{
     default_plugin_dirs, feature_bits, feature_names, PluginRegistry, Refusal, TechniqueEntry,
-    TechniqueKind, PLUGIN_PATH_VARIABLE,
+    TechniqueKind, BUILT_IN_LIBRARY, PLUGIN_PATH_VARIABLE,
 };
 pub use set::{check_combination, Combination, Techniques};

@@ -148,7 +148,12 @@ impl CubeGltf {
 
     /// The scene as GLB bytes.
     pub fn glb(&self) -> Vec<u8> {
-        let mut json = self.json(None).into_bytes();
+        self.glb_with_json(&self.json(None))
+    }
+
+    /// GLB bytes of `json` (for example [`CubeGltf::json`] with a change) and the binary.
+    pub fn glb_with_json(&self, json: &str) -> Vec<u8> {
+        let mut json = json.as_bytes().to_vec();
         while !json.len().is_multiple_of(4) {
             json.push(b' ');
         }

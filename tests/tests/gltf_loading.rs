@@ -208,6 +208,38 @@ fn accessor_beyond_its_view_is_refused() {
 }
 
 #[test]
+fn a_primitive_naming_a_missing_position_accessor_is_refused_not_a_panic() {
+    // The glTF crate's own validation indexes the accessor list with this index before it
+    // checks it: it panicked (issue 14's one-byte mutation), both as .gltf and as .glb.
+    for glb in [false, true] {
+        let text = load_error("missing-accessor", |dir| {
+            let cube = CubeGltf::new();
+            let uri = (!glb).then_some("missing.bin");
+            let json = cube.json(uri).replacen(
+                r#""POSITION": 0, "NORMAL": 1}, "indices": 3"#,
+                r#""POSITION": 9, "NORMAL": 1}, "indices": 3"#,
+                1,
+            );
+            assert!(json.contains(r#""POSITION": 9"#), "the fixture changed");
+            if glb {
+                let path = dir.join("missing.glb");
+                std::fs::write(&path, cube.glb_with_json(&json)).unwrap();
+                path
+            } else {
+                std::fs::write(dir.join("missing.bin"), &cube.bin).unwrap();
+                let path = dir.join("missing.gltf");
+                std::fs::write(&path, json).unwrap();
+                path
+            }
+        });
+        assert!(
+            text.contains("meshes[0].primitives[1].attributes.POSITION names accessor 9"),
+            "{text}"
+        );
+    }
+}
+
+#[test]
 fn garbage_and_unsupported_files_are_refused() {
     let text = load_error("garbage", |dir| {
         let path = dir.join("garbage.gltf");

@@ -25,16 +25,44 @@ pub fn load_gltf(path: &Path) -> Result<Scene, LoadError> {
     load_gltf_bytes(&bytes, path)
 }
 
+/// The glTF crate's validation reads each primitive's POSITION accessor before it checks that
+/// the index exists, and panics on a file that names a missing one; this check runs first.
+fn check_position_accessors(root: &gltf::json::Root) -> Result<(), String> {
+    let accessors = root.accessors.len();
+    for (m, mesh) in root.meshes.iter().enumerate() {
+        for (p, primitive) in mesh.primitives.iter().enumerate() {
+            let position = gltf::json::validation::Checked::Valid(gltf::Semantic::Positions);
+            if let Some(index) = primitive.attributes.get(&position) {
+                if index.value() >= accessors {
+                    return Err(format!(
+                        "meshes[{m}].primitives[{p}].attributes.POSITION names accessor {}, but the file has {accessors} accessors",
+                        index.value()
+                    ));
+                }
+            }
+        }
+    }
+    Ok(())
+}
+
 /// Loads glTF from `bytes`; `path` names the file in errors and locates external buffers.
 pub fn load_gltf_bytes(bytes: &[u8], path: &Path) -> Result<Scene, LoadError> {
     let invalid = |message: String| LoadError::Invalid {
         path: path.to_owned(),
         message,
     };
-    let gltf = gltf::Gltf::from_slice(bytes).map_err(|source| LoadError::Gltf {
+    let gltf_error = |message: String| LoadError::Gltf {
         path: path.to_owned(),
-        message: source.to_string(),
-    })?;
+        message,
+    };
+    let unchecked =
+        gltf::Gltf::from_slice_without_validation(bytes).map_err(|e| gltf_error(e.to_string()))?;
+    check_position_accessors(unchecked.document.as_json()).map_err(invalid)?;
+    let gltf = gltf::Gltf {
+        document: gltf::Document::from_json(unchecked.document.into_json())
+            .map_err(|e| gltf_error(e.to_string()))?,
+        blob: unchecked.blob,
+    };
     let base_dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
     let buffers = resolve_buffers(&gltf, &base_dir).map_err(invalid)?;
     check_views(&gltf.document, &buffers).map_err(invalid)?;

@@ -391,13 +391,51 @@ fn every_truncation_fails_cleanly() {
 }
 
 #[test]
+fn a_pointer_table_the_reference_loader_cannot_use_is_refused() {
+    // The reference loader relocates through the table before anything else: a table outside
+    // the file, or an entry that is not a pointer field inside it, makes it read out of bounds.
+    let good = cube_csf_bytes();
+    let pointers = u32_at(&good, 12) as usize;
+    let table = u64::from_le_bytes(good[32..40].try_into().unwrap()) as usize;
+    assert!(pointers > 0 && table + 8 * pointers <= good.len());
+    read_csf(&good).unwrap();
+
+    let mut far = good.clone();
+    far[32..40].copy_from_slice(&(1u64 << 40).to_le_bytes());
+    let error = read_csf(&far).unwrap_err().to_string();
+    assert!(
+        error.contains("pointersOFFSET") && error.contains("beyond the end of the file"),
+        "{error}"
+    );
+
+    let mut unaligned = good.clone();
+    unaligned[32..40].copy_from_slice(&(table as u64 + 4).to_le_bytes());
+    let error = read_csf(&unaligned).unwrap_err().to_string();
+    assert!(error.contains("not aligned to 8 bytes"), "{error}");
+
+    for bad_entry in [good.len() as u64, 36, 41] {
+        let mut wild = good.clone();
+        let last = table + 8 * (pointers - 1);
+        wild[last..last + 8].copy_from_slice(&bad_entry.to_le_bytes());
+        let error = read_csf(&wild).unwrap_err().to_string();
+        assert!(
+            error.contains(&format!(
+                "entry {} points at offset {bad_entry}",
+                pointers - 1
+            )),
+            "{error}"
+        );
+    }
+}
+
+#[test]
 fn malformed_csf_files_on_disk_name_the_file() {
     let dir = scratch_dir("csf_bad");
     let path = dir.join("broken.csf");
     std::fs::write(&path, &cube_csf_bytes()[..100]).unwrap();
     let error = load_file(&path).unwrap_err().to_string();
     assert!(
-        error.contains("broken.csf") && error.contains("geometriesOFFSET"),
+        error.contains("broken.csf") && error.contains("OFFSET"),
         "{error}"
     );
     let gz = dir.join("notgzip.csf.gz");

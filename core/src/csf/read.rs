@@ -129,6 +129,53 @@ impl<'a> Reader<'a> {
     }
 }
 
+/// Checks the pointer table as the reference loader does before it relocates through it: the
+/// table 8-aligned and inside the file, each entry the 8-aligned offset of a pointer field
+/// after the header's first 40 bytes and inside the file. cadr reads by the schema and never
+/// relocates, but a file it accepts must be one the reference loader can read.
+fn check_pointer_table(data: &[u8], num_pointers: i32, table: u64) -> Result<(), CsfError> {
+    let entries = count("header", "numPointers", num_pointers)?;
+    if entries == 0 {
+        return Ok(());
+    }
+    let size = data.len() as u64;
+    if table % 8 != 0 {
+        return Err(error(
+            "header",
+            "pointersOFFSET",
+            format!("offset {table} is not aligned to 8 bytes"),
+        ));
+    }
+    let end = entries
+        .checked_mul(8)
+        .and_then(|bytes| table.checked_add(bytes))
+        .filter(|&end| end <= size)
+        .ok_or_else(|| {
+            error(
+                "header",
+                "pointersOFFSET",
+                format!(
+                    "the table of {entries} pointers at offset {table} lies beyond the end of the file ({size} bytes)"
+                ),
+            )
+        })?;
+    let fields = Fields(data);
+    for (index, at) in (table..end).step_by(8).enumerate() {
+        let location = fields.u64(at as usize);
+        if location % 8 != 0 || location < 40 || location > size.saturating_sub(8) {
+            return Err(error(
+                "pointer table",
+                "entry",
+                format!(
+                    "entry {index} points at offset {location}, not an 8-aligned pointer field between 40 and {}",
+                    size.saturating_sub(8)
+                ),
+            ));
+        }
+    }
+    Ok(())
+}
+
 fn count(structure: &str, field: &'static str, value: i32) -> Result<u64, CsfError> {
     u64::try_from(value).map_err(|_| error(structure, field, format!("count {value} is negative")))
 }
@@ -205,6 +252,7 @@ pub fn read_csf(data: &[u8]) -> Result<CsfFile, CsfError> {
             format!("{root}, but there are {num_nodes} nodes"),
         ));
     }
+    check_pointer_table(data, header.i32(12), header.u64(32))?;
     let reader = Reader { data, header_size };
 
     let geometry_bytes = reader.array(

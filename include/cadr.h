@@ -992,11 +992,12 @@ enum CadrResult cadr_renderer_pick_rect(CadrRenderer renderer,
 void cadr_pick_result_free(struct CadrPickResult *result);
 
 // Creates a renderer that draws into an offscreen `width` × `height` image, with the fastest
-// technique combination the device and plugins allow (see `cadr_renderer_technique`).
+// technique combination the device and plugins allow, or the built-in combination when no
+// plugin library was found (see `cadr_renderer_technique`).
 //
 // Returns `CADR_RESULT_OK` and writes `*renderer`, `CADR_RESULT_NULL_ARGUMENT`,
-// `CADR_RESULT_INVALID_ARGUMENT` (size 0 or above 16384), `CADR_RESULT_NOT_FOUND` (no plugins:
-// the message lists the directories searched), `CADR_RESULT_VULKAN` or a handle error.
+// `CADR_RESULT_INVALID_ARGUMENT` (size 0 or above 16384), `CADR_RESULT_PLUGIN_FAILED` (a
+// technique failed to create its instance), `CADR_RESULT_VULKAN` or a handle error.
 // Ownership: the renderer is the caller's until `cadr_renderer_destroy`; it keeps the
 // context's device alive. Thread-safety: callable from any thread; one renderer is used by
 // one call at a time (an internal lock), and renderers of one context take turns on its queue.

@@ -207,7 +207,6 @@ pub(crate) struct TechniqueText {
 pub(crate) struct ContextState {
     pub(crate) device: Arc<Device>,
     pub(crate) registry: Arc<PluginRegistry>,
-    pub(crate) plugin_dirs: Vec<PathBuf>,
     pub(crate) techniques: Vec<TechniqueText>,
     refusals: Vec<(CString, CString)>,
     pub(crate) presentation: bool,
@@ -405,7 +404,6 @@ pub unsafe extern "C" fn cadr_context_create(
         let state = ContextState {
             device,
             registry: Arc::new(registry),
-            plugin_dirs: dirs,
             techniques,
             refusals,
             presentation,

@@ -102,12 +102,11 @@ unsafe impl Send for ThreadBound {}
 static RENDERERS: Registry<ThreadBound> = Registry::new(0xC3, "renderer");
 
 /// Technique combinations tried for a new renderer, fastest first; the first the device and
-/// the plugins can run is chosen.
-const PREFERRED: [[&str; 4]; 4] = [
+/// the plugins can run is chosen, else the renderer keeps the built-in combination.
+const PREFERRED: [[&str; 4]; 3] = [
     ["arena", "ssbo-index", "groups-mdi-replay", "frustum"],
     ["per-geometry", "push", "groups-replay", "frustum"],
     ["per-geometry", "push", "individual", "frustum"],
-    ["per-geometry", "push", "individual", "none"],
 ];
 
 fn combination(names: [&str; 4]) -> Combination {
@@ -146,27 +145,16 @@ fn new_renderer(
     }
     let device = &context.device;
     let mut view = View::new(device, Arc::clone(&context.registry), width, height)?;
+    // The view starts with the built-in combination, which needs no plugin library; a faster
+    // one replaces it when the plugins and the device offer one.
     let techniques = view.techniques_mut();
-    let chosen = PREFERRED
+    if let Some(faster) = PREFERRED
         .iter()
         .map(|&names| combination(names))
         .find(|c| techniques.check(c).is_ok())
-        .ok_or_else(|| {
-            let dirs: Vec<String> = context
-                .plugin_dirs
-                .iter()
-                .map(|d| d.display().to_string())
-                .collect();
-            Failure::new(
-                CadrResult::NotFound,
-                format!(
-                    "no usable technique plugins ({} techniques found) in: {}; install them in lib/cadr/plugins beside libcadr.so, or name their directory in the context options or CADR_PLUGIN_PATH",
-                    context.techniques.len(),
-                    dirs.join(", ")
-                ),
-            )
-        })?;
-    techniques.select(&chosen)?;
+    {
+        techniques.select(&faster)?;
+    }
     let swapchain = match surface {
         Some(surface) => Some(Swapchain::new(device, surface, width, height)?),
         None => None,
@@ -192,11 +180,12 @@ pub(crate) fn with_renderer<R>(
 }
 
 /// Creates a renderer that draws into an offscreen `width` × `height` image, with the fastest
-/// technique combination the device and plugins allow (see `cadr_renderer_technique`).
+/// technique combination the device and plugins allow, or the built-in combination when no
+/// plugin library was found (see `cadr_renderer_technique`).
 ///
 /// Returns `CADR_RESULT_OK` and writes `*renderer`, `CADR_RESULT_NULL_ARGUMENT`,
-/// `CADR_RESULT_INVALID_ARGUMENT` (size 0 or above 16384), `CADR_RESULT_NOT_FOUND` (no plugins:
-/// the message lists the directories searched), `CADR_RESULT_VULKAN` or a handle error.
+/// `CADR_RESULT_INVALID_ARGUMENT` (size 0 or above 16384), `CADR_RESULT_PLUGIN_FAILED` (a
+/// technique failed to create its instance), `CADR_RESULT_VULKAN` or a handle error.
 /// Ownership: the renderer is the caller's until `cadr_renderer_destroy`; it keeps the
 /// context's device alive. Thread-safety: callable from any thread; one renderer is used by
 /// one call at a time (an internal lock), and renderers of one context take turns on its queue.

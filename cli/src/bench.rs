@@ -1,5 +1,6 @@
 //! `cadr bench`: renders a scene with the built-in combination (the baseline) and with
-//! technique combinations in one run, all through one view of the one GPU scene, and prints a table like the seeds' (CPU and GPU microseconds per frame, draw
+//! technique combinations in one run, all through one view of the one GPU scene, and prints a
+//! table like the seeds' (CPU and GPU microseconds per frame, draw
 //! calls, state changes, triangles, speedup over the baseline), optionally as JSON and over a
 //! growing grid (`--sweep`).
 

@@ -592,6 +592,33 @@ static void test_renderer(CadrContext context, struct Built *b) {
   free(second);
 }
 
+/* Without any plugin library a context still has the built-in techniques, and a renderer
+   draws with them. */
+static void test_without_plugins(void) {
+  struct CadrContextOptions options;
+  CadrContext context = NULL;
+  CadrRenderer renderer = NULL;
+  uint32_t count = 0;
+  const char *name = NULL;
+  uint64_t validation_errors = 99;
+
+  OK(cadr_context_options_default(&options));
+  options.validation = true;
+  options.default_plugin_dirs = false;
+  OK(cadr_context_create(&options, &context));
+  OK(cadr_context_technique_count(context, &count));
+  CHECK(count == 4);
+  OK(cadr_renderer_create(context, 32, 24, &renderer));
+  OK(cadr_renderer_technique(renderer, CADR_TECHNIQUE_KIND_VERTEX, &name));
+  CHECK(strcmp(name, "per-geometry") == 0);
+  OK(cadr_renderer_technique(renderer, CADR_TECHNIQUE_KIND_SUBMISSION, &name));
+  CHECK(strcmp(name, "individual") == 0);
+  OK(cadr_renderer_destroy(renderer));
+  OK(cadr_context_validation_error_count(context, &validation_errors));
+  CHECK(validation_errors == 0);
+  OK(cadr_context_destroy(context));
+}
+
 int main(void) {
   CadrContext context;
   struct Built built;
@@ -605,6 +632,7 @@ int main(void) {
   built = test_scene();
   test_loading(built.scene, built.root);
   test_renderer(context, &built);
+  test_without_plugins();
 
   /* The one-call path. */
   snprintf(path, sizeof path, "%s/one-call.png", out_dir ? out_dir : "/tmp");

@@ -2,8 +2,8 @@
 //! each kind, linked statically) comes first, then every library in the plugin directories is
 //! opened, its ABI version negotiated before any struct is read, its techniques listed and
 //! checked against the device. Both go through one registration, so a built-in technique is
-//! read through the ABI exactly as a plugin's. Libraries are never unloaded (their code may still be referenced by
-//! techniques alive or destroyed). What cannot be used is kept as a [`Refusal`] that says why.
+//! read through the ABI exactly as a plugin's. Libraries are never unloaded (their code may
+//! still be referenced by techniques alive or destroyed). What cannot be used is kept as a [`Refusal`] that says why.
 
 use std::ffi::{c_char, CStr};
 use std::path::{Path, PathBuf};
@@ -15,6 +15,17 @@ use crate::vk::Capabilities;
 
 /// The environment variable with extra plugin directories (separated like `PATH`).
 pub const PLUGIN_PATH_VARIABLE: &str = "CADR_PLUGIN_PATH";
+
+/// The size of `$type` up to and including `$field`: what a writer that knew `$field` as the
+/// last field wrote.
+macro_rules! size_through {
+    ($type:ty, $field:ident) => {{
+        fn field_size<T, F>(_: impl Fn(&T) -> &F) -> usize {
+            std::mem::size_of::<F>()
+        }
+        std::mem::offset_of!($type, $field) + field_size(|s: &$type| &s.$field)
+    }};
+}
 
 /// What [`TechniqueEntry::library`] says for the built-in techniques.
 pub const BUILT_IN_LIBRARY: &str = "built-in";
@@ -82,18 +93,6 @@ impl TechniqueKind {
         }
     }
 }
-
-/// The size of `$type` up to and including `$field`: what a writer that knew `$field` as the
-/// last field wrote.
-macro_rules! size_through {
-    ($type:ty, $field:ident) => {{
-        fn field_size<T, F>(_: impl Fn(&T) -> &F) -> usize {
-            std::mem::size_of::<F>()
-        }
-        std::mem::offset_of!($type, $field) + field_size(|s: &$type| &s.$field)
-    }};
-}
-use size_through;
 
 /// The size of [`abi::CadrPluginLibrary`] in ABI 1.0.
 fn first_library_size() -> usize {

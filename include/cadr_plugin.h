@@ -11,7 +11,7 @@
 #define CADR_PLUGIN_ABI_MAJOR 1
 
 // Minor version of this ABI: additions that older readers may ignore.
-#define CADR_PLUGIN_ABI_MINOR 2
+#define CADR_PLUGIN_ABI_MINOR 3
 
 // `(major << 16) | minor`, what [`CadrPluginVersionFn`] returns.
 #define CADR_PLUGIN_ABI_VERSION ((CADR_PLUGIN_ABI_MAJOR << 16) | CADR_PLUGIN_ABI_MINOR)
@@ -165,6 +165,17 @@ typedef struct CadrHostApi {
                               struct CadrMessage *message);
   // Destroys a buffer from `create_buffer` (the caller makes sure the GPU is done with it).
   void (*destroy_buffer)(void *user, const struct CadrBuffer *buffer);
+  // Since ABI 1.3 (read it only when `size` covers it): compiles GLSL `source` (NUL-terminated,
+  // `#version 460`) for the stage `stage` (a `VkShaderStageFlagBits` value: vertex, fragment
+  // or compute) and creates a `VkShaderModule` from it into `*module`. The plugin owns the
+  // module and destroys it with `vkDestroyShaderModule` and the host's allocation callbacks.
+  // `name` names the source in error messages. On failure writes the compiler's message.
+  CadrStatus (*create_shader_module)(void *user,
+                                     uint32_t stage,
+                                     const char *source,
+                                     const char *name,
+                                     uint64_t *module,
+                                     struct CadrMessage *message);
 } CadrHostApi;
 
 // What `create` receives. Owned by the host; the struct is valid for the call, the `vulkan`
@@ -287,6 +298,8 @@ typedef struct CadrSceneView {
   struct CadrBufferRef material_buffer;
   // [`CadrInstanceRecord`] per instance id.
   struct CadrBufferRef instance_buffer;
+  // Since ABI 1.3 (read it only when `size` covers it): [`CadrCullEntry`] per instance id.
+  struct CadrBufferRef cull_buffer;
 } CadrSceneView;
 
 // The per-instance record in [`CadrSceneView::instance_buffer`], indexed by instance id
@@ -471,6 +484,24 @@ typedef struct CadrPathRef_CadrParameterPathVtable {
   const struct CadrParameterPathVtable *vtable;
 } CadrPathRef_CadrParameterPathVtable;
 
+// Since ABI 1.3: where the indirect commands of one pass lie, written by a GPU culler
+// during the frame: `VkDrawIndexedIndirectCommand`s (20 bytes each, `firstInstance` the
+// instance id) and their count (a u32). The culler owns the buffers.
+typedef struct CadrGpuDraws {
+  // `VkBuffer` of the commands (0: the pass draws nothing).
+  uint64_t commands;
+  // Byte offset of the first command.
+  uint64_t commands_offset;
+  // `VkBuffer` holding the count.
+  uint64_t count_buffer;
+  // Byte offset of the count.
+  uint64_t count_offset;
+  // The most commands the count can say (`maxDrawCount`).
+  uint32_t max_draws;
+  // Bytes between commands (20 or more, a multiple of 4).
+  uint32_t stride;
+} CadrGpuDraws;
+
 // What a submission records with. Owned by the host, valid for the call; the command
 // buffer is the host's (secondary command buffers the submission records are its own).
 typedef struct CadrRecordContext {
@@ -506,6 +537,13 @@ typedef struct CadrRecordContext {
   // instance ids into `VK_FORMAT_R32_UINT`); secondary command buffers must inherit it.
   // Read it only when `size` covers it; 0 means [`CadrVulkan::color_format`].
   int32_t color_format;
+  // Since ABI 1.3 (read it only when `size` covers it): null, or `pass_count` draw sources a
+  // GPU culler wrote for this phase of the frame, one per pass: a submission that provides
+  // [`CADR_TRAIT_DRAWS_GPU_COMMANDS`] draws each pass from its source.
+  const struct CadrGpuDraws *gpu_draws;
+  // Since ABI 1.3: the phase of the frame being recorded (0 unless a GPU culler splits the
+  // frame into phases, see [`CadrCullingVtable::phase_count`]).
+  uint32_t phase;
 } CadrRecordContext;
 
 // Submission vtable ([`CADR_KIND_SUBMISSION`]).
@@ -551,6 +589,55 @@ typedef struct CadrCullOutput {
   uint64_t *changed_bits;
 } CadrCullOutput;
 
+// Since ABI 1.3: what a GPU culler records with, once per phase of the frame. Owned by the
+// host, valid for the call; the culler writes `draws`.
+//
+// Positions are relative to the eye so that precision holds far from the origin: the GPU
+// matrices keep their translation as an f32 high part and remainder ([`CadrMatrix`]), and a
+// point `p` relative to the eye is `(t_high - eye_high) + (t_low - eye_low) + R * x`.
+typedef struct CadrGpuCullContext {
+  // Size of this struct.
+  uint32_t size;
+  // The phase being recorded, `0..phase_count`.
+  uint32_t phase;
+  // The primary `VkCommandBuffer`, outside rendering. The host has made the frame's scene
+  // uploads visible to compute shaders; the culler makes its own writes visible to
+  // `DRAW_INDIRECT` and vertex shaders with a barrier before it returns.
+  void *command_buffer;
+  // The scene (its `cull_buffer`, `instance_buffer` and `matrix_buffer` hold the data).
+  const struct CadrSceneView *scene;
+  // Number of passes.
+  uint32_t pass_count;
+  // The passes the frame draws, in order (their kinds say which ranges: triangles, edges,
+  // or pickable triangles for the pick pass).
+  const struct CadrPass *passes;
+  // Where the culler writes the draw source of each pass for this phase (`pass_count`
+  // entries, zeroed by the host).
+  struct CadrGpuDraws *draws;
+  // The eye position's f32 high part (xyz, w = 0).
+  float eye_high[4];
+  // The eye position's f32 remainder (xyz, w = 0).
+  float eye_low[4];
+  // Frustum planes relative to the eye (xyz normal pointing inside, w distance): a point `q`
+  // relative to the eye is inside when `dot(n, q) + w >= 0` for all six.
+  float planes[6][4];
+  // Projection times the view's rotation, column-major: clip coordinates of a point
+  // relative to the eye (Vulkan depth 0..1).
+  float view_projection[16];
+  // Target width in pixels.
+  uint32_t width;
+  // Target height in pixels.
+  uint32_t height;
+  // The frame's depth image (`VkImage`), readable in phases after the first: the host has
+  // ended rendering, and the image is in `depth_layout` with its writes visible to compute
+  // shaders; the culler leaves it in that layout. 0 in phase 0.
+  uint64_t depth_image;
+  // A `VkImageView` of the depth image (depth aspect), 0 in phase 0.
+  uint64_t depth_view;
+  // `VkImageLayout` of the depth image during the call.
+  int32_t depth_layout;
+} CadrGpuCullContext;
+
 // Culling vtable ([`CADR_KIND_CULLING`]).
 typedef struct CadrCullingVtable {
   // Size, create, destroy.
@@ -560,9 +647,21 @@ typedef struct CadrCullingVtable {
                      const struct CadrCullInput *input,
                      struct CadrCullOutput *output,
                      struct CadrMessage *message);
-  // Reserved for GPU culling (must be null in ABI 1.0): records compute work that writes
-  // indirect commands and counts for the submission to draw.
-  CadrStatus (*record_gpu)(void *instance, const struct CadrRecordContext *context);
+  // GPU culling (reserved and null before ABI 1.3; a culler has `cull` or this): records,
+  // for one phase of the frame, compute work that tests the instances on the GPU and writes
+  // each pass's indirect commands and count, and says where in `context.draws`. The host
+  // then records the phase's rendering with the submission drawing from them.
+  CadrStatus (*record_gpu)(void *instance,
+                           const struct CadrGpuCullContext *context,
+                           struct CadrMessage *message);
+  // Since ABI 1.3: how many phases a frame has with this GPU culler (none or 0 means 1).
+  // Between phases the host ends rendering and hands the culler the depth so far (two-phase
+  // occlusion: draw what was visible last frame, test the rest against that depth, draw
+  // what became visible).
+  uint32_t (*phase_count)(void *instance);
+  // Since ABI 1.3: adds to `stats` what the GPU drew (`draws`, `primitives`) in the last
+  // frame whose work has finished. Called by the host after waiting for a frame.
+  void (*gpu_counts)(void *instance, struct CadrStats *stats);
 } CadrCullingVtable;
 
 // Success.
@@ -630,6 +729,11 @@ typedef struct CadrCullingVtable {
 // `VK_RENDERING_CONTENTS_SECONDARY_COMMAND_BUFFERS_BIT` and records nothing inline.
 #define CADR_TRAIT_SECONDARY_COMMAND_BUFFERS (1 << 4)
 
+// Since ABI 1.3. Submission: when the record context carries GPU-written draws
+// ([`CadrRecordContext::gpu_draws`]), draws each pass from them with
+// `vkCmdDrawIndexedIndirectCount` instead of its own lists. GPU culling needs it.
+#define CADR_TRAIT_DRAWS_GPU_COMMANDS (1 << 5)
+
 // Device-local; written by transfers or shaders.
 #define CADR_MEMORY_GPU_ONLY 0
 
@@ -644,6 +748,10 @@ typedef struct CadrCullingVtable {
 
 // The instance id is alive.
 #define CADR_INSTANCE_ALIVE (1 << 2)
+
+// Since ABI 1.3, set in [`CadrCullEntry::flags`] only: the instance is drawn unless culled
+// (alive, visible in the scene tree, with triangles).
+#define CADR_INSTANCE_CANDIDATE (1 << 3)
 
 // Triangles (solid shading).
 #define CADR_PASS_TRIANGLES 0

@@ -1,18 +1,20 @@
 //! `cadr bench`: renders a scene with the built-in combination (the baseline) and with
 //! technique combinations in one run, all through one view of the one GPU scene, and prints a
-//! table like the seeds' (CPU and GPU microseconds per frame, draw
-//! calls, state changes, triangles, speedup over the baseline), optionally as JSON and over a
-//! growing grid (`--sweep`).
+//! table like the seeds' (CPU and GPU microseconds per frame, scene update, bytes uploaded,
+//! draw calls, state changes, triangles, speedup over the baseline), optionally as JSON and
+//! over a growing grid (`--sweep`). The camera stands still or orbits (`--camera`), and
+//! `--animate N` moves N assembly nodes every frame: every row sees the same frames.
 
 use std::sync::Arc;
 
 use cadr_core::load::SceneSource;
-use cadr_core::render::{Camera, FrameStats, DEFAULT_DIRECTION};
+use cadr_core::render::FrameStats;
 use cadr_core::scene::{flatten, Scene, SceneStats};
 use cadr_core::technique::{Combination, PluginRegistry, ShadeMode, TechniqueKind, Techniques};
 use cadr_core::vk::Device;
 
 use crate::args::{parse_size, Args};
+use crate::motion::Motion;
 use crate::techniques::{load_registry, TechniqueSession, KIND_OPTIONS};
 
 /// The (vertex, parameter) pairs the default selection tries with every submission: the
@@ -37,25 +39,68 @@ struct Row {
     shade: &'static str,
     cpu_us: f64,
     gpu_us: Option<f64>,
+    /// Moving nodes and bringing the tree and GPU scene up to date.
+    scene_update_us: f64,
+    /// Median bytes uploaded per frame.
+    bytes_uploaded: u64,
+    /// The first measured frame's counters.
     stats: FrameStats,
 }
 
-/// Renders 2 warm-up frames, then `frames` measured ones; medians of CPU and GPU time.
+/// What one row measured: medians of CPU, GPU, scene update and upload, and the first
+/// measured frame.
+struct Measured {
+    cpu_us: f64,
+    gpu_us: Option<f64>,
+    scene_update_us: f64,
+    bytes_uploaded: u64,
+    first: FrameStats,
+}
+
+/// Renders 2 warm-up frames, then `frames` measured ones (frame numbers from 0, so that every
+/// row sees the same motion); medians.
 fn measure(
     frames: usize,
-    mut draw: impl FnMut() -> Result<FrameStats, String>,
-) -> Result<(f64, Option<f64>, FrameStats), String> {
-    for _ in 0..2 {
-        draw()?;
+    mut draw: impl FnMut(usize) -> Result<(FrameStats, f64), String>,
+) -> Result<Measured, String> {
+    for frame in 0..2 {
+        draw(frame)?;
     }
     let mut samples = Vec::with_capacity(frames);
-    for _ in 0..frames {
-        samples.push(draw()?);
+    for frame in 0..frames {
+        samples.push(draw(frame + 2)?);
     }
-    let cpu = crate::median(&mut samples.iter().map(FrameStats::cpu_us).collect::<Vec<_>>());
-    let mut gpu: Vec<f64> = samples.iter().filter_map(|s| s.gpu_us).collect();
+    let cpu = crate::median(&mut samples.iter().map(|s| s.0.cpu_us()).collect::<Vec<_>>());
+    let mut gpu: Vec<f64> = samples.iter().filter_map(|s| s.0.gpu_us).collect();
     let gpu = (!gpu.is_empty()).then(|| crate::median(&mut gpu));
-    Ok((cpu, gpu, samples[0]))
+    let update = crate::median(&mut samples.iter().map(|s| s.1).collect::<Vec<_>>());
+    let uploaded = crate::median(
+        &mut samples
+            .iter()
+            .map(|s| s.0.bytes_uploaded as f64)
+            .collect::<Vec<_>>(),
+    );
+    Ok(Measured {
+        cpu_us: cpu,
+        gpu_us: gpu,
+        scene_update_us: update,
+        bytes_uploaded: uploaded as u64,
+        first: samples[0].0,
+    })
+}
+
+impl Row {
+    fn new(label: String, shade: &'static str, measured: Measured) -> Self {
+        Self {
+            label,
+            shade,
+            cpu_us: measured.cpu_us,
+            gpu_us: measured.gpu_us,
+            scene_update_us: measured.scene_update_us,
+            bytes_uploaded: measured.bytes_uploaded,
+            stats: measured.first,
+        }
+    }
 }
 
 fn list(args: &Args, option: &str) -> Option<Vec<String>> {
@@ -175,6 +220,7 @@ struct Bench {
     registry: Arc<PluginRegistry>,
     size: (u32, u32),
     frames: usize,
+    motion: Motion,
 }
 
 impl Bench {
@@ -189,23 +235,25 @@ impl Bench {
         let flat = flatten(scene).map_err(|e| e.to_string())?;
         let stats = SceneStats::new(scene, &flat);
         drop(flat);
-        let camera = Camera::fit(
-            &stats.bounds,
-            f64::from(self.size.0) / f64::from(self.size.1),
-            DEFAULT_DIRECTION,
-        );
+        let aspect = f64::from(self.size.0) / f64::from(self.size.1);
         let mut rows = Vec::new();
         let mut session =
             TechniqueSession::new(&self.device, scene, Arc::clone(&self.registry), self.size)?;
+        let mut motion = self.motion.clone();
+        motion.choose_nodes(&session.graph, &stats.bounds);
+        if !quiet && motion.requested > 0 {
+            println!(
+                "animate: {} of {} requested assembly nodes move every frame",
+                motion.moved_nodes(),
+                motion.requested
+            );
+        }
+        let view = (&stats.bounds, aspect);
         session.choose(&Combination::built_in(), ShadeMode::Solid)?;
-        let (cpu_us, gpu_us, first) = measure(self.frames, || session.render(&camera))?;
-        let baseline = Row {
-            label: "baseline (built-in)".into(),
-            shade: "solid",
-            cpu_us,
-            gpu_us,
-            stats: first,
-        };
+        let measured = measure(self.frames, |frame| {
+            session.render_moving(&motion, view, frame)
+        })?;
+        let baseline = Row::new("baseline (built-in)".into(), "solid", measured);
         if !quiet {
             print_header();
             print_row(&baseline, baseline.cpu_us);
@@ -218,14 +266,10 @@ impl Bench {
         for mode in shade_modes(args)? {
             for combination in &combinations {
                 session.choose(combination, mode)?;
-                let (cpu_us, gpu_us, first) = measure(self.frames, || session.render(&camera))?;
-                let row = Row {
-                    label: combination.to_string(),
-                    shade: mode.name(),
-                    cpu_us,
-                    gpu_us,
-                    stats: first,
-                };
+                let measured = measure(self.frames, |frame| {
+                    session.render_moving(&motion, view, frame)
+                })?;
+                let row = Row::new(combination.to_string(), mode.name(), measured);
                 if !quiet {
                     print_row(&row, rows[0].cpu_us);
                 }
@@ -238,11 +282,13 @@ impl Bench {
 
 fn print_header() {
     println!(
-        "{:<58} {:>6} {:>10} {:>10} {:>8} {:>8} {:>6} {:>7} {:>7} {:>10} {:>9}",
+        "{:<58} {:>6} {:>10} {:>10} {:>9} {:>9} {:>8} {:>8} {:>6} {:>7} {:>7} {:>10} {:>9}",
         "technique (vertex / params / submit / cull)",
         "shade",
         "CPU µs",
         "GPU µs",
+        "update µs",
+        "upload B",
         "calls",
         "ranges",
         "pipe",
@@ -257,11 +303,13 @@ fn print_row(row: &Row, baseline_cpu: f64) {
     let gpu = row.gpu_us.map_or("n/a".to_owned(), |g| format!("{g:.0}"));
     let s = &row.stats;
     println!(
-        "{:<58} {:>6} {:>10.1} {:>10} {:>8} {:>8} {:>6} {:>7} {:>7} {:>10} {:>8.1}x",
+        "{:<58} {:>6} {:>10.1} {:>10} {:>9.1} {:>9} {:>8} {:>8} {:>6} {:>7} {:>7} {:>10} {:>8.1}x",
         row.label,
         row.shade,
         row.cpu_us,
         gpu,
+        row.scene_update_us,
+        row.bytes_uploaded,
         s.draw_calls,
         s.draws,
         s.pipeline_binds,
@@ -279,6 +327,8 @@ fn row_json(row: &Row, baseline_cpu: f64) -> serde_json::Value {
         "shade": row.shade,
         "cpu_us": row.cpu_us,
         "gpu_us": row.gpu_us,
+        "scene_update_us": row.scene_update_us,
+        "bytes_uploaded": row.bytes_uploaded,
         "draw_calls": s.draw_calls,
         "draws": s.draws,
         "pipeline_binds": s.pipeline_binds,
@@ -324,8 +374,11 @@ pub fn bench(args: &Args) -> Result<(), String> {
             "--sweep-parts",
             "--validation",
             "--no-validation",
+            "--camera",
+            "--animate",
         ],
     )?;
+    let motion = Motion::from_args(args)?;
     let sweep = args.flag("--sweep") || args.value(&["--sweep-parts"]).is_some();
     let frames = frames_option(args, if sweep { 5 } else { 10 })?;
     let size = parse_size(args.value(&["--size"]).unwrap_or("640x480"))?;
@@ -336,13 +389,16 @@ pub fn bench(args: &Args) -> Result<(), String> {
         registry,
         size,
         frames,
+        motion: motion.clone(),
     };
     println!(
-        "device: {} — {} measured frames after 2 warm-up frames, {}x{}, medians",
+        "device: {} — {} measured frames after 2 warm-up frames, {}x{}, medians; camera {}, {} animated nodes",
         device.adapter().name,
         frames,
         size.0,
-        size.1
+        size.1,
+        motion.camera.name(),
+        motion.requested
     );
     let json = if sweep {
         run_sweep(&bench, args)?
@@ -369,6 +425,8 @@ pub fn bench(args: &Args) -> Result<(), String> {
             "device": device.adapter().name,
             "frames": frames,
             "size": [size.0, size.1],
+            "camera": motion.camera.name(),
+            "animate": motion.requested,
             "scene": stats_json(name, &stats),
             "rows": rows_json(&rows),
         })

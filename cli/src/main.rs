@@ -3,6 +3,7 @@
 mod args;
 mod bench;
 mod bench_tree;
+mod motion;
 mod pick;
 mod techniques;
 

@@ -6,12 +6,15 @@ use std::sync::Arc;
 
 use cadr_core::graph::SceneGraph;
 use cadr_core::render::{Camera, FrameStats};
+use cadr_core::scene::Aabb;
 use cadr_core::scene::Scene;
 use cadr_core::technique::{
     default_plugin_dirs, feature_bits, feature_names, Combination, PluginRegistry, ShadeMode,
     TechniqueKind, Techniques, PLUGIN_PATH_VARIABLE,
 };
 use cadr_core::tree::SceneTree;
+
+use crate::motion::Motion;
 use cadr_core::view::View;
 use cadr_core::vk::{Device, DeviceOptions, InstanceOptions};
 
@@ -113,6 +116,26 @@ impl TechniqueSession {
             .select(combination)
             .map_err(|e| explain(e.to_string()))?;
         techniques.set_shade_mode(shade).map_err(|e| e.to_string())
+    }
+
+    /// Draws frame `frame` of `motion`: moves its nodes, brings the tree and the GPU scene up
+    /// to date (timed: the scene update, in microseconds) and draws with its camera.
+    pub fn render_moving(
+        &mut self,
+        motion: &Motion,
+        (bounds, aspect): (&Aabb, f64),
+        frame: usize,
+    ) -> Result<(FrameStats, f64), String> {
+        let start = std::time::Instant::now();
+        motion.animate(&mut self.graph, frame)?;
+        self.tree.update(&mut self.graph);
+        self.view
+            .sync(&self.graph, &mut self.tree)
+            .map_err(|e| e.to_string())?;
+        let update_us = start.elapsed().as_secs_f64() * 1e6;
+        let camera = motion.camera(bounds, aspect, frame);
+        let stats = self.view.draw(&camera).map_err(|e| e.to_string())?;
+        Ok((stats, update_us))
     }
 
     /// Draws one frame.

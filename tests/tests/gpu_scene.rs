@@ -522,9 +522,11 @@ proptest! {
             }
         }
         // What the GPU holds equals the CPU copy (the scatter put every item in place).
-        let [matrices, materials, records] = scene.read_back_arrays().unwrap();
-        let [fresh_matrices, fresh_materials, fresh_records] = fresh.read_back_arrays().unwrap();
+        let [matrices, materials, records, cull_entries] = scene.read_back_arrays().unwrap();
+        let [fresh_matrices, fresh_materials, fresh_records, fresh_cull_entries] =
+            fresh.read_back_arrays().unwrap();
         prop_assert_eq!(records, fresh_records);
+        prop_assert_eq!(cull_entries, fresh_cull_entries);
         prop_assert_eq!(materials, fresh_materials);
         for slot in 0..synced.matrices.len() {
             if tree.has_instances(slot as u32) {

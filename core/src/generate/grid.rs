@@ -99,7 +99,7 @@ pub fn grid(parts: u64, triangles_per_part: f64) -> Scene {
     scene
 }
 
-fn hue_to_rgb(hue: f32) -> [f32; 4] {
+pub(super) fn hue_to_rgb(hue: f32) -> [f32; 4] {
     let channel = |offset: f32| {
         let t = (hue + offset).fract() * 6.0;
         let value = (t - 3.0).abs() - 1.0;

@@ -10,12 +10,14 @@
 //! Generators are deterministic: the same source gives the same scene on every run.
 
 mod assembly;
+mod cabinet;
 mod component;
 mod grid;
 mod rng;
 mod shapes;
 
 pub use assembly::{assembly, AssemblySpec};
+pub use cabinet::cabinet;
 pub use grid::grid;
 pub use rng::Rng;
 pub use shapes::{prism_triangles, GeometryBuilder};
@@ -34,6 +36,11 @@ pub enum GeneratorSpec {
     GraphicsCard,
     /// `gen:racecar`.
     RaceCar,
+    /// `gen:cabinet[:cabinets=N]`: machines inside closed housings, most parts hidden.
+    Cabinet {
+        /// Number of cabinets (366 parts each).
+        cabinets: u32,
+    },
     /// `gen:grid:parts=N[,tris=T]`.
     Grid {
         /// Exact number of parts.
@@ -44,7 +51,11 @@ pub enum GeneratorSpec {
 }
 
 /// The generator names, for help texts.
-pub const GENERATOR_NAMES: &str = "demo, graphicscard, racecar, grid:parts=N[,tris=T]";
+pub const GENERATOR_NAMES: &str =
+    "demo, graphicscard, racecar, cabinet[:cabinets=N], grid:parts=N[,tris=T]";
+
+/// The most cabinets `gen:cabinet` makes (about 11 million parts).
+const MAX_CABINETS: u32 = 30_000;
 
 impl GeneratorSpec {
     /// Parses what follows `gen:`.
@@ -66,6 +77,25 @@ impl GeneratorSpec {
             "demo" => no_params(Self::Demo),
             "graphicscard" => no_params(Self::GraphicsCard),
             "racecar" => no_params(Self::RaceCar),
+            "cabinet" => {
+                let mut cabinets = 24;
+                for (key, value) in params {
+                    if key != "cabinets" {
+                        return Err(format!(
+                            "gen:cabinet: unknown parameter '{key}' (known: cabinets)"
+                        ));
+                    }
+                    cabinets = value
+                        .replace('_', "")
+                        .parse()
+                        .ok()
+                        .filter(|n| (1..=MAX_CABINETS).contains(n))
+                        .ok_or_else(|| {
+                            format!("gen:cabinet: cabinets={value} is not a number from 1 to {MAX_CABINETS}")
+                        })?;
+                }
+                Ok(Self::Cabinet { cabinets })
+            }
             "grid" => {
                 let mut parts = None;
                 let mut triangles_per_part = 12.0;
@@ -148,6 +178,7 @@ pub fn generate(spec: &GeneratorSpec) -> Scene {
             objects_per_module: 60,
             seed: 2015,
         }),
+        GeneratorSpec::Cabinet { cabinets } => cabinet(*cabinets),
         GeneratorSpec::Grid {
             parts,
             triangles_per_part,

@@ -36,6 +36,8 @@ pub const MATRIX_BYTES: usize = 64;
 pub const MATERIAL_BYTES: usize = 32;
 /// Bytes of one instance record on the GPU ([`abi::CadrInstanceRecord`]).
 pub const RECORD_BYTES: usize = 16;
+/// Bytes of one cull entry on the GPU ([`abi::CadrCullEntry`]).
+pub const CULL_ENTRY_BYTES: usize = 48;
 
 /// Splits f64 coordinates into an f32 high part and the f32 remainder: `high + low` equals the
 /// input to about 2^-48 of its size, and the shader subtracts the eye's parts separately so
@@ -88,6 +90,7 @@ pub struct GpuScene {
     matrix_gpu: GpuArray,
     material_gpu: GpuArray,
     record_gpu: GpuArray,
+    cull_gpu: GpuArray,
     uploader: SparseUploader,
     frame_dirty_matrices: Vec<u32>,
     frame_dirty_materials: Vec<u32>,
@@ -100,7 +103,7 @@ pub struct GpuScene {
     /// Instance entries refreshed by the last sync.
     last_touched: u64,
     /// The buffers as techniques see them (with device addresses), refreshed when replaced.
-    buffer_refs: [abi::CadrBufferRef; 6],
+    buffer_refs: [abi::CadrBufferRef; 7],
 }
 
 impl GpuScene {
@@ -131,6 +134,7 @@ impl GpuScene {
             matrix_gpu: GpuArray::new(device, "scene matrices", MATRIX_BYTES)?,
             material_gpu: GpuArray::new(device, "scene materials", MATERIAL_BYTES)?,
             record_gpu: GpuArray::new(device, "scene instance records", RECORD_BYTES)?,
+            cull_gpu: GpuArray::new(device, "scene cull entries", CULL_ENTRY_BYTES)?,
             uploader: SparseUploader::default(),
             frame_dirty_matrices: Vec::new(),
             frame_dirty_materials: Vec::new(),
@@ -159,6 +163,7 @@ impl GpuScene {
             &self.matrix_gpu.buffer,
             &self.material_gpu.buffer,
             &self.record_gpu.buffer,
+            &self.cull_gpu.buffer,
         ]
         .map(|buffer| abi::CadrBufferRef {
             buffer: buffer.raw().as_raw(),
@@ -200,10 +205,12 @@ impl GpuScene {
         self.matrix_gpu.reserve(&device, nodes.max(1))?;
         self.material_gpu.reserve(&device, material_slots.max(1))?;
         self.record_gpu.reserve(&device, count.max(1))?;
+        self.cull_gpu.reserve(&device, count.max(1))?;
         for array in [
             &mut self.matrix_gpu,
             &mut self.material_gpu,
             &mut self.record_gpu,
+            &mut self.cull_gpu,
         ] {
             array.queue_all();
         }
@@ -381,6 +388,7 @@ impl GpuScene {
         for &id in &touched {
             self.refresh_instance(tree, id);
             self.record_gpu.queue(id);
+            self.cull_gpu.queue(id);
         }
         self.last_touched = touched.len() as u64;
         if !touched.is_empty() {
@@ -434,7 +442,12 @@ impl GpuScene {
             let item = records.get(slot as usize).copied().unwrap_or_default();
             out.extend_from_slice(&item.to_le_bytes());
         };
-        let ([matrix_count, material_count, record_count], bytes) = self.uploader.record(
+        let (instances, candidates) = (&self.instances, &self.candidate_bits);
+        let cull_entry_bytes = |slot: u32, out: &mut Vec<u8>| {
+            let item = cull_entry(instances, candidates, slot);
+            out.extend_from_slice(&item.to_le_bytes());
+        };
+        let ([matrix_count, material_count, record_count, _], bytes) = self.uploader.record(
             &self.device,
             pipelines,
             command_buffer,
@@ -442,6 +455,7 @@ impl GpuScene {
                 (&mut self.matrix_gpu, &matrix_bytes),
                 (&mut self.material_gpu, &material_bytes),
                 (&mut self.record_gpu, &record_bytes),
+                (&mut self.cull_gpu, &cull_entry_bytes),
             ],
         )?;
         self.last_upload.matrices += matrix_count;
@@ -472,7 +486,7 @@ impl GpuScene {
 
     /// The view techniques read this frame. Valid while `self` is not changed.
     pub(crate) fn view(&self) -> abi::CadrSceneView {
-        let [vertex_buffer, index_buffer, wire_index_buffer, matrix_buffer, material_buffer, instance_buffer] =
+        let [vertex_buffer, index_buffer, wire_index_buffer, matrix_buffer, material_buffer, instance_buffer, cull_buffer] =
             self.buffer_refs;
         abi::CadrSceneView {
             size: std::mem::size_of::<abi::CadrSceneView>() as u32,
@@ -497,6 +511,7 @@ impl GpuScene {
             matrix_buffer,
             material_buffer,
             instance_buffer,
+            cull_buffer,
         }
     }
 
@@ -545,14 +560,15 @@ impl GpuScene {
         }
     }
 
-    /// Reads back the GPU's matrix, material and record arrays (for tests: the sparse uploads
-    /// must leave them equal to the CPU copy). Waits for the device.
-    pub fn read_back_arrays(&self) -> RenderResult<[Vec<u8>; 3]> {
+    /// Reads back the GPU's matrix, material, record and cull-entry arrays (for tests: the
+    /// sparse uploads must leave them equal to the CPU copy). Waits for the device.
+    pub fn read_back_arrays(&self) -> RenderResult<[Vec<u8>; 4]> {
         let read = |array: &GpuArray, bytes: usize| array.buffer.download(0, bytes as u64);
         Ok([
             read(&self.matrix_gpu, self.matrices.len() * MATRIX_BYTES)?,
             read(&self.material_gpu, self.materials.len() * MATERIAL_BYTES)?,
             read(&self.record_gpu, self.records.len() * RECORD_BYTES)?,
+            read(&self.cull_gpu, self.instances.len() * CULL_ENTRY_BYTES)?,
         ])
     }
 }
@@ -570,6 +586,37 @@ pub struct SceneContent<'a> {
     pub materials: &'a [abi::CadrMaterial],
     /// Drawn bits by instance id.
     pub drawn_bits: &'a [u64],
+}
+
+/// The cull entry of instance `slot`: its sphere and ranges, flagged as a candidate when it is
+/// drawn unless culled.
+fn cull_entry(
+    instances: &[abi::CadrInstance],
+    candidates: &[u64],
+    slot: u32,
+) -> abi::CadrCullEntry {
+    let Some(instance) = instances.get(slot as usize) else {
+        return abi::CadrCullEntry::default();
+    };
+    let candidate = candidates
+        .get(slot as usize / 64)
+        .is_some_and(|word| word >> (slot % 64) & 1 == 1);
+    abi::CadrCullEntry {
+        sphere: instance.sphere,
+        first_index: instance.first_index,
+        index_count: instance.index_count,
+        first_wire_index: instance.first_wire_index,
+        wire_index_count: instance.wire_index_count,
+        vertex_base: instance.vertex_base,
+        matrix: instance.matrix,
+        flags: instance.flags
+            | if candidate {
+                abi::CADR_INSTANCE_CANDIDATE
+            } else {
+                0
+            },
+        reserved: 0,
+    }
 }
 
 fn set_bit(bits: &mut [u64], id: u32, on: bool) {

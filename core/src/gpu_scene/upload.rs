@@ -1,5 +1,5 @@
-//! Sparse uploads (seed 000): the GPU scene's arrays (matrices, materials, instance records)
-//! change a few items at a time. Each frame the changed items of every array are gathered on the
+//! Sparse uploads (seed 000): the GPU scene's arrays (matrices, materials, instance records,
+//! cull entries) change a few items at a time. Each frame the changed items of every array are gathered on the
 //! CPU into one compact buffer, each item behind its slot, and `scatter.comp` moves them into
 //! place on the GPU: the bytes uploaded are those of the changed items. An array that was
 //! (re)created is uploaded whole instead.
@@ -97,6 +97,9 @@ pub struct UploadStats {
     pub bytes: u64,
 }
 
+/// How many arrays the GPU scene keeps: matrices, materials, instance records, cull entries.
+pub(super) const ARRAYS: usize = 4;
+
 /// The compact update buffer and the descriptor sets that point the scatter pipeline at it and
 /// at each array.
 #[derive(Default)]
@@ -104,7 +107,7 @@ pub(super) struct SparseUploader {
     updates: Option<Buffer>,
     sets: Option<DescriptorSets>,
     /// The buffers the sets were written for (updates, then each array).
-    written: [vk::Buffer; 4],
+    written: [vk::Buffer; ARRAYS + 1],
     /// The compact updates of a frame, kept to be refilled without allocating.
     gathered: Vec<u8>,
 }
@@ -113,7 +116,7 @@ pub(super) struct SparseUploader {
 pub(super) type ArrayItems<'a> = (&'a mut GpuArray, &'a dyn Fn(u32, &mut Vec<u8>));
 
 impl SparseUploader {
-    /// Uploads what changed in `arrays` (at most three): whole arrays through a staging copy,
+    /// Uploads what changed in `arrays`: whole arrays through a staging copy,
     /// changed items gathered and scattered by `scatter.comp`, recorded into `command_buffer`
     /// (before the frame's pass; the frame's barrier makes the writes visible to drawing).
     /// Returns the items uploaded per array and the bytes sent.
@@ -122,9 +125,9 @@ impl SparseUploader {
         device: &Arc<Device>,
         pipelines: &Pipelines,
         command_buffer: vk::CommandBuffer,
-        mut arrays: [ArrayItems<'_>; 3],
-    ) -> RenderResult<([u64; 3], u64)> {
-        let mut counts = [0u64; 3];
+        mut arrays: [ArrayItems<'_>; ARRAYS],
+    ) -> RenderResult<([u64; ARRAYS], u64)> {
+        let mut counts = [0u64; ARRAYS];
         let mut bytes = 0u64;
         let mut gathered = std::mem::take(&mut self.gathered);
         gathered.clear();
@@ -175,7 +178,7 @@ impl SparseUploader {
         device: &Arc<Device>,
         pipelines: &Pipelines,
         command_buffer: vk::CommandBuffer,
-        arrays: &[ArrayItems<'_>; 3],
+        arrays: &[ArrayItems<'_>; ARRAYS],
         gathered: &[u8],
         dispatches: &[(usize, u32, u32)],
     ) -> RenderResult<()> {
@@ -196,21 +199,19 @@ impl SparseUploader {
             return Ok(());
         };
         updates.write(0, gathered)?;
-        let targets = [
-            updates.raw(),
-            arrays[0].0.buffer.raw(),
-            arrays[1].0.buffer.raw(),
-            arrays[2].0.buffer.raw(),
-        ];
+        let mut targets = [updates.raw(); ARRAYS + 1];
+        for (target, (array, _)) in targets[1..].iter_mut().zip(arrays) {
+            *target = array.buffer.raw();
+        }
         if self.sets.is_none() {
-            let layouts = [pipelines.scatter_set_layout(); 3];
+            let layouts = [pipelines.scatter_set_layout(); ARRAYS];
             self.sets = Some(DescriptorSets::new(
                 device,
                 "scatter",
                 &layouts,
                 &[vk::DescriptorPoolSize::default()
                     .ty(vk::DescriptorType::STORAGE_BUFFER)
-                    .descriptor_count(6)],
+                    .descriptor_count(2 * ARRAYS as u32)],
             )?);
         }
         let Some(sets) = &self.sets else {
@@ -218,7 +219,7 @@ impl SparseUploader {
         };
         if self.written != targets {
             let ssbo = vk::DescriptorType::STORAGE_BUFFER;
-            for set in 0..3 {
+            for set in 0..ARRAYS {
                 sets.write_buffer(set, 0, ssbo, targets[0], vk::WHOLE_SIZE);
                 sets.write_buffer(set, 1, ssbo, targets[set + 1], vk::WHOLE_SIZE);
             }

@@ -41,6 +41,25 @@ impl Camera {
         Self { view, projection }
     }
 
+    /// A camera on a deterministic orbit around `bounds`: `turn` is the fraction of a full
+    /// circle (0 to 1), the eye circles the centre at `distance` times the bounds' radius,
+    /// somewhat above it, looking at the centre. At a distance of about 1 the frustum cuts
+    /// the scene: what is behind the eye and beside the view is outside (the motion that
+    /// culling must keep up with).
+    pub fn orbit(bounds: &Aabb, aspect: f64, turn: f64, distance: f64) -> Self {
+        let (center, radius) = if bounds.is_empty() {
+            (DVec3::ZERO, 1.0)
+        } else {
+            (bounds.center(), bounds.radius().max(1e-6))
+        };
+        let angle = turn * std::f64::consts::TAU;
+        let direction = DVec3::new(angle.cos(), 0.45, angle.sin()).normalize();
+        let eye = center + direction * radius * distance;
+        let near = radius * 1e-3;
+        let far = radius * (distance + 1.5);
+        Self::look_at(eye, center, DEFAULT_FOV_DEGREES, aspect, near, far)
+    }
+
     /// A camera that sees all of `bounds` from `direction`, for an image of `aspect` (width/height):
     /// the eye moves back along `direction` until every corner of the box is inside the view.
     pub fn fit(bounds: &Aabb, aspect: f64, direction: DVec3) -> Self {

@@ -22,9 +22,10 @@ use crate::error::{RenderError, RenderResult};
 use crate::vk::raw as vk;
 
 use crate::gpu_scene::split_f64;
+pub(crate) use crate::vk::SUSPENDED_DEPTH_LAYOUT;
 use crate::vk::{
-    begin_rendering, end_rendering, Buffer, CommandContext, DescriptorSets, Device, GpuTimer,
-    Image, MemoryLocation, OffscreenTarget, RenderingTarget,
+    begin_rendering, end_rendering, suspend_rendering, Buffer, CommandContext, DescriptorSets,
+    Device, GpuTimer, Image, MemoryLocation, OffscreenTarget, RenderingTarget,
 };
 use pick::{PickTarget, PixelRect};
 
@@ -53,9 +54,23 @@ pub(crate) enum PassTarget {
     Pick,
 }
 
-/// What a technique records at one point of the frame: before the pass, inside it, or after it.
+/// What a technique records at one point of the frame: before the pass, inside it (once per
+/// phase), between phases, or after it; with the phase.
 pub(crate) type Recorder<'a> =
-    dyn FnMut(&Renderer, vk::CommandBuffer, &mut FrameStats) -> RenderResult<()> + 'a;
+    dyn FnMut(&Renderer, vk::CommandBuffer, u32, &mut FrameStats) -> RenderResult<()> + 'a;
+
+/// The recorders of a frame, in the order they run.
+pub(crate) struct FrameRecorders<'r, 'a> {
+    /// Outside rendering, before the first phase.
+    pub before: &'r mut Recorder<'a>,
+    /// Inside rendering, once per phase.
+    pub inside: &'r mut Recorder<'a>,
+    /// Outside rendering between phases (from phase 1 on), the depth so far readable in
+    /// [`SUSPENDED_DEPTH_LAYOUT`].
+    pub between: &'r mut Recorder<'a>,
+    /// Outside rendering, after the last phase.
+    pub after: &'r mut Recorder<'a>,
+}
 
 impl Renderer {
     /// Creates a renderer with a `width` × `height` target.
@@ -170,14 +185,14 @@ impl Renderer {
     }
 
     /// Runs a frame: uniforms, command buffer, target transitions, the technique's commands
-    /// before and inside the render pass, submission, wait, timings.
+    /// before the pass, inside it in `phases` phases (the pass suspended between them, its
+    /// depth readable) and after it, submission, wait, timings.
     pub(crate) fn frame(
         &mut self,
         camera: &Camera,
         (pass, secondary): (PassTarget, bool),
-        before: &mut Recorder<'_>,
-        inside: &mut Recorder<'_>,
-        after: &mut Recorder<'_>,
+        phases: u32,
+        recorders: FrameRecorders<'_, '_>,
     ) -> RenderResult<FrameStats> {
         // The eye in f64, split for relative-to-eye positions on the GPU.
         let eye = camera.view.inverse().w_axis.truncate();
@@ -201,11 +216,22 @@ impl Renderer {
         if let Some(timer) = &mut self.timer {
             timer.begin(command_buffer);
         }
-        before(self, command_buffer, &mut stats)?;
-        self.begin_pass(command_buffer, pass, secondary);
-        inside(self, command_buffer, &mut stats)?;
-        self.end_pass(command_buffer, pass);
-        after(self, command_buffer, &mut stats)?;
+        let phases = phases.max(1);
+        (recorders.before)(self, command_buffer, 0, &mut stats)?;
+        for phase in 0..phases {
+            let target = self.pass_target(pass, (secondary, phase > 0, phases > 1));
+            if phase > 0 {
+                (recorders.between)(self, command_buffer, phase, &mut stats)?;
+            }
+            begin_rendering(&self.device, command_buffer, &target);
+            (recorders.inside)(self, command_buffer, phase, &mut stats)?;
+            if phase + 1 < phases {
+                suspend_rendering(&self.device, command_buffer, &target);
+            } else {
+                end_rendering(&self.device, command_buffer, &target);
+            }
+        }
+        (recorders.after)(self, command_buffer, phases - 1, &mut stats)?;
         if let Some(timer) = &mut self.timer {
             timer.end(command_buffer);
         }
@@ -241,31 +267,31 @@ impl Renderer {
         self.frame_sets.sets[0]
     }
 
-    /// Begins rendering into the pass target; with `secondary`, the pass's contents come from
-    /// secondary command buffers, which set their own viewport and scissor.
-    fn begin_pass(&self, command_buffer: vk::CommandBuffer, pass: PassTarget, secondary: bool) {
-        begin_rendering(
-            &self.device,
-            command_buffer,
-            &self.pass_target(pass, secondary),
-        );
+    /// The frame's depth image, as a later phase reads it (in [`SUSPENDED_DEPTH_LAYOUT`]).
+    pub(crate) fn depth_image(&self) -> &Image {
+        &self.target.depth
     }
 
-    fn end_pass(&self, command_buffer: vk::CommandBuffer, pass: PassTarget) {
-        end_rendering(&self.device, command_buffer, &self.pass_target(pass, false));
-    }
-
-    /// What a pass renders into: the colour or id image, cleared, and the depth, kept for the
-    /// pick pass (picking reads the depth under the cursor).
-    fn pass_target(&self, pass: PassTarget, secondary: bool) -> RenderingTarget<'_> {
+    /// What a pass renders into: the colour or id image, cleared (loaded when the phase
+    /// `resume`s a suspended pass), and the depth, kept for the pick pass (picking reads the
+    /// depth under the cursor) and stored when the frame has several phases. With
+    /// `secondary`, the pass's contents come from secondary command buffers, which set their
+    /// own viewport and scissor.
+    fn pass_target(
+        &self,
+        pass: PassTarget,
+        (secondary, resume, phased): (bool, bool, bool),
+    ) -> RenderingTarget<'_> {
         let (color, clear_color) = self.pass_image(pass);
         RenderingTarget {
             color,
             clear_color,
             depth: &self.target.depth,
             keep_depth: pass == PassTarget::Pick,
+            store_depth: phased,
             extent: self.target.extent(),
             secondary,
+            resume,
         }
     }
 }

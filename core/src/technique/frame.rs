@@ -1,6 +1,6 @@
-//! A frame drawn by the active techniques: culling on the CPU (only changed bits applied),
-//! uploads and the techniques' preparations before the pass, the submission's recording
-//! inside it. The pick pass is the same frame with the pick pipelines (the same vertex shader,
+//! A frame drawn by the active techniques: culling on the CPU (only changed bits applied) or
+//! on the GPU (`gpu_cull.rs`: compute work per phase that writes the draws), uploads and the
+//! techniques' preparations before the pass, the submission's recording inside it. The pick pass is the same frame with the pick pipelines (the same vertex shader,
 //! instance ids into the pick target) and a readback of the picked rectangle after it.
 
 use std::cell::RefCell;
@@ -12,12 +12,15 @@ use crate::vk::raw::{self as vk, Handle};
 use cadr_plugin_abi as abi;
 use glam::DMat4;
 
+use super::gpu_cull::{EyeRelativeView, GpuCuller, PhaseDepth};
 use super::pipeline::PassSet;
 use super::registry::TechniqueKind;
 use super::set::{status, Message, Techniques};
 use crate::gpu_scene::GpuScene;
 use crate::render::pick::{PickSample, PixelRect};
-use crate::render::{Camera, FrameStats, PassTarget, Renderer};
+use crate::render::{
+    Camera, FrameRecorders, FrameStats, PassTarget, Renderer, SUSPENDED_DEPTH_LAYOUT,
+};
 use crate::vk::memory_barrier;
 
 /// World-space frustum planes of `camera` (normals point inside; Vulkan depth 0..1).
@@ -93,10 +96,14 @@ impl Renderer {
             key = mix(key, view.parameters_generation);
         }
         let frame_set = self.frame_set().as_raw();
-        let shared = RefCell::new((scene, abi::CadrStats::default()));
+        let culler = GpuCuller::of(techniques, pipelines.passes.len())?;
+        let phases = culler.as_ref().map_or(1, |c| c.phases);
+        let eye_view = EyeRelativeView::new(camera);
+        let shared = RefCell::new((scene, abi::CadrStats::default(), culler));
         let context = |command_buffer: vk::CommandBuffer,
                        view: &abi::CadrSceneView,
-                       stats: *mut abi::CadrStats|
+                       stats: *mut abi::CadrStats,
+                       (gpu_draws, phase): (*const abi::CadrGpuDraws, u32)|
          -> RenderResult<abi::CadrRecordContext> {
             let vertex = techniques.get(TechniqueKind::Vertex)?;
             let parameters = techniques.get(TechniqueKind::Parameters)?;
@@ -121,14 +128,42 @@ impl Renderer {
                 commands_key: key,
                 stats,
                 color_format: color_format.as_raw(),
+                gpu_draws,
+                phase,
             })
+        };
+        // Records a phase of the GPU culler (if any) outside rendering.
+        let record_culling = |renderer: &Renderer,
+                              command_buffer: vk::CommandBuffer,
+                              phase: u32,
+                              scene: &GpuScene,
+                              culler: &mut Option<GpuCuller<'_>>|
+         -> RenderResult<()> {
+            let Some(culler) = culler.as_mut() else {
+                return Ok(());
+            };
+            let depth = (phase > 0).then(|| PhaseDepth {
+                image: renderer.depth_image().raw(),
+                view: renderer.depth_image().view(),
+                layout: SUSPENDED_DEPTH_LAYOUT,
+            });
+            culler.record(
+                phase,
+                command_buffer,
+                &scene.view(),
+                &pipelines.passes,
+                &eye_view,
+                (width, height),
+                depth,
+            )
         };
         let mut before = |renderer: &Renderer,
                           command_buffer: vk::CommandBuffer,
+                          _: u32,
                           stats: &mut FrameStats|
          -> RenderResult<()> {
             let mut guard = shared.borrow_mut();
-            let (scene, counters) = &mut *guard;
+            let (scene, counters, culler) = &mut *guard;
             stats.bytes_uploaded = scene.record_uploads(renderer.pipelines(), command_buffer)?;
             barrier(renderer, command_buffer);
             let view = scene.view();
@@ -150,21 +185,34 @@ impl Renderer {
             }
             let submission = techniques.get(TechniqueKind::Submission)?;
             if let Some(prepare) = submission.vtable::<abi::CadrSubmissionVtable>().prepare {
-                let record = context(command_buffer, &view, counters)?;
+                let gpu_draws = culler
+                    .as_ref()
+                    .map_or(std::ptr::null(), |c| c.draws.as_ptr());
+                let record = context(command_buffer, &view, counters, (gpu_draws, 0))?;
                 let mut message = Message::new();
                 // SAFETY: as above.
                 let result = unsafe { prepare(submission.instance, &record, message.raw()) };
                 status(&submission.entry, "prepare", result, &message)?;
             }
             barrier(renderer, command_buffer);
-            Ok(())
+            record_culling(renderer, command_buffer, 0, scene, culler)
+        };
+        let mut between = |renderer: &Renderer,
+                           command_buffer: vk::CommandBuffer,
+                           phase: u32,
+                           _: &mut FrameStats|
+         -> RenderResult<()> {
+            let mut guard = shared.borrow_mut();
+            let (scene, _, culler) = &mut *guard;
+            record_culling(renderer, command_buffer, phase, scene, culler)
         };
         let mut inside = |_: &Renderer,
                           command_buffer: vk::CommandBuffer,
+                          phase: u32,
                           _: &mut FrameStats|
          -> RenderResult<()> {
             let mut guard = shared.borrow_mut();
-            let (scene, counters) = &mut *guard;
+            let (scene, counters, culler) = &mut *guard;
             let view = scene.view();
             let submission = techniques.get(TechniqueKind::Submission)?;
             let record_fn = submission
@@ -174,7 +222,10 @@ impl Renderer {
                     technique: format!("submit '{}'", submission.entry.name),
                     message: "its vtable has no record function".into(),
                 })?;
-            let record = context(command_buffer, &view, counters)?;
+            let gpu_draws = culler
+                .as_ref()
+                .map_or(std::ptr::null(), |c| c.draws.as_ptr());
+            let record = context(command_buffer, &view, counters, (gpu_draws, phase))?;
             let mut message = Message::new();
             // SAFETY: a live instance; the context is valid for the call.
             let result = unsafe { record_fn(submission.instance, &record, message.raw()) };
@@ -185,7 +236,7 @@ impl Renderer {
             PassSet::Pick => PassTarget::Pick,
         };
         let mut after =
-            |renderer: &Renderer, command_buffer: vk::CommandBuffer, _: &mut FrameStats| {
+            |renderer: &Renderer, command_buffer: vk::CommandBuffer, _: u32, _: &mut FrameStats| {
                 if target == PassTarget::Pick {
                     renderer.record_pick_readback(command_buffer);
                 }
@@ -194,11 +245,15 @@ impl Renderer {
         let mut stats = self.frame(
             camera,
             (target, secondary),
-            &mut before,
-            &mut inside,
-            &mut after,
+            phases,
+            FrameRecorders {
+                before: &mut before,
+                inside: &mut inside,
+                between: &mut between,
+                after: &mut after,
+            },
         )?;
-        let (scene, counters) = shared.into_inner();
+        let (scene, counters, culler) = shared.into_inner();
         if counters.failures > 0 {
             return Err(RenderError::Technique {
                 technique: techniques.combination().to_string(),
@@ -209,6 +264,12 @@ impl Renderer {
         stats.draw_calls = counters.draw_calls;
         stats.draws = counters.draws;
         stats.triangles = scene.drawn_triangles();
+        if let Some(culler) = culler {
+            // The frame has finished: what the GPU decided to draw.
+            let drawn = culler.counts();
+            stats.draws = drawn.draws;
+            stats.triangles = drawn.primitives;
+        }
         stats.pipeline_binds = counters.pipeline_binds;
         stats.vertex_binds = counters.vertex_binds;
         stats.parameter_updates = counters.parameter_binds;
@@ -217,7 +278,7 @@ impl Renderer {
 }
 
 /// Makes transfer, compute and host writes before the pass visible to vertex input, shaders
-/// and indirect reads.
+/// (GPU culling's too) and indirect reads.
 fn barrier(renderer: &Renderer, command_buffer: vk::CommandBuffer) {
     memory_barrier(
         renderer.device(),
@@ -234,6 +295,7 @@ fn barrier(renderer: &Renderer, command_buffer: vk::CommandBuffer) {
             vk::PipelineStageFlags2::VERTEX_INPUT
                 | vk::PipelineStageFlags2::VERTEX_SHADER
                 | vk::PipelineStageFlags2::DRAW_INDIRECT
+                | vk::PipelineStageFlags2::COMPUTE_SHADER
                 | vk::PipelineStageFlags2::ALL_TRANSFER,
             vk::AccessFlags2::VERTEX_ATTRIBUTE_READ
                 | vk::AccessFlags2::INDEX_READ
@@ -260,6 +322,18 @@ fn cull_key(epoch: u64, view: &abi::CadrSceneView, planes: &[[f64; 4]; 6]) -> u6
 /// Runs the culling technique and applies the bits that changed. Culling depends only on the
 /// view and the scene, so it runs again only when one of them (or the culler) changed.
 fn cull(scene: &mut GpuScene, techniques: &mut Techniques, camera: &Camera) -> RenderResult<()> {
+    if GpuCuller::is_active(techniques) {
+        // The GPU decides: every candidate stays in the drawn set (once per culler and
+        // scene layout, so a moving camera costs the CPU nothing here).
+        let key = mix(techniques.epoch, scene.view().buffers_generation);
+        if techniques.cull_key != Some(key) {
+            let visible = vec![u64::MAX; scene.culled_bits().len()];
+            let changed: Vec<u64> = scene.culled_bits().iter().map(|w| !w).collect();
+            scene.apply_culling(&visible, &changed);
+            techniques.cull_key = Some(key);
+        }
+        return Ok(());
+    }
     let planes = frustum_planes(camera);
     let key = cull_key(techniques.epoch, &scene.view(), &planes);
     if techniques.cull_key == Some(key) {

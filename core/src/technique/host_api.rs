@@ -1,5 +1,5 @@
-//! What the host offers plugin instances: buffers it allocates and frees for them, and
-//! counting `VkAllocationCallbacks` for the objects they create, so that a test can prove that
+//! What the host offers plugin instances: buffers it allocates and frees for them, shader
+//! modules compiled from their GLSL, and counting `VkAllocationCallbacks` for the objects they create, so that a test can prove that
 //! swapping techniques leaks nothing.
 
 use std::alloc::Layout;
@@ -12,7 +12,8 @@ use crate::vk::raw as vk;
 use crate::vk::raw::Handle;
 use cadr_plugin_abi as abi;
 
-use crate::vk::{Buffer, Device, MemoryLocation};
+use crate::shaders::compile_glsl;
+use crate::vk::{create_unowned_shader_module, Buffer, Device, MemoryLocation, ShaderStage};
 
 /// Live counts of what plugins hold.
 #[derive(Debug, Default)]
@@ -196,6 +197,46 @@ unsafe extern "C" fn destroy_buffer(user: *mut c_void, buffer: *const abi::CadrB
     }));
 }
 
+unsafe extern "C" fn create_shader_module(
+    user: *mut c_void,
+    stage: u32,
+    source: *const c_char,
+    name: *const c_char,
+    module: *mut u64,
+    message: *mut abi::CadrMessage,
+) -> abi::CadrStatus {
+    let result = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+        // SAFETY: `user` is the HostServices this API belongs to.
+        let services = unsafe { &*user.cast::<HostServices>() };
+        // SAFETY: the plugin passes NUL-terminated strings (or null).
+        let text = |pointer: *const c_char| {
+            unsafe { pointer.as_ref() }.map(|_| {
+                // SAFETY: as above, checked non-null.
+                unsafe { CStr::from_ptr(pointer) }
+                    .to_string_lossy()
+                    .into_owned()
+            })
+        };
+        let name = text(name).unwrap_or_else(|| "plugin shader".into());
+        let source = text(source).ok_or_else(|| format!("shader '{name}' has no source"))?;
+        services.create_shader_module(stage, &source, &name)
+    }));
+    match result {
+        Ok(Ok(raw)) if !module.is_null() => {
+            // SAFETY: checked non-null; the plugin passes a writable handle.
+            unsafe { *module = raw };
+            abi::CADR_STATUS_OK
+        }
+        Ok(Ok(_)) => abi::CADR_STATUS_ERROR,
+        Ok(Err(text)) => {
+            // SAFETY: the plugin passes a valid message buffer or null.
+            unsafe { abi::CadrMessage::write(message, &text) };
+            abi::CADR_STATUS_ERROR
+        }
+        Err(_) => abi::CADR_STATUS_PANICKED,
+    }
+}
+
 impl HostServices {
     pub(crate) fn new(device: &Arc<Device>) -> Box<Self> {
         let counts = Arc::new(PluginAllocations::default());
@@ -209,6 +250,7 @@ impl HostServices {
                 user: std::ptr::null_mut(),
                 create_buffer: Some(create_buffer),
                 destroy_buffer: Some(destroy_buffer),
+                create_shader_module: Some(create_shader_module),
             },
             callbacks: vk::AllocationCallbacks::default(),
         });
@@ -274,6 +316,21 @@ impl HostServices {
             .map_err(|_| "the host's buffer table is poisoned")?
             .insert(id, buffer);
         Ok(described)
+    }
+
+    /// Compiles `source` for `stage` and creates a module the plugin owns (made with the
+    /// counting callbacks, which the plugin destroys it with).
+    fn create_shader_module(&self, stage: u32, source: &str, name: &str) -> Result<u64, String> {
+        let stage = match vk::ShaderStageFlags::from_raw(stage) {
+            vk::ShaderStageFlags::VERTEX => ShaderStage::Vertex,
+            vk::ShaderStageFlags::FRAGMENT => ShaderStage::Fragment,
+            vk::ShaderStageFlags::COMPUTE => ShaderStage::Compute,
+            other => return Err(format!("shader '{name}': unsupported stage {other:?}")),
+        };
+        let words = compile_glsl(name, source, stage, &[]).map_err(|e| e.to_string())?;
+        let module = create_unowned_shader_module(&self.device, name, &words, &self.callbacks)
+            .map_err(|e| format!("shader '{name}': {e}"))?;
+        Ok(module.as_raw())
     }
 
     fn destroy_buffer(&self, id: u64) {

@@ -4,6 +4,7 @@
 //! `Renderer::pick_techniques`).
 
 mod frame;
+mod gpu_cull;
 mod host_api;
 mod pipeline;
 mod registry;

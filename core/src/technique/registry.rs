@@ -543,9 +543,14 @@ impl PluginRegistry {
                 )));
                 continue;
             };
+            // Before ABI 1.3 the culling vtable's `record_gpu` was reserved: not read.
+            let readable = if kind == TechniqueKind::Culling && minor < 3 {
+                (vtable_size as usize).min(kind.first_vtable_size())
+            } else {
+                vtable_size as usize
+            };
             // SAFETY: the vtable's size says how many bytes the library wrote.
-            let vtable =
-                unsafe { VtableCopy::new(info.vtable, vtable_size as usize, kind.vtable_size()) };
+            let vtable = unsafe { VtableCopy::new(info.vtable, readable, kind.vtable_size()) };
             if self
                 .techniques
                 .iter()

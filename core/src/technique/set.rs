@@ -90,6 +90,9 @@ fn trait_name(bit: u64) -> &'static str {
             "a parameter path that writes values into commands"
         }
         abi::CADR_TRAIT_SECONDARY_COMMAND_BUFFERS => "secondary command buffers",
+        abi::CADR_TRAIT_DRAWS_GPU_COMMANDS => {
+            "a submission that draws the GPU-written commands (individual-indirect-count)"
+        }
         _ => "an unknown trait",
     }
 }

@@ -351,8 +351,11 @@ impl OffscreenTarget {
             "offscreen depth",
             extent,
             DEPTH_FORMAT,
-            // Read back under the cursor by the pick pass.
-            vk::ImageUsageFlags::DEPTH_STENCIL_ATTACHMENT | vk::ImageUsageFlags::TRANSFER_SRC,
+            // Read back under the cursor by the pick pass; sampled by GPU occlusion culling
+            // between the phases of a frame.
+            vk::ImageUsageFlags::DEPTH_STENCIL_ATTACHMENT
+                | vk::ImageUsageFlags::TRANSFER_SRC
+                | vk::ImageUsageFlags::SAMPLED,
             vk::ImageAspectFlags::DEPTH,
         )?;
         Ok(Self { color, depth })

@@ -34,8 +34,10 @@ pub use pipeline::{
     DescriptorSetLayout, DescriptorSets, GraphicsPipelineDesc, Pipeline, PipelineLayout,
     VertexLayout,
 };
-pub use rendering::{begin_rendering, end_rendering, RenderingTarget};
-pub use shader::{ShaderModule, ShaderStage};
+pub use rendering::{
+    begin_rendering, end_rendering, suspend_rendering, RenderingTarget, SUSPENDED_DEPTH_LAYOUT,
+};
+pub use shader::{create_unowned_shader_module, ShaderModule, ShaderStage};
 pub use swapchain::{PresentOutcome, Swapchain};
 pub use timer::GpuTimer;
 

@@ -1,5 +1,7 @@
 //! Dynamic rendering into one colour and one depth image: the layout transitions before and
-//! after, the cleared attachments, and the viewport covering the target.
+//! after, the cleared attachments, and the viewport covering the target. A pass may be
+//! suspended (the depth made readable by compute shaders) and resumed, for frames drawn in
+//! phases (GPU occlusion culling).
 
 use ash::vk;
 
@@ -16,12 +18,20 @@ pub struct RenderingTarget<'a> {
     pub depth: &'a Image,
     /// Whether the depth is stored and made readable after the pass.
     pub keep_depth: bool,
+    /// Whether the depth is stored (the pass will be suspended and its depth read).
+    pub store_depth: bool,
     /// The area rendered.
     pub extent: vk::Extent2D,
     /// Whether the pass's contents come from secondary command buffers (which set their own
     /// viewport and scissor).
     pub secondary: bool,
+    /// Whether this continues a pass that [`suspend_rendering`] suspended: both attachments
+    /// are loaded instead of cleared.
+    pub resume: bool,
 }
+
+/// The layout the depth image is in while a pass is suspended.
+pub const SUSPENDED_DEPTH_LAYOUT: vk::ImageLayout = vk::ImageLayout::DEPTH_READ_ONLY_OPTIMAL;
 
 /// Transitions the target's images for rendering and begins rendering into them.
 pub fn begin_rendering(
@@ -29,32 +39,50 @@ pub fn begin_rendering(
     command_buffer: vk::CommandBuffer,
     target: &RenderingTarget<'_>,
 ) {
+    let color_before = if target.resume {
+        (
+            vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL,
+            vk::PipelineStageFlags2::COLOR_ATTACHMENT_OUTPUT,
+            vk::AccessFlags2::COLOR_ATTACHMENT_WRITE,
+        )
+    } else {
+        (
+            vk::ImageLayout::UNDEFINED,
+            vk::PipelineStageFlags2::TOP_OF_PIPE,
+            vk::AccessFlags2::NONE,
+        )
+    };
     transition(
         device,
         command_buffer,
         target.color.raw(),
         vk::ImageAspectFlags::COLOR,
+        color_before,
+        (
+            vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL,
+            vk::PipelineStageFlags2::COLOR_ATTACHMENT_OUTPUT,
+            vk::AccessFlags2::COLOR_ATTACHMENT_WRITE | vk::AccessFlags2::COLOR_ATTACHMENT_READ,
+        ),
+    );
+    let depth_before = if target.resume {
+        (
+            SUSPENDED_DEPTH_LAYOUT,
+            vk::PipelineStageFlags2::COMPUTE_SHADER,
+            vk::AccessFlags2::SHADER_SAMPLED_READ,
+        )
+    } else {
         (
             vk::ImageLayout::UNDEFINED,
             vk::PipelineStageFlags2::TOP_OF_PIPE,
             vk::AccessFlags2::NONE,
-        ),
-        (
-            vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL,
-            vk::PipelineStageFlags2::COLOR_ATTACHMENT_OUTPUT,
-            vk::AccessFlags2::COLOR_ATTACHMENT_WRITE,
-        ),
-    );
+        )
+    };
     transition(
         device,
         command_buffer,
         target.depth.raw(),
         vk::ImageAspectFlags::DEPTH,
-        (
-            vk::ImageLayout::UNDEFINED,
-            vk::PipelineStageFlags2::TOP_OF_PIPE,
-            vk::AccessFlags2::NONE,
-        ),
+        depth_before,
         (
             vk::ImageLayout::DEPTH_ATTACHMENT_OPTIMAL,
             vk::PipelineStageFlags2::EARLY_FRAGMENT_TESTS
@@ -63,10 +91,15 @@ pub fn begin_rendering(
                 | vk::AccessFlags2::DEPTH_STENCIL_ATTACHMENT_READ,
         ),
     );
+    let load_op = if target.resume {
+        vk::AttachmentLoadOp::LOAD
+    } else {
+        vk::AttachmentLoadOp::CLEAR
+    };
     let color_attachment = [vk::RenderingAttachmentInfo::default()
         .image_view(target.color.view())
         .image_layout(vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL)
-        .load_op(vk::AttachmentLoadOp::CLEAR)
+        .load_op(load_op)
         .store_op(vk::AttachmentStoreOp::STORE)
         .clear_value(vk::ClearValue {
             color: target.clear_color,
@@ -74,8 +107,9 @@ pub fn begin_rendering(
     let depth_attachment = vk::RenderingAttachmentInfo::default()
         .image_view(target.depth.view())
         .image_layout(vk::ImageLayout::DEPTH_ATTACHMENT_OPTIMAL)
-        .load_op(vk::AttachmentLoadOp::CLEAR)
-        .store_op(if target.keep_depth {
+        .load_op(load_op)
+        // A suspended pass reads its depth, so every pass but a last unkept one stores it.
+        .store_op(if target.keep_depth || target.store_depth {
             vk::AttachmentStoreOp::STORE
         } else {
             vk::AttachmentStoreOp::DONT_CARE
@@ -118,6 +152,34 @@ pub fn begin_rendering(
             raw.cmd_set_scissor(command_buffer, 0, &[area]);
         }
     }
+}
+
+/// Suspends rendering begun by [`begin_rendering`] (with `store_depth`): ends it and makes the
+/// depth readable by compute shaders in [`SUSPENDED_DEPTH_LAYOUT`]; the colour image stays an
+/// attachment. Resume with `resume` set.
+pub fn suspend_rendering(
+    device: &Device,
+    command_buffer: vk::CommandBuffer,
+    target: &RenderingTarget<'_>,
+) {
+    // SAFETY: rendering was begun by begin_rendering on this command buffer.
+    unsafe { device.raw().cmd_end_rendering(command_buffer) };
+    transition(
+        device,
+        command_buffer,
+        target.depth.raw(),
+        vk::ImageAspectFlags::DEPTH,
+        (
+            vk::ImageLayout::DEPTH_ATTACHMENT_OPTIMAL,
+            vk::PipelineStageFlags2::LATE_FRAGMENT_TESTS,
+            vk::AccessFlags2::DEPTH_STENCIL_ATTACHMENT_WRITE,
+        ),
+        (
+            SUSPENDED_DEPTH_LAYOUT,
+            vk::PipelineStageFlags2::COMPUTE_SHADER,
+            vk::AccessFlags2::SHADER_SAMPLED_READ,
+        ),
+    );
 }
 
 /// Ends rendering begun by [`begin_rendering`] on `command_buffer` and makes the colour image

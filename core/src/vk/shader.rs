@@ -40,6 +40,22 @@ impl ShaderStage {
     }
 }
 
+/// Creates a shader module from SPIR-V `words` that the caller owns (a plugin, which destroys
+/// it with the same allocation callbacks).
+pub fn create_unowned_shader_module(
+    device: &Device,
+    name: &str,
+    words: &[u32],
+    callbacks: &vk::AllocationCallbacks<'_>,
+) -> VkResult<vk::ShaderModule> {
+    let info = vk::ShaderModuleCreateInfo::default().code(words);
+    // SAFETY: words is SPIR-V from shaderc; info and callbacks live until the call returns.
+    let raw = unsafe { device.raw.create_shader_module(&info, Some(callbacks)) }
+        .or_vk("vkCreateShaderModule")?;
+    device.set_name(raw, name);
+    Ok(raw)
+}
+
 /// A compiled shader module; destroyed on drop.
 pub struct ShaderModule {
     device: Arc<Device>,

@@ -19,9 +19,9 @@
 //! record and cull contexts) starts with its `size` in bytes (a reader ignores fields beyond the
 //! size the writer gave, and defaults fields the writer did not know); the small value records
 //! laid out in arrays or passed by value ([`CadrInstance`], [`CadrMatrix`], [`CadrMaterial`],
-//! [`CadrInstanceRecord`], [`CadrPass`], [`CadrBuffer`], [`CadrBufferRef`], [`CadrStats`],
-//! [`CadrBindState`], [`CadrDrawBase`], [`CadrVertexInput`], [`CadrMessage`]) are fixed for a
-//! major version; whoever
+//! [`CadrInstanceRecord`], [`CadrCullEntry`], [`CadrPass`], [`CadrBuffer`], [`CadrBufferRef`],
+//! [`CadrStats`], [`CadrBindState`], [`CadrDrawBase`], [`CadrGpuDraws`], [`CadrVertexInput`],
+//! [`CadrMessage`]) are fixed for a major version; whoever
 //! allocates frees (buffers a plugin asks the host for go back through the host); strings are
 //! NUL-terminated UTF-8 owned by the side that returns them, valid as long as the library
 //! (descriptions) or the instance (shader snippets); no function unwinds across the boundary
@@ -36,7 +36,7 @@ use std::ffi::{c_char, c_void};
 /// Major version of this ABI: a library built for another major version is refused.
 pub const CADR_PLUGIN_ABI_MAJOR: u32 = 1;
 /// Minor version of this ABI: additions that older readers may ignore.
-pub const CADR_PLUGIN_ABI_MINOR: u32 = 2;
+pub const CADR_PLUGIN_ABI_MINOR: u32 = 3;
 /// `(major << 16) | minor`, what [`CadrPluginVersionFn`] returns.
 pub const CADR_PLUGIN_ABI_VERSION: u32 = (CADR_PLUGIN_ABI_MAJOR << 16) | CADR_PLUGIN_ABI_MINOR;
 
@@ -112,6 +112,10 @@ pub const CADR_TRAIT_PARAMETERS_IN_COMMANDS: CadrTraitBits = 1 << 3;
 /// Submission: records into secondary command buffers; the host begins rendering with
 /// `VK_RENDERING_CONTENTS_SECONDARY_COMMAND_BUFFERS_BIT` and records nothing inline.
 pub const CADR_TRAIT_SECONDARY_COMMAND_BUFFERS: CadrTraitBits = 1 << 4;
+/// Since ABI 1.3. Submission: when the record context carries GPU-written draws
+/// ([`CadrRecordContext::gpu_draws`]), draws each pass from them with
+/// `vkCmdDrawIndexedIndirectCount` instead of its own lists. GPU culling needs it.
+pub const CADR_TRAIT_DRAWS_GPU_COMMANDS: CadrTraitBits = 1 << 5;
 
 /// A message buffer the host hands to functions that can fail: the plugin writes a
 /// NUL-terminated UTF-8 message of at most `capacity` bytes (including the NUL).
@@ -284,6 +288,21 @@ pub struct CadrHostApi {
     >,
     /// Destroys a buffer from `create_buffer` (the caller makes sure the GPU is done with it).
     pub destroy_buffer: Option<unsafe extern "C" fn(user: *mut c_void, buffer: *const CadrBuffer)>,
+    /// Since ABI 1.3 (read it only when `size` covers it): compiles GLSL `source` (NUL-terminated,
+    /// `#version 460`) for the stage `stage` (a `VkShaderStageFlagBits` value: vertex, fragment
+    /// or compute) and creates a `VkShaderModule` from it into `*module`. The plugin owns the
+    /// module and destroys it with `vkDestroyShaderModule` and the host's allocation callbacks.
+    /// `name` names the source in error messages. On failure writes the compiler's message.
+    pub create_shader_module: Option<
+        unsafe extern "C" fn(
+            user: *mut c_void,
+            stage: u32,
+            source: *const c_char,
+            name: *const c_char,
+            module: *mut u64,
+            message: *mut CadrMessage,
+        ) -> CadrStatus,
+    >,
 }
 
 /// What `create` receives. Owned by the host; the struct is valid for the call, the `vulkan`
@@ -321,6 +340,9 @@ pub const CADR_INSTANCE_HIGHLIGHTED: CadrInstanceFlags = 1 << 0;
 pub const CADR_INSTANCE_PICKABLE: CadrInstanceFlags = 1 << 1;
 /// The instance id is alive.
 pub const CADR_INSTANCE_ALIVE: CadrInstanceFlags = 1 << 2;
+/// Since ABI 1.3, set in [`CadrCullEntry::flags`] only: the instance is drawn unless culled
+/// (alive, visible in the scene tree, with triangles).
+pub const CADR_INSTANCE_CANDIDATE: CadrInstanceFlags = 1 << 3;
 
 /// One drawable part on one path of the scene tree (the unit of "individual" drawing). Index
 /// positions are absolute element offsets in the scene's index buffers; indices are relative
@@ -414,6 +436,53 @@ pub struct CadrInstanceRecord {
     pub instance: u32,
 }
 
+/// Since ABI 1.3: what a GPU culler reads per instance id from [`CadrSceneView::cull_buffer`]
+/// (48 bytes, little-endian, std430-compatible): the bounding sphere and the ranges each pass
+/// draws, so that a compute shader can test an instance and write its indirect command.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct CadrCullEntry {
+    /// The part's bounding sphere in object space: centre xyz, radius w.
+    pub sphere: [f32; 4],
+    /// First triangle index (absolute in the index buffer).
+    pub first_index: u32,
+    /// Triangle index count.
+    pub index_count: u32,
+    /// First edge index (absolute in the wire index buffer).
+    pub first_wire_index: u32,
+    /// Edge index count.
+    pub wire_index_count: u32,
+    /// The geometry's first vertex (the draw's `vertexOffset`).
+    pub vertex_base: u32,
+    /// Matrix slot.
+    pub matrix: u32,
+    /// `CADR_INSTANCE_*` bits, with [`CADR_INSTANCE_CANDIDATE`].
+    pub flags: u32,
+    /// Zero.
+    pub reserved: u32,
+}
+
+impl CadrCullEntry {
+    /// The GPU layout: 12 little-endian 32-bit words.
+    pub fn to_le_bytes(&self) -> [u8; 48] {
+        let mut bytes = [0; 48];
+        let words = self.sphere.map(f32::to_bits).into_iter().chain([
+            self.first_index,
+            self.index_count,
+            self.first_wire_index,
+            self.wire_index_count,
+            self.vertex_base,
+            self.matrix,
+            self.flags,
+            self.reserved,
+        ]);
+        for (i, word) in words.enumerate() {
+            bytes[i * 4..i * 4 + 4].copy_from_slice(&word.to_le_bytes());
+        }
+        bytes
+    }
+}
+
 /// The scene as techniques see it during one frame. Owned by the host, read-only for plugins;
 /// everything it points at stays valid and unchanged until the frame's last call (copy what
 /// must outlive the frame).
@@ -464,6 +533,8 @@ pub struct CadrSceneView {
     pub material_buffer: CadrBufferRef,
     /// [`CadrInstanceRecord`] per instance id.
     pub instance_buffer: CadrBufferRef,
+    /// Since ABI 1.3 (read it only when `size` covers it): [`CadrCullEntry`] per instance id.
+    pub cull_buffer: CadrBufferRef,
 }
 
 /// What a draw pass draws.
@@ -736,6 +807,13 @@ pub struct CadrRecordContext {
     /// instance ids into `VK_FORMAT_R32_UINT`); secondary command buffers must inherit it.
     /// Read it only when `size` covers it; 0 means [`CadrVulkan::color_format`].
     pub color_format: i32,
+    /// Since ABI 1.3 (read it only when `size` covers it): null, or `pass_count` draw sources a
+    /// GPU culler wrote for this phase of the frame, one per pass: a submission that provides
+    /// [`CADR_TRAIT_DRAWS_GPU_COMMANDS`] draws each pass from its source.
+    pub gpu_draws: *const CadrGpuDraws,
+    /// Since ABI 1.3: the phase of the frame being recorded (0 unless a GPU culler splits the
+    /// frame into phases, see [`CadrCullingVtable::phase_count`]).
+    pub phase: u32,
 }
 
 /// Submission vtable ([`CADR_KIND_SUBMISSION`]).
@@ -795,6 +873,77 @@ pub struct CadrCullOutput {
     pub changed_bits: *mut u64,
 }
 
+/// Since ABI 1.3: where the indirect commands of one pass lie, written by a GPU culler
+/// during the frame: `VkDrawIndexedIndirectCommand`s (20 bytes each, `firstInstance` the
+/// instance id) and their count (a u32). The culler owns the buffers.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct CadrGpuDraws {
+    /// `VkBuffer` of the commands (0: the pass draws nothing).
+    pub commands: u64,
+    /// Byte offset of the first command.
+    pub commands_offset: u64,
+    /// `VkBuffer` holding the count.
+    pub count_buffer: u64,
+    /// Byte offset of the count.
+    pub count_offset: u64,
+    /// The most commands the count can say (`maxDrawCount`).
+    pub max_draws: u32,
+    /// Bytes between commands (20 or more, a multiple of 4).
+    pub stride: u32,
+}
+
+/// Since ABI 1.3: what a GPU culler records with, once per phase of the frame. Owned by the
+/// host, valid for the call; the culler writes `draws`.
+///
+/// Positions are relative to the eye so that precision holds far from the origin: the GPU
+/// matrices keep their translation as an f32 high part and remainder ([`CadrMatrix`]), and a
+/// point `p` relative to the eye is `(t_high - eye_high) + (t_low - eye_low) + R * x`.
+#[repr(C)]
+#[derive(Debug)]
+pub struct CadrGpuCullContext {
+    /// Size of this struct.
+    pub size: u32,
+    /// The phase being recorded, `0..phase_count`.
+    pub phase: u32,
+    /// The primary `VkCommandBuffer`, outside rendering. The host has made the frame's scene
+    /// uploads visible to compute shaders; the culler makes its own writes visible to
+    /// `DRAW_INDIRECT` and vertex shaders with a barrier before it returns.
+    pub command_buffer: *mut c_void,
+    /// The scene (its `cull_buffer`, `instance_buffer` and `matrix_buffer` hold the data).
+    pub scene: *const CadrSceneView,
+    /// Number of passes.
+    pub pass_count: u32,
+    /// The passes the frame draws, in order (their kinds say which ranges: triangles, edges,
+    /// or pickable triangles for the pick pass).
+    pub passes: *const CadrPass,
+    /// Where the culler writes the draw source of each pass for this phase (`pass_count`
+    /// entries, zeroed by the host).
+    pub draws: *mut CadrGpuDraws,
+    /// The eye position's f32 high part (xyz, w = 0).
+    pub eye_high: [f32; 4],
+    /// The eye position's f32 remainder (xyz, w = 0).
+    pub eye_low: [f32; 4],
+    /// Frustum planes relative to the eye (xyz normal pointing inside, w distance): a point `q`
+    /// relative to the eye is inside when `dot(n, q) + w >= 0` for all six.
+    pub planes: [[f32; 4]; 6],
+    /// Projection times the view's rotation, column-major: clip coordinates of a point
+    /// relative to the eye (Vulkan depth 0..1).
+    pub view_projection: [f32; 16],
+    /// Target width in pixels.
+    pub width: u32,
+    /// Target height in pixels.
+    pub height: u32,
+    /// The frame's depth image (`VkImage`), readable in phases after the first: the host has
+    /// ended rendering, and the image is in `depth_layout` with its writes visible to compute
+    /// shaders; the culler leaves it in that layout. 0 in phase 0.
+    pub depth_image: u64,
+    /// A `VkImageView` of the depth image (depth aspect), 0 in phase 0.
+    pub depth_view: u64,
+    /// `VkImageLayout` of the depth image during the call.
+    pub depth_layout: i32,
+}
+
 /// Culling vtable ([`CADR_KIND_CULLING`]).
 #[repr(C)]
 #[derive(Debug)]
@@ -810,14 +959,25 @@ pub struct CadrCullingVtable {
             message: *mut CadrMessage,
         ) -> CadrStatus,
     >,
-    /// Reserved for GPU culling (must be null in ABI 1.0): records compute work that writes
-    /// indirect commands and counts for the submission to draw.
+    /// GPU culling (reserved and null before ABI 1.3; a culler has `cull` or this): records,
+    /// for one phase of the frame, compute work that tests the instances on the GPU and writes
+    /// each pass's indirect commands and count, and says where in `context.draws`. The host
+    /// then records the phase's rendering with the submission drawing from them.
     pub record_gpu: Option<
         unsafe extern "C" fn(
             instance: *mut c_void,
-            context: *const CadrRecordContext,
+            context: *const CadrGpuCullContext,
+            message: *mut CadrMessage,
         ) -> CadrStatus,
     >,
+    /// Since ABI 1.3: how many phases a frame has with this GPU culler (none or 0 means 1).
+    /// Between phases the host ends rendering and hands the culler the depth so far (two-phase
+    /// occlusion: draw what was visible last frame, test the rest against that depth, draw
+    /// what became visible).
+    pub phase_count: Option<unsafe extern "C" fn(instance: *mut c_void) -> u32>,
+    /// Since ABI 1.3: adds to `stats` what the GPU drew (`draws`, `primitives`) in the last
+    /// frame whose work has finished. Called by the host after waiting for a frame.
+    pub gpu_counts: Option<unsafe extern "C" fn(instance: *mut c_void, stats: *mut CadrStats)>,
 }
 
 impl CadrInstanceRecord {
@@ -846,6 +1006,8 @@ mod tests {
         assert_eq!(std::mem::size_of::<CadrMaterial>(), 32);
         assert_eq!(std::mem::size_of::<CadrInstanceRecord>(), 16);
         assert_eq!(std::mem::size_of::<CadrBindState>(), 32);
+        assert_eq!(std::mem::size_of::<CadrCullEntry>(), 48);
+        assert_eq!(std::mem::size_of::<CadrGpuDraws>(), 40);
         assert_eq!(CADR_PLUGIN_ABI_VERSION >> 16, CADR_PLUGIN_ABI_MAJOR);
     }
 

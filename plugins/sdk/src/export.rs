@@ -11,8 +11,8 @@ use ash::vk::Handle;
 use cadr_plugin_abi as abi;
 
 use crate::gpu::Gpu;
-use crate::views::{Bind, CullInput, CullOutput, Record, Scene};
-use crate::{Culling, ParameterPath, Submission, Technique, VertexPath};
+use crate::views::{Bind, CullInput, CullOutput, GpuCull, Record, Scene};
+use crate::{Culling, GpuCulling, ParameterPath, Submission, Technique, VertexPath};
 
 /// How a technique describes itself (strings NUL-terminated).
 #[derive(Clone, Copy, Debug)]
@@ -448,6 +448,54 @@ pub fn culling<T: Culling>(describe: Describe) -> abi::CadrTechniqueInfo {
             common: common::<T, abi::CadrCullingVtable>(),
             cull: Some(cull::<T>),
             record_gpu: None,
+            phase_count: None,
+            gpu_counts: None,
+        },
+    )
+}
+
+/// The technique info of a GPU culling technique (ABI 1.3).
+pub fn gpu_culling<T: GpuCulling>(describe: Describe) -> abi::CadrTechniqueInfo {
+    unsafe extern "C" fn record_gpu<T: GpuCulling>(
+        instance: *mut c_void,
+        context: *const abi::CadrGpuCullContext,
+        message: *mut abi::CadrMessage,
+    ) -> abi::CadrStatus {
+        guarded(message, || {
+            // SAFETY: the host's context for the call.
+            let cull = unsafe { GpuCull::from_raw(context) }.ok_or("no GPU cull context")?;
+            // SAFETY: see `this`.
+            unsafe { this::<T>(instance) }.record(&cull)
+        })
+    }
+    unsafe extern "C" fn phase_count<T: GpuCulling>(instance: *mut c_void) -> u32 {
+        // SAFETY: see `this`.
+        catch_unwind(AssertUnwindSafe(|| {
+            unsafe { this::<T>(instance) }.phase_count()
+        }))
+        .unwrap_or(1)
+    }
+    unsafe extern "C" fn gpu_counts<T: GpuCulling>(
+        instance: *mut c_void,
+        stats: *mut abi::CadrStats,
+    ) {
+        // SAFETY: see `this`.
+        let counts = catch_unwind(AssertUnwindSafe(|| unsafe { this::<T>(instance) }.counts()));
+        // SAFETY: the host passes its counters or null.
+        if let (Ok(counts), Some(stats)) = (counts, unsafe { stats.as_mut() }) {
+            stats.draws += counts.draws;
+            stats.primitives += counts.primitives;
+        }
+    }
+    info(
+        abi::CADR_KIND_CULLING,
+        describe,
+        abi::CadrCullingVtable {
+            common: common::<T, abi::CadrCullingVtable>(),
+            cull: None,
+            record_gpu: Some(record_gpu::<T>),
+            phase_count: Some(phase_count::<T>),
+            gpu_counts: Some(gpu_counts::<T>),
         },
     )
 }

@@ -133,6 +133,45 @@ impl Gpu {
     }
 }
 
+impl Gpu {
+    /// Asks the host (ABI 1.3) to compile GLSL `source` for `stage` into a shader module that
+    /// the caller owns: destroy it with `device.destroy_shader_module(module, gpu.allocator())`.
+    pub fn create_shader_module(
+        &self,
+        name: &str,
+        stage: vk::ShaderStageFlags,
+        source: &str,
+    ) -> Result<vk::ShaderModule, String> {
+        // SAFETY: the host API outlives the instance.
+        let host = unsafe { self.host.as_ref() }.ok_or("the host passed no services")?;
+        let end = std::mem::offset_of!(abi::CadrHostApi, create_shader_module)
+            + std::mem::size_of::<usize>();
+        let create = host
+            .create_shader_module
+            .filter(|_| host.size as usize >= end)
+            .ok_or("the host cannot compile shaders (it speaks plugin ABI 1.2 or older)")?;
+        let name_c = CString::new(name).map_err(|_| format!("shader name '{name}' holds a NUL"))?;
+        let source = CString::new(source).map_err(|_| format!("shader '{name}' holds a NUL"))?;
+        let mut module = 0u64;
+        let mut message = MessageBuffer::new();
+        // SAFETY: every pointer is valid for the call.
+        let status = unsafe {
+            create(
+                host.user,
+                stage.as_raw(),
+                source.as_ptr(),
+                name_c.as_ptr(),
+                &mut module,
+                message.as_abi(),
+            )
+        };
+        if status != abi::CADR_STATUS_OK {
+            return Err(message.text());
+        }
+        Ok(vk::ShaderModule::from_raw(module))
+    }
+}
+
 /// A buffer the host allocated for a plugin; given back on drop (the owner makes sure the GPU
 /// is done with it).
 pub struct HostBuffer {
@@ -191,6 +230,32 @@ impl HostBuffer {
             )
         };
         Ok(())
+    }
+}
+
+impl HostBuffer {
+    /// Reads `length` bytes at byte `offset` of a host-visible buffer (host-coherent memory:
+    /// after the GPU work that wrote them has finished and been made visible to the host).
+    pub fn read(&self, offset: u64, length: usize) -> Result<Vec<u8>, String> {
+        if self.raw.mapped.is_null() {
+            return Err("the buffer is not host-visible".into());
+        }
+        if offset + length as u64 > self.raw.size_bytes {
+            return Err(format!(
+                "reading {length} bytes at {offset} overruns a {}-byte buffer",
+                self.raw.size_bytes
+            ));
+        }
+        let mut bytes = vec![0u8; length];
+        // SAFETY: the range lies inside the mapping (checked above).
+        unsafe {
+            std::ptr::copy_nonoverlapping(
+                self.raw.mapped.cast::<u8>().add(offset as usize),
+                bytes.as_mut_ptr(),
+                length,
+            )
+        };
+        Ok(bytes)
     }
 }
 

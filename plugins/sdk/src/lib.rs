@@ -1,7 +1,7 @@
 //! The SDK for writing cadr technique plugins in Rust.
 //!
 //! Implement [`Technique`] and one kind trait ([`VertexPath`], [`ParameterPath`],
-//! [`Submission`], [`Culling`]) per technique, then list them in [`technique_library!`], which
+//! [`Submission`], [`Culling`] or [`GpuCulling`]) per technique, then list them in [`technique_library!`], which
 //! generates the `extern "C"` shims (each catching panics) that the host calls, and export the
 //! library from a dynamic library with [`export_plugin!`] (the two symbols the host looks for).
 //! A library that is not exported can be linked into a host statically: cadr's built-in
@@ -17,7 +17,7 @@ pub use ash;
 pub use ash::vk;
 pub use cadr_plugin_abi as abi;
 pub use gpu::{Gpu, HostBuffer};
-pub use views::{buffer, Bind, CullInput, CullOutput, Path, Record, Scene};
+pub use views::{buffer, Bind, CullInput, CullOutput, GpuCull, Path, Record, Scene};
 
 use std::ffi::CStr;
 use std::sync::Arc;
@@ -103,6 +103,23 @@ pub trait Culling: Technique {
     fn cull(&mut self, input: &CullInput<'_>, output: &mut CullOutput<'_>) -> Result<(), String>;
 }
 
+/// Culling on the GPU (since ABI 1.3): compute work recorded into the frame that tests the
+/// instances and writes each pass's indirect commands and count, which a submission providing
+/// `CADR_TRAIT_DRAWS_GPU_COMMANDS` draws. Listed as kind `gpu_culling`.
+pub trait GpuCulling: Technique {
+    /// Phases of a frame (between them the host ends rendering and hands over the depth).
+    fn phase_count(&self) -> u32 {
+        1
+    }
+    /// Records phase `cull.phase()`: tests, writes the commands, sets each pass's draws.
+    fn record(&mut self, cull: &GpuCull<'_>) -> Result<(), String>;
+    /// What the GPU drew in the last finished frame: `draws` (commands, all passes) and
+    /// `primitives` (triangles of the triangle and pick passes).
+    fn counts(&self) -> abi::CadrStats {
+        abi::CadrStats::default()
+    }
+}
+
 /// Defines a technique library: a Rust function `$entry` with the signature of
 /// `cadr_plugin_entry` that describes the listed techniques. Nothing is exported, so several
 /// libraries can be linked into one binary (the host's built-in techniques are one); hand the
@@ -120,7 +137,7 @@ pub trait Culling: Technique {
 ///     ]
 /// }
 /// ```
-/// Kinds: `vertex`, `parameters`, `submission`, `culling`.
+/// Kinds: `vertex`, `parameters`, `submission`, `culling`, `gpu_culling`.
 #[macro_export]
 macro_rules! technique_library {
     (

@@ -262,6 +262,26 @@ impl<'a> Record<'a> {
             .then(|| vk::Format::from_raw(self.raw.color_format))
     }
 
+    /// Since ABI 1.3: the draw sources a GPU culler wrote for this phase, one per pass, or
+    /// `None` when the submission draws its own lists.
+    pub fn gpu_draws(&self) -> Option<&'a [abi::CadrGpuDraws]> {
+        let end = std::mem::offset_of!(abi::CadrRecordContext, phase) + 4;
+        if (self.raw.size as usize) < end || self.raw.gpu_draws.is_null() {
+            return None;
+        }
+        Some(slice(self.raw.gpu_draws, self.raw.pass_count as usize))
+    }
+
+    /// Since ABI 1.3: the phase of the frame being recorded (0 for older hosts).
+    pub fn phase(&self) -> u32 {
+        let end = std::mem::offset_of!(abi::CadrRecordContext, phase) + 4;
+        if (self.raw.size as usize) < end {
+            0
+        } else {
+            self.raw.phase
+        }
+    }
+
     /// Target size.
     pub fn extent(&self) -> vk::Extent2D {
         vk::Extent2D {
@@ -401,5 +421,56 @@ impl<'a> CullOutput<'a> {
                 changed_bits: std::slice::from_raw_parts_mut(raw.changed_bits, words),
             }
         })
+    }
+}
+
+/// What a GPU culler records with, for one phase of the frame (since ABI 1.3).
+#[derive(Debug)]
+pub struct GpuCull<'a> {
+    raw: &'a abi::CadrGpuCullContext,
+}
+
+impl<'a> GpuCull<'a> {
+    /// Wraps the host's context.
+    ///
+    /// # Safety
+    /// `raw` is null or a valid context for the call, its `draws` writable.
+    pub unsafe fn from_raw(raw: *const abi::CadrGpuCullContext) -> Option<Self> {
+        // SAFETY: per the contract.
+        unsafe { raw.as_ref() }.map(|raw| Self { raw })
+    }
+
+    /// The raw context: eye, planes, view-projection, target size and depth.
+    pub fn raw(&self) -> &'a abi::CadrGpuCullContext {
+        self.raw
+    }
+
+    /// The phase being recorded.
+    pub fn phase(&self) -> u32 {
+        self.raw.phase
+    }
+
+    /// The primary command buffer, outside rendering.
+    pub fn command_buffer(&self) -> vk::CommandBuffer {
+        vk::CommandBuffer::from_raw(self.raw.command_buffer as u64)
+    }
+
+    /// The scene.
+    pub fn scene(&self) -> Option<Scene<'a>> {
+        // SAFETY: the host's view for the call.
+        unsafe { Scene::from_raw(self.raw.scene) }
+    }
+
+    /// The passes the frame draws.
+    pub fn passes(&self) -> &'a [abi::CadrPass] {
+        slice(self.raw.passes, self.raw.pass_count as usize)
+    }
+
+    /// Says where pass `index`'s commands and count lie for this phase.
+    pub fn set_draws(&self, index: usize, draws: abi::CadrGpuDraws) {
+        if index < self.raw.pass_count as usize && !self.raw.draws.is_null() {
+            // SAFETY: the host gives `pass_count` writable entries for the call.
+            unsafe { *self.raw.draws.add(index) = draws };
+        }
     }
 }

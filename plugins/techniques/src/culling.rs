@@ -3,11 +3,12 @@
 //! - `none`: every candidate is drawn;
 //! - `frustum`: each part's bounding sphere, placed by its f64 world matrix, is tested against
 //!   the view frustum on worker threads; the result and its XOR with the last frame's bits go
-//!   back, so the host applies only what changed (seed 000's visibility deltas).
+//!   back, so the host applies only what changed (seed 000's visibility deltas);
+//! - `gpu-frustum`, `gpu-occlusion`: culling on the GPU ([`crate::gpu_culling`]).
 
 use std::sync::Arc;
 
-use cadr_plugin_sdk::abi::CadrInstance;
+use cadr_plugin_sdk::abi::{self, CadrInstance};
 use cadr_plugin_sdk::{technique_library, CullInput, CullOutput, Culling, Gpu, Technique};
 
 /// Writes `visible` bits and their XOR with the previous bits (in `output.visible_bits`).
@@ -145,5 +146,25 @@ technique_library! {
             description: "CPU frustum culling of part bounding spheres on worker threads; only changed visibility bits are applied.",
             features: 0, provides: 0, needs: 0,
         },
+        gpu_culling crate::gpu_culling::GpuFrustum {
+            name: "gpu-frustum",
+            description: "GPU frustum culling: a compute shader tests every part's sphere and writes the indirect draws and their count; the CPU does nothing per part, moving or not.",
+            features: GPU_CULLING_FEATURES, provides: 0, needs: GPU_CULLING_NEEDS,
+        },
+        gpu_culling crate::gpu_culling::GpuOcclusion {
+            name: "gpu-occlusion",
+            description: "GPU frustum and two-phase occlusion culling: draws what was visible last frame, tests the rest against a depth pyramid of it, draws what became visible in the same frame.",
+            features: GPU_CULLING_FEATURES, provides: 0, needs: GPU_CULLING_NEEDS,
+        },
     ]
 }
+
+/// What GPU culling needs of the device: indirect draws with a count and `firstInstance`.
+const GPU_CULLING_FEATURES: u64 = abi::CADR_FEATURE_MULTI_DRAW_INDIRECT
+    | abi::CADR_FEATURE_DRAW_INDIRECT_FIRST_INSTANCE
+    | abi::CADR_FEATURE_DRAW_INDIRECT_COUNT;
+/// What GPU culling needs of its partners: a submission that draws its commands, absolute
+/// ranges in one scene-wide binding, and parameters found from the instance index.
+const GPU_CULLING_NEEDS: u64 = abi::CADR_TRAIT_DRAWS_GPU_COMMANDS
+    | abi::CADR_TRAIT_SCENE_SHARES_BINDING
+    | abi::CADR_TRAIT_PARAMETERS_FROM_INSTANCE_INDEX;

@@ -6,6 +6,7 @@
 
 pub mod builtin;
 pub mod culling;
+pub mod gpu_culling;
 pub mod parameters;
 pub mod submission;
 pub mod vertex;

@@ -213,6 +213,10 @@ impl<const S: u8, const A: u8, const M: u8> Submit<S, A, M> {
 
 impl<const S: u8, const A: u8, const M: u8> Submission for Submit<S, A, M> {
     fn prepare(&mut self, record: &Record<'_>) -> Result<(), String> {
+        if record.gpu_draws().is_some() {
+            // A GPU culler writes this frame's draws: no lists to keep.
+            return Ok(());
+        }
         let changed = self.refresh_lists(record);
         if changed && matches!(api(A), Api::Indirect | Api::IndirectCount) {
             self.write_indirect(record)?;
@@ -221,6 +225,13 @@ impl<const S: u8, const A: u8, const M: u8> Submission for Submit<S, A, M> {
     }
 
     fn record(&mut self, record: &Record<'_>) -> Result<(), String> {
+        if let Some(draws) = record.gpu_draws() {
+            if api(A) != Api::IndirectCount || mode(M) != Mode::Inline {
+                return Err("this submission cannot draw GPU-written commands".into());
+            }
+            record::record_gpu_draws(&self.gpu, record, draws);
+            return Ok(());
+        }
         // A host that skipped prepare still gets the right lists.
         if self.refresh_lists(record) && matches!(api(A), Api::Indirect | Api::IndirectCount) {
             return Err("the draws changed after prepare".into());
@@ -343,8 +354,8 @@ technique_library! {
         },
         submission Submit<INDIVIDUAL, INDIRECT_COUNT, INLINE> {
             name: "individual-indirect-count",
-            description: "Indirect commands with the count read from a buffer (where GPU culling will write it).",
-            features: COUNT_FEATURES, provides: 0, needs: GPU_DRAWS,
+            description: "Indirect commands with the count read from a buffer; with a gpu- culler, one vkCmdDrawIndexedIndirectCount per pass of the commands the GPU wrote.",
+            features: COUNT_FEATURES, provides: abi::CADR_TRAIT_DRAWS_GPU_COMMANDS, needs: GPU_DRAWS,
         },
         submission Submit<JOIN, INDIRECT_COUNT, INLINE> {
             name: "join-indirect-count",

@@ -1,0 +1,149 @@
+//! The host side of GPU culling (plugin ABI 1.3): a culler whose vtable has `record_gpu`
+//! records compute work into the frame that writes each pass's indirect commands and count;
+//! the submission draws from them. The CPU does no per-instance work: a moving camera costs
+//! what a still one does.
+
+use std::ffi::c_void;
+
+use crate::error::RenderResult;
+use crate::vk::raw::{self as vk, Handle};
+use cadr_plugin_abi as abi;
+
+use super::registry::TechniqueKind;
+use super::set::{status, Active, Message, Techniques};
+use crate::gpu_scene::split_f64;
+use crate::render::Camera;
+
+/// The active GPU culler of a frame and the draw sources it wrote for the current phase.
+pub(crate) struct GpuCuller<'a> {
+    active: &'a Active,
+    record_gpu: unsafe extern "C" fn(
+        *mut c_void,
+        *const abi::CadrGpuCullContext,
+        *mut abi::CadrMessage,
+    ) -> abi::CadrStatus,
+    /// Phases of the frame (at least 1).
+    pub(crate) phases: u32,
+    /// Per pass, where this phase's commands lie (zeroed before each phase).
+    pub(crate) draws: Vec<abi::CadrGpuDraws>,
+}
+
+/// What the culler needs of the view: the eye, the planes and the projection relative to it.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct EyeRelativeView {
+    eye_high: [f32; 4],
+    eye_low: [f32; 4],
+    planes: [[f32; 4]; 6],
+    view_projection: [f32; 16],
+}
+
+impl EyeRelativeView {
+    /// The camera's frustum planes and projection for points given relative to the eye: the
+    /// plane `n·p + d` becomes `n·q + (d + n·eye)` for `q = p - eye`, computed in f64.
+    pub(crate) fn new(camera: &Camera) -> Self {
+        let eye = camera.view.inverse().w_axis.truncate();
+        let (high, low) = split_f64(eye);
+        let planes = super::frame::frustum_planes(camera).map(|[x, y, z, d]| {
+            let shifted = d + x * eye.x + y * eye.y + z * eye.z;
+            [x as f32, y as f32, z as f32, shifted as f32]
+        });
+        let mut rotation = camera.view;
+        rotation.w_axis = glam::DVec4::W;
+        let view_projection = (camera.projection * rotation).as_mat4().to_cols_array();
+        Self {
+            eye_high: [high[0], high[1], high[2], 0.0],
+            eye_low: [low[0], low[1], low[2], 0.0],
+            planes,
+            view_projection,
+        }
+    }
+}
+
+/// The frame's depth as a later phase reads it.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct PhaseDepth {
+    pub(crate) image: vk::Image,
+    pub(crate) view: vk::ImageView,
+    pub(crate) layout: vk::ImageLayout,
+}
+
+impl<'a> GpuCuller<'a> {
+    /// The active culler if it culls on the GPU (a library of ABI 1.3 or later with
+    /// `record_gpu`), with room for `pass_count` draw sources.
+    pub(crate) fn of(techniques: &'a Techniques, pass_count: usize) -> RenderResult<Option<Self>> {
+        let active = techniques.get(TechniqueKind::Culling)?;
+        let vtable = active.vtable::<abi::CadrCullingVtable>();
+        let Some(record_gpu) = vtable.record_gpu else {
+            return Ok(None);
+        };
+        // SAFETY: a live instance of this vtable.
+        let phases = vtable
+            .phase_count
+            .map_or(1, |count| unsafe { count(active.instance) })
+            .max(1);
+        Ok(Some(Self {
+            active,
+            record_gpu,
+            phases,
+            draws: vec![abi::CadrGpuDraws::default(); pass_count],
+        }))
+    }
+
+    /// Whether the active culler culls on the GPU.
+    pub(crate) fn is_active(techniques: &Techniques) -> bool {
+        techniques.get(TechniqueKind::Culling).is_ok_and(|active| {
+            active
+                .vtable::<abi::CadrCullingVtable>()
+                .record_gpu
+                .is_some()
+        })
+    }
+
+    /// Records `phase` of the culling into `command_buffer` (outside rendering).
+    #[allow(clippy::too_many_arguments)]
+    pub(crate) fn record(
+        &mut self,
+        phase: u32,
+        command_buffer: vk::CommandBuffer,
+        scene: &abi::CadrSceneView,
+        passes: &[abi::CadrPass],
+        view: &EyeRelativeView,
+        (width, height): (u32, u32),
+        depth: Option<PhaseDepth>,
+    ) -> RenderResult<()> {
+        self.draws.fill(abi::CadrGpuDraws::default());
+        let context = abi::CadrGpuCullContext {
+            size: std::mem::size_of::<abi::CadrGpuCullContext>() as u32,
+            phase,
+            command_buffer: command_buffer.as_raw() as *mut c_void,
+            scene,
+            pass_count: passes.len() as u32,
+            passes: passes.as_ptr(),
+            draws: self.draws.as_mut_ptr(),
+            eye_high: view.eye_high,
+            eye_low: view.eye_low,
+            planes: view.planes,
+            view_projection: view.view_projection,
+            width,
+            height,
+            depth_image: depth.map_or(0, |d| d.image.as_raw()),
+            depth_view: depth.map_or(0, |d| d.view.as_raw()),
+            depth_layout: depth.map_or(0, |d| d.layout.as_raw()),
+        };
+        let mut message = Message::new();
+        // SAFETY: a live instance; the context and the arrays it points at are valid for the
+        // call, `draws` holds `pass_count` writable entries.
+        let result = unsafe { (self.record_gpu)(self.active.instance, &context, message.raw()) };
+        status(&self.active.entry, "record_gpu", result, &message)
+    }
+
+    /// What the GPU drew in the last finished frame (draws and triangles).
+    pub(crate) fn counts(&self) -> abi::CadrStats {
+        let mut stats = abi::CadrStats::default();
+        if let Some(counts) = self.active.vtable::<abi::CadrCullingVtable>().gpu_counts {
+            // SAFETY: a live instance; `stats` is writable for the call.
+            unsafe { counts(self.active.instance, &mut stats) };
+        }
+        stats
+    }
+}

@@ -1,0 +1,181 @@
+#version 460
+// GPU culling (gpu-frustum, gpu-occlusion): one invocation per instance id tests the part's
+// bounding sphere, placed by its GPU matrix relative to the eye, against the frustum and, for
+// occlusion, against the depth pyramid of what was drawn first; a part that passes gets an
+// indirect command appended for this pass, and the count goes where
+// vkCmdDrawIndexedIndirectCount reads it.
+layout(local_size_x = 64) in;
+
+const uint PASS_EDGES = 1u;
+const uint PASS_PICK = 2u;
+const uint INSTANCE_PICKABLE = 2u;
+const uint INSTANCE_CANDIDATE = 8u;
+
+// What this dispatch does.
+const uint MODE_FRUSTUM = 0u;          // frustum only
+const uint MODE_LAST_VISIBLE = 1u;     // occlusion phase 0: what was visible last frame
+const uint MODE_NEWLY_VISIBLE = 2u;    // occlusion phase 1: test the pyramid, draw what is new
+
+struct CullEntry {
+    vec4 sphere;
+    uint first_index;
+    uint index_count;
+    uint first_wire_index;
+    uint wire_index_count;
+    uint vertex_base;
+    uint matrix;
+    uint flags;
+    uint reserved;
+};
+
+struct Matrix {
+    vec4 columns[4];
+};
+
+layout(set = 0, binding = 0, std430) readonly buffer Entries { CullEntry entries[]; };
+layout(set = 0, binding = 1, std430) readonly buffer Matrices { Matrix matrices[]; };
+layout(set = 0, binding = 2, std430) writeonly buffer Commands { uint commands[]; };
+// [0..8): commands per pass slot; [8]: commands in all; [9]: triangles drawn.
+layout(set = 0, binding = 3, std430) buffer Counts { uint counts[]; };
+layout(set = 0, binding = 4, std140) uniform View {
+    vec4 eye_high;
+    vec4 eye_low;
+    vec4 planes[6];
+    mat4 view_projection;
+    // x, y: the depth image's size; z: pyramid levels; w: unused.
+    uvec4 pyramid;
+} view;
+// One bit per instance id: visible at the end of the last frame (read) and of this one
+// (written by the first pass of phase 1).
+layout(set = 0, binding = 5, std430) readonly buffer LastVisible { uint last_visible[]; };
+layout(set = 0, binding = 6, std430) buffer NowVisible { uint now_visible[]; };
+// The depth pyramid (see hiz.comp): level k holds the farthest depth of 2^(k+1) × 2^(k+1)
+// depth texels, the levels one after the other.
+layout(set = 0, binding = 7, std430) readonly buffer Pyramid { float pyramid[]; };
+
+layout(push_constant) uniform Dispatch {
+    uint instance_count;
+    uint pass_kind;
+    uint pass_slot;
+    uint first_command;
+    uint mode;
+    uint writes_visibility;
+} dispatch;
+
+bool in_frustum(vec3 center, float radius) {
+    for (int i = 0; i < 6; ++i) {
+        if (dot(view.planes[i].xyz, center) + view.planes[i].w < -radius) {
+            return false;
+        }
+    }
+    return true;
+}
+
+// Whether the sphere may be visible over the depth drawn so far (conservative: the nearest
+// depth of its box against the farthest depth of the pyramid texels under its screen rect).
+bool passes_pyramid(vec3 center, float radius) {
+    vec2 lo = vec2(1.0);
+    vec2 hi = vec2(-1.0);
+    float nearest = 1.0;
+    for (int corner = 0; corner < 8; ++corner) {
+        vec3 offset = vec3((corner & 1) != 0 ? radius : -radius,
+                           (corner & 2) != 0 ? radius : -radius,
+                           (corner & 4) != 0 ? radius : -radius);
+        vec4 clip = view.view_projection * vec4(center + offset, 1.0);
+        if (clip.w <= 1e-6) {
+            return true; // reaches behind the eye: cannot be judged
+        }
+        vec3 ndc = clip.xyz / clip.w;
+        lo = min(lo, ndc.xy);
+        hi = max(hi, ndc.xy);
+        nearest = min(nearest, ndc.z);
+    }
+    lo = clamp(lo, vec2(-1.0), vec2(1.0));
+    hi = clamp(hi, vec2(-1.0), vec2(1.0));
+    if (nearest <= 0.0) {
+        return true;
+    }
+    vec2 size = vec2(view.pyramid.xy);
+    vec2 texel_lo = (lo * 0.5 + 0.5) * size;
+    vec2 texel_hi = (hi * 0.5 + 0.5) * size;
+    vec2 extent = max(texel_hi - texel_lo, vec2(1.0));
+    uint levels = max(view.pyramid.z, 1u);
+    // The level where the rect spans at most 3 texels per axis: fine enough that a part
+    // hidden near a silhouette is still found hidden.
+    uint level = uint(clamp(ceil(log2(max(extent.x, extent.y))) - 2.0, 0.0, float(levels - 1u)));
+    // Where the level starts and how wide it is.
+    uvec2 dims = (view.pyramid.xy + 1u) / 2u;
+    uint offset = 0u;
+    for (uint k = 0u; k < level; ++k) {
+        offset += dims.x * dims.y;
+        dims = max((dims + 1u) / 2u, uvec2(1u));
+    }
+    float scale = exp2(-float(level + 1u));
+    uvec2 a = uvec2(clamp(ivec2(floor(texel_lo * scale)), ivec2(0), ivec2(dims) - 1));
+    uvec2 b = uvec2(clamp(ivec2(floor(texel_hi * scale)), ivec2(0), ivec2(dims) - 1));
+    b = min(b, a + 3u);
+    float farthest = 0.0;
+    for (uint y = a.y; y <= b.y; ++y) {
+        for (uint x = a.x; x <= b.x; ++x) {
+            farthest = max(farthest, pyramid[offset + y * dims.x + x]);
+        }
+    }
+    return nearest <= farthest;
+}
+
+bool bit(uint id) {
+    return (last_visible[id >> 5] >> (id & 31u) & 1u) != 0u;
+}
+
+void main() {
+    uint id = gl_GlobalInvocationID.x;
+    if (id >= dispatch.instance_count) {
+        return;
+    }
+    CullEntry entry = entries[id];
+    if ((entry.flags & INSTANCE_CANDIDATE) == 0u) {
+        return;
+    }
+    if (dispatch.pass_kind == PASS_PICK && (entry.flags & INSTANCE_PICKABLE) == 0u) {
+        return;
+    }
+    Matrix m = matrices[entry.matrix];
+    mat3 rotation = mat3(m.columns[0].xyz, m.columns[1].xyz, m.columns[2].xyz);
+    vec3 low = vec3(m.columns[0].w, m.columns[1].w, m.columns[2].w);
+    vec3 center = (m.columns[3].xyz - view.eye_high.xyz) + (low - view.eye_low.xyz)
+        + rotation * entry.sphere.xyz;
+    float scale = max(length(rotation[0]), max(length(rotation[1]), length(rotation[2])));
+    float radius = entry.sphere.w * scale;
+
+    bool visible = in_frustum(center, radius);
+    bool draw = visible;
+    if (dispatch.mode == MODE_LAST_VISIBLE) {
+        draw = visible && bit(id);
+    } else if (dispatch.mode == MODE_NEWLY_VISIBLE) {
+        visible = visible && passes_pyramid(center, radius);
+        draw = visible && !bit(id);
+        if (dispatch.writes_visibility != 0u && visible) {
+            atomicOr(now_visible[id >> 5], 1u << (id & 31u));
+        }
+    }
+    uint first = entry.first_index;
+    uint count = entry.index_count;
+    if (dispatch.pass_kind == PASS_EDGES) {
+        first = entry.first_wire_index;
+        count = entry.wire_index_count;
+    }
+    if (!draw || count == 0u) {
+        return;
+    }
+    uint slot = atomicAdd(counts[dispatch.pass_slot], 1u);
+    uint base = (dispatch.first_command + slot) * 5u;
+    commands[base] = count;
+    commands[base + 1u] = 1u;
+    commands[base + 2u] = first;
+    commands[base + 3u] = entry.vertex_base;
+    commands[base + 4u] = id;
+    atomicAdd(counts[8], 1u);
+    if (dispatch.pass_kind != PASS_EDGES) {
+        atomicAdd(counts[9], count / 3u);
+    }
+}

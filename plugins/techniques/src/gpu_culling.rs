@@ -1,0 +1,814 @@
+//! GPU culling (plugin ABI 1.3; seeds 002 and 004): the frame's draws are decided by compute
+//! shaders on the GPU scene's own buffers, so a moving camera costs the CPU what a still one
+//! does.
+//!
+//! - `gpu-frustum`: per instance, the bounding sphere placed by its GPU matrix (relative to
+//!   the eye, so precision holds far from the origin) against the frustum; the survivors'
+//!   indirect commands are appended and counted per pass (`shaders/gpu_cull.comp`).
+//! - `gpu-occlusion`: the seeds' temporal two-phase occlusion. Phase 0 draws what was visible
+//!   at the end of the last frame (and is in the frustum); between the phases a depth pyramid
+//!   is built from that depth (`shaders/hiz.comp`); phase 1 tests every instance against it,
+//!   draws what became visible, and keeps the visibility for the next frame. A part that
+//!   comes into view is drawn in the frame it does.
+//!
+//! The submission draws the commands with `vkCmdDrawIndexedIndirectCount` (a submission
+//! providing `CADR_TRAIT_DRAWS_GPU_COMMANDS`); commands use absolute ranges and `firstInstance`
+//! = instance id, so the vertex path must bind the whole scene once and the parameter path
+//! find parameters from the instance index.
+
+use std::sync::Arc;
+
+use cadr_plugin_sdk::abi;
+use cadr_plugin_sdk::vk::{self, Handle};
+use cadr_plugin_sdk::{buffer, Gpu, GpuCull, GpuCulling, HostBuffer, Technique};
+
+/// Words of the counts buffer: commands per (phase, pass) slot, then commands in all and
+/// triangles drawn.
+const COUNT_WORDS: usize = 10;
+const TOTAL_COMMANDS: usize = 8;
+const TOTAL_TRIANGLES: usize = 9;
+/// Passes per phase the counts have room for.
+const PASSES_PER_PHASE: usize = 4;
+/// Bytes of one `VkDrawIndexedIndirectCommand`.
+const COMMAND_BYTES: u64 = 20;
+
+const MODE_FRUSTUM: u32 = 0;
+const MODE_LAST_VISIBLE: u32 = 1;
+const MODE_NEWLY_VISIBLE: u32 = 2;
+
+/// The view uniform of `gpu_cull.comp` (std140).
+#[repr(C)]
+#[derive(Clone, Copy)]
+struct ViewUniform {
+    eye_high: [f32; 4],
+    eye_low: [f32; 4],
+    planes: [[f32; 4]; 6],
+    view_projection: [f32; 16],
+    pyramid: [u32; 4],
+}
+
+impl ViewUniform {
+    fn bytes(&self) -> Vec<u8> {
+        let floats = self
+            .eye_high
+            .iter()
+            .chain(&self.eye_low)
+            .chain(self.planes.iter().flatten())
+            .chain(&self.view_projection);
+        floats
+            .flat_map(|f| f.to_le_bytes())
+            .chain(self.pyramid.iter().flat_map(|u| u.to_le_bytes()))
+            .collect()
+    }
+}
+
+/// Push constants of one cull dispatch.
+#[derive(Clone, Copy)]
+struct CullDispatch {
+    instance_count: u32,
+    pass_kind: u32,
+    pass_slot: u32,
+    first_command: u32,
+    mode: u32,
+    writes_visibility: u32,
+}
+
+/// Push constants of one pyramid level.
+#[derive(Clone, Copy)]
+struct PyramidLevel {
+    source_size: [u32; 2],
+    size: [u32; 2],
+    source_offset: u32,
+    offset: u32,
+    from_depth: u32,
+}
+
+fn words(values: &[u32]) -> Vec<u8> {
+    values.iter().flat_map(|v| v.to_le_bytes()).collect()
+}
+
+/// The sizes of the pyramid's levels for a `width` × `height` depth image.
+fn pyramid_levels(width: u32, height: u32) -> Vec<[u32; 2]> {
+    let mut size = [width.div_ceil(2).max(1), height.div_ceil(2).max(1)];
+    let mut levels = vec![size];
+    while size != [1, 1] {
+        size = [size[0].div_ceil(2).max(1), size[1].div_ceil(2).max(1)];
+        levels.push(size);
+    }
+    levels
+}
+
+/// The Vulkan objects a culler owns, destroyed on drop (null ones skipped), so that a
+/// creation failing half-way leaks nothing.
+struct Objects {
+    gpu: Arc<Gpu>,
+    cull_set_layout: vk::DescriptorSetLayout,
+    cull_layout: vk::PipelineLayout,
+    cull_pipeline: vk::Pipeline,
+    pyramid_set_layout: vk::DescriptorSetLayout,
+    pyramid_layout: vk::PipelineLayout,
+    pyramid_pipeline: vk::Pipeline,
+    sampler: vk::Sampler,
+    pool: vk::DescriptorPool,
+    /// One cull set per parity of the visibility buffers (which is last, which is now).
+    cull_sets: [vk::DescriptorSet; 2],
+    pyramid_set: vk::DescriptorSet,
+}
+
+impl Drop for Objects {
+    fn drop(&mut self) {
+        let (device, allocator) = (&self.gpu.device, self.gpu.allocator());
+        // SAFETY: the host destroys instances after the GPU is done with them; each object
+        // was created on this device with these callbacks and is destroyed once.
+        unsafe {
+            device.destroy_pipeline(self.cull_pipeline, allocator);
+            device.destroy_pipeline(self.pyramid_pipeline, allocator);
+            device.destroy_pipeline_layout(self.cull_layout, allocator);
+            device.destroy_pipeline_layout(self.pyramid_layout, allocator);
+            device.destroy_descriptor_set_layout(self.cull_set_layout, allocator);
+            device.destroy_descriptor_set_layout(self.pyramid_set_layout, allocator);
+            device.destroy_descriptor_pool(self.pool, allocator);
+            device.destroy_sampler(self.sampler, allocator);
+        }
+    }
+}
+
+impl Objects {
+    fn set_layout(
+        &self,
+        bindings: &[(vk::DescriptorType, u32)],
+    ) -> Result<vk::DescriptorSetLayout, String> {
+        let bindings: Vec<_> = bindings
+            .iter()
+            .enumerate()
+            .map(|(i, &(ty, _))| {
+                vk::DescriptorSetLayoutBinding::default()
+                    .binding(i as u32)
+                    .descriptor_type(ty)
+                    .descriptor_count(1)
+                    .stage_flags(vk::ShaderStageFlags::COMPUTE)
+            })
+            .collect();
+        let info = vk::DescriptorSetLayoutCreateInfo::default().bindings(&bindings);
+        // SAFETY: the info lives for the call.
+        unsafe {
+            self.gpu
+                .device
+                .create_descriptor_set_layout(&info, self.gpu.allocator())
+        }
+        .map_err(|e| format!("vkCreateDescriptorSetLayout: {e}"))
+    }
+
+    /// A compute pipeline from GLSL `source` with one set and `push_bytes` of push constants.
+    fn pipeline(
+        &self,
+        name: &str,
+        source: &str,
+        set_layout: vk::DescriptorSetLayout,
+        push_bytes: u32,
+    ) -> Result<(vk::PipelineLayout, vk::Pipeline), String> {
+        let (device, allocator) = (&self.gpu.device, self.gpu.allocator());
+        let set_layouts = [set_layout];
+        let ranges = [vk::PushConstantRange::default()
+            .stage_flags(vk::ShaderStageFlags::COMPUTE)
+            .size(push_bytes)];
+        let info = vk::PipelineLayoutCreateInfo::default()
+            .set_layouts(&set_layouts)
+            .push_constant_ranges(&ranges);
+        // SAFETY: the info lives for the call.
+        let layout = unsafe { device.create_pipeline_layout(&info, allocator) }
+            .map_err(|e| format!("vkCreatePipelineLayout: {e}"))?;
+        let module =
+            match self
+                .gpu
+                .create_shader_module(name, vk::ShaderStageFlags::COMPUTE, source)
+            {
+                Ok(module) => module,
+                Err(e) => {
+                    // SAFETY: created above, unused.
+                    unsafe { device.destroy_pipeline_layout(layout, allocator) };
+                    return Err(e);
+                }
+            };
+        let stage = vk::PipelineShaderStageCreateInfo::default()
+            .stage(vk::ShaderStageFlags::COMPUTE)
+            .module(module)
+            .name(c"main");
+        let info = [vk::ComputePipelineCreateInfo::default()
+            .stage(stage)
+            .layout(layout)];
+        // SAFETY: the module and layout are live; the info lives for the call.
+        let created =
+            unsafe { device.create_compute_pipelines(vk::PipelineCache::null(), &info, allocator) };
+        // SAFETY: the pipeline keeps what it needs of the module.
+        unsafe { device.destroy_shader_module(module, allocator) };
+        match created {
+            Ok(pipelines) => Ok((layout, pipelines[0])),
+            Err((_, e)) => {
+                // SAFETY: created above, unused.
+                unsafe { device.destroy_pipeline_layout(layout, allocator) };
+                Err(format!("vkCreateComputePipelines ({name}): {e}"))
+            }
+        }
+    }
+
+    fn new(gpu: &Arc<Gpu>, occlusion: bool) -> Result<Self, String> {
+        let mut objects = Self {
+            gpu: Arc::clone(gpu),
+            cull_set_layout: vk::DescriptorSetLayout::null(),
+            cull_layout: vk::PipelineLayout::null(),
+            cull_pipeline: vk::Pipeline::null(),
+            pyramid_set_layout: vk::DescriptorSetLayout::null(),
+            pyramid_layout: vk::PipelineLayout::null(),
+            pyramid_pipeline: vk::Pipeline::null(),
+            sampler: vk::Sampler::null(),
+            pool: vk::DescriptorPool::null(),
+            cull_sets: [vk::DescriptorSet::null(); 2],
+            pyramid_set: vk::DescriptorSet::null(),
+        };
+        let storage = vk::DescriptorType::STORAGE_BUFFER;
+        let cull_bindings = [
+            (storage, 0),
+            (storage, 1),
+            (storage, 2),
+            (storage, 3),
+            (vk::DescriptorType::UNIFORM_BUFFER, 4),
+            (storage, 5),
+            (storage, 6),
+            (storage, 7),
+        ];
+        objects.cull_set_layout = objects.set_layout(&cull_bindings)?;
+        (objects.cull_layout, objects.cull_pipeline) = objects.pipeline(
+            "gpu_cull.comp",
+            include_str!("../shaders/gpu_cull.comp"),
+            objects.cull_set_layout,
+            24,
+        )?;
+        let (device, allocator) = (&gpu.device, gpu.allocator());
+        if occlusion {
+            objects.pyramid_set_layout = objects.set_layout(&[
+                (vk::DescriptorType::COMBINED_IMAGE_SAMPLER, 0),
+                (storage, 1),
+            ])?;
+            (objects.pyramid_layout, objects.pyramid_pipeline) = objects.pipeline(
+                "hiz.comp",
+                include_str!("../shaders/hiz.comp"),
+                objects.pyramid_set_layout,
+                28,
+            )?;
+            let info = vk::SamplerCreateInfo::default()
+                .mag_filter(vk::Filter::NEAREST)
+                .min_filter(vk::Filter::NEAREST)
+                .address_mode_u(vk::SamplerAddressMode::CLAMP_TO_EDGE)
+                .address_mode_v(vk::SamplerAddressMode::CLAMP_TO_EDGE);
+            // SAFETY: the info lives for the call.
+            objects.sampler = unsafe { device.create_sampler(&info, allocator) }
+                .map_err(|e| format!("vkCreateSampler: {e}"))?;
+        }
+        let sizes = [
+            vk::DescriptorPoolSize::default()
+                .ty(storage)
+                .descriptor_count(15),
+            vk::DescriptorPoolSize::default()
+                .ty(vk::DescriptorType::UNIFORM_BUFFER)
+                .descriptor_count(2),
+            vk::DescriptorPoolSize::default()
+                .ty(vk::DescriptorType::COMBINED_IMAGE_SAMPLER)
+                .descriptor_count(1),
+        ];
+        let info = vk::DescriptorPoolCreateInfo::default()
+            .max_sets(3)
+            .pool_sizes(&sizes);
+        // SAFETY: the info lives for the call.
+        objects.pool = unsafe { device.create_descriptor_pool(&info, allocator) }
+            .map_err(|e| format!("vkCreateDescriptorPool: {e}"))?;
+        let mut layouts = vec![objects.cull_set_layout; 2];
+        if occlusion {
+            layouts.push(objects.pyramid_set_layout);
+        }
+        let info = vk::DescriptorSetAllocateInfo::default()
+            .descriptor_pool(objects.pool)
+            .set_layouts(&layouts);
+        // SAFETY: the pool has room for these sets.
+        let sets = unsafe { device.allocate_descriptor_sets(&info) }
+            .map_err(|e| format!("vkAllocateDescriptorSets: {e}"))?;
+        objects.cull_sets = [sets[0], sets[1]];
+        objects.pyramid_set = sets.get(2).copied().unwrap_or_default();
+        Ok(objects)
+    }
+}
+
+/// A GPU culler: `gpu-frustum` without occlusion, `gpu-occlusion` with it.
+pub struct GpuCuller<const OCCLUSION: bool> {
+    gpu: Arc<Gpu>,
+    objects: Objects,
+    /// The view uniform, written by `vkCmdUpdateBuffer` in the frame.
+    view: HostBuffer,
+    /// Commands per (phase, pass) slot and the totals; host-visible for the frame's counts.
+    counts: HostBuffer,
+    /// The commands: one region of `capacity` per (phase, pass) slot.
+    commands: Option<HostBuffer>,
+    capacity: u32,
+    /// Visibility bits at the end of the last frame and of this one (occlusion), swapped per
+    /// frame; 4 bytes each for `gpu-frustum`, which reads none.
+    visibility: [HostBuffer; 2],
+    visibility_words: u32,
+    last: usize,
+    /// The depth pyramid (occlusion) and the depth size it was made for.
+    pyramid: HostBuffer,
+    pyramid_size: (u32, u32),
+    /// What the descriptor sets were last written with.
+    cull_written: [Option<[u64; 8]>; 2],
+    pyramid_written: Option<[u64; 2]>,
+    /// Passes of the frame being recorded (set in phase 0).
+    pass_count: usize,
+}
+
+impl<const OCCLUSION: bool> Technique for GpuCuller<OCCLUSION> {
+    fn create(gpu: Arc<Gpu>) -> Result<Self, String> {
+        let objects = Objects::new(&gpu, OCCLUSION)?;
+        let storage = vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_DST;
+        let view = gpu.create_buffer(
+            "gpu cull view",
+            std::mem::size_of::<ViewUniform>() as u64,
+            vk::BufferUsageFlags::UNIFORM_BUFFER | vk::BufferUsageFlags::TRANSFER_DST,
+            abi::CADR_MEMORY_GPU_ONLY,
+        )?;
+        let counts = gpu.create_buffer(
+            "gpu cull counts",
+            (COUNT_WORDS * 4) as u64,
+            storage | vk::BufferUsageFlags::INDIRECT_BUFFER,
+            abi::CADR_MEMORY_CPU_TO_GPU,
+        )?;
+        let tiny = |name| gpu.create_buffer(name, 4, storage, abi::CADR_MEMORY_GPU_ONLY);
+        Ok(Self {
+            visibility: [tiny("gpu cull visibility")?, tiny("gpu cull visibility")?],
+            pyramid: tiny("gpu cull pyramid")?,
+            gpu,
+            objects,
+            view,
+            counts,
+            commands: None,
+            capacity: 0,
+            visibility_words: 0,
+            last: 0,
+            pyramid_size: (0, 0),
+            cull_written: [None; 2],
+            pyramid_written: None,
+            pass_count: 0,
+        })
+    }
+}
+
+/// A barrier from `src` to `dst` (stages and accesses) on all memory.
+fn barrier(
+    gpu: &Gpu,
+    command_buffer: vk::CommandBuffer,
+    src: (vk::PipelineStageFlags2, vk::AccessFlags2),
+    dst: (vk::PipelineStageFlags2, vk::AccessFlags2),
+) {
+    let barriers = [vk::MemoryBarrier2::default()
+        .src_stage_mask(src.0)
+        .src_access_mask(src.1)
+        .dst_stage_mask(dst.0)
+        .dst_access_mask(dst.1)];
+    let info = vk::DependencyInfo::default().memory_barriers(&barriers);
+    // SAFETY: recording outside rendering.
+    unsafe { gpu.device.cmd_pipeline_barrier2(command_buffer, &info) };
+}
+
+impl<const OCCLUSION: bool> GpuCuller<OCCLUSION> {
+    fn phases(&self) -> u32 {
+        if OCCLUSION {
+            2
+        } else {
+            1
+        }
+    }
+
+    /// Makes the commands and visibility buffers big enough for `instances` and `passes`;
+    /// new visibility buffers are cleared in `command_buffer`.
+    fn reserve(
+        &mut self,
+        instances: u32,
+        passes: usize,
+        command_buffer: vk::CommandBuffer,
+    ) -> Result<(), String> {
+        let storage = vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_DST;
+        let needed = instances.max(1);
+        if self.commands.is_none() || needed > self.capacity {
+            let capacity = needed.next_power_of_two();
+            let slots = (self.phases() as usize * PASSES_PER_PHASE) as u64;
+            self.commands = Some(self.gpu.create_buffer(
+                "gpu cull commands",
+                u64::from(capacity) * COMMAND_BYTES * slots,
+                storage | vk::BufferUsageFlags::INDIRECT_BUFFER,
+                abi::CADR_MEMORY_GPU_ONLY,
+            )?);
+            self.capacity = capacity;
+        }
+        let _ = passes;
+        if OCCLUSION && needed.div_ceil(32) > self.visibility_words {
+            let words = needed.div_ceil(32).next_power_of_two();
+            for buffer in &mut self.visibility {
+                *buffer = self.gpu.create_buffer(
+                    "gpu cull visibility",
+                    u64::from(words) * 4,
+                    storage,
+                    abi::CADR_MEMORY_GPU_ONLY,
+                )?;
+                // SAFETY: recording outside rendering; the buffer allows transfer writes.
+                unsafe {
+                    self.gpu.device.cmd_fill_buffer(
+                        command_buffer,
+                        buffer.raw(),
+                        0,
+                        vk::WHOLE_SIZE,
+                        0,
+                    )
+                };
+            }
+            self.visibility_words = words;
+        }
+        Ok(())
+    }
+
+    /// Makes the pyramid buffer fit a `width` × `height` depth image (before the frame's
+    /// first use of the cull set, which points at it).
+    fn reserve_pyramid(&mut self, width: u32, height: u32) -> Result<(), String> {
+        if self.pyramid_size == (width, height) {
+            return Ok(());
+        }
+        let texels: u64 = pyramid_levels(width, height)
+            .iter()
+            .map(|[w, h]| u64::from(w * h))
+            .sum();
+        self.pyramid = self.gpu.create_buffer(
+            "gpu cull pyramid",
+            texels * 4,
+            vk::BufferUsageFlags::STORAGE_BUFFER,
+            abi::CADR_MEMORY_GPU_ONLY,
+        )?;
+        self.pyramid_size = (width, height);
+        Ok(())
+    }
+
+    /// Points the cull set at the scene's buffers and ours (when any changed).
+    fn write_cull_set(&mut self, scene: &abi::CadrSceneView) {
+        let Some(commands) = &self.commands else {
+            return;
+        };
+        let now = 1 - self.last;
+        let buffers = [
+            buffer(&scene.cull_buffer),
+            buffer(&scene.matrix_buffer),
+            commands.raw(),
+            self.counts.raw(),
+            self.view.raw(),
+            self.visibility[self.last].raw(),
+            self.visibility[now].raw(),
+            self.pyramid.raw(),
+        ];
+        let key = buffers.map(|b| b.as_raw());
+        if self.cull_written[self.last] == Some(key) {
+            return;
+        }
+        let infos: Vec<[vk::DescriptorBufferInfo; 1]> = buffers
+            .iter()
+            .map(|&b| {
+                [vk::DescriptorBufferInfo::default()
+                    .buffer(b)
+                    .range(vk::WHOLE_SIZE)]
+            })
+            .collect();
+        let writes: Vec<vk::WriteDescriptorSet> = infos
+            .iter()
+            .enumerate()
+            .map(|(binding, info)| {
+                let ty = if binding == 4 {
+                    vk::DescriptorType::UNIFORM_BUFFER
+                } else {
+                    vk::DescriptorType::STORAGE_BUFFER
+                };
+                vk::WriteDescriptorSet::default()
+                    .dst_set(self.objects.cull_sets[self.last])
+                    .dst_binding(binding as u32)
+                    .descriptor_type(ty)
+                    .buffer_info(info)
+            })
+            .collect();
+        // SAFETY: the set is not in use (the host waits for the last frame before recording
+        // the next); the buffers are live.
+        unsafe { self.gpu.device.update_descriptor_sets(&writes, &[]) };
+        self.cull_written[self.last] = Some(key);
+    }
+
+    /// Records the cull dispatches of `phase` for every pass, in `mode`.
+    fn dispatch_cull(&self, cull: &GpuCull<'_>, instances: u32, mode: u32) {
+        let device = &self.gpu.device;
+        let command_buffer = cull.command_buffer();
+        // SAFETY: recording outside rendering; the pipeline, layout and set are live.
+        unsafe {
+            device.cmd_bind_pipeline(
+                command_buffer,
+                vk::PipelineBindPoint::COMPUTE,
+                self.objects.cull_pipeline,
+            );
+            device.cmd_bind_descriptor_sets(
+                command_buffer,
+                vk::PipelineBindPoint::COMPUTE,
+                self.objects.cull_layout,
+                0,
+                &[self.objects.cull_sets[self.last]],
+                &[],
+            );
+        }
+        for (index, pass) in cull.passes().iter().enumerate().take(PASSES_PER_PHASE) {
+            let slot = cull.phase() as usize * PASSES_PER_PHASE + index;
+            let dispatch = CullDispatch {
+                instance_count: instances,
+                pass_kind: pass.kind,
+                pass_slot: slot as u32,
+                first_command: slot as u32 * self.capacity,
+                mode,
+                writes_visibility: u32::from(index == 0),
+            };
+            let constants = words(&[
+                dispatch.instance_count,
+                dispatch.pass_kind,
+                dispatch.pass_slot,
+                dispatch.first_command,
+                dispatch.mode,
+                dispatch.writes_visibility,
+            ]);
+            // SAFETY: recording; the constants fit the layout's 24 bytes.
+            unsafe {
+                device.cmd_push_constants(
+                    command_buffer,
+                    self.objects.cull_layout,
+                    vk::ShaderStageFlags::COMPUTE,
+                    0,
+                    &constants,
+                );
+                device.cmd_dispatch(command_buffer, instances.div_ceil(64), 1, 1);
+            }
+            if let Some(commands) = &self.commands {
+                cull.set_draws(
+                    index,
+                    abi::CadrGpuDraws {
+                        commands: commands.raw().as_raw(),
+                        commands_offset: u64::from(dispatch.first_command) * COMMAND_BYTES,
+                        count_buffer: self.counts.raw().as_raw(),
+                        count_offset: slot as u64 * 4,
+                        max_draws: instances,
+                        stride: COMMAND_BYTES as u32,
+                    },
+                );
+            }
+        }
+    }
+
+    /// Builds the depth pyramid from the depth drawn in phase 0.
+    fn build_pyramid(&mut self, cull: &GpuCull<'_>) -> Result<(), String> {
+        let raw = cull.raw();
+        let (width, height) = (raw.width.max(1), raw.height.max(1));
+        let levels = pyramid_levels(width, height);
+        if self.pyramid_size != (width, height) {
+            return Err("the target changed size between the phases of a frame".into());
+        }
+        let depth_view = vk::ImageView::from_raw(raw.depth_view);
+        if depth_view == vk::ImageView::null() {
+            return Err("the host passed no depth for phase 1".into());
+        }
+        let key = [raw.depth_view, self.pyramid.raw().as_raw()];
+        let device = &self.gpu.device;
+        if self.pyramid_written != Some(key) {
+            let image = [vk::DescriptorImageInfo::default()
+                .sampler(self.objects.sampler)
+                .image_view(depth_view)
+                .image_layout(vk::ImageLayout::from_raw(raw.depth_layout))];
+            let pyramid = [vk::DescriptorBufferInfo::default()
+                .buffer(self.pyramid.raw())
+                .range(vk::WHOLE_SIZE)];
+            let writes = [
+                vk::WriteDescriptorSet::default()
+                    .dst_set(self.objects.pyramid_set)
+                    .dst_binding(0)
+                    .descriptor_type(vk::DescriptorType::COMBINED_IMAGE_SAMPLER)
+                    .image_info(&image),
+                vk::WriteDescriptorSet::default()
+                    .dst_set(self.objects.pyramid_set)
+                    .dst_binding(1)
+                    .descriptor_type(vk::DescriptorType::STORAGE_BUFFER)
+                    .buffer_info(&pyramid),
+            ];
+            // SAFETY: the set is not in use (see `write_cull_set`).
+            unsafe { device.update_descriptor_sets(&writes, &[]) };
+            self.pyramid_written = Some(key);
+        }
+        let command_buffer = cull.command_buffer();
+        // SAFETY: recording outside rendering; pipeline, layout and set are live.
+        unsafe {
+            device.cmd_bind_pipeline(
+                command_buffer,
+                vk::PipelineBindPoint::COMPUTE,
+                self.objects.pyramid_pipeline,
+            );
+            device.cmd_bind_descriptor_sets(
+                command_buffer,
+                vk::PipelineBindPoint::COMPUTE,
+                self.objects.pyramid_layout,
+                0,
+                &[self.objects.pyramid_set],
+                &[],
+            );
+        }
+        let mut source = ([width, height], 0u32);
+        let mut offset = 0u32;
+        for (index, &size) in levels.iter().enumerate() {
+            let level = PyramidLevel {
+                source_size: source.0,
+                size,
+                source_offset: source.1,
+                offset,
+                from_depth: u32::from(index == 0),
+            };
+            let constants = words(&[
+                level.source_size[0],
+                level.source_size[1],
+                level.size[0],
+                level.size[1],
+                level.source_offset,
+                level.offset,
+                level.from_depth,
+            ]);
+            // SAFETY: recording; the constants fit the layout's 28 bytes.
+            unsafe {
+                device.cmd_push_constants(
+                    command_buffer,
+                    self.objects.pyramid_layout,
+                    vk::ShaderStageFlags::COMPUTE,
+                    0,
+                    &constants,
+                );
+                device.cmd_dispatch(command_buffer, size[0].div_ceil(8), size[1].div_ceil(8), 1);
+            }
+            barrier(
+                &self.gpu,
+                command_buffer,
+                (
+                    vk::PipelineStageFlags2::COMPUTE_SHADER,
+                    vk::AccessFlags2::SHADER_WRITE,
+                ),
+                (
+                    vk::PipelineStageFlags2::COMPUTE_SHADER,
+                    vk::AccessFlags2::SHADER_READ,
+                ),
+            );
+            source = (size, offset);
+            offset += size[0] * size[1];
+        }
+        Ok(())
+    }
+}
+
+impl<const OCCLUSION: bool> GpuCulling for GpuCuller<OCCLUSION> {
+    fn phase_count(&self) -> u32 {
+        self.phases()
+    }
+
+    fn record(&mut self, cull: &GpuCull<'_>) -> Result<(), String> {
+        let scene = cull.scene().ok_or("no scene")?;
+        let raw = cull.raw();
+        let instances = scene.raw().instance_count;
+        let command_buffer = cull.command_buffer();
+        let gpu = Arc::clone(&self.gpu);
+        let device = &gpu.device;
+        let transfer_to_compute = (
+            (
+                vk::PipelineStageFlags2::ALL_TRANSFER,
+                vk::AccessFlags2::TRANSFER_WRITE,
+            ),
+            (
+                vk::PipelineStageFlags2::COMPUTE_SHADER,
+                vk::AccessFlags2::SHADER_READ
+                    | vk::AccessFlags2::SHADER_WRITE
+                    | vk::AccessFlags2::UNIFORM_READ,
+            ),
+        );
+        if cull.phase() == 0 {
+            if cull.passes().len() > PASSES_PER_PHASE {
+                return Err(format!(
+                    "{} passes; GPU culling handles at most {PASSES_PER_PHASE}",
+                    cull.passes().len()
+                ));
+            }
+            self.pass_count = cull.passes().len();
+            // The previous frame's reads of our buffers (indirect draws, culls) come first.
+            barrier(
+                &self.gpu,
+                command_buffer,
+                (
+                    vk::PipelineStageFlags2::DRAW_INDIRECT
+                        | vk::PipelineStageFlags2::COMPUTE_SHADER,
+                    vk::AccessFlags2::INDIRECT_COMMAND_READ | vk::AccessFlags2::SHADER_READ,
+                ),
+                (
+                    vk::PipelineStageFlags2::ALL_TRANSFER,
+                    vk::AccessFlags2::TRANSFER_WRITE,
+                ),
+            );
+            self.reserve(instances, self.pass_count, command_buffer)?;
+            if OCCLUSION {
+                self.reserve_pyramid(raw.width.max(1), raw.height.max(1))?;
+                // This frame reads what the last one found visible and writes afresh.
+                self.last = 1 - self.last;
+                let now = 1 - self.last;
+                // SAFETY: recording outside rendering; the buffer allows transfer writes.
+                unsafe {
+                    device.cmd_fill_buffer(
+                        command_buffer,
+                        self.visibility[now].raw(),
+                        0,
+                        vk::WHOLE_SIZE,
+                        0,
+                    )
+                };
+            }
+            let uniform = ViewUniform {
+                eye_high: raw.eye_high,
+                eye_low: raw.eye_low,
+                planes: raw.planes,
+                view_projection: raw.view_projection,
+                pyramid: [
+                    raw.width.max(1),
+                    raw.height.max(1),
+                    pyramid_levels(raw.width.max(1), raw.height.max(1)).len() as u32,
+                    0,
+                ],
+            };
+            // SAFETY: recording outside rendering; both buffers allow transfer writes and the
+            // update is under 64 KiB and a multiple of 4.
+            unsafe {
+                device.cmd_update_buffer(command_buffer, self.view.raw(), 0, &uniform.bytes());
+                device.cmd_fill_buffer(command_buffer, self.counts.raw(), 0, vk::WHOLE_SIZE, 0);
+            }
+            barrier(
+                &self.gpu,
+                command_buffer,
+                transfer_to_compute.0,
+                transfer_to_compute.1,
+            );
+            self.write_cull_set(scene.raw());
+            let mode = if OCCLUSION {
+                MODE_LAST_VISIBLE
+            } else {
+                MODE_FRUSTUM
+            };
+            self.dispatch_cull(cull, instances, mode);
+        } else {
+            self.build_pyramid(cull)?;
+            self.write_cull_set(scene.raw());
+            self.dispatch_cull(cull, instances, MODE_NEWLY_VISIBLE);
+        }
+        // The commands and counts are read by the draws; the counts by the host at the end.
+        barrier(
+            &self.gpu,
+            command_buffer,
+            (
+                vk::PipelineStageFlags2::COMPUTE_SHADER,
+                vk::AccessFlags2::SHADER_WRITE,
+            ),
+            (
+                vk::PipelineStageFlags2::DRAW_INDIRECT
+                    | vk::PipelineStageFlags2::VERTEX_SHADER
+                    | vk::PipelineStageFlags2::COMPUTE_SHADER
+                    | vk::PipelineStageFlags2::HOST,
+                vk::AccessFlags2::INDIRECT_COMMAND_READ
+                    | vk::AccessFlags2::SHADER_READ
+                    | vk::AccessFlags2::HOST_READ,
+            ),
+        );
+        Ok(())
+    }
+
+    fn counts(&self) -> abi::CadrStats {
+        let read = |word: usize| {
+            self.counts
+                .read(word as u64 * 4, 4)
+                .ok()
+                .and_then(|b| b.try_into().ok())
+                .map_or(0, u32::from_le_bytes)
+        };
+        abi::CadrStats {
+            draws: u64::from(read(TOTAL_COMMANDS)),
+            primitives: u64::from(read(TOTAL_TRIANGLES)),
+            ..abi::CadrStats::default()
+        }
+    }
+}
+
+/// `gpu-frustum`.
+pub type GpuFrustum = GpuCuller<false>;
+/// `gpu-occlusion`.
+pub type GpuOcclusion = GpuCuller<true>;

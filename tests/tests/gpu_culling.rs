@@ -1,0 +1,179 @@
+//! GPU culling (`gpu-frustum`, `gpu-occlusion`): an orbit of several frames draws what no
+//! culling draws, frame by frame, with fewer triangles where the frustum cuts or housings hide;
+//! combinations that cannot draw the GPU's commands are refused with the reason.
+#![allow(clippy::unwrap_used)] // Test code: a failed unwrap is a failed test.
+
+use std::sync::Arc;
+
+use cadr_core::generate::{generate, GeneratorSpec};
+use cadr_core::graph::SceneGraph;
+use cadr_core::render::{Camera, FrameStats, DEFAULT_DIRECTION};
+use cadr_core::scene::{flatten, Aabb, Scene};
+use cadr_core::technique::{Combination, Techniques};
+use cadr_core::tree::SceneTree;
+use cadr_core::view::View;
+use cadr_tests::images::compare;
+use cadr_tests::{assert_no_validation_errors, plugin_registry, test_device};
+
+const SIZE: (u32, u32) = (200, 150);
+
+fn combination(culling: &str) -> Combination {
+    Combination {
+        vertex: "arena".into(),
+        parameters: "ssbo-index".into(),
+        submission: "individual-indirect-count".into(),
+        culling: culling.into(),
+    }
+}
+
+/// Renders `cameras` with each culling technique in turn through one view; per culler, the
+/// images and frame statistics.
+fn render_frames(
+    source: &Scene,
+    cullers: &[&str],
+    cameras: &[Camera],
+) -> Vec<Vec<(image::RgbaImage, FrameStats)>> {
+    let device = test_device();
+    let (mut graph, _) = SceneGraph::from_scene(source).unwrap();
+    let mut tree = SceneTree::build(&mut graph);
+    let registry = plugin_registry(&device);
+    let mut view = View::new(&device, Arc::clone(&registry), SIZE.0, SIZE.1).unwrap();
+    let results = cullers
+        .iter()
+        .map(|culler| {
+            view.techniques_mut().select(&combination(culler)).unwrap();
+            cameras
+                .iter()
+                .map(|camera| {
+                    let stats = view.render(&graph, &mut tree, camera).unwrap();
+                    (view.renderer().read_rgba8().unwrap(), stats)
+                })
+                .collect()
+        })
+        .collect();
+    drop(view);
+    assert_no_validation_errors(&device);
+    results
+}
+
+fn bounds(scene: &Scene) -> Aabb {
+    flatten(scene).unwrap().bounds
+}
+
+fn aspect() -> f64 {
+    f64::from(SIZE.0) / f64::from(SIZE.1)
+}
+
+#[test]
+fn gpu_culling_follows_an_orbit_frame_by_frame() {
+    let scene = generate(&GeneratorSpec::Demo);
+    let bounds = bounds(&scene);
+    let cameras: Vec<Camera> = (0..6)
+        .map(|i| Camera::orbit(&bounds, aspect(), f64::from(i) / 12.0, 1.0))
+        .collect();
+    let cullers = ["none", "gpu-frustum", "gpu-occlusion"];
+    let results = render_frames(&scene, &cullers, &cameras);
+    let mut cut = 0;
+    for (frame, (reference, all)) in results[0].iter().enumerate() {
+        for (index, culler) in cullers.iter().enumerate().skip(1) {
+            let (image, stats) = &results[index][frame];
+            let difference = compare(image, reference).unwrap();
+            assert!(
+                difference.mean < 0.3 && difference.p99 < 6.0,
+                "{culler}, frame {frame}: {difference:?}"
+            );
+            assert!(
+                stats.triangles <= all.triangles,
+                "{culler}, frame {frame}: {} triangles of {}",
+                stats.triangles,
+                all.triangles
+            );
+        }
+        let (frustum, occlusion) = (&results[1][frame].1, &results[2][frame].1);
+        // Occlusion tests the frustum too: it never draws what the frustum culls.
+        assert!(occlusion.triangles <= frustum.triangles, "frame {frame}");
+        if frustum.triangles < all.triangles * 9 / 10 {
+            cut += 1;
+        }
+    }
+    assert!(
+        cut >= 3,
+        "the orbit is close enough that the frustum cuts ({cut} frames)"
+    );
+}
+
+#[test]
+fn gpu_occlusion_skips_what_housings_hide() {
+    let scene = generate(&GeneratorSpec::Cabinet { cabinets: 12 });
+    let bounds = bounds(&scene);
+    let still = Camera::fit(&bounds, aspect(), DEFAULT_DIRECTION);
+    // The first frame knows nothing of the last; from the third on, what was visible is what
+    // phase 0 draws. Then the camera moves: what comes into view is drawn in the same frame.
+    let mut cameras = vec![still; 4];
+    cameras
+        .extend((0..3).map(|i| Camera::orbit(&bounds, aspect(), 0.1 + f64::from(i) * 0.05, 1.6)));
+    let results = render_frames(&scene, &["none", "gpu-occlusion"], &cameras);
+    for (frame, ((reference, all), (image, occluded))) in
+        results[0].iter().zip(&results[1]).enumerate()
+    {
+        let difference = compare(image, reference).unwrap();
+        assert!(
+            difference.mean < 0.3 && difference.p99 < 6.0,
+            "frame {frame}: {difference:?}"
+        );
+        println!(
+            "frame {frame}: {} of {} triangles",
+            occluded.triangles, all.triangles
+        );
+        if frame >= 2 {
+            assert!(
+                occluded.triangles * 5 <= all.triangles,
+                "frame {frame}: {} triangles drawn of {}",
+                occluded.triangles,
+                all.triangles
+            );
+        }
+    }
+}
+
+#[test]
+fn gpu_cullers_need_a_submission_that_draws_their_commands() {
+    let device = test_device();
+    let registry = plugin_registry(&device);
+    let view = View::new(&device, Arc::clone(&registry), SIZE.0, SIZE.1).unwrap();
+    let techniques: &Techniques = view.techniques();
+    for culler in ["gpu-frustum", "gpu-occlusion"] {
+        techniques.check(&combination(culler)).unwrap();
+        let refusals = [
+            (
+                Combination {
+                    submission: "groups-mdi".into(),
+                    ..combination(culler)
+                },
+                // The culler is what is refused here: the partners suit each other.
+                "draws the GPU-written commands (individual-indirect-count)",
+            ),
+            (
+                Combination {
+                    vertex: "per-geometry".into(),
+                    ..combination(culler)
+                },
+                "binds the whole scene",
+            ),
+            (
+                Combination {
+                    parameters: "push".into(),
+                    ..combination(culler)
+                },
+                "instance index",
+            ),
+        ];
+        for (refused, reason) in refusals {
+            let why = techniques.check(&refused).unwrap_err();
+            assert!(
+                why.contains("needs") && why.contains(reason),
+                "{refused}: {why}"
+            );
+        }
+    }
+}

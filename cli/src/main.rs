@@ -29,6 +29,7 @@ USAGE:
     cadr techniques [--json]
     cadr bench [SCENE] [--frames N] [--json FILE] [--size WxH] [--shade solid|edges|all]
                [--vertex A,B] [--params A,B] [--submit A,B] [--cull A,B] [--all]
+               [--camera static|orbit] [--animate N]
     cadr bench --sweep [--sweep-parts N,N,...]
     cadr pick SCENE X Y [--size WxH] [--rect X2,Y2] [--json] [technique options]
     cadr info SCENE
@@ -40,6 +41,8 @@ SCENE is a .gltf, .glb, .csf or .csf.gz file, or a generator:
     gen:demo           the built-in demo (default)
     gen:graphicscard   ~68 000 parts of ~10 triangles (the seeds' Graphicscard)
     gen:racecar        ~98 000 parts of ~37 triangles
+    gen:cabinet        machines in closed housings, racks of cabinets (optional :cabinets=N,
+                       default 24, 366 parts each): most parts hidden from outside
     gen:grid:parts=N   exactly N parts in a cube of objects (optional ,tris=T)
 
 render: draws the scene offscreen with the camera fitted to its bounds, writes a PNG
@@ -55,8 +58,11 @@ bench:  renders the built-in combination (the baseline) and technique combinatio
         supported one; lists to choose) for N frames after 2 warm-up frames and prints CPU
         and GPU µs, draw calls,
         state changes, triangles and the speedup over the baseline; --json FILE writes them
-        with the scene statistics. --sweep measures a set over gen:grid of 10 000 to 1 000 000
-        parts to show how each technique's CPU cost grows.
+        with the scene statistics. --camera orbit circles the scene close enough that the
+        frustum cuts (default static); --animate N moves N assembly nodes every frame (an
+        exploded view); the table adds the scene update µs and the bytes uploaded per frame.
+        --sweep measures a set over gen:grid of 10 000 to 1 000 000 parts to show how each
+        technique's CPU cost grows.
 pick:   what lies under pixel (X, Y) of the view `render` draws (same size, camera and
         technique options): the geo node and part, its path of nodes from the root (a shared
         part has one per occurrence), the depth and the world position (f64). --rect X2,Y2

@@ -320,8 +320,6 @@ pub struct GpuCuller<const OCCLUSION: bool> {
     /// What the descriptor sets were last written with.
     cull_written: [Option<[u64; 8]>; 2],
     pyramid_written: Option<[u64; 2]>,
-    /// Passes of the frame being recorded (set in phase 0).
-    pass_count: usize,
 }
 
 impl<const OCCLUSION: bool> Technique for GpuCuller<OCCLUSION> {
@@ -355,7 +353,6 @@ impl<const OCCLUSION: bool> Technique for GpuCuller<OCCLUSION> {
             pyramid_size: (0, 0),
             cull_written: [None; 2],
             pyramid_written: None,
-            pass_count: 0,
         })
     }
 }
@@ -386,14 +383,9 @@ impl<const OCCLUSION: bool> GpuCuller<OCCLUSION> {
         }
     }
 
-    /// Makes the commands and visibility buffers big enough for `instances` and `passes`;
-    /// new visibility buffers are cleared in `command_buffer`.
-    fn reserve(
-        &mut self,
-        instances: u32,
-        passes: usize,
-        command_buffer: vk::CommandBuffer,
-    ) -> Result<(), String> {
+    /// Makes the commands (a region per phase and pass slot) and visibility buffers big
+    /// enough for `instances`; new visibility buffers are cleared in `command_buffer`.
+    fn reserve(&mut self, instances: u32, command_buffer: vk::CommandBuffer) -> Result<(), String> {
         let storage = vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_DST;
         let needed = instances.max(1);
         if self.commands.is_none() || needed > self.capacity {
@@ -407,7 +399,6 @@ impl<const OCCLUSION: bool> GpuCuller<OCCLUSION> {
             )?);
             self.capacity = capacity;
         }
-        let _ = passes;
         if OCCLUSION && needed.div_ceil(32) > self.visibility_words {
             let words = needed.div_ceil(32).next_power_of_two();
             for buffer in &mut self.visibility {
@@ -703,7 +694,6 @@ impl<const OCCLUSION: bool> GpuCulling for GpuCuller<OCCLUSION> {
                     cull.passes().len()
                 ));
             }
-            self.pass_count = cull.passes().len();
             // The previous frame's reads of our buffers (indirect draws, culls) come first.
             barrier(
                 &self.gpu,
@@ -718,7 +708,7 @@ impl<const OCCLUSION: bool> GpuCulling for GpuCuller<OCCLUSION> {
                     vk::AccessFlags2::TRANSFER_WRITE,
                 ),
             );
-            self.reserve(instances, self.pass_count, command_buffer)?;
+            self.reserve(instances, command_buffer)?;
             if OCCLUSION {
                 self.reserve_pyramid(raw.width.max(1), raw.height.max(1))?;
                 // This frame reads what the last one found visible and writes afresh.

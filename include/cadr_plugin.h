@@ -11,7 +11,7 @@
 #define CADR_PLUGIN_ABI_MAJOR 1
 
 // Minor version of this ABI: additions that older readers may ignore.
-#define CADR_PLUGIN_ABI_MINOR 3
+#define CADR_PLUGIN_ABI_MINOR 4
 
 // `(major << 16) | minor`, what [`CadrPluginVersionFn`] returns.
 #define CADR_PLUGIN_ABI_VERSION ((CADR_PLUGIN_ABI_MAJOR << 16) | CADR_PLUGIN_ABI_MINOR)
@@ -268,13 +268,15 @@ typedef struct CadrSceneView {
   uint64_t parameters_generation;
   // Number of matrix slots.
   uint32_t matrix_count;
-  // The matrices on the CPU (`matrix_count`).
+  // The matrices on the CPU (`matrix_count`); behind the GPU for moved subtrees unless an
+  // active technique sets [`CADR_TRAIT_READS_HOST_MATRICES`].
   const struct CadrMatrix *matrices;
   // Number of material slots.
   uint32_t material_count;
   // The materials on the CPU (`material_count`).
   const struct CadrMaterial *materials;
-  // Matrix slots changed since the last frame.
+  // Matrix slots changed since the last frame (the host's writes only, unless an active
+  // technique sets [`CADR_TRAIT_READS_HOST_MATRICES`]).
   const uint32_t *dirty_matrices;
   // Number of entries at `dirty_matrices`.
   uint32_t dirty_matrix_count;
@@ -292,7 +294,8 @@ typedef struct CadrSceneView {
   struct CadrBufferRef index_buffer;
   // Edge indices (u32 line list).
   struct CadrBufferRef wire_index_buffer;
-  // [`CadrMatrix`] per matrix slot.
+  // [`CadrMatrix`] per matrix slot, the world matrix of every tree node (with the GPU
+  // transform hierarchy, written by its compute pass before the frame's techniques run).
   struct CadrBufferRef matrix_buffer;
   // [`CadrMaterial`] per material slot.
   struct CadrBufferRef material_buffer;
@@ -733,6 +736,17 @@ typedef struct CadrCullingVtable {
 // ([`CadrRecordContext::gpu_draws`]), draws each pass from them with
 // `vkCmdDrawIndexedIndirectCount` instead of its own lists. GPU culling needs it.
 #define CADR_TRAIT_DRAWS_GPU_COMMANDS (1 << 5)
+
+// Since ABI 1.4. Any kind, an announcement rather than an offer (no technique needs it): the
+// technique reads world matrices on the host ([`CadrSceneView::matrices`],
+// [`CadrSceneView::dirty_matrices`] or [`CadrCullInput::world_matrices`]). While no active
+// technique sets it (and every one comes from a library of ABI 1.4 or later), the host keeps
+// the transform hierarchy on the GPU: a moved assembly node uploads only its local matrix and a
+// compute pass updates the world matrices of its subtree in [`CadrSceneView::matrix_buffer`];
+// the host arrays then lag behind for moved subtrees and `dirty_matrices` lists only the slots
+// the host itself wrote. A technique that reads matrices from the matrix buffer on the GPU
+// leaves it clear.
+#define CADR_TRAIT_READS_HOST_MATRICES (1 << 6)
 
 // Device-local; written by transfers or shaders.
 #define CADR_MEMORY_GPU_ONLY 0

@@ -22,6 +22,8 @@ void main() {
     }
     uint within = word % scatter.item_words;
     uint source = scatter.first_word + item * (scatter.item_words + 1u);
-    uint slot = update_words[source];
+    // The top bit of a slot word is a mark for later passes (the transform hierarchy's moved
+    // roots), not part of the slot.
+    uint slot = update_words[source] & 0x7fffffffu;
     target_words[slot * scatter.item_words + within] = update_words[source + 1u + within];
 }

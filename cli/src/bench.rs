@@ -10,7 +10,9 @@ use std::sync::Arc;
 use cadr_core::load::SceneSource;
 use cadr_core::render::FrameStats;
 use cadr_core::scene::{flatten, Scene, SceneStats};
-use cadr_core::technique::{Combination, PluginRegistry, ShadeMode, TechniqueKind, Techniques};
+use cadr_core::technique::{
+    Combination, PluginRegistry, ShadeMode, TechniqueKind, Techniques, Transforms,
+};
 use cadr_core::vk::Device;
 
 use crate::args::{parse_size, Args};
@@ -43,6 +45,8 @@ struct Row {
     scene_update_us: f64,
     /// Median bytes uploaded per frame.
     bytes_uploaded: u64,
+    /// Where moved subtrees' world matrices were computed: "gpu" or "host".
+    transforms: &'static str,
     /// The first measured frame's counters.
     stats: FrameStats,
 }
@@ -90,10 +94,14 @@ fn measure(
 }
 
 impl Row {
-    fn new(label: String, shade: &'static str, measured: Measured) -> Self {
+    fn new(label: String, shade: &'static str, transforms: Transforms, measured: Measured) -> Self {
         Self {
             label,
             shade,
+            transforms: match transforms {
+                Transforms::Gpu => "gpu",
+                Transforms::Host => "host",
+            },
             cpu_us: measured.cpu_us,
             gpu_us: measured.gpu_us,
             scene_update_us: measured.scene_update_us,
@@ -253,7 +261,8 @@ impl Bench {
         let measured = measure(self.frames, |frame| {
             session.render_moving(&motion, view, frame)
         })?;
-        let baseline = Row::new("baseline (built-in)".into(), "solid", measured);
+        let transforms = session.techniques().transforms();
+        let baseline = Row::new("baseline (built-in)".into(), "solid", transforms, measured);
         if !quiet {
             print_header();
             print_row(&baseline, baseline.cpu_us);
@@ -269,7 +278,8 @@ impl Bench {
                 let measured = measure(self.frames, |frame| {
                     session.render_moving(&motion, view, frame)
                 })?;
-                let row = Row::new(combination.to_string(), mode.name(), measured);
+                let transforms = session.techniques().transforms();
+                let row = Row::new(combination.to_string(), mode.name(), transforms, measured);
                 if !quiet {
                     print_row(&row, rows[0].cpu_us);
                 }
@@ -329,6 +339,7 @@ fn row_json(row: &Row, baseline_cpu: f64) -> serde_json::Value {
         "gpu_us": row.gpu_us,
         "scene_update_us": row.scene_update_us,
         "bytes_uploaded": row.bytes_uploaded,
+        "transforms": row.transforms,
         "draw_calls": s.draw_calls,
         "draws": s.draws,
         "pipeline_binds": s.pipeline_binds,

@@ -9,6 +9,7 @@ use cadr_core::graph::{NodeFlags, NodeHandle, NodeKind, SceneGraph};
 use cadr_core::load::SceneSource;
 use cadr_core::render::Renderer;
 use cadr_core::scene::Material;
+use cadr_core::technique::Transforms;
 use cadr_core::tree::SceneTree;
 use cadr_core::vk::{Device, DeviceOptions};
 use glam::{DMat4, DVec3};
@@ -71,7 +72,8 @@ pub fn bench_tree(scene_text: &str, runs: usize) -> Result<(), String> {
     tree.take_changes();
     let device = Device::new(&DeviceOptions::default()).map_err(|e| e.to_string())?;
     let renderer = Renderer::new(&device, 1, 1).map_err(|e| e.to_string())?;
-    let mut gpu_scene = GpuScene::new(&device, &graph, &mut tree).map_err(|e| e.to_string())?;
+    let mut gpu_scene =
+        GpuScene::new(&device, &graph, &mut tree, Transforms::Host).map_err(|e| e.to_string())?;
     gpu_scene
         .flush_uploads(renderer.pipelines())
         .map_err(|e| e.to_string())?;
@@ -96,7 +98,7 @@ pub fn bench_tree(scene_text: &str, runs: usize) -> Result<(), String> {
             update_samples.push(start.elapsed().as_secs_f64() * 1e3);
             // What the GPU scene uploads for this edit.
             let synced = gpu_scene
-                .sync(graph, tree)
+                .sync(graph, tree, Transforms::Host)
                 .and_then(|()| gpu_scene.flush_uploads(renderer.pipelines()));
             if let Err(e) = synced {
                 upload_error.get_or_insert(e.to_string());

@@ -334,6 +334,63 @@ fn bench_prints_the_table_and_writes_json() {
 }
 
 #[test]
+fn bench_animate_moves_assemblies_on_the_gpu_with_64_bytes_per_node() {
+    let path = std::env::temp_dir().join(format!("cadr-cli-animate-{}.json", std::process::id()));
+    let output = cadr(&[
+        "bench",
+        "gen:cabinet:cabinets=2",
+        "--frames",
+        "3",
+        "--size",
+        "64x48",
+        "--vertex",
+        "arena",
+        "--params",
+        "ssbo-index,push",
+        "--submit",
+        "individual-indirect-count",
+        "--cull",
+        "none,gpu-frustum",
+        "--camera",
+        "orbit",
+        "--animate",
+        "4",
+        "--json",
+        path.to_str().unwrap(),
+    ]);
+    assert!(output.status.success(), "{}", stderr(&output));
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&path).unwrap()).unwrap();
+    assert_eq!(json["camera"], "orbit");
+    assert_eq!(json["animate"], 4);
+    let rows = json["rows"].as_array().unwrap();
+    let row = |technique: &str| {
+        rows.iter()
+            .find(|r| r["technique"] == technique)
+            .unwrap_or_else(|| panic!("no row {technique}: {rows:?}"))
+    };
+    for technique in [
+        "arena / ssbo-index / individual-indirect-count / none",
+        "arena / ssbo-index / individual-indirect-count / gpu-frustum",
+    ] {
+        let gpu = row(technique);
+        assert_eq!(gpu["transforms"], "gpu", "{gpu}");
+        assert_eq!(
+            gpu["bytes_uploaded"],
+            4 * 64,
+            "a slot and a local matrix per moved node: {gpu}"
+        );
+        assert!(gpu["scene_update_us"].as_f64().unwrap() > 0.0, "{gpu}");
+    }
+    let host = row("arena / push / individual-indirect-count / none");
+    assert_eq!(host["transforms"], "host", "{host}");
+    assert!(
+        host["bytes_uploaded"].as_u64().unwrap() > 4 * 64,
+        "the host uploads the world matrices below the moved nodes: {host}"
+    );
+}
+
+#[test]
 fn without_plugin_libraries_the_built_in_combination_draws_and_others_are_explained() {
     // A copy of the binary in a directory of its own finds no plugin library.
     let dir = std::env::temp_dir().join(format!("cadr-cli-alone-{}", std::process::id()));

@@ -102,6 +102,12 @@ pub const SCATTER_COMP: ShaderSource = ShaderSource {
     stage: ShaderStage::Compute,
     source: include_str!("../../shaders/scatter.comp"),
 };
+/// The GPU transform hierarchy: world matrices of moved subtrees from their local matrices.
+pub const TRANSFORMS_COMP: ShaderSource = ShaderSource {
+    name: "transforms.comp",
+    stage: ShaderStage::Compute,
+    source: include_str!("../../shaders/transforms.comp"),
+};
 
 /// The technique vertex shader's frame: the host pastes the vertex and parameter paths'
 /// snippets in (see `technique::pipeline`), so it is not complete by itself.
@@ -121,4 +127,10 @@ pub const EDGES_FRAG: ShaderSource = ShaderSource {
 pub const TEMPLATES: &[ShaderSource] = &[TECHNIQUE_VERT];
 
 /// Every complete shader, for validation.
-pub const ALL: &[ShaderSource] = &[SHADED_FRAG, PICK_FRAG, SCATTER_COMP, EDGES_FRAG];
+pub const ALL: &[ShaderSource] = &[
+    SHADED_FRAG,
+    PICK_FRAG,
+    SCATTER_COMP,
+    TRANSFORMS_COMP,
+    EDGES_FRAG,
+];

@@ -13,7 +13,7 @@ use crate::gpu_scene::GpuScene;
 use crate::graph::{NodeHandle, SceneGraph};
 use crate::render::pick::{PickSample, PixelRect};
 use crate::render::{Camera, FrameStats, Renderer};
-use crate::technique::{Combination, PluginRegistry, Techniques};
+use crate::technique::{Combination, PluginRegistry, Techniques, Transforms};
 use crate::tree::SceneTree;
 use crate::vk::Device;
 
@@ -113,12 +113,16 @@ impl View {
 
     /// Brings the GPU scene up to date with `tree` (which must be up to date with `graph`):
     /// created on first use, then synced with the changes since this view's last frame (a
-    /// tree this view has not read before is uploaded afresh).
+    /// tree this view has not read before is uploaded afresh). World matrices of moved
+    /// subtrees are computed where the active techniques need them
+    /// ([`Techniques::transforms`]).
     pub fn sync(&mut self, graph: &SceneGraph, tree: &mut SceneTree) -> RenderResult<()> {
+        let transforms = self.techniques.transforms();
         match &mut self.scene {
-            Some(scene) => scene.sync(graph, tree),
+            Some(scene) => scene.sync(graph, tree, transforms),
             None => {
-                self.scene = Some(GpuScene::new(self.renderer.device(), graph, tree)?);
+                let device = self.renderer.device();
+                self.scene = Some(GpuScene::new(device, graph, tree, transforms)?);
                 Ok(())
             }
         }
@@ -148,6 +152,13 @@ impl View {
             .scene
             .as_mut()
             .ok_or_else(|| RenderError::InvalidUse("no GPU scene: sync first".into()))?;
+        if scene.transforms() == Transforms::Gpu && self.techniques.transforms() == Transforms::Host
+        {
+            // The host's copies of moved matrices lag behind: only a sync brings them back.
+            return Err(RenderError::InvalidUse(
+                "the techniques now read world matrices on the host: sync before drawing".into(),
+            ));
+        }
         Ok((scene, &mut self.techniques, &mut self.renderer))
     }
 

@@ -13,7 +13,7 @@ use cadr_core::graph::{GeometryHandle, MaterialHandle, NodeFlags, NodeHandle, Sc
 use cadr_core::render::pick::PixelRect;
 use cadr_core::render::{Camera, Renderer, CLEAR_COLOR, DEFAULT_DIRECTION};
 use cadr_core::scene::{flatten, Material};
-use cadr_core::technique::{Combination, TechniqueKind};
+use cadr_core::technique::{Combination, TechniqueKind, Transforms};
 use cadr_core::tree::SceneTree;
 use cadr_core::view::View;
 use cadr_core::vk::Device;
@@ -421,7 +421,7 @@ fn a_replaced_geometry_is_written_in_place() {
     assert_eq!(upload.records, 3, "only its 3 users' records");
     assert_eq!(scene.last_touched(), 3);
     // The result equals a fresh upload.
-    let fresh = GpuScene::new(&device, &graph, &mut tree).unwrap();
+    let fresh = GpuScene::new(&device, &graph, &mut tree, Transforms::Host).unwrap();
     assert_eq!(scene.content().records, fresh.content().records);
     assert_no_validation_errors(&device);
 }
@@ -461,7 +461,7 @@ proptest! {
             .collect();
         let mut tree = SceneTree::build(&mut graph);
         let renderer = Renderer::new(&device, 1, 1).unwrap();
-        let mut scene = GpuScene::new(&device, &graph, &mut tree).unwrap();
+        let mut scene = GpuScene::new(&device, &graph, &mut tree, Transforms::Host).unwrap();
         scene.flush_uploads(renderer.pipelines()).unwrap();
         for (step, edit) in edits.iter().enumerate() {
             let pick = |n: u8| transforms[n as usize % transforms.len()];
@@ -506,10 +506,10 @@ proptest! {
                 }
             }
             tree.update(&mut graph);
-            scene.sync(&graph, &mut tree).unwrap();
+            scene.sync(&graph, &mut tree, Transforms::Host).unwrap();
             scene.flush_uploads(renderer.pipelines()).unwrap();
         }
-        let mut fresh = GpuScene::new(&device, &graph, &mut tree).unwrap();
+        let mut fresh = GpuScene::new(&device, &graph, &mut tree, Transforms::Host).unwrap();
         fresh.flush_uploads(renderer.pipelines()).unwrap();
         let (synced, expected) = (scene.content(), fresh.content());
         prop_assert_eq!(synced.records, expected.records);

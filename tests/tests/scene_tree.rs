@@ -68,6 +68,13 @@ impl Consumer {
         for &t in &changes.dirty_matrices {
             self.matrices.insert(t, tree.world(t));
         }
+        // A moved path's whole subtree has new world matrices (a host reader walks it).
+        tree.refresh_worlds();
+        let mut below: Vec<u32> = changes.moved.clone();
+        while let Some(t) = below.pop() {
+            self.matrices.insert(t, tree.world(t));
+            below.extend_from_slice(tree.children(t));
+        }
     }
 
     fn check(&self, tree: &SceneTree) {
@@ -425,9 +432,18 @@ fn shared_subgraphs_appear_once_per_path_and_edits_reach_every_path() {
     tree.update(g);
     let changes = tree.take_changes();
     assert_eq!(
-        changes.dirty_matrices.len(),
-        2,
-        "the placement and the bolt beneath it"
+        changes.moved.len(),
+        1,
+        "the placement's one path moved, in O(1)"
+    );
+    assert!(changes.dirty_matrices.is_empty(), "nothing below it walked");
+    let placement_path = changes.moved[0];
+    assert_eq!(tree.path(placement_path).last(), Some(&places[7]));
+    let bolt_path = tree.children(placement_path)[0];
+    assert_eq!(
+        tree.world(bolt_path).w_axis.truncate(),
+        DVec3::new(7.0, 1.0, 0.0) + g.node(bolt).unwrap().local_matrix().w_axis.truncate(),
+        "the bolt's world matrix follows, computed when asked"
     );
     assert!(changes.added.is_empty() && changes.removed.is_empty() && changes.changed.is_empty());
     // A material change of the shared node reaches every path.

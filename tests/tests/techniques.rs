@@ -13,7 +13,7 @@ use cadr_core::load::load_file;
 use cadr_core::render::{Camera, Renderer, DEFAULT_DIRECTION};
 use cadr_core::scene::{flatten, Scene};
 use cadr_core::technique::{
-    feature_bits, Combination, PluginRegistry, ShadeMode, TechniqueKind, Techniques,
+    feature_bits, Combination, PluginRegistry, ShadeMode, TechniqueKind, Techniques, Transforms,
 };
 use cadr_core::tree::SceneTree;
 use cadr_core::vk::Device;
@@ -49,7 +49,7 @@ impl Fixture {
         );
         let (mut graph, _) = SceneGraph::from_scene(source).unwrap();
         let mut tree = SceneTree::build(&mut graph);
-        let mut scene = GpuScene::new(&device, &graph, &mut tree).unwrap();
+        let mut scene = GpuScene::new(&device, &graph, &mut tree, Transforms::Host).unwrap();
         let mut techniques = Techniques::new(
             &device,
             plugin_registry(&device),
@@ -76,7 +76,9 @@ impl Fixture {
         &mut self,
     ) -> Result<cadr_core::render::FrameStats, cadr_core::error::RenderError> {
         self.tree.update(&mut self.graph);
-        self.scene.sync(&self.graph, &mut self.tree).unwrap();
+        self.scene
+            .sync(&self.graph, &mut self.tree, Transforms::Host)
+            .unwrap();
         self.renderer
             .render_techniques(&mut self.scene, &mut self.techniques, &self.camera)
     }

@@ -3,6 +3,10 @@
 //! arenas (`geometry.rs`), per-instance entries and records, matrices (f64 on the CPU for
 //! culling; on the GPU with translations split into f32 high and low parts) and materials.
 //!
+//! World matrices of moved subtrees are computed where the active techniques need them
+//! ([`Transforms`]): on the host, or on the GPU by the transform hierarchy (`hierarchy.rs`),
+//! in which case a moved node uploads its local matrix only.
+//!
 //! It reads the tree as one of its readers ([`SceneTree::subscribe`]): each sync applies what
 //! changed since this scene's own last sync, with work and uploads in proportion to the change
 //! (changed slots gathered and scattered on the GPU by `upload.rs`; a replaced geometry written
@@ -10,8 +14,10 @@
 //! tree (two renderers) each see every change.
 
 mod geometry;
+mod hierarchy;
 mod upload;
 
+pub use hierarchy::{gpu_local, HierarchyMethod, HierarchyPlan, LOCAL_BYTES, LOCAL_WORDS};
 pub use upload::UploadStats;
 
 use std::sync::Arc;
@@ -25,9 +31,11 @@ use glam::DMat4;
 use crate::graph::SceneGraph;
 use crate::render::Pipelines;
 use crate::scene::Vertex;
+use crate::technique::Transforms;
 use crate::tree::{ChangeReader, InstanceRef, SceneTree, TreeChanges};
 use crate::vk::{Device, OneShot};
 use geometry::GeometryArenas;
+use hierarchy::TransformHierarchy;
 use upload::{GpuArray, SparseUploader};
 
 /// Bytes of one matrix on the GPU ([`abi::CadrMatrix`]).
@@ -87,10 +95,20 @@ pub struct GpuScene {
     matrices: Vec<abi::CadrMatrix>,
     worlds: Vec<[f64; 16]>,
     materials: Vec<abi::CadrMaterial>,
+    /// Where moved subtrees' world matrices are computed.
+    transforms: Transforms,
+    /// Local matrices per tree node (with [`Transforms::Gpu`] only).
+    locals: Vec<[f32; LOCAL_WORDS]>,
+    /// Tree nodes moved since the last upload (with [`Transforms::Gpu`]).
+    frame_moved: Vec<u32>,
+    hierarchy: TransformHierarchy,
+    /// What the last upload's hierarchy pass did.
+    last_hierarchy: Option<HierarchyPlan>,
     matrix_gpu: GpuArray,
     material_gpu: GpuArray,
     record_gpu: GpuArray,
     cull_gpu: GpuArray,
+    local_gpu: GpuArray,
     uploader: SparseUploader,
     frame_dirty_matrices: Vec<u32>,
     frame_dirty_materials: Vec<u32>,
@@ -107,11 +125,13 @@ pub struct GpuScene {
 }
 
 impl GpuScene {
-    /// Puts the tree's scene on the GPU and subscribes to the tree's changes.
+    /// Puts the tree's scene on the GPU, with world matrices kept where `transforms` says, and
+    /// subscribes to the tree's changes.
     pub fn new(
         device: &Arc<Device>,
         graph: &SceneGraph,
         tree: &mut SceneTree,
+        transforms: Transforms,
     ) -> RenderResult<Self> {
         // Generations are unique across scenes: techniques that cached a previous scene's
         // buffers or commands see that this one differs.
@@ -131,10 +151,16 @@ impl GpuScene {
             matrices: Vec::new(),
             worlds: Vec::new(),
             materials: Vec::new(),
+            transforms,
+            locals: Vec::new(),
+            frame_moved: Vec::new(),
+            hierarchy: TransformHierarchy::new(device),
+            last_hierarchy: None,
             matrix_gpu: GpuArray::new(device, "scene matrices", MATRIX_BYTES)?,
             material_gpu: GpuArray::new(device, "scene materials", MATERIAL_BYTES)?,
             record_gpu: GpuArray::new(device, "scene instance records", RECORD_BYTES)?,
             cull_gpu: GpuArray::new(device, "scene cull entries", CULL_ENTRY_BYTES)?,
+            local_gpu: GpuArray::new(device, "scene local matrices", LOCAL_BYTES)?,
             uploader: SparseUploader::default(),
             frame_dirty_matrices: Vec::new(),
             frame_dirty_materials: Vec::new(),
@@ -177,12 +203,19 @@ impl GpuScene {
     }
 
     /// Rebuilds every entry from the tree and graph and queues every array for upload.
-    fn refresh_all(&mut self, graph: &SceneGraph, tree: &SceneTree) -> RenderResult<()> {
+    fn refresh_all(&mut self, graph: &SceneGraph, tree: &mut SceneTree) -> RenderResult<()> {
+        tree.refresh_worlds();
         let nodes = tree.node_capacity();
         self.worlds = vec![[0.0; 16]; nodes];
         self.matrices = vec![abi::CadrMatrix::default(); nodes];
+        self.locals = Vec::new();
+        self.frame_moved.clear();
+        let on_gpu = self.transforms == Transforms::Gpu;
+        if on_gpu {
+            self.locals = vec![[0.0; LOCAL_WORDS]; nodes];
+        }
         for t in 0..nodes as u32 {
-            if tree.has_instances(t) {
+            if self.keeps_matrix(tree, t) {
                 self.set_matrix(tree, t);
             }
         }
@@ -206,16 +239,18 @@ impl GpuScene {
         self.material_gpu.reserve(&device, material_slots.max(1))?;
         self.record_gpu.reserve(&device, count.max(1))?;
         self.cull_gpu.reserve(&device, count.max(1))?;
+        self.local_gpu.reserve(&device, self.locals.len().max(1))?;
         for array in [
             &mut self.matrix_gpu,
             &mut self.material_gpu,
             &mut self.record_gpu,
             &mut self.cull_gpu,
+            &mut self.local_gpu,
         ] {
             array.queue_all();
         }
         self.frame_dirty_matrices = (0..nodes as u32)
-            .filter(|&t| tree.has_instances(t))
+            .filter(|&t| self.keeps_matrix(tree, t))
             .collect();
         self.frame_dirty_materials = (0..material_slots as u32).collect();
         self.last_touched = count as u64;
@@ -243,10 +278,22 @@ impl GpuScene {
         }
     }
 
+    /// Whether matrix slot `t` holds a world matrix: a Geo path's, or with the GPU transform
+    /// hierarchy any live path's (the hierarchy starts from the parents of moved nodes).
+    fn keeps_matrix(&self, tree: &SceneTree, t: u32) -> bool {
+        match self.transforms {
+            Transforms::Host => tree.has_instances(t),
+            Transforms::Gpu => tree.is_node_alive(t),
+        }
+    }
+
     fn set_matrix(&mut self, tree: &SceneTree, t: u32) {
         let world = tree.world(t);
         self.worlds[t as usize] = world.to_cols_array();
         self.matrices[t as usize] = gpu_matrix(&world);
+        if let Some(local) = self.locals.get_mut(t as usize) {
+            *local = gpu_local(&tree.local(t));
+        }
     }
 
     /// The entry of a live instance whose geometry and part are in the arenas.
@@ -307,9 +354,15 @@ impl GpuScene {
         self.set_drawn(id, candidate && culled_in);
     }
 
-    /// Applies the tree's changes since this scene's last sync. The tree must be up to date
-    /// with the graph (`SceneTree::update`).
-    pub fn sync(&mut self, graph: &SceneGraph, tree: &mut SceneTree) -> RenderResult<()> {
+    /// Applies the tree's changes since this scene's last sync, with world matrices kept where
+    /// `transforms` says (a change of place uploads every matrix again). The tree must be up
+    /// to date with the graph (`SceneTree::update`).
+    pub fn sync(
+        &mut self,
+        graph: &SceneGraph,
+        tree: &mut SceneTree,
+        transforms: Transforms,
+    ) -> RenderResult<()> {
         self.frame_dirty_matrices.clear();
         self.frame_dirty_materials.clear();
         self.last_upload = UploadStats::default();
@@ -317,8 +370,13 @@ impl GpuScene {
         let Some(changes) = tree.changes_for(&self.reader) else {
             // A tree this scene does not read: start over from it.
             self.reader = tree.subscribe();
+            self.transforms = transforms;
             return self.relayout(graph, tree);
         };
+        if transforms != self.transforms {
+            self.transforms = transforms;
+            return self.refresh_all(graph, tree);
+        }
         if changes.is_empty() {
             return Ok(());
         }
@@ -346,11 +404,33 @@ impl GpuScene {
             return self.refresh_all(graph, tree);
         }
         self.apply(graph, tree, &changes);
+        if self.transforms == Transforms::Gpu && !self.local_gpu.is_whole() {
+            self.frame_moved.sort_unstable();
+            self.frame_moved.dedup();
+            self.hierarchy.plan(tree, &self.frame_moved)?;
+        }
         Ok(())
     }
 
+    /// Where world matrices of moved subtrees are computed now.
+    pub fn transforms(&self) -> Transforms {
+        self.transforms
+    }
+
+    /// Makes the transform hierarchy use `method` whatever the shape of the moved subtrees
+    /// (`None`: chosen from it, the default). For comparing the methods.
+    pub fn force_hierarchy_method(&mut self, method: Option<HierarchyMethod>) {
+        self.hierarchy.forced = method;
+    }
+
+    /// What the last upload's transform hierarchy pass did (none when nothing moved, or with
+    /// [`Transforms::Host`]).
+    pub fn last_hierarchy(&self) -> Option<HierarchyPlan> {
+        self.last_hierarchy
+    }
+
     /// Lays the arenas out again and rebuilds every entry.
-    fn relayout(&mut self, graph: &SceneGraph, tree: &SceneTree) -> RenderResult<()> {
+    fn relayout(&mut self, graph: &SceneGraph, tree: &mut SceneTree) -> RenderResult<()> {
         let (arenas, bytes) = GeometryArenas::upload(&self.device, graph)?;
         self.arenas = arenas;
         self.last_upload.geometry_bytes += bytes;
@@ -359,14 +439,18 @@ impl GpuScene {
     }
 
     /// Applies changes that fit the current arrays.
-    fn apply(&mut self, graph: &SceneGraph, tree: &SceneTree, changes: &TreeChanges) {
+    fn apply(&mut self, graph: &SceneGraph, tree: &mut SceneTree, changes: &TreeChanges) {
         for &t in &changes.dirty_matrices {
-            if tree.has_instances(t) {
+            if self.keeps_matrix(tree, t) {
                 self.set_matrix(tree, t);
                 self.matrix_gpu.queue(t);
+                if self.transforms == Transforms::Gpu {
+                    self.local_gpu.queue(t);
+                }
                 self.frame_dirty_matrices.push(t);
             }
         }
+        self.apply_moves(tree, &changes.moved);
         for &slot in &changes.dirty_materials {
             if (slot as usize) < self.materials.len() {
                 self.materials[slot as usize] = gpu_material(graph, slot);
@@ -374,7 +458,10 @@ impl GpuScene {
                 self.frame_dirty_materials.push(slot);
             }
         }
-        if !changes.dirty_matrices.is_empty() || !changes.dirty_materials.is_empty() {
+        if !changes.dirty_matrices.is_empty()
+            || !changes.moved.is_empty()
+            || !changes.dirty_materials.is_empty()
+        {
             self.parameters_generation += 1;
         }
         let touched: Vec<u32> = changes
@@ -393,6 +480,37 @@ impl GpuScene {
         self.last_touched = touched.len() as u64;
         if !touched.is_empty() {
             self.draws_generation += 1;
+        }
+    }
+
+    /// Applies moved paths: on the GPU, their local matrices go up marked as moved roots;
+    /// on the host, the world matrices of their subtrees are brought up to date and uploaded.
+    fn apply_moves(&mut self, tree: &mut SceneTree, moved: &[u32]) {
+        match self.transforms {
+            Transforms::Gpu => {
+                for &t in moved {
+                    self.locals[t as usize] = gpu_local(&tree.local(t));
+                    self.local_gpu.queue_marked(t);
+                    self.frame_moved.push(t);
+                }
+            }
+            Transforms::Host => {
+                if moved.is_empty() {
+                    return;
+                }
+                tree.refresh_worlds();
+                let mut stack: Vec<u32> = moved.to_vec();
+                while let Some(t) = stack.pop() {
+                    if tree.has_instances(t) {
+                        self.set_matrix(tree, t);
+                        self.matrix_gpu.queue(t);
+                        self.frame_dirty_matrices.push(t);
+                    }
+                    stack.extend_from_slice(tree.children(t));
+                }
+                self.frame_dirty_matrices.sort_unstable();
+                self.frame_dirty_matrices.dedup();
+            }
         }
     }
 
@@ -447,17 +565,35 @@ impl GpuScene {
             let item = cull_entry(instances, candidates, slot);
             out.extend_from_slice(&item.to_le_bytes());
         };
-        let ([matrix_count, material_count, record_count, _], bytes) = self.uploader.record(
-            &self.device,
-            pipelines,
-            command_buffer,
-            [
-                (&mut self.matrix_gpu, &matrix_bytes),
-                (&mut self.material_gpu, &material_bytes),
-                (&mut self.record_gpu, &record_bytes),
-                (&mut self.cull_gpu, &cull_entry_bytes),
-            ],
-        )?;
+        let locals = &self.locals;
+        let local_bytes = |slot: u32, out: &mut Vec<u8>| {
+            let item = locals.get(slot as usize).copied().unwrap_or_default();
+            out.extend_from_slice(bytemuck::cast_slice(&item));
+        };
+        let ([matrix_count, material_count, record_count, _, local_count], first_words, bytes) =
+            self.uploader.record(
+                &self.device,
+                pipelines,
+                command_buffer,
+                [
+                    (&mut self.matrix_gpu, &matrix_bytes),
+                    (&mut self.material_gpu, &material_bytes),
+                    (&mut self.record_gpu, &record_bytes),
+                    (&mut self.cull_gpu, &cull_entry_bytes),
+                    (&mut self.local_gpu, &local_bytes),
+                ],
+            )?;
+        self.frame_moved.clear();
+        self.last_hierarchy = match self.uploader.updates() {
+            Some(updates) if self.transforms == Transforms::Gpu => self.hierarchy.record(
+                pipelines,
+                command_buffer,
+                updates,
+                (first_words[4], local_count as u32),
+                (self.local_gpu.buffer.raw(), self.matrix_gpu.buffer.raw()),
+            )?,
+            _ => None,
+        };
         self.last_upload.matrices += matrix_count;
         self.last_upload.materials += material_count;
         self.last_upload.records += record_count;

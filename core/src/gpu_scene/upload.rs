@@ -1,5 +1,5 @@
 //! Sparse uploads (seed 000): the GPU scene's arrays (matrices, materials, instance records,
-//! cull entries) change a few items at a time. Each frame the changed items of every array are gathered on the
+//! cull entries, local matrices) change a few items at a time. Each frame the changed items of every array are gathered on the
 //! CPU into one compact buffer, each item behind its slot, and `scatter.comp` moves them into
 //! place on the GPU: the bytes uploaded are those of the changed items. An array that was
 //! (re)created is uploaded whole instead.
@@ -10,6 +10,7 @@ use crate::error::RenderResult;
 use crate::vk::raw as vk;
 
 use super::geometry::usage;
+use super::hierarchy::MOVED_ROOT_MARK;
 use crate::render::{Pipelines, ScatterParameters};
 use crate::vk::{record_dispatch, Buffer, DescriptorSets, Device, MemoryLocation};
 
@@ -74,6 +75,19 @@ impl GpuArray {
         }
     }
 
+    /// Queues slot `slot` with its slot word marked for a later pass (see
+    /// [`super::hierarchy::MOVED_ROOT_MARK`]); queued both ways, it is uploaded once, marked.
+    pub(super) fn queue_marked(&mut self, slot: u32) {
+        if !self.whole {
+            self.pending.push(slot | MOVED_ROOT_MARK);
+        }
+    }
+
+    /// Whether the whole array goes up with the next upload.
+    pub(super) fn is_whole(&self) -> bool {
+        self.whole
+    }
+
     /// Queues the whole array for the next upload.
     pub(super) fn queue_all(&mut self) {
         self.whole = true;
@@ -97,8 +111,9 @@ pub struct UploadStats {
     pub bytes: u64,
 }
 
-/// How many arrays the GPU scene keeps: matrices, materials, instance records, cull entries.
-pub(super) const ARRAYS: usize = 4;
+/// How many arrays the GPU scene keeps: matrices, materials, instance records, cull entries,
+/// local matrices.
+pub(super) const ARRAYS: usize = 5;
 
 /// The compact update buffer and the descriptor sets that point the scatter pipeline at it and
 /// at each array.
@@ -119,15 +134,17 @@ impl SparseUploader {
     /// Uploads what changed in `arrays`: whole arrays through a staging copy,
     /// changed items gathered and scattered by `scatter.comp`, recorded into `command_buffer`
     /// (before the frame's pass; the frame's barrier makes the writes visible to drawing).
-    /// Returns the items uploaded per array and the bytes sent.
+    /// Returns the items uploaded per array, where each array's items start in the update
+    /// buffer (in words; see [`SparseUploader::updates`]) and the bytes sent.
     pub(super) fn record(
         &mut self,
         device: &Arc<Device>,
         pipelines: &Pipelines,
         command_buffer: vk::CommandBuffer,
         mut arrays: [ArrayItems<'_>; ARRAYS],
-    ) -> RenderResult<([u64; ARRAYS], u64)> {
+    ) -> RenderResult<([u64; ARRAYS], [u32; ARRAYS], u64)> {
         let mut counts = [0u64; ARRAYS];
+        let mut first_words = [0u32; ARRAYS];
         let mut bytes = 0u64;
         let mut gathered = std::mem::take(&mut self.gathered);
         gathered.clear();
@@ -144,11 +161,21 @@ impl SparseUploader {
                 bytes += data.len() as u64;
             } else if !array.pending.is_empty() {
                 let first_word = (gathered.len() / 4) as u32;
-                array.pending.sort_unstable();
-                array.pending.dedup();
-                for &slot in &array.pending {
-                    gathered.extend_from_slice(&slot.to_le_bytes());
-                    item(slot, &mut gathered);
+                first_words[index] = first_word;
+                array
+                    .pending
+                    .sort_unstable_by_key(|word| word & !MOVED_ROOT_MARK);
+                // Once per slot, keeping a mark.
+                array.pending.dedup_by(|later, kept| {
+                    let same = *later & !MOVED_ROOT_MARK == *kept & !MOVED_ROOT_MARK;
+                    if same {
+                        *kept |= *later & MOVED_ROOT_MARK;
+                    }
+                    same
+                });
+                for &word in &array.pending {
+                    gathered.extend_from_slice(&word.to_le_bytes());
+                    item(word & !MOVED_ROOT_MARK, &mut gathered);
                 }
                 counts[index] = array.pending.len() as u64;
                 dispatches.push((index, first_word, array.pending.len() as u32));
@@ -168,7 +195,12 @@ impl SparseUploader {
         );
         self.gathered = gathered;
         result?;
-        Ok((counts, bytes + self.gathered.len() as u64))
+        Ok((counts, first_words, bytes + self.gathered.len() as u64))
+    }
+
+    /// The buffer the last upload's compact items went through, if any.
+    pub(super) fn updates(&self) -> Option<vk::Buffer> {
+        self.updates.as_ref().map(Buffer::raw)
     }
 
     /// Writes `gathered` into the update buffer and records one scatter dispatch per array

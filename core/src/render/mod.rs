@@ -12,7 +12,9 @@ mod stats;
 
 pub use camera::{Camera, DEFAULT_DIRECTION, DEFAULT_FOV_DEGREES};
 pub use output::SaveError;
-pub use pipeline::{FrameUniforms, Pipelines, ScatterParameters, PICK_FORMAT};
+pub use pipeline::{
+    FrameUniforms, HierarchyParameters, HierarchyStage, Pipelines, ScatterParameters, PICK_FORMAT,
+};
 pub use stats::FrameStats;
 
 use std::sync::Arc;

@@ -1,5 +1,5 @@
 //! Pipelines and their layouts: the per-frame descriptor set shared by every technique and the
-//! GPU scene's scatter compute pipeline.
+//! GPU scene's compute pipelines (the scatter of sparse uploads, the transform hierarchy).
 
 use std::sync::{Arc, OnceLock};
 
@@ -40,6 +40,38 @@ pub struct ScatterParameters {
     pub first_word: u32,
 }
 
+/// The stages of `transforms.comp` (see `gpu_scene::hierarchy`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum HierarchyStage {
+    /// Moved roots mark themselves.
+    Stamp = 0,
+    /// Ranges of the roots not below another, laid end to end.
+    Roots = 1,
+    /// Every node multiplies the locals up to its root.
+    Leaves = 2,
+    /// The nodes one depth below their roots multiply their parent's world matrix.
+    Level = 3,
+}
+
+/// Push constants of `transforms.comp`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct HierarchyParameters {
+    /// A [`HierarchyStage`].
+    pub stage: u32,
+    /// The index of the first local matrix's slot word in the update buffer.
+    pub first_word: u32,
+    /// Local matrices uploaded this frame (the moved roots among them are marked): the
+    /// entries of the roots list.
+    pub root_count: u32,
+    /// This frame's stamp (never 0).
+    pub stamp: u32,
+    /// Nodes in the moved ranges.
+    pub total: u32,
+    /// The depth below the roots a `Level` dispatch updates.
+    pub level: u32,
+}
+
 /// Every pipeline and layout the renderer uses.
 pub struct Pipelines {
     device: Arc<Device>,
@@ -51,6 +83,10 @@ pub struct Pipelines {
     /// Made on first use (each pipeline costs a shader compile and, on lavapipe, a JIT compile
     /// of 60–150 ms, so only what a renderer uses is made).
     scatter: OnceLock<Pipeline>,
+    /// The transform hierarchy's set: updates, locals, nodes, order, stamps, roots, worlds.
+    hierarchy_set_layout: DescriptorSetLayout,
+    hierarchy_layout: PipelineLayout,
+    hierarchy: OnceLock<Pipeline>,
 }
 
 impl Pipelines {
@@ -73,12 +109,24 @@ impl Pipelines {
             std::mem::size_of::<ScatterParameters>() as u32,
             compute,
         )?;
+        let hierarchy_set_layout =
+            DescriptorSetLayout::new(device, "hierarchy set layout", &[compute_storage; 7])?;
+        let hierarchy_layout = PipelineLayout::new(
+            device,
+            "hierarchy layout",
+            &[hierarchy_set_layout.raw()],
+            std::mem::size_of::<HierarchyParameters>() as u32,
+            compute,
+        )?;
         Ok(Self {
             device: Arc::clone(device),
             frame_set_layout,
             scatter_set_layout,
             scatter_layout,
             scatter: OnceLock::new(),
+            hierarchy_set_layout,
+            hierarchy_layout,
+            hierarchy: OnceLock::new(),
         })
     }
 
@@ -99,18 +147,42 @@ impl Pipelines {
 
     /// The scatter compute pipeline.
     pub fn scatter(&self) -> RenderResult<vk::Pipeline> {
-        if let Some(pipeline) = self.scatter.get() {
+        self.compute(&self.scatter, &self.scatter_layout, &shaders::SCATTER_COMP)
+    }
+
+    /// The transform hierarchy's set layout.
+    pub fn hierarchy_set_layout(&self) -> vk::DescriptorSetLayout {
+        self.hierarchy_set_layout.raw()
+    }
+
+    /// The transform hierarchy's pipeline layout.
+    pub fn hierarchy_layout(&self) -> vk::PipelineLayout {
+        self.hierarchy_layout.raw()
+    }
+
+    /// The transform hierarchy's compute pipeline.
+    pub fn hierarchy(&self) -> RenderResult<vk::Pipeline> {
+        self.compute(
+            &self.hierarchy,
+            &self.hierarchy_layout,
+            &shaders::TRANSFORMS_COMP,
+        )
+    }
+
+    /// The compute pipeline in `slot`, made from `shader` on first use.
+    fn compute(
+        &self,
+        slot: &OnceLock<Pipeline>,
+        layout: &PipelineLayout,
+        shader: &ShaderSource,
+    ) -> RenderResult<vk::Pipeline> {
+        if let Some(pipeline) = slot.get() {
             return Ok(pipeline.raw());
         }
-        let shader = module(&self.device, &shaders::SCATTER_COMP)?;
-        let made = Pipeline::compute(
-            &self.device,
-            &self.scatter_layout,
-            &shader,
-            "scatter pipeline",
-        )?;
+        let module = module(&self.device, shader)?;
+        let made = Pipeline::compute(&self.device, layout, &module, shader.name)?;
         // Another thread may have made one meanwhile: the first is kept, `made` is dropped.
-        Ok(self.scatter.get_or_init(|| made).raw())
+        Ok(slot.get_or_init(|| made).raw())
     }
 }
 

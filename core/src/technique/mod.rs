@@ -17,4 +17,4 @@ pub use registry::{
     default_plugin_dirs, feature_bits, feature_names, PluginRegistry, Refusal, TechniqueEntry,
     TechniqueKind, BUILT_IN_LIBRARY, PLUGIN_PATH_VARIABLE,
 };
-pub use set::{check_combination, Combination, Techniques};
+pub use set::{check_combination, Combination, Techniques, Transforms};

@@ -93,8 +93,19 @@ fn trait_name(bit: u64) -> &'static str {
         abi::CADR_TRAIT_DRAWS_GPU_COMMANDS => {
             "a submission that draws the GPU-written commands (individual-indirect-count)"
         }
+        abi::CADR_TRAIT_READS_HOST_MATRICES => "a technique that reads world matrices on the host",
         _ => "an unknown trait",
     }
+}
+
+/// Where the world matrices of moved subtrees are computed.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Transforms {
+    /// On the host, in f64, and uploaded per changed slot: what techniques that read host
+    /// matrices need.
+    Host,
+    /// On the GPU (the transform hierarchy): a moved node uploads its local matrix only.
+    Gpu,
 }
 
 /// Why a combination cannot work, or `Ok` when it can.
@@ -412,6 +423,21 @@ impl Techniques {
         let mut combination = self.combination();
         combination.set(kind, name);
         self.select(&combination)
+    }
+
+    /// Where the active combination needs world matrices kept: on the host when one of its
+    /// techniques reads them there (`CADR_TRAIT_READS_HOST_MATRICES`, or a library older than
+    /// ABI 1.4, which could not say), otherwise on the GPU only.
+    pub fn transforms(&self) -> Transforms {
+        let on_host = self.active.iter().flatten().any(|active| {
+            active.entry.provides & abi::CADR_TRAIT_READS_HOST_MATRICES != 0
+                || active.entry.abi_version.1 < 4
+        });
+        if on_host {
+            Transforms::Host
+        } else {
+            Transforms::Gpu
+        }
     }
 
     pub(crate) fn get(&self, kind: TechniqueKind) -> RenderResult<&Active> {

@@ -22,6 +22,11 @@ pub struct TreeChanges {
     pub visibility_changed: Vec<u32>,
     /// Live tree nodes whose world matrix changed (the matrix slots to upload).
     pub dirty_matrices: Vec<u32>,
+    /// Live tree nodes whose local matrix moved without anything else changing: the world
+    /// matrices of their whole subtrees changed but are not listed in `dirty_matrices` (the
+    /// GPU transform hierarchy recomputes them; a reader that keeps world matrices on the host
+    /// walks the subtrees, see [`super::SceneTree::refresh_worlds`]).
+    pub moved: Vec<u32>,
     /// Material slots whose parameters changed.
     pub dirty_materials: Vec<u32>,
     /// Geometry slots whose data was replaced.
@@ -36,6 +41,7 @@ impl TreeChanges {
             && self.changed.is_empty()
             && self.visibility_changed.is_empty()
             && self.dirty_matrices.is_empty()
+            && self.moved.is_empty()
             && self.dirty_materials.is_empty()
             && self.dirty_geometries.is_empty()
     }
@@ -49,30 +55,33 @@ pub(super) struct ChangeBits {
     pub(super) changed: BitSet,
     pub(super) visibility_changed: BitSet,
     pub(super) dirty_matrices: BitSet,
+    pub(super) moved: BitSet,
     pub(super) dirty_materials: BitSet,
     pub(super) dirty_geometries: BitSet,
 }
 
 impl ChangeBits {
-    fn sets(&self) -> [&BitSet; 7] {
+    fn sets(&self) -> [&BitSet; 8] {
         [
             &self.created,
             &self.destroyed,
             &self.changed,
             &self.visibility_changed,
             &self.dirty_matrices,
+            &self.moved,
             &self.dirty_materials,
             &self.dirty_geometries,
         ]
     }
 
-    fn sets_mut(&mut self) -> [&mut BitSet; 7] {
+    fn sets_mut(&mut self) -> [&mut BitSet; 8] {
         [
             &mut self.created,
             &mut self.destroyed,
             &mut self.changed,
             &mut self.visibility_changed,
             &mut self.dirty_matrices,
+            &mut self.moved,
             &mut self.dirty_materials,
             &mut self.dirty_geometries,
         ]
@@ -113,6 +122,11 @@ impl ChangeBits {
                 .collect(),
             dirty_matrices: self
                 .dirty_matrices
+                .iter()
+                .filter(|&t| node_alive.contains(t))
+                .collect(),
+            moved: self
+                .moved
                 .iter()
                 .filter(|&t| node_alive.contains(t))
                 .collect(),

@@ -56,7 +56,19 @@ pub struct SceneTree {
     node_graph: Vec<NodeHandle>,
     node_parent: Vec<u32>,
     node_children: Vec<Vec<u32>>,
+    /// World matrices, a cache: up to date except in the subtrees of `stale_roots`.
     node_world: Vec<DMat4>,
+    /// The transform each path applies to its subtree (a Transform's matrix, a billboard's
+    /// turn, identity otherwise).
+    node_local: Vec<DMat4>,
+    /// Paths moved by the fast path (`moved` changes) whose subtrees' cached world matrices
+    /// are stale until [`SceneTree::refresh_worlds`].
+    stale_roots: Vec<u32>,
+    /// LOD and billboard paths in each path's subtree (itself included): a subtree without
+    /// them moves by its local matrix alone.
+    view_dependent_below: Vec<u32>,
+    /// Bumped whenever tree nodes are created or removed.
+    structure_generation: u64,
     node_instances: Vec<Vec<u32>>,
     node_visible: BitSet,
     node_highlighted: BitSet,
@@ -173,6 +185,8 @@ impl SceneTree {
                 self.node_parent.push(NONE);
                 self.node_children.push(Vec::new());
                 self.node_world.push(DMat4::IDENTITY);
+                self.node_local.push(DMat4::IDENTITY);
+                self.view_dependent_below.push(0);
                 self.node_instances.push(Vec::new());
                 self.node_graph.len() as u32 - 1
             }
@@ -180,7 +194,9 @@ impl SceneTree {
         let i = id as usize;
         self.node_graph[i] = handle;
         self.node_parent[i] = parent;
+        self.view_dependent_below[i] = 0;
         self.node_alive.insert(id);
+        self.structure_generation += 1;
         let slot = handle.index() as usize;
         if slot >= self.paths_of.len() {
             self.paths_of.resize(slot + 1, Vec::new());
@@ -245,12 +261,15 @@ impl SceneTree {
             if first == NONE {
                 first = id;
             }
-            let (world, state) = self.placement(parent, node, link_shown);
+            let parent_world = self.parent_world(parent, first == id);
+            let (local, world, state) = self.placement(parent, &parent_world, node, link_shown);
             self.node_world[id as usize] = world;
+            self.node_local[id as usize] = local;
             self.set_node_state(id, state);
             self.changes.pending.dirty_matrices.insert(id);
             if matches!(node.kind, NodeKind::Lod { .. } | NodeKind::Billboard) {
                 self.view_dependent.insert(id);
+                self.count_view_dependent(id, 1);
             }
             if parent != NONE {
                 let siblings = &mut self.node_children[parent as usize];
@@ -297,28 +316,55 @@ impl SceneTree {
         first
     }
 
-    /// World matrix and state of a path to `node` below tree node `parent` (`NONE` for the
-    /// root), shown by its parent or not.
-    fn placement(&self, parent: u32, node: &GraphNode, link_shown: bool) -> (DMat4, PathState) {
-        let (parent_world, parent_state) = if parent == NONE {
-            (
-                DMat4::IDENTITY,
-                PathState {
-                    visible: true,
-                    highlighted: false,
-                    pickable: true,
-                },
-            )
+    /// The world matrix of tree node `parent` (identity for `NONE`) as a child's placement
+    /// needs it: the top of a walk (`top`) computes it along the path, since the cache may be
+    /// stale there; below the top the walk has just refreshed it.
+    fn parent_world(&self, parent: u32, top: bool) -> DMat4 {
+        if parent == NONE {
+            DMat4::IDENTITY
+        } else if top {
+            self.world(parent)
         } else {
-            (self.node_world[parent as usize], self.node_state(parent))
+            self.node_world[parent as usize]
+        }
+    }
+
+    /// Adds `delta` to the view-dependent count of `t` and of every path above it.
+    fn count_view_dependent(&mut self, t: u32, delta: i64) {
+        let mut p = t;
+        while p != NONE {
+            let count = &mut self.view_dependent_below[p as usize];
+            *count = (i64::from(*count) + delta) as u32;
+            p = self.node_parent[p as usize];
+        }
+    }
+
+    /// Local matrix, world matrix and state of a path to `node` below tree node `parent`
+    /// (`NONE` for the root) whose world matrix is `parent_world`, shown by its parent or not.
+    fn placement(
+        &self,
+        parent: u32,
+        parent_world: &DMat4,
+        node: &GraphNode,
+        link_shown: bool,
+    ) -> (DMat4, DMat4, PathState) {
+        let parent_state = if parent == NONE {
+            PathState {
+                visible: true,
+                highlighted: false,
+                pickable: true,
+            }
+        } else {
+            self.node_state(parent)
         };
-        let world = parent_world * local_transform(node, &parent_world, self.eye);
+        let local = local_transform(node, parent_world, self.eye);
+        let world = *parent_world * local;
         let state = PathState {
             visible: parent_state.visible && link_shown && node.flags.visible,
             highlighted: parent_state.highlighted || node.flags.highlighted,
             pickable: parent_state.pickable && node.flags.pickable,
         };
-        (world, state)
+        (local, world, state)
     }
 
     fn node_state(&self, t: u32) -> PathState {
@@ -337,6 +383,12 @@ impl SceneTree {
 
     /// Removes tree node `id` and everything below it.
     fn remove_subtree(&mut self, id: u32) {
+        let view_dependent = self.view_dependent_below[id as usize];
+        let parent = self.node_parent[id as usize];
+        if view_dependent > 0 && parent != NONE {
+            self.count_view_dependent(parent, -i64::from(view_dependent));
+        }
+        self.structure_generation += 1;
         let mut stack = vec![id];
         while let Some(t) = stack.pop() {
             let i = t as usize;
@@ -357,6 +409,7 @@ impl SceneTree {
             self.node_unpickable.remove(t);
             self.view_dependent.remove(t);
             self.changes.pending.dirty_matrices.remove(t);
+            self.changes.pending.moved.remove(t);
             self.free_nodes.push(t);
         }
     }
@@ -377,13 +430,7 @@ impl SceneTree {
             return false;
         };
         parent_node.children().get(position).is_some_and(|link| {
-            shows_child(
-                parent_node,
-                position,
-                link,
-                &self.node_world[parent as usize],
-                self.eye,
-            )
+            shows_child(parent_node, position, link, &self.world(parent), self.eye)
         })
     }
 
@@ -397,7 +444,9 @@ impl SceneTree {
                 continue;
             };
             let parent = self.node_parent[i];
-            let (world, state) = self.placement(parent, node, link_shown);
+            let parent_world = self.parent_world(parent, t == id);
+            let (local, world, state) = self.placement(parent, &parent_world, node, link_shown);
+            self.node_local[i] = local;
             let old = self.node_state(t);
             if state != old {
                 self.set_node_state(t, state);
@@ -475,7 +524,7 @@ impl SceneTree {
             for child in removed {
                 self.remove_subtree(child);
             }
-            let world = self.node_world[t as usize];
+            let world = self.world(t);
             for (position, link) in new.iter().enumerate().take(new.len() - suffix).skip(prefix) {
                 let shown = shows_child(node, position, link, &world, self.eye);
                 self.build_subtree(graph, t, position, link.node, shown);
@@ -507,9 +556,8 @@ impl SceneTree {
         }
         for event in &events {
             match *event {
-                GraphEvent::MatrixChanged(n)
-                | GraphEvent::FlagsChanged(n)
-                | GraphEvent::SelectionChanged(n) => {
+                GraphEvent::MatrixChanged(n) => self.move_paths(graph, n, &mut refresh),
+                GraphEvent::FlagsChanged(n) | GraphEvent::SelectionChanged(n) => {
                     refresh.extend(self.current_paths(n));
                 }
                 GraphEvent::PartMaterialChanged { node, part } => {
@@ -575,6 +623,52 @@ impl SceneTree {
                 self.refresh_subtree(graph, t);
             }
         }
+    }
+
+    /// Applies a new matrix of graph node `n` to its paths. A path whose subtree holds no LOD
+    /// or billboard (whose choice depends on world matrices) takes the fast path: its local
+    /// matrix is replaced and it is reported as `moved`, in O(1), and the world matrices below
+    /// it are left to whoever needs them (the GPU transform hierarchy, or
+    /// [`SceneTree::refresh_worlds`]). Other paths go to `refresh`.
+    fn move_paths(&mut self, graph: &SceneGraph, n: NodeHandle, refresh: &mut Vec<u32>) {
+        let Ok(node) = graph.node(n) else { return };
+        for t in self.current_paths(n) {
+            if self.view_dependent_below[t as usize] > 0 {
+                refresh.push(t);
+                continue;
+            }
+            self.node_local[t as usize] = local_transform(node, &DMat4::IDENTITY, self.eye);
+            self.changes.pending.moved.insert(t);
+            self.stale_roots.push(t);
+        }
+    }
+
+    /// Brings the cached world matrices of moved subtrees up to date (work in proportion to
+    /// those subtrees). Readers that keep world matrices on the host call it before walking
+    /// the subtrees of `moved` paths; [`SceneTree::world`] is right without it.
+    pub fn refresh_worlds(&mut self) {
+        if self.stale_roots.is_empty() {
+            return;
+        }
+        // Each root starts from its parent's chain, so the order does not matter.
+        let mut roots = std::mem::take(&mut self.stale_roots);
+        roots.sort_unstable();
+        roots.dedup();
+        // Chains are computed while the list is non-empty: keep it so until the end.
+        self.stale_roots = roots.clone();
+        for &root in &roots {
+            if !self.node_alive.contains(root) {
+                continue;
+            }
+            let parent = self.node_parent[root as usize];
+            let mut stack = vec![(root, self.parent_world(parent, true))];
+            while let Some((t, parent_world)) = stack.pop() {
+                let world = parent_world * self.node_local[t as usize];
+                self.node_world[t as usize] = world;
+                stack.extend(self.node_children[t as usize].iter().map(|&c| (c, world)));
+            }
+        }
+        self.stale_roots.clear();
     }
 
     /// Moves the eye: refreshes the subtrees of LOD and billboard paths (only).
@@ -676,9 +770,54 @@ impl SceneTree {
         self.node_alive.contains(id) && !self.node_instances[id as usize].is_empty()
     }
 
-    /// The world matrix of tree node `id`.
+    /// The world matrix of tree node `id`: the cached one, or, while moved subtrees are
+    /// stale, the product of the local matrices along the path (O(depth), multiplied from the
+    /// root down as the cache is, so the result is the same to the bit).
     pub fn world(&self, id: u32) -> DMat4 {
-        self.node_world[id as usize]
+        if self.stale_roots.is_empty() {
+            return self.node_world[id as usize];
+        }
+        let mut path = Vec::with_capacity(16);
+        let mut t = id;
+        while t != NONE {
+            path.push(t);
+            t = self.node_parent[t as usize];
+        }
+        path.iter().rev().fold(DMat4::IDENTITY, |world, &t| {
+            world * self.node_local[t as usize]
+        })
+    }
+
+    /// The local matrix of tree node `id` (what it applies to its subtree).
+    pub fn local(&self, id: u32) -> DMat4 {
+        self.node_local[id as usize]
+    }
+
+    /// The parent of tree node `id`, `None` for the root.
+    pub fn parent(&self, id: u32) -> Option<u32> {
+        let parent = self.node_parent[id as usize];
+        (parent != NONE).then_some(parent)
+    }
+
+    /// Whether tree node `id` is alive.
+    pub fn is_node_alive(&self, id: u32) -> bool {
+        self.node_alive.contains(id)
+    }
+
+    /// The root tree node.
+    pub fn root(&self) -> u32 {
+        self.root
+    }
+
+    /// The children of tree node `id`, in order.
+    pub fn children(&self, id: u32) -> &[u32] {
+        &self.node_children[id as usize]
+    }
+
+    /// Bumped whenever tree nodes are created or removed (a layout of the tree built at one
+    /// value holds while it stays).
+    pub fn structure_generation(&self) -> u64 {
+        self.structure_generation
     }
 
     /// The graph nodes along the path of tree node `id`, from the root.
@@ -695,7 +834,8 @@ impl SceneTree {
 
     /// Bytes held by the tree, split into (world matrices, everything else).
     pub fn memory_bytes(&self) -> (usize, usize) {
-        let matrices = self.node_world.capacity() * std::mem::size_of::<DMat4>();
+        let matrices = (self.node_world.capacity() + self.node_local.capacity())
+            * std::mem::size_of::<DMat4>();
         let vec_heap = |v: &Vec<Vec<u32>>| {
             v.iter().map(|c| c.capacity() * 4).sum::<usize>() + v.capacity() * 24
         };
@@ -705,6 +845,8 @@ impl SceneTree {
             + vec_heap(&self.node_instances)
             + vec_heap(&self.paths_of)
             + self.free_nodes.capacity() * 4
+            + self.stale_roots.capacity() * 4
+            + self.view_dependent_below.capacity() * 4
             + (self.inst_node.capacity()
                 + self.inst_part.capacity()
                 + self.inst_geometry.capacity()

@@ -36,7 +36,7 @@ use std::ffi::{c_char, c_void};
 /// Major version of this ABI: a library built for another major version is refused.
 pub const CADR_PLUGIN_ABI_MAJOR: u32 = 1;
 /// Minor version of this ABI: additions that older readers may ignore.
-pub const CADR_PLUGIN_ABI_MINOR: u32 = 3;
+pub const CADR_PLUGIN_ABI_MINOR: u32 = 4;
 /// `(major << 16) | minor`, what [`CadrPluginVersionFn`] returns.
 pub const CADR_PLUGIN_ABI_VERSION: u32 = (CADR_PLUGIN_ABI_MAJOR << 16) | CADR_PLUGIN_ABI_MINOR;
 
@@ -116,6 +116,16 @@ pub const CADR_TRAIT_SECONDARY_COMMAND_BUFFERS: CadrTraitBits = 1 << 4;
 /// ([`CadrRecordContext::gpu_draws`]), draws each pass from them with
 /// `vkCmdDrawIndexedIndirectCount` instead of its own lists. GPU culling needs it.
 pub const CADR_TRAIT_DRAWS_GPU_COMMANDS: CadrTraitBits = 1 << 5;
+/// Since ABI 1.4. Any kind, an announcement rather than an offer (no technique needs it): the
+/// technique reads world matrices on the host ([`CadrSceneView::matrices`],
+/// [`CadrSceneView::dirty_matrices`] or [`CadrCullInput::world_matrices`]). While no active
+/// technique sets it (and every one comes from a library of ABI 1.4 or later), the host keeps
+/// the transform hierarchy on the GPU: a moved assembly node uploads only its local matrix and a
+/// compute pass updates the world matrices of its subtree in [`CadrSceneView::matrix_buffer`];
+/// the host arrays then lag behind for moved subtrees and `dirty_matrices` lists only the slots
+/// the host itself wrote. A technique that reads matrices from the matrix buffer on the GPU
+/// leaves it clear.
+pub const CADR_TRAIT_READS_HOST_MATRICES: CadrTraitBits = 1 << 6;
 
 /// A message buffer the host hands to functions that can fail: the plugin writes a
 /// NUL-terminated UTF-8 message of at most `capacity` bytes (including the NUL).
@@ -503,13 +513,15 @@ pub struct CadrSceneView {
     pub parameters_generation: u64,
     /// Number of matrix slots.
     pub matrix_count: u32,
-    /// The matrices on the CPU (`matrix_count`).
+    /// The matrices on the CPU (`matrix_count`); behind the GPU for moved subtrees unless an
+    /// active technique sets [`CADR_TRAIT_READS_HOST_MATRICES`].
     pub matrices: *const CadrMatrix,
     /// Number of material slots.
     pub material_count: u32,
     /// The materials on the CPU (`material_count`).
     pub materials: *const CadrMaterial,
-    /// Matrix slots changed since the last frame.
+    /// Matrix slots changed since the last frame (the host's writes only, unless an active
+    /// technique sets [`CADR_TRAIT_READS_HOST_MATRICES`]).
     pub dirty_matrices: *const u32,
     /// Number of entries at `dirty_matrices`.
     pub dirty_matrix_count: u32,
@@ -527,7 +539,8 @@ pub struct CadrSceneView {
     pub index_buffer: CadrBufferRef,
     /// Edge indices (u32 line list).
     pub wire_index_buffer: CadrBufferRef,
-    /// [`CadrMatrix`] per matrix slot.
+    /// [`CadrMatrix`] per matrix slot, the world matrix of every tree node (with the GPU
+    /// transform hierarchy, written by its compute pass before the frame's techniques run).
     pub matrix_buffer: CadrBufferRef,
     /// [`CadrMaterial`] per material slot.
     pub material_buffer: CadrBufferRef,

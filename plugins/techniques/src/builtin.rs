@@ -26,7 +26,9 @@ technique_library! {
         parameters Push {
             name: "push",
             description: "Matrix and material values pushed with every draw (push constants; the seeds' glUniform/ubosub).",
-            features: 0, provides: abi::CADR_TRAIT_PARAMETERS_IN_COMMANDS, needs: 0,
+            features: 0,
+            provides: abi::CADR_TRAIT_PARAMETERS_IN_COMMANDS | abi::CADR_TRAIT_READS_HOST_MATRICES,
+            needs: 0,
         },
         submission Individual {
             name: "individual",

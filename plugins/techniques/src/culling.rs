@@ -144,7 +144,7 @@ technique_library! {
         culling Frustum {
             name: "frustum",
             description: "CPU frustum culling of part bounding spheres on worker threads; only changed visibility bits are applied.",
-            features: 0, provides: 0, needs: 0,
+            features: 0, provides: abi::CADR_TRAIT_READS_HOST_MATRICES, needs: 0,
         },
         gpu_culling crate::gpu_culling::GpuFrustum {
             name: "gpu-frustum",

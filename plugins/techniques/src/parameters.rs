@@ -519,7 +519,7 @@ technique_library! {
         parameters UboDynamic {
             name: "ubo-dynamic",
             description: "Uniform buffers bound with dynamic offsets, one set per update frequency: matrix per object, material per batch (the seeds' uborange).",
-            features: 0, provides: 0, needs: 0,
+            features: 0, provides: abi::CADR_TRAIT_READS_HOST_MATRICES, needs: 0,
         },
         parameters SsboIndex {
             name: "ssbo-index",

@@ -163,7 +163,12 @@ fn check_gpu_worlds(scene: &GpuScene, tree: &SceneTree) -> Result<usize, TestCas
         .collect();
     let mut checked = 0;
     for t in 0..tree.node_capacity() as u32 {
-        if !tree.is_node_alive(t) {
+        // On the host path only Geo paths keep a matrix slot; on the GPU path every path.
+        let keeps = match scene.transforms() {
+            Transforms::Gpu => tree.is_node_alive(t),
+            Transforms::Host => tree.has_instances(t),
+        };
+        if !keeps {
             continue;
         }
         let gpu = &floats[t as usize * 16..t as usize * 16 + 16];
@@ -376,5 +381,33 @@ fn moving_assemblies_draws_like_a_fresh_upload() {
     assert!(refused.contains("sync"), "{refused}");
     on_gpu.render(&assembly.graph, &mut tree, &camera).unwrap();
     drop((on_gpu, on_host));
+    assert_no_validation_errors(&device);
+}
+
+#[test]
+fn a_planned_pass_is_dropped_when_the_scene_is_uploaded_afresh() {
+    // A move synced on the GPU path, then, before any upload, a sync that switches to the host
+    // path (which uploads every matrix): the planned hierarchy pass must not run on what the
+    // next upload holds.
+    let device = test_device();
+    let renderer = Renderer::new(&device, 1, 1).unwrap();
+    let mut assembly = Assembly::new();
+    let mut tree = SceneTree::build(&mut assembly.graph);
+    let mut scene = GpuScene::new(&device, &assembly.graph, &mut tree, Transforms::Gpu).unwrap();
+    scene.flush_uploads(renderer.pipelines()).unwrap();
+    let moved = assembly.assemblies[1];
+    let matrix = placement(0.3, 1.5, DVec3::new(FAR, 2.0, 0.0));
+    assembly.graph.set_matrix(moved, matrix).unwrap();
+    tree.update(&mut assembly.graph);
+    scene
+        .sync(&assembly.graph, &mut tree, Transforms::Gpu)
+        .unwrap();
+    scene
+        .sync(&assembly.graph, &mut tree, Transforms::Host)
+        .unwrap();
+    scene.flush_uploads(renderer.pipelines()).unwrap();
+    assert_eq!(scene.last_hierarchy(), None);
+    check_gpu_worlds(&scene, &tree).unwrap();
+    drop(scene);
     assert_no_validation_errors(&device);
 }

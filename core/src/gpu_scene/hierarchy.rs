@@ -182,6 +182,11 @@ impl TransformHierarchy {
         }
     }
 
+    /// Forgets this frame's plan (every world matrix goes up from the host instead).
+    pub(super) fn cancel(&mut self) {
+        self.plan = None;
+    }
+
     /// Plans this frame's pass for `moved` roots (alive tree nodes, sorted, without repeats),
     /// laying the tree out again first if its structure changed. None when nothing moved.
     pub(super) fn plan(
@@ -269,6 +274,9 @@ impl TransformHierarchy {
         let Some(plan) = self.plan.take() else {
             return Ok(None);
         };
+        if local_count == 0 || plan.nodes == 0 {
+            return Ok(None);
+        }
         let (Some(nodes), Some(order), Some(stamps), Some(roots)) =
             (&self.nodes, &self.order, &self.stamps, &self.roots)
         else {

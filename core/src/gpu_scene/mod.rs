@@ -210,6 +210,7 @@ impl GpuScene {
         self.matrices = vec![abi::CadrMatrix::default(); nodes];
         self.locals = Vec::new();
         self.frame_moved.clear();
+        self.hierarchy.cancel();
         let on_gpu = self.transforms == Transforms::Gpu;
         if on_gpu {
             self.locals = vec![[0.0; LOCAL_WORDS]; nodes];

@@ -592,3 +592,26 @@ fn screen_size_lod_switches_to_coarser_children_as_parts_shrink_on_screen() {
         .to_string();
     assert!(error.contains("decreasing"), "{error}");
 }
+
+#[test]
+fn moving_the_same_nodes_every_frame_without_refreshing_holds_memory_steady() {
+    // A reader that never asks for world matrices on the host (the GPU transform hierarchy)
+    // must not make the tree's bookkeeping grow frame after frame.
+    let mut world = World::new();
+    let g = &mut world.graph;
+    let placement = g.create_transform("placement", DMat4::IDENTITY).unwrap();
+    g.add_child(g.root(), placement).unwrap();
+    let mut tree = SceneTree::build(g);
+    let mut memory = Vec::new();
+    for frame in 0..1000 {
+        let at = DVec3::new(f64::from(frame), 0.0, 0.0);
+        g.set_matrix(placement, DMat4::from_translation(at))
+            .unwrap();
+        tree.update(g);
+        assert_eq!(tree.take_changes().moved.len(), 1);
+        if frame == 10 || frame == 999 {
+            memory.push(tree.memory_bytes());
+        }
+    }
+    assert_eq!(memory[0], memory[1], "tree bytes after 10 and 1000 moves");
+}

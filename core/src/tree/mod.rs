@@ -62,8 +62,11 @@ pub struct SceneTree {
     /// turn, identity otherwise).
     node_local: Vec<DMat4>,
     /// Paths moved by the fast path (`moved` changes) whose subtrees' cached world matrices
-    /// are stale until [`SceneTree::refresh_worlds`].
+    /// are stale until [`SceneTree::refresh_worlds`], each once (`stale_marks`): a reader that
+    /// never refreshes (the GPU transform hierarchy) keeps the list as long as the set of
+    /// distinct moved paths, not growing frame after frame.
     stale_roots: Vec<u32>,
+    stale_marks: BitSet,
     /// LOD and billboard paths in each path's subtree (itself included): a subtree without
     /// them moves by its local matrix alone.
     view_dependent_below: Vec<u32>,
@@ -639,7 +642,10 @@ impl SceneTree {
             }
             self.node_local[t as usize] = local_transform(node, &DMat4::IDENTITY, self.eye);
             self.changes.pending.moved.insert(t);
-            self.stale_roots.push(t);
+            if !self.stale_marks.contains(t) {
+                self.stale_marks.insert(t);
+                self.stale_roots.push(t);
+            }
         }
     }
 
@@ -650,12 +656,9 @@ impl SceneTree {
         if self.stale_roots.is_empty() {
             return;
         }
-        // Each root starts from its parent's chain, so the order does not matter.
-        let mut roots = std::mem::take(&mut self.stale_roots);
-        roots.sort_unstable();
-        roots.dedup();
-        // Chains are computed while the list is non-empty: keep it so until the end.
-        self.stale_roots = roots.clone();
+        // Each root starts from its parent's chain (computed while the list is non-empty, so
+        // it stays until the end), so the order does not matter.
+        let roots = self.stale_roots.clone();
         for &root in &roots {
             if !self.node_alive.contains(root) {
                 continue;
@@ -669,6 +672,7 @@ impl SceneTree {
             }
         }
         self.stale_roots.clear();
+        self.stale_marks.clear();
     }
 
     /// Moves the eye: refreshes the subtrees of LOD and billboard paths (only).
@@ -846,6 +850,7 @@ impl SceneTree {
             + vec_heap(&self.paths_of)
             + self.free_nodes.capacity() * 4
             + self.stale_roots.capacity() * 4
+            + self.stale_marks.memory_bytes()
             + self.view_dependent_below.capacity() * 4
             + (self.inst_node.capacity()
                 + self.inst_part.capacity()

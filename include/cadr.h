@@ -1120,6 +1120,25 @@ enum CadrResult cadr_renderer_set_shade_mode(CadrRenderer renderer, uint32_t mod
 // `mode` is null or writable.
 enum CadrResult cadr_renderer_shade_mode(CadrRenderer renderer, uint32_t *mode);
 
+// Sets the sub-pixel culling threshold: with a GPU culler (`gpu-frustum`, `gpu-occlusion`)
+// active, parts whose bounding sphere projects smaller than `pixels` across are not drawn, in
+// any pass (picking included). 0, the default, keeps every part (CAD users count small parts);
+// CPU cullers ignore the threshold. Applies from the next frame.
+//
+// Returns `CADR_RESULT_OK`, `CADR_RESULT_INVALID_ARGUMENT` (negative, infinite or NaN) or a
+// handle error. Ownership: nothing changes hands. Thread-safety: as `cadr_renderer_create`.
+enum CadrResult cadr_renderer_set_min_pixels(CadrRenderer renderer, float pixels);
+
+// Writes the sub-pixel culling threshold in pixels (0: off).
+//
+// Returns `CADR_RESULT_OK`, `CADR_RESULT_NULL_ARGUMENT` or a handle error.
+// Ownership: the output is the caller's; cadr keeps no pointer to it.
+// Thread-safety: as `cadr_renderer_create`.
+//
+// # Safety
+// `pixels` is null or writable.
+enum CadrResult cadr_renderer_min_pixels(CadrRenderer renderer, float *pixels);
+
 // Renders one frame of `scene` seen by `camera`: applies the host's edits since the last
 // frame (incrementally), culls, draws with the current techniques and, for a window, presents.
 // `stats` may be NULL.

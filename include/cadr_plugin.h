@@ -11,7 +11,7 @@
 #define CADR_PLUGIN_ABI_MAJOR 1
 
 // Minor version of this ABI: additions that older readers may ignore.
-#define CADR_PLUGIN_ABI_MINOR 4
+#define CADR_PLUGIN_ABI_MINOR 5
 
 // `(major << 16) | minor`, what [`CadrPluginVersionFn`] returns.
 #define CADR_PLUGIN_ABI_VERSION ((CADR_PLUGIN_ABI_MAJOR << 16) | CADR_PLUGIN_ABI_MINOR)
@@ -639,6 +639,12 @@ typedef struct CadrGpuCullContext {
   uint64_t depth_view;
   // `VkImageLayout` of the depth image during the call.
   int32_t depth_layout;
+  // Since ABI 1.5 (read it only when `size` covers it): the smallest projected diameter, in
+  // pixels, of a part's bounding sphere that is still drawn; a part whose sphere projects
+  // smaller is culled from every pass (pick included, so what is picked is what is seen).
+  // 0 (the default) culls nothing for its size: CAD users count small parts. A part whose
+  // sphere holds the eye is never culled for its size.
+  float min_pixels;
 } CadrGpuCullContext;
 
 // Culling vtable ([`CADR_KIND_CULLING`]).

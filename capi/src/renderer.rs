@@ -563,6 +563,47 @@ pub unsafe extern "C" fn cadr_renderer_shade_mode(
     })
 }
 
+/// Sets the sub-pixel culling threshold: with a GPU culler (`gpu-frustum`, `gpu-occlusion`)
+/// active, parts whose bounding sphere projects smaller than `pixels` across are not drawn, in
+/// any pass (picking included). 0, the default, keeps every part (CAD users count small parts);
+/// CPU cullers ignore the threshold. Applies from the next frame.
+///
+/// Returns `CADR_RESULT_OK`, `CADR_RESULT_INVALID_ARGUMENT` (negative, infinite or NaN) or a
+/// handle error. Ownership: nothing changes hands. Thread-safety: as `cadr_renderer_create`.
+#[no_mangle]
+pub extern "C" fn cadr_renderer_set_min_pixels(renderer: CadrRenderer, pixels: f32) -> CadrResult {
+    guard(|| {
+        if !pixels.is_finite() || pixels < 0.0 {
+            return Err(Failure::invalid(format!(
+                "sub-pixel threshold {pixels}: expected a finite number of pixels >= 0"
+            )));
+        }
+        with_renderer(renderer, |state| {
+            Ok(state.view.techniques_mut().set_min_pixels(pixels)?)
+        })
+    })
+}
+
+/// Writes the sub-pixel culling threshold in pixels (0: off).
+///
+/// Returns `CADR_RESULT_OK`, `CADR_RESULT_NULL_ARGUMENT` or a handle error.
+/// Ownership: the output is the caller's; cadr keeps no pointer to it.
+/// Thread-safety: as `cadr_renderer_create`.
+///
+/// # Safety
+/// `pixels` is null or writable.
+#[no_mangle]
+pub unsafe extern "C" fn cadr_renderer_min_pixels(
+    renderer: CadrRenderer,
+    pixels: *mut f32,
+) -> CadrResult {
+    guard(|| {
+        let value = with_renderer(renderer, |state| Ok(state.view.techniques().min_pixels()))?;
+        // SAFETY: pixels is null or writable (the caller's contract).
+        unsafe { deliver(pixels, "pixels", value) }
+    })
+}
+
 /// Renders one frame of `scene` seen by `camera`: applies the host's edits since the last
 /// frame (incrementally), culls, draws with the current techniques and, for a window, presents.
 /// `stats` may be NULL.

@@ -229,6 +229,8 @@ struct Bench {
     size: (u32, u32),
     frames: usize,
     motion: Motion,
+    /// The `gpu-` cullers' sub-pixel threshold (`--min-pixels`; 0: off).
+    min_pixels: f32,
 }
 
 impl Bench {
@@ -275,6 +277,10 @@ impl Bench {
         for mode in shade_modes(args)? {
             for combination in &combinations {
                 session.choose(combination, mode)?;
+                session
+                    .techniques()
+                    .set_min_pixels(self.min_pixels)
+                    .map_err(|e| e.to_string())?;
                 let measured = measure(self.frames, |frame| {
                     session.render_moving(&motion, view, frame)
                 })?;
@@ -387,6 +393,7 @@ pub fn bench(args: &Args) -> Result<(), String> {
             "--no-validation",
             "--camera",
             "--animate",
+            "--min-pixels",
         ],
     )?;
     let motion = Motion::from_args(args)?;
@@ -401,15 +408,21 @@ pub fn bench(args: &Args) -> Result<(), String> {
         size,
         frames,
         motion: motion.clone(),
+        min_pixels: crate::techniques::min_pixels_from_args(args)?,
     };
     println!(
-        "device: {} — {} measured frames after 2 warm-up frames, {}x{}, medians; camera {}, {} animated nodes",
+        "device: {} — {} measured frames after 2 warm-up frames, {}x{}, medians; camera {}, {} animated nodes{}",
         device.adapter().name,
         frames,
         size.0,
         size.1,
         motion.camera.name(),
-        motion.requested
+        motion.requested,
+        if bench.min_pixels > 0.0 {
+            format!("; gpu- cullers skip parts under {} px", bench.min_pixels)
+        } else {
+            String::new()
+        }
     );
     let json = if sweep {
         run_sweep(&bench, args)?
@@ -438,6 +451,7 @@ pub fn bench(args: &Args) -> Result<(), String> {
             "size": [size.0, size.1],
             "camera": motion.camera.name(),
             "animate": motion.requested,
+            "min_pixels": bench.min_pixels,
             "scene": stats_json(name, &stats),
             "rows": rows_json(&rows),
         })

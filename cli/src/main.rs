@@ -25,11 +25,11 @@ cadr — a Vulkan renderer for very large CAD assemblies
 USAGE:
     cadr render SCENE [-o OUT.png] [--size WxH] [--frames N] [--validation]
                 [--vertex NAME] [--params NAME] [--submit NAME] [--cull NAME]
-                [--shade solid|edges] [--baseline]
+                [--shade solid|edges] [--min-pixels PX] [--baseline]
     cadr techniques [--json]
     cadr bench [SCENE] [--frames N] [--json FILE] [--size WxH] [--shade solid|edges|all]
                [--vertex A,B] [--params A,B] [--submit A,B] [--cull A,B] [--all]
-               [--camera static|orbit] [--animate N]
+               [--camera static|orbit] [--animate N] [--min-pixels PX]
     cadr bench --sweep [--sweep-parts N,N,...]
     cadr pick SCENE X Y [--size WxH] [--rect X2,Y2] [--json] [technique options]
     cadr info SCENE
@@ -50,7 +50,8 @@ render: draws the scene offscreen with the camera fitted to its bounds, writes a
         --frames N renders N frames after one warm-up and reports medians. It draws with one
         technique per kind, solid or with edges; the default is the built-in combination
         (per-geometry, push, individual, none), which needs no plugin library; --baseline
-        asks for it explicitly.
+        asks for it explicitly. --min-pixels PX (with a gpu- culler) skips parts whose bounding
+        sphere projects under PX pixels across; off by default, as CAD users count small parts.
 techniques: lists every technique (built in or from a plugin library), its description and
         whether this device runs it.
 bench:  renders the built-in combination (the baseline) and technique combinations (by
@@ -61,6 +62,7 @@ bench:  renders the built-in combination (the baseline) and technique combinatio
         with the scene statistics. --camera orbit circles the scene close enough that the
         frustum cuts (default static); --animate N moves N assembly nodes every frame (an
         exploded view); the table adds the scene update µs and the bytes uploaded per frame.
+        --min-pixels PX sets the gpu- cullers' sub-pixel threshold (CPU cullers ignore it).
         --sweep measures a set over gen:grid of 10 000 to 1 000 000 parts to show how each
         technique's CPU cost grows.
 pick:   what lies under pixel (X, Y) of the view `render` draws (same size, camera and
@@ -252,10 +254,13 @@ fn render(args: &Args) -> Result<(), String> {
             "--submit",
             "--cull",
             "--shade",
+            "--min-pixels",
             "--baseline",
         ],
     )?;
     let (combination, shade) = techniques::combination_from_args(args)?;
+    let min_pixels = techniques::min_pixels_from_args(args)?;
+    techniques::check_min_pixels(min_pixels, &combination)?;
     if args.flag("--baseline") && techniques::technique_requested(args) {
         return Err(
             "--baseline draws with the built-in combination; it takes no technique options".into(),
@@ -290,7 +295,14 @@ fn render(args: &Args) -> Result<(), String> {
     let mut session =
         techniques::TechniqueSession::new(&device, &scene, registry, (width, height))?;
     session.choose(&combination, shade)?;
-    let technique_line = format!("{combination}, {}", shade.name());
+    session
+        .techniques()
+        .set_min_pixels(min_pixels)
+        .map_err(|e| e.to_string())?;
+    let mut technique_line = format!("{combination}, {}", shade.name());
+    if min_pixels > 0.0 {
+        technique_line += &format!(", parts under {min_pixels} px culled");
+    }
     let upload_ms = upload_start.elapsed().as_secs_f64() * 1e3;
     let camera = Camera::fit(
         &stats.bounds,

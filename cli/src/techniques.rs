@@ -60,12 +60,38 @@ pub fn combination_from_args(args: &Args) -> Result<(Combination, ShadeMode), St
     Ok((combination, shade))
 }
 
+/// `--min-pixels PX`: the sub-pixel culling threshold of the `gpu-` cullers (0, off, when not
+/// given).
+pub fn min_pixels_from_args(args: &Args) -> Result<f32, String> {
+    match args.value(&["--min-pixels"]) {
+        None => Ok(0.0),
+        Some(text) => text
+            .parse::<f32>()
+            .ok()
+            .filter(|pixels| pixels.is_finite() && *pixels >= 0.0)
+            .ok_or_else(|| format!("--min-pixels {text}: expected a number of pixels >= 0")),
+    }
+}
+
+/// Refuses a sub-pixel threshold with a culler that does not apply it (CPU cullers keep every
+/// part in the frustum).
+pub fn check_min_pixels(min_pixels: f32, combination: &Combination) -> Result<(), String> {
+    if min_pixels > 0.0 && !combination.culling.starts_with("gpu-") {
+        return Err(format!(
+            "--min-pixels culls on the GPU: choose --cull gpu-frustum or gpu-occlusion (the culler is '{}')",
+            combination.culling
+        ));
+    }
+    Ok(())
+}
+
 /// Whether any technique option was given.
 pub fn technique_requested(args: &Args) -> bool {
     KIND_OPTIONS
         .iter()
         .any(|(_, option)| args.value(&[option]).is_some())
         || args.value(&["--shade"]).is_some()
+        || args.value(&["--min-pixels"]).is_some()
 }
 
 /// A scene ready for technique plugins: its graph and tree, and the view that draws them.

@@ -448,3 +448,71 @@ fn without_plugin_libraries_the_built_in_combination_draws_and_others_are_explai
         .all(|t| t["built_in"] == true && t["library"] == "built-in" && t["supported"] == true));
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+#[test]
+fn render_min_pixels_culls_small_parts_on_the_gpu_and_is_refused_elsewhere() {
+    let path = std::env::temp_dir().join(format!("cadr-cli-subpixel-{}.png", std::process::id()));
+    let triangles = |extra: &[&str]| {
+        let mut arguments = vec![
+            "render",
+            "gen:grid:parts=512",
+            "-o",
+            path.to_str().unwrap(),
+            "--size",
+            "200x150",
+            "--vertex",
+            "arena",
+            "--params",
+            "ssbo-index",
+            "--submit",
+            "individual-indirect-count",
+            "--cull",
+            "gpu-frustum",
+            "--validation",
+        ];
+        arguments.extend_from_slice(extra);
+        let output = cadr(&arguments);
+        assert!(output.status.success(), "{}", stderr(&output));
+        let text = stdout(&output);
+        assert!(text.contains("validation:  0 errors"), "{text}");
+        let drawn = text
+            .lines()
+            .find_map(|line| line.strip_prefix("drawn:"))
+            .unwrap_or_else(|| panic!("no drawn line: {text}"));
+        let count: u64 = drawn
+            .split(", ")
+            .find_map(|field| field.strip_suffix(" triangles"))
+            .and_then(|n| n.trim().parse().ok())
+            .unwrap_or_else(|| panic!("no triangles in: {drawn}"));
+        (count, text)
+    };
+    let (all, _) = triangles(&[]);
+    let (culled, text) = triangles(&["--min-pixels", "8"]);
+    assert!(
+        culled < all && culled > 0,
+        "parts under 8 px are skipped: {culled} of {all} triangles"
+    );
+    assert!(text.contains("parts under 8 px culled"), "{text}");
+
+    let output = cadr(&[
+        "render",
+        "gen:demo",
+        "--cull",
+        "frustum",
+        "--min-pixels",
+        "4",
+    ]);
+    assert!(!output.status.success());
+    assert!(
+        stderr(&output).contains("--min-pixels culls on the GPU"),
+        "{}",
+        stderr(&output)
+    );
+    let output = cadr(&["render", "gen:demo", "--min-pixels", "-1"]);
+    assert!(!output.status.success());
+    assert!(
+        stderr(&output).contains("--min-pixels -1: expected a number of pixels >= 0"),
+        "{}",
+        stderr(&output)
+    );
+}

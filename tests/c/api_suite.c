@@ -554,6 +554,33 @@ static void test_renderer(CadrContext context, struct Built *b) {
   CHECK(stats.draw_calls <= 2 && stats.draws == 2);
   EXPECT(cadr_renderer_set_techniques(renderer, NULL), CADR_RESULT_NULL_ARGUMENT);
 
+  /* Sub-pixel culling (GPU cullers; off by default): a threshold wider than the view culls
+   * every part, 0 brings them all back. */
+  {
+    float pixels = -1.0f;
+    uint64_t all;
+    struct CadrTechniqueSelection gpu = {"arena", "ssbo-index", "individual-indirect-count",
+                                         "gpu-frustum"};
+    OK(cadr_renderer_min_pixels(renderer, &pixels));
+    CHECK(pixels == 0.0f);
+    OK(cadr_renderer_set_techniques(renderer, &gpu));
+    OK(cadr_renderer_render(renderer, b->scene, &camera, &stats));
+    all = stats.triangles;
+    CHECK(all > 0);
+    OK(cadr_renderer_set_min_pixels(renderer, 1.0e6f));
+    OK(cadr_renderer_min_pixels(renderer, &pixels));
+    CHECK(pixels == 1.0e6f);
+    OK(cadr_renderer_render(renderer, b->scene, &camera, &stats));
+    CHECK(stats.triangles == 0);
+    OK(cadr_renderer_set_min_pixels(renderer, 0.0f));
+    OK(cadr_renderer_render(renderer, b->scene, &camera, &stats));
+    CHECK(stats.triangles == all);
+    EXPECT(cadr_renderer_set_min_pixels(renderer, -1.0f), CADR_RESULT_INVALID_ARGUMENT);
+    MESSAGE_HAS("sub-pixel threshold");
+    EXPECT(cadr_renderer_set_min_pixels(renderer, NAN), CADR_RESULT_INVALID_ARGUMENT);
+    EXPECT(cadr_renderer_min_pixels(renderer, NULL), CADR_RESULT_NULL_ARGUMENT);
+  }
+
   /* Shade modes. */
   OK(cadr_renderer_shade_mode(renderer, &mode));
   CHECK(mode == CADR_SHADE_SOLID);

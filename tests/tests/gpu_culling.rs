@@ -177,3 +177,91 @@ fn gpu_cullers_need_a_submission_that_draws_their_commands() {
         }
     }
 }
+
+#[test]
+fn sub_pixel_culling_drops_small_parts_only_when_asked() {
+    let scene = generate(&GeneratorSpec::Grid {
+        parts: 512,
+        triangles_per_part: 12.0,
+    });
+    let bounds = bounds(&scene);
+    let far = Camera::fit(&bounds, aspect(), DEFAULT_DIRECTION);
+    // An eye inside the first part: its bounding sphere holds the eye.
+    let flat = flatten(&scene).unwrap();
+    let first = flat.instances[0];
+    let part = scene.geometries[first.geometry as usize].bounds();
+    let inside = first.world.transform_point3(part.center());
+    let radius = bounds.radius();
+    let near = Camera::look_at(
+        inside,
+        inside + glam::DVec3::new(1.0, 0.3, 0.2),
+        40.0,
+        aspect(),
+        radius * 1e-4,
+        radius * 3.0,
+    );
+
+    let device = test_device();
+    let (mut graph, _) = SceneGraph::from_scene(&scene).unwrap();
+    let mut tree = SceneTree::build(&mut graph);
+    let registry = plugin_registry(&device);
+    let mut view = View::new(&device, Arc::clone(&registry), SIZE.0, SIZE.1).unwrap();
+    view.techniques_mut().select(&combination("none")).unwrap();
+    let all = view.render(&graph, &mut tree, &far).unwrap().triangles;
+    let reference = view.renderer().read_rgba8().unwrap();
+    assert_eq!(view.techniques().min_pixels(), 0.0, "off by default");
+    for culler in ["gpu-frustum", "gpu-occlusion"] {
+        view.techniques_mut().select(&combination(culler)).unwrap();
+        let mut triangles = |view: &mut View, pixels: f32, camera: &Camera| {
+            view.techniques_mut().set_min_pixels(pixels).unwrap();
+            // Occlusion's first frames draw without a visibility history; the third is settled.
+            (0..3)
+                .map(|_| view.render(&graph, &mut tree, camera).unwrap().triangles)
+                .last()
+                .unwrap()
+        };
+        let unculled = triangles(&mut view, 0.0, &far);
+        if culler == "gpu-frustum" {
+            // The view holds the whole grid: nothing is outside the frustum.
+            assert_eq!(unculled, all, "{culler}: off keeps all");
+        } else {
+            assert!(
+                unculled <= all,
+                "{culler}: occlusion alone: {unculled} of {all}"
+            );
+        }
+        let image = view.renderer().read_rgba8().unwrap();
+        let difference = compare(&image, &reference).unwrap();
+        assert!(
+            difference.mean < 0.3 && difference.p99 < 6.0,
+            "{culler}: {difference:?}"
+        );
+        let thresholds = [1.0, 2.0, 4.0, 8.0, 16.0, 32.0, 64.0, 1e5];
+        let counts: Vec<u64> = thresholds
+            .iter()
+            .map(|&pixels| triangles(&mut view, pixels, &far))
+            .collect();
+        println!("{culler}: {all} triangles; at {thresholds:?} pixels: {counts:?}");
+        assert!(
+            counts.windows(2).all(|pair| pair[1] <= pair[0]),
+            "{culler}: a larger threshold never draws more: {counts:?}"
+        );
+        assert_eq!(
+            counts[counts.len() - 1],
+            0,
+            "{culler}: wider than the view culls all"
+        );
+        assert!(
+            counts.iter().any(|&count| count > 0 && count < unculled),
+            "{culler}: near parts outlast far ones at some threshold: {counts:?}"
+        );
+        // A sphere holding the eye is never too small, whatever the threshold.
+        let around_eye = triangles(&mut view, 1e5, &near);
+        assert!(around_eye > 0, "{culler}: the part around the eye is kept");
+        view.techniques_mut().set_min_pixels(0.0).unwrap();
+    }
+    assert!(view.techniques_mut().set_min_pixels(-1.0).is_err());
+    assert!(view.techniques_mut().set_min_pixels(f32::NAN).is_err());
+    drop(view);
+    assert_no_validation_errors(&device);
+}

@@ -98,7 +98,7 @@ impl Renderer {
         let frame_set = self.frame_set().as_raw();
         let culler = GpuCuller::of(techniques, pipelines.passes.len())?;
         let phases = culler.as_ref().map_or(1, |c| c.phases);
-        let eye_view = EyeRelativeView::new(camera);
+        let eye_view = EyeRelativeView::new(camera, techniques.min_pixels());
         let shared = RefCell::new((scene, abi::CadrStats::default(), culler));
         let context = |command_buffer: vk::CommandBuffer,
                        view: &abi::CadrSceneView,

@@ -35,12 +35,15 @@ pub(crate) struct EyeRelativeView {
     eye_low: [f32; 4],
     planes: [[f32; 4]; 6],
     view_projection: [f32; 16],
+    /// Parts whose bounding sphere projects smaller than this many pixels are culled (0: none).
+    min_pixels: f32,
 }
 
 impl EyeRelativeView {
     /// The camera's frustum planes and projection for points given relative to the eye: the
-    /// plane `n·p + d` becomes `n·q + (d + n·eye)` for `q = p - eye`, computed in f64.
-    pub(crate) fn new(camera: &Camera) -> Self {
+    /// plane `n·p + d` becomes `n·q + (d + n·eye)` for `q = p - eye`, computed in f64; parts
+    /// projecting under `min_pixels` are culled.
+    pub(crate) fn new(camera: &Camera, min_pixels: f32) -> Self {
         let eye = camera.view.inverse().w_axis.truncate();
         let (high, low) = split_f64(eye);
         let planes = super::frame::frustum_planes(camera).map(|[x, y, z, d]| {
@@ -55,6 +58,7 @@ impl EyeRelativeView {
             eye_low: [low[0], low[1], low[2], 0.0],
             planes,
             view_projection,
+            min_pixels,
         }
     }
 }
@@ -129,6 +133,7 @@ impl<'a> GpuCuller<'a> {
             depth_image: depth.map_or(0, |d| d.image.as_raw()),
             depth_view: depth.map_or(0, |d| d.view.as_raw()),
             depth_layout: depth.map_or(0, |d| d.layout.as_raw()),
+            min_pixels: view.min_pixels,
         };
         let mut message = Message::new();
         // SAFETY: a live instance; the context and the arrays it points at are valid for the

@@ -214,6 +214,8 @@ pub struct Techniques {
     vulkan: Box<abi::CadrVulkan>,
     pub(crate) active: [Option<Active>; 4],
     shade: ShadeMode,
+    /// Sub-pixel culling threshold of GPU cullers, in pixels (0: off).
+    min_pixels: f32,
     pub(crate) pipelines: Option<TechniquePipelines>,
     /// The pick pass's pipelines (same vertex shader, instance ids into the pick target),
     /// built on the first pick.
@@ -273,6 +275,7 @@ impl Techniques {
             vulkan,
             active: [None, None, None, None],
             shade: ShadeMode::Solid,
+            min_pixels: 0.0,
             pipelines: None,
             pick_pipelines: None,
             shaders: ShaderCache::default(),
@@ -317,6 +320,25 @@ impl Techniques {
             self.pipelines = None;
             self.epoch += 1;
         }
+        Ok(())
+    }
+
+    /// The sub-pixel culling threshold: GPU cullers drop parts whose bounding sphere projects
+    /// smaller than this many pixels across (0, the default, keeps every part).
+    pub fn min_pixels(&self) -> f32 {
+        self.min_pixels
+    }
+
+    /// Sets the sub-pixel culling threshold in pixels (0 turns it off). It applies to GPU
+    /// cullers (the `gpu-` culling techniques), from the next frame; CPU cullers keep every
+    /// part they find in the frustum.
+    pub fn set_min_pixels(&mut self, pixels: f32) -> RenderResult<()> {
+        if !pixels.is_finite() || pixels < 0.0 {
+            return Err(RenderError::InvalidUse(format!(
+                "sub-pixel threshold {pixels}: expected a finite number of pixels >= 0"
+            )));
+        }
+        self.min_pixels = pixels;
         Ok(())
     }
 

@@ -36,7 +36,7 @@ use std::ffi::{c_char, c_void};
 /// Major version of this ABI: a library built for another major version is refused.
 pub const CADR_PLUGIN_ABI_MAJOR: u32 = 1;
 /// Minor version of this ABI: additions that older readers may ignore.
-pub const CADR_PLUGIN_ABI_MINOR: u32 = 4;
+pub const CADR_PLUGIN_ABI_MINOR: u32 = 5;
 /// `(major << 16) | minor`, what [`CadrPluginVersionFn`] returns.
 pub const CADR_PLUGIN_ABI_VERSION: u32 = (CADR_PLUGIN_ABI_MAJOR << 16) | CADR_PLUGIN_ABI_MINOR;
 
@@ -955,6 +955,12 @@ pub struct CadrGpuCullContext {
     pub depth_view: u64,
     /// `VkImageLayout` of the depth image during the call.
     pub depth_layout: i32,
+    /// Since ABI 1.5 (read it only when `size` covers it): the smallest projected diameter, in
+    /// pixels, of a part's bounding sphere that is still drawn; a part whose sphere projects
+    /// smaller is culled from every pass (pick included, so what is picked is what is seen).
+    /// 0 (the default) culls nothing for its size: CAD users count small parts. A part whose
+    /// sphere holds the eye is never culled for its size.
+    pub min_pixels: f32,
 }
 
 /// Culling vtable ([`CADR_KIND_CULLING`]).

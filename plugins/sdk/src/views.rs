@@ -450,6 +450,18 @@ impl<'a> GpuCull<'a> {
         self.raw.phase
     }
 
+    /// The sub-pixel threshold (projected diameter in pixels below which a part is culled);
+    /// 0, culling nothing for its size, from a host older than ABI 1.5.
+    pub fn min_pixels(&self) -> f32 {
+        let end =
+            std::mem::offset_of!(abi::CadrGpuCullContext, min_pixels) + std::mem::size_of::<f32>();
+        if self.raw.size as usize >= end && self.raw.min_pixels.is_finite() {
+            self.raw.min_pixels.max(0.0)
+        } else {
+            0.0
+        }
+    }
+
     /// The primary command buffer, outside rendering.
     pub fn command_buffer(&self) -> vk::CommandBuffer {
         vk::CommandBuffer::from_raw(self.raw.command_buffer as u64)

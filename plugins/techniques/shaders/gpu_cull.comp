@@ -3,7 +3,8 @@
 // bounding sphere, placed by its GPU matrix relative to the eye, against the frustum and, for
 // occlusion, against the depth pyramid of what was drawn first; a part that passes gets an
 // indirect command appended for this pass, and the count goes where
-// vkCmdDrawIndexedIndirectCount reads it.
+// vkCmdDrawIndexedIndirectCount reads it. Parts projecting under the host's sub-pixel
+// threshold (off by default) are culled too.
 layout(local_size_x = 64) in;
 
 const uint PASS_EDGES = 1u;
@@ -44,6 +45,9 @@ layout(set = 0, binding = 4, std140) uniform View {
     mat4 view_projection;
     // x, y: the depth image's size; z: pyramid levels; w: unused.
     uvec4 pyramid;
+    // x: the sub-pixel threshold (projected diameter in pixels; 0: off); y: pixels per unit
+    // of size at clip w = 1.
+    vec4 sub_pixel;
 } view;
 // One bit per instance id: visible at the end of the last frame (read) and of this one
 // (written by the first pass of phase 1).
@@ -123,6 +127,24 @@ bool passes_pyramid(vec3 center, float radius) {
     return nearest <= farthest;
 }
 
+// Whether the sphere projects at least the sub-pixel threshold across. A perspective view
+// (clip w grows with distance) measures at w - radius, the sphere's nearest depth, which never
+// underestimates the size on the axis; a sphere holding the eye is always large enough.
+bool large_enough(vec3 center, float radius) {
+    if (view.sub_pixel.x <= 0.0) {
+        return true;
+    }
+    vec4 w_row = vec4(view.view_projection[0][3], view.view_projection[1][3],
+                      view.view_projection[2][3], view.view_projection[3][3]);
+    float w = dot(w_row, vec4(center, 1.0));
+    bool perspective = w_row.w == 0.0;
+    float nearest = perspective ? w - radius : w;
+    if (nearest <= 0.0) {
+        return true;
+    }
+    return 2.0 * radius * view.sub_pixel.y >= view.sub_pixel.x * nearest;
+}
+
 bool bit(uint id) {
     return (last_visible[id >> 5] >> (id & 31u) & 1u) != 0u;
 }
@@ -147,7 +169,7 @@ void main() {
     float scale = max(length(rotation[0]), max(length(rotation[1]), length(rotation[2])));
     float radius = entry.sphere.w * scale;
 
-    bool visible = in_frustum(center, radius);
+    bool visible = in_frustum(center, radius) && large_enough(center, radius);
     bool draw = visible;
     if (dispatch.mode == MODE_LAST_VISIBLE) {
         draw = visible && bit(id);

@@ -10,6 +10,8 @@
 //!   is built from that depth (`shaders/hiz.comp`); phase 1 tests every instance against it,
 //!   draws what became visible, and keeps the visibility for the next frame. A part that
 //!   comes into view is drawn in the frame it does.
+//! - Both cull parts smaller than the host's sub-pixel threshold (ABI 1.5, off by default):
+//!   a part whose bounding sphere projects under `min_pixels` across is drawn in no pass.
 //!
 //! The submission draws the commands with `vkCmdDrawIndexedIndirectCount` (a submission
 //! providing `CADR_TRAIT_DRAWS_GPU_COMMANDS`); commands use absolute ranges and `firstInstance`
@@ -45,6 +47,9 @@ struct ViewUniform {
     planes: [[f32; 4]; 6],
     view_projection: [f32; 16],
     pyramid: [u32; 4],
+    /// x: the sub-pixel threshold (projected diameter in pixels, 0: off); y: pixels per unit
+    /// of size at clip w = 1 (see [`pixels_per_unit`]); zw: unused.
+    sub_pixel: [f32; 4],
 }
 
 impl ViewUniform {
@@ -58,8 +63,23 @@ impl ViewUniform {
         floats
             .flat_map(|f| f.to_le_bytes())
             .chain(self.pyramid.iter().flat_map(|u| u.to_le_bytes()))
+            .chain(self.sub_pixel.iter().flat_map(|f| f.to_le_bytes()))
             .collect()
     }
+}
+
+/// How many pixels one unit of length covers at clip w = 1 with this view-projection
+/// (column-major, projection times a rotation) on a `width` × `height` target: the larger of
+/// the x and y scales. A sphere of radius r at clip w spans about `2 r k / w` pixels, exactly
+/// so for an orthographic view (w = 1).
+fn pixels_per_unit(view_projection: &[f32; 16], width: u32, height: u32) -> f32 {
+    let row_length = |row: usize| {
+        (0..3)
+            .map(|column| view_projection[column * 4 + row].powi(2))
+            .sum::<f32>()
+            .sqrt()
+    };
+    (row_length(0) * width as f32 * 0.5).max(row_length(1) * height as f32 * 0.5)
 }
 
 /// Push constants of one cull dispatch.
@@ -735,6 +755,12 @@ impl<const OCCLUSION: bool> GpuCulling for GpuCuller<OCCLUSION> {
                     raw.height.max(1),
                     pyramid_levels(raw.width.max(1), raw.height.max(1)).len() as u32,
                     0,
+                ],
+                sub_pixel: [
+                    cull.min_pixels(),
+                    pixels_per_unit(&raw.view_projection, raw.width, raw.height),
+                    0.0,
+                    0.0,
                 ],
             };
             // SAFETY: recording outside rendering; both buffers allow transfer writes and the

@@ -645,6 +645,14 @@ typedef struct CadrGpuCullContext {
   // 0 (the default) culls nothing for its size: CAD users count small parts. A part whose
   // sphere holds the eye is never culled for its size.
   float min_pixels;
+  // Since ABI 1.5: a `VkBuffer` (uniform-buffer usage, host-written before each submission
+  // of the frame, also one that resubmits it) holding a [`CadrGpuCullView`] at
+  // `view_offset`: the same view as the fields above, for shaders. A culler that reads the
+  // view from here rather than recording its values can be replayed
+  // ([`CADR_TRAIT_REPLAYABLE`]). Owned by the host; valid while the frame runs.
+  uint64_t view_buffer;
+  // Byte offset of the [`CadrGpuCullView`] in `view_buffer` (a multiple of 256).
+  uint64_t view_offset;
 } CadrGpuCullContext;
 
 // Culling vtable ([`CADR_KIND_CULLING`]).
@@ -753,6 +761,15 @@ typedef struct CadrCullingVtable {
 // the host itself wrote. A technique that reads matrices from the matrix buffer on the GPU
 // leaves it clear.
 #define CADR_TRAIT_READS_HOST_MATRICES (1 << 6)
+
+// Since ABI 1.5. Any kind, an announcement: the technique's per-frame calls (`prepare`,
+// `record`, `record_gpu`) record the same commands, and change nothing else, for a frame
+// whose commands key ([`CadrRecordContext::commands_key`]) and scene generations equal the
+// last recorded frame's, whatever the camera (a GPU culler reads the camera from
+// [`CadrGpuCullContext::view_buffer`] on the GPU, not from its values). When every active
+// technique sets it and the frame uploads nothing, the host resubmits the last frame's
+// command buffer without calling them: a frame with nothing changed costs one submission.
+#define CADR_TRAIT_REPLAYABLE (1 << 7)
 
 // Device-local; written by transfers or shaders.
 #define CADR_MEMORY_GPU_ONLY 0

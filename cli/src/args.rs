@@ -17,6 +17,7 @@ const SWITCHES: &[&str] = &[
     "--baseline",
     "--all",
     "--sweep",
+    "--no-replay",
 ];
 
 impl Args {

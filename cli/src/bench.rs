@@ -47,6 +47,8 @@ struct Row {
     bytes_uploaded: u64,
     /// Where moved subtrees' world matrices were computed: "gpu" or "host".
     transforms: &'static str,
+    /// Measured frames that resubmitted the last recording, and frames measured.
+    replayed: (usize, usize),
     /// The first measured frame's counters.
     stats: FrameStats,
 }
@@ -58,6 +60,8 @@ struct Measured {
     gpu_us: Option<f64>,
     scene_update_us: f64,
     bytes_uploaded: u64,
+    /// Measured frames that were replayed, and frames measured.
+    replayed: (usize, usize),
     first: FrameStats,
 }
 
@@ -89,6 +93,10 @@ fn measure(
         gpu_us: gpu,
         scene_update_us: update,
         bytes_uploaded: uploaded as u64,
+        replayed: (
+            samples.iter().filter(|s| s.0.replayed).count(),
+            samples.len(),
+        ),
         first: samples[0].0,
     })
 }
@@ -106,6 +114,7 @@ impl Row {
             gpu_us: measured.gpu_us,
             scene_update_us: measured.scene_update_us,
             bytes_uploaded: measured.bytes_uploaded,
+            replayed: measured.replayed,
             stats: measured.first,
         }
     }
@@ -231,6 +240,8 @@ struct Bench {
     motion: Motion,
     /// The `gpu-` cullers' sub-pixel threshold (`--min-pixels`; 0: off).
     min_pixels: f32,
+    /// Whether the measured combinations may replay unchanged frames (not `--no-replay`).
+    frame_replay: bool,
 }
 
 impl Bench {
@@ -260,11 +271,14 @@ impl Bench {
         }
         let view = (&stats.bounds, aspect);
         session.choose(&Combination::built_in(), ShadeMode::Solid)?;
+        // The reference records every frame, as the seeds' baseline does.
+        session.techniques().set_frame_replay(false);
         let measured = measure(self.frames, |frame| {
             session.render_moving(&motion, view, frame)
         })?;
         let transforms = session.techniques().transforms();
         let baseline = Row::new("baseline (built-in)".into(), "solid", transforms, measured);
+        session.techniques().set_frame_replay(self.frame_replay);
         if !quiet {
             print_header();
             print_row(&baseline, baseline.cpu_us);
@@ -298,9 +312,10 @@ impl Bench {
 
 fn print_header() {
     println!(
-        "{:<58} {:>6} {:>10} {:>10} {:>9} {:>9} {:>8} {:>8} {:>6} {:>7} {:>7} {:>10} {:>9}",
+        "{:<58} {:>6} {:>7} {:>10} {:>10} {:>9} {:>9} {:>8} {:>8} {:>6} {:>7} {:>7} {:>10} {:>9}",
         "technique (vertex / params / submit / cull)",
         "shade",
+        "replay",
         "CPU µs",
         "GPU µs",
         "update µs",
@@ -319,9 +334,10 @@ fn print_row(row: &Row, baseline_cpu: f64) {
     let gpu = row.gpu_us.map_or("n/a".to_owned(), |g| format!("{g:.0}"));
     let s = &row.stats;
     println!(
-        "{:<58} {:>6} {:>10.1} {:>10} {:>9.1} {:>9} {:>8} {:>8} {:>6} {:>7} {:>7} {:>10} {:>8.1}x",
+        "{:<58} {:>6} {:>7} {:>10.1} {:>10} {:>9.1} {:>9} {:>8} {:>8} {:>6} {:>7} {:>7} {:>10} {:>8.1}x",
         row.label,
         row.shade,
+        format!("{}/{}", row.replayed.0, row.replayed.1),
         row.cpu_us,
         gpu,
         row.scene_update_us,
@@ -346,6 +362,7 @@ fn row_json(row: &Row, baseline_cpu: f64) -> serde_json::Value {
         "scene_update_us": row.scene_update_us,
         "bytes_uploaded": row.bytes_uploaded,
         "transforms": row.transforms,
+        "replayed_frames": row.replayed.0,
         "draw_calls": s.draw_calls,
         "draws": s.draws,
         "pipeline_binds": s.pipeline_binds,
@@ -394,6 +411,7 @@ pub fn bench(args: &Args) -> Result<(), String> {
             "--camera",
             "--animate",
             "--min-pixels",
+            "--no-replay",
         ],
     )?;
     let motion = Motion::from_args(args)?;
@@ -409,6 +427,7 @@ pub fn bench(args: &Args) -> Result<(), String> {
         frames,
         motion: motion.clone(),
         min_pixels: crate::techniques::min_pixels_from_args(args)?,
+        frame_replay: !args.flag("--no-replay"),
     };
     println!(
         "device: {} — {} measured frames after 2 warm-up frames, {}x{}, medians; camera {}, {} animated nodes{}",
@@ -452,6 +471,7 @@ pub fn bench(args: &Args) -> Result<(), String> {
             "camera": motion.camera.name(),
             "animate": motion.requested,
             "min_pixels": bench.min_pixels,
+            "frame_replay": bench.frame_replay,
             "scene": stats_json(name, &stats),
             "rows": rows_json(&rows),
         })

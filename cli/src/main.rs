@@ -25,11 +25,11 @@ cadr — a Vulkan renderer for very large CAD assemblies
 USAGE:
     cadr render SCENE [-o OUT.png] [--size WxH] [--frames N] [--validation]
                 [--vertex NAME] [--params NAME] [--submit NAME] [--cull NAME]
-                [--shade solid|edges] [--min-pixels PX] [--baseline]
+                [--shade solid|edges] [--min-pixels PX] [--no-replay] [--baseline]
     cadr techniques [--json]
     cadr bench [SCENE] [--frames N] [--json FILE] [--size WxH] [--shade solid|edges|all]
                [--vertex A,B] [--params A,B] [--submit A,B] [--cull A,B] [--all]
-               [--camera static|orbit] [--animate N] [--min-pixels PX]
+               [--camera static|orbit] [--animate N] [--min-pixels PX] [--no-replay]
     cadr bench --sweep [--sweep-parts N,N,...]
     cadr pick SCENE X Y [--size WxH] [--rect X2,Y2] [--json] [technique options]
     cadr info SCENE
@@ -52,6 +52,8 @@ render: draws the scene offscreen with the camera fitted to its bounds, writes a
         (per-geometry, push, individual, none), which needs no plugin library; --baseline
         asks for it explicitly. --min-pixels PX (with a gpu- culler) skips parts whose bounding
         sphere projects under PX pixels across; off by default, as CAD users count small parts.
+        A frame that would record what the last one recorded (only the camera moved, or
+        nothing) resubmits it instead; --no-replay records every frame (--baseline does).
 techniques: lists every technique (built in or from a plugin library), its description and
         whether this device runs it.
 bench:  renders the built-in combination (the baseline) and technique combinations (by
@@ -63,6 +65,8 @@ bench:  renders the built-in combination (the baseline) and technique combinatio
         frustum cuts (default static); --animate N moves N assembly nodes every frame (an
         exploded view); the table adds the scene update µs and the bytes uploaded per frame.
         --min-pixels PX sets the gpu- cullers' sub-pixel threshold (CPU cullers ignore it).
+        The baseline records every frame; the other rows replay unchanged frames (the replay
+        column counts them) unless --no-replay.
         --sweep measures a set over gen:grid of 10 000 to 1 000 000 parts to show how each
         technique's CPU cost grows.
 pick:   what lies under pixel (X, Y) of the view `render` draws (same size, camera and
@@ -255,6 +259,7 @@ fn render(args: &Args) -> Result<(), String> {
             "--cull",
             "--shade",
             "--min-pixels",
+            "--no-replay",
             "--baseline",
         ],
     )?;
@@ -299,6 +304,10 @@ fn render(args: &Args) -> Result<(), String> {
         .techniques()
         .set_min_pixels(min_pixels)
         .map_err(|e| e.to_string())?;
+    // The baseline records every frame, as the seeds' does.
+    session
+        .techniques()
+        .set_frame_replay(!args.flag("--no-replay") && !args.flag("--baseline"));
     let mut technique_line = format!("{combination}, {}", shade.name());
     if min_pixels > 0.0 {
         technique_line += &format!(", parts under {min_pixels} px culled");
@@ -356,10 +365,12 @@ fn render(args: &Args) -> Result<(), String> {
     } else {
         format!("{:.0} µs", median(&mut gpu))
     };
+    let replayed = samples.iter().filter(|s| s.replayed).count();
     println!(
-        "{label} CPU {:.0} µs (recording {:.0} µs), GPU {gpu_text}",
+        "{label} CPU {:.0} µs (recording {:.0} µs), GPU {gpu_text}, {replayed} of {} replayed",
         median(&mut cpu),
-        median(&mut record)
+        median(&mut record),
+        samples.len()
     );
     println!("setup:       load {load_ms:.1} ms, upload {upload_ms:.1} ms");
     if validation_requested(args) {

@@ -331,6 +331,36 @@ fn bench_prints_the_table_and_writes_json() {
         assert_eq!(row["triangles"], rows[0]["triangles"], "{row}");
     }
     assert_eq!(rows[1]["draw_calls"], 500, "individual: one call per part");
+    // The still camera changes nothing: the baseline records every frame, the others resubmit
+    // (the frames after the two warm-up frames) and report the recorded frame's counters.
+    assert_eq!(rows[0]["replayed_frames"], 0, "{}", rows[0]);
+    assert_eq!(rows[1]["replayed_frames"], 2, "{}", rows[1]);
+    assert_eq!(rows[2]["replayed_frames"], 2, "{}", rows[2]);
+    assert_eq!(json["frame_replay"], true);
+
+    let output = cadr(&[
+        "bench",
+        "gen:grid:parts=500",
+        "--frames",
+        "2",
+        "--size",
+        "64x48",
+        "--vertex",
+        "per-geometry",
+        "--params",
+        "push",
+        "--submit",
+        "individual",
+        "--no-replay",
+        "--json",
+        path.to_str().unwrap(),
+    ]);
+    assert!(output.status.success(), "{}", stderr(&output));
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&path).unwrap()).unwrap();
+    let rows = json["rows"].as_array().unwrap();
+    assert_eq!(rows[1]["replayed_frames"], 0, "--no-replay records every frame");
+    assert_eq!(rows[1]["draw_calls"], 500);
 }
 
 #[test]

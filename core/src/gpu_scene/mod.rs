@@ -540,6 +540,19 @@ impl GpuScene {
         }
     }
 
+    /// Whether the next frame uploads anything (a changed slot or a whole array).
+    pub(crate) fn has_pending_uploads(&self) -> bool {
+        [
+            &self.matrix_gpu,
+            &self.material_gpu,
+            &self.record_gpu,
+            &self.cull_gpu,
+            &self.local_gpu,
+        ]
+        .iter()
+        .any(|array| array.has_pending())
+    }
+
     /// Records the pending uploads (before the pass) and clears them; returns the bytes sent.
     pub(crate) fn record_uploads(
         &mut self,

@@ -83,6 +83,11 @@ impl GpuArray {
         }
     }
 
+    /// Whether anything goes up with the next upload.
+    pub(super) fn has_pending(&self) -> bool {
+        self.whole || !self.pending.is_empty()
+    }
+
     /// Whether the whole array goes up with the next upload.
     pub(super) fn is_whole(&self) -> bool {
         self.whole

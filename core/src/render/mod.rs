@@ -41,10 +41,39 @@ pub struct Renderer {
     frame_uniforms: Buffer,
     pipelines: Pipelines,
     frame_sets: DescriptorSets,
+    /// What GPU cullers read of the view (`CadrGpuCullView`), host-written every frame.
+    cull_view: Buffer,
     commands: CommandContext,
     timer: Option<GpuTimer>,
     /// The id target and its readback, created on the first pick.
     pick: Option<PickTarget>,
+    /// The replay key of the last recorded frame, if it had one.
+    last_recorded: Option<u64>,
+    /// The frame in the command buffer, if it may be submitted again as it is: its replay
+    /// key and what it drew.
+    replayable: Option<(u64, FrameStats)>,
+}
+
+/// The bytes reserved for the GPU cullers' view (`CadrGpuCullView`, 224 bytes).
+pub(crate) const CULL_VIEW_BYTES: u64 = 256;
+
+/// How a frame is drawn: into which target, from which command buffers, in how many phases,
+/// and whether it may be replayed.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct FramePlan<'a> {
+    /// The target of the pass.
+    pub pass: PassTarget,
+    /// Whether the pass's contents come from secondary command buffers.
+    pub secondary: bool,
+    /// Phases of the pass (at least 1).
+    pub phases: u32,
+    /// The GPU cullers' view, written before the frame is submitted.
+    pub cull_view: Option<&'a [u8]>,
+    /// What the recording depends on, when the techniques allow a replay: a frame with the
+    /// key of the last recorded one, recorded twice in a row without uploads, resubmits it.
+    pub replay_key: Option<u64>,
+    /// Whether the frame uploads scene data (it is then recorded, whatever its key).
+    pub uploads_pending: bool,
 }
 
 /// Which image a pass draws into.
@@ -101,6 +130,13 @@ impl Renderer {
             frame_uniforms.raw(),
             vk::WHOLE_SIZE,
         );
+        let cull_view = Buffer::new(
+            device,
+            "gpu cull view",
+            CULL_VIEW_BYTES,
+            vk::BufferUsageFlags::UNIFORM_BUFFER,
+            MemoryLocation::CpuToGpu,
+        )?;
         let commands = CommandContext::new(device, "frame commands")?;
         let timer = GpuTimer::new(device, "frame timer")?;
         Ok(Self {
@@ -109,9 +145,12 @@ impl Renderer {
             frame_uniforms,
             pipelines,
             frame_sets,
+            cull_view,
             commands,
             timer,
             pick: None,
+            last_recorded: None,
+            replayable: None,
         })
     }
 
@@ -137,6 +176,9 @@ impl Renderer {
             return Ok(());
         }
         self.commands.wait()?;
+        // The recorded frame draws into the old target: never submit it again.
+        self.replayable = None;
+        self.last_recorded = None;
         self.target = OffscreenTarget::new(&self.device, width, height)?;
         self.pick = None;
         Ok(())
@@ -187,13 +229,13 @@ impl Renderer {
     }
 
     /// Runs a frame: uniforms, command buffer, target transitions, the technique's commands
-    /// before the pass, inside it in `phases` phases (the pass suspended between them, its
-    /// depth readable) and after it, submission, wait, timings.
+    /// before the pass, inside it in `plan.phases` phases (the pass suspended between them, its
+    /// depth readable) and after it, submission, wait, timings. A frame whose replay key is
+    /// that of the recording in the command buffer submits it again instead.
     pub(crate) fn frame(
         &mut self,
         camera: &Camera,
-        (pass, secondary): (PassTarget, bool),
-        phases: u32,
+        plan: FramePlan<'_>,
         recorders: FrameRecorders<'_, '_>,
     ) -> RenderResult<FrameStats> {
         // The eye in f64, split for relative-to-eye positions on the GPU.
@@ -209,19 +251,30 @@ impl Renderer {
             light: [0.22, 0.68, 0.35, 0.0],
         };
         self.commands.wait()?;
+        let record_start = Instant::now();
         self.frame_uniforms
             .write(0, bytemuck::bytes_of(&uniforms))?;
+        if let Some(bytes) = plan.cull_view {
+            self.cull_view.write(0, bytes)?;
+        }
+        match (plan.replay_key, self.replayable) {
+            (Some(key), Some((recorded, recorded_stats)))
+                if key == recorded && !plan.uploads_pending =>
+            {
+                return self.replay(recorded_stats, record_start);
+            }
+            _ => self.replayable = None,
+        }
 
-        let record_start = Instant::now();
         let command_buffer = self.commands.begin()?;
         let mut stats = FrameStats::default();
         if let Some(timer) = &mut self.timer {
             timer.begin(command_buffer);
         }
-        let phases = phases.max(1);
+        let phases = plan.phases.max(1);
         (recorders.before)(self, command_buffer, 0, &mut stats)?;
         for phase in 0..phases {
-            let target = self.pass_target(pass, (secondary, phase > 0, phases > 1));
+            let target = self.pass_target(plan.pass, (plan.secondary, phase > 0, phases > 1));
             if phase > 0 {
                 (recorders.between)(self, command_buffer, phase, &mut stats)?;
             }
@@ -241,12 +294,48 @@ impl Renderer {
         stats.cpu_record_us = (submit_start - record_start).as_secs_f64() * 1e6;
         self.commands.submit()?;
         stats.cpu_submit_us = submit_start.elapsed().as_secs_f64() * 1e6;
+        // The first recording after a change may do one-time work (uploads, new buffers
+        // cleared); the second with the same key and no uploads is the steady frame.
+        if plan.replay_key.is_some()
+            && plan.replay_key == self.last_recorded
+            && stats.bytes_uploaded == 0
+        {
+            self.replayable = plan.replay_key.map(|key| (key, stats));
+        }
+        self.last_recorded = plan.replay_key;
         self.commands.wait()?;
-        stats.gpu_us = match &self.timer {
+        stats.gpu_us = self.gpu_time()?;
+        Ok(stats)
+    }
+
+    /// Submits the recorded frame again; it draws what it drew when recorded.
+    fn replay(&mut self, recorded: FrameStats, start: Instant) -> RenderResult<FrameStats> {
+        let submit_start = Instant::now();
+        self.commands.resubmit()?;
+        let stats = FrameStats {
+            cpu_record_us: (submit_start - start).as_secs_f64() * 1e6,
+            cpu_submit_us: submit_start.elapsed().as_secs_f64() * 1e6,
+            replayed: true,
+            ..recorded
+        };
+        self.commands.wait()?;
+        Ok(FrameStats {
+            gpu_us: self.gpu_time()?,
+            ..stats
+        })
+    }
+
+    /// The GPU time of the last finished frame, if timestamps work.
+    fn gpu_time(&self) -> RenderResult<Option<f64>> {
+        Ok(match &self.timer {
             Some(timer) => timer.elapsed_us()?,
             None => None,
-        };
-        Ok(stats)
+        })
+    }
+
+    /// The buffer GPU cullers read the view from (`CadrGpuCullView` at offset 0).
+    pub(crate) fn cull_view_buffer(&self) -> vk::Buffer {
+        self.cull_view.raw()
     }
 
     /// The image and clear value of a pass target.

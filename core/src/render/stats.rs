@@ -23,6 +23,9 @@ pub struct FrameStats {
     pub parameter_updates: u64,
     /// Bytes uploaded to the GPU for this frame (matrices, materials).
     pub bytes_uploaded: u64,
+    /// Whether the frame resubmitted the last recorded command buffer (nothing had changed
+    /// but the camera, and the techniques allow it): recording cost nothing.
+    pub replayed: bool,
 }
 
 impl FrameStats {

@@ -19,7 +19,7 @@ use super::set::{status, Message, Techniques};
 use crate::gpu_scene::GpuScene;
 use crate::render::pick::{PickSample, PixelRect};
 use crate::render::{
-    Camera, FrameRecorders, FrameStats, PassTarget, Renderer, SUSPENDED_DEPTH_LAYOUT,
+    Camera, FramePlan, FrameRecorders, FrameStats, PassTarget, Renderer, SUSPENDED_DEPTH_LAYOUT,
 };
 use crate::vk::memory_barrier;
 
@@ -98,7 +98,13 @@ impl Renderer {
         let frame_set = self.frame_set().as_raw();
         let culler = GpuCuller::of(techniques, pipelines.passes.len())?;
         let phases = culler.as_ref().map_or(1, |c| c.phases);
-        let eye_view = EyeRelativeView::new(camera, techniques.min_pixels());
+        let eye_view = EyeRelativeView::new(camera, (width, height), techniques.min_pixels());
+        let cull_view_bytes = culler.as_ref().map(|_| eye_view.bytes());
+        // A frame records the same commands as the last one when the techniques allow it and
+        // nothing they depend on changed (the camera reaches the GPU through uniforms).
+        let replay_key = (matches!(passes, PassSet::Shaded(_)) && techniques.replayable())
+            .then(|| mix(mix(key, view.parameters_generation), frame_set));
+        let uploads_pending = scene.has_pending_uploads();
         let shared = RefCell::new((scene, abi::CadrStats::default(), culler));
         let context = |command_buffer: vk::CommandBuffer,
                        view: &abi::CadrSceneView,
@@ -153,7 +159,7 @@ impl Renderer {
                 &scene.view(),
                 &pipelines.passes,
                 &eye_view,
-                (width, height),
+                renderer.cull_view_buffer(),
                 depth,
             )
         };
@@ -235,17 +241,33 @@ impl Renderer {
             PassSet::Shaded(_) => PassTarget::Color,
             PassSet::Pick => PassTarget::Pick,
         };
-        let mut after =
-            |renderer: &Renderer, command_buffer: vk::CommandBuffer, _: u32, _: &mut FrameStats| {
-                if target == PassTarget::Pick {
-                    renderer.record_pick_readback(command_buffer);
-                }
-                Ok(())
-            };
+        let mut after = |renderer: &Renderer,
+                         command_buffer: vk::CommandBuffer,
+                         _: u32,
+                         stats: &mut FrameStats| {
+            if target == PassTarget::Pick {
+                renderer.record_pick_readback(command_buffer);
+            }
+            // What the recording issued (a replay of it issues the same).
+            let guard = shared.borrow();
+            let counters = &guard.1;
+            stats.draw_calls = counters.draw_calls;
+            stats.draws = counters.draws;
+            stats.pipeline_binds = counters.pipeline_binds;
+            stats.vertex_binds = counters.vertex_binds;
+            stats.parameter_updates = counters.parameter_binds;
+            Ok(())
+        };
         let mut stats = self.frame(
             camera,
-            (target, secondary),
-            phases,
+            FramePlan {
+                pass: target,
+                secondary,
+                phases,
+                cull_view: cull_view_bytes.as_deref(),
+                replay_key,
+                uploads_pending,
+            },
             FrameRecorders {
                 before: &mut before,
                 inside: &mut inside,
@@ -261,8 +283,6 @@ impl Renderer {
             });
         }
         stats.cpu_record_us += cull_us;
-        stats.draw_calls = counters.draw_calls;
-        stats.draws = counters.draws;
         stats.triangles = scene.drawn_triangles();
         if let Some(culler) = culler {
             // The frame has finished: what the GPU decided to draw.
@@ -270,9 +290,6 @@ impl Renderer {
             stats.draws = drawn.draws;
             stats.triangles = drawn.primitives;
         }
-        stats.pipeline_binds = counters.pipeline_binds;
-        stats.vertex_binds = counters.vertex_binds;
-        stats.parameter_updates = counters.parameter_binds;
         Ok(stats)
     }
 }

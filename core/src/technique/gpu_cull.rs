@@ -28,22 +28,18 @@ pub(crate) struct GpuCuller<'a> {
     pub(crate) draws: Vec<abi::CadrGpuDraws>,
 }
 
-/// What the culler needs of the view: the eye, the planes and the projection relative to it.
+/// What the culler needs of the view: the eye, the planes and the projection relative to it,
+/// the target size and the sub-pixel threshold, as shaders read it (`CadrGpuCullView`).
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct EyeRelativeView {
-    eye_high: [f32; 4],
-    eye_low: [f32; 4],
-    planes: [[f32; 4]; 6],
-    view_projection: [f32; 16],
-    /// Parts whose bounding sphere projects smaller than this many pixels are culled (0: none).
-    min_pixels: f32,
+    pub(crate) gpu: abi::CadrGpuCullView,
 }
 
 impl EyeRelativeView {
     /// The camera's frustum planes and projection for points given relative to the eye: the
     /// plane `n·p + d` becomes `n·q + (d + n·eye)` for `q = p - eye`, computed in f64; parts
-    /// projecting under `min_pixels` are culled.
-    pub(crate) fn new(camera: &Camera, min_pixels: f32) -> Self {
+    /// projecting under `min_pixels` across on the `width` × `height` target are culled.
+    pub(crate) fn new(camera: &Camera, (width, height): (u32, u32), min_pixels: f32) -> Self {
         let eye = camera.view.inverse().w_axis.truncate();
         let (high, low) = split_f64(eye);
         let planes = super::frame::frustum_planes(camera).map(|[x, y, z, d]| {
@@ -52,14 +48,38 @@ impl EyeRelativeView {
         });
         let mut rotation = camera.view;
         rotation.w_axis = glam::DVec4::W;
-        let view_projection = (camera.projection * rotation).as_mat4().to_cols_array();
+        let view_projection = camera.projection * rotation;
+        // Pixels per unit of size at clip w = 1: the x and y rows' scales over half the target.
+        let scale = |row: usize, pixels: u32| {
+            view_projection.row(row).truncate().length() * f64::from(pixels) * 0.5
+        };
+        let pixels_per_unit = scale(0, width).max(scale(1, height)) as f32;
         Self {
-            eye_high: [high[0], high[1], high[2], 0.0],
-            eye_low: [low[0], low[1], low[2], 0.0],
-            planes,
-            view_projection,
-            min_pixels,
+            gpu: abi::CadrGpuCullView {
+                eye_high: [high[0], high[1], high[2], 0.0],
+                eye_low: [low[0], low[1], low[2], 0.0],
+                planes,
+                view_projection: view_projection.as_mat4().to_cols_array(),
+                target: [width, height, 0, 0],
+                sub_pixel: [min_pixels, pixels_per_unit, 0.0, 0.0],
+            },
         }
+    }
+
+    /// The view's bytes as the culler's shaders read them (std140, little-endian).
+    pub(crate) fn bytes(&self) -> Vec<u8> {
+        let view = &self.gpu;
+        let floats = view
+            .eye_high
+            .iter()
+            .chain(&view.eye_low)
+            .chain(view.planes.iter().flatten())
+            .chain(&view.view_projection);
+        floats
+            .flat_map(|f| f.to_le_bytes())
+            .chain(view.target.iter().flat_map(|u| u.to_le_bytes()))
+            .chain(view.sub_pixel.iter().flat_map(|f| f.to_le_bytes()))
+            .collect()
     }
 }
 
@@ -112,9 +132,10 @@ impl<'a> GpuCuller<'a> {
         scene: &abi::CadrSceneView,
         passes: &[abi::CadrPass],
         view: &EyeRelativeView,
-        (width, height): (u32, u32),
+        view_buffer: vk::Buffer,
         depth: Option<PhaseDepth>,
     ) -> RenderResult<()> {
+        let gpu_view = &view.gpu;
         self.draws.fill(abi::CadrGpuDraws::default());
         let context = abi::CadrGpuCullContext {
             size: std::mem::size_of::<abi::CadrGpuCullContext>() as u32,
@@ -124,16 +145,18 @@ impl<'a> GpuCuller<'a> {
             pass_count: passes.len() as u32,
             passes: passes.as_ptr(),
             draws: self.draws.as_mut_ptr(),
-            eye_high: view.eye_high,
-            eye_low: view.eye_low,
-            planes: view.planes,
-            view_projection: view.view_projection,
-            width,
-            height,
+            eye_high: gpu_view.eye_high,
+            eye_low: gpu_view.eye_low,
+            planes: gpu_view.planes,
+            view_projection: gpu_view.view_projection,
+            width: gpu_view.target[0],
+            height: gpu_view.target[1],
             depth_image: depth.map_or(0, |d| d.image.as_raw()),
             depth_view: depth.map_or(0, |d| d.view.as_raw()),
             depth_layout: depth.map_or(0, |d| d.layout.as_raw()),
-            min_pixels: view.min_pixels,
+            min_pixels: gpu_view.sub_pixel[0],
+            view_buffer: view_buffer.as_raw(),
+            view_offset: 0,
         };
         let mut message = Message::new();
         // SAFETY: a live instance; the context and the arrays it points at are valid for the

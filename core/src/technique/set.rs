@@ -216,6 +216,8 @@ pub struct Techniques {
     shade: ShadeMode,
     /// Sub-pixel culling threshold of GPU cullers, in pixels (0: off).
     min_pixels: f32,
+    /// Whether unchanged frames may be resubmitted rather than recorded.
+    frame_replay: bool,
     pub(crate) pipelines: Option<TechniquePipelines>,
     /// The pick pass's pipelines (same vertex shader, instance ids into the pick target),
     /// built on the first pick.
@@ -276,6 +278,7 @@ impl Techniques {
             active: [None, None, None, None],
             shade: ShadeMode::Solid,
             min_pixels: 0.0,
+            frame_replay: true,
             pipelines: None,
             pick_pipelines: None,
             shaders: ShaderCache::default(),
@@ -340,6 +343,31 @@ impl Techniques {
         }
         self.min_pixels = pixels;
         Ok(())
+    }
+
+    /// Whether frames that would record what the last one recorded resubmit it instead (on by
+    /// default; see [`Techniques::replayable`]).
+    pub fn frame_replay(&self) -> bool {
+        self.frame_replay
+    }
+
+    /// Turns frame replay on or off. Off, every frame is recorded: the seeds' baseline, and
+    /// what `cadr bench` measures its reference row with.
+    pub fn set_frame_replay(&mut self, enabled: bool) {
+        self.frame_replay = enabled;
+    }
+
+    /// Whether frames may be replayed: frame replay is on and every active technique lets the
+    /// host resubmit a frame whose recording would not change (`CADR_TRAIT_REPLAYABLE`,
+    /// libraries of ABI 1.5 or later).
+    pub fn replayable(&self) -> bool {
+        self.frame_replay
+            && self.active.iter().all(|active| {
+                active.as_ref().is_some_and(|active| {
+                    active.entry.abi_version.1 >= 5
+                        && active.entry.provides & abi::CADR_TRAIT_REPLAYABLE != 0
+                })
+            })
     }
 
     /// What plugins hold now (objects through the allocation callbacks, buffers).

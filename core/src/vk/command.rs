@@ -61,8 +61,8 @@ impl CommandContext {
                 .reset_command_pool(self.pool, vk::CommandPoolResetFlags::empty())
                 .or_vk("vkResetCommandPool")?;
         }
-        let begin = vk::CommandBufferBeginInfo::default()
-            .flags(vk::CommandBufferUsageFlags::ONE_TIME_SUBMIT);
+        // Not one-time: a frame with nothing changed is submitted again (`resubmit`).
+        let begin = vk::CommandBufferBeginInfo::default();
         // SAFETY: the command buffer is reset and not in use.
         unsafe {
             self.device
@@ -78,6 +78,17 @@ impl CommandContext {
         // SAFETY: the command buffer is recording (begin was called).
         unsafe { self.device.raw.end_command_buffer(self.command_buffer) }
             .or_vk("vkEndCommandBuffer")?;
+        let buffers = [self.command_buffer];
+        let submit = [vk::SubmitInfo::default().command_buffers(&buffers)];
+        self.device.submit(&submit, self.fence)
+    }
+
+    /// Submits the last recorded command buffer again, as it is, after waiting for its
+    /// previous submission; the fence signals when the GPU is done.
+    pub fn resubmit(&mut self) -> VkResult<()> {
+        self.wait()?;
+        // SAFETY: the fence is signalled (waited for above), so no submission uses it.
+        unsafe { self.device.raw.reset_fences(&[self.fence]) }.or_vk("vkResetFences")?;
         let buffers = [self.command_buffer];
         let submit = [vk::SubmitInfo::default().command_buffers(&buffers)];
         self.device.submit(&submit, self.fence)

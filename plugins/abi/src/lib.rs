@@ -126,6 +126,14 @@ pub const CADR_TRAIT_DRAWS_GPU_COMMANDS: CadrTraitBits = 1 << 5;
 /// the host itself wrote. A technique that reads matrices from the matrix buffer on the GPU
 /// leaves it clear.
 pub const CADR_TRAIT_READS_HOST_MATRICES: CadrTraitBits = 1 << 6;
+/// Since ABI 1.5. Any kind, an announcement: the technique's per-frame calls (`prepare`,
+/// `record`, `record_gpu`) record the same commands, and change nothing else, for a frame
+/// whose commands key ([`CadrRecordContext::commands_key`]) and scene generations equal the
+/// last recorded frame's, whatever the camera (a GPU culler reads the camera from
+/// [`CadrGpuCullContext::view_buffer`] on the GPU, not from its values). When every active
+/// technique sets it and the frame uploads nothing, the host resubmits the last frame's
+/// command buffer without calling them: a frame with nothing changed costs one submission.
+pub const CADR_TRAIT_REPLAYABLE: CadrTraitBits = 1 << 7;
 
 /// A message buffer the host hands to functions that can fail: the plugin writes a
 /// NUL-terminated UTF-8 message of at most `capacity` bytes (including the NUL).
@@ -961,6 +969,36 @@ pub struct CadrGpuCullContext {
     /// 0 (the default) culls nothing for its size: CAD users count small parts. A part whose
     /// sphere holds the eye is never culled for its size.
     pub min_pixels: f32,
+    /// Since ABI 1.5: a `VkBuffer` (uniform-buffer usage, host-written before each submission
+    /// of the frame, also one that resubmits it) holding a [`CadrGpuCullView`] at
+    /// `view_offset`: the same view as the fields above, for shaders. A culler that reads the
+    /// view from here rather than recording its values can be replayed
+    /// ([`CADR_TRAIT_REPLAYABLE`]). Owned by the host; valid while the frame runs.
+    pub view_buffer: u64,
+    /// Byte offset of the [`CadrGpuCullView`] in `view_buffer` (a multiple of 256).
+    pub view_offset: u64,
+}
+
+/// Since ABI 1.5: the view of a GPU-culled frame as shaders read it (std140: vec4s, then a
+/// column-major mat4, a uvec4 and a vec4), in [`CadrGpuCullContext::view_buffer`].
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct CadrGpuCullView {
+    /// The eye position's f32 high part (xyz, w = 0).
+    pub eye_high: [f32; 4],
+    /// The eye position's f32 remainder (xyz, w = 0).
+    pub eye_low: [f32; 4],
+    /// Frustum planes relative to the eye, as [`CadrGpuCullContext::planes`].
+    pub planes: [[f32; 4]; 6],
+    /// Projection times the view's rotation, column-major, as
+    /// [`CadrGpuCullContext::view_projection`].
+    pub view_projection: [f32; 16],
+    /// Target width and height in pixels, then two zeros.
+    pub target: [u32; 4],
+    /// The sub-pixel threshold ([`CadrGpuCullContext::min_pixels`]); the pixels one unit of
+    /// size covers at clip w = 1 (the larger of the x and y scales: a sphere of radius r at
+    /// clip w spans about `2 r k / w` pixels); two zeros.
+    pub sub_pixel: [f32; 4],
 }
 
 /// Culling vtable ([`CADR_KIND_CULLING`]).

@@ -462,6 +462,19 @@ impl<'a> GpuCull<'a> {
         }
     }
 
+    /// The host's buffer and offset holding the view as shaders read it
+    /// (`CadrGpuCullView`, since ABI 1.5), if the host passed one.
+    pub fn view_buffer(&self) -> Option<(vk::Buffer, u64)> {
+        let end =
+            std::mem::offset_of!(abi::CadrGpuCullContext, view_offset) + std::mem::size_of::<u64>();
+        (self.raw.size as usize >= end && self.raw.view_buffer != 0).then(|| {
+            (
+                vk::Buffer::from_raw(self.raw.view_buffer),
+                self.raw.view_offset,
+            )
+        })
+    }
+
     /// The primary command buffer, outside rendering.
     pub fn command_buffer(&self) -> vk::CommandBuffer {
         vk::CommandBuffer::from_raw(self.raw.command_buffer as u64)

@@ -38,13 +38,14 @@ layout(set = 0, binding = 1, std430) readonly buffer Matrices { Matrix matrices[
 layout(set = 0, binding = 2, std430) writeonly buffer Commands { uint commands[]; };
 // [0..8): commands per pass slot; [8]: commands in all; [9]: triangles drawn.
 layout(set = 0, binding = 3, std430) buffer Counts { uint counts[]; };
+// The host's CadrGpuCullView, written before every submission of the frame.
 layout(set = 0, binding = 4, std140) uniform View {
     vec4 eye_high;
     vec4 eye_low;
     vec4 planes[6];
     mat4 view_projection;
-    // x, y: the depth image's size; z: pyramid levels; w: unused.
-    uvec4 pyramid;
+    // x, y: the target's (and depth image's) size; zw: unused.
+    uvec4 target;
     // x: the sub-pixel threshold (projected diameter in pixels; 0: off); y: pixels per unit
     // of size at clip w = 1.
     vec4 sub_pixel;
@@ -64,6 +65,7 @@ layout(push_constant) uniform Dispatch {
     uint first_command;
     uint mode;
     uint writes_visibility;
+    uint pyramid_levels;
 } dispatch;
 
 bool in_frustum(vec3 center, float radius) {
@@ -99,16 +101,16 @@ bool passes_pyramid(vec3 center, float radius) {
     if (nearest <= 0.0) {
         return true;
     }
-    vec2 size = vec2(view.pyramid.xy);
+    vec2 size = vec2(view.target.xy);
     vec2 texel_lo = (lo * 0.5 + 0.5) * size;
     vec2 texel_hi = (hi * 0.5 + 0.5) * size;
     vec2 extent = max(texel_hi - texel_lo, vec2(1.0));
-    uint levels = max(view.pyramid.z, 1u);
+    uint levels = max(dispatch.pyramid_levels, 1u);
     // The level where the rect spans at most 3 texels per axis: fine enough that a part
     // hidden near a silhouette is still found hidden.
     uint level = uint(clamp(ceil(log2(max(extent.x, extent.y))) - 2.0, 0.0, float(levels - 1u)));
     // Where the level starts and how wide it is.
-    uvec2 dims = (view.pyramid.xy + 1u) / 2u;
+    uvec2 dims = (view.target.xy + 1u) / 2u;
     uint offset = 0u;
     for (uint k = 0u; k < level; ++k) {
         offset += dims.x * dims.y;

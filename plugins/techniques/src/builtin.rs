@@ -21,24 +21,24 @@ technique_library! {
         vertex PerGeometry {
             name: "per-geometry",
             description: "Vertex and index buffers bound per geometry, re-bound only when the geometry changes.",
-            features: 0, provides: GEOMETRY, needs: 0,
+            features: 0, provides: GEOMETRY | abi::CADR_TRAIT_REPLAYABLE, needs: 0,
         },
         parameters Push {
             name: "push",
             description: "Matrix and material values pushed with every draw (push constants; the seeds' glUniform/ubosub).",
             features: 0,
-            provides: abi::CADR_TRAIT_PARAMETERS_IN_COMMANDS | abi::CADR_TRAIT_READS_HOST_MATRICES,
+            provides: abi::CADR_TRAIT_PARAMETERS_IN_COMMANDS | abi::CADR_TRAIT_READS_HOST_MATRICES | abi::CADR_TRAIT_REPLAYABLE,
             needs: 0,
         },
         submission Individual {
             name: "individual",
             description: "One vkCmdDrawIndexed per part in scene order, recorded every frame (the seeds' baseline strategy).",
-            features: 0, provides: 0, needs: 0,
+            features: 0, provides: abi::CADR_TRAIT_REPLAYABLE, needs: 0,
         },
         culling NoCulling {
             name: "none",
             description: "No culling: every visible part is drawn.",
-            features: 0, provides: 0, needs: 0,
+            features: 0, provides: abi::CADR_TRAIT_REPLAYABLE, needs: 0,
         },
     ]
 }

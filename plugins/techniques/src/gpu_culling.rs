@@ -34,53 +34,15 @@ const PASSES_PER_PHASE: usize = 4;
 /// Bytes of one `VkDrawIndexedIndirectCommand`.
 const COMMAND_BYTES: u64 = 20;
 
+/// The visibility buffers: last frame's (read) and this frame's (written).
+const LAST: usize = 0;
+const NOW: usize = 1;
+/// The binding of the host's view uniform (`CadrGpuCullView`) in the cull set.
+const VIEW_BINDING: usize = 4;
+
 const MODE_FRUSTUM: u32 = 0;
 const MODE_LAST_VISIBLE: u32 = 1;
 const MODE_NEWLY_VISIBLE: u32 = 2;
-
-/// The view uniform of `gpu_cull.comp` (std140).
-#[repr(C)]
-#[derive(Clone, Copy)]
-struct ViewUniform {
-    eye_high: [f32; 4],
-    eye_low: [f32; 4],
-    planes: [[f32; 4]; 6],
-    view_projection: [f32; 16],
-    pyramid: [u32; 4],
-    /// x: the sub-pixel threshold (projected diameter in pixels, 0: off); y: pixels per unit
-    /// of size at clip w = 1 (see [`pixels_per_unit`]); zw: unused.
-    sub_pixel: [f32; 4],
-}
-
-impl ViewUniform {
-    fn bytes(&self) -> Vec<u8> {
-        let floats = self
-            .eye_high
-            .iter()
-            .chain(&self.eye_low)
-            .chain(self.planes.iter().flatten())
-            .chain(&self.view_projection);
-        floats
-            .flat_map(|f| f.to_le_bytes())
-            .chain(self.pyramid.iter().flat_map(|u| u.to_le_bytes()))
-            .chain(self.sub_pixel.iter().flat_map(|f| f.to_le_bytes()))
-            .collect()
-    }
-}
-
-/// How many pixels one unit of length covers at clip w = 1 with this view-projection
-/// (column-major, projection times a rotation) on a `width` × `height` target: the larger of
-/// the x and y scales. A sphere of radius r at clip w spans about `2 r k / w` pixels, exactly
-/// so for an orthographic view (w = 1).
-fn pixels_per_unit(view_projection: &[f32; 16], width: u32, height: u32) -> f32 {
-    let row_length = |row: usize| {
-        (0..3)
-            .map(|column| view_projection[column * 4 + row].powi(2))
-            .sum::<f32>()
-            .sqrt()
-    };
-    (row_length(0) * width as f32 * 0.5).max(row_length(1) * height as f32 * 0.5)
-}
 
 /// Push constants of one cull dispatch.
 #[derive(Clone, Copy)]
@@ -91,6 +53,7 @@ struct CullDispatch {
     first_command: u32,
     mode: u32,
     writes_visibility: u32,
+    pyramid_levels: u32,
 }
 
 /// Push constants of one pyramid level.
@@ -130,8 +93,7 @@ struct Objects {
     pyramid_pipeline: vk::Pipeline,
     sampler: vk::Sampler,
     pool: vk::DescriptorPool,
-    /// One cull set per parity of the visibility buffers (which is last, which is now).
-    cull_sets: [vk::DescriptorSet; 2],
+    cull_set: vk::DescriptorSet,
     pyramid_set: vk::DescriptorSet,
 }
 
@@ -243,7 +205,7 @@ impl Objects {
             pyramid_pipeline: vk::Pipeline::null(),
             sampler: vk::Sampler::null(),
             pool: vk::DescriptorPool::null(),
-            cull_sets: [vk::DescriptorSet::null(); 2],
+            cull_set: vk::DescriptorSet::null(),
             pyramid_set: vk::DescriptorSet::null(),
         };
         let storage = vk::DescriptorType::STORAGE_BUFFER;
@@ -262,7 +224,7 @@ impl Objects {
             "gpu_cull.comp",
             include_str!("../shaders/gpu_cull.comp"),
             objects.cull_set_layout,
-            24,
+            28,
         )?;
         let (device, allocator) = (&gpu.device, gpu.allocator());
         if occlusion {
@@ -288,21 +250,21 @@ impl Objects {
         let sizes = [
             vk::DescriptorPoolSize::default()
                 .ty(storage)
-                .descriptor_count(15),
+                .descriptor_count(8),
             vk::DescriptorPoolSize::default()
                 .ty(vk::DescriptorType::UNIFORM_BUFFER)
-                .descriptor_count(2),
+                .descriptor_count(1),
             vk::DescriptorPoolSize::default()
                 .ty(vk::DescriptorType::COMBINED_IMAGE_SAMPLER)
                 .descriptor_count(1),
         ];
         let info = vk::DescriptorPoolCreateInfo::default()
-            .max_sets(3)
+            .max_sets(2)
             .pool_sizes(&sizes);
         // SAFETY: the info lives for the call.
         objects.pool = unsafe { device.create_descriptor_pool(&info, allocator) }
             .map_err(|e| format!("vkCreateDescriptorPool: {e}"))?;
-        let mut layouts = vec![objects.cull_set_layout; 2];
+        let mut layouts = vec![objects.cull_set_layout];
         if occlusion {
             layouts.push(objects.pyramid_set_layout);
         }
@@ -312,8 +274,8 @@ impl Objects {
         // SAFETY: the pool has room for these sets.
         let sets = unsafe { device.allocate_descriptor_sets(&info) }
             .map_err(|e| format!("vkAllocateDescriptorSets: {e}"))?;
-        objects.cull_sets = [sets[0], sets[1]];
-        objects.pyramid_set = sets.get(2).copied().unwrap_or_default();
+        objects.cull_set = sets[0];
+        objects.pyramid_set = sets.get(1).copied().unwrap_or_default();
         Ok(objects)
     }
 }
@@ -322,23 +284,23 @@ impl Objects {
 pub struct GpuCuller<const OCCLUSION: bool> {
     gpu: Arc<Gpu>,
     objects: Objects,
-    /// The view uniform, written by `vkCmdUpdateBuffer` in the frame.
-    view: HostBuffer,
     /// Commands per (phase, pass) slot and the totals; host-visible for the frame's counts.
     counts: HostBuffer,
     /// The commands: one region of `capacity` per (phase, pass) slot.
     commands: Option<HostBuffer>,
     capacity: u32,
-    /// Visibility bits at the end of the last frame and of this one (occlusion), swapped per
-    /// frame; 4 bytes each for `gpu-frustum`, which reads none.
+    /// Visibility bits at the end of the last frame (read) and of this one (written, then
+    /// copied over the first at the end of the frame, so that every frame records the same
+    /// commands); 4 bytes each for `gpu-frustum`, which reads none.
     visibility: [HostBuffer; 2],
     visibility_words: u32,
-    last: usize,
     /// The depth pyramid (occlusion) and the depth size it was made for.
     pyramid: HostBuffer,
     pyramid_size: (u32, u32),
+    /// Levels of the pyramid of the current target size (a push constant of the culls).
+    pyramid_levels: u32,
     /// What the descriptor sets were last written with.
-    cull_written: [Option<[u64; 8]>; 2],
+    cull_written: Option<[u64; 8]>,
     pyramid_written: Option<[u64; 2]>,
 }
 
@@ -346,32 +308,26 @@ impl<const OCCLUSION: bool> Technique for GpuCuller<OCCLUSION> {
     fn create(gpu: Arc<Gpu>) -> Result<Self, String> {
         let objects = Objects::new(&gpu, OCCLUSION)?;
         let storage = vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_DST;
-        let view = gpu.create_buffer(
-            "gpu cull view",
-            std::mem::size_of::<ViewUniform>() as u64,
-            vk::BufferUsageFlags::UNIFORM_BUFFER | vk::BufferUsageFlags::TRANSFER_DST,
-            abi::CADR_MEMORY_GPU_ONLY,
-        )?;
         let counts = gpu.create_buffer(
             "gpu cull counts",
             (COUNT_WORDS * 4) as u64,
             storage | vk::BufferUsageFlags::INDIRECT_BUFFER,
             abi::CADR_MEMORY_CPU_TO_GPU,
         )?;
-        let tiny = |name| gpu.create_buffer(name, 4, storage, abi::CADR_MEMORY_GPU_ONLY);
+        let visibility_usage = storage | vk::BufferUsageFlags::TRANSFER_SRC;
+        let tiny = |name| gpu.create_buffer(name, 4, visibility_usage, abi::CADR_MEMORY_GPU_ONLY);
         Ok(Self {
             visibility: [tiny("gpu cull visibility")?, tiny("gpu cull visibility")?],
             pyramid: tiny("gpu cull pyramid")?,
             gpu,
             objects,
-            view,
             counts,
             commands: None,
             capacity: 0,
             visibility_words: 0,
-            last: 0,
             pyramid_size: (0, 0),
-            cull_written: [None; 2],
+            pyramid_levels: 1,
+            cull_written: None,
             pyramid_written: None,
         })
     }
@@ -425,7 +381,7 @@ impl<const OCCLUSION: bool> GpuCuller<OCCLUSION> {
                 *buffer = self.gpu.create_buffer(
                     "gpu cull visibility",
                     u64::from(words) * 4,
-                    storage,
+                    storage | vk::BufferUsageFlags::TRANSFER_SRC,
                     abi::CADR_MEMORY_GPU_ONLY,
                 )?;
                 // SAFETY: recording outside rendering; the buffer allows transfer writes.
@@ -464,45 +420,55 @@ impl<const OCCLUSION: bool> GpuCuller<OCCLUSION> {
         Ok(())
     }
 
-    /// Points the cull set at the scene's buffers and ours (when any changed).
-    fn write_cull_set(&mut self, scene: &abi::CadrSceneView) {
+    /// Points the cull set at the scene's buffers, the host's view and ours (when any
+    /// changed).
+    fn write_cull_set(
+        &mut self,
+        scene: &abi::CadrSceneView,
+        (view, view_offset): (vk::Buffer, u64),
+    ) {
         let Some(commands) = &self.commands else {
             return;
         };
-        let now = 1 - self.last;
         let buffers = [
             buffer(&scene.cull_buffer),
             buffer(&scene.matrix_buffer),
             commands.raw(),
             self.counts.raw(),
-            self.view.raw(),
-            self.visibility[self.last].raw(),
-            self.visibility[now].raw(),
+            view,
+            self.visibility[LAST].raw(),
+            self.visibility[NOW].raw(),
             self.pyramid.raw(),
         ];
-        let key = buffers.map(|b| b.as_raw());
-        if self.cull_written[self.last] == Some(key) {
+        let mut key = buffers.map(|b| b.as_raw());
+        key[4] ^= view_offset.rotate_left(32);
+        if self.cull_written == Some(key) {
             return;
         }
         let infos: Vec<[vk::DescriptorBufferInfo; 1]> = buffers
             .iter()
-            .map(|&b| {
-                [vk::DescriptorBufferInfo::default()
-                    .buffer(b)
-                    .range(vk::WHOLE_SIZE)]
+            .enumerate()
+            .map(|(binding, &b)| {
+                let info = vk::DescriptorBufferInfo::default().buffer(b);
+                [if binding == VIEW_BINDING {
+                    info.offset(view_offset)
+                        .range(std::mem::size_of::<abi::CadrGpuCullView>() as u64)
+                } else {
+                    info.range(vk::WHOLE_SIZE)
+                }]
             })
             .collect();
         let writes: Vec<vk::WriteDescriptorSet> = infos
             .iter()
             .enumerate()
             .map(|(binding, info)| {
-                let ty = if binding == 4 {
+                let ty = if binding == VIEW_BINDING {
                     vk::DescriptorType::UNIFORM_BUFFER
                 } else {
                     vk::DescriptorType::STORAGE_BUFFER
                 };
                 vk::WriteDescriptorSet::default()
-                    .dst_set(self.objects.cull_sets[self.last])
+                    .dst_set(self.objects.cull_set)
                     .dst_binding(binding as u32)
                     .descriptor_type(ty)
                     .buffer_info(info)
@@ -511,7 +477,7 @@ impl<const OCCLUSION: bool> GpuCuller<OCCLUSION> {
         // SAFETY: the set is not in use (the host waits for the last frame before recording
         // the next); the buffers are live.
         unsafe { self.gpu.device.update_descriptor_sets(&writes, &[]) };
-        self.cull_written[self.last] = Some(key);
+        self.cull_written = Some(key);
     }
 
     /// Records the cull dispatches of `phase` for every pass, in `mode`.
@@ -530,7 +496,7 @@ impl<const OCCLUSION: bool> GpuCuller<OCCLUSION> {
                 vk::PipelineBindPoint::COMPUTE,
                 self.objects.cull_layout,
                 0,
-                &[self.objects.cull_sets[self.last]],
+                &[self.objects.cull_set],
                 &[],
             );
         }
@@ -543,6 +509,7 @@ impl<const OCCLUSION: bool> GpuCuller<OCCLUSION> {
                 first_command: slot as u32 * self.capacity,
                 mode,
                 writes_visibility: u32::from(index == 0),
+                pyramid_levels: self.pyramid_levels,
             };
             let constants = words(&[
                 dispatch.instance_count,
@@ -551,8 +518,9 @@ impl<const OCCLUSION: bool> GpuCuller<OCCLUSION> {
                 dispatch.first_command,
                 dispatch.mode,
                 dispatch.writes_visibility,
+                dispatch.pyramid_levels,
             ]);
-            // SAFETY: recording; the constants fit the layout's 24 bytes.
+            // SAFETY: recording; the constants fit the layout's 28 bytes.
             unsafe {
                 device.cmd_push_constants(
                     command_buffer,
@@ -577,6 +545,34 @@ impl<const OCCLUSION: bool> GpuCuller<OCCLUSION> {
                 );
             }
         }
+    }
+
+    /// Copies this frame's visibility over the last frame's, for the next frame to read: the
+    /// buffers keep their roles, so every frame records the same commands.
+    fn keep_visibility(&self, command_buffer: vk::CommandBuffer) {
+        barrier(
+            &self.gpu,
+            command_buffer,
+            (
+                vk::PipelineStageFlags2::COMPUTE_SHADER,
+                vk::AccessFlags2::SHADER_READ | vk::AccessFlags2::SHADER_WRITE,
+            ),
+            (
+                vk::PipelineStageFlags2::ALL_TRANSFER,
+                vk::AccessFlags2::TRANSFER_READ | vk::AccessFlags2::TRANSFER_WRITE,
+            ),
+        );
+        let region = [vk::BufferCopy::default().size(u64::from(self.visibility_words) * 4)];
+        // SAFETY: recording outside rendering; both buffers hold `visibility_words` words and
+        // allow the transfer; the barrier above ordered the culls' accesses before it.
+        unsafe {
+            self.gpu.device.cmd_copy_buffer(
+                command_buffer,
+                self.visibility[NOW].raw(),
+                self.visibility[LAST].raw(),
+                &region,
+            )
+        };
     }
 
     /// Builds the depth pyramid from the depth drawn in phase 0.
@@ -693,6 +689,9 @@ impl<const OCCLUSION: bool> GpuCulling for GpuCuller<OCCLUSION> {
         let raw = cull.raw();
         let instances = scene.raw().instance_count;
         let command_buffer = cull.command_buffer();
+        let view = cull
+            .view_buffer()
+            .ok_or("the host passed no view buffer (a host of ABI 1.5 or later does)")?;
         let gpu = Arc::clone(&self.gpu);
         let device = &gpu.device;
         let transfer_to_compute = (
@@ -714,14 +713,18 @@ impl<const OCCLUSION: bool> GpuCulling for GpuCuller<OCCLUSION> {
                     cull.passes().len()
                 ));
             }
-            // The previous frame's reads of our buffers (indirect draws, culls) come first.
+            // The previous frame's reads of our buffers (indirect draws, culls, the visibility
+            // copy) come first.
             barrier(
                 &self.gpu,
                 command_buffer,
                 (
                     vk::PipelineStageFlags2::DRAW_INDIRECT
-                        | vk::PipelineStageFlags2::COMPUTE_SHADER,
-                    vk::AccessFlags2::INDIRECT_COMMAND_READ | vk::AccessFlags2::SHADER_READ,
+                        | vk::PipelineStageFlags2::COMPUTE_SHADER
+                        | vk::PipelineStageFlags2::ALL_TRANSFER,
+                    vk::AccessFlags2::INDIRECT_COMMAND_READ
+                        | vk::AccessFlags2::SHADER_READ
+                        | vk::AccessFlags2::TRANSFER_READ,
                 ),
                 (
                     vk::PipelineStageFlags2::ALL_TRANSFER,
@@ -729,44 +732,24 @@ impl<const OCCLUSION: bool> GpuCulling for GpuCuller<OCCLUSION> {
                 ),
             );
             self.reserve(instances, command_buffer)?;
+            let (width, height) = (raw.width.max(1), raw.height.max(1));
+            self.pyramid_levels = pyramid_levels(width, height).len() as u32;
             if OCCLUSION {
-                self.reserve_pyramid(raw.width.max(1), raw.height.max(1))?;
+                self.reserve_pyramid(width, height)?;
                 // This frame reads what the last one found visible and writes afresh.
-                self.last = 1 - self.last;
-                let now = 1 - self.last;
                 // SAFETY: recording outside rendering; the buffer allows transfer writes.
                 unsafe {
                     device.cmd_fill_buffer(
                         command_buffer,
-                        self.visibility[now].raw(),
+                        self.visibility[NOW].raw(),
                         0,
                         vk::WHOLE_SIZE,
                         0,
                     )
                 };
             }
-            let uniform = ViewUniform {
-                eye_high: raw.eye_high,
-                eye_low: raw.eye_low,
-                planes: raw.planes,
-                view_projection: raw.view_projection,
-                pyramid: [
-                    raw.width.max(1),
-                    raw.height.max(1),
-                    pyramid_levels(raw.width.max(1), raw.height.max(1)).len() as u32,
-                    0,
-                ],
-                sub_pixel: [
-                    cull.min_pixels(),
-                    pixels_per_unit(&raw.view_projection, raw.width, raw.height),
-                    0.0,
-                    0.0,
-                ],
-            };
-            // SAFETY: recording outside rendering; both buffers allow transfer writes and the
-            // update is under 64 KiB and a multiple of 4.
+            // SAFETY: recording outside rendering; the buffer allows transfer writes.
             unsafe {
-                device.cmd_update_buffer(command_buffer, self.view.raw(), 0, &uniform.bytes());
                 device.cmd_fill_buffer(command_buffer, self.counts.raw(), 0, vk::WHOLE_SIZE, 0);
             }
             barrier(
@@ -775,7 +758,7 @@ impl<const OCCLUSION: bool> GpuCulling for GpuCuller<OCCLUSION> {
                 transfer_to_compute.0,
                 transfer_to_compute.1,
             );
-            self.write_cull_set(scene.raw());
+            self.write_cull_set(scene.raw(), view);
             let mode = if OCCLUSION {
                 MODE_LAST_VISIBLE
             } else {
@@ -784,8 +767,11 @@ impl<const OCCLUSION: bool> GpuCulling for GpuCuller<OCCLUSION> {
             self.dispatch_cull(cull, instances, mode);
         } else {
             self.build_pyramid(cull)?;
-            self.write_cull_set(scene.raw());
+            self.write_cull_set(scene.raw(), view);
             self.dispatch_cull(cull, instances, MODE_NEWLY_VISIBLE);
+            if cull.phase() + 1 == self.phases() {
+                self.keep_visibility(command_buffer);
+            }
         }
         // The commands and counts are read by the draws; the counts by the host at the end.
         barrier(

@@ -1,0 +1,129 @@
+//! Frame replay: a frame that would record what the last one recorded (the camera moved, or
+//! nothing did) resubmits the last command buffer. It must draw exactly what recording would:
+//! the camera reaches the GPU through uniforms, and any edit, resize or technique change
+//! records afresh.
+#![allow(clippy::unwrap_used)] // Test code: a failed unwrap is a failed test.
+
+use std::sync::Arc;
+
+use cadr_core::generate::{generate, GeneratorSpec};
+use cadr_core::graph::SceneGraph;
+use cadr_core::render::Camera;
+use cadr_core::scene::flatten;
+use cadr_core::technique::Combination;
+use cadr_core::tree::SceneTree;
+use cadr_core::view::View;
+use cadr_tests::images::compare;
+use cadr_tests::{assert_no_validation_errors, plugin_registry, test_device};
+use glam::{DMat4, DVec3};
+
+const SIZE: (u32, u32) = (160, 120);
+
+fn combination(submission: &str, culling: &str) -> Combination {
+    Combination {
+        vertex: "arena".into(),
+        parameters: "ssbo-index".into(),
+        submission: submission.into(),
+        culling: culling.into(),
+    }
+}
+
+/// What one frame showed and whether it was replayed.
+struct Shown {
+    image: image::RgbaImage,
+    replayed: bool,
+    triangles: u64,
+}
+
+/// Renders `frames` of an orbit with `combination`, frame replay on or off: at frame `edit_at`
+/// a transform node is lifted, three frames later the target is resized and back.
+fn orbit(combination: &Combination, replay: bool, edit_at: usize, frames: usize) -> Vec<Shown> {
+    let device = test_device();
+    let scene = generate(&GeneratorSpec::Demo);
+    let bounds = flatten(&scene).unwrap().bounds;
+    let (mut graph, handles) = SceneGraph::from_scene(&scene).unwrap();
+    // The first transform node (before the tree is built, so the probe is no edit).
+    let (root, original) = handles
+        .iter()
+        .find_map(|&node| {
+            let matrix = graph.node(node).unwrap().local_matrix();
+            graph
+                .set_matrix(node, matrix)
+                .is_ok()
+                .then_some((node, matrix))
+        })
+        .unwrap();
+    let mut tree = SceneTree::build(&mut graph);
+    let registry = plugin_registry(&device);
+    let mut view = View::new(&device, Arc::clone(&registry), SIZE.0, SIZE.1).unwrap();
+    view.techniques_mut().select(combination).unwrap();
+    view.techniques_mut().set_frame_replay(replay);
+    let aspect = f64::from(SIZE.0) / f64::from(SIZE.1);
+    let shown = (0..frames)
+        .map(|frame| {
+            if frame == edit_at {
+                let lift = DMat4::from_translation(DVec3::new(0.0, bounds.radius() * 0.2, 0.0));
+                graph.set_matrix(root, lift * original).unwrap();
+                tree.update(&mut graph);
+            }
+            if frame == edit_at + 3 {
+                // A resize and back: the recording drew into the old target.
+                view.renderer_mut().resize(SIZE.0 / 2, SIZE.1 / 2).unwrap();
+                view.renderer_mut().resize(SIZE.0, SIZE.1).unwrap();
+            }
+            let camera = Camera::orbit(&bounds, aspect, frame as f64 / 40.0, 1.2);
+            let stats = view.render(&graph, &mut tree, &camera).unwrap();
+            Shown {
+                image: view.renderer().read_rgba8().unwrap(),
+                replayed: stats.replayed,
+                triangles: stats.triangles,
+            }
+        })
+        .collect();
+    drop(view);
+    assert_no_validation_errors(&device);
+    shown
+}
+
+#[test]
+fn replayed_frames_follow_the_camera_and_every_change_records_afresh() {
+    let (edit_at, frames) = (5, 10);
+    for combination in [
+        combination("individual-indirect-count", "gpu-frustum"),
+        combination("individual-indirect-count", "gpu-occlusion"),
+        combination("groups-mdi-replay", "none"),
+    ] {
+        let replayed = orbit(&combination, true, edit_at, frames);
+        let recorded = orbit(&combination, false, edit_at, frames);
+        let flags: Vec<bool> = replayed.iter().map(|s| s.replayed).collect();
+        println!("{combination}: replayed {flags:?}");
+        for (frame, (a, b)) in replayed.iter().zip(&recorded).enumerate() {
+            assert!(!b.replayed, "{combination}, frame {frame}: replay is off");
+            let difference = compare(&a.image, &b.image).unwrap();
+            assert!(
+                difference.max == 0.0 || (difference.mean < 0.3 && difference.p99 < 6.0),
+                "{combination}, frame {frame}: the replayed frame differs: {difference:?}"
+            );
+            assert_eq!(a.triangles, b.triangles, "{combination}, frame {frame}");
+            // The first two frames record (the first may do one-time work); the edit and the
+            // resize record, and so does the frame after each; the camera alone never does.
+            let expected = !matches!(frame, 0 | 1)
+                && frame != edit_at
+                && frame != edit_at + 1
+                && frame != edit_at + 3
+                && frame != edit_at + 4;
+            assert_eq!(
+                a.replayed, expected,
+                "{combination}, frame {frame}: {flags:?}"
+            );
+        }
+        // The edit shows in the frame it was made.
+        let before = &replayed[edit_at - 1].image;
+        let after = &replayed[edit_at].image;
+        let moved = compare(before, after).unwrap();
+        assert!(
+            moved.mean > 0.3,
+            "{combination}: the lifted root shows: {moved:?}"
+        );
+    }
+}

@@ -132,6 +132,10 @@ typedef struct CadrVulkan {
   // `VkAllocationCallbacks*` to pass to every `vkCreate*`/`vkDestroy*` (the host counts
   // live objects with them); may be null.
   const void *allocation_callbacks;
+  // Since ABI 1.5 (read it only when `size` covers it): the host's `VkPipelineCache`, kept on
+  // disk between runs; pass it to `vkCreate*Pipelines` so that a plugin's pipelines build
+  // fast the second time. Internally synchronised (any thread); owned by the host; may be 0.
+  uint64_t pipeline_cache;
 } CadrVulkan;
 
 // A buffer the host created for a plugin ([`CadrHostApi::create_buffer`]).

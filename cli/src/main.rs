@@ -83,12 +83,21 @@ bench-tree: builds the incremental scene tree of SCENE (default gen:graphicscard
 devices: lists the Vulkan devices; CADR_DEVICE=INDEX|NAME picks one.
 
 
+Compiled shaders and the Vulkan pipeline cache are kept between runs in $CADR_CACHE_DIR, else
+$XDG_CACHE_HOME/cadr, else ~/.cache/cadr; --no-cache (any command) neither reads nor writes it.
 Validation layers are on with --validation or CADR_VALIDATION=1. Plugins are found beside the
 executable (and in its plugins/ folder) and in the directories of CADR_PLUGIN_PATH.
 ";
 
 fn main() -> ExitCode {
-    let mut argv = std::env::args().skip(1);
+    let mut argv: Vec<String> = std::env::args().skip(1).collect();
+    // Any command: --no-cache neither reads nor writes the disk cache.
+    let before = argv.len();
+    argv.retain(|argument| argument != "--no-cache");
+    if argv.len() != before {
+        cadr_core::disk_cache::set_enabled(false);
+    }
+    let mut argv = argv.into_iter();
     let command = argv.next();
     let result = match command.as_deref() {
         None | Some("--help" | "-h" | "help") => {

@@ -359,7 +359,10 @@ fn bench_prints_the_table_and_writes_json() {
     let json: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(&path).unwrap()).unwrap();
     let rows = json["rows"].as_array().unwrap();
-    assert_eq!(rows[1]["replayed_frames"], 0, "--no-replay records every frame");
+    assert_eq!(
+        rows[1]["replayed_frames"], 0,
+        "--no-replay records every frame"
+    );
     assert_eq!(rows[1]["draw_calls"], 500);
 }
 
@@ -545,4 +548,114 @@ fn render_min_pixels_culls_small_parts_on_the_gpu_and_is_refused_elsewhere() {
         "{}",
         stderr(&output)
     );
+}
+
+#[test]
+fn the_disk_cache_serves_the_second_run_and_survives_damaged_entries() {
+    let dir = std::env::temp_dir().join(format!("cadr-cli-cache-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    let png = dir.join("frame.png");
+    let cache = dir.join("cache");
+    let exe = std::path::Path::new(env!("CARGO_BIN_EXE_cadr"));
+    let render = |cache: &std::path::Path, extra: &[&str]| {
+        let output = Command::new(exe)
+            .args(["render", "gen:demo", "-o"])
+            .arg(&png)
+            .args([
+                "--size",
+                "96x72",
+                "--vertex",
+                "arena",
+                "--params",
+                "ssbo-index",
+            ])
+            .args([
+                "--submit",
+                "individual-indirect-count",
+                "--cull",
+                "gpu-frustum",
+            ])
+            .arg("--validation")
+            .args(extra)
+            .env("CADR_PLUGIN_PATH", exe.parent().unwrap().join("deps"))
+            .env("CADR_CACHE_DIR", cache)
+            .output()
+            .expect("run cadr");
+        assert!(output.status.success(), "{}", stderr(&output));
+        assert!(
+            stdout(&output).contains("validation:  0 errors"),
+            "{}",
+            stdout(&output)
+        );
+        std::fs::read(&png).unwrap()
+    };
+    let entries = |kind: &str| -> Vec<(std::path::PathBuf, std::time::SystemTime)> {
+        let mut files: Vec<_> = std::fs::read_dir(cache.join(kind))
+            .map(|dir| {
+                dir.map(|e| e.unwrap().path())
+                    .map(|p| {
+                        (
+                            p.clone(),
+                            std::fs::metadata(&p).unwrap().modified().unwrap(),
+                        )
+                    })
+                    .collect()
+            })
+            .unwrap_or_default();
+        files.sort();
+        files
+    };
+
+    let first = render(&cache, &[]);
+    let shaders = entries("spirv");
+    assert!(shaders.len() >= 3, "compiled shaders are kept: {shaders:?}");
+    assert_eq!(
+        entries("pipelines").len(),
+        1,
+        "the device's pipeline cache is kept"
+    );
+    for (path, _) in shaders.iter().chain(&entries("pipelines")) {
+        assert!(
+            std::fs::read(path).unwrap().starts_with(b"CADRCACH"),
+            "{path:?}"
+        );
+    }
+
+    // The second run finds every shader: none is compiled and written again.
+    let second = render(&cache, &[]);
+    assert_eq!(
+        first, second,
+        "the cached shaders and pipelines draw the same image"
+    );
+    assert_eq!(entries("spirv"), shaders, "no shader entry was rewritten");
+
+    // Damaged, truncated and foreign entries are ignored and rewritten, never trusted.
+    for (index, (path, _)) in shaders.iter().chain(&entries("pipelines")).enumerate() {
+        let mut bytes = std::fs::read(path).unwrap();
+        match index % 3 {
+            0 => bytes.truncate(bytes.len() / 2),
+            1 => {
+                let last = bytes.len() - 1;
+                bytes[last] ^= 0x5a;
+            }
+            _ => bytes = b"not a cadr cache entry".to_vec(),
+        }
+        std::fs::write(path, bytes).unwrap();
+    }
+    let third = render(&cache, &[]);
+    assert_eq!(first, third, "damaged entries change nothing drawn");
+    for (path, _) in entries("spirv").iter().chain(&entries("pipelines")) {
+        let bytes = std::fs::read(path).unwrap();
+        assert!(
+            bytes.starts_with(b"CADRCACH") && bytes.len() > 40,
+            "{path:?} was rewritten"
+        );
+    }
+
+    // --no-cache neither reads nor writes.
+    let untouched = dir.join("untouched");
+    let fourth = render(&untouched, &["--no-cache"]);
+    assert_eq!(first, fourth);
+    assert!(!untouched.exists(), "--no-cache wrote {untouched:?}");
+    let _ = std::fs::remove_dir_all(&dir);
 }

@@ -9,6 +9,7 @@
 //! layers above it report.
 
 pub mod csf;
+pub mod disk_cache;
 pub mod error;
 pub mod generate;
 pub mod gpu_scene;

@@ -5,6 +5,7 @@
 //! accessors, vertex fetch) that are assembled into complete shaders when a combination is
 //! chosen, so a build-time compiler could not know every permutation.
 
+use crate::disk_cache::DiskCache;
 use crate::vk::ShaderStage;
 
 /// A shader that failed to compile: a renderer error (a broken source or snippet), not a
@@ -29,9 +30,65 @@ fn shaderc_kind(stage: ShaderStage) -> shaderc::ShaderKind {
 /// A virtual file that `#include "name"` resolves to.
 pub type IncludeFile = (&'static str, &'static str);
 
+/// The cache kind of compiled shaders.
+const SPIRV_CACHE: &str = "spirv";
+/// The first word of every SPIR-V module.
+const SPIRV_MAGIC: u32 = 0x0723_0203;
+
 /// Compiles GLSL `source` (named `name` in messages) for Vulkan 1.3, resolving `#include`
-/// against `includes`. Returns the SPIR-V words.
+/// against `includes`. Returns the SPIR-V words. A module compiled before from the same
+/// source, stage and includes by the same cadr and compiler comes from the user's disk cache
+/// ([`crate::disk_cache`]); what is compiled goes there.
 pub fn compile_glsl(
+    name: &str,
+    source: &str,
+    stage: ShaderStage,
+    includes: &[IncludeFile],
+) -> Result<Vec<u32>, ShaderCompileError> {
+    let Some(cache) = DiskCache::user() else {
+        return compile_uncached(name, source, stage, includes);
+    };
+    let (spirv_major, spirv_minor) = shaderc::get_spirv_version();
+    let versions = format!(
+        "cadr {} shaderc spirv {spirv_major}.{spirv_minor} vulkan1.3 performance",
+        env!("CARGO_PKG_VERSION")
+    );
+    let stage_name = format!("{stage:?}");
+    let mut parts: Vec<&[u8]> = vec![
+        versions.as_bytes(),
+        stage_name.as_bytes(),
+        name.as_bytes(),
+        source.as_bytes(),
+    ];
+    for (file, content) in includes {
+        parts.extend([file.as_bytes(), content.as_bytes()]);
+    }
+    let entry = format!("{}.spv", crate::disk_cache::key(&parts));
+    if let Some(words) = cache
+        .read(SPIRV_CACHE, &entry)
+        .and_then(|b| spirv_words(&b))
+    {
+        return Ok(words);
+    }
+    let words = compile_uncached(name, source, stage, includes)?;
+    let bytes: Vec<u8> = words.iter().flat_map(|w| w.to_le_bytes()).collect();
+    cache.write(SPIRV_CACHE, &entry, &bytes);
+    Ok(words)
+}
+
+/// SPIR-V words from cached bytes, if they look like a module (whole words, the magic first).
+fn spirv_words(bytes: &[u8]) -> Option<Vec<u32>> {
+    if bytes.len() % 4 != 0 || bytes.len() < 20 {
+        return None;
+    }
+    let words: Vec<u32> = bytes
+        .chunks_exact(4)
+        .map(|c| u32::from_le_bytes([c[0], c[1], c[2], c[3]]))
+        .collect();
+    (words[0] == SPIRV_MAGIC).then_some(words)
+}
+
+fn compile_uncached(
     name: &str,
     source: &str,
     stage: ShaderStage,

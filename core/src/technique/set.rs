@@ -265,6 +265,7 @@ impl Techniques {
             min_uniform_buffer_offset_alignment: limits.min_uniform_buffer_offset_alignment,
             max_push_constants_size: limits.max_push_constants_size,
             allocation_callbacks: services.callbacks().cast(),
+            pipeline_cache: device.pipeline_cache().as_raw(),
         });
         let worker_threads = std::thread::available_parallelism()
             .map(|n| n.get() as u32)

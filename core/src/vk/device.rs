@@ -12,6 +12,7 @@ use gpu_allocator::MemoryLocation;
 use super::adapter::{self, Adapter, DeviceChoice};
 use super::error::{VkError, VkResult, VkResultExt};
 use super::instance::{Instance, InstanceOptions, ValidationLog};
+use super::pipeline_cache::PersistentPipelineCache;
 
 /// Optional device features cadr uses when present. Required ones (dynamic rendering,
 /// synchronization2) are not listed: a device without them is refused.
@@ -73,6 +74,8 @@ pub struct Device {
     capabilities: Capabilities,
     limits: vk::PhysicalDeviceLimits,
     queue_timestamp_bits: u32,
+    /// Every pipeline is created through it; kept on disk between runs.
+    pipeline_cache: PersistentPipelineCache,
 }
 
 impl Device {
@@ -233,6 +236,7 @@ impl Device {
             .as_ref()
             .map(|_| ash::ext::debug_utils::Device::new(&instance.raw, &raw));
 
+        let pipeline_cache = PersistentPipelineCache::load(&raw, &properties);
         let device = Arc::new(Self {
             instance,
             adapter,
@@ -243,9 +247,15 @@ impl Device {
             capabilities,
             limits: properties.limits,
             queue_timestamp_bits,
+            pipeline_cache,
         });
         device.set_name(queue, "cadr render queue");
         Ok(device)
+    }
+
+    /// The pipeline cache every pipeline is created with (null when none could be made).
+    pub fn pipeline_cache(&self) -> vk::PipelineCache {
+        self.pipeline_cache.handle
     }
 
     /// The instance the device was created on.
@@ -391,6 +401,7 @@ impl Drop for Device {
         }
         // The allocator frees its memory blocks through the device: drop it first.
         drop(self.allocator().take());
+        self.pipeline_cache.save_and_destroy(&self.raw);
         // SAFETY: no child object remains (see above).
         unsafe { self.raw.destroy_device(None) };
     }

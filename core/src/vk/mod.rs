@@ -15,6 +15,7 @@ mod error;
 mod image;
 mod instance;
 mod pipeline;
+mod pipeline_cache;
 mod rendering;
 mod shader;
 mod swapchain;

@@ -195,7 +195,7 @@ impl Pipeline {
         let pipelines = unsafe {
             device
                 .raw()
-                .create_graphics_pipelines(vk::PipelineCache::null(), &info, None)
+                .create_graphics_pipelines(device.pipeline_cache(), &info, None)
         }
         .map_err(|(_, result)| result)
         .or_vk("vkCreateGraphicsPipelines")?;
@@ -224,7 +224,7 @@ impl Pipeline {
         let pipelines = unsafe {
             device
                 .raw()
-                .create_compute_pipelines(vk::PipelineCache::null(), &info, None)
+                .create_compute_pipelines(device.pipeline_cache(), &info, None)
         }
         .map_err(|(_, result)| result)
         .or_vk("vkCreateComputePipelines")?;

@@ -258,6 +258,10 @@ pub struct CadrVulkan {
     /// `VkAllocationCallbacks*` to pass to every `vkCreate*`/`vkDestroy*` (the host counts
     /// live objects with them); may be null.
     pub allocation_callbacks: *const c_void,
+    /// Since ABI 1.5 (read it only when `size` covers it): the host's `VkPipelineCache`, kept on
+    /// disk between runs; pass it to `vkCreate*Pipelines` so that a plugin's pipelines build
+    /// fast the second time. Internally synchronised (any thread); owned by the host; may be 0.
+    pub pipeline_cache: u64,
 }
 
 /// Where a host buffer lives.

@@ -26,6 +26,9 @@ pub struct Gpu {
     pub formats: (vk::Format, vk::Format),
     /// Worker threads the technique may use.
     pub worker_threads: u32,
+    /// The host's pipeline cache (null from a host older than ABI 1.5): pass it when creating
+    /// pipelines.
+    pub pipeline_cache: vk::PipelineCache,
     allocation_callbacks: *const vk::AllocationCallbacks<'static>,
     host: *const abi::CadrHostApi,
 }
@@ -80,6 +83,15 @@ impl Gpu {
                 vk::Format::from_raw(vulkan.depth_format),
             ),
             worker_threads: info.worker_threads.max(1),
+            pipeline_cache: {
+                let end = std::mem::offset_of!(abi::CadrVulkan, pipeline_cache)
+                    + std::mem::size_of::<u64>();
+                if vulkan.size as usize >= end {
+                    vk::PipelineCache::from_raw(vulkan.pipeline_cache)
+                } else {
+                    vk::PipelineCache::null()
+                }
+            },
             allocation_callbacks: vulkan.allocation_callbacks.cast(),
             host: info.host,
         }))

@@ -181,7 +181,7 @@ impl Objects {
             .layout(layout)];
         // SAFETY: the module and layout are live; the info lives for the call.
         let created =
-            unsafe { device.create_compute_pipelines(vk::PipelineCache::null(), &info, allocator) };
+            unsafe { device.create_compute_pipelines(self.gpu.pipeline_cache, &info, allocator) };
         // SAFETY: the pipeline keeps what it needs of the module.
         unsafe { device.destroy_shader_module(module, allocator) };
         match created {

@@ -274,7 +274,6 @@ fn render(args: &Args) -> Result<(), String> {
     )?;
     let (combination, shade) = techniques::combination_from_args(args)?;
     let min_pixels = techniques::min_pixels_from_args(args)?;
-    techniques::check_min_pixels(min_pixels, &combination)?;
     if args.flag("--baseline") && techniques::technique_requested(args) {
         return Err(
             "--baseline draws with the built-in combination; it takes no technique options".into(),
@@ -309,10 +308,7 @@ fn render(args: &Args) -> Result<(), String> {
     let mut session =
         techniques::TechniqueSession::new(&device, &scene, registry, (width, height))?;
     session.choose(&combination, shade)?;
-    session
-        .techniques()
-        .set_min_pixels(min_pixels)
-        .map_err(|e| e.to_string())?;
+    session.set_min_pixels(min_pixels)?;
     // The baseline records every frame, as the seeds' does.
     session
         .techniques()

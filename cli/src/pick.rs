@@ -99,7 +99,6 @@ pub fn pick(args: &Args) -> Result<(), String> {
     }
     let (combination, shade) = techniques::combination_from_args(args)?;
     let min_pixels = techniques::min_pixels_from_args(args)?;
-    techniques::check_min_pixels(min_pixels, &combination)?;
     let source = cadr_core::load::SceneSource::parse(scene_text).map_err(|e| e.to_string())?;
     let scene = source.load().map_err(|e| e.to_string())?;
     let flat = flatten(&scene).map_err(|e| e.to_string())?;
@@ -109,10 +108,7 @@ pub fn pick(args: &Args) -> Result<(), String> {
     let (registry, _) = techniques::load_registry(&device);
     let mut session = TechniqueSession::new(&device, &scene, registry, (width, height))?;
     session.choose(&combination, shade)?;
-    session
-        .techniques()
-        .set_min_pixels(min_pixels)
-        .map_err(|e| e.to_string())?;
+    session.set_min_pixels(min_pixels)?;
     // The view `cadr render` draws: the camera fitted to the scene's bounds.
     let camera = Camera::fit(
         &stats.bounds,

@@ -73,18 +73,6 @@ pub fn min_pixels_from_args(args: &Args) -> Result<f32, String> {
     }
 }
 
-/// Refuses a sub-pixel threshold with a culler that does not apply it (CPU cullers keep every
-/// part in the frustum).
-pub fn check_min_pixels(min_pixels: f32, combination: &Combination) -> Result<(), String> {
-    if min_pixels > 0.0 && !combination.culling.starts_with("gpu-") {
-        return Err(format!(
-            "--min-pixels culls on the GPU: choose --cull gpu-frustum or gpu-occlusion (the culler is '{}')",
-            combination.culling
-        ));
-    }
-    Ok(())
-}
-
 /// Whether any technique option was given.
 pub fn technique_requested(args: &Args) -> bool {
     KIND_OPTIONS
@@ -142,6 +130,21 @@ impl TechniqueSession {
             .select(combination)
             .map_err(|e| explain(e.to_string()))?;
         techniques.set_shade_mode(shade).map_err(|e| e.to_string())
+    }
+
+    /// Sets the sub-pixel threshold (`--min-pixels`) of the chosen culler; refused with a
+    /// culler that would ignore it (CPU cullers keep every part in the frustum).
+    pub fn set_min_pixels(&mut self, min_pixels: f32) -> Result<(), String> {
+        let techniques = self.view.techniques_mut();
+        if min_pixels > 0.0 && !techniques.culls_on_gpu() {
+            return Err(format!(
+                "--min-pixels culls on the GPU: choose --cull gpu-frustum or gpu-occlusion (the culler is '{}')",
+                techniques.combination().culling
+            ));
+        }
+        techniques
+            .set_min_pixels(min_pixels)
+            .map_err(|e| e.to_string())
     }
 
     /// Draws frame `frame` of `motion`: moves its nodes, brings the tree and the GPU scene up

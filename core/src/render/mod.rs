@@ -1,5 +1,5 @@
 //! The renderer: an offscreen target and the frame that draws into it (uniforms, command
-//! buffer, pass, submission, timings; `stats.rs` says what a frame cost, `output.rs` reads the
+//! buffer, pass, submission, timings, and the replay of an unchanged frame's recording; `stats.rs` says what a frame cost, `output.rs` reads the
 //! image back and writes PNGs). The techniques record into its frames
 //! (`Renderer::render_techniques`, `Renderer::pick_techniques`); the pick pass draws instance
 //! ids and depth into their own target and reads a rectangle of them back ([`pick`]).
@@ -53,9 +53,6 @@ pub struct Renderer {
     /// key and what it drew.
     replayable: Option<(u64, FrameStats)>,
 }
-
-/// The bytes reserved for the GPU cullers' view (`CadrGpuCullView`, 224 bytes).
-pub(crate) const CULL_VIEW_BYTES: u64 = 256;
 
 /// How a frame is drawn: into which target, from which command buffers, in how many phases,
 /// and whether it may be replayed.
@@ -133,7 +130,7 @@ impl Renderer {
         let cull_view = Buffer::new(
             device,
             "gpu cull view",
-            CULL_VIEW_BYTES,
+            std::mem::size_of::<cadr_plugin_abi::CadrGpuCullView>() as u64,
             vk::BufferUsageFlags::UNIFORM_BUFFER,
             MemoryLocation::CpuToGpu,
         )?;

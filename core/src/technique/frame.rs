@@ -1,6 +1,7 @@
 //! A frame drawn by the active techniques: culling on the CPU (only changed bits applied) or
 //! on the GPU (`gpu_cull.rs`: compute work per phase that writes the draws), uploads and the
-//! techniques' preparations before the pass, the submission's recording inside it. The pick pass is the same frame with the pick pipelines (the same vertex shader,
+//! techniques' preparations before the pass, the submission's recording inside it, and the
+//! replay key that lets the renderer resubmit a recording nothing has changed. The pick pass is the same frame with the pick pipelines (the same vertex shader,
 //! instance ids into the pick target) and a readback of the picked rectangle after it.
 
 use std::cell::RefCell;
@@ -12,7 +13,7 @@ use crate::vk::raw::{self as vk, Handle};
 use cadr_plugin_abi as abi;
 use glam::DMat4;
 
-use super::gpu_cull::{EyeRelativeView, GpuCuller, PhaseDepth};
+use super::gpu_cull::{cull_view, cull_view_bytes, GpuCuller, PhaseDepth};
 use super::pipeline::PassSet;
 use super::registry::TechniqueKind;
 use super::set::{status, Message, Techniques};
@@ -98,12 +99,15 @@ impl Renderer {
         let frame_set = self.frame_set().as_raw();
         let culler = GpuCuller::of(techniques, pipelines.passes.len())?;
         let phases = culler.as_ref().map_or(1, |c| c.phases);
-        let eye_view = EyeRelativeView::new(camera, (width, height), techniques.min_pixels());
-        let cull_view_bytes = culler.as_ref().map(|_| eye_view.bytes());
+        // Only a GPU culler needs the view relative to the eye.
+        let gpu_view = culler
+            .as_ref()
+            .map(|_| cull_view(camera, (width, height), techniques.min_pixels()));
+        let cull_view_bytes = gpu_view.as_ref().map(cull_view_bytes);
         // A frame records the same commands as the last one when the techniques allow it and
         // nothing they depend on changed (the camera reaches the GPU through uniforms).
         let replay_key = (matches!(passes, PassSet::Shaded(_)) && techniques.replayable())
-            .then(|| mix(mix(key, view.parameters_generation), frame_set));
+            .then(|| mix(key, view.parameters_generation));
         let uploads_pending = scene.has_pending_uploads();
         let shared = RefCell::new((scene, abi::CadrStats::default(), culler));
         let context = |command_buffer: vk::CommandBuffer,
@@ -145,7 +149,7 @@ impl Renderer {
                               scene: &GpuScene,
                               culler: &mut Option<GpuCuller<'_>>|
          -> RenderResult<()> {
-            let Some(culler) = culler.as_mut() else {
+            let (Some(culler), Some(gpu_view)) = (culler.as_mut(), gpu_view.as_ref()) else {
                 return Ok(());
             };
             let depth = (phase > 0).then(|| PhaseDepth {
@@ -158,7 +162,7 @@ impl Renderer {
                 command_buffer,
                 &scene.view(),
                 &pipelines.passes,
-                &eye_view,
+                gpu_view,
                 renderer.cull_view_buffer(),
                 depth,
             )
@@ -264,7 +268,7 @@ impl Renderer {
                 pass: target,
                 secondary,
                 phases,
-                cull_view: cull_view_bytes.as_deref(),
+                cull_view: cull_view_bytes.as_ref().map(|bytes| &bytes[..]),
                 replay_key,
                 uploads_pending,
             },

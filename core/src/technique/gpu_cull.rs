@@ -28,59 +28,60 @@ pub(crate) struct GpuCuller<'a> {
     pub(crate) draws: Vec<abi::CadrGpuDraws>,
 }
 
-/// What the culler needs of the view: the eye, the planes and the projection relative to it,
-/// the target size and the sub-pixel threshold, as shaders read it (`CadrGpuCullView`).
-#[derive(Clone, Copy, Debug)]
-pub(crate) struct EyeRelativeView {
-    pub(crate) gpu: abi::CadrGpuCullView,
+/// Bytes of a [`abi::CadrGpuCullView`] as shaders read it (std140: it has no padding).
+pub(crate) const CULL_VIEW_BYTES: usize = std::mem::size_of::<abi::CadrGpuCullView>();
+
+/// What a GPU culler needs of the view, relative to the eye: the camera's frustum planes and
+/// projection for points given relative to the eye (the plane `n·p + d` becomes
+/// `n·q + (d + n·eye)` for `q = p - eye`, computed in f64), the target size, and the
+/// sub-pixel threshold (parts projecting under `min_pixels` across are culled).
+pub(crate) fn cull_view(
+    camera: &Camera,
+    (width, height): (u32, u32),
+    min_pixels: f32,
+) -> abi::CadrGpuCullView {
+    let eye = camera.view.inverse().w_axis.truncate();
+    let (high, low) = split_f64(eye);
+    let planes = super::frame::frustum_planes(camera).map(|[x, y, z, d]| {
+        let shifted = d + x * eye.x + y * eye.y + z * eye.z;
+        [x as f32, y as f32, z as f32, shifted as f32]
+    });
+    let mut rotation = camera.view;
+    rotation.w_axis = glam::DVec4::W;
+    let view_projection = camera.projection * rotation;
+    // Pixels per unit of size at clip w = 1: the x and y rows' scales over half the target.
+    let scale = |row: usize, pixels: u32| {
+        view_projection.row(row).truncate().length() * f64::from(pixels) * 0.5
+    };
+    let pixels_per_unit = scale(0, width).max(scale(1, height)) as f32;
+    abi::CadrGpuCullView {
+        eye_high: [high[0], high[1], high[2], 0.0],
+        eye_low: [low[0], low[1], low[2], 0.0],
+        planes,
+        view_projection: view_projection.as_mat4().to_cols_array(),
+        target: [width, height, 0, 0],
+        sub_pixel: [min_pixels, pixels_per_unit, 0.0, 0.0],
+    }
 }
 
-impl EyeRelativeView {
-    /// The camera's frustum planes and projection for points given relative to the eye: the
-    /// plane `n·p + d` becomes `n·q + (d + n·eye)` for `q = p - eye`, computed in f64; parts
-    /// projecting under `min_pixels` across on the `width` × `height` target are culled.
-    pub(crate) fn new(camera: &Camera, (width, height): (u32, u32), min_pixels: f32) -> Self {
-        let eye = camera.view.inverse().w_axis.truncate();
-        let (high, low) = split_f64(eye);
-        let planes = super::frame::frustum_planes(camera).map(|[x, y, z, d]| {
-            let shifted = d + x * eye.x + y * eye.y + z * eye.z;
-            [x as f32, y as f32, z as f32, shifted as f32]
-        });
-        let mut rotation = camera.view;
-        rotation.w_axis = glam::DVec4::W;
-        let view_projection = camera.projection * rotation;
-        // Pixels per unit of size at clip w = 1: the x and y rows' scales over half the target.
-        let scale = |row: usize, pixels: u32| {
-            view_projection.row(row).truncate().length() * f64::from(pixels) * 0.5
-        };
-        let pixels_per_unit = scale(0, width).max(scale(1, height)) as f32;
-        Self {
-            gpu: abi::CadrGpuCullView {
-                eye_high: [high[0], high[1], high[2], 0.0],
-                eye_low: [low[0], low[1], low[2], 0.0],
-                planes,
-                view_projection: view_projection.as_mat4().to_cols_array(),
-                target: [width, height, 0, 0],
-                sub_pixel: [min_pixels, pixels_per_unit, 0.0, 0.0],
-            },
-        }
+/// The view's bytes as the culler's shaders read them (std140, little-endian), without
+/// allocating: the host writes them every frame.
+pub(crate) fn cull_view_bytes(view: &abi::CadrGpuCullView) -> [u8; CULL_VIEW_BYTES] {
+    let floats = view
+        .eye_high
+        .iter()
+        .chain(&view.eye_low)
+        .chain(view.planes.iter().flatten())
+        .chain(&view.view_projection);
+    let words = floats
+        .map(|f| f.to_bits())
+        .chain(view.target)
+        .chain(view.sub_pixel.iter().map(|f| f.to_bits()));
+    let mut bytes = [0u8; CULL_VIEW_BYTES];
+    for (chunk, word) in bytes.chunks_exact_mut(4).zip(words) {
+        chunk.copy_from_slice(&word.to_le_bytes());
     }
-
-    /// The view's bytes as the culler's shaders read them (std140, little-endian).
-    pub(crate) fn bytes(&self) -> Vec<u8> {
-        let view = &self.gpu;
-        let floats = view
-            .eye_high
-            .iter()
-            .chain(&view.eye_low)
-            .chain(view.planes.iter().flatten())
-            .chain(&view.view_projection);
-        floats
-            .flat_map(|f| f.to_le_bytes())
-            .chain(view.target.iter().flat_map(|u| u.to_le_bytes()))
-            .chain(view.sub_pixel.iter().flat_map(|f| f.to_le_bytes()))
-            .collect()
-    }
+    bytes
 }
 
 /// The frame's depth as a later phase reads it.
@@ -131,11 +132,10 @@ impl<'a> GpuCuller<'a> {
         command_buffer: vk::CommandBuffer,
         scene: &abi::CadrSceneView,
         passes: &[abi::CadrPass],
-        view: &EyeRelativeView,
+        gpu_view: &abi::CadrGpuCullView,
         view_buffer: vk::Buffer,
         depth: Option<PhaseDepth>,
     ) -> RenderResult<()> {
-        let gpu_view = &view.gpu;
         self.draws.fill(abi::CadrGpuDraws::default());
         let context = abi::CadrGpuCullContext {
             size: std::mem::size_of::<abi::CadrGpuCullContext>() as u32,

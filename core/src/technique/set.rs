@@ -333,6 +333,11 @@ impl Techniques {
         self.min_pixels
     }
 
+    /// Whether the active culler culls on the GPU (and so applies the sub-pixel threshold).
+    pub fn culls_on_gpu(&self) -> bool {
+        super::gpu_cull::GpuCuller::is_active(self)
+    }
+
     /// Sets the sub-pixel culling threshold in pixels (0 turns it off). It applies to GPU
     /// cullers (the `gpu-` culling techniques), from the next frame; CPU cullers keep every
     /// part they find in the frustum.

@@ -300,7 +300,7 @@ pub struct GpuCuller<const OCCLUSION: bool> {
     /// Levels of the pyramid of the current target size (a push constant of the culls).
     pyramid_levels: u32,
     /// What the descriptor sets were last written with.
-    cull_written: Option<[u64; 8]>,
+    cull_written: Option<([u64; 8], u64)>,
     pyramid_written: Option<[u64; 2]>,
 }
 
@@ -440,8 +440,7 @@ impl<const OCCLUSION: bool> GpuCuller<OCCLUSION> {
             self.visibility[NOW].raw(),
             self.pyramid.raw(),
         ];
-        let mut key = buffers.map(|b| b.as_raw());
-        key[4] ^= view_offset.rotate_left(32);
+        let key = (buffers.map(|b| b.as_raw()), view_offset);
         if self.cull_written == Some(key) {
             return;
         }

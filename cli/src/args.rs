@@ -1,98 +1,486 @@
-//! A small command-line parser: `cadr COMMAND [ARGS] [--flag value]`.
+//! The command line, declared with `clap`: every command, its options and their help. The
+//! commands' modules take the parsed structures; values are checked here (sizes, counts,
+//! thresholds), so that a bad value is refused with the option's name before any work starts.
 
-/// Parsed arguments: positionals in order, flags by name.
-#[derive(Debug, Default)]
-pub struct Args {
-    positionals: Vec<String>,
-    options: Vec<(String, Option<String>)>,
+use std::path::PathBuf;
+
+use clap::{Args, Parser, Subcommand, ValueEnum};
+
+use cadr_core::technique::{Combination, ShadeMode, TechniqueKind};
+
+use crate::motion::CameraPath;
+
+/// What every command's help ends with: scenes, the cache, validation and plugins.
+const ENVIRONMENT_HELP: &str = "\
+SCENE is a .gltf, .glb, .csf or .csf.gz file, or a generator:
+    gen:demo           the built-in demo (default)
+    gen:graphicscard   ~68 000 parts of ~10 triangles (the seeds' Graphicscard)
+    gen:racecar        ~98 000 parts of ~37 triangles
+    gen:cabinet        machines in closed housings, racks of cabinets (optional :cabinets=N,
+                       default 24, 366 parts each): most parts hidden from outside
+    gen:grid:parts=N   exactly N parts in a cube of objects (optional ,tris=T)
+
+Compiled shaders and the Vulkan pipeline cache are kept between runs in $CADR_CACHE_DIR, else
+$XDG_CACHE_HOME/cadr, else ~/.cache/cadr; --no-cache neither reads nor writes it.
+Validation layers are on with --validation or CADR_VALIDATION=1. Plugins are found beside the
+executable (and in its plugins/ folder) and in the directories of CADR_PLUGIN_PATH;
+CADR_DEVICE=INDEX|NAME picks the Vulkan device.
+Exit status: 0 on success, 1 when the work failed, 2 when the command line is wrong.";
+
+/// cadr: a Vulkan renderer for very large CAD assemblies.
+#[derive(Debug, Parser)]
+#[command(
+    name = "cadr",
+    version,
+    propagate_version = true,
+    arg_required_else_help = true,
+    after_help = ENVIRONMENT_HELP
+)]
+pub struct Cli {
+    /// Neither read nor write the disk cache of compiled shaders and pipelines.
+    #[arg(long, global = true)]
+    pub no_cache: bool,
+    #[command(subcommand)]
+    pub command: Command,
 }
 
-/// Flags that take no value.
-const SWITCHES: &[&str] = &[
-    "--validation",
-    "--no-validation",
-    "--help",
-    "-h",
-    "--quiet",
-    "--baseline",
-    "--all",
-    "--sweep",
-    "--no-replay",
-];
+/// The commands.
+#[derive(Debug, Subcommand)]
+pub enum Command {
+    /// Draw a scene offscreen and write a PNG.
+    ///
+    /// Draws the scene with the camera fitted to its bounds, writes a PNG and prints what it
+    /// drew and the frame's CPU and GPU time. It draws with one technique per kind, solid or
+    /// with edges; the default is the built-in combination (per-geometry, push, individual,
+    /// none), which needs no plugin library. A frame that would record what the last one
+    /// recorded (only the camera moved, or nothing) resubmits it instead.
+    #[command(after_help = ENVIRONMENT_HELP)]
+    Render(RenderArgs),
+    /// What lies under a pixel (or in a rectangle) of the view `render` draws.
+    ///
+    /// Same size, camera and technique options as `render`: prints the geo node and part, its
+    /// path of nodes from the root (a shared part has one per occurrence), the depth and the
+    /// world position (f64).
+    #[command(after_help = ENVIRONMENT_HELP)]
+    Pick(PickArgs),
+    /// Print nodes, geometries, parts, materials, instances, triangles, vertices and bounds.
+    #[command(after_help = ENVIRONMENT_HELP)]
+    Info(InfoArgs),
+    /// Write a scene in another format and say what the target cannot hold.
+    ///
+    /// OUT is .gltf (with a .bin beside it), .glb, .csf or .csf.gz.
+    #[command(after_help = ENVIRONMENT_HELP)]
+    Convert(ConvertArgs),
+    /// List every technique (built in or from a plugin library) and whether this device runs it.
+    Techniques(TechniquesArgs),
+    /// Measure technique combinations against the built-in baseline in one run.
+    ///
+    /// Renders the built-in combination (the baseline, which records every frame) and
+    /// technique combinations (by default every submission with per-geometry/push and
+    /// arena/ssbo-index; --all for every supported one; lists to choose) for N frames after 2
+    /// warm-up frames and prints CPU and GPU µs, scene update µs, bytes uploaded, draw calls,
+    /// state changes, triangles and the speedup over the baseline. Rows other than the
+    /// baseline replay unchanged frames (the replay column counts them) unless --no-replay.
+    #[command(after_help = ENVIRONMENT_HELP)]
+    Bench(BenchArgs),
+    /// Measure edits of the incremental scene tree against a full rebuild.
+    ///
+    /// Builds the incremental scene tree of SCENE and measures edits (1 transform, 1% and 100%
+    /// of part placements, a material, hiding 1%) against a full rebuild in the same run,
+    /// memory per instance and bytes uploaded per frame.
+    #[command(after_help = ENVIRONMENT_HELP)]
+    BenchTree(BenchTreeArgs),
+    /// List the Vulkan devices (CADR_DEVICE=INDEX|NAME picks one).
+    Devices,
+    /// Print a shell completion script.
+    ///
+    /// For example: cadr completions bash > ~/.local/share/bash-completion/completions/cadr
+    Completions(CompletionsArgs),
+}
 
-impl Args {
-    /// Splits `args` (without the program and command names) of `command`.
-    pub fn parse(command: &str, args: impl IntoIterator<Item = String>) -> Result<Self, String> {
-        // `cadr techniques --json` and `cadr pick --json` print JSON; elsewhere `--json FILE`
-        // names a file.
-        let command_switches: &[&str] = if command == "techniques" || command == "pick" {
-            &["--json"]
-        } else {
-            &[]
-        };
-        let mut parsed = Self::default();
-        let mut iter = args.into_iter();
-        while let Some(arg) = iter.next() {
-            if let Some((name, value)) = arg.split_once('=').filter(|(n, _)| n.starts_with("--")) {
-                parsed
-                    .options
-                    .push((name.to_owned(), Some(value.to_owned())));
-            } else if SWITCHES.contains(&arg.as_str()) || command_switches.contains(&arg.as_str()) {
-                parsed.options.push((arg, None));
-            } else if arg.starts_with('-') && arg.len() > 1 {
-                let value = iter.next().ok_or_else(|| format!("{arg} needs a value"))?;
-                parsed.options.push((arg, Some(value)));
-            } else {
-                parsed.positionals.push(arg);
+/// `--validation` and `--no-validation`.
+#[derive(Debug, Args)]
+pub struct ValidationArgs {
+    /// Turn the Vulkan validation layers on (as CADR_VALIDATION=1 does).
+    #[arg(long)]
+    pub validation: bool,
+    /// Keep them off even when CADR_VALIDATION asks for them.
+    #[arg(long, conflicts_with = "validation")]
+    pub no_validation: bool,
+}
+
+impl ValidationArgs {
+    /// Whether the options or the environment ask for the validation layers.
+    pub fn requested(&self) -> bool {
+        if self.no_validation {
+            return false;
+        }
+        self.validation || std::env::var("CADR_VALIDATION").is_ok_and(|v| v != "0" && !v.is_empty())
+    }
+}
+
+/// The shade modes of `render` and `pick`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum Shade {
+    /// Shaded surfaces.
+    Solid,
+    /// Shaded surfaces with their feature edges.
+    Edges,
+}
+
+impl Shade {
+    /// The renderer's mode.
+    pub fn mode(self) -> ShadeMode {
+        match self {
+            Self::Solid => ShadeMode::Solid,
+            Self::Edges => ShadeMode::Edges,
+        }
+    }
+}
+
+/// One technique per kind, the shade mode and the sub-pixel threshold (`render`, `pick`).
+#[derive(Debug, Args)]
+pub struct TechniqueArgs {
+    /// Vertex technique (see cadr techniques; default per-geometry).
+    #[arg(long, value_name = "NAME")]
+    pub vertex: Option<String>,
+    /// Parameter technique (default push).
+    #[arg(long = "params", value_name = "NAME")]
+    pub parameters: Option<String>,
+    /// Submission technique (default individual).
+    #[arg(long = "submit", value_name = "NAME")]
+    pub submission: Option<String>,
+    /// Culling technique (default none).
+    #[arg(long = "cull", value_name = "NAME")]
+    pub culling: Option<String>,
+    /// Shade mode.
+    #[arg(long, value_enum, value_name = "MODE")]
+    pub shade: Option<Shade>,
+    /// Skip parts whose bounding sphere projects under PX pixels across (gpu- cullers only;
+    /// off by default, as CAD users count small parts).
+    #[arg(long, value_name = "PX", value_parser = parse_min_pixels, allow_negative_numbers = true)]
+    pub min_pixels: Option<f32>,
+}
+
+impl TechniqueArgs {
+    /// The combination the options choose (defaults for kinds not given).
+    pub fn combination(&self) -> Combination {
+        let mut combination = Combination::built_in();
+        for (kind, name) in [
+            (TechniqueKind::Vertex, &self.vertex),
+            (TechniqueKind::Parameters, &self.parameters),
+            (TechniqueKind::Submission, &self.submission),
+            (TechniqueKind::Culling, &self.culling),
+        ] {
+            if let Some(name) = name {
+                combination.set(kind, name);
             }
         }
-        Ok(parsed)
+        combination
     }
 
-    /// The value of the last occurrence of any of `names`.
-    pub fn value(&self, names: &[&str]) -> Option<&str> {
-        self.options
-            .iter()
-            .rev()
-            .find(|(n, _)| names.contains(&n.as_str()))
-            .and_then(|(_, v)| v.as_deref())
+    /// The shade mode (solid unless given).
+    pub fn shade_mode(&self) -> ShadeMode {
+        self.shade.map_or(ShadeMode::Solid, Shade::mode)
     }
 
-    /// Whether the switch `name` was given.
-    pub fn flag(&self, name: &str) -> bool {
-        self.options.iter().any(|(n, _)| n == name)
+    /// The sub-pixel threshold (0, off, unless given).
+    pub fn min_pixels(&self) -> f32 {
+        self.min_pixels.unwrap_or(0.0)
     }
 
-    /// Positional arguments.
-    pub fn positionals(&self) -> &[String] {
-        &self.positionals
+    /// Whether any technique option was given.
+    pub fn any(&self) -> bool {
+        self.vertex.is_some()
+            || self.parameters.is_some()
+            || self.submission.is_some()
+            || self.culling.is_some()
+            || self.shade.is_some()
+            || self.min_pixels.is_some()
     }
+}
 
-    /// Fails on any option not in `known`.
-    pub fn reject_unknown(&self, command: &str, known: &[&str]) -> Result<(), String> {
-        match self
-            .options
-            .iter()
-            .find(|(n, _)| !known.contains(&n.as_str()))
-        {
-            Some((name, _)) => Err(format!(
-                "cadr {command}: unknown option {name} (see cadr --help)"
-            )),
-            None => Ok(()),
+/// `cadr render`.
+#[derive(Debug, Args)]
+pub struct RenderArgs {
+    /// The scene: a file or a generator.
+    #[arg(value_name = "SCENE", default_value = "gen:demo")]
+    pub scene: String,
+    /// The PNG to write.
+    #[arg(short, long, value_name = "OUT.png", default_value = "out.png")]
+    pub output: PathBuf,
+    /// Image size.
+    #[arg(long, value_name = "WxH", default_value = "1024x768", value_parser = parse_size)]
+    pub size: Size,
+    /// Render N frames after one warm-up and report medians.
+    #[arg(long, value_name = "N", default_value_t = 1,
+          value_parser = clap::value_parser!(u32).range(1..=100_000))]
+    pub frames: u32,
+    #[command(flatten)]
+    pub techniques: TechniqueArgs,
+    /// Record every frame instead of replaying unchanged ones.
+    #[arg(long)]
+    pub no_replay: bool,
+    /// Draw with the built-in combination and record every frame, as the seeds' baseline does.
+    #[arg(long)]
+    pub baseline: bool,
+    #[command(flatten)]
+    pub validation: ValidationArgs,
+}
+
+/// `cadr pick`.
+#[derive(Debug, Args)]
+pub struct PickArgs {
+    /// The scene.
+    #[arg(value_name = "SCENE")]
+    pub scene: String,
+    /// The pixel's column, from the left.
+    #[arg(value_name = "X")]
+    pub x: u32,
+    /// The pixel's row, from the top.
+    #[arg(value_name = "Y")]
+    pub y: u32,
+    /// View size.
+    #[arg(long, value_name = "WxH", default_value = "1024x768", value_parser = parse_size)]
+    pub size: Size,
+    /// List every pickable part with a visible pixel in the rectangle from (X, Y) to (X2, Y2).
+    #[arg(long, value_name = "X2,Y2", value_parser = parse_corner)]
+    pub rect: Option<(u32, u32)>,
+    /// Print hit, node, part, path, depth and position (and hits for --rect) as JSON.
+    #[arg(long)]
+    pub json: bool,
+    #[command(flatten)]
+    pub techniques: TechniqueArgs,
+    #[command(flatten)]
+    pub validation: ValidationArgs,
+}
+
+/// `cadr info`.
+#[derive(Debug, Args)]
+pub struct InfoArgs {
+    /// The scene: a file or a generator.
+    #[arg(value_name = "SCENE", default_value = "gen:demo")]
+    pub scene: String,
+}
+
+/// `cadr convert`.
+#[derive(Debug, Args)]
+pub struct ConvertArgs {
+    /// The scene to read.
+    #[arg(value_name = "SCENE")]
+    pub scene: String,
+    /// The file to write (.gltf, .glb, .csf or .csf.gz).
+    #[arg(value_name = "OUT")]
+    pub output: PathBuf,
+}
+
+/// `cadr techniques`.
+#[derive(Debug, Args)]
+pub struct TechniquesArgs {
+    /// Print the list as JSON.
+    #[arg(long)]
+    pub json: bool,
+}
+
+/// The shade modes `bench` measures.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum BenchShade {
+    /// Shaded surfaces.
+    Solid,
+    /// With feature edges.
+    Edges,
+    /// Both, one row each.
+    All,
+}
+
+impl BenchShade {
+    /// The renderer's modes.
+    pub fn modes(self) -> Vec<ShadeMode> {
+        match self {
+            Self::Solid => vec![ShadeMode::Solid],
+            Self::Edges => vec![ShadeMode::Edges],
+            Self::All => ShadeMode::ALL.to_vec(),
         }
+    }
+}
+
+/// `cadr bench`.
+#[derive(Debug, Args)]
+pub struct BenchArgs {
+    /// The scene: a file or a generator.
+    #[arg(
+        value_name = "SCENE",
+        default_value = "gen:demo",
+        conflicts_with = "sweep"
+    )]
+    pub scene: String,
+    /// Measured frames per row (default 10, 5 with --sweep).
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..=10_000))]
+    pub frames: Option<u32>,
+    /// Write the table and the scene statistics as JSON.
+    #[arg(long, value_name = "FILE")]
+    pub json: Option<PathBuf>,
+    /// Image size.
+    #[arg(long, value_name = "WxH", default_value = "640x480", value_parser = parse_size)]
+    pub size: Size,
+    /// Shade modes to measure.
+    #[arg(long, value_enum, value_name = "MODE", default_value = "solid")]
+    pub shade: BenchShade,
+    /// Vertex techniques to measure (comma-separated; others default to every one).
+    #[arg(long, value_name = "A,B", value_delimiter = ',')]
+    pub vertex: Option<Vec<String>>,
+    /// Parameter techniques to measure.
+    #[arg(long = "params", value_name = "A,B", value_delimiter = ',')]
+    pub parameters: Option<Vec<String>>,
+    /// Submission techniques to measure.
+    #[arg(long = "submit", value_name = "A,B", value_delimiter = ',')]
+    pub submission: Option<Vec<String>>,
+    /// Culling techniques to measure (default none, every one with --all).
+    #[arg(long = "cull", value_name = "A,B", value_delimiter = ',')]
+    pub culling: Option<Vec<String>>,
+    /// Measure every supported combination.
+    #[arg(long)]
+    pub all: bool,
+    /// Measure a set over gen:grid of 10 000 to 1 000 000 parts, to show how each
+    /// technique's CPU cost grows.
+    #[arg(long)]
+    pub sweep: bool,
+    /// The sweep's part counts (implies --sweep).
+    #[arg(long, value_name = "N,N,...", value_delimiter = ',',
+          value_parser = clap::value_parser!(u64).range(1..=50_000_000))]
+    pub sweep_parts: Option<Vec<u64>>,
+    /// The camera: still, or circling the scene close enough that the frustum cuts.
+    #[arg(long, value_enum, value_name = "PATH", default_value = "static")]
+    pub camera: CameraPath,
+    /// Move N assembly nodes every frame (an exploded view); the table adds the scene update
+    /// µs and the bytes uploaded per frame.
+    #[arg(long, value_name = "N", default_value_t = 0)]
+    pub animate: usize,
+    /// The gpu- cullers' sub-pixel threshold (CPU cullers ignore it).
+    #[arg(long, value_name = "PX", value_parser = parse_min_pixels, allow_negative_numbers = true)]
+    pub min_pixels: Option<f32>,
+    /// Record every frame instead of replaying unchanged ones.
+    #[arg(long)]
+    pub no_replay: bool,
+    #[command(flatten)]
+    pub validation: ValidationArgs,
+}
+
+impl BenchArgs {
+    /// The names `--vertex`, `--params`, `--submit` and `--cull` list, by kind.
+    pub fn technique_lists(&self) -> [(TechniqueKind, &'static str, Option<&[String]>); 4] {
+        [
+            (TechniqueKind::Vertex, "--vertex", self.vertex.as_deref()),
+            (
+                TechniqueKind::Parameters,
+                "--params",
+                self.parameters.as_deref(),
+            ),
+            (
+                TechniqueKind::Submission,
+                "--submit",
+                self.submission.as_deref(),
+            ),
+            (TechniqueKind::Culling, "--cull", self.culling.as_deref()),
+        ]
+    }
+
+    /// Whether this run is a sweep.
+    pub fn sweeping(&self) -> bool {
+        self.sweep || self.sweep_parts.is_some()
+    }
+}
+
+/// `cadr bench-tree`.
+#[derive(Debug, Args)]
+pub struct BenchTreeArgs {
+    /// The scene: a file or a generator.
+    #[arg(value_name = "SCENE", default_value = "gen:graphicscard")]
+    pub scene: String,
+    /// Runs per measurement (medians).
+    #[arg(long, value_name = "N", default_value_t = 5,
+          value_parser = clap::value_parser!(u32).range(1..=1000))]
+    pub runs: u32,
+}
+
+/// `cadr completions`.
+#[derive(Debug, Args)]
+pub struct CompletionsArgs {
+    /// The shell.
+    #[arg(value_enum)]
+    pub shell: clap_complete::Shell,
+}
+
+/// An image size in pixels.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Size {
+    pub width: u32,
+    pub height: u32,
+}
+
+impl Size {
+    /// Width over height.
+    pub fn aspect(self) -> f64 {
+        f64::from(self.width) / f64::from(self.height)
     }
 }
 
 /// Parses `WIDTHxHEIGHT`.
-pub fn parse_size(text: &str) -> Result<(u32, u32), String> {
-    let bad = || format!("--size {text}: expected WIDTHxHEIGHT, e.g. 1024x768");
+fn parse_size(text: &str) -> Result<Size, String> {
+    let bad = || "expected WIDTHxHEIGHT, e.g. 1024x768".to_owned();
     let (w, h) = text.split_once(['x', 'X']).ok_or_else(bad)?;
-    let (w, h) = (
+    let (width, height) = (
         w.trim().parse::<u32>().map_err(|_| bad())?,
         h.trim().parse::<u32>().map_err(|_| bad())?,
     );
-    if w == 0 || h == 0 || w > 16384 || h > 16384 {
-        return Err(format!("--size {text}: each side must be 1 to 16384"));
+    if width == 0 || height == 0 || width > 16384 || height > 16384 {
+        return Err("each side must be 1 to 16384".into());
     }
-    Ok((w, h))
+    Ok(Size { width, height })
+}
+
+/// Parses `X2,Y2`.
+fn parse_corner(text: &str) -> Result<(u32, u32), String> {
+    let bad = || "expected X2,Y2 (the other corner, in pixels)".to_owned();
+    let (x, y) = text.split_once(',').ok_or_else(bad)?;
+    Ok((
+        x.trim().parse().map_err(|_| bad())?,
+        y.trim().parse().map_err(|_| bad())?,
+    ))
+}
+
+/// Parses a sub-pixel threshold: a number of pixels, 0 or more.
+fn parse_min_pixels(text: &str) -> Result<f32, String> {
+    text.parse::<f32>()
+        .ok()
+        .filter(|pixels| pixels.is_finite() && *pixels >= 0.0)
+        .ok_or_else(|| "expected a number of pixels >= 0".to_owned())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use clap::CommandFactory;
+
+    #[test]
+    fn the_command_line_declaration_is_consistent() {
+        Cli::command().debug_assert();
+    }
+
+    #[test]
+    fn sizes_and_thresholds_are_checked() {
+        assert_eq!(
+            parse_size("640X480"),
+            Ok(Size {
+                width: 640,
+                height: 480
+            })
+        );
+        assert!(parse_size("0x10").is_err());
+        assert!(parse_size("big").is_err());
+        assert_eq!(parse_corner("3, 4"), Ok((3, 4)));
+        assert!(parse_min_pixels("-1").is_err());
+        assert!(parse_min_pixels("NaN").is_err());
+        assert_eq!(parse_min_pixels("2.5"), Ok(2.5));
+    }
 }

@@ -7,7 +7,6 @@
 
 use std::sync::Arc;
 
-use cadr_core::load::SceneSource;
 use cadr_core::render::FrameStats;
 use cadr_core::scene::{flatten, Scene, SceneStats};
 use cadr_core::technique::{
@@ -15,9 +14,9 @@ use cadr_core::technique::{
 };
 use cadr_core::vk::Device;
 
-use crate::args::{parse_size, Args};
+use crate::args::{BenchArgs, Size};
 use crate::motion::Motion;
-use crate::techniques::{load_registry, TechniqueSession, KIND_OPTIONS};
+use crate::techniques::{load_registry, TechniqueSession};
 
 /// The (vertex, parameter) pairs the default selection tries with every submission: the
 /// classic binds, then the GPU-resident indexed path.
@@ -120,19 +119,10 @@ impl Row {
     }
 }
 
-fn list(args: &Args, option: &str) -> Option<Vec<String>> {
-    args.value(&[option]).map(|v| {
-        v.split(',')
-            .map(|s| s.trim().to_owned())
-            .filter(|s| !s.is_empty())
-            .collect()
-    })
-}
-
 /// The combinations to measure: every supported one with `--all`; those the options name
 /// (each option a comma-separated list, others defaulting to every technique); or the default
 /// selection: every submission with the [`DEFAULT_PATHS`] that fit it, culling `none`.
-fn selection(args: &Args, techniques: &Techniques) -> Result<Vec<Combination>, String> {
+fn selection(args: &BenchArgs, techniques: &Techniques) -> Result<Vec<Combination>, String> {
     let registry = techniques.registry();
     let names = |kind: TechniqueKind| -> Vec<String> {
         registry
@@ -141,52 +131,50 @@ fn selection(args: &Args, techniques: &Techniques) -> Result<Vec<Combination>, S
             .map(|t| t.name.clone())
             .collect()
     };
-    let chosen =
-        |kind: TechniqueKind, option: &str, default: Vec<String>| -> Result<Vec<String>, String> {
-            match list(args, option) {
-                None => Ok(default),
-                Some(wanted) => {
-                    for name in &wanted {
-                        if registry.find(kind, name).is_none() {
-                            return Err(format!(
-                                "{option} {name}: no such {} technique (see cadr techniques)",
-                                kind.name()
-                            ));
-                        }
-                    }
-                    Ok(wanted)
-                }
-            }
+    // A kind's list as given (blank names dropped, each checked), or `default`.
+    let chosen = |(kind, option, list): (TechniqueKind, &str, Option<&[String]>),
+                  default: Vec<String>|
+     -> Result<Vec<String>, String> {
+        let Some(list) = list else {
+            return Ok(default);
         };
-    let any_filter = KIND_OPTIONS.iter().any(|(_, o)| args.value(&[o]).is_some());
+        let wanted: Vec<String> = list
+            .iter()
+            .map(|name| name.trim().to_owned())
+            .filter(|name| !name.is_empty())
+            .collect();
+        if let Some(unknown) = wanted
+            .iter()
+            .find(|name| registry.find(kind, name).is_none())
+        {
+            return Err(format!(
+                "{option} {unknown}: no such {} technique (see cadr techniques)",
+                kind.name()
+            ));
+        }
+        Ok(wanted)
+    };
+    let [vertex_list, parameter_list, submission_list, culling_list] = args.technique_lists();
+    let any_filter = [vertex_list, parameter_list, submission_list, culling_list]
+        .iter()
+        .any(|(_, _, list)| list.is_some());
     let mut combinations = Vec::new();
-    if args.flag("--all") || any_filter {
-        for vertex in chosen(
-            TechniqueKind::Vertex,
-            "--vertex",
-            names(TechniqueKind::Vertex),
-        )? {
-            for parameters in chosen(
-                TechniqueKind::Parameters,
-                "--params",
-                names(TechniqueKind::Parameters),
-            )? {
-                for submission in chosen(
-                    TechniqueKind::Submission,
-                    "--submit",
-                    names(TechniqueKind::Submission),
-                )? {
-                    let cull_default = if args.flag("--all") {
-                        names(TechniqueKind::Culling)
-                    } else {
-                        vec!["none".to_owned()]
-                    };
-                    for culling in chosen(TechniqueKind::Culling, "--cull", cull_default)? {
+    if args.all || any_filter {
+        let cull_default = if args.all {
+            names(TechniqueKind::Culling)
+        } else {
+            vec!["none".to_owned()]
+        };
+        let cullers = chosen(culling_list, cull_default)?;
+        for vertex in chosen(vertex_list, names(TechniqueKind::Vertex))? {
+            for parameters in chosen(parameter_list, names(TechniqueKind::Parameters))? {
+                for submission in chosen(submission_list, names(TechniqueKind::Submission))? {
+                    for culling in &cullers {
                         combinations.push(Combination {
                             vertex: vertex.clone(),
                             parameters: parameters.clone(),
                             submission: submission.clone(),
-                            culling,
+                            culling: culling.clone(),
                         });
                     }
                 }
@@ -210,32 +198,10 @@ fn selection(args: &Args, techniques: &Techniques) -> Result<Vec<Combination>, S
         .collect())
 }
 
-fn shade_modes(args: &Args) -> Result<Vec<ShadeMode>, String> {
-    match args.value(&["--shade"]) {
-        None => Ok(vec![ShadeMode::Solid]),
-        Some("all") => Ok(ShadeMode::ALL.to_vec()),
-        Some(name) => ShadeMode::parse(name)
-            .map(|m| vec![m])
-            .ok_or_else(|| format!("--shade {name}: expected solid, edges or all")),
-    }
-}
-
-fn frames_option(args: &Args, default: usize) -> Result<usize, String> {
-    match args.value(&["--frames"]) {
-        None => Ok(default),
-        Some(text) => match text.parse::<usize>() {
-            Ok(n) if (1..=10_000).contains(&n) => Ok(n),
-            _ => Err(format!(
-                "--frames {text}: expected a number from 1 to 10000"
-            )),
-        },
-    }
-}
-
 struct Bench {
     device: Arc<Device>,
     registry: Arc<PluginRegistry>,
-    size: (u32, u32),
+    size: Size,
     frames: usize,
     motion: Motion,
     /// The `gpu-` cullers' sub-pixel threshold (`--min-pixels`; 0: off).
@@ -250,16 +216,20 @@ impl Bench {
         &self,
         scene: &Scene,
         combinations: Option<&[Combination]>,
-        args: &Args,
+        args: &BenchArgs,
         quiet: bool,
     ) -> Result<(SceneStats, Vec<Row>), String> {
         let flat = flatten(scene).map_err(|e| e.to_string())?;
         let stats = SceneStats::new(scene, &flat);
         drop(flat);
-        let aspect = f64::from(self.size.0) / f64::from(self.size.1);
+        let aspect = self.size.aspect();
         let mut rows = Vec::new();
-        let mut session =
-            TechniqueSession::new(&self.device, scene, Arc::clone(&self.registry), self.size)?;
+        let mut session = TechniqueSession::new(
+            &self.device,
+            scene,
+            Arc::clone(&self.registry),
+            (self.size.width, self.size.height),
+        )?;
         let mut motion = self.motion.clone();
         motion.choose_nodes(&session.graph, &stats.bounds);
         if !quiet && motion.requested > 0 {
@@ -288,7 +258,7 @@ impl Bench {
             Some(list) => list.to_vec(),
             None => selection(args, session.techniques())?,
         };
-        for mode in shade_modes(args)? {
+        for mode in args.shade.modes() {
             for combination in &combinations {
                 session.choose(combination, mode)?;
                 session
@@ -391,34 +361,14 @@ fn rows_json(rows: &[Row]) -> Vec<serde_json::Value> {
 }
 
 /// `cadr bench`.
-pub fn bench(args: &Args) -> Result<(), String> {
-    args.reject_unknown(
-        "bench",
-        &[
-            "--frames",
-            "--json",
-            "--size",
-            "--shade",
-            "--vertex",
-            "--params",
-            "--submit",
-            "--cull",
-            "--all",
-            "--sweep",
-            "--sweep-parts",
-            "--validation",
-            "--no-validation",
-            "--camera",
-            "--animate",
-            "--min-pixels",
-            "--no-replay",
-        ],
-    )?;
-    let motion = Motion::from_args(args)?;
-    let sweep = args.flag("--sweep") || args.value(&["--sweep-parts"]).is_some();
-    let frames = frames_option(args, if sweep { 5 } else { 10 })?;
-    let size = parse_size(args.value(&["--size"]).unwrap_or("640x480"))?;
-    let device = crate::open_device(args)?;
+pub fn bench(args: &BenchArgs) -> Result<(), String> {
+    let motion = Motion::new(args.camera, args.animate);
+    let sweep = args.sweeping();
+    let frames = args
+        .frames
+        .map_or(if sweep { 5 } else { 10 }, |n| n as usize);
+    let size = args.size;
+    let device = crate::open_device(&args.validation)?;
     let (registry, _) = load_registry(&device);
     let bench = Bench {
         device: Arc::clone(&device),
@@ -426,15 +376,15 @@ pub fn bench(args: &Args) -> Result<(), String> {
         size,
         frames,
         motion: motion.clone(),
-        min_pixels: crate::techniques::min_pixels_from_args(args)?,
-        frame_replay: !args.flag("--no-replay"),
+        min_pixels: args.min_pixels.unwrap_or(0.0),
+        frame_replay: !args.no_replay,
     };
     println!(
         "device: {} — {} measured frames after 2 warm-up frames, {}x{}, medians; camera {}, {} animated nodes{}",
         device.adapter().name,
         frames,
-        size.0,
-        size.1,
+        size.width,
+        size.height,
         motion.camera.name(),
         motion.requested,
         if bench.min_pixels > 0.0 {
@@ -446,19 +396,8 @@ pub fn bench(args: &Args) -> Result<(), String> {
     let json = if sweep {
         run_sweep(&bench, args)?
     } else {
-        let name = args
-            .positionals()
-            .first()
-            .map_or("gen:demo", String::as_str);
-        if args.positionals().len() > 1 {
-            return Err(format!(
-                "cadr bench: unexpected argument '{}'",
-                args.positionals()[1]
-            ));
-        }
-        let scene = SceneSource::parse(name)
-            .and_then(|s| s.load())
-            .map_err(|e| e.to_string())?;
+        let name = args.scene.as_str();
+        let scene = crate::load_scene(name)?;
         let (stats, rows) = bench.run(&scene, None, args, false)?;
         println!(
             "scene: {name}: {} parts, {} triangles, {} materials, {} geometries",
@@ -467,7 +406,7 @@ pub fn bench(args: &Args) -> Result<(), String> {
         serde_json::json!({
             "device": device.adapter().name,
             "frames": frames,
-            "size": [size.0, size.1],
+            "size": [size.width, size.height],
             "camera": motion.camera.name(),
             "animate": motion.requested,
             "min_pixels": bench.min_pixels,
@@ -476,10 +415,11 @@ pub fn bench(args: &Args) -> Result<(), String> {
             "rows": rows_json(&rows),
         })
     };
-    if let Some(path) = args.value(&["--json"]) {
+    if let Some(path) = &args.json {
         let text = serde_json::to_string_pretty(&json).map_err(|e| e.to_string())?;
-        std::fs::write(path, text + "\n").map_err(|e| format!("cannot write {path}: {e}"))?;
-        println!("wrote {path}");
+        std::fs::write(path, text + "\n")
+            .map_err(|e| format!("cannot write {}: {e}", path.display()))?;
+        println!("wrote {}", path.display());
     }
     let errors = device.validation_log().errors().len();
     if errors > 0 {
@@ -489,22 +429,11 @@ pub fn bench(args: &Args) -> Result<(), String> {
 }
 
 /// Measures the sweep set over gen:grid scenes of growing size.
-fn run_sweep(bench: &Bench, args: &Args) -> Result<serde_json::Value, String> {
-    let parts: Vec<u64> = match args.value(&["--sweep-parts"]) {
-        None => vec![10_000, 100_000, 1_000_000],
-        Some(text) => text
-            .split(',')
-            .map(|p| {
-                p.trim()
-                    .parse::<u64>()
-                    .ok()
-                    .filter(|&n| (1..=50_000_000).contains(&n))
-            })
-            .collect::<Option<Vec<_>>>()
-            .ok_or_else(|| {
-                format!("--sweep-parts {text}: expected part counts like 10000,100000,1000000")
-            })?,
-    };
+fn run_sweep(bench: &Bench, args: &BenchArgs) -> Result<serde_json::Value, String> {
+    let parts: Vec<u64> = args
+        .sweep_parts
+        .clone()
+        .unwrap_or_else(|| vec![10_000, 100_000, 1_000_000]);
     let combinations: Vec<Combination> = SWEEP_SET
         .iter()
         .map(|&(vertex, parameters, submission)| Combination {
@@ -518,9 +447,7 @@ fn run_sweep(bench: &Bench, args: &Args) -> Result<serde_json::Value, String> {
     for &n in &parts {
         let name = format!("gen:grid:parts={n}");
         println!("measuring {name} ...");
-        let scene = SceneSource::parse(&name)
-            .and_then(|s| s.load())
-            .map_err(|e| e.to_string())?;
+        let scene = crate::load_scene(&name)?;
         let (stats, rows) = bench.run(&scene, Some(&combinations), args, true)?;
         columns.push((n, stats, rows));
     }

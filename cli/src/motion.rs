@@ -7,8 +7,6 @@ use cadr_core::render::{Camera, DEFAULT_DIRECTION};
 use cadr_core::scene::Aabb;
 use glam::{DMat4, DVec3};
 
-use crate::args::Args;
-
 /// Frames per full orbit.
 const ORBIT_FRAMES: f64 = 120.0;
 /// Distance of the orbiting eye from the centre, in scene radii: close enough that the
@@ -18,7 +16,7 @@ const ORBIT_DISTANCE: f64 = 1.1;
 const ANIMATE_FRAMES: f64 = 60.0;
 
 /// How the camera moves.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
 pub enum CameraPath {
     /// Fitted to the scene, still.
     Static,
@@ -50,25 +48,15 @@ pub struct Motion {
 }
 
 impl Motion {
-    /// `--camera` and `--animate` (nodes are chosen by [`Motion::choose_nodes`]).
-    pub fn from_args(args: &Args) -> Result<Self, String> {
-        let camera = match args.value(&["--camera"]).unwrap_or("static") {
-            "static" => CameraPath::Static,
-            "orbit" => CameraPath::Orbit,
-            other => return Err(format!("--camera {other}: expected 'static' or 'orbit'")),
-        };
-        let requested = match args.value(&["--animate"]) {
-            None => 0,
-            Some(text) => text.parse::<usize>().map_err(|_| {
-                format!("--animate {text}: expected a number of assembly nodes to move")
-            })?,
-        };
-        Ok(Self {
+    /// The camera's path and how many assembly nodes to move (chosen by
+    /// [`Motion::choose_nodes`]).
+    pub fn new(camera: CameraPath, requested: usize) -> Self {
+        Self {
             camera,
             moved: Vec::new(),
             amplitude: 0.0,
             requested,
-        })
+        }
     }
 
     /// Picks the nodes to move: Transform nodes with children, nearest the root first (the

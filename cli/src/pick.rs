@@ -8,29 +8,8 @@ use cadr_core::render::{Camera, DEFAULT_DIRECTION};
 use cadr_core::scene::{flatten, SceneStats};
 use cadr_core::view::PickHit;
 
-use crate::args::{parse_size, Args};
+use crate::args::{PickArgs, Size};
 use crate::techniques::{self, TechniqueSession};
-
-/// The options `pick` takes besides the technique options.
-const OPTIONS: &[&str] = &[
-    "--size",
-    "--rect",
-    "--json",
-    "--validation",
-    "--no-validation",
-    "--vertex",
-    "--params",
-    "--submit",
-    "--cull",
-    "--shade",
-    "--min-pixels",
-];
-
-fn coordinate(text: &str, what: &str) -> Result<u32, String> {
-    text.trim()
-        .parse::<u32>()
-        .map_err(|_| format!("{what} '{text}': expected a pixel coordinate (0 or more)"))
-}
 
 /// A node as the user knows it: its name, or `#slot` when it has none.
 fn node_label(graph: &SceneGraph, node: NodeHandle) -> String {
@@ -70,25 +49,12 @@ fn hit_line(graph: &SceneGraph, hit: &PickHit) -> String {
 }
 
 /// `cadr pick`.
-pub fn pick(args: &Args) -> Result<(), String> {
-    args.reject_unknown("pick", OPTIONS)?;
-    let (scene_text, x, y) = match args.positionals() {
-        [scene, x, y] => (scene.as_str(), coordinate(x, "X")?, coordinate(y, "Y")?),
-        [_, _, _, extra, ..] => return Err(format!("cadr pick: unexpected argument '{extra}'")),
-        _ => return Err("cadr pick: expected SCENE X Y (see cadr --help)".into()),
-    };
-    let (width, height) = parse_size(args.value(&["--size"]).unwrap_or("1024x768"))?;
-    let rect = match args.value(&["--rect"]) {
+pub fn pick(args: &PickArgs) -> Result<(), String> {
+    let (x, y) = (args.x, args.y);
+    let Size { width, height } = args.size;
+    let rect = match args.rect {
         None => PixelRect::pixel(x, y),
-        Some(text) => {
-            let (x2, y2) = text
-                .split_once(',')
-                .ok_or_else(|| format!("--rect {text}: expected X2,Y2 (the other corner)"))?;
-            PixelRect::spanning(
-                (x, y),
-                (coordinate(x2, "--rect X2")?, coordinate(y2, "--rect Y2")?),
-            )
-        }
+        Some(corner) => PixelRect::spanning((x, y), corner),
     };
     if u64::from(rect.x) + u64::from(rect.width) > u64::from(width)
         || u64::from(rect.y) + u64::from(rect.height) > u64::from(height)
@@ -97,14 +63,14 @@ pub fn pick(args: &Args) -> Result<(), String> {
             "pixels {rect} are outside the {width}x{height} view (--size)"
         ));
     }
-    let (combination, shade) = techniques::combination_from_args(args)?;
-    let min_pixels = techniques::min_pixels_from_args(args)?;
-    let source = cadr_core::load::SceneSource::parse(scene_text).map_err(|e| e.to_string())?;
-    let scene = source.load().map_err(|e| e.to_string())?;
+    let combination = args.techniques.combination();
+    let shade = args.techniques.shade_mode();
+    let min_pixels = args.techniques.min_pixels();
+    let scene = crate::load_scene(&args.scene)?;
     let flat = flatten(&scene).map_err(|e| e.to_string())?;
     let stats = SceneStats::new(&scene, &flat);
     drop(flat);
-    let device = crate::open_device(args)?;
+    let device = crate::open_device(&args.validation)?;
     let (registry, _) = techniques::load_registry(&device);
     let mut session = TechniqueSession::new(&device, &scene, registry, (width, height))?;
     session.choose(&combination, shade)?;
@@ -127,7 +93,7 @@ pub fn pick(args: &Args) -> Result<(), String> {
     }
     let graph = &session.graph;
     let single = rect.width == 1 && rect.height == 1;
-    if args.flag("--json") {
+    if args.json {
         let mut report = serde_json::json!({
             "hit": !hits.is_empty(),
             "pixel": [x, y],

@@ -18,7 +18,7 @@ use crate::motion::Motion;
 use cadr_core::view::View;
 use cadr_core::vk::{Device, DeviceOptions, InstanceOptions};
 
-use crate::args::Args;
+use crate::args::TechniquesArgs;
 
 /// The command-line option of each technique kind.
 pub const KIND_OPTIONS: [(TechniqueKind, &str); 4] = [
@@ -42,44 +42,6 @@ pub fn no_plugins_message(dirs: &[PathBuf]) -> String {
         "no technique plugin library found, only the built-in techniques (searched {}; build them with `cargo build --workspace` or set {PLUGIN_PATH_VARIABLE})",
         searched.join(", ")
     )
-}
-
-/// The combination and shade mode the options choose (defaults for kinds not given).
-pub fn combination_from_args(args: &Args) -> Result<(Combination, ShadeMode), String> {
-    let mut combination = Combination::built_in();
-    for (kind, option) in KIND_OPTIONS {
-        if let Some(name) = args.value(&[option]) {
-            combination.set(kind, name);
-        }
-    }
-    let shade = match args.value(&["--shade"]) {
-        None => ShadeMode::Solid,
-        Some(name) => ShadeMode::parse(name)
-            .ok_or_else(|| format!("--shade {name}: expected solid or edges"))?,
-    };
-    Ok((combination, shade))
-}
-
-/// `--min-pixels PX`: the sub-pixel culling threshold of the `gpu-` cullers (0, off, when not
-/// given).
-pub fn min_pixels_from_args(args: &Args) -> Result<f32, String> {
-    match args.value(&["--min-pixels"]) {
-        None => Ok(0.0),
-        Some(text) => text
-            .parse::<f32>()
-            .ok()
-            .filter(|pixels| pixels.is_finite() && *pixels >= 0.0)
-            .ok_or_else(|| format!("--min-pixels {text}: expected a number of pixels >= 0")),
-    }
-}
-
-/// Whether any technique option was given.
-pub fn technique_requested(args: &Args) -> bool {
-    KIND_OPTIONS
-        .iter()
-        .any(|(_, option)| args.value(&[option]).is_some())
-        || args.value(&["--shade"]).is_some()
-        || args.value(&["--min-pixels"]).is_some()
 }
 
 /// A scene ready for technique plugins: its graph and tree, and the view that draws them.
@@ -176,8 +138,7 @@ impl TechniqueSession {
 }
 
 /// `cadr techniques [--json]`.
-pub fn techniques(args: &Args) -> Result<(), String> {
-    args.reject_unknown("techniques", &["--json"])?;
+pub fn techniques(args: &TechniquesArgs) -> Result<(), String> {
     let options = DeviceOptions {
         instance: InstanceOptions::default(),
         ..DeviceOptions::default()
@@ -185,7 +146,7 @@ pub fn techniques(args: &Args) -> Result<(), String> {
     let device = Device::new(&options).map_err(|e| e.to_string())?;
     let (registry, dirs) = load_registry(&device);
     let device_name = device.adapter().name.clone();
-    if args.flag("--json") {
+    if args.json {
         let techniques: Vec<serde_json::Value> = registry
             .techniques()
             .iter()

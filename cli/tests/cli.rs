@@ -73,36 +73,102 @@ fn render_writes_a_png_and_reports_the_frame() {
 
 #[test]
 fn bad_input_gives_a_clear_error_and_exit_code() {
-    for (args, expected) in [
+    // Work that fails exits with 1; a wrong command line with 2, as clap's programs do.
+    for (args, code, expected) in [
         (
             vec!["render", "/nonexistent/engine.glb"],
+            1,
             "/nonexistent/engine.glb",
         ),
+        (vec!["info", "gen:grid:parts=-5"], 1, "not a whole number"),
         (
             vec!["render", "gen:demo", "--size", "big"],
-            "expected WIDTHxHEIGHT",
+            2,
+            "invalid value 'big' for '--size <WxH>': expected WIDTHxHEIGHT",
         ),
-        (vec!["render", "gen:demo", "--frames", "0"], "--frames 0"),
+        (
+            vec!["render", "gen:demo", "--frames", "0"],
+            2,
+            "invalid value '0' for '--frames <N>'",
+        ),
         (
             vec!["render", "gen:demo", "--colour", "red"],
-            "unknown option --colour",
+            2,
+            "unexpected argument '--colour'",
         ),
-        (vec!["info", "gen:grid:parts=-5"], "not a whole number"),
         (
             vec!["info", "a.glb", "b.glb"],
+            2,
             "unexpected argument 'b.glb'",
         ),
-        (vec!["explode"], "unknown command 'explode'"),
-        (vec!["render", "gen:demo", "-o"], "-o needs a value"),
+        (vec!["explode"], 2, "unrecognized subcommand 'explode'"),
+        (
+            vec!["render", "gen:demo", "-o"],
+            2,
+            "a value is required for '--output",
+        ),
+        (
+            vec!["convert", "gen:demo"],
+            2,
+            "required arguments were not provided",
+        ),
+        (
+            vec!["bench", "--shade", "toon"],
+            2,
+            "[possible values: solid, edges, all]",
+        ),
     ] {
         let output = cadr(&args);
-        assert_eq!(output.status.code(), Some(1), "{args:?} should fail");
+        assert_eq!(output.status.code(), Some(code), "{args:?}");
         let text = stderr(&output);
         assert!(
             text.starts_with("error: ") && text.contains(expected),
             "{args:?}: {text}"
         );
     }
+}
+
+#[test]
+fn a_misspelt_option_gets_a_suggestion_and_every_command_its_help() {
+    let output = cadr(&["render", "gen:demo", "--frame", "3"]);
+    assert_eq!(output.status.code(), Some(2));
+    assert!(
+        stderr(&output).contains("a similar argument exists: '--frames'"),
+        "{}",
+        stderr(&output)
+    );
+    for (command, option) in [
+        ("render", "--min-pixels <PX>"),
+        ("bench", "--sweep-parts <N,N,...>"),
+        ("pick", "--rect <X2,Y2>"),
+    ] {
+        let output = cadr(&[command, "--help"]);
+        assert!(output.status.success(), "{command}");
+        assert!(
+            stdout(&output).contains(option),
+            "{command}: {}",
+            stdout(&output)
+        );
+    }
+    let output = cadr(&["--version"]);
+    assert_eq!(
+        stdout(&output).trim(),
+        format!("cadr {}", env!("CARGO_PKG_VERSION"))
+    );
+}
+
+#[test]
+fn completions_name_the_commands_for_each_shell() {
+    for shell in ["bash", "zsh", "fish"] {
+        let output = cadr(&["completions", shell]);
+        assert!(output.status.success(), "{shell}: {}", stderr(&output));
+        let script = stdout(&output);
+        for word in ["render", "bench-tree", "min-pixels", "sweep-parts"] {
+            assert!(script.contains(word), "{shell} completions lack {word}");
+        }
+    }
+    let output = cadr(&["completions", "tcsh"]);
+    assert_eq!(output.status.code(), Some(2));
 }
 
 #[test]
@@ -130,13 +196,6 @@ fn convert_writes_csf_and_gltf_that_info_reads() {
         stdout(&output).contains("instances:        120 "),
         "{}",
         stdout(&output)
-    );
-    let output = cadr(&["convert", "gen:demo"]);
-    assert_eq!(output.status.code(), Some(1));
-    assert!(
-        stderr(&output).contains("needs SCENE and OUT"),
-        "{}",
-        stderr(&output)
     );
     let output = cadr(&["convert", "gen:demo", "out.stl"]);
     assert!(
@@ -181,8 +240,10 @@ fn help_lists_the_commands_and_generators() {
     assert!(output.status.success());
     let text = stdout(&output);
     for expected in [
-        "cadr render",
-        "cadr info",
+        "Usage: cadr [OPTIONS] <COMMAND>",
+        "  render ",
+        "  bench-tree ",
+        "  completions ",
         "gen:graphicscard",
         "gen:racecar",
         "gen:grid:parts=N",
@@ -288,7 +349,7 @@ fn render_uses_the_chosen_techniques_and_refuses_bad_combinations() {
         "toon",
     ]);
     assert!(
-        stderr(&output).contains("--shade toon: expected solid or edges"),
+        stderr(&output).contains("invalid value 'toon' for '--shade <MODE>'"),
         "{}",
         stderr(&output)
     );
@@ -544,7 +605,9 @@ fn render_min_pixels_culls_small_parts_on_the_gpu_and_is_refused_elsewhere() {
     let output = cadr(&["render", "gen:demo", "--min-pixels", "-1"]);
     assert!(!output.status.success());
     assert!(
-        stderr(&output).contains("--min-pixels -1: expected a number of pixels >= 0"),
+        stderr(&output).contains(
+            "invalid value '-1' for '--min-pixels <PX>': expected a number of pixels >= 0"
+        ),
         "{}",
         stderr(&output)
     );

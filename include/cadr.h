@@ -402,6 +402,30 @@ typedef struct CadrFrameStats {
   uint64_t bytes_uploaded;
 } CadrFrameStats;
 
+// Milliseconds cadr spent in each phase of its work in this process, since it was loaded or
+// since `cadr_timings_reset`, over every context, scene and renderer. A phase that runs
+// inside another (pipelines built during a first frame) counts only for itself.
+typedef struct CadrTimings {
+  // Vulkan instance and device creation (`cadr_context_create`).
+  double device_ms;
+  // Reading and parsing scene files, or generating scenes (`cadr_scene_load`).
+  double load_ms;
+  // Building scene graphs and trees from loaded scenes.
+  double scene_build_ms;
+  // Uploading scenes to the GPU and bringing them up to date.
+  double upload_ms;
+  // Compiling shaders, or reading them from the disk cache.
+  double shader_compile_ms;
+  // Creating pipelines.
+  double pipeline_creation_ms;
+  // Each renderer's first frame, less the shaders and pipelines it built.
+  double first_frame_ms;
+  // Reading pictures back (`cadr_renderer_read_pixels`, `cadr_renderer_save_png`).
+  double readback_ms;
+  // Encoding and writing PNG files.
+  double png_encode_ms;
+} CadrTimings;
+
 #ifdef __cplusplus
 extern "C" {
 #endif // __cplusplus
@@ -1139,6 +1163,28 @@ enum CadrResult cadr_renderer_set_min_pixels(CadrRenderer renderer, float pixels
 // `pixels` is null or writable.
 enum CadrResult cadr_renderer_min_pixels(CadrRenderer renderer, float *pixels);
 
+// Turns frame replay on (the default) or off. With it on, a frame that would record what the
+// renderer's last frame recorded (only the camera moved, or nothing changed) resubmits that
+// recording instead, when every active technique allows it; the picture is the same. Off,
+// every frame is recorded afresh (to measure recording, or to compare).
+//
+// Returns `CADR_RESULT_OK` or a handle error. Ownership: nothing changes hands.
+// Thread-safety: as `cadr_renderer_create`.
+enum CadrResult cadr_renderer_set_frame_replay(CadrRenderer renderer, bool enabled);
+
+// Writes whether frame replay is on (`*enabled`) and whether the renderer's last frame was
+// a replay (`*last_frame_replayed`; false before the first frame). Either output may be NULL.
+//
+// Returns `CADR_RESULT_OK` or a handle error.
+// Ownership: the outputs are the caller's; cadr keeps no pointer to them.
+// Thread-safety: as `cadr_renderer_create`.
+//
+// # Safety
+// `enabled` and `last_frame_replayed` are each null or writable.
+enum CadrResult cadr_renderer_frame_replay(CadrRenderer renderer,
+                                           bool *enabled,
+                                           bool *last_frame_replayed);
+
 // Renders one frame of `scene` seen by `camera`: applies the host's edits since the last
 // frame (incrementally), culls, draws with the current techniques and, for a window, presents.
 // `stats` may be NULL.
@@ -1205,6 +1251,22 @@ enum CadrResult cadr_scene_destroy(CadrScene scene);
 // # Safety
 // `root` is null or writable.
 enum CadrResult cadr_scene_root(CadrScene scene, CadrNode *root);
+
+// Writes the time cadr spent in each phase so far (see `CadrTimings`).
+//
+// Returns `CADR_RESULT_OK` or `CADR_RESULT_NULL_ARGUMENT`.
+// Ownership: the output is the caller's; cadr keeps no pointer to it.
+// Thread-safety: any thread, at any time; phases still running are not yet counted.
+//
+// # Safety
+// `timings` is null or writable.
+enum CadrResult cadr_timings(struct CadrTimings *timings);
+
+// Sets every phase's total to zero, for a host that measures one stretch of its run.
+//
+// Ownership: nothing changes hands. Thread-safety: any thread; work running meanwhile may be
+// counted on either side of the reset.
+void cadr_timings_reset(void);
 
 #ifdef __cplusplus
 }  // extern "C"

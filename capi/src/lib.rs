@@ -26,6 +26,7 @@ mod nodes;
 mod pick;
 mod renderer;
 mod scene;
+mod timings;
 
 pub use bounds::*;
 pub use camera::{cadr_camera_fit, cadr_camera_look_at, CadrCamera};
@@ -37,6 +38,7 @@ pub use nodes::*;
 pub use pick::*;
 pub use renderer::*;
 pub use scene::*;
+pub use timings::*;
 
 use std::ffi::c_char;
 use std::path::PathBuf;

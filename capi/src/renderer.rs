@@ -87,6 +87,8 @@ pub(crate) struct RendererState {
     pub(crate) view: View,
     swapchain: Option<Swapchain>,
     context: Arc<ContextState>,
+    /// Whether the last frame resubmitted the recording before it.
+    last_frame_replayed: bool,
 }
 
 /// A renderer's state, movable between threads.
@@ -163,6 +165,7 @@ fn new_renderer(
         view,
         swapchain,
         context: Arc::clone(&context),
+        last_frame_replayed: false,
     };
     let handle = RENDERERS.insert(ThreadBound(state))?;
     // SAFETY: renderer is null or writable (the caller's contract).
@@ -604,6 +607,58 @@ pub unsafe extern "C" fn cadr_renderer_min_pixels(
     })
 }
 
+/// Turns frame replay on (the default) or off. With it on, a frame that would record what the
+/// renderer's last frame recorded (only the camera moved, or nothing changed) resubmits that
+/// recording instead, when every active technique allows it; the picture is the same. Off,
+/// every frame is recorded afresh (to measure recording, or to compare).
+///
+/// Returns `CADR_RESULT_OK` or a handle error. Ownership: nothing changes hands.
+/// Thread-safety: as `cadr_renderer_create`.
+#[no_mangle]
+pub extern "C" fn cadr_renderer_set_frame_replay(
+    renderer: CadrRenderer,
+    enabled: bool,
+) -> CadrResult {
+    guard(|| {
+        with_renderer(renderer, |state| {
+            state.view.techniques_mut().set_frame_replay(enabled);
+            Ok(())
+        })
+    })
+}
+
+/// Writes whether frame replay is on (`*enabled`) and whether the renderer's last frame was
+/// a replay (`*last_frame_replayed`; false before the first frame). Either output may be NULL.
+///
+/// Returns `CADR_RESULT_OK` or a handle error.
+/// Ownership: the outputs are the caller's; cadr keeps no pointer to them.
+/// Thread-safety: as `cadr_renderer_create`.
+///
+/// # Safety
+/// `enabled` and `last_frame_replayed` are each null or writable.
+#[no_mangle]
+pub unsafe extern "C" fn cadr_renderer_frame_replay(
+    renderer: CadrRenderer,
+    enabled: *mut bool,
+    last_frame_replayed: *mut bool,
+) -> CadrResult {
+    guard(|| {
+        let (on, replayed) = with_renderer(renderer, |state| {
+            Ok((
+                state.view.techniques().frame_replay(),
+                state.last_frame_replayed,
+            ))
+        })?;
+        for (out, value) in [(enabled, on), (last_frame_replayed, replayed)] {
+            if !out.is_null() {
+                // SAFETY: non-null; writable by contract.
+                unsafe { write(out, value) };
+            }
+        }
+        Ok(())
+    })
+}
+
 /// Renders one frame of `scene` seen by `camera`: applies the host's edits since the last
 /// frame (incrementally), culls, draws with the current techniques and, for a window, presents.
 /// `stats` may be NULL.
@@ -670,6 +725,7 @@ pub unsafe extern "C" fn cadr_renderer_render(
             frame.vertex_binds = drawn.vertex_binds;
             frame.parameter_updates = drawn.parameter_updates;
             frame.bytes_uploaded = drawn.bytes_uploaded;
+            state.last_frame_replayed = drawn.replayed;
             Ok(frame)
         })?;
         if !stats.is_null() {

@@ -224,6 +224,10 @@ pub struct RenderArgs {
     /// Draw with the built-in combination and record every frame, as the seeds' baseline does.
     #[arg(long)]
     pub baseline: bool,
+    /// Print where the run's time went: instance and device creation, load, scene build,
+    /// upload, shader compile, pipeline creation, first frame, readback, PNG encode.
+    #[arg(long)]
+    pub timings: bool,
     #[command(flatten)]
     pub validation: ValidationArgs,
 }

@@ -13,12 +13,14 @@ use std::time::Instant;
 use cadr_core::load::SceneSource;
 use cadr_core::render::{Camera, FrameStats, DEFAULT_DIRECTION};
 use cadr_core::scene::{flatten, SceneStats};
+use cadr_core::timings::{self, Phase};
 use cadr_core::vk::{self as cvk, Device, DeviceOptions, InstanceOptions};
 
 use args::{Cli, Command, ConvertArgs, InfoArgs, RenderArgs, Size, ValidationArgs};
 use clap::{CommandFactory, Parser};
 
 fn main() -> ExitCode {
+    let process_start = Instant::now();
     let cli = match Cli::try_parse() {
         Ok(cli) => cli,
         // Help and --version print and succeed; a wrong command line exits with 2.
@@ -28,7 +30,7 @@ fn main() -> ExitCode {
         cadr_core::disk_cache::set_enabled(false);
     }
     let result = match cli.command {
-        Command::Render(args) => render(&args),
+        Command::Render(args) => render(&args, process_start),
         Command::Pick(args) => pick::pick(&args),
         Command::Info(args) => info(&args),
         Command::Convert(args) => convert(&args),
@@ -134,7 +136,7 @@ pub(crate) fn median(values: &mut [f64]) -> f64 {
     }
 }
 
-fn render(args: &RenderArgs) -> Result<(), String> {
+fn render(args: &RenderArgs, process_start: Instant) -> Result<(), String> {
     let combination = args.techniques.combination();
     let shade = args.techniques.shade_mode();
     let min_pixels = args.techniques.min_pixels();
@@ -143,17 +145,13 @@ fn render(args: &RenderArgs) -> Result<(), String> {
             "--baseline draws with the built-in combination; it takes no technique options".into(),
         );
     }
-    let process_start = Instant::now();
     let output = &args.output;
     let Size { width, height } = args.size;
     let frames = args.frames as usize;
 
-    let load_start = Instant::now();
     let scene = load_scene(&args.scene)?;
-    let load_ms = load_start.elapsed().as_secs_f64() * 1e3;
 
     let device = open_device(&args.validation)?;
-    let upload_start = Instant::now();
     let flat = flatten(&scene).map_err(|e| e.to_string())?;
     let stats = SceneStats::new(&scene, &flat);
     drop(flat);
@@ -170,7 +168,6 @@ fn render(args: &RenderArgs) -> Result<(), String> {
     if min_pixels > 0.0 {
         technique_line += &format!(", parts under {min_pixels} px culled");
     }
-    let upload_ms = upload_start.elapsed().as_secs_f64() * 1e3;
     let camera = Camera::fit(
         &stats.bounds,
         f64::from(width) / f64::from(height),
@@ -230,7 +227,12 @@ fn render(args: &RenderArgs) -> Result<(), String> {
         median(&mut record),
         samples.len()
     );
-    println!("setup:       load {load_ms:.1} ms, upload {upload_ms:.1} ms");
+    let spent = timings::snapshot();
+    println!(
+        "setup:       load {:.1} ms, upload {:.1} ms",
+        spent.ms(Phase::Load),
+        spent.ms(Phase::Upload)
+    );
     if args.validation.requested() {
         println!("validation:  {validation_errors} errors");
     }
@@ -239,10 +241,28 @@ fn render(args: &RenderArgs) -> Result<(), String> {
         output.display(),
         process_start.elapsed().as_secs_f64() * 1e3
     );
+    if args.timings {
+        print_timings(process_start.elapsed());
+    }
     if validation_errors > 0 {
         return Err(format!(
             "{validation_errors} Vulkan validation errors (see above)"
         ));
     }
     Ok(())
+}
+
+/// `--timings`: each phase's share of the run so far (`wall`), and what no phase accounts
+/// for (argument parsing, technique selection, plugin discovery, printing).
+fn print_timings(wall: std::time::Duration) {
+    let spent = timings::snapshot();
+    let wall_ms = wall.as_secs_f64() * 1e3;
+    let percent = |ms: f64| 100.0 * ms / wall_ms.max(1e-9);
+    println!("timings:     {wall_ms:.1} ms from start to PNG written");
+    for phase in Phase::ALL {
+        let ms = spent.ms(phase);
+        println!("  {:<18} {ms:>9.1} ms {:>5.1}%", phase.name(), percent(ms));
+    }
+    let other = (wall_ms - spent.total().as_secs_f64() * 1e3).max(0.0);
+    println!("  {:<18} {other:>9.1} ms {:>5.1}%", "other", percent(other));
 }

@@ -722,3 +722,58 @@ fn the_disk_cache_serves_the_second_run_and_survives_damaged_entries() {
     assert!(!untouched.exists(), "--no-cache wrote {untouched:?}");
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+#[test]
+fn render_timings_split_the_run_into_its_phases() {
+    let path = std::env::temp_dir().join(format!("cadr-cli-timings-{}.png", std::process::id()));
+    let output = cadr(&[
+        "render",
+        "gen:demo",
+        "-o",
+        path.to_str().unwrap(),
+        "--size",
+        "64x48",
+        "--timings",
+    ]);
+    assert!(output.status.success(), "{}", stderr(&output));
+    let text = stdout(&output);
+    let total: f64 = text
+        .lines()
+        .find_map(|l| l.strip_prefix("timings:"))
+        .and_then(|rest| rest.split_whitespace().next())
+        .and_then(|ms| ms.parse().ok())
+        .unwrap_or_else(|| panic!("no total in:\n{text}"));
+    let mut sum = 0.0;
+    for phase in [
+        "device",
+        "load",
+        "scene build",
+        "upload",
+        "shader compile",
+        "pipeline creation",
+        "first frame",
+        "readback",
+        "png encode",
+        "other",
+    ] {
+        let line = text
+            .lines()
+            .find(|l| l.trim_start().starts_with(phase) && l.contains(" ms "))
+            .unwrap_or_else(|| panic!("no {phase} line in:\n{text}"));
+        let ms: f64 = line.trim_start()[phase.len()..]
+            .split_whitespace()
+            .next()
+            .and_then(|v| v.parse().ok())
+            .unwrap_or_else(|| panic!("no figure in {line}"));
+        if phase != "other" {
+            assert!(ms > 0.0, "{phase} took no time: {line}");
+        }
+        sum += ms;
+    }
+    // The phases and the rest account for the run, each counted once.
+    assert!(
+        (sum - total).abs() <= 0.1 * total + 1.0,
+        "{sum} vs {total}:\n{text}"
+    );
+    let _ = std::fs::remove_file(&path);
+}

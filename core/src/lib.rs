@@ -20,6 +20,7 @@ pub mod save;
 pub mod scene;
 pub mod shaders;
 pub mod technique;
+pub mod timings;
 pub mod tree;
 pub mod view;
 pub mod vk;

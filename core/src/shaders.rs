@@ -6,6 +6,7 @@
 //! chosen, so a build-time compiler could not know every permutation.
 
 use crate::disk_cache::DiskCache;
+use crate::timings::{self, Phase};
 use crate::vk::ShaderStage;
 
 /// A shader that failed to compile: a renderer error (a broken source or snippet), not a
@@ -38,8 +39,68 @@ const SPIRV_MAGIC: u32 = 0x0723_0203;
 /// Compiles GLSL `source` (named `name` in messages) for Vulkan 1.3, resolving `#include`
 /// against `includes`. Returns the SPIR-V words. A module compiled before from the same
 /// source, stage and includes by the same cadr and compiler comes from the user's disk cache
-/// ([`crate::disk_cache`]); what is compiled goes there.
+/// ([`crate::disk_cache`]); what is compiled goes there. Timed as
+/// [`Phase::ShaderCompile`](crate::timings::Phase::ShaderCompile).
 pub fn compile_glsl(
+    name: &str,
+    source: &str,
+    stage: ShaderStage,
+    includes: &[IncludeFile],
+) -> Result<Vec<u32>, ShaderCompileError> {
+    timings::time(Phase::ShaderCompile, || {
+        compile_cached(name, source, stage, includes)
+    })
+}
+
+/// One shader for [`compile_glsl_all`].
+#[derive(Clone, Copy, Debug)]
+pub struct CompileRequest<'a> {
+    /// Its name in messages.
+    pub name: &'a str,
+    /// GLSL text.
+    pub source: &'a str,
+    /// Pipeline stage.
+    pub stage: ShaderStage,
+    /// Files `#include` resolves to.
+    pub includes: &'a [IncludeFile],
+}
+
+/// Compiles several shaders at once, each on a thread of its own (as [`compile_glsl`] does
+/// one): what a combination needs is ready in the time of its slowest shader. Results in the
+/// order of `requests`.
+pub fn compile_glsl_all(
+    requests: &[CompileRequest<'_>],
+) -> Vec<Result<Vec<u32>, ShaderCompileError>> {
+    timings::time(Phase::ShaderCompile, || match requests {
+        [] => Vec::new(),
+        [one] => vec![compile_cached(
+            one.name,
+            one.source,
+            one.stage,
+            one.includes,
+        )],
+        many => std::thread::scope(|scope| {
+            let workers: Vec<_> = many
+                .iter()
+                .map(|r| scope.spawn(move || compile_cached(r.name, r.source, r.stage, r.includes)))
+                .collect();
+            workers
+                .into_iter()
+                .zip(many)
+                .map(|(worker, request)| {
+                    worker.join().unwrap_or_else(|_| {
+                        Err(ShaderCompileError {
+                            name: request.name.to_owned(),
+                            log: "the compiler's thread panicked".into(),
+                        })
+                    })
+                })
+                .collect()
+        }),
+    })
+}
+
+fn compile_cached(
     name: &str,
     source: &str,
     stage: ShaderStage,

@@ -14,6 +14,7 @@ use crate::graph::{NodeHandle, SceneGraph};
 use crate::render::pick::{PickSample, PixelRect};
 use crate::render::{Camera, FrameStats, Renderer};
 use crate::technique::{Combination, PluginRegistry, Techniques, Transforms};
+use crate::timings::{self, Phase};
 use crate::tree::SceneTree;
 use crate::vk::Device;
 
@@ -63,6 +64,8 @@ pub struct View {
     scene: Option<GpuScene>,
     techniques: Techniques,
     renderer: Renderer,
+    /// Whether a frame was drawn (the first counts as [`Phase::FirstFrame`]).
+    drawn: bool,
 }
 
 impl View {
@@ -83,6 +86,7 @@ impl View {
             scene: None,
             techniques,
             renderer,
+            drawn: false,
         })
     }
 
@@ -118,14 +122,14 @@ impl View {
     /// ([`Techniques::transforms`]).
     pub fn sync(&mut self, graph: &SceneGraph, tree: &mut SceneTree) -> RenderResult<()> {
         let transforms = self.techniques.transforms();
-        match &mut self.scene {
+        timings::time(Phase::Upload, || match &mut self.scene {
             Some(scene) => scene.sync(graph, tree, transforms),
             None => {
                 let device = self.renderer.device();
                 self.scene = Some(GpuScene::new(device, graph, tree, transforms)?);
                 Ok(())
             }
-        }
+        })
     }
 
     /// Draws one frame of `tree` seen by `camera` with the active techniques (syncing the GPU
@@ -142,8 +146,17 @@ impl View {
 
     /// Draws one frame of the GPU scene as last synced (see [`View::sync`]).
     pub fn draw(&mut self, camera: &Camera) -> RenderResult<FrameStats> {
+        let first = !self.drawn;
         let (scene, techniques, renderer) = self.parts()?;
-        renderer.render_techniques(scene, techniques, camera)
+        let stats = if first {
+            timings::time(Phase::FirstFrame, || {
+                renderer.render_techniques(scene, techniques, camera)
+            })?
+        } else {
+            renderer.render_techniques(scene, techniques, camera)?
+        };
+        self.drawn = true;
+        Ok(stats)
     }
 
     /// The GPU scene, the techniques and the renderer, borrowed together for a frame.

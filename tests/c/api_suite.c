@@ -581,6 +581,28 @@ static void test_renderer(CadrContext context, struct Built *b) {
     EXPECT(cadr_renderer_min_pixels(renderer, NULL), CADR_RESULT_NULL_ARGUMENT);
   }
 
+  /* Frame replay (on by default): an unchanged second frame resubmits the first's recording
+   * and shows the same picture; off, every frame is recorded. */
+  {
+    bool enabled = false, replayed = true;
+    OK(cadr_renderer_frame_replay(renderer, &enabled, &replayed));
+    CHECK(enabled);
+    OK(cadr_renderer_render(renderer, b->scene, &camera, &stats));
+    OK(cadr_renderer_render(renderer, b->scene, &camera, &stats));
+    OK(cadr_renderer_read_pixels(renderer, first, W * H * 4));
+    OK(cadr_renderer_render(renderer, b->scene, &camera, &stats));
+    OK(cadr_renderer_frame_replay(renderer, NULL, &replayed));
+    CHECK(replayed);
+    OK(cadr_renderer_read_pixels(renderer, second, W * H * 4));
+    CHECK(pixel_difference(first, second, W * H * 4) == 0);
+    OK(cadr_renderer_set_frame_replay(renderer, false));
+    OK(cadr_renderer_render(renderer, b->scene, &camera, &stats));
+    OK(cadr_renderer_frame_replay(renderer, &enabled, &replayed));
+    CHECK(!enabled && !replayed);
+    OK(cadr_renderer_set_frame_replay(renderer, true));
+    EXPECT(cadr_renderer_set_frame_replay((CadrRenderer)b->scene, true), CADR_RESULT_FOREIGN_HANDLE);
+  }
+
   /* Shade modes. */
   OK(cadr_renderer_shade_mode(renderer, &mode));
   CHECK(mode == CADR_SHADE_SOLID);
@@ -661,9 +683,21 @@ int main(void) {
   test_renderer(context, &built);
   test_without_plugins();
 
-  /* The one-call path. */
+  /* The one-call path, with the time of each of its phases counted from a reset. */
   snprintf(path, sizeof path, "%s/one-call.png", out_dir ? out_dir : "/tmp");
-  OK(cadr_render_scene_to_png("gen:grid:parts=20", path, 32, 32, true));
+  {
+    struct CadrTimings timings;
+    cadr_timings_reset();
+    OK(cadr_timings(&timings));
+    CHECK(timings.device_ms == 0.0 && timings.first_frame_ms == 0.0 && timings.png_encode_ms == 0.0);
+    OK(cadr_render_scene_to_png("gen:grid:parts=20", path, 32, 32, true));
+    OK(cadr_timings(&timings));
+    CHECK(timings.device_ms > 0.0 && timings.load_ms > 0.0 && timings.scene_build_ms > 0.0);
+    CHECK(timings.upload_ms > 0.0 && timings.shader_compile_ms > 0.0);
+    CHECK(timings.pipeline_creation_ms > 0.0 && timings.first_frame_ms > 0.0);
+    CHECK(timings.readback_ms > 0.0 && timings.png_encode_ms > 0.0);
+    EXPECT(cadr_timings(NULL), CADR_RESULT_NULL_ARGUMENT);
+  }
   EXPECT(cadr_render_scene_to_png("gen:grid:parts=20", path, 0, 32, false),
          CADR_RESULT_INVALID_ARGUMENT);
 

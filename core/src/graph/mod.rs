@@ -1007,7 +1007,9 @@ impl SceneGraph {
 
     /// Builds a graph from a scene; returns it with the handles of the scene's nodes.
     pub fn from_scene(scene: &Scene) -> Result<(Self, Vec<NodeHandle>), GraphError> {
-        convert::scene_to_graph(scene)
+        crate::timings::time(crate::timings::Phase::SceneBuild, || {
+            convert::scene_to_graph(scene)
+        })
     }
 
     /// Adds `scene` (from a loader or generator) below `parent` under a new Group named after

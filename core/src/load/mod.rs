@@ -77,10 +77,10 @@ impl SceneSource {
 
     /// Loads or generates the scene.
     pub fn load(&self) -> Result<Scene, LoadError> {
-        match self {
+        crate::timings::time(crate::timings::Phase::Load, || match self {
             Self::File(path) => load_file(path),
             Self::Generator(spec) => Ok(generate::generate(spec)),
-        }
+        })
     }
 }
 

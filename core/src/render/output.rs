@@ -4,12 +4,13 @@ use std::path::Path;
 
 use super::Renderer;
 use crate::error::{RenderError, RenderResult};
+use crate::timings::{self, Phase};
 
 impl Renderer {
     /// Reads the last frame back as tightly packed RGBA8 rows.
     pub fn read_rgba8(&self) -> RenderResult<image::RgbaImage> {
         let (width, height) = self.size();
-        let pixels = self.target.read_rgba8(&self.device)?;
+        let pixels = timings::time(Phase::Readback, || self.target.read_rgba8(&self.device))?;
         image::RgbaImage::from_raw(width, height, pixels).ok_or_else(|| {
             RenderError::InvalidUse(format!("read back fewer pixels than {width}x{height}"))
         })
@@ -18,12 +19,13 @@ impl Renderer {
     /// Writes the last frame to a PNG file.
     pub fn save_png(&self, path: &Path) -> Result<(), SaveError> {
         let image = self.read_rgba8()?;
-        image
-            .save_with_format(path, image::ImageFormat::Png)
-            .map_err(|source| SaveError::Write {
-                path: path.to_owned(),
-                source,
-            })
+        timings::time(Phase::PngEncode, || {
+            image.save_with_format(path, image::ImageFormat::Png)
+        })
+        .map_err(|source| SaveError::Write {
+            path: path.to_owned(),
+            source,
+        })
     }
 }
 

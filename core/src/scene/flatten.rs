@@ -84,6 +84,12 @@ fn draw_counts(scene: &Scene) -> Vec<u64> {
 
 /// Flattens a validated scene (see [`Scene::validate`]).
 pub fn flatten(scene: &Scene) -> Result<FlatScene, SceneError> {
+    crate::timings::time(crate::timings::Phase::SceneBuild, || {
+        flatten_validated(scene)
+    })
+}
+
+fn flatten_validated(scene: &Scene) -> Result<FlatScene, SceneError> {
     scene.validate()?;
     let counts = draw_counts(scene);
     let total = scene

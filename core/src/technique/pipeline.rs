@@ -80,57 +80,129 @@ pub fn assemble_vertex_shader(vertex_snippet: &str, parameter_snippet: &str) -> 
     format!("#version 460\n{}\n{body}", extensions.join("\n"))
 }
 
-/// SPIR-V of the fragment shaders: shaded triangles, edge lines and instance ids.
-#[derive(Clone)]
-struct FragmentShaders {
-    solid: Arc<Vec<u32>>,
-    edges: Arc<Vec<u32>>,
-    pick: Arc<Vec<u32>>,
+/// The fragment shaders of the passes.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+enum FragmentShader {
+    /// Shaded triangles.
+    Solid,
+    /// Edge lines.
+    Edges,
+    /// Instance ids and depths for picking.
+    Pick,
 }
 
-/// SPIR-V of assembled shaders, by (vertex path, parameter path) name.
+impl FragmentShader {
+    fn source(self) -> &'static shaders::ShaderSource {
+        match self {
+            Self::Solid => &shaders::SHADED_FRAG,
+            Self::Edges => &shaders::EDGES_FRAG,
+            Self::Pick => &shaders::PICK_FRAG,
+        }
+    }
+
+    /// Those `passes` draw with.
+    fn needed_by(passes: PassSet) -> &'static [FragmentShader] {
+        match passes {
+            PassSet::Shaded(ShadeMode::Solid) => &[Self::Solid],
+            PassSet::Shaded(ShadeMode::Edges) => &[Self::Solid, Self::Edges],
+            PassSet::Pick => &[Self::Pick],
+        }
+    }
+}
+
+/// SPIR-V of assembled vertex shaders, by (vertex path, parameter path) name, and of the
+/// fragment shaders, each compiled when a pass first needs it.
 #[derive(Default)]
 pub struct ShaderCache {
     vertex: HashMap<(String, String), Arc<Vec<u32>>>,
-    fragments: Option<FragmentShaders>,
+    fragments: HashMap<FragmentShader, Arc<Vec<u32>>>,
+}
+
+/// The SPIR-V one pass set is built from.
+pub struct PassShaders {
+    /// The assembled vertex shader.
+    pub vertex: Arc<Vec<u32>>,
+    fragments: Vec<(FragmentShader, Arc<Vec<u32>>)>,
+}
+
+impl PassShaders {
+    fn fragment(&self, shader: FragmentShader) -> RenderResult<&[u32]> {
+        self.fragments
+            .iter()
+            .find(|(kind, _)| *kind == shader)
+            .map(|(_, words)| words.as_slice())
+            .ok_or_else(|| {
+                crate::error::RenderError::InvalidUse(format!(
+                    "the {shader:?} fragment shader was not prepared"
+                ))
+            })
+    }
 }
 
 impl ShaderCache {
-    /// The vertex shader of a combination, compiled on first use.
-    pub fn vertex(
+    /// The vertex shader of the (vertex path, parameter path) `key` (assembled by `source`)
+    /// and the fragment shaders `passes` draw with. Those not compiled before are compiled
+    /// now, together, on a thread each (a combination is ready in the time of its slowest
+    /// shader); passes not drawn compile nothing.
+    pub fn prepare(
         &mut self,
         key: (String, String),
         source: impl FnOnce() -> String,
-    ) -> RenderResult<Arc<Vec<u32>>> {
-        if let Some(words) = self.vertex.get(&key) {
-            return Ok(Arc::clone(words));
+        passes: PassSet,
+    ) -> RenderResult<PassShaders> {
+        let wanted = FragmentShader::needed_by(passes);
+        let missing: Vec<FragmentShader> = wanted
+            .iter()
+            .copied()
+            .filter(|f| !self.fragments.contains_key(f))
+            .collect();
+        let vertex_name = format!("technique.vert [{} + {}]", key.0, key.1);
+        let vertex_source = (!self.vertex.contains_key(&key)).then(source);
+        let mut requests: Vec<shaders::CompileRequest<'_>> = missing
+            .iter()
+            .map(|f| {
+                let shader = f.source();
+                shaders::CompileRequest {
+                    name: shader.name,
+                    source: shader.source,
+                    stage: shader.stage,
+                    includes: shaders::INCLUDES,
+                }
+            })
+            .collect();
+        if let Some(source) = &vertex_source {
+            requests.push(shaders::CompileRequest {
+                name: &vertex_name,
+                source,
+                stage: ShaderStage::Vertex,
+                includes: shaders::INCLUDES,
+            });
         }
-        let name = format!("technique.vert [{} + {}]", key.0, key.1);
-        let words = Arc::new(shaders::compile_glsl(
-            &name,
-            &source(),
-            ShaderStage::Vertex,
-            shaders::INCLUDES,
-        )?);
-        self.vertex.insert(key, Arc::clone(&words));
-        Ok(words)
-    }
-
-    fn fragments(&mut self) -> RenderResult<FragmentShaders> {
-        if let Some(shaders) = &self.fragments {
-            return Ok(shaders.clone());
+        let mut compiled = shaders::compile_glsl_all(&requests).into_iter();
+        for fragment in &missing {
+            if let Some(words) = compiled.next() {
+                self.fragments.insert(*fragment, Arc::new(words?));
+            }
         }
-        let compile = |shader: &shaders::ShaderSource| {
-            shaders::compile_glsl(shader.name, shader.source, shader.stage, shaders::INCLUDES)
-                .map(Arc::new)
-        };
-        let shaders = FragmentShaders {
-            solid: compile(&shaders::SHADED_FRAG)?,
-            edges: compile(&shaders::EDGES_FRAG)?,
-            pick: compile(&shaders::PICK_FRAG)?,
-        };
-        self.fragments = Some(shaders.clone());
-        Ok(shaders)
+        if vertex_source.is_some() {
+            if let Some(words) = compiled.next() {
+                self.vertex.insert(key.clone(), Arc::new(words?));
+            }
+        }
+        let not_compiled =
+            || crate::error::RenderError::InvalidUse("a technique shader was not compiled".into());
+        Ok(PassShaders {
+            vertex: Arc::clone(self.vertex.get(&key).ok_or_else(not_compiled)?),
+            fragments: wanted
+                .iter()
+                .map(|f| {
+                    Ok((
+                        *f,
+                        Arc::clone(self.fragments.get(f).ok_or_else(not_compiled)?),
+                    ))
+                })
+                .collect::<RenderResult<_>>()?,
+        })
     }
 }
 
@@ -157,8 +229,8 @@ pub struct PipelineInputs<'a> {
     pub path_set_layouts: [vk::DescriptorSetLayout; 3],
     /// The vertex path's input.
     pub vertex_input: abi::CadrVertexInput,
-    /// Assembled vertex shader.
-    pub vertex_spirv: &'a [u32],
+    /// The vertex and fragment shaders of the passes.
+    pub shaders: &'a PassShaders,
     /// The passes to build.
     pub passes: PassSet,
     /// The kind the pick pass is given: [`abi::CADR_PASS_PICK`] when every active technique
@@ -168,11 +240,7 @@ pub struct PipelineInputs<'a> {
 
 impl TechniquePipelines {
     /// Creates the layout and the passes' pipelines.
-    pub fn new(
-        device: &Arc<Device>,
-        cache: &mut ShaderCache,
-        inputs: &PipelineInputs<'_>,
-    ) -> RenderResult<Self> {
+    pub fn new(device: &Arc<Device>, inputs: &PipelineInputs<'_>) -> RenderResult<Self> {
         let empty_set_layout = DescriptorSetLayout::new(device, "empty set layout", &[])?;
         let used = inputs
             .path_set_layouts
@@ -206,22 +274,26 @@ impl TechniquePipelines {
                 PassSet::Shaded(_) => COLOR_FORMAT,
             },
         };
-        let fragments = cache.fragments()?;
+        let fragment = |shader: FragmentShader| inputs.shaders.fragment(shader);
         let triangles = vk::PrimitiveTopology::TRIANGLE_LIST;
         match inputs.passes {
             PassSet::Shaded(ShadeMode::Solid) => {
-                let pipeline = this.pipeline(inputs, &fragments.solid, triangles, false)?;
+                let pipeline =
+                    this.pipeline(inputs, fragment(FragmentShader::Solid)?, triangles, false)?;
                 this.add(pipeline, abi::CADR_PASS_TRIANGLES);
             }
             PassSet::Shaded(ShadeMode::Edges) => {
-                let pipeline = this.pipeline(inputs, &fragments.solid, triangles, true)?;
+                let pipeline =
+                    this.pipeline(inputs, fragment(FragmentShader::Solid)?, triangles, true)?;
                 this.add(pipeline, abi::CADR_PASS_TRIANGLES);
                 let lines = vk::PrimitiveTopology::LINE_LIST;
-                let pipeline = this.pipeline(inputs, &fragments.edges, lines, false)?;
+                let pipeline =
+                    this.pipeline(inputs, fragment(FragmentShader::Edges)?, lines, false)?;
                 this.add(pipeline, abi::CADR_PASS_EDGES);
             }
             PassSet::Pick => {
-                let pipeline = this.pipeline(inputs, &fragments.pick, triangles, false)?;
+                let pipeline =
+                    this.pipeline(inputs, fragment(FragmentShader::Pick)?, triangles, false)?;
                 this.add(pipeline, inputs.pick_kind);
             }
         }
@@ -247,7 +319,7 @@ impl TechniquePipelines {
         let vertex = ShaderModule::from_spirv(
             &self.device,
             "technique.vert",
-            inputs.vertex_spirv,
+            &inputs.shaders.vertex,
             ShaderStage::Vertex,
         )?;
         let fragment = ShaderModule::from_spirv(
@@ -277,5 +349,54 @@ impl TechniquePipelines {
                 name: "technique pipeline",
             },
         )?)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A vertex shader assembled from two small paths: positions and normals from vertex
+    /// inputs, the object from push constants.
+    fn vertex_source() -> String {
+        assemble_vertex_shader(
+            "layout(location = 0) in vec3 in_position;\n\
+             layout(location = 1) in vec3 in_normal;\n\
+             vec3 cadr_vertex_position() { return in_position; }\n\
+             vec3 cadr_vertex_normal() { return in_normal; }",
+            "CadrObject cadr_object() {\n\
+                 return CadrObject(cadr_push.matrix, cadr_push.vectors[0], cadr_push.vectors[1].xy,\n\
+                                   cadr_push.words[0].x, cadr_push.words[0].y);\n\
+             }",
+        )
+    }
+
+    #[test]
+    fn only_the_shaders_a_pass_set_draws_with_are_compiled_each_once() {
+        let mut cache = ShaderCache::default();
+        let key = || ("per-geometry".to_owned(), "push".to_owned());
+        let mut assembled = 0;
+        let mut prepare = |cache: &mut ShaderCache, passes| {
+            cache.prepare(
+                key(),
+                || {
+                    assembled += 1;
+                    vertex_source()
+                },
+                passes,
+            )
+        };
+        prepare(&mut cache, PassSet::Shaded(ShadeMode::Solid)).expect("solid");
+        assert_eq!(cache.fragments.len(), 1, "solid needs one fragment shader");
+        prepare(&mut cache, PassSet::Shaded(ShadeMode::Edges)).expect("edges");
+        assert_eq!(cache.fragments.len(), 2);
+        prepare(&mut cache, PassSet::Pick).expect("pick");
+        assert_eq!(cache.fragments.len(), 3);
+        prepare(&mut cache, PassSet::Shaded(ShadeMode::Solid)).expect("again");
+        assert_eq!(
+            assembled, 1,
+            "the vertex shader is assembled and compiled once"
+        );
+        assert_eq!(cache.vertex.len(), 1);
     }
 }

@@ -589,9 +589,11 @@ impl Techniques {
             };
         }
         let key = (vertex.entry.name.clone(), parameters.entry.name.clone());
-        let spirv = self.shaders.vertex(key, || {
-            assemble_vertex_shader(&vertex_snippet, &parameter_snippet)
-        })?;
+        let shaders = self.shaders.prepare(
+            key,
+            || assemble_vertex_shader(&vertex_snippet, &parameter_snippet),
+            passes,
+        )?;
         let inputs = PipelineInputs {
             frame_set_layout: self.frame_set_layout,
             path_set_layouts: [
@@ -600,11 +602,11 @@ impl Techniques {
                 vk::DescriptorSetLayout::from_raw(vertex_set),
             ],
             vertex_input: input,
-            vertex_spirv: &spirv,
+            shaders: &shaders,
             passes,
             pick_kind: self.pick_pass_kind(),
         };
-        TechniquePipelines::new(&self.device, &mut self.shaders, &inputs)
+        TechniquePipelines::new(&self.device, &inputs)
     }
 }
 

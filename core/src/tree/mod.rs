@@ -165,14 +165,16 @@ impl SceneTree {
 
     /// Builds the tree with LOD and billboards evaluated for `eye`.
     pub fn build_with_eye(graph: &mut SceneGraph, eye: DVec3) -> Self {
-        graph.take_events();
-        let mut tree = Self {
-            eye,
-            ..Self::default()
-        };
-        let root = graph.root();
-        tree.root = tree.build_subtree(graph, NONE, 0, root, true);
-        tree
+        crate::timings::time(crate::timings::Phase::SceneBuild, || {
+            graph.take_events();
+            let mut tree = Self {
+                eye,
+                ..Self::default()
+            };
+            let root = graph.root();
+            tree.root = tree.build_subtree(graph, NONE, 0, root, true);
+            tree
+        })
     }
 
     /// The eye LOD and billboards were last evaluated for.

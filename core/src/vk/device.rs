@@ -81,8 +81,10 @@ pub struct Device {
 impl Device {
     /// Creates an instance and a device according to `options`.
     pub fn new(options: &DeviceOptions) -> VkResult<Arc<Self>> {
-        let instance = Arc::new(Instance::new(&options.instance)?);
-        Self::with_instance_and_extensions(instance, &options.choice, &options.extra_extensions)
+        crate::timings::time(crate::timings::Phase::Device, || {
+            let instance = Arc::new(Instance::new(&options.instance)?);
+            Self::with_instance_and_extensions(instance, &options.choice, &options.extra_extensions)
+        })
     }
 
     /// Creates a device on an existing instance.

@@ -192,11 +192,11 @@ impl Pipeline {
             .push_next(&mut rendering)];
         // SAFETY: every struct the info points to lives until the call returns; the modules are
         // alive during the call (pipelines do not keep them).
-        let pipelines = unsafe {
+        let pipelines = crate::timings::time(crate::timings::Phase::PipelineCreation, || unsafe {
             device
                 .raw()
                 .create_graphics_pipelines(device.pipeline_cache(), &info, None)
-        }
+        })
         .map_err(|(_, result)| result)
         .or_vk("vkCreateGraphicsPipelines")?;
         device.set_name(pipelines[0], desc.name);
@@ -221,11 +221,11 @@ impl Pipeline {
             .stage(stage)
             .layout(layout.raw())];
         // SAFETY: the info and the module live for the call.
-        let pipelines = unsafe {
+        let pipelines = crate::timings::time(crate::timings::Phase::PipelineCreation, || unsafe {
             device
                 .raw()
                 .create_compute_pipelines(device.pipeline_cache(), &info, None)
-        }
+        })
         .map_err(|(_, result)| result)
         .or_vk("vkCreateComputePipelines")?;
         device.set_name(pipelines[0], name);

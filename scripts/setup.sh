@@ -17,6 +17,8 @@ packages=(
   xvfb libglfw3-dev x11-apps
   # The installed package is tested from a C++ host with CMake and with pkg-config.
   cmake
+  # The font of `cadr bench --plot`'s labels.
+  fonts-dejavu-core
 )
 if [[ "${1:-}" == "--bench" ]]; then
   packages+=(f3d hyperfine xauth)

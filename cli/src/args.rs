@@ -324,6 +324,11 @@ pub struct BenchArgs {
     /// Write the table and the scene statistics as JSON.
     #[arg(long, value_name = "FILE")]
     pub json: Option<PathBuf>,
+    /// Draw the table as a chart (.svg or .png): bars of CPU µs per frame on a log scale, or
+    /// with --sweep lines of cost against scene size. The labels' font is DejaVu Sans
+    /// (fonts-dejavu-core) or the .ttf file CADR_PLOT_FONT names.
+    #[arg(long, value_name = "FILE")]
+    pub plot: Option<PathBuf>,
     /// Image size.
     #[arg(long, value_name = "WxH", default_value = "640x480", value_parser = parse_size)]
     pub size: Size,

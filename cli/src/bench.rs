@@ -16,6 +16,7 @@ use cadr_core::vk::Device;
 
 use crate::args::{BenchArgs, Size};
 use crate::motion::Motion;
+use crate::progress::Steps;
 use crate::techniques::{load_registry, TechniqueSession};
 
 /// The (vertex, parameter) pairs the default selection tries with every submission: the
@@ -224,6 +225,7 @@ impl Bench {
         drop(flat);
         let aspect = self.size.aspect();
         let mut rows = Vec::new();
+        let scene_name = scene.name.clone();
         let mut session = TechniqueSession::new(
             &self.device,
             scene,
@@ -239,7 +241,22 @@ impl Bench {
                 motion.requested
             );
         }
+        let combinations = match combinations {
+            Some(list) => list.to_vec(),
+            None => selection(args, session.techniques())?,
+        };
+        let modes = args.shade.modes();
+        let mut steps = Steps::new(
+            1 + (modes.len() * combinations.len()) as u64,
+            &format!("bench {scene_name}"),
+        );
+        let show = |steps: &Steps, line: String| {
+            if !quiet {
+                steps.println(&line);
+            }
+        };
         let view = (&stats.bounds, aspect);
+        steps.start("baseline");
         session.choose(&Combination::built_in(), ShadeMode::Solid)?;
         // The reference records every frame, as the seeds' baseline does.
         session.techniques().set_frame_replay(false);
@@ -249,17 +266,13 @@ impl Bench {
         let transforms = session.techniques().transforms();
         let baseline = Row::new("baseline (built-in)".into(), "solid", transforms, measured);
         session.techniques().set_frame_replay(self.frame_replay);
-        if !quiet {
-            print_header();
-            print_row(&baseline, baseline.cpu_us);
-        }
+        show(&steps, header_line());
+        show(&steps, row_line(&baseline, baseline.cpu_us));
+        steps.done();
         rows.push(baseline);
-        let combinations = match combinations {
-            Some(list) => list.to_vec(),
-            None => selection(args, session.techniques())?,
-        };
-        for mode in args.shade.modes() {
+        for mode in modes {
             for combination in &combinations {
+                steps.start(&format!("{combination} [{}]", mode.name()));
                 session.choose(combination, mode)?;
                 session
                     .techniques()
@@ -270,9 +283,8 @@ impl Bench {
                 })?;
                 let transforms = session.techniques().transforms();
                 let row = Row::new(combination.to_string(), mode.name(), transforms, measured);
-                if !quiet {
-                    print_row(&row, rows[0].cpu_us);
-                }
+                show(&steps, row_line(&row, rows[0].cpu_us));
+                steps.done();
                 rows.push(row);
             }
         }
@@ -280,8 +292,8 @@ impl Bench {
     }
 }
 
-fn print_header() {
-    println!(
+fn header_line() -> String {
+    format!(
         "{:<58} {:>6} {:>7} {:>10} {:>10} {:>9} {:>9} {:>8} {:>8} {:>6} {:>7} {:>7} {:>10} {:>9}",
         "technique (vertex / params / submit / cull)",
         "shade",
@@ -297,13 +309,13 @@ fn print_header() {
         "param",
         "triangles",
         "speedup"
-    );
+    )
 }
 
-fn print_row(row: &Row, baseline_cpu: f64) {
+fn row_line(row: &Row, baseline_cpu: f64) -> String {
     let gpu = row.gpu_us.map_or("n/a".to_owned(), |g| format!("{g:.0}"));
     let s = &row.stats;
-    println!(
+    format!(
         "{:<58} {:>6} {:>7} {:>10.1} {:>10} {:>9.1} {:>9} {:>8} {:>8} {:>6} {:>7} {:>7} {:>10} {:>8.1}x",
         row.label,
         row.shade,
@@ -319,7 +331,7 @@ fn print_row(row: &Row, baseline_cpu: f64) {
         s.parameter_updates,
         s.triangles,
         baseline_cpu / row.cpu_us.max(0.001)
-    );
+    )
 }
 
 fn row_json(row: &Row, baseline_cpu: f64) -> serde_json::Value {
@@ -362,6 +374,9 @@ fn rows_json(rows: &[Row]) -> Vec<serde_json::Value> {
 
 /// `cadr bench`.
 pub fn bench(args: &BenchArgs) -> Result<(), String> {
+    if let Some(path) = &args.plot {
+        crate::plot::check_path(path)?;
+    }
     let motion = Motion::new(args.camera, args.animate);
     let sweep = args.sweeping();
     let frames = args
@@ -403,6 +418,20 @@ pub fn bench(args: &BenchArgs) -> Result<(), String> {
             "scene: {name}: {} parts, {} triangles, {} materials, {} geometries",
             stats.instances, stats.triangles, stats.materials, stats.geometries
         );
+        if let Some(path) = &args.plot {
+            let bars: Vec<(String, f64)> = rows
+                .iter()
+                .map(|row| (format!("{} [{}]", row.label, row.shade), row.cpu_us))
+                .collect();
+            let title = format!(
+                "{name}: {} parts, camera {}, {} — CPU µs per frame",
+                stats.instances,
+                motion.camera.name(),
+                device.adapter().name
+            );
+            crate::plot::bars(path, &title, &bars)?;
+            println!("wrote {}", path.display());
+        }
         serde_json::json!({
             "device": device.adapter().name,
             "frames": frames,
@@ -472,6 +501,22 @@ fn run_sweep(bench: &Bench, args: &BenchArgs) -> Result<serde_json::Value, Strin
             columns[columns.len() - 1].2[i].cpu_us,
         );
         println!(" {:>9.2}x", last / first.max(0.001));
+    }
+    if let Some(path) = &args.plot {
+        let series: Vec<crate::plot::Series> = first_rows
+            .iter()
+            .enumerate()
+            .map(|(i, row)| crate::plot::Series {
+                label: format!("{} [{}]", row.label, row.shade),
+                points: columns.iter().map(|(n, _, rows)| (*n, rows[i].cpu_us)).collect(),
+            })
+            .collect();
+        let title = format!(
+            "gen:grid sweep on {} — CPU µs per frame",
+            bench.device.adapter().name
+        );
+        crate::plot::lines(path, &title, &series)?;
+        println!("wrote {}", path.display());
     }
     let sizes: Vec<serde_json::Value> = columns
         .iter()

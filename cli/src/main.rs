@@ -5,6 +5,8 @@ mod bench;
 mod bench_tree;
 mod motion;
 mod pick;
+mod plot;
+mod progress;
 mod techniques;
 
 use std::process::ExitCode;
@@ -57,10 +59,10 @@ fn main() -> ExitCode {
     }
 }
 
+/// Loads or generates the scene `text` names (with a spinner if it takes over a second).
 fn load_scene(text: &str) -> Result<cadr_core::scene::Scene, String> {
-    SceneSource::parse(text)
-        .and_then(|source| source.load())
-        .map_err(|e| e.to_string())
+    let source = SceneSource::parse(text).map_err(|e| e.to_string())?;
+    progress::spin(&format!("loading {text}"), || source.load()).map_err(|e| e.to_string())
 }
 
 /// The Vulkan device, with the validation layers when the options or the environment ask.

@@ -60,11 +60,14 @@ impl TechniqueSession {
         registry: Arc<PluginRegistry>,
         (width, height): (u32, u32),
     ) -> Result<Self, String> {
-        let (mut graph, _) = SceneGraph::from_scene(source).map_err(|e| e.to_string())?;
-        let mut tree = SceneTree::build(&mut graph);
-        let mut view = View::new(device, registry, width, height).map_err(|e| e.to_string())?;
-        view.sync(&graph, &mut tree).map_err(|e| e.to_string())?;
-        Ok(Self { graph, tree, view })
+        crate::progress::spin(&format!("building and uploading {}", source.name), || {
+            let (mut graph, _) = SceneGraph::from_scene(source).map_err(|e| e.to_string())?;
+            let mut tree = SceneTree::build(&mut graph);
+            let mut view =
+                View::new(device, registry, width, height).map_err(|e| e.to_string())?;
+            view.sync(&graph, &mut tree).map_err(|e| e.to_string())?;
+            Ok(Self { graph, tree, view })
+        })
     }
 
     /// The active techniques.

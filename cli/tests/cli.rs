@@ -777,3 +777,67 @@ fn render_timings_split_the_run_into_its_phases() {
     );
     let _ = std::fs::remove_file(&path);
 }
+
+#[test]
+fn bench_plots_the_table_and_the_sweep() {
+    let dir = std::env::temp_dir().join(format!("cadr-cli-plot-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let (svg, png, sweep) = (dir.join("t.svg"), dir.join("t.png"), dir.join("s.svg"));
+    let table = |plot: &std::path::Path| {
+        cadr(&[
+            "bench",
+            "gen:grid:parts=300",
+            "--frames",
+            "1",
+            "--size",
+            "48x32",
+            "--vertex",
+            "per-geometry",
+            "--params",
+            "push",
+            "--submit",
+            "individual,groups-replay",
+            "--plot",
+            plot.to_str().unwrap(),
+        ])
+    };
+    let output = table(&svg);
+    assert!(output.status.success(), "{}", stderr(&output));
+    // Nothing but the table on the pipes: progress is for terminals.
+    assert!(stderr(&output).is_empty(), "{}", stderr(&output));
+    let text = std::fs::read_to_string(&svg).unwrap();
+    assert!(text.starts_with("<svg"), "{}", &text[..80.min(text.len())]);
+    for label in [
+        "baseline (built-in) [solid]",
+        "per-geometry / push / groups-replay / none [solid]",
+        "CPU µs per frame (log scale)",
+    ] {
+        assert!(text.contains(label), "the chart lacks {label}");
+    }
+    let output = table(&png);
+    assert!(output.status.success(), "{}", stderr(&output));
+    let picture = image::open(&png).unwrap().to_rgb8();
+    assert_eq!(picture.width(), 1400);
+    // Bars are drawn: some pixels are neither white nor grey.
+    assert!(picture.pixels().any(|p| p[2] > p[0].saturating_add(60)));
+
+    let output = cadr(&[
+        "bench",
+        "--sweep-parts",
+        "100,400",
+        "--frames",
+        "1",
+        "--size",
+        "32x32",
+        "--plot",
+        sweep.to_str().unwrap(),
+    ]);
+    assert!(output.status.success(), "{}", stderr(&output));
+    let text = std::fs::read_to_string(&sweep).unwrap();
+    assert!(text.contains("parts (log scale)") && text.contains("groups-mdi-replay"));
+
+    let output = table(&dir.join("t.txt"));
+    assert_eq!(output.status.code(), Some(1));
+    assert!(stderr(&output).contains("expected a file ending in .svg or .png"));
+    let _ = std::fs::remove_dir_all(&dir);
+}

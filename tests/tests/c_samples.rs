@@ -248,18 +248,10 @@ fn viewer_under_xvfb_swaps_techniques_resizes_and_shows_the_offscreen_image() {
         foreground_fraction(&offscreen) > 0.05,
         "the offscreen view shows nothing"
     );
-    let mut total = 0_u64;
-    let mut differing = 0_u32;
-    for (a, b) in window.pixels().zip(offscreen.pixels()) {
-        let difference: u32 = (0..3).map(|c| u32::from(a[c].abs_diff(b[c]))).sum();
-        total += u64::from(difference);
-        differing += u32::from(difference > 48);
-    }
-    let pixels = size.0 * size.1;
-    let mean = total as f64 / f64::from(pixels) / 3.0;
+    let difference = cadr_tests::images::compare(&window, &offscreen).unwrap();
     assert!(
-        mean < 2.0 && differing < pixels / 100,
-        "window and offscreen render differ: mean {mean:.2} per channel, {differing} of {pixels} pixels (images in {})",
+        difference.within(cadr_tests::images::DEFAULT_TOLERANCE),
+        "window and offscreen render differ: {difference:?} (images in {})",
         dir.display()
     );
 }

@@ -13,7 +13,7 @@ use cadr_core::scene::flatten;
 use cadr_core::technique::Combination;
 use cadr_core::tree::SceneTree;
 use cadr_core::view::View;
-use cadr_tests::images::compare;
+use cadr_tests::images::{compare, SAME_PICTURE, VISIBLE_CHANGE};
 use cadr_tests::{assert_no_validation_errors, plugin_registry, test_device};
 use glam::{DMat4, DVec3};
 
@@ -101,7 +101,7 @@ fn replayed_frames_follow_the_camera_and_every_change_records_afresh() {
             assert!(!b.replayed, "{combination}, frame {frame}: replay is off");
             let difference = compare(&a.image, &b.image).unwrap();
             assert!(
-                difference.max == 0.0 || (difference.mean < 0.3 && difference.p99 < 6.0),
+                difference.within(SAME_PICTURE),
                 "{combination}, frame {frame}: the replayed frame differs: {difference:?}"
             );
             assert_eq!(a.triangles, b.triangles, "{combination}, frame {frame}");
@@ -122,7 +122,7 @@ fn replayed_frames_follow_the_camera_and_every_change_records_afresh() {
         let after = &replayed[edit_at].image;
         let moved = compare(before, after).unwrap();
         assert!(
-            moved.mean > 0.3,
+            moved.mean > VISIBLE_CHANGE,
             "{combination}: the lifted root shows: {moved:?}"
         );
     }

@@ -12,7 +12,7 @@ use cadr_core::scene::{flatten, Aabb, Scene};
 use cadr_core::technique::{Combination, Techniques};
 use cadr_core::tree::SceneTree;
 use cadr_core::view::View;
-use cadr_tests::images::compare;
+use cadr_tests::images::{compare, SAME_PICTURE};
 use cadr_tests::{assert_no_validation_errors, plugin_registry, test_device};
 
 const SIZE: (u32, u32) = (200, 150);
@@ -79,7 +79,7 @@ fn gpu_culling_follows_an_orbit_frame_by_frame() {
             let (image, stats) = &results[index][frame];
             let difference = compare(image, reference).unwrap();
             assert!(
-                difference.mean < 0.3 && difference.p99 < 6.0,
+                difference.within(SAME_PICTURE),
                 "{culler}, frame {frame}: {difference:?}"
             );
             assert!(
@@ -118,7 +118,7 @@ fn gpu_occlusion_skips_what_housings_hide() {
     {
         let difference = compare(image, reference).unwrap();
         assert!(
-            difference.mean < 0.3 && difference.p99 < 6.0,
+            difference.within(SAME_PICTURE),
             "frame {frame}: {difference:?}"
         );
         println!(
@@ -232,10 +232,7 @@ fn sub_pixel_culling_drops_small_parts_only_when_asked() {
         }
         let image = view.renderer().read_rgba8().unwrap();
         let difference = compare(&image, &reference).unwrap();
-        assert!(
-            difference.mean < 0.3 && difference.p99 < 6.0,
-            "{culler}: {difference:?}"
-        );
+        assert!(difference.within(SAME_PICTURE), "{culler}: {difference:?}");
         let thresholds = [1.0, 2.0, 4.0, 8.0, 16.0, 32.0, 64.0, 1e5];
         let counts: Vec<u64> = thresholds
             .iter()

@@ -584,7 +584,7 @@ fn views_on_two_threads_share_one_device_and_its_queue() {
     });
     let difference = cadr_tests::images::compare(&images[0], &images[1]).unwrap();
     assert!(
-        difference.mean < 0.3 && difference.p99 < 6.0,
+        difference.within(cadr_tests::images::SAME_PICTURE),
         "{difference:?}"
     );
     assert_no_validation_errors(&device);

@@ -17,7 +17,7 @@ use cadr_core::technique::{
 };
 use cadr_core::tree::SceneTree;
 use cadr_core::vk::Device;
-use cadr_tests::images::compare;
+use cadr_tests::images::{compare, SAME_PICTURE, VISIBLE_CHANGE};
 use cadr_tests::{assert_no_validation_errors, plugin_registry, test_device, CYLINDER_ENGINE_GLB};
 
 const SIZE: (u32, u32) = (160, 120);
@@ -91,10 +91,7 @@ impl Fixture {
     fn assert_matches_baseline(&mut self, what: &str) {
         let (image, _) = self.render();
         let difference = compare(&image, &self.baseline).unwrap();
-        assert!(
-            difference.mean < 0.3 && difference.p99 < 6.0,
-            "{what}: {difference:?}"
-        );
+        assert!(difference.within(SAME_PICTURE), "{what}: {difference:?}");
     }
 }
 
@@ -182,7 +179,10 @@ fn every_combination_matches(source: &Scene, what: &str) {
     }
     let (highlighted, _) = f.render();
     let tint = compare(&highlighted, &f.baseline).unwrap();
-    assert!(tint.mean > 0.2, "{what}: the highlight shows: {tint:?}");
+    assert!(
+        tint.mean > VISIBLE_CHANGE,
+        "{what}: the highlight shows: {tint:?}"
+    );
     f.baseline = highlighted;
     let combinations = all_combinations(f.techniques.registry());
     assert!(
@@ -200,7 +200,10 @@ fn every_combination_matches(source: &Scene, what: &str) {
             ShadeMode::Edges => {
                 let (image, stats) = f.render();
                 let lines = compare(&image, &f.baseline).unwrap();
-                assert!(lines.mean > 0.2, "{what}: edges are drawn: {lines:?}");
+                assert!(
+                    lines.mean > VISIBLE_CHANGE,
+                    "{what}: edges are drawn: {lines:?}"
+                );
                 assert!(stats.draw_calls > 0);
                 image
             }
@@ -211,7 +214,7 @@ fn every_combination_matches(source: &Scene, what: &str) {
                     f.techniques.select(combination).unwrap();
                     let (image, stats) = f.render();
                     let difference = compare(&image, &reference).unwrap();
-                    if !(difference.mean < 0.3 && difference.p99 < 6.0) || stats.draw_calls == 0 {
+                    if !(difference.within(SAME_PICTURE)) || stats.draw_calls == 0 {
                         failures.push(format!(
                             "{combination} [{}]: {difference:?}, {} draw calls",
                             mode.name(),
@@ -483,7 +486,7 @@ fn frustum_culling_draws_only_what_the_camera_sees() {
     let (baseline, _) = f.render();
     let difference = compare(&culled_image, &baseline).unwrap();
     assert!(
-        difference.mean < 0.3 && difference.p99 < 6.0,
+        difference.within(SAME_PICTURE),
         "culling removes only unseen parts: {difference:?}"
     );
     drop(f.techniques);

@@ -366,7 +366,7 @@ fn moving_assemblies_draws_like_a_fresh_upload() {
             let image = view.renderer().read_rgba8().unwrap();
             let difference = images::compare(&image, &expected).unwrap();
             assert!(
-                difference.mean < 0.3 && difference.p99 < 6.0,
+                difference.within(images::SAME_PICTURE),
                 "frame {frame}, {name} transforms: {difference:?}"
             );
         }

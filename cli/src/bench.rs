@@ -508,7 +508,10 @@ fn run_sweep(bench: &Bench, args: &BenchArgs) -> Result<serde_json::Value, Strin
             .enumerate()
             .map(|(i, row)| crate::plot::Series {
                 label: format!("{} [{}]", row.label, row.shade),
-                points: columns.iter().map(|(n, _, rows)| (*n, rows[i].cpu_us)).collect(),
+                points: columns
+                    .iter()
+                    .map(|(n, _, rows)| (*n, rows[i].cpu_us))
+                    .collect(),
             })
             .collect();
         let title = format!(

@@ -136,7 +136,9 @@ fn write(path: &Path, size: (u32, u32), chart: &Chart<'_>) -> Result<(), String>
 fn log_range(values: impl Iterator<Item = f64>) -> Range<f64> {
     let (low, high) = values
         .filter(|v| v.is_finite() && *v > 0.0)
-        .fold((f64::INFINITY, 0.0f64), |(lo, hi), v| (lo.min(v), hi.max(v)));
+        .fold((f64::INFINITY, 0.0f64), |(lo, hi), v| {
+            (lo.min(v), hi.max(v))
+        });
     if low > high {
         return 0.1..10.0;
     }

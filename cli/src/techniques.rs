@@ -63,8 +63,7 @@ impl TechniqueSession {
         crate::progress::spin(&format!("building and uploading {}", source.name), || {
             let (mut graph, _) = SceneGraph::from_scene(source).map_err(|e| e.to_string())?;
             let mut tree = SceneTree::build(&mut graph);
-            let mut view =
-                View::new(device, registry, width, height).map_err(|e| e.to_string())?;
+            let mut view = View::new(device, registry, width, height).map_err(|e| e.to_string())?;
             view.sync(&graph, &mut tree).map_err(|e| e.to_string())?;
             Ok(Self { graph, tree, view })
         })

@@ -135,6 +135,28 @@ pub(super) struct SparseUploader {
 /// An array with a function that appends the bytes of its item at a slot.
 pub(super) type ArrayItems<'a> = (&'a mut GpuArray, &'a dyn Fn(u32, &mut Vec<u8>));
 
+/// Uploads every item of `array`, made by `item` straight into streamed staging chunks (no
+/// host copy of the whole array); returns the bytes sent.
+fn upload_whole(array: &GpuArray, item: &dyn Fn(u32, &mut Vec<u8>)) -> RenderResult<u64> {
+    let item_bytes = array.item_bytes as u64;
+    let size = array.capacity as u64 * item_bytes;
+    // The items overlapping a chunk, made into a buffer reused from chunk to chunk.
+    let mut items: Vec<u8> = Vec::new();
+    array.buffer.upload_with(0, size, |start, chunk| {
+        let first = start / item_bytes;
+        let end = (start + chunk.len() as u64).div_ceil(item_bytes);
+        items.clear();
+        for slot in first..end {
+            item(slot as u32, &mut items);
+        }
+        // Every item is item_bytes long; the padding only guards the slice below.
+        items.resize(((end - first) * item_bytes) as usize, 0);
+        let skip = (start - first * item_bytes) as usize;
+        chunk.copy_from_slice(&items[skip..skip + chunk.len()]);
+    })?;
+    Ok(size)
+}
+
 impl SparseUploader {
     /// Uploads what changed in `arrays`: whole arrays through a staging copy,
     /// changed items gathered and scattered by `scatter.comp`, recorded into `command_buffer`
@@ -157,13 +179,8 @@ impl SparseUploader {
         let mut dispatches: Vec<(usize, u32, u32)> = Vec::new();
         for (index, (array, item)) in arrays.iter_mut().enumerate() {
             if array.whole {
-                let mut data = Vec::with_capacity(array.capacity * array.item_bytes);
-                for slot in 0..array.capacity as u32 {
-                    item(slot, &mut data);
-                }
-                array.buffer.upload_at(0, &data)?;
+                bytes += upload_whole(array, *item)?;
                 counts[index] = array.capacity as u64;
-                bytes += data.len() as u64;
             } else if !array.pending.is_empty() {
                 let first_word = (gathered.len() / 4) as u32;
                 first_words[index] = first_word;

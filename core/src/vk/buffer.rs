@@ -6,9 +6,14 @@ use ash::vk;
 use gpu_allocator::vulkan::Allocation;
 pub use gpu_allocator::MemoryLocation;
 
-use super::command::OneShot;
+use super::command::{CommandContext, OneShot};
 use super::device::Device;
 use super::error::{VkError, VkResult, VkResultExt};
+
+/// Bytes per staging buffer of a streamed upload ([`Buffer::upload_with`]).
+pub const STAGING_CHUNK_BYTES: u64 = 16 << 20;
+/// Staging buffers a streamed upload cycles through.
+pub const STAGING_CHUNKS: usize = 3;
 
 /// A buffer and its memory; freed on drop.
 pub struct Buffer {
@@ -89,40 +94,81 @@ impl Buffer {
         Ok(buffer)
     }
 
-    /// Copies `data` to `offset` of this buffer (which needs TRANSFER_DST usage) through a
-    /// staging buffer, and waits. The caller makes sure the GPU is not using that range.
+    /// Copies `data` to `offset` of this buffer (which needs TRANSFER_DST usage) through
+    /// staging memory (see [`Buffer::upload_with`]), and waits. The caller makes sure the GPU
+    /// is not using that range.
     pub fn upload_at(&self, offset: u64, data: &[u8]) -> VkResult<()> {
-        if data.is_empty() {
+        self.upload_with(offset, data.len() as u64, |start, chunk| {
+            let start = start as usize;
+            chunk.copy_from_slice(&data[start..start + chunk.len()]);
+        })
+    }
+
+    /// Uploads `size` bytes to `offset` of this buffer (which needs TRANSFER_DST usage):
+    /// `fill(start, chunk)` writes bytes `start..start + chunk.len()` of the data straight
+    /// into staging memory. Large uploads stream through a ring of [`STAGING_CHUNKS`] staging
+    /// buffers of [`STAGING_CHUNK_BYTES`]: the CPU fills one while the GPU copies the others,
+    /// and only a buffer about to be refilled is waited for, so the data goes up at the
+    /// speed of memory in bounded staging memory. Returns when every copy is done. The caller
+    /// makes sure the GPU is not using that range.
+    pub fn upload_with(
+        &self,
+        offset: u64,
+        size: u64,
+        mut fill: impl FnMut(u64, &mut [u8]),
+    ) -> VkResult<()> {
+        if size == 0 {
             return Ok(());
         }
-        if offset + data.len() as u64 > self.size {
+        if offset.checked_add(size).is_none_or(|end| end > self.size) {
             return Err(VkError::InvalidUse(format!(
                 "uploading bytes {offset}..{} into a {}-byte buffer",
-                offset + data.len() as u64,
+                offset.saturating_add(size),
                 self.size
             )));
         }
         let device = &self.device;
-        let mut staging = Self::new(
-            device,
-            "staging",
-            data.len() as u64,
-            vk::BufferUsageFlags::TRANSFER_SRC,
-            MemoryLocation::CpuToGpu,
-        )?;
-        staging.write(0, data)?;
-        let mut one_shot = OneShot::begin(device, "staging upload")?;
-        let region = [vk::BufferCopy::default()
-            .dst_offset(offset)
-            .size(data.len() as u64)];
-        // SAFETY: both buffers are alive until the submission below has completed; the region
-        // lies within both (checked above).
-        unsafe {
-            device
-                .raw
-                .cmd_copy_buffer(one_shot.command_buffer(), staging.raw, self.raw, &region)
-        };
-        one_shot.submit_and_wait()
+        crate::timings::time(crate::timings::Phase::Upload, || {
+            let chunk_bytes = size.min(STAGING_CHUNK_BYTES);
+            let mut ring: Vec<(Buffer, CommandContext)> = Vec::new();
+            let mut start = 0;
+            while start < size {
+                let length = (size - start).min(chunk_bytes);
+                let slot = ring
+                    .len()
+                    .min((start / chunk_bytes) as usize % STAGING_CHUNKS);
+                if slot == ring.len() {
+                    let staging = Self::new(
+                        device,
+                        "staging",
+                        chunk_bytes,
+                        vk::BufferUsageFlags::TRANSFER_SRC,
+                        MemoryLocation::CpuToGpu,
+                    )?;
+                    ring.push((staging, CommandContext::new(device, "staging upload")?));
+                }
+                let (staging, commands) = &mut ring[slot];
+                // Waits for this staging buffer's previous copy, then refills it.
+                let command_buffer = commands.begin()?;
+                fill(start, &mut staging.mapped_mut()?[..length as usize]);
+                let region = [vk::BufferCopy::default()
+                    .dst_offset(offset + start)
+                    .size(length)];
+                // SAFETY: both buffers live until the copy has completed (the ring is waited
+                // for below); the region lies within both (checked above).
+                unsafe {
+                    device
+                        .raw
+                        .cmd_copy_buffer(command_buffer, staging.raw, self.raw, &region)
+                };
+                commands.submit()?;
+                start += length;
+            }
+            for (_, commands) in &ring {
+                commands.wait()?;
+            }
+            Ok(())
+        })
     }
 
     /// Copies `size` bytes from `offset` of this buffer (which needs TRANSFER_SRC usage) to the

@@ -16,6 +16,15 @@
 // The library's patch version.
 #define CADR_VERSION_PATCH 0
 
+// Frames paced to the display, never torn; every window offers it (the default).
+#define CADR_PRESENT_FIFO 0
+
+// The newest frame replaces one waiting to be shown: not torn, not paced.
+#define CADR_PRESENT_MAILBOX 1
+
+// Frames shown as soon as they are drawn, possibly torn.
+#define CADR_PRESENT_IMMEDIATE 2
+
 // Shaded triangles only.
 #define CADR_SHADE_SOLID 0
 
@@ -1015,6 +1024,51 @@ enum CadrResult cadr_renderer_pick_rect(CadrRenderer renderer,
 // `result` is null or a result filled by a pick (or zeroed).
 void cadr_pick_result_free(struct CadrPickResult *result);
 
+// Sets how many frames the GPU may have: 1 waits for each frame before
+// `cadr_renderer_render` returns (its GPU time is then that frame's); 2 returns once the frame
+// is submitted and waits for it when the next frame begins, or when its pixels or a pick are
+// read, so the host's work and the next frame's scene update overlap the GPU's drawing (the
+// statistics' GPU time is then the previous frame's). Window renderers start with 2,
+// offscreen ones with 1.
+//
+// Returns `CADR_RESULT_OK`, `CADR_RESULT_INVALID_ARGUMENT` (not 1 or 2), `CADR_RESULT_VULKAN`
+// or a handle error. Ownership: nothing changes hands. Thread-safety: as
+// `cadr_renderer_create`.
+enum CadrResult cadr_renderer_set_frames_in_flight(CadrRenderer renderer, uint32_t frames);
+
+// Writes how many frames the GPU may have (see `cadr_renderer_set_frames_in_flight`).
+//
+// Returns `CADR_RESULT_OK`, `CADR_RESULT_NULL_ARGUMENT` or a handle error.
+// Ownership: the output is the caller's; cadr keeps no pointer to it.
+// Thread-safety: as `cadr_renderer_create`.
+//
+// # Safety
+// `frames` is null or writable.
+enum CadrResult cadr_renderer_frames_in_flight(CadrRenderer renderer, uint32_t *frames);
+
+// Sets how a window renderer's frames reach its window: `CADR_PRESENT_FIFO` (the default),
+// `CADR_PRESENT_MAILBOX` or `CADR_PRESENT_IMMEDIATE`. The swapchain is recreated; a mode the
+// window's surface does not offer is refused, naming those it does.
+//
+// Returns `CADR_RESULT_OK`, `CADR_RESULT_INVALID_ARGUMENT` (unknown mode),
+// `CADR_RESULT_UNSUPPORTED` (not offered, or an offscreen renderer), `CADR_RESULT_VULKAN` or a
+// handle error. Ownership: nothing changes hands. Thread-safety: as `cadr_renderer_create`.
+enum CadrResult cadr_renderer_set_present_mode(CadrRenderer renderer, uint32_t mode);
+
+// Writes a window renderer's present mode (`*mode`) and the modes its surface offers
+// (`*offered`: bit `1 << CADR_PRESENT_*` set for each). Either output may be NULL.
+//
+// Returns `CADR_RESULT_OK`, `CADR_RESULT_UNSUPPORTED` (an offscreen renderer),
+// `CADR_RESULT_VULKAN` or a handle error.
+// Ownership: the outputs are the caller's; cadr keeps no pointer to them.
+// Thread-safety: as `cadr_renderer_create`.
+//
+// # Safety
+// `mode` and `offered` are each null or writable.
+enum CadrResult cadr_renderer_present_mode(CadrRenderer renderer,
+                                           uint32_t *mode,
+                                           uint32_t *offered);
+
 // Creates a renderer that draws into an offscreen `width` × `height` image, with the fastest
 // technique combination the device and plugins allow, or the built-in combination when no
 // plugin library was found (see `cadr_renderer_technique`).
@@ -1130,8 +1184,8 @@ enum CadrResult cadr_renderer_technique(CadrRenderer renderer, uint32_t kind, co
 // Sets the shade mode: `CADR_SHADE_SOLID` or `CADR_SHADE_EDGES`.
 //
 // Returns `CADR_RESULT_OK`, `CADR_RESULT_INVALID_ARGUMENT` (unknown mode), `CADR_RESULT_VULKAN`
-// Ownership: nothing changes hands; the arguments are read during the call only.
-// or a handle error. Thread-safety: as `cadr_renderer_create`.
+// or a handle error. Ownership: nothing changes hands; the arguments are read during the call
+// only. Thread-safety: as `cadr_renderer_create`.
 enum CadrResult cadr_renderer_set_shade_mode(CadrRenderer renderer, uint32_t mode);
 
 // Writes the shade mode (`CADR_SHADE_SOLID` or `CADR_SHADE_EDGES`).

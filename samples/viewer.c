@@ -2,12 +2,17 @@
  *
  *   viewer [scene]                   (default gen:demo; .gltf/.glb/.csf/.csf.gz or gen:NAME)
  *   viewer [scene] --self-test DIR   scripted run for the tests (see below)
+ *   viewer [scene] [--frames-in-flight 1|2] [--present fifo|mailbox|immediate]
+ *                  [--orbit-frames N]
  *
  * Mouse: left drag orbits, right or middle drag pans, the wheel zooms.
  * Keys:  V, P, S, C cycle the vertex path, parameter path, submission and culling technique;
- *        E toggles solid / solid with edges; F fits the view; Esc quits.
- * The window title shows the techniques and the frame's figures; they are also printed once a
- * second. Resizing and minimizing are handled by cadr (swapchain recreated, frames skipped).
+ *        E toggles solid / solid with edges; F fits the view; I toggles 1 / 2 frames in flight;
+ *        M cycles the present modes the window offers; Esc quits.
+ * The window title shows the techniques, frames in flight, present mode, the frame's figures
+ * and frames per second; they are also printed once a second. --orbit-frames N orbits the
+ * camera for N frames as fast as they come, prints the frames per second and quits (a
+ * benchmark of the window path). Resizing and minimizing are handled by cadr (swapchain recreated, frames skipped).
  *
  * --self-test DIR renders frames, cycles every technique kind once, toggles the shade mode,
  * resizes the window, then renders a fixed view both into the window and offscreen
@@ -38,7 +43,10 @@ struct Viewer {
   int dragging; /* 0 none, 1 orbit, 2 pan */
   uint32_t shade;
   struct CadrFrameStats stats;
+  double frames_per_second;
 };
+
+static const char *const present_names[3] = {"fifo", "mailbox", "immediate"};
 
 static double now_seconds(void) {
   struct timespec t;
@@ -103,16 +111,41 @@ static void toggle_shade(struct Viewer *v) {
   printf("shade mode: %s\n", v->shade == CADR_SHADE_SOLID ? "solid" : "edges");
 }
 
+static void toggle_frames_in_flight(struct Viewer *v) {
+  uint32_t frames = 1;
+  CADR_CHECK(cadr_renderer_frames_in_flight(v->renderer, &frames));
+  CADR_CHECK(cadr_renderer_set_frames_in_flight(v->renderer, frames == 1 ? 2 : 1));
+  printf("frames in flight: %u\n", frames == 1 ? 2 : 1);
+}
+
+/* The next present mode the window offers after the current one. */
+static void cycle_present_mode(struct Viewer *v) {
+  uint32_t mode = 0, offered = 0, step;
+  CADR_CHECK(cadr_renderer_present_mode(v->renderer, &mode, &offered));
+  for (step = 1; step <= 3; ++step) {
+    uint32_t next = (mode + step) % 3;
+    if (offered & (1u << next)) {
+      CADR_CHECK(cadr_renderer_set_present_mode(v->renderer, next));
+      printf("present mode: %s\n", present_names[next]);
+      return;
+    }
+  }
+}
+
 static void describe(struct Viewer *v, char *text, size_t size) {
   const char *names[4];
-  uint32_t kind;
+  uint32_t kind, frames = 1, mode = 0;
   for (kind = 0; kind < 4; ++kind) {
     CADR_CHECK(cadr_renderer_technique(v->renderer, kind, &names[kind]));
   }
-  snprintf(text, size, "cadr viewer | %s / %s / %s / %s | %s | %llu draws in %llu calls | CPU %.0f us, GPU %.0f us",
+  CADR_CHECK(cadr_renderer_frames_in_flight(v->renderer, &frames));
+  CADR_CHECK(cadr_renderer_present_mode(v->renderer, &mode, NULL));
+  snprintf(text, size,
+           "cadr viewer | %s / %s / %s / %s | %s | %u in flight, %s | %llu draws in %llu calls | CPU %.0f us, GPU %.0f us | %.0f frames/s",
            names[0], names[1], names[2], names[3], v->shade == CADR_SHADE_SOLID ? "solid" : "edges",
-           (unsigned long long)v->stats.draws, (unsigned long long)v->stats.draw_calls,
-           v->stats.cpu_us, v->stats.gpu_us);
+           frames, present_names[mode % 3], (unsigned long long)v->stats.draws,
+           (unsigned long long)v->stats.draw_calls, v->stats.cpu_us, v->stats.gpu_us,
+           v->frames_per_second);
 }
 
 static void render(struct Viewer *v) {
@@ -141,6 +174,8 @@ static void on_key(GLFWwindow *window, int key, int scancode, int action, int mo
   case GLFW_KEY_C: cycle_technique(v, CADR_TECHNIQUE_KIND_CULLING); break;
   case GLFW_KEY_E: toggle_shade(v); break;
   case GLFW_KEY_F: fit_view(v); break;
+  case GLFW_KEY_I: toggle_frames_in_flight(v); break;
+  case GLFW_KEY_M: cycle_present_mode(v); break;
   case GLFW_KEY_ESCAPE: glfwSetWindowShouldClose(window, GLFW_TRUE); break;
   default: break;
   }
@@ -209,6 +244,25 @@ static int self_test(struct Viewer *v, const char *dir) {
   toggle_shade(v);
   render(v);
   toggle_shade(v);
+  /* Every present mode the window offers, with one and two frames in flight. */
+  {
+    uint32_t mode, offered = 0, frames;
+    CADR_CHECK(cadr_renderer_present_mode(v->renderer, NULL, &offered));
+    printf("present modes offered:");
+    for (mode = 0; mode < 3; ++mode) {
+      if (offered & (1u << mode)) {
+        printf(" %s", present_names[mode]);
+        for (frames = 1; frames <= 2; ++frames) {
+          CADR_CHECK(cadr_renderer_set_frames_in_flight(v->renderer, frames));
+          CADR_CHECK(cadr_renderer_set_present_mode(v->renderer, mode));
+          render(v);
+          render(v);
+        }
+      }
+    }
+    printf("\n");
+    CADR_CHECK(cadr_renderer_set_present_mode(v->renderer, CADR_PRESENT_FIFO));
+  }
   glfwSetWindowSize(v->window, 480, 360);
   for (frame = 0; frame < 200 && (fb_width != 480 || fb_height != 360); ++frame) {
     glfwPollEvents();
@@ -252,13 +306,28 @@ int main(int argc, char **argv) {
   void *instance = NULL;
   VkSurfaceKHR surface = VK_NULL_HANDLE;
   CadrNode root;
-  int i, width, height, status = 0;
+  int i, width, height, status = 0, orbit_frames = 0, frames_in_flight = 0, present = -1;
   double last_print;
   char title[512];
 
   for (i = 1; i < argc; ++i) {
     if (strcmp(argv[i], "--self-test") == 0 && i + 1 < argc) {
       test_dir = argv[++i];
+    } else if (strcmp(argv[i], "--orbit-frames") == 0 && i + 1 < argc) {
+      orbit_frames = atoi(argv[++i]);
+    } else if (strcmp(argv[i], "--frames-in-flight") == 0 && i + 1 < argc) {
+      frames_in_flight = atoi(argv[++i]);
+    } else if (strcmp(argv[i], "--present") == 0 && i + 1 < argc) {
+      const char *name = argv[++i];
+      for (present = 2; present >= 0 && strcmp(present_names[present], name) != 0; --present) {
+      }
+      if (present < 0) {
+        fprintf(stderr, "viewer: --present %s: expected fifo, mailbox or immediate\n", name);
+        return 2;
+      }
+    } else if (argv[i][0] == '-') {
+      fprintf(stderr, "viewer: unknown option %s\n", argv[i]);
+      return 2;
     } else {
       source = argv[i];
     }
@@ -296,6 +365,12 @@ int main(int argc, char **argv) {
   glfwGetFramebufferSize(v.window, &width, &height);
   CADR_CHECK(cadr_renderer_create_for_surface(v.context, (uint64_t)surface, (uint32_t)width,
                                               (uint32_t)height, &v.renderer));
+  if (frames_in_flight != 0) {
+    CADR_CHECK(cadr_renderer_set_frames_in_flight(v.renderer, (uint32_t)frames_in_flight));
+  }
+  if (present >= 0) {
+    CADR_CHECK(cadr_renderer_set_present_mode(v.renderer, (uint32_t)present));
+  }
 
   CADR_CHECK(cadr_scene_create(&v.scene));
   CADR_CHECK(cadr_scene_root(v.scene, &root));
@@ -310,10 +385,25 @@ int main(int argc, char **argv) {
   glfwSetCursorPosCallback(v.window, on_cursor);
   glfwSetScrollCallback(v.window, on_scroll);
   glfwSetFramebufferSizeCallback(v.window, on_framebuffer_size);
-  printf("viewer: %s (V/P/S/C cycle techniques, E edges, F fit, Esc quit)\n", source);
+  printf("viewer: %s (V/P/S/C cycle techniques, E edges, F fit, I frames in flight, M present "
+         "mode, Esc quit)\n",
+         source);
 
   if (test_dir != NULL) {
     status = self_test(&v, test_dir);
+  } else if (orbit_frames > 0) {
+    int frame;
+    double start;
+    render(&v); /* first-use costs (pipelines, uploads) are not counted */
+    start = now_seconds();
+    for (frame = 0; frame < orbit_frames; ++frame) {
+      glfwPollEvents();
+      v.yaw += 2.0 * 3.14159265358979 / 120.0; /* a 120th of a turn per frame */
+      render(&v);
+    }
+    v.frames_per_second = orbit_frames / (now_seconds() - start);
+    describe(&v, title, sizeof title);
+    printf("%s\norbit: %d frames, %.1f frames/s\n", title, orbit_frames, v.frames_per_second);
   } else {
     int frames = 0;
     last_print = now_seconds();
@@ -322,9 +412,10 @@ int main(int argc, char **argv) {
       render(&v);
       ++frames;
       if (now_seconds() - last_print >= 1.0) {
+        v.frames_per_second = frames / (now_seconds() - last_print);
         describe(&v, title, sizeof title);
         glfwSetWindowTitle(v.window, title);
-        printf("%s | %d frames/s\n", title, frames);
+        printf("%s\n", title);
         frames = 0;
         last_print = now_seconds();
       }

@@ -85,7 +85,7 @@ pub struct CadrFrameStats {
 /// swapchain, and the context that keeps the device alive.
 pub(crate) struct RendererState {
     pub(crate) view: View,
-    swapchain: Option<Swapchain>,
+    pub(crate) swapchain: Option<Swapchain>,
     context: Arc<ContextState>,
     /// Whether the last frame resubmitted the recording before it.
     last_frame_replayed: bool,
@@ -161,6 +161,11 @@ fn new_renderer(
         Some(surface) => Some(Swapchain::new(device, surface, width, height)?),
         None => None,
     };
+    if swapchain.is_some() {
+        // A window's frames go to the GPU without waiting for the last one (see
+        // cadr_renderer_set_frames_in_flight); offscreen frames are read back at once anyway.
+        view.renderer_mut().set_frames_in_flight(2)?;
+    }
     let state = RendererState {
         view,
         swapchain,
@@ -521,8 +526,8 @@ pub unsafe extern "C" fn cadr_renderer_technique(
 /// Sets the shade mode: `CADR_SHADE_SOLID` or `CADR_SHADE_EDGES`.
 ///
 /// Returns `CADR_RESULT_OK`, `CADR_RESULT_INVALID_ARGUMENT` (unknown mode), `CADR_RESULT_VULKAN`
-/// Ownership: nothing changes hands; the arguments are read during the call only.
-/// or a handle error. Thread-safety: as `cadr_renderer_create`.
+/// or a handle error. Ownership: nothing changes hands; the arguments are read during the call
+/// only. Thread-safety: as `cadr_renderer_create`.
 #[no_mangle]
 pub extern "C" fn cadr_renderer_set_shade_mode(renderer: CadrRenderer, mode: u32) -> CadrResult {
     guard(|| {

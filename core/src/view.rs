@@ -68,6 +68,13 @@ pub struct View {
     drawn: bool,
 }
 
+impl Drop for View {
+    fn drop(&mut self) {
+        // A frame in flight may still read the GPU scene, which is dropped first.
+        let _ = self.renderer.finish();
+    }
+}
+
 impl View {
     /// A view of `width` × `height` pixels drawing with techniques from `registry`, starting
     /// with the built-in combination ([`Combination::built_in`]; choose another with
@@ -122,10 +129,11 @@ impl View {
     /// ([`Techniques::transforms`]).
     pub fn sync(&mut self, graph: &SceneGraph, tree: &mut SceneTree) -> RenderResult<()> {
         let transforms = self.techniques.transforms();
+        let renderer = &self.renderer;
         timings::time(Phase::Upload, || match &mut self.scene {
-            Some(scene) => scene.sync(graph, tree, transforms),
+            Some(scene) => scene.sync_after(graph, tree, transforms, &mut || renderer.finish()),
             None => {
-                let device = self.renderer.device();
+                let device = renderer.device();
                 self.scene = Some(GpuScene::new(device, graph, tree, transforms)?);
                 Ok(())
             }

@@ -603,6 +603,33 @@ static void test_renderer(CadrContext context, struct Built *b) {
     EXPECT(cadr_renderer_set_frame_replay((CadrRenderer)b->scene, true), CADR_RESULT_FOREIGN_HANDLE);
   }
 
+  /* Frames in flight (offscreen renderers start with 1): with 2, a frame returns once it is
+   * submitted and its pixels are read after it finishes; offscreen renderers present nothing. */
+  {
+    uint32_t frames = 0, mode = 9;
+    OK(cadr_renderer_frames_in_flight(renderer, &frames));
+    CHECK(frames == 1);
+    OK(cadr_renderer_render(renderer, b->scene, &camera, &stats));
+    OK(cadr_renderer_read_pixels(renderer, first, W * H * 4));
+    OK(cadr_renderer_set_frames_in_flight(renderer, 2));
+    OK(cadr_renderer_frames_in_flight(renderer, &frames));
+    CHECK(frames == 2);
+    OK(cadr_renderer_render(renderer, b->scene, &camera, &stats));
+    OK(cadr_renderer_render(renderer, b->scene, &camera, &stats));
+    OK(cadr_renderer_read_pixels(renderer, second, W * H * 4));
+    CHECK(pixel_difference(first, second, W * H * 4) == 0);
+    EXPECT(cadr_renderer_set_frames_in_flight(renderer, 3), CADR_RESULT_INVALID_ARGUMENT);
+    MESSAGE_HAS("frames in flight");
+    EXPECT(cadr_renderer_set_frames_in_flight(renderer, 0), CADR_RESULT_INVALID_ARGUMENT);
+    OK(cadr_renderer_set_frames_in_flight(renderer, 1));
+    EXPECT(cadr_renderer_frames_in_flight(renderer, NULL), CADR_RESULT_NULL_ARGUMENT);
+    EXPECT(cadr_renderer_set_present_mode(renderer, CADR_PRESENT_MAILBOX), CADR_RESULT_UNSUPPORTED);
+    MESSAGE_HAS("offscreen");
+    EXPECT(cadr_renderer_present_mode(renderer, &mode, NULL), CADR_RESULT_UNSUPPORTED);
+    CHECK(mode == 9);
+    EXPECT(cadr_renderer_set_present_mode(renderer, 7), CADR_RESULT_INVALID_ARGUMENT);
+  }
+
   /* Shade modes. */
   OK(cadr_renderer_shade_mode(renderer, &mode));
   CHECK(mode == CADR_SHADE_SOLID);

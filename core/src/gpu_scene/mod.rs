@@ -364,23 +364,39 @@ impl GpuScene {
         tree: &mut SceneTree,
         transforms: Transforms,
     ) -> RenderResult<()> {
+        self.sync_after(graph, tree, transforms, &mut || Ok(()))
+    }
+
+    /// [`GpuScene::sync`], calling `settle` first when there is anything to change: a
+    /// renderer with a frame in flight waits for it there, as changes may replace buffers it
+    /// reads or copy into them. With nothing changed (a moving camera), nothing waits.
+    pub fn sync_after(
+        &mut self,
+        graph: &SceneGraph,
+        tree: &mut SceneTree,
+        transforms: Transforms,
+        settle: &mut dyn FnMut() -> RenderResult<()>,
+    ) -> RenderResult<()> {
         self.frame_dirty_matrices.clear();
         self.frame_dirty_materials.clear();
         self.last_upload = UploadStats::default();
         self.last_touched = 0;
         let Some(changes) = tree.changes_for(&self.reader) else {
             // A tree this scene does not read: start over from it.
+            settle()?;
             self.reader = tree.subscribe();
             self.transforms = transforms;
             return self.relayout(graph, tree);
         };
         if transforms != self.transforms {
+            settle()?;
             self.transforms = transforms;
             return self.refresh_all(graph, tree);
         }
         if changes.is_empty() {
             return Ok(());
         }
+        settle()?;
         let grown = tree.node_capacity() > self.matrices.len()
             || tree.instance_capacity() > self.instances.len()
             || graph.capacities().2 > self.materials.len();

@@ -52,7 +52,15 @@ pub struct Renderer {
     /// The frame in the command buffer, if it may be submitted again as it is: its replay
     /// key and what it drew.
     replayable: Option<(u64, FrameStats)>,
+    /// Frames the GPU may work on while the CPU prepares the next (see
+    /// [`Renderer::set_frames_in_flight`]).
+    frames_in_flight: u32,
 }
+
+/// The most frames a renderer lets the GPU work on while it prepares the next: techniques
+/// keep one copy of what they write on the host per frame, so the next frame's recording
+/// waits for the last one.
+pub const MAX_FRAMES_IN_FLIGHT: u32 = 2;
 
 /// How a frame is drawn: into which target, from which command buffers, in how many phases,
 /// and whether it may be replayed.
@@ -148,6 +156,7 @@ impl Renderer {
             pick: None,
             last_recorded: None,
             replayable: None,
+            frames_in_flight: 1,
         })
     }
 
@@ -179,6 +188,35 @@ impl Renderer {
         self.target = OffscreenTarget::new(&self.device, width, height)?;
         self.pick = None;
         Ok(())
+    }
+
+    /// How many frames the GPU may have: 1 (the default) waits for each frame before
+    /// returning from it, so its GPU time is known and its picture ready; 2 returns as soon as
+    /// the frame is submitted and waits for it when the next frame begins (or when its picture
+    /// or pick is read), so the host's work, scene updates and CPU culling for the next frame
+    /// overlap the GPU's drawing. With 2, [`FrameStats::gpu_us`] is the previous frame's.
+    pub fn set_frames_in_flight(&mut self, frames: u32) -> RenderResult<()> {
+        if !(1..=MAX_FRAMES_IN_FLIGHT).contains(&frames) {
+            return Err(RenderError::InvalidUse(format!(
+                "{frames} frames in flight: expected 1 to {MAX_FRAMES_IN_FLIGHT}"
+            )));
+        }
+        if frames == 1 {
+            self.finish()?;
+        }
+        self.frames_in_flight = frames;
+        Ok(())
+    }
+
+    /// How many frames the GPU may have (see [`Renderer::set_frames_in_flight`]).
+    pub fn frames_in_flight(&self) -> u32 {
+        self.frames_in_flight
+    }
+
+    /// Waits until the GPU has finished the last frame (its picture, pick results and
+    /// buffers are then the host's to read or change).
+    pub fn finish(&self) -> RenderResult<()> {
+        Ok(self.commands.wait()?)
     }
 
     /// The color image of the last frame (in TRANSFER_SRC_OPTIMAL between frames), for
@@ -219,6 +257,7 @@ impl Renderer {
     /// The prepared rectangle's samples from the last pick pass: the pixels covered by a
     /// pickable instance.
     pub(crate) fn pick_samples(&self) -> RenderResult<Vec<pick::PickSample>> {
+        self.finish()?;
         match &self.pick {
             Some(target) => target.samples(),
             None => Ok(Vec::new()),
@@ -248,6 +287,12 @@ impl Renderer {
             light: [0.22, 0.68, 0.35, 0.0],
         };
         self.commands.wait()?;
+        // With a frame in flight, the last one's GPU time is read now that it is done anyway.
+        let previous_gpu_us = if self.frames_in_flight > 1 {
+            self.gpu_time()?
+        } else {
+            None
+        };
         let record_start = Instant::now();
         self.frame_uniforms
             .write(0, bytemuck::bytes_of(&uniforms))?;
@@ -258,7 +303,7 @@ impl Renderer {
             (Some(key), Some((recorded, recorded_stats)))
                 if key == recorded && !plan.uploads_pending =>
             {
-                return self.replay(recorded_stats, record_start);
+                return self.replay(recorded_stats, record_start, previous_gpu_us);
             }
             _ => self.replayable = None,
         }
@@ -300,13 +345,27 @@ impl Renderer {
             self.replayable = plan.replay_key.map(|key| (key, stats));
         }
         self.last_recorded = plan.replay_key;
-        self.commands.wait()?;
-        stats.gpu_us = self.gpu_time()?;
+        stats.gpu_us = self.finish_or_keep_in_flight(previous_gpu_us)?;
         Ok(stats)
     }
 
+    /// With one frame in flight, waits for the frame just submitted and returns its GPU time;
+    /// with more, leaves it running and returns `previous_gpu_us`, the frame before's.
+    fn finish_or_keep_in_flight(&self, previous_gpu_us: Option<f64>) -> RenderResult<Option<f64>> {
+        if self.frames_in_flight > 1 {
+            return Ok(previous_gpu_us);
+        }
+        self.finish()?;
+        self.gpu_time()
+    }
+
     /// Submits the recorded frame again; it draws what it drew when recorded.
-    fn replay(&mut self, recorded: FrameStats, start: Instant) -> RenderResult<FrameStats> {
+    fn replay(
+        &mut self,
+        recorded: FrameStats,
+        start: Instant,
+        previous_gpu_us: Option<f64>,
+    ) -> RenderResult<FrameStats> {
         let submit_start = Instant::now();
         self.commands.resubmit()?;
         let stats = FrameStats {
@@ -315,9 +374,8 @@ impl Renderer {
             replayed: true,
             ..recorded
         };
-        self.commands.wait()?;
         Ok(FrameStats {
-            gpu_us: self.gpu_time()?,
+            gpu_us: self.finish_or_keep_in_flight(previous_gpu_us)?,
             ..stats
         })
     }

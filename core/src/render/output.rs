@@ -10,6 +10,7 @@ impl Renderer {
     /// Reads the last frame back as tightly packed RGBA8 rows.
     pub fn read_rgba8(&self) -> RenderResult<image::RgbaImage> {
         let (width, height) = self.size();
+        self.finish()?;
         let pixels = timings::time(Phase::Readback, || self.target.read_rgba8(&self.device))?;
         image::RgbaImage::from_raw(width, height, pixels).ok_or_else(|| {
             RenderError::InvalidUse(format!("read back fewer pixels than {width}x{height}"))

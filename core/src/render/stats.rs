@@ -7,7 +7,9 @@ pub struct FrameStats {
     pub cpu_record_us: f64,
     /// CPU time of the queue submission, in microseconds.
     pub cpu_submit_us: f64,
-    /// GPU time between the frame's first and last command, in microseconds (if timestamps work).
+    /// GPU time between the frame's first and last command, in microseconds (if timestamps work);
+    /// with two frames in flight, the previous frame's (read without waiting; `None` for the
+    /// first).
     pub gpu_us: Option<f64>,
     /// Draw calls issued (an indirect or multi-draw call counts once).
     pub draw_calls: u64,

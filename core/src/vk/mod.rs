@@ -39,7 +39,7 @@ pub use rendering::{
     begin_rendering, end_rendering, suspend_rendering, RenderingTarget, SUSPENDED_DEPTH_LAYOUT,
 };
 pub use shader::{create_unowned_shader_module, ShaderModule, ShaderStage};
-pub use swapchain::{PresentOutcome, Swapchain};
+pub use swapchain::{PresentMode, PresentOutcome, Swapchain};
 pub use timer::GpuTimer;
 
 pub use ash::vk as raw;

@@ -46,9 +46,11 @@ pub fn begin_rendering(
             vk::AccessFlags2::COLOR_ATTACHMENT_WRITE,
         )
     } else {
+        // The last frame's image may still be copied or blitted (a readback, a window's
+        // present) by work submitted before this frame: wait for those reads, not for more.
         (
             vk::ImageLayout::UNDEFINED,
-            vk::PipelineStageFlags2::TOP_OF_PIPE,
+            vk::PipelineStageFlags2::COPY | vk::PipelineStageFlags2::BLIT,
             vk::AccessFlags2::NONE,
         )
     };
@@ -71,9 +73,10 @@ pub fn begin_rendering(
             vk::AccessFlags2::SHADER_SAMPLED_READ,
         )
     } else {
+        // The last pick's depth readback may still be running.
         (
             vk::ImageLayout::UNDEFINED,
-            vk::PipelineStageFlags2::TOP_OF_PIPE,
+            vk::PipelineStageFlags2::COPY,
             vk::AccessFlags2::NONE,
         )
     };
@@ -201,9 +204,10 @@ pub fn end_rendering(
             vk::PipelineStageFlags2::COLOR_ATTACHMENT_OUTPUT,
             vk::AccessFlags2::COLOR_ATTACHMENT_WRITE,
         ),
+        // Read back by a copy, or blitted into a window's image by a later submission.
         (
             vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
-            vk::PipelineStageFlags2::COPY,
+            vk::PipelineStageFlags2::COPY | vk::PipelineStageFlags2::BLIT,
             vk::AccessFlags2::TRANSFER_READ,
         ),
     );

@@ -25,6 +25,39 @@ pub enum PresentOutcome {
     Skipped,
 }
 
+/// How presented frames reach the window.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum PresentMode {
+    /// Paced to the display, never torn (every device offers it; the default).
+    Fifo,
+    /// The newest frame replaces a waiting one: not torn, not paced (low latency).
+    Mailbox,
+    /// Shown at once, possibly torn: frames as fast as they are drawn.
+    Immediate,
+}
+
+impl PresentMode {
+    /// Every mode.
+    pub const ALL: [PresentMode; 3] = [Self::Fifo, Self::Mailbox, Self::Immediate];
+
+    /// Its name in messages.
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Fifo => "fifo",
+            Self::Mailbox => "mailbox",
+            Self::Immediate => "immediate",
+        }
+    }
+
+    fn raw(self) -> vk::PresentModeKHR {
+        match self {
+            Self::Fifo => vk::PresentModeKHR::FIFO,
+            Self::Mailbox => vk::PresentModeKHR::MAILBOX,
+            Self::Immediate => vk::PresentModeKHR::IMMEDIATE,
+        }
+    }
+}
+
 /// A swapchain that owns its surface.
 pub struct Swapchain {
     device: Arc<Device>,
@@ -39,6 +72,8 @@ pub struct Swapchain {
     wanted: vk::Extent2D,
     /// Set when the driver reported the swapchain suboptimal or out of date.
     stale: bool,
+    /// How frames reach the window.
+    present_mode: PresentMode,
     image_acquired: vk::Semaphore,
     /// One per swapchain image: signalled by the blit, waited for by the presentation.
     ready_to_present: Vec<vk::Semaphore>,
@@ -99,6 +134,7 @@ impl Swapchain {
             extent: vk::Extent2D::default(),
             wanted: vk::Extent2D { width, height },
             stale: false,
+            present_mode: PresentMode::Fifo,
             image_acquired,
             ready_to_present: Vec::new(),
             commands,
@@ -119,6 +155,54 @@ impl Swapchain {
     /// The swapchain images' format.
     pub fn format(&self) -> vk::Format {
         self.format
+    }
+
+    /// The present modes the surface offers (FIFO always).
+    pub fn present_modes(&self) -> VkResult<Vec<PresentMode>> {
+        // SAFETY: physical device and surface belong to this instance.
+        let offered = unsafe {
+            self.surface_fn.get_physical_device_surface_present_modes(
+                self.device.adapter().physical,
+                self.surface,
+            )
+        }
+        .or_vk("vkGetPhysicalDeviceSurfacePresentModesKHR")?;
+        Ok(PresentMode::ALL
+            .into_iter()
+            .filter(|mode| *mode == PresentMode::Fifo || offered.contains(&mode.raw()))
+            .collect())
+    }
+
+    /// How frames reach the window now.
+    pub fn present_mode(&self) -> PresentMode {
+        self.present_mode
+    }
+
+    /// Presents with `mode` from the next frame on (the swapchain is recreated); a mode the
+    /// surface does not offer is refused with the ones it does.
+    pub fn set_present_mode(&mut self, mode: PresentMode) -> VkResult<()> {
+        if mode == self.present_mode {
+            return Ok(());
+        }
+        let offered = self.present_modes()?;
+        if !offered.contains(&mode) {
+            let names: Vec<&str> = offered.iter().map(|m| m.name()).collect();
+            return Err(VkError::Unsupported {
+                device: self.device.adapter().name.clone(),
+                reason: format!(
+                    "the window's surface does not offer the {} present mode (it offers {})",
+                    mode.name(),
+                    names.join(", ")
+                ),
+            });
+        }
+        let previous = self.present_mode;
+        self.present_mode = mode;
+        if let Err(error) = self.recreate() {
+            self.present_mode = previous;
+            return Err(error);
+        }
+        Ok(())
     }
 
     /// Records the window's new size and recreates the swapchain for it.
@@ -211,8 +295,8 @@ impl Swapchain {
             .image_sharing_mode(vk::SharingMode::EXCLUSIVE)
             .pre_transform(capabilities.current_transform)
             .composite_alpha(composite)
-            // FIFO is always available and paces frames to the display, as a CAD window wants.
-            .present_mode(vk::PresentModeKHR::FIFO)
+            // FIFO by default: always offered, and paced to the display as a CAD window wants.
+            .present_mode(self.present_mode.raw())
             .clipped(true)
             .old_swapchain(old);
         // SAFETY: the create info is valid for this surface (values come from its
@@ -236,9 +320,12 @@ impl Swapchain {
     }
 
     /// Blits `frame` (a color image in TRANSFER_SRC_OPTIMAL, as a frame leaves it) into the
-    /// next swapchain image and presents it; waits until the blit is done, so `frame` can be
-    /// drawn into again at once.
+    /// next swapchain image and presents it, without waiting for the GPU: the blit follows the
+    /// frame on the queue, and the next frame's drawing into `frame` waits for the blit there.
+    /// Only the previous present's blit is waited for, as its command buffer and semaphore are
+    /// reused (it ran before this frame's drawing, so it is done by now in practice).
     pub fn present(&mut self, frame: &Image) -> VkResult<PresentOutcome> {
+        self.commands.wait()?;
         if self.stale {
             self.recreate()?;
         }
@@ -249,8 +336,8 @@ impl Swapchain {
                 return Ok(PresentOutcome::Skipped);
             }
         }
-        // SAFETY: the swapchain is live; the semaphore is unsignalled (its last wait completed:
-        // every blit is waited for before present returns).
+        // SAFETY: the swapchain is live; the semaphore is unsignalled (its last wait, the
+        // previous blit, completed: it was waited for above).
         let acquired = unsafe {
             self.swapchain_fn.acquire_next_image(
                 self.raw,
@@ -365,7 +452,6 @@ impl Swapchain {
             }
             Err(error) => return Err(super::error::map_result("vkQueuePresentKHR", error)),
         };
-        self.commands.wait()?;
         Ok(outcome)
     }
 }

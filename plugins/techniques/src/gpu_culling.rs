@@ -712,8 +712,10 @@ impl<const OCCLUSION: bool> GpuCulling for GpuCuller<OCCLUSION> {
                     cull.passes().len()
                 ));
             }
+            // New buffers are cleared first (nothing else uses them yet).
+            self.reserve(instances, command_buffer)?;
             // The previous frame's reads of our buffers (indirect draws, culls, the visibility
-            // copy) come first.
+            // copy) and those clears come before this frame's clears.
             barrier(
                 &self.gpu,
                 command_buffer,
@@ -723,14 +725,14 @@ impl<const OCCLUSION: bool> GpuCulling for GpuCuller<OCCLUSION> {
                         | vk::PipelineStageFlags2::ALL_TRANSFER,
                     vk::AccessFlags2::INDIRECT_COMMAND_READ
                         | vk::AccessFlags2::SHADER_READ
-                        | vk::AccessFlags2::TRANSFER_READ,
+                        | vk::AccessFlags2::TRANSFER_READ
+                        | vk::AccessFlags2::TRANSFER_WRITE,
                 ),
                 (
                     vk::PipelineStageFlags2::ALL_TRANSFER,
                     vk::AccessFlags2::TRANSFER_WRITE,
                 ),
             );
-            self.reserve(instances, command_buffer)?;
             let (width, height) = (raw.width.max(1), raw.height.max(1));
             self.pyramid_levels = pyramid_levels(width, height).len() as u32;
             if OCCLUSION {

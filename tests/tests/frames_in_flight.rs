@@ -1,0 +1,133 @@
+//! Frames in flight: with two, a frame returns once submitted and the next one (or a readback,
+//! a pick, an edit) waits for it. The pictures must be those of waiting for every frame, edits
+//! included, with GPU times read a frame late and no validation error.
+#![allow(clippy::unwrap_used)] // Test code: a failed unwrap is a failed test.
+
+use cadr_core::generate::{generate, GeneratorSpec};
+use cadr_core::graph::SceneGraph;
+use cadr_core::render::pick::PixelRect;
+use cadr_core::render::Camera;
+use cadr_core::scene::flatten;
+use cadr_core::technique::Combination;
+use cadr_core::tree::SceneTree;
+use cadr_core::view::View;
+use cadr_tests::images::{compare, SAME_PICTURE};
+use cadr_tests::{assert_no_validation_errors, plugin_registry, test_device};
+use glam::{DMat4, DVec3};
+
+const SIZE: (u32, u32) = (128, 96);
+
+/// What a run showed: the picture after every third frame, each frame's GPU time, and what the
+/// pick at the centre hit at the end.
+struct Run {
+    pictures: Vec<image::RgbaImage>,
+    gpu_us: Vec<Option<f64>>,
+    picked: Option<u32>,
+}
+
+/// Orbits gen:demo for 12 frames with `frames_in_flight`, reading the picture back only every
+/// third frame (the others stay in flight); at frame 5 an assembly is lifted.
+fn orbit(combination: &Combination, frames_in_flight: u32) -> Run {
+    let device = test_device();
+    let scene = generate(&GeneratorSpec::Demo);
+    let bounds = flatten(&scene).unwrap().bounds;
+    let (mut graph, handles) = SceneGraph::from_scene(&scene).unwrap();
+    let (node, original) = handles
+        .iter()
+        .find_map(|&node| {
+            let matrix = graph.node(node).unwrap().local_matrix();
+            graph
+                .set_matrix(node, matrix)
+                .is_ok()
+                .then_some((node, matrix))
+        })
+        .unwrap();
+    let mut tree = SceneTree::build(&mut graph);
+    let mut view = View::new(&device, plugin_registry(&device), SIZE.0, SIZE.1).unwrap();
+    view.techniques_mut().select(combination).unwrap();
+    view.renderer_mut()
+        .set_frames_in_flight(frames_in_flight)
+        .unwrap();
+    assert_eq!(view.renderer().frames_in_flight(), frames_in_flight);
+    let aspect = f64::from(SIZE.0) / f64::from(SIZE.1);
+    let mut run = Run {
+        pictures: Vec::new(),
+        gpu_us: Vec::new(),
+        picked: None,
+    };
+    let mut camera = Camera::fit(&bounds, aspect, cadr_core::render::DEFAULT_DIRECTION);
+    for frame in 0..12 {
+        if frame == 5 {
+            let lift = DMat4::from_translation(DVec3::new(0.0, bounds.radius() * 0.2, 0.0));
+            graph.set_matrix(node, lift * original).unwrap();
+            tree.update(&mut graph);
+        }
+        camera = Camera::orbit(&bounds, aspect, frame as f64 / 30.0, 1.3);
+        let stats = view.render(&graph, &mut tree, &camera).unwrap();
+        run.gpu_us.push(stats.gpu_us);
+        if frame % 3 == 2 {
+            run.pictures.push(view.renderer().read_rgba8().unwrap());
+        }
+    }
+    let hits = view
+        .pick(
+            &graph,
+            &mut tree,
+            &camera,
+            PixelRect::pixel(SIZE.0 / 2, SIZE.1 / 2),
+        )
+        .unwrap();
+    run.picked = hits.first().map(|hit| hit.instance);
+    assert!(
+        view.renderer_mut().set_frames_in_flight(3).is_err(),
+        "at most 2 frames in flight"
+    );
+    assert_no_validation_errors(&device);
+    run
+}
+
+#[test]
+fn two_frames_in_flight_draw_and_pick_what_waiting_for_each_frame_does() {
+    // Lavapipe runs submissions one after another, so a missing barrier between overlapping
+    // frames would not show in the pictures: the synchronization checks of the validation
+    // layer look for them (this test runs in a process of its own).
+    std::env::set_var(
+        "VK_LAYER_ENABLES",
+        "VK_VALIDATION_FEATURE_ENABLE_SYNCHRONIZATION_VALIDATION_EXT",
+    );
+    for combination in [
+        Combination::built_in(),
+        Combination {
+            vertex: "arena".into(),
+            parameters: "ssbo-index".into(),
+            submission: "individual-indirect-count".into(),
+            culling: "gpu-occlusion".into(),
+        },
+        Combination {
+            vertex: "arena".into(),
+            parameters: "ssbo-index".into(),
+            submission: "groups-mdi-replay".into(),
+            culling: "frustum".into(),
+        },
+    ] {
+        let waited = orbit(&combination, 1);
+        let overlapped = orbit(&combination, 2);
+        for (index, (a, b)) in waited.pictures.iter().zip(&overlapped.pictures).enumerate() {
+            let difference = compare(b, a).unwrap();
+            assert!(
+                difference.within(SAME_PICTURE),
+                "{combination}, picture {index}: {difference:?}"
+            );
+        }
+        assert_eq!(waited.picked, overlapped.picked, "{combination}");
+        assert!(
+            waited.picked.is_some(),
+            "{combination}: the centre shows a part"
+        );
+        // Waiting, each frame knows its own GPU time; in flight, the one before's.
+        if waited.gpu_us.iter().all(Option::is_some) {
+            assert_eq!(overlapped.gpu_us[0], None, "{combination}");
+            assert!(overlapped.gpu_us[1..].iter().all(Option::is_some));
+        }
+    }
+}

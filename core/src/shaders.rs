@@ -40,7 +40,7 @@ const SPIRV_MAGIC: u32 = 0x0723_0203;
 /// against `includes`. Returns the SPIR-V words. A module compiled before from the same
 /// source, stage and includes by the same cadr and compiler comes from the user's disk cache
 /// ([`crate::disk_cache`]); what is compiled goes there. Timed as
-/// [`Phase::ShaderCompile`](crate::timings::Phase::ShaderCompile).
+/// [`Phase::ShaderCompile`].
 pub fn compile_glsl(
     name: &str,
     source: &str,

@@ -11,9 +11,9 @@ use super::device::Device;
 use super::error::{VkError, VkResult, VkResultExt};
 
 /// Bytes per staging buffer of a streamed upload ([`Buffer::upload_with`]).
-pub const STAGING_CHUNK_BYTES: u64 = 16 << 20;
+const STAGING_CHUNK_BYTES: u64 = 16 << 20;
 /// Staging buffers a streamed upload cycles through.
-pub const STAGING_CHUNKS: usize = 3;
+const STAGING_CHUNKS: usize = 3;
 
 /// A buffer and its memory; freed on drop.
 pub struct Buffer {
@@ -106,8 +106,8 @@ impl Buffer {
 
     /// Uploads `size` bytes to `offset` of this buffer (which needs TRANSFER_DST usage):
     /// `fill(start, chunk)` writes bytes `start..start + chunk.len()` of the data straight
-    /// into staging memory. Large uploads stream through a ring of [`STAGING_CHUNKS`] staging
-    /// buffers of [`STAGING_CHUNK_BYTES`]: the CPU fills one while the GPU copies the others,
+    /// into staging memory. Large uploads stream through a ring of `STAGING_CHUNKS` staging
+    /// buffers of `STAGING_CHUNK_BYTES`: the CPU fills one while the GPU copies the others,
     /// and only a buffer about to be refilled is waited for, so the data goes up at the
     /// speed of memory in bounded staging memory. Returns when every copy is done. The caller
     /// makes sure the GPU is not using that range.

@@ -12,6 +12,7 @@ mod techniques;
 use std::process::ExitCode;
 use std::time::Instant;
 
+use cadr_core::graph::SceneGraph;
 use cadr_core::load::SceneSource;
 use cadr_core::render::{Camera, FrameStats, DEFAULT_DIRECTION};
 use cadr_core::scene::{flatten, SceneStats};
@@ -158,8 +159,13 @@ fn render(args: &RenderArgs, process_start: Instant) -> Result<(), String> {
     let stats = SceneStats::new(&scene, &flat);
     drop(flat);
     let (registry, _) = techniques::load_registry(&device);
+    // The graph holds the scene from here on: the loaded copy goes before the tree and the
+    // GPU scene are built.
+    let (graph, _) = SceneGraph::from_scene(&scene).map_err(|e| e.to_string())?;
+    let scene_name = scene.name.clone();
+    drop(scene);
     let mut session =
-        techniques::TechniqueSession::new(&device, &scene, registry, (width, height))?;
+        techniques::TechniqueSession::from_graph(&device, graph, registry, (width, height))?;
     session.choose(&combination, shade)?;
     session.set_min_pixels(min_pixels)?;
     // The baseline records every frame, as the seeds' does.
@@ -197,7 +203,7 @@ fn render(args: &RenderArgs, process_start: Instant) -> Result<(), String> {
     let adapter = device.adapter();
     println!(
         "scene:       {} ({} nodes, {} geometries, {} materials)",
-        scene.name, stats.nodes, stats.geometries, stats.materials
+        scene_name, stats.nodes, stats.geometries, stats.materials
     );
     println!("device:      {} ({:?})", adapter.name, adapter.device_type);
     println!("techniques:  {technique_line}");
@@ -245,6 +251,7 @@ fn render(args: &RenderArgs, process_start: Instant) -> Result<(), String> {
     );
     if args.timings {
         print_timings(process_start.elapsed());
+        print_memory(&device, stats.instances as u64);
     }
     if validation_errors > 0 {
         return Err(format!(
@@ -252,6 +259,42 @@ fn render(args: &RenderArgs, process_start: Instant) -> Result<(), String> {
         ));
     }
     Ok(())
+}
+
+/// The most memory this process held resident so far (Linux), in bytes.
+fn peak_resident_bytes() -> Option<u64> {
+    let status = std::fs::read_to_string("/proc/self/status").ok()?;
+    let line = status.lines().find(|l| l.starts_with("VmHWM:"))?;
+    let kilobytes: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
+    Some(kilobytes * 1024)
+}
+
+/// `--timings`: peak memory, device memory and the host's bytes per part. A CPU device
+/// (lavapipe) keeps device memory in host memory, so it is taken out of the resident peak.
+fn print_memory(device: &Device, parts: u64) {
+    let (_, device_peak) = device.memory_in_use();
+    let on_host = device.adapter().device_type == cvk::raw::PhysicalDeviceType::CPU;
+    let Some(resident) = peak_resident_bytes() else {
+        return;
+    };
+    let host = if on_host {
+        resident.saturating_sub(device_peak)
+    } else {
+        resident
+    };
+    let mb = |bytes: u64| bytes as f64 / (1024.0 * 1024.0);
+    println!(
+        "memory:      peak resident {:.0} MB; device memory {:.0} MB at most{}; host {:.0} MB, {:.0} B per part",
+        mb(resident),
+        mb(device_peak),
+        if on_host {
+            " (in host memory on this CPU device)"
+        } else {
+            ""
+        },
+        mb(host),
+        host as f64 / parts.max(1) as f64
+    );
 }
 
 /// `--timings`: each phase's share of the run so far (`wall`), and what no phase accounts

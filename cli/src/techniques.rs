@@ -60,8 +60,19 @@ impl TechniqueSession {
         registry: Arc<PluginRegistry>,
         (width, height): (u32, u32),
     ) -> Result<Self, String> {
-        crate::progress::spin(&format!("building and uploading {}", source.name), || {
-            let (mut graph, _) = SceneGraph::from_scene(source).map_err(|e| e.to_string())?;
+        let (graph, _) = SceneGraph::from_scene(source).map_err(|e| e.to_string())?;
+        Self::from_graph(device, graph, registry, (width, height))
+    }
+
+    /// Builds the tree of `graph` and a `width` × `height` view of it (its GPU scene is
+    /// uploaded now). For a large scene, dropping the loaded copy first lowers the peak.
+    pub fn from_graph(
+        device: &Arc<Device>,
+        mut graph: SceneGraph,
+        registry: Arc<PluginRegistry>,
+        (width, height): (u32, u32),
+    ) -> Result<Self, String> {
+        crate::progress::spin("building and uploading the scene", || {
             let mut tree = SceneTree::build(&mut graph);
             let mut view = View::new(device, registry, width, height).map_err(|e| e.to_string())?;
             view.sync(&graph, &mut tree).map_err(|e| e.to_string())?;

@@ -770,6 +770,14 @@ fn render_timings_split_the_run_into_its_phases() {
         }
         sum += ms;
     }
+    let memory = text
+        .lines()
+        .find(|l| l.starts_with("memory:"))
+        .unwrap_or_else(|| panic!("no memory line in:\n{text}"));
+    assert!(
+        memory.contains("peak resident") && memory.contains("B per part"),
+        "{memory}"
+    );
     // The phases and the rest account for the run, each counted once.
     assert!(
         (sum - total).abs() <= 0.1 * total + 1.0,

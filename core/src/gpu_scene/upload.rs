@@ -50,12 +50,15 @@ impl GpuArray {
     }
 
     /// Makes room for `count` items; a new buffer is uploaded whole. True when the buffer was
-    /// replaced.
+    /// replaced. The first buffer holds `count` exactly (a loaded scene's arrays are as large
+    /// as they will be); a growing array gets half as much again as it had, so a scene built
+    /// part by part reallocates a logarithmic number of times.
     pub(super) fn reserve(&mut self, device: &Arc<Device>, count: usize) -> RenderResult<bool> {
         if count <= self.capacity && self.capacity > 0 {
             return Ok(false);
         }
-        let capacity = count.next_power_of_two().max(64);
+        let grown = self.capacity + self.capacity / 2;
+        let capacity = count.max(grown).max(64);
         self.buffer = Buffer::new(
             device,
             self.name,

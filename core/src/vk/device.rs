@@ -70,6 +70,8 @@ pub struct Device {
     /// on several threads sharing this device take turns.
     queue: Mutex<vk::Queue>,
     allocator: Mutex<Option<Allocator>>,
+    /// Bytes of device memory allocated now and at most (see [`Device::memory_in_use`]).
+    memory_bytes: (std::sync::atomic::AtomicU64, std::sync::atomic::AtomicU64),
     debug_utils: Option<ash::ext::debug_utils::Device>,
     capabilities: Capabilities,
     limits: vk::PhysicalDeviceLimits,
@@ -245,6 +247,7 @@ impl Device {
             raw,
             queue: Mutex::new(queue),
             allocator: Mutex::new(Some(allocator)),
+            memory_bytes: Default::default(),
             debug_utils,
             capabilities,
             limits: properties.limits,
@@ -318,7 +321,8 @@ impl Device {
         location: MemoryLocation,
         linear: bool,
     ) -> VkResult<Allocation> {
-        self.allocator()
+        let allocation = self
+            .allocator()
             .as_mut()
             .ok_or(VkError::DeviceLost("memory allocation after shutdown"))?
             .allocate(&AllocationCreateDesc {
@@ -331,14 +335,34 @@ impl Device {
             .map_err(|source| VkError::Allocation {
                 what: name.to_owned(),
                 source,
-            })
+            })?;
+        use std::sync::atomic::Ordering::Relaxed;
+        let (now, peak) = &self.memory_bytes;
+        let in_use = now.fetch_add(allocation.size(), Relaxed) + allocation.size();
+        peak.fetch_max(in_use, Relaxed);
+        Ok(allocation)
     }
 
     /// Returns memory to the allocator.
     pub(crate) fn free(&self, allocation: Allocation) {
+        let size = allocation.size();
         if let Some(allocator) = self.allocator().as_mut() {
-            let _ = allocator.free(allocation);
+            if allocator.free(allocation).is_ok() {
+                self.memory_bytes
+                    .0
+                    .fetch_sub(size, std::sync::atomic::Ordering::Relaxed);
+            }
         }
+    }
+
+    /// Bytes of device memory the device's buffers and images hold now, and the most they
+    /// held at once (a technique plugin's allocations included when made through the host).
+    pub fn memory_in_use(&self) -> (u64, u64) {
+        use std::sync::atomic::Ordering::Relaxed;
+        (
+            self.memory_bytes.0.load(Relaxed),
+            self.memory_bytes.1.load(Relaxed),
+        )
     }
 
     /// Gives `handle` a debug name (shown by validation messages and capture tools).

@@ -52,8 +52,8 @@ pub struct TechniqueSession {
 }
 
 impl TechniqueSession {
-    /// Builds the scene's graph and tree and a `width` × `height` view of it (its GPU scene is
-    /// uploaded now).
+    /// Builds the scene's graph and tree and a `width` × `height` view of it (see
+    /// [`TechniqueSession::from_graph`]).
     pub fn new(
         device: &Arc<Device>,
         source: &Scene,
@@ -64,18 +64,19 @@ impl TechniqueSession {
         Self::from_graph(device, graph, registry, (width, height))
     }
 
-    /// Builds the tree of `graph` and a `width` × `height` view of it (its GPU scene is
-    /// uploaded now). For a large scene, dropping the loaded copy first lowers the peak.
+    /// Builds the tree of `graph` and a `width` × `height` view of it. The GPU scene is
+    /// uploaded by the first frame, once the techniques are chosen: techniques that compute
+    /// world matrices on the GPU lay it out otherwise than the built-in ones. For a large
+    /// scene, dropping the loaded copy first lowers the peak.
     pub fn from_graph(
         device: &Arc<Device>,
         mut graph: SceneGraph,
         registry: Arc<PluginRegistry>,
         (width, height): (u32, u32),
     ) -> Result<Self, String> {
-        crate::progress::spin("building and uploading the scene", || {
-            let mut tree = SceneTree::build(&mut graph);
-            let mut view = View::new(device, registry, width, height).map_err(|e| e.to_string())?;
-            view.sync(&graph, &mut tree).map_err(|e| e.to_string())?;
+        crate::progress::spin("building the scene tree", || {
+            let tree = SceneTree::build(&mut graph);
+            let view = View::new(device, registry, width, height).map_err(|e| e.to_string())?;
             Ok(Self { graph, tree, view })
         })
     }
@@ -142,8 +143,14 @@ impl TechniqueSession {
         Ok((stats, update_us))
     }
 
-    /// Draws one frame.
+    /// Draws one frame (the first uploads the GPU scene, with a spinner if it takes long).
     pub fn render(&mut self, camera: &Camera) -> Result<FrameStats, String> {
+        if self.view.scene().is_none() {
+            crate::progress::spin("uploading the scene", || {
+                self.view.sync(&self.graph, &mut self.tree)
+            })
+            .map_err(|e| e.to_string())?;
+        }
         self.view
             .render(&self.graph, &mut self.tree, camera)
             .map_err(|e| e.to_string())

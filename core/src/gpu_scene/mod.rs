@@ -231,10 +231,12 @@ impl GpuScene {
         self.candidate_bits = vec![0; words];
         self.drawn_bits = vec![0; words];
         self.culled_bits = vec![u64::MAX; words];
-        self.triangles = 0;
-        for id in 0..count as u32 {
-            self.refresh_instance(tree, id);
-        }
+        self.triangles = fill_instances(
+            &self.arenas,
+            tree,
+            (&mut self.instances, &mut self.records),
+            (&mut self.candidate_bits, &mut self.drawn_bits),
+        );
         let device = Arc::clone(&self.device);
         self.matrix_gpu.reserve(&device, nodes.max(1))?;
         self.material_gpu.reserve(&device, material_slots.max(1))?;
@@ -299,40 +301,7 @@ impl GpuScene {
 
     /// The entry of a live instance whose geometry and part are in the arenas.
     fn entry_of(&self, instance: &InstanceRef) -> Option<(abi::CadrInstance, bool)> {
-        let place = self
-            .arenas
-            .places
-            .get(instance.geometry as usize)?
-            .as_ref()?;
-        let ([first, count, first_wire, wire_count], sphere) =
-            *place.parts.get(instance.part as usize)?;
-        let flags = abi::CADR_INSTANCE_ALIVE
-            | if instance.highlighted {
-                abi::CADR_INSTANCE_HIGHLIGHTED
-            } else {
-                0
-            }
-            | if instance.pickable {
-                abi::CADR_INSTANCE_PICKABLE
-            } else {
-                0
-            };
-        let entry = abi::CadrInstance {
-            matrix: instance.tree_node,
-            material: instance.material,
-            geometry: instance.geometry,
-            part: instance.part,
-            flags,
-            vertex_base: place.vertex_base,
-            geometry_first_index: place.first_index,
-            geometry_first_wire_index: place.first_wire_index,
-            first_index: place.first_index + first,
-            index_count: count,
-            first_wire_index: place.first_wire_index + first_wire,
-            wire_index_count: wire_count,
-            sphere,
-        };
-        Some((entry, instance.visible && count > 0))
+        entry_in(&self.arenas, instance)
     }
 
     fn refresh_instance(&mut self, tree: &SceneTree, id: u32) {
@@ -783,6 +752,102 @@ fn cull_entry(
             },
         reserved: 0,
     }
+}
+
+/// The entry of a live instance whose geometry and part are in `arenas`, and whether it is a
+/// candidate for drawing (shown, with triangles).
+fn entry_in(arenas: &GeometryArenas, instance: &InstanceRef) -> Option<(abi::CadrInstance, bool)> {
+    let place = arenas.places.get(instance.geometry as usize)?.as_ref()?;
+    let ([first, count, first_wire, wire_count], sphere) =
+        *place.parts.get(instance.part as usize)?;
+    let flags = abi::CADR_INSTANCE_ALIVE
+        | if instance.highlighted {
+            abi::CADR_INSTANCE_HIGHLIGHTED
+        } else {
+            0
+        }
+        | if instance.pickable {
+            abi::CADR_INSTANCE_PICKABLE
+        } else {
+            0
+        };
+    let entry = abi::CadrInstance {
+        matrix: instance.tree_node,
+        material: instance.material,
+        geometry: instance.geometry,
+        part: instance.part,
+        flags,
+        vertex_base: place.vertex_base,
+        geometry_first_index: place.first_index,
+        geometry_first_wire_index: place.first_wire_index,
+        first_index: place.first_index + first,
+        index_count: count,
+        first_wire_index: place.first_wire_index + first_wire,
+        wire_index_count: wire_count,
+        sphere,
+    };
+    Some((entry, instance.visible && count > 0))
+}
+
+/// Fills the entries and records of every instance slot of `tree` (all of `instances`, fresh:
+/// every culled bit set) and their candidate and drawn bits, on a thread per core, each over
+/// whole 64-instance words; returns the triangles drawn. The loop a large scene's first upload
+/// spends most of its time in.
+fn fill_instances(
+    arenas: &GeometryArenas,
+    tree: &SceneTree,
+    (instances, records): (&mut [abi::CadrInstance], &mut [abi::CadrInstanceRecord]),
+    (candidate_bits, drawn_bits): (&mut [u64], &mut [u64]),
+) -> u64 {
+    let threads = std::thread::available_parallelism().map_or(1, |n| n.get());
+    let words_per_thread = candidate_bits.len().div_ceil(threads).max(1);
+    let per_thread = words_per_thread * 64;
+    std::thread::scope(|scope| {
+        let workers: Vec<_> = instances
+            .chunks_mut(per_thread)
+            .zip(records.chunks_mut(per_thread))
+            .zip(candidate_bits.chunks_mut(words_per_thread))
+            .zip(drawn_bits.chunks_mut(words_per_thread))
+            .enumerate()
+            .map(|(chunk, (((instances, records), candidates), drawn))| {
+                scope.spawn(move || {
+                    let first = chunk * per_thread;
+                    let mut triangles = 0u64;
+                    for (offset, (entry_slot, record_slot)) in
+                        instances.iter_mut().zip(records.iter_mut()).enumerate()
+                    {
+                        let id = (first + offset) as u32;
+                        let (entry, candidate) = tree
+                            .instance(id)
+                            .and_then(|instance| entry_in(arenas, &instance))
+                            .unwrap_or((abi::CadrInstance::default(), false));
+                        *entry_slot = entry;
+                        *record_slot = abi::CadrInstanceRecord {
+                            matrix: entry.matrix,
+                            material: entry.material,
+                            flags: entry.flags,
+                            instance: id,
+                        };
+                        if candidate {
+                            // Every culled bit is set: a candidate is drawn.
+                            set_bit(candidates, offset as u32, true);
+                            set_bit(drawn, offset as u32, true);
+                            triangles += u64::from(entry.index_count / 3);
+                        }
+                    }
+                    triangles
+                })
+            })
+            .collect();
+        workers
+            .into_iter()
+            .map(|worker| {
+                worker
+                    .join()
+                    .unwrap_or_else(|panic| std::panic::resume_unwind(panic))
+            })
+            .sum()
+    })
 }
 
 fn set_bit(bits: &mut [u64], id: u32, on: bool) {

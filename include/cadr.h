@@ -1112,7 +1112,9 @@ enum CadrResult cadr_renderer_create_for_surface(CadrContext context,
 //
 // Returns `CADR_RESULT_OK` or a handle error.
 // Ownership: the handle (or item) is given back to cadr and invalid afterwards.
-// Thread-safety: not while another thread uses this renderer.
+// Thread-safety: any thread. A call another thread is making with this renderer finishes
+// first (the renderer goes when it returns); later calls with the handle are refused with
+// `CADR_RESULT_DESTROYED_HANDLE`.
 enum CadrResult cadr_renderer_destroy(CadrRenderer renderer);
 
 // Gives the renderer a new size: for a window, call it from the framebuffer-size callback

@@ -254,7 +254,9 @@ pub unsafe extern "C" fn cadr_renderer_create_for_surface(
 ///
 /// Returns `CADR_RESULT_OK` or a handle error.
 /// Ownership: the handle (or item) is given back to cadr and invalid afterwards.
-/// Thread-safety: not while another thread uses this renderer.
+/// Thread-safety: any thread. A call another thread is making with this renderer finishes
+/// first (the renderer goes when it returns); later calls with the handle are refused with
+/// `CADR_RESULT_DESTROYED_HANDLE`.
 #[no_mangle]
 pub extern "C" fn cadr_renderer_destroy(renderer: CadrRenderer) -> CadrResult {
     guard(|| {

@@ -59,3 +59,56 @@ fn the_suite_under_address_sanitizer_finds_no_leak_or_invalid_access() {
         ],
     );
 }
+
+fn run_threads(name: &str, sources: &[&str], extra: &[&str], env: &[(&str, String)]) {
+    let dir = scratch_dir(name);
+    let program = dir.join("threads");
+    let sources: Vec<_> = sources.iter().map(|s| repository().join(s)).collect();
+    build_c_program(
+        &sources,
+        &program,
+        // Threads, atomics and thread-local storage are C11.
+        &[&["-std=c11", "-pthread"], extra].concat(),
+    );
+    let output = Command::new(&program)
+        .envs(env.iter().map(|(k, v)| (k, v)))
+        .output()
+        .unwrap();
+    assert!(output.status.success(), "{}", describe(&output));
+    assert!(
+        String::from_utf8_lossy(&output.stdout).contains("checks passed"),
+        "{}",
+        describe(&output)
+    );
+}
+
+/// Two renderers drawing and picking one scene on two threads while a third edits it and a
+/// fourth loads scenes, then a renderer destroyed while a thread draws with it: every call
+/// succeeds or is refused with a result, with validation on.
+#[test]
+fn the_api_from_several_threads_at_once() {
+    run_threads("c-api-threads", &["tests/c/threads.c"], &[], &[]);
+}
+
+/// The same under ThreadSanitizer: no data race on what the C program's threads share and
+/// hand to cadr. cadr's own Rust code cannot be instrumented on the stable compiler, and its
+/// locks are futexes TSan cannot see, so what its library calls is suppressed
+/// (`tests/c/tsan.supp`); safe Rust has no data races, and its unsafe hand-overs between
+/// threads are the renderer and scene locks this test exercises.
+#[test]
+fn the_threads_test_under_thread_sanitizer_finds_no_race() {
+    let suppressions = repository().join("tests/c/tsan.supp");
+    run_threads(
+        "c-api-threads-tsan",
+        // Suppressions by library need the libraries mapped until exit.
+        &["tests/c/threads.c", "tests/c/keep_libraries_loaded.c"],
+        &["-fsanitize=thread", "-fno-omit-frame-pointer"],
+        &[(
+            "TSAN_OPTIONS",
+            format!(
+                "halt_on_error=1:exitcode=66:suppressions={}",
+                suppressions.display()
+            ),
+        )],
+    );
+}

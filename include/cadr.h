@@ -73,6 +73,10 @@ typedef enum CadrResult {
   // A technique plugin failed (its create, prepare or record call returned an error or
   // panicked); the renderer keeps its previous techniques.
   CADR_RESULT_PLUGIN_FAILED = 14,
+  // The Vulkan device was lost (a driver reset, a removed or switched GPU): every later call
+  // that needs the GPU on this context returns this too. Destroy the context's renderers and
+  // the context, and create them again; scenes are not affected.
+  CADR_RESULT_DEVICE_LOST = 15,
 } CadrResult;
 
 // The kind of a physical device.

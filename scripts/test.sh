@@ -14,3 +14,12 @@ if cargo nextest --version >/dev/null 2>&1; then
 else
   cargo test --workspace --locked --no-fail-fast
 fi
+
+# Injected Vulkan failures need cadr-core built with the fault-injection feature: every
+# allocation, submission and device loss of a render is made to fail in turn.
+cargo clippy -p cadr-tests --features fault-injection --all-targets --locked -- -D warnings
+if cargo nextest --version >/dev/null 2>&1; then
+  cargo nextest run -p cadr-tests --features fault-injection --locked -E 'binary(fault_injection)'
+else
+  cargo test -p cadr-tests --features fault-injection --locked --test fault_injection
+fi

@@ -39,6 +39,10 @@ pub enum CadrResult {
     /// A technique plugin failed (its create, prepare or record call returned an error or
     /// panicked); the renderer keeps its previous techniques.
     PluginFailed = 14,
+    /// The Vulkan device was lost (a driver reset, a removed or switched GPU): every later call
+    /// that needs the GPU on this context returns this too. Destroy the context's renderers and
+    /// the context, and create them again; scenes are not affected.
+    DeviceLost = 15,
 }
 
 thread_local! {
@@ -67,6 +71,7 @@ impl From<cadr_core::vk::VkError> for Failure {
     fn from(error: cadr_core::vk::VkError) -> Self {
         let code = match error {
             cadr_core::vk::VkError::Unsupported { .. } => CadrResult::Unsupported,
+            cadr_core::vk::VkError::DeviceLost(_) => CadrResult::DeviceLost,
             _ => CadrResult::Vulkan,
         };
         Self::new(code, error.to_string())
@@ -115,7 +120,7 @@ pub(crate) fn guard(body: impl FnOnce() -> Result<(), Failure>) -> CadrResult {
 /// Ownership: static; do not free. Thread-safety: callable from any thread.
 #[no_mangle]
 pub extern "C" fn cadr_result_string(result: i32) -> *const c_char {
-    const ALL: [CadrResult; 15] = [
+    const ALL: [CadrResult; 16] = [
         CadrResult::Ok,
         CadrResult::NullArgument,
         CadrResult::InvalidArgument,
@@ -131,6 +136,7 @@ pub extern "C" fn cadr_result_string(result: i32) -> *const c_char {
         CadrResult::Unsupported,
         CadrResult::InUse,
         CadrResult::PluginFailed,
+        CadrResult::DeviceLost,
     ];
     let text: &'static str = match ALL.iter().find(|r| **r as i32 == result) {
         None => "unknown result\0",
@@ -149,6 +155,7 @@ pub extern "C" fn cadr_result_string(result: i32) -> *const c_char {
         Some(CadrResult::Unsupported) => "unsupported\0",
         Some(CadrResult::InUse) => "still in use\0",
         Some(CadrResult::PluginFailed) => "technique plugin failed\0",
+        Some(CadrResult::DeviceLost) => "device lost\0",
     };
     text.as_ptr().cast()
 }
@@ -188,4 +195,19 @@ pub unsafe extern "C" fn cadr_last_error_message(
         *length = bytes.len();
     }
     CadrResult::Ok
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_lost_device_has_a_result_of_its_own() {
+        let failure = Failure::from(cadr_core::vk::VkError::DeviceLost("vkQueueSubmit"));
+        assert_eq!(failure.code, CadrResult::DeviceLost);
+        assert!(failure.message.contains("lost"), "{}", failure.message);
+        // SAFETY: the returned strings are static and NUL-terminated.
+        let text = unsafe { std::ffi::CStr::from_ptr(cadr_result_string(15)) };
+        assert_eq!(text.to_str(), Ok("device lost"));
+    }
 }

@@ -5,7 +5,7 @@ use std::sync::Arc;
 use ash::vk;
 
 use super::device::Device;
-use super::error::{VkResult, VkResultExt};
+use super::error::{VkError, VkResult, VkResultExt};
 
 /// A command pool with one primary command buffer and a fence: record, submit, wait.
 pub struct CommandContext {
@@ -13,6 +13,8 @@ pub struct CommandContext {
     pool: vk::CommandPool,
     command_buffer: vk::CommandBuffer,
     fence: vk::Fence,
+    /// Whether the last submission was made (a failed one leaves nothing to wait for).
+    in_flight: bool,
 }
 
 impl CommandContext {
@@ -29,6 +31,7 @@ impl CommandContext {
             pool,
             command_buffer: vk::CommandBuffer::null(),
             fence: vk::Fence::null(),
+            in_flight: false,
         };
         let alloc_info = vk::CommandBufferAllocateInfo::default()
             .command_pool(pool)
@@ -56,6 +59,11 @@ impl CommandContext {
                 .raw
                 .reset_fences(&[self.fence])
                 .or_vk("vkResetFences")?;
+        }
+        // Unsignalled now: nothing to wait for until the next submission is made.
+        self.in_flight = false;
+        // SAFETY: as above.
+        unsafe {
             self.device
                 .raw
                 .reset_command_pool(self.pool, vk::CommandPoolResetFlags::empty())
@@ -80,7 +88,9 @@ impl CommandContext {
             .or_vk("vkEndCommandBuffer")?;
         let buffers = [self.command_buffer];
         let submit = [vk::SubmitInfo::default().command_buffers(&buffers)];
-        self.device.submit(&submit, self.fence)
+        let submitted = self.device.submit(&submit, self.fence);
+        self.in_flight = submitted.is_ok();
+        submitted
     }
 
     /// Submits the last recorded command buffer again, as it is, after waiting for its
@@ -91,7 +101,9 @@ impl CommandContext {
         unsafe { self.device.raw.reset_fences(&[self.fence]) }.or_vk("vkResetFences")?;
         let buffers = [self.command_buffer];
         let submit = [vk::SubmitInfo::default().command_buffers(&buffers)];
-        self.device.submit(&submit, self.fence)
+        let submitted = self.device.submit(&submit, self.fence);
+        self.in_flight = submitted.is_ok();
+        submitted
     }
 
     /// Ends recording and submits after each `wait` semaphore (at its stage) has been
@@ -112,18 +124,27 @@ impl CommandContext {
             .wait_semaphores(&wait_semaphores)
             .wait_dst_stage_mask(&wait_stages)
             .signal_semaphores(signal)];
-        self.device.submit(&submit, self.fence)
+        let submitted = self.device.submit(&submit, self.fence);
+        self.in_flight = submitted.is_ok();
+        submitted
     }
 
-    /// Waits until the last submission has finished.
+    /// Waits until the last submission has finished (at once when it failed, so that a host
+    /// can go on after an error; an error when the device was lost).
     pub fn wait(&self) -> VkResult<()> {
-        // SAFETY: the fence belongs to this device.
-        unsafe {
-            self.device
-                .raw
-                .wait_for_fences(&[self.fence], true, u64::MAX)
+        if self.in_flight {
+            // SAFETY: the fence belongs to this device. A lost device answers at once.
+            unsafe {
+                self.device
+                    .raw
+                    .wait_for_fences(&[self.fence], true, u64::MAX)
+            }
+            .or_vk("vkWaitForFences")?;
         }
-        .or_vk("vkWaitForFences")
+        if self.device.is_lost() {
+            return Err(VkError::DeviceLost("vkWaitForFences"));
+        }
+        Ok(())
     }
 
     /// The command buffer being recorded.
@@ -134,13 +155,16 @@ impl CommandContext {
 
 impl Drop for CommandContext {
     fn drop(&mut self) {
-        // SAFETY: waiting first makes sure the GPU no longer uses the buffer; the handles are
-        // destroyed once (null handles are ignored by Vulkan).
+        // SAFETY: waiting first (for a submission that was made, even on a device marked lost:
+        // a lost device answers at once) makes sure the GPU no longer uses the buffer; the
+        // handles are destroyed once (null handles are ignored by Vulkan).
         unsafe {
-            let _ = self
-                .device
-                .raw
-                .wait_for_fences(&[self.fence], true, u64::MAX);
+            if self.in_flight {
+                let _ = self
+                    .device
+                    .raw
+                    .wait_for_fences(&[self.fence], true, u64::MAX);
+            }
             self.device.raw.destroy_fence(self.fence, None);
             self.device.raw.destroy_command_pool(self.pool, None);
         }

@@ -70,6 +70,9 @@ pub struct Device {
     /// on several threads sharing this device take turns.
     queue: Mutex<vk::Queue>,
     allocator: Mutex<Option<Allocator>>,
+    /// Set once the device reports (or a test injects) `VK_ERROR_DEVICE_LOST`: every later
+    /// submission, wait and allocation is refused with [`VkError::DeviceLost`].
+    lost: std::sync::atomic::AtomicBool,
     /// Bytes of device memory allocated now and at most (see [`Device::memory_in_use`]).
     memory_bytes: (std::sync::atomic::AtomicU64, std::sync::atomic::AtomicU64),
     debug_utils: Option<ash::ext::debug_utils::Device>,
@@ -248,6 +251,7 @@ impl Device {
             queue: Mutex::new(queue),
             allocator: Mutex::new(Some(allocator)),
             memory_bytes: Default::default(),
+            lost: Default::default(),
             debug_utils,
             capabilities,
             limits: properties.limits,
@@ -321,6 +325,15 @@ impl Device {
         location: MemoryLocation,
         linear: bool,
     ) -> VkResult<Allocation> {
+        if self.is_lost() {
+            return Err(VkError::DeviceLost("vkAllocateMemory"));
+        }
+        if super::fault::fails(super::fault::FaultKind::DeviceMemory) {
+            return Err(super::error::map_result(
+                "vkAllocateMemory (injected)",
+                vk::Result::ERROR_OUT_OF_DEVICE_MEMORY,
+            ));
+        }
         let allocation = self
             .allocator()
             .as_mut()
@@ -400,21 +413,53 @@ impl Device {
 
     /// Submits `submits` to the render queue, signalling `fence` when they are done.
     pub(crate) fn submit(&self, submits: &[vk::SubmitInfo<'_>], fence: vk::Fence) -> VkResult<()> {
-        self.with_queue(|queue| {
+        use super::fault::{fails, FaultKind};
+        if self.is_lost() {
+            return Err(VkError::DeviceLost("vkQueueSubmit"));
+        }
+        if fails(FaultKind::Submit) {
+            return Err(super::error::map_result(
+                "vkQueueSubmit (injected)",
+                vk::Result::ERROR_OUT_OF_DEVICE_MEMORY,
+            ));
+        }
+        if fails(FaultKind::DeviceLost) {
+            self.mark_lost();
+            return Err(VkError::DeviceLost("vkQueueSubmit (injected)"));
+        }
+        let submitted = self.with_queue(|queue| {
             // SAFETY: the queue is reserved for this call; the caller passes executable
             // command buffers, semaphores and an unsignalled fence of this device.
             unsafe { self.raw.queue_submit(queue, submits, fence) }
-        })
-        .or_vk("vkQueueSubmit")
+        });
+        if submitted == Err(vk::Result::ERROR_DEVICE_LOST) {
+            self.mark_lost();
+        }
+        submitted.or_vk("vkQueueSubmit")
+    }
+
+    /// Whether the device was lost: nothing can be submitted to it any more; its objects can
+    /// only be destroyed, and a new device created.
+    pub fn is_lost(&self) -> bool {
+        self.lost.load(std::sync::atomic::Ordering::Relaxed)
+    }
+
+    fn mark_lost(&self) {
+        self.lost.store(true, std::sync::atomic::Ordering::Relaxed);
     }
 
     /// Waits until the device is idle (the queue reserved meanwhile, as Vulkan requires).
     pub fn wait_idle(&self) -> VkResult<()> {
         self.with_queue(|_| {
-            // SAFETY: the device is alive and its only queue is reserved for the wait.
+            // SAFETY: the device is alive and its only queue is reserved for the wait (a lost
+            // device answers at once).
             unsafe { self.raw.device_wait_idle() }
         })
-        .or_vk("vkDeviceWaitIdle")
+        .or_vk("vkDeviceWaitIdle")?;
+        if self.is_lost() {
+            return Err(VkError::DeviceLost("vkDeviceWaitIdle"));
+        }
+        Ok(())
     }
 }
 

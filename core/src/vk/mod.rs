@@ -12,6 +12,7 @@ mod buffer;
 mod command;
 mod device;
 mod error;
+pub mod fault;
 mod image;
 mod instance;
 mod pipeline;

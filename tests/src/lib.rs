@@ -15,6 +15,21 @@ use cadr_core::tree::SceneTree;
 use cadr_core::view::View;
 use cadr_core::vk::{Device, DeviceOptions, InstanceOptions};
 
+/// The first node of `nodes` that takes a matrix (a transform), with its matrix: a part of
+/// the scene to move. Probe it before the tree is built, so that the probe is no edit.
+pub fn first_transform(
+    graph: &mut SceneGraph,
+    nodes: &[cadr_core::graph::NodeHandle],
+) -> Option<(cadr_core::graph::NodeHandle, glam::DMat4)> {
+    nodes.iter().find_map(|&node| {
+        let matrix = graph.node(node).ok()?.local_matrix();
+        graph
+            .set_matrix(node, matrix)
+            .is_ok()
+            .then_some((node, matrix))
+    })
+}
+
 /// A device with the validation layers on. Tests never skip: without Vulkan they fail here.
 pub fn test_device() -> Arc<Device> {
     let options = DeviceOptions {

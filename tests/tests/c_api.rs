@@ -8,7 +8,7 @@ use cadr_tests::c_programs::{build_c_program, describe, repository, scratch_dir}
 
 fn run_suite(name: &str, sources: &[&str], extra: &[&str], env: &[(&str, String)]) {
     let dir = scratch_dir(name);
-    let program = dir.join("api_suite");
+    let program = dir.join("program");
     let sources: Vec<_> = sources.iter().map(|s| repository().join(s)).collect();
     build_c_program(&sources, &program, extra);
     let output = Command::new(&program)
@@ -60,34 +60,15 @@ fn the_suite_under_address_sanitizer_finds_no_leak_or_invalid_access() {
     );
 }
 
-fn run_threads(name: &str, sources: &[&str], extra: &[&str], env: &[(&str, String)]) {
-    let dir = scratch_dir(name);
-    let program = dir.join("threads");
-    let sources: Vec<_> = sources.iter().map(|s| repository().join(s)).collect();
-    build_c_program(
-        &sources,
-        &program,
-        // Threads, atomics and thread-local storage are C11.
-        &[&["-std=c11", "-pthread"], extra].concat(),
-    );
-    let output = Command::new(&program)
-        .envs(env.iter().map(|(k, v)| (k, v)))
-        .output()
-        .unwrap();
-    assert!(output.status.success(), "{}", describe(&output));
-    assert!(
-        String::from_utf8_lossy(&output.stdout).contains("checks passed"),
-        "{}",
-        describe(&output)
-    );
-}
+/// Threads, atomics and thread-local storage are C11.
+const THREADS: [&str; 2] = ["-std=c11", "-pthread"];
 
 /// Two renderers drawing and picking one scene on two threads while a third edits it and a
 /// fourth loads scenes, then a renderer destroyed while a thread draws with it: every call
 /// succeeds or is refused with a result, with validation on.
 #[test]
 fn the_api_from_several_threads_at_once() {
-    run_threads("c-api-threads", &["tests/c/threads.c"], &[], &[]);
+    run_suite("c-api-threads", &["tests/c/threads.c"], &THREADS, &[]);
 }
 
 /// The same under ThreadSanitizer: no data race on what the C program's threads share and
@@ -98,11 +79,15 @@ fn the_api_from_several_threads_at_once() {
 #[test]
 fn the_threads_test_under_thread_sanitizer_finds_no_race() {
     let suppressions = repository().join("tests/c/tsan.supp");
-    run_threads(
+    run_suite(
         "c-api-threads-tsan",
         // Suppressions by library need the libraries mapped until exit.
         &["tests/c/threads.c", "tests/c/keep_libraries_loaded.c"],
-        &["-fsanitize=thread", "-fno-omit-frame-pointer"],
+        &[
+            &THREADS[..],
+            &["-fsanitize=thread", "-fno-omit-frame-pointer"],
+        ]
+        .concat(),
         &[(
             "TSAN_OPTIONS",
             format!(

@@ -14,7 +14,7 @@ use cadr_core::technique::Combination;
 use cadr_core::tree::SceneTree;
 use cadr_core::view::View;
 use cadr_tests::images::{compare, SAME_PICTURE, VISIBLE_CHANGE};
-use cadr_tests::{assert_no_validation_errors, plugin_registry, test_device};
+use cadr_tests::{assert_no_validation_errors, first_transform, plugin_registry, test_device};
 use glam::{DMat4, DVec3};
 
 const SIZE: (u32, u32) = (160, 120);
@@ -42,17 +42,7 @@ fn orbit(combination: &Combination, replay: bool, edit_at: usize, frames: usize)
     let scene = generate(&GeneratorSpec::Demo);
     let bounds = flatten(&scene).unwrap().bounds;
     let (mut graph, handles) = SceneGraph::from_scene(&scene).unwrap();
-    // The first transform node (before the tree is built, so the probe is no edit).
-    let (root, original) = handles
-        .iter()
-        .find_map(|&node| {
-            let matrix = graph.node(node).unwrap().local_matrix();
-            graph
-                .set_matrix(node, matrix)
-                .is_ok()
-                .then_some((node, matrix))
-        })
-        .unwrap();
+    let (root, original) = first_transform(&mut graph, &handles).unwrap();
     let mut tree = SceneTree::build(&mut graph);
     let registry = plugin_registry(&device);
     let mut view = View::new(&device, Arc::clone(&registry), SIZE.0, SIZE.1).unwrap();

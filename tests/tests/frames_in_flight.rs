@@ -12,7 +12,7 @@ use cadr_core::technique::Combination;
 use cadr_core::tree::SceneTree;
 use cadr_core::view::View;
 use cadr_tests::images::{compare, SAME_PICTURE};
-use cadr_tests::{assert_no_validation_errors, plugin_registry, test_device};
+use cadr_tests::{assert_no_validation_errors, first_transform, plugin_registry, test_device};
 use glam::{DMat4, DVec3};
 
 const SIZE: (u32, u32) = (128, 96);
@@ -32,16 +32,7 @@ fn orbit(combination: &Combination, frames_in_flight: u32) -> Run {
     let scene = generate(&GeneratorSpec::Demo);
     let bounds = flatten(&scene).unwrap().bounds;
     let (mut graph, handles) = SceneGraph::from_scene(&scene).unwrap();
-    let (node, original) = handles
-        .iter()
-        .find_map(|&node| {
-            let matrix = graph.node(node).unwrap().local_matrix();
-            graph
-                .set_matrix(node, matrix)
-                .is_ok()
-                .then_some((node, matrix))
-        })
-        .unwrap();
+    let (node, original) = first_transform(&mut graph, &handles).unwrap();
     let mut tree = SceneTree::build(&mut graph);
     let mut view = View::new(&device, plugin_registry(&device), SIZE.0, SIZE.1).unwrap();
     view.techniques_mut().select(combination).unwrap();

@@ -246,6 +246,38 @@ pub fn is_gzip_path(path: &Path) -> bool {
         .is_some_and(|e| e.eq_ignore_ascii_case("gz"))
 }
 
+/// The most bytes a `.csf.gz` may decompress to unless `CADR_MAX_DECOMPRESSED_BYTES` says
+/// otherwise: a small file must not make cadr take all of the host's memory.
+pub const DEFAULT_MAX_DECOMPRESSED_BYTES: u64 = 8 << 30;
+
+/// The variable that sets the decompression limit, in bytes.
+pub const MAX_DECOMPRESSED_VARIABLE: &str = "CADR_MAX_DECOMPRESSED_BYTES";
+
+fn decompression_limit() -> u64 {
+    std::env::var(MAX_DECOMPRESSED_VARIABLE)
+        .ok()
+        .and_then(|text| text.trim().parse().ok())
+        .unwrap_or(DEFAULT_MAX_DECOMPRESSED_BYTES)
+}
+
+/// Decompresses gzip `raw`, refusing (before holding more) data that grows past `limit` bytes.
+pub fn gunzip_within(raw: &[u8], limit: u64) -> std::io::Result<Vec<u8>> {
+    let mut out = Vec::new();
+    flate2::read::GzDecoder::new(raw)
+        .take(limit.saturating_add(1))
+        .read_to_end(&mut out)?;
+    if out.len() as u64 > limit {
+        return Err(std::io::Error::new(
+            std::io::ErrorKind::InvalidData,
+            format!(
+                "its {} compressed bytes decompress to more than {limit} bytes, the limit ({MAX_DECOMPRESSED_VARIABLE} raises it)",
+                raw.len()
+            ),
+        ));
+    }
+    Ok(out)
+}
+
 /// Reads a `.csf` or `.csf.gz` file.
 pub fn load_csf(path: &Path) -> Result<CsfFile, CsfFileError> {
     let io = |source| CsfFileError::Io {
@@ -254,11 +286,7 @@ pub fn load_csf(path: &Path) -> Result<CsfFile, CsfFileError> {
     };
     let raw = std::fs::read(path).map_err(io)?;
     let bytes = if is_gzip_path(path) {
-        let mut out = Vec::new();
-        flate2::read::GzDecoder::new(&raw[..])
-            .read_to_end(&mut out)
-            .map_err(io)?;
-        out
+        gunzip_within(&raw, decompression_limit()).map_err(io)?
     } else {
         raw
     };
@@ -282,5 +310,33 @@ pub fn save_csf(file: &CsfFile, path: &Path) -> Result<(), CsfFileError> {
         std::fs::write(path, encoder.finish().map_err(io)?).map_err(io)
     } else {
         std::fs::write(path, bytes).map_err(io)
+    }
+}
+
+#[cfg(test)]
+mod decompression_tests {
+    use super::*;
+    use std::io::Write;
+
+    fn gzip(bytes: &[u8]) -> Vec<u8> {
+        let mut encoder = flate2::write::GzEncoder::new(Vec::new(), flate2::Compression::default());
+        encoder.write_all(bytes).expect("compress");
+        encoder.finish().expect("compress")
+    }
+
+    #[test]
+    fn a_small_file_that_decompresses_past_the_limit_is_refused() {
+        // 4 MiB of zeros compress to a few KiB: a bomb in miniature.
+        let bomb = gzip(&vec![0u8; 4 << 20]);
+        assert!(bomb.len() < 64 << 10);
+        let refused = gunzip_within(&bomb, 1 << 20).expect_err("past the limit");
+        assert!(
+            refused.to_string().contains("more than 1048576 bytes"),
+            "{refused}"
+        );
+        assert_eq!(
+            gunzip_within(&bomb, 4 << 20).map(|v| v.len()).ok(),
+            Some(4 << 20)
+        );
     }
 }

@@ -158,12 +158,14 @@ where
             let count = rows.len();
             // Row i (the baseline first) is drawn at the top: segment count - 1 - i.
             let label_of = |segment: usize| rows.get(count.checked_sub(segment + 1)?);
+            // A range 0..n has a segment at each of 0..=n; one row still needs a range.
+            let last_segment = count.saturating_sub(1).max(1);
             let mut chart = ChartBuilder::on(area)
                 .caption(*title, ("sans-serif", 20))
                 .margin(12)
                 .x_label_area_size(40)
                 .y_label_area_size(520)
-                .build_cartesian_2d(x_range.log_scale(), (0..count).into_segmented())
+                .build_cartesian_2d(x_range.log_scale(), (0..last_segment).into_segmented())
                 .map_err(err)?;
             chart
                 .configure_mesh()
@@ -249,4 +251,20 @@ where
         }
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_table_of_one_row_is_drawn_and_other_extensions_are_refused() {
+        let path = std::env::temp_dir().join(format!("cadr-plot-{}.svg", std::process::id()));
+        let rows = [("baseline (built-in) [solid]".to_owned(), 123.0)];
+        bars(&path, "one row", &rows).expect("draw");
+        let svg = std::fs::read_to_string(&path).expect("read");
+        assert!(svg.contains("baseline (built-in) [solid]"));
+        let _ = std::fs::remove_file(&path);
+        assert!(check_path(Path::new("table.pdf")).is_err());
+    }
 }

@@ -50,11 +50,9 @@ pub extern "C" fn cadr_renderer_set_frames_in_flight(
 ) -> CadrResult {
     guard(|| {
         with_renderer(renderer, |state| {
-            state
-                .view
-                .renderer_mut()
-                .set_frames_in_flight(frames)
-                .map_err(|e| Failure::invalid(e.to_string()))
+            // An out-of-range count is the renderer's invalid use (CADR_RESULT_INVALID_ARGUMENT);
+            // waiting for a frame may fail as Vulkan does.
+            Ok(state.view.renderer_mut().set_frames_in_flight(frames)?)
         })
     })
 }

@@ -313,12 +313,7 @@ impl GpuScene {
         // Out of the drawn set with its old entry, back in with the new one.
         self.set_drawn(id, false);
         self.instances[i] = entry;
-        self.records[i] = abi::CadrInstanceRecord {
-            matrix: entry.matrix,
-            material: entry.material,
-            flags: entry.flags,
-            instance: id,
-        };
+        self.records[i] = record_of(&entry, id);
         set_bit(&mut self.candidate_bits, id, candidate);
         let culled_in = self.culled_bits[i / 64] >> (i % 64) & 1 == 1;
         self.set_drawn(id, candidate && culled_in);
@@ -789,6 +784,19 @@ fn entry_in(arenas: &GeometryArenas, instance: &InstanceRef) -> Option<(abi::Cad
     Some((entry, instance.visible && count > 0))
 }
 
+/// Scenes with fewer instances fill them on the calling thread.
+const PARALLEL_FILL_INSTANCES: usize = 1 << 16;
+
+/// The record of instance `id` (what the drawing shaders read of it).
+fn record_of(entry: &abi::CadrInstance, id: u32) -> abi::CadrInstanceRecord {
+    abi::CadrInstanceRecord {
+        matrix: entry.matrix,
+        material: entry.material,
+        flags: entry.flags,
+        instance: id,
+    }
+}
+
 /// Fills the entries and records of every instance slot of `tree` (all of `instances`, fresh:
 /// every culled bit set) and their candidate and drawn bits, on a thread per core, each over
 /// whole 64-instance words; returns the triangles drawn. The loop a large scene's first upload
@@ -799,7 +807,12 @@ fn fill_instances(
     (instances, records): (&mut [abi::CadrInstance], &mut [abi::CadrInstanceRecord]),
     (candidate_bits, drawn_bits): (&mut [u64], &mut [u64]),
 ) -> u64 {
-    let threads = std::thread::available_parallelism().map_or(1, |n| n.get());
+    // Threads pay for themselves only on large scenes.
+    let threads = if instances.len() < PARALLEL_FILL_INSTANCES {
+        1
+    } else {
+        std::thread::available_parallelism().map_or(1, |n| n.get())
+    };
     let words_per_thread = candidate_bits.len().div_ceil(threads).max(1);
     let per_thread = words_per_thread * 64;
     std::thread::scope(|scope| {
@@ -822,12 +835,7 @@ fn fill_instances(
                             .and_then(|instance| entry_in(arenas, &instance))
                             .unwrap_or((abi::CadrInstance::default(), false));
                         *entry_slot = entry;
-                        *record_slot = abi::CadrInstanceRecord {
-                            matrix: entry.matrix,
-                            material: entry.material,
-                            flags: entry.flags,
-                            instance: id,
-                        };
+                        *record_slot = record_of(&entry, id);
                         if candidate {
                             // Every culled bit is set: a candidate is drawn.
                             set_bit(candidates, offset as u32, true);

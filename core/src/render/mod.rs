@@ -1,6 +1,7 @@
 //! The renderer: an offscreen target and the frame that draws into it (uniforms, command
-//! buffer, pass, submission, timings, and the replay of an unchanged frame's recording; `stats.rs` says what a frame cost, `output.rs` reads the
-//! image back and writes PNGs). The techniques record into its frames
+//! buffer, pass, submission, timings, frames in flight, and the replay of an unchanged frame's
+//! recording; `stats.rs` says what a frame cost, `output.rs` reads the image back and writes
+//! PNGs). The techniques record into its frames
 //! (`Renderer::render_techniques`, `Renderer::pick_techniques`); the pick pass draws instance
 //! ids and depth into their own target and reads a rectangle of them back ([`pick`]).
 
@@ -266,7 +267,8 @@ impl Renderer {
 
     /// Runs a frame: uniforms, command buffer, target transitions, the technique's commands
     /// before the pass, inside it in `plan.phases` phases (the pass suspended between them, its
-    /// depth readable) and after it, submission, wait, timings. A frame whose replay key is
+    /// depth readable) and after it, submission, timings, and with one frame in flight the
+    /// wait for it (with two, the next frame waits instead). A frame whose replay key is
     /// that of the recording in the command buffer submits it again instead.
     pub(crate) fn frame(
         &mut self,

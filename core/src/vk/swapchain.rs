@@ -4,7 +4,8 @@
 //!
 //! The swapchain is recreated when the window's size changes, when the driver reports it out of
 //! date or suboptimal, and it pauses (presents nothing) while the window has no area
-//! (minimized).
+//! (minimized). Frames reach the window in the chosen present mode (FIFO by default), and a
+//! present does not wait for the GPU.
 
 use std::sync::Arc;
 

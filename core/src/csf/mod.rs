@@ -280,17 +280,28 @@ pub fn gunzip_within(raw: &[u8], limit: u64) -> std::io::Result<Vec<u8>> {
 
 /// Reads a `.csf` or `.csf.gz` file.
 pub fn load_csf(path: &Path) -> Result<CsfFile, CsfFileError> {
-    let io = |source| CsfFileError::Io {
+    let raw = std::fs::read(path).map_err(|source| CsfFileError::Io {
         path: path.to_owned(),
         source,
-    };
-    let raw = std::fs::read(path).map_err(io)?;
-    let bytes = if is_gzip_path(path) {
-        gunzip_within(&raw, decompression_limit()).map_err(io)?
+    })?;
+    csf_from_bytes(&raw, is_gzip_path(path), path)
+}
+
+/// Reads a CSF file's bytes held in memory, gzip-compressed when `gzip` is true; `path` names
+/// the file in errors.
+pub fn csf_from_bytes(raw: &[u8], gzip: bool, path: &Path) -> Result<CsfFile, CsfFileError> {
+    let decompressed;
+    let bytes = if gzip {
+        decompressed =
+            gunzip_within(raw, decompression_limit()).map_err(|source| CsfFileError::Io {
+                path: path.to_owned(),
+                source,
+            })?;
+        &decompressed[..]
     } else {
         raw
     };
-    read_csf(&bytes).map_err(|source| CsfFileError::Malformed {
+    read_csf(bytes).map_err(|source| CsfFileError::Malformed {
         path: path.to_owned(),
         source,
     })

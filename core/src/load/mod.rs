@@ -5,7 +5,7 @@
 
 mod gltf;
 
-pub use self::gltf::{load_gltf, load_gltf_bytes};
+pub use self::gltf::load_gltf_bytes;
 
 use std::path::{Path, PathBuf};
 
@@ -115,10 +115,23 @@ impl SceneFormat {
 
 /// Loads a scene file, choosing the format by extension.
 pub fn load_file(path: &Path) -> Result<Scene, LoadError> {
-    match SceneFormat::from_path(path) {
-        Some(SceneFormat::Gltf | SceneFormat::Glb) => load_gltf(path),
-        Some(SceneFormat::Csf | SceneFormat::CsfGz) => {
-            let file = crate::csf::load_csf(path)?;
+    let format = SceneFormat::from_path(path).ok_or_else(|| LoadError::UnknownFormat {
+        path: path.to_owned(),
+    })?;
+    let bytes = std::fs::read(path).map_err(|source| LoadError::Io {
+        path: path.to_owned(),
+        source,
+    })?;
+    load_bytes(&bytes, format, path)
+}
+
+/// Loads a scene from a file's bytes held in memory. `path` names the file in errors and, for
+/// glTF, is where external buffers are looked up (beside it).
+pub fn load_bytes(bytes: &[u8], format: SceneFormat, path: &Path) -> Result<Scene, LoadError> {
+    match format {
+        SceneFormat::Gltf | SceneFormat::Glb => load_gltf_bytes(bytes, path),
+        SceneFormat::Csf | SceneFormat::CsfGz => {
+            let file = crate::csf::csf_from_bytes(bytes, format == SceneFormat::CsfGz, path)?;
             let name = path
                 .file_name()
                 .map(|n| n.to_string_lossy().into_owned())
@@ -135,9 +148,6 @@ pub fn load_file(path: &Path) -> Result<Scene, LoadError> {
             })?;
             Ok(scene)
         }
-        None => Err(LoadError::UnknownFormat {
-            path: path.to_owned(),
-        }),
     }
 }
 

@@ -1,4 +1,4 @@
-//! Fuzzing the CSF reader with a proptest mutator over the seed corpus in `tests/corpus/csf/`:
+//! Fuzzing the CSF reader with a proptest mutator over the CSF files of the fuzz corpus in `fuzz/corpus/csf/`:
 //! whatever the bytes, reading, converting, validating and flattening return errors and never
 //! panic or read out of bounds. Failures proptest finds are kept in `proptest-regressions/`.
 #![allow(clippy::unwrap_used)] // Test code: a failed unwrap is a failed test.
@@ -12,7 +12,7 @@ use cadr_tests::fixtures::{rich_csf_file, scratch_dir, CubeGltf};
 use proptest::prelude::*;
 
 fn corpus_dir() -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("corpus/csf")
+    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../fuzz/corpus/csf")
 }
 
 /// The seeds: the cube scene in every version, and a file with every optional structure.
@@ -52,6 +52,8 @@ fn corpus() -> Vec<Vec<u8>> {
         .map(|entries| {
             entries
                 .filter_map(|e| std::fs::read(e.ok()?.path()).ok())
+                // Plain CSF only: the gzip inputs of the coverage-guided corpus are not mutated here.
+                .filter(|bytes| bytes.starts_with(&cadr_core::csf::MAGIC.to_le_bytes()))
                 .collect()
         })
         .unwrap_or_default();

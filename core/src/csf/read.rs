@@ -424,12 +424,18 @@ fn read_geometry(
             0,
         )
     };
-    let normal_channels = if normal_offset == 0 {
+    // A null data offset means the channels are absent, whatever the count says; so do
+    // channels of no vertices (or parts), which hold no data (and are written back as null).
+    let normal_channels = if normal_offset == 0 || num_vertices == 0 {
         0
     } else {
         normal_channels
     };
-    let tex_channels = if tex_offset == 0 { 0 } else { tex_channels };
+    let tex_channels = if tex_offset == 0 || num_vertices == 0 {
+        0
+    } else {
+        tex_channels
+    };
     if num_vertices > 0 && vertex_offset == 0 {
         return Err(error(
             s,
@@ -464,8 +470,11 @@ fn read_geometry(
     let (mut aux, mut aux_storage_order, mut perpart, mut perpart_storage_order) =
         (Vec::new(), Vec::new(), Vec::new(), Vec::new());
     if version >= 6 {
-        // A null data offset means the channels are absent, whatever the count says.
-        let aux_channels = if fields.u64(40) == 0 { 0 } else { aux_channels };
+        let aux_channels = if fields.u64(40) == 0 || num_vertices == 0 {
+            0
+        } else {
+            aux_channels
+        };
         aux = floats(reader.array(
             s,
             "auxOFFSET",
@@ -482,7 +491,7 @@ fn read_geometry(
             4,
             4,
         )?);
-        let part_channels = if fields.u64(56) == 0 {
+        let part_channels = if fields.u64(56) == 0 || num_parts == 0 {
             0
         } else {
             part_channels

@@ -16,15 +16,6 @@ use gltf::mesh::Mode;
 use super::LoadError;
 use crate::scene::{Geometry, Material, MeshRef, Node, Part, Scene, Vertex};
 
-/// Loads a `.gltf` or `.glb` file.
-pub fn load_gltf(path: &Path) -> Result<Scene, LoadError> {
-    let bytes = std::fs::read(path).map_err(|source| LoadError::Io {
-        path: path.to_owned(),
-        source,
-    })?;
-    load_gltf_bytes(&bytes, path)
-}
-
 /// The glTF crate's validation reads each primitive's POSITION accessor before it checks that
 /// the index exists, and panics on a file that names a missing one; this check runs first.
 fn check_position_accessors(root: &gltf::json::Root) -> Result<(), String> {
@@ -45,6 +36,24 @@ fn check_position_accessors(root: &gltf::json::Root) -> Result<(), String> {
     Ok(())
 }
 
+/// Size of the GLB header: magic, version, length.
+const GLB_HEADER_SIZE: u32 = 12;
+
+/// The glTF crate subtracts the header's size from the GLB header's `length` unchecked; a
+/// length smaller than the header is refused first.
+fn check_glb_header(bytes: &[u8]) -> Result<(), String> {
+    if !bytes.starts_with(b"glTF") || bytes.len() < GLB_HEADER_SIZE as usize {
+        return Ok(());
+    }
+    let length = u32::from_le_bytes([bytes[8], bytes[9], bytes[10], bytes[11]]);
+    if length < GLB_HEADER_SIZE {
+        return Err(format!(
+            "the GLB header's length is {length} bytes, less than the {GLB_HEADER_SIZE}-byte header itself"
+        ));
+    }
+    Ok(())
+}
+
 /// Loads glTF from `bytes`; `path` names the file in errors and locates external buffers.
 pub fn load_gltf_bytes(bytes: &[u8], path: &Path) -> Result<Scene, LoadError> {
     let invalid = |message: String| LoadError::Invalid {
@@ -55,6 +64,7 @@ pub fn load_gltf_bytes(bytes: &[u8], path: &Path) -> Result<Scene, LoadError> {
         path: path.to_owned(),
         message,
     };
+    check_glb_header(bytes).map_err(gltf_error)?;
     let unchecked =
         gltf::Gltf::from_slice_without_validation(bytes).map_err(|e| gltf_error(e.to_string()))?;
     check_position_accessors(unchecked.document.as_json()).map_err(invalid)?;
@@ -232,7 +242,7 @@ fn resolve_buffers(gltf: &gltf::Gltf, base_dir: &Path) -> Result<Vec<Vec<u8>>, S
             }
             gltf::buffer::Source::Uri(uri) => {
                 let file = base_dir.join(percent_decode(uri));
-                let data = std::fs::read(&file).map_err(|e| {
+                let data = read_buffer_file(&file, buffer.length()).map_err(|e| {
                     format!(
                         "buffer {index} refers to '{}', which cannot be read: {e}",
                         file.display()
@@ -251,6 +261,25 @@ fn resolve_buffers(gltf: &gltf::Gltf, base_dir: &Path) -> Result<Vec<Vec<u8>>, S
         buffers.push(data);
     }
     Ok(buffers)
+}
+
+/// Reads the first `length` bytes of a buffer's file. Only a regular file is read, and no more
+/// than the buffer declares: a URI naming a device or a pipe (`/dev/zero`) must not hang cadr
+/// or take all of its memory.
+fn read_buffer_file(file: &Path, length: usize) -> std::io::Result<Vec<u8>> {
+    use std::io::Read as _;
+    let opened = std::fs::File::open(file)?;
+    let metadata = opened.metadata()?;
+    if !metadata.is_file() {
+        return Err(std::io::Error::new(
+            std::io::ErrorKind::InvalidInput,
+            "it is not a regular file",
+        ));
+    }
+    let wanted = (length as u64).min(metadata.len());
+    let mut data = Vec::with_capacity(wanted as usize);
+    opened.take(wanted).read_to_end(&mut data)?;
+    Ok(data)
 }
 
 fn percent_decode(uri: &str) -> PathBuf {
@@ -305,13 +334,15 @@ fn check_accessor(
     }
     let element = accessor.size() as u64;
     let count = accessor.count() as u64;
+    // The glTF crate's readers compute `count - 1` unchecked.
+    if count == 0 {
+        return Err(format!(
+            "accessor {index} ({usage}) has count 0; glTF requires at least 1"
+        ));
+    }
     if let Some(view) = accessor.view() {
         let stride = view.stride().map_or(element, |s| s as u64);
-        let needed = if count == 0 {
-            0
-        } else {
-            accessor.offset() as u64 + stride * (count - 1) + element
-        };
+        let needed = accessor.offset() as u64 + stride * (count - 1) + element;
         if needed > view.length() as u64 {
             return Err(format!(
                 "accessor {index} ({usage}, {count} elements) needs {needed} bytes of bufferView {}, which has {}",
@@ -322,6 +353,11 @@ fn check_accessor(
     }
     if let Some(sparse) = accessor.sparse() {
         let sparse_count = sparse.count() as u64;
+        if sparse_count == 0 {
+            return Err(format!(
+                "accessor {index} ({usage}) has sparse.count 0; glTF requires at least 1"
+            ));
+        }
         let index_size = match sparse.indices().index_type() {
             gltf::accessor::sparse::IndexType::U8 => 1,
             gltf::accessor::sparse::IndexType::U16 => 2,

@@ -1,10 +1,16 @@
 //! Injected Vulkan failures (feature `fault-injection`: `cargo nextest run -p cadr-tests
-//! --features fault-injection`, as `scripts/test.sh` does): every device memory allocation,
-//! queue submission and device loss of a render of gen:demo with a technique swap in between
-//! is made to fail in turn. Each failure must come back as an error with a clear message, never
-//! a panic; nothing may leak (device memory counted, Vulkan objects by the validation layer at
-//! device destruction); a lost device must say so at the next call; and after any failure the
-//! host can destroy what it has, create it again and render the same picture.
+//! --features fault-injection`, as `scripts/test.sh` does): device memory allocations, host
+//! memory allocations (through the allocation callbacks), queue submissions and device losses
+//! of a render of gen:demo with a technique swap in between, from instance creation on, are
+//! made to fail in turn. Each failure must come back as an error with a clear message, never a
+//! panic; nothing may leak (device memory and the host memory of Vulkan objects counted,
+//! Vulkan objects also by the validation layer at device destruction); a lost device must say
+//! so at the next call; and after any failure the host can destroy what it has, create it
+//! again and render the same picture. A host allocation the render can do without (a debug
+//! name) may fail without an error if the picture stays the same.
+//!
+//! Up to 40 points per kind run by default, spread over the calls of a clean run (a render
+//! makes thousands of host allocations); `CADR_FAULT_POINTS=N` or `=all` runs more.
 #![cfg(feature = "fault-injection")]
 #![allow(clippy::unwrap_used)] // Test code: a failed unwrap is a failed test.
 
@@ -18,13 +24,25 @@ use cadr_core::technique::Combination;
 use cadr_core::tree::SceneTree;
 use cadr_core::view::View;
 use cadr_core::vk::fault::{self, FaultKind};
-use cadr_core::vk::Device;
+use cadr_core::vk::host_memory::live_object_allocations;
+use cadr_core::vk::{Device, DeviceOptions, InstanceOptions};
 use cadr_tests::images::{compare, SAME_PICTURE};
-use cadr_tests::{plugin_registry, test_device};
+use cadr_tests::plugin_registry;
 
 const SIZE: (u32, u32) = (96, 72);
-/// At most this many failure points per kind (evenly spread, the first and last included).
+/// At most this many failure points per kind (evenly spread, the first and last included),
+/// unless `CADR_FAULT_POINTS` says another number, or `all`.
 const MOST_POINTS: u64 = 40;
+
+fn most_points() -> u64 {
+    match std::env::var("CADR_FAULT_POINTS").as_deref() {
+        Ok("all") => u64::MAX,
+        Ok(text) => text.parse().ok().filter(|&n| n >= 2).unwrap_or_else(|| {
+            panic!("CADR_FAULT_POINTS={text}: expected a number from 2, or all")
+        }),
+        Err(_) => MOST_POINTS,
+    }
+}
 
 /// Renders gen:demo with a GPU-culled combination, swaps to the built-in one, renders again
 /// and reads the picture back.
@@ -58,11 +76,37 @@ fn render_with_a_swap(device: &Arc<Device>) -> Result<image::RgbaImage, String> 
     view.renderer().read_rgba8().map_err(|e| e.to_string())
 }
 
-/// Runs the render on a device of its own and checks that nothing is left behind: no device
-/// memory once the view is gone, no validation error (leaked objects included) once the
-/// device is gone. A lost device must refuse the next call, saying so.
-fn on_a_fresh_device(what: &str) -> Result<image::RgbaImage, String> {
-    let device = test_device();
+/// Runs the render on a device of its own (whose creation may fail too) and checks that
+/// nothing is left behind: no device memory once the view is gone; no host memory of a Vulkan
+/// object and no validation error (leaked objects included) once the device is gone. A lost
+/// device must refuse the next call, saying so.
+///
+/// `armed` is the fault injected, if any. When it is a host allocation made while the device
+/// is destroyed (inside the driver's vkDeviceWaitIdle), Mesa 22.3's lavapipe does not free an
+/// allocation it made just before on that error path: that leak is the driver's and is allowed.
+fn on_a_fresh_device(
+    what: &str,
+    armed: Option<(FaultKind, u64)>,
+) -> Result<image::RgbaImage, String> {
+    let objects_before = live_object_allocations();
+    let options = DeviceOptions {
+        instance: InstanceOptions {
+            validation: true,
+            ..InstanceOptions::default()
+        },
+        ..DeviceOptions::default()
+    };
+    let device = match Device::new(&options) {
+        Ok(device) => device,
+        Err(error) => {
+            assert_eq!(
+                live_object_allocations(),
+                objects_before,
+                "{what}: a failed device creation left host memory allocated"
+            );
+            return Err(error.to_string());
+        }
+    };
     let log = Arc::clone(device.validation_log());
     let result = render_with_a_swap(&device);
     if device.is_lost() {
@@ -81,19 +125,35 @@ fn on_a_fresh_device(what: &str) -> Result<image::RgbaImage, String> {
         0,
         "{what}: device memory left allocated"
     );
+    let host_calls_before_destruction = fault::calls(FaultKind::HostMemory);
     drop(device);
-    let errors = log.errors();
+    let failed_in_destruction = armed.is_some_and(|(kind, n)| {
+        kind == FaultKind::HostMemory && n > host_calls_before_destruction
+    });
+    // Mesa's drivers report each VK_ERROR_OUT_OF_HOST_MEMORY they return through the debug
+    // messenger with that name as the whole text: the injected failure itself, not a misuse.
+    let errors: Vec<String> = log
+        .errors()
+        .into_iter()
+        .filter(|text| text != "VK_ERROR_OUT_OF_HOST_MEMORY")
+        .collect();
     assert!(errors.is_empty(), "{what}: validation errors: {errors:?}");
+    let leaked = live_object_allocations() - objects_before;
+    assert!(
+        leaked == 0 || (failed_in_destruction && leaked == 1),
+        "{what}: {leaked} host allocations of Vulkan objects left allocated"
+    );
     result
 }
 
 /// The failure points of a kind that was called `calls` times in a clean run.
 fn points(calls: u64) -> Vec<u64> {
-    if calls <= MOST_POINTS {
+    let most = most_points();
+    if calls <= most {
         return (1..=calls).collect();
     }
-    let mut points: Vec<u64> = (0..MOST_POINTS)
-        .map(|i| 1 + i * (calls - 1) / (MOST_POINTS - 1))
+    let mut points: Vec<u64> = (0..most)
+        .map(|i| 1 + i * (calls - 1) / (most - 1))
         .collect();
     points.dedup();
     points
@@ -102,33 +162,49 @@ fn points(calls: u64) -> Vec<u64> {
 #[test]
 fn every_injected_failure_is_an_error_and_the_host_recovers() {
     fault::disarm();
-    let clean = on_a_fresh_device("clean run").unwrap();
+    let clean = on_a_fresh_device("clean run", None).unwrap();
     let calls: Vec<(FaultKind, u64)> = FaultKind::ALL
         .iter()
         .map(|&kind| (kind, fault::calls(kind)))
         .collect();
+    let mut tolerated = Vec::new();
     for &(kind, count) in &calls {
         assert!(count > 0, "a render makes no {} call", kind.name());
         for n in points(count) {
             let what = format!("{}:{n} of {count}", kind.name());
             fault::arm(kind, n);
-            let outcome = std::panic::catch_unwind(|| on_a_fresh_device(&what));
+            let outcome = std::panic::catch_unwind(|| on_a_fresh_device(&what, Some((kind, n))));
             let result = outcome.unwrap_or_else(|_| panic!("{what}: panicked"));
-            let message = result.expect_err(&format!("{what}: the failure was not reported"));
-            let expected = match kind {
-                FaultKind::DeviceMemory | FaultKind::Submit => "out of",
-                FaultKind::DeviceLost => "lost",
-            };
-            assert!(
-                message.to_lowercase().contains(expected),
-                "{what}: unclear message: {message}"
-            );
+            match result {
+                // A host allocation that a call can do without (an object's debug name) may
+                // fail without failing the render; the picture must then be the same.
+                Ok(picture) if kind == FaultKind::HostMemory => {
+                    let difference = compare(&picture, &clean).unwrap();
+                    assert!(difference.within(SAME_PICTURE), "{what}: {difference:?}");
+                    tolerated.push(what);
+                    continue;
+                }
+                Ok(_) => panic!("{what}: the failure was not reported"),
+                Err(message) => {
+                    let expected = match kind {
+                        FaultKind::DeviceMemory | FaultKind::HostMemory | FaultKind::Submit => {
+                            "out of"
+                        }
+                        FaultKind::DeviceLost => "lost",
+                    };
+                    assert!(
+                        message.to_lowercase().contains(expected),
+                        "{what}: unclear message: {message}"
+                    );
+                }
+            }
             // The host starts again and draws what it drew before.
             fault::disarm();
-            let again = on_a_fresh_device(&format!("{what}, again")).unwrap();
+            let again = on_a_fresh_device(&format!("{what}, again"), None).unwrap();
             let difference = compare(&again, &clean).unwrap();
             assert!(difference.within(SAME_PICTURE), "{what}: {difference:?}");
         }
     }
+    println!("failures the render did without: {tolerated:?}");
     println!("failure points per kind (calls in a clean run): {calls:?}");
 }

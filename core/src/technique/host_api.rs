@@ -2,7 +2,6 @@
 //! modules compiled from their GLSL, and counting `VkAllocationCallbacks` for the objects they create, so that a test can prove that
 //! swapping techniques leaks nothing.
 
-use std::alloc::Layout;
 use std::collections::HashMap;
 use std::ffi::{c_char, c_void, CStr};
 use std::sync::atomic::{AtomicI64, Ordering};
@@ -13,6 +12,7 @@ use crate::vk::raw::Handle;
 use cadr_plugin_abi as abi;
 
 use crate::shaders::compile_glsl;
+use crate::vk::host_memory::counting_callbacks;
 use crate::vk::{create_unowned_shader_module, Buffer, Device, MemoryLocation, ShaderStage};
 
 /// Live counts of what plugins hold.
@@ -52,102 +52,6 @@ pub(crate) struct HostServices {
 unsafe impl Send for HostServices {}
 // SAFETY: as above.
 unsafe impl Sync for HostServices {}
-
-/// Alignment and size kept in front of each callback allocation.
-const HEADER: usize = 16;
-
-/// Zero-byte requests get no memory: they are answered with the (aligned, never mapped) address
-/// equal to the alignment, which `free` recognises. Some layers ask for zero bytes and never
-/// free them; nothing is then lost.
-const ZERO_SIZE_LIMIT: usize = 1 << 16;
-
-fn is_zero_size(memory: *mut c_void) -> bool {
-    (memory as usize) <= ZERO_SIZE_LIMIT
-}
-
-unsafe extern "system" fn allocate(
-    user: *mut c_void,
-    size: usize,
-    alignment: usize,
-    _scope: vk::SystemAllocationScope,
-) -> *mut c_void {
-    if size == 0 && alignment <= ZERO_SIZE_LIMIT {
-        return std::ptr::without_provenance_mut(alignment.max(1));
-    }
-    let alignment = alignment.max(HEADER);
-    let Ok(layout) = Layout::from_size_align(size + alignment, alignment) else {
-        return std::ptr::null_mut();
-    };
-    // SAFETY: the layout has a non-zero size.
-    let base = unsafe { std::alloc::alloc(layout) };
-    if base.is_null() {
-        return base.cast();
-    }
-    // SAFETY: `alignment >= 16` bytes precede the returned pointer: size and alignment go there.
-    unsafe {
-        let user_pointer = base.add(alignment);
-        user_pointer.cast::<usize>().sub(1).write_unaligned(size);
-        user_pointer
-            .cast::<usize>()
-            .sub(2)
-            .write_unaligned(alignment);
-        if let Some(counts) = user.cast::<PluginAllocations>().as_ref() {
-            counts.object_allocations.fetch_add(1, Ordering::Relaxed);
-        }
-        user_pointer.cast()
-    }
-}
-
-unsafe extern "system" fn free(user: *mut c_void, memory: *mut c_void) {
-    if memory.is_null() || is_zero_size(memory) {
-        return;
-    }
-    // SAFETY: `memory` came from `allocate`, which stored size and alignment in front.
-    unsafe {
-        let size = memory.cast::<usize>().sub(1).read_unaligned();
-        let alignment = memory.cast::<usize>().sub(2).read_unaligned();
-        let base = memory.cast::<u8>().sub(alignment);
-        std::alloc::dealloc(
-            base,
-            Layout::from_size_align_unchecked(size + alignment, alignment),
-        );
-        if let Some(counts) = user.cast::<PluginAllocations>().as_ref() {
-            counts.object_allocations.fetch_sub(1, Ordering::Relaxed);
-        }
-    }
-}
-
-unsafe extern "system" fn reallocate(
-    user: *mut c_void,
-    original: *mut c_void,
-    size: usize,
-    alignment: usize,
-    scope: vk::SystemAllocationScope,
-) -> *mut c_void {
-    if original.is_null() || is_zero_size(original) {
-        // SAFETY: forwarded (a zero-size original holds nothing to copy).
-        return unsafe { allocate(user, size, alignment, scope) };
-    }
-    if size == 0 {
-        // SAFETY: forwarded.
-        unsafe { free(user, original) };
-        return std::ptr::null_mut();
-    }
-    // SAFETY: forwarded; `original` came from `allocate`.
-    unsafe {
-        let fresh = allocate(user, size, alignment, scope);
-        if !fresh.is_null() {
-            let old_size = original.cast::<usize>().sub(1).read_unaligned();
-            std::ptr::copy_nonoverlapping(
-                original.cast::<u8>(),
-                fresh.cast::<u8>(),
-                old_size.min(size),
-            );
-            free(user, original);
-        }
-        fresh
-    }
-}
 
 unsafe extern "C" fn create_buffer(
     user: *mut c_void,
@@ -256,15 +160,7 @@ impl HostServices {
         });
         let user: *mut HostServices = &mut *services;
         services.api.user = user.cast();
-        services.callbacks = vk::AllocationCallbacks {
-            p_user_data: Arc::as_ptr(&services.counts).cast_mut().cast(),
-            pfn_allocation: Some(allocate),
-            pfn_reallocation: Some(reallocate),
-            pfn_free: Some(free),
-            pfn_internal_allocation: None,
-            pfn_internal_free: None,
-            _marker: std::marker::PhantomData,
-        };
+        services.callbacks = counting_callbacks(&services.counts.object_allocations);
         services
     }
 

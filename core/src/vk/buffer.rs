@@ -1,5 +1,6 @@
 //! Buffers with their memory, and uploads through a staging buffer.
 
+use super::host_memory::core_callbacks as host_callbacks;
 use std::sync::Arc;
 
 use ash::vk;
@@ -37,7 +38,8 @@ impl Buffer {
             .usage(usage)
             .sharing_mode(vk::SharingMode::EXCLUSIVE);
         // SAFETY: info is valid and lives until the call returns.
-        let raw = unsafe { device.raw.create_buffer(&info, None) }.or_vk("vkCreateBuffer")?;
+        let raw =
+            unsafe { device.raw.create_buffer(&info, host_callbacks()) }.or_vk("vkCreateBuffer")?;
         // From here on, Drop cleans up the buffer if allocation fails.
         let mut buffer = Self {
             device: Arc::clone(device),
@@ -254,7 +256,7 @@ impl Drop for Buffer {
     fn drop(&mut self) {
         // SAFETY: users keep buffers alive until the GPU is done with them (renderers wait on
         // their frame fences before dropping); the handle is destroyed once.
-        unsafe { self.device.raw.destroy_buffer(self.raw, None) };
+        unsafe { self.device.raw.destroy_buffer(self.raw, host_callbacks()) };
         if let Some(allocation) = self.allocation.take() {
             self.device.free(allocation);
         }

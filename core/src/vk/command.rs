@@ -1,5 +1,6 @@
 //! Command pools and one-shot submissions (uploads, readbacks).
 
+use super::host_memory::core_callbacks as host_callbacks;
 use std::sync::Arc;
 
 use ash::vk;
@@ -24,7 +25,7 @@ impl CommandContext {
             .queue_family_index(device.queue_family())
             .flags(vk::CommandPoolCreateFlags::TRANSIENT);
         // SAFETY: pool_info is valid for this device.
-        let pool = unsafe { device.raw.create_command_pool(&pool_info, None) }
+        let pool = unsafe { device.raw.create_command_pool(&pool_info, host_callbacks()) }
             .or_vk("vkCreateCommandPool")?;
         let mut context = Self {
             device: Arc::clone(device),
@@ -42,8 +43,8 @@ impl CommandContext {
             .or_vk("vkAllocateCommandBuffers")?[0];
         let fence_info = vk::FenceCreateInfo::default().flags(vk::FenceCreateFlags::SIGNALED);
         // SAFETY: fence_info is valid.
-        context.fence =
-            unsafe { device.raw.create_fence(&fence_info, None) }.or_vk("vkCreateFence")?;
+        context.fence = unsafe { device.raw.create_fence(&fence_info, host_callbacks()) }
+            .or_vk("vkCreateFence")?;
         device.set_name(pool, &format!("{name} pool"));
         device.set_name(context.command_buffer, name);
         device.set_name(context.fence, &format!("{name} fence"));
@@ -165,8 +166,10 @@ impl Drop for CommandContext {
                     .raw
                     .wait_for_fences(&[self.fence], true, u64::MAX);
             }
-            self.device.raw.destroy_fence(self.fence, None);
-            self.device.raw.destroy_command_pool(self.pool, None);
+            self.device.raw.destroy_fence(self.fence, host_callbacks());
+            self.device
+                .raw
+                .destroy_command_pool(self.pool, host_callbacks());
         }
     }
 }

@@ -1,5 +1,6 @@
 //! The logical device: queue, memory allocator, debug names and capability flags.
 
+use super::host_memory::core_callbacks as host_callbacks;
 use std::ffi::CString;
 use std::sync::{Arc, Mutex, MutexGuard, PoisonError};
 
@@ -217,8 +218,12 @@ impl Device {
         }
         // SAFETY: create_info and its chain live until the call returns; only supported
         // features are enabled.
-        let raw = unsafe { instance.raw.create_device(physical, &create_info, None) }
-            .or_vk("vkCreateDevice")?;
+        let raw = unsafe {
+            instance
+                .raw
+                .create_device(physical, &create_info, host_callbacks())
+        }
+        .or_vk("vkCreateDevice")?;
         // SAFETY: the family and index 0 were requested in create_info.
         let queue = unsafe { raw.get_device_queue(adapter.queue_family, 0) };
 
@@ -474,6 +479,6 @@ impl Drop for Device {
         drop(self.allocator().take());
         self.pipeline_cache.save_and_destroy(&self.raw);
         // SAFETY: no child object remains (see above).
-        unsafe { self.raw.destroy_device(None) };
+        unsafe { self.raw.destroy_device(host_callbacks()) };
     }
 }

@@ -4,6 +4,9 @@
 //!
 //! `CADR_FAULT=KIND:N` makes the Nth call of KIND fail (counted from the process's start):
 //! - `device-memory`: a device memory allocation returns `VK_ERROR_OUT_OF_DEVICE_MEMORY`;
+//! - `host-memory`: a host allocation of a Vulkan object's memory, through cadr's allocation
+//!   callbacks ([`super::host_memory`]), returns NULL, so the call that made it fails with
+//!   `VK_ERROR_OUT_OF_HOST_MEMORY`;
 //! - `submit`: a queue submission returns `VK_ERROR_OUT_OF_DEVICE_MEMORY`;
 //! - `device-lost`: a queue submission returns `VK_ERROR_DEVICE_LOST`, and the device is lost
 //!   from then on (every later submission, wait and allocation says so).
@@ -15,6 +18,8 @@
 pub enum FaultKind {
     /// Device memory allocation.
     DeviceMemory,
+    /// Host memory allocation through the Vulkan allocation callbacks.
+    HostMemory,
     /// Queue submission.
     Submit,
     /// The device is lost at a queue submission.
@@ -23,12 +28,18 @@ pub enum FaultKind {
 
 impl FaultKind {
     /// Every kind.
-    pub const ALL: [FaultKind; 3] = [Self::DeviceMemory, Self::Submit, Self::DeviceLost];
+    pub const ALL: [FaultKind; 4] = [
+        Self::DeviceMemory,
+        Self::HostMemory,
+        Self::Submit,
+        Self::DeviceLost,
+    ];
 
     /// The name `CADR_FAULT` uses.
     pub fn name(self) -> &'static str {
         match self {
             Self::DeviceMemory => "device-memory",
+            Self::HostMemory => "host-memory",
             Self::Submit => "submit",
             Self::DeviceLost => "device-lost",
         }
@@ -76,7 +87,8 @@ mod armed {
     use super::{parse_fault, FaultKind};
 
     /// Calls of each kind so far.
-    static CALLS: [AtomicU64; 3] = [const { AtomicU64::new(0) }; 3];
+    static CALLS: [AtomicU64; FaultKind::ALL.len()] =
+        [const { AtomicU64::new(0) }; FaultKind::ALL.len()];
     /// The fault armed: its kind and the call that fails.
     static ARMED: Mutex<Option<(FaultKind, u64)>> = Mutex::new(None);
     static FROM_ENVIRONMENT: OnceLock<()> = OnceLock::new();

@@ -1,5 +1,6 @@
 //! Images and the offscreen color + depth target, with readback to RGBA8.
 
+use super::host_memory::core_callbacks as host_callbacks;
 use std::sync::Arc;
 
 use ash::vk;
@@ -47,7 +48,8 @@ impl Image {
             .sharing_mode(vk::SharingMode::EXCLUSIVE)
             .initial_layout(vk::ImageLayout::UNDEFINED);
         // SAFETY: info is valid and lives until the call returns.
-        let raw = unsafe { device.raw.create_image(&info, None) }.or_vk("vkCreateImage")?;
+        let raw =
+            unsafe { device.raw.create_image(&info, host_callbacks()) }.or_vk("vkCreateImage")?;
         let mut image = Self {
             device: Arc::clone(device),
             raw,
@@ -73,8 +75,8 @@ impl Image {
             .format(format)
             .subresource_range(subresource_range(aspect));
         // SAFETY: the image is bound to memory; view_info matches it.
-        image.view =
-            unsafe { device.raw.create_image_view(&view_info, None) }.or_vk("vkCreateImageView")?;
+        image.view = unsafe { device.raw.create_image_view(&view_info, host_callbacks()) }
+            .or_vk("vkCreateImageView")?;
         device.set_name(raw, name);
         device.set_name(image.view, &format!("{name} view"));
         Ok(image)
@@ -194,8 +196,10 @@ impl Drop for Image {
     fn drop(&mut self) {
         // SAFETY: owners wait for the GPU before dropping images; handles are destroyed once.
         unsafe {
-            self.device.raw.destroy_image_view(self.view, None);
-            self.device.raw.destroy_image(self.raw, None);
+            self.device
+                .raw
+                .destroy_image_view(self.view, host_callbacks());
+            self.device.raw.destroy_image(self.raw, host_callbacks());
         }
         if let Some(allocation) = self.allocation.take() {
             self.device.free(allocation);

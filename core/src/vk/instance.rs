@@ -1,6 +1,7 @@
 //! The Vulkan instance, its validation layer and the debug messenger that collects validation
 //! messages so that tests can fail on any error.
 
+use super::host_memory::core_callbacks as host_callbacks;
 use std::ffi::{c_void, CStr};
 use std::sync::{Arc, Mutex};
 
@@ -121,7 +122,8 @@ impl Instance {
             .enabled_layer_names(&layers)
             .enabled_extension_names(&extensions);
         // SAFETY: create_info and everything it points to live until the call returns.
-        let raw = unsafe { entry.create_instance(&create_info, None) }.or_vk("vkCreateInstance")?;
+        let raw = unsafe { entry.create_instance(&create_info, host_callbacks()) }
+            .or_vk("vkCreateInstance")?;
 
         let validation_log = Arc::new(ValidationLog::default());
         let debug_utils =
@@ -144,8 +146,10 @@ impl Instance {
                 .user_data(Arc::as_ptr(&user_data) as *mut c_void);
             // SAFETY: the user data points to a ValidationLog kept alive by callback_data
             // until after the messenger is destroyed in Drop.
-            messenger = unsafe { debug_utils.create_debug_utils_messenger(&messenger_info, None) }
-                .or_vk("vkCreateDebugUtilsMessengerEXT")?;
+            messenger = unsafe {
+                debug_utils.create_debug_utils_messenger(&messenger_info, host_callbacks())
+            }
+            .or_vk("vkCreateDebugUtilsMessengerEXT")?;
             callback_data = Some(user_data);
         }
 
@@ -185,12 +189,14 @@ impl Drop for Instance {
         if let Some(debug_utils) = &self.debug_utils {
             if self.messenger != vk::DebugUtilsMessengerEXT::null() {
                 // SAFETY: the messenger was created from this instance and is destroyed once.
-                unsafe { debug_utils.destroy_debug_utils_messenger(self.messenger, None) };
+                unsafe {
+                    debug_utils.destroy_debug_utils_messenger(self.messenger, host_callbacks())
+                };
             }
         }
         // SAFETY: every child object (devices) is dropped before the instance: Device holds
         // an Arc<Instance>.
-        unsafe { self.raw.destroy_instance(None) };
+        unsafe { self.raw.destroy_instance(host_callbacks()) };
     }
 }
 

@@ -13,6 +13,7 @@ mod command;
 mod device;
 mod error;
 pub mod fault;
+pub mod host_memory;
 mod image;
 mod instance;
 mod pipeline;

@@ -3,6 +3,7 @@
 //! device and driver (checked against Vulkan's own cache header before Vulkan sees it), saved
 //! when the device is destroyed.
 
+use super::host_memory::core_callbacks as host_callbacks;
 use ash::vk;
 
 use crate::disk_cache::DiskCache;
@@ -57,7 +58,7 @@ impl PersistentPipelineCache {
         let create = |data: &[u8]| {
             let info = vk::PipelineCacheCreateInfo::default().initial_data(data);
             // SAFETY: the device is live; the data lives for the call.
-            unsafe { device.create_pipeline_cache(&info, None) }
+            unsafe { device.create_pipeline_cache(&info, host_callbacks()) }
         };
         let handle = create(&initial)
             .or_else(|_| create(&[]))
@@ -77,7 +78,7 @@ impl PersistentPipelineCache {
             }
         }
         // SAFETY: no pipeline creation uses it any more; destroyed once.
-        unsafe { device.destroy_pipeline_cache(self.handle, None) };
+        unsafe { device.destroy_pipeline_cache(self.handle, host_callbacks()) };
         self.handle = vk::PipelineCache::null();
     }
 }

@@ -1,6 +1,7 @@
 //! Shader modules from SPIR-V, and the stages they are written for (GLSL is compiled by
 //! `crate::shaders`).
 
+use super::host_memory::core_callbacks as host_callbacks;
 use std::sync::Arc;
 
 use ash::vk;
@@ -73,7 +74,7 @@ impl ShaderModule {
     ) -> VkResult<Self> {
         let info = vk::ShaderModuleCreateInfo::default().code(words);
         // SAFETY: words is SPIR-V from shaderc; info lives until the call returns.
-        let raw = unsafe { device.raw.create_shader_module(&info, None) }
+        let raw = unsafe { device.raw.create_shader_module(&info, host_callbacks()) }
             .or_vk("vkCreateShaderModule")?;
         device.set_name(raw, name);
         Ok(Self {
@@ -97,6 +98,10 @@ impl ShaderModule {
 impl Drop for ShaderModule {
     fn drop(&mut self) {
         // SAFETY: pipelines built from the module keep their own copy; destroyed once.
-        unsafe { self.device.raw.destroy_shader_module(self.raw, None) };
+        unsafe {
+            self.device
+                .raw
+                .destroy_shader_module(self.raw, host_callbacks())
+        };
     }
 }

@@ -7,6 +7,7 @@
 //! (minimized). Frames reach the window in the chosen present mode (FIFO by default), and a
 //! present does not wait for the GPU.
 
+use super::host_memory::core_callbacks as host_callbacks;
 use std::sync::Arc;
 
 use ash::vk;
@@ -86,7 +87,7 @@ fn create_semaphore(device: &Device, name: &str) -> VkResult<vk::Semaphore> {
     let semaphore = unsafe {
         device
             .raw
-            .create_semaphore(&vk::SemaphoreCreateInfo::default(), None)
+            .create_semaphore(&vk::SemaphoreCreateInfo::default(), host_callbacks())
     }
     .or_vk("vkCreateSemaphore")?;
     device.set_name(semaphore, name);
@@ -303,10 +304,13 @@ impl Swapchain {
         // SAFETY: the create info is valid for this surface (values come from its
         // capabilities); the old swapchain is retired by this call and destroyed below after
         // the device went idle.
-        let raw = unsafe { self.swapchain_fn.create_swapchain(&create_info, None) }
-            .or_vk("vkCreateSwapchainKHR")?;
+        let raw = unsafe {
+            self.swapchain_fn
+                .create_swapchain(&create_info, host_callbacks())
+        }
+        .or_vk("vkCreateSwapchainKHR")?;
         // SAFETY: the device is idle, so nothing uses the old swapchain or its images.
-        unsafe { self.swapchain_fn.destroy_swapchain(old, None) };
+        unsafe { self.swapchain_fn.destroy_swapchain(old, host_callbacks()) };
         self.raw = raw;
         // SAFETY: raw is a live swapchain.
         self.images = unsafe { self.swapchain_fn.get_swapchain_images(raw) }
@@ -464,10 +468,17 @@ impl Drop for Swapchain {
         // the swapchain made on it).
         unsafe {
             for semaphore in self.ready_to_present.drain(..) {
-                self.device.raw.destroy_semaphore(semaphore, None);
+                self.device
+                    .raw
+                    .destroy_semaphore(semaphore, host_callbacks());
             }
-            self.device.raw.destroy_semaphore(self.image_acquired, None);
-            self.swapchain_fn.destroy_swapchain(self.raw, None);
+            self.device
+                .raw
+                .destroy_semaphore(self.image_acquired, host_callbacks());
+            self.swapchain_fn
+                .destroy_swapchain(self.raw, host_callbacks());
+            // The host created the surface without allocation callbacks (glfwCreateWindowSurface
+            // with NULL), so it is destroyed without them.
             self.surface_fn.destroy_surface(self.surface, None);
         }
     }

@@ -1,5 +1,6 @@
 //! GPU timestamps around a span of commands.
 
+use super::host_memory::core_callbacks as host_callbacks;
 use std::sync::Arc;
 
 use ash::vk;
@@ -24,8 +25,8 @@ impl GpuTimer {
             .query_type(vk::QueryType::TIMESTAMP)
             .query_count(2);
         // SAFETY: info is valid.
-        let pool =
-            unsafe { device.raw.create_query_pool(&info, None) }.or_vk("vkCreateQueryPool")?;
+        let pool = unsafe { device.raw.create_query_pool(&info, host_callbacks()) }
+            .or_vk("vkCreateQueryPool")?;
         device.set_name(pool, name);
         Ok(Some(Self {
             device: Arc::clone(device),
@@ -94,6 +95,10 @@ impl GpuTimer {
 impl Drop for GpuTimer {
     fn drop(&mut self) {
         // SAFETY: owners wait for their frames before dropping; destroyed once.
-        unsafe { self.device.raw.destroy_query_pool(self.pool, None) };
+        unsafe {
+            self.device
+                .raw
+                .destroy_query_pool(self.pool, host_callbacks())
+        };
     }
 }

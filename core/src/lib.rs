@@ -15,6 +15,7 @@ pub mod generate;
 pub mod gpu_scene;
 pub mod graph;
 pub mod load;
+pub mod memory_budget;
 pub mod render;
 pub mod save;
 pub mod scene;

@@ -292,3 +292,71 @@ fn textures_do_not_break_loading() {
     let scene = load_file(&path).unwrap_or_else(|e| panic!("{e}"));
     assert_eq!(scene.materials[0].base_color, [0.8, 0.1, 0.1, 1.0]);
 }
+
+#[test]
+fn a_small_file_that_expands_past_the_memory_budget_is_refused() {
+    // Three levels of a thousand references to the same child: a billion parts from 13 kB.
+    // SAFETY: nextest runs each test in a process of its own; no other thread reads it.
+    std::env::set_var(cadr_core::memory_budget::VARIABLE, "1G");
+    let text = load_error("expansion", |dir| {
+        let mut cube = CubeGltf::new();
+        let thousand = |child: u32| format!("[{}]", vec![child.to_string(); 1000].join(","));
+        cube.nodes = format!(
+            r#"[{{"children": {}}}, {{"children": {}}}, {{"children": {}}}, {{"mesh": 0}}]"#,
+            thousand(1),
+            thousand(2),
+            thousand(3)
+        );
+        cube.write_glb(dir, "expansion")
+    });
+    assert!(
+        text.contains("expands to 2000000000 drawn parts")
+            && text.contains("memory budget of 1.0 GiB")
+            && text.contains("CADR_MEMORY_BUDGET"),
+        "{text}"
+    );
+}
+
+#[test]
+fn a_buffer_naming_a_device_is_refused_not_read_forever() {
+    let text = load_error("device_buffer", |dir| {
+        let cube = CubeGltf::new();
+        let path = dir.join("zero.gltf");
+        std::fs::write(&path, cube.json(Some("/dev/zero"))).unwrap();
+        path
+    });
+    assert!(
+        text.contains("buffer 0 refers to '/dev/zero'") && text.contains("not a regular file"),
+        "{text}"
+    );
+}
+
+#[test]
+fn an_accessor_of_count_zero_is_refused_not_a_panic() {
+    let text = load_error("count_zero", |dir| {
+        let cube = CubeGltf::new();
+        let json = cube
+            .json(None)
+            .replacen(r#""count": 24"#, r#""count": 0"#, 1);
+        assert!(
+            json.contains(r#""count": 0"#),
+            "the fixture changed: {json}"
+        );
+        std::fs::write(dir.join("zero.glb"), cube.glb_with_json(&json)).unwrap();
+        dir.join("zero.glb")
+    });
+    assert!(text.contains("has count 0"), "{text}");
+}
+
+#[test]
+fn a_glb_length_shorter_than_its_header_is_refused_not_a_panic() {
+    let mut bytes = CubeGltf::new().glb();
+    bytes[8..12].copy_from_slice(&4u32.to_le_bytes());
+    let text = load_gltf_bytes(&bytes, Path::new("short-header.glb"))
+        .unwrap_err()
+        .to_string();
+    assert!(
+        text.contains("short-header.glb") && text.contains("length is 4 bytes"),
+        "{text}"
+    );
+}

@@ -47,6 +47,27 @@ pub struct FlatScene {
     pub bounds: Aabb,
 }
 
+/// Number of draw items the scene expands to (saturating).
+fn drawn_parts(scene: &Scene) -> u64 {
+    let counts = draw_counts(scene);
+    scene
+        .roots
+        .iter()
+        .fold(0_u64, |sum, &r| sum.saturating_add(counts[r as usize]))
+}
+
+/// Checks that a scene (otherwise valid) expands to at most [`MAX_DRAW_ITEMS`] drawn parts, and
+/// to no more than the memory budget holds ([`crate::memory_budget`]).
+pub(super) fn check_expansion(scene: &Scene) -> Result<(), SceneError> {
+    let total = drawn_parts(scene);
+    if total > MAX_DRAW_ITEMS {
+        return Err(SceneError(format!(
+            "the scene expands to {total} drawn parts through shared subgraphs (at most {MAX_DRAW_ITEMS})"
+        )));
+    }
+    crate::memory_budget::check_drawn_parts(total).map_err(SceneError)
+}
+
 /// Number of draw items under each node, saturating (memoised over the DAG).
 fn draw_counts(scene: &Scene) -> Vec<u64> {
     let mut counts: Vec<Option<u64>> = vec![None; scene.nodes.len()];
@@ -91,16 +112,7 @@ pub fn flatten(scene: &Scene) -> Result<FlatScene, SceneError> {
 
 fn flatten_validated(scene: &Scene) -> Result<FlatScene, SceneError> {
     scene.validate()?;
-    let counts = draw_counts(scene);
-    let total = scene
-        .roots
-        .iter()
-        .fold(0_u64, |sum, &r| sum.saturating_add(counts[r as usize]));
-    if total > MAX_DRAW_ITEMS {
-        return Err(SceneError(format!(
-            "the scene expands to {total} drawn parts through shared subgraphs (at most {MAX_DRAW_ITEMS})"
-        )));
-    }
+    let total = drawn_parts(scene);
     let geometry_bounds: Vec<Aabb> = scene.geometries.iter().map(|g| g.bounds()).collect();
     let mut flat = FlatScene {
         draws: Vec::with_capacity(total as usize),

@@ -253,7 +253,8 @@ impl Geometry {
 
 impl Scene {
     /// Checks every reference and range: indices within vertices, parts within indices, node,
-    /// geometry and material references in range, finite values, no cycles in the node graph.
+    /// geometry and material references in range, finite values, no cycles in the node graph,
+    /// and an expansion (paths × parts) within `MAX_DRAW_ITEMS` and the memory budget.
     /// Everything downstream (flattening, rendering) relies on a validated scene.
     pub fn validate(&self) -> Result<(), SceneError> {
         let fail = |text: String| Err(SceneError(text));
@@ -350,7 +351,7 @@ impl Scene {
                 self.nodes[node as usize].name
             ));
         }
-        Ok(())
+        flatten::check_expansion(self)
     }
 
     /// A node on a cycle of the child graph, if there is one.

@@ -11,7 +11,7 @@
 #define CADR_PLUGIN_ABI_MAJOR 1
 
 // Minor version of this ABI: additions that older readers may ignore.
-#define CADR_PLUGIN_ABI_MINOR 5
+#define CADR_PLUGIN_ABI_MINOR 6
 
 // `(major << 16) | minor`, what [`CadrPluginVersionFn`] returns.
 #define CADR_PLUGIN_ABI_VERSION ((CADR_PLUGIN_ABI_MAJOR << 16) | CADR_PLUGIN_ABI_MINOR)
@@ -793,6 +793,14 @@ typedef struct CadrCullingVtable {
 // Since ABI 1.3, set in [`CadrCullEntry::flags`] only: the instance is drawn unless culled
 // (alive, visible in the scene tree, with triangles).
 #define CADR_INSTANCE_CANDIDATE (1 << 3)
+
+// Since ABI 1.6: the part's triangles enclose a volume (watertight and consistently wound,
+// counter-clockwise seen from outside); a section plane's cut through it is capped.
+#define CADR_INSTANCE_CLOSED (1 << 4)
+
+// Since ABI 1.6: with [`CADR_INSTANCE_CLOSED`], the part's triangles wind clockwise seen from
+// outside (an inside-out mesh).
+#define CADR_INSTANCE_INSIDE_OUT (1 << 5)
 
 // Triangles (solid shading).
 #define CADR_PASS_TRIANGLES 0

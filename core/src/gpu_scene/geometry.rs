@@ -9,9 +9,11 @@ use crate::error::RenderResult;
 use crate::vk::raw as vk;
 
 use crate::graph::SceneGraph;
+use crate::scene::closure::{closure, Closure};
 use crate::scene::edges::{feature_edges, DEFAULT_CREASE_DEGREES};
 use crate::scene::{Geometry, Part, Vertex};
 use crate::vk::{Buffer, Device};
+use cadr_plugin_abi as abi;
 
 /// Where one geometry lies in the arenas and how much room it has there.
 #[derive(Clone, Debug)]
@@ -21,8 +23,9 @@ pub(super) struct GeometryPlace {
     pub(super) first_wire_index: u32,
     /// Vertices, indices and wire indices the place can hold (its size when laid out).
     room: [u32; 3],
-    /// Per part: first index, count, first wire index, wire count (relative), bounding sphere.
-    pub(super) parts: Vec<([u32; 4], [f32; 4])>,
+    /// Per part: first index, count, first wire index, wire count (relative), bounding sphere,
+    /// and its closure as instance flags (`CADR_INSTANCE_CLOSED`, `CADR_INSTANCE_INSIDE_OUT`).
+    pub(super) parts: Vec<([u32; 4], [f32; 4], u32)>,
 }
 
 /// A geometry's data as the arenas hold it: edge indices derived by crease angle when the
@@ -79,7 +82,16 @@ fn part_sphere(vertices: &[Vertex], indices: &[u32]) -> [f32; 4] {
     [center[0], center[1], center[2], radius * (1.0 + 1e-5)]
 }
 
-fn part_entries(data: &ArenaData<'_>) -> Vec<([u32; 4], [f32; 4])> {
+/// The instance flags of a part's closure.
+fn closure_flags(vertices: &[Vertex], indices: &[u32]) -> u32 {
+    match closure(vertices, indices) {
+        Closure::Open => 0,
+        Closure::Closed => abi::CADR_INSTANCE_CLOSED,
+        Closure::InsideOut => abi::CADR_INSTANCE_CLOSED | abi::CADR_INSTANCE_INSIDE_OUT,
+    }
+}
+
+fn part_entries(data: &ArenaData<'_>) -> Vec<([u32; 4], [f32; 4], u32)> {
     data.parts
         .iter()
         .map(|p| {
@@ -93,6 +105,7 @@ fn part_entries(data: &ArenaData<'_>) -> Vec<([u32; 4], [f32; 4])> {
                     p.wire_index_count,
                 ],
                 part_sphere(data.vertices, &data.indices[start..end]),
+                closure_flags(data.vertices, &data.indices[start..end]),
             )
         })
         .collect()

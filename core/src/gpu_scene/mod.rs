@@ -753,9 +753,10 @@ fn cull_entry(
 /// candidate for drawing (shown, with triangles).
 fn entry_in(arenas: &GeometryArenas, instance: &InstanceRef) -> Option<(abi::CadrInstance, bool)> {
     let place = arenas.places.get(instance.geometry as usize)?.as_ref()?;
-    let ([first, count, first_wire, wire_count], sphere) =
+    let ([first, count, first_wire, wire_count], sphere, closure) =
         *place.parts.get(instance.part as usize)?;
     let flags = abi::CADR_INSTANCE_ALIVE
+        | closure
         | if instance.highlighted {
             abi::CADR_INSTANCE_HIGHLIGHTED
         } else {

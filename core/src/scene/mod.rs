@@ -3,6 +3,7 @@
 //! drawable part.
 
 mod bounds;
+pub mod closure;
 pub mod edges;
 mod flatten;
 pub mod graph;

@@ -36,7 +36,7 @@ use std::ffi::{c_char, c_void};
 /// Major version of this ABI: a library built for another major version is refused.
 pub const CADR_PLUGIN_ABI_MAJOR: u32 = 1;
 /// Minor version of this ABI: additions that older readers may ignore.
-pub const CADR_PLUGIN_ABI_MINOR: u32 = 5;
+pub const CADR_PLUGIN_ABI_MINOR: u32 = 6;
 /// `(major << 16) | minor`, what [`CadrPluginVersionFn`] returns.
 pub const CADR_PLUGIN_ABI_VERSION: u32 = (CADR_PLUGIN_ABI_MAJOR << 16) | CADR_PLUGIN_ABI_MINOR;
 
@@ -365,6 +365,12 @@ pub const CADR_INSTANCE_ALIVE: CadrInstanceFlags = 1 << 2;
 /// Since ABI 1.3, set in [`CadrCullEntry::flags`] only: the instance is drawn unless culled
 /// (alive, visible in the scene tree, with triangles).
 pub const CADR_INSTANCE_CANDIDATE: CadrInstanceFlags = 1 << 3;
+/// Since ABI 1.6: the part's triangles enclose a volume (watertight and consistently wound,
+/// counter-clockwise seen from outside); a section plane's cut through it is capped.
+pub const CADR_INSTANCE_CLOSED: CadrInstanceFlags = 1 << 4;
+/// Since ABI 1.6: with [`CADR_INSTANCE_CLOSED`], the part's triangles wind clockwise seen from
+/// outside (an inside-out mesh).
+pub const CADR_INSTANCE_INSIDE_OUT: CadrInstanceFlags = 1 << 5;
 
 /// One drawable part on one path of the scene tree (the unit of "individual" drawing). Index
 /// positions are absolute element offsets in the scene's index buffers; indices are relative

@@ -1,0 +1,128 @@
+//! Whether a part's triangles enclose a volume, which section caps need: a cut through a closed
+//! surface shows its inside, a cut through an open one shows nothing to fill.
+//!
+//! Vertices are welded by position first (CAD meshes split vertices along hard edges to give
+//! them several normals). The surface is closed when every edge between two welded positions
+//! belongs to exactly two triangles that run along it in opposite directions (a consistently
+//! wound, watertight surface); its signed volume then says whether the triangles wind
+//! counter-clockwise seen from outside (as glTF wants) or are inside out. Degenerate triangles
+//! are ignored.
+
+use std::collections::HashMap;
+
+use super::Vertex;
+
+/// How a part's triangles close.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Closure {
+    /// Not watertight or not consistently wound (or enclosing no volume).
+    Open,
+    /// Closed, counter-clockwise seen from outside.
+    Closed,
+    /// Closed, clockwise seen from outside.
+    InsideOut,
+}
+
+/// The closure of the triangles `indices` over `vertices` (indices out of range make it open).
+pub fn closure(vertices: &[Vertex], indices: &[u32]) -> Closure {
+    let mut welded: HashMap<[u32; 3], u32> = HashMap::new();
+    let mut weld = |index: u32| -> Option<u32> {
+        let position = vertices.get(index as usize)?.position;
+        // +0.0 and -0.0 are one position.
+        let key = position.map(|c| (c + 0.0).to_bits());
+        let next = welded.len() as u32;
+        Some(*welded.entry(key).or_insert(next))
+    };
+    // Per undirected edge: how many triangles use it, and the sum of their directions.
+    let mut edges: HashMap<(u32, u32), (u32, i32)> = HashMap::new();
+    let mut volume = 0.0_f64;
+    for triangle in indices.chunks_exact(3) {
+        let (Some(a), Some(b), Some(c)) = (weld(triangle[0]), weld(triangle[1]), weld(triangle[2]))
+        else {
+            return Closure::Open;
+        };
+        if a == b || b == c || c == a {
+            continue;
+        }
+        for (from, to) in [(a, b), (b, c), (c, a)] {
+            let (key, direction) = if from < to {
+                ((from, to), 1)
+            } else {
+                ((to, from), -1)
+            };
+            let edge = edges.entry(key).or_insert((0, 0));
+            edge.0 += 1;
+            edge.1 += direction;
+        }
+        let [p, q, r] = [0, 1, 2].map(|i| {
+            let position = vertices[triangle[i] as usize].position;
+            glam::DVec3::new(
+                f64::from(position[0]),
+                f64::from(position[1]),
+                f64::from(position[2]),
+            )
+        });
+        volume += p.dot(q.cross(r));
+    }
+    let watertight = !edges.is_empty() && edges.values().all(|&(uses, sum)| uses == 2 && sum == 0);
+    match (watertight, volume) {
+        (true, v) if v > 0.0 => Closure::Closed,
+        (true, v) if v < 0.0 => Closure::InsideOut,
+        _ => Closure::Open,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn vertex(x: f32, y: f32, z: f32) -> Vertex {
+        Vertex {
+            position: [x, y, z],
+            normal: [0.0, 0.0, 1.0],
+        }
+    }
+
+    /// A unit tetrahedron, counter-clockwise from outside.
+    fn tetrahedron() -> (Vec<Vertex>, Vec<u32>) {
+        let vertices = vec![
+            vertex(0.0, 0.0, 0.0),
+            vertex(1.0, 0.0, 0.0),
+            vertex(0.0, 1.0, 0.0),
+            vertex(0.0, 0.0, 1.0),
+        ];
+        let indices = vec![0, 2, 1, 0, 1, 3, 0, 3, 2, 1, 2, 3];
+        (vertices, indices)
+    }
+
+    #[test]
+    fn a_tetrahedron_is_closed_and_inside_out_when_flipped() {
+        let (vertices, indices) = tetrahedron();
+        assert_eq!(closure(&vertices, &indices), Closure::Closed);
+        let flipped: Vec<u32> = indices.chunks(3).flat_map(|t| [t[0], t[2], t[1]]).collect();
+        assert_eq!(closure(&vertices, &flipped), Closure::InsideOut);
+    }
+
+    #[test]
+    fn split_vertices_are_welded_by_position() {
+        // Each face with vertices of its own, as a mesh with hard-edge normals has them.
+        let (vertices, indices) = tetrahedron();
+        let split: Vec<Vertex> = indices.iter().map(|&i| vertices[i as usize]).collect();
+        let own: Vec<u32> = (0..split.len() as u32).collect();
+        assert_eq!(closure(&split, &own), Closure::Closed);
+    }
+
+    #[test]
+    fn a_missing_face_a_doubled_face_or_a_flipped_face_is_open() {
+        let (vertices, indices) = tetrahedron();
+        assert_eq!(closure(&vertices, &indices[..9]), Closure::Open);
+        let mut doubled = indices.clone();
+        doubled.extend_from_slice(&indices[..3]);
+        assert_eq!(closure(&vertices, &doubled), Closure::Open);
+        let mut one_flipped = indices.clone();
+        one_flipped.swap(0, 1);
+        assert_eq!(closure(&vertices, &one_flipped), Closure::Open);
+        assert_eq!(closure(&vertices, &[]), Closure::Open);
+        assert_eq!(closure(&vertices, &[0, 1, 9]), Closure::Open);
+    }
+}

@@ -40,6 +40,15 @@
 // Node flag: the node's parts are drawn highlighted.
 #define CADR_NODE_HIGHLIGHTED 4
 
+// The most section planes a renderer takes at once.
+#define CADR_MAX_SECTION_PLANES 6
+
+// Section flag: fill the cut of closed parts with the plane's cap colour (on by default).
+#define CADR_SECTION_CAPS 1
+
+// Section flag: hatch the caps (off by default).
+#define CADR_SECTION_HATCHED 2
+
 // The result of every fallible cadr function.
 typedef enum CadrResult {
   // Success.
@@ -1311,6 +1320,65 @@ enum CadrResult cadr_scene_destroy(CadrScene scene);
 // # Safety
 // `root` is null or writable.
 enum CadrResult cadr_scene_root(CadrScene scene, CadrNode *root);
+
+// Sets the renderer's section planes: `count` planes of four doubles each, `(nx, ny, nz, d)`,
+// each keeping the half-space `nx·x + ny·y + nz·z + d >= 0` of world space (the normal need not
+// be of unit length). 0 planes (`planes` may then be NULL) cuts nothing. The next frame and
+// pick apply them; what they cut away is neither drawn nor picked.
+//
+// Returns `CADR_RESULT_OK`, `CADR_RESULT_NULL_ARGUMENT`, `CADR_RESULT_INVALID_ARGUMENT` (more
+// than `CADR_MAX_SECTION_PLANES`, a zero normal or a value that is not finite; the message
+// names the plane, and the planes stay as they were) or a handle error. Ownership: `planes`
+// is read during the call only. Thread-safety: as `cadr_renderer_create`.
+//
+// # Safety
+// `planes` is null or points to `4 * count` readable doubles.
+enum CadrResult cadr_renderer_set_section_planes(CadrRenderer renderer,
+                                                 const double *planes,
+                                                 uint32_t count);
+
+// Writes the number of section planes into `*count` and, when `planes` is not NULL, up to
+// `capacity` of them (four doubles each, normals of unit length) into `planes`.
+//
+// Returns `CADR_RESULT_OK`, `CADR_RESULT_NULL_ARGUMENT` (`count` NULL) or a handle error.
+// Ownership: the outputs are the caller's. Thread-safety: as `cadr_renderer_create`.
+//
+// # Safety
+// `planes` is null or writable for `4 * capacity` doubles; `count` is null or writable.
+enum CadrResult cadr_renderer_section_planes(CadrRenderer renderer,
+                                             double *planes,
+                                             uint32_t capacity,
+                                             uint32_t *count);
+
+// Sets the section flags: `CADR_SECTION_CAPS` (fill cuts through closed parts; without it the
+// inside shows) and `CADR_SECTION_HATCHED` (hatch the caps). The default is
+// `CADR_SECTION_CAPS`.
+//
+// Returns `CADR_RESULT_OK`, `CADR_RESULT_INVALID_ARGUMENT` (unknown bits) or a handle error.
+// Ownership: nothing changes hands. Thread-safety: as `cadr_renderer_create`.
+enum CadrResult cadr_renderer_set_section_flags(CadrRenderer renderer, uint32_t flags);
+
+// Writes the section flags (`CADR_SECTION_*`).
+//
+// Returns `CADR_RESULT_OK`, `CADR_RESULT_NULL_ARGUMENT` or a handle error.
+// Ownership: the output is the caller's. Thread-safety: as `cadr_renderer_create`.
+//
+// # Safety
+// `flags` is null or writable.
+enum CadrResult cadr_renderer_section_flags(CadrRenderer renderer, uint32_t *flags);
+
+// Sets the cap colour of section plane `index` (0 to `CADR_MAX_SECTION_PLANES - 1`, whether
+// or not that plane is set) to the linear RGBA `rgba` (four floats, clamped to 0..1).
+//
+// Returns `CADR_RESULT_OK`, `CADR_RESULT_NULL_ARGUMENT`, `CADR_RESULT_INVALID_ARGUMENT` (index
+// out of range or a value that is not finite) or a handle error. Ownership: `rgba` is read
+// during the call only. Thread-safety: as `cadr_renderer_create`.
+//
+// # Safety
+// `rgba` is null or points to four readable floats.
+enum CadrResult cadr_renderer_set_section_cap_color(CadrRenderer renderer,
+                                                    uint32_t index,
+                                                    const float *rgba);
 
 // Writes the time cadr spent in each phase so far (see `CadrTimings`).
 //

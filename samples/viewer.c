@@ -8,13 +8,15 @@
  * Mouse: left drag orbits, right or middle drag pans, the wheel zooms.
  * Keys:  V, P, S, C cycle the vertex path, parameter path, submission and culling technique;
  *        E toggles solid / solid with edges; F fits the view; I toggles 1 / 2 frames in flight;
- *        M cycles the present modes the window offers; Esc quits.
- * The window title shows the techniques, frames in flight, present mode, the frame's figures
+ *        M cycles the present modes the window offers; X cycles a section plane through the
+ *        view's centre across x, y, z and off; K toggles its caps, H their hatching; Esc quits.
+ * The window title shows the techniques, the section, frames in flight, present mode, the frame's figures
  * and frames per second; they are also printed once a second. --orbit-frames N orbits the
  * camera for N frames as fast as they come, prints the frames per second and quits (a
  * benchmark of the window path). Resizing and minimizing are handled by cadr (swapchain recreated, frames skipped).
  *
  * --self-test DIR renders frames, cycles every technique kind once, toggles the shade mode,
+ * cycles the section planes with and without caps and hatching,
  * resizes the window, then renders a fixed view both into the window and offscreen
  * (DIR/offscreen.png), prints "screenshot ready WxH" and keeps presenting until a line arrives
  * on stdin, so that a test can grab the window and compare. */
@@ -42,6 +44,8 @@ struct Viewer {
   double last_x, last_y;
   int dragging; /* 0 none, 1 orbit, 2 pan */
   uint32_t shade;
+  int section_axis;      /* -1: no section; 0, 1, 2: a plane across x, y or z */
+  uint32_t section_flags; /* CADR_SECTION_* */
   struct CadrFrameStats stats;
   double frames_per_second;
 };
@@ -111,6 +115,33 @@ static void toggle_shade(struct Viewer *v) {
   printf("shade mode: %s\n", v->shade == CADR_SHADE_SOLID ? "solid" : "edges");
 }
 
+static const char *const axis_names[3] = {"x", "y", "z"};
+
+/* Sets the section: a plane through the view's centre keeping the side below it on the axis. */
+static void apply_section(struct Viewer *v) {
+  double plane[4] = {0.0, 0.0, 0.0, 0.0};
+  if (v->section_axis < 0) {
+    CADR_CHECK(cadr_renderer_set_section_planes(v->renderer, NULL, 0));
+  } else {
+    plane[v->section_axis] = -1.0;
+    plane[3] = v->target[v->section_axis];
+    CADR_CHECK(cadr_renderer_set_section_planes(v->renderer, plane, 1));
+  }
+  CADR_CHECK(cadr_renderer_set_section_flags(v->renderer, v->section_flags));
+}
+
+static void cycle_section(struct Viewer *v) {
+  v->section_axis = v->section_axis >= 2 ? -1 : v->section_axis + 1;
+  apply_section(v);
+  printf("section: %s\n", v->section_axis < 0 ? "off" : axis_names[v->section_axis]);
+}
+
+static void toggle_section_flag(struct Viewer *v, uint32_t flag, const char *name) {
+  v->section_flags ^= flag;
+  apply_section(v);
+  printf("section %s: %s\n", name, (v->section_flags & flag) ? "on" : "off");
+}
+
 static void toggle_frames_in_flight(struct Viewer *v) {
   uint32_t frames = 1;
   CADR_CHECK(cadr_renderer_frames_in_flight(v->renderer, &frames));
@@ -134,16 +165,24 @@ static void cycle_present_mode(struct Viewer *v) {
 
 static void describe(struct Viewer *v, char *text, size_t size) {
   const char *names[4];
+  char section[64];
   uint32_t kind, frames = 1, mode = 0;
   for (kind = 0; kind < 4; ++kind) {
     CADR_CHECK(cadr_renderer_technique(v->renderer, kind, &names[kind]));
   }
   CADR_CHECK(cadr_renderer_frames_in_flight(v->renderer, &frames));
   CADR_CHECK(cadr_renderer_present_mode(v->renderer, &mode, NULL));
+  snprintf(section, sizeof section, "%s%s%s",
+           v->section_axis < 0 ? "no section" : "section ",
+           v->section_axis < 0 ? "" : axis_names[v->section_axis],
+           v->section_axis < 0 ? ""
+           : (v->section_flags & CADR_SECTION_CAPS)
+               ? ((v->section_flags & CADR_SECTION_HATCHED) ? " capped, hatched" : " capped")
+               : " uncapped");
   snprintf(text, size,
-           "cadr viewer | %s / %s / %s / %s | %s | %u in flight, %s | %llu draws in %llu calls | CPU %.0f us, GPU %.0f us | %.0f frames/s",
+           "cadr viewer | %s / %s / %s / %s | %s | %s | %u in flight, %s | %llu draws in %llu calls | CPU %.0f us, GPU %.0f us | %.0f frames/s",
            names[0], names[1], names[2], names[3], v->shade == CADR_SHADE_SOLID ? "solid" : "edges",
-           frames, present_names[mode % 3], (unsigned long long)v->stats.draws,
+           section, frames, present_names[mode % 3], (unsigned long long)v->stats.draws,
            (unsigned long long)v->stats.draw_calls, v->stats.cpu_us, v->stats.gpu_us,
            v->frames_per_second);
 }
@@ -176,6 +215,9 @@ static void on_key(GLFWwindow *window, int key, int scancode, int action, int mo
   case GLFW_KEY_F: fit_view(v); break;
   case GLFW_KEY_I: toggle_frames_in_flight(v); break;
   case GLFW_KEY_M: cycle_present_mode(v); break;
+  case GLFW_KEY_X: cycle_section(v); break;
+  case GLFW_KEY_K: toggle_section_flag(v, CADR_SECTION_CAPS, "caps"); break;
+  case GLFW_KEY_H: toggle_section_flag(v, CADR_SECTION_HATCHED, "hatching"); break;
   case GLFW_KEY_ESCAPE: glfwSetWindowShouldClose(window, GLFW_TRUE); break;
   default: break;
   }
@@ -244,6 +286,21 @@ static int self_test(struct Viewer *v, const char *dir) {
   toggle_shade(v);
   render(v);
   toggle_shade(v);
+  /* Each section axis, capped, hatched and uncapped, then off again. */
+  for (frame = 0; frame < 4; ++frame) {
+    cycle_section(v);
+    render(v);
+  }
+  toggle_section_flag(v, CADR_SECTION_HATCHED, "hatching");
+  cycle_section(v);
+  render(v);
+  toggle_section_flag(v, CADR_SECTION_CAPS, "caps");
+  render(v);
+  toggle_section_flag(v, CADR_SECTION_CAPS, "caps");
+  toggle_section_flag(v, CADR_SECTION_HATCHED, "hatching");
+  cycle_section(v);
+  cycle_section(v);
+  cycle_section(v);
   /* Every present mode the window offers, with one and two frames in flight. */
   {
     uint32_t mode, offered = 0, frames;
@@ -334,6 +391,8 @@ int main(int argc, char **argv) {
   }
   memset(&v, 0, sizeof v);
   v.shade = CADR_SHADE_SOLID;
+  v.section_axis = -1;
+  v.section_flags = CADR_SECTION_CAPS;
   if (!glfwInit()) {
     fprintf(stderr, "viewer: GLFW cannot open a display (is DISPLAY set?)\n");
     return 1;

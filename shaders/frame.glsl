@@ -6,4 +6,12 @@ layout(set = 0, binding = 0, std140) uniform FrameUniforms {
     vec4 eye_high;         // the eye's world position: f32 high part (xyz) ...
     vec4 eye_low;          // ... and the f32 remainder, split from f64 on the CPU
     vec4 light;            // x: ambient, y: diffuse, z: specular, w: unused
+    // Section planes relative to the eye: n.xyz and d + n·eye (computed in f64 on the CPU);
+    // a point at world offset o from the eye is kept where dot(n, o) + w >= 0. Unused: (0,0,0,1).
+    vec4 section_planes[6];
+    vec4 section_colors[6];  // cap colour of each plane (linear RGBA)
+    uvec4 section;           // x: bits 0-7 plane count, bit 8 caps, bit 9 hatching
 } frame;
+
+const uint CADR_SECTION_CAPS = 0x100u;
+const uint CADR_SECTION_HATCHED = 0x200u;

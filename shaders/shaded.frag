@@ -1,15 +1,28 @@
 #version 460
-// Shaded triangles of every technique combination: a head light on the material colour.
+// Shaded triangles of every technique combination: a head light on the material colour. While
+// section planes cut with caps on, a closed part seen through a cut shows the cap there (see
+// section.glsl).
 #include "frame.glsl"
 #include "shading.glsl"
+#include "section.glsl"
 
 layout(location = 0) in vec3 in_view_position;
 layout(location = 1) in vec3 in_view_normal;
 layout(location = 2) flat in vec4 in_base_color;
 layout(location = 3) flat in vec2 in_surface;
+layout(location = 5) in vec3 in_eye_offset;
+layout(location = 6) flat in float in_closure;
 
 layout(location = 0) out vec4 out_color;
 
 void main() {
+    bool seen_from_inside = in_closure * (gl_FrontFacing ? 1.0 : -1.0) < 0.0;
+    if ((frame.section.x & CADR_SECTION_CAPS) != 0u && seen_from_inside) {
+        int plane = section_cap_plane(in_eye_offset);
+        if (plane >= 0) {
+            out_color = vec4(section_cap_color(plane, in_eye_offset), 1.0);
+            return;
+        }
+    }
     out_color = vec4(shade_headlight(in_view_position, in_view_normal, in_base_color, in_surface, frame.light), 1.0);
 }

@@ -32,6 +32,16 @@ layout(location = 1) out vec3 out_view_normal;
 layout(location = 2) flat out vec4 out_base_color;
 layout(location = 3) flat out vec2 out_surface;
 layout(location = 4) flat out uint out_pick_id;
+// Section caps: the world-space offset from the eye, and how the part closes as seen through
+// the winding of this draw: +1 closed, -1 closed but wound the other way (inside out, or
+// mirrored by its matrix), 0 open.
+layout(location = 5) out vec3 out_eye_offset;
+layout(location = 6) flat out float out_closure;
+
+out float gl_ClipDistance[6];
+
+const uint CADR_INSTANCE_CLOSED = 16u;
+const uint CADR_INSTANCE_INSIDE_OUT = 32u;
 
 void main() {
     CadrObject object = cadr_object();
@@ -53,4 +63,15 @@ void main() {
     // The pick pass writes instance + 1; 0 (nothing) lets the click through unpickable parts.
     out_pick_id = (object.flags & CADR_INSTANCE_PICKABLE) != 0u ? object.instance + 1u : 0u;
     gl_Position = frame.projection * view_position;
+    for (int i = 0; i < 6; ++i) {
+        gl_ClipDistance[i] = dot(frame.section_planes[i].xyz, world_offset) + frame.section_planes[i].w;
+    }
+    out_eye_offset = world_offset;
+    float closure = 0.0;
+    if ((object.flags & CADR_INSTANCE_CLOSED) != 0u) {
+        bool inside_out = (object.flags & CADR_INSTANCE_INSIDE_OUT) != 0u;
+        bool mirrored = determinant(linear_world) < 0.0;
+        closure = inside_out != mirrored ? -1.0 : 1.0;
+    }
+    out_closure = closure;
 }

@@ -27,6 +27,7 @@ mod pick;
 mod presentation;
 mod renderer;
 mod scene;
+mod section;
 mod timings;
 
 pub use bounds::*;
@@ -40,6 +41,7 @@ pub use pick::*;
 pub use presentation::*;
 pub use renderer::*;
 pub use scene::*;
+pub use section::*;
 pub use timings::*;
 
 use std::ffi::c_char;

@@ -6,6 +6,7 @@ use std::path::PathBuf;
 
 use clap::{Args, Parser, Subcommand, ValueEnum};
 
+use cadr_core::render::Section;
 use cadr_core::technique::{Combination, ShadeMode, TechniqueKind};
 
 use crate::motion::CameraPath;
@@ -200,6 +201,55 @@ impl TechniqueArgs {
     }
 }
 
+/// Section planes and their caps (`render`, `pick`).
+#[derive(Debug, Args)]
+pub struct SectionArgs {
+    /// Cut the scene with the plane NX,NY,NZ,D (world units), keeping the side where
+    /// NX·x + NY·y + NZ·z + D >= 0; repeat for up to 6 planes. Write --section=-1,0,0,5 when
+    /// the first number is negative.
+    #[arg(long = "section", value_name = "NX,NY,NZ,D", value_parser = parse_plane,
+          allow_negative_numbers = true)]
+    pub planes: Vec<glam::DVec4>,
+    /// Fill the cut of closed parts with the plane's colour (the default).
+    #[arg(long, overrides_with = "no_caps")]
+    pub caps: bool,
+    /// Show the inside of cut parts instead of filling the cut.
+    #[arg(long, overrides_with = "caps")]
+    pub no_caps: bool,
+    /// Hatch the caps.
+    #[arg(long)]
+    pub hatch: bool,
+}
+
+impl SectionArgs {
+    /// The section the options give (no planes: nothing cut).
+    pub fn section(&self) -> Result<Section, String> {
+        let mut section = Section::none();
+        section
+            .set_planes(&self.planes)
+            .map_err(|e| format!("--section: {e}"))?;
+        section.set_caps(!self.no_caps);
+        section.set_hatched(self.hatch);
+        Ok(section)
+    }
+
+    /// A short description for the report ("2 section planes, capped").
+    pub fn describe(&self) -> Option<String> {
+        let count = self.planes.len();
+        (count > 0).then(|| {
+            format!(
+                "{count} section plane{}, {}",
+                if count == 1 { "" } else { "s" },
+                match (self.no_caps, self.hatch) {
+                    (true, _) => "uncapped",
+                    (false, true) => "capped, hatched",
+                    (false, false) => "capped",
+                }
+            )
+        })
+    }
+}
+
 /// `cadr render`.
 #[derive(Debug, Args)]
 pub struct RenderArgs {
@@ -218,6 +268,8 @@ pub struct RenderArgs {
     pub frames: u32,
     #[command(flatten)]
     pub techniques: TechniqueArgs,
+    #[command(flatten)]
+    pub section: SectionArgs,
     /// Record every frame instead of replaying unchanged ones.
     #[arg(long)]
     pub no_replay: bool,
@@ -255,6 +307,8 @@ pub struct PickArgs {
     pub json: bool,
     #[command(flatten)]
     pub techniques: TechniqueArgs,
+    #[command(flatten)]
+    pub section: SectionArgs,
     #[command(flatten)]
     pub validation: ValidationArgs,
 }
@@ -456,6 +510,23 @@ fn parse_corner(text: &str) -> Result<(u32, u32), String> {
         x.trim().parse().map_err(|_| bad())?,
         y.trim().parse().map_err(|_| bad())?,
     ))
+}
+
+/// Parses a plane `NX,NY,NZ,D`: four finite numbers, the normal not zero.
+fn parse_plane(text: &str) -> Result<glam::DVec4, String> {
+    let bad = || "expected NX,NY,NZ,D: four numbers, the normal not zero".to_owned();
+    let values: Vec<f64> = text
+        .split(',')
+        .map(|v| v.trim().parse::<f64>().map_err(|_| bad()))
+        .collect::<Result<_, _>>()?;
+    let [x, y, z, d] = values[..] else {
+        return Err(bad());
+    };
+    let plane = glam::DVec4::new(x, y, z, d);
+    if !plane.is_finite() || plane.truncate().length() == 0.0 {
+        return Err(bad());
+    }
+    Ok(plane)
 }
 
 /// Parses a sub-pixel threshold: a number of pixels, 0 or more.

@@ -148,6 +148,7 @@ fn render(args: &RenderArgs, process_start: Instant) -> Result<(), String> {
             "--baseline draws with the built-in combination; it takes no technique options".into(),
         );
     }
+    let section = args.section.section()?;
     let output = &args.output;
     let Size { width, height } = args.size;
     let frames = args.frames as usize;
@@ -168,6 +169,7 @@ fn render(args: &RenderArgs, process_start: Instant) -> Result<(), String> {
         techniques::TechniqueSession::from_graph(&device, graph, registry, (width, height))?;
     session.choose(&combination, shade)?;
     session.set_min_pixels(min_pixels)?;
+    session.set_section(section);
     // The baseline records every frame, as the seeds' does.
     session
         .techniques()
@@ -175,6 +177,9 @@ fn render(args: &RenderArgs, process_start: Instant) -> Result<(), String> {
     let mut technique_line = format!("{combination}, {}", shade.name());
     if min_pixels > 0.0 {
         technique_line += &format!(", parts under {min_pixels} px culled");
+    }
+    if let Some(section) = args.section.describe() {
+        technique_line += &format!(", {section}");
     }
     let camera = Camera::fit(
         &stats.bounds,

@@ -66,6 +66,7 @@ pub fn pick(args: &PickArgs) -> Result<(), String> {
     let combination = args.techniques.combination();
     let shade = args.techniques.shade_mode();
     let min_pixels = args.techniques.min_pixels();
+    let section = args.section.section()?;
     let scene = crate::load_scene(&args.scene)?;
     let flat = flatten(&scene).map_err(|e| e.to_string())?;
     let stats = SceneStats::new(&scene, &flat);
@@ -75,6 +76,7 @@ pub fn pick(args: &PickArgs) -> Result<(), String> {
     let mut session = TechniqueSession::new(&device, &scene, registry, (width, height))?;
     session.choose(&combination, shade)?;
     session.set_min_pixels(min_pixels)?;
+    session.set_section(section);
     // The view `cadr render` draws: the camera fitted to the scene's bounds.
     let camera = Camera::fit(
         &stats.bounds,

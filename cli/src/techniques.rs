@@ -5,7 +5,7 @@ use std::path::PathBuf;
 use std::sync::Arc;
 
 use cadr_core::graph::SceneGraph;
-use cadr_core::render::{Camera, FrameStats};
+use cadr_core::render::{Camera, FrameStats, Section};
 use cadr_core::scene::Aabb;
 use cadr_core::scene::Scene;
 use cadr_core::technique::{
@@ -106,6 +106,11 @@ impl TechniqueSession {
             .select(combination)
             .map_err(|e| explain(e.to_string()))?;
         techniques.set_shade_mode(shade).map_err(|e| e.to_string())
+    }
+
+    /// Cuts the view with `section` (`--section`, `--caps`, `--no-caps`, `--hatch`).
+    pub fn set_section(&mut self, section: Section) {
+        self.view.set_section(section);
     }
 
     /// Sets the sub-pixel threshold (`--min-pixels`) of the chosen culler; refused with a

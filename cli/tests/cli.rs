@@ -849,3 +849,63 @@ fn bench_plots_the_table_and_the_sweep() {
     assert!(stderr(&output).contains("expected a file ending in .svg or .png"));
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+#[test]
+fn sections_cut_what_render_draws_and_pick_hits() {
+    let dir = std::env::temp_dir().join(format!("cadr-cli-section-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let whole = dir.join("whole.png");
+    let cut = dir.join("cut.png");
+    let render = |out: &std::path::Path, extra: &[&str]| {
+        let mut args = vec![
+            "render",
+            "gen:demo",
+            "-o",
+            out.to_str().unwrap(),
+            "--size",
+            "80x60",
+        ];
+        args.extend_from_slice(extra);
+        cadr(&args)
+    };
+    assert!(render(&whole, &[]).status.success());
+    // Keep y <= 0.4 and hatch the caps; negative numbers need no '='.
+    let output = render(
+        &cut,
+        &["--section", "0,-1,0,0.4", "--hatch", "--validation"],
+    );
+    assert!(output.status.success(), "{}", stderr(&output));
+    let text = stdout(&output);
+    assert!(text.contains("1 section plane, capped, hatched"), "{text}");
+    assert!(text.contains("validation:  0 errors"), "{text}");
+    assert_ne!(std::fs::read(&whole).unwrap(), std::fs::read(&cut).unwrap());
+
+    // A plane keeping nothing of the scene: the centre picks nothing.
+    let pick = |extra: &[&str]| {
+        let mut args = vec![
+            "pick", "gen:demo", "400", "300", "--size", "800x600", "--json",
+        ];
+        args.extend_from_slice(extra);
+        cadr(&args)
+    };
+    let hit = pick(&[]);
+    assert!(hit.status.success(), "{}", stderr(&hit));
+    assert!(stdout(&hit).contains("\"node\""), "{}", stdout(&hit));
+    let missed = pick(&["--section", "0,1,0,-1000"]);
+    assert!(missed.status.success(), "{}", stderr(&missed));
+    assert!(!stdout(&missed).contains("\"node\""), "{}", stdout(&missed));
+
+    let bad = render(&cut, &["--section", "0,0,0,1"]);
+    assert_eq!(bad.status.code(), Some(2), "{}", stderr(&bad));
+    assert!(stderr(&bad).contains("NX,NY,NZ,D"), "{}", stderr(&bad));
+    let plane = ["--section", "1,0,0,0"];
+    let seven: Vec<&str> = plane.iter().copied().cycle().take(14).collect();
+    let many = render(&cut, &seven);
+    assert_eq!(many.status.code(), Some(1), "{}", stderr(&many));
+    assert!(
+        stderr(&many).contains("--section: 7 section planes given; at most 6"),
+        "{}",
+        stderr(&many)
+    );
+    std::fs::remove_dir_all(&dir).unwrap();
+}

@@ -189,6 +189,7 @@ fn compile_uncached(
 pub const INCLUDES: &[IncludeFile] = &[
     ("frame.glsl", include_str!("../../shaders/frame.glsl")),
     ("shading.glsl", include_str!("../../shaders/shading.glsl")),
+    ("section.glsl", include_str!("../../shaders/section.glsl")),
 ];
 
 /// A complete shader: name (file name), stage and source.

@@ -12,7 +12,7 @@ use crate::error::{RenderError, RenderResult};
 use crate::gpu_scene::GpuScene;
 use crate::graph::{NodeHandle, SceneGraph};
 use crate::render::pick::{PickSample, PixelRect};
-use crate::render::{Camera, FrameStats, Renderer};
+use crate::render::{Camera, FrameStats, Renderer, Section};
 use crate::technique::{Combination, PluginRegistry, Techniques, Transforms};
 use crate::timings::{self, Phase};
 use crate::tree::SceneTree;
@@ -115,6 +115,17 @@ impl View {
     /// The active techniques, to choose or swap them.
     pub fn techniques_mut(&mut self) -> &mut Techniques {
         &mut self.techniques
+    }
+
+    /// The section planes and caps of this view.
+    pub fn section(&self) -> &Section {
+        self.renderer.section()
+    }
+
+    /// Cuts the view with `section`'s planes (every pass, picking included, ignores what they
+    /// cut away) and caps cuts through closed parts when its caps are on.
+    pub fn set_section(&mut self, section: Section) {
+        self.renderer.set_section(section);
     }
 
     /// The GPU scene last drawn, if any.

@@ -641,6 +641,58 @@ static void test_renderer(CadrContext context, struct Built *b) {
   EXPECT(cadr_renderer_shade_mode(renderer, NULL), CADR_RESULT_NULL_ARGUMENT);
   OK(cadr_renderer_set_shade_mode(renderer, CADR_SHADE_SOLID));
 
+  /* Section planes: a plane keeping only z >= 1e6 cuts the whole scene away, so nothing is
+   * drawn or picked; planes are refused with the reason and kept; no planes cut nothing. */
+  {
+    double away[4] = {0.0, 0.0, 2.0, -2.0e6}, read[8] = {0};
+    double zero_normal[4] = {0.0, 0.0, 0.0, 1.0};
+    double seven[28] = {0};
+    float blue[4] = {0.1f, 0.2f, 0.9f, 1.0f}, not_finite[4] = {NAN, 0.0f, 0.0f, 1.0f};
+    uint32_t count = 9, flags = 0;
+    CadrPickResult picked = {NULL, 0};
+    OK(cadr_renderer_section_planes(renderer, NULL, 0, &count));
+    CHECK(count == 0);
+    OK(cadr_renderer_section_flags(renderer, &flags));
+    CHECK(flags == CADR_SECTION_CAPS);
+    OK(cadr_renderer_render(renderer, b->scene, &camera, &stats));
+    OK(cadr_renderer_read_pixels(renderer, first, W * H * 4));
+    OK(cadr_renderer_set_section_planes(renderer, away, 1));
+    OK(cadr_renderer_section_planes(renderer, read, 2, &count));
+    CHECK(count == 1 && read[2] == 1.0 && read[3] == -1.0e6 && read[4] == 0.0);
+    OK(cadr_renderer_render(renderer, b->scene, &camera, &stats));
+    OK(cadr_renderer_read_pixels(renderer, second, W * H * 4));
+    CHECK(pixel_difference(first, second, W * H * 4) > 0);
+    CHECK(second[4 * (W * (H / 2) + W / 2)] == second[0]); /* the centre shows the background */
+    OK(cadr_renderer_pick(renderer, b->scene, &camera, W / 2, H / 2, &picked));
+    CHECK(picked.hit_count == 0);
+    EXPECT(cadr_renderer_set_section_planes(renderer, zero_normal, 1), CADR_RESULT_INVALID_ARGUMENT);
+    MESSAGE_HAS("section plane 0");
+    EXPECT(cadr_renderer_set_section_planes(renderer, seven, 7), CADR_RESULT_INVALID_ARGUMENT);
+    MESSAGE_HAS("at most 6");
+    EXPECT(cadr_renderer_set_section_planes(renderer, NULL, 1), CADR_RESULT_NULL_ARGUMENT);
+    OK(cadr_renderer_section_planes(renderer, NULL, 0, &count));
+    CHECK(count == 1); /* refused planes leave the planes as they were */
+    EXPECT(cadr_renderer_section_planes(renderer, read, 2, NULL), CADR_RESULT_NULL_ARGUMENT);
+    OK(cadr_renderer_set_section_flags(renderer, CADR_SECTION_CAPS | CADR_SECTION_HATCHED));
+    OK(cadr_renderer_section_flags(renderer, &flags));
+    CHECK(flags == (CADR_SECTION_CAPS | CADR_SECTION_HATCHED));
+    EXPECT(cadr_renderer_set_section_flags(renderer, 8), CADR_RESULT_INVALID_ARGUMENT);
+    MESSAGE_HAS("unknown bits");
+    OK(cadr_renderer_set_section_cap_color(renderer, 5, blue));
+    EXPECT(cadr_renderer_set_section_cap_color(renderer, CADR_MAX_SECTION_PLANES, blue),
+           CADR_RESULT_INVALID_ARGUMENT);
+    EXPECT(cadr_renderer_set_section_cap_color(renderer, 0, not_finite), CADR_RESULT_INVALID_ARGUMENT);
+    EXPECT(cadr_renderer_set_section_cap_color(renderer, 0, NULL), CADR_RESULT_NULL_ARGUMENT);
+    OK(cadr_renderer_set_section_planes(renderer, NULL, 0));
+    OK(cadr_renderer_set_section_flags(renderer, CADR_SECTION_CAPS));
+    OK(cadr_renderer_pick(renderer, b->scene, &camera, W / 2, H / 2, &picked));
+    CHECK(picked.hit_count == 1);
+    cadr_pick_result_free(&picked);
+    OK(cadr_renderer_render(renderer, b->scene, &camera, &stats));
+    OK(cadr_renderer_read_pixels(renderer, second, W * H * 4));
+    CHECK(pixel_difference(first, second, W * H * 4) == 0);
+  }
+
   /* Resizing. */
   OK(cadr_renderer_resize(renderer, 48, 32));
   OK(cadr_renderer_size(renderer, &width, &height));

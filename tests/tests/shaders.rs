@@ -55,7 +55,10 @@ fn every_shader_file_is_listed() {
 
 #[test]
 fn shader_struct_mirrors_have_std140_layout() {
-    assert_eq!(std::mem::size_of::<FrameUniforms>(), 176);
+    assert_eq!(std::mem::size_of::<FrameUniforms>(), 384);
+    assert_eq!(std::mem::offset_of!(FrameUniforms, section_planes), 176);
+    assert_eq!(std::mem::offset_of!(FrameUniforms, section_colors), 272);
+    assert_eq!(std::mem::offset_of!(FrameUniforms, section), 368);
     assert_eq!(std::mem::offset_of!(FrameUniforms, view_rotation), 64);
     assert_eq!(std::mem::offset_of!(FrameUniforms, eye_high), 128);
     assert_eq!(std::mem::offset_of!(FrameUniforms, eye_low), 144);

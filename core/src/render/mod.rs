@@ -9,6 +9,7 @@ mod camera;
 mod output;
 pub mod pick;
 mod pipeline;
+mod section;
 mod stats;
 
 pub use camera::{Camera, DEFAULT_DIRECTION, DEFAULT_FOV_DEGREES};
@@ -16,6 +17,7 @@ pub use output::SaveError;
 pub use pipeline::{
     FrameUniforms, HierarchyParameters, HierarchyStage, Pipelines, ScatterParameters, PICK_FORMAT,
 };
+pub use section::{Section, DEFAULT_CAP_COLORS, MAX_SECTION_PLANES};
 pub use stats::FrameStats;
 
 use std::sync::Arc;
@@ -56,6 +58,8 @@ pub struct Renderer {
     /// Frames the GPU may work on while the CPU prepares the next (see
     /// [`Renderer::set_frames_in_flight`]).
     frames_in_flight: u32,
+    /// The section planes and caps every pass applies.
+    section: Section,
 }
 
 /// The most frames a renderer lets the GPU work on while it prepares the next: techniques
@@ -158,7 +162,19 @@ impl Renderer {
             last_recorded: None,
             replayable: None,
             frames_in_flight: 1,
+            section: Section::none(),
         })
+    }
+
+    /// The section planes and caps (none by default).
+    pub fn section(&self) -> &Section {
+        &self.section
+    }
+
+    /// Sets the section planes and caps; the next frame applies them (a recorded frame may be
+    /// replayed: they reach the GPU through the frame's uniforms).
+    pub fn set_section(&mut self, section: Section) {
+        self.section = section;
     }
 
     /// The device.
@@ -287,6 +303,9 @@ impl Renderer {
             eye_high: [eye_high[0], eye_high[1], eye_high[2], 0.0],
             eye_low: [eye_low[0], eye_low[1], eye_low[2], 0.0],
             light: [0.22, 0.68, 0.35, 0.0],
+            section_planes: self.section.eye_relative(eye),
+            section_colors: self.section.colors(),
+            section: [self.section.flags(), 0, 0, 0],
         };
         self.commands.wait()?;
         // With a frame in flight, the last one's GPU time is read now that it is done anyway.

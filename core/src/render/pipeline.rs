@@ -26,6 +26,12 @@ pub struct FrameUniforms {
     pub eye_low: [f32; 4],
     /// Ambient, diffuse and specular strength of the head light.
     pub light: [f32; 4],
+    /// Section planes relative to the eye (see [`super::Section`]).
+    pub section_planes: [[f32; 4]; 6],
+    /// Cap colour of each plane.
+    pub section_colors: [[f32; 4]; 6],
+    /// Plane count (bits 0-7), caps (bit 8), hatching (bit 9).
+    pub section: [u32; 4],
 }
 
 /// Push constants of `scatter.comp`: one dispatch scatters the items of one array.

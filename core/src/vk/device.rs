@@ -16,7 +16,7 @@ use super::instance::{Instance, InstanceOptions, ValidationLog};
 use super::pipeline_cache::PersistentPipelineCache;
 
 /// Optional device features cadr uses when present. Required ones (dynamic rendering,
-/// synchronization2) are not listed: a device without them is refused.
+/// synchronization2, shaderClipDistance) are not listed: a device without them is refused.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct Capabilities {
     /// `multiDrawIndirect`: many indirect draws in one call.
@@ -134,6 +134,13 @@ impl Device {
                 reason: "Vulkan 1.3 dynamicRendering and synchronization2 are required".into(),
             });
         }
+        // Section planes clip in the vertex shader every technique shares.
+        if core.shader_clip_distance != vk::TRUE {
+            return Err(VkError::Unsupported {
+                device: adapter.name.clone(),
+                reason: "shaderClipDistance (section planes) is required".into(),
+            });
+        }
         // SAFETY: physical comes from this instance.
         let families = unsafe {
             instance
@@ -175,7 +182,8 @@ impl Device {
         let enabled_core = vk::PhysicalDeviceFeatures::default()
             .multi_draw_indirect(capabilities.multi_draw_indirect)
             .draw_indirect_first_instance(capabilities.draw_indirect_first_instance)
-            .pipeline_statistics_query(capabilities.pipeline_statistics_query);
+            .pipeline_statistics_query(capabilities.pipeline_statistics_query)
+            .shader_clip_distance(true);
         let mut enabled13 = vk::PhysicalDeviceVulkan13Features::default()
             .dynamic_rendering(true)
             .synchronization2(true)

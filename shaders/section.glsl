@@ -1,0 +1,39 @@
+// Section caps. A closed part cut by a section plane shows its inside through the cut: the
+// back faces of its far side. Such a back face is visible only where the cut removed what was
+// in front of it, so a visible back face of a closed part is painted as the cap: the view ray
+// is followed back to where it entered the kept region (the last plane it crossed into), and
+// the fragment takes that plane's cap colour, lit with the plane's normal.
+// Needs frame.glsl and shading.glsl.
+
+// The plane whose cut the fragment at world offset `eye_offset` from the eye is seen through
+// (-1 when none: the eye is on the kept side of every plane, so no cut lies in front).
+int section_cap_plane(vec3 eye_offset) {
+    uint count = min(frame.section.x & 0xffu, 6u);
+    float entry = 0.0;
+    int plane = -1;
+    for (uint i = 0u; i < count; ++i) {
+        vec4 p = frame.section_planes[i];
+        float along = dot(p.xyz, eye_offset);
+        // The eye is on the cut side of this plane and the ray crosses into the kept side.
+        if (p.w < 0.0 && along > 0.0) {
+            float t = -p.w / along;
+            if (t > entry) {
+                entry = t;
+                plane = int(i);
+            }
+        }
+    }
+    return plane;
+}
+
+// The colour of the cap of `plane` seen at world offset `eye_offset` from the eye
+// (gamma-encoded, like shade_headlight).
+vec3 section_cap_color(int plane, vec3 eye_offset) {
+    vec3 view_normal = mat3(frame.view_rotation) * frame.section_planes[plane].xyz;
+    vec3 view_position = (frame.view_rotation * vec4(eye_offset, 1.0)).xyz;
+    vec3 color = shade_headlight(view_position, view_normal, frame.section_colors[plane], vec2(0.0, 0.7), frame.light);
+    if ((frame.section.x & CADR_SECTION_HATCHED) != 0u && mod(gl_FragCoord.x + gl_FragCoord.y, 8.0) < 2.0) {
+        color *= 0.35;
+    }
+    return color;
+}

@@ -1,0 +1,361 @@
+//! Section planes: what a plane cuts away is neither drawn nor picked, cuts through closed parts
+//! are capped with the plane's colour where the cut is, cuts through open parts are not, every
+//! technique combination draws the same section, and a cut far from the origin is as exact as
+//! one at the origin.
+#![allow(clippy::unwrap_used)] // Test code: a failed unwrap is a failed test.
+
+use std::sync::Arc;
+
+use cadr_core::generate::{generate, GeneratorSpec};
+use cadr_core::graph::SceneGraph;
+use cadr_core::render::pick::PixelRect;
+use cadr_core::render::{Camera, Section, DEFAULT_DIRECTION};
+use cadr_core::scene::{flatten, Geometry, Material, MeshRef, Node, Part, Scene, Vertex};
+use cadr_core::technique::{Combination, ShadeMode, TechniqueKind};
+use cadr_core::tree::SceneTree;
+use cadr_core::view::View;
+use cadr_core::vk::Device;
+use cadr_tests::images::{assert_matches_reference, compare, DEFAULT_TOLERANCE, SAME_PICTURE};
+use cadr_tests::{assert_no_validation_errors, plugin_registry, test_device};
+use glam::{DMat4, DVec3, DVec4};
+
+const SIZE: (u32, u32) = (160, 120);
+const EYE: DVec3 = DVec3::new(3.0, 2.5, 4.0);
+
+/// A box from -1 to 1 on each axis, wound counter-clockwise seen from outside; without its top
+/// (+z) face when `open`.
+fn unit_box(open: bool) -> Geometry {
+    let vertices: Vec<Vertex> = (0..8)
+        .map(|i| {
+            let p = [i & 1, i >> 1 & 1, i >> 2 & 1].map(|b| if b == 1 { 1.0 } else { -1.0 });
+            Vertex {
+                position: p,
+                normal: p.map(|c| c / 3f32.sqrt()),
+            }
+        })
+        .collect();
+    // Faces as quads (a, b, c, d), counter-clockwise from outside.
+    let faces: [[u32; 4]; 6] = [
+        [0, 2, 3, 1], // -z
+        [0, 1, 5, 4], // -y
+        [0, 4, 6, 2], // -x
+        [1, 3, 7, 5], // +x
+        [2, 6, 7, 3], // +y
+        [4, 5, 7, 6], // +z
+    ];
+    let kept = if open { &faces[..5] } else { &faces[..] };
+    let indices: Vec<u32> = kept
+        .iter()
+        .flat_map(|[a, b, c, d]| [*a, *b, *c, *a, *c, *d])
+        .collect();
+    Geometry {
+        name: if open { "open box" } else { "box" }.into(),
+        parts: vec![Part {
+            first_index: 0,
+            index_count: indices.len() as u32,
+            first_wire_index: 0,
+            wire_index_count: 0,
+        }],
+        vertices,
+        indices,
+        wire_indices: Vec::new(),
+    }
+}
+
+/// Boxes at `places`, gray, the first geometry closed or open.
+fn boxes(open: bool, places: &[DVec3]) -> Scene {
+    let mut scene = Scene {
+        name: "boxes".into(),
+        geometries: vec![unit_box(open)],
+        materials: vec![Material {
+            name: "gray".into(),
+            base_color: [0.5, 0.5, 0.5, 1.0],
+            metallic: 0.0,
+            roughness: 0.8,
+        }],
+        ..Scene::default()
+    };
+    for (i, place) in places.iter().enumerate() {
+        let mut node = Node::new(format!("box {i}"));
+        node.local = DMat4::from_translation(*place);
+        node.mesh = Some(MeshRef::new(0, vec![0]));
+        scene.nodes.push(node);
+        scene.roots.push(i as u32);
+    }
+    scene
+}
+
+struct Fixture {
+    device: Arc<Device>,
+    graph: SceneGraph,
+    tree: SceneTree,
+    view: View,
+    camera: Camera,
+}
+
+impl Fixture {
+    fn new(scene: &Scene, camera: Camera) -> Self {
+        let device = test_device();
+        let (mut graph, _) = SceneGraph::from_scene(scene).unwrap();
+        let tree = SceneTree::build(&mut graph);
+        let view = View::new(&device, plugin_registry(&device), SIZE.0, SIZE.1).unwrap();
+        Self {
+            device,
+            graph,
+            tree,
+            view,
+            camera,
+        }
+    }
+
+    fn looking_at_the_origin(scene: &Scene, offset: DVec3) -> Self {
+        let aspect = f64::from(SIZE.0) / f64::from(SIZE.1);
+        let camera = Camera::look_at(EYE + offset, offset, 40.0, aspect, 0.1, 100.0);
+        Self::new(scene, camera)
+    }
+
+    fn section(&mut self, planes: &[DVec4], caps: bool) {
+        let mut section = Section::none();
+        section.set_planes(planes).unwrap();
+        section.set_caps(caps);
+        self.view.set_section(section);
+    }
+
+    fn render(&mut self) -> image::RgbaImage {
+        self.view
+            .render(&self.graph, &mut self.tree, &self.camera)
+            .unwrap();
+        self.view.renderer().read_rgba8().unwrap()
+    }
+
+    /// The pixel `point` projects to.
+    fn pixel_of(&self, point: DVec3) -> (u32, u32) {
+        let clip = self.camera.projection * self.camera.view * point.extend(1.0);
+        let ndc = clip.truncate() / clip.w;
+        (
+            ((ndc.x + 1.0) * 0.5 * f64::from(SIZE.0)) as u32,
+            ((ndc.y + 1.0) * 0.5 * f64::from(SIZE.1)) as u32,
+        )
+    }
+
+    fn color_at(&mut self, image: &image::RgbaImage, point: DVec3) -> [f32; 3] {
+        let (x, y) = self.pixel_of(point);
+        let p = image.get_pixel(x, y).0;
+        [p[0], p[1], p[2]].map(|c| f32::from(c) / 255.0)
+    }
+}
+
+fn reddish([r, g, b]: [f32; 3]) -> bool {
+    r - g > 0.25 && r - b > 0.25
+}
+
+fn bluish([r, g, b]: [f32; 3]) -> bool {
+    b - r > 0.25 && b - g > 0.1
+}
+
+fn grayish([r, g, b]: [f32; 3]) -> bool {
+    (r - g).abs() < 0.05 && (g - b).abs() < 0.05 && r > 0.1
+}
+
+/// Keeps z <= 0: cuts the front half of a box seen from `EYE` away.
+const KEEP_BELOW_Z0: DVec4 = DVec4::new(0.0, 0.0, -1.0, 0.0);
+
+#[test]
+fn a_cut_through_a_closed_box_is_capped_with_the_plane_colour_where_the_cut_is() {
+    let mut f = Fixture::looking_at_the_origin(&boxes(false, &[DVec3::ZERO]), DVec3::ZERO);
+    let whole = f.render();
+    let on_cap = DVec3::new(0.3, 0.3, 0.0);
+    assert!(grayish(f.color_at(&whole, on_cap)), "the box uncut is gray");
+
+    f.section(&[KEEP_BELOW_Z0], true);
+    let cut = f.render();
+    assert!(
+        reddish(f.color_at(&cut, on_cap)),
+        "the cap has the first plane's colour: {:?}",
+        f.color_at(&cut, on_cap)
+    );
+    // The cap ends where the box does: just inside its edge at x = 1 the cap, just outside the
+    // box's kept +x side.
+    let inside = DVec3::new(0.9, 0.0, 0.0);
+    let outside = DVec3::new(1.1, 0.0, 0.0);
+    assert!(
+        reddish(f.color_at(&cut, inside)),
+        "{:?}",
+        f.color_at(&cut, inside)
+    );
+    assert!(
+        grayish(f.color_at(&cut, outside)),
+        "{:?}",
+        f.color_at(&cut, outside)
+    );
+
+    // Each plane has a colour of its own, which the host may change.
+    let mut section = f.view.section().clone();
+    assert!(section.set_cap_color(0, [0.1, 0.2, 0.9, 1.0]));
+    f.view.set_section(section);
+    let blue = f.render();
+    assert!(
+        bluish(f.color_at(&blue, on_cap)),
+        "{:?}",
+        f.color_at(&blue, on_cap)
+    );
+
+    // Without caps the inside shows, shaded as it is.
+    f.section(&[KEEP_BELOW_Z0], false);
+    let uncapped = f.render();
+    assert!(
+        grayish(f.color_at(&uncapped, on_cap)),
+        "{:?}",
+        f.color_at(&uncapped, on_cap)
+    );
+    drop(f.view);
+    assert_no_validation_errors(&f.device);
+}
+
+#[test]
+fn a_cut_through_an_open_mesh_shows_no_cap() {
+    // Without its top face the box is open; the cut removes where that face was anyway, so
+    // what remains is the closed box's remainder, but drawn without a cap.
+    let mut f = Fixture::looking_at_the_origin(&boxes(true, &[DVec3::ZERO]), DVec3::ZERO);
+    f.section(&[KEEP_BELOW_Z0], true);
+    let cut = f.render();
+    let on_cap = DVec3::new(0.3, 0.3, 0.0);
+    let color = f.color_at(&cut, on_cap);
+    assert!(grayish(color), "no cap, no smear: {color:?}");
+    drop(f.view);
+    assert_no_validation_errors(&f.device);
+}
+
+#[test]
+fn picking_through_a_cut_hits_what_is_behind() {
+    // Box 0 at the origin, box 1 behind it on the line of sight.
+    let behind = -EYE * 0.8;
+    let mut f = Fixture::looking_at_the_origin(&boxes(false, &[DVec3::ZERO, behind]), DVec3::ZERO);
+    let centre = f.pixel_of(DVec3::ZERO);
+    let pick = |f: &mut Fixture| {
+        let hits = f
+            .view
+            .pick(
+                &f.graph,
+                &mut f.tree,
+                &f.camera,
+                PixelRect::pixel(centre.0, centre.1),
+            )
+            .unwrap();
+        let name = f.graph.node(hits[0].node).unwrap().name.clone();
+        name.trim_end_matches(" geometry").to_owned()
+    };
+    assert_eq!(pick(&mut f), "box 0");
+    // Keep what lies more than 2.2 beyond the origin along the view: box 0 is cut away whole.
+    let away = -EYE.normalize();
+    f.section(&[away.extend(-2.2)], true);
+    assert_eq!(pick(&mut f), "box 1");
+    drop(f.view);
+    assert_no_validation_errors(&f.device);
+}
+
+#[test]
+fn a_cut_far_from_the_origin_is_as_exact_as_one_at_the_origin() {
+    // 10 000 km away, f32 world coordinates would round the plane by a metre; relative to
+    // the eye in f64 the cut lands where it does at the origin.
+    let far = DVec3::new(1.0e7, -3.0e6, 5.0e6);
+    let plane = DVec4::new(0.6, 0.0, -0.8, 0.1);
+    let far_plane = plane.truncate().extend(plane.w - plane.truncate().dot(far));
+    let mut near_fixture =
+        Fixture::looking_at_the_origin(&boxes(false, &[DVec3::ZERO]), DVec3::ZERO);
+    near_fixture.section(&[plane], true);
+    let near_image = near_fixture.render();
+    let mut far_fixture = Fixture::looking_at_the_origin(&boxes(false, &[far]), far);
+    far_fixture.section(&[far_plane], true);
+    let far_image = far_fixture.render();
+    let difference = compare(&far_image, &near_image).unwrap();
+    assert!(difference.within(DEFAULT_TOLERANCE), "{difference:?}");
+}
+
+/// gen:demo cut by two planes, with edges, capped and hatched as the reference shows it.
+fn demo_section(f: &mut Fixture) {
+    let mut section = Section::none();
+    section
+        .set_planes(&[
+            DVec4::new(0.0, -1.0, 0.0, 0.4),
+            DVec4::new(-1.0, 0.0, -0.2, 14.0),
+        ])
+        .unwrap();
+    section.set_hatched(true);
+    f.view.set_section(section);
+    f.view
+        .techniques_mut()
+        .set_shade_mode(ShadeMode::Edges)
+        .unwrap();
+}
+
+fn demo_fixture() -> Fixture {
+    let scene = generate(&GeneratorSpec::Demo);
+    let bounds = flatten(&scene).unwrap().bounds;
+    let camera = Camera::fit(
+        &bounds,
+        f64::from(SIZE.0) / f64::from(SIZE.1),
+        DEFAULT_DIRECTION,
+    );
+    Fixture::new(&scene, camera)
+}
+
+#[test]
+fn the_demo_section_matches_its_reference_in_every_sampled_combination() {
+    let mut f = demo_fixture();
+    demo_section(&mut f);
+    let reference = f.render();
+    assert_matches_reference("section_demo", &reference, DEFAULT_TOLERANCE);
+    // Every third valid combination (a deterministic sample over all kinds), culled on the
+    // CPU and on the GPU, draws the same section.
+    let registry = Arc::clone(f.view.techniques().registry());
+    let names = |kind| {
+        registry
+            .of_kind(kind)
+            .map(|t| t.name.clone())
+            .collect::<Vec<_>>()
+    };
+    let mut valid = Vec::new();
+    for vertex in names(TechniqueKind::Vertex) {
+        for parameters in names(TechniqueKind::Parameters) {
+            for submission in names(TechniqueKind::Submission) {
+                for culling in names(TechniqueKind::Culling) {
+                    let combination = Combination {
+                        vertex: vertex.clone(),
+                        parameters: parameters.clone(),
+                        submission: submission.clone(),
+                        culling,
+                    };
+                    if f.view.techniques().check(&combination).is_ok() {
+                        valid.push(combination);
+                    }
+                }
+            }
+        }
+    }
+    let mut failures = Vec::new();
+    let sampled: Vec<_> = valid.iter().step_by(3).collect();
+    for combination in &sampled {
+        f.view.techniques_mut().select(combination).unwrap();
+        let image = f.render();
+        let difference = compare(&image, &reference).unwrap();
+        if !difference.within(SAME_PICTURE) {
+            failures.push(format!("{combination}: {difference:?}"));
+        }
+    }
+    assert!(
+        failures.is_empty(),
+        "{} of {} differ:\n{}",
+        failures.len(),
+        sampled.len(),
+        failures.join("\n")
+    );
+    assert!(sampled.iter().any(|c| c.culling.starts_with("gpu-")));
+    println!(
+        "{} of {} valid combinations sampled",
+        sampled.len(),
+        valid.len()
+    );
+    drop(f.view);
+    assert_no_validation_errors(&f.device);
+}

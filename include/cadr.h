@@ -31,6 +31,12 @@
 // Shaded triangles with their edges drawn as lines.
 #define CADR_SHADE_EDGES 1
 
+// Display mode: edge lines only, those hidden behind surfaces removed.
+#define CADR_SHADE_HIDDEN_LINE 2
+
+// Display mode: every triangle's edges, hidden ones included.
+#define CADR_SHADE_WIREFRAME 3
+
 // Node flag: the node and its subtree are drawn.
 #define CADR_NODE_VISIBLE 1
 
@@ -1196,14 +1202,15 @@ enum CadrResult cadr_renderer_set_technique(CadrRenderer renderer, uint32_t kind
 // `name` is null or writable.
 enum CadrResult cadr_renderer_technique(CadrRenderer renderer, uint32_t kind, const char **name);
 
-// Sets the shade mode: `CADR_SHADE_SOLID` or `CADR_SHADE_EDGES`.
+// Sets the display mode: `CADR_SHADE_SOLID`, `CADR_SHADE_EDGES`, `CADR_SHADE_HIDDEN_LINE` or
+// `CADR_SHADE_WIREFRAME`.
 //
 // Returns `CADR_RESULT_OK`, `CADR_RESULT_INVALID_ARGUMENT` (unknown mode), `CADR_RESULT_VULKAN`
 // or a handle error. Ownership: nothing changes hands; the arguments are read during the call
 // only. Thread-safety: as `cadr_renderer_create`.
 enum CadrResult cadr_renderer_set_shade_mode(CadrRenderer renderer, uint32_t mode);
 
-// Writes the shade mode (`CADR_SHADE_SOLID` or `CADR_SHADE_EDGES`).
+// Writes the display mode (`CADR_SHADE_*`).
 //
 // Returns `CADR_RESULT_OK`, `CADR_RESULT_NULL_ARGUMENT` or a handle error.
 // Ownership: the outputs are the caller's; cadr keeps no pointer to them.

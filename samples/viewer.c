@@ -7,7 +7,7 @@
  *
  * Mouse: left drag orbits, right or middle drag pans, the wheel zooms.
  * Keys:  V, P, S, C cycle the vertex path, parameter path, submission and culling technique;
- *        E toggles solid / solid with edges; F fits the view; I toggles 1 / 2 frames in flight;
+ *        E cycles the display modes (solid, edges, hidden-line, wireframe); F fits the view; I toggles 1 / 2 frames in flight;
  *        M cycles the present modes the window offers; X cycles a section plane through the
  *        view's centre across x, y, z and off; K toggles its caps, H their hatching; Esc quits.
  * The window title shows the techniques, the section, frames in flight, present mode, the frame's figures
@@ -109,10 +109,12 @@ static void cycle_technique(struct Viewer *v, uint32_t kind) {
   printf("%s technique: no other one fits the current combination\n", kind_names[kind]);
 }
 
+static const char *const shade_names[4] = {"solid", "edges", "hidden-line", "wireframe"};
+
 static void toggle_shade(struct Viewer *v) {
-  v->shade = v->shade == CADR_SHADE_SOLID ? CADR_SHADE_EDGES : CADR_SHADE_SOLID;
+  v->shade = (v->shade + 1) % 4;
   CADR_CHECK(cadr_renderer_set_shade_mode(v->renderer, v->shade));
-  printf("shade mode: %s\n", v->shade == CADR_SHADE_SOLID ? "solid" : "edges");
+  printf("display mode: %s\n", shade_names[v->shade]);
 }
 
 static const char *const axis_names[3] = {"x", "y", "z"};
@@ -181,7 +183,7 @@ static void describe(struct Viewer *v, char *text, size_t size) {
                : " uncapped");
   snprintf(text, size,
            "cadr viewer | %s / %s / %s / %s | %s | %s | %u in flight, %s | %llu draws in %llu calls | CPU %.0f us, GPU %.0f us | %.0f frames/s",
-           names[0], names[1], names[2], names[3], v->shade == CADR_SHADE_SOLID ? "solid" : "edges",
+           names[0], names[1], names[2], names[3], shade_names[v->shade % 4],
            section, frames, present_names[mode % 3], (unsigned long long)v->stats.draws,
            (unsigned long long)v->stats.draw_calls, v->stats.cpu_us, v->stats.gpu_us,
            v->frames_per_second);
@@ -283,9 +285,10 @@ static int self_test(struct Viewer *v, const char *dir) {
     cycle_technique(v, kind);
     render(v);
   }
-  toggle_shade(v);
-  render(v);
-  toggle_shade(v);
+  for (frame = 0; frame < 4; ++frame) {
+    toggle_shade(v);
+    render(v);
+  }
   /* Each section axis, capped, hatched and uncapped, then off again. */
   for (frame = 0; frame < 4; ++frame) {
     cycle_section(v);
@@ -444,8 +447,8 @@ int main(int argc, char **argv) {
   glfwSetCursorPosCallback(v.window, on_cursor);
   glfwSetScrollCallback(v.window, on_scroll);
   glfwSetFramebufferSizeCallback(v.window, on_framebuffer_size);
-  printf("viewer: %s (V/P/S/C cycle techniques, E edges, F fit, I frames in flight, M present "
-         "mode, Esc quit)\n",
+  printf("viewer: %s (V/P/S/C cycle techniques, E display mode, X section, K caps, H hatching, "
+         "F fit, I frames in flight, M present mode, Esc quit)\n",
          source);
 
   if (test_dir != NULL) {

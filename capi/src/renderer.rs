@@ -31,6 +31,10 @@ pub type CadrRenderer = *mut CadrRendererObject;
 pub const CADR_SHADE_SOLID: u32 = 0;
 /// Shaded triangles with their edges drawn as lines.
 pub const CADR_SHADE_EDGES: u32 = 1;
+/// Display mode: edge lines only, those hidden behind surfaces removed.
+pub const CADR_SHADE_HIDDEN_LINE: u32 = 2;
+/// Display mode: every triangle's edges, hidden ones included.
+pub const CADR_SHADE_WIREFRAME: u32 = 3;
 
 /// One technique name per kind; NULL keeps the renderer's current technique of that kind.
 #[repr(C)]
@@ -525,7 +529,8 @@ pub unsafe extern "C" fn cadr_renderer_technique(
     })
 }
 
-/// Sets the shade mode: `CADR_SHADE_SOLID` or `CADR_SHADE_EDGES`.
+/// Sets the display mode: `CADR_SHADE_SOLID`, `CADR_SHADE_EDGES`, `CADR_SHADE_HIDDEN_LINE` or
+/// `CADR_SHADE_WIREFRAME`.
 ///
 /// Returns `CADR_RESULT_OK`, `CADR_RESULT_INVALID_ARGUMENT` (unknown mode), `CADR_RESULT_VULKAN`
 /// or a handle error. Ownership: nothing changes hands; the arguments are read during the call
@@ -536,11 +541,11 @@ pub extern "C" fn cadr_renderer_set_shade_mode(renderer: CadrRenderer, mode: u32
         let mode = match mode {
             CADR_SHADE_SOLID => ShadeMode::Solid,
             CADR_SHADE_EDGES => ShadeMode::Edges,
-            other => {
-                return Err(Failure::invalid(format!(
-                    "shade mode {other} is not 0 (solid) or 1 (edges)"
-                )))
-            }
+            CADR_SHADE_HIDDEN_LINE => ShadeMode::HiddenLine,
+            CADR_SHADE_WIREFRAME => ShadeMode::Wireframe,
+            other => return Err(Failure::invalid(format!(
+                "shade mode {other} is not 0 (solid), 1 (edges), 2 (hidden line) or 3 (wireframe)"
+            ))),
         };
         with_renderer(renderer, |state| {
             Ok(state.view.techniques_mut().set_shade_mode(mode)?)
@@ -548,7 +553,7 @@ pub extern "C" fn cadr_renderer_set_shade_mode(renderer: CadrRenderer, mode: u32
     })
 }
 
-/// Writes the shade mode (`CADR_SHADE_SOLID` or `CADR_SHADE_EDGES`).
+/// Writes the display mode (`CADR_SHADE_*`).
 ///
 /// Returns `CADR_RESULT_OK`, `CADR_RESULT_NULL_ARGUMENT` or a handle error.
 /// Ownership: the outputs are the caller's; cadr keeps no pointer to them.
@@ -566,6 +571,8 @@ pub unsafe extern "C" fn cadr_renderer_shade_mode(
             Ok(match state.view.techniques().shade_mode() {
                 ShadeMode::Solid => CADR_SHADE_SOLID,
                 ShadeMode::Edges => CADR_SHADE_EDGES,
+                ShadeMode::HiddenLine => CADR_SHADE_HIDDEN_LINE,
+                ShadeMode::Wireframe => CADR_SHADE_WIREFRAME,
             })
         })?;
         // SAFETY: mode is null or writable (the caller's contract).

@@ -120,13 +120,18 @@ impl ValidationArgs {
     }
 }
 
-/// The shade modes of `render` and `pick`.
+/// The display modes of `render` and `pick`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
 pub enum Shade {
     /// Shaded surfaces.
+    #[value(alias = "shaded")]
     Solid,
     /// Shaded surfaces with their feature edges.
     Edges,
+    /// Feature edges only, those hidden behind surfaces removed.
+    HiddenLine,
+    /// Every triangle's edges, hidden ones included.
+    Wireframe,
 }
 
 impl Shade {
@@ -135,6 +140,8 @@ impl Shade {
         match self {
             Self::Solid => ShadeMode::Solid,
             Self::Edges => ShadeMode::Edges,
+            Self::HiddenLine => ShadeMode::HiddenLine,
+            Self::Wireframe => ShadeMode::Wireframe,
         }
     }
 }
@@ -154,8 +161,8 @@ pub struct TechniqueArgs {
     /// Culling technique (default none).
     #[arg(long = "cull", value_name = "NAME")]
     pub culling: Option<String>,
-    /// Shade mode.
-    #[arg(long, value_enum, value_name = "MODE")]
+    /// Display mode (--shade is another name for it).
+    #[arg(long = "display", alias = "shade", value_enum, value_name = "MODE")]
     pub shade: Option<Shade>,
     /// Skip parts whose bounding sphere projects under PX pixels across (gpu- cullers only;
     /// off by default, as CAD users count small parts).
@@ -344,10 +351,15 @@ pub struct TechniquesArgs {
 #[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
 pub enum BenchShade {
     /// Shaded surfaces.
+    #[value(alias = "shaded")]
     Solid,
     /// With feature edges.
     Edges,
-    /// Both, one row each.
+    /// Feature edges only, hidden ones removed.
+    HiddenLine,
+    /// Every triangle's edges.
+    Wireframe,
+    /// Every mode, one row each.
     All,
 }
 
@@ -357,6 +369,8 @@ impl BenchShade {
         match self {
             Self::Solid => vec![ShadeMode::Solid],
             Self::Edges => vec![ShadeMode::Edges],
+            Self::HiddenLine => vec![ShadeMode::HiddenLine],
+            Self::Wireframe => vec![ShadeMode::Wireframe],
             Self::All => ShadeMode::ALL.to_vec(),
         }
     }
@@ -386,8 +400,14 @@ pub struct BenchArgs {
     /// Image size.
     #[arg(long, value_name = "WxH", default_value = "640x480", value_parser = parse_size)]
     pub size: Size,
-    /// Shade modes to measure.
-    #[arg(long, value_enum, value_name = "MODE", default_value = "solid")]
+    /// Display modes to measure (--shade is another name for it).
+    #[arg(
+        long = "display",
+        alias = "shade",
+        value_enum,
+        value_name = "MODE",
+        default_value = "solid"
+    )]
     pub shade: BenchShade,
     /// Vertex techniques to measure (comma-separated; others default to every one).
     #[arg(long, value_name = "A,B", value_delimiter = ',')]

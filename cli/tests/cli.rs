@@ -115,7 +115,7 @@ fn bad_input_gives_a_clear_error_and_exit_code() {
         (
             vec!["bench", "--shade", "toon"],
             2,
-            "[possible values: solid, edges, all]",
+            "[possible values: solid, edges, hidden-line, wireframe, all]",
         ),
     ] {
         let output = cadr(&args);
@@ -349,7 +349,7 @@ fn render_uses_the_chosen_techniques_and_refuses_bad_combinations() {
         "toon",
     ]);
     assert!(
-        stderr(&output).contains("invalid value 'toon' for '--shade <MODE>'"),
+        stderr(&output).contains("invalid value 'toon' for '--display <MODE>'"),
         "{}",
         stderr(&output)
     );

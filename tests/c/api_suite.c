@@ -637,7 +637,14 @@ static void test_renderer(CadrContext context, struct Built *b) {
   OK(cadr_renderer_shade_mode(renderer, &mode));
   CHECK(mode == CADR_SHADE_EDGES);
   OK(cadr_renderer_render(renderer, b->scene, &camera, &stats));
+  OK(cadr_renderer_set_shade_mode(renderer, CADR_SHADE_HIDDEN_LINE));
+  OK(cadr_renderer_render(renderer, b->scene, &camera, &stats));
+  OK(cadr_renderer_set_shade_mode(renderer, CADR_SHADE_WIREFRAME));
+  OK(cadr_renderer_render(renderer, b->scene, &camera, &stats));
+  OK(cadr_renderer_shade_mode(renderer, &mode));
+  CHECK(mode == CADR_SHADE_WIREFRAME);
   EXPECT(cadr_renderer_set_shade_mode(renderer, 5), CADR_RESULT_INVALID_ARGUMENT);
+  MESSAGE_HAS("3 (wireframe)");
   EXPECT(cadr_renderer_shade_mode(renderer, NULL), CADR_RESULT_NULL_ARGUMENT);
   OK(cadr_renderer_set_shade_mode(renderer, CADR_SHADE_SOLID));
 

@@ -217,7 +217,12 @@ fn viewer_under_xvfb_swaps_techniques_resizes_and_shows_the_offscreen_image() {
         "params technique: ",
         "submit technique: ",
         "cull technique: ",
-        "shade mode: edges",
+        "display mode: edges",
+        "display mode: hidden-line",
+        "display mode: wireframe",
+        "section: x",
+        "section caps: off",
+        "section hatching: on",
         "present modes offered: fifo",
         "resized to 480x360",
     ] {

@@ -17,7 +17,7 @@ use crate::vk::{
     ShaderStage, VertexLayout, COLOR_FORMAT,
 };
 
-/// The shade modes of the seeds.
+/// The display modes: how surfaces and edges are drawn.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Default)]
 pub enum ShadeMode {
     /// Shaded triangles.
@@ -25,17 +25,29 @@ pub enum ShadeMode {
     Solid,
     /// Shaded triangles (pushed back by a depth bias) with edge lines over them.
     Edges,
+    /// Edge lines only, those hidden behind surfaces removed: the surfaces fill the depth
+    /// buffer (pushed back by a depth bias) but not the picture.
+    HiddenLine,
+    /// Every triangle's edges, hidden ones included (no surface is filled).
+    Wireframe,
 }
 
 impl ShadeMode {
-    /// Both modes.
-    pub const ALL: [ShadeMode; 2] = [ShadeMode::Solid, ShadeMode::Edges];
+    /// Every mode.
+    pub const ALL: [ShadeMode; 4] = [
+        ShadeMode::Solid,
+        ShadeMode::Edges,
+        ShadeMode::HiddenLine,
+        ShadeMode::Wireframe,
+    ];
 
     /// Its name on the command line.
     pub fn name(self) -> &'static str {
         match self {
             ShadeMode::Solid => "solid",
             ShadeMode::Edges => "edges",
+            ShadeMode::HiddenLine => "hidden-line",
+            ShadeMode::Wireframe => "wireframe",
         }
     }
 
@@ -104,7 +116,10 @@ impl FragmentShader {
     fn needed_by(passes: PassSet) -> &'static [FragmentShader] {
         match passes {
             PassSet::Shaded(ShadeMode::Solid) => &[Self::Solid],
-            PassSet::Shaded(ShadeMode::Edges) => &[Self::Solid, Self::Edges],
+            PassSet::Shaded(ShadeMode::Edges | ShadeMode::HiddenLine) => {
+                &[Self::Solid, Self::Edges]
+            }
+            PassSet::Shaded(ShadeMode::Wireframe) => &[Self::Edges],
             PassSet::Pick => &[Self::Pick],
         }
     }
@@ -206,6 +221,17 @@ impl ShaderCache {
     }
 }
 
+/// How a pass rasterizes, beyond its shaders and topology.
+#[derive(Clone, Copy, Debug, Default)]
+struct Raster {
+    /// Pushed back so that edge lines win the depth test.
+    depth_bias: bool,
+    /// Triangles drawn as their edges.
+    triangle_outlines: bool,
+    /// Depth only, no colour.
+    depth_only: bool,
+}
+
 /// The pipelines and layout of one combination and shade mode; destroyed together.
 pub struct TechniquePipelines {
     device: Arc<Device>,
@@ -276,24 +302,42 @@ impl TechniquePipelines {
         };
         let fragment = |shader: FragmentShader| inputs.shaders.fragment(shader);
         let triangles = vk::PrimitiveTopology::TRIANGLE_LIST;
+        let lines = vk::PrimitiveTopology::LINE_LIST;
+        let plain = Raster::default();
+        let under_lines = Raster {
+            depth_bias: true,
+            ..plain
+        };
         match inputs.passes {
             PassSet::Shaded(ShadeMode::Solid) => {
-                let pipeline =
-                    this.pipeline(inputs, fragment(FragmentShader::Solid)?, triangles, false)?;
+                let solid = fragment(FragmentShader::Solid)?;
+                let pipeline = this.pipeline(inputs, solid, triangles, plain)?;
                 this.add(pipeline, abi::CADR_PASS_TRIANGLES);
             }
-            PassSet::Shaded(ShadeMode::Edges) => {
-                let pipeline =
-                    this.pipeline(inputs, fragment(FragmentShader::Solid)?, triangles, true)?;
+            PassSet::Shaded(mode @ (ShadeMode::Edges | ShadeMode::HiddenLine)) => {
+                let surfaces = Raster {
+                    depth_only: mode == ShadeMode::HiddenLine,
+                    ..under_lines
+                };
+                let solid = fragment(FragmentShader::Solid)?;
+                let pipeline = this.pipeline(inputs, solid, triangles, surfaces)?;
                 this.add(pipeline, abi::CADR_PASS_TRIANGLES);
-                let lines = vk::PrimitiveTopology::LINE_LIST;
-                let pipeline =
-                    this.pipeline(inputs, fragment(FragmentShader::Edges)?, lines, false)?;
+                let edges = fragment(FragmentShader::Edges)?;
+                let pipeline = this.pipeline(inputs, edges, lines, plain)?;
                 this.add(pipeline, abi::CADR_PASS_EDGES);
             }
+            PassSet::Shaded(ShadeMode::Wireframe) => {
+                let outlines = Raster {
+                    triangle_outlines: true,
+                    ..plain
+                };
+                let edges = fragment(FragmentShader::Edges)?;
+                let pipeline = this.pipeline(inputs, edges, triangles, outlines)?;
+                this.add(pipeline, abi::CADR_PASS_TRIANGLES);
+            }
             PassSet::Pick => {
-                let pipeline =
-                    this.pipeline(inputs, fragment(FragmentShader::Pick)?, triangles, false)?;
+                let pick = fragment(FragmentShader::Pick)?;
+                let pipeline = this.pipeline(inputs, pick, triangles, plain)?;
                 this.add(pipeline, inputs.pick_kind);
             }
         }
@@ -314,7 +358,7 @@ impl TechniquePipelines {
         inputs: &PipelineInputs<'_>,
         fragment: &[u32],
         topology: vk::PrimitiveTopology,
-        depth_bias: bool,
+        raster: Raster,
     ) -> RenderResult<Pipeline> {
         let vertex = ShaderModule::from_spirv(
             &self.device,
@@ -344,7 +388,9 @@ impl TechniquePipelines {
                     attributes: &attributes,
                 }),
                 topology,
-                depth_bias,
+                depth_bias: raster.depth_bias,
+                triangle_outlines: raster.triangle_outlines,
+                color_writes: !raster.depth_only,
                 color_format: self.color_format,
                 name: "technique pipeline",
             },

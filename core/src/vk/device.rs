@@ -16,7 +16,8 @@ use super::instance::{Instance, InstanceOptions, ValidationLog};
 use super::pipeline_cache::PersistentPipelineCache;
 
 /// Optional device features cadr uses when present. Required ones (dynamic rendering,
-/// synchronization2, shaderClipDistance) are not listed: a device without them is refused.
+/// synchronization2, shaderClipDistance, fillModeNonSolid) are not listed: a device without
+/// them is refused.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct Capabilities {
     /// `multiDrawIndirect`: many indirect draws in one call.
@@ -134,12 +135,24 @@ impl Device {
                 reason: "Vulkan 1.3 dynamicRendering and synchronization2 are required".into(),
             });
         }
-        // Section planes clip in the vertex shader every technique shares.
-        if core.shader_clip_distance != vk::TRUE {
-            return Err(VkError::Unsupported {
-                device: adapter.name.clone(),
-                reason: "shaderClipDistance (section planes) is required".into(),
-            });
+        // Section planes clip in the vertex shader every technique shares; the wireframe
+        // display mode draws triangles as lines.
+        for (supported, name) in [
+            (
+                core.shader_clip_distance,
+                "shaderClipDistance (section planes)",
+            ),
+            (
+                core.fill_mode_non_solid,
+                "fillModeNonSolid (the wireframe display mode)",
+            ),
+        ] {
+            if supported != vk::TRUE {
+                return Err(VkError::Unsupported {
+                    device: adapter.name.clone(),
+                    reason: format!("{name} is required"),
+                });
+            }
         }
         // SAFETY: physical comes from this instance.
         let families = unsafe {
@@ -183,7 +196,8 @@ impl Device {
             .multi_draw_indirect(capabilities.multi_draw_indirect)
             .draw_indirect_first_instance(capabilities.draw_indirect_first_instance)
             .pipeline_statistics_query(capabilities.pipeline_statistics_query)
-            .shader_clip_distance(true);
+            .shader_clip_distance(true)
+            .fill_mode_non_solid(true);
         let mut enabled13 = vk::PhysicalDeviceVulkan13Features::default()
             .dynamic_rendering(true)
             .synchronization2(true)

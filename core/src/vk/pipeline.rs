@@ -164,7 +164,11 @@ impl Pipeline {
             .viewport_count(1)
             .scissor_count(1);
         let rasterization = vk::PipelineRasterizationStateCreateInfo::default()
-            .polygon_mode(vk::PolygonMode::FILL)
+            .polygon_mode(if desc.triangle_outlines {
+                vk::PolygonMode::LINE
+            } else {
+                vk::PolygonMode::FILL
+            })
             .cull_mode(vk::CullModeFlags::NONE)
             .front_face(vk::FrontFace::COUNTER_CLOCKWISE)
             .depth_bias_enable(desc.depth_bias)
@@ -178,7 +182,11 @@ impl Pipeline {
             .depth_write_enable(true)
             .depth_compare_op(vk::CompareOp::LESS_OR_EQUAL);
         let blend_attachments = [vk::PipelineColorBlendAttachmentState::default()
-            .color_write_mask(vk::ColorComponentFlags::RGBA)];
+            .color_write_mask(if desc.color_writes {
+                vk::ColorComponentFlags::RGBA
+            } else {
+                vk::ColorComponentFlags::empty()
+            })];
         let blend =
             vk::PipelineColorBlendStateCreateInfo::default().attachments(&blend_attachments);
         let dynamic_states = [vk::DynamicState::VIEWPORT, vk::DynamicState::SCISSOR];
@@ -286,6 +294,10 @@ pub struct GraphicsPipelineDesc<'a> {
     pub topology: vk::PrimitiveTopology,
     /// Pushes triangles back (constant and slope factor 1) so that edge lines win the depth test.
     pub depth_bias: bool,
+    /// Draws triangles as their three edges (polygon mode LINE: the wireframe display mode).
+    pub triangle_outlines: bool,
+    /// Writes colour; without, only depth (the hidden-line display mode's surfaces).
+    pub color_writes: bool,
     /// The colour attachment's format.
     pub color_format: vk::Format,
     /// The debug name.

@@ -1,0 +1,101 @@
+//! Display modes: gen:demo and the 2CylinderEngine in each mode match their references, each
+//! mode shows something other than the others, and the line-only modes fill no surface.
+#![allow(clippy::unwrap_used)] // Test code: a failed unwrap is a failed test.
+
+use cadr_core::generate::{generate, GeneratorSpec};
+use cadr_core::graph::SceneGraph;
+use cadr_core::load::load_file;
+use cadr_core::render::{Camera, CLEAR_COLOR, DEFAULT_DIRECTION};
+use cadr_core::scene::{flatten, Scene};
+use cadr_core::technique::ShadeMode;
+use cadr_core::tree::SceneTree;
+use cadr_core::view::View;
+use cadr_tests::images::{assert_matches_reference, compare, DEFAULT_TOLERANCE, VISIBLE_CHANGE};
+use cadr_tests::{assert_no_validation_errors, plugin_registry, test_device, CYLINDER_ENGINE_GLB};
+
+const SIZE: (u32, u32) = (160, 120);
+
+/// The scene in every mode, in the order of `ShadeMode::ALL`.
+fn render_every_mode(scene: &Scene) -> Vec<image::RgbaImage> {
+    let device = test_device();
+    let bounds = flatten(scene).unwrap().bounds;
+    let camera = Camera::fit(
+        &bounds,
+        f64::from(SIZE.0) / f64::from(SIZE.1),
+        DEFAULT_DIRECTION,
+    );
+    let (mut graph, _) = SceneGraph::from_scene(scene).unwrap();
+    let mut tree = SceneTree::build(&mut graph);
+    let mut view = View::new(&device, plugin_registry(&device), SIZE.0, SIZE.1).unwrap();
+    let images = ShadeMode::ALL
+        .iter()
+        .map(|&mode| {
+            view.techniques_mut().set_shade_mode(mode).unwrap();
+            view.render(&graph, &mut tree, &camera).unwrap();
+            view.renderer().read_rgba8().unwrap()
+        })
+        .collect();
+    drop(view);
+    assert_no_validation_errors(&device);
+    images
+}
+
+/// The share of pixels that are neither the background nor the dark line colour.
+fn filled_fraction(image: &image::RgbaImage) -> f64 {
+    let background = CLEAR_COLOR.map(|c| (c * 255.0).round());
+    let filled = image
+        .pixels()
+        .filter(|p| {
+            let near_background = (0..3).all(|i| (f32::from(p.0[i]) - background[i]).abs() < 12.0);
+            let line = (0..3).all(|i| p.0[i] < 90);
+            !near_background && !line
+        })
+        .count();
+    filled as f64 / f64::from(image.width() * image.height())
+}
+
+fn check_modes(name: &str, scene: &Scene) {
+    let images = render_every_mode(scene);
+    for (mode, image) in ShadeMode::ALL.iter().zip(&images) {
+        assert_matches_reference(
+            &format!("{name}_{}", mode.name().replace('-', "_")),
+            image,
+            DEFAULT_TOLERANCE,
+        );
+    }
+    for (i, a) in images.iter().enumerate() {
+        for b in &images[i + 1..] {
+            let difference = compare(a, b).unwrap();
+            assert!(
+                difference.mean > VISIBLE_CHANGE,
+                "{name}: two modes look alike: {difference:?}"
+            );
+        }
+    }
+    let [solid, _, hidden_line, wireframe] = &images[..] else {
+        unreachable!("four modes")
+    };
+    assert!(
+        filled_fraction(solid) > 0.05,
+        "{name}: solid fills surfaces"
+    );
+    for (mode, image) in [("hidden-line", hidden_line), ("wireframe", wireframe)] {
+        assert!(
+            filled_fraction(image) < 0.2 * filled_fraction(solid),
+            "{name}: {mode} fills no surface: {} against {}",
+            filled_fraction(image),
+            filled_fraction(solid)
+        );
+    }
+}
+
+#[test]
+fn the_demo_in_every_display_mode_matches_its_references() {
+    check_modes("display_demo", &generate(&GeneratorSpec::Demo));
+}
+
+#[test]
+fn the_cylinder_engine_in_every_display_mode_matches_its_references() {
+    let scene = load_file(std::path::Path::new(CYLINDER_ENGINE_GLB)).unwrap();
+    check_modes("display_cylinder_engine", &scene);
+}

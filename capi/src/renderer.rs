@@ -543,9 +543,11 @@ pub extern "C" fn cadr_renderer_set_shade_mode(renderer: CadrRenderer, mode: u32
             CADR_SHADE_EDGES => ShadeMode::Edges,
             CADR_SHADE_HIDDEN_LINE => ShadeMode::HiddenLine,
             CADR_SHADE_WIREFRAME => ShadeMode::Wireframe,
-            other => return Err(Failure::invalid(format!(
+            other => {
+                return Err(Failure::invalid(format!(
                 "shade mode {other} is not 0 (solid), 1 (edges), 2 (hidden line) or 3 (wireframe)"
-            ))),
+            )))
+            }
         };
         with_renderer(renderer, |state| {
             Ok(state.view.techniques_mut().set_shade_mode(mode)?)

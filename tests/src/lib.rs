@@ -10,7 +10,7 @@ use std::sync::Arc;
 use cadr_core::graph::SceneGraph;
 use cadr_core::render::{Camera, DEFAULT_DIRECTION};
 use cadr_core::scene::{flatten, Scene, SceneStats};
-use cadr_core::technique::{feature_bits, PluginRegistry};
+use cadr_core::technique::{feature_bits, Combination, PluginRegistry, TechniqueKind};
 use cadr_core::tree::SceneTree;
 use cadr_core::view::View;
 use cadr_core::vk::{Device, DeviceOptions, InstanceOptions};
@@ -156,4 +156,30 @@ pub fn assert_same_drawing(a: &Scene, b: &Scene) {
         SceneStats::new(a, &fa).triangles,
         SceneStats::new(b, &fb).triangles
     );
+}
+
+/// Every combination of the registry's techniques, valid or not, kind by kind in registry order.
+pub fn all_combinations(registry: &PluginRegistry) -> Vec<Combination> {
+    let names = |kind| {
+        registry
+            .of_kind(kind)
+            .map(|t| t.name.clone())
+            .collect::<Vec<_>>()
+    };
+    let mut all = Vec::new();
+    for vertex in names(TechniqueKind::Vertex) {
+        for parameters in names(TechniqueKind::Parameters) {
+            for submission in names(TechniqueKind::Submission) {
+                for culling in names(TechniqueKind::Culling) {
+                    all.push(Combination {
+                        vertex: vertex.clone(),
+                        parameters: parameters.clone(),
+                        submission: submission.clone(),
+                        culling,
+                    });
+                }
+            }
+        }
+    }
+    all
 }

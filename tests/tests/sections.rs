@@ -11,12 +11,12 @@ use cadr_core::graph::SceneGraph;
 use cadr_core::render::pick::PixelRect;
 use cadr_core::render::{Camera, Section, DEFAULT_DIRECTION};
 use cadr_core::scene::{flatten, Geometry, Material, MeshRef, Node, Part, Scene, Vertex};
-use cadr_core::technique::{Combination, ShadeMode, TechniqueKind};
+use cadr_core::technique::ShadeMode;
 use cadr_core::tree::SceneTree;
 use cadr_core::view::View;
 use cadr_core::vk::Device;
 use cadr_tests::images::{assert_matches_reference, compare, DEFAULT_TOLERANCE, SAME_PICTURE};
-use cadr_tests::{assert_no_validation_errors, plugin_registry, test_device};
+use cadr_tests::{all_combinations, assert_no_validation_errors, plugin_registry, test_device};
 use glam::{DMat4, DVec3, DVec4};
 
 const SIZE: (u32, u32) = (160, 120);
@@ -308,31 +308,10 @@ fn the_demo_section_matches_its_reference_in_every_sampled_combination() {
     assert_matches_reference("section_demo", &reference, DEFAULT_TOLERANCE);
     // Every third valid combination (a deterministic sample over all kinds), culled on the
     // CPU and on the GPU, draws the same section.
-    let registry = Arc::clone(f.view.techniques().registry());
-    let names = |kind| {
-        registry
-            .of_kind(kind)
-            .map(|t| t.name.clone())
-            .collect::<Vec<_>>()
-    };
-    let mut valid = Vec::new();
-    for vertex in names(TechniqueKind::Vertex) {
-        for parameters in names(TechniqueKind::Parameters) {
-            for submission in names(TechniqueKind::Submission) {
-                for culling in names(TechniqueKind::Culling) {
-                    let combination = Combination {
-                        vertex: vertex.clone(),
-                        parameters: parameters.clone(),
-                        submission: submission.clone(),
-                        culling,
-                    };
-                    if f.view.techniques().check(&combination).is_ok() {
-                        valid.push(combination);
-                    }
-                }
-            }
-        }
-    }
+    let valid: Vec<_> = all_combinations(f.view.techniques().registry())
+        .into_iter()
+        .filter(|c| f.view.techniques().check(c).is_ok())
+        .collect();
     let mut failures = Vec::new();
     let sampled: Vec<_> = valid.iter().step_by(3).collect();
     for combination in &sampled {

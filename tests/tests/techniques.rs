@@ -18,7 +18,10 @@ use cadr_core::technique::{
 use cadr_core::tree::SceneTree;
 use cadr_core::vk::Device;
 use cadr_tests::images::{compare, SAME_PICTURE, VISIBLE_CHANGE};
-use cadr_tests::{assert_no_validation_errors, plugin_registry, test_device, CYLINDER_ENGINE_GLB};
+use cadr_tests::{
+    all_combinations, assert_no_validation_errors, plugin_registry, test_device,
+    CYLINDER_ENGINE_GLB,
+};
 
 const SIZE: (u32, u32) = (160, 120);
 
@@ -134,31 +137,6 @@ fn the_built_in_combination_needs_no_library_and_draws_each_part_once() {
 }
 
 /// Every combination of the registry's techniques, in a stable order.
-fn all_combinations(registry: &PluginRegistry) -> Vec<Combination> {
-    let names = |kind| {
-        registry
-            .of_kind(kind)
-            .map(|t| t.name.clone())
-            .collect::<Vec<_>>()
-    };
-    let mut all = Vec::new();
-    for vertex in names(TechniqueKind::Vertex) {
-        for parameters in names(TechniqueKind::Parameters) {
-            for submission in names(TechniqueKind::Submission) {
-                for culling in names(TechniqueKind::Culling) {
-                    all.push(Combination {
-                        vertex: vertex.clone(),
-                        parameters: parameters.clone(),
-                        submission: submission.clone(),
-                        culling,
-                    });
-                }
-            }
-        }
-    }
-    all
-}
-
 /// Renders every valid combination in both shade modes and compares it with the reference
 /// (the baseline for solid; the simplest combination for edges, checked against the baseline
 /// where no edges are drawn). Invalid combinations must be refused with a reason.

@@ -35,15 +35,8 @@ struct SharedCallbacks(vk::AllocationCallbacks<'static>);
 // which may be used from any thread.
 unsafe impl Sync for SharedCallbacks {}
 
-static CORE_CALLBACKS: SharedCallbacks = SharedCallbacks(vk::AllocationCallbacks {
-    p_user_data: &CORE_OBJECT_ALLOCATIONS as *const AtomicI64 as *mut c_void,
-    pfn_allocation: Some(allocate),
-    pfn_reallocation: Some(reallocate),
-    pfn_free: Some(free),
-    pfn_internal_allocation: None,
-    pfn_internal_free: None,
-    _marker: std::marker::PhantomData,
-});
+static CORE_CALLBACKS: SharedCallbacks =
+    SharedCallbacks(counting_callbacks(&CORE_OBJECT_ALLOCATIONS));
 
 /// The callbacks to pass to every `vkCreate*` and `vkDestroy*` of cadr's own objects.
 pub(crate) fn core_callbacks() -> Option<&'static vk::AllocationCallbacks<'static>> {
@@ -58,7 +51,7 @@ pub fn live_object_allocations() -> i64 {
 
 /// Callbacks that count live allocations into `counter`, which must outlive every object
 /// created with them (and be destroyed with the same callbacks).
-pub fn counting_callbacks(counter: *const AtomicI64) -> vk::AllocationCallbacks<'static> {
+pub const fn counting_callbacks(counter: *const AtomicI64) -> vk::AllocationCallbacks<'static> {
     vk::AllocationCallbacks {
         p_user_data: counter.cast_mut().cast(),
         pfn_allocation: Some(allocate),

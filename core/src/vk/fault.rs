@@ -6,7 +6,9 @@
 //! - `device-memory`: a device memory allocation returns `VK_ERROR_OUT_OF_DEVICE_MEMORY`;
 //! - `host-memory`: a host allocation of a Vulkan object's memory, through cadr's allocation
 //!   callbacks ([`super::host_memory`]), returns NULL, so the call that made it fails with
-//!   `VK_ERROR_OUT_OF_HOST_MEMORY`;
+//!   `VK_ERROR_OUT_OF_HOST_MEMORY` (Mesa 22.3's lavapipe does not survive every such failure:
+//!   it uses some allocations unchecked, in vkCreatePipelineLayout and while recording
+//!   commands);
 //! - `submit`: a queue submission returns `VK_ERROR_OUT_OF_DEVICE_MEMORY`;
 //! - `device-lost`: a queue submission returns `VK_ERROR_DEVICE_LOST`, and the device is lost
 //!   from then on (every later submission, wait and allocation says so).

@@ -239,22 +239,23 @@ impl SectionArgs {
         section.set_hatched(self.hatch);
         Ok(section)
     }
+}
 
-    /// A short description for the report ("2 section planes, capped").
-    pub fn describe(&self) -> Option<String> {
-        let count = self.planes.len();
-        (count > 0).then(|| {
-            format!(
-                "{count} section plane{}, {}",
-                if count == 1 { "" } else { "s" },
-                match (self.no_caps, self.hatch) {
-                    (true, _) => "uncapped",
-                    (false, true) => "capped, hatched",
-                    (false, false) => "capped",
-                }
-            )
-        })
-    }
+/// A short description of `section` for the report ("2 section planes, capped"); none without
+/// planes.
+pub fn describe_section(section: &Section) -> Option<String> {
+    let count = section.planes().len();
+    (count > 0).then(|| {
+        format!(
+            "{count} section plane{}, {}",
+            if count == 1 { "" } else { "s" },
+            match (section.caps(), section.hatched()) {
+                (false, _) => "uncapped",
+                (true, true) => "capped, hatched",
+                (true, false) => "capped",
+            }
+        )
+    })
 }
 
 /// `cadr render`.

@@ -169,6 +169,7 @@ fn render(args: &RenderArgs, process_start: Instant) -> Result<(), String> {
         techniques::TechniqueSession::from_graph(&device, graph, registry, (width, height))?;
     session.choose(&combination, shade)?;
     session.set_min_pixels(min_pixels)?;
+    let section_line = args::describe_section(&section);
     session.set_section(section);
     // The baseline records every frame, as the seeds' does.
     session
@@ -178,7 +179,7 @@ fn render(args: &RenderArgs, process_start: Instant) -> Result<(), String> {
     if min_pixels > 0.0 {
         technique_line += &format!(", parts under {min_pixels} px culled");
     }
-    if let Some(section) = args.section.describe() {
+    if let Some(section) = section_line {
         technique_line += &format!(", {section}");
     }
     let camera = Camera::fit(

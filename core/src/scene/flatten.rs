@@ -57,15 +57,16 @@ fn drawn_parts(scene: &Scene) -> u64 {
 }
 
 /// Checks that a scene (otherwise valid) expands to at most [`MAX_DRAW_ITEMS`] drawn parts, and
-/// to no more than the memory budget holds ([`crate::memory_budget`]).
-pub(super) fn check_expansion(scene: &Scene) -> Result<(), SceneError> {
+/// to no more than the memory budget holds ([`crate::memory_budget`]); returns that number.
+pub(super) fn check_expansion(scene: &Scene) -> Result<u64, SceneError> {
     let total = drawn_parts(scene);
     if total > MAX_DRAW_ITEMS {
         return Err(SceneError(format!(
             "the scene expands to {total} drawn parts through shared subgraphs (at most {MAX_DRAW_ITEMS})"
         )));
     }
-    crate::memory_budget::check_drawn_parts(total).map_err(SceneError)
+    crate::memory_budget::check_drawn_parts(total).map_err(SceneError)?;
+    Ok(total)
 }
 
 /// Number of draw items under each node, saturating (memoised over the DAG).
@@ -111,8 +112,8 @@ pub fn flatten(scene: &Scene) -> Result<FlatScene, SceneError> {
 }
 
 fn flatten_validated(scene: &Scene) -> Result<FlatScene, SceneError> {
-    scene.validate()?;
-    let total = drawn_parts(scene);
+    scene.validate_references()?;
+    let total = check_expansion(scene)?;
     let geometry_bounds: Vec<Aabb> = scene.geometries.iter().map(|g| g.bounds()).collect();
     let mut flat = FlatScene {
         draws: Vec::with_capacity(total as usize),

@@ -258,6 +258,12 @@ impl Scene {
     /// and an expansion (paths × parts) within `MAX_DRAW_ITEMS` and the memory budget.
     /// Everything downstream (flattening, rendering) relies on a validated scene.
     pub fn validate(&self) -> Result<(), SceneError> {
+        self.validate_references()?;
+        flatten::check_expansion(self).map(|_| ())
+    }
+
+    /// [`Scene::validate`] without the expansion check.
+    pub(super) fn validate_references(&self) -> Result<(), SceneError> {
         let fail = |text: String| Err(SceneError(text));
         for (g, geometry) in self.geometries.iter().enumerate() {
             geometry.validate(g)?;
@@ -352,7 +358,7 @@ impl Scene {
                 self.nodes[node as usize].name
             ));
         }
-        flatten::check_expansion(self)
+        Ok(())
     }
 
     /// A node on a cycle of the child graph, if there is one.

@@ -32,7 +32,7 @@ while (( $# > 0 )); do
 done
 
 packages=(-p cadr-capi -p cadr-cli -p cadr-plugin-vertex -p cadr-plugin-parameters
-          -p cadr-plugin-submission -p cadr-plugin-culling)
+          -p cadr-plugin-submission -p cadr-plugin-culling -p cadr-plugin-transparency)
 if (( build )); then
   if [[ "$profile" == release ]]; then
     cargo build --locked --release "${packages[@]}"

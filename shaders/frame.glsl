@@ -11,7 +11,13 @@ layout(set = 0, binding = 0, std140) uniform FrameUniforms {
     vec4 section_planes[6];
     vec4 section_colors[6];  // cap colour of each plane (linear RGBA)
     uvec4 section;           // x: bits 0-7 plane count, bit 8 caps, bit 9 hatching
+    uvec4 target;            // x, y: the target's width and height; z: CADR_DISPLAY_* bits
 } frame;
 
 const uint CADR_SECTION_CAPS = 0x100u;
 const uint CADR_SECTION_HATCHED = 0x200u;
+
+// frame.target.z: the X-ray display mode (every part not highlighted drawn translucent).
+const uint CADR_DISPLAY_XRAY = 1u;
+// The opacity of parts X-ray makes translucent.
+const float CADR_XRAY_OPACITY = 0.2;

@@ -43,8 +43,29 @@ out float gl_ClipDistance[6];
 const uint CADR_INSTANCE_CLOSED = 16u;
 const uint CADR_INSTANCE_INSIDE_OUT = 32u;
 
+// Which surfaces the pipeline draws: every one, only the opaque ones (the opaque pass of a
+// frame with translucent surfaces) or only the translucent ones (the transparency method's
+// pass). A part the pipeline does not draw has its triangles clipped away whole.
+const uint CADR_DRAW_ALL = 0u;
+const uint CADR_DRAW_OPAQUE = 1u;
+const uint CADR_DRAW_TRANSLUCENT = 2u;
+layout(constant_id = 0) const uint CADR_DRAW_ROLE = CADR_DRAW_ALL;
+
 void main() {
     CadrObject object = cadr_object();
+    // Translucent: a material opacity under 1, or X-ray on a part not highlighted.
+    bool highlighted = (object.flags & CADR_INSTANCE_HIGHLIGHTED) != 0u;
+    if ((frame.target.z & CADR_DISPLAY_XRAY) != 0u && !highlighted) {
+        object.base_color.a = min(object.base_color.a, CADR_XRAY_OPACITY);
+    }
+    bool translucent = object.base_color.a < 1.0;
+    if (CADR_DRAW_ROLE != CADR_DRAW_ALL && translucent != (CADR_DRAW_ROLE == CADR_DRAW_TRANSLUCENT)) {
+        gl_Position = vec4(0.0, 0.0, 2.0, 1.0);
+        for (int i = 0; i < 6; ++i) {
+            gl_ClipDistance[i] = -1.0;
+        }
+        return;
+    }
     mat4 world = object.world;
     vec3 translation_low = vec3(world[0].w, world[1].w, world[2].w);
     mat3 linear_world = mat3(world[0].xyz, world[1].xyz, world[2].xyz);
@@ -56,7 +77,7 @@ void main() {
     out_view_position = view_position.xyz;
     out_view_normal = cofactor * cadr_vertex_normal();
     out_base_color = object.base_color;
-    if ((object.flags & CADR_INSTANCE_HIGHLIGHTED) != 0u) {
+    if (highlighted) {
         out_base_color.rgb = mix(out_base_color.rgb, HIGHLIGHT_COLOR, 0.65);
     }
     out_surface = object.surface;

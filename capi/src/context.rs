@@ -124,6 +124,9 @@ pub enum CadrTechniqueKind {
     Submission = 2,
     /// Which instances are drawn.
     Culling = 3,
+    /// How translucent surfaces are blended (`weighted-blended`, the default, or the exact
+    /// `per-pixel-lists`).
+    Transparency = 4,
 }
 
 impl CadrTechniqueKind {
@@ -133,6 +136,7 @@ impl CadrTechniqueKind {
             Self::Parameters => TechniqueKind::Parameters,
             Self::Submission => TechniqueKind::Submission,
             Self::Culling => TechniqueKind::Culling,
+            Self::Transparency => TechniqueKind::Transparency,
         }
     }
 
@@ -142,6 +146,7 @@ impl CadrTechniqueKind {
             TechniqueKind::Parameters => Self::Parameters,
             TechniqueKind::Submission => Self::Submission,
             TechniqueKind::Culling => Self::Culling,
+            TechniqueKind::Transparency => Self::Transparency,
         }
     }
 
@@ -152,9 +157,10 @@ impl CadrTechniqueKind {
             1 => Self::Parameters,
             2 => Self::Submission,
             3 => Self::Culling,
+            4 => Self::Transparency,
             _ => {
                 return Err(Failure::invalid(format!(
-                    "technique kind {value} is not 0..3"
+                    "technique kind {value} is not 0..4"
                 )))
             }
         })

@@ -35,6 +35,9 @@ pub const CADR_SHADE_EDGES: u32 = 1;
 pub const CADR_SHADE_HIDDEN_LINE: u32 = 2;
 /// Display mode: every triangle's edges, hidden ones included.
 pub const CADR_SHADE_WIREFRAME: u32 = 3;
+/// Display mode: every part translucent with its edges, highlighted parts opaque (what is
+/// inside an assembly shows through its housing).
+pub const CADR_SHADE_XRAY: u32 = 4;
 
 /// One technique name per kind; NULL keeps the renderer's current technique of that kind.
 #[repr(C)]
@@ -121,6 +124,7 @@ fn combination(names: [&str; 4]) -> Combination {
         parameters: names[1].into(),
         submission: names[2].into(),
         culling: names[3].into(),
+        ..Combination::built_in()
     }
 }
 
@@ -529,8 +533,8 @@ pub unsafe extern "C" fn cadr_renderer_technique(
     })
 }
 
-/// Sets the display mode: `CADR_SHADE_SOLID`, `CADR_SHADE_EDGES`, `CADR_SHADE_HIDDEN_LINE` or
-/// `CADR_SHADE_WIREFRAME`.
+/// Sets the display mode: `CADR_SHADE_SOLID`, `CADR_SHADE_EDGES`, `CADR_SHADE_HIDDEN_LINE`,
+/// `CADR_SHADE_WIREFRAME` or `CADR_SHADE_XRAY`.
 ///
 /// Returns `CADR_RESULT_OK`, `CADR_RESULT_INVALID_ARGUMENT` (unknown mode), `CADR_RESULT_VULKAN`
 /// or a handle error. Ownership: nothing changes hands; the arguments are read during the call
@@ -543,9 +547,10 @@ pub extern "C" fn cadr_renderer_set_shade_mode(renderer: CadrRenderer, mode: u32
             CADR_SHADE_EDGES => ShadeMode::Edges,
             CADR_SHADE_HIDDEN_LINE => ShadeMode::HiddenLine,
             CADR_SHADE_WIREFRAME => ShadeMode::Wireframe,
+            CADR_SHADE_XRAY => ShadeMode::XRay,
             other => {
                 return Err(Failure::invalid(format!(
-                "shade mode {other} is not 0 (solid), 1 (edges), 2 (hidden line) or 3 (wireframe)"
+                "shade mode {other} is not 0 (solid), 1 (edges), 2 (hidden line), 3 (wireframe) or 4 (X-ray)"
             )))
             }
         };
@@ -575,6 +580,7 @@ pub unsafe extern "C" fn cadr_renderer_shade_mode(
                 ShadeMode::Edges => CADR_SHADE_EDGES,
                 ShadeMode::HiddenLine => CADR_SHADE_HIDDEN_LINE,
                 ShadeMode::Wireframe => CADR_SHADE_WIREFRAME,
+                ShadeMode::XRay => CADR_SHADE_XRAY,
             })
         })?;
         // SAFETY: mode is null or writable (the caller's contract).

@@ -132,6 +132,9 @@ pub enum Shade {
     HiddenLine,
     /// Every triangle's edges, hidden ones included.
     Wireframe,
+    /// Every part translucent with its edges, highlighted parts opaque.
+    #[value(name = "xray")]
+    XRay,
 }
 
 impl Shade {
@@ -142,6 +145,7 @@ impl Shade {
             Self::Edges => ShadeMode::Edges,
             Self::HiddenLine => ShadeMode::HiddenLine,
             Self::Wireframe => ShadeMode::Wireframe,
+            Self::XRay => ShadeMode::XRay,
         }
     }
 }
@@ -161,6 +165,10 @@ pub struct TechniqueArgs {
     /// Culling technique (default none).
     #[arg(long = "cull", value_name = "NAME")]
     pub culling: Option<String>,
+    /// Transparency method for translucent parts (default weighted-blended; per-pixel-lists is
+    /// exact).
+    #[arg(long, value_name = "NAME")]
+    pub transparency: Option<String>,
     /// Display mode (--shade is another name for it).
     #[arg(long = "display", alias = "shade", value_enum, value_name = "MODE")]
     pub shade: Option<Shade>,
@@ -179,6 +187,7 @@ impl TechniqueArgs {
             (TechniqueKind::Parameters, &self.parameters),
             (TechniqueKind::Submission, &self.submission),
             (TechniqueKind::Culling, &self.culling),
+            (TechniqueKind::Transparency, &self.transparency),
         ] {
             if let Some(name) = name {
                 combination.set(kind, name);
@@ -203,6 +212,7 @@ impl TechniqueArgs {
             || self.parameters.is_some()
             || self.submission.is_some()
             || self.culling.is_some()
+            || self.transparency.is_some()
             || self.shade.is_some()
             || self.min_pixels.is_some()
     }
@@ -360,6 +370,9 @@ pub enum BenchShade {
     HiddenLine,
     /// Every triangle's edges.
     Wireframe,
+    /// Translucent parts with their edges.
+    #[value(name = "xray")]
+    XRay,
     /// Every mode, one row each.
     All,
 }
@@ -372,6 +385,7 @@ impl BenchShade {
             Self::Edges => vec![ShadeMode::Edges],
             Self::HiddenLine => vec![ShadeMode::HiddenLine],
             Self::Wireframe => vec![ShadeMode::Wireframe],
+            Self::XRay => vec![ShadeMode::XRay],
             Self::All => ShadeMode::ALL.to_vec(),
         }
     }
@@ -422,6 +436,9 @@ pub struct BenchArgs {
     /// Culling techniques to measure (default none, every one with --all).
     #[arg(long = "cull", value_name = "A,B", value_delimiter = ',')]
     pub culling: Option<Vec<String>>,
+    /// Transparency methods to measure (default weighted-blended, every one with --all).
+    #[arg(long, value_name = "A,B", value_delimiter = ',')]
+    pub transparency: Option<Vec<String>>,
     /// Measure every supported combination.
     #[arg(long)]
     pub all: bool,
@@ -451,8 +468,9 @@ pub struct BenchArgs {
 }
 
 impl BenchArgs {
-    /// The names `--vertex`, `--params`, `--submit` and `--cull` list, by kind.
-    pub fn technique_lists(&self) -> [(TechniqueKind, &'static str, Option<&[String]>); 4] {
+    /// The names `--vertex`, `--params`, `--submit`, `--cull` and `--transparency` list, by
+    /// kind.
+    pub fn technique_lists(&self) -> [(TechniqueKind, &'static str, Option<&[String]>); 5] {
         [
             (TechniqueKind::Vertex, "--vertex", self.vertex.as_deref()),
             (
@@ -466,6 +484,11 @@ impl BenchArgs {
                 self.submission.as_deref(),
             ),
             (TechniqueKind::Culling, "--cull", self.culling.as_deref()),
+            (
+                TechniqueKind::Transparency,
+                "--transparency",
+                self.transparency.as_deref(),
+            ),
         ]
     }
 

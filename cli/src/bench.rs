@@ -11,6 +11,7 @@ use cadr_core::render::FrameStats;
 use cadr_core::scene::{flatten, Scene, SceneStats};
 use cadr_core::technique::{
     Combination, PluginRegistry, ShadeMode, TechniqueKind, Techniques, Transforms,
+    DEFAULT_TRANSPARENCY,
 };
 use cadr_core::vk::Device;
 
@@ -155,10 +156,17 @@ fn selection(args: &BenchArgs, techniques: &Techniques) -> Result<Vec<Combinatio
         }
         Ok(wanted)
     };
-    let [vertex_list, parameter_list, submission_list, culling_list] = args.technique_lists();
+    let [vertex_list, parameter_list, submission_list, culling_list, transparency_list] =
+        args.technique_lists();
     let any_filter = [vertex_list, parameter_list, submission_list, culling_list]
         .iter()
         .any(|(_, _, list)| list.is_some());
+    let transparency_default = if args.all {
+        names(TechniqueKind::Transparency)
+    } else {
+        vec![DEFAULT_TRANSPARENCY.to_owned()]
+    };
+    let methods = chosen(transparency_list, transparency_default)?;
     let mut combinations = Vec::new();
     if args.all || any_filter {
         let cull_default = if args.all {
@@ -171,12 +179,15 @@ fn selection(args: &BenchArgs, techniques: &Techniques) -> Result<Vec<Combinatio
             for parameters in chosen(parameter_list, names(TechniqueKind::Parameters))? {
                 for submission in chosen(submission_list, names(TechniqueKind::Submission))? {
                     for culling in &cullers {
-                        combinations.push(Combination {
-                            vertex: vertex.clone(),
-                            parameters: parameters.clone(),
-                            submission: submission.clone(),
-                            culling: culling.clone(),
-                        });
+                        for transparency in &methods {
+                            combinations.push(Combination {
+                                vertex: vertex.clone(),
+                                parameters: parameters.clone(),
+                                submission: submission.clone(),
+                                culling: culling.clone(),
+                                transparency: transparency.clone(),
+                            });
+                        }
                     }
                 }
             }
@@ -184,12 +195,15 @@ fn selection(args: &BenchArgs, techniques: &Techniques) -> Result<Vec<Combinatio
     } else {
         for submission in names(TechniqueKind::Submission) {
             for (vertex, parameters) in DEFAULT_PATHS {
-                combinations.push(Combination {
-                    vertex: vertex.into(),
-                    parameters: parameters.into(),
-                    submission: submission.clone(),
-                    culling: "none".into(),
-                });
+                for transparency in &methods {
+                    combinations.push(Combination {
+                        vertex: vertex.into(),
+                        parameters: parameters.into(),
+                        submission: submission.clone(),
+                        culling: "none".into(),
+                        transparency: transparency.clone(),
+                    });
+                }
             }
         }
     }
@@ -470,6 +484,7 @@ fn run_sweep(bench: &Bench, args: &BenchArgs) -> Result<serde_json::Value, Strin
             parameters: parameters.into(),
             submission: submission.into(),
             culling: "none".into(),
+            ..Combination::built_in()
         })
         .collect();
     let mut columns: Vec<(u64, SceneStats, Vec<Row>)> = Vec::new();

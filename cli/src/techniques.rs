@@ -21,11 +21,12 @@ use cadr_core::vk::{Device, DeviceOptions, InstanceOptions};
 use crate::args::TechniquesArgs;
 
 /// The command-line option of each technique kind.
-pub const KIND_OPTIONS: [(TechniqueKind, &str); 4] = [
+pub const KIND_OPTIONS: [(TechniqueKind, &str); 5] = [
     (TechniqueKind::Vertex, "--vertex"),
     (TechniqueKind::Parameters, "--params"),
     (TechniqueKind::Submission, "--submit"),
     (TechniqueKind::Culling, "--cull"),
+    (TechniqueKind::Transparency, "--transparency"),
 ];
 
 /// The plugins for `device`, from the default directories.
@@ -224,7 +225,12 @@ pub fn techniques(args: &TechniquesArgs) -> Result<(), String> {
             println!("  {:<26} {}{origin}{support}", t.name, t.description);
         }
     }
-    println!("\nshade modes (--shade): solid (default), edges");
+    let modes: Vec<&str> = ShadeMode::ALL.iter().map(|m| m.name()).collect();
+    println!(
+        "\ndisplay modes (--display): {} (default {})",
+        modes.join(", "),
+        ShadeMode::Solid.name()
+    );
     for refusal in registry.refusals() {
         println!("refused: {refusal}");
     }

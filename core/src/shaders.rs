@@ -190,6 +190,10 @@ pub const INCLUDES: &[IncludeFile] = &[
     ("frame.glsl", include_str!("../../shaders/frame.glsl")),
     ("shading.glsl", include_str!("../../shaders/shading.glsl")),
     ("section.glsl", include_str!("../../shaders/section.glsl")),
+    (
+        "transparency.glsl",
+        include_str!("../../shaders/transparency.glsl"),
+    ),
 ];
 
 /// A complete shader: name (file name), stage and source.
@@ -242,8 +246,32 @@ pub const EDGES_FRAG: ShaderSource = ShaderSource {
     source: include_str!("../../shaders/edges.frag"),
 };
 
+/// Translucent surfaces: the transparency method's fragment snippet completes it (see
+/// `technique::pipeline`).
+pub const TRANSLUCENT_FRAG: ShaderSource = ShaderSource {
+    name: "translucent.frag",
+    stage: ShaderStage::Fragment,
+    source: include_str!("../../shaders/translucent.frag"),
+};
+/// The transparency merge: the method's merge snippet completes it.
+pub const MERGE_FRAG: ShaderSource = ShaderSource {
+    name: "merge.frag",
+    stage: ShaderStage::Fragment,
+    source: include_str!("../../shaders/merge.frag"),
+};
+/// One triangle covering the target (full-screen passes).
+pub const MERGE_VERT: ShaderSource = ShaderSource {
+    name: "merge.vert",
+    stage: ShaderStage::Vertex,
+    source: include_str!("../../shaders/merge.vert"),
+};
+
+/// The marker a transparency method's snippet replaces in [`TRANSLUCENT_FRAG`] and
+/// [`MERGE_FRAG`].
+pub const TRANSPARENCY_MARKER: &str = "//@TRANSPARENCY@";
+
 /// Shaders that are templates: plugins' snippets complete them (see `technique::pipeline`).
-pub const TEMPLATES: &[ShaderSource] = &[TECHNIQUE_VERT];
+pub const TEMPLATES: &[ShaderSource] = &[TECHNIQUE_VERT, TRANSLUCENT_FRAG, MERGE_FRAG];
 
 /// Every complete shader, for validation.
 pub const ALL: &[ShaderSource] = &[
@@ -252,4 +280,5 @@ pub const ALL: &[ShaderSource] = &[
     SCATTER_COMP,
     TRANSFORMS_COMP,
     EDGES_FRAG,
+    MERGE_VERT,
 ];

@@ -86,8 +86,11 @@ impl View {
         height: u32,
     ) -> RenderResult<Self> {
         let renderer = Renderer::new(device, width, height)?;
-        let mut techniques =
-            Techniques::new(device, registry, renderer.pipelines().frame_set_layout());
+        let mut techniques = Techniques::new(
+            device,
+            registry,
+            renderer.pipelines().technique_set_layouts(),
+        );
         techniques.select(&Combination::built_in())?;
         Ok(Self {
             scene: None,

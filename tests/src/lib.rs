@@ -176,6 +176,7 @@ pub fn all_combinations(registry: &PluginRegistry) -> Vec<Combination> {
                         parameters: parameters.clone(),
                         submission: submission.clone(),
                         culling,
+                        ..Combination::built_in()
                     });
                 }
             }

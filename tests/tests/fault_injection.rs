@@ -64,6 +64,7 @@ fn render_with_a_swap(device: &Arc<Device>) -> Result<image::RgbaImage, String> 
             parameters: "ssbo-index".into(),
             submission: "individual-indirect-count".into(),
             culling: "gpu-frustum".into(),
+            ..Combination::built_in()
         })
         .map_err(|e| e.to_string())?;
     view.render(&graph, &mut tree, &camera)

@@ -25,6 +25,7 @@ fn combination(submission: &str, culling: &str) -> Combination {
         parameters: "ssbo-index".into(),
         submission: submission.into(),
         culling: culling.into(),
+        ..Combination::built_in()
     }
 }
 

@@ -93,12 +93,14 @@ fn two_frames_in_flight_draw_and_pick_what_waiting_for_each_frame_does() {
             parameters: "ssbo-index".into(),
             submission: "individual-indirect-count".into(),
             culling: "gpu-occlusion".into(),
+            ..Combination::built_in()
         },
         Combination {
             vertex: "arena".into(),
             parameters: "ssbo-index".into(),
             submission: "groups-mdi-replay".into(),
             culling: "frustum".into(),
+            ..Combination::built_in()
         },
     ] {
         let waited = orbit(&combination, 1);

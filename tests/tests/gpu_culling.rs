@@ -23,6 +23,7 @@ fn combination(culling: &str) -> Combination {
         parameters: "ssbo-index".into(),
         submission: "individual-indirect-count".into(),
         culling: culling.into(),
+        ..Combination::built_in()
     }
 }
 

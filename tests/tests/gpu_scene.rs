@@ -174,6 +174,7 @@ fn every_valid_combination_picks_what_it_draws(source: &cadr_core::scene::Scene,
                     parameters: parameters.clone(),
                     submission: submission.clone(),
                     culling: "none".into(),
+                    ..Combination::built_in()
                 };
                 if view.techniques().check(&combination).is_err() {
                     continue;
@@ -561,6 +562,7 @@ fn views_on_two_threads_share_one_device_and_its_queue() {
             parameters: "ssbo-index".into(),
             submission: "individual-mdi".into(),
             culling: "none".into(),
+            ..Combination::built_in()
         },
     ];
     let images: Vec<image::RgbaImage> = std::thread::scope(|scope| {

@@ -56,7 +56,7 @@ impl Fixture {
         let mut techniques = Techniques::new(
             &device,
             plugin_registry(&device),
-            renderer.pipelines().frame_set_layout(),
+            renderer.pipelines().technique_set_layouts(),
         );
         techniques.select(&Combination::built_in()).unwrap();
         renderer
@@ -120,7 +120,7 @@ fn the_built_in_combination_needs_no_library_and_draws_each_part_once() {
     f.techniques = Techniques::new(
         &f.device,
         Arc::new(built_in),
-        f.renderer.pipelines().frame_set_layout(),
+        f.renderer.pipelines().technique_set_layouts(),
     );
     f.techniques.select(&combination).unwrap();
     let (image, stats) = f.render();
@@ -175,7 +175,7 @@ fn every_combination_matches(source: &Scene, what: &str) {
         f.techniques.set_shade_mode(mode).unwrap();
         let reference = match mode {
             ShadeMode::Solid => f.baseline.clone(),
-            ShadeMode::Edges | ShadeMode::HiddenLine | ShadeMode::Wireframe => {
+            ShadeMode::Edges | ShadeMode::HiddenLine | ShadeMode::Wireframe | ShadeMode::XRay => {
                 let (image, stats) = f.render();
                 let lines = compare(&image, &f.baseline).unwrap();
                 assert!(
@@ -186,11 +186,11 @@ fn every_combination_matches(source: &Scene, what: &str) {
                 image
             }
         };
-        // Solid and edges: every combination; the line-only modes share their passes' kinds
-        // (triangles, edges) with those two, so every third combination is checked there.
+        // Solid and edges: every combination; the line-only modes and X-ray share their passes'
+        // kinds (triangles, edges) with those two, so every third combination is checked there.
         let stride = match mode {
             ShadeMode::Solid | ShadeMode::Edges => 1,
-            ShadeMode::HiddenLine | ShadeMode::Wireframe => 3,
+            ShadeMode::HiddenLine | ShadeMode::Wireframe | ShadeMode::XRay => 3,
         };
         for combination in combinations.iter().step_by(stride) {
             match f.techniques.check(combination) {
@@ -311,7 +311,7 @@ fn failing_techniques_are_refused_and_the_renderer_keeps_working() {
     f.techniques = Techniques::new(
         &f.device,
         registry,
-        f.renderer.pipelines().frame_set_layout(),
+        f.renderer.pipelines().technique_set_layouts(),
     );
     f.techniques.select(&Combination::built_in()).unwrap();
     f.assert_matches_baseline("before");
@@ -388,6 +388,7 @@ fn a_thousand_swaps_leak_nothing() {
         parameters: "ubo-dynamic".into(),
         submission: "groups-replay".into(),
         culling: "frustum".into(),
+        ..Combination::built_in()
     };
     f.techniques.select(&start).unwrap();
     f.render();
@@ -550,7 +551,7 @@ fn a_technique_written_in_c_plugs_in_also_built_for_an_older_abi_minor() {
         f.techniques = Techniques::new(
             &f.device,
             Arc::new(registry),
-            f.renderer.pipelines().frame_set_layout(),
+            f.renderer.pipelines().technique_set_layouts(),
         );
         let combination = Combination {
             culling: "c-candidates".into(),

@@ -46,6 +46,7 @@ fn views_edits_and_loads_on_four_threads_at_once() {
             parameters: "ssbo-index".into(),
             submission: "individual-indirect-count".into(),
             culling: "gpu-frustum".into(),
+            ..Combination::built_in()
         },
     ];
     // The drawing threads wait here, once the edits and loads are over, to draw the last frame.

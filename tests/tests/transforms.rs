@@ -313,6 +313,7 @@ fn moving_assemblies_draws_like_a_fresh_upload() {
         parameters: "ssbo-index".into(),
         submission: "individual".into(),
         culling: "none".into(),
+        ..Combination::built_in()
     };
     let mut assembly = Assembly::new();
     let mut tree = SceneTree::build(&mut assembly.graph);

@@ -79,6 +79,12 @@ pub fn gpu_material(graph: &SceneGraph, slot: u32) -> abi::CadrMaterial {
         .unwrap_or_default()
 }
 
+/// Whether parts of `material` are translucent: an opacity under 1 (the shaders decide the
+/// same from the base colour's alpha).
+fn is_translucent(material: &abi::CadrMaterial) -> bool {
+    material.base_color[3] < 1.0
+}
+
 /// The first generation of the next GPU scene (each scene counts within its own 2^32).
 static NEXT_GENERATIONS: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(1);
 
@@ -95,6 +101,8 @@ pub struct GpuScene {
     matrices: Vec<abi::CadrMatrix>,
     worlds: Vec<[f64; 16]>,
     materials: Vec<abi::CadrMaterial>,
+    /// Material slots whose opacity is under 1 (their parts are drawn as translucent).
+    translucent_materials: usize,
     /// Where moved subtrees' world matrices are computed.
     transforms: Transforms,
     /// Local matrices per tree node (with [`Transforms::Gpu`] only).
@@ -151,6 +159,7 @@ impl GpuScene {
             matrices: Vec::new(),
             worlds: Vec::new(),
             materials: Vec::new(),
+            translucent_materials: 0,
             transforms,
             locals: Vec::new(),
             frame_moved: Vec::new(),
@@ -224,6 +233,7 @@ impl GpuScene {
         self.materials = (0..material_slots as u32)
             .map(|slot| gpu_material(graph, slot))
             .collect();
+        self.translucent_materials = self.materials.iter().filter(|m| is_translucent(m)).count();
         let count = tree.instance_capacity();
         self.instances = vec![abi::CadrInstance::default(); count];
         self.records = vec![abi::CadrInstanceRecord::default(); count];
@@ -434,7 +444,12 @@ impl GpuScene {
         self.apply_moves(tree, &changes.moved);
         for &slot in &changes.dirty_materials {
             if (slot as usize) < self.materials.len() {
-                self.materials[slot as usize] = gpu_material(graph, slot);
+                let material = gpu_material(graph, slot);
+                let was = is_translucent(&self.materials[slot as usize]);
+                self.translucent_materials = self.translucent_materials
+                    + usize::from(is_translucent(&material))
+                    - usize::from(was);
+                self.materials[slot as usize] = material;
                 self.material_gpu.queue(slot);
                 self.frame_dirty_materials.push(slot);
             }
@@ -666,6 +681,12 @@ impl GpuScene {
             .iter()
             .map(|w| w.count_ones() as usize)
             .sum()
+    }
+
+    /// Whether some material is translucent (opacity under 1): frames then draw translucent
+    /// surfaces with the transparency method.
+    pub fn has_translucency(&self) -> bool {
+        self.translucent_materials > 0
     }
 
     /// Triangles of the drawn instances.

@@ -94,7 +94,7 @@ pub fn load_gltf_bytes(bytes: &[u8], path: &Path) -> Result<Scene, LoadError> {
                 name: m
                     .name()
                     .map_or_else(|| format!("material {i}"), str::to_owned),
-                base_color: pbr.base_color_factor(),
+                base_color: opacity_by_alpha_mode(&m, pbr.base_color_factor()),
                 metallic: pbr.metallic_factor(),
                 roughness: pbr.roughness_factor(),
             }
@@ -538,4 +538,24 @@ fn triangle_list(indices: &[u32], mode: Mode) -> Vec<u32> {
             .collect(),
         _ => indices[..indices.len() / 3 * 3].to_vec(),
     }
+}
+
+/// The base colour with the opacity the material's `alphaMode` gives it: OPAQUE ignores the
+/// factor's alpha (opacity 1); MASK keeps a surface whose alpha reaches `alphaCutoff` (default
+/// 0.5) opaque and drops the rest (opacity 0: cadr has no textures yet, so the alpha is one
+/// value over the material and the test is exact); BLEND keeps the alpha as opacity.
+fn opacity_by_alpha_mode(material: &gltf::Material<'_>, mut color: [f32; 4]) -> [f32; 4] {
+    color[3] = match material.alpha_mode() {
+        gltf::material::AlphaMode::Opaque => 1.0,
+        gltf::material::AlphaMode::Mask => {
+            let cutoff = material.alpha_cutoff().unwrap_or(0.5);
+            if color[3] >= cutoff {
+                1.0
+            } else {
+                0.0
+            }
+        }
+        gltf::material::AlphaMode::Blend => color[3].clamp(0.0, 1.0),
+    };
+    color
 }

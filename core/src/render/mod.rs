@@ -11,11 +11,13 @@ pub mod pick;
 mod pipeline;
 mod section;
 mod stats;
+mod transparency;
 
 pub use camera::{Camera, DEFAULT_DIRECTION, DEFAULT_FOV_DEGREES};
 pub use output::SaveError;
 pub use pipeline::{
-    FrameUniforms, HierarchyParameters, HierarchyStage, Pipelines, ScatterParameters, PICK_FORMAT,
+    FrameUniforms, HierarchyParameters, HierarchyStage, Pipelines, ScatterParameters, DISPLAY_XRAY,
+    PICK_FORMAT,
 };
 pub use section::{Section, DEFAULT_CAP_COLORS, MAX_SECTION_PLANES};
 pub use stats::FrameStats;
@@ -27,12 +29,15 @@ use crate::error::{RenderError, RenderResult};
 use crate::vk::raw as vk;
 
 use crate::gpu_scene::split_f64;
+use crate::technique::TransparencyMethod;
 pub(crate) use crate::vk::SUSPENDED_DEPTH_LAYOUT;
 use crate::vk::{
-    begin_rendering, end_rendering, suspend_rendering, Buffer, CommandContext, DescriptorSets,
-    Device, GpuTimer, Image, MemoryLocation, OffscreenTarget, RenderingTarget,
+    begin_overlay, begin_rendering, end_overlay, end_rendering, memory_barrier, record_fullscreen,
+    suspend_rendering, Buffer, CommandContext, DescriptorSets, Device, GpuTimer, Image,
+    MemoryLocation, OffscreenTarget, RenderingTarget,
 };
 use pick::{PickTarget, PixelRect};
+use transparency::{storage_buffer, TransparencyTargets};
 
 /// The background colour of rendered images (linear RGBA).
 pub const CLEAR_COLOR: [f32; 4] = [0.80, 0.84, 0.88, 1.0];
@@ -60,6 +65,10 @@ pub struct Renderer {
     frames_in_flight: u32,
     /// The section planes and caps every pass applies.
     section: Section,
+    /// What the transparency method of the last frame with translucent surfaces drew into.
+    transparency: Option<TransparencyTargets>,
+    /// The storage the frame set names while no method's storage is made.
+    placeholder_storage: Buffer,
 }
 
 /// The most frames a renderer lets the GPU work on while it prepares the next: techniques
@@ -84,6 +93,11 @@ pub(crate) struct FramePlan<'a> {
     pub replay_key: Option<u64>,
     /// Whether the frame uploads scene data (it is then recorded, whatever its key).
     pub uploads_pending: bool,
+    /// `DISPLAY_*` bits for the shaders.
+    pub display: u32,
+    /// The transparency method and its merge (pipeline, layout), when the frame draws
+    /// translucent surfaces.
+    pub translucency: Option<(&'a TransparencyMethod, (vk::Pipeline, vk::PipelineLayout))>,
 }
 
 /// Which image a pass draws into.
@@ -129,15 +143,28 @@ impl Renderer {
             device,
             "frame",
             &[pipelines.frame_set_layout()],
-            &[vk::DescriptorPoolSize::default()
-                .ty(vk::DescriptorType::UNIFORM_BUFFER)
-                .descriptor_count(1)],
+            &[
+                vk::DescriptorPoolSize::default()
+                    .ty(vk::DescriptorType::UNIFORM_BUFFER)
+                    .descriptor_count(1),
+                vk::DescriptorPoolSize::default()
+                    .ty(vk::DescriptorType::STORAGE_BUFFER)
+                    .descriptor_count(1),
+            ],
         )?;
         frame_sets.write_buffer(
             0,
             0,
             vk::DescriptorType::UNIFORM_BUFFER,
             frame_uniforms.raw(),
+            vk::WHOLE_SIZE,
+        );
+        let placeholder_storage = storage_buffer(device, 0)?;
+        frame_sets.write_buffer(
+            0,
+            1,
+            vk::DescriptorType::STORAGE_BUFFER,
+            placeholder_storage.raw(),
             vk::WHOLE_SIZE,
         );
         let cull_view = Buffer::new(
@@ -163,6 +190,8 @@ impl Renderer {
             replayable: None,
             frames_in_flight: 1,
             section: Section::none(),
+            transparency: None,
+            placeholder_storage,
         })
     }
 
@@ -204,6 +233,7 @@ impl Renderer {
         self.last_recorded = None;
         self.target = OffscreenTarget::new(&self.device, width, height)?;
         self.pick = None;
+        self.drop_transparency_targets();
         Ok(())
     }
 
@@ -306,8 +336,15 @@ impl Renderer {
             section_planes: self.section.eye_relative(eye),
             section_colors: self.section.colors(),
             section: [self.section.flags(), 0, 0, 0],
+            target: {
+                let (width, height) = self.size();
+                [width, height, plan.display, 0]
+            },
         };
         self.commands.wait()?;
+        if let Some((method, _)) = plan.translucency {
+            self.ensure_transparency_targets(method)?;
+        }
         // With a frame in flight, the last one's GPU time is read now that it is done anyway.
         let previous_gpu_us = if self.frames_in_flight > 1 {
             self.gpu_time()?
@@ -336,8 +373,21 @@ impl Renderer {
         }
         let phases = plan.phases.max(1);
         (recorders.before)(self, command_buffer, 0, &mut stats)?;
+        let transparency = plan
+            .translucency
+            .and(self.transparency.as_ref())
+            .filter(|_| plan.pass == PassTarget::Color);
+        if let Some(targets) = transparency {
+            self.record_storage_clear(command_buffer, targets);
+        }
+        let extra_colors: Vec<(&Image, vk::ClearColorValue)> = transparency
+            .map(|t| t.images.iter().zip(t.clears.iter().copied()).collect())
+            .unwrap_or_default();
         for phase in 0..phases {
-            let target = self.pass_target(plan.pass, (plan.secondary, phase > 0, phases > 1));
+            let target = RenderingTarget {
+                extra_colors: &extra_colors,
+                ..self.pass_target(plan.pass, (plan.secondary, phase > 0, phases > 1))
+            };
             if phase > 0 {
                 (recorders.between)(self, command_buffer, phase, &mut stats)?;
             }
@@ -348,6 +398,9 @@ impl Renderer {
             } else {
                 end_rendering(&self.device, command_buffer, &target);
             }
+        }
+        if let (Some(targets), Some((_, merge))) = (transparency, plan.translucency) {
+            self.record_merge(command_buffer, targets, merge);
         }
         (recorders.after)(self, command_buffer, phases - 1, &mut stats)?;
         if let Some(timer) = &mut self.timer {
@@ -429,6 +482,122 @@ impl Renderer {
         }
     }
 
+    /// Makes the targets and storage of `method` at the target's size, unless the last ones
+    /// fit; the frame set's binding 1 then names the new storage (the GPU is idle: the caller
+    /// waited for the last frame).
+    fn ensure_transparency_targets(&mut self, method: &TransparencyMethod) -> RenderResult<()> {
+        let extent = self.target.extent();
+        if self
+            .transparency
+            .as_ref()
+            .is_some_and(|t| t.fit(method, extent))
+        {
+            return Ok(());
+        }
+        // The recorded frame names the old targets.
+        self.replayable = None;
+        self.last_recorded = None;
+        self.drop_transparency_targets();
+        let targets = TransparencyTargets::new(
+            &self.device,
+            method,
+            extent,
+            self.pipelines.merge_set_layout(),
+        )?;
+        self.frame_sets.write_buffer(
+            0,
+            1,
+            vk::DescriptorType::STORAGE_BUFFER,
+            targets.storage.raw(),
+            vk::WHOLE_SIZE,
+        );
+        self.transparency = Some(targets);
+        Ok(())
+    }
+
+    /// Forgets the transparency targets; the frame set names the placeholder storage again.
+    fn drop_transparency_targets(&mut self) {
+        if self.transparency.take().is_some() {
+            self.frame_sets.write_buffer(
+                0,
+                1,
+                vk::DescriptorType::STORAGE_BUFFER,
+                self.placeholder_storage.raw(),
+                vk::WHOLE_SIZE,
+            );
+        }
+    }
+
+    /// Zeroes the part of the method's storage it wants cleared, after the last frame's merge
+    /// read it and before this frame's translucent fragments write it.
+    fn record_storage_clear(
+        &self,
+        command_buffer: vk::CommandBuffer,
+        targets: &TransparencyTargets,
+    ) {
+        if targets.cleared_bytes == 0 {
+            return;
+        }
+        memory_barrier(
+            &self.device,
+            command_buffer,
+            (
+                vk::PipelineStageFlags2::FRAGMENT_SHADER,
+                vk::AccessFlags2::SHADER_STORAGE_READ | vk::AccessFlags2::SHADER_STORAGE_WRITE,
+            ),
+            (
+                vk::PipelineStageFlags2::CLEAR,
+                vk::AccessFlags2::TRANSFER_WRITE,
+            ),
+        );
+        targets
+            .storage
+            .record_fill(command_buffer, targets.cleared_bytes, 0);
+        memory_barrier(
+            &self.device,
+            command_buffer,
+            (
+                vk::PipelineStageFlags2::CLEAR,
+                vk::AccessFlags2::TRANSFER_WRITE,
+            ),
+            (
+                vk::PipelineStageFlags2::FRAGMENT_SHADER,
+                vk::AccessFlags2::SHADER_STORAGE_READ | vk::AccessFlags2::SHADER_STORAGE_WRITE,
+            ),
+        );
+    }
+
+    /// The merge: after the rendering, the method's result at each pixel blended over the
+    /// picture.
+    fn record_merge(
+        &self,
+        command_buffer: vk::CommandBuffer,
+        targets: &TransparencyTargets,
+        merge: (vk::Pipeline, vk::PipelineLayout),
+    ) {
+        // The translucent fragments' storage writes, read by the merge.
+        memory_barrier(
+            &self.device,
+            command_buffer,
+            (
+                vk::PipelineStageFlags2::FRAGMENT_SHADER,
+                vk::AccessFlags2::SHADER_STORAGE_WRITE,
+            ),
+            (
+                vk::PipelineStageFlags2::FRAGMENT_SHADER,
+                vk::AccessFlags2::SHADER_STORAGE_READ,
+            ),
+        );
+        begin_overlay(&self.device, command_buffer, &self.target.color);
+        record_fullscreen(
+            &self.device,
+            command_buffer,
+            merge,
+            &[self.frame_set(), targets.merge_set.sets[0]],
+        );
+        end_overlay(&self.device, command_buffer, &self.target.color);
+    }
+
     /// The frame uniforms' descriptor set (set 0 of every pipeline).
     pub(crate) fn frame_set(&self) -> vk::DescriptorSet {
         self.frame_sets.sets[0]
@@ -459,6 +628,7 @@ impl Renderer {
             extent: self.target.extent(),
             secondary,
             resume,
+            extra_colors: &[],
         }
     }
 }

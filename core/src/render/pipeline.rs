@@ -32,7 +32,12 @@ pub struct FrameUniforms {
     pub section_colors: [[f32; 4]; 6],
     /// Plane count (bits 0-7), caps (bit 8), hatching (bit 9).
     pub section: [u32; 4],
+    /// The target's width and height; display bits (`DISPLAY_XRAY`); zero.
+    pub target: [u32; 4],
 }
+
+/// [`FrameUniforms::target`]`[2]`: the X-ray display mode.
+pub const DISPLAY_XRAY: u32 = 1;
 
 /// Push constants of `scatter.comp`: one dispatch scatters the items of one array.
 #[repr(C)]
@@ -81,8 +86,10 @@ pub struct HierarchyParameters {
 /// Every pipeline and layout the renderer uses.
 pub struct Pipelines {
     device: Arc<Device>,
-    /// Set 0: the frame uniform buffer.
+    /// Set 0: the frame uniform buffer and the transparency method's storage.
     frame_set_layout: DescriptorSetLayout,
+    /// Set 1 of the transparency merge: the method's targets as sampled images.
+    merge_set_layout: DescriptorSetLayout,
     /// The scatter pipeline's set: the compact updates and the array they go into.
     scatter_set_layout: DescriptorSetLayout,
     scatter_layout: PipelineLayout,
@@ -102,7 +109,21 @@ impl Pipelines {
         let frame_set_layout = DescriptorSetLayout::new(
             device,
             "frame set layout",
-            &[(vk::DescriptorType::UNIFORM_BUFFER, graphics)],
+            &[
+                (vk::DescriptorType::UNIFORM_BUFFER, graphics),
+                (
+                    vk::DescriptorType::STORAGE_BUFFER,
+                    vk::ShaderStageFlags::FRAGMENT,
+                ),
+            ],
+        )?;
+        let merge_set_layout = DescriptorSetLayout::new(
+            device,
+            "transparency merge set layout",
+            &[(
+                vk::DescriptorType::SAMPLED_IMAGE,
+                vk::ShaderStageFlags::FRAGMENT,
+            ); 2],
         )?;
         let compute = vk::ShaderStageFlags::COMPUTE;
         let compute_storage = (vk::DescriptorType::STORAGE_BUFFER, compute);
@@ -127,6 +148,7 @@ impl Pipelines {
         Ok(Self {
             device: Arc::clone(device),
             frame_set_layout,
+            merge_set_layout,
             scatter_set_layout,
             scatter_layout,
             scatter: OnceLock::new(),
@@ -136,9 +158,20 @@ impl Pipelines {
         })
     }
 
-    /// Set 0 of every graphics pipeline: the frame uniform buffer.
+    /// Set 0 of every graphics pipeline: the frame uniform buffer (binding 0) and the
+    /// transparency method's storage (binding 1, fragment shaders).
     pub fn frame_set_layout(&self) -> vk::DescriptorSetLayout {
         self.frame_set_layout.raw()
+    }
+
+    /// Set 1 of the transparency merge: the method's targets (bindings 0 and 1).
+    pub fn merge_set_layout(&self) -> vk::DescriptorSetLayout {
+        self.merge_set_layout.raw()
+    }
+
+    /// The layouts technique pipelines are built with: the frame set's and the merge's.
+    pub fn technique_set_layouts(&self) -> (vk::DescriptorSetLayout, vk::DescriptorSetLayout) {
+        (self.frame_set_layout(), self.merge_set_layout())
     }
 
     /// The scatter pipeline's set layout.

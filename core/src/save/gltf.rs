@@ -211,9 +211,12 @@ pub fn gltf_document(scene: &Scene) -> Result<GltfDocument, SceneError> {
         .materials
         .iter()
         .map(|m| {
+            // A translucent material keeps its opacity (glTF's default mode ignores alpha).
+            let alpha_mode = if m.base_color[3] < 1.0 { "BLEND" } else { "OPAQUE" };
             json!({
                 "name": m.name,
                 "pbrMetallicRoughness": {"baseColorFactor": m.base_color, "metallicFactor": m.metallic, "roughnessFactor": m.roughness},
+                "alphaMode": alpha_mode,
                 "doubleSided": true
             })
         })

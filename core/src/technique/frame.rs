@@ -14,7 +14,7 @@ use cadr_plugin_abi as abi;
 use glam::DMat4;
 
 use super::gpu_cull::{cull_view, cull_view_bytes, GpuCuller, PhaseDepth};
-use super::pipeline::PassSet;
+use super::pipeline::{PassSet, ShadeMode};
 use super::registry::TechniqueKind;
 use super::set::{status, Message, Techniques};
 use crate::gpu_scene::GpuScene;
@@ -48,7 +48,12 @@ impl Renderer {
         techniques: &mut Techniques,
         camera: &Camera,
     ) -> RenderResult<FrameStats> {
-        let passes = PassSet::Shaded(techniques.shade_mode());
+        let mode = techniques.shade_mode();
+        let passes = PassSet::Shaded {
+            mode,
+            translucent: mode == ShadeMode::XRay
+                || (mode.shows_translucency() && scene.has_translucency()),
+        };
         self.draw_techniques(scene, techniques, camera, passes)
     }
 
@@ -89,10 +94,23 @@ impl Renderer {
         let view = scene.view();
         let pipelines = techniques.pipelines_for(passes)?;
         let color_format = pipelines.color_format;
+        let mut extra_color_formats = [0i32; 2];
+        for (slot, format) in extra_color_formats
+            .iter_mut()
+            .zip(&pipelines.extra_color_formats)
+        {
+            *slot = format.as_raw();
+        }
+        let extra_color_count = pipelines.extra_color_formats.len().min(2) as u32;
         let mut key = mix(techniques.epoch, view.draws_generation);
         key = mix(key, view.buffers_generation);
         key = mix(key, u64::from(width) << 32 | u64::from(height));
         key = mix(key, color_format.as_raw() as u64);
+        key = mix(key, u64::from(extra_color_count));
+        // The pass set (with or without translucent surfaces) changes the pipelines drawn.
+        for pass in &pipelines.passes {
+            key = mix(key, pass.pipeline);
+        }
         if values_in_commands {
             key = mix(key, view.parameters_generation);
         }
@@ -106,7 +124,7 @@ impl Renderer {
         let cull_view_bytes = gpu_view.as_ref().map(cull_view_bytes);
         // A frame records the same commands as the last one when the techniques allow it and
         // nothing they depend on changed (the camera reaches the GPU through uniforms).
-        let replay_key = (matches!(passes, PassSet::Shaded(_)) && techniques.replayable())
+        let replay_key = (matches!(passes, PassSet::Shaded { .. }) && techniques.replayable())
             .then(|| mix(key, view.parameters_generation));
         let uploads_pending = scene.has_pending_uploads();
         let shared = RefCell::new((scene, abi::CadrStats::default(), culler));
@@ -140,6 +158,8 @@ impl Renderer {
                 color_format: color_format.as_raw(),
                 gpu_draws,
                 phase,
+                extra_color_count,
+                extra_color_formats,
             })
         };
         // Records a phase of the GPU culler (if any) outside rendering.
@@ -242,8 +262,21 @@ impl Renderer {
             status(&submission.entry, "record", result, &message)
         };
         let target = match passes {
-            PassSet::Shaded(_) => PassTarget::Color,
+            PassSet::Shaded { .. } => PassTarget::Color,
             PassSet::Pick => PassTarget::Pick,
+        };
+        let translucency = match (&pipelines.merge, &pipelines.merge_layout) {
+            (Some(merge), Some(layout)) => techniques
+                .transparency_method()
+                .map(|method| (method, (merge.raw(), layout.raw()))),
+            _ => None,
+        };
+        let display = match passes {
+            PassSet::Shaded {
+                mode: ShadeMode::XRay,
+                ..
+            } => crate::render::DISPLAY_XRAY,
+            _ => 0,
         };
         let mut after = |renderer: &Renderer,
                          command_buffer: vk::CommandBuffer,
@@ -271,6 +304,8 @@ impl Renderer {
                 cull_view: cull_view_bytes.as_ref().map(|bytes| &bytes[..]),
                 replay_key,
                 uploads_pending,
+                display,
+                translucency,
             },
             FrameRecorders {
                 before: &mut before,

@@ -12,9 +12,9 @@ mod set;
 
 pub use frame::frustum_planes;
 pub use host_api::AllocationCounts;
-pub use pipeline::{assemble_vertex_shader, PassSet, ShadeMode};
+pub use pipeline::{assemble_vertex_shader, PassSet, ShadeMode, TransparencyMethod};
 pub use registry::{
     default_plugin_dirs, feature_bits, feature_names, PluginRegistry, Refusal, TechniqueEntry,
     TechniqueKind, BUILT_IN_LIBRARY, PLUGIN_PATH_VARIABLE,
 };
-pub use set::{check_combination, Combination, Techniques, Transforms};
+pub use set::{check_combination, Combination, Techniques, Transforms, DEFAULT_TRANSPARENCY};

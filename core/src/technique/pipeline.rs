@@ -13,8 +13,8 @@ use cadr_plugin_abi as abi;
 use crate::render::PICK_FORMAT;
 use crate::shaders;
 use crate::vk::{
-    DescriptorSetLayout, Device, GraphicsPipelineDesc, Pipeline, PipelineLayout, ShaderModule,
-    ShaderStage, VertexLayout, COLOR_FORMAT,
+    Blend, ColorTarget, DepthUse, DescriptorSetLayout, Device, GraphicsPipelineDesc, Pipeline,
+    PipelineLayout, ShaderModule, ShaderStage, VertexLayout, COLOR_FORMAT,
 };
 
 /// The display modes: how surfaces and edges are drawn.
@@ -30,15 +30,19 @@ pub enum ShadeMode {
     HiddenLine,
     /// Every triangle's edges, hidden ones included (no surface is filled).
     Wireframe,
+    /// Every part translucent with its edges, except highlighted parts, which stay opaque: what
+    /// is inside an assembly shows through its housing.
+    XRay,
 }
 
 impl ShadeMode {
     /// Every mode.
-    pub const ALL: [ShadeMode; 4] = [
+    pub const ALL: [ShadeMode; 5] = [
         ShadeMode::Solid,
         ShadeMode::Edges,
         ShadeMode::HiddenLine,
         ShadeMode::Wireframe,
+        ShadeMode::XRay,
     ];
 
     /// Its name on the command line.
@@ -48,7 +52,14 @@ impl ShadeMode {
             ShadeMode::Edges => "edges",
             ShadeMode::HiddenLine => "hidden-line",
             ShadeMode::Wireframe => "wireframe",
+            ShadeMode::XRay => "xray",
         }
+    }
+
+    /// Whether translucent surfaces are drawn as such in this mode (in the line modes every
+    /// surface only hides lines). X-ray always draws some.
+    pub fn shows_translucency(self) -> bool {
+        matches!(self, ShadeMode::Solid | ShadeMode::Edges | ShadeMode::XRay)
     }
 
     /// Parses a command-line name.
@@ -60,10 +71,86 @@ impl ShadeMode {
 /// The passes a set of pipelines draws: the shaded frame in a shade mode, or the pick pass.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum PassSet {
-    /// Shaded triangles (and edges in [`ShadeMode::Edges`]) into the colour target.
-    Shaded(ShadeMode),
+    /// Shaded triangles (and edges in the edge modes) into the colour target; with
+    /// `translucent`, opaque surfaces first, then the translucent ones with the transparency
+    /// method (its targets join the rendering) and its merge after the rendering.
+    Shaded {
+        /// The display mode.
+        mode: ShadeMode,
+        /// Whether the frame draws translucent surfaces.
+        translucent: bool,
+    },
     /// Triangles of pickable instances, their ids into the pick target.
     Pick,
+}
+
+/// Which surfaces a technique pipeline draws (the vertex shader's `CADR_DRAW_ROLE`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum DrawRole {
+    /// Every surface (frames without translucency, lines, picking).
+    All = 0,
+    /// Opaque surfaces only.
+    Opaque = 1,
+    /// Translucent surfaces only.
+    Translucent = 2,
+}
+
+/// A transparency method as its technique described it (`CadrTransparencyMethod`), owned.
+#[derive(Clone, Debug, PartialEq)]
+pub struct TransparencyMethod {
+    /// The technique's name (shaders are compiled once per method).
+    pub name: String,
+    /// Its colour targets.
+    pub targets: Vec<abi::CadrTransparencyTarget>,
+    /// Storage words at the start, zeroed every frame.
+    pub storage_header_words: u32,
+    /// Storage words per pixel.
+    pub storage_words_per_pixel: u32,
+    /// Of those, zeroed every frame.
+    pub storage_cleared_words_per_pixel: u32,
+    /// Defines `cadr_transparent_fragment`.
+    pub fragment_snippet: String,
+    /// Defines `cadr_merge`.
+    pub merge_snippet: String,
+}
+
+impl TransparencyMethod {
+    /// `template` with the method's declarations and `snippet` pasted in.
+    fn assemble(&self, template: &shaders::ShaderSource, snippet: &str) -> String {
+        let mut defines = format!("#define CADR_TARGET_COUNT {}\n", self.targets.len());
+        if self.storage_words_per_pixel > 0 || self.storage_header_words > 0 {
+            defines.push_str("#define CADR_STORAGE\n");
+        }
+        template
+            .source
+            .replacen("#version 460\n", &format!("#version 460\n{defines}"), 1)
+            .replace(shaders::TRANSPARENCY_MARKER, snippet)
+    }
+
+    /// Bytes of storage for `pixels`, and of those the bytes zeroed every frame.
+    pub fn storage_bytes(&self, pixels: u64) -> (u64, u64) {
+        let header = u64::from(self.storage_header_words);
+        let total = header + u64::from(self.storage_words_per_pixel) * pixels;
+        let cleared = header + u64::from(self.storage_cleared_words_per_pixel) * pixels;
+        (total * 4, cleared.min(total) * 4)
+    }
+
+    /// The targets' formats.
+    pub fn target_formats(&self) -> Vec<vk::Format> {
+        self.targets
+            .iter()
+            .map(|t| vk::Format::from_raw(t.format))
+            .collect()
+    }
+}
+
+/// The SPIR-V of a transparency method: its translucent fragment shader, and the merge's
+/// vertex and fragment shaders.
+#[derive(Clone)]
+struct MethodShaders {
+    translucent: Arc<Vec<u32>>,
+    merge_vertex: Arc<Vec<u32>>,
+    merge: Arc<Vec<u32>>,
 }
 
 /// Assembles the technique vertex shader from the two snippets. Lines of a snippet starting
@@ -115,11 +202,13 @@ impl FragmentShader {
     /// Those `passes` draw with.
     fn needed_by(passes: PassSet) -> &'static [FragmentShader] {
         match passes {
-            PassSet::Shaded(ShadeMode::Solid) => &[Self::Solid],
-            PassSet::Shaded(ShadeMode::Edges | ShadeMode::HiddenLine) => {
-                &[Self::Solid, Self::Edges]
-            }
-            PassSet::Shaded(ShadeMode::Wireframe) => &[Self::Edges],
+            PassSet::Shaded { mode, .. } => match mode {
+                ShadeMode::Solid => &[Self::Solid],
+                ShadeMode::Edges | ShadeMode::HiddenLine | ShadeMode::XRay => {
+                    &[Self::Solid, Self::Edges]
+                }
+                ShadeMode::Wireframe => &[Self::Edges],
+            },
             PassSet::Pick => &[Self::Pick],
         }
     }
@@ -131,6 +220,7 @@ impl FragmentShader {
 pub struct ShaderCache {
     vertex: HashMap<(String, String), Arc<Vec<u32>>>,
     fragments: HashMap<FragmentShader, Arc<Vec<u32>>>,
+    methods: HashMap<String, MethodShaders>,
 }
 
 /// The SPIR-V one pass set is built from.
@@ -138,6 +228,8 @@ pub struct PassShaders {
     /// The assembled vertex shader.
     pub vertex: Arc<Vec<u32>>,
     fragments: Vec<(FragmentShader, Arc<Vec<u32>>)>,
+    /// The transparency method's, for a frame with translucent surfaces.
+    method: Option<MethodShaders>,
 }
 
 impl PassShaders {
@@ -164,6 +256,7 @@ impl ShaderCache {
         key: (String, String),
         source: impl FnOnce() -> String,
         passes: PassSet,
+        method: Option<&TransparencyMethod>,
     ) -> RenderResult<PassShaders> {
         let wanted = FragmentShader::needed_by(passes);
         let missing: Vec<FragmentShader> = wanted
@@ -206,7 +299,17 @@ impl ShaderCache {
         }
         let not_compiled =
             || crate::error::RenderError::InvalidUse("a technique shader was not compiled".into());
+        let method = match (passes, method) {
+            (
+                PassSet::Shaded {
+                    translucent: true, ..
+                },
+                Some(method),
+            ) => Some(self.method_shaders(method)?),
+            _ => None,
+        };
         Ok(PassShaders {
+            method,
             vertex: Arc::clone(self.vertex.get(&key).ok_or_else(not_compiled)?),
             fragments: wanted
                 .iter()
@@ -221,9 +324,55 @@ impl ShaderCache {
     }
 }
 
+impl ShaderCache {
+    /// The shaders of `method`, compiled together the first time.
+    fn method_shaders(&mut self, method: &TransparencyMethod) -> RenderResult<MethodShaders> {
+        if let Some(shaders) = self.methods.get(&method.name) {
+            return Ok(shaders.clone());
+        }
+        let translucent = method.assemble(&shaders::TRANSLUCENT_FRAG, &method.fragment_snippet);
+        let merge = method.assemble(&shaders::MERGE_FRAG, &method.merge_snippet);
+        let translucent_name = format!("translucent.frag [{}]", method.name);
+        let merge_name = format!("merge.frag [{}]", method.name);
+        let request = |name, source, stage| shaders::CompileRequest {
+            name,
+            source,
+            stage,
+            includes: shaders::INCLUDES,
+        };
+        let mut compiled = shaders::compile_glsl_all(&[
+            request(&translucent_name, &translucent, ShaderStage::Fragment),
+            request(
+                shaders::MERGE_VERT.name,
+                shaders::MERGE_VERT.source,
+                ShaderStage::Vertex,
+            ),
+            request(&merge_name, &merge, ShaderStage::Fragment),
+        ])
+        .into_iter();
+        let mut next = || -> RenderResult<Arc<Vec<u32>>> {
+            let words = compiled.next().ok_or_else(|| {
+                crate::error::RenderError::InvalidUse(
+                    "a transparency shader was not compiled".into(),
+                )
+            })??;
+            Ok(Arc::new(words))
+        };
+        let shaders = MethodShaders {
+            translucent: next()?,
+            merge_vertex: next()?,
+            merge: next()?,
+        };
+        self.methods.insert(method.name.clone(), shaders.clone());
+        Ok(shaders)
+    }
+}
+
 /// How a pass rasterizes, beyond its shaders and topology.
 #[derive(Clone, Copy, Debug, Default)]
 struct Raster {
+    /// Translucent surfaces, blended into the method's targets (depth tested, not written).
+    translucent: bool,
     /// Pushed back so that edge lines win the depth test.
     depth_bias: bool,
     /// Triangles drawn as their edges.
@@ -232,25 +381,38 @@ struct Raster {
     depth_only: bool,
 }
 
-/// The pipelines and layout of one combination and shade mode; destroyed together.
+/// The pipelines and layout of one combination and pass set; destroyed together.
 pub struct TechniquePipelines {
     device: Arc<Device>,
     // Dropped in this order: the pipelines, then the layouts they were made with.
     pipelines: Vec<Pipeline>,
+    /// The transparency merge, for a pass set with translucent surfaces.
+    pub merge: Option<Pipeline>,
     /// The shared layout.
     pub layout: PipelineLayout,
+    /// The merge's layout: the frame set, then the method's targets.
+    pub merge_layout: Option<PipelineLayout>,
     /// Stands in for the sets a path does not use below one it does.
     _empty_set_layout: DescriptorSetLayout,
+    /// What they draw.
+    pub pass_set: PassSet,
     /// The passes, in order.
     pub passes: Vec<abi::CadrPass>,
     /// The colour attachment's format (the pick pass draws ids).
     pub color_format: vk::Format,
+    /// The formats of the colour attachments after the first (the transparency method's
+    /// targets, while translucent surfaces are drawn).
+    pub extra_color_formats: Vec<vk::Format>,
+    /// The transparency method's targets (empty without translucent surfaces).
+    targets: Vec<abi::CadrTransparencyTarget>,
 }
 
 /// What a combination's pipelines are built from.
 pub struct PipelineInputs<'a> {
     /// The host's set 0 layout.
     pub frame_set_layout: vk::DescriptorSetLayout,
+    /// The merge's set 1 layout: the transparency targets as sampled images.
+    pub merge_set_layout: vk::DescriptorSetLayout,
     /// Set layouts 1 and 2 (parameter path) and 3 (vertex path); null for none.
     pub path_set_layouts: [vk::DescriptorSetLayout; 3],
     /// The vertex path's input.
@@ -262,6 +424,8 @@ pub struct PipelineInputs<'a> {
     /// The kind the pick pass is given: [`abi::CADR_PASS_PICK`] when every active technique
     /// knows it (ABI 1.2 or later), else [`abi::CADR_PASS_TRIANGLES`].
     pub pick_kind: abi::CadrPassKind,
+    /// The active transparency method.
+    pub method: Option<&'a TransparencyMethod>,
 }
 
 impl TechniquePipelines {
@@ -289,16 +453,30 @@ impl TechniquePipelines {
             128,
             vk::ShaderStageFlags::VERTEX,
         )?;
+        let translucent_method = match (inputs.passes, inputs.method) {
+            (
+                PassSet::Shaded {
+                    translucent: true, ..
+                },
+                Some(method),
+            ) => Some(method),
+            _ => None,
+        };
         let mut this = Self {
             device: Arc::clone(device),
             pipelines: Vec::new(),
+            merge: None,
             layout,
+            merge_layout: None,
             _empty_set_layout: empty_set_layout,
+            pass_set: inputs.passes,
             passes: Vec::new(),
             color_format: match inputs.passes {
                 PassSet::Pick => PICK_FORMAT,
-                PassSet::Shaded(_) => COLOR_FORMAT,
+                PassSet::Shaded { .. } => COLOR_FORMAT,
             },
+            extra_color_formats: translucent_method.map_or_else(Vec::new, |m| m.target_formats()),
+            targets: translucent_method.map_or_else(Vec::new, |m| m.targets.clone()),
         };
         let fragment = |shader: FragmentShader| inputs.shaders.fragment(shader);
         let triangles = vk::PrimitiveTopology::TRIANGLE_LIST;
@@ -309,12 +487,18 @@ impl TechniquePipelines {
             ..plain
         };
         match inputs.passes {
-            PassSet::Shaded(ShadeMode::Solid) => {
+            PassSet::Shaded {
+                mode: ShadeMode::Solid,
+                ..
+            } => {
                 let solid = fragment(FragmentShader::Solid)?;
                 let pipeline = this.pipeline(inputs, solid, triangles, plain)?;
                 this.add(pipeline, abi::CADR_PASS_TRIANGLES);
             }
-            PassSet::Shaded(mode @ (ShadeMode::Edges | ShadeMode::HiddenLine)) => {
+            PassSet::Shaded {
+                mode: mode @ (ShadeMode::Edges | ShadeMode::HiddenLine | ShadeMode::XRay),
+                ..
+            } => {
                 let surfaces = Raster {
                     depth_only: mode == ShadeMode::HiddenLine,
                     ..under_lines
@@ -326,7 +510,10 @@ impl TechniquePipelines {
                 let pipeline = this.pipeline(inputs, edges, lines, plain)?;
                 this.add(pipeline, abi::CADR_PASS_EDGES);
             }
-            PassSet::Shaded(ShadeMode::Wireframe) => {
+            PassSet::Shaded {
+                mode: ShadeMode::Wireframe,
+                ..
+            } => {
                 let outlines = Raster {
                     triangle_outlines: true,
                     ..plain
@@ -341,6 +528,15 @@ impl TechniquePipelines {
                 this.add(pipeline, inputs.pick_kind);
             }
         }
+        if let (Some(shaders), Some(_)) = (inputs.shaders.method.as_ref(), translucent_method) {
+            let translucent = Raster {
+                translucent: true,
+                ..plain
+            };
+            let pipeline = this.pipeline(inputs, &shaders.translucent, triangles, translucent)?;
+            this.add(pipeline, abi::CADR_PASS_TRIANGLES);
+            this.add_merge(inputs, shaders)?;
+        }
         Ok(this)
     }
 
@@ -351,6 +547,79 @@ impl TechniquePipelines {
             kind,
         });
         self.pipelines.push(pipeline);
+    }
+
+    /// The merge: a full-screen triangle blending the method's result over the picture.
+    fn add_merge(
+        &mut self,
+        inputs: &PipelineInputs<'_>,
+        shaders: &MethodShaders,
+    ) -> RenderResult<()> {
+        let layout = PipelineLayout::new(
+            &self.device,
+            "transparency merge layout",
+            &[inputs.frame_set_layout, inputs.merge_set_layout],
+            0,
+            vk::ShaderStageFlags::FRAGMENT,
+        )?;
+        let vertex = ShaderModule::from_spirv(
+            &self.device,
+            "merge.vert",
+            &shaders.merge_vertex,
+            ShaderStage::Vertex,
+        )?;
+        let fragment = ShaderModule::from_spirv(
+            &self.device,
+            "merge.frag",
+            &shaders.merge,
+            ShaderStage::Fragment,
+        )?;
+        let colors = [ColorTarget {
+            format: COLOR_FORMAT,
+            writes: true,
+            blend: Some(Blend::PREMULTIPLIED_OVER),
+        }];
+        self.merge = Some(Pipeline::graphics(
+            &self.device,
+            &GraphicsPipelineDesc {
+                layout: &layout,
+                vertex: &vertex,
+                fragment: &fragment,
+                vertex_layout: None,
+                topology: vk::PrimitiveTopology::TRIANGLE_LIST,
+                depth_bias: false,
+                triangle_outlines: false,
+                colors: &colors,
+                depth: DepthUse::None,
+                vertex_constants: &[],
+                name: "transparency merge",
+            },
+        )?);
+        self.merge_layout = Some(layout);
+        Ok(())
+    }
+
+    /// The colour attachments of a pipeline drawing `raster`: the picture, then the method's
+    /// targets, each written only by the pipelines that draw into it.
+    fn colors(&self, raster: Raster) -> Vec<ColorTarget> {
+        let picture = if raster.translucent || raster.depth_only {
+            ColorTarget::untouched(self.color_format)
+        } else {
+            ColorTarget::replaced(self.color_format)
+        };
+        std::iter::once(picture)
+            .chain(self.targets.iter().map(|target| {
+                if raster.translucent {
+                    ColorTarget {
+                        format: vk::Format::from_raw(target.format),
+                        writes: true,
+                        blend: Some(blend_of(&target.blend)),
+                    }
+                } else {
+                    ColorTarget::untouched(vk::Format::from_raw(target.format))
+                }
+            }))
+            .collect()
     }
 
     fn pipeline(
@@ -377,6 +646,22 @@ impl TechniquePipelines {
         let attributes: Vec<(vk::Format, u32)> = (0..count)
             .map(|i| (vk::Format::from_raw(input.formats[i]), input.offsets[i]))
             .collect();
+        let surfaces =
+            topology == vk::PrimitiveTopology::TRIANGLE_LIST && !raster.triangle_outlines;
+        let translucent_frame = matches!(
+            self.pass_set,
+            PassSet::Shaded {
+                translucent: true,
+                ..
+            }
+        );
+        let role = match (translucent_frame, raster.translucent, surfaces) {
+            (false, _, _) => DrawRole::All,
+            (true, true, _) => DrawRole::Translucent,
+            (true, false, true) => DrawRole::Opaque,
+            (true, false, false) => DrawRole::All,
+        };
+        let colors = self.colors(raster);
         Ok(Pipeline::graphics(
             &self.device,
             &GraphicsPipelineDesc {
@@ -390,11 +675,32 @@ impl TechniquePipelines {
                 topology,
                 depth_bias: raster.depth_bias,
                 triangle_outlines: raster.triangle_outlines,
-                color_writes: !raster.depth_only,
-                color_format: self.color_format,
-                name: "technique pipeline",
+                colors: &colors,
+                depth: if raster.translucent {
+                    DepthUse::Test
+                } else {
+                    DepthUse::TestAndWrite
+                },
+                vertex_constants: &[role as u32],
+                name: if raster.translucent {
+                    "translucent technique pipeline"
+                } else {
+                    "technique pipeline"
+                },
             },
         )?)
+    }
+}
+
+/// A method's blend state as the Vulkan layer takes it.
+fn blend_of(blend: &abi::CadrBlend) -> Blend {
+    Blend {
+        src_color: vk::BlendFactor::from_raw(blend.src_color),
+        dst_color: vk::BlendFactor::from_raw(blend.dst_color),
+        color_op: vk::BlendOp::from_raw(blend.color_op),
+        src_alpha: vk::BlendFactor::from_raw(blend.src_alpha),
+        dst_alpha: vk::BlendFactor::from_raw(blend.dst_alpha),
+        alpha_op: vk::BlendOp::from_raw(blend.alpha_op),
     }
 }
 
@@ -430,15 +736,27 @@ mod tests {
                     vertex_source()
                 },
                 passes,
+                None,
             )
         };
-        prepare(&mut cache, PassSet::Shaded(ShadeMode::Solid)).expect("solid");
+        let solid = || PassSet::Shaded {
+            mode: ShadeMode::Solid,
+            translucent: false,
+        };
+        prepare(&mut cache, solid()).expect("solid");
         assert_eq!(cache.fragments.len(), 1, "solid needs one fragment shader");
-        prepare(&mut cache, PassSet::Shaded(ShadeMode::Edges)).expect("edges");
+        prepare(
+            &mut cache,
+            PassSet::Shaded {
+                mode: ShadeMode::Edges,
+                translucent: false,
+            },
+        )
+        .expect("edges");
         assert_eq!(cache.fragments.len(), 2);
         prepare(&mut cache, PassSet::Pick).expect("pick");
         assert_eq!(cache.fragments.len(), 3);
-        prepare(&mut cache, PassSet::Shaded(ShadeMode::Solid)).expect("again");
+        prepare(&mut cache, solid()).expect("again");
         assert_eq!(
             assembled, 1,
             "the vertex shader is assembled and compiled once"

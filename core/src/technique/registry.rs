@@ -41,15 +41,18 @@ pub enum TechniqueKind {
     Submission,
     /// Which instances are drawn.
     Culling,
+    /// How translucent surfaces are blended (ABI 1.7).
+    Transparency,
 }
 
 impl TechniqueKind {
     /// Every kind, in the order combinations are written.
-    pub const ALL: [TechniqueKind; 4] = [
+    pub const ALL: [TechniqueKind; 5] = [
         TechniqueKind::Vertex,
         TechniqueKind::Parameters,
         TechniqueKind::Submission,
         TechniqueKind::Culling,
+        TechniqueKind::Transparency,
     ];
 
     /// The name used on the command line and in messages.
@@ -59,6 +62,7 @@ impl TechniqueKind {
             TechniqueKind::Parameters => "params",
             TechniqueKind::Submission => "submit",
             TechniqueKind::Culling => "cull",
+            TechniqueKind::Transparency => "transparency",
         }
     }
 
@@ -68,6 +72,7 @@ impl TechniqueKind {
             abi::CADR_KIND_PARAMETER_PATH => Some(TechniqueKind::Parameters),
             abi::CADR_KIND_SUBMISSION => Some(TechniqueKind::Submission),
             abi::CADR_KIND_CULLING => Some(TechniqueKind::Culling),
+            abi::CADR_KIND_TRANSPARENCY => Some(TechniqueKind::Transparency),
             _ => None,
         }
     }
@@ -79,6 +84,7 @@ impl TechniqueKind {
             TechniqueKind::Parameters => std::mem::size_of::<abi::CadrParameterPathVtable>(),
             TechniqueKind::Submission => std::mem::size_of::<abi::CadrSubmissionVtable>(),
             TechniqueKind::Culling => std::mem::size_of::<abi::CadrCullingVtable>(),
+            TechniqueKind::Transparency => std::mem::size_of::<abi::CadrTransparencyVtable>(),
         }
     }
 
@@ -90,6 +96,7 @@ impl TechniqueKind {
             TechniqueKind::Parameters => size_through!(abi::CadrParameterPathVtable, bind_draw),
             TechniqueKind::Submission => size_through!(abi::CadrSubmissionVtable, record),
             TechniqueKind::Culling => size_through!(abi::CadrCullingVtable, cull),
+            TechniqueKind::Transparency => size_through!(abi::CadrTransparencyVtable, method),
         }
     }
 }
@@ -237,6 +244,10 @@ pub fn feature_bits(capabilities: Capabilities) -> u64 {
             capabilities.shader_draw_parameters,
             abi::CADR_FEATURE_SHADER_DRAW_PARAMETERS,
         ),
+        (
+            capabilities.fragment_stores_and_atomics,
+            abi::CADR_FEATURE_FRAGMENT_STORES_AND_ATOMICS,
+        ),
     ] {
         if has {
             bits |= bit;
@@ -267,6 +278,10 @@ pub fn feature_names(bits: u64) -> Vec<&'static str> {
         (
             abi::CADR_FEATURE_DEVICE_GENERATED_COMMANDS,
             "VK_NV_device_generated_commands",
+        ),
+        (
+            abi::CADR_FEATURE_FRAGMENT_STORES_AND_ATOMICS,
+            "fragmentStoresAndAtomics",
         ),
     ]
     .into_iter()

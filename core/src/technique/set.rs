@@ -12,6 +12,7 @@ use cadr_plugin_abi as abi;
 use super::host_api::{AllocationCounts, HostServices};
 use super::pipeline::{
     assemble_vertex_shader, PassSet, PipelineInputs, ShadeMode, ShaderCache, TechniquePipelines,
+    TransparencyMethod,
 };
 use super::registry::{feature_bits, PluginRegistry, TechniqueEntry, TechniqueKind};
 use crate::vk::{Device, COLOR_FORMAT, DEPTH_FORMAT};
@@ -27,7 +28,12 @@ pub struct Combination {
     pub submission: String,
     /// Culling.
     pub culling: String,
+    /// Transparency method.
+    pub transparency: String,
 }
+
+/// The transparency method of [`Combination::built_in`], built into cadr.
+pub const DEFAULT_TRANSPARENCY: &str = "weighted-blended";
 
 impl Combination {
     /// The built-in combination, the default: the simplest technique of each kind, linked
@@ -39,6 +45,7 @@ impl Combination {
             parameters: "push".into(),
             submission: "individual".into(),
             culling: "none".into(),
+            transparency: DEFAULT_TRANSPARENCY.into(),
         }
     }
 
@@ -49,6 +56,7 @@ impl Combination {
             TechniqueKind::Parameters => &self.parameters,
             TechniqueKind::Submission => &self.submission,
             TechniqueKind::Culling => &self.culling,
+            TechniqueKind::Transparency => &self.transparency,
         }
     }
 
@@ -59,6 +67,7 @@ impl Combination {
             TechniqueKind::Parameters => &mut self.parameters,
             TechniqueKind::Submission => &mut self.submission,
             TechniqueKind::Culling => &mut self.culling,
+            TechniqueKind::Transparency => &mut self.transparency,
         };
         name.clone_into(slot);
     }
@@ -70,7 +79,12 @@ impl std::fmt::Display for Combination {
             f,
             "{} / {} / {} / {}",
             self.vertex, self.parameters, self.submission, self.culling
-        )
+        )?;
+        // The default method is left unsaid, so that names stay short where it does not matter.
+        if self.transparency != DEFAULT_TRANSPARENCY {
+            write!(f, " / {}", self.transparency)?;
+        }
+        Ok(())
     }
 }
 
@@ -212,18 +226,21 @@ pub struct Techniques {
     registry: Arc<PluginRegistry>,
     services: Box<HostServices>,
     vulkan: Box<abi::CadrVulkan>,
-    pub(crate) active: [Option<Active>; 4],
+    pub(crate) active: [Option<Active>; 5],
+    /// The active transparency method's description.
+    method: Option<TransparencyMethod>,
     shade: ShadeMode,
     /// Sub-pixel culling threshold of GPU cullers, in pixels (0: off).
     min_pixels: f32,
     /// Whether unchanged frames may be resubmitted rather than recorded.
     frame_replay: bool,
-    pub(crate) pipelines: Option<TechniquePipelines>,
-    /// The pick pass's pipelines (same vertex shader, instance ids into the pick target),
-    /// built on the first pick.
-    pub(crate) pick_pipelines: Option<TechniquePipelines>,
+    /// The pipelines of each pass set drawn since the combination or shade mode changed (the
+    /// shaded frame with and without translucent surfaces, the pick pass), built on first use.
+    pipelines: Vec<TechniquePipelines>,
     shaders: ShaderCache,
     frame_set_layout: vk::DescriptorSetLayout,
+    /// The transparency merge's set layout (its targets).
+    merge_set_layout: vk::DescriptorSetLayout,
     /// Bumped whenever techniques, pipelines or the target change (part of the commands key).
     pub(crate) epoch: u64,
     /// What culling last ran for (see `frame::cull`).
@@ -237,11 +254,11 @@ fn index(kind: TechniqueKind) -> usize {
 
 impl Techniques {
     /// Creates an empty set over `registry` for renderers on `device` whose frame set layout
-    /// is `frame_set_layout`.
+    /// and transparency merge set layout are `layouts`.
     pub fn new(
         device: &Arc<Device>,
         registry: Arc<PluginRegistry>,
-        frame_set_layout: vk::DescriptorSetLayout,
+        (frame_set_layout, merge_set_layout): (vk::DescriptorSetLayout, vk::DescriptorSetLayout),
     ) -> Self {
         let services = HostServices::new(device);
         let handles = device.raw_handles();
@@ -276,14 +293,15 @@ impl Techniques {
             registry,
             services,
             vulkan,
-            active: [None, None, None, None],
+            active: [None, None, None, None, None],
+            method: None,
             shade: ShadeMode::Solid,
             min_pixels: 0.0,
             frame_replay: true,
-            pipelines: None,
-            pick_pipelines: None,
+            pipelines: Vec::new(),
             shaders: ShaderCache::default(),
             frame_set_layout,
+            merge_set_layout,
             epoch: 1,
             cull_key: None,
             worker_threads,
@@ -308,6 +326,7 @@ impl Techniques {
             parameters: name(TechniqueKind::Parameters),
             submission: name(TechniqueKind::Submission),
             culling: name(TechniqueKind::Culling),
+            transparency: name(TechniqueKind::Transparency),
         }
     }
 
@@ -321,7 +340,7 @@ impl Techniques {
         if mode != self.shade {
             self.wait_idle()?;
             self.shade = mode;
-            self.pipelines = None;
+            self.pipelines.retain(|p| p.pass_set == PassSet::Pick);
             self.epoch += 1;
         }
         Ok(())
@@ -463,13 +482,20 @@ impl Techniques {
         if created.is_empty() {
             return Ok(());
         }
+        let method = match created
+            .iter()
+            .find(|(slot, _)| *slot == index(TechniqueKind::Transparency))
+        {
+            Some((_, active)) => Some(describe_method(active)?),
+            None => self.method.clone(),
+        };
         self.wait_idle()?;
-        self.pipelines = None;
-        self.pick_pipelines = None;
+        self.pipelines.clear();
         for (slot, active) in created {
             // The old instance drops here, after the GPU finished with it.
             self.active[slot] = Some(active);
         }
+        self.method = method;
         self.epoch += 1;
         Ok(())
     }
@@ -502,19 +528,12 @@ impl Techniques {
         })
     }
 
-    /// Builds the pipelines of the current combination for `passes` (the shade mode's, or the
-    /// pick pass's) if needed.
+    /// Builds the pipelines of the current combination for `passes` (the shade mode's, with or
+    /// without translucent surfaces, or the pick pass's) if needed.
     pub(crate) fn ensure_pipelines(&mut self, passes: PassSet) -> RenderResult<()> {
-        let slot = match passes {
-            PassSet::Shaded(_) => &self.pipelines,
-            PassSet::Pick => &self.pick_pipelines,
-        };
-        if slot.is_none() {
-            let pipelines = Some(self.build_pipelines(passes)?);
-            match passes {
-                PassSet::Shaded(_) => self.pipelines = pipelines,
-                PassSet::Pick => self.pick_pipelines = pipelines,
-            }
+        if !self.pipelines.iter().any(|p| p.pass_set == passes) {
+            let pipelines = self.build_pipelines(passes)?;
+            self.pipelines.push(pipelines);
             self.epoch += 1;
         }
         Ok(())
@@ -522,11 +541,15 @@ impl Techniques {
 
     /// The pipelines built for `passes` (see `ensure_pipelines`).
     pub(crate) fn pipelines_for(&self, passes: PassSet) -> RenderResult<&TechniquePipelines> {
-        match passes {
-            PassSet::Shaded(_) => self.pipelines.as_ref(),
-            PassSet::Pick => self.pick_pipelines.as_ref(),
-        }
-        .ok_or_else(|| RenderError::InvalidUse("technique pipelines were not built".into()))
+        self.pipelines
+            .iter()
+            .find(|p| p.pass_set == passes)
+            .ok_or_else(|| RenderError::InvalidUse("technique pipelines were not built".into()))
+    }
+
+    /// The active transparency method.
+    pub fn transparency_method(&self) -> Option<&TransparencyMethod> {
+        self.method.as_ref()
     }
 
     /// [`abi::CADR_PASS_PICK`] when every active technique was built for ABI 1.2 or later
@@ -593,9 +616,11 @@ impl Techniques {
             key,
             || assemble_vertex_shader(&vertex_snippet, &parameter_snippet),
             passes,
+            self.method.as_ref(),
         )?;
         let inputs = PipelineInputs {
             frame_set_layout: self.frame_set_layout,
+            merge_set_layout: self.merge_set_layout,
             path_set_layouts: [
                 vk::DescriptorSetLayout::from_raw(parameter_sets[0]),
                 vk::DescriptorSetLayout::from_raw(parameter_sets[1]),
@@ -605,6 +630,7 @@ impl Techniques {
             shaders: &shaders,
             passes,
             pick_kind: self.pick_pass_kind(),
+            method: self.method.as_ref(),
         };
         TechniquePipelines::new(&self.device, &inputs)
     }
@@ -613,10 +639,79 @@ impl Techniques {
 impl Drop for Techniques {
     fn drop(&mut self) {
         let _ = self.wait_idle();
-        self.pipelines = None;
-        self.pick_pipelines = None;
+        self.pipelines.clear();
         for slot in &mut self.active {
             *slot = None;
         }
     }
+}
+
+/// Asks a transparency technique what it is (`CadrTransparencyVtable::method`) and checks the
+/// answer: at most 2 targets of formats the host can use, snippets present.
+fn describe_method(active: &Active) -> RenderResult<TransparencyMethod> {
+    let entry = &active.entry;
+    let refuse = |message: String| RenderError::Technique {
+        technique: format!("{} '{}'", entry.kind.name(), entry.name),
+        message,
+    };
+    let method_fn = active
+        .vtable::<abi::CadrTransparencyVtable>()
+        .method
+        .ok_or_else(|| refuse("its vtable has no method function".into()))?;
+    // SAFETY: all-zero is a valid CadrTransparencyMethod (integers and null pointers).
+    let mut raw: abi::CadrTransparencyMethod = unsafe { std::mem::zeroed() };
+    raw.size = std::mem::size_of::<abi::CadrTransparencyMethod>() as u32;
+    let mut message = Message::new();
+    // SAFETY: a live instance; `raw` is writable for the call.
+    let result = unsafe { method_fn(active.instance, &mut raw, message.raw()) };
+    status(entry, "method", result, &message)?;
+    let text = |pointer: *const c_char, what: &str| -> RenderResult<String> {
+        if pointer.is_null() {
+            return Err(refuse(format!("it gave no {what}")));
+        }
+        // SAFETY: NUL-terminated per the ABI, alive as long as the instance.
+        Ok(unsafe { CStr::from_ptr(pointer) }
+            .to_string_lossy()
+            .into_owned())
+    };
+    if raw.target_count as usize > raw.targets.len() {
+        return Err(refuse(format!(
+            "{} targets: at most {}",
+            raw.target_count,
+            raw.targets.len()
+        )));
+    }
+    let targets = raw.targets[..raw.target_count as usize].to_vec();
+    let usable = [
+        vk::Format::R16G16B16A16_SFLOAT,
+        vk::Format::R16_SFLOAT,
+        vk::Format::R32_SFLOAT,
+        vk::Format::R8G8B8A8_UNORM,
+        vk::Format::R16G16_SFLOAT,
+    ];
+    if let Some((i, target)) = targets
+        .iter()
+        .enumerate()
+        .find(|(_, t)| !usable.contains(&vk::Format::from_raw(t.format)))
+    {
+        return Err(refuse(format!(
+            "target {i} has format {}, not one cadr blends into ({usable:?})",
+            target.format
+        )));
+    }
+    if raw.storage_cleared_words_per_pixel > raw.storage_words_per_pixel {
+        return Err(refuse(format!(
+            "it clears {} storage words per pixel of {}",
+            raw.storage_cleared_words_per_pixel, raw.storage_words_per_pixel
+        )));
+    }
+    Ok(TransparencyMethod {
+        name: entry.name.clone(),
+        targets,
+        storage_header_words: raw.storage_header_words,
+        storage_words_per_pixel: raw.storage_words_per_pixel,
+        storage_cleared_words_per_pixel: raw.storage_cleared_words_per_pixel,
+        fragment_snippet: text(raw.fragment_snippet, "fragment snippet")?,
+        merge_snippet: text(raw.merge_snippet, "merge snippet")?,
+    })
 }

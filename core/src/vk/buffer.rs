@@ -250,6 +250,21 @@ impl Buffer {
     pub fn size(&self) -> u64 {
         self.size
     }
+
+    /// Records filling its first `size` bytes (a multiple of 4) with the word `value`.
+    pub fn record_fill(&self, command_buffer: vk::CommandBuffer, size: u64, value: u32) {
+        let size = size.min(self.size) & !3;
+        if size == 0 {
+            return;
+        }
+        // SAFETY: command_buffer is recording outside rendering; the buffer outlives the
+        // submission (owners wait for their frames) and was created with TRANSFER_DST.
+        unsafe {
+            self.device
+                .raw
+                .cmd_fill_buffer(command_buffer, self.raw, 0, size, value)
+        };
+    }
 }
 
 impl Drop for Buffer {

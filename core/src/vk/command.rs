@@ -233,3 +233,28 @@ pub fn record_dispatch(
         raw.cmd_dispatch(command_buffer, groups, 1, 1);
     }
 }
+
+/// Records one triangle covering the target with `pipeline` (a full-screen pass whose vertex
+/// shader makes the triangle from `gl_VertexIndex`), `sets` bound from set 0 of `layout`.
+pub fn record_fullscreen(
+    device: &Device,
+    command_buffer: vk::CommandBuffer,
+    (pipeline, layout): (vk::Pipeline, vk::PipelineLayout),
+    sets: &[vk::DescriptorSet],
+) {
+    let raw = device.raw();
+    // SAFETY: the caller records inside rendering compatible with the pipeline; pipeline,
+    // layout and sets are live and compatible.
+    unsafe {
+        raw.cmd_bind_pipeline(command_buffer, vk::PipelineBindPoint::GRAPHICS, pipeline);
+        raw.cmd_bind_descriptor_sets(
+            command_buffer,
+            vk::PipelineBindPoint::GRAPHICS,
+            layout,
+            0,
+            sets,
+            &[],
+        );
+        raw.cmd_draw(command_buffer, 3, 1, 0, 0);
+    }
+}

@@ -36,6 +36,9 @@ pub struct Capabilities {
     pub pipeline_statistics_query: bool,
     /// Timestamps are supported on the render queue.
     pub timestamps: bool,
+    /// `fragmentStoresAndAtomics`: fragment shaders write storage buffers (the exact
+    /// transparency method's per-pixel lists).
+    pub fragment_stores_and_atomics: bool,
 }
 
 /// How to create a [`Device`].
@@ -136,7 +139,8 @@ impl Device {
             });
         }
         // Section planes clip in the vertex shader every technique shares; the wireframe
-        // display mode draws triangles as lines.
+        // display mode draws triangles as lines; translucent surfaces blend into the
+        // transparency method's targets, differently from the picture.
         for (supported, name) in [
             (
                 core.shader_clip_distance,
@@ -145,6 +149,10 @@ impl Device {
             (
                 core.fill_mode_non_solid,
                 "fillModeNonSolid (the wireframe display mode)",
+            ),
+            (
+                core.independent_blend,
+                "independentBlend (the transparency methods' targets)",
             ),
         ] {
             if supported != vk::TRUE {
@@ -190,14 +198,17 @@ impl Device {
             multi_draw: has_multi_draw,
             pipeline_statistics_query: core.pipeline_statistics_query == vk::TRUE,
             timestamps: queue_timestamp_bits > 0 && properties.limits.timestamp_period > 0.0,
+            fragment_stores_and_atomics: core.fragment_stores_and_atomics == vk::TRUE,
         };
 
         let enabled_core = vk::PhysicalDeviceFeatures::default()
             .multi_draw_indirect(capabilities.multi_draw_indirect)
             .draw_indirect_first_instance(capabilities.draw_indirect_first_instance)
             .pipeline_statistics_query(capabilities.pipeline_statistics_query)
+            .fragment_stores_and_atomics(capabilities.fragment_stores_and_atomics)
             .shader_clip_distance(true)
-            .fill_mode_non_solid(true);
+            .fill_mode_non_solid(true)
+            .independent_blend(true);
         let mut enabled13 = vk::PhysicalDeviceVulkan13Features::default()
             .dynamic_rendering(true)
             .synchronization2(true)

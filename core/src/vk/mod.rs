@@ -25,7 +25,7 @@ mod timer;
 
 pub use adapter::{enumerate as enumerate_adapters, Adapter, DeviceChoice, DEVICE_ENV};
 pub use buffer::{Buffer, MemoryLocation};
-pub use command::{record_dispatch, CommandContext, OneShot};
+pub use command::{record_dispatch, record_fullscreen, CommandContext, OneShot};
 pub use device::{Capabilities, Device, DeviceOptions, RawHandles};
 pub use error::{map_result, VkError, VkResult, VkResultExt};
 pub use image::{
@@ -34,11 +34,12 @@ pub use image::{
 };
 pub use instance::{Instance, InstanceOptions, ValidationLog, ValidationMessage};
 pub use pipeline::{
-    DescriptorSetLayout, DescriptorSets, GraphicsPipelineDesc, Pipeline, PipelineLayout,
-    VertexLayout,
+    Blend, ColorTarget, DepthUse, DescriptorSetLayout, DescriptorSets, GraphicsPipelineDesc,
+    Pipeline, PipelineLayout, VertexLayout,
 };
 pub use rendering::{
-    begin_rendering, end_rendering, suspend_rendering, RenderingTarget, SUSPENDED_DEPTH_LAYOUT,
+    begin_overlay, begin_rendering, end_overlay, end_rendering, suspend_rendering, RenderingTarget,
+    SUSPENDED_DEPTH_LAYOUT,
 };
 pub use shader::{create_unowned_shader_module, ShaderModule, ShaderStage};
 pub use swapchain::{PresentMode, PresentOutcome, Swapchain};

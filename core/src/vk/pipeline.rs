@@ -83,9 +83,15 @@ impl PipelineLayout {
         let push = [vk::PushConstantRange::default()
             .stage_flags(push_stages)
             .size(push_bytes)];
+        // No push constants: no range (a range may not be empty).
+        let ranges = if push_bytes == 0 {
+            &push[..0]
+        } else {
+            &push[..]
+        };
         let info = vk::PipelineLayoutCreateInfo::default()
             .set_layouts(sets)
-            .push_constant_ranges(&push);
+            .push_constant_ranges(ranges);
         // SAFETY: the info lives for the call.
         let raw = unsafe { device.raw().create_pipeline_layout(&info, host_callbacks()) }
             .or_vk("vkCreatePipelineLayout")?;
@@ -122,11 +128,29 @@ pub struct Pipeline {
 impl Pipeline {
     /// A graphics pipeline as [`GraphicsPipelineDesc`] describes it.
     pub fn graphics(device: &Arc<Device>, desc: &GraphicsPipelineDesc<'_>) -> VkResult<Self> {
+        // Vertex shader constant i (constant_id = i) is `vertex_constants[i]`.
+        let constant_entries: Vec<vk::SpecializationMapEntry> = (0..desc.vertex_constants.len())
+            .map(|i| {
+                vk::SpecializationMapEntry::default()
+                    .constant_id(i as u32)
+                    .offset(4 * i as u32)
+                    .size(4)
+            })
+            .collect();
+        let constant_bytes: Vec<u8> = desc
+            .vertex_constants
+            .iter()
+            .flat_map(|c| c.to_ne_bytes())
+            .collect();
+        let specialization = vk::SpecializationInfo::default()
+            .map_entries(&constant_entries)
+            .data(&constant_bytes);
         let stages = [
             vk::PipelineShaderStageCreateInfo::default()
                 .stage(vk::ShaderStageFlags::VERTEX)
                 .module(desc.vertex.raw())
-                .name(c"main"),
+                .name(c"main")
+                .specialization_info(&specialization),
             vk::PipelineShaderStageCreateInfo::default()
                 .stage(vk::ShaderStageFlags::FRAGMENT)
                 .module(desc.fragment.raw())
@@ -178,23 +202,45 @@ impl Pipeline {
         let multisample = vk::PipelineMultisampleStateCreateInfo::default()
             .rasterization_samples(vk::SampleCountFlags::TYPE_1);
         let depth = vk::PipelineDepthStencilStateCreateInfo::default()
-            .depth_test_enable(true)
-            .depth_write_enable(true)
+            .depth_test_enable(desc.depth != DepthUse::None)
+            .depth_write_enable(desc.depth == DepthUse::TestAndWrite)
             .depth_compare_op(vk::CompareOp::LESS_OR_EQUAL);
-        let blend_attachments = [vk::PipelineColorBlendAttachmentState::default()
-            .color_write_mask(if desc.color_writes {
-                vk::ColorComponentFlags::RGBA
-            } else {
-                vk::ColorComponentFlags::empty()
-            })];
+        let blend_attachments: Vec<vk::PipelineColorBlendAttachmentState> = desc
+            .colors
+            .iter()
+            .map(|target| {
+                let state = vk::PipelineColorBlendAttachmentState::default().color_write_mask(
+                    if target.writes {
+                        vk::ColorComponentFlags::RGBA
+                    } else {
+                        vk::ColorComponentFlags::empty()
+                    },
+                );
+                match target.blend {
+                    Some(blend) => state
+                        .blend_enable(true)
+                        .src_color_blend_factor(blend.src_color)
+                        .dst_color_blend_factor(blend.dst_color)
+                        .color_blend_op(blend.color_op)
+                        .src_alpha_blend_factor(blend.src_alpha)
+                        .dst_alpha_blend_factor(blend.dst_alpha)
+                        .alpha_blend_op(blend.alpha_op),
+                    None => state,
+                }
+            })
+            .collect();
         let blend =
             vk::PipelineColorBlendStateCreateInfo::default().attachments(&blend_attachments);
         let dynamic_states = [vk::DynamicState::VIEWPORT, vk::DynamicState::SCISSOR];
         let dynamic = vk::PipelineDynamicStateCreateInfo::default().dynamic_states(&dynamic_states);
-        let color_formats = [desc.color_format];
+        let color_formats: Vec<vk::Format> = desc.colors.iter().map(|c| c.format).collect();
         let mut rendering = vk::PipelineRenderingCreateInfo::default()
             .color_attachment_formats(&color_formats)
-            .depth_attachment_format(DEPTH_FORMAT);
+            .depth_attachment_format(if desc.depth == DepthUse::None {
+                vk::Format::UNDEFINED
+            } else {
+                DEPTH_FORMAT
+            });
         let info = [vk::GraphicsPipelineCreateInfo::default()
             .stages(&stages)
             .vertex_input_state(&vertex_input)
@@ -278,9 +324,79 @@ pub struct VertexLayout<'a> {
     pub attributes: &'a [(vk::Format, u32)],
 }
 
+/// How a pipeline uses the depth attachment ([`DEPTH_FORMAT`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum DepthUse {
+    /// Tested (LESS_OR_EQUAL) and written: opaque surfaces and lines.
+    TestAndWrite,
+    /// Tested, not written: translucent surfaces.
+    Test,
+    /// No depth attachment: full-screen passes.
+    None,
+}
+
+/// How a colour attachment is blended, as in `VkPipelineColorBlendAttachmentState`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Blend {
+    /// Source factor for colour.
+    pub src_color: vk::BlendFactor,
+    /// Destination factor for colour.
+    pub dst_color: vk::BlendFactor,
+    /// Operation for colour.
+    pub color_op: vk::BlendOp,
+    /// Source factor for alpha.
+    pub src_alpha: vk::BlendFactor,
+    /// Destination factor for alpha.
+    pub dst_alpha: vk::BlendFactor,
+    /// Operation for alpha.
+    pub alpha_op: vk::BlendOp,
+}
+
+impl Blend {
+    /// Premultiplied colour over what is there: `src + dst × (1 − src.a)`.
+    pub const PREMULTIPLIED_OVER: Blend = Blend {
+        src_color: vk::BlendFactor::ONE,
+        dst_color: vk::BlendFactor::ONE_MINUS_SRC_ALPHA,
+        color_op: vk::BlendOp::ADD,
+        src_alpha: vk::BlendFactor::ONE,
+        dst_alpha: vk::BlendFactor::ONE_MINUS_SRC_ALPHA,
+        alpha_op: vk::BlendOp::ADD,
+    };
+}
+
+/// One colour attachment of a pipeline.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct ColorTarget {
+    /// Its format.
+    pub format: vk::Format,
+    /// Whether the pipeline writes it (all four components).
+    pub writes: bool,
+    /// How it is blended; `None` replaces.
+    pub blend: Option<Blend>,
+}
+
+impl ColorTarget {
+    /// Written, not blended.
+    pub fn replaced(format: vk::Format) -> Self {
+        Self {
+            format,
+            writes: true,
+            blend: None,
+        }
+    }
+
+    /// Not written (the attachment is there for the rendering's sake).
+    pub fn untouched(format: vk::Format) -> Self {
+        Self {
+            format,
+            writes: false,
+            blend: None,
+        }
+    }
+}
+
 /// What cadr's graphics pipelines differ in. The rest is shared: dynamic viewport and scissor,
-/// no face culling, depth test and write with LESS_OR_EQUAL, one colour target, dynamic
-/// rendering with [`DEPTH_FORMAT`].
+/// no face culling, LESS_OR_EQUAL depth tests, dynamic rendering.
 pub struct GraphicsPipelineDesc<'a> {
     /// The pipeline layout.
     pub layout: &'a PipelineLayout,
@@ -296,10 +412,13 @@ pub struct GraphicsPipelineDesc<'a> {
     pub depth_bias: bool,
     /// Draws triangles as their three edges (polygon mode LINE: the wireframe display mode).
     pub triangle_outlines: bool,
-    /// Writes colour; without, only depth (the hidden-line display mode's surfaces).
-    pub color_writes: bool,
-    /// The colour attachment's format.
-    pub color_format: vk::Format,
+    /// The colour attachments, in order (a pipeline that writes none of them draws depth
+    /// only: the hidden-line display mode's surfaces).
+    pub colors: &'a [ColorTarget],
+    /// How it uses depth.
+    pub depth: DepthUse,
+    /// Values of the vertex shader's specialization constants 0, 1, … (u32 each).
+    pub vertex_constants: &'a [u32],
     /// The debug name.
     pub name: &'a str,
 }
@@ -362,6 +481,23 @@ impl DescriptorSets {
             .buffer_info(&info)];
         // SAFETY: callers update sets only while no submitted command buffer uses them (frames
         // are waited for before the next is recorded).
+        unsafe { self.device.raw().update_descriptor_sets(&write, &[]) };
+    }
+}
+
+impl DescriptorSets {
+    /// Points `binding` of set `set` at `view`, a sampled image in `SHADER_READ_ONLY_OPTIMAL`
+    /// (read with `texelFetch`, no sampler).
+    pub fn write_sampled_image(&self, set: usize, binding: u32, view: vk::ImageView) {
+        let info = [vk::DescriptorImageInfo::default()
+            .image_view(view)
+            .image_layout(vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL)];
+        let write = [vk::WriteDescriptorSet::default()
+            .dst_set(self.sets[set])
+            .dst_binding(binding)
+            .descriptor_type(vk::DescriptorType::SAMPLED_IMAGE)
+            .image_info(&info)];
+        // SAFETY: as in `write_buffer`.
         unsafe { self.device.raw().update_descriptor_sets(&write, &[]) };
     }
 }

@@ -1,7 +1,8 @@
-//! Dynamic rendering into one colour and one depth image: the layout transitions before and
-//! after, the cleared attachments, and the viewport covering the target. A pass may be
-//! suspended (the depth made readable by compute shaders) and resumed, for frames drawn in
-//! phases (GPU occlusion culling).
+//! Dynamic rendering into one colour and one depth image (and the extra colour targets of a
+//! transparency method): the layout transitions before and after, the cleared attachments, and
+//! the viewport covering the target. A pass may be suspended (the depth made readable by
+//! compute shaders) and resumed, for frames drawn in phases (GPU occlusion culling). An overlay
+//! pass draws over the finished colour image without depth (the transparency merge).
 
 use ash::vk;
 
@@ -28,6 +29,10 @@ pub struct RenderingTarget<'a> {
     /// Whether this continues a pass that [`suspend_rendering`] suspended: both attachments
     /// are loaded instead of cleared.
     pub resume: bool,
+    /// Colour attachments after the first, with their clear values: cleared when the pass
+    /// begins (loaded when it resumes) and left in `SHADER_READ_ONLY_OPTIMAL` for fragment
+    /// shaders when it ends.
+    pub extra_colors: &'a [(&'a Image, vk::ClearColorValue)],
 }
 
 /// The layout the depth image is in while a pass is suspended.
@@ -94,19 +99,45 @@ pub fn begin_rendering(
                 | vk::AccessFlags2::DEPTH_STENCIL_ATTACHMENT_READ,
         ),
     );
+    if !target.resume {
+        for (image, _) in target.extra_colors {
+            // The last frame's merge may still read them.
+            transition(
+                device,
+                command_buffer,
+                image.raw(),
+                vk::ImageAspectFlags::COLOR,
+                (
+                    vk::ImageLayout::UNDEFINED,
+                    vk::PipelineStageFlags2::FRAGMENT_SHADER,
+                    vk::AccessFlags2::NONE,
+                ),
+                (
+                    vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL,
+                    vk::PipelineStageFlags2::COLOR_ATTACHMENT_OUTPUT,
+                    vk::AccessFlags2::COLOR_ATTACHMENT_WRITE
+                        | vk::AccessFlags2::COLOR_ATTACHMENT_READ,
+                ),
+            );
+        }
+    }
     let load_op = if target.resume {
         vk::AttachmentLoadOp::LOAD
     } else {
         vk::AttachmentLoadOp::CLEAR
     };
-    let color_attachment = [vk::RenderingAttachmentInfo::default()
-        .image_view(target.color.view())
-        .image_layout(vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL)
-        .load_op(load_op)
-        .store_op(vk::AttachmentStoreOp::STORE)
-        .clear_value(vk::ClearValue {
-            color: target.clear_color,
-        })];
+    let color_attachment: Vec<vk::RenderingAttachmentInfo<'_>> =
+        std::iter::once((target.color, target.clear_color))
+            .chain(target.extra_colors.iter().copied())
+            .map(|(image, clear)| {
+                vk::RenderingAttachmentInfo::default()
+                    .image_view(image.view())
+                    .image_layout(vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL)
+                    .load_op(load_op)
+                    .store_op(vk::AttachmentStoreOp::STORE)
+                    .clear_value(vk::ClearValue { color: clear })
+            })
+            .collect();
     let depth_attachment = vk::RenderingAttachmentInfo::default()
         .image_view(target.depth.view())
         .image_layout(vk::ImageLayout::DEPTH_ATTACHMENT_OPTIMAL)
@@ -211,6 +242,24 @@ pub fn end_rendering(
             vk::AccessFlags2::TRANSFER_READ,
         ),
     );
+    for (image, _) in target.extra_colors {
+        transition(
+            device,
+            command_buffer,
+            image.raw(),
+            vk::ImageAspectFlags::COLOR,
+            (
+                vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL,
+                vk::PipelineStageFlags2::COLOR_ATTACHMENT_OUTPUT,
+                vk::AccessFlags2::COLOR_ATTACHMENT_WRITE,
+            ),
+            (
+                vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL,
+                vk::PipelineStageFlags2::FRAGMENT_SHADER,
+                vk::AccessFlags2::SHADER_SAMPLED_READ,
+            ),
+        );
+    }
     if target.keep_depth {
         transition(
             device,
@@ -229,4 +278,76 @@ pub fn end_rendering(
             ),
         );
     }
+}
+
+/// Begins rendering over `color`, a finished picture in `TRANSFER_SRC_OPTIMAL` (as
+/// [`end_rendering`] leaves it): loaded, no depth, the viewport covering it.
+pub fn begin_overlay(device: &Device, command_buffer: vk::CommandBuffer, color: &Image) {
+    transition(
+        device,
+        command_buffer,
+        color.raw(),
+        vk::ImageAspectFlags::COLOR,
+        (
+            vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
+            vk::PipelineStageFlags2::COLOR_ATTACHMENT_OUTPUT,
+            vk::AccessFlags2::COLOR_ATTACHMENT_WRITE,
+        ),
+        (
+            vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL,
+            vk::PipelineStageFlags2::COLOR_ATTACHMENT_OUTPUT,
+            vk::AccessFlags2::COLOR_ATTACHMENT_WRITE | vk::AccessFlags2::COLOR_ATTACHMENT_READ,
+        ),
+    );
+    let attachment = [vk::RenderingAttachmentInfo::default()
+        .image_view(color.view())
+        .image_layout(vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL)
+        .load_op(vk::AttachmentLoadOp::LOAD)
+        .store_op(vk::AttachmentStoreOp::STORE)];
+    let area = vk::Rect2D {
+        offset: vk::Offset2D::default(),
+        extent: color.extent(),
+    };
+    let rendering = vk::RenderingInfo::default()
+        .render_area(area)
+        .layer_count(1)
+        .color_attachments(&attachment);
+    let viewport = [vk::Viewport {
+        x: 0.0,
+        y: 0.0,
+        width: area.extent.width as f32,
+        height: area.extent.height as f32,
+        min_depth: 0.0,
+        max_depth: 1.0,
+    }];
+    let raw = device.raw();
+    // SAFETY: command_buffer is recording outside rendering; the image outlives the submission.
+    unsafe {
+        raw.cmd_begin_rendering(command_buffer, &rendering);
+        raw.cmd_set_viewport(command_buffer, 0, &viewport);
+        raw.cmd_set_scissor(command_buffer, 0, &[area]);
+    }
+}
+
+/// Ends an overlay begun by [`begin_overlay`]: the colour image is ready to be copied from
+/// again, as [`end_rendering`] leaves it.
+pub fn end_overlay(device: &Device, command_buffer: vk::CommandBuffer, color: &Image) {
+    // SAFETY: rendering was begun by begin_overlay on this command buffer.
+    unsafe { device.raw().cmd_end_rendering(command_buffer) };
+    transition(
+        device,
+        command_buffer,
+        color.raw(),
+        vk::ImageAspectFlags::COLOR,
+        (
+            vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL,
+            vk::PipelineStageFlags2::COLOR_ATTACHMENT_OUTPUT,
+            vk::AccessFlags2::COLOR_ATTACHMENT_WRITE,
+        ),
+        (
+            vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
+            vk::PipelineStageFlags2::COPY | vk::PipelineStageFlags2::BLIT,
+            vk::AccessFlags2::TRANSFER_READ,
+        ),
+    );
 }

@@ -36,7 +36,7 @@ use std::ffi::{c_char, c_void};
 /// Major version of this ABI: a library built for another major version is refused.
 pub const CADR_PLUGIN_ABI_MAJOR: u32 = 1;
 /// Minor version of this ABI: additions that older readers may ignore.
-pub const CADR_PLUGIN_ABI_MINOR: u32 = 6;
+pub const CADR_PLUGIN_ABI_MINOR: u32 = 7;
 /// `(major << 16) | minor`, what [`CadrPluginVersionFn`] returns.
 pub const CADR_PLUGIN_ABI_VERSION: u32 = (CADR_PLUGIN_ABI_MAJOR << 16) | CADR_PLUGIN_ABI_MINOR;
 
@@ -72,6 +72,9 @@ pub const CADR_KIND_PARAMETER_PATH: CadrTechniqueKind = 2;
 pub const CADR_KIND_SUBMISSION: CadrTechniqueKind = 3;
 /// Which instances are drawn at all ([`CadrCullingVtable`]).
 pub const CADR_KIND_CULLING: CadrTechniqueKind = 4;
+/// Since ABI 1.7: how translucent surfaces are blended, whatever their order
+/// ([`CadrTransparencyVtable`]).
+pub const CADR_KIND_TRANSPARENCY: CadrTechniqueKind = 5;
 
 /// Device features, as bits of a `u64`: what a technique needs ([`CadrTechniqueInfo`]) and
 /// what the host's device has enabled ([`CadrVulkan::features`]).
@@ -92,6 +95,8 @@ pub const CADR_FEATURE_SHADER_DRAW_PARAMETERS: CadrFeatureBits = 1 << 5;
 pub const CADR_FEATURE_MESH_SHADER: CadrFeatureBits = 1 << 6;
 /// `VK_NV_device_generated_commands` (as above).
 pub const CADR_FEATURE_DEVICE_GENERATED_COMMANDS: CadrFeatureBits = 1 << 7;
+/// Since ABI 1.7: `fragmentStoresAndAtomics` (fragment shaders write storage buffers).
+pub const CADR_FEATURE_FRAGMENT_STORES_AND_ATOMICS: CadrFeatureBits = 1 << 8;
 
 /// What a technique offers to, or needs from, the techniques it is combined with, as bits of
 /// a `u64` ([`CadrTechniqueInfo::provides`], [`CadrTechniqueInfo::needs`]). The host refuses a
@@ -213,7 +218,7 @@ pub struct CadrTechniqueInfo {
     /// `CADR_TRAIT_*` bits this technique needs from its partners.
     pub needs: CadrTraitBits,
     /// The kind's vtable: [`CadrVertexPathVtable`], [`CadrParameterPathVtable`],
-    /// [`CadrSubmissionVtable`] or [`CadrCullingVtable`].
+    /// [`CadrSubmissionVtable`], [`CadrCullingVtable`] or [`CadrTransparencyVtable`].
     pub vtable: *const c_void,
 }
 
@@ -845,6 +850,13 @@ pub struct CadrRecordContext {
     /// Since ABI 1.3: the phase of the frame being recorded (0 unless a GPU culler splits the
     /// frame into phases, see [`CadrCullingVtable::phase_count`]).
     pub phase: u32,
+    /// Since ABI 1.7 (read it only when `size` covers it): how many colour attachments the
+    /// rendering has after the first (`color_format`): the transparency method's targets
+    /// ([`CadrTransparencyMethod::targets`]) while the frame draws translucent surfaces, else 0.
+    /// Secondary command buffers inherit all of them, in order.
+    pub extra_color_count: u32,
+    /// Since ABI 1.7: the `VkFormat`s of those attachments (`extra_color_count` of them).
+    pub extra_color_formats: [i32; 2],
 }
 
 /// Submission vtable ([`CADR_KIND_SUBMISSION`]).
@@ -1045,6 +1057,108 @@ pub struct CadrCullingVtable {
     /// Since ABI 1.3: adds to `stats` what the GPU drew (`draws`, `primitives`) in the last
     /// frame whose work has finished. Called by the host after waiting for a frame.
     pub gpu_counts: Option<unsafe extern "C" fn(instance: *mut c_void, stats: *mut CadrStats)>,
+}
+
+/// Since ABI 1.7: how a colour target of a transparency method is blended, as the fields of
+/// `VkPipelineColorBlendAttachmentState` (blending is always enabled; all four components are
+/// written).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct CadrBlend {
+    /// `VkBlendFactor` for the colour source.
+    pub src_color: i32,
+    /// `VkBlendFactor` for the colour destination.
+    pub dst_color: i32,
+    /// `VkBlendOp` for colour.
+    pub color_op: i32,
+    /// `VkBlendFactor` for the alpha source.
+    pub src_alpha: i32,
+    /// `VkBlendFactor` for the alpha destination.
+    pub dst_alpha: i32,
+    /// `VkBlendOp` for alpha.
+    pub alpha_op: i32,
+}
+
+/// Since ABI 1.7: one colour target a transparency method draws translucent fragments into.
+/// The host creates it at the frame's size, clears it when the frame begins and lets the merge
+/// read it.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct CadrTransparencyTarget {
+    /// `VkFormat`, one the device can blend into and sample (every device blends
+    /// `VK_FORMAT_R16G16B16A16_SFLOAT` and `VK_FORMAT_R16_SFLOAT`).
+    pub format: i32,
+    /// How fragments are blended into it.
+    pub blend: CadrBlend,
+    /// The value it is cleared to.
+    pub clear: [f32; 4],
+}
+
+/// Since ABI 1.7: what a transparency method is, as the host builds it into every frame that
+/// draws translucent surfaces (parts whose material's opacity is under 1, or every part not
+/// highlighted in the X-ray display mode). Opaque surfaces are drawn first, as without
+/// translucency; then, in the same rendering and with the same submission and culling, the
+/// translucent surfaces are drawn with depth testing against the opaque ones but no depth
+/// writes, each fragment handed to `fragment_snippet`; after rendering, a full-screen pass
+/// runs `merge_snippet` per pixel and blends what it returns over the opaque picture.
+///
+/// Written by the plugin into the host's struct; the strings belong to the instance and stay
+/// valid as long as it lives.
+///
+/// The host declares, for both snippets, the frame uniforms (`frame`) and:
+/// - `uint cadr_pixel_index()`: the pixel's index, `y * width + x`;
+/// - `uint cadr_pixel_count()`: width × height of the target;
+/// - with `storage_words_per_pixel` > 0, `buffer CadrTransparencyStorage { uint
+///   cadr_storage[]; }`: `storage_header_words + storage_words_per_pixel × pixels` words, of
+///   which the first `storage_header_words + storage_cleared_words_per_pixel × pixels` are
+///   zero when the frame's translucent surfaces begin (the rest keeps what it held);
+/// - in the fragment snippet, `layout(location = 1 + i) out vec4 cadr_target_i` for each
+///   target (`cadr_target_0`, `cadr_target_1`); fragment tests run early, so a fragment that
+///   reaches the snippet is in front of every opaque surface;
+/// - in the merge snippet, `vec4 cadr_target_texel(int i)`: target i at this pixel.
+#[repr(C)]
+#[derive(Debug)]
+pub struct CadrTransparencyMethod {
+    /// Size of this struct as the host knows it (the host sets it; the plugin writes fields
+    /// it covers).
+    pub size: u32,
+    /// Number of colour targets (0 to 2) at `targets`.
+    pub target_count: u32,
+    /// The targets.
+    pub targets: [CadrTransparencyTarget; 2],
+    /// Words of storage at the start of the buffer, zeroed every frame (counters).
+    pub storage_header_words: u32,
+    /// Words of storage per pixel (0: no storage buffer).
+    pub storage_words_per_pixel: u32,
+    /// Of those, the words per pixel zeroed every frame (they lie first, right after the
+    /// header: `cadr_storage[storage_header_words + i]` for i below this times the pixels).
+    pub storage_cleared_words_per_pixel: u32,
+    /// GLSL defining `void cadr_transparent_fragment(vec4 color, float view_depth)`: `color`
+    /// is the shaded colour premultiplied by its opacity (gamma-encoded, as the picture),
+    /// `view_depth` the distance along the view direction (positive, in scene units). It
+    /// writes the targets and the storage.
+    pub fragment_snippet: *const c_char,
+    /// GLSL defining `vec4 cadr_merge()`: the pixel's translucent colour, premultiplied, with
+    /// its coverage in alpha; the host blends it over the opaque picture
+    /// (`rgb + picture × (1 − a)`).
+    pub merge_snippet: *const c_char,
+}
+
+/// Since ABI 1.7: transparency vtable ([`CADR_KIND_TRANSPARENCY`]).
+#[repr(C)]
+#[derive(Debug)]
+pub struct CadrTransparencyVtable {
+    /// Size, create, destroy.
+    pub common: CadrCommonVtable,
+    /// Describes the method into `method` (whose `size` the host set). Called once per
+    /// instance, after `create`; on failure writes `message`.
+    pub method: Option<
+        unsafe extern "C" fn(
+            instance: *mut c_void,
+            method: *mut CadrTransparencyMethod,
+            message: *mut CadrMessage,
+        ) -> CadrStatus,
+    >,
 }
 
 impl CadrInstanceRecord {

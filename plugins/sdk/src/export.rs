@@ -12,7 +12,7 @@ use cadr_plugin_abi as abi;
 
 use crate::gpu::Gpu;
 use crate::views::{Bind, CullInput, CullOutput, GpuCull, Record, Scene};
-use crate::{Culling, GpuCulling, ParameterPath, Submission, Technique, VertexPath};
+use crate::{Culling, GpuCulling, ParameterPath, Submission, Technique, Transparency, VertexPath};
 
 /// How a technique describes itself (strings NUL-terminated).
 #[derive(Clone, Copy, Debug)]
@@ -496,6 +496,46 @@ pub fn gpu_culling<T: GpuCulling>(describe: Describe) -> abi::CadrTechniqueInfo 
             record_gpu: Some(record_gpu::<T>),
             phase_count: Some(phase_count::<T>),
             gpu_counts: Some(gpu_counts::<T>),
+        },
+    )
+}
+
+/// The technique info of a transparency method (ABI 1.7).
+pub fn transparency<T: Transparency>(describe: Describe) -> abi::CadrTechniqueInfo {
+    unsafe extern "C" fn method<T: Transparency>(
+        instance: *mut c_void,
+        method: *mut abi::CadrTransparencyMethod,
+        message: *mut abi::CadrMessage,
+    ) -> abi::CadrStatus {
+        guarded(message, || {
+            // SAFETY: see `this`.
+            let this = unsafe { this::<T>(instance) };
+            // SAFETY: the host passes its struct, valid and unaliased for the call.
+            let method = unsafe { method.as_mut() }.ok_or("no method to describe")?;
+            if (method.size as usize) < std::mem::size_of::<abi::CadrTransparencyMethod>() {
+                return Err("the host's transparency method struct is too small".into());
+            }
+            let targets = this.targets();
+            if targets.len() > method.targets.len() {
+                return Err(format!("{} targets: at most 2", targets.len()));
+            }
+            method.target_count = targets.len() as u32;
+            method.targets[..targets.len()].copy_from_slice(&targets);
+            let (header, per_pixel, cleared) = this.storage_words();
+            method.storage_header_words = header;
+            method.storage_words_per_pixel = per_pixel;
+            method.storage_cleared_words_per_pixel = cleared;
+            method.fragment_snippet = this.fragment_snippet().as_ptr();
+            method.merge_snippet = this.merge_snippet().as_ptr();
+            Ok(())
+        })
+    }
+    info(
+        abi::CADR_KIND_TRANSPARENCY,
+        describe,
+        abi::CadrTransparencyVtable {
+            common: common::<T, abi::CadrTransparencyVtable>(),
+            method: Some(method::<T>),
         },
     )
 }

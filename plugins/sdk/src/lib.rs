@@ -1,7 +1,7 @@
 //! The SDK for writing cadr technique plugins in Rust.
 //!
 //! Implement [`Technique`] and one kind trait ([`VertexPath`], [`ParameterPath`],
-//! [`Submission`], [`Culling`] or [`GpuCulling`]) per technique, then list them in [`technique_library!`], which
+//! [`Submission`], [`Culling`], [`GpuCulling`] or [`Transparency`]) per technique, then list them in [`technique_library!`], which
 //! generates the `extern "C"` shims (each catching panics) that the host calls, and export the
 //! library from a dynamic library with [`export_plugin!`] (the two symbols the host looks for).
 //! A library that is not exported can be linked into a host statically: cadr's built-in
@@ -120,6 +120,23 @@ pub trait GpuCulling: Technique {
     }
 }
 
+/// How translucent surfaces are blended (since ABI 1.7): a method the host builds into every
+/// frame that draws translucent surfaces (see `abi::CadrTransparencyMethod`). Listed as kind
+/// `transparency`.
+pub trait Transparency: Technique {
+    /// The colour targets (at most 2).
+    fn targets(&self) -> Vec<abi::CadrTransparencyTarget>;
+    /// Storage words: at the start (zeroed every frame), per pixel, and of those per pixel the
+    /// ones zeroed every frame. None by default.
+    fn storage_words(&self) -> (u32, u32, u32) {
+        (0, 0, 0)
+    }
+    /// GLSL defining `void cadr_transparent_fragment(vec4 color, float view_depth)`.
+    fn fragment_snippet(&self) -> &CStr;
+    /// GLSL defining `vec4 cadr_merge()`.
+    fn merge_snippet(&self) -> &CStr;
+}
+
 /// Defines a technique library: a Rust function `$entry` with the signature of
 /// `cadr_plugin_entry` that describes the listed techniques. Nothing is exported, so several
 /// libraries can be linked into one binary (the host's built-in techniques are one); hand the
@@ -137,7 +154,7 @@ pub trait GpuCulling: Technique {
 ///     ]
 /// }
 /// ```
-/// Kinds: `vertex`, `parameters`, `submission`, `culling`, `gpu_culling`.
+/// Kinds: `vertex`, `parameters`, `submission`, `culling`, `gpu_culling`, `transparency`.
 #[macro_export]
 macro_rules! technique_library {
     (

@@ -262,6 +262,24 @@ impl<'a> Record<'a> {
             .then(|| vk::Format::from_raw(self.raw.color_format))
     }
 
+    /// Every colour attachment's format, in order: the pass's (`default` where the host does
+    /// not say) and, since ABI 1.7, the transparency targets the rendering also has. Secondary
+    /// command buffers inherit all of them.
+    pub fn color_formats(&self, default: vk::Format) -> Vec<vk::Format> {
+        let mut formats = vec![self.color_format().unwrap_or(default)];
+        let end = std::mem::offset_of!(abi::CadrRecordContext, extra_color_formats)
+            + std::mem::size_of::<[i32; 2]>();
+        if self.raw.size as usize >= end {
+            let count = (self.raw.extra_color_count as usize).min(2);
+            formats.extend(
+                self.raw.extra_color_formats[..count]
+                    .iter()
+                    .map(|&f| vk::Format::from_raw(f)),
+            );
+        }
+        formats
+    }
+
     /// Since ABI 1.3: the draw sources a GPU culler wrote for this phase, one per pass, or
     /// `None` when the submission draws its own lists.
     pub fn gpu_draws(&self) -> Option<&'a [abi::CadrGpuDraws]> {

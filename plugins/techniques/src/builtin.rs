@@ -9,6 +9,7 @@ use cadr_plugin_sdk::technique_library;
 use crate::culling::NoCulling;
 use crate::parameters::Push;
 use crate::submission::Individual;
+use crate::transparency::WeightedBlended;
 use crate::vertex::{PerGeometry, GEOMETRY};
 
 /// The name the built-in library describes itself with.
@@ -38,6 +39,11 @@ technique_library! {
         culling NoCulling {
             name: "none",
             description: "No culling: every visible part is drawn.",
+            features: 0, provides: abi::CADR_TRAIT_REPLAYABLE, needs: 0,
+        },
+        transparency WeightedBlended {
+            name: "weighted-blended",
+            description: "Weighted blended order-independent transparency (McGuire and Bavoil): one pass, exact for one layer, approximate where layers overlap.",
             features: 0, provides: abi::CADR_TRAIT_REPLAYABLE, needs: 0,
         },
     ]

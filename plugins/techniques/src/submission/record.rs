@@ -303,16 +303,17 @@ impl SecondaryBuffers {
         let workers = workers.clamp(1, self.buffers.len());
         let shared = Shared(recorder);
         let extent = recorder.record.extent();
-        let color_format = recorder.record.color_format().unwrap_or(self.gpu.formats.0);
+        let color_formats = recorder.record.color_formats(self.gpu.formats.0);
         let results: Vec<Result<CadrStats, String>> = std::thread::scope(|scope| {
             let handles: Vec<_> = (0..workers)
                 .map(|worker| {
                     let shared = &shared;
                     let (pool, buffer) = (self.pools[worker], self.buffers[worker]);
                     let gpu = &self.gpu;
+                    let color_formats = &color_formats;
                     let work = move || -> Result<CadrStats, String> {
                         let mut local = CadrStats::default();
-                        begin_secondary(gpu, pool, buffer, (extent, color_format))?;
+                        begin_secondary(gpu, pool, buffer, (extent, color_formats))?;
                         let part = if workers == 1 {
                             0..usize::MAX
                         } else {
@@ -364,11 +365,10 @@ fn begin_secondary(
     gpu: &Gpu,
     pool: vk::CommandPool,
     buffer: vk::CommandBuffer,
-    (extent, color_format): (vk::Extent2D, vk::Format),
+    (extent, color_formats): (vk::Extent2D, &[vk::Format]),
 ) -> Result<(), String> {
-    let formats = [color_format];
     let mut rendering = vk::CommandBufferInheritanceRenderingInfo::default()
-        .color_attachment_formats(&formats)
+        .color_attachment_formats(color_formats)
         .depth_attachment_format(gpu.formats.1)
         .rasterization_samples(vk::SampleCountFlags::TYPE_1);
     let inheritance = vk::CommandBufferInheritanceInfo::default().push_next(&mut rendering);

@@ -1,0 +1,100 @@
+//! What a frame with translucent surfaces needs besides its picture: the transparency method's
+//! colour targets at the frame's size, its storage buffer (part of the frame set, binding 1)
+//! and the merge's descriptor set that reads the targets. Made when a method or size first
+//! needs them, kept while both stay the same.
+
+use std::sync::Arc;
+
+use crate::error::RenderResult;
+use crate::technique::TransparencyMethod;
+use crate::vk::raw as vk;
+use crate::vk::{Buffer, DescriptorSets, Device, Image, MemoryLocation};
+
+/// The smallest storage buffer: what binding 1 of the frame set holds when no method needs
+/// storage (a binding must name a buffer).
+pub(crate) const PLACEHOLDER_STORAGE_BYTES: u64 = 16;
+
+/// The targets, storage and merge set of one transparency method at one size.
+pub(crate) struct TransparencyTargets {
+    /// What they were made for: the method and the target size.
+    made_for: (TransparencyMethod, vk::Extent2D),
+    /// The method's colour targets.
+    pub images: Vec<Image>,
+    /// Their clear values.
+    pub clears: Vec<vk::ClearColorValue>,
+    /// The storage buffer (at least [`PLACEHOLDER_STORAGE_BYTES`]).
+    pub storage: Buffer,
+    /// The bytes of it zeroed every frame.
+    pub cleared_bytes: u64,
+    /// The merge's set 1: the targets.
+    pub merge_set: DescriptorSets,
+}
+
+impl TransparencyTargets {
+    /// Whether these were made for `method` at `extent`.
+    pub fn fit(&self, method: &TransparencyMethod, extent: vk::Extent2D) -> bool {
+        self.made_for.0 == *method && self.made_for.1 == extent
+    }
+
+    /// Makes the targets, storage and merge set of `method` at `extent`.
+    pub fn new(
+        device: &Arc<Device>,
+        method: &TransparencyMethod,
+        extent: vk::Extent2D,
+        merge_set_layout: vk::DescriptorSetLayout,
+    ) -> RenderResult<Self> {
+        let images = method
+            .target_formats()
+            .into_iter()
+            .enumerate()
+            .map(|(i, format)| {
+                Image::new(
+                    device,
+                    &format!("transparency target {i}"),
+                    extent,
+                    format,
+                    vk::ImageUsageFlags::COLOR_ATTACHMENT | vk::ImageUsageFlags::SAMPLED,
+                    vk::ImageAspectFlags::COLOR,
+                )
+            })
+            .collect::<Result<Vec<_>, _>>()?;
+        let clears = method
+            .targets
+            .iter()
+            .map(|t| vk::ClearColorValue { float32: t.clear })
+            .collect();
+        let pixels = u64::from(extent.width) * u64::from(extent.height);
+        let (bytes, cleared_bytes) = method.storage_bytes(pixels);
+        let storage = storage_buffer(device, bytes)?;
+        let merge_set = DescriptorSets::new(
+            device,
+            "transparency merge",
+            &[merge_set_layout],
+            &[vk::DescriptorPoolSize::default()
+                .ty(vk::DescriptorType::SAMPLED_IMAGE)
+                .descriptor_count(2)],
+        )?;
+        for (binding, image) in images.iter().enumerate() {
+            merge_set.write_sampled_image(0, binding as u32, image.view());
+        }
+        Ok(Self {
+            made_for: (method.clone(), extent),
+            images,
+            clears,
+            storage,
+            cleared_bytes,
+            merge_set,
+        })
+    }
+}
+
+/// A storage buffer of `bytes` (at least the placeholder's), zeroed by transfers.
+pub(crate) fn storage_buffer(device: &Arc<Device>, bytes: u64) -> RenderResult<Buffer> {
+    Ok(Buffer::new(
+        device,
+        "transparency storage",
+        bytes.max(PLACEHOLDER_STORAGE_BYTES),
+        vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_DST,
+        MemoryLocation::GpuOnly,
+    )?)
+}

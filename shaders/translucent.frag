@@ -1,0 +1,33 @@
+#version 460
+// Translucent surfaces of every technique combination: shaded as in shaded.frag (without
+// caps: a translucent part shows its inside anyway), premultiplied by the opacity and handed
+// to the transparency method's snippet, which the host pastes below with the declarations of
+// its targets and storage (CADR_TARGET_COUNT, CADR_STORAGE).
+// Fragments behind an opaque surface never reach the method (which may write storage).
+layout(early_fragment_tests) in;
+#include "frame.glsl"
+#include "shading.glsl"
+#include "transparency.glsl"
+
+layout(location = 0) in vec3 in_view_position;
+layout(location = 1) in vec3 in_view_normal;
+layout(location = 2) flat in vec4 in_base_color;
+layout(location = 3) flat in vec2 in_surface;
+
+// The picture itself is written by the opaque pass and the merge only.
+layout(location = 0) out vec4 out_color;
+#if CADR_TARGET_COUNT > 0
+layout(location = 1) out vec4 cadr_target_0;
+#endif
+#if CADR_TARGET_COUNT > 1
+layout(location = 2) out vec4 cadr_target_1;
+#endif
+
+//@TRANSPARENCY@
+
+void main() {
+    vec3 color = shade_headlight(in_view_position, in_view_normal, in_base_color, in_surface, frame.light);
+    float opacity = clamp(in_base_color.a, 0.0, 1.0);
+    out_color = vec4(0.0);
+    cadr_transparent_fragment(vec4(color * opacity, opacity), -in_view_position.z);
+}

@@ -1,5 +1,6 @@
-//! Display modes: gen:demo and the 2CylinderEngine in each mode match their references, each
-//! mode shows something other than the others, and the line-only modes fill no surface.
+//! Display modes: gen:demo and the 2CylinderEngine in each mode (X-ray included) match their
+//! references, each mode shows something other than the others, and the line-only modes fill
+//! no surface.
 #![allow(clippy::unwrap_used)] // Test code: a failed unwrap is a failed test.
 
 use cadr_core::generate::{generate, GeneratorSpec};
@@ -72,8 +73,8 @@ fn check_modes(name: &str, scene: &Scene) {
             );
         }
     }
-    let [solid, _, hidden_line, wireframe] = &images[..] else {
-        unreachable!("four modes")
+    let [solid, _, hidden_line, wireframe, _] = &images[..] else {
+        unreachable!("five modes")
     };
     assert!(
         filled_fraction(solid) > 0.05,

@@ -1,0 +1,371 @@
+//! Transparency: translucent materials blend over what is behind them whatever the order they
+//! are drawn in, with the fast method (weighted-blended) and the exact one (per-pixel-lists)
+//! agreeing where layers do not pile up; every technique combination draws translucency like
+//! the built-in one; X-ray shows what is hidden and keeps highlighted parts opaque; glTF's
+//! alphaMode gives materials their opacity and survives a save.
+#![allow(clippy::unwrap_used)] // Test code: a failed unwrap is a failed test.
+
+use std::sync::Arc;
+
+use cadr_core::graph::{NodeHandle, SceneGraph};
+use cadr_core::load::load_file;
+use cadr_core::render::Camera;
+use cadr_core::save::save_scene;
+use cadr_core::scene::{Geometry, Material, MeshRef, Node, Part, Scene, Vertex};
+use cadr_core::technique::{Combination, ShadeMode, TechniqueKind};
+use cadr_core::tree::SceneTree;
+use cadr_core::view::View;
+use cadr_core::vk::Device;
+use cadr_tests::images::{assert_matches_reference, compare, Tolerance, DEFAULT_TOLERANCE};
+use cadr_tests::{all_combinations, assert_no_validation_errors, plugin_registry, test_device};
+use glam::{DMat4, DVec3};
+
+const SIZE: (u32, u32) = (160, 120);
+
+/// The exact method against the fast one where at most two layers overlap: the weighted
+/// average of two colours differs from their order in the overlap only.
+const METHODS_AGREE: Tolerance = Tolerance {
+    mean: 0.02,
+    p99: 0.35,
+};
+
+/// A square in the z = 0 plane from -1 to 1, facing +z.
+fn square() -> Geometry {
+    let vertices = [[-1.0, -1.0], [1.0, -1.0], [1.0, 1.0], [-1.0, 1.0]]
+        .map(|[x, y]| Vertex {
+            position: [x, y, 0.0],
+            normal: [0.0, 0.0, 1.0],
+        })
+        .to_vec();
+    Geometry {
+        name: "square".into(),
+        vertices,
+        indices: vec![0, 1, 2, 0, 2, 3],
+        wire_indices: Vec::new(),
+        parts: vec![Part {
+            first_index: 0,
+            index_count: 6,
+            first_wire_index: 0,
+            wire_index_count: 0,
+        }],
+    }
+}
+
+fn material(name: &str, base_color: [f32; 4]) -> Material {
+    Material {
+        name: name.into(),
+        base_color,
+        metallic: 0.0,
+        roughness: 1.0,
+    }
+}
+
+/// Seen from +z: a large opaque red square at z = -1, a blue one at z = 0 (left of centre) and
+/// a green one at z = 0.5 (right of centre), overlapping in the middle; blue and green have
+/// opacity `alpha`.
+fn layers(alpha: f32) -> Scene {
+    let mut scene = Scene {
+        name: "layers".into(),
+        geometries: vec![square()],
+        materials: vec![
+            material("red", [0.8, 0.1, 0.1, 1.0]),
+            material("blue", [0.1, 0.2, 0.9, alpha]),
+            material("green", [0.1, 0.8, 0.2, alpha]),
+        ],
+        ..Scene::default()
+    };
+    let places = [
+        (DVec3::new(0.0, 0.0, -1.0), 2.0, 0),
+        (DVec3::new(-0.4, 0.0, 0.0), 0.6, 1),
+        (DVec3::new(0.4, 0.0, 0.5), 0.6, 2),
+    ];
+    for (i, (place, scale, material)) in places.into_iter().enumerate() {
+        let mut node = Node::new(format!("square {i}"));
+        node.local = DMat4::from_translation(place) * DMat4::from_scale(DVec3::splat(scale));
+        node.mesh = Some(MeshRef::new(0, vec![material]));
+        scene.nodes.push(node);
+        scene.roots.push(i as u32);
+    }
+    scene
+}
+
+struct Fixture {
+    device: Arc<Device>,
+    graph: SceneGraph,
+    /// The graph node of each scene node.
+    nodes: Vec<NodeHandle>,
+    tree: SceneTree,
+    view: View,
+    camera: Camera,
+}
+
+impl Fixture {
+    fn new(scene: &Scene) -> Self {
+        let device = test_device();
+        let (mut graph, nodes) = SceneGraph::from_scene(scene).unwrap();
+        let tree = SceneTree::build(&mut graph);
+        let view = View::new(&device, plugin_registry(&device), SIZE.0, SIZE.1).unwrap();
+        let aspect = f64::from(SIZE.0) / f64::from(SIZE.1);
+        let camera = Camera::look_at(DVec3::new(0.0, 0.0, 5.0), DVec3::ZERO, 40.0, aspect, 0.1, 50.0);
+        Self {
+            device,
+            graph,
+            nodes,
+            tree,
+            view,
+            camera,
+        }
+    }
+
+    fn render(&mut self) -> image::RgbaImage {
+        self.tree.update(&mut self.graph);
+        self.view
+            .render(&self.graph, &mut self.tree, &self.camera)
+            .unwrap();
+        self.view.renderer().read_rgba8().unwrap()
+    }
+
+    fn use_method(&mut self, name: &str) {
+        self.view
+            .techniques_mut()
+            .swap(TechniqueKind::Transparency, name)
+            .unwrap();
+    }
+
+    /// The pixel `point` projects to.
+    fn pixel_of(&self, point: DVec3) -> (u32, u32) {
+        let clip = self.camera.projection * self.camera.view * point.extend(1.0);
+        let ndc = clip.truncate() / clip.w;
+        (
+            ((ndc.x + 1.0) * 0.5 * f64::from(SIZE.0)) as u32,
+            ((ndc.y + 1.0) * 0.5 * f64::from(SIZE.1)) as u32,
+        )
+    }
+
+    fn color_at(&self, image: &image::RgbaImage, point: DVec3) -> [f32; 3] {
+        let (x, y) = self.pixel_of(point);
+        let p = image.get_pixel(x, y).0;
+        [p[0], p[1], p[2]].map(|c| f32::from(c) / 255.0)
+    }
+
+    /// The picture with square `node` hidden.
+    fn without(&mut self, node: u32) -> image::RgbaImage {
+        let handle = self.nodes[node as usize];
+        let mut flags = self.graph.node(handle).unwrap().flags;
+        flags.visible = false;
+        self.graph.set_flags(handle, flags).unwrap();
+        let image = self.render();
+        flags.visible = true;
+        self.graph.set_flags(handle, flags).unwrap();
+        image
+    }
+}
+
+/// `a` over `b` with opacity `alpha`, per channel.
+fn over(a: [f32; 3], alpha: f32, b: [f32; 3]) -> [f32; 3] {
+    [0, 1, 2].map(|i| a[i] * alpha + b[i] * (1.0 - alpha))
+}
+
+fn assert_close(what: &str, got: [f32; 3], expected: [f32; 3], tolerance: f32) {
+    let worst = (0..3)
+        .map(|i| (got[i] - expected[i]).abs())
+        .fold(0.0, f32::max);
+    assert!(
+        worst <= tolerance,
+        "{what}: {got:?}, expected {expected:?} (within {tolerance})"
+    );
+}
+
+/// Only blue over red (left), only green over red (right), both over red (middle).
+const LEFT: DVec3 = DVec3::new(-0.75, 0.0, 0.0);
+const MIDDLE: DVec3 = DVec3::new(0.0, 0.0, 0.0);
+
+#[test]
+fn one_translucent_layer_blends_over_what_is_behind_it_with_either_method() {
+    // The colours each square shades to, opaque, and the red behind.
+    let mut opaque = Fixture::new(&layers(1.0));
+    let opaque_image = opaque.render();
+    let blue = opaque.color_at(&opaque_image, LEFT);
+    let behind = opaque.without(1);
+    let red = opaque.color_at(&behind, LEFT);
+    assert!(blue[2] > 0.5 && red[0] > 0.5, "blue {blue:?}, red {red:?}");
+
+    let mut f = Fixture::new(&layers(0.5));
+    for method in ["weighted-blended", "per-pixel-lists"] {
+        f.use_method(method);
+        let image = f.render();
+        assert_close(
+            &format!("{method}: blue at opacity 0.5 over red"),
+            f.color_at(&image, LEFT),
+            over(blue, 0.5, red),
+            3.0 / 255.0,
+        );
+    }
+    drop(f.view);
+    drop(opaque.view);
+    assert_no_validation_errors(&f.device);
+}
+
+#[test]
+fn the_exact_method_sorts_layers_and_the_fast_one_agrees_where_they_do_not_pile_up() {
+    let mut opaque = Fixture::new(&layers(1.0));
+    let front = opaque.render();
+    let green = opaque.color_at(&front, MIDDLE);
+    let behind = opaque.without(2);
+    let blue = opaque.color_at(&behind, MIDDLE);
+    let red = opaque.color_at(&Fixture::new(&layers(0.0)).render(), MIDDLE);
+    let mut f = Fixture::new(&layers(0.5));
+    f.use_method("per-pixel-lists");
+    let exact = f.render();
+    // Green is in front: green over (blue over red), whatever the order they were drawn in.
+    assert_close(
+        "per-pixel-lists: green over blue over red",
+        f.color_at(&exact, MIDDLE),
+        over(green, 0.5, over(blue, 0.5, red)),
+        4.0 / 255.0,
+    );
+    f.use_method("weighted-blended");
+    let fast = f.render();
+    // The fast method averages the two layers' colours by weight: their coverage is exact.
+    let difference = compare(&fast, &exact).unwrap();
+    assert!(
+        difference.within(METHODS_AGREE),
+        "the methods agree within {METHODS_AGREE:?}: {difference:?}"
+    );
+    drop(f.view);
+    drop(opaque.view);
+    assert_no_validation_errors(&f.device);
+}
+
+#[test]
+fn every_valid_combination_draws_translucency_like_the_built_in_one() {
+    let mut f = Fixture::new(&layers(0.5));
+    let combinations = all_combinations(f.view.techniques().registry());
+    let mut checked = 0;
+    for method in ["weighted-blended", "per-pixel-lists"] {
+        let built_in = Combination {
+            transparency: method.into(),
+            ..Combination::built_in()
+        };
+        f.view.techniques_mut().select(&built_in).unwrap();
+        let reference = f.render();
+        // A sample (every fifth): the translucent pass goes through the submissions' and
+        // cullers' code for triangles, which the display-mode tests cover in full.
+        for combination in combinations.iter().skip(checked % 5).step_by(5) {
+            let combination = Combination {
+                transparency: method.into(),
+                ..combination.clone()
+            };
+            if f.view.techniques().check(&combination).is_err() {
+                continue;
+            }
+            f.view.techniques_mut().select(&combination).unwrap();
+            let image = f.render();
+            let difference = compare(&image, &reference).unwrap();
+            assert!(
+                difference.within(DEFAULT_TOLERANCE),
+                "{combination}: {difference:?}"
+            );
+            checked += 1;
+        }
+    }
+    assert!(checked > 20, "{checked} combinations checked");
+    drop(f.view);
+    assert_no_validation_errors(&f.device);
+}
+
+#[test]
+fn an_opaque_scene_draws_no_translucent_pass() {
+    let mut f = Fixture::new(&layers(1.0));
+    f.render();
+    let opaque = f.view.render(&f.graph, &mut f.tree, &f.camera).unwrap();
+    let mut translucent = Fixture::new(&layers(0.5));
+    translucent.render();
+    let stats = translucent
+        .view
+        .render(&translucent.graph, &mut translucent.tree, &translucent.camera)
+        .unwrap();
+    assert_eq!(opaque.draw_calls, 3, "one pass of three squares");
+    assert_eq!(
+        stats.draw_calls, 6,
+        "with translucent squares, the translucent pass draws them too"
+    );
+}
+
+#[test]
+fn xray_shows_hidden_parts_and_keeps_highlighted_ones_opaque() {
+    let mut f = Fixture::new(&layers(1.0));
+    let solid = f.render();
+    let blue = f.color_at(&solid, LEFT);
+    f.view
+        .techniques_mut()
+        .set_shade_mode(ShadeMode::XRay)
+        .unwrap();
+    let xray = f.render();
+    let seen = f.color_at(&xray, LEFT);
+    assert!(
+        seen[0] > blue[0] + 0.1,
+        "the red square behind the blue one shows through: {seen:?} against {blue:?}"
+    );
+    // Highlight the blue square: it hides the red one again (tinted, and opaque).
+    let handle = f.nodes[1];
+    let mut flags = f.graph.node(handle).unwrap().flags;
+    flags.highlighted = true;
+    f.graph.set_flags(handle, flags).unwrap();
+    let highlighted = f.render();
+    let hidden = f.without(0);
+    let without_red = f.color_at(&hidden, LEFT);
+    assert_close(
+        "a highlighted part stays opaque in X-ray",
+        f.color_at(&highlighted, LEFT),
+        without_red,
+        2.0 / 255.0,
+    );
+    assert_matches_reference("transparency_layers_xray", &highlighted, DEFAULT_TOLERANCE);
+    drop(f.view);
+    assert_no_validation_errors(&f.device);
+}
+
+#[test]
+fn gltf_alpha_modes_give_materials_their_opacity_and_survive_a_save() {
+    let dir = std::env::temp_dir().join(format!("cadr-alpha-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join("layers.gltf");
+    let mut scene = layers(0.4);
+    scene.materials.push(material("masked", [0.5, 0.5, 0.5, 0.4]));
+    scene.materials.push(material("cut", [0.5, 0.5, 0.5, 0.4]));
+    save_scene(&scene, &path).unwrap();
+    let saved = load_file(&path).unwrap();
+    let alphas: Vec<f32> = saved.materials.iter().map(|m| m.base_color[3]).collect();
+    assert_eq!(alphas, [1.0, 0.4, 0.4, 0.4, 0.4], "BLEND keeps the opacity");
+
+    // The same file with other modes: OPAQUE ignores alpha; MASK keeps a material whose alpha
+    // reaches the cutoff opaque and drops one below it.
+    let text = std::fs::read_to_string(&path).unwrap();
+    let mut modes = [
+        r#""alphaMode":"OPAQUE""#,
+        r#""alphaMode":"BLEND""#,
+        r#""alphaMode":"OPAQUE""#,
+        r#""alphaMode":"MASK","alphaCutoff":0.3"#,
+        r#""alphaMode":"MASK""#,
+    ]
+    .into_iter();
+    let compact: String = text.split_whitespace().collect::<Vec<_>>().join("");
+    let rewritten: Vec<String> = compact
+        .split(r#""alphaMode":"#)
+        .enumerate()
+        .map(|(i, piece)| {
+            if i == 0 {
+                return piece.to_owned();
+            }
+            // Drop the old value ("OPAQUE" or "BLEND") and put the next mode in.
+            let rest = piece.split_once(',').map_or("", |(_, rest)| rest);
+            format!("{},{rest}", modes.next().unwrap())
+        })
+        .collect();
+    std::fs::write(&path, rewritten.concat()).unwrap();
+    let modes = load_file(&path).unwrap();
+    let alphas: Vec<f32> = modes.materials.iter().map(|m| m.base_color[3]).collect();
+    assert_eq!(alphas, [1.0, 0.4, 1.0, 1.0, 0.0]);
+    std::fs::remove_dir_all(&dir).unwrap();
+}

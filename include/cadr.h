@@ -37,6 +37,10 @@
 // Display mode: every triangle's edges, hidden ones included.
 #define CADR_SHADE_WIREFRAME 3
 
+// Display mode: every part translucent with its edges, highlighted parts opaque (what is
+// inside an assembly shows through its housing).
+#define CADR_SHADE_XRAY 4
+
 // Node flag: the node and its subtree are drawn.
 #define CADR_NODE_VISIBLE 1
 
@@ -118,6 +122,9 @@ typedef enum CadrTechniqueKind {
   CADR_TECHNIQUE_KIND_SUBMISSION = 2,
   // Which instances are drawn.
   CADR_TECHNIQUE_KIND_CULLING = 3,
+  // How translucent surfaces are blended (`weighted-blended`, the default, or the exact
+  // `per-pixel-lists`).
+  CADR_TECHNIQUE_KIND_TRANSPARENCY = 4,
 } CadrTechniqueKind;
 
 // Opaque type behind [`CadrContext`]; never dereferenced by the host or by cadr.
@@ -1202,8 +1209,8 @@ enum CadrResult cadr_renderer_set_technique(CadrRenderer renderer, uint32_t kind
 // `name` is null or writable.
 enum CadrResult cadr_renderer_technique(CadrRenderer renderer, uint32_t kind, const char **name);
 
-// Sets the display mode: `CADR_SHADE_SOLID`, `CADR_SHADE_EDGES`, `CADR_SHADE_HIDDEN_LINE` or
-// `CADR_SHADE_WIREFRAME`.
+// Sets the display mode: `CADR_SHADE_SOLID`, `CADR_SHADE_EDGES`, `CADR_SHADE_HIDDEN_LINE`,
+// `CADR_SHADE_WIREFRAME` or `CADR_SHADE_XRAY`.
 //
 // Returns `CADR_RESULT_OK`, `CADR_RESULT_INVALID_ARGUMENT` (unknown mode), `CADR_RESULT_VULKAN`
 // or a handle error. Ownership: nothing changes hands; the arguments are read during the call

@@ -11,7 +11,7 @@
 #define CADR_PLUGIN_ABI_MAJOR 1
 
 // Minor version of this ABI: additions that older readers may ignore.
-#define CADR_PLUGIN_ABI_MINOR 6
+#define CADR_PLUGIN_ABI_MINOR 7
 
 // `(major << 16) | minor`, what [`CadrPluginVersionFn`] returns.
 #define CADR_PLUGIN_ABI_VERSION ((CADR_PLUGIN_ABI_MAJOR << 16) | CADR_PLUGIN_ABI_MINOR)
@@ -63,7 +63,7 @@ typedef struct CadrTechniqueInfo {
   // `CADR_TRAIT_*` bits this technique needs from its partners.
   CadrTraitBits needs;
   // The kind's vtable: [`CadrVertexPathVtable`], [`CadrParameterPathVtable`],
-  // [`CadrSubmissionVtable`] or [`CadrCullingVtable`].
+  // [`CadrSubmissionVtable`], [`CadrCullingVtable`] or [`CadrTransparencyVtable`].
   const void *vtable;
 } CadrTechniqueInfo;
 
@@ -551,6 +551,13 @@ typedef struct CadrRecordContext {
   // Since ABI 1.3: the phase of the frame being recorded (0 unless a GPU culler splits the
   // frame into phases, see [`CadrCullingVtable::phase_count`]).
   uint32_t phase;
+  // Since ABI 1.7 (read it only when `size` covers it): how many colour attachments the
+  // rendering has after the first (`color_format`): the transparency method's targets
+  // ([`CadrTransparencyMethod::targets`]) while the frame draws translucent surfaces, else 0.
+  // Secondary command buffers inherit all of them, in order.
+  uint32_t extra_color_count;
+  // Since ABI 1.7: the `VkFormat`s of those attachments (`extra_color_count` of them).
+  int32_t extra_color_formats[2];
 } CadrRecordContext;
 
 // Submission vtable ([`CADR_KIND_SUBMISSION`]).
@@ -561,7 +568,9 @@ typedef struct CadrSubmissionVtable {
   CadrStatus (*prepare)(void *instance,
                         const struct CadrRecordContext *context,
                         struct CadrMessage *message);
-  // Inside rendering: records (or replays) the passes' draws.
+  // Inside rendering: records (or replays) the passes' draws, pass by pass: every draw of a
+  // pass comes before any draw of the next (the translucent surfaces' pass, last, must see
+  // every opaque surface's depth), also when several threads record.
   CadrStatus (*record)(void *instance,
                        const struct CadrRecordContext *context,
                        struct CadrMessage *message);
@@ -685,6 +694,116 @@ typedef struct CadrCullingVtable {
   void (*gpu_counts)(void *instance, struct CadrStats *stats);
 } CadrCullingVtable;
 
+// Since ABI 1.5: the view of a GPU-culled frame as shaders read it (std140: vec4s, then a
+// column-major mat4, a uvec4 and a vec4), in [`CadrGpuCullContext::view_buffer`].
+typedef struct CadrGpuCullView {
+  // The eye position's f32 high part (xyz, w = 0).
+  float eye_high[4];
+  // The eye position's f32 remainder (xyz, w = 0).
+  float eye_low[4];
+  // Frustum planes relative to the eye, as [`CadrGpuCullContext::planes`].
+  float planes[6][4];
+  // Projection times the view's rotation, column-major, as
+  // [`CadrGpuCullContext::view_projection`].
+  float view_projection[16];
+  // Target width and height in pixels, then two zeros.
+  uint32_t target[4];
+  // The sub-pixel threshold ([`CadrGpuCullContext::min_pixels`]); the pixels one unit of
+  // size covers at clip w = 1 (the larger of the x and y scales: a sphere of radius r at
+  // clip w spans about `2 r k / w` pixels); two zeros.
+  float sub_pixel[4];
+} CadrGpuCullView;
+
+// Since ABI 1.7: how a colour target of a transparency method is blended, as the fields of
+// `VkPipelineColorBlendAttachmentState` (blending is always enabled; all four components are
+// written).
+typedef struct CadrBlend {
+  // `VkBlendFactor` for the colour source.
+  int32_t src_color;
+  // `VkBlendFactor` for the colour destination.
+  int32_t dst_color;
+  // `VkBlendOp` for colour.
+  int32_t color_op;
+  // `VkBlendFactor` for the alpha source.
+  int32_t src_alpha;
+  // `VkBlendFactor` for the alpha destination.
+  int32_t dst_alpha;
+  // `VkBlendOp` for alpha.
+  int32_t alpha_op;
+} CadrBlend;
+
+// Since ABI 1.7: one colour target a transparency method draws translucent fragments into.
+// The host creates it at the frame's size, clears it when the frame begins and lets the merge
+// read it.
+typedef struct CadrTransparencyTarget {
+  // `VkFormat`, one the device can blend into and sample (every device blends
+  // `VK_FORMAT_R16G16B16A16_SFLOAT` and `VK_FORMAT_R16_SFLOAT`).
+  int32_t format;
+  // How fragments are blended into it.
+  struct CadrBlend blend;
+  // The value it is cleared to.
+  float clear[4];
+} CadrTransparencyTarget;
+
+// Since ABI 1.7: what a transparency method is, as the host builds it into every frame that
+// draws translucent surfaces (parts whose material's opacity is under 1, or every part not
+// highlighted in the X-ray display mode). Opaque surfaces are drawn first, as without
+// translucency; then, in the same rendering and with the same submission and culling, the
+// translucent surfaces are drawn with depth testing against the opaque ones but no depth
+// writes, each fragment handed to `fragment_snippet`; after rendering, a full-screen pass
+// runs `merge_snippet` per pixel and blends what it returns over the opaque picture.
+//
+// Written by the plugin into the host's struct; the strings belong to the instance and stay
+// valid as long as it lives.
+//
+// The host declares, for both snippets, the frame uniforms (`frame`) and:
+// - `uint cadr_pixel_index()`: the pixel's index, `y * width + x`;
+// - `uint cadr_pixel_count()`: width × height of the target;
+// - with `storage_words_per_pixel` > 0, `buffer CadrTransparencyStorage { uint
+//   cadr_storage[]; }`: `storage_header_words + storage_words_per_pixel × pixels` words, of
+//   which the first `storage_header_words + storage_cleared_words_per_pixel × pixels` are
+//   zero when the frame's translucent surfaces begin (the rest keeps what it held);
+// - in the fragment snippet, `layout(location = 1 + i) out vec4 cadr_target_i` for each
+//   target (`cadr_target_0`, `cadr_target_1`); fragment tests run early, so a fragment that
+//   reaches the snippet is in front of every opaque surface;
+// - in the merge snippet, `vec4 cadr_target_texel(int i)`: target i at this pixel.
+typedef struct CadrTransparencyMethod {
+  // Size of this struct as the host knows it (the host sets it; the plugin writes fields
+  // it covers).
+  uint32_t size;
+  // Number of colour targets (0 to 2) at `targets`.
+  uint32_t target_count;
+  // The targets.
+  struct CadrTransparencyTarget targets[2];
+  // Words of storage at the start of the buffer, zeroed every frame (counters).
+  uint32_t storage_header_words;
+  // Words of storage per pixel (0: no storage buffer).
+  uint32_t storage_words_per_pixel;
+  // Of those, the words per pixel zeroed every frame (they lie first, right after the
+  // header: `cadr_storage[storage_header_words + i]` for i below this times the pixels).
+  uint32_t storage_cleared_words_per_pixel;
+  // GLSL defining `void cadr_transparent_fragment(vec4 color, float view_depth)`: `color`
+  // is the shaded colour premultiplied by its opacity (gamma-encoded, as the picture),
+  // `view_depth` the distance along the view direction (positive, in scene units). It
+  // writes the targets and the storage.
+  const char *fragment_snippet;
+  // GLSL defining `vec4 cadr_merge()`: the pixel's translucent colour, premultiplied, with
+  // its coverage in alpha; the host blends it over the opaque picture
+  // (`rgb + picture × (1 − a)`).
+  const char *merge_snippet;
+} CadrTransparencyMethod;
+
+// Since ABI 1.7: transparency vtable ([`CADR_KIND_TRANSPARENCY`]).
+typedef struct CadrTransparencyVtable {
+  // Size, create, destroy.
+  struct CadrCommonVtable common;
+  // Describes the method into `method` (whose `size` the host set). Called once per
+  // instance, after `create`; on failure writes `message`.
+  CadrStatus (*method)(void *instance,
+                       struct CadrTransparencyMethod *method,
+                       struct CadrMessage *message);
+} CadrTransparencyVtable;
+
 // Success.
 #define CADR_STATUS_OK 0
 
@@ -705,6 +824,10 @@ typedef struct CadrCullingVtable {
 
 // Which instances are drawn at all ([`CadrCullingVtable`]).
 #define CADR_KIND_CULLING 4
+
+// Since ABI 1.7: how translucent surfaces are blended, whatever their order
+// ([`CadrTransparencyVtable`]).
+#define CADR_KIND_TRANSPARENCY 5
 
 // `multiDrawIndirect`.
 #define CADR_FEATURE_MULTI_DRAW_INDIRECT (1 << 0)
@@ -729,6 +852,9 @@ typedef struct CadrCullingVtable {
 
 // `VK_NV_device_generated_commands` (as above).
 #define CADR_FEATURE_DEVICE_GENERATED_COMMANDS (1 << 7)
+
+// Since ABI 1.7: `fragmentStoresAndAtomics` (fragment shaders write storage buffers).
+#define CADR_FEATURE_FRAGMENT_STORES_AND_ATOMICS (1 << 8)
 
 // Vertex path: the parts of one geometry share one binding (draws differ only in
 // `firstIndex`), so one draw call may cover several parts of a geometry.

@@ -115,7 +115,7 @@ fn bad_input_gives_a_clear_error_and_exit_code() {
         (
             vec!["bench", "--shade", "toon"],
             2,
-            "[possible values: solid, edges, hidden-line, wireframe, all]",
+            "[possible values: solid, edges, hidden-line, wireframe, xray, all]",
         ),
     ] {
         let output = cadr(&args);
@@ -536,7 +536,11 @@ fn without_plugin_libraries_the_built_in_combination_draws_and_others_are_explai
     assert!(output.status.success(), "{}", stderr(&output));
     let listing: serde_json::Value = serde_json::from_slice(&output.stdout).unwrap();
     let techniques = listing["techniques"].as_array().unwrap();
-    assert_eq!(techniques.len(), 4, "{listing}");
+    assert_eq!(
+        techniques.len(),
+        5,
+        "one built-in technique per kind: {listing}"
+    );
     assert!(techniques
         .iter()
         .all(|t| t["built_in"] == true && t["library"] == "built-in" && t["supported"] == true));

@@ -186,10 +186,10 @@ static CadrContext test_context(void) {
   CHECK(count >= 20);
   for (i = 0; i < count; ++i) {
     OK(cadr_context_technique(context, i, &technique));
-    CHECK(technique.kind <= CADR_TECHNIQUE_KIND_CULLING);
+    CHECK(technique.kind <= CADR_TECHNIQUE_KIND_TRANSPARENCY);
     CHECK(strlen(technique.name) > 0 && strlen(technique.description) > 0);
     /* The built-in techniques come first, then those of the plugin libraries. */
-    CHECK(i < 4 ? strcmp(technique.library, "built-in") == 0
+    CHECK(i < 5 ? strcmp(technique.library, "built-in") == 0
                 : strstr(technique.library, "cadr_plugin_") != NULL);
     CHECK(technique.supported == (technique.unsupported_reason[0] == '\0'));
   }
@@ -643,8 +643,20 @@ static void test_renderer(CadrContext context, struct Built *b) {
   OK(cadr_renderer_render(renderer, b->scene, &camera, &stats));
   OK(cadr_renderer_shade_mode(renderer, &mode));
   CHECK(mode == CADR_SHADE_WIREFRAME);
+  /* X-ray with either transparency method: the fast one (the default) and the exact one. */
+  OK(cadr_renderer_set_shade_mode(renderer, CADR_SHADE_XRAY));
+  OK(cadr_renderer_render(renderer, b->scene, &camera, &stats));
+  OK(cadr_renderer_technique(renderer, CADR_TECHNIQUE_KIND_TRANSPARENCY, &name));
+  CHECK(strcmp(name, "weighted-blended") == 0);
+  OK(cadr_renderer_set_technique(renderer, CADR_TECHNIQUE_KIND_TRANSPARENCY, "per-pixel-lists"));
+  OK(cadr_renderer_render(renderer, b->scene, &camera, &stats));
+  OK(cadr_renderer_technique(renderer, CADR_TECHNIQUE_KIND_TRANSPARENCY, &name));
+  CHECK(strcmp(name, "per-pixel-lists") == 0);
+  OK(cadr_renderer_shade_mode(renderer, &mode));
+  CHECK(mode == CADR_SHADE_XRAY);
+  OK(cadr_renderer_set_technique(renderer, CADR_TECHNIQUE_KIND_TRANSPARENCY, "weighted-blended"));
   EXPECT(cadr_renderer_set_shade_mode(renderer, 5), CADR_RESULT_INVALID_ARGUMENT);
-  MESSAGE_HAS("3 (wireframe)");
+  MESSAGE_HAS("4 (X-ray)");
   EXPECT(cadr_renderer_shade_mode(renderer, NULL), CADR_RESULT_NULL_ARGUMENT);
   OK(cadr_renderer_set_shade_mode(renderer, CADR_SHADE_SOLID));
 

@@ -106,7 +106,14 @@ impl Fixture {
         let tree = SceneTree::build(&mut graph);
         let view = View::new(&device, plugin_registry(&device), SIZE.0, SIZE.1).unwrap();
         let aspect = f64::from(SIZE.0) / f64::from(SIZE.1);
-        let camera = Camera::look_at(DVec3::new(0.0, 0.0, 5.0), DVec3::ZERO, 40.0, aspect, 0.1, 50.0);
+        let camera = Camera::look_at(
+            DVec3::new(0.0, 0.0, 5.0),
+            DVec3::ZERO,
+            40.0,
+            aspect,
+            0.1,
+            50.0,
+        );
         Self {
             device,
             graph,
@@ -283,7 +290,11 @@ fn an_opaque_scene_draws_no_translucent_pass() {
     translucent.render();
     let stats = translucent
         .view
-        .render(&translucent.graph, &mut translucent.tree, &translucent.camera)
+        .render(
+            &translucent.graph,
+            &mut translucent.tree,
+            &translucent.camera,
+        )
         .unwrap();
     assert_eq!(opaque.draw_calls, 3, "one pass of three squares");
     assert_eq!(
@@ -332,7 +343,9 @@ fn gltf_alpha_modes_give_materials_their_opacity_and_survive_a_save() {
     std::fs::create_dir_all(&dir).unwrap();
     let path = dir.join("layers.gltf");
     let mut scene = layers(0.4);
-    scene.materials.push(material("masked", [0.5, 0.5, 0.5, 0.4]));
+    scene
+        .materials
+        .push(material("masked", [0.5, 0.5, 0.5, 0.4]));
     scene.materials.push(material("cut", [0.5, 0.5, 0.5, 0.4]));
     save_scene(&scene, &path).unwrap();
     let saved = load_file(&path).unwrap();

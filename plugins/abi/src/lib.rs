@@ -873,7 +873,9 @@ pub struct CadrSubmissionVtable {
             message: *mut CadrMessage,
         ) -> CadrStatus,
     >,
-    /// Inside rendering: records (or replays) the passes' draws.
+    /// Inside rendering: records (or replays) the passes' draws, pass by pass: every draw of a
+    /// pass comes before any draw of the next (the translucent surfaces' pass, last, must see
+    /// every opaque surface's depth), also when several threads record.
     pub record: Option<
         unsafe extern "C" fn(
             instance: *mut c_void,

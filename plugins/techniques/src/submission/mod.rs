@@ -84,6 +84,8 @@ pub struct Submit<const STRATEGY: u8, const API: u8, const MODE: u8> {
     secondary: Option<SecondaryBuffers>,
     recorded_key: Option<u64>,
     recorded_stats: abi::CadrStats,
+    /// The secondary buffers the recording executes, in order.
+    recorded_order: Vec<vk::CommandBuffer>,
 }
 
 impl<const S: u8, const A: u8, const M: u8> Technique for Submit<S, A, M> {
@@ -106,6 +108,7 @@ impl<const S: u8, const A: u8, const M: u8> Technique for Submit<S, A, M> {
             secondary,
             recorded_key: None,
             recorded_stats: abi::CadrStats::default(),
+            recorded_order: Vec::new(),
         })
     }
 }
@@ -240,8 +243,8 @@ impl<const S: u8, const A: u8, const M: u8> Submission for Submit<S, A, M> {
             Mode::Inline => {
                 self.recorder(record).record_passes(
                     record.command_buffer(),
+                    (0..usize::MAX, 1),
                     0..usize::MAX,
-                    1,
                     record.stats(),
                 );
                 Ok(())
@@ -253,7 +256,8 @@ impl<const S: u8, const A: u8, const M: u8> Submission for Submit<S, A, M> {
                         .secondary
                         .as_ref()
                         .ok_or("no secondary command buffer")?;
-                    secondary.record_all(&self.recorder(record), &mut stats, 1)?;
+                    self.recorded_order =
+                        secondary.record_all(&self.recorder(record), &mut stats, 1)?;
                     self.recorded_stats = stats;
                     self.recorded_key = Some(record.commands_key());
                 }
@@ -261,7 +265,7 @@ impl<const S: u8, const A: u8, const M: u8> Submission for Submit<S, A, M> {
                     .secondary
                     .as_ref()
                     .ok_or("no secondary command buffer")?;
-                secondary.execute(record.command_buffer(), 1);
+                secondary.execute(record.command_buffer(), &self.recorded_order);
                 let recorded = self.recorded_stats;
                 record.count(|s| add(s, &recorded));
                 Ok(())
@@ -273,8 +277,8 @@ impl<const S: u8, const A: u8, const M: u8> Submission for Submit<S, A, M> {
                     .ok_or("no secondary command buffers")?;
                 let workers = secondary.len();
                 let mut stats = abi::CadrStats::default();
-                secondary.record_all(&self.recorder(record), &mut stats, workers)?;
-                secondary.execute(record.command_buffer(), workers);
+                let order = secondary.record_all(&self.recorder(record), &mut stats, workers)?;
+                secondary.execute(record.command_buffer(), &order);
                 record.count(|s| add(s, &stats));
                 Ok(())
             }

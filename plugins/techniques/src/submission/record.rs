@@ -47,12 +47,14 @@ impl Recorder<'_> {
     pub fn record_passes(
         &self,
         command_buffer: vk::CommandBuffer,
-        part: Range<usize>,
-        parts: usize,
+        (part, parts): (Range<usize>, usize),
+        passes: Range<usize>,
         stats: *mut CadrStats,
     ) {
         let device = &self.gpu.device;
-        for pass in self.record.passes() {
+        let all = self.record.passes();
+        let passes = &all[passes.start.min(all.len())..passes.end.min(all.len())];
+        for pass in passes {
             let slot = super::pass_slot(pass.kind);
             let list = &self.lists[slot];
             let batch_range = if part.end == usize::MAX {
@@ -254,12 +256,17 @@ pub fn record_gpu_draws(gpu: &Gpu, record: &Record<'_>, draws: &[abi::CadrGpuDra
     }
 }
 
-/// Secondary command buffers, one pool each (pools are externally synchronised, so each
-/// worker thread gets its own).
+/// The most passes whose shares workers record into buffers of their own.
+const PASS_BUFFERS: usize = 4;
+
+/// Secondary command buffers: a pool per worker (pools are externally synchronised, so each
+/// worker thread gets its own) with a buffer per pass, so that several workers' shares of a
+/// frame execute pass by pass (every draw of a pass before any of the next: translucent
+/// surfaces must come after every opaque one).
 pub struct SecondaryBuffers {
     gpu: Arc<Gpu>,
     pools: Vec<vk::CommandPool>,
-    buffers: Vec<vk::CommandBuffer>,
+    buffers: Vec<[vk::CommandBuffer; PASS_BUFFERS]>,
 }
 
 impl SecondaryBuffers {
@@ -279,11 +286,14 @@ impl SecondaryBuffers {
             let alloc = vk::CommandBufferAllocateInfo::default()
                 .command_pool(pool)
                 .level(vk::CommandBufferLevel::SECONDARY)
-                .command_buffer_count(1);
+                .command_buffer_count(PASS_BUFFERS as u32);
             // SAFETY: as above.
             let buffers = unsafe { gpu.device.allocate_command_buffers(&alloc) }
                 .map_err(|e| format!("vkAllocateCommandBuffers: {e}"))?;
-            this.buffers.extend(buffers);
+            let buffers: [vk::CommandBuffer; PASS_BUFFERS] = buffers
+                .try_into()
+                .map_err(|_| "vkAllocateCommandBuffers gave too few buffers".to_owned())?;
+            this.buffers.push(buffers);
         }
         Ok(this)
     }
@@ -292,15 +302,32 @@ impl SecondaryBuffers {
         self.buffers.len()
     }
 
-    /// Records the first `workers` buffers, each with its share of the batches, on as many
-    /// threads; adds their counters to `stats`.
+    /// Records the frame on `workers` threads, each its share of the batches of every pass;
+    /// adds their counters to `stats` and returns the buffers to execute, in order. One worker
+    /// records every pass into one buffer; several record a buffer per pass (up to
+    /// [`PASS_BUFFERS`] passes, the rest into the last), executed pass by pass.
     pub fn record_all(
         &self,
         recorder: &Recorder<'_>,
         stats: &mut CadrStats,
         workers: usize,
-    ) -> Result<(), String> {
+    ) -> Result<Vec<vk::CommandBuffer>, String> {
         let workers = workers.clamp(1, self.buffers.len());
+        let pass_count = recorder.record.passes().len();
+        // The passes of each buffer a worker records.
+        let groups: Vec<std::ops::Range<usize>> = if workers == 1 {
+            vec![0..usize::MAX]
+        } else {
+            (0..pass_count.clamp(1, PASS_BUFFERS))
+                .map(|p| {
+                    if p + 1 == PASS_BUFFERS {
+                        p..usize::MAX
+                    } else {
+                        p..p + 1
+                    }
+                })
+                .collect()
+        };
         let shared = Shared(recorder);
         let extent = recorder.record.extent();
         let color_formats = recorder.record.color_formats(self.gpu.formats.0);
@@ -308,21 +335,29 @@ impl SecondaryBuffers {
             let handles: Vec<_> = (0..workers)
                 .map(|worker| {
                     let shared = &shared;
-                    let (pool, buffer) = (self.pools[worker], self.buffers[worker]);
+                    let (pool, buffers) = (self.pools[worker], &self.buffers[worker]);
                     let gpu = &self.gpu;
                     let color_formats = &color_formats;
+                    let groups = &groups;
                     let work = move || -> Result<CadrStats, String> {
                         let mut local = CadrStats::default();
-                        begin_secondary(gpu, pool, buffer, (extent, color_formats))?;
                         let part = if workers == 1 {
                             0..usize::MAX
                         } else {
                             worker..worker + 1
                         };
-                        shared.0.record_passes(buffer, part, workers, &mut local);
-                        // SAFETY: the buffer is recording.
-                        unsafe { gpu.device.end_command_buffer(buffer) }
-                            .map_err(|e| format!("vkEndCommandBuffer: {e}"))?;
+                        for (group, &buffer) in groups.iter().zip(buffers) {
+                            begin_secondary(gpu, pool, buffer, (extent, color_formats))?;
+                            shared.0.record_passes(
+                                buffer,
+                                (part.clone(), workers),
+                                group.clone(),
+                                &mut local,
+                            );
+                            // SAFETY: the buffer is recording.
+                            unsafe { gpu.device.end_command_buffer(buffer) }
+                                .map_err(|e| format!("vkEndCommandBuffer: {e}"))?;
+                        }
                         Ok(local)
                     };
                     if workers == 1 {
@@ -345,19 +380,18 @@ impl SecondaryBuffers {
         for result in results {
             super::add(stats, &result?);
         }
-        Ok(())
+        // Pass by pass, each pass's shares in worker order.
+        Ok((0..groups.len())
+            .flat_map(|group| (0..workers).map(move |worker| (group, worker)))
+            .map(|(group, worker)| self.buffers[worker][group])
+            .collect())
     }
 
-    /// Executes the first `count` buffers in `primary`.
-    pub fn execute(&self, primary: vk::CommandBuffer, count: usize) {
-        let count = count.min(self.buffers.len());
+    /// Executes `buffers` (recorded by [`SecondaryBuffers::record_all`]) in `primary`.
+    pub fn execute(&self, primary: vk::CommandBuffer, buffers: &[vk::CommandBuffer]) {
         // SAFETY: recording inside rendering begun for secondary contents; the buffers were
         // recorded for it and stay alive until the frame finishes.
-        unsafe {
-            self.gpu
-                .device
-                .cmd_execute_commands(primary, &self.buffers[..count])
-        };
+        unsafe { self.gpu.device.cmd_execute_commands(primary, buffers) };
     }
 }
 

@@ -754,7 +754,7 @@ static void test_without_plugins(void) {
   options.default_plugin_dirs = false;
   OK(cadr_context_create(&options, &context));
   OK(cadr_context_technique_count(context, &count));
-  CHECK(count == 4);
+  CHECK(count == 5); /* one per kind */
   OK(cadr_renderer_create(context, 32, 24, &renderer));
   OK(cadr_renderer_technique(renderer, CADR_TECHNIQUE_KIND_VERTEX, &name));
   CHECK(strcmp(name, "per-geometry") == 0);

@@ -346,8 +346,15 @@ impl SecondaryBuffers {
                         } else {
                             worker..worker + 1
                         };
+                        // SAFETY: the pool is used by this thread only; the GPU finished its
+                        // buffers' last use (the host waits for every frame before the next).
+                        unsafe {
+                            gpu.device
+                                .reset_command_pool(pool, vk::CommandPoolResetFlags::empty())
+                        }
+                        .map_err(|e| format!("vkResetCommandPool: {e}"))?;
                         for (group, &buffer) in groups.iter().zip(buffers) {
-                            begin_secondary(gpu, pool, buffer, (extent, color_formats))?;
+                            begin_secondary(gpu, buffer, (extent, color_formats))?;
                             shared.0.record_passes(
                                 buffer,
                                 (part.clone(), workers),
@@ -397,7 +404,6 @@ impl SecondaryBuffers {
 
 fn begin_secondary(
     gpu: &Gpu,
-    pool: vk::CommandPool,
     buffer: vk::CommandBuffer,
     (extent, color_formats): (vk::Extent2D, &[vk::Format]),
 ) -> Result<(), String> {
@@ -421,12 +427,8 @@ fn begin_secondary(
         min_depth: 0.0,
         max_depth: 1.0,
     };
-    // SAFETY: the pool is used by this thread only; the GPU finished the buffer's last use
-    // (the host waits for every frame before the next).
+    // SAFETY: the pool is used by this thread only and was reset by it for this frame.
     unsafe {
-        gpu.device
-            .reset_command_pool(pool, vk::CommandPoolResetFlags::empty())
-            .map_err(|e| format!("vkResetCommandPool: {e}"))?;
         gpu.device
             .begin_command_buffer(buffer, &begin)
             .map_err(|e| format!("vkBeginCommandBuffer: {e}"))?;

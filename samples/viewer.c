@@ -7,7 +7,8 @@
  *
  * Mouse: left drag orbits, right or middle drag pans, the wheel zooms.
  * Keys:  V, P, S, C cycle the vertex path, parameter path, submission and culling technique;
- *        E cycles the display modes (solid, edges, hidden-line, wireframe); F fits the view; I toggles 1 / 2 frames in flight;
+ *        E cycles the display modes (solid, edges, hidden-line, wireframe, xray); T cycles the
+ *        transparency methods; F fits the view; I toggles 1 / 2 frames in flight;
  *        M cycles the present modes the window offers; X cycles a section plane through the
  *        view's centre across x, y, z and off; K toggles its caps, H their hatching; Esc quits.
  * The window title shows the techniques, the section, frames in flight, present mode, the frame's figures
@@ -32,7 +33,7 @@
 #include <string.h>
 #include <time.h>
 
-static const char *const kind_names[4] = {"vertex", "params", "submit", "cull"};
+static const char *const kind_names[5] = {"vertex", "params", "submit", "cull", "transparency"};
 
 struct Viewer {
   GLFWwindow *window;
@@ -109,10 +110,10 @@ static void cycle_technique(struct Viewer *v, uint32_t kind) {
   printf("%s technique: no other one fits the current combination\n", kind_names[kind]);
 }
 
-static const char *const shade_names[4] = {"solid", "edges", "hidden-line", "wireframe"};
+static const char *const shade_names[5] = {"solid", "edges", "hidden-line", "wireframe", "xray"};
 
 static void toggle_shade(struct Viewer *v) {
-  v->shade = (v->shade + 1) % 4;
+  v->shade = (v->shade + 1) % 5;
   CADR_CHECK(cadr_renderer_set_shade_mode(v->renderer, v->shade));
   printf("display mode: %s\n", shade_names[v->shade]);
 }
@@ -166,10 +167,10 @@ static void cycle_present_mode(struct Viewer *v) {
 }
 
 static void describe(struct Viewer *v, char *text, size_t size) {
-  const char *names[4];
+  const char *names[5];
   char section[64];
   uint32_t kind, frames = 1, mode = 0;
-  for (kind = 0; kind < 4; ++kind) {
+  for (kind = 0; kind < 5; ++kind) {
     CADR_CHECK(cadr_renderer_technique(v->renderer, kind, &names[kind]));
   }
   CADR_CHECK(cadr_renderer_frames_in_flight(v->renderer, &frames));
@@ -182,8 +183,8 @@ static void describe(struct Viewer *v, char *text, size_t size) {
                ? ((v->section_flags & CADR_SECTION_HATCHED) ? " capped, hatched" : " capped")
                : " uncapped");
   snprintf(text, size,
-           "cadr viewer | %s / %s / %s / %s | %s | %s | %u in flight, %s | %llu draws in %llu calls | CPU %.0f us, GPU %.0f us | %.0f frames/s",
-           names[0], names[1], names[2], names[3], shade_names[v->shade % 4],
+           "cadr viewer | %s / %s / %s / %s | %s, %s | %s | %u in flight, %s | %llu draws in %llu calls | CPU %.0f us, GPU %.0f us | %.0f frames/s",
+           names[0], names[1], names[2], names[3], shade_names[v->shade % 5], names[4],
            section, frames, present_names[mode % 3], (unsigned long long)v->stats.draws,
            (unsigned long long)v->stats.draw_calls, v->stats.cpu_us, v->stats.gpu_us,
            v->frames_per_second);
@@ -213,6 +214,7 @@ static void on_key(GLFWwindow *window, int key, int scancode, int action, int mo
   case GLFW_KEY_P: cycle_technique(v, CADR_TECHNIQUE_KIND_PARAMETERS); break;
   case GLFW_KEY_S: cycle_technique(v, CADR_TECHNIQUE_KIND_SUBMISSION); break;
   case GLFW_KEY_C: cycle_technique(v, CADR_TECHNIQUE_KIND_CULLING); break;
+  case GLFW_KEY_T: cycle_technique(v, CADR_TECHNIQUE_KIND_TRANSPARENCY); break;
   case GLFW_KEY_E: toggle_shade(v); break;
   case GLFW_KEY_F: fit_view(v); break;
   case GLFW_KEY_I: toggle_frames_in_flight(v); break;
@@ -281,11 +283,11 @@ static int self_test(struct Viewer *v, const char *dir) {
   }
   printf("rendered 3 frames: %llu draws, CPU %.1f us\n", (unsigned long long)v->stats.draws,
          v->stats.cpu_us);
-  for (kind = 0; kind < 4; ++kind) {
+  for (kind = 0; kind < 5; ++kind) {
     cycle_technique(v, kind);
     render(v);
   }
-  for (frame = 0; frame < 4; ++frame) {
+  for (frame = 0; frame < 5; ++frame) {
     toggle_shade(v);
     render(v);
   }

@@ -316,7 +316,7 @@ impl SecondaryBuffers {
         let pass_count = recorder.record.passes().len();
         // The passes of each buffer a worker records.
         let groups: Vec<std::ops::Range<usize>> = if workers == 1 {
-            vec![0..usize::MAX]
+            std::iter::once(0..usize::MAX).collect()
         } else {
             (0..pass_count.clamp(1, PASS_BUFFERS))
                 .map(|p| {

@@ -288,10 +288,11 @@ pub fn begin_overlay(device: &Device, command_buffer: vk::CommandBuffer, color: 
         command_buffer,
         color.raw(),
         vk::ImageAspectFlags::COLOR,
+        // Chained to end_rendering's transition (whose second scope is copies and blits).
         (
             vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
-            vk::PipelineStageFlags2::COLOR_ATTACHMENT_OUTPUT,
-            vk::AccessFlags2::COLOR_ATTACHMENT_WRITE,
+            vk::PipelineStageFlags2::COPY | vk::PipelineStageFlags2::BLIT,
+            vk::AccessFlags2::NONE,
         ),
         (
             vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL,

@@ -736,8 +736,9 @@ typedef struct CadrBlend {
 // The host creates it at the frame's size, clears it when the frame begins and lets the merge
 // read it.
 typedef struct CadrTransparencyTarget {
-  // `VkFormat`, one the device can blend into and sample (every device blends
-  // `VK_FORMAT_R16G16B16A16_SFLOAT` and `VK_FORMAT_R16_SFLOAT`).
+  // `VkFormat`: one every device blends into and samples, which the host accepts:
+  // `VK_FORMAT_R16G16B16A16_SFLOAT`, `VK_FORMAT_R16G16_SFLOAT`, `VK_FORMAT_R16_SFLOAT` or
+  // `VK_FORMAT_R8G8B8A8_UNORM` (another is refused when the technique is selected).
   int32_t format;
   // How fragments are blended into it.
   struct CadrBlend blend;
@@ -797,8 +798,9 @@ typedef struct CadrTransparencyMethod {
 typedef struct CadrTransparencyVtable {
   // Size, create, destroy.
   struct CadrCommonVtable common;
-  // Describes the method into `method` (whose `size` the host set). Called once per
-  // instance, after `create`; on failure writes `message`.
+  // Describes the method into `method` (whose `size` the host set; the host owns the struct
+  // and copies the snippets, which stay the instance's). Called once per instance, after
+  // `create`, from one thread; on failure writes `message`.
   CadrStatus (*method)(void *instance,
                        struct CadrTransparencyMethod *method,
                        struct CadrMessage *message);

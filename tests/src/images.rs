@@ -156,3 +156,29 @@ pub fn covered_fraction(image: &RgbaImage) -> f64 {
     let covered = image.pixels().filter(|p| **p != background).count();
     covered as f64 / (image.width() * image.height()).max(1) as f64
 }
+
+/// The pixel of a `width` × `height` picture drawn through `camera` that the world point
+/// `point` projects to.
+pub fn pixel_of(
+    camera: &cadr_core::render::Camera,
+    (width, height): (u32, u32),
+    point: glam::DVec3,
+) -> (u32, u32) {
+    let clip = camera.projection * camera.view * point.extend(1.0);
+    let ndc = clip.truncate() / clip.w;
+    (
+        ((ndc.x + 1.0) * 0.5 * f64::from(width)) as u32,
+        ((ndc.y + 1.0) * 0.5 * f64::from(height)) as u32,
+    )
+}
+
+/// The colour (RGB, 0 to 1) of `image` where the world point `point` shows.
+pub fn color_at(
+    image: &RgbaImage,
+    camera: &cadr_core::render::Camera,
+    point: glam::DVec3,
+) -> [f32; 3] {
+    let (x, y) = pixel_of(camera, image.dimensions(), point);
+    let p = image.get_pixel(x, y).0;
+    [p[0], p[1], p[2]].map(|c| f32::from(c) / 255.0)
+}

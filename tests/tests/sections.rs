@@ -15,7 +15,9 @@ use cadr_core::technique::ShadeMode;
 use cadr_core::tree::SceneTree;
 use cadr_core::view::View;
 use cadr_core::vk::Device;
-use cadr_tests::images::{assert_matches_reference, compare, DEFAULT_TOLERANCE, SAME_PICTURE};
+use cadr_tests::images::{
+    self, assert_matches_reference, compare, DEFAULT_TOLERANCE, SAME_PICTURE,
+};
 use cadr_tests::{all_combinations, assert_no_validation_errors, plugin_registry, test_device};
 use glam::{DMat4, DVec3, DVec4};
 
@@ -130,18 +132,11 @@ impl Fixture {
 
     /// The pixel `point` projects to.
     fn pixel_of(&self, point: DVec3) -> (u32, u32) {
-        let clip = self.camera.projection * self.camera.view * point.extend(1.0);
-        let ndc = clip.truncate() / clip.w;
-        (
-            ((ndc.x + 1.0) * 0.5 * f64::from(SIZE.0)) as u32,
-            ((ndc.y + 1.0) * 0.5 * f64::from(SIZE.1)) as u32,
-        )
+        images::pixel_of(&self.camera, SIZE, point)
     }
 
-    fn color_at(&mut self, image: &image::RgbaImage, point: DVec3) -> [f32; 3] {
-        let (x, y) = self.pixel_of(point);
-        let p = image.get_pixel(x, y).0;
-        [p[0], p[1], p[2]].map(|c| f32::from(c) / 255.0)
+    fn color_at(&self, image: &image::RgbaImage, point: DVec3) -> [f32; 3] {
+        images::color_at(image, &self.camera, point)
     }
 }
 

@@ -160,13 +160,7 @@ impl Renderer {
             vk::WHOLE_SIZE,
         );
         let placeholder_storage = storage_buffer(device, 0)?;
-        frame_sets.write_buffer(
-            0,
-            1,
-            vk::DescriptorType::STORAGE_BUFFER,
-            placeholder_storage.raw(),
-            vk::WHOLE_SIZE,
-        );
+        name_storage(&frame_sets, &placeholder_storage);
         let cull_view = Buffer::new(
             device,
             "gpu cull view",
@@ -504,13 +498,7 @@ impl Renderer {
             extent,
             self.pipelines.merge_set_layout(),
         )?;
-        self.frame_sets.write_buffer(
-            0,
-            1,
-            vk::DescriptorType::STORAGE_BUFFER,
-            targets.storage.raw(),
-            vk::WHOLE_SIZE,
-        );
+        name_storage(&self.frame_sets, &targets.storage);
         self.transparency = Some(targets);
         Ok(())
     }
@@ -518,13 +506,7 @@ impl Renderer {
     /// Forgets the transparency targets; the frame set names the placeholder storage again.
     fn drop_transparency_targets(&mut self) {
         if self.transparency.take().is_some() {
-            self.frame_sets.write_buffer(
-                0,
-                1,
-                vk::DescriptorType::STORAGE_BUFFER,
-                self.placeholder_storage.raw(),
-                vk::WHOLE_SIZE,
-            );
+            name_storage(&self.frame_sets, &self.placeholder_storage);
         }
     }
 
@@ -631,6 +613,18 @@ impl Renderer {
             extra_colors: &[],
         }
     }
+}
+
+/// Points the frame set's binding 1 at `storage`, the transparency method's storage (the
+/// caller makes sure no submitted frame uses the set).
+fn name_storage(frame_sets: &DescriptorSets, storage: &Buffer) {
+    frame_sets.write_buffer(
+        0,
+        1,
+        vk::DescriptorType::STORAGE_BUFFER,
+        storage.raw(),
+        vk::WHOLE_SIZE,
+    );
 }
 
 impl Drop for Renderer {

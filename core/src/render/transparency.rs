@@ -16,8 +16,9 @@ pub(crate) const PLACEHOLDER_STORAGE_BYTES: u64 = 16;
 
 /// The targets, storage and merge set of one transparency method at one size.
 pub(crate) struct TransparencyTargets {
-    /// What they were made for: the method and the target size.
-    made_for: (TransparencyMethod, vk::Extent2D),
+    /// What they were made for: the method's name (a kind's names are unique, and a method
+    /// describes itself once) and the target size.
+    made_for: (String, vk::Extent2D),
     /// The method's colour targets.
     pub images: Vec<Image>,
     /// Their clear values.
@@ -33,7 +34,7 @@ pub(crate) struct TransparencyTargets {
 impl TransparencyTargets {
     /// Whether these were made for `method` at `extent`.
     pub fn fit(&self, method: &TransparencyMethod, extent: vk::Extent2D) -> bool {
-        self.made_for.0 == *method && self.made_for.1 == extent
+        self.made_for.0 == method.name && self.made_for.1 == extent
     }
 
     /// Makes the targets, storage and merge set of `method` at `extent`.
@@ -78,7 +79,7 @@ impl TransparencyTargets {
             merge_set.write_sampled_image(0, binding as u32, image.view());
         }
         Ok(Self {
-            made_for: (method.clone(), extent),
+            made_for: (method.name.clone(), extent),
             images,
             clears,
             storage,

@@ -682,12 +682,12 @@ fn describe_method(active: &Active) -> RenderResult<TransparencyMethod> {
         )));
     }
     let targets = raw.targets[..raw.target_count as usize].to_vec();
+    // Formats every Vulkan device must blend into (and sample).
     let usable = [
         vk::Format::R16G16B16A16_SFLOAT,
-        vk::Format::R16_SFLOAT,
-        vk::Format::R32_SFLOAT,
-        vk::Format::R8G8B8A8_UNORM,
         vk::Format::R16G16_SFLOAT,
+        vk::Format::R16_SFLOAT,
+        vk::Format::R8G8B8A8_UNORM,
     ];
     if let Some((i, target)) = targets
         .iter()

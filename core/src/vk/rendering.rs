@@ -169,22 +169,27 @@ pub fn begin_rendering(
         .layer_count(1)
         .color_attachments(&color_attachment)
         .depth_attachment(&depth_attachment);
+    // SAFETY: command_buffer is recording; the target's images outlive the submission.
+    unsafe { device.raw().cmd_begin_rendering(command_buffer, &rendering) };
+    if !target.secondary {
+        cover(device, command_buffer, area);
+    }
+}
+
+/// Sets the viewport (depth 0..1) and scissor to `area`, inside rendering.
+fn cover(device: &Device, command_buffer: vk::CommandBuffer, area: vk::Rect2D) {
     let viewport = [vk::Viewport {
         x: 0.0,
         y: 0.0,
-        width: target.extent.width as f32,
-        height: target.extent.height as f32,
+        width: area.extent.width as f32,
+        height: area.extent.height as f32,
         min_depth: 0.0,
         max_depth: 1.0,
     }];
-    let raw = device.raw();
-    // SAFETY: command_buffer is recording; the target's images outlive the submission.
+    // SAFETY: command_buffer is recording inside rendering.
     unsafe {
-        raw.cmd_begin_rendering(command_buffer, &rendering);
-        if !target.secondary {
-            raw.cmd_set_viewport(command_buffer, 0, &viewport);
-            raw.cmd_set_scissor(command_buffer, 0, &[area]);
-        }
+        device.raw().cmd_set_viewport(command_buffer, 0, &viewport);
+        device.raw().cmd_set_scissor(command_buffer, 0, &[area]);
     }
 }
 
@@ -313,21 +318,9 @@ pub fn begin_overlay(device: &Device, command_buffer: vk::CommandBuffer, color: 
         .render_area(area)
         .layer_count(1)
         .color_attachments(&attachment);
-    let viewport = [vk::Viewport {
-        x: 0.0,
-        y: 0.0,
-        width: area.extent.width as f32,
-        height: area.extent.height as f32,
-        min_depth: 0.0,
-        max_depth: 1.0,
-    }];
-    let raw = device.raw();
     // SAFETY: command_buffer is recording outside rendering; the image outlives the submission.
-    unsafe {
-        raw.cmd_begin_rendering(command_buffer, &rendering);
-        raw.cmd_set_viewport(command_buffer, 0, &viewport);
-        raw.cmd_set_scissor(command_buffer, 0, &[area]);
-    }
+    unsafe { device.raw().cmd_begin_rendering(command_buffer, &rendering) };
+    cover(device, command_buffer, area);
 }
 
 /// Ends an overlay begun by [`begin_overlay`]: the colour image is ready to be copied from

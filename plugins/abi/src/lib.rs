@@ -1087,8 +1087,9 @@ pub struct CadrBlend {
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct CadrTransparencyTarget {
-    /// `VkFormat`, one the device can blend into and sample (every device blends
-    /// `VK_FORMAT_R16G16B16A16_SFLOAT` and `VK_FORMAT_R16_SFLOAT`).
+    /// `VkFormat`: one every device blends into and samples, which the host accepts:
+    /// `VK_FORMAT_R16G16B16A16_SFLOAT`, `VK_FORMAT_R16G16_SFLOAT`, `VK_FORMAT_R16_SFLOAT` or
+    /// `VK_FORMAT_R8G8B8A8_UNORM` (another is refused when the technique is selected).
     pub format: i32,
     /// How fragments are blended into it.
     pub blend: CadrBlend,
@@ -1152,8 +1153,9 @@ pub struct CadrTransparencyMethod {
 pub struct CadrTransparencyVtable {
     /// Size, create, destroy.
     pub common: CadrCommonVtable,
-    /// Describes the method into `method` (whose `size` the host set). Called once per
-    /// instance, after `create`; on failure writes `message`.
+    /// Describes the method into `method` (whose `size` the host set; the host owns the struct
+    /// and copies the snippets, which stay the instance's). Called once per instance, after
+    /// `create`, from one thread; on failure writes `message`.
     pub method: Option<
         unsafe extern "C" fn(
             instance: *mut c_void,

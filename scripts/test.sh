@@ -19,7 +19,7 @@ fi
 # allocation, submission and device loss of a render is made to fail in turn.
 cargo clippy -p cadr-tests --features fault-injection --all-targets --locked -- -D warnings
 if cargo nextest --version >/dev/null 2>&1; then
-  cargo nextest run -p cadr-tests --features fault-injection --locked -E 'binary(fault_injection)'
+  cargo nextest run -p cadr-tests --features fault-injection --locked --test fault_injection
 else
   cargo test -p cadr-tests --features fault-injection --locked --test fault_injection
 fi

@@ -372,6 +372,7 @@ pub unsafe extern "C" fn cadr_context_create(
             instance: InstanceOptions {
                 validation: options.validation,
                 extra_extensions: c_strings(instance_extensions, "options.instance_extensions")?,
+                ..InstanceOptions::default()
             },
             choice,
             extra_extensions: device_extensions,

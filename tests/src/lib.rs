@@ -32,9 +32,20 @@ pub fn first_transform(
 
 /// A device with the validation layers on. Tests never skip: without Vulkan they fail here.
 pub fn test_device() -> Arc<Device> {
+    validated_device(false)
+}
+
+/// A device with the validation layers and their synchronization checks on (slower): for
+/// the tests of paths with many barriers, such as transparency.
+pub fn test_device_with_synchronization_checks() -> Arc<Device> {
+    validated_device(true)
+}
+
+fn validated_device(synchronization_validation: bool) -> Arc<Device> {
     let options = DeviceOptions {
         instance: InstanceOptions {
             validation: true,
+            synchronization_validation,
             ..InstanceOptions::default()
         },
         ..DeviceOptions::default()

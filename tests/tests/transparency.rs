@@ -17,7 +17,10 @@ use cadr_core::tree::SceneTree;
 use cadr_core::view::View;
 use cadr_core::vk::Device;
 use cadr_tests::images::{self, assert_matches_reference, compare, Tolerance, DEFAULT_TOLERANCE};
-use cadr_tests::{all_combinations, assert_no_validation_errors, plugin_registry, test_device};
+use cadr_tests::{
+    all_combinations, assert_no_validation_errors, plugin_registry,
+    test_device_with_synchronization_checks as test_device,
+};
 use glam::{DMat4, DVec3};
 
 const SIZE: (u32, u32) = (160, 120);

@@ -511,7 +511,9 @@ impl Renderer {
     }
 
     /// Zeroes the part of the method's storage it wants cleared, after the last frame's merge
-    /// read it and before this frame's translucent fragments write it.
+    /// read it and before this frame's translucent fragments write it. The fill is scoped as
+    /// any transfer: validation layers disagree on whether `vkCmdFillBuffer` is a clear or a
+    /// copy stage.
     fn record_storage_clear(
         &self,
         command_buffer: vk::CommandBuffer,
@@ -528,7 +530,7 @@ impl Renderer {
                 vk::AccessFlags2::SHADER_STORAGE_READ | vk::AccessFlags2::SHADER_STORAGE_WRITE,
             ),
             (
-                vk::PipelineStageFlags2::CLEAR,
+                vk::PipelineStageFlags2::ALL_TRANSFER,
                 vk::AccessFlags2::TRANSFER_WRITE,
             ),
         );
@@ -539,7 +541,7 @@ impl Renderer {
             &self.device,
             command_buffer,
             (
-                vk::PipelineStageFlags2::CLEAR,
+                vk::PipelineStageFlags2::ALL_TRANSFER,
                 vk::AccessFlags2::TRANSFER_WRITE,
             ),
             (

@@ -249,3 +249,15 @@ macro_rules! export_plugin {
         $crate::export_plugin!(entry: cadr_plugin_library_entry);
     };
 }
+
+/// How a plugin reports a failed Vulkan call: `vkCreateX: out of host memory` for the two
+/// out-of-memory results (the words hosts and users look for), the result's own description
+/// otherwise. For `map_err(vulkan_failure("vkCreateX"))`.
+pub fn vulkan_failure(call: &'static str) -> impl Fn(vk::Result) -> String {
+    move |result| match result {
+        vk::Result::ERROR_OUT_OF_HOST_MEMORY => format!("{call}: out of host memory"),
+        vk::Result::ERROR_OUT_OF_DEVICE_MEMORY => format!("{call}: out of device memory"),
+        vk::Result::ERROR_DEVICE_LOST => format!("{call}: the device was lost"),
+        other => format!("{call}: {other} ({other:?})"),
+    }
+}

@@ -22,6 +22,7 @@ use std::sync::Arc;
 
 use cadr_plugin_sdk::abi;
 use cadr_plugin_sdk::vk::{self, Handle};
+use cadr_plugin_sdk::vulkan_failure;
 use cadr_plugin_sdk::{buffer, Gpu, GpuCull, GpuCulling, HostBuffer, Technique};
 
 /// Words of the counts buffer: commands per (phase, pass) slot, then commands in all and
@@ -138,7 +139,7 @@ impl Objects {
                 .device
                 .create_descriptor_set_layout(&info, self.gpu.allocator())
         }
-        .map_err(|e| format!("vkCreateDescriptorSetLayout: {e}"))
+        .map_err(vulkan_failure("vkCreateDescriptorSetLayout"))
     }
 
     /// A compute pipeline from GLSL `source` with one set and `push_bytes` of push constants.
@@ -159,7 +160,7 @@ impl Objects {
             .push_constant_ranges(&ranges);
         // SAFETY: the info lives for the call.
         let layout = unsafe { device.create_pipeline_layout(&info, allocator) }
-            .map_err(|e| format!("vkCreatePipelineLayout: {e}"))?;
+            .map_err(vulkan_failure("vkCreatePipelineLayout"))?;
         let module =
             match self
                 .gpu
@@ -189,7 +190,10 @@ impl Objects {
             Err((_, e)) => {
                 // SAFETY: created above, unused.
                 unsafe { device.destroy_pipeline_layout(layout, allocator) };
-                Err(format!("vkCreateComputePipelines ({name}): {e}"))
+                Err(format!(
+                    "{name}: {}",
+                    vulkan_failure("vkCreateComputePipelines")(e)
+                ))
             }
         }
     }
@@ -245,7 +249,7 @@ impl Objects {
                 .address_mode_v(vk::SamplerAddressMode::CLAMP_TO_EDGE);
             // SAFETY: the info lives for the call.
             objects.sampler = unsafe { device.create_sampler(&info, allocator) }
-                .map_err(|e| format!("vkCreateSampler: {e}"))?;
+                .map_err(vulkan_failure("vkCreateSampler"))?;
         }
         let sizes = [
             vk::DescriptorPoolSize::default()
@@ -263,7 +267,7 @@ impl Objects {
             .pool_sizes(&sizes);
         // SAFETY: the info lives for the call.
         objects.pool = unsafe { device.create_descriptor_pool(&info, allocator) }
-            .map_err(|e| format!("vkCreateDescriptorPool: {e}"))?;
+            .map_err(vulkan_failure("vkCreateDescriptorPool"))?;
         let mut layouts = vec![objects.cull_set_layout];
         if occlusion {
             layouts.push(objects.pyramid_set_layout);
@@ -273,7 +277,7 @@ impl Objects {
             .set_layouts(&layouts);
         // SAFETY: the pool has room for these sets.
         let sets = unsafe { device.allocate_descriptor_sets(&info) }
-            .map_err(|e| format!("vkAllocateDescriptorSets: {e}"))?;
+            .map_err(vulkan_failure("vkAllocateDescriptorSets"))?;
         objects.cull_set = sets[0];
         objects.pyramid_set = sets.get(1).copied().unwrap_or_default();
         Ok(objects)

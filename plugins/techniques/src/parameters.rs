@@ -12,6 +12,7 @@ use std::sync::Arc;
 
 use cadr_plugin_sdk::abi::{self, CadrBindState, CadrInstance};
 use cadr_plugin_sdk::vk;
+use cadr_plugin_sdk::vulkan_failure;
 use cadr_plugin_sdk::{technique_library, Bind, Gpu, HostBuffer, ParameterPath, Scene, Technique};
 
 fn push(gpu: &Gpu, bind: &Bind<'_>, offset: u32, bytes: &[u8]) {
@@ -117,7 +118,7 @@ fn set_layout(gpu: &Gpu, types: &[vk::DescriptorType]) -> Result<vk::DescriptorS
         gpu.device
             .create_descriptor_set_layout(&info, gpu.allocator())
     }
-    .map_err(|e| format!("vkCreateDescriptorSetLayout: {e}"))
+    .map_err(vulkan_failure("vkCreateDescriptorSetLayout"))
 }
 
 /// Descriptor layouts, a pool and one set per layout; destroyed together.
@@ -149,13 +150,13 @@ impl Sets {
             .pool_sizes(&sizes);
         // SAFETY: the info lives for the call.
         this.pool = unsafe { gpu.device.create_descriptor_pool(&info, gpu.allocator()) }
-            .map_err(|e| format!("vkCreateDescriptorPool: {e}"))?;
+            .map_err(vulkan_failure("vkCreateDescriptorPool"))?;
         let alloc = vk::DescriptorSetAllocateInfo::default()
             .descriptor_pool(this.pool)
             .set_layouts(&this.layouts);
         // SAFETY: the pool was sized for exactly these sets.
         this.sets = unsafe { gpu.device.allocate_descriptor_sets(&alloc) }
-            .map_err(|e| format!("vkAllocateDescriptorSets: {e}"))?;
+            .map_err(vulkan_failure("vkAllocateDescriptorSets"))?;
         Ok(this)
     }
 

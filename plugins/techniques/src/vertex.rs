@@ -12,6 +12,7 @@ use std::sync::Arc;
 
 use cadr_plugin_sdk::abi::{self, CadrBindState, CadrDrawBase, CadrInstance, CadrVertexInput};
 use cadr_plugin_sdk::vk;
+use cadr_plugin_sdk::vulkan_failure;
 use cadr_plugin_sdk::{technique_library, Bind, Gpu, Scene, Technique, VertexPath};
 
 const ATTRIBUTES_SNIPPET: &CStr = c"
@@ -201,7 +202,7 @@ impl Technique for Pulling {
         let info = vk::DescriptorSetLayoutCreateInfo::default().bindings(&binding);
         // SAFETY: the info lives for the call.
         let layout = unsafe { device.create_descriptor_set_layout(&info, gpu.allocator()) }
-            .map_err(|e| format!("vkCreateDescriptorSetLayout: {e}"))?;
+            .map_err(vulkan_failure("vkCreateDescriptorSetLayout"))?;
         let sizes = [vk::DescriptorPoolSize::default()
             .ty(vk::DescriptorType::STORAGE_BUFFER)
             .descriptor_count(1)];
@@ -214,7 +215,7 @@ impl Technique for Pulling {
             Err(e) => {
                 // SAFETY: created above, unused.
                 unsafe { device.destroy_descriptor_set_layout(layout, gpu.allocator()) };
-                return Err(format!("vkCreateDescriptorPool: {e}"));
+                return Err(vulkan_failure("vkCreateDescriptorPool")(e));
             }
         };
         let mut this = Self {
@@ -230,7 +231,7 @@ impl Technique for Pulling {
             .set_layouts(&layouts);
         // SAFETY: the pool has room for this one set.
         this.set = unsafe { gpu.device.allocate_descriptor_sets(&alloc) }
-            .map_err(|e| format!("vkAllocateDescriptorSets: {e}"))?[0];
+            .map_err(vulkan_failure("vkAllocateDescriptorSets"))?[0];
         Ok(this)
     }
 }

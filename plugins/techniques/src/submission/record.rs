@@ -6,6 +6,7 @@ use std::sync::Arc;
 
 use cadr_plugin_sdk::abi::{self, CadrBindState, CadrStats};
 use cadr_plugin_sdk::vk::{self, Handle};
+use cadr_plugin_sdk::vulkan_failure;
 use cadr_plugin_sdk::{Gpu, Record};
 
 use super::lists::PassList;
@@ -281,7 +282,7 @@ impl SecondaryBuffers {
                 vk::CommandPoolCreateInfo::default().flags(vk::CommandPoolCreateFlags::TRANSIENT);
             // SAFETY: the info lives for the call; the pool is destroyed in Drop.
             let pool = unsafe { gpu.device.create_command_pool(&info, gpu.allocator()) }
-                .map_err(|e| format!("vkCreateCommandPool: {e}"))?;
+                .map_err(vulkan_failure("vkCreateCommandPool"))?;
             this.pools.push(pool);
             let alloc = vk::CommandBufferAllocateInfo::default()
                 .command_pool(pool)
@@ -289,7 +290,7 @@ impl SecondaryBuffers {
                 .command_buffer_count(PASS_BUFFERS as u32);
             // SAFETY: as above.
             let buffers = unsafe { gpu.device.allocate_command_buffers(&alloc) }
-                .map_err(|e| format!("vkAllocateCommandBuffers: {e}"))?;
+                .map_err(vulkan_failure("vkAllocateCommandBuffers"))?;
             let buffers: [vk::CommandBuffer; PASS_BUFFERS] = buffers
                 .try_into()
                 .map_err(|_| "vkAllocateCommandBuffers gave too few buffers".to_owned())?;
@@ -352,7 +353,7 @@ impl SecondaryBuffers {
                             gpu.device
                                 .reset_command_pool(pool, vk::CommandPoolResetFlags::empty())
                         }
-                        .map_err(|e| format!("vkResetCommandPool: {e}"))?;
+                        .map_err(vulkan_failure("vkResetCommandPool"))?;
                         for (group, &buffer) in groups.iter().zip(buffers) {
                             begin_secondary(gpu, buffer, (extent, color_formats))?;
                             shared.0.record_passes(
@@ -363,7 +364,7 @@ impl SecondaryBuffers {
                             );
                             // SAFETY: the buffer is recording.
                             unsafe { gpu.device.end_command_buffer(buffer) }
-                                .map_err(|e| format!("vkEndCommandBuffer: {e}"))?;
+                                .map_err(vulkan_failure("vkEndCommandBuffer"))?;
                         }
                         Ok(local)
                     };
@@ -431,7 +432,7 @@ fn begin_secondary(
     unsafe {
         gpu.device
             .begin_command_buffer(buffer, &begin)
-            .map_err(|e| format!("vkBeginCommandBuffer: {e}"))?;
+            .map_err(vulkan_failure("vkBeginCommandBuffer"))?;
         gpu.device.cmd_set_viewport(buffer, 0, &[viewport]);
         gpu.device.cmd_set_scissor(buffer, 0, &[area]);
     }

@@ -136,6 +136,11 @@ typedef struct CadrRendererObject CadrRendererObject;
 // Opaque type behind [`CadrScene`].
 typedef struct CadrSceneObject CadrSceneObject;
 
+// A renderer: draws scenes with the chosen techniques into an offscreen image, or into a host
+// window through a swapchain. Created by `cadr_renderer_create` or
+// `cadr_renderer_create_for_surface`, released by `cadr_renderer_destroy`.
+typedef struct CadrRendererObject *CadrRenderer;
+
 // A scene: a scene graph with one root Group, and the scene tree flattened from it.
 // Created by `cadr_scene_create`, released by `cadr_scene_destroy`. A scene needs no context:
 // any renderer can draw it.
@@ -356,11 +361,6 @@ typedef struct CadrLoadResult {
   size_t material_count;
 } CadrLoadResult;
 
-// A renderer: draws scenes with the chosen techniques into an offscreen image, or into a host
-// window through a swapchain. Created by `cadr_renderer_create` or
-// `cadr_renderer_create_for_surface`, released by `cadr_renderer_destroy`.
-typedef struct CadrRendererObject *CadrRenderer;
-
 // One picked occurrence of a part.
 typedef struct CadrPickHit {
   // The geo node drawn.
@@ -498,6 +498,32 @@ enum CadrResult cadr_render_scene_to_png(const char *scene,
                                          uint32_t width,
                                          uint32_t height,
                                          bool validation);
+
+// Sets the background: `top_rgb` at the picture's top row blending to `bottom_rgb` at its
+// bottom row, three floats each, as display values in 0..1 (what a PNG stores; the default
+// is a light grey-blue gradient). Pass the same colour twice for a flat background. The
+// next frame draws it, in every display mode, under translucent parts too.
+//
+// Returns `CADR_RESULT_OK`, `CADR_RESULT_NULL_ARGUMENT`, `CADR_RESULT_INVALID_ARGUMENT` (a
+// value outside 0..1 or not finite) or a handle error. Ownership: both arrays are read during
+// the call only. Thread-safety: as `cadr_renderer_create`.
+//
+// # Safety
+// `top_rgb` and `bottom_rgb` are null or point to three readable floats each.
+enum CadrResult cadr_renderer_set_background(CadrRenderer renderer,
+                                             const float *top_rgb,
+                                             const float *bottom_rgb);
+
+// Writes the background's top and bottom colours (three floats each, display values in
+// 0..1; see `cadr_renderer_set_background`).
+//
+// Returns `CADR_RESULT_OK`, `CADR_RESULT_NULL_ARGUMENT` or a handle error. Ownership: the
+// arrays are the caller's; cadr keeps no pointer to them. Thread-safety: as
+// `cadr_renderer_create`.
+//
+// # Safety
+// `top_rgb` and `bottom_rgb` are null or point to three writable floats each.
+enum CadrResult cadr_renderer_background(CadrRenderer renderer, float *top_rgb, float *bottom_rgb);
 
 // Writes the world-space bounds of everything the scene shows (empty: `min` > `max`).
 //

@@ -10,14 +10,15 @@
  *        E cycles the display modes (solid, edges, hidden-line, wireframe, xray); T cycles the
  *        transparency methods; F fits the view; I toggles 1 / 2 frames in flight;
  *        M cycles the present modes the window offers; X cycles a section plane through the
- *        view's centre across x, y, z and off; K toggles its caps, H their hatching; Esc quits.
+ *        view's centre across x, y, z and off; K toggles its caps, H their hatching;
+ *        B cycles the background (cadr's gradient, white, dark); Esc quits.
  * The window title shows the techniques, the section, frames in flight, present mode, the frame's figures
  * and frames per second; they are also printed once a second. --orbit-frames N orbits the
  * camera for N frames as fast as they come, prints the frames per second and quits (a
  * benchmark of the window path). Resizing and minimizing are handled by cadr (swapchain recreated, frames skipped).
  *
  * --self-test DIR renders frames, cycles every technique kind once, toggles the shade mode,
- * cycles the section planes with and without caps and hatching,
+ * cycles the section planes with and without caps and hatching, cycles the backgrounds,
  * resizes the window, then renders a fixed view both into the window and offscreen
  * (DIR/offscreen.png), prints "screenshot ready WxH" and keeps presenting until a line arrives
  * on stdin, so that a test can grab the window and compare. */
@@ -47,6 +48,7 @@ struct Viewer {
   uint32_t shade;
   int section_axis;      /* -1: no section; 0, 1, 2: a plane across x, y or z */
   uint32_t section_flags; /* CADR_SECTION_* */
+  uint32_t background;    /* index into backgrounds */
   struct CadrFrameStats stats;
   double frames_per_second;
 };
@@ -145,6 +147,27 @@ static void toggle_section_flag(struct Viewer *v, uint32_t flag, const char *nam
   printf("section %s: %s\n", name, (v->section_flags & flag) ? "on" : "off");
 }
 
+/* The backgrounds B cycles through: cadr's default gradient first (read from the renderer). */
+static const char *const background_names[3] = {"gradient", "white", "dark"};
+
+static void cycle_background(struct Viewer *v) {
+  static float default_top[3], default_bottom[3];
+  static int have_default = 0;
+  const float white[3] = {1.0f, 1.0f, 1.0f};
+  const float dark_top[3] = {0.20f, 0.22f, 0.26f}, dark_bottom[3] = {0.05f, 0.06f, 0.08f};
+  if (!have_default) {
+    CADR_CHECK(cadr_renderer_background(v->renderer, default_top, default_bottom));
+    have_default = 1;
+  }
+  v->background = (v->background + 1) % 3;
+  switch (v->background) {
+  case 0: CADR_CHECK(cadr_renderer_set_background(v->renderer, default_top, default_bottom)); break;
+  case 1: CADR_CHECK(cadr_renderer_set_background(v->renderer, white, white)); break;
+  default: CADR_CHECK(cadr_renderer_set_background(v->renderer, dark_top, dark_bottom)); break;
+  }
+  printf("background: %s\n", background_names[v->background]);
+}
+
 static void toggle_frames_in_flight(struct Viewer *v) {
   uint32_t frames = 1;
   CADR_CHECK(cadr_renderer_frames_in_flight(v->renderer, &frames));
@@ -183,9 +206,9 @@ static void describe(struct Viewer *v, char *text, size_t size) {
                ? ((v->section_flags & CADR_SECTION_HATCHED) ? " capped, hatched" : " capped")
                : " uncapped");
   snprintf(text, size,
-           "cadr viewer | %s / %s / %s / %s | %s, %s | %s | %u in flight, %s | %llu draws in %llu calls | CPU %.0f us, GPU %.0f us | %.0f frames/s",
+           "cadr viewer | %s / %s / %s / %s | %s, %s | %s | %s background | %u in flight, %s | %llu draws in %llu calls | CPU %.0f us, GPU %.0f us | %.0f frames/s",
            names[0], names[1], names[2], names[3], shade_names[v->shade % 5], names[4],
-           section, frames, present_names[mode % 3], (unsigned long long)v->stats.draws,
+           section, background_names[v->background % 3], frames, present_names[mode % 3], (unsigned long long)v->stats.draws,
            (unsigned long long)v->stats.draw_calls, v->stats.cpu_us, v->stats.gpu_us,
            v->frames_per_second);
 }
@@ -222,6 +245,7 @@ static void on_key(GLFWwindow *window, int key, int scancode, int action, int mo
   case GLFW_KEY_X: cycle_section(v); break;
   case GLFW_KEY_K: toggle_section_flag(v, CADR_SECTION_CAPS, "caps"); break;
   case GLFW_KEY_H: toggle_section_flag(v, CADR_SECTION_HATCHED, "hatching"); break;
+  case GLFW_KEY_B: cycle_background(v); break;
   case GLFW_KEY_ESCAPE: glfwSetWindowShouldClose(window, GLFW_TRUE); break;
   default: break;
   }
@@ -303,6 +327,11 @@ static int self_test(struct Viewer *v, const char *dir) {
   render(v);
   toggle_section_flag(v, CADR_SECTION_CAPS, "caps");
   toggle_section_flag(v, CADR_SECTION_HATCHED, "hatching");
+  /* Every background, ending on the default. */
+  for (frame = 0; frame < 3; ++frame) {
+    cycle_background(v);
+    render(v);
+  }
   cycle_section(v);
   cycle_section(v);
   cycle_section(v);

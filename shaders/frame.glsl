@@ -5,13 +5,15 @@ layout(set = 0, binding = 0, std140) uniform FrameUniforms {
     mat4 view_rotation;    // world -> view space with the eye at the origin (no translation)
     vec4 eye_high;         // the eye's world position: f32 high part (xyz) ...
     vec4 eye_low;          // ... and the f32 remainder, split from f64 on the CPU
-    vec4 light;            // x: ambient, y: diffuse, z: specular, w: unused
+    vec4 light;            // x: ambient (sky and ground), y: diffuse, z: specular, w: unused
     // Section planes relative to the eye: n.xyz and d + n·eye (computed in f64 on the CPU);
     // a point at world offset o from the eye is kept where dot(n, o) + w >= 0. Unused: (0,0,0,1).
     vec4 section_planes[6];
     vec4 section_colors[6];  // cap colour of each plane (linear RGBA)
     uvec4 section;           // x: bits 0-7 plane count, bit 8 caps, bit 9 hatching
     uvec4 target;            // x, y: the target's width and height; z: CADR_DISPLAY_* bits
+    vec4 background_top;     // the background at the top of the picture (display RGB) ...
+    vec4 background_bottom;  // ... and at its bottom, blended linearly between
 } frame;
 
 const uint CADR_SECTION_CAPS = 0x100u;

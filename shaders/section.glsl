@@ -31,7 +31,8 @@ int section_cap_plane(vec3 eye_offset) {
 vec3 section_cap_color(int plane, vec3 eye_offset) {
     vec3 view_normal = mat3(frame.view_rotation) * frame.section_planes[plane].xyz;
     vec3 view_position = (frame.view_rotation * vec4(eye_offset, 1.0)).xyz;
-    vec3 color = shade_headlight(view_position, view_normal, frame.section_colors[plane], vec2(0.0, 0.7), frame.light);
+    vec3 color = shade_headlight(view_position, view_normal, frame.section_colors[plane], vec2(0.0, 0.7), frame.light,
+                                 frame.view_rotation[1].xyz);
     if ((frame.section.x & CADR_SECTION_HATCHED) != 0u && mod(gl_FragCoord.x + gl_FragCoord.y, 8.0) < 2.0) {
         color *= 0.35;
     }

@@ -24,5 +24,6 @@ void main() {
             return;
         }
     }
-    out_color = vec4(shade_headlight(in_view_position, in_view_normal, in_base_color, in_surface, frame.light), 1.0);
+    out_color = vec4(shade_headlight(in_view_position, in_view_normal, in_base_color, in_surface, frame.light,
+                          frame.view_rotation[1].xyz), 1.0);
 }

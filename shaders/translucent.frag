@@ -26,7 +26,8 @@ layout(location = 2) out vec4 cadr_target_1;
 //@TRANSPARENCY@
 
 void main() {
-    vec3 color = shade_headlight(in_view_position, in_view_normal, in_base_color, in_surface, frame.light);
+    vec3 color = shade_headlight(in_view_position, in_view_normal, in_base_color, in_surface, frame.light,
+                          frame.view_rotation[1].xyz);
     float opacity = clamp(in_base_color.a, 0.0, 1.0);
     out_color = vec4(0.0);
     cadr_transparent_fragment(vec4(color * opacity, opacity), -in_view_position.z);

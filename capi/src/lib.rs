@@ -15,6 +15,7 @@
 //!   called.
 
 mod args;
+mod background;
 mod bounds;
 mod camera;
 mod context;
@@ -30,6 +31,7 @@ mod scene;
 mod section;
 mod timings;
 
+pub use background::*;
 pub use bounds::*;
 pub use camera::{cadr_camera_fit, cadr_camera_look_at, CadrCamera};
 pub use context::*;

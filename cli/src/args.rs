@@ -6,7 +6,7 @@ use std::path::PathBuf;
 
 use clap::{Args, Parser, Subcommand, ValueEnum};
 
-use cadr_core::render::Section;
+use cadr_core::render::{Background, Section};
 use cadr_core::technique::{Combination, ShadeMode, TechniqueKind};
 
 use crate::motion::CameraPath;
@@ -298,6 +298,11 @@ pub struct RenderArgs {
     /// upload, shader compile, pipeline creation, first frame, readback, PNG encode.
     #[arg(long)]
     pub timings: bool,
+    /// The background: gradient (the default), flat, one colour #RRGGBB, or a gradient
+    /// from the top colour to the bottom one, #RRGGBB,#RRGGBB.
+    #[arg(long, value_name = "gradient|flat|#RRGGBB[,#RRGGBB]", value_parser = parse_background,
+          default_value = "gradient")]
+    pub background: Background,
     #[command(flatten)]
     pub validation: ValidationArgs,
 }
@@ -573,6 +578,39 @@ fn parse_plane(text: &str) -> Result<glam::DVec4, String> {
     Ok(plane)
 }
 
+/// The one colour of `--background flat`: the middle of the default gradient.
+const FLAT_BACKGROUND: [f32; 3] = [0.80, 0.84, 0.88];
+
+/// Parses `--background`: `gradient`, `flat`, `#RRGGBB` or `#RRGGBB,#RRGGBB` (top, bottom).
+fn parse_background(text: &str) -> Result<Background, String> {
+    let bad = |part: &str| {
+        format!("'{part}': expected gradient, flat, #RRGGBB or #RRGGBB,#RRGGBB (top, bottom)")
+    };
+    let color = |part: &str| -> Result<[f32; 3], String> {
+        let hex = part.trim().strip_prefix('#').ok_or_else(|| bad(part))?;
+        if hex.len() != 6 || !hex.is_ascii() {
+            return Err(bad(part));
+        }
+        let mut rgb = [0.0; 3];
+        for (i, value) in rgb.iter_mut().enumerate() {
+            let byte = u8::from_str_radix(&hex[2 * i..2 * i + 2], 16).map_err(|_| bad(part))?;
+            *value = f32::from(byte) / 255.0;
+        }
+        Ok(rgb)
+    };
+    match text.trim() {
+        "gradient" => Ok(Background::GRADIENT),
+        "flat" => Ok(Background::flat(FLAT_BACKGROUND)),
+        colors => match colors.split_once(',') {
+            Some((top, bottom)) => Ok(Background {
+                top: color(top)?,
+                bottom: color(bottom)?,
+            }),
+            None => Ok(Background::flat(color(colors)?)),
+        },
+    }
+}
+
 /// Parses a sub-pixel threshold: a number of pixels, 0 or more.
 fn parse_min_pixels(text: &str) -> Result<f32, String> {
     text.parse::<f32>()
@@ -606,5 +644,28 @@ mod tests {
         assert!(parse_min_pixels("-1").is_err());
         assert!(parse_min_pixels("NaN").is_err());
         assert_eq!(parse_min_pixels("2.5"), Ok(2.5));
+    }
+
+    #[test]
+    fn backgrounds_are_names_or_hex_colours() {
+        assert_eq!(parse_background("gradient"), Ok(Background::GRADIENT));
+        assert_eq!(
+            parse_background("flat"),
+            Ok(Background::flat(FLAT_BACKGROUND))
+        );
+        assert_eq!(
+            parse_background("#ff0000,#000080"),
+            Ok(Background {
+                top: [1.0, 0.0, 0.0],
+                bottom: [0.0, 0.0, 128.0 / 255.0]
+            })
+        );
+        assert_eq!(parse_background("#FFFFFF"), Ok(Background::flat([1.0; 3])));
+        for bad in [
+            "", "red", "#12345", "#1234567", "#gg0000", "#ffffff,", "#ééé",
+        ] {
+            let error = parse_background(bad).expect_err(bad);
+            assert!(error.contains("expected gradient"), "{bad}: {error}");
+        }
     }
 }

@@ -171,6 +171,7 @@ fn render(args: &RenderArgs, process_start: Instant) -> Result<(), String> {
     session.set_min_pixels(min_pixels)?;
     let section_line = args::describe_section(&section);
     session.set_section(section);
+    session.set_background(args.background)?;
     // The baseline records every frame, as the seeds' does.
     session
         .techniques()

@@ -5,7 +5,7 @@ use std::path::PathBuf;
 use std::sync::Arc;
 
 use cadr_core::graph::SceneGraph;
-use cadr_core::render::{Camera, FrameStats, Section};
+use cadr_core::render::{Background, Camera, FrameStats, Section};
 use cadr_core::scene::Aabb;
 use cadr_core::scene::Scene;
 use cadr_core::technique::{
@@ -112,6 +112,14 @@ impl TechniqueSession {
     /// Cuts the view with `section` (`--section`, `--caps`, `--no-caps`, `--hatch`).
     pub fn set_section(&mut self, section: Section) {
         self.view.set_section(section);
+    }
+
+    /// Sets the background the picture is drawn over (`--background`).
+    pub fn set_background(&mut self, background: Background) -> Result<(), String> {
+        self.view
+            .renderer_mut()
+            .set_background(background)
+            .map_err(|e| format!("--background: {e}"))
     }
 
     /// Sets the sub-pixel threshold (`--min-pixels`) of the chosen culler; refused with a

@@ -266,6 +266,13 @@ pub const MERGE_VERT: ShaderSource = ShaderSource {
     source: include_str!("../../shaders/merge.vert"),
 };
 
+/// The background under what a frame drew.
+pub const BACKGROUND_FRAG: ShaderSource = ShaderSource {
+    name: "background.frag",
+    stage: ShaderStage::Fragment,
+    source: include_str!("../../shaders/background.frag"),
+};
+
 /// The marker a transparency method's snippet replaces in [`TRANSLUCENT_FRAG`] and
 /// [`MERGE_FRAG`].
 pub const TRANSPARENCY_MARKER: &str = "//@TRANSPARENCY@";
@@ -281,4 +288,5 @@ pub const ALL: &[ShaderSource] = &[
     TRANSFORMS_COMP,
     EDGES_FRAG,
     MERGE_VERT,
+    BACKGROUND_FRAG,
 ];

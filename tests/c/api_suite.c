@@ -681,7 +681,8 @@ static void test_renderer(CadrContext context, struct Built *b) {
     OK(cadr_renderer_render(renderer, b->scene, &camera, &stats));
     OK(cadr_renderer_read_pixels(renderer, second, W * H * 4));
     CHECK(pixel_difference(first, second, W * H * 4) > 0);
-    CHECK(second[4 * (W * (H / 2) + W / 2)] == second[0]); /* the centre shows the background */
+    /* The centre shows the background, as the left edge of its row does (a vertical gradient). */
+    CHECK(second[4 * (W * (H / 2) + W / 2)] == second[4 * (W * (H / 2))]);
     OK(cadr_renderer_pick(renderer, b->scene, &camera, W / 2, H / 2, &picked));
     CHECK(picked.hit_count == 0);
     EXPECT(cadr_renderer_set_section_planes(renderer, zero_normal, 1), CADR_RESULT_INVALID_ARGUMENT);
@@ -707,6 +708,37 @@ static void test_renderer(CadrContext context, struct Built *b) {
     OK(cadr_renderer_pick(renderer, b->scene, &camera, W / 2, H / 2, &picked));
     CHECK(picked.hit_count == 1);
     cadr_pick_result_free(&picked);
+    OK(cadr_renderer_render(renderer, b->scene, &camera, &stats));
+    OK(cadr_renderer_read_pixels(renderer, second, W * H * 4));
+    CHECK(pixel_difference(first, second, W * H * 4) == 0);
+  }
+
+  /* The background: a red-to-blue gradient shows at the top and bottom corners, refused colours
+   * name the problem and leave it as it was, and the default comes back. */
+  {
+    float top[3] = {1.0f, 0.0f, 0.0f}, bottom[3] = {0.0f, 0.0f, 1.0f};
+    float too_bright[3] = {1.5f, 0.0f, 0.0f}, not_finite[3] = {NAN, 0.0f, 0.0f};
+    float default_top[3], default_bottom[3], read_top[3], read_bottom[3];
+    const uint8_t *corner;
+    OK(cadr_renderer_background(renderer, default_top, default_bottom));
+    CHECK(default_top[0] > 0.5f && default_top[0] <= 1.0f && default_bottom[2] > 0.5f);
+    OK(cadr_renderer_set_background(renderer, top, bottom));
+    OK(cadr_renderer_render(renderer, b->scene, &camera, &stats));
+    OK(cadr_renderer_read_pixels(renderer, second, W * H * 4));
+    corner = second; /* top-left */
+    CHECK(corner[0] > 240 && corner[1] < 10 && corner[2] < 15);
+    corner = second + 4 * (W * (H - 1)); /* bottom-left */
+    CHECK(corner[0] < 15 && corner[1] < 10 && corner[2] > 240);
+    EXPECT(cadr_renderer_set_background(renderer, too_bright, bottom), CADR_RESULT_INVALID_ARGUMENT);
+    MESSAGE_HAS("background top colour");
+    EXPECT(cadr_renderer_set_background(renderer, top, not_finite), CADR_RESULT_INVALID_ARGUMENT);
+    MESSAGE_HAS("background bottom colour");
+    EXPECT(cadr_renderer_set_background(renderer, NULL, bottom), CADR_RESULT_NULL_ARGUMENT);
+    MESSAGE_HAS("top_rgb");
+    EXPECT(cadr_renderer_background(renderer, read_top, NULL), CADR_RESULT_NULL_ARGUMENT);
+    OK(cadr_renderer_background(renderer, read_top, read_bottom));
+    CHECK(read_top[0] == 1.0f && read_top[2] == 0.0f && read_bottom[2] == 1.0f);
+    OK(cadr_renderer_set_background(renderer, default_top, default_bottom));
     OK(cadr_renderer_render(renderer, b->scene, &camera, &stats));
     OK(cadr_renderer_read_pixels(renderer, second, W * H * 4));
     CHECK(pixel_difference(first, second, W * H * 4) == 0);

@@ -16,6 +16,7 @@
 
 use std::path::PathBuf;
 
+use cadr_core::render::Background;
 use image::RgbaImage;
 
 /// How far two images are apart, in FLIP error (0: the same, 1: as different as can be).
@@ -150,10 +151,20 @@ pub fn assert_matches_reference(name: &str, image: &RgbaImage, tolerance: Tolera
     );
 }
 
-/// Fraction of pixels that differ from the top-left (background) pixel.
+/// Whether the pixel at (`x`, `y`) shows the default background (within one step per
+/// channel: the GPU rounds the gradient its own way).
+pub fn is_background(image: &RgbaImage, x: u32, y: u32) -> bool {
+    let expected = Background::default().rgb8_at(y, image.height());
+    let pixel = image.get_pixel(x, y).0;
+    (0..3).all(|c| pixel[c].abs_diff(expected[c]) <= 1)
+}
+
+/// Fraction of pixels that do not show the default background.
 pub fn covered_fraction(image: &RgbaImage) -> f64 {
-    let background = *image.get_pixel(0, 0);
-    let covered = image.pixels().filter(|p| **p != background).count();
+    let covered = image
+        .enumerate_pixels()
+        .filter(|(x, y, _)| !is_background(image, *x, *y))
+        .count();
     covered as f64 / (image.width() * image.height()).max(1) as f64
 }
 

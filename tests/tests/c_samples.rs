@@ -24,12 +24,13 @@ fn sample(name: &str, dir: &Path, extra: &[&str]) -> PathBuf {
     program
 }
 
-/// Pixels that differ from the top-left (background) pixel.
+/// Pixels that differ from the left edge of their row (the background: a vertical gradient,
+/// or one colour).
 fn foreground_fraction(image: &image::RgbaImage) -> f64 {
-    let background = *image.get_pixel(0, 0);
     let differing = image
-        .pixels()
-        .filter(|p| {
+        .enumerate_pixels()
+        .filter(|(_, y, p)| {
+            let background = image.get_pixel(0, *y);
             (0..3)
                 .map(|c| p[c].abs_diff(background[c]) as u32)
                 .sum::<u32>()
@@ -225,6 +226,9 @@ fn viewer_under_xvfb_swaps_techniques_resizes_and_shows_the_offscreen_image() {
         "section: x",
         "section caps: off",
         "section hatching: on",
+        "background: white",
+        "background: dark",
+        "background: gradient",
         "present modes offered: fifo",
         "resized to 480x360",
     ] {

@@ -6,7 +6,7 @@
 use cadr_core::generate::{generate, GeneratorSpec};
 use cadr_core::graph::SceneGraph;
 use cadr_core::load::load_file;
-use cadr_core::render::{Camera, CLEAR_COLOR, DEFAULT_DIRECTION};
+use cadr_core::render::{Background, Camera, DEFAULT_DIRECTION};
 use cadr_core::scene::{flatten, Scene};
 use cadr_core::technique::ShadeMode;
 use cadr_core::tree::SceneTree;
@@ -43,11 +43,11 @@ fn render_every_mode(scene: &Scene) -> Vec<image::RgbaImage> {
 
 /// The share of pixels that are neither the background nor the dark line colour.
 fn filled_fraction(image: &image::RgbaImage) -> f64 {
-    let background = CLEAR_COLOR.map(|c| (c * 255.0).round());
     let filled = image
-        .pixels()
-        .filter(|p| {
-            let near_background = (0..3).all(|i| (f32::from(p.0[i]) - background[i]).abs() < 12.0);
+        .enumerate_pixels()
+        .filter(|(_, y, p)| {
+            let background = Background::default().rgb8_at(*y, image.height());
+            let near_background = (0..3).all(|i| p.0[i].abs_diff(background[i]) < 12);
             let line = (0..3).all(|i| p.0[i] < 90);
             !near_background && !line
         })

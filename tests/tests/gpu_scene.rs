@@ -11,7 +11,7 @@ use cadr_core::generate::{generate, GeneratorSpec, GeometryBuilder};
 use cadr_core::gpu_scene::{GpuScene, MATRIX_BYTES};
 use cadr_core::graph::{GeometryHandle, MaterialHandle, NodeFlags, NodeHandle, SceneGraph};
 use cadr_core::render::pick::PixelRect;
-use cadr_core::render::{Camera, Renderer, CLEAR_COLOR, DEFAULT_DIRECTION};
+use cadr_core::render::{Camera, Renderer, DEFAULT_DIRECTION};
 use cadr_core::scene::{flatten, Material};
 use cadr_core::technique::{Combination, TechniqueKind, Transforms};
 use cadr_core::tree::SceneTree;
@@ -122,11 +122,11 @@ fn every_valid_combination_picks_what_it_draws(source: &cadr_core::scene::Scene,
     assert!(reference.len() >= 10, "{} parts picked", reference.len());
     view.render(&graph, &mut tree, &camera).unwrap();
     let image = view.renderer().read_rgba8().unwrap();
-    let background = CLEAR_COLOR.map(|c| (c * 255.0).round() as i32);
     for hit in &reference {
-        let pixel = image.get_pixel(hit.pixel.0, hit.pixel.1).0;
-        let is_background = (0..3).all(|c| (i32::from(pixel[c]) - background[c]).abs() <= 1);
-        assert!(!is_background, "{hit:?} picks a background pixel");
+        assert!(
+            !cadr_tests::images::is_background(&image, hit.pixel.0, hit.pixel.1),
+            "{hit:?} picks a background pixel"
+        );
         let instance = tree.instance(hit.instance).unwrap();
         let world = tree.world(instance.tree_node);
         let geometry = graph.geometry_at(instance.geometry).unwrap();

@@ -7,13 +7,15 @@ use cadr_core::load::load_file;
 use std::sync::Arc;
 
 use cadr_core::graph::SceneGraph;
-use cadr_core::render::{Camera, CLEAR_COLOR, DEFAULT_DIRECTION};
+use cadr_core::render::{Background, Camera, DEFAULT_DIRECTION};
 use cadr_core::scene::{flatten, Scene};
 use cadr_core::technique::{feature_bits, PluginRegistry};
 use cadr_core::tree::SceneTree;
 use cadr_core::view::View;
 use cadr_tests::fixtures::{scratch_dir, CubeGltf};
-use cadr_tests::images::{assert_matches_reference, compare, covered_fraction, DEFAULT_TOLERANCE};
+use cadr_tests::images::{
+    self, assert_matches_reference, compare, covered_fraction, DEFAULT_TOLERANCE,
+};
 use cadr_tests::{assert_no_validation_errors, render_scene, test_device, CYLINDER_ENGINE_GLB};
 
 #[test]
@@ -61,10 +63,23 @@ fn materials_reach_the_image() {
 #[test]
 fn empty_scene_renders_the_background() {
     let image = render_scene(&Scene::default(), 64, 48);
-    let expected = CLEAR_COLOR.map(|c| (c * 255.0).round() as u8);
     assert!(
-        image.pixels().all(|p| p.0 == expected),
+        image
+            .enumerate_pixels()
+            .all(|(x, y, _)| images::is_background(&image, x, y)),
         "an empty scene is all background"
+    );
+    // The default background is a gradient, lighter at the top, opaque everywhere.
+    let (top, bottom) = (image.get_pixel(0, 0).0, image.get_pixel(0, 47).0);
+    assert!(
+        (0..3).all(|c| top[c] > bottom[c]),
+        "{top:?} over {bottom:?}"
+    );
+    assert!(image.pixels().all(|p| p.0[3] == 255));
+    assert_eq!(
+        &top[..3],
+        &Background::default().rgb8_at(0, 48)[..],
+        "the top row"
     );
 }
 

@@ -5,6 +5,7 @@
 //! (`Renderer::render_techniques`, `Renderer::pick_techniques`); the pick pass draws instance
 //! ids and depth into their own target and reads a rectangle of them back ([`pick`]).
 
+mod background;
 mod camera;
 mod output;
 pub mod pick;
@@ -13,6 +14,7 @@ mod section;
 mod stats;
 mod transparency;
 
+pub use background::Background;
 pub use camera::{Camera, DEFAULT_DIRECTION, DEFAULT_FOV_DEGREES};
 pub use output::SaveError;
 pub use pipeline::{
@@ -39,8 +41,9 @@ use crate::vk::{
 use pick::{PickTarget, PixelRect};
 use transparency::{storage_buffer, TransparencyTargets};
 
-/// The background colour of rendered images (linear RGBA).
-pub const CLEAR_COLOR: [f32; 4] = [0.80, 0.84, 0.88, 1.0];
+/// What the colour pass clears to: nothing drawn, no coverage (the background goes under
+/// it after the rendering).
+const UNCOVERED: [f32; 4] = [0.0; 4];
 
 /// Renders scenes into an offscreen color + depth target.
 pub struct Renderer {
@@ -69,6 +72,8 @@ pub struct Renderer {
     transparency: Option<TransparencyTargets>,
     /// The storage the frame set names while no method's storage is made.
     placeholder_storage: Buffer,
+    /// The background every picture is drawn over.
+    background: Background,
 }
 
 /// The most frames a renderer lets the GPU work on while it prepares the next: techniques
@@ -186,7 +191,21 @@ impl Renderer {
             section: Section::none(),
             transparency: None,
             placeholder_storage,
+            background: Background::default(),
         })
+    }
+
+    /// The background pictures are drawn over ([`Background::GRADIENT`] by default).
+    pub fn background(&self) -> Background {
+        self.background
+    }
+
+    /// Sets the background; the next frame draws it (through the frame's uniforms, so a
+    /// recorded frame replays with it).
+    pub fn set_background(&mut self, background: Background) -> RenderResult<()> {
+        background.validate().map_err(RenderError::InvalidUse)?;
+        self.background = background;
+        Ok(())
     }
 
     /// The section planes and caps (none by default).
@@ -334,6 +353,8 @@ impl Renderer {
                 let (width, height) = self.size();
                 [width, height, plan.display, 0]
             },
+            background_top: opaque(self.background.top),
+            background_bottom: opaque(self.background.bottom),
         };
         self.commands.wait()?;
         if let Some((method, _)) = plan.translucency {
@@ -393,8 +414,9 @@ impl Renderer {
                 end_rendering(&self.device, command_buffer, &target);
             }
         }
-        if let (Some(targets), Some((_, merge))) = (transparency, plan.translucency) {
-            self.record_merge(command_buffer, targets, merge);
+        if plan.pass == PassTarget::Color {
+            let merge = transparency.zip(plan.translucency.map(|(_, merge)| merge));
+            self.record_overlay(command_buffer, merge)?;
         }
         (recorders.after)(self, command_buffer, phases - 1, &mut stats)?;
         if let Some(timer) = &mut self.timer {
@@ -469,9 +491,7 @@ impl Renderer {
             }
             _ => (
                 &self.target.color,
-                vk::ClearColorValue {
-                    float32: CLEAR_COLOR,
-                },
+                vk::ClearColorValue { float32: UNCOVERED },
             ),
         }
     }
@@ -551,35 +571,47 @@ impl Renderer {
         );
     }
 
-    /// The merge: after the rendering, the method's result at each pixel blended over the
-    /// picture.
-    fn record_merge(
+    /// What goes over the finished rendering: the transparency method's result at each
+    /// pixel blended over the picture (with translucent surfaces), then the background
+    /// under whatever the picture leaves uncovered.
+    fn record_overlay(
         &self,
         command_buffer: vk::CommandBuffer,
-        targets: &TransparencyTargets,
-        merge: (vk::Pipeline, vk::PipelineLayout),
-    ) {
-        // The translucent fragments' storage writes, read by the merge.
-        memory_barrier(
-            &self.device,
-            command_buffer,
-            (
-                vk::PipelineStageFlags2::FRAGMENT_SHADER,
-                vk::AccessFlags2::SHADER_STORAGE_WRITE,
-            ),
-            (
-                vk::PipelineStageFlags2::FRAGMENT_SHADER,
-                vk::AccessFlags2::SHADER_STORAGE_READ,
-            ),
-        );
+        merge: Option<(&TransparencyTargets, (vk::Pipeline, vk::PipelineLayout))>,
+    ) -> RenderResult<()> {
+        let background = self.pipelines.background()?;
+        if merge.is_some() {
+            // The translucent fragments' storage writes, read by the merge.
+            memory_barrier(
+                &self.device,
+                command_buffer,
+                (
+                    vk::PipelineStageFlags2::FRAGMENT_SHADER,
+                    vk::AccessFlags2::SHADER_STORAGE_WRITE,
+                ),
+                (
+                    vk::PipelineStageFlags2::FRAGMENT_SHADER,
+                    vk::AccessFlags2::SHADER_STORAGE_READ,
+                ),
+            );
+        }
         begin_overlay(&self.device, command_buffer, &self.target.color);
+        if let Some((targets, merge)) = merge {
+            record_fullscreen(
+                &self.device,
+                command_buffer,
+                merge,
+                &[self.frame_set(), targets.merge_set.sets[0]],
+            );
+        }
         record_fullscreen(
             &self.device,
             command_buffer,
-            merge,
-            &[self.frame_set(), targets.merge_set.sets[0]],
+            background,
+            &[self.frame_set()],
         );
         end_overlay(&self.device, command_buffer, &self.target.color);
+        Ok(())
     }
 
     /// The frame uniforms' descriptor set (set 0 of every pipeline).
@@ -634,4 +666,9 @@ impl Drop for Renderer {
         // Resources are destroyed by their own Drop; make sure the GPU is done with them.
         let _ = self.commands.wait();
     }
+}
+
+/// A background colour as the uniforms carry it.
+fn opaque(color: [f32; 3]) -> [f32; 4] {
+    [color[0], color[1], color[2], 1.0]
 }

@@ -7,7 +7,10 @@ use crate::error::RenderResult;
 use crate::vk::raw as vk;
 
 use crate::shaders::{self, ShaderSource};
-use crate::vk::{DescriptorSetLayout, Device, Pipeline, PipelineLayout, ShaderModule};
+use crate::vk::{
+    Blend, ColorTarget, DepthUse, DescriptorSetLayout, Device, GraphicsPipelineDesc, Pipeline,
+    PipelineLayout, ShaderModule, COLOR_FORMAT,
+};
 
 /// Format of the pick target: one instance id (+1) per pixel.
 pub const PICK_FORMAT: vk::Format = vk::Format::R32_UINT;
@@ -34,6 +37,10 @@ pub struct FrameUniforms {
     pub section: [u32; 4],
     /// The target's width and height; display bits (`DISPLAY_XRAY`); zero.
     pub target: [u32; 4],
+    /// The background's top colour (display RGB, alpha 1).
+    pub background_top: [f32; 4],
+    /// The background's bottom colour.
+    pub background_bottom: [f32; 4],
 }
 
 /// [`FrameUniforms::target`]`[2]`: the X-ray display mode.
@@ -100,6 +107,9 @@ pub struct Pipelines {
     hierarchy_set_layout: DescriptorSetLayout,
     hierarchy_layout: PipelineLayout,
     hierarchy: OnceLock<Pipeline>,
+    /// The background's layout (the frame set) and pipeline, made on first use.
+    background_layout: PipelineLayout,
+    background: OnceLock<Pipeline>,
 }
 
 impl Pipelines {
@@ -145,8 +155,17 @@ impl Pipelines {
             std::mem::size_of::<HierarchyParameters>() as u32,
             compute,
         )?;
+        let background_layout = PipelineLayout::new(
+            device,
+            "background layout",
+            &[frame_set_layout.raw()],
+            0,
+            vk::ShaderStageFlags::FRAGMENT,
+        )?;
         Ok(Self {
             device: Arc::clone(device),
+            background_layout,
+            background: OnceLock::new(),
             frame_set_layout,
             merge_set_layout,
             scatter_set_layout,
@@ -206,6 +225,39 @@ impl Pipelines {
             &self.hierarchy_layout,
             &shaders::TRANSFORMS_COMP,
         )
+    }
+
+    /// The background: a full-screen triangle under what the picture leaves uncovered (its
+    /// alpha is its coverage), with its layout.
+    pub fn background(&self) -> RenderResult<(vk::Pipeline, vk::PipelineLayout)> {
+        let layout = self.background_layout.raw();
+        if let Some(pipeline) = self.background.get() {
+            return Ok((pipeline.raw(), layout));
+        }
+        let vertex = module(&self.device, &shaders::MERGE_VERT)?;
+        let fragment = module(&self.device, &shaders::BACKGROUND_FRAG)?;
+        let colors = [ColorTarget {
+            format: COLOR_FORMAT,
+            writes: true,
+            blend: Some(Blend::UNDER),
+        }];
+        let made = Pipeline::graphics(
+            &self.device,
+            &GraphicsPipelineDesc {
+                layout: &self.background_layout,
+                vertex: &vertex,
+                fragment: &fragment,
+                vertex_layout: None,
+                topology: vk::PrimitiveTopology::TRIANGLE_LIST,
+                depth_bias: false,
+                triangle_outlines: false,
+                colors: &colors,
+                depth: DepthUse::None,
+                vertex_constants: &[],
+                name: "background",
+            },
+        )?;
+        Ok((self.background.get_or_init(|| made).raw(), layout))
     }
 
     /// The compute pipeline in `slot`, made from `shader` on first use.

@@ -362,6 +362,17 @@ impl Blend {
         dst_alpha: vk::BlendFactor::ONE_MINUS_SRC_ALPHA,
         alpha_op: vk::BlendOp::ADD,
     };
+
+    /// Opaque colour under what is there, whose alpha is its coverage:
+    /// `src × (1 − dst.a) + dst`, ending opaque.
+    pub const UNDER: Blend = Blend {
+        src_color: vk::BlendFactor::ONE_MINUS_DST_ALPHA,
+        dst_color: vk::BlendFactor::ONE,
+        color_op: vk::BlendOp::ADD,
+        src_alpha: vk::BlendFactor::ONE_MINUS_DST_ALPHA,
+        dst_alpha: vk::BlendFactor::ONE,
+        alpha_op: vk::BlendOp::ADD,
+    };
 }
 
 /// One colour attachment of a pipeline.

@@ -7,10 +7,7 @@ use crate::error::RenderResult;
 use crate::vk::raw as vk;
 
 use crate::shaders::{self, ShaderSource};
-use crate::vk::{
-    Blend, ColorTarget, DepthUse, DescriptorSetLayout, Device, GraphicsPipelineDesc, Pipeline,
-    PipelineLayout, ShaderModule, COLOR_FORMAT,
-};
+use crate::vk::{Blend, DescriptorSetLayout, Device, Pipeline, PipelineLayout, ShaderModule};
 
 /// Format of the pick target: one instance id (+1) per pixel.
 pub const PICK_FORMAT: vk::Format = vk::Format::R32_UINT;
@@ -236,26 +233,12 @@ impl Pipelines {
         }
         let vertex = module(&self.device, &shaders::MERGE_VERT)?;
         let fragment = module(&self.device, &shaders::BACKGROUND_FRAG)?;
-        let colors = [ColorTarget {
-            format: COLOR_FORMAT,
-            writes: true,
-            blend: Some(Blend::UNDER),
-        }];
-        let made = Pipeline::graphics(
+        let made = Pipeline::fullscreen(
             &self.device,
-            &GraphicsPipelineDesc {
-                layout: &self.background_layout,
-                vertex: &vertex,
-                fragment: &fragment,
-                vertex_layout: None,
-                topology: vk::PrimitiveTopology::TRIANGLE_LIST,
-                depth_bias: false,
-                triangle_outlines: false,
-                colors: &colors,
-                depth: DepthUse::None,
-                vertex_constants: &[],
-                name: "background",
-            },
+            &self.background_layout,
+            (&vertex, &fragment),
+            Blend::UNDER,
+            "background",
         )?;
         Ok((self.background.get_or_init(|| made).raw(), layout))
     }

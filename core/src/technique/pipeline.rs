@@ -574,26 +574,12 @@ impl TechniquePipelines {
             &shaders.merge,
             ShaderStage::Fragment,
         )?;
-        let colors = [ColorTarget {
-            format: COLOR_FORMAT,
-            writes: true,
-            blend: Some(Blend::PREMULTIPLIED_OVER),
-        }];
-        self.merge = Some(Pipeline::graphics(
+        self.merge = Some(Pipeline::fullscreen(
             &self.device,
-            &GraphicsPipelineDesc {
-                layout: &layout,
-                vertex: &vertex,
-                fragment: &fragment,
-                vertex_layout: None,
-                topology: vk::PrimitiveTopology::TRIANGLE_LIST,
-                depth_bias: false,
-                triangle_outlines: false,
-                colors: &colors,
-                depth: DepthUse::None,
-                vertex_constants: &[],
-                name: "transparency merge",
-            },
+            &layout,
+            (&vertex, &fragment),
+            Blend::PREMULTIPLIED_OVER,
+            "transparency merge",
         )?);
         self.merge_layout = Some(layout);
         Ok(())

@@ -126,6 +126,39 @@ pub struct Pipeline {
 }
 
 impl Pipeline {
+    /// A full-screen pass over the picture (no vertex input, no depth): `vertex` draws one
+    /// triangle covering the target, `fragment` writes the picture's colour format blended
+    /// by `blend`.
+    pub fn fullscreen(
+        device: &Arc<Device>,
+        layout: &PipelineLayout,
+        (vertex, fragment): (&ShaderModule, &ShaderModule),
+        blend: Blend,
+        name: &str,
+    ) -> VkResult<Self> {
+        let colors = [ColorTarget {
+            format: super::COLOR_FORMAT,
+            writes: true,
+            blend: Some(blend),
+        }];
+        Self::graphics(
+            device,
+            &GraphicsPipelineDesc {
+                layout,
+                vertex,
+                fragment,
+                vertex_layout: None,
+                topology: vk::PrimitiveTopology::TRIANGLE_LIST,
+                depth_bias: false,
+                triangle_outlines: false,
+                colors: &colors,
+                depth: DepthUse::None,
+                vertex_constants: &[],
+                name,
+            },
+        )
+    }
+
     /// A graphics pipeline as [`GraphicsPipelineDesc`] describes it.
     pub fn graphics(device: &Arc<Device>, desc: &GraphicsPipelineDesc<'_>) -> VkResult<Self> {
         // Vertex shader constant i (constant_id = i) is `vertex_constants[i]`.

@@ -230,23 +230,7 @@ pub fn end_rendering(
 ) {
     // SAFETY: rendering was begun by begin_rendering on this command buffer.
     unsafe { device.raw().cmd_end_rendering(command_buffer) };
-    transition(
-        device,
-        command_buffer,
-        target.color.raw(),
-        vk::ImageAspectFlags::COLOR,
-        (
-            vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL,
-            vk::PipelineStageFlags2::COLOR_ATTACHMENT_OUTPUT,
-            vk::AccessFlags2::COLOR_ATTACHMENT_WRITE,
-        ),
-        // Read back by a copy, or blitted into a window's image by a later submission.
-        (
-            vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
-            vk::PipelineStageFlags2::COPY | vk::PipelineStageFlags2::BLIT,
-            vk::AccessFlags2::TRANSFER_READ,
-        ),
-    );
+    color_ready_to_copy(device, command_buffer, target.color);
     for (image, _) in target.extra_colors {
         transition(
             device,
@@ -328,6 +312,12 @@ pub fn begin_overlay(device: &Device, command_buffer: vk::CommandBuffer, color: 
 pub fn end_overlay(device: &Device, command_buffer: vk::CommandBuffer, color: &Image) {
     // SAFETY: rendering was begun by begin_overlay on this command buffer.
     unsafe { device.raw().cmd_end_rendering(command_buffer) };
+    color_ready_to_copy(device, command_buffer, color);
+}
+
+/// Moves a colour attachment that was just drawn into `TRANSFER_SRC_OPTIMAL`: read back by a
+/// copy, or blitted into a window's image by a later submission.
+fn color_ready_to_copy(device: &Device, command_buffer: vk::CommandBuffer, color: &Image) {
     transition(
         device,
         command_buffer,

@@ -499,6 +499,31 @@ enum CadrResult cadr_render_scene_to_png(const char *scene,
                                          uint32_t height,
                                          bool validation);
 
+// Sets the samples per pixel of the renderer's colour pass: 1 (the default) draws one, 2, 4
+// or 8 smooth the edges of triangles and lines (MSAA), resolved into the picture at the end of
+// the pass, for offscreen and window renderers alike. Picking is unchanged: the pick pass
+// always draws one sample per pixel. The next frame draws with it; the renderer's targets and
+// pipelines are remade for the new count.
+//
+// Returns `CADR_RESULT_OK`, `CADR_RESULT_INVALID_ARGUMENT` (a count the device does not offer:
+// the message lists those it does; `cadr_renderer_msaa` gives them as a mask),
+// `CADR_RESULT_PLUGIN_FAILED` at the next frame when the active submission records secondary
+// command buffers and was built before plugin ABI 1.8, `CADR_RESULT_VULKAN` or a handle error.
+// Ownership: nothing changes hands. Thread-safety: as `cadr_renderer_create`.
+enum CadrResult cadr_renderer_set_msaa(CadrRenderer renderer, uint32_t samples);
+
+// Writes the samples per pixel the colour pass draws (`*samples`: 1 without MSAA) and the
+// counts this renderer's device offers (`*offered`: a mask with bit value N set for each
+// offered count N, as `VkSampleCountFlags`: 1 always, 0x5 for 1 and 4). Either output may be
+// NULL.
+//
+// Returns `CADR_RESULT_OK` or a handle error. Ownership: the outputs are the caller's; cadr
+// keeps no pointer to them. Thread-safety: as `cadr_renderer_create`.
+//
+// # Safety
+// `samples` and `offered` are each null or writable.
+enum CadrResult cadr_renderer_msaa(CadrRenderer renderer, uint32_t *samples, uint32_t *offered);
+
 // Sets the background: `top_rgb` at the picture's top row blending to `bottom_rgb` at its
 // bottom row, three floats each, as display values in 0..1 (what a PNG stores; the default
 // is a light grey-blue gradient). Pass the same colour twice for a flat background. The

@@ -11,7 +11,7 @@
 #define CADR_PLUGIN_ABI_MAJOR 1
 
 // Minor version of this ABI: additions that older readers may ignore.
-#define CADR_PLUGIN_ABI_MINOR 7
+#define CADR_PLUGIN_ABI_MINOR 8
 
 // `(major << 16) | minor`, what [`CadrPluginVersionFn`] returns.
 #define CADR_PLUGIN_ABI_VERSION ((CADR_PLUGIN_ABI_MAJOR << 16) | CADR_PLUGIN_ABI_MINOR)
@@ -558,6 +558,12 @@ typedef struct CadrRecordContext {
   uint32_t extra_color_count;
   // Since ABI 1.7: the `VkFormat`s of those attachments (`extra_color_count` of them).
   int32_t extra_color_formats[2];
+  // Since ABI 1.8 (read it only when `size` covers it; absent means 1): the samples per
+  // pixel of every attachment of the rendering, a `VkSampleCountFlagBits` (1 without MSAA;
+  // the pick pass always has 1). Secondary command buffers inherit it as their
+  // `rasterizationSamples`. The host draws with MSAA through a submission of
+  // [`CADR_TRAIT_SECONDARY_COMMAND_BUFFERS`] only when its library is of ABI 1.8 or later.
+  uint32_t rasterization_samples;
 } CadrRecordContext;
 
 // Submission vtable ([`CADR_KIND_SUBMISSION`]).

@@ -14,6 +14,7 @@
 //! - Every function's documentation states who owns what and from which threads it may be
 //!   called.
 
+mod antialiasing;
 mod args;
 mod background;
 mod bounds;

@@ -303,6 +303,10 @@ pub struct RenderArgs {
     #[arg(long, value_name = "gradient|flat|#RRGGBB[,#RRGGBB]", value_parser = parse_background,
           default_value = "gradient")]
     pub background: Background,
+    /// Anti-alias with N samples per pixel (MSAA: 1, the default, is off; 2, 4 or 8 where the
+    /// device offers them: cadr devices lists them).
+    #[arg(long, value_name = "N", default_value_t = 1, value_parser = parse_msaa)]
+    pub msaa: u32,
     #[command(flatten)]
     pub validation: ValidationArgs,
 }
@@ -468,6 +472,11 @@ pub struct BenchArgs {
     /// Record every frame instead of replaying unchanged ones.
     #[arg(long)]
     pub no_replay: bool,
+    /// MSAA levels to measure, samples per pixel (comma-separated: 1,4 measures each row
+    /// without and with 4x; default 1).
+    #[arg(long, value_name = "N,N", value_delimiter = ',', default_value = "1",
+          value_parser = parse_msaa)]
+    pub msaa: Vec<u32>,
     #[command(flatten)]
     pub validation: ValidationArgs,
 }
@@ -612,6 +621,15 @@ fn parse_background(text: &str) -> Result<Background, String> {
 }
 
 /// Parses a sub-pixel threshold: a number of pixels, 0 or more.
+/// Parses an MSAA level: a sample count Vulkan can name (1, 2, 4, … 64); whether the device
+/// offers it is checked once it is open.
+fn parse_msaa(text: &str) -> Result<u32, String> {
+    text.parse::<u32>()
+        .ok()
+        .filter(|samples| samples.is_power_of_two() && *samples <= 64)
+        .ok_or_else(|| "expected samples per pixel: 1, 2, 4 or 8".to_owned())
+}
+
 fn parse_min_pixels(text: &str) -> Result<f32, String> {
     text.parse::<f32>()
         .ok()
@@ -644,6 +662,16 @@ mod tests {
         assert!(parse_min_pixels("-1").is_err());
         assert!(parse_min_pixels("NaN").is_err());
         assert_eq!(parse_min_pixels("2.5"), Ok(2.5));
+    }
+
+    #[test]
+    fn msaa_levels_are_sample_counts() {
+        assert_eq!(parse_msaa("1"), Ok(1));
+        assert_eq!(parse_msaa("8"), Ok(8));
+        for bad in ["0", "3", "128", "four", "-4"] {
+            let error = parse_msaa(bad).expect_err(bad);
+            assert!(error.contains("samples per pixel"), "{bad}: {error}");
+        }
     }
 
     #[test]

@@ -40,6 +40,8 @@ const SWEEP_SET: [(&str, &str, &str); 7] = [
 struct Row {
     label: String,
     shade: &'static str,
+    /// Samples per pixel of the colour pass (1: no MSAA).
+    msaa: u32,
     cpu_us: f64,
     gpu_us: Option<f64>,
     /// Moving nodes and bringing the tree and GPU scene up to date.
@@ -107,6 +109,7 @@ impl Row {
         Self {
             label,
             shade,
+            msaa: 1,
             transforms: match transforms {
                 Transforms::Gpu => "gpu",
                 Transforms::Host => "host",
@@ -261,7 +264,7 @@ impl Bench {
         };
         let modes = args.shade.modes();
         let mut steps = Steps::new(
-            1 + (modes.len() * combinations.len()) as u64,
+            1 + (args.msaa.len() * modes.len() * combinations.len()) as u64,
             &format!("bench {scene_name}"),
         );
         let show = |steps: &Steps, line: String| {
@@ -284,33 +287,49 @@ impl Bench {
         show(&steps, row_line(&baseline, baseline.cpu_us));
         steps.done();
         rows.push(baseline);
-        for mode in modes {
-            for combination in &combinations {
-                steps.start(&format!("{combination} [{}]", mode.name()));
-                session.choose(combination, mode)?;
-                session
-                    .techniques()
-                    .set_min_pixels(self.min_pixels)
-                    .map_err(|e| e.to_string())?;
-                let measured = measure(self.frames, |frame| {
-                    session.render_moving(&motion, view, frame)
-                })?;
-                let transforms = session.techniques().transforms();
-                let row = Row::new(combination.to_string(), mode.name(), transforms, measured);
-                show(&steps, row_line(&row, rows[0].cpu_us));
-                steps.done();
-                rows.push(row);
+        for &samples in &args.msaa {
+            session.set_msaa(samples)?;
+            for &mode in &modes {
+                for combination in &combinations {
+                    steps.start(&format!("{combination} [{}, {samples}x]", mode.name()));
+                    session.choose(combination, mode)?;
+                    session
+                        .techniques()
+                        .set_min_pixels(self.min_pixels)
+                        .map_err(|e| e.to_string())?;
+                    let measured = measure(self.frames, |frame| {
+                        session.render_moving(&motion, view, frame)
+                    })?;
+                    let transforms = session.techniques().transforms();
+                    let row = Row {
+                        msaa: samples,
+                        ..Row::new(combination.to_string(), mode.name(), transforms, measured)
+                    };
+                    show(&steps, row_line(&row, rows[0].cpu_us));
+                    steps.done();
+                    rows.push(row);
+                }
             }
         }
         Ok((stats, rows))
     }
 }
 
+/// The display mode of a row, with its MSAA level when it has one ("edges, 4x").
+fn row_mode(row: &Row) -> String {
+    if row.msaa > 1 {
+        format!("{}, {}x", row.shade, row.msaa)
+    } else {
+        row.shade.to_owned()
+    }
+}
+
 fn header_line() -> String {
     format!(
-        "{:<58} {:>11} {:>7} {:>10} {:>10} {:>9} {:>9} {:>8} {:>8} {:>6} {:>7} {:>7} {:>10} {:>9}",
+        "{:<58} {:>11} {:>4} {:>7} {:>10} {:>10} {:>9} {:>9} {:>8} {:>8} {:>6} {:>7} {:>7} {:>10} {:>9}",
         "technique (vertex / params / submit / cull)",
         "shade",
+        "AA",
         "replay",
         "CPU µs",
         "GPU µs",
@@ -330,9 +349,10 @@ fn row_line(row: &Row, baseline_cpu: f64) -> String {
     let gpu = row.gpu_us.map_or("n/a".to_owned(), |g| format!("{g:.0}"));
     let s = &row.stats;
     format!(
-        "{:<58} {:>11} {:>7} {:>10.1} {:>10} {:>9.1} {:>9} {:>8} {:>8} {:>6} {:>7} {:>7} {:>10} {:>8.1}x",
+        "{:<58} {:>11} {:>4} {:>7} {:>10.1} {:>10} {:>9.1} {:>9} {:>8} {:>8} {:>6} {:>7} {:>7} {:>10} {:>8.1}x",
         row.label,
         row.shade,
+        format!("{}x", row.msaa),
         format!("{}/{}", row.replayed.0, row.replayed.1),
         row.cpu_us,
         gpu,
@@ -353,6 +373,7 @@ fn row_json(row: &Row, baseline_cpu: f64) -> serde_json::Value {
     serde_json::json!({
         "technique": row.label,
         "shade": row.shade,
+        "msaa": row.msaa,
         "cpu_us": row.cpu_us,
         "gpu_us": row.gpu_us,
         "scene_update_us": row.scene_update_us,
@@ -398,6 +419,13 @@ pub fn bench(args: &BenchArgs) -> Result<(), String> {
         .map_or(if sweep { 5 } else { 10 }, |n| n as usize);
     let size = args.size;
     let device = crate::open_device(&args.validation)?;
+    let offered = device.sample_counts();
+    if let Some(samples) = args.msaa.iter().find(|s| !offered.contains(s)) {
+        return Err(format!(
+            "--msaa {samples}: {} offers {offered:?} samples per pixel",
+            device.adapter().name
+        ));
+    }
     let (registry, _) = load_registry(&device);
     let bench = Bench {
         device: Arc::clone(&device),
@@ -435,7 +463,7 @@ pub fn bench(args: &BenchArgs) -> Result<(), String> {
         if let Some(path) = &args.plot {
             let bars: Vec<(String, f64)> = rows
                 .iter()
-                .map(|row| (format!("{} [{}]", row.label, row.shade), row.cpu_us))
+                .map(|row| (format!("{} [{}]", row.label, row_mode(row)), row.cpu_us))
                 .collect();
             let title = format!(
                 "{name}: {} parts, camera {}, {} — CPU µs per frame",
@@ -507,7 +535,7 @@ fn run_sweep(bench: &Bench, args: &BenchArgs) -> Result<serde_json::Value, Strin
     }
     println!(" {:>10}", "last/first");
     for (i, row) in first_rows.iter().enumerate() {
-        print!("{:<58}", format!("{} [{}]", row.label, row.shade));
+        print!("{:<58}", format!("{} [{}]", row.label, row_mode(row)));
         for (_, _, rows) in &columns {
             print!(" {:>12.1}", rows[i].cpu_us);
         }
@@ -522,7 +550,7 @@ fn run_sweep(bench: &Bench, args: &BenchArgs) -> Result<serde_json::Value, Strin
             .iter()
             .enumerate()
             .map(|(i, row)| crate::plot::Series {
-                label: format!("{} [{}]", row.label, row.shade),
+                label: format!("{} [{}]", row.label, row_mode(row)),
                 points: columns
                     .iter()
                     .map(|(n, _, rows)| (*n, rows[i].cpu_us))

@@ -118,13 +118,24 @@ fn devices() -> Result<(), String> {
     let instance = cvk::Instance::new(&InstanceOptions::default()).map_err(|e| e.to_string())?;
     let adapters = cvk::enumerate_adapters(&instance).map_err(|e| e.to_string())?;
     for adapter in adapters {
+        let msaa: Vec<String> = adapter
+            .sample_counts
+            .iter()
+            .filter(|&&count| count > 1)
+            .map(|count| format!("{count}x"))
+            .collect();
         println!(
-            "{}: {} ({:?}, Vulkan {}.{})",
+            "{}: {} ({:?}, Vulkan {}.{}, MSAA {})",
             adapter.index,
             adapter.name,
             adapter.device_type,
             cvk::raw::api_version_major(adapter.api_version),
-            cvk::raw::api_version_minor(adapter.api_version)
+            cvk::raw::api_version_minor(adapter.api_version),
+            if msaa.is_empty() {
+                "none".to_owned()
+            } else {
+                msaa.join(" ")
+            }
         );
     }
     Ok(())
@@ -172,6 +183,7 @@ fn render(args: &RenderArgs, process_start: Instant) -> Result<(), String> {
     let section_line = args::describe_section(&section);
     session.set_section(section);
     session.set_background(args.background)?;
+    session.set_msaa(args.msaa)?;
     // The baseline records every frame, as the seeds' does.
     session
         .techniques()
@@ -182,6 +194,9 @@ fn render(args: &RenderArgs, process_start: Instant) -> Result<(), String> {
     }
     if let Some(section) = section_line {
         technique_line += &format!(", {section}");
+    }
+    if args.msaa > 1 {
+        technique_line += &format!(", MSAA {}x", args.msaa);
     }
     let camera = Camera::fit(
         &stats.bounds,

@@ -122,6 +122,15 @@ impl TechniqueSession {
             .map_err(|e| format!("--background: {e}"))
     }
 
+    /// Sets the samples per pixel of the colour pass (`--msaa`); a count the device does not
+    /// offer is refused with those it does.
+    pub fn set_msaa(&mut self, samples: u32) -> Result<(), String> {
+        self.view
+            .renderer_mut()
+            .set_msaa(samples)
+            .map_err(|e| format!("--msaa: {e}"))
+    }
+
     /// Sets the sub-pixel threshold (`--min-pixels`) of the chosen culler; refused with a
     /// culler that would ignore it (CPU cullers keep every part in the frustum).
     pub fn set_min_pixels(&mut self, min_pixels: f32) -> Result<(), String> {

@@ -36,7 +36,7 @@ pub(crate) use crate::vk::SUSPENDED_DEPTH_LAYOUT;
 use crate::vk::{
     begin_overlay, begin_rendering, end_overlay, end_rendering, memory_barrier, record_fullscreen,
     suspend_rendering, Buffer, CommandContext, DescriptorSets, Device, GpuTimer, Image,
-    MemoryLocation, OffscreenTarget, RenderingTarget,
+    MemoryLocation, Multisampled, OffscreenTarget, RenderingTarget,
 };
 use pick::{PickTarget, PixelRect};
 use transparency::{storage_buffer, TransparencyTargets};
@@ -135,7 +135,7 @@ pub(crate) struct FrameRecorders<'r, 'a> {
 impl Renderer {
     /// Creates a renderer with a `width` × `height` target.
     pub fn new(device: &Arc<Device>, width: u32, height: u32) -> RenderResult<Self> {
-        let target = OffscreenTarget::new(device, width, height)?;
+        let target = OffscreenTarget::new(device, width, height, 1)?;
         let frame_uniforms = Buffer::new(
             device,
             "frame uniforms",
@@ -244,7 +244,41 @@ impl Renderer {
         // The recorded frame draws into the old target: never submit it again.
         self.replayable = None;
         self.last_recorded = None;
-        self.target = OffscreenTarget::new(&self.device, width, height)?;
+        self.target = OffscreenTarget::new(&self.device, width, height, self.msaa())?;
+        self.pick = None;
+        self.drop_transparency_targets();
+        Ok(())
+    }
+
+    /// Samples per pixel of the colour pass: 1 (the default) draws one, 2, 4 or 8 anti-alias
+    /// edges (MSAA), resolved into the picture at the end of the pass. The pick pass always
+    /// draws one sample, so picking stays exact.
+    pub fn msaa(&self) -> u32 {
+        self.target.samples()
+    }
+
+    /// Sets the samples per pixel of the colour pass (see [`Renderer::msaa`]); the next frame
+    /// draws with them. A count the device does not offer for colour and depth attachments
+    /// ([`Device::sample_counts`]) is refused with the counts it offers.
+    pub fn set_msaa(&mut self, samples: u32) -> RenderResult<()> {
+        if samples == self.msaa() {
+            return Ok(());
+        }
+        let offered = self.device.sample_counts();
+        if !offered.contains(&samples) {
+            let offered: Vec<String> = offered.iter().map(u32::to_string).collect();
+            return Err(RenderError::InvalidUse(format!(
+                "MSAA {samples}x: {} offers {} samples per pixel",
+                self.device.adapter().name,
+                offered.join(", ")
+            )));
+        }
+        self.commands.wait()?;
+        // The recorded frame draws into the old target: never submit it again.
+        self.replayable = None;
+        self.last_recorded = None;
+        let (width, height) = self.size();
+        self.target = OffscreenTarget::new(&self.device, width, height, samples)?;
         self.pick = None;
         self.drop_transparency_targets();
         Ok(())
@@ -398,10 +432,18 @@ impl Renderer {
         let extra_colors: Vec<(&Image, vk::ClearColorValue)> = transparency
             .map(|t| t.images.iter().zip(t.clears.iter().copied()).collect())
             .unwrap_or_default();
+        let multisampled_extra_colors: Vec<&Image> = transparency
+            .map(|t| t.multisampled_images.iter().collect())
+            .unwrap_or_default();
         for phase in 0..phases {
+            let target = self.pass_target(plan.pass, (plan.secondary, phase > 0, phases > 1));
             let target = RenderingTarget {
                 extra_colors: &extra_colors,
-                ..self.pass_target(plan.pass, (plan.secondary, phase > 0, phases > 1))
+                multisampled: target.multisampled.map(|m| Multisampled {
+                    extra_colors: &multisampled_extra_colors,
+                    ..m
+                }),
+                ..target
             };
             if phase > 0 {
                 (recorders.between)(self, command_buffer, phase, &mut stats)?;
@@ -501,10 +543,11 @@ impl Renderer {
     /// waited for the last frame).
     fn ensure_transparency_targets(&mut self, method: &TransparencyMethod) -> RenderResult<()> {
         let extent = self.target.extent();
+        let samples = self.msaa();
         if self
             .transparency
             .as_ref()
-            .is_some_and(|t| t.fit(method, extent))
+            .is_some_and(|t| t.fit(method, extent, samples))
         {
             return Ok(());
         }
@@ -515,7 +558,7 @@ impl Renderer {
         let targets = TransparencyTargets::new(
             &self.device,
             method,
-            extent,
+            (extent, samples),
             self.pipelines.merge_set_layout(),
         )?;
         name_storage(&self.frame_sets, &targets.storage);
@@ -628,7 +671,8 @@ impl Renderer {
     /// `resume`s a suspended pass), and the depth, kept for the pick pass (picking reads the
     /// depth under the cursor) and stored when the frame has several phases. With
     /// `secondary`, the pass's contents come from secondary command buffers, which set their
-    /// own viewport and scissor.
+    /// own viewport and scissor. With MSAA the colour pass draws into the multisampled
+    /// images and resolves them into these; the pick pass never does.
     fn pass_target(
         &self,
         pass: PassTarget,
@@ -645,6 +689,15 @@ impl Renderer {
             secondary,
             resume,
             extra_colors: &[],
+            multisampled: match (pass, &self.target.multisampled) {
+                (PassTarget::Color, Some(images)) => Some(Multisampled {
+                    color: &images.color,
+                    depth: &images.depth,
+                    extra_colors: &[],
+                    depth_resolve: self.device.depth_resolve_mode(),
+                }),
+                _ => None,
+            },
         }
     }
 }

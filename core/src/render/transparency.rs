@@ -17,10 +17,13 @@ pub(crate) const PLACEHOLDER_STORAGE_BYTES: u64 = 16;
 /// The targets, storage and merge set of one transparency method at one size.
 pub(crate) struct TransparencyTargets {
     /// What they were made for: the method's name (a kind's names are unique, and a method
-    /// describes itself once) and the target size.
-    made_for: (String, vk::Extent2D),
-    /// The method's colour targets.
+    /// describes itself once), the target size and its samples per pixel.
+    made_for: (String, vk::Extent2D, u32),
+    /// The method's colour targets (one sample: what the merge reads).
     pub images: Vec<Image>,
+    /// With MSAA, the multisampled targets the translucent pass draws into, resolved into
+    /// `images` at the end of the pass; empty otherwise.
+    pub multisampled_images: Vec<Image>,
     /// Their clear values.
     pub clears: Vec<vk::ClearColorValue>,
     /// The storage buffer (at least [`PLACEHOLDER_STORAGE_BYTES`]).
@@ -32,16 +35,17 @@ pub(crate) struct TransparencyTargets {
 }
 
 impl TransparencyTargets {
-    /// Whether these were made for `method` at `extent`.
-    pub fn fit(&self, method: &TransparencyMethod, extent: vk::Extent2D) -> bool {
-        self.made_for.0 == method.name && self.made_for.1 == extent
+    /// Whether these were made for `method` at `extent` with `samples` per pixel.
+    pub fn fit(&self, method: &TransparencyMethod, extent: vk::Extent2D, samples: u32) -> bool {
+        self.made_for.0 == method.name && self.made_for.1 == extent && self.made_for.2 == samples
     }
 
-    /// Makes the targets, storage and merge set of `method` at `extent`.
+    /// Makes the targets, storage and merge set of `method` at `extent` with `samples` per
+    /// pixel.
     pub fn new(
         device: &Arc<Device>,
         method: &TransparencyMethod,
-        extent: vk::Extent2D,
+        (extent, samples): (vk::Extent2D, u32),
         merge_set_layout: vk::DescriptorSetLayout,
     ) -> RenderResult<Self> {
         let images = method
@@ -59,6 +63,25 @@ impl TransparencyTargets {
                 )
             })
             .collect::<Result<Vec<_>, _>>()?;
+        let multisampled_images = if samples > 1 {
+            method
+                .target_formats()
+                .into_iter()
+                .enumerate()
+                .map(|(i, format)| {
+                    Image::multisampled(
+                        device,
+                        &format!("transparency target {i} (multisampled)"),
+                        (extent, samples),
+                        format,
+                        vk::ImageUsageFlags::COLOR_ATTACHMENT,
+                        vk::ImageAspectFlags::COLOR,
+                    )
+                })
+                .collect::<Result<Vec<_>, _>>()?
+        } else {
+            Vec::new()
+        };
         let clears = method
             .targets
             .iter()
@@ -79,8 +102,9 @@ impl TransparencyTargets {
             merge_set.write_sampled_image(0, binding as u32, image.view());
         }
         Ok(Self {
-            made_for: (method.name.clone(), extent),
+            made_for: (method.name.clone(), extent, samples),
             images,
+            multisampled_images,
             clears,
             storage,
             cleared_bytes,

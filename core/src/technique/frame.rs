@@ -53,6 +53,7 @@ impl Renderer {
             mode,
             translucent: mode == ShadeMode::XRay
                 || (mode.shows_translucency() && scene.has_translucency()),
+            samples: self.msaa(),
         };
         self.draw_techniques(scene, techniques, camera, passes)
     }
@@ -88,6 +89,19 @@ impl Renderer {
         let submission = techniques.get(TechniqueKind::Submission)?;
         let parameters = techniques.get(TechniqueKind::Parameters)?;
         let secondary = submission.entry.provides & abi::CADR_TRAIT_SECONDARY_COMMAND_BUFFERS != 0;
+        if secondary && passes.samples() > 1 && submission.entry.abi_version < (1, 8) {
+            // Its secondary command buffers would inherit one sample per pixel.
+            return Err(RenderError::Technique {
+                technique: format!("submission '{}'", submission.entry.name),
+                message: format!(
+                    "it records secondary command buffers and was built for ABI {}.{}, which \
+                     cannot draw with MSAA ({}x asked; ABI 1.8 or later can)",
+                    submission.entry.abi_version.0,
+                    submission.entry.abi_version.1,
+                    passes.samples()
+                ),
+            });
+        }
         let values_in_commands =
             parameters.entry.provides & abi::CADR_TRAIT_PARAMETERS_IN_COMMANDS != 0;
         let (width, height) = self.size();
@@ -107,6 +121,7 @@ impl Renderer {
         key = mix(key, u64::from(width) << 32 | u64::from(height));
         key = mix(key, color_format.as_raw() as u64);
         key = mix(key, u64::from(extra_color_count));
+        key = mix(key, u64::from(passes.samples()));
         // The pass set (with or without translucent surfaces) changes the pipelines drawn.
         for pass in &pipelines.passes {
             key = mix(key, pass.pipeline);
@@ -160,6 +175,7 @@ impl Renderer {
                 phase,
                 extra_color_count,
                 extra_color_formats,
+                rasterization_samples: passes.samples(),
             })
         };
         // Records a phase of the GPU culler (if any) outside rendering.

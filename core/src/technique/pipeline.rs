@@ -79,9 +79,21 @@ pub enum PassSet {
         mode: ShadeMode,
         /// Whether the frame draws translucent surfaces.
         translucent: bool,
+        /// Samples per pixel (1, or the MSAA level the renderer draws with).
+        samples: u32,
     },
     /// Triangles of pickable instances, their ids into the pick target.
     Pick,
+}
+
+impl PassSet {
+    /// Samples per pixel of the pass's attachments (the pick pass is always exact: one).
+    pub fn samples(self) -> u32 {
+        match self {
+            PassSet::Shaded { samples, .. } => samples,
+            PassSet::Pick => 1,
+        }
+    }
 }
 
 /// Which surfaces a technique pipeline draws (the vertex shader's `CADR_DRAW_ROLE`).
@@ -668,6 +680,7 @@ impl TechniquePipelines {
                     DepthUse::TestAndWrite
                 },
                 vertex_constants: &[role as u32],
+                samples: self.pass_set.samples(),
                 name: if raster.translucent {
                     "translucent technique pipeline"
                 } else {
@@ -728,6 +741,7 @@ mod tests {
         let solid = || PassSet::Shaded {
             mode: ShadeMode::Solid,
             translucent: false,
+            samples: 1,
         };
         prepare(&mut cache, solid()).expect("solid");
         assert_eq!(cache.fragments.len(), 1, "solid needs one fragment shader");
@@ -736,10 +750,15 @@ mod tests {
             PassSet::Shaded {
                 mode: ShadeMode::Edges,
                 translucent: false,
+                samples: 4,
             },
         )
         .expect("edges");
-        assert_eq!(cache.fragments.len(), 2);
+        assert_eq!(
+            cache.fragments.len(),
+            2,
+            "the sample count changes pipelines, not shaders"
+        );
         prepare(&mut cache, PassSet::Pick).expect("pick");
         assert_eq!(cache.fragments.len(), 3);
         prepare(&mut cache, solid()).expect("again");

@@ -23,6 +23,9 @@ pub struct Adapter {
     pub queue_family: u32,
     /// The supported Vulkan version.
     pub api_version: u32,
+    /// The samples per pixel a colour pass can have: 1 always, and the MSAA levels (2, 4, 8,
+    /// …) the device offers for colour and depth attachments alike; smallest first.
+    pub sample_counts: Vec<u32>,
 }
 
 /// How a device is chosen.
@@ -100,9 +103,19 @@ pub fn enumerate(instance: &Instance) -> VkResult<Vec<Adapter>> {
             device_type: properties.device_type,
             queue_family: queue_family as u32,
             api_version: properties.api_version,
+            sample_counts: sample_counts(&properties.limits),
         });
     }
     Ok(adapters)
+}
+
+/// The sample counts of a colour pass with a depth attachment under `limits`.
+fn sample_counts(limits: &vk::PhysicalDeviceLimits) -> Vec<u32> {
+    let offered = limits.framebuffer_color_sample_counts & limits.framebuffer_depth_sample_counts;
+    (0..7)
+        .map(|bit| 1u32 << bit)
+        .filter(|&count| count == 1 || offered.contains(vk::SampleCountFlags::from_raw(count)))
+        .collect()
 }
 
 /// Picks a device according to `choice`.

@@ -83,6 +83,10 @@ pub struct Device {
     debug_utils: Option<ash::ext::debug_utils::Device>,
     capabilities: Capabilities,
     limits: vk::PhysicalDeviceLimits,
+    /// How a multisampled depth is resolved into the one-sample depth that GPU cullers read
+    /// between phases: the farthest sample where the device offers it (conservative for
+    /// occlusion), else sample 0 (every Vulkan 1.2 device offers it).
+    depth_resolve_mode: vk::ResolveModeFlags,
     queue_timestamp_bits: u32,
     /// Every pipeline is created through it; kept on disk between runs.
     pipeline_cache: PersistentPipelineCache,
@@ -128,6 +132,23 @@ impl Device {
                 .get_physical_device_features2(physical, &mut supported)
         };
         let core = supported.features;
+        let mut depth_resolve = vk::PhysicalDeviceDepthStencilResolveProperties::default();
+        let mut properties2 =
+            vk::PhysicalDeviceProperties2::default().push_next(&mut depth_resolve);
+        // SAFETY: physical comes from this instance; the chain lives on this stack frame.
+        unsafe {
+            instance
+                .raw
+                .get_physical_device_properties2(physical, &mut properties2)
+        };
+        let depth_resolve_mode = if depth_resolve
+            .supported_depth_resolve_modes
+            .contains(vk::ResolveModeFlags::MAX)
+        {
+            vk::ResolveModeFlags::MAX
+        } else {
+            vk::ResolveModeFlags::SAMPLE_ZERO
+        };
         let (dynamic_rendering, synchronization2) = (
             supported13.dynamic_rendering == vk::TRUE,
             supported13.synchronization2 == vk::TRUE,
@@ -293,6 +314,7 @@ impl Device {
             debug_utils,
             capabilities,
             limits: properties.limits,
+            depth_resolve_mode,
             queue_timestamp_bits,
             pipeline_cache,
         });
@@ -318,6 +340,17 @@ impl Device {
     /// Optional features that are enabled.
     pub fn capabilities(&self) -> Capabilities {
         self.capabilities
+    }
+
+    /// The sample counts a colour pass can have here (1 always; the MSAA levels 2, 4, 8, …
+    /// the device offers for colour and depth attachments alike), smallest first.
+    pub fn sample_counts(&self) -> Vec<u32> {
+        self.adapter.sample_counts.clone()
+    }
+
+    /// How a multisampled depth attachment is resolved (see the field).
+    pub fn depth_resolve_mode(&self) -> vk::ResolveModeFlags {
+        self.depth_resolve_mode
     }
 
     /// The device limits.

@@ -20,6 +20,7 @@ pub struct Image {
     allocation: Option<Allocation>,
     format: vk::Format,
     extent: vk::Extent2D,
+    samples: u32,
 }
 
 impl Image {
@@ -28,6 +29,20 @@ impl Image {
         device: &Arc<Device>,
         name: &str,
         extent: vk::Extent2D,
+        format: vk::Format,
+        usage: vk::ImageUsageFlags,
+        aspect: vk::ImageAspectFlags,
+    ) -> VkResult<Self> {
+        Self::multisampled(device, name, (extent, 1), format, usage, aspect)
+    }
+
+    /// Creates a device-local 2D image of `samples` samples per pixel (1, or a count from
+    /// [`Device::sample_counts`]: an attachment that is resolved into a one-sample image),
+    /// with one mip level and a view of it.
+    pub fn multisampled(
+        device: &Arc<Device>,
+        name: &str,
+        (extent, samples): (vk::Extent2D, u32),
         format: vk::Format,
         usage: vk::ImageUsageFlags,
         aspect: vk::ImageAspectFlags,
@@ -42,7 +57,7 @@ impl Image {
             })
             .mip_levels(1)
             .array_layers(1)
-            .samples(vk::SampleCountFlags::TYPE_1)
+            .samples(vk::SampleCountFlags::from_raw(samples))
             .tiling(vk::ImageTiling::OPTIMAL)
             .usage(usage)
             .sharing_mode(vk::SharingMode::EXCLUSIVE)
@@ -57,6 +72,7 @@ impl Image {
             allocation: None,
             format,
             extent,
+            samples,
         };
         // SAFETY: raw is a live image of this device.
         let requirements = unsafe { device.raw.get_image_memory_requirements(raw) };
@@ -189,6 +205,11 @@ impl Image {
     /// Width and height.
     pub fn extent(&self) -> vk::Extent2D {
         self.extent
+    }
+
+    /// Samples per pixel (1 for an image that is not multisampled).
+    pub fn samples(&self) -> u32 {
+        self.samples
     }
 }
 
@@ -325,20 +346,40 @@ pub const DEPTH_FORMAT: vk::Format = vk::Format::D32_SFLOAT;
 
 /// An offscreen color + depth target that can be read back.
 pub struct OffscreenTarget {
-    /// The color attachment (left in TRANSFER_SRC_OPTIMAL after a frame).
+    /// The color attachment (left in TRANSFER_SRC_OPTIMAL after a frame): the picture, into
+    /// which a multisampled colour pass resolves.
     pub color: Image,
-    /// The depth attachment.
+    /// The depth attachment: the pick pass's, and what a multisampled colour pass resolves
+    /// its depth into for GPU cullers to read between phases.
+    pub depth: Image,
+    /// With MSAA, what the colour pass draws into before it is resolved.
+    pub multisampled: Option<MultisampledTarget>,
+}
+
+/// The multisampled colour and depth attachments of an MSAA colour pass.
+pub struct MultisampledTarget {
+    /// Resolved (averaged) into [`OffscreenTarget::color`].
+    pub color: Image,
+    /// Resolved into [`OffscreenTarget::depth`] with [`Device::depth_resolve_mode`].
     pub depth: Image,
 }
 
 impl OffscreenTarget {
-    /// Creates a target of `width` × `height` pixels.
-    pub fn new(device: &Arc<Device>, width: u32, height: u32) -> VkResult<Self> {
+    /// Creates a target of `width` × `height` pixels whose colour pass draws `samples` samples
+    /// per pixel (1: no multisampling; others must be in [`Device::sample_counts`]).
+    pub fn new(device: &Arc<Device>, width: u32, height: u32, samples: u32) -> VkResult<Self> {
         let limit = device.limits().max_image_dimension2_d;
         if width == 0 || height == 0 || width > limit || height > limit {
             return Err(VkError::Unsupported {
                 device: device.adapter().name.clone(),
                 reason: format!("a {width}x{height} target (each side must be 1 to {limit})"),
+            });
+        }
+        let offered = device.sample_counts();
+        if !offered.contains(&samples) {
+            return Err(VkError::Unsupported {
+                device: device.adapter().name.clone(),
+                reason: format!("{samples} samples per pixel (this device offers {offered:?})"),
             });
         }
         let extent = vk::Extent2D { width, height };
@@ -362,7 +403,38 @@ impl OffscreenTarget {
                 | vk::ImageUsageFlags::SAMPLED,
             vk::ImageAspectFlags::DEPTH,
         )?;
-        Ok(Self { color, depth })
+        let multisampled = if samples > 1 {
+            Some(MultisampledTarget {
+                color: Image::multisampled(
+                    device,
+                    "offscreen color (multisampled)",
+                    (extent, samples),
+                    COLOR_FORMAT,
+                    vk::ImageUsageFlags::COLOR_ATTACHMENT,
+                    vk::ImageAspectFlags::COLOR,
+                )?,
+                depth: Image::multisampled(
+                    device,
+                    "offscreen depth (multisampled)",
+                    (extent, samples),
+                    DEPTH_FORMAT,
+                    vk::ImageUsageFlags::DEPTH_STENCIL_ATTACHMENT,
+                    vk::ImageAspectFlags::DEPTH,
+                )?,
+            })
+        } else {
+            None
+        };
+        Ok(Self {
+            color,
+            depth,
+            multisampled,
+        })
+    }
+
+    /// Samples per pixel of the colour pass.
+    pub fn samples(&self) -> u32 {
+        self.multisampled.as_ref().map_or(1, |m| m.color.samples())
     }
 
     /// Width and height in pixels.

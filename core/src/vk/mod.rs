@@ -30,7 +30,7 @@ pub use device::{Capabilities, Device, DeviceOptions, RawHandles};
 pub use error::{map_result, VkError, VkResult, VkResultExt};
 pub use image::{
     memory_barrier, read_rgba8, record_image_copy, subresource_range, transition, Image,
-    OffscreenTarget, COLOR_FORMAT, DEPTH_FORMAT,
+    MultisampledTarget, OffscreenTarget, COLOR_FORMAT, DEPTH_FORMAT,
 };
 pub use instance::{Instance, InstanceOptions, ValidationLog, ValidationMessage};
 pub use pipeline::{
@@ -38,8 +38,8 @@ pub use pipeline::{
     Pipeline, PipelineLayout, VertexLayout,
 };
 pub use rendering::{
-    begin_overlay, begin_rendering, end_overlay, end_rendering, suspend_rendering, RenderingTarget,
-    SUSPENDED_DEPTH_LAYOUT,
+    begin_overlay, begin_rendering, end_overlay, end_rendering, suspend_rendering, Multisampled,
+    RenderingTarget, SUSPENDED_DEPTH_LAYOUT,
 };
 pub use shader::{create_unowned_shader_module, ShaderModule, ShaderStage};
 pub use swapchain::{PresentMode, PresentOutcome, Swapchain};

@@ -154,6 +154,7 @@ impl Pipeline {
                 colors: &colors,
                 depth: DepthUse::None,
                 vertex_constants: &[],
+                samples: 1,
                 name,
             },
         )
@@ -233,7 +234,7 @@ impl Pipeline {
             .depth_bias_slope_factor(1.0)
             .line_width(1.0);
         let multisample = vk::PipelineMultisampleStateCreateInfo::default()
-            .rasterization_samples(vk::SampleCountFlags::TYPE_1);
+            .rasterization_samples(vk::SampleCountFlags::from_raw(desc.samples));
         let depth = vk::PipelineDepthStencilStateCreateInfo::default()
             .depth_test_enable(desc.depth != DepthUse::None)
             .depth_write_enable(desc.depth == DepthUse::TestAndWrite)
@@ -463,6 +464,8 @@ pub struct GraphicsPipelineDesc<'a> {
     pub depth: DepthUse,
     /// Values of the vertex shader's specialization constants 0, 1, … (u32 each).
     pub vertex_constants: &'a [u32],
+    /// Samples per pixel of the attachments it draws into (1 without MSAA).
+    pub samples: u32,
     /// The debug name.
     pub name: &'a str,
 }

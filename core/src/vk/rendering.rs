@@ -2,7 +2,10 @@
 //! transparency method): the layout transitions before and after, the cleared attachments, and
 //! the viewport covering the target. A pass may be suspended (the depth made readable by
 //! compute shaders) and resumed, for frames drawn in phases (GPU occlusion culling). An overlay
-//! pass draws over the finished colour image without depth (the transparency merge).
+//! pass draws over the finished colour image without depth (the transparency merge). With
+//! MSAA the pass draws into multisampled images and resolves them into the one-sample ones
+//! whenever it ends or is suspended (colours averaged, depth by the device's resolve mode), so
+//! everything after the pass (readback, overlay, GPU cullers, presentation) reads one sample.
 
 use ash::vk;
 
@@ -33,7 +36,36 @@ pub struct RenderingTarget<'a> {
     /// begins (loaded when it resumes) and left in `SHADER_READ_ONLY_OPTIMAL` for fragment
     /// shaders when it ends.
     pub extra_colors: &'a [(&'a Image, vk::ClearColorValue)],
+    /// With MSAA, the images drawn into, resolved into `color`, `depth` and `extra_colors`.
+    pub multisampled: Option<Multisampled<'a>>,
 }
+
+/// The multisampled attachments of a pass (all of one sample count), each resolved into the
+/// one-sample image of the same role.
+#[derive(Clone, Copy)]
+pub struct Multisampled<'a> {
+    /// Drawn into instead of [`RenderingTarget::color`]; averaged into it.
+    pub color: &'a Image,
+    /// Drawn into instead of [`RenderingTarget::depth`]; resolved into it with `depth_resolve`.
+    pub depth: &'a Image,
+    /// Drawn into instead of [`RenderingTarget::extra_colors`], in their order; averaged.
+    pub extra_colors: &'a [&'a Image],
+    /// How the depth is resolved ([`Device::depth_resolve_mode`]).
+    pub depth_resolve: vk::ResolveModeFlags,
+}
+
+/// Where a resolve writes a one-sample depth image: resolves of every aspect run in the
+/// colour attachment output stage as colour attachment writes.
+const DEPTH_RESOLVE_WRITE: (vk::PipelineStageFlags2, vk::AccessFlags2) = (
+    vk::PipelineStageFlags2::from_raw(
+        vk::PipelineStageFlags2::LATE_FRAGMENT_TESTS.as_raw()
+            | vk::PipelineStageFlags2::COLOR_ATTACHMENT_OUTPUT.as_raw(),
+    ),
+    vk::AccessFlags2::from_raw(
+        vk::AccessFlags2::DEPTH_STENCIL_ATTACHMENT_WRITE.as_raw()
+            | vk::AccessFlags2::COLOR_ATTACHMENT_WRITE.as_raw(),
+    ),
+);
 
 /// The layout the depth image is in while a pass is suspended.
 pub const SUSPENDED_DEPTH_LAYOUT: vk::ImageLayout = vk::ImageLayout::DEPTH_READ_ONLY_OPTIMAL;
@@ -78,27 +110,31 @@ pub fn begin_rendering(
             vk::AccessFlags2::SHADER_SAMPLED_READ,
         )
     } else {
-        // The last pick's depth readback may still be running.
+        // The last pick's depth readback may still be running, or the last frame's resolve.
         (
             vk::ImageLayout::UNDEFINED,
-            vk::PipelineStageFlags2::COPY,
+            vk::PipelineStageFlags2::COPY | DEPTH_RESOLVE_WRITE.0,
             vk::AccessFlags2::NONE,
         )
     };
+    let depth_attachment_use = (
+        vk::ImageLayout::DEPTH_ATTACHMENT_OPTIMAL,
+        vk::PipelineStageFlags2::EARLY_FRAGMENT_TESTS | DEPTH_RESOLVE_WRITE.0,
+        vk::AccessFlags2::DEPTH_STENCIL_ATTACHMENT_WRITE
+            | vk::AccessFlags2::DEPTH_STENCIL_ATTACHMENT_READ
+            | DEPTH_RESOLVE_WRITE.1,
+    );
     transition(
         device,
         command_buffer,
         target.depth.raw(),
         vk::ImageAspectFlags::DEPTH,
         depth_before,
-        (
-            vk::ImageLayout::DEPTH_ATTACHMENT_OPTIMAL,
-            vk::PipelineStageFlags2::EARLY_FRAGMENT_TESTS
-                | vk::PipelineStageFlags2::LATE_FRAGMENT_TESTS,
-            vk::AccessFlags2::DEPTH_STENCIL_ATTACHMENT_WRITE
-                | vk::AccessFlags2::DEPTH_STENCIL_ATTACHMENT_READ,
-        ),
+        depth_attachment_use,
     );
+    if let Some(multisampled) = &target.multisampled {
+        begin_multisampled(device, command_buffer, multisampled, target.resume);
+    }
     if !target.resume {
         for (image, _) in target.extra_colors {
             // The last frame's merge may still read them.
@@ -126,19 +162,50 @@ pub fn begin_rendering(
     } else {
         vk::AttachmentLoadOp::CLEAR
     };
+    let resolves = |image: &Image| {
+        (
+            vk::ResolveModeFlags::AVERAGE,
+            image.view(),
+            vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL,
+        )
+    };
     let color_attachment: Vec<vk::RenderingAttachmentInfo<'_>> =
         std::iter::once((target.color, target.clear_color))
             .chain(target.extra_colors.iter().copied())
-            .map(|(image, clear)| {
-                vk::RenderingAttachmentInfo::default()
-                    .image_view(image.view())
+            .enumerate()
+            .map(|(i, (image, clear))| {
+                let info = vk::RenderingAttachmentInfo::default()
                     .image_layout(vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL)
                     .load_op(load_op)
-                    .store_op(vk::AttachmentStoreOp::STORE)
-                    .clear_value(vk::ClearValue { color: clear })
+                    .clear_value(vk::ClearValue { color: clear });
+                let drawn = target.multisampled.as_ref().and_then(|m| {
+                    if i == 0 {
+                        Some(m.color)
+                    } else {
+                        m.extra_colors.get(i - 1).copied()
+                    }
+                });
+                match drawn {
+                    // A multisampled colour is kept only while the pass is resumed later.
+                    Some(drawn) => {
+                        let (mode, view, layout) = resolves(image);
+                        info.image_view(drawn.view())
+                            .resolve_mode(mode)
+                            .resolve_image_view(view)
+                            .resolve_image_layout(layout)
+                            .store_op(if target.store_depth {
+                                vk::AttachmentStoreOp::STORE
+                            } else {
+                                vk::AttachmentStoreOp::DONT_CARE
+                            })
+                    }
+                    None => info
+                        .image_view(image.view())
+                        .store_op(vk::AttachmentStoreOp::STORE),
+                }
             })
             .collect();
-    let depth_attachment = vk::RenderingAttachmentInfo::default()
+    let mut depth_attachment = vk::RenderingAttachmentInfo::default()
         .image_view(target.depth.view())
         .image_layout(vk::ImageLayout::DEPTH_ATTACHMENT_OPTIMAL)
         .load_op(load_op)
@@ -154,6 +221,16 @@ pub fn begin_rendering(
                 stencil: 0,
             },
         });
+    if let Some(multisampled) = &target.multisampled {
+        depth_attachment = depth_attachment.image_view(multisampled.depth.view());
+        if target.store_depth {
+            // GPU cullers read the depth between phases: the one-sample depth receives it.
+            depth_attachment = depth_attachment
+                .resolve_mode(multisampled.depth_resolve)
+                .resolve_image_view(target.depth.view())
+                .resolve_image_layout(vk::ImageLayout::DEPTH_ATTACHMENT_OPTIMAL);
+        }
+    }
     let area = vk::Rect2D {
         offset: vk::Offset2D::default(),
         extent: target.extent,
@@ -174,6 +251,69 @@ pub fn begin_rendering(
     if !target.secondary {
         cover(device, command_buffer, area);
     }
+}
+
+/// Makes the multisampled attachments ready to draw into: freshly (the last frame's pass may
+/// still draw into them) or, when the pass resumes, after what it drew before its suspension.
+fn begin_multisampled(
+    device: &Device,
+    command_buffer: vk::CommandBuffer,
+    multisampled: &Multisampled<'_>,
+    resume: bool,
+) {
+    let color_stage = vk::PipelineStageFlags2::COLOR_ATTACHMENT_OUTPUT;
+    let color_use = (
+        vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL,
+        color_stage,
+        vk::AccessFlags2::COLOR_ATTACHMENT_WRITE | vk::AccessFlags2::COLOR_ATTACHMENT_READ,
+    );
+    let color_before = if resume {
+        color_use
+    } else {
+        (
+            vk::ImageLayout::UNDEFINED,
+            color_stage,
+            vk::AccessFlags2::NONE,
+        )
+    };
+    for image in
+        std::iter::once(multisampled.color).chain(multisampled.extra_colors.iter().copied())
+    {
+        transition(
+            device,
+            command_buffer,
+            image.raw(),
+            vk::ImageAspectFlags::COLOR,
+            color_before,
+            color_use,
+        );
+    }
+    let depth_stages = vk::PipelineStageFlags2::EARLY_FRAGMENT_TESTS
+        | vk::PipelineStageFlags2::LATE_FRAGMENT_TESTS
+        | vk::PipelineStageFlags2::COLOR_ATTACHMENT_OUTPUT;
+    let depth_use = (
+        vk::ImageLayout::DEPTH_ATTACHMENT_OPTIMAL,
+        depth_stages,
+        vk::AccessFlags2::DEPTH_STENCIL_ATTACHMENT_WRITE
+            | vk::AccessFlags2::DEPTH_STENCIL_ATTACHMENT_READ,
+    );
+    let depth_before = if resume {
+        depth_use
+    } else {
+        (
+            vk::ImageLayout::UNDEFINED,
+            depth_stages,
+            vk::AccessFlags2::NONE,
+        )
+    };
+    transition(
+        device,
+        command_buffer,
+        multisampled.depth.raw(),
+        vk::ImageAspectFlags::DEPTH,
+        depth_before,
+        depth_use,
+    );
 }
 
 /// Sets the viewport (depth 0..1) and scissor to `area`, inside rendering.
@@ -210,8 +350,8 @@ pub fn suspend_rendering(
         vk::ImageAspectFlags::DEPTH,
         (
             vk::ImageLayout::DEPTH_ATTACHMENT_OPTIMAL,
-            vk::PipelineStageFlags2::LATE_FRAGMENT_TESTS,
-            vk::AccessFlags2::DEPTH_STENCIL_ATTACHMENT_WRITE,
+            DEPTH_RESOLVE_WRITE.0,
+            DEPTH_RESOLVE_WRITE.1,
         ),
         (
             SUSPENDED_DEPTH_LAYOUT,
@@ -257,8 +397,8 @@ pub fn end_rendering(
             vk::ImageAspectFlags::DEPTH,
             (
                 vk::ImageLayout::DEPTH_ATTACHMENT_OPTIMAL,
-                vk::PipelineStageFlags2::LATE_FRAGMENT_TESTS,
-                vk::AccessFlags2::DEPTH_STENCIL_ATTACHMENT_WRITE,
+                DEPTH_RESOLVE_WRITE.0,
+                DEPTH_RESOLVE_WRITE.1,
             ),
             (
                 vk::ImageLayout::TRANSFER_SRC_OPTIMAL,

@@ -36,7 +36,7 @@ use std::ffi::{c_char, c_void};
 /// Major version of this ABI: a library built for another major version is refused.
 pub const CADR_PLUGIN_ABI_MAJOR: u32 = 1;
 /// Minor version of this ABI: additions that older readers may ignore.
-pub const CADR_PLUGIN_ABI_MINOR: u32 = 7;
+pub const CADR_PLUGIN_ABI_MINOR: u32 = 8;
 /// `(major << 16) | minor`, what [`CadrPluginVersionFn`] returns.
 pub const CADR_PLUGIN_ABI_VERSION: u32 = (CADR_PLUGIN_ABI_MAJOR << 16) | CADR_PLUGIN_ABI_MINOR;
 
@@ -857,6 +857,12 @@ pub struct CadrRecordContext {
     pub extra_color_count: u32,
     /// Since ABI 1.7: the `VkFormat`s of those attachments (`extra_color_count` of them).
     pub extra_color_formats: [i32; 2],
+    /// Since ABI 1.8 (read it only when `size` covers it; absent means 1): the samples per
+    /// pixel of every attachment of the rendering, a `VkSampleCountFlagBits` (1 without MSAA;
+    /// the pick pass always has 1). Secondary command buffers inherit it as their
+    /// `rasterizationSamples`. The host draws with MSAA through a submission of
+    /// [`CADR_TRAIT_SECONDARY_COMMAND_BUFFERS`] only when its library is of ABI 1.8 or later.
+    pub rasterization_samples: u32,
 }
 
 /// Submission vtable ([`CADR_KIND_SUBMISSION`]).

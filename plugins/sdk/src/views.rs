@@ -280,6 +280,17 @@ impl<'a> Record<'a> {
         formats
     }
 
+    /// Since ABI 1.8: the samples per pixel of the rendering's attachments (1 without MSAA,
+    /// and where the host does not say): secondary command buffers inherit it.
+    pub fn rasterization_samples(&self) -> vk::SampleCountFlags {
+        let end = std::mem::offset_of!(abi::CadrRecordContext, rasterization_samples) + 4;
+        if self.raw.size as usize >= end && self.raw.rasterization_samples != 0 {
+            vk::SampleCountFlags::from_raw(self.raw.rasterization_samples)
+        } else {
+            vk::SampleCountFlags::TYPE_1
+        }
+    }
+
     /// Since ABI 1.3: the draw sources a GPU culler wrote for this phase, one per pass, or
     /// `None` when the submission draws its own lists.
     pub fn gpu_draws(&self) -> Option<&'a [abi::CadrGpuDraws]> {

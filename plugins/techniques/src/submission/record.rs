@@ -332,6 +332,7 @@ impl SecondaryBuffers {
         let shared = Shared(recorder);
         let extent = recorder.record.extent();
         let color_formats = recorder.record.color_formats(self.gpu.formats.0);
+        let samples = recorder.record.rasterization_samples();
         let results: Vec<Result<CadrStats, String>> = std::thread::scope(|scope| {
             let handles: Vec<_> = (0..workers)
                 .map(|worker| {
@@ -355,7 +356,7 @@ impl SecondaryBuffers {
                         }
                         .map_err(vulkan_failure("vkResetCommandPool"))?;
                         for (group, &buffer) in groups.iter().zip(buffers) {
-                            begin_secondary(gpu, buffer, (extent, color_formats))?;
+                            begin_secondary(gpu, buffer, (extent, color_formats, samples))?;
                             shared.0.record_passes(
                                 buffer,
                                 (part.clone(), workers),
@@ -406,12 +407,12 @@ impl SecondaryBuffers {
 fn begin_secondary(
     gpu: &Gpu,
     buffer: vk::CommandBuffer,
-    (extent, color_formats): (vk::Extent2D, &[vk::Format]),
+    (extent, color_formats, samples): (vk::Extent2D, &[vk::Format], vk::SampleCountFlags),
 ) -> Result<(), String> {
     let mut rendering = vk::CommandBufferInheritanceRenderingInfo::default()
         .color_attachment_formats(color_formats)
         .depth_attachment_format(gpu.formats.1)
-        .rasterization_samples(vk::SampleCountFlags::TYPE_1);
+        .rasterization_samples(samples);
     let inheritance = vk::CommandBufferInheritanceInfo::default().push_next(&mut rendering);
     let begin = vk::CommandBufferBeginInfo::default()
         .flags(vk::CommandBufferUsageFlags::RENDER_PASS_CONTINUE)

@@ -3,7 +3,7 @@
  *   viewer [scene]                   (default gen:demo; .gltf/.glb/.csf/.csf.gz or gen:NAME)
  *   viewer [scene] --self-test DIR   scripted run for the tests (see below)
  *   viewer [scene] [--frames-in-flight 1|2] [--present fifo|mailbox|immediate]
- *                  [--orbit-frames N]
+ *                  [--msaa N] [--orbit-frames N]
  *
  * Mouse: left drag orbits, right or middle drag pans, the wheel zooms.
  * Keys:  V, P, S, C cycle the vertex path, parameter path, submission and culling technique;
@@ -11,14 +11,16 @@
  *        transparency methods; F fits the view; I toggles 1 / 2 frames in flight;
  *        M cycles the present modes the window offers; X cycles a section plane through the
  *        view's centre across x, y, z and off; K toggles its caps, H their hatching;
- *        B cycles the background (cadr's gradient, white, dark); Esc quits.
- * The window title shows the techniques, the section, frames in flight, present mode, the frame's figures
+ *        B cycles the background (cadr's gradient, white, dark); A cycles the anti-aliasing
+ *        levels the device offers (MSAA 2x, 4x, 8x, then off); Esc quits.
+ * The window title shows the techniques, the section, the anti-aliasing, frames in flight, present mode, the frame's figures
  * and frames per second; they are also printed once a second. --orbit-frames N orbits the
  * camera for N frames as fast as they come, prints the frames per second and quits (a
  * benchmark of the window path). Resizing and minimizing are handled by cadr (swapchain recreated, frames skipped).
  *
  * --self-test DIR renders frames, cycles every technique kind once, toggles the shade mode,
- * cycles the section planes with and without caps and hatching, cycles the backgrounds,
+ * cycles the section planes with and without caps and hatching, cycles the backgrounds and
+ * the anti-aliasing levels (in X-ray and with edges too),
  * resizes the window, then renders a fixed view both into the window and offscreen
  * (DIR/offscreen.png), prints "screenshot ready WxH" and keeps presenting until a line arrives
  * on stdin, so that a test can grab the window and compare. */
@@ -168,6 +170,19 @@ static void cycle_background(struct Viewer *v) {
   printf("background: %s\n", background_names[v->background]);
 }
 
+/* The next anti-aliasing level the device offers after the current one, off after the highest. */
+static void cycle_msaa(struct Viewer *v) {
+  uint32_t samples = 1, offered = 1, next;
+  CADR_CHECK(cadr_renderer_msaa(v->renderer, &samples, &offered));
+  for (next = samples * 2; next <= 64 && !(offered & next); next *= 2) {
+  }
+  if (next > 64) {
+    next = 1;
+  }
+  CADR_CHECK(cadr_renderer_set_msaa(v->renderer, next));
+  printf("anti-aliasing: %s%u%s\n", next > 1 ? "MSAA " : "", next, next > 1 ? "x" : " sample (off)");
+}
+
 static void toggle_frames_in_flight(struct Viewer *v) {
   uint32_t frames = 1;
   CADR_CHECK(cadr_renderer_frames_in_flight(v->renderer, &frames));
@@ -192,9 +207,16 @@ static void cycle_present_mode(struct Viewer *v) {
 static void describe(struct Viewer *v, char *text, size_t size) {
   const char *names[5];
   char section[64];
-  uint32_t kind, frames = 1, mode = 0;
+  char antialiasing[16];
+  uint32_t kind, frames = 1, mode = 0, samples = 1;
   for (kind = 0; kind < 5; ++kind) {
     CADR_CHECK(cadr_renderer_technique(v->renderer, kind, &names[kind]));
+  }
+  CADR_CHECK(cadr_renderer_msaa(v->renderer, &samples, NULL));
+  if (samples > 1) {
+    snprintf(antialiasing, sizeof antialiasing, "MSAA %ux", samples);
+  } else {
+    snprintf(antialiasing, sizeof antialiasing, "no AA");
   }
   CADR_CHECK(cadr_renderer_frames_in_flight(v->renderer, &frames));
   CADR_CHECK(cadr_renderer_present_mode(v->renderer, &mode, NULL));
@@ -206,9 +228,9 @@ static void describe(struct Viewer *v, char *text, size_t size) {
                ? ((v->section_flags & CADR_SECTION_HATCHED) ? " capped, hatched" : " capped")
                : " uncapped");
   snprintf(text, size,
-           "cadr viewer | %s / %s / %s / %s | %s, %s | %s | %s background | %u in flight, %s | %llu draws in %llu calls | CPU %.0f us, GPU %.0f us | %.0f frames/s",
+           "cadr viewer | %s / %s / %s / %s | %s, %s | %s | %s | %s background | %u in flight, %s | %llu draws in %llu calls | CPU %.0f us, GPU %.0f us | %.0f frames/s",
            names[0], names[1], names[2], names[3], shade_names[v->shade % 5], names[4],
-           section, background_names[v->background % 3], frames, present_names[mode % 3], (unsigned long long)v->stats.draws,
+           antialiasing, section, background_names[v->background % 3], frames, present_names[mode % 3], (unsigned long long)v->stats.draws,
            (unsigned long long)v->stats.draw_calls, v->stats.cpu_us, v->stats.gpu_us,
            v->frames_per_second);
 }
@@ -246,6 +268,7 @@ static void on_key(GLFWwindow *window, int key, int scancode, int action, int mo
   case GLFW_KEY_K: toggle_section_flag(v, CADR_SECTION_CAPS, "caps"); break;
   case GLFW_KEY_H: toggle_section_flag(v, CADR_SECTION_HATCHED, "hatching"); break;
   case GLFW_KEY_B: cycle_background(v); break;
+  case GLFW_KEY_A: cycle_msaa(v); break;
   case GLFW_KEY_ESCAPE: glfwSetWindowShouldClose(window, GLFW_TRUE); break;
   default: break;
   }
@@ -335,6 +358,21 @@ static int self_test(struct Viewer *v, const char *dir) {
   cycle_section(v);
   cycle_section(v);
   cycle_section(v);
+  /* Every anti-aliasing level the device offers, in X-ray and with edges (its line and
+   * translucent passes), ending without. */
+  {
+    uint32_t samples = 1, mode;
+    do {
+      cycle_msaa(v);
+      for (mode = 0; mode < 5; ++mode) {
+        toggle_shade(v);
+        if (v->shade == CADR_SHADE_EDGES || v->shade == CADR_SHADE_XRAY) {
+          render(v);
+        }
+      }
+      CADR_CHECK(cadr_renderer_msaa(v->renderer, &samples, NULL));
+    } while (samples > 1);
+  }
   /* Every present mode the window offers, with one and two frames in flight. */
   {
     uint32_t mode, offered = 0, frames;
@@ -397,7 +435,7 @@ int main(int argc, char **argv) {
   void *instance = NULL;
   VkSurfaceKHR surface = VK_NULL_HANDLE;
   CadrNode root;
-  int i, width, height, status = 0, orbit_frames = 0, frames_in_flight = 0, present = -1;
+  int i, width, height, status = 0, orbit_frames = 0, frames_in_flight = 0, present = -1, msaa = 0;
   double last_print;
   char title[512];
 
@@ -406,6 +444,8 @@ int main(int argc, char **argv) {
       test_dir = argv[++i];
     } else if (strcmp(argv[i], "--orbit-frames") == 0 && i + 1 < argc) {
       orbit_frames = atoi(argv[++i]);
+    } else if (strcmp(argv[i], "--msaa") == 0 && i + 1 < argc) {
+      msaa = atoi(argv[++i]);
     } else if (strcmp(argv[i], "--frames-in-flight") == 0 && i + 1 < argc) {
       frames_in_flight = atoi(argv[++i]);
     } else if (strcmp(argv[i], "--present") == 0 && i + 1 < argc) {
@@ -464,6 +504,9 @@ int main(int argc, char **argv) {
   if (present >= 0) {
     CADR_CHECK(cadr_renderer_set_present_mode(v.renderer, (uint32_t)present));
   }
+  if (msaa != 0) {
+    CADR_CHECK(cadr_renderer_set_msaa(v.renderer, (uint32_t)msaa));
+  }
 
   CADR_CHECK(cadr_scene_create(&v.scene));
   CADR_CHECK(cadr_scene_root(v.scene, &root));
@@ -479,7 +522,7 @@ int main(int argc, char **argv) {
   glfwSetScrollCallback(v.window, on_scroll);
   glfwSetFramebufferSizeCallback(v.window, on_framebuffer_size);
   printf("viewer: %s (V/P/S/C cycle techniques, E display mode, X section, K caps, H hatching, "
-         "F fit, I frames in flight, M present mode, Esc quit)\n",
+         "A anti-aliasing, F fit, I frames in flight, M present mode, Esc quit)\n",
          source);
 
   if (test_dir != NULL) {

@@ -744,6 +744,41 @@ static void test_renderer(CadrContext context, struct Built *b) {
     CHECK(pixel_difference(first, second, W * H * 4) == 0);
   }
 
+  /* Anti-aliasing: one sample by default and the offered levels as a mask (1 always); a level
+   * the device lacks is refused by name; the highest offered level blends edge pixels, keeps
+   * the rest of the picture and picks exactly; one sample again draws the first picture. */
+  {
+    uint32_t samples = 0, offered = 0, highest = 1, bit, differing;
+    CadrPickResult picked = {NULL, 0};
+    OK(cadr_renderer_msaa(renderer, &samples, &offered));
+    CHECK(samples == 1 && (offered & 1u) != 0);
+    OK(cadr_renderer_msaa(renderer, NULL, NULL));
+    for (bit = 2; bit <= 64; bit <<= 1) {
+      if (offered & bit) {
+        highest = bit;
+      }
+    }
+    CHECK(highest >= 4); /* lavapipe offers 4x, GPUs more */
+    EXPECT(cadr_renderer_set_msaa(renderer, 3), CADR_RESULT_INVALID_ARGUMENT);
+    MESSAGE_HAS("MSAA 3x");
+    OK(cadr_renderer_msaa(renderer, &samples, NULL));
+    CHECK(samples == 1);
+    OK(cadr_renderer_set_msaa(renderer, highest));
+    OK(cadr_renderer_msaa(renderer, &samples, NULL));
+    CHECK(samples == highest);
+    OK(cadr_renderer_render(renderer, b->scene, &camera, &stats));
+    OK(cadr_renderer_read_pixels(renderer, second, W * H * 4));
+    differing = pixel_difference(first, second, W * H * 4);
+    CHECK(differing > 0 && differing < W * H / 10);
+    OK(cadr_renderer_pick(renderer, b->scene, &camera, W / 2, H / 2, &picked));
+    CHECK(picked.hit_count == 1);
+    cadr_pick_result_free(&picked);
+    OK(cadr_renderer_set_msaa(renderer, 1));
+    OK(cadr_renderer_render(renderer, b->scene, &camera, &stats));
+    OK(cadr_renderer_read_pixels(renderer, second, W * H * 4));
+    CHECK(pixel_difference(first, second, W * H * 4) == 0);
+  }
+
   /* Resizing. */
   OK(cadr_renderer_resize(renderer, 48, 32));
   OK(cadr_renderer_size(renderer, &width, &height));

@@ -229,6 +229,8 @@ fn viewer_under_xvfb_swaps_techniques_resizes_and_shows_the_offscreen_image() {
         "background: white",
         "background: dark",
         "background: gradient",
+        "anti-aliasing: MSAA ",
+        "anti-aliasing: 1 sample (off)",
         "present modes offered: fifo",
         "resized to 480x360",
     ] {

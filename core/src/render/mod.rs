@@ -273,7 +273,8 @@ impl Renderer {
                 offered.join(", ")
             )));
         }
-        self.commands.wait()?;
+        // Not only this renderer's frames use the target: a window's present blits from it.
+        self.device.wait_idle()?;
         // The recorded frame draws into the old target: never submit it again.
         self.replayable = None;
         self.last_recorded = None;

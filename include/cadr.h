@@ -1055,7 +1055,8 @@ enum CadrResult cadr_scene_set_part_visible(CadrScene scene,
 // left) when drawing `scene` seen by `camera` with the current techniques: at most one hit,
 // with the geo node, part, occurrence path, depth and world position. Parts that are hidden
 // are not drawn; parts that are not pickable (`CADR_NODE_PICKABLE` cleared on a node of their
-// path) let the click through to what is behind them.
+// path) let the click through to what is behind them; so do translucent parts (material
+// opacity under 1) while `cadr_renderer_set_pick_through_translucent` is on.
 //
 // Returns `CADR_RESULT_OK` and writes `*result` (no hits over background),
 // `CADR_RESULT_NULL_ARGUMENT`, `CADR_RESULT_INVALID_ARGUMENT` (a pixel outside the image, a
@@ -1072,6 +1073,27 @@ enum CadrResult cadr_renderer_pick(CadrRenderer renderer,
                                    uint32_t x,
                                    uint32_t y,
                                    struct CadrPickResult *result);
+
+// Lets picking go through translucent parts (materials of opacity under 1) to what is behind
+// them (`through` true), or picks them like opaque ones (false, the default: what is seen
+// in front is what is picked). Applies to `cadr_renderer_pick` and `cadr_renderer_pick_rect`
+// from the next call; the picture is unchanged. X-ray's see-through look is a display mode
+// and does not count: parts it shows translucent are picked as their material says.
+//
+// Returns `CADR_RESULT_OK` or a handle error. Ownership: nothing changes hands.
+// Thread-safety: as `cadr_renderer_create`.
+enum CadrResult cadr_renderer_set_pick_through_translucent(CadrRenderer renderer, bool through);
+
+// Writes whether picking goes through translucent parts (see
+// `cadr_renderer_set_pick_through_translucent`).
+//
+// Returns `CADR_RESULT_OK`, `CADR_RESULT_NULL_ARGUMENT` or a handle error. Ownership: the
+// output is the caller's; cadr keeps no pointer to it. Thread-safety: as
+// `cadr_renderer_create`.
+//
+// # Safety
+// `through` is null or writable.
+enum CadrResult cadr_renderer_pick_through_translucent(CadrRenderer renderer, bool *through);
 
 // Box selection: every pickable part with a visible pixel in the `width` × `height`
 // rectangle whose top-left pixel is (`x`, `y`), one hit per occurrence and part (at its

@@ -120,7 +120,8 @@ unsafe fn pick(
 /// left) when drawing `scene` seen by `camera` with the current techniques: at most one hit,
 /// with the geo node, part, occurrence path, depth and world position. Parts that are hidden
 /// are not drawn; parts that are not pickable (`CADR_NODE_PICKABLE` cleared on a node of their
-/// path) let the click through to what is behind them.
+/// path) let the click through to what is behind them; so do translucent parts (material
+/// opacity under 1) while `cadr_renderer_set_pick_through_translucent` is on.
 ///
 /// Returns `CADR_RESULT_OK` and writes `*result` (no hits over background),
 /// `CADR_RESULT_NULL_ARGUMENT`, `CADR_RESULT_INVALID_ARGUMENT` (a pixel outside the image, a
@@ -142,6 +143,53 @@ pub unsafe extern "C" fn cadr_renderer_pick(
 ) -> CadrResult {
     // SAFETY: forwarded contract.
     guard(|| unsafe { pick(renderer, scene, camera, PixelRect::pixel(x, y), result) })
+}
+
+/// Lets picking go through translucent parts (materials of opacity under 1) to what is behind
+/// them (`through` true), or picks them like opaque ones (false, the default: what is seen
+/// in front is what is picked). Applies to `cadr_renderer_pick` and `cadr_renderer_pick_rect`
+/// from the next call; the picture is unchanged. X-ray's see-through look is a display mode
+/// and does not count: parts it shows translucent are picked as their material says.
+///
+/// Returns `CADR_RESULT_OK` or a handle error. Ownership: nothing changes hands.
+/// Thread-safety: as `cadr_renderer_create`.
+#[no_mangle]
+pub extern "C" fn cadr_renderer_set_pick_through_translucent(
+    renderer: CadrRenderer,
+    through: bool,
+) -> CadrResult {
+    guard(|| {
+        with_renderer(renderer, |state| {
+            state
+                .view
+                .techniques_mut()
+                .set_pick_through_translucent(through);
+            Ok(())
+        })
+    })
+}
+
+/// Writes whether picking goes through translucent parts (see
+/// `cadr_renderer_set_pick_through_translucent`).
+///
+/// Returns `CADR_RESULT_OK`, `CADR_RESULT_NULL_ARGUMENT` or a handle error. Ownership: the
+/// output is the caller's; cadr keeps no pointer to it. Thread-safety: as
+/// `cadr_renderer_create`.
+///
+/// # Safety
+/// `through` is null or writable.
+#[no_mangle]
+pub unsafe extern "C" fn cadr_renderer_pick_through_translucent(
+    renderer: CadrRenderer,
+    through: *mut bool,
+) -> CadrResult {
+    guard(|| {
+        let value = with_renderer(renderer, |state| {
+            Ok(state.view.techniques().pick_through_translucent())
+        })?;
+        // SAFETY: through is null or writable (the caller's contract).
+        unsafe { deliver(through, "through", value) }
+    })
 }
 
 /// Box selection: every pickable part with a visible pixel in the `width` × `height`

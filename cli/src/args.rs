@@ -332,6 +332,9 @@ pub struct PickArgs {
     /// Print hit, node, part, path, depth and position (and hits for --rect) as JSON.
     #[arg(long)]
     pub json: bool,
+    /// Pick through translucent parts (material opacity under 1) to what is behind them.
+    #[arg(long)]
+    pub through_translucent: bool,
     #[command(flatten)]
     pub techniques: TechniqueArgs,
     #[command(flatten)]

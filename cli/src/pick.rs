@@ -77,6 +77,9 @@ pub fn pick(args: &PickArgs) -> Result<(), String> {
     session.choose(&combination, shade)?;
     session.set_min_pixels(min_pixels)?;
     session.set_section(section);
+    session
+        .techniques()
+        .set_pick_through_translucent(args.through_translucent);
     // The view `cadr render` draws: the camera fitted to the scene's bounds.
     let camera = Camera::fit(
         &stats.bounds,

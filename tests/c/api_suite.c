@@ -779,6 +779,22 @@ static void test_renderer(CadrContext context, struct Built *b) {
     CHECK(pixel_difference(first, second, W * H * 4) == 0);
   }
 
+  /* Picking through translucent parts: off by default; on, the opaque cubes still stop it. */
+  {
+    bool through = true;
+    CadrPickResult picked = {NULL, 0};
+    OK(cadr_renderer_pick_through_translucent(renderer, &through));
+    CHECK(!through);
+    EXPECT(cadr_renderer_pick_through_translucent(renderer, NULL), CADR_RESULT_NULL_ARGUMENT);
+    OK(cadr_renderer_set_pick_through_translucent(renderer, true));
+    OK(cadr_renderer_pick_through_translucent(renderer, &through));
+    CHECK(through);
+    OK(cadr_renderer_pick(renderer, b->scene, &camera, W / 2, H / 2, &picked));
+    CHECK(picked.hit_count == 1);
+    cadr_pick_result_free(&picked);
+    OK(cadr_renderer_set_pick_through_translucent(renderer, false));
+  }
+
   /* Resizing. */
   OK(cadr_renderer_resize(renderer, 48, 32));
   OK(cadr_renderer_size(renderer, &width, &height));

@@ -174,7 +174,7 @@ fn picking_stays_exact_with_msaa() {
         width: 80,
         height: 60,
     };
-    let mut pick = |f: &mut Fixture| {
+    let pick = |f: &mut Fixture| {
         f.view
             .pick(&f.graph, &mut f.tree, &f.camera, rect)
             .unwrap()

@@ -373,3 +373,45 @@ fn gltf_alpha_modes_give_materials_their_opacity_and_survive_a_save() {
     assert_eq!(alphas, [1.0, 0.4, 1.0, 1.0, 0.0]);
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+/// Picking sees a translucent part in front by default and, asked to, goes through it to the
+/// opaque one behind; the picture does not change; an opaque part in front stops it either way.
+#[test]
+fn picking_goes_through_translucent_parts_when_asked() {
+    let mut f = Fixture::new(&layers(0.5));
+    let picture = f.render();
+    let mut pick_at = |f: &mut Fixture, point: DVec3| {
+        let (x, y) = images::pixel_of(&f.camera, SIZE, point);
+        let hits = f
+            .view
+            .pick(
+                &f.graph,
+                &mut f.tree,
+                &f.camera,
+                cadr_core::render::pick::PixelRect::pixel(x, y),
+            )
+            .unwrap();
+        assert_eq!(hits.len(), 1, "one hit at {point}");
+        hits[0].path.clone()
+    };
+    // Left of centre only the blue square (z = 0) is in front of the red one (z = -1).
+    let blue_point = DVec3::new(-0.7, 0.0, 0.0);
+    assert!(!f.view.techniques().pick_through_translucent());
+    let picked = pick_at(&mut f, blue_point);
+    assert!(picked.contains(&f.nodes[1]), "blue is seen, so picked");
+    f.view.techniques_mut().set_pick_through_translucent(true);
+    let picked = pick_at(&mut f, blue_point);
+    assert!(picked.contains(&f.nodes[0]), "through blue to red");
+    assert_eq!(f.render(), picture, "the picture is the same");
+    // Made opaque, the green square stops the click again.
+    let mut opaque = layers(0.5);
+    opaque.materials[2].base_color[3] = 1.0;
+    let mut g = Fixture::new(&opaque);
+    g.view.techniques_mut().set_pick_through_translucent(true);
+    let green_point = DVec3::new(0.7, 0.0, 0.5);
+    let picked = pick_at(&mut g, green_point);
+    assert!(picked.contains(&g.nodes[2]), "opaque green stops the click");
+    drop((f.view, g.view));
+    assert_no_validation_errors(&f.device);
+    assert_no_validation_errors(&g.device);
+}

@@ -69,7 +69,10 @@ impl Renderer {
         rect: PixelRect,
     ) -> RenderResult<Vec<PickSample>> {
         self.prepare_pick(rect)?;
-        self.draw_techniques(scene, techniques, camera, PassSet::Pick)?;
+        let passes = PassSet::Pick {
+            through_translucent: techniques.pick_through_translucent(),
+        };
+        self.draw_techniques(scene, techniques, camera, passes)?;
         self.pick_samples()
     }
 
@@ -279,7 +282,7 @@ impl Renderer {
         };
         let target = match passes {
             PassSet::Shaded { .. } => PassTarget::Color,
-            PassSet::Pick => PassTarget::Pick,
+            PassSet::Pick { .. } => PassTarget::Pick,
         };
         let translucency = match (&pipelines.merge, &pipelines.merge_layout) {
             (Some(merge), Some(layout)) => techniques

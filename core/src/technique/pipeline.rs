@@ -83,7 +83,10 @@ pub enum PassSet {
         samples: u32,
     },
     /// Triangles of pickable instances, their ids into the pick target.
-    Pick,
+    Pick {
+        /// Whether translucent parts let the click through to what is behind them.
+        through_translucent: bool,
+    },
 }
 
 impl PassSet {
@@ -91,7 +94,7 @@ impl PassSet {
     pub fn samples(self) -> u32 {
         match self {
             PassSet::Shaded { samples, .. } => samples,
-            PassSet::Pick => 1,
+            PassSet::Pick { .. } => 1,
         }
     }
 }
@@ -221,7 +224,7 @@ impl FragmentShader {
                 }
                 ShadeMode::Wireframe => &[Self::Edges],
             },
-            PassSet::Pick => &[Self::Pick],
+            PassSet::Pick { .. } => &[Self::Pick],
         }
     }
 }
@@ -484,7 +487,7 @@ impl TechniquePipelines {
             pass_set: inputs.passes,
             passes: Vec::new(),
             color_format: match inputs.passes {
-                PassSet::Pick => PICK_FORMAT,
+                PassSet::Pick { .. } => PICK_FORMAT,
                 PassSet::Shaded { .. } => COLOR_FORMAT,
             },
             extra_color_formats: translucent_method.map_or_else(Vec::new, |m| m.target_formats()),
@@ -534,7 +537,7 @@ impl TechniquePipelines {
                 let pipeline = this.pipeline(inputs, edges, triangles, outlines)?;
                 this.add(pipeline, abi::CADR_PASS_TRIANGLES);
             }
-            PassSet::Pick => {
+            PassSet::Pick { .. } => {
                 let pick = fragment(FragmentShader::Pick)?;
                 let pipeline = this.pipeline(inputs, pick, triangles, plain)?;
                 this.add(pipeline, inputs.pick_kind);
@@ -653,7 +656,14 @@ impl TechniquePipelines {
                 ..
             }
         );
+        let through_translucent = matches!(
+            self.pass_set,
+            PassSet::Pick {
+                through_translucent: true
+            }
+        );
         let role = match (translucent_frame, raster.translucent, surfaces) {
+            (false, _, _) if through_translucent => DrawRole::Opaque,
             (false, _, _) => DrawRole::All,
             (true, true, _) => DrawRole::Translucent,
             (true, false, true) => DrawRole::Opaque,
@@ -759,7 +769,13 @@ mod tests {
             2,
             "the sample count changes pipelines, not shaders"
         );
-        prepare(&mut cache, PassSet::Pick).expect("pick");
+        prepare(
+            &mut cache,
+            PassSet::Pick {
+                through_translucent: false,
+            },
+        )
+        .expect("pick");
         assert_eq!(cache.fragments.len(), 3);
         prepare(&mut cache, solid()).expect("again");
         assert_eq!(

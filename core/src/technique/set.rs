@@ -230,6 +230,8 @@ pub struct Techniques {
     /// The active transparency method's description.
     method: Option<TransparencyMethod>,
     shade: ShadeMode,
+    /// Whether picking goes through translucent parts.
+    pick_through_translucent: bool,
     /// Sub-pixel culling threshold of GPU cullers, in pixels (0: off).
     min_pixels: f32,
     /// Whether unchanged frames may be resubmitted rather than recorded.
@@ -296,6 +298,7 @@ impl Techniques {
             active: [None, None, None, None, None],
             method: None,
             shade: ShadeMode::Solid,
+            pick_through_translucent: false,
             min_pixels: 0.0,
             frame_replay: true,
             pipelines: Vec::new(),
@@ -340,10 +343,22 @@ impl Techniques {
         if mode != self.shade {
             self.wait_idle()?;
             self.shade = mode;
-            self.pipelines.retain(|p| p.pass_set == PassSet::Pick);
+            self.pipelines
+                .retain(|p| matches!(p.pass_set, PassSet::Pick { .. }));
             self.epoch += 1;
         }
         Ok(())
+    }
+
+    /// Whether picking goes through translucent parts (materials of opacity under 1) to what
+    /// is behind them; off by default: what is seen is what is picked.
+    pub fn pick_through_translucent(&self) -> bool {
+        self.pick_through_translucent
+    }
+
+    /// Lets picking go through translucent parts, or not (the default); from the next pick.
+    pub fn set_pick_through_translucent(&mut self, through: bool) {
+        self.pick_through_translucent = through;
     }
 
     /// The sub-pixel culling threshold: GPU cullers drop parts whose bounding sphere projects

@@ -588,6 +588,49 @@ pub unsafe extern "C" fn cadr_renderer_shade_mode(
     })
 }
 
+/// Shows the hidden edges in the `CADR_SHADE_HIDDEN_LINE` mode dashed, in a lighter grey than
+/// the visible ones (`dashed` true), or removes them (false, the default). Other modes are not
+/// affected. Applies from the next frame. With the `gpu-occlusion` culler, parts it finds
+/// entirely hidden are not drawn, so their dashed edges do not show.
+///
+/// Returns `CADR_RESULT_OK` or a handle error. Ownership: nothing changes hands.
+/// Thread-safety: as `cadr_renderer_create`.
+#[no_mangle]
+pub extern "C" fn cadr_renderer_set_dashed_hidden_lines(
+    renderer: CadrRenderer,
+    dashed: bool,
+) -> CadrResult {
+    guard(|| {
+        with_renderer(renderer, |state| {
+            state.view.techniques_mut().set_dashed_hidden_lines(dashed);
+            Ok(())
+        })
+    })
+}
+
+/// Writes whether the hidden-line mode shows hidden edges dashed (see
+/// `cadr_renderer_set_dashed_hidden_lines`).
+///
+/// Returns `CADR_RESULT_OK`, `CADR_RESULT_NULL_ARGUMENT` or a handle error.
+/// Ownership: the output is the caller's; cadr keeps no pointer to it.
+/// Thread-safety: as `cadr_renderer_create`.
+///
+/// # Safety
+/// `dashed` is null or writable.
+#[no_mangle]
+pub unsafe extern "C" fn cadr_renderer_dashed_hidden_lines(
+    renderer: CadrRenderer,
+    dashed: *mut bool,
+) -> CadrResult {
+    guard(|| {
+        let value = with_renderer(renderer, |state| {
+            Ok(state.view.techniques().dashed_hidden_lines())
+        })?;
+        // SAFETY: dashed is null or writable (the caller's contract).
+        unsafe { deliver(dashed, "dashed", value) }
+    })
+}
+
 /// Sets the sub-pixel culling threshold: with a GPU culler (`gpu-frustum`, `gpu-occlusion`)
 /// active, parts whose bounding sphere projects smaller than `pixels` across are not drawn, in
 /// any pass (picking included). 0, the default, keeps every part (CAD users count small parts);

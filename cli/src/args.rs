@@ -303,6 +303,10 @@ pub struct RenderArgs {
     #[arg(long, value_name = "gradient|flat|#RRGGBB[,#RRGGBB]", value_parser = parse_background,
           default_value = "gradient")]
     pub background: Background,
+    /// In the hidden-line display mode, show the hidden edges dashed in a lighter grey
+    /// instead of removing them.
+    #[arg(long)]
+    pub dashed: bool,
     /// Anti-alias with N samples per pixel (MSAA: 1, the default, is off; 2, 4 or 8 where the
     /// device offers them: cadr devices lists them).
     #[arg(long, value_name = "N", default_value_t = 1, value_parser = parse_msaa)]

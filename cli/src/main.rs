@@ -16,6 +16,7 @@ use cadr_core::graph::SceneGraph;
 use cadr_core::load::SceneSource;
 use cadr_core::render::{Camera, FrameStats, DEFAULT_DIRECTION};
 use cadr_core::scene::{flatten, SceneStats};
+use cadr_core::technique::ShadeMode;
 use cadr_core::timings::{self, Phase};
 use cadr_core::vk::{self as cvk, Device, DeviceOptions, InstanceOptions};
 
@@ -184,6 +185,10 @@ fn render(args: &RenderArgs, process_start: Instant) -> Result<(), String> {
     session.set_section(section);
     session.set_background(args.background)?;
     session.set_msaa(args.msaa)?;
+    if args.dashed && shade != ShadeMode::HiddenLine {
+        return Err("--dashed shows hidden edges dashed in --display hidden-line only".into());
+    }
+    session.techniques().set_dashed_hidden_lines(args.dashed);
     // The baseline records every frame, as the seeds' does.
     session
         .techniques()
@@ -194,6 +199,9 @@ fn render(args: &RenderArgs, process_start: Instant) -> Result<(), String> {
     }
     if let Some(section) = section_line {
         technique_line += &format!(", {section}");
+    }
+    if args.dashed {
+        technique_line += ", hidden edges dashed";
     }
     if args.msaa > 1 {
         technique_line += &format!(", MSAA {}x", args.msaa);

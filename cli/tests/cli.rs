@@ -967,6 +967,14 @@ fn msaa_anti_aliases_render_and_bench_measures_each_level() {
         stderr(&output)
     );
 
+    let output = cadr(&["render", "gen:demo", "-o", "/dev/null", "--dashed"]);
+    assert_eq!(output.status.code(), Some(1), "{}", stderr(&output));
+    assert!(
+        stderr(&output).contains("hidden-line"),
+        "{}",
+        stderr(&output)
+    );
+
     let json_path = dir.join("bench.json");
     let output = cadr(&[
         "bench",

@@ -245,6 +245,12 @@ pub const EDGES_FRAG: ShaderSource = ShaderSource {
     stage: ShaderStage::Fragment,
     source: include_str!("../../shaders/edges.frag"),
 };
+/// Hidden edge lines, dashed (the hidden-line mode's option).
+pub const HIDDEN_EDGES_FRAG: ShaderSource = ShaderSource {
+    name: "hidden_edges.frag",
+    stage: ShaderStage::Fragment,
+    source: include_str!("../../shaders/hidden_edges.frag"),
+};
 
 /// Translucent surfaces: the transparency method's fragment snippet completes it (see
 /// `technique::pipeline`).
@@ -287,6 +293,7 @@ pub const ALL: &[ShaderSource] = &[
     SCATTER_COMP,
     TRANSFORMS_COMP,
     EDGES_FRAG,
+    HIDDEN_EDGES_FRAG,
     MERGE_VERT,
     BACKGROUND_FRAG,
 ];

@@ -779,6 +779,27 @@ static void test_renderer(CadrContext context, struct Built *b) {
     CHECK(pixel_difference(first, second, W * H * 4) == 0);
   }
 
+  /* Dashed hidden lines: off by default; on, the hidden-line picture gains dashes. */
+  {
+    bool dashed = true;
+    OK(cadr_renderer_dashed_hidden_lines(renderer, &dashed));
+    CHECK(!dashed);
+    EXPECT(cadr_renderer_dashed_hidden_lines(renderer, NULL), CADR_RESULT_NULL_ARGUMENT);
+    OK(cadr_renderer_set_shade_mode(renderer, CADR_SHADE_HIDDEN_LINE));
+    OK(cadr_renderer_render(renderer, b->scene, &camera, &stats));
+    OK(cadr_renderer_read_pixels(renderer, first, W * H * 4));
+    OK(cadr_renderer_set_dashed_hidden_lines(renderer, true));
+    OK(cadr_renderer_dashed_hidden_lines(renderer, &dashed));
+    CHECK(dashed);
+    OK(cadr_renderer_render(renderer, b->scene, &camera, &stats));
+    OK(cadr_renderer_read_pixels(renderer, second, W * H * 4));
+    CHECK(pixel_difference(first, second, W * H * 4) > 0);
+    OK(cadr_renderer_set_dashed_hidden_lines(renderer, false));
+    OK(cadr_renderer_set_shade_mode(renderer, CADR_SHADE_SOLID));
+    OK(cadr_renderer_render(renderer, b->scene, &camera, &stats));
+    OK(cadr_renderer_read_pixels(renderer, first, W * H * 4));
+  }
+
   /* Picking through translucent parts: off by default; on, the opaque cubes still stop it. */
   {
     bool through = true;

@@ -100,3 +100,70 @@ fn the_cylinder_engine_in_every_display_mode_matches_its_references() {
     let scene = load_file(std::path::Path::new(CYLINDER_ENGINE_GLB)).unwrap();
     check_modes("display_cylinder_engine", &scene);
 }
+
+/// Hidden-line with its hidden edges dashed: the visible lines stay as they are, and grey
+/// dashes appear where edges run behind surfaces (none of them where hidden-line alone shows
+/// a line, more of them than the visible lines' share of the picture would allow by chance).
+#[test]
+fn hidden_line_shows_hidden_edges_dashed_when_asked() {
+    let scene = load_file(std::path::Path::new(CYLINDER_ENGINE_GLB)).unwrap();
+    let device = test_device();
+    let bounds = flatten(&scene).unwrap().bounds;
+    let camera = Camera::fit(
+        &bounds,
+        f64::from(SIZE.0) / f64::from(SIZE.1),
+        DEFAULT_DIRECTION,
+    );
+    let (mut graph, _) = SceneGraph::from_scene(&scene).unwrap();
+    let mut tree = SceneTree::build(&mut graph);
+    let mut view = View::new(&device, plugin_registry(&device), SIZE.0, SIZE.1).unwrap();
+    view.techniques_mut()
+        .set_shade_mode(ShadeMode::HiddenLine)
+        .unwrap();
+    let mut draw = |view: &mut View, dashed: bool| {
+        view.techniques_mut().set_dashed_hidden_lines(dashed);
+        view.render(&graph, &mut tree, &camera).unwrap();
+        view.renderer().read_rgba8().unwrap()
+    };
+    let removed = draw(&mut view, false);
+    let dashed = draw(&mut view, true);
+    assert!(view.techniques().dashed_hidden_lines());
+    assert_matches_reference(
+        "display_cylinder_engine_hidden_line_dashed",
+        &dashed,
+        DEFAULT_TOLERANCE,
+    );
+    let dark = |p: &image::Rgba<u8>| (0..3).all(|i| p.0[i] < 90);
+    let grey = |p: &image::Rgba<u8>| (0..3).all(|i| (100..140).contains(&p.0[i]));
+    let lines = removed.pixels().filter(|p| dark(p)).count();
+    let kept = removed
+        .pixels()
+        .zip(dashed.pixels())
+        .filter(|(a, b)| dark(a) && dark(b))
+        .count();
+    assert!(
+        kept as f64 >= 0.99 * lines as f64,
+        "{kept} of {lines} visible line pixels kept"
+    );
+    let dashes = removed
+        .pixels()
+        .zip(dashed.pixels())
+        .filter(|(a, b)| !dark(a) && grey(b))
+        .count();
+    assert!(
+        dashes > lines / 4,
+        "{dashes} grey dash pixels against {lines} visible line pixels"
+    );
+    // The other modes do not change.
+    view.techniques_mut()
+        .set_shade_mode(ShadeMode::Edges)
+        .unwrap();
+    let edges_dashed = draw(&mut view, true);
+    let edges = draw(&mut view, false);
+    assert_eq!(
+        edges_dashed, edges,
+        "edges mode has no hidden lines to dash"
+    );
+    drop(view);
+    assert_no_validation_errors(&device);
+}

@@ -380,7 +380,7 @@ fn gltf_alpha_modes_give_materials_their_opacity_and_survive_a_save() {
 fn picking_goes_through_translucent_parts_when_asked() {
     let mut f = Fixture::new(&layers(0.5));
     let picture = f.render();
-    let mut pick_at = |f: &mut Fixture, point: DVec3| {
+    let pick_at = |f: &mut Fixture, point: DVec3| {
         let (x, y) = images::pixel_of(&f.camera, SIZE, point);
         let hits = f
             .view

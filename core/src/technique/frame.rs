@@ -54,6 +54,7 @@ impl Renderer {
             translucent: mode == ShadeMode::XRay
                 || (mode.shows_translucency() && scene.has_translucency()),
             samples: self.msaa(),
+            dashed_hidden: mode == ShadeMode::HiddenLine && techniques.dashed_hidden_lines(),
         };
         self.draw_techniques(scene, techniques, camera, passes)
     }

@@ -81,6 +81,9 @@ pub enum PassSet {
         translucent: bool,
         /// Samples per pixel (1, or the MSAA level the renderer draws with).
         samples: u32,
+        /// In the hidden-line mode, whether hidden edges are drawn too, dashed and lighter
+        /// (always false in the other modes).
+        dashed_hidden: bool,
     },
     /// Triangles of pickable instances, their ids into the pick target.
     Pick {
@@ -201,6 +204,8 @@ enum FragmentShader {
     Solid,
     /// Edge lines.
     Edges,
+    /// Hidden edge lines, dashed.
+    HiddenEdges,
     /// Instance ids and depths for picking.
     Pick,
 }
@@ -210,6 +215,7 @@ impl FragmentShader {
         match self {
             Self::Solid => &shaders::SHADED_FRAG,
             Self::Edges => &shaders::EDGES_FRAG,
+            Self::HiddenEdges => &shaders::HIDDEN_EDGES_FRAG,
             Self::Pick => &shaders::PICK_FRAG,
         }
     }
@@ -217,6 +223,11 @@ impl FragmentShader {
     /// Those `passes` draw with.
     fn needed_by(passes: PassSet) -> &'static [FragmentShader] {
         match passes {
+            PassSet::Shaded {
+                mode: ShadeMode::HiddenLine,
+                dashed_hidden: true,
+                ..
+            } => &[Self::Solid, Self::HiddenEdges, Self::Edges],
             PassSet::Shaded { mode, .. } => match mode {
                 ShadeMode::Solid => &[Self::Solid],
                 ShadeMode::Edges | ShadeMode::HiddenLine | ShadeMode::XRay => {
@@ -394,6 +405,8 @@ struct Raster {
     triangle_outlines: bool,
     /// Depth only, no colour.
     depth_only: bool,
+    /// Drawn only behind the surfaces (depth GREATER, not written): hidden lines.
+    behind: bool,
 }
 
 /// The pipelines and layout of one combination and pass set; destroyed together.
@@ -521,6 +534,20 @@ impl TechniquePipelines {
                 let solid = fragment(FragmentShader::Solid)?;
                 let pipeline = this.pipeline(inputs, solid, triangles, surfaces)?;
                 this.add(pipeline, abi::CADR_PASS_TRIANGLES);
+                if let PassSet::Shaded {
+                    dashed_hidden: true,
+                    ..
+                } = inputs.passes
+                {
+                    // Before the visible lines, which win where the two cross.
+                    let hidden = Raster {
+                        behind: true,
+                        ..plain
+                    };
+                    let dashed = fragment(FragmentShader::HiddenEdges)?;
+                    let pipeline = this.pipeline(inputs, dashed, lines, hidden)?;
+                    this.add(pipeline, abi::CADR_PASS_EDGES);
+                }
                 let edges = fragment(FragmentShader::Edges)?;
                 let pipeline = this.pipeline(inputs, edges, lines, plain)?;
                 this.add(pipeline, abi::CADR_PASS_EDGES);
@@ -684,7 +711,9 @@ impl TechniquePipelines {
                 depth_bias: raster.depth_bias,
                 triangle_outlines: raster.triangle_outlines,
                 colors: &colors,
-                depth: if raster.translucent {
+                depth: if raster.behind {
+                    DepthUse::TestBehind
+                } else if raster.translucent {
                     DepthUse::Test
                 } else {
                     DepthUse::TestAndWrite
@@ -752,6 +781,7 @@ mod tests {
             mode: ShadeMode::Solid,
             translucent: false,
             samples: 1,
+            dashed_hidden: false,
         };
         prepare(&mut cache, solid()).expect("solid");
         assert_eq!(cache.fragments.len(), 1, "solid needs one fragment shader");
@@ -761,6 +791,7 @@ mod tests {
                 mode: ShadeMode::Edges,
                 translucent: false,
                 samples: 4,
+                dashed_hidden: false,
             },
         )
         .expect("edges");

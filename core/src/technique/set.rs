@@ -232,6 +232,8 @@ pub struct Techniques {
     shade: ShadeMode,
     /// Whether picking goes through translucent parts.
     pick_through_translucent: bool,
+    /// Whether the hidden-line mode shows hidden edges dashed.
+    dashed_hidden_lines: bool,
     /// Sub-pixel culling threshold of GPU cullers, in pixels (0: off).
     min_pixels: f32,
     /// Whether unchanged frames may be resubmitted rather than recorded.
@@ -299,6 +301,7 @@ impl Techniques {
             method: None,
             shade: ShadeMode::Solid,
             pick_through_translucent: false,
+            dashed_hidden_lines: false,
             min_pixels: 0.0,
             frame_replay: true,
             pipelines: Vec::new(),
@@ -348,6 +351,18 @@ impl Techniques {
             self.epoch += 1;
         }
         Ok(())
+    }
+
+    /// Whether the hidden-line display mode also draws the hidden edges, dashed and in a
+    /// lighter grey (off by default: hidden edges are removed).
+    pub fn dashed_hidden_lines(&self) -> bool {
+        self.dashed_hidden_lines
+    }
+
+    /// Shows hidden edges dashed in the hidden-line mode, or removes them (the default); from
+    /// the next frame (other modes are not affected).
+    pub fn set_dashed_hidden_lines(&mut self, dashed: bool) {
+        self.dashed_hidden_lines = dashed;
     }
 
     /// Whether picking goes through translucent parts (materials of opacity under 1) to what

@@ -238,7 +238,11 @@ impl Pipeline {
         let depth = vk::PipelineDepthStencilStateCreateInfo::default()
             .depth_test_enable(desc.depth != DepthUse::None)
             .depth_write_enable(desc.depth == DepthUse::TestAndWrite)
-            .depth_compare_op(vk::CompareOp::LESS_OR_EQUAL);
+            .depth_compare_op(if desc.depth == DepthUse::TestBehind {
+                vk::CompareOp::GREATER
+            } else {
+                vk::CompareOp::LESS_OR_EQUAL
+            });
         let blend_attachments: Vec<vk::PipelineColorBlendAttachmentState> = desc
             .colors
             .iter()
@@ -365,6 +369,8 @@ pub enum DepthUse {
     TestAndWrite,
     /// Tested, not written: translucent surfaces.
     Test,
+    /// Passing only behind what was drawn (GREATER), not written: hidden lines.
+    TestBehind,
     /// No depth attachment: full-screen passes.
     None,
 }

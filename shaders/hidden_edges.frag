@@ -1,0 +1,19 @@
+#version 460
+// The hidden edge lines of the hidden-line display mode, when they are shown dashed: a
+// lighter grey than the visible lines, dashed by a checkerboard of 4 x 5 pixel cells in
+// screen space: a line of any direction crosses cells in turn, so it shows dashes of 4 to 5
+// pixels (cells of unequal sides, so that 45-degree lines do not run along cell corners).
+layout(location = 0) in vec3 in_view_position;
+layout(location = 1) in vec3 in_view_normal;
+layout(location = 2) flat in vec4 in_base_color;
+layout(location = 3) flat in vec2 in_surface;
+
+layout(location = 0) out vec4 out_color;
+
+void main() {
+    ivec2 cell = ivec2(gl_FragCoord.xy) / ivec2(4, 5);
+    if (((cell.x + cell.y) & 1) != 0) {
+        discard;
+    }
+    out_color = vec4(0.45, 0.47, 0.50, 1.0);
+}

@@ -22,7 +22,8 @@ pub struct RenderingTarget<'a> {
     pub depth: &'a Image,
     /// Whether the depth is stored and made readable after the pass.
     pub keep_depth: bool,
-    /// Whether the depth is stored (the pass will be suspended and its depth read).
+    /// Whether the depth is stored (the pass will be suspended and its depth read); with
+    /// MSAA the multisampled colours are then stored too, for the pass to resume on.
     pub store_depth: bool,
     /// The area rendered.
     pub extent: vk::Extent2D,
@@ -162,13 +163,6 @@ pub fn begin_rendering(
     } else {
         vk::AttachmentLoadOp::CLEAR
     };
-    let resolves = |image: &Image| {
-        (
-            vk::ResolveModeFlags::AVERAGE,
-            image.view(),
-            vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL,
-        )
-    };
     let color_attachment: Vec<vk::RenderingAttachmentInfo<'_>> =
         std::iter::once((target.color, target.clear_color))
             .chain(target.extra_colors.iter().copied())
@@ -187,18 +181,16 @@ pub fn begin_rendering(
                 });
                 match drawn {
                     // A multisampled colour is kept only while the pass is resumed later.
-                    Some(drawn) => {
-                        let (mode, view, layout) = resolves(image);
-                        info.image_view(drawn.view())
-                            .resolve_mode(mode)
-                            .resolve_image_view(view)
-                            .resolve_image_layout(layout)
-                            .store_op(if target.store_depth {
-                                vk::AttachmentStoreOp::STORE
-                            } else {
-                                vk::AttachmentStoreOp::DONT_CARE
-                            })
-                    }
+                    Some(drawn) => info
+                        .image_view(drawn.view())
+                        .resolve_mode(vk::ResolveModeFlags::AVERAGE)
+                        .resolve_image_view(image.view())
+                        .resolve_image_layout(vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL)
+                        .store_op(if target.store_depth {
+                            vk::AttachmentStoreOp::STORE
+                        } else {
+                            vk::AttachmentStoreOp::DONT_CARE
+                        }),
                     None => info
                         .image_view(image.view())
                         .store_op(vk::AttachmentStoreOp::STORE),

@@ -1300,6 +1300,25 @@ enum CadrResult cadr_renderer_set_shade_mode(CadrRenderer renderer, uint32_t mod
 // `mode` is null or writable.
 enum CadrResult cadr_renderer_shade_mode(CadrRenderer renderer, uint32_t *mode);
 
+// Turns screen-space ambient occlusion on or off (off by default): in the modes that fill
+// surfaces (solid, edges, X-ray), creases, corners and gaps between parts are darkened from
+// the frame's depth; the background and translucent surfaces are not. Applies from the next
+// frame; its cost is one full-screen pass.
+//
+// Returns `CADR_RESULT_OK`, `CADR_RESULT_VULKAN` or a handle error. Ownership: nothing
+// changes hands. Thread-safety: as `cadr_renderer_create`.
+enum CadrResult cadr_renderer_set_ssao(CadrRenderer renderer, bool on);
+
+// Writes whether screen-space ambient occlusion is on (see `cadr_renderer_set_ssao`).
+//
+// Returns `CADR_RESULT_OK`, `CADR_RESULT_NULL_ARGUMENT` or a handle error.
+// Ownership: the output is the caller's; cadr keeps no pointer to it.
+// Thread-safety: as `cadr_renderer_create`.
+//
+// # Safety
+// `on` is null or writable.
+enum CadrResult cadr_renderer_ssao(CadrRenderer renderer, bool *on);
+
 // Shows the hidden edges in the `CADR_SHADE_HIDDEN_LINE` mode dashed, in a lighter grey than
 // the visible ones (`dashed` true), or removes them (false, the default). Other modes are not
 // affected. Applies from the next frame. With the `gpu-occlusion` culler, parts it finds

@@ -11,7 +11,7 @@
  *        transparency methods; F fits the view; I toggles 1 / 2 frames in flight;
  *        M cycles the present modes the window offers; X cycles a section plane through the
  *        view's centre across x, y, z and off; K toggles its caps, H their hatching;
- *        D toggles dashed hidden edges in hidden-line;
+ *        D toggles dashed hidden edges in hidden-line; O toggles ambient occlusion;
  *        B cycles the background (cadr's gradient, white, dark); A cycles the anti-aliasing
  *        levels the device offers (MSAA 2x, 4x, 8x, then off); Esc quits.
  * The window title shows the techniques, the section, the anti-aliasing, frames in flight, present mode, the frame's figures
@@ -191,6 +191,13 @@ static void toggle_dashed(struct Viewer *v) {
   printf("hidden edges: %s\n", dashed ? "removed" : "dashed");
 }
 
+static void toggle_ssao(struct Viewer *v) {
+  bool on = false;
+  CADR_CHECK(cadr_renderer_ssao(v->renderer, &on));
+  CADR_CHECK(cadr_renderer_set_ssao(v->renderer, !on));
+  printf("ambient occlusion: %s\n", on ? "off" : "on");
+}
+
 static void toggle_frames_in_flight(struct Viewer *v) {
   uint32_t frames = 1;
   CADR_CHECK(cadr_renderer_frames_in_flight(v->renderer, &frames));
@@ -278,6 +285,7 @@ static void on_key(GLFWwindow *window, int key, int scancode, int action, int mo
   case GLFW_KEY_B: cycle_background(v); break;
   case GLFW_KEY_A: cycle_msaa(v); break;
   case GLFW_KEY_D: toggle_dashed(v); break;
+  case GLFW_KEY_O: toggle_ssao(v); break;
   case GLFW_KEY_ESCAPE: glfwSetWindowShouldClose(window, GLFW_TRUE); break;
   default: break;
   }
@@ -377,6 +385,9 @@ static int self_test(struct Viewer *v, const char *dir) {
         toggle_shade(v);
         if (v->shade == CADR_SHADE_EDGES || v->shade == CADR_SHADE_XRAY) {
           render(v);
+          toggle_ssao(v);
+          render(v);
+          toggle_ssao(v);
         } else if (v->shade == CADR_SHADE_HIDDEN_LINE) {
           toggle_dashed(v);
           render(v);
@@ -535,7 +546,7 @@ int main(int argc, char **argv) {
   glfwSetScrollCallback(v.window, on_scroll);
   glfwSetFramebufferSizeCallback(v.window, on_framebuffer_size);
   printf("viewer: %s (V/P/S/C cycle techniques, E display mode, X section, K caps, H hatching, "
-         "A anti-aliasing, D dashed hidden edges, F fit, I frames in flight, M present mode, Esc quit)\n",
+         "A anti-aliasing, D dashed hidden edges, O ambient occlusion, F fit, I frames in flight, M present mode, Esc quit)\n",
          source);
 
   if (test_dir != NULL) {

@@ -303,6 +303,10 @@ pub struct RenderArgs {
     #[arg(long, value_name = "gradient|flat|#RRGGBB[,#RRGGBB]", value_parser = parse_background,
           default_value = "gradient")]
     pub background: Background,
+    /// Darken creases, corners and gaps between parts with screen-space ambient occlusion
+    /// (solid, edges and xray).
+    #[arg(long)]
+    pub ssao: bool,
     /// In the hidden-line display mode, show the hidden edges dashed in a lighter grey
     /// instead of removing them.
     #[arg(long)]
@@ -479,6 +483,9 @@ pub struct BenchArgs {
     /// Record every frame instead of replaying unchanged ones.
     #[arg(long)]
     pub no_replay: bool,
+    /// Measure every row also with screen-space ambient occlusion (its cost).
+    #[arg(long)]
+    pub ssao: bool,
     /// MSAA levels to measure, samples per pixel (comma-separated: 1,4 measures each row
     /// without and with 4x; default 1).
     #[arg(long, value_name = "N,N", value_delimiter = ',', default_value = "1",

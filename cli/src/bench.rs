@@ -42,6 +42,8 @@ struct Row {
     shade: &'static str,
     /// Samples per pixel of the colour pass (1: no MSAA).
     msaa: u32,
+    /// Whether screen-space ambient occlusion was on.
+    ssao: bool,
     cpu_us: f64,
     gpu_us: Option<f64>,
     /// Moving nodes and bringing the tree and GPU scene up to date.
@@ -110,6 +112,7 @@ impl Row {
             label,
             shade,
             msaa: 1,
+            ssao: false,
             transforms: match transforms {
                 Transforms::Gpu => "gpu",
                 Transforms::Host => "host",
@@ -263,8 +266,9 @@ impl Bench {
             None => selection(args, session.techniques())?,
         };
         let modes = args.shade.modes();
+        let ssao_levels: &[bool] = if args.ssao { &[false, true] } else { &[false] };
         let mut steps = Steps::new(
-            1 + (args.msaa.len() * modes.len() * combinations.len()) as u64,
+            1 + (ssao_levels.len() * args.msaa.len() * modes.len() * combinations.len()) as u64,
             &format!("bench {scene_name}"),
         );
         let show = |steps: &Steps, line: String| {
@@ -287,8 +291,16 @@ impl Bench {
         show(&steps, row_line(&baseline, baseline.cpu_us));
         steps.done();
         rows.push(baseline);
-        for &samples in &args.msaa {
+        for (&ssao, &samples) in ssao_levels
+            .iter()
+            .flat_map(|ssao| args.msaa.iter().map(move |samples| (ssao, samples)))
+        {
             session.set_msaa(samples)?;
+            session
+                .view
+                .renderer_mut()
+                .set_ssao(ssao)
+                .map_err(|e| e.to_string())?;
             for &mode in &modes {
                 for combination in &combinations {
                     steps.start(&format!("{combination} [{}, {samples}x]", mode.name()));
@@ -303,6 +315,7 @@ impl Bench {
                     let transforms = session.techniques().transforms();
                     let row = Row {
                         msaa: samples,
+                        ssao,
                         ..Row::new(combination.to_string(), mode.name(), transforms, measured)
                     };
                     show(&steps, row_line(&row, rows[0].cpu_us));
@@ -317,8 +330,17 @@ impl Bench {
 
 /// The display mode of a row, with its MSAA level when it has one ("edges, 4x").
 fn row_mode(row: &Row) -> String {
+    let mut mode = shade_label(row);
     if row.msaa > 1 {
-        format!("{}, {}x", row.shade, row.msaa)
+        mode += &format!(", {}x", row.msaa);
+    }
+    mode
+}
+
+/// The display mode of a row, with "+ao" when ambient occlusion was on.
+fn shade_label(row: &Row) -> String {
+    if row.ssao {
+        format!("{}+ao", row.shade)
     } else {
         row.shade.to_owned()
     }
@@ -326,7 +348,7 @@ fn row_mode(row: &Row) -> String {
 
 fn header_line() -> String {
     format!(
-        "{:<58} {:>11} {:>4} {:>7} {:>10} {:>10} {:>9} {:>9} {:>8} {:>8} {:>6} {:>7} {:>7} {:>10} {:>9}",
+        "{:<58} {:>14} {:>4} {:>7} {:>10} {:>10} {:>9} {:>9} {:>8} {:>8} {:>6} {:>7} {:>7} {:>10} {:>9}",
         "technique (vertex / params / submit / cull)",
         "shade",
         "AA",
@@ -349,9 +371,9 @@ fn row_line(row: &Row, baseline_cpu: f64) -> String {
     let gpu = row.gpu_us.map_or("n/a".to_owned(), |g| format!("{g:.0}"));
     let s = &row.stats;
     format!(
-        "{:<58} {:>11} {:>4} {:>7} {:>10.1} {:>10} {:>9.1} {:>9} {:>8} {:>8} {:>6} {:>7} {:>7} {:>10} {:>8.1}x",
+        "{:<58} {:>14} {:>4} {:>7} {:>10.1} {:>10} {:>9.1} {:>9} {:>8} {:>8} {:>6} {:>7} {:>7} {:>10} {:>8.1}x",
         row.label,
-        row.shade,
+        shade_label(row),
         format!("{}x", row.msaa),
         format!("{}/{}", row.replayed.0, row.replayed.1),
         row.cpu_us,
@@ -374,6 +396,7 @@ fn row_json(row: &Row, baseline_cpu: f64) -> serde_json::Value {
         "technique": row.label,
         "shade": row.shade,
         "msaa": row.msaa,
+        "ssao": row.ssao,
         "cpu_us": row.cpu_us,
         "gpu_us": row.gpu_us,
         "scene_update_us": row.scene_update_us,

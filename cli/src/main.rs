@@ -185,6 +185,11 @@ fn render(args: &RenderArgs, process_start: Instant) -> Result<(), String> {
     session.set_section(section);
     session.set_background(args.background)?;
     session.set_msaa(args.msaa)?;
+    session
+        .view
+        .renderer_mut()
+        .set_ssao(args.ssao)
+        .map_err(|e| e.to_string())?;
     if args.dashed && shade != ShadeMode::HiddenLine {
         return Err("--dashed shows hidden edges dashed in --display hidden-line only".into());
     }
@@ -202,6 +207,9 @@ fn render(args: &RenderArgs, process_start: Instant) -> Result<(), String> {
     }
     if args.dashed {
         technique_line += ", hidden edges dashed";
+    }
+    if args.ssao {
+        technique_line += ", ambient occlusion";
     }
     if args.msaa > 1 {
         technique_line += &format!(", MSAA {}x", args.msaa);

@@ -993,6 +993,7 @@ fn msaa_anti_aliases_render_and_bench_measures_each_level() {
         "edges",
         "--msaa",
         "1,4",
+        "--ssao",
         "--json",
         json_path.to_str().unwrap(),
     ]);
@@ -1005,7 +1006,20 @@ fn msaa_anti_aliases_render_and_bench_measures_each_level() {
         .iter()
         .map(|row| row["msaa"].as_u64().unwrap())
         .collect();
-    assert_eq!(levels, [1, 1, 4], "the baseline, then each level");
+    assert_eq!(levels, [1, 1, 4, 1, 4], "the baseline, then each level");
+    let occlusion: Vec<bool> = json["rows"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|row| row["ssao"].as_bool().unwrap())
+        .collect();
+    assert_eq!(
+        occlusion,
+        [false, false, false, true, true],
+        "each level without, then with ambient occlusion"
+    );
+    let text = stdout(&output);
+    assert!(text.contains("edges+ao"), "{text}");
     let output = cadr(&["bench", "gen:grid:parts=200", "--msaa", "64"]);
     assert_eq!(output.status.code(), Some(1), "{}", stderr(&output));
     assert!(stderr(&output).contains("--msaa 64"), "{}", stderr(&output));

@@ -245,6 +245,12 @@ pub const EDGES_FRAG: ShaderSource = ShaderSource {
     stage: ShaderStage::Fragment,
     source: include_str!("../../shaders/edges.frag"),
 };
+/// Screen-space ambient occlusion over the opaque picture (an option).
+pub const SSAO_FRAG: ShaderSource = ShaderSource {
+    name: "ssao.frag",
+    stage: ShaderStage::Fragment,
+    source: include_str!("../../shaders/ssao.frag"),
+};
 /// Hidden edge lines, dashed (the hidden-line mode's option).
 pub const HIDDEN_EDGES_FRAG: ShaderSource = ShaderSource {
     name: "hidden_edges.frag",
@@ -294,6 +300,7 @@ pub const ALL: &[ShaderSource] = &[
     TRANSFORMS_COMP,
     EDGES_FRAG,
     HIDDEN_EDGES_FRAG,
+    SSAO_FRAG,
     MERGE_VERT,
     BACKGROUND_FRAG,
 ];

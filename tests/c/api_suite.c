@@ -800,6 +800,31 @@ static void test_renderer(CadrContext context, struct Built *b) {
     OK(cadr_renderer_read_pixels(renderer, first, W * H * 4));
   }
 
+  /* Ambient occlusion: off by default; on, it only darkens, and off again restores the picture. */
+  {
+    bool on = true;
+    size_t i;
+    int lighter = 0;
+    OK(cadr_renderer_ssao(renderer, &on));
+    CHECK(!on);
+    EXPECT(cadr_renderer_ssao(renderer, NULL), CADR_RESULT_NULL_ARGUMENT);
+    OK(cadr_renderer_set_ssao(renderer, true));
+    OK(cadr_renderer_ssao(renderer, &on));
+    CHECK(on);
+    OK(cadr_renderer_render(renderer, b->scene, &camera, &stats));
+    OK(cadr_renderer_read_pixels(renderer, second, W * H * 4));
+    for (i = 0; i < (size_t)W * H * 4; i += 4) {
+      int before = first[i] + first[i + 1] + first[i + 2];
+      int after = second[i] + second[i + 1] + second[i + 2];
+      lighter += after > before + 3;
+    }
+    CHECK(lighter == 0);
+    OK(cadr_renderer_set_ssao(renderer, false));
+    OK(cadr_renderer_render(renderer, b->scene, &camera, &stats));
+    OK(cadr_renderer_read_pixels(renderer, second, W * H * 4));
+    CHECK(pixel_difference(first, second, W * H * 4) == 0);
+  }
+
   /* Picking through translucent parts: off by default; on, the opaque cubes still stop it. */
   {
     bool through = true;

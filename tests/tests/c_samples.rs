@@ -232,6 +232,7 @@ fn viewer_under_xvfb_swaps_techniques_resizes_and_shows_the_offscreen_image() {
         "anti-aliasing: MSAA ",
         "anti-aliasing: 1 sample (off)",
         "hidden edges: dashed",
+        "ambient occlusion: on",
         "present modes offered: fifo",
         "resized to 480x360",
     ] {

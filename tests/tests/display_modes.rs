@@ -167,3 +167,67 @@ fn hidden_line_shows_hidden_edges_dashed_when_asked() {
     drop(view);
     assert_no_validation_errors(&device);
 }
+
+/// Screen-space ambient occlusion darkens where parts meet (the demo's parts on their
+/// plates), never the background, and leaves the line-only modes alone; with MSAA too.
+#[test]
+fn ambient_occlusion_darkens_where_parts_meet_and_only_there() {
+    let scene = generate(&GeneratorSpec::Demo);
+    let device = test_device();
+    let bounds = flatten(&scene).unwrap().bounds;
+    let camera = Camera::fit(
+        &bounds,
+        f64::from(SIZE.0) / f64::from(SIZE.1),
+        DEFAULT_DIRECTION,
+    );
+    let (mut graph, _) = SceneGraph::from_scene(&scene).unwrap();
+    let mut tree = SceneTree::build(&mut graph);
+    let mut view = View::new(&device, plugin_registry(&device), SIZE.0, SIZE.1).unwrap();
+    let mut draw = |view: &mut View, ssao: bool| {
+        view.renderer_mut().set_ssao(ssao).unwrap();
+        view.render(&graph, &mut tree, &camera).unwrap();
+        view.renderer().read_rgba8().unwrap()
+    };
+    let luminance = |p: &image::Rgba<u8>| p.0[..3].iter().map(|&c| u32::from(c)).sum::<u32>();
+    for samples in [1, 4] {
+        view.renderer_mut().set_msaa(samples).unwrap();
+        let plain = draw(&mut view, false);
+        let occluded = draw(&mut view, true);
+        assert!(view.renderer().ssao());
+        if samples == 1 {
+            assert_matches_reference("display_demo_solid_ssao", &occluded, DEFAULT_TOLERANCE);
+        }
+        let mut darker = 0;
+        for ((x, y, a), b) in plain.enumerate_pixels().zip(occluded.pixels()) {
+            assert!(
+                luminance(b) <= luminance(a) + 3,
+                "{samples}x: occlusion only darkens ({x}, {y}): {a:?} -> {b:?}"
+            );
+            if cadr_tests::images::is_background(&plain, x, y) {
+                assert_eq!(
+                    a, b,
+                    "{samples}x: the background at ({x}, {y}) is untouched"
+                );
+            } else if luminance(b) + 30 < luminance(a) {
+                darker += 1;
+            }
+        }
+        let covered = plain
+            .enumerate_pixels()
+            .filter(|(x, y, _)| !cadr_tests::images::is_background(&plain, *x, *y))
+            .count();
+        assert!(
+            darker > covered / 50 && darker < covered / 2,
+            "{samples}x: {darker} of {covered} covered pixels clearly darker"
+        );
+    }
+    // Line-only modes fill no surface to occlude.
+    view.techniques_mut()
+        .set_shade_mode(ShadeMode::Wireframe)
+        .unwrap();
+    let with = draw(&mut view, true);
+    let without = draw(&mut view, false);
+    assert_eq!(with, without, "wireframe is not occluded");
+    drop(view);
+    assert_no_validation_errors(&device);
+}

@@ -74,6 +74,11 @@ pub struct Renderer {
     placeholder_storage: Buffer,
     /// The background every picture is drawn over.
     background: Background,
+    /// Whether frames that fill surfaces get screen-space ambient occlusion.
+    ssao: bool,
+    /// The ambient occlusion pass's set, naming the target's depth; made on first use, dropped
+    /// when the target is remade.
+    ssao_set: Option<DescriptorSets>,
 }
 
 /// The most frames a renderer lets the GPU work on while it prepares the next: techniques
@@ -103,6 +108,8 @@ pub(crate) struct FramePlan<'a> {
     /// The transparency method and its merge (pipeline, layout), when the frame draws
     /// translucent surfaces.
     pub translucency: Option<(&'a TransparencyMethod, (vk::Pipeline, vk::PipelineLayout))>,
+    /// Whether the frame fills surfaces, so that ambient occlusion (when on) applies.
+    pub fills_surfaces: bool,
 }
 
 /// Which image a pass draws into.
@@ -192,6 +199,8 @@ impl Renderer {
             transparency: None,
             placeholder_storage,
             background: Background::default(),
+            ssao: false,
+            ssao_set: None,
         })
     }
 
@@ -206,6 +215,47 @@ impl Renderer {
         background.validate().map_err(RenderError::InvalidUse)?;
         self.background = background;
         Ok(())
+    }
+
+    /// Whether frames that fill surfaces (solid, edges, X-ray) get screen-space ambient
+    /// occlusion: creases, corners and gaps between parts darkened from the depth (off by
+    /// default).
+    pub fn ssao(&self) -> bool {
+        self.ssao
+    }
+
+    /// Turns screen-space ambient occlusion on or off (see [`Renderer::ssao`]); the next frame
+    /// draws with it.
+    pub fn set_ssao(&mut self, on: bool) -> RenderResult<()> {
+        if on != self.ssao {
+            self.commands.wait()?;
+            // The recorded frame has (or lacks) the occlusion pass.
+            self.replayable = None;
+            self.last_recorded = None;
+            self.ssao = on;
+        }
+        Ok(())
+    }
+
+    /// The ambient occlusion pass's set for the current target (the GPU is idle: the caller
+    /// waited for the last frame).
+    fn ensure_ssao_set(&mut self) -> RenderResult<vk::DescriptorSet> {
+        if self.ssao_set.is_none() {
+            let sets = DescriptorSets::new(
+                &self.device,
+                "ambient occlusion",
+                &[self.pipelines.ssao_set_layout()],
+                &[vk::DescriptorPoolSize::default()
+                    .ty(vk::DescriptorType::SAMPLED_IMAGE)
+                    .descriptor_count(1)],
+            )?;
+            sets.write_sampled_image(0, 0, self.target.depth.view());
+            self.ssao_set = Some(sets);
+        }
+        Ok(self
+            .ssao_set
+            .as_ref()
+            .map_or(vk::DescriptorSet::null(), |s| s.sets[0]))
     }
 
     /// The section planes and caps (none by default).
@@ -245,6 +295,7 @@ impl Renderer {
         self.replayable = None;
         self.last_recorded = None;
         self.target = OffscreenTarget::new(&self.device, width, height, self.msaa())?;
+        self.ssao_set = None;
         self.pick = None;
         self.drop_transparency_targets();
         Ok(())
@@ -280,6 +331,7 @@ impl Renderer {
         self.last_recorded = None;
         let (width, height) = self.size();
         self.target = OffscreenTarget::new(&self.device, width, height, samples)?;
+        self.ssao_set = None;
         self.pick = None;
         self.drop_transparency_targets();
         Ok(())
@@ -395,6 +447,11 @@ impl Renderer {
         if let Some((method, _)) = plan.translucency {
             self.ensure_transparency_targets(method)?;
         }
+        let ssao_set = if self.ssao && plan.fills_surfaces && plan.pass == PassTarget::Color {
+            Some(self.ensure_ssao_set()?)
+        } else {
+            None
+        };
         // With a frame in flight, the last one's GPU time is read now that it is done anyway.
         let previous_gpu_us = if self.frames_in_flight > 1 {
             self.gpu_time()?
@@ -440,6 +497,7 @@ impl Renderer {
             let target = self.pass_target(plan.pass, (plan.secondary, phase > 0, phases > 1));
             let target = RenderingTarget {
                 extra_colors: &extra_colors,
+                shade_from_depth: ssao_set.is_some(),
                 multisampled: target.multisampled.map(|m| Multisampled {
                     extra_colors: &multisampled_extra_colors,
                     ..m
@@ -459,7 +517,7 @@ impl Renderer {
         }
         if plan.pass == PassTarget::Color {
             let merge = transparency.zip(plan.translucency.map(|(_, merge)| merge));
-            self.record_overlay(command_buffer, merge)?;
+            self.record_overlay(command_buffer, merge, ssao_set)?;
         }
         (recorders.after)(self, command_buffer, phases - 1, &mut stats)?;
         if let Some(timer) = &mut self.timer {
@@ -615,15 +673,20 @@ impl Renderer {
         );
     }
 
-    /// What goes over the finished rendering: the transparency method's result at each
-    /// pixel blended over the picture (with translucent surfaces), then the background
-    /// under whatever the picture leaves uncovered.
+    /// What goes over the finished rendering: ambient occlusion darkening the opaque picture
+    /// (when on), the transparency method's result at each pixel blended over the picture
+    /// (with translucent surfaces), then the background under whatever the picture leaves
+    /// uncovered.
     fn record_overlay(
         &self,
         command_buffer: vk::CommandBuffer,
         merge: Option<(&TransparencyTargets, (vk::Pipeline, vk::PipelineLayout))>,
+        ssao_set: Option<vk::DescriptorSet>,
     ) -> RenderResult<()> {
         let background = self.pipelines.background()?;
+        let ssao = ssao_set
+            .map(|set| Ok::<_, RenderError>((self.pipelines.ssao()?, set)))
+            .transpose()?;
         if merge.is_some() {
             // The translucent fragments' storage writes, read by the merge.
             memory_barrier(
@@ -640,6 +703,15 @@ impl Renderer {
             );
         }
         begin_overlay(&self.device, command_buffer, &self.target.color);
+        // Occlusion darkens the opaque surfaces, before translucent ones are merged over them.
+        if let Some((pipeline, set)) = ssao {
+            record_fullscreen(
+                &self.device,
+                command_buffer,
+                pipeline,
+                &[self.frame_set(), set],
+            );
+        }
         if let Some((targets, merge)) = merge {
             record_fullscreen(
                 &self.device,
@@ -685,6 +757,7 @@ impl Renderer {
             clear_color,
             depth: &self.target.depth,
             keep_depth: pass == PassTarget::Pick,
+            shade_from_depth: false,
             store_depth: phased,
             extent: self.target.extent(),
             secondary,

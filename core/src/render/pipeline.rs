@@ -107,6 +107,11 @@ pub struct Pipelines {
     /// The background's layout (the frame set) and pipeline, made on first use.
     background_layout: PipelineLayout,
     background: OnceLock<Pipeline>,
+    /// Set 1 of the ambient occlusion pass: the frame's depth as a sampled image.
+    ssao_set_layout: DescriptorSetLayout,
+    /// The ambient occlusion pass's layout (the frame set, its set) and pipeline.
+    ssao_layout: PipelineLayout,
+    ssao: OnceLock<Pipeline>,
 }
 
 impl Pipelines {
@@ -159,8 +164,26 @@ impl Pipelines {
             0,
             vk::ShaderStageFlags::FRAGMENT,
         )?;
+        let ssao_set_layout = DescriptorSetLayout::new(
+            device,
+            "ambient occlusion set layout",
+            &[(
+                vk::DescriptorType::SAMPLED_IMAGE,
+                vk::ShaderStageFlags::FRAGMENT,
+            )],
+        )?;
+        let ssao_layout = PipelineLayout::new(
+            device,
+            "ambient occlusion layout",
+            &[frame_set_layout.raw(), ssao_set_layout.raw()],
+            0,
+            vk::ShaderStageFlags::FRAGMENT,
+        )?;
         Ok(Self {
             device: Arc::clone(device),
+            ssao_set_layout,
+            ssao_layout,
+            ssao: OnceLock::new(),
             background_layout,
             background: OnceLock::new(),
             frame_set_layout,
@@ -227,20 +250,52 @@ impl Pipelines {
     /// The background: a full-screen triangle under what the picture leaves uncovered (its
     /// alpha is its coverage), with its layout.
     pub fn background(&self) -> RenderResult<(vk::Pipeline, vk::PipelineLayout)> {
-        let layout = self.background_layout.raw();
-        if let Some(pipeline) = self.background.get() {
-            return Ok((pipeline.raw(), layout));
+        self.fullscreen(
+            &self.background,
+            &self.background_layout,
+            &shaders::BACKGROUND_FRAG,
+            Blend::UNDER,
+        )
+    }
+
+    /// Set 1 of the ambient occlusion pass: the frame's depth (binding 0).
+    pub fn ssao_set_layout(&self) -> vk::DescriptorSetLayout {
+        self.ssao_set_layout.raw()
+    }
+
+    /// Screen-space ambient occlusion: a full-screen triangle darkening the picture where the
+    /// depth around a pixel rises above its surface, with its layout.
+    pub fn ssao(&self) -> RenderResult<(vk::Pipeline, vk::PipelineLayout)> {
+        self.fullscreen(
+            &self.ssao,
+            &self.ssao_layout,
+            &shaders::SSAO_FRAG,
+            Blend::DARKEN,
+        )
+    }
+
+    /// The full-screen pipeline in `slot`, made from `fragment` on first use.
+    fn fullscreen(
+        &self,
+        slot: &OnceLock<Pipeline>,
+        layout: &PipelineLayout,
+        fragment: &ShaderSource,
+        blend: Blend,
+    ) -> RenderResult<(vk::Pipeline, vk::PipelineLayout)> {
+        if let Some(pipeline) = slot.get() {
+            return Ok((pipeline.raw(), layout.raw()));
         }
         let vertex = module(&self.device, &shaders::MERGE_VERT)?;
-        let fragment = module(&self.device, &shaders::BACKGROUND_FRAG)?;
+        let fragment_module = module(&self.device, fragment)?;
         let made = Pipeline::fullscreen(
             &self.device,
-            &self.background_layout,
-            (&vertex, &fragment),
-            Blend::UNDER,
-            "background",
+            layout,
+            (&vertex, &fragment_module),
+            blend,
+            fragment.name,
         )?;
-        Ok((self.background.get_or_init(|| made).raw(), layout))
+        // Another thread may have made one meanwhile: the first is kept, `made` is dropped.
+        Ok((slot.get_or_init(|| made).raw(), layout.raw()))
     }
 
     /// The compute pipeline in `slot`, made from `shader` on first use.

@@ -326,6 +326,13 @@ impl Renderer {
                 uploads_pending,
                 display,
                 translucency,
+                fills_surfaces: matches!(
+                    passes,
+                    PassSet::Shaded {
+                        mode: ShadeMode::Solid | ShadeMode::Edges | ShadeMode::XRay,
+                        ..
+                    }
+                ),
             },
             FrameRecorders {
                 before: &mut before,

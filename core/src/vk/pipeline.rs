@@ -403,6 +403,17 @@ impl Blend {
         alpha_op: vk::BlendOp::ADD,
     };
 
+    /// Darkens what is there by the source's alpha, keeping its alpha (coverage):
+    /// `dst × (1 − src.a)`.
+    pub const DARKEN: Blend = Blend {
+        src_color: vk::BlendFactor::ZERO,
+        dst_color: vk::BlendFactor::ONE_MINUS_SRC_ALPHA,
+        color_op: vk::BlendOp::ADD,
+        src_alpha: vk::BlendFactor::ZERO,
+        dst_alpha: vk::BlendFactor::ONE,
+        alpha_op: vk::BlendOp::ADD,
+    };
+
     /// Opaque colour under what is there, whose alpha is its coverage:
     /// `src × (1 − dst.a) + dst`, ending opaque.
     pub const UNDER: Blend = Blend {

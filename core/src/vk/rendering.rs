@@ -22,6 +22,9 @@ pub struct RenderingTarget<'a> {
     pub depth: &'a Image,
     /// Whether the depth is stored and made readable after the pass.
     pub keep_depth: bool,
+    /// Whether the depth is stored (resolved, with MSAA) and left readable by fragment
+    /// shaders in `SHADER_READ_ONLY_OPTIMAL` after the pass (screen-space ambient occlusion).
+    pub shade_from_depth: bool,
     /// Whether the depth is stored (the pass will be suspended and its depth read); with
     /// MSAA the multisampled colours are then stored too, for the pass to resume on.
     pub store_depth: bool,
@@ -111,10 +114,13 @@ pub fn begin_rendering(
             vk::AccessFlags2::SHADER_SAMPLED_READ,
         )
     } else {
-        // The last pick's depth readback may still be running, or the last frame's resolve.
+        // The last pick's depth readback may still be running, or the last frame's resolve
+        // or ambient occlusion.
         (
             vk::ImageLayout::UNDEFINED,
-            vk::PipelineStageFlags2::COPY | DEPTH_RESOLVE_WRITE.0,
+            vk::PipelineStageFlags2::COPY
+                | vk::PipelineStageFlags2::FRAGMENT_SHADER
+                | DEPTH_RESOLVE_WRITE.0,
             vk::AccessFlags2::NONE,
         )
     };
@@ -202,11 +208,13 @@ pub fn begin_rendering(
         .image_layout(vk::ImageLayout::DEPTH_ATTACHMENT_OPTIMAL)
         .load_op(load_op)
         // A suspended pass reads its depth, so every pass but a last unkept one stores it.
-        .store_op(if target.keep_depth || target.store_depth {
-            vk::AttachmentStoreOp::STORE
-        } else {
-            vk::AttachmentStoreOp::DONT_CARE
-        })
+        .store_op(
+            if target.keep_depth || target.store_depth || target.shade_from_depth {
+                vk::AttachmentStoreOp::STORE
+            } else {
+                vk::AttachmentStoreOp::DONT_CARE
+            },
+        )
         .clear_value(vk::ClearValue {
             depth_stencil: vk::ClearDepthStencilValue {
                 depth: 1.0,
@@ -215,8 +223,9 @@ pub fn begin_rendering(
         });
     if let Some(multisampled) = &target.multisampled {
         depth_attachment = depth_attachment.image_view(multisampled.depth.view());
-        if target.store_depth {
-            // GPU cullers read the depth between phases: the one-sample depth receives it.
+        if target.store_depth || target.shade_from_depth {
+            // GPU cullers read the depth between phases, ambient occlusion after the pass:
+            // the one-sample depth receives it.
             depth_attachment = depth_attachment
                 .resolve_mode(multisampled.depth_resolve)
                 .resolve_image_view(target.depth.view())
@@ -373,6 +382,24 @@ pub fn end_rendering(
                 vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL,
                 vk::PipelineStageFlags2::COLOR_ATTACHMENT_OUTPUT,
                 vk::AccessFlags2::COLOR_ATTACHMENT_WRITE,
+            ),
+            (
+                vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL,
+                vk::PipelineStageFlags2::FRAGMENT_SHADER,
+                vk::AccessFlags2::SHADER_SAMPLED_READ,
+            ),
+        );
+    }
+    if target.shade_from_depth {
+        transition(
+            device,
+            command_buffer,
+            target.depth.raw(),
+            vk::ImageAspectFlags::DEPTH,
+            (
+                vk::ImageLayout::DEPTH_ATTACHMENT_OPTIMAL,
+                DEPTH_RESOLVE_WRITE.0,
+                DEPTH_RESOLVE_WRITE.1,
             ),
             (
                 vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL,

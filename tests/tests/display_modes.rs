@@ -101,22 +101,50 @@ fn the_cylinder_engine_in_every_display_mode_matches_its_references() {
     check_modes("display_cylinder_engine", &scene);
 }
 
+/// A scene in a view of `SIZE` with the fitted camera, for the tests that change one setting.
+struct Viewed {
+    device: std::sync::Arc<cadr_core::vk::Device>,
+    graph: SceneGraph,
+    tree: SceneTree,
+    view: View,
+    camera: Camera,
+}
+
+impl Viewed {
+    fn new(scene: &Scene) -> Self {
+        let device = test_device();
+        let bounds = flatten(scene).unwrap().bounds;
+        let camera = Camera::fit(
+            &bounds,
+            f64::from(SIZE.0) / f64::from(SIZE.1),
+            DEFAULT_DIRECTION,
+        );
+        let (mut graph, _) = SceneGraph::from_scene(scene).unwrap();
+        let tree = SceneTree::build(&mut graph);
+        let view = View::new(&device, plugin_registry(&device), SIZE.0, SIZE.1).unwrap();
+        Self {
+            device,
+            graph,
+            tree,
+            view,
+            camera,
+        }
+    }
+}
+
 /// Hidden-line with its hidden edges dashed: the visible lines stay as they are, and grey
 /// dashes appear where edges run behind surfaces (none of them where hidden-line alone shows
 /// a line, more of them than the visible lines' share of the picture would allow by chance).
 #[test]
 fn hidden_line_shows_hidden_edges_dashed_when_asked() {
     let scene = load_file(std::path::Path::new(CYLINDER_ENGINE_GLB)).unwrap();
-    let device = test_device();
-    let bounds = flatten(&scene).unwrap().bounds;
-    let camera = Camera::fit(
-        &bounds,
-        f64::from(SIZE.0) / f64::from(SIZE.1),
-        DEFAULT_DIRECTION,
-    );
-    let (mut graph, _) = SceneGraph::from_scene(&scene).unwrap();
-    let mut tree = SceneTree::build(&mut graph);
-    let mut view = View::new(&device, plugin_registry(&device), SIZE.0, SIZE.1).unwrap();
+    let Viewed {
+        device,
+        graph,
+        mut tree,
+        mut view,
+        camera,
+    } = Viewed::new(&scene);
     view.techniques_mut()
         .set_shade_mode(ShadeMode::HiddenLine)
         .unwrap();
@@ -172,17 +200,13 @@ fn hidden_line_shows_hidden_edges_dashed_when_asked() {
 /// plates), never the background, and leaves the line-only modes alone; with MSAA too.
 #[test]
 fn ambient_occlusion_darkens_where_parts_meet_and_only_there() {
-    let scene = generate(&GeneratorSpec::Demo);
-    let device = test_device();
-    let bounds = flatten(&scene).unwrap().bounds;
-    let camera = Camera::fit(
-        &bounds,
-        f64::from(SIZE.0) / f64::from(SIZE.1),
-        DEFAULT_DIRECTION,
-    );
-    let (mut graph, _) = SceneGraph::from_scene(&scene).unwrap();
-    let mut tree = SceneTree::build(&mut graph);
-    let mut view = View::new(&device, plugin_registry(&device), SIZE.0, SIZE.1).unwrap();
+    let Viewed {
+        device,
+        graph,
+        mut tree,
+        mut view,
+        camera,
+    } = Viewed::new(&generate(&GeneratorSpec::Demo));
     let mut draw = |view: &mut View, ssao: bool| {
         view.renderer_mut().set_ssao(ssao).unwrap();
         view.render(&graph, &mut tree, &camera).unwrap();

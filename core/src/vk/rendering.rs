@@ -390,7 +390,24 @@ pub fn end_rendering(
             ),
         );
     }
-    if target.shade_from_depth {
+    // What reads the depth after the pass: ambient occlusion's fragment shader, or the pick
+    // readback's copy.
+    let depth_reader = if target.shade_from_depth {
+        Some((
+            vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL,
+            vk::PipelineStageFlags2::FRAGMENT_SHADER,
+            vk::AccessFlags2::SHADER_SAMPLED_READ,
+        ))
+    } else if target.keep_depth {
+        Some((
+            vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
+            vk::PipelineStageFlags2::COPY,
+            vk::AccessFlags2::TRANSFER_READ,
+        ))
+    } else {
+        None
+    };
+    if let Some(reader) = depth_reader {
         transition(
             device,
             command_buffer,
@@ -401,29 +418,7 @@ pub fn end_rendering(
                 DEPTH_RESOLVE_WRITE.0,
                 DEPTH_RESOLVE_WRITE.1,
             ),
-            (
-                vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL,
-                vk::PipelineStageFlags2::FRAGMENT_SHADER,
-                vk::AccessFlags2::SHADER_SAMPLED_READ,
-            ),
-        );
-    }
-    if target.keep_depth {
-        transition(
-            device,
-            command_buffer,
-            target.depth.raw(),
-            vk::ImageAspectFlags::DEPTH,
-            (
-                vk::ImageLayout::DEPTH_ATTACHMENT_OPTIMAL,
-                DEPTH_RESOLVE_WRITE.0,
-                DEPTH_RESOLVE_WRITE.1,
-            ),
-            (
-                vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
-                vk::PipelineStageFlags2::COPY,
-                vk::AccessFlags2::TRANSFER_READ,
-            ),
+            reader,
         );
     }
 }

@@ -90,6 +90,65 @@ pub fn assert_no_validation_errors(device: &Device) {
     );
 }
 
+/// A scene in a view that has the plugin libraries, seen by one camera: for tests that draw it
+/// several ways (display modes, MSAA, options) on one device.
+pub struct SceneView {
+    /// The device, validation on.
+    pub device: Arc<Device>,
+    /// The scene's graph.
+    pub graph: SceneGraph,
+    /// Its tree.
+    pub tree: SceneTree,
+    /// The view drawing it.
+    pub view: View,
+    /// The camera.
+    pub camera: Camera,
+}
+
+impl SceneView {
+    /// `scene` in a `width` × `height` view on `device`, seen by `camera`.
+    pub fn new(
+        device: Arc<Device>,
+        scene: &Scene,
+        (width, height): (u32, u32),
+        camera: Camera,
+    ) -> Self {
+        let (mut graph, _) = SceneGraph::from_scene(scene).expect("build the scene graph");
+        let tree = SceneTree::build(&mut graph);
+        let view =
+            View::new(&device, plugin_registry(&device), width, height).expect("create the view");
+        Self {
+            device,
+            graph,
+            tree,
+            view,
+            camera,
+        }
+    }
+
+    /// `scene` in a `width` × `height` view on `device`, the camera fitted to its bounds.
+    pub fn fitted(device: Arc<Device>, scene: &Scene, (width, height): (u32, u32)) -> Self {
+        let bounds = flatten(scene).expect("flatten the scene").bounds;
+        let camera = Camera::fit(
+            &bounds,
+            f64::from(width) / f64::from(height),
+            DEFAULT_DIRECTION,
+        );
+        Self::new(device, scene, (width, height), camera)
+    }
+
+    /// Draws a frame with the view's current settings and reads it back.
+    pub fn render(&mut self) -> image::RgbaImage {
+        self.view
+            .render(&self.graph, &mut self.tree, &self.camera)
+            .expect("render a frame");
+        self.view
+            .renderer()
+            .read_rgba8()
+            .expect("read the frame back")
+    }
+}
+
 /// Renders `scene` with the built-in combination (no plugin library), the camera fitted to its
 /// bounds, and returns the image; checks one draw per part and validation.
 pub fn render_scene(scene: &Scene, width: u32, height: u32) -> image::RgbaImage {

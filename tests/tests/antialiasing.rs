@@ -8,20 +8,16 @@ use std::collections::HashSet;
 use std::sync::Arc;
 
 use cadr_core::generate::{generate, GeneratorSpec};
-use cadr_core::graph::SceneGraph;
 use cadr_core::render::pick::PixelRect;
-use cadr_core::render::{Camera, DEFAULT_DIRECTION};
-use cadr_core::scene::{flatten, Scene};
+use cadr_core::scene::Scene;
 use cadr_core::technique::{Combination, ShadeMode};
-use cadr_core::tree::SceneTree;
-use cadr_core::view::View;
 use cadr_core::vk::Device;
 use cadr_tests::images::{
     assert_matches_reference, compare, ImageDifference, Tolerance, DEFAULT_TOLERANCE,
 };
 use cadr_tests::{
-    all_combinations, assert_no_validation_errors, plugin_registry, test_device,
-    test_device_with_synchronization_checks,
+    all_combinations, assert_no_validation_errors, test_device,
+    test_device_with_synchronization_checks, SceneView,
 };
 
 const SIZE: (u32, u32) = (160, 120);
@@ -52,47 +48,20 @@ const SAME_MSAA_PICTURE: Tolerance = Tolerance {
     p99: 0.25,
 };
 
-struct Fixture {
-    device: Arc<Device>,
-    graph: SceneGraph,
-    tree: SceneTree,
-    view: View,
-    camera: Camera,
+/// The demo (or `scene`) in a fitted view.
+fn fixture(device: Arc<Device>, scene: &Scene) -> SceneView {
+    SceneView::fitted(device, scene, SIZE)
 }
 
-impl Fixture {
-    fn new(device: Arc<Device>, scene: &Scene) -> Self {
-        let bounds = flatten(scene).unwrap().bounds;
-        let camera = Camera::fit(
-            &bounds,
-            f64::from(SIZE.0) / f64::from(SIZE.1),
-            DEFAULT_DIRECTION,
-        );
-        let (mut graph, _) = SceneGraph::from_scene(scene).unwrap();
-        let tree = SceneTree::build(&mut graph);
-        let view = View::new(&device, plugin_registry(&device), SIZE.0, SIZE.1).unwrap();
-        Self {
-            device,
-            graph,
-            tree,
-            view,
-            camera,
-        }
-    }
+/// Two frames, the second read back: replaying techniques draw it from their recording.
+fn render(f: &mut SceneView) -> image::RgbaImage {
+    f.render();
+    f.render()
+}
 
-    fn render(&mut self) -> image::RgbaImage {
-        // Two frames: replaying techniques draw the second from their recording.
-        for _ in 0..2 {
-            self.view
-                .render(&self.graph, &mut self.tree, &self.camera)
-                .unwrap();
-        }
-        self.view.renderer().read_rgba8().unwrap()
-    }
-
-    fn msaa(&mut self) -> u32 {
-        *self.device.sample_counts().last().unwrap()
-    }
+/// The highest MSAA level the device offers.
+fn highest_msaa(f: &SceneView) -> u32 {
+    f.device.sample_counts().last().copied().unwrap_or(1)
 }
 
 fn distinct_colours(image: &image::RgbaImage) -> usize {
@@ -105,8 +74,8 @@ fn distinct_colours(image: &image::RgbaImage) -> usize {
 
 #[test]
 fn msaa_smooths_edges_and_keeps_the_picture() {
-    let mut f = Fixture::new(test_device(), &generate(&GeneratorSpec::Demo));
-    let samples = f.msaa();
+    let mut f = fixture(test_device(), &generate(&GeneratorSpec::Demo));
+    let samples = highest_msaa(&f);
     assert!(
         samples >= 4,
         "the test device offers MSAA (lavapipe has 4x): {:?}",
@@ -115,10 +84,10 @@ fn msaa_smooths_edges_and_keeps_the_picture() {
     for mode in ShadeMode::ALL {
         f.view.techniques_mut().set_shade_mode(mode).unwrap();
         f.view.renderer_mut().set_msaa(1).unwrap();
-        let aliased = f.render();
+        let aliased = render(&mut f);
         f.view.renderer_mut().set_msaa(samples).unwrap();
         assert_eq!(f.view.renderer().msaa(), samples);
-        let smooth = f.render();
+        let smooth = render(&mut f);
         if mode == ShadeMode::Edges && samples == 4 {
             assert_matches_reference("display_demo_edges_msaa4", &smooth, DEFAULT_TOLERANCE);
         }
@@ -142,10 +111,10 @@ fn msaa_smooths_edges_and_keeps_the_picture() {
 
 #[test]
 fn sample_counts_the_device_does_not_offer_are_refused_and_drawing_goes_on() {
-    let mut f = Fixture::new(test_device(), &generate(&GeneratorSpec::Demo));
+    let mut f = fixture(test_device(), &generate(&GeneratorSpec::Demo));
     let offered = f.device.sample_counts();
     assert_eq!(offered[0], 1, "one sample is always offered");
-    let before = f.render();
+    let before = render(&mut f);
     for refused in [0, 3, 128].into_iter().chain(
         [2, 8, 16]
             .into_iter()
@@ -159,7 +128,7 @@ fn sample_counts_the_device_does_not_offer_are_refused_and_drawing_goes_on() {
         );
         assert_eq!(f.view.renderer().msaa(), 1, "a refusal changes nothing");
     }
-    let after = f.render();
+    let after = render(&mut f);
     assert_eq!(before, after, "the renderer draws on as before");
     drop(f.view);
     assert_no_validation_errors(&f.device);
@@ -167,14 +136,14 @@ fn sample_counts_the_device_does_not_offer_are_refused_and_drawing_goes_on() {
 
 #[test]
 fn picking_stays_exact_with_msaa() {
-    let mut f = Fixture::new(test_device(), &generate(&GeneratorSpec::Demo));
+    let mut f = fixture(test_device(), &generate(&GeneratorSpec::Demo));
     let rect = PixelRect {
         x: 40,
         y: 30,
         width: 80,
         height: 60,
     };
-    let pick = |f: &mut Fixture| {
+    let pick = |f: &mut SceneView| {
         f.view
             .pick(&f.graph, &mut f.tree, &f.camera, rect)
             .unwrap()
@@ -184,10 +153,10 @@ fn picking_stays_exact_with_msaa() {
     };
     let one_sample = pick(&mut f);
     assert!(one_sample.len() > 10, "{} hits", one_sample.len());
-    let samples = f.msaa();
+    let samples = highest_msaa(&f);
     f.view.renderer_mut().set_msaa(samples).unwrap();
     // A frame drawn with MSAA between, as a viewer does.
-    f.render();
+    render(&mut f);
     assert_eq!(pick(&mut f), one_sample, "the same hits, pixels and depths");
     drop(f.view);
     assert_no_validation_errors(&f.device);
@@ -198,8 +167,8 @@ fn picking_stays_exact_with_msaa() {
 /// combination draws with MSAA.
 #[test]
 fn every_kind_of_technique_draws_with_msaa_like_the_built_in_one() {
-    let mut f = Fixture::new(test_device(), &generate(&GeneratorSpec::Demo));
-    let samples = f.msaa();
+    let mut f = fixture(test_device(), &generate(&GeneratorSpec::Demo));
+    let samples = highest_msaa(&f);
     f.view.renderer_mut().set_msaa(samples).unwrap();
     let combinations = all_combinations(f.view.techniques().registry());
     let occlusion = Combination {
@@ -223,7 +192,7 @@ fn every_kind_of_technique_draws_with_msaa_like_the_built_in_one() {
             .select(&Combination::built_in())
             .unwrap();
         f.view.techniques_mut().set_shade_mode(mode).unwrap();
-        let reference = f.render();
+        let reference = render(&mut f);
         // Each mode a share of the sample, the occlusion culler in every one.
         for combination in sample
             .iter()
@@ -233,7 +202,7 @@ fn every_kind_of_technique_draws_with_msaa_like_the_built_in_one() {
         {
             f.view.techniques_mut().select(combination).unwrap();
             f.view.techniques_mut().set_shade_mode(mode).unwrap();
-            let image = f.render();
+            let image = render(&mut f);
             let difference = compare(&image, &reference).unwrap();
             assert!(
                 difference.within(SAME_MSAA_PICTURE),
@@ -253,12 +222,12 @@ fn every_kind_of_technique_draws_with_msaa_like_the_built_in_one() {
 #[test]
 fn both_transparency_methods_draw_xray_with_msaa() {
     let device = test_device_with_synchronization_checks();
-    let mut f = Fixture::new(device, &generate(&GeneratorSpec::Demo));
+    let mut f = fixture(device, &generate(&GeneratorSpec::Demo));
     f.view
         .techniques_mut()
         .set_shade_mode(ShadeMode::XRay)
         .unwrap();
-    let samples = f.msaa();
+    let samples = highest_msaa(&f);
     for method in ["weighted-blended", "per-pixel-lists"] {
         let combination = Combination {
             transparency: method.into(),
@@ -268,9 +237,9 @@ fn both_transparency_methods_draw_xray_with_msaa() {
         };
         f.view.techniques_mut().select(&combination).unwrap();
         f.view.renderer_mut().set_msaa(1).unwrap();
-        let one_sample = f.render();
+        let one_sample = render(&mut f);
         f.view.renderer_mut().set_msaa(samples).unwrap();
-        let smooth = f.render();
+        let smooth = render(&mut f);
         let difference = difference_from_afar(&smooth, &one_sample);
         assert!(
             difference.within(MSAA_AGAINST_ONE_SAMPLE),

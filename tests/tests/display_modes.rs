@@ -4,40 +4,27 @@
 #![allow(clippy::unwrap_used)] // Test code: a failed unwrap is a failed test.
 
 use cadr_core::generate::{generate, GeneratorSpec};
-use cadr_core::graph::SceneGraph;
 use cadr_core::load::load_file;
-use cadr_core::render::{Background, Camera, DEFAULT_DIRECTION};
-use cadr_core::scene::{flatten, Scene};
+use cadr_core::render::Background;
+use cadr_core::scene::Scene;
 use cadr_core::technique::ShadeMode;
-use cadr_core::tree::SceneTree;
-use cadr_core::view::View;
 use cadr_tests::images::{assert_matches_reference, compare, DEFAULT_TOLERANCE, VISIBLE_CHANGE};
-use cadr_tests::{assert_no_validation_errors, plugin_registry, test_device, CYLINDER_ENGINE_GLB};
+use cadr_tests::{assert_no_validation_errors, test_device, SceneView, CYLINDER_ENGINE_GLB};
 
 const SIZE: (u32, u32) = (160, 120);
 
 /// The scene in every mode, in the order of `ShadeMode::ALL`.
 fn render_every_mode(scene: &Scene) -> Vec<image::RgbaImage> {
-    let device = test_device();
-    let bounds = flatten(scene).unwrap().bounds;
-    let camera = Camera::fit(
-        &bounds,
-        f64::from(SIZE.0) / f64::from(SIZE.1),
-        DEFAULT_DIRECTION,
-    );
-    let (mut graph, _) = SceneGraph::from_scene(scene).unwrap();
-    let mut tree = SceneTree::build(&mut graph);
-    let mut view = View::new(&device, plugin_registry(&device), SIZE.0, SIZE.1).unwrap();
+    let mut f = SceneView::fitted(test_device(), scene, SIZE);
     let images = ShadeMode::ALL
         .iter()
         .map(|&mode| {
-            view.techniques_mut().set_shade_mode(mode).unwrap();
-            view.render(&graph, &mut tree, &camera).unwrap();
-            view.renderer().read_rgba8().unwrap()
+            f.view.techniques_mut().set_shade_mode(mode).unwrap();
+            f.render()
         })
         .collect();
-    drop(view);
-    assert_no_validation_errors(&device);
+    drop(f.view);
+    assert_no_validation_errors(&f.device);
     images
 }
 
@@ -101,61 +88,24 @@ fn the_cylinder_engine_in_every_display_mode_matches_its_references() {
     check_modes("display_cylinder_engine", &scene);
 }
 
-/// A scene in a view of `SIZE` with the fitted camera, for the tests that change one setting.
-struct Viewed {
-    device: std::sync::Arc<cadr_core::vk::Device>,
-    graph: SceneGraph,
-    tree: SceneTree,
-    view: View,
-    camera: Camera,
-}
-
-impl Viewed {
-    fn new(scene: &Scene) -> Self {
-        let device = test_device();
-        let bounds = flatten(scene).unwrap().bounds;
-        let camera = Camera::fit(
-            &bounds,
-            f64::from(SIZE.0) / f64::from(SIZE.1),
-            DEFAULT_DIRECTION,
-        );
-        let (mut graph, _) = SceneGraph::from_scene(scene).unwrap();
-        let tree = SceneTree::build(&mut graph);
-        let view = View::new(&device, plugin_registry(&device), SIZE.0, SIZE.1).unwrap();
-        Self {
-            device,
-            graph,
-            tree,
-            view,
-            camera,
-        }
-    }
-}
-
 /// Hidden-line with its hidden edges dashed: the visible lines stay as they are, and grey
 /// dashes appear where edges run behind surfaces (none of them where hidden-line alone shows
 /// a line, more of them than the visible lines' share of the picture would allow by chance).
 #[test]
 fn hidden_line_shows_hidden_edges_dashed_when_asked() {
     let scene = load_file(std::path::Path::new(CYLINDER_ENGINE_GLB)).unwrap();
-    let Viewed {
-        device,
-        graph,
-        mut tree,
-        mut view,
-        camera,
-    } = Viewed::new(&scene);
-    view.techniques_mut()
+    let mut f = SceneView::fitted(test_device(), &scene, SIZE);
+    f.view
+        .techniques_mut()
         .set_shade_mode(ShadeMode::HiddenLine)
         .unwrap();
-    let mut draw = |view: &mut View, dashed: bool| {
-        view.techniques_mut().set_dashed_hidden_lines(dashed);
-        view.render(&graph, &mut tree, &camera).unwrap();
-        view.renderer().read_rgba8().unwrap()
+    let draw = |f: &mut SceneView, dashed: bool| {
+        f.view.techniques_mut().set_dashed_hidden_lines(dashed);
+        f.render()
     };
-    let removed = draw(&mut view, false);
-    let dashed = draw(&mut view, true);
-    assert!(view.techniques().dashed_hidden_lines());
+    let removed = draw(&mut f, false);
+    let dashed = draw(&mut f, true);
+    assert!(f.view.techniques().dashed_hidden_lines());
     assert_matches_reference(
         "display_cylinder_engine_hidden_line_dashed",
         &dashed,
@@ -183,41 +133,35 @@ fn hidden_line_shows_hidden_edges_dashed_when_asked() {
         "{dashes} grey dash pixels against {lines} visible line pixels"
     );
     // The other modes do not change.
-    view.techniques_mut()
+    f.view
+        .techniques_mut()
         .set_shade_mode(ShadeMode::Edges)
         .unwrap();
-    let edges_dashed = draw(&mut view, true);
-    let edges = draw(&mut view, false);
+    let edges_dashed = draw(&mut f, true);
+    let edges = draw(&mut f, false);
     assert_eq!(
         edges_dashed, edges,
         "edges mode has no hidden lines to dash"
     );
-    drop(view);
-    assert_no_validation_errors(&device);
+    drop(f.view);
+    assert_no_validation_errors(&f.device);
 }
 
 /// Screen-space ambient occlusion darkens where parts meet (the demo's parts on their
 /// plates), never the background, and leaves the line-only modes alone; with MSAA too.
 #[test]
 fn ambient_occlusion_darkens_where_parts_meet_and_only_there() {
-    let Viewed {
-        device,
-        graph,
-        mut tree,
-        mut view,
-        camera,
-    } = Viewed::new(&generate(&GeneratorSpec::Demo));
-    let mut draw = |view: &mut View, ssao: bool| {
-        view.renderer_mut().set_ssao(ssao).unwrap();
-        view.render(&graph, &mut tree, &camera).unwrap();
-        view.renderer().read_rgba8().unwrap()
+    let mut f = SceneView::fitted(test_device(), &generate(&GeneratorSpec::Demo), SIZE);
+    let draw = |f: &mut SceneView, ssao: bool| {
+        f.view.renderer_mut().set_ssao(ssao).unwrap();
+        f.render()
     };
     let luminance = |p: &image::Rgba<u8>| p.0[..3].iter().map(|&c| u32::from(c)).sum::<u32>();
     for samples in [1, 4] {
-        view.renderer_mut().set_msaa(samples).unwrap();
-        let plain = draw(&mut view, false);
-        let occluded = draw(&mut view, true);
-        assert!(view.renderer().ssao());
+        f.view.renderer_mut().set_msaa(samples).unwrap();
+        let plain = draw(&mut f, false);
+        let occluded = draw(&mut f, true);
+        assert!(f.view.renderer().ssao());
         if samples == 1 {
             assert_matches_reference("display_demo_solid_ssao", &occluded, DEFAULT_TOLERANCE);
         }
@@ -246,12 +190,13 @@ fn ambient_occlusion_darkens_where_parts_meet_and_only_there() {
         );
     }
     // Line-only modes fill no surface to occlude.
-    view.techniques_mut()
+    f.view
+        .techniques_mut()
         .set_shade_mode(ShadeMode::Wireframe)
         .unwrap();
-    let with = draw(&mut view, true);
-    let without = draw(&mut view, false);
+    let with = draw(&mut f, true);
+    let without = draw(&mut f, false);
     assert_eq!(with, without, "wireframe is not occluded");
-    drop(view);
-    assert_no_validation_errors(&device);
+    drop(f.view);
+    assert_no_validation_errors(&f.device);
 }

@@ -165,6 +165,7 @@ unsafe fn geometry_from(desc: *const CadrGeometryDesc) -> Result<Geometry, Failu
         indices: indices.to_vec(),
         wire_indices: wire_indices.to_vec(),
         parts,
+        attributes: Vec::new(),
     };
     geometry
         .validate(0)
@@ -200,6 +201,7 @@ unsafe fn material_from(desc: *const CadrMaterialDesc) -> Result<Material, Failu
         base_color: desc.base_color,
         metallic: desc.metallic,
         roughness: desc.roughness,
+        ..Material::default()
     })
 }
 
@@ -329,7 +331,9 @@ pub unsafe extern "C" fn cadr_scene_create_material(
     })
 }
 
-/// Changes a material's parameters; every part using it is drawn with them.
+/// Changes a material's parameters; every part using it is drawn with them. A texture the
+/// material has (from a loaded file) is kept, and so is an alpha cutoff (glTF MASK); otherwise
+/// `base_color[3]` is the opacity, also for a material a file made OPAQUE.
 ///
 /// Ownership: nothing changes hands; the arguments are read during the call only.
 /// Returns as `cadr_scene_create_material`. Thread-safety: as `cadr_scene_create`.
@@ -344,9 +348,15 @@ pub unsafe extern "C" fn cadr_scene_set_material(
 ) -> crate::CadrResult {
     guard(|| {
         // SAFETY: forwarded contract.
-        let data = unsafe { material_from(desc) }?;
+        let mut data = unsafe { material_from(desc) }?;
         with_scene(scene, |s| {
             let handle = material_of(&s.graph, material, "material")?;
+            let current = s.graph.material(handle).map_err(graph_failure)?;
+            data.base_color_texture = current.base_color_texture;
+            // A mask keeps cutting; a file's OPAQUE mode must not hide the opacity a host sets.
+            if let cadr_core::scene::AlphaMode::Mask { .. } = current.alpha_mode {
+                data.alpha_mode = current.alpha_mode;
+            }
             s.graph.set_material(handle, data).map_err(graph_failure)
         })
     })

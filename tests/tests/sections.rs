@@ -61,6 +61,7 @@ fn unit_box(open: bool) -> Geometry {
         vertices,
         indices,
         wire_indices: Vec::new(),
+        attributes: Vec::new(),
     }
 }
 
@@ -74,6 +75,7 @@ fn boxes(open: bool, places: &[DVec3]) -> Scene {
             base_color: [0.5, 0.5, 0.5, 1.0],
             metallic: 0.0,
             roughness: 0.8,
+            ..Material::default()
         }],
         ..Scene::default()
     };

@@ -11,7 +11,7 @@ use cadr_core::graph::{NodeHandle, SceneGraph};
 use cadr_core::load::load_file;
 use cadr_core::render::Camera;
 use cadr_core::save::save_scene;
-use cadr_core::scene::{Geometry, Material, MeshRef, Node, Part, Scene, Vertex};
+use cadr_core::scene::{AlphaMode, Geometry, Material, MeshRef, Node, Part, Scene, Vertex};
 use cadr_core::technique::{Combination, ShadeMode, TechniqueKind};
 use cadr_core::tree::SceneTree;
 use cadr_core::view::View;
@@ -51,6 +51,7 @@ fn square() -> Geometry {
             first_wire_index: 0,
             wire_index_count: 0,
         }],
+        attributes: Vec::new(),
     }
 }
 
@@ -60,6 +61,7 @@ fn material(name: &str, base_color: [f32; 4]) -> Material {
         base_color,
         metallic: 0.0,
         roughness: 1.0,
+        ..Material::default()
     }
 }
 
@@ -342,9 +344,15 @@ fn gltf_alpha_modes_give_materials_their_opacity_and_survive_a_save() {
     let saved = load_file(&path).unwrap();
     let alphas: Vec<f32> = saved.materials.iter().map(|m| m.base_color[3]).collect();
     assert_eq!(alphas, [1.0, 0.4, 0.4, 0.4, 0.4], "BLEND keeps the opacity");
+    let translucent: Vec<bool> = saved
+        .materials
+        .iter()
+        .map(|m| m.is_translucent(|_| false))
+        .collect();
+    assert_eq!(translucent, [false, true, true, true, true]);
 
-    // The same file with other modes: OPAQUE ignores alpha; MASK keeps a material whose alpha
-    // reaches the cutoff opaque and drops one below it.
+    // The same file with other modes: OPAQUE ignores alpha; MASK keeps the factor's alpha,
+    // which the shaders compare with the cutoff (default 0.5); neither is translucent.
     let text = std::fs::read_to_string(&path).unwrap();
     let mut modes = [
         r#""alphaMode":"OPAQUE""#,
@@ -369,8 +377,32 @@ fn gltf_alpha_modes_give_materials_their_opacity_and_survive_a_save() {
         .collect();
     std::fs::write(&path, rewritten.concat()).unwrap();
     let modes = load_file(&path).unwrap();
-    let alphas: Vec<f32> = modes.materials.iter().map(|m| m.base_color[3]).collect();
-    assert_eq!(alphas, [1.0, 0.4, 1.0, 1.0, 0.0]);
+    let loaded: Vec<AlphaMode> = modes.materials.iter().map(|m| m.alpha_mode).collect();
+    assert_eq!(
+        loaded,
+        [
+            AlphaMode::Opaque,
+            AlphaMode::Blend,
+            AlphaMode::Opaque,
+            AlphaMode::Mask { cutoff: 0.3 },
+            AlphaMode::Mask { cutoff: 0.5 }
+        ]
+    );
+    let translucent: Vec<bool> = modes
+        .materials
+        .iter()
+        .map(|m| m.is_translucent(|_| false))
+        .collect();
+    assert_eq!(translucent, [false, true, false, false, false]);
+    // Saved again, every mode survives.
+    save_scene(&modes, &path).unwrap();
+    let again: Vec<AlphaMode> = load_file(&path)
+        .unwrap()
+        .materials
+        .iter()
+        .map(|m| m.alpha_mode)
+        .collect();
+    assert_eq!(again, loaded);
     std::fs::remove_dir_all(&dir).unwrap();
 }
 

@@ -221,6 +221,7 @@ fn material_from_csf(csf: &CsfMaterial) -> Material {
         base_color: csf.color,
         metallic: 0.0,
         roughness: 0.5,
+        ..Material::default()
     };
     if let Some(packet) = gltf2_packet(&csf.bytes) {
         let f32_at = |at: usize| {

@@ -63,6 +63,7 @@ fn palette(count: usize, rng: &mut Rng) -> Vec<Material> {
                 ],
                 metallic,
                 roughness,
+                ..Material::default()
             }
         })
         .collect()

@@ -71,6 +71,7 @@ pub fn cabinet(cabinets: u32) -> Scene {
             },
             metallic: if i % 4 == 1 { 0.8 } else { 0.0 },
             roughness: 0.5,
+            ..Material::default()
         })
         .collect();
     for kind in 0..MACHINE_KINDS {

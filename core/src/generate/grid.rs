@@ -26,6 +26,7 @@ pub fn grid(parts: u64, triangles_per_part: f64) -> Scene {
                 base_color: hue_to_rgb(hue),
                 metallic: if i % 3 == 0 { 0.9 } else { 0.0 },
                 roughness: 0.4,
+                ..Material::default()
             }
         })
         .collect();

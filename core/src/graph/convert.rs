@@ -4,7 +4,9 @@ use std::collections::HashMap;
 
 use glam::DMat4;
 
-use super::{GeometryHandle, GraphError, MaterialHandle, NodeHandle, NodeKind, SceneGraph};
+use super::{
+    GeometryHandle, GraphError, MaterialHandle, NodeHandle, NodeKind, SceneGraph, TextureHandle,
+};
 use crate::scene::{MeshRef, Node, PartOverride, Scene};
 
 /// The scene the graph shows: hidden nodes and inactive Switch children are left out, a LOD
@@ -20,10 +22,19 @@ pub(super) fn graph_to_scene(graph: &SceneGraph) -> Scene {
         geometry_index.insert(handle, scene.geometries.len() as u32);
         scene.geometries.push(entry.geometry.clone());
     }
+    let mut texture_index = HashMap::new();
+    for (handle, entry) in graph.textures.iter() {
+        texture_index.insert(handle.index(), scene.textures.len() as u32);
+        scene.textures.push(entry.texture.clone());
+    }
     let mut material_index = HashMap::new();
     for (handle, entry) in graph.materials.iter() {
         material_index.insert(handle, scene.materials.len() as u32);
-        scene.materials.push(entry.material.clone());
+        let mut material = entry.material.clone();
+        if let Some(texture) = &mut material.base_color_texture {
+            texture.texture = texture_index[&texture.texture];
+        }
+        scene.materials.push(material);
     }
     let mut node_index: HashMap<NodeHandle, u32> = HashMap::new();
     for (handle, _) in graph.nodes.iter() {
@@ -77,7 +88,7 @@ pub(super) fn graph_to_scene(graph: &SceneGraph) -> Scene {
 }
 
 /// What [`SceneGraph::import`] created: the Group holding the scene's roots, and every node,
-/// geometry and material made for it.
+/// geometry, material and texture made for it.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct Imported {
     /// The new Group (named after the scene) that holds the scene's roots.
@@ -88,6 +99,8 @@ pub struct Imported {
     pub geometries: Vec<GeometryHandle>,
     /// One material per scene material, in the scene's order.
     pub materials: Vec<MaterialHandle>,
+    /// One texture per scene texture, in the scene's order.
+    pub textures: Vec<TextureHandle>,
 }
 
 /// A graph equivalent to `scene`: see [`import_scene`]; the scene's roots hang directly under
@@ -120,6 +133,7 @@ pub(super) fn import_scene(
         nodes: std::iter::once(root).chain(created.nodes).collect(),
         geometries: created.geometries,
         materials: created.materials,
+        textures: created.textures,
     })
 }
 
@@ -135,19 +149,40 @@ fn add_scene(
         nodes: Vec::new(),
         geometries: Vec::new(),
         materials: Vec::new(),
+        textures: Vec::new(),
     };
     let geometries = scene
         .geometries
         .iter()
         .map(|g| graph.create_geometry(g.clone()))
         .collect::<Result<Vec<_>, _>>()?;
+    let textures = scene
+        .textures
+        .iter()
+        .map(|t| graph.create_texture(t.clone()))
+        .collect::<Result<Vec<_>, _>>()?;
     let materials = scene
         .materials
         .iter()
-        .map(|m| graph.create_material(m.clone()))
+        .map(|m| {
+            let mut material = m.clone();
+            if let Some(texture) = &mut material.base_color_texture {
+                let handle = textures.get(texture.texture as usize).ok_or_else(|| {
+                    GraphError::Invalid(format!(
+                        "material '{}' uses texture {}, but the scene has {}",
+                        m.name,
+                        texture.texture,
+                        textures.len()
+                    ))
+                })?;
+                texture.texture = handle.index();
+            }
+            graph.create_material(material)
+        })
         .collect::<Result<Vec<_>, _>>()?;
     created.geometries.clone_from(&geometries);
     created.materials.clone_from(&materials);
+    created.textures.clone_from(&textures);
     let mut handles = Vec::with_capacity(scene.nodes.len());
     for node in &scene.nodes {
         let handle = if node.local == DMat4::IDENTITY {

@@ -17,7 +17,7 @@ use std::collections::HashMap;
 
 use glam::DMat4;
 
-use crate::scene::{Geometry, Material, Scene};
+use crate::scene::{Geometry, Material, Scene, Texture};
 
 /// The most paths (scene tree nodes) one link may add: sharing multiplies paths, and a chain
 /// of nodes each linked twice would otherwise expand to billions.
@@ -30,6 +30,9 @@ pub type NodeHandle = Handle<GraphNode>;
 pub type GeometryHandle = Handle<GeometryEntry>;
 /// A material of the graph.
 pub type MaterialHandle = Handle<MaterialEntry>;
+/// A texture of the graph. Materials name it by its slot ([`TextureHandle::index`]) in
+/// [`crate::scene::TextureRef::texture`].
+pub type TextureHandle = Handle<TextureEntry>;
 
 /// What a node does.
 #[derive(Clone, Debug, PartialEq)]
@@ -181,6 +184,15 @@ pub struct MaterialEntry {
     users: u32,
 }
 
+/// A texture and whether any of its texels is translucent.
+#[derive(Clone, Debug)]
+pub struct TextureEntry {
+    /// The image and its sampling.
+    pub texture: Texture,
+    /// Whether any texel's alpha is under 1 (a BLEND material using it is translucent).
+    pub translucent: bool,
+}
+
 /// An edit, as the scene tree consumes it.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum GraphEvent {
@@ -253,6 +265,14 @@ pub enum GraphError {
         /// Generation.
         generation: u32,
     },
+    /// The texture handle is destroyed or from another graph.
+    #[error("texture handle {index}:{generation} is destroyed or belongs to another graph")]
+    StaleTexture {
+        /// Slot.
+        index: u32,
+        /// Generation.
+        generation: u32,
+    },
     /// The edit needs another kind of node.
     #[error("node '{name}' is a {actual}; {operation} needs a {expected}")]
     WrongKind {
@@ -301,6 +321,9 @@ pub struct SceneGraph {
     nodes: Slots<GraphNode>,
     geometries: Slots<GeometryEntry>,
     materials: Slots<MaterialEntry>,
+    textures: Slots<TextureEntry>,
+    /// Changes whenever a texture is created or destroyed.
+    textures_generation: u64,
     root: NodeHandle,
     events: Vec<GraphEvent>,
 }
@@ -320,6 +343,13 @@ fn stale_node(h: NodeHandle) -> GraphError {
 
 fn stale_geometry(h: GeometryHandle) -> GraphError {
     GraphError::StaleGeometry {
+        index: h.index(),
+        generation: h.generation(),
+    }
+}
+
+fn stale_texture(h: TextureHandle) -> GraphError {
+    GraphError::StaleTexture {
         index: h.index(),
         generation: h.generation(),
     }
@@ -347,6 +377,8 @@ impl SceneGraph {
             nodes,
             geometries: Slots::default(),
             materials: Slots::default(),
+            textures: Slots::default(),
+            textures_generation: 0,
             root,
             events: Vec::new(),
         }
@@ -404,6 +436,36 @@ impl SceneGraph {
     /// The material in slot `index`.
     pub fn material_at(&self, index: u32) -> Option<&Material> {
         self.materials.get_by_index(index).map(|e| &e.material)
+    }
+
+    /// The texture, or an error for a stale handle.
+    pub fn texture(&self, texture: TextureHandle) -> Result<&Texture, GraphError> {
+        self.textures
+            .get(texture)
+            .map(|e| &e.texture)
+            .ok_or_else(|| stale_texture(texture))
+    }
+
+    /// The texture in slot `index`, with whether it has translucent texels.
+    pub fn texture_at(&self, index: u32) -> Option<&TextureEntry> {
+        self.textures.get_by_index(index)
+    }
+
+    /// Bound of texture slot indices.
+    pub fn texture_capacity(&self) -> usize {
+        self.textures.capacity()
+    }
+
+    /// Changes whenever a texture is created or destroyed (the GPU scene rebuilds its textures
+    /// then).
+    pub fn textures_generation(&self) -> u64 {
+        self.textures_generation
+    }
+
+    /// Whether a material drawn with `material` is translucent (see
+    /// [`Material::is_translucent`]).
+    pub fn is_translucent(&self, material: &Material) -> bool {
+        material.is_translucent(|t| self.texture_at(t).is_some_and(|e| e.translucent))
     }
 
     /// Bounds of node, geometry and material slot indices.
@@ -635,9 +697,62 @@ impl SceneGraph {
         Ok(())
     }
 
-    /// A new material; its values must be finite.
+    /// A new texture; its texel count must match its size.
+    pub fn create_texture(&mut self, texture: Texture) -> Result<TextureHandle, GraphError> {
+        texture
+            .validate(self.textures.capacity())
+            .map_err(|e| GraphError::Invalid(e.0))?;
+        let translucent = texture.has_translucent_texels();
+        self.textures_generation += 1;
+        Ok(self.textures.insert(TextureEntry {
+            texture,
+            translucent,
+        }))
+    }
+
+    /// Destroys a texture no material uses.
+    pub fn destroy_texture(&mut self, texture: TextureHandle) -> Result<(), GraphError> {
+        let entry = self
+            .textures
+            .get(texture)
+            .ok_or_else(|| stale_texture(texture))?;
+        let users = self
+            .materials
+            .iter()
+            .filter(|(_, m)| {
+                m.material
+                    .base_color_texture
+                    .is_some_and(|t| t.texture == texture.index())
+            })
+            .count();
+        if users > 0 {
+            return Err(GraphError::InUse {
+                what: format!("texture '{}' (by materials, not nodes)", entry.texture.name),
+                users: users as u32,
+            });
+        }
+        self.textures.remove(texture);
+        self.textures_generation += 1;
+        Ok(())
+    }
+
+    /// Checks a material's values and that the texture it names is alive.
+    fn check_material(&self, material: &Material) -> Result<(), GraphError> {
+        check_material(material)?;
+        if let Some(t) = material.base_color_texture {
+            if self.textures.get_by_index(t.texture).is_none() {
+                return Err(GraphError::Invalid(format!(
+                    "material '{}' uses texture slot {}, which holds no texture",
+                    material.name, t.texture
+                )));
+            }
+        }
+        Ok(())
+    }
+
+    /// A new material; its values must be finite and its texture alive.
     pub fn create_material(&mut self, material: Material) -> Result<MaterialHandle, GraphError> {
-        check_material(&material)?;
+        self.check_material(&material)?;
         Ok(self.materials.insert(MaterialEntry { material, users: 0 }))
     }
 
@@ -647,7 +762,7 @@ impl SceneGraph {
         handle: MaterialHandle,
         material: Material,
     ) -> Result<(), GraphError> {
-        check_material(&material)?;
+        self.check_material(&material)?;
         let entry = self
             .materials
             .get_mut(handle)
@@ -1080,12 +1195,14 @@ fn check_material(material: &Material) -> Result<(), GraphError> {
         .base_color
         .iter()
         .chain([&material.metallic, &material.roughness]);
-    if values.into_iter().all(|v| v.is_finite()) {
-        Ok(())
-    } else {
-        Err(GraphError::Invalid(format!(
+    if !values.into_iter().all(|v| v.is_finite()) {
+        return Err(GraphError::Invalid(format!(
             "material '{}' has a non-finite value",
             material.name
-        )))
+        )));
     }
+    // The texture's existence is checked by the graph; here only the values.
+    material
+        .validate_texture(0, usize::MAX)
+        .map_err(|e| GraphError::Invalid(e.0.replacen("material 0 ", "material ", 1)))
 }

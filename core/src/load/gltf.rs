@@ -3,7 +3,9 @@
 //! Every byte range is checked before it is read, so a truncated or inconsistent file gives a
 //! [`LoadError`] that names the buffer, view, accessor, mesh or node, never a panic. Meshes
 //! become geometries (primitives are their parts), nodes keep their hierarchy and sharing, and
-//! PBR factors become materials. Textures are not used yet; files with them load.
+//! PBR factors become materials with their base-colour textures (`gltf_textures.rs`), texture
+//! transforms (`KHR_texture_transform`) and alpha modes; primitives keep the texture
+//! coordinates their material samples and their vertex colours.
 
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
@@ -14,7 +16,10 @@ use gltf::accessor::{DataType, Dimensions};
 use gltf::mesh::Mode;
 
 use super::LoadError;
-use crate::scene::{Geometry, Material, MeshRef, Node, Part, Scene, Vertex};
+use crate::scene::{
+    AlphaMode, Geometry, Material, MeshRef, Node, Part, Scene, TextureRef, UvTransform, Vertex,
+    VertexAttributes,
+};
 
 /// The glTF crate's validation reads each primitive's POSITION accessor before it checks that
 /// the index exists, and panics on a file that names a missing one; this check runs first.
@@ -84,19 +89,34 @@ pub fn load_gltf_bytes(bytes: &[u8], path: &Path) -> Result<Scene, LoadError> {
             .unwrap_or_default(),
         ..Scene::default()
     };
+    let textures = super::gltf_textures::load_textures(&gltf.document, &buffers, &base_dir);
+    // Scene textures are the glTF textures that decoded, in order.
+    let mut texture_index = Vec::with_capacity(textures.len());
+    for texture in textures {
+        texture_index.push(texture.map(|texture| {
+            scene.textures.push(texture);
+            scene.textures.len() as u32 - 1
+        }));
+    }
+    // The texture-coordinate set each material's base-colour texture samples.
+    let mut uv_sets = Vec::new();
     scene.materials = gltf
         .document
         .materials()
         .enumerate()
         .map(|(i, m)| {
             let pbr = m.pbr_metallic_roughness();
+            let (base_color_texture, uv_set) = base_color_texture(&pbr, &texture_index);
+            uv_sets.push(uv_set);
             Material {
                 name: m
                     .name()
                     .map_or_else(|| format!("material {i}"), str::to_owned),
-                base_color: opacity_by_alpha_mode(&m, pbr.base_color_factor()),
+                base_color: pbr.base_color_factor(),
                 metallic: pbr.metallic_factor(),
                 roughness: pbr.roughness_factor(),
+                base_color_texture,
+                alpha_mode: alpha_mode(&m),
             }
         })
         .collect();
@@ -104,10 +124,10 @@ pub fn load_gltf_bytes(bytes: &[u8], path: &Path) -> Result<Scene, LoadError> {
     let mut mesh_refs: Vec<Option<MeshRef>> = Vec::new();
     // Meshes made of the same accessors (the same geometry under other materials, as cadr and
     // CSF exporters write them) share one geometry.
-    let mut geometry_by_accessors: HashMap<Vec<[Option<usize>; 4]>, u32> = HashMap::new();
+    let mut geometry_by_accessors: HashMap<Vec<[Option<usize>; 6]>, u32> = HashMap::new();
     for mesh in gltf.document.meshes() {
-        let key = accessor_key(&mesh);
-        let (geometry, materials) = load_mesh(&mesh, &buffers).map_err(invalid)?;
+        let key = accessor_key(&mesh, &uv_sets);
+        let (geometry, materials) = load_mesh(&mesh, &buffers, &uv_sets).map_err(invalid)?;
         if geometry.parts.is_empty() {
             mesh_refs.push(None);
             continue;
@@ -171,9 +191,9 @@ pub fn load_gltf_bytes(bytes: &[u8], path: &Path) -> Result<Scene, LoadError> {
     Ok(scene)
 }
 
-/// What a mesh's geometry is made of: per triangle primitive, its POSITION, NORMAL and index
-/// accessors and its mode.
-fn accessor_key(mesh: &gltf::Mesh<'_>) -> Vec<[Option<usize>; 4]> {
+/// What a mesh's geometry is made of: per triangle primitive, its POSITION, NORMAL, index,
+/// texture-coordinate (the set its material samples) and colour accessors and its mode.
+fn accessor_key(mesh: &gltf::Mesh<'_>, uv_sets: &[Option<u32>]) -> Vec<[Option<usize>; 6]> {
     mesh.primitives()
         .filter(|p| {
             matches!(
@@ -186,6 +206,10 @@ fn accessor_key(mesh: &gltf::Mesh<'_>) -> Vec<[Option<usize>; 4]> {
                 p.get(&gltf::Semantic::Positions).map(|a| a.index()),
                 p.get(&gltf::Semantic::Normals).map(|a| a.index()),
                 p.indices().map(|a| a.index()),
+                uv_set_of(&p, uv_sets)
+                    .and_then(|set| p.get(&gltf::Semantic::TexCoords(set)))
+                    .map(|a| a.index()),
+                p.get(&gltf::Semantic::Colors(0)).map(|a| a.index()),
                 Some(p.mode() as usize),
             ]
         })
@@ -266,7 +290,7 @@ fn resolve_buffers(gltf: &gltf::Gltf, base_dir: &Path) -> Result<Vec<Vec<u8>>, S
 /// Reads the first `length` bytes of a buffer's file. Only a regular file is read, and no more
 /// than the buffer declares: a URI naming a device or a pipe (`/dev/zero`) must not hang cadr
 /// or take all of its memory.
-fn read_buffer_file(file: &Path, length: usize) -> std::io::Result<Vec<u8>> {
+pub(super) fn read_buffer_file(file: &Path, length: usize) -> std::io::Result<Vec<u8>> {
     use std::io::Read as _;
     let opened = std::fs::File::open(file)?;
     let metadata = opened.metadata()?;
@@ -282,7 +306,7 @@ fn read_buffer_file(file: &Path, length: usize) -> std::io::Result<Vec<u8>> {
     Ok(data)
 }
 
-fn percent_decode(uri: &str) -> PathBuf {
+pub(super) fn percent_decode(uri: &str) -> PathBuf {
     let bytes = uri.as_bytes();
     let mut out = Vec::with_capacity(bytes.len());
     let mut i = 0;
@@ -393,6 +417,7 @@ fn check_accessor(
 fn load_mesh(
     mesh: &gltf::Mesh<'_>,
     buffers: &[Vec<u8>],
+    uv_sets: &[Option<u32>],
 ) -> Result<(Geometry, Vec<Option<u32>>), String> {
     let mesh_name = mesh
         .name()
@@ -439,6 +464,8 @@ fn load_mesh(
             )
             .map_err(|e| format!("{at}: {e}"))?;
         }
+        let attributes = read_attributes(&primitive, &at, buffers, uv_sets, positions_accessor.count())
+            .map_err(|e| format!("{at}: {e}"))?;
         let reader = primitive.reader(|b| buffers.get(b.index()).map(Vec::as_slice));
         let positions: Vec<[f32; 3]> = reader
             .read_positions()
@@ -477,6 +504,11 @@ fn load_mesh(
         }
         let triangles = triangle_list(&raw_indices, mode);
         let base = geometry.vertices.len() as u32;
+        if attributes.is_some() && geometry.attributes.is_empty() {
+            geometry
+                .attributes
+                .resize(geometry.vertices.len(), VertexAttributes::default());
+        }
         let first_index = geometry.indices.len() as u32;
         match normals {
             Some(normals) => {
@@ -487,6 +519,9 @@ fn load_mesh(
                         .map(|(&position, &normal)| Vertex { position, normal }),
                 );
                 geometry.indices.extend(triangles.iter().map(|&i| base + i));
+                if let Some(attributes) = &attributes {
+                    geometry.attributes.extend_from_slice(attributes);
+                }
             }
             None => {
                 // glTF: without normals, flat shading. Each triangle gets its own vertices.
@@ -503,12 +538,20 @@ fn load_mesh(
                             position: positions[index as usize],
                             normal,
                         });
+                        if let Some(attributes) = &attributes {
+                            geometry.attributes.push(attributes[index as usize]);
+                        }
                     }
                     geometry
                         .indices
                         .extend((0..3).map(|k| base + 3 * t as u32 + k));
                 }
             }
+        }
+        if attributes.is_none() && !geometry.attributes.is_empty() {
+            geometry
+                .attributes
+                .resize(geometry.vertices.len(), VertexAttributes::default());
         }
         let index_count = geometry.indices.len() as u32 - first_index;
         geometry.parts.push(Part {
@@ -519,6 +562,94 @@ fn load_mesh(
         materials.push(primitive.material().index().map(|m| m as u32));
     }
     Ok((geometry, materials))
+}
+
+/// The primitive's texture coordinates (the set its material samples) and vertex colours
+/// (`COLOR_0`), one per vertex; `None` when it has neither. A material that samples a set the
+/// primitive lacks gets a warning and (0, 0).
+fn read_attributes(
+    primitive: &gltf::Primitive<'_>,
+    at: &str,
+    buffers: &[Vec<u8>],
+    uv_sets: &[Option<u32>],
+    vertex_count: usize,
+) -> Result<Option<Vec<VertexAttributes>>, String> {
+    let check_count = |accessor: &gltf::Accessor<'_>, usage: &str| {
+        if accessor.count() == vertex_count {
+            Ok(())
+        } else {
+            Err(format!(
+                "accessor {} ({usage}) has {} elements for {vertex_count} vertices",
+                accessor.index(),
+                accessor.count()
+            ))
+        }
+    };
+    let uv_set = uv_set_of(primitive, uv_sets);
+    let uv_accessor = match uv_set {
+        Some(set) => {
+            let accessor = primitive.get(&gltf::Semantic::TexCoords(set));
+            if accessor.is_none() {
+                log::warn!(
+                    "{at}: its material samples TEXCOORD_{set}, which the primitive does not have"
+                );
+            }
+            accessor
+        }
+        None => None,
+    };
+    let uv_usage = format!("TEXCOORD_{}", uv_set.unwrap_or(0));
+    if let Some(accessor) = &uv_accessor {
+        check_accessor(
+            accessor,
+            &uv_usage,
+            &[DataType::F32, DataType::U8, DataType::U16],
+            Dimensions::Vec2,
+        )?;
+        check_count(accessor, &uv_usage)?;
+    }
+    let color_accessor = primitive.get(&gltf::Semantic::Colors(0));
+    if let Some(accessor) = &color_accessor {
+        let dimensions = if accessor.dimensions() == Dimensions::Vec3 {
+            Dimensions::Vec3
+        } else {
+            Dimensions::Vec4
+        };
+        check_accessor(
+            accessor,
+            "COLOR_0",
+            &[DataType::F32, DataType::U8, DataType::U16],
+            dimensions,
+        )?;
+        check_count(accessor, "COLOR_0")?;
+    }
+    if uv_accessor.is_none() && color_accessor.is_none() {
+        return Ok(None);
+    }
+    let reader = primitive.reader(|b| buffers.get(b.index()).map(Vec::as_slice));
+    let mut attributes = vec![VertexAttributes::default(); vertex_count];
+    if let (Some(set), Some(_)) = (uv_set, &uv_accessor) {
+        let uvs = reader
+            .read_tex_coords(set)
+            .ok_or_else(|| format!("{uv_usage} cannot be read"))?
+            .into_f32();
+        for (i, (attribute, uv)) in attributes.iter_mut().zip(uvs).enumerate() {
+            if !uv.iter().all(|c| c.is_finite()) {
+                return Err(format!("{uv_usage} {i} is not finite: {uv:?}"));
+            }
+            attribute.uv = uv;
+        }
+    }
+    if color_accessor.is_some() {
+        let colors = reader
+            .read_colors(0)
+            .ok_or("COLOR_0 cannot be read")?
+            .into_rgba_u8();
+        for (attribute, color) in attributes.iter_mut().zip(colors) {
+            attribute.color = color;
+        }
+    }
+    Ok(Some(attributes))
 }
 
 /// Converts strip and fan indices to a triangle list.
@@ -540,22 +671,45 @@ fn triangle_list(indices: &[u32], mode: Mode) -> Vec<u32> {
     }
 }
 
-/// The base colour with the opacity the material's `alphaMode` gives it: OPAQUE ignores the
-/// factor's alpha (opacity 1); MASK keeps a surface whose alpha reaches `alphaCutoff` (default
-/// 0.5) opaque and drops the rest (opacity 0: cadr has no textures yet, so the alpha is one
-/// value over the material and the test is exact); BLEND keeps the alpha as opacity.
-fn opacity_by_alpha_mode(material: &gltf::Material<'_>, mut color: [f32; 4]) -> [f32; 4] {
-    color[3] = match material.alpha_mode() {
-        gltf::material::AlphaMode::Opaque => 1.0,
-        gltf::material::AlphaMode::Mask => {
-            let cutoff = material.alpha_cutoff().unwrap_or(0.5);
-            if color[3] >= cutoff {
-                1.0
-            } else {
-                0.0
-            }
-        }
-        gltf::material::AlphaMode::Blend => color[3].clamp(0.0, 1.0),
+/// How the material's `alphaMode` uses alpha; its base colour keeps the factor's alpha, which
+/// counts as opacity in BLEND only (OPAQUE ignores it, MASK compares it with the cutoff).
+fn alpha_mode(material: &gltf::Material<'_>) -> AlphaMode {
+    match material.alpha_mode() {
+        gltf::material::AlphaMode::Opaque => AlphaMode::Opaque,
+        gltf::material::AlphaMode::Mask => AlphaMode::Mask {
+            cutoff: material.alpha_cutoff().unwrap_or(0.5),
+        },
+        gltf::material::AlphaMode::Blend => AlphaMode::Blend,
+    }
+}
+
+/// The material's base-colour texture (with its `KHR_texture_transform`) and the
+/// texture-coordinate set it samples; none when the material has no texture or its image
+/// could not be decoded (`texture_index` maps glTF textures to the scene's).
+fn base_color_texture(
+    pbr: &gltf::material::PbrMetallicRoughness<'_>,
+    texture_index: &[Option<u32>],
+) -> (Option<TextureRef>, Option<u32>) {
+    let Some(info) = pbr.base_color_texture() else {
+        return (None, None);
     };
-    color
+    let Some(texture) = texture_index.get(info.texture().index()).copied().flatten() else {
+        return (None, None);
+    };
+    let (transform, set) = match info.texture_transform() {
+        Some(t) => (
+            UvTransform::from_offset_rotation_scale(t.offset(), t.rotation(), t.scale()),
+            t.tex_coord().unwrap_or(info.tex_coord()),
+        ),
+        None => (UvTransform::IDENTITY, info.tex_coord()),
+    };
+    (Some(TextureRef { texture, transform }), Some(set))
+}
+
+/// The texture-coordinate set the primitive's material samples, if it samples one.
+fn uv_set_of(primitive: &gltf::Primitive<'_>, uv_sets: &[Option<u32>]) -> Option<u32> {
+    primitive
+        .material()
+        .index()
+        .and_then(|m| uv_sets.get(m).copied().flatten())
 }

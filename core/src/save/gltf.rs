@@ -7,7 +7,7 @@ use std::collections::HashMap;
 use glam::DMat4;
 use serde_json::{json, Value};
 
-use crate::scene::{Aabb, NodeIndex, Scene, SceneError};
+use crate::scene::{Aabb, AlphaMode, NodeIndex, Scene, SceneError};
 
 /// A glTF document in memory: its JSON (without the buffer URI) and binary buffer.
 pub struct GltfDocument {
@@ -207,18 +207,33 @@ pub fn gltf_document(scene: &Scene) -> Result<GltfDocument, SceneError> {
         }
     }
 
+    let texture_is_translucent = |t: u32| {
+        scene
+            .textures
+            .get(t as usize)
+            .is_some_and(|t| t.has_translucent_texels())
+    };
     let materials: Vec<Value> = scene
         .materials
         .iter()
         .map(|m| {
             // A translucent material keeps its opacity (glTF's default mode ignores alpha).
-            let alpha_mode = if m.base_color[3] < 1.0 { "BLEND" } else { "OPAQUE" };
-            json!({
+            let mut material = json!({
                 "name": m.name,
                 "pbrMetallicRoughness": {"baseColorFactor": m.base_color, "metallicFactor": m.metallic, "roughnessFactor": m.roughness},
-                "alphaMode": alpha_mode,
                 "doubleSided": true
-            })
+            });
+            match m.alpha_mode {
+                AlphaMode::Mask { cutoff } => {
+                    material["alphaMode"] = json!("MASK");
+                    material["alphaCutoff"] = json!(cutoff);
+                }
+                AlphaMode::Blend if m.is_translucent(texture_is_translucent) => {
+                    material["alphaMode"] = json!("BLEND");
+                }
+                AlphaMode::Blend | AlphaMode::Opaque => material["alphaMode"] = json!("OPAQUE"),
+            }
+            material
         })
         .collect();
     while builder.binary.len() % 4 != 0 {

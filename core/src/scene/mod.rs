@@ -8,10 +8,12 @@ pub mod edges;
 mod flatten;
 pub mod graph;
 mod stats;
+mod texture;
 
 pub use bounds::Aabb;
 pub use flatten::{flatten, DrawItem, FlatScene, Instance};
 pub use stats::SceneStats;
+pub use texture::{AlphaMode, Sampler, Texture, TextureRef, UvTransform, Wrap};
 
 use glam::DMat4;
 
@@ -23,6 +25,27 @@ pub struct Vertex {
     pub position: [f32; 3],
     /// Object-space unit normal.
     pub normal: [f32; 3],
+}
+
+/// What a vertex carries besides its position and normal, 12 bytes on the GPU: a texture
+/// coordinate and a colour. A geometry has them for every vertex or for none.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct VertexAttributes {
+    /// Texture coordinate (glTF `TEXCOORD_n`; (0, 0) at the image's top left).
+    pub uv: [f32; 2],
+    /// Linear RGBA colour multiplying the material's base colour (glTF `COLOR_0`).
+    pub color: [u8; 4],
+}
+
+impl Default for VertexAttributes {
+    /// No coordinate, white: the material's colour unchanged.
+    fn default() -> Self {
+        Self {
+            uv: [0.0, 0.0],
+            color: [255; 4],
+        }
+    }
 }
 
 /// A sub-range of a geometry's index buffer drawn with one material (a glTF primitive, a CSF
@@ -60,6 +83,9 @@ pub struct Geometry {
     pub wire_indices: Vec<u32>,
     /// Index ranges, each drawn with its own material.
     pub parts: Vec<Part>,
+    /// Texture coordinates and colours: one per vertex, or empty (every vertex white, at
+    /// (0, 0)).
+    pub attributes: Vec<VertexAttributes>,
 }
 
 impl Geometry {
@@ -88,6 +114,23 @@ pub struct Material {
     pub metallic: f32,
     /// 0 = mirror, 1 = fully rough.
     pub roughness: f32,
+    /// The base colour's texture, multiplying `base_color` (and the vertex colours).
+    pub base_color_texture: Option<TextureRef>,
+    /// How texture and vertex alpha are used.
+    pub alpha_mode: AlphaMode,
+}
+
+impl Material {
+    /// Whether parts drawn with it are translucent: in the BLEND mode, an opacity under 1 or a
+    /// texture with translucent texels (`texture_is_translucent` says whether the texture it
+    /// names has any).
+    pub fn is_translucent(&self, texture_is_translucent: impl Fn(u32) -> bool) -> bool {
+        self.alpha_mode == AlphaMode::Blend
+            && (self.base_color[3] < 1.0
+                || self
+                    .base_color_texture
+                    .is_some_and(|t| texture_is_translucent(t.texture)))
+    }
 }
 
 impl Default for Material {
@@ -97,6 +140,8 @@ impl Default for Material {
             base_color: [0.8, 0.8, 0.8, 1.0],
             metallic: 0.0,
             roughness: 0.5,
+            base_color_texture: None,
+            alpha_mode: AlphaMode::Blend,
         }
     }
 }
@@ -177,6 +222,8 @@ pub struct Scene {
     pub geometries: Vec<Geometry>,
     /// Materials.
     pub materials: Vec<Material>,
+    /// Textures the materials name.
+    pub textures: Vec<Texture>,
     /// All nodes.
     pub nodes: Vec<Node>,
     /// The nodes drawn at the top level.
@@ -204,6 +251,24 @@ impl Geometry {
             return fail(format!(
                 "geometry {g} ('{}') vertex {i} is not finite: {v:?}",
                 geometry.name
+            ));
+        }
+        if !geometry.attributes.is_empty() && geometry.attributes.len() != vertex_count {
+            return fail(format!(
+                "geometry {g} ('{}') has {} vertex attributes for {vertex_count} vertices (one per vertex, or none)",
+                geometry.name,
+                geometry.attributes.len()
+            ));
+        }
+        if let Some((i, a)) = geometry
+            .attributes
+            .iter()
+            .enumerate()
+            .find(|(_, a)| !a.uv.iter().all(|c| c.is_finite()))
+        {
+            return fail(format!(
+                "geometry {g} ('{}') texture coordinate {i} is not finite: {:?}",
+                geometry.name, a.uv
             ));
         }
         if let Some((i, index)) = geometry
@@ -279,6 +344,10 @@ impl Scene {
                     material.name
                 ));
             }
+            material.validate_texture(m, self.textures.len())?;
+        }
+        for (t, texture) in self.textures.iter().enumerate() {
+            texture.validate(t)?;
         }
         for (n, node) in self.nodes.iter().enumerate() {
             if !node.local.to_cols_array().iter().all(|c| c.is_finite()) {
@@ -367,5 +436,35 @@ impl Scene {
             self.nodes[node].children.get(i).map(|&c| c as usize)
         })
         .map(|(_, child)| child as NodeIndex)
+    }
+}
+
+impl Material {
+    /// Checks its texture reference against `texture_count` textures and its transform and
+    /// cutoff for finite values; `m` numbers the material in messages.
+    pub fn validate_texture(&self, m: usize, texture_count: usize) -> Result<(), SceneError> {
+        if let Some(texture) = &self.base_color_texture {
+            if texture.texture as usize >= texture_count {
+                return Err(SceneError(format!(
+                    "material {m} ('{}') uses texture {}, but there are {texture_count}",
+                    self.name, texture.texture
+                )));
+            }
+            if !texture.transform.is_finite() {
+                return Err(SceneError(format!(
+                    "material {m} ('{}') has a non-finite texture transform",
+                    self.name
+                )));
+            }
+        }
+        if let AlphaMode::Mask { cutoff } = self.alpha_mode {
+            if !cutoff.is_finite() {
+                return Err(SceneError(format!(
+                    "material {m} ('{}') has a non-finite alpha cutoff",
+                    self.name
+                )));
+            }
+        }
+        Ok(())
     }
 }

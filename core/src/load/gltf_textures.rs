@@ -1,0 +1,145 @@
+//! glTF images and textures: each image read (from a buffer view, a data URI or a file beside
+//! the glTF) and decoded once with the `image` crate, the images on a thread each up to the
+//! machine's cores; each texture is an image with its sampler.
+//!
+//! An image that cannot be read or decoded is not fatal: the textures made from it are left
+//! out with a warning that names the image and why, and their materials draw untextured.
+
+use std::path::Path;
+use std::sync::Arc;
+
+use base64::Engine as _;
+
+use crate::scene::{Sampler, Texture, Wrap};
+
+/// A decoded image: width, height and RGBA texels.
+type Decoded = (u32, u32, Arc<Vec<u8>>);
+
+/// The scene's textures, one per glTF texture (`None` for those whose image failed).
+pub(super) fn load_textures(
+    document: &gltf::Document,
+    buffers: &[Vec<u8>],
+    base_dir: &Path,
+) -> Vec<Option<Texture>> {
+    let images: Vec<gltf::Image<'_>> = document.images().collect();
+    let decoded = decode_in_parallel(&images, |image| decode(image, buffers, base_dir));
+    let decoded: Vec<Option<Decoded>> = decoded
+        .into_iter()
+        .zip(&images)
+        .map(|(result, image)| {
+            result
+                .map_err(|why| {
+                    log::warn!(
+                        "image {} ({}) is left out: {why}",
+                        image.index(),
+                        image_name(image)
+                    )
+                })
+                .ok()
+        })
+        .collect();
+    document
+        .textures()
+        .map(|texture| {
+            let image = texture.source();
+            let (width, height, texels) = decoded[image.index()].clone()?;
+            Some(Texture {
+                name: texture
+                    .name()
+                    .map_or_else(|| image_name(&image), str::to_owned),
+                width,
+                height,
+                texels,
+                sampler: sampler(&texture.sampler()),
+            })
+        })
+        .collect()
+}
+
+fn image_name(image: &gltf::Image<'_>) -> String {
+    match (image.name(), image.source()) {
+        (Some(name), _) => name.to_owned(),
+        (None, gltf::image::Source::Uri { uri, .. }) if !uri.starts_with("data:") => uri.to_owned(),
+        (None, _) => format!("image {}", image.index()),
+    }
+}
+
+fn sampler(sampler: &gltf::texture::Sampler<'_>) -> Sampler {
+    let wrap = |mode: gltf::texture::WrappingMode| match mode {
+        gltf::texture::WrappingMode::Repeat => Wrap::Repeat,
+        gltf::texture::WrappingMode::ClampToEdge => Wrap::ClampToEdge,
+        gltf::texture::WrappingMode::MirroredRepeat => Wrap::MirroredRepeat,
+    };
+    Sampler {
+        wrap_s: wrap(sampler.wrap_s()),
+        wrap_t: wrap(sampler.wrap_t()),
+        magnify_nearest: sampler.mag_filter() == Some(gltf::texture::MagFilter::Nearest),
+    }
+}
+
+/// Runs `decode` over `items` on up to one thread per core, keeping their order.
+fn decode_in_parallel<T: Sync, R: Send>(
+    items: &[T],
+    decode: impl Fn(&T) -> R + Sync,
+) -> Vec<R> {
+    let threads = std::thread::available_parallelism()
+        .map_or(1, usize::from)
+        .min(items.len())
+        .max(1);
+    let chunk = items.len().div_ceil(threads).max(1);
+    std::thread::scope(|scope| {
+        let workers: Vec<_> = items
+            .chunks(chunk)
+            .map(|chunk| scope.spawn(|| chunk.iter().map(&decode).collect::<Vec<R>>()))
+            .collect();
+        workers
+            .into_iter()
+            .flat_map(|worker| match worker.join() {
+                Ok(results) => results,
+                Err(panic) => std::panic::resume_unwind(panic),
+            })
+            .collect()
+    })
+}
+
+/// Reads and decodes one image (within the `image` crate's default allocation limit, 512 MiB).
+fn decode(image: &gltf::Image<'_>, buffers: &[Vec<u8>], base_dir: &Path) -> Result<Decoded, String> {
+    let owned;
+    let bytes: &[u8] = match image.source() {
+        gltf::image::Source::View { view, .. } => {
+            let buffer = &buffers[view.buffer().index()];
+            // The views were checked against their buffers before any image is read.
+            &buffer[view.offset()..view.offset() + view.length()]
+        }
+        gltf::image::Source::Uri { uri, .. } if uri.starts_with("data:") => {
+            let (_, payload) = uri
+                .split_once(";base64,")
+                .ok_or("its data URI is not base64")?;
+            owned = base64::engine::general_purpose::STANDARD
+                .decode(payload)
+                .map_err(|e| format!("its data URI has invalid base64 data: {e}"))?;
+            &owned
+        }
+        gltf::image::Source::Uri { uri, .. } => {
+            let file = base_dir.join(super::gltf::percent_decode(uri));
+            owned = super::gltf::read_buffer_file(&file, usize::MAX)
+                .map_err(|e| format!("'{}' cannot be read: {e}", file.display()))?;
+            &owned
+        }
+    };
+    let reader = image::ImageReader::new(std::io::Cursor::new(bytes))
+        .with_guessed_format()
+        .map_err(|e| e.to_string())?;
+    let format = reader
+        .format()
+        .ok_or("its format is not one cadr decodes (PNG or JPEG)")?;
+    let decoded = reader
+        .decode()
+        .map_err(|e| format!("it is not a valid {format:?} image: {e}"))?
+        .into_rgba8();
+    let (width, height) = decoded.dimensions();
+    if width == 0 || height == 0 {
+        return Err("it has no texels".into());
+    }
+    Ok((width, height, Arc::new(decoded.into_raw())))
+}

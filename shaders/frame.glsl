@@ -21,5 +21,9 @@ const uint CADR_SECTION_HATCHED = 0x200u;
 
 // frame.target.z: the X-ray display mode (every part not highlighted drawn translucent).
 const uint CADR_DISPLAY_XRAY = 1u;
+// frame.target.z: the scene has vertex attributes (texture coordinates, colours) to read.
+const uint CADR_DISPLAY_VERTEX_ATTRIBUTES = 2u;
+// frame.target.z: materials' textures are sampled.
+const uint CADR_DISPLAY_TEXTURES = 4u;
 // The opacity of parts X-ray makes translucent.
 const float CADR_XRAY_OPACITY = 0.2;

@@ -1,12 +1,21 @@
 #version 460
 // The pick pass: writes which instance covers each pixel (instance id + 1; 0 is nothing).
-// Instances that cannot be picked come with id 0 and let the click through to what is behind.
+// Instances that cannot be picked come with id 0 and let the click through to what is behind,
+// and so do the holes a material's alpha mask cuts.
+#include "texturing.glsl"
+
+layout(location = 2) flat in vec4 in_base_color;
 layout(location = 4) flat in uint in_pick_id;
+layout(location = 7) in vec2 in_uv;
+layout(location = 8) in vec4 in_vertex_color;
+layout(location = 9) flat in uvec4 in_texture;
 
 layout(location = 0) out uint out_id;
 
 void main() {
-    if (in_pick_id == 0u) {
+    // Sampled before any discard: the texture's derivatives need the whole quad.
+    vec4 surface = cadr_surface_color(in_base_color, in_vertex_color, in_uv, in_texture);
+    if (in_pick_id == 0u || cadr_masked_out(surface, in_texture)) {
         discard;
     }
     out_id = in_pick_id;

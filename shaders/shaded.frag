@@ -1,10 +1,12 @@
 #version 460
-// Shaded triangles of every technique combination: a head light on the material colour. While
+// Shaded triangles of every technique combination: a head light on the material colour (times
+// the vertex colour and the texture; a material's alpha mask cuts holes). While
 // section planes cut with caps on, a closed part seen through a cut shows the cap there (see
 // section.glsl).
 #include "frame.glsl"
 #include "shading.glsl"
 #include "section.glsl"
+#include "texturing.glsl"
 
 layout(location = 0) in vec3 in_view_position;
 layout(location = 1) in vec3 in_view_normal;
@@ -12,10 +14,17 @@ layout(location = 2) flat in vec4 in_base_color;
 layout(location = 3) flat in vec2 in_surface;
 layout(location = 5) in vec3 in_eye_offset;
 layout(location = 6) flat in float in_closure;
+layout(location = 7) in vec2 in_uv;
+layout(location = 8) in vec4 in_vertex_color;
+layout(location = 9) flat in uvec4 in_texture;
 
 layout(location = 0) out vec4 out_color;
 
 void main() {
+    vec4 surface = cadr_surface_color(in_base_color, in_vertex_color, in_uv, in_texture);
+    if (cadr_masked_out(surface, in_texture)) {
+        discard;
+    }
     bool seen_from_inside = in_closure * (gl_FrontFacing ? 1.0 : -1.0) < 0.0;
     if ((frame.section.x & CADR_SECTION_CAPS) != 0u && seen_from_inside) {
         int plane = section_cap_plane(in_eye_offset);
@@ -24,6 +33,6 @@ void main() {
             return;
         }
     }
-    out_color = vec4(shade_headlight(in_view_position, in_view_normal, in_base_color, in_surface, frame.light,
+    out_color = vec4(shade_headlight(in_view_position, in_view_normal, surface, in_surface, frame.light,
                           frame.view_rotation[1].xyz), 1.0);
 }

@@ -1,8 +1,30 @@
 // The vertex shader every technique combination shares. The host assembles it: the vertex
-// path's snippet (cadr_vertex_position, cadr_vertex_normal) and the parameter path's snippet
-// (cadr_object) replace the two markers below. Positions are made relative to the eye with
-// the translation split into f32 high and low parts.
+// path's snippet (cadr_vertex_position, cadr_vertex_normal, and where it defines
+// CADR_VERTEX_INDEX, cadr_vertex_index) and the parameter path's snippet (cadr_object)
+// replace the two markers below. Positions are made relative to the eye with the translation
+// split into f32 high and low parts. Texture coordinates, vertex colours and each material's
+// texture description come from the host's frame set (bindings 2-4), whatever the paths.
 #include "frame.glsl"
+
+// The GPU scene's instance records (matrix, material, flags, instance), by instance id.
+layout(set = 0, binding = 2, std430) readonly buffer CadrHostInstanceRecords {
+    uvec4 cadr_host_instance_records[];
+};
+// Per material slot: the texture-coordinate transform's rows (xyz), and layer + 1 (0: none),
+// sampling bits, alpha mode, the mask's cutoff (float bits). See gpu_scene/textures.rs.
+struct CadrMaterialTexture {
+    vec4 u_row;
+    vec4 v_row;
+    uvec4 info;
+};
+layout(set = 0, binding = 3, std430) readonly buffer CadrHostMaterialTextures {
+    CadrMaterialTexture cadr_host_material_textures[];
+};
+// Per vertex of the vertex arena (with CADR_DISPLAY_VERTEX_ATTRIBUTES): u, v (float bits),
+// colour (RGBA8).
+layout(set = 0, binding = 4, std430) readonly buffer CadrHostVertexAttributes {
+    uint cadr_host_vertex_attributes[];
+};
 
 struct CadrObject {
     mat4 world;            // column 3: translation high part; w of columns 0-2: low part
@@ -37,6 +59,13 @@ layout(location = 4) flat out uint out_pick_id;
 // mirrored by its matrix), 0 open.
 layout(location = 5) out vec3 out_eye_offset;
 layout(location = 6) flat out float out_closure;
+// Texturing (texturing.glsl): the transformed texture coordinate, the vertex colour, the
+// material's texture description (layer + 1 or 0 with textures off, sampling, alpha mode,
+// cutoff) and the opacity a translucent surface may have at most (X-ray lowers it).
+layout(location = 7) out vec2 out_uv;
+layout(location = 8) out vec4 out_vertex_color;
+layout(location = 9) flat out uvec4 out_texture;
+layout(location = 10) flat out float out_opacity_limit;
 
 out float gl_ClipDistance[6];
 
@@ -51,14 +80,28 @@ const uint CADR_DRAW_OPAQUE = 1u;
 const uint CADR_DRAW_TRANSLUCENT = 2u;
 layout(constant_id = 0) const uint CADR_DRAW_ROLE = CADR_DRAW_ALL;
 
+const uint CADR_TEXTURE_SAMPLING_TRANSLUCENT = 32u;
+const uint CADR_TEXTURE_ALPHA_BLEND = 2u;
+
 void main() {
     CadrObject object = cadr_object();
-    // Translucent: a material opacity under 1, or X-ray on a part not highlighted.
-    bool highlighted = (object.flags & CADR_INSTANCE_HIGHLIGHTED) != 0u;
-    if ((frame.target.z & CADR_DISPLAY_XRAY) != 0u && !highlighted) {
-        object.base_color.a = min(object.base_color.a, CADR_XRAY_OPACITY);
+    uint material = cadr_host_instance_records[object.instance].y;
+    CadrMaterialTexture material_texture = cadr_host_material_textures[material];
+    uvec4 texture_info = material_texture.info;
+    if ((frame.target.z & CADR_DISPLAY_TEXTURES) == 0u) {
+        texture_info.x = 0u;
     }
-    bool translucent = object.base_color.a < 1.0;
+    // Translucent: a BLEND material with an opacity under 1 or a translucent texture, or
+    // X-ray on a part not highlighted.
+    bool highlighted = (object.flags & CADR_INSTANCE_HIGHLIGHTED) != 0u;
+    bool blends = texture_info.z == CADR_TEXTURE_ALPHA_BLEND;
+    bool translucent = blends && (object.base_color.a < 1.0
+        || (texture_info.x != 0u && (texture_info.y & CADR_TEXTURE_SAMPLING_TRANSLUCENT) != 0u));
+    out_opacity_limit = 1.0;
+    if ((frame.target.z & CADR_DISPLAY_XRAY) != 0u && !highlighted) {
+        translucent = true;
+        out_opacity_limit = CADR_XRAY_OPACITY;
+    }
     if (CADR_DRAW_ROLE != CADR_DRAW_ALL && translucent != (CADR_DRAW_ROLE == CADR_DRAW_TRANSLUCENT)) {
         gl_Position = vec4(0.0, 0.0, 2.0, 1.0);
         for (int i = 0; i < 6; ++i) {
@@ -81,6 +124,20 @@ void main() {
         out_base_color.rgb = mix(out_base_color.rgb, HIGHLIGHT_COLOR, 0.65);
     }
     out_surface = object.surface;
+    out_texture = texture_info;
+    vec2 uv = vec2(0.0);
+    out_vertex_color = vec4(1.0);
+#ifdef CADR_VERTEX_INDEX
+    if ((frame.target.z & CADR_DISPLAY_VERTEX_ATTRIBUTES) != 0u) {
+        uint at = cadr_vertex_index() * 3u;
+        uv = vec2(uintBitsToFloat(cadr_host_vertex_attributes[at]),
+                  uintBitsToFloat(cadr_host_vertex_attributes[at + 1u]));
+        out_vertex_color = unpackUnorm4x8(cadr_host_vertex_attributes[at + 2u]);
+    }
+#endif
+    vec3 homogeneous_uv = vec3(uv, 1.0);
+    out_uv = vec2(dot(material_texture.u_row.xyz, homogeneous_uv),
+                  dot(material_texture.v_row.xyz, homogeneous_uv));
     // The pick pass writes instance + 1; 0 (nothing) lets the click through unpickable parts.
     out_pick_id = (object.flags & CADR_INSTANCE_PICKABLE) != 0u ? object.instance + 1u : 0u;
     gl_Position = frame.projection * view_position;

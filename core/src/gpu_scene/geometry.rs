@@ -1,7 +1,9 @@
 //! The GPU scene's geometry: every geometry's vertices, triangle indices and edge indices in
 //! three shared arenas (usable as vertex, index and storage buffers), with each geometry's place
 //! and room there. A replaced geometry that fits its room is written in place: only its bytes
-//! are uploaded and only its users' instance entries change.
+//! are uploaded and only its users' instance entries change. Texture coordinates and colours
+//! go in a fourth arena laid out like the vertices (the same index finds a vertex's
+//! attributes), made only when some geometry has them.
 
 use std::sync::Arc;
 
@@ -11,7 +13,7 @@ use crate::vk::raw as vk;
 use crate::graph::SceneGraph;
 use crate::scene::closure::{closure, Closure};
 use crate::scene::edges::{feature_edges, DEFAULT_CREASE_DEGREES};
-use crate::scene::{Geometry, Part, Vertex};
+use crate::scene::{Geometry, Part, Vertex, VertexAttributes};
 use crate::vk::{Buffer, Device};
 use cadr_plugin_abi as abi;
 
@@ -123,11 +125,15 @@ pub(super) fn usage(device: &Device, base: vk::BufferUsageFlags) -> vk::BufferUs
     usage
 }
 
-/// The three arenas and the place of every geometry slot in them.
+/// The arenas and the place of every geometry slot in them.
 pub(super) struct GeometryArenas {
     pub(super) vertices: Buffer,
     pub(super) indices: Buffer,
     pub(super) wire_indices: Buffer,
+    /// One [`VertexAttributes`] per vertex when `has_attributes`, else 16 unused bytes.
+    pub(super) attributes: Buffer,
+    /// Whether some geometry has texture coordinates or colours.
+    pub(super) has_attributes: bool,
     pub(super) places: Vec<Option<GeometryPlace>>,
 }
 
@@ -162,9 +168,22 @@ impl GeometryArenas {
             let bytes: &[u8] = if data.is_empty() { &[0; 16] } else { data };
             Buffer::with_data(device, name, bytes, usage(device, base))
         };
+        let has_attributes = (0..geometry_slots as u32)
+            .filter_map(|slot| graph.geometry_at(slot))
+            .any(|g| !g.attributes.is_empty());
+        let mut attributes: Vec<VertexAttributes> = Vec::new();
+        if has_attributes {
+            attributes.reserve(vertices.len());
+            for slot in 0..geometry_slots as u32 {
+                if let Some(geometry) = graph.geometry_at(slot) {
+                    extend_attributes(&mut attributes, geometry);
+                }
+            }
+        }
         let bytes = (std::mem::size_of_val(vertices.as_slice())
             + std::mem::size_of_val(indices.as_slice())
-            + std::mem::size_of_val(wire.as_slice())) as u64;
+            + std::mem::size_of_val(wire.as_slice())
+            + std::mem::size_of_val(attributes.as_slice())) as u64;
         let arenas = Self {
             vertices: upload(
                 "scene vertices",
@@ -181,6 +200,12 @@ impl GeometryArenas {
                 bytemuck::cast_slice(&wire),
                 vk::BufferUsageFlags::INDEX_BUFFER,
             )?,
+            attributes: upload(
+                "scene vertex attributes",
+                bytemuck::cast_slice(&attributes),
+                vk::BufferUsageFlags::empty(),
+            )?,
+            has_attributes,
             places,
         };
         Ok((arenas, bytes))
@@ -198,6 +223,10 @@ impl GeometryArenas {
         let Some(geometry) = graph.geometry_at(slot) else {
             return Ok(None);
         };
+        if !geometry.attributes.is_empty() && !self.has_attributes {
+            // The first geometry with attributes: the attribute arena is made by a new layout.
+            return Ok(None);
+        }
         let Some(Some(place)) = self.places.get_mut(slot as usize) else {
             return Ok(None);
         };
@@ -220,9 +249,31 @@ impl GeometryArenas {
             .upload_at(u64::from(place.first_index) * 4, index_bytes)?;
         self.wire_indices
             .upload_at(u64::from(place.first_wire_index) * 4, wire_bytes)?;
+        let mut attribute_bytes = 0;
+        if self.has_attributes {
+            let mut attributes = Vec::with_capacity(data.vertices.len());
+            extend_attributes(&mut attributes, geometry);
+            let bytes: &[u8] = bytemuck::cast_slice(&attributes);
+            let size = std::mem::size_of::<VertexAttributes>() as u64;
+            self.attributes
+                .upload_at(u64::from(place.vertex_base) * size, bytes)?;
+            attribute_bytes = bytes.len();
+        }
         place.parts = part_entries(&data);
         Ok(Some(
-            (vertex_bytes.len() + index_bytes.len() + wire_bytes.len()) as u64,
+            (vertex_bytes.len() + index_bytes.len() + wire_bytes.len() + attribute_bytes) as u64,
         ))
+    }
+}
+
+/// Appends the geometry's attributes, or white at (0, 0) for each vertex when it has none.
+fn extend_attributes(attributes: &mut Vec<VertexAttributes>, geometry: &Geometry) {
+    if geometry.attributes.len() == geometry.vertices.len() {
+        attributes.extend_from_slice(&geometry.attributes);
+    } else {
+        attributes.resize(
+            attributes.len() + geometry.vertices.len(),
+            VertexAttributes::default(),
+        );
     }
 }

@@ -15,9 +15,13 @@
 
 mod geometry;
 mod hierarchy;
+mod textures;
 mod upload;
 
 pub use hierarchy::{gpu_local, HierarchyMethod, HierarchyPlan, LOCAL_BYTES, LOCAL_WORDS};
+pub use textures::{
+    gpu_material_texture, ARRAY_BUDGET_BYTES, MATERIAL_TEXTURE_BYTES, MAX_LAYER_SIZE,
+};
 pub use upload::UploadStats;
 
 use std::sync::Arc;
@@ -36,6 +40,7 @@ use crate::tree::{ChangeReader, InstanceRef, SceneTree, TreeChanges};
 use crate::vk::{Device, OneShot};
 use geometry::GeometryArenas;
 use hierarchy::TransformHierarchy;
+use textures::TextureArray;
 use upload::{GpuArray, SparseUploader};
 
 /// Bytes of one matrix on the GPU ([`abi::CadrMatrix`]).
@@ -79,10 +84,30 @@ pub fn gpu_material(graph: &SceneGraph, slot: u32) -> abi::CadrMaterial {
         .unwrap_or_default()
 }
 
-/// Whether parts of `material` are translucent: an opacity under 1 (the shaders decide the
-/// same from the base colour's alpha).
-fn is_translucent(material: &abi::CadrMaterial) -> bool {
-    material.base_color[3] < 1.0
+/// Whether parts drawn with material slot `slot` are translucent (the vertex shader decides
+/// the same from the base colour's alpha and the material's texture description).
+fn is_translucent(graph: &SceneGraph, slot: u32) -> bool {
+    graph
+        .material_at(slot)
+        .is_some_and(|m| graph.is_translucent(m))
+}
+
+/// What the frame set's scene bindings name (see [`GpuScene::frame_resources`]).
+pub struct FrameResources {
+    /// Instance records (binding 2).
+    pub records: vk::Buffer,
+    /// Material slots' texture descriptions (binding 3).
+    pub material_textures: vk::Buffer,
+    /// Vertex attributes (binding 4).
+    pub vertex_attributes: vk::Buffer,
+    /// The texture array's view (bindings 5 and 6).
+    pub textures: vk::ImageView,
+    /// Trilinear sampler (binding 5).
+    pub linear_sampler: vk::Sampler,
+    /// Nearest-magnification sampler (binding 6).
+    pub nearest_sampler: vk::Sampler,
+    /// Changes whenever one of them is replaced.
+    pub generation: u64,
 }
 
 /// The first generation of the next GPU scene (each scene counts within its own 2^32).
@@ -101,8 +126,14 @@ pub struct GpuScene {
     matrices: Vec<abi::CadrMatrix>,
     worlds: Vec<[f64; 16]>,
     materials: Vec<abi::CadrMaterial>,
-    /// Material slots whose opacity is under 1 (their parts are drawn as translucent).
+    /// Per material slot: its texture description (`textures::gpu_material_texture`).
+    material_textures: Vec<[u32; 12]>,
+    /// Per material slot: whether its parts are translucent.
+    translucent: Vec<bool>,
+    /// Material slots whose parts are translucent.
     translucent_materials: usize,
+    /// The textures, rebuilt when the graph's change.
+    textures: TextureArray,
     /// Where moved subtrees' world matrices are computed.
     transforms: Transforms,
     /// Local matrices per tree node (with [`Transforms::Gpu`] only).
@@ -114,6 +145,7 @@ pub struct GpuScene {
     last_hierarchy: Option<HierarchyPlan>,
     matrix_gpu: GpuArray,
     material_gpu: GpuArray,
+    material_texture_gpu: GpuArray,
     record_gpu: GpuArray,
     cull_gpu: GpuArray,
     local_gpu: GpuArray,
@@ -147,6 +179,7 @@ impl GpuScene {
             NEXT_GENERATIONS.fetch_add(1 << 32, std::sync::atomic::Ordering::Relaxed);
         let reader = tree.subscribe();
         let (arenas, geometry_bytes) = GeometryArenas::upload(device, graph)?;
+        let (textures, texture_bytes) = TextureArray::build(device, graph)?;
         let mut scene = Self {
             device: Arc::clone(device),
             reader,
@@ -159,7 +192,10 @@ impl GpuScene {
             matrices: Vec::new(),
             worlds: Vec::new(),
             materials: Vec::new(),
+            material_textures: Vec::new(),
+            translucent: Vec::new(),
             translucent_materials: 0,
+            textures,
             transforms,
             locals: Vec::new(),
             frame_moved: Vec::new(),
@@ -167,6 +203,11 @@ impl GpuScene {
             last_hierarchy: None,
             matrix_gpu: GpuArray::new(device, "scene matrices", MATRIX_BYTES)?,
             material_gpu: GpuArray::new(device, "scene materials", MATERIAL_BYTES)?,
+            material_texture_gpu: GpuArray::new(
+                device,
+                "scene material textures",
+                MATERIAL_TEXTURE_BYTES,
+            )?,
             record_gpu: GpuArray::new(device, "scene instance records", RECORD_BYTES)?,
             cull_gpu: GpuArray::new(device, "scene cull entries", CULL_ENTRY_BYTES)?,
             local_gpu: GpuArray::new(device, "scene local matrices", LOCAL_BYTES)?,
@@ -179,7 +220,7 @@ impl GpuScene {
             triangles: 0,
             last_upload: UploadStats {
                 geometry_bytes,
-                bytes: geometry_bytes,
+                bytes: geometry_bytes + texture_bytes,
                 ..UploadStats::default()
             },
             last_touched: 0,
@@ -233,7 +274,13 @@ impl GpuScene {
         self.materials = (0..material_slots as u32)
             .map(|slot| gpu_material(graph, slot))
             .collect();
-        self.translucent_materials = self.materials.iter().filter(|m| is_translucent(m)).count();
+        self.material_textures = (0..material_slots as u32)
+            .map(|slot| gpu_material_texture(graph, slot))
+            .collect();
+        self.translucent = (0..material_slots as u32)
+            .map(|slot| is_translucent(graph, slot))
+            .collect();
+        self.translucent_materials = self.translucent.iter().filter(|&&t| t).count();
         let count = tree.instance_capacity();
         self.instances = vec![abi::CadrInstance::default(); count];
         self.records = vec![abi::CadrInstanceRecord::default(); count];
@@ -250,12 +297,15 @@ impl GpuScene {
         let device = Arc::clone(&self.device);
         self.matrix_gpu.reserve(&device, nodes.max(1))?;
         self.material_gpu.reserve(&device, material_slots.max(1))?;
+        self.material_texture_gpu
+            .reserve(&device, material_slots.max(1))?;
         self.record_gpu.reserve(&device, count.max(1))?;
         self.cull_gpu.reserve(&device, count.max(1))?;
         self.local_gpu.reserve(&device, self.locals.len().max(1))?;
         for array in [
             &mut self.matrix_gpu,
             &mut self.material_gpu,
+            &mut self.material_texture_gpu,
             &mut self.record_gpu,
             &mut self.cull_gpu,
             &mut self.local_gpu,
@@ -371,6 +421,14 @@ impl GpuScene {
             return Ok(());
         }
         settle()?;
+        // Materials name textures by slot: with new textures their descriptions are made
+        // again with every array, and the frame set names the new image.
+        let textures_changed = graph.textures_generation() != self.textures.generation;
+        if textures_changed {
+            let (textures, bytes) = TextureArray::build(&self.device, graph)?;
+            self.textures = textures;
+            self.last_upload.bytes += bytes;
+        }
         let grown = tree.node_capacity() > self.matrices.len()
             || tree.instance_capacity() > self.instances.len()
             || graph.capacities().2 > self.materials.len();
@@ -391,7 +449,7 @@ impl GpuScene {
             // Grown past its room (or new): lay the arenas out again.
             return self.relayout(graph, tree);
         }
-        if grown {
+        if grown || textures_changed {
             return self.refresh_all(graph, tree);
         }
         self.apply(graph, tree, &changes);
@@ -426,6 +484,11 @@ impl GpuScene {
         self.arenas = arenas;
         self.last_upload.geometry_bytes += bytes;
         self.last_upload.bytes += bytes;
+        if graph.textures_generation() != self.textures.generation {
+            let (textures, bytes) = TextureArray::build(&self.device, graph)?;
+            self.textures = textures;
+            self.last_upload.bytes += bytes;
+        }
         self.refresh_all(graph, tree)
     }
 
@@ -444,13 +507,15 @@ impl GpuScene {
         self.apply_moves(tree, &changes.moved);
         for &slot in &changes.dirty_materials {
             if (slot as usize) < self.materials.len() {
-                let material = gpu_material(graph, slot);
-                let was = is_translucent(&self.materials[slot as usize]);
+                let translucent = is_translucent(graph, slot);
+                let was = std::mem::replace(&mut self.translucent[slot as usize], translucent);
                 self.translucent_materials = self.translucent_materials
-                    + usize::from(is_translucent(&material))
+                    + usize::from(translucent)
                     - usize::from(was);
-                self.materials[slot as usize] = material;
+                self.materials[slot as usize] = gpu_material(graph, slot);
+                self.material_textures[slot as usize] = gpu_material_texture(graph, slot);
                 self.material_gpu.queue(slot);
+                self.material_texture_gpu.queue(slot);
                 self.frame_dirty_materials.push(slot);
             }
         }
@@ -540,6 +605,7 @@ impl GpuScene {
         [
             &self.matrix_gpu,
             &self.material_gpu,
+            &self.material_texture_gpu,
             &self.record_gpu,
             &self.cull_gpu,
             &self.local_gpu,
@@ -565,6 +631,11 @@ impl GpuScene {
             let item = materials.get(slot as usize).copied().unwrap_or_default();
             out.extend_from_slice(&item.to_le_bytes());
         };
+        let material_textures = &self.material_textures;
+        let material_texture_bytes = |slot: u32, out: &mut Vec<u8>| {
+            let item = material_textures.get(slot as usize).copied().unwrap_or_default();
+            out.extend_from_slice(bytemuck::cast_slice(&item));
+        };
         let record_bytes = |slot: u32, out: &mut Vec<u8>| {
             let item = records.get(slot as usize).copied().unwrap_or_default();
             out.extend_from_slice(&item.to_le_bytes());
@@ -579,7 +650,7 @@ impl GpuScene {
             let item = locals.get(slot as usize).copied().unwrap_or_default();
             out.extend_from_slice(bytemuck::cast_slice(&item));
         };
-        let ([matrix_count, material_count, record_count, _, local_count], first_words, bytes) =
+        let ([matrix_count, material_count, _, record_count, _, local_count], first_words, bytes) =
             self.uploader.record(
                 &self.device,
                 pipelines,
@@ -587,6 +658,7 @@ impl GpuScene {
                 [
                     (&mut self.matrix_gpu, &matrix_bytes),
                     (&mut self.material_gpu, &material_bytes),
+                    (&mut self.material_texture_gpu, &material_texture_bytes),
                     (&mut self.record_gpu, &record_bytes),
                     (&mut self.cull_gpu, &cull_entry_bytes),
                     (&mut self.local_gpu, &local_bytes),
@@ -598,7 +670,7 @@ impl GpuScene {
                 pipelines,
                 command_buffer,
                 updates,
-                (first_words[4], local_count as u32),
+                (first_words[5], local_count as u32),
                 (self.local_gpu.buffer.raw(), self.matrix_gpu.buffer.raw()),
             )?,
             _ => None,
@@ -683,10 +755,35 @@ impl GpuScene {
             .sum()
     }
 
-    /// Whether some material is translucent (opacity under 1): frames then draw translucent
-    /// surfaces with the transparency method.
+    /// Whether some material is translucent (opacity under 1, or a BLEND texture with
+    /// translucent texels): frames then draw translucent surfaces with the transparency
+    /// method.
     pub fn has_translucency(&self) -> bool {
         self.translucent_materials > 0
+    }
+
+    /// Whether some geometry has texture coordinates or colours (the vertex shader reads them
+    /// only then).
+    pub fn has_vertex_attributes(&self) -> bool {
+        self.arenas.has_attributes
+    }
+
+    /// Whether the scene has textures.
+    pub fn has_textures(&self) -> bool {
+        self.textures.any
+    }
+
+    /// The buffers, image and samplers the frame set names for the shared shaders.
+    pub fn frame_resources(&self) -> FrameResources {
+        FrameResources {
+            records: self.record_gpu.buffer.raw(),
+            material_textures: self.material_texture_gpu.buffer.raw(),
+            vertex_attributes: self.arenas.attributes.raw(),
+            textures: self.textures.image.view(),
+            linear_sampler: self.textures.linear.raw(),
+            nearest_sampler: self.textures.nearest.raw(),
+            generation: self.buffers_generation,
+        }
     }
 
     /// Triangles of the drawn instances.

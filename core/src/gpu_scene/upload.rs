@@ -121,7 +121,7 @@ pub struct UploadStats {
 
 /// How many arrays the GPU scene keeps: matrices, materials, instance records, cull entries,
 /// local matrices.
-pub(super) const ARRAYS: usize = 5;
+pub(super) const ARRAYS: usize = 6;
 
 /// The compact update buffer and the descriptor sets that point the scatter pipeline at it and
 /// at each array.

@@ -18,8 +18,8 @@ pub use background::Background;
 pub use camera::{Camera, DEFAULT_DIRECTION, DEFAULT_FOV_DEGREES};
 pub use output::SaveError;
 pub use pipeline::{
-    FrameUniforms, HierarchyParameters, HierarchyStage, Pipelines, ScatterParameters, DISPLAY_XRAY,
-    PICK_FORMAT,
+    FrameUniforms, HierarchyParameters, HierarchyStage, Pipelines, ScatterParameters,
+    DISPLAY_TEXTURES, DISPLAY_VERTEX_ATTRIBUTES, DISPLAY_XRAY, PICK_FORMAT,
 };
 pub use section::{Section, DEFAULT_CAP_COLORS, MAX_SECTION_PLANES};
 pub use stats::FrameStats;
@@ -39,6 +39,7 @@ use crate::vk::{
     MemoryLocation, Multisampled, OffscreenTarget, RenderingTarget,
 };
 use pick::{PickTarget, PixelRect};
+use crate::gpu_scene::FrameResources;
 use transparency::{storage_buffer, TransparencyTargets};
 
 /// What the colour pass clears to: nothing drawn, no coverage (the background goes under
@@ -79,6 +80,10 @@ pub struct Renderer {
     /// The ambient occlusion pass's set, naming the target's depth; made on first use, dropped
     /// when the target is remade.
     ssao_set: Option<DescriptorSets>,
+    /// Whether materials' textures are sampled (vertex colours apply either way).
+    textures: bool,
+    /// The generation of the GPU scene resources the frame set names, if any.
+    bound_scene: Option<u64>,
 }
 
 /// The most frames a renderer lets the GPU work on while it prepares the next: techniques
@@ -161,7 +166,10 @@ impl Renderer {
                     .descriptor_count(1),
                 vk::DescriptorPoolSize::default()
                     .ty(vk::DescriptorType::STORAGE_BUFFER)
-                    .descriptor_count(1),
+                    .descriptor_count(4),
+                vk::DescriptorPoolSize::default()
+                    .ty(vk::DescriptorType::COMBINED_IMAGE_SAMPLER)
+                    .descriptor_count(2),
             ],
         )?;
         frame_sets.write_buffer(
@@ -198,6 +206,8 @@ impl Renderer {
             section: Section::none(),
             transparency: None,
             placeholder_storage,
+            textures: true,
+            bound_scene: None,
             background: Background::default(),
             ssao: false,
             ssao_set: None,
@@ -234,6 +244,40 @@ impl Renderer {
             self.last_recorded = None;
             self.ssao = on;
         }
+        Ok(())
+    }
+
+    /// Whether materials' textures are sampled (on by default). Vertex colours apply either way.
+    pub fn textures(&self) -> bool {
+        self.textures
+    }
+
+    /// Turns the sampling of materials' textures on or off (`cadr render --no-textures`); the
+    /// next frame draws with it (it reaches the shaders through the frame uniforms, so a
+    /// replayed frame follows too). A BLEND material that is translucent only through its
+    /// texture still goes through the translucent pass, where it comes out opaque.
+    pub fn set_textures(&mut self, on: bool) {
+        self.textures = on;
+    }
+
+    /// Points the frame set's scene bindings (2–6) at `resources` unless it names them
+    /// already. A recorded frame names the old ones: the GPU is waited for and the recording
+    /// forgotten.
+    pub(crate) fn bind_scene(&mut self, resources: &FrameResources) -> RenderResult<()> {
+        if self.bound_scene == Some(resources.generation) {
+            return Ok(());
+        }
+        self.finish()?;
+        self.replayable = None;
+        self.last_recorded = None;
+        let storage = vk::DescriptorType::STORAGE_BUFFER;
+        let sets = &self.frame_sets;
+        sets.write_buffer(0, 2, storage, resources.records, vk::WHOLE_SIZE);
+        sets.write_buffer(0, 3, storage, resources.material_textures, vk::WHOLE_SIZE);
+        sets.write_buffer(0, 4, storage, resources.vertex_attributes, vk::WHOLE_SIZE);
+        sets.write_combined_image(0, 5, resources.textures, resources.linear_sampler);
+        sets.write_combined_image(0, 6, resources.textures, resources.nearest_sampler);
+        self.bound_scene = Some(resources.generation);
         Ok(())
     }
 

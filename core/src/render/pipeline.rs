@@ -42,6 +42,12 @@ pub struct FrameUniforms {
 
 /// [`FrameUniforms::target`]`[2]`: the X-ray display mode.
 pub const DISPLAY_XRAY: u32 = 1;
+/// [`FrameUniforms::target`]`[2]`: the scene has vertex attributes (texture coordinates and
+/// colours) for the vertex shader to read.
+pub const DISPLAY_VERTEX_ATTRIBUTES: u32 = 2;
+/// [`FrameUniforms::target`]`[2]`: materials' textures are sampled (textures on, and the scene
+/// has some).
+pub const DISPLAY_TEXTURES: u32 = 4;
 
 /// Push constants of `scatter.comp`: one dispatch scatters the items of one array.
 #[repr(C)]
@@ -118,6 +124,14 @@ impl Pipelines {
     /// Creates the layouts; pipelines are made on first use.
     pub fn new(device: &Arc<Device>) -> RenderResult<Self> {
         let graphics = vk::ShaderStageFlags::VERTEX | vk::ShaderStageFlags::FRAGMENT;
+        let vertex_storage = (
+            vk::DescriptorType::STORAGE_BUFFER,
+            vk::ShaderStageFlags::VERTEX,
+        );
+        let fragment_texture = (
+            vk::DescriptorType::COMBINED_IMAGE_SAMPLER,
+            vk::ShaderStageFlags::FRAGMENT,
+        );
         let frame_set_layout = DescriptorSetLayout::new(
             device,
             "frame set layout",
@@ -127,6 +141,11 @@ impl Pipelines {
                     vk::DescriptorType::STORAGE_BUFFER,
                     vk::ShaderStageFlags::FRAGMENT,
                 ),
+                vertex_storage,
+                vertex_storage,
+                vertex_storage,
+                fragment_texture,
+                fragment_texture,
             ],
         )?;
         let merge_set_layout = DescriptorSetLayout::new(
@@ -197,8 +216,11 @@ impl Pipelines {
         })
     }
 
-    /// Set 0 of every graphics pipeline: the frame uniform buffer (binding 0) and the
-    /// transparency method's storage (binding 1, fragment shaders).
+    /// Set 0 of every graphics pipeline: the frame uniform buffer (binding 0), the
+    /// transparency method's storage (binding 1, fragment shaders), and for the shared vertex
+    /// shader the GPU scene's instance records, material texture descriptions and vertex
+    /// attributes (bindings 2–4), and its textures sampled trilinear and with nearest
+    /// magnification (bindings 5–6, fragment shaders).
     pub fn frame_set_layout(&self) -> vk::DescriptorSetLayout {
         self.frame_set_layout.raw()
     }

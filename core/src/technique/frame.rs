@@ -85,6 +85,7 @@ impl Renderer {
         passes: PassSet,
     ) -> RenderResult<FrameStats> {
         techniques.ensure_pipelines(passes)?;
+        self.bind_scene(&scene.frame_resources())?;
         let cull_start = Instant::now();
         cull(scene, techniques, camera)?;
         let techniques = &*techniques;
@@ -291,13 +292,19 @@ impl Renderer {
                 .map(|method| (method, (merge.raw(), layout.raw()))),
             _ => None,
         };
-        let display = match passes {
+        let mut display = match passes {
             PassSet::Shaded {
                 mode: ShadeMode::XRay,
                 ..
             } => crate::render::DISPLAY_XRAY,
             _ => 0,
         };
+        if shared.borrow().0.has_vertex_attributes() {
+            display |= crate::render::DISPLAY_VERTEX_ATTRIBUTES;
+        }
+        if self.textures() && shared.borrow().0.has_textures() {
+            display |= crate::render::DISPLAY_TEXTURES;
+        }
         let mut after = |renderer: &Renderer,
                          command_buffer: vk::CommandBuffer,
                          _: u32,

@@ -47,6 +47,33 @@ impl Image {
         usage: vk::ImageUsageFlags,
         aspect: vk::ImageAspectFlags,
     ) -> VkResult<Self> {
+        let shape = ImageShape {
+            extent,
+            samples,
+            layers: 1,
+            mips: 1,
+            array_view: false,
+        };
+        Self::create(device, name, shape, format, usage, aspect)
+    }
+
+    /// Creates a device-local 2D image of any [`ImageShape`] and a view of all of it (a 2D
+    /// array view when it has several layers).
+    fn create(
+        device: &Arc<Device>,
+        name: &str,
+        shape: ImageShape,
+        format: vk::Format,
+        usage: vk::ImageUsageFlags,
+        aspect: vk::ImageAspectFlags,
+    ) -> VkResult<Self> {
+        let ImageShape {
+            extent,
+            samples,
+            layers,
+            mips,
+            ..
+        } = shape;
         let info = vk::ImageCreateInfo::default()
             .image_type(vk::ImageType::TYPE_2D)
             .format(format)
@@ -55,8 +82,8 @@ impl Image {
                 height: extent.height,
                 depth: 1,
             })
-            .mip_levels(1)
-            .array_layers(1)
+            .mip_levels(mips)
+            .array_layers(layers)
             .samples(vk::SampleCountFlags::from_raw(samples))
             .tiling(vk::ImageTiling::OPTIMAL)
             .usage(usage)
@@ -85,11 +112,20 @@ impl Image {
         };
         image.allocation = Some(allocation);
         bound.or_vk("vkBindImageMemory")?;
+        let view_type = if shape.array_view || layers > 1 {
+            vk::ImageViewType::TYPE_2D_ARRAY
+        } else {
+            vk::ImageViewType::TYPE_2D
+        };
         let view_info = vk::ImageViewCreateInfo::default()
             .image(raw)
-            .view_type(vk::ImageViewType::TYPE_2D)
+            .view_type(view_type)
             .format(format)
-            .subresource_range(subresource_range(aspect));
+            .subresource_range(
+                subresource_range(aspect)
+                    .level_count(mips)
+                    .layer_count(layers),
+            );
         // SAFETY: the image is bound to memory; view_info matches it.
         image.view = unsafe { device.raw.create_image_view(&view_info, host_callbacks()) }
             .or_vk("vkCreateImageView")?;
@@ -107,20 +143,52 @@ impl Image {
         pixels: &[u8],
         usage: vk::ImageUsageFlags,
     ) -> VkResult<Self> {
-        let expected = u64::from(extent.width) * u64::from(extent.height) * 4;
-        if pixels.len() as u64 != expected {
-            return Err(VkError::InvalidUse(format!(
-                "image '{name}': {} bytes of pixels for {}x{} RGBA8 (needs {expected})",
-                pixels.len(),
-                extent.width,
-                extent.height
-            )));
-        }
-        let image = Self::new(
+        let shape = ImageShape {
+            extent,
+            samples: 1,
+            layers: 1,
+            mips: 1,
+            array_view: false,
+        };
+        Self::with_texels(
             device,
             name,
-            extent,
-            vk::Format::R8G8B8A8_UNORM,
+            (shape, vk::Format::R8G8B8A8_UNORM),
+            pixels,
+            usage,
+        )
+    }
+
+    /// Creates a sampled image of a 4-byte-per-texel `format` holding `texels`, uploaded
+    /// through a staging buffer and left in `SHADER_READ_ONLY_OPTIMAL`: layer by layer, each
+    /// layer's mip levels from the largest, each level's rows tightly packed (level `m` is
+    /// `max(1, width >> m)` × `max(1, height >> m)`).
+    pub fn with_texels(
+        device: &Arc<Device>,
+        name: &str,
+        (shape, format): (ImageShape, vk::Format),
+        texels: &[u8],
+        usage: vk::ImageUsageFlags,
+    ) -> VkResult<Self> {
+        let regions = shape.texel_regions();
+        let expected = regions.last().map_or(0, |r| {
+            r.buffer_offset + u64::from(r.image_extent.width) * u64::from(r.image_extent.height) * 4
+        });
+        if texels.len() as u64 != expected {
+            return Err(VkError::InvalidUse(format!(
+                "image '{name}': {} bytes of texels for {}x{}, {} layers of {} mip levels at 4 bytes a texel (needs {expected})",
+                texels.len(),
+                shape.extent.width,
+                shape.extent.height,
+                shape.layers,
+                shape.mips
+            )));
+        }
+        let image = Self::create(
+            device,
+            name,
+            shape,
+            format,
             usage | vk::ImageUsageFlags::TRANSFER_DST | vk::ImageUsageFlags::SAMPLED,
             vk::ImageAspectFlags::COLOR,
         )?;
@@ -131,14 +199,16 @@ impl Image {
             vk::BufferUsageFlags::TRANSFER_SRC,
             MemoryLocation::CpuToGpu,
         )?;
-        staging.write(0, pixels)?;
+        staging.write(0, texels)?;
         let mut one_shot = OneShot::begin(device, "image upload")?;
         let command_buffer = one_shot.command_buffer();
-        transition(
+        let whole = subresource_range(vk::ImageAspectFlags::COLOR)
+            .level_count(shape.mips)
+            .layer_count(shape.layers);
+        transition_range(
             device,
             command_buffer,
-            image.raw,
-            vk::ImageAspectFlags::COLOR,
+            (image.raw, whole),
             (
                 vk::ImageLayout::UNDEFINED,
                 vk::PipelineStageFlags2::TOP_OF_PIPE,
@@ -150,23 +220,21 @@ impl Image {
                 vk::AccessFlags2::TRANSFER_WRITE,
             ),
         );
-        let region = [full_copy_region(extent)];
-        // SAFETY: the image is in TRANSFER_DST_OPTIMAL; both resources outlive the submission,
-        // which is waited for below.
+        // SAFETY: the image is in TRANSFER_DST_OPTIMAL; the regions lie inside both resources,
+        // which outlive the submission, waited for below.
         unsafe {
             device.raw.cmd_copy_buffer_to_image(
                 command_buffer,
                 staging.raw(),
                 image.raw,
                 vk::ImageLayout::TRANSFER_DST_OPTIMAL,
-                &region,
+                &regions,
             )
         };
-        transition(
+        transition_range(
             device,
             command_buffer,
-            image.raw,
-            vk::ImageAspectFlags::COLOR,
+            (image.raw, whole),
             (
                 vk::ImageLayout::TRANSFER_DST_OPTIMAL,
                 vk::PipelineStageFlags2::COPY,
@@ -174,7 +242,7 @@ impl Image {
             ),
             (
                 vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL,
-                vk::PipelineStageFlags2::FRAGMENT_SHADER,
+                vk::PipelineStageFlags2::VERTEX_SHADER | vk::PipelineStageFlags2::FRAGMENT_SHADER,
                 vk::AccessFlags2::SHADER_SAMPLED_READ,
             ),
         );
@@ -258,12 +326,29 @@ pub fn memory_barrier(
     };
 }
 
-/// An image layout transition with synchronization2.
+/// An image layout transition with synchronization2 (of the first mip level and layer).
 pub fn transition(
     device: &Device,
     command_buffer: vk::CommandBuffer,
     image: vk::Image,
     aspect: vk::ImageAspectFlags,
+    old: (vk::ImageLayout, vk::PipelineStageFlags2, vk::AccessFlags2),
+    new: (vk::ImageLayout, vk::PipelineStageFlags2, vk::AccessFlags2),
+) {
+    transition_range(
+        device,
+        command_buffer,
+        (image, subresource_range(aspect)),
+        old,
+        new,
+    );
+}
+
+/// A layout transition of `range` of an image with synchronization2.
+pub fn transition_range(
+    device: &Device,
+    command_buffer: vk::CommandBuffer,
+    (image, range): (vk::Image, vk::ImageSubresourceRange),
     (old_layout, src_stage, src_access): (
         vk::ImageLayout,
         vk::PipelineStageFlags2,
@@ -283,7 +368,7 @@ pub fn transition(
         .old_layout(old_layout)
         .new_layout(new_layout)
         .image(image)
-        .subresource_range(subresource_range(aspect))];
+        .subresource_range(range)];
     let dependency = vk::DependencyInfo::default().image_memory_barriers(&barrier);
     // SAFETY: command_buffer is recording; image is alive for the command buffer's lifetime.
     unsafe {
@@ -445,6 +530,54 @@ impl OffscreenTarget {
     /// Copies the color image (in TRANSFER_SRC_OPTIMAL) to the host as tightly packed RGBA8 rows.
     pub fn read_rgba8(&self, device: &Arc<Device>) -> VkResult<Vec<u8>> {
         read_rgba8(device, &self.color, vk::ImageLayout::TRANSFER_SRC_OPTIMAL)
+    }
+}
+
+/// The size, samples, layers and mip levels of an image.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct ImageShape {
+    /// Width and height of mip level 0.
+    pub extent: vk::Extent2D,
+    /// Samples per pixel (1 unless it is a multisampled attachment).
+    pub samples: u32,
+    /// Array layers.
+    pub layers: u32,
+    /// Mip levels.
+    pub mips: u32,
+    /// Whether its view is a 2D array (shaders sample it as `sampler2DArray`), whatever the
+    /// layer count.
+    pub array_view: bool,
+}
+
+impl ImageShape {
+    /// The copy regions of texels laid out as [`Image::with_texels`] takes them, 4 bytes each.
+    fn texel_regions(&self) -> Vec<vk::BufferImageCopy> {
+        let mut offset = 0u64;
+        let mut regions = Vec::new();
+        for layer in 0..self.layers {
+            for mip in 0..self.mips {
+                let width = (self.extent.width >> mip).max(1);
+                let height = (self.extent.height >> mip).max(1);
+                regions.push(
+                    vk::BufferImageCopy::default()
+                        .buffer_offset(offset)
+                        .image_subresource(
+                            vk::ImageSubresourceLayers::default()
+                                .aspect_mask(vk::ImageAspectFlags::COLOR)
+                                .mip_level(mip)
+                                .base_array_layer(layer)
+                                .layer_count(1),
+                        )
+                        .image_extent(vk::Extent3D {
+                            width,
+                            height,
+                            depth: 1,
+                        }),
+                );
+                offset += u64::from(width) * u64::from(height) * 4;
+            }
+        }
+        regions
     }
 }
 

@@ -19,6 +19,7 @@ mod instance;
 mod pipeline;
 mod pipeline_cache;
 mod rendering;
+mod sampler;
 mod shader;
 mod swapchain;
 mod timer;
@@ -29,9 +30,11 @@ pub use command::{record_dispatch, record_fullscreen, CommandContext, OneShot};
 pub use device::{Capabilities, Device, DeviceOptions, RawHandles};
 pub use error::{map_result, VkError, VkResult, VkResultExt};
 pub use image::{
-    memory_barrier, read_rgba8, record_image_copy, subresource_range, transition, Image,
-    MultisampledTarget, OffscreenTarget, COLOR_FORMAT, DEPTH_FORMAT,
+    memory_barrier, read_rgba8, record_image_copy, subresource_range, transition,
+    transition_range, Image, ImageShape, MultisampledTarget, OffscreenTarget, COLOR_FORMAT,
+    DEPTH_FORMAT,
 };
+pub use sampler::Sampler;
 pub use instance::{Instance, InstanceOptions, ValidationLog, ValidationMessage};
 pub use pipeline::{
     Blend, ColorTarget, DepthUse, DescriptorSetLayout, DescriptorSets, GraphicsPipelineDesc,

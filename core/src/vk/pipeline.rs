@@ -566,6 +566,30 @@ impl DescriptorSets {
     }
 }
 
+impl DescriptorSets {
+    /// Points `binding` of set `set` at `view`, in `SHADER_READ_ONLY_OPTIMAL`, sampled with
+    /// `sampler`.
+    pub fn write_combined_image(
+        &self,
+        set: usize,
+        binding: u32,
+        view: vk::ImageView,
+        sampler: vk::Sampler,
+    ) {
+        let info = [vk::DescriptorImageInfo::default()
+            .image_view(view)
+            .sampler(sampler)
+            .image_layout(vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL)];
+        let write = [vk::WriteDescriptorSet::default()
+            .dst_set(self.sets[set])
+            .dst_binding(binding)
+            .descriptor_type(vk::DescriptorType::COMBINED_IMAGE_SAMPLER)
+            .image_info(&info)];
+        // SAFETY: as in `write_buffer`.
+        unsafe { self.device.raw().update_descriptor_sets(&write, &[]) };
+    }
+}
+
 impl Drop for DescriptorSets {
     fn drop(&mut self) {
         // SAFETY: owners drop their sets after the GPU is done with them; sets go with the pool.

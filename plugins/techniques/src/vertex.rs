@@ -15,11 +15,26 @@ use cadr_plugin_sdk::vk;
 use cadr_plugin_sdk::vulkan_failure;
 use cadr_plugin_sdk::{technique_library, Bind, Gpu, Scene, Technique, VertexPath};
 
-const ATTRIBUTES_SNIPPET: &CStr = c"
+// Every snippet defines CADR_VERTEX_INDEX: the vertex's index in the scene's vertex buffer,
+// where the host finds its texture coordinate and colour.
+const ARENA_SNIPPET: &CStr = c"
 layout(location = 0) in vec3 cadr_in_position;
 layout(location = 1) in vec3 cadr_in_normal;
 vec3 cadr_vertex_position() { return cadr_in_position; }
 vec3 cadr_vertex_normal() { return cadr_in_normal; }
+#define CADR_VERTEX_INDEX
+uint cadr_vertex_index() { return uint(gl_VertexIndex); }
+";
+
+/// The bound paths count vertices from the binding's start: the geometry's first vertex is
+/// pushed (bytes 96-99) with every binding.
+const BOUND_SNIPPET: &CStr = c"
+layout(location = 0) in vec3 cadr_in_position;
+layout(location = 1) in vec3 cadr_in_normal;
+vec3 cadr_vertex_position() { return cadr_in_position; }
+vec3 cadr_vertex_normal() { return cadr_in_normal; }
+#define CADR_VERTEX_INDEX
+uint cadr_vertex_index() { return cadr_push.words[0].x + uint(gl_VertexIndex); }
 ";
 
 fn attributes() -> CadrVertexInput {
@@ -51,7 +66,7 @@ fn index_source(bind: &Bind<'_>, drawn: &CadrInstance, per_part: bool) -> (vk::B
     }
 }
 
-/// Binds vertex and index buffers at the given element offsets.
+/// Binds vertex and index buffers at the given element offsets and pushes the vertex offset.
 fn bind_buffers(gpu: &Gpu, bind: &Bind<'_>, index: (vk::Buffer, u32), vertex_base: u32) {
     let scene = bind.scene().raw();
     let vertex_bytes = u64::from(vertex_base) * u64::from(scene.vertex_stride);
@@ -68,6 +83,14 @@ fn bind_buffers(gpu: &Gpu, bind: &Bind<'_>, index: (vk::Buffer, u32), vertex_bas
             index.0,
             u64::from(index.1) * 4,
             vk::IndexType::UINT32,
+        );
+        // Bytes 96-99 lie in the layout's 128-byte vertex range.
+        gpu.device.cmd_push_constants(
+            bind.command_buffer(),
+            bind.layout(),
+            vk::ShaderStageFlags::VERTEX,
+            96,
+            &vertex_base.to_le_bytes(),
         );
     }
     bind.count(|s| s.vertex_binds += 1);
@@ -87,7 +110,7 @@ impl<const PER_PART: bool> Technique for Bound<PER_PART> {
 
 impl<const PER_PART: bool> VertexPath for Bound<PER_PART> {
     fn shader_snippet(&self) -> &CStr {
-        ATTRIBUTES_SNIPPET
+        BOUND_SNIPPET
     }
     fn vertex_input(&self) -> CadrVertexInput {
         attributes()
@@ -154,7 +177,7 @@ fn bind_whole_index_buffer(gpu: &Gpu, bind: &Bind<'_>) {
 
 impl VertexPath for Arena {
     fn shader_snippet(&self) -> &CStr {
-        ATTRIBUTES_SNIPPET
+        ARENA_SNIPPET
     }
     fn vertex_input(&self) -> CadrVertexInput {
         attributes()
@@ -260,6 +283,8 @@ vec3 cadr_vertex_normal() {
     uint base = uint(gl_VertexIndex) * 6u + 3u;
     return vec3(cadr_vertex_data[base], cadr_vertex_data[base + 1u], cadr_vertex_data[base + 2u]);
 }
+#define CADR_VERTEX_INDEX
+uint cadr_vertex_index() { return uint(gl_VertexIndex); }
 ";
 
 impl VertexPath for Pulling {
@@ -339,6 +364,8 @@ vec3 cadr_pulled(uint offset) {
 }
 vec3 cadr_vertex_position() { return cadr_pulled(0u); }
 vec3 cadr_vertex_normal() { return cadr_pulled(3u); }
+#define CADR_VERTEX_INDEX
+uint cadr_vertex_index() { return uint(gl_VertexIndex); }
 ";
 
 impl VertexPath for PullingAddress {

@@ -1,0 +1,208 @@
+//! The scene's textures on the GPU and what each material slot says about its texture.
+//!
+//! Textures live in one 2D array image of square, mipmapped sRGB layers, layer `t` holding
+//! texture slot `t`, sampled through a `sampler2DArray` in the frame set: the path that works
+//! on every device (lavapipe has no descriptor indexing, so no array of textures of their own
+//! sizes). Each texture is resampled to the layer size: the largest texture's side rounded up
+//! to a power of two, at most [`MAX_LAYER_SIZE`], halved while the array would pass
+//! [`ARRAY_BUDGET_BYTES`]. Layers and their mip chains are made on the CPU with the `image`
+//! crate, a thread per core, and uploaded once; the array is rebuilt when the graph's textures
+//! change.
+
+use std::sync::Arc;
+
+use image::imageops::FilterType;
+use image::RgbaImage;
+
+use crate::error::RenderResult;
+use crate::graph::SceneGraph;
+use crate::scene::{AlphaMode, Texture};
+use crate::vk::raw as vk;
+use crate::vk::{Device, Image, ImageShape, Sampler};
+
+/// The largest layer side, in texels.
+pub const MAX_LAYER_SIZE: u32 = 1024;
+
+/// The most device memory the array may take; layers shrink to fit.
+pub const ARRAY_BUDGET_BYTES: u64 = 256 << 20;
+
+/// Bytes of one material slot's texture description on the GPU (`CadrMaterialTexture` in
+/// `shaders/technique.vert`).
+pub const MATERIAL_TEXTURE_BYTES: usize = 48;
+
+/// `CadrMaterialTexture::info.y`: bits 0–1 wrap S, 2–3 wrap T ([`crate::scene::Wrap::code`]),
+/// and these.
+const SAMPLING_NEAREST: u32 = 16;
+const SAMPLING_TRANSLUCENT: u32 = 32;
+
+/// A material slot's texture as the vertex shader reads it: the UV transform's rows (xyz),
+/// then layer + 1 (0: none), sampling bits, alpha mode ([`AlphaMode::code`]) and the mask's
+/// cutoff (f32 bits).
+pub fn gpu_material_texture(graph: &SceneGraph, slot: u32) -> [u32; 12] {
+    let Some(material) = graph.material_at(slot) else {
+        return [0; 12];
+    };
+    let mut words = [0u32; 12];
+    let cutoff = match material.alpha_mode {
+        AlphaMode::Mask { cutoff } => cutoff,
+        _ => 0.0,
+    };
+    words[8..12].copy_from_slice(&[0, 0, material.alpha_mode.code(), cutoff.to_bits()]);
+    let reference = material
+        .base_color_texture
+        .and_then(|r| Some((r, graph.texture_at(r.texture)?)));
+    match reference {
+        Some((reference, entry)) => {
+            let rows = [reference.transform.u_row, reference.transform.v_row];
+            for (row, values) in rows.iter().enumerate() {
+                for (column, value) in values.iter().enumerate() {
+                    words[row * 4 + column] = value.to_bits();
+                }
+            }
+            let sampler = entry.texture.sampler;
+            let mut sampling = sampler.wrap_s.code() | sampler.wrap_t.code() << 2;
+            if sampler.magnify_nearest {
+                sampling |= SAMPLING_NEAREST;
+            }
+            if entry.translucent {
+                sampling |= SAMPLING_TRANSLUCENT;
+            }
+            words[8] = reference.texture + 1;
+            words[9] = sampling;
+        }
+        None => {
+            words[0] = 1f32.to_bits();
+            words[5] = 1f32.to_bits();
+        }
+    }
+    words
+}
+
+/// The texture array, its view and the two samplers the shaders choose between.
+pub(super) struct TextureArray {
+    pub(super) image: Image,
+    /// Trilinear.
+    pub(super) linear: Sampler,
+    /// Nearest texel when magnifying (glTF `magFilter` NEAREST).
+    pub(super) nearest: Sampler,
+    /// The graph's textures generation it was built from.
+    pub(super) generation: u64,
+    /// Whether the graph had any texture.
+    pub(super) any: bool,
+}
+
+impl TextureArray {
+    /// Builds the array from the graph's textures (one white texel when it has none); returns
+    /// it and the bytes uploaded.
+    pub(super) fn build(device: &Arc<Device>, graph: &SceneGraph) -> RenderResult<(Self, u64)> {
+        let slots: Vec<Option<&Texture>> = (0..graph.texture_capacity() as u32)
+            .map(|t| graph.texture_at(t).map(|e| &e.texture))
+            .collect();
+        let any = slots.iter().any(Option::is_some);
+        let layers = slots.len().max(1) as u32;
+        let size = if any { layer_size(&slots, layers) } else { 1 };
+        let mips = size.ilog2() + 1;
+        let texels: Vec<u8> = if any {
+            resample_in_parallel(&slots, size, mips).concat()
+        } else {
+            vec![255; 4]
+        };
+        let shape = ImageShape {
+            extent: vk::Extent2D {
+                width: size,
+                height: size,
+            },
+            samples: 1,
+            layers,
+            mips,
+            array_view: true,
+        };
+        let image = Image::with_texels(
+            device,
+            "scene textures",
+            (shape, vk::Format::R8G8B8A8_SRGB),
+            &texels,
+            vk::ImageUsageFlags::SAMPLED,
+        )?;
+        let array = Self {
+            image,
+            linear: Sampler::new(device, "scene textures (trilinear)", false)?,
+            nearest: Sampler::new(device, "scene textures (nearest magnification)", true)?,
+            generation: graph.textures_generation(),
+            any,
+        };
+        Ok((array, texels.len() as u64))
+    }
+}
+
+/// The layer side: the largest texture's side as a power of two, at most
+/// [`MAX_LAYER_SIZE`], halved until `layers` layers with their mips fit the budget.
+fn layer_size(slots: &[Option<&Texture>], layers: u32) -> u32 {
+    let largest = slots
+        .iter()
+        .flatten()
+        .map(|t| t.width.max(t.height))
+        .max()
+        .unwrap_or(1);
+    let mut size = largest.next_power_of_two().min(MAX_LAYER_SIZE);
+    let bytes = |size: u32| u64::from(layers) * u64::from(size) * u64::from(size) * 4 * 4 / 3;
+    while size > 16 && bytes(size) > ARRAY_BUDGET_BYTES {
+        size /= 2;
+    }
+    size
+}
+
+/// Every slot's layer with its mip chain (a dead slot's is transparent black), on a thread
+/// per core.
+fn resample_in_parallel(slots: &[Option<&Texture>], size: u32, mips: u32) -> Vec<Vec<u8>> {
+    let threads = std::thread::available_parallelism()
+        .map_or(1, usize::from)
+        .min(slots.len())
+        .max(1);
+    let chunk = slots.len().div_ceil(threads).max(1);
+    std::thread::scope(|scope| {
+        let workers: Vec<_> = slots
+            .chunks(chunk)
+            .map(|chunk| {
+                scope.spawn(move || {
+                    chunk
+                        .iter()
+                        .map(|slot| mip_chain(*slot, size, mips))
+                        .collect::<Vec<_>>()
+                })
+            })
+            .collect();
+        workers
+            .into_iter()
+            .flat_map(|worker| match worker.join() {
+                Ok(layers) => layers,
+                Err(panic) => std::panic::resume_unwind(panic),
+            })
+            .collect()
+    })
+}
+
+/// A texture resampled to `size` × `size` and its mip levels down to 1 × 1, each level made
+/// from the one above it.
+fn mip_chain(texture: Option<&Texture>, size: u32, mips: u32) -> Vec<u8> {
+    let Some(texture) = texture else {
+        let texels: u64 = (0..mips).map(|m| u64::from((size >> m).max(1)).pow(2)).sum();
+        return vec![0; texels as usize * 4];
+    };
+    let source = RgbaImage::from_raw(texture.width, texture.height, texture.texels.to_vec())
+        .unwrap_or_else(|| RgbaImage::new(1, 1));
+    let mut level = if (texture.width, texture.height) == (size, size) {
+        source
+    } else {
+        image::imageops::resize(&source, size, size, FilterType::Triangle)
+    };
+    let mut texels = Vec::new();
+    for m in 0..mips {
+        texels.extend_from_slice(level.as_raw());
+        if m + 1 < mips {
+            let next = (size >> (m + 1)).max(1);
+            level = image::imageops::resize(&level, next, next, FilterType::Triangle);
+        }
+    }
+    texels
+}

@@ -190,7 +190,10 @@ pub const INCLUDES: &[IncludeFile] = &[
     ("frame.glsl", include_str!("../../shaders/frame.glsl")),
     ("shading.glsl", include_str!("../../shaders/shading.glsl")),
     ("section.glsl", include_str!("../../shaders/section.glsl")),
-    ("texturing.glsl", include_str!("../../shaders/texturing.glsl")),
+    (
+        "texturing.glsl",
+        include_str!("../../shaders/texturing.glsl"),
+    ),
     (
         "transparency.glsl",
         include_str!("../../shaders/transparency.glsl"),

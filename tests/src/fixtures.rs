@@ -329,3 +329,171 @@ pub fn rich_csf_file() -> CsfFile {
         }),
     }
 }
+
+/// Where the quads of [`textured_gltf`] lie: centres (x, y) in the plane z = 0, each
+/// [`TEXTURED_QUAD_SIZE`] across, in front of a red backdrop at z = -0.5.
+pub mod textured {
+    /// The checker texture (8 × 8 texels, NEAREST), repeated twice each way by
+    /// `KHR_texture_transform`: 16 × 16 cells.
+    pub const CHECKER: (f64, f64) = (-1.0, 1.0);
+    /// The alpha-masked texture (MASK, cutoff 0.5): its left half is cut away.
+    pub const MASKED: (f64, f64) = (1.0, 1.0);
+    /// Vertex colours (no texture): red top left, green top right, blue bottom right, white
+    /// bottom left.
+    pub const VERTEX_COLORS: (f64, f64) = (-1.0, -1.0);
+    /// A BLEND texture of blue at half opacity: the backdrop shows through.
+    pub const BLENDED: (f64, f64) = (1.0, -1.0);
+    /// Side of each quad.
+    pub const QUAD_SIZE: f64 = 1.6;
+    /// The checker's dark and light texels (sRGB).
+    pub const CHECKER_COLORS: [[u8; 4]; 2] = [[20, 20, 20, 255], [250, 210, 30, 255]];
+    /// The masked texture's kept half (sRGB).
+    pub const MASK_KEPT: [u8; 4] = [255, 140, 0, 255];
+    /// The blended texture's one texel (sRGB, alpha 128).
+    pub const BLEND_TEXEL: [u8; 4] = [30, 80, 230, 128];
+}
+
+fn png_data_uri(width: u32, height: u32, texels: Vec<u8>) -> String {
+    let image = image::RgbaImage::from_raw(width, height, texels).expect("texels for the size");
+    let mut png = std::io::Cursor::new(Vec::new());
+    image
+        .write_to(&mut png, image::ImageFormat::Png)
+        .expect("encode PNG");
+    format!(
+        "data:image/png;base64,{}",
+        base64::engine::general_purpose::STANDARD.encode(png.into_inner())
+    )
+}
+
+/// Writes `textured.gltf` (buffer and PNG images embedded as data URIs) into `dir`: four quads
+/// facing +Z over a red backdrop, showing a repeated checker texture with a texture transform,
+/// an alpha mask, vertex colours and a translucent texture (see [`textured`]).
+pub fn textured_gltf(dir: &Path) -> PathBuf {
+    use textured::*;
+    let mut buffer: Vec<u8> = Vec::new();
+    let mut views = Vec::new();
+    let mut accessors = Vec::new();
+    let mut push = |bytes: Vec<u8>, accessor: String| {
+        while buffer.len() % 4 != 0 {
+            buffer.push(0);
+        }
+        views.push(format!(
+            r#"{{"buffer": 0, "byteOffset": {}, "byteLength": {}}}"#,
+            buffer.len(),
+            bytes.len()
+        ));
+        buffer.extend_from_slice(&bytes);
+        accessors.push(accessor.replace("VIEW", &(views.len() - 1).to_string()));
+        accessors.len() - 1
+    };
+    let f32s = |values: &[f32]| values.iter().flat_map(|v| v.to_le_bytes()).collect();
+    // Quads: (centre, z, half size, material, with uv, with colours).
+    let quads = [
+        ((0.0, 0.0), -0.5, 2.2, 0, false, false),
+        (CHECKER, 0.0, QUAD_SIZE / 2.0, 1, true, false),
+        (MASKED, 0.0, QUAD_SIZE / 2.0, 2, true, false),
+        (VERTEX_COLORS, 0.0, QUAD_SIZE / 2.0, 3, false, true),
+        (BLENDED, 0.0, QUAD_SIZE / 2.0, 4, true, false),
+    ];
+    let mut meshes = Vec::new();
+    for ((cx, cy), z, half, material, uv, colors) in quads {
+        let (x0, x1, y0, y1) = (cx - half, cx + half, cy - half, cy + half);
+        // Top left, top right, bottom right, bottom left.
+        let corners = [[x0, y1], [x1, y1], [x1, y0], [x0, y0]];
+        let positions: Vec<f32> = corners
+            .iter()
+            .flat_map(|[x, y]| [*x as f32, *y as f32, z as f32])
+            .collect();
+        let (min, max) = (
+            [x0 as f32, y0 as f32, z as f32],
+            [x1 as f32, y1 as f32, z as f32],
+        );
+        let position = push(
+            f32s(&positions),
+            format!(
+                r#"{{"bufferView": VIEW, "componentType": 5126, "count": 4, "type": "VEC3", "min": {min:?}, "max": {max:?}}}"#
+            ),
+        );
+        let normal = push(
+            f32s(&[0.0, 0.0, 1.0].repeat(4)),
+            r#"{"bufferView": VIEW, "componentType": 5126, "count": 4, "type": "VEC3"}"#.into(),
+        );
+        let indices = push(
+            [0u16, 3, 2, 0, 2, 1]
+                .iter()
+                .flat_map(|i| i.to_le_bytes())
+                .collect(),
+            r#"{"bufferView": VIEW, "componentType": 5123, "count": 6, "type": "SCALAR"}"#.into(),
+        );
+        let mut attributes = format!(r#""POSITION": {position}, "NORMAL": {normal}"#);
+        if uv {
+            let coordinates = push(
+                f32s(&[0.0, 0.0, 1.0, 0.0, 1.0, 1.0, 0.0, 1.0]),
+                r#"{"bufferView": VIEW, "componentType": 5126, "count": 4, "type": "VEC2"}"#.into(),
+            );
+            attributes.push_str(&format!(r#", "TEXCOORD_0": {coordinates}"#));
+        }
+        if colors {
+            let rgba = [
+                [255u8, 0, 0, 255],
+                [0, 255, 0, 255],
+                [0, 0, 255, 255],
+                [255, 255, 255, 255],
+            ];
+            let colors = push(
+                rgba.concat(),
+                r#"{"bufferView": VIEW, "componentType": 5121, "normalized": true, "count": 4, "type": "VEC4"}"#
+                    .into(),
+            );
+            attributes.push_str(&format!(r#", "COLOR_0": {colors}"#));
+        }
+        meshes.push(format!(
+            r#"{{"primitives": [{{"attributes": {{{attributes}}}, "indices": {indices}, "material": {material}}}]}}"#
+        ));
+    }
+    let checker: Vec<u8> = (0..64)
+        .flat_map(|i| CHECKER_COLORS[(i % 8 + i / 8) % 2])
+        .collect();
+    let images = [
+        png_data_uri(8, 8, checker),
+        png_data_uri(2, 1, [[0, 0, 0, 0], MASK_KEPT].concat()),
+        png_data_uri(1, 1, BLEND_TEXEL.to_vec()),
+    ]
+    .map(|uri| format!(r#"{{"uri": "{uri}"}}"#))
+    .join(", ");
+    let nodes: Vec<String> = (0..quads.len())
+        .map(|m| format!(r#"{{"mesh": {m}}}"#))
+        .collect();
+    let json = format!(
+        r#"{{
+  "asset": {{"version": "2.0"}},
+  "extensionsUsed": ["KHR_texture_transform"],
+  "scene": 0,
+  "scenes": [{{"nodes": [0, 1, 2, 3, 4]}}],
+  "nodes": [{nodes}],
+  "meshes": [{meshes}],
+  "materials": [
+    {{"name": "backdrop", "pbrMetallicRoughness": {{"baseColorFactor": [0.8, 0.05, 0.05, 1.0], "roughnessFactor": 1.0, "metallicFactor": 0.0}}}},
+    {{"name": "checker", "pbrMetallicRoughness": {{"baseColorTexture": {{"index": 0, "extensions": {{"KHR_texture_transform": {{"scale": [2.0, 2.0]}}}}}}, "roughnessFactor": 1.0, "metallicFactor": 0.0}}}},
+    {{"name": "masked", "alphaMode": "MASK", "alphaCutoff": 0.5, "pbrMetallicRoughness": {{"baseColorTexture": {{"index": 1}}, "roughnessFactor": 1.0, "metallicFactor": 0.0}}}},
+    {{"name": "vertex colours", "pbrMetallicRoughness": {{"roughnessFactor": 1.0, "metallicFactor": 0.0}}}},
+    {{"name": "blended", "alphaMode": "BLEND", "pbrMetallicRoughness": {{"baseColorTexture": {{"index": 2}}, "roughnessFactor": 1.0, "metallicFactor": 0.0}}}}
+  ],
+  "samplers": [{{"magFilter": 9728, "minFilter": 9987, "wrapS": 10497, "wrapT": 10497}}],
+  "images": [{images}],
+  "textures": [{{"source": 0, "sampler": 0}}, {{"source": 1, "sampler": 0}}, {{"source": 2, "sampler": 0}}],
+  "buffers": [{{"byteLength": {length}, "uri": "data:application/octet-stream;base64,{data}"}}],
+  "bufferViews": [{views}],
+  "accessors": [{accessors}]
+}}"#,
+        nodes = nodes.join(", "),
+        meshes = meshes.join(", "),
+        length = buffer.len(),
+        data = base64::engine::general_purpose::STANDARD.encode(&buffer),
+        views = views.join(", "),
+        accessors = accessors.join(", "),
+    );
+    let path = dir.join("textured.gltf");
+    std::fs::write(&path, json).expect("write textured.gltf");
+    path
+}

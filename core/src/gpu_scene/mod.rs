@@ -509,9 +509,8 @@ impl GpuScene {
             if (slot as usize) < self.materials.len() {
                 let translucent = is_translucent(graph, slot);
                 let was = std::mem::replace(&mut self.translucent[slot as usize], translucent);
-                self.translucent_materials = self.translucent_materials
-                    + usize::from(translucent)
-                    - usize::from(was);
+                self.translucent_materials =
+                    self.translucent_materials + usize::from(translucent) - usize::from(was);
                 self.materials[slot as usize] = gpu_material(graph, slot);
                 self.material_textures[slot as usize] = gpu_material_texture(graph, slot);
                 self.material_gpu.queue(slot);
@@ -633,7 +632,10 @@ impl GpuScene {
         };
         let material_textures = &self.material_textures;
         let material_texture_bytes = |slot: u32, out: &mut Vec<u8>| {
-            let item = material_textures.get(slot as usize).copied().unwrap_or_default();
+            let item = material_textures
+                .get(slot as usize)
+                .copied()
+                .unwrap_or_default();
             out.extend_from_slice(bytemuck::cast_slice(&item));
         };
         let record_bytes = |slot: u32, out: &mut Vec<u8>| {

@@ -183,26 +183,58 @@ fn resample_in_parallel(slots: &[Option<&Texture>], size: u32, mips: u32) -> Vec
 }
 
 /// A texture resampled to `size` × `size` and its mip levels down to 1 × 1, each level made
-/// from the one above it.
+/// from the one above it. Colours are filtered weighted by their alpha (premultiplied), so
+/// that the colour of transparent texels does not bleed into the kept ones. A texture smaller
+/// than the layer and magnified to its nearest texel is enlarged by repeating texels, which
+/// keeps them sharp.
 fn mip_chain(texture: Option<&Texture>, size: u32, mips: u32) -> Vec<u8> {
     let Some(texture) = texture else {
-        let texels: u64 = (0..mips).map(|m| u64::from((size >> m).max(1)).pow(2)).sum();
+        let texels: u64 = (0..mips)
+            .map(|m| u64::from((size >> m).max(1)).pow(2))
+            .sum();
         return vec![0; texels as usize * 4];
     };
     let source = RgbaImage::from_raw(texture.width, texture.height, texture.texels.to_vec())
         .unwrap_or_else(|| RgbaImage::new(1, 1));
+    let enlarged = texture.width <= size && texture.height <= size;
+    let first_filter = if enlarged && texture.sampler.magnify_nearest {
+        FilterType::Nearest
+    } else {
+        FilterType::Triangle
+    };
     let mut level = if (texture.width, texture.height) == (size, size) {
         source
     } else {
-        image::imageops::resize(&source, size, size, FilterType::Triangle)
+        resize_premultiplied(&source, size, first_filter)
     };
     let mut texels = Vec::new();
     for m in 0..mips {
         texels.extend_from_slice(level.as_raw());
         if m + 1 < mips {
             let next = (size >> (m + 1)).max(1);
-            level = image::imageops::resize(&level, next, next, FilterType::Triangle);
+            level = resize_premultiplied(&level, next, FilterType::Triangle);
         }
     }
     texels
+}
+
+/// `image` resized to `size` × `size` with its colours weighted by alpha.
+fn resize_premultiplied(image: &RgbaImage, size: u32, filter: FilterType) -> RgbaImage {
+    let mut premultiplied = image.clone();
+    for texel in premultiplied.pixels_mut() {
+        let alpha = u32::from(texel[3]);
+        for c in 0..3 {
+            texel[c] = ((u32::from(texel[c]) * alpha + 127) / 255) as u8;
+        }
+    }
+    let mut resized = image::imageops::resize(&premultiplied, size, size, filter);
+    for texel in resized.pixels_mut() {
+        let alpha = u32::from(texel[3]);
+        if alpha > 0 {
+            for c in 0..3 {
+                texel[c] = ((u32::from(texel[c]) * 255 + alpha / 2) / alpha).min(255) as u8;
+            }
+        }
+    }
+    resized
 }

@@ -464,8 +464,14 @@ fn load_mesh(
             )
             .map_err(|e| format!("{at}: {e}"))?;
         }
-        let attributes = read_attributes(&primitive, &at, buffers, uv_sets, positions_accessor.count())
-            .map_err(|e| format!("{at}: {e}"))?;
+        let attributes = read_attributes(
+            &primitive,
+            &at,
+            buffers,
+            uv_sets,
+            positions_accessor.count(),
+        )
+        .map_err(|e| format!("{at}: {e}"))?;
         let reader = primitive.reader(|b| buffers.get(b.index()).map(Vec::as_slice));
         let positions: Vec<[f32; 3]> = reader
             .read_positions()

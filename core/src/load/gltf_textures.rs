@@ -78,10 +78,7 @@ fn sampler(sampler: &gltf::texture::Sampler<'_>) -> Sampler {
 }
 
 /// Runs `decode` over `items` on up to one thread per core, keeping their order.
-fn decode_in_parallel<T: Sync, R: Send>(
-    items: &[T],
-    decode: impl Fn(&T) -> R + Sync,
-) -> Vec<R> {
+fn decode_in_parallel<T: Sync, R: Send>(items: &[T], decode: impl Fn(&T) -> R + Sync) -> Vec<R> {
     let threads = std::thread::available_parallelism()
         .map_or(1, usize::from)
         .min(items.len())
@@ -103,7 +100,11 @@ fn decode_in_parallel<T: Sync, R: Send>(
 }
 
 /// Reads and decodes one image (within the `image` crate's default allocation limit, 512 MiB).
-fn decode(image: &gltf::Image<'_>, buffers: &[Vec<u8>], base_dir: &Path) -> Result<Decoded, String> {
+fn decode(
+    image: &gltf::Image<'_>,
+    buffers: &[Vec<u8>],
+    base_dir: &Path,
+) -> Result<Decoded, String> {
     let owned;
     let bytes: &[u8] = match image.source() {
         gltf::image::Source::View { view, .. } => {

@@ -31,6 +31,7 @@ use crate::error::{RenderError, RenderResult};
 use crate::vk::raw as vk;
 
 use crate::gpu_scene::split_f64;
+use crate::gpu_scene::FrameResources;
 use crate::technique::TransparencyMethod;
 pub(crate) use crate::vk::SUSPENDED_DEPTH_LAYOUT;
 use crate::vk::{
@@ -39,7 +40,6 @@ use crate::vk::{
     MemoryLocation, Multisampled, OffscreenTarget, RenderingTarget,
 };
 use pick::{PickTarget, PixelRect};
-use crate::gpu_scene::FrameResources;
 use transparency::{storage_buffer, TransparencyTargets};
 
 /// What the colour pass clears to: nothing drawn, no coverage (the background goes under

@@ -30,11 +30,9 @@ pub use command::{record_dispatch, record_fullscreen, CommandContext, OneShot};
 pub use device::{Capabilities, Device, DeviceOptions, RawHandles};
 pub use error::{map_result, VkError, VkResult, VkResultExt};
 pub use image::{
-    memory_barrier, read_rgba8, record_image_copy, subresource_range, transition,
-    transition_range, Image, ImageShape, MultisampledTarget, OffscreenTarget, COLOR_FORMAT,
-    DEPTH_FORMAT,
+    memory_barrier, read_rgba8, record_image_copy, subresource_range, transition, transition_range,
+    Image, ImageShape, MultisampledTarget, OffscreenTarget, COLOR_FORMAT, DEPTH_FORMAT,
 };
-pub use sampler::Sampler;
 pub use instance::{Instance, InstanceOptions, ValidationLog, ValidationMessage};
 pub use pipeline::{
     Blend, ColorTarget, DepthUse, DescriptorSetLayout, DescriptorSets, GraphicsPipelineDesc,
@@ -44,6 +42,7 @@ pub use rendering::{
     begin_overlay, begin_rendering, end_overlay, end_rendering, suspend_rendering, Multisampled,
     RenderingTarget, SUSPENDED_DEPTH_LAYOUT,
 };
+pub use sampler::Sampler;
 pub use shader::{create_unowned_shader_module, ShaderModule, ShaderStage};
 pub use swapchain::{PresentMode, PresentOutcome, Swapchain};
 pub use timer::GpuTimer;

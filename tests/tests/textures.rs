@@ -1,0 +1,437 @@
+//! Textures, texture transforms, vertex colours and alpha modes, from glTF files to the
+//! picture: a file of our own (`fixtures::textured_gltf`: a repeated checker with
+//! `KHR_texture_transform`, an alpha mask, vertex colours, a translucent texture over a red
+//! backdrop) and the Khronos samples Debian ships (TextureTransformTest, BoxTextured in three
+//! containers); every vertex and parameter path samples them alike; picking goes through mask
+//! holes; `--no-textures` turns them off; the graph's textures can change at run time.
+
+use std::collections::HashSet;
+
+use cadr_core::load::load_file;
+use cadr_core::render::pick::PixelRect;
+use cadr_core::render::Camera;
+use cadr_core::scene::{Material, Scene, Texture, TextureRef, UvTransform};
+use cadr_core::technique::{Combination, ShadeMode, TechniqueKind};
+use cadr_tests::fixtures::{scratch_dir, textured, textured_gltf};
+use cadr_tests::images::{
+    assert_matches_reference, color_at, compare, DEFAULT_TOLERANCE, SAME_PICTURE,
+};
+use cadr_tests::{assert_no_validation_errors, test_device, SceneView};
+use glam::DVec3;
+
+const SIZE: (u32, u32) = (480, 480);
+const TEXTURE_TRANSFORM_TEST: &str =
+    "/usr/share/assimp/models/glTF2/textureTransform/TextureTransformTest.gltf";
+const BOX_TEXTURED: [&str; 3] = [
+    "/usr/share/assimp/models/glTF2/BoxTextured-glTF/BoxTextured.gltf",
+    "/usr/share/assimp/models/glTF2/BoxTextured-glTF-Binary/BoxTextured.glb",
+    "/usr/share/assimp/models/glTF2/BoxTextured-glTF-Embedded/BoxTextured.gltf",
+];
+
+fn textured_scene(test: &str) -> Scene {
+    let dir = scratch_dir(test);
+    let scene = load_file(&textured_gltf(&dir)).unwrap_or_else(|e| panic!("{e}"));
+    let _ = std::fs::remove_dir_all(&dir);
+    scene
+}
+
+/// The textured fixture seen straight on.
+fn front_view(scene: &Scene) -> SceneView {
+    let bounds = cadr_core::scene::flatten(scene).unwrap().bounds;
+    let camera = Camera::fit(&bounds, 1.0, DVec3::Z);
+    SceneView::new(test_device(), scene, SIZE, camera)
+}
+
+fn point((x, y): (f64, f64), dx: f64, dy: f64) -> DVec3 {
+    DVec3::new(x + dx, y + dy, 0.0)
+}
+
+fn brightness(c: [f32; 3]) -> f32 {
+    c.iter().sum::<f32>() / 3.0
+}
+
+#[test]
+fn the_textured_file_loads_its_textures_transforms_colours_and_alpha_modes() {
+    let scene = textured_scene("load");
+    assert_eq!(scene.textures.len(), 3);
+    assert_eq!((scene.textures[0].width, scene.textures[0].height), (8, 8));
+    assert!(scene.textures[0].sampler.magnify_nearest);
+    assert!(!scene.textures[0].has_translucent_texels());
+    assert!(scene.textures[2].has_translucent_texels());
+    let checker = scene
+        .materials
+        .iter()
+        .find(|m| m.name == "checker")
+        .unwrap();
+    let reference = checker.base_color_texture.expect("the checker's texture");
+    assert_eq!(reference.transform.apply([0.5, 0.25]), [1.0, 0.5]);
+    let blended = scene
+        .materials
+        .iter()
+        .find(|m| m.name == "blended")
+        .unwrap();
+    assert!(blended.is_translucent(|t| scene.textures[t as usize].has_translucent_texels()));
+    let with_colors = scene
+        .geometries
+        .iter()
+        .find(|g| g.attributes.iter().any(|a| a.color == [255, 0, 0, 255]))
+        .expect("the vertex-coloured quad");
+    assert_eq!(with_colors.attributes.len(), with_colors.vertices.len());
+}
+
+/// What each quad shows: checker cells alternate, the mask cuts its left half (the red
+/// backdrop shows), vertex colours blend from their corners, the translucent texture lets the
+/// backdrop through; with textures off the checker is one colour, the mask cuts nothing and
+/// the blend quad is opaque; the picture matches its references.
+#[test]
+fn textures_colours_and_alpha_reach_the_picture() {
+    let scene = textured_scene("picture");
+    let mut f = front_view(&scene);
+    let image = f.render();
+    assert_matches_reference("textured_solid", &image, DEFAULT_TOLERANCE);
+    let camera = f.camera.clone();
+    let at = |image: &image::RgbaImage, p: DVec3| color_at(image, &camera, p);
+    let half = textured::QUAD_SIZE / 2.0;
+    // Checker: 16 cells across the quad, 0.1 units each.
+    let cell = textured::QUAD_SIZE / 16.0;
+    let cell_center = |i: f64, j: f64| {
+        point(
+            textured::CHECKER,
+            -half + cell * (i + 0.5),
+            half - cell * (j + 0.5),
+        )
+    };
+    for (i, j) in [(3.0, 4.0), (8.0, 8.0), (12.0, 1.0)] {
+        let (a, b) = (
+            at(&image, cell_center(i, j)),
+            at(&image, cell_center(i + 1.0, j)),
+        );
+        assert!(
+            (brightness(a) - brightness(b)).abs() > 0.3,
+            "cells ({i}, {j}) and the next differ: {a:?} {b:?}"
+        );
+        assert_eq!(
+            at(&image, cell_center(i, j)).map(|c| (c * 20.0).round()),
+            at(&image, cell_center(i + 2.0, j)).map(|c| (c * 20.0).round()),
+            "every other cell is alike"
+        );
+    }
+    // Mask: the left half is cut, the backdrop shows red; the right half is orange.
+    let hole = at(&image, point(textured::MASKED, -half / 2.0, 0.0));
+    let kept = at(&image, point(textured::MASKED, half / 2.0, 0.0));
+    assert!(
+        hole[0] > hole[1] + 0.4 && hole[0] > hole[2] + 0.4,
+        "backdrop red in the hole: {hole:?}"
+    );
+    assert!(
+        kept[0] > 0.7 && kept[1] > 0.35 && kept[2] < 0.2,
+        "orange where kept: {kept:?}"
+    );
+    // Vertex colours: red, green and blue near their corners.
+    let near = 0.8 * half;
+    let red = at(&image, point(textured::VERTEX_COLORS, -near, near));
+    let green = at(&image, point(textured::VERTEX_COLORS, near, near));
+    let blue = at(&image, point(textured::VERTEX_COLORS, near, -near));
+    assert!(red[0] > red[1] + 0.3 && red[0] > red[2] + 0.3, "{red:?}");
+    assert!(
+        green[1] > green[0] + 0.3 && green[1] > green[2] + 0.3,
+        "{green:?}"
+    );
+    assert!(
+        blue[2] > blue[0] + 0.3 && blue[2] > blue[1] + 0.3,
+        "{blue:?}"
+    );
+    // The translucent blue lets the red backdrop through.
+    let blended = at(&image, point(textured::BLENDED, 0.0, 0.0));
+    assert!(
+        blended[0] > 0.3 && blended[2] > 0.3,
+        "blue over red: {blended:?}"
+    );
+
+    // X-ray: everything translucent, the mask still cuts.
+    f.view
+        .techniques_mut()
+        .set_shade_mode(ShadeMode::XRay)
+        .unwrap();
+    let xray = f.render();
+    assert_matches_reference("textured_xray", &xray, DEFAULT_TOLERANCE);
+    let xray_hole = at(&xray, point(textured::MASKED, -half / 2.0, 0.0));
+    let xray_kept = at(&xray, point(textured::MASKED, half / 2.0, 0.0));
+    // Orange (no blue) at X-ray's opacity over the hole's faint backdrop.
+    assert!(
+        xray_kept[2] < xray_hole[2] - 0.08,
+        "X-ray keeps the mask: {xray_hole:?} {xray_kept:?}"
+    );
+
+    // Textures off: the checker is one colour, nothing is cut, the blend quad is opaque white.
+    f.view
+        .techniques_mut()
+        .set_shade_mode(ShadeMode::Solid)
+        .unwrap();
+    f.view.renderer_mut().set_textures(false);
+    let plain = f.render();
+    let (a, b) = (
+        at(&plain, cell_center(3.0, 4.0)),
+        at(&plain, cell_center(4.0, 4.0)),
+    );
+    assert!((brightness(a) - brightness(b)).abs() < 0.02, "{a:?} {b:?}");
+    let uncut = at(&plain, point(textured::MASKED, -half / 2.0, 0.0));
+    assert!(
+        uncut[1] > 0.6 && uncut[2] > 0.6,
+        "the mask quad is whole and white: {uncut:?}"
+    );
+    let opaque = at(&plain, point(textured::BLENDED, 0.0, 0.0));
+    assert!(
+        opaque.iter().all(|&c| c > 0.6),
+        "white, not red-tinted: {opaque:?}"
+    );
+    // Vertex colours stay: they are not textures.
+    assert_eq!(
+        at(&plain, point(textured::VERTEX_COLORS, -near, near)),
+        red,
+        "vertex colours do not depend on textures"
+    );
+    // And back on: the first picture again.
+    f.view.renderer_mut().set_textures(true);
+    let again = f.render();
+    assert!(compare(&again, &image).unwrap().within(SAME_PICTURE));
+    drop(f.view);
+    assert_no_validation_errors(&f.device);
+}
+
+/// A click in the mask's hole reaches the backdrop; beside it, it hits the masked quad.
+#[test]
+fn picking_goes_through_alpha_mask_holes() {
+    let scene = textured_scene("pick");
+    let mut f = front_view(&scene);
+    let half = textured::QUAD_SIZE / 2.0;
+    let mut pick_at = |p: DVec3| {
+        let (x, y) = cadr_tests::images::pixel_of(&f.camera, SIZE, p);
+        let hits = f
+            .view
+            .pick(&f.graph, &mut f.tree, &f.camera, PixelRect::pixel(x, y))
+            .unwrap();
+        assert_eq!(hits.len(), 1, "one hit at {p}");
+        let node = f.graph.node(hits[0].node).unwrap();
+        let cadr_core::graph::NodeKind::Geo { part_materials, .. } = &node.kind else {
+            panic!("a Geo node");
+        };
+        f.graph.material(part_materials[0]).unwrap().name.clone()
+    };
+    assert_eq!(
+        pick_at(point(textured::MASKED, -half / 2.0, 0.0)),
+        "backdrop"
+    );
+    assert_eq!(pick_at(point(textured::MASKED, half / 2.0, 0.0)), "masked");
+    assert_eq!(pick_at(point(textured::CHECKER, 0.0, 0.0)), "checker");
+    drop(f.view);
+    assert_no_validation_errors(&f.device);
+}
+
+/// Every vertex path (each says where its vertices lie in its own way) with every parameter
+/// path, and the GPU cullers, draw the textured file like the built-in combination.
+#[test]
+fn every_vertex_and_parameter_path_samples_textures_alike() {
+    let scene = textured_scene("paths");
+    let mut f = front_view(&scene);
+    let reference = f.render();
+    let registry = f.view.techniques().registry().clone();
+    let names = |kind| {
+        registry
+            .of_kind(kind)
+            .map(|t| t.name.clone())
+            .collect::<Vec<_>>()
+    };
+    let mut combinations = Vec::new();
+    for vertex in names(TechniqueKind::Vertex) {
+        for parameters in names(TechniqueKind::Parameters) {
+            combinations.push(Combination {
+                vertex: vertex.clone(),
+                parameters,
+                ..Combination::built_in()
+            });
+        }
+    }
+    for culling in ["gpu-frustum", "gpu-occlusion"] {
+        combinations.push(Combination {
+            vertex: "arena".into(),
+            parameters: "ssbo-index".into(),
+            submission: "individual-indirect-count".into(),
+            culling: culling.into(),
+            ..Combination::built_in()
+        });
+    }
+    let valid: Vec<Combination> = combinations
+        .into_iter()
+        .filter(|c| f.view.techniques().check(c).is_ok())
+        .collect();
+    let mut checked = HashSet::new();
+    for combination in &valid {
+        f.view.techniques_mut().select(combination).unwrap();
+        for mode in [ShadeMode::Solid, ShadeMode::XRay] {
+            f.view.techniques_mut().set_shade_mode(mode).unwrap();
+            let image = f.render();
+            let expected = if mode == ShadeMode::Solid {
+                reference.clone()
+            } else {
+                let mut built_in = front_view(&scene);
+                built_in.view.techniques_mut().set_shade_mode(mode).unwrap();
+                built_in.render()
+            };
+            let difference = compare(&image, &expected).unwrap();
+            assert!(
+                difference.within(SAME_PICTURE),
+                "{combination} [{}]: {difference:?}",
+                mode.name()
+            );
+        }
+        f.view
+            .techniques_mut()
+            .set_shade_mode(ShadeMode::Solid)
+            .unwrap();
+        checked.insert(combination.vertex.clone());
+    }
+    assert!(checked.len() >= 4, "vertex paths checked: {checked:?}");
+    drop(f.view);
+    assert_no_validation_errors(&f.device);
+}
+
+/// Khronos' TextureTransformTest: each square shows "Correct" marks where offset, rotation,
+/// scale and texCoord overrides are applied right; BoxTextured reads its image from a file, a
+/// GLB buffer view and a data URI (the last two have the same samplers and draw alike; the
+/// first wraps with MIRRORED_REPEAT and CLAMP_TO_EDGE and has a reference of its own).
+#[test]
+fn the_khronos_texture_samples_draw_as_their_references() {
+    let scene = load_file(std::path::Path::new(TEXTURE_TRANSFORM_TEST)).unwrap();
+    assert!(
+        scene.materials.iter().any(|m| m
+            .base_color_texture
+            .is_some_and(|t| t.transform != UvTransform::IDENTITY)),
+        "texture transforms read"
+    );
+    let mut f = front_view(&scene);
+    let image = f.render();
+    assert_matches_reference("textured_transform_test", &image, DEFAULT_TOLERANCE);
+    drop(f.view);
+    assert_no_validation_errors(&f.device);
+
+    let pictures: Vec<image::RgbaImage> = BOX_TEXTURED
+        .iter()
+        .map(|path| {
+            let scene = load_file(std::path::Path::new(path)).unwrap();
+            assert_eq!(scene.textures.len(), 1, "{path}");
+            cadr_tests::render_scene(&scene, 320, 240)
+        })
+        .collect();
+    assert_matches_reference("textured_box_gltf", &pictures[0], DEFAULT_TOLERANCE);
+    assert_matches_reference("textured_box_glb", &pictures[1], DEFAULT_TOLERANCE);
+    assert!(
+        compare(&pictures[2], &pictures[1])
+            .unwrap()
+            .within(SAME_PICTURE),
+        "{} draws like {}",
+        BOX_TEXTURED[2],
+        BOX_TEXTURED[1]
+    );
+}
+
+/// A host adds a texture and a material using it at run time: the GPU scene rebuilds its
+/// textures and the part shows it; the texture cannot be destroyed while the material uses
+/// it.
+#[test]
+fn a_texture_created_at_run_time_reaches_the_picture() {
+    let scene = textured_scene("runtime");
+    let mut f = front_view(&scene);
+    let before = f.render();
+    let green = Texture {
+        name: "green".into(),
+        width: 2,
+        height: 2,
+        texels: std::sync::Arc::new([0u8, 200, 0, 255].repeat(4)),
+        sampler: Default::default(),
+    };
+    let texture = f.graph.create_texture(green).unwrap();
+    let material = f
+        .graph
+        .create_material(Material {
+            name: "green texture".into(),
+            base_color: [1.0; 4],
+            base_color_texture: Some(TextureRef {
+                texture: texture.index(),
+                transform: UvTransform::IDENTITY,
+            }),
+            ..Material::default()
+        })
+        .unwrap();
+    // The checker quad's Geo node gets the new material.
+    let checker_node = f
+        .graph
+        .nodes()
+        .find(|(_, n)| match &n.kind {
+            cadr_core::graph::NodeKind::Geo { part_materials, .. } => {
+                f.graph.material(part_materials[0]).unwrap().name == "checker"
+            }
+            _ => false,
+        })
+        .map(|(h, _)| h)
+        .unwrap();
+    f.graph
+        .set_part_material(checker_node, 0, material)
+        .unwrap();
+    f.tree.update(&mut f.graph);
+    let after = f.render();
+    let center = point(textured::CHECKER, 0.0, 0.0);
+    let now = color_at(&after, &f.camera, center);
+    assert!(
+        now[1] > now[0] + 0.3 && now[1] > now[2] + 0.3,
+        "green: {now:?}"
+    );
+    assert_ne!(color_at(&before, &f.camera, center), now);
+    let refused = f.graph.destroy_texture(texture).unwrap_err().to_string();
+    assert!(
+        refused.contains("texture 'green'") && refused.contains("still used"),
+        "{refused}"
+    );
+    drop(f.view);
+    assert_no_validation_errors(&f.device);
+}
+
+/// A TEXCOORD accessor with a count other than the positions' is refused naming it; an image
+/// that cannot be decoded leaves its material untextured, and the file loads.
+#[test]
+fn bad_texture_data_is_refused_or_left_out_clearly() {
+    let dir = scratch_dir("bad-textures");
+    let path = textured_gltf(&dir);
+    let json = std::fs::read_to_string(&path).unwrap();
+    // The checker quad's TEXCOORD_0 accessor claims 3 elements.
+    let broken = json.replacen(
+        r#""componentType": 5126, "count": 4, "type": "VEC2""#,
+        r#""componentType": 5126, "count": 3, "type": "VEC2""#,
+        1,
+    );
+    assert_ne!(broken, json);
+    std::fs::write(&path, broken).unwrap();
+    let error = load_file(&path).unwrap_err().to_string();
+    assert!(
+        error.contains("TEXCOORD_0") && error.contains("3 elements for 4 vertices"),
+        "{error}"
+    );
+    // The first image replaced by bytes that are no PNG.
+    let start = json.find(r#""uri": "data:image/png;base64,"#).unwrap();
+    let end = start + json[start..].find("\"}").unwrap();
+    let undecodable = format!(
+        "{}\"uri\": \"data:image/png;base64,bm90IGFuIGltYWdl{}",
+        &json[..start],
+        &json[end..]
+    );
+    std::fs::write(&path, undecodable).unwrap();
+    let scene = load_file(&path).unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!(scene.textures.len(), 2, "the undecodable image is left out");
+    let checker = scene
+        .materials
+        .iter()
+        .find(|m| m.name == "checker")
+        .unwrap();
+    assert!(checker.base_color_texture.is_none());
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -800,7 +800,9 @@ enum CadrResult cadr_scene_create_material(CadrScene scene,
                                            const struct CadrMaterialDesc *desc,
                                            CadrMaterial *material);
 
-// Changes a material's parameters; every part using it is drawn with them.
+// Changes a material's parameters; every part using it is drawn with them. A texture the
+// material has (from a loaded file) is kept, and so is an alpha cutoff (glTF MASK); otherwise
+// `base_color[3]` is the opacity, also for a material a file made OPAQUE.
 //
 // Ownership: nothing changes hands; the arguments are read during the call only.
 // Returns as `cadr_scene_create_material`. Thread-safety: as `cadr_scene_create`.
@@ -1318,6 +1320,24 @@ enum CadrResult cadr_renderer_set_ssao(CadrRenderer renderer, bool on);
 // # Safety
 // `on` is null or writable.
 enum CadrResult cadr_renderer_ssao(CadrRenderer renderer, bool *on);
+
+// Turns the sampling of materials' base-colour textures on (`on` true, the default) or off:
+// off, materials show their base colour (times vertex colours, which stay). Applies from the
+// next frame; nothing is rebuilt.
+//
+// Returns `CADR_RESULT_OK` or a handle error. Ownership: nothing changes hands.
+// Thread-safety: as `cadr_renderer_create`.
+enum CadrResult cadr_renderer_set_textures(CadrRenderer renderer, bool on);
+
+// Writes whether materials' textures are sampled (see `cadr_renderer_set_textures`).
+//
+// Returns `CADR_RESULT_OK`, `CADR_RESULT_NULL_ARGUMENT` or a handle error.
+// Ownership: the output is the caller's; cadr keeps no pointer to it.
+// Thread-safety: as `cadr_renderer_create`.
+//
+// # Safety
+// `on` is null or writable.
+enum CadrResult cadr_renderer_textures(CadrRenderer renderer, bool *on);
 
 // Shows the hidden edges in the `CADR_SHADE_HIDDEN_LINE` mode dashed, in a lighter grey than
 // the visible ones (`dashed` true), or removes them (false, the default). Other modes are not

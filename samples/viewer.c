@@ -12,6 +12,7 @@
  *        M cycles the present modes the window offers; X cycles a section plane through the
  *        view's centre across x, y, z and off; K toggles its caps, H their hatching;
  *        D toggles dashed hidden edges in hidden-line; O toggles ambient occlusion;
+ *        U toggles materials' textures;
  *        B cycles the background (cadr's gradient, white, dark); A cycles the anti-aliasing
  *        levels the device offers (MSAA 2x, 4x, 8x, then off); Esc quits.
  * The window title shows the techniques, the section, the anti-aliasing, frames in flight, present mode, the frame's figures
@@ -191,6 +192,13 @@ static void toggle_dashed(struct Viewer *v) {
   printf("hidden edges: %s\n", dashed ? "removed" : "dashed");
 }
 
+static void toggle_textures(struct Viewer *v) {
+  bool on = true;
+  CADR_CHECK(cadr_renderer_textures(v->renderer, &on));
+  CADR_CHECK(cadr_renderer_set_textures(v->renderer, !on));
+  printf("textures: %s\n", on ? "off" : "on");
+}
+
 static void toggle_ssao(struct Viewer *v) {
   bool on = false;
   CADR_CHECK(cadr_renderer_ssao(v->renderer, &on));
@@ -224,6 +232,7 @@ static void describe(struct Viewer *v, char *text, size_t size) {
   char section[64];
   char antialiasing[16];
   uint32_t kind, frames = 1, mode = 0, samples = 1;
+  bool textures = true;
   for (kind = 0; kind < 5; ++kind) {
     CADR_CHECK(cadr_renderer_technique(v->renderer, kind, &names[kind]));
   }
@@ -235,6 +244,7 @@ static void describe(struct Viewer *v, char *text, size_t size) {
   }
   CADR_CHECK(cadr_renderer_frames_in_flight(v->renderer, &frames));
   CADR_CHECK(cadr_renderer_present_mode(v->renderer, &mode, NULL));
+  CADR_CHECK(cadr_renderer_textures(v->renderer, &textures));
   snprintf(section, sizeof section, "%s%s%s",
            v->section_axis < 0 ? "no section" : "section ",
            v->section_axis < 0 ? "" : axis_names[v->section_axis],
@@ -243,9 +253,9 @@ static void describe(struct Viewer *v, char *text, size_t size) {
                ? ((v->section_flags & CADR_SECTION_HATCHED) ? " capped, hatched" : " capped")
                : " uncapped");
   snprintf(text, size,
-           "cadr viewer | %s / %s / %s / %s | %s, %s | %s | %s | %s background | %u in flight, %s | %llu draws in %llu calls | CPU %.0f us, GPU %.0f us | %.0f frames/s",
+           "cadr viewer | %s / %s / %s / %s | %s, %s | %s | %s | %s | %s background | %u in flight, %s | %llu draws in %llu calls | CPU %.0f us, GPU %.0f us | %.0f frames/s",
            names[0], names[1], names[2], names[3], shade_names[v->shade % 5], names[4],
-           antialiasing, section, background_names[v->background % 3], frames, present_names[mode % 3], (unsigned long long)v->stats.draws,
+           antialiasing, textures ? "textures" : "no textures", section, background_names[v->background % 3], frames, present_names[mode % 3], (unsigned long long)v->stats.draws,
            (unsigned long long)v->stats.draw_calls, v->stats.cpu_us, v->stats.gpu_us,
            v->frames_per_second);
 }
@@ -286,6 +296,7 @@ static void on_key(GLFWwindow *window, int key, int scancode, int action, int mo
   case GLFW_KEY_A: cycle_msaa(v); break;
   case GLFW_KEY_D: toggle_dashed(v); break;
   case GLFW_KEY_O: toggle_ssao(v); break;
+  case GLFW_KEY_U: toggle_textures(v); break;
   case GLFW_KEY_ESCAPE: glfwSetWindowShouldClose(window, GLFW_TRUE); break;
   default: break;
   }
@@ -388,6 +399,9 @@ static int self_test(struct Viewer *v, const char *dir) {
           toggle_ssao(v);
           render(v);
           toggle_ssao(v);
+          toggle_textures(v);
+          render(v);
+          toggle_textures(v);
         } else if (v->shade == CADR_SHADE_HIDDEN_LINE) {
           toggle_dashed(v);
           render(v);

@@ -621,6 +621,42 @@ pub unsafe extern "C" fn cadr_renderer_ssao(renderer: CadrRenderer, on: *mut boo
     })
 }
 
+/// Turns the sampling of materials' base-colour textures on (`on` true, the default) or off:
+/// off, materials show their base colour (times vertex colours, which stay). Applies from the
+/// next frame; nothing is rebuilt.
+///
+/// Returns `CADR_RESULT_OK` or a handle error. Ownership: nothing changes hands.
+/// Thread-safety: as `cadr_renderer_create`.
+#[no_mangle]
+pub extern "C" fn cadr_renderer_set_textures(renderer: CadrRenderer, on: bool) -> CadrResult {
+    guard(|| {
+        with_renderer(renderer, |state| {
+            state.view.renderer_mut().set_textures(on);
+            Ok(())
+        })
+    })
+}
+
+/// Writes whether materials' textures are sampled (see `cadr_renderer_set_textures`).
+///
+/// Returns `CADR_RESULT_OK`, `CADR_RESULT_NULL_ARGUMENT` or a handle error.
+/// Ownership: the output is the caller's; cadr keeps no pointer to it.
+/// Thread-safety: as `cadr_renderer_create`.
+///
+/// # Safety
+/// `on` is null or writable.
+#[no_mangle]
+pub unsafe extern "C" fn cadr_renderer_textures(
+    renderer: CadrRenderer,
+    on: *mut bool,
+) -> CadrResult {
+    guard(|| {
+        let value = with_renderer(renderer, |state| Ok(state.view.renderer().textures()))?;
+        // SAFETY: on is null or writable (the caller's contract).
+        unsafe { deliver(on, "on", value) }
+    })
+}
+
 /// Shows the hidden edges in the `CADR_SHADE_HIDDEN_LINE` mode dashed, in a lighter grey than
 /// the visible ones (`dashed` true), or removes them (false, the default). Other modes are not
 /// affected. Applies from the next frame. With the `gpu-occlusion` culler, parts it finds

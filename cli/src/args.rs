@@ -307,6 +307,9 @@ pub struct RenderArgs {
     /// (solid, edges and xray).
     #[arg(long)]
     pub ssao: bool,
+    /// Draw materials without their textures (base colours and vertex colours only).
+    #[arg(long)]
+    pub no_textures: bool,
     /// In the hidden-line display mode, show the hidden edges dashed in a lighter grey
     /// instead of removing them.
     #[arg(long)]

@@ -190,6 +190,7 @@ fn render(args: &RenderArgs, process_start: Instant) -> Result<(), String> {
         .renderer_mut()
         .set_ssao(args.ssao)
         .map_err(|e| e.to_string())?;
+    session.view.renderer_mut().set_textures(!args.no_textures);
     if args.dashed && shade != ShadeMode::HiddenLine {
         return Err("--dashed shows hidden edges dashed in --display hidden-line only".into());
     }
@@ -210,6 +211,9 @@ fn render(args: &RenderArgs, process_start: Instant) -> Result<(), String> {
     }
     if args.ssao {
         technique_line += ", ambient occlusion";
+    }
+    if args.no_textures {
+        technique_line += ", no textures";
     }
     if args.msaa > 1 {
         technique_line += &format!(", MSAA {}x", args.msaa);

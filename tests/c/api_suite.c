@@ -825,6 +825,47 @@ static void test_renderer(CadrContext context, struct Built *b) {
     CHECK(pixel_difference(first, second, W * H * 4) == 0);
   }
 
+  /* Textures: a file's base-colour texture is drawn by default; off, the box shows its base
+   * colour only; on again, the first picture. */
+  {
+    CadrScene textured = NULL;
+    CadrNode textured_root = 0;
+    struct CadrLoadResult loaded;
+    struct CadrBounds box;
+    struct CadrCamera box_camera;
+    const double front[3] = {0.4, 0.5, 1.0};
+    bool on = false;
+    uint8_t *with = (uint8_t *)malloc(W * H * 4), *without = (uint8_t *)malloc(W * H * 4);
+    CHECK(with != NULL && without != NULL);
+    OK(cadr_scene_create(&textured));
+    OK(cadr_scene_root(textured, &textured_root));
+    memset(&loaded, 0, sizeof loaded);
+    OK(cadr_scene_load(textured,
+                       "/usr/share/assimp/models/glTF2/BoxTextured-glTF-Binary/BoxTextured.glb",
+                       textured_root, &loaded));
+    cadr_load_result_free(&loaded);
+    OK(cadr_scene_bounds(textured, &box));
+    OK(cadr_camera_fit(&box, (double)W / H, front, &box_camera));
+    OK(cadr_renderer_textures(renderer, &on));
+    CHECK(on);
+    EXPECT(cadr_renderer_textures(renderer, NULL), CADR_RESULT_NULL_ARGUMENT);
+    OK(cadr_renderer_render(renderer, textured, &box_camera, &stats));
+    OK(cadr_renderer_read_pixels(renderer, with, W * H * 4));
+    OK(cadr_renderer_set_textures(renderer, false));
+    OK(cadr_renderer_textures(renderer, &on));
+    CHECK(!on);
+    OK(cadr_renderer_render(renderer, textured, &box_camera, &stats));
+    OK(cadr_renderer_read_pixels(renderer, without, W * H * 4));
+    CHECK(pixel_difference(with, without, W * H * 4) > 200);
+    OK(cadr_renderer_set_textures(renderer, true));
+    OK(cadr_renderer_render(renderer, textured, &box_camera, &stats));
+    OK(cadr_renderer_read_pixels(renderer, without, W * H * 4));
+    CHECK(pixel_difference(with, without, W * H * 4) == 0);
+    OK(cadr_scene_destroy(textured));
+    free(with);
+    free(without);
+  }
+
   /* Picking through translucent parts: off by default; on, the opaque cubes still stop it. */
   {
     bool through = true;

@@ -435,3 +435,71 @@ fn bad_texture_data_is_refused_or_left_out_clearly() {
     assert!(checker.base_color_texture.is_none());
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// Saved as glTF (JSON with its buffer, and GLB), the textured file keeps its textures,
+/// samplers, transforms, texture coordinates, colours and alpha modes, and draws the same
+/// picture; saved as CSF, the notes say what is lost.
+#[test]
+fn saving_keeps_textures_or_says_what_is_lost() {
+    let scene = textured_scene("save");
+    let dir = scratch_dir("save-textured");
+    let original = {
+        let mut f = front_view(&scene);
+        f.render()
+    };
+    for name in ["again.gltf", "again.glb"] {
+        let path = dir.join(name);
+        let notes = cadr_core::save::save_scene(&scene, &path).unwrap();
+        assert!(notes.iter().all(|n| !n.contains("texture")), "{notes:?}");
+        let saved = load_file(&path).unwrap_or_else(|e| panic!("{name}: {e}"));
+        assert_eq!(
+            saved.textures, scene.textures,
+            "{name}: textures and samplers"
+        );
+        for (a, b) in saved.materials.iter().zip(&scene.materials) {
+            assert_eq!(a.alpha_mode, b.alpha_mode, "{name}: '{}'", b.name);
+            match (&a.base_color_texture, &b.base_color_texture) {
+                (Some(a), Some(b)) => {
+                    assert_eq!(a.texture, b.texture);
+                    for (x, y) in a
+                        .transform
+                        .u_row
+                        .iter()
+                        .chain(&a.transform.v_row)
+                        .zip(b.transform.u_row.iter().chain(&b.transform.v_row))
+                    {
+                        assert!((x - y).abs() < 1e-6, "{name}: {a:?} vs {b:?}");
+                    }
+                }
+                (a, b) => assert_eq!(a.is_some(), b.is_some(), "{name}: '{}'", b.is_some()),
+            }
+        }
+        let attributes = |s: &Scene| {
+            s.geometries
+                .iter()
+                .map(|g| g.attributes.clone())
+                .collect::<Vec<_>>()
+        };
+        assert_eq!(attributes(&saved), attributes(&scene), "{name}");
+        let mut f = front_view(&saved);
+        let picture = f.render();
+        assert!(
+            compare(&picture, &original).unwrap().within(SAME_PICTURE),
+            "{name} draws like the original"
+        );
+    }
+    let notes = cadr_core::save::save_scene(&scene, &dir.join("flat.csf")).unwrap();
+    assert!(
+        notes
+            .iter()
+            .any(|n| n.contains("3 textures used by 3 materials are not written")),
+        "{notes:?}"
+    );
+    assert!(
+        notes
+            .iter()
+            .any(|n| n.contains("texture coordinates and vertex colours")),
+        "{notes:?}"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -1,5 +1,7 @@
-//! Writing glTF 2.0: one buffer, per geometry a position and a normal accessor shared by its
-//! parts, one index accessor per part; a mesh per distinct (geometry, part materials, hidden
+//! Writing glTF 2.0: one buffer, per geometry a position and a normal accessor (and, when it
+//! has them, texture coordinates and colours) shared by its parts, one index accessor per
+//! part; textures as PNG images in the buffer with their samplers, texture transforms as
+//! `KHR_texture_transform`; a mesh per distinct (geometry, part materials, hidden
 //! parts) combination; the node DAG unfolded into trees with matrices at full precision.
 
 use std::collections::HashMap;
@@ -7,7 +9,7 @@ use std::collections::HashMap;
 use glam::DMat4;
 use serde_json::{json, Value};
 
-use crate::scene::{Aabb, AlphaMode, NodeIndex, Scene, SceneError};
+use crate::scene::{Aabb, AlphaMode, NodeIndex, Scene, SceneError, UvTransform, Wrap};
 
 /// A glTF document in memory: its JSON (without the buffer URI) and binary buffer.
 pub struct GltfDocument {
@@ -22,6 +24,7 @@ const ARRAY_BUFFER: u32 = 34962;
 const ELEMENT_ARRAY_BUFFER: u32 = 34963;
 const FLOAT: u32 = 5126;
 const UNSIGNED_INT: u32 = 5125;
+const UNSIGNED_BYTE: u32 = 5121;
 
 struct Builder<'a> {
     scene: &'a Scene,
@@ -32,6 +35,8 @@ struct Builder<'a> {
     nodes: Vec<Value>,
     /// Per geometry: (position accessor, normal accessor, first index accessor of its parts).
     geometry_accessors: Vec<(usize, usize, usize)>,
+    /// Per geometry: its texture coordinate and colour accessors, when it has attributes.
+    attribute_accessors: Vec<Option<(usize, usize)>>,
     mesh_cache: HashMap<(u32, Vec<u32>, Vec<u32>), usize>,
 }
 
@@ -97,7 +102,66 @@ impl Builder<'_> {
             }
             self.geometry_accessors
                 .push((position, normal, first_index_accessor));
+            let attributes = (!geometry.attributes.is_empty()).then(|| {
+                let uvs: Vec<u8> = geometry
+                    .attributes
+                    .iter()
+                    .flat_map(|a| a.uv)
+                    .flat_map(f32::to_le_bytes)
+                    .collect();
+                let colors: Vec<u8> = geometry.attributes.iter().flat_map(|a| a.color).collect();
+                let view = self.push_view(&uvs, ARRAY_BUFFER);
+                let uv = self.push_accessor(
+                    json!({"bufferView": view, "componentType": FLOAT, "count": count, "type": "VEC2"}),
+                );
+                let view = self.push_view(&colors, ARRAY_BUFFER);
+                let color = self.push_accessor(
+                    json!({"bufferView": view, "componentType": UNSIGNED_BYTE, "normalized": true, "count": count, "type": "VEC4"}),
+                );
+                (uv, color)
+            });
+            self.attribute_accessors.push(attributes);
         }
+    }
+
+    /// Every texture as a PNG image in the buffer, with its sampler: the `images`, `samplers`
+    /// and `textures` arrays.
+    fn add_textures(&mut self) -> Result<[Vec<Value>; 3], SceneError> {
+        let wrap = |w: Wrap| match w {
+            Wrap::Repeat => 10497,
+            Wrap::ClampToEdge => 33071,
+            Wrap::MirroredRepeat => 33648,
+        };
+        let (mut images, mut samplers, mut textures) = (Vec::new(), Vec::new(), Vec::new());
+        for (t, texture) in self.scene.textures.iter().enumerate() {
+            let image =
+                image::RgbaImage::from_raw(texture.width, texture.height, texture.texels.to_vec())
+                    .ok_or_else(|| {
+                        SceneError(format!("texture {t} has the wrong number of texels"))
+                    })?;
+            let mut png = std::io::Cursor::new(Vec::new());
+            image
+                .write_to(&mut png, image::ImageFormat::Png)
+                .map_err(|e| SceneError(format!("texture {t} ('{}'): {e}", texture.name)))?;
+            while self.binary.len() % 4 != 0 {
+                self.binary.push(0);
+            }
+            let png = png.into_inner();
+            self.views.push(
+                json!({"buffer": 0, "byteOffset": self.binary.len(), "byteLength": png.len()}),
+            );
+            self.binary.extend_from_slice(&png);
+            images.push(json!({"name": texture.name, "bufferView": self.views.len() - 1, "mimeType": "image/png"}));
+            let sampler = texture.sampler;
+            samplers.push(json!({
+                "magFilter": if sampler.magnify_nearest { 9728 } else { 9729 },
+                "minFilter": 9987,
+                "wrapS": wrap(sampler.wrap_s),
+                "wrapT": wrap(sampler.wrap_t)
+            }));
+            textures.push(json!({"source": t, "sampler": t}));
+        }
+        Ok([images, samplers, textures])
     }
 
     /// The mesh drawing `parts` of `geometry` with `materials` (one per listed part).
@@ -107,11 +171,16 @@ impl Builder<'_> {
             return mesh;
         }
         let (position, normal, first) = self.geometry_accessors[geometry as usize];
+        let mut attributes = json!({"POSITION": position, "NORMAL": normal});
+        if let Some((uv, color)) = self.attribute_accessors[geometry as usize] {
+            attributes["TEXCOORD_0"] = json!(uv);
+            attributes["COLOR_0"] = json!(color);
+        }
         let primitives: Vec<Value> = parts
             .iter()
             .zip(&materials)
             .map(|(&p, &m)| {
-                json!({"attributes": {"POSITION": position, "NORMAL": normal}, "indices": first + p as usize, "material": m, "mode": 4})
+                json!({"attributes": attributes, "indices": first + p as usize, "material": m, "mode": 4})
             })
             .collect();
         let name = &self.scene.geometries[geometry as usize].name;
@@ -185,9 +254,12 @@ pub fn gltf_document(scene: &Scene) -> Result<GltfDocument, SceneError> {
         meshes: Vec::new(),
         nodes: Vec::new(),
         geometry_accessors: Vec::new(),
+        attribute_accessors: Vec::new(),
         mesh_cache: HashMap::new(),
     };
     builder.add_geometries();
+    let [images, samplers, textures] = builder.add_textures()?;
+    let mut transformed = false;
     let roots: Vec<usize> = scene
         .roots
         .iter()
@@ -223,6 +295,15 @@ pub fn gltf_document(scene: &Scene) -> Result<GltfDocument, SceneError> {
                 "pbrMetallicRoughness": {"baseColorFactor": m.base_color, "metallicFactor": m.metallic, "roughnessFactor": m.roughness},
                 "doubleSided": true
             });
+            if let Some(reference) = &m.base_color_texture {
+                let mut info = json!({"index": reference.texture});
+                if reference.transform != UvTransform::IDENTITY {
+                    transformed = true;
+                    info["extensions"] =
+                        json!({"KHR_texture_transform": texture_transform(&reference.transform)});
+                }
+                material["pbrMetallicRoughness"]["baseColorTexture"] = info;
+            }
             match m.alpha_mode {
                 AlphaMode::Mask { cutoff } => {
                     material["alphaMode"] = json!("MASK");
@@ -247,8 +328,14 @@ pub fn gltf_document(scene: &Scene) -> Result<GltfDocument, SceneError> {
         "materials": materials,
         "buffers": [{"byteLength": builder.binary.len()}],
     });
+    if transformed {
+        json["extensionsUsed"] = json!(["KHR_texture_transform"]);
+    }
     for (key, items) in [
         ("meshes", builder.meshes),
+        ("images", images),
+        ("samplers", samplers),
+        ("textures", textures),
         ("bufferViews", builder.views),
         ("accessors", builder.accessors),
     ] {
@@ -301,4 +388,16 @@ impl GltfDocument {
         }
         out
     }
+}
+
+/// `KHR_texture_transform`'s offset, rotation and scale of a transform made from them (what
+/// the reader makes; a sheared transform, which no file gives, keeps its columns' lengths).
+fn texture_transform(transform: &UvTransform) -> Value {
+    let [a, b, offset_u] = transform.u_row;
+    let [c, d, offset_v] = transform.v_row;
+    // u_row = (cos·sx, sin·sy), v_row = (−sin·sx, cos·sy).
+    let scale_x = a.hypot(c);
+    let scale_y = b.hypot(d);
+    let rotation = (-c).atan2(a);
+    json!({"offset": [offset_u, offset_v], "rotation": rotation, "scale": [scale_x, scale_y]})
 }

@@ -93,6 +93,27 @@ pub fn save_scene(scene: &Scene, path: &Path) -> Result<Vec<String>, SaveError> 
                     file.nodes.len()
                 ));
             }
+            let textured = scene
+                .materials
+                .iter()
+                .filter(|m| m.base_color_texture.is_some())
+                .count();
+            if textured > 0 {
+                notes.push(format!(
+                    "{} textures used by {textured} materials are not written: CSF has no textures",
+                    scene.textures.len()
+                ));
+            }
+            let attributed = scene
+                .geometries
+                .iter()
+                .filter(|g| !g.attributes.is_empty())
+                .count();
+            if attributed > 0 {
+                notes.push(format!(
+                    "the texture coordinates and vertex colours of {attributed} geometries are not written: cadr's CSF writer keeps positions and normals"
+                ));
+            }
             save_csf(&file, path)?;
         }
         None => {

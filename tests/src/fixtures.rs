@@ -331,7 +331,7 @@ pub fn rich_csf_file() -> CsfFile {
 }
 
 /// Where the quads of [`textured_gltf`] lie: centres (x, y) in the plane z = 0, each
-/// [`TEXTURED_QUAD_SIZE`] across, in front of a red backdrop at z = -0.5.
+/// [`QUAD_SIZE`](textured::QUAD_SIZE) across, in front of a red backdrop at z = -0.5.
 pub mod textured {
     /// The checker texture (8 × 8 texels, NEAREST), repeated twice each way by
     /// `KHR_texture_transform`: 16 × 16 cells.
@@ -374,7 +374,7 @@ pub fn textured_gltf(dir: &Path) -> PathBuf {
     let mut views = Vec::new();
     let mut accessors = Vec::new();
     let mut push = |bytes: Vec<u8>, accessor: String| {
-        while buffer.len() % 4 != 0 {
+        while !buffer.len().is_multiple_of(4) {
             buffer.push(0);
         }
         views.push(format!(

@@ -4,6 +4,7 @@
 //! backdrop) and the Khronos samples Debian ships (TextureTransformTest, BoxTextured in three
 //! containers); every vertex and parameter path samples them alike; picking goes through mask
 //! holes; `--no-textures` turns them off; the graph's textures can change at run time.
+#![allow(clippy::unwrap_used)] // Test code: a failed unwrap is a failed test.
 
 use std::collections::HashSet;
 
@@ -89,7 +90,7 @@ fn textures_colours_and_alpha_reach_the_picture() {
     let mut f = front_view(&scene);
     let image = f.render();
     assert_matches_reference("textured_solid", &image, DEFAULT_TOLERANCE);
-    let camera = f.camera.clone();
+    let camera = f.camera;
     let at = |image: &image::RgbaImage, p: DVec3| color_at(image, &camera, p);
     let half = textured::QUAD_SIZE / 2.0;
     // Checker: 16 cells across the quad, 0.1 units each.

@@ -230,9 +230,9 @@ fn resize_premultiplied(image: &RgbaImage, size: u32, filter: FilterType) -> Rgb
     let mut resized = image::imageops::resize(&premultiplied, size, size, filter);
     for texel in resized.pixels_mut() {
         let alpha = u32::from(texel[3]);
-        if alpha > 0 {
-            for c in 0..3 {
-                texel[c] = ((u32::from(texel[c]) * 255 + alpha / 2) / alpha).min(255) as u8;
+        for c in 0..3 {
+            if let Some(value) = (u32::from(texel[c]) * 255 + alpha / 2).checked_div(alpha) {
+                texel[c] = value.min(255) as u8;
             }
         }
     }

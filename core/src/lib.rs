@@ -16,6 +16,7 @@ pub mod gpu_scene;
 pub mod graph;
 pub mod load;
 pub mod memory_budget;
+pub mod parallel;
 pub mod render;
 pub mod save;
 pub mod scene;

@@ -12,12 +12,12 @@ use cadr_core::load::load_file;
 use cadr_core::render::pick::PixelRect;
 use cadr_core::render::Camera;
 use cadr_core::scene::{Material, Scene, Texture, TextureRef, UvTransform};
-use cadr_core::technique::{Combination, ShadeMode, TechniqueKind};
+use cadr_core::technique::{Combination, ShadeMode};
 use cadr_tests::fixtures::{scratch_dir, textured, textured_gltf};
 use cadr_tests::images::{
     assert_matches_reference, color_at, compare, DEFAULT_TOLERANCE, SAME_PICTURE,
 };
-use cadr_tests::{assert_no_validation_errors, test_device, SceneView};
+use cadr_tests::{all_combinations, assert_no_validation_errors, test_device, SceneView};
 use glam::DVec3;
 
 const SIZE: (u32, u32) = (480, 480);
@@ -236,23 +236,11 @@ fn every_vertex_and_parameter_path_samples_textures_alike() {
     let scene = textured_scene("paths");
     let mut f = front_view(&scene);
     let reference = f.render();
-    let registry = f.view.techniques().registry().clone();
-    let names = |kind| {
-        registry
-            .of_kind(kind)
-            .map(|t| t.name.clone())
-            .collect::<Vec<_>>()
-    };
-    let mut combinations = Vec::new();
-    for vertex in names(TechniqueKind::Vertex) {
-        for parameters in names(TechniqueKind::Parameters) {
-            combinations.push(Combination {
-                vertex: vertex.clone(),
-                parameters,
-                ..Combination::built_in()
-            });
-        }
-    }
+    let built_in = Combination::built_in();
+    let mut combinations: Vec<Combination> = all_combinations(f.view.techniques().registry())
+        .into_iter()
+        .filter(|c| c.submission == built_in.submission && c.culling == built_in.culling)
+        .collect();
     for culling in ["gpu-frustum", "gpu-occlusion"] {
         combinations.push(Combination {
             vertex: "arena".into(),

@@ -351,7 +351,7 @@ fn gltf_alpha_modes_give_materials_their_opacity_and_survive_a_save() {
         .collect();
     assert_eq!(translucent, [false, true, true, true, true]);
 
-    // The same file with other modes: OPAQUE ignores alpha; MASK keeps the factor's alpha,
+    // The same file with other modes: OPAQUE makes alpha 1; MASK keeps the factor's alpha,
     // which the shaders compare with the cutoff (default 0.5); neither is translucent.
     let text = std::fs::read_to_string(&path).unwrap();
     let mut modes = [
@@ -377,6 +377,8 @@ fn gltf_alpha_modes_give_materials_their_opacity_and_survive_a_save() {
         .collect();
     std::fs::write(&path, rewritten.concat()).unwrap();
     let modes = load_file(&path).unwrap();
+    let alphas: Vec<f32> = modes.materials.iter().map(|m| m.base_color[3]).collect();
+    assert_eq!(alphas, [1.0, 0.4, 1.0, 0.4, 0.4]);
     let loaded: Vec<AlphaMode> = modes.materials.iter().map(|m| m.alpha_mode).collect();
     assert_eq!(
         loaded,

@@ -37,7 +37,7 @@ fn image_upload_and_readback_round_trip() {
     .err()
     .expect("too few pixels is refused");
     assert!(
-        error.to_string().contains("10 bytes of pixels for 37x11"),
+        error.to_string().contains("10 bytes of texels for 37x11"),
         "{error}"
     );
     drop(image);

@@ -103,7 +103,7 @@ impl TextureArray {
         let size = if any { layer_size(&slots, layers) } else { 1 };
         let mips = size.ilog2() + 1;
         let texels: Vec<u8> = if any {
-            resample_in_parallel(&slots, size, mips).concat()
+            crate::parallel::map(&slots, |slot| mip_chain(*slot, size, mips)).concat()
         } else {
             vec![255; 4]
         };
@@ -150,36 +150,6 @@ fn layer_size(slots: &[Option<&Texture>], layers: u32) -> u32 {
         size /= 2;
     }
     size
-}
-
-/// Every slot's layer with its mip chain (a dead slot's is transparent black), on a thread
-/// per core.
-fn resample_in_parallel(slots: &[Option<&Texture>], size: u32, mips: u32) -> Vec<Vec<u8>> {
-    let threads = std::thread::available_parallelism()
-        .map_or(1, usize::from)
-        .min(slots.len())
-        .max(1);
-    let chunk = slots.len().div_ceil(threads).max(1);
-    std::thread::scope(|scope| {
-        let workers: Vec<_> = slots
-            .chunks(chunk)
-            .map(|chunk| {
-                scope.spawn(move || {
-                    chunk
-                        .iter()
-                        .map(|slot| mip_chain(*slot, size, mips))
-                        .collect::<Vec<_>>()
-                })
-            })
-            .collect();
-        workers
-            .into_iter()
-            .flat_map(|worker| match worker.join() {
-                Ok(layers) => layers,
-                Err(panic) => std::panic::resume_unwind(panic),
-            })
-            .collect()
-    })
 }
 
 /// A texture resampled to `size` × `size` and its mip levels down to 1 × 1, each level made

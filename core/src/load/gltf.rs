@@ -108,15 +108,21 @@ pub fn load_gltf_bytes(bytes: &[u8], path: &Path) -> Result<Scene, LoadError> {
             let pbr = m.pbr_metallic_roughness();
             let (base_color_texture, uv_set) = base_color_texture(&pbr, &texture_index);
             uv_sets.push(uv_set);
+            let alpha_mode = alpha_mode(&m);
+            let mut base_color = pbr.base_color_factor();
+            if alpha_mode == AlphaMode::Opaque {
+                // Fully opaque, wherever the colour goes (a CSF keeps it as opacity).
+                base_color[3] = 1.0;
+            }
             Material {
                 name: m
                     .name()
                     .map_or_else(|| format!("material {i}"), str::to_owned),
-                base_color: pbr.base_color_factor(),
+                base_color,
                 metallic: pbr.metallic_factor(),
                 roughness: pbr.roughness_factor(),
                 base_color_texture,
-                alpha_mode: alpha_mode(&m),
+                alpha_mode,
             }
         })
         .collect();
@@ -677,8 +683,8 @@ fn triangle_list(indices: &[u32], mode: Mode) -> Vec<u32> {
     }
 }
 
-/// How the material's `alphaMode` uses alpha; its base colour keeps the factor's alpha, which
-/// counts as opacity in BLEND only (OPAQUE ignores it, MASK compares it with the cutoff).
+/// How the material's `alphaMode` uses alpha: the factor's alpha is the opacity in BLEND, is
+/// compared with the cutoff in MASK, and is made 1 in OPAQUE.
 fn alpha_mode(material: &gltf::Material<'_>) -> AlphaMode {
     match material.alpha_mode() {
         gltf::material::AlphaMode::Opaque => AlphaMode::Opaque,

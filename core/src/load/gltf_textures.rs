@@ -22,7 +22,7 @@ pub(super) fn load_textures(
     base_dir: &Path,
 ) -> Vec<Option<Texture>> {
     let images: Vec<gltf::Image<'_>> = document.images().collect();
-    let decoded = decode_in_parallel(&images, |image| decode(image, buffers, base_dir));
+    let decoded = crate::parallel::map(&images, |image| decode(image, buffers, base_dir));
     let decoded: Vec<Option<Decoded>> = decoded
         .into_iter()
         .zip(&images)
@@ -75,28 +75,6 @@ fn sampler(sampler: &gltf::texture::Sampler<'_>) -> Sampler {
         wrap_t: wrap(sampler.wrap_t()),
         magnify_nearest: sampler.mag_filter() == Some(gltf::texture::MagFilter::Nearest),
     }
-}
-
-/// Runs `decode` over `items` on up to one thread per core, keeping their order.
-fn decode_in_parallel<T: Sync, R: Send>(items: &[T], decode: impl Fn(&T) -> R + Sync) -> Vec<R> {
-    let threads = std::thread::available_parallelism()
-        .map_or(1, usize::from)
-        .min(items.len())
-        .max(1);
-    let chunk = items.len().div_ceil(threads).max(1);
-    std::thread::scope(|scope| {
-        let workers: Vec<_> = items
-            .chunks(chunk)
-            .map(|chunk| scope.spawn(|| chunk.iter().map(&decode).collect::<Vec<R>>()))
-            .collect();
-        workers
-            .into_iter()
-            .flat_map(|worker| match worker.join() {
-                Ok(results) => results,
-                Err(panic) => std::panic::resume_unwind(panic),
-            })
-            .collect()
-    })
 }
 
 /// Reads and decodes one image (within the `image` crate's default allocation limit, 512 MiB).

@@ -25,5 +25,8 @@ const uint CADR_DISPLAY_XRAY = 1u;
 const uint CADR_DISPLAY_VERTEX_ATTRIBUTES = 2u;
 // frame.target.z: materials' textures are sampled.
 const uint CADR_DISPLAY_TEXTURES = 4u;
+// frame.target.z: some material has a texture or an alpha mode other than BLEND (without, the
+// vertex shader does not read the material descriptions).
+const uint CADR_DISPLAY_MATERIAL_DESCRIPTIONS = 8u;
 // The opacity of parts X-ray makes translucent.
 const float CADR_XRAY_OPACITY = 0.2;

@@ -85,8 +85,13 @@ const uint CADR_TEXTURE_ALPHA_BLEND = 2u;
 
 void main() {
     CadrObject object = cadr_object();
-    uint material = cadr_host_instance_records[object.instance].y;
-    CadrMaterialTexture material_texture = cadr_host_material_textures[material];
+    // No texture, BLEND: what every material is while none is described otherwise.
+    CadrMaterialTexture material_texture = CadrMaterialTexture(
+        vec4(1.0, 0.0, 0.0, 0.0), vec4(0.0, 1.0, 0.0, 0.0), uvec4(0u, 0u, CADR_TEXTURE_ALPHA_BLEND, 0u));
+    if ((frame.target.z & CADR_DISPLAY_MATERIAL_DESCRIPTIONS) != 0u) {
+        uint material = cadr_host_instance_records[object.instance].y;
+        material_texture = cadr_host_material_textures[material];
+    }
     uvec4 texture_info = material_texture.info;
     if ((frame.target.z & CADR_DISPLAY_TEXTURES) == 0u) {
         texture_info.x = 0u;

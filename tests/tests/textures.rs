@@ -492,3 +492,89 @@ fn saving_keeps_textures_or_says_what_is_lost() {
     );
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// A scene without textures (the shaders then skip every material description) gets one at
+/// run time by a material change: the textures are built, the description reaches the GPU
+/// and the part shows the texture.
+#[test]
+fn a_scene_without_textures_gets_one_by_a_material_change() {
+    use cadr_core::scene::{Geometry, MeshRef, Node, Part, Vertex, VertexAttributes};
+    let corners = [[-1.0f32, 1.0], [1.0, 1.0], [1.0, -1.0], [-1.0, -1.0]];
+    let quad = Geometry {
+        name: "quad".into(),
+        vertices: corners
+            .iter()
+            .map(|&[x, y]| Vertex {
+                position: [x, y, 0.0],
+                normal: [0.0, 0.0, 1.0],
+            })
+            .collect(),
+        indices: vec![0, 3, 2, 0, 2, 1],
+        parts: vec![Part {
+            first_index: 0,
+            index_count: 6,
+            ..Part::default()
+        }],
+        attributes: corners
+            .iter()
+            .map(|&[x, y]| VertexAttributes {
+                uv: [(x + 1.0) / 2.0, (1.0 - y) / 2.0],
+                ..VertexAttributes::default()
+            })
+            .collect(),
+        ..Geometry::default()
+    };
+    let mut node = Node::new("quad");
+    node.mesh = Some(MeshRef::new(0, vec![0]));
+    let scene = Scene {
+        geometries: vec![quad],
+        materials: vec![Material {
+            name: "plain".into(),
+            base_color: [0.9, 0.9, 0.9, 1.0],
+            ..Material::default()
+        }],
+        nodes: vec![node],
+        roots: vec![0],
+        ..Scene::default()
+    };
+    let mut f = front_view(&scene);
+    let before = f.render();
+    let left = DVec3::new(-0.5, 0.0, 0.0);
+    let right = DVec3::new(0.5, 0.0, 0.0);
+    let plain = color_at(&before, &f.camera, left);
+    assert_eq!(plain, color_at(&before, &f.camera, right));
+    // Two texels: blue on the left, yellow on the right.
+    let texture = f
+        .graph
+        .create_texture(Texture {
+            name: "halves".into(),
+            width: 2,
+            height: 1,
+            texels: std::sync::Arc::new(vec![20, 40, 230, 255, 240, 220, 20, 255]),
+            sampler: cadr_core::scene::Sampler {
+                magnify_nearest: true,
+                ..Default::default()
+            },
+        })
+        .unwrap();
+    let material = f.graph.material_handle_at(0).unwrap();
+    let mut textured = f.graph.material(material).unwrap().clone();
+    textured.base_color_texture = Some(TextureRef {
+        texture: texture.index(),
+        transform: UvTransform::IDENTITY,
+    });
+    f.graph.set_material(material, textured).unwrap();
+    f.tree.update(&mut f.graph);
+    let after = f.render();
+    let (l, r) = (
+        color_at(&after, &f.camera, left),
+        color_at(&after, &f.camera, right),
+    );
+    assert!(l[2] > l[0] + 0.3, "blue on the left: {l:?}");
+    assert!(
+        r[0] > r[2] + 0.3 && r[1] > r[2] + 0.3,
+        "yellow on the right: {r:?}"
+    );
+    drop(f.view);
+    assert_no_validation_errors(&f.device);
+}

@@ -132,6 +132,9 @@ pub struct GpuScene {
     translucent: Vec<bool>,
     /// Material slots whose parts are translucent.
     translucent_materials: usize,
+    /// Material slots whose texture description is not the default (a texture, or an alpha
+    /// mode other than BLEND): while there are none, the vertex shader skips reading them.
+    described_materials: usize,
     /// The textures, rebuilt when the graph's change.
     textures: TextureArray,
     /// Where moved subtrees' world matrices are computed.
@@ -195,6 +198,7 @@ impl GpuScene {
             material_textures: Vec::new(),
             translucent: Vec::new(),
             translucent_materials: 0,
+            described_materials: 0,
             textures,
             transforms,
             locals: Vec::new(),
@@ -281,6 +285,11 @@ impl GpuScene {
             .map(|slot| is_translucent(graph, slot))
             .collect();
         self.translucent_materials = self.translucent.iter().filter(|&&t| t).count();
+        self.described_materials = self
+            .material_textures
+            .iter()
+            .filter(|words| textures::is_described(words))
+            .count();
         let count = tree.instance_capacity();
         self.instances = vec![abi::CadrInstance::default(); count];
         self.records = vec![abi::CadrInstanceRecord::default(); count];
@@ -512,7 +521,12 @@ impl GpuScene {
                 self.translucent_materials =
                     self.translucent_materials + usize::from(translucent) - usize::from(was);
                 self.materials[slot as usize] = gpu_material(graph, slot);
-                self.material_textures[slot as usize] = gpu_material_texture(graph, slot);
+                let description = gpu_material_texture(graph, slot);
+                let was =
+                    std::mem::replace(&mut self.material_textures[slot as usize], description);
+                self.described_materials = self.described_materials
+                    + usize::from(textures::is_described(&description))
+                    - usize::from(textures::is_described(&was));
                 self.material_gpu.queue(slot);
                 self.material_texture_gpu.queue(slot);
                 self.frame_dirty_materials.push(slot);
@@ -773,6 +787,12 @@ impl GpuScene {
     /// Whether the scene has textures.
     pub fn has_textures(&self) -> bool {
         self.textures.any
+    }
+
+    /// Whether some material slot has a texture or an alpha mode other than BLEND (the
+    /// vertex shader reads the descriptions only then).
+    pub fn has_material_descriptions(&self) -> bool {
+        self.described_materials > 0
     }
 
     /// The buffers, image and samplers the frame set names for the shared shaders.

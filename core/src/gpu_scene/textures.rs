@@ -78,6 +78,12 @@ pub fn gpu_material_texture(graph: &SceneGraph, slot: u32) -> [u32; 12] {
     words
 }
 
+/// Whether a material description differs from what the vertex shader assumes without one
+/// (no texture, BLEND).
+pub(super) fn is_described(words: &[u32; 12]) -> bool {
+    words[8] != 0 || words[10] != AlphaMode::Blend.code()
+}
+
 /// The texture array, its view and the two samplers the shaders choose between.
 pub(super) struct TextureArray {
     pub(super) image: Image,

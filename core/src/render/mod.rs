@@ -19,7 +19,8 @@ pub use camera::{Camera, DEFAULT_DIRECTION, DEFAULT_FOV_DEGREES};
 pub use output::SaveError;
 pub use pipeline::{
     FrameUniforms, HierarchyParameters, HierarchyStage, Pipelines, ScatterParameters,
-    DISPLAY_TEXTURES, DISPLAY_VERTEX_ATTRIBUTES, DISPLAY_XRAY, PICK_FORMAT,
+    DISPLAY_MATERIAL_DESCRIPTIONS, DISPLAY_TEXTURES, DISPLAY_VERTEX_ATTRIBUTES, DISPLAY_XRAY,
+    PICK_FORMAT,
 };
 pub use section::{Section, DEFAULT_CAP_COLORS, MAX_SECTION_PLANES};
 pub use stats::FrameStats;

@@ -48,6 +48,9 @@ pub const DISPLAY_VERTEX_ATTRIBUTES: u32 = 2;
 /// [`FrameUniforms::target`]`[2]`: materials' textures are sampled (textures on, and the scene
 /// has some).
 pub const DISPLAY_TEXTURES: u32 = 4;
+/// [`FrameUniforms::target`]`[2]`: some material has a texture or an alpha mode other than
+/// BLEND, so the vertex shader reads the material descriptions.
+pub const DISPLAY_MATERIAL_DESCRIPTIONS: u32 = 8;
 
 /// Push constants of `scatter.comp`: one dispatch scatters the items of one array.
 #[repr(C)]

@@ -305,6 +305,9 @@ impl Renderer {
         if self.textures() && shared.borrow().0.has_textures() {
             display |= crate::render::DISPLAY_TEXTURES;
         }
+        if shared.borrow().0.has_material_descriptions() {
+            display |= crate::render::DISPLAY_MATERIAL_DESCRIPTIONS;
+        }
         let mut after = |renderer: &Renderer,
                          command_buffer: vk::CommandBuffer,
                          _: u32,

@@ -137,6 +137,21 @@ impl SceneView {
         Self::new(device, scene, (width, height), camera)
     }
 
+    /// Picks the pixel that the world point `point` projects to (the tree must be up to date
+    /// with the graph): the hits there.
+    pub fn pick_at(&mut self, point: glam::DVec3) -> Vec<cadr_core::view::PickHit> {
+        let size = self.view.renderer().size();
+        let (x, y) = images::pixel_of(&self.camera, size, point);
+        self.view
+            .pick(
+                &self.graph,
+                &mut self.tree,
+                &self.camera,
+                cadr_core::render::pick::PixelRect::pixel(x, y),
+            )
+            .expect("pick")
+    }
+
     /// Draws a frame with the view's current settings and reads it back.
     pub fn render(&mut self) -> image::RgbaImage {
         self.view

@@ -4,21 +4,14 @@
 //! one at the origin.
 #![allow(clippy::unwrap_used)] // Test code: a failed unwrap is a failed test.
 
-use std::sync::Arc;
-
 use cadr_core::generate::{generate, GeneratorSpec};
-use cadr_core::graph::SceneGraph;
-use cadr_core::render::pick::PixelRect;
 use cadr_core::render::{Camera, Section, DEFAULT_DIRECTION};
 use cadr_core::scene::{flatten, Geometry, Material, MeshRef, Node, Part, Scene, Vertex};
 use cadr_core::technique::ShadeMode;
-use cadr_core::tree::SceneTree;
-use cadr_core::view::View;
-use cadr_core::vk::Device;
 use cadr_tests::images::{
     self, assert_matches_reference, compare, DEFAULT_TOLERANCE, SAME_PICTURE,
 };
-use cadr_tests::{all_combinations, assert_no_validation_errors, plugin_registry, test_device};
+use cadr_tests::{all_combinations, assert_no_validation_errors, test_device, SceneView};
 use glam::{DMat4, DVec3, DVec4};
 
 const SIZE: (u32, u32) = (160, 120);
@@ -89,27 +82,25 @@ fn boxes(open: bool, places: &[DVec3]) -> Scene {
     scene
 }
 
-struct Fixture {
-    device: Arc<Device>,
-    graph: SceneGraph,
-    tree: SceneTree,
-    view: View,
-    camera: Camera,
+/// A [`SceneView`] with the section helpers of these tests.
+struct Fixture(SceneView);
+
+impl std::ops::Deref for Fixture {
+    type Target = SceneView;
+    fn deref(&self) -> &SceneView {
+        &self.0
+    }
+}
+
+impl std::ops::DerefMut for Fixture {
+    fn deref_mut(&mut self) -> &mut SceneView {
+        &mut self.0
+    }
 }
 
 impl Fixture {
     fn new(scene: &Scene, camera: Camera) -> Self {
-        let device = test_device();
-        let (mut graph, _) = SceneGraph::from_scene(scene).unwrap();
-        let tree = SceneTree::build(&mut graph);
-        let view = View::new(&device, plugin_registry(&device), SIZE.0, SIZE.1).unwrap();
-        Self {
-            device,
-            graph,
-            tree,
-            view,
-            camera,
-        }
+        Self(SceneView::new(test_device(), scene, SIZE, camera))
     }
 
     fn looking_at_the_origin(scene: &Scene, offset: DVec3) -> Self {
@@ -123,18 +114,6 @@ impl Fixture {
         section.set_planes(planes).unwrap();
         section.set_caps(caps);
         self.view.set_section(section);
-    }
-
-    fn render(&mut self) -> image::RgbaImage {
-        self.view
-            .render(&self.graph, &mut self.tree, &self.camera)
-            .unwrap();
-        self.view.renderer().read_rgba8().unwrap()
-    }
-
-    /// The pixel `point` projects to.
-    fn pixel_of(&self, point: DVec3) -> (u32, u32) {
-        images::pixel_of(&self.camera, SIZE, point)
     }
 
     fn color_at(&self, image: &image::RgbaImage, point: DVec3) -> [f32; 3] {
@@ -205,8 +184,9 @@ fn a_cut_through_a_closed_box_is_capped_with_the_plane_colour_where_the_cut_is()
         "{:?}",
         f.color_at(&uncapped, on_cap)
     );
-    drop(f.view);
-    assert_no_validation_errors(&f.device);
+    let Fixture(SceneView { device, view, .. }) = f;
+    drop(view);
+    assert_no_validation_errors(&device);
 }
 
 #[test]
@@ -219,8 +199,9 @@ fn a_cut_through_an_open_mesh_shows_no_cap() {
     let on_cap = DVec3::new(0.3, 0.3, 0.0);
     let color = f.color_at(&cut, on_cap);
     assert!(grayish(color), "no cap, no smear: {color:?}");
-    drop(f.view);
-    assert_no_validation_errors(&f.device);
+    let Fixture(SceneView { device, view, .. }) = f;
+    drop(view);
+    assert_no_validation_errors(&device);
 }
 
 #[test]
@@ -228,17 +209,8 @@ fn picking_through_a_cut_hits_what_is_behind() {
     // Box 0 at the origin, box 1 behind it on the line of sight.
     let behind = -EYE * 0.8;
     let mut f = Fixture::looking_at_the_origin(&boxes(false, &[DVec3::ZERO, behind]), DVec3::ZERO);
-    let centre = f.pixel_of(DVec3::ZERO);
     let pick = |f: &mut Fixture| {
-        let hits = f
-            .view
-            .pick(
-                &f.graph,
-                &mut f.tree,
-                &f.camera,
-                PixelRect::pixel(centre.0, centre.1),
-            )
-            .unwrap();
+        let hits = f.pick_at(DVec3::ZERO);
         let name = f.graph.node(hits[0].node).unwrap().name.clone();
         name.trim_end_matches(" geometry").to_owned()
     };
@@ -247,8 +219,9 @@ fn picking_through_a_cut_hits_what_is_behind() {
     let away = -EYE.normalize();
     f.section(&[away.extend(-2.2)], true);
     assert_eq!(pick(&mut f), "box 1");
-    drop(f.view);
-    assert_no_validation_errors(&f.device);
+    let Fixture(SceneView { device, view, .. }) = f;
+    drop(view);
+    assert_no_validation_errors(&device);
 }
 
 #[test]
@@ -332,6 +305,7 @@ fn the_demo_section_matches_its_reference_in_every_sampled_combination() {
         sampled.len(),
         valid.len()
     );
-    drop(f.view);
-    assert_no_validation_errors(&f.device);
+    let Fixture(SceneView { device, view, .. }) = f;
+    drop(view);
+    assert_no_validation_errors(&device);
 }

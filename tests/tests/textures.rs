@@ -9,7 +9,6 @@
 use std::collections::HashSet;
 
 use cadr_core::load::load_file;
-use cadr_core::render::pick::PixelRect;
 use cadr_core::render::Camera;
 use cadr_core::scene::{Material, Scene, Texture, TextureRef, UvTransform};
 use cadr_core::technique::{Combination, ShadeMode};
@@ -207,11 +206,7 @@ fn picking_goes_through_alpha_mask_holes() {
     let mut f = front_view(&scene);
     let half = textured::QUAD_SIZE / 2.0;
     let mut pick_at = |p: DVec3| {
-        let (x, y) = cadr_tests::images::pixel_of(&f.camera, SIZE, p);
-        let hits = f
-            .view
-            .pick(&f.graph, &mut f.tree, &f.camera, PixelRect::pixel(x, y))
-            .unwrap();
+        let hits = f.pick_at(p);
         assert_eq!(hits.len(), 1, "one hit at {p}");
         let node = f.graph.node(hits[0].node).unwrap();
         let cadr_core::graph::NodeKind::Geo { part_materials, .. } = &node.kind else {

@@ -15,27 +15,38 @@ use cadr_plugin_sdk::vk;
 use cadr_plugin_sdk::vulkan_failure;
 use cadr_plugin_sdk::{technique_library, Bind, Gpu, Scene, Technique, VertexPath};
 
-// Every snippet defines CADR_VERTEX_INDEX: the vertex's index in the scene's vertex buffer,
-// where the host finds its texture coordinate and colour.
-const ARENA_SNIPPET: &CStr = c"
+/// The snippet of the paths with vertex input (locations 0 and 1), whose vertex lies at
+/// `index` in the scene's vertex buffer. Every snippet defines CADR_VERTEX_INDEX, where the host
+/// finds the vertex's texture coordinate and colour.
+macro_rules! attributes_snippet {
+    ($index:literal) => {
+        match CStr::from_bytes_with_nul(
+            concat!(
+                "
 layout(location = 0) in vec3 cadr_in_position;
 layout(location = 1) in vec3 cadr_in_normal;
 vec3 cadr_vertex_position() { return cadr_in_position; }
 vec3 cadr_vertex_normal() { return cadr_in_normal; }
 #define CADR_VERTEX_INDEX
-uint cadr_vertex_index() { return uint(gl_VertexIndex); }
-";
+uint cadr_vertex_index() { return ",
+                $index,
+                "; }
+\0"
+            )
+            .as_bytes(),
+        ) {
+            Ok(snippet) => snippet,
+            Err(_) => panic!("a snippet is one C string"),
+        }
+    };
+}
+
+/// The scene bound at 0: draws offset their vertices, `gl_VertexIndex` counts from the start.
+const ARENA_SNIPPET: &CStr = attributes_snippet!("uint(gl_VertexIndex)");
 
 /// The bound paths count vertices from the binding's start: the geometry's first vertex is
 /// pushed (bytes 96-99) with every binding.
-const BOUND_SNIPPET: &CStr = c"
-layout(location = 0) in vec3 cadr_in_position;
-layout(location = 1) in vec3 cadr_in_normal;
-vec3 cadr_vertex_position() { return cadr_in_position; }
-vec3 cadr_vertex_normal() { return cadr_in_normal; }
-#define CADR_VERTEX_INDEX
-uint cadr_vertex_index() { return cadr_push.words[0].x + uint(gl_VertexIndex); }
-";
+const BOUND_SNIPPET: &CStr = attributes_snippet!("cadr_push.words[0].x + uint(gl_VertexIndex)");
 
 fn attributes() -> CadrVertexInput {
     CadrVertexInput {

@@ -12,7 +12,7 @@
  *        M cycles the present modes the window offers; X cycles a section plane through the
  *        view's centre across x, y, z and off; K toggles its caps, H their hatching;
  *        D toggles dashed hidden edges in hidden-line; O toggles ambient occlusion;
- *        U toggles materials' textures;
+ *        U toggles materials' textures; L toggles silhouette edges in edges and hidden-line;
  *        B cycles the background (cadr's gradient, white, dark); A cycles the anti-aliasing
  *        levels the device offers (MSAA 2x, 4x, 8x, then off); Esc quits.
  * The window title shows the techniques, the section, the anti-aliasing, frames in flight, present mode, the frame's figures
@@ -199,6 +199,13 @@ static void toggle_textures(struct Viewer *v) {
   printf("textures: %s\n", on ? "off" : "on");
 }
 
+static void toggle_silhouettes(struct Viewer *v) {
+  bool on = true;
+  CADR_CHECK(cadr_renderer_silhouettes(v->renderer, &on));
+  CADR_CHECK(cadr_renderer_set_silhouettes(v->renderer, !on));
+  printf("silhouettes: %s\n", on ? "off" : "on");
+}
+
 static void toggle_ssao(struct Viewer *v) {
   bool on = false;
   CADR_CHECK(cadr_renderer_ssao(v->renderer, &on));
@@ -232,7 +239,7 @@ static void describe(struct Viewer *v, char *text, size_t size) {
   char section[64];
   char antialiasing[16];
   uint32_t kind, frames = 1, mode = 0, samples = 1;
-  bool textures = true;
+  bool textures = true, silhouettes = true;
   for (kind = 0; kind < 5; ++kind) {
     CADR_CHECK(cadr_renderer_technique(v->renderer, kind, &names[kind]));
   }
@@ -245,6 +252,7 @@ static void describe(struct Viewer *v, char *text, size_t size) {
   CADR_CHECK(cadr_renderer_frames_in_flight(v->renderer, &frames));
   CADR_CHECK(cadr_renderer_present_mode(v->renderer, &mode, NULL));
   CADR_CHECK(cadr_renderer_textures(v->renderer, &textures));
+  CADR_CHECK(cadr_renderer_silhouettes(v->renderer, &silhouettes));
   snprintf(section, sizeof section, "%s%s%s",
            v->section_axis < 0 ? "no section" : "section ",
            v->section_axis < 0 ? "" : axis_names[v->section_axis],
@@ -253,8 +261,10 @@ static void describe(struct Viewer *v, char *text, size_t size) {
                ? ((v->section_flags & CADR_SECTION_HATCHED) ? " capped, hatched" : " capped")
                : " uncapped");
   snprintf(text, size,
-           "cadr viewer | %s / %s / %s / %s | %s, %s | %s | %s | %s | %s background | %u in flight, %s | %llu draws in %llu calls | CPU %.0f us, GPU %.0f us | %.0f frames/s",
-           names[0], names[1], names[2], names[3], shade_names[v->shade % 5], names[4],
+           "cadr viewer | %s / %s / %s / %s | %s%s, %s | %s | %s | %s | %s background | %u in flight, %s | %llu draws in %llu calls | CPU %.0f us, GPU %.0f us | %.0f frames/s",
+           names[0], names[1], names[2], names[3], shade_names[v->shade % 5],
+           silhouettes || (v->shade != CADR_SHADE_EDGES && v->shade != CADR_SHADE_HIDDEN_LINE) ? "" : " without silhouettes",
+           names[4],
            antialiasing, textures ? "textures" : "no textures", section, background_names[v->background % 3], frames, present_names[mode % 3], (unsigned long long)v->stats.draws,
            (unsigned long long)v->stats.draw_calls, v->stats.cpu_us, v->stats.gpu_us,
            v->frames_per_second);
@@ -297,6 +307,7 @@ static void on_key(GLFWwindow *window, int key, int scancode, int action, int mo
   case GLFW_KEY_D: toggle_dashed(v); break;
   case GLFW_KEY_O: toggle_ssao(v); break;
   case GLFW_KEY_U: toggle_textures(v); break;
+  case GLFW_KEY_L: toggle_silhouettes(v); break;
   case GLFW_KEY_ESCAPE: glfwSetWindowShouldClose(window, GLFW_TRUE); break;
   default: break;
   }
@@ -406,6 +417,9 @@ static int self_test(struct Viewer *v, const char *dir) {
           toggle_dashed(v);
           render(v);
           toggle_dashed(v);
+          toggle_silhouettes(v);
+          render(v);
+          toggle_silhouettes(v);
         }
       }
       CADR_CHECK(cadr_renderer_msaa(v->renderer, &samples, NULL));

@@ -30,3 +30,5 @@ const uint CADR_DISPLAY_TEXTURES = 4u;
 const uint CADR_DISPLAY_MATERIAL_DESCRIPTIONS = 8u;
 // The opacity of parts X-ray makes translucent.
 const float CADR_XRAY_OPACITY = 0.2;
+// The colour of edge lines and silhouettes (display RGB).
+const vec3 CADR_EDGE_COLOR = vec3(0.06, 0.07, 0.09);

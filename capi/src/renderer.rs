@@ -621,6 +621,42 @@ pub unsafe extern "C" fn cadr_renderer_ssao(renderer: CadrRenderer, on: *mut boo
     })
 }
 
+/// Turns silhouette edges on (`on` true, the default) or off: in the edge display modes
+/// (edges, hidden-line), the outlines of curved surfaces, which no feature edge marks, are
+/// drawn with the feature edges, found where the frame's depth breaks. Applies from the next
+/// frame; its cost is one full-screen pass in those modes.
+///
+/// Returns `CADR_RESULT_OK`, `CADR_RESULT_VULKAN` or a handle error. Ownership: nothing
+/// changes hands. Thread-safety: as `cadr_renderer_create`.
+#[no_mangle]
+pub extern "C" fn cadr_renderer_set_silhouettes(renderer: CadrRenderer, on: bool) -> CadrResult {
+    guard(|| {
+        with_renderer(renderer, |state| {
+            Ok(state.view.renderer_mut().set_silhouettes(on)?)
+        })
+    })
+}
+
+/// Writes whether silhouette edges are on (see `cadr_renderer_set_silhouettes`).
+///
+/// Returns `CADR_RESULT_OK`, `CADR_RESULT_NULL_ARGUMENT` or a handle error.
+/// Ownership: the output is the caller's; cadr keeps no pointer to it.
+/// Thread-safety: as `cadr_renderer_create`.
+///
+/// # Safety
+/// `on` is null or writable.
+#[no_mangle]
+pub unsafe extern "C" fn cadr_renderer_silhouettes(
+    renderer: CadrRenderer,
+    on: *mut bool,
+) -> CadrResult {
+    guard(|| {
+        let value = with_renderer(renderer, |state| Ok(state.view.renderer().silhouettes()))?;
+        // SAFETY: on is null or writable (the caller's contract).
+        unsafe { deliver(on, "on", value) }
+    })
+}
+
 /// Turns the sampling of materials' base-colour textures on (`on` true, the default) or off:
 /// off, materials show their base colour (times vertex colours, which stay). Applies from the
 /// next frame; nothing is rebuilt.

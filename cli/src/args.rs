@@ -314,6 +314,10 @@ pub struct RenderArgs {
     /// instead of removing them.
     #[arg(long)]
     pub dashed: bool,
+    /// Draw the edge display modes (edges, hidden-line) with feature edges only, without the
+    /// silhouettes of curved surfaces.
+    #[arg(long)]
+    pub no_silhouettes: bool,
     /// Anti-alias with N samples per pixel (MSAA: 1, the default, is off; 2, 4 or 8 where the
     /// device offers them: cadr devices lists them).
     #[arg(long, value_name = "N", default_value_t = 1, value_parser = parse_msaa)]

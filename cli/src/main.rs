@@ -191,6 +191,11 @@ fn render(args: &RenderArgs, process_start: Instant) -> Result<(), String> {
         .set_ssao(args.ssao)
         .map_err(|e| e.to_string())?;
     session.view.renderer_mut().set_textures(!args.no_textures);
+    session
+        .view
+        .renderer_mut()
+        .set_silhouettes(!args.no_silhouettes)
+        .map_err(|e| e.to_string())?;
     if args.dashed && shade != ShadeMode::HiddenLine {
         return Err("--dashed shows hidden edges dashed in --display hidden-line only".into());
     }
@@ -214,6 +219,9 @@ fn render(args: &RenderArgs, process_start: Instant) -> Result<(), String> {
     }
     if args.no_textures {
         technique_line += ", no textures";
+    }
+    if args.no_silhouettes && matches!(shade, ShadeMode::Edges | ShadeMode::HiddenLine) {
+        technique_line += ", no silhouettes";
     }
     if args.msaa > 1 {
         technique_line += &format!(", MSAA {}x", args.msaa);

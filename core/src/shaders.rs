@@ -255,6 +255,12 @@ pub const SSAO_FRAG: ShaderSource = ShaderSource {
     stage: ShaderStage::Fragment,
     source: include_str!("../../shaders/ssao.frag"),
 };
+/// Silhouette edges over the picture of the edge display modes, found where the depth breaks.
+pub const SILHOUETTES_FRAG: ShaderSource = ShaderSource {
+    name: "silhouettes.frag",
+    stage: ShaderStage::Fragment,
+    source: include_str!("../../shaders/silhouettes.frag"),
+};
 /// Hidden edge lines, dashed (the hidden-line mode's option).
 pub const HIDDEN_EDGES_FRAG: ShaderSource = ShaderSource {
     name: "hidden_edges.frag",
@@ -305,6 +311,7 @@ pub const ALL: &[ShaderSource] = &[
     EDGES_FRAG,
     HIDDEN_EDGES_FRAG,
     SSAO_FRAG,
+    SILHOUETTES_FRAG,
     MERGE_VERT,
     BACKGROUND_FRAG,
 ];

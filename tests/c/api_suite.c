@@ -800,6 +800,50 @@ static void test_renderer(CadrContext context, struct Built *b) {
     OK(cadr_renderer_read_pixels(renderer, first, W * H * 4));
   }
 
+  /* Silhouettes: on by default; in hidden-line they outline the engine's curved surfaces beside
+   * its feature edges, in solid they change nothing. */
+  {
+    CadrScene engine = NULL;
+    CadrNode engine_root = 0;
+    struct CadrLoadResult loaded;
+    struct CadrBounds bounds;
+    struct CadrCamera engine_camera;
+    const double front[3] = {0.4, 0.5, 1.0};
+    bool on = false;
+    OK(cadr_scene_create(&engine));
+    OK(cadr_scene_root(engine, &engine_root));
+    memset(&loaded, 0, sizeof loaded);
+    OK(cadr_scene_load(engine,
+                       "/usr/share/assimp/models/glTF2/2CylinderEngine-glTF-Binary/2CylinderEngine.glb",
+                       engine_root, &loaded));
+    cadr_load_result_free(&loaded);
+    OK(cadr_scene_bounds(engine, &bounds));
+    OK(cadr_camera_fit(&bounds, (double)W / H, front, &engine_camera));
+    OK(cadr_renderer_silhouettes(renderer, &on));
+    CHECK(on);
+    EXPECT(cadr_renderer_silhouettes(renderer, NULL), CADR_RESULT_NULL_ARGUMENT);
+    OK(cadr_renderer_set_shade_mode(renderer, CADR_SHADE_HIDDEN_LINE));
+    OK(cadr_renderer_render(renderer, engine, &engine_camera, &stats));
+    OK(cadr_renderer_read_pixels(renderer, second, W * H * 4));
+    OK(cadr_renderer_set_silhouettes(renderer, false));
+    OK(cadr_renderer_silhouettes(renderer, &on));
+    CHECK(!on);
+    OK(cadr_renderer_render(renderer, engine, &engine_camera, &stats));
+    OK(cadr_renderer_read_pixels(renderer, first, W * H * 4));
+    CHECK(pixel_difference(first, second, W * H * 4) > 20);
+    OK(cadr_renderer_set_shade_mode(renderer, CADR_SHADE_SOLID));
+    OK(cadr_renderer_render(renderer, engine, &engine_camera, &stats));
+    OK(cadr_renderer_read_pixels(renderer, first, W * H * 4));
+    OK(cadr_renderer_set_silhouettes(renderer, true));
+    OK(cadr_renderer_render(renderer, engine, &engine_camera, &stats));
+    OK(cadr_renderer_read_pixels(renderer, second, W * H * 4));
+    CHECK(pixel_difference(first, second, W * H * 4) == 0);
+    OK(cadr_scene_destroy(engine));
+    /* The blocks below compare with the test scene's solid picture. */
+    OK(cadr_renderer_render(renderer, b->scene, &camera, &stats));
+    OK(cadr_renderer_read_pixels(renderer, first, W * H * 4));
+  }
+
   /* Ambient occlusion: off by default; on, it only darkens, and off again restores the picture. */
   {
     bool on = true;

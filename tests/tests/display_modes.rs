@@ -1,15 +1,19 @@
 //! Display modes: gen:demo and the 2CylinderEngine in each mode (X-ray included) match their
 //! references, each mode shows something other than the others, and the line-only modes fill
-//! no surface.
+//! no surface; silhouettes outline curved surfaces in the edge modes.
 #![allow(clippy::unwrap_used)] // Test code: a failed unwrap is a failed test.
 
-use cadr_core::generate::{generate, GeneratorSpec};
+use cadr_core::generate::{generate, GeneratorSpec, GeometryBuilder};
 use cadr_core::load::load_file;
-use cadr_core::render::Background;
-use cadr_core::scene::Scene;
+use cadr_core::render::{Background, Camera, DEFAULT_FOV_DEGREES};
+use cadr_core::scene::edges::{feature_edges, DEFAULT_CREASE_DEGREES};
+use cadr_core::scene::{Material, MeshRef, Node, Scene};
 use cadr_core::technique::ShadeMode;
-use cadr_tests::images::{assert_matches_reference, compare, DEFAULT_TOLERANCE, VISIBLE_CHANGE};
+use cadr_tests::images::{
+    self, assert_matches_reference, compare, DEFAULT_TOLERANCE, VISIBLE_CHANGE,
+};
 use cadr_tests::{assert_no_validation_errors, test_device, SceneView, CYLINDER_ENGINE_GLB};
+use glam::{DMat4, DVec3};
 
 const SIZE: (u32, u32) = (160, 120);
 
@@ -197,6 +201,99 @@ fn ambient_occlusion_darkens_where_parts_meet_and_only_there() {
     let with = draw(&mut f, true);
     let without = draw(&mut f, false);
     assert_eq!(with, without, "wireframe is not occluded");
+    drop(f.view);
+    assert_no_validation_errors(&f.device);
+}
+
+/// A smooth cylinder (48 facets, radius 1, from y = -1 to 1) whose only feature edges are its
+/// rims: its sides are outlined by silhouettes alone.
+fn smooth_cylinder() -> Scene {
+    let mut builder = GeometryBuilder::new("cylinder");
+    builder.prism(48, DMat4::from_scale(DVec3::new(1.0, 2.0, 1.0)));
+    let mut geometry = builder.finish();
+    let (wire_indices, parts) = feature_edges(&geometry, DEFAULT_CREASE_DEGREES);
+    geometry.wire_indices = wire_indices;
+    geometry.parts = parts;
+    let mut node = Node::new("cylinder");
+    node.mesh = Some(MeshRef::new(0, vec![0]));
+    Scene {
+        name: "cylinder".into(),
+        geometries: vec![geometry],
+        materials: vec![Material::default()],
+        nodes: vec![node],
+        roots: vec![0],
+        ..Scene::default()
+    }
+}
+
+/// Silhouette edges outline the sides of a smooth cylinder in the edge modes, where no feature
+/// edge runs: a line at each side of its outline, on the cylinder, and none across its curved
+/// face; without them (or in the other modes) there is none; with MSAA too.
+#[test]
+fn silhouettes_outline_curved_surfaces_in_the_edge_modes() {
+    let aspect = f64::from(SIZE.0) / f64::from(SIZE.1);
+    let camera = Camera::look_at(
+        DVec3::new(0.0, 1.5, 6.0),
+        DVec3::ZERO,
+        DEFAULT_FOV_DEGREES,
+        aspect,
+        0.1,
+        100.0,
+    );
+    let mut f = SceneView::new(test_device(), &smooth_cylinder(), SIZE, camera);
+    let dark = |p: &image::Rgba<u8>| (0..3).all(|i| p.0[i] < 90);
+    // The row through the cylinder's middle, clear of its rims.
+    let (_, row) = images::pixel_of(&f.camera, SIZE, DVec3::ZERO);
+    let draw = |f: &mut SceneView, mode: ShadeMode, silhouettes: bool| {
+        f.view.techniques_mut().set_shade_mode(mode).unwrap();
+        f.view.renderer_mut().set_silhouettes(silhouettes).unwrap();
+        f.render()
+    };
+    for samples in [1, 4] {
+        f.view.renderer_mut().set_msaa(samples).unwrap();
+        let solid = draw(&mut f, ShadeMode::Solid, true);
+        let covered: Vec<u32> = (0..SIZE.0)
+            .filter(|&x| !images::is_background(&solid, x, row))
+            .collect();
+        let (left, right) = (covered[0], covered[covered.len() - 1]);
+        assert!(
+            right - left > SIZE.0 / 8,
+            "{samples}x: the cylinder is seen"
+        );
+        for mode in [ShadeMode::Edges, ShadeMode::HiddenLine] {
+            let with = draw(&mut f, mode, true);
+            assert!(f.view.renderer().silhouettes());
+            let without = draw(&mut f, mode, false);
+            let dark_columns = |image: &image::RgbaImage| -> Vec<u32> {
+                (0..SIZE.0)
+                    .filter(|&x| dark(image.get_pixel(x, row)))
+                    .collect()
+            };
+            assert_eq!(
+                dark_columns(&without),
+                Vec::<u32>::new(),
+                "{samples}x {mode:?}: no feature edge crosses the middle row"
+            );
+            let lines = dark_columns(&with);
+            let near = |edge: u32| lines.iter().filter(|&&x| x.abs_diff(edge) <= 1).count();
+            assert!(
+                near(left) >= 1 && near(right) >= 1,
+                "{samples}x {mode:?}: lines at the outline {left}..{right}: {lines:?}"
+            );
+            assert!(
+                lines.len() <= 4,
+                "{samples}x {mode:?}: no line across the curved face: {lines:?}"
+            );
+        }
+        // The other modes draw no silhouettes.
+        for mode in [ShadeMode::Solid, ShadeMode::Wireframe, ShadeMode::XRay] {
+            assert_eq!(
+                draw(&mut f, mode, true),
+                draw(&mut f, mode, false),
+                "{samples}x {mode:?}"
+            );
+        }
+    }
     drop(f.view);
     assert_no_validation_errors(&f.device);
 }

@@ -78,9 +78,11 @@ pub struct Renderer {
     background: Background,
     /// Whether frames that fill surfaces get screen-space ambient occlusion.
     ssao: bool,
-    /// The ambient occlusion pass's set, naming the target's depth; made on first use, dropped
-    /// when the target is remade.
-    ssao_set: Option<DescriptorSets>,
+    /// Whether the edge display modes draw silhouette edges with the feature edges.
+    silhouettes: bool,
+    /// The set naming the target's depth for the passes over the picture that read it
+    /// (ambient occlusion, silhouettes); made on first use, dropped when the target is remade.
+    depth_set: Option<DescriptorSets>,
     /// Whether materials' textures are sampled (vertex colours apply either way).
     textures: bool,
     /// The generation of the GPU scene resources the frame set names, if any.
@@ -116,6 +118,18 @@ pub(crate) struct FramePlan<'a> {
     pub translucency: Option<(&'a TransparencyMethod, (vk::Pipeline, vk::PipelineLayout))>,
     /// Whether the frame fills surfaces, so that ambient occlusion (when on) applies.
     pub fills_surfaces: bool,
+    /// Whether the frame draws feature edges over surfaces that fill the depth (the edges
+    /// and hidden-line modes), so that silhouettes (when on) join them.
+    pub draws_edges: bool,
+}
+
+/// The passes over a colour frame's picture that read its depth.
+#[derive(Clone, Copy, Debug)]
+struct DepthOverlays {
+    /// Ambient occlusion.
+    ssao: bool,
+    /// Silhouette edges.
+    silhouettes: bool,
 }
 
 /// Which image a pass draws into.
@@ -211,7 +225,8 @@ impl Renderer {
             bound_scene: None,
             background: Background::default(),
             ssao: false,
-            ssao_set: None,
+            silhouettes: true,
+            depth_set: None,
         })
     }
 
@@ -244,6 +259,26 @@ impl Renderer {
             self.replayable = None;
             self.last_recorded = None;
             self.ssao = on;
+        }
+        Ok(())
+    }
+
+    /// Whether the edge display modes (edges, hidden-line) draw silhouette edges with the
+    /// feature edges: the outlines of curved surfaces where the depth breaks, which no
+    /// feature edge marks (on by default).
+    pub fn silhouettes(&self) -> bool {
+        self.silhouettes
+    }
+
+    /// Turns silhouette edges on or off (see [`Renderer::silhouettes`]); the next frame
+    /// draws with it.
+    pub fn set_silhouettes(&mut self, on: bool) -> RenderResult<()> {
+        if on != self.silhouettes {
+            self.commands.wait()?;
+            // The recorded frame has (or lacks) the silhouettes pass.
+            self.replayable = None;
+            self.last_recorded = None;
+            self.silhouettes = on;
         }
         Ok(())
     }
@@ -282,23 +317,23 @@ impl Renderer {
         Ok(())
     }
 
-    /// The ambient occlusion pass's set for the current target (the GPU is idle: the caller
-    /// waited for the last frame).
-    fn ensure_ssao_set(&mut self) -> RenderResult<vk::DescriptorSet> {
-        if self.ssao_set.is_none() {
+    /// The depth set of the passes over the picture for the current target (the GPU is
+    /// idle: the caller waited for the last frame).
+    fn ensure_depth_set(&mut self) -> RenderResult<vk::DescriptorSet> {
+        if self.depth_set.is_none() {
             let sets = DescriptorSets::new(
                 &self.device,
-                "ambient occlusion",
-                &[self.pipelines.ssao_set_layout()],
+                "picture depth",
+                &[self.pipelines.depth_set_layout()],
                 &[vk::DescriptorPoolSize::default()
                     .ty(vk::DescriptorType::SAMPLED_IMAGE)
                     .descriptor_count(1)],
             )?;
             sets.write_sampled_image(0, 0, self.target.depth.view());
-            self.ssao_set = Some(sets);
+            self.depth_set = Some(sets);
         }
         Ok(self
-            .ssao_set
+            .depth_set
             .as_ref()
             .map_or(vk::DescriptorSet::null(), |s| s.sets[0]))
     }
@@ -340,7 +375,7 @@ impl Renderer {
         self.replayable = None;
         self.last_recorded = None;
         self.target = OffscreenTarget::new(&self.device, width, height, self.msaa())?;
-        self.ssao_set = None;
+        self.depth_set = None;
         self.pick = None;
         self.drop_transparency_targets();
         Ok(())
@@ -376,7 +411,7 @@ impl Renderer {
         self.last_recorded = None;
         let (width, height) = self.size();
         self.target = OffscreenTarget::new(&self.device, width, height, samples)?;
-        self.ssao_set = None;
+        self.depth_set = None;
         self.pick = None;
         self.drop_transparency_targets();
         Ok(())
@@ -492,8 +527,13 @@ impl Renderer {
         if let Some((method, _)) = plan.translucency {
             self.ensure_transparency_targets(method)?;
         }
-        let ssao_set = if self.ssao && plan.fills_surfaces && plan.pass == PassTarget::Color {
-            Some(self.ensure_ssao_set()?)
+        let color = plan.pass == PassTarget::Color;
+        let depth_overlays = DepthOverlays {
+            ssao: self.ssao && plan.fills_surfaces && color,
+            silhouettes: self.silhouettes && plan.draws_edges && color,
+        };
+        let depth_set = if depth_overlays.ssao || depth_overlays.silhouettes {
+            Some(self.ensure_depth_set()?)
         } else {
             None
         };
@@ -542,7 +582,7 @@ impl Renderer {
             let target = self.pass_target(plan.pass, (plan.secondary, phase > 0, phases > 1));
             let target = RenderingTarget {
                 extra_colors: &extra_colors,
-                shade_from_depth: ssao_set.is_some(),
+                shade_from_depth: depth_set.is_some(),
                 multisampled: target.multisampled.map(|m| Multisampled {
                     extra_colors: &multisampled_extra_colors,
                     ..m
@@ -562,7 +602,8 @@ impl Renderer {
         }
         if plan.pass == PassTarget::Color {
             let merge = transparency.zip(plan.translucency.map(|(_, merge)| merge));
-            self.record_overlay(command_buffer, merge, ssao_set)?;
+            let depth_overlays = depth_set.map(|set| (depth_overlays, set));
+            self.record_overlay(command_buffer, merge, depth_overlays)?;
         }
         (recorders.after)(self, command_buffer, phases - 1, &mut stats)?;
         if let Some(timer) = &mut self.timer {
@@ -719,19 +760,27 @@ impl Renderer {
     }
 
     /// What goes over the finished rendering: ambient occlusion darkening the opaque picture
-    /// (when on), the transparency method's result at each pixel blended over the picture
-    /// (with translucent surfaces), then the background under whatever the picture leaves
-    /// uncovered.
+    /// and silhouette edges over it (each when on, with the set naming the depth), the
+    /// transparency method's result at each pixel blended over the picture (with translucent
+    /// surfaces), then the background under whatever the picture leaves uncovered.
     fn record_overlay(
         &self,
         command_buffer: vk::CommandBuffer,
         merge: Option<(&TransparencyTargets, (vk::Pipeline, vk::PipelineLayout))>,
-        ssao_set: Option<vk::DescriptorSet>,
+        depth_overlays: Option<(DepthOverlays, vk::DescriptorSet)>,
     ) -> RenderResult<()> {
         let background = self.pipelines.background()?;
-        let ssao = ssao_set
-            .map(|set| Ok::<_, RenderError>((self.pipelines.ssao()?, set)))
-            .transpose()?;
+        let mut from_depth = Vec::new();
+        if let Some((overlays, set)) = depth_overlays {
+            // Occlusion darkens the opaque surfaces, before lines go over them and
+            // translucent surfaces are merged over both.
+            if overlays.ssao {
+                from_depth.push((self.pipelines.ssao()?, set));
+            }
+            if overlays.silhouettes {
+                from_depth.push((self.pipelines.silhouettes()?, set));
+            }
+        }
         if merge.is_some() {
             // The translucent fragments' storage writes, read by the merge.
             memory_barrier(
@@ -748,8 +797,7 @@ impl Renderer {
             );
         }
         begin_overlay(&self.device, command_buffer, &self.target.color);
-        // Occlusion darkens the opaque surfaces, before translucent ones are merged over them.
-        if let Some((pipeline, set)) = ssao {
+        for (pipeline, set) in from_depth {
             record_fullscreen(
                 &self.device,
                 command_buffer,

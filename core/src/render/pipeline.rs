@@ -116,11 +116,14 @@ pub struct Pipelines {
     /// The background's layout (the frame set) and pipeline, made on first use.
     background_layout: PipelineLayout,
     background: OnceLock<Pipeline>,
-    /// Set 1 of the ambient occlusion pass: the frame's depth as a sampled image.
-    ssao_set_layout: DescriptorSetLayout,
-    /// The ambient occlusion pass's layout (the frame set, its set) and pipeline.
-    ssao_layout: PipelineLayout,
+    /// Set 1 of the passes over the picture that read its depth: the depth as a sampled image.
+    depth_set_layout: DescriptorSetLayout,
+    /// Their layout (the frame set, the depth set).
+    depth_overlay_layout: PipelineLayout,
+    /// Ambient occlusion.
     ssao: OnceLock<Pipeline>,
+    /// Silhouette edges.
+    silhouettes: OnceLock<Pipeline>,
 }
 
 impl Pipelines {
@@ -186,26 +189,27 @@ impl Pipelines {
             0,
             vk::ShaderStageFlags::FRAGMENT,
         )?;
-        let ssao_set_layout = DescriptorSetLayout::new(
+        let depth_set_layout = DescriptorSetLayout::new(
             device,
-            "ambient occlusion set layout",
+            "picture depth set layout",
             &[(
                 vk::DescriptorType::SAMPLED_IMAGE,
                 vk::ShaderStageFlags::FRAGMENT,
             )],
         )?;
-        let ssao_layout = PipelineLayout::new(
+        let depth_overlay_layout = PipelineLayout::new(
             device,
-            "ambient occlusion layout",
-            &[frame_set_layout.raw(), ssao_set_layout.raw()],
+            "picture depth overlay layout",
+            &[frame_set_layout.raw(), depth_set_layout.raw()],
             0,
             vk::ShaderStageFlags::FRAGMENT,
         )?;
         Ok(Self {
             device: Arc::clone(device),
-            ssao_set_layout,
-            ssao_layout,
+            depth_set_layout,
+            depth_overlay_layout,
             ssao: OnceLock::new(),
+            silhouettes: OnceLock::new(),
             background_layout,
             background: OnceLock::new(),
             frame_set_layout,
@@ -283,9 +287,10 @@ impl Pipelines {
         )
     }
 
-    /// Set 1 of the ambient occlusion pass: the frame's depth (binding 0).
-    pub fn ssao_set_layout(&self) -> vk::DescriptorSetLayout {
-        self.ssao_set_layout.raw()
+    /// Set 1 of the passes over the picture that read its depth (ambient occlusion,
+    /// silhouettes): the frame's depth (binding 0).
+    pub fn depth_set_layout(&self) -> vk::DescriptorSetLayout {
+        self.depth_set_layout.raw()
     }
 
     /// Screen-space ambient occlusion: a full-screen triangle darkening the picture where the
@@ -293,9 +298,20 @@ impl Pipelines {
     pub fn ssao(&self) -> RenderResult<(vk::Pipeline, vk::PipelineLayout)> {
         self.fullscreen(
             &self.ssao,
-            &self.ssao_layout,
+            &self.depth_overlay_layout,
             &shaders::SSAO_FRAG,
             Blend::DARKEN,
+        )
+    }
+
+    /// Silhouette edges: a full-screen triangle drawing lines over the picture where its
+    /// depth breaks, with its layout.
+    pub fn silhouettes(&self) -> RenderResult<(vk::Pipeline, vk::PipelineLayout)> {
+        self.fullscreen(
+            &self.silhouettes,
+            &self.depth_overlay_layout,
+            &shaders::SILHOUETTES_FRAG,
+            Blend::PREMULTIPLIED_OVER,
         )
     }
 

@@ -343,6 +343,13 @@ impl Renderer {
                         ..
                     }
                 ),
+                draws_edges: matches!(
+                    passes,
+                    PassSet::Shaded {
+                        mode: ShadeMode::Edges | ShadeMode::HiddenLine,
+                        ..
+                    }
+                ),
             },
             FrameRecorders {
                 before: &mut before,

@@ -30,5 +30,10 @@ const uint CADR_DISPLAY_TEXTURES = 4u;
 const uint CADR_DISPLAY_MATERIAL_DESCRIPTIONS = 8u;
 // The opacity of parts X-ray makes translucent.
 const float CADR_XRAY_OPACITY = 0.2;
+// frame.target.z: highlighted parts are outlined (their surfaces record themselves in the
+// outline keys, binding 7) instead of tinted.
+const uint CADR_DISPLAY_HIGHLIGHT_OUTLINE = 16u;
 // The colour of edge lines and silhouettes (display RGB).
 const vec3 CADR_EDGE_COLOR = vec3(0.06, 0.07, 0.09);
+// The colour highlighted parts are tinted towards, or outlined in.
+const vec3 CADR_HIGHLIGHT_COLOR = vec3(1.0, 0.55, 0.05);

@@ -2,11 +2,13 @@
 // Shaded triangles of every technique combination: a head light on the material colour (times
 // the vertex colour and the texture; a material's alpha mask cuts holes). While
 // section planes cut with caps on, a closed part seen through a cut shows the cap there (see
-// section.glsl).
+// section.glsl). With the highlight outline style, every surface fragment records itself in
+// the outline keys (outline.glsl).
 #include "frame.glsl"
 #include "shading.glsl"
 #include "section.glsl"
 #include "texturing.glsl"
+#include "outline.glsl"
 
 layout(location = 0) in vec3 in_view_position;
 layout(location = 1) in vec3 in_view_normal;
@@ -17,6 +19,7 @@ layout(location = 6) flat in float in_closure;
 layout(location = 7) in vec2 in_uv;
 layout(location = 8) in vec4 in_vertex_color;
 layout(location = 9) flat in uvec4 in_texture;
+layout(location = 11) flat in uint in_highlighted;
 
 layout(location = 0) out vec4 out_color;
 
@@ -24,6 +27,9 @@ void main() {
     vec4 surface = cadr_surface_color(in_base_color, in_vertex_color, in_uv, in_texture);
     if (cadr_masked_out(surface, in_texture)) {
         discard;
+    }
+    if ((frame.target.z & CADR_DISPLAY_HIGHLIGHT_OUTLINE) != 0u) {
+        cadr_record_outline(in_highlighted != 0u);
     }
     bool seen_from_inside = in_closure * (gl_FrontFacing ? 1.0 : -1.0) < 0.0;
     if ((frame.section.x & CADR_SECTION_CAPS) != 0u && seen_from_inside) {

@@ -36,7 +36,6 @@ struct CadrObject {
 
 const uint CADR_INSTANCE_HIGHLIGHTED = 1u;
 const uint CADR_INSTANCE_PICKABLE = 2u;
-const vec3 HIGHLIGHT_COLOR = vec3(1.0, 0.55, 0.05);
 
 // Push constants: bytes 0-95 belong to the parameter path, 96-127 to the vertex path.
 layout(push_constant) uniform CadrPushConstants {
@@ -66,6 +65,8 @@ layout(location = 7) out vec2 out_uv;
 layout(location = 8) out vec4 out_vertex_color;
 layout(location = 9) flat out uvec4 out_texture;
 layout(location = 10) flat out float out_opacity_limit;
+// 1 for a highlighted part (the outline style records it for its outline), else 0.
+layout(location = 11) flat out uint out_highlighted;
 
 out float gl_ClipDistance[6];
 
@@ -125,9 +126,10 @@ void main() {
     out_view_position = view_position.xyz;
     out_view_normal = cofactor * cadr_vertex_normal();
     out_base_color = object.base_color;
-    if (highlighted) {
-        out_base_color.rgb = mix(out_base_color.rgb, HIGHLIGHT_COLOR, 0.65);
+    if (highlighted && (frame.target.z & CADR_DISPLAY_HIGHLIGHT_OUTLINE) == 0u) {
+        out_base_color.rgb = mix(out_base_color.rgb, CADR_HIGHLIGHT_COLOR, 0.65);
     }
+    out_highlighted = highlighted ? 1u : 0u;
     out_surface = object.surface;
     out_texture = texture_info;
     vec2 uv = vec2(0.0);

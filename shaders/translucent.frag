@@ -11,6 +11,7 @@ layout(early_fragment_tests) in;
 #include "shading.glsl"
 #include "transparency.glsl"
 #include "texturing.glsl"
+#include "outline.glsl"
 
 layout(location = 0) in vec3 in_view_position;
 layout(location = 1) in vec3 in_view_normal;
@@ -20,6 +21,7 @@ layout(location = 7) in vec2 in_uv;
 layout(location = 8) in vec4 in_vertex_color;
 layout(location = 9) flat in uvec4 in_texture;
 layout(location = 10) flat in float in_opacity_limit;
+layout(location = 11) flat in uint in_highlighted;
 
 // The picture itself is written by the opaque pass and the merge only.
 layout(location = 0) out vec4 out_color;
@@ -36,6 +38,11 @@ void main() {
     vec4 surface = cadr_surface_color(in_base_color, in_vertex_color, in_uv, in_texture);
     if (cadr_masked_out(surface, in_texture)) {
         discard;
+    }
+    // A highlighted translucent surface gets its outline; the others do not hide what is
+    // outlined behind them (X-ray shows the highlighted parts inside a housing outlined).
+    if ((frame.target.z & CADR_DISPLAY_HIGHLIGHT_OUTLINE) != 0u && in_highlighted != 0u) {
+        cadr_record_outline(true);
     }
     vec3 color = shade_headlight(in_view_position, in_view_normal, surface, in_surface, frame.light,
                           frame.view_rotation[1].xyz);

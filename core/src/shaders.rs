@@ -52,6 +52,11 @@ pub fn compile_glsl(
     })
 }
 
+/// `source` with `defines` (whole `#define` lines) inserted after its `#version` line.
+pub fn with_defines(source: &str, defines: &str) -> String {
+    source.replacen("#version 460\n", &format!("#version 460\n{defines}"), 1)
+}
+
 /// One shader for [`compile_glsl_all`].
 #[derive(Clone, Copy, Debug)]
 pub struct CompileRequest<'a> {
@@ -194,6 +199,7 @@ pub const INCLUDES: &[IncludeFile] = &[
         "texturing.glsl",
         include_str!("../../shaders/texturing.glsl"),
     ),
+    ("outline.glsl", include_str!("../../shaders/outline.glsl")),
     (
         "transparency.glsl",
         include_str!("../../shaders/transparency.glsl"),
@@ -261,6 +267,12 @@ pub const SILHOUETTES_FRAG: ShaderSource = ShaderSource {
     stage: ShaderStage::Fragment,
     source: include_str!("../../shaders/silhouettes.frag"),
 };
+/// The outline highlight style's band around highlighted parts.
+pub const OUTLINE_FRAG: ShaderSource = ShaderSource {
+    name: "outline.frag",
+    stage: ShaderStage::Fragment,
+    source: include_str!("../../shaders/outline.frag"),
+};
 /// Hidden edge lines, dashed (the hidden-line mode's option).
 pub const HIDDEN_EDGES_FRAG: ShaderSource = ShaderSource {
     name: "hidden_edges.frag",
@@ -312,6 +324,7 @@ pub const ALL: &[ShaderSource] = &[
     HIDDEN_EDGES_FRAG,
     SSAO_FRAG,
     SILHOUETTES_FRAG,
+    OUTLINE_FRAG,
     MERGE_VERT,
     BACKGROUND_FRAG,
 ];

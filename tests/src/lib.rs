@@ -97,6 +97,8 @@ pub struct SceneView {
     pub device: Arc<Device>,
     /// The scene's graph.
     pub graph: SceneGraph,
+    /// The handles of the scene's nodes, in the scene's order.
+    pub nodes: Vec<cadr_core::graph::NodeHandle>,
     /// Its tree.
     pub tree: SceneTree,
     /// The view drawing it.
@@ -113,13 +115,14 @@ impl SceneView {
         (width, height): (u32, u32),
         camera: Camera,
     ) -> Self {
-        let (mut graph, _) = SceneGraph::from_scene(scene).expect("build the scene graph");
+        let (mut graph, nodes) = SceneGraph::from_scene(scene).expect("build the scene graph");
         let tree = SceneTree::build(&mut graph);
         let view =
             View::new(&device, plugin_registry(&device), width, height).expect("create the view");
         Self {
             device,
             graph,
+            nodes,
             tree,
             view,
             camera,

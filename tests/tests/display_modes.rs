@@ -1,11 +1,13 @@
 //! Display modes: gen:demo and the 2CylinderEngine in each mode (X-ray included) match their
 //! references, each mode shows something other than the others, and the line-only modes fill
-//! no surface; silhouettes outline curved surfaces in the edge modes.
+//! no surface; silhouettes outline curved surfaces in the edge modes; highlighted parts are
+//! tinted or outlined.
 #![allow(clippy::unwrap_used)] // Test code: a failed unwrap is a failed test.
 
 use cadr_core::generate::{generate, GeneratorSpec, GeometryBuilder};
+use cadr_core::graph::NodeFlags;
 use cadr_core::load::load_file;
-use cadr_core::render::{Background, Camera, DEFAULT_FOV_DEGREES};
+use cadr_core::render::{Background, Camera, HighlightStyle, DEFAULT_FOV_DEGREES};
 use cadr_core::scene::edges::{feature_edges, DEFAULT_CREASE_DEGREES};
 use cadr_core::scene::{Material, MeshRef, Node, Scene};
 use cadr_core::technique::ShadeMode;
@@ -292,6 +294,152 @@ fn silhouettes_outline_curved_surfaces_in_the_edge_modes() {
                 draw(&mut f, mode, false),
                 "{samples}x {mode:?}"
             );
+        }
+    }
+    drop(f.view);
+    assert_no_validation_errors(&f.device);
+}
+
+/// Two cubes side by side (x = -1.2 and 1.2, edge 1.6), seen from the front.
+fn two_cubes() -> SceneView {
+    let mut builder = GeometryBuilder::new("cube");
+    builder.cuboid(DVec3::splat(-0.8), DVec3::splat(0.8), DMat4::IDENTITY);
+    let mut scene = Scene {
+        name: "two cubes".into(),
+        geometries: vec![builder.finish()],
+        materials: vec![Material::default()],
+        ..Scene::default()
+    };
+    for (i, x) in [-1.2, 1.2].into_iter().enumerate() {
+        let mut node = Node::new(format!("cube {i}"));
+        node.local = DMat4::from_translation(DVec3::new(x, 0.0, 0.0));
+        node.mesh = Some(MeshRef::new(0, vec![0]));
+        scene.nodes.push(node);
+        scene.roots.push(i as u32);
+    }
+    let aspect = f64::from(SIZE.0) / f64::from(SIZE.1);
+    let camera = Camera::look_at(
+        DVec3::new(0.0, 0.0, 8.0),
+        DVec3::ZERO,
+        DEFAULT_FOV_DEGREES,
+        aspect,
+        0.1,
+        100.0,
+    );
+    SceneView::new(test_device(), &scene, SIZE, camera)
+}
+
+/// The highlight styles: tint mixes the highlighted cube's colour towards orange; outline keeps
+/// its colour and draws an orange band just outside it and nowhere else, in the solid, edges,
+/// hidden-line and X-ray modes and with MSAA; with nothing highlighted it draws nothing, and
+/// tint again draws the tinted picture again.
+#[test]
+fn highlighted_parts_are_tinted_or_outlined() {
+    let mut f = two_cubes();
+    let highlight = |f: &mut SceneView, on: bool| {
+        let right = f.nodes[1];
+        let flags = NodeFlags {
+            highlighted: on,
+            ..NodeFlags::default()
+        };
+        f.graph.set_flags(right, flags).unwrap();
+        f.tree.update(&mut f.graph);
+    };
+    let orange = |p: &image::Rgba<u8>| p.0[0] > 200 && (100..180).contains(&p.0[1]) && p.0[2] < 60;
+    let (_, row) = images::pixel_of(&f.camera, SIZE, DVec3::ZERO);
+    let (centre, _) = images::pixel_of(&f.camera, SIZE, DVec3::new(1.2, 0.0, 0.0));
+    let (left_centre, _) = images::pixel_of(&f.camera, SIZE, DVec3::new(-1.2, 0.0, 0.0));
+    for samples in [1, 4] {
+        f.view.renderer_mut().set_msaa(samples).unwrap();
+        for mode in [
+            ShadeMode::Solid,
+            ShadeMode::Edges,
+            ShadeMode::HiddenLine,
+            ShadeMode::XRay,
+        ] {
+            let context = format!("{samples}x {mode:?}");
+            f.view.techniques_mut().set_shade_mode(mode).unwrap();
+            f.view
+                .renderer_mut()
+                .set_highlight_style(HighlightStyle::Tint)
+                .unwrap();
+            highlight(&mut f, false);
+            let plain = f.render();
+            let covered: Vec<u32> = (0..SIZE.0)
+                .filter(|&x| x > (centre + left_centre) / 2)
+                .filter(|&x| !images::is_background(&plain, x, row))
+                .collect();
+            let (first, last) = (covered[0], covered[covered.len() - 1]);
+            assert!(
+                first < centre && centre < last,
+                "{context}: the right cube is seen"
+            );
+            highlight(&mut f, true);
+            let tinted = f.render();
+            f.view
+                .renderer_mut()
+                .set_highlight_style(HighlightStyle::Outline)
+                .unwrap();
+            assert_eq!(f.view.renderer().highlight_style(), HighlightStyle::Outline);
+            let outlined = f.render();
+            if mode == ShadeMode::Solid {
+                assert_ne!(
+                    tinted.get_pixel(centre, row),
+                    plain.get_pixel(centre, row),
+                    "{context}: tint changes the highlighted cube's colour"
+                );
+            }
+            if mode == ShadeMode::XRay {
+                // Highlighted, the cube is opaque in X-ray: its own colour, not tinted.
+                assert!(!orange(outlined.get_pixel(centre, row)), "{context}");
+                assert_ne!(
+                    outlined.get_pixel(centre, row),
+                    tinted.get_pixel(centre, row),
+                    "{context}: the outlined cube is not tinted"
+                );
+            } else {
+                assert_eq!(
+                    outlined.get_pixel(centre, row),
+                    plain.get_pixel(centre, row),
+                    "{context}: the outlined cube keeps its colour"
+                );
+            }
+            // The band is 2 pixels wide around the surfaces; a line or an anti-aliased edge
+            // may stick out of them by one.
+            for x in [last + 1, first - 1] {
+                assert!(
+                    orange(outlined.get_pixel(x, row)),
+                    "{context}: the band at ({x}, {row}) beside {first}..{last}: {:?}",
+                    outlined.get_pixel(x, row)
+                );
+            }
+            // Nothing changes away from the band: not the other cube, not the background.
+            for (x, y, p) in outlined.enumerate_pixels() {
+                let near_band = x + 4 >= first && x <= last + 4;
+                if !near_band {
+                    assert_eq!(
+                        p,
+                        plain.get_pixel(x, y),
+                        "{context}: ({x}, {y}) is untouched"
+                    );
+                }
+            }
+            assert_eq!(
+                outlined.get_pixel(left_centre, row),
+                plain.get_pixel(left_centre, row)
+            );
+            highlight(&mut f, false);
+            assert_eq!(
+                f.render(),
+                plain,
+                "{context}: nothing highlighted, nothing outlined"
+            );
+            highlight(&mut f, true);
+            f.view
+                .renderer_mut()
+                .set_highlight_style(HighlightStyle::Tint)
+                .unwrap();
+            assert_eq!(f.render(), tinted, "{context}: tint again");
         }
     }
     drop(f.view);

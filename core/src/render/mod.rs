@@ -7,6 +7,7 @@
 
 mod background;
 mod camera;
+mod highlight;
 mod output;
 pub mod pick;
 mod pipeline;
@@ -16,11 +17,12 @@ mod transparency;
 
 pub use background::Background;
 pub use camera::{Camera, DEFAULT_DIRECTION, DEFAULT_FOV_DEGREES};
+pub use highlight::HighlightStyle;
 pub use output::SaveError;
 pub use pipeline::{
     FrameUniforms, HierarchyParameters, HierarchyStage, Pipelines, ScatterParameters,
-    DISPLAY_MATERIAL_DESCRIPTIONS, DISPLAY_TEXTURES, DISPLAY_VERTEX_ATTRIBUTES, DISPLAY_XRAY,
-    PICK_FORMAT,
+    DISPLAY_HIGHLIGHT_OUTLINE, DISPLAY_MATERIAL_DESCRIPTIONS, DISPLAY_TEXTURES,
+    DISPLAY_VERTEX_ATTRIBUTES, DISPLAY_XRAY, PICK_FORMAT,
 };
 pub use section::{Section, DEFAULT_CAP_COLORS, MAX_SECTION_PLANES};
 pub use stats::FrameStats;
@@ -40,6 +42,7 @@ use crate::vk::{
     suspend_rendering, Buffer, CommandContext, DescriptorSets, Device, GpuTimer, Image,
     MemoryLocation, Multisampled, OffscreenTarget, RenderingTarget,
 };
+use highlight::OutlineKeys;
 use pick::{PickTarget, PixelRect};
 use transparency::{storage_buffer, TransparencyTargets};
 
@@ -85,6 +88,12 @@ pub struct Renderer {
     depth_set: Option<DescriptorSets>,
     /// Whether materials' textures are sampled (vertex colours apply either way).
     textures: bool,
+    /// How highlighted parts are drawn.
+    highlight_style: HighlightStyle,
+    /// With the outline style, the outline keys at the target's size (made by the first
+    /// frame that needs them), which binding 7 of the frame set names; otherwise the
+    /// placeholder storage is named there.
+    outline_keys: Option<OutlineKeys>,
     /// The generation of the GPU scene resources the frame set names, if any.
     bound_scene: Option<u64>,
 }
@@ -181,7 +190,7 @@ impl Renderer {
                     .descriptor_count(1),
                 vk::DescriptorPoolSize::default()
                     .ty(vk::DescriptorType::STORAGE_BUFFER)
-                    .descriptor_count(4),
+                    .descriptor_count(5),
                 vk::DescriptorPoolSize::default()
                     .ty(vk::DescriptorType::COMBINED_IMAGE_SAMPLER)
                     .descriptor_count(2),
@@ -196,6 +205,7 @@ impl Renderer {
         );
         let placeholder_storage = storage_buffer(device, 0)?;
         name_storage(&frame_sets, &placeholder_storage);
+        name_outline_keys(&frame_sets, &placeholder_storage);
         let cull_view = Buffer::new(
             device,
             "gpu cull view",
@@ -222,6 +232,8 @@ impl Renderer {
             transparency: None,
             placeholder_storage,
             textures: true,
+            highlight_style: HighlightStyle::default(),
+            outline_keys: None,
             bound_scene: None,
             background: Background::default(),
             ssao: false,
@@ -279,6 +291,34 @@ impl Renderer {
             self.replayable = None;
             self.last_recorded = None;
             self.silhouettes = on;
+        }
+        Ok(())
+    }
+
+    /// How highlighted parts are drawn ([`HighlightStyle::Tint`] by default).
+    pub fn highlight_style(&self) -> HighlightStyle {
+        self.highlight_style
+    }
+
+    /// Sets how highlighted parts are drawn; the next frame draws so. The outline style is
+    /// refused on a device without `fragmentStoresAndAtomics` (its surfaces record the
+    /// outline keys from their fragment shaders).
+    pub fn set_highlight_style(&mut self, style: HighlightStyle) -> RenderResult<()> {
+        if style == HighlightStyle::Outline
+            && !self.device.capabilities().fragment_stores_and_atomics
+        {
+            return Err(RenderError::InvalidUse(format!(
+                "the outline highlight style needs fragmentStoresAndAtomics, which {} lacks",
+                self.device.adapter().name
+            )));
+        }
+        if style != self.highlight_style {
+            self.commands.wait()?;
+            // The recorded frame has (or lacks) the outline's clear and pass.
+            self.replayable = None;
+            self.last_recorded = None;
+            self.highlight_style = style;
+            self.drop_outline_keys();
         }
         Ok(())
     }
@@ -378,6 +418,7 @@ impl Renderer {
         self.depth_set = None;
         self.pick = None;
         self.drop_transparency_targets();
+        self.drop_outline_keys();
         Ok(())
     }
 
@@ -518,7 +559,12 @@ impl Renderer {
             section: [self.section.flags(), 0, 0, 0],
             target: {
                 let (width, height) = self.size();
-                [width, height, plan.display, 0]
+                let outline_bit = if self.highlight_style == HighlightStyle::Outline {
+                    DISPLAY_HIGHLIGHT_OUTLINE
+                } else {
+                    0
+                };
+                [width, height, plan.display | outline_bit, 0]
             },
             background_top: opaque(self.background.top),
             background_bottom: opaque(self.background.bottom),
@@ -528,6 +574,10 @@ impl Renderer {
             self.ensure_transparency_targets(method)?;
         }
         let color = plan.pass == PassTarget::Color;
+        let outline = self.highlight_style == HighlightStyle::Outline && color;
+        if outline {
+            self.ensure_outline_keys()?;
+        }
         let depth_overlays = DepthOverlays {
             ssao: self.ssao && plan.fills_surfaces && color,
             silhouettes: self.silhouettes && plan.draws_edges && color,
@@ -570,7 +620,16 @@ impl Renderer {
             .and(self.transparency.as_ref())
             .filter(|_| plan.pass == PassTarget::Color);
         if let Some(targets) = transparency {
-            self.record_storage_clear(command_buffer, targets);
+            self.record_storage_clear(command_buffer, &targets.storage, targets.cleared_bytes, 0);
+        }
+        let outline_keys = self.outline_keys.as_ref().filter(|_| outline);
+        if let Some(keys) = outline_keys {
+            self.record_storage_clear(
+                command_buffer,
+                &keys.buffer,
+                keys.bytes(),
+                highlight::NO_SURFACE,
+            );
         }
         let extra_colors: Vec<(&Image, vk::ClearColorValue)> = transparency
             .map(|t| t.images.iter().zip(t.clears.iter().copied()).collect())
@@ -603,7 +662,12 @@ impl Renderer {
         if plan.pass == PassTarget::Color {
             let merge = transparency.zip(plan.translucency.map(|(_, merge)| merge));
             let depth_overlays = depth_set.map(|set| (depth_overlays, set));
-            self.record_overlay(command_buffer, merge, depth_overlays)?;
+            self.record_overlay(
+                command_buffer,
+                merge,
+                depth_overlays,
+                outline_keys.is_some(),
+            )?;
         }
         (recorders.after)(self, command_buffer, phases - 1, &mut stats)?;
         if let Some(timer) = &mut self.timer {
@@ -711,6 +775,33 @@ impl Renderer {
         Ok(())
     }
 
+    /// Makes the outline keys for the target's size unless they are made, and names them in
+    /// the frame set (the GPU is idle: the caller waited for the last frame; the recorded
+    /// frame named the old binding and is forgotten).
+    fn ensure_outline_keys(&mut self) -> RenderResult<()> {
+        let extent = self.target.extent();
+        if self
+            .outline_keys
+            .as_ref()
+            .is_some_and(|k| k.extent == extent)
+        {
+            return Ok(());
+        }
+        self.replayable = None;
+        self.last_recorded = None;
+        let keys = OutlineKeys::new(&self.device, extent)?;
+        name_outline_keys(&self.frame_sets, &keys.buffer);
+        self.outline_keys = Some(keys);
+        Ok(())
+    }
+
+    /// Forgets the outline keys; the frame set names the placeholder storage there again.
+    fn drop_outline_keys(&mut self) {
+        if self.outline_keys.take().is_some() {
+            name_outline_keys(&self.frame_sets, &self.placeholder_storage);
+        }
+    }
+
     /// Forgets the transparency targets; the frame set names the placeholder storage again.
     fn drop_transparency_targets(&mut self) {
         if self.transparency.take().is_some() {
@@ -725,9 +816,11 @@ impl Renderer {
     fn record_storage_clear(
         &self,
         command_buffer: vk::CommandBuffer,
-        targets: &TransparencyTargets,
+        storage: &Buffer,
+        bytes: u64,
+        value: u32,
     ) {
-        if targets.cleared_bytes == 0 {
+        if bytes == 0 {
             return;
         }
         memory_barrier(
@@ -742,9 +835,7 @@ impl Renderer {
                 vk::AccessFlags2::TRANSFER_WRITE,
             ),
         );
-        targets
-            .storage
-            .record_fill(command_buffer, targets.cleared_bytes, 0);
+        storage.record_fill(command_buffer, bytes, value);
         memory_barrier(
             &self.device,
             command_buffer,
@@ -762,14 +853,17 @@ impl Renderer {
     /// What goes over the finished rendering: ambient occlusion darkening the opaque picture
     /// and silhouette edges over it (each when on, with the set naming the depth), the
     /// transparency method's result at each pixel blended over the picture (with translucent
-    /// surfaces), then the background under whatever the picture leaves uncovered.
+    /// surfaces), the band around highlighted parts (with the `outline` style), then the
+    /// background under whatever the picture leaves uncovered.
     fn record_overlay(
         &self,
         command_buffer: vk::CommandBuffer,
         merge: Option<(&TransparencyTargets, (vk::Pipeline, vk::PipelineLayout))>,
         depth_overlays: Option<(DepthOverlays, vk::DescriptorSet)>,
+        outline: bool,
     ) -> RenderResult<()> {
         let background = self.pipelines.background()?;
+        let outline = outline.then(|| self.pipelines.outline()).transpose()?;
         let mut from_depth = Vec::new();
         if let Some((overlays, set)) = depth_overlays {
             // Occlusion darkens the opaque surfaces, before lines go over them and
@@ -781,8 +875,9 @@ impl Renderer {
                 from_depth.push((self.pipelines.silhouettes()?, set));
             }
         }
-        if merge.is_some() {
-            // The translucent fragments' storage writes, read by the merge.
+        if merge.is_some() || outline.is_some() {
+            // The fragments' storage writes (translucent ones, outline keys), read by the
+            // merge and the outline.
             memory_barrier(
                 &self.device,
                 command_buffer,
@@ -812,6 +907,9 @@ impl Renderer {
                 merge,
                 &[self.frame_set(), targets.merge_set.sets[0]],
             );
+        }
+        if let Some(outline) = outline {
+            record_fullscreen(&self.device, command_buffer, outline, &[self.frame_set()]);
         }
         record_fullscreen(
             &self.device,
@@ -875,6 +973,17 @@ fn name_storage(frame_sets: &DescriptorSets, storage: &Buffer) {
     frame_sets.write_buffer(
         0,
         1,
+        vk::DescriptorType::STORAGE_BUFFER,
+        storage.raw(),
+        vk::WHOLE_SIZE,
+    );
+}
+
+/// Names `storage` as the outline keys (binding 7 of the frame set).
+fn name_outline_keys(frame_sets: &DescriptorSets, storage: &Buffer) {
+    frame_sets.write_buffer(
+        0,
+        7,
         vk::DescriptorType::STORAGE_BUFFER,
         storage.raw(),
         vk::WHOLE_SIZE,

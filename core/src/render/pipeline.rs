@@ -51,6 +51,9 @@ pub const DISPLAY_TEXTURES: u32 = 4;
 /// [`FrameUniforms::target`]`[2]`: some material has a texture or an alpha mode other than
 /// BLEND, so the vertex shader reads the material descriptions.
 pub const DISPLAY_MATERIAL_DESCRIPTIONS: u32 = 8;
+/// [`FrameUniforms::target`]`[2]`: highlighted parts are outlined, not tinted; surfaces record
+/// the outline keys (binding 7).
+pub const DISPLAY_HIGHLIGHT_OUTLINE: u32 = 16;
 
 /// Push constants of `scatter.comp`: one dispatch scatters the items of one array.
 #[repr(C)]
@@ -113,9 +116,12 @@ pub struct Pipelines {
     hierarchy_set_layout: DescriptorSetLayout,
     hierarchy_layout: PipelineLayout,
     hierarchy: OnceLock<Pipeline>,
-    /// The background's layout (the frame set) and pipeline, made on first use.
-    background_layout: PipelineLayout,
+    /// The layout of the passes over the picture that read only the frame set.
+    frame_overlay_layout: PipelineLayout,
+    /// The background, made on first use.
     background: OnceLock<Pipeline>,
+    /// The outline highlight style's band.
+    outline: OnceLock<Pipeline>,
     /// Set 1 of the passes over the picture that read its depth: the depth as a sampled image.
     depth_set_layout: DescriptorSetLayout,
     /// Their layout (the frame set, the depth set).
@@ -152,6 +158,10 @@ impl Pipelines {
                 vertex_storage,
                 fragment_texture,
                 fragment_texture,
+                (
+                    vk::DescriptorType::STORAGE_BUFFER,
+                    vk::ShaderStageFlags::FRAGMENT,
+                ),
             ],
         )?;
         let merge_set_layout = DescriptorSetLayout::new(
@@ -182,9 +192,9 @@ impl Pipelines {
             std::mem::size_of::<HierarchyParameters>() as u32,
             compute,
         )?;
-        let background_layout = PipelineLayout::new(
+        let frame_overlay_layout = PipelineLayout::new(
             device,
-            "background layout",
+            "frame overlay layout",
             &[frame_set_layout.raw()],
             0,
             vk::ShaderStageFlags::FRAGMENT,
@@ -210,8 +220,9 @@ impl Pipelines {
             depth_overlay_layout,
             ssao: OnceLock::new(),
             silhouettes: OnceLock::new(),
-            background_layout,
+            frame_overlay_layout,
             background: OnceLock::new(),
+            outline: OnceLock::new(),
             frame_set_layout,
             merge_set_layout,
             scatter_set_layout,
@@ -226,8 +237,9 @@ impl Pipelines {
     /// Set 0 of every graphics pipeline: the frame uniform buffer (binding 0), the
     /// transparency method's storage (binding 1, fragment shaders), and for the shared vertex
     /// shader the GPU scene's instance records, material texture descriptions and vertex
-    /// attributes (bindings 2–4), and its textures sampled trilinear and with nearest
-    /// magnification (bindings 5–6, fragment shaders).
+    /// attributes (bindings 2–4), its textures sampled trilinear and with nearest
+    /// magnification (bindings 5–6, fragment shaders), and the outline keys of the outline
+    /// highlight style (binding 7, fragment shaders).
     pub fn frame_set_layout(&self) -> vk::DescriptorSetLayout {
         self.frame_set_layout.raw()
     }
@@ -281,9 +293,20 @@ impl Pipelines {
     pub fn background(&self) -> RenderResult<(vk::Pipeline, vk::PipelineLayout)> {
         self.fullscreen(
             &self.background,
-            &self.background_layout,
+            &self.frame_overlay_layout,
             &shaders::BACKGROUND_FRAG,
             Blend::UNDER,
+        )
+    }
+
+    /// The outline highlight style's band around highlighted parts, from the outline keys,
+    /// over the picture, with its layout.
+    pub fn outline(&self) -> RenderResult<(vk::Pipeline, vk::PipelineLayout)> {
+        self.fullscreen(
+            &self.outline,
+            &self.frame_overlay_layout,
+            &shaders::OUTLINE_FRAG,
+            Blend::PREMULTIPLIED_OVER,
         )
     }
 

@@ -133,15 +133,17 @@ pub struct TransparencyMethod {
 }
 
 impl TransparencyMethod {
-    /// `template` with the method's declarations and `snippet` pasted in.
-    fn assemble(&self, template: &shaders::ShaderSource, snippet: &str) -> String {
-        let mut defines = format!("#define CADR_TARGET_COUNT {}\n", self.targets.len());
+    /// `template` with the method's declarations, the device's `defines` and `snippet`
+    /// pasted in.
+    fn assemble(&self, template: &shaders::ShaderSource, snippet: &str, defines: &str) -> String {
+        let mut defines = format!(
+            "{defines}#define CADR_TARGET_COUNT {}\n",
+            self.targets.len()
+        );
         if self.storage_words_per_pixel > 0 || self.storage_header_words > 0 {
             defines.push_str("#define CADR_STORAGE\n");
         }
-        template
-            .source
-            .replacen("#version 460\n", &format!("#version 460\n{defines}"), 1)
+        shaders::with_defines(template.source, &defines)
             .replace(shaders::TRANSPARENCY_MARKER, snippet)
     }
 
@@ -247,6 +249,8 @@ pub struct ShaderCache {
     vertex: HashMap<(String, String), Arc<Vec<u32>>>,
     fragments: HashMap<FragmentShader, Arc<Vec<u32>>>,
     methods: HashMap<String, MethodShaders>,
+    /// `#define` lines every fragment shader is compiled with: what the device allows.
+    fragment_defines: String,
 }
 
 /// The SPIR-V one pass set is built from.
@@ -273,6 +277,20 @@ impl PassShaders {
 }
 
 impl ShaderCache {
+    /// An empty cache for a device that has `fragmentStoresAndAtomics` or not: with it, the
+    /// surface shaders record the outline keys of the highlight outline style
+    /// (`CADR_OUTLINE_KEYS`, `shaders/outline.glsl`).
+    pub fn new(fragment_stores_and_atomics: bool) -> Self {
+        Self {
+            fragment_defines: if fragment_stores_and_atomics {
+                "#define CADR_OUTLINE_KEYS\n".into()
+            } else {
+                String::new()
+            },
+            ..Self::default()
+        }
+    }
+
     /// The vertex shader of the (vertex path, parameter path) `key` (assembled by `source`)
     /// and the fragment shaders `passes` draw with. Those not compiled before are compiled
     /// now, together, on a thread each (a combination is ready in the time of its slowest
@@ -292,13 +310,18 @@ impl ShaderCache {
             .collect();
         let vertex_name = format!("technique.vert [{} + {}]", key.0, key.1);
         let vertex_source = (!self.vertex.contains_key(&key)).then(source);
+        let fragment_sources: Vec<String> = missing
+            .iter()
+            .map(|f| shaders::with_defines(f.source().source, &self.fragment_defines))
+            .collect();
         let mut requests: Vec<shaders::CompileRequest<'_>> = missing
             .iter()
-            .map(|f| {
+            .zip(&fragment_sources)
+            .map(|(f, source)| {
                 let shader = f.source();
                 shaders::CompileRequest {
                     name: shader.name,
-                    source: shader.source,
+                    source,
                     stage: shader.stage,
                     includes: shaders::INCLUDES,
                 }
@@ -356,8 +379,13 @@ impl ShaderCache {
         if let Some(shaders) = self.methods.get(&method.name) {
             return Ok(shaders.clone());
         }
-        let translucent = method.assemble(&shaders::TRANSLUCENT_FRAG, &method.fragment_snippet);
-        let merge = method.assemble(&shaders::MERGE_FRAG, &method.merge_snippet);
+        let defines = &self.fragment_defines;
+        let translucent = method.assemble(
+            &shaders::TRANSLUCENT_FRAG,
+            &method.fragment_snippet,
+            defines,
+        );
+        let merge = method.assemble(&shaders::MERGE_FRAG, &method.merge_snippet, defines);
         let translucent_name = format!("translucent.frag [{}]", method.name);
         let merge_name = format!("merge.frag [{}]", method.name);
         let request = |name, source, stage| shaders::CompileRequest {

@@ -37,7 +37,7 @@ pub struct Capabilities {
     /// Timestamps are supported on the render queue.
     pub timestamps: bool,
     /// `fragmentStoresAndAtomics`: fragment shaders write storage buffers (the exact
-    /// transparency method's per-pixel lists).
+    /// transparency method's per-pixel lists, the outline highlight style's keys).
     pub fragment_stores_and_atomics: bool,
 }
 

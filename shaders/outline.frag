@@ -1,0 +1,42 @@
+#version 460
+// The outline highlight style: over the finished picture, a band two pixels wide in the
+// highlight colour around every region where the nearest surface is a highlighted part's
+// (from the outline keys its surfaces recorded, outline.glsl). The band lies outside the
+// part, over what surrounds it; the part itself keeps its own colours.
+#define CADR_OUTLINE_KEYS
+#include "frame.glsl"
+#include "outline.glsl"
+
+layout(location = 0) out vec4 out_color;
+
+// The band's width in pixels.
+const int RADIUS = 2;
+
+bool highlighted_at(ivec2 pixel) {
+    uint key = cadr_outline_keys[uint(pixel.y) * frame.target.x + uint(pixel.x)];
+    return key != CADR_OUTLINE_NOTHING && (key & 1u) == 0u;
+}
+
+void main() {
+    ivec2 pixel = ivec2(gl_FragCoord.xy);
+    ivec2 size = ivec2(frame.target.xy);
+    out_color = vec4(0.0);
+    if (highlighted_at(pixel)) {
+        return;
+    }
+    float nearest = 2.0 * float(RADIUS);
+    for (int dy = -RADIUS; dy <= RADIUS; ++dy) {
+        for (int dx = -RADIUS; dx <= RADIUS; ++dx) {
+            ivec2 other = pixel + ivec2(dx, dy);
+            if (any(lessThan(other, ivec2(0))) || any(greaterThanEqual(other, size))) {
+                continue;
+            }
+            if (highlighted_at(other)) {
+                nearest = min(nearest, length(vec2(dx, dy)));
+            }
+        }
+    }
+    // Full inside the radius, half at the window's corners: rounded outer corners.
+    float coverage = nearest <= float(RADIUS) ? 1.0 : (nearest < 2.0 * float(RADIUS) ? 0.5 : 0.0);
+    out_color = vec4(CADR_HIGHLIGHT_COLOR * coverage, coverage);
+}

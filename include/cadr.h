@@ -41,6 +41,13 @@
 // inside an assembly shows through its housing).
 #define CADR_SHADE_XRAY 4
 
+// Highlight style: highlighted parts' colours mixed towards orange (the default).
+#define CADR_HIGHLIGHT_TINT 0
+
+// Highlight style: highlighted parts keep their colours, with an orange band two pixels wide
+// around them. Needs the device's `fragmentStoresAndAtomics`.
+#define CADR_HIGHLIGHT_OUTLINE 1
+
 // Node flag: the node and its subtree are drawn.
 #define CADR_NODE_VISIBLE 1
 
@@ -1320,6 +1327,25 @@ enum CadrResult cadr_renderer_set_ssao(CadrRenderer renderer, bool on);
 // # Safety
 // `on` is null or writable.
 enum CadrResult cadr_renderer_ssao(CadrRenderer renderer, bool *on);
+
+// Sets how highlighted parts (`CADR_NODE_HIGHLIGHTED`) are drawn: `CADR_HIGHLIGHT_TINT` (the
+// default) or `CADR_HIGHLIGHT_OUTLINE`, in every display mode. Applies from the next frame.
+//
+// Returns `CADR_RESULT_OK`, `CADR_RESULT_INVALID_ARGUMENT` (an unknown style, or the outline
+// on a device without `fragmentStoresAndAtomics`; the message says which),
+// `CADR_RESULT_VULKAN` or a handle error. Ownership: nothing changes hands.
+// Thread-safety: as `cadr_renderer_create`.
+enum CadrResult cadr_renderer_set_highlight_style(CadrRenderer renderer, uint32_t style);
+
+// Writes the highlight style (`CADR_HIGHLIGHT_*`).
+//
+// Returns `CADR_RESULT_OK`, `CADR_RESULT_NULL_ARGUMENT` or a handle error.
+// Ownership: the output is the caller's; cadr keeps no pointer to it.
+// Thread-safety: as `cadr_renderer_create`.
+//
+// # Safety
+// `style` is null or writable.
+enum CadrResult cadr_renderer_highlight_style(CadrRenderer renderer, uint32_t *style);
 
 // Turns silhouette edges on (`on` true, the default) or off: in the edge display modes
 // (edges, hidden-line), the outlines of curved surfaces, which no feature edge marks, are

@@ -5,7 +5,8 @@
  *   viewer [scene] [--frames-in-flight 1|2] [--present fifo|mailbox|immediate]
  *                  [--msaa N] [--orbit-frames N]
  *
- * Mouse: left drag orbits, right or middle drag pans, the wheel zooms.
+ * Mouse: left drag orbits, right or middle drag pans, the wheel zooms; a left click selects
+ *        the part under the cursor (highlighted; a click on the background clears it).
  * Keys:  V, P, S, C cycle the vertex path, parameter path, submission and culling technique;
  *        E cycles the display modes (solid, edges, hidden-line, wireframe, xray); T cycles the
  *        transparency methods; F fits the view; I toggles 1 / 2 frames in flight;
@@ -13,6 +14,7 @@
  *        view's centre across x, y, z and off; K toggles its caps, H their hatching;
  *        D toggles dashed hidden edges in hidden-line; O toggles ambient occlusion;
  *        U toggles materials' textures; L toggles silhouette edges in edges and hidden-line;
+ *        G cycles the highlight style (tint, outline);
  *        B cycles the background (cadr's gradient, white, dark); A cycles the anti-aliasing
  *        levels the device offers (MSAA 2x, 4x, 8x, then off); Esc quits.
  * The window title shows the techniques, the section, the anti-aliasing, frames in flight, present mode, the frame's figures
@@ -49,6 +51,8 @@ struct Viewer {
   double target[3], distance, yaw, pitch, radius;
   double last_x, last_y;
   int dragging; /* 0 none, 1 orbit, 2 pan */
+  double press_x, press_y; /* where the left button went down: a click if it comes up there */
+  CadrNode selected;       /* the highlighted geo node, 0 for none */
   uint32_t shade;
   int section_axis;      /* -1: no section; 0, 1, 2: a plane across x, y or z */
   uint32_t section_flags; /* CADR_SECTION_* */
@@ -206,6 +210,60 @@ static void toggle_silhouettes(struct Viewer *v) {
   printf("silhouettes: %s\n", on ? "off" : "on");
 }
 
+static void cycle_highlight_style(struct Viewer *v) {
+  uint32_t style = CADR_HIGHLIGHT_TINT;
+  CADR_CHECK(cadr_renderer_highlight_style(v->renderer, &style));
+  style = style == CADR_HIGHLIGHT_TINT ? CADR_HIGHLIGHT_OUTLINE : CADR_HIGHLIGHT_TINT;
+  if (cadr_renderer_set_highlight_style(v->renderer, style) != CADR_RESULT_OK) {
+    char message[512];
+    size_t length = 0;
+    if (cadr_last_error_message(message, sizeof message, &length) != CADR_RESULT_OK) {
+      strcpy(message, "(message too long)");
+    }
+    printf("highlight style: %s\n", message);
+    return;
+  }
+  printf("highlight style: %s\n", style == CADR_HIGHLIGHT_TINT ? "tint" : "outline");
+}
+
+/* Selects the part under the window point (x, y) in screen coordinates: its geo node is
+ * highlighted and the one selected before is not; over the background, nothing is selected. */
+static void select_at(struct Viewer *v, double x, double y) {
+  int window_width, window_height, fb_width, fb_height;
+  uint32_t width = 0, height = 0, flags = 0;
+  struct CadrCamera camera;
+  CadrPickResult picked = {NULL, 0};
+  double px, py;
+  glfwGetWindowSize(v->window, &window_width, &window_height);
+  glfwGetFramebufferSize(v->window, &fb_width, &fb_height);
+  CADR_CHECK(cadr_renderer_size(v->renderer, &width, &height));
+  if (window_width <= 0 || window_height <= 0 || width == 0 || height == 0) {
+    return;
+  }
+  /* Screen coordinates to pixels (they differ on high-density displays). */
+  px = x * fb_width / window_width;
+  py = y * fb_height / window_height;
+  if (px < 0 || py < 0 || px >= width || py >= height) {
+    return;
+  }
+  camera_of(v, width, height, &camera);
+  CADR_CHECK(cadr_renderer_pick(v->renderer, v->scene, &camera, (uint32_t)px, (uint32_t)py, &picked));
+  if (v->selected != 0) {
+    CADR_CHECK(cadr_scene_flags(v->scene, v->selected, &flags));
+    CADR_CHECK(cadr_scene_set_flags(v->scene, v->selected, flags & ~CADR_NODE_HIGHLIGHTED));
+    v->selected = 0;
+  }
+  if (picked.hit_count > 0) {
+    v->selected = picked.hits[0].node;
+    CADR_CHECK(cadr_scene_flags(v->scene, v->selected, &flags));
+    CADR_CHECK(cadr_scene_set_flags(v->scene, v->selected, flags | CADR_NODE_HIGHLIGHTED));
+    printf("selected node %llu, part %u\n", (unsigned long long)v->selected, picked.hits[0].part);
+  } else {
+    printf("selection cleared\n");
+  }
+  cadr_pick_result_free(&picked);
+}
+
 static void toggle_ssao(struct Viewer *v) {
   bool on = false;
   CADR_CHECK(cadr_renderer_ssao(v->renderer, &on));
@@ -240,6 +298,7 @@ static void describe(struct Viewer *v, char *text, size_t size) {
   char antialiasing[16];
   uint32_t kind, frames = 1, mode = 0, samples = 1;
   bool textures = true, silhouettes = true;
+  uint32_t highlight = CADR_HIGHLIGHT_TINT;
   for (kind = 0; kind < 5; ++kind) {
     CADR_CHECK(cadr_renderer_technique(v->renderer, kind, &names[kind]));
   }
@@ -253,6 +312,7 @@ static void describe(struct Viewer *v, char *text, size_t size) {
   CADR_CHECK(cadr_renderer_present_mode(v->renderer, &mode, NULL));
   CADR_CHECK(cadr_renderer_textures(v->renderer, &textures));
   CADR_CHECK(cadr_renderer_silhouettes(v->renderer, &silhouettes));
+  CADR_CHECK(cadr_renderer_highlight_style(v->renderer, &highlight));
   snprintf(section, sizeof section, "%s%s%s",
            v->section_axis < 0 ? "no section" : "section ",
            v->section_axis < 0 ? "" : axis_names[v->section_axis],
@@ -261,9 +321,10 @@ static void describe(struct Viewer *v, char *text, size_t size) {
                ? ((v->section_flags & CADR_SECTION_HATCHED) ? " capped, hatched" : " capped")
                : " uncapped");
   snprintf(text, size,
-           "cadr viewer | %s / %s / %s / %s | %s%s, %s | %s | %s | %s | %s background | %u in flight, %s | %llu draws in %llu calls | CPU %.0f us, GPU %.0f us | %.0f frames/s",
+           "cadr viewer | %s / %s / %s / %s | %s%s, %s highlight, %s | %s | %s | %s | %s background | %u in flight, %s | %llu draws in %llu calls | CPU %.0f us, GPU %.0f us | %.0f frames/s",
            names[0], names[1], names[2], names[3], shade_names[v->shade % 5],
            silhouettes || (v->shade != CADR_SHADE_EDGES && v->shade != CADR_SHADE_HIDDEN_LINE) ? "" : " without silhouettes",
+           highlight == CADR_HIGHLIGHT_OUTLINE ? "outline" : "tint",
            names[4],
            antialiasing, textures ? "textures" : "no textures", section, background_names[v->background % 3], frames, present_names[mode % 3], (unsigned long long)v->stats.draws,
            (unsigned long long)v->stats.draw_calls, v->stats.cpu_us, v->stats.gpu_us,
@@ -308,6 +369,7 @@ static void on_key(GLFWwindow *window, int key, int scancode, int action, int mo
   case GLFW_KEY_O: toggle_ssao(v); break;
   case GLFW_KEY_U: toggle_textures(v); break;
   case GLFW_KEY_L: toggle_silhouettes(v); break;
+  case GLFW_KEY_G: cycle_highlight_style(v); break;
   case GLFW_KEY_ESCAPE: glfwSetWindowShouldClose(window, GLFW_TRUE); break;
   default: break;
   }
@@ -318,8 +380,15 @@ static void on_button(GLFWwindow *window, int button, int action, int mods) {
   (void)mods;
   if (action == GLFW_PRESS) {
     glfwGetCursorPos(window, &v->last_x, &v->last_y);
+    v->press_x = v->last_x;
+    v->press_y = v->last_y;
     v->dragging = button == GLFW_MOUSE_BUTTON_LEFT ? 1 : 2;
   } else {
+    double x, y;
+    glfwGetCursorPos(window, &x, &y);
+    if (button == GLFW_MOUSE_BUTTON_LEFT && fabs(x - v->press_x) < 3 && fabs(y - v->press_y) < 3) {
+      select_at(v, x, y);
+    }
     v->dragging = 0;
   }
 }
@@ -375,6 +444,23 @@ static int self_test(struct Viewer *v, const char *dir) {
   }
   for (frame = 0; frame < 5; ++frame) {
     toggle_shade(v);
+    render(v);
+  }
+  /* A click at the window's centre selects the part there; each highlight style shows it;
+   * a click outside the picture keeps it, one on the corner (background) clears it. */
+  {
+    int window_width = 0, window_height = 0;
+    glfwGetWindowSize(v->window, &window_width, &window_height);
+    select_at(v, window_width / 2.0, window_height / 2.0);
+    if (v->selected == 0) {
+      fprintf(stderr, "a click at the window's centre selected nothing\n");
+      return 1;
+    }
+    render(v);
+    cycle_highlight_style(v);
+    render(v);
+    cycle_highlight_style(v);
+    select_at(v, 1.0, 1.0);
     render(v);
   }
   /* Each section axis, capped, hatched and uncapped, then off again. */

@@ -6,6 +6,7 @@ use std::path::Path;
 use std::sync::Arc;
 use std::time::Instant;
 
+use cadr_core::render::HighlightStyle;
 use cadr_core::technique::{Combination, ShadeMode, TechniqueKind};
 use cadr_core::view::View;
 use cadr_core::vk::{raw, raw::Handle, PresentOutcome, Swapchain};
@@ -38,6 +39,12 @@ pub const CADR_SHADE_WIREFRAME: u32 = 3;
 /// Display mode: every part translucent with its edges, highlighted parts opaque (what is
 /// inside an assembly shows through its housing).
 pub const CADR_SHADE_XRAY: u32 = 4;
+
+/// Highlight style: highlighted parts' colours mixed towards orange (the default).
+pub const CADR_HIGHLIGHT_TINT: u32 = 0;
+/// Highlight style: highlighted parts keep their colours, with an orange band two pixels wide
+/// around them. Needs the device's `fragmentStoresAndAtomics`.
+pub const CADR_HIGHLIGHT_OUTLINE: u32 = 1;
 
 /// One technique name per kind; NULL keeps the renderer's current technique of that kind.
 #[repr(C)]
@@ -618,6 +625,59 @@ pub unsafe extern "C" fn cadr_renderer_ssao(renderer: CadrRenderer, on: *mut boo
         let value = with_renderer(renderer, |state| Ok(state.view.renderer().ssao()))?;
         // SAFETY: on is null or writable (the caller's contract).
         unsafe { deliver(on, "on", value) }
+    })
+}
+
+/// Sets how highlighted parts (`CADR_NODE_HIGHLIGHTED`) are drawn: `CADR_HIGHLIGHT_TINT` (the
+/// default) or `CADR_HIGHLIGHT_OUTLINE`, in every display mode. Applies from the next frame.
+///
+/// Returns `CADR_RESULT_OK`, `CADR_RESULT_INVALID_ARGUMENT` (an unknown style, or the outline
+/// on a device without `fragmentStoresAndAtomics`; the message says which),
+/// `CADR_RESULT_VULKAN` or a handle error. Ownership: nothing changes hands.
+/// Thread-safety: as `cadr_renderer_create`.
+#[no_mangle]
+pub extern "C" fn cadr_renderer_set_highlight_style(
+    renderer: CadrRenderer,
+    style: u32,
+) -> CadrResult {
+    guard(|| {
+        let style = match style {
+            CADR_HIGHLIGHT_TINT => HighlightStyle::Tint,
+            CADR_HIGHLIGHT_OUTLINE => HighlightStyle::Outline,
+            other => {
+                return Err(Failure::invalid(format!(
+                    "highlight style {other} is not 0 (tint) or 1 (outline)"
+                )))
+            }
+        };
+        with_renderer(renderer, |state| {
+            Ok(state.view.renderer_mut().set_highlight_style(style)?)
+        })
+    })
+}
+
+/// Writes the highlight style (`CADR_HIGHLIGHT_*`).
+///
+/// Returns `CADR_RESULT_OK`, `CADR_RESULT_NULL_ARGUMENT` or a handle error.
+/// Ownership: the output is the caller's; cadr keeps no pointer to it.
+/// Thread-safety: as `cadr_renderer_create`.
+///
+/// # Safety
+/// `style` is null or writable.
+#[no_mangle]
+pub unsafe extern "C" fn cadr_renderer_highlight_style(
+    renderer: CadrRenderer,
+    style: *mut u32,
+) -> CadrResult {
+    guard(|| {
+        let value = with_renderer(renderer, |state| {
+            Ok(match state.view.renderer().highlight_style() {
+                HighlightStyle::Tint => CADR_HIGHLIGHT_TINT,
+                HighlightStyle::Outline => CADR_HIGHLIGHT_OUTLINE,
+            })
+        })?;
+        // SAFETY: style is null or writable (the caller's contract).
+        unsafe { deliver(style, "style", value) }
     })
 }
 

@@ -844,6 +844,43 @@ static void test_renderer(CadrContext context, struct Built *b) {
     OK(cadr_renderer_read_pixels(renderer, first, W * H * 4));
   }
 
+  /* Highlight styles: tint by default; the outline keeps the cube's colours and adds an orange
+   * band around it; with nothing highlighted it draws nothing. */
+  {
+    uint32_t style = 7;
+    size_t i;
+    int orange = 0;
+    uint8_t *tinted = (uint8_t *)malloc(W * H * 4);
+    CHECK(tinted != NULL);
+    OK(cadr_renderer_highlight_style(renderer, &style));
+    CHECK(style == CADR_HIGHLIGHT_TINT);
+    EXPECT(cadr_renderer_highlight_style(renderer, NULL), CADR_RESULT_NULL_ARGUMENT);
+    EXPECT(cadr_renderer_set_highlight_style(renderer, 7), CADR_RESULT_INVALID_ARGUMENT);
+    MESSAGE_HAS("highlight style 7");
+    OK(cadr_scene_set_flags(b->scene, b->geo,
+                            CADR_NODE_VISIBLE | CADR_NODE_PICKABLE | CADR_NODE_HIGHLIGHTED));
+    OK(cadr_renderer_render(renderer, b->scene, &camera, &stats));
+    OK(cadr_renderer_read_pixels(renderer, tinted, W * H * 4));
+    CHECK(pixel_difference(first, tinted, W * H * 4) > 0);
+    OK(cadr_renderer_set_highlight_style(renderer, CADR_HIGHLIGHT_OUTLINE));
+    OK(cadr_renderer_highlight_style(renderer, &style));
+    CHECK(style == CADR_HIGHLIGHT_OUTLINE);
+    OK(cadr_renderer_render(renderer, b->scene, &camera, &stats));
+    OK(cadr_renderer_read_pixels(renderer, second, W * H * 4));
+    CHECK(pixel_difference(tinted, second, W * H * 4) > 0);
+    for (i = 0; i < (size_t)W * H * 4; i += 4) {
+      orange += second[i] > 200 && second[i + 1] > 100 && second[i + 1] < 180 && second[i + 2] < 60 &&
+                !(first[i] > 200 && first[i + 1] > 100 && first[i + 1] < 180 && first[i + 2] < 60);
+    }
+    CHECK(orange > 10);
+    OK(cadr_scene_set_flags(b->scene, b->geo, CADR_NODE_VISIBLE | CADR_NODE_PICKABLE));
+    OK(cadr_renderer_render(renderer, b->scene, &camera, &stats));
+    OK(cadr_renderer_read_pixels(renderer, second, W * H * 4));
+    CHECK(pixel_difference(first, second, W * H * 4) == 0);
+    OK(cadr_renderer_set_highlight_style(renderer, CADR_HIGHLIGHT_TINT));
+    free(tinted);
+  }
+
   /* Ambient occlusion: off by default; on, it only darkens, and off again restores the picture. */
   {
     bool on = true;

@@ -233,6 +233,11 @@ fn viewer_under_xvfb_swaps_techniques_resizes_and_shows_the_offscreen_image() {
         "anti-aliasing: 1 sample (off)",
         "hidden edges: dashed",
         "ambient occlusion: on",
+        "silhouettes: off",
+        "selected node ",
+        "highlight style: outline",
+        "highlight style: tint",
+        "selection cleared",
         "present modes offered: fifo",
         "resized to 480x360",
     ] {

@@ -6,7 +6,7 @@ use std::path::PathBuf;
 
 use clap::{Args, Parser, Subcommand, ValueEnum};
 
-use cadr_core::render::{Background, Section};
+use cadr_core::render::{Background, HighlightStyle, Section};
 use cadr_core::technique::{Combination, ShadeMode, TechniqueKind};
 
 use crate::motion::CameraPath;
@@ -318,6 +318,14 @@ pub struct RenderArgs {
     /// silhouettes of curved surfaces.
     #[arg(long)]
     pub no_silhouettes: bool,
+    /// Highlight the nodes named NAME (and what is below them), as a host highlights a
+    /// selection; repeatable.
+    #[arg(long, value_name = "NAME")]
+    pub highlight: Vec<String>,
+    /// How highlighted parts show: tinted towards orange (tint, the default) or with an orange
+    /// band around them, their colours kept (outline).
+    #[arg(long, value_name = "tint|outline", default_value = "tint", value_parser = parse_highlight_style)]
+    pub highlight_style: HighlightStyle,
     /// Anti-alias with N samples per pixel (MSAA: 1, the default, is off; 2, 4 or 8 where the
     /// device offers them: cadr devices lists them).
     #[arg(long, value_name = "N", default_value_t = 1, value_parser = parse_msaa)]
@@ -612,6 +620,10 @@ fn parse_plane(text: &str) -> Result<glam::DVec4, String> {
 const FLAT_BACKGROUND: [f32; 3] = [0.80, 0.84, 0.88];
 
 /// Parses `--background`: `gradient`, `flat`, `#RRGGBB` or `#RRGGBB,#RRGGBB` (top, bottom).
+fn parse_highlight_style(text: &str) -> Result<HighlightStyle, String> {
+    HighlightStyle::parse(text).ok_or_else(|| format!("'{text}' is not tint or outline"))
+}
+
 fn parse_background(text: &str) -> Result<Background, String> {
     let bad = |part: &str| {
         format!("'{part}': expected gradient, flat, #RRGGBB or #RRGGBB,#RRGGBB (top, bottom)")

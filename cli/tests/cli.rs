@@ -1024,3 +1024,86 @@ fn msaa_anti_aliases_render_and_bench_measures_each_level() {
     assert_eq!(output.status.code(), Some(1), "{}", stderr(&output));
     assert!(stderr(&output).contains("--msaa 64"), "{}", stderr(&output));
 }
+
+/// `--highlight NAME` highlights the nodes so named, `--highlight-style outline` draws a band
+/// around them instead of tinting them, `--no-silhouettes` leaves the silhouettes out of the
+/// edge modes; each changes the picture and says so, and an unknown name or style is refused.
+#[test]
+fn render_highlights_named_nodes_and_draws_silhouettes_on_request() {
+    let dir = std::env::temp_dir().join(format!("cadr-cli-highlight-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let draw = |name: &str, scene: &str, extra: &[&str]| {
+        let path = dir.join(format!("{name}.png"));
+        let mut args = vec![
+            "render",
+            scene,
+            "--size",
+            "160x120",
+            "--validation",
+            "-o",
+            path.to_str().unwrap(),
+        ];
+        args.extend_from_slice(extra);
+        let output = cadr(&args);
+        assert!(output.status.success(), "{name}: {}", stderr(&output));
+        assert!(stdout(&output).contains("validation:  0 errors"));
+        (stdout(&output), image::open(&path).unwrap().to_rgba8())
+    };
+    let (_, plain) = draw("plain", "gen:demo", &[]);
+    let (text, tinted) = draw("tinted", "gen:demo", &["--highlight", "module 0"]);
+    assert!(text.contains("module 0 highlighted (tint)"), "{text}");
+    let (text, outlined) = draw(
+        "outlined",
+        "gen:demo",
+        &["--highlight", "module 0", "--highlight-style", "outline"],
+    );
+    assert!(text.contains("module 0 highlighted (outline)"), "{text}");
+    let orange = |p: &image::Rgba<u8>| p.0[0] > 200 && (100..180).contains(&p.0[1]) && p.0[2] < 60;
+    let band = outlined
+        .pixels()
+        .zip(plain.pixels())
+        .filter(|(o, p)| orange(o) && !orange(p))
+        .count();
+    assert!(band > 20, "{band} pixels of the band");
+    assert!(tinted != plain, "the tint shows");
+    assert!(tinted != outlined, "the outline is no tint");
+    let engine = "/usr/share/assimp/models/glTF2/2CylinderEngine-glTF-Binary/2CylinderEngine.glb";
+    let (_, with) = draw("edges", engine, &["--display", "hidden-line"]);
+    let (text, without) = draw(
+        "edges-without",
+        engine,
+        &["--display", "hidden-line", "--no-silhouettes"],
+    );
+    assert!(text.contains("no silhouettes"), "{text}");
+    assert!(with != without, "the engine's cylinders have silhouettes");
+
+    let output = cadr(&[
+        "render",
+        "gen:demo",
+        "-o",
+        "/dev/null",
+        "--highlight",
+        "nope",
+    ]);
+    assert_eq!(output.status.code(), Some(1), "{}", stderr(&output));
+    assert!(
+        stderr(&output).contains("--highlight nope"),
+        "{}",
+        stderr(&output)
+    );
+    let output = cadr(&[
+        "render",
+        "gen:demo",
+        "-o",
+        "/dev/null",
+        "--highlight-style",
+        "glow",
+    ]);
+    assert_eq!(output.status.code(), Some(2), "{}", stderr(&output));
+    assert!(
+        stderr(&output).contains("tint or outline"),
+        "{}",
+        stderr(&output)
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}

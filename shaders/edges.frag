@@ -1,13 +1,16 @@
 #version 460
-// The edge lines of the edge display modes: a dark line colour, unlit.
+// The edge lines of the edge display modes (and wireframe's triangle outlines): a dark line
+// colour, unlit; a highlighted part's lines in a darker highlight colour, so that a highlight
+// shows in the line-only modes too, and on a tinted surface.
 #include "frame.glsl"
 layout(location = 0) in vec3 in_view_position;
 layout(location = 1) in vec3 in_view_normal;
 layout(location = 2) flat in vec4 in_base_color;
 layout(location = 3) flat in vec2 in_surface;
+layout(location = 11) flat in uint in_highlighted;
 
 layout(location = 0) out vec4 out_color;
 
 void main() {
-    out_color = vec4(CADR_EDGE_COLOR, 1.0);
+    out_color = vec4(in_highlighted != 0u ? 0.7 * CADR_HIGHLIGHT_COLOR : CADR_EDGE_COLOR, 1.0);
 }

@@ -442,6 +442,28 @@ fn highlighted_parts_are_tinted_or_outlined() {
             assert_eq!(f.render(), tinted, "{context}: tint again");
         }
     }
+    // In the line-only modes a highlighted part's lines are drawn dark orange: the highlight
+    // shows there too (on the right cube only). Silhouettes, drawn after the lines, would
+    // cover the cube's outline in the edge colour: they are off here.
+    f.view.renderer_mut().set_silhouettes(false).unwrap();
+    f.view.renderer_mut().set_msaa(1).unwrap();
+    let line_orange =
+        |p: &image::Rgba<u8>| p.0[0] > 140 && (60..130).contains(&p.0[1]) && p.0[2] < 50;
+    for mode in [ShadeMode::HiddenLine, ShadeMode::Wireframe] {
+        f.view.techniques_mut().set_shade_mode(mode).unwrap();
+        let image = f.render();
+        let middle = (centre + left_centre) / 2;
+        let right = (middle..SIZE.0)
+            .filter(|&x| line_orange(image.get_pixel(x, row)))
+            .count();
+        let left = (0..middle)
+            .filter(|&x| line_orange(image.get_pixel(x, row)))
+            .count();
+        assert!(
+            right >= 2 && left == 0,
+            "{mode:?}: {right} right, {left} left"
+        );
+    }
     drop(f.view);
     assert_no_validation_errors(&f.device);
 }

@@ -1077,33 +1077,12 @@ fn render_highlights_named_nodes_and_draws_silhouettes_on_request() {
     assert!(text.contains("no silhouettes"), "{text}");
     assert!(with != without, "the engine's cylinders have silhouettes");
 
-    let output = cadr(&[
-        "render",
-        "gen:demo",
-        "-o",
-        "/dev/null",
-        "--highlight",
-        "nope",
-    ]);
-    assert_eq!(output.status.code(), Some(1), "{}", stderr(&output));
-    assert!(
-        stderr(&output).contains("--highlight nope"),
-        "{}",
-        stderr(&output)
-    );
-    let output = cadr(&[
-        "render",
-        "gen:demo",
-        "-o",
-        "/dev/null",
-        "--highlight-style",
-        "glow",
-    ]);
-    assert_eq!(output.status.code(), Some(2), "{}", stderr(&output));
-    assert!(
-        stderr(&output).contains("tint or outline"),
-        "{}",
-        stderr(&output)
-    );
+    let refused = |option: &str, value: &str, code: i32, says: &str| {
+        let output = cadr(&["render", "gen:demo", "-o", "/dev/null", option, value]);
+        assert_eq!(output.status.code(), Some(code), "{}", stderr(&output));
+        assert!(stderr(&output).contains(says), "{}", stderr(&output));
+    };
+    refused("--highlight", "nope", 1, "--highlight nope");
+    refused("--highlight-style", "glow", 2, "tint or outline");
     let _ = std::fs::remove_dir_all(&dir);
 }

@@ -268,8 +268,7 @@ impl Renderer {
         if on != self.ssao {
             self.commands.wait()?;
             // The recorded frame has (or lacks) the occlusion pass.
-            self.replayable = None;
-            self.last_recorded = None;
+            self.forget_recording();
             self.ssao = on;
         }
         Ok(())
@@ -288,8 +287,7 @@ impl Renderer {
         if on != self.silhouettes {
             self.commands.wait()?;
             // The recorded frame has (or lacks) the silhouettes pass.
-            self.replayable = None;
-            self.last_recorded = None;
+            self.forget_recording();
             self.silhouettes = on;
         }
         Ok(())
@@ -315,8 +313,7 @@ impl Renderer {
         if style != self.highlight_style {
             self.commands.wait()?;
             // The recorded frame has (or lacks) the outline's clear and pass.
-            self.replayable = None;
-            self.last_recorded = None;
+            self.forget_recording();
             self.highlight_style = style;
             self.drop_outline_keys();
         }
@@ -344,8 +341,7 @@ impl Renderer {
             return Ok(());
         }
         self.finish()?;
-        self.replayable = None;
-        self.last_recorded = None;
+        self.forget_recording();
         let storage = vk::DescriptorType::STORAGE_BUFFER;
         let sets = &self.frame_sets;
         sets.write_buffer(0, 2, storage, resources.records, vk::WHOLE_SIZE);
@@ -355,6 +351,13 @@ impl Renderer {
         sets.write_combined_image(0, 6, resources.textures, resources.nearest_sampler);
         self.bound_scene = Some(resources.generation);
         Ok(())
+    }
+
+    /// Forgets the frame in the command buffer: the next frame is recorded afresh, whatever
+    /// its replay key (it would draw what no longer holds: other passes, bindings or targets).
+    fn forget_recording(&mut self) {
+        self.replayable = None;
+        self.last_recorded = None;
     }
 
     /// The depth set of the passes over the picture for the current target (the GPU is
@@ -412,8 +415,7 @@ impl Renderer {
         }
         self.commands.wait()?;
         // The recorded frame draws into the old target: never submit it again.
-        self.replayable = None;
-        self.last_recorded = None;
+        self.forget_recording();
         self.target = OffscreenTarget::new(&self.device, width, height, self.msaa())?;
         self.depth_set = None;
         self.pick = None;
@@ -448,8 +450,7 @@ impl Renderer {
         // Not only this renderer's frames use the target: a window's present blits from it.
         self.device.wait_idle()?;
         // The recorded frame draws into the old target: never submit it again.
-        self.replayable = None;
-        self.last_recorded = None;
+        self.forget_recording();
         let (width, height) = self.size();
         self.target = OffscreenTarget::new(&self.device, width, height, samples)?;
         self.depth_set = None;
@@ -761,8 +762,7 @@ impl Renderer {
             return Ok(());
         }
         // The recorded frame names the old targets.
-        self.replayable = None;
-        self.last_recorded = None;
+        self.forget_recording();
         self.drop_transparency_targets();
         let targets = TransparencyTargets::new(
             &self.device,
@@ -787,8 +787,7 @@ impl Renderer {
         {
             return Ok(());
         }
-        self.replayable = None;
-        self.last_recorded = None;
+        self.forget_recording();
         let keys = OutlineKeys::new(&self.device, extent)?;
         name_outline_keys(&self.frame_sets, &keys.buffer);
         self.outline_keys = Some(keys);

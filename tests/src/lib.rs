@@ -155,6 +155,14 @@ impl SceneView {
             .expect("pick")
     }
 
+    /// Drops the view (its objects destroyed, so that their validation messages are in) and
+    /// fails the test if the validation layer reported an error on the device.
+    pub fn assert_no_validation_errors(self) {
+        let SceneView { device, view, .. } = self;
+        drop(view);
+        assert_no_validation_errors(&device);
+    }
+
     /// Draws a frame with the view's current settings and reads it back.
     pub fn render(&mut self) -> image::RgbaImage {
         self.view

@@ -16,8 +16,7 @@ use cadr_tests::images::{
     assert_matches_reference, compare, ImageDifference, Tolerance, DEFAULT_TOLERANCE,
 };
 use cadr_tests::{
-    all_combinations, assert_no_validation_errors, test_device,
-    test_device_with_synchronization_checks, SceneView,
+    all_combinations, test_device, test_device_with_synchronization_checks, SceneView,
 };
 
 const SIZE: (u32, u32) = (160, 120);
@@ -105,8 +104,7 @@ fn msaa_smooths_edges_and_keeps_the_picture() {
             mode.name()
         );
     }
-    drop(f.view);
-    assert_no_validation_errors(&f.device);
+    f.assert_no_validation_errors();
 }
 
 #[test]
@@ -130,8 +128,7 @@ fn sample_counts_the_device_does_not_offer_are_refused_and_drawing_goes_on() {
     }
     let after = render(&mut f);
     assert_eq!(before, after, "the renderer draws on as before");
-    drop(f.view);
-    assert_no_validation_errors(&f.device);
+    f.assert_no_validation_errors();
 }
 
 #[test]
@@ -158,8 +155,7 @@ fn picking_stays_exact_with_msaa() {
     // A frame drawn with MSAA between, as a viewer does.
     render(&mut f);
     assert_eq!(pick(&mut f), one_sample, "the same hits, pixels and depths");
-    drop(f.view);
-    assert_no_validation_errors(&f.device);
+    f.assert_no_validation_errors();
 }
 
 /// A sample of the valid combinations (every seventh, and the GPU occlusion culler, whose
@@ -213,8 +209,7 @@ fn every_kind_of_technique_draws_with_msaa_like_the_built_in_one() {
         }
     }
     assert!(checked.len() > 10, "{} combinations checked", checked.len());
-    drop(f.view);
-    assert_no_validation_errors(&f.device);
+    f.assert_no_validation_errors();
 }
 
 /// Translucent parts with MSAA, under the synchronization checks: the methods' targets are
@@ -246,6 +241,5 @@ fn both_transparency_methods_draw_xray_with_msaa() {
             "{method}: {difference:?}"
         );
     }
-    drop(f.view);
-    assert_no_validation_errors(&f.device);
+    f.assert_no_validation_errors();
 }

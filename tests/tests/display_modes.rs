@@ -14,7 +14,7 @@ use cadr_core::technique::ShadeMode;
 use cadr_tests::images::{
     self, assert_matches_reference, compare, DEFAULT_TOLERANCE, VISIBLE_CHANGE,
 };
-use cadr_tests::{assert_no_validation_errors, test_device, SceneView, CYLINDER_ENGINE_GLB};
+use cadr_tests::{test_device, SceneView, CYLINDER_ENGINE_GLB};
 use glam::{DMat4, DVec3};
 
 const SIZE: (u32, u32) = (160, 120);
@@ -29,8 +29,7 @@ fn render_every_mode(scene: &Scene) -> Vec<image::RgbaImage> {
             f.render()
         })
         .collect();
-    drop(f.view);
-    assert_no_validation_errors(&f.device);
+    f.assert_no_validation_errors();
     images
 }
 
@@ -149,8 +148,7 @@ fn hidden_line_shows_hidden_edges_dashed_when_asked() {
         edges_dashed, edges,
         "edges mode has no hidden lines to dash"
     );
-    drop(f.view);
-    assert_no_validation_errors(&f.device);
+    f.assert_no_validation_errors();
 }
 
 /// Screen-space ambient occlusion darkens where parts meet (the demo's parts on their
@@ -203,8 +201,7 @@ fn ambient_occlusion_darkens_where_parts_meet_and_only_there() {
     let with = draw(&mut f, true);
     let without = draw(&mut f, false);
     assert_eq!(with, without, "wireframe is not occluded");
-    drop(f.view);
-    assert_no_validation_errors(&f.device);
+    f.assert_no_validation_errors();
 }
 
 /// A smooth cylinder (48 facets, radius 1, from y = -1 to 1) whose only feature edges are its
@@ -296,8 +293,7 @@ fn silhouettes_outline_curved_surfaces_in_the_edge_modes() {
             );
         }
     }
-    drop(f.view);
-    assert_no_validation_errors(&f.device);
+    f.assert_no_validation_errors();
 }
 
 /// Two cubes side by side (x = -1.2 and 1.2, edge 1.6), seen from the front.
@@ -464,6 +460,5 @@ fn highlighted_parts_are_tinted_or_outlined() {
             "{mode:?}: {right} right, {left} left"
         );
     }
-    drop(f.view);
-    assert_no_validation_errors(&f.device);
+    f.assert_no_validation_errors();
 }

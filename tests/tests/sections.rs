@@ -11,7 +11,7 @@ use cadr_core::technique::ShadeMode;
 use cadr_tests::images::{
     self, assert_matches_reference, compare, DEFAULT_TOLERANCE, SAME_PICTURE,
 };
-use cadr_tests::{all_combinations, assert_no_validation_errors, test_device, SceneView};
+use cadr_tests::{all_combinations, test_device, SceneView};
 use glam::{DMat4, DVec3, DVec4};
 
 const SIZE: (u32, u32) = (160, 120);
@@ -184,9 +184,7 @@ fn a_cut_through_a_closed_box_is_capped_with_the_plane_colour_where_the_cut_is()
         "{:?}",
         f.color_at(&uncapped, on_cap)
     );
-    let Fixture(SceneView { device, view, .. }) = f;
-    drop(view);
-    assert_no_validation_errors(&device);
+    f.0.assert_no_validation_errors();
 }
 
 #[test]
@@ -199,9 +197,7 @@ fn a_cut_through_an_open_mesh_shows_no_cap() {
     let on_cap = DVec3::new(0.3, 0.3, 0.0);
     let color = f.color_at(&cut, on_cap);
     assert!(grayish(color), "no cap, no smear: {color:?}");
-    let Fixture(SceneView { device, view, .. }) = f;
-    drop(view);
-    assert_no_validation_errors(&device);
+    f.0.assert_no_validation_errors();
 }
 
 #[test]
@@ -219,9 +215,7 @@ fn picking_through_a_cut_hits_what_is_behind() {
     let away = -EYE.normalize();
     f.section(&[away.extend(-2.2)], true);
     assert_eq!(pick(&mut f), "box 1");
-    let Fixture(SceneView { device, view, .. }) = f;
-    drop(view);
-    assert_no_validation_errors(&device);
+    f.0.assert_no_validation_errors();
 }
 
 #[test]
@@ -305,7 +299,5 @@ fn the_demo_section_matches_its_reference_in_every_sampled_combination() {
         sampled.len(),
         valid.len()
     );
-    let Fixture(SceneView { device, view, .. }) = f;
-    drop(view);
-    assert_no_validation_errors(&device);
+    f.0.assert_no_validation_errors();
 }

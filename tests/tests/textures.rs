@@ -16,7 +16,7 @@ use cadr_tests::fixtures::{scratch_dir, textured, textured_gltf};
 use cadr_tests::images::{
     assert_matches_reference, color_at, compare, DEFAULT_TOLERANCE, SAME_PICTURE,
 };
-use cadr_tests::{all_combinations, assert_no_validation_errors, test_device, SceneView};
+use cadr_tests::{all_combinations, test_device, SceneView};
 use glam::DVec3;
 
 const SIZE: (u32, u32) = (480, 480);
@@ -195,8 +195,7 @@ fn textures_colours_and_alpha_reach_the_picture() {
     f.view.renderer_mut().set_textures(true);
     let again = f.render();
     assert!(compare(&again, &image).unwrap().within(SAME_PICTURE));
-    drop(f.view);
-    assert_no_validation_errors(&f.device);
+    f.assert_no_validation_errors();
 }
 
 /// A click in the mask's hole reaches the backdrop; beside it, it hits the masked quad.
@@ -220,8 +219,7 @@ fn picking_goes_through_alpha_mask_holes() {
     );
     assert_eq!(pick_at(point(textured::MASKED, half / 2.0, 0.0)), "masked");
     assert_eq!(pick_at(point(textured::CHECKER, 0.0, 0.0)), "checker");
-    drop(f.view);
-    assert_no_validation_errors(&f.device);
+    f.assert_no_validation_errors();
 }
 
 /// Every vertex path (each says where its vertices lie in its own way) with every parameter
@@ -276,8 +274,7 @@ fn every_vertex_and_parameter_path_samples_textures_alike() {
         checked.insert(combination.vertex.clone());
     }
     assert!(checked.len() >= 4, "vertex paths checked: {checked:?}");
-    drop(f.view);
-    assert_no_validation_errors(&f.device);
+    f.assert_no_validation_errors();
 }
 
 /// Khronos' TextureTransformTest: each square shows "Correct" marks where offset, rotation,
@@ -296,8 +293,7 @@ fn the_khronos_texture_samples_draw_as_their_references() {
     let mut f = front_view(&scene);
     let image = f.render();
     assert_matches_reference("textured_transform_test", &image, DEFAULT_TOLERANCE);
-    drop(f.view);
-    assert_no_validation_errors(&f.device);
+    f.assert_no_validation_errors();
 
     let pictures: Vec<image::RgbaImage> = BOX_TEXTURED
         .iter()
@@ -376,8 +372,7 @@ fn a_texture_created_at_run_time_reaches_the_picture() {
         refused.contains("texture 'green'") && refused.contains("still used"),
         "{refused}"
     );
-    drop(f.view);
-    assert_no_validation_errors(&f.device);
+    f.assert_no_validation_errors();
 }
 
 /// A TEXCOORD accessor with a count other than the positions' is refused naming it; an image
@@ -570,6 +565,5 @@ fn a_scene_without_textures_gets_one_by_a_material_change() {
         r[0] > r[2] + 0.3 && r[1] > r[2] + 0.3,
         "yellow on the right: {r:?}"
     );
-    drop(f.view);
-    assert_no_validation_errors(&f.device);
+    f.assert_no_validation_errors();
 }

@@ -5,21 +5,14 @@
 //! alphaMode gives materials their opacity and survives a save.
 #![allow(clippy::unwrap_used)] // Test code: a failed unwrap is a failed test.
 
-use std::sync::Arc;
-
-use cadr_core::graph::{NodeHandle, SceneGraph};
 use cadr_core::load::load_file;
-use cadr_core::render::Camera;
+use cadr_core::render::{Camera, FrameStats};
 use cadr_core::save::save_scene;
 use cadr_core::scene::{AlphaMode, Geometry, Material, MeshRef, Node, Part, Scene, Vertex};
 use cadr_core::technique::{Combination, ShadeMode, TechniqueKind};
-use cadr_core::tree::SceneTree;
-use cadr_core::view::View;
-use cadr_core::vk::Device;
 use cadr_tests::images::{self, assert_matches_reference, compare, Tolerance, DEFAULT_TOLERANCE};
 use cadr_tests::{
-    all_combinations, assert_no_validation_errors, plugin_registry,
-    test_device_with_synchronization_checks as test_device,
+    all_combinations, test_device_with_synchronization_checks as test_device, SceneView,
 };
 use glam::{DMat4, DVec3};
 
@@ -94,22 +87,24 @@ fn layers(alpha: f32) -> Scene {
     scene
 }
 
-struct Fixture {
-    device: Arc<Device>,
-    graph: SceneGraph,
-    /// The graph node of each scene node.
-    nodes: Vec<NodeHandle>,
-    tree: SceneTree,
-    view: View,
-    camera: Camera,
+/// A [`SceneView`] of the layers, seen from the front, with the helpers of these tests.
+struct Fixture(SceneView);
+
+impl std::ops::Deref for Fixture {
+    type Target = SceneView;
+    fn deref(&self) -> &SceneView {
+        &self.0
+    }
+}
+
+impl std::ops::DerefMut for Fixture {
+    fn deref_mut(&mut self) -> &mut SceneView {
+        &mut self.0
+    }
 }
 
 impl Fixture {
     fn new(scene: &Scene) -> Self {
-        let device = test_device();
-        let (mut graph, nodes) = SceneGraph::from_scene(scene).unwrap();
-        let tree = SceneTree::build(&mut graph);
-        let view = View::new(&device, plugin_registry(&device), SIZE.0, SIZE.1).unwrap();
         let aspect = f64::from(SIZE.0) / f64::from(SIZE.1);
         let camera = Camera::look_at(
             DVec3::new(0.0, 0.0, 5.0),
@@ -119,22 +114,22 @@ impl Fixture {
             0.1,
             50.0,
         );
-        Self {
-            device,
-            graph,
-            nodes,
-            tree,
-            view,
-            camera,
-        }
+        Self(SceneView::new(test_device(), scene, SIZE, camera))
     }
 
+    /// Brings the tree up to the graph and draws a frame.
     fn render(&mut self) -> image::RgbaImage {
-        self.tree.update(&mut self.graph);
-        self.view
-            .render(&self.graph, &mut self.tree, &self.camera)
-            .unwrap();
-        self.view.renderer().read_rgba8().unwrap()
+        let view = &mut self.0;
+        view.tree.update(&mut view.graph);
+        view.render()
+    }
+
+    /// Draws a frame and returns what it cost and drew.
+    fn stats(&mut self) -> FrameStats {
+        let view = &mut self.0;
+        view.view
+            .render(&view.graph, &mut view.tree, &view.camera)
+            .unwrap()
     }
 
     fn use_method(&mut self, name: &str) {
@@ -201,9 +196,8 @@ fn one_translucent_layer_blends_over_what_is_behind_it_with_either_method() {
             3.0 / 255.0,
         );
     }
-    drop(f.view);
-    drop(opaque.view);
-    assert_no_validation_errors(&f.device);
+    opaque.0.assert_no_validation_errors();
+    f.0.assert_no_validation_errors();
 }
 
 #[test]
@@ -232,9 +226,8 @@ fn the_exact_method_sorts_layers_and_the_fast_one_agrees_where_they_do_not_pile_
         difference.within(METHODS_AGREE),
         "the methods agree within {METHODS_AGREE:?}: {difference:?}"
     );
-    drop(f.view);
-    drop(opaque.view);
-    assert_no_validation_errors(&f.device);
+    opaque.0.assert_no_validation_errors();
+    f.0.assert_no_validation_errors();
 }
 
 #[test]
@@ -270,25 +263,17 @@ fn every_valid_combination_draws_translucency_like_the_built_in_one() {
         }
     }
     assert!(checked > 20, "{checked} combinations checked");
-    drop(f.view);
-    assert_no_validation_errors(&f.device);
+    f.0.assert_no_validation_errors();
 }
 
 #[test]
 fn an_opaque_scene_draws_no_translucent_pass() {
     let mut f = Fixture::new(&layers(1.0));
     f.render();
-    let opaque = f.view.render(&f.graph, &mut f.tree, &f.camera).unwrap();
+    let opaque = f.stats();
     let mut translucent = Fixture::new(&layers(0.5));
     translucent.render();
-    let stats = translucent
-        .view
-        .render(
-            &translucent.graph,
-            &mut translucent.tree,
-            &translucent.camera,
-        )
-        .unwrap();
+    let stats = translucent.stats();
     assert_eq!(opaque.draw_calls, 3, "one pass of three squares");
     assert_eq!(
         stats.draw_calls, 6,
@@ -326,8 +311,7 @@ fn xray_shows_hidden_parts_and_keeps_highlighted_ones_opaque() {
         2.0 / 255.0,
     );
     assert_matches_reference("transparency_layers_xray", &highlighted, DEFAULT_TOLERANCE);
-    drop(f.view);
-    assert_no_validation_errors(&f.device);
+    f.0.assert_no_validation_errors();
 }
 
 #[test]
@@ -415,16 +399,7 @@ fn picking_goes_through_translucent_parts_when_asked() {
     let mut f = Fixture::new(&layers(0.5));
     let picture = f.render();
     let pick_at = |f: &mut Fixture, point: DVec3| {
-        let (x, y) = images::pixel_of(&f.camera, SIZE, point);
-        let hits = f
-            .view
-            .pick(
-                &f.graph,
-                &mut f.tree,
-                &f.camera,
-                cadr_core::render::pick::PixelRect::pixel(x, y),
-            )
-            .unwrap();
+        let hits = f.pick_at(point);
         assert_eq!(hits.len(), 1, "one hit at {point}");
         hits[0].path.clone()
     };
@@ -445,7 +420,6 @@ fn picking_goes_through_translucent_parts_when_asked() {
     let green_point = DVec3::new(0.7, 0.0, 0.5);
     let picked = pick_at(&mut g, green_point);
     assert!(picked.contains(&g.nodes[2]), "opaque green stops the click");
-    drop((f.view, g.view));
-    assert_no_validation_errors(&f.device);
-    assert_no_validation_errors(&g.device);
+    f.0.assert_no_validation_errors();
+    g.0.assert_no_validation_errors();
 }

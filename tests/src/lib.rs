@@ -163,6 +163,12 @@ impl SceneView {
         assert_no_validation_errors(&device);
     }
 
+    /// The colour (RGB, 0 to 1) of `image`, drawn through this view's camera, where the world
+    /// point `point` shows.
+    pub fn color_at(&self, image: &image::RgbaImage, point: glam::DVec3) -> [f32; 3] {
+        images::color_at(image, &self.camera, point)
+    }
+
     /// Draws a frame with the view's current settings and reads it back.
     pub fn render(&mut self) -> image::RgbaImage {
         self.view

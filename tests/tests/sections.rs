@@ -8,9 +8,7 @@ use cadr_core::generate::{generate, GeneratorSpec};
 use cadr_core::render::{Camera, Section, DEFAULT_DIRECTION};
 use cadr_core::scene::{flatten, Geometry, Material, MeshRef, Node, Part, Scene, Vertex};
 use cadr_core::technique::ShadeMode;
-use cadr_tests::images::{
-    self, assert_matches_reference, compare, DEFAULT_TOLERANCE, SAME_PICTURE,
-};
+use cadr_tests::images::{assert_matches_reference, compare, DEFAULT_TOLERANCE, SAME_PICTURE};
 use cadr_tests::{all_combinations, test_device, SceneView};
 use glam::{DMat4, DVec3, DVec4};
 
@@ -114,10 +112,6 @@ impl Fixture {
         section.set_planes(planes).unwrap();
         section.set_caps(caps);
         self.view.set_section(section);
-    }
-
-    fn color_at(&self, image: &image::RgbaImage, point: DVec3) -> [f32; 3] {
-        images::color_at(image, &self.camera, point)
     }
 }
 

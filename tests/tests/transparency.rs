@@ -10,7 +10,7 @@ use cadr_core::render::{Camera, FrameStats};
 use cadr_core::save::save_scene;
 use cadr_core::scene::{AlphaMode, Geometry, Material, MeshRef, Node, Part, Scene, Vertex};
 use cadr_core::technique::{Combination, ShadeMode, TechniqueKind};
-use cadr_tests::images::{self, assert_matches_reference, compare, Tolerance, DEFAULT_TOLERANCE};
+use cadr_tests::images::{assert_matches_reference, compare, Tolerance, DEFAULT_TOLERANCE};
 use cadr_tests::{
     all_combinations, test_device_with_synchronization_checks as test_device, SceneView,
 };
@@ -137,10 +137,6 @@ impl Fixture {
             .techniques_mut()
             .swap(TechniqueKind::Transparency, name)
             .unwrap();
-    }
-
-    fn color_at(&self, image: &image::RgbaImage, point: DVec3) -> [f32; 3] {
-        images::color_at(image, &self.camera, point)
     }
 
     /// The picture with square `node` hidden.

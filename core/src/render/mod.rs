@@ -560,12 +560,7 @@ impl Renderer {
             section: [self.section.flags(), 0, 0, 0],
             target: {
                 let (width, height) = self.size();
-                let outline_bit = if self.highlight_style == HighlightStyle::Outline {
-                    DISPLAY_HIGHLIGHT_OUTLINE
-                } else {
-                    0
-                };
-                [width, height, plan.display | outline_bit, 0]
+                [width, height, plan.display, 0]
             },
             background_top: opaque(self.background.top),
             background_bottom: opaque(self.background.bottom),
@@ -863,17 +858,19 @@ impl Renderer {
     ) -> RenderResult<()> {
         let background = self.pipelines.background()?;
         let outline = outline.then(|| self.pipelines.outline()).transpose()?;
-        let mut from_depth = Vec::new();
-        if let Some((overlays, set)) = depth_overlays {
-            // Occlusion darkens the opaque surfaces, before lines go over them and
-            // translucent surfaces are merged over both.
-            if overlays.ssao {
-                from_depth.push((self.pipelines.ssao()?, set));
-            }
-            if overlays.silhouettes {
-                from_depth.push((self.pipelines.silhouettes()?, set));
-            }
-        }
+        // Occlusion darkens the opaque surfaces, before lines go over them and translucent
+        // surfaces are merged over both.
+        let (ssao, silhouettes) = match depth_overlays {
+            Some((overlays, set)) => (
+                (overlays.ssao)
+                    .then(|| self.pipelines.ssao().map(|pipeline| (pipeline, set)))
+                    .transpose()?,
+                (overlays.silhouettes)
+                    .then(|| self.pipelines.silhouettes().map(|pipeline| (pipeline, set)))
+                    .transpose()?,
+            ),
+            None => (None, None),
+        };
         if merge.is_some() || outline.is_some() {
             // The fragments' storage writes (translucent ones, outline keys), read by the
             // merge and the outline.
@@ -891,7 +888,7 @@ impl Renderer {
             );
         }
         begin_overlay(&self.device, command_buffer, &self.target.color);
-        for (pipeline, set) in from_depth {
+        for (pipeline, set) in [ssao, silhouettes].into_iter().flatten() {
             record_fullscreen(
                 &self.device,
                 command_buffer,

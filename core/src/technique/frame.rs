@@ -308,6 +308,9 @@ impl Renderer {
         if shared.borrow().0.has_material_descriptions() {
             display |= crate::render::DISPLAY_MATERIAL_DESCRIPTIONS;
         }
+        if self.highlight_style() == crate::render::HighlightStyle::Outline {
+            display |= crate::render::DISPLAY_HIGHLIGHT_OUTLINE;
+        }
         let mut after = |renderer: &Renderer,
                          command_buffer: vk::CommandBuffer,
                          _: u32,

@@ -590,7 +590,9 @@ typedef struct CadrCullInput {
   const struct CadrSceneView *scene;
   // Candidate bits: alive, visible in the tree, with triangles.
   const uint64_t *candidate_bits;
-  // World matrices in f64 per matrix slot (column-major, 16 each).
+  // World matrices in f64 per matrix slot (column-major, 16 each). Null while the host
+  // keeps the transform hierarchy on the GPU (no active technique announces
+  // [`CADR_TRAIT_READS_HOST_MATRICES`]): a culler that reads them announces it.
   const double *world_matrices;
   // World-space frustum planes (xyz normal pointing inside, w distance): a point p is
   // inside when `dot(n, p) + w >= 0` for all six.

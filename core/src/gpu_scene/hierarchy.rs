@@ -220,7 +220,7 @@ impl TransformHierarchy {
         let device = &self.device;
         let storage = usage(device, vk::BufferUsageFlags::empty());
         let make = |name: &str, bytes: &[u8]| -> RenderResult<Buffer> {
-            let buffer = Buffer::new(
+            let mut buffer = Buffer::new(
                 device,
                 name,
                 (bytes.len() as u64).max(16),

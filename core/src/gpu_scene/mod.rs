@@ -119,11 +119,12 @@ pub struct GpuScene {
     reader: ChangeReader,
     arenas: GeometryArenas,
     instances: Vec<abi::CadrInstance>,
-    records: Vec<abi::CadrInstanceRecord>,
     candidate_bits: Vec<u64>,
     culled_bits: Vec<u64>,
     drawn_bits: Vec<u64>,
     matrices: Vec<abi::CadrMatrix>,
+    /// World matrices in f64 per matrix slot, for techniques that read them on the host; empty
+    /// while the transform hierarchy is on the GPU ([`Transforms::Gpu`]), where none does.
     worlds: Vec<[f64; 16]>,
     materials: Vec<abi::CadrMaterial>,
     /// Per material slot: its texture description (`textures::gpu_material_texture`).
@@ -188,7 +189,6 @@ impl GpuScene {
             reader,
             arenas,
             instances: Vec::new(),
-            records: Vec::new(),
             candidate_bits: Vec::new(),
             culled_bits: Vec::new(),
             drawn_bits: Vec::new(),
@@ -260,12 +260,16 @@ impl GpuScene {
     fn refresh_all(&mut self, graph: &SceneGraph, tree: &mut SceneTree) -> RenderResult<()> {
         tree.refresh_worlds();
         let nodes = tree.node_capacity();
-        self.worlds = vec![[0.0; 16]; nodes];
+        let on_gpu = self.transforms == Transforms::Gpu;
+        self.worlds = if on_gpu {
+            Vec::new()
+        } else {
+            vec![[0.0; 16]; nodes]
+        };
         self.matrices = vec![abi::CadrMatrix::default(); nodes];
         self.locals = Vec::new();
         self.frame_moved.clear();
         self.hierarchy.cancel();
-        let on_gpu = self.transforms == Transforms::Gpu;
         if on_gpu {
             self.locals = vec![[0.0; LOCAL_WORDS]; nodes];
         }
@@ -292,7 +296,6 @@ impl GpuScene {
             .count();
         let count = tree.instance_capacity();
         self.instances = vec![abi::CadrInstance::default(); count];
-        self.records = vec![abi::CadrInstanceRecord::default(); count];
         let words = count.div_ceil(64);
         self.candidate_bits = vec![0; words];
         self.drawn_bits = vec![0; words];
@@ -300,7 +303,7 @@ impl GpuScene {
         self.triangles = fill_instances(
             &self.arenas,
             tree,
-            (&mut self.instances, &mut self.records),
+            &mut self.instances,
             (&mut self.candidate_bits, &mut self.drawn_bits),
         );
         let device = Arc::clone(&self.device);
@@ -361,7 +364,9 @@ impl GpuScene {
 
     fn set_matrix(&mut self, tree: &SceneTree, t: u32) {
         let world = tree.world(t);
-        self.worlds[t as usize] = world.to_cols_array();
+        if let Some(kept) = self.worlds.get_mut(t as usize) {
+            *kept = world.to_cols_array();
+        }
         self.matrices[t as usize] = gpu_matrix(&world);
         if let Some(local) = self.locals.get_mut(t as usize) {
             *local = gpu_local(&tree.local(t));
@@ -382,7 +387,6 @@ impl GpuScene {
         // Out of the drawn set with its old entry, back in with the new one.
         self.set_drawn(id, false);
         self.instances[i] = entry;
-        self.records[i] = record_of(&entry, id);
         set_bit(&mut self.candidate_bits, id, candidate);
         let culled_in = self.culled_bits[i / 64] >> (i % 64) & 1 == 1;
         self.set_drawn(id, candidate && culled_in);
@@ -635,36 +639,37 @@ impl GpuScene {
     ) -> RenderResult<u64> {
         let matrices = &self.matrices;
         let materials = &self.materials;
-        let records = &self.records;
-        let matrix_bytes = |slot: u32, out: &mut Vec<u8>| {
+        let matrix_bytes = |slot: u32, out: &mut [u8]| {
             let item = matrices.get(slot as usize).copied().unwrap_or_default();
-            out.extend_from_slice(&item.to_le_bytes());
+            out.copy_from_slice(&item.to_le_bytes());
         };
-        let material_bytes = |slot: u32, out: &mut Vec<u8>| {
+        let material_bytes = |slot: u32, out: &mut [u8]| {
             let item = materials.get(slot as usize).copied().unwrap_or_default();
-            out.extend_from_slice(&item.to_le_bytes());
+            out.copy_from_slice(&item.to_le_bytes());
         };
         let material_textures = &self.material_textures;
-        let material_texture_bytes = |slot: u32, out: &mut Vec<u8>| {
+        let material_texture_bytes = |slot: u32, out: &mut [u8]| {
             let item = material_textures
                 .get(slot as usize)
                 .copied()
                 .unwrap_or_default();
-            out.extend_from_slice(bytemuck::cast_slice(&item));
-        };
-        let record_bytes = |slot: u32, out: &mut Vec<u8>| {
-            let item = records.get(slot as usize).copied().unwrap_or_default();
-            out.extend_from_slice(&item.to_le_bytes());
+            out.copy_from_slice(bytemuck::cast_slice(&item));
         };
         let (instances, candidates) = (&self.instances, &self.candidate_bits);
-        let cull_entry_bytes = |slot: u32, out: &mut Vec<u8>| {
+        let record_bytes = |slot: u32, out: &mut [u8]| {
+            let item = instances
+                .get(slot as usize)
+                .map_or_else(Default::default, |entry| record_of(entry, slot));
+            out.copy_from_slice(&item.to_le_bytes());
+        };
+        let cull_entry_bytes = |slot: u32, out: &mut [u8]| {
             let item = cull_entry(instances, candidates, slot);
-            out.extend_from_slice(&item.to_le_bytes());
+            out.copy_from_slice(&item.to_le_bytes());
         };
         let locals = &self.locals;
-        let local_bytes = |slot: u32, out: &mut Vec<u8>| {
+        let local_bytes = |slot: u32, out: &mut [u8]| {
             let item = locals.get(slot as usize).copied().unwrap_or_default();
-            out.extend_from_slice(bytemuck::cast_slice(&item));
+            out.copy_from_slice(bytemuck::cast_slice(&item));
         };
         let ([matrix_count, material_count, _, record_count, _, local_count], first_words, bytes) =
             self.uploader.record(
@@ -818,12 +823,12 @@ impl GpuScene {
         self.instances.len()
     }
 
-    /// The CPU copy of the GPU-side content: instance entries and records, matrices and
-    /// materials (for comparing an incrementally synced scene with a fresh one).
+    /// The CPU copy of the GPU-side content: instance entries (the GPU's instance records and
+    /// cull entries are made from them), matrices and materials (for comparing an
+    /// incrementally synced scene with a fresh one).
     pub fn content(&self) -> SceneContent<'_> {
         SceneContent {
             instances: &self.instances,
-            records: &self.records,
             matrices: &self.matrices,
             materials: &self.materials,
             drawn_bits: &self.drawn_bits,
@@ -837,7 +842,7 @@ impl GpuScene {
         Ok([
             read(&self.matrix_gpu, self.matrices.len() * MATRIX_BYTES)?,
             read(&self.material_gpu, self.materials.len() * MATERIAL_BYTES)?,
-            read(&self.record_gpu, self.records.len() * RECORD_BYTES)?,
+            read(&self.record_gpu, self.instances.len() * RECORD_BYTES)?,
             read(&self.cull_gpu, self.instances.len() * CULL_ENTRY_BYTES)?,
         ])
     }
@@ -848,8 +853,6 @@ impl GpuScene {
 pub struct SceneContent<'a> {
     /// Instance entries by instance id.
     pub instances: &'a [abi::CadrInstance],
-    /// Instance records by instance id.
-    pub records: &'a [abi::CadrInstanceRecord],
     /// Matrices by tree node.
     pub matrices: &'a [abi::CadrMatrix],
     /// Materials by slot.
@@ -938,14 +941,14 @@ fn record_of(entry: &abi::CadrInstance, id: u32) -> abi::CadrInstanceRecord {
     }
 }
 
-/// Fills the entries and records of every instance slot of `tree` (all of `instances`, fresh:
+/// Fills the entries of every instance slot of `tree` (all of `instances`, fresh:
 /// every culled bit set) and their candidate and drawn bits, on a thread per core, each over
 /// whole 64-instance words; returns the triangles drawn. The loop a large scene's first upload
 /// spends most of its time in.
 fn fill_instances(
     arenas: &GeometryArenas,
     tree: &SceneTree,
-    (instances, records): (&mut [abi::CadrInstance], &mut [abi::CadrInstanceRecord]),
+    instances: &mut [abi::CadrInstance],
     (candidate_bits, drawn_bits): (&mut [u64], &mut [u64]),
 ) -> u64 {
     // Threads pay for themselves only on large scenes.
@@ -959,24 +962,20 @@ fn fill_instances(
     std::thread::scope(|scope| {
         let workers: Vec<_> = instances
             .chunks_mut(per_thread)
-            .zip(records.chunks_mut(per_thread))
             .zip(candidate_bits.chunks_mut(words_per_thread))
             .zip(drawn_bits.chunks_mut(words_per_thread))
             .enumerate()
-            .map(|(chunk, (((instances, records), candidates), drawn))| {
+            .map(|(chunk, ((instances, candidates), drawn))| {
                 scope.spawn(move || {
                     let first = chunk * per_thread;
                     let mut triangles = 0u64;
-                    for (offset, (entry_slot, record_slot)) in
-                        instances.iter_mut().zip(records.iter_mut()).enumerate()
-                    {
+                    for (offset, entry_slot) in instances.iter_mut().enumerate() {
                         let id = (first + offset) as u32;
                         let (entry, candidate) = tree
                             .instance(id)
                             .and_then(|instance| entry_in(arenas, &instance))
                             .unwrap_or((abi::CadrInstance::default(), false));
                         *entry_slot = entry;
-                        *record_slot = record_of(&entry, id);
                         if candidate {
                             // Every culled bit is set: a candidate is drawn.
                             set_bit(candidates, offset as u32, true);

@@ -135,27 +135,39 @@ pub(super) struct SparseUploader {
     gathered: Vec<u8>,
 }
 
-/// An array with a function that appends the bytes of its item at a slot.
-pub(super) type ArrayItems<'a> = (&'a mut GpuArray, &'a dyn Fn(u32, &mut Vec<u8>));
+/// An array with a function that writes the bytes of its item at a slot (exactly the array's
+/// item size).
+pub(super) type ArrayItems<'a> = (&'a mut GpuArray, &'a (dyn Fn(u32, &mut [u8]) + Sync));
 
-/// Uploads every item of `array`, made by `item` straight into streamed staging chunks (no
-/// host copy of the whole array); returns the bytes sent.
-fn upload_whole(array: &GpuArray, item: &dyn Fn(u32, &mut Vec<u8>)) -> RenderResult<u64> {
-    let item_bytes = array.item_bytes as u64;
-    let size = array.capacity as u64 * item_bytes;
-    // The items overlapping a chunk, made into a buffer reused from chunk to chunk.
-    let mut items: Vec<u8> = Vec::new();
+/// Uploads every item of `array`, made by `item` straight into the buffer or its staging
+/// chunks (no host copy of the whole array), on a thread per core; returns the bytes sent.
+fn upload_whole(array: &mut GpuArray, item: &(dyn Fn(u32, &mut [u8]) + Sync)) -> RenderResult<u64> {
+    let item_bytes = array.item_bytes;
+    let size = (array.capacity * item_bytes) as u64;
     array.buffer.upload_with(0, size, |start, chunk| {
-        let first = start / item_bytes;
-        let end = (start + chunk.len() as u64).div_ceil(item_bytes);
-        items.clear();
-        for slot in first..end {
-            item(slot as u32, &mut items);
+        let start = start as usize;
+        // The first item starting in the chunk.
+        let first = start.div_ceil(item_bytes);
+        // The bytes before it: the rest of an item cut by the chunk's start.
+        let head = (first * item_bytes - start).min(chunk.len());
+        let mut straddling = vec![0u8; item_bytes];
+        if head > 0 {
+            item(first as u32 - 1, &mut straddling);
+            let cut = start - (first - 1) * item_bytes;
+            chunk[..head].copy_from_slice(&straddling[cut..cut + head]);
         }
-        // Every item is item_bytes long; the padding only guards the slice below.
-        items.resize(((end - first) * item_bytes) as usize, 0);
-        let skip = (start - first * item_bytes) as usize;
-        chunk.copy_from_slice(&items[skip..skip + chunk.len()]);
+        let whole_items = (chunk.len() - head) / item_bytes;
+        let mut items = chunk[head..].chunks_exact_mut(item_bytes);
+        for (slot, out) in (first..).zip(&mut items) {
+            item(slot as u32, out);
+        }
+        // An item cut by the chunk's end: its head.
+        let tail = items.into_remainder();
+        if !tail.is_empty() {
+            item((first + whole_items) as u32, &mut straddling);
+            let length = tail.len();
+            tail.copy_from_slice(&straddling[..length]);
+        }
     })?;
     Ok(size)
 }
@@ -198,9 +210,12 @@ impl SparseUploader {
                     }
                     same
                 });
+                let item_bytes = array.item_bytes;
                 for &word in &array.pending {
                     gathered.extend_from_slice(&word.to_le_bytes());
-                    item(word & !MOVED_ROOT_MARK, &mut gathered);
+                    let at = gathered.len();
+                    gathered.resize(at + item_bytes, 0);
+                    item(word & !MOVED_ROOT_MARK, &mut gathered[at..]);
                 }
                 counts[index] = array.pending.len() as u64;
                 dispatches.push((index, first_word, array.pending.len() as u32));

@@ -453,7 +453,10 @@ fn cull(scene: &mut GpuScene, techniques: &mut Techniques, camera: &Camera) -> R
         size: std::mem::size_of::<abi::CadrCullInput>() as u32,
         scene: &view,
         candidate_bits: scene.candidate_bits().as_ptr(),
-        world_matrices: scene.worlds().as_ptr().cast(),
+        world_matrices: match scene.worlds() {
+            [] => std::ptr::null(),
+            worlds => worlds.as_ptr().cast(),
+        },
         planes,
     };
     let mut output = abi::CadrCullOutput {

@@ -1,4 +1,5 @@
-//! Buffers with their memory, and uploads through a staging buffer.
+//! Buffers with their memory, and uploads: written in place where the host can write the
+//! buffer's memory, else streamed through staging buffers.
 
 use super::host_memory::core_callbacks as host_callbacks;
 use std::sync::Arc;
@@ -15,6 +16,10 @@ use super::error::{VkError, VkResult, VkResultExt};
 const STAGING_CHUNK_BYTES: u64 = 16 << 20;
 /// Staging buffers a streamed upload cycles through.
 const STAGING_CHUNKS: usize = 3;
+
+/// Bytes one thread fills at a time in an upload: large uploads are split into pieces this
+/// big, spread over the cores.
+const FILL_PIECE_BYTES: usize = 4 << 20;
 
 /// A buffer and its memory; freed on drop.
 pub struct Buffer {
@@ -85,7 +90,7 @@ impl Buffer {
         data: &[u8],
         usage: vk::BufferUsageFlags,
     ) -> VkResult<Self> {
-        let buffer = Self::new(
+        let mut buffer = Self::new(
             device,
             name,
             data.len() as u64,
@@ -96,10 +101,9 @@ impl Buffer {
         Ok(buffer)
     }
 
-    /// Copies `data` to `offset` of this buffer (which needs TRANSFER_DST usage) through
-    /// staging memory (see [`Buffer::upload_with`]), and waits. The caller makes sure the GPU
-    /// is not using that range.
-    pub fn upload_at(&self, offset: u64, data: &[u8]) -> VkResult<()> {
+    /// Copies `data` to `offset` of this buffer (which needs TRANSFER_DST usage; see
+    /// [`Buffer::upload_with`]). The caller makes sure the GPU is not using that range.
+    pub fn upload_at(&mut self, offset: u64, data: &[u8]) -> VkResult<()> {
         self.upload_with(offset, data.len() as u64, |start, chunk| {
             let start = start as usize;
             chunk.copy_from_slice(&data[start..start + chunk.len()]);
@@ -107,17 +111,20 @@ impl Buffer {
     }
 
     /// Uploads `size` bytes to `offset` of this buffer (which needs TRANSFER_DST usage):
-    /// `fill(start, chunk)` writes bytes `start..start + chunk.len()` of the data straight
-    /// into staging memory. Large uploads stream through a ring of `STAGING_CHUNKS` staging
-    /// buffers of `STAGING_CHUNK_BYTES`: the CPU fills one while the GPU copies the others,
-    /// and only a buffer about to be refilled is waited for, so the data goes up at the
-    /// speed of memory in bounded staging memory. Returns when every copy is done. The caller
-    /// makes sure the GPU is not using that range.
+    /// `fill(start, chunk)` writes bytes `start..start + chunk.len()` of the data, on up to a
+    /// thread per core for large uploads, in any order. Where the buffer's memory is
+    /// host-visible and coherent (a CPU device, a GPU sharing memory with the host) and
+    /// [`Device::staged_uploads`] is off, `fill` writes it directly: no staging copy, no GPU
+    /// work. Elsewhere the data streams through a ring of `STAGING_CHUNKS` staging buffers of
+    /// `STAGING_CHUNK_BYTES`: the CPU fills one while the GPU copies the others, and only a
+    /// buffer about to be refilled is waited for, so the data goes up at the speed of memory in
+    /// bounded staging memory. Returns when the data is in the buffer. The caller makes sure
+    /// the GPU is not using that range.
     pub fn upload_with(
-        &self,
+        &mut self,
         offset: u64,
         size: u64,
-        mut fill: impl FnMut(u64, &mut [u8]),
+        fill: impl Fn(u64, &mut [u8]) + Sync,
     ) -> VkResult<()> {
         if size == 0 {
             return Ok(());
@@ -129,48 +136,70 @@ impl Buffer {
                 self.size
             )));
         }
-        let device = &self.device;
         crate::timings::time(crate::timings::Phase::Upload, || {
-            let chunk_bytes = size.min(STAGING_CHUNK_BYTES);
-            let mut ring: Vec<(Buffer, CommandContext)> = Vec::new();
-            let mut start = 0;
-            while start < size {
-                let length = (size - start).min(chunk_bytes);
-                let slot = ring
-                    .len()
-                    .min((start / chunk_bytes) as usize % STAGING_CHUNKS);
-                if slot == ring.len() {
-                    let staging = Self::new(
-                        device,
-                        "staging",
-                        chunk_bytes,
-                        vk::BufferUsageFlags::TRANSFER_SRC,
-                        MemoryLocation::CpuToGpu,
-                    )?;
-                    ring.push((staging, CommandContext::new(device, "staging upload")?));
+            let direct = !self.device.staged_uploads()
+                && self.allocation.as_ref().is_some_and(|a| {
+                    a.memory_properties()
+                        .contains(vk::MemoryPropertyFlags::HOST_COHERENT)
+                });
+            match self.mapped_mut() {
+                Ok(bytes) if direct => {
+                    let range = offset as usize..(offset + size) as usize;
+                    fill_in_pieces(0, &mut bytes[range], &fill);
+                    Ok(())
                 }
-                let (staging, commands) = &mut ring[slot];
-                // Waits for this staging buffer's previous copy, then refills it.
-                let command_buffer = commands.begin()?;
-                fill(start, &mut staging.mapped_mut()?[..length as usize]);
-                let region = [vk::BufferCopy::default()
-                    .dst_offset(offset + start)
-                    .size(length)];
-                // SAFETY: both buffers live until the copy has completed (the ring is waited
-                // for below); the region lies within both (checked above).
-                unsafe {
-                    device
-                        .raw
-                        .cmd_copy_buffer(command_buffer, staging.raw, self.raw, &region)
-                };
-                commands.submit()?;
-                start += length;
+                _ => self.upload_staged(offset, size, &fill),
             }
-            for (_, commands) in &ring {
-                commands.wait()?;
-            }
-            Ok(())
         })
+    }
+
+    /// [`Buffer::upload_with`] through the ring of staging buffers.
+    fn upload_staged(
+        &self,
+        offset: u64,
+        size: u64,
+        fill: &(impl Fn(u64, &mut [u8]) + Sync),
+    ) -> VkResult<()> {
+        let device = &self.device;
+        let chunk_bytes = size.min(STAGING_CHUNK_BYTES);
+        let mut ring: Vec<(Buffer, CommandContext)> = Vec::new();
+        let mut start = 0;
+        while start < size {
+            let length = (size - start).min(chunk_bytes);
+            let slot = ring
+                .len()
+                .min((start / chunk_bytes) as usize % STAGING_CHUNKS);
+            if slot == ring.len() {
+                let staging = Self::new(
+                    device,
+                    "staging",
+                    chunk_bytes,
+                    vk::BufferUsageFlags::TRANSFER_SRC,
+                    MemoryLocation::CpuToGpu,
+                )?;
+                ring.push((staging, CommandContext::new(device, "staging upload")?));
+            }
+            let (staging, commands) = &mut ring[slot];
+            // Waits for this staging buffer's previous copy, then refills it.
+            let command_buffer = commands.begin()?;
+            fill_in_pieces(start, &mut staging.mapped_mut()?[..length as usize], fill);
+            let region = [vk::BufferCopy::default()
+                .dst_offset(offset + start)
+                .size(length)];
+            // SAFETY: both buffers live until the copy has completed (the ring is waited
+            // for below); the region lies within both (checked by the caller).
+            unsafe {
+                device
+                    .raw
+                    .cmd_copy_buffer(command_buffer, staging.raw, self.raw, &region)
+            };
+            commands.submit()?;
+            start += length;
+        }
+        for (_, commands) in &ring {
+            commands.wait()?;
+        }
+        Ok(())
     }
 
     /// Copies `size` bytes from `offset` of this buffer (which needs TRANSFER_SRC usage) to the
@@ -276,4 +305,21 @@ impl Drop for Buffer {
             self.device.free(allocation);
         }
     }
+}
+
+/// Calls `fill(start + offset, piece)` over `bytes` in pieces of `FILL_PIECE_BYTES`, on up to
+/// a thread per core when there is more than one piece.
+fn fill_in_pieces(start: u64, bytes: &mut [u8], fill: &(impl Fn(u64, &mut [u8]) + Sync)) {
+    if bytes.len() <= FILL_PIECE_BYTES {
+        fill(start, bytes);
+        return;
+    }
+    let mut pieces: Vec<(u64, &mut [u8])> = bytes
+        .chunks_mut(FILL_PIECE_BYTES)
+        .enumerate()
+        .map(|(index, piece)| (start + (index * FILL_PIECE_BYTES) as u64, piece))
+        .collect();
+    crate::parallel::for_each_mut(&mut pieces, |(piece_start, piece)| {
+        fill(*piece_start, piece)
+    });
 }

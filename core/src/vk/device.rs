@@ -80,6 +80,9 @@ pub struct Device {
     lost: std::sync::atomic::AtomicBool,
     /// Bytes of device memory allocated now and at most (see [`Device::memory_in_use`]).
     memory_bytes: (std::sync::atomic::AtomicU64, std::sync::atomic::AtomicU64),
+    /// Set by [`Device::set_staged_uploads`]: uploads go through staging buffers even into
+    /// host-visible memory.
+    staged_uploads: std::sync::atomic::AtomicBool,
     debug_utils: Option<ash::ext::debug_utils::Device>,
     capabilities: Capabilities,
     limits: vk::PhysicalDeviceLimits,
@@ -310,6 +313,7 @@ impl Device {
             queue: Mutex::new(queue),
             allocator: Mutex::new(Some(allocator)),
             memory_bytes: Default::default(),
+            staged_uploads: Default::default(),
             lost: Default::default(),
             debug_utils,
             capabilities,
@@ -507,6 +511,22 @@ impl Device {
             self.mark_lost();
         }
         submitted.or_vk("vkQueueSubmit")
+    }
+
+    /// Makes uploads go through staging buffers and a GPU copy even into buffers whose memory
+    /// the host can write (see [`super::Buffer::upload_with`]), as on a discrete GPU: for tests
+    /// and measurements of that path on devices that would write directly. Any thread may
+    /// call it; uploads started afterwards follow it.
+    pub fn set_staged_uploads(&self, staged: bool) {
+        self.staged_uploads
+            .store(staged, std::sync::atomic::Ordering::Relaxed);
+    }
+
+    /// Whether uploads are made to go through staging buffers (see
+    /// [`Device::set_staged_uploads`]).
+    pub fn staged_uploads(&self) -> bool {
+        self.staged_uploads
+            .load(std::sync::atomic::Ordering::Relaxed)
     }
 
     /// Whether the device was lost: nothing can be submitted to it any more; its objects can

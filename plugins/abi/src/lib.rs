@@ -901,7 +901,9 @@ pub struct CadrCullInput {
     pub scene: *const CadrSceneView,
     /// Candidate bits: alive, visible in the tree, with triangles.
     pub candidate_bits: *const u64,
-    /// World matrices in f64 per matrix slot (column-major, 16 each).
+    /// World matrices in f64 per matrix slot (column-major, 16 each). Null while the host
+    /// keeps the transform hierarchy on the GPU (no active technique announces
+    /// [`CADR_TRAIT_READS_HOST_MATRICES`]): a culler that reads them announces it.
     pub world_matrices: *const f64,
     /// World-space frustum planes (xyz normal pointing inside, w distance): a point p is
     /// inside when `dot(n, p) + w >= 0` for all six.

@@ -10,7 +10,9 @@
 //! name) may fail without an error if the picture stays the same.
 //!
 //! Up to 40 points per kind run by default, spread over the calls of a clean run (a render
-//! makes thousands of host allocations); `CADR_FAULT_POINTS=N` or `=all` runs more.
+//! makes about two hundred host allocations that can fail: see `cadr_core::vk::fault` for
+//! those of the driver and the validation layer that are never failed);
+//! `CADR_FAULT_POINTS=N` or `=all` runs more.
 #![cfg(feature = "fault-injection")]
 #![allow(clippy::unwrap_used)] // Test code: a failed unwrap is a failed test.
 
@@ -82,9 +84,7 @@ fn render_with_a_swap(device: &Arc<Device>) -> Result<image::RgbaImage, String> 
 /// object and no validation error (leaked objects included) once the device is gone. A lost
 /// device must refuse the next call, saying so.
 ///
-/// `armed` is the fault injected, if any. When it is a host allocation made while the device
-/// is destroyed (inside the driver's vkDeviceWaitIdle), Mesa 22.3's lavapipe does not free an
-/// allocation it made just before on that error path: that leak is the driver's and is allowed.
+/// `armed` is the fault injected, if any.
 fn on_a_fresh_device(
     what: &str,
     armed: Option<(FaultKind, u64)>,
@@ -126,23 +126,25 @@ fn on_a_fresh_device(
         0,
         "{what}: device memory left allocated"
     );
-    let host_calls_before_destruction = fault::calls(FaultKind::HostMemory);
     drop(device);
-    let failed_in_destruction = armed.is_some_and(|(kind, n)| {
-        kind == FaultKind::HostMemory && n > host_calls_before_destruction
-    });
+    let host_memory_armed = armed.is_some_and(|(kind, _)| kind == FaultKind::HostMemory);
     // Mesa's drivers report each VK_ERROR_OUT_OF_HOST_MEMORY they return through the debug
-    // messenger with that name as the whole text: the injected failure itself, not a misuse.
+    // messenger with that name as the whole text, and the loader says it failed to allocate:
+    // the injected failure itself, not a misuse.
+    let reports_injected_failure = |text: &str| {
+        text == "VK_ERROR_OUT_OF_HOST_MEMORY"
+            || (text.starts_with("loader_") && text.contains("Failed to allocate"))
+    };
     let errors: Vec<String> = log
         .errors()
         .into_iter()
-        .filter(|text| text != "VK_ERROR_OUT_OF_HOST_MEMORY")
+        .filter(|text| !(host_memory_armed && reports_injected_failure(text)))
         .collect();
     assert!(errors.is_empty(), "{what}: validation errors: {errors:?}");
     let leaked = live_object_allocations() - objects_before;
-    assert!(
-        leaked == 0 || (failed_in_destruction && leaked == 1),
-        "{what}: {leaked} host allocations of Vulkan objects left allocated"
+    assert_eq!(
+        leaked, 0,
+        "{what}: host allocations of Vulkan objects left allocated"
     );
     result
 }

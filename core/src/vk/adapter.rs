@@ -72,22 +72,35 @@ fn type_rank(device_type: vk::PhysicalDeviceType) -> u32 {
 /// Every physical device with a graphics+compute queue and Vulkan 1.3.
 pub fn enumerate(instance: &Instance) -> VkResult<Vec<Adapter>> {
     // SAFETY: the instance is alive for the call.
-    let physicals =
-        unsafe { instance.raw.enumerate_physical_devices() }.or_vk("vkEnumeratePhysicalDevices")?;
+    let enumerate_physical_devices = || unsafe { instance.raw.enumerate_physical_devices() };
+    // The validation layer (tests only) sets itself up here and, after a failed host
+    // allocation, leaves a lock held that the instance's destruction then waits for forever:
+    // with the layer, no host-memory fault is injected (as in its instance creation).
+    let physicals = if instance.validation_enabled() {
+        super::fault::without_host_memory_faults(enumerate_physical_devices)
+    } else {
+        enumerate_physical_devices()
+    }
+    .or_vk("vkEnumeratePhysicalDevices")?;
     let mut adapters = Vec::new();
     for (index, physical) in physicals.into_iter().enumerate() {
-        // SAFETY: physical comes from this instance.
-        let properties = unsafe { instance.raw.get_physical_device_properties(physical) };
+        // These queries return no result, so they cannot report a failed host allocation (the
+        // validation layer crashes on one): no host-memory fault is injected into them.
+        let (properties, families) = super::fault::without_host_memory_faults(|| {
+            // SAFETY: physical comes from this instance.
+            unsafe {
+                (
+                    instance.raw.get_physical_device_properties(physical),
+                    instance
+                        .raw
+                        .get_physical_device_queue_family_properties(physical),
+                )
+            }
+        });
         let name = properties
             .device_name_as_c_str()
             .map(|n| n.to_string_lossy().into_owned())
             .unwrap_or_else(|_| format!("device {index}"));
-        // SAFETY: physical comes from this instance.
-        let families = unsafe {
-            instance
-                .raw
-                .get_physical_device_queue_family_properties(physical)
-        };
         let wanted = vk::QueueFlags::GRAPHICS | vk::QueueFlags::COMPUTE;
         let Some(queue_family) = families.iter().position(|f| f.queue_flags.contains(wanted))
         else {

@@ -1,6 +1,6 @@
 //! Command pools and one-shot submissions (uploads, readbacks).
 
-use super::host_memory::core_callbacks as host_callbacks;
+use super::host_memory::{core_callbacks as host_callbacks, core_command_pool_callbacks};
 use std::sync::Arc;
 
 use ash::vk;
@@ -25,8 +25,12 @@ impl CommandContext {
             .queue_family_index(device.queue_family())
             .flags(vk::CommandPoolCreateFlags::TRANSIENT);
         // SAFETY: pool_info is valid for this device.
-        let pool = unsafe { device.raw.create_command_pool(&pool_info, host_callbacks()) }
-            .or_vk("vkCreateCommandPool")?;
+        let pool = unsafe {
+            device
+                .raw
+                .create_command_pool(&pool_info, core_command_pool_callbacks())
+        }
+        .or_vk("vkCreateCommandPool")?;
         let mut context = Self {
             device: Arc::clone(device),
             pool,
@@ -169,7 +173,7 @@ impl Drop for CommandContext {
             self.device.raw.destroy_fence(self.fence, host_callbacks());
             self.device
                 .raw
-                .destroy_command_pool(self.pool, host_callbacks());
+                .destroy_command_pool(self.pool, core_command_pool_callbacks());
         }
     }
 }

@@ -51,6 +51,13 @@ pub enum VkError {
         #[source]
         source: gpu_allocator::AllocationError,
     },
+    /// The driver ran out of host memory while the memory allocator asked it for GPU memory
+    /// (gpu-allocator reports that as an internal error).
+    #[error("GPU memory allocation of {what} ran out of host memory (vkAllocateMemory: ERROR_OUT_OF_HOST_MEMORY)")]
+    AllocationOutOfHostMemory {
+        /// What was being allocated (its debug name).
+        what: String,
+    },
     /// A resource was used against its contract (a caller's bug, reported instead of panicking).
     #[error("invalid use: {0}")]
     InvalidUse(String),
@@ -64,6 +71,21 @@ pub fn map_result(call: &'static str, result: vk::Result) -> VkError {
         }
         vk::Result::ERROR_DEVICE_LOST => VkError::DeviceLost(call),
         _ => VkError::Call { call, result },
+    }
+}
+
+/// Turns an error of the memory allocator, allocating `what`, into a [`VkError`].
+pub(crate) fn allocation_error(what: &str, source: gpu_allocator::AllocationError) -> VkError {
+    match source {
+        gpu_allocator::AllocationError::Internal(message)
+            if message.contains("ERROR_OUT_OF_HOST_MEMORY") =>
+        {
+            VkError::AllocationOutOfHostMemory { what: what.into() }
+        }
+        source => VkError::Allocation {
+            what: what.into(),
+            source,
+        },
     }
 }
 

@@ -6,9 +6,16 @@
 //! - `device-memory`: a device memory allocation returns `VK_ERROR_OUT_OF_DEVICE_MEMORY`;
 //! - `host-memory`: a host allocation of a Vulkan object's memory, through cadr's allocation
 //!   callbacks ([`super::host_memory`]), returns NULL, so the call that made it fails with
-//!   `VK_ERROR_OUT_OF_HOST_MEMORY` (Mesa 22.3's lavapipe does not survive every such failure:
+//!   `VK_ERROR_OUT_OF_HOST_MEMORY`. Mesa 22.3's lavapipe does not survive every such failure:
 //!   it uses some allocations unchecked, in vkCreatePipelineLayout and while recording
-//!   commands);
+//!   commands, and the validation layer does not either in some queries that return no
+//!   result (and so could not report one). So cadr's own command pools (whose callbacks the
+//!   driver allocates recorded commands with) get callbacks that count but never fail, and no
+//!   host allocation fails inside cadr's vkCreatePipelineLayout, the physical-device queries,
+//!   or the validation layer's set-up (instance creation and the first enumeration of
+//!   physical devices with the layer, which goes on after a failure there and then crashes or
+//!   deadlocks), or vkDeviceWaitIdle (where the driver leaks an allocation of its own after a
+//!   failed one) ([`without_host_memory_faults`]); plugins' calls are not exempt;
 //! - `submit`: a queue submission returns `VK_ERROR_OUT_OF_DEVICE_MEMORY`;
 //! - `device-lost`: a queue submission returns `VK_ERROR_DEVICE_LOST`, and the device is lost
 //!   from then on (every later submission, wait and allocation says so).
@@ -137,8 +144,24 @@ mod armed {
         }
     }
 
+    thread_local! {
+        /// Set while this thread runs [`without_host_memory_faults`].
+        static HOST_MEMORY_EXEMPT: std::cell::Cell<bool> = const { std::cell::Cell::new(false) };
+    }
+
+    /// Runs `work` with no host-memory fault injected (nor counted) on this thread.
+    pub(crate) fn without_host_memory_faults<R>(work: impl FnOnce() -> R) -> R {
+        let before = HOST_MEMORY_EXEMPT.with(|exempt| exempt.replace(true));
+        let result = work();
+        HOST_MEMORY_EXEMPT.with(|exempt| exempt.set(before));
+        result
+    }
+
     /// Counts a call of `kind`; true when it is the one armed to fail.
     pub(crate) fn fails(kind: FaultKind) -> bool {
+        if kind == FaultKind::HostMemory && HOST_MEMORY_EXEMPT.with(std::cell::Cell::get) {
+            return false;
+        }
         read_environment();
         let call = CALLS[kind.index()].fetch_add(1, Ordering::Relaxed) + 1;
         *armed() == Some((kind, call))
@@ -149,7 +172,15 @@ mod armed {
 pub use armed::{arm, calls, disarm};
 
 #[cfg(feature = "fault-injection")]
-pub(crate) use armed::fails;
+pub(crate) use armed::{fails, without_host_memory_faults};
+
+/// Runs `work` with no host-memory fault injected on this thread (for driver calls that do
+/// not survive one); without the feature, just runs it.
+#[cfg(not(feature = "fault-injection"))]
+#[inline(always)]
+pub(crate) fn without_host_memory_faults<R>(work: impl FnOnce() -> R) -> R {
+    work()
+}
 
 /// Without the feature nothing fails.
 #[cfg(not(feature = "fault-injection"))]

@@ -38,9 +38,30 @@ unsafe impl Sync for SharedCallbacks {}
 static CORE_CALLBACKS: SharedCallbacks =
     SharedCallbacks(counting_callbacks(&CORE_OBJECT_ALLOCATIONS));
 
+/// The callbacks of cadr's own command pools: counted like the others, but never failed by
+/// fault injection. The driver allocates the memory of recorded commands through them, and
+/// Mesa 22.3's lavapipe uses some of it unchecked (vkCmdBindDescriptorSets copies the sets
+/// into a failed allocation): an injected failure there crashes the driver instead of
+/// testing cadr.
+static CORE_COMMAND_POOL_CALLBACKS: SharedCallbacks = SharedCallbacks(vk::AllocationCallbacks {
+    p_user_data: (&raw const CORE_OBJECT_ALLOCATIONS).cast_mut().cast(),
+    pfn_allocation: Some(allocate_without_faults),
+    pfn_reallocation: Some(reallocate_without_faults),
+    pfn_free: Some(free),
+    pfn_internal_allocation: None,
+    pfn_internal_free: None,
+    _marker: std::marker::PhantomData,
+});
+
 /// The callbacks to pass to every `vkCreate*` and `vkDestroy*` of cadr's own objects.
 pub(crate) fn core_callbacks() -> Option<&'static vk::AllocationCallbacks<'static>> {
     Some(&CORE_CALLBACKS.0)
+}
+
+/// The callbacks to create and destroy cadr's own command pools with (see
+/// `CORE_COMMAND_POOL_CALLBACKS`).
+pub(crate) fn core_command_pool_callbacks() -> Option<&'static vk::AllocationCallbacks<'static>> {
+    Some(&CORE_COMMAND_POOL_CALLBACKS.0)
 }
 
 /// Live host allocations of cadr's own Vulkan objects, in the whole process (0 once every
@@ -76,11 +97,21 @@ unsafe extern "system" fn allocate(
     user: *mut c_void,
     size: usize,
     alignment: usize,
-    _scope: vk::SystemAllocationScope,
+    scope: vk::SystemAllocationScope,
 ) -> *mut c_void {
     if fault::fails(FaultKind::HostMemory) {
         return std::ptr::null_mut();
     }
+    // SAFETY: forwarded.
+    unsafe { allocate_without_faults(user, size, alignment, scope) }
+}
+
+unsafe extern "system" fn allocate_without_faults(
+    user: *mut c_void,
+    size: usize,
+    alignment: usize,
+    _scope: vk::SystemAllocationScope,
+) -> *mut c_void {
     if size == 0 && alignment <= ZERO_SIZE_LIMIT {
         return std::ptr::without_provenance_mut(alignment.max(1));
     }
@@ -131,6 +162,44 @@ unsafe extern "system" fn free(user: *mut c_void, memory: *mut c_void) {
 }
 
 unsafe extern "system" fn reallocate(
+    user: *mut c_void,
+    original: *mut c_void,
+    size: usize,
+    alignment: usize,
+    scope: vk::SystemAllocationScope,
+) -> *mut c_void {
+    // SAFETY: forwarded.
+    unsafe { reallocate_through(allocate, user, original, size, alignment, scope) }
+}
+
+unsafe extern "system" fn reallocate_without_faults(
+    user: *mut c_void,
+    original: *mut c_void,
+    size: usize,
+    alignment: usize,
+    scope: vk::SystemAllocationScope,
+) -> *mut c_void {
+    // SAFETY: forwarded.
+    unsafe {
+        reallocate_through(
+            allocate_without_faults,
+            user,
+            original,
+            size,
+            alignment,
+            scope,
+        )
+    }
+}
+
+/// Reallocation with `allocate` making the new allocation.
+unsafe fn reallocate_through(
+    allocate: unsafe extern "system" fn(
+        *mut c_void,
+        usize,
+        usize,
+        vk::SystemAllocationScope,
+    ) -> *mut c_void,
     user: *mut c_void,
     original: *mut c_void,
     size: usize,

@@ -137,16 +137,32 @@ impl Instance {
             create_info = create_info.push_next(&mut validation_features);
         }
         // SAFETY: create_info and everything it points to live until the call returns.
-        let raw = unsafe { entry.create_instance(&create_info, host_callbacks()) }
-            .or_vk("vkCreateInstance")?;
+        let create = || unsafe { entry.create_instance(&create_info, host_callbacks()) };
+        // The validation layer (tests only) does not survive a failed host allocation of its
+        // own set-up: it goes on and crashes later. Injected host-memory failures test cadr,
+        // so none is injected into an instance creation with the layer.
+        let raw = if layers.is_empty() {
+            create()
+        } else {
+            super::fault::without_host_memory_faults(create)
+        }
+        .or_vk("vkCreateInstance")?;
 
         let validation_log = Arc::new(ValidationLog::default());
         let debug_utils =
             has_debug_utils.then(|| ash::ext::debug_utils::Instance::new(&entry, &raw));
-        let mut messenger = vk::DebugUtilsMessengerEXT::null();
-        let mut callback_data = None;
-        if let (true, Some(debug_utils)) = (options.validation, &debug_utils) {
-            let user_data = Arc::clone(&validation_log);
+        // Built before the messenger, so that a failure to make it destroys the instance.
+        let mut instance = Self {
+            entry,
+            raw,
+            debug_utils,
+            messenger: vk::DebugUtilsMessengerEXT::null(),
+            validation_log,
+            _callback_data: None,
+        };
+        if let (true, Some(debug_utils)) = (options.validation, &instance.debug_utils) {
+            let validation_log = &instance.validation_log;
+            let user_data = Arc::clone(validation_log);
             let messenger_info = vk::DebugUtilsMessengerCreateInfoEXT::default()
                 .message_severity(
                     vk::DebugUtilsMessageSeverityFlagsEXT::ERROR
@@ -161,21 +177,14 @@ impl Instance {
                 .user_data(Arc::as_ptr(&user_data) as *mut c_void);
             // SAFETY: the user data points to a ValidationLog kept alive by callback_data
             // until after the messenger is destroyed in Drop.
-            messenger = unsafe {
+            let messenger = unsafe {
                 debug_utils.create_debug_utils_messenger(&messenger_info, host_callbacks())
             }
             .or_vk("vkCreateDebugUtilsMessengerEXT")?;
-            callback_data = Some(user_data);
+            instance.messenger = messenger;
+            instance._callback_data = Some(user_data);
         }
-
-        Ok(Self {
-            entry,
-            raw,
-            debug_utils,
-            messenger,
-            validation_log,
-            _callback_data: callback_data,
-        })
+        Ok(instance)
     }
 
     /// Whether the validation layer reports into the log (validation was asked for).

@@ -15,7 +15,7 @@
 //!   or the validation layer's set-up (instance creation and the first enumeration of
 //!   physical devices with the layer, which goes on after a failure there and then crashes or
 //!   deadlocks), or vkDeviceWaitIdle (where the driver leaks an allocation of its own after a
-//!   failed one) ([`without_host_memory_faults`]); plugins' calls are not exempt;
+//!   failed one) (`without_host_memory_faults`); plugins' calls are not exempt;
 //! - `submit`: a queue submission returns `VK_ERROR_OUT_OF_DEVICE_MEMORY`;
 //! - `device-lost`: a queue submission returns `VK_ERROR_DEVICE_LOST`, and the device is lost
 //!   from then on (every later submission, wait and allocation says so).

@@ -3,10 +3,7 @@
 /// `work` applied to every item on up to one thread per core (contiguous chunks), the results
 /// in the items' order. A panic in `work` is resumed on the caller's thread.
 pub fn map<T: Sync, R: Send>(items: &[T], work: impl Fn(&T) -> R + Sync) -> Vec<R> {
-    let threads = std::thread::available_parallelism()
-        .map_or(1, usize::from)
-        .min(items.len())
-        .max(1);
+    let threads = threads_for(items.len());
     let chunk = items.len().div_ceil(threads).max(1);
     std::thread::scope(|scope| {
         let workers: Vec<_> = items
@@ -26,10 +23,7 @@ pub fn map<T: Sync, R: Send>(items: &[T], work: impl Fn(&T) -> R + Sync) -> Vec<
 /// `work` applied to every item, mutably, on up to one thread per core (contiguous chunks of
 /// items). A panic in `work` is resumed on the caller's thread.
 pub fn for_each_mut<T: Send>(items: &mut [T], work: impl Fn(&mut T) + Sync) {
-    let threads = std::thread::available_parallelism()
-        .map_or(1, usize::from)
-        .min(items.len())
-        .max(1);
+    let threads = threads_for(items.len());
     if threads == 1 {
         items.iter_mut().for_each(work);
         return;
@@ -46,4 +40,12 @@ pub fn for_each_mut<T: Send>(items: &mut [T], work: impl Fn(&mut T) + Sync) {
             }
         }
     });
+}
+
+/// Threads for `items` items: one per core, at most one per item, at least one.
+fn threads_for(items: usize) -> usize {
+    std::thread::available_parallelism()
+        .map_or(1, usize::from)
+        .min(items)
+        .max(1)
 }

@@ -43,15 +43,8 @@ static CORE_CALLBACKS: SharedCallbacks =
 /// Mesa 22.3's lavapipe uses some of it unchecked (vkCmdBindDescriptorSets copies the sets
 /// into a failed allocation): an injected failure there crashes the driver instead of
 /// testing cadr.
-static CORE_COMMAND_POOL_CALLBACKS: SharedCallbacks = SharedCallbacks(vk::AllocationCallbacks {
-    p_user_data: (&raw const CORE_OBJECT_ALLOCATIONS).cast_mut().cast(),
-    pfn_allocation: Some(allocate_without_faults),
-    pfn_reallocation: Some(reallocate_without_faults),
-    pfn_free: Some(free),
-    pfn_internal_allocation: None,
-    pfn_internal_free: None,
-    _marker: std::marker::PhantomData,
-});
+static CORE_COMMAND_POOL_CALLBACKS: SharedCallbacks =
+    SharedCallbacks(callbacks::<false>(&CORE_OBJECT_ALLOCATIONS));
 
 /// The callbacks to pass to every `vkCreate*` and `vkDestroy*` of cadr's own objects.
 pub(crate) fn core_callbacks() -> Option<&'static vk::AllocationCallbacks<'static>> {
@@ -73,10 +66,17 @@ pub fn live_object_allocations() -> i64 {
 /// Callbacks that count live allocations into `counter`, which must outlive every object
 /// created with them (and be destroyed with the same callbacks).
 pub const fn counting_callbacks(counter: *const AtomicI64) -> vk::AllocationCallbacks<'static> {
+    callbacks::<true>(counter)
+}
+
+/// Counting callbacks whose allocations fault injection may fail (`MAY_FAIL`) or not.
+const fn callbacks<const MAY_FAIL: bool>(
+    counter: *const AtomicI64,
+) -> vk::AllocationCallbacks<'static> {
     vk::AllocationCallbacks {
         p_user_data: counter.cast_mut().cast(),
-        pfn_allocation: Some(allocate),
-        pfn_reallocation: Some(reallocate),
+        pfn_allocation: Some(allocate::<MAY_FAIL>),
+        pfn_reallocation: Some(reallocate::<MAY_FAIL>),
         pfn_free: Some(free),
         pfn_internal_allocation: None,
         pfn_internal_free: None,
@@ -93,25 +93,15 @@ fn counter(user: *mut c_void) -> Option<&'static AtomicI64> {
     unsafe { user.cast::<AtomicI64>().as_ref() }
 }
 
-unsafe extern "system" fn allocate(
-    user: *mut c_void,
-    size: usize,
-    alignment: usize,
-    scope: vk::SystemAllocationScope,
-) -> *mut c_void {
-    if fault::fails(FaultKind::HostMemory) {
-        return std::ptr::null_mut();
-    }
-    // SAFETY: forwarded.
-    unsafe { allocate_without_faults(user, size, alignment, scope) }
-}
-
-unsafe extern "system" fn allocate_without_faults(
+unsafe extern "system" fn allocate<const MAY_FAIL: bool>(
     user: *mut c_void,
     size: usize,
     alignment: usize,
     _scope: vk::SystemAllocationScope,
 ) -> *mut c_void {
+    if MAY_FAIL && fault::fails(FaultKind::HostMemory) {
+        return std::ptr::null_mut();
+    }
     if size == 0 && alignment <= ZERO_SIZE_LIMIT {
         return std::ptr::without_provenance_mut(alignment.max(1));
     }
@@ -161,45 +151,7 @@ unsafe extern "system" fn free(user: *mut c_void, memory: *mut c_void) {
     }
 }
 
-unsafe extern "system" fn reallocate(
-    user: *mut c_void,
-    original: *mut c_void,
-    size: usize,
-    alignment: usize,
-    scope: vk::SystemAllocationScope,
-) -> *mut c_void {
-    // SAFETY: forwarded.
-    unsafe { reallocate_through(allocate, user, original, size, alignment, scope) }
-}
-
-unsafe extern "system" fn reallocate_without_faults(
-    user: *mut c_void,
-    original: *mut c_void,
-    size: usize,
-    alignment: usize,
-    scope: vk::SystemAllocationScope,
-) -> *mut c_void {
-    // SAFETY: forwarded.
-    unsafe {
-        reallocate_through(
-            allocate_without_faults,
-            user,
-            original,
-            size,
-            alignment,
-            scope,
-        )
-    }
-}
-
-/// Reallocation with `allocate` making the new allocation.
-unsafe fn reallocate_through(
-    allocate: unsafe extern "system" fn(
-        *mut c_void,
-        usize,
-        usize,
-        vk::SystemAllocationScope,
-    ) -> *mut c_void,
+unsafe extern "system" fn reallocate<const MAY_FAIL: bool>(
     user: *mut c_void,
     original: *mut c_void,
     size: usize,
@@ -208,7 +160,7 @@ unsafe fn reallocate_through(
 ) -> *mut c_void {
     if original.is_null() || is_zero_size(original) {
         // SAFETY: forwarded (a zero-size original holds nothing to copy).
-        return unsafe { allocate(user, size, alignment, scope) };
+        return unsafe { allocate::<MAY_FAIL>(user, size, alignment, scope) };
     }
     if size == 0 {
         // SAFETY: forwarded.
@@ -218,7 +170,7 @@ unsafe fn reallocate_through(
     // SAFETY: forwarded; `original` came from `allocate`. On failure the original stays
     // allocated, as Vulkan requires.
     unsafe {
-        let fresh = allocate(user, size, alignment, scope);
+        let fresh = allocate::<MAY_FAIL>(user, size, alignment, scope);
         if !fresh.is_null() {
             let old_size = original.cast::<usize>().sub(1).read_unaligned();
             std::ptr::copy_nonoverlapping(

@@ -61,7 +61,8 @@ pub struct RawHandles {
     pub physical_device: vk::PhysicalDevice,
     /// The logical device.
     pub device: vk::Device,
-    /// The loader's `vkGetInstanceProcAddr`.
+    /// The loader's `vkGetInstanceProcAddr` (with the `fault-injection` feature, one that
+    /// exempts what lavapipe cannot survive a host-memory fault in, as cadr's own calls are).
     pub get_instance_proc_addr: vk::PFN_vkGetInstanceProcAddr,
 }
 
@@ -469,7 +470,18 @@ impl Device {
             instance: self.instance.raw().handle(),
             physical_device: self.adapter.physical,
             device: self.raw.handle(),
-            get_instance_proc_addr: self.instance.entry().static_fn().get_instance_proc_addr,
+            get_instance_proc_addr: super::fault::plugin_loader(
+                (self.instance.raw().handle(), self.raw.handle()),
+                super::fault::RealFunctions {
+                    get_instance_proc_addr: self
+                        .instance
+                        .entry()
+                        .static_fn()
+                        .get_instance_proc_addr,
+                    get_device_proc_addr: self.instance.raw().fp_v1_0().get_device_proc_addr,
+                    create_pipeline_layout: self.raw.fp_v1_0().create_pipeline_layout,
+                },
+            ),
         }
     }
 

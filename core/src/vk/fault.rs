@@ -15,7 +15,11 @@
 //!   or the validation layer's set-up (instance creation and the first enumeration of
 //!   physical devices with the layer, which goes on after a failure there and then crashes or
 //!   deadlocks), or vkDeviceWaitIdle (where the driver leaks an allocation of its own after a
-//!   failed one) (`without_host_memory_faults`); plugins' calls are not exempt;
+//!   failed one) (`without_host_memory_faults`); plugins load Vulkan through a
+//!   `vkGetInstanceProcAddr` that wraps their vkCreatePipelineLayout the same way
+//!   (`plugin_loader`). In vkCreateGraphicsPipelines and vkGetQueryPoolResults, which lavapipe
+//!   survives a failure of the first allocation in but leaks after a later one, only the first
+//!   may fail (`with_first_host_memory_fault_only`);
 //! - `submit`: a queue submission returns `VK_ERROR_OUT_OF_DEVICE_MEMORY`;
 //! - `device-lost`: a queue submission returns `VK_ERROR_DEVICE_LOST`, and the device is lost
 //!   from then on (every later submission, wait and allocation says so).
@@ -88,12 +92,30 @@ pub fn parse_fault(text: &str) -> Result<(FaultKind, u64), String> {
     Ok((kind, n))
 }
 
+/// The real functions behind the `vkGetInstanceProcAddr` cadr hands plugins, for one instance
+/// and its device (with the `fault-injection` feature they are wrapped; without it plugins get
+/// the loader's own, and the others are not read).
+#[derive(Clone, Copy)]
+#[cfg_attr(not(feature = "fault-injection"), allow(dead_code))]
+pub(crate) struct RealFunctions {
+    /// The loader's (the Vulkan library may be unloaded and loaded again at another address
+    /// between devices, so it is kept per device).
+    pub get_instance_proc_addr: ash::vk::PFN_vkGetInstanceProcAddr,
+    /// The instance's.
+    pub get_device_proc_addr: ash::vk::PFN_vkGetDeviceProcAddr,
+    /// The device's.
+    pub create_pipeline_layout: ash::vk::PFN_vkCreatePipelineLayout,
+}
+
 #[cfg(feature = "fault-injection")]
 mod armed {
+    use std::ffi::{c_char, CStr};
     use std::sync::atomic::{AtomicU64, Ordering};
     use std::sync::{Mutex, OnceLock};
 
-    use super::{parse_fault, FaultKind};
+    use ash::vk;
+
+    use super::{parse_fault, FaultKind, RealFunctions};
 
     /// Calls of each kind so far.
     static CALLS: [AtomicU64; FaultKind::ALL.len()] =
@@ -144,23 +166,150 @@ mod armed {
         }
     }
 
+    /// Which host allocations of this thread may fail.
+    #[derive(Clone, Copy, PartialEq, Eq)]
+    enum HostMemoryWindow {
+        /// Every one.
+        All,
+        /// None ([`without_host_memory_faults`]).
+        None,
+        /// Only the first one from here on ([`with_first_host_memory_fault_only`]); `true`
+        /// once that one was counted.
+        FirstOnly(bool),
+    }
+
     thread_local! {
-        /// Set while this thread runs [`without_host_memory_faults`].
-        static HOST_MEMORY_EXEMPT: std::cell::Cell<bool> = const { std::cell::Cell::new(false) };
+        static HOST_MEMORY_WINDOW: std::cell::Cell<HostMemoryWindow> =
+            const { std::cell::Cell::new(HostMemoryWindow::All) };
+    }
+
+    fn in_window<R>(window: HostMemoryWindow, work: impl FnOnce() -> R) -> R {
+        let before = HOST_MEMORY_WINDOW.with(|current| current.replace(window));
+        let result = work();
+        HOST_MEMORY_WINDOW.with(|current| current.set(before));
+        result
     }
 
     /// Runs `work` with no host-memory fault injected (nor counted) on this thread.
     pub(crate) fn without_host_memory_faults<R>(work: impl FnOnce() -> R) -> R {
-        let before = HOST_MEMORY_EXEMPT.with(|exempt| exempt.replace(true));
-        let result = work();
-        HOST_MEMORY_EXEMPT.with(|exempt| exempt.set(before));
-        result
+        in_window(HostMemoryWindow::None, work)
+    }
+
+    /// Runs `work` with only its first host allocation on this thread able to fail (and
+    /// counted): for driver calls that survive a failure of their first allocation but leak
+    /// after a later one.
+    pub(crate) fn with_first_host_memory_fault_only<R>(work: impl FnOnce() -> R) -> R {
+        in_window(HostMemoryWindow::FirstOnly(false), work)
+    }
+
+    /// What [`plugin_loader`] was given, by instance and device handle (Vulkan passes the
+    /// wrappers no user data). A handle may be reused once its object is gone: a new entry
+    /// replaces any with the same instance or device, and no two live objects share one.
+    static REAL_FUNCTIONS: Mutex<Vec<(vk::Instance, vk::Device, RealFunctions)>> =
+        Mutex::new(Vec::new());
+
+    fn real_functions(matches: impl Fn(vk::Instance, vk::Device) -> bool) -> Option<RealFunctions> {
+        let table = REAL_FUNCTIONS
+            .lock()
+            .unwrap_or_else(std::sync::PoisonError::into_inner);
+        table
+            .iter()
+            .find(|&&(instance, device, _)| matches(instance, device))
+            .map(|&(_, _, real)| real)
+    }
+
+    /// The `vkGetInstanceProcAddr` to hand plugins of `instance` and `device` in place of the
+    /// loader's: the same functions, except that their `vkCreatePipelineLayout` runs with no
+    /// host-memory fault injected, like cadr's own (lavapipe uses that allocation unchecked).
+    pub(crate) fn plugin_loader(
+        (instance, device): (vk::Instance, vk::Device),
+        real: RealFunctions,
+    ) -> vk::PFN_vkGetInstanceProcAddr {
+        let mut table = REAL_FUNCTIONS
+            .lock()
+            .unwrap_or_else(std::sync::PoisonError::into_inner);
+        table.retain(|&(known_instance, known_device, _)| {
+            known_instance != instance && known_device != device
+        });
+        table.push((instance, device, real));
+        plugin_get_instance_proc_addr
+    }
+
+    const CREATE_PIPELINE_LAYOUT: &[u8] = b"vkCreatePipelineLayout";
+
+    unsafe extern "system" fn plugin_get_instance_proc_addr(
+        instance: vk::Instance,
+        name: *const c_char,
+    ) -> vk::PFN_vkVoidFunction {
+        let real = real_functions(|known, _| known == instance)?;
+        // SAFETY: Vulkan's contract: name is a NUL-terminated string.
+        let wanted = unsafe { CStr::from_ptr(name) }.to_bytes();
+        if wanted == CREATE_PIPELINE_LAYOUT {
+            return plugin_create_pipeline_layout_fn();
+        }
+        if wanted == b"vkGetDeviceProcAddr" {
+            // SAFETY: the wrapper has vkGetDeviceProcAddr's signature.
+            return Some(unsafe {
+                std::mem::transmute::<vk::PFN_vkGetDeviceProcAddr, unsafe extern "system" fn()>(
+                    plugin_get_device_proc_addr,
+                )
+            });
+        }
+        // SAFETY: the caller's arguments, passed on.
+        unsafe { (real.get_instance_proc_addr)(instance, name) }
+    }
+
+    fn plugin_create_pipeline_layout_fn() -> vk::PFN_vkVoidFunction {
+        // SAFETY: the wrapper has vkCreatePipelineLayout's signature.
+        Some(unsafe {
+            std::mem::transmute::<vk::PFN_vkCreatePipelineLayout, unsafe extern "system" fn()>(
+                plugin_create_pipeline_layout,
+            )
+        })
+    }
+
+    unsafe extern "system" fn plugin_get_device_proc_addr(
+        device: vk::Device,
+        name: *const c_char,
+    ) -> vk::PFN_vkVoidFunction {
+        let real = real_functions(|_, known| known == device)?;
+        // SAFETY: Vulkan's contract: name is a NUL-terminated string.
+        if unsafe { CStr::from_ptr(name) }.to_bytes() == CREATE_PIPELINE_LAYOUT {
+            return plugin_create_pipeline_layout_fn();
+        }
+        // SAFETY: the caller's arguments, passed on.
+        unsafe { (real.get_device_proc_addr)(device, name) }
+    }
+
+    unsafe extern "system" fn plugin_create_pipeline_layout(
+        device: vk::Device,
+        info: *const vk::PipelineLayoutCreateInfo<'_>,
+        allocator: *const vk::AllocationCallbacks<'_>,
+        layout: *mut vk::PipelineLayout,
+    ) -> vk::Result {
+        let Some(real) = real_functions(|_, known| known == device) else {
+            return vk::Result::ERROR_INITIALIZATION_FAILED;
+        };
+        without_host_memory_faults(|| {
+            // SAFETY: the caller's arguments, passed on.
+            unsafe { (real.create_pipeline_layout)(device, info, allocator, layout) }
+        })
     }
 
     /// Counts a call of `kind`; true when it is the one armed to fail.
     pub(crate) fn fails(kind: FaultKind) -> bool {
-        if kind == FaultKind::HostMemory && HOST_MEMORY_EXEMPT.with(std::cell::Cell::get) {
-            return false;
+        if kind == FaultKind::HostMemory {
+            let may_fail = HOST_MEMORY_WINDOW.with(|window| match window.get() {
+                HostMemoryWindow::All => true,
+                HostMemoryWindow::None | HostMemoryWindow::FirstOnly(true) => false,
+                HostMemoryWindow::FirstOnly(false) => {
+                    window.set(HostMemoryWindow::FirstOnly(true));
+                    true
+                }
+            });
+            if !may_fail {
+                return false;
+            }
         }
         read_environment();
         let call = CALLS[kind.index()].fetch_add(1, Ordering::Relaxed) + 1;
@@ -172,13 +321,33 @@ mod armed {
 pub use armed::{arm, calls, disarm};
 
 #[cfg(feature = "fault-injection")]
-pub(crate) use armed::{fails, without_host_memory_faults};
+pub(crate) use armed::{
+    fails, plugin_loader, with_first_host_memory_fault_only, without_host_memory_faults,
+};
+
+/// The `vkGetInstanceProcAddr` to hand plugins: without the feature, the loader's own.
+#[cfg(not(feature = "fault-injection"))]
+#[inline(always)]
+pub(crate) fn plugin_loader(
+    _handles: (ash::vk::Instance, ash::vk::Device),
+    real: RealFunctions,
+) -> ash::vk::PFN_vkGetInstanceProcAddr {
+    real.get_instance_proc_addr
+}
 
 /// Runs `work` with no host-memory fault injected on this thread (for driver calls that do
 /// not survive one); without the feature, just runs it.
 #[cfg(not(feature = "fault-injection"))]
 #[inline(always)]
 pub(crate) fn without_host_memory_faults<R>(work: impl FnOnce() -> R) -> R {
+    work()
+}
+
+/// Runs `work` with only its first host allocation able to fail; without the feature, just
+/// runs it.
+#[cfg(not(feature = "fault-injection"))]
+#[inline(always)]
+pub(crate) fn with_first_host_memory_fault_only<R>(work: impl FnOnce() -> R) -> R {
     work()
 }
 

@@ -295,12 +295,19 @@ impl Pipeline {
             .dynamic_state(&dynamic)
             .layout(desc.layout.raw())
             .push_next(&mut rendering)];
-        // SAFETY: every struct the info points to lives until the call returns; the modules are
-        // alive during the call (pipelines do not keep them).
-        let pipelines = crate::timings::time(crate::timings::Phase::PipelineCreation, || unsafe {
-            device
-                .raw()
-                .create_graphics_pipelines(device.pipeline_cache(), &info, host_callbacks())
+        // Lavapipe leaks what it allocated when a later allocation in this call fails.
+        let pipelines = crate::timings::time(crate::timings::Phase::PipelineCreation, || {
+            super::fault::with_first_host_memory_fault_only(|| {
+                // SAFETY: every struct the info points to lives until the call returns; the
+                // modules are alive during the call (pipelines do not keep them).
+                unsafe {
+                    device.raw().create_graphics_pipelines(
+                        device.pipeline_cache(),
+                        &info,
+                        host_callbacks(),
+                    )
+                }
+            })
         })
         .map_err(|(_, result)| result)
         .or_vk("vkCreateGraphicsPipelines")?;

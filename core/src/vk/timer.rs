@@ -71,15 +71,18 @@ impl GpuTimer {
             return Ok(None);
         }
         let mut ticks = [0_u64; 2];
-        // SAFETY: both queries were written by a completed submission (the caller waited).
-        unsafe {
-            self.device.raw.get_query_pool_results(
-                self.pool,
-                0,
-                &mut ticks,
-                vk::QueryResultFlags::TYPE_64 | vk::QueryResultFlags::WAIT,
-            )
-        }
+        // Lavapipe leaks an allocation when a later one in this call fails.
+        super::fault::with_first_host_memory_fault_only(|| {
+            // SAFETY: both queries were written by a completed submission (the caller waited).
+            unsafe {
+                self.device.raw.get_query_pool_results(
+                    self.pool,
+                    0,
+                    &mut ticks,
+                    vk::QueryResultFlags::TYPE_64 | vk::QueryResultFlags::WAIT,
+                )
+            }
+        })
         .or_vk("vkGetQueryPoolResults")?;
         let (period_ns, valid_bits) = self.device.timestamp_info();
         let mask = if valid_bits >= 64 {

@@ -261,23 +261,45 @@ impl GpuScene {
         tree.refresh_worlds();
         let nodes = tree.node_capacity();
         let on_gpu = self.transforms == Transforms::Gpu;
-        self.worlds = if on_gpu {
-            Vec::new()
-        } else {
-            vec![[0.0; 16]; nodes]
-        };
-        self.matrices = vec![abi::CadrMatrix::default(); nodes];
-        self.locals = Vec::new();
         self.frame_moved.clear();
         self.hierarchy.cancel();
-        if on_gpu {
-            self.locals = vec![[0.0; LOCAL_WORDS]; nodes];
-        }
-        for t in 0..nodes as u32 {
-            if self.keeps_matrix(tree, t) {
-                self.set_matrix(tree, t);
+        // Each array is made on a thread per core, every item written once (see
+        // `parallel::collect_indexed`); slots that keep no matrix stay zero.
+        let kept = |t: usize| self.keeps_matrix(tree, t as u32);
+        let by_node = (1, PARALLEL_FILL_NODES);
+        let matrices = crate::parallel::collect_indexed(nodes, by_node, |t, ()| {
+            if kept(t) {
+                gpu_matrix(&tree.world(t as u32))
+            } else {
+                abi::CadrMatrix::default()
             }
-        }
+        })
+        .0;
+        let worlds = if on_gpu {
+            Vec::new()
+        } else {
+            crate::parallel::collect_indexed(nodes, by_node, |t, ()| {
+                if kept(t) {
+                    tree.world(t as u32).to_cols_array()
+                } else {
+                    [0.0; 16]
+                }
+            })
+            .0
+        };
+        let locals = if on_gpu {
+            crate::parallel::collect_indexed(nodes, by_node, |t, ()| {
+                if kept(t) {
+                    gpu_local(&tree.local(t as u32))
+                } else {
+                    [0.0; LOCAL_WORDS]
+                }
+            })
+            .0
+        } else {
+            Vec::new()
+        };
+        (self.matrices, self.worlds, self.locals) = (matrices, worlds, locals);
         let (_, _, material_slots) = graph.capacities();
         self.materials = (0..material_slots as u32)
             .map(|slot| gpu_material(graph, slot))
@@ -295,17 +317,16 @@ impl GpuScene {
             .filter(|words| textures::is_described(words))
             .count();
         let count = tree.instance_capacity();
-        self.instances = vec![abi::CadrInstance::default(); count];
-        let words = count.div_ceil(64);
-        self.candidate_bits = vec![0; words];
-        self.drawn_bits = vec![0; words];
-        self.culled_bits = vec![u64::MAX; words];
-        self.triangles = fill_instances(
-            &self.arenas,
-            tree,
-            &mut self.instances,
-            (&mut self.candidate_bits, &mut self.drawn_bits),
-        );
+        let (instances, tallies) = make_instances(&self.arenas, tree, count);
+        self.instances = instances;
+        self.candidate_bits = tallies
+            .iter()
+            .flat_map(|tally| tally.candidate_bits.iter().copied())
+            .collect();
+        // Every culled bit is set: a candidate is drawn.
+        self.drawn_bits = self.candidate_bits.clone();
+        self.culled_bits = vec![u64::MAX; count.div_ceil(64)];
+        self.triangles = tallies.iter().map(|tally| tally.triangles).sum();
         let device = Arc::clone(&self.device);
         self.matrix_gpu.reserve(&device, nodes.max(1))?;
         self.material_gpu.reserve(&device, material_slots.max(1))?;
@@ -928,8 +949,9 @@ fn entry_in(arenas: &GeometryArenas, instance: &InstanceRef) -> Option<(abi::Cad
     Some((entry, instance.visible && count > 0))
 }
 
-/// Scenes with fewer instances fill them on the calling thread.
-const PARALLEL_FILL_INSTANCES: usize = 1 << 16;
+/// Fewer instances (tree nodes) than this per thread are made on the calling thread.
+const PARALLEL_FILL_INSTANCES: usize = 1 << 15;
+const PARALLEL_FILL_NODES: usize = 1 << 15;
 
 /// The record of instance `id` (what the drawing shaders read of it).
 fn record_of(entry: &abi::CadrInstance, id: u32) -> abi::CadrInstanceRecord {
@@ -941,61 +963,40 @@ fn record_of(entry: &abi::CadrInstance, id: u32) -> abi::CadrInstanceRecord {
     }
 }
 
-/// Fills the entries of every instance slot of `tree` (all of `instances`, fresh:
-/// every culled bit set) and their candidate and drawn bits, on a thread per core, each over
-/// whole 64-instance words; returns the triangles drawn. The loop a large scene's first upload
-/// spends most of its time in.
-fn fill_instances(
+/// What one thread counted of the instances it made: the candidate bits of its chunk (which
+/// starts at a multiple of 64) and their triangles.
+#[derive(Default)]
+struct InstanceTally {
+    candidate_bits: Vec<u64>,
+    triangles: u64,
+}
+
+/// The entries of instances `0..count` of `tree` (dead ones default), on a thread per core.
+fn make_instances(
     arenas: &GeometryArenas,
     tree: &SceneTree,
-    instances: &mut [abi::CadrInstance],
-    (candidate_bits, drawn_bits): (&mut [u64], &mut [u64]),
-) -> u64 {
-    // Threads pay for themselves only on large scenes.
-    let threads = if instances.len() < PARALLEL_FILL_INSTANCES {
-        1
-    } else {
-        std::thread::available_parallelism().map_or(1, |n| n.get())
-    };
-    let words_per_thread = candidate_bits.len().div_ceil(threads).max(1);
-    let per_thread = words_per_thread * 64;
-    std::thread::scope(|scope| {
-        let workers: Vec<_> = instances
-            .chunks_mut(per_thread)
-            .zip(candidate_bits.chunks_mut(words_per_thread))
-            .zip(drawn_bits.chunks_mut(words_per_thread))
-            .enumerate()
-            .map(|(chunk, ((instances, candidates), drawn))| {
-                scope.spawn(move || {
-                    let first = chunk * per_thread;
-                    let mut triangles = 0u64;
-                    for (offset, entry_slot) in instances.iter_mut().enumerate() {
-                        let id = (first + offset) as u32;
-                        let (entry, candidate) = tree
-                            .instance(id)
-                            .and_then(|instance| entry_in(arenas, &instance))
-                            .unwrap_or((abi::CadrInstance::default(), false));
-                        *entry_slot = entry;
-                        if candidate {
-                            // Every culled bit is set: a candidate is drawn.
-                            set_bit(candidates, offset as u32, true);
-                            set_bit(drawn, offset as u32, true);
-                            triangles += u64::from(entry.index_count / 3);
-                        }
-                    }
-                    triangles
-                })
-            })
-            .collect();
-        workers
-            .into_iter()
-            .map(|worker| {
-                worker
-                    .join()
-                    .unwrap_or_else(|panic| std::panic::resume_unwind(panic))
-            })
-            .sum()
-    })
+    count: usize,
+) -> (Vec<abi::CadrInstance>, Vec<InstanceTally>) {
+    crate::parallel::collect_indexed(
+        count,
+        (64, PARALLEL_FILL_INSTANCES),
+        |id, tally: &mut InstanceTally| {
+            if id % 64 == 0 {
+                tally.candidate_bits.push(0);
+            }
+            let (entry, candidate) = tree
+                .instance(id as u32)
+                .and_then(|instance| entry_in(arenas, &instance))
+                .unwrap_or((abi::CadrInstance::default(), false));
+            if candidate {
+                if let Some(word) = tally.candidate_bits.last_mut() {
+                    *word |= 1 << (id % 64);
+                }
+                tally.triangles += u64::from(entry.index_count / 3);
+            }
+            entry
+        },
+    )
 }
 
 fn set_bit(bits: &mut [u64], id: u32, on: bool) {

@@ -6,7 +6,7 @@
 //! sizes). Each texture is resampled to the layer size: the largest texture's side rounded up
 //! to a power of two, at most [`MAX_LAYER_SIZE`], halved while the array would pass
 //! [`ARRAY_BUDGET_BYTES`]. Layers and their mip chains are made on the CPU with the `image`
-//! crate, a thread per core, and uploaded once; the array is rebuilt when the graph's textures
+//! crate, in linear colour, a thread per core, and uploaded once; the array is rebuilt when the graph's textures
 //! change.
 
 use std::sync::Arc;
@@ -159,10 +159,11 @@ fn layer_size(slots: &[Option<&Texture>], layers: u32) -> u32 {
 }
 
 /// A texture resampled to `size` × `size` and its mip levels down to 1 × 1, each level made
-/// from the one above it. Colours are filtered weighted by their alpha (premultiplied), so
-/// that the colour of transparent texels does not bleed into the kept ones. A texture smaller
-/// than the layer and magnified to its nearest texel is enlarged by repeating texels, which
-/// keeps them sharp.
+/// from the one above it. Texels are filtered as light, in linear 16-bit colour (the sRGB
+/// texels decoded first, each level encoded back to sRGB as it is stored), and weighted by
+/// their alpha (premultiplied), so that the colour of transparent texels does not bleed into
+/// the kept ones. A texture smaller than the layer and magnified to its nearest texel is
+/// enlarged by repeating texels, which keeps them sharp (and exact).
 fn mip_chain(texture: Option<&Texture>, size: u32, mips: u32) -> Vec<u8> {
     let Some(texture) = texture else {
         let texels: u64 = (0..mips)
@@ -178,39 +179,130 @@ fn mip_chain(texture: Option<&Texture>, size: u32, mips: u32) -> Vec<u8> {
     } else {
         FilterType::Triangle
     };
-    let mut level = if (texture.width, texture.height) == (size, size) {
-        source
-    } else {
-        resize_premultiplied(&source, size, first_filter)
-    };
+    let mut level = linear_premultiplied(&source);
+    if (texture.width, texture.height) != (size, size) {
+        level = image::imageops::resize(&level, size, size, first_filter);
+    }
     let mut texels = Vec::new();
     for m in 0..mips {
-        texels.extend_from_slice(level.as_raw());
+        texels.extend(level.pixels().flat_map(srgb_straight));
         if m + 1 < mips {
             let next = (size >> (m + 1)).max(1);
-            level = resize_premultiplied(&level, next, FilterType::Triangle);
+            level = image::imageops::resize(&level, next, next, FilterType::Triangle);
         }
     }
     texels
 }
 
-/// `image` resized to `size` × `size` with its colours weighted by alpha.
-fn resize_premultiplied(image: &RgbaImage, size: u32, filter: FilterType) -> RgbaImage {
-    let mut premultiplied = image.clone();
-    for texel in premultiplied.pixels_mut() {
-        let alpha = u32::from(texel[3]);
-        for c in 0..3 {
-            texel[c] = ((u32::from(texel[c]) * alpha + 127) / 255) as u8;
+/// Linear colour with alpha, 16 bits a channel, the colour premultiplied by alpha.
+type LinearImage = image::ImageBuffer<image::Rgba<u16>, Vec<u16>>;
+
+/// `image`'s sRGB texels as linear colour premultiplied by alpha.
+fn linear_premultiplied(image: &RgbaImage) -> LinearImage {
+    let decode = srgb_decode_table();
+    LinearImage::from_fn(image.width(), image.height(), |x, y| {
+        let [r, g, b, a] = image.get_pixel(x, y).0;
+        let alpha = u32::from(a);
+        let premultiplied =
+            |c: u8| ((u32::from(decode[usize::from(c)]) * alpha + 127) / 255) as u16;
+        image::Rgba([
+            premultiplied(r),
+            premultiplied(g),
+            premultiplied(b),
+            u16::from(a) * 257,
+        ])
+    })
+}
+
+/// A linear premultiplied texel as sRGB bytes with straight alpha.
+fn srgb_straight(texel: &image::Rgba<u16>) -> [u8; 4] {
+    let [r, g, b, a] = texel.0;
+    let alpha = f32::from(a) / 65535.0;
+    let encode = |c: u16| {
+        if a == 0 {
+            return 0;
+        }
+        let linear = (f32::from(c) / 65535.0 / alpha).min(1.0);
+        let srgb = if linear <= 0.003_130_8 {
+            linear * 12.92
+        } else {
+            1.055 * linear.powf(1.0 / 2.4) - 0.055
+        };
+        (srgb * 255.0).round() as u8
+    };
+    [
+        encode(r),
+        encode(g),
+        encode(b),
+        ((u32::from(a) + 128) / 257) as u8,
+    ]
+}
+
+/// Linear values of the 256 sRGB-encoded bytes, scaled to 16 bits.
+fn srgb_decode_table() -> &'static [u16; 256] {
+    static TABLE: std::sync::OnceLock<[u16; 256]> = std::sync::OnceLock::new();
+    TABLE.get_or_init(|| {
+        std::array::from_fn(|byte| {
+            let srgb = byte as f32 / 255.0;
+            let linear = if srgb <= 0.040_45 {
+                srgb / 12.92
+            } else {
+                ((srgb + 0.055) / 1.055).powf(2.4)
+            };
+            (linear * 65535.0).round() as u16
+        })
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn texture_of(image: RgbaImage) -> Texture {
+        Texture {
+            name: "test".into(),
+            width: image.width(),
+            height: image.height(),
+            texels: Arc::new(image.into_raw()),
+            sampler: Default::default(),
         }
     }
-    let mut resized = image::imageops::resize(&premultiplied, size, size, filter);
-    for texel in resized.pixels_mut() {
-        let alpha = u32::from(texel[3]);
-        for c in 0..3 {
-            if let Some(value) = (u32::from(texel[c]) * 255 + alpha / 2).checked_div(alpha) {
-                texel[c] = value.min(255) as u8;
-            }
+
+    #[test]
+    fn opaque_srgb_bytes_survive_the_linear_round_trip() {
+        for byte in 0..=255_u8 {
+            let image = RgbaImage::from_pixel(1, 1, image::Rgba([byte, byte, byte, 255]));
+            let texel = *linear_premultiplied(&image).get_pixel(0, 0);
+            assert_eq!(
+                srgb_straight(&texel),
+                [byte, byte, byte, 255],
+                "byte {byte}"
+            );
         }
     }
-    resized
+
+    #[test]
+    fn mips_average_light_not_srgb_bytes_and_ignore_transparent_colour() {
+        // Black and white texels average to half the light: sRGB 188, not 128.
+        let checker = RgbaImage::from_fn(2, 2, |x, y| {
+            let white = (x + y) % 2 == 0;
+            image::Rgba(if white { [255; 4] } else { [0, 0, 0, 255] })
+        });
+        let texels = mip_chain(Some(&texture_of(checker)), 2, 2);
+        assert_eq!(texels.len(), (4 + 1) * 4);
+        let last = &texels[16..20];
+        assert!((187..=189).contains(&last[0]), "{last:?}");
+        assert_eq!(last[3], 255);
+        // A transparent red texel next to opaque blue ones adds no red to the mip.
+        let mostly_blue = RgbaImage::from_fn(2, 2, |x, y| {
+            image::Rgba(if (x, y) == (0, 0) {
+                [255, 0, 0, 0]
+            } else {
+                [0, 0, 255, 255]
+            })
+        });
+        let texels = mip_chain(Some(&texture_of(mostly_blue)), 2, 2);
+        let last = &texels[16..20];
+        assert_eq!(&last[..3], &[0, 0, 255], "{last:?}");
+    }
 }

@@ -8,6 +8,7 @@ mod pick;
 mod plot;
 mod progress;
 mod techniques;
+mod warnings;
 
 use std::process::ExitCode;
 use std::time::Instant;
@@ -25,6 +26,7 @@ use clap::{CommandFactory, Parser};
 
 fn main() -> ExitCode {
     let process_start = Instant::now();
+    warnings::show_on_standard_error();
     let cli = match Cli::try_parse() {
         Ok(cli) => cli,
         // Help and --version print and succeed; a wrong command line exits with 2.

@@ -1086,3 +1086,37 @@ fn render_highlights_named_nodes_and_draws_silhouettes_on_request() {
     refused("--highlight-style", "glow", 2, "tint or outline");
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// What the library warns of reaches the user: `info` of a glTF whose only image is no image
+/// loads the scene and says the image is left out.
+#[test]
+fn the_librarys_warnings_reach_standard_error() {
+    let dir = std::env::temp_dir().join(format!("cadr-cli-warnings-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join("broken-image.gltf");
+    // One triangle whose material's texture image is the text "not an image".
+    let gltf = r#"{
+  "asset": {"version": "2.0"},
+  "buffers": [{"byteLength": 36,
+    "uri": "data:application/octet-stream;base64,AAAAAAAAAAAAAAAAAACAPwAAAAAAAAAAAAAAAAAAgD8AAAAA"}],
+  "bufferViews": [{"buffer": 0, "byteLength": 36}],
+  "accessors": [{"bufferView": 0, "componentType": 5126, "count": 3, "type": "VEC3",
+    "min": [0, 0, 0], "max": [1, 1, 0]}],
+  "images": [{"name": "decal", "uri": "data:image/png;base64,bm90IGFuIGltYWdl"}],
+  "textures": [{"source": 0}],
+  "materials": [{"pbrMetallicRoughness": {"baseColorTexture": {"index": 0}}}],
+  "meshes": [{"primitives": [{"attributes": {"POSITION": 0}, "material": 0}]}],
+  "nodes": [{"mesh": 0}],
+  "scenes": [{"nodes": [0]}]
+}"#;
+    std::fs::write(&path, gltf).unwrap();
+    let output = cadr(&["info", path.to_str().unwrap()]);
+    assert!(output.status.success(), "{}", stderr(&output));
+    assert!(
+        stderr(&output)
+            .contains("warning: image 0 (decal) is left out: its format is not one cadr decodes"),
+        "{}",
+        stderr(&output)
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -56,17 +56,31 @@ pub fn check_drawn_parts(parts: u64) -> Result<(), String> {
     let budget = budget()?;
     let needed = parts.saturating_mul(HOST_BYTES_PER_DRAWN_PART);
     if needed > budget {
-        return Err(format!(
-            "the scene expands to {parts} drawn parts, which would take about {} of host memory, more than the memory budget of {} ({VARIABLE} changes it)",
-            gib(needed),
-            gib(budget)
+        return Err(over_budget(
+            &format!("the scene expands to {parts} drawn parts, which"),
+            needed,
+            budget,
         ));
     }
     Ok(())
 }
 
-fn gib(bytes: u64) -> String {
-    format!("{:.1} GiB", bytes as f64 / f64::from(1u32 << 30))
+/// The refusal of `what`, which would take `needed` bytes of host memory, over `budget`.
+pub fn over_budget(what: &str, needed: u64, budget: u64) -> String {
+    format!(
+        "{what} would take about {} of host memory, more than the memory budget of {} ({VARIABLE} changes it)",
+        human_bytes(needed),
+        human_bytes(budget)
+    )
+}
+
+/// `bytes` in the largest binary unit it reaches, to one decimal.
+fn human_bytes(bytes: u64) -> String {
+    let units = [(30, "GiB"), (20, "MiB"), (10, "KiB")];
+    match units.iter().find(|&&(shift, _)| bytes >> shift > 0) {
+        Some(&(shift, unit)) => format!("{:.1} {unit}", bytes as f64 / (1u64 << shift) as f64),
+        None => format!("{bytes} bytes"),
+    }
 }
 
 #[cfg(test)]
@@ -81,6 +95,14 @@ mod tests {
         assert_eq!(parse_size("1t"), Some(1 << 40));
         assert_eq!(parse_size("lots"), None);
         assert_eq!(parse_size("99999999999T"), None);
+    }
+
+    #[test]
+    fn sizes_read_in_their_largest_unit() {
+        assert_eq!(human_bytes(512), "512 bytes");
+        assert_eq!(human_bytes(4 << 10), "4.0 KiB");
+        assert_eq!(human_bytes(3 << 19), "1.5 MiB");
+        assert_eq!(human_bytes(1 << 30), "1.0 GiB");
     }
 
     #[test]

@@ -353,7 +353,8 @@ pub mod textured {
     pub const BLEND_TEXEL: [u8; 4] = [30, 80, 230, 128];
 }
 
-fn png_data_uri(width: u32, height: u32, texels: Vec<u8>) -> String {
+/// A PNG data URI of `width` × `height` RGBA `texels`.
+pub fn png_data_uri(width: u32, height: u32, texels: Vec<u8>) -> String {
     let image = image::RgbaImage::from_raw(width, height, texels).expect("texels for the size");
     let mut png = std::io::Cursor::new(Vec::new());
     image

@@ -567,3 +567,65 @@ fn a_scene_without_textures_gets_one_by_a_material_change() {
     );
     f.assert_no_validation_errors();
 }
+
+/// The warnings logged in this process (each test runs in a process of its own).
+fn logged_warnings() -> &'static std::sync::Mutex<Vec<String>> {
+    struct Capture(std::sync::Mutex<Vec<String>>);
+    impl log::Log for Capture {
+        fn enabled(&self, metadata: &log::Metadata<'_>) -> bool {
+            metadata.level() <= log::Level::Warn
+        }
+        fn log(&self, record: &log::Record<'_>) {
+            if self.enabled(record.metadata()) {
+                let mut lines = self.0.lock().unwrap_or_else(|e| e.into_inner());
+                lines.push(record.args().to_string());
+            }
+        }
+        fn flush(&self) {}
+    }
+    static CAPTURE: Capture = Capture(std::sync::Mutex::new(Vec::new()));
+    if log::set_logger(&CAPTURE).is_ok() {
+        log::set_max_level(log::LevelFilter::Warn);
+    }
+    &CAPTURE.0
+}
+
+/// Images are decoded only while their texels fit the memory budget; one past it is left out
+/// with a warning that names it and the budget, and the scene loads without its texture.
+#[test]
+fn an_image_past_the_memory_budget_is_left_out_saying_so() {
+    // SAFETY: nextest runs each test in a process of its own; no other thread reads it.
+    std::env::set_var(cadr_core::memory_budget::VARIABLE, "4K");
+    let warnings = logged_warnings();
+    let dir = scratch_dir("budget-textures");
+    let path = textured_gltf(&dir);
+    let json = std::fs::read_to_string(&path).unwrap();
+    // The 8×8 checker becomes 64×64: 16 KiB of texels, past the 4 KiB budget, which the four
+    // quads (1 KiB) and the other two images (12 bytes) fit.
+    let start = json.find(r#""uri": "data:image/png;base64,"#).unwrap();
+    let end = start + json[start..].find("\"}").unwrap();
+    let large = cadr_tests::fixtures::png_data_uri(64, 64, vec![200; 64 * 64 * 4]);
+    let json = format!("{}\"uri\": \"{large}{}", &json[..start], &json[end..]);
+    std::fs::write(&path, json).unwrap();
+    let scene = load_file(&path).unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!(
+        scene.textures.len(),
+        2,
+        "the image past the budget is left out"
+    );
+    let checker = scene
+        .materials
+        .iter()
+        .find(|m| m.name == "checker")
+        .unwrap();
+    assert!(checker.base_color_texture.is_none());
+    let warnings = warnings.lock().unwrap().clone();
+    assert!(
+        warnings.iter().any(|w| w.starts_with("image 0 ")
+            && w.contains("16.0 KiB")
+            && w.contains("memory budget of 4.0 KiB")
+            && w.contains("CADR_MEMORY_BUDGET")),
+        "{warnings:?}"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}

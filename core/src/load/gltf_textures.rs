@@ -5,6 +5,7 @@
 //! An image that cannot be read or decoded is not fatal: the textures made from it are left
 //! out with a warning that names the image and why, and their materials draw untextured.
 
+use std::borrow::Cow;
 use std::path::Path;
 use std::sync::Arc;
 
@@ -22,7 +23,13 @@ pub(super) fn load_textures(
     base_dir: &Path,
 ) -> Vec<Option<Texture>> {
     let images: Vec<gltf::Image<'_>> = document.images().collect();
-    let decoded = crate::parallel::map(&images, |image| decode(image, buffers, base_dir));
+    let encoded = crate::parallel::map(&images, |image| {
+        let bytes = encoded_bytes(image, buffers, base_dir)?;
+        let (width, height) = dimensions(&bytes)?;
+        Ok((bytes, u64::from(width) * u64::from(height) * 4))
+    });
+    let admitted = within_memory_budget(encoded);
+    let decoded = crate::parallel::map(&admitted, |bytes| decode(bytes.as_ref()?));
     let decoded: Vec<Option<Decoded>> = decoded
         .into_iter()
         .zip(&images)
@@ -77,35 +84,79 @@ fn sampler(sampler: &gltf::texture::Sampler<'_>) -> Sampler {
     }
 }
 
-/// Reads and decodes one image (within the `image` crate's default allocation limit, 512 MiB).
-fn decode(
+/// The images that fit the memory budget decoded together (in the file's order; each takes
+/// 4 bytes a texel), the others refused saying so.
+fn within_memory_budget(
+    encoded: Vec<Result<(Cow<'_, [u8]>, u64), String>>,
+) -> Vec<Result<Cow<'_, [u8]>, String>> {
+    let budget = crate::memory_budget::budget();
+    let mut taken = 0_u64;
+    encoded
+        .into_iter()
+        .map(|image| {
+            let (bytes, decoded_bytes) = image?;
+            let budget = budget.clone()?;
+            let needed = taken.saturating_add(decoded_bytes);
+            if needed > budget {
+                return Err(crate::memory_budget::over_budget(
+                    "its texels with those of the images before it",
+                    needed,
+                    budget,
+                ));
+            }
+            taken = needed;
+            Ok(bytes)
+        })
+        .collect()
+}
+
+/// One image's encoded bytes: from its buffer view, its data URI or its file.
+fn encoded_bytes<'b>(
     image: &gltf::Image<'_>,
-    buffers: &[Vec<u8>],
+    buffers: &'b [Vec<u8>],
     base_dir: &Path,
-) -> Result<Decoded, String> {
-    let owned;
-    let bytes: &[u8] = match image.source() {
+) -> Result<Cow<'b, [u8]>, String> {
+    Ok(match image.source() {
         gltf::image::Source::View { view, .. } => {
             let buffer = &buffers[view.buffer().index()];
             // The views were checked against their buffers before any image is read.
-            &buffer[view.offset()..view.offset() + view.length()]
+            Cow::Borrowed(&buffer[view.offset()..view.offset() + view.length()])
         }
         gltf::image::Source::Uri { uri, .. } if uri.starts_with("data:") => {
             let (_, payload) = uri
                 .split_once(";base64,")
                 .ok_or("its data URI is not base64")?;
-            owned = base64::engine::general_purpose::STANDARD
-                .decode(payload)
-                .map_err(|e| format!("its data URI has invalid base64 data: {e}"))?;
-            &owned
+            Cow::Owned(
+                base64::engine::general_purpose::STANDARD
+                    .decode(payload)
+                    .map_err(|e| format!("its data URI has invalid base64 data: {e}"))?,
+            )
         }
         gltf::image::Source::Uri { uri, .. } => {
             let file = base_dir.join(super::gltf::percent_decode(uri));
-            owned = super::gltf::read_buffer_file(&file, usize::MAX)
-                .map_err(|e| format!("'{}' cannot be read: {e}", file.display()))?;
-            &owned
+            Cow::Owned(
+                super::gltf::read_buffer_file(&file, usize::MAX)
+                    .map_err(|e| format!("'{}' cannot be read: {e}", file.display()))?,
+            )
         }
-    };
+    })
+}
+
+/// The width and height an image's header declares.
+fn dimensions(bytes: &[u8]) -> Result<(u32, u32), String> {
+    let reader = image::ImageReader::new(std::io::Cursor::new(bytes))
+        .with_guessed_format()
+        .map_err(|e| e.to_string())?;
+    let format = reader
+        .format()
+        .ok_or("its format is not one cadr decodes (PNG or JPEG)")?;
+    reader
+        .into_dimensions()
+        .map_err(|e| format!("it is not a valid {format:?} image: {e}"))
+}
+
+/// Decodes one image (within the `image` crate's default allocation limit, 512 MiB).
+fn decode(bytes: &[u8]) -> Result<Decoded, String> {
     let reader = image::ImageReader::new(std::io::Cursor::new(bytes))
         .with_guessed_format()
         .map_err(|e| e.to_string())?;

@@ -84,10 +84,13 @@ fn sampler(sampler: &gltf::texture::Sampler<'_>) -> Sampler {
     }
 }
 
+/// An image's encoded bytes and the bytes of its decoded texels, or why it cannot be read.
+type Encoded<'b> = Result<(Cow<'b, [u8]>, u64), String>;
+
 /// The images that fit the memory budget decoded together (in the file's order; each takes
 /// 4 bytes a texel), the others refused saying so.
 fn within_memory_budget(
-    encoded: Vec<Result<(Cow<'_, [u8]>, u64), String>>,
+    encoded: Vec<Encoded<'_>>,
 ) -> Vec<Result<Cow<'_, [u8]>, String>> {
     let budget = crate::memory_budget::budget();
     let mut taken = 0_u64;

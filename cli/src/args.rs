@@ -506,6 +506,16 @@ pub struct BenchArgs {
     #[arg(long, value_name = "N,N", value_delimiter = ',', default_value = "1",
           value_parser = parse_msaa)]
     pub msaa: Vec<u32>,
+    /// Silhouette edges in the edges and hidden-line rows, on or off (comma-separated: on,off
+    /// measures those rows with and without, their cost; default on).
+    #[arg(long, value_name = "on,off", value_delimiter = ',', default_value = "on",
+          value_parser = parse_on_off)]
+    pub silhouettes: Vec<bool>,
+    /// Highlight styles to measure (comma-separated: tint,outline measures each row with
+    /// each; default tint).
+    #[arg(long, value_name = "tint,outline", value_delimiter = ',', default_value = "tint",
+          value_parser = parse_highlight_style)]
+    pub highlight_style: Vec<HighlightStyle>,
     #[command(flatten)]
     pub validation: ValidationArgs,
 }
@@ -620,6 +630,14 @@ fn parse_plane(text: &str) -> Result<glam::DVec4, String> {
 const FLAT_BACKGROUND: [f32; 3] = [0.80, 0.84, 0.88];
 
 /// Parses `--background`: `gradient`, `flat`, `#RRGGBB` or `#RRGGBB,#RRGGBB` (top, bottom).
+fn parse_on_off(text: &str) -> Result<bool, String> {
+    match text {
+        "on" => Ok(true),
+        "off" => Ok(false),
+        _ => Err(format!("'{text}' is not on or off")),
+    }
+}
+
 fn parse_highlight_style(text: &str) -> Result<HighlightStyle, String> {
     HighlightStyle::parse(text).ok_or_else(|| format!("'{text}' is not tint or outline"))
 }

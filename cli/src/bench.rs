@@ -7,7 +7,7 @@
 
 use std::sync::Arc;
 
-use cadr_core::render::FrameStats;
+use cadr_core::render::{FrameStats, HighlightStyle};
 use cadr_core::scene::{flatten, Scene, SceneStats};
 use cadr_core::technique::{
     Combination, PluginRegistry, ShadeMode, TechniqueKind, Techniques, Transforms,
@@ -44,6 +44,10 @@ struct Row {
     msaa: u32,
     /// Whether screen-space ambient occlusion was on.
     ssao: bool,
+    /// Whether silhouette edges were drawn (in the modes that draw them).
+    silhouettes: bool,
+    /// How highlighted parts were drawn.
+    highlight_style: HighlightStyle,
     cpu_us: f64,
     gpu_us: Option<f64>,
     /// Moving nodes and bringing the tree and GPU scene up to date.
@@ -113,6 +117,8 @@ impl Row {
             shade,
             msaa: 1,
             ssao: false,
+            silhouettes: true,
+            highlight_style: HighlightStyle::Tint,
             transforms: match transforms {
                 Transforms::Gpu => "gpu",
                 Transforms::Host => "host",
@@ -267,10 +273,37 @@ impl Bench {
         };
         let modes = args.shade.modes();
         let ssao_levels: &[bool] = if args.ssao { &[false, true] } else { &[false] };
-        let mut steps = Steps::new(
-            1 + (ssao_levels.len() * args.msaa.len() * modes.len() * combinations.len()) as u64,
-            &format!("bench {scene_name}"),
-        );
+        // Every setting a row is measured with, its settings varied from the last (fastest).
+        let settings: Vec<RowSettings> = ssao_levels
+            .iter()
+            .flat_map(|&ssao| args.msaa.iter().map(move |&msaa| (ssao, msaa)))
+            .flat_map(|(ssao, msaa)| {
+                args.highlight_style
+                    .iter()
+                    .map(move |&highlight_style| (ssao, msaa, highlight_style))
+            })
+            .flat_map(|(ssao, msaa, highlight_style)| {
+                args.silhouettes
+                    .iter()
+                    .map(move |&silhouettes| RowSettings {
+                        ssao,
+                        msaa,
+                        highlight_style,
+                        silhouettes,
+                    })
+            })
+            .collect();
+        // Silhouettes change only the modes that draw them: other modes get one row for the
+        // first setting listed.
+        let measured_in = |settings: &RowSettings, mode: ShadeMode| {
+            draws_silhouettes(mode) || settings.silhouettes == args.silhouettes[0]
+        };
+        let rows_to_measure = settings
+            .iter()
+            .flat_map(|s| modes.iter().filter(|&&mode| measured_in(s, mode)))
+            .count()
+            * combinations.len();
+        let mut steps = Steps::new(1 + rows_to_measure as u64, &format!("bench {scene_name}"));
         let show = |steps: &Steps, line: String| {
             if !quiet {
                 steps.println(&line);
@@ -291,19 +324,21 @@ impl Bench {
         show(&steps, row_line(&baseline, baseline.cpu_us));
         steps.done();
         rows.push(baseline);
-        for (&ssao, &samples) in ssao_levels
-            .iter()
-            .flat_map(|ssao| args.msaa.iter().map(move |samples| (ssao, samples)))
-        {
-            session.set_msaa(samples)?;
-            session
-                .view
-                .renderer_mut()
-                .set_ssao(ssao)
+        for setting in &settings {
+            session.set_msaa(setting.msaa)?;
+            let renderer = session.view.renderer_mut();
+            renderer
+                .set_ssao(setting.ssao)
+                .and_then(|()| renderer.set_silhouettes(setting.silhouettes))
+                .and_then(|()| renderer.set_highlight_style(setting.highlight_style))
                 .map_err(|e| e.to_string())?;
-            for &mode in &modes {
+            for &mode in modes.iter().filter(|&&mode| measured_in(setting, mode)) {
                 for combination in &combinations {
-                    steps.start(&format!("{combination} [{}, {samples}x]", mode.name()));
+                    steps.start(&format!(
+                        "{combination} [{}, {}x]",
+                        mode.name(),
+                        setting.msaa
+                    ));
                     session.choose(combination, mode)?;
                     session
                         .techniques()
@@ -314,8 +349,10 @@ impl Bench {
                     })?;
                     let transforms = session.techniques().transforms();
                     let row = Row {
-                        msaa: samples,
-                        ssao,
+                        msaa: setting.msaa,
+                        ssao: setting.ssao,
+                        silhouettes: setting.silhouettes,
+                        highlight_style: setting.highlight_style,
                         ..Row::new(combination.to_string(), mode.name(), transforms, measured)
                     };
                     show(&steps, row_line(&row, rows[0].cpu_us));
@@ -337,18 +374,38 @@ fn row_mode(row: &Row) -> String {
     mode
 }
 
-/// The display mode of a row, with "+ao" when ambient occlusion was on.
+/// The settings of the renderer a row is measured with.
+struct RowSettings {
+    ssao: bool,
+    msaa: u32,
+    highlight_style: HighlightStyle,
+    silhouettes: bool,
+}
+
+/// Whether `mode` draws silhouette edges when they are on.
+fn draws_silhouettes(mode: ShadeMode) -> bool {
+    matches!(mode, ShadeMode::Edges | ShadeMode::HiddenLine)
+}
+
+/// The display mode of a row, with "+ao" when ambient occlusion was on, "+outline" with the
+/// outline highlight style and "-sil" when a mode that draws silhouettes did not.
 fn shade_label(row: &Row) -> String {
+    let mut label = row.shade.to_owned();
     if row.ssao {
-        format!("{}+ao", row.shade)
-    } else {
-        row.shade.to_owned()
+        label += "+ao";
     }
+    if row.highlight_style == HighlightStyle::Outline {
+        label += "+outline";
+    }
+    if !row.silhouettes && (row.shade == "edges" || row.shade == "hidden-line") {
+        label += "-sil";
+    }
+    label
 }
 
 fn header_line() -> String {
     format!(
-        "{:<58} {:>14} {:>4} {:>7} {:>10} {:>10} {:>9} {:>9} {:>8} {:>8} {:>6} {:>7} {:>7} {:>10} {:>9}",
+        "{:<58} {:>26} {:>4} {:>7} {:>10} {:>10} {:>9} {:>9} {:>8} {:>8} {:>6} {:>7} {:>7} {:>10} {:>9}",
         "technique (vertex / params / submit / cull)",
         "shade",
         "AA",
@@ -371,7 +428,7 @@ fn row_line(row: &Row, baseline_cpu: f64) -> String {
     let gpu = row.gpu_us.map_or("n/a".to_owned(), |g| format!("{g:.0}"));
     let s = &row.stats;
     format!(
-        "{:<58} {:>14} {:>4} {:>7} {:>10.1} {:>10} {:>9.1} {:>9} {:>8} {:>8} {:>6} {:>7} {:>7} {:>10} {:>8.1}x",
+        "{:<58} {:>26} {:>4} {:>7} {:>10.1} {:>10} {:>9.1} {:>9} {:>8} {:>8} {:>6} {:>7} {:>7} {:>10} {:>8.1}x",
         row.label,
         shade_label(row),
         format!("{}x", row.msaa),
@@ -397,6 +454,8 @@ fn row_json(row: &Row, baseline_cpu: f64) -> serde_json::Value {
         "shade": row.shade,
         "msaa": row.msaa,
         "ssao": row.ssao,
+        "silhouettes": row.silhouettes,
+        "highlight_style": row.highlight_style.name(),
         "cpu_us": row.cpu_us,
         "gpu_us": row.gpu_us,
         "scene_update_us": row.scene_update_us,

@@ -1020,6 +1020,66 @@ fn msaa_anti_aliases_render_and_bench_measures_each_level() {
     );
     let text = stdout(&output);
     assert!(text.contains("edges+ao"), "{text}");
+
+    // Silhouettes on and off in the modes that draw them, each highlight style.
+    let output = cadr(&[
+        "bench",
+        "gen:grid:parts=200",
+        "--frames",
+        "2",
+        "--size",
+        "64x48",
+        "--vertex",
+        "per-geometry",
+        "--params",
+        "push",
+        "--submit",
+        "individual",
+        "--display",
+        "all",
+        "--silhouettes",
+        "on,off",
+        "--highlight-style",
+        "tint,outline",
+        "--json",
+        json_path.to_str().unwrap(),
+    ]);
+    assert!(output.status.success(), "{}", stderr(&output));
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&json_path).unwrap()).unwrap();
+    let rows: Vec<(String, bool, String)> = json["rows"].as_array().unwrap()[1..]
+        .iter()
+        .map(|row| {
+            (
+                row["shade"].as_str().unwrap().to_owned(),
+                row["silhouettes"].as_bool().unwrap(),
+                row["highlight_style"].as_str().unwrap().to_owned(),
+            )
+        })
+        .collect();
+    let mut expected = Vec::new();
+    for style in ["tint", "outline"] {
+        for silhouettes in [true, false] {
+            for mode in ["solid", "edges", "hidden-line", "wireframe", "xray"] {
+                if silhouettes || mode == "edges" || mode == "hidden-line" {
+                    expected.push((mode.to_owned(), silhouettes, style.to_owned()));
+                }
+            }
+        }
+    }
+    assert_eq!(
+        rows, expected,
+        "each style, silhouettes on then off in the edge modes"
+    );
+    let text = stdout(&output);
+    assert!(text.contains("hidden-line+outline-sil"), "{text}");
+    let output = cadr(&["bench", "gen:grid:parts=200", "--silhouettes", "maybe"]);
+    assert_eq!(output.status.code(), Some(2), "{}", stderr(&output));
+    assert!(
+        stderr(&output).contains("not on or off"),
+        "{}",
+        stderr(&output)
+    );
     let output = cadr(&["bench", "gen:grid:parts=200", "--msaa", "64"]);
     assert_eq!(output.status.code(), Some(1), "{}", stderr(&output));
     assert!(stderr(&output).contains("--msaa 64"), "{}", stderr(&output));

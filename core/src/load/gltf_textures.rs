@@ -89,9 +89,7 @@ type Encoded<'b> = Result<(Cow<'b, [u8]>, u64), String>;
 
 /// The images that fit the memory budget decoded together (in the file's order; each takes
 /// 4 bytes a texel), the others refused saying so.
-fn within_memory_budget(
-    encoded: Vec<Encoded<'_>>,
-) -> Vec<Result<Cow<'_, [u8]>, String>> {
+fn within_memory_budget(encoded: Vec<Encoded<'_>>) -> Vec<Result<Cow<'_, [u8]>, String>> {
     let budget = crate::memory_budget::budget();
     let mut taken = 0_u64;
     encoded

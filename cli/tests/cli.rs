@@ -976,30 +976,32 @@ fn msaa_anti_aliases_render_and_bench_measures_each_level() {
     );
 
     let json_path = dir.join("bench.json");
-    let output = cadr(&[
-        "bench",
-        "gen:grid:parts=200",
-        "--frames",
-        "2",
-        "--size",
-        "64x48",
-        "--vertex",
-        "per-geometry",
-        "--params",
-        "push",
-        "--submit",
-        "individual",
-        "--display",
-        "edges",
-        "--msaa",
-        "1,4",
-        "--ssao",
-        "--json",
-        json_path.to_str().unwrap(),
-    ]);
-    assert!(output.status.success(), "{}", stderr(&output));
-    let json: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(&json_path).unwrap()).unwrap();
+    // A small bench of one combination with `settings`: its output and JSON.
+    let bench = |settings: &[&str]| {
+        let mut args = vec![
+            "bench",
+            "gen:grid:parts=200",
+            "--frames",
+            "2",
+            "--size",
+            "64x48",
+            "--vertex",
+            "per-geometry",
+            "--params",
+            "push",
+            "--submit",
+            "individual",
+            "--json",
+            json_path.to_str().unwrap(),
+        ];
+        args.extend_from_slice(settings);
+        let output = cadr(&args);
+        assert!(output.status.success(), "{}", stderr(&output));
+        let json: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(&json_path).unwrap()).unwrap();
+        (output, json)
+    };
+    let (output, json) = bench(&["--display", "edges", "--msaa", "1,4", "--ssao"]);
     let levels: Vec<u64> = json["rows"]
         .as_array()
         .unwrap()
@@ -1022,31 +1024,14 @@ fn msaa_anti_aliases_render_and_bench_measures_each_level() {
     assert!(text.contains("edges+ao"), "{text}");
 
     // Silhouettes on and off in the modes that draw them, each highlight style.
-    let output = cadr(&[
-        "bench",
-        "gen:grid:parts=200",
-        "--frames",
-        "2",
-        "--size",
-        "64x48",
-        "--vertex",
-        "per-geometry",
-        "--params",
-        "push",
-        "--submit",
-        "individual",
+    let (output, json) = bench(&[
         "--display",
         "all",
         "--silhouettes",
         "on,off",
         "--highlight-style",
         "tint,outline",
-        "--json",
-        json_path.to_str().unwrap(),
     ]);
-    assert!(output.status.success(), "{}", stderr(&output));
-    let json: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(&json_path).unwrap()).unwrap();
     let rows: Vec<(String, bool, String)> = json["rows"].as_array().unwrap()[1..]
         .iter()
         .map(|row| {

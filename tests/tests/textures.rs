@@ -396,23 +396,30 @@ fn bad_texture_data_is_refused_or_left_out_clearly() {
         "{error}"
     );
     // The first image replaced by bytes that are no PNG.
+    let undecodable = with_first_image(&json, "data:image/png;base64,bm90IGFuIGltYWdl");
+    std::fs::write(&path, undecodable).unwrap();
+    assert_checker_left_untextured(&path);
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// The fixture's JSON with its first image (the checker's) at `uri`.
+fn with_first_image(json: &str, uri: &str) -> String {
     let start = json.find(r#""uri": "data:image/png;base64,"#).unwrap();
     let end = start + json[start..].find("\"}").unwrap();
-    let undecodable = format!(
-        "{}\"uri\": \"data:image/png;base64,bm90IGFuIGltYWdl{}",
-        &json[..start],
-        &json[end..]
-    );
-    std::fs::write(&path, undecodable).unwrap();
-    let scene = load_file(&path).unwrap_or_else(|e| panic!("{e}"));
-    assert_eq!(scene.textures.len(), 2, "the undecodable image is left out");
+    format!("{}\"uri\": \"{uri}{}", &json[..start], &json[end..])
+}
+
+/// Loads the fixture at `path`, whose checker image is refused: the other two textures load
+/// and the checker material draws untextured.
+fn assert_checker_left_untextured(path: &std::path::Path) {
+    let scene = load_file(path).unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!(scene.textures.len(), 2, "the refused image is left out");
     let checker = scene
         .materials
         .iter()
         .find(|m| m.name == "checker")
         .unwrap();
     assert!(checker.base_color_texture.is_none());
-    let _ = std::fs::remove_dir_all(&dir);
 }
 
 /// Saved as glTF (JSON with its buffer, and GLB), the textured file keeps its textures,
@@ -602,23 +609,9 @@ fn an_image_past_the_memory_budget_is_left_out_saying_so() {
     let json = std::fs::read_to_string(&path).unwrap();
     // The 8×8 checker becomes 64×64: 16 KiB of texels, past the 4 KiB budget, which the four
     // quads (1 KiB) and the other two images (12 bytes) fit.
-    let start = json.find(r#""uri": "data:image/png;base64,"#).unwrap();
-    let end = start + json[start..].find("\"}").unwrap();
     let large = cadr_tests::fixtures::png_data_uri(64, 64, vec![200; 64 * 64 * 4]);
-    let json = format!("{}\"uri\": \"{large}{}", &json[..start], &json[end..]);
-    std::fs::write(&path, json).unwrap();
-    let scene = load_file(&path).unwrap_or_else(|e| panic!("{e}"));
-    assert_eq!(
-        scene.textures.len(),
-        2,
-        "the image past the budget is left out"
-    );
-    let checker = scene
-        .materials
-        .iter()
-        .find(|m| m.name == "checker")
-        .unwrap();
-    assert!(checker.base_color_texture.is_none());
+    std::fs::write(&path, with_first_image(&json, &large)).unwrap();
+    assert_checker_left_untextured(&path);
     let warnings = warnings.lock().unwrap().clone();
     assert!(
         warnings.iter().any(|w| w.starts_with("image 0 ")

@@ -143,14 +143,23 @@ fn encoded_bytes<'b>(
     })
 }
 
-/// The width and height an image's header declares.
-fn dimensions(bytes: &[u8]) -> Result<(u32, u32), String> {
+/// A reader of an image's encoded bytes.
+type BytesReader<'b> = image::ImageReader<std::io::Cursor<&'b [u8]>>;
+
+/// A reader of an image's bytes in the format they are in, and that format.
+fn reader(bytes: &[u8]) -> Result<(BytesReader<'_>, image::ImageFormat), String> {
     let reader = image::ImageReader::new(std::io::Cursor::new(bytes))
         .with_guessed_format()
         .map_err(|e| e.to_string())?;
     let format = reader
         .format()
         .ok_or("its format is not one cadr decodes (PNG or JPEG)")?;
+    Ok((reader, format))
+}
+
+/// The width and height an image's header declares.
+fn dimensions(bytes: &[u8]) -> Result<(u32, u32), String> {
+    let (reader, format) = reader(bytes)?;
     reader
         .into_dimensions()
         .map_err(|e| format!("it is not a valid {format:?} image: {e}"))
@@ -158,12 +167,7 @@ fn dimensions(bytes: &[u8]) -> Result<(u32, u32), String> {
 
 /// Decodes one image (within the `image` crate's default allocation limit, 512 MiB).
 fn decode(bytes: &[u8]) -> Result<Decoded, String> {
-    let reader = image::ImageReader::new(std::io::Cursor::new(bytes))
-        .with_guessed_format()
-        .map_err(|e| e.to_string())?;
-    let format = reader
-        .format()
-        .ok_or("its format is not one cadr decodes (PNG or JPEG)")?;
+    let (reader, format) = reader(bytes)?;
     let decoded = reader
         .decode()
         .map_err(|e| format!("it is not a valid {format:?} image: {e}"))?

@@ -169,8 +169,10 @@ impl SceneView {
         images::color_at(image, &self.camera, point)
     }
 
-    /// Draws a frame with the view's current settings and reads it back.
+    /// Brings the tree up to the graph, draws a frame with the view's current settings and
+    /// reads it back.
     pub fn render(&mut self) -> image::RgbaImage {
+        self.tree.update(&mut self.graph);
         self.view
             .render(&self.graph, &mut self.tree, &self.camera)
             .expect("render a frame");

@@ -80,33 +80,20 @@ fn boxes(open: bool, places: &[DVec3]) -> Scene {
     scene
 }
 
-/// A [`SceneView`] with the section helpers of these tests.
-struct Fixture(SceneView);
-
-impl std::ops::Deref for Fixture {
-    type Target = SceneView;
-    fn deref(&self) -> &SceneView {
-        &self.0
-    }
+/// A [`SceneView`] of `scene` seen from `EYE + offset`, looking at `offset`.
+fn looking_at_the_origin(scene: &Scene, offset: DVec3) -> SceneView {
+    let aspect = f64::from(SIZE.0) / f64::from(SIZE.1);
+    let camera = Camera::look_at(EYE + offset, offset, 40.0, aspect, 0.1, 100.0);
+    SceneView::new(test_device(), scene, SIZE, camera)
 }
 
-impl std::ops::DerefMut for Fixture {
-    fn deref_mut(&mut self) -> &mut SceneView {
-        &mut self.0
-    }
+/// The section helper of these tests on a [`SceneView`].
+trait SectionView {
+    /// Cuts the view with `planes`, capped or not.
+    fn section(&mut self, planes: &[DVec4], caps: bool);
 }
 
-impl Fixture {
-    fn new(scene: &Scene, camera: Camera) -> Self {
-        Self(SceneView::new(test_device(), scene, SIZE, camera))
-    }
-
-    fn looking_at_the_origin(scene: &Scene, offset: DVec3) -> Self {
-        let aspect = f64::from(SIZE.0) / f64::from(SIZE.1);
-        let camera = Camera::look_at(EYE + offset, offset, 40.0, aspect, 0.1, 100.0);
-        Self::new(scene, camera)
-    }
-
+impl SectionView for SceneView {
     fn section(&mut self, planes: &[DVec4], caps: bool) {
         let mut section = Section::none();
         section.set_planes(planes).unwrap();
@@ -132,7 +119,7 @@ const KEEP_BELOW_Z0: DVec4 = DVec4::new(0.0, 0.0, -1.0, 0.0);
 
 #[test]
 fn a_cut_through_a_closed_box_is_capped_with_the_plane_colour_where_the_cut_is() {
-    let mut f = Fixture::looking_at_the_origin(&boxes(false, &[DVec3::ZERO]), DVec3::ZERO);
+    let mut f = looking_at_the_origin(&boxes(false, &[DVec3::ZERO]), DVec3::ZERO);
     let whole = f.render();
     let on_cap = DVec3::new(0.3, 0.3, 0.0);
     assert!(grayish(f.color_at(&whole, on_cap)), "the box uncut is gray");
@@ -178,28 +165,28 @@ fn a_cut_through_a_closed_box_is_capped_with_the_plane_colour_where_the_cut_is()
         "{:?}",
         f.color_at(&uncapped, on_cap)
     );
-    f.0.assert_no_validation_errors();
+    f.assert_no_validation_errors();
 }
 
 #[test]
 fn a_cut_through_an_open_mesh_shows_no_cap() {
     // Without its top face the box is open; the cut removes where that face was anyway, so
     // what remains is the closed box's remainder, but drawn without a cap.
-    let mut f = Fixture::looking_at_the_origin(&boxes(true, &[DVec3::ZERO]), DVec3::ZERO);
+    let mut f = looking_at_the_origin(&boxes(true, &[DVec3::ZERO]), DVec3::ZERO);
     f.section(&[KEEP_BELOW_Z0], true);
     let cut = f.render();
     let on_cap = DVec3::new(0.3, 0.3, 0.0);
     let color = f.color_at(&cut, on_cap);
     assert!(grayish(color), "no cap, no smear: {color:?}");
-    f.0.assert_no_validation_errors();
+    f.assert_no_validation_errors();
 }
 
 #[test]
 fn picking_through_a_cut_hits_what_is_behind() {
     // Box 0 at the origin, box 1 behind it on the line of sight.
     let behind = -EYE * 0.8;
-    let mut f = Fixture::looking_at_the_origin(&boxes(false, &[DVec3::ZERO, behind]), DVec3::ZERO);
-    let pick = |f: &mut Fixture| {
+    let mut f = looking_at_the_origin(&boxes(false, &[DVec3::ZERO, behind]), DVec3::ZERO);
+    let pick = |f: &mut SceneView| {
         let hits = f.pick_at(DVec3::ZERO);
         let name = f.graph.node(hits[0].node).unwrap().name.clone();
         name.trim_end_matches(" geometry").to_owned()
@@ -209,7 +196,7 @@ fn picking_through_a_cut_hits_what_is_behind() {
     let away = -EYE.normalize();
     f.section(&[away.extend(-2.2)], true);
     assert_eq!(pick(&mut f), "box 1");
-    f.0.assert_no_validation_errors();
+    f.assert_no_validation_errors();
 }
 
 #[test]
@@ -219,11 +206,10 @@ fn a_cut_far_from_the_origin_is_as_exact_as_one_at_the_origin() {
     let far = DVec3::new(1.0e7, -3.0e6, 5.0e6);
     let plane = DVec4::new(0.6, 0.0, -0.8, 0.1);
     let far_plane = plane.truncate().extend(plane.w - plane.truncate().dot(far));
-    let mut near_fixture =
-        Fixture::looking_at_the_origin(&boxes(false, &[DVec3::ZERO]), DVec3::ZERO);
+    let mut near_fixture = looking_at_the_origin(&boxes(false, &[DVec3::ZERO]), DVec3::ZERO);
     near_fixture.section(&[plane], true);
     let near_image = near_fixture.render();
-    let mut far_fixture = Fixture::looking_at_the_origin(&boxes(false, &[far]), far);
+    let mut far_fixture = looking_at_the_origin(&boxes(false, &[far]), far);
     far_fixture.section(&[far_plane], true);
     let far_image = far_fixture.render();
     let difference = compare(&far_image, &near_image).unwrap();
@@ -231,7 +217,7 @@ fn a_cut_far_from_the_origin_is_as_exact_as_one_at_the_origin() {
 }
 
 /// gen:demo cut by two planes, with edges, capped and hatched as the reference shows it.
-fn demo_section(f: &mut Fixture) {
+fn demo_section(f: &mut SceneView) {
     let mut section = Section::none();
     section
         .set_planes(&[
@@ -247,7 +233,7 @@ fn demo_section(f: &mut Fixture) {
         .unwrap();
 }
 
-fn demo_fixture() -> Fixture {
+fn demo_fixture() -> SceneView {
     let scene = generate(&GeneratorSpec::Demo);
     let bounds = flatten(&scene).unwrap().bounds;
     let camera = Camera::fit(
@@ -255,7 +241,7 @@ fn demo_fixture() -> Fixture {
         f64::from(SIZE.0) / f64::from(SIZE.1),
         DEFAULT_DIRECTION,
     );
-    Fixture::new(&scene, camera)
+    SceneView::new(test_device(), &scene, SIZE, camera)
 }
 
 #[test]
@@ -293,5 +279,5 @@ fn the_demo_section_matches_its_reference_in_every_sampled_combination() {
         sampled.len(),
         valid.len()
     );
-    f.0.assert_no_validation_errors();
+    f.assert_no_validation_errors();
 }

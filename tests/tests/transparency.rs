@@ -87,48 +87,34 @@ fn layers(alpha: f32) -> Scene {
     scene
 }
 
-/// A [`SceneView`] of the layers, seen from the front, with the helpers of these tests.
-struct Fixture(SceneView);
-
-impl std::ops::Deref for Fixture {
-    type Target = SceneView;
-    fn deref(&self) -> &SceneView {
-        &self.0
-    }
+/// A [`SceneView`] of the layers, seen from the front.
+fn layers_view(scene: &Scene) -> SceneView {
+    let aspect = f64::from(SIZE.0) / f64::from(SIZE.1);
+    let camera = Camera::look_at(
+        DVec3::new(0.0, 0.0, 5.0),
+        DVec3::ZERO,
+        40.0,
+        aspect,
+        0.1,
+        50.0,
+    );
+    SceneView::new(test_device(), scene, SIZE, camera)
 }
 
-impl std::ops::DerefMut for Fixture {
-    fn deref_mut(&mut self) -> &mut SceneView {
-        &mut self.0
-    }
-}
-
-impl Fixture {
-    fn new(scene: &Scene) -> Self {
-        let aspect = f64::from(SIZE.0) / f64::from(SIZE.1);
-        let camera = Camera::look_at(
-            DVec3::new(0.0, 0.0, 5.0),
-            DVec3::ZERO,
-            40.0,
-            aspect,
-            0.1,
-            50.0,
-        );
-        Self(SceneView::new(test_device(), scene, SIZE, camera))
-    }
-
-    /// Brings the tree up to the graph and draws a frame.
-    fn render(&mut self) -> image::RgbaImage {
-        let view = &mut self.0;
-        view.tree.update(&mut view.graph);
-        view.render()
-    }
-
+/// The helpers of these tests on a [`SceneView`] of the layers.
+trait LayersView {
     /// Draws a frame and returns what it cost and drew.
+    fn stats(&mut self) -> FrameStats;
+    fn use_method(&mut self, name: &str);
+    /// The picture with square `node` hidden.
+    fn without(&mut self, node: u32) -> image::RgbaImage;
+}
+
+impl LayersView for SceneView {
     fn stats(&mut self) -> FrameStats {
-        let view = &mut self.0;
-        view.view
-            .render(&view.graph, &mut view.tree, &view.camera)
+        self.tree.update(&mut self.graph);
+        self.view
+            .render(&self.graph, &mut self.tree, &self.camera)
             .unwrap()
     }
 
@@ -139,7 +125,6 @@ impl Fixture {
             .unwrap();
     }
 
-    /// The picture with square `node` hidden.
     fn without(&mut self, node: u32) -> image::RgbaImage {
         let handle = self.nodes[node as usize];
         let mut flags = self.graph.node(handle).unwrap().flags;
@@ -174,14 +159,14 @@ const MIDDLE: DVec3 = DVec3::new(0.0, 0.0, 0.0);
 #[test]
 fn one_translucent_layer_blends_over_what_is_behind_it_with_either_method() {
     // The colours each square shades to, opaque, and the red behind.
-    let mut opaque = Fixture::new(&layers(1.0));
+    let mut opaque = layers_view(&layers(1.0));
     let opaque_image = opaque.render();
     let blue = opaque.color_at(&opaque_image, LEFT);
     let behind = opaque.without(1);
     let red = opaque.color_at(&behind, LEFT);
     assert!(blue[2] > 0.5 && red[0] > 0.5, "blue {blue:?}, red {red:?}");
 
-    let mut f = Fixture::new(&layers(0.5));
+    let mut f = layers_view(&layers(0.5));
     for method in ["weighted-blended", "per-pixel-lists"] {
         f.use_method(method);
         let image = f.render();
@@ -192,19 +177,19 @@ fn one_translucent_layer_blends_over_what_is_behind_it_with_either_method() {
             3.0 / 255.0,
         );
     }
-    opaque.0.assert_no_validation_errors();
-    f.0.assert_no_validation_errors();
+    opaque.assert_no_validation_errors();
+    f.assert_no_validation_errors();
 }
 
 #[test]
 fn the_exact_method_sorts_layers_and_the_fast_one_agrees_where_they_do_not_pile_up() {
-    let mut opaque = Fixture::new(&layers(1.0));
+    let mut opaque = layers_view(&layers(1.0));
     let front = opaque.render();
     let green = opaque.color_at(&front, MIDDLE);
     let behind = opaque.without(2);
     let blue = opaque.color_at(&behind, MIDDLE);
-    let red = opaque.color_at(&Fixture::new(&layers(0.0)).render(), MIDDLE);
-    let mut f = Fixture::new(&layers(0.5));
+    let red = opaque.color_at(&layers_view(&layers(0.0)).render(), MIDDLE);
+    let mut f = layers_view(&layers(0.5));
     f.use_method("per-pixel-lists");
     let exact = f.render();
     // Green is in front: green over (blue over red), whatever the order they were drawn in.
@@ -222,13 +207,13 @@ fn the_exact_method_sorts_layers_and_the_fast_one_agrees_where_they_do_not_pile_
         difference.within(METHODS_AGREE),
         "the methods agree within {METHODS_AGREE:?}: {difference:?}"
     );
-    opaque.0.assert_no_validation_errors();
-    f.0.assert_no_validation_errors();
+    opaque.assert_no_validation_errors();
+    f.assert_no_validation_errors();
 }
 
 #[test]
 fn every_valid_combination_draws_translucency_like_the_built_in_one() {
-    let mut f = Fixture::new(&layers(0.5));
+    let mut f = layers_view(&layers(0.5));
     let combinations = all_combinations(f.view.techniques().registry());
     let mut checked = 0;
     for method in ["weighted-blended", "per-pixel-lists"] {
@@ -259,15 +244,15 @@ fn every_valid_combination_draws_translucency_like_the_built_in_one() {
         }
     }
     assert!(checked > 20, "{checked} combinations checked");
-    f.0.assert_no_validation_errors();
+    f.assert_no_validation_errors();
 }
 
 #[test]
 fn an_opaque_scene_draws_no_translucent_pass() {
-    let mut f = Fixture::new(&layers(1.0));
+    let mut f = layers_view(&layers(1.0));
     f.render();
     let opaque = f.stats();
-    let mut translucent = Fixture::new(&layers(0.5));
+    let mut translucent = layers_view(&layers(0.5));
     translucent.render();
     let stats = translucent.stats();
     assert_eq!(opaque.draw_calls, 3, "one pass of three squares");
@@ -279,7 +264,7 @@ fn an_opaque_scene_draws_no_translucent_pass() {
 
 #[test]
 fn xray_shows_hidden_parts_and_keeps_highlighted_ones_opaque() {
-    let mut f = Fixture::new(&layers(1.0));
+    let mut f = layers_view(&layers(1.0));
     let solid = f.render();
     let blue = f.color_at(&solid, LEFT);
     f.view
@@ -307,7 +292,7 @@ fn xray_shows_hidden_parts_and_keeps_highlighted_ones_opaque() {
         2.0 / 255.0,
     );
     assert_matches_reference("transparency_layers_xray", &highlighted, DEFAULT_TOLERANCE);
-    f.0.assert_no_validation_errors();
+    f.assert_no_validation_errors();
 }
 
 #[test]
@@ -392,9 +377,9 @@ fn gltf_alpha_modes_give_materials_their_opacity_and_survive_a_save() {
 /// opaque one behind; the picture does not change; an opaque part in front stops it either way.
 #[test]
 fn picking_goes_through_translucent_parts_when_asked() {
-    let mut f = Fixture::new(&layers(0.5));
+    let mut f = layers_view(&layers(0.5));
     let picture = f.render();
-    let pick_at = |f: &mut Fixture, point: DVec3| {
+    let pick_at = |f: &mut SceneView, point: DVec3| {
         let hits = f.pick_at(point);
         assert_eq!(hits.len(), 1, "one hit at {point}");
         hits[0].path.clone()
@@ -411,11 +396,11 @@ fn picking_goes_through_translucent_parts_when_asked() {
     // Made opaque, the green square stops the click again.
     let mut opaque = layers(0.5);
     opaque.materials[2].base_color[3] = 1.0;
-    let mut g = Fixture::new(&opaque);
+    let mut g = layers_view(&opaque);
     g.view.techniques_mut().set_pick_through_translucent(true);
     let green_point = DVec3::new(0.7, 0.0, 0.5);
     let picked = pick_at(&mut g, green_point);
     assert!(picked.contains(&g.nodes[2]), "opaque green stops the click");
-    f.0.assert_no_validation_errors();
-    g.0.assert_no_validation_errors();
+    f.assert_no_validation_errors();
+    g.assert_no_validation_errors();
 }

@@ -15,6 +15,36 @@ fn cadr(args: &[&str]) -> Output {
         .expect("run cadr")
 }
 
+/// A small bench of `scene` (2 frames at 64×48, per-geometry / push / individual) with
+/// `settings`, its JSON written to `json_path`: the run (which must succeed) and the JSON.
+fn small_bench(
+    scene: &str,
+    json_path: &std::path::Path,
+    settings: &[&str],
+) -> (Output, serde_json::Value) {
+    let mut args = vec![
+        "bench",
+        scene,
+        "--frames",
+        "2",
+        "--size",
+        "64x48",
+        "--vertex",
+        "per-geometry",
+        "--params",
+        "push",
+        "--submit",
+        "individual",
+        "--json",
+        json_path.to_str().unwrap(),
+    ];
+    args.extend_from_slice(settings);
+    let output = cadr(&args);
+    assert!(output.status.success(), "{}", stderr(&output));
+    let json = serde_json::from_str(&std::fs::read_to_string(json_path).unwrap()).unwrap();
+    (output, json)
+}
+
 fn stdout(output: &Output) -> String {
     String::from_utf8_lossy(&output.stdout).into_owned()
 }
@@ -399,26 +429,7 @@ fn bench_prints_the_table_and_writes_json() {
     assert_eq!(rows[2]["replayed_frames"], 2, "{}", rows[2]);
     assert_eq!(json["frame_replay"], true);
 
-    let output = cadr(&[
-        "bench",
-        "gen:grid:parts=500",
-        "--frames",
-        "2",
-        "--size",
-        "64x48",
-        "--vertex",
-        "per-geometry",
-        "--params",
-        "push",
-        "--submit",
-        "individual",
-        "--no-replay",
-        "--json",
-        path.to_str().unwrap(),
-    ]);
-    assert!(output.status.success(), "{}", stderr(&output));
-    let json: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(&path).unwrap()).unwrap();
+    let (_, json) = small_bench("gen:grid:parts=500", &path, &["--no-replay"]);
     let rows = json["rows"].as_array().unwrap();
     assert_eq!(
         rows[1]["replayed_frames"], 0,
@@ -976,32 +987,11 @@ fn msaa_anti_aliases_render_and_bench_measures_each_level() {
     );
 
     let json_path = dir.join("bench.json");
-    // A small bench of one combination with `settings`: its output and JSON.
-    let bench = |settings: &[&str]| {
-        let mut args = vec![
-            "bench",
-            "gen:grid:parts=200",
-            "--frames",
-            "2",
-            "--size",
-            "64x48",
-            "--vertex",
-            "per-geometry",
-            "--params",
-            "push",
-            "--submit",
-            "individual",
-            "--json",
-            json_path.to_str().unwrap(),
-        ];
-        args.extend_from_slice(settings);
-        let output = cadr(&args);
-        assert!(output.status.success(), "{}", stderr(&output));
-        let json: serde_json::Value =
-            serde_json::from_str(&std::fs::read_to_string(&json_path).unwrap()).unwrap();
-        (output, json)
-    };
-    let (output, json) = bench(&["--display", "edges", "--msaa", "1,4", "--ssao"]);
+    let (output, json) = small_bench(
+        "gen:grid:parts=200",
+        &json_path,
+        &["--display", "edges", "--msaa", "1,4", "--ssao"],
+    );
     let levels: Vec<u64> = json["rows"]
         .as_array()
         .unwrap()
@@ -1024,14 +1014,18 @@ fn msaa_anti_aliases_render_and_bench_measures_each_level() {
     assert!(text.contains("edges+ao"), "{text}");
 
     // Silhouettes on and off in the modes that draw them, each highlight style.
-    let (output, json) = bench(&[
-        "--display",
-        "all",
-        "--silhouettes",
-        "on,off",
-        "--highlight-style",
-        "tint,outline",
-    ]);
+    let (output, json) = small_bench(
+        "gen:grid:parts=200",
+        &json_path,
+        &[
+            "--display",
+            "all",
+            "--silhouettes",
+            "on,off",
+            "--highlight-style",
+            "tint,outline",
+        ],
+    );
     let rows: Vec<(String, bool, String)> = json["rows"].as_array().unwrap()[1..]
         .iter()
         .map(|row| {

@@ -478,6 +478,40 @@ fn frustum_culling_draws_only_what_the_camera_sees() {
     assert_no_validation_errors(&f.device);
 }
 
+/// Builds `tests/c-plugin/{source}` against the plugin header in `include` as the plugin
+/// library `name` in `dir` (strict C99, warnings as errors) and returns its path.
+fn build_c_plugin(dir: &Path, name: &str, include: &Path, source: &str) -> std::path::PathBuf {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
+    let library = dir.join(format!(
+        "{}{name}{}",
+        std::env::consts::DLL_PREFIX,
+        std::env::consts::DLL_SUFFIX
+    ));
+    let output = std::process::Command::new("cc")
+        .args([
+            "-std=c99",
+            "-Wall",
+            "-Wextra",
+            "-Wpedantic",
+            "-Werror",
+            "-shared",
+            "-fPIC",
+            "-I",
+        ])
+        .arg(include)
+        .arg(root.join("tests/c-plugin").join(source))
+        .arg("-o")
+        .arg(&library)
+        .output()
+        .expect("cc is needed (build-essential)");
+    assert!(
+        output.status.success(),
+        "{name}: {}",
+        String::from_utf8_lossy(&output.stderr)
+    );
+    library
+}
+
 #[test]
 fn a_technique_written_in_c_plugs_in_also_built_for_an_older_abi_minor() {
     let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
@@ -506,34 +540,7 @@ fn a_technique_written_in_c_plugs_in_also_built_for_an_older_abi_minor() {
     };
     let dir = cadr_tests::fixtures::scratch_dir("c-plugin");
     for (name, include, version) in builds {
-        let library = dir.join(format!(
-            "{}{name}{}",
-            std::env::consts::DLL_PREFIX,
-            std::env::consts::DLL_SUFFIX
-        ));
-        let output = std::process::Command::new("cc")
-            .args([
-                "-std=c99",
-                "-Wall",
-                "-Wextra",
-                "-Wpedantic",
-                "-Werror",
-                "-shared",
-                "-fPIC",
-                "-I",
-            ])
-            .arg(include)
-            .arg(root.join("tests/c-plugin/cull_everything_visible.c"))
-            .arg("-o")
-            .arg(&library)
-            .output()
-            .expect("cc is needed (build-essential)");
-        assert!(
-            output.status.success(),
-            "{name}: {}",
-            String::from_utf8_lossy(&output.stderr)
-        );
-
+        let library = build_c_plugin(&dir, name, &include, "cull_everything_visible.c");
         let mut f = Fixture::with_size(&generate(&GeneratorSpec::Demo), (96, 72));
         let features = feature_bits(f.device.capabilities());
         let mut registry = PluginRegistry::discover(&[cadr_tests::test_binary_dir()], features);
@@ -562,4 +569,55 @@ fn a_technique_written_in_c_plugs_in_also_built_for_an_older_abi_minor() {
         drop(f.techniques);
         assert_no_validation_errors(&f.device);
     }
+}
+
+#[test]
+fn a_secondary_buffer_submission_built_before_abi_1_8_is_refused_under_msaa() {
+    // Its secondary command buffers would inherit one sample per pixel inside a pass of
+    // four: the host refuses the frame, naming the technique, its ABI and the sample count,
+    // and draws with it as before without MSAA.
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
+    let dir = cadr_tests::fixtures::scratch_dir("c-secondary");
+    let library = build_c_plugin(
+        &dir,
+        "cadr_fixture_c_secondary_abi_1_0",
+        &root.join("tests/c-plugin/abi-1.0"),
+        "secondary_submission.c",
+    );
+    let mut f = Fixture::with_size(&generate(&GeneratorSpec::Demo), (96, 72));
+    let features = feature_bits(f.device.capabilities());
+    let mut registry = PluginRegistry::built_in(features);
+    registry.load(&library, features);
+    assert!(registry.refusals().is_empty(), "{:?}", registry.refusals());
+    let submission = registry
+        .find(TechniqueKind::Submission, "c-secondary")
+        .unwrap();
+    assert_eq!(submission.abi_version, (1, 0));
+    f.techniques = Techniques::new(
+        &f.device,
+        Arc::new(registry),
+        f.renderer.pipelines().technique_set_layouts(),
+    );
+    f.techniques
+        .select(&Combination {
+            submission: "c-secondary".into(),
+            ..Combination::built_in()
+        })
+        .unwrap();
+    let one_sample = f.try_render().unwrap();
+    assert_eq!(one_sample.draw_calls, 0, "the fixture records nothing");
+    let samples = 4;
+    assert!(
+        f.device.sample_counts().contains(&samples),
+        "lavapipe and every GPU offer 4 samples"
+    );
+    f.renderer.set_msaa(samples).unwrap();
+    let refusal = f.try_render().unwrap_err().to_string();
+    for expected in ["submission 'c-secondary'", "ABI 1.0", "MSAA (4x asked"] {
+        assert!(refusal.contains(expected), "{expected:?} in {refusal}");
+    }
+    f.renderer.set_msaa(1).unwrap();
+    f.try_render().unwrap();
+    drop(f.techniques);
+    assert_no_validation_errors(&f.device);
 }

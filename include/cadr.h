@@ -66,6 +66,27 @@
 // Section flag: hatch the caps (off by default).
 #define CADR_SECTION_HATCHED 2
 
+// Texture wrap: the image repeats (glTF REPEAT; the default).
+#define CADR_WRAP_REPEAT 0
+
+// Texture wrap: the edge texels extend outwards (glTF CLAMP_TO_EDGE).
+#define CADR_WRAP_CLAMP_TO_EDGE 1
+
+// Texture wrap: the image repeats, every other copy mirrored (glTF MIRRORED_REPEAT).
+#define CADR_WRAP_MIRRORED_REPEAT 2
+
+// Alpha mode: texture and vertex alpha are ignored and the material is drawn opaque
+// (glTF OPAQUE).
+#define CADR_ALPHA_OPAQUE 0
+
+// Alpha mode: a fragment whose alpha (texture × vertex colour × base colour) is under the
+// cutoff is cut away, the rest is opaque; picking goes through the holes too (glTF MASK).
+#define CADR_ALPHA_MASK 1
+
+// Alpha mode: alpha is opacity, drawn with the renderer's transparency method (glTF BLEND;
+// what a material has unless told otherwise).
+#define CADR_ALPHA_BLEND 2
+
 // The result of every fallible cadr function.
 typedef enum CadrResult {
   // Success.
@@ -444,6 +465,30 @@ typedef struct CadrFrameStats {
   uint64_t bytes_uploaded;
 } CadrFrameStats;
 
+// An image in the host's memory. The texels are copied; the host may free them after the
+// call.
+typedef struct CadrTextureDesc {
+  // Name (NULL: empty); messages name the texture by it.
+  const char *name;
+  // Width in texels (at least 1).
+  uint32_t width;
+  // Height in texels (at least 1).
+  uint32_t height;
+  // `width × height × 4` bytes: RGBA, 8 bits each, colour sRGB-encoded and alpha linear
+  // (as PNG and glTF base-colour textures are), rows from the top of the image down.
+  const uint8_t *texels;
+  // How the first texture coordinate wraps outside 0..1 (`CADR_WRAP_*`).
+  uint32_t wrap_s;
+  // How the second texture coordinate wraps (`CADR_WRAP_*`).
+  uint32_t wrap_t;
+  // Magnified texels show as blocks (nearest texel) instead of blended; minification
+  // always blends mip levels.
+  bool magnify_nearest;
+} CadrTextureDesc;
+
+// A texture of a scene (0 is never valid; where a texture is optional, 0 means none).
+typedef uint64_t CadrTexture;
+
 // Milliseconds cadr spent in each phase of its work in this process, since it was loaded or
 // since `cadr_timings_reset`, over every context, scene and renderer. A phase that runs
 // inside another (pipelines built during a first frame) counts only for itself.
@@ -808,8 +853,9 @@ enum CadrResult cadr_scene_create_material(CadrScene scene,
                                            CadrMaterial *material);
 
 // Changes a material's parameters; every part using it is drawn with them. A texture the
-// material has (from a loaded file) is kept, and so is an alpha cutoff (glTF MASK); otherwise
-// `base_color[3]` is the opacity, also for a material a file made OPAQUE.
+// material has (from a loaded file or `cadr_scene_set_material_texture`) is kept, and so is
+// an alpha cutoff (glTF MASK); otherwise `base_color[3]` is the opacity, also for a material
+// a file or `cadr_scene_set_material_alpha_mode` made OPAQUE.
 //
 // Ownership: nothing changes hands; the arguments are read during the call only.
 // Returns as `cadr_scene_create_material`. Thread-safety: as `cadr_scene_create`.
@@ -1570,6 +1616,84 @@ enum CadrResult cadr_renderer_section_flags(CadrRenderer renderer, uint32_t *fla
 enum CadrResult cadr_renderer_set_section_cap_color(CadrRenderer renderer,
                                                     uint32_t index,
                                                     const float *rgba);
+
+// Creates a texture from the host's texels (copied). Materials use it through
+// `cadr_scene_set_material_texture`, with the texture coordinates of their geometry
+// (`cadr_scene_set_geometry_attributes`). The renderer mipmaps it, filtering in linear light.
+//
+// Returns `CADR_RESULT_OK` and writes `*texture`, `CADR_RESULT_NULL_ARGUMENT` (the message
+// names the field), `CADR_RESULT_INVALID_ARGUMENT` (a size of 0, a wrap code unknown, texels
+// past the memory budget `CADR_MEMORY_BUDGET`) or a handle error.
+// Ownership: the texture belongs to the scene. Thread-safety: as `cadr_scene_create`.
+//
+// # Safety
+// `desc` is null or valid with `texels` valid for `width × height × 4` bytes; `texture` null
+// or writable.
+enum CadrResult cadr_scene_create_texture(CadrScene scene,
+                                          const struct CadrTextureDesc *desc,
+                                          CadrTexture *texture);
+
+// Destroys a texture that no material uses.
+//
+// Returns `CADR_RESULT_OK`, `CADR_RESULT_IN_USE` (materials still use it: set their texture
+// to 0 first) or a handle error.
+// Ownership: the handle is given back to cadr and invalid afterwards.
+// Thread-safety: as `cadr_scene_create`.
+enum CadrResult cadr_scene_destroy_texture(CadrScene scene, CadrTexture texture);
+
+// Gives a material a base-colour texture, which multiplies its base colour (and the vertex
+// colours), or takes it away (`texture` 0). `uv_transform` maps the geometry's texture
+// coordinates before sampling, as two rows of an affine map: `u' = t[0]·u + t[1]·v + t[2]`,
+// `v' = t[3]·u + t[4]·v + t[5]` (glTF `KHR_texture_transform` in one matrix); NULL keeps
+// them as they are. The material keeps its other parameters, and `cadr_scene_set_material`
+// keeps the texture.
+//
+// Returns `CADR_RESULT_OK`, `CADR_RESULT_INVALID_ARGUMENT` (a transform entry not finite,
+// named) or a handle error (for the material or the texture).
+// Ownership: nothing changes hands; the arguments are read during the call only.
+// Thread-safety: as `cadr_scene_create`.
+//
+// # Safety
+// `uv_transform` is null or points to 6 readable floats.
+enum CadrResult cadr_scene_set_material_texture(CadrScene scene,
+                                                CadrMaterial material,
+                                                CadrTexture texture,
+                                                const float *uv_transform);
+
+// Sets how a material uses alpha: `CADR_ALPHA_BLEND` (the default; alpha is opacity),
+// `CADR_ALPHA_MASK` (fragments with alpha under `cutoff`, in 0..1, are cut away; the rest is
+// opaque) or `CADR_ALPHA_OPAQUE` (alpha is ignored). `cutoff` is read only for the mask.
+// `cadr_scene_set_material` later keeps a mask; it makes an opaque material blend again, so
+// that the opacity it sets shows.
+//
+// Returns `CADR_RESULT_OK`, `CADR_RESULT_INVALID_ARGUMENT` (an unknown mode, a cutoff outside
+// 0..1) or a handle error.
+// Ownership: nothing changes hands. Thread-safety: as `cadr_scene_create`.
+enum CadrResult cadr_scene_set_material_alpha_mode(CadrScene scene,
+                                                   CadrMaterial material,
+                                                   uint32_t mode,
+                                                   float cutoff);
+
+// Gives a geometry's vertices texture coordinates and colours, or takes them away (both
+// NULL). `vertex_count` must be the geometry's. `uvs`: NULL (all (0, 0)) or `vertex_count`
+// × 2 floats, (0, 0) at the image's top left. `colors`: NULL (all white) or `vertex_count` × 4
+// floats, linear RGBA in 0..1 (kept in 8 bits each), multiplying the material's base colour (per-vertex results
+// such as stresses show this way, blended across each triangle). Geo nodes that use the
+// geometry draw with them from the next frame.
+//
+// Returns `CADR_RESULT_OK`, `CADR_RESULT_INVALID_ARGUMENT` (a vertex count other than the
+// geometry's, a coordinate not finite or a colour outside 0..1, named with its index) or a
+// handle error.
+// Ownership: everything is copied; the arrays can be freed after the call.
+// Thread-safety: as `cadr_scene_create`.
+//
+// # Safety
+// `uvs` and `colors` are null or valid for their counts.
+enum CadrResult cadr_scene_set_geometry_attributes(CadrScene scene,
+                                                   CadrGeometry geometry,
+                                                   uint32_t vertex_count,
+                                                   const float *uvs,
+                                                   const float *colors);
 
 // Writes the time cadr spent in each phase so far (see `CadrTimings`).
 //

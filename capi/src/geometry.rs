@@ -332,8 +332,9 @@ pub unsafe extern "C" fn cadr_scene_create_material(
 }
 
 /// Changes a material's parameters; every part using it is drawn with them. A texture the
-/// material has (from a loaded file) is kept, and so is an alpha cutoff (glTF MASK); otherwise
-/// `base_color[3]` is the opacity, also for a material a file made OPAQUE.
+/// material has (from a loaded file or `cadr_scene_set_material_texture`) is kept, and so is
+/// an alpha cutoff (glTF MASK); otherwise `base_color[3]` is the opacity, also for a material
+/// a file or `cadr_scene_set_material_alpha_mode` made OPAQUE.
 ///
 /// Ownership: nothing changes hands; the arguments are read during the call only.
 /// Returns as `cadr_scene_create_material`. Thread-safety: as `cadr_scene_create`.

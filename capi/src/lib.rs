@@ -2,9 +2,10 @@
 //!
 //! Conventions (every function follows them):
 //! - Objects are opaque, generation-checked handles: [`CadrContext`], [`CadrScene`],
-//!   [`CadrRenderer`], and 64-bit [`CadrNode`], [`CadrGeometry`], [`CadrMaterial`] values inside a
-//!   scene. A destroyed handle gives `CADR_RESULT_DESTROYED_HANDLE`, a handle of another type or
-//!   a made-up value `CADR_RESULT_FOREIGN_HANDLE`: never a crash. `destroy(NULL)` is a no-op.
+//!   [`CadrRenderer`], and 64-bit [`CadrNode`], [`CadrGeometry`], [`CadrMaterial`],
+//!   [`CadrTexture`] values inside a scene. A destroyed handle gives
+//!   `CADR_RESULT_DESTROYED_HANDLE`, a handle of another type or a made-up value
+//!   `CADR_RESULT_FOREIGN_HANDLE`: never a crash. `destroy(NULL)` is a no-op.
 //! - Fallible functions return a [`CadrResult`]; outputs are written through out-parameters
 //!   only on success. A NULL pointer argument gives `CADR_RESULT_NULL_ARGUMENT`.
 //! - Details of the last error on the calling thread: [`cadr_last_error_message`];
@@ -30,6 +31,7 @@ mod presentation;
 mod renderer;
 mod scene;
 mod section;
+mod textures;
 mod timings;
 
 pub use background::*;
@@ -45,6 +47,7 @@ pub use presentation::*;
 pub use renderer::*;
 pub use scene::*;
 pub use section::*;
+pub use textures::*;
 pub use timings::*;
 
 use std::ffi::c_char;

@@ -1,9 +1,11 @@
 //! Scenes: the scene graph a host edits and the scene tree that flattens it incrementally for
-//! renderers; the handles of scenes, nodes, geometries and materials. Nodes are made and
-//! edited in `nodes.rs`, files loaded in `load.rs`, bounds and statistics in `bounds.rs`,
-//! geometry and materials in `geometry.rs`.
+//! renderers; the handles of scenes, nodes, geometries, materials and textures. Nodes are made
+//! and edited in `nodes.rs`, files loaded in `load.rs`, bounds and statistics in `bounds.rs`,
+//! geometry and materials in `geometry.rs`, textures and vertex attributes in `textures.rs`.
 
-use cadr_core::graph::{GeometryHandle, GraphError, MaterialHandle, NodeHandle, SceneGraph};
+use cadr_core::graph::{
+    GeometryHandle, GraphError, MaterialHandle, NodeHandle, SceneGraph, TextureHandle,
+};
 use cadr_core::tree::SceneTree;
 
 use crate::args::deliver;
@@ -29,6 +31,9 @@ pub type CadrGeometry = u64;
 
 /// A material of a scene (0 is never valid).
 pub type CadrMaterial = u64;
+
+/// A texture of a scene (0 is never valid; where a texture is optional, 0 means none).
+pub type CadrTexture = u64;
 
 /// Node flag: the node and its subtree are drawn.
 pub const CADR_NODE_VISIBLE: u32 = 1;
@@ -57,6 +62,7 @@ pub(crate) static SCENES: Registry<SceneState> = Registry::new(0xC2, "scene");
 const NODE_TAG: u64 = 0x4E;
 const GEOMETRY_TAG: u64 = 0x47;
 const MATERIAL_TAG: u64 = 0x4D;
+const TEXTURE_TAG: u64 = 0x54;
 const GENERATION_MASK: u32 = 0xff_ffff;
 
 fn encode(tag: u64, index: u32, generation: u32) -> u64 {
@@ -132,6 +138,17 @@ pub(crate) fn material_of(
     })
 }
 
+pub(crate) fn texture_of(
+    graph: &SceneGraph,
+    value: CadrTexture,
+    what: &str,
+) -> Result<TextureHandle, Failure> {
+    let capacity = graph.texture_capacity();
+    decode(value, TEXTURE_TAG, what, "texture", capacity, |i| {
+        graph.texture_handle_at(i)
+    })
+}
+
 pub(crate) fn node_value(handle: NodeHandle) -> CadrNode {
     encode(NODE_TAG, handle.index(), handle.generation())
 }
@@ -144,12 +161,17 @@ pub(crate) fn material_value(handle: MaterialHandle) -> CadrMaterial {
     encode(MATERIAL_TAG, handle.index(), handle.generation())
 }
 
+pub(crate) fn texture_value(handle: TextureHandle) -> CadrTexture {
+    encode(TEXTURE_TAG, handle.index(), handle.generation())
+}
+
 /// A graph error as a result code and message.
 pub(crate) fn graph_failure(error: GraphError) -> Failure {
     let code = match error {
         GraphError::StaleNode { .. }
         | GraphError::StaleGeometry { .. }
-        | GraphError::StaleMaterial { .. } => CadrResult::DestroyedHandle,
+        | GraphError::StaleMaterial { .. }
+        | GraphError::StaleTexture { .. } => CadrResult::DestroyedHandle,
         GraphError::InUse { .. } => CadrResult::InUse,
         _ => CadrResult::InvalidArgument,
     };

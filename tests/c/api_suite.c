@@ -409,6 +409,173 @@ static unsigned pixel_difference(const uint8_t *a, const uint8_t *b, size_t size
   return differing;
 }
 
+/* The RGB of pixel (x, y) of a W-wide RGBA picture. */
+#define PIXEL(picture, width, x, y) (&(picture)[4 * ((size_t)(width) * (y) + (x))])
+
+static bool reddish(const uint8_t *p) { return p[0] > 2 * p[1] && p[0] > 2 * p[2]; }
+static bool greenish(const uint8_t *p) { return p[1] > 2 * p[0] && p[1] > 2 * p[2]; }
+static bool bluish(const uint8_t *p) { return p[2] > 2 * p[0] && p[2] > 2 * p[1]; }
+
+/* Textures, a material's texture and alpha mode, and vertex colours from the host's arrays: a
+   square facing the camera, textured red on its left half and blue on its right (2x1 texels,
+   magnified as blocks); flipped by a UV transform; cut away where the texture's alpha is 0
+   under a mask; coloured green by its vertices without the texture. Every error path too. */
+static void test_host_textures(CadrRenderer renderer, uint32_t width, uint32_t height) {
+  static const float positions[] = {-1, -1, 0, 1, -1, 0, 1, 1, 0, -1, 1, 0};
+  static const uint32_t indices[] = {0, 1, 2, 0, 2, 3};
+  /* (0, 0) is the image's top left. */
+  static const float uvs[] = {0, 1, 1, 1, 1, 0, 0, 0};
+  static const float greens[] = {0, 1, 0, 1, 0, 1, 0, 1, 0, 1, 0, 1, 0, 1, 0, 1};
+  static const float too_bright[] = {0, 1, 0, 1, 0, 1, 0, 1, 0, 1, 0, 1, 0, 2, 0, 1};
+  static const float not_finite_uvs[] = {0, 1, 1, 1, 1, NAN, 0, 0};
+  static const uint8_t red_blue[] = {255, 0, 0, 255, 0, 0, 255, 255};
+  static const uint8_t red_clear[] = {255, 0, 0, 255, 0, 0, 255, 0};
+  static const float mirrored[6] = {-1, 0, 1, 0, 1, 0};
+  static const float not_finite_transform[6] = {1, 0, INFINITY, 0, 1, 0};
+  static const double front[3] = {0, 0, 1};
+  struct CadrGeometryDesc desc;
+  struct CadrMaterialDesc white = {"white", {1.0f, 1.0f, 1.0f, 1.0f}, 0.0f, 0.8f};
+  struct CadrTextureDesc texture_desc;
+  struct CadrBounds bounds;
+  struct CadrCamera camera;
+  CadrScene scene = NULL;
+  CadrNode root = 0, geo = 0;
+  CadrGeometry square = 0;
+  CadrMaterial material = 0;
+  CadrTexture texture = 0, clear = 0, spare = 0;
+  uint8_t *picture = (uint8_t *)malloc((size_t)width * height * 4);
+  const uint32_t left = width / 2 - width / 8, right = width / 2 + width / 8, row = height / 2;
+  CHECK(picture != NULL);
+
+  OK(cadr_scene_create(&scene));
+  OK(cadr_scene_root(scene, &root));
+  memset(&desc, 0, sizeof desc);
+  desc.name = "square";
+  desc.positions = positions;
+  desc.vertex_count = 4;
+  desc.indices = indices;
+  desc.index_count = 6;
+  OK(cadr_scene_create_geometry(scene, &desc, &square));
+  OK(cadr_scene_create_material(scene, &white, &material));
+  OK(cadr_scene_create_geo(scene, "square", square, &material, 1, &geo));
+  OK(cadr_scene_add_child(scene, root, geo));
+
+  memset(&texture_desc, 0, sizeof texture_desc);
+  texture_desc.name = "red|blue";
+  texture_desc.width = 2;
+  texture_desc.height = 1;
+  texture_desc.texels = red_blue;
+  texture_desc.wrap_s = CADR_WRAP_CLAMP_TO_EDGE;
+  texture_desc.wrap_t = CADR_WRAP_REPEAT;
+  texture_desc.magnify_nearest = true;
+  OK(cadr_scene_create_texture(scene, &texture_desc, &texture));
+  CHECK(texture != 0);
+  texture_desc.texels = red_clear;
+  texture_desc.name = "red|clear";
+  OK(cadr_scene_create_texture(scene, &texture_desc, &clear));
+  OK(cadr_scene_set_geometry_attributes(scene, square, 4, uvs, NULL));
+  OK(cadr_scene_set_material_texture(scene, material, texture, NULL));
+
+  OK(cadr_scene_bounds(scene, &bounds));
+  OK(cadr_camera_fit(&bounds, (double)width / height, front, &camera));
+  OK(cadr_renderer_render(renderer, scene, &camera, NULL));
+  OK(cadr_renderer_read_pixels(renderer, picture, (size_t)width * height * 4));
+  CHECK(reddish(PIXEL(picture, width, left, row)) && bluish(PIXEL(picture, width, right, row)));
+
+  /* u' = 1 - u: the halves swap. */
+  OK(cadr_scene_set_material_texture(scene, material, texture, mirrored));
+  OK(cadr_renderer_render(renderer, scene, &camera, NULL));
+  OK(cadr_renderer_read_pixels(renderer, picture, (size_t)width * height * 4));
+  CHECK(bluish(PIXEL(picture, width, left, row)) && reddish(PIXEL(picture, width, right, row)));
+
+  /* A mask cuts the right half away: the background shows there, as at the row's left end. */
+  OK(cadr_scene_set_material_texture(scene, material, clear, NULL));
+  OK(cadr_scene_set_material_alpha_mode(scene, material, CADR_ALPHA_MASK, 0.5f));
+  OK(cadr_renderer_render(renderer, scene, &camera, NULL));
+  OK(cadr_renderer_read_pixels(renderer, picture, (size_t)width * height * 4));
+  CHECK(reddish(PIXEL(picture, width, left, row)));
+  CHECK(memcmp(PIXEL(picture, width, right, row), PIXEL(picture, width, 0, row), 3) == 0);
+  {
+    CadrPickResult picked = {NULL, 0};
+    OK(cadr_renderer_pick(renderer, scene, &camera, left, row, &picked));
+    CHECK(picked.hit_count == 1);
+    cadr_pick_result_free(&picked);
+    OK(cadr_renderer_pick(renderer, scene, &camera, right, row, &picked));
+    CHECK(picked.hit_count == 0); /* picking goes through the holes */
+  }
+  /* Opaque: the clear texels draw (blue-free, so not the background). */
+  OK(cadr_scene_set_material_alpha_mode(scene, material, CADR_ALPHA_OPAQUE, 0.0f));
+  OK(cadr_renderer_render(renderer, scene, &camera, NULL));
+  OK(cadr_renderer_read_pixels(renderer, picture, (size_t)width * height * 4));
+  CHECK(memcmp(PIXEL(picture, width, right, row), PIXEL(picture, width, 0, row), 3) != 0);
+
+  /* Without the texture, green vertex colours colour the white material. */
+  OK(cadr_scene_set_material_texture(scene, material, 0, NULL));
+  OK(cadr_scene_set_material_alpha_mode(scene, material, CADR_ALPHA_BLEND, 0.0f));
+  OK(cadr_scene_set_geometry_attributes(scene, square, 4, NULL, greens));
+  OK(cadr_renderer_render(renderer, scene, &camera, NULL));
+  OK(cadr_renderer_read_pixels(renderer, picture, (size_t)width * height * 4));
+  CHECK(greenish(PIXEL(picture, width, left, row)) && greenish(PIXEL(picture, width, right, row)));
+  /* Taken away, the material's white shows. */
+  OK(cadr_scene_set_geometry_attributes(scene, square, 4, NULL, NULL));
+  OK(cadr_renderer_render(renderer, scene, &camera, NULL));
+  OK(cadr_renderer_read_pixels(renderer, picture, (size_t)width * height * 4));
+  CHECK(!greenish(PIXEL(picture, width, left, row)));
+
+  /* Errors name what is wrong; nothing changes. */
+  EXPECT(cadr_scene_create_texture(scene, NULL, &spare), CADR_RESULT_NULL_ARGUMENT);
+  EXPECT(cadr_scene_create_texture(scene, &texture_desc, NULL), CADR_RESULT_NULL_ARGUMENT);
+  texture_desc.width = 0;
+  EXPECT(cadr_scene_create_texture(scene, &texture_desc, &spare), CADR_RESULT_INVALID_ARGUMENT);
+  MESSAGE_HAS("0×1 texels");
+  texture_desc.width = 2;
+  texture_desc.wrap_t = 7;
+  EXPECT(cadr_scene_create_texture(scene, &texture_desc, &spare), CADR_RESULT_INVALID_ARGUMENT);
+  MESSAGE_HAS("desc.wrap_t is 7");
+  texture_desc.wrap_t = CADR_WRAP_MIRRORED_REPEAT;
+  texture_desc.texels = NULL;
+  EXPECT(cadr_scene_create_texture(scene, &texture_desc, &spare), CADR_RESULT_NULL_ARGUMENT);
+  MESSAGE_HAS("desc.texels");
+  texture_desc.width = 100000;
+  texture_desc.height = 100000;
+  EXPECT(cadr_scene_create_texture(scene, &texture_desc, &spare), CADR_RESULT_INVALID_ARGUMENT);
+  MESSAGE_HAS("memory budget");
+  CHECK(spare == 0);
+  EXPECT(cadr_scene_set_geometry_attributes(scene, square, 3, uvs, NULL),
+         CADR_RESULT_INVALID_ARGUMENT);
+  MESSAGE_HAS("has 4 vertices");
+  EXPECT(cadr_scene_set_geometry_attributes(scene, square, 4, NULL, too_bright),
+         CADR_RESULT_INVALID_ARGUMENT);
+  MESSAGE_HAS("colors[13] (vertex 3)");
+  EXPECT(cadr_scene_set_geometry_attributes(scene, square, 4, not_finite_uvs, NULL),
+         CADR_RESULT_INVALID_ARGUMENT);
+  MESSAGE_HAS("uvs[5] (vertex 2)");
+  EXPECT(cadr_scene_set_material_texture(scene, material, texture, not_finite_transform),
+         CADR_RESULT_INVALID_ARGUMENT);
+  MESSAGE_HAS("uv_transform[2]");
+  EXPECT(cadr_scene_set_material_texture(scene, material, material, NULL),
+         CADR_RESULT_FOREIGN_HANDLE);
+  EXPECT(cadr_scene_set_material_texture(scene, texture, texture, NULL),
+         CADR_RESULT_FOREIGN_HANDLE);
+  EXPECT(cadr_scene_set_material_alpha_mode(scene, material, 3, 0.5f),
+         CADR_RESULT_INVALID_ARGUMENT);
+  EXPECT(cadr_scene_set_material_alpha_mode(scene, material, CADR_ALPHA_MASK, 1.5f),
+         CADR_RESULT_INVALID_ARGUMENT);
+  MESSAGE_HAS("cutoff is 1.5");
+  /* A texture in use stays; unused, it goes, and its handle is then a destroyed one. */
+  OK(cadr_scene_set_material_texture(scene, material, texture, NULL));
+  EXPECT(cadr_scene_destroy_texture(scene, texture), CADR_RESULT_IN_USE);
+  OK(cadr_scene_destroy_texture(scene, clear));
+  EXPECT(cadr_scene_destroy_texture(scene, clear), CADR_RESULT_DESTROYED_HANDLE);
+  EXPECT(cadr_scene_set_material_texture(scene, material, clear, NULL),
+         CADR_RESULT_DESTROYED_HANDLE);
+  EXPECT(cadr_scene_destroy_texture(scene, 0), CADR_RESULT_NULL_ARGUMENT);
+  OK(cadr_scene_set_material_texture(scene, material, 0, NULL));
+  OK(cadr_scene_destroy_texture(scene, texture));
+  OK(cadr_scene_destroy(scene));
+  free(picture);
+}
+
 static void test_renderer(CadrContext context, struct Built *b) {
   enum { W = 96, H = 64 };
   CadrRenderer renderer = NULL, other = NULL;
@@ -946,6 +1113,8 @@ static void test_renderer(CadrContext context, struct Built *b) {
     free(with);
     free(without);
   }
+
+  test_host_textures(renderer, W, H);
 
   /* Picking through translucent parts: off by default; on, the opaque cubes still stop it. */
   {

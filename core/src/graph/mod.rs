@@ -1144,6 +1144,11 @@ impl SceneGraph {
         self.materials.handle_at(index)
     }
 
+    /// The live texture in slot `index`, if any.
+    pub fn texture_handle_at(&self, index: u32) -> Option<TextureHandle> {
+        self.textures.handle_at(index)
+    }
+
     /// Live nodes with handles.
     pub fn nodes(&self) -> impl Iterator<Item = (NodeHandle, &GraphNode)> {
         self.nodes.iter()

@@ -490,6 +490,9 @@ fn rows_json(rows: &[Row]) -> Vec<serde_json::Value> {
 }
 
 /// `cadr bench`.
+/// Empty submissions timed for the floor line.
+const FLOOR_SAMPLES: usize = 1000;
+
 pub fn bench(args: &BenchArgs) -> Result<(), String> {
     if let Some(path) = &args.plot {
         crate::plot::check_path(path)?;
@@ -542,6 +545,12 @@ pub fn bench(args: &BenchArgs) -> Result<(), String> {
             "scene: {name}: {} parts, {} triangles, {} materials, {} geometries",
             stats.instances, stats.triangles, stats.materials, stats.geometries
         );
+        let floor_us =
+            cadr_core::vk::resubmit_floor_us(&device, FLOOR_SAMPLES).map_err(|e| e.to_string())?;
+        println!(
+            "floor: the driver takes {floor_us:.1} µs to resubmit an empty recorded command buffer \
+             (median of {FLOOR_SAMPLES}); a replayed row's CPU µs is this plus cadr's own work"
+        );
         if let Some(path) = &args.plot {
             let bars: Vec<(String, f64)> = rows
                 .iter()
@@ -565,6 +574,7 @@ pub fn bench(args: &BenchArgs) -> Result<(), String> {
             "min_pixels": bench.min_pixels,
             "frame_replay": bench.frame_replay,
             "scene": stats_json(name, &stats),
+            "submit_floor_us": floor_us,
             "rows": rows_json(&rows),
         })
     };

@@ -428,6 +428,9 @@ fn bench_prints_the_table_and_writes_json() {
     assert_eq!(rows[1]["replayed_frames"], 2, "{}", rows[1]);
     assert_eq!(rows[2]["replayed_frames"], 2, "{}", rows[2]);
     assert_eq!(json["frame_replay"], true);
+    // The driver's floor under every replayed frame, measured in the same run.
+    assert!(json["submit_floor_us"].as_f64().unwrap() > 0.0, "{json}");
+    assert!(text.contains("floor: the driver takes"), "{text}");
 
     let (_, json) = small_bench("gen:grid:parts=500", &path, &["--no-replay"]);
     let rows = json["rows"].as_array().unwrap();

@@ -8,6 +8,26 @@ use ash::vk;
 use super::device::Device;
 use super::error::{VkError, VkResult, VkResultExt};
 
+/// The CPU time of handing the queue a recorded, empty command buffer again, as a replayed
+/// frame hands it its recording (`CommandContext::resubmit`): the median over `samples`
+/// submissions, each waited for before the next is timed, in microseconds. It is the floor
+/// under any frame on this device and driver, which `cadr bench` prints beside its rows.
+pub fn resubmit_floor_us(device: &Arc<Device>, samples: usize) -> VkResult<f64> {
+    let mut context = CommandContext::new(device, "resubmit floor")?;
+    context.begin()?;
+    context.submit()?;
+    let mut times = Vec::with_capacity(samples.max(1));
+    for _ in 0..samples.max(1) {
+        context.wait()?;
+        let start = std::time::Instant::now();
+        context.resubmit()?;
+        times.push(start.elapsed().as_secs_f64() * 1e6);
+    }
+    context.wait()?;
+    times.sort_by(f64::total_cmp);
+    Ok(times[times.len() / 2])
+}
+
 /// A command pool with one primary command buffer and a fence: record, submit, wait.
 pub struct CommandContext {
     device: Arc<Device>,

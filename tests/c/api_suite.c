@@ -75,14 +75,22 @@ static const uint32_t cube_indices[] = {
     0, 1, 5, 0, 5, 4, 1, 2, 6, 1, 6, 5, 2, 3, 7, 2, 7, 6, 3, 0, 4, 3, 4, 7};
 static const struct CadrPart cube_parts[] = {{0, 12, 0, 0}, {12, 24, 0, 0}};
 
-static struct CadrGeometryDesc cube_desc(void) {
+/* A geometry of one part, its normals computed by cadr. */
+static struct CadrGeometryDesc geometry_desc(const char *name, const float *positions,
+                                             uint32_t vertex_count, const uint32_t *indices,
+                                             uint32_t index_count) {
   struct CadrGeometryDesc desc;
   memset(&desc, 0, sizeof desc);
-  desc.name = "cube";
-  desc.positions = cube_positions;
-  desc.vertex_count = 8;
-  desc.indices = cube_indices;
-  desc.index_count = 36;
+  desc.name = name;
+  desc.positions = positions;
+  desc.vertex_count = vertex_count;
+  desc.indices = indices;
+  desc.index_count = index_count;
+  return desc;
+}
+
+static struct CadrGeometryDesc cube_desc(void) {
+  struct CadrGeometryDesc desc = geometry_desc("cube", cube_positions, 8, cube_indices, 36);
   desc.parts = cube_parts;
   desc.part_count = 2;
   return desc;
@@ -449,12 +457,7 @@ static void test_host_textures(CadrRenderer renderer, uint32_t width, uint32_t h
 
   OK(cadr_scene_create(&scene));
   OK(cadr_scene_root(scene, &root));
-  memset(&desc, 0, sizeof desc);
-  desc.name = "square";
-  desc.positions = positions;
-  desc.vertex_count = 4;
-  desc.indices = indices;
-  desc.index_count = 6;
+  desc = geometry_desc("square", positions, 4, indices, 6);
   OK(cadr_scene_create_geometry(scene, &desc, &square));
   OK(cadr_scene_create_material(scene, &white, &material));
   OK(cadr_scene_create_geo(scene, "square", square, &material, 1, &geo));

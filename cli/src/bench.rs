@@ -489,10 +489,10 @@ fn rows_json(rows: &[Row]) -> Vec<serde_json::Value> {
     rows.iter().map(|r| row_json(r, baseline_cpu)).collect()
 }
 
-/// `cadr bench`.
 /// Empty submissions timed for the floor line.
 const FLOOR_SAMPLES: usize = 1000;
 
+/// `cadr bench`.
 pub fn bench(args: &BenchArgs) -> Result<(), String> {
     if let Some(path) = &args.plot {
         crate::plot::check_path(path)?;

@@ -6,8 +6,9 @@
 use std::ffi::c_char;
 use std::sync::Arc;
 
+use cadr_core::graph::SceneGraph;
 use cadr_core::scene::{
-    AlphaMode, Sampler, Texture, TextureRef, UvTransform, VertexAttributes, Wrap,
+    AlphaMode, Material, Sampler, Texture, TextureRef, UvTransform, VertexAttributes, Wrap,
 };
 
 use crate::args::{deliver, non_null, optional_str, slice};
@@ -163,6 +164,20 @@ pub extern "C" fn cadr_scene_destroy_texture(scene: CadrScene, texture: CadrText
     })
 }
 
+/// Changes a material of `scene` by `edit` (which may read the graph), keeping the rest.
+fn edit_material(
+    scene: CadrScene,
+    material: CadrMaterial,
+    edit: impl FnOnce(&SceneGraph, &mut Material) -> Result<(), Failure>,
+) -> Result<(), Failure> {
+    with_scene(scene, |s| {
+        let handle = material_of(&s.graph, material, "material")?;
+        let mut data = s.graph.material(handle).map_err(graph_failure)?.clone();
+        edit(&s.graph, &mut data)?;
+        s.graph.set_material(handle, data).map_err(graph_failure)
+    })
+}
+
 /// Gives a material a base-colour texture, which multiplies its base colour (and the vertex
 /// colours), or takes it away (`texture` 0). `uv_transform` maps the geometry's texture
 /// coordinates before sampling, as two rows of an affine map: `u' = t[0]·u + t[1]·v + t[2]`,
@@ -201,18 +216,15 @@ pub unsafe extern "C" fn cadr_scene_set_material_texture(
                 v_row: [t[3], t[4], t[5]],
             }
         };
-        with_scene(scene, |s| {
-            let handle = material_of(&s.graph, material, "material")?;
-            let texture = match texture {
+        edit_material(scene, material, |graph, data| {
+            data.base_color_texture = match texture {
                 0 => None,
                 value => Some(TextureRef {
-                    texture: texture_of(&s.graph, value, "texture")?.index(),
+                    texture: texture_of(graph, value, "texture")?.index(),
                     transform,
                 }),
             };
-            let mut data = s.graph.material(handle).map_err(graph_failure)?.clone();
-            data.base_color_texture = texture;
-            s.graph.set_material(handle, data).map_err(graph_failure)
+            Ok(())
         })
     })
 }
@@ -250,11 +262,9 @@ pub extern "C" fn cadr_scene_set_material_alpha_mode(
                 )))
             }
         };
-        with_scene(scene, |s| {
-            let handle = material_of(&s.graph, material, "material")?;
-            let mut data = s.graph.material(handle).map_err(graph_failure)?.clone();
+        edit_material(scene, material, |_, data| {
             data.alpha_mode = mode;
-            s.graph.set_material(handle, data).map_err(graph_failure)
+            Ok(())
         })
     })
 }

@@ -629,7 +629,7 @@ fn parse_plane(text: &str) -> Result<glam::DVec4, String> {
 /// The one colour of `--background flat`: the middle of the default gradient.
 const FLAT_BACKGROUND: [f32; 3] = [0.80, 0.84, 0.88];
 
-/// Parses `--background`: `gradient`, `flat`, `#RRGGBB` or `#RRGGBB,#RRGGBB` (top, bottom).
+/// Parses `on` or `off` (`bench --silhouettes`).
 fn parse_on_off(text: &str) -> Result<bool, String> {
     match text {
         "on" => Ok(true),
@@ -638,10 +638,12 @@ fn parse_on_off(text: &str) -> Result<bool, String> {
     }
 }
 
+/// Parses a highlight style: `tint` or `outline`.
 fn parse_highlight_style(text: &str) -> Result<HighlightStyle, String> {
     HighlightStyle::parse(text).ok_or_else(|| format!("'{text}' is not tint or outline"))
 }
 
+/// Parses `--background`: `gradient`, `flat`, `#RRGGBB` or `#RRGGBB,#RRGGBB` (top, bottom).
 fn parse_background(text: &str) -> Result<Background, String> {
     let bad = |part: &str| {
         format!("'{part}': expected gradient, flat, #RRGGBB or #RRGGBB,#RRGGBB (top, bottom)")

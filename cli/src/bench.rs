@@ -397,7 +397,7 @@ fn shade_label(row: &Row) -> String {
     if row.highlight_style == HighlightStyle::Outline {
         label += "+outline";
     }
-    if !row.silhouettes && (row.shade == "edges" || row.shade == "hidden-line") {
+    if !row.silhouettes && ShadeMode::parse(row.shade).is_some_and(draws_silhouettes) {
         label += "-sil";
     }
     label
@@ -545,8 +545,10 @@ pub fn bench(args: &BenchArgs) -> Result<(), String> {
             "scene: {name}: {} parts, {} triangles, {} materials, {} geometries",
             stats.instances, stats.triangles, stats.materials, stats.geometries
         );
-        let floor_us =
-            cadr_core::vk::resubmit_floor_us(&device, FLOOR_SAMPLES).map_err(|e| e.to_string())?;
+        let floor_us = crate::median(
+            &mut cadr_core::vk::resubmit_times_us(&device, FLOOR_SAMPLES)
+                .map_err(|e| e.to_string())?,
+        );
         println!(
             "floor: the driver takes {floor_us:.1} µs to resubmit an empty recorded command buffer \
              (median of {FLOOR_SAMPLES}); a replayed row's CPU µs is this plus cadr's own work"

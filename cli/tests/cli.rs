@@ -22,6 +22,16 @@ fn small_bench(
     json_path: &std::path::Path,
     settings: &[&str],
 ) -> (Output, serde_json::Value) {
+    small_bench_of(scene, "individual", json_path, settings)
+}
+
+/// As `small_bench`, measuring the submission techniques `submit` (comma-separated).
+fn small_bench_of(
+    scene: &str,
+    submit: &str,
+    json_path: &std::path::Path,
+    settings: &[&str],
+) -> (Output, serde_json::Value) {
     let mut args = vec![
         "bench",
         scene,
@@ -34,7 +44,7 @@ fn small_bench(
         "--params",
         "push",
         "--submit",
-        "individual",
+        submit,
         "--json",
         json_path.to_str().unwrap(),
     ];
@@ -388,31 +398,14 @@ fn render_uses_the_chosen_techniques_and_refuses_bad_combinations() {
 #[test]
 fn bench_prints_the_table_and_writes_json() {
     let path = std::env::temp_dir().join(format!("cadr-cli-bench-{}.json", std::process::id()));
-    let output = cadr(&[
-        "bench",
-        "gen:grid:parts=500",
-        "--frames",
-        "2",
-        "--size",
-        "64x48",
-        "--vertex",
-        "per-geometry",
-        "--params",
-        "push",
-        "--submit",
-        "individual,groups-replay",
-        "--json",
-        path.to_str().unwrap(),
-    ]);
-    assert!(output.status.success(), "{}", stderr(&output));
+    let (output, json) =
+        small_bench_of("gen:grid:parts=500", "individual,groups-replay", &path, &[]);
     let text = stdout(&output);
     assert!(text.contains("baseline (built-in)"), "{text}");
     assert!(
         text.contains("per-geometry / push / groups-replay / none"),
         "{text}"
     );
-    let json: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(&path).unwrap()).unwrap();
     let rows = json["rows"].as_array().unwrap();
     assert_eq!(rows.len(), 3, "baseline and two combinations");
     assert_eq!(json["scene"]["parts"], 500);

@@ -3,21 +3,7 @@
 /// `work` applied to every item on up to one thread per core (contiguous chunks), the results
 /// in the items' order. A panic in `work` is resumed on the caller's thread.
 pub fn map<T: Sync, R: Send>(items: &[T], work: impl Fn(&T) -> R + Sync) -> Vec<R> {
-    let threads = threads_for(items.len());
-    let chunk = items.len().div_ceil(threads).max(1);
-    std::thread::scope(|scope| {
-        let workers: Vec<_> = items
-            .chunks(chunk)
-            .map(|chunk| scope.spawn(|| chunk.iter().map(&work).collect::<Vec<R>>()))
-            .collect();
-        workers
-            .into_iter()
-            .flat_map(|worker| match worker.join() {
-                Ok(results) => results,
-                Err(panic) => std::panic::resume_unwind(panic),
-            })
-            .collect()
-    })
+    collect_indexed(items.len(), (1, 1), |i, _: &mut ()| work(&items[i])).0
 }
 
 /// `work` applied to every item, mutably, on up to one thread per core (contiguous chunks of

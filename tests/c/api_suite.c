@@ -424,6 +424,15 @@ static bool reddish(const uint8_t *p) { return p[0] > 2 * p[1] && p[0] > 2 * p[2
 static bool greenish(const uint8_t *p) { return p[1] > 2 * p[0] && p[1] > 2 * p[2]; }
 static bool bluish(const uint8_t *p) { return p[2] > 2 * p[0] && p[2] > 2 * p[1]; }
 
+/* Renders `scene` and reads the picture back into `picture` (the renderer's size). */
+static void render_into(CadrRenderer renderer, CadrScene scene, const struct CadrCamera *camera,
+                        uint8_t *picture) {
+  uint32_t width = 0, height = 0;
+  OK(cadr_renderer_size(renderer, &width, &height));
+  OK(cadr_renderer_render(renderer, scene, camera, NULL));
+  OK(cadr_renderer_read_pixels(renderer, picture, (size_t)width * height * 4));
+}
+
 /* Textures, a material's texture and alpha mode, and vertex colours from the host's arrays: a
    square facing the camera, textured red on its left half and blue on its right (2x1 texels,
    magnified as blocks); flipped by a UV transform; cut away where the texture's alpha is 0
@@ -481,21 +490,18 @@ static void test_host_textures(CadrRenderer renderer, uint32_t width, uint32_t h
 
   OK(cadr_scene_bounds(scene, &bounds));
   OK(cadr_camera_fit(&bounds, (double)width / height, front, &camera));
-  OK(cadr_renderer_render(renderer, scene, &camera, NULL));
-  OK(cadr_renderer_read_pixels(renderer, picture, (size_t)width * height * 4));
+  render_into(renderer, scene, &camera, picture);
   CHECK(reddish(PIXEL(picture, width, left, row)) && bluish(PIXEL(picture, width, right, row)));
 
   /* u' = 1 - u: the halves swap. */
   OK(cadr_scene_set_material_texture(scene, material, texture, mirrored));
-  OK(cadr_renderer_render(renderer, scene, &camera, NULL));
-  OK(cadr_renderer_read_pixels(renderer, picture, (size_t)width * height * 4));
+  render_into(renderer, scene, &camera, picture);
   CHECK(bluish(PIXEL(picture, width, left, row)) && reddish(PIXEL(picture, width, right, row)));
 
   /* A mask cuts the right half away: the background shows there, as at the row's left end. */
   OK(cadr_scene_set_material_texture(scene, material, clear, NULL));
   OK(cadr_scene_set_material_alpha_mode(scene, material, CADR_ALPHA_MASK, 0.5f));
-  OK(cadr_renderer_render(renderer, scene, &camera, NULL));
-  OK(cadr_renderer_read_pixels(renderer, picture, (size_t)width * height * 4));
+  render_into(renderer, scene, &camera, picture);
   CHECK(reddish(PIXEL(picture, width, left, row)));
   CHECK(memcmp(PIXEL(picture, width, right, row), PIXEL(picture, width, 0, row), 3) == 0);
   {
@@ -508,21 +514,18 @@ static void test_host_textures(CadrRenderer renderer, uint32_t width, uint32_t h
   }
   /* Opaque: the clear texels draw (blue-free, so not the background). */
   OK(cadr_scene_set_material_alpha_mode(scene, material, CADR_ALPHA_OPAQUE, 0.0f));
-  OK(cadr_renderer_render(renderer, scene, &camera, NULL));
-  OK(cadr_renderer_read_pixels(renderer, picture, (size_t)width * height * 4));
+  render_into(renderer, scene, &camera, picture);
   CHECK(memcmp(PIXEL(picture, width, right, row), PIXEL(picture, width, 0, row), 3) != 0);
 
   /* Without the texture, green vertex colours colour the white material. */
   OK(cadr_scene_set_material_texture(scene, material, 0, NULL));
   OK(cadr_scene_set_material_alpha_mode(scene, material, CADR_ALPHA_BLEND, 0.0f));
   OK(cadr_scene_set_geometry_attributes(scene, square, 4, NULL, greens));
-  OK(cadr_renderer_render(renderer, scene, &camera, NULL));
-  OK(cadr_renderer_read_pixels(renderer, picture, (size_t)width * height * 4));
+  render_into(renderer, scene, &camera, picture);
   CHECK(greenish(PIXEL(picture, width, left, row)) && greenish(PIXEL(picture, width, right, row)));
   /* Taken away, the material's white shows. */
   OK(cadr_scene_set_geometry_attributes(scene, square, 4, NULL, NULL));
-  OK(cadr_renderer_render(renderer, scene, &camera, NULL));
-  OK(cadr_renderer_read_pixels(renderer, picture, (size_t)width * height * 4));
+  render_into(renderer, scene, &camera, picture);
   CHECK(!greenish(PIXEL(picture, width, left, row)));
 
   /* Errors name what is wrong; nothing changes. */

@@ -265,37 +265,15 @@ impl GpuScene {
         self.hierarchy.cancel();
         // Each array is made on a thread per core, every item written once (see
         // `parallel::collect_indexed`); slots that keep no matrix stay zero.
-        let kept = |t: usize| self.keeps_matrix(tree, t as u32);
-        let by_node = (1, PARALLEL_FILL_NODES);
-        let matrices = crate::parallel::collect_indexed(nodes, by_node, |t, ()| {
-            if kept(t) {
-                gpu_matrix(&tree.world(t as u32))
-            } else {
-                abi::CadrMatrix::default()
-            }
-        })
-        .0;
+        let kept = |t: u32| self.keeps_matrix(tree, t);
+        let matrices = per_kept_node(nodes, &kept, |t| gpu_matrix(&tree.world(t)));
         let worlds = if on_gpu {
             Vec::new()
         } else {
-            crate::parallel::collect_indexed(nodes, by_node, |t, ()| {
-                if kept(t) {
-                    tree.world(t as u32).to_cols_array()
-                } else {
-                    [0.0; 16]
-                }
-            })
-            .0
+            per_kept_node(nodes, &kept, |t| tree.world(t).to_cols_array())
         };
         let locals = if on_gpu {
-            crate::parallel::collect_indexed(nodes, by_node, |t, ()| {
-                if kept(t) {
-                    gpu_local(&tree.local(t as u32))
-                } else {
-                    [0.0; LOCAL_WORDS]
-                }
-            })
-            .0
+            per_kept_node(nodes, &kept, |t| gpu_local(&tree.local(t)))
         } else {
             Vec::new()
         };
@@ -949,9 +927,28 @@ fn entry_in(arenas: &GeometryArenas, instance: &InstanceRef) -> Option<(abi::Cad
     Some((entry, instance.visible && count > 0))
 }
 
-/// Fewer instances (tree nodes) than this per thread are made on the calling thread.
+/// Fewer instances than this per thread are made on the calling thread.
 const PARALLEL_FILL_INSTANCES: usize = 1 << 15;
+/// Fewer tree nodes than this per thread have their matrices made on the calling thread.
 const PARALLEL_FILL_NODES: usize = 1 << 15;
+
+/// An array with an item per tree node: `make(t)` for the nodes that keep a matrix, zero
+/// for the others; made on a thread per core.
+fn per_kept_node<T: Default + Send>(
+    nodes: usize,
+    kept: &(impl Fn(u32) -> bool + Sync),
+    make: impl Fn(u32) -> T + Sync,
+) -> Vec<T> {
+    crate::parallel::collect_indexed(nodes, (1, PARALLEL_FILL_NODES), |t, _: &mut ()| {
+        let t = t as u32;
+        if kept(t) {
+            make(t)
+        } else {
+            T::default()
+        }
+    })
+    .0
+}
 
 /// The record of instance `id` (what the drawing shaders read of it).
 fn record_of(entry: &abi::CadrInstance, id: u32) -> abi::CadrInstanceRecord {

@@ -6,8 +6,8 @@
 //! sizes). Each texture is resampled to the layer size: the largest texture's side rounded up
 //! to a power of two, at most [`MAX_LAYER_SIZE`], halved while the array would pass
 //! [`ARRAY_BUDGET_BYTES`]. Layers and their mip chains are made on the CPU with the `image`
-//! crate, in linear colour, a thread per core, and uploaded once; the array is rebuilt when the graph's textures
-//! change.
+//! crate, in linear colour, a thread per core, and uploaded once; the array is rebuilt when
+//! the graph's textures change.
 
 use std::sync::Arc;
 

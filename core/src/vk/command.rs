@@ -8,24 +8,23 @@ use ash::vk;
 use super::device::Device;
 use super::error::{VkError, VkResult, VkResultExt};
 
-/// The CPU time of handing the queue a recorded, empty command buffer again, as a replayed
-/// frame hands it its recording (`CommandContext::resubmit`): the median over `samples`
-/// submissions, each waited for before the next is timed, in microseconds. It is the floor
-/// under any frame on this device and driver, which `cadr bench` prints beside its rows.
-pub fn resubmit_floor_us(device: &Arc<Device>, samples: usize) -> VkResult<f64> {
+/// The CPU time, in microseconds, of each of `samples` resubmissions of a recorded, empty
+/// command buffer, as a replayed frame hands the queue its recording
+/// (`CommandContext::resubmit`), each waited for before the next is timed: the floor under
+/// any frame on this device and driver, which `cadr bench` prints beside its rows.
+pub fn resubmit_times_us(device: &Arc<Device>, samples: usize) -> VkResult<Vec<f64>> {
     let mut context = CommandContext::new(device, "resubmit floor")?;
     context.begin()?;
     context.submit()?;
-    let mut times = Vec::with_capacity(samples.max(1));
-    for _ in 0..samples.max(1) {
+    let mut times = Vec::with_capacity(samples);
+    for _ in 0..samples {
         context.wait()?;
         let start = std::time::Instant::now();
         context.resubmit()?;
         times.push(start.elapsed().as_secs_f64() * 1e6);
     }
     context.wait()?;
-    times.sort_by(f64::total_cmp);
-    Ok(times[times.len() / 2])
+    Ok(times)
 }
 
 /// A command pool with one primary command buffer and a fence: record, submit, wait.

@@ -26,7 +26,7 @@ mod timer;
 
 pub use adapter::{enumerate as enumerate_adapters, Adapter, DeviceChoice, DEVICE_ENV};
 pub use buffer::{Buffer, MemoryLocation};
-pub use command::{record_dispatch, record_fullscreen, resubmit_floor_us, CommandContext, OneShot};
+pub use command::{record_dispatch, record_fullscreen, resubmit_times_us, CommandContext, OneShot};
 pub use device::{Capabilities, Device, DeviceOptions, RawHandles};
 pub use error::{map_result, VkError, VkResult, VkResultExt};
 pub use image::{

@@ -18,6 +18,8 @@ layout(set = 0, binding = 0, std140) uniform FrameUniforms {
 
 const uint CADR_SECTION_CAPS = 0x100u;
 const uint CADR_SECTION_HATCHED = 0x200u;
+// The pick pass's flag on ids whose pixel shows a cap (the host reads it as PICK_CAP_BIT).
+const uint CADR_PICK_CAP = 0x80000000u;
 
 // frame.target.z: the X-ray display mode (every part not highlighted drawn translucent).
 const uint CADR_DISPLAY_XRAY = 1u;

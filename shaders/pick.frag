@@ -1,11 +1,17 @@
 #version 460
 // The pick pass: writes which instance covers each pixel (instance id + 1; 0 is nothing).
 // Instances that cannot be picked come with id 0 and let the click through to what is behind,
-// and so do the holes a material's alpha mask cuts.
+// and so do the holes a material's alpha mask cuts. A cap (section.glsl) sets CADR_PICK_CAP
+// in the id: the host moves such a hit from the far face the cap is painted on to the plane.
+#include "frame.glsl"
+#include "shading.glsl"
+#include "section.glsl"
 #include "texturing.glsl"
 
 layout(location = 2) flat in vec4 in_base_color;
 layout(location = 4) flat in uint in_pick_id;
+layout(location = 5) in vec3 in_eye_offset;
+layout(location = 6) flat in float in_closure;
 layout(location = 7) in vec2 in_uv;
 layout(location = 8) in vec4 in_vertex_color;
 layout(location = 9) flat in uvec4 in_texture;
@@ -18,5 +24,5 @@ void main() {
     if (in_pick_id == 0u || cadr_masked_out(surface, in_texture)) {
         discard;
     }
-    out_id = in_pick_id;
+    out_id = section_cap_of(in_closure, in_eye_offset) >= 0 ? in_pick_id | CADR_PICK_CAP : in_pick_id;
 }

@@ -26,6 +26,17 @@ int section_cap_plane(vec3 eye_offset) {
     return plane;
 }
 
+// The plane whose cap a fragment of a part closing as `closure` (in_closure) shows at world
+// offset `eye_offset` from the eye: with caps on, a closed part seen from inside through a cut
+// (-1 for every other fragment).
+int section_cap_of(float closure, vec3 eye_offset) {
+    bool seen_from_inside = closure * (gl_FrontFacing ? 1.0 : -1.0) < 0.0;
+    if ((frame.section.x & CADR_SECTION_CAPS) == 0u || !seen_from_inside) {
+        return -1;
+    }
+    return section_cap_plane(eye_offset);
+}
+
 // The colour of the cap of `plane` seen at world offset `eye_offset` from the eye
 // (gamma-encoded, like shade_headlight).
 vec3 section_cap_color(int plane, vec3 eye_offset) {

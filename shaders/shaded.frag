@@ -31,13 +31,10 @@ void main() {
     if ((frame.target.z & CADR_DISPLAY_HIGHLIGHT_OUTLINE) != 0u) {
         cadr_record_outline(in_highlighted != 0u);
     }
-    bool seen_from_inside = in_closure * (gl_FrontFacing ? 1.0 : -1.0) < 0.0;
-    if ((frame.section.x & CADR_SECTION_CAPS) != 0u && seen_from_inside) {
-        int plane = section_cap_plane(in_eye_offset);
-        if (plane >= 0) {
-            out_color = vec4(section_cap_color(plane, in_eye_offset), 1.0);
-            return;
-        }
+    int cap_plane = section_cap_of(in_closure, in_eye_offset);
+    if (cap_plane >= 0) {
+        out_color = vec4(section_cap_color(cap_plane, in_eye_offset), 1.0);
+        return;
     }
     out_color = vec4(shade_headlight(in_view_position, in_view_normal, surface, in_surface, frame.light,
                           frame.view_rotation[1].xyz), 1.0);

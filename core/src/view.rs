@@ -57,6 +57,39 @@ pub fn unproject(
     camera.view.inverse().transform_point3(view.truncate())
 }
 
+/// The depth of the world point `point` seen by `camera` (0 near plane, 1 far plane).
+fn depth_of(camera: &Camera, point: DVec3) -> f32 {
+    let clip = camera.projection * camera.view * point.extend(1.0);
+    (clip.z / clip.w) as f32
+}
+
+/// `sample` as a pick reports it, with the world point under its pixel's centre. A cap's
+/// pixel shows the plane where it cuts the part, so its point and depth move from the far face
+/// the cap is painted on to the plane (where a user who clicks a cut face measures from).
+fn surface_point(
+    sample: PickSample,
+    section: &Section,
+    camera: &Camera,
+    size: (u32, u32),
+) -> (PickSample, DVec3) {
+    let pixel = (sample.x, sample.y);
+    let surface = unproject(camera, size, pixel, sample.depth);
+    if !sample.cap {
+        return (sample, surface);
+    }
+    let near = unproject(camera, size, pixel, 0.0);
+    match section.cap_entry(near, surface) {
+        Some(cut) => (
+            PickSample {
+                depth: depth_of(camera, cut),
+                ..sample
+            },
+            cut,
+        ),
+        None => (sample, surface),
+    }
+}
+
 /// A renderer with its techniques and GPU scene.
 pub struct View {
     // Dropped in this order: the scene and the techniques before the renderer whose layouts
@@ -208,18 +241,20 @@ impl View {
     ) -> RenderResult<Vec<PickHit>> {
         self.sync(graph, tree)?;
         let (scene, techniques, renderer) = self.parts()?;
-        let samples = renderer.pick_techniques(scene, techniques, camera, rect)?;
         let size = renderer.size();
-        let mut nearest: HashMap<u32, PickSample> = HashMap::new();
+        let section = renderer.section().clone();
+        let samples = renderer.pick_techniques(scene, techniques, camera, rect)?;
+        let mut nearest: HashMap<u32, (PickSample, DVec3)> = HashMap::new();
         for sample in samples {
-            let best = nearest.entry(sample.instance).or_insert(sample);
-            if sample.depth < best.depth {
-                *best = sample;
+            let (sample, position) = surface_point(sample, &section, camera, size);
+            let best = nearest.entry(sample.instance).or_insert((sample, position));
+            if sample.depth < best.0.depth {
+                *best = (sample, position);
             }
         }
         let mut hits: Vec<PickHit> = nearest
             .into_values()
-            .filter_map(|sample| {
+            .filter_map(|(sample, position)| {
                 let instance = tree.instance(sample.instance)?;
                 let path = tree.path(instance.tree_node);
                 Some(PickHit {
@@ -229,7 +264,7 @@ impl View {
                     path,
                     pixel: (sample.x, sample.y),
                     depth: sample.depth,
-                    position: unproject(camera, size, (sample.x, sample.y), sample.depth),
+                    position,
                 })
             })
             .collect();

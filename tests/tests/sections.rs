@@ -8,6 +8,7 @@ use cadr_core::generate::{generate, GeneratorSpec};
 use cadr_core::render::{Camera, Section, DEFAULT_DIRECTION};
 use cadr_core::scene::{flatten, Geometry, Material, MeshRef, Node, Part, Scene, Vertex};
 use cadr_core::technique::ShadeMode;
+use cadr_core::view::unproject;
 use cadr_tests::images::{assert_matches_reference, compare, DEFAULT_TOLERANCE, SAME_PICTURE};
 use cadr_tests::{all_combinations, test_device, SceneView};
 use glam::{DMat4, DVec3, DVec4};
@@ -196,6 +197,35 @@ fn picking_through_a_cut_hits_what_is_behind() {
     let away = -EYE.normalize();
     f.section(&[away.extend(-2.2)], true);
     assert_eq!(pick(&mut f), "box 1");
+    f.assert_no_validation_errors();
+}
+
+#[test]
+fn a_pick_on_a_cap_finds_the_cut_part_at_the_plane() {
+    // The cap is where the plane cuts the box, so a pick there reports that point, not the
+    // far face the cap is painted on; the hit's depth is the plane's too.
+    let mut f = looking_at_the_origin(&boxes(false, &[DVec3::ZERO]), DVec3::ZERO);
+    f.section(&[KEEP_BELOW_Z0], true);
+    let on_cap = DVec3::new(0.3, 0.3, 0.0);
+    let hits = f.pick_at(on_cap);
+    assert_eq!(hits.len(), 1, "{hits:?}");
+    let hit = &hits[0];
+    assert!(hit.position.z.abs() < 1e-4, "on the plane z = 0: {hit:?}");
+    assert!(
+        (hit.position - on_cap).length() < 0.05,
+        "within a pixel of the point picked: {hit:?}"
+    );
+    let size = f.view.renderer().size();
+    let at_depth = unproject(&f.camera, size, hit.pixel, hit.depth);
+    assert!(
+        (at_depth - hit.position).length() < 1e-3,
+        "the depth is the plane's: {at_depth} against {}",
+        hit.position
+    );
+    // Without caps the cut is open and the pick finds the far face behind it.
+    f.section(&[KEEP_BELOW_Z0], false);
+    let open = f.pick_at(on_cap);
+    assert!(open[0].position.z < -0.5, "{:?}", open[0]);
     f.assert_no_validation_errors();
 }
 

@@ -74,7 +74,14 @@ pub struct PickSample {
     pub instance: u32,
     /// Its depth (0 at the near plane, 1 at the far plane).
     pub depth: f32,
+    /// Whether the pixel shows a section cap of the instance: the depth is then that of the
+    /// far face the cap is painted on, not of the cut.
+    pub cap: bool,
 }
+
+/// The pick pass's flag on the ids of pixels that show a cap (`CADR_PICK_CAP` in the shaders);
+/// the other bits are the instance id + 1.
+pub const PICK_CAP_BIT: u32 = 1 << 31;
 
 /// The id image and the readback of one rectangle.
 pub(crate) struct PickTarget {
@@ -165,12 +172,13 @@ impl PickTarget {
         };
         Ok((0..pixels)
             .filter_map(|i| {
-                let id = word(i);
+                let id = word(i) & !PICK_CAP_BIT;
                 (id != 0).then(|| PickSample {
                     x: rect.x + (i % rect.width as usize) as u32,
                     y: rect.y + (i / rect.width as usize) as u32,
                     instance: id - 1,
                     depth: f32::from_bits(word(pixels + i)),
+                    cap: word(i) & PICK_CAP_BIT != 0,
                 })
             })
             .collect())

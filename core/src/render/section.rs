@@ -9,7 +9,9 @@
 //! as the plane (optionally hatched), so the cut reads as a solid face. An open part shows no
 //! cap (its inside, if seen, is shaded as it is). The cap keeps the depth of the face it is
 //! painted on, so depth tests, occlusion culling and the edges mode's depth bias treat it like
-//! any other surface; picking a cap picks the part that was cut.
+//! any other surface (the edge lines of that face show through the cap). Picking a cap picks
+//! the part that was cut, at the point where the plane cuts it (`cap_entry`): the pick pass
+//! flags cap pixels and the host moves their depth to the plane.
 
 use glam::{DVec3, DVec4};
 
@@ -118,6 +120,26 @@ impl Section {
         }
     }
 
+    /// Where the segment from `from` to `to` last crosses into the kept side of a plane it
+    /// starts on the cut side of: where a cap seen from `from` at `to` lies (the f64
+    /// counterpart of `section_cap_plane` in `shaders/section.glsl`). None when it crosses
+    /// no plane that way, or ends where a plane cuts (nothing is drawn there).
+    pub fn cap_entry(&self, from: DVec3, to: DVec3) -> Option<DVec3> {
+        let mut entry: Option<f64> = None;
+        for plane in &self.planes {
+            let start = plane.truncate().dot(from) + plane.w;
+            let end = plane.truncate().dot(to) + plane.w;
+            if end < 0.0 {
+                return None;
+            }
+            if start < 0.0 {
+                let t = start / (start - end);
+                entry = Some(entry.map_or(t, |e| e.max(t)));
+            }
+        }
+        entry.map(|t| from.lerp(to, t))
+    }
+
     /// The planes relative to `eye` as the shaders take them: `(n, d + n·eye)`, computed in f64
     /// and then rounded; unused slots keep everything.
     pub(crate) fn eye_relative(&self, eye: DVec3) -> [[f32; 4]; MAX_SECTION_PLANES] {
@@ -165,6 +187,32 @@ mod tests {
         let infinite = section.set_planes(&[DVec4::new(1.0, 0.0, 0.0, f64::NAN)]);
         assert!(infinite.is_err());
         assert_eq!(section.planes().len(), 1, "a refused set leaves the planes");
+    }
+
+    #[test]
+    fn a_cap_lies_where_the_segment_last_enters_the_kept_side() {
+        let mut section = Section::none();
+        // Keeps x >= 1 and y >= 2.
+        section
+            .set_planes(&[
+                DVec4::new(1.0, 0.0, 0.0, -1.0),
+                DVec4::new(0.0, 2.0, 0.0, -4.0),
+            ])
+            .unwrap();
+        let from = DVec3::new(0.0, 0.0, 0.0);
+        // Crosses x = 1 at t = 0.25 and y = 2 at t = 0.5: the last is the cap.
+        let entry = section.cap_entry(from, DVec3::new(4.0, 4.0, 8.0)).unwrap();
+        assert!(
+            (entry - DVec3::new(2.0, 2.0, 4.0)).length() < 1e-12,
+            "{entry}"
+        );
+        // Starting on the kept side of both: no cut lies in front.
+        assert_eq!(
+            section.cap_entry(DVec3::new(2.0, 3.0, 0.0), DVec3::ONE * 9.0),
+            None
+        );
+        // Ending on the cut side of a plane: nothing is drawn there.
+        assert_eq!(section.cap_entry(from, DVec3::new(4.0, 1.0, 0.0)), None);
     }
 
     #[test]

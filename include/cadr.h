@@ -31,7 +31,8 @@
 // Shaded triangles with their edges drawn as lines.
 #define CADR_SHADE_EDGES 1
 
-// Display mode: edge lines only, those hidden behind surfaces removed.
+// Display mode: edge lines only, those hidden behind opaque surfaces removed (translucent
+// surfaces hide no lines).
 #define CADR_SHADE_HIDDEN_LINE 2
 
 // Display mode: every triangle's edges, hidden ones included.

@@ -55,6 +55,7 @@ impl Renderer {
                 || (mode.shows_translucency() && scene.has_translucency()),
             samples: self.msaa(),
             dashed_hidden: mode == ShadeMode::HiddenLine && techniques.dashed_hidden_lines(),
+            lines_through_translucent: mode == ShadeMode::HiddenLine && scene.has_translucency(),
         };
         self.draw_techniques(scene, techniques, camera, passes)
     }

@@ -25,8 +25,9 @@ pub enum ShadeMode {
     Solid,
     /// Shaded triangles (pushed back by a depth bias) with edge lines over them.
     Edges,
-    /// Edge lines only, those hidden behind surfaces removed: the surfaces fill the depth
-    /// buffer (pushed back by a depth bias) but not the picture.
+    /// Edge lines only, those hidden behind opaque surfaces removed: the opaque surfaces fill
+    /// the depth buffer (pushed back by a depth bias) but not the picture; translucent ones
+    /// hide no lines.
     HiddenLine,
     /// Every triangle's edges, hidden ones included (no surface is filled).
     Wireframe,
@@ -56,8 +57,9 @@ impl ShadeMode {
         }
     }
 
-    /// Whether translucent surfaces are drawn as such in this mode (in the line modes every
-    /// surface only hides lines). X-ray always draws some.
+    /// Whether translucent surfaces are drawn as such in this mode (in the line modes no
+    /// surface is drawn: in hidden-line the opaque ones hide lines, the translucent ones do
+    /// not). X-ray always draws some.
     pub fn shows_translucency(self) -> bool {
         matches!(self, ShadeMode::Solid | ShadeMode::Edges | ShadeMode::XRay)
     }
@@ -84,6 +86,10 @@ pub enum PassSet {
         /// In the hidden-line mode, whether hidden edges are drawn too, dashed and lighter
         /// (always false in the other modes).
         dashed_hidden: bool,
+        /// In the hidden-line mode, whether the scene has translucent surfaces, which then
+        /// hide no lines: what is behind glass shows through it (always false in the other
+        /// modes, which draw translucency as such).
+        lines_through_translucent: bool,
     },
     /// Triangles of pickable instances, their ids into the pick target.
     Pick {
@@ -717,8 +723,16 @@ impl TechniquePipelines {
                 through_translucent: true
             }
         );
+        let lines_through_translucent = matches!(
+            self.pass_set,
+            PassSet::Shaded {
+                lines_through_translucent: true,
+                ..
+            }
+        );
         let role = match (translucent_frame, raster.translucent, surfaces) {
             (false, _, _) if through_translucent => DrawRole::Opaque,
+            (false, _, true) if lines_through_translucent => DrawRole::Opaque,
             (false, _, _) => DrawRole::All,
             (true, true, _) => DrawRole::Translucent,
             (true, false, true) => DrawRole::Opaque,
@@ -810,6 +824,7 @@ mod tests {
             translucent: false,
             samples: 1,
             dashed_hidden: false,
+            lines_through_translucent: false,
         };
         prepare(&mut cache, solid()).expect("solid");
         assert_eq!(cache.fragments.len(), 1, "solid needs one fragment shader");
@@ -820,6 +835,7 @@ mod tests {
                 translucent: false,
                 samples: 4,
                 dashed_hidden: false,
+                lines_through_translucent: false,
             },
         )
         .expect("edges");

@@ -402,7 +402,8 @@ typedef struct CadrPickHit {
   uint32_t y;
   // Depth at the pixel: 0 at the near plane, 1 at the far plane.
   float depth;
-  // The surface point under the pixel's centre, in world space (double precision).
+  // The surface point under the pixel's centre, in world space (double precision). On a
+  // section cap, the point where the plane cuts the part (and `depth` is its depth).
   double position[3];
   // The occurrence: the nodes from the scene's root to `node` (a shared subgraph is drawn
   // once per path; this says which). Owned by the result.

@@ -25,7 +25,8 @@ pub struct CadrPickHit {
     pub y: u32,
     /// Depth at the pixel: 0 at the near plane, 1 at the far plane.
     pub depth: f32,
-    /// The surface point under the pixel's centre, in world space (double precision).
+    /// The surface point under the pixel's centre, in world space (double precision). On a
+    /// section cap, the point where the plane cuts the part (and `depth` is its depth).
     pub position: [f64; 3],
     /// The occurrence: the nodes from the scene's root to `node` (a shared subgraph is drawn
     /// once per path; this says which). Owned by the result.

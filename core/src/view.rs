@@ -34,7 +34,8 @@ pub struct PickHit {
     pub pixel: (u32, u32),
     /// Depth at the pixel (0 near plane, 1 far plane).
     pub depth: f32,
-    /// The surface point under the pixel's centre, in world space.
+    /// The surface point under the pixel's centre, in world space; on a section cap, the
+    /// point where the plane cuts the part (`depth` is then that point's too).
     pub position: DVec3,
 }
 

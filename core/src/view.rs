@@ -242,12 +242,12 @@ impl View {
     ) -> RenderResult<Vec<PickHit>> {
         self.sync(graph, tree)?;
         let (scene, techniques, renderer) = self.parts()?;
-        let size = renderer.size();
-        let section = renderer.section().clone();
         let samples = renderer.pick_techniques(scene, techniques, camera, rect)?;
+        let size = renderer.size();
+        let section = renderer.section();
         let mut nearest: HashMap<u32, (PickSample, DVec3)> = HashMap::new();
         for sample in samples {
-            let (sample, position) = surface_point(sample, &section, camera, size);
+            let (sample, position) = surface_point(sample, section, camera, size);
             let best = nearest.entry(sample.instance).or_insert((sample, position));
             if sample.depth < best.0.depth {
                 *best = (sample, position);

@@ -49,6 +49,9 @@ struct Row {
     /// How highlighted parts were drawn.
     highlight_style: HighlightStyle,
     cpu_us: f64,
+    /// Of `cpu_us`, the median time spent handing the recording to the queue (the driver's
+    /// submission call); the rest is cadr's own work.
+    cpu_submit_us: f64,
     gpu_us: Option<f64>,
     /// Moving nodes and bringing the tree and GPU scene up to date.
     scene_update_us: f64,
@@ -66,6 +69,7 @@ struct Row {
 /// measured frame.
 struct Measured {
     cpu_us: f64,
+    cpu_submit_us: f64,
     gpu_us: Option<f64>,
     scene_update_us: f64,
     bytes_uploaded: u64,
@@ -88,6 +92,12 @@ fn measure(
         samples.push(draw(frame + 2)?);
     }
     let cpu = crate::median(&mut samples.iter().map(|s| s.0.cpu_us()).collect::<Vec<_>>());
+    let submit = crate::median(
+        &mut samples
+            .iter()
+            .map(|s| s.0.cpu_submit_us)
+            .collect::<Vec<_>>(),
+    );
     let mut gpu: Vec<f64> = samples.iter().filter_map(|s| s.0.gpu_us).collect();
     let gpu = (!gpu.is_empty()).then(|| crate::median(&mut gpu));
     let update = crate::median(&mut samples.iter().map(|s| s.1).collect::<Vec<_>>());
@@ -99,6 +109,7 @@ fn measure(
     );
     Ok(Measured {
         cpu_us: cpu,
+        cpu_submit_us: submit,
         gpu_us: gpu,
         scene_update_us: update,
         bytes_uploaded: uploaded as u64,
@@ -124,6 +135,7 @@ impl Row {
                 Transforms::Host => "host",
             },
             cpu_us: measured.cpu_us,
+            cpu_submit_us: measured.cpu_submit_us,
             gpu_us: measured.gpu_us,
             scene_update_us: measured.scene_update_us,
             bytes_uploaded: measured.bytes_uploaded,
@@ -405,12 +417,13 @@ fn shade_label(row: &Row) -> String {
 
 fn header_line() -> String {
     format!(
-        "{:<58} {:>26} {:>4} {:>7} {:>10} {:>10} {:>9} {:>9} {:>8} {:>8} {:>6} {:>7} {:>7} {:>10} {:>9}",
+        "{:<58} {:>26} {:>4} {:>7} {:>10} {:>9} {:>10} {:>9} {:>9} {:>8} {:>8} {:>6} {:>7} {:>7} {:>10} {:>9}",
         "technique (vertex / params / submit / cull)",
         "shade",
         "AA",
         "replay",
         "CPU µs",
+        "submit µs",
         "GPU µs",
         "update µs",
         "upload B",
@@ -428,12 +441,13 @@ fn row_line(row: &Row, baseline_cpu: f64) -> String {
     let gpu = row.gpu_us.map_or("n/a".to_owned(), |g| format!("{g:.0}"));
     let s = &row.stats;
     format!(
-        "{:<58} {:>26} {:>4} {:>7} {:>10.1} {:>10} {:>9.1} {:>9} {:>8} {:>8} {:>6} {:>7} {:>7} {:>10} {:>8.1}x",
+        "{:<58} {:>26} {:>4} {:>7} {:>10.1} {:>9.1} {:>10} {:>9.1} {:>9} {:>8} {:>8} {:>6} {:>7} {:>7} {:>10} {:>8.1}x",
         row.label,
         shade_label(row),
         format!("{}x", row.msaa),
         format!("{}/{}", row.replayed.0, row.replayed.1),
         row.cpu_us,
+        row.cpu_submit_us,
         gpu,
         row.scene_update_us,
         row.bytes_uploaded,
@@ -457,6 +471,7 @@ fn row_json(row: &Row, baseline_cpu: f64) -> serde_json::Value {
         "silhouettes": row.silhouettes,
         "highlight_style": row.highlight_style.name(),
         "cpu_us": row.cpu_us,
+        "cpu_submit_us": row.cpu_submit_us,
         "gpu_us": row.gpu_us,
         "scene_update_us": row.scene_update_us,
         "bytes_uploaded": row.bytes_uploaded,
@@ -551,7 +566,9 @@ pub fn bench(args: &BenchArgs) -> Result<(), String> {
         );
         println!(
             "floor: the driver takes {floor_us:.1} µs to resubmit an empty recorded command buffer \
-             (median of {FLOOR_SAMPLES}); a replayed row's CPU µs is this plus cadr's own work"
+             (median of {FLOOR_SAMPLES}, back to back); a row's CPU µs is its submit µs (the \
+             driver's submission call, dearer to a queue that idled through a long frame) plus \
+             cadr's own work"
         );
         if let Some(path) = &args.plot {
             let bars: Vec<(String, f64)> = rows

@@ -412,6 +412,12 @@ fn bench_prints_the_table_and_writes_json() {
     assert_eq!(rows[0]["speedup"], 1.0);
     for row in rows {
         assert!(row["cpu_us"].as_f64().unwrap() > 0.0, "{row}");
+        // The driver's submission call is a part of the frame's CPU time, not all of it.
+        let submit = row["cpu_submit_us"].as_f64().unwrap();
+        assert!(
+            submit > 0.0 && submit < row["cpu_us"].as_f64().unwrap(),
+            "{row}"
+        );
         assert_eq!(row["triangles"], rows[0]["triangles"], "{row}");
     }
     assert_eq!(rows[1]["draw_calls"], 500, "individual: one call per part");

@@ -69,6 +69,9 @@ layout(location = 10) flat out float out_opacity_limit;
 layout(location = 11) flat out uint out_highlighted;
 
 out float gl_ClipDistance[6];
+// The same position in every pipeline built from this shader, whatever its fragment shader: the
+// section caps' second pass (caps.frag) finds the surface each pixel shows by depth equality.
+invariant gl_Position;
 
 const uint CADR_INSTANCE_CLOSED = 16u;
 const uint CADR_INSTANCE_INSIDE_OUT = 32u;

@@ -273,6 +273,12 @@ pub const OUTLINE_FRAG: ShaderSource = ShaderSource {
     stage: ShaderStage::Fragment,
     source: include_str!("../../shaders/outline.frag"),
 };
+/// Section caps painted again over the edge lines (the edge modes with caps on).
+pub const CAPS_FRAG: ShaderSource = ShaderSource {
+    name: "caps.frag",
+    stage: ShaderStage::Fragment,
+    source: include_str!("../../shaders/caps.frag"),
+};
 /// Hidden edge lines, dashed (the hidden-line mode's option).
 pub const HIDDEN_EDGES_FRAG: ShaderSource = ShaderSource {
     name: "hidden_edges.frag",
@@ -322,6 +328,7 @@ pub const ALL: &[ShaderSource] = &[
     TRANSFORMS_COMP,
     EDGES_FRAG,
     HIDDEN_EDGES_FRAG,
+    CAPS_FRAG,
     SSAO_FRAG,
     SILHOUETTES_FRAG,
     OUTLINE_FRAG,

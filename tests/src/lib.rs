@@ -169,6 +169,24 @@ impl SceneView {
         images::color_at(image, &self.camera, point)
     }
 
+    /// The brightness (the largest of R, G and B, 0 to 1) of the darkest pixel of `image`
+    /// among the 3 × 3 around where the world point `point` shows: whether a line of a pixel's
+    /// width passes there, wherever the rasterizer put it.
+    pub fn darkest_around(&self, image: &image::RgbaImage, point: glam::DVec3) -> f32 {
+        let (x, y) = images::pixel_of(&self.camera, image.dimensions(), point);
+        let mut darkest = f32::MAX;
+        for (dx, dy) in (0..3).flat_map(|dx| (0..3).map(move |dy| (dx, dy))) {
+            let p = image
+                .get_pixel(
+                    (x + dx).saturating_sub(1).min(image.width() - 1),
+                    (y + dy).saturating_sub(1).min(image.height() - 1),
+                )
+                .0;
+            darkest = darkest.min(f32::from(p[0].max(p[1]).max(p[2])) / 255.0);
+        }
+        darkest
+    }
+
     /// Brings the tree up to the graph, draws a frame with the view's current settings and
     /// reads it back.
     pub fn render(&mut self) -> image::RgbaImage {

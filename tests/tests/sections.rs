@@ -170,6 +170,56 @@ fn a_cut_through_a_closed_box_is_capped_with_the_plane_colour_where_the_cut_is()
 }
 
 #[test]
+fn a_cap_hides_the_lines_of_the_far_faces_it_is_painted_on() {
+    // Seen from EYE through the cut at z = 0, the cap lies over the box's far faces: the crease
+    // where its -x and -y faces meet, and the edge between its -x and -z faces.
+    let behind_cap = [DVec3::new(-1.0, -1.0, -0.5), DVec3::new(-1.0, 0.0, -1.0)];
+    // The crease between the kept +x and +y faces is in front of everything.
+    let near_crease = DVec3::new(1.0, 1.0, -0.5);
+    // Hidden-line also with its hidden lines dashed: a cut face hides them, as a section view
+    // in a drawing omits them.
+    let modes = [
+        (ShadeMode::Edges, false),
+        (ShadeMode::HiddenLine, false),
+        (ShadeMode::HiddenLine, true),
+    ];
+    for (mode, dashed) in modes {
+        let mut f = looking_at_the_origin(&boxes(false, &[DVec3::ZERO]), DVec3::ZERO);
+        f.view.techniques_mut().set_shade_mode(mode).unwrap();
+        f.view.techniques_mut().set_dashed_hidden_lines(dashed);
+        f.section(&[KEEP_BELOW_Z0], true);
+        let capped = f.render();
+        for point in behind_cap {
+            let color = f.color_at(&capped, point);
+            assert!(
+                reddish(color),
+                "{mode:?} (dashed: {dashed}): the cap at {point}: {color:?}"
+            );
+            let darkest = f.darkest_around(&capped, point);
+            assert!(
+                darkest > 0.3,
+                "{mode:?} (dashed: {dashed}): no line shows through the cap at {point} (darkest {darkest})"
+            );
+        }
+        assert!(
+            f.darkest_around(&capped, near_crease) < 0.3,
+            "{mode:?} (dashed: {dashed}): the lines in front of the cut still show"
+        );
+        // Without caps the cut box is seen from inside, its far faces' lines with it.
+        f.section(&[KEEP_BELOW_Z0], false);
+        let uncapped = f.render();
+        for point in behind_cap {
+            let darkest = f.darkest_around(&uncapped, point);
+            assert!(
+                darkest < 0.3,
+                "{mode:?} (dashed: {dashed}): uncapped, the line at {point} shows (darkest {darkest})"
+            );
+        }
+        f.assert_no_validation_errors();
+    }
+}
+
+#[test]
 fn a_cut_through_an_open_mesh_shows_no_cap() {
     // Without its top face the box is open; the cut removes where that face was anyway, so
     // what remains is the closed box's remainder, but drawn without a cap.

@@ -10,9 +10,7 @@ use cadr_core::render::{Camera, FrameStats};
 use cadr_core::save::save_scene;
 use cadr_core::scene::{AlphaMode, Geometry, Material, MeshRef, Node, Part, Scene, Vertex};
 use cadr_core::technique::{Combination, ShadeMode, TechniqueKind};
-use cadr_tests::images::{
-    assert_matches_reference, compare, pixel_of, Tolerance, DEFAULT_TOLERANCE,
-};
+use cadr_tests::images::{assert_matches_reference, compare, Tolerance, DEFAULT_TOLERANCE};
 use cadr_tests::{
     all_combinations, test_device_with_synchronization_checks as test_device, SceneView,
 };
@@ -297,20 +295,6 @@ fn xray_shows_hidden_parts_and_keeps_highlighted_ones_opaque() {
     f.assert_no_validation_errors();
 }
 
-/// The darkest channel maximum in the 3×3 pixels around where `point` shows (an edge line is
-/// dark, the background light).
-fn darkest_around(f: &SceneView, image: &image::RgbaImage, point: DVec3) -> f32 {
-    let (x, y) = pixel_of(&f.camera, image.dimensions(), point);
-    let mut darkest = f32::MAX;
-    for (dx, dy) in (0..3).flat_map(|dx| (0..3).map(move |dy| (dx, dy))) {
-        let p = image
-            .get_pixel((x + dx).saturating_sub(1), (y + dy).saturating_sub(1))
-            .0;
-        darkest = darkest.min(f32::from(p[0].max(p[1]).max(p[2])) / 255.0);
-    }
-    darkest
-}
-
 #[test]
 fn hidden_line_shows_the_lines_behind_translucent_surfaces() {
     // The blue square's right border (x = 0.2) lies behind the green square. Opaque, green
@@ -323,7 +307,7 @@ fn hidden_line_shows_the_lines_behind_translucent_surfaces() {
             .set_shade_mode(ShadeMode::HiddenLine)
             .unwrap();
         let image = f.render();
-        let darkest = darkest_around(&f, &image, behind_green);
+        let darkest = f.darkest_around(&image, behind_green);
         f.assert_no_validation_errors();
         darkest
     };

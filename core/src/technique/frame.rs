@@ -56,6 +56,9 @@ impl Renderer {
             samples: self.msaa(),
             dashed_hidden: mode == ShadeMode::HiddenLine && techniques.dashed_hidden_lines(),
             lines_through_translucent: mode == ShadeMode::HiddenLine && scene.has_translucency(),
+            caps_over_lines: matches!(mode, ShadeMode::Edges | ShadeMode::HiddenLine)
+                && self.section().caps()
+                && !self.section().planes().is_empty(),
         };
         self.draw_techniques(scene, techniques, camera, passes)
     }

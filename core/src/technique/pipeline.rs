@@ -90,6 +90,12 @@ pub enum PassSet {
         /// hide no lines: what is behind glass shows through it (always false in the other
         /// modes, which draw translucency as such).
         lines_through_translucent: bool,
+        /// In the edges and hidden-line modes, whether section caps are drawn (a plane cuts
+        /// and caps are on): the lines then write no depth, and after them a caps pass
+        /// (`shaders/caps.frag`, depth EQUAL on the surfaces' depth) paints the visible caps
+        /// again over the lines of the far faces they are painted on (always false in the
+        /// other modes).
+        caps_over_lines: bool,
     },
     /// Triangles of pickable instances, their ids into the pick target.
     Pick {
@@ -214,6 +220,8 @@ enum FragmentShader {
     Edges,
     /// Hidden edge lines, dashed.
     HiddenEdges,
+    /// Section caps painted again over the lines.
+    Caps,
     /// Instance ids and depths for picking.
     Pick,
 }
@@ -224,6 +232,7 @@ impl FragmentShader {
             Self::Solid => &shaders::SHADED_FRAG,
             Self::Edges => &shaders::EDGES_FRAG,
             Self::HiddenEdges => &shaders::HIDDEN_EDGES_FRAG,
+            Self::Caps => &shaders::CAPS_FRAG,
             Self::Pick => &shaders::PICK_FRAG,
         }
     }
@@ -234,8 +243,19 @@ impl FragmentShader {
             PassSet::Shaded {
                 mode: ShadeMode::HiddenLine,
                 dashed_hidden: true,
+                caps_over_lines,
                 ..
-            } => &[Self::Solid, Self::HiddenEdges, Self::Edges],
+            } => {
+                if caps_over_lines {
+                    &[Self::Solid, Self::HiddenEdges, Self::Edges, Self::Caps]
+                } else {
+                    &[Self::Solid, Self::HiddenEdges, Self::Edges]
+                }
+            }
+            PassSet::Shaded {
+                caps_over_lines: true,
+                ..
+            } => &[Self::Solid, Self::Edges, Self::Caps],
             PassSet::Shaded { mode, .. } => match mode {
                 ShadeMode::Solid => &[Self::Solid],
                 ShadeMode::Edges | ShadeMode::HiddenLine | ShadeMode::XRay => {
@@ -441,6 +461,11 @@ struct Raster {
     depth_only: bool,
     /// Drawn only behind the surfaces (depth GREATER, not written): hidden lines.
     behind: bool,
+    /// Drawn only on the surface each pixel shows (depth EQUAL, not written): the caps pass.
+    on_surfaces: bool,
+    /// Depth tested, not written: the lines under the caps pass, which must find the
+    /// surfaces' depth where lines were drawn.
+    keeps_depth: bool,
 }
 
 /// The pipelines and layout of one combination and pass set; destroyed together.
@@ -582,9 +607,31 @@ impl TechniquePipelines {
                     let pipeline = this.pipeline(inputs, dashed, lines, hidden)?;
                     this.add(pipeline, abi::CADR_PASS_EDGES);
                 }
+                let caps_over_lines = matches!(
+                    inputs.passes,
+                    PassSet::Shaded {
+                        caps_over_lines: true,
+                        ..
+                    }
+                );
+                let visible_lines = Raster {
+                    keeps_depth: caps_over_lines,
+                    ..plain
+                };
                 let edges = fragment(FragmentShader::Edges)?;
-                let pipeline = this.pipeline(inputs, edges, lines, plain)?;
+                let pipeline = this.pipeline(inputs, edges, lines, visible_lines)?;
                 this.add(pipeline, abi::CADR_PASS_EDGES);
+                if caps_over_lines {
+                    // The surfaces' own vertex shader, role and depth bias: depth EQUAL finds
+                    // the surface each pixel shows.
+                    let caps = Raster {
+                        on_surfaces: true,
+                        ..under_lines
+                    };
+                    let caps_fragment = fragment(FragmentShader::Caps)?;
+                    let pipeline = this.pipeline(inputs, caps_fragment, triangles, caps)?;
+                    this.add(pipeline, abi::CADR_PASS_TRIANGLES);
+                }
             }
             PassSet::Shaded {
                 mode: ShadeMode::Wireframe,
@@ -755,7 +802,9 @@ impl TechniquePipelines {
                 colors: &colors,
                 depth: if raster.behind {
                     DepthUse::TestBehind
-                } else if raster.translucent {
+                } else if raster.on_surfaces {
+                    DepthUse::TestEqual
+                } else if raster.translucent || raster.keeps_depth {
                     DepthUse::Test
                 } else {
                     DepthUse::TestAndWrite
@@ -825,6 +874,7 @@ mod tests {
             samples: 1,
             dashed_hidden: false,
             lines_through_translucent: false,
+            caps_over_lines: false,
         };
         prepare(&mut cache, solid()).expect("solid");
         assert_eq!(cache.fragments.len(), 1, "solid needs one fragment shader");
@@ -836,6 +886,7 @@ mod tests {
                 samples: 4,
                 dashed_hidden: false,
                 lines_through_translucent: false,
+                caps_over_lines: false,
             },
         )
         .expect("edges");

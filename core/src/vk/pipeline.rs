@@ -242,10 +242,10 @@ impl Pipeline {
         let depth = vk::PipelineDepthStencilStateCreateInfo::default()
             .depth_test_enable(desc.depth != DepthUse::None)
             .depth_write_enable(desc.depth == DepthUse::TestAndWrite)
-            .depth_compare_op(if desc.depth == DepthUse::TestBehind {
-                vk::CompareOp::GREATER
-            } else {
-                vk::CompareOp::LESS_OR_EQUAL
+            .depth_compare_op(match desc.depth {
+                DepthUse::TestBehind => vk::CompareOp::GREATER,
+                DepthUse::TestEqual => vk::CompareOp::EQUAL,
+                _ => vk::CompareOp::LESS_OR_EQUAL,
             });
         let blend_attachments: Vec<vk::PipelineColorBlendAttachmentState> = desc
             .colors
@@ -382,6 +382,9 @@ pub enum DepthUse {
     Test,
     /// Passing only behind what was drawn (GREATER), not written: hidden lines.
     TestBehind,
+    /// Passing only on what was drawn (EQUAL), not written: a second pass over the surface
+    /// each pixel shows, drawn with the same vertex shader and depth bias as the first.
+    TestEqual,
     /// No depth attachment: full-screen passes.
     None,
 }

@@ -32,7 +32,7 @@
 #define CADR_SHADE_EDGES 1
 
 // Display mode: edge lines only, those hidden behind opaque surfaces removed (translucent
-// surfaces hide no lines).
+// surfaces hide no lines); section caps are filled and hide the lines behind them.
 #define CADR_SHADE_HIDDEN_LINE 2
 
 // Display mode: every triangle's edges, hidden ones included.

@@ -33,7 +33,7 @@ pub const CADR_SHADE_SOLID: u32 = 0;
 /// Shaded triangles with their edges drawn as lines.
 pub const CADR_SHADE_EDGES: u32 = 1;
 /// Display mode: edge lines only, those hidden behind opaque surfaces removed (translucent
-/// surfaces hide no lines).
+/// surfaces hide no lines); section caps are filled and hide the lines behind them.
 pub const CADR_SHADE_HIDDEN_LINE: u32 = 2;
 /// Display mode: every triangle's edges, hidden ones included.
 pub const CADR_SHADE_WIREFRAME: u32 = 3;

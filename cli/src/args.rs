@@ -128,7 +128,7 @@ pub enum Shade {
     Solid,
     /// Shaded surfaces with their feature edges.
     Edges,
-    /// Feature edges only, those hidden behind opaque surfaces removed.
+    /// Feature edges only, those hidden behind opaque surfaces removed (section caps filled).
     HiddenLine,
     /// Every triangle's edges, hidden ones included.
     Wireframe,

@@ -27,7 +27,7 @@ pub enum ShadeMode {
     Edges,
     /// Edge lines only, those hidden behind opaque surfaces removed: the opaque surfaces fill
     /// the depth buffer (pushed back by a depth bias) but not the picture; translucent ones
-    /// hide no lines.
+    /// hide no lines. Section caps are filled, over the lines behind them.
     HiddenLine,
     /// Every triangle's edges, hidden ones included (no surface is filled).
     Wireframe,

@@ -20,6 +20,11 @@ pub const DEFAULT_DIRECTION: DVec3 = DVec3::new(0.8, 0.7, 1.2);
 pub const DEFAULT_FOV_DEGREES: f64 = 40.0;
 
 impl Camera {
+    /// Where the eye is, in world space.
+    pub fn eye(&self) -> DVec3 {
+        self.view.inverse().w_axis.truncate()
+    }
+
     /// A camera at `eye` looking at `target` with the +Y axis up.
     pub fn look_at(
         eye: DVec3,

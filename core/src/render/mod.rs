@@ -545,7 +545,7 @@ impl Renderer {
         recorders: FrameRecorders<'_, '_>,
     ) -> RenderResult<FrameStats> {
         // The eye in f64, split for relative-to-eye positions on the GPU.
-        let eye = camera.view.inverse().w_axis.truncate();
+        let eye = camera.eye();
         let (eye_high, eye_low) = split_f64(eye);
         let mut view_rotation = camera.view;
         view_rotation.w_axis = glam::DVec4::W;

@@ -89,6 +89,17 @@ impl Section {
         self.caps
     }
 
+    /// Whether a cap can show to an eye at `eye`: caps are on and the eye is on the cut side
+    /// of a plane, so that a view ray can cross a cut into a part (the host's counterpart of
+    /// the test in `section_cap_plane`, `shaders/section.glsl`).
+    pub fn caps_seen_from(&self, eye: DVec3) -> bool {
+        self.caps
+            && self
+                .planes
+                .iter()
+                .any(|plane| plane.truncate().dot(eye) + plane.w < 0.0)
+    }
+
     /// Caps cuts through closed parts, or shows their inside.
     pub fn set_caps(&mut self, caps: bool) {
         self.caps = caps;
@@ -213,6 +224,28 @@ mod tests {
         );
         // Ending on the cut side of a plane: nothing is drawn there.
         assert_eq!(section.cap_entry(from, DVec3::new(4.0, 1.0, 0.0)), None);
+    }
+
+    #[test]
+    fn caps_show_only_to_an_eye_on_the_cut_side_of_a_plane() {
+        let mut section = Section::none();
+        section
+            .set_planes(&[
+                DVec4::new(0.0, 0.0, -1.0, 0.0),
+                DVec4::new(1.0, 0.0, 0.0, 5.0),
+            ])
+            .unwrap();
+        let above = DVec3::new(0.0, 0.0, 4.0);
+        let below = DVec3::new(0.0, 0.0, -4.0);
+        assert!(section.caps_seen_from(above), "z > 0 is cut away");
+        assert!(!section.caps_seen_from(below), "kept by both planes");
+        assert!(
+            section.caps_seen_from(DVec3::new(-6.0, 0.0, -4.0)),
+            "cut by the second plane"
+        );
+        section.set_caps(false);
+        assert!(!section.caps_seen_from(above), "caps off");
+        assert!(!Section::none().caps_seen_from(above), "no planes");
     }
 
     #[test]

@@ -57,8 +57,7 @@ impl Renderer {
             dashed_hidden: mode == ShadeMode::HiddenLine && techniques.dashed_hidden_lines(),
             lines_through_translucent: mode == ShadeMode::HiddenLine && scene.has_translucency(),
             caps_over_lines: matches!(mode, ShadeMode::Edges | ShadeMode::HiddenLine)
-                && self.section().caps()
-                && !self.section().planes().is_empty(),
+                && self.section().caps_seen_from(camera.eye()),
         };
         self.draw_techniques(scene, techniques, camera, passes)
     }

@@ -40,7 +40,7 @@ pub(crate) fn cull_view(
     (width, height): (u32, u32),
     min_pixels: f32,
 ) -> abi::CadrGpuCullView {
-    let eye = camera.view.inverse().w_axis.truncate();
+    let eye = camera.eye();
     let (high, low) = split_f64(eye);
     let planes = super::frame::frustum_planes(camera).map(|[x, y, z, d]| {
         let shifted = d + x * eye.x + y * eye.y + z * eye.z;

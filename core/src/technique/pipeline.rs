@@ -90,8 +90,9 @@ pub enum PassSet {
         /// hide no lines: what is behind glass shows through it (always false in the other
         /// modes, which draw translucency as such).
         lines_through_translucent: bool,
-        /// In the edges and hidden-line modes, whether section caps are drawn (a plane cuts
-        /// and caps are on): the lines then write no depth, and after them a caps pass
+        /// In the edges and hidden-line modes, whether section caps can show (caps are on and
+        /// the eye is on the cut side of a plane): the lines then write no depth, and after
+        /// them a caps pass
         /// (`shaders/caps.frag`, depth EQUAL on the surfaces' depth) paints the visible caps
         /// again over the lines of the far faces they are painted on (always false in the
         /// other modes).
@@ -243,15 +244,14 @@ impl FragmentShader {
             PassSet::Shaded {
                 mode: ShadeMode::HiddenLine,
                 dashed_hidden: true,
-                caps_over_lines,
+                caps_over_lines: true,
                 ..
-            } => {
-                if caps_over_lines {
-                    &[Self::Solid, Self::HiddenEdges, Self::Edges, Self::Caps]
-                } else {
-                    &[Self::Solid, Self::HiddenEdges, Self::Edges]
-                }
-            }
+            } => &[Self::Solid, Self::HiddenEdges, Self::Edges, Self::Caps],
+            PassSet::Shaded {
+                mode: ShadeMode::HiddenLine,
+                dashed_hidden: true,
+                ..
+            } => &[Self::Solid, Self::HiddenEdges, Self::Edges],
             PassSet::Shaded {
                 caps_over_lines: true,
                 ..

@@ -79,9 +79,10 @@ pub enum Command {
     /// Renders the built-in combination (the baseline, which records every frame) and
     /// technique combinations (by default every submission with per-geometry/push and
     /// arena/ssbo-index; --all for every supported one; lists to choose) for N frames after 2
-    /// warm-up frames and prints CPU and GPU µs, scene update µs, bytes uploaded, draw calls,
-    /// state changes, triangles and the speedup over the baseline. Rows other than the
-    /// baseline replay unchanged frames (the replay column counts them) unless --no-replay.
+    /// warm-up frames and prints CPU µs (and of it the driver's submission call, submit µs),
+    /// GPU µs, scene update µs, bytes uploaded, draw calls, state changes, triangles and the
+    /// speedup over the baseline. Rows other than the baseline replay unchanged frames (the
+    /// replay column counts them) unless --no-replay.
     #[command(after_help = ENVIRONMENT_HELP)]
     Bench(BenchArgs),
     /// Measure edits of the incremental scene tree against a full rebuild.

@@ -1,8 +1,9 @@
 //! `cadr bench`: renders a scene with the built-in combination (the baseline) and with
 //! technique combinations in one run, all through one view of the one GPU scene, and prints a
-//! table like the seeds' (CPU and GPU microseconds per frame, scene update, bytes uploaded,
-//! draw calls, state changes, triangles, speedup over the baseline), optionally as JSON and
-//! over a growing grid (`--sweep`). The camera stands still or orbits (`--camera`), and
+//! table like the seeds' (CPU microseconds per frame and the driver's submission call's share
+//! of them, GPU microseconds, scene update, bytes uploaded, draw calls, state changes,
+//! triangles, speedup over the baseline), optionally as JSON and over a growing grid
+//! (`--sweep`). The camera stands still or orbits (`--camera`), and
 //! `--animate N` moves N assembly nodes every frame: every row sees the same frames.
 
 use std::sync::Arc;

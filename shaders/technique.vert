@@ -26,6 +26,12 @@ layout(set = 0, binding = 4, std430) readonly buffer CadrHostVertexAttributes {
     uint cadr_host_vertex_attributes[];
 };
 
+// The GPU scene's cull entries by instance id, three vec4 each: the first is the part's
+// bounding sphere in object space (centre, radius). See CadrCullEntry in the plugin ABI.
+layout(set = 0, binding = 8, std430) readonly buffer CadrHostCullEntries {
+    vec4 cadr_host_cull_entries[];
+};
+
 struct CadrObject {
     mat4 world;            // column 3: translation high part; w of columns 0-2: low part
     vec4 base_color;
@@ -83,9 +89,29 @@ const uint CADR_DRAW_ALL = 0u;
 const uint CADR_DRAW_OPAQUE = 1u;
 const uint CADR_DRAW_TRANSLUCENT = 2u;
 layout(constant_id = 0) const uint CADR_DRAW_ROLE = CADR_DRAW_ALL;
+// The section caps' pass (caps.frag): only a closed part that a plane cuts can show a cap, so
+// every other part has its triangles clipped away whole.
+layout(constant_id = 1) const bool CADR_CAPS_PASS = false;
 
 const uint CADR_TEXTURE_SAMPLING_TRANSLUCENT = 32u;
 const uint CADR_TEXTURE_ALPHA_BLEND = 2u;
+
+// Whether some section plane passes through the bounding sphere `sphere` (object space) of a
+// part placed by `linear_world` with its origin at `eye_relative` from the eye.
+bool cadr_cut_by_a_plane(vec4 sphere, mat3 linear_world, vec3 eye_relative) {
+    vec3 center = linear_world * sphere.xyz + eye_relative;
+    float scale = max(max(length(linear_world[0]), length(linear_world[1])), length(linear_world[2]));
+    // With the rounding of f32 eye-relative positions as slack.
+    float radius = sphere.w * scale + 1e-5 * length(center);
+    uint count = min(frame.section.x & 0xffu, 6u);
+    for (uint i = 0u; i < count; ++i) {
+        vec4 plane = frame.section_planes[i];
+        if (abs(dot(plane.xyz, center) + plane.w) <= radius) {
+            return true;
+        }
+    }
+    return false;
+}
 
 void main() {
     CadrObject object = cadr_object();
@@ -111,17 +137,22 @@ void main() {
         translucent = true;
         out_opacity_limit = CADR_XRAY_OPACITY;
     }
-    if (CADR_DRAW_ROLE != CADR_DRAW_ALL && translucent != (CADR_DRAW_ROLE == CADR_DRAW_TRANSLUCENT)) {
+    mat4 world = object.world;
+    vec3 translation_low = vec3(world[0].w, world[1].w, world[2].w);
+    mat3 linear_world = mat3(world[0].xyz, world[1].xyz, world[2].xyz);
+    precise vec3 eye_relative = (world[3].xyz - frame.eye_high.xyz) + (translation_low - frame.eye_low.xyz);
+    bool drawn = CADR_DRAW_ROLE == CADR_DRAW_ALL || translucent == (CADR_DRAW_ROLE == CADR_DRAW_TRANSLUCENT);
+    if (CADR_CAPS_PASS && drawn) {
+        drawn = (object.flags & CADR_INSTANCE_CLOSED) != 0u
+            && cadr_cut_by_a_plane(cadr_host_cull_entries[object.instance * 3u], linear_world, eye_relative);
+    }
+    if (!drawn) {
         gl_Position = vec4(0.0, 0.0, 2.0, 1.0);
         for (int i = 0; i < 6; ++i) {
             gl_ClipDistance[i] = -1.0;
         }
         return;
     }
-    mat4 world = object.world;
-    vec3 translation_low = vec3(world[0].w, world[1].w, world[2].w);
-    mat3 linear_world = mat3(world[0].xyz, world[1].xyz, world[2].xyz);
-    precise vec3 eye_relative = (world[3].xyz - frame.eye_high.xyz) + (translation_low - frame.eye_low.xyz);
     vec3 world_offset = linear_world * cadr_vertex_position() + eye_relative;
     vec4 view_position = frame.view_rotation * vec4(world_offset, 1.0);
     mat3 linear = mat3(frame.view_rotation) * linear_world;

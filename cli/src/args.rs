@@ -219,7 +219,7 @@ impl TechniqueArgs {
     }
 }
 
-/// Section planes and their caps (`render`, `pick`).
+/// Section planes and their caps (`render`, `pick`, `bench`).
 #[derive(Debug, Args)]
 pub struct SectionArgs {
     /// Cut the scene with the plane NX,NY,NZ,D (world units), keeping the side where
@@ -517,6 +517,9 @@ pub struct BenchArgs {
     #[arg(long, value_name = "tint,outline", value_delimiter = ',', default_value = "tint",
           value_parser = parse_highlight_style)]
     pub highlight_style: Vec<HighlightStyle>,
+    /// Every row (the baseline too) cuts the scene with these planes.
+    #[command(flatten)]
+    pub section: SectionArgs,
     #[command(flatten)]
     pub validation: ValidationArgs,
 }

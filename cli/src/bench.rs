@@ -8,7 +8,7 @@
 
 use std::sync::Arc;
 
-use cadr_core::render::{FrameStats, HighlightStyle};
+use cadr_core::render::{FrameStats, HighlightStyle, Section};
 use cadr_core::scene::{flatten, Scene, SceneStats};
 use cadr_core::technique::{
     Combination, PluginRegistry, ShadeMode, TechniqueKind, Techniques, Transforms,
@@ -248,6 +248,9 @@ struct Bench {
     min_pixels: f32,
     /// Whether the measured combinations may replay unchanged frames (not `--no-replay`).
     frame_replay: bool,
+    /// The section every row cuts the scene with (`--section`, `--caps`, `--no-caps`,
+    /// `--hatch`).
+    section: Section,
 }
 
 impl Bench {
@@ -271,6 +274,7 @@ impl Bench {
             Arc::clone(&self.registry),
             (self.size.width, self.size.height),
         )?;
+        session.set_section(self.section.clone());
         let mut motion = self.motion.clone();
         motion.choose_nodes(&session.graph, &stats.bounds);
         if !quiet && motion.requested > 0 {
@@ -505,6 +509,19 @@ fn rows_json(rows: &[Row]) -> Vec<serde_json::Value> {
     rows.iter().map(|r| row_json(r, baseline_cpu)).collect()
 }
 
+/// The section of every row: its planes (unit normals, `[nx, ny, nz, d]`), whether cuts are
+/// capped and hatched; null without planes.
+fn section_json(section: &Section) -> serde_json::Value {
+    if section.planes().is_empty() {
+        return serde_json::Value::Null;
+    }
+    serde_json::json!({
+        "planes": section.planes().iter().map(|p| p.to_array()).collect::<Vec<_>>(),
+        "caps": section.caps(),
+        "hatch": section.hatched(),
+    })
+}
+
 /// Empty submissions timed for the floor line.
 const FLOOR_SAMPLES: usize = 1000;
 
@@ -527,6 +544,7 @@ pub fn bench(args: &BenchArgs) -> Result<(), String> {
             device.adapter().name
         ));
     }
+    let section = args.section.section()?;
     let (registry, _) = load_registry(&device);
     let bench = Bench {
         device: Arc::clone(&device),
@@ -536,9 +554,10 @@ pub fn bench(args: &BenchArgs) -> Result<(), String> {
         motion: motion.clone(),
         min_pixels: args.min_pixels.unwrap_or(0.0),
         frame_replay: !args.no_replay,
+        section,
     };
     println!(
-        "device: {} — {} measured frames after 2 warm-up frames, {}x{}, medians; camera {}, {} animated nodes{}",
+        "device: {} — {} measured frames after 2 warm-up frames, {}x{}, medians; camera {}, {} animated nodes{}{}",
         device.adapter().name,
         frames,
         size.width,
@@ -549,7 +568,9 @@ pub fn bench(args: &BenchArgs) -> Result<(), String> {
             format!("; gpu- cullers skip parts under {} px", bench.min_pixels)
         } else {
             String::new()
-        }
+        },
+        crate::args::describe_section(&bench.section)
+            .map_or(String::new(), |section| format!("; {section}")),
     );
     let json = if sweep {
         run_sweep(&bench, args)?
@@ -593,6 +614,7 @@ pub fn bench(args: &BenchArgs) -> Result<(), String> {
             "animate": motion.requested,
             "min_pixels": bench.min_pixels,
             "frame_replay": bench.frame_replay,
+            "section": section_json(&bench.section),
             "scene": stats_json(name, &stats),
             "submit_floor_us": floor_us,
             "rows": rows_json(&rows),
@@ -689,6 +711,7 @@ fn run_sweep(bench: &Bench, args: &BenchArgs) -> Result<serde_json::Value, Strin
     Ok(serde_json::json!({
         "device": bench.device.adapter().name,
         "frames": bench.frames,
+        "section": section_json(&bench.section),
         "sweep": sizes,
     }))
 }

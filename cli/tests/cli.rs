@@ -440,6 +440,50 @@ fn bench_prints_the_table_and_writes_json() {
     assert_eq!(rows[1]["draw_calls"], 500);
 }
 
+/// `bench --section` cuts every row; in the edges mode, seen from the cut side, the caps pass
+/// draws the parts a third time (after the surfaces and the lines), and `--no-caps` drops it.
+#[test]
+fn bench_measures_a_sectioned_scene_with_and_without_caps() {
+    let path = std::env::temp_dir().join(format!("cadr-cli-section-{}.json", std::process::id()));
+    // The fitted camera looks from +z: it sees the cut side of a plane keeping z <= 1.6.
+    let plane = "--section=0,0,-2,3.2";
+    let (output, json) = small_bench("gen:grid:parts=200", &path, &["--display", "edges", plane]);
+    assert!(
+        stdout(&output).contains("1 section plane, capped"),
+        "{}",
+        stdout(&output)
+    );
+    assert_eq!(
+        json["section"]["planes"],
+        serde_json::json!([[0.0, 0.0, -1.0, 1.6]])
+    );
+    assert_eq!(json["section"]["caps"], true);
+    let rows = json["rows"].as_array().unwrap();
+    assert_eq!(rows[1]["shade"], "edges");
+    assert_eq!(
+        rows[1]["draw_calls"], 600,
+        "surfaces, lines, caps: {}",
+        rows[1]
+    );
+    let (_, json) = small_bench(
+        "gen:grid:parts=200",
+        &path,
+        &["--display", "edges", plane, "--no-caps"],
+    );
+    assert_eq!(json["section"]["caps"], false);
+    assert_eq!(json["rows"][1]["draw_calls"], 400, "{}", json["rows"][1]);
+    let (_, json) = small_bench("gen:grid:parts=200", &path, &[]);
+    assert_eq!(json["section"], serde_json::Value::Null);
+    let output = cadr(&["bench", "gen:grid:parts=200", "--section=0,0,0,1"]);
+    assert_eq!(output.status.code(), Some(2), "{}", stderr(&output));
+    assert!(
+        stderr(&output).contains("the normal not zero"),
+        "{}",
+        stderr(&output)
+    );
+    let _ = std::fs::remove_file(&path);
+}
+
 #[test]
 fn bench_animate_moves_assemblies_on_the_gpu_with_64_bytes_per_node() {
     let path = std::env::temp_dir().join(format!("cadr-cli-animate-{}.json", std::process::id()));

@@ -106,6 +106,8 @@ pub struct FrameResources {
     pub linear_sampler: vk::Sampler,
     /// Nearest-magnification sampler (binding 6).
     pub nearest_sampler: vk::Sampler,
+    /// Cull entries, whose bounding spheres the section caps' pass reads (binding 8).
+    pub cull_entries: vk::Buffer,
     /// Changes whenever one of them is replaced.
     pub generation: u64,
 }
@@ -808,6 +810,7 @@ impl GpuScene {
             textures: self.textures.image.view(),
             linear_sampler: self.textures.linear.raw(),
             nearest_sampler: self.textures.nearest.raw(),
+            cull_entries: self.cull_gpu.buffer.raw(),
             generation: self.buffers_generation,
         }
     }

@@ -333,7 +333,7 @@ impl Renderer {
         self.textures = on;
     }
 
-    /// Points the frame set's scene bindings (2–6) at `resources` unless it names them
+    /// Points the frame set's scene bindings (2–6 and 8) at `resources` unless it names them
     /// already. A recorded frame names the old ones: the GPU is waited for and the recording
     /// forgotten.
     pub(crate) fn bind_scene(&mut self, resources: &FrameResources) -> RenderResult<()> {
@@ -349,6 +349,7 @@ impl Renderer {
         sets.write_buffer(0, 4, storage, resources.vertex_attributes, vk::WHOLE_SIZE);
         sets.write_combined_image(0, 5, resources.textures, resources.linear_sampler);
         sets.write_combined_image(0, 6, resources.textures, resources.nearest_sampler);
+        sets.write_buffer(0, 8, storage, resources.cull_entries, vk::WHOLE_SIZE);
         self.bound_scene = Some(resources.generation);
         Ok(())
     }

@@ -162,6 +162,7 @@ impl Pipelines {
                     vk::DescriptorType::STORAGE_BUFFER,
                     vk::ShaderStageFlags::FRAGMENT,
                 ),
+                vertex_storage,
             ],
         )?;
         let merge_set_layout = DescriptorSetLayout::new(
@@ -238,8 +239,9 @@ impl Pipelines {
     /// transparency method's storage (binding 1, fragment shaders), and for the shared vertex
     /// shader the GPU scene's instance records, material texture descriptions and vertex
     /// attributes (bindings 2–4), its textures sampled trilinear and with nearest
-    /// magnification (bindings 5–6, fragment shaders), and the outline keys of the outline
-    /// highlight style (binding 7, fragment shaders).
+    /// magnification (bindings 5–6, fragment shaders), the outline keys of the outline
+    /// highlight style (binding 7, fragment shaders) and the GPU scene's cull entries, whose
+    /// bounding spheres the section caps' pass reads (binding 8).
     pub fn frame_set_layout(&self) -> vk::DescriptorSetLayout {
         self.frame_set_layout.raw()
     }

@@ -461,7 +461,9 @@ struct Raster {
     depth_only: bool,
     /// Drawn only behind the surfaces (depth GREATER, not written): hidden lines.
     behind: bool,
-    /// Drawn only on the surface each pixel shows (depth EQUAL, not written): the caps pass.
+    /// Drawn only on the surface each pixel shows (depth EQUAL, not written): the caps pass,
+    /// whose vertex shader (`CADR_CAPS_PASS`) also clips away every part that cannot show a
+    /// cap (open, or crossed by no plane).
     on_surfaces: bool,
     /// Depth tested, not written: the lines under the caps pass, which must find the
     /// surfaces' depth where lines were drawn.
@@ -809,7 +811,7 @@ impl TechniquePipelines {
                 } else {
                     DepthUse::TestAndWrite
                 },
-                vertex_constants: &[role as u32],
+                vertex_constants: &[role as u32, u32::from(raster.on_surfaces)],
                 samples: self.pass_set.samples(),
                 name: if raster.translucent {
                     "translucent technique pipeline"

@@ -1108,6 +1108,70 @@ enum CadrResult cadr_scene_set_part_visible(CadrScene scene,
                                             uint32_t part,
                                             bool visible);
 
+// Sets the colour of edge lines and silhouettes in every display mode that draws them
+// (edges, hidden-line, wireframe, X-ray; dashed hidden lines take a lighter shade of it):
+// three floats, display values in 0..1 (what a PNG stores; the default is near-black,
+// 0.06, 0.07, 0.09). The next frame draws with it.
+//
+// Returns `CADR_RESULT_OK`, `CADR_RESULT_NULL_ARGUMENT`, `CADR_RESULT_INVALID_ARGUMENT` (a
+// value outside 0..1 or not finite; the colour is kept) or a handle error. Ownership: `rgb`
+// is read during the call only. Thread-safety: as `cadr_renderer_create`.
+//
+// # Safety
+// `rgb` is null or points to three readable floats.
+enum CadrResult cadr_renderer_set_edge_color(CadrRenderer renderer, const float *rgb);
+
+// Writes the colour of edge lines (three floats; see `cadr_renderer_set_edge_color`).
+//
+// Returns `CADR_RESULT_OK`, `CADR_RESULT_NULL_ARGUMENT` or a handle error. Ownership: the
+// array is the caller's; cadr keeps no pointer to it. Thread-safety: as
+// `cadr_renderer_create`.
+//
+// # Safety
+// `rgb` is null or points to three writable floats.
+enum CadrResult cadr_renderer_edge_color(CadrRenderer renderer, float *rgb);
+
+// Sets the highlight colour: what highlighted parts are tinted towards
+// (`CADR_HIGHLIGHT_TINT`) or outlined in (`CADR_HIGHLIGHT_OUTLINE`), and the colour of their
+// edge lines (a darker shade): three floats, display values in 0..1 (the default is orange,
+// 1.0, 0.55, 0.05). The next frame draws with it.
+//
+// Returns `CADR_RESULT_OK`, `CADR_RESULT_NULL_ARGUMENT`, `CADR_RESULT_INVALID_ARGUMENT` (a
+// value outside 0..1 or not finite; the colour is kept) or a handle error. Ownership: `rgb`
+// is read during the call only. Thread-safety: as `cadr_renderer_create`.
+//
+// # Safety
+// `rgb` is null or points to three readable floats.
+enum CadrResult cadr_renderer_set_highlight_color(CadrRenderer renderer, const float *rgb);
+
+// Writes the highlight colour (three floats; see `cadr_renderer_set_highlight_color`).
+//
+// Returns `CADR_RESULT_OK`, `CADR_RESULT_NULL_ARGUMENT` or a handle error. Ownership: the
+// array is the caller's; cadr keeps no pointer to it. Thread-safety: as
+// `cadr_renderer_create`.
+//
+// # Safety
+// `rgb` is null or points to three writable floats.
+enum CadrResult cadr_renderer_highlight_color(CadrRenderer renderer, float *rgb);
+
+// Sets the width in pixels, 1 to 8 (default 2), of the band the `CADR_HIGHLIGHT_OUTLINE`
+// style draws around highlighted parts. The next frame draws with it.
+//
+// Returns `CADR_RESULT_OK`, `CADR_RESULT_INVALID_ARGUMENT` (outside 1 to 8; the width is
+// kept) or a handle error. Ownership: nothing changes hands. Thread-safety: as
+// `cadr_renderer_create`.
+enum CadrResult cadr_renderer_set_outline_width(CadrRenderer renderer, uint32_t pixels);
+
+// Writes the outline band's width in pixels (see `cadr_renderer_set_outline_width`).
+//
+// Returns `CADR_RESULT_OK`, `CADR_RESULT_NULL_ARGUMENT` or a handle error. Ownership: the
+// output is the caller's; cadr keeps no pointer to it. Thread-safety: as
+// `cadr_renderer_create`.
+//
+// # Safety
+// `pixels` is null or writable.
+enum CadrResult cadr_renderer_outline_width(CadrRenderer renderer, uint32_t *pixels);
+
 // Picks what lies under pixel (`x`, `y`) of the renderer's image (column, row from the top
 // left) when drawing `scene` seen by `camera` with the current techniques: at most one hit,
 // with the geo node, part, occurrence path, depth and world position. Parts that are hidden
@@ -1432,14 +1496,15 @@ enum CadrResult cadr_renderer_set_textures(CadrRenderer renderer, bool on);
 // `on` is null or writable.
 enum CadrResult cadr_renderer_textures(CadrRenderer renderer, bool *on);
 
-// Shows the hidden edges in the `CADR_SHADE_HIDDEN_LINE` mode dashed, in a lighter grey than
-// the visible ones (`dashed` true), or removes them (false, the default). Other modes are not
+// Shows the hidden edges in the `CADR_SHADE_HIDDEN_LINE` mode dashed, in a lighter shade of
+// the visible ones' colour (`dashed` true), or removes them (false, the default). Other modes are not
 // affected. Applies from the next frame. With the `gpu-occlusion` culler, parts it finds
 // entirely hidden are not drawn, so their dashed edges do not show.
 //
 // Returns `CADR_RESULT_OK` or a handle error. Ownership: nothing changes hands.
 // Thread-safety: as `cadr_renderer_create`.
-enum CadrResult cadr_renderer_set_dashed_hidden_lines(CadrRenderer renderer, bool dashed);
+enum CadrResult cadr_renderer_set_dashed_hidden_lines(CadrRenderer renderer,
+                                                      bool dashed);
 
 // Writes whether the hidden-line mode shows hidden edges dashed (see
 // `cadr_renderer_set_dashed_hidden_lines`).

@@ -12,5 +12,5 @@ layout(location = 11) flat in uint in_highlighted;
 layout(location = 0) out vec4 out_color;
 
 void main() {
-    out_color = vec4(in_highlighted != 0u ? 0.7 * CADR_HIGHLIGHT_COLOR : CADR_EDGE_COLOR, 1.0);
+    out_color = vec4(in_highlighted != 0u ? 0.7 * frame.highlight.rgb : frame.edge_color.rgb, 1.0);
 }

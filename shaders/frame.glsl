@@ -14,6 +14,9 @@ layout(set = 0, binding = 0, std140) uniform FrameUniforms {
     uvec4 target;            // x, y: the target's width and height; z: CADR_DISPLAY_* bits
     vec4 background_top;     // the background at the top of the picture (display RGB) ...
     vec4 background_bottom;  // ... and at its bottom, blended linearly between
+    vec4 edge_color;         // edge lines and silhouettes (display RGB)
+    vec4 highlight;          // what highlighted parts are tinted towards or outlined in
+                             // (display RGB); w: the outline band's width in pixels
 } frame;
 
 const uint CADR_SECTION_CAPS = 0x100u;
@@ -35,7 +38,3 @@ const float CADR_XRAY_OPACITY = 0.2;
 // frame.target.z: highlighted parts are outlined (their surfaces record themselves in the
 // outline keys, binding 7) instead of tinted.
 const uint CADR_DISPLAY_HIGHLIGHT_OUTLINE = 16u;
-// The colour of edge lines and silhouettes (display RGB).
-const vec3 CADR_EDGE_COLOR = vec3(0.06, 0.07, 0.09);
-// The colour highlighted parts are tinted towards, or outlined in.
-const vec3 CADR_HIGHLIGHT_COLOR = vec3(1.0, 0.55, 0.05);

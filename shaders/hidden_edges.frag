@@ -1,8 +1,9 @@
 #version 460
 // The hidden edge lines of the hidden-line display mode, when they are shown dashed: a
-// lighter grey than the visible lines, dashed by a checkerboard of 4 x 5 pixel cells in
+// lighter shade of the visible lines' colour, dashed by a checkerboard of 4 x 5 pixel cells in
 // screen space: a line of any direction crosses cells in turn, so it shows dashes of 4 to 5
 // pixels (cells of unequal sides, so that 45-degree lines do not run along cell corners).
+#include "frame.glsl"
 layout(location = 0) in vec3 in_view_position;
 layout(location = 1) in vec3 in_view_normal;
 layout(location = 2) flat in vec4 in_base_color;
@@ -15,5 +16,5 @@ void main() {
     if (((cell.x + cell.y) & 1) != 0) {
         discard;
     }
-    out_color = vec4(0.45, 0.47, 0.50, 1.0);
+    out_color = vec4(mix(frame.edge_color.rgb, vec3(1.0), 0.42), 1.0);
 }

@@ -1,6 +1,6 @@
 #version 460
 // The outline highlight style: over the finished picture, a band two pixels wide in the
-// highlight colour around every region where the nearest surface is a highlighted part's
+// highlight colour (frame.highlight; its w is the band's width in pixels, 1 to 8) around every region where the nearest surface is a highlighted part's
 // (from the outline keys its surfaces recorded, outline.glsl). The band lies outside the
 // part, over what surrounds it; the part itself keeps its own colours.
 #define CADR_OUTLINE_KEYS
@@ -9,8 +9,8 @@
 
 layout(location = 0) out vec4 out_color;
 
-// The band's width in pixels.
-const int RADIUS = 2;
+// The widest band the host allows (Palette::MAX_OUTLINE_WIDTH): the search window's bound.
+const int MAX_RADIUS = 8;
 
 bool highlighted_at(ivec2 pixel) {
     uint key = cadr_outline_keys[uint(pixel.y) * frame.target.x + uint(pixel.x)];
@@ -24,9 +24,10 @@ void main() {
     if (highlighted_at(pixel)) {
         return;
     }
-    float nearest = 2.0 * float(RADIUS);
-    for (int dy = -RADIUS; dy <= RADIUS; ++dy) {
-        for (int dx = -RADIUS; dx <= RADIUS; ++dx) {
+    int radius = clamp(int(frame.highlight.w), 1, MAX_RADIUS);
+    float nearest = 2.0 * float(radius);
+    for (int dy = -radius; dy <= radius; ++dy) {
+        for (int dx = -radius; dx <= radius; ++dx) {
             ivec2 other = pixel + ivec2(dx, dy);
             if (any(lessThan(other, ivec2(0))) || any(greaterThanEqual(other, size))) {
                 continue;
@@ -37,6 +38,6 @@ void main() {
         }
     }
     // Full inside the radius, half at the window's corners: rounded outer corners.
-    float coverage = nearest <= float(RADIUS) ? 1.0 : (nearest < 2.0 * float(RADIUS) ? 0.5 : 0.0);
-    out_color = vec4(CADR_HIGHLIGHT_COLOR * coverage, coverage);
+    float coverage = nearest <= float(radius) ? 1.0 : (nearest < 2.0 * float(radius) ? 0.5 : 0.0);
+    out_color = vec4(frame.highlight.rgb * coverage, coverage);
 }

@@ -46,7 +46,7 @@ void main() {
         }
         float neighbour_depth = depth_at(neighbour);
         if (neighbour_depth >= 1.0) {
-            out_color = vec4(CADR_EDGE_COLOR, 1.0);
+            out_color = vec4(frame.edge_color.rgb, 1.0);
             return;
         }
         ivec2 opposite = pixel - directions[i];
@@ -62,7 +62,7 @@ void main() {
         float farther = view_position(at, predicted, inverse_projection).z
             - view_position(at, neighbour_depth, inverse_projection).z;
         if (farther > BREAK_PIXELS * pixel_width) {
-            out_color = vec4(CADR_EDGE_COLOR, 1.0);
+            out_color = vec4(frame.edge_color.rgb, 1.0);
             return;
         }
     }

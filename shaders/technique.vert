@@ -161,7 +161,7 @@ void main() {
     out_view_normal = cofactor * cadr_vertex_normal();
     out_base_color = object.base_color;
     if (highlighted && (frame.target.z & CADR_DISPLAY_HIGHLIGHT_OUTLINE) == 0u) {
-        out_base_color.rgb = mix(out_base_color.rgb, CADR_HIGHLIGHT_COLOR, 0.65);
+        out_base_color.rgb = mix(out_base_color.rgb, frame.highlight.rgb, 0.65);
     }
     out_highlighted = highlighted ? 1u : 0u;
     out_surface = object.surface;

@@ -754,8 +754,8 @@ pub unsafe extern "C" fn cadr_renderer_textures(
     })
 }
 
-/// Shows the hidden edges in the `CADR_SHADE_HIDDEN_LINE` mode dashed, in a lighter grey than
-/// the visible ones (`dashed` true), or removes them (false, the default). Other modes are not
+/// Shows the hidden edges in the `CADR_SHADE_HIDDEN_LINE` mode dashed, in a lighter shade of
+/// the visible ones' colour (`dashed` true), or removes them (false, the default). Other modes are not
 /// affected. Applies from the next frame. With the `gpu-occlusion` culler, parts it finds
 /// entirely hidden are not drawn, so their dashed edges do not show.
 ///

@@ -6,7 +6,7 @@ use std::path::PathBuf;
 
 use clap::{Args, Parser, Subcommand, ValueEnum};
 
-use cadr_core::render::{Background, HighlightStyle, Section};
+use cadr_core::render::{Background, DisplayRgb, HighlightStyle, Palette, Section};
 use cadr_core::technique::{Combination, ShadeMode, TechniqueKind};
 
 use crate::motion::CameraPath;
@@ -239,6 +239,19 @@ pub struct SectionArgs {
     pub hatch: bool,
 }
 
+impl RenderArgs {
+    /// The palette `--edge-color`, `--highlight-color` and `--outline-width` give (the
+    /// default where one is not given).
+    pub fn palette(&self) -> Palette {
+        let default = Palette::DEFAULT;
+        Palette {
+            edges: self.edge_color.unwrap_or(default.edges),
+            highlight: self.highlight_color.unwrap_or(default.highlight),
+            outline_width: self.outline_width.unwrap_or(default.outline_width),
+        }
+    }
+}
+
 impl SectionArgs {
     /// The section the options give (no planes: nothing cut).
     pub fn section(&self) -> Result<Section, String> {
@@ -311,8 +324,8 @@ pub struct RenderArgs {
     /// Draw materials without their textures (base colours and vertex colours only).
     #[arg(long)]
     pub no_textures: bool,
-    /// In the hidden-line display mode, show the hidden edges dashed in a lighter grey
-    /// instead of removing them.
+    /// In the hidden-line display mode, show the hidden edges dashed, in a lighter shade of
+    /// the edge colour, instead of removing them.
     #[arg(long)]
     pub dashed: bool,
     /// Draw the edge display modes (edges, hidden-line) with feature edges only, without the
@@ -323,10 +336,21 @@ pub struct RenderArgs {
     /// selection; repeatable.
     #[arg(long, value_name = "NAME")]
     pub highlight: Vec<String>,
-    /// How highlighted parts show: tinted towards orange (tint, the default) or with an orange
-    /// band around them, their colours kept (outline).
+    /// How highlighted parts show: tinted towards the highlight colour (tint, the default) or
+    /// with a band in it around them, their colours kept (outline).
     #[arg(long, value_name = "tint|outline", default_value = "tint", value_parser = parse_highlight_style)]
     pub highlight_style: HighlightStyle,
+    /// The colour of edge lines and silhouettes, #RRGGBB (default #0F1217, near-black; dashed
+    /// hidden lines take a lighter shade of it).
+    #[arg(long, value_name = "#RRGGBB", value_parser = parse_hex_color)]
+    pub edge_color: Option<DisplayRgb>,
+    /// The highlight colour, #RRGGBB: what highlighted parts are tinted towards or outlined in
+    /// (default #FF8C0D, orange).
+    #[arg(long, value_name = "#RRGGBB", value_parser = parse_hex_color)]
+    pub highlight_color: Option<DisplayRgb>,
+    /// The width in pixels of the band the outline highlight style draws, 1 to 8 (default 2).
+    #[arg(long, value_name = "PX", value_parser = clap::value_parser!(u32).range(1..=8))]
+    pub outline_width: Option<u32>,
     /// Anti-alias with N samples per pixel (MSAA: 1, the default, is off; 2, 4 or 8 where the
     /// device offers them: cadr devices lists them).
     #[arg(long, value_name = "N", default_value_t = 1, value_parser = parse_msaa)]
@@ -652,18 +676,7 @@ fn parse_background(text: &str) -> Result<Background, String> {
     let bad = |part: &str| {
         format!("'{part}': expected gradient, flat, #RRGGBB or #RRGGBB,#RRGGBB (top, bottom)")
     };
-    let color = |part: &str| -> Result<[f32; 3], String> {
-        let hex = part.trim().strip_prefix('#').ok_or_else(|| bad(part))?;
-        if hex.len() != 6 || !hex.is_ascii() {
-            return Err(bad(part));
-        }
-        let mut rgb = [0.0; 3];
-        for (i, value) in rgb.iter_mut().enumerate() {
-            let byte = u8::from_str_radix(&hex[2 * i..2 * i + 2], 16).map_err(|_| bad(part))?;
-            *value = f32::from(byte) / 255.0;
-        }
-        Ok(rgb)
-    };
+    let color = |part: &str| parse_hex_color(part).map_err(|_| bad(part));
     match text.trim() {
         "gradient" => Ok(Background::GRADIENT),
         "flat" => Ok(Background::flat(FLAT_BACKGROUND)),
@@ -677,7 +690,21 @@ fn parse_background(text: &str) -> Result<Background, String> {
     }
 }
 
-/// Parses a sub-pixel threshold: a number of pixels, 0 or more.
+/// Parses a colour written #RRGGBB (display values, as a PNG stores them).
+fn parse_hex_color(text: &str) -> Result<DisplayRgb, String> {
+    let bad = || format!("'{}': expected a colour #RRGGBB", text.trim());
+    let hex = text.trim().strip_prefix('#').ok_or_else(bad)?;
+    if hex.len() != 6 || !hex.is_ascii() {
+        return Err(bad());
+    }
+    let mut rgb = [0.0; 3];
+    for (i, value) in rgb.iter_mut().enumerate() {
+        let byte = u8::from_str_radix(&hex[2 * i..2 * i + 2], 16).map_err(|_| bad())?;
+        *value = f32::from(byte) / 255.0;
+    }
+    Ok(rgb)
+}
+
 /// Parses an MSAA level: a sample count Vulkan can name (1, 2, 4, … 64); whether the device
 /// offers it is checked once it is open.
 fn parse_msaa(text: &str) -> Result<u32, String> {
@@ -687,6 +714,7 @@ fn parse_msaa(text: &str) -> Result<u32, String> {
         .ok_or_else(|| "expected samples per pixel: 1, 2, 4 or 8".to_owned())
 }
 
+/// Parses a sub-pixel threshold: a number of pixels, 0 or more.
 fn parse_min_pixels(text: &str) -> Result<f32, String> {
     text.parse::<f32>()
         .ok()

@@ -231,6 +231,11 @@ fn render(args: &RenderArgs, process_start: Instant) -> Result<(), String> {
     session
         .view
         .renderer_mut()
+        .set_palette(args.palette())
+        .map_err(|e| e.to_string())?;
+    session
+        .view
+        .renderer_mut()
         .set_silhouettes(!args.no_silhouettes)
         .map_err(|e| e.to_string())?;
     if args.dashed && shade != ShadeMode::HiddenLine {

@@ -1112,7 +1112,8 @@ fn msaa_anti_aliases_render_and_bench_measures_each_level() {
 
 /// `--highlight NAME` highlights the nodes so named, `--highlight-style outline` draws a band
 /// around them instead of tinting them, `--no-silhouettes` leaves the silhouettes out of the
-/// edge modes; each changes the picture and says so, and an unknown name or style is refused.
+/// edge modes, `--highlight-color`, `--outline-width` and `--edge-color` set the palette; each
+/// changes the picture and says so, and an unknown name, style, colour or width is refused.
 #[test]
 fn render_highlights_named_nodes_and_draws_silhouettes_on_request() {
     let dir = std::env::temp_dir().join(format!("cadr-cli-highlight-{}", std::process::id()));
@@ -1161,6 +1162,33 @@ fn render_highlights_named_nodes_and_draws_silhouettes_on_request() {
     );
     assert!(text.contains("no silhouettes"), "{text}");
     assert!(with != without, "the engine's cylinders have silhouettes");
+    // The palette: a green band 4 pixels wide, blue edge lines.
+    let (_, green) = draw(
+        "green",
+        "gen:demo",
+        &[
+            "--highlight",
+            "module 0",
+            "--highlight-style",
+            "outline",
+            "--highlight-color",
+            "#00ff00",
+            "--outline-width",
+            "4",
+            "--display",
+            "edges",
+            "--edge-color",
+            "#0000FF",
+        ],
+    );
+    let exactly =
+        |image: &image::RgbaImage, rgb: [u8; 3]| image.pixels().filter(|p| p.0[..3] == rgb).count();
+    assert!(
+        exactly(&green, [0, 255, 0]) > band,
+        "a wider band, in green"
+    );
+    assert!(exactly(&green, [0, 0, 255]) > 20, "blue lines");
+    assert_eq!(exactly(&outlined, [0, 0, 255]), 0);
 
     let refused = |option: &str, value: &str, code: i32, says: &str| {
         let output = cadr(&["render", "gen:demo", "-o", "/dev/null", option, value]);
@@ -1169,6 +1197,14 @@ fn render_highlights_named_nodes_and_draws_silhouettes_on_request() {
     };
     refused("--highlight", "nope", 1, "--highlight nope");
     refused("--highlight-style", "glow", 2, "tint or outline");
+    refused("--edge-color", "blue", 2, "expected a colour #RRGGBB");
+    refused(
+        "--highlight-color",
+        "#12345",
+        2,
+        "expected a colour #RRGGBB",
+    );
+    refused("--outline-width", "9", 2, "1..=8");
     let _ = std::fs::remove_dir_all(&dir);
 }
 

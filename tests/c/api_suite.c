@@ -1054,6 +1054,81 @@ static void test_renderer(CadrContext context, struct Built *b) {
     free(tinted);
   }
 
+  /* The palette: edge lines in the host's colour; highlighted parts outlined in its highlight
+   * colour, the band as wide as asked; out-of-range values refused, the old ones kept. */
+  {
+    float rgb[3] = {-1.0f, -1.0f, -1.0f};
+    const float blue[3] = {0.0f, 0.0f, 1.0f};
+    const float green[3] = {0.0f, 1.0f, 0.0f};
+    const float too_bright[3] = {2.0f, 0.0f, 0.0f};
+    uint32_t width = 0;
+    size_t i;
+    int blue_pixels = 0, narrow = 0, wide = 0;
+    OK(cadr_renderer_edge_color(renderer, rgb));
+    CHECK(rgb[0] > 0.05f && rgb[0] < 0.07f && rgb[2] > 0.08f && rgb[2] < 0.1f);
+    OK(cadr_renderer_highlight_color(renderer, rgb));
+    CHECK(rgb[0] == 1.0f && rgb[1] > 0.5f && rgb[1] < 0.6f);
+    OK(cadr_renderer_outline_width(renderer, &width));
+    CHECK(width == 2);
+    EXPECT(cadr_renderer_edge_color(renderer, NULL), CADR_RESULT_NULL_ARGUMENT);
+    EXPECT(cadr_renderer_set_highlight_color(renderer, NULL), CADR_RESULT_NULL_ARGUMENT);
+    EXPECT(cadr_renderer_outline_width(renderer, NULL), CADR_RESULT_NULL_ARGUMENT);
+    EXPECT(cadr_renderer_set_edge_color(renderer, too_bright), CADR_RESULT_INVALID_ARGUMENT);
+    MESSAGE_HAS("edge colour");
+    EXPECT(cadr_renderer_set_outline_width(renderer, 9), CADR_RESULT_INVALID_ARGUMENT);
+    MESSAGE_HAS("outline width 9");
+    EXPECT(cadr_renderer_set_outline_width(renderer, 0), CADR_RESULT_INVALID_ARGUMENT);
+    OK(cadr_renderer_outline_width(renderer, &width));
+    CHECK(width == 2);
+
+    OK(cadr_renderer_set_edge_color(renderer, blue));
+    OK(cadr_renderer_edge_color(renderer, rgb));
+    CHECK(rgb[0] == 0.0f && rgb[1] == 0.0f && rgb[2] == 1.0f);
+    OK(cadr_renderer_set_shade_mode(renderer, CADR_SHADE_EDGES));
+    OK(cadr_renderer_render(renderer, b->scene, &camera, &stats));
+    OK(cadr_renderer_read_pixels(renderer, second, W * H * 4));
+    for (i = 0; i < (size_t)W * H * 4; i += 4) {
+      blue_pixels += second[i] == 0 && second[i + 1] == 0 && second[i + 2] == 255;
+    }
+    CHECK(blue_pixels > 10);
+    OK(cadr_renderer_set_shade_mode(renderer, CADR_SHADE_SOLID));
+
+    OK(cadr_renderer_set_highlight_color(renderer, green));
+    OK(cadr_renderer_set_highlight_style(renderer, CADR_HIGHLIGHT_OUTLINE));
+    OK(cadr_scene_set_flags(b->scene, b->geo,
+                            CADR_NODE_VISIBLE | CADR_NODE_PICKABLE | CADR_NODE_HIGHLIGHTED));
+    OK(cadr_renderer_set_outline_width(renderer, 1));
+    OK(cadr_renderer_render(renderer, b->scene, &camera, &stats));
+    OK(cadr_renderer_read_pixels(renderer, second, W * H * 4));
+    for (i = 0; i < (size_t)W * H * 4; i += 4) {
+      narrow += second[i] == 0 && second[i + 1] == 255 && second[i + 2] == 0;
+    }
+    OK(cadr_renderer_set_outline_width(renderer, 4));
+    OK(cadr_renderer_outline_width(renderer, &width));
+    CHECK(width == 4);
+    OK(cadr_renderer_render(renderer, b->scene, &camera, &stats));
+    OK(cadr_renderer_read_pixels(renderer, second, W * H * 4));
+    for (i = 0; i < (size_t)W * H * 4; i += 4) {
+      wide += second[i] == 0 && second[i + 1] == 255 && second[i + 2] == 0;
+    }
+    CHECK(narrow > 10);
+    CHECK(wide > 3 * narrow);
+
+    /* The defaults again draw the test scene's solid picture. */
+    {
+      const float edges[3] = {0.06f, 0.07f, 0.09f};
+      const float orange[3] = {1.0f, 0.55f, 0.05f};
+      OK(cadr_renderer_set_edge_color(renderer, edges));
+      OK(cadr_renderer_set_highlight_color(renderer, orange));
+    }
+    OK(cadr_renderer_set_outline_width(renderer, 2));
+    OK(cadr_renderer_set_highlight_style(renderer, CADR_HIGHLIGHT_TINT));
+    OK(cadr_scene_set_flags(b->scene, b->geo, CADR_NODE_VISIBLE | CADR_NODE_PICKABLE));
+    OK(cadr_renderer_render(renderer, b->scene, &camera, &stats));
+    OK(cadr_renderer_read_pixels(renderer, second, W * H * 4));
+    CHECK(pixel_difference(first, second, W * H * 4) == 0);
+  }
+
   /* Ambient occlusion: off by default; on, it only darkens, and off again restores the picture. */
   {
     bool on = true;

@@ -1,13 +1,13 @@
 //! Display modes: gen:demo and the 2CylinderEngine in each mode (X-ray included) match their
 //! references, each mode shows something other than the others, and the line-only modes fill
 //! no surface; silhouettes outline curved surfaces in the edge modes; highlighted parts are
-//! tinted or outlined.
+//! tinted or outlined, in the colours and band width of the host's palette.
 #![allow(clippy::unwrap_used)] // Test code: a failed unwrap is a failed test.
 
 use cadr_core::generate::{generate, GeneratorSpec, GeometryBuilder};
 use cadr_core::graph::NodeFlags;
 use cadr_core::load::load_file;
-use cadr_core::render::{Background, Camera, HighlightStyle, DEFAULT_FOV_DEGREES};
+use cadr_core::render::{Background, Camera, HighlightStyle, Palette, DEFAULT_FOV_DEGREES};
 use cadr_core::scene::edges::{feature_edges, DEFAULT_CREASE_DEGREES};
 use cadr_core::scene::{Material, MeshRef, Node, Scene};
 use cadr_core::technique::ShadeMode;
@@ -459,6 +459,118 @@ fn highlighted_parts_are_tinted_or_outlined() {
             right >= 2 && left == 0,
             "{mode:?}: {right} right, {left} left"
         );
+    }
+    f.assert_no_validation_errors();
+}
+
+/// The host's palette: edge lines and silhouettes in its edge colour (and dashed hidden lines
+/// in a lighter shade of it), highlighted parts tinted towards or outlined in its highlight
+/// colour, the band as wide as it asks; a palette out of range is refused and the last kept.
+#[test]
+fn the_palette_colours_lines_and_highlights_and_sizes_the_outline() {
+    let mut f = two_cubes();
+    let right = f.nodes[1];
+    let flags = NodeFlags {
+        highlighted: true,
+        ..NodeFlags::default()
+    };
+    f.graph.set_flags(right, flags).unwrap();
+    f.tree.update(&mut f.graph);
+    let blue = [0.0, 0.0, 1.0];
+    let green = [0.0, 1.0, 0.0];
+    let is = |p: &image::Rgba<u8>, rgb: [u8; 3]| p.0[..3] == rgb;
+    let count =
+        |image: &image::RgbaImage, rgb: [u8; 3]| image.pixels().filter(|p| is(p, rgb)).count();
+    let (centre, row) = images::pixel_of(&f.camera, SIZE, DVec3::new(1.2, 0.0, 0.0));
+
+    // Edge lines (and the silhouettes of the cubes against the background) in blue: the left
+    // cube, not highlighted, is drawn with them.
+    f.view
+        .techniques_mut()
+        .set_shade_mode(ShadeMode::Edges)
+        .unwrap();
+    let default_lines = f.render();
+    assert_eq!(count(&default_lines, [0, 0, 255]), 0);
+    f.view
+        .renderer_mut()
+        .set_palette(Palette {
+            edges: blue,
+            ..Palette::DEFAULT
+        })
+        .unwrap();
+    let blue_lines = f.render();
+    assert!(
+        count(&blue_lines, [0, 0, 255]) > 40,
+        "{} blue pixels",
+        count(&blue_lines, [0, 0, 255])
+    );
+    // Dashed hidden lines: a lighter blue (mixed 42 % towards white), where none was before.
+    f.view
+        .techniques_mut()
+        .set_shade_mode(ShadeMode::HiddenLine)
+        .unwrap();
+    f.view.techniques_mut().set_dashed_hidden_lines(true);
+    let light_blue = [107, 107, 255];
+    let near = |p: &image::Rgba<u8>| {
+        p.0[..3]
+            .iter()
+            .zip(light_blue)
+            .all(|(&a, b)| a.abs_diff(b) <= 2)
+    };
+    let dashed = f.render();
+    assert!(
+        dashed.pixels().filter(|p| near(p)).count() > 10,
+        "dashed lines in light blue"
+    );
+    f.view.techniques_mut().set_dashed_hidden_lines(false);
+
+    // The highlight: tint towards green, then a green band 5 pixels wide.
+    f.view
+        .techniques_mut()
+        .set_shade_mode(ShadeMode::Solid)
+        .unwrap();
+    let orange_tint = *f.render().get_pixel(centre, row);
+    f.view
+        .renderer_mut()
+        .set_palette(Palette {
+            highlight: green,
+            outline_width: 5,
+            ..Palette::DEFAULT
+        })
+        .unwrap();
+    let green_tint = *f.render().get_pixel(centre, row);
+    assert!(
+        green_tint.0[1] > orange_tint.0[1] + 20 && green_tint.0[0] + 40 < orange_tint.0[0],
+        "tinted towards green: {green_tint:?}, towards orange: {orange_tint:?}"
+    );
+    f.view
+        .renderer_mut()
+        .set_highlight_style(HighlightStyle::Outline)
+        .unwrap();
+    let outlined = f.render();
+    let last = (centre..SIZE.0)
+        .take_while(|&x| !is(outlined.get_pixel(x, row), [0, 255, 0]))
+        .last()
+        .unwrap();
+    let band = (last + 1..SIZE.0)
+        .take_while(|&x| is(outlined.get_pixel(x, row), [0, 255, 0]))
+        .count();
+    assert_eq!(band, 5, "the band right of the cube is 5 pixels wide");
+
+    // Out of range: refused, the last palette kept.
+    let before = f.view.renderer().palette();
+    for wrong in [
+        Palette {
+            outline_width: 9,
+            ..before
+        },
+        Palette {
+            edges: [0.0, -0.1, 0.0],
+            ..before
+        },
+    ] {
+        assert!(f.view.renderer_mut().set_palette(wrong).is_err());
+        assert_eq!(f.view.renderer().palette(), before);
     }
     f.assert_no_validation_errors();
 }

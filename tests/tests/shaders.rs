@@ -55,7 +55,9 @@ fn every_shader_file_is_listed() {
 
 #[test]
 fn shader_struct_mirrors_have_std140_layout() {
-    assert_eq!(std::mem::size_of::<FrameUniforms>(), 432);
+    assert_eq!(std::mem::size_of::<FrameUniforms>(), 464);
+    assert_eq!(std::mem::offset_of!(FrameUniforms, edge_color), 432);
+    assert_eq!(std::mem::offset_of!(FrameUniforms, highlight), 448);
     assert_eq!(std::mem::offset_of!(FrameUniforms, target), 384);
     assert_eq!(std::mem::offset_of!(FrameUniforms, background_top), 400);
     assert_eq!(std::mem::offset_of!(FrameUniforms, background_bottom), 416);

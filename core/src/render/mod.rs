@@ -9,6 +9,7 @@ mod background;
 mod camera;
 mod highlight;
 mod output;
+mod palette;
 pub mod pick;
 mod pipeline;
 mod section;
@@ -19,6 +20,7 @@ pub use background::Background;
 pub use camera::{Camera, DEFAULT_DIRECTION, DEFAULT_FOV_DEGREES};
 pub use highlight::HighlightStyle;
 pub use output::SaveError;
+pub use palette::{DisplayRgb, Palette};
 pub use pipeline::{
     FrameUniforms, HierarchyParameters, HierarchyStage, Pipelines, ScatterParameters,
     DISPLAY_HIGHLIGHT_OUTLINE, DISPLAY_MATERIAL_DESCRIPTIONS, DISPLAY_TEXTURES,
@@ -79,6 +81,8 @@ pub struct Renderer {
     placeholder_storage: Buffer,
     /// The background every picture is drawn over.
     background: Background,
+    /// The colours of edge lines and highlights.
+    palette: Palette,
     /// Whether frames that fill surfaces get screen-space ambient occlusion.
     ssao: bool,
     /// Whether the edge display modes draw silhouette edges with the feature edges.
@@ -236,6 +240,7 @@ impl Renderer {
             outline_keys: None,
             bound_scene: None,
             background: Background::default(),
+            palette: Palette::default(),
             ssao: false,
             silhouettes: true,
             depth_set: None,
@@ -252,6 +257,22 @@ impl Renderer {
     pub fn set_background(&mut self, background: Background) -> RenderResult<()> {
         background.validate().map_err(RenderError::InvalidUse)?;
         self.background = background;
+        Ok(())
+    }
+
+    /// The colours of edge lines and highlights and the outline band's width
+    /// ([`Palette::DEFAULT`] by default).
+    pub fn palette(&self) -> Palette {
+        self.palette
+    }
+
+    /// Sets the colours of edge lines and highlights and the outline band's width; the next
+    /// frame draws with them (through the frame's uniforms, so a recorded frame replays with
+    /// them). Refuses colours outside 0..1 and widths outside 1 to
+    /// [`Palette::MAX_OUTLINE_WIDTH`], keeping the palette it had.
+    pub fn set_palette(&mut self, palette: Palette) -> RenderResult<()> {
+        palette.validate().map_err(RenderError::InvalidUse)?;
+        self.palette = palette;
         Ok(())
     }
 
@@ -565,6 +586,11 @@ impl Renderer {
             },
             background_top: opaque(self.background.top),
             background_bottom: opaque(self.background.bottom),
+            edge_color: opaque(self.palette.edges),
+            highlight: {
+                let [r, g, b] = self.palette.highlight;
+                [r, g, b, self.palette.outline_width as f32]
+            },
         };
         self.commands.wait()?;
         if let Some((method, _)) = plan.translucency {

@@ -38,6 +38,10 @@ pub struct FrameUniforms {
     pub background_top: [f32; 4],
     /// The background's bottom colour.
     pub background_bottom: [f32; 4],
+    /// The edge lines' colour (display RGB, alpha 1; see [`super::Palette`]).
+    pub edge_color: [f32; 4],
+    /// The highlight colour (display RGB) and the outline band's width in pixels (w).
+    pub highlight: [f32; 4],
 }
 
 /// [`FrameUniforms::target`]`[2]`: the X-ray display mode.

@@ -354,7 +354,7 @@ impl Techniques {
     }
 
     /// Whether the hidden-line display mode also draws the hidden edges, dashed and in a
-    /// lighter grey (off by default: hidden edges are removed).
+    /// lighter shade of the edge colour (off by default: hidden edges are removed).
     pub fn dashed_hidden_lines(&self) -> bool {
         self.dashed_hidden_lines
     }

@@ -23,14 +23,38 @@ fn change_palette(
     })
 }
 
-/// Reads three floats from `rgb` (named `name` in errors) as a colour.
+/// Sets the palette colour `slot` chooses to the three floats at `rgb`.
 ///
 /// # Safety
 /// `rgb` is null or points to three readable floats.
-unsafe fn read_rgb(rgb: *const f32, name: &str) -> Result<DisplayRgb, Failure> {
-    // SAFETY: null or three readable floats (the caller's contract).
-    let values = unsafe { slice(rgb, 3, name) }?;
-    Ok([values[0], values[1], values[2]])
+unsafe fn set_color(
+    renderer: CadrRenderer,
+    rgb: *const f32,
+    slot: impl FnOnce(&mut Palette) -> &mut DisplayRgb,
+) -> CadrResult {
+    change_palette(renderer, |palette| {
+        // SAFETY: null or three readable floats (the caller's contract).
+        let values = unsafe { slice(rgb, 3, "rgb") }?;
+        *slot(palette) = [values[0], values[1], values[2]];
+        Ok(())
+    })
+}
+
+/// Writes the palette colour `color` chooses to the three floats at `rgb`.
+///
+/// # Safety
+/// `rgb` is null or points to three writable floats.
+unsafe fn deliver_color(
+    renderer: CadrRenderer,
+    rgb: *mut f32,
+    color: impl FnOnce(&Palette) -> DisplayRgb,
+) -> CadrResult {
+    guard(|| {
+        let palette = with_renderer(renderer, |state| Ok(state.view.renderer().palette()))?;
+        // SAFETY: null or three writable floats (the caller's contract); [f32; 3] has the
+        // alignment of f32.
+        unsafe { deliver(rgb.cast::<DisplayRgb>(), "rgb", color(&palette)) }
+    })
 }
 
 /// Sets the colour of edge lines and silhouettes in every display mode that draws them
@@ -49,11 +73,8 @@ pub unsafe extern "C" fn cadr_renderer_set_edge_color(
     renderer: CadrRenderer,
     rgb: *const f32,
 ) -> CadrResult {
-    change_palette(renderer, |palette| {
-        // SAFETY: null or three readable floats (the caller's contract).
-        palette.edges = unsafe { read_rgb(rgb, "rgb") }?;
-        Ok(())
-    })
+    // SAFETY: null or three readable floats (the caller's contract).
+    unsafe { set_color(renderer, rgb, |palette| &mut palette.edges) }
 }
 
 /// Writes the colour of edge lines (three floats; see `cadr_renderer_set_edge_color`).
@@ -69,12 +90,8 @@ pub unsafe extern "C" fn cadr_renderer_edge_color(
     renderer: CadrRenderer,
     rgb: *mut f32,
 ) -> CadrResult {
-    guard(|| {
-        let palette = with_renderer(renderer, |state| Ok(state.view.renderer().palette()))?;
-        // SAFETY: null or three writable floats (the caller's contract); [f32; 3] has the
-        // alignment of f32.
-        unsafe { deliver(rgb.cast::<[f32; 3]>(), "rgb", palette.edges) }
-    })
+    // SAFETY: null or three writable floats (the caller's contract).
+    unsafe { deliver_color(renderer, rgb, |palette| palette.edges) }
 }
 
 /// Sets the highlight colour: what highlighted parts are tinted towards
@@ -93,11 +110,8 @@ pub unsafe extern "C" fn cadr_renderer_set_highlight_color(
     renderer: CadrRenderer,
     rgb: *const f32,
 ) -> CadrResult {
-    change_palette(renderer, |palette| {
-        // SAFETY: null or three readable floats (the caller's contract).
-        palette.highlight = unsafe { read_rgb(rgb, "rgb") }?;
-        Ok(())
-    })
+    // SAFETY: null or three readable floats (the caller's contract).
+    unsafe { set_color(renderer, rgb, |palette| &mut palette.highlight) }
 }
 
 /// Writes the highlight colour (three floats; see `cadr_renderer_set_highlight_color`).
@@ -113,12 +127,8 @@ pub unsafe extern "C" fn cadr_renderer_highlight_color(
     renderer: CadrRenderer,
     rgb: *mut f32,
 ) -> CadrResult {
-    guard(|| {
-        let palette = with_renderer(renderer, |state| Ok(state.view.renderer().palette()))?;
-        // SAFETY: null or three writable floats (the caller's contract); [f32; 3] has the
-        // alignment of f32.
-        unsafe { deliver(rgb.cast::<[f32; 3]>(), "rgb", palette.highlight) }
-    })
+    // SAFETY: null or three writable floats (the caller's contract).
+    unsafe { deliver_color(renderer, rgb, |palette| palette.highlight) }
 }
 
 /// Sets the width in pixels, 1 to 8 (default 2), of the band the `CADR_HIGHLIGHT_OUTLINE`

@@ -15,8 +15,9 @@
  *        D toggles dashed hidden edges in hidden-line; O toggles ambient occlusion;
  *        U toggles materials' textures; L toggles silhouette edges in edges and hidden-line;
  *        G cycles the highlight style (tint, outline);
- *        B cycles the background (cadr's gradient, white, dark); A cycles the anti-aliasing
- *        levels the device offers (MSAA 2x, 4x, 8x, then off); Esc quits.
+ *        B cycles the background (cadr's gradient, white, dark with light edge lines);
+ *        A cycles the anti-aliasing levels the device offers (MSAA 2x, 4x, 8x, then off);
+ *        Esc quits.
  * The window title shows the techniques, the section, the anti-aliasing, frames in flight, present mode, the frame's figures
  * and frames per second; they are also printed once a second. --orbit-frames N orbits the
  * camera for N frames as fast as they come, prints the frames per second and quits (a
@@ -155,16 +156,19 @@ static void toggle_section_flag(struct Viewer *v, uint32_t flag, const char *nam
   printf("section %s: %s\n", name, (v->section_flags & flag) ? "on" : "off");
 }
 
-/* The backgrounds B cycles through: cadr's default gradient first (read from the renderer). */
+/* The backgrounds B cycles through: cadr's default gradient first (read from the renderer).
+ * The dark one comes with light edge lines, which dark lines would not show on. */
 static const char *const background_names[3] = {"gradient", "white", "dark"};
 
 static void cycle_background(struct Viewer *v) {
-  static float default_top[3], default_bottom[3];
+  static float default_top[3], default_bottom[3], default_edges[3];
   static int have_default = 0;
   const float white[3] = {1.0f, 1.0f, 1.0f};
   const float dark_top[3] = {0.20f, 0.22f, 0.26f}, dark_bottom[3] = {0.05f, 0.06f, 0.08f};
+  const float light_edges[3] = {0.85f, 0.87f, 0.90f};
   if (!have_default) {
     CADR_CHECK(cadr_renderer_background(v->renderer, default_top, default_bottom));
+    CADR_CHECK(cadr_renderer_edge_color(v->renderer, default_edges));
     have_default = 1;
   }
   v->background = (v->background + 1) % 3;
@@ -173,6 +177,7 @@ static void cycle_background(struct Viewer *v) {
   case 1: CADR_CHECK(cadr_renderer_set_background(v->renderer, white, white)); break;
   default: CADR_CHECK(cadr_renderer_set_background(v->renderer, dark_top, dark_bottom)); break;
   }
+  CADR_CHECK(cadr_renderer_set_edge_color(v->renderer, v->background == 2 ? light_edges : default_edges));
   printf("background: %s\n", background_names[v->background]);
 }
 

@@ -1,7 +1,8 @@
 #version 460
-// The outline highlight style: over the finished picture, a band two pixels wide in the
-// highlight colour (frame.highlight; its w is the band's width in pixels, 1 to 8) around every region where the nearest surface is a highlighted part's
-// (from the outline keys its surfaces recorded, outline.glsl). The band lies outside the
+// The outline highlight style: over the finished picture, a band in the highlight colour
+// (frame.highlight; its w is the band's width in pixels, 1 to 8, 2 by default) around every
+// region where the nearest surface is a highlighted part's (from the outline keys its surfaces
+// recorded, outline.glsl). The band lies outside the
 // part, over what surrounds it; the part itself keeps its own colours.
 #define CADR_OUTLINE_KEYS
 #include "frame.glsl"

@@ -2,6 +2,8 @@
 //! under what a frame drew after its rendering, so every display mode and transparency method
 //! meets the same background.
 
+use super::palette::check_display_rgb;
+
 /// The background's colours, as display RGB values in 0..1 (what a PNG stores).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Background {
@@ -42,14 +44,8 @@ impl Background {
 
     /// Checks that every channel is a finite value in 0..1.
     pub fn validate(&self) -> Result<(), String> {
-        for (end, color) in [("top", self.top), ("bottom", self.bottom)] {
-            if let Some(value) = color.iter().find(|c| !(0.0..=1.0).contains(*c)) {
-                return Err(format!(
-                    "background {end} colour {color:?}: {value} is not in 0..1"
-                ));
-            }
-        }
-        Ok(())
+        check_display_rgb("background top", self.top)?;
+        check_display_rgb("background bottom", self.bottom)
     }
 }
 

@@ -18,6 +18,15 @@ pub struct Palette {
     pub outline_width: u32,
 }
 
+/// Checks that every channel of `color`, the colour named `what` in the error, is a finite
+/// value in 0..1.
+pub(crate) fn check_display_rgb(what: &str, color: DisplayRgb) -> Result<(), String> {
+    match color.iter().find(|c| !(0.0..=1.0).contains(*c)) {
+        Some(value) => Err(format!("{what} colour {color:?}: {value} is not in 0..1")),
+        None => Ok(()),
+    }
+}
+
 impl Palette {
     /// The default: near-black lines, an orange highlight, a band 2 pixels wide.
     pub const DEFAULT: Palette = Palette {
@@ -33,11 +42,8 @@ impl Palette {
     /// Checks that every channel is a finite value in 0..1 and the width is 1 to
     /// [`Palette::MAX_OUTLINE_WIDTH`].
     pub fn validate(&self) -> Result<(), String> {
-        for (what, color) in [("edge", self.edges), ("highlight", self.highlight)] {
-            if let Some(value) = color.iter().find(|c| !(0.0..=1.0).contains(*c)) {
-                return Err(format!("{what} colour {color:?}: {value} is not in 0..1"));
-            }
-        }
+        check_display_rgb("edge", self.edges)?;
+        check_display_rgb("highlight", self.highlight)?;
         if !(1..=Self::MAX_OUTLINE_WIDTH).contains(&self.outline_width) {
             return Err(format!(
                 "outline width {} pixels: expected 1 to {}",

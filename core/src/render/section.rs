@@ -9,7 +9,8 @@
 //! as the plane (optionally hatched), so the cut reads as a solid face. An open part shows no
 //! cap (its inside, if seen, is shaded as it is). The cap keeps the depth of the face it is
 //! painted on, so depth tests, occlusion culling and the edges mode's depth bias treat it like
-//! any other surface (the edge lines of that face show through the cap). Picking a cap picks
+//! any other surface; in the edge modes a caps pass paints the visible caps again over the
+//! edge lines of that face (`PassSet::Shaded::caps_over_lines`). Picking a cap picks
 //! the part that was cut, at the point where the plane cuts it (`cap_entry`): the pick pass
 //! flags cap pixels and the host moves their depth to the plane.
 

@@ -92,10 +92,9 @@ pub enum PassSet {
         lines_through_translucent: bool,
         /// In the edges and hidden-line modes, whether section caps can show (caps are on and
         /// the eye is on the cut side of a plane): the lines then write no depth, and after
-        /// them a caps pass
-        /// (`shaders/caps.frag`, depth EQUAL on the surfaces' depth) paints the visible caps
-        /// again over the lines of the far faces they are painted on (always false in the
-        /// other modes).
+        /// them a caps pass (`shaders/caps.frag`, depth EQUAL on the surfaces' depth) paints
+        /// the visible caps again over the lines of the far faces they are painted on (always
+        /// false in the other modes).
         caps_over_lines: bool,
     },
     /// Triangles of pickable instances, their ids into the pick target.

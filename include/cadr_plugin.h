@@ -11,7 +11,7 @@
 #define CADR_PLUGIN_ABI_MAJOR 1
 
 // Minor version of this ABI: additions that older readers may ignore.
-#define CADR_PLUGIN_ABI_MINOR 8
+#define CADR_PLUGIN_ABI_MINOR 9
 
 // `(major << 16) | minor`, what [`CadrPluginVersionFn`] returns.
 #define CADR_PLUGIN_ABI_VERSION ((CADR_PLUGIN_ABI_MAJOR << 16) | CADR_PLUGIN_ABI_MINOR)
@@ -509,6 +509,25 @@ typedef struct CadrGpuDraws {
   uint32_t stride;
 } CadrGpuDraws;
 
+// Since ABI 1.9: which instances a pass needs, by their flags: those whose
+// `flags & mask == value` ([`CadrInstance::flags`], the same bits in [`CadrCullEntry::flags`]).
+// The pass's pipeline clips every other instance away whole, so drawing them too is correct,
+// only wasted work: a submission or GPU culler that honours the filter skips them (the X-ray
+// mode's opaque pass needs only highlighted parts, the transparency method's pass only
+// translucent ones, the section caps' pass only closed ones); one that ignores it draws
+// everything as before. `mask` 0 is every instance.
+typedef struct CadrPassFilter {
+  // The `CADR_INSTANCE_*` bits the filter looks at.
+  CadrInstanceFlags mask;
+  // What those bits must be.
+  CadrInstanceFlags value;
+  // Nonzero: only parts whose bounding sphere some section plane passes through (the
+  // section caps' pass: a part no plane cuts shows no cap). Only a culler that knows the
+  // planes and where the parts are can tell: a GPU culler honours it, a submission drawing
+  // its own lists does not.
+  uint32_t section_cut;
+} CadrPassFilter;
+
 // What a submission records with. Owned by the host, valid for the call; the command
 // buffer is the host's (secondary command buffers the submission records are its own).
 typedef struct CadrRecordContext {
@@ -564,6 +583,10 @@ typedef struct CadrRecordContext {
   // `rasterizationSamples`. The host draws with MSAA through a submission of
   // [`CADR_TRAIT_SECONDARY_COMMAND_BUFFERS`] only when its library is of ABI 1.8 or later.
   uint32_t rasterization_samples;
+  // Since ABI 1.9 (read it only when `size` covers it): null, or `pass_count` filters, one
+  // per pass: the instances each pass needs ([`CadrPassFilter`]). Part of what
+  // `commands_key` covers.
+  const struct CadrPassFilter *pass_filters;
 } CadrRecordContext;
 
 // Submission vtable ([`CADR_KIND_SUBMISSION`]).
@@ -597,6 +620,13 @@ typedef struct CadrCullInput {
   // World-space frustum planes (xyz normal pointing inside, w distance): a point p is
   // inside when `dot(n, p) + w >= 0` for all six.
   double planes[6][4];
+  // Since ABI 1.9 (read it only when `size` covers it): how many of `section_planes` the
+  // view is cut with.
+  uint32_t section_plane_count;
+  // Since ABI 1.9: world-space section planes (xyz unit normal, w distance), each keeping
+  // the points with `dot(n, p) + w >= 0`: a part whose sphere lies wholly outside one is
+  // cut away, and a culler may cull it like one outside the frustum.
+  double section_planes[6][4];
 } CadrCullInput;
 
 // What culling writes: `word_count` words each. The host owns both arrays; the culler
@@ -674,6 +704,17 @@ typedef struct CadrGpuCullContext {
   uint64_t view_buffer;
   // Byte offset of the [`CadrGpuCullView`] in `view_buffer` (a multiple of 256).
   uint64_t view_offset;
+  // Since ABI 1.9 (read it only when `size` covers it): null, or `pass_count` filters, one
+  // per pass: the instances each pass needs ([`CadrPassFilter`]); a culler that honours
+  // them writes no commands for the others.
+  const struct CadrPassFilter *pass_filters;
+  // Since ABI 1.9: how many of `section_planes` the view is cut with.
+  uint32_t section_plane_count;
+  // Since ABI 1.9: the section planes relative to the eye (xyz unit normal, w distance),
+  // each keeping the points `q` (relative to the eye) with `dot(n, q) + w >= 0`: a part
+  // whose sphere lies wholly outside one is cut away, and the culler may cull it like one
+  // outside the frustum. Also in [`CadrGpuCullView::section_planes`].
+  float section_planes[6][4];
 } CadrGpuCullContext;
 
 // Culling vtable ([`CADR_KIND_CULLING`]).
@@ -703,7 +744,8 @@ typedef struct CadrCullingVtable {
 } CadrCullingVtable;
 
 // Since ABI 1.5: the view of a GPU-culled frame as shaders read it (std140: vec4s, then a
-// column-major mat4, a uvec4 and a vec4), in [`CadrGpuCullContext::view_buffer`].
+// column-major mat4, a uvec4 and a vec4; since ABI 1.9 six vec4s and a uvec4 more, which an
+// older culler's shaders do not declare), in [`CadrGpuCullContext::view_buffer`].
 typedef struct CadrGpuCullView {
   // The eye position's f32 high part (xyz, w = 0).
   float eye_high[4];
@@ -720,6 +762,11 @@ typedef struct CadrGpuCullView {
   // size covers at clip w = 1 (the larger of the x and y scales: a sphere of radius r at
   // clip w spans about `2 r k / w` pixels); two zeros.
   float sub_pixel[4];
+  // Since ABI 1.9: the section planes relative to the eye, as
+  // [`CadrGpuCullContext::section_planes`] (the unused ones keep everything: 0, 0, 0, 1).
+  float section_planes[6][4];
+  // Since ABI 1.9: the number of section planes, then three zeros.
+  uint32_t section[4];
 } CadrGpuCullView;
 
 // Since ABI 1.7: how a colour target of a transparency method is blended, as the fields of
@@ -937,6 +984,12 @@ typedef struct CadrTransparencyVtable {
 // Since ABI 1.6: with [`CADR_INSTANCE_CLOSED`], the part's triangles wind clockwise seen from
 // outside (an inside-out mesh).
 #define CADR_INSTANCE_INSIDE_OUT (1 << 5)
+
+// Since ABI 1.9: the part's material is translucent (blended with an opacity under 1, or with
+// a base-colour texture that has translucent texels), so frames with translucency draw it in
+// the transparency method's pass. Textures turned off make such a part opaque again where its
+// opacity is 1: the flag then says "may be translucent".
+#define CADR_INSTANCE_TRANSLUCENT (1 << 6)
 
 // Triangles (solid shading).
 #define CADR_PASS_TRIANGLES 0

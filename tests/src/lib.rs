@@ -187,6 +187,20 @@ impl SceneView {
         darkest
     }
 
+    /// Brings the tree up to the graph and draws two frames with the view's current settings:
+    /// what the second drew (a steady frame; with a GPU culler, what the GPU drew).
+    pub fn steady_draws(&mut self) -> u64 {
+        self.tree.update(&mut self.graph);
+        let mut draw = || {
+            self.view
+                .render(&self.graph, &mut self.tree, &self.camera)
+                .expect("render a frame")
+                .draws
+        };
+        draw();
+        draw()
+    }
+
     /// Brings the tree up to the graph, draws a frame with the view's current settings and
     /// reads it back.
     pub fn render(&mut self) -> image::RgbaImage {

@@ -7,7 +7,7 @@
 use cadr_core::generate::{generate, GeneratorSpec};
 use cadr_core::render::{Camera, Section, DEFAULT_DIRECTION};
 use cadr_core::scene::{flatten, Geometry, Material, MeshRef, Node, Part, Scene, Vertex};
-use cadr_core::technique::ShadeMode;
+use cadr_core::technique::{Combination, ShadeMode};
 use cadr_core::view::unproject;
 use cadr_tests::images::{assert_matches_reference, compare, DEFAULT_TOLERANCE, SAME_PICTURE};
 use cadr_tests::{all_combinations, test_device, SceneView};
@@ -215,6 +215,100 @@ fn a_cap_hides_the_lines_of_the_far_faces_it_is_painted_on() {
                 "{mode:?} (dashed: {dashed}): uncapped, the line at {point} shows (darkest {darkest})"
             );
         }
+        f.assert_no_validation_errors();
+    }
+}
+
+#[test]
+fn the_caps_pass_draws_only_closed_parts() {
+    // A closed box at the origin, an open one beside it, both cut; edges mode, where caps
+    // are painted again over the lines in a pass of their own.
+    let mut scene = boxes(false, &[DVec3::ZERO, DVec3::new(0.0, -3.0, 0.0)]);
+    scene.geometries.push(unit_box(true));
+    scene.nodes[1].mesh = Some(MeshRef::new(1, vec![0]));
+    let mut f = looking_at_the_origin(&scene, DVec3::ZERO);
+    f.view
+        .techniques_mut()
+        .set_shade_mode(ShadeMode::Edges)
+        .unwrap();
+    // The surfaces and the (feature) edge lines of both boxes.
+    assert_eq!(f.steady_draws(), 2 + 2, "uncut");
+    f.section(&[KEEP_BELOW_Z0], false);
+    assert_eq!(f.steady_draws(), 2 + 2, "cut, no caps");
+    f.section(&[KEEP_BELOW_Z0], true);
+    let capped = f.render();
+    assert_eq!(
+        f.steady_draws(),
+        2 + 2 + 1,
+        "the caps pass draws the closed box only"
+    );
+    let on_cap = DVec3::new(0.3, 0.3, 0.0);
+    assert!(reddish(f.color_at(&capped, on_cap)), "capped");
+    f.assert_no_validation_errors();
+}
+
+#[test]
+fn cullers_cull_what_a_plane_cuts_away_and_gpu_cullers_cap_only_what_it_cuts() {
+    // Box 0 is cut by the plane z = 0, box 1 lies wholly on the kept side, box 2 wholly on the
+    // side cut away. Edges mode with caps: surfaces, edge lines, and the caps pass.
+    let places = [
+        DVec3::ZERO,
+        DVec3::new(-2.5, 0.0, -2.5),
+        DVec3::new(2.5, 0.0, 2.5),
+    ];
+    let reference = {
+        let mut f = looking_at_the_origin(&boxes(false, &places), DVec3::ZERO);
+        f.view
+            .techniques_mut()
+            .set_shade_mode(ShadeMode::Edges)
+            .unwrap();
+        f.section(&[KEEP_BELOW_Z0], true);
+        f.render()
+    };
+    let with = |submission: &str, culling: &str| Combination {
+        vertex: "arena".into(),
+        parameters: "ssbo-index".into(),
+        submission: submission.into(),
+        culling: culling.into(),
+        ..Combination::built_in()
+    };
+    // Per culler: draws uncut, and cut with caps. Without culling every box is drawn in every
+    // pass; a CPU culler culls box 2 but its submission cannot tell which closed parts a plane
+    // cuts; a GPU culler can, so its caps pass draws box 0 alone.
+    let expected = [
+        (with("individual-indirect-count", "none"), 3 + 3, 3 + 3 + 3),
+        (
+            with("individual-indirect-count", "frustum"),
+            3 + 3,
+            2 + 2 + 2,
+        ),
+        (
+            with("individual-indirect-count", "gpu-frustum"),
+            3 + 3,
+            2 + 2 + 1,
+        ),
+        (
+            with("individual-indirect-count", "gpu-occlusion"),
+            3 + 3,
+            2 + 2 + 1,
+        ),
+    ];
+    for (combination, uncut, cut) in expected {
+        let mut f = looking_at_the_origin(&boxes(false, &places), DVec3::ZERO);
+        f.view.techniques_mut().select(&combination).unwrap();
+        f.view
+            .techniques_mut()
+            .set_shade_mode(ShadeMode::Edges)
+            .unwrap();
+        assert_eq!(f.steady_draws(), uncut, "{combination}: uncut");
+        f.section(&[KEEP_BELOW_Z0], true);
+        assert_eq!(f.steady_draws(), cut, "{combination}: cut");
+        let image = f.render();
+        let difference = compare(&image, &reference).unwrap();
+        assert!(
+            difference.within(SAME_PICTURE),
+            "{combination}: {difference:?}"
+        );
         f.assert_no_validation_errors();
     }
 }

@@ -10,7 +10,9 @@ use cadr_core::render::{Camera, FrameStats};
 use cadr_core::save::save_scene;
 use cadr_core::scene::{AlphaMode, Geometry, Material, MeshRef, Node, Part, Scene, Vertex};
 use cadr_core::technique::{Combination, ShadeMode, TechniqueKind};
-use cadr_tests::images::{assert_matches_reference, compare, Tolerance, DEFAULT_TOLERANCE};
+use cadr_tests::images::{
+    assert_matches_reference, compare, Tolerance, DEFAULT_TOLERANCE, SAME_PICTURE,
+};
 use cadr_tests::{
     all_combinations, test_device_with_synchronization_checks as test_device, SceneView,
 };
@@ -257,9 +259,102 @@ fn an_opaque_scene_draws_no_translucent_pass() {
     let stats = translucent.stats();
     assert_eq!(opaque.draw_calls, 3, "one pass of three squares");
     assert_eq!(
-        stats.draw_calls, 6,
-        "with translucent squares, the translucent pass draws them too"
+        stats.draw_calls, 3,
+        "with translucent squares, the opaque pass draws the red one and the translucent \
+         pass the other two"
     );
+}
+
+/// Combinations that draw in each way a submission can: direct calls, indirect commands,
+/// recorded once and replayed, recorded on threads, and commands a GPU culler writes.
+fn one_per_way_of_drawing() -> Vec<Combination> {
+    let with = |submission: &str, culling: &str| Combination {
+        vertex: "arena".into(),
+        parameters: "ssbo-index".into(),
+        submission: submission.into(),
+        culling: culling.into(),
+        ..Combination::built_in()
+    };
+    vec![
+        Combination::built_in(),
+        with("individual-indirect-count", "none"),
+        with("groups-mdi-replay", "none"),
+        with("individual-threads", "frustum"),
+        with("individual-indirect-count", "gpu-frustum"),
+        with("individual-indirect-count", "gpu-occlusion"),
+    ]
+}
+
+#[test]
+fn each_pass_draws_only_the_parts_it_needs() {
+    let mut f = layers_view(&layers(0.5));
+    let reference = f.render();
+    let mut xray_reference = None;
+    let blue = (0..3)
+        .filter_map(|i| f.graph.material_handle_at(i))
+        .find(|&m| f.graph.material(m).unwrap().name == "blue")
+        .unwrap();
+    for combination in one_per_way_of_drawing() {
+        f.view.techniques_mut().check(&combination).unwrap();
+        f.view.techniques_mut().select(&combination).unwrap();
+        // Red is opaque, blue and green translucent: each drawn in one pass only.
+        assert_eq!(f.steady_draws(), 3, "{combination}: translucent scene");
+        let image = f.render();
+        let difference = compare(&image, &reference).unwrap();
+        assert!(
+            difference.within(SAME_PICTURE),
+            "{combination}: {difference:?}"
+        );
+
+        // Blue made opaque moves to the opaque pass; back, and it returns.
+        let mut material = f.graph.material(blue).unwrap().clone();
+        material.base_color[3] = 1.0;
+        f.graph.set_material(blue, material.clone()).unwrap();
+        assert_eq!(f.steady_draws(), 3, "{combination}: blue made opaque");
+        let opaque_blue = f.render();
+        let hidden = f.without(0);
+        assert_close(
+            &format!("{combination}: an opaque blue square hides the red one"),
+            f.color_at(&opaque_blue, LEFT),
+            f.color_at(&hidden, LEFT),
+            2.0 / 255.0,
+        );
+        material.base_color[3] = 0.5;
+        f.graph.set_material(blue, material).unwrap();
+        let again = f.render();
+        let difference = compare(&again, &reference).unwrap();
+        assert!(
+            difference.within(SAME_PICTURE),
+            "{combination}: {difference:?}"
+        );
+
+        // X-ray with the red square highlighted: the opaque pass draws it alone; the edge
+        // lines (the squares' borders) and the translucent pass draw every part (those not
+        // highlighted, and highlighted ones with a translucent material).
+        f.view
+            .techniques_mut()
+            .set_shade_mode(ShadeMode::XRay)
+            .unwrap();
+        let red = f.nodes[0];
+        let mut flags = f.graph.node(red).unwrap().flags;
+        flags.highlighted = true;
+        f.graph.set_flags(red, flags).unwrap();
+        assert_eq!(f.steady_draws(), 1 + 3 + 3, "{combination}: X-ray");
+        let xray = f.render();
+        let xray_reference = xray_reference.get_or_insert_with(|| xray.clone());
+        let difference = compare(&xray, xray_reference).unwrap();
+        assert!(
+            difference.within(SAME_PICTURE),
+            "{combination}: {difference:?}"
+        );
+        flags.highlighted = false;
+        f.graph.set_flags(red, flags).unwrap();
+        f.view
+            .techniques_mut()
+            .set_shade_mode(ShadeMode::Solid)
+            .unwrap();
+    }
+    f.assert_no_validation_errors();
 }
 
 #[test]

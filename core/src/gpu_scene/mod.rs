@@ -297,7 +297,7 @@ impl GpuScene {
             .filter(|words| textures::is_described(words))
             .count();
         let count = tree.instance_capacity();
-        let (instances, tallies) = make_instances(&self.arenas, tree, count);
+        let (instances, tallies) = make_instances(&self.arenas, &self.translucent, tree, count);
         self.instances = instances;
         self.candidate_bits = tallies
             .iter()
@@ -376,7 +376,29 @@ impl GpuScene {
 
     /// The entry of a live instance whose geometry and part are in the arenas.
     fn entry_of(&self, instance: &InstanceRef) -> Option<(abi::CadrInstance, bool)> {
-        entry_in(&self.arenas, instance)
+        entry_in(&self.arenas, &self.translucent, instance)
+    }
+
+    /// Sets or clears [`abi::CADR_INSTANCE_TRANSLUCENT`] on the instances of the material
+    /// slots whose translucency changed (`flipped`), queues their records and cull entries,
+    /// and says whether any changed. A scan of every instance, for an edit that is rare.
+    fn reflag_translucency(&mut self, flipped: &[u32]) -> bool {
+        if flipped.is_empty() {
+            return false;
+        }
+        let mut any = false;
+        for id in 0..self.instances.len() {
+            let entry = &mut self.instances[id];
+            if entry.flags & abi::CADR_INSTANCE_ALIVE == 0 || !flipped.contains(&entry.material) {
+                continue;
+            }
+            let translucent = self.translucent[entry.material as usize];
+            entry.flags = translucency_flag(entry.flags, translucent);
+            self.record_gpu.queue(id as u32);
+            self.cull_gpu.queue(id as u32);
+            any = true;
+        }
+        any
     }
 
     fn refresh_instance(&mut self, tree: &SceneTree, id: u32) {
@@ -519,10 +541,14 @@ impl GpuScene {
             }
         }
         self.apply_moves(tree, &changes.moved);
+        let mut flipped = Vec::new();
         for &slot in &changes.dirty_materials {
             if (slot as usize) < self.materials.len() {
                 let translucent = is_translucent(graph, slot);
                 let was = std::mem::replace(&mut self.translucent[slot as usize], translucent);
+                if was != translucent {
+                    flipped.push(slot);
+                }
                 self.translucent_materials =
                     self.translucent_materials + usize::from(translucent) - usize::from(was);
                 self.materials[slot as usize] = gpu_material(graph, slot);
@@ -542,6 +568,9 @@ impl GpuScene {
             || !changes.dirty_materials.is_empty()
         {
             self.parameters_generation += 1;
+        }
+        if self.reflag_translucency(&flipped) {
+            self.draws_generation += 1;
         }
         let touched: Vec<u32> = changes
             .removed
@@ -896,11 +925,20 @@ fn cull_entry(
 
 /// The entry of a live instance whose geometry and part are in `arenas`, and whether it is a
 /// candidate for drawing (shown, with triangles).
-fn entry_in(arenas: &GeometryArenas, instance: &InstanceRef) -> Option<(abi::CadrInstance, bool)> {
+/// `translucent` says per material slot whether its parts are.
+fn entry_in(
+    arenas: &GeometryArenas,
+    translucent: &[bool],
+    instance: &InstanceRef,
+) -> Option<(abi::CadrInstance, bool)> {
     let place = arenas.places.get(instance.geometry as usize)?.as_ref()?;
     let ([first, count, first_wire, wire_count], sphere, closure) =
         *place.parts.get(instance.part as usize)?;
-    let flags = abi::CADR_INSTANCE_ALIVE
+    let translucent = translucent
+        .get(instance.material as usize)
+        .copied()
+        .unwrap_or(false);
+    let flags = translucency_flag(abi::CADR_INSTANCE_ALIVE, translucent)
         | closure
         | if instance.highlighted {
             abi::CADR_INSTANCE_HIGHLIGHTED
@@ -928,6 +966,15 @@ fn entry_in(arenas: &GeometryArenas, instance: &InstanceRef) -> Option<(abi::Cad
         sphere,
     };
     Some((entry, instance.visible && count > 0))
+}
+
+/// `flags` with [`abi::CADR_INSTANCE_TRANSLUCENT`] set or cleared.
+fn translucency_flag(flags: u32, translucent: bool) -> u32 {
+    if translucent {
+        flags | abi::CADR_INSTANCE_TRANSLUCENT
+    } else {
+        flags & !abi::CADR_INSTANCE_TRANSLUCENT
+    }
 }
 
 /// Fewer instances than this per thread are made on the calling thread.
@@ -971,9 +1018,11 @@ struct InstanceTally {
     triangles: u64,
 }
 
-/// The entries of instances `0..count` of `tree` (dead ones default), on a thread per core.
+/// The entries of instances `0..count` of `tree` (dead ones default; `translucent` per material
+/// slot), on a thread per core.
 fn make_instances(
     arenas: &GeometryArenas,
+    translucent: &[bool],
     tree: &SceneTree,
     count: usize,
 ) -> (Vec<abi::CadrInstance>, Vec<InstanceTally>) {
@@ -986,7 +1035,7 @@ fn make_instances(
             }
             let (entry, candidate) = tree
                 .instance(id as u32)
-                .and_then(|instance| entry_in(arenas, &instance))
+                .and_then(|instance| entry_in(arenas, translucent, &instance))
                 .unwrap_or((abi::CadrInstance::default(), false));
             if candidate {
                 if let Some(word) = tally.candidate_bits.last_mut() {

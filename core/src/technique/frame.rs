@@ -20,7 +20,8 @@ use super::set::{status, Message, Techniques};
 use crate::gpu_scene::GpuScene;
 use crate::render::pick::{PickSample, PixelRect};
 use crate::render::{
-    Camera, FramePlan, FrameRecorders, FrameStats, PassTarget, Renderer, SUSPENDED_DEPTH_LAYOUT,
+    Camera, FramePlan, FrameRecorders, FrameStats, PassTarget, Renderer, Section,
+    MAX_SECTION_PLANES, SUSPENDED_DEPTH_LAYOUT,
 };
 use crate::vk::memory_barrier;
 
@@ -90,7 +91,7 @@ impl Renderer {
         techniques.ensure_pipelines(passes)?;
         self.bind_scene(&scene.frame_resources())?;
         let cull_start = Instant::now();
-        cull(scene, techniques, camera)?;
+        cull(scene, techniques, camera, self.section())?;
         let techniques = &*techniques;
         let cull_us = cull_start.elapsed().as_secs_f64() * 1e6;
 
@@ -134,6 +135,14 @@ impl Renderer {
         for pass in &pipelines.passes {
             key = mix(key, pass.pipeline);
         }
+        // Which instances each pass needs: the translucency flag says exactly which parts are
+        // translucent unless textures are off in a scene that has them.
+        let exact_translucency = self.textures() || !scene.has_textures();
+        let pass_filters = pipelines.pass_filters(exact_translucency);
+        for filter in &pass_filters {
+            key = mix(key, u64::from(filter.mask) << 32 | u64::from(filter.value));
+            key = mix(key, u64::from(filter.section_cut));
+        }
         if values_in_commands {
             key = mix(key, view.parameters_generation);
         }
@@ -141,9 +150,14 @@ impl Renderer {
         let culler = GpuCuller::of(techniques, pipelines.passes.len())?;
         let phases = culler.as_ref().map_or(1, |c| c.phases);
         // Only a GPU culler needs the view relative to the eye.
-        let gpu_view = culler
-            .as_ref()
-            .map(|_| cull_view(camera, (width, height), techniques.min_pixels()));
+        let gpu_view = culler.as_ref().map(|_| {
+            cull_view(
+                camera,
+                (width, height),
+                techniques.min_pixels(),
+                self.section(),
+            )
+        });
         let cull_view_bytes = gpu_view.as_ref().map(cull_view_bytes);
         // A frame records the same commands as the last one when the techniques allow it and
         // nothing they depend on changed (the camera reaches the GPU through uniforms).
@@ -184,6 +198,7 @@ impl Renderer {
                 extra_color_count,
                 extra_color_formats,
                 rasterization_samples: passes.samples(),
+                pass_filters: pass_filters.as_ptr(),
             })
         };
         // Records a phase of the GPU culler (if any) outside rendering.
@@ -205,7 +220,7 @@ impl Renderer {
                 phase,
                 command_buffer,
                 &scene.view(),
-                &pipelines.passes,
+                (&pipelines.passes, &pass_filters),
                 gpu_view,
                 renderer.cull_view_buffer(),
                 depth,
@@ -414,11 +429,13 @@ fn barrier(renderer: &Renderer, command_buffer: vk::CommandBuffer) {
     );
 }
 
-/// What a culling result depends on: the culler, the scene and the view.
-fn cull_key(epoch: u64, view: &abi::CadrSceneView, planes: &[[f64; 4]; 6]) -> u64 {
+/// What a culling result depends on: the culler, the scene and the view (frustum and section
+/// planes).
+fn cull_key(epoch: u64, view: &abi::CadrSceneView, planes: &[[f64; 4]]) -> u64 {
     let mut key = mix(epoch, view.draws_generation);
     key = mix(key, view.parameters_generation);
     key = mix(key, view.buffers_generation);
+    key = mix(key, planes.len() as u64);
     for value in planes.iter().flatten() {
         key = mix(key, value.to_bits());
     }
@@ -426,8 +443,14 @@ fn cull_key(epoch: u64, view: &abi::CadrSceneView, planes: &[[f64; 4]; 6]) -> u6
 }
 
 /// Runs the culling technique and applies the bits that changed. Culling depends only on the
-/// view and the scene, so it runs again only when one of them (or the culler) changed.
-fn cull(scene: &mut GpuScene, techniques: &mut Techniques, camera: &Camera) -> RenderResult<()> {
+/// view (with its section) and the scene, so it runs again only when one of them (or the
+/// culler) changed.
+fn cull(
+    scene: &mut GpuScene,
+    techniques: &mut Techniques,
+    camera: &Camera,
+    section: &Section,
+) -> RenderResult<()> {
     if GpuCuller::is_active(techniques) {
         // The GPU decides: every candidate stays in the drawn set (once per culler and
         // scene layout, so a moving camera costs the CPU nothing here).
@@ -441,7 +464,17 @@ fn cull(scene: &mut GpuScene, techniques: &mut Techniques, camera: &Camera) -> R
         return Ok(());
     }
     let planes = frustum_planes(camera);
-    let key = cull_key(techniques.epoch, &scene.view(), &planes);
+    let mut section_planes = [[0.0; 4]; MAX_SECTION_PLANES];
+    for (slot, plane) in section_planes.iter_mut().zip(section.planes()) {
+        *slot = plane.to_array();
+    }
+    let section_plane_count = section.planes().len().min(MAX_SECTION_PLANES);
+    let all_planes: Vec<[f64; 4]> = planes
+        .iter()
+        .chain(&section_planes[..section_plane_count])
+        .copied()
+        .collect();
+    let key = cull_key(techniques.epoch, &scene.view(), &all_planes);
     if techniques.cull_key == Some(key) {
         return Ok(());
     }
@@ -461,6 +494,8 @@ fn cull(scene: &mut GpuScene, techniques: &mut Techniques, camera: &Camera) -> R
             worlds => worlds.as_ptr().cast(),
         },
         planes,
+        section_plane_count: section_plane_count as u32,
+        section_planes,
     };
     let mut output = abi::CadrCullOutput {
         size: std::mem::size_of::<abi::CadrCullOutput>() as u32,
@@ -474,6 +509,6 @@ fn cull(scene: &mut GpuScene, techniques: &mut Techniques, camera: &Camera) -> R
     status(&culling.entry, "cull", result, &message)?;
     scene.apply_culling(&visible, &changed);
     // The draws generation moved if anything changed: key on what the scene is now.
-    techniques.cull_key = Some(cull_key(techniques.epoch, &scene.view(), &planes));
+    techniques.cull_key = Some(cull_key(techniques.epoch, &scene.view(), &all_planes));
     Ok(())
 }

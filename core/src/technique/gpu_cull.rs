@@ -12,7 +12,7 @@ use cadr_plugin_abi as abi;
 use super::registry::TechniqueKind;
 use super::set::{status, Active, Message, Techniques};
 use crate::gpu_scene::split_f64;
-use crate::render::Camera;
+use crate::render::{Camera, Section};
 
 /// The active GPU culler of a frame and the draw sources it wrote for the current phase.
 pub(crate) struct GpuCuller<'a> {
@@ -39,6 +39,7 @@ pub(crate) fn cull_view(
     camera: &Camera,
     (width, height): (u32, u32),
     min_pixels: f32,
+    section: &Section,
 ) -> abi::CadrGpuCullView {
     let eye = camera.eye();
     let (high, low) = split_f64(eye);
@@ -61,6 +62,8 @@ pub(crate) fn cull_view(
         view_projection: view_projection.as_mat4().to_cols_array(),
         target: [width, height, 0, 0],
         sub_pixel: [min_pixels, pixels_per_unit, 0.0, 0.0],
+        section_planes: section.eye_relative(eye),
+        section: [section.planes().len() as u32, 0, 0, 0],
     }
 }
 
@@ -76,7 +79,9 @@ pub(crate) fn cull_view_bytes(view: &abi::CadrGpuCullView) -> [u8; CULL_VIEW_BYT
     let words = floats
         .map(|f| f.to_bits())
         .chain(view.target)
-        .chain(view.sub_pixel.iter().map(|f| f.to_bits()));
+        .chain(view.sub_pixel.iter().map(|f| f.to_bits()))
+        .chain(view.section_planes.iter().flatten().map(|f| f.to_bits()))
+        .chain(view.section);
     let mut bytes = [0u8; CULL_VIEW_BYTES];
     for (chunk, word) in bytes.chunks_exact_mut(4).zip(words) {
         chunk.copy_from_slice(&word.to_le_bytes());
@@ -124,19 +129,21 @@ impl<'a> GpuCuller<'a> {
         })
     }
 
-    /// Records `phase` of the culling into `command_buffer` (outside rendering).
+    /// Records `phase` of the culling into `command_buffer` (outside rendering), for `passes`
+    /// with their filters (one each).
     #[allow(clippy::too_many_arguments)]
     pub(crate) fn record(
         &mut self,
         phase: u32,
         command_buffer: vk::CommandBuffer,
         scene: &abi::CadrSceneView,
-        passes: &[abi::CadrPass],
+        (passes, filters): (&[abi::CadrPass], &[abi::CadrPassFilter]),
         gpu_view: &abi::CadrGpuCullView,
         view_buffer: vk::Buffer,
         depth: Option<PhaseDepth>,
     ) -> RenderResult<()> {
         self.draws.fill(abi::CadrGpuDraws::default());
+        debug_assert_eq!(passes.len(), filters.len());
         let context = abi::CadrGpuCullContext {
             size: std::mem::size_of::<abi::CadrGpuCullContext>() as u32,
             phase,
@@ -157,6 +164,9 @@ impl<'a> GpuCuller<'a> {
             min_pixels: gpu_view.sub_pixel[0],
             view_buffer: view_buffer.as_raw(),
             view_offset: 0,
+            pass_filters: filters.as_ptr(),
+            section_plane_count: gpu_view.section[0],
+            section_planes: gpu_view.section_planes,
         };
         let mut message = Message::new();
         // SAFETY: a live instance; the context and the arrays it points at are valid for the

@@ -125,6 +125,48 @@ enum DrawRole {
     Translucent = 2,
 }
 
+/// What a pass's vertex shader lets through: its draw role, and whether it is the section
+/// caps' pass (`CADR_CAPS_PASS`, closed parts a plane cuts only).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+struct PassScope {
+    role: DrawRole,
+    caps: bool,
+}
+
+impl PassScope {
+    /// The instances the pass needs, as the plugin ABI's filter on their flags: the others its
+    /// vertex shader clips away whole, so submissions and GPU cullers may skip them. `xray`:
+    /// the X-ray mode, where every part not highlighted is translucent. `exact_translucency`:
+    /// whether [`abi::CADR_INSTANCE_TRANSLUCENT`] names exactly the parts the vertex shader
+    /// draws as translucent (not while textures are turned off in a scene that has them: it
+    /// then says "may be translucent", which only the translucent pass may rely on).
+    fn filter(self, xray: bool, exact_translucency: bool) -> abi::CadrPassFilter {
+        const HIGHLIGHTED: u32 = abi::CADR_INSTANCE_HIGHLIGHTED;
+        const TRANSLUCENT: u32 = abi::CADR_INSTANCE_TRANSLUCENT;
+        let (mut mask, mut value) = match (self.role, xray, exact_translucency) {
+            (DrawRole::All, _, _) => (0, 0),
+            // Opaque in X-ray: highlighted, and not translucent by material.
+            (DrawRole::Opaque, true, true) => (HIGHLIGHTED | TRANSLUCENT, HIGHLIGHTED),
+            (DrawRole::Opaque, true, false) => (HIGHLIGHTED, HIGHLIGHTED),
+            (DrawRole::Opaque, false, true) => (TRANSLUCENT, 0),
+            (DrawRole::Opaque, false, false) => (0, 0),
+            // Translucent in X-ray: not highlighted, or translucent by material.
+            (DrawRole::Translucent, true, _) => (0, 0),
+            (DrawRole::Translucent, false, _) => (TRANSLUCENT, TRANSLUCENT),
+        };
+        if self.caps {
+            mask |= abi::CADR_INSTANCE_CLOSED;
+            value |= abi::CADR_INSTANCE_CLOSED;
+        }
+        abi::CadrPassFilter {
+            mask,
+            value,
+            // The caps pass: only parts a plane cuts can show a cap.
+            section_cut: u32::from(self.caps),
+        }
+    }
+}
+
 /// A transparency method as its technique described it (`CadrTransparencyMethod`), owned.
 #[derive(Clone, Debug, PartialEq)]
 pub struct TransparencyMethod {
@@ -486,6 +528,8 @@ pub struct TechniquePipelines {
     pub pass_set: PassSet,
     /// The passes, in order.
     pub passes: Vec<abi::CadrPass>,
+    /// What each pass's vertex shader lets through, in the same order.
+    scopes: Vec<PassScope>,
     /// The colour attachment's format (the pick pass draws ids).
     pub color_format: vk::Format,
     /// The formats of the colour attachments after the first (the transparency method's
@@ -559,6 +603,7 @@ impl TechniquePipelines {
             _empty_set_layout: empty_set_layout,
             pass_set: inputs.passes,
             passes: Vec::new(),
+            scopes: Vec::new(),
             color_format: match inputs.passes {
                 PassSet::Pick { .. } => PICK_FORMAT,
                 PassSet::Shaded { .. } => COLOR_FORMAT,
@@ -664,13 +709,30 @@ impl TechniquePipelines {
         Ok(this)
     }
 
-    fn add(&mut self, pipeline: Pipeline, kind: abi::CadrPassKind) {
+    fn add(&mut self, (pipeline, scope): (Pipeline, PassScope), kind: abi::CadrPassKind) {
         use crate::vk::raw::Handle;
         self.passes.push(abi::CadrPass {
             pipeline: pipeline.raw().as_raw(),
             kind,
         });
+        self.scopes.push(scope);
         self.pipelines.push(pipeline);
+    }
+
+    /// The instances each pass needs (see [`PassScope::filter`]), in the order of
+    /// [`TechniquePipelines::passes`].
+    pub fn pass_filters(&self, exact_translucency: bool) -> Vec<abi::CadrPassFilter> {
+        let xray = matches!(
+            self.pass_set,
+            PassSet::Shaded {
+                mode: ShadeMode::XRay,
+                ..
+            }
+        );
+        self.scopes
+            .iter()
+            .map(|scope| scope.filter(xray, exact_translucency))
+            .collect()
     }
 
     /// The merge: a full-screen triangle blending the method's result over the picture.
@@ -738,7 +800,7 @@ impl TechniquePipelines {
         fragment: &[u32],
         topology: vk::PrimitiveTopology,
         raster: Raster,
-    ) -> RenderResult<Pipeline> {
+    ) -> RenderResult<(Pipeline, PassScope)> {
         let vertex = ShaderModule::from_spirv(
             &self.device,
             "technique.vert",
@@ -787,7 +849,11 @@ impl TechniquePipelines {
             (true, false, false) => DrawRole::All,
         };
         let colors = self.colors(raster);
-        Ok(Pipeline::graphics(
+        let scope = PassScope {
+            role,
+            caps: raster.on_surfaces,
+        };
+        let pipeline = Pipeline::graphics(
             &self.device,
             &GraphicsPipelineDesc {
                 layout: &self.layout,
@@ -818,7 +884,8 @@ impl TechniquePipelines {
                     "technique pipeline"
                 },
             },
-        )?)
+        )?;
+        Ok((pipeline, scope))
     }
 }
 
@@ -851,6 +918,40 @@ mod tests {
                                    cadr_push.words[0].x, cadr_push.words[0].y);\n\
              }",
         )
+    }
+
+    #[test]
+    fn a_pass_filter_leaves_out_only_what_its_vertex_shader_clips() {
+        use abi::CADR_INSTANCE_TRANSLUCENT as TRANSLUCENT;
+        use abi::{CADR_INSTANCE_CLOSED as CLOSED, CADR_INSTANCE_HIGHLIGHTED as HIGHLIGHTED};
+        let scope = |role, caps| PassScope { role, caps };
+        let keeps = |scope: PassScope, xray, exact, flags| scope.filter(xray, exact).keeps(flags);
+        let opaque = scope(DrawRole::Opaque, false);
+        let translucent = scope(DrawRole::Translucent, false);
+        // Outside X-ray the opaque pass leaves out translucent parts while the flag is exact;
+        // with textures off it only says "may be translucent", so the pass keeps them.
+        assert!(!keeps(opaque, false, true, TRANSLUCENT));
+        assert!(keeps(opaque, false, true, 0));
+        assert!(keeps(opaque, false, false, TRANSLUCENT));
+        // The translucent pass needs only what may be translucent, exact or not.
+        assert!(keeps(translucent, false, false, TRANSLUCENT));
+        assert!(!keeps(translucent, false, false, 0));
+        // X-ray: the opaque pass draws highlighted parts with an opaque material; the
+        // translucent one every part (those not highlighted, and translucent materials).
+        assert!(keeps(opaque, true, true, HIGHLIGHTED));
+        assert!(!keeps(opaque, true, true, HIGHLIGHTED | TRANSLUCENT));
+        assert!(keeps(opaque, true, false, HIGHLIGHTED | TRANSLUCENT));
+        assert!(!keeps(opaque, true, false, 0));
+        for flags in [0, HIGHLIGHTED, TRANSLUCENT, HIGHLIGHTED | TRANSLUCENT] {
+            assert!(keeps(translucent, true, true, flags));
+            assert!(keeps(scope(DrawRole::All, false), true, true, flags));
+        }
+        // The caps pass: closed parts, and only those a plane cuts (for cullers that can tell).
+        let caps = scope(DrawRole::All, true);
+        assert!(keeps(caps, false, true, CLOSED));
+        assert!(!keeps(caps, false, true, 0));
+        assert_eq!(caps.filter(false, true).section_cut, 1);
+        assert_eq!(opaque.filter(false, true).section_cut, 0);
     }
 
     #[test]

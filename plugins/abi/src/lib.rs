@@ -19,7 +19,7 @@
 //! record and cull contexts) starts with its `size` in bytes (a reader ignores fields beyond the
 //! size the writer gave, and defaults fields the writer did not know); the small value records
 //! laid out in arrays or passed by value ([`CadrInstance`], [`CadrMatrix`], [`CadrMaterial`],
-//! [`CadrInstanceRecord`], [`CadrCullEntry`], [`CadrPass`], [`CadrBuffer`], [`CadrBufferRef`],
+//! [`CadrInstanceRecord`], [`CadrCullEntry`], [`CadrPass`], [`CadrPassFilter`], [`CadrBuffer`], [`CadrBufferRef`],
 //! [`CadrStats`], [`CadrBindState`], [`CadrDrawBase`], [`CadrGpuDraws`], [`CadrVertexInput`],
 //! [`CadrMessage`]) are fixed for a major version; whoever
 //! allocates frees (buffers a plugin asks the host for go back through the host); strings are
@@ -36,7 +36,7 @@ use std::ffi::{c_char, c_void};
 /// Major version of this ABI: a library built for another major version is refused.
 pub const CADR_PLUGIN_ABI_MAJOR: u32 = 1;
 /// Minor version of this ABI: additions that older readers may ignore.
-pub const CADR_PLUGIN_ABI_MINOR: u32 = 8;
+pub const CADR_PLUGIN_ABI_MINOR: u32 = 9;
 /// `(major << 16) | minor`, what [`CadrPluginVersionFn`] returns.
 pub const CADR_PLUGIN_ABI_VERSION: u32 = (CADR_PLUGIN_ABI_MAJOR << 16) | CADR_PLUGIN_ABI_MINOR;
 
@@ -376,6 +376,11 @@ pub const CADR_INSTANCE_CLOSED: CadrInstanceFlags = 1 << 4;
 /// Since ABI 1.6: with [`CADR_INSTANCE_CLOSED`], the part's triangles wind clockwise seen from
 /// outside (an inside-out mesh).
 pub const CADR_INSTANCE_INSIDE_OUT: CadrInstanceFlags = 1 << 5;
+/// Since ABI 1.9: the part's material is translucent (blended with an opacity under 1, or with
+/// a base-colour texture that has translucent texels), so frames with translucency draw it in
+/// the transparency method's pass. Textures turned off make such a part opaque again where its
+/// opacity is 1: the flag then says "may be translucent".
+pub const CADR_INSTANCE_TRANSLUCENT: CadrInstanceFlags = 1 << 6;
 
 /// One drawable part on one path of the scene tree (the unit of "individual" drawing). Index
 /// positions are absolute element offsets in the scene's index buffers; indices are relative
@@ -594,6 +599,34 @@ pub struct CadrPass {
     pub pipeline: u64,
     /// `CADR_PASS_*`.
     pub kind: CadrPassKind,
+}
+
+/// Since ABI 1.9: which instances a pass needs, by their flags: those whose
+/// `flags & mask == value` ([`CadrInstance::flags`], the same bits in [`CadrCullEntry::flags`]).
+/// The pass's pipeline clips every other instance away whole, so drawing them too is correct,
+/// only wasted work: a submission or GPU culler that honours the filter skips them (the X-ray
+/// mode's opaque pass needs only highlighted parts, the transparency method's pass only
+/// translucent ones, the section caps' pass only closed ones); one that ignores it draws
+/// everything as before. `mask` 0 is every instance.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub struct CadrPassFilter {
+    /// The `CADR_INSTANCE_*` bits the filter looks at.
+    pub mask: CadrInstanceFlags,
+    /// What those bits must be.
+    pub value: CadrInstanceFlags,
+    /// Nonzero: only parts whose bounding sphere some section plane passes through (the
+    /// section caps' pass: a part no plane cuts shows no cap). Only a culler that knows the
+    /// planes and where the parts are can tell: a GPU culler honours it, a submission drawing
+    /// its own lists does not.
+    pub section_cut: u32,
+}
+
+impl CadrPassFilter {
+    /// Whether an instance with `flags` is needed.
+    pub fn keeps(&self, flags: CadrInstanceFlags) -> bool {
+        flags & self.mask == self.value
+    }
 }
 
 /// Counters a frame's recording adds to.
@@ -863,6 +896,10 @@ pub struct CadrRecordContext {
     /// `rasterizationSamples`. The host draws with MSAA through a submission of
     /// [`CADR_TRAIT_SECONDARY_COMMAND_BUFFERS`] only when its library is of ABI 1.8 or later.
     pub rasterization_samples: u32,
+    /// Since ABI 1.9 (read it only when `size` covers it): null, or `pass_count` filters, one
+    /// per pass: the instances each pass needs ([`CadrPassFilter`]). Part of what
+    /// `commands_key` covers.
+    pub pass_filters: *const CadrPassFilter,
 }
 
 /// Submission vtable ([`CADR_KIND_SUBMISSION`]).
@@ -908,6 +945,13 @@ pub struct CadrCullInput {
     /// World-space frustum planes (xyz normal pointing inside, w distance): a point p is
     /// inside when `dot(n, p) + w >= 0` for all six.
     pub planes: [[f64; 4]; 6],
+    /// Since ABI 1.9 (read it only when `size` covers it): how many of `section_planes` the
+    /// view is cut with.
+    pub section_plane_count: u32,
+    /// Since ABI 1.9: world-space section planes (xyz unit normal, w distance), each keeping
+    /// the points with `dot(n, p) + w >= 0`: a part whose sphere lies wholly outside one is
+    /// cut away, and a culler may cull it like one outside the frustum.
+    pub section_planes: [[f64; 4]; 6],
 }
 
 /// What culling writes: `word_count` words each. The host owns both arrays; the culler
@@ -1009,10 +1053,22 @@ pub struct CadrGpuCullContext {
     pub view_buffer: u64,
     /// Byte offset of the [`CadrGpuCullView`] in `view_buffer` (a multiple of 256).
     pub view_offset: u64,
+    /// Since ABI 1.9 (read it only when `size` covers it): null, or `pass_count` filters, one
+    /// per pass: the instances each pass needs ([`CadrPassFilter`]); a culler that honours
+    /// them writes no commands for the others.
+    pub pass_filters: *const CadrPassFilter,
+    /// Since ABI 1.9: how many of `section_planes` the view is cut with.
+    pub section_plane_count: u32,
+    /// Since ABI 1.9: the section planes relative to the eye (xyz unit normal, w distance),
+    /// each keeping the points `q` (relative to the eye) with `dot(n, q) + w >= 0`: a part
+    /// whose sphere lies wholly outside one is cut away, and the culler may cull it like one
+    /// outside the frustum. Also in [`CadrGpuCullView::section_planes`].
+    pub section_planes: [[f32; 4]; 6],
 }
 
 /// Since ABI 1.5: the view of a GPU-culled frame as shaders read it (std140: vec4s, then a
-/// column-major mat4, a uvec4 and a vec4), in [`CadrGpuCullContext::view_buffer`].
+/// column-major mat4, a uvec4 and a vec4; since ABI 1.9 six vec4s and a uvec4 more, which an
+/// older culler's shaders do not declare), in [`CadrGpuCullContext::view_buffer`].
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct CadrGpuCullView {
@@ -1031,6 +1087,11 @@ pub struct CadrGpuCullView {
     /// size covers at clip w = 1 (the larger of the x and y scales: a sphere of radius r at
     /// clip w spans about `2 r k / w` pixels); two zeros.
     pub sub_pixel: [f32; 4],
+    /// Since ABI 1.9: the section planes relative to the eye, as
+    /// [`CadrGpuCullContext::section_planes`] (the unused ones keep everything: 0, 0, 0, 1).
+    pub section_planes: [[f32; 4]; 6],
+    /// Since ABI 1.9: the number of section planes, then three zeros.
+    pub section: [u32; 4],
 }
 
 /// Culling vtable ([`CADR_KIND_CULLING`]).

@@ -15,6 +15,18 @@ fn slice<'a, T>(pointer: *const T, count: usize) -> &'a [T] {
     }
 }
 
+/// The filters of `count` passes at `pointer` (`None` or null: every pass keeps every
+/// instance).
+fn pass_filters(
+    pointer: Option<*const abi::CadrPassFilter>,
+    count: u32,
+) -> Vec<abi::CadrPassFilter> {
+    match pointer {
+        Some(pointer) if !pointer.is_null() => slice(pointer, count as usize).to_vec(),
+        _ => vec![abi::CadrPassFilter::default(); count as usize],
+    }
+}
+
 /// The scene during one frame.
 #[derive(Clone, Copy, Debug)]
 pub struct Scene<'a> {
@@ -291,6 +303,17 @@ impl<'a> Record<'a> {
         }
     }
 
+    /// Since ABI 1.9: the filter of each pass (which instances it needs), one per pass; every
+    /// instance for a host older than ABI 1.9 or one that passes none.
+    pub fn pass_filters(&self) -> Vec<abi::CadrPassFilter> {
+        let end = std::mem::offset_of!(abi::CadrRecordContext, pass_filters)
+            + std::mem::size_of::<*const abi::CadrPassFilter>();
+        pass_filters(
+            (self.raw.size as usize >= end).then_some(self.raw.pass_filters),
+            self.raw.pass_count,
+        )
+    }
+
     /// Since ABI 1.3: the draw sources a GPU culler wrote for this phase, one per pass, or
     /// `None` when the submission draws its own lists.
     pub fn gpu_draws(&self) -> Option<&'a [abi::CadrGpuDraws]> {
@@ -420,6 +443,18 @@ impl<'a> CullInput<'a> {
     pub fn planes(&self) -> &'a [[f64; 4]; 6] {
         &self.raw.planes
     }
+
+    /// Since ABI 1.9: the world-space section planes the view is cut with (none for older
+    /// hosts), each keeping `dot(n, p) + w >= 0`.
+    pub fn section_planes(&self) -> &'a [[f64; 4]] {
+        let end = std::mem::offset_of!(abi::CadrCullInput, section_planes)
+            + std::mem::size_of::<[[f64; 4]; 6]>();
+        if (self.raw.size as usize) < end {
+            return &[];
+        }
+        let count = (self.raw.section_plane_count as usize).min(self.raw.section_planes.len());
+        &self.raw.section_planes[..count]
+    }
 }
 
 /// What culling writes.
@@ -518,6 +553,17 @@ impl<'a> GpuCull<'a> {
     /// The passes the frame draws.
     pub fn passes(&self) -> &'a [abi::CadrPass] {
         slice(self.raw.passes, self.raw.pass_count as usize)
+    }
+
+    /// Since ABI 1.9: the filter of each pass (which instances it needs), one per pass; every
+    /// instance for a host older than ABI 1.9 or one that passes none.
+    pub fn pass_filters(&self) -> Vec<abi::CadrPassFilter> {
+        let end = std::mem::offset_of!(abi::CadrGpuCullContext, pass_filters)
+            + std::mem::size_of::<*const abi::CadrPassFilter>();
+        pass_filters(
+            (self.raw.size as usize >= end).then_some(self.raw.pass_filters),
+            self.raw.pass_count,
+        )
     }
 
     /// Says where pass `index`'s commands and count lie for this phase.

@@ -4,7 +4,9 @@
 // occlusion, against the depth pyramid of what was drawn first; a part that passes gets an
 // indirect command appended for this pass, and the count goes where
 // vkCmdDrawIndexedIndirectCount reads it. Parts projecting under the host's sub-pixel
-// threshold (off by default) are culled too.
+// threshold (off by default) and parts a section plane cuts away whole are culled too, and a
+// pass gets no commands for the parts its filter leaves out (the X-ray mode's opaque pass
+// draws only highlighted parts, the section caps' pass only closed parts a plane cuts).
 layout(local_size_x = 64) in;
 
 const uint PASS_EDGES = 1u;
@@ -49,6 +51,10 @@ layout(set = 0, binding = 4, std140) uniform View {
     // x: the sub-pixel threshold (projected diameter in pixels; 0: off); y: pixels per unit
     // of size at clip w = 1.
     vec4 sub_pixel;
+    // The section planes relative to the eye (ABI 1.9), each keeping dot(n, q) + w >= 0; x of
+    // `section`: how many.
+    vec4 section_planes[6];
+    uvec4 section;
 } view;
 // One bit per instance id: visible at the end of the last frame (read) and of this one
 // (written by the first pass of phase 1).
@@ -66,15 +72,42 @@ layout(push_constant) uniform Dispatch {
     uint mode;
     uint writes_visibility;
     uint pyramid_levels;
+    // The pass's filter (CadrPassFilter): only instances with flags & mask == value are drawn.
+    uint filter_mask;
+    uint filter_value;
+    // Nonzero: only parts some section plane passes through (the section caps' pass).
+    uint filter_section_cut;
 } dispatch;
 
+// Inside the frustum, and not wholly cut away by a section plane.
 bool in_frustum(vec3 center, float radius) {
     for (int i = 0; i < 6; ++i) {
         if (dot(view.planes[i].xyz, center) + view.planes[i].w < -radius) {
             return false;
         }
     }
+    // With the rounding of f32 eye-relative positions as slack: the vertex shader clips
+    // against the same planes, and what it keeps must not be culled.
+    float slack = radius + 1e-5 * length(center);
+    uint sections = min(view.section.x, 6u);
+    for (uint i = 0u; i < sections; ++i) {
+        if (dot(view.section_planes[i].xyz, center) + view.section_planes[i].w < -slack) {
+            return false;
+        }
+    }
     return true;
+}
+
+// Whether some section plane passes through the sphere.
+bool cut_by_a_plane(vec3 center, float radius) {
+    float slack = radius + 1e-5 * length(center);
+    uint sections = min(view.section.x, 6u);
+    for (uint i = 0u; i < sections; ++i) {
+        if (abs(dot(view.section_planes[i].xyz, center) + view.section_planes[i].w) <= slack) {
+            return true;
+        }
+    }
+    return false;
 }
 
 // Whether the sphere may be visible over the depth drawn so far (conservative: the nearest
@@ -188,7 +221,9 @@ void main() {
         first = entry.first_wire_index;
         count = entry.wire_index_count;
     }
-    if (!draw || count == 0u) {
+    // After the visibility bit: a pass's filter decides what it draws, not what is visible.
+    if (!draw || count == 0u || (entry.flags & dispatch.filter_mask) != dispatch.filter_value
+        || (dispatch.filter_section_cut != 0u && !cut_by_a_plane(center, radius))) {
         return;
     }
     uint slot = atomicAdd(counts[dispatch.pass_slot], 1u);

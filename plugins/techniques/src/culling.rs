@@ -2,8 +2,9 @@
 //!
 //! - `none`: every candidate is drawn;
 //! - `frustum`: each part's bounding sphere, placed by its f64 world matrix, is tested against
-//!   the view frustum on worker threads; the result and its XOR with the last frame's bits go
-//!   back, so the host applies only what changed (seed 000's visibility deltas);
+//!   the view frustum and the section planes (a part wholly cut away is culled) on worker
+//!   threads; the result and its XOR with the last frame's bits go back, so the host applies
+//!   only what changed (seed 000's visibility deltas);
 //! - `gpu-frustum`, `gpu-occlusion`: culling on the GPU ([`crate::gpu_culling`]).
 
 use std::sync::Arc;
@@ -49,8 +50,9 @@ impl Technique for Frustum {
     }
 }
 
-/// Whether the sphere of `instance`, placed by `world`, touches the frustum.
-fn inside(instance: &CadrInstance, world: &[f64; 16], planes: &[[f64; 4]; 6]) -> bool {
+/// Whether the sphere of `instance`, placed by `world`, touches the inside of every plane
+/// (the frustum's, then the section's).
+fn inside(instance: &CadrInstance, world: &[f64; 16], planes: &[[f64; 4]]) -> bool {
     let [x, y, z, r] = instance.sphere.map(f64::from);
     let center = [
         world[0] * x + world[4] * y + world[8] * z + world[12],
@@ -70,11 +72,14 @@ fn inside(instance: &CadrInstance, world: &[f64; 16], planes: &[[f64; 4]; 6]) ->
 
 /// The visible bits of words `words` (candidates only).
 fn cull_words(input: &CullInput<'_>, words: std::ops::Range<usize>) -> Vec<u64> {
-    let (instances, worlds, planes) = (
-        input.scene().instances(),
-        input.world_matrices(),
-        input.planes(),
-    );
+    let (instances, worlds) = (input.scene().instances(), input.world_matrices());
+    // A part wholly outside a section plane is cut away: culled like one outside the frustum.
+    let planes: Vec<[f64; 4]> = input
+        .planes()
+        .iter()
+        .chain(input.section_planes())
+        .copied()
+        .collect();
     let candidates = input.candidate_bits();
     words
         .map(|word| {
@@ -90,7 +95,7 @@ fn cull_words(input: &CullInput<'_>, words: std::ops::Range<usize>) -> Vec<u64> 
                         .get(id)
                         .and_then(|i| worlds.get(i.matrix as usize)),
                 ) {
-                    (Some(instance), Some(world)) => inside(instance, world, planes),
+                    (Some(instance), Some(world)) => inside(instance, world, &planes),
                     _ => false,
                 };
                 if passes {

@@ -55,7 +55,12 @@ struct CullDispatch {
     mode: u32,
     writes_visibility: u32,
     pyramid_levels: u32,
+    /// The pass's filter (`CadrPassFilter`): only instances whose flags match get a command.
+    filter: abi::CadrPassFilter,
 }
+
+/// Bytes of [`CullDispatch`] as pushed.
+const CULL_PUSH_BYTES: u32 = 40;
 
 /// Push constants of one pyramid level.
 #[derive(Clone, Copy)]
@@ -228,7 +233,7 @@ impl Objects {
             "gpu_cull.comp",
             include_str!("../shaders/gpu_cull.comp"),
             objects.cull_set_layout,
-            28,
+            CULL_PUSH_BYTES,
         )?;
         let (device, allocator) = (&gpu.device, gpu.allocator());
         if occlusion {
@@ -503,7 +508,14 @@ impl<const OCCLUSION: bool> GpuCuller<OCCLUSION> {
                 &[],
             );
         }
-        for (index, pass) in cull.passes().iter().enumerate().take(PASSES_PER_PHASE) {
+        let filters = cull.pass_filters();
+        for (index, (pass, filter)) in cull
+            .passes()
+            .iter()
+            .zip(filters)
+            .enumerate()
+            .take(PASSES_PER_PHASE)
+        {
             let slot = cull.phase() as usize * PASSES_PER_PHASE + index;
             let dispatch = CullDispatch {
                 instance_count: instances,
@@ -513,6 +525,7 @@ impl<const OCCLUSION: bool> GpuCuller<OCCLUSION> {
                 mode,
                 writes_visibility: u32::from(index == 0),
                 pyramid_levels: self.pyramid_levels,
+                filter,
             };
             let constants = words(&[
                 dispatch.instance_count,
@@ -522,8 +535,11 @@ impl<const OCCLUSION: bool> GpuCuller<OCCLUSION> {
                 dispatch.mode,
                 dispatch.writes_visibility,
                 dispatch.pyramid_levels,
+                dispatch.filter.mask,
+                dispatch.filter.value,
+                dispatch.filter.section_cut,
             ]);
-            // SAFETY: recording; the constants fit the layout's 28 bytes.
+            // SAFETY: recording; the constants fit the layout's 40 bytes.
             unsafe {
                 device.cmd_push_constants(
                     command_buffer,

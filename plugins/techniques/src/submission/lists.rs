@@ -78,9 +78,14 @@ fn one_batch_per_range(ranges: &[Range]) -> Vec<Batch> {
         .collect()
 }
 
-/// Builds the list of `pass` with `strategy`. The pick pass never joins parts (each pixel must
-/// name its part): joining strategies draw it one part per range and binding, in scene order.
-pub fn build(scene: &Scene<'_>, pass: abi::CadrPassKind, strategy: Strategy) -> PassList {
+/// Builds the list of `pass` with `strategy`, of the drawn instances `filter` keeps. The pick
+/// pass never joins parts (each pixel must name its part): joining strategies draw it one part
+/// per range and binding, in scene order.
+pub fn build(
+    scene: &Scene<'_>,
+    (pass, filter): (abi::CadrPassKind, abi::CadrPassFilter),
+    strategy: Strategy,
+) -> PassList {
     let strategy = match strategy {
         Strategy::Join | Strategy::Groups if pass == abi::CADR_PASS_PICK => Strategy::Individual,
         other => other,
@@ -88,6 +93,9 @@ pub fn build(scene: &Scene<'_>, pass: abi::CadrPassKind, strategy: Strategy) -> 
     let instances = scene.instances();
     let drawn = scene.drawn_ids().filter_map(|id| {
         let instance = instances.get(id as usize)?;
+        if !filter.keeps(instance.flags) {
+            return None;
+        }
         let (first, count) = pass_range(instance, pass);
         (count > 0).then_some(Range {
             instance: id,

@@ -18,7 +18,7 @@ use cadr_plugin_sdk::vk;
 use cadr_plugin_sdk::{technique_library, Gpu, HostBuffer, Record, Submission, Technique};
 
 use lists::{PassList, Strategy};
-use record::{Api, Recorder, SecondaryBuffers};
+use record::{Api, PassDraws, Recorder, SecondaryBuffers};
 
 /// The recording mode.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -66,7 +66,7 @@ fn mode(code: u8) -> Mode {
     }
 }
 
-/// Indirect commands of one pass, on the GPU.
+/// Indirect commands of one list, on the GPU.
 #[derive(Default)]
 struct IndirectPass {
     commands: Option<HostBuffer>,
@@ -74,13 +74,34 @@ struct IndirectPass {
     draws: u32,
 }
 
+/// What a list is made for: a pass slot (the kind's ranges) and the pass's filter. Passes with
+/// equal keys draw the same list.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+struct ListKey {
+    slot: usize,
+    filter: abi::CadrPassFilter,
+}
+
+/// A list kept for the passes of its key, with its indirect commands.
+struct KeptList {
+    key: ListKey,
+    /// The scene generations it was built for.
+    built_for: Option<(u64, u64)>,
+    list: PassList,
+    indirect: IndirectPass,
+    /// Whether `indirect` holds the commands of `list`.
+    indirect_written: bool,
+}
+
+/// The most lists kept (every pass set and filter a frame alternates between).
+const MAX_KEPT_LISTS: usize = 12;
+
 /// One submission technique.
 pub struct Submit<const STRATEGY: u8, const API: u8, const MODE: u8> {
     gpu: Arc<Gpu>,
-    lists: [PassList; PASS_SLOTS],
-    /// Per slot, the scene generations its list was built for.
-    lists_key: [Option<(u64, u64)>; PASS_SLOTS],
-    indirect: [IndirectPass; PASS_SLOTS],
+    kept: Vec<KeptList>,
+    /// Per pass of the last record, the kept list it draws.
+    pass_lists: Vec<usize>,
     secondary: Option<SecondaryBuffers>,
     recorded_key: Option<u64>,
     recorded_stats: abi::CadrStats,
@@ -102,9 +123,8 @@ impl<const S: u8, const A: u8, const M: u8> Technique for Submit<S, A, M> {
         };
         Ok(Self {
             gpu,
-            lists: Default::default(),
-            lists_key: [None; PASS_SLOTS],
-            indirect: Default::default(),
+            kept: Vec::new(),
+            pass_lists: Vec::new(),
             secondary,
             recorded_key: None,
             recorded_stats: abi::CadrStats::default(),
@@ -113,10 +133,8 @@ impl<const S: u8, const A: u8, const M: u8> Technique for Submit<S, A, M> {
     }
 }
 
-/// Triangles, edges and the pick pass each keep their own list and indirect commands.
-pub(crate) const PASS_SLOTS: usize = 3;
-
-/// The list and indirect-command slot of a pass kind (unknown kinds draw as triangles).
+/// The ranges a pass kind draws: triangles, edges, or the pick pass's (unknown kinds draw as
+/// triangles).
 pub(crate) fn pass_slot(kind: abi::CadrPassKind) -> usize {
     match kind {
         abi::CADR_PASS_EDGES => 1,
@@ -126,29 +144,55 @@ pub(crate) fn pass_slot(kind: abi::CadrPassKind) -> usize {
 }
 
 impl<const S: u8, const A: u8, const M: u8> Submit<S, A, M> {
-    /// Rebuilds the lists of the record's passes whose draws changed since they were built;
-    /// true when any was.
+    /// Finds or makes the list of each of the record's passes and rebuilds those whose draws
+    /// changed since they were built; true when any was.
     fn refresh_lists(&mut self, record: &Record<'_>) -> bool {
         let scene = record.scene();
-        let key = (scene.raw().draws_generation, scene.raw().buffers_generation);
+        let generations = (scene.raw().draws_generation, scene.raw().buffers_generation);
+        if self.kept.len() > MAX_KEPT_LISTS {
+            self.kept.clear();
+        }
+        self.pass_lists.clear();
         let mut changed = false;
-        for pass in record.passes() {
-            let slot = pass_slot(pass.kind);
-            if self.lists_key[slot] != Some(key) {
-                self.lists[slot] = lists::build(&scene, pass.kind, strategy(S));
-                self.lists_key[slot] = Some(key);
+        for (pass, filter) in record.passes().iter().zip(record.pass_filters()) {
+            let key = ListKey {
+                slot: pass_slot(pass.kind),
+                filter,
+            };
+            let index = match self.kept.iter().position(|kept| kept.key == key) {
+                Some(index) => index,
+                None => {
+                    self.kept.push(KeptList {
+                        key,
+                        built_for: None,
+                        list: PassList::default(),
+                        indirect: IndirectPass::default(),
+                        indirect_written: false,
+                    });
+                    self.kept.len() - 1
+                }
+            };
+            let kept = &mut self.kept[index];
+            if kept.built_for != Some(generations) {
+                kept.list = lists::build(&scene, (pass.kind, filter), strategy(S));
+                kept.built_for = Some(generations);
+                kept.indirect_written = false;
                 changed = true;
             }
+            self.pass_lists.push(index);
         }
         changed
     }
 
-    /// Writes the indirect commands of every pass.
+    /// Writes the indirect commands of every pass's list that lacks them.
     fn write_indirect(&mut self, record: &Record<'_>) -> Result<(), String> {
         let instances = record.scene().instances();
-        for pass in record.passes() {
-            let slot = pass_slot(pass.kind);
-            let list = &self.lists[slot];
+        for &index in &self.pass_lists {
+            let kept = &mut self.kept[index];
+            if kept.indirect_written {
+                continue;
+            }
+            let list = &kept.list;
             let mut bytes: Vec<u8> = Vec::with_capacity(list.ranges.len() * 20);
             for batch in &list.batches {
                 for range in &list.ranges[batch.ranges.clone()] {
@@ -161,7 +205,7 @@ impl<const S: u8, const A: u8, const M: u8> Submit<S, A, M> {
                 }
             }
             let draws = (bytes.len() / 20) as u32;
-            let indirect = &mut self.indirect[slot];
+            let indirect = &mut kept.indirect;
             let needed = (bytes.len() as u64).max(20);
             if indirect.commands.as_ref().is_none_or(|b| b.size() < needed) {
                 indirect.commands = Some(self.gpu.create_buffer(
@@ -188,6 +232,7 @@ impl<const S: u8, const A: u8, const M: u8> Submit<S, A, M> {
                 }
             }
             indirect.draws = draws;
+            kept.indirect_written = true;
         }
         Ok(())
     }
@@ -197,19 +242,26 @@ impl<const S: u8, const A: u8, const M: u8> Submit<S, A, M> {
             gpu: &self.gpu,
             record,
             api: api(A),
-            lists: &self.lists,
-            indirect: std::array::from_fn(|slot| {
-                let pass = &self.indirect[slot];
-                (
-                    pass.commands
-                        .as_ref()
-                        .map_or(vk::Buffer::null(), HostBuffer::raw),
-                    pass.count
-                        .as_ref()
-                        .map_or(vk::Buffer::null(), HostBuffer::raw),
-                    pass.draws,
-                )
-            }),
+            passes: self
+                .pass_lists
+                .iter()
+                .map(|&index| {
+                    let kept = &self.kept[index];
+                    let indirect = &kept.indirect;
+                    PassDraws {
+                        list: &kept.list,
+                        commands: indirect
+                            .commands
+                            .as_ref()
+                            .map_or(vk::Buffer::null(), HostBuffer::raw),
+                        count: indirect
+                            .count
+                            .as_ref()
+                            .map_or(vk::Buffer::null(), HostBuffer::raw),
+                        indirect_draws: indirect.draws,
+                    }
+                })
+                .collect(),
         }
     }
 }
@@ -220,8 +272,8 @@ impl<const S: u8, const A: u8, const M: u8> Submission for Submit<S, A, M> {
             // A GPU culler writes this frame's draws: no lists to keep.
             return Ok(());
         }
-        let changed = self.refresh_lists(record);
-        if changed && matches!(api(A), Api::Indirect | Api::IndirectCount) {
+        self.refresh_lists(record);
+        if matches!(api(A), Api::Indirect | Api::IndirectCount) {
             self.write_indirect(record)?;
         }
         Ok(())

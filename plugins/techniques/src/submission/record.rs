@@ -24,14 +24,24 @@ pub enum Api {
     IndirectCount,
 }
 
+/// What one pass draws: its list, and the list's indirect commands where the API draws them.
+pub struct PassDraws<'a> {
+    pub list: &'a PassList,
+    /// Indirect commands (null without).
+    pub commands: vk::Buffer,
+    /// The count buffer (null without).
+    pub count: vk::Buffer,
+    /// Number of indirect commands.
+    pub indirect_draws: u32,
+}
+
 /// Everything a recording thread needs.
 pub struct Recorder<'a> {
     pub gpu: &'a Gpu,
     pub record: &'a Record<'a>,
     pub api: Api,
-    pub lists: &'a [PassList; super::PASS_SLOTS],
-    /// Per pass slot: indirect commands, count buffer, number of commands.
-    pub indirect: [(vk::Buffer, vk::Buffer, u32); super::PASS_SLOTS],
+    /// Per pass of the record, in order.
+    pub passes: Vec<PassDraws<'a>>,
 }
 
 /// A `Record` shared with worker threads: every function it leads to is thread-safe per the
@@ -54,17 +64,16 @@ impl Recorder<'_> {
     ) {
         let device = &self.gpu.device;
         let all = self.record.passes();
-        let passes = &all[passes.start.min(all.len())..passes.end.min(all.len())];
-        for pass in passes {
-            let slot = super::pass_slot(pass.kind);
-            let list = &self.lists[slot];
+        let passes = passes.start.min(all.len())..passes.end.min(all.len());
+        for (pass, draws) in all[passes.clone()].iter().zip(&self.passes[passes]) {
+            let list = draws.list;
             let batch_range = if part.end == usize::MAX {
                 0..list.batches.len()
             } else {
                 let per = list.batches.len().div_ceil(parts.max(1));
                 (part.start * per).min(list.batches.len())..(part.end * per).min(list.batches.len())
             };
-            let indirect = self.indirect[slot];
+            let indirect = (draws.commands, draws.count, draws.indirect_draws);
             let gpu_draws = matches!(self.api, Api::Indirect | Api::IndirectCount);
             if batch_range.is_empty() && !(gpu_draws && part.start == 0 && indirect.2 > 0) {
                 continue;

@@ -294,6 +294,18 @@ pub fn assert_same_drawing(a: &Scene, b: &Scene) {
     );
 }
 
+/// The combination that binds the whole scene once (`arena` / `ssbo-index`) with `submission`
+/// and `culling`: what GPU cullers need of their partners.
+pub fn scene_wide(submission: &str, culling: &str) -> Combination {
+    Combination {
+        vertex: "arena".into(),
+        parameters: "ssbo-index".into(),
+        submission: submission.into(),
+        culling: culling.into(),
+        ..Combination::built_in()
+    }
+}
+
 /// Every combination of the registry's techniques, valid or not, kind by kind in registry order.
 pub fn all_combinations(registry: &PluginRegistry) -> Vec<Combination> {
     let names = |kind| {

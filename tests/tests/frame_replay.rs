@@ -14,20 +14,13 @@ use cadr_core::technique::Combination;
 use cadr_core::tree::SceneTree;
 use cadr_core::view::View;
 use cadr_tests::images::{compare, SAME_PICTURE, VISIBLE_CHANGE};
-use cadr_tests::{assert_no_validation_errors, first_transform, plugin_registry, test_device};
+use cadr_tests::{
+    assert_no_validation_errors, first_transform, plugin_registry, scene_wide as combination,
+    test_device,
+};
 use glam::{DMat4, DVec3};
 
 const SIZE: (u32, u32) = (160, 120);
-
-fn combination(submission: &str, culling: &str) -> Combination {
-    Combination {
-        vertex: "arena".into(),
-        parameters: "ssbo-index".into(),
-        submission: submission.into(),
-        culling: culling.into(),
-        ..Combination::built_in()
-    }
-}
 
 /// What one frame showed and whether it was replayed.
 struct Shown {

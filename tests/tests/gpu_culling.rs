@@ -13,18 +13,12 @@ use cadr_core::technique::{Combination, Techniques};
 use cadr_core::tree::SceneTree;
 use cadr_core::view::View;
 use cadr_tests::images::{compare, SAME_PICTURE};
-use cadr_tests::{assert_no_validation_errors, plugin_registry, test_device};
+use cadr_tests::{assert_no_validation_errors, plugin_registry, scene_wide, test_device};
 
 const SIZE: (u32, u32) = (200, 150);
 
 fn combination(culling: &str) -> Combination {
-    Combination {
-        vertex: "arena".into(),
-        parameters: "ssbo-index".into(),
-        submission: "individual-indirect-count".into(),
-        culling: culling.into(),
-        ..Combination::built_in()
-    }
+    scene_wide("individual-indirect-count", culling)
 }
 
 /// Renders `cameras` with each culling technique in turn through one view; per culler, the

@@ -7,10 +7,10 @@
 use cadr_core::generate::{generate, GeneratorSpec};
 use cadr_core::render::{Camera, Section, DEFAULT_DIRECTION};
 use cadr_core::scene::{flatten, Geometry, Material, MeshRef, Node, Part, Scene, Vertex};
-use cadr_core::technique::{Combination, ShadeMode};
+use cadr_core::technique::ShadeMode;
 use cadr_core::view::unproject;
 use cadr_tests::images::{assert_matches_reference, compare, DEFAULT_TOLERANCE, SAME_PICTURE};
-use cadr_tests::{all_combinations, test_device, SceneView};
+use cadr_tests::{all_combinations, scene_wide, test_device, SceneView};
 use glam::{DMat4, DVec3, DVec4};
 
 const SIZE: (u32, u32) = (160, 120);
@@ -265,30 +265,27 @@ fn cullers_cull_what_a_plane_cuts_away_and_gpu_cullers_cap_only_what_it_cuts() {
         f.section(&[KEEP_BELOW_Z0], true);
         f.render()
     };
-    let with = |submission: &str, culling: &str| Combination {
-        vertex: "arena".into(),
-        parameters: "ssbo-index".into(),
-        submission: submission.into(),
-        culling: culling.into(),
-        ..Combination::built_in()
-    };
     // Per culler: draws uncut, and cut with caps. Without culling every box is drawn in every
     // pass; a CPU culler culls box 2 but its submission cannot tell which closed parts a plane
     // cuts; a GPU culler can, so its caps pass draws box 0 alone.
     let expected = [
-        (with("individual-indirect-count", "none"), 3 + 3, 3 + 3 + 3),
         (
-            with("individual-indirect-count", "frustum"),
+            scene_wide("individual-indirect-count", "none"),
+            3 + 3,
+            3 + 3 + 3,
+        ),
+        (
+            scene_wide("individual-indirect-count", "frustum"),
             3 + 3,
             2 + 2 + 2,
         ),
         (
-            with("individual-indirect-count", "gpu-frustum"),
+            scene_wide("individual-indirect-count", "gpu-frustum"),
             3 + 3,
             2 + 2 + 1,
         ),
         (
-            with("individual-indirect-count", "gpu-occlusion"),
+            scene_wide("individual-indirect-count", "gpu-occlusion"),
             3 + 3,
             2 + 2 + 1,
         ),

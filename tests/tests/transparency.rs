@@ -14,7 +14,7 @@ use cadr_tests::images::{
     assert_matches_reference, compare, Tolerance, DEFAULT_TOLERANCE, SAME_PICTURE,
 };
 use cadr_tests::{
-    all_combinations, test_device_with_synchronization_checks as test_device, SceneView,
+    all_combinations, scene_wide, test_device_with_synchronization_checks as test_device, SceneView,
 };
 use glam::{DMat4, DVec3};
 
@@ -268,20 +268,13 @@ fn an_opaque_scene_draws_no_translucent_pass() {
 /// Combinations that draw in each way a submission can: direct calls, indirect commands,
 /// recorded once and replayed, recorded on threads, and commands a GPU culler writes.
 fn one_per_way_of_drawing() -> Vec<Combination> {
-    let with = |submission: &str, culling: &str| Combination {
-        vertex: "arena".into(),
-        parameters: "ssbo-index".into(),
-        submission: submission.into(),
-        culling: culling.into(),
-        ..Combination::built_in()
-    };
     vec![
         Combination::built_in(),
-        with("individual-indirect-count", "none"),
-        with("groups-mdi-replay", "none"),
-        with("individual-threads", "frustum"),
-        with("individual-indirect-count", "gpu-frustum"),
-        with("individual-indirect-count", "gpu-occlusion"),
+        scene_wide("individual-indirect-count", "none"),
+        scene_wide("groups-mdi-replay", "none"),
+        scene_wide("individual-threads", "frustum"),
+        scene_wide("individual-indirect-count", "gpu-frustum"),
+        scene_wide("individual-indirect-count", "gpu-occlusion"),
     ]
 }
 

@@ -139,7 +139,7 @@ impl Renderer {
         // translucent unless textures are off in a scene that has them.
         let exact_translucency = self.textures() || !scene.has_textures();
         let pass_filters = pipelines.pass_filters(exact_translucency);
-        for filter in &pass_filters {
+        for filter in pass_filters {
             key = mix(key, u64::from(filter.mask) << 32 | u64::from(filter.value));
             key = mix(key, u64::from(filter.section_cut));
         }
@@ -220,7 +220,7 @@ impl Renderer {
                 phase,
                 command_buffer,
                 &scene.view(),
-                (&pipelines.passes, &pass_filters),
+                (&pipelines.passes, pass_filters),
                 gpu_view,
                 renderer.cull_view_buffer(),
                 depth,
@@ -431,12 +431,16 @@ fn barrier(renderer: &Renderer, command_buffer: vk::CommandBuffer) {
 
 /// What a culling result depends on: the culler, the scene and the view (frustum and section
 /// planes).
-fn cull_key(epoch: u64, view: &abi::CadrSceneView, planes: &[[f64; 4]]) -> u64 {
+fn cull_key(
+    epoch: u64,
+    view: &abi::CadrSceneView,
+    (frustum, section): (&[[f64; 4]; 6], &[[f64; 4]]),
+) -> u64 {
     let mut key = mix(epoch, view.draws_generation);
     key = mix(key, view.parameters_generation);
     key = mix(key, view.buffers_generation);
-    key = mix(key, planes.len() as u64);
-    for value in planes.iter().flatten() {
+    key = mix(key, section.len() as u64);
+    for value in frustum.iter().chain(section).flatten() {
         key = mix(key, value.to_bits());
     }
     key
@@ -469,12 +473,8 @@ fn cull(
         *slot = plane.to_array();
     }
     let section_plane_count = section.planes().len().min(MAX_SECTION_PLANES);
-    let all_planes: Vec<[f64; 4]> = planes
-        .iter()
-        .chain(&section_planes[..section_plane_count])
-        .copied()
-        .collect();
-    let key = cull_key(techniques.epoch, &scene.view(), &all_planes);
+    let all_planes = (&planes, &section_planes[..section_plane_count]);
+    let key = cull_key(techniques.epoch, &scene.view(), all_planes);
     if techniques.cull_key == Some(key) {
         return Ok(());
     }
@@ -509,6 +509,6 @@ fn cull(
     status(&culling.entry, "cull", result, &message)?;
     scene.apply_culling(&visible, &changed);
     // The draws generation moved if anything changed: key on what the scene is now.
-    techniques.cull_key = Some(cull_key(techniques.epoch, &scene.view(), &all_planes));
+    techniques.cull_key = Some(cull_key(techniques.epoch, &scene.view(), all_planes));
     Ok(())
 }

@@ -528,8 +528,10 @@ pub struct TechniquePipelines {
     pub pass_set: PassSet,
     /// The passes, in order.
     pub passes: Vec<abi::CadrPass>,
-    /// What each pass's vertex shader lets through, in the same order.
-    scopes: Vec<PassScope>,
+    /// The instances each pass needs, in the same order (see [`PassScope::filter`]): while the
+    /// translucency flag is inexact (`[0]`) and while it is exact (`[1]`). Made with the
+    /// passes, so a frame only picks one.
+    filters: [Vec<abi::CadrPassFilter>; 2],
     /// The colour attachment's format (the pick pass draws ids).
     pub color_format: vk::Format,
     /// The formats of the colour attachments after the first (the transparency method's
@@ -603,7 +605,7 @@ impl TechniquePipelines {
             _empty_set_layout: empty_set_layout,
             pass_set: inputs.passes,
             passes: Vec::new(),
-            scopes: Vec::new(),
+            filters: [Vec::new(), Vec::new()],
             color_format: match inputs.passes {
                 PassSet::Pick { .. } => PICK_FORMAT,
                 PassSet::Shaded { .. } => COLOR_FORMAT,
@@ -715,13 +717,6 @@ impl TechniquePipelines {
             pipeline: pipeline.raw().as_raw(),
             kind,
         });
-        self.scopes.push(scope);
-        self.pipelines.push(pipeline);
-    }
-
-    /// The instances each pass needs (see [`PassScope::filter`]), in the order of
-    /// [`TechniquePipelines::passes`].
-    pub fn pass_filters(&self, exact_translucency: bool) -> Vec<abi::CadrPassFilter> {
         let xray = matches!(
             self.pass_set,
             PassSet::Shaded {
@@ -729,10 +724,16 @@ impl TechniquePipelines {
                 ..
             }
         );
-        self.scopes
-            .iter()
-            .map(|scope| scope.filter(xray, exact_translucency))
-            .collect()
+        for (filters, exact_translucency) in self.filters.iter_mut().zip([false, true]) {
+            filters.push(scope.filter(xray, exact_translucency));
+        }
+        self.pipelines.push(pipeline);
+    }
+
+    /// The instances each pass needs (see [`PassScope::filter`]), in the order of
+    /// [`TechniquePipelines::passes`].
+    pub fn pass_filters(&self, exact_translucency: bool) -> &[abi::CadrPassFilter] {
+        &self.filters[usize::from(exact_translucency)]
     }
 
     /// The merge: a full-screen triangle blending the method's result over the picture.

@@ -15,16 +15,21 @@ fn slice<'a, T>(pointer: *const T, count: usize) -> &'a [T] {
     }
 }
 
-/// The filters of `count` passes at `pointer` (`None` or null: every pass keeps every
-/// instance).
-fn pass_filters(
+/// The filters of `count` passes at `pointer`, one per pass (`None` or null: every pass keeps
+/// every instance).
+fn pass_filters<'a>(
     pointer: Option<*const abi::CadrPassFilter>,
     count: u32,
-) -> Vec<abi::CadrPassFilter> {
-    match pointer {
-        Some(pointer) if !pointer.is_null() => slice(pointer, count as usize).to_vec(),
-        _ => vec![abi::CadrPassFilter::default(); count as usize],
-    }
+) -> impl Iterator<Item = abi::CadrPassFilter> + 'a {
+    let given: &'a [abi::CadrPassFilter] = match pointer {
+        Some(pointer) => slice(pointer, count as usize),
+        None => &[],
+    };
+    let missing = count as usize - given.len();
+    given
+        .iter()
+        .copied()
+        .chain(std::iter::repeat_n(abi::CadrPassFilter::default(), missing))
 }
 
 /// The scene during one frame.
@@ -305,7 +310,7 @@ impl<'a> Record<'a> {
 
     /// Since ABI 1.9: the filter of each pass (which instances it needs), one per pass; every
     /// instance for a host older than ABI 1.9 or one that passes none.
-    pub fn pass_filters(&self) -> Vec<abi::CadrPassFilter> {
+    pub fn pass_filters(&self) -> impl Iterator<Item = abi::CadrPassFilter> + 'a {
         let end = std::mem::offset_of!(abi::CadrRecordContext, pass_filters)
             + std::mem::size_of::<*const abi::CadrPassFilter>();
         pass_filters(
@@ -557,7 +562,7 @@ impl<'a> GpuCull<'a> {
 
     /// Since ABI 1.9: the filter of each pass (which instances it needs), one per pass; every
     /// instance for a host older than ABI 1.9 or one that passes none.
-    pub fn pass_filters(&self) -> Vec<abi::CadrPassFilter> {
+    pub fn pass_filters(&self) -> impl Iterator<Item = abi::CadrPassFilter> + 'a {
         let end = std::mem::offset_of!(abi::CadrGpuCullContext, pass_filters)
             + std::mem::size_of::<*const abi::CadrPassFilter>();
         pass_filters(

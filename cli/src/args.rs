@@ -439,15 +439,26 @@ pub enum BenchShade {
 
 impl BenchShade {
     /// The renderer's modes.
-    pub fn modes(self) -> Vec<ShadeMode> {
+    fn modes(self) -> &'static [ShadeMode] {
         match self {
-            Self::Solid => vec![ShadeMode::Solid],
-            Self::Edges => vec![ShadeMode::Edges],
-            Self::HiddenLine => vec![ShadeMode::HiddenLine],
-            Self::Wireframe => vec![ShadeMode::Wireframe],
-            Self::XRay => vec![ShadeMode::XRay],
-            Self::All => ShadeMode::ALL.to_vec(),
+            Self::Solid => &[ShadeMode::Solid],
+            Self::Edges => &[ShadeMode::Edges],
+            Self::HiddenLine => &[ShadeMode::HiddenLine],
+            Self::Wireframe => &[ShadeMode::Wireframe],
+            Self::XRay => &[ShadeMode::XRay],
+            Self::All => &ShadeMode::ALL,
         }
+    }
+
+    /// The renderer's modes `list` names, in the order given, each once.
+    pub fn modes_of(list: &[Self]) -> Vec<ShadeMode> {
+        let mut modes = Vec::new();
+        for mode in list.iter().flat_map(|shade| shade.modes()) {
+            if !modes.contains(mode) {
+                modes.push(*mode);
+            }
+        }
+        modes
     }
 }
 
@@ -475,15 +486,17 @@ pub struct BenchArgs {
     /// Image size.
     #[arg(long, value_name = "WxH", default_value = "640x480", value_parser = parse_size)]
     pub size: Size,
-    /// Display modes to measure (--shade is another name for it).
+    /// Display modes to measure, comma-separated: solid,xray measures each row in each (--shade
+    /// is another name for it).
     #[arg(
         long = "display",
         alias = "shade",
         value_enum,
-        value_name = "MODE",
+        value_name = "MODE,MODE",
+        value_delimiter = ',',
         default_value = "solid"
     )]
-    pub shade: BenchShade,
+    pub shade: Vec<BenchShade>,
     /// Vertex techniques to measure (comma-separated; others default to every one).
     #[arg(long, value_name = "A,B", value_delimiter = ',')]
     pub vertex: Option<Vec<String>>,
@@ -541,6 +554,11 @@ pub struct BenchArgs {
     #[arg(long, value_name = "tint,outline", value_delimiter = ',', default_value = "tint",
           value_parser = parse_highlight_style)]
     pub highlight_style: Vec<HighlightStyle>,
+    /// Highlight the nodes named NAME (and what is below them) in every row, as a host
+    /// highlights a selection; repeatable. X-ray draws them opaque, the outline style bands
+    /// them.
+    #[arg(long, value_name = "NAME", conflicts_with_all = ["sweep", "sweep_parts"])]
+    pub highlight: Vec<String>,
     /// Every row (the baseline too) cuts the scene with these planes.
     #[command(flatten)]
     pub section: SectionArgs,

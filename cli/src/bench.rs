@@ -16,7 +16,7 @@ use cadr_core::technique::{
 };
 use cadr_core::vk::Device;
 
-use crate::args::{BenchArgs, Size};
+use crate::args::{BenchArgs, BenchShade, Size};
 use crate::motion::Motion;
 use crate::progress::Steps;
 use crate::techniques::{load_registry, TechniqueSession};
@@ -273,6 +273,7 @@ impl Bench {
             scene,
             Arc::clone(&self.registry),
             (self.size.width, self.size.height),
+            &args.highlight,
         )?;
         session.set_section(self.section.clone());
         let mut motion = self.motion.clone();
@@ -288,7 +289,7 @@ impl Bench {
             Some(list) => list.to_vec(),
             None => selection(args, session.techniques())?,
         };
-        let modes = args.shade.modes();
+        let modes = BenchShade::modes_of(&args.shade);
         let ssao_levels: &[bool] = if args.ssao { &[false, true] } else { &[false] };
         // Every setting a row is measured with, its settings varied from the last (fastest).
         let settings: Vec<RowSettings> = ssao_levels
@@ -557,7 +558,7 @@ pub fn bench(args: &BenchArgs) -> Result<(), String> {
         section,
     };
     println!(
-        "device: {} — {} measured frames after 2 warm-up frames, {}x{}, medians; camera {}, {} animated nodes{}{}",
+        "device: {} — {} measured frames after 2 warm-up frames, {}x{}, medians; camera {}, {} animated nodes{}{}{}",
         device.adapter().name,
         frames,
         size.width,
@@ -571,6 +572,11 @@ pub fn bench(args: &BenchArgs) -> Result<(), String> {
         },
         crate::args::describe_section(&bench.section)
             .map_or(String::new(), |section| format!("; {section}")),
+        if args.highlight.is_empty() {
+            String::new()
+        } else {
+            format!("; highlighted: {}", args.highlight.join(", "))
+        },
     );
     let json = if sweep {
         run_sweep(&bench, args)?
@@ -615,6 +621,7 @@ pub fn bench(args: &BenchArgs) -> Result<(), String> {
             "min_pixels": bench.min_pixels,
             "frame_replay": bench.frame_replay,
             "section": section_json(&bench.section),
+            "highlight": args.highlight,
             "scene": stats_json(name, &stats),
             "submit_floor_us": floor_us,
             "rows": rows_json(&rows),

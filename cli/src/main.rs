@@ -144,35 +144,6 @@ fn devices() -> Result<(), String> {
     Ok(())
 }
 
-/// Highlights the nodes of `scene` (their handles in `graph`: `nodes`) named one of `names`;
-/// a name that no node has is an error.
-fn highlight_named(
-    graph: &mut SceneGraph,
-    scene: &cadr_core::scene::Scene,
-    nodes: &[cadr_core::graph::NodeHandle],
-    names: &[String],
-) -> Result<(), String> {
-    for name in names {
-        let mut found = false;
-        for (node, handle) in scene.nodes.iter().zip(nodes) {
-            if &node.name == name {
-                let flags = cadr_core::graph::NodeFlags {
-                    highlighted: true,
-                    ..graph.node(*handle).map_err(|e| e.to_string())?.flags
-                };
-                graph.set_flags(*handle, flags).map_err(|e| e.to_string())?;
-                found = true;
-            }
-        }
-        if !found {
-            return Err(format!(
-                "--highlight {name}: no node of the scene is named so"
-            ));
-        }
-    }
-    Ok(())
-}
-
 pub(crate) fn median(values: &mut [f64]) -> f64 {
     values.sort_by(f64::total_cmp);
     match values.len() {
@@ -206,7 +177,7 @@ fn render(args: &RenderArgs, process_start: Instant) -> Result<(), String> {
     // The graph holds the scene from here on: the loaded copy goes before the tree and the
     // GPU scene are built.
     let (mut graph, nodes) = SceneGraph::from_scene(&scene).map_err(|e| e.to_string())?;
-    highlight_named(&mut graph, &scene, &nodes, &args.highlight)?;
+    techniques::highlight_named(&mut graph, &scene, &nodes, &args.highlight)?;
     let scene_name = scene.name.clone();
     drop(scene);
     let mut session =

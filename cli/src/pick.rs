@@ -73,7 +73,7 @@ pub fn pick(args: &PickArgs) -> Result<(), String> {
     drop(flat);
     let device = crate::open_device(&args.validation)?;
     let (registry, _) = techniques::load_registry(&device);
-    let mut session = TechniqueSession::new(&device, &scene, registry, (width, height))?;
+    let mut session = TechniqueSession::new(&device, &scene, registry, (width, height), &[])?;
     session.choose(&combination, shade)?;
     session.set_min_pixels(min_pixels)?;
     session.set_section(section);

@@ -4,7 +4,7 @@
 use std::path::PathBuf;
 use std::sync::Arc;
 
-use cadr_core::graph::SceneGraph;
+use cadr_core::graph::{NodeFlags, NodeHandle, SceneGraph};
 use cadr_core::render::{Background, Camera, FrameStats, Section};
 use cadr_core::scene::Aabb;
 use cadr_core::scene::Scene;
@@ -45,6 +45,35 @@ pub fn no_plugins_message(dirs: &[PathBuf]) -> String {
     )
 }
 
+/// Highlights the nodes of `scene` (their handles in `graph`: `nodes`) named one of `names`;
+/// a name that no node has is an error.
+pub fn highlight_named(
+    graph: &mut SceneGraph,
+    scene: &Scene,
+    nodes: &[NodeHandle],
+    names: &[String],
+) -> Result<(), String> {
+    for name in names {
+        let mut found = false;
+        for (node, handle) in scene.nodes.iter().zip(nodes) {
+            if &node.name == name {
+                let flags = NodeFlags {
+                    highlighted: true,
+                    ..graph.node(*handle).map_err(|e| e.to_string())?.flags
+                };
+                graph.set_flags(*handle, flags).map_err(|e| e.to_string())?;
+                found = true;
+            }
+        }
+        if !found {
+            return Err(format!(
+                "--highlight {name}: no node of the scene is named so"
+            ));
+        }
+    }
+    Ok(())
+}
+
 /// A scene ready for technique plugins: its graph and tree, and the view that draws them.
 pub struct TechniqueSession {
     pub graph: SceneGraph,
@@ -53,15 +82,18 @@ pub struct TechniqueSession {
 }
 
 impl TechniqueSession {
-    /// Builds the scene's graph and tree and a `width` × `height` view of it (see
+    /// Builds the scene's graph, with the nodes named one of `highlight` highlighted (a name
+    /// no node has is an error), its tree and a `width` × `height` view of it (see
     /// [`TechniqueSession::from_graph`]).
     pub fn new(
         device: &Arc<Device>,
         source: &Scene,
         registry: Arc<PluginRegistry>,
         (width, height): (u32, u32),
+        highlight: &[String],
     ) -> Result<Self, String> {
-        let (graph, _) = SceneGraph::from_scene(source).map_err(|e| e.to_string())?;
+        let (mut graph, nodes) = SceneGraph::from_scene(source).map_err(|e| e.to_string())?;
+        highlight_named(&mut graph, source, &nodes, highlight)?;
         Self::from_graph(device, graph, registry, (width, height))
     }
 

@@ -971,6 +971,58 @@ fn sections_cut_what_render_draws_and_pick_hits() {
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
+/// `bench --display` takes a list of modes, and `--highlight NAME` selects nodes in every
+/// row, as `render --highlight` does.
+#[test]
+fn bench_measures_a_list_of_display_modes_with_highlighted_nodes() {
+    let dir = std::env::temp_dir().join(format!("cadr-cli-bench-modes-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let json_path = dir.join("bench.json");
+    // A list of display modes, each measured once in the order given; highlighted nodes
+    // (a host's selection) make X-ray draw them once more, opaque.
+    let xray_draws = |highlight: &[&str]| {
+        let mut settings = vec!["--display", "xray,solid,xray"];
+        for name in highlight {
+            settings.extend(["--highlight", name]);
+        }
+        let (_, json) = small_bench("gen:demo", &json_path, &settings);
+        let rows = json["rows"].as_array().unwrap();
+        let modes: Vec<&str> = rows[1..]
+            .iter()
+            .map(|row| row["shade"].as_str().unwrap())
+            .collect();
+        assert_eq!(
+            modes,
+            ["xray", "solid"],
+            "each mode once, in the order given"
+        );
+        let names: Vec<&str> = json["highlight"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|name| name.as_str().unwrap())
+            .collect();
+        assert_eq!(names, highlight);
+        let draws = |row: &serde_json::Value| row["draws"].as_u64().unwrap();
+        (draws(&rows[1]), draws(&rows[2]))
+    };
+    let (plain_xray, plain_solid) = xray_draws(&[]);
+    let (selected_xray, selected_solid) = xray_draws(&["module 0"]);
+    assert_eq!(selected_solid, plain_solid, "solid draws every part once");
+    assert!(
+        selected_xray > plain_xray && selected_xray - plain_xray < plain_solid,
+        "X-ray draws module 0's parts once more, opaque: {selected_xray} against {plain_xray}"
+    );
+    let output = cadr(&["bench", "gen:demo", "--highlight", "nope"]);
+    assert_eq!(output.status.code(), Some(1), "{}", stderr(&output));
+    assert!(
+        stderr(&output).contains("--highlight nope"),
+        "{}",
+        stderr(&output)
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
 #[test]
 fn msaa_anti_aliases_render_and_bench_measures_each_level() {
     let devices = stdout(&cadr(&["devices"]));
@@ -1098,6 +1150,7 @@ fn msaa_anti_aliases_render_and_bench_measures_each_level() {
     );
     let text = stdout(&output);
     assert!(text.contains("hidden-line+outline-sil"), "{text}");
+
     let output = cadr(&["bench", "gen:grid:parts=200", "--silhouettes", "maybe"]);
     assert_eq!(output.status.code(), Some(2), "{}", stderr(&output));
     assert!(

@@ -16,7 +16,7 @@ use cadr_tests::images::{
     assert_matches_reference, compare, ImageDifference, Tolerance, DEFAULT_TOLERANCE,
 };
 use cadr_tests::{
-    all_combinations, test_device, test_device_with_synchronization_checks, SceneView,
+    all_combinations, scene_wide, test_device, test_device_with_synchronization_checks, SceneView,
 };
 
 const SIZE: (u32, u32) = (160, 120);
@@ -167,13 +167,7 @@ fn every_kind_of_technique_draws_with_msaa_like_the_built_in_one() {
     let samples = highest_msaa(&f);
     f.view.renderer_mut().set_msaa(samples).unwrap();
     let combinations = all_combinations(f.view.techniques().registry());
-    let occlusion = Combination {
-        vertex: "arena".into(),
-        parameters: "ssbo-index".into(),
-        submission: "individual-indirect-count".into(),
-        culling: "gpu-occlusion".into(),
-        ..Combination::built_in()
-    };
+    let occlusion = scene_wide("individual-indirect-count", "gpu-occlusion");
     let sample: Vec<Combination> = combinations
         .iter()
         .filter(|c| f.view.techniques().check(c).is_ok())

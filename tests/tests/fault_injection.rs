@@ -29,7 +29,7 @@ use cadr_core::vk::fault::{self, FaultKind};
 use cadr_core::vk::host_memory::live_object_allocations;
 use cadr_core::vk::{Device, DeviceOptions, InstanceOptions};
 use cadr_tests::images::{compare, SAME_PICTURE};
-use cadr_tests::plugin_registry;
+use cadr_tests::{plugin_registry, scene_wide};
 
 const SIZE: (u32, u32) = (96, 72);
 /// At most this many failure points per kind (evenly spread, the first and last included):
@@ -58,13 +58,7 @@ fn render_with_a_swap(device: &Arc<Device>) -> Result<image::RgbaImage, String> 
         DEFAULT_DIRECTION,
     );
     view.techniques_mut()
-        .select(&Combination {
-            vertex: "arena".into(),
-            parameters: "ssbo-index".into(),
-            submission: "individual-indirect-count".into(),
-            culling: "gpu-frustum".into(),
-            ..Combination::built_in()
-        })
+        .select(&scene_wide("individual-indirect-count", "gpu-frustum"))
         .map_err(|e| e.to_string())?;
     view.render(&graph, &mut tree, &camera)
         .map_err(|e| e.to_string())?;

@@ -12,7 +12,9 @@ use cadr_core::technique::Combination;
 use cadr_core::tree::SceneTree;
 use cadr_core::view::View;
 use cadr_tests::images::{compare, SAME_PICTURE};
-use cadr_tests::{assert_no_validation_errors, first_transform, plugin_registry, test_device};
+use cadr_tests::{
+    assert_no_validation_errors, first_transform, plugin_registry, scene_wide, test_device,
+};
 use glam::{DMat4, DVec3};
 
 const SIZE: (u32, u32) = (128, 96);
@@ -88,20 +90,8 @@ fn two_frames_in_flight_draw_and_pick_what_waiting_for_each_frame_does() {
     );
     for combination in [
         Combination::built_in(),
-        Combination {
-            vertex: "arena".into(),
-            parameters: "ssbo-index".into(),
-            submission: "individual-indirect-count".into(),
-            culling: "gpu-occlusion".into(),
-            ..Combination::built_in()
-        },
-        Combination {
-            vertex: "arena".into(),
-            parameters: "ssbo-index".into(),
-            submission: "groups-mdi-replay".into(),
-            culling: "frustum".into(),
-            ..Combination::built_in()
-        },
+        scene_wide("individual-indirect-count", "gpu-occlusion"),
+        scene_wide("groups-mdi-replay", "frustum"),
     ] {
         let waited = orbit(&combination, 1);
         let overlapped = orbit(&combination, 2);

@@ -17,7 +17,9 @@ use cadr_core::technique::{Combination, TechniqueKind, Transforms};
 use cadr_core::tree::SceneTree;
 use cadr_core::view::View;
 use cadr_core::vk::Device;
-use cadr_tests::{assert_no_validation_errors, plugin_registry, test_device, CYLINDER_ENGINE_GLB};
+use cadr_tests::{
+    assert_no_validation_errors, plugin_registry, scene_wide, test_device, CYLINDER_ENGINE_GLB,
+};
 use glam::{DMat4, DVec3};
 use proptest::prelude::*;
 
@@ -621,13 +623,7 @@ fn views_on_two_threads_share_one_device_and_its_queue() {
     );
     let combinations = [
         Combination::built_in(),
-        Combination {
-            vertex: "arena".into(),
-            parameters: "ssbo-index".into(),
-            submission: "individual-mdi".into(),
-            culling: "none".into(),
-            ..Combination::built_in()
-        },
+        scene_wide("individual-mdi", "none"),
     ];
     let images: Vec<image::RgbaImage> = std::thread::scope(|scope| {
         let workers: Vec<_> = combinations

@@ -16,7 +16,7 @@ use cadr_tests::fixtures::{scratch_dir, textured, textured_gltf};
 use cadr_tests::images::{
     assert_matches_reference, color_at, compare, DEFAULT_TOLERANCE, SAME_PICTURE,
 };
-use cadr_tests::{all_combinations, test_device, SceneView};
+use cadr_tests::{all_combinations, scene_wide, test_device, SceneView};
 use glam::DVec3;
 
 const SIZE: (u32, u32) = (480, 480);
@@ -235,13 +235,7 @@ fn every_vertex_and_parameter_path_samples_textures_alike() {
         .filter(|c| c.submission == built_in.submission && c.culling == built_in.culling)
         .collect();
     for culling in ["gpu-frustum", "gpu-occlusion"] {
-        combinations.push(Combination {
-            vertex: "arena".into(),
-            parameters: "ssbo-index".into(),
-            submission: "individual-indirect-count".into(),
-            culling: culling.into(),
-            ..Combination::built_in()
-        });
+        combinations.push(scene_wide("individual-indirect-count", culling));
     }
     let valid: Vec<Combination> = combinations
         .into_iter()

@@ -19,7 +19,8 @@ use cadr_core::tree::SceneTree;
 use cadr_core::view::View;
 use cadr_tests::images::{compare, SAME_PICTURE};
 use cadr_tests::{
-    assert_no_validation_errors, first_transform, plugin_registry, test_device, CYLINDER_ENGINE_GLB,
+    assert_no_validation_errors, first_transform, plugin_registry, scene_wide, test_device,
+    CYLINDER_ENGINE_GLB,
 };
 
 const SIZE: (u32, u32) = (128, 96);
@@ -41,13 +42,7 @@ fn views_edits_and_loads_on_four_threads_at_once() {
     let scene = Mutex::new((graph, tree));
     let combinations = [
         Combination::built_in(),
-        Combination {
-            vertex: "arena".into(),
-            parameters: "ssbo-index".into(),
-            submission: "individual-indirect-count".into(),
-            culling: "gpu-frustum".into(),
-            ..Combination::built_in()
-        },
+        scene_wide("individual-indirect-count", "gpu-frustum"),
     ];
     // The drawing threads wait here, once the edits and loads are over, to draw the last frame.
     let edits_over = std::sync::Barrier::new(3);

@@ -11,10 +11,10 @@ use cadr_core::gpu_scene::{GpuScene, HierarchyMethod, LOCAL_BYTES, MATRIX_BYTES}
 use cadr_core::graph::{GeometryHandle, MaterialHandle, NodeFlags, NodeHandle, SceneGraph};
 use cadr_core::render::{Camera, Renderer};
 use cadr_core::scene::Material;
-use cadr_core::technique::{Combination, TechniqueKind, Transforms};
+use cadr_core::technique::{TechniqueKind, Transforms};
 use cadr_core::tree::SceneTree;
 use cadr_core::view::View;
-use cadr_tests::{assert_no_validation_errors, images, plugin_registry, test_device};
+use cadr_tests::{assert_no_validation_errors, images, plugin_registry, scene_wide, test_device};
 use glam::{DMat4, DQuat, DVec3};
 use proptest::prelude::*;
 
@@ -308,13 +308,7 @@ fn moving_assemblies_draws_like_a_fresh_upload() {
     // that uploads the moved scene afresh, and against the host path (push constants).
     let device = test_device();
     let registry = plugin_registry(&device);
-    let gpu_combination = Combination {
-        vertex: "arena".into(),
-        parameters: "ssbo-index".into(),
-        submission: "individual".into(),
-        culling: "none".into(),
-        ..Combination::built_in()
-    };
+    let gpu_combination = scene_wide("individual", "none");
     let mut assembly = Assembly::new();
     let mut tree = SceneTree::build(&mut assembly.graph);
     let camera = Camera::look_at(

@@ -73,9 +73,9 @@ impl Recorder<'_> {
                 let per = list.batches.len().div_ceil(parts.max(1));
                 (part.start * per).min(list.batches.len())..(part.end * per).min(list.batches.len())
             };
-            let indirect = (draws.commands, draws.count, draws.indirect_draws);
             let gpu_draws = matches!(self.api, Api::Indirect | Api::IndirectCount);
-            if batch_range.is_empty() && !(gpu_draws && part.start == 0 && indirect.2 > 0) {
+            if batch_range.is_empty() && !(gpu_draws && part.start == 0 && draws.indirect_draws > 0)
+            {
                 continue;
             }
             let bind = self.record.bind_context(command_buffer, pass.kind, stats);
@@ -112,34 +112,35 @@ impl Recorder<'_> {
             vertex.bind_pass(&bind, &mut vertex_state);
             parameters.bind_pass(&bind, &mut parameter_state);
             if gpu_draws {
-                if part.start != 0 || indirect.2 == 0 {
+                if part.start != 0 || draws.indirect_draws == 0 {
                     continue;
                 }
-                // SAFETY: recording; the indirect buffers hold `indirect.2` commands of 20 bytes.
+                // SAFETY: recording; the indirect buffers hold `draws.indirect_draws` commands of
+                // 20 bytes.
                 unsafe {
                     if self.api == Api::Indirect {
                         device.cmd_draw_indexed_indirect(
                             command_buffer,
-                            indirect.0,
+                            draws.commands,
                             0,
-                            indirect.2,
+                            draws.indirect_draws,
                             20,
                         );
                     } else {
                         device.cmd_draw_indexed_indirect_count(
                             command_buffer,
-                            indirect.0,
+                            draws.commands,
                             0,
-                            indirect.1,
+                            draws.count,
                             0,
-                            indirect.2,
+                            draws.indirect_draws,
                             20,
                         );
                     }
                 }
                 count(&|s| {
                     s.draw_calls += 1;
-                    s.draws += u64::from(indirect.2);
+                    s.draws += u64::from(draws.indirect_draws);
                 });
                 continue;
             }

@@ -11,7 +11,7 @@
 #define CADR_PLUGIN_ABI_MAJOR 1
 
 // Minor version of this ABI: additions that older readers may ignore.
-#define CADR_PLUGIN_ABI_MINOR 9
+#define CADR_PLUGIN_ABI_MINOR 10
 
 // `(major << 16) | minor`, what [`CadrPluginVersionFn`] returns.
 #define CADR_PLUGIN_ABI_VERSION ((CADR_PLUGIN_ABI_MAJOR << 16) | CADR_PLUGIN_ABI_MINOR)
@@ -957,6 +957,19 @@ typedef struct CadrTransparencyVtable {
 // technique sets it and the frame uploads nothing, the host resubmits the last frame's
 // command buffer without calling them: a frame with nothing changed costs one submission.
 #define CADR_TRAIT_REPLAYABLE (1 << 7)
+
+// Since ABI 1.10. Any kind, an announcement that widens [`CADR_TRAIT_REPLAYABLE`]: the
+// technique's per-frame calls (`prepare`, `record`, `record_gpu`) read no parameter values on
+// the host ([`CadrSceneView::matrices`], [`CadrSceneView::materials`],
+// [`CadrSceneView::dirty_matrices`], [`CadrSceneView::dirty_materials`]), so what they record
+// stays right when only [`CadrSceneView::parameters_generation`] changed: the shaders read the
+// values from the scene's buffers. When every active technique sets it and
+// [`CADR_TRAIT_REPLAYABLE`], a frame in which parts moved or materials changed resubmits the
+// last recording, after a command buffer of the host's own with the frame's uploads (the
+// sparse upload and the transform hierarchy): moving parts cost the CPU what a still camera
+// costs, plus the upload. A technique that puts parameter values in its commands
+// ([`CADR_TRAIT_PARAMETERS_IN_COMMANDS`]) or copies them on the host leaves it clear.
+#define CADR_TRAIT_REPLAYS_PARAMETER_CHANGES (1 << 8)
 
 // Device-local; written by transfers or shaders.
 #define CADR_MEMORY_GPU_ONLY 0

@@ -62,7 +62,13 @@ pub struct Renderer {
     /// What GPU cullers read of the view (`CadrGpuCullView`), host-written every frame.
     cull_view: Buffer,
     commands: CommandContext,
+    /// The GPU time of a frame's pass (the main command buffer).
     timer: Option<GpuTimer>,
+    /// The GPU time of a frame's uploads (the prologue submitted ahead of the main buffer).
+    upload_timer: Option<GpuTimer>,
+    /// Whether the last submission carried an upload prologue (its GPU time is the frame's
+    /// too).
+    last_submission_uploaded: bool,
     /// The id target and its readback, created on the first pick.
     pick: Option<PickTarget>,
     /// The replay key of the last recorded frame, if it had one.
@@ -120,9 +126,10 @@ pub(crate) struct FramePlan<'a> {
     /// The GPU cullers' view, written before the frame is submitted.
     pub cull_view: Option<&'a [u8]>,
     /// What the recording depends on, when the techniques allow a replay: a frame with the
-    /// key of the last recorded one, recorded twice in a row without uploads, resubmits it.
+    /// key of the last recorded one, recorded twice in a row, resubmits it.
     pub replay_key: Option<u64>,
-    /// Whether the frame uploads scene data (it is then recorded, whatever its key).
+    /// Whether the frame uploads scene data (recorded into the prologue, whether the frame
+    /// is recorded or replayed).
     pub uploads_pending: bool,
     /// `DISPLAY_*` bits for the shaders.
     pub display: u32,
@@ -161,6 +168,10 @@ pub(crate) type Recorder<'a> =
 
 /// The recorders of a frame, in the order they run.
 pub(crate) struct FrameRecorders<'r, 'a> {
+    /// The frame's uploads, when [`FramePlan::uploads_pending`]: into the prologue, a command
+    /// buffer of their own submitted ahead of the frame's, so that a replayed frame gets them
+    /// too. `before` makes their writes visible.
+    pub uploads: &'r mut Recorder<'a>,
     /// Outside rendering, before the first phase.
     pub before: &'r mut Recorder<'a>,
     /// Inside rendering, once per phase.
@@ -219,6 +230,7 @@ impl Renderer {
         )?;
         let commands = CommandContext::new(device, "frame commands")?;
         let timer = GpuTimer::new(device, "frame timer")?;
+        let upload_timer = GpuTimer::new(device, "frame upload timer")?;
         Ok(Self {
             device: Arc::clone(device),
             target,
@@ -228,6 +240,8 @@ impl Renderer {
             cull_view,
             commands,
             timer,
+            upload_timer,
+            last_submission_uploaded: false,
             pick: None,
             last_recorded: None,
             replayable: None,
@@ -622,17 +636,35 @@ impl Renderer {
         if let Some(bytes) = plan.cull_view {
             self.cull_view.write(0, bytes)?;
         }
+        let mut stats = FrameStats::default();
+        if plan.uploads_pending {
+            let command_buffer = self.commands.begin_prologue()?;
+            if let Some(timer) = &mut self.upload_timer {
+                timer.begin(command_buffer);
+            }
+            (recorders.uploads)(self, command_buffer, 0, &mut stats)?;
+            if let Some(timer) = &mut self.upload_timer {
+                timer.end(command_buffer);
+            }
+            self.commands.end_prologue()?;
+        }
         match (plan.replay_key, self.replayable) {
-            (Some(key), Some((recorded, recorded_stats)))
-                if key == recorded && !plan.uploads_pending =>
-            {
-                return self.replay(recorded_stats, record_start, previous_gpu_us);
+            (Some(key), Some((recorded, recorded_stats))) if key == recorded => {
+                let replayed = FrameStats {
+                    bytes_uploaded: stats.bytes_uploaded,
+                    ..recorded_stats
+                };
+                return self.replay(
+                    replayed,
+                    plan.uploads_pending,
+                    record_start,
+                    previous_gpu_us,
+                );
             }
             _ => self.replayable = None,
         }
 
         let command_buffer = self.commands.begin()?;
-        let mut stats = FrameStats::default();
         if let Some(timer) = &mut self.timer {
             timer.begin(command_buffer);
         }
@@ -699,13 +731,12 @@ impl Renderer {
         let submit_start = Instant::now();
         stats.cpu_record_us = (submit_start - record_start).as_secs_f64() * 1e6;
         self.commands.submit()?;
+        self.last_submission_uploaded = plan.uploads_pending;
         stats.cpu_submit_us = submit_start.elapsed().as_secs_f64() * 1e6;
-        // The first recording after a change may do one-time work (uploads, new buffers
-        // cleared); the second with the same key and no uploads is the steady frame.
-        if plan.replay_key.is_some()
-            && plan.replay_key == self.last_recorded
-            && stats.bytes_uploaded == 0
-        {
+        // The first recording after a change may do one-time work (new buffers cleared);
+        // the second with the same key is the steady frame. Uploads are not part of it: they
+        // go in the prologue.
+        if plan.replay_key.is_some() && plan.replay_key == self.last_recorded {
             self.replayable = plan.replay_key.map(|key| (key, stats));
         }
         self.last_recorded = plan.replay_key;
@@ -723,15 +754,18 @@ impl Renderer {
         self.gpu_time()
     }
 
-    /// Submits the recorded frame again; it draws what it drew when recorded.
+    /// Submits the recorded frame again, after the prologue with this frame's uploads when
+    /// it `uploaded`; it draws what it drew when recorded.
     fn replay(
         &mut self,
         recorded: FrameStats,
+        uploaded: bool,
         start: Instant,
         previous_gpu_us: Option<f64>,
     ) -> RenderResult<FrameStats> {
         let submit_start = Instant::now();
         self.commands.resubmit()?;
+        self.last_submission_uploaded = uploaded;
         let stats = FrameStats {
             cpu_record_us: (submit_start - start).as_secs_f64() * 1e6,
             cpu_submit_us: submit_start.elapsed().as_secs_f64() * 1e6,
@@ -744,12 +778,18 @@ impl Renderer {
         })
     }
 
-    /// The GPU time of the last finished frame, if timestamps work.
+    /// The GPU time of the last finished frame (its uploads and its pass), if timestamps
+    /// work.
     fn gpu_time(&self) -> RenderResult<Option<f64>> {
-        Ok(match &self.timer {
+        let pass = match &self.timer {
             Some(timer) => timer.elapsed_us()?,
             None => None,
-        })
+        };
+        let uploads = match (&self.upload_timer, self.last_submission_uploaded) {
+            (Some(timer), true) => timer.elapsed_us()?,
+            _ => None,
+        };
+        Ok(pass.map(|pass| pass + uploads.unwrap_or(0.0)))
     }
 
     /// The buffer GPU cullers read the view from (`CadrGpuCullView` at offset 0).

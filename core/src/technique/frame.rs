@@ -160,9 +160,17 @@ impl Renderer {
         });
         let cull_view_bytes = gpu_view.as_ref().map(cull_view_bytes);
         // A frame records the same commands as the last one when the techniques allow it and
-        // nothing they depend on changed (the camera reaches the GPU through uniforms).
+        // nothing they depend on changed (the camera reaches the GPU through uniforms, moved
+        // parts and new material values through the uploads, when no technique reads them on
+        // the host).
         let replay_key = (matches!(passes, PassSet::Shaded { .. }) && techniques.replayable())
-            .then(|| mix(key, view.parameters_generation));
+            .then(|| {
+                if techniques.replays_parameter_changes() {
+                    key
+                } else {
+                    mix(key, view.parameters_generation)
+                }
+            });
         let uploads_pending = scene.has_pending_uploads();
         let shared = RefCell::new((scene, abi::CadrStats::default(), culler));
         let context = |command_buffer: vk::CommandBuffer,
@@ -226,14 +234,25 @@ impl Renderer {
                 depth,
             )
         };
+        let mut uploads = |renderer: &Renderer,
+                           command_buffer: vk::CommandBuffer,
+                           _: u32,
+                           stats: &mut FrameStats|
+         -> RenderResult<()> {
+            let mut guard = shared.borrow_mut();
+            stats.bytes_uploaded = guard
+                .0
+                .record_uploads(renderer.pipelines(), command_buffer)?;
+            Ok(())
+        };
         let mut before = |renderer: &Renderer,
                           command_buffer: vk::CommandBuffer,
                           _: u32,
-                          stats: &mut FrameStats|
+                          _: &mut FrameStats|
          -> RenderResult<()> {
             let mut guard = shared.borrow_mut();
             let (scene, counters, culler) = &mut *guard;
-            stats.bytes_uploaded = scene.record_uploads(renderer.pipelines(), command_buffer)?;
+            // The uploads went ahead in the prologue (this frame's, or a replayed one's).
             barrier(renderer, command_buffer);
             let view = scene.view();
             let raw_command_buffer = command_buffer.as_raw() as *mut c_void;
@@ -373,6 +392,7 @@ impl Renderer {
                 ),
             },
             FrameRecorders {
+                uploads: &mut uploads,
                 before: &mut before,
                 inside: &mut inside,
                 between: &mut between,

@@ -425,6 +425,20 @@ impl Techniques {
             })
     }
 
+    /// Whether frames in which only parameter values changed (moved parts, new material
+    /// values) may be replayed too: frames may be replayed and every active technique reads
+    /// no parameter values on the host while recording
+    /// (`CADR_TRAIT_REPLAYS_PARAMETER_CHANGES`, libraries of ABI 1.10 or later).
+    pub fn replays_parameter_changes(&self) -> bool {
+        self.replayable()
+            && self.active.iter().all(|active| {
+                active.as_ref().is_some_and(|active| {
+                    active.entry.abi_version.1 >= 10
+                        && active.entry.provides & abi::CADR_TRAIT_REPLAYS_PARAMETER_CHANGES != 0
+                })
+            })
+    }
+
     /// What plugins hold now (objects through the allocation callbacks, buffers).
     pub fn plugin_allocations(&self) -> AllocationCounts {
         self.services.snapshot()

@@ -27,7 +27,11 @@ pub fn resubmit_times_us(device: &Arc<Device>, samples: usize) -> VkResult<Vec<f
     Ok(times)
 }
 
-/// A command pool with one primary command buffer and a fence: record, submit, wait.
+/// A command pool with one primary command buffer and a fence: record, submit, wait. A
+/// prologue (a second pool and buffer, made on first use) may be recorded before a
+/// submission and goes to the queue ahead of the main buffer, in the same submission: what
+/// changes every frame (a frame's uploads) goes there, so that the main recording can be
+/// submitted again as it is.
 pub struct CommandContext {
     device: Arc<Device>,
     pool: vk::CommandPool,
@@ -35,6 +39,21 @@ pub struct CommandContext {
     fence: vk::Fence,
     /// Whether the last submission was made (a failed one leaves nothing to wait for).
     in_flight: bool,
+    /// The prologue's pool and command buffer, once one was recorded.
+    prologue: Option<(vk::CommandPool, vk::CommandBuffer)>,
+    /// Where the prologue of the next submission stands.
+    prologue_state: PrologueState,
+}
+
+/// Where the prologue of the next submission stands.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum PrologueState {
+    /// None goes with the next submission.
+    Absent,
+    /// Begun and not yet ended (not submitted unless ended).
+    Recording,
+    /// Ended: it goes ahead of the main buffer in the next submission.
+    Ready,
 }
 
 impl CommandContext {
@@ -56,6 +75,8 @@ impl CommandContext {
             command_buffer: vk::CommandBuffer::null(),
             fence: vk::Fence::null(),
             in_flight: false,
+            prologue: None,
+            prologue_state: PrologueState::Absent,
         };
         let alloc_info = vk::CommandBufferAllocateInfo::default()
             .command_pool(pool)
@@ -105,26 +126,137 @@ impl CommandContext {
         Ok(self.command_buffer)
     }
 
+    /// Begins the prologue of the next submission: waits for the last submission, resets the
+    /// prologue's pool and begins its buffer. Once `end_prologue` has ended it, the next
+    /// `submit`, `resubmit` or `submit_with_semaphores` submits it ahead of the main buffer
+    /// (once); a prologue begun and not ended (its recording failed) is not submitted.
+    pub fn begin_prologue(&mut self) -> VkResult<vk::CommandBuffer> {
+        self.prologue_state = PrologueState::Absent;
+        self.wait()?;
+        let (pool, command_buffer) = match self.prologue {
+            Some(prologue) => prologue,
+            None => {
+                let prologue = self.create_prologue()?;
+                self.prologue = Some(prologue);
+                prologue
+            }
+        };
+        // SAFETY: the last submission has finished (waited for above), so the GPU no longer
+        // uses the prologue's buffer.
+        unsafe {
+            self.device
+                .raw
+                .reset_command_pool(pool, vk::CommandPoolResetFlags::empty())
+        }
+        .or_vk("vkResetCommandPool")?;
+        let begin = vk::CommandBufferBeginInfo::default()
+            .flags(vk::CommandBufferUsageFlags::ONE_TIME_SUBMIT);
+        // SAFETY: the command buffer is reset and not in use.
+        unsafe { self.device.raw.begin_command_buffer(command_buffer, &begin) }
+            .or_vk("vkBeginCommandBuffer")?;
+        self.prologue_state = PrologueState::Recording;
+        Ok(command_buffer)
+    }
+
+    /// Ends the prologue `begin_prologue` began, for the next submission.
+    pub fn end_prologue(&mut self) -> VkResult<()> {
+        let Some((_, command_buffer)) = self.prologue else {
+            return Ok(());
+        };
+        if self.prologue_state != PrologueState::Recording {
+            return Ok(());
+        }
+        self.prologue_state = PrologueState::Absent;
+        // SAFETY: the prologue is recording (begin_prologue began it, state says so).
+        unsafe { self.device.raw.end_command_buffer(command_buffer) }
+            .or_vk("vkEndCommandBuffer")?;
+        self.prologue_state = PrologueState::Ready;
+        Ok(())
+    }
+
+    fn create_prologue(&self) -> VkResult<(vk::CommandPool, vk::CommandBuffer)> {
+        let pool_info = vk::CommandPoolCreateInfo::default()
+            .queue_family_index(self.device.queue_family())
+            .flags(vk::CommandPoolCreateFlags::TRANSIENT);
+        // SAFETY: pool_info is valid for this device.
+        let pool = unsafe {
+            self.device
+                .raw
+                .create_command_pool(&pool_info, core_command_pool_callbacks())
+        }
+        .or_vk("vkCreateCommandPool")?;
+        let alloc_info = vk::CommandBufferAllocateInfo::default()
+            .command_pool(pool)
+            .level(vk::CommandBufferLevel::PRIMARY)
+            .command_buffer_count(1);
+        // SAFETY: the pool is alive; one buffer is requested.
+        match unsafe { self.device.raw.allocate_command_buffers(&alloc_info) } {
+            Ok(buffers) => {
+                self.device.set_name(pool, "prologue pool");
+                self.device.set_name(buffers[0], "prologue");
+                Ok((pool, buffers[0]))
+            }
+            Err(error) => {
+                // SAFETY: the pool was just created and holds nothing in use.
+                unsafe {
+                    self.device
+                        .raw
+                        .destroy_command_pool(pool, core_command_pool_callbacks())
+                };
+                Err(error).or_vk("vkAllocateCommandBuffers")
+            }
+        }
+    }
+
     /// Ends recording and submits; the fence signals when the GPU is done.
     pub fn submit(&mut self) -> VkResult<()> {
         // SAFETY: the command buffer is recording (begin was called).
         unsafe { self.device.raw.end_command_buffer(self.command_buffer) }
             .or_vk("vkEndCommandBuffer")?;
-        let buffers = [self.command_buffer];
-        let submit = [vk::SubmitInfo::default().command_buffers(&buffers)];
-        let submitted = self.device.submit(&submit, self.fence);
-        self.in_flight = submitted.is_ok();
-        submitted
+        self.submit_recorded(&[], &[])
     }
 
     /// Submits the last recorded command buffer again, as it is, after waiting for its
-    /// previous submission; the fence signals when the GPU is done.
+    /// previous submission (a prologue recorded since goes ahead of it); the fence signals
+    /// when the GPU is done.
     pub fn resubmit(&mut self) -> VkResult<()> {
         self.wait()?;
         // SAFETY: the fence is signalled (waited for above), so no submission uses it.
         unsafe { self.device.raw.reset_fences(&[self.fence]) }.or_vk("vkResetFences")?;
-        let buffers = [self.command_buffer];
-        let submit = [vk::SubmitInfo::default().command_buffers(&buffers)];
+        self.in_flight = false;
+        self.submit_recorded(&[], &[])
+    }
+
+    /// Submits the prologue, if one was recorded, and the main buffer, ended, with the fence
+    /// (unsignalled: reset by `begin` or `resubmit`).
+    fn submit_recorded(
+        &mut self,
+        wait: &[(vk::Semaphore, vk::PipelineStageFlags)],
+        signal: &[vk::Semaphore],
+    ) -> VkResult<()> {
+        let ready = std::mem::replace(&mut self.prologue_state, PrologueState::Absent);
+        let prologue = self
+            .prologue
+            .filter(|_| ready == PrologueState::Ready)
+            .map(|(_, command_buffer)| command_buffer);
+        let with_prologue;
+        let alone;
+        let buffers: &[vk::CommandBuffer] = match prologue {
+            Some(prologue) => {
+                with_prologue = [prologue, self.command_buffer];
+                &with_prologue
+            }
+            None => {
+                alone = [self.command_buffer];
+                &alone
+            }
+        };
+        let (wait_semaphores, wait_stages): (Vec<_>, Vec<_>) = wait.iter().copied().unzip();
+        let submit = [vk::SubmitInfo::default()
+            .command_buffers(buffers)
+            .wait_semaphores(&wait_semaphores)
+            .wait_dst_stage_mask(&wait_stages)
+            .signal_semaphores(signal)];
         let submitted = self.device.submit(&submit, self.fence);
         self.in_flight = submitted.is_ok();
         submitted
@@ -141,16 +273,7 @@ impl CommandContext {
         // SAFETY: the command buffer is recording (begin was called).
         unsafe { self.device.raw.end_command_buffer(self.command_buffer) }
             .or_vk("vkEndCommandBuffer")?;
-        let buffers = [self.command_buffer];
-        let (wait_semaphores, wait_stages): (Vec<_>, Vec<_>) = wait.iter().copied().unzip();
-        let submit = [vk::SubmitInfo::default()
-            .command_buffers(&buffers)
-            .wait_semaphores(&wait_semaphores)
-            .wait_dst_stage_mask(&wait_stages)
-            .signal_semaphores(signal)];
-        let submitted = self.device.submit(&submit, self.fence);
-        self.in_flight = submitted.is_ok();
-        submitted
+        self.submit_recorded(wait, signal)
     }
 
     /// Waits until the last submission has finished (at once when it failed, so that a host
@@ -193,6 +316,11 @@ impl Drop for CommandContext {
             self.device
                 .raw
                 .destroy_command_pool(self.pool, core_command_pool_callbacks());
+            if let Some((pool, _)) = self.prologue {
+                self.device
+                    .raw
+                    .destroy_command_pool(pool, core_command_pool_callbacks());
+            }
         }
     }
 }

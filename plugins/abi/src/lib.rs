@@ -36,7 +36,7 @@ use std::ffi::{c_char, c_void};
 /// Major version of this ABI: a library built for another major version is refused.
 pub const CADR_PLUGIN_ABI_MAJOR: u32 = 1;
 /// Minor version of this ABI: additions that older readers may ignore.
-pub const CADR_PLUGIN_ABI_MINOR: u32 = 9;
+pub const CADR_PLUGIN_ABI_MINOR: u32 = 10;
 /// `(major << 16) | minor`, what [`CadrPluginVersionFn`] returns.
 pub const CADR_PLUGIN_ABI_VERSION: u32 = (CADR_PLUGIN_ABI_MAJOR << 16) | CADR_PLUGIN_ABI_MINOR;
 
@@ -139,6 +139,18 @@ pub const CADR_TRAIT_READS_HOST_MATRICES: CadrTraitBits = 1 << 6;
 /// technique sets it and the frame uploads nothing, the host resubmits the last frame's
 /// command buffer without calling them: a frame with nothing changed costs one submission.
 pub const CADR_TRAIT_REPLAYABLE: CadrTraitBits = 1 << 7;
+/// Since ABI 1.10. Any kind, an announcement that widens [`CADR_TRAIT_REPLAYABLE`]: the
+/// technique's per-frame calls (`prepare`, `record`, `record_gpu`) read no parameter values on
+/// the host ([`CadrSceneView::matrices`], [`CadrSceneView::materials`],
+/// [`CadrSceneView::dirty_matrices`], [`CadrSceneView::dirty_materials`]), so what they record
+/// stays right when only [`CadrSceneView::parameters_generation`] changed: the shaders read the
+/// values from the scene's buffers. When every active technique sets it and
+/// [`CADR_TRAIT_REPLAYABLE`], a frame in which parts moved or materials changed resubmits the
+/// last recording, after a command buffer of the host's own with the frame's uploads (the
+/// sparse upload and the transform hierarchy): moving parts cost the CPU what a still camera
+/// costs, plus the upload. A technique that puts parameter values in its commands
+/// ([`CADR_TRAIT_PARAMETERS_IN_COMMANDS`]) or copies them on the host leaves it clear.
+pub const CADR_TRAIT_REPLAYS_PARAMETER_CHANGES: CadrTraitBits = 1 << 8;
 
 /// A message buffer the host hands to functions that can fail: the plugin writes a
 /// NUL-terminated UTF-8 message of at most `capacity` bytes (including the NUL).

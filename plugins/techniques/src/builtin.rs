@@ -3,6 +3,7 @@
 //! draw, no culling). Hosts register it statically, so it works without any plugin library;
 //! every other technique is measured against it.
 
+use crate::REPLAYABLE;
 use cadr_plugin_sdk::abi;
 use cadr_plugin_sdk::technique_library;
 
@@ -22,7 +23,7 @@ technique_library! {
         vertex PerGeometry {
             name: "per-geometry",
             description: "Vertex and index buffers bound per geometry, re-bound only when the geometry changes.",
-            features: 0, provides: GEOMETRY | abi::CADR_TRAIT_REPLAYABLE, needs: 0,
+            features: 0, provides: GEOMETRY | REPLAYABLE, needs: 0,
         },
         parameters Push {
             name: "push",
@@ -34,17 +35,17 @@ technique_library! {
         submission Individual {
             name: "individual",
             description: "One vkCmdDrawIndexed per part in scene order, recorded every frame (the seeds' baseline strategy).",
-            features: 0, provides: abi::CADR_TRAIT_REPLAYABLE, needs: 0,
+            features: 0, provides: REPLAYABLE, needs: 0,
         },
         culling NoCulling {
             name: "none",
             description: "No culling: every visible part is drawn.",
-            features: 0, provides: abi::CADR_TRAIT_REPLAYABLE, needs: 0,
+            features: 0, provides: REPLAYABLE, needs: 0,
         },
         transparency WeightedBlended {
             name: "weighted-blended",
             description: "Weighted blended order-independent transparency (McGuire and Bavoil): one pass, exact for one layer, approximate where layers overlap.",
-            features: 0, provides: abi::CADR_TRAIT_REPLAYABLE, needs: 0,
+            features: 0, provides: REPLAYABLE, needs: 0,
         },
     ]
 }

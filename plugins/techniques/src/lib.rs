@@ -11,3 +11,11 @@ pub mod parameters;
 pub mod submission;
 pub mod transparency;
 pub mod vertex;
+
+use cadr_plugin_sdk::abi;
+
+/// What cadr's techniques announce unless they read parameter values on the host (`push`,
+/// `ubo-dynamic`): their frames may be replayed, also those in which only parameter values
+/// changed (moved parts, new material values).
+pub(crate) const REPLAYABLE: abi::CadrTraitBits =
+    abi::CADR_TRAIT_REPLAYABLE | abi::CADR_TRAIT_REPLAYS_PARAMETER_CHANGES;

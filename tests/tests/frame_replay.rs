@@ -128,8 +128,12 @@ fn replayed_frames_follow_the_camera_and_every_change_records_afresh() {
 
 /// What each of `frames` frames of an exploding assembly showed, with `combination` and frame
 /// replay on or off: every frame moves the demo's transform nodes apart (a still camera), as
-/// a host dragging parts does.
-fn explode(combination: &Combination, replay: bool, frames: usize) -> Vec<(Shown, u64)> {
+/// a host dragging parts does. Also what a fresh view shows of the last frame's scene.
+fn explode(
+    combination: &Combination,
+    replay: bool,
+    frames: usize,
+) -> (Vec<(Shown, u64)>, image::RgbaImage) {
     let device = test_device();
     let scene = generate(&GeneratorSpec::Demo);
     let bounds = flatten(&scene).unwrap().bounds;
@@ -168,8 +172,14 @@ fn explode(combination: &Combination, replay: bool, frames: usize) -> Vec<(Shown
         })
         .collect();
     drop(view);
+    let mut fresh = View::new(&device, Arc::clone(&registry), SIZE.0, SIZE.1).unwrap();
+    fresh.techniques_mut().select(combination).unwrap();
+    let mut fresh_tree = SceneTree::build(&mut graph);
+    fresh.render(&graph, &mut fresh_tree, &camera).unwrap();
+    let expected = fresh.renderer().read_rgba8().unwrap();
+    drop(fresh);
     assert_no_validation_errors(&device);
-    shown
+    (shown, expected)
 }
 
 #[test]
@@ -188,8 +198,8 @@ fn moving_parts_replay_the_recorded_pass_after_their_upload() {
         // Copies matrices into its own buffers on the host: a moved part records afresh.
         (reads_on_host, false),
     ] {
-        let replayed = explode(&combination, true, frames);
-        let recorded = explode(&combination, false, frames);
+        let (replayed, fresh) = explode(&combination, true, frames);
+        let (recorded, _) = explode(&combination, false, frames);
         let flags: Vec<bool> = replayed.iter().map(|(s, _)| s.replayed).collect();
         println!("{combination}: replayed {flags:?}");
         for (frame, ((a, uploaded), (b, _))) in replayed.iter().zip(&recorded).enumerate() {
@@ -211,6 +221,11 @@ fn moving_parts_replay_the_recorded_pass_after_their_upload() {
         }
         let first = &replayed[1].0.image;
         let last = &replayed[frames - 1].0.image;
+        let difference = compare(last, &fresh).unwrap();
+        assert!(
+            difference.within(SAME_PICTURE),
+            "{combination}: the last frame differs from a fresh upload: {difference:?}"
+        );
         let moved = compare(first, last).unwrap();
         assert!(
             moved.mean > VISIBLE_CHANGE,

@@ -35,6 +35,7 @@ use crate::vk::{memory_barrier, record_dispatch, Buffer, DescriptorSets, Device,
 
 use super::geometry::usage;
 use super::split_f64;
+use super::upload::mix;
 
 /// 32-bit words of one local matrix on the GPU: columns 0–2 as rotation and scale with the
 /// translation's low part in w, then the translation's high part.
@@ -159,8 +160,12 @@ pub(super) struct TransformHierarchy {
     sets: Option<DescriptorSets>,
     /// The buffers the set was written for.
     written: [vk::Buffer; 7],
+    /// Counts the writes of the set (a recording that uses it is stale after one).
+    sets_generation: u64,
     /// This frame's plan, made at sync.
     plan: Option<HierarchyPlan>,
+    /// The pass made ready for recording, if any.
+    ready: Option<ReadyPass>,
     /// A method chosen by the caller instead of the plan's (benchmarks, tests).
     pub(super) forced: Option<HierarchyMethod>,
 }
@@ -177,7 +182,9 @@ impl TransformHierarchy {
             stamp: 0,
             sets: None,
             written: [vk::Buffer::null(); 7],
+            sets_generation: 0,
             plan: None,
+            ready: None,
             forced: None,
         }
     }
@@ -185,6 +192,7 @@ impl TransformHierarchy {
     /// Forgets this frame's plan (every world matrix goes up from the host instead).
     pub(super) fn cancel(&mut self) {
         self.plan = None;
+        self.ready = None;
     }
 
     /// Plans this frame's pass for `moved` roots (alive tree nodes, sorted, without repeats),
@@ -259,18 +267,20 @@ impl TransformHierarchy {
         Ok(())
     }
 
-    /// Records this frame's pass (after the scatter that wrote the locals): `updates` holds the
-    /// scatter's compact items, `local_count` locals from `first_word` (the moved roots among
-    /// them marked); `locals` and `worlds` are the scene's arrays. Returns the plan it carried
-    /// out.
-    pub(super) fn record(
+    /// Readies this frame's pass (after the scatter that writes the locals): `updates` holds
+    /// the scatter's compact items, `local_count` locals from `first_word` (the moved roots
+    /// among them marked); `locals` and `worlds` are the scene's arrays; `same_roots` says
+    /// whether the moved roots are those of the last pass made ready. Returns the plan it
+    /// carries out, which [`TransformHierarchy::record`] records.
+    pub(super) fn prepare(
         &mut self,
         pipelines: &Pipelines,
-        command_buffer: vk::CommandBuffer,
         updates: vk::Buffer,
         (first_word, local_count): (u32, u32),
         (locals, worlds): (vk::Buffer, vk::Buffer),
+        same_roots: bool,
     ) -> RenderResult<Option<HierarchyPlan>> {
+        self.ready = None;
         let Some(plan) = self.plan.take() else {
             return Ok(None);
         };
@@ -300,6 +310,7 @@ impl TransformHierarchy {
                     .ty(vk::DescriptorType::STORAGE_BUFFER)
                     .descriptor_count(targets.len() as u32)],
             )?);
+            self.sets_generation += 1;
         }
         let Some(sets) = &self.sets else {
             return Ok(None);
@@ -315,15 +326,55 @@ impl TransformHierarchy {
                 );
             }
             self.written = targets;
+            self.sets_generation += 1;
         }
-        self.stamp = self.stamp.wrapping_add(1).max(1);
+        // A new stamp tells this frame's roots from the last one's; with the same roots, the
+        // nodes that carry the last stamp are exactly this frame's roots, so it serves again
+        // (and the pass records the same commands).
+        if !same_roots || self.stamp == 0 {
+            self.stamp = self.stamp.wrapping_add(1).max(1);
+        }
+        self.ready = Some(ReadyPass {
+            plan,
+            first_word,
+            local_count,
+        });
+        Ok(Some(plan))
+    }
+
+    /// What the commands [`TransformHierarchy::record`] records for the pass made ready
+    /// depend on: equal keys record equal commands.
+    pub(super) fn commands_key(&self) -> u64 {
+        let Some(ready) = &self.ready else {
+            return 0;
+        };
+        let plan = ready.plan;
+        let mut key = mix(self.sets_generation, u64::from(self.stamp));
+        key = mix(
+            key,
+            u64::from(ready.first_word) << 32 | u64::from(ready.local_count),
+        );
+        key = mix(key, u64::from(plan.nodes) << 32 | u64::from(plan.height));
+        mix(key, plan.method as u64)
+    }
+
+    /// Records the pass made ready (nothing when none is).
+    pub(super) fn record(
+        &self,
+        pipelines: &Pipelines,
+        command_buffer: vk::CommandBuffer,
+    ) -> RenderResult<()> {
+        let (Some(ready), Some(sets)) = (&self.ready, &self.sets) else {
+            return Ok(());
+        };
+        let plan = ready.plan;
         let pipeline = (pipelines.hierarchy()?, pipelines.hierarchy_layout());
         let device = &self.device;
         let dispatch = |stage: HierarchyStage, level: u32, groups: u32| {
             let parameters = HierarchyParameters {
                 stage: stage as u32,
-                first_word,
-                root_count: local_count,
+                first_word: ready.first_word,
+                root_count: ready.local_count,
                 stamp: self.stamp,
                 total: plan.nodes,
                 level,
@@ -339,7 +390,7 @@ impl TransformHierarchy {
             );
         };
         let node_groups = plan.nodes.div_ceil(64);
-        dispatch(HierarchyStage::Stamp, 0, local_count.div_ceil(64));
+        dispatch(HierarchyStage::Stamp, 0, ready.local_count.div_ceil(64));
         dispatch(HierarchyStage::Roots, 0, 1);
         match plan.method {
             HierarchyMethod::Leaves => dispatch(HierarchyStage::Leaves, 0, node_groups),
@@ -349,8 +400,16 @@ impl TransformHierarchy {
                 }
             }
         }
-        Ok(Some(plan))
+        Ok(())
     }
+}
+
+/// A pass made ready for recording: its plan and where its roots lie in the update buffer.
+#[derive(Clone, Copy, Debug)]
+struct ReadyPass {
+    plan: HierarchyPlan,
+    first_word: u32,
+    local_count: u32,
 }
 
 /// Compute writes before the barrier are seen by compute reads and writes after it.

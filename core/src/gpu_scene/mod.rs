@@ -661,12 +661,10 @@ impl GpuScene {
         .any(|array| array.has_pending())
     }
 
-    /// Records the pending uploads (before the pass) and clears them; returns the bytes sent.
-    pub(crate) fn record_uploads(
-        &mut self,
-        pipelines: &Pipelines,
-        command_buffer: vk::CommandBuffer,
-    ) -> RenderResult<u64> {
+    /// Gathers the pending uploads on the host and clears them, making their commands ready
+    /// for [`GpuScene::record_uploads`]; returns the bytes sent and what those commands
+    /// depend on (equal keys record equal commands, whatever the items moved).
+    pub(crate) fn prepare_uploads(&mut self, pipelines: &Pipelines) -> RenderResult<(u64, u64)> {
         let matrices = &self.matrices;
         let materials = &self.materials;
         let matrix_bytes = |slot: u32, out: &mut [u8]| {
@@ -701,11 +699,11 @@ impl GpuScene {
             let item = locals.get(slot as usize).copied().unwrap_or_default();
             out.copy_from_slice(bytemuck::cast_slice(&item));
         };
+        let last_slots = self.uploader.commands_key();
         let ([matrix_count, material_count, _, record_count, _, local_count], first_words, bytes) =
-            self.uploader.record(
+            self.uploader.gather(
                 &self.device,
                 pipelines,
-                command_buffer,
                 [
                     (&mut self.matrix_gpu, &matrix_bytes),
                     (&mut self.material_gpu, &material_bytes),
@@ -717,27 +715,49 @@ impl GpuScene {
             )?;
         self.frame_moved.clear();
         self.last_hierarchy = match self.uploader.updates() {
-            Some(updates) if self.transforms == Transforms::Gpu => self.hierarchy.record(
+            Some(updates) if self.transforms == Transforms::Gpu => self.hierarchy.prepare(
                 pipelines,
-                command_buffer,
                 updates,
                 (first_words[5], local_count as u32),
                 (self.local_gpu.buffer.raw(), self.matrix_gpu.buffer.raw()),
+                self.uploader.commands_key() == last_slots,
             )?,
-            _ => None,
+            _ => {
+                self.hierarchy.cancel();
+                None
+            }
         };
         self.last_upload.matrices += matrix_count;
         self.last_upload.materials += material_count;
         self.last_upload.records += record_count;
         self.last_upload.bytes += bytes;
-        Ok(bytes)
+        let mut key = upload::mix(self.uploader.commands_key(), self.hierarchy.commands_key());
+        key = upload::mix(key, u64::from(self.last_hierarchy.is_some()));
+        Ok((bytes, key))
+    }
+
+    /// Records the commands of the uploads [`GpuScene::prepare_uploads`] gathered: the scatter
+    /// and the transform hierarchy's pass (before the frame's pass, whose first barrier makes
+    /// their writes visible).
+    pub(crate) fn record_uploads(
+        &self,
+        pipelines: &Pipelines,
+        command_buffer: vk::CommandBuffer,
+    ) -> RenderResult<()> {
+        self.uploader
+            .record(&self.device, pipelines, command_buffer)?;
+        if self.last_hierarchy.is_some() {
+            self.hierarchy.record(pipelines, command_buffer)?;
+        }
+        Ok(())
     }
 
     /// Uploads what is pending now, outside a frame (one submission, waited for); returns the
     /// bytes sent. Frames upload by themselves; this serves measurements and tests.
     pub fn flush_uploads(&mut self, pipelines: &Pipelines) -> RenderResult<u64> {
         let mut one_shot = OneShot::begin(&self.device, "scene upload")?;
-        let bytes = self.record_uploads(pipelines, one_shot.command_buffer())?;
+        let (bytes, _) = self.prepare_uploads(pipelines)?;
+        self.record_uploads(pipelines, one_shot.command_buffer())?;
         one_shot.submit_and_wait()?;
         Ok(bytes)
     }

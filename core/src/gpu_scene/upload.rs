@@ -131,8 +131,18 @@ pub(super) struct SparseUploader {
     sets: Option<DescriptorSets>,
     /// The buffers the sets were written for (updates, then each array).
     written: [vk::Buffer; ARRAYS + 1],
+    /// Counts the writes of the sets (a recording that uses them is stale after one).
+    sets_generation: u64,
     /// The compact updates of a frame, kept to be refilled without allocating.
     gathered: Vec<u8>,
+    /// The last gather's scatter dispatches: per array with changed items, its index, first
+    /// word in the update buffer and item count.
+    dispatches: Vec<(usize, u32, u32)>,
+    /// The item size of each array, in words, at the last gather.
+    item_words: [u32; ARRAYS],
+    /// Identifies the last gather's commands: its dispatches, the slots they write (not the
+    /// items) and the sets they use.
+    commands_key: u64,
 }
 
 /// An array with a function that writes the bytes of its item at a slot (exactly the array's
@@ -173,16 +183,15 @@ fn upload_whole(array: &mut GpuArray, item: &(dyn Fn(u32, &mut [u8]) + Sync)) ->
 }
 
 impl SparseUploader {
-    /// Uploads what changed in `arrays`: whole arrays through a staging copy,
-    /// changed items gathered and scattered by `scatter.comp`, recorded into `command_buffer`
-    /// (before the frame's pass; the frame's barrier makes the writes visible to drawing).
-    /// Returns the items uploaded per array, where each array's items start in the update
-    /// buffer (in words; see [`SparseUploader::updates`]) and the bytes sent.
-    pub(super) fn record(
+    /// Gathers what changed in `arrays` on the host: whole arrays uploaded through a staging
+    /// copy, changed items gathered into the update buffer (written now) for the scatter
+    /// that [`SparseUploader::record`] records. Returns the items uploaded per array, where
+    /// each array's items start in the update buffer (in words; see
+    /// [`SparseUploader::updates`]) and the bytes sent.
+    pub(super) fn gather(
         &mut self,
         device: &Arc<Device>,
         pipelines: &Pipelines,
-        command_buffer: vk::CommandBuffer,
         mut arrays: [ArrayItems<'_>; ARRAYS],
     ) -> RenderResult<([u64; ARRAYS], [u32; ARRAYS], u64)> {
         let mut counts = [0u64; ARRAYS];
@@ -190,9 +199,10 @@ impl SparseUploader {
         let mut bytes = 0u64;
         let mut gathered = std::mem::take(&mut self.gathered);
         gathered.clear();
-        // Per array: its first word in `gathered` and its item count.
-        let mut dispatches: Vec<(usize, u32, u32)> = Vec::new();
+        self.dispatches.clear();
+        let mut key = 0u64;
         for (index, (array, item)) in arrays.iter_mut().enumerate() {
+            self.item_words[index] = (array.item_bytes / 4) as u32;
             if array.whole {
                 bytes += upload_whole(array, *item)?;
                 counts[index] = array.capacity as u64;
@@ -212,30 +222,36 @@ impl SparseUploader {
                 });
                 let item_bytes = array.item_bytes;
                 for &word in &array.pending {
+                    key = mix(key, u64::from(word));
                     gathered.extend_from_slice(&word.to_le_bytes());
                     let at = gathered.len();
                     gathered.resize(at + item_bytes, 0);
                     item(word & !MOVED_ROOT_MARK, &mut gathered[at..]);
                 }
                 counts[index] = array.pending.len() as u64;
-                dispatches.push((index, first_word, array.pending.len() as u32));
+                self.dispatches
+                    .push((index, first_word, array.pending.len() as u32));
             }
         }
         for (array, _) in arrays.iter_mut() {
             array.whole = false;
             array.pending.clear();
         }
-        let result = self.scatter(
-            device,
-            pipelines,
-            command_buffer,
-            &arrays,
-            &gathered,
-            &dispatches,
-        );
+        let written = self.write_updates(device, pipelines, &arrays, &gathered);
         self.gathered = gathered;
-        result?;
+        written?;
+        for &(index, first_word, item_count) in &self.dispatches {
+            key = mix(key, (index as u64) << 32 | u64::from(first_word));
+            key = mix(key, u64::from(item_count));
+        }
+        self.commands_key = mix(key, self.sets_generation);
         Ok((counts, first_words, bytes + self.gathered.len() as u64))
+    }
+
+    /// What the commands [`SparseUploader::record`] records for the last gather depend on:
+    /// equal keys record equal commands (the items they move may differ).
+    pub(super) fn commands_key(&self) -> u64 {
+        self.commands_key
     }
 
     /// The buffer the last upload's compact items went through, if any.
@@ -243,16 +259,14 @@ impl SparseUploader {
         self.updates.as_ref().map(Buffer::raw)
     }
 
-    /// Writes `gathered` into the update buffer and records one scatter dispatch per array
-    /// with changed items: `(array, first word, item count)`.
-    fn scatter(
+    /// Writes `gathered` into the update buffer (grown if need be) and points the sets at it
+    /// and the arrays.
+    fn write_updates(
         &mut self,
         device: &Arc<Device>,
         pipelines: &Pipelines,
-        command_buffer: vk::CommandBuffer,
         arrays: &[ArrayItems<'_>; ARRAYS],
         gathered: &[u8],
-        dispatches: &[(usize, u32, u32)],
     ) -> RenderResult<()> {
         if gathered.is_empty() {
             return Ok(());
@@ -285,6 +299,7 @@ impl SparseUploader {
                     .ty(vk::DescriptorType::STORAGE_BUFFER)
                     .descriptor_count(2 * ARRAYS as u32)],
             )?);
+            self.sets_generation += 1;
         }
         let Some(sets) = &self.sets else {
             return Ok(());
@@ -296,10 +311,28 @@ impl SparseUploader {
                 sets.write_buffer(set, 1, ssbo, targets[set + 1], vk::WHOLE_SIZE);
             }
             self.written = targets;
+            self.sets_generation += 1;
+        }
+        Ok(())
+    }
+
+    /// Records the last gather's scatter, one dispatch per array with changed items (before
+    /// the frame's pass; the frame's barrier makes the writes visible to drawing).
+    pub(super) fn record(
+        &self,
+        device: &Device,
+        pipelines: &Pipelines,
+        command_buffer: vk::CommandBuffer,
+    ) -> RenderResult<()> {
+        let Some(sets) = &self.sets else {
+            return Ok(());
+        };
+        if self.dispatches.is_empty() {
+            return Ok(());
         }
         let scatter = pipelines.scatter()?;
-        for &(index, first_word, item_count) in dispatches {
-            let item_words = (arrays[index].0.item_bytes / 4) as u32;
+        for &(index, first_word, item_count) in &self.dispatches {
+            let item_words = self.item_words[index];
             let parameters = ScatterParameters {
                 item_count,
                 item_words,
@@ -316,4 +349,9 @@ impl SparseUploader {
         }
         Ok(())
     }
+}
+
+/// Folds `value` into `key` (FNV-like, for commands keys).
+pub(super) fn mix(key: u64, value: u64) -> u64 {
+    (key ^ value).wrapping_mul(0x100_0000_01b3).rotate_left(17)
 }

@@ -69,6 +69,8 @@ pub struct Renderer {
     /// Whether the last submission carried an upload prologue (its GPU time is the frame's
     /// too).
     last_submission_uploaded: bool,
+    /// The upload key of the prologue in its command buffer, if it may be submitted again.
+    recorded_prologue: Option<u64>,
     /// The id target and its readback, created on the first pick.
     pick: Option<PickTarget>,
     /// The replay key of the last recorded frame, if it had one.
@@ -166,11 +168,18 @@ pub(crate) enum PassTarget {
 pub(crate) type Recorder<'a> =
     dyn FnMut(&Renderer, vk::CommandBuffer, u32, &mut FrameStats) -> RenderResult<()> + 'a;
 
+/// Gathers a frame's uploads on the host (written into their buffers, counted in the stats)
+/// and returns what their commands depend on: equal keys record equal commands.
+pub(crate) type UploadGatherer<'a> =
+    dyn FnMut(&Renderer, &mut FrameStats) -> RenderResult<u64> + 'a;
+
 /// The recorders of a frame, in the order they run.
 pub(crate) struct FrameRecorders<'r, 'a> {
-    /// The frame's uploads, when [`FramePlan::uploads_pending`]: into the prologue, a command
-    /// buffer of their own submitted ahead of the frame's, so that a replayed frame gets them
-    /// too. `before` makes their writes visible.
+    /// The frame's uploads, when [`FramePlan::uploads_pending`], gathered on the host.
+    pub gather_uploads: &'r mut UploadGatherer<'a>,
+    /// Their commands: into the prologue, a command buffer of their own submitted ahead of
+    /// the frame's, so that a replayed frame gets them too; a prologue with the key of the
+    /// last one is submitted again instead. `before` makes their writes visible.
     pub uploads: &'r mut Recorder<'a>,
     /// Outside rendering, before the first phase.
     pub before: &'r mut Recorder<'a>,
@@ -242,6 +251,7 @@ impl Renderer {
             timer,
             upload_timer,
             last_submission_uploaded: false,
+            recorded_prologue: None,
             pick: None,
             last_recorded: None,
             replayable: None,
@@ -638,15 +648,20 @@ impl Renderer {
         }
         let mut stats = FrameStats::default();
         if plan.uploads_pending {
-            let command_buffer = self.commands.begin_prologue()?;
-            if let Some(timer) = &mut self.upload_timer {
-                timer.begin(command_buffer);
+            let key = (recorders.gather_uploads)(self, &mut stats)?;
+            if self.recorded_prologue != Some(key) || !self.commands.reuse_prologue() {
+                self.recorded_prologue = None;
+                let command_buffer = self.commands.begin_prologue()?;
+                if let Some(timer) = &mut self.upload_timer {
+                    timer.begin(command_buffer);
+                }
+                (recorders.uploads)(self, command_buffer, 0, &mut stats)?;
+                if let Some(timer) = &mut self.upload_timer {
+                    timer.end(command_buffer);
+                }
+                self.commands.end_prologue()?;
+                self.recorded_prologue = Some(key);
             }
-            (recorders.uploads)(self, command_buffer, 0, &mut stats)?;
-            if let Some(timer) = &mut self.upload_timer {
-                timer.end(command_buffer);
-            }
-            self.commands.end_prologue()?;
         }
         match (plan.replay_key, self.replayable) {
             (Some(key), Some((recorded, recorded_stats))) if key == recorded => {

@@ -234,16 +234,22 @@ impl Renderer {
                 depth,
             )
         };
+        let mut gather_uploads =
+            |renderer: &Renderer, stats: &mut FrameStats| -> RenderResult<u64> {
+                let mut guard = shared.borrow_mut();
+                let (bytes, key) = guard.0.prepare_uploads(renderer.pipelines())?;
+                stats.bytes_uploaded = bytes;
+                Ok(key)
+            };
         let mut uploads = |renderer: &Renderer,
                            command_buffer: vk::CommandBuffer,
                            _: u32,
-                           stats: &mut FrameStats|
+                           _: &mut FrameStats|
          -> RenderResult<()> {
-            let mut guard = shared.borrow_mut();
-            stats.bytes_uploaded = guard
+            shared
+                .borrow()
                 .0
-                .record_uploads(renderer.pipelines(), command_buffer)?;
-            Ok(())
+                .record_uploads(renderer.pipelines(), command_buffer)
         };
         let mut before = |renderer: &Renderer,
                           command_buffer: vk::CommandBuffer,
@@ -392,6 +398,7 @@ impl Renderer {
                 ),
             },
             FrameRecorders {
+                gather_uploads: &mut gather_uploads,
                 uploads: &mut uploads,
                 before: &mut before,
                 inside: &mut inside,

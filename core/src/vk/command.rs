@@ -43,6 +43,8 @@ pub struct CommandContext {
     prologue: Option<(vk::CommandPool, vk::CommandBuffer)>,
     /// Where the prologue of the next submission stands.
     prologue_state: PrologueState,
+    /// Whether the prologue's buffer holds a complete recording (it may be submitted again).
+    prologue_recorded: bool,
 }
 
 /// Where the prologue of the next submission stands.
@@ -77,6 +79,7 @@ impl CommandContext {
             in_flight: false,
             prologue: None,
             prologue_state: PrologueState::Absent,
+            prologue_recorded: false,
         };
         let alloc_info = vk::CommandBufferAllocateInfo::default()
             .command_pool(pool)
@@ -132,6 +135,7 @@ impl CommandContext {
     /// (once); a prologue begun and not ended (its recording failed) is not submitted.
     pub fn begin_prologue(&mut self) -> VkResult<vk::CommandBuffer> {
         self.prologue_state = PrologueState::Absent;
+        self.prologue_recorded = false;
         self.wait()?;
         let (pool, command_buffer) = match self.prologue {
             Some(prologue) => prologue,
@@ -149,8 +153,9 @@ impl CommandContext {
                 .reset_command_pool(pool, vk::CommandPoolResetFlags::empty())
         }
         .or_vk("vkResetCommandPool")?;
-        let begin = vk::CommandBufferBeginInfo::default()
-            .flags(vk::CommandBufferUsageFlags::ONE_TIME_SUBMIT);
+        // Not one-time: a prologue that would record the same commands goes again
+        // (`reuse_prologue`).
+        let begin = vk::CommandBufferBeginInfo::default();
         // SAFETY: the command buffer is reset and not in use.
         unsafe { self.device.raw.begin_command_buffer(command_buffer, &begin) }
             .or_vk("vkBeginCommandBuffer")?;
@@ -171,7 +176,17 @@ impl CommandContext {
         unsafe { self.device.raw.end_command_buffer(command_buffer) }
             .or_vk("vkEndCommandBuffer")?;
         self.prologue_state = PrologueState::Ready;
+        self.prologue_recorded = true;
         Ok(())
+    }
+
+    /// Makes the last prologue recorded go ahead of the next submission again, as it is;
+    /// false when there is none to reuse (none recorded, or its recording failed).
+    pub fn reuse_prologue(&mut self) -> bool {
+        if self.prologue.is_some() && self.prologue_recorded {
+            self.prologue_state = PrologueState::Ready;
+        }
+        self.prologue_state == PrologueState::Ready
     }
 
     fn create_prologue(&self) -> VkResult<(vk::CommandPool, vk::CommandBuffer)> {

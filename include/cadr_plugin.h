@@ -967,7 +967,9 @@ typedef struct CadrTransparencyVtable {
 // [`CADR_TRAIT_REPLAYABLE`], a frame in which parts moved or materials changed resubmits the
 // last recording, after a command buffer of the host's own with the frame's uploads (the
 // sparse upload and the transform hierarchy): moving parts cost the CPU what a still camera
-// costs, plus the upload. A technique that puts parameter values in its commands
+// costs, plus the upload. A culler that sets it and not [`CADR_TRAIT_READS_HOST_MATRICES`]
+// reads no parameter values in `cull` either, so the host does not cull again when only they
+// changed. A technique that puts parameter values in its commands
 // ([`CADR_TRAIT_PARAMETERS_IN_COMMANDS`]) or copies them on the host leaves it clear.
 #define CADR_TRAIT_REPLAYS_PARAMETER_CHANGES (1 << 8)
 

@@ -22,14 +22,13 @@
 //! Translations stay split into f32 high and low parts as everywhere on the GPU, and the
 //! shader adds them with error-free sums, so a part far from the origin keeps its precision.
 
-use std::collections::HashSet;
 use std::sync::Arc;
 
 use glam::DMat4;
 
 use crate::error::RenderResult;
 use crate::render::{HierarchyParameters, HierarchyStage, Pipelines};
-use crate::tree::SceneTree;
+use crate::tree::{BitSet, SceneTree};
 use crate::vk::raw as vk;
 use crate::vk::{memory_barrier, record_dispatch, Buffer, DescriptorSets, Device, MemoryLocation};
 
@@ -162,6 +161,8 @@ pub(super) struct TransformHierarchy {
     written: [vk::Buffer; 7],
     /// Counts the writes of the set (a recording that uses it is stale after one).
     sets_generation: u64,
+    /// The moved roots while a plan is made (empty between plans).
+    marked: BitSet,
     /// This frame's plan, made at sync.
     plan: Option<HierarchyPlan>,
     /// The pass made ready for recording, if any.
@@ -183,6 +184,7 @@ impl TransformHierarchy {
             sets: None,
             written: [vk::Buffer::null(); 7],
             sets_generation: 0,
+            marked: BitSet::default(),
             plan: None,
             ready: None,
             forced: None,
@@ -216,7 +218,7 @@ impl TransformHierarchy {
         let Some(layout) = &self.layout else {
             return Ok(None);
         };
-        let mut chosen = plan(layout, moved);
+        let mut chosen = plan(layout, moved, &mut self.marked);
         chosen.method = self.forced.unwrap_or(chosen.method);
         self.plan = Some(chosen);
         self.ensure_roots(moved.len())?;
@@ -427,13 +429,15 @@ fn compute_barrier(device: &Device, command_buffer: vk::CommandBuffer) {
 }
 
 /// The plan for `moved` roots: the ranges of the roots that lie below no other moved root, and
-/// the cheaper method for their shape.
-fn plan(layout: &Layout, moved: &[u32]) -> HierarchyPlan {
-    let marked: HashSet<u32> = moved.iter().copied().collect();
+/// the cheaper method for their shape. `marked` is scratch, empty before and after.
+fn plan(layout: &Layout, moved: &[u32], marked: &mut BitSet) -> HierarchyPlan {
+    for &t in moved {
+        marked.insert(t);
+    }
     let below_another = |t: u32| {
         let mut p = layout.parent[t as usize];
         while p != NONE {
-            if marked.contains(&p) {
+            if marked.contains(p) {
                 return true;
             }
             p = layout.parent[p as usize];
@@ -450,6 +454,7 @@ fn plan(layout: &Layout, moved: &[u32]) -> HierarchyPlan {
         height = height.max(layout.height[i]);
         walk += layout.walk[i];
     }
+    marked.clear();
     let levels = nodes + u64::from(height + 1) * (nodes / SKIP_COST_DIVISOR + DISPATCH_COST);
     HierarchyPlan {
         roots: moved.len() as u32,

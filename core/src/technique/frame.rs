@@ -456,15 +456,18 @@ fn barrier(renderer: &Renderer, command_buffer: vk::CommandBuffer) {
     );
 }
 
-/// What a culling result depends on: the culler, the scene and the view (frustum and section
-/// planes).
+/// What a culling result depends on: the culler, the scene (its parameter values only when
+/// the culler `reads_parameters`) and the view (frustum and section planes).
 fn cull_key(
     epoch: u64,
     view: &abi::CadrSceneView,
     (frustum, section): (&[[f64; 4]; 6], &[[f64; 4]]),
+    reads_parameters: bool,
 ) -> u64 {
     let mut key = mix(epoch, view.draws_generation);
-    key = mix(key, view.parameters_generation);
+    if reads_parameters {
+        key = mix(key, view.parameters_generation);
+    }
     key = mix(key, view.buffers_generation);
     key = mix(key, section.len() as u64);
     for value in frustum.iter().chain(section).flatten() {
@@ -501,11 +504,22 @@ fn cull(
     }
     let section_plane_count = section.planes().len().min(MAX_SECTION_PLANES);
     let all_planes = (&planes, &section_planes[..section_plane_count]);
-    let key = cull_key(techniques.epoch, &scene.view(), all_planes);
+    let culling = techniques.get(TechniqueKind::Culling)?;
+    // A culler of ABI 1.10 that replays parameter changes and reads no host matrices culls
+    // the same whatever the parameter values: moved parts do not make it cull again.
+    let provides = culling.entry.provides;
+    let reads_parameters = culling.entry.abi_version.1 < 10
+        || provides & abi::CADR_TRAIT_REPLAYS_PARAMETER_CHANGES == 0
+        || provides & abi::CADR_TRAIT_READS_HOST_MATRICES != 0;
+    let key = cull_key(
+        techniques.epoch,
+        &scene.view(),
+        all_planes,
+        reads_parameters,
+    );
     if techniques.cull_key == Some(key) {
         return Ok(());
     }
-    let culling = techniques.get(TechniqueKind::Culling)?;
     let Some(cull_fn) = culling.vtable::<abi::CadrCullingVtable>().cull else {
         return Ok(());
     };
@@ -536,6 +550,11 @@ fn cull(
     status(&culling.entry, "cull", result, &message)?;
     scene.apply_culling(&visible, &changed);
     // The draws generation moved if anything changed: key on what the scene is now.
-    techniques.cull_key = Some(cull_key(techniques.epoch, &scene.view(), all_planes));
+    techniques.cull_key = Some(cull_key(
+        techniques.epoch,
+        &scene.view(),
+        all_planes,
+        reads_parameters,
+    ));
     Ok(())
 }

@@ -839,8 +839,10 @@ pub unsafe extern "C" fn cadr_renderer_min_pixels(
 }
 
 /// Turns frame replay on (the default) or off. With it on, a frame that would record what the
-/// renderer's last frame recorded (only the camera moved, or nothing changed) resubmits that
-/// recording instead, when every active technique allows it; the picture is the same. Off,
+/// renderer's last frame recorded (only the camera moved, or nothing changed; also parts moved
+/// or material values changed, when every active technique reads parameter values on the
+/// GPU) resubmits that recording instead, after the frame's uploads, when every active
+/// technique allows it; the picture is the same. Off,
 /// every frame is recorded afresh (to measure recording, or to compare).
 ///
 /// Returns `CADR_RESULT_OK` or a handle error. Ownership: nothing changes hands.

@@ -54,7 +54,7 @@ pub enum Command {
     /// drew and the frame's CPU and GPU time. It draws with one technique per kind, solid or
     /// with edges; the default is the built-in combination (per-geometry, push, individual,
     /// none), which needs no plugin library. A frame that would record what the last one
-    /// recorded (only the camera moved, or nothing) resubmits it instead.
+    /// recorded (only the camera or parts moved, or nothing) resubmits it instead.
     #[command(after_help = ENVIRONMENT_HELP)]
     Render(RenderArgs),
     /// What lies under a pixel (or in a rectangle) of the view `render` draws.

@@ -11,9 +11,10 @@ use cadr_core::generate::{generate, GeneratorSpec};
 use cadr_core::graph::{NodeFlags, SceneGraph};
 use cadr_core::render::Camera;
 use cadr_core::scene::flatten;
-use cadr_core::technique::Combination;
+use cadr_core::technique::{Combination, PluginRegistry};
 use cadr_core::tree::SceneTree;
 use cadr_core::view::View;
+use cadr_core::vk::Device;
 use cadr_tests::images::{compare, SAME_PICTURE, VISIBLE_CHANGE};
 use cadr_tests::{
     assert_no_validation_errors, first_transform, plugin_registry, scene_wide as combination,
@@ -22,6 +23,19 @@ use cadr_tests::{
 use glam::{DMat4, DVec3};
 
 const SIZE: (u32, u32) = (160, 120);
+
+/// A view of `SIZE` drawing with `combination`, frame replay on or off.
+fn view_with(
+    device: &Arc<Device>,
+    registry: &Arc<PluginRegistry>,
+    combination: &Combination,
+    replay: bool,
+) -> View {
+    let mut view = View::new(device, Arc::clone(registry), SIZE.0, SIZE.1).unwrap();
+    view.techniques_mut().select(combination).unwrap();
+    view.techniques_mut().set_frame_replay(replay);
+    view
+}
 
 /// What one frame showed and whether it was replayed.
 struct Shown {
@@ -41,9 +55,7 @@ fn orbit(combination: &Combination, replay: bool, edit_at: usize, frames: usize)
     let (root, original) = first_transform(&mut graph, &handles).unwrap();
     let mut tree = SceneTree::build(&mut graph);
     let registry = plugin_registry(&device);
-    let mut view = View::new(&device, Arc::clone(&registry), SIZE.0, SIZE.1).unwrap();
-    view.techniques_mut().select(combination).unwrap();
-    view.techniques_mut().set_frame_replay(replay);
+    let mut view = view_with(&device, &registry, combination, replay);
     let aspect = f64::from(SIZE.0) / f64::from(SIZE.1);
     let shown = (0..frames)
         .map(|frame| {
@@ -149,9 +161,7 @@ fn explode(
     assert!(moving.len() > 1, "the demo has transform nodes to move");
     let mut tree = SceneTree::build(&mut graph);
     let registry = plugin_registry(&device);
-    let mut view = View::new(&device, Arc::clone(&registry), SIZE.0, SIZE.1).unwrap();
-    view.techniques_mut().select(combination).unwrap();
-    view.techniques_mut().set_frame_replay(replay);
+    let mut view = view_with(&device, &registry, combination, replay);
     let aspect = f64::from(SIZE.0) / f64::from(SIZE.1);
     let camera = Camera::orbit(&bounds, aspect, 0.3, 1.2);
     let shown = (0..frames)
@@ -172,8 +182,7 @@ fn explode(
         })
         .collect();
     drop(view);
-    let mut fresh = View::new(&device, Arc::clone(&registry), SIZE.0, SIZE.1).unwrap();
-    fresh.techniques_mut().select(combination).unwrap();
+    let mut fresh = view_with(&device, &registry, combination, true);
     let mut fresh_tree = SceneTree::build(&mut graph);
     fresh.render(&graph, &mut fresh_tree, &camera).unwrap();
     let expected = fresh.renderer().read_rgba8().unwrap();

@@ -731,7 +731,10 @@ impl GpuScene {
         self.last_upload.materials += material_count;
         self.last_upload.records += record_count;
         self.last_upload.bytes += bytes;
-        let mut key = upload::mix(self.uploader.commands_key(), self.hierarchy.commands_key());
+        // The buffers generation is unique across scenes: a prologue recorded for another
+        // scene (its sets gone with it) never matches.
+        let mut key = upload::mix(self.buffers_generation, self.uploader.commands_key());
+        key = upload::mix(key, self.hierarchy.commands_key());
         key = upload::mix(key, u64::from(self.last_hierarchy.is_some()));
         Ok((bytes, key))
     }

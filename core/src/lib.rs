@@ -8,6 +8,7 @@
 //! layer under all of it, the only code that calls ash; [`error::RenderError`] is what the
 //! layers above it report.
 
+mod commands_key;
 pub mod csf;
 pub mod disk_cache;
 pub mod error;

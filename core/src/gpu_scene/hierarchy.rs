@@ -34,7 +34,7 @@ use crate::vk::{memory_barrier, record_dispatch, Buffer, DescriptorSets, Device,
 
 use super::geometry::usage;
 use super::split_f64;
-use super::upload::mix;
+use crate::commands_key::mix;
 
 /// 32-bit words of one local matrix on the GPU: columns 0–2 as rotation and scale with the
 /// translation's low part in w, then the translation's high part.

@@ -733,9 +733,10 @@ impl GpuScene {
         self.last_upload.bytes += bytes;
         // The buffers generation is unique across scenes: a prologue recorded for another
         // scene (its sets gone with it) never matches.
-        let mut key = upload::mix(self.buffers_generation, self.uploader.commands_key());
-        key = upload::mix(key, self.hierarchy.commands_key());
-        key = upload::mix(key, u64::from(self.last_hierarchy.is_some()));
+        let mut key =
+            crate::commands_key::mix(self.buffers_generation, self.uploader.commands_key());
+        key = crate::commands_key::mix(key, self.hierarchy.commands_key());
+        key = crate::commands_key::mix(key, u64::from(self.last_hierarchy.is_some()));
         Ok((bytes, key))
     }
 

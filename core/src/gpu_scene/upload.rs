@@ -6,6 +6,7 @@
 
 use std::sync::Arc;
 
+use crate::commands_key::mix;
 use crate::error::RenderResult;
 use crate::vk::raw as vk;
 
@@ -349,9 +350,4 @@ impl SparseUploader {
         }
         Ok(())
     }
-}
-
-/// Folds `value` into `key` (FNV-like, for commands keys).
-pub(super) fn mix(key: u64, value: u64) -> u64 {
-    (key ^ value).wrapping_mul(0x100_0000_01b3).rotate_left(17)
 }

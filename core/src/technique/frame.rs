@@ -8,6 +8,7 @@ use std::cell::RefCell;
 use std::ffi::c_void;
 use std::time::Instant;
 
+use crate::commands_key::mix;
 use crate::error::{RenderError, RenderResult};
 use crate::vk::raw::{self as vk, Handle};
 use cadr_plugin_abi as abi;
@@ -34,10 +35,6 @@ pub fn frustum_planes(camera: &Camera) -> [[f64; 4]; 6] {
         let p = if length > 0.0 { p / length } else { p };
         p.to_array()
     })
-}
-
-fn mix(key: u64, value: u64) -> u64 {
-    (key ^ value).wrapping_mul(0x100_0000_01b3).rotate_left(17)
 }
 
 impl Renderer {

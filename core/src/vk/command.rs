@@ -61,39 +61,22 @@ enum PrologueState {
 impl CommandContext {
     /// Creates the pool, its command buffer and a signalled fence.
     pub fn new(device: &Arc<Device>, name: &str) -> VkResult<Self> {
-        let pool_info = vk::CommandPoolCreateInfo::default()
-            .queue_family_index(device.queue_family())
-            .flags(vk::CommandPoolCreateFlags::TRANSIENT);
-        // SAFETY: pool_info is valid for this device.
-        let pool = unsafe {
-            device
-                .raw
-                .create_command_pool(&pool_info, core_command_pool_callbacks())
-        }
-        .or_vk("vkCreateCommandPool")?;
+        let (pool, command_buffer) = pool_with_buffer(device, name)?;
+        // Dropped on a later failure: the pool is destroyed with it.
         let mut context = Self {
             device: Arc::clone(device),
             pool,
-            command_buffer: vk::CommandBuffer::null(),
+            command_buffer,
             fence: vk::Fence::null(),
             in_flight: false,
             prologue: None,
             prologue_state: PrologueState::Absent,
             prologue_recorded: false,
         };
-        let alloc_info = vk::CommandBufferAllocateInfo::default()
-            .command_pool(pool)
-            .level(vk::CommandBufferLevel::PRIMARY)
-            .command_buffer_count(1);
-        // SAFETY: the pool is alive; one buffer is requested.
-        context.command_buffer = unsafe { device.raw.allocate_command_buffers(&alloc_info) }
-            .or_vk("vkAllocateCommandBuffers")?[0];
         let fence_info = vk::FenceCreateInfo::default().flags(vk::FenceCreateFlags::SIGNALED);
         // SAFETY: fence_info is valid.
         context.fence = unsafe { device.raw.create_fence(&fence_info, host_callbacks()) }
             .or_vk("vkCreateFence")?;
-        device.set_name(pool, &format!("{name} pool"));
-        device.set_name(context.command_buffer, name);
         device.set_name(context.fence, &format!("{name} fence"));
         Ok(context)
     }
@@ -140,7 +123,7 @@ impl CommandContext {
         let (pool, command_buffer) = match self.prologue {
             Some(prologue) => prologue,
             None => {
-                let prologue = self.create_prologue()?;
+                let prologue = pool_with_buffer(&self.device, "prologue")?;
                 self.prologue = Some(prologue);
                 prologue
             }
@@ -187,40 +170,6 @@ impl CommandContext {
             self.prologue_state = PrologueState::Ready;
         }
         self.prologue_state == PrologueState::Ready
-    }
-
-    fn create_prologue(&self) -> VkResult<(vk::CommandPool, vk::CommandBuffer)> {
-        let pool_info = vk::CommandPoolCreateInfo::default()
-            .queue_family_index(self.device.queue_family())
-            .flags(vk::CommandPoolCreateFlags::TRANSIENT);
-        // SAFETY: pool_info is valid for this device.
-        let pool = unsafe {
-            self.device
-                .raw
-                .create_command_pool(&pool_info, core_command_pool_callbacks())
-        }
-        .or_vk("vkCreateCommandPool")?;
-        let alloc_info = vk::CommandBufferAllocateInfo::default()
-            .command_pool(pool)
-            .level(vk::CommandBufferLevel::PRIMARY)
-            .command_buffer_count(1);
-        // SAFETY: the pool is alive; one buffer is requested.
-        match unsafe { self.device.raw.allocate_command_buffers(&alloc_info) } {
-            Ok(buffers) => {
-                self.device.set_name(pool, "prologue pool");
-                self.device.set_name(buffers[0], "prologue");
-                Ok((pool, buffers[0]))
-            }
-            Err(error) => {
-                // SAFETY: the pool was just created and holds nothing in use.
-                unsafe {
-                    self.device
-                        .raw
-                        .destroy_command_pool(pool, core_command_pool_callbacks())
-                };
-                Err(error).or_vk("vkAllocateCommandBuffers")
-            }
-        }
     }
 
     /// Ends recording and submits; the fence signals when the GPU is done.
@@ -336,6 +285,42 @@ impl Drop for CommandContext {
                     .raw
                     .destroy_command_pool(pool, core_command_pool_callbacks());
             }
+        }
+    }
+}
+
+/// A transient command pool with one primary command buffer, named after `name`; the pool is
+/// destroyed again when the buffer cannot be allocated.
+fn pool_with_buffer(device: &Device, name: &str) -> VkResult<(vk::CommandPool, vk::CommandBuffer)> {
+    let pool_info = vk::CommandPoolCreateInfo::default()
+        .queue_family_index(device.queue_family())
+        .flags(vk::CommandPoolCreateFlags::TRANSIENT);
+    // SAFETY: pool_info is valid for this device.
+    let pool = unsafe {
+        device
+            .raw
+            .create_command_pool(&pool_info, core_command_pool_callbacks())
+    }
+    .or_vk("vkCreateCommandPool")?;
+    let alloc_info = vk::CommandBufferAllocateInfo::default()
+        .command_pool(pool)
+        .level(vk::CommandBufferLevel::PRIMARY)
+        .command_buffer_count(1);
+    // SAFETY: the pool is alive; one buffer is requested.
+    match unsafe { device.raw.allocate_command_buffers(&alloc_info) } {
+        Ok(buffers) => {
+            device.set_name(pool, &format!("{name} pool"));
+            device.set_name(buffers[0], name);
+            Ok((pool, buffers[0]))
+        }
+        Err(error) => {
+            // SAFETY: the pool was just created and holds nothing in use.
+            unsafe {
+                device
+                    .raw
+                    .destroy_command_pool(pool, core_command_pool_callbacks())
+            };
+            Err(error).or_vk("vkAllocateCommandBuffers")
         }
     }
 }

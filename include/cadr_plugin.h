@@ -11,7 +11,7 @@
 #define CADR_PLUGIN_ABI_MAJOR 1
 
 // Minor version of this ABI: additions that older readers may ignore.
-#define CADR_PLUGIN_ABI_MINOR 10
+#define CADR_PLUGIN_ABI_MINOR 11
 
 // `(major << 16) | minor`, what [`CadrPluginVersionFn`] returns.
 #define CADR_PLUGIN_ABI_VERSION ((CADR_PLUGIN_ABI_MAJOR << 16) | CADR_PLUGIN_ABI_MINOR)
@@ -528,6 +528,19 @@ typedef struct CadrPassFilter {
   uint32_t section_cut;
 } CadrPassFilter;
 
+// Since ABI 1.11: the instances a pass does not need although its [`CadrPassFilter`] keeps
+// them: those whose `flags & mask == value`; `mask` 0 excludes none. A filter says what a
+// needed instance is, an exclusion what it is not: the X-ray mode's translucent pass needs
+// every instance except the highlighted opaque ones its opaque pass draws, which no single
+// filter can say. As with the filter, the pass's pipeline clips the excluded instances away
+// whole, so drawing them is correct, only wasted work.
+typedef struct CadrPassExclusion {
+  // The `CADR_INSTANCE_*` bits the exclusion looks at; 0 excludes nothing.
+  CadrInstanceFlags mask;
+  // What those bits are in an instance the pass does not need.
+  CadrInstanceFlags value;
+} CadrPassExclusion;
+
 // What a submission records with. Owned by the host, valid for the call; the command
 // buffer is the host's (secondary command buffers the submission records are its own).
 typedef struct CadrRecordContext {
@@ -587,6 +600,10 @@ typedef struct CadrRecordContext {
   // per pass: the instances each pass needs ([`CadrPassFilter`]). Part of what
   // `commands_key` covers.
   const struct CadrPassFilter *pass_filters;
+  // Since ABI 1.11 (read it only when `size` covers it): null, or `pass_count` exclusions,
+  // one per pass: the instances each pass does not need although its filter keeps them
+  // ([`CadrPassExclusion`]). Part of what `commands_key` covers.
+  const struct CadrPassExclusion *pass_exclusions;
 } CadrRecordContext;
 
 // Submission vtable ([`CADR_KIND_SUBMISSION`]).
@@ -715,6 +732,10 @@ typedef struct CadrGpuCullContext {
   // whose sphere lies wholly outside one is cut away, and the culler may cull it like one
   // outside the frustum. Also in [`CadrGpuCullView::section_planes`].
   float section_planes[6][4];
+  // Since ABI 1.11 (read it only when `size` covers it): null, or `pass_count` exclusions,
+  // one per pass ([`CadrPassExclusion`]); a culler that honours them writes no commands for
+  // the instances they exclude.
+  const struct CadrPassExclusion *pass_exclusions;
 } CadrGpuCullContext;
 
 // Culling vtable ([`CADR_KIND_CULLING`]).
@@ -973,6 +994,12 @@ typedef struct CadrTransparencyVtable {
 // ([`CADR_TRAIT_PARAMETERS_IN_COMMANDS`]) or copies them on the host leaves it clear.
 #define CADR_TRAIT_REPLAYS_PARAMETER_CHANGES (1 << 8)
 
+// Since ABI 1.11. Culling, an announcement: what `cull` writes depends on the scene (its
+// candidates and instances) only, never on the view ([`CadrCullInput::planes`],
+// [`CadrCullInput::section_planes`]): the host calls it again only when the scene changed, not
+// every frame of an orbiting camera (`none`, which draws every candidate, sets it).
+#define CADR_TRAIT_CULLS_WHATEVER_THE_VIEW (1 << 9)
+
 // Device-local; written by transfers or shaders.
 #define CADR_MEMORY_GPU_ONLY 0
 
@@ -1003,8 +1030,14 @@ typedef struct CadrTransparencyVtable {
 // Since ABI 1.9: the part's material is translucent (blended with an opacity under 1, or with
 // a base-colour texture that has translucent texels), so frames with translucency draw it in
 // the transparency method's pass. Textures turned off make such a part opaque again where its
-// opacity is 1: the flag then says "may be translucent".
+// opacity is 1: [`CADR_INSTANCE_TRANSLUCENT_BY_TEXTURE`] says which (before ABI 1.11 the flag
+// then said "may be translucent").
 #define CADR_INSTANCE_TRANSLUCENT (1 << 6)
+
+// Since ABI 1.11, with [`CADR_INSTANCE_TRANSLUCENT`]: the part is translucent only through
+// its base-colour texture's texels (its material's opacity is 1), so with textures turned off
+// it is opaque.
+#define CADR_INSTANCE_TRANSLUCENT_BY_TEXTURE (1 << 7)
 
 // Triangles (solid shading).
 #define CADR_PASS_TRIANGLES 0

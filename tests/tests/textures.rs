@@ -87,6 +87,9 @@ fn the_textured_file_loads_its_textures_transforms_colours_and_alpha_modes() {
 fn textures_colours_and_alpha_reach_the_picture() {
     let scene = textured_scene("picture");
     let mut f = front_view(&scene);
+    // Each part is drawn once, in the opaque pass or the translucent one.
+    let parts = cadr_core::scene::flatten(&scene).unwrap().draws.len() as u64;
+    assert_eq!(f.steady_draws(), parts, "textures on");
     let image = f.render();
     assert_matches_reference("textured_solid", &image, DEFAULT_TOLERANCE);
     let camera = f.camera;
@@ -169,6 +172,9 @@ fn textures_colours_and_alpha_reach_the_picture() {
         .set_shade_mode(ShadeMode::Solid)
         .unwrap();
     f.view.renderer_mut().set_textures(false);
+    // Still once each: the quad translucent by its texture only is opaque now, drawn by the
+    // opaque pass and by no translucent one.
+    assert_eq!(f.steady_draws(), parts, "textures off");
     let plain = f.render();
     let (a, b) = (
         at(&plain, cell_center(3.0, 4.0)),

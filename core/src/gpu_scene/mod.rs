@@ -84,12 +84,19 @@ pub fn gpu_material(graph: &SceneGraph, slot: u32) -> abi::CadrMaterial {
         .unwrap_or_default()
 }
 
-/// Whether parts drawn with material slot `slot` are translucent (the vertex shader decides
-/// the same from the base colour's alpha and the material's texture description).
-fn is_translucent(graph: &SceneGraph, slot: u32) -> bool {
-    graph
-        .material_at(slot)
-        .is_some_and(|m| graph.is_translucent(m))
+/// The translucency flags of parts drawn with material slot `slot`:
+/// [`abi::CADR_INSTANCE_TRANSLUCENT`] when they are, with
+/// [`abi::CADR_INSTANCE_TRANSLUCENT_BY_TEXTURE`] when only their texture makes them so (the
+/// vertex shader decides the same from the base colour's alpha and the material's texture
+/// description).
+fn translucency(graph: &SceneGraph, slot: u32) -> abi::CadrInstanceFlags {
+    match graph.material_at(slot) {
+        Some(m) if m.is_translucent_without_textures() => abi::CADR_INSTANCE_TRANSLUCENT,
+        Some(m) if graph.is_translucent(m) => {
+            abi::CADR_INSTANCE_TRANSLUCENT | abi::CADR_INSTANCE_TRANSLUCENT_BY_TEXTURE
+        }
+        _ => 0,
+    }
 }
 
 /// What the frame set's scene bindings name (see [`GpuScene::frame_resources`]).
@@ -131,10 +138,10 @@ pub struct GpuScene {
     materials: Vec<abi::CadrMaterial>,
     /// Per material slot: its texture description (`textures::gpu_material_texture`).
     material_textures: Vec<[u32; 12]>,
-    /// Per material slot: whether its parts are translucent.
-    translucent: Vec<bool>,
-    /// Material slots whose parts are translucent.
-    translucent_materials: usize,
+    /// Per material slot: the translucency flags of its parts (see [`translucency`]).
+    translucency: Vec<abi::CadrInstanceFlags>,
+    /// Material slots whose parts are translucent: with textures off (`[0]`) and on (`[1]`).
+    translucent_materials: [usize; 2],
     /// Material slots whose texture description is not the default (a texture, or an alpha
     /// mode other than BLEND): while there are none, the vertex shader skips reading them.
     described_materials: usize,
@@ -198,8 +205,8 @@ impl GpuScene {
             worlds: Vec::new(),
             materials: Vec::new(),
             material_textures: Vec::new(),
-            translucent: Vec::new(),
-            translucent_materials: 0,
+            translucency: Vec::new(),
+            translucent_materials: [0; 2],
             described_materials: 0,
             textures,
             transforms,
@@ -287,17 +294,21 @@ impl GpuScene {
         self.material_textures = (0..material_slots as u32)
             .map(|slot| gpu_material_texture(graph, slot))
             .collect();
-        self.translucent = (0..material_slots as u32)
-            .map(|slot| is_translucent(graph, slot))
+        self.translucency = (0..material_slots as u32)
+            .map(|slot| translucency(graph, slot))
             .collect();
-        self.translucent_materials = self.translucent.iter().filter(|&&t| t).count();
+        self.translucent_materials = self
+            .translucency
+            .iter()
+            .map(|&flags| translucent_with_and_without_textures(flags))
+            .fold([0; 2], |[a, b], [c, d]| [a + c, b + d]);
         self.described_materials = self
             .material_textures
             .iter()
             .filter(|words| textures::is_described(words))
             .count();
         let count = tree.instance_capacity();
-        let (instances, tallies) = make_instances(&self.arenas, &self.translucent, tree, count);
+        let (instances, tallies) = make_instances(&self.arenas, &self.translucency, tree, count);
         self.instances = instances;
         self.candidate_bits = tallies
             .iter()
@@ -376,10 +387,10 @@ impl GpuScene {
 
     /// The entry of a live instance whose geometry and part are in the arenas.
     fn entry_of(&self, instance: &InstanceRef) -> Option<(abi::CadrInstance, bool)> {
-        entry_in(&self.arenas, &self.translucent, instance)
+        entry_in(&self.arenas, &self.translucency, instance)
     }
 
-    /// Sets or clears [`abi::CADR_INSTANCE_TRANSLUCENT`] on the instances of the material
+    /// Sets or clears the translucency flags ([`translucency`]) on the instances of the material
     /// slots whose translucency changed (`flipped`), queues their records and cull entries,
     /// and says whether any changed. A scan of every instance, for an edit that is rare.
     fn reflag_translucency(&mut self, flipped: &[u32]) -> bool {
@@ -392,8 +403,8 @@ impl GpuScene {
             if entry.flags & abi::CADR_INSTANCE_ALIVE == 0 || !flipped.contains(&entry.material) {
                 continue;
             }
-            let translucent = self.translucent[entry.material as usize];
-            entry.flags = translucency_flag(entry.flags, translucent);
+            entry.flags =
+                with_translucency(entry.flags, self.translucency[entry.material as usize]);
             self.record_gpu.queue(id as u32);
             self.cull_gpu.queue(id as u32);
             any = true;
@@ -544,13 +555,18 @@ impl GpuScene {
         let mut flipped = Vec::new();
         for &slot in &changes.dirty_materials {
             if (slot as usize) < self.materials.len() {
-                let translucent = is_translucent(graph, slot);
-                let was = std::mem::replace(&mut self.translucent[slot as usize], translucent);
-                if was != translucent {
+                let flags = translucency(graph, slot);
+                let was = std::mem::replace(&mut self.translucency[slot as usize], flags);
+                if was != flags {
                     flipped.push(slot);
                 }
-                self.translucent_materials =
-                    self.translucent_materials + usize::from(translucent) - usize::from(was);
+                let (now, was) = (
+                    translucent_with_and_without_textures(flags),
+                    translucent_with_and_without_textures(was),
+                );
+                for ((count, now), was) in self.translucent_materials.iter_mut().zip(now).zip(was) {
+                    *count = *count + now - was;
+                }
                 self.materials[slot as usize] = gpu_material(graph, slot);
                 let description = gpu_material_texture(graph, slot);
                 let was =
@@ -830,11 +846,11 @@ impl GpuScene {
             .sum()
     }
 
-    /// Whether some material is translucent (opacity under 1, or a BLEND texture with
-    /// translucent texels): frames then draw translucent surfaces with the transparency
-    /// method.
-    pub fn has_translucency(&self) -> bool {
-        self.translucent_materials > 0
+    /// Whether some material is translucent (opacity under 1, or, with `textures` drawn, a
+    /// BLEND texture with translucent texels): frames then draw translucent surfaces with the
+    /// transparency method.
+    pub fn has_translucency(&self, textures: bool) -> bool {
+        self.translucent_materials[usize::from(textures)] > 0
     }
 
     /// Whether some geometry has texture coordinates or colours (the vertex shader reads them
@@ -949,20 +965,20 @@ fn cull_entry(
 
 /// The entry of a live instance whose geometry and part are in `arenas`, and whether it is a
 /// candidate for drawing (shown, with triangles).
-/// `translucent` says per material slot whether its parts are.
+/// `translucency` gives per material slot its parts' translucency flags.
 fn entry_in(
     arenas: &GeometryArenas,
-    translucent: &[bool],
+    translucency: &[abi::CadrInstanceFlags],
     instance: &InstanceRef,
 ) -> Option<(abi::CadrInstance, bool)> {
     let place = arenas.places.get(instance.geometry as usize)?.as_ref()?;
     let ([first, count, first_wire, wire_count], sphere, closure) =
         *place.parts.get(instance.part as usize)?;
-    let translucent = translucent
+    let translucency = translucency
         .get(instance.material as usize)
         .copied()
-        .unwrap_or(false);
-    let flags = translucency_flag(abi::CADR_INSTANCE_ALIVE, translucent)
+        .unwrap_or(0);
+    let flags = with_translucency(abi::CADR_INSTANCE_ALIVE, translucency)
         | closure
         | if instance.highlighted {
             abi::CADR_INSTANCE_HIGHLIGHTED
@@ -992,13 +1008,22 @@ fn entry_in(
     Some((entry, instance.visible && count > 0))
 }
 
-/// `flags` with [`abi::CADR_INSTANCE_TRANSLUCENT`] set or cleared.
-fn translucency_flag(flags: u32, translucent: bool) -> u32 {
-    if translucent {
-        flags | abi::CADR_INSTANCE_TRANSLUCENT
-    } else {
-        flags & !abi::CADR_INSTANCE_TRANSLUCENT
-    }
+/// Whether a material slot of `translucency` flags counts as translucent with textures off
+/// (`[0]`) and on (`[1]`), as 0 or 1.
+fn translucent_with_and_without_textures(translucency: abi::CadrInstanceFlags) -> [usize; 2] {
+    [
+        usize::from(translucency == abi::CADR_INSTANCE_TRANSLUCENT),
+        usize::from(translucency != 0),
+    ]
+}
+
+/// `flags` with their translucency flags replaced by `translucency` (see [`translucency`]).
+fn with_translucency(
+    flags: abi::CadrInstanceFlags,
+    translucency: abi::CadrInstanceFlags,
+) -> abi::CadrInstanceFlags {
+    const BITS: u32 = abi::CADR_INSTANCE_TRANSLUCENT | abi::CADR_INSTANCE_TRANSLUCENT_BY_TEXTURE;
+    flags & !BITS | translucency
 }
 
 /// Fewer instances than this per thread are made on the calling thread.
@@ -1042,11 +1067,11 @@ struct InstanceTally {
     triangles: u64,
 }
 
-/// The entries of instances `0..count` of `tree` (dead ones default; `translucent` per material
-/// slot), on a thread per core.
+/// The entries of instances `0..count` of `tree` (dead ones default; `translucency` per
+/// material slot), on a thread per core.
 fn make_instances(
     arenas: &GeometryArenas,
-    translucent: &[bool],
+    translucency: &[abi::CadrInstanceFlags],
     tree: &SceneTree,
     count: usize,
 ) -> (Vec<abi::CadrInstance>, Vec<InstanceTally>) {
@@ -1059,7 +1084,7 @@ fn make_instances(
             }
             let (entry, candidate) = tree
                 .instance(id as u32)
-                .and_then(|instance| entry_in(arenas, translucent, &instance))
+                .and_then(|instance| entry_in(arenas, translucency, &instance))
                 .unwrap_or((abi::CadrInstance::default(), false));
             if candidate {
                 if let Some(word) = tally.candidate_bits.last_mut() {

@@ -125,11 +125,17 @@ impl Material {
     /// texture with translucent texels (`texture_is_translucent` says whether the texture it
     /// names has any).
     pub fn is_translucent(&self, texture_is_translucent: impl Fn(u32) -> bool) -> bool {
-        self.alpha_mode == AlphaMode::Blend
-            && (self.base_color[3] < 1.0
-                || self
+        self.is_translucent_without_textures()
+            || (self.alpha_mode == AlphaMode::Blend
+                && self
                     .base_color_texture
                     .is_some_and(|t| texture_is_translucent(t.texture)))
+    }
+
+    /// Whether parts drawn with it are translucent while textures are turned off: in the
+    /// BLEND mode, an opacity under 1.
+    pub fn is_translucent_without_textures(&self) -> bool {
+        self.alpha_mode == AlphaMode::Blend && self.base_color[3] < 1.0
     }
 }
 

@@ -47,13 +47,13 @@ impl Renderer {
         camera: &Camera,
     ) -> RenderResult<FrameStats> {
         let mode = techniques.shade_mode();
+        let translucency = scene.has_translucency(self.textures());
         let passes = PassSet::Shaded {
             mode,
-            translucent: mode == ShadeMode::XRay
-                || (mode.shows_translucency() && scene.has_translucency()),
+            translucent: mode == ShadeMode::XRay || (mode.shows_translucency() && translucency),
             samples: self.msaa(),
             dashed_hidden: mode == ShadeMode::HiddenLine && techniques.dashed_hidden_lines(),
-            lines_through_translucent: mode == ShadeMode::HiddenLine && scene.has_translucency(),
+            lines_through_translucent: mode == ShadeMode::HiddenLine && translucency,
             caps_over_lines: matches!(mode, ShadeMode::Edges | ShadeMode::HiddenLine)
                 && self.section().caps_seen_from(camera.eye()),
         };
@@ -132,13 +132,16 @@ impl Renderer {
         for pass in &pipelines.passes {
             key = mix(key, pass.pipeline);
         }
-        // Which instances each pass needs: the translucency flag says exactly which parts are
-        // translucent unless textures are off in a scene that has them.
-        let exact_translucency = self.textures() || !scene.has_textures();
-        let pass_filters = pipelines.pass_filters(exact_translucency);
-        for filter in pass_filters {
+        // Which instances each pass needs: without textures, parts translucent by their
+        // texture only are opaque.
+        let pass_filters = pipelines.pass_filters(self.textures());
+        for (filter, exclusion) in pass_filters.filters.iter().zip(&pass_filters.exclusions) {
             key = mix(key, u64::from(filter.mask) << 32 | u64::from(filter.value));
             key = mix(key, u64::from(filter.section_cut));
+            key = mix(
+                key,
+                u64::from(exclusion.mask) << 32 | u64::from(exclusion.value),
+            );
         }
         if values_in_commands {
             key = mix(key, view.parameters_generation);
@@ -203,7 +206,8 @@ impl Renderer {
                 extra_color_count,
                 extra_color_formats,
                 rasterization_samples: passes.samples(),
-                pass_filters: pass_filters.as_ptr(),
+                pass_filters: pass_filters.filters.as_ptr(),
+                pass_exclusions: pass_filters.exclusions.as_ptr(),
             })
         };
         // Records a phase of the GPU culler (if any) outside rendering.
@@ -453,22 +457,63 @@ fn barrier(renderer: &Renderer, command_buffer: vk::CommandBuffer) {
     );
 }
 
-/// What a culling result depends on: the culler, the scene (its parameter values only when
-/// the culler `reads_parameters`) and the view (frustum and section planes).
+/// What a CPU culler's result depends on, by what it announced.
+#[derive(Clone, Copy)]
+struct CullDepends {
+    /// The scene's parameter values (matrices, materials).
+    parameters: bool,
+    /// The view: its frustum and section planes.
+    view: bool,
+}
+
+impl CullDepends {
+    /// What a culler that `provides` these traits, from a library of ABI `minor`, reads:
+    /// everything, unless its minor lets it say otherwise and it does.
+    fn of(provides: abi::CadrTraitBits, minor: u32) -> Self {
+        Self {
+            // ABI 1.10: it replays parameter changes and reads no host matrices.
+            parameters: minor < 10
+                || provides & abi::CADR_TRAIT_REPLAYS_PARAMETER_CHANGES == 0
+                || provides & abi::CADR_TRAIT_READS_HOST_MATRICES != 0,
+            // ABI 1.11: its result is the same whatever the view.
+            view: minor < 11 || provides & abi::CADR_TRAIT_CULLS_WHATEVER_THE_VIEW == 0,
+        }
+    }
+}
+
+/// What a culling result depends on: the culler, the scene (its parameter values and the view,
+/// frustum and section planes, as far as the culler `depends` on them).
 fn cull_key(
     epoch: u64,
     view: &abi::CadrSceneView,
-    (frustum, section): (&[[f64; 4]; 6], &[[f64; 4]]),
-    reads_parameters: bool,
+    planes: (&[[f64; 4]; 6], &[[f64; 4]]),
+    depends: CullDepends,
 ) -> u64 {
-    let mut key = mix(epoch, view.draws_generation);
-    if reads_parameters {
-        key = mix(key, view.parameters_generation);
+    let generations = (
+        view.draws_generation,
+        view.parameters_generation,
+        view.buffers_generation,
+    );
+    cull_key_of(epoch, generations, planes, depends)
+}
+
+/// [`cull_key`] of the scene's draws, parameters and buffers generations.
+fn cull_key_of(
+    epoch: u64,
+    (draws, parameters, buffers): (u64, u64, u64),
+    (frustum, section): (&[[f64; 4]; 6], &[[f64; 4]]),
+    depends: CullDepends,
+) -> u64 {
+    let mut key = mix(epoch, draws);
+    if depends.parameters {
+        key = mix(key, parameters);
     }
-    key = mix(key, view.buffers_generation);
-    key = mix(key, section.len() as u64);
-    for value in frustum.iter().chain(section).flatten() {
-        key = mix(key, value.to_bits());
+    key = mix(key, buffers);
+    if depends.view {
+        key = mix(key, section.len() as u64);
+        for value in frustum.iter().chain(section).flatten() {
+            key = mix(key, value.to_bits());
+        }
     }
     key
 }
@@ -502,18 +547,10 @@ fn cull(
     let section_plane_count = section.planes().len().min(MAX_SECTION_PLANES);
     let all_planes = (&planes, &section_planes[..section_plane_count]);
     let culling = techniques.get(TechniqueKind::Culling)?;
-    // A culler of ABI 1.10 that replays parameter changes and reads no host matrices culls
-    // the same whatever the parameter values: moved parts do not make it cull again.
-    let provides = culling.entry.provides;
-    let reads_parameters = culling.entry.abi_version.1 < 10
-        || provides & abi::CADR_TRAIT_REPLAYS_PARAMETER_CHANGES == 0
-        || provides & abi::CADR_TRAIT_READS_HOST_MATRICES != 0;
-    let key = cull_key(
-        techniques.epoch,
-        &scene.view(),
-        all_planes,
-        reads_parameters,
-    );
+    // Moved parts do not make a culler cull again that reads no parameter values, nor a
+    // moving camera one whose result does not depend on the view.
+    let depends = CullDepends::of(culling.entry.provides, culling.entry.abi_version.1);
+    let key = cull_key(techniques.epoch, &scene.view(), all_planes, depends);
     if techniques.cull_key == Some(key) {
         return Ok(());
     }
@@ -551,7 +588,59 @@ fn cull(
         techniques.epoch,
         &scene.view(),
         all_planes,
-        reads_parameters,
+        depends,
     ));
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Two orbit positions' frustums and one section plane.
+    fn views() -> [[[f64; 4]; 6]; 2] {
+        let mut turned = [[0.0, 0.0, 1.0, 5.0]; 6];
+        turned[0] = [0.6, 0.0, 0.8, 5.0];
+        [[[0.0, 0.0, 1.0, 5.0]; 6], turned]
+    }
+
+    #[test]
+    fn a_culler_is_called_again_only_for_what_its_result_depends_on() {
+        let [front, side] = views();
+        let section = [[1.0, 0.0, 0.0, 0.0]];
+        let scene = (3, 7, 11);
+        let moved = (3, 8, 11);
+        let redrawn = (4, 7, 11);
+        let key = |provides, minor, generations, planes| {
+            cull_key_of(1, generations, planes, CullDepends::of(provides, minor))
+        };
+        let frustum = abi::CADR_TRAIT_READS_HOST_MATRICES | abi::CADR_TRAIT_REPLAYABLE;
+        let none = abi::CADR_TRAIT_REPLAYABLE
+            | abi::CADR_TRAIT_REPLAYS_PARAMETER_CHANGES
+            | abi::CADR_TRAIT_CULLS_WHATEVER_THE_VIEW;
+        // A view-dependent culler culls again for a turned camera and a new section.
+        assert_ne!(
+            key(frustum, 11, scene, (&front, &[][..])),
+            key(frustum, 11, scene, (&side, &[][..]))
+        );
+        assert_ne!(
+            key(frustum, 11, scene, (&front, &[][..])),
+            key(frustum, 11, scene, (&front, &section[..]))
+        );
+        assert_ne!(
+            key(frustum, 11, scene, (&front, &[][..])),
+            key(frustum, 11, moved, (&front, &[][..]))
+        );
+        // `none` does not for either, nor for moved parts, but does for changed draws.
+        let still = key(none, 11, scene, (&front, &[][..]));
+        assert_eq!(still, key(none, 11, scene, (&side, &[][..])));
+        assert_eq!(still, key(none, 11, scene, (&side, &section[..])));
+        assert_eq!(still, key(none, 11, moved, (&front, &[][..])));
+        assert_ne!(still, key(none, 11, redrawn, (&front, &[][..])));
+        // A library of ABI 1.10 cannot have said so: its culler culls for every view.
+        assert_ne!(
+            key(none, 10, scene, (&front, &[][..])),
+            key(none, 10, scene, (&side, &[][..]))
+        );
+    }
 }

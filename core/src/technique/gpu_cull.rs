@@ -9,6 +9,7 @@ use crate::error::RenderResult;
 use crate::vk::raw::{self as vk, Handle};
 use cadr_plugin_abi as abi;
 
+use super::pipeline::PassFilters;
 use super::registry::TechniqueKind;
 use super::set::{status, Active, Message, Techniques};
 use crate::gpu_scene::split_f64;
@@ -137,13 +138,14 @@ impl<'a> GpuCuller<'a> {
         phase: u32,
         command_buffer: vk::CommandBuffer,
         scene: &abi::CadrSceneView,
-        (passes, filters): (&[abi::CadrPass], &[abi::CadrPassFilter]),
+        (passes, filters): (&[abi::CadrPass], &PassFilters),
         gpu_view: &abi::CadrGpuCullView,
         view_buffer: vk::Buffer,
         depth: Option<PhaseDepth>,
     ) -> RenderResult<()> {
         self.draws.fill(abi::CadrGpuDraws::default());
-        debug_assert_eq!(passes.len(), filters.len());
+        debug_assert_eq!(passes.len(), filters.filters.len());
+        debug_assert_eq!(passes.len(), filters.exclusions.len());
         let context = abi::CadrGpuCullContext {
             size: std::mem::size_of::<abi::CadrGpuCullContext>() as u32,
             phase,
@@ -164,9 +166,10 @@ impl<'a> GpuCuller<'a> {
             min_pixels: gpu_view.sub_pixel[0],
             view_buffer: view_buffer.as_raw(),
             view_offset: 0,
-            pass_filters: filters.as_ptr(),
+            pass_filters: filters.filters.as_ptr(),
             section_plane_count: gpu_view.section[0],
             section_planes: gpu_view.section_planes,
+            pass_exclusions: filters.exclusions.as_ptr(),
         };
         let mut message = Message::new();
         // SAFETY: a live instance; the context and the arrays it points at are valid for the

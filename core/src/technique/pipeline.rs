@@ -134,37 +134,62 @@ struct PassScope {
 }
 
 impl PassScope {
-    /// The instances the pass needs, as the plugin ABI's filter on their flags: the others its
-    /// vertex shader clips away whole, so submissions and GPU cullers may skip them. `xray`:
-    /// the X-ray mode, where every part not highlighted is translucent. `exact_translucency`:
-    /// whether [`abi::CADR_INSTANCE_TRANSLUCENT`] names exactly the parts the vertex shader
-    /// draws as translucent (not while textures are turned off in a scene that has them: it
-    /// then says "may be translucent", which only the translucent pass may rely on).
-    fn filter(self, xray: bool, exact_translucency: bool) -> abi::CadrPassFilter {
+    /// The instances the pass needs, as the plugin ABI's filter and exclusion on their flags:
+    /// the others its vertex shader clips away whole, so submissions and GPU cullers may skip
+    /// them. `xray`: the X-ray mode, where every part not highlighted is translucent.
+    /// `textures`: whether textures are drawn; without them a part translucent only by its
+    /// texture ([`abi::CADR_INSTANCE_TRANSLUCENT_BY_TEXTURE`]) is opaque.
+    fn filter(self, xray: bool, textures: bool) -> (abi::CadrPassFilter, abi::CadrPassExclusion) {
         const HIGHLIGHTED: u32 = abi::CADR_INSTANCE_HIGHLIGHTED;
         const TRANSLUCENT: u32 = abi::CADR_INSTANCE_TRANSLUCENT;
-        let (mut mask, mut value) = match (self.role, xray, exact_translucency) {
-            (DrawRole::All, _, _) => (0, 0),
+        const BY_TEXTURE: u32 = abi::CADR_INSTANCE_TRANSLUCENT_BY_TEXTURE;
+        const ANY: (u32, u32) = (0, 0);
+        // Translucent by material: with textures, the flag; without, the flag but not by texture.
+        let (material_mask, material_translucent) = if textures {
+            (TRANSLUCENT, TRANSLUCENT)
+        } else {
+            (TRANSLUCENT | BY_TEXTURE, TRANSLUCENT)
+        };
+        let ((mut mask, mut value), exclusion) = match (self.role, xray) {
+            (DrawRole::All, _) => (ANY, ANY),
+            // Opaque: not translucent by material (without textures, an exclusion says it).
+            (DrawRole::Opaque, false) if textures => ((TRANSLUCENT, 0), ANY),
+            (DrawRole::Opaque, false) => (ANY, (material_mask, material_translucent)),
             // Opaque in X-ray: highlighted, and not translucent by material.
-            (DrawRole::Opaque, true, true) => (HIGHLIGHTED | TRANSLUCENT, HIGHLIGHTED),
-            (DrawRole::Opaque, true, false) => (HIGHLIGHTED, HIGHLIGHTED),
-            (DrawRole::Opaque, false, true) => (TRANSLUCENT, 0),
-            (DrawRole::Opaque, false, false) => (0, 0),
-            // Translucent in X-ray: not highlighted, or translucent by material.
-            (DrawRole::Translucent, true, _) => (0, 0),
-            (DrawRole::Translucent, false, _) => (TRANSLUCENT, TRANSLUCENT),
+            (DrawRole::Opaque, true) if textures => ((HIGHLIGHTED | TRANSLUCENT, HIGHLIGHTED), ANY),
+            (DrawRole::Opaque, true) => (
+                (HIGHLIGHTED, HIGHLIGHTED),
+                (material_mask, material_translucent),
+            ),
+            (DrawRole::Translucent, false) => ((material_mask, material_translucent), ANY),
+            // Translucent in X-ray: not highlighted, or translucent by material: every part
+            // but the highlighted opaque ones. Without textures one exclusion cannot also
+            // name those translucent by texture only: they are drawn, and clipped.
+            (DrawRole::Translucent, true) => (ANY, (HIGHLIGHTED | TRANSLUCENT, HIGHLIGHTED)),
         };
         if self.caps {
             mask |= abi::CADR_INSTANCE_CLOSED;
             value |= abi::CADR_INSTANCE_CLOSED;
         }
-        abi::CadrPassFilter {
+        let filter = abi::CadrPassFilter {
             mask,
             value,
             // The caps pass: only parts a plane cuts can show a cap.
             section_cut: u32::from(self.caps),
-        }
+        };
+        let (mask, value) = exclusion;
+        (filter, abi::CadrPassExclusion { mask, value })
     }
+}
+
+/// The instances each pass of a frame needs, one filter and one exclusion per pass, in the
+/// order of [`TechniquePipelines::passes`] (see [`PassScope::filter`]).
+#[derive(Clone, Debug, Default)]
+pub struct PassFilters {
+    /// What each pass keeps.
+    pub filters: Vec<abi::CadrPassFilter>,
+    /// Of those, what each pass does not need.
+    pub exclusions: Vec<abi::CadrPassExclusion>,
 }
 
 /// A transparency method as its technique described it (`CadrTransparencyMethod`), owned.
@@ -528,10 +553,9 @@ pub struct TechniquePipelines {
     pub pass_set: PassSet,
     /// The passes, in order.
     pub passes: Vec<abi::CadrPass>,
-    /// The instances each pass needs, in the same order (see [`PassScope::filter`]): while the
-    /// translucency flag is inexact (`[0]`) and while it is exact (`[1]`). Made with the
-    /// passes, so a frame only picks one.
-    filters: [Vec<abi::CadrPassFilter>; 2],
+    /// The instances each pass needs, in the same order (see [`PassScope::filter`]): with
+    /// textures off (`[0]`) and on (`[1]`). Made with the passes, so a frame only picks one.
+    filters: [PassFilters; 2],
     /// The colour attachment's format (the pick pass draws ids).
     pub color_format: vk::Format,
     /// The formats of the colour attachments after the first (the transparency method's
@@ -605,7 +629,7 @@ impl TechniquePipelines {
             _empty_set_layout: empty_set_layout,
             pass_set: inputs.passes,
             passes: Vec::new(),
-            filters: [Vec::new(), Vec::new()],
+            filters: Default::default(),
             color_format: match inputs.passes {
                 PassSet::Pick { .. } => PICK_FORMAT,
                 PassSet::Shaded { .. } => COLOR_FORMAT,
@@ -724,16 +748,18 @@ impl TechniquePipelines {
                 ..
             }
         );
-        for (filters, exact_translucency) in self.filters.iter_mut().zip([false, true]) {
-            filters.push(scope.filter(xray, exact_translucency));
+        for (filters, textures) in self.filters.iter_mut().zip([false, true]) {
+            let (filter, exclusion) = scope.filter(xray, textures);
+            filters.filters.push(filter);
+            filters.exclusions.push(exclusion);
         }
         self.pipelines.push(pipeline);
     }
 
     /// The instances each pass needs (see [`PassScope::filter`]), in the order of
     /// [`TechniquePipelines::passes`].
-    pub fn pass_filters(&self, exact_translucency: bool) -> &[abi::CadrPassFilter] {
-        &self.filters[usize::from(exact_translucency)]
+    pub fn pass_filters(&self, textures: bool) -> &PassFilters {
+        &self.filters[usize::from(textures)]
     }
 
     /// The merge: a full-screen triangle blending the method's result over the picture.
@@ -921,38 +947,81 @@ mod tests {
         )
     }
 
+    /// Whether technique.vert draws a part with `flags` in a pass of `scope`: its translucency
+    /// test, role and caps clipping, as the shader decides them.
+    fn vertex_shader_draws(scope: PassScope, xray: bool, textures: bool, flags: u32) -> bool {
+        let set = |bit: u32| flags & bit != 0;
+        let by_material = set(abi::CADR_INSTANCE_TRANSLUCENT)
+            && (textures || !set(abi::CADR_INSTANCE_TRANSLUCENT_BY_TEXTURE));
+        let translucent = by_material || (xray && !set(abi::CADR_INSTANCE_HIGHLIGHTED));
+        let drawn = match scope.role {
+            DrawRole::All => true,
+            DrawRole::Opaque => !translucent,
+            DrawRole::Translucent => translucent,
+        };
+        drawn && (!scope.caps || set(abi::CADR_INSTANCE_CLOSED))
+    }
+
     #[test]
     fn a_pass_filter_leaves_out_only_what_its_vertex_shader_clips() {
         use abi::CADR_INSTANCE_TRANSLUCENT as TRANSLUCENT;
+        use abi::CADR_INSTANCE_TRANSLUCENT_BY_TEXTURE as BY_TEXTURE;
         use abi::{CADR_INSTANCE_CLOSED as CLOSED, CADR_INSTANCE_HIGHLIGHTED as HIGHLIGHTED};
-        let scope = |role, caps| PassScope { role, caps };
-        let keeps = |scope: PassScope, xray, exact, flags| scope.filter(xray, exact).keeps(flags);
-        let opaque = scope(DrawRole::Opaque, false);
-        let translucent = scope(DrawRole::Translucent, false);
-        // Outside X-ray the opaque pass leaves out translucent parts while the flag is exact;
-        // with textures off it only says "may be translucent", so the pass keeps them.
-        assert!(!keeps(opaque, false, true, TRANSLUCENT));
-        assert!(keeps(opaque, false, true, 0));
-        assert!(keeps(opaque, false, false, TRANSLUCENT));
-        // The translucent pass needs only what may be translucent, exact or not.
-        assert!(keeps(translucent, false, false, TRANSLUCENT));
-        assert!(!keeps(translucent, false, false, 0));
-        // X-ray: the opaque pass draws highlighted parts with an opaque material; the
-        // translucent one every part (those not highlighted, and translucent materials).
-        assert!(keeps(opaque, true, true, HIGHLIGHTED));
-        assert!(!keeps(opaque, true, true, HIGHLIGHTED | TRANSLUCENT));
-        assert!(keeps(opaque, true, false, HIGHLIGHTED | TRANSLUCENT));
-        assert!(!keeps(opaque, true, false, 0));
-        for flags in [0, HIGHLIGHTED, TRANSLUCENT, HIGHLIGHTED | TRANSLUCENT] {
-            assert!(keeps(translucent, true, true, flags));
-            assert!(keeps(scope(DrawRole::All, false), true, true, flags));
+        let mut every_flags = Vec::new();
+        for highlighted in [0, HIGHLIGHTED] {
+            for translucency in [0, TRANSLUCENT, TRANSLUCENT | BY_TEXTURE] {
+                for closed in [0, CLOSED] {
+                    every_flags.push(highlighted | translucency | closed);
+                }
+            }
         }
-        // The caps pass: closed parts, and only those a plane cuts (for cullers that can tell).
-        let caps = scope(DrawRole::All, true);
-        assert!(keeps(caps, false, true, CLOSED));
-        assert!(!keeps(caps, false, true, 0));
-        assert_eq!(caps.filter(false, true).section_cut, 1);
-        assert_eq!(opaque.filter(false, true).section_cut, 0);
+        let mut kept_needlessly = Vec::new();
+        for role in [DrawRole::All, DrawRole::Opaque, DrawRole::Translucent] {
+            for caps in [false, true] {
+                let scope = PassScope { role, caps };
+                for (xray, textures) in [(false, false), (false, true), (true, false), (true, true)]
+                {
+                    let (filter, exclusion) = scope.filter(xray, textures);
+                    let keeps = |flags| filter.keeps(flags) && !exclusion.excludes(flags);
+                    for &flags in &every_flags {
+                        let drawn = vertex_shader_draws(scope, xray, textures, flags);
+                        assert!(
+                            keeps(flags) || !drawn,
+                            "{scope:?} xray {xray} textures {textures}: flags {flags:#x} drawn \
+                             but filtered out"
+                        );
+                        if keeps(flags) && !drawn {
+                            kept_needlessly.push((role, caps, xray, textures, flags & !CLOSED));
+                        }
+                    }
+                }
+            }
+        }
+        // Every filter is exact but one: X-ray's translucent pass without textures keeps the
+        // highlighted parts translucent by texture only, which one exclusion cannot also name.
+        kept_needlessly.dedup();
+        let textured_highlighted = HIGHLIGHTED | TRANSLUCENT | BY_TEXTURE;
+        assert_eq!(
+            kept_needlessly,
+            [false, true].map(|caps| (
+                DrawRole::Translucent,
+                caps,
+                true,
+                false,
+                textured_highlighted
+            ))
+        );
+        // The caps pass: only those a plane cuts (for cullers that can tell).
+        let caps = PassScope {
+            role: DrawRole::All,
+            caps: true,
+        };
+        let opaque = PassScope {
+            role: DrawRole::Opaque,
+            caps: false,
+        };
+        assert_eq!(caps.filter(false, true).0.section_cut, 1);
+        assert_eq!(opaque.filter(false, true).0.section_cut, 0);
     }
 
     #[test]

@@ -19,15 +19,15 @@
 //! record and cull contexts) starts with its `size` in bytes (a reader ignores fields beyond the
 //! size the writer gave, and defaults fields the writer did not know); the small value records
 //! laid out in arrays or passed by value ([`CadrInstance`], [`CadrMatrix`], [`CadrMaterial`],
-//! [`CadrInstanceRecord`], [`CadrCullEntry`], [`CadrPass`], [`CadrPassFilter`], [`CadrBuffer`], [`CadrBufferRef`],
-//! [`CadrStats`], [`CadrBindState`], [`CadrDrawBase`], [`CadrGpuDraws`], [`CadrVertexInput`],
-//! [`CadrMessage`]) are fixed for a major version; whoever
-//! allocates frees (buffers a plugin asks the host for go back through the host); strings are
-//! NUL-terminated UTF-8 owned by the side that returns them, valid as long as the library
-//! (descriptions) or the instance (shader snippets); no function unwinds across the boundary
-//! (the SDK's shims catch panics and return [`CADR_STATUS_PANICKED`]); libraries are never
-//! unloaded. Functions marked "thread-safe" may be called from several threads at once on the
-//! same instance; all others are called from one thread at a time.
+//! [`CadrInstanceRecord`], [`CadrCullEntry`], [`CadrPass`], [`CadrPassFilter`],
+//! [`CadrPassExclusion`], [`CadrBuffer`], [`CadrBufferRef`], [`CadrStats`], [`CadrBindState`],
+//! [`CadrDrawBase`], [`CadrGpuDraws`], [`CadrVertexInput`], [`CadrMessage`]) are fixed for a
+//! major version; whoever allocates frees (buffers a plugin asks the host for go back through
+//! the host); strings are NUL-terminated UTF-8 owned by the side that returns them, valid as
+//! long as the library (descriptions) or the instance (shader snippets); no function unwinds
+//! across the boundary (the SDK's shims catch panics and return [`CADR_STATUS_PANICKED`]);
+//! libraries are never unloaded. Functions marked "thread-safe" may be called from several
+//! threads at once on the same instance; all others are called from one thread at a time.
 
 #![allow(non_camel_case_types)]
 
@@ -36,7 +36,7 @@ use std::ffi::{c_char, c_void};
 /// Major version of this ABI: a library built for another major version is refused.
 pub const CADR_PLUGIN_ABI_MAJOR: u32 = 1;
 /// Minor version of this ABI: additions that older readers may ignore.
-pub const CADR_PLUGIN_ABI_MINOR: u32 = 10;
+pub const CADR_PLUGIN_ABI_MINOR: u32 = 11;
 /// `(major << 16) | minor`, what [`CadrPluginVersionFn`] returns.
 pub const CADR_PLUGIN_ABI_VERSION: u32 = (CADR_PLUGIN_ABI_MAJOR << 16) | CADR_PLUGIN_ABI_MINOR;
 
@@ -153,6 +153,11 @@ pub const CADR_TRAIT_REPLAYABLE: CadrTraitBits = 1 << 7;
 /// changed. A technique that puts parameter values in its commands
 /// ([`CADR_TRAIT_PARAMETERS_IN_COMMANDS`]) or copies them on the host leaves it clear.
 pub const CADR_TRAIT_REPLAYS_PARAMETER_CHANGES: CadrTraitBits = 1 << 8;
+/// Since ABI 1.11. Culling, an announcement: what `cull` writes depends on the scene (its
+/// candidates and instances) only, never on the view ([`CadrCullInput::planes`],
+/// [`CadrCullInput::section_planes`]): the host calls it again only when the scene changed, not
+/// every frame of an orbiting camera (`none`, which draws every candidate, sets it).
+pub const CADR_TRAIT_CULLS_WHATEVER_THE_VIEW: CadrTraitBits = 1 << 9;
 
 /// A message buffer the host hands to functions that can fail: the plugin writes a
 /// NUL-terminated UTF-8 message of at most `capacity` bytes (including the NUL).
@@ -393,8 +398,13 @@ pub const CADR_INSTANCE_INSIDE_OUT: CadrInstanceFlags = 1 << 5;
 /// Since ABI 1.9: the part's material is translucent (blended with an opacity under 1, or with
 /// a base-colour texture that has translucent texels), so frames with translucency draw it in
 /// the transparency method's pass. Textures turned off make such a part opaque again where its
-/// opacity is 1: the flag then says "may be translucent".
+/// opacity is 1: [`CADR_INSTANCE_TRANSLUCENT_BY_TEXTURE`] says which (before ABI 1.11 the flag
+/// then said "may be translucent").
 pub const CADR_INSTANCE_TRANSLUCENT: CadrInstanceFlags = 1 << 6;
+/// Since ABI 1.11, with [`CADR_INSTANCE_TRANSLUCENT`]: the part is translucent only through
+/// its base-colour texture's texels (its material's opacity is 1), so with textures turned off
+/// it is opaque.
+pub const CADR_INSTANCE_TRANSLUCENT_BY_TEXTURE: CadrInstanceFlags = 1 << 7;
 
 /// One drawable part on one path of the scene tree (the unit of "individual" drawing). Index
 /// positions are absolute element offsets in the scene's index buffers; indices are relative
@@ -640,6 +650,28 @@ impl CadrPassFilter {
     /// Whether an instance with `flags` is needed.
     pub fn keeps(&self, flags: CadrInstanceFlags) -> bool {
         flags & self.mask == self.value
+    }
+}
+
+/// Since ABI 1.11: the instances a pass does not need although its [`CadrPassFilter`] keeps
+/// them: those whose `flags & mask == value`; `mask` 0 excludes none. A filter says what a
+/// needed instance is, an exclusion what it is not: the X-ray mode's translucent pass needs
+/// every instance except the highlighted opaque ones its opaque pass draws, which no single
+/// filter can say. As with the filter, the pass's pipeline clips the excluded instances away
+/// whole, so drawing them is correct, only wasted work.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub struct CadrPassExclusion {
+    /// The `CADR_INSTANCE_*` bits the exclusion looks at; 0 excludes nothing.
+    pub mask: CadrInstanceFlags,
+    /// What those bits are in an instance the pass does not need.
+    pub value: CadrInstanceFlags,
+}
+
+impl CadrPassExclusion {
+    /// Whether an instance with `flags` is not needed.
+    pub fn excludes(&self, flags: CadrInstanceFlags) -> bool {
+        self.mask != 0 && flags & self.mask == self.value
     }
 }
 
@@ -914,6 +946,10 @@ pub struct CadrRecordContext {
     /// per pass: the instances each pass needs ([`CadrPassFilter`]). Part of what
     /// `commands_key` covers.
     pub pass_filters: *const CadrPassFilter,
+    /// Since ABI 1.11 (read it only when `size` covers it): null, or `pass_count` exclusions,
+    /// one per pass: the instances each pass does not need although its filter keeps them
+    /// ([`CadrPassExclusion`]). Part of what `commands_key` covers.
+    pub pass_exclusions: *const CadrPassExclusion,
 }
 
 /// Submission vtable ([`CADR_KIND_SUBMISSION`]).
@@ -1078,6 +1114,10 @@ pub struct CadrGpuCullContext {
     /// whose sphere lies wholly outside one is cut away, and the culler may cull it like one
     /// outside the frustum. Also in [`CadrGpuCullView::section_planes`].
     pub section_planes: [[f32; 4]; 6],
+    /// Since ABI 1.11 (read it only when `size` covers it): null, or `pass_count` exclusions,
+    /// one per pass ([`CadrPassExclusion`]); a culler that honours them writes no commands for
+    /// the instances they exclude.
+    pub pass_exclusions: *const CadrPassExclusion,
 }
 
 /// Since ABI 1.5: the view of a GPU-culled frame as shaders read it (std140: vec4s, then a
@@ -1276,6 +1316,8 @@ mod tests {
         assert_eq!(std::mem::size_of::<CadrBindState>(), 32);
         assert_eq!(std::mem::size_of::<CadrCullEntry>(), 48);
         assert_eq!(std::mem::size_of::<CadrGpuDraws>(), 40);
+        assert_eq!(std::mem::size_of::<CadrPassFilter>(), 12);
+        assert_eq!(std::mem::size_of::<CadrPassExclusion>(), 8);
         assert_eq!(CADR_PLUGIN_ABI_VERSION >> 16, CADR_PLUGIN_ABI_MAJOR);
     }
 

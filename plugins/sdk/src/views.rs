@@ -15,21 +15,38 @@ fn slice<'a, T>(pointer: *const T, count: usize) -> &'a [T] {
     }
 }
 
-/// The filters of `count` passes at `pointer`, one per pass (`None` or null: every pass keeps
-/// every instance).
+/// Which instances one pass needs: the host's filter and, since ABI 1.11, its exclusion.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub struct PassFilter {
+    /// The instances the pass may need ([`abi::CadrPassFilter`]).
+    pub keep: abi::CadrPassFilter,
+    /// Of those, the ones it does not need ([`abi::CadrPassExclusion`]).
+    pub exclude: abi::CadrPassExclusion,
+}
+
+impl PassFilter {
+    /// Whether an instance with `flags` is needed.
+    pub fn keeps(&self, flags: abi::CadrInstanceFlags) -> bool {
+        self.keep.keeps(flags) && !self.exclude.excludes(flags)
+    }
+}
+
+/// The filters of `count` passes: filters at `filters`, exclusions at `exclusions` (`None` or
+/// null: every pass keeps every instance, excludes none).
 fn pass_filters<'a>(
-    pointer: Option<*const abi::CadrPassFilter>,
+    (filters, exclusions): (
+        Option<*const abi::CadrPassFilter>,
+        Option<*const abi::CadrPassExclusion>,
+    ),
     count: u32,
-) -> impl Iterator<Item = abi::CadrPassFilter> + 'a {
-    let given: &'a [abi::CadrPassFilter] = match pointer {
-        Some(pointer) => slice(pointer, count as usize),
-        None => &[],
-    };
-    let missing = count as usize - given.len();
-    given
-        .iter()
-        .copied()
-        .chain(std::iter::repeat_n(abi::CadrPassFilter::default(), missing))
+) -> impl Iterator<Item = PassFilter> + 'a {
+    let filters: &'a [abi::CadrPassFilter] = filters.map_or(&[], |p| slice(p, count as usize));
+    let exclusions: &'a [abi::CadrPassExclusion] =
+        exclusions.map_or(&[], |p| slice(p, count as usize));
+    (0..count as usize).map(move |pass| PassFilter {
+        keep: filters.get(pass).copied().unwrap_or_default(),
+        exclude: exclusions.get(pass).copied().unwrap_or_default(),
+    })
 }
 
 /// The scene during one frame.
@@ -308,13 +325,21 @@ impl<'a> Record<'a> {
         }
     }
 
-    /// Since ABI 1.9: the filter of each pass (which instances it needs), one per pass; every
-    /// instance for a host older than ABI 1.9 or one that passes none.
-    pub fn pass_filters(&self) -> impl Iterator<Item = abi::CadrPassFilter> + 'a {
-        let end = std::mem::offset_of!(abi::CadrRecordContext, pass_filters)
-            + std::mem::size_of::<*const abi::CadrPassFilter>();
+    /// Since ABI 1.9: the filter of each pass (which instances it needs), one per pass, with
+    /// its exclusion since ABI 1.11; every instance for a host older than ABI 1.9 or one that
+    /// passes none.
+    pub fn pass_filters(&self) -> impl Iterator<Item = PassFilter> + 'a {
+        let covers = |end: usize| self.raw.size as usize >= end + std::mem::size_of::<usize>();
         pass_filters(
-            (self.raw.size as usize >= end).then_some(self.raw.pass_filters),
+            (
+                covers(std::mem::offset_of!(abi::CadrRecordContext, pass_filters))
+                    .then_some(self.raw.pass_filters),
+                covers(std::mem::offset_of!(
+                    abi::CadrRecordContext,
+                    pass_exclusions
+                ))
+                .then_some(self.raw.pass_exclusions),
+            ),
             self.raw.pass_count,
         )
     }
@@ -560,13 +585,21 @@ impl<'a> GpuCull<'a> {
         slice(self.raw.passes, self.raw.pass_count as usize)
     }
 
-    /// Since ABI 1.9: the filter of each pass (which instances it needs), one per pass; every
-    /// instance for a host older than ABI 1.9 or one that passes none.
-    pub fn pass_filters(&self) -> impl Iterator<Item = abi::CadrPassFilter> + 'a {
-        let end = std::mem::offset_of!(abi::CadrGpuCullContext, pass_filters)
-            + std::mem::size_of::<*const abi::CadrPassFilter>();
+    /// Since ABI 1.9: the filter of each pass (which instances it needs), one per pass, with
+    /// its exclusion since ABI 1.11; every instance for a host older than ABI 1.9 or one that
+    /// passes none.
+    pub fn pass_filters(&self) -> impl Iterator<Item = PassFilter> + 'a {
+        let covers = |end: usize| self.raw.size as usize >= end + std::mem::size_of::<usize>();
         pass_filters(
-            (self.raw.size as usize >= end).then_some(self.raw.pass_filters),
+            (
+                covers(std::mem::offset_of!(abi::CadrGpuCullContext, pass_filters))
+                    .then_some(self.raw.pass_filters),
+                covers(std::mem::offset_of!(
+                    abi::CadrGpuCullContext,
+                    pass_exclusions
+                ))
+                .then_some(self.raw.pass_exclusions),
+            ),
             self.raw.pass_count,
         )
     }

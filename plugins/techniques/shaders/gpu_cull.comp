@@ -77,6 +77,10 @@ layout(push_constant) uniform Dispatch {
     uint filter_value;
     // Nonzero: only parts some section plane passes through (the section caps' pass).
     uint filter_section_cut;
+    // The pass's exclusion (CadrPassExclusion): of those, instances with flags & mask ==
+    // value are not drawn (mask 0 excludes none).
+    uint exclude_mask;
+    uint exclude_value;
 } dispatch;
 
 // Inside the frustum, and not wholly cut away by a section plane.
@@ -222,8 +226,10 @@ void main() {
         count = entry.wire_index_count;
     }
     // After the visibility bit: a pass's filter decides what it draws, not what is visible.
+    bool excluded = dispatch.exclude_mask != 0u
+        && (entry.flags & dispatch.exclude_mask) == dispatch.exclude_value;
     if (!draw || count == 0u || (entry.flags & dispatch.filter_mask) != dispatch.filter_value
-        || (dispatch.filter_section_cut != 0u && !cut_by_a_plane(center, radius))) {
+        || excluded || (dispatch.filter_section_cut != 0u && !cut_by_a_plane(center, radius))) {
         return;
     }
     uint slot = atomicAdd(counts[dispatch.pass_slot], 1u);

@@ -40,7 +40,7 @@ technique_library! {
         culling NoCulling {
             name: "none",
             description: "No culling: every visible part is drawn.",
-            features: 0, provides: REPLAYABLE, needs: 0,
+            features: 0, provides: REPLAYABLE | abi::CADR_TRAIT_CULLS_WHATEVER_THE_VIEW, needs: 0,
         },
         transparency WeightedBlended {
             name: "weighted-blended",

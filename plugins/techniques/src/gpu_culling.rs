@@ -23,7 +23,7 @@ use std::sync::Arc;
 use cadr_plugin_sdk::abi;
 use cadr_plugin_sdk::vk::{self, Handle};
 use cadr_plugin_sdk::vulkan_failure;
-use cadr_plugin_sdk::{buffer, Gpu, GpuCull, GpuCulling, HostBuffer, Technique};
+use cadr_plugin_sdk::{buffer, Gpu, GpuCull, GpuCulling, HostBuffer, PassFilter, Technique};
 
 /// Words of the counts buffer: commands per (phase, pass) slot, then commands in all and
 /// triangles drawn.
@@ -55,12 +55,12 @@ struct CullDispatch {
     mode: u32,
     writes_visibility: u32,
     pyramid_levels: u32,
-    /// The pass's filter (`CadrPassFilter`): only instances whose flags match get a command.
-    filter: abi::CadrPassFilter,
+    /// The pass's filter and exclusion: only the instances it keeps get a command.
+    filter: PassFilter,
 }
 
 /// Bytes of [`CullDispatch`] as pushed.
-const CULL_PUSH_BYTES: u32 = 40;
+const CULL_PUSH_BYTES: u32 = 48;
 
 /// Push constants of one pyramid level.
 #[derive(Clone, Copy)]
@@ -535,11 +535,13 @@ impl<const OCCLUSION: bool> GpuCuller<OCCLUSION> {
                 dispatch.mode,
                 dispatch.writes_visibility,
                 dispatch.pyramid_levels,
-                dispatch.filter.mask,
-                dispatch.filter.value,
-                dispatch.filter.section_cut,
+                dispatch.filter.keep.mask,
+                dispatch.filter.keep.value,
+                dispatch.filter.keep.section_cut,
+                dispatch.filter.exclude.mask,
+                dispatch.filter.exclude.value,
             ]);
-            // SAFETY: recording; the constants fit the layout's 40 bytes.
+            // SAFETY: recording; the constants fit the layout's 48 bytes.
             unsafe {
                 device.cmd_push_constants(
                     command_buffer,

@@ -4,7 +4,7 @@
 use std::collections::HashMap;
 
 use cadr_plugin_sdk::abi::{self, CadrInstance};
-use cadr_plugin_sdk::Scene;
+use cadr_plugin_sdk::{PassFilter, Scene};
 
 /// How draws are formed from the drawn instances.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -83,7 +83,7 @@ fn one_batch_per_range(ranges: &[Range]) -> Vec<Batch> {
 /// per range and binding, in scene order.
 pub fn build(
     scene: &Scene<'_>,
-    (pass, filter): (abi::CadrPassKind, abi::CadrPassFilter),
+    (pass, filter): (abi::CadrPassKind, PassFilter),
     strategy: Strategy,
 ) -> PassList {
     let strategy = match strategy {

@@ -16,7 +16,9 @@ use std::sync::Arc;
 use crate::REPLAYABLE;
 use cadr_plugin_sdk::abi;
 use cadr_plugin_sdk::vk;
-use cadr_plugin_sdk::{technique_library, Gpu, HostBuffer, Record, Submission, Technique};
+use cadr_plugin_sdk::{
+    technique_library, Gpu, HostBuffer, PassFilter, Record, Submission, Technique,
+};
 
 use lists::{PassList, Strategy};
 use record::{Api, PassDraws, Recorder, SecondaryBuffers};
@@ -80,7 +82,7 @@ struct IndirectPass {
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 struct ListKey {
     slot: usize,
-    filter: abi::CadrPassFilter,
+    filter: PassFilter,
 }
 
 /// A list kept for the passes of its key, with its indirect commands.

@@ -16,6 +16,18 @@
 // The library's patch version.
 #define CADR_VERSION_PATCH 0
 
+// Message severity: something failed (a Vulkan validation error, for instance).
+#define CADR_MESSAGE_ERROR 1
+
+// Message severity: something the host's user should know, usually data left out of a load.
+#define CADR_MESSAGE_WARNING 2
+
+// Message severity: information on what cadr did.
+#define CADR_MESSAGE_INFO 3
+
+// Message severity: details for whoever debugs cadr.
+#define CADR_MESSAGE_DEBUG 4
+
 // Frames paced to the display, never torn; every window offers it (the default).
 #define CADR_PRESENT_FIFO 0
 
@@ -389,6 +401,16 @@ typedef struct CadrLoadResult {
   // Number of `materials`.
   size_t material_count;
 } CadrLoadResult;
+
+// Receives one message: its severity (`CADR_MESSAGE_*`), its NUL-terminated UTF-8 text, and the
+// `user_data` given to `cadr_set_message_callback`.
+//
+// Ownership: the text is cadr's and valid only during the call; copy what you keep.
+// Thread-safety: called on whichever thread cadr works on when the message arises (the one
+// calling into cadr, a worker thread of cadr, or a Vulkan driver's thread for validation
+// messages), possibly on several threads at once: the callback must be thread-safe. It may call
+// cadr functions, `cadr_set_message_callback` included.
+typedef void (*CadrMessageCallback)(uint32_t severity, const char *message, void *user_data);
 
 // One picked occurrence of a part.
 typedef struct CadrPickHit {
@@ -900,6 +922,22 @@ enum CadrResult cadr_scene_load(CadrScene scene,
 // # Safety
 // `result` is null or a result filled by `cadr_scene_load` (or zeroed).
 void cadr_load_result_free(struct CadrLoadResult *result);
+
+// Installs `callback` to receive cadr's messages of severity `most_verbose` and more serious
+// (`CADR_MESSAGE_ERROR` < `CADR_MESSAGE_WARNING` < `CADR_MESSAGE_INFO` <
+// `CADR_MESSAGE_DEBUG`), replacing the one installed before; NULL removes it, and messages are
+// dropped again (the default). One callback serves the whole process: every context, scene and
+// renderer.
+//
+// Returns `CADR_RESULT_OK`, `CADR_RESULT_INVALID_ARGUMENT` (`most_verbose` is not a
+// `CADR_MESSAGE_*` severity) or `CADR_RESULT_UNSUPPORTED` (a Rust host installed a logger of
+// the `log` crate first: cadr's messages go there). Ownership: cadr keeps `user_data` and
+// hands it back to each call, never reading through it; it must stay valid until the callback
+// is replaced or removed. Thread-safety: any thread; a message arising meanwhile goes to the
+// old callback or the new one.
+enum CadrResult cadr_set_message_callback(CadrMessageCallback callback,
+                                          void *user_data,
+                                          uint32_t most_verbose);
 
 // Creates a Group (not attached yet). `name` may be NULL.
 //

@@ -29,6 +29,7 @@ int main(int argc, char **argv) {
   double matrix[16];
   int i;
 
+  sample_print_messages();
   CADR_CHECK(cadr_context_create(NULL, &context));
   CADR_CHECK(cadr_scene_create(&scene));
   CADR_CHECK(cadr_scene_root(scene, &root));

@@ -632,6 +632,7 @@ int main(int argc, char **argv) {
   options.instance_extensions = extensions;
   options.instance_extension_count = extension_count;
   options.validation = test_dir != NULL;
+  sample_print_messages();
   CADR_CHECK(cadr_context_create(&options, &v.context));
   CADR_CHECK(cadr_context_vulkan_instance(v.context, &instance));
   if (glfwCreateWindowSurface((VkInstance)instance, v.window, NULL, &surface) != VK_SUCCESS) {

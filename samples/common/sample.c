@@ -19,6 +19,15 @@ void sample_check(enum CadrResult result, const char *call, const char *file, in
   exit(1);
 }
 
+static void print_message(uint32_t severity, const char *message, void *user_data) {
+  (void)user_data;
+  fprintf(stderr, "cadr %s: %s\n", severity == CADR_MESSAGE_ERROR ? "error" : "warning", message);
+}
+
+void sample_print_messages(void) {
+  CADR_CHECK(cadr_set_message_callback(print_message, NULL, CADR_MESSAGE_WARNING));
+}
+
 void sample_identity(double m[16]) {
   int i;
   for (i = 0; i < 16; ++i) {

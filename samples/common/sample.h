@@ -10,6 +10,9 @@
 
 void sample_check(enum CadrResult result, const char *call, const char *file, int line);
 
+/* Prints cadr's warnings and errors (what a load left out, validation errors) to stderr. */
+void sample_print_messages(void);
+
 /* Column-major 4x4 matrices. */
 void sample_identity(double m[16]);
 void sample_translation(double m[16], double x, double y, double z);

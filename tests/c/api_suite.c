@@ -406,6 +406,83 @@ static void test_loading(CadrScene scene, CadrNode root) {
   cadr_load_result_free(NULL);
 }
 
+/* What the message callback received. */
+struct Messages {
+  int warnings;
+  int others;
+  char last_warning[512];
+};
+
+static void record_message(uint32_t severity, const char *message, void *user_data) {
+  struct Messages *messages = (struct Messages *)user_data;
+  if (severity == CADR_MESSAGE_WARNING) {
+    ++messages->warnings;
+    snprintf(messages->last_warning, sizeof messages->last_warning, "%s", message);
+  } else {
+    ++messages->others;
+  }
+}
+
+/* A glTF triangle with a second primitive of points, which cadr does not draw yet and says so. */
+static const char *points_gltf =
+    "{\"asset\":{\"version\":\"2.0\"},\"scene\":0,\"scenes\":[{\"nodes\":[0]}],"
+    "\"nodes\":[{\"mesh\":0,\"name\":\"tri\"}],\"meshes\":[{\"primitives\":["
+    "{\"attributes\":{\"POSITION\":0}},{\"attributes\":{\"POSITION\":0},\"mode\":0}]}],"
+    "\"buffers\":[{\"byteLength\":36,\"uri\":\"data:application/octet-stream;base64,"
+    "AAAAAAAAAAAAAAAAAACAPwAAAAAAAAAAAAAAAAAAgD8AAAAA\"}],"
+    "\"bufferViews\":[{\"buffer\":0,\"byteLength\":36}],"
+    "\"accessors\":[{\"bufferView\":0,\"componentType\":5126,\"count\":3,\"type\":\"VEC3\","
+    "\"min\":[0,0,0],\"max\":[1,1,0]}]}";
+
+/* Loads `path` under `root` and drops what it made. */
+static void load_and_drop(CadrScene scene, CadrNode root, const char *path) {
+  struct CadrLoadResult loaded;
+  memset(&loaded, 0, sizeof loaded);
+  OK(cadr_scene_load(scene, path, root, &loaded));
+  CHECK(loaded.geometry_count == 1);
+  OK(cadr_scene_destroy_node(scene, loaded.root));
+  cadr_load_result_free(&loaded);
+}
+
+/* The message callback hears what a load leaves out, at the severities asked for, until it is
+ * removed. */
+static void test_messages(CadrScene scene, CadrNode root) {
+  struct Messages messages;
+  char path[512];
+  const char *out_dir = getenv("CADR_TEST_OUT");
+  FILE *file;
+  memset(&messages, 0, sizeof messages);
+  snprintf(path, sizeof path, "%s/points.gltf", out_dir ? out_dir : "/tmp");
+  file = fopen(path, "w");
+  CHECK(file != NULL);
+  CHECK(fputs(points_gltf, file) >= 0);
+  CHECK(fclose(file) == 0);
+
+  EXPECT(cadr_set_message_callback(record_message, &messages, 0), CADR_RESULT_INVALID_ARGUMENT);
+  MESSAGE_HAS("severity 0");
+  EXPECT(cadr_set_message_callback(record_message, &messages, 5), CADR_RESULT_INVALID_ARGUMENT);
+  load_and_drop(scene, root, path); /* no callback yet: nothing heard */
+  CHECK(messages.warnings == 0);
+
+  OK(cadr_set_message_callback(record_message, &messages, CADR_MESSAGE_WARNING));
+  load_and_drop(scene, root, path);
+  CHECK(messages.warnings == 1);
+  CHECK(strstr(messages.last_warning, "primitive 1: Points primitives are not drawn yet") != NULL);
+  CHECK(messages.others == 0);
+
+  /* Errors only: the warning is not sent. */
+  OK(cadr_set_message_callback(record_message, &messages, CADR_MESSAGE_ERROR));
+  load_and_drop(scene, root, path);
+  CHECK(messages.warnings == 1);
+
+  /* Removed: nothing is sent. */
+  OK(cadr_set_message_callback(record_message, &messages, CADR_MESSAGE_DEBUG));
+  OK(cadr_set_message_callback(NULL, NULL, CADR_MESSAGE_DEBUG));
+  load_and_drop(scene, root, path);
+  CHECK(messages.warnings == 1);
+  remove(path);
+}
+
 static unsigned pixel_difference(const uint8_t *a, const uint8_t *b, size_t size) {
   unsigned differing = 0;
   size_t i;
@@ -1279,6 +1356,7 @@ int main(void) {
   context = test_context();
   built = test_scene();
   test_loading(built.scene, built.root);
+  test_messages(built.scene, built.root);
   test_renderer(context, &built);
   test_without_plugins();
 

@@ -468,6 +468,7 @@ static void test_messages(CadrScene scene, CadrNode root) {
   load_and_drop(scene, root, path);
   CHECK(messages.warnings == 1);
   CHECK(strstr(messages.last_warning, "primitive 1: Points primitives are not drawn yet") != NULL);
+  CHECK(strstr(messages.last_warning, path) == messages.last_warning); /* it names the file */
   CHECK(messages.others == 0);
 
   /* Errors only: the warning is not sent. */

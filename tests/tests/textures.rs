@@ -614,10 +614,12 @@ fn an_image_past_the_memory_budget_is_left_out_saying_so() {
     assert_checker_left_untextured(&path);
     let warnings = warnings.lock().unwrap().clone();
     assert!(
-        warnings.iter().any(|w| w.starts_with("image 0 ")
-            && w.contains("16.0 KiB")
-            && w.contains("memory budget of 4.0 KiB")
-            && w.contains("CADR_MEMORY_BUDGET")),
+        warnings
+            .iter()
+            .any(|w| w.starts_with(&format!("{}: image 0 ", path.display()))
+                && w.contains("16.0 KiB")
+                && w.contains("memory budget of 4.0 KiB")
+                && w.contains("CADR_MEMORY_BUDGET")),
         "{warnings:?}"
     );
     let _ = std::fs::remove_dir_all(&dir);

@@ -89,7 +89,7 @@ pub fn load_gltf_bytes(bytes: &[u8], path: &Path) -> Result<Scene, LoadError> {
             .unwrap_or_default(),
         ..Scene::default()
     };
-    let textures = super::gltf_textures::load_textures(&gltf.document, &buffers, &base_dir);
+    let textures = super::gltf_textures::load_textures(&gltf.document, &buffers, path);
     // Scene textures are the glTF textures that decoded, in order.
     let mut texture_index = Vec::with_capacity(textures.len());
     for texture in textures {
@@ -133,7 +133,7 @@ pub fn load_gltf_bytes(bytes: &[u8], path: &Path) -> Result<Scene, LoadError> {
     let mut geometry_by_accessors: HashMap<Vec<[Option<usize>; 6]>, u32> = HashMap::new();
     for mesh in gltf.document.meshes() {
         let key = accessor_key(&mesh, &uv_sets);
-        let (geometry, materials) = load_mesh(&mesh, &buffers, &uv_sets).map_err(invalid)?;
+        let (geometry, materials) = load_mesh(&mesh, &buffers, &uv_sets, path).map_err(invalid)?;
         if geometry.parts.is_empty() {
             mesh_refs.push(None);
             continue;
@@ -419,11 +419,12 @@ fn check_accessor(
 }
 
 /// One mesh as a geometry whose parts are its triangle primitives, with each part's material
-/// (`None` = the glTF default material).
+/// (`None` = the glTF default material). `file` names the file in warnings.
 fn load_mesh(
     mesh: &gltf::Mesh<'_>,
     buffers: &[Vec<u8>],
     uv_sets: &[Option<u32>],
+    file: &Path,
 ) -> Result<(Geometry, Vec<Option<u32>>), String> {
     let mesh_name = mesh
         .name()
@@ -444,7 +445,10 @@ fn load_mesh(
             mode,
             Mode::Triangles | Mode::TriangleStrip | Mode::TriangleFan
         ) {
-            log::warn!("{at}: {mode:?} primitives are not drawn yet");
+            log::warn!(
+                "{}: {at}: {mode:?} primitives are not drawn yet",
+                file.display()
+            );
             continue;
         }
         let positions_accessor = primitive
@@ -472,7 +476,7 @@ fn load_mesh(
         }
         let attributes = read_attributes(
             &primitive,
-            &at,
+            &format!("{}: {at}", file.display()),
             buffers,
             uv_sets,
             positions_accessor.count(),
@@ -578,7 +582,7 @@ fn load_mesh(
 
 /// The primitive's texture coordinates (the set its material samples) and vertex colours
 /// (`COLOR_0`), one per vertex; `None` when it has neither. A material that samples a set the
-/// primitive lacks gets a warning and (0, 0).
+/// primitive lacks gets a warning (saying it happened `at`: the file and primitive) and (0, 0).
 fn read_attributes(
     primitive: &gltf::Primitive<'_>,
     at: &str,

@@ -16,12 +16,14 @@ use crate::scene::{Sampler, Texture, Wrap};
 /// A decoded image: width, height and RGBA texels.
 type Decoded = (u32, u32, Arc<Vec<u8>>);
 
-/// The scene's textures, one per glTF texture (`None` for those whose image failed).
+/// The scene's textures, one per glTF texture (`None` for those whose image failed, with a
+/// warning naming the glTF `file`, whose folder holds external images).
 pub(super) fn load_textures(
     document: &gltf::Document,
     buffers: &[Vec<u8>],
-    base_dir: &Path,
+    file: &Path,
 ) -> Vec<Option<Texture>> {
+    let base_dir = file.parent().unwrap_or(Path::new(""));
     let images: Vec<gltf::Image<'_>> = document.images().collect();
     let encoded = crate::parallel::map(&images, |image| {
         let bytes = encoded_bytes(image, buffers, base_dir)?;
@@ -37,7 +39,8 @@ pub(super) fn load_textures(
             result
                 .map_err(|why| {
                     log::warn!(
-                        "image {} ({}) is left out: {why}",
+                        "{}: image {} ({}) is left out: {why}",
+                        file.display(),
                         image.index(),
                         image_name(image)
                     )

@@ -615,3 +615,50 @@ fn moving_the_same_nodes_every_frame_without_refreshing_holds_memory_steady() {
     }
     assert_eq!(memory[0], memory[1], "tree bytes after 10 and 1000 moves");
 }
+
+#[test]
+fn a_large_edit_leaves_no_large_event_storage_behind() {
+    // The tree keeps the storage of the graph's events between updates, so that dragging parts
+    // allocates nothing, but not the storage of an edit that moved thousands of nodes.
+    let mut world = World::new();
+    let g = &mut world.graph;
+    let placements: Vec<_> = (0..6000)
+        .map(|i| {
+            let node = g
+                .create_transform(&format!("placement {i}"), DMat4::IDENTITY)
+                .unwrap();
+            g.add_child(g.root(), node).unwrap();
+            node
+        })
+        .collect();
+    let mut tree = SceneTree::build(g);
+    let mut frame = 0.0;
+    let mut drag = |tree: &mut SceneTree, g: &mut SceneGraph, count: usize| {
+        frame += 1.0;
+        for &node in &placements[..count] {
+            g.set_matrix(node, DMat4::from_translation(DVec3::X * frame))
+                .unwrap();
+        }
+        tree.update(g);
+        assert_eq!(tree.take_changes().moved.len(), count);
+        tree.memory_bytes()
+    };
+    drag(&mut tree, g, 10);
+    let steady = drag(&mut tree, g, 10);
+    assert_eq!(
+        drag(&mut tree, g, 10),
+        steady,
+        "dragging holds memory steady"
+    );
+    let large = drag(&mut tree, g, 6000);
+    drag(&mut tree, g, 10);
+    let after = drag(&mut tree, g, 10);
+    // The change logs' bit sets grow to the 6000 nodes and stay (a few bytes per node); the
+    // storage of 6000 events does not.
+    let events_bytes = 6000 * std::mem::size_of::<cadr_core::graph::GraphEvent>();
+    assert!(
+        large.1 < steady.1 + events_bytes && after.1 < steady.1 + events_bytes,
+        "after moving 6000 nodes the tree keeps no storage of their events: {steady:?} then \
+         {large:?}, {after:?}"
+    );
+}

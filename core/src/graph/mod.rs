@@ -486,9 +486,12 @@ impl SceneGraph {
         )
     }
 
-    /// Takes the events recorded since the last call.
-    pub fn take_events(&mut self) -> Vec<GraphEvent> {
-        std::mem::take(&mut self.events)
+    /// Hands the events recorded since the last call over in `events` (what it held is
+    /// dropped) and keeps `events`' old storage to record the next ones: a reader calling it
+    /// every frame with the same vector allocates nothing once both are large enough.
+    pub fn take_events(&mut self, events: &mut Vec<GraphEvent>) {
+        events.clear();
+        std::mem::swap(events, &mut self.events);
     }
 
     /// Number of events waiting.

@@ -23,6 +23,10 @@ use crate::graph::{ChildLink, GraphEvent, GraphNode, LodMetric, NodeHandle, Node
 
 const NONE: u32 = u32::MAX;
 
+/// The most graph events whose storage the tree keeps between updates (a frame that drags
+/// parts has one per moved node).
+const KEPT_GRAPH_EVENTS: usize = 4096;
+
 /// What a path inherits from the nodes along it.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 struct PathState {
@@ -91,6 +95,9 @@ pub struct SceneTree {
     inst_unpickable: BitSet,
 
     free_instances: Vec<u32>,
+    /// Storage for the graph's events that [`SceneTree::update`] applies, kept between updates
+    /// (up to [`KEPT_GRAPH_EVENTS`]).
+    graph_events: Vec<GraphEvent>,
     /// What changed, for each reader.
     changes: ChangeLogs,
     eye: DVec3,
@@ -166,11 +173,12 @@ impl SceneTree {
     /// Builds the tree with LOD and billboards evaluated for `eye`.
     pub fn build_with_eye(graph: &mut SceneGraph, eye: DVec3) -> Self {
         crate::timings::time(crate::timings::Phase::SceneBuild, || {
-            graph.take_events();
             let mut tree = Self {
                 eye,
                 ..Self::default()
             };
+            // Dropped with their storage: a scene's creation events can be millions.
+            graph.take_events(&mut Vec::new());
             let root = graph.root();
             tree.root = tree.build_subtree(graph, NONE, 0, root, true);
             tree
@@ -544,7 +552,8 @@ impl SceneTree {
 
     /// Applies the graph's pending events.
     pub fn update(&mut self, graph: &mut SceneGraph) {
-        let events = graph.take_events();
+        let mut events = std::mem::take(&mut self.graph_events);
+        graph.take_events(&mut events);
         let mut structural: Vec<NodeHandle> = events
             .iter()
             .filter_map(|e| match *e {
@@ -628,6 +637,11 @@ impl SceneTree {
                 self.refresh_subtree(graph, t);
             }
         }
+        // Kept for the next update, unless a large edit made it large.
+        events.clear();
+        if events.capacity() <= KEPT_GRAPH_EVENTS {
+            self.graph_events = events;
+        }
     }
 
     /// Applies a new matrix of graph node `n` to its paths. A path whose subtree holds no LOD
@@ -637,7 +651,14 @@ impl SceneTree {
     /// [`SceneTree::refresh_worlds`]). Other paths go to `refresh`.
     fn move_paths(&mut self, graph: &SceneGraph, n: NodeHandle, refresh: &mut Vec<u32>) {
         let Ok(node) = graph.node(n) else { return };
-        for t in self.current_paths(n) {
+        // By index rather than through `current_paths`: a dragged part moves every frame, and
+        // its move allocates nothing.
+        let path_count = self.paths_of.get(n.index() as usize).map_or(0, Vec::len);
+        for i in 0..path_count {
+            let t = self.paths_of[n.index() as usize][i];
+            if self.node_graph[t as usize] != n {
+                continue;
+            }
             if self.view_dependent_below[t as usize] > 0 {
                 refresh.push(t);
                 continue;
@@ -860,6 +881,7 @@ impl SceneTree {
                 + self.inst_material.capacity())
                 * 4
             + self.free_instances.capacity() * 4
+            + self.graph_events.capacity() * std::mem::size_of::<GraphEvent>()
             + [
                 &self.node_visible,
                 &self.node_highlighted,

@@ -31,19 +31,28 @@ impl PassFilter {
     }
 }
 
-/// The filters of `count` passes: filters at `filters`, exclusions at `exclusions` (`None` or
-/// null: every pass keeps every instance, excludes none).
+/// The filters of a context's `count` passes: filters and exclusions, each at its pointer
+/// where the context's `size` covers the pointer's field (at its offset) and the pointer is not
+/// null; else every pass keeps every instance and excludes none.
 fn pass_filters<'a>(
-    (filters, exclusions): (
-        Option<*const abi::CadrPassFilter>,
-        Option<*const abi::CadrPassExclusion>,
-    ),
+    size: u32,
+    (filters_at, filters): (usize, *const abi::CadrPassFilter),
+    (exclusions_at, exclusions): (usize, *const abi::CadrPassExclusion),
     count: u32,
 ) -> impl Iterator<Item = PassFilter> + 'a {
-    let filters: &'a [abi::CadrPassFilter] = filters.map_or(&[], |p| slice(p, count as usize));
-    let exclusions: &'a [abi::CadrPassExclusion] =
-        exclusions.map_or(&[], |p| slice(p, count as usize));
-    (0..count as usize).map(move |pass| PassFilter {
+    let covers = |at: usize| size as usize >= at + std::mem::size_of::<usize>();
+    let count = count as usize;
+    let filters: &'a [abi::CadrPassFilter] = if covers(filters_at) {
+        slice(filters, count)
+    } else {
+        &[]
+    };
+    let exclusions: &'a [abi::CadrPassExclusion] = if covers(exclusions_at) {
+        slice(exclusions, count)
+    } else {
+        &[]
+    };
+    (0..count).map(move |pass| PassFilter {
         keep: filters.get(pass).copied().unwrap_or_default(),
         exclude: exclusions.get(pass).copied().unwrap_or_default(),
     })
@@ -329,19 +338,17 @@ impl<'a> Record<'a> {
     /// its exclusion since ABI 1.11; every instance for a host older than ABI 1.9 or one that
     /// passes none.
     pub fn pass_filters(&self) -> impl Iterator<Item = PassFilter> + 'a {
-        let covers = |end: usize| self.raw.size as usize >= end + std::mem::size_of::<usize>();
-        pass_filters(
-            (
-                covers(std::mem::offset_of!(abi::CadrRecordContext, pass_filters))
-                    .then_some(self.raw.pass_filters),
-                covers(std::mem::offset_of!(
-                    abi::CadrRecordContext,
-                    pass_exclusions
-                ))
-                .then_some(self.raw.pass_exclusions),
-            ),
-            self.raw.pass_count,
-        )
+        use abi::CadrRecordContext as Context;
+        let raw = self.raw;
+        let filters = (
+            std::mem::offset_of!(Context, pass_filters),
+            raw.pass_filters,
+        );
+        let exclusions = (
+            std::mem::offset_of!(Context, pass_exclusions),
+            raw.pass_exclusions,
+        );
+        pass_filters(raw.size, filters, exclusions, raw.pass_count)
     }
 
     /// Since ABI 1.3: the draw sources a GPU culler wrote for this phase, one per pass, or
@@ -589,19 +596,17 @@ impl<'a> GpuCull<'a> {
     /// its exclusion since ABI 1.11; every instance for a host older than ABI 1.9 or one that
     /// passes none.
     pub fn pass_filters(&self) -> impl Iterator<Item = PassFilter> + 'a {
-        let covers = |end: usize| self.raw.size as usize >= end + std::mem::size_of::<usize>();
-        pass_filters(
-            (
-                covers(std::mem::offset_of!(abi::CadrGpuCullContext, pass_filters))
-                    .then_some(self.raw.pass_filters),
-                covers(std::mem::offset_of!(
-                    abi::CadrGpuCullContext,
-                    pass_exclusions
-                ))
-                .then_some(self.raw.pass_exclusions),
-            ),
-            self.raw.pass_count,
-        )
+        use abi::CadrGpuCullContext as Context;
+        let raw = self.raw;
+        let filters = (
+            std::mem::offset_of!(Context, pass_filters),
+            raw.pass_filters,
+        );
+        let exclusions = (
+            std::mem::offset_of!(Context, pass_exclusions),
+            raw.pass_exclusions,
+        );
+        pass_filters(raw.size, filters, exclusions, raw.pass_count)
     }
 
     /// Says where pass `index`'s commands and count lie for this phase.

@@ -58,6 +58,28 @@ fn pass_filters<'a>(
     })
 }
 
+/// The `pass_filters` method of a view whose `raw` context of type `$context` has
+/// `pass_filters` and `pass_exclusions`.
+macro_rules! pass_filters_method {
+    ($context:ty) => {
+        /// Since ABI 1.9: the filter of each pass (which instances it needs), one per pass,
+        /// with its exclusion since ABI 1.11; every instance for a host older than ABI 1.9 or
+        /// one that passes none.
+        pub fn pass_filters(&self) -> impl Iterator<Item = PassFilter> + 'a {
+            let raw = self.raw;
+            let filters = (
+                std::mem::offset_of!($context, pass_filters),
+                raw.pass_filters,
+            );
+            let exclusions = (
+                std::mem::offset_of!($context, pass_exclusions),
+                raw.pass_exclusions,
+            );
+            pass_filters(raw.size, filters, exclusions, raw.pass_count)
+        }
+    };
+}
+
 /// The scene during one frame.
 #[derive(Clone, Copy, Debug)]
 pub struct Scene<'a> {
@@ -334,22 +356,7 @@ impl<'a> Record<'a> {
         }
     }
 
-    /// Since ABI 1.9: the filter of each pass (which instances it needs), one per pass, with
-    /// its exclusion since ABI 1.11; every instance for a host older than ABI 1.9 or one that
-    /// passes none.
-    pub fn pass_filters(&self) -> impl Iterator<Item = PassFilter> + 'a {
-        use abi::CadrRecordContext as Context;
-        let raw = self.raw;
-        let filters = (
-            std::mem::offset_of!(Context, pass_filters),
-            raw.pass_filters,
-        );
-        let exclusions = (
-            std::mem::offset_of!(Context, pass_exclusions),
-            raw.pass_exclusions,
-        );
-        pass_filters(raw.size, filters, exclusions, raw.pass_count)
-    }
+    pass_filters_method!(abi::CadrRecordContext);
 
     /// Since ABI 1.3: the draw sources a GPU culler wrote for this phase, one per pass, or
     /// `None` when the submission draws its own lists.
@@ -592,22 +599,7 @@ impl<'a> GpuCull<'a> {
         slice(self.raw.passes, self.raw.pass_count as usize)
     }
 
-    /// Since ABI 1.9: the filter of each pass (which instances it needs), one per pass, with
-    /// its exclusion since ABI 1.11; every instance for a host older than ABI 1.9 or one that
-    /// passes none.
-    pub fn pass_filters(&self) -> impl Iterator<Item = PassFilter> + 'a {
-        use abi::CadrGpuCullContext as Context;
-        let raw = self.raw;
-        let filters = (
-            std::mem::offset_of!(Context, pass_filters),
-            raw.pass_filters,
-        );
-        let exclusions = (
-            std::mem::offset_of!(Context, pass_exclusions),
-            raw.pass_exclusions,
-        );
-        pass_filters(raw.size, filters, exclusions, raw.pass_count)
-    }
+    pass_filters_method!(abi::CadrGpuCullContext);
 
     /// Says where pass `index`'s commands and count lie for this phase.
     pub fn set_draws(&self, index: usize, draws: abi::CadrGpuDraws) {

@@ -26,6 +26,7 @@ pub use upload::UploadStats;
 
 use std::sync::Arc;
 
+use crate::commands_key::mix;
 use crate::error::RenderResult;
 use crate::vk::raw as vk;
 use crate::vk::raw::Handle;
@@ -749,10 +750,9 @@ impl GpuScene {
         self.last_upload.bytes += bytes;
         // The buffers generation is unique across scenes: a prologue recorded for another
         // scene (its sets gone with it) never matches.
-        let mut key =
-            crate::commands_key::mix(self.buffers_generation, self.uploader.commands_key());
-        key = crate::commands_key::mix(key, self.hierarchy.commands_key());
-        key = crate::commands_key::mix(key, u64::from(self.last_hierarchy.is_some()));
+        let mut key = mix(self.buffers_generation, self.uploader.commands_key());
+        key = mix(key, self.hierarchy.commands_key());
+        key = mix(key, u64::from(self.last_hierarchy.is_some()));
         Ok((bytes, key))
     }
 

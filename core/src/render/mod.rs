@@ -69,8 +69,6 @@ pub struct Renderer {
     /// Whether the last submission carried an upload prologue (its GPU time is the frame's
     /// too).
     last_submission_uploaded: bool,
-    /// The upload key of the prologue in its command buffer, if it may be submitted again.
-    recorded_prologue: Option<u64>,
     /// The id target and its readback, created on the first pick.
     pick: Option<PickTarget>,
     /// The replay key of the last recorded frame, if it had one.
@@ -251,7 +249,6 @@ impl Renderer {
             timer,
             upload_timer,
             last_submission_uploaded: false,
-            recorded_prologue: None,
             pick: None,
             last_recorded: None,
             replayable: None,
@@ -649,8 +646,7 @@ impl Renderer {
         let mut stats = FrameStats::default();
         if plan.uploads_pending {
             let key = (recorders.gather_uploads)(self, &mut stats)?;
-            if self.recorded_prologue != Some(key) || !self.commands.reuse_prologue() {
-                self.recorded_prologue = None;
+            if !self.commands.reuse_prologue(key) {
                 let command_buffer = self.commands.begin_prologue()?;
                 if let Some(timer) = &mut self.upload_timer {
                     timer.begin(command_buffer);
@@ -659,8 +655,7 @@ impl Renderer {
                 if let Some(timer) = &mut self.upload_timer {
                     timer.end(command_buffer);
                 }
-                self.commands.end_prologue()?;
-                self.recorded_prologue = Some(key);
+                self.commands.end_prologue(key)?;
             }
         }
         match (plan.replay_key, self.replayable) {

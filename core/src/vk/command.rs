@@ -43,8 +43,9 @@ pub struct CommandContext {
     prologue: Option<(vk::CommandPool, vk::CommandBuffer)>,
     /// Where the prologue of the next submission stands.
     prologue_state: PrologueState,
-    /// Whether the prologue's buffer holds a complete recording (it may be submitted again).
-    prologue_recorded: bool,
+    /// The key of the complete recording the prologue's buffer holds, if any: a prologue
+    /// with that key may be submitted again as it is.
+    prologue_key: Option<u64>,
 }
 
 /// Where the prologue of the next submission stands.
@@ -71,7 +72,7 @@ impl CommandContext {
             in_flight: false,
             prologue: None,
             prologue_state: PrologueState::Absent,
-            prologue_recorded: false,
+            prologue_key: None,
         };
         let fence_info = vk::FenceCreateInfo::default().flags(vk::FenceCreateFlags::SIGNALED);
         // SAFETY: fence_info is valid.
@@ -118,7 +119,7 @@ impl CommandContext {
     /// (once); a prologue begun and not ended (its recording failed) is not submitted.
     pub fn begin_prologue(&mut self) -> VkResult<vk::CommandBuffer> {
         self.prologue_state = PrologueState::Absent;
-        self.prologue_recorded = false;
+        self.prologue_key = None;
         self.wait()?;
         let (pool, command_buffer) = match self.prologue {
             Some(prologue) => prologue,
@@ -146,8 +147,9 @@ impl CommandContext {
         Ok(command_buffer)
     }
 
-    /// Ends the prologue `begin_prologue` began, for the next submission.
-    pub fn end_prologue(&mut self) -> VkResult<()> {
+    /// Ends the prologue `begin_prologue` began, for the next submission; `key` says what its
+    /// commands depend on (see `reuse_prologue`).
+    pub fn end_prologue(&mut self, key: u64) -> VkResult<()> {
         let Some((_, command_buffer)) = self.prologue else {
             return Ok(());
         };
@@ -159,17 +161,19 @@ impl CommandContext {
         unsafe { self.device.raw.end_command_buffer(command_buffer) }
             .or_vk("vkEndCommandBuffer")?;
         self.prologue_state = PrologueState::Ready;
-        self.prologue_recorded = true;
+        self.prologue_key = Some(key);
         Ok(())
     }
 
-    /// Makes the last prologue recorded go ahead of the next submission again, as it is;
-    /// false when there is none to reuse (none recorded, or its recording failed).
-    pub fn reuse_prologue(&mut self) -> bool {
-        if self.prologue.is_some() && self.prologue_recorded {
+    /// Makes the last prologue recorded go ahead of the next submission again, as it is,
+    /// when it was ended with `key`; false when there is none to reuse (none recorded, its
+    /// recording failed, or its commands depend on something else).
+    pub fn reuse_prologue(&mut self, key: u64) -> bool {
+        if self.prologue.is_some() && self.prologue_key == Some(key) {
             self.prologue_state = PrologueState::Ready;
+            return true;
         }
-        self.prologue_state == PrologueState::Ready
+        false
     }
 
     /// Ends recording and submits; the fence signals when the GPU is done.

@@ -16,7 +16,7 @@ use glam::DMat4;
 
 use super::gpu_cull::{cull_view, cull_view_bytes, GpuCuller, PhaseDepth};
 use super::pipeline::{PassSet, ShadeMode};
-use super::registry::TechniqueKind;
+use super::registry::{announces, TechniqueKind};
 use super::set::{status, Message, Techniques};
 use crate::gpu_scene::GpuScene;
 use crate::render::pick::{PickSample, PixelRect};
@@ -470,13 +470,13 @@ impl CullDepends {
     /// What a culler that `provides` these traits, from a library of ABI `minor`, reads:
     /// everything, unless its minor lets it say otherwise and it does.
     fn of(provides: abi::CadrTraitBits, minor: u32) -> Self {
+        let announces = |trait_bit, since| announces((provides, minor), trait_bit, since);
         Self {
-            // ABI 1.10: it replays parameter changes and reads no host matrices.
-            parameters: minor < 10
-                || provides & abi::CADR_TRAIT_REPLAYS_PARAMETER_CHANGES == 0
+            // Unless it replays parameter changes and reads no host matrices.
+            parameters: !announces(abi::CADR_TRAIT_REPLAYS_PARAMETER_CHANGES, 10)
                 || provides & abi::CADR_TRAIT_READS_HOST_MATRICES != 0,
-            // ABI 1.11: its result is the same whatever the view.
-            view: minor < 11 || provides & abi::CADR_TRAIT_CULLS_WHATEVER_THE_VIEW == 0,
+            // Unless its result is the same whatever the view.
+            view: !announces(abi::CADR_TRAIT_CULLS_WHATEVER_THE_VIEW, 11),
         }
     }
 }

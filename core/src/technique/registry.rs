@@ -178,6 +178,12 @@ impl TechniqueEntry {
         self.library.as_os_str() == BUILT_IN_LIBRARY
     }
 
+    /// Whether it announces `trait_bit`, a `CADR_TRAIT_*` announcement that ABI 1.`since`
+    /// introduced (see [`announces`]).
+    pub(crate) fn announces(&self, trait_bit: abi::CadrTraitBits, since: u32) -> bool {
+        announces((self.provides, self.abi_version.1), trait_bit, since)
+    }
+
     /// The vtable, in this host's layout for the entry's kind (fields the plugin's ABI minor
     /// did not have are none).
     pub(crate) fn vtable(&self) -> *const std::ffi::c_void {
@@ -190,6 +196,17 @@ impl TechniqueEntry {
         // this host's vtable of the entry's kind.
         unsafe { &*self.vtable().cast::<abi::CadrCommonVtable>() }
     }
+}
+
+/// Whether a technique that `provides` these traits, from a library of ABI minor `minor`,
+/// announces `trait_bit`, which ABI 1.`since` introduced: a library built before then could not
+/// have said so, whatever its bits.
+pub(crate) fn announces(
+    (provides, minor): (abi::CadrTraitBits, u32),
+    trait_bit: abi::CadrTraitBits,
+    since: u32,
+) -> bool {
+    minor >= since && provides & trait_bit != 0
 }
 
 /// A library or technique that cannot be used, and why.

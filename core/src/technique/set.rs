@@ -418,10 +418,9 @@ impl Techniques {
     pub fn replayable(&self) -> bool {
         self.frame_replay
             && self.active.iter().all(|active| {
-                active.as_ref().is_some_and(|active| {
-                    active.entry.abi_version.1 >= 5
-                        && active.entry.provides & abi::CADR_TRAIT_REPLAYABLE != 0
-                })
+                active
+                    .as_ref()
+                    .is_some_and(|active| active.entry.announces(abi::CADR_TRAIT_REPLAYABLE, 5))
             })
     }
 
@@ -433,8 +432,9 @@ impl Techniques {
         self.replayable()
             && self.active.iter().all(|active| {
                 active.as_ref().is_some_and(|active| {
-                    active.entry.abi_version.1 >= 10
-                        && active.entry.provides & abi::CADR_TRAIT_REPLAYS_PARAMETER_CHANGES != 0
+                    active
+                        .entry
+                        .announces(abi::CADR_TRAIT_REPLAYS_PARAMETER_CHANGES, 10)
                 })
             })
     }

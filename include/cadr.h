@@ -1497,10 +1497,13 @@ enum CadrResult cadr_renderer_set_highlight_style(CadrRenderer renderer, uint32_
 // `style` is null or writable.
 enum CadrResult cadr_renderer_highlight_style(CadrRenderer renderer, uint32_t *style);
 
-// Turns silhouette edges on (`on` true, the default) or off: in the edge display modes
-// (edges, hidden-line), the outlines of curved surfaces, which no feature edge marks, are
-// drawn with the feature edges, found where the frame's depth breaks. Applies from the next
-// frame; its cost is one full-screen pass in those modes.
+// Turns silhouette edges on (`on` true, the default) or off: in the display modes with
+// feature edges (edges, hidden-line, X-ray), the outlines of curved surfaces, which no
+// feature edge marks, are drawn with the feature edges, found where the frame's depth breaks
+// (in X-ray, where the nearest surface's depth breaks, translucent surfaces included; on a
+// device without `fragmentStoresAndAtomics` X-ray draws none). Applies from the next frame;
+// its cost is one full-screen pass in those modes, and in X-ray an atomic write per surface
+// fragment.
 //
 // Returns `CADR_RESULT_OK`, `CADR_RESULT_VULKAN` or a handle error. Ownership: nothing
 // changes hands. Thread-safety: as `cadr_renderer_create`.

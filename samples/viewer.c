@@ -13,7 +13,7 @@
  *        M cycles the present modes the window offers; X cycles a section plane through the
  *        view's centre across x, y, z and off; K toggles its caps, H their hatching;
  *        D toggles dashed hidden edges in hidden-line; O toggles ambient occlusion;
- *        U toggles materials' textures; L toggles silhouette edges in edges and hidden-line;
+ *        U toggles materials' textures; L toggles silhouette edges in edges, hidden-line and xray;
  *        G cycles the highlight style (tint, outline);
  *        B cycles the background (cadr's gradient, white, dark with light edge lines);
  *        A cycles the anti-aliasing levels the device offers (MSAA 2x, 4x, 8x, then off);
@@ -328,7 +328,7 @@ static void describe(struct Viewer *v, char *text, size_t size) {
   snprintf(text, size,
            "cadr viewer | %s / %s / %s / %s | %s%s, %s highlight, %s | %s | %s | %s | %s background | %u in flight, %s | %llu draws in %llu calls | CPU %.0f us, GPU %.0f us | %.0f frames/s",
            names[0], names[1], names[2], names[3], shade_names[v->shade % 5],
-           silhouettes || (v->shade != CADR_SHADE_EDGES && v->shade != CADR_SHADE_HIDDEN_LINE) ? "" : " without silhouettes",
+           silhouettes || (v->shade != CADR_SHADE_EDGES && v->shade != CADR_SHADE_HIDDEN_LINE && v->shade != CADR_SHADE_XRAY) ? "" : " without silhouettes",
            highlight == CADR_HIGHLIGHT_OUTLINE ? "outline" : "tint",
            names[4],
            antialiasing, textures ? "textures" : "no textures", section, background_names[v->background % 3], frames, present_names[mode % 3], (unsigned long long)v->stats.draws,

@@ -38,3 +38,6 @@ const float CADR_XRAY_OPACITY = 0.2;
 // frame.target.z: highlighted parts are outlined (their surfaces record themselves in the
 // outline keys, binding 7) instead of tinted.
 const uint CADR_DISPLAY_HIGHLIGHT_OUTLINE = 16u;
+// frame.target.z: surfaces record their depth in the nearest depth (binding 7), from which the
+// silhouettes pass finds X-ray's silhouettes (its translucent surfaces write no depth).
+const uint CADR_DISPLAY_NEAREST_DEPTH = 32u;

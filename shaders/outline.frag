@@ -2,11 +2,11 @@
 // The outline highlight style: over the finished picture, a band in the highlight colour
 // (frame.highlight; its w is the band's width in pixels, 1 to 8, 2 by default) around every
 // region where the nearest surface is a highlighted part's (from the outline keys its surfaces
-// recorded, outline.glsl). The band lies outside the
+// recorded, pixel_keys.glsl). The band lies outside the
 // part, over what surrounds it; the part itself keeps its own colours.
-#define CADR_OUTLINE_KEYS
+#define CADR_PIXEL_KEYS_READ
 #include "frame.glsl"
-#include "outline.glsl"
+#include "pixel_keys.glsl"
 
 layout(location = 0) out vec4 out_color;
 
@@ -14,8 +14,8 @@ layout(location = 0) out vec4 out_color;
 const int MAX_RADIUS = 8;
 
 bool highlighted_at(ivec2 pixel) {
-    uint key = cadr_outline_keys[uint(pixel.y) * frame.target.x + uint(pixel.x)];
-    return key != CADR_OUTLINE_NOTHING && (key & 1u) == 0u;
+    uint key = cadr_pixel_keys[cadr_pixel_key_index(CADR_OUTLINE_PLANE, uvec2(pixel))];
+    return key != CADR_PIXEL_KEY_NOTHING && (key & 1u) == 0u;
 }
 
 void main() {

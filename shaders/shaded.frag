@@ -3,12 +3,13 @@
 // the vertex colour and the texture; a material's alpha mask cuts holes). While
 // section planes cut with caps on, a closed part seen through a cut shows the cap there (see
 // section.glsl). With the highlight outline style, every surface fragment records itself in
-// the outline keys (outline.glsl).
+// the outline keys, and for X-ray's silhouettes its depth in the nearest depth
+// (pixel_keys.glsl).
 #include "frame.glsl"
 #include "shading.glsl"
 #include "section.glsl"
 #include "texturing.glsl"
-#include "outline.glsl"
+#include "pixel_keys.glsl"
 
 layout(location = 0) in vec3 in_view_position;
 layout(location = 1) in vec3 in_view_normal;
@@ -30,6 +31,9 @@ void main() {
     }
     if ((frame.target.z & CADR_DISPLAY_HIGHLIGHT_OUTLINE) != 0u) {
         cadr_record_outline(in_highlighted != 0u);
+    }
+    if ((frame.target.z & CADR_DISPLAY_NEAREST_DEPTH) != 0u) {
+        cadr_record_nearest_depth();
     }
     int cap_plane = section_cap_of(in_closure, in_eye_offset);
     if (cap_plane >= 0) {

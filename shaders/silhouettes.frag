@@ -1,13 +1,18 @@
 #version 460
-// Silhouette edges over the finished picture of the edge display modes: the outlines of
-// curved surfaces (a cylinder's sides, a sphere's rim), which no feature edge marks, found
-// where the depth breaks. A pixel is on a silhouette when a neighbour is uncovered, or lies
+// Silhouette edges over the finished picture of the edge display modes (edges, hidden-line,
+// X-ray): the outlines of curved surfaces (a cylinder's sides, a sphere's rim), which no
+// feature edge marks, found where the depth breaks: the depth buffer's, or in X-ray, whose
+// translucent surfaces write none, the nearer of it and the nearest depth every surface
+// recorded (CADR_DISPLAY_NEAREST_DEPTH, pixel_keys.glsl): a surface's fragments under its own
+// edge lines fail the depth test there and record nothing. A pixel is on a silhouette when a neighbour is uncovered, or lies
 // farther than the surface through this pixel and the one opposite predicts by more than a
 // few pixel widths (the depth buffer is linear in screen space across a plane, so the
 // prediction is exact on planes and close on gently curved surfaces). The line goes on the
 // near side, in the edge lines' colour, drawn over the picture (premultiplied).
 #extension GL_EXT_samplerless_texture_functions : require
+#define CADR_PIXEL_KEYS_READ
 #include "frame.glsl"
+#include "pixel_keys.glsl"
 
 layout(set = 1, binding = 0) uniform texture2D depth_image;
 
@@ -23,8 +28,16 @@ vec3 view_position(vec2 pixel, float depth, mat4 inverse_projection) {
     return view.xyz / view.w;
 }
 
+// The nearest surface's (or line's) depth at `pixel`, 1 where none is.
 float depth_at(ivec2 pixel) {
-    return texelFetch(depth_image, pixel, 0).r;
+    float depth = texelFetch(depth_image, pixel, 0).r;
+    if ((frame.target.z & CADR_DISPLAY_NEAREST_DEPTH) != 0u) {
+        uint key = cadr_pixel_keys[cadr_pixel_key_index(CADR_NEAREST_DEPTH_PLANE, uvec2(pixel))];
+        if (key != CADR_PIXEL_KEY_NOTHING) {
+            depth = min(depth, uintBitsToFloat(key));
+        }
+    }
+    return depth;
 }
 
 void main() {

@@ -11,7 +11,7 @@ layout(early_fragment_tests) in;
 #include "shading.glsl"
 #include "transparency.glsl"
 #include "texturing.glsl"
-#include "outline.glsl"
+#include "pixel_keys.glsl"
 
 layout(location = 0) in vec3 in_view_position;
 layout(location = 1) in vec3 in_view_normal;
@@ -43,6 +43,10 @@ void main() {
     // outlined behind them (X-ray shows the highlighted parts inside a housing outlined).
     if ((frame.target.z & CADR_DISPLAY_HIGHLIGHT_OUTLINE) != 0u && in_highlighted != 0u) {
         cadr_record_outline(true);
+    }
+    // X-ray's silhouettes outline translucent surfaces too.
+    if ((frame.target.z & CADR_DISPLAY_NEAREST_DEPTH) != 0u) {
+        cadr_record_nearest_depth();
     }
     vec3 color = shade_headlight(in_view_position, in_view_normal, surface, in_surface, frame.light,
                           frame.view_rotation[1].xyz);

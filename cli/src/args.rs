@@ -328,7 +328,7 @@ pub struct RenderArgs {
     /// the edge colour, instead of removing them.
     #[arg(long)]
     pub dashed: bool,
-    /// Draw the edge display modes (edges, hidden-line) with feature edges only, without the
+    /// Draw the display modes with feature edges (edges, hidden-line, X-ray) without the
     /// silhouettes of curved surfaces.
     #[arg(long)]
     pub no_silhouettes: bool,
@@ -544,8 +544,8 @@ pub struct BenchArgs {
     #[arg(long, value_name = "N,N", value_delimiter = ',', default_value = "1",
           value_parser = parse_msaa)]
     pub msaa: Vec<u32>,
-    /// Silhouette edges in the edges and hidden-line rows, on or off (comma-separated: on,off
-    /// measures those rows with and without, their cost; default on).
+    /// Silhouette edges in the edges, hidden-line and X-ray rows, on or off (comma-separated:
+    /// on,off measures those rows with and without, their cost; default on).
     #[arg(long, value_name = "on,off", value_delimiter = ',', default_value = "on",
           value_parser = parse_on_off)]
     pub silhouettes: Vec<bool>,

@@ -314,7 +314,7 @@ impl Bench {
         // Silhouettes change only the modes that draw them: other modes get one row for the
         // first setting listed.
         let measured_in = |settings: &RowSettings, mode: ShadeMode| {
-            draws_silhouettes(mode) || settings.silhouettes == args.silhouettes[0]
+            mode.draws_silhouettes() || settings.silhouettes == args.silhouettes[0]
         };
         let rows_to_measure = settings
             .iter()
@@ -400,11 +400,6 @@ struct RowSettings {
     silhouettes: bool,
 }
 
-/// Whether `mode` draws silhouette edges when they are on.
-fn draws_silhouettes(mode: ShadeMode) -> bool {
-    matches!(mode, ShadeMode::Edges | ShadeMode::HiddenLine)
-}
-
 /// The display mode of a row, with "+ao" when ambient occlusion was on, "+outline" with the
 /// outline highlight style and "-sil" when a mode that draws silhouettes did not.
 fn shade_label(row: &Row) -> String {
@@ -415,7 +410,7 @@ fn shade_label(row: &Row) -> String {
     if row.highlight_style == HighlightStyle::Outline {
         label += "+outline";
     }
-    if !row.silhouettes && ShadeMode::parse(row.shade).is_some_and(draws_silhouettes) {
+    if !row.silhouettes && ShadeMode::parse(row.shade).is_some_and(ShadeMode::draws_silhouettes) {
         label += "-sil";
     }
     label

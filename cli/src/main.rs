@@ -240,7 +240,7 @@ fn render(args: &RenderArgs, process_start: Instant) -> Result<(), String> {
             args.highlight_style.name()
         );
     }
-    if args.no_silhouettes && matches!(shade, ShadeMode::Edges | ShadeMode::HiddenLine) {
+    if args.no_silhouettes && shade.draws_silhouettes() {
         technique_line += ", no silhouettes";
     }
     if args.msaa > 1 {

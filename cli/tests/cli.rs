@@ -1140,7 +1140,7 @@ fn msaa_anti_aliases_render_and_bench_measures_each_level() {
     for style in ["tint", "outline"] {
         for silhouettes in [true, false] {
             for mode in ["solid", "edges", "hidden-line", "wireframe", "xray"] {
-                if silhouettes || mode == "edges" || mode == "hidden-line" {
+                if silhouettes || ["edges", "hidden-line", "xray"].contains(&mode) {
                     expected.push((mode.to_owned(), silhouettes, style.to_owned()));
                 }
             }
@@ -1148,7 +1148,7 @@ fn msaa_anti_aliases_render_and_bench_measures_each_level() {
     }
     assert_eq!(
         rows, expected,
-        "each style, silhouettes on then off in the edge modes"
+        "each style, silhouettes on then off in the modes with feature edges"
     );
     let text = stdout(&output);
     assert!(text.contains("hidden-line+outline-sil"), "{text}");

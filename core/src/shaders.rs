@@ -199,7 +199,10 @@ pub const INCLUDES: &[IncludeFile] = &[
         "texturing.glsl",
         include_str!("../../shaders/texturing.glsl"),
     ),
-    ("outline.glsl", include_str!("../../shaders/outline.glsl")),
+    (
+        "pixel_keys.glsl",
+        include_str!("../../shaders/pixel_keys.glsl"),
+    ),
     (
         "transparency.glsl",
         include_str!("../../shaders/transparency.glsl"),

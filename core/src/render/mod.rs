@@ -12,6 +12,7 @@ mod output;
 mod palette;
 pub mod pick;
 mod pipeline;
+mod pixel_keys;
 mod section;
 mod stats;
 mod transparency;
@@ -23,8 +24,8 @@ pub use output::SaveError;
 pub use palette::{DisplayRgb, Palette};
 pub use pipeline::{
     FrameUniforms, HierarchyParameters, HierarchyStage, Pipelines, ScatterParameters,
-    DISPLAY_HIGHLIGHT_OUTLINE, DISPLAY_MATERIAL_DESCRIPTIONS, DISPLAY_TEXTURES,
-    DISPLAY_VERTEX_ATTRIBUTES, DISPLAY_XRAY, PICK_FORMAT,
+    DISPLAY_HIGHLIGHT_OUTLINE, DISPLAY_MATERIAL_DESCRIPTIONS, DISPLAY_NEAREST_DEPTH,
+    DISPLAY_TEXTURES, DISPLAY_VERTEX_ATTRIBUTES, DISPLAY_XRAY, PICK_FORMAT,
 };
 pub use section::{Section, DEFAULT_CAP_COLORS, MAX_SECTION_PLANES};
 pub use stats::FrameStats;
@@ -44,8 +45,8 @@ use crate::vk::{
     suspend_rendering, Buffer, CommandContext, DescriptorSets, Device, GpuTimer, Image,
     MemoryLocation, Multisampled, OffscreenTarget, RenderingTarget,
 };
-use highlight::OutlineKeys;
 use pick::{PickTarget, PixelRect};
+use pixel_keys::{KeyPlane, PixelKeys};
 use transparency::{storage_buffer, TransparencyTargets};
 
 /// What the colour pass clears to: nothing drawn, no coverage (the background goes under
@@ -100,10 +101,10 @@ pub struct Renderer {
     textures: bool,
     /// How highlighted parts are drawn.
     highlight_style: HighlightStyle,
-    /// With the outline style, the outline keys at the target's size (made by the first
-    /// frame that needs them), which binding 7 of the frame set names; otherwise the
+    /// The pixel keys at the target's size (made by the first frame that needs them: with the
+    /// outline style, or X-ray's silhouettes), which binding 7 of the frame set names; otherwise the
     /// placeholder storage is named there.
-    outline_keys: Option<OutlineKeys>,
+    pixel_keys: Option<PixelKeys>,
     /// The generation of the GPU scene resources the frame set names, if any.
     bound_scene: Option<u64>,
 }
@@ -138,8 +139,8 @@ pub(crate) struct FramePlan<'a> {
     pub translucency: Option<(&'a TransparencyMethod, (vk::Pipeline, vk::PipelineLayout))>,
     /// Whether the frame fills surfaces, so that ambient occlusion (when on) applies.
     pub fills_surfaces: bool,
-    /// Whether the frame draws feature edges over surfaces that fill the depth (the edges
-    /// and hidden-line modes), so that silhouettes (when on) join them.
+    /// Whether the frame draws feature edges (the edges, hidden-line and X-ray modes), so
+    /// that silhouettes (when on) join them.
     pub draws_edges: bool,
 }
 
@@ -148,8 +149,19 @@ pub(crate) struct FramePlan<'a> {
 struct DepthOverlays {
     /// Ambient occlusion.
     ssao: bool,
-    /// Silhouette edges.
-    silhouettes: bool,
+    /// Silhouette edges, and the depth they are found in.
+    silhouettes: Option<SilhouetteSource>,
+}
+
+/// The depth a frame's silhouettes are found in.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum SilhouetteSource {
+    /// The depth buffer: the surfaces fill it (edges, hidden-line). The silhouettes go under
+    /// the translucent surfaces merged over the picture, as the edge lines do.
+    DepthBuffer,
+    /// The nearest depth every surface records in the pixel keys (X-ray, whose translucent
+    /// surfaces write no depth). They outline the nearest surfaces, so they go over the merge.
+    NearestDepth,
 }
 
 /// Which image a pass draws into.
@@ -227,7 +239,7 @@ impl Renderer {
         );
         let placeholder_storage = storage_buffer(device, 0)?;
         name_storage(&frame_sets, &placeholder_storage);
-        name_outline_keys(&frame_sets, &placeholder_storage);
+        name_pixel_keys(&frame_sets, &placeholder_storage);
         let cull_view = Buffer::new(
             device,
             "gpu cull view",
@@ -258,7 +270,7 @@ impl Renderer {
             placeholder_storage,
             textures: true,
             highlight_style: HighlightStyle::default(),
-            outline_keys: None,
+            pixel_keys: None,
             bound_scene: None,
             background: Background::default(),
             palette: Palette::default(),
@@ -316,11 +328,27 @@ impl Renderer {
         Ok(())
     }
 
-    /// Whether the edge display modes (edges, hidden-line) draw silhouette edges with the
-    /// feature edges: the outlines of curved surfaces where the depth breaks, which no
-    /// feature edge marks (on by default).
+    /// Whether the display modes that draw feature edges (edges, hidden-line, X-ray) draw
+    /// silhouette edges with them: the outlines of curved surfaces where the depth breaks,
+    /// which no feature edge marks (on by default). X-ray finds them in the nearest depth its
+    /// surfaces record, which needs the device's `fragmentStoresAndAtomics`: without it, X-ray
+    /// draws none.
     pub fn silhouettes(&self) -> bool {
         self.silhouettes
+    }
+
+    /// Where the silhouettes of a frame planned as `plan` are found, if it draws them.
+    fn silhouette_source(&self, plan: &FramePlan<'_>) -> Option<SilhouetteSource> {
+        if !(self.silhouettes && plan.draws_edges && plan.pass == PassTarget::Color) {
+            return None;
+        }
+        if plan.display & DISPLAY_XRAY == 0 {
+            Some(SilhouetteSource::DepthBuffer)
+        } else if self.device.capabilities().fragment_stores_and_atomics {
+            Some(SilhouetteSource::NearestDepth)
+        } else {
+            None
+        }
     }
 
     /// Turns silhouette edges on or off (see [`Renderer::silhouettes`]); the next frame
@@ -357,7 +385,7 @@ impl Renderer {
             // The recorded frame has (or lacks) the outline's clear and pass.
             self.forget_recording();
             self.highlight_style = style;
-            self.drop_outline_keys();
+            self.drop_pixel_keys();
         }
         Ok(())
     }
@@ -463,7 +491,7 @@ impl Renderer {
         self.depth_set = None;
         self.pick = None;
         self.drop_transparency_targets();
-        self.drop_outline_keys();
+        self.drop_pixel_keys();
         Ok(())
     }
 
@@ -592,6 +620,19 @@ impl Renderer {
         let (eye_high, eye_low) = split_f64(eye);
         let mut view_rotation = camera.view;
         view_rotation.w_axis = glam::DVec4::W;
+        let color = plan.pass == PassTarget::Color;
+        let outline = self.highlight_style == HighlightStyle::Outline && color;
+        let depth_overlays = DepthOverlays {
+            ssao: self.ssao && plan.fills_surfaces && color,
+            silhouettes: self.silhouette_source(&plan),
+        };
+        let nearest_depth = depth_overlays.silhouettes == Some(SilhouetteSource::NearestDepth);
+        let display = plan.display
+            | if nearest_depth {
+                DISPLAY_NEAREST_DEPTH
+            } else {
+                0
+            };
         let uniforms = FrameUniforms {
             projection: camera.projection.as_mat4().to_cols_array_2d(),
             view_rotation: view_rotation.as_mat4().to_cols_array_2d(),
@@ -603,7 +644,7 @@ impl Renderer {
             section: [self.section.flags(), 0, 0, 0],
             target: {
                 let (width, height) = self.size();
-                [width, height, plan.display, 0]
+                [width, height, display, 0]
             },
             background_top: opaque(self.background.top),
             background_bottom: opaque(self.background.bottom),
@@ -617,16 +658,10 @@ impl Renderer {
         if let Some((method, _)) = plan.translucency {
             self.ensure_transparency_targets(method)?;
         }
-        let color = plan.pass == PassTarget::Color;
-        let outline = self.highlight_style == HighlightStyle::Outline && color;
-        if outline {
-            self.ensure_outline_keys()?;
+        if outline || nearest_depth {
+            self.ensure_pixel_keys()?;
         }
-        let depth_overlays = DepthOverlays {
-            ssao: self.ssao && plan.fills_surfaces && color,
-            silhouettes: self.silhouettes && plan.draws_edges && color,
-        };
-        let depth_set = if depth_overlays.ssao || depth_overlays.silhouettes {
+        let depth_set = if depth_overlays.ssao || depth_overlays.silhouettes.is_some() {
             Some(self.ensure_depth_set()?)
         } else {
             None
@@ -685,16 +720,25 @@ impl Renderer {
             .and(self.transparency.as_ref())
             .filter(|_| plan.pass == PassTarget::Color);
         if let Some(targets) = transparency {
-            self.record_storage_clear(command_buffer, &targets.storage, targets.cleared_bytes, 0);
-        }
-        let outline_keys = self.outline_keys.as_ref().filter(|_| outline);
-        if let Some(keys) = outline_keys {
             self.record_storage_clear(
                 command_buffer,
-                &keys.buffer,
-                keys.bytes(),
-                highlight::NO_SURFACE,
+                &targets.storage,
+                (0, targets.cleared_bytes),
+                0,
             );
+        }
+        let planes: &[KeyPlane] = match (outline, nearest_depth) {
+            (true, true) => &[KeyPlane::Outline, KeyPlane::NearestDepth],
+            (true, false) => &[KeyPlane::Outline],
+            (false, true) => &[KeyPlane::NearestDepth],
+            (false, false) => &[],
+        };
+        if let Some((keys, span)) = self
+            .pixel_keys
+            .as_ref()
+            .and_then(|keys| Some((keys, keys.span(planes)?)))
+        {
+            self.record_storage_clear(command_buffer, &keys.buffer, span, pixel_keys::NO_SURFACE);
         }
         let extra_colors: Vec<(&Image, vk::ClearColorValue)> = transparency
             .map(|t| t.images.iter().zip(t.clears.iter().copied()).collect())
@@ -727,12 +771,7 @@ impl Renderer {
         if plan.pass == PassTarget::Color {
             let merge = transparency.zip(plan.translucency.map(|(_, merge)| merge));
             let depth_overlays = depth_set.map(|set| (depth_overlays, set));
-            self.record_overlay(
-                command_buffer,
-                merge,
-                depth_overlays,
-                outline_keys.is_some(),
-            )?;
+            self.record_overlay(command_buffer, merge, depth_overlays, outline)?;
         }
         (recorders.after)(self, command_buffer, phases - 1, &mut stats)?;
         if let Some(timer) = &mut self.timer {
@@ -847,29 +886,25 @@ impl Renderer {
         Ok(())
     }
 
-    /// Makes the outline keys for the target's size unless they are made, and names them in
+    /// Makes the pixel keys for the target's size unless they are made, and names them in
     /// the frame set (the GPU is idle: the caller waited for the last frame; the recorded
     /// frame named the old binding and is forgotten).
-    fn ensure_outline_keys(&mut self) -> RenderResult<()> {
+    fn ensure_pixel_keys(&mut self) -> RenderResult<()> {
         let extent = self.target.extent();
-        if self
-            .outline_keys
-            .as_ref()
-            .is_some_and(|k| k.extent == extent)
-        {
+        if self.pixel_keys.as_ref().is_some_and(|k| k.extent == extent) {
             return Ok(());
         }
         self.forget_recording();
-        let keys = OutlineKeys::new(&self.device, extent)?;
-        name_outline_keys(&self.frame_sets, &keys.buffer);
-        self.outline_keys = Some(keys);
+        let keys = PixelKeys::new(&self.device, extent)?;
+        name_pixel_keys(&self.frame_sets, &keys.buffer);
+        self.pixel_keys = Some(keys);
         Ok(())
     }
 
-    /// Forgets the outline keys; the frame set names the placeholder storage there again.
-    fn drop_outline_keys(&mut self) {
-        if self.outline_keys.take().is_some() {
-            name_outline_keys(&self.frame_sets, &self.placeholder_storage);
+    /// Forgets the pixel keys; the frame set names the placeholder storage there again.
+    fn drop_pixel_keys(&mut self) {
+        if self.pixel_keys.take().is_some() {
+            name_pixel_keys(&self.frame_sets, &self.placeholder_storage);
         }
     }
 
@@ -880,15 +915,16 @@ impl Renderer {
         }
     }
 
-    /// Zeroes the part of the method's storage it wants cleared, after the last frame's merge
-    /// read it and before this frame's translucent fragments write it. The fill is scoped as
+    /// Fills `(offset, bytes)` of `storage` with `value` (the part of the method's storage it
+    /// wants cleared, the pixel keys' planes in use), after the last frame's passes read it
+    /// and before this frame's fragments write it. The fill is scoped as
     /// any transfer: validation layers disagree on whether `vkCmdFillBuffer` is a clear or a
     /// copy stage.
     fn record_storage_clear(
         &self,
         command_buffer: vk::CommandBuffer,
         storage: &Buffer,
-        bytes: u64,
+        (offset, bytes): (u64, u64),
         value: u32,
     ) {
         if bytes == 0 {
@@ -906,7 +942,7 @@ impl Renderer {
                 vk::AccessFlags2::TRANSFER_WRITE,
             ),
         );
-        storage.record_fill(command_buffer, bytes, value);
+        storage.record_fill(command_buffer, offset, bytes, value);
         memory_barrier(
             &self.device,
             command_buffer,
@@ -924,8 +960,8 @@ impl Renderer {
     /// What goes over the finished rendering: ambient occlusion darkening the opaque picture
     /// and silhouette edges over it (each when on, with the set naming the depth), the
     /// transparency method's result at each pixel blended over the picture (with translucent
-    /// surfaces), the band around highlighted parts (with the `outline` style), then the
-    /// background under whatever the picture leaves uncovered.
+    /// surfaces), X-ray's silhouettes over that, the band around highlighted parts (with the
+    /// `outline` style), then the background under whatever the picture leaves uncovered.
     fn record_overlay(
         &self,
         command_buffer: vk::CommandBuffer,
@@ -942,15 +978,26 @@ impl Renderer {
                 (overlays.ssao)
                     .then(|| self.pipelines.ssao().map(|pipeline| (pipeline, set)))
                     .transpose()?,
-                (overlays.silhouettes)
-                    .then(|| self.pipelines.silhouettes().map(|pipeline| (pipeline, set)))
+                overlays
+                    .silhouettes
+                    .map(|source| {
+                        self.pipelines
+                            .silhouettes()
+                            .map(|pipeline| (pipeline, set, source))
+                    })
                     .transpose()?,
             ),
             None => (None, None),
         };
-        if merge.is_some() || outline.is_some() {
-            // The fragments' storage writes (translucent ones, outline keys), read by the
-            // merge and the outline.
+        let silhouettes_from = |wanted: SilhouetteSource| {
+            silhouettes
+                .filter(|&(_, _, source)| source == wanted)
+                .map(|(pipeline, set, _)| (pipeline, set))
+        };
+        let reads_pixel_keys = silhouettes_from(SilhouetteSource::NearestDepth).is_some();
+        if merge.is_some() || outline.is_some() || reads_pixel_keys {
+            // The fragments' storage writes (translucent ones, pixel keys), read by the
+            // merge, the outline and X-ray's silhouettes.
             memory_barrier(
                 &self.device,
                 command_buffer,
@@ -965,14 +1012,18 @@ impl Renderer {
             );
         }
         begin_overlay(&self.device, command_buffer, &self.target.color);
-        for (pipeline, set) in [ssao, silhouettes].into_iter().flatten() {
+        let record_depth_overlay = |(pipeline, set): ((vk::Pipeline, vk::PipelineLayout), _)| {
             record_fullscreen(
                 &self.device,
                 command_buffer,
                 pipeline,
                 &[self.frame_set(), set],
             );
-        }
+        };
+        [ssao, silhouettes_from(SilhouetteSource::DepthBuffer)]
+            .into_iter()
+            .flatten()
+            .for_each(record_depth_overlay);
         if let Some((targets, merge)) = merge {
             record_fullscreen(
                 &self.device,
@@ -981,6 +1032,9 @@ impl Renderer {
                 &[self.frame_set(), targets.merge_set.sets[0]],
             );
         }
+        silhouettes_from(SilhouetteSource::NearestDepth)
+            .into_iter()
+            .for_each(record_depth_overlay);
         if let Some(outline) = outline {
             record_fullscreen(&self.device, command_buffer, outline, &[self.frame_set()]);
         }
@@ -1052,8 +1106,8 @@ fn name_storage(frame_sets: &DescriptorSets, storage: &Buffer) {
     );
 }
 
-/// Names `storage` as the outline keys (binding 7 of the frame set).
-fn name_outline_keys(frame_sets: &DescriptorSets, storage: &Buffer) {
+/// Names `storage` as the pixel keys (binding 7 of the frame set).
+fn name_pixel_keys(frame_sets: &DescriptorSets, storage: &Buffer) {
     frame_sets.write_buffer(
         0,
         7,

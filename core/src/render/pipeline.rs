@@ -58,6 +58,9 @@ pub const DISPLAY_MATERIAL_DESCRIPTIONS: u32 = 8;
 /// [`FrameUniforms::target`]`[2]`: highlighted parts are outlined, not tinted; surfaces record
 /// the outline keys (binding 7).
 pub const DISPLAY_HIGHLIGHT_OUTLINE: u32 = 16;
+/// [`FrameUniforms::target`]`[2]`: surfaces record their depth in the nearest depth (binding
+/// 7), where the silhouettes pass finds X-ray's silhouettes (the renderer sets it).
+pub const DISPLAY_NEAREST_DEPTH: u32 = 32;
 
 /// Push constants of `scatter.comp`: one dispatch scatters the items of one array.
 #[repr(C)]

@@ -392,10 +392,7 @@ impl Renderer {
                 ),
                 draws_edges: matches!(
                     passes,
-                    PassSet::Shaded {
-                        mode: ShadeMode::Edges | ShadeMode::HiddenLine,
-                        ..
-                    }
+                    PassSet::Shaded { mode, .. } if mode.draws_silhouettes()
                 ),
             },
             FrameRecorders {

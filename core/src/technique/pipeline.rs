@@ -64,6 +64,16 @@ impl ShadeMode {
         matches!(self, ShadeMode::Solid | ShadeMode::Edges | ShadeMode::XRay)
     }
 
+    /// Whether this mode draws feature edges, which silhouette edges join when they are on
+    /// (`Renderer::set_silhouettes`): edges, hidden-line and X-ray. Wireframe draws every
+    /// triangle's edges, which need none.
+    pub fn draws_silhouettes(self) -> bool {
+        matches!(
+            self,
+            ShadeMode::Edges | ShadeMode::HiddenLine | ShadeMode::XRay
+        )
+    }
+
     /// Parses a command-line name.
     pub fn parse(name: &str) -> Option<Self> {
         Self::ALL.into_iter().find(|m| m.name() == name)
@@ -370,12 +380,12 @@ impl PassShaders {
 
 impl ShaderCache {
     /// An empty cache for a device that has `fragmentStoresAndAtomics` or not: with it, the
-    /// surface shaders record the outline keys of the highlight outline style
-    /// (`CADR_OUTLINE_KEYS`, `shaders/outline.glsl`).
+    /// surface shaders record the per-pixel keys, the highlight outline style's and X-ray's
+    /// nearest depth (`CADR_PIXEL_KEYS_WRITTEN`, `shaders/pixel_keys.glsl`).
     pub fn new(fragment_stores_and_atomics: bool) -> Self {
         Self {
             fragment_defines: if fragment_stores_and_atomics {
-                "#define CADR_OUTLINE_KEYS\n".into()
+                "#define CADR_PIXEL_KEYS_WRITTEN\n".into()
             } else {
                 String::new()
             },

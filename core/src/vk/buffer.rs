@@ -280,9 +280,17 @@ impl Buffer {
         self.size
     }
 
-    /// Records filling its first `size` bytes (a multiple of 4) with the word `value`.
-    pub fn record_fill(&self, command_buffer: vk::CommandBuffer, size: u64, value: u32) {
-        let size = size.min(self.size) & !3;
+    /// Records filling `size` bytes from `offset` (both multiples of 4; clamped to the buffer)
+    /// with the word `value`.
+    pub fn record_fill(
+        &self,
+        command_buffer: vk::CommandBuffer,
+        offset: u64,
+        size: u64,
+        value: u32,
+    ) {
+        let offset = offset.min(self.size) & !3;
+        let size = size.min(self.size - offset) & !3;
         if size == 0 {
             return;
         }
@@ -291,7 +299,7 @@ impl Buffer {
         unsafe {
             self.device
                 .raw
-                .cmd_fill_buffer(command_buffer, self.raw, 0, size, value)
+                .cmd_fill_buffer(command_buffer, self.raw, offset, size, value)
         };
     }
 }

@@ -1,0 +1,67 @@
+//! The per-pixel keys: a storage buffer of planes of one `uint` per pixel of the target (frame
+//! set binding 7, `shaders/pixel_keys.glsl`), which the surface shaders fill with `atomicMin`
+//! and the passes over the finished picture read. Plane 0 holds the highlight outline style's
+//! keys (the nearest surface's depth and whether it is highlighted, `shaders/outline.frag`
+//! draws the band from them); plane 1 the nearest surface's depth, translucent surfaces
+//! included, from which `shaders/silhouettes.frag` finds X-ray's silhouettes. Recording needs
+//! the device's `fragmentStoresAndAtomics`.
+
+use std::sync::Arc;
+
+use crate::error::RenderResult;
+use crate::vk::raw as vk;
+use crate::vk::{Buffer, Device, MemoryLocation};
+
+/// Bytes of one key (a `uint` per pixel).
+const KEY_BYTES: u64 = 4;
+
+/// The value a cleared key holds: no surface drawn there.
+pub(crate) const NO_SURFACE: u32 = u32::MAX;
+
+/// A plane of the keys (its index is the shaders' `CADR_*_PLANE`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum KeyPlane {
+    /// The highlight outline style's keys.
+    Outline = 0,
+    /// The nearest surface's depth (X-ray's silhouettes).
+    NearestDepth = 1,
+}
+
+/// How many planes the buffer holds.
+const PLANES: u64 = 2;
+
+/// The keys of one target size.
+pub(crate) struct PixelKeys {
+    /// The buffer the frame set names at binding 7.
+    pub buffer: Buffer,
+    /// The target size it was made for.
+    pub extent: vk::Extent2D,
+}
+
+impl PixelKeys {
+    /// Keys for a target of `extent`.
+    pub fn new(device: &Arc<Device>, extent: vk::Extent2D) -> RenderResult<Self> {
+        let buffer = Buffer::new(
+            device,
+            "pixel keys",
+            (plane_bytes(extent) * PLANES).max(KEY_BYTES),
+            vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_DST,
+            MemoryLocation::GpuOnly,
+        )?;
+        Ok(Self { buffer, extent })
+    }
+
+    /// The bytes a frame that uses `planes` clears: (offset, size) from the first to the end
+    /// of the last (the planes follow each other, so with the two there are no others between).
+    pub fn span(&self, planes: &[KeyPlane]) -> Option<(u64, u64)> {
+        let bytes = plane_bytes(self.extent);
+        let first = planes.iter().map(|&p| p as u64).min()?;
+        let last = planes.iter().map(|&p| p as u64).max()?;
+        Some((first * bytes, (last + 1 - first) * bytes))
+    }
+}
+
+/// Bytes of one plane: a key per pixel of `extent`.
+fn plane_bytes(extent: vk::Extent2D) -> u64 {
+    u64::from(extent.width) * u64::from(extent.height) * KEY_BYTES
+}

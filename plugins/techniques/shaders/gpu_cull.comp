@@ -83,35 +83,30 @@ layout(push_constant) uniform Dispatch {
     uint exclude_value;
 } dispatch;
 
-// Inside the frustum, and not wholly cut away by a section plane.
+// Inside the frustum.
 bool in_frustum(vec3 center, float radius) {
     for (int i = 0; i < 6; ++i) {
         if (dot(view.planes[i].xyz, center) + view.planes[i].w < -radius) {
             return false;
         }
     }
-    // With the rounding of f32 eye-relative positions as slack: the vertex shader clips
-    // against the same planes, and what it keeps must not be culled.
-    float slack = radius + 1e-5 * length(center);
-    uint sections = min(view.section.x, 6u);
-    for (uint i = 0u; i < sections; ++i) {
-        if (dot(view.section_planes[i].xyz, center) + view.section_planes[i].w < -slack) {
-            return false;
-        }
-    }
     return true;
 }
 
-// Whether some section plane passes through the sphere.
-bool cut_by_a_plane(vec3 center, float radius) {
+// Where the sphere lies against the section planes: x, some plane cuts it away whole; y, some
+// plane passes through it. With the rounding of f32 eye-relative positions as slack: the
+// vertex shader clips against the same planes, and what it keeps must not be culled.
+bvec2 against_sections(vec3 center, float radius) {
     float slack = radius + 1e-5 * length(center);
+    bool cut_away = false;
+    bool crossed = false;
     uint sections = min(view.section.x, 6u);
     for (uint i = 0u; i < sections; ++i) {
-        if (abs(dot(view.section_planes[i].xyz, center) + view.section_planes[i].w) <= slack) {
-            return true;
-        }
+        float distance = dot(view.section_planes[i].xyz, center) + view.section_planes[i].w;
+        cut_away = cut_away || distance < -slack;
+        crossed = crossed || abs(distance) <= slack;
     }
-    return false;
+    return bvec2(cut_away, crossed);
 }
 
 // Whether the sphere may be visible over the depth drawn so far (conservative: the nearest
@@ -208,7 +203,8 @@ void main() {
     float scale = max(length(rotation[0]), max(length(rotation[1]), length(rotation[2])));
     float radius = entry.sphere.w * scale;
 
-    bool visible = in_frustum(center, radius) && large_enough(center, radius);
+    bvec2 sections = against_sections(center, radius);
+    bool visible = in_frustum(center, radius) && !sections.x && large_enough(center, radius);
     bool draw = visible;
     if (dispatch.mode == MODE_LAST_VISIBLE) {
         draw = visible && bit(id);
@@ -229,7 +225,7 @@ void main() {
     bool excluded = dispatch.exclude_mask != 0u
         && (entry.flags & dispatch.exclude_mask) == dispatch.exclude_value;
     if (!draw || count == 0u || (entry.flags & dispatch.filter_mask) != dispatch.filter_value
-        || excluded || (dispatch.filter_section_cut != 0u && !cut_by_a_plane(center, radius))) {
+        || excluded || (dispatch.filter_section_cut != 0u && !sections.y)) {
         return;
     }
     uint slot = atomicAdd(counts[dispatch.pass_slot], 1u);

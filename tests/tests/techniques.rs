@@ -440,6 +440,74 @@ fn a_thousand_swaps_leak_nothing() {
     assert_no_validation_errors(&f.device);
 }
 
+/// Pipelines follow the vertex path, the parameter path and the transparency method only:
+/// swapping a submission or a culler, or going back to a display mode drawn before, builds
+/// none; swapping a path drops them; at most 8 pass sets are kept (every mode at two MSAA
+/// levels makes 10); and what is drawn stays right throughout.
+#[test]
+fn pipelines_are_kept_across_swaps_and_modes_that_do_not_change_them() {
+    let mut f = Fixture::with_size(&generate(&GeneratorSpec::Demo), (64, 48));
+    let start = Combination {
+        vertex: "pulling".into(),
+        parameters: "ubo-dynamic".into(),
+        submission: "groups-replay".into(),
+        culling: "frustum".into(),
+        ..Combination::built_in()
+    };
+    f.techniques.select(&start).unwrap();
+    f.assert_matches_baseline("the first combination");
+    assert_eq!(f.techniques.kept_pass_sets(), 1, "solid's pass set");
+    f.techniques.set_shade_mode(ShadeMode::Edges).unwrap();
+    let (edges, _) = f.render();
+    assert_eq!(f.techniques.kept_pass_sets(), 2, "edges builds its own");
+    f.techniques.set_shade_mode(ShadeMode::Solid).unwrap();
+    f.assert_matches_baseline("back in solid");
+    assert_eq!(f.techniques.kept_pass_sets(), 2, "solid's were kept");
+    for (kind, name) in [
+        (TechniqueKind::Culling, "none"),
+        (TechniqueKind::Submission, "groups-multidraw"),
+        (TechniqueKind::Submission, "individual-threads"),
+    ] {
+        f.techniques.swap(kind, name).unwrap();
+        f.assert_matches_baseline(name);
+        assert_eq!(
+            f.techniques.kept_pass_sets(),
+            2,
+            "swapping to {name} keeps the pipelines"
+        );
+    }
+    f.techniques.set_shade_mode(ShadeMode::Edges).unwrap();
+    let (edges_again, _) = f.render();
+    let difference = compare(&edges_again, &edges).unwrap();
+    assert!(difference.within(SAME_PICTURE), "edges: {difference:?}");
+    assert_eq!(f.techniques.kept_pass_sets(), 2);
+
+    f.techniques.swap(TechniqueKind::Vertex, "arena").unwrap();
+    assert_eq!(
+        f.techniques.kept_pass_sets(),
+        0,
+        "a new vertex path drops them"
+    );
+    f.techniques.set_shade_mode(ShadeMode::Solid).unwrap();
+    f.assert_matches_baseline("a new vertex path");
+    assert_eq!(f.techniques.kept_pass_sets(), 1);
+
+    for samples in [1, 4] {
+        f.renderer.set_msaa(samples).unwrap();
+        for mode in ShadeMode::ALL {
+            f.techniques.set_shade_mode(mode).unwrap();
+            f.try_render().unwrap();
+            assert!(f.techniques.kept_pass_sets() <= 8, "{samples}x {mode:?}");
+        }
+    }
+    assert_eq!(f.techniques.kept_pass_sets(), 8, "the bound");
+    f.renderer.set_msaa(1).unwrap();
+    f.techniques.set_shade_mode(ShadeMode::Solid).unwrap();
+    f.assert_matches_baseline("solid again after the oldest went");
+    drop(f.techniques);
+    assert_no_validation_errors(&f.device);
+}
+
 #[test]
 fn frustum_culling_draws_only_what_the_camera_sees() {
     let mut f = Fixture::with_size(&generate(&GeneratorSpec::Demo), SIZE);

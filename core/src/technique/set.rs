@@ -238,9 +238,13 @@ pub struct Techniques {
     min_pixels: f32,
     /// Whether unchanged frames may be resubmitted rather than recorded.
     frame_replay: bool,
-    /// The pipelines of each pass set drawn since the combination or shade mode changed (the
-    /// shaded frame with and without translucent surfaces, the pick pass), built on first use.
-    pipelines: Vec<TechniquePipelines>,
+    /// The pipelines of the pass sets drawn since the vertex path, parameter path or
+    /// transparency method changed (each display mode's shaded frame with and without
+    /// translucent surfaces, at each MSAA level, the pick pass), built on first use, at most
+    /// [`KEPT_PASS_SETS`]: a display mode or option turned on again finds them built.
+    pipelines: Vec<KeptPipelines>,
+    /// Counts `ensure_pipelines` calls: when each kept pass set was last drawn.
+    pipeline_uses: u64,
     shaders: ShaderCache,
     frame_set_layout: vk::DescriptorSetLayout,
     /// The transparency merge's set layout (its targets).
@@ -255,6 +259,24 @@ pub struct Techniques {
 fn index(kind: TechniqueKind) -> usize {
     kind as usize
 }
+
+/// How many pass sets' pipelines are kept at most; past it the one unused longest goes.
+const KEPT_PASS_SETS: usize = 8;
+
+/// The pipelines of one pass set, and when they were last drawn with.
+struct KeptPipelines {
+    pipelines: TechniquePipelines,
+    last_use: u64,
+}
+
+/// The kinds whose techniques the pipelines are built from: the vertex shader is assembled
+/// from the paths' snippets (its layouts are theirs), the translucent passes and the merge
+/// from the transparency method's. Swapping a submission or a culler keeps them.
+const PIPELINE_KINDS: [TechniqueKind; 3] = [
+    TechniqueKind::Vertex,
+    TechniqueKind::Parameters,
+    TechniqueKind::Transparency,
+];
 
 impl Techniques {
     /// Creates an empty set over `registry` for renderers on `device` whose frame set layout
@@ -305,6 +327,7 @@ impl Techniques {
             min_pixels: 0.0,
             frame_replay: true,
             pipelines: Vec::new(),
+            pipeline_uses: 0,
             shaders: ShaderCache::new(device.capabilities().fragment_stores_and_atomics),
             frame_set_layout,
             merge_set_layout,
@@ -341,13 +364,11 @@ impl Techniques {
         self.shade
     }
 
-    /// Sets the shade mode (pipelines are rebuilt before the next frame).
+    /// Sets the shade mode (its pipelines are built before the next frame unless a frame
+    /// drew in it before and they are kept).
     pub fn set_shade_mode(&mut self, mode: ShadeMode) -> RenderResult<()> {
         if mode != self.shade {
-            self.wait_idle()?;
             self.shade = mode;
-            self.pipelines
-                .retain(|p| matches!(p.pass_set, PassSet::Pick { .. }));
             self.epoch += 1;
         }
         Ok(())
@@ -533,13 +554,24 @@ impl Techniques {
             Some((_, active)) => Some(describe_method(active)?),
             None => self.method.clone(),
         };
+        let pick_kind = self.pick_pass_kind();
+        let rebuilt = created
+            .iter()
+            .any(|(slot, _)| PIPELINE_KINDS.map(index).contains(slot));
         self.wait_idle()?;
-        self.pipelines.clear();
+        if rebuilt {
+            self.pipelines.clear();
+        }
         for (slot, active) in created {
             // The old instance drops here, after the GPU finished with it.
             self.active[slot] = Some(active);
         }
         self.method = method;
+        if self.pick_pass_kind() != pick_kind {
+            // A library of an older ABI came or went: the pick pass is drawn as another kind.
+            self.pipelines
+                .retain(|kept| !matches!(kept.pipelines.pass_set, PassSet::Pick { .. }));
+        }
         self.epoch += 1;
         Ok(())
     }
@@ -575,11 +607,30 @@ impl Techniques {
     /// Builds the pipelines of the current combination for `passes` (the shade mode's, with or
     /// without translucent surfaces, or the pick pass's) if needed.
     pub(crate) fn ensure_pipelines(&mut self, passes: PassSet) -> RenderResult<()> {
-        if !self.pipelines.iter().any(|p| p.pass_set == passes) {
-            let pipelines = self.build_pipelines(passes)?;
-            self.pipelines.push(pipelines);
-            self.epoch += 1;
+        self.pipeline_uses += 1;
+        let last_use = self.pipeline_uses;
+        if let Some(kept) = self
+            .pipelines
+            .iter_mut()
+            .find(|kept| kept.pipelines.pass_set == passes)
+        {
+            kept.last_use = last_use;
+            return Ok(());
         }
+        let pipelines = self.build_pipelines(passes)?;
+        if self.pipelines.len() >= KEPT_PASS_SETS {
+            // The GPU may still draw with the one that goes.
+            self.wait_idle()?;
+            let unused_longest = (0..self.pipelines.len())
+                .min_by_key(|&i| self.pipelines[i].last_use)
+                .unwrap_or(0);
+            self.pipelines.swap_remove(unused_longest);
+        }
+        self.pipelines.push(KeptPipelines {
+            pipelines,
+            last_use,
+        });
+        self.epoch += 1;
         Ok(())
     }
 
@@ -587,8 +638,15 @@ impl Techniques {
     pub(crate) fn pipelines_for(&self, passes: PassSet) -> RenderResult<&TechniquePipelines> {
         self.pipelines
             .iter()
+            .map(|kept| &kept.pipelines)
             .find(|p| p.pass_set == passes)
             .ok_or_else(|| RenderError::InvalidUse("technique pipelines were not built".into()))
+    }
+
+    /// How many pass sets' pipelines are kept (at most 8: past that, the one unused longest
+    /// goes).
+    pub fn kept_pass_sets(&self) -> usize {
+        self.pipelines.len()
     }
 
     /// The active transparency method.

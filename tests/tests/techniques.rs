@@ -380,8 +380,9 @@ fn failing_techniques_are_refused_and_the_renderer_keeps_working() {
     assert_no_validation_errors(&f.device);
 }
 
-#[test]
-fn a_thousand_swaps_leak_nothing() {
+/// The demo, small, drawn by plugin techniques of every kind (pulling / ubo-dynamic /
+/// groups-replay / frustum), from which the swap tests start; and that combination.
+fn small_demo_with_plugins() -> (Fixture, Combination) {
     let mut f = Fixture::with_size(&generate(&GeneratorSpec::Demo), (64, 48));
     let start = Combination {
         vertex: "pulling".into(),
@@ -391,6 +392,12 @@ fn a_thousand_swaps_leak_nothing() {
         ..Combination::built_in()
     };
     f.techniques.select(&start).unwrap();
+    (f, start)
+}
+
+#[test]
+fn a_thousand_swaps_leak_nothing() {
+    let (mut f, start) = small_demo_with_plugins();
     f.render();
     let before = f.techniques.plugin_allocations();
     assert!(
@@ -446,15 +453,7 @@ fn a_thousand_swaps_leak_nothing() {
 /// levels makes 10); and what is drawn stays right throughout.
 #[test]
 fn pipelines_are_kept_across_swaps_and_modes_that_do_not_change_them() {
-    let mut f = Fixture::with_size(&generate(&GeneratorSpec::Demo), (64, 48));
-    let start = Combination {
-        vertex: "pulling".into(),
-        parameters: "ubo-dynamic".into(),
-        submission: "groups-replay".into(),
-        culling: "frustum".into(),
-        ..Combination::built_in()
-    };
-    f.techniques.select(&start).unwrap();
+    let (mut f, _) = small_demo_with_plugins();
     f.assert_matches_baseline("the first combination");
     assert_eq!(f.techniques.kept_pass_sets(), 1, "solid's pass set");
     f.techniques.set_shade_mode(ShadeMode::Edges).unwrap();

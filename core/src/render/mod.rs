@@ -46,7 +46,7 @@ use crate::vk::{
     MemoryLocation, Multisampled, OffscreenTarget, RenderingTarget,
 };
 use pick::{PickTarget, PixelRect};
-use pixel_keys::{KeyPlane, PixelKeys};
+use pixel_keys::PixelKeys;
 use transparency::{storage_buffer, TransparencyTargets};
 
 /// What the colour pass clears to: nothing drawn, no coverage (the background goes under
@@ -727,16 +727,10 @@ impl Renderer {
                 0,
             );
         }
-        let planes: &[KeyPlane] = match (outline, nearest_depth) {
-            (true, true) => &[KeyPlane::Outline, KeyPlane::NearestDepth],
-            (true, false) => &[KeyPlane::Outline],
-            (false, true) => &[KeyPlane::NearestDepth],
-            (false, false) => &[],
-        };
         if let Some((keys, span)) = self
             .pixel_keys
             .as_ref()
-            .and_then(|keys| Some((keys, keys.span(planes)?)))
+            .and_then(|keys| Some((keys, keys.span(outline, nearest_depth)?)))
         {
             self.record_storage_clear(command_buffer, &keys.buffer, span, pixel_keys::NO_SURFACE);
         }

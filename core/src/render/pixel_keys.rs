@@ -20,7 +20,7 @@ pub(crate) const NO_SURFACE: u32 = u32::MAX;
 
 /// A plane of the keys (its index is the shaders' `CADR_*_PLANE`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub(crate) enum KeyPlane {
+enum KeyPlane {
     /// The highlight outline style's keys.
     Outline = 0,
     /// The nearest surface's depth (X-ray's silhouettes).
@@ -51,13 +51,23 @@ impl PixelKeys {
         Ok(Self { buffer, extent })
     }
 
-    /// The bytes a frame that uses `planes` clears: (offset, size) from the first to the end
-    /// of the last (the planes follow each other, so with the two there are no others between).
-    pub fn span(&self, planes: &[KeyPlane]) -> Option<(u64, u64)> {
+    /// The bytes a frame that uses the outline keys (`outline`) and the nearest depth
+    /// (`nearest_depth`) clears, as (offset, size): the planes it uses, which follow each
+    /// other; none when it uses neither.
+    pub fn span(&self, outline: bool, nearest_depth: bool) -> Option<(u64, u64)> {
+        let first = if outline {
+            KeyPlane::Outline
+        } else {
+            KeyPlane::NearestDepth
+        } as u64;
+        let end = if nearest_depth {
+            KeyPlane::NearestDepth
+        } else {
+            KeyPlane::Outline
+        } as u64
+            + 1;
         let bytes = plane_bytes(self.extent);
-        let first = planes.iter().map(|&p| p as u64).min()?;
-        let last = planes.iter().map(|&p| p as u64).max()?;
-        Some((first * bytes, (last + 1 - first) * bytes))
+        (outline || nearest_depth).then(|| (first * bytes, (end - first) * bytes))
     }
 }
 

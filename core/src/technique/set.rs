@@ -241,10 +241,9 @@ pub struct Techniques {
     /// The pipelines of the pass sets drawn since the vertex path, parameter path or
     /// transparency method changed (each display mode's shaded frame with and without
     /// translucent surfaces, at each MSAA level, the pick pass), built on first use, at most
-    /// [`KEPT_PASS_SETS`]: a display mode or option turned on again finds them built.
-    pipelines: Vec<KeptPipelines>,
-    /// Counts `ensure_pipelines` calls: when each kept pass set was last drawn.
-    pipeline_uses: u64,
+    /// [`KEPT_PASS_SETS`]: a display mode or option turned on again finds them built. The
+    /// last drawn is last, so the first is the one unused longest.
+    pipelines: Vec<TechniquePipelines>,
     shaders: ShaderCache,
     frame_set_layout: vk::DescriptorSetLayout,
     /// The transparency merge's set layout (its targets).
@@ -262,12 +261,6 @@ fn index(kind: TechniqueKind) -> usize {
 
 /// How many pass sets' pipelines are kept at most; past it the one unused longest goes.
 const KEPT_PASS_SETS: usize = 8;
-
-/// The pipelines of one pass set, and when they were last drawn with.
-struct KeptPipelines {
-    pipelines: TechniquePipelines,
-    last_use: u64,
-}
 
 /// The kinds whose techniques the pipelines are built from: the vertex shader is assembled
 /// from the paths' snippets (its layouts are theirs), the translucent passes and the merge
@@ -327,7 +320,6 @@ impl Techniques {
             min_pixels: 0.0,
             frame_replay: true,
             pipelines: Vec::new(),
-            pipeline_uses: 0,
             shaders: ShaderCache::new(device.capabilities().fragment_stores_and_atomics),
             frame_set_layout,
             merge_set_layout,
@@ -570,7 +562,7 @@ impl Techniques {
         if self.pick_pass_kind() != pick_kind {
             // A library of an older ABI came or went: the pick pass is drawn as another kind.
             self.pipelines
-                .retain(|kept| !matches!(kept.pipelines.pass_set, PassSet::Pick { .. }));
+                .retain(|p| !matches!(p.pass_set, PassSet::Pick { .. }));
         }
         self.epoch += 1;
         Ok(())
@@ -607,29 +599,18 @@ impl Techniques {
     /// Builds the pipelines of the current combination for `passes` (the shade mode's, with or
     /// without translucent surfaces, or the pick pass's) if needed.
     pub(crate) fn ensure_pipelines(&mut self, passes: PassSet) -> RenderResult<()> {
-        self.pipeline_uses += 1;
-        let last_use = self.pipeline_uses;
-        if let Some(kept) = self
-            .pipelines
-            .iter_mut()
-            .find(|kept| kept.pipelines.pass_set == passes)
-        {
-            kept.last_use = last_use;
+        if let Some(i) = self.pipelines.iter().position(|p| p.pass_set == passes) {
+            // Drawn now: last (a frame drawing one pass set moves nothing).
+            self.pipelines[i..].rotate_left(1);
             return Ok(());
         }
         let pipelines = self.build_pipelines(passes)?;
         if self.pipelines.len() >= KEPT_PASS_SETS {
-            // The GPU may still draw with the one that goes.
+            // The one unused longest goes; the GPU may still draw with it.
             self.wait_idle()?;
-            let unused_longest = (0..self.pipelines.len())
-                .min_by_key(|&i| self.pipelines[i].last_use)
-                .unwrap_or(0);
-            self.pipelines.swap_remove(unused_longest);
+            self.pipelines.remove(0);
         }
-        self.pipelines.push(KeptPipelines {
-            pipelines,
-            last_use,
-        });
+        self.pipelines.push(pipelines);
         self.epoch += 1;
         Ok(())
     }
@@ -638,7 +619,6 @@ impl Techniques {
     pub(crate) fn pipelines_for(&self, passes: PassSet) -> RenderResult<&TechniquePipelines> {
         self.pipelines
             .iter()
-            .map(|kept| &kept.pipelines)
             .find(|p| p.pass_set == passes)
             .ok_or_else(|| RenderError::InvalidUse("technique pipelines were not built".into()))
     }

@@ -246,9 +246,9 @@ impl Pipelines {
     /// transparency method's storage (binding 1, fragment shaders), and for the shared vertex
     /// shader the GPU scene's instance records, material texture descriptions and vertex
     /// attributes (bindings 2–4), its textures sampled trilinear and with nearest
-    /// magnification (bindings 5–6, fragment shaders), the outline keys of the outline
-    /// highlight style (binding 7, fragment shaders) and the GPU scene's cull entries, whose
-    /// bounding spheres the section caps' pass reads (binding 8).
+    /// magnification (bindings 5–6, fragment shaders), the pixel keys (the outline highlight
+    /// style's and X-ray's nearest depth; binding 7, fragment shaders) and the GPU scene's
+    /// cull entries, whose bounding spheres the section caps' pass reads (binding 8).
     pub fn frame_set_layout(&self) -> vk::DescriptorSetLayout {
         self.frame_set_layout.raw()
     }
@@ -337,7 +337,7 @@ impl Pipelines {
     }
 
     /// Silhouette edges: a full-screen triangle drawing lines over the picture where its
-    /// depth breaks, with its layout.
+    /// depth breaks (in X-ray, the nearest depth of the pixel keys), with its layout.
     pub fn silhouettes(&self) -> RenderResult<(vk::Pipeline, vk::PipelineLayout)> {
         self.fullscreen(
             &self.silhouettes,

@@ -1,7 +1,6 @@
 #version 460
 // The edge lines of the edge display modes (and wireframe's triangle outlines): a dark line
-// colour, unlit; a highlighted part's lines in a darker highlight colour, so that a highlight
-// shows in the line-only modes too, and on a tinted surface.
+// colour, unlit; a highlighted part's lines in a darker highlight colour (cadr_line_color).
 #include "frame.glsl"
 layout(location = 0) in vec3 in_view_position;
 layout(location = 1) in vec3 in_view_normal;
@@ -12,5 +11,5 @@ layout(location = 11) flat in uint in_highlighted;
 layout(location = 0) out vec4 out_color;
 
 void main() {
-    out_color = vec4(in_highlighted != 0u ? 0.7 * frame.highlight.rgb : frame.edge_color.rgb, 1.0);
+    out_color = vec4(cadr_line_color(in_highlighted != 0u), 1.0);
 }

@@ -38,6 +38,13 @@ const float CADR_XRAY_OPACITY = 0.2;
 // frame.target.z: highlighted parts are outlined (their surfaces record themselves in the
 // outline keys, binding 7) instead of tinted.
 const uint CADR_DISPLAY_HIGHLIGHT_OUTLINE = 16u;
-// frame.target.z: surfaces record their depth in the nearest depth (binding 7), from which the
-// silhouettes pass finds X-ray's silhouettes (its translucent surfaces write no depth).
-const uint CADR_DISPLAY_NEAREST_DEPTH = 32u;
+// frame.target.z: surfaces record themselves in the nearest surfaces (binding 7), where the
+// silhouettes pass finds X-ray's silhouettes (its translucent surfaces write no depth) and
+// which silhouettes outline highlighted parts.
+const uint CADR_DISPLAY_NEAREST_SURFACES = 32u;
+
+// The colour of edge lines and silhouettes: a highlighted part's in a darker highlight
+// colour, so that a highlight shows in the line-only modes too, and on a tinted surface.
+vec3 cadr_line_color(bool highlighted) {
+    return highlighted ? 0.7 * frame.highlight.rgb : frame.edge_color.rgb;
+}

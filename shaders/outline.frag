@@ -14,8 +14,7 @@ layout(location = 0) out vec4 out_color;
 const int MAX_RADIUS = 8;
 
 bool highlighted_at(ivec2 pixel) {
-    uint key = cadr_pixel_keys[cadr_pixel_key_index(CADR_OUTLINE_PLANE, uvec2(pixel))];
-    return key != CADR_PIXEL_KEY_NOTHING && (key & 1u) == 0u;
+    return cadr_key_highlighted(cadr_pixel_keys[cadr_pixel_key_index(CADR_OUTLINE_PLANE, uvec2(pixel))]);
 }
 
 void main() {

@@ -2,9 +2,8 @@
 // Shaded triangles of every technique combination: a head light on the material colour (times
 // the vertex colour and the texture; a material's alpha mask cuts holes). While
 // section planes cut with caps on, a closed part seen through a cut shows the cap there (see
-// section.glsl). With the highlight outline style, every surface fragment records itself in
-// the outline keys, and for X-ray's silhouettes its depth in the nearest depth
-// (pixel_keys.glsl).
+// section.glsl). Every surface fragment records itself in the outline keys with the highlight
+// outline style, and in the nearest surfaces for the silhouettes (pixel_keys.glsl).
 #include "frame.glsl"
 #include "shading.glsl"
 #include "section.glsl"
@@ -30,10 +29,10 @@ void main() {
         discard;
     }
     if ((frame.target.z & CADR_DISPLAY_HIGHLIGHT_OUTLINE) != 0u) {
-        cadr_record_outline(in_highlighted != 0u);
+        cadr_record_surface(CADR_OUTLINE_PLANE, in_highlighted != 0u);
     }
-    if ((frame.target.z & CADR_DISPLAY_NEAREST_DEPTH) != 0u) {
-        cadr_record_nearest_depth();
+    if ((frame.target.z & CADR_DISPLAY_NEAREST_SURFACES) != 0u) {
+        cadr_record_surface(CADR_NEAREST_SURFACES_PLANE, in_highlighted != 0u);
     }
     int cap_plane = section_cap_of(in_closure, in_eye_offset);
     if (cap_plane >= 0) {

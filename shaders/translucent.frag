@@ -42,11 +42,11 @@ void main() {
     // A highlighted translucent surface gets its outline; the others do not hide what is
     // outlined behind them (X-ray shows the highlighted parts inside a housing outlined).
     if ((frame.target.z & CADR_DISPLAY_HIGHLIGHT_OUTLINE) != 0u && in_highlighted != 0u) {
-        cadr_record_outline(true);
+        cadr_record_surface(CADR_OUTLINE_PLANE, true);
     }
     // X-ray's silhouettes outline translucent surfaces too.
-    if ((frame.target.z & CADR_DISPLAY_NEAREST_DEPTH) != 0u) {
-        cadr_record_nearest_depth();
+    if ((frame.target.z & CADR_DISPLAY_NEAREST_SURFACES) != 0u) {
+        cadr_record_surface(CADR_NEAREST_SURFACES_PLANE, in_highlighted != 0u);
     }
     vec3 color = shade_headlight(in_view_position, in_view_normal, surface, in_surface, frame.light,
                           frame.view_rotation[1].xyz);

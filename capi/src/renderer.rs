@@ -685,10 +685,12 @@ pub unsafe extern "C" fn cadr_renderer_highlight_style(
 /// Turns silhouette edges on (`on` true, the default) or off: in the display modes with
 /// feature edges (edges, hidden-line, X-ray), the outlines of curved surfaces, which no
 /// feature edge marks, are drawn with the feature edges, found where the frame's depth breaks
-/// (in X-ray, where the nearest surface's depth breaks, translucent surfaces included; on a
-/// device without `fragmentStoresAndAtomics` X-ray draws none). Applies from the next frame;
-/// its cost is one full-screen pass in those modes, and in X-ray an atomic write per surface
-/// fragment.
+/// (in X-ray, where the nearest surface's depth breaks, translucent surfaces included), in the
+/// edge lines' colour, or a highlighted part's in the highlight's line colour, as its feature
+/// edges. On a device without `fragmentStoresAndAtomics` X-ray draws none and the other modes
+/// draw every silhouette in the edge lines' colour. Applies from the next frame; its cost is
+/// one full-screen pass in those modes, and in X-ray, or while some part is highlighted, an
+/// atomic write per surface fragment.
 ///
 /// Returns `CADR_RESULT_OK`, `CADR_RESULT_VULKAN` or a handle error. Ownership: nothing
 /// changes hands. Thread-safety: as `cadr_renderer_create`.

@@ -297,6 +297,80 @@ fn silhouettes_outline_curved_surfaces_in_the_edge_modes() {
     f.assert_no_validation_errors();
 }
 
+/// A highlighted part's silhouettes take the highlight's line colour, as its feature edges do,
+/// in every mode that draws them (X-ray's opaque highlighted parts included), with MSAA too;
+/// once the highlight is taken away they are drawn in the edge lines' colour again.
+#[test]
+fn silhouettes_of_a_highlighted_part_take_its_line_colour() {
+    let aspect = f64::from(SIZE.0) / f64::from(SIZE.1);
+    let camera = Camera::look_at(
+        DVec3::new(0.0, 1.5, 6.0),
+        DVec3::ZERO,
+        DEFAULT_FOV_DEGREES,
+        aspect,
+        0.1,
+        100.0,
+    );
+    let mut f = SceneView::new(test_device(), &smooth_cylinder(), SIZE, camera);
+    let cylinder = f.nodes[0];
+    let highlight = |f: &mut SceneView, highlighted: bool| {
+        let flags = NodeFlags {
+            highlighted,
+            ..NodeFlags::default()
+        };
+        f.graph.set_flags(cylinder, flags).unwrap();
+    };
+    // The lines' colours in display RGB, as 8-bit values.
+    let palette = Palette::default();
+    let to_8_bits = |rgb: [f32; 3]| rgb.map(|c| (c * 255.0).round() as i32);
+    let edge_line = to_8_bits(palette.edges);
+    let highlight_line = to_8_bits(palette.highlight.map(|c| 0.7 * c));
+    let is = |p: &image::Rgba<u8>, rgb: [i32; 3]| {
+        (0..3).all(|i| (i32::from(p.0[i]) - rgb[i]).abs() <= 6)
+    };
+    let (_, row) = images::pixel_of(&f.camera, SIZE, DVec3::ZERO);
+    for samples in [1, 4] {
+        f.view.renderer_mut().set_msaa(samples).unwrap();
+        for mode in [ShadeMode::Edges, ShadeMode::HiddenLine, ShadeMode::XRay] {
+            f.view.techniques_mut().set_shade_mode(mode).unwrap();
+            let columns = |image: &image::RgbaImage, rgb: [i32; 3]| -> Vec<u32> {
+                (0..SIZE.0)
+                    .filter(|&x| is(image.get_pixel(x, row), rgb))
+                    .collect()
+            };
+            highlight(&mut f, false);
+            let plain = f.render();
+            let plain_lines = columns(&plain, edge_line);
+            assert!(
+                plain_lines.len() >= 2,
+                "{samples}x {mode:?}: silhouettes in the edge colour: {plain_lines:?}"
+            );
+            highlight(&mut f, true);
+            // Twice: the second frame is the replayed one where the techniques replay.
+            for _ in 0..2 {
+                let highlighted = f.render();
+                assert_eq!(
+                    columns(&highlighted, edge_line),
+                    Vec::<u32>::new(),
+                    "{samples}x {mode:?}: no silhouette in the edge colour"
+                );
+                assert_eq!(
+                    columns(&highlighted, highlight_line),
+                    plain_lines,
+                    "{samples}x {mode:?}: the same silhouettes in the highlight's line colour"
+                );
+            }
+            highlight(&mut f, false);
+            assert_eq!(
+                columns(&f.render(), edge_line),
+                plain_lines,
+                "{samples}x {mode:?}: the edge colour again"
+            );
+        }
+    }
+    f.assert_no_validation_errors();
+}
+
 /// Two cubes side by side (x = -1.2 and 1.2, edge 1.6), seen from the front.
 fn two_cubes() -> SceneView {
     let mut builder = GeometryBuilder::new("cube");

@@ -170,6 +170,8 @@ pub struct GpuScene {
     parameters_generation: u64,
     buffers_generation: u64,
     triangles: u64,
+    /// Live instances flagged highlighted.
+    highlighted: usize,
     /// What the last sync and upload wrote.
     last_upload: UploadStats,
     /// Instance entries refreshed by the last sync.
@@ -232,6 +234,7 @@ impl GpuScene {
             parameters_generation: first_generation,
             buffers_generation: first_generation,
             triangles: 0,
+            highlighted: 0,
             last_upload: UploadStats {
                 geometry_bytes,
                 bytes: geometry_bytes + texture_bytes,
@@ -319,6 +322,7 @@ impl GpuScene {
         self.drawn_bits = self.candidate_bits.clone();
         self.culled_bits = vec![u64::MAX; count.div_ceil(64)];
         self.triangles = tallies.iter().map(|tally| tally.triangles).sum();
+        self.highlighted = tallies.iter().map(|tally| tally.highlighted).sum();
         let device = Arc::clone(&self.device);
         self.matrix_gpu.reserve(&device, nodes.max(1))?;
         self.material_gpu.reserve(&device, material_slots.max(1))?;
@@ -421,6 +425,8 @@ impl GpuScene {
         let i = id as usize;
         // Out of the drawn set with its old entry, back in with the new one.
         self.set_drawn(id, false);
+        self.highlighted -= usize::from(is_highlighted(&self.instances[i]));
+        self.highlighted += usize::from(is_highlighted(&entry));
         self.instances[i] = entry;
         set_bit(&mut self.candidate_bits, id, candidate);
         let culled_in = self.culled_bits[i / 64] >> (i % 64) & 1 == 1;
@@ -853,6 +859,12 @@ impl GpuScene {
         self.translucent_materials[usize::from(textures)] > 0
     }
 
+    /// Whether some live instance is highlighted (the silhouettes of the edge display modes
+    /// then take the highlight's line colour where they outline one).
+    pub fn has_highlighted(&self) -> bool {
+        self.highlighted > 0
+    }
+
     /// Whether some geometry has texture coordinates or colours (the vertex shader reads them
     /// only then).
     pub fn has_vertex_attributes(&self) -> bool {
@@ -1065,6 +1077,8 @@ fn record_of(entry: &abi::CadrInstance, id: u32) -> abi::CadrInstanceRecord {
 struct InstanceTally {
     candidate_bits: Vec<u64>,
     triangles: u64,
+    /// Live instances flagged highlighted.
+    highlighted: usize,
 }
 
 /// The entries of instances `0..count` of `tree` (dead ones default; `translucency` per
@@ -1092,9 +1106,16 @@ fn make_instances(
                 }
                 tally.triangles += u64::from(entry.index_count / 3);
             }
+            tally.highlighted += usize::from(is_highlighted(&entry));
             entry
         },
     )
+}
+
+/// Whether `entry` is a live instance flagged highlighted.
+fn is_highlighted(entry: &abi::CadrInstance) -> bool {
+    const BITS: u32 = abi::CADR_INSTANCE_ALIVE | abi::CADR_INSTANCE_HIGHLIGHTED;
+    entry.flags & BITS == BITS
 }
 
 fn set_bit(bits: &mut [u64], id: u32, on: bool) {

@@ -24,7 +24,7 @@ pub use output::SaveError;
 pub use palette::{DisplayRgb, Palette};
 pub use pipeline::{
     FrameUniforms, HierarchyParameters, HierarchyStage, Pipelines, ScatterParameters,
-    DISPLAY_HIGHLIGHT_OUTLINE, DISPLAY_MATERIAL_DESCRIPTIONS, DISPLAY_NEAREST_DEPTH,
+    DISPLAY_HIGHLIGHT_OUTLINE, DISPLAY_MATERIAL_DESCRIPTIONS, DISPLAY_NEAREST_SURFACES,
     DISPLAY_TEXTURES, DISPLAY_VERTEX_ATTRIBUTES, DISPLAY_XRAY, PICK_FORMAT,
 };
 pub use section::{Section, DEFAULT_CAP_COLORS, MAX_SECTION_PLANES};
@@ -102,7 +102,7 @@ pub struct Renderer {
     /// How highlighted parts are drawn.
     highlight_style: HighlightStyle,
     /// The pixel keys at the target's size (made by the first frame that needs them: with the
-    /// outline style, or X-ray's silhouettes), which binding 7 of the frame set names;
+    /// outline style, or the silhouettes' nearest surfaces), which binding 7 of the frame set names;
     /// otherwise the placeholder storage is named there.
     pixel_keys: Option<PixelKeys>,
     /// The generation of the GPU scene resources the frame set names, if any.
@@ -142,6 +142,9 @@ pub(crate) struct FramePlan<'a> {
     /// Whether the frame draws feature edges (the edges, hidden-line and X-ray modes), so
     /// that silhouettes (when on) join them.
     pub draws_edges: bool,
+    /// Whether some part is highlighted, so that silhouettes (when drawn) take the
+    /// highlight's line colour where they outline one.
+    pub highlights: bool,
 }
 
 /// The passes over a colour frame's picture that read its depth.
@@ -151,6 +154,9 @@ struct DepthOverlays {
     ssao: bool,
     /// Silhouette edges, and the depth they are found in.
     silhouettes: Option<SilhouetteSource>,
+    /// Whether the surfaces record the nearest surfaces (pixel keys plane 1), which the
+    /// silhouettes read: X-ray's depth, and which of them outline highlighted parts.
+    nearest_surfaces: bool,
 }
 
 /// The depth a frame's silhouettes are found in.
@@ -159,9 +165,9 @@ enum SilhouetteSource {
     /// The depth buffer: the surfaces fill it (edges, hidden-line). The silhouettes go under
     /// the translucent surfaces merged over the picture, as the edge lines do.
     DepthBuffer,
-    /// The nearest depth every surface records in the pixel keys (X-ray, whose translucent
+    /// The nearest surfaces every surface records in the pixel keys (X-ray, whose translucent
     /// surfaces write no depth). They outline the nearest surfaces, so they go over the merge.
-    NearestDepth,
+    NearestSurfaces,
 }
 
 /// Which image a pass draws into.
@@ -330,9 +336,11 @@ impl Renderer {
 
     /// Whether the display modes that draw feature edges (edges, hidden-line, X-ray) draw
     /// silhouette edges with them: the outlines of curved surfaces where the depth breaks,
-    /// which no feature edge marks (on by default). X-ray finds them in the nearest depth its
-    /// surfaces record, which needs the device's `fragmentStoresAndAtomics`: without it, X-ray
-    /// draws none.
+    /// which no feature edge marks (on by default), in the edge lines' colour, or a
+    /// highlighted part's in the highlight's line colour as its edges. X-ray finds them in the
+    /// nearest surfaces its surfaces record, and the highlight's colour is found there too,
+    /// which needs the device's `fragmentStoresAndAtomics`: without it, X-ray draws none and
+    /// the others draw every silhouette in the edge lines' colour.
     pub fn silhouettes(&self) -> bool {
         self.silhouettes
     }
@@ -345,9 +353,26 @@ impl Renderer {
         if plan.display & DISPLAY_XRAY == 0 {
             Some(SilhouetteSource::DepthBuffer)
         } else if self.device.capabilities().fragment_stores_and_atomics {
-            Some(SilhouetteSource::NearestDepth)
+            Some(SilhouetteSource::NearestSurfaces)
         } else {
             None
+        }
+    }
+
+    /// Whether a frame planned as `plan` whose silhouettes are found in `silhouettes` has
+    /// its surfaces record the nearest surfaces: for X-ray's silhouettes, and for the others
+    /// where some part is highlighted and the device can record them.
+    fn records_nearest_surfaces(
+        &self,
+        plan: &FramePlan<'_>,
+        silhouettes: Option<SilhouetteSource>,
+    ) -> bool {
+        match silhouettes {
+            Some(SilhouetteSource::NearestSurfaces) => true,
+            Some(SilhouetteSource::DepthBuffer) => {
+                plan.highlights && self.device.capabilities().fragment_stores_and_atomics
+            }
+            None => false,
         }
     }
 
@@ -622,14 +647,16 @@ impl Renderer {
         view_rotation.w_axis = glam::DVec4::W;
         let color = plan.pass == PassTarget::Color;
         let outline = self.highlight_style == HighlightStyle::Outline && color;
+        let silhouettes = self.silhouette_source(&plan);
         let depth_overlays = DepthOverlays {
             ssao: self.ssao && plan.fills_surfaces && color,
-            silhouettes: self.silhouette_source(&plan),
+            silhouettes,
+            nearest_surfaces: self.records_nearest_surfaces(&plan, silhouettes),
         };
-        let nearest_depth = depth_overlays.silhouettes == Some(SilhouetteSource::NearestDepth);
+        let nearest_surfaces = depth_overlays.nearest_surfaces;
         let display = plan.display
-            | if nearest_depth {
-                DISPLAY_NEAREST_DEPTH
+            | if nearest_surfaces {
+                DISPLAY_NEAREST_SURFACES
             } else {
                 0
             };
@@ -658,7 +685,7 @@ impl Renderer {
         if let Some((method, _)) = plan.translucency {
             self.ensure_transparency_targets(method)?;
         }
-        if outline || nearest_depth {
+        if outline || nearest_surfaces {
             self.ensure_pixel_keys()?;
         }
         let depth_set = if depth_overlays.ssao || depth_overlays.silhouettes.is_some() {
@@ -730,7 +757,7 @@ impl Renderer {
         if let Some((keys, span)) = self
             .pixel_keys
             .as_ref()
-            .and_then(|keys| Some((keys, keys.span(outline, nearest_depth)?)))
+            .and_then(|keys| Some((keys, keys.span(outline, nearest_surfaces)?)))
         {
             self.record_storage_clear(command_buffer, &keys.buffer, span, pixel_keys::NO_SURFACE);
         }
@@ -967,6 +994,8 @@ impl Renderer {
         let outline = outline.then(|| self.pipelines.outline()).transpose()?;
         // Occlusion darkens the opaque surfaces, before lines go over them and translucent
         // surfaces are merged over both.
+        let reads_pixel_keys =
+            depth_overlays.is_some_and(|(overlays, _)| overlays.nearest_surfaces);
         let (ssao, silhouettes) = match depth_overlays {
             Some((overlays, set)) => (
                 (overlays.ssao)
@@ -988,10 +1017,9 @@ impl Renderer {
                 .filter(|&(_, _, source)| source == wanted)
                 .map(|(pipeline, set, _)| (pipeline, set))
         };
-        let reads_pixel_keys = silhouettes_from(SilhouetteSource::NearestDepth).is_some();
         if merge.is_some() || outline.is_some() || reads_pixel_keys {
             // The fragments' storage writes (translucent ones, pixel keys), read by the
-            // merge, the outline and X-ray's silhouettes.
+            // merge, the outline and the silhouettes.
             memory_barrier(
                 &self.device,
                 command_buffer,
@@ -1026,7 +1054,7 @@ impl Renderer {
                 &[self.frame_set(), targets.merge_set.sets[0]],
             );
         }
-        silhouettes_from(SilhouetteSource::NearestDepth)
+        silhouettes_from(SilhouetteSource::NearestSurfaces)
             .into_iter()
             .for_each(record_depth_overlay);
         if let Some(outline) = outline {

@@ -58,9 +58,10 @@ pub const DISPLAY_MATERIAL_DESCRIPTIONS: u32 = 8;
 /// [`FrameUniforms::target`]`[2]`: highlighted parts are outlined, not tinted; surfaces record
 /// the outline keys (binding 7).
 pub const DISPLAY_HIGHLIGHT_OUTLINE: u32 = 16;
-/// [`FrameUniforms::target`]`[2]`: surfaces record their depth in the nearest depth (binding
-/// 7), where the silhouettes pass finds X-ray's silhouettes (the renderer sets it).
-pub const DISPLAY_NEAREST_DEPTH: u32 = 32;
+/// [`FrameUniforms::target`]`[2]`: surfaces record themselves in the nearest surfaces
+/// (binding 7), where the silhouettes pass finds X-ray's silhouettes and which silhouettes
+/// outline highlighted parts (the renderer sets it).
+pub const DISPLAY_NEAREST_SURFACES: u32 = 32;
 
 /// Push constants of `scatter.comp`: one dispatch scatters the items of one array.
 #[repr(C)]
@@ -247,7 +248,7 @@ impl Pipelines {
     /// shader the GPU scene's instance records, material texture descriptions and vertex
     /// attributes (bindings 2–4), its textures sampled trilinear and with nearest
     /// magnification (bindings 5–6, fragment shaders), the pixel keys (the outline highlight
-    /// style's and X-ray's nearest depth; binding 7, fragment shaders) and the GPU scene's
+    /// style's and the silhouettes' nearest surfaces; binding 7, fragment shaders) and the GPU scene's
     /// cull entries, whose bounding spheres the section caps' pass reads (binding 8).
     pub fn frame_set_layout(&self) -> vk::DescriptorSetLayout {
         self.frame_set_layout.raw()
@@ -337,7 +338,7 @@ impl Pipelines {
     }
 
     /// Silhouette edges: a full-screen triangle drawing lines over the picture where its
-    /// depth breaks (in X-ray, the nearest depth of the pixel keys), with its layout.
+    /// depth breaks (in X-ray, the nearest surfaces of the pixel keys), with its layout.
     pub fn silhouettes(&self) -> RenderResult<(vk::Pipeline, vk::PipelineLayout)> {
         self.fullscreen(
             &self.silhouettes,

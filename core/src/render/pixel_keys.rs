@@ -1,10 +1,11 @@
 //! The per-pixel keys: a storage buffer of planes of one `uint` per pixel of the target (frame
 //! set binding 7, `shaders/pixel_keys.glsl`), which the surface shaders fill with `atomicMin`
-//! and the passes over the finished picture read. Plane 0 holds the highlight outline style's
-//! keys (the nearest surface's depth and whether it is highlighted, `shaders/outline.frag`
-//! draws the band from them); plane 1 the nearest surface's depth, translucent surfaces
-//! included, from which `shaders/silhouettes.frag` finds X-ray's silhouettes. Recording needs
-//! the device's `fragmentStoresAndAtomics`.
+//! and the passes over the finished picture read: each key is the nearest surface's depth and
+//! whether it is a highlighted part's. Plane 0 holds the highlight outline style's keys
+//! (`shaders/outline.frag` draws the band from them); plane 1 the nearest surfaces, translucent
+//! ones included, from which `shaders/silhouettes.frag` finds X-ray's silhouettes and draws
+//! those of highlighted parts in the highlight's line colour. Recording needs the device's
+//! `fragmentStoresAndAtomics`.
 
 use std::sync::Arc;
 
@@ -23,8 +24,8 @@ pub(crate) const NO_SURFACE: u32 = u32::MAX;
 enum KeyPlane {
     /// The highlight outline style's keys.
     Outline = 0,
-    /// The nearest surface's depth (X-ray's silhouettes).
-    NearestDepth = 1,
+    /// The nearest surfaces (the silhouettes').
+    NearestSurfaces = 1,
 }
 
 /// How many planes the buffer holds.
@@ -51,23 +52,23 @@ impl PixelKeys {
         Ok(Self { buffer, extent })
     }
 
-    /// The bytes a frame that uses the outline keys (`outline`) and the nearest depth
-    /// (`nearest_depth`) clears, as (offset, size): the planes it uses, which follow each
+    /// The bytes a frame that uses the outline keys (`outline`) and the nearest surfaces
+    /// (`nearest_surfaces`) clears, as (offset, size): the planes it uses, which follow each
     /// other; none when it uses neither.
-    pub fn span(&self, outline: bool, nearest_depth: bool) -> Option<(u64, u64)> {
+    pub fn span(&self, outline: bool, nearest_surfaces: bool) -> Option<(u64, u64)> {
         let first = if outline {
             KeyPlane::Outline
         } else {
-            KeyPlane::NearestDepth
+            KeyPlane::NearestSurfaces
         } as u64;
-        let end = if nearest_depth {
-            KeyPlane::NearestDepth
+        let end = if nearest_surfaces {
+            KeyPlane::NearestSurfaces
         } else {
             KeyPlane::Outline
         } as u64
             + 1;
         let bytes = plane_bytes(self.extent);
-        (outline || nearest_depth).then(|| (first * bytes, (end - first) * bytes))
+        (outline || nearest_surfaces).then(|| (first * bytes, (end - first) * bytes))
     }
 }
 

@@ -372,6 +372,7 @@ impl Renderer {
             stats.parameter_updates = counters.parameter_binds;
             Ok(())
         };
+        let highlights = shared.borrow().0.has_highlighted();
         let mut stats = self.frame(
             camera,
             FramePlan {
@@ -394,6 +395,7 @@ impl Renderer {
                     passes,
                     PassSet::Shaded { mode, .. } if mode.draws_silhouettes()
                 ),
+                highlights,
             },
             FrameRecorders {
                 gather_uploads: &mut gather_uploads,

@@ -380,8 +380,8 @@ impl PassShaders {
 
 impl ShaderCache {
     /// An empty cache for a device that has `fragmentStoresAndAtomics` or not: with it, the
-    /// surface shaders record the per-pixel keys, the highlight outline style's and X-ray's
-    /// nearest depth (`CADR_PIXEL_KEYS_WRITTEN`, `shaders/pixel_keys.glsl`).
+    /// surface shaders record the per-pixel keys, the highlight outline style's and the
+    /// silhouettes' nearest surfaces (`CADR_PIXEL_KEYS_WRITTEN`, `shaders/pixel_keys.glsl`).
     pub fn new(fragment_stores_and_atomics: bool) -> Self {
         Self {
             fragment_defines: if fragment_stores_and_atomics {

@@ -579,24 +579,33 @@ fn the_palette_colours_lines_and_highlights_and_sizes_the_outline() {
         "{} blue pixels",
         count(&blue_lines, [0, 0, 255])
     );
-    // Dashed hidden lines: a lighter blue (mixed 42 % towards white), where none was before.
+    // Dashed hidden lines: a lighter blue (mixed 42 % towards white), where none was before;
+    // the highlighted cube's a lighter shade of the highlight's line colour (70 % of orange).
     f.view
         .techniques_mut()
         .set_shade_mode(ShadeMode::HiddenLine)
         .unwrap();
     f.view.techniques_mut().set_dashed_hidden_lines(true);
-    let light_blue = [107, 107, 255];
-    let near = |p: &image::Rgba<u8>| {
-        p.0[..3]
-            .iter()
-            .zip(light_blue)
-            .all(|(&a, b)| a.abs_diff(b) <= 2)
+    let light = |rgb: [f32; 3]| rgb.map(|c| ((c + (1.0 - c) * 0.42) * 255.0).round() as u8);
+    let light_blue = light(blue);
+    let light_highlight = light(Palette::DEFAULT.highlight.map(|c| 0.7 * c));
+    let near = |p: &image::Rgba<u8>, rgb: [u8; 3]| {
+        p.0[..3].iter().zip(rgb).all(|(&a, b)| a.abs_diff(b) <= 3)
     };
     let dashed = f.render();
+    let dashes = |rgb: [u8; 3], on_the_right: bool| {
+        dashed
+            .enumerate_pixels()
+            .filter(|&(x, _, p)| near(p, rgb) && (x >= SIZE.0 / 2) == on_the_right)
+            .count()
+    };
+    assert!(dashes(light_blue, false) > 10, "dashed lines in light blue");
+    assert_eq!(dashes(light_blue, true), 0, "none on the highlighted cube");
     assert!(
-        dashed.pixels().filter(|p| near(p)).count() > 10,
-        "dashed lines in light blue"
+        dashes(light_highlight, true) > 10,
+        "the highlighted cube's dashed lines in {light_highlight:?}"
     );
+    assert_eq!(dashes(light_highlight, false), 0);
     f.view.techniques_mut().set_dashed_hidden_lines(false);
 
     // The highlight: tint towards green, then a green band 5 pixels wide.

@@ -308,9 +308,6 @@ impl TransformHierarchy {
                 &self.device,
                 "hierarchy",
                 &[pipelines.hierarchy_set_layout()],
-                &[vk::DescriptorPoolSize::default()
-                    .ty(vk::DescriptorType::STORAGE_BUFFER)
-                    .descriptor_count(targets.len() as u32)],
             )?);
             self.sets_generation += 1;
         }

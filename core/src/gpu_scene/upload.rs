@@ -292,14 +292,7 @@ impl SparseUploader {
         }
         if self.sets.is_none() {
             let layouts = [pipelines.scatter_set_layout(); ARRAYS];
-            self.sets = Some(DescriptorSets::new(
-                device,
-                "scatter",
-                &layouts,
-                &[vk::DescriptorPoolSize::default()
-                    .ty(vk::DescriptorType::STORAGE_BUFFER)
-                    .descriptor_count(2 * ARRAYS as u32)],
-            )?);
+            self.sets = Some(DescriptorSets::new(device, "scatter", &layouts)?);
             self.sets_generation += 1;
         }
         let Some(sets) = &self.sets else {

@@ -220,22 +220,7 @@ impl Renderer {
             MemoryLocation::CpuToGpu,
         )?;
         let pipelines = Pipelines::new(device)?;
-        let frame_sets = DescriptorSets::new(
-            device,
-            "frame",
-            &[pipelines.frame_set_layout()],
-            &[
-                vk::DescriptorPoolSize::default()
-                    .ty(vk::DescriptorType::UNIFORM_BUFFER)
-                    .descriptor_count(1),
-                vk::DescriptorPoolSize::default()
-                    .ty(vk::DescriptorType::STORAGE_BUFFER)
-                    .descriptor_count(5),
-                vk::DescriptorPoolSize::default()
-                    .ty(vk::DescriptorType::COMBINED_IMAGE_SAMPLER)
-                    .descriptor_count(2),
-            ],
-        )?;
+        let frame_sets = DescriptorSets::new(device, "frame", &[pipelines.frame_set_layout()])?;
         frame_sets.write_buffer(
             0,
             0,
@@ -464,9 +449,6 @@ impl Renderer {
                 &self.device,
                 "picture depth",
                 &[self.pipelines.depth_set_layout()],
-                &[vk::DescriptorPoolSize::default()
-                    .ty(vk::DescriptorType::SAMPLED_IMAGE)
-                    .descriptor_count(1)],
             )?;
             sets.write_sampled_image(0, 0, self.target.depth.view());
             self.depth_set = Some(sets);

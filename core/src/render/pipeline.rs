@@ -250,23 +250,23 @@ impl Pipelines {
     /// magnification (bindings 5–6, fragment shaders), the pixel keys (the outline highlight
     /// style's and the silhouettes' nearest surfaces; binding 7, fragment shaders) and the GPU scene's
     /// cull entries, whose bounding spheres the section caps' pass reads (binding 8).
-    pub fn frame_set_layout(&self) -> vk::DescriptorSetLayout {
-        self.frame_set_layout.raw()
+    pub fn frame_set_layout(&self) -> &DescriptorSetLayout {
+        &self.frame_set_layout
     }
 
     /// Set 1 of the transparency merge: the method's targets (bindings 0 and 1).
-    pub fn merge_set_layout(&self) -> vk::DescriptorSetLayout {
-        self.merge_set_layout.raw()
+    pub fn merge_set_layout(&self) -> &DescriptorSetLayout {
+        &self.merge_set_layout
     }
 
     /// The layouts technique pipelines are built with: the frame set's and the merge's.
     pub fn technique_set_layouts(&self) -> (vk::DescriptorSetLayout, vk::DescriptorSetLayout) {
-        (self.frame_set_layout(), self.merge_set_layout())
+        (self.frame_set_layout.raw(), self.merge_set_layout.raw())
     }
 
     /// The scatter pipeline's set layout.
-    pub fn scatter_set_layout(&self) -> vk::DescriptorSetLayout {
-        self.scatter_set_layout.raw()
+    pub fn scatter_set_layout(&self) -> &DescriptorSetLayout {
+        &self.scatter_set_layout
     }
 
     /// The scatter pipeline's layout.
@@ -280,8 +280,8 @@ impl Pipelines {
     }
 
     /// The transform hierarchy's set layout.
-    pub fn hierarchy_set_layout(&self) -> vk::DescriptorSetLayout {
-        self.hierarchy_set_layout.raw()
+    pub fn hierarchy_set_layout(&self) -> &DescriptorSetLayout {
+        &self.hierarchy_set_layout
     }
 
     /// The transform hierarchy's pipeline layout.
@@ -322,8 +322,8 @@ impl Pipelines {
 
     /// Set 1 of the passes over the picture that read its depth (ambient occlusion,
     /// silhouettes): the frame's depth (binding 0).
-    pub fn depth_set_layout(&self) -> vk::DescriptorSetLayout {
-        self.depth_set_layout.raw()
+    pub fn depth_set_layout(&self) -> &DescriptorSetLayout {
+        &self.depth_set_layout
     }
 
     /// Screen-space ambient occlusion: a full-screen triangle darkening the picture where the

@@ -8,7 +8,7 @@ use std::sync::Arc;
 use crate::error::RenderResult;
 use crate::technique::TransparencyMethod;
 use crate::vk::raw as vk;
-use crate::vk::{Buffer, DescriptorSets, Device, Image, MemoryLocation};
+use crate::vk::{Buffer, DescriptorSetLayout, DescriptorSets, Device, Image, MemoryLocation};
 
 /// The smallest storage buffer: what binding 1 of the frame set holds when no method needs
 /// storage (a binding must name a buffer).
@@ -46,7 +46,7 @@ impl TransparencyTargets {
         device: &Arc<Device>,
         method: &TransparencyMethod,
         (extent, samples): (vk::Extent2D, u32),
-        merge_set_layout: vk::DescriptorSetLayout,
+        merge_set_layout: &DescriptorSetLayout,
     ) -> RenderResult<Self> {
         let images = method
             .target_formats()
@@ -90,14 +90,7 @@ impl TransparencyTargets {
         let pixels = u64::from(extent.width) * u64::from(extent.height);
         let (bytes, cleared_bytes) = method.storage_bytes(pixels);
         let storage = storage_buffer(device, bytes)?;
-        let merge_set = DescriptorSets::new(
-            device,
-            "transparency merge",
-            &[merge_set_layout],
-            &[vk::DescriptorPoolSize::default()
-                .ty(vk::DescriptorType::SAMPLED_IMAGE)
-                .descriptor_count(2)],
-        )?;
+        let merge_set = DescriptorSets::new(device, "transparency merge", &[merge_set_layout])?;
         for (binding, image) in images.iter().enumerate() {
             merge_set.write_sampled_image(0, binding as u32, image.view());
         }

@@ -13,6 +13,8 @@ use super::{Device, ShaderModule, VkResult, VkResultExt, DEPTH_FORMAT};
 pub struct DescriptorSetLayout {
     device: Arc<Device>,
     raw: vk::DescriptorSetLayout,
+    /// The type of each binding (one descriptor each), which a pool for its sets is sized by.
+    types: Vec<vk::DescriptorType>,
 }
 
 impl DescriptorSetLayout {
@@ -45,6 +47,7 @@ impl DescriptorSetLayout {
         Ok(Self {
             device: Arc::clone(device),
             raw,
+            types: bindings.iter().map(|b| b.descriptor_type).collect(),
         })
     }
 
@@ -501,6 +504,28 @@ pub struct GraphicsPipelineDesc<'a> {
     pub name: &'a str,
 }
 
+/// The pool sizes that hold one set of each of `layouts`: per descriptor type, the bindings
+/// of that type across them.
+fn pool_sizes(layouts: &[&DescriptorSetLayout]) -> Vec<vk::DescriptorPoolSize> {
+    pool_sizes_of(
+        layouts
+            .iter()
+            .flat_map(|layout| layout.types.iter().copied()),
+    )
+}
+
+/// The pool sizes that hold a descriptor of each of `types`.
+fn pool_sizes_of(types: impl Iterator<Item = vk::DescriptorType>) -> Vec<vk::DescriptorPoolSize> {
+    let mut sizes: Vec<vk::DescriptorPoolSize> = Vec::new();
+    for ty in types {
+        match sizes.iter_mut().find(|size| size.ty == ty) {
+            Some(size) => size.descriptor_count += 1,
+            None => sizes.push(vk::DescriptorPoolSize::default().ty(ty).descriptor_count(1)),
+        }
+    }
+    sizes
+}
+
 /// A descriptor pool, its sets and the layouts it was made for; destroyed together.
 pub struct DescriptorSets {
     device: Arc<Device>,
@@ -510,16 +535,18 @@ pub struct DescriptorSets {
 }
 
 impl DescriptorSets {
-    /// Allocates one set per layout from a pool sized for them.
+    /// Allocates one set per layout from a pool sized for exactly them: as many descriptors
+    /// of each type as their bindings hold (a device may refuse a set its pool has no room
+    /// for, where another allocates it anyway).
     pub fn new(
         device: &Arc<Device>,
         name: &str,
-        layouts: &[vk::DescriptorSetLayout],
-        sizes: &[vk::DescriptorPoolSize],
+        layouts: &[&DescriptorSetLayout],
     ) -> VkResult<Self> {
+        let sizes = pool_sizes(layouts);
         let info = vk::DescriptorPoolCreateInfo::default()
             .max_sets(layouts.len() as u32)
-            .pool_sizes(sizes);
+            .pool_sizes(&sizes);
         // SAFETY: the info lives for the call.
         let pool = unsafe { device.raw().create_descriptor_pool(&info, host_callbacks()) }
             .or_vk("vkCreateDescriptorPool")?;
@@ -529,9 +556,11 @@ impl DescriptorSets {
             pool,
             sets: Vec::new(),
         };
+        let raw_layouts: Vec<vk::DescriptorSetLayout> =
+            layouts.iter().map(|layout| layout.raw).collect();
         let alloc = vk::DescriptorSetAllocateInfo::default()
             .descriptor_pool(pool)
-            .set_layouts(layouts);
+            .set_layouts(&raw_layouts);
         // SAFETY: the pool was sized for exactly these sets.
         this.sets = unsafe { device.raw().allocate_descriptor_sets(&alloc) }
             .or_vk("vkAllocateDescriptorSets")?;
@@ -612,5 +641,56 @@ impl Drop for DescriptorSets {
                 .raw()
                 .destroy_descriptor_pool(self.pool, host_callbacks())
         };
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_pool_holds_every_binding_of_its_layouts() {
+        use vk::DescriptorType as T;
+        // The frame set's bindings, then a second layout's.
+        let frame = [
+            T::UNIFORM_BUFFER,
+            T::STORAGE_BUFFER,
+            T::STORAGE_BUFFER,
+            T::STORAGE_BUFFER,
+            T::STORAGE_BUFFER,
+            T::COMBINED_IMAGE_SAMPLER,
+            T::COMBINED_IMAGE_SAMPLER,
+            T::STORAGE_BUFFER,
+            T::STORAGE_BUFFER,
+        ];
+        let counts = |types: &[T]| -> Vec<(T, u32)> {
+            pool_sizes_of(types.iter().copied())
+                .iter()
+                .map(|size| (size.ty, size.descriptor_count))
+                .collect()
+        };
+        assert_eq!(
+            counts(&frame),
+            [
+                (T::UNIFORM_BUFFER, 1),
+                (T::STORAGE_BUFFER, 6),
+                (T::COMBINED_IMAGE_SAMPLER, 2)
+            ]
+        );
+        let two_sets: Vec<T> = frame
+            .iter()
+            .chain(&[T::SAMPLED_IMAGE; 2])
+            .copied()
+            .collect();
+        assert_eq!(
+            counts(&two_sets),
+            [
+                (T::UNIFORM_BUFFER, 1),
+                (T::STORAGE_BUFFER, 6),
+                (T::COMBINED_IMAGE_SAMPLER, 2),
+                (T::SAMPLED_IMAGE, 2)
+            ]
+        );
+        assert_eq!(counts(&[]), []);
     }
 }

@@ -1,0 +1,139 @@
+//! `cadr render` on a second Vulkan implementation: SwiftShader, Google's CPU driver, which
+//! keeps to the specification where lavapipe is lenient (lavapipe allocates descriptor sets
+//! past their pool's sizes, for one; SwiftShader refuses, as GPU drivers may). Each display
+//! mode and feature renders there with no validation error, and looks as it does on lavapipe.
+//! `scripts/setup.sh` installs the driver into `target/swiftshader` (`CADR_SWIFTSHADER_DIR`
+//! overrides); without it the test fails and says so.
+#![allow(clippy::unwrap_used)] // Test code: a failed unwrap is a failed test.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+use cadr_tests::images::{compare, ImageDifference};
+
+/// SwiftShader's Vulkan driver manifest.
+fn swiftshader_manifest() -> PathBuf {
+    let dir = std::env::var_os("CADR_SWIFTSHADER_DIR").map_or_else(
+        || Path::new(env!("CARGO_MANIFEST_DIR")).join("../target/swiftshader"),
+        PathBuf::from,
+    );
+    let manifest = dir.join("vk_swiftshader_icd.json");
+    assert!(
+        manifest.is_file(),
+        "SwiftShader is not installed at {}: run scripts/setup.sh",
+        manifest.display()
+    );
+    manifest
+}
+
+/// Runs `cadr render gen:demo` into `png` with validation on and `args`, on SwiftShader's
+/// driver alone when `manifest` is given (the Vulkan loader then sees no other), otherwise on
+/// the default device.
+fn render(png: &Path, args: &[&str], manifest: Option<&Path>) -> Output {
+    let exe = Path::new(env!("CARGO_BIN_EXE_cadr"));
+    let mut command = Command::new(exe);
+    command
+        .args([
+            "render",
+            "gen:demo",
+            "--size",
+            "240x180",
+            "--validation",
+            "-o",
+        ])
+        .arg(png)
+        .args(args)
+        .env("CADR_PLUGIN_PATH", exe.parent().unwrap().join("deps"))
+        .env_remove("CADR_DEVICE");
+    if let Some(manifest) = manifest {
+        command.env("VK_ICD_FILENAMES", manifest);
+    }
+    command.output().expect("run cadr")
+}
+
+fn text(output: &Output) -> String {
+    format!(
+        "{}{}",
+        String::from_utf8_lossy(&output.stdout),
+        String::from_utf8_lossy(&output.stderr)
+    )
+}
+
+/// The display modes and the features drawn over them, each in one render.
+const CASES: &[(&str, &[&str])] = &[
+    ("solid", &[]),
+    ("edges with MSAA", &["--display", "edges", "--msaa", "4"]),
+    (
+        "dashed hidden-line",
+        &["--display", "hidden-line", "--dashed"],
+    ),
+    ("wireframe", &["--display", "wireframe"]),
+    (
+        "X-ray with a highlight",
+        &["--display", "xray", "--highlight", "module 0"],
+    ),
+    (
+        "outlined highlight",
+        &["--highlight", "module 1", "--highlight-style", "outline"],
+    ),
+    (
+        "capped section",
+        &["--display", "edges", "--section=0,-1,0,0.02", "--caps"],
+    ),
+    ("ambient occlusion", &["--ssao"]),
+    (
+        "exact transparency in X-ray",
+        &["--display", "xray", "--transparency", "per-pixel-lists"],
+    ),
+];
+
+/// How far SwiftShader's picture may be from lavapipe's (FLIP, mean over the pixels): the two
+/// rasterize, filter and round differently along edges, by up to 0.02 on these pictures.
+const DRIVERS_APART: f64 = 0.03;
+
+#[test]
+fn every_display_mode_renders_on_swiftshader_as_on_lavapipe() {
+    let manifest = swiftshader_manifest();
+    let dir = std::env::temp_dir().join(format!("cadr-swiftshader-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let mut pictures = Vec::new();
+    for (i, &(name, args)) in CASES.iter().enumerate() {
+        let [lavapipe, swiftshader] = ["lavapipe", "swiftshader"].map(|driver| {
+            let png = dir.join(format!("{i}-{driver}.png"));
+            let output = render(&png, args, (driver == "swiftshader").then_some(&*manifest));
+            let log = text(&output);
+            assert!(output.status.success(), "{name} on {driver}: {log}");
+            assert!(
+                log.contains("validation:  0 errors"),
+                "{name} on {driver}: {log}"
+            );
+            if driver == "swiftshader" {
+                assert!(
+                    log.contains("SwiftShader"),
+                    "{name}: not on SwiftShader: {log}"
+                );
+            }
+            image::open(&png).unwrap().to_rgba8()
+        });
+        let difference = compare(&swiftshader, &lavapipe).unwrap();
+        assert!(
+            difference.mean <= DRIVERS_APART,
+            "{name}: SwiftShader's picture is {difference:?} from lavapipe's"
+        );
+        pictures.push((name, lavapipe, difference));
+    }
+    let differences: Vec<(&str, f64)> = pictures.iter().map(|(n, _, d)| (*n, d.mean)).collect();
+    println!("SwiftShader against lavapipe (FLIP mean): {differences:?}");
+    // What each case adds to the solid picture is drawn: the two drivers' pictures of a case
+    // are nearer each other than half the way from solid to the case.
+    let (_, solid, _) = &pictures[0];
+    for (name, picture, drivers) in &pictures[1..] {
+        let ImageDifference { mean, .. } = compare(picture, solid).unwrap();
+        assert!(
+            drivers.mean < 0.5 * mean,
+            "{name}: the drivers are {} apart, the case {mean} from solid",
+            drivers.mean
+        );
+    }
+    std::fs::remove_dir_all(&dir).unwrap();
+}

@@ -225,12 +225,8 @@ fn smooth_cylinder() -> Scene {
     }
 }
 
-/// Silhouette edges outline the sides of a smooth cylinder in the modes that draw feature edges
-/// (X-ray's translucent surfaces included), where no feature edge runs: a line at each side of
-/// its outline, on the cylinder, and none across its curved face; without them (or in the
-/// other modes) there is none; with MSAA too.
-#[test]
-fn silhouettes_outline_curved_surfaces_in_the_edge_modes() {
+/// The smooth cylinder seen a little from above, its sides upright in the picture.
+fn smooth_cylinder_view() -> SceneView {
     let aspect = f64::from(SIZE.0) / f64::from(SIZE.1);
     let camera = Camera::look_at(
         DVec3::new(0.0, 1.5, 6.0),
@@ -240,7 +236,16 @@ fn silhouettes_outline_curved_surfaces_in_the_edge_modes() {
         0.1,
         100.0,
     );
-    let mut f = SceneView::new(test_device(), &smooth_cylinder(), SIZE, camera);
+    SceneView::new(test_device(), &smooth_cylinder(), SIZE, camera)
+}
+
+/// Silhouette edges outline the sides of a smooth cylinder in the modes that draw feature edges
+/// (X-ray's translucent surfaces included), where no feature edge runs: a line at each side of
+/// its outline, on the cylinder, and none across its curved face; without them (or in the
+/// other modes) there is none; with MSAA too.
+#[test]
+fn silhouettes_outline_curved_surfaces_in_the_edge_modes() {
+    let mut f = smooth_cylinder_view();
     let dark = |p: &image::Rgba<u8>| (0..3).all(|i| p.0[i] < 90);
     // The row through the cylinder's middle, clear of its rims.
     let (_, row) = images::pixel_of(&f.camera, SIZE, DVec3::ZERO);
@@ -302,16 +307,7 @@ fn silhouettes_outline_curved_surfaces_in_the_edge_modes() {
 /// once the highlight is taken away they are drawn in the edge lines' colour again.
 #[test]
 fn silhouettes_of_a_highlighted_part_take_its_line_colour() {
-    let aspect = f64::from(SIZE.0) / f64::from(SIZE.1);
-    let camera = Camera::look_at(
-        DVec3::new(0.0, 1.5, 6.0),
-        DVec3::ZERO,
-        DEFAULT_FOV_DEGREES,
-        aspect,
-        0.1,
-        100.0,
-    );
-    let mut f = SceneView::new(test_device(), &smooth_cylinder(), SIZE, camera);
+    let mut f = smooth_cylinder_view();
     let cylinder = f.nodes[0];
     let highlight = |f: &mut SceneView, highlighted: bool| {
         let flags = NodeFlags {

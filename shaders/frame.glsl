@@ -42,6 +42,9 @@ const uint CADR_DISPLAY_HIGHLIGHT_OUTLINE = 16u;
 // silhouettes pass finds X-ray's silhouettes (its translucent surfaces write no depth) and
 // which silhouettes outline highlighted parts.
 const uint CADR_DISPLAY_NEAREST_SURFACES = 32u;
+// frame.target.z: opaque surfaces record the cap keys (binding 7), from which cap_ties.frag
+// paints the caps that tie with another part's surface (caps on, and seen).
+const uint CADR_DISPLAY_CAP_KEYS = 64u;
 
 // The colour of edge lines and silhouettes: a highlighted part's in a darker highlight
 // colour, so that a highlight shows in the line-only modes too, and on a tinted surface.

@@ -10,7 +10,11 @@
 // - plane 1, the nearest surfaces (CADR_DISPLAY_NEAREST_SURFACES): every surface, translucent
 //   ones included, which write no depth to the depth buffer; silhouettes.frag finds X-ray's
 //   silhouettes in their depth, and in every edge mode draws the silhouettes of highlighted
-//   parts in the highlight's line colour.
+//   parts in the highlight's line colour;
+// - planes 2 and 3, the cap keys (CADR_DISPLAY_CAP_KEYS): in plane 2 the nearest opaque
+//   fragment that shows a section cap, its lowest 3 bits the plane's index instead of the
+//   highlight bit; in plane 3 the nearest opaque fragment that does not; cap_ties.frag paints
+//   the caps that tie with another part's surface from them.
 // Recording needs fragmentStoresAndAtomics: the host defines CADR_PIXEL_KEYS_WRITTEN for the
 // surface shaders where the device has it (the renderer asks for neither plane elsewhere), and
 // without it recording does nothing. A pass that only reads defines CADR_PIXEL_KEYS_READ.
@@ -27,6 +31,8 @@ layout(set = 0, binding = 7, std430) readonly buffer CadrPixelKeys {
 const uint CADR_PIXEL_KEY_NOTHING = 0xffffffffu;
 const uint CADR_OUTLINE_PLANE = 0u;
 const uint CADR_NEAREST_SURFACES_PLANE = 1u;
+const uint CADR_CAPS_PLANE = 2u;
+const uint CADR_UNCAPPED_PLANE = 3u;
 
 // Where the key of `pixel` in `plane` lies.
 uint cadr_pixel_key_index(uint plane, uvec2 pixel) {
@@ -49,7 +55,15 @@ void cadr_record_surface(uint plane, bool highlighted) {
     uint key = (floatBitsToUint(max(gl_FragCoord.z, 0.0)) & ~1u) | (highlighted ? 0u : 1u);
     atomicMin(cadr_pixel_keys[cadr_pixel_key_index(plane, uvec2(gl_FragCoord.xy))], key);
 }
+
+// Records a fragment that shows the cap of section plane `section_plane` in the caps plane.
+void cadr_record_cap(int section_plane) {
+    uint key = (floatBitsToUint(max(gl_FragCoord.z, 0.0)) & ~7u) | uint(section_plane);
+    atomicMin(cadr_pixel_keys[cadr_pixel_key_index(CADR_CAPS_PLANE, uvec2(gl_FragCoord.xy))], key);
+}
 #else
 void cadr_record_surface(uint plane, bool highlighted) {
+}
+void cadr_record_cap(int section_plane) {
 }
 #endif

@@ -3,7 +3,8 @@
 // the vertex colour and the texture; a material's alpha mask cuts holes). While
 // section planes cut with caps on, a closed part seen through a cut shows the cap there (see
 // section.glsl). Every surface fragment records itself in the outline keys with the highlight
-// outline style, and in the nearest surfaces for the silhouettes (pixel_keys.glsl).
+// outline style, in the nearest surfaces for the silhouettes, and in the cap keys while caps
+// are seen (pixel_keys.glsl).
 #include "frame.glsl"
 #include "shading.glsl"
 #include "section.glsl"
@@ -35,6 +36,13 @@ void main() {
         cadr_record_surface(CADR_NEAREST_SURFACES_PLANE, in_highlighted != 0u);
     }
     int cap_plane = section_cap_of(in_closure, in_eye_offset);
+    if ((frame.target.z & CADR_DISPLAY_CAP_KEYS) != 0u) {
+        if (cap_plane >= 0) {
+            cadr_record_cap(cap_plane);
+        } else {
+            cadr_record_surface(CADR_UNCAPPED_PLANE, false);
+        }
+    }
     if (cap_plane >= 0) {
         out_color = vec4(section_cap_color(cap_plane, in_eye_offset), 1.0);
         return;

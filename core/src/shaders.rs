@@ -282,6 +282,12 @@ pub const CAPS_FRAG: ShaderSource = ShaderSource {
     stage: ShaderStage::Fragment,
     source: include_str!("../../shaders/caps.frag"),
 };
+/// Section caps where the face a cap is found on ties with another part's surface.
+pub const CAP_TIES_FRAG: ShaderSource = ShaderSource {
+    name: "cap_ties.frag",
+    stage: ShaderStage::Fragment,
+    source: include_str!("../../shaders/cap_ties.frag"),
+};
 /// Hidden edge lines, dashed (the hidden-line mode's option).
 pub const HIDDEN_EDGES_FRAG: ShaderSource = ShaderSource {
     name: "hidden_edges.frag",
@@ -335,6 +341,7 @@ pub const ALL: &[ShaderSource] = &[
     SSAO_FRAG,
     SILHOUETTES_FRAG,
     OUTLINE_FRAG,
+    CAP_TIES_FRAG,
     MERGE_VERT,
     BACKGROUND_FRAG,
 ];

@@ -169,6 +169,76 @@ fn a_cut_through_a_closed_box_is_capped_with_the_plane_colour_where_the_cut_is()
     f.assert_no_validation_errors();
 }
 
+/// A cut part standing on another: the cut box's bottom face, which the cap is found on, lies
+/// in the plate's top face; the cap covers the whole cut all the same, in every mode that
+/// draws caps and with MSAA, and the plate around it keeps its colour.
+#[test]
+fn a_cut_part_standing_on_another_is_capped_over_the_whole_cut() {
+    let mut scene = boxes(false, &[DVec3::ZERO]);
+    // A plate of the same box, 10 × 10 × 0.2, its top face at the box's bottom (z = -1).
+    let mut plate = Node::new("plate");
+    plate.local = DMat4::from_translation(DVec3::new(0.0, 0.0, -1.1))
+        * DMat4::from_scale(DVec3::new(5.0, 5.0, 0.1));
+    plate.mesh = Some(MeshRef::new(0, vec![0]));
+    scene.nodes.push(plate);
+    scene.roots.push(1);
+    let mut f = looking_at_the_origin(&scene, DVec3::ZERO);
+    f.section(&[KEEP_BELOW_Z0], true);
+    // Points of the cut, over the box's bottom face, and of the plate's top around the box.
+    let grid = |z: f64, extent: f64| -> Vec<DVec3> {
+        (0..9)
+            .flat_map(|i| (0..9).map(move |j| (i, j)))
+            .map(|(i, j)| {
+                let at = |k: i32| -extent + 2.0 * extent * f64::from(k) / 8.0;
+                DVec3::new(at(i), at(j), z)
+            })
+            .collect()
+    };
+    let on_cut = grid(0.0, 0.9);
+    let in_view = |p: &DVec3| {
+        let (x, y) = cadr_tests::images::pixel_of(&f.camera, SIZE, *p);
+        x < SIZE.0 && y < SIZE.1
+    };
+    let on_plate: Vec<DVec3> = grid(-1.0, 3.0)
+        .into_iter()
+        // On the eye's side of the box, which hides the plate beyond it.
+        .filter(|p| (p.x > 1.2 || p.y > 1.2) && in_view(p))
+        .collect();
+    assert!(
+        on_plate.len() >= 10,
+        "{} points of the plate",
+        on_plate.len()
+    );
+    for samples in [1, 4] {
+        f.view.renderer_mut().set_msaa(samples).unwrap();
+        for mode in [ShadeMode::Solid, ShadeMode::Edges, ShadeMode::HiddenLine] {
+            f.view.techniques_mut().set_shade_mode(mode).unwrap();
+            let cut = f.render();
+            let uncapped: Vec<_> = on_cut
+                .iter()
+                .filter(|&&p| !reddish(f.color_at(&cut, p)))
+                .map(|&p| (p.x, p.y, f.color_at(&cut, p)))
+                .collect();
+            assert!(
+                uncapped.is_empty(),
+                "{samples}x {mode:?}: {} of {} points of the cut show no cap: {:?}",
+                uncapped.len(),
+                on_cut.len(),
+                &uncapped[..uncapped.len().min(4)]
+            );
+            let leaks: Vec<_> = on_plate
+                .iter()
+                .filter(|&&p| reddish(f.color_at(&cut, p)))
+                .collect();
+            assert!(
+                leaks.is_empty(),
+                "{samples}x {mode:?}: the cap shows on the plate at {leaks:?}"
+            );
+        }
+    }
+    f.assert_no_validation_errors();
+}
+
 #[test]
 fn a_cap_hides_the_lines_of_the_far_faces_it_is_painted_on() {
     // Seen from EYE through the cut at z = 0, the cap lies over the box's far faces: the crease

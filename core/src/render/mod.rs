@@ -24,8 +24,9 @@ pub use output::SaveError;
 pub use palette::{DisplayRgb, Palette};
 pub use pipeline::{
     FrameUniforms, HierarchyParameters, HierarchyStage, Pipelines, ScatterParameters,
-    DISPLAY_HIGHLIGHT_OUTLINE, DISPLAY_MATERIAL_DESCRIPTIONS, DISPLAY_NEAREST_SURFACES,
-    DISPLAY_TEXTURES, DISPLAY_VERTEX_ATTRIBUTES, DISPLAY_XRAY, PICK_FORMAT,
+    DISPLAY_CAP_KEYS, DISPLAY_HIGHLIGHT_OUTLINE, DISPLAY_MATERIAL_DESCRIPTIONS,
+    DISPLAY_NEAREST_SURFACES, DISPLAY_TEXTURES, DISPLAY_VERTEX_ATTRIBUTES, DISPLAY_XRAY,
+    PICK_FORMAT,
 };
 pub use section::{Section, DEFAULT_CAP_COLORS, MAX_SECTION_PLANES};
 pub use stats::FrameStats;
@@ -157,6 +158,15 @@ struct DepthOverlays {
     /// Whether the surfaces record the nearest surfaces (pixel keys plane 1), which the
     /// silhouettes read: X-ray's depth, and which of them outline highlighted parts.
     nearest_surfaces: bool,
+}
+
+/// The passes over a colour frame's picture that read only the pixel keys.
+#[derive(Clone, Copy, Debug)]
+struct KeyedOverlays {
+    /// The band around highlighted parts (the outline highlight style).
+    outline: bool,
+    /// The caps that tie with another part's surface (caps seen, with the cap keys).
+    cap_ties: bool,
 }
 
 /// The depth a frame's silhouettes are found in.
@@ -636,12 +646,21 @@ impl Renderer {
             nearest_surfaces: self.records_nearest_surfaces(&plan, silhouettes),
         };
         let nearest_surfaces = depth_overlays.nearest_surfaces;
+        // Caps that tie with another part's surface are painted from the cap keys.
+        let cap_keys = color
+            && self.device.capabilities().fragment_stores_and_atomics
+            && self.section.caps_seen_from(eye);
         let display = plan.display
             | if nearest_surfaces {
                 DISPLAY_NEAREST_SURFACES
             } else {
                 0
-            };
+            }
+            | if cap_keys { DISPLAY_CAP_KEYS } else { 0 };
+        // The recording has (or lacks) the cap keys' clear and pass, which the camera decides.
+        let replay_key = plan
+            .replay_key
+            .map(|key| crate::commands_key::mix(key, u64::from(cap_keys)));
         let uniforms = FrameUniforms {
             projection: camera.projection.as_mat4().to_cols_array_2d(),
             view_rotation: view_rotation.as_mat4().to_cols_array_2d(),
@@ -667,7 +686,7 @@ impl Renderer {
         if let Some((method, _)) = plan.translucency {
             self.ensure_transparency_targets(method)?;
         }
-        if outline || nearest_surfaces {
+        if outline || nearest_surfaces || cap_keys {
             self.ensure_pixel_keys()?;
         }
         let depth_set = if depth_overlays.ssao || depth_overlays.silhouettes.is_some() {
@@ -702,7 +721,7 @@ impl Renderer {
                 self.commands.end_prologue(key)?;
             }
         }
-        match (plan.replay_key, self.replayable) {
+        match (replay_key, self.replayable) {
             (Some(key), Some((recorded, recorded_stats))) if key == recorded => {
                 let replayed = FrameStats {
                     bytes_uploaded: stats.bytes_uploaded,
@@ -739,7 +758,7 @@ impl Renderer {
         if let Some((keys, span)) = self
             .pixel_keys
             .as_ref()
-            .and_then(|keys| Some((keys, keys.span(outline, nearest_surfaces)?)))
+            .and_then(|keys| Some((keys, keys.span(outline, nearest_surfaces, cap_keys)?)))
         {
             self.record_storage_clear(command_buffer, &keys.buffer, span, pixel_keys::NO_SURFACE);
         }
@@ -774,7 +793,11 @@ impl Renderer {
         if plan.pass == PassTarget::Color {
             let merge = transparency.zip(plan.translucency.map(|(_, merge)| merge));
             let depth_overlays = depth_set.map(|set| (depth_overlays, set));
-            self.record_overlay(command_buffer, merge, depth_overlays, outline)?;
+            let keyed = KeyedOverlays {
+                outline,
+                cap_ties: cap_keys,
+            };
+            self.record_overlay(command_buffer, merge, depth_overlays, keyed)?;
         }
         (recorders.after)(self, command_buffer, phases - 1, &mut stats)?;
         if let Some(timer) = &mut self.timer {
@@ -788,10 +811,10 @@ impl Renderer {
         // The first recording after a change may do one-time work (new buffers cleared);
         // the second with the same key is the steady frame. Uploads are not part of it: they
         // go in the prologue.
-        if plan.replay_key.is_some() && plan.replay_key == self.last_recorded {
-            self.replayable = plan.replay_key.map(|key| (key, stats));
+        if replay_key.is_some() && replay_key == self.last_recorded {
+            self.replayable = replay_key.map(|key| (key, stats));
         }
-        self.last_recorded = plan.replay_key;
+        self.last_recorded = replay_key;
         stats.gpu_us = self.finish_or_keep_in_flight(previous_gpu_us)?;
         Ok(stats)
     }
@@ -960,24 +983,32 @@ impl Renderer {
         );
     }
 
-    /// What goes over the finished rendering: ambient occlusion darkening the opaque picture
-    /// and silhouette edges over it (each when on, with the set naming the depth), the
-    /// transparency method's result at each pixel blended over the picture (with translucent
-    /// surfaces), X-ray's silhouettes over that, the band around highlighted parts (with the
-    /// `outline` style), then the background under whatever the picture leaves uncovered.
+    /// What goes over the finished rendering: the section caps that tie with another part's
+    /// surface (caps seen), ambient occlusion darkening the opaque picture and silhouette
+    /// edges over it (each when on, with the set naming the depth), the transparency method's
+    /// result at each pixel blended over the picture (with translucent surfaces), X-ray's
+    /// silhouettes over that, the band around highlighted parts (with the outline style), then
+    /// the background under whatever the picture leaves uncovered.
     fn record_overlay(
         &self,
         command_buffer: vk::CommandBuffer,
         merge: Option<(&TransparencyTargets, (vk::Pipeline, vk::PipelineLayout))>,
         depth_overlays: Option<(DepthOverlays, vk::DescriptorSet)>,
-        outline: bool,
+        keyed: KeyedOverlays,
     ) -> RenderResult<()> {
         let background = self.pipelines.background()?;
-        let outline = outline.then(|| self.pipelines.outline()).transpose()?;
+        let outline = keyed
+            .outline
+            .then(|| self.pipelines.outline())
+            .transpose()?;
+        let cap_ties = keyed
+            .cap_ties
+            .then(|| self.pipelines.cap_ties())
+            .transpose()?;
         // Occlusion darkens the opaque surfaces, before lines go over them and translucent
         // surfaces are merged over both.
         let reads_pixel_keys =
-            depth_overlays.is_some_and(|(overlays, _)| overlays.nearest_surfaces);
+            keyed.cap_ties || depth_overlays.is_some_and(|(overlays, _)| overlays.nearest_surfaces);
         let (ssao, silhouettes) = match depth_overlays {
             Some((overlays, set)) => (
                 (overlays.ssao)
@@ -1016,6 +1047,10 @@ impl Renderer {
             );
         }
         begin_overlay(&self.device, command_buffer, &self.target.color);
+        // The caps are part of the opaque picture: first.
+        if let Some(cap_ties) = cap_ties {
+            record_fullscreen(&self.device, command_buffer, cap_ties, &[self.frame_set()]);
+        }
         let record_depth_overlay = |(pipeline, set): ((vk::Pipeline, vk::PipelineLayout), _)| {
             record_fullscreen(
                 &self.device,

@@ -62,6 +62,10 @@ pub const DISPLAY_HIGHLIGHT_OUTLINE: u32 = 16;
 /// (binding 7), where the silhouettes pass finds X-ray's silhouettes and which silhouettes
 /// outline highlighted parts (the renderer sets it).
 pub const DISPLAY_NEAREST_SURFACES: u32 = 32;
+/// [`FrameUniforms::target`]`[2]`: opaque surfaces record the cap keys (binding 7), from which
+/// the cap ties pass paints the caps that tie with another part's surface (the renderer sets
+/// it).
+pub const DISPLAY_CAP_KEYS: u32 = 64;
 
 /// Push constants of `scatter.comp`: one dispatch scatters the items of one array.
 #[repr(C)]
@@ -138,6 +142,8 @@ pub struct Pipelines {
     ssao: OnceLock<Pipeline>,
     /// Silhouette edges.
     silhouettes: OnceLock<Pipeline>,
+    /// The caps that tie with another part's surface.
+    cap_ties: OnceLock<Pipeline>,
 }
 
 impl Pipelines {
@@ -229,6 +235,7 @@ impl Pipelines {
             depth_overlay_layout,
             ssao: OnceLock::new(),
             silhouettes: OnceLock::new(),
+            cap_ties: OnceLock::new(),
             frame_overlay_layout,
             background: OnceLock::new(),
             outline: OnceLock::new(),
@@ -344,6 +351,17 @@ impl Pipelines {
             &self.silhouettes,
             &self.depth_overlay_layout,
             &shaders::SILHOUETTES_FRAG,
+            Blend::PREMULTIPLIED_OVER,
+        )
+    }
+
+    /// Section caps painted where the face a cap is found on ties with another part's
+    /// surface, from the cap keys, over the picture, with its layout.
+    pub fn cap_ties(&self) -> RenderResult<(vk::Pipeline, vk::PipelineLayout)> {
+        self.fullscreen(
+            &self.cap_ties,
+            &self.frame_overlay_layout,
+            &shaders::CAP_TIES_FRAG,
             Blend::PREMULTIPLIED_OVER,
         )
     }

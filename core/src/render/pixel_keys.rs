@@ -4,8 +4,10 @@
 //! whether it is a highlighted part's. Plane 0 holds the highlight outline style's keys
 //! (`shaders/outline.frag` draws the band from them); plane 1 the nearest surfaces, translucent
 //! ones included, from which `shaders/silhouettes.frag` finds X-ray's silhouettes and draws
-//! those of highlighted parts in the highlight's line colour. Recording needs the device's
-//! `fragmentStoresAndAtomics`.
+//! those of highlighted parts in the highlight's line colour; planes 2 and 3 the cap keys, the
+//! nearest opaque fragments that show a section cap and that do not, from which
+//! `shaders/cap_ties.frag` paints the caps that tie with another part's surface. Recording
+//! needs the device's `fragmentStoresAndAtomics`.
 
 use std::sync::Arc;
 
@@ -26,10 +28,14 @@ enum KeyPlane {
     Outline = 0,
     /// The nearest surfaces (the silhouettes').
     NearestSurfaces = 1,
+    /// The nearest fragments that show a section cap (the cap ties').
+    Caps = 2,
+    /// The nearest fragments that do not (the cap ties').
+    Uncapped = 3,
 }
 
 /// How many planes the buffer holds.
-const PLANES: u64 = 2;
+const PLANES: u64 = 4;
 
 /// The keys of one target size.
 pub(crate) struct PixelKeys {
@@ -52,23 +58,29 @@ impl PixelKeys {
         Ok(Self { buffer, extent })
     }
 
-    /// The bytes a frame that uses the outline keys (`outline`) and the nearest surfaces
-    /// (`nearest_surfaces`) clears, as (offset, size): the planes it uses, which follow each
-    /// other; none when it uses neither.
-    pub fn span(&self, outline: bool, nearest_surfaces: bool) -> Option<(u64, u64)> {
-        let first = if outline {
-            KeyPlane::Outline
-        } else {
-            KeyPlane::NearestSurfaces
-        } as u64;
-        let end = if nearest_surfaces {
-            KeyPlane::NearestSurfaces
-        } else {
-            KeyPlane::Outline
-        } as u64
-            + 1;
+    /// The bytes a frame that uses the outline keys (`outline`), the nearest surfaces
+    /// (`nearest_surfaces`) and the cap keys (`cap_keys`) clears, as (offset, size): from the
+    /// first plane it uses to the last; none when it uses none.
+    pub fn span(
+        &self,
+        outline: bool,
+        nearest_surfaces: bool,
+        cap_keys: bool,
+    ) -> Option<(u64, u64)> {
+        let used = [
+            (KeyPlane::Outline, outline),
+            (KeyPlane::NearestSurfaces, nearest_surfaces),
+            (KeyPlane::Caps, cap_keys),
+            (KeyPlane::Uncapped, cap_keys),
+        ];
+        let mut planes = used
+            .iter()
+            .filter(|(_, on)| *on)
+            .map(|&(plane, _)| plane as u64);
+        let first = planes.next()?;
+        let last = planes.next_back().unwrap_or(first);
         let bytes = plane_bytes(self.extent);
-        (outline || nearest_surfaces).then(|| (first * bytes, (end - first) * bytes))
+        Some((first * bytes, (last + 1 - first) * bytes))
     }
 }
 

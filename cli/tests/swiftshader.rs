@@ -1,7 +1,8 @@
 //! `cadr render` on a second Vulkan implementation: SwiftShader, Google's CPU driver, which
 //! keeps to the specification where lavapipe is lenient (lavapipe allocates descriptor sets
 //! past their pool's sizes, for one; SwiftShader refuses, as GPU drivers may). Each display
-//! mode and feature renders there with no validation error, and looks as it does on lavapipe.
+//! mode and feature, and technique plugins of every kind, render there with no validation
+//! error, and look as they do on lavapipe.
 //! `scripts/setup.sh` installs the driver into `target/swiftshader` (`CADR_SWIFTSHADER_DIR`
 //! overrides); without it the test fails and says so.
 #![allow(clippy::unwrap_used)] // Test code: a failed unwrap is a failed test.
@@ -59,7 +60,9 @@ fn text(output: &Output) -> String {
     )
 }
 
-/// The display modes and the features drawn over them, each in one render.
+/// The display modes and the features drawn over them, each in one render, then technique
+/// plugins of each kind that SwiftShader runs (it lacks `drawIndirectCount` and
+/// `VK_EXT_multi_draw`), which draw the solid picture again.
 const CASES: &[(&str, &[&str])] = &[
     ("solid", &[]),
     ("edges with MSAA", &["--display", "edges", "--msaa", "4"]),
@@ -85,7 +88,35 @@ const CASES: &[(&str, &[&str])] = &[
         "exact transparency in X-ray",
         &["--display", "xray", "--transparency", "per-pixel-lists"],
     ),
+    (
+        "arena / ssbo-index / groups-mdi-replay / frustum",
+        &[
+            "--vertex",
+            "arena",
+            "--params",
+            "ssbo-index",
+            "--submit",
+            "groups-mdi-replay",
+            "--cull",
+            "frustum",
+        ],
+    ),
+    (
+        "pulling / ubo-dynamic / individual / none",
+        &[
+            "--vertex",
+            "pulling",
+            "--params",
+            "ubo-dynamic",
+            "--submit",
+            "individual",
+        ],
+    ),
 ];
+
+/// How many of [`CASES`] change the picture (the display modes and features); the technique
+/// cases, named by their combination, follow.
+const PICTURE_CASES: usize = 9;
 
 /// How far SwiftShader's picture may be from lavapipe's (FLIP, mean over the pixels): the two
 /// rasterize, filter and round differently along edges, by up to 0.02 on these pictures.
@@ -93,6 +124,12 @@ const DRIVERS_APART: f64 = 0.03;
 
 #[test]
 fn every_display_mode_renders_on_swiftshader_as_on_lavapipe() {
+    assert!(CASES[..PICTURE_CASES]
+        .iter()
+        .all(|(name, _)| !name.contains(" / ")));
+    assert!(CASES[PICTURE_CASES..]
+        .iter()
+        .all(|(name, _)| name.contains(" / ")));
     let manifest = swiftshader_manifest();
     let dir = std::env::temp_dir().join(format!("cadr-swiftshader-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
@@ -127,7 +164,7 @@ fn every_display_mode_renders_on_swiftshader_as_on_lavapipe() {
     // What each case adds to the solid picture is drawn: the two drivers' pictures of a case
     // are nearer each other than half the way from solid to the case.
     let (_, solid, _) = &pictures[0];
-    for (name, picture, drivers) in &pictures[1..] {
+    for (name, picture, drivers) in &pictures[1..PICTURE_CASES] {
         let ImageDifference { mean, .. } = compare(picture, solid).unwrap();
         assert!(
             drivers.mean < 0.5 * mean,

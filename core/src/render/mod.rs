@@ -103,8 +103,8 @@ pub struct Renderer {
     /// How highlighted parts are drawn.
     highlight_style: HighlightStyle,
     /// The pixel keys at the target's size (made by the first frame that needs them: with the
-    /// outline style, or the silhouettes' nearest surfaces), which binding 7 of the frame set names;
-    /// otherwise the placeholder storage is named there.
+    /// outline style, the silhouettes' nearest surfaces or the cap keys), which binding 7 of
+    /// the frame set names; otherwise the placeholder storage is named there.
     pixel_keys: Option<PixelKeys>,
     /// The generation of the GPU scene resources the frame set names, if any.
     bound_scene: Option<u64>,

@@ -41,8 +41,8 @@ void main() {
     if (cap == CADR_PIXEL_KEY_NOTHING || other == CADR_PIXEL_KEY_NOTHING) {
         return;
     }
-    float cap_depth = uintBitsToFloat(cap & ~7u);
-    float other_depth = uintBitsToFloat(other);
+    float cap_depth = cadr_cap_key_depth(cap);
+    float other_depth = cadr_key_depth(other);
     float other_distance = view_distance(other_depth);
     if (abs(view_distance(cap_depth) - other_distance) > TIE * other_distance) {
         return;
@@ -50,5 +50,5 @@ void main() {
     vec2 ndc = gl_FragCoord.xy / vec2(frame.target.xy) * 2.0 - 1.0;
     vec4 view = inverse(frame.projection) * vec4(ndc, cap_depth, 1.0);
     vec3 eye_offset = transpose(mat3(frame.view_rotation)) * (view.xyz / view.w);
-    out_color = vec4(section_cap_color(int(cap & 7u), eye_offset), 1.0);
+    out_color = vec4(section_cap_color(cadr_cap_key_plane(cap), eye_offset), 1.0);
 }

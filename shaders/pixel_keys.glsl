@@ -49,6 +49,16 @@ float cadr_key_depth(uint key) {
     return uintBitsToFloat(key & ~1u);
 }
 
+// A cap key (plane 2): the depth of the fragment (to within its lowest 3 bits) ...
+float cadr_cap_key_depth(uint key) {
+    return uintBitsToFloat(key & ~7u);
+}
+
+// ... and the index of the section plane whose cap it shows.
+int cadr_cap_key_plane(uint key) {
+    return int(key & 7u);
+}
+
 #if defined(CADR_PIXEL_KEYS_WRITTEN)
 // Records a surface fragment in `plane` (the caller checks the plane's display bit).
 void cadr_record_surface(uint plane, bool highlighted) {

@@ -646,8 +646,10 @@ impl Renderer {
             nearest_surfaces: self.records_nearest_surfaces(&plan, silhouettes),
         };
         let nearest_surfaces = depth_overlays.nearest_surfaces;
-        // Caps that tie with another part's surface are painted from the cap keys.
+        // Caps that tie with another part's surface are painted from the cap keys, which the
+        // surfaces record (every mode but wireframe, which draws none).
         let cap_keys = color
+            && (plan.fills_surfaces || plan.draws_edges)
             && self.device.capabilities().fragment_stores_and_atomics
             && self.section.caps_seen_from(eye);
         let display = plan.display

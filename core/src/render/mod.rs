@@ -47,7 +47,7 @@ use crate::vk::{
     MemoryLocation, Multisampled, OffscreenTarget, RenderingTarget,
 };
 use pick::{PickTarget, PixelRect};
-use pixel_keys::PixelKeys;
+use pixel_keys::{KeyUse, PixelKeys};
 use transparency::{storage_buffer, TransparencyTargets};
 
 /// What the colour pass clears to: nothing drawn, no coverage (the background goes under
@@ -688,8 +688,13 @@ impl Renderer {
         if let Some((method, _)) = plan.translucency {
             self.ensure_transparency_targets(method)?;
         }
-        if outline || nearest_surfaces || cap_keys {
-            self.ensure_pixel_keys()?;
+        let key_use = KeyUse {
+            outline,
+            nearest_surfaces,
+            cap_keys,
+        };
+        if let Some(planes) = key_use.plane_count() {
+            self.ensure_pixel_keys(planes)?;
         }
         let depth_set = if depth_overlays.ssao || depth_overlays.silhouettes.is_some() {
             Some(self.ensure_depth_set()?)
@@ -760,7 +765,7 @@ impl Renderer {
         if let Some((keys, span)) = self
             .pixel_keys
             .as_ref()
-            .and_then(|keys| Some((keys, keys.span(outline, nearest_surfaces, cap_keys)?)))
+            .and_then(|keys| Some((keys, keys.span(key_use)?)))
         {
             self.record_storage_clear(command_buffer, &keys.buffer, span, pixel_keys::NO_SURFACE);
         }
@@ -914,16 +919,22 @@ impl Renderer {
         Ok(())
     }
 
-    /// Makes the pixel keys for the target's size unless they are made, and names them in
-    /// the frame set (the GPU is idle: the caller waited for the last frame; the recorded
-    /// frame named the old binding and is forgotten).
-    fn ensure_pixel_keys(&mut self) -> RenderResult<()> {
+    /// Makes pixel keys of at least `planes` planes for the target's size unless they are
+    /// made (as many as any frame so far needed, so that modes drawn in turn do not remake
+    /// them), and names them in the frame set (the GPU is idle: the caller waited for the
+    /// last frame; the recorded frame named the old binding and is forgotten).
+    fn ensure_pixel_keys(&mut self, planes: u64) -> RenderResult<()> {
         let extent = self.target.extent();
-        if self.pixel_keys.as_ref().is_some_and(|k| k.extent == extent) {
+        let made = self.pixel_keys.as_ref();
+        if made.is_some_and(|k| k.holds(extent, planes)) {
             return Ok(());
         }
+        let planes = match made {
+            Some(keys) if keys.extent == extent => planes.max(keys.planes()),
+            _ => planes,
+        };
         self.forget_recording();
-        let keys = PixelKeys::new(&self.device, extent)?;
+        let keys = PixelKeys::new(&self.device, extent, planes)?;
         name_pixel_keys(&self.frame_sets, &keys.buffer);
         self.pixel_keys = Some(keys);
         Ok(())

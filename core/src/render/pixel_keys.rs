@@ -34,51 +34,81 @@ enum KeyPlane {
     Uncapped = 3,
 }
 
-/// How many planes the buffer holds.
-const PLANES: u64 = 4;
-
-/// The keys of one target size.
-pub(crate) struct PixelKeys {
-    /// The buffer the frame set names at binding 7.
-    pub buffer: Buffer,
-    /// The target size it was made for.
-    pub extent: vk::Extent2D,
+/// The planes a frame uses.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub(crate) struct KeyUse {
+    /// The outline keys (the outline highlight style).
+    pub outline: bool,
+    /// The nearest surfaces (the silhouettes').
+    pub nearest_surfaces: bool,
+    /// The cap keys, two planes (the cap ties').
+    pub cap_keys: bool,
 }
 
-impl PixelKeys {
-    /// Keys for a target of `extent`.
-    pub fn new(device: &Arc<Device>, extent: vk::Extent2D) -> RenderResult<Self> {
-        let buffer = Buffer::new(
-            device,
-            "pixel keys",
-            (plane_bytes(extent) * PLANES).max(KEY_BYTES),
-            vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_DST,
-            MemoryLocation::GpuOnly,
-        )?;
-        Ok(Self { buffer, extent })
-    }
-
-    /// The bytes a frame that uses the outline keys (`outline`), the nearest surfaces
-    /// (`nearest_surfaces`) and the cap keys (`cap_keys`) clears, as (offset, size): from the
-    /// first plane it uses to the last; none when it uses none.
-    pub fn span(
-        &self,
-        outline: bool,
-        nearest_surfaces: bool,
-        cap_keys: bool,
-    ) -> Option<(u64, u64)> {
+impl KeyUse {
+    /// The first and the last plane used, if any.
+    fn planes(self) -> Option<(u64, u64)> {
         let used = [
-            (KeyPlane::Outline, outline),
-            (KeyPlane::NearestSurfaces, nearest_surfaces),
-            (KeyPlane::Caps, cap_keys),
-            (KeyPlane::Uncapped, cap_keys),
+            (KeyPlane::Outline, self.outline),
+            (KeyPlane::NearestSurfaces, self.nearest_surfaces),
+            (KeyPlane::Caps, self.cap_keys),
+            (KeyPlane::Uncapped, self.cap_keys),
         ];
         let mut planes = used
             .iter()
             .filter(|(_, on)| *on)
             .map(|&(plane, _)| plane as u64);
         let first = planes.next()?;
-        let last = planes.next_back().unwrap_or(first);
+        Some((first, planes.next_back().unwrap_or(first)))
+    }
+
+    /// How many planes a buffer needs for this use (up to the last used), if any.
+    pub fn plane_count(self) -> Option<u64> {
+        self.planes().map(|(_, last)| last + 1)
+    }
+}
+
+/// The keys of one target size, as many planes as the frames so far needed.
+pub(crate) struct PixelKeys {
+    /// The buffer the frame set names at binding 7.
+    pub buffer: Buffer,
+    /// The target size it was made for.
+    pub extent: vk::Extent2D,
+    /// The planes it holds.
+    planes: u64,
+}
+
+impl PixelKeys {
+    /// Keys of `planes` planes for a target of `extent`.
+    pub fn new(device: &Arc<Device>, extent: vk::Extent2D, planes: u64) -> RenderResult<Self> {
+        let buffer = Buffer::new(
+            device,
+            "pixel keys",
+            (plane_bytes(extent) * planes).max(KEY_BYTES),
+            vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_DST,
+            MemoryLocation::GpuOnly,
+        )?;
+        Ok(Self {
+            buffer,
+            extent,
+            planes,
+        })
+    }
+
+    /// The planes it holds.
+    pub fn planes(&self) -> u64 {
+        self.planes
+    }
+
+    /// Whether these keys serve a target of `extent` with `planes` planes.
+    pub fn holds(&self, extent: vk::Extent2D, planes: u64) -> bool {
+        self.extent == extent && self.planes >= planes
+    }
+
+    /// The bytes a frame of `key_use` clears, as (offset, size): from the first plane it uses
+    /// to the last; none when it uses none.
+    pub fn span(&self, key_use: KeyUse) -> Option<(u64, u64)> {
+        let (first, last) = key_use.planes()?;
         let bytes = plane_bytes(self.extent);
         Some((first * bytes, (last + 1 - first) * bytes))
     }
@@ -87,4 +117,37 @@ impl PixelKeys {
 /// Bytes of one plane: a key per pixel of `extent`.
 fn plane_bytes(extent: vk::Extent2D) -> u64 {
     u64::from(extent.width) * u64::from(extent.height) * KEY_BYTES
+}
+
+#[cfg(test)]
+mod tests {
+    use super::KeyUse;
+
+    #[test]
+    fn a_buffer_holds_the_planes_up_to_the_last_used() {
+        let outline = KeyUse {
+            outline: true,
+            ..KeyUse::default()
+        };
+        let nearest = KeyUse {
+            nearest_surfaces: true,
+            ..KeyUse::default()
+        };
+        let caps = KeyUse {
+            cap_keys: true,
+            ..KeyUse::default()
+        };
+        assert_eq!(KeyUse::default().plane_count(), None);
+        assert_eq!(outline.plane_count(), Some(1));
+        assert_eq!(nearest.plane_count(), Some(2));
+        assert_eq!(caps.plane_count(), Some(4));
+        assert_eq!(nearest.planes(), Some((1, 1)));
+        assert_eq!(caps.planes(), Some((2, 3)));
+        let both = KeyUse {
+            outline: true,
+            cap_keys: true,
+            ..KeyUse::default()
+        };
+        assert_eq!(both.planes(), Some((0, 3)));
+    }
 }

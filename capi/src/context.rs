@@ -376,6 +376,7 @@ pub unsafe extern "C" fn cadr_context_create(
             },
             choice,
             extra_extensions: device_extensions,
+            ..DeviceOptions::default()
         })?;
         let mut dirs: Vec<PathBuf> = plugin_dirs.into_iter().map(PathBuf::from).collect();
         if options.default_plugin_dirs {

@@ -127,8 +127,12 @@ fn devices() -> Result<(), String> {
             .filter(|&&count| count > 1)
             .map(|count| format!("{count}x"))
             .collect();
+        let textures = match adapter.bindless_textures {
+            0 => "one texture array".to_owned(),
+            capacity => format!("bindless, up to {capacity}"),
+        };
         println!(
-            "{}: {} ({:?}, Vulkan {}.{}, MSAA {})",
+            "{}: {} ({:?}, Vulkan {}.{}, MSAA {}, textures {textures})",
             adapter.index,
             adapter.name,
             adapter.device_type,

@@ -7,25 +7,11 @@
 //! overrides); without it the test fails and says so.
 #![allow(clippy::unwrap_used)] // Test code: a failed unwrap is a failed test.
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::process::{Command, Output};
 
 use cadr_tests::images::{compare, ImageDifference};
-
-/// SwiftShader's Vulkan driver manifest.
-fn swiftshader_manifest() -> PathBuf {
-    let dir = std::env::var_os("CADR_SWIFTSHADER_DIR").map_or_else(
-        || Path::new(env!("CARGO_MANIFEST_DIR")).join("../target/swiftshader"),
-        PathBuf::from,
-    );
-    let manifest = dir.join("vk_swiftshader_icd.json");
-    assert!(
-        manifest.is_file(),
-        "SwiftShader is not installed at {}: run scripts/setup.sh",
-        manifest.display()
-    );
-    manifest
-}
+use cadr_tests::swiftshader_manifest;
 
 /// Runs `cadr render gen:demo` into `png` with validation on and `args`, on SwiftShader's
 /// driver alone when `manifest` is given (the Vulkan loader then sees no other), otherwise on
@@ -131,6 +117,20 @@ fn every_display_mode_renders_on_swiftshader_as_on_lavapipe() {
         .iter()
         .all(|(name, _)| name.contains(" / ")));
     let manifest = swiftshader_manifest();
+    // SwiftShader draws textures through the bindless table, lavapipe through the array: the
+    // cases below run both texture paths.
+    for (driver, path) in [
+        (Some(&*manifest), "textures bindless, up to "),
+        (None, "textures one texture array"),
+    ] {
+        let mut command = Command::new(env!("CARGO_BIN_EXE_cadr"));
+        command.arg("devices");
+        if let Some(manifest) = driver {
+            command.env("VK_ICD_FILENAMES", manifest);
+        }
+        let devices = text(&command.output().expect("run cadr devices"));
+        assert!(devices.contains(path), "{devices}");
+    }
     let dir = std::env::temp_dir().join(format!("cadr-swiftshader-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     let mut pictures = Vec::new();

@@ -58,6 +58,49 @@ fn validated_device(synchronization_validation: bool) -> Arc<Device> {
     }
 }
 
+/// SwiftShader's Vulkan driver manifest, which `scripts/setup.sh` installs into
+/// `target/swiftshader` (`CADR_SWIFTSHADER_DIR` overrides); fails the test, saying so, where
+/// it is missing. SwiftShader is the second Vulkan implementation of the tests: it keeps to
+/// the specification where lavapipe is lenient, and it has descriptor indexing (the bindless
+/// texture path), which lavapipe lacks.
+pub fn swiftshader_manifest() -> std::path::PathBuf {
+    let dir = std::env::var_os("CADR_SWIFTSHADER_DIR").map_or_else(
+        || std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../target/swiftshader"),
+        std::path::PathBuf::from,
+    );
+    let manifest = dir.join("vk_swiftshader_icd.json");
+    assert!(
+        manifest.is_file(),
+        "SwiftShader is not installed at {}: run scripts/setup.sh",
+        manifest.display()
+    );
+    manifest
+}
+
+/// A device with validation on SwiftShader's driver, which this process's Vulkan loader is
+/// pointed at alone (`VK_ICD_FILENAMES`, set once before the first instance: a test binary
+/// calling this must create no device on another driver); `texture_array_only` as in
+/// [`DeviceOptions`].
+pub fn swiftshader_device(texture_array_only: bool) -> Arc<Device> {
+    static POINTED: std::sync::Once = std::sync::Once::new();
+    POINTED.call_once(|| std::env::set_var("VK_ICD_FILENAMES", swiftshader_manifest()));
+    let options = DeviceOptions {
+        instance: InstanceOptions {
+            validation: true,
+            ..InstanceOptions::default()
+        },
+        texture_array_only,
+        ..DeviceOptions::default()
+    };
+    let device = Device::new(&options).unwrap_or_else(|e| panic!("SwiftShader device: {e}"));
+    assert!(
+        device.adapter().name.contains("SwiftShader"),
+        "the device is {}",
+        device.adapter().name
+    );
+    device
+}
+
 /// The directory of the running test binary, where cargo puts the plugin libraries it built.
 pub fn test_binary_dir() -> std::path::PathBuf {
     let exe = std::env::current_exe().expect("the test binary's path");

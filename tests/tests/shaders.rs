@@ -2,8 +2,9 @@
 #![allow(clippy::unwrap_used)] // Test code: a failed unwrap is a failed test.
 
 use cadr_core::render::{FrameUniforms, Renderer, ScatterParameters};
-use cadr_core::shaders::{compile_glsl, ALL, INCLUDES, TEMPLATES};
-use cadr_core::vk::ShaderStage;
+use cadr_core::shaders::{compile_glsl, with_defines, ALL, INCLUDES, TEMPLATES};
+use cadr_core::technique::fragment_defines;
+use cadr_core::vk::{Capabilities, ShaderStage};
 use cadr_tests::{assert_no_validation_errors, test_device};
 
 #[test]
@@ -18,6 +19,20 @@ fn shaders_compile_and_validate() {
             shader.name
         );
         assert_eq!(ShaderStage::from_file_name(shader.name), Some(shader.stage));
+    }
+    // The fragment shaders also as a device with every optional feature compiles them (the
+    // bindless texture table, the pixel keys): lavapipe draws only the other variant.
+    let everything = Capabilities {
+        bindless_textures: 1,
+        fragment_stores_and_atomics: true,
+        ..Capabilities::default()
+    };
+    let defines = fragment_defines(everything);
+    assert!(defines.contains("CADR_BINDLESS_TEXTURES"), "{defines}");
+    for shader in ALL.iter().filter(|s| s.stage == ShaderStage::Fragment) {
+        let source = with_defines(shader.source, &defines);
+        compile_glsl(shader.name, &source, shader.stage, INCLUDES)
+            .unwrap_or_else(|e| panic!("with every feature: {e}"));
     }
     // Creating the pipelines runs the layer's SPIR-V validation and interface checks.
     let device = test_device();

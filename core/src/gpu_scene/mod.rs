@@ -20,7 +20,8 @@ mod upload;
 
 pub use hierarchy::{gpu_local, HierarchyMethod, HierarchyPlan, LOCAL_BYTES, LOCAL_WORDS};
 pub use textures::{
-    gpu_material_texture, ARRAY_BUDGET_BYTES, MATERIAL_TEXTURE_BYTES, MAX_LAYER_SIZE,
+    gpu_material_texture, TextureBindings, ARRAY_BUDGET_BYTES, MATERIAL_TEXTURE_BYTES,
+    MAX_LAYER_SIZE, MAX_TABLE_SIDE, TABLE_BUDGET_BYTES,
 };
 pub use upload::UploadStats;
 
@@ -41,7 +42,7 @@ use crate::tree::{ChangeReader, InstanceRef, SceneTree, TreeChanges};
 use crate::vk::{Device, OneShot};
 use geometry::GeometryArenas;
 use hierarchy::TransformHierarchy;
-use textures::TextureArray;
+use textures::SceneTextures;
 use upload::{GpuArray, SparseUploader};
 
 /// Bytes of one matrix on the GPU ([`abi::CadrMatrix`]).
@@ -101,15 +102,15 @@ fn translucency(graph: &SceneGraph, slot: u32) -> abi::CadrInstanceFlags {
 }
 
 /// What the frame set's scene bindings name (see [`GpuScene::frame_resources`]).
-pub struct FrameResources {
+pub struct FrameResources<'a> {
     /// Instance records (binding 2).
     pub records: vk::Buffer,
     /// Material slots' texture descriptions (binding 3).
     pub material_textures: vk::Buffer,
     /// Vertex attributes (binding 4).
     pub vertex_attributes: vk::Buffer,
-    /// The texture array's view (bindings 5 and 6).
-    pub textures: vk::ImageView,
+    /// The textures (the array at bindings 5 and 6, or the bindless table at binding 9).
+    pub textures: TextureBindings<'a>,
     /// Trilinear sampler (binding 5).
     pub linear_sampler: vk::Sampler,
     /// Nearest-magnification sampler (binding 6).
@@ -147,7 +148,7 @@ pub struct GpuScene {
     /// mode other than BLEND): while there are none, the vertex shader skips reading them.
     described_materials: usize,
     /// The textures, rebuilt when the graph's change.
-    textures: TextureArray,
+    textures: SceneTextures,
     /// Where moved subtrees' world matrices are computed.
     transforms: Transforms,
     /// Local matrices per tree node (with [`Transforms::Gpu`] only).
@@ -195,7 +196,7 @@ impl GpuScene {
             NEXT_GENERATIONS.fetch_add(1 << 32, std::sync::atomic::Ordering::Relaxed);
         let reader = tree.subscribe();
         let (arenas, geometry_bytes) = GeometryArenas::upload(device, graph)?;
-        let (textures, texture_bytes) = TextureArray::build(device, graph)?;
+        let (textures, texture_bytes) = SceneTextures::new(device, graph)?;
         let mut scene = Self {
             device: Arc::clone(device),
             reader,
@@ -237,6 +238,7 @@ impl GpuScene {
             highlighted: 0,
             last_upload: UploadStats {
                 geometry_bytes,
+                texture_bytes,
                 bytes: geometry_bytes + texture_bytes,
                 ..UploadStats::default()
             },
@@ -479,9 +481,7 @@ impl GpuScene {
         // again with every array, and the frame set names the new image.
         let textures_changed = graph.textures_generation() != self.textures.generation;
         if textures_changed {
-            let (textures, bytes) = TextureArray::build(&self.device, graph)?;
-            self.textures = textures;
-            self.last_upload.bytes += bytes;
+            self.rebuild_textures(graph)?;
         }
         let grown = tree.node_capacity() > self.matrices.len()
             || tree.instance_capacity() > self.instances.len()
@@ -532,6 +532,14 @@ impl GpuScene {
         self.last_hierarchy
     }
 
+    /// Builds the textures again from the graph's (see [`SceneTextures::rebuild`]).
+    fn rebuild_textures(&mut self, graph: &SceneGraph) -> RenderResult<()> {
+        let bytes = self.textures.rebuild(&self.device, graph)?;
+        self.last_upload.texture_bytes += bytes;
+        self.last_upload.bytes += bytes;
+        Ok(())
+    }
+
     /// Lays the arenas out again and rebuilds every entry.
     fn relayout(&mut self, graph: &SceneGraph, tree: &mut SceneTree) -> RenderResult<()> {
         let (arenas, bytes) = GeometryArenas::upload(&self.device, graph)?;
@@ -539,9 +547,7 @@ impl GpuScene {
         self.last_upload.geometry_bytes += bytes;
         self.last_upload.bytes += bytes;
         if graph.textures_generation() != self.textures.generation {
-            let (textures, bytes) = TextureArray::build(&self.device, graph)?;
-            self.textures = textures;
-            self.last_upload.bytes += bytes;
+            self.rebuild_textures(graph)?;
         }
         self.refresh_all(graph, tree)
     }
@@ -883,12 +889,12 @@ impl GpuScene {
     }
 
     /// The buffers, image and samplers the frame set names for the shared shaders.
-    pub fn frame_resources(&self) -> FrameResources {
+    pub fn frame_resources(&self) -> FrameResources<'_> {
         FrameResources {
             records: self.record_gpu.buffer.raw(),
             material_textures: self.material_texture_gpu.buffer.raw(),
             vertex_attributes: self.arenas.attributes.raw(),
-            textures: self.textures.image.view(),
+            textures: self.textures.bindings(),
             linear_sampler: self.textures.linear.raw(),
             nearest_sampler: self.textures.nearest.raw(),
             cull_entries: self.cull_gpu.buffer.raw(),

@@ -1,13 +1,19 @@
 //! The scene's textures on the GPU and what each material slot says about its texture.
 //!
-//! Textures live in one 2D array image of square, mipmapped sRGB layers, layer `t` holding
-//! texture slot `t`, sampled through a `sampler2DArray` in the frame set: the path that works
-//! on every device (lavapipe has no descriptor indexing, so no array of textures of their own
-//! sizes). Each texture is resampled to the layer size: the largest texture's side rounded up
-//! to a power of two, at most [`MAX_LAYER_SIZE`], halved while the array would pass
-//! [`ARRAY_BUDGET_BYTES`]. Layers and their mip chains are made on the CPU with the `image`
-//! crate, in linear colour, a thread per core, and uploaded once; the array is rebuilt when
-//! the graph's textures change.
+//! Two paths, chosen by the device ([`crate::vk::Capabilities::bindless_textures`]):
+//! - **Bindless** (descriptor indexing): each texture is an image of its own at its own size
+//!   (its sides at most [`MAX_TABLE_SIDE`], all of them together within
+//!   [`TABLE_BUDGET_BYTES`]), in a table of sampled images the shaders index by texture slot
+//!   (frame set binding 9). A texture whose texels did not change keeps its image when the
+//!   graph's textures change.
+//! - **Array** (every device; lavapipe has no descriptor indexing): one 2D array image of
+//!   square layers, layer `t` holding texture slot `t`, sampled through a `sampler2DArray`.
+//!   Each texture is resampled to the layer size: the largest texture's side rounded up to a
+//!   power of two, at most [`MAX_LAYER_SIZE`], halved while the array would pass
+//!   [`ARRAY_BUDGET_BYTES`].
+//!
+//! Mip chains are made on the CPU with the `image` crate, in linear colour, a thread per core,
+//! and uploaded in one submission; the textures are rebuilt when the graph's change.
 
 use std::sync::Arc;
 
@@ -18,13 +24,20 @@ use crate::error::RenderResult;
 use crate::graph::SceneGraph;
 use crate::scene::{AlphaMode, Texture};
 use crate::vk::raw as vk;
-use crate::vk::{Device, Image, ImageShape, Sampler};
+use crate::vk::{Device, Image, ImageShape, Sampler, TexelImage, VkError};
 
-/// The largest layer side, in texels.
+/// The largest layer side of the texture array, in texels.
 pub const MAX_LAYER_SIZE: u32 = 1024;
 
-/// The most device memory the array may take; layers shrink to fit.
+/// The most device memory the texture array may take; layers shrink to fit.
 pub const ARRAY_BUDGET_BYTES: u64 = 256 << 20;
+
+/// The largest side of a bindless texture, in texels (larger ones are made smaller, keeping
+/// their aspect).
+pub const MAX_TABLE_SIDE: u32 = 8192;
+
+/// The most device memory the bindless textures may take together; the largest shrink to fit.
+pub const TABLE_BUDGET_BYTES: u64 = 1 << 30;
 
 /// Bytes of one material slot's texture description on the GPU (`CadrMaterialTexture` in
 /// `shaders/technique.vert`).
@@ -36,7 +49,7 @@ const SAMPLING_NEAREST: u32 = 16;
 const SAMPLING_TRANSLUCENT: u32 = 32;
 
 /// A material slot's texture as the vertex shader reads it: the UV transform's rows (xyz),
-/// then layer + 1 (0: none), sampling bits, alpha mode ([`AlphaMode::code`]) and the mask's
+/// then texture slot + 1 (0: none; the array's layer or the table's element), sampling bits, alpha mode ([`AlphaMode::code`]) and the mask's
 /// cutoff (f32 bits).
 pub fn gpu_material_texture(graph: &SceneGraph, slot: u32) -> [u32; 12] {
     let Some(material) = graph.material_at(slot) else {
@@ -84,60 +97,277 @@ pub(super) fn is_described(words: &[u32; 12]) -> bool {
     words[8] != 0 || words[10] != AlphaMode::Blend.code()
 }
 
-/// The texture array, its view and the two samplers the shaders choose between.
-pub(super) struct TextureArray {
-    pub(super) image: Image,
+/// The scene's textures on the GPU, the two samplers the shaders choose between, and what
+/// they were built from.
+pub(super) struct SceneTextures {
+    images: TextureImages,
     /// Trilinear.
     pub(super) linear: Sampler,
     /// Nearest texel when magnifying (glTF `magFilter` NEAREST).
     pub(super) nearest: Sampler,
-    /// The graph's textures generation it was built from.
+    /// The graph's textures generation they were built from.
     pub(super) generation: u64,
     /// Whether the graph had any texture.
     pub(super) any: bool,
+    /// With the table: each slot's view (null for an empty slot), as the frame set names them.
+    table_views: Vec<vk::ImageView>,
 }
 
-impl TextureArray {
-    /// Builds the array from the graph's textures (one white texel when it has none); returns
-    /// it and the bytes uploaded.
-    pub(super) fn build(device: &Arc<Device>, graph: &SceneGraph) -> RenderResult<(Self, u64)> {
+/// The scene's textures as the frame set names them.
+#[derive(Clone, Copy, Debug)]
+pub enum TextureBindings<'a> {
+    /// The texture array (bindings 5 and 6, with each sampler).
+    Array(vk::ImageView),
+    /// The bindless table (binding 9): each texture slot's view, null for an empty slot.
+    Table(&'a [vk::ImageView]),
+}
+
+/// The images of one of the two paths (see the module).
+enum TextureImages {
+    /// Every texture slot a layer of this array.
+    Array(Image),
+    /// Per texture slot, its own image (none for an empty slot).
+    Table(Vec<Option<TableTexture>>),
+}
+
+/// A texture of the bindless table and the texels it was made from.
+struct TableTexture {
+    image: Image,
+    texels: Arc<Vec<u8>>,
+}
+
+impl SceneTextures {
+    /// Builds the textures of `graph` on the path the device has. Returns them and the bytes
+    /// uploaded.
+    pub(super) fn new(device: &Arc<Device>, graph: &SceneGraph) -> RenderResult<(Self, u64)> {
+        let mut textures = Self {
+            images: TextureImages::Table(Vec::new()),
+            table_views: Vec::new(),
+            linear: Sampler::new(device, "scene textures (trilinear)", false)?,
+            nearest: Sampler::new(device, "scene textures (nearest magnification)", true)?,
+            generation: 0,
+            any: false,
+        };
+        let bytes = textures.rebuild(device, graph)?;
+        Ok((textures, bytes))
+    }
+
+    /// Builds them again from the graph's textures (the GPU is not using them); a bindless
+    /// texture whose texels did not change keeps its image. On an error they stay as they
+    /// were. Returns the bytes uploaded.
+    pub(super) fn rebuild(
+        &mut self,
+        device: &Arc<Device>,
+        graph: &SceneGraph,
+    ) -> RenderResult<u64> {
         let slots: Vec<Option<&Texture>> = (0..graph.texture_capacity() as u32)
             .map(|t| graph.texture_at(t).map(|e| &e.texture))
             .collect();
-        let any = slots.iter().any(Option::is_some);
-        let layers = slots.len().max(1) as u32;
-        let size = if any { layer_size(&slots, layers) } else { 1 };
-        let mips = size.ilog2() + 1;
-        let texels: Vec<u8> = if any {
-            crate::parallel::map(&slots, |slot| mip_chain(*slot, size, mips)).concat()
+        let capacity = device.capabilities().bindless_textures;
+        let (images, bytes) = if capacity > 0 {
+            let mut no_table = Vec::new();
+            let previous = match &mut self.images {
+                TextureImages::Table(table) => table,
+                TextureImages::Array(_) => &mut no_table,
+            };
+            let (table, bytes) = build_table(device, &slots, capacity, previous)?;
+            (TextureImages::Table(table), bytes)
         } else {
-            vec![255; 4]
+            build_array(device, &slots)?
         };
-        let shape = ImageShape {
-            extent: vk::Extent2D {
-                width: size,
-                height: size,
+        self.table_views = match &images {
+            TextureImages::Table(table) => table
+                .iter()
+                .map(|t| t.as_ref().map_or(vk::ImageView::null(), |t| t.image.view()))
+                .collect(),
+            TextureImages::Array(_) => Vec::new(),
+        };
+        self.images = images;
+        self.generation = graph.textures_generation();
+        self.any = slots.iter().any(Option::is_some);
+        Ok(bytes)
+    }
+}
+
+impl SceneTextures {
+    /// How the frame set names them.
+    pub(super) fn bindings(&self) -> TextureBindings<'_> {
+        match &self.images {
+            TextureImages::Array(image) => TextureBindings::Array(image.view()),
+            TextureImages::Table(_) => TextureBindings::Table(&self.table_views),
+        }
+    }
+}
+
+/// The texture array of `slots` (one white texel when there is none), and the bytes uploaded.
+fn build_array(
+    device: &Arc<Device>,
+    slots: &[Option<&Texture>],
+) -> RenderResult<(TextureImages, u64)> {
+    let any = slots.iter().any(Option::is_some);
+    let layers = slots.len().max(1) as u32;
+    let most_layers = device.limits().max_image_array_layers;
+    if layers > most_layers {
+        return Err(VkError::Unsupported {
+            device: device.adapter().name.clone(),
+            reason: format!(
+                "the scene has {layers} texture slots, and the texture array of a device without descriptor indexing holds at most {most_layers} (maxImageArrayLayers)"
+            ),
+        }
+        .into());
+    }
+    let size = if any { layer_size(slots, layers) } else { 1 };
+    let mips = size.ilog2() + 1;
+    let texels: Vec<u8> = if any {
+        crate::parallel::map(slots, |slot| mip_chain(*slot, (size, size), mips)).concat()
+    } else {
+        vec![255; 4]
+    };
+    let shape = ImageShape {
+        extent: vk::Extent2D {
+            width: size,
+            height: size,
+        },
+        samples: 1,
+        layers,
+        mips,
+        array_view: true,
+    };
+    let image = Image::with_texels(
+        device,
+        "scene textures",
+        (shape, vk::Format::R8G8B8A8_SRGB),
+        &texels,
+        vk::ImageUsageFlags::SAMPLED,
+    )?;
+    Ok((TextureImages::Array(image), texels.len() as u64))
+}
+
+/// The bindless table of `slots` at most `capacity` long, taking from `previous` the images
+/// whose texels and size are the same (on an error, `previous` is left whole); returns it and
+/// the bytes uploaded.
+fn build_table(
+    device: &Arc<Device>,
+    slots: &[Option<&Texture>],
+    capacity: u32,
+    previous: &mut [Option<TableTexture>],
+) -> RenderResult<(Vec<Option<TableTexture>>, u64)> {
+    if slots.len() > capacity as usize {
+        return Err(VkError::Unsupported {
+            device: device.adapter().name.clone(),
+            reason: format!(
+                "the scene has {} texture slots, and the device binds at most {capacity} textures",
+                slots.len()
+            ),
+        }
+        .into());
+    }
+    let max_side = MAX_TABLE_SIDE.min(device.limits().max_image_dimension2_d);
+    let sides: Vec<Option<(u32, u32)>> = slots
+        .iter()
+        .map(|slot| slot.map(|t| (t.width, t.height)))
+        .collect();
+    let sizes = table_sizes(&sides, max_side, TABLE_BUDGET_BYTES);
+    // What can stay: the same texels at the same size.
+    let keeps: Vec<bool> = slots
+        .iter()
+        .zip(&sizes)
+        .enumerate()
+        .map(|(t, (slot, size))| {
+            let (Some(Some(old)), Some(texture)) = (previous.get(t), slot) else {
+                return false;
+            };
+            let extent = old.image.extent();
+            Arc::ptr_eq(&old.texels, &texture.texels)
+                && Some((extent.width, extent.height)) == *size
+        })
+        .collect();
+    let wanted: Vec<(usize, &Texture, (u32, u32))> = slots
+        .iter()
+        .zip(&sizes)
+        .enumerate()
+        .filter(|(t, _)| !keeps[*t])
+        .filter_map(|(t, (slot, size))| Some((t, (*slot)?, (*size)?)))
+        .collect();
+    let chains: Vec<(Vec<u8>, u32)> = crate::parallel::map(&wanted, |&(_, texture, size)| {
+        let mips = size.0.max(size.1).ilog2() + 1;
+        (mip_chain(Some(texture), size, mips), mips)
+    });
+    let names: Vec<String> = wanted
+        .iter()
+        .map(|(t, texture, _)| format!("scene texture {t} '{}'", texture.name))
+        .collect();
+    let requests: Vec<TexelImage<'_>> = wanted
+        .iter()
+        .zip(&chains)
+        .zip(&names)
+        .map(
+            |((&(_, _, (width, height)), (texels, mips)), name)| TexelImage {
+                name,
+                shape: ImageShape {
+                    extent: vk::Extent2D { width, height },
+                    samples: 1,
+                    layers: 1,
+                    mips: *mips,
+                    array_view: false,
+                },
+                format: vk::Format::R8G8B8A8_SRGB,
+                texels,
             },
-            samples: 1,
-            layers,
-            mips,
-            array_view: true,
-        };
-        let image = Image::with_texels(
-            device,
-            "scene textures",
-            (shape, vk::Format::R8G8B8A8_SRGB),
-            &texels,
-            vk::ImageUsageFlags::SAMPLED,
-        )?;
-        let array = Self {
+        )
+        .collect();
+    let images = Image::many_with_texels(device, &requests, vk::ImageUsageFlags::SAMPLED)?;
+    let bytes = chains.iter().map(|(texels, _)| texels.len() as u64).sum();
+    let mut table: Vec<Option<TableTexture>> = keeps
+        .iter()
+        .enumerate()
+        .map(|(t, &keep)| if keep { previous[t].take() } else { None })
+        .collect();
+    for ((t, texture, _), image) in wanted.iter().zip(images) {
+        table[*t] = Some(TableTexture {
             image,
-            linear: Sampler::new(device, "scene textures (trilinear)", false)?,
-            nearest: Sampler::new(device, "scene textures (nearest magnification)", true)?,
-            generation: graph.textures_generation(),
-            any,
+            texels: Arc::clone(&texture.texels),
+        });
+    }
+    Ok((table, bytes))
+}
+
+/// The size of each bindless texture of `sides` (none for an empty slot): its own, made
+/// smaller keeping its aspect while a side passes `max_side`, and the largest halved while all
+/// of them with their mips would pass `budget` bytes (not below 16 texels a side).
+fn table_sizes(
+    sides: &[Option<(u32, u32)>],
+    max_side: u32,
+    budget: u64,
+) -> Vec<Option<(u32, u32)>> {
+    let fit = |(width, height): (u32, u32), limit: u32| -> (u32, u32) {
+        let longest = width.max(height);
+        if longest <= limit {
+            return (width, height);
+        }
+        let scale = |side: u32| {
+            ((u64::from(side) * u64::from(limit) + u64::from(longest) / 2) / u64::from(longest))
+                .max(1) as u32
         };
-        Ok((array, texels.len() as u64))
+        (scale(width), scale(height))
+    };
+    let bytes = |sizes: &[Option<(u32, u32)>]| -> u64 {
+        sizes
+            .iter()
+            .flatten()
+            .map(|&(w, h)| u64::from(w) * u64::from(h) * 4 * 4 / 3)
+            .sum()
+    };
+    let mut limit = max_side.max(1);
+    loop {
+        let sizes: Vec<Option<(u32, u32)>> = sides
+            .iter()
+            .map(|side| side.map(|s| fit(s, limit)))
+            .collect();
+        if limit <= 16 || bytes(&sizes) <= budget {
+            return sizes;
+        }
+        limit /= 2;
     }
 }
 
@@ -158,37 +388,41 @@ fn layer_size(slots: &[Option<&Texture>], layers: u32) -> u32 {
     size
 }
 
-/// A texture resampled to `size` × `size` and its mip levels down to 1 × 1, each level made
-/// from the one above it. Texels are filtered as light, in linear 16-bit colour (the sRGB
+/// A texture resampled to `width` × `height` and its mip levels down to 1 × 1 (`mips` of
+/// them), each level made from the one above it. Texels are filtered as light, in linear 16-bit colour (the sRGB
 /// texels decoded first, each level encoded back to sRGB as it is stored), and weighted by
 /// their alpha (premultiplied), so that the colour of transparent texels does not bleed into
 /// the kept ones. A texture smaller than the layer and magnified to its nearest texel is
 /// enlarged by repeating texels, which keeps them sharp (and exact).
-fn mip_chain(texture: Option<&Texture>, size: u32, mips: u32) -> Vec<u8> {
+fn mip_chain(texture: Option<&Texture>, (width, height): (u32, u32), mips: u32) -> Vec<u8> {
+    let level_size = |m: u32| ((width >> m).max(1), (height >> m).max(1));
     let Some(texture) = texture else {
         let texels: u64 = (0..mips)
-            .map(|m| u64::from((size >> m).max(1)).pow(2))
+            .map(|m| {
+                let (w, h) = level_size(m);
+                u64::from(w) * u64::from(h)
+            })
             .sum();
         return vec![0; texels as usize * 4];
     };
     let source = RgbaImage::from_raw(texture.width, texture.height, texture.texels.to_vec())
         .unwrap_or_else(|| RgbaImage::new(1, 1));
-    let enlarged = texture.width <= size && texture.height <= size;
+    let enlarged = texture.width <= width && texture.height <= height;
     let first_filter = if enlarged && texture.sampler.magnify_nearest {
         FilterType::Nearest
     } else {
         FilterType::Triangle
     };
     let mut level = linear_premultiplied(&source);
-    if (texture.width, texture.height) != (size, size) {
-        level = image::imageops::resize(&level, size, size, first_filter);
+    if (texture.width, texture.height) != (width, height) {
+        level = image::imageops::resize(&level, width, height, first_filter);
     }
     let mut texels = Vec::new();
     for m in 0..mips {
         texels.extend(level.pixels().flat_map(srgb_straight));
         if m + 1 < mips {
-            let next = (size >> (m + 1)).max(1);
-            level = image::imageops::resize(&level, next, next, FilterType::Triangle);
+            let (next_width, next_height) = level_size(m + 1);
+            level = image::imageops::resize(&level, next_width, next_height, FilterType::Triangle);
         }
     }
     texels
@@ -269,6 +503,36 @@ mod tests {
     }
 
     #[test]
+    fn table_textures_keep_their_size_within_the_side_and_the_budget() {
+        let sides = [Some((300, 20)), None, Some((5000, 1000)), Some((1, 1))];
+        // Their own sizes, the too-long one shrunk to the side keeping its aspect.
+        assert_eq!(
+            table_sizes(&sides, 4096, u64::MAX),
+            [Some((300, 20)), None, Some((4096, 819)), Some((1, 1))]
+        );
+        // Over the budget, the largest shrink first, halving the side.
+        let budget = 2048 * 410 * 4 * 4 / 3 + 300 * 20 * 6;
+        assert_eq!(
+            table_sizes(&sides, 4096, budget),
+            [Some((300, 20)), None, Some((2048, 410)), Some((1, 1))]
+        );
+        // Never below 16 texels a side.
+        assert_eq!(
+            table_sizes(&sides, 4096, 0),
+            [Some((16, 1)), None, Some((16, 3)), Some((1, 1))]
+        );
+    }
+
+    #[test]
+    fn non_square_mip_chains_halve_each_side_down_to_one() {
+        let image = RgbaImage::from_pixel(8, 2, image::Rgba([10, 20, 30, 255]));
+        let texels = mip_chain(Some(&texture_of(image)), (8, 2), 4);
+        // 8 × 2, 4 × 1, 2 × 1, 1 × 1.
+        assert_eq!(texels.len(), (16 + 4 + 2 + 1) * 4);
+        assert_eq!(&texels[texels.len() - 4..], &[10, 20, 30, 255]);
+    }
+
+    #[test]
     fn opaque_srgb_bytes_survive_the_linear_round_trip() {
         for byte in 0..=255_u8 {
             let image = RgbaImage::from_pixel(1, 1, image::Rgba([byte, byte, byte, 255]));
@@ -288,7 +552,7 @@ mod tests {
             let white = (x + y) % 2 == 0;
             image::Rgba(if white { [255; 4] } else { [0, 0, 0, 255] })
         });
-        let texels = mip_chain(Some(&texture_of(checker)), 2, 2);
+        let texels = mip_chain(Some(&texture_of(checker)), (2, 2), 2);
         assert_eq!(texels.len(), (4 + 1) * 4);
         let last = &texels[16..20];
         assert!((187..=189).contains(&last[0]), "{last:?}");
@@ -301,7 +565,7 @@ mod tests {
                 [0, 0, 255, 255]
             })
         });
-        let texels = mip_chain(Some(&texture_of(mostly_blue)), 2, 2);
+        let texels = mip_chain(Some(&texture_of(mostly_blue)), (2, 2), 2);
         let last = &texels[16..20];
         assert_eq!(&last[..3], &[0, 0, 255], "{last:?}");
     }

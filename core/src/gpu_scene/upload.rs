@@ -115,6 +115,9 @@ pub struct UploadStats {
     pub records: u64,
     /// Bytes of geometry written (arenas laid out, or geometries replaced in place).
     pub geometry_bytes: u64,
+    /// Bytes of texels written (with their mip levels): every texture with the texture array,
+    /// only new or changed ones with bindless textures.
+    pub texture_bytes: u64,
     /// Every byte sent to the GPU: geometry, whole arrays, and the compact updates with their
     /// slots.
     pub bytes: u64,

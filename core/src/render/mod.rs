@@ -26,7 +26,7 @@ pub use pipeline::{
     FrameUniforms, HierarchyParameters, HierarchyStage, Pipelines, ScatterParameters,
     DISPLAY_CAP_KEYS, DISPLAY_HIGHLIGHT_OUTLINE, DISPLAY_MATERIAL_DESCRIPTIONS,
     DISPLAY_NEAREST_SURFACES, DISPLAY_TEXTURES, DISPLAY_VERTEX_ATTRIBUTES, DISPLAY_XRAY,
-    PICK_FORMAT,
+    PICK_FORMAT, TEXTURE_TABLE_BINDING,
 };
 pub use section::{Section, DEFAULT_CAP_COLORS, MAX_SECTION_PLANES};
 pub use stats::FrameStats;
@@ -38,7 +38,7 @@ use crate::error::{RenderError, RenderResult};
 use crate::vk::raw as vk;
 
 use crate::gpu_scene::split_f64;
-use crate::gpu_scene::FrameResources;
+use crate::gpu_scene::{FrameResources, TextureBindings};
 use crate::technique::TransparencyMethod;
 pub(crate) use crate::vk::SUSPENDED_DEPTH_LAYOUT;
 use crate::vk::{
@@ -423,7 +423,7 @@ impl Renderer {
         self.textures = on;
     }
 
-    /// Points the frame set's scene bindings (2–6 and 8) at `resources` unless it names them
+    /// Points the frame set's scene bindings (2–6, 8 and the texture table 9) at `resources` unless it names them
     /// already. A recorded frame names the old ones: the GPU is waited for and the recording
     /// forgotten.
     pub(crate) fn bind_scene(&mut self, resources: &FrameResources) -> RenderResult<()> {
@@ -437,8 +437,23 @@ impl Renderer {
         sets.write_buffer(0, 2, storage, resources.records, vk::WHOLE_SIZE);
         sets.write_buffer(0, 3, storage, resources.material_textures, vk::WHOLE_SIZE);
         sets.write_buffer(0, 4, storage, resources.vertex_attributes, vk::WHOLE_SIZE);
-        sets.write_combined_image(0, 5, resources.textures, resources.linear_sampler);
-        sets.write_combined_image(0, 6, resources.textures, resources.nearest_sampler);
+        match resources.textures {
+            TextureBindings::Array(view) => {
+                sets.write_combined_image(0, 5, view, resources.linear_sampler);
+                sets.write_combined_image(0, 6, view, resources.nearest_sampler);
+            }
+            TextureBindings::Table(views) => {
+                sets.write_sampler(0, 5, resources.linear_sampler);
+                sets.write_sampler(0, 6, resources.nearest_sampler);
+                // Runs of filled slots, one write each; empty slots stay unwritten (the
+                // table is partially bound, and no material names them).
+                let mut first = 0;
+                for run in views.split(|view| *view == vk::ImageView::null()) {
+                    sets.write_sampled_images(0, TEXTURE_TABLE_BINDING, first, run);
+                    first += run.len() as u32 + 1;
+                }
+            }
+        }
         sets.write_buffer(0, 8, storage, resources.cull_entries, vk::WHOLE_SIZE);
         self.bound_scene = Some(resources.generation);
         Ok(())

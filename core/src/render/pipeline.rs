@@ -7,7 +7,9 @@ use crate::error::RenderResult;
 use crate::vk::raw as vk;
 
 use crate::shaders::{self, ShaderSource};
-use crate::vk::{Blend, DescriptorSetLayout, Device, Pipeline, PipelineLayout, ShaderModule};
+use crate::vk::{
+    Blend, DescriptorSetLayout, Device, LayoutBinding, Pipeline, PipelineLayout, ShaderModule,
+};
 
 /// Format of the pick target: one instance id (+1) per pixel.
 pub const PICK_FORMAT: vk::Format = vk::Format::R32_UINT;
@@ -111,6 +113,44 @@ pub struct HierarchyParameters {
     pub level: u32,
 }
 
+/// The frame set's bindings (see [`Pipelines::frame_set_layout`]) on a device that binds
+/// `bindless_textures` textures (0: none, the texture array's path).
+fn frame_set_bindings(bindless_textures: u32) -> Vec<LayoutBinding> {
+    use vk::DescriptorType as Type;
+    use vk::ShaderStageFlags as Stage;
+    let graphics = Stage::VERTEX | Stage::FRAGMENT;
+    let vertex_storage = LayoutBinding::one(Type::STORAGE_BUFFER, Stage::VERTEX);
+    let fragment_storage = LayoutBinding::one(Type::STORAGE_BUFFER, Stage::FRAGMENT);
+    let texture_sampling = if bindless_textures > 0 {
+        LayoutBinding::one(Type::SAMPLER, Stage::FRAGMENT)
+    } else {
+        LayoutBinding::one(Type::COMBINED_IMAGE_SAMPLER, Stage::FRAGMENT)
+    };
+    let mut bindings = vec![
+        LayoutBinding::one(Type::UNIFORM_BUFFER, graphics),
+        fragment_storage,
+        vertex_storage,
+        vertex_storage,
+        vertex_storage,
+        texture_sampling,
+        texture_sampling,
+        fragment_storage,
+        vertex_storage,
+    ];
+    if bindless_textures > 0 {
+        bindings.push(LayoutBinding {
+            ty: Type::SAMPLED_IMAGE,
+            stages: Stage::FRAGMENT,
+            count: bindless_textures,
+            indexed_array: true,
+        });
+    }
+    bindings
+}
+
+/// The frame set's binding of the bindless texture table.
+pub const TEXTURE_TABLE_BINDING: u32 = 9;
+
 /// Every pipeline and layout the renderer uses.
 pub struct Pipelines {
     device: Arc<Device>,
@@ -149,35 +189,10 @@ pub struct Pipelines {
 impl Pipelines {
     /// Creates the layouts; pipelines are made on first use.
     pub fn new(device: &Arc<Device>) -> RenderResult<Self> {
-        let graphics = vk::ShaderStageFlags::VERTEX | vk::ShaderStageFlags::FRAGMENT;
-        let vertex_storage = (
-            vk::DescriptorType::STORAGE_BUFFER,
-            vk::ShaderStageFlags::VERTEX,
-        );
-        let fragment_texture = (
-            vk::DescriptorType::COMBINED_IMAGE_SAMPLER,
-            vk::ShaderStageFlags::FRAGMENT,
-        );
-        let frame_set_layout = DescriptorSetLayout::new(
+        let frame_set_layout = DescriptorSetLayout::with_bindings(
             device,
             "frame set layout",
-            &[
-                (vk::DescriptorType::UNIFORM_BUFFER, graphics),
-                (
-                    vk::DescriptorType::STORAGE_BUFFER,
-                    vk::ShaderStageFlags::FRAGMENT,
-                ),
-                vertex_storage,
-                vertex_storage,
-                vertex_storage,
-                fragment_texture,
-                fragment_texture,
-                (
-                    vk::DescriptorType::STORAGE_BUFFER,
-                    vk::ShaderStageFlags::FRAGMENT,
-                ),
-                vertex_storage,
-            ],
+            &frame_set_bindings(device.capabilities().bindless_textures),
         )?;
         let merge_set_layout = DescriptorSetLayout::new(
             device,
@@ -254,9 +269,12 @@ impl Pipelines {
     /// transparency method's storage (binding 1, fragment shaders), and for the shared vertex
     /// shader the GPU scene's instance records, material texture descriptions and vertex
     /// attributes (bindings 2–4), its textures sampled trilinear and with nearest
-    /// magnification (bindings 5–6, fragment shaders), the pixel keys (the outline highlight
-    /// style's and the silhouettes' nearest surfaces; binding 7, fragment shaders) and the GPU scene's
-    /// cull entries, whose bounding spheres the section caps' pass reads (binding 8).
+    /// magnification (bindings 5–6, fragment shaders: the texture array with each sampler, or
+    /// with bindless textures the two samplers alone), the pixel keys (the outline highlight
+    /// style's and the silhouettes' nearest surfaces; binding 7, fragment shaders), the GPU
+    /// scene's cull entries, whose bounding spheres the section caps' pass reads (binding 8),
+    /// and with bindless textures the table of textures (binding 9, see
+    /// [`frame_set_bindings`]).
     pub fn frame_set_layout(&self) -> &DescriptorSetLayout {
         &self.frame_set_layout
     }

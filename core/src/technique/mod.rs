@@ -12,7 +12,9 @@ mod set;
 
 pub use frame::frustum_planes;
 pub use host_api::AllocationCounts;
-pub use pipeline::{assemble_vertex_shader, PassSet, ShadeMode, TransparencyMethod};
+pub use pipeline::{
+    assemble_vertex_shader, fragment_defines, PassSet, ShadeMode, TransparencyMethod,
+};
 pub use registry::{
     default_plugin_dirs, feature_bits, feature_names, PluginRegistry, Refusal, TechniqueEntry,
     TechniqueKind, BUILT_IN_LIBRARY, PLUGIN_PATH_VARIABLE,

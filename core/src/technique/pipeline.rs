@@ -13,8 +13,8 @@ use cadr_plugin_abi as abi;
 use crate::render::PICK_FORMAT;
 use crate::shaders;
 use crate::vk::{
-    Blend, ColorTarget, DepthUse, DescriptorSetLayout, Device, GraphicsPipelineDesc, Pipeline,
-    PipelineLayout, ShaderModule, ShaderStage, VertexLayout, COLOR_FORMAT,
+    Blend, Capabilities, ColorTarget, DepthUse, DescriptorSetLayout, Device, GraphicsPipelineDesc,
+    Pipeline, PipelineLayout, ShaderModule, ShaderStage, VertexLayout, COLOR_FORMAT,
 };
 
 /// The display modes: how surfaces and edges are drawn.
@@ -344,6 +344,21 @@ impl FragmentShader {
     }
 }
 
+/// The `#define` (and `#extension`) lines every fragment shader is compiled with on a device
+/// with `capabilities`.
+pub fn fragment_defines(capabilities: Capabilities) -> String {
+    let mut defines = String::new();
+    if capabilities.bindless_textures > 0 {
+        defines.push_str(
+            "#extension GL_EXT_nonuniform_qualifier : require\n#define CADR_BINDLESS_TEXTURES\n",
+        );
+    }
+    if capabilities.fragment_stores_and_atomics {
+        defines.push_str("#define CADR_PIXEL_KEYS_WRITTEN\n");
+    }
+    defines
+}
+
 /// SPIR-V of assembled vertex shaders, by (vertex path, parameter path) name, and of the
 /// fragment shaders, each compiled when a pass first needs it.
 #[derive(Default)]
@@ -379,16 +394,14 @@ impl PassShaders {
 }
 
 impl ShaderCache {
-    /// An empty cache for a device that has `fragmentStoresAndAtomics` or not: with it, the
+    /// An empty cache for a device with `capabilities`: with `fragmentStoresAndAtomics`, the
     /// surface shaders record the per-pixel keys, the highlight outline style's and the
-    /// silhouettes' nearest surfaces (`CADR_PIXEL_KEYS_WRITTEN`, `shaders/pixel_keys.glsl`).
-    pub fn new(fragment_stores_and_atomics: bool) -> Self {
+    /// silhouettes' nearest surfaces (`CADR_PIXEL_KEYS_WRITTEN`, `shaders/pixel_keys.glsl`);
+    /// with bindless textures, they index the table of textures
+    /// (`CADR_BINDLESS_TEXTURES`, `shaders/texturing.glsl`).
+    pub fn new(capabilities: Capabilities) -> Self {
         Self {
-            fragment_defines: if fragment_stores_and_atomics {
-                "#define CADR_PIXEL_KEYS_WRITTEN\n".into()
-            } else {
-                String::new()
-            },
+            fragment_defines: fragment_defines(capabilities),
             ..Self::default()
         }
     }

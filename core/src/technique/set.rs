@@ -320,7 +320,7 @@ impl Techniques {
             min_pixels: 0.0,
             frame_replay: true,
             pipelines: Vec::new(),
-            shaders: ShaderCache::new(device.capabilities().fragment_stores_and_atomics),
+            shaders: ShaderCache::new(device.capabilities()),
             frame_set_layout,
             merge_set_layout,
             epoch: 1,

@@ -26,7 +26,15 @@ pub struct Adapter {
     /// The samples per pixel a colour pass can have: 1 always, and the MSAA levels (2, 4, 8,
     /// …) the device offers for colour and depth attachments alike; smallest first.
     pub sample_counts: Vec<u32>,
+    /// How many textures the bindless texture path can bind here (0: the device lacks
+    /// descriptor indexing, and textures are layers of one array); see
+    /// [`super::Capabilities::bindless_textures`].
+    pub bindless_textures: u32,
 }
+
+/// The most textures the bindless path binds, whatever the device allows (the frame set
+/// holds a descriptor for each).
+pub const MAX_BINDLESS_TEXTURES: u32 = 16_384;
 
 /// How a device is chosen.
 #[derive(Clone, Debug, Default, PartialEq, Eq)]
@@ -86,17 +94,19 @@ pub fn enumerate(instance: &Instance) -> VkResult<Vec<Adapter>> {
     for (index, physical) in physicals.into_iter().enumerate() {
         // These queries return no result, so they cannot report a failed host allocation (the
         // validation layer crashes on one): no host-memory fault is injected into them.
-        let (properties, families) = super::fault::without_host_memory_faults(|| {
-            // SAFETY: physical comes from this instance.
-            unsafe {
-                (
-                    instance.raw.get_physical_device_properties(physical),
-                    instance
-                        .raw
-                        .get_physical_device_queue_family_properties(physical),
-                )
-            }
-        });
+        let (properties, families, bindless_textures) =
+            super::fault::without_host_memory_faults(|| {
+                // SAFETY: physical comes from this instance.
+                let (properties, families) = unsafe {
+                    (
+                        instance.raw.get_physical_device_properties(physical),
+                        instance
+                            .raw
+                            .get_physical_device_queue_family_properties(physical),
+                    )
+                };
+                (properties, families, bindless_textures(instance, physical))
+            });
         let name = properties
             .device_name_as_c_str()
             .map(|n| n.to_string_lossy().into_owned())
@@ -117,9 +127,67 @@ pub fn enumerate(instance: &Instance) -> VkResult<Vec<Adapter>> {
             queue_family: queue_family as u32,
             api_version: properties.api_version,
             sample_counts: sample_counts(&properties.limits),
+            bindless_textures,
         });
     }
     Ok(adapters)
+}
+
+/// How many textures the bindless path may bind on a device with these features and
+/// properties (see [`Capabilities::bindless_textures`]): 0 without descriptor indexing.
+fn bindless_texture_capacity(
+    features: &vk::PhysicalDeviceVulkan12Features<'_>,
+    properties: &vk::PhysicalDeviceVulkan12Properties<'_>,
+) -> u32 {
+    let has_all = [
+        features.runtime_descriptor_array,
+        features.shader_sampled_image_array_non_uniform_indexing,
+        features.descriptor_binding_partially_bound,
+        features.descriptor_binding_sampled_image_update_after_bind,
+    ]
+    .iter()
+    .all(|&feature| feature == vk::TRUE);
+    if !has_all {
+        return 0;
+    }
+    // The frame set's other bindings count against the per-stage resources too.
+    let room = properties
+        .max_per_stage_descriptor_update_after_bind_sampled_images
+        .min(properties.max_descriptor_set_update_after_bind_sampled_images)
+        .min(
+            properties
+                .max_per_stage_update_after_bind_resources
+                .saturating_sub(16),
+        );
+    let capacity = room.min(MAX_BINDLESS_TEXTURES);
+    // A table this small is no better than the array's layers.
+    if capacity < MIN_BINDLESS_TEXTURES {
+        0
+    } else {
+        capacity
+    }
+}
+
+/// Below this many, the bindless path is not used.
+const MIN_BINDLESS_TEXTURES: u32 = 64;
+
+/// How many textures the bindless path can bind on `physical` (see
+/// [`bindless_texture_capacity`]).
+fn bindless_textures(instance: &Instance, physical: vk::PhysicalDevice) -> u32 {
+    let mut features12 = vk::PhysicalDeviceVulkan12Features::default();
+    let mut features = vk::PhysicalDeviceFeatures2::default().push_next(&mut features12);
+    let mut properties12 = vk::PhysicalDeviceVulkan12Properties::default();
+    let mut properties = vk::PhysicalDeviceProperties2::default().push_next(&mut properties12);
+    // SAFETY: physical comes from this instance; the chains live on this stack frame.
+    unsafe {
+        instance
+            .raw
+            .get_physical_device_features2(physical, &mut features);
+        instance
+            .raw
+            .get_physical_device_properties2(physical, &mut properties);
+    }
+    bindless_texture_capacity(&features12, &properties12)
 }
 
 /// The sample counts of a colour pass with a depth attachment under `limits`.

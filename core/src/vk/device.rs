@@ -39,6 +39,13 @@ pub struct Capabilities {
     /// `fragmentStoresAndAtomics`: fragment shaders write storage buffers (the exact
     /// transparency method's per-pixel lists, the outline highlight style's keys).
     pub fragment_stores_and_atomics: bool,
+    /// How many textures the shaders can index in one runtime array of sampled images, each
+    /// image its own size (descriptor indexing: `runtimeDescriptorArray`,
+    /// `shaderSampledImageArrayNonUniformIndexing`, `descriptorBindingPartiallyBound`,
+    /// `descriptorBindingSampledImageUpdateAfterBind`); 0 where the device lacks it (or
+    /// [`DeviceOptions::texture_array_only`] said not to use it), and textures are layers of
+    /// one array image instead.
+    pub bindless_textures: u32,
 }
 
 /// How to create a [`Device`].
@@ -50,6 +57,9 @@ pub struct DeviceOptions {
     pub choice: DeviceChoice,
     /// Extra device extensions (for example `VK_KHR_swapchain` for a host's window).
     pub extra_extensions: Vec<CString>,
+    /// Keeps textures as layers of one array image even where the device could bind each
+    /// texture at its own size (for comparing the two paths; off by default).
+    pub texture_array_only: bool,
 }
 
 /// The raw handles of a device, for code that loads Vulkan itself (the technique plugins).
@@ -101,23 +111,24 @@ impl Device {
     pub fn new(options: &DeviceOptions) -> VkResult<Arc<Self>> {
         crate::timings::time(crate::timings::Phase::Device, || {
             let instance = Arc::new(Instance::new(&options.instance)?);
-            Self::with_instance_and_extensions(instance, &options.choice, &options.extra_extensions)
+            Self::on_instance(instance, options)
         })
     }
 
     /// Creates a device on an existing instance.
     pub fn with_instance(instance: Arc<Instance>, choice: &DeviceChoice) -> VkResult<Arc<Self>> {
-        Self::with_instance_and_extensions(instance, choice, &[])
+        let options = DeviceOptions {
+            choice: choice.clone(),
+            ..DeviceOptions::default()
+        };
+        Self::on_instance(instance, &options)
     }
 
-    /// Creates a device on an existing instance with extra device extensions; a missing
-    /// extension is refused by name.
-    pub fn with_instance_and_extensions(
-        instance: Arc<Instance>,
-        choice: &DeviceChoice,
-        extra_extensions: &[CString],
-    ) -> VkResult<Arc<Self>> {
-        let adapter = adapter::choose(&instance, choice)?;
+    /// Creates a device on an existing instance as `options` say (their instance options are
+    /// not used); a missing extra extension is refused by name.
+    fn on_instance(instance: Arc<Instance>, options: &DeviceOptions) -> VkResult<Arc<Self>> {
+        let extra_extensions = &options.extra_extensions;
+        let adapter = adapter::choose(&instance, &options.choice)?;
         let physical = adapter.physical;
         // SAFETY: physical comes from this instance.
         let properties = unsafe { instance.raw.get_physical_device_properties(physical) };
@@ -224,6 +235,11 @@ impl Device {
             pipeline_statistics_query: core.pipeline_statistics_query == vk::TRUE,
             timestamps: queue_timestamp_bits > 0 && properties.limits.timestamp_period > 0.0,
             fragment_stores_and_atomics: core.fragment_stores_and_atomics == vk::TRUE,
+            bindless_textures: if options.texture_array_only {
+                0
+            } else {
+                adapter.bindless_textures
+            },
         };
 
         let enabled_core = vk::PhysicalDeviceFeatures::default()
@@ -244,6 +260,13 @@ impl Device {
             .buffer_device_address(capabilities.buffer_device_address)
             .draw_indirect_count(capabilities.draw_indirect_count)
             .host_query_reset(supported12.host_query_reset == vk::TRUE);
+        if capabilities.bindless_textures > 0 {
+            enabled12 = enabled12
+                .runtime_descriptor_array(true)
+                .shader_sampled_image_array_non_uniform_indexing(true)
+                .descriptor_binding_partially_bound(true)
+                .descriptor_binding_sampled_image_update_after_bind(true);
+        }
         let mut enabled11 = vk::PhysicalDeviceVulkan11Features::default()
             .shader_draw_parameters(capabilities.shader_draw_parameters);
         let priorities = [1.0_f32];

@@ -170,84 +170,130 @@ impl Image {
         texels: &[u8],
         usage: vk::ImageUsageFlags,
     ) -> VkResult<Self> {
-        let regions = shape.texel_regions();
-        let expected = regions.last().map_or(0, |r| {
-            r.buffer_offset + u64::from(r.image_extent.width) * u64::from(r.image_extent.height) * 4
-        });
-        if texels.len() as u64 != expected {
-            return Err(VkError::InvalidUse(format!(
-                "image '{name}': {} bytes of texels for {}x{}, {} layers of {} mip levels at 4 bytes a texel (needs {expected})",
-                texels.len(),
-                shape.extent.width,
-                shape.extent.height,
-                shape.layers,
-                shape.mips
-            )));
-        }
-        let image = Self::create(
+        let mut images = Self::many_with_texels(
             device,
-            name,
-            shape,
-            format,
-            usage | vk::ImageUsageFlags::TRANSFER_DST | vk::ImageUsageFlags::SAMPLED,
-            vk::ImageAspectFlags::COLOR,
+            &[TexelImage {
+                name,
+                shape,
+                format,
+                texels,
+            }],
+            usage,
         )?;
+        images
+            .pop()
+            .ok_or_else(|| VkError::InvalidUse(format!("image '{name}' was not made")))
+    }
+
+    /// Creates the sampled images `requests` describe, as [`Image::with_texels`] does one,
+    /// through one staging buffer and one submission.
+    pub fn many_with_texels(
+        device: &Arc<Device>,
+        requests: &[TexelImage<'_>],
+        usage: vk::ImageUsageFlags,
+    ) -> VkResult<Vec<Self>> {
+        if requests.is_empty() {
+            return Ok(Vec::new());
+        }
+        let mut images = Vec::with_capacity(requests.len());
+        let mut regions = Vec::with_capacity(requests.len());
+        let mut staged = 0u64;
+        for request in requests {
+            let shape = request.shape;
+            let mut image_regions = shape.texel_regions();
+            let expected = image_regions.last().map_or(0, |r| {
+                r.buffer_offset
+                    + u64::from(r.image_extent.width) * u64::from(r.image_extent.height) * 4
+            });
+            if request.texels.len() as u64 != expected {
+                return Err(VkError::InvalidUse(format!(
+                    "image '{}': {} bytes of texels for {}x{}, {} layers of {} mip levels at 4 bytes a texel (needs {expected})",
+                    request.name,
+                    request.texels.len(),
+                    shape.extent.width,
+                    shape.extent.height,
+                    shape.layers,
+                    shape.mips
+                )));
+            }
+            for region in &mut image_regions {
+                region.buffer_offset += staged;
+            }
+            staged += expected;
+            regions.push(image_regions);
+            images.push(Self::create(
+                device,
+                request.name,
+                shape,
+                request.format,
+                usage | vk::ImageUsageFlags::TRANSFER_DST | vk::ImageUsageFlags::SAMPLED,
+                vk::ImageAspectFlags::COLOR,
+            )?);
+        }
+        let name = requests[0].name;
         let mut staging = Buffer::new(
             device,
             &format!("{name} (staging)"),
-            expected,
+            staged,
             vk::BufferUsageFlags::TRANSFER_SRC,
             MemoryLocation::CpuToGpu,
         )?;
-        staging.write(0, texels)?;
+        let mut offset = 0u64;
+        for request in requests {
+            staging.write(offset, request.texels)?;
+            offset += request.texels.len() as u64;
+        }
         let mut one_shot = OneShot::begin(device, "image upload")?;
         let command_buffer = one_shot.command_buffer();
-        let whole = subresource_range(vk::ImageAspectFlags::COLOR)
-            .level_count(shape.mips)
-            .layer_count(shape.layers);
-        transition_range(
-            device,
-            command_buffer,
-            (image.raw, whole),
-            (
-                vk::ImageLayout::UNDEFINED,
-                vk::PipelineStageFlags2::TOP_OF_PIPE,
-                vk::AccessFlags2::NONE,
-            ),
-            (
-                vk::ImageLayout::TRANSFER_DST_OPTIMAL,
-                vk::PipelineStageFlags2::COPY,
-                vk::AccessFlags2::TRANSFER_WRITE,
-            ),
-        );
-        // SAFETY: the image is in TRANSFER_DST_OPTIMAL; the regions lie inside both resources,
-        // which outlive the submission, waited for below.
-        unsafe {
-            device.raw.cmd_copy_buffer_to_image(
+        for ((image, request), image_regions) in images.iter().zip(requests).zip(&regions) {
+            let whole = subresource_range(vk::ImageAspectFlags::COLOR)
+                .level_count(request.shape.mips)
+                .layer_count(request.shape.layers);
+            transition_range(
+                device,
                 command_buffer,
-                staging.raw(),
-                image.raw,
-                vk::ImageLayout::TRANSFER_DST_OPTIMAL,
-                &regions,
-            )
-        };
-        transition_range(
-            device,
-            command_buffer,
-            (image.raw, whole),
-            (
-                vk::ImageLayout::TRANSFER_DST_OPTIMAL,
-                vk::PipelineStageFlags2::COPY,
-                vk::AccessFlags2::TRANSFER_WRITE,
-            ),
-            (
-                vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL,
-                vk::PipelineStageFlags2::VERTEX_SHADER | vk::PipelineStageFlags2::FRAGMENT_SHADER,
-                vk::AccessFlags2::SHADER_SAMPLED_READ,
-            ),
-        );
+                (image.raw, whole),
+                (
+                    vk::ImageLayout::UNDEFINED,
+                    vk::PipelineStageFlags2::TOP_OF_PIPE,
+                    vk::AccessFlags2::NONE,
+                ),
+                (
+                    vk::ImageLayout::TRANSFER_DST_OPTIMAL,
+                    vk::PipelineStageFlags2::COPY,
+                    vk::AccessFlags2::TRANSFER_WRITE,
+                ),
+            );
+            // SAFETY: the image is in TRANSFER_DST_OPTIMAL; the regions lie inside both
+            // resources, which outlive the submission, waited for below.
+            unsafe {
+                device.raw.cmd_copy_buffer_to_image(
+                    command_buffer,
+                    staging.raw(),
+                    image.raw,
+                    vk::ImageLayout::TRANSFER_DST_OPTIMAL,
+                    image_regions,
+                )
+            };
+            transition_range(
+                device,
+                command_buffer,
+                (image.raw, whole),
+                (
+                    vk::ImageLayout::TRANSFER_DST_OPTIMAL,
+                    vk::PipelineStageFlags2::COPY,
+                    vk::AccessFlags2::TRANSFER_WRITE,
+                ),
+                (
+                    vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL,
+                    vk::PipelineStageFlags2::VERTEX_SHADER
+                        | vk::PipelineStageFlags2::FRAGMENT_SHADER,
+                    vk::AccessFlags2::SHADER_SAMPLED_READ,
+                ),
+            );
+        }
         one_shot.submit_and_wait()?;
-        Ok(image)
+        Ok(images)
     }
 
     /// The device that owns the image.
@@ -531,6 +577,19 @@ impl OffscreenTarget {
     pub fn read_rgba8(&self, device: &Arc<Device>) -> VkResult<Vec<u8>> {
         read_rgba8(device, &self.color, vk::ImageLayout::TRANSFER_SRC_OPTIMAL)
     }
+}
+
+/// One image for [`Image::many_with_texels`].
+#[derive(Clone, Copy, Debug)]
+pub struct TexelImage<'a> {
+    /// Its debug name.
+    pub name: &'a str,
+    /// Its size, layers and mips.
+    pub shape: ImageShape,
+    /// A 4-byte-per-texel format.
+    pub format: vk::Format,
+    /// The texels, laid out as [`Image::with_texels`] takes them.
+    pub texels: &'a [u8],
 }
 
 /// The size, samples, layers and mip levels of an image.

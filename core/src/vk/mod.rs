@@ -24,19 +24,21 @@ mod shader;
 mod swapchain;
 mod timer;
 
-pub use adapter::{enumerate as enumerate_adapters, Adapter, DeviceChoice, DEVICE_ENV};
+pub use adapter::{
+    enumerate as enumerate_adapters, Adapter, DeviceChoice, DEVICE_ENV, MAX_BINDLESS_TEXTURES,
+};
 pub use buffer::{Buffer, MemoryLocation};
 pub use command::{record_dispatch, record_fullscreen, resubmit_times_us, CommandContext, OneShot};
 pub use device::{Capabilities, Device, DeviceOptions, RawHandles};
 pub use error::{map_result, VkError, VkResult, VkResultExt};
 pub use image::{
     memory_barrier, read_rgba8, record_image_copy, subresource_range, transition, transition_range,
-    Image, ImageShape, MultisampledTarget, OffscreenTarget, COLOR_FORMAT, DEPTH_FORMAT,
+    Image, ImageShape, MultisampledTarget, OffscreenTarget, TexelImage, COLOR_FORMAT, DEPTH_FORMAT,
 };
 pub use instance::{Instance, InstanceOptions, ValidationLog, ValidationMessage};
 pub use pipeline::{
     Blend, ColorTarget, DepthUse, DescriptorSetLayout, DescriptorSets, GraphicsPipelineDesc,
-    Pipeline, PipelineLayout, VertexLayout,
+    LayoutBinding, Pipeline, PipelineLayout, VertexLayout,
 };
 pub use rendering::{
     begin_overlay, begin_rendering, end_overlay, end_rendering, suspend_rendering, Multisampled,

@@ -13,8 +13,39 @@ use super::{Device, ShaderModule, VkResult, VkResultExt, DEPTH_FORMAT};
 pub struct DescriptorSetLayout {
     device: Arc<Device>,
     raw: vk::DescriptorSetLayout,
-    /// The type of each binding (one descriptor each), which a pool for its sets is sized by.
-    types: Vec<vk::DescriptorType>,
+    /// The type and descriptor count of each binding, which a pool for its sets is sized by.
+    types: Vec<(vk::DescriptorType, u32)>,
+    /// Whether some binding may be updated while a set of it is bound: its sets come from a
+    /// pool made for that.
+    update_after_bind: bool,
+}
+
+/// One binding of a [`DescriptorSetLayout`] made with [`DescriptorSetLayout::with_bindings`].
+#[derive(Clone, Copy, Debug)]
+pub struct LayoutBinding {
+    /// What it holds.
+    pub ty: vk::DescriptorType,
+    /// The stages that read it.
+    pub stages: vk::ShaderStageFlags,
+    /// Descriptors in it: 1, or the length of an array.
+    pub count: u32,
+    /// An array indexed at run time whose elements need not all be written
+    /// (`PARTIALLY_BOUND`), and which may be written while a set is bound but not in use
+    /// (`UPDATE_AFTER_BIND`, whose higher limits a table of textures needs): descriptor
+    /// indexing, which the device must have enabled.
+    pub indexed_array: bool,
+}
+
+impl LayoutBinding {
+    /// One descriptor of `ty` read by `stages`.
+    pub fn one(ty: vk::DescriptorType, stages: vk::ShaderStageFlags) -> Self {
+        Self {
+            ty,
+            stages,
+            count: 1,
+            indexed_array: false,
+        }
+    }
 }
 
 impl DescriptorSetLayout {
@@ -24,19 +55,52 @@ impl DescriptorSetLayout {
         name: &str,
         bindings: &[(vk::DescriptorType, vk::ShaderStageFlags)],
     ) -> VkResult<Self> {
-        let bindings: Vec<vk::DescriptorSetLayoutBinding<'_>> = bindings
+        let bindings: Vec<LayoutBinding> = bindings
+            .iter()
+            .map(|&(ty, stages)| LayoutBinding::one(ty, stages))
+            .collect();
+        Self::with_bindings(device, name, &bindings)
+    }
+
+    /// A layout whose binding `i` is `bindings[i]`.
+    pub fn with_bindings(
+        device: &Arc<Device>,
+        name: &str,
+        bindings: &[LayoutBinding],
+    ) -> VkResult<Self> {
+        let raw_bindings: Vec<vk::DescriptorSetLayoutBinding<'_>> = bindings
             .iter()
             .enumerate()
-            .map(|(i, &(ty, stages))| {
+            .map(|(i, binding)| {
                 vk::DescriptorSetLayoutBinding::default()
                     .binding(i as u32)
-                    .descriptor_type(ty)
-                    .descriptor_count(1)
-                    .stage_flags(stages)
+                    .descriptor_type(binding.ty)
+                    .descriptor_count(binding.count)
+                    .stage_flags(binding.stages)
             })
             .collect();
-        let info = vk::DescriptorSetLayoutCreateInfo::default().bindings(&bindings);
-        // SAFETY: the info lives for the call.
+        let flags: Vec<vk::DescriptorBindingFlags> = bindings
+            .iter()
+            .map(|binding| {
+                if binding.indexed_array {
+                    vk::DescriptorBindingFlags::PARTIALLY_BOUND
+                        | vk::DescriptorBindingFlags::UPDATE_AFTER_BIND
+                } else {
+                    vk::DescriptorBindingFlags::empty()
+                }
+            })
+            .collect();
+        let update_after_bind = bindings.iter().any(|binding| binding.indexed_array);
+        let mut binding_flags =
+            vk::DescriptorSetLayoutBindingFlagsCreateInfo::default().binding_flags(&flags);
+        let mut info = vk::DescriptorSetLayoutCreateInfo::default().bindings(&raw_bindings);
+        if update_after_bind {
+            info = info
+                .flags(vk::DescriptorSetLayoutCreateFlags::UPDATE_AFTER_BIND_POOL)
+                .push_next(&mut binding_flags);
+        }
+        // SAFETY: the info and its chain live for the call; indexed arrays are asked for only
+        // on a device with descriptor indexing enabled (the caller's contract).
         let raw = unsafe {
             device
                 .raw()
@@ -47,7 +111,8 @@ impl DescriptorSetLayout {
         Ok(Self {
             device: Arc::clone(device),
             raw,
-            types: bindings.iter().map(|b| b.descriptor_type).collect(),
+            types: bindings.iter().map(|b| (b.ty, b.count)).collect(),
+            update_after_bind,
         })
     }
 
@@ -514,13 +579,19 @@ fn pool_sizes(layouts: &[&DescriptorSetLayout]) -> Vec<vk::DescriptorPoolSize> {
     )
 }
 
-/// The pool sizes that hold a descriptor of each of `types`.
-fn pool_sizes_of(types: impl Iterator<Item = vk::DescriptorType>) -> Vec<vk::DescriptorPoolSize> {
+/// The pool sizes that hold `count` descriptors of each (type, count) of `bindings`.
+fn pool_sizes_of(
+    bindings: impl Iterator<Item = (vk::DescriptorType, u32)>,
+) -> Vec<vk::DescriptorPoolSize> {
     let mut sizes: Vec<vk::DescriptorPoolSize> = Vec::new();
-    for ty in types {
+    for (ty, count) in bindings {
         match sizes.iter_mut().find(|size| size.ty == ty) {
-            Some(size) => size.descriptor_count += 1,
-            None => sizes.push(vk::DescriptorPoolSize::default().ty(ty).descriptor_count(1)),
+            Some(size) => size.descriptor_count += count,
+            None => sizes.push(
+                vk::DescriptorPoolSize::default()
+                    .ty(ty)
+                    .descriptor_count(count),
+            ),
         }
     }
     sizes
@@ -544,7 +615,13 @@ impl DescriptorSets {
         layouts: &[&DescriptorSetLayout],
     ) -> VkResult<Self> {
         let sizes = pool_sizes(layouts);
+        let flags = if layouts.iter().any(|layout| layout.update_after_bind) {
+            vk::DescriptorPoolCreateFlags::UPDATE_AFTER_BIND
+        } else {
+            vk::DescriptorPoolCreateFlags::empty()
+        };
         let info = vk::DescriptorPoolCreateInfo::default()
+            .flags(flags)
             .max_sets(layouts.len() as u32)
             .pool_sizes(&sizes);
         // SAFETY: the info lives for the call.
@@ -596,13 +673,46 @@ impl DescriptorSets {
     /// Points `binding` of set `set` at `view`, a sampled image in `SHADER_READ_ONLY_OPTIMAL`
     /// (read with `texelFetch`, no sampler).
     pub fn write_sampled_image(&self, set: usize, binding: u32, view: vk::ImageView) {
-        let info = [vk::DescriptorImageInfo::default()
-            .image_view(view)
-            .image_layout(vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL)];
+        self.write_sampled_images(set, binding, 0, &[view]);
+    }
+
+    /// Points elements `first..first + views.len()` of the array `binding` of set `set` at
+    /// `views`, sampled images in `SHADER_READ_ONLY_OPTIMAL`.
+    pub fn write_sampled_images(
+        &self,
+        set: usize,
+        binding: u32,
+        first: u32,
+        views: &[vk::ImageView],
+    ) {
+        if views.is_empty() {
+            return;
+        }
+        let infos: Vec<vk::DescriptorImageInfo> = views
+            .iter()
+            .map(|&view| {
+                vk::DescriptorImageInfo::default()
+                    .image_view(view)
+                    .image_layout(vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL)
+            })
+            .collect();
         let write = [vk::WriteDescriptorSet::default()
             .dst_set(self.sets[set])
             .dst_binding(binding)
+            .dst_array_element(first)
             .descriptor_type(vk::DescriptorType::SAMPLED_IMAGE)
+            .image_info(&infos)];
+        // SAFETY: as in `write_buffer`.
+        unsafe { self.device.raw().update_descriptor_sets(&write, &[]) };
+    }
+
+    /// Points `binding` of set `set` at `sampler`.
+    pub fn write_sampler(&self, set: usize, binding: u32, sampler: vk::Sampler) {
+        let info = [vk::DescriptorImageInfo::default().sampler(sampler)];
+        let write = [vk::WriteDescriptorSet::default()
+            .dst_set(self.sets[set])
+            .dst_binding(binding)
+            .descriptor_type(vk::DescriptorType::SAMPLER)
             .image_info(&info)];
         // SAFETY: as in `write_buffer`.
         unsafe { self.device.raw().update_descriptor_sets(&write, &[]) };
@@ -664,7 +774,7 @@ mod tests {
             T::STORAGE_BUFFER,
         ];
         let counts = |types: &[T]| -> Vec<(T, u32)> {
-            pool_sizes_of(types.iter().copied())
+            pool_sizes_of(types.iter().map(|&ty| (ty, 1)))
                 .iter()
                 .map(|size| (size.ty, size.descriptor_count))
                 .collect()
@@ -692,5 +802,18 @@ mod tests {
             ]
         );
         assert_eq!(counts(&[]), []);
+        // An array binding counts its length.
+        let table: Vec<(T, u32)> = pool_sizes_of(
+            [
+                (T::SAMPLER, 1),
+                (T::SAMPLED_IMAGE, 4096),
+                (T::SAMPLED_IMAGE, 1),
+            ]
+            .into_iter(),
+        )
+        .iter()
+        .map(|size| (size.ty, size.descriptor_count))
+        .collect();
+        assert_eq!(table, [(T::SAMPLER, 1), (T::SAMPLED_IMAGE, 4097)]);
     }
 }

@@ -5,6 +5,7 @@
 //! alone (`cadr_tests::swiftshader_device`).
 #![allow(clippy::unwrap_used)] // Test code: a failed unwrap is a failed test.
 
+use std::collections::HashSet;
 use std::sync::Arc;
 
 use cadr_core::gpu_scene::MAX_LAYER_SIZE;
@@ -14,11 +15,11 @@ use cadr_core::scene::{
     Geometry, Material, MeshRef, Node, Part, Scene, Texture, TextureRef, UvTransform, Vertex,
     VertexAttributes,
 };
-use cadr_core::technique::ShadeMode;
+use cadr_core::technique::{Combination, ShadeMode};
 use cadr_core::vk::Device;
 use cadr_tests::fixtures::{scratch_dir, textured, textured_gltf};
 use cadr_tests::images::{color_at, compare, SAME_PICTURE};
-use cadr_tests::{swiftshader_device, SceneView};
+use cadr_tests::{all_combinations, swiftshader_device, SceneView};
 use glam::DVec3;
 
 const SIZE: (u32, u32) = (480, 480);
@@ -284,6 +285,38 @@ fn a_texture_after_an_emptied_slot_keeps_its_place() {
     assert!(
         center[1] > center[0] + 0.3 && center[1] > center[2] + 0.3,
         "green: {center:?}"
+    );
+    f.assert_no_validation_errors();
+}
+
+/// Every vertex and parameter path (each hands the shared shaders the material, and so the
+/// texture slot, its own way) samples the table like the built-in combination.
+#[test]
+fn every_vertex_and_parameter_path_samples_the_table_alike() {
+    let dir = scratch_dir("bindless_paths");
+    let scene = load_file(&textured_gltf(&dir)).unwrap();
+    let _ = std::fs::remove_dir_all(&dir);
+    let mut f = front_view(swiftshader_device(false), &scene);
+    let reference = f.render();
+    let built_in = Combination::built_in();
+    let valid: Vec<Combination> = all_combinations(f.view.techniques().registry())
+        .into_iter()
+        .filter(|c| c.submission == built_in.submission && c.culling == built_in.culling)
+        .filter(|c| f.view.techniques().check(c).is_ok())
+        .collect();
+    let mut parameter_paths = HashSet::new();
+    for combination in &valid {
+        f.view.techniques_mut().select(combination).unwrap();
+        let difference = compare(&f.render(), &reference).unwrap();
+        assert!(
+            difference.within(SAME_PICTURE),
+            "{combination}: {difference:?}"
+        );
+        parameter_paths.insert(combination.parameters.clone());
+    }
+    assert!(
+        parameter_paths.len() >= 3,
+        "parameter paths checked: {parameter_paths:?}"
     );
     f.assert_no_validation_errors();
 }

@@ -6,7 +6,7 @@
 // lets either win, pixel by pixel, so the plate would show through the cap in patches. From
 // the cap keys the opaque surfaces recorded (CADR_DISPLAY_CAP_KEYS, pixel_keys.glsl): where
 // the nearest cap fragment and the nearest other surface tie (their distances differ by under
-// a relative 1e-4, far under any part's thickness; the cap key's lowest bits hold the plane,
+// a relative CADR_CAP_TIE, section.glsl; the cap key's lowest bits hold the plane,
 // so exact ties cannot be told from near ones), the cap is painted as shaded.frag paints it,
 // at the position the cap fragment had. Where the cap lies clearly nearer, the surfaces
 // painted it already (with their anti-aliasing), and where a surface lies clearly in front,
@@ -19,20 +19,6 @@
 
 layout(location = 0) out vec4 out_color;
 
-// How much farther than the nearest other surface, as a fraction of its distance, the cap's
-// face may lie and still tie with it.
-const float TIE = 1e-4;
-
-// The distance along the view (view space looks down -z) of what lies at depth `depth`:
-// depth = (a z + b) / (c z + d) from the projection, solved for z.
-float view_distance(float depth) {
-    float a = frame.projection[2][2];
-    float b = frame.projection[3][2];
-    float c = frame.projection[2][3];
-    float d = frame.projection[3][3];
-    return -(b - depth * d) / (depth * c - a);
-}
-
 void main() {
     uvec2 pixel = uvec2(gl_FragCoord.xy);
     out_color = vec4(0.0);
@@ -43,8 +29,8 @@ void main() {
     }
     float cap_depth = cadr_cap_key_depth(cap);
     float other_depth = cadr_key_depth(other);
-    float other_distance = view_distance(other_depth);
-    if (abs(view_distance(cap_depth) - other_distance) > TIE * other_distance) {
+    float other_distance = cadr_view_distance(other_depth);
+    if (abs(cadr_view_distance(cap_depth) - other_distance) > CADR_CAP_TIE * other_distance) {
         return;
     }
     vec2 ndc = gl_FragCoord.xy / vec2(frame.target.xy) * 2.0 - 1.0;

@@ -3,6 +3,9 @@
 // Instances that cannot be picked come with id 0 and let the click through to what is behind,
 // and so do the holes a material's alpha mask cuts. A cap (section.glsl) sets CADR_PICK_CAP
 // in the id: the host moves such a hit from the far face the cap is painted on to the plane.
+// Where that face ties with another part's surface (a cut part standing on a plate), the
+// picture paints the cap (cap_ties.frag): the cap's depth is pulled nearer by the same tie
+// margin, so that the click hits what the picture shows.
 #include "frame.glsl"
 #include "shading.glsl"
 #include "section.glsl"
@@ -24,5 +27,9 @@ void main() {
     if (in_pick_id == 0u || cadr_masked_out(surface, in_texture)) {
         discard;
     }
-    out_id = section_cap_of(in_closure, in_eye_offset) >= 0 ? in_pick_id | CADR_PICK_CAP : in_pick_id;
+    bool cap = section_cap_of(in_closure, in_eye_offset) >= 0;
+    out_id = cap ? in_pick_id | CADR_PICK_CAP : in_pick_id;
+    gl_FragDepth = cap
+        ? cadr_depth_at(cadr_view_distance(gl_FragCoord.z) * (1.0 - CADR_CAP_TIE))
+        : gl_FragCoord.z;
 }

@@ -26,6 +26,27 @@ int section_cap_plane(vec3 eye_offset) {
     return plane;
 }
 
+// How much farther than another surface, as a fraction of that surface's distance, the face a
+// cap is found on may lie and still tie with it (the bottom of a cut part standing on a plate
+// lies in the plate's top): far under any part's thickness, far over the depth buffer's steps.
+const float CADR_CAP_TIE = 1e-4;
+
+// The distance along the view (view space looks down -z) of what lies at depth `depth`:
+// depth = (a z + b) / (c z + d) from the projection, solved for z.
+float cadr_view_distance(float depth) {
+    float a = frame.projection[2][2];
+    float b = frame.projection[3][2];
+    float c = frame.projection[2][3];
+    float d = frame.projection[3][3];
+    return -(b - depth * d) / (depth * c - a);
+}
+
+// The depth of what lies at `distance` along the view (the inverse of cadr_view_distance).
+float cadr_depth_at(float distance) {
+    vec4 clip = frame.projection * vec4(0.0, 0.0, -distance, 1.0);
+    return clip.z / clip.w;
+}
+
 // The plane whose cap a fragment of a part closing as `closure` (in_closure) shows at world
 // offset `eye_offset` from the eye: with caps on, a closed part seen from inside through a cut
 // (-1 for every other fragment).

@@ -236,6 +236,21 @@ fn a_cut_part_standing_on_another_is_capped_over_the_whole_cut() {
             );
         }
     }
+    // A click anywhere on the cut hits the box's cap, on the plane, as the picture shows (the
+    // plate's top, the only other surface there, lies at z = -1).
+    f.tree.update(&mut f.graph);
+    let missed: Vec<(DVec3, Option<DVec3>)> = on_cut
+        .iter()
+        .map(|&p| (p, f.pick_at(p).first().map(|hit| hit.position)))
+        .filter(|(_, at)| !matches!(at, Some(at) if at.z.abs() < 1e-3))
+        .collect();
+    assert!(
+        missed.is_empty(),
+        "{} of {} clicks on the cut miss the cap (point, position hit): {:?}",
+        missed.len(),
+        on_cut.len(),
+        &missed[..missed.len().min(4)]
+    );
     f.assert_no_validation_errors();
 }
 

@@ -624,3 +624,40 @@ fn an_image_past_the_memory_budget_is_left_out_saying_so() {
     );
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// A device without descriptor indexing holds the textures as layers of one array: a scene
+/// with more textures than the device's array has layers is refused, saying how many of each.
+#[test]
+fn more_textures_than_the_array_has_layers_are_refused_clearly() {
+    let mut scene = textured_scene("too_many");
+    let device = test_device();
+    assert_eq!(
+        device.capabilities().bindless_textures,
+        0,
+        "lavapipe has no descriptor indexing"
+    );
+    let layers = device.limits().max_image_array_layers as usize;
+    let one_texel = Texture {
+        name: "one texel".into(),
+        width: 1,
+        height: 1,
+        texels: std::sync::Arc::new(vec![255; 4]),
+        sampler: Default::default(),
+    };
+    scene.textures.resize(layers + 1, one_texel);
+    let bounds = cadr_core::scene::flatten(&scene).unwrap().bounds;
+    let camera = Camera::fit(&bounds, 1.0, DVec3::Z);
+    let mut f = SceneView::new(device, &scene, (64, 64), camera);
+    f.tree.update(&mut f.graph);
+    let error = f
+        .view
+        .render(&f.graph, &mut f.tree, &f.camera)
+        .unwrap_err()
+        .to_string();
+    assert!(
+        error.contains(&format!("{} texture slots", layers + 1))
+            && error.contains(&format!("at most {layers} (maxImageArrayLayers)")),
+        "{error}"
+    );
+    f.assert_no_validation_errors();
+}

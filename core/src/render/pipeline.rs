@@ -273,8 +273,9 @@ impl Pipelines {
     /// with bindless textures the two samplers alone), the pixel keys (the outline highlight
     /// style's and the silhouettes' nearest surfaces; binding 7, fragment shaders), the GPU
     /// scene's cull entries, whose bounding spheres the section caps' pass reads (binding 8),
-    /// and with bindless textures the table of textures (binding 9, see
-    /// [`frame_set_bindings`]).
+    /// and with bindless textures the table of textures (binding 9,
+    /// [`TEXTURE_TABLE_BINDING`]: an update-after-bind, partially bound array of sampled
+    /// images as long as the device binds textures).
     pub fn frame_set_layout(&self) -> &DescriptorSetLayout {
         &self.frame_set_layout
     }

@@ -498,3 +498,49 @@ pub fn textured_gltf(dir: &Path) -> PathBuf {
     std::fs::write(&path, json).expect("write textured.gltf");
     path
 }
+
+/// A scene of one 2 × 2 quad in the plane z = 0, facing +z, drawn with `material` (the
+/// scene's only one), with `textures`: its texture coordinates run from 0 to `u_across` left
+/// to right and from 0 to 1 top to bottom.
+pub fn quad_scene(
+    material: cadr_core::scene::Material,
+    textures: Vec<cadr_core::scene::Texture>,
+    u_across: f32,
+) -> cadr_core::scene::Scene {
+    use cadr_core::scene::{Geometry, MeshRef, Node, Part, Scene, Vertex, VertexAttributes};
+    let corners = [[-1.0f32, 1.0], [1.0, 1.0], [1.0, -1.0], [-1.0, -1.0]];
+    let quad = Geometry {
+        name: "quad".into(),
+        vertices: corners
+            .iter()
+            .map(|&[x, y]| Vertex {
+                position: [x, y, 0.0],
+                normal: [0.0, 0.0, 1.0],
+            })
+            .collect(),
+        indices: vec![0, 3, 2, 0, 2, 1],
+        parts: vec![Part {
+            first_index: 0,
+            index_count: 6,
+            ..Part::default()
+        }],
+        attributes: corners
+            .iter()
+            .map(|&[x, y]| VertexAttributes {
+                uv: [(x + 1.0) / 2.0 * u_across, (1.0 - y) / 2.0],
+                ..VertexAttributes::default()
+            })
+            .collect(),
+        ..Geometry::default()
+    };
+    let mut node = Node::new("quad");
+    node.mesh = Some(MeshRef::new(0, vec![0]));
+    Scene {
+        geometries: vec![quad],
+        materials: vec![material],
+        textures,
+        nodes: vec![node],
+        roots: vec![0],
+        ..Scene::default()
+    }
+}

@@ -11,13 +11,10 @@ use std::sync::Arc;
 use cadr_core::gpu_scene::MAX_LAYER_SIZE;
 use cadr_core::load::load_file;
 use cadr_core::render::Camera;
-use cadr_core::scene::{
-    Geometry, Material, MeshRef, Node, Part, Scene, Texture, TextureRef, UvTransform, Vertex,
-    VertexAttributes,
-};
+use cadr_core::scene::{Material, Scene, Texture, TextureRef, UvTransform};
 use cadr_core::technique::{Combination, ShadeMode};
 use cadr_core::vk::Device;
-use cadr_tests::fixtures::{scratch_dir, textured, textured_gltf};
+use cadr_tests::fixtures::{quad_scene, scratch_dir, textured, textured_gltf};
 use cadr_tests::images::{color_at, compare, SAME_PICTURE};
 use cadr_tests::{all_combinations, swiftshader_device, SceneView};
 use glam::DVec3;
@@ -135,49 +132,16 @@ fn stripes(width: u32) -> Texture {
 
 /// A 2 × 2 quad textured with `texture`, showing the first `fraction` of it across.
 fn striped_quad(texture: Texture, fraction: f32) -> Scene {
-    let corners = [[-1.0f32, 1.0], [1.0, 1.0], [1.0, -1.0], [-1.0, -1.0]];
-    let quad = Geometry {
-        name: "quad".into(),
-        vertices: corners
-            .iter()
-            .map(|&[x, y]| Vertex {
-                position: [x, y, 0.0],
-                normal: [0.0, 0.0, 1.0],
-            })
-            .collect(),
-        indices: vec![0, 3, 2, 0, 2, 1],
-        parts: vec![Part {
-            first_index: 0,
-            index_count: 6,
-            ..Part::default()
-        }],
-        attributes: corners
-            .iter()
-            .map(|&[x, y]| VertexAttributes {
-                uv: [(x + 1.0) / 2.0 * fraction, (1.0 - y) / 2.0],
-                ..VertexAttributes::default()
-            })
-            .collect(),
-        ..Geometry::default()
+    let striped = Material {
+        name: "striped".into(),
+        base_color: [1.0; 4],
+        base_color_texture: Some(TextureRef {
+            texture: 0,
+            transform: UvTransform::IDENTITY,
+        }),
+        ..Material::default()
     };
-    let mut node = Node::new("quad");
-    node.mesh = Some(MeshRef::new(0, vec![0]));
-    Scene {
-        geometries: vec![quad],
-        materials: vec![Material {
-            name: "striped".into(),
-            base_color: [1.0; 4],
-            base_color_texture: Some(TextureRef {
-                texture: 0,
-                transform: UvTransform::IDENTITY,
-            }),
-            ..Material::default()
-        }],
-        textures: vec![texture],
-        nodes: vec![node],
-        roots: vec![0],
-        ..Scene::default()
-    }
+    quad_scene(striped, vec![texture], fraction)
 }
 
 /// The brightest and darkest pixel along the middle row of the quad's picture.

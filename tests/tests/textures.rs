@@ -12,7 +12,7 @@ use cadr_core::load::load_file;
 use cadr_core::render::Camera;
 use cadr_core::scene::{Material, Scene, Texture, TextureRef, UvTransform};
 use cadr_core::technique::{Combination, ShadeMode};
-use cadr_tests::fixtures::{scratch_dir, textured, textured_gltf};
+use cadr_tests::fixtures::{quad_scene, scratch_dir, textured, textured_gltf};
 use cadr_tests::images::{
     assert_matches_reference, color_at, compare, DEFAULT_TOLERANCE, SAME_PICTURE,
 };
@@ -495,45 +495,12 @@ fn saving_keeps_textures_or_says_what_is_lost() {
 /// and the part shows the texture.
 #[test]
 fn a_scene_without_textures_gets_one_by_a_material_change() {
-    use cadr_core::scene::{Geometry, MeshRef, Node, Part, Vertex, VertexAttributes};
-    let corners = [[-1.0f32, 1.0], [1.0, 1.0], [1.0, -1.0], [-1.0, -1.0]];
-    let quad = Geometry {
-        name: "quad".into(),
-        vertices: corners
-            .iter()
-            .map(|&[x, y]| Vertex {
-                position: [x, y, 0.0],
-                normal: [0.0, 0.0, 1.0],
-            })
-            .collect(),
-        indices: vec![0, 3, 2, 0, 2, 1],
-        parts: vec![Part {
-            first_index: 0,
-            index_count: 6,
-            ..Part::default()
-        }],
-        attributes: corners
-            .iter()
-            .map(|&[x, y]| VertexAttributes {
-                uv: [(x + 1.0) / 2.0, (1.0 - y) / 2.0],
-                ..VertexAttributes::default()
-            })
-            .collect(),
-        ..Geometry::default()
+    let plain = Material {
+        name: "plain".into(),
+        base_color: [0.9, 0.9, 0.9, 1.0],
+        ..Material::default()
     };
-    let mut node = Node::new("quad");
-    node.mesh = Some(MeshRef::new(0, vec![0]));
-    let scene = Scene {
-        geometries: vec![quad],
-        materials: vec![Material {
-            name: "plain".into(),
-            base_color: [0.9, 0.9, 0.9, 1.0],
-            ..Material::default()
-        }],
-        nodes: vec![node],
-        roots: vec![0],
-        ..Scene::default()
-    };
+    let scene = quad_scene(plain, Vec::new(), 1.0);
     let mut f = front_view(&scene);
     let before = f.render();
     let left = DVec3::new(-0.5, 0.0, 0.0);

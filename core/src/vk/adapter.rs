@@ -27,7 +27,8 @@ pub struct Adapter {
     /// …) the device offers for colour and depth attachments alike; smallest first.
     pub sample_counts: Vec<u32>,
     /// How many textures the bindless texture path can bind here (0: the device lacks
-    /// descriptor indexing, and textures are layers of one array); see
+    /// descriptor indexing, or `CADR_TEXTURE_ARRAY=1` said not to use it, and textures are
+    /// layers of one array); see
     /// [`super::Capabilities::bindless_textures`].
     pub bindless_textures: u32,
 }
@@ -171,9 +172,16 @@ fn bindless_texture_capacity(
 /// Below this many, the bindless path is not used.
 const MIN_BINDLESS_TEXTURES: u32 = 64;
 
+/// The environment variable that keeps textures in one array even on a device with
+/// descriptor indexing (`1`): a workaround for a driver whose descriptor indexing misbehaves.
+pub const TEXTURE_ARRAY_ENV: &str = "CADR_TEXTURE_ARRAY";
+
 /// How many textures the bindless path can bind on `physical` (see
-/// [`bindless_texture_capacity`]).
+/// [`bindless_texture_capacity`]); 0 when [`TEXTURE_ARRAY_ENV`] is `1`.
 fn bindless_textures(instance: &Instance, physical: vk::PhysicalDevice) -> u32 {
+    if std::env::var(TEXTURE_ARRAY_ENV).is_ok_and(|value| value.trim() == "1") {
+        return 0;
+    }
     let mut features12 = vk::PhysicalDeviceVulkan12Features::default();
     let mut features = vk::PhysicalDeviceFeatures2::default().push_next(&mut features12);
     let mut properties12 = vk::PhysicalDeviceVulkan12Properties::default();

@@ -26,6 +26,7 @@ mod timer;
 
 pub use adapter::{
     enumerate as enumerate_adapters, Adapter, DeviceChoice, DEVICE_ENV, MAX_BINDLESS_TEXTURES,
+    TEXTURE_ARRAY_ENV,
 };
 pub use buffer::{Buffer, MemoryLocation};
 pub use command::{record_dispatch, record_fullscreen, resubmit_times_us, CommandContext, OneShot};

@@ -31,6 +31,9 @@ pub struct Adapter {
     /// layers of one array); see
     /// [`super::Capabilities::bindless_textures`].
     pub bindless_textures: u32,
+    /// Whether it has geometry shaders (`geometryShader`), which the hidden-line mode's
+    /// dashed hidden silhouettes need; see [`super::Capabilities::geometry_shader`].
+    pub geometry_shader: bool,
 }
 
 /// The most textures the bindless path binds, whatever the device allows (the frame set
@@ -95,18 +98,24 @@ pub fn enumerate(instance: &Instance) -> VkResult<Vec<Adapter>> {
     for (index, physical) in physicals.into_iter().enumerate() {
         // These queries return no result, so they cannot report a failed host allocation (the
         // validation layer crashes on one): no host-memory fault is injected into them.
-        let (properties, families, bindless_textures) =
+        let (properties, families, features, bindless_textures) =
             super::fault::without_host_memory_faults(|| {
                 // SAFETY: physical comes from this instance.
-                let (properties, families) = unsafe {
+                let (properties, families, features) = unsafe {
                     (
                         instance.raw.get_physical_device_properties(physical),
                         instance
                             .raw
                             .get_physical_device_queue_family_properties(physical),
+                        instance.raw.get_physical_device_features(physical),
                     )
                 };
-                (properties, families, bindless_textures(instance, physical))
+                (
+                    properties,
+                    families,
+                    features,
+                    bindless_textures(instance, physical),
+                )
             });
         let name = properties
             .device_name_as_c_str()
@@ -129,6 +138,7 @@ pub fn enumerate(instance: &Instance) -> VkResult<Vec<Adapter>> {
             api_version: properties.api_version,
             sample_counts: sample_counts(&properties.limits),
             bindless_textures,
+            geometry_shader: features.geometry_shader == vk::TRUE,
         });
     }
     Ok(adapters)

@@ -46,6 +46,9 @@ pub struct Capabilities {
     /// [`DeviceOptions::texture_array_only`] said not to use it), and textures are layers of
     /// one array image instead.
     pub bindless_textures: u32,
+    /// `geometryShader`: the hidden-line mode draws the silhouettes of hidden curved surfaces
+    /// (`shaders/silhouette_lines.geom`).
+    pub geometry_shader: bool,
 }
 
 /// How to create a [`Device`].
@@ -240,6 +243,7 @@ impl Device {
             } else {
                 adapter.bindless_textures
             },
+            geometry_shader: core.geometry_shader == vk::TRUE,
         };
 
         let enabled_core = vk::PhysicalDeviceFeatures::default()
@@ -247,6 +251,7 @@ impl Device {
             .draw_indirect_first_instance(capabilities.draw_indirect_first_instance)
             .pipeline_statistics_query(capabilities.pipeline_statistics_query)
             .fragment_stores_and_atomics(capabilities.fragment_stores_and_atomics)
+            .geometry_shader(capabilities.geometry_shader)
             .shader_clip_distance(true)
             .fill_mode_non_solid(true)
             .independent_blend(true);

@@ -218,6 +218,7 @@ impl Pipeline {
             &GraphicsPipelineDesc {
                 layout,
                 vertex,
+                geometry: None,
                 fragment,
                 vertex_layout: None,
                 topology: vk::PrimitiveTopology::TRIANGLE_LIST,
@@ -251,17 +252,25 @@ impl Pipeline {
         let specialization = vk::SpecializationInfo::default()
             .map_entries(&constant_entries)
             .data(&constant_bytes);
-        let stages = [
-            vk::PipelineShaderStageCreateInfo::default()
-                .stage(vk::ShaderStageFlags::VERTEX)
-                .module(desc.vertex.raw())
-                .name(c"main")
-                .specialization_info(&specialization),
+        let mut stages = vec![vk::PipelineShaderStageCreateInfo::default()
+            .stage(vk::ShaderStageFlags::VERTEX)
+            .module(desc.vertex.raw())
+            .name(c"main")
+            .specialization_info(&specialization)];
+        if let Some(geometry) = desc.geometry {
+            stages.push(
+                vk::PipelineShaderStageCreateInfo::default()
+                    .stage(vk::ShaderStageFlags::GEOMETRY)
+                    .module(geometry.raw())
+                    .name(c"main"),
+            );
+        }
+        stages.push(
             vk::PipelineShaderStageCreateInfo::default()
                 .stage(vk::ShaderStageFlags::FRAGMENT)
                 .module(desc.fragment.raw())
                 .name(c"main"),
-        ];
+        );
         let layout = desc.vertex_layout.unwrap_or(VertexLayout {
             stride: 0,
             attributes: &[],
@@ -546,6 +555,9 @@ pub struct GraphicsPipelineDesc<'a> {
     pub layout: &'a PipelineLayout,
     /// The vertex shader.
     pub vertex: &'a ShaderModule,
+    /// A geometry shader between the two, or `None` (it needs
+    /// [`super::Capabilities::geometry_shader`]).
+    pub geometry: Option<&'a ShaderModule>,
     /// The fragment shader.
     pub fragment: &'a ShaderModule,
     /// `None` for no vertex input (vertex pulling).

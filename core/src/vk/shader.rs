@@ -14,6 +14,8 @@ use super::error::{VkResult, VkResultExt};
 pub enum ShaderStage {
     /// Vertex shader.
     Vertex,
+    /// Geometry shader (needs the device's `geometryShader`: [`super::Capabilities::geometry_shader`]).
+    Geometry,
     /// Fragment shader.
     Fragment,
     /// Compute shader.
@@ -21,10 +23,11 @@ pub enum ShaderStage {
 }
 
 impl ShaderStage {
-    /// The stage for a file name ending in `.vert`, `.frag` or `.comp`.
+    /// The stage for a file name ending in `.vert`, `.geom`, `.frag` or `.comp`.
     pub fn from_file_name(name: &str) -> Option<Self> {
         match name.rsplit('.').next()? {
             "vert" => Some(Self::Vertex),
+            "geom" => Some(Self::Geometry),
             "frag" => Some(Self::Fragment),
             "comp" => Some(Self::Compute),
             _ => None,
@@ -35,6 +38,7 @@ impl ShaderStage {
     pub fn flag(self) -> vk::ShaderStageFlags {
         match self {
             Self::Vertex => vk::ShaderStageFlags::VERTEX,
+            Self::Geometry => vk::ShaderStageFlags::GEOMETRY,
             Self::Fragment => vk::ShaderStageFlags::FRAGMENT,
             Self::Compute => vk::ShaderStageFlags::COMPUTE,
         }

@@ -1540,8 +1540,10 @@ enum CadrResult cadr_renderer_set_textures(CadrRenderer renderer, bool on);
 enum CadrResult cadr_renderer_textures(CadrRenderer renderer, bool *on);
 
 // Shows the hidden edges in the `CADR_SHADE_HIDDEN_LINE` mode dashed, in a lighter shade of
-// the visible ones' colour (`dashed` true), or removes them (false, the default). Other modes are not
-// affected. Applies from the next frame. With the `gpu-occlusion` culler, parts it finds
+// the visible ones' colour (`dashed` true), or removes them (false, the default). With
+// silhouettes on (`cadr_renderer_set_silhouettes`), the silhouettes of hidden curved
+// surfaces (tessellated with shared vertex normals) are dashed too where the device has
+// geometry shaders. Other modes are not affected. Applies from the next frame. With the `gpu-occlusion` culler, parts it finds
 // entirely hidden are not drawn, so their dashed edges do not show.
 //
 // Returns `CADR_RESULT_OK` or a handle error. Ownership: nothing changes hands.

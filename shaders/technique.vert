@@ -74,7 +74,11 @@ layout(location = 10) flat out float out_opacity_limit;
 // 1 for a highlighted part (the outline style records it for its outline), else 0.
 layout(location = 11) flat out uint out_highlighted;
 
-out float gl_ClipDistance[6];
+// Only what every pass reads (the hidden silhouettes' geometry shader declares the same).
+out gl_PerVertex {
+    vec4 gl_Position;
+    float gl_ClipDistance[6];
+};
 // The same position in every pipeline built from this shader, whatever its fragment shader: the
 // section caps' second pass (caps.frag) finds the surface each pixel shows by depth equality.
 invariant gl_Position;

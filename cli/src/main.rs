@@ -131,8 +131,14 @@ fn devices() -> Result<(), String> {
             0 => "one texture array".to_owned(),
             capacity => format!("bindless, up to {capacity}"),
         };
+        let hidden_silhouettes = if adapter.geometry_shader {
+            "dashed"
+        } else {
+            "not drawn (no geometry shaders)"
+        };
         println!(
-            "{}: {} ({:?}, Vulkan {}.{}, MSAA {}, textures {textures})",
+            "{}: {} ({:?}, Vulkan {}.{}, MSAA {}, textures {textures}, hidden silhouettes \
+             {hidden_silhouettes})",
             adapter.index,
             adapter.name,
             adapter.device_type,

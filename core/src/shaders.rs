@@ -23,6 +23,7 @@ pub struct ShaderCompileError {
 fn shaderc_kind(stage: ShaderStage) -> shaderc::ShaderKind {
     match stage {
         ShaderStage::Vertex => shaderc::ShaderKind::Vertex,
+        ShaderStage::Geometry => shaderc::ShaderKind::Geometry,
         ShaderStage::Fragment => shaderc::ShaderKind::Fragment,
         ShaderStage::Compute => shaderc::ShaderKind::Compute,
     }
@@ -295,6 +296,14 @@ pub const HIDDEN_EDGES_FRAG: ShaderSource = ShaderSource {
     source: include_str!("../../shaders/hidden_edges.frag"),
 };
 
+/// Silhouette lines of curved surfaces, found per triangle from its vertex normals: the
+/// hidden-line mode's dashed hidden silhouettes.
+pub const SILHOUETTE_LINES_GEOM: ShaderSource = ShaderSource {
+    name: "silhouette_lines.geom",
+    stage: ShaderStage::Geometry,
+    source: include_str!("../../shaders/silhouette_lines.geom"),
+};
+
 /// Translucent surfaces: the transparency method's fragment snippet completes it (see
 /// `technique::pipeline`).
 pub const TRANSLUCENT_FRAG: ShaderSource = ShaderSource {
@@ -337,6 +346,7 @@ pub const ALL: &[ShaderSource] = &[
     TRANSFORMS_COMP,
     EDGES_FRAG,
     HIDDEN_EDGES_FRAG,
+    SILHOUETTE_LINES_GEOM,
     CAPS_FRAG,
     SSAO_FRAG,
     SILHOUETTES_FRAG,

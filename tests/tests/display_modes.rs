@@ -9,12 +9,13 @@ use cadr_core::graph::NodeFlags;
 use cadr_core::load::load_file;
 use cadr_core::render::{Background, Camera, HighlightStyle, Palette, DEFAULT_FOV_DEGREES};
 use cadr_core::scene::edges::{feature_edges, DEFAULT_CREASE_DEGREES};
-use cadr_core::scene::{Material, MeshRef, Node, Scene};
+use cadr_core::scene::{Geometry, Material, MeshRef, Node, Part, Scene, Vertex};
+use cadr_core::technique::Combination;
 use cadr_core::technique::ShadeMode;
 use cadr_tests::images::{
     self, assert_matches_reference, compare, DEFAULT_TOLERANCE, VISIBLE_CHANGE,
 };
-use cadr_tests::{test_device, SceneView, CYLINDER_ENGINE_GLB};
+use cadr_tests::{scene_wide, test_device, SceneView, CYLINDER_ENGINE_GLB};
 use glam::{DMat4, DVec3};
 
 const SIZE: (u32, u32) = (160, 120);
@@ -298,6 +299,202 @@ fn silhouettes_outline_curved_surfaces_in_the_edge_modes() {
                 "{samples}x {mode:?}"
             );
         }
+    }
+    f.assert_no_validation_errors();
+}
+
+/// A cylinder with shared normals, as CAD tessellations make curved surfaces (radius 1, from
+/// y = -1 to 1, 48 sides whose vertices each carry the radial normal), its caps flat: its only
+/// feature edges are its rims.
+fn shared_normal_cylinder() -> Geometry {
+    let sides = 48_u32;
+    let mut geometry = Geometry {
+        name: "shared-normal cylinder".into(),
+        ..Geometry::default()
+    };
+    let around = |k: u32| {
+        let angle = std::f32::consts::TAU * k as f32 / sides as f32;
+        (angle.cos(), angle.sin())
+    };
+    for k in 0..sides {
+        let (x, z) = around(k);
+        for y in [-1.0, 1.0] {
+            geometry.vertices.push(Vertex {
+                position: [x, y, z],
+                normal: [x, 0.0, z],
+            });
+        }
+    }
+    for k in 0..sides {
+        let (a, b) = (2 * k, 2 * ((k + 1) % sides));
+        // Counter-clockwise seen from outside.
+        geometry.indices.extend([a, a + 1, b + 1, a, b + 1, b]);
+    }
+    for y in [-1.0_f32, 1.0] {
+        let first = geometry.vertices.len() as u32;
+        for k in 0..sides {
+            let (x, z) = around(k);
+            geometry.vertices.push(Vertex {
+                position: [x, y, z],
+                normal: [0.0, y, 0.0],
+            });
+        }
+        for k in 1..sides - 1 {
+            if y > 0.0 {
+                geometry.indices.extend([first, first + k + 1, first + k]);
+            } else {
+                geometry.indices.extend([first, first + k, first + k + 1]);
+            }
+        }
+    }
+    geometry.parts = vec![Part {
+        first_index: 0,
+        index_count: geometry.indices.len() as u32,
+        first_wire_index: 0,
+        wire_index_count: 0,
+    }];
+    let (wire_indices, parts) = feature_edges(&geometry, DEFAULT_CREASE_DEGREES);
+    geometry.wire_indices = wire_indices;
+    geometry.parts = parts;
+    geometry
+}
+
+/// The shared-normal cylinder behind a wide plate (x from -2.5 to 2.5, y from -0.5 to 0.5,
+/// z from 1.5 to 2) that hides its middle, seen from the front a little from above.
+fn cylinder_behind_a_plate() -> SceneView {
+    let mut builder = GeometryBuilder::new("plate");
+    builder.cuboid(
+        DVec3::new(-2.5, -0.5, 1.5),
+        DVec3::new(2.5, 0.5, 2.0),
+        DMat4::IDENTITY,
+    );
+    let mut plate = builder.finish();
+    let (wire_indices, parts) = feature_edges(&plate, DEFAULT_CREASE_DEGREES);
+    plate.wire_indices = wire_indices;
+    plate.parts = parts;
+    let mut nodes = Vec::new();
+    for (geometry, name) in [(0, "cylinder"), (1, "plate")] {
+        let mut node = Node::new(name);
+        node.mesh = Some(MeshRef::new(geometry, vec![0]));
+        nodes.push(node);
+    }
+    let scene = Scene {
+        name: "cylinder behind a plate".into(),
+        geometries: vec![shared_normal_cylinder(), plate],
+        materials: vec![Material::default()],
+        nodes,
+        roots: vec![0, 1],
+        ..Scene::default()
+    };
+    let aspect = f64::from(SIZE.0) / f64::from(SIZE.1);
+    let camera = Camera::look_at(
+        DVec3::new(0.0, 0.3, 6.0),
+        DVec3::ZERO,
+        DEFAULT_FOV_DEGREES,
+        aspect,
+        0.1,
+        100.0,
+    );
+    SceneView::new(test_device(), &scene, SIZE, camera)
+}
+
+/// Hidden-line with dashed hidden lines dashes the silhouettes of hidden curved surfaces too
+/// (where the device has geometry shaders, as lavapipe does): the sides of a cylinder behind a
+/// plate, which no feature edge marks, show as dashes in the rows the plate hides, close to
+/// the cylinder's outline and nowhere across it; not where the sides are seen (the visible
+/// silhouettes are solid lines), not without silhouettes, not without dashes; with MSAA and
+/// through a GPU culler too.
+#[test]
+fn hidden_line_dashes_the_silhouettes_of_hidden_curved_surfaces() {
+    let mut f = cylinder_behind_a_plate();
+    assert!(f.device.capabilities().geometry_shader, "lavapipe has them");
+    // The outline's columns: where the eye's tangents touch the cylinder.
+    let (tangent_x, tangent_z) = ((1.0_f64 - 1.0 / 36.0).sqrt(), 1.0 / 6.0);
+    let at = |x: f64, y: f64| images::pixel_of(&f.camera, SIZE, DVec3::new(x, y, tangent_z));
+    let (left, _) = at(-tangent_x, 0.0);
+    let (right, _) = at(tangent_x, 0.0);
+    // Rows the plate hides (the cylinder's y from 0.3 down to -0.5), rows where the sides are
+    // seen (y from 0.8 down to 0.65), clear of the plate's edges and the rims.
+    let hidden_rows = at(0.0, 0.3).1..=at(0.0, -0.5).1;
+    let seen_rows = at(0.0, 0.8).1..=at(0.0, 0.65).1;
+    assert!(hidden_rows.clone().count() >= 10 && seen_rows.clone().count() >= 3);
+    // The pixels in `rows` that differ between two pictures: at the outline's left side, at
+    // its right side, and elsewhere across the cylinder.
+    let changed =
+        |a: &image::RgbaImage, b: &image::RgbaImage, rows: std::ops::RangeInclusive<u32>| {
+            let mut counts = [0_usize; 3];
+            for y in rows {
+                for x in left - 6..=right + 6 {
+                    if a.get_pixel(x, y) != b.get_pixel(x, y) {
+                        let side = if x.abs_diff(left) <= 2 {
+                            0
+                        } else if x.abs_diff(right) <= 2 {
+                            1
+                        } else {
+                            2
+                        };
+                        counts[side] += 1;
+                    }
+                }
+            }
+            counts
+        };
+    let combinations = [
+        Combination::built_in(),
+        scene_wide("individual-indirect-count", "gpu-frustum"),
+    ];
+    for (combination, samples) in combinations
+        .iter()
+        .zip([4, 1])
+        .chain([(&combinations[0], 1)])
+    {
+        f.view.techniques_mut().select(combination).unwrap();
+        f.view
+            .techniques_mut()
+            .set_shade_mode(ShadeMode::HiddenLine)
+            .unwrap();
+        f.view.renderer_mut().set_msaa(samples).unwrap();
+        let case = format!("{combination} {samples}x");
+        let mut draw = |dashed: bool, silhouettes: bool| {
+            f.view.techniques_mut().set_dashed_hidden_lines(dashed);
+            f.view.renderer_mut().set_silhouettes(silhouettes).unwrap();
+            f.render()
+        };
+        let dashed = draw(true, true);
+        let dashed_without_silhouettes = draw(true, false);
+        let solid_lines = draw(false, true);
+        let solid_lines_without_silhouettes = draw(false, false);
+        let [hidden_left, hidden_right, across] =
+            changed(&dashed, &dashed_without_silhouettes, hidden_rows.clone());
+        assert!(
+            hidden_left >= 4 && hidden_right >= 4,
+            "{case}: dashes along both hidden sides: {hidden_left}, {hidden_right}"
+        );
+        assert_eq!(across, 0, "{case}: no dash across the hidden curved face");
+        let [seen_left, seen_right, _] = changed(&dashed, &solid_lines, seen_rows.clone());
+        assert_eq!(
+            (seen_left, seen_right),
+            (0, 0),
+            "{case}: the sides seen are not dashed"
+        );
+        assert_eq!(
+            changed(
+                &dashed_without_silhouettes,
+                &solid_lines_without_silhouettes,
+                hidden_rows.clone()
+            ),
+            [0, 0, 0],
+            "{case}: without silhouettes, no hidden side is dashed"
+        );
+        assert_eq!(
+            changed(
+                &solid_lines,
+                &solid_lines_without_silhouettes,
+                hidden_rows.clone()
+            ),
+            [0, 0, 0],
+            "{case}: without dashes, no hidden side is drawn"
+        );
     }
     f.assert_no_validation_errors();
 }

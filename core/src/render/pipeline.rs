@@ -8,7 +8,8 @@ use crate::vk::raw as vk;
 
 use crate::shaders::{self, ShaderSource};
 use crate::vk::{
-    Blend, DescriptorSetLayout, Device, LayoutBinding, Pipeline, PipelineLayout, ShaderModule,
+    Blend, Capabilities, DescriptorSetLayout, Device, LayoutBinding, Pipeline, PipelineLayout,
+    ShaderModule,
 };
 
 /// Format of the pick target: one instance id (+1) per pixel.
@@ -113,12 +114,18 @@ pub struct HierarchyParameters {
     pub level: u32,
 }
 
-/// The frame set's bindings (see [`Pipelines::frame_set_layout`]) on a device that binds
-/// `bindless_textures` textures (0: none, the texture array's path).
-fn frame_set_bindings(bindless_textures: u32) -> Vec<LayoutBinding> {
+/// The frame set's bindings (see [`Pipelines::frame_set_layout`]) on a device with
+/// `capabilities`: the bindless texture table where it binds textures so
+/// ([`Capabilities::bindless_textures`]), the frame uniforms seen by geometry shaders where it
+/// has them (the hidden silhouettes' `shaders/silhouette_lines.geom`).
+fn frame_set_bindings(capabilities: Capabilities) -> Vec<LayoutBinding> {
     use vk::DescriptorType as Type;
     use vk::ShaderStageFlags as Stage;
-    let graphics = Stage::VERTEX | Stage::FRAGMENT;
+    let bindless_textures = capabilities.bindless_textures;
+    let mut uniform_stages = Stage::VERTEX | Stage::FRAGMENT;
+    if capabilities.geometry_shader {
+        uniform_stages |= Stage::GEOMETRY;
+    }
     let vertex_storage = LayoutBinding::one(Type::STORAGE_BUFFER, Stage::VERTEX);
     let fragment_storage = LayoutBinding::one(Type::STORAGE_BUFFER, Stage::FRAGMENT);
     let texture_sampling = if bindless_textures > 0 {
@@ -127,7 +134,7 @@ fn frame_set_bindings(bindless_textures: u32) -> Vec<LayoutBinding> {
         LayoutBinding::one(Type::COMBINED_IMAGE_SAMPLER, Stage::FRAGMENT)
     };
     let mut bindings = vec![
-        LayoutBinding::one(Type::UNIFORM_BUFFER, graphics),
+        LayoutBinding::one(Type::UNIFORM_BUFFER, uniform_stages),
         fragment_storage,
         vertex_storage,
         vertex_storage,
@@ -192,7 +199,7 @@ impl Pipelines {
         let frame_set_layout = DescriptorSetLayout::with_bindings(
             device,
             "frame set layout",
-            &frame_set_bindings(device.capabilities().bindless_textures),
+            &frame_set_bindings(device.capabilities()),
         )?;
         let merge_set_layout = DescriptorSetLayout::new(
             device,
@@ -265,7 +272,8 @@ impl Pipelines {
         })
     }
 
-    /// Set 0 of every graphics pipeline: the frame uniform buffer (binding 0), the
+    /// Set 0 of every graphics pipeline: the frame uniform buffer (binding 0; geometry shaders
+    /// read it too where the device has them), the
     /// transparency method's storage (binding 1, fragment shaders), and for the shared vertex
     /// shader the GPU scene's instance records, material texture descriptions and vertex
     /// attributes (bindings 2–4), its textures sampled trilinear and with nearest

@@ -48,14 +48,18 @@ impl Renderer {
     ) -> RenderResult<FrameStats> {
         let mode = techniques.shade_mode();
         let translucency = scene.has_translucency(self.textures());
+        let dashed_hidden = mode == ShadeMode::HiddenLine && techniques.dashed_hidden_lines();
         let passes = PassSet::Shaded {
             mode,
             translucent: mode == ShadeMode::XRay || (mode.shows_translucency() && translucency),
             samples: self.msaa(),
-            dashed_hidden: mode == ShadeMode::HiddenLine && techniques.dashed_hidden_lines(),
+            dashed_hidden,
             lines_through_translucent: mode == ShadeMode::HiddenLine && translucency,
             caps_over_lines: matches!(mode, ShadeMode::Edges | ShadeMode::HiddenLine)
                 && self.section().caps_seen_from(camera.eye()),
+            hidden_silhouettes: dashed_hidden
+                && self.silhouettes()
+                && self.device().capabilities().geometry_shader,
         };
         self.draw_techniques(scene, techniques, camera, passes)
     }

@@ -106,6 +106,12 @@ pub enum PassSet {
         /// the visible caps again over the lines of the far faces they are painted on (always
         /// false in the other modes).
         caps_over_lines: bool,
+        /// With `dashed_hidden`, whether the silhouettes of hidden curved surfaces are dashed
+        /// too: a pass over the triangles whose geometry shader
+        /// (`shaders/silhouette_lines.geom`) turns each into the segment where its surface
+        /// turns away from the eye, drawn only behind the surfaces (silhouettes on, and the
+        /// device has geometry shaders; always false otherwise).
+        hidden_silhouettes: bool,
     },
     /// Triangles of pickable instances, their ids into the pick target.
     Pick {
@@ -288,34 +294,51 @@ pub fn assemble_vertex_shader(vertex_snippet: &str, parameter_snippet: &str) -> 
     format!("#version 460\n{}\n{body}", extensions.join("\n"))
 }
 
-/// The fragment shaders of the passes.
+/// The shaders of the passes after the shared vertex shader: fragment shaders, and the
+/// geometry shader of the hidden silhouettes.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
-enum FragmentShader {
+enum PassShader {
     /// Shaded triangles.
     Solid,
     /// Edge lines.
     Edges,
     /// Hidden edge lines, dashed.
     HiddenEdges,
+    /// The silhouette lines of curved surfaces (a geometry shader over their triangles).
+    SilhouetteLines,
     /// Section caps painted again over the lines.
     Caps,
     /// Instance ids and depths for picking.
     Pick,
 }
 
-impl FragmentShader {
+impl PassShader {
     fn source(self) -> &'static shaders::ShaderSource {
         match self {
             Self::Solid => &shaders::SHADED_FRAG,
             Self::Edges => &shaders::EDGES_FRAG,
             Self::HiddenEdges => &shaders::HIDDEN_EDGES_FRAG,
+            Self::SilhouetteLines => &shaders::SILHOUETTE_LINES_GEOM,
             Self::Caps => &shaders::CAPS_FRAG,
             Self::Pick => &shaders::PICK_FRAG,
         }
     }
 
     /// Those `passes` draw with.
-    fn needed_by(passes: PassSet) -> &'static [FragmentShader] {
+    fn needed_by(passes: PassSet) -> Vec<PassShader> {
+        let mut shaders = Self::needed_without_silhouette_lines(passes).to_vec();
+        if let PassSet::Shaded {
+            hidden_silhouettes: true,
+            ..
+        } = passes
+        {
+            shaders.push(Self::SilhouetteLines);
+        }
+        shaders
+    }
+
+    /// Those `passes` draw with, leaving out the hidden silhouettes' geometry shader.
+    fn needed_without_silhouette_lines(passes: PassSet) -> &'static [PassShader] {
         match passes {
             PassSet::Shaded {
                 mode: ShadeMode::HiddenLine,
@@ -360,13 +383,14 @@ pub fn fragment_defines(capabilities: Capabilities) -> String {
 }
 
 /// SPIR-V of assembled vertex shaders, by (vertex path, parameter path) name, and of the
-/// fragment shaders, each compiled when a pass first needs it.
+/// passes' other shaders, each compiled when a pass first needs it.
 #[derive(Default)]
 pub struct ShaderCache {
     vertex: HashMap<(String, String), Arc<Vec<u32>>>,
-    fragments: HashMap<FragmentShader, Arc<Vec<u32>>>,
+    pass_shaders: HashMap<PassShader, Arc<Vec<u32>>>,
     methods: HashMap<String, MethodShaders>,
-    /// `#define` lines every fragment shader is compiled with: what the device allows.
+    /// `#define` lines every fragment (and geometry) shader is compiled with: what the device
+    /// allows.
     fragment_defines: String,
 }
 
@@ -374,20 +398,20 @@ pub struct ShaderCache {
 pub struct PassShaders {
     /// The assembled vertex shader.
     pub vertex: Arc<Vec<u32>>,
-    fragments: Vec<(FragmentShader, Arc<Vec<u32>>)>,
+    pass_shaders: Vec<(PassShader, Arc<Vec<u32>>)>,
     /// The transparency method's, for a frame with translucent surfaces.
     method: Option<MethodShaders>,
 }
 
 impl PassShaders {
-    fn fragment(&self, shader: FragmentShader) -> RenderResult<&[u32]> {
-        self.fragments
+    fn shader(&self, shader: PassShader) -> RenderResult<&[u32]> {
+        self.pass_shaders
             .iter()
             .find(|(kind, _)| *kind == shader)
             .map(|(_, words)| words.as_slice())
             .ok_or_else(|| {
                 crate::error::RenderError::InvalidUse(format!(
-                    "the {shader:?} fragment shader was not prepared"
+                    "the {shader:?} shader was not prepared"
                 ))
             })
     }
@@ -407,7 +431,7 @@ impl ShaderCache {
     }
 
     /// The vertex shader of the (vertex path, parameter path) `key` (assembled by `source`)
-    /// and the fragment shaders `passes` draw with. Those not compiled before are compiled
+    /// and the other shaders `passes` draw with. Those not compiled before are compiled
     /// now, together, on a thread each (a combination is ready in the time of its slowest
     /// shader); passes not drawn compile nothing.
     pub fn prepare(
@@ -417,21 +441,21 @@ impl ShaderCache {
         passes: PassSet,
         method: Option<&TransparencyMethod>,
     ) -> RenderResult<PassShaders> {
-        let wanted = FragmentShader::needed_by(passes);
-        let missing: Vec<FragmentShader> = wanted
+        let wanted = PassShader::needed_by(passes);
+        let missing: Vec<PassShader> = wanted
             .iter()
             .copied()
-            .filter(|f| !self.fragments.contains_key(f))
+            .filter(|f| !self.pass_shaders.contains_key(f))
             .collect();
         let vertex_name = format!("technique.vert [{} + {}]", key.0, key.1);
         let vertex_source = (!self.vertex.contains_key(&key)).then(source);
-        let fragment_sources: Vec<String> = missing
+        let pass_sources: Vec<String> = missing
             .iter()
             .map(|f| shaders::with_defines(f.source().source, &self.fragment_defines))
             .collect();
         let mut requests: Vec<shaders::CompileRequest<'_>> = missing
             .iter()
-            .zip(&fragment_sources)
+            .zip(&pass_sources)
             .map(|(f, source)| {
                 let shader = f.source();
                 shaders::CompileRequest {
@@ -451,9 +475,9 @@ impl ShaderCache {
             });
         }
         let mut compiled = shaders::compile_glsl_all(&requests).into_iter();
-        for fragment in &missing {
+        for shader in &missing {
             if let Some(words) = compiled.next() {
-                self.fragments.insert(*fragment, Arc::new(words?));
+                self.pass_shaders.insert(*shader, Arc::new(words?));
             }
         }
         if vertex_source.is_some() {
@@ -475,12 +499,12 @@ impl ShaderCache {
         Ok(PassShaders {
             method,
             vertex: Arc::clone(self.vertex.get(&key).ok_or_else(not_compiled)?),
-            fragments: wanted
+            pass_shaders: wanted
                 .iter()
                 .map(|f| {
                     Ok((
                         *f,
-                        Arc::clone(self.fragments.get(f).ok_or_else(not_compiled)?),
+                        Arc::clone(self.pass_shaders.get(f).ok_or_else(not_compiled)?),
                     ))
                 })
                 .collect::<RenderResult<_>>()?,
@@ -557,6 +581,9 @@ struct Raster {
     /// Depth tested, not written: the lines under the caps pass, which must find the
     /// surfaces' depth where lines were drawn.
     keeps_depth: bool,
+    /// Triangles turned into their silhouette segments by the geometry shader
+    /// (`shaders/silhouette_lines.geom`): lines, not surfaces.
+    silhouette_lines: bool,
 }
 
 /// The pipelines and layout of one combination and pass set; destroyed together.
@@ -660,7 +687,7 @@ impl TechniquePipelines {
             extra_color_formats: translucent_method.map_or_else(Vec::new, |m| m.target_formats()),
             targets: translucent_method.map_or_else(Vec::new, |m| m.targets.clone()),
         };
-        let fragment = |shader: FragmentShader| inputs.shaders.fragment(shader);
+        let fragment = |shader: PassShader| inputs.shaders.shader(shader);
         let triangles = vk::PrimitiveTopology::TRIANGLE_LIST;
         let lines = vk::PrimitiveTopology::LINE_LIST;
         let plain = Raster::default();
@@ -673,7 +700,7 @@ impl TechniquePipelines {
                 mode: ShadeMode::Solid,
                 ..
             } => {
-                let solid = fragment(FragmentShader::Solid)?;
+                let solid = fragment(PassShader::Solid)?;
                 let pipeline = this.pipeline(inputs, solid, triangles, plain)?;
                 this.add(pipeline, abi::CADR_PASS_TRIANGLES);
             }
@@ -685,7 +712,7 @@ impl TechniquePipelines {
                     depth_only: mode == ShadeMode::HiddenLine,
                     ..under_lines
                 };
-                let solid = fragment(FragmentShader::Solid)?;
+                let solid = fragment(PassShader::Solid)?;
                 let pipeline = this.pipeline(inputs, solid, triangles, surfaces)?;
                 this.add(pipeline, abi::CADR_PASS_TRIANGLES);
                 if let PassSet::Shaded {
@@ -698,9 +725,22 @@ impl TechniquePipelines {
                         behind: true,
                         ..plain
                     };
-                    let dashed = fragment(FragmentShader::HiddenEdges)?;
+                    let dashed = fragment(PassShader::HiddenEdges)?;
                     let pipeline = this.pipeline(inputs, dashed, lines, hidden)?;
                     this.add(pipeline, abi::CADR_PASS_EDGES);
+                    if let PassSet::Shaded {
+                        hidden_silhouettes: true,
+                        ..
+                    } = inputs.passes
+                    {
+                        // The triangles, each turned into its silhouette segment, if any.
+                        let silhouettes = Raster {
+                            silhouette_lines: true,
+                            ..hidden
+                        };
+                        let pipeline = this.pipeline(inputs, dashed, triangles, silhouettes)?;
+                        this.add(pipeline, abi::CADR_PASS_TRIANGLES);
+                    }
                 }
                 let caps_over_lines = matches!(
                     inputs.passes,
@@ -713,7 +753,7 @@ impl TechniquePipelines {
                     keeps_depth: caps_over_lines,
                     ..plain
                 };
-                let edges = fragment(FragmentShader::Edges)?;
+                let edges = fragment(PassShader::Edges)?;
                 let pipeline = this.pipeline(inputs, edges, lines, visible_lines)?;
                 this.add(pipeline, abi::CADR_PASS_EDGES);
                 if caps_over_lines {
@@ -723,7 +763,7 @@ impl TechniquePipelines {
                         on_surfaces: true,
                         ..under_lines
                     };
-                    let caps_fragment = fragment(FragmentShader::Caps)?;
+                    let caps_fragment = fragment(PassShader::Caps)?;
                     let pipeline = this.pipeline(inputs, caps_fragment, triangles, caps)?;
                     this.add(pipeline, abi::CADR_PASS_TRIANGLES);
                 }
@@ -736,12 +776,12 @@ impl TechniquePipelines {
                     triangle_outlines: true,
                     ..plain
                 };
-                let edges = fragment(FragmentShader::Edges)?;
+                let edges = fragment(PassShader::Edges)?;
                 let pipeline = this.pipeline(inputs, edges, triangles, outlines)?;
                 this.add(pipeline, abi::CADR_PASS_TRIANGLES);
             }
             PassSet::Pick { .. } => {
-                let pick = fragment(FragmentShader::Pick)?;
+                let pick = fragment(PassShader::Pick)?;
                 let pipeline = this.pipeline(inputs, pick, triangles, plain)?;
                 this.add(pipeline, inputs.pick_kind);
             }
@@ -863,13 +903,24 @@ impl TechniquePipelines {
             fragment,
             ShaderStage::Fragment,
         )?;
+        let geometry = if raster.silhouette_lines {
+            Some(ShaderModule::from_spirv(
+                &self.device,
+                "silhouette_lines.geom",
+                inputs.shaders.shader(PassShader::SilhouetteLines)?,
+                ShaderStage::Geometry,
+            )?)
+        } else {
+            None
+        };
         let input = inputs.vertex_input;
         let count = (input.attribute_count as usize).min(input.formats.len());
         let attributes: Vec<(vk::Format, u32)> = (0..count)
             .map(|i| (vk::Format::from_raw(input.formats[i]), input.offsets[i]))
             .collect();
-        let surfaces =
-            topology == vk::PrimitiveTopology::TRIANGLE_LIST && !raster.triangle_outlines;
+        let surfaces = topology == vk::PrimitiveTopology::TRIANGLE_LIST
+            && !raster.triangle_outlines
+            && !raster.silhouette_lines;
         let translucent_frame = matches!(
             self.pass_set,
             PassSet::Shaded {
@@ -908,6 +959,7 @@ impl TechniquePipelines {
             &GraphicsPipelineDesc {
                 layout: &self.layout,
                 vertex: &vertex,
+                geometry: geometry.as_ref(),
                 fragment: &fragment,
                 vertex_layout: (input.stride != 0).then_some(VertexLayout {
                     stride: input.stride,
@@ -1070,9 +1122,14 @@ mod tests {
             dashed_hidden: false,
             lines_through_translucent: false,
             caps_over_lines: false,
+            hidden_silhouettes: false,
         };
         prepare(&mut cache, solid()).expect("solid");
-        assert_eq!(cache.fragments.len(), 1, "solid needs one fragment shader");
+        assert_eq!(
+            cache.pass_shaders.len(),
+            1,
+            "solid needs one fragment shader"
+        );
         prepare(
             &mut cache,
             PassSet::Shaded {
@@ -1082,11 +1139,12 @@ mod tests {
                 dashed_hidden: false,
                 lines_through_translucent: false,
                 caps_over_lines: false,
+                hidden_silhouettes: false,
             },
         )
         .expect("edges");
         assert_eq!(
-            cache.fragments.len(),
+            cache.pass_shaders.len(),
             2,
             "the sample count changes pipelines, not shaders"
         );
@@ -1097,7 +1155,29 @@ mod tests {
             },
         )
         .expect("pick");
-        assert_eq!(cache.fragments.len(), 3);
+        assert_eq!(cache.pass_shaders.len(), 3);
+        let dashed = |hidden_silhouettes| PassSet::Shaded {
+            mode: ShadeMode::HiddenLine,
+            translucent: false,
+            samples: 1,
+            dashed_hidden: true,
+            lines_through_translucent: false,
+            caps_over_lines: false,
+            hidden_silhouettes,
+        };
+        prepare(&mut cache, dashed(false)).expect("dashed");
+        assert_eq!(cache.pass_shaders.len(), 4, "the dashes' fragment shader");
+        assert!(!cache
+            .pass_shaders
+            .contains_key(&PassShader::SilhouetteLines));
+        prepare(&mut cache, dashed(true)).expect("dashed silhouettes");
+        assert!(
+            cache
+                .pass_shaders
+                .contains_key(&PassShader::SilhouetteLines),
+            "the hidden silhouettes' geometry shader"
+        );
+        assert_eq!(cache.pass_shaders.len(), 5);
         prepare(&mut cache, solid()).expect("again");
         assert_eq!(
             assembled, 1,

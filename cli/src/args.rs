@@ -549,6 +549,11 @@ pub struct BenchArgs {
     #[arg(long, value_name = "on,off", value_delimiter = ',', default_value = "on",
           value_parser = parse_on_off)]
     pub silhouettes: Vec<bool>,
+    /// Hidden-line rows with their hidden lines dashed, hidden silhouettes included: `--dashed`
+    /// alone measures them dashed, `--dashed on,off` both ways (their cost; default off).
+    #[arg(long, value_name = "on,off", value_delimiter = ',', num_args = 0..=1,
+          default_value = "off", default_missing_value = "on", value_parser = parse_on_off)]
+    pub dashed: Vec<bool>,
     /// Highlight styles to measure (comma-separated: tint,outline measures each row with
     /// each; default tint).
     #[arg(long, value_name = "tint,outline", value_delimiter = ',', default_value = "tint",

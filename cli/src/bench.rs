@@ -47,6 +47,8 @@ struct Row {
     ssao: bool,
     /// Whether silhouette edges were drawn (in the modes that draw them).
     silhouettes: bool,
+    /// Whether hidden lines were drawn dashed (in the hidden-line mode).
+    dashed: bool,
     /// How highlighted parts were drawn.
     highlight_style: HighlightStyle,
     cpu_us: f64,
@@ -130,6 +132,7 @@ impl Row {
             msaa: 1,
             ssao: false,
             silhouettes: true,
+            dashed: false,
             highlight_style: HighlightStyle::Tint,
             transforms: match transforms {
                 Transforms::Gpu => "gpu",
@@ -303,18 +306,23 @@ impl Bench {
             .flat_map(|(ssao, msaa, highlight_style)| {
                 args.silhouettes
                     .iter()
-                    .map(move |&silhouettes| RowSettings {
-                        ssao,
-                        msaa,
-                        highlight_style,
-                        silhouettes,
-                    })
+                    .map(move |&silhouettes| (ssao, msaa, highlight_style, silhouettes))
+            })
+            .flat_map(|(ssao, msaa, highlight_style, silhouettes)| {
+                args.dashed.iter().map(move |&dashed| RowSettings {
+                    ssao,
+                    msaa,
+                    highlight_style,
+                    silhouettes,
+                    dashed,
+                })
             })
             .collect();
-        // Silhouettes change only the modes that draw them: other modes get one row for the
-        // first setting listed.
+        // Silhouettes change only the modes that draw them, dashes only hidden-line: other
+        // modes get one row for the first setting listed.
         let measured_in = |settings: &RowSettings, mode: ShadeMode| {
-            mode.draws_silhouettes() || settings.silhouettes == args.silhouettes[0]
+            (mode.draws_silhouettes() || settings.silhouettes == args.silhouettes[0])
+                && (mode == ShadeMode::HiddenLine || settings.dashed == args.dashed[0])
         };
         let rows_to_measure = settings
             .iter()
@@ -362,6 +370,7 @@ impl Bench {
                         .techniques()
                         .set_min_pixels(self.min_pixels)
                         .map_err(|e| e.to_string())?;
+                    session.techniques().set_dashed_hidden_lines(setting.dashed);
                     let measured = measure(self.frames, |frame| {
                         session.render_moving(&motion, view, frame)
                     })?;
@@ -370,6 +379,7 @@ impl Bench {
                         msaa: setting.msaa,
                         ssao: setting.ssao,
                         silhouettes: setting.silhouettes,
+                        dashed: setting.dashed && mode == ShadeMode::HiddenLine,
                         highlight_style: setting.highlight_style,
                         ..Row::new(combination.to_string(), mode.name(), transforms, measured)
                     };
@@ -398,12 +408,17 @@ struct RowSettings {
     msaa: u32,
     highlight_style: HighlightStyle,
     silhouettes: bool,
+    dashed: bool,
 }
 
 /// The display mode of a row, with "+ao" when ambient occlusion was on, "+outline" with the
-/// outline highlight style and "-sil" when a mode that draws silhouettes did not.
+/// outline highlight style, "+dashed" for hidden-line with its hidden lines dashed and "-sil"
+/// when a mode that draws silhouettes did not.
 fn shade_label(row: &Row) -> String {
     let mut label = row.shade.to_owned();
+    if row.dashed {
+        label += "+dashed";
+    }
     if row.ssao {
         label += "+ao";
     }
@@ -470,6 +485,7 @@ fn row_json(row: &Row, baseline_cpu: f64) -> serde_json::Value {
         "msaa": row.msaa,
         "ssao": row.ssao,
         "silhouettes": row.silhouettes,
+        "dashed": row.dashed,
         "highlight_style": row.highlight_style.name(),
         "cpu_us": row.cpu_us,
         "cpu_submit_us": row.cpu_submit_us,

@@ -1153,6 +1153,44 @@ fn msaa_anti_aliases_render_and_bench_measures_each_level() {
     let text = stdout(&output);
     assert!(text.contains("hidden-line+outline-sil"), "{text}");
 
+    // Hidden-line dashed and not; the other modes once.
+    for (dashed, expected) in [
+        (
+            "on,off",
+            &[
+                ("solid", false),
+                ("hidden-line", true),
+                ("hidden-line", false),
+            ][..],
+        ),
+        ("", &[("solid", false), ("hidden-line", true)][..]),
+    ] {
+        let mut options = vec!["--display", "solid,hidden-line", "--dashed"];
+        if !dashed.is_empty() {
+            options.push(dashed);
+        }
+        let (output, json) = small_bench("gen:grid:parts=200", &json_path, &options);
+        let rows: Vec<(String, bool)> = json["rows"].as_array().unwrap()[1..]
+            .iter()
+            .map(|row| {
+                (
+                    row["shade"].as_str().unwrap().to_owned(),
+                    row["dashed"].as_bool().unwrap(),
+                )
+            })
+            .collect();
+        let expected: Vec<(String, bool)> = expected
+            .iter()
+            .map(|(mode, dashed)| ((*mode).to_owned(), *dashed))
+            .collect();
+        assert_eq!(rows, expected, "--dashed {dashed}");
+        assert!(
+            stdout(&output).contains("hidden-line+dashed"),
+            "{}",
+            stdout(&output)
+        );
+    }
+
     let output = cadr(&["bench", "gen:grid:parts=200", "--silhouettes", "maybe"]);
     assert_eq!(output.status.code(), Some(2), "{}", stderr(&output));
     assert!(

@@ -11,7 +11,7 @@
 #define CADR_PLUGIN_ABI_MAJOR 1
 
 // Minor version of this ABI: additions that older readers may ignore.
-#define CADR_PLUGIN_ABI_MINOR 11
+#define CADR_PLUGIN_ABI_MINOR 12
 
 // `(major << 16) | minor`, what [`CadrPluginVersionFn`] returns.
 #define CADR_PLUGIN_ABI_VERSION ((CADR_PLUGIN_ABI_MAJOR << 16) | CADR_PLUGIN_ABI_MINOR)
@@ -1038,6 +1038,12 @@ typedef struct CadrTransparencyVtable {
 // its base-colour texture's texels (its material's opacity is 1), so with textures turned off
 // it is opaque.
 #define CADR_INSTANCE_TRANSLUCENT_BY_TEXTURE (1 << 7)
+
+// Since ABI 1.12: some triangle of the part has vertex normals that differ (the shared
+// normals of a curved surface, where a silhouette can run across a triangle). The hidden-line
+// mode's hidden silhouettes pass needs only such parts: a part whose every triangle has one
+// normal yields no silhouette segment there.
+#define CADR_INSTANCE_CURVED (1 << 8)
 
 // Triangles (solid shading).
 #define CADR_PASS_TRIANGLES 0

@@ -4,10 +4,10 @@
 // is tessellated with shared normals that vary across its triangles, so its silhouette (the
 // outline that no feature edge marks: a hole's or a shaft's sides) is where the surface turns
 // from facing the eye to facing away, the zero of n·v interpolated across each triangle: the
-// segment between the two points on the triangle's edges where that sign changes. A flat face
-// has one normal, so it changes sign nowhere and emits nothing; a faceted mesh (a normal per
-// facet) emits nothing either: its outline runs along feature edges or across facets the
-// screen-space silhouettes of the visible picture find.
+// segment between the two points on the triangle's edges where that sign changes. A triangle
+// with one normal (a flat face, a faceted mesh's facet) emits nothing: a faceted mesh's outline
+// runs along its facets' edges, where only the screen-space silhouettes of the visible picture
+// find it.
 #include "frame.glsl"
 
 layout(triangles) in;
@@ -66,6 +66,11 @@ void emit_crossing(int a, int b, float facing_a, float facing_b) {
 void main() {
     // A part the vertex shader clipped away whole (one its pass does not draw) has every clip
     // distance negative: its segment is clipped too.
+    // A triangle with one normal is flat: no silhouette crosses it (the parts without any
+    // other, not CADR_INSTANCE_CURVED, are left out of the pass).
+    if (in_view_normal[0] == in_view_normal[1] && in_view_normal[1] == in_view_normal[2]) {
+        return;
+    }
     float g[3] = float[3](facing(0), facing(1), facing(2));
     // The sign changes on no edge or on two.
     for (int a = 0; a < 3; ++a) {

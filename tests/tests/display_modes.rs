@@ -205,15 +205,27 @@ fn ambient_occlusion_darkens_where_parts_meet_and_only_there() {
     f.assert_no_validation_errors();
 }
 
+/// `scene` in a view of `SIZE`, seen from `eye` looking at the origin.
+fn seen_from(scene: &Scene, eye: DVec3) -> SceneView {
+    let aspect = f64::from(SIZE.0) / f64::from(SIZE.1);
+    let camera = Camera::look_at(eye, DVec3::ZERO, DEFAULT_FOV_DEGREES, aspect, 0.1, 100.0);
+    SceneView::new(test_device(), scene, SIZE, camera)
+}
+
+/// Gives `geometry` the feature edges `feature_edges` derives at the default crease angle.
+fn with_feature_edges(geometry: &mut Geometry) {
+    let (wire_indices, parts) = feature_edges(geometry, DEFAULT_CREASE_DEGREES);
+    geometry.wire_indices = wire_indices;
+    geometry.parts = parts;
+}
+
 /// A smooth cylinder (48 facets, radius 1, from y = -1 to 1) whose only feature edges are its
 /// rims: its sides are outlined by silhouettes alone.
 fn smooth_cylinder() -> Scene {
     let mut builder = GeometryBuilder::new("cylinder");
     builder.prism(48, DMat4::from_scale(DVec3::new(1.0, 2.0, 1.0)));
     let mut geometry = builder.finish();
-    let (wire_indices, parts) = feature_edges(&geometry, DEFAULT_CREASE_DEGREES);
-    geometry.wire_indices = wire_indices;
-    geometry.parts = parts;
+    with_feature_edges(&mut geometry);
     let mut node = Node::new("cylinder");
     node.mesh = Some(MeshRef::new(0, vec![0]));
     Scene {
@@ -228,16 +240,7 @@ fn smooth_cylinder() -> Scene {
 
 /// The smooth cylinder seen a little from above, its sides upright in the picture.
 fn smooth_cylinder_view() -> SceneView {
-    let aspect = f64::from(SIZE.0) / f64::from(SIZE.1);
-    let camera = Camera::look_at(
-        DVec3::new(0.0, 1.5, 6.0),
-        DVec3::ZERO,
-        DEFAULT_FOV_DEGREES,
-        aspect,
-        0.1,
-        100.0,
-    );
-    SceneView::new(test_device(), &smooth_cylinder(), SIZE, camera)
+    seen_from(&smooth_cylinder(), DVec3::new(0.0, 1.5, 6.0))
 }
 
 /// Silhouette edges outline the sides of a smooth cylinder in the modes that draw feature edges
@@ -353,9 +356,7 @@ fn shared_normal_cylinder() -> Geometry {
         first_wire_index: 0,
         wire_index_count: 0,
     }];
-    let (wire_indices, parts) = feature_edges(&geometry, DEFAULT_CREASE_DEGREES);
-    geometry.wire_indices = wire_indices;
-    geometry.parts = parts;
+    with_feature_edges(&mut geometry);
     geometry
 }
 
@@ -369,9 +370,7 @@ fn cylinder_behind_a_plate() -> SceneView {
         DMat4::IDENTITY,
     );
     let mut plate = builder.finish();
-    let (wire_indices, parts) = feature_edges(&plate, DEFAULT_CREASE_DEGREES);
-    plate.wire_indices = wire_indices;
-    plate.parts = parts;
+    with_feature_edges(&mut plate);
     let mut nodes = Vec::new();
     for (geometry, name) in [(0, "cylinder"), (1, "plate")] {
         let mut node = Node::new(name);
@@ -386,16 +385,7 @@ fn cylinder_behind_a_plate() -> SceneView {
         roots: vec![0, 1],
         ..Scene::default()
     };
-    let aspect = f64::from(SIZE.0) / f64::from(SIZE.1);
-    let camera = Camera::look_at(
-        DVec3::new(0.0, 0.3, 6.0),
-        DVec3::ZERO,
-        DEFAULT_FOV_DEGREES,
-        aspect,
-        0.1,
-        100.0,
-    );
-    SceneView::new(test_device(), &scene, SIZE, camera)
+    seen_from(&scene, DVec3::new(0.0, 0.3, 6.0))
 }
 
 /// Hidden-line with dashed hidden lines dashes the silhouettes of hidden curved surfaces too
@@ -403,7 +393,7 @@ fn cylinder_behind_a_plate() -> SceneView {
 /// plate, which no feature edge marks, show as dashes in the rows the plate hides, close to
 /// the cylinder's outline and nowhere across it; not where the sides are seen (the visible
 /// silhouettes are solid lines), not without silhouettes, not without dashes; with MSAA and
-/// through a GPU culler too.
+/// through a GPU culler too; the pass draws only the curved part, not the faceted plate.
 #[test]
 fn hidden_line_dashes_the_silhouettes_of_hidden_curved_surfaces() {
     let mut f = cylinder_behind_a_plate();
@@ -464,6 +454,18 @@ fn hidden_line_dashes_the_silhouettes_of_hidden_curved_surfaces() {
         let dashed_without_silhouettes = draw(true, false);
         let solid_lines = draw(false, true);
         let solid_lines_without_silhouettes = draw(false, false);
+        // The silhouettes' pass draws the curved cylinder alone (CADR_INSTANCE_CURVED):
+        // the faceted plate has no triangle a silhouette crosses.
+        let mut steady_draws = |silhouettes: bool| {
+            f.view.techniques_mut().set_dashed_hidden_lines(true);
+            f.view.renderer_mut().set_silhouettes(silhouettes).unwrap();
+            f.steady_draws()
+        };
+        let pass_draws = steady_draws(true) - steady_draws(false);
+        assert_eq!(
+            pass_draws, 1,
+            "{case}: the silhouettes' pass draws one part"
+        );
         let [hidden_left, hidden_right, across] =
             changed(&dashed, &dashed_without_silhouettes, hidden_rows.clone());
         assert!(
@@ -581,16 +583,7 @@ fn two_cubes() -> SceneView {
         scene.nodes.push(node);
         scene.roots.push(i as u32);
     }
-    let aspect = f64::from(SIZE.0) / f64::from(SIZE.1);
-    let camera = Camera::look_at(
-        DVec3::new(0.0, 0.0, 8.0),
-        DVec3::ZERO,
-        DEFAULT_FOV_DEGREES,
-        aspect,
-        0.1,
-        100.0,
-    );
-    SceneView::new(test_device(), &scene, SIZE, camera)
+    seen_from(&scene, DVec3::new(0.0, 0.0, 8.0))
 }
 
 /// The highlight styles: tint mixes the highlighted cube's colour towards orange; outline keeps

@@ -26,7 +26,8 @@ pub(super) struct GeometryPlace {
     /// Vertices, indices and wire indices the place can hold (its size when laid out).
     room: [u32; 3],
     /// Per part: first index, count, first wire index, wire count (relative), bounding sphere,
-    /// and its closure as instance flags (`CADR_INSTANCE_CLOSED`, `CADR_INSTANCE_INSIDE_OUT`).
+    /// and its shape as instance flags (`CADR_INSTANCE_CLOSED`, `CADR_INSTANCE_INSIDE_OUT`,
+    /// `CADR_INSTANCE_CURVED`).
     pub(super) parts: Vec<([u32; 4], [f32; 4], u32)>,
 }
 
@@ -84,13 +85,29 @@ fn part_sphere(vertices: &[Vertex], indices: &[u32]) -> [f32; 4] {
     [center[0], center[1], center[2], radius * (1.0 + 1e-5)]
 }
 
-/// The instance flags of a part's closure.
-fn closure_flags(vertices: &[Vertex], indices: &[u32]) -> u32 {
-    match closure(vertices, indices) {
+/// The instance flags of a part's shape: its closure, and whether it is curved.
+fn shape_flags(vertices: &[Vertex], indices: &[u32]) -> u32 {
+    let closure = match closure(vertices, indices) {
         Closure::Open => 0,
         Closure::Closed => abi::CADR_INSTANCE_CLOSED,
         Closure::InsideOut => abi::CADR_INSTANCE_CLOSED | abi::CADR_INSTANCE_INSIDE_OUT,
-    }
+    };
+    let curved = if is_curved(vertices, indices) {
+        abi::CADR_INSTANCE_CURVED
+    } else {
+        0
+    };
+    closure | curved
+}
+
+/// Whether some triangle of `indices` has vertex normals that differ (bit for bit: the hidden
+/// silhouettes' geometry shader skips a triangle whose three normals are the same).
+fn is_curved(vertices: &[Vertex], indices: &[u32]) -> bool {
+    let normal = |i: u32| vertices.get(i as usize).map(|v| v.normal.map(f32::to_bits));
+    indices.chunks_exact(3).any(|triangle| {
+        let first = normal(triangle[0]);
+        triangle[1..].iter().any(|&i| normal(i) != first)
+    })
 }
 
 fn part_entries(data: &ArenaData<'_>) -> Vec<([u32; 4], [f32; 4], u32)> {
@@ -107,7 +124,7 @@ fn part_entries(data: &ArenaData<'_>) -> Vec<([u32; 4], [f32; 4], u32)> {
                     p.wire_index_count,
                 ],
                 part_sphere(data.vertices, &data.indices[start..end]),
-                closure_flags(data.vertices, &data.indices[start..end]),
+                shape_flags(data.vertices, &data.indices[start..end]),
             )
         })
         .collect()
@@ -275,5 +292,33 @@ fn extend_attributes(attributes: &mut Vec<VertexAttributes>, geometry: &Geometry
             attributes.len() + geometry.vertices.len(),
             VertexAttributes::default(),
         );
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::generate::GeometryBuilder;
+    use glam::DMat4;
+
+    #[test]
+    fn a_part_is_curved_where_a_triangle_has_normals_that_differ() {
+        let mut builder = GeometryBuilder::new("prism");
+        builder.prism(48, DMat4::IDENTITY);
+        let faceted = builder.finish();
+        assert_eq!(
+            shape_flags(&faceted.vertices, &faceted.indices) & abi::CADR_INSTANCE_CURVED,
+            0,
+            "a normal per facet"
+        );
+        let vertex = |position: [f32; 3], normal: [f32; 3]| Vertex { position, normal };
+        let shared = [
+            vertex([0.0, 0.0, 0.0], [0.0, 0.0, 1.0]),
+            vertex([1.0, 0.0, 0.0], [0.6, 0.0, 0.8]),
+            vertex([0.0, 1.0, 0.0], [0.0, 0.0, 1.0]),
+        ];
+        assert!(is_curved(&shared, &[0, 1, 2]));
+        assert!(!is_curved(&shared, &[0, 2, 0]), "one normal");
+        assert!(!is_curved(&shared, &[]));
     }
 }

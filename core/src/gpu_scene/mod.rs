@@ -990,14 +990,14 @@ fn entry_in(
     instance: &InstanceRef,
 ) -> Option<(abi::CadrInstance, bool)> {
     let place = arenas.places.get(instance.geometry as usize)?.as_ref()?;
-    let ([first, count, first_wire, wire_count], sphere, closure) =
+    let ([first, count, first_wire, wire_count], sphere, shape) =
         *place.parts.get(instance.part as usize)?;
     let translucency = translucency
         .get(instance.material as usize)
         .copied()
         .unwrap_or(0);
     let flags = with_translucency(abi::CADR_INSTANCE_ALIVE, translucency)
-        | closure
+        | shape
         | if instance.highlighted {
             abi::CADR_INSTANCE_HIGHLIGHTED
         } else {

@@ -141,12 +141,14 @@ enum DrawRole {
     Translucent = 2,
 }
 
-/// What a pass's vertex shader lets through: its draw role, and whether it is the section
-/// caps' pass (`CADR_CAPS_PASS`, closed parts a plane cuts only).
+/// What a pass lets through: its vertex shader's draw role, whether it is the section caps'
+/// pass (`CADR_CAPS_PASS`, closed parts a plane cuts only), and whether it is the hidden
+/// silhouettes' pass (whose geometry shader yields nothing for a part that is not curved).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 struct PassScope {
     role: DrawRole,
     caps: bool,
+    silhouettes: bool,
 }
 
 impl PassScope {
@@ -186,6 +188,10 @@ impl PassScope {
         if self.caps {
             mask |= abi::CADR_INSTANCE_CLOSED;
             value |= abi::CADR_INSTANCE_CLOSED;
+        }
+        if self.silhouettes {
+            mask |= abi::CADR_INSTANCE_CURVED;
+            value |= abi::CADR_INSTANCE_CURVED;
         }
         let filter = abi::CadrPassFilter {
             mask,
@@ -953,6 +959,7 @@ impl TechniquePipelines {
         let scope = PassScope {
             role,
             caps: raster.on_surfaces,
+            silhouettes: raster.silhouette_lines,
         };
         let pipeline = Pipeline::graphics(
             &self.device,
@@ -1022,9 +1029,10 @@ mod tests {
         )
     }
 
-    /// Whether technique.vert draws a part with `flags` in a pass of `scope`: its translucency
-    /// test, role and caps clipping, as the shader decides them.
-    fn vertex_shader_draws(scope: PassScope, xray: bool, textures: bool, flags: u32) -> bool {
+    /// Whether a pass of `scope` draws anything of a part with `flags`: technique.vert's
+    /// translucency test, role and caps clipping, as the shader decides them, and for the
+    /// hidden silhouettes' pass whether its geometry shader can yield a segment.
+    fn pass_draws(scope: PassScope, xray: bool, textures: bool, flags: u32) -> bool {
         let set = |bit: u32| flags & bit != 0;
         let by_material = set(abi::CADR_INSTANCE_TRANSLUCENT)
             && (textures || !set(abi::CADR_INSTANCE_TRANSLUCENT_BY_TEXTURE));
@@ -1034,11 +1042,14 @@ mod tests {
             DrawRole::Opaque => !translucent,
             DrawRole::Translucent => translucent,
         };
-        drawn && (!scope.caps || set(abi::CADR_INSTANCE_CLOSED))
+        drawn
+            && (!scope.caps || set(abi::CADR_INSTANCE_CLOSED))
+            && (!scope.silhouettes || set(abi::CADR_INSTANCE_CURVED))
     }
 
     #[test]
-    fn a_pass_filter_leaves_out_only_what_its_vertex_shader_clips() {
+    fn a_pass_filter_leaves_out_only_what_its_pass_cannot_draw() {
+        use abi::CADR_INSTANCE_CURVED as CURVED;
         use abi::CADR_INSTANCE_TRANSLUCENT as TRANSLUCENT;
         use abi::CADR_INSTANCE_TRANSLUCENT_BY_TEXTURE as BY_TEXTURE;
         use abi::{CADR_INSTANCE_CLOSED as CLOSED, CADR_INSTANCE_HIGHLIGHTED as HIGHLIGHTED};
@@ -1046,27 +1057,34 @@ mod tests {
         for highlighted in [0, HIGHLIGHTED] {
             for translucency in [0, TRANSLUCENT, TRANSLUCENT | BY_TEXTURE] {
                 for closed in [0, CLOSED] {
-                    every_flags.push(highlighted | translucency | closed);
+                    for curved in [0, CURVED] {
+                        every_flags.push(highlighted | translucency | closed | curved);
+                    }
                 }
             }
         }
         let mut kept_needlessly = Vec::new();
         for role in [DrawRole::All, DrawRole::Opaque, DrawRole::Translucent] {
-            for caps in [false, true] {
-                let scope = PassScope { role, caps };
+            for (caps, silhouettes) in [(false, false), (true, false), (false, true)] {
+                let scope = PassScope {
+                    role,
+                    caps,
+                    silhouettes,
+                };
                 for (xray, textures) in [(false, false), (false, true), (true, false), (true, true)]
                 {
                     let (filter, exclusion) = scope.filter(xray, textures);
                     let keeps = |flags| filter.keeps(flags) && !exclusion.excludes(flags);
                     for &flags in &every_flags {
-                        let drawn = vertex_shader_draws(scope, xray, textures, flags);
+                        let drawn = pass_draws(scope, xray, textures, flags);
                         assert!(
                             keeps(flags) || !drawn,
                             "{scope:?} xray {xray} textures {textures}: flags {flags:#x} drawn \
                              but filtered out"
                         );
                         if keeps(flags) && !drawn {
-                            kept_needlessly.push((role, caps, xray, textures, flags & !CLOSED));
+                            let shapeless = flags & !(CLOSED | CURVED);
+                            kept_needlessly.push((scope, xray, textures, shapeless));
                         }
                     }
                 }
@@ -1078,9 +1096,12 @@ mod tests {
         let textured_highlighted = HIGHLIGHTED | TRANSLUCENT | BY_TEXTURE;
         assert_eq!(
             kept_needlessly,
-            [false, true].map(|caps| (
-                DrawRole::Translucent,
-                caps,
+            [(false, false), (true, false), (false, true)].map(|(caps, silhouettes)| (
+                PassScope {
+                    role: DrawRole::Translucent,
+                    caps,
+                    silhouettes
+                },
                 true,
                 false,
                 textured_highlighted
@@ -1090,10 +1111,12 @@ mod tests {
         let caps = PassScope {
             role: DrawRole::All,
             caps: true,
+            silhouettes: false,
         };
         let opaque = PassScope {
             role: DrawRole::Opaque,
             caps: false,
+            silhouettes: false,
         };
         assert_eq!(caps.filter(false, true).0.section_cut, 1);
         assert_eq!(opaque.filter(false, true).0.section_cut, 0);

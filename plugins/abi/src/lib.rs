@@ -36,7 +36,7 @@ use std::ffi::{c_char, c_void};
 /// Major version of this ABI: a library built for another major version is refused.
 pub const CADR_PLUGIN_ABI_MAJOR: u32 = 1;
 /// Minor version of this ABI: additions that older readers may ignore.
-pub const CADR_PLUGIN_ABI_MINOR: u32 = 11;
+pub const CADR_PLUGIN_ABI_MINOR: u32 = 12;
 /// `(major << 16) | minor`, what [`CadrPluginVersionFn`] returns.
 pub const CADR_PLUGIN_ABI_VERSION: u32 = (CADR_PLUGIN_ABI_MAJOR << 16) | CADR_PLUGIN_ABI_MINOR;
 
@@ -405,6 +405,11 @@ pub const CADR_INSTANCE_TRANSLUCENT: CadrInstanceFlags = 1 << 6;
 /// its base-colour texture's texels (its material's opacity is 1), so with textures turned off
 /// it is opaque.
 pub const CADR_INSTANCE_TRANSLUCENT_BY_TEXTURE: CadrInstanceFlags = 1 << 7;
+/// Since ABI 1.12: some triangle of the part has vertex normals that differ (the shared
+/// normals of a curved surface, where a silhouette can run across a triangle). The hidden-line
+/// mode's hidden silhouettes pass needs only such parts: a part whose every triangle has one
+/// normal yields no silhouette segment there.
+pub const CADR_INSTANCE_CURVED: CadrInstanceFlags = 1 << 8;
 
 /// One drawable part on one path of the scene tree (the unit of "individual" drawing). Index
 /// positions are absolute element offsets in the scene's index buffers; indices are relative

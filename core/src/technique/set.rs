@@ -373,8 +373,17 @@ impl Techniques {
     }
 
     /// Shows hidden edges dashed in the hidden-line mode, or removes them (the default); from
-    /// the next frame (other modes are not affected).
+    /// the next frame (other modes are not affected). With silhouettes on, the silhouettes of
+    /// hidden curved surfaces are dashed too where the device has geometry shaders; where it
+    /// has none, turning dashes on logs a warning that says they are left out.
     pub fn set_dashed_hidden_lines(&mut self, dashed: bool) {
+        if dashed && !self.dashed_hidden_lines && !self.device.capabilities().geometry_shader {
+            log::warn!(
+                "dashed hidden lines on {}: the silhouettes of hidden curved surfaces are not \
+                 drawn, the device has no geometry shaders (geometryShader)",
+                self.device.adapter().name
+            );
+        }
         self.dashed_hidden_lines = dashed;
     }
 

@@ -46,6 +46,18 @@ fn point((x, y): (f64, f64), dx: f64, dy: f64) -> DVec3 {
     DVec3::new(x + dx, y + dy, 0.0)
 }
 
+/// The centre of cell (`i`, `j`) of the checker quad's texture: 16 cells across, counted from
+/// its top left.
+fn checker_cell_center(i: f64, j: f64) -> DVec3 {
+    let half = textured::QUAD_SIZE / 2.0;
+    let cell = textured::QUAD_SIZE / 16.0;
+    point(
+        textured::CHECKER,
+        -half + cell * (i + 0.5),
+        half - cell * (j + 0.5),
+    )
+}
+
 fn brightness(c: [f32; 3]) -> f32 {
     c.iter().sum::<f32>() / 3.0
 }
@@ -95,15 +107,7 @@ fn textures_colours_and_alpha_reach_the_picture() {
     let camera = f.camera;
     let at = |image: &image::RgbaImage, p: DVec3| color_at(image, &camera, p);
     let half = textured::QUAD_SIZE / 2.0;
-    // Checker: 16 cells across the quad, 0.1 units each.
-    let cell = textured::QUAD_SIZE / 16.0;
-    let cell_center = |i: f64, j: f64| {
-        point(
-            textured::CHECKER,
-            -half + cell * (i + 0.5),
-            half - cell * (j + 0.5),
-        )
-    };
+    let cell_center = checker_cell_center;
     for (i, j) in [(3.0, 4.0), (8.0, 8.0), (12.0, 1.0)] {
         let (a, b) = (
             at(&image, cell_center(i, j)),
@@ -201,6 +205,40 @@ fn textures_colours_and_alpha_reach_the_picture() {
     f.view.renderer_mut().set_textures(true);
     let again = f.render();
     assert!(compare(&again, &image).unwrap().within(SAME_PICTURE));
+    f.assert_no_validation_errors();
+}
+
+/// The textured file in the display modes `textures_colours_and_alpha_reach_the_picture` does
+/// not draw (solid and X-ray): each matches its reference; edges keeps the texture under its
+/// lines, the line-only modes fill no surface, so no checker shows.
+#[test]
+fn the_textured_file_in_the_edge_and_line_modes_matches_its_references() {
+    let scene = textured_scene("modes");
+    let mut f = front_view(&scene);
+    let camera = f.camera;
+    let cells_apart = |image: &image::RgbaImage| {
+        let at = |i, j| brightness(color_at(image, &camera, checker_cell_center(i, j)));
+        (at(2.0, 5.0) - at(3.0, 5.0)).abs()
+    };
+    for mode in [
+        ShadeMode::Edges,
+        ShadeMode::HiddenLine,
+        ShadeMode::Wireframe,
+    ] {
+        f.view.techniques_mut().set_shade_mode(mode).unwrap();
+        let image = f.render();
+        assert_matches_reference(
+            &format!("textured_{}", mode.name().replace('-', "_")),
+            &image,
+            DEFAULT_TOLERANCE,
+        );
+        let apart = cells_apart(&image);
+        if mode == ShadeMode::Edges {
+            assert!(apart > 0.3, "edges: the checker shows: {apart}");
+        } else {
+            assert!(apart < 0.02, "{mode:?}: no checker: {apart}");
+        }
+    }
     f.assert_no_validation_errors();
 }
 

@@ -388,47 +388,122 @@ fn cylinder_behind_a_plate() -> SceneView {
     seen_from(&scene, DVec3::new(0.0, 0.3, 6.0))
 }
 
+/// The pixels in `rows` that differ between two pictures, in three counts: within 2 pixels of
+/// column `left`, within 2 of column `right`, elsewhere from `left - 6` to `right + 6`.
+fn changed_near(
+    (a, b): (&image::RgbaImage, &image::RgbaImage),
+    (left, right): (u32, u32),
+    rows: std::ops::RangeInclusive<u32>,
+) -> [usize; 3] {
+    let mut counts = [0_usize; 3];
+    for y in rows {
+        for x in left - 6..=right + 6 {
+            if a.get_pixel(x, y) != b.get_pixel(x, y) {
+                let side = if x.abs_diff(left) <= 2 {
+                    0
+                } else if x.abs_diff(right) <= 2 {
+                    1
+                } else {
+                    2
+                };
+                counts[side] += 1;
+            }
+        }
+    }
+    counts
+}
+
+/// Checks `cylinder_behind_a_plate` in hidden-line as its view now draws it (its camera, MSAA
+/// and techniques), the cylinder's outline touching it at x = ±`tangent.0`, z = `tangent.1`:
+/// dashes along both hidden sides and nowhere across, none along the sides seen, none without
+/// silhouettes or dashes; the silhouettes' pass draws the curved cylinder alone.
+fn assert_hidden_silhouettes(f: &mut SceneView, (tangent_x, tangent_z): (f64, f64), case: &str) {
+    let camera = f.camera;
+    let at = |x: f64, y: f64| images::pixel_of(&camera, SIZE, DVec3::new(x, y, tangent_z));
+    let columns = (at(-tangent_x, 0.0).0, at(tangent_x, 0.0).0);
+    // Rows the plate hides (the cylinder's y from 0.3 down to -0.35), rows where the sides are
+    // seen (y from 0.8 down to 0.65), clear of the plate's edges and the rims.
+    let hidden_rows = at(0.0, 0.3).1..=at(0.0, -0.35).1;
+    let seen_rows = at(0.0, 0.8).1..=at(0.0, 0.65).1;
+    assert!(hidden_rows.clone().count() >= 10 && seen_rows.clone().count() >= 3);
+    f.view
+        .techniques_mut()
+        .set_shade_mode(ShadeMode::HiddenLine)
+        .unwrap();
+    let mut draw = |dashed: bool, silhouettes: bool| {
+        f.view.techniques_mut().set_dashed_hidden_lines(dashed);
+        f.view.renderer_mut().set_silhouettes(silhouettes).unwrap();
+        f.render()
+    };
+    let dashed = draw(true, true);
+    let dashed_without_silhouettes = draw(true, false);
+    let solid_lines = draw(false, true);
+    let solid_lines_without_silhouettes = draw(false, false);
+    let [hidden_left, hidden_right, across] = changed_near(
+        (&dashed, &dashed_without_silhouettes),
+        columns,
+        hidden_rows.clone(),
+    );
+    assert!(
+        hidden_left >= 4 && hidden_right >= 4,
+        "{case}: dashes along both hidden sides: {hidden_left}, {hidden_right}"
+    );
+    assert_eq!(across, 0, "{case}: no dash across the hidden curved face");
+    let [seen_left, seen_right, _] =
+        changed_near((&dashed, &solid_lines), columns, seen_rows.clone());
+    assert_eq!(
+        (seen_left, seen_right),
+        (0, 0),
+        "{case}: the sides seen are not dashed"
+    );
+    assert_eq!(
+        changed_near(
+            (
+                &dashed_without_silhouettes,
+                &solid_lines_without_silhouettes
+            ),
+            columns,
+            hidden_rows.clone()
+        ),
+        [0, 0, 0],
+        "{case}: without silhouettes, no hidden side is dashed"
+    );
+    assert_eq!(
+        changed_near(
+            (&solid_lines, &solid_lines_without_silhouettes),
+            columns,
+            hidden_rows
+        ),
+        [0, 0, 0],
+        "{case}: without dashes, no hidden side is drawn"
+    );
+    // The silhouettes' pass draws the curved cylinder alone (CADR_INSTANCE_CURVED): the
+    // faceted plate has no triangle a silhouette crosses.
+    let mut steady_draws = |silhouettes: bool| {
+        f.view.techniques_mut().set_dashed_hidden_lines(true);
+        f.view.renderer_mut().set_silhouettes(silhouettes).unwrap();
+        f.steady_draws()
+    };
+    let pass_draws = steady_draws(true) - steady_draws(false);
+    assert_eq!(
+        pass_draws, 1,
+        "{case}: the silhouettes' pass draws one part"
+    );
+}
+
 /// Hidden-line with dashed hidden lines dashes the silhouettes of hidden curved surfaces too
 /// (where the device has geometry shaders, as lavapipe does): the sides of a cylinder behind a
 /// plate, which no feature edge marks, show as dashes in the rows the plate hides, close to
 /// the cylinder's outline and nowhere across it; not where the sides are seen (the visible
-/// silhouettes are solid lines), not without silhouettes, not without dashes; with MSAA and
-/// through a GPU culler too; the pass draws only the curved part, not the faceted plate.
+/// silhouettes are solid lines), not without silhouettes, not without dashes; with MSAA,
+/// through a GPU culler and seen through an orthographic projection too; the pass draws only
+/// the curved part, not the faceted plate.
 #[test]
 fn hidden_line_dashes_the_silhouettes_of_hidden_curved_surfaces() {
     let mut f = cylinder_behind_a_plate();
     assert!(f.device.capabilities().geometry_shader, "lavapipe has them");
-    // The outline's columns: where the eye's tangents touch the cylinder.
-    let (tangent_x, tangent_z) = ((1.0_f64 - 1.0 / 36.0).sqrt(), 1.0 / 6.0);
-    let at = |x: f64, y: f64| images::pixel_of(&f.camera, SIZE, DVec3::new(x, y, tangent_z));
-    let (left, _) = at(-tangent_x, 0.0);
-    let (right, _) = at(tangent_x, 0.0);
-    // Rows the plate hides (the cylinder's y from 0.3 down to -0.5), rows where the sides are
-    // seen (y from 0.8 down to 0.65), clear of the plate's edges and the rims.
-    let hidden_rows = at(0.0, 0.3).1..=at(0.0, -0.5).1;
-    let seen_rows = at(0.0, 0.8).1..=at(0.0, 0.65).1;
-    assert!(hidden_rows.clone().count() >= 10 && seen_rows.clone().count() >= 3);
-    // The pixels in `rows` that differ between two pictures: at the outline's left side, at
-    // its right side, and elsewhere across the cylinder.
-    let changed =
-        |a: &image::RgbaImage, b: &image::RgbaImage, rows: std::ops::RangeInclusive<u32>| {
-            let mut counts = [0_usize; 3];
-            for y in rows {
-                for x in left - 6..=right + 6 {
-                    if a.get_pixel(x, y) != b.get_pixel(x, y) {
-                        let side = if x.abs_diff(left) <= 2 {
-                            0
-                        } else if x.abs_diff(right) <= 2 {
-                            1
-                        } else {
-                            2
-                        };
-                        counts[side] += 1;
-                    }
-                }
-            }
-            counts
-        };
+    // Where the eye's tangents touch the cylinder (radius 1, the eye 6 from its axis).
+    let perspective_tangent = ((1.0_f64 - 1.0 / 36.0).sqrt(), 1.0 / 6.0);
     let combinations = [
         Combination::built_in(),
         scene_wide("individual-indirect-count", "gpu-frustum"),
@@ -439,65 +514,26 @@ fn hidden_line_dashes_the_silhouettes_of_hidden_curved_surfaces() {
         .chain([(&combinations[0], 1)])
     {
         f.view.techniques_mut().select(combination).unwrap();
-        f.view
-            .techniques_mut()
-            .set_shade_mode(ShadeMode::HiddenLine)
-            .unwrap();
         f.view.renderer_mut().set_msaa(samples).unwrap();
         let case = format!("{combination} {samples}x");
-        let mut draw = |dashed: bool, silhouettes: bool| {
-            f.view.techniques_mut().set_dashed_hidden_lines(dashed);
-            f.view.renderer_mut().set_silhouettes(silhouettes).unwrap();
-            f.render()
-        };
-        let dashed = draw(true, true);
-        let dashed_without_silhouettes = draw(true, false);
-        let solid_lines = draw(false, true);
-        let solid_lines_without_silhouettes = draw(false, false);
-        // The silhouettes' pass draws the curved cylinder alone (CADR_INSTANCE_CURVED):
-        // the faceted plate has no triangle a silhouette crosses.
-        let mut steady_draws = |silhouettes: bool| {
-            f.view.techniques_mut().set_dashed_hidden_lines(true);
-            f.view.renderer_mut().set_silhouettes(silhouettes).unwrap();
-            f.steady_draws()
-        };
-        let pass_draws = steady_draws(true) - steady_draws(false);
-        assert_eq!(
-            pass_draws, 1,
-            "{case}: the silhouettes' pass draws one part"
-        );
-        let [hidden_left, hidden_right, across] =
-            changed(&dashed, &dashed_without_silhouettes, hidden_rows.clone());
-        assert!(
-            hidden_left >= 4 && hidden_right >= 4,
-            "{case}: dashes along both hidden sides: {hidden_left}, {hidden_right}"
-        );
-        assert_eq!(across, 0, "{case}: no dash across the hidden curved face");
-        let [seen_left, seen_right, _] = changed(&dashed, &solid_lines, seen_rows.clone());
-        assert_eq!(
-            (seen_left, seen_right),
-            (0, 0),
-            "{case}: the sides seen are not dashed"
-        );
-        assert_eq!(
-            changed(
-                &dashed_without_silhouettes,
-                &solid_lines_without_silhouettes,
-                hidden_rows.clone()
-            ),
-            [0, 0, 0],
-            "{case}: without silhouettes, no hidden side is dashed"
-        );
-        assert_eq!(
-            changed(
-                &solid_lines,
-                &solid_lines_without_silhouettes,
-                hidden_rows.clone()
-            ),
-            [0, 0, 0],
-            "{case}: without dashes, no hidden side is drawn"
-        );
+        assert_hidden_silhouettes(&mut f, perspective_tangent, &case);
     }
+    // Parallel rays touch the cylinder at x = ±1, z = 0 (a host's own orthographic matrix,
+    // as the C API takes it; Vulkan's y down, depth 0 to 1). The eye close in front, where a
+    // perspective's tangents would touch it 4 pixels further in.
+    let aspect = f64::from(SIZE.0) / f64::from(SIZE.1);
+    f.camera = Camera::look_at(
+        DVec3::new(0.0, 0.0, 2.2),
+        DVec3::ZERO,
+        DEFAULT_FOV_DEGREES,
+        aspect,
+        0.1,
+        100.0,
+    );
+    let mut orthographic = DMat4::orthographic_rh(-2.0, 2.0, -1.5, 1.5, 0.1, 100.0);
+    orthographic.y_axis.y *= -1.0;
+    f.camera.projection = orthographic;
+    assert_hidden_silhouettes(&mut f, (1.0, 0.0), "orthographic");
     f.assert_no_validation_errors();
 }
 

@@ -198,6 +198,22 @@ impl SceneView {
             .expect("pick")
     }
 
+    /// The material name of the one part a click at `point` hits (the test fails unless it
+    /// hits exactly one, a Geo node's).
+    pub fn material_picked_at(&mut self, point: glam::DVec3) -> String {
+        let hits = self.pick_at(point);
+        assert_eq!(hits.len(), 1, "one hit at {point}");
+        let node = self.graph.node(hits[0].node).expect("the hit node");
+        let cadr_core::graph::NodeKind::Geo { part_materials, .. } = &node.kind else {
+            panic!("a Geo node at {point}");
+        };
+        self.graph
+            .material(part_materials[0])
+            .expect("the hit part's material")
+            .name
+            .clone()
+    }
+
     /// Drops the view (its objects destroyed, so that their validation messages are in) and
     /// fails the test if the validation layer reported an error on the device.
     pub fn assert_no_validation_errors(self) {

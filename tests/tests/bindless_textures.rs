@@ -28,17 +28,6 @@ fn front_view(device: Arc<Device>, scene: &Scene) -> SceneView {
     SceneView::new(device, scene, SIZE, camera)
 }
 
-/// The material name of what a click at `point` hits.
-fn picked_material(f: &mut SceneView, point: DVec3) -> String {
-    let hits = f.pick_at(point);
-    assert_eq!(hits.len(), 1, "one hit at {point}");
-    let node = f.graph.node(hits[0].node).unwrap();
-    let cadr_core::graph::NodeKind::Geo { part_materials, .. } = &node.kind else {
-        panic!("a Geo node");
-    };
-    f.graph.material(part_materials[0]).unwrap().name.clone()
-}
-
 /// The textured fixture (a repeated nearest-magnified checker, an alpha mask, vertex colours,
 /// a translucent texture) draws alike through the table and through the array, solid and in
 /// X-ray (the translucent pass samples textures too), and a click goes through the mask's
@@ -63,8 +52,8 @@ fn the_bindless_path_draws_textures_as_the_array_does() {
         let (x, y) = textured::MASKED;
         let hole = DVec3::new(x - half / 2.0, y, 0.0);
         let kept = DVec3::new(x + half / 2.0, y, 0.0);
-        assert_eq!(picked_material(&mut f, hole), "backdrop");
-        assert_eq!(picked_material(&mut f, kept), "masked");
+        assert_eq!(f.material_picked_at(hole), "backdrop");
+        assert_eq!(f.material_picked_at(kept), "masked");
         f.view
             .techniques_mut()
             .set_shade_mode(ShadeMode::XRay)

@@ -20,8 +20,10 @@ fn shaders_compile_and_validate() {
         );
         assert_eq!(ShaderStage::from_file_name(shader.name), Some(shader.stage));
     }
-    // The fragment shaders also as a device with every optional feature compiles them (the
-    // bindless texture table, the pixel keys): lavapipe draws only the other variant.
+    // The fragment shaders, and the geometry shader compiled with the same lines, also as a
+    // device with every optional feature compiles them (the bindless texture table, the pixel
+    // keys): lavapipe draws only the other variant, and SwiftShader, which has the table, has
+    // no geometry shaders.
     let everything = Capabilities {
         bindless_textures: 1,
         fragment_stores_and_atomics: true,
@@ -29,7 +31,8 @@ fn shaders_compile_and_validate() {
     };
     let defines = fragment_defines(everything);
     assert!(defines.contains("CADR_BINDLESS_TEXTURES"), "{defines}");
-    for shader in ALL.iter().filter(|s| s.stage == ShaderStage::Fragment) {
+    let pass_stages = [ShaderStage::Fragment, ShaderStage::Geometry];
+    for shader in ALL.iter().filter(|s| pass_stages.contains(&s.stage)) {
         let source = with_defines(shader.source, &defines);
         compile_glsl(shader.name, &source, shader.stage, INCLUDES)
             .unwrap_or_else(|e| panic!("with every feature: {e}"));

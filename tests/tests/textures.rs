@@ -248,21 +248,18 @@ fn picking_goes_through_alpha_mask_holes() {
     let scene = textured_scene("pick");
     let mut f = front_view(&scene);
     let half = textured::QUAD_SIZE / 2.0;
-    let mut pick_at = |p: DVec3| {
-        let hits = f.pick_at(p);
-        assert_eq!(hits.len(), 1, "one hit at {p}");
-        let node = f.graph.node(hits[0].node).unwrap();
-        let cadr_core::graph::NodeKind::Geo { part_materials, .. } = &node.kind else {
-            panic!("a Geo node");
-        };
-        f.graph.material(part_materials[0]).unwrap().name.clone()
-    };
     assert_eq!(
-        pick_at(point(textured::MASKED, -half / 2.0, 0.0)),
+        f.material_picked_at(point(textured::MASKED, -half / 2.0, 0.0)),
         "backdrop"
     );
-    assert_eq!(pick_at(point(textured::MASKED, half / 2.0, 0.0)), "masked");
-    assert_eq!(pick_at(point(textured::CHECKER, 0.0, 0.0)), "checker");
+    assert_eq!(
+        f.material_picked_at(point(textured::MASKED, half / 2.0, 0.0)),
+        "masked"
+    );
+    assert_eq!(
+        f.material_picked_at(point(textured::CHECKER, 0.0, 0.0)),
+        "checker"
+    );
     f.assert_no_validation_errors();
 }
 

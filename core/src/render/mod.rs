@@ -423,9 +423,9 @@ impl Renderer {
         self.textures = on;
     }
 
-    /// Points the frame set's scene bindings (2–6, 8 and the texture table 9) at `resources` unless it names them
-    /// already. A recorded frame names the old ones: the GPU is waited for and the recording
-    /// forgotten.
+    /// Points the frame set's scene bindings (2–6, 8 and the texture table 9) at `resources`
+    /// unless it names them already. A recorded frame names the old ones: the GPU is waited
+    /// for and the recording forgotten.
     pub(crate) fn bind_scene(&mut self, resources: &FrameResources) -> RenderResult<()> {
         if self.bound_scene == Some(resources.generation) {
             return Ok(());

@@ -544,3 +544,20 @@ pub fn quad_scene(
         ..Scene::default()
     }
 }
+
+/// Gives material slot `slot` of `graph` the base-colour texture `texture`, untransformed.
+pub fn give_texture(
+    graph: &mut cadr_core::graph::SceneGraph,
+    slot: u32,
+    texture: cadr_core::graph::TextureHandle,
+) {
+    let material = graph.material_handle_at(slot).expect("the material slot");
+    let mut textured = graph.material(material).expect("the material").clone();
+    textured.base_color_texture = Some(cadr_core::scene::TextureRef {
+        texture: texture.index(),
+        transform: cadr_core::scene::UvTransform::IDENTITY,
+    });
+    graph
+        .set_material(material, textured)
+        .expect("set the material");
+}

@@ -14,7 +14,7 @@ use cadr_core::render::Camera;
 use cadr_core::scene::{Material, Scene, Texture, TextureRef, UvTransform};
 use cadr_core::technique::{Combination, ShadeMode};
 use cadr_core::vk::Device;
-use cadr_tests::fixtures::{quad_scene, scratch_dir, textured, textured_gltf};
+use cadr_tests::fixtures::{give_texture, quad_scene, scratch_dir, textured, textured_gltf};
 use cadr_tests::images::{color_at, compare, SAME_PICTURE};
 use cadr_tests::{all_combinations, swiftshader_device, SceneView};
 use glam::DVec3;
@@ -193,13 +193,7 @@ fn a_new_texture_uploads_only_itself_into_the_table() {
             sampler: Default::default(),
         };
         let texture = f.graph.create_texture(green).unwrap();
-        let material = f.graph.material_handle_at(0).unwrap();
-        let mut green_material = f.graph.material(material).unwrap().clone();
-        green_material.base_color_texture = Some(TextureRef {
-            texture: texture.index(),
-            transform: UvTransform::IDENTITY,
-        });
-        f.graph.set_material(material, green_material).unwrap();
+        give_texture(&mut f.graph, 0, texture);
         let image = f.render();
         let center = color_at(&image, &f.camera, DVec3::ZERO);
         assert!(

@@ -12,7 +12,7 @@ use cadr_core::load::load_file;
 use cadr_core::render::Camera;
 use cadr_core::scene::{Material, Scene, Texture, TextureRef, UvTransform};
 use cadr_core::technique::{Combination, ShadeMode};
-use cadr_tests::fixtures::{quad_scene, scratch_dir, textured, textured_gltf};
+use cadr_tests::fixtures::{give_texture, quad_scene, scratch_dir, textured, textured_gltf};
 use cadr_tests::images::{
     assert_matches_reference, color_at, compare, DEFAULT_TOLERANCE, SAME_PICTURE,
 };
@@ -556,13 +556,7 @@ fn a_scene_without_textures_gets_one_by_a_material_change() {
             },
         })
         .unwrap();
-    let material = f.graph.material_handle_at(0).unwrap();
-    let mut textured = f.graph.material(material).unwrap().clone();
-    textured.base_color_texture = Some(TextureRef {
-        texture: texture.index(),
-        transform: UvTransform::IDENTITY,
-    });
-    f.graph.set_material(material, textured).unwrap();
+    give_texture(&mut f.graph, 0, texture);
     f.tree.update(&mut f.graph);
     let after = f.render();
     let (l, r) = (

@@ -360,3 +360,50 @@ fn a_glb_length_shorter_than_its_header_is_refused_not_a_panic() {
         "{text}"
     );
 }
+
+/// The glTF findings of the fuzz campaigns and of the audit of the glTF crate
+/// (`fuzz/findings/gltf/`, made by `fuzz/make_seeds.py`): each made cadr or the glTF crate panic
+/// or abort; each is now refused with an error that names the file and what is wrong in it.
+#[test]
+fn each_gltf_finding_is_refused_naming_what_is_wrong() {
+    let findings = Path::new(env!("CARGO_MANIFEST_DIR")).join("../fuzz/findings/gltf");
+    let expected = [
+        (
+            "image-buffer-view-without-mime-type.glb",
+            "images[0] has a bufferView but no mimeType",
+        ),
+        (
+            "image-without-uri-or-buffer-view.gltf",
+            "images[0] has neither a uri nor a bufferView",
+        ),
+        (
+            "byte-stride-shorter-than-element.gltf",
+            "accessor 0 (POSITION) has 12-byte elements, but bufferView 0 has a byteStride of 4",
+        ),
+        (
+            "sparse-values-with-byte-stride.gltf",
+            "accessor 0 (POSITION) has sparse values in bufferView 2, which has a byteStride of 4; glTF forbids one there",
+        ),
+        (
+            "buffer-view-end-past-u64.glb",
+            "bufferView 4 covers bytes 18446744073709551608..18446744073709551624 of buffer 0",
+        ),
+        (
+            "viewless-accessor-of-four-billion-elements.gltf",
+            "accessor 0 (POSITION) has no bufferView and its 4000000000 elements would take about 238.4 GiB of host memory, more than the memory budget",
+        ),
+    ];
+    for (file, message) in expected {
+        let path = findings.join(file);
+        let error = load_file(&path).expect_err(file);
+        assert!(
+            !matches!(error, LoadError::ReaderPanicked { .. }),
+            "{file}: refused only by the panic boundary: {error}"
+        );
+        let text = error.to_string();
+        assert!(
+            text.contains(file) && text.contains(message),
+            "{file}: {text}"
+        );
+    }
+}

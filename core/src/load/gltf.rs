@@ -41,6 +41,24 @@ fn check_position_accessors(root: &gltf::json::Root) -> Result<(), String> {
     Ok(())
 }
 
+/// The glTF crate's `Image::source` unwraps a `mimeType` where the image has a `bufferView`,
+/// and a `uri` where it has none, although its validation accepts an image without either; the
+/// specification requires both, so such an image is refused first.
+fn check_images(root: &gltf::json::Root) -> Result<(), String> {
+    for (i, image) in root.images.iter().enumerate() {
+        match (&image.buffer_view, &image.mime_type, &image.uri) {
+            (Some(_), None, _) => {
+                return Err(format!("images[{i}] has a bufferView but no mimeType"));
+            }
+            (None, _, None) => {
+                return Err(format!("images[{i}] has neither a uri nor a bufferView"));
+            }
+            _ => {}
+        }
+    }
+    Ok(())
+}
+
 /// Size of the GLB header: magic, version, length.
 const GLB_HEADER_SIZE: u32 = 12;
 
@@ -73,6 +91,7 @@ pub fn load_gltf_bytes(bytes: &[u8], path: &Path) -> Result<Scene, LoadError> {
     let unchecked =
         gltf::Gltf::from_slice_without_validation(bytes).map_err(|e| gltf_error(e.to_string()))?;
     check_position_accessors(unchecked.document.as_json()).map_err(invalid)?;
+    check_images(unchecked.document.as_json()).map_err(invalid)?;
     let gltf = gltf::Gltf {
         document: gltf::Document::from_json(unchecked.document.into_json())
             .map_err(|e| gltf_error(e.to_string()))?,
@@ -331,10 +350,12 @@ pub(super) fn percent_decode(uri: &str) -> PathBuf {
     PathBuf::from(String::from_utf8_lossy(&out).into_owned())
 }
 
+/// Checks that every buffer view lies within its buffer (in `u128`: a view's offset and length
+/// may each be up to `u64::MAX`, and the glTF crate adds them unchecked).
 fn check_views(document: &gltf::Document, buffers: &[Vec<u8>]) -> Result<(), String> {
     for view in document.views() {
-        let end = view.offset() as u64 + view.length() as u64;
-        let available = buffers[view.buffer().index()].len() as u64;
+        let end = view.offset() as u128 + view.length() as u128;
+        let available = buffers[view.buffer().index()].len() as u128;
         if end > available {
             return Err(format!(
                 "bufferView {} covers bytes {}..{end} of buffer {}, which has {available}",
@@ -347,7 +368,15 @@ fn check_views(document: &gltf::Document, buffers: &[Vec<u8>]) -> Result<(), Str
     Ok(())
 }
 
+/// Host bytes that loading holds for each element of an accessor that has no bufferView (all
+/// zeros but for its sparse values): the element read, and the vertex, attribute and index
+/// copies made from it, rounded up. Such an accessor's `count` is not bounded by any bytes in
+/// the file, so it is checked against the memory budget before the glTF crate's reader
+/// allocates `count` elements (an allocation that fails aborts the process).
+const LOADED_BYTES_PER_VIEWLESS_ELEMENT: u64 = 64;
+
 /// Checks that `accessor`'s elements lie within its view, and that it has the expected type.
+/// Sizes are computed in `u128`, where a hostile `count` or offset cannot overflow them.
 fn check_accessor(
     accessor: &gltf::Accessor<'_>,
     usage: &str,
@@ -362,27 +391,51 @@ fn check_accessor(
             accessor.dimensions()
         ));
     }
-    let element = accessor.size() as u64;
-    let count = accessor.count() as u64;
+    let element = accessor.size() as u128;
+    let count = accessor.count() as u128;
     // The glTF crate's readers compute `count - 1` unchecked.
     if count == 0 {
         return Err(format!(
             "accessor {index} ({usage}) has count 0; glTF requires at least 1"
         ));
     }
-    if let Some(view) = accessor.view() {
-        let stride = view.stride().map_or(element, |s| s as u64);
-        let needed = accessor.offset() as u64 + stride * (count - 1) + element;
-        if needed > view.length() as u64 {
-            return Err(format!(
-                "accessor {index} ({usage}, {count} elements) needs {needed} bytes of bufferView {}, which has {}",
-                view.index(),
-                view.length()
-            ));
+    match accessor.view() {
+        Some(view) => {
+            // The glTF crate's reader takes each element from `stride` bytes, and indexes past
+            // them (a panic) where the stride is shorter than an element.
+            if let Some(stride) = view.stride().filter(|&s| (s as u128) < element) {
+                return Err(format!(
+                    "accessor {index} ({usage}) has {element}-byte elements, but bufferView {} has a byteStride of {stride}",
+                    view.index()
+                ));
+            }
+            let stride = view.stride().map_or(element, |s| s as u128);
+            let needed = accessor.offset() as u128 + stride * (count - 1) + element;
+            if needed > view.length() as u128 {
+                return Err(format!(
+                    "accessor {index} ({usage}, {count} elements) needs {needed} bytes of bufferView {}, which has {}",
+                    view.index(),
+                    view.length()
+                ));
+            }
+        }
+        None => {
+            let budget = crate::memory_budget::budget()?;
+            let needed = count.saturating_mul(LOADED_BYTES_PER_VIEWLESS_ELEMENT.into());
+            if needed > budget.into() {
+                return Err(format!(
+                    "accessor {index} ({usage}) has no bufferView and {}",
+                    crate::memory_budget::over_budget(
+                        &format!("its {count} elements"),
+                        u64::try_from(needed).unwrap_or(u64::MAX),
+                        budget,
+                    )
+                ));
+            }
         }
     }
     if let Some(sparse) = accessor.sparse() {
-        let sparse_count = sparse.count() as u64;
+        let sparse_count = sparse.count() as u128;
         if sparse_count == 0 {
             return Err(format!(
                 "accessor {index} ({usage}) has sparse.count 0; glTF requires at least 1"
@@ -397,17 +450,25 @@ fn check_accessor(
             (
                 "indices",
                 sparse.indices().view(),
-                sparse.indices().offset() as u64,
+                sparse.indices().offset() as u128,
                 index_size,
             ),
             (
                 "values",
                 sparse.values().view(),
-                sparse.values().offset() as u64,
+                sparse.values().offset() as u128,
                 element,
             ),
         ] {
-            if offset + size * sparse_count > view.length() as u64 {
+            // glTF forbids a byteStride here; the glTF crate's reader would step by it (and
+            // panic where it is shorter than an element).
+            if let Some(stride) = view.stride() {
+                return Err(format!(
+                    "accessor {index} ({usage}) has sparse {what} in bufferView {}, which has a byteStride of {stride}; glTF forbids one there",
+                    view.index()
+                ));
+            }
+            if offset + size * sparse_count > view.length() as u128 {
                 return Err(format!(
                     "accessor {index} ({usage}) has sparse {what} beyond the end of bufferView {}",
                     view.index()

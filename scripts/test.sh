@@ -16,10 +16,14 @@ else
 fi
 
 # Injected Vulkan failures need cadr-core built with the fault-injection feature: every
-# allocation, submission and device loss of a render is made to fail in turn.
-cargo clippy -p cadr-tests --features fault-injection --all-targets --locked -- -D warnings
+# allocation, submission and device loss of a render is made to fail in turn. The same feature
+# injects a panic into file reading, which the load's panic boundary must turn into an error
+# (through the Rust API, the C API and the command line).
+cargo clippy -p cadr-tests -p cadr-cli --features fault-injection --all-targets --locked -- -D warnings
 if cargo nextest --version >/dev/null 2>&1; then
-  cargo nextest run -p cadr-tests --features fault-injection --locked --test fault_injection
+  cargo nextest run -p cadr-tests --features fault-injection --locked --test fault_injection --test reader_panic
+  cargo nextest run -p cadr-cli --features fault-injection --locked --test cli panic_while_reading
 else
-  cargo test -p cadr-tests --features fault-injection --locked --test fault_injection
+  cargo test -p cadr-tests --features fault-injection --locked --test fault_injection --test reader_panic
+  cargo test -p cadr-cli --features fault-injection --locked --test cli panic_while_reading
 fi

@@ -1333,3 +1333,39 @@ fn the_librarys_warnings_reach_standard_error() {
     assert!(stderr(&output).contains(&expected), "{}", stderr(&output));
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// With the `fault-injection` feature (`scripts/test.sh` runs this test so): a panic while a
+/// file is read, injected on a worker thread as one inside a dependency would arise, is an
+/// error naming the file, with the panic's location on a second error line, and no backtrace
+/// even where `RUST_BACKTRACE` asks for one.
+#[cfg(feature = "fault-injection")]
+#[test]
+fn a_panic_while_reading_a_file_is_an_error_without_a_backtrace() {
+    let engine = "/usr/share/assimp/models/glTF2/2CylinderEngine-glTF-Binary/2CylinderEngine.glb";
+    let output = Command::new(env!("CARGO_BIN_EXE_cadr"))
+        .args(["info", engine])
+        .env(cadr_core::load::INJECTED_PANIC_VARIABLE, "1")
+        .env("RUST_BACKTRACE", "1")
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert_eq!(output.status.code(), Some(1), "{stderr}");
+    assert!(
+        stderr.contains(&format!(
+            "error: {engine}: the file could not be read: {}",
+            cadr_core::load::READER_PANIC
+        )),
+        "{stderr}"
+    );
+    assert!(
+        stderr.contains(&format!("error: {engine}: reading it panicked at"))
+            && stderr.contains("load/mod.rs:"),
+        "the location is logged: {stderr}"
+    );
+    for backtrace in ["stack backtrace", "thread '", "RUST_BACKTRACE", "note: "] {
+        assert!(
+            !stderr.contains(backtrace),
+            "{backtrace:?} printed: {stderr}"
+        );
+    }
+}

@@ -17,6 +17,7 @@ pub mod gpu_scene;
 pub mod graph;
 pub mod load;
 pub mod memory_budget;
+pub mod panic_boundary;
 pub mod parallel;
 pub mod render;
 pub mod save;

@@ -1,13 +1,15 @@
 //! Work spread over the machine's cores: scoped threads, no pool to keep.
 
 /// `work` applied to every item on up to one thread per core (contiguous chunks), the results
-/// in the items' order. A panic in `work` is resumed on the caller's thread.
+/// in the items' order. A panic in `work` is resumed on the caller's thread (and reported to
+/// the caller's [`crate::panic_boundary`], if it runs inside one).
 pub fn map<T: Sync, R: Send>(items: &[T], work: impl Fn(&T) -> R + Sync) -> Vec<R> {
     collect_indexed(items.len(), (1, 1), |i, _: &mut ()| work(&items[i])).0
 }
 
 /// `work` applied to every item, mutably, on up to one thread per core (contiguous chunks of
-/// items). A panic in `work` is resumed on the caller's thread.
+/// items). A panic in `work` is resumed on the caller's thread (and reported to the caller's
+/// [`crate::panic_boundary`], if it runs inside one).
 pub fn for_each_mut<T: Send>(items: &mut [T], work: impl Fn(&mut T) + Sync) {
     let threads = threads_for(items.len());
     if threads == 1 {
@@ -15,10 +17,16 @@ pub fn for_each_mut<T: Send>(items: &mut [T], work: impl Fn(&mut T) + Sync) {
         return;
     }
     let chunk = items.len().div_ceil(threads);
+    let boundary = crate::panic_boundary::inherit();
     std::thread::scope(|scope| {
         let workers: Vec<_> = items
             .chunks_mut(chunk)
-            .map(|chunk| scope.spawn(|| chunk.iter_mut().for_each(&work)))
+            .map(|chunk| {
+                scope.spawn(|| {
+                    let _inside = boundary.enter();
+                    chunk.iter_mut().for_each(&work)
+                })
+            })
             .collect();
         for worker in workers {
             if let Err(panic) = worker.join() {
@@ -52,12 +60,14 @@ pub fn collect_indexed<T: Send, A: Default + Send>(
     let chunk = len.div_ceil(threads).div_ceil(align).max(1) * align;
     let mut items: Vec<T> = Vec::with_capacity(len);
     let make = &make;
+    let boundary = &crate::panic_boundary::inherit();
     let tallies = std::thread::scope(|scope| {
         let workers: Vec<_> = items.spare_capacity_mut()[..len]
             .chunks_mut(chunk)
             .enumerate()
             .map(|(index, slots)| {
                 let mut fill = move || {
+                    let _inside = boundary.enter();
                     let mut tally = A::default();
                     let first = index * chunk;
                     for (offset, slot) in slots.iter_mut().enumerate() {

@@ -11,7 +11,7 @@ use std::ffi::CString;
 use std::path::{Path, PathBuf};
 
 use cadr_core::csf::{csf_from_scene, read_csf, write_csf};
-use cadr_core::load::{load_bytes, SceneFormat};
+use cadr_core::load::{load_bytes, LoadError, SceneFormat, READER_PANIC};
 use cadr_core::scene::{flatten, Scene};
 
 /// The fuzz targets, by the name of their corpus directory.
@@ -72,8 +72,20 @@ pub fn gltf(data: &[u8]) {
         SceneFormat::Glb => (SceneFormat::Glb, "input.glb"),
         _ => (SceneFormat::Gltf, "input.gltf"),
     };
-    if let Ok(scene) = load_bytes(data, format, &nowhere(name)) {
+    if let Some(scene) = loaded(load_bytes(data, format, &nowhere(name))) {
         use_accepted(&scene);
+    }
+}
+
+/// The scene a reader accepted, `None` for a refusal; a panic that the load's panic boundary
+/// caught is still a finding, and panics here.
+fn loaded(result: Result<Scene, LoadError>) -> Option<Scene> {
+    match result {
+        Ok(scene) => Some(scene),
+        Err(error @ LoadError::ReaderPanicked { .. }) => {
+            panic!("the load's panic boundary caught a panic: {error}")
+        }
+        Err(_) => None,
     }
 }
 
@@ -97,7 +109,7 @@ pub fn csf(data: &[u8]) {
             );
         }
     }
-    if let Ok(scene) = load_bytes(data, format, &nowhere(name)) {
+    if let Some(scene) = loaded(load_bytes(data, format, &nowhere(name))) {
         use_accepted(&scene);
     }
 }
@@ -113,7 +125,7 @@ fn use_accepted(scene: &Scene) {
 
 /// `cadr_scene_load` on the input written to a file (its extension from [`sniff_format`]),
 /// into a new scene. Refusals are `CADR_RESULT_LOAD_FAILED`; `CADR_RESULT_PANIC` (a panic the
-/// C API caught) is a finding.
+/// C API caught) and a refusal by the load's panic boundary (a panic it caught) are findings.
 pub fn scene_load(data: &[u8]) {
     use cadr::*;
     let extension = match sniff_format(data) {
@@ -144,6 +156,10 @@ pub fn scene_load(data: &[u8]) {
     );
     if result == CadrResult::LoadFailed {
         assert!(!message.is_empty(), "a refusal without a message");
+        assert!(
+            !message.contains(READER_PANIC),
+            "the load's panic boundary caught a panic: {message}"
+        );
     }
     // SAFETY: `loaded` is zeroed or filled by cadr_scene_load.
     unsafe { cadr_load_result_free(loaded.as_mut_ptr()) };

@@ -54,7 +54,21 @@ pub enum LoadError {
     /// A `gen:` source that names no generator or has bad parameters.
     #[error("{0}")]
     Generator(String),
+    /// Reading the file panicked, in cadr or in a dependency, and the load's panic boundary
+    /// caught it ([`crate::panic_boundary`]): the file is refused, and the panic (a bug to
+    /// report, with the file) is logged with its location.
+    #[error("{}: the file could not be read: {READER_PANIC} ({})", path.display(), panic.message)]
+    ReaderPanicked {
+        /// The file.
+        path: PathBuf,
+        /// What panicked, and where.
+        panic: crate::panic_boundary::CaughtPanic,
+    },
 }
+
+/// What a [`LoadError::ReaderPanicked`] says of itself, so that a caller that sees only the
+/// text (a C host, a fuzz target through the C API) can tell a caught panic from a refusal.
+pub const READER_PANIC: &str = "its reader hit an internal error (a bug in cadr or a library it uses; please report it with the file)";
 
 /// Where a scene comes from.
 #[derive(Clone, Debug, PartialEq)]
@@ -128,7 +142,33 @@ pub fn load_file(path: &Path) -> Result<Scene, LoadError> {
 
 /// Loads a scene from a file's bytes held in memory. `path` names the file in errors and, for
 /// glTF, is where external buffers are looked up (beside it).
+///
+/// Runs behind a panic boundary: a panic while the file is read, validated or converted is
+/// logged (as an error, with its location) and returned as [`LoadError::ReaderPanicked`].
 pub fn load_bytes(bytes: &[u8], format: SceneFormat, path: &Path) -> Result<Scene, LoadError> {
+    crate::panic_boundary::catch(|| read_bytes(bytes, format, path)).unwrap_or_else(|panic| {
+        log::error!("{}: reading it {panic}", path.display());
+        Err(LoadError::ReaderPanicked {
+            path: path.to_owned(),
+            panic,
+        })
+    })
+}
+
+/// With the `fault-injection` feature, the variable that makes every file read panic on a
+/// worker thread, as a panic inside a dependency's decoder would: the tests of the load's panic
+/// boundary set it.
+#[cfg(feature = "fault-injection")]
+pub const INJECTED_PANIC_VARIABLE: &str = "CADR_FAULT_READER_PANIC";
+
+/// [`load_bytes`] without its panic boundary.
+fn read_bytes(bytes: &[u8], format: SceneFormat, path: &Path) -> Result<Scene, LoadError> {
+    #[cfg(feature = "fault-injection")]
+    if std::env::var_os(INJECTED_PANIC_VARIABLE).is_some() {
+        crate::parallel::map(&[false, true], |&injected| {
+            assert!(!injected, "a panic injected by {INJECTED_PANIC_VARIABLE}");
+        });
+    }
     match format {
         SceneFormat::Gltf | SceneFormat::Glb => load_gltf_bytes(bytes, path),
         SceneFormat::Csf | SceneFormat::CsfGz => {

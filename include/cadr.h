@@ -299,6 +299,25 @@ typedef struct CadrDeviceInfo {
   bool validation;
 } CadrDeviceInfo;
 
+// The device memory a context's cadr holds, filled by `cadr_context_memory_usage`. Hosts
+// watch it over a session (a CAD tool stays open for days) to see that cadr's share of the
+// GPU does not grow.
+//
+// The struct grows by appending fields: set `size` to `sizeof(CadrMemoryUsage)` before the
+// call. cadr writes only the fields that lie within `size` bytes, so a host compiled against
+// an older header keeps working with a newer library; a host compiled against a newer header
+// gets the fields this library does not know zeroed.
+typedef struct CadrMemoryUsage {
+  // `sizeof(CadrMemoryUsage)`, set by the host.
+  uint32_t size;
+  // Bytes of device memory in cadr's live buffers and images (all renderers and scenes of
+  // the context, and the technique plugins' buffers).
+  uint64_t device_allocated_bytes;
+  // Bytes of device memory cadr has taken from the driver: the blocks its buffers and
+  // images are carved from, unused room included (at least `device_allocated_bytes`).
+  uint64_t device_reserved_bytes;
+} CadrMemoryUsage;
+
 // One technique offered by the plugins. The strings belong to the context and stay valid
 // until it is destroyed.
 typedef struct CadrTechniqueInfo {
@@ -755,6 +774,19 @@ enum CadrResult cadr_context_vulkan_instance(CadrContext context, void **instanc
 // # Safety
 // `count` is null or writable.
 enum CadrResult cadr_context_validation_error_count(CadrContext context, uint64_t *count);
+
+// Writes the device memory the context's cadr holds now into `*usage`, up to `usage->size`
+// bytes (see `CadrMemoryUsage`). Host memory is the host's to measure (the process's
+// resident size); `scripts/soak.sh` watches both.
+//
+// Returns `CADR_RESULT_OK`, `CADR_RESULT_NULL_ARGUMENT`, `CADR_RESULT_INVALID_ARGUMENT`
+// (`usage->size` smaller than its own field) or a handle error.
+// Ownership: `*usage` is the caller's; cadr keeps no pointer to it. Thread-safety: callable
+// from any thread.
+//
+// # Safety
+// `usage` is null, or writable for `usage->size` bytes (at least 4).
+enum CadrResult cadr_context_memory_usage(CadrContext context, struct CadrMemoryUsage *usage);
 
 // Writes the number of techniques the plugins offer (supported or not).
 //

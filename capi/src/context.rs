@@ -535,6 +535,86 @@ pub unsafe extern "C" fn cadr_context_validation_error_count(
     })
 }
 
+/// The device memory a context's cadr holds, filled by `cadr_context_memory_usage`. Hosts
+/// watch it over a session (a CAD tool stays open for days) to see that cadr's share of the
+/// GPU does not grow.
+///
+/// The struct grows by appending fields: set `size` to `sizeof(CadrMemoryUsage)` before the
+/// call. cadr writes only the fields that lie within `size` bytes, so a host compiled against
+/// an older header keeps working with a newer library; a host compiled against a newer header
+/// gets the fields this library does not know zeroed.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default)]
+pub struct CadrMemoryUsage {
+    /// `sizeof(CadrMemoryUsage)`, set by the host.
+    pub size: u32,
+    /// Bytes of device memory in cadr's live buffers and images (all renderers and scenes of
+    /// the context, and the technique plugins' buffers).
+    pub device_allocated_bytes: u64,
+    /// Bytes of device memory cadr has taken from the driver: the blocks its buffers and
+    /// images are carved from, unused room included (at least `device_allocated_bytes`).
+    pub device_reserved_bytes: u64,
+}
+
+/// Writes the device memory the context's cadr holds now into `*usage`, up to `usage->size`
+/// bytes (see `CadrMemoryUsage`). Host memory is the host's to measure (the process's
+/// resident size); `scripts/soak.sh` watches both.
+///
+/// Returns `CADR_RESULT_OK`, `CADR_RESULT_NULL_ARGUMENT`, `CADR_RESULT_INVALID_ARGUMENT`
+/// (`usage->size` smaller than its own field) or a handle error.
+/// Ownership: `*usage` is the caller's; cadr keeps no pointer to it. Thread-safety: callable
+/// from any thread.
+///
+/// # Safety
+/// `usage` is null, or writable for `usage->size` bytes (at least 4).
+#[no_mangle]
+pub unsafe extern "C" fn cadr_context_memory_usage(
+    context: CadrContext,
+    usage: *mut CadrMemoryUsage,
+) -> CadrResult {
+    guard(|| {
+        let state = context_state(context)?;
+        non_null(usage, "usage")?;
+        // SAFETY: non-null; the caller's contract makes at least `size` readable.
+        let size = unsafe { usage.cast::<u32>().read_unaligned() } as usize;
+        if size < std::mem::size_of::<u32>() {
+            return Err(Failure::new(
+                CadrResult::InvalidArgument,
+                format!("usage->size is {size}; set it to sizeof(CadrMemoryUsage)"),
+            ));
+        }
+        let memory = state.device.memory_usage();
+        let fields = [
+            (
+                std::mem::offset_of!(CadrMemoryUsage, device_allocated_bytes),
+                memory.allocated_bytes,
+            ),
+            (
+                std::mem::offset_of!(CadrMemoryUsage, device_reserved_bytes),
+                memory.reserved_bytes,
+            ),
+        ];
+        for (offset, value) in fields {
+            if offset + std::mem::size_of::<u64>() <= size {
+                // SAFETY: the field lies within the `size` bytes the caller made writable.
+                unsafe {
+                    usage
+                        .cast::<u8>()
+                        .add(offset)
+                        .cast::<u64>()
+                        .write_unaligned(value)
+                };
+            }
+        }
+        let known = std::mem::size_of::<CadrMemoryUsage>();
+        if size > known {
+            // SAFETY: bytes `known..size` lie within the `size` bytes the caller made writable.
+            unsafe { std::ptr::write_bytes(usage.cast::<u8>().add(known), 0, size - known) };
+        }
+        Ok(())
+    })
+}
+
 /// Writes the number of techniques the plugins offer (supported or not).
 ///
 /// Returns `CADR_RESULT_OK`, `CADR_RESULT_NULL_ARGUMENT` or a handle error.

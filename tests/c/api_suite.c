@@ -7,6 +7,7 @@
 #include "cadr.h"
 
 #include <math.h>
+#include <stddef.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -1383,6 +1384,49 @@ int main(void) {
   CHECK(validation_errors == 0);
   EXPECT(cadr_context_validation_error_count(context, NULL), CADR_RESULT_NULL_ARGUMENT);
 
+  {
+    /* Device memory: what a renderer's targets take, and back to the figure before once it is
+     * destroyed; with this header's struct, an older host's smaller one (only the fields it
+     * knows are written) and a newer host's larger one (what this library does not know is
+     * zeroed). */
+    struct CadrMemoryUsage usage;
+    struct {
+      struct CadrMemoryUsage usage;
+      uint64_t field_of_a_later_version;
+    } newer;
+    uint64_t before;
+    CadrRenderer memory_renderer;
+    memset(&usage, 0xAB, sizeof usage);
+    usage.size = sizeof usage;
+    OK(cadr_context_memory_usage(context, &usage));
+    CHECK(usage.size == sizeof usage && usage.device_allocated_bytes != 0xABABABABABABABABull);
+    before = usage.device_allocated_bytes;
+    OK(cadr_renderer_create(context, 64, 48, &memory_renderer));
+    OK(cadr_context_memory_usage(context, &usage));
+    CHECK(usage.device_allocated_bytes > before);
+    CHECK(usage.device_reserved_bytes >= usage.device_allocated_bytes);
+    memset(&usage, 0xAB, sizeof usage);
+    usage.size = (uint32_t)offsetof(struct CadrMemoryUsage, device_reserved_bytes);
+    OK(cadr_context_memory_usage(context, &usage));
+    CHECK(usage.device_allocated_bytes > before);
+    CHECK(usage.device_reserved_bytes == 0xABABABABABABABABull);
+    memset(&newer, 0xCD, sizeof newer);
+    newer.usage.size = sizeof newer;
+    OK(cadr_context_memory_usage(context, &newer.usage));
+    CHECK(newer.usage.device_reserved_bytes >= newer.usage.device_allocated_bytes);
+    CHECK(newer.field_of_a_later_version == 0 && newer.usage.size == sizeof newer);
+    OK(cadr_renderer_destroy(memory_renderer));
+    usage.size = sizeof usage;
+    OK(cadr_context_memory_usage(context, &usage));
+    CHECK(usage.device_allocated_bytes == before);
+    usage.size = 2;
+    EXPECT(cadr_context_memory_usage(context, &usage), CADR_RESULT_INVALID_ARGUMENT);
+    MESSAGE_HAS("usage->size is 2");
+    EXPECT(cadr_context_memory_usage(context, NULL), CADR_RESULT_NULL_ARGUMENT);
+    EXPECT(cadr_context_memory_usage((CadrContext)built.scene, &usage),
+           CADR_RESULT_FOREIGN_HANDLE);
+  }
+
   OK(cadr_scene_destroy(built.scene));
   EXPECT(cadr_scene_destroy(built.scene), CADR_RESULT_DESTROYED_HANDLE);
   EXPECT(cadr_scene_root(built.scene, &built.root), CADR_RESULT_DESTROYED_HANDLE);
@@ -1390,6 +1434,7 @@ int main(void) {
   OK(cadr_context_destroy(context));
   EXPECT(cadr_context_destroy(context), CADR_RESULT_DESTROYED_HANDLE);
   EXPECT(cadr_context_device_info(context, NULL), CADR_RESULT_DESTROYED_HANDLE);
+  EXPECT(cadr_context_memory_usage(context, NULL), CADR_RESULT_DESTROYED_HANDLE);
   OK(cadr_context_destroy(NULL));
   printf("api suite: %d checks passed\n", checks);
   return 0;

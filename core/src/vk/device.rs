@@ -411,6 +411,21 @@ impl Device {
         self.adapter.queue_family
     }
 
+    /// The device memory cadr holds now, through its allocator (plugins' buffers included:
+    /// they allocate through the host).
+    pub fn memory_usage(&self) -> DeviceMemoryUsage {
+        match self.allocator().as_ref() {
+            Some(allocator) => {
+                let report = allocator.generate_report();
+                DeviceMemoryUsage {
+                    allocated_bytes: report.total_allocated_bytes,
+                    reserved_bytes: report.total_capacity_bytes,
+                }
+            }
+            None => DeviceMemoryUsage::default(),
+        }
+    }
+
     /// Locks the memory allocator.
     pub(crate) fn allocator(&self) -> MutexGuard<'_, Option<Allocator>> {
         self.allocator
@@ -614,4 +629,14 @@ impl Drop for Device {
         // SAFETY: no child object remains (see above).
         unsafe { self.raw.destroy_device(host_callbacks()) };
     }
+}
+
+/// Device memory held by cadr ([`Device::memory_usage`]).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct DeviceMemoryUsage {
+    /// Bytes in live allocations (buffers and images).
+    pub allocated_bytes: u64,
+    /// Bytes of the memory blocks the allocations are carved from: what the driver has given
+    /// cadr, unused room included.
+    pub reserved_bytes: u64,
 }

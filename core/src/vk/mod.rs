@@ -30,7 +30,7 @@ pub use adapter::{
 };
 pub use buffer::{Buffer, MemoryLocation};
 pub use command::{record_dispatch, record_fullscreen, resubmit_times_us, CommandContext, OneShot};
-pub use device::{Capabilities, Device, DeviceOptions, RawHandles};
+pub use device::{Capabilities, Device, DeviceMemoryUsage, DeviceOptions, RawHandles};
 pub use error::{map_result, VkError, VkResult, VkResultExt};
 pub use image::{
     memory_barrier, read_rgba8, record_image_copy, subresource_range, transition, transition_range,

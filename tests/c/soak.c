@@ -1,0 +1,358 @@
+/* soak: a C host that does, over and over, what a CAD tool does all day through the C API --
+ * loads a file into the scene, edits it (moves, hides and shows parts), renders, picks, swaps
+ * technique plugins, then unloads the file -- and watches its memory: the process's resident
+ * size (/proc/self/statm) and the device memory cadr holds (cadr_context_memory_usage).
+ *
+ *   soak [--scene SCENE] [--load FILE] [--size WxH] [--validation]
+ *        [--seconds S | --iterations N] [--warmup-seconds S | --warmup-iterations N]
+ *        [--max-growth-percent P] [--csv FILE] [--keep-loaded] [--combinations N]
+ *
+ * SCENE (default gen:graphicscard) is loaded once and stays; FILE (a .gltf, .glb, .csf or a
+ * generator; default gen:demo) is loaded and unloaded every iteration. Memory is sampled once
+ * an iteration, at the same point (after the pick, before the unload). After the warm-up, the
+ * highest sample of each kind is compared with the highest of the warm-up: the run fails (exit
+ * 1) when either grew by more than P percent (default 1). Each sample is a line of FILE
+ * (seconds,iteration,resident_bytes,device_allocated_bytes,device_reserved_bytes).
+ * `--keep-loaded` never unloads FILE, so that memory grows: the check of the check. The
+ * techniques cycle through N valid (submission, culling) pairs (default 8, spread over all the
+ * valid ones); the warm-up lasts at least one cycle, so that every pair's pipelines exist
+ * before memory is compared.
+ *
+ * Run by scripts/soak.sh (minutes on gen:graphicscard) and, briefly and with validation, by
+ * tests/tests/soak.rs. Exits 1 on a failed call, a validation error or growth past the bound. */
+#define _POSIX_C_SOURCE 200809L
+#include "cadr.h"
+
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+#include <unistd.h>
+
+static const char *last_error(void) {
+  static char text[4096];
+  size_t length = 0;
+  if (cadr_last_error_message(text, sizeof text, &length) != CADR_RESULT_OK) {
+    return "(message too long)";
+  }
+  return text;
+}
+
+#define OK(call)                                                                     \
+  do {                                                                               \
+    enum CadrResult result_ = (call);                                                \
+    if (result_ != CADR_RESULT_OK) {                                                 \
+      fprintf(stderr, "soak: %s:%d: %s gave %s: %s\n", __FILE__, __LINE__, #call,    \
+              cadr_result_string((int32_t)result_), last_error());                  \
+      exit(1);                                                                       \
+    }                                                                                \
+  } while (0)
+
+struct Options {
+  const char *scene;
+  const char *load;
+  uint32_t width, height;
+  bool validation;
+  bool keep_loaded;
+  long combinations;
+  double seconds, warmup_seconds;
+  long iterations, warmup_iterations;
+  double max_growth_percent;
+  const char *csv;
+};
+
+static void usage(const char *why) {
+  fprintf(stderr,
+          "soak: %s\nusage: soak [--scene SCENE] [--load FILE] [--size WxH] [--validation]\n"
+          "            [--seconds S | --iterations N] [--warmup-seconds S | --warmup-iterations N]\n"
+          "            [--max-growth-percent P] [--csv FILE] [--keep-loaded] [--combinations N]\n",
+          why);
+  exit(2);
+}
+
+static struct Options parse(int argc, char **argv) {
+  struct Options o = {"gen:graphicscard", "gen:demo", 640, 480, false, false, 8, 60.0, 10.0, -1,
+                      -1, 1.0, NULL};
+  int i;
+  for (i = 1; i < argc; ++i) {
+    const char *flag = argv[i];
+    const char *value = i + 1 < argc ? argv[i + 1] : NULL;
+    if (strcmp(flag, "--validation") == 0) {
+      o.validation = true;
+      continue;
+    }
+    if (strcmp(flag, "--keep-loaded") == 0) {
+      o.keep_loaded = true;
+      continue;
+    }
+    if (value == NULL) {
+      usage("an option lacks its value");
+    }
+    ++i;
+    if (strcmp(flag, "--scene") == 0) {
+      o.scene = value;
+    } else if (strcmp(flag, "--load") == 0) {
+      o.load = value;
+    } else if (strcmp(flag, "--size") == 0) {
+      if (sscanf(value, "%ux%u", &o.width, &o.height) != 2 || o.width == 0 || o.height == 0) {
+        usage("--size takes WxH");
+      }
+    } else if (strcmp(flag, "--seconds") == 0) {
+      o.seconds = atof(value);
+    } else if (strcmp(flag, "--iterations") == 0) {
+      o.iterations = atol(value);
+    } else if (strcmp(flag, "--warmup-seconds") == 0) {
+      o.warmup_seconds = atof(value);
+    } else if (strcmp(flag, "--warmup-iterations") == 0) {
+      o.warmup_iterations = atol(value);
+    } else if (strcmp(flag, "--max-growth-percent") == 0) {
+      o.max_growth_percent = atof(value);
+    } else if (strcmp(flag, "--combinations") == 0) {
+      o.combinations = atol(value);
+      if (o.combinations < 1) {
+        usage("--combinations takes a number from 1");
+      }
+    } else if (strcmp(flag, "--csv") == 0) {
+      o.csv = value;
+    } else {
+      usage("unknown option");
+    }
+  }
+  return o;
+}
+
+static double now_seconds(void) {
+  struct timespec t;
+  clock_gettime(CLOCK_MONOTONIC, &t);
+  return (double)t.tv_sec + (double)t.tv_nsec * 1e-9;
+}
+
+/* The process's resident size in bytes. */
+static unsigned long long resident_bytes(void) {
+  unsigned long long total = 0, resident = 0;
+  FILE *statm = fopen("/proc/self/statm", "r");
+  if (statm == NULL || fscanf(statm, "%llu %llu", &total, &resident) != 2) {
+    fprintf(stderr, "soak: /proc/self/statm cannot be read\n");
+    exit(1);
+  }
+  fclose(statm);
+  return resident * (unsigned long long)sysconf(_SC_PAGESIZE);
+}
+
+/* The supported techniques of `kind`, at most `capacity` names (the context owns them). */
+static size_t supported(CadrContext context, enum CadrTechniqueKind kind, const char **names,
+                        size_t capacity) {
+  uint32_t count = 0, i;
+  size_t found = 0;
+  OK(cadr_context_technique_count(context, &count));
+  for (i = 0; i < count && found < capacity; ++i) {
+    struct CadrTechniqueInfo info;
+    OK(cadr_context_technique(context, i, &info));
+    if (info.kind == kind && info.supported) {
+      names[found++] = info.name;
+    }
+  }
+  return found;
+}
+
+/* Up to `capacity` valid (submission, culling) selections, spread evenly over all of them. */
+static size_t valid_selections(CadrContext context, CadrRenderer renderer,
+                               struct CadrTechniqueSelection *chosen, size_t capacity) {
+  const char *submissions[32], *cullers[32];
+  struct CadrTechniqueSelection valid[32 * 32];
+  size_t submission_count = supported(context, CADR_TECHNIQUE_KIND_SUBMISSION, submissions, 32);
+  size_t culler_count = supported(context, CADR_TECHNIQUE_KIND_CULLING, cullers, 32);
+  size_t count = 0, i, j;
+  for (i = 0; i < submission_count; ++i) {
+    for (j = 0; j < culler_count; ++j) {
+      struct CadrTechniqueSelection selection = {NULL, NULL, submissions[i], cullers[j]};
+      if (cadr_renderer_check_techniques(renderer, &selection) == CADR_RESULT_OK) {
+        valid[count++] = selection;
+      }
+    }
+  }
+  for (i = 0; i < capacity && i < count; ++i) {
+    chosen[i] = valid[i * count / (capacity < count ? capacity : count)];
+  }
+  return i;
+}
+
+struct Extremes {
+  unsigned long long resident, device;
+};
+
+static double growth_percent(unsigned long long before, unsigned long long after) {
+  return before == 0 ? (after == 0 ? 0.0 : INFINITY) : 100.0 * ((double)after / before - 1.0);
+}
+
+int main(int argc, char **argv) {
+  struct Options o = parse(argc, argv);
+  struct CadrContextOptions context_options;
+  CadrContext context;
+  CadrScene scene;
+  CadrRenderer renderer;
+  CadrNode root, place;
+  struct CadrLoadResult base;
+  struct CadrBounds bounds;
+  struct CadrDeviceInfo device;
+  struct CadrTechniqueSelection *selections;
+  size_t selection_count;
+  struct Extremes warm = {0, 0}, after = {0, 0}, last = {0, 0};
+  FILE *csv = NULL;
+  double start, elapsed = 0.0;
+  long iteration = 0, samples_after = 0;
+  uint64_t validation_errors = 0;
+  double identity[16] = {1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1};
+
+  OK(cadr_context_options_default(&context_options));
+  context_options.validation = o.validation;
+  OK(cadr_context_create(&context_options, &context));
+  OK(cadr_scene_create(&scene));
+  OK(cadr_scene_root(scene, &root));
+  OK(cadr_scene_load(scene, o.scene, root, &base));
+  OK(cadr_scene_create_transform(scene, "soak place", identity, &place));
+  OK(cadr_scene_add_child(scene, root, place));
+  OK(cadr_scene_bounds(scene, &bounds));
+  OK(cadr_renderer_create(context, o.width, o.height, &renderer));
+  selections = malloc(sizeof *selections * (size_t)o.combinations);
+  if (selections == NULL) {
+    fprintf(stderr, "soak: out of memory\n");
+    return 1;
+  }
+  selection_count = valid_selections(context, renderer, selections, (size_t)o.combinations);
+  if (selection_count == 0) {
+    fprintf(stderr, "soak: no valid submission and culling techniques\n");
+    return 1;
+  }
+  if (o.csv != NULL) {
+    csv = fopen(o.csv, "w");
+    if (csv == NULL) {
+      fprintf(stderr, "soak: %s cannot be written\n", o.csv);
+      return 1;
+    }
+    fprintf(csv, "seconds,iteration,resident_bytes,device_allocated_bytes,device_reserved_bytes\n");
+  }
+  OK(cadr_context_device_info(context, &device));
+  printf("soak: on %s: %s stays, %s is loaded and unloaded each iteration; %zu technique "
+         "combinations swapped in turn; %ux%u%s\n",
+         device.name, o.scene, o.load, selection_count, o.width, o.height,
+         o.validation ? ", validation on" : "");
+  fflush(stdout);
+
+  start = now_seconds();
+  for (;;) {
+    bool warming = (size_t)iteration < selection_count ||
+                   (o.warmup_iterations >= 0 ? iteration < o.warmup_iterations
+                                             : elapsed < o.warmup_seconds);
+    struct CadrLoadResult loaded;
+    struct CadrCamera camera;
+    struct CadrFrameStats stats;
+    struct CadrPickResult picked;
+    struct CadrMemoryUsage usage;
+    double angle = 0.37 * (double)iteration, matrix[16];
+    const double direction[3] = {cos(angle), sin(angle), 0.6};
+    unsigned long long resident;
+    size_t i;
+
+    if (o.iterations >= 0 ? iteration >= o.iterations : elapsed >= o.seconds) {
+      break;
+    }
+    /* Load a file under the moving place, and edit: move it, hide and show a part of the
+     * scene that stays, highlight another. */
+    OK(cadr_scene_load(scene, o.load, place, &loaded));
+    memcpy(matrix, identity, sizeof matrix);
+    matrix[12] = bounds.max[0] * sin(angle);
+    matrix[13] = bounds.max[1] * cos(angle);
+    OK(cadr_scene_set_matrix(scene, place, matrix));
+    if (base.node_count > 4) {
+      /* A node of the second half (leaves, not the scene's top groups): hidden or highlighted
+       * for this iteration, and the one before it back to normal. */
+      size_t half = base.node_count / 2;
+      CadrNode toggled = base.nodes[half + (size_t)iteration % half];
+      CadrNode restored = base.nodes[half + (size_t)(iteration + half - 1) % half];
+      OK(cadr_scene_set_flags(scene, restored, CADR_NODE_VISIBLE | CADR_NODE_PICKABLE));
+      OK(cadr_scene_set_flags(scene, toggled,
+                              iteration % 2 == 0 ? CADR_NODE_PICKABLE
+                                                 : CADR_NODE_VISIBLE | CADR_NODE_PICKABLE |
+                                                       CADR_NODE_HIGHLIGHTED));
+    }
+    /* Swap techniques, render from an orbiting camera, pick. */
+    OK(cadr_renderer_set_techniques(renderer, &selections[(size_t)iteration % selection_count]));
+    OK(cadr_scene_bounds(scene, &bounds));
+    OK(cadr_camera_fit(&bounds, (double)o.width / o.height, direction, &camera));
+    OK(cadr_renderer_render(renderer, scene, &camera, &stats));
+    OK(cadr_renderer_pick(renderer, scene, &camera, (uint32_t)(iteration * 7) % o.width,
+                          (uint32_t)(iteration * 5) % o.height, &picked));
+    cadr_pick_result_free(&picked);
+
+    /* Sample, then unload: the nodes, then the geometries and materials they used. */
+    usage.size = sizeof usage;
+    OK(cadr_context_memory_usage(context, &usage));
+    resident = resident_bytes();
+    elapsed = now_seconds() - start;
+    if (csv != NULL) {
+      fprintf(csv, "%.3f,%ld,%llu,%llu,%llu\n", elapsed, iteration, resident,
+              (unsigned long long)usage.device_allocated_bytes,
+              (unsigned long long)usage.device_reserved_bytes);
+      fflush(csv);
+    }
+    last.resident = resident;
+    last.device = usage.device_reserved_bytes;
+    if (warming) {
+      warm.resident = resident > warm.resident ? resident : warm.resident;
+      warm.device = last.device > warm.device ? last.device : warm.device;
+    } else {
+      after.resident = resident > after.resident ? resident : after.resident;
+      after.device = last.device > after.device ? last.device : after.device;
+      ++samples_after;
+    }
+    for (i = 0; i < loaded.node_count && !o.keep_loaded; ++i) {
+      OK(cadr_scene_destroy_node(scene, loaded.nodes[i]));
+    }
+    for (i = 0; i < loaded.geometry_count && !o.keep_loaded; ++i) {
+      OK(cadr_scene_destroy_geometry(scene, loaded.geometries[i]));
+    }
+    for (i = 0; i < loaded.material_count && !o.keep_loaded; ++i) {
+      OK(cadr_scene_destroy_material(scene, loaded.materials[i]));
+    }
+    cadr_load_result_free(&loaded);
+    ++iteration;
+  }
+  if (csv != NULL) {
+    fclose(csv);
+  }
+  free(selections);
+  OK(cadr_context_validation_error_count(context, &validation_errors));
+  cadr_load_result_free(&base);
+  OK(cadr_renderer_destroy(renderer));
+  OK(cadr_scene_destroy(scene));
+  OK(cadr_context_destroy(context));
+
+  printf("soak: %ld iterations in %.1f s (%.2f s each)\n", iteration, elapsed,
+         iteration > 0 ? elapsed / (double)iteration : 0.0);
+  if (samples_after == 0) {
+    fprintf(stderr, "soak: no iteration after the warm-up; run longer\n");
+    return 1;
+  }
+  printf("soak: resident memory: warm-up peak %.1f MiB, later peak %.1f MiB, last %.1f MiB "
+         "(%+.2f %%)\n",
+         warm.resident / 1048576.0, after.resident / 1048576.0, last.resident / 1048576.0,
+         growth_percent(warm.resident, after.resident));
+  printf("soak: device memory: warm-up peak %.1f MiB, later peak %.1f MiB, last %.1f MiB "
+         "(%+.2f %%)\n",
+         warm.device / 1048576.0, after.device / 1048576.0, last.device / 1048576.0,
+         growth_percent(warm.device, after.device));
+  if (validation_errors > 0) {
+    fprintf(stderr, "soak: %llu validation errors\n", (unsigned long long)validation_errors);
+    return 1;
+  }
+  if (growth_percent(warm.resident, after.resident) > o.max_growth_percent ||
+      growth_percent(warm.device, after.device) > o.max_growth_percent) {
+    fprintf(stderr, "soak: memory grew by more than %.2f %% after the warm-up\n",
+            o.max_growth_percent);
+    return 1;
+  }
+  printf("soak: flat within %.2f %% after the warm-up\n", o.max_growth_percent);
+  return 0;
+}

@@ -934,7 +934,10 @@ enum CadrResult cadr_scene_destroy_material(CadrScene scene, CadrMaterial materi
 // it. On success `*result` lists what was created; free it with `cadr_load_result_free`.
 //
 // Returns `CADR_RESULT_OK`, `CADR_RESULT_NULL_ARGUMENT`, `CADR_RESULT_LOAD_FAILED` (the
-// message names the file and the bad item; nothing is added) or a handle error.
+// message names the file and the bad item; nothing is added) or a handle error. A panic while
+// the file is read (a bug, in cadr or a library it uses) is also `CADR_RESULT_LOAD_FAILED`,
+// saying the file could not be read, and its location goes to the message callback as an
+// error: a load never returns `CADR_RESULT_PANIC`.
 // Ownership: `path` is read during the call; the arrays in `*result` are the caller's until
 // `cadr_load_result_free`. Thread-safety: as `cadr_scene_create`; the file is read while the
 // scene is not locked.

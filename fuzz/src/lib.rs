@@ -3,7 +3,8 @@
 //! ordinary test run (`tests/replay.rs`).
 //!
 //! A target returns normally for every input: the input may be refused with an error, but
-//! nothing may panic (inside cadr or a dependency), abort, hang or allocate without bound. What
+//! nothing may panic (inside cadr or a dependency, even where the load's panic boundary catches
+//! it), abort, hang or allocate without bound. What
 //! a reader accepts must also survive what cadr does next with it: validation, flattening into a
 //! scene tree, conversion to CSF and back, and import into a scene graph through the C API.
 

@@ -96,11 +96,7 @@ impl From<cadr_core::error::RenderError> for Failure {
 /// Runs `body`, turning its failure or panic into a result code and the thread's last error.
 pub(crate) fn guard(body: impl FnOnce() -> Result<(), Failure>) -> CadrResult {
     let outcome = catch_unwind(AssertUnwindSafe(body)).unwrap_or_else(|panic| {
-        let text = panic
-            .downcast_ref::<&str>()
-            .map(|s| (*s).to_owned())
-            .or_else(|| panic.downcast_ref::<String>().cloned())
-            .unwrap_or_else(|| "unknown panic".to_owned());
+        let text = cadr_core::panic_boundary::payload_text(panic.as_ref());
         Err(Failure::new(
             CadrResult::Panic,
             format!("internal error: {text}"),

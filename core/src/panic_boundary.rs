@@ -130,7 +130,7 @@ fn install_hook() {
 }
 
 /// A panic payload's text: the `&str` or `String` it carries, else a placeholder.
-fn payload_text(payload: &(dyn std::any::Any + Send)) -> String {
+pub fn payload_text(payload: &(dyn std::any::Any + Send)) -> String {
     payload
         .downcast_ref::<&str>()
         .map(|text| (*text).to_owned())

@@ -12,7 +12,10 @@
  * an iteration, at the same point (after the pick, before the unload). After the warm-up, the
  * highest sample of each kind is compared with the highest of the warm-up: the run fails (exit
  * 1) when either grew by more than P percent (default 1). Each sample is a line of FILE
- * (seconds,iteration,resident_bytes,device_allocated_bytes,device_reserved_bytes).
+ * (seconds,iteration,resident_bytes,device_allocated_bytes,device_reserved_bytes,
+ * heap_in_use_bytes). The heap in use (glibc's mallinfo2: what is allocated and not freed)
+ * is reported beside the resident size, not judged: where resident memory grows and the heap
+ * in use does not, the allocator is keeping memory that was freed, not cadr.
  * `--keep-loaded` never unloads FILE, so that memory grows: the check of the check. The
  * techniques cycle through N valid (submission, culling) pairs (default 8, spread over all the
  * valid ones); the warm-up lasts at least one cycle, so that every pair's pipelines exist
@@ -20,8 +23,10 @@
  *
  * Run by scripts/soak.sh (minutes on gen:graphicscard) and, briefly and with validation, by
  * tests/tests/soak.rs. Exits 1 on a failed call, a validation error or growth past the bound. */
-#define _POSIX_C_SOURCE 200809L
+#define _GNU_SOURCE
 #include "cadr.h"
+
+#include <malloc.h>
 
 #include <math.h>
 #include <stdio.h>
@@ -178,8 +183,18 @@ static size_t valid_selections(CadrContext context, CadrRenderer renderer,
   return i;
 }
 
+/* Bytes the C allocator has handed out and not had back (0 where it cannot say). */
+static unsigned long long heap_in_use(void) {
+#if defined(__GLIBC__) && (__GLIBC__ > 2 || (__GLIBC__ == 2 && __GLIBC_MINOR__ >= 33))
+  struct mallinfo2 info = mallinfo2();
+  return (unsigned long long)(info.uordblks + info.hblkhd);
+#else
+  return 0;
+#endif
+}
+
 struct Extremes {
-  unsigned long long resident, device;
+  unsigned long long resident, device, heap;
 };
 
 static double growth_percent(unsigned long long before, unsigned long long after) {
@@ -198,7 +213,7 @@ int main(int argc, char **argv) {
   struct CadrDeviceInfo device;
   struct CadrTechniqueSelection *selections;
   size_t selection_count;
-  struct Extremes warm = {0, 0}, after = {0, 0}, last = {0, 0};
+  struct Extremes warm = {0, 0, 0}, after = {0, 0, 0}, last = {0, 0, 0};
   FILE *csv = NULL;
   double start, elapsed = 0.0;
   long iteration = 0, samples_after = 0;
@@ -231,7 +246,8 @@ int main(int argc, char **argv) {
       fprintf(stderr, "soak: %s cannot be written\n", o.csv);
       return 1;
     }
-    fprintf(csv, "seconds,iteration,resident_bytes,device_allocated_bytes,device_reserved_bytes\n");
+    fprintf(csv, "seconds,iteration,resident_bytes,device_allocated_bytes,device_reserved_bytes,"
+                 "heap_in_use_bytes\n");
   }
   OK(cadr_context_device_info(context, &device));
   printf("soak: on %s: %s stays, %s is loaded and unloaded each iteration; %zu technique "
@@ -252,7 +268,7 @@ int main(int argc, char **argv) {
     struct CadrMemoryUsage usage;
     double angle = 0.37 * (double)iteration, matrix[16];
     const double direction[3] = {cos(angle), sin(angle), 0.6};
-    unsigned long long resident;
+    unsigned long long resident, heap;
     size_t i;
 
     if (o.iterations >= 0 ? iteration >= o.iterations : elapsed >= o.seconds) {
@@ -290,23 +306,24 @@ int main(int argc, char **argv) {
     usage.size = sizeof usage;
     OK(cadr_context_memory_usage(context, &usage));
     resident = resident_bytes();
+    heap = heap_in_use();
     elapsed = now_seconds() - start;
     if (csv != NULL) {
-      fprintf(csv, "%.3f,%ld,%llu,%llu,%llu\n", elapsed, iteration, resident,
+      fprintf(csv, "%.3f,%ld,%llu,%llu,%llu,%llu\n", elapsed, iteration, resident,
               (unsigned long long)usage.device_allocated_bytes,
-              (unsigned long long)usage.device_reserved_bytes);
+              (unsigned long long)usage.device_reserved_bytes, heap);
       fflush(csv);
     }
     last.resident = resident;
     last.device = usage.device_reserved_bytes;
-    if (warming) {
-      warm.resident = resident > warm.resident ? resident : warm.resident;
-      warm.device = last.device > warm.device ? last.device : warm.device;
-    } else {
-      after.resident = resident > after.resident ? resident : after.resident;
-      after.device = last.device > after.device ? last.device : after.device;
-      ++samples_after;
+    last.heap = heap;
+    {
+      struct Extremes *phase = warming ? &warm : &after;
+      phase->resident = resident > phase->resident ? resident : phase->resident;
+      phase->device = last.device > phase->device ? last.device : phase->device;
+      phase->heap = heap > phase->heap ? heap : phase->heap;
     }
+    samples_after += warming ? 0 : 1;
     for (i = 0; i < loaded.node_count && !o.keep_loaded; ++i) {
       OK(cadr_scene_destroy_node(scene, loaded.nodes[i]));
     }
@@ -343,6 +360,10 @@ int main(int argc, char **argv) {
          "(%+.2f %%)\n",
          warm.device / 1048576.0, after.device / 1048576.0, last.device / 1048576.0,
          growth_percent(warm.device, after.device));
+  printf("soak: heap in use (not judged): warm-up peak %.1f MiB, later peak %.1f MiB, last "
+         "%.1f MiB (%+.2f %%)\n",
+         warm.heap / 1048576.0, after.heap / 1048576.0, last.heap / 1048576.0,
+         growth_percent(warm.heap, after.heap));
   if (validation_errors > 0) {
     fprintf(stderr, "soak: %llu validation errors\n", (unsigned long long)validation_errors);
     return 1;

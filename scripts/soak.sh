@@ -35,7 +35,8 @@ mkdir -p "$out"
 mkdir -p "$out/lib"
 ln -sf "$PWD/target/release/libcadr.so" "$out/lib/libcadr.so"
 ln -sf "$PWD/target/release/libcadr.so" "$out/lib/libcadr.so.0"
-cc -std=c99 -O2 -Wall -Wextra -Wpedantic -Werror -Iinclude tests/c/soak.c -o "$out/soak" \
+cc -std=c99 -O2 -Wall -Wextra -Wpedantic -Werror -Iinclude -Isamples tests/c/soak.c \
+  samples/common/sample.c -o "$out/soak" \
   -L"$out/lib" -Wl,-rpath,"$PWD/$out/lib" -lcadr -lm
 
 swiftshader="${CADR_SWIFTSHADER_DIR:-$PWD/target/swiftshader}/vk_swiftshader_icd.json"

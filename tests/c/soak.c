@@ -21,10 +21,12 @@
  * valid ones); the warm-up lasts at least one cycle, so that every pair's pipelines exist
  * before memory is compared.
  *
- * Run by scripts/soak.sh (minutes on gen:graphicscard) and, briefly and with validation, by
- * tests/tests/soak.rs. Exits 1 on a failed call, a validation error or growth past the bound. */
+ * Built with the samples' helpers (samples/common/sample.c: checked calls, matrices, cadr's
+ * warnings on stderr). Run by scripts/soak.sh (minutes on gen:graphicscard) and, briefly and
+ * with validation, by tests/tests/soak.rs. Exits 1 on a failed call, a validation error or
+ * growth past the bound. */
 #define _GNU_SOURCE
-#include "cadr.h"
+#include "common/sample.h"
 
 #include <malloc.h>
 
@@ -34,25 +36,6 @@
 #include <string.h>
 #include <time.h>
 #include <unistd.h>
-
-static const char *last_error(void) {
-  static char text[4096];
-  size_t length = 0;
-  if (cadr_last_error_message(text, sizeof text, &length) != CADR_RESULT_OK) {
-    return "(message too long)";
-  }
-  return text;
-}
-
-#define OK(call)                                                                     \
-  do {                                                                               \
-    enum CadrResult result_ = (call);                                                \
-    if (result_ != CADR_RESULT_OK) {                                                 \
-      fprintf(stderr, "soak: %s:%d: %s gave %s: %s\n", __FILE__, __LINE__, #call,    \
-              cadr_result_string((int32_t)result_), last_error());                  \
-      exit(1);                                                                       \
-    }                                                                                \
-  } while (0)
 
 struct Options {
   const char *scene;
@@ -150,10 +133,10 @@ static size_t supported(CadrContext context, enum CadrTechniqueKind kind, const 
                         size_t capacity) {
   uint32_t count = 0, i;
   size_t found = 0;
-  OK(cadr_context_technique_count(context, &count));
+  CADR_CHECK(cadr_context_technique_count(context, &count));
   for (i = 0; i < count && found < capacity; ++i) {
     struct CadrTechniqueInfo info;
-    OK(cadr_context_technique(context, i, &info));
+    CADR_CHECK(cadr_context_technique(context, i, &info));
     if (info.kind == kind && info.supported) {
       names[found++] = info.name;
     }
@@ -218,18 +201,20 @@ int main(int argc, char **argv) {
   double start, elapsed = 0.0;
   long iteration = 0, samples_after = 0;
   uint64_t validation_errors = 0;
-  double identity[16] = {1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1};
+  double identity[16];
 
-  OK(cadr_context_options_default(&context_options));
+  sample_identity(identity);
+  sample_print_messages();
+  CADR_CHECK(cadr_context_options_default(&context_options));
   context_options.validation = o.validation;
-  OK(cadr_context_create(&context_options, &context));
-  OK(cadr_scene_create(&scene));
-  OK(cadr_scene_root(scene, &root));
-  OK(cadr_scene_load(scene, o.scene, root, &base));
-  OK(cadr_scene_create_transform(scene, "soak place", identity, &place));
-  OK(cadr_scene_add_child(scene, root, place));
-  OK(cadr_scene_bounds(scene, &bounds));
-  OK(cadr_renderer_create(context, o.width, o.height, &renderer));
+  CADR_CHECK(cadr_context_create(&context_options, &context));
+  CADR_CHECK(cadr_scene_create(&scene));
+  CADR_CHECK(cadr_scene_root(scene, &root));
+  CADR_CHECK(cadr_scene_load(scene, o.scene, root, &base));
+  CADR_CHECK(cadr_scene_create_transform(scene, "soak place", identity, &place));
+  CADR_CHECK(cadr_scene_add_child(scene, root, place));
+  CADR_CHECK(cadr_scene_bounds(scene, &bounds));
+  CADR_CHECK(cadr_renderer_create(context, o.width, o.height, &renderer));
   selections = malloc(sizeof *selections * (size_t)o.combinations);
   if (selections == NULL) {
     fprintf(stderr, "soak: out of memory\n");
@@ -249,7 +234,7 @@ int main(int argc, char **argv) {
     fprintf(csv, "seconds,iteration,resident_bytes,device_allocated_bytes,device_reserved_bytes,"
                  "heap_in_use_bytes\n");
   }
-  OK(cadr_context_device_info(context, &device));
+  CADR_CHECK(cadr_context_device_info(context, &device));
   printf("soak: on %s: %s stays, %s is loaded and unloaded each iteration; %zu technique "
          "combinations swapped in turn; %ux%u%s\n",
          device.name, o.scene, o.load, selection_count, o.width, o.height,
@@ -276,35 +261,34 @@ int main(int argc, char **argv) {
     }
     /* Load a file under the moving place, and edit: move it, hide and show a part of the
      * scene that stays, highlight another. */
-    OK(cadr_scene_load(scene, o.load, place, &loaded));
-    memcpy(matrix, identity, sizeof matrix);
-    matrix[12] = bounds.max[0] * sin(angle);
-    matrix[13] = bounds.max[1] * cos(angle);
-    OK(cadr_scene_set_matrix(scene, place, matrix));
+    CADR_CHECK(cadr_scene_load(scene, o.load, place, &loaded));
+    sample_translation(matrix, bounds.max[0] * sin(angle), bounds.max[1] * cos(angle), 0.0);
+    CADR_CHECK(cadr_scene_set_matrix(scene, place, matrix));
     if (base.node_count > 4) {
       /* A node of the second half (leaves, not the scene's top groups): hidden or highlighted
        * for this iteration, and the one before it back to normal. */
       size_t half = base.node_count / 2;
       CadrNode toggled = base.nodes[half + (size_t)iteration % half];
       CadrNode restored = base.nodes[half + (size_t)(iteration + half - 1) % half];
-      OK(cadr_scene_set_flags(scene, restored, CADR_NODE_VISIBLE | CADR_NODE_PICKABLE));
-      OK(cadr_scene_set_flags(scene, toggled,
+      CADR_CHECK(cadr_scene_set_flags(scene, restored, CADR_NODE_VISIBLE | CADR_NODE_PICKABLE));
+      CADR_CHECK(cadr_scene_set_flags(scene, toggled,
                               iteration % 2 == 0 ? CADR_NODE_PICKABLE
                                                  : CADR_NODE_VISIBLE | CADR_NODE_PICKABLE |
                                                        CADR_NODE_HIGHLIGHTED));
     }
     /* Swap techniques, render from an orbiting camera, pick. */
-    OK(cadr_renderer_set_techniques(renderer, &selections[(size_t)iteration % selection_count]));
-    OK(cadr_scene_bounds(scene, &bounds));
-    OK(cadr_camera_fit(&bounds, (double)o.width / o.height, direction, &camera));
-    OK(cadr_renderer_render(renderer, scene, &camera, &stats));
-    OK(cadr_renderer_pick(renderer, scene, &camera, (uint32_t)(iteration * 7) % o.width,
+    CADR_CHECK(
+        cadr_renderer_set_techniques(renderer, &selections[(size_t)iteration % selection_count]));
+    CADR_CHECK(cadr_scene_bounds(scene, &bounds));
+    CADR_CHECK(cadr_camera_fit(&bounds, (double)o.width / o.height, direction, &camera));
+    CADR_CHECK(cadr_renderer_render(renderer, scene, &camera, &stats));
+    CADR_CHECK(cadr_renderer_pick(renderer, scene, &camera, (uint32_t)(iteration * 7) % o.width,
                           (uint32_t)(iteration * 5) % o.height, &picked));
     cadr_pick_result_free(&picked);
 
     /* Sample, then unload: the nodes, then the geometries and materials they used. */
     usage.size = sizeof usage;
-    OK(cadr_context_memory_usage(context, &usage));
+    CADR_CHECK(cadr_context_memory_usage(context, &usage));
     resident = resident_bytes();
     heap = heap_in_use();
     elapsed = now_seconds() - start;
@@ -325,13 +309,13 @@ int main(int argc, char **argv) {
     }
     samples_after += warming ? 0 : 1;
     for (i = 0; i < loaded.node_count && !o.keep_loaded; ++i) {
-      OK(cadr_scene_destroy_node(scene, loaded.nodes[i]));
+      CADR_CHECK(cadr_scene_destroy_node(scene, loaded.nodes[i]));
     }
     for (i = 0; i < loaded.geometry_count && !o.keep_loaded; ++i) {
-      OK(cadr_scene_destroy_geometry(scene, loaded.geometries[i]));
+      CADR_CHECK(cadr_scene_destroy_geometry(scene, loaded.geometries[i]));
     }
     for (i = 0; i < loaded.material_count && !o.keep_loaded; ++i) {
-      OK(cadr_scene_destroy_material(scene, loaded.materials[i]));
+      CADR_CHECK(cadr_scene_destroy_material(scene, loaded.materials[i]));
     }
     cadr_load_result_free(&loaded);
     ++iteration;
@@ -340,11 +324,11 @@ int main(int argc, char **argv) {
     fclose(csv);
   }
   free(selections);
-  OK(cadr_context_validation_error_count(context, &validation_errors));
+  CADR_CHECK(cadr_context_validation_error_count(context, &validation_errors));
   cadr_load_result_free(&base);
-  OK(cadr_renderer_destroy(renderer));
-  OK(cadr_scene_destroy(scene));
-  OK(cadr_context_destroy(context));
+  CADR_CHECK(cadr_renderer_destroy(renderer));
+  CADR_CHECK(cadr_scene_destroy(scene));
+  CADR_CHECK(cadr_context_destroy(context));
 
   printf("soak: %ld iterations in %.1f s (%.2f s each)\n", iteration, elapsed,
          iteration > 0 ? elapsed / (double)iteration : 0.0);

@@ -26,7 +26,16 @@ const MAX_GROWTH_PERCENT: &str = "3";
 fn soak_program() -> PathBuf {
     let dir = scratch_dir("soak");
     let program = dir.join("soak");
-    build_c_program(&[repository().join("tests/c/soak.c")], &program, &[]);
+    let samples = repository().join("samples");
+    let include_samples = format!("-I{}", samples.display());
+    build_c_program(
+        &[
+            repository().join("tests/c/soak.c"),
+            samples.join("common/sample.c"),
+        ],
+        &program,
+        &[&include_samples],
+    );
     program
 }
 

@@ -5,8 +5,9 @@
 set -euo pipefail
 
 packages=(
-  # Vulkan loader and headers, the CPU driver (lavapipe), validation layers, vulkaninfo.
-  libvulkan1 libvulkan-dev mesa-vulkan-drivers vulkan-validationlayers vulkan-tools
+  # Vulkan loader and headers, validation layers, vulkaninfo. The CPU driver (lavapipe) comes
+  # from the backports suite, below.
+  libvulkan1 libvulkan-dev vulkan-validationlayers vulkan-tools
   # Shader compiler library linked at build time (shaderc plus its glslang and SPIRV-Tools).
   libshaderc-dev glslang-dev spirv-tools
   # The Khronos "2CylinderEngine" glTF sample used by the tests.
@@ -26,6 +27,9 @@ if [[ "${1:-}" == "--bench" ]]; then
   packages+=(f3d hyperfine xauth)
 fi
 
+sudo=""
+if [[ $(id -u) -ne 0 ]]; then sudo="sudo"; fi
+
 missing=()
 for package in "${packages[@]}"; do
   if ! dpkg-query -W -f='${Status}' "$package" 2>/dev/null | grep -q "install ok installed"; then
@@ -35,10 +39,61 @@ done
 
 if (( ${#missing[@]} > 0 )); then
   echo "setup: installing ${missing[*]}"
-  sudo=""
-  if [[ $(id -u) -ne 0 ]]; then sudo="sudo"; fi
   $sudo apt-get update -qq
   DEBIAN_FRONTEND=noninteractive $sudo apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null
+fi
+
+# Mesa 25's lavapipe (Vulkan 1.4: mesh shaders, descriptor indexing, device-generated commands)
+# is the default driver of the tests. Debian 12 ships Mesa 22.3; Debian's own backports suite
+# has Mesa 25. The suite is added on the mirror this machine already uses for bookworm (read
+# from its apt configuration, so no host name is written here); backports are pinned below the
+# release by default, so nothing else is upgraded from it.
+mesa_wanted="25."
+if [[ "$(dpkg-query -W -f='${Version}' mesa-vulkan-drivers 2>/dev/null)" != "$mesa_wanted"* ]]; then
+  backports_list=/etc/apt/sources.list.d/cadr-bookworm-backports.sources
+  if ! apt-get indextargets --no-release-info --format '$(RELEASE)' 'Created-By: Packages' \
+      | grep -qx bookworm-backports; then
+    mirror="$(apt-get indextargets --no-release-info --format '$(REPO_URI) $(RELEASE)' \
+      'Created-By: Packages' | awk '$2 == "bookworm" { print $1; exit }')"
+    if [[ -z "$mirror" ]]; then
+      echo "setup: no apt source serves Debian 12 (bookworm); cannot add bookworm-backports" >&2
+      exit 1
+    fi
+    echo "setup: adding bookworm-backports from $mirror"
+    printf 'Types: deb\nURIs: %s\nSuites: bookworm-backports\nComponents: main\nSigned-By: %s\n' \
+      "$mirror" /usr/share/keyrings/debian-archive-keyring.gpg | $sudo tee "$backports_list" >/dev/null
+  fi
+  echo "setup: installing Mesa 25's Vulkan driver from bookworm-backports"
+  $sudo apt-get update -qq
+  DEBIAN_FRONTEND=noninteractive $sudo apt-get install -y -qq --no-install-recommends \
+    -t bookworm-backports mesa-vulkan-drivers >/dev/null
+fi
+
+repository="$(cd "$(dirname "$0")/.." && pwd)"
+
+# Debian 12's own driver, Mesa 22.3's lavapipe (Vulkan 1.3: no mesh shaders, no descriptor
+# indexing, no device-generated commands), stays a tested target for the fallback paths. Its
+# package is fetched from the bookworm suite and unpacked, not installed, into target/mesa-22.3
+# (CADR_MESA22_DIR overrides), with a manifest that names the unpacked library.
+mesa22_dir="${CADR_MESA22_DIR:-$repository/target/mesa-22.3}"
+if [[ ! -f "$mesa22_dir/lvp_icd.json" ]]; then
+  echo "setup: unpacking Mesa 22.3's lavapipe into $mesa22_dir"
+  work22="$(mktemp -d)"
+  # As root, apt would download as its own user, who cannot write into a private directory.
+  download_mesa22() {
+    (cd "$work22" && apt-get download -qq -o APT::Sandbox::User="$(id -un)" mesa-vulkan-drivers/bookworm)
+  }
+  if ! download_mesa22; then
+    $sudo apt-get update -qq
+    download_mesa22
+  fi
+  dpkg -x "$work22"/mesa-vulkan-drivers_22.3*.deb "$work22/root"
+  mkdir -p "$mesa22_dir"
+  cp "$(find "$work22/root" -name libvulkan_lvp.so -print -quit)" "$mesa22_dir/"
+  # The package's own manifest, pointed at the unpacked library.
+  sed -E "s|\"library_path\": *\"[^\"]*\"|\"library_path\": \"$mesa22_dir/libvulkan_lvp.so\"|" \
+    "$(find "$work22/root" -name 'lvp_icd.*.json' -print -quit)" > "$mesa22_dir/lvp_icd.json"
+  rm -rf "$work22"
 fi
 
 if ! command -v cargo >/dev/null 2>&1; then
@@ -52,7 +107,6 @@ fi
 # (MIT; SwiftShader itself is Apache-2.0), fetched from the npm registry at a pinned version
 # and checked against its digest. Only the driver and its manifest are kept, in
 # target/swiftshader (CADR_SWIFTSHADER_DIR overrides).
-repository="$(cd "$(dirname "$0")/.." && pwd)"
 swiftshader_dir="${CADR_SWIFTSHADER_DIR:-$repository/target/swiftshader}"
 if [[ ! -f "$swiftshader_dir/vk_swiftshader_icd.json" ]]; then
   echo "setup: fetching SwiftShader into $swiftshader_dir"

@@ -16,7 +16,9 @@ use cadr_tests::fixtures::{give_texture, quad_scene, scratch_dir, textured, text
 use cadr_tests::images::{
     assert_matches_reference, color_at, compare, DEFAULT_TOLERANCE, SAME_PICTURE,
 };
-use cadr_tests::{all_combinations, scene_wide, test_device, SceneView};
+use cadr_tests::{
+    all_combinations, scene_wide, test_device, test_device_with_texture_array_only, SceneView,
+};
 use glam::DVec3;
 
 const SIZE: (u32, u32) = (480, 480);
@@ -327,7 +329,15 @@ fn the_khronos_texture_samples_draw_as_their_references() {
     );
     let mut f = front_view(&scene);
     let image = f.render();
-    assert_matches_reference("textured_transform_test", &image, DEFAULT_TOLERANCE);
+    // Textures bound each at its own size (descriptor indexing) and as layers of one array
+    // image (resampled to the largest texture's size) filter differently: by 0.013-0.015 FLIP
+    // mean on this sample, beyond the tolerance, so each path has its reference.
+    let reference = if f.device.capabilities().bindless_textures > 0 {
+        "textured_transform_test"
+    } else {
+        "textured_transform_test_texture_array"
+    };
+    assert_matches_reference(reference, &image, DEFAULT_TOLERANCE);
     f.assert_no_validation_errors();
 
     let pictures: Vec<image::RgbaImage> = BOX_TEXTURED
@@ -626,12 +636,8 @@ fn an_image_past_the_memory_budget_is_left_out_saying_so() {
 #[test]
 fn more_textures_than_the_array_has_layers_are_refused_clearly() {
     let mut scene = textured_scene("too_many");
-    let device = test_device();
-    assert_eq!(
-        device.capabilities().bindless_textures,
-        0,
-        "lavapipe has no descriptor indexing"
-    );
+    let device = test_device_with_texture_array_only();
+    assert_eq!(device.capabilities().bindless_textures, 0);
     let layers = device.limits().max_image_array_layers as usize;
     let one_texel = Texture {
         name: "one texel".into(),

@@ -136,9 +136,10 @@ fn devices() -> Result<(), String> {
         } else {
             "not drawn (no geometry shaders)"
         };
+        let mesh_shaders = if adapter.mesh_shader { "yes" } else { "no" };
         println!(
             "{}: {} ({:?}, Vulkan {}.{}, MSAA {}, textures {textures}, hidden silhouettes \
-             {hidden_silhouettes})",
+             {hidden_silhouettes}, mesh shaders {mesh_shaders})",
             adapter.index,
             adapter.name,
             adapter.device_type,

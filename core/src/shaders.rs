@@ -26,6 +26,8 @@ fn shaderc_kind(stage: ShaderStage) -> shaderc::ShaderKind {
         ShaderStage::Geometry => shaderc::ShaderKind::Geometry,
         ShaderStage::Fragment => shaderc::ShaderKind::Fragment,
         ShaderStage::Compute => shaderc::ShaderKind::Compute,
+        ShaderStage::Task => shaderc::ShaderKind::Task,
+        ShaderStage::Mesh => shaderc::ShaderKind::Mesh,
     }
 }
 

@@ -35,6 +35,22 @@ pub fn test_device() -> Arc<Device> {
     validated_device(false)
 }
 
+/// A device with the validation layers on that keeps textures as layers of one array image
+/// even where the device has descriptor indexing (the path of devices without it).
+pub fn test_device_with_texture_array_only() -> Arc<Device> {
+    let options = DeviceOptions {
+        instance: InstanceOptions {
+            validation: true,
+            ..InstanceOptions::default()
+        },
+        texture_array_only: true,
+        ..DeviceOptions::default()
+    };
+    Device::new(&options).unwrap_or_else(|error| {
+        panic!("cannot create a Vulkan device with validation (run scripts/setup.sh): {error}")
+    })
+}
+
 /// A device with the validation layers and their synchronization checks on (slower): for
 /// the tests of paths with many barriers, such as transparency.
 pub fn test_device_with_synchronization_checks() -> Arc<Device> {
@@ -77,13 +93,43 @@ pub fn swiftshader_manifest() -> std::path::PathBuf {
     manifest
 }
 
-/// A device with validation on SwiftShader's driver, which this process's Vulkan loader is
-/// pointed at alone (`VK_ICD_FILENAMES`, set once before the first instance: a test binary
-/// calling this must create no device on another driver); `texture_array_only` as in
-/// [`DeviceOptions`].
-pub fn swiftshader_device(texture_array_only: bool) -> Arc<Device> {
-    static POINTED: std::sync::Once = std::sync::Once::new();
-    POINTED.call_once(|| std::env::set_var("VK_ICD_FILENAMES", swiftshader_manifest()));
+/// Mesa 22.3's lavapipe manifest (Debian 12's own driver: Vulkan 1.3, no mesh shaders, no
+/// descriptor indexing, no device-generated commands), which `scripts/setup.sh` unpacks into
+/// `target/mesa-22.3` (`CADR_MESA22_DIR` overrides); fails the test, saying so, where it is
+/// missing.
+pub fn mesa22_manifest() -> std::path::PathBuf {
+    let dir = std::env::var_os("CADR_MESA22_DIR").map_or_else(
+        || std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../target/mesa-22.3"),
+        std::path::PathBuf::from,
+    );
+    let manifest = dir.join("lvp_icd.json");
+    assert!(
+        manifest.is_file(),
+        "Mesa 22.3's lavapipe is not unpacked at {}: run scripts/setup.sh",
+        manifest.display()
+    );
+    manifest
+}
+
+/// A device with validation on the driver of `manifest`, which this process's Vulkan loader
+/// is pointed at alone (`VK_ICD_FILENAMES`, set once before the first instance: a test binary
+/// calling this must create no device on another driver; nextest runs each test in a process
+/// of its own); `texture_array_only` as in [`DeviceOptions`]. The device's name must contain
+/// `name`.
+fn device_on_driver(
+    manifest: &std::path::Path,
+    name: &str,
+    texture_array_only: bool,
+) -> Arc<Device> {
+    static POINTED: std::sync::OnceLock<std::path::PathBuf> = std::sync::OnceLock::new();
+    let pointed = POINTED.get_or_init(|| {
+        std::env::set_var("VK_ICD_FILENAMES", manifest);
+        manifest.to_path_buf()
+    });
+    assert_eq!(
+        pointed, manifest,
+        "this process already uses another Vulkan driver"
+    );
     let options = DeviceOptions {
         instance: InstanceOptions {
             validation: true,
@@ -92,13 +138,24 @@ pub fn swiftshader_device(texture_array_only: bool) -> Arc<Device> {
         texture_array_only,
         ..DeviceOptions::default()
     };
-    let device = Device::new(&options).unwrap_or_else(|e| panic!("SwiftShader device: {e}"));
+    let device = Device::new(&options).unwrap_or_else(|e| panic!("{name} device: {e}"));
     assert!(
-        device.adapter().name.contains("SwiftShader"),
+        device.adapter().name.contains(name),
         "the device is {}",
         device.adapter().name
     );
     device
+}
+
+/// A device with validation on SwiftShader's driver (see [`device_on_driver`]);
+/// `texture_array_only` as in [`DeviceOptions`].
+pub fn swiftshader_device(texture_array_only: bool) -> Arc<Device> {
+    device_on_driver(&swiftshader_manifest(), "SwiftShader", texture_array_only)
+}
+
+/// A device with validation on Mesa 22.3's lavapipe (see [`device_on_driver`]).
+pub fn mesa22_device() -> Arc<Device> {
+    device_on_driver(&mesa22_manifest(), "llvmpipe", false)
 }
 
 /// The directory of the running test binary, where cargo puts the plugin libraries it built.

@@ -34,6 +34,9 @@ pub struct Adapter {
     /// Whether it has geometry shaders (`geometryShader`), which the hidden-line mode's
     /// dashed hidden silhouettes need; see [`super::Capabilities::geometry_shader`].
     pub geometry_shader: bool,
+    /// Whether it has `VK_EXT_mesh_shader` with task and mesh shaders; see
+    /// [`super::Capabilities::mesh_shader`].
+    pub mesh_shader: bool,
 }
 
 /// The most textures the bindless path binds, whatever the device allows (the frame set
@@ -98,7 +101,7 @@ pub fn enumerate(instance: &Instance) -> VkResult<Vec<Adapter>> {
     for (index, physical) in physicals.into_iter().enumerate() {
         // These queries return no result, so they cannot report a failed host allocation (the
         // validation layer crashes on one): no host-memory fault is injected into them.
-        let (properties, families, features, bindless_textures) =
+        let (properties, families, features, bindless_textures, mesh_shader) =
             super::fault::without_host_memory_faults(|| {
                 // SAFETY: physical comes from this instance.
                 let (properties, families, features) = unsafe {
@@ -115,6 +118,7 @@ pub fn enumerate(instance: &Instance) -> VkResult<Vec<Adapter>> {
                     families,
                     features,
                     bindless_textures(instance, physical),
+                    has_mesh_shader(instance, physical),
                 )
             });
         let name = properties
@@ -139,9 +143,42 @@ pub fn enumerate(instance: &Instance) -> VkResult<Vec<Adapter>> {
             sample_counts: sample_counts(&properties.limits),
             bindless_textures,
             geometry_shader: features.geometry_shader == vk::TRUE,
+            mesh_shader,
         });
     }
     Ok(adapters)
+}
+
+/// Whether `physical` lists `extension`.
+pub(super) fn has_extension(
+    instance: &Instance,
+    physical: vk::PhysicalDevice,
+    extension: &std::ffi::CStr,
+) -> bool {
+    // SAFETY: physical comes from this instance.
+    let extensions = unsafe { instance.raw.enumerate_device_extension_properties(physical) };
+    extensions.is_ok_and(|extensions| {
+        extensions
+            .iter()
+            .any(|e| e.extension_name_as_c_str() == Ok(extension))
+    })
+}
+
+/// Whether `physical` has `VK_EXT_mesh_shader` with both its task and mesh stages.
+fn has_mesh_shader(instance: &Instance, physical: vk::PhysicalDevice) -> bool {
+    if !has_extension(instance, physical, ash::ext::mesh_shader::NAME) {
+        return false;
+    }
+    let mut mesh = vk::PhysicalDeviceMeshShaderFeaturesEXT::default();
+    let mut features = vk::PhysicalDeviceFeatures2::default().push_next(&mut mesh);
+    // SAFETY: physical comes from this instance and has the extension; the chain lives on
+    // this stack frame.
+    unsafe {
+        instance
+            .raw
+            .get_physical_device_features2(physical, &mut features)
+    };
+    mesh.task_shader == vk::TRUE && mesh.mesh_shader == vk::TRUE
 }
 
 /// How many textures the bindless path may bind on a device with these features and

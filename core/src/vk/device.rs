@@ -49,6 +49,9 @@ pub struct Capabilities {
     /// `geometryShader`: the hidden-line mode draws the silhouettes of hidden curved surfaces
     /// (`shaders/silhouette_lines.geom`).
     pub geometry_shader: bool,
+    /// `VK_EXT_mesh_shader` with its task and mesh stages: pipelines made with
+    /// [`super::Pipeline::mesh`] and drawn with [`super::draw_mesh_tasks_indirect_count`].
+    pub mesh_shader: bool,
 }
 
 /// How to create a [`Device`].
@@ -98,6 +101,8 @@ pub struct Device {
     /// host-visible memory.
     staged_uploads: std::sync::atomic::AtomicBool,
     debug_utils: Option<ash::ext::debug_utils::Device>,
+    /// The commands of `VK_EXT_mesh_shader`, where [`Capabilities::mesh_shader`] is set.
+    pub(super) mesh_shader: Option<ash::ext::mesh_shader::Device>,
     capabilities: Capabilities,
     limits: vk::PhysicalDeviceLimits,
     /// How a multisampled depth is resolved into the one-sample depth that GPU cullers read
@@ -225,9 +230,12 @@ impl Device {
                 });
             }
         }
-        let has_multi_draw = extensions
-            .iter()
-            .any(|e| e.extension_name_as_c_str() == Ok(ash::ext::multi_draw::NAME));
+        let has_extension = |name: &std::ffi::CStr| {
+            extensions
+                .iter()
+                .any(|e| e.extension_name_as_c_str() == Ok(name))
+        };
+        let has_multi_draw = has_extension(ash::ext::multi_draw::NAME);
         let capabilities = Capabilities {
             multi_draw_indirect: core.multi_draw_indirect == vk::TRUE,
             draw_indirect_first_instance: core.draw_indirect_first_instance == vk::TRUE,
@@ -244,6 +252,7 @@ impl Device {
                 adapter.bindless_textures
             },
             geometry_shader: core.geometry_shader == vk::TRUE,
+            mesh_shader: adapter.mesh_shader,
         };
 
         let enabled_core = vk::PhysicalDeviceFeatures::default()
@@ -284,13 +293,20 @@ impl Device {
             .push_next(&mut enabled12)
             .push_next(&mut enabled11);
         let mut multi_draw = vk::PhysicalDeviceMultiDrawFeaturesEXT::default().multi_draw(true);
+        let mut mesh_shader_features = vk::PhysicalDeviceMeshShaderFeaturesEXT::default()
+            .task_shader(true)
+            .mesh_shader(true);
         let mut extension_names = Vec::new();
         if capabilities.multi_draw {
             extension_names.push(ash::ext::multi_draw::NAME.as_ptr());
         }
+        if capabilities.mesh_shader {
+            extension_names.push(ash::ext::mesh_shader::NAME.as_ptr());
+        }
         for wanted in extra_extensions {
-            let already =
-                capabilities.multi_draw && wanted.as_c_str() == ash::ext::multi_draw::NAME;
+            let already = (capabilities.multi_draw
+                && wanted.as_c_str() == ash::ext::multi_draw::NAME)
+                || (capabilities.mesh_shader && wanted.as_c_str() == ash::ext::mesh_shader::NAME);
             if !already {
                 extension_names.push(wanted.as_ptr());
             }
@@ -301,6 +317,9 @@ impl Device {
             .push_next(&mut enabled);
         if capabilities.multi_draw {
             create_info = create_info.push_next(&mut multi_draw);
+        }
+        if capabilities.mesh_shader {
+            create_info = create_info.push_next(&mut mesh_shader_features);
         }
         // SAFETY: create_info and its chain live until the call returns; only supported
         // features are enabled.
@@ -330,6 +349,9 @@ impl Device {
             .debug_utils
             .as_ref()
             .map(|_| ash::ext::debug_utils::Device::new(&instance.raw, &raw));
+        let mesh_shader = capabilities
+            .mesh_shader
+            .then(|| ash::ext::mesh_shader::Device::new(&instance.raw, &raw));
 
         let pipeline_cache = PersistentPipelineCache::load(&raw, &properties);
         let device = Arc::new(Self {
@@ -342,6 +364,7 @@ impl Device {
             staged_uploads: Default::default(),
             lost: Default::default(),
             debug_utils,
+            mesh_shader,
             capabilities,
             limits: properties.limits,
             depth_resolve_mode,

@@ -16,6 +16,7 @@ pub mod fault;
 pub mod host_memory;
 mod image;
 mod instance;
+mod mesh;
 mod pipeline;
 mod pipeline_cache;
 mod rendering;
@@ -37,6 +38,10 @@ pub use image::{
     Image, ImageShape, MultisampledTarget, OffscreenTarget, TexelImage, COLOR_FORMAT, DEPTH_FORMAT,
 };
 pub use instance::{Instance, InstanceOptions, ValidationLog, ValidationMessage};
+pub use mesh::{
+    draw_mesh_tasks, draw_mesh_tasks_indirect_count, MeshPipelineDesc,
+    DRAW_MESH_TASKS_COMMAND_BYTES,
+};
 pub use pipeline::{
     Blend, ColorTarget, DepthUse, DescriptorSetLayout, DescriptorSets, GraphicsPipelineDesc,
     LayoutBinding, Pipeline, PipelineLayout, VertexLayout,

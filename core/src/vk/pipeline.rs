@@ -299,6 +299,35 @@ impl Pipeline {
         };
         let input_assembly =
             vk::PipelineInputAssemblyStateCreateInfo::default().topology(desc.topology);
+        Self::rasterizing(
+            device,
+            &RasterState {
+                layout: desc.layout,
+                depth_bias: desc.depth_bias,
+                triangle_outlines: desc.triangle_outlines,
+                colors: desc.colors,
+                depth: desc.depth,
+                samples: desc.samples,
+                name: desc.name,
+            },
+            &stages,
+            Some((&vertex_input, &input_assembly)),
+        )
+    }
+
+    /// Creates a pipeline that rasterizes into `raster`'s targets from `stages`, with
+    /// `vertex_input` and its input assembly (`None` for mesh-shader pipelines, which have
+    /// neither).
+    pub(super) fn rasterizing(
+        device: &Arc<Device>,
+        raster: &RasterState<'_>,
+        stages: &[vk::PipelineShaderStageCreateInfo<'_>],
+        vertex_input: Option<(
+            &vk::PipelineVertexInputStateCreateInfo<'_>,
+            &vk::PipelineInputAssemblyStateCreateInfo<'_>,
+        )>,
+    ) -> VkResult<Self> {
+        let desc = raster;
         let viewport = vk::PipelineViewportStateCreateInfo::default()
             .viewport_count(1)
             .scissor_count(1);
@@ -360,10 +389,8 @@ impl Pipeline {
             } else {
                 DEPTH_FORMAT
             });
-        let info = [vk::GraphicsPipelineCreateInfo::default()
-            .stages(&stages)
-            .vertex_input_state(&vertex_input)
-            .input_assembly_state(&input_assembly)
+        let mut info = vk::GraphicsPipelineCreateInfo::default()
+            .stages(stages)
             .viewport_state(&viewport)
             .rasterization_state(&rasterization)
             .multisample_state(&multisample)
@@ -371,7 +398,13 @@ impl Pipeline {
             .color_blend_state(&blend)
             .dynamic_state(&dynamic)
             .layout(desc.layout.raw())
-            .push_next(&mut rendering)];
+            .push_next(&mut rendering);
+        if let Some((vertex_input, input_assembly)) = vertex_input {
+            info = info
+                .vertex_input_state(vertex_input)
+                .input_assembly_state(input_assembly);
+        }
+        let info = [info];
         // Lavapipe leaks what it allocated when a later allocation in this call fails.
         let pipelines = crate::timings::time(crate::timings::Phase::PipelineCreation, || {
             super::fault::with_first_host_memory_fault_only(|| {
@@ -579,6 +612,17 @@ pub struct GraphicsPipelineDesc<'a> {
     pub samples: u32,
     /// The debug name.
     pub name: &'a str,
+}
+
+/// What every rasterizing pipeline (vertex or mesh shaders) says about its targets.
+pub(super) struct RasterState<'a> {
+    pub(super) layout: &'a PipelineLayout,
+    pub(super) depth_bias: bool,
+    pub(super) triangle_outlines: bool,
+    pub(super) colors: &'a [ColorTarget],
+    pub(super) depth: DepthUse,
+    pub(super) samples: u32,
+    pub(super) name: &'a str,
 }
 
 /// The pool sizes that hold one set of each of `layouts`: per descriptor type, the bindings

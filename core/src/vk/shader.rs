@@ -20,16 +20,23 @@ pub enum ShaderStage {
     Fragment,
     /// Compute shader.
     Compute,
+    /// Task shader, launching mesh shader workgroups (needs [`super::Capabilities::mesh_shader`]).
+    Task,
+    /// Mesh shader, writing vertices and primitives (needs [`super::Capabilities::mesh_shader`]).
+    Mesh,
 }
 
 impl ShaderStage {
-    /// The stage for a file name ending in `.vert`, `.geom`, `.frag` or `.comp`.
+    /// The stage for a file name ending in `.vert`, `.geom`, `.frag`, `.comp`, `.task` or
+    /// `.mesh`.
     pub fn from_file_name(name: &str) -> Option<Self> {
         match name.rsplit('.').next()? {
             "vert" => Some(Self::Vertex),
             "geom" => Some(Self::Geometry),
             "frag" => Some(Self::Fragment),
             "comp" => Some(Self::Compute),
+            "task" => Some(Self::Task),
+            "mesh" => Some(Self::Mesh),
             _ => None,
         }
     }
@@ -41,6 +48,8 @@ impl ShaderStage {
             Self::Geometry => vk::ShaderStageFlags::GEOMETRY,
             Self::Fragment => vk::ShaderStageFlags::FRAGMENT,
             Self::Compute => vk::ShaderStageFlags::COMPUTE,
+            Self::Task => vk::ShaderStageFlags::TASK_EXT,
+            Self::Mesh => vk::ShaderStageFlags::MESH_EXT,
         }
     }
 }

@@ -925,14 +925,22 @@ typedef struct CadrTransparencyVtable {
 // `shaderDrawParameters` (Vulkan 1.1).
 #define CADR_FEATURE_SHADER_DRAW_PARAMETERS (1 << 5)
 
-// `VK_EXT_mesh_shader` (no technique uses it yet; listed so that requirements can name it).
+// `VK_EXT_mesh_shader` with task and mesh shaders (set by hosts since ABI 1.12's
+// `VK_EXT_mesh_shader` support; no built-in technique needs it yet).
 #define CADR_FEATURE_MESH_SHADER (1 << 6)
 
-// `VK_NV_device_generated_commands` (as above).
+// `VK_NV_device_generated_commands`: never set by any host (reserved; see
+// [`CADR_FEATURE_DEVICE_GENERATED_COMMANDS_EXT`] for the cross-vendor extension).
 #define CADR_FEATURE_DEVICE_GENERATED_COMMANDS (1 << 7)
 
 // Since ABI 1.7: `fragmentStoresAndAtomics` (fragment shaders write storage buffers).
 #define CADR_FEATURE_FRAGMENT_STORES_AND_ATOMICS (1 << 8)
+
+// `VK_EXT_device_generated_commands` with `VK_KHR_maintenance5`, both enabled on the device,
+// and `bufferDeviceAddress`. Added within ABI 1.12: a host that does not know the bit never
+// sets it, so a technique that needs it is refused there as on a device without the
+// extension. Load the functions with the SDK's `dgc::Device`.
+#define CADR_FEATURE_DEVICE_GENERATED_COMMANDS_EXT (1 << 9)
 
 // Vertex path: the parts of one geometry share one binding (draws differ only in
 // `firstIndex`), so one draw call may cover several parts of a geometry.

@@ -1,6 +1,7 @@
 //! Devices without Vulkan 1.4's extras: on Debian 12's own driver (Mesa 22.3's lavapipe,
 //! unpacked by `scripts/setup.sh`), what needs mesh shaders is refused with the reason, not
 //! crashed into. Each test runs in a process of its own pointed at that driver alone.
+#![allow(clippy::unwrap_used)] // Test code: a failed unwrap is a failed test.
 
 use cadr_core::vk::raw as vk;
 use cadr_core::vk::{
@@ -48,9 +49,8 @@ fn mesh_shaders_are_refused_with_the_reason_on_mesa_22_3() {
         "{message}"
     );
     let mut one_shot = OneShot::begin(&device, "no mesh draw").unwrap();
-    let error = draw_mesh_tasks(&device, one_shot.command_buffer(), [1, 1, 1])
-        .err()
-        .expect("refused");
+    let error =
+        draw_mesh_tasks(&device, one_shot.command_buffer(), [1, 1, 1]).expect_err("refused");
     assert!(
         error
             .to_string()
@@ -58,5 +58,25 @@ fn mesh_shaders_are_refused_with_the_reason_on_mesa_22_3() {
         "{error}"
     );
     one_shot.submit_and_wait().unwrap();
+    assert_no_validation_errors(&device);
+}
+
+#[test]
+fn the_dgc_submission_is_refused_with_the_reason_on_mesa_22_3() {
+    let device = mesa22_device();
+    assert!(!device.capabilities().device_generated_commands);
+    let registry = cadr_tests::plugin_registry(&device);
+    let view =
+        cadr_core::view::View::new(&device, std::sync::Arc::clone(&registry), 64, 64).unwrap();
+    let error = view
+        .techniques()
+        .check(&cadr_tests::scene_wide("dgc", "gpu-frustum"))
+        .expect_err("refused");
+    let message = error.to_string();
+    assert!(
+        message.contains("dgc") && message.contains("VK_EXT_device_generated_commands"),
+        "{message}"
+    );
+    drop(view);
     assert_no_validation_errors(&device);
 }

@@ -1,6 +1,7 @@
 //! Mesh shaders in the Vulkan layer (`VK_EXT_mesh_shader`) on the default driver, Mesa 25's
 //! lavapipe: a task shader launches mesh workgroups, each of which draws one quad, directly
 //! and through an indirect draw whose count the GPU reads. Validation is on.
+#![allow(clippy::unwrap_used)] // Test code: a failed unwrap is a failed test.
 
 use std::sync::Arc;
 

@@ -265,6 +265,11 @@ pub fn feature_bits(capabilities: Capabilities) -> u64 {
             capabilities.fragment_stores_and_atomics,
             abi::CADR_FEATURE_FRAGMENT_STORES_AND_ATOMICS,
         ),
+        (capabilities.mesh_shader, abi::CADR_FEATURE_MESH_SHADER),
+        (
+            capabilities.device_generated_commands && capabilities.buffer_device_address,
+            abi::CADR_FEATURE_DEVICE_GENERATED_COMMANDS_EXT,
+        ),
     ] {
         if has {
             bits |= bit;
@@ -299,6 +304,10 @@ pub fn feature_names(bits: u64) -> Vec<&'static str> {
         (
             abi::CADR_FEATURE_FRAGMENT_STORES_AND_ATOMICS,
             "fragmentStoresAndAtomics",
+        ),
+        (
+            abi::CADR_FEATURE_DEVICE_GENERATED_COMMANDS_EXT,
+            "VK_EXT_device_generated_commands",
         ),
     ]
     .into_iter()

@@ -105,7 +105,7 @@ fn trait_name(bit: u64) -> &'static str {
         }
         abi::CADR_TRAIT_SECONDARY_COMMAND_BUFFERS => "secondary command buffers",
         abi::CADR_TRAIT_DRAWS_GPU_COMMANDS => {
-            "a submission that draws the GPU-written commands (individual-indirect-count)"
+            "a submission that draws the GPU-written commands (individual-indirect-count, dgc)"
         }
         abi::CADR_TRAIT_READS_HOST_MATRICES => "a technique that reads world matrices on the host",
         _ => "an unknown trait",

@@ -37,6 +37,10 @@ pub struct Adapter {
     /// Whether it has `VK_EXT_mesh_shader` with task and mesh shaders; see
     /// [`super::Capabilities::mesh_shader`].
     pub mesh_shader: bool,
+    /// Whether it has `VK_EXT_device_generated_commands` (with `VK_KHR_maintenance5` and
+    /// buffer device addresses, which it needs); see
+    /// [`super::Capabilities::device_generated_commands`].
+    pub device_generated_commands: bool,
 }
 
 /// The most textures the bindless path binds, whatever the device allows (the frame set
@@ -101,7 +105,7 @@ pub fn enumerate(instance: &Instance) -> VkResult<Vec<Adapter>> {
     for (index, physical) in physicals.into_iter().enumerate() {
         // These queries return no result, so they cannot report a failed host allocation (the
         // validation layer crashes on one): no host-memory fault is injected into them.
-        let (properties, families, features, bindless_textures, mesh_shader) =
+        let (properties, families, features, bindless_textures, mesh_shader, generated_commands) =
             super::fault::without_host_memory_faults(|| {
                 // SAFETY: physical comes from this instance.
                 let (properties, families, features) = unsafe {
@@ -119,6 +123,7 @@ pub fn enumerate(instance: &Instance) -> VkResult<Vec<Adapter>> {
                     features,
                     bindless_textures(instance, physical),
                     has_mesh_shader(instance, physical),
+                    has_device_generated_commands(instance, physical),
                 )
             });
         let name = properties
@@ -144,6 +149,7 @@ pub fn enumerate(instance: &Instance) -> VkResult<Vec<Adapter>> {
             bindless_textures,
             geometry_shader: features.geometry_shader == vk::TRUE,
             mesh_shader,
+            device_generated_commands: generated_commands,
         });
     }
     Ok(adapters)
@@ -179,6 +185,35 @@ fn has_mesh_shader(instance: &Instance, physical: vk::PhysicalDevice) -> bool {
             .get_physical_device_features2(physical, &mut features)
     };
     mesh.task_shader == vk::TRUE && mesh.mesh_shader == vk::TRUE
+}
+
+/// Whether `physical` has `VK_EXT_device_generated_commands` and what it needs:
+/// `VK_KHR_maintenance5` (its preprocess buffers' usage flag) and buffer device addresses
+/// (the stream is read by address).
+fn has_device_generated_commands(instance: &Instance, physical: vk::PhysicalDevice) -> bool {
+    use cadr_vk_ext::device_generated_commands as dgc;
+    if !has_extension(instance, physical, dgc::NAME)
+        || !has_extension(instance, physical, ash::khr::maintenance5::NAME)
+    {
+        return false;
+    }
+    let mut generated = dgc::PhysicalDeviceFeatures::default();
+    let mut maintenance5 = vk::PhysicalDeviceMaintenance5FeaturesKHR::default();
+    let mut vulkan12 = vk::PhysicalDeviceVulkan12Features::default();
+    let mut features = vk::PhysicalDeviceFeatures2::default()
+        .push_next(&mut generated)
+        .push_next(&mut maintenance5)
+        .push_next(&mut vulkan12);
+    // SAFETY: physical comes from this instance and has both extensions; the chain lives on
+    // this stack frame.
+    unsafe {
+        instance
+            .raw
+            .get_physical_device_features2(physical, &mut features)
+    };
+    generated.device_generated_commands == vk::TRUE
+        && maintenance5.maintenance5 == vk::TRUE
+        && vulkan12.buffer_device_address == vk::TRUE
 }
 
 /// How many textures the bindless path may bind on a device with these features and

@@ -52,6 +52,9 @@ pub struct Capabilities {
     /// `VK_EXT_mesh_shader` with its task and mesh stages: pipelines made with
     /// [`super::Pipeline::mesh`] and drawn with [`super::draw_mesh_tasks_indirect_count`].
     pub mesh_shader: bool,
+    /// `VK_EXT_device_generated_commands` (with `VK_KHR_maintenance5`): the GPU writes
+    /// command sequences that a command buffer executes ([`super::dgc`]).
+    pub device_generated_commands: bool,
 }
 
 /// How to create a [`Device`].
@@ -253,6 +256,7 @@ impl Device {
             },
             geometry_shader: core.geometry_shader == vk::TRUE,
             mesh_shader: adapter.mesh_shader,
+            device_generated_commands: adapter.device_generated_commands,
         };
 
         let enabled_core = vk::PhysicalDeviceFeatures::default()
@@ -296,21 +300,33 @@ impl Device {
         let mut mesh_shader_features = vk::PhysicalDeviceMeshShaderFeaturesEXT::default()
             .task_shader(true)
             .mesh_shader(true);
-        let mut extension_names = Vec::new();
+        let mut generated_commands_features =
+            cadr_vk_ext::device_generated_commands::PhysicalDeviceFeatures {
+                device_generated_commands: vk::TRUE,
+                ..Default::default()
+            };
+        let mut maintenance5_features =
+            vk::PhysicalDeviceMaintenance5FeaturesKHR::default().maintenance5(true);
+        let mut enabled_extensions: Vec<&std::ffi::CStr> = Vec::new();
+        if capabilities.device_generated_commands {
+            enabled_extensions.push(cadr_vk_ext::device_generated_commands::NAME);
+            enabled_extensions.push(ash::khr::maintenance5::NAME);
+        }
         if capabilities.multi_draw {
-            extension_names.push(ash::ext::multi_draw::NAME.as_ptr());
+            enabled_extensions.push(ash::ext::multi_draw::NAME);
         }
         if capabilities.mesh_shader {
-            extension_names.push(ash::ext::mesh_shader::NAME.as_ptr());
+            enabled_extensions.push(ash::ext::mesh_shader::NAME);
         }
         for wanted in extra_extensions {
-            let already = (capabilities.multi_draw
-                && wanted.as_c_str() == ash::ext::multi_draw::NAME)
-                || (capabilities.mesh_shader && wanted.as_c_str() == ash::ext::mesh_shader::NAME);
-            if !already {
-                extension_names.push(wanted.as_ptr());
+            if !enabled_extensions.contains(&wanted.as_c_str()) {
+                enabled_extensions.push(wanted);
             }
         }
+        let extension_names: Vec<*const std::ffi::c_char> = enabled_extensions
+            .iter()
+            .map(|name| name.as_ptr())
+            .collect();
         let mut create_info = vk::DeviceCreateInfo::default()
             .queue_create_infos(&queue_info)
             .enabled_extension_names(&extension_names)
@@ -320,6 +336,11 @@ impl Device {
         }
         if capabilities.mesh_shader {
             create_info = create_info.push_next(&mut mesh_shader_features);
+        }
+        if capabilities.device_generated_commands {
+            create_info = create_info
+                .push_next(&mut generated_commands_features)
+                .push_next(&mut maintenance5_features);
         }
         // SAFETY: create_info and its chain live until the call returns; only supported
         // features are enabled.

@@ -122,10 +122,17 @@ impl Instance {
             .engine_name(c"cadr")
             .api_version(vk::API_VERSION_1_3);
         let synchronization = [vk::ValidationFeatureEnableEXT::SYNCHRONIZATION_VALIDATION];
+        // The layer replaces the driver's handles by its own ("unique handles") and unwraps
+        // them in the commands it knows. Commands of extensions newer than the layer
+        // (`VK_EXT_device_generated_commands`) reach the driver without unwrapping, so the
+        // layer keeps the driver's handles; every check stays on.
+        let unique_handles = [vk::ValidationFeatureDisableEXT::UNIQUE_HANDLES];
         let mut validation_features =
-            vk::ValidationFeaturesEXT::default().enabled_validation_features(&synchronization);
-        let with_synchronization = options.validation && options.synchronization_validation;
-        if with_synchronization {
+            vk::ValidationFeaturesEXT::default().disabled_validation_features(&unique_handles);
+        if options.synchronization_validation {
+            validation_features = validation_features.enabled_validation_features(&synchronization);
+        }
+        if options.validation {
             // Offered by the validation layer itself.
             extensions.push(ash::ext::validation_features::NAME.as_ptr());
         }
@@ -133,7 +140,7 @@ impl Instance {
             .application_info(&app_info)
             .enabled_layer_names(&layers)
             .enabled_extension_names(&extensions);
-        if with_synchronization {
+        if options.validation {
             create_info = create_info.push_next(&mut validation_features);
         }
         // SAFETY: create_info and everything it points to live until the call returns.
@@ -224,8 +231,39 @@ impl Drop for Instance {
     }
 }
 
+/// Structure types of extensions newer than Debian 12's validation layer (1.3.239) that cadr
+/// chains where the driver has them: `VkPhysicalDeviceMaintenance5FeaturesKHR` (Vulkan
+/// 1.3.268) and `VkPhysicalDeviceDeviceGeneratedCommandsFeaturesEXT` (1.3.296) into
+/// `vkCreateDevice`, and `VkBufferUsageFlags2CreateInfoKHR` (1.3.268) into the `dgc`
+/// submission's `vkCreateBuffer` of preprocess memory. The layer calls any
+/// structure it does not know an error (`VUID-…-pNext-pNext`, "unknown VkStructureType"),
+/// though the driver knows it: for these two structures, and that message alone, the message
+/// is a warning. A newer layer knows them and validates them.
+const STRUCTURES_NEWER_THAN_THE_LAYER: [i32; 3] = [1_000_470_000, 1_000_470_006, 1_000_572_000];
+
+/// Whether `text` is the layer's "unknown structure" message about one of
+/// [`STRUCTURES_NEWER_THAN_THE_LAYER`].
+fn is_unknown_newer_structure(text: &str) -> bool {
+    text.contains("-pNext-pNext")
+        && STRUCTURES_NEWER_THAN_THE_LAYER
+            .iter()
+            .any(|ty| text.contains(&format!("with unknown VkStructureType ({ty})")))
+}
+
+/// Whether `text` is about an extension newer than the layer that cadr enables: an unknown
+/// structure of one ([`is_unknown_newer_structure`]), or the layer's warning that it does not
+/// validate `VK_EXT_device_generated_commands` or `VK_KHR_maintenance5`. Logged at debug
+/// level (still recorded), not printed on every run.
+fn is_about_extensions_newer_than_the_layer(text: &str) -> bool {
+    is_unknown_newer_structure(text)
+        || ["VK_EXT_device_generated_commands", "VK_KHR_maintenance5"]
+            .iter()
+            .any(|name| text.contains(&format!("Extension {name} is not supported by this layer")))
+}
+
 /// Whether `text` is a validation message known to be wrong, recorded as a warning instead
-/// of an error. There is one: translucent fragments write the transparency method's storage
+/// of an error. There are two. The layer's "unknown structure" errors about structures of
+/// extensions newer than it ([`is_unknown_newer_structure`]). And translucent fragments write the transparency method's storage
 /// with atomics and at distinct places, unordered within a rendering by design; the
 /// synchronization checks (layers 1.3.239 at least) accept that from the draws of one
 /// command buffer but call it a write-after-write hazard between secondary command buffers
@@ -233,6 +271,12 @@ impl Drop for Instance {
 /// inline. Only that shape matches: both accesses fragment-shader storage writes, found at
 /// `vkCmdExecuteCommands`.
 fn is_known_false_positive(text: &str) -> bool {
+    is_unknown_newer_structure(text) || is_execute_commands_storage_hazard(text)
+}
+
+/// The write-after-write "hazard" between secondary command buffers described at
+/// [`is_known_false_positive`].
+fn is_execute_commands_storage_hazard(text: &str) -> bool {
     const FRAGMENT_STORAGE_WRITE: &str = "SYNC_FRAGMENT_SHADER_SHADER_STORAGE_WRITE";
     text.contains("SYNC-HAZARD-WRITE-AFTER-WRITE")
         && text.contains("vkCmdExecuteCommands: Hazard WRITE_AFTER_WRITE")
@@ -268,6 +312,8 @@ unsafe extern "system" fn debug_callback(
         if is_error {
             log::error!("vulkan validation: {text}");
             eprintln!("[vulkan validation error] {text}");
+        } else if is_about_extensions_newer_than_the_layer(&text) {
+            log::debug!("vulkan validation (a structure newer than the layer): {text}");
         } else {
             log::warn!("vulkan validation: {text}");
         }
@@ -285,6 +331,27 @@ mod tests {
         entry 3, Recorded access info (recorded_usage: SYNC_FRAGMENT_SHADER_SHADER_STORAGE_WRITE, \
         command: vkCmdDrawIndexed). Access info (prior_usage: \
         SYNC_FRAGMENT_SHADER_SHADER_STORAGE_WRITE, write_barriers: 0, command: vkCmdDrawIndexed)";
+
+    const UNKNOWN_STRUCTURE: &str = "Validation Error: [ VUID-VkDeviceCreateInfo-pNext-pNext ] \
+        Object 0: VK_NULL_HANDLE, type = VK_OBJECT_TYPE_DEVICE; | MessageID = 0x901f59ec | \
+        vkCreateDevice: pCreateInfo->pNext chain includes a structure with unknown \
+        VkStructureType (1000572000); Allowed structures are [...]";
+
+    #[test]
+    fn only_the_unknown_structures_of_newer_extensions_cadr_chains_are_excused() {
+        assert!(is_known_false_positive(UNKNOWN_STRUCTURE));
+        assert!(is_known_false_positive(
+            &UNKNOWN_STRUCTURE.replace("(1000572000)", "(1000470000)")
+        ));
+        for (from, to) in [
+            ("(1000572000)", "(1000572001)"),
+            ("(1000572000)", "(1000328000)"),
+            ("pNext-pNext", "sType-sType"),
+        ] {
+            let changed = UNKNOWN_STRUCTURE.replace(from, to);
+            assert!(!is_known_false_positive(&changed), "{changed}");
+        }
+    }
 
     #[test]
     fn only_fragment_storage_writes_across_secondaries_are_excused() {

@@ -56,3 +56,4 @@ pub use swapchain::{PresentMode, PresentOutcome, Swapchain};
 pub use timer::GpuTimer;
 
 pub use ash::vk as raw;
+pub use cadr_vk_ext::device_generated_commands as dgc;

@@ -91,12 +91,19 @@ pub const CADR_FEATURE_MULTI_DRAW: CadrFeatureBits = 1 << 3;
 pub const CADR_FEATURE_BUFFER_DEVICE_ADDRESS: CadrFeatureBits = 1 << 4;
 /// `shaderDrawParameters` (Vulkan 1.1).
 pub const CADR_FEATURE_SHADER_DRAW_PARAMETERS: CadrFeatureBits = 1 << 5;
-/// `VK_EXT_mesh_shader` (no technique uses it yet; listed so that requirements can name it).
+/// `VK_EXT_mesh_shader` with task and mesh shaders (set by hosts since ABI 1.12's
+/// `VK_EXT_mesh_shader` support; no built-in technique needs it yet).
 pub const CADR_FEATURE_MESH_SHADER: CadrFeatureBits = 1 << 6;
-/// `VK_NV_device_generated_commands` (as above).
+/// `VK_NV_device_generated_commands`: never set by any host (reserved; see
+/// [`CADR_FEATURE_DEVICE_GENERATED_COMMANDS_EXT`] for the cross-vendor extension).
 pub const CADR_FEATURE_DEVICE_GENERATED_COMMANDS: CadrFeatureBits = 1 << 7;
 /// Since ABI 1.7: `fragmentStoresAndAtomics` (fragment shaders write storage buffers).
 pub const CADR_FEATURE_FRAGMENT_STORES_AND_ATOMICS: CadrFeatureBits = 1 << 8;
+/// `VK_EXT_device_generated_commands` with `VK_KHR_maintenance5`, both enabled on the device,
+/// and `bufferDeviceAddress`. Added within ABI 1.12: a host that does not know the bit never
+/// sets it, so a technique that needs it is refused there as on a device without the
+/// extension. Load the functions with the SDK's `dgc::Device`.
+pub const CADR_FEATURE_DEVICE_GENERATED_COMMANDS_EXT: CadrFeatureBits = 1 << 9;
 
 /// What a technique offers to, or needs from, the techniques it is combined with, as bits of
 /// a `u64` ([`CadrTechniqueInfo::provides`], [`CadrTechniqueInfo::needs`]). The host refuses a

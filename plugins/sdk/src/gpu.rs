@@ -16,8 +16,13 @@ pub struct Gpu {
     pub instance: ash::Instance,
     /// Device-level functions.
     pub device: ash::Device,
+    /// The physical device the host's device was created on.
+    pub physical_device: vk::PhysicalDevice,
     /// `VK_EXT_multi_draw` functions (present when the feature bit is).
     pub multi_draw: Option<ash::ext::multi_draw::Device>,
+    /// `VK_EXT_device_generated_commands` functions (present when
+    /// `CADR_FEATURE_DEVICE_GENERATED_COMMANDS_EXT` is).
+    pub generated_commands: Option<crate::dgc::Device>,
     /// `CADR_FEATURE_*` bits enabled on the device.
     pub features: abi::CadrFeatureBits,
     /// `minUniformBufferOffsetAlignment`.
@@ -72,10 +77,22 @@ impl Gpu {
         let device = unsafe { ash::Device::load(instance.fp_v1_0(), device_handle) };
         let multi_draw = (vulkan.features & abi::CADR_FEATURE_MULTI_DRAW != 0)
             .then(|| ash::ext::multi_draw::Device::new(&instance, &device));
+        let generated_commands =
+            if vulkan.features & abi::CADR_FEATURE_DEVICE_GENERATED_COMMANDS_EXT != 0 {
+                Some(
+                    crate::dgc::Device::new(&instance, &device).ok_or(
+                        "the device lacks the commands of VK_EXT_device_generated_commands",
+                    )?,
+                )
+            } else {
+                None
+            };
         Ok(Arc::new(Self {
             instance,
             device,
+            physical_device: vk::PhysicalDevice::from_raw(vulkan.physical_device as u64),
             multi_draw,
+            generated_commands,
             features: vulkan.features,
             min_uniform_buffer_offset_alignment: vulkan.min_uniform_buffer_offset_alignment.max(1),
             formats: (

@@ -16,6 +16,7 @@ mod views;
 pub use ash;
 pub use ash::vk;
 pub use cadr_plugin_abi as abi;
+pub use cadr_vk_ext::device_generated_commands as dgc;
 pub use gpu::{Gpu, HostBuffer};
 pub use views::{buffer, Bind, CullInput, CullOutput, GpuCull, PassFilter, Path, Record, Scene};
 

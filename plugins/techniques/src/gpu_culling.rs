@@ -32,6 +32,13 @@ const TOTAL_COMMANDS: usize = 8;
 const TOTAL_TRIANGLES: usize = 9;
 /// Passes per phase the counts have room for.
 const PASSES_PER_PHASE: usize = 4;
+/// How the commands and counts are read: as indirect buffers, and by device address where the
+/// submission runs them as generated commands (the host drops that usage on a device without
+/// buffer device addresses).
+const DRAWN_FROM: vk::BufferUsageFlags = vk::BufferUsageFlags::from_raw(
+    vk::BufferUsageFlags::INDIRECT_BUFFER.as_raw()
+        | vk::BufferUsageFlags::SHADER_DEVICE_ADDRESS.as_raw(),
+);
 /// Bytes of one `VkDrawIndexedIndirectCommand`.
 const COMMAND_BYTES: u64 = 20;
 
@@ -320,7 +327,7 @@ impl<const OCCLUSION: bool> Technique for GpuCuller<OCCLUSION> {
         let counts = gpu.create_buffer(
             "gpu cull counts",
             (COUNT_WORDS * 4) as u64,
-            storage | vk::BufferUsageFlags::INDIRECT_BUFFER,
+            storage | DRAWN_FROM,
             abi::CADR_MEMORY_CPU_TO_GPU,
         )?;
         let visibility_usage = storage | vk::BufferUsageFlags::TRANSFER_SRC;
@@ -379,7 +386,7 @@ impl<const OCCLUSION: bool> GpuCuller<OCCLUSION> {
             self.commands = Some(self.gpu.create_buffer(
                 "gpu cull commands",
                 u64::from(capacity) * COMMAND_BYTES * slots,
-                storage | vk::BufferUsageFlags::INDIRECT_BUFFER,
+                storage | DRAWN_FROM,
                 abi::CADR_MEMORY_GPU_ONLY,
             )?);
             self.capacity = capacity;

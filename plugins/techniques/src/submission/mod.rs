@@ -8,6 +8,7 @@
 //! recorded every frame in parallel on worker threads. Bindings are filtered by the vertex and
 //! parameter paths' bind states, so an unchanged binding is never re-issued.
 
+mod generated;
 pub mod lists;
 mod record;
 
@@ -15,11 +16,12 @@ use std::sync::Arc;
 
 use crate::REPLAYABLE;
 use cadr_plugin_sdk::abi;
-use cadr_plugin_sdk::vk;
+use cadr_plugin_sdk::vk::{self, Handle};
 use cadr_plugin_sdk::{
     technique_library, Gpu, HostBuffer, PassFilter, Record, Submission, Technique,
 };
 
+use generated::{Execution, GeneratedCommands};
 use lists::{PassList, Strategy};
 use record::{Api, PassDraws, Recorder, SecondaryBuffers};
 
@@ -39,6 +41,7 @@ const DIRECT: u8 = 0;
 const MULTI_DRAW: u8 = 1;
 const INDIRECT: u8 = 2;
 const INDIRECT_COUNT: u8 = 3;
+const GENERATED: u8 = 4;
 const INLINE: u8 = 0;
 const REPLAY: u8 = 1;
 const THREADS: u8 = 2;
@@ -57,6 +60,7 @@ fn api(code: u8) -> Api {
         MULTI_DRAW => Api::MultiDraw,
         INDIRECT => Api::Indirect,
         INDIRECT_COUNT => Api::IndirectCount,
+        GENERATED => Api::Generated,
         _ => Api::Direct,
     }
 }
@@ -110,6 +114,8 @@ pub struct Submit<const STRATEGY: u8, const API: u8, const MODE: u8> {
     recorded_stats: abi::CadrStats,
     /// The secondary buffers the recording executes, in order.
     recorded_order: Vec<vk::CommandBuffer>,
+    /// With [`Api::Generated`], the commands layout and preprocess memory.
+    generated: Option<GeneratedCommands>,
 }
 
 impl<const S: u8, const A: u8, const M: u8> Technique for Submit<S, A, M> {
@@ -124,8 +130,14 @@ impl<const S: u8, const A: u8, const M: u8> Technique for Submit<S, A, M> {
         } else {
             None
         };
+        let generated = if api(A) == Api::Generated {
+            Some(GeneratedCommands::new(&gpu)?)
+        } else {
+            None
+        };
         Ok(Self {
             gpu,
+            generated,
             kept: Vec::new(),
             pass_lists: Vec::new(),
             secondary,
@@ -210,23 +222,29 @@ impl<const S: u8, const A: u8, const M: u8> Submit<S, A, M> {
             let draws = (bytes.len() / 20) as u32;
             let indirect = &mut kept.indirect;
             let needed = (bytes.len() as u64).max(20);
+            // Generated commands read the stream and the count by device address.
+            let usage = if api(A) == Api::Generated {
+                vk::BufferUsageFlags::INDIRECT_BUFFER | vk::BufferUsageFlags::SHADER_DEVICE_ADDRESS
+            } else {
+                vk::BufferUsageFlags::INDIRECT_BUFFER
+            };
             if indirect.commands.as_ref().is_none_or(|b| b.size() < needed) {
                 indirect.commands = Some(self.gpu.create_buffer(
                     "indirect commands",
                     needed.next_power_of_two(),
-                    vk::BufferUsageFlags::INDIRECT_BUFFER,
+                    usage,
                     abi::CADR_MEMORY_CPU_TO_GPU,
                 )?);
             }
             if let Some(commands) = indirect.commands.as_mut() {
                 commands.write(0, &bytes)?;
             }
-            if api(A) == Api::IndirectCount {
+            if matches!(api(A), Api::IndirectCount | Api::Generated) {
                 if indirect.count.is_none() {
                     indirect.count = Some(self.gpu.create_buffer(
                         "indirect count",
                         4,
-                        vk::BufferUsageFlags::INDIRECT_BUFFER,
+                        usage,
                         abi::CADR_MEMORY_CPU_TO_GPU,
                     )?);
                 }
@@ -236,6 +254,80 @@ impl<const S: u8, const A: u8, const M: u8> Submit<S, A, M> {
             }
             indirect.draws = draws;
             kept.indirect_written = true;
+        }
+        Ok(())
+    }
+
+    /// Records every pass as one execution of generated commands: the GPU culler's commands
+    /// where one wrote them, else the pass list's indirect commands.
+    fn record_generated(&mut self, record: &Record<'_>) -> Result<(), String> {
+        let passes = record.passes();
+        let executions: Vec<Option<Execution>> = match record.gpu_draws() {
+            Some(draws) => passes
+                .iter()
+                .zip(draws)
+                .map(|(pass, source)| {
+                    (source.commands != 0 && source.max_draws != 0).then(|| Execution {
+                        pipeline: vk::Pipeline::from_raw(pass.pipeline),
+                        commands: vk::Buffer::from_raw(source.commands),
+                        commands_offset: source.commands_offset,
+                        count: vk::Buffer::from_raw(source.count_buffer),
+                        count_offset: source.count_offset,
+                        max_sequences: source.max_draws,
+                        stride: source.stride,
+                    })
+                })
+                .collect(),
+            None => {
+                // A host that skipped prepare still gets the right lists.
+                if self.refresh_lists(record) {
+                    return Err("the draws changed after prepare".into());
+                }
+                passes
+                    .iter()
+                    .zip(&self.pass_lists)
+                    .map(|(pass, &index)| {
+                        let indirect = &self.kept[index].indirect;
+                        match (&indirect.commands, &indirect.count) {
+                            (Some(commands), Some(count)) if indirect.draws > 0 => {
+                                Some(Execution {
+                                    pipeline: vk::Pipeline::from_raw(pass.pipeline),
+                                    commands: commands.raw(),
+                                    commands_offset: 0,
+                                    count: count.raw(),
+                                    count_offset: 0,
+                                    max_sequences: indirect.draws,
+                                    stride: 20,
+                                })
+                            }
+                            _ => None,
+                        }
+                    })
+                    .collect()
+            }
+        };
+        let generated = self
+            .generated
+            .as_mut()
+            .ok_or("no generated commands state")?;
+        let drawn: Vec<(usize, &Execution)> = executions
+            .iter()
+            .enumerate()
+            .filter_map(|(i, e)| e.as_ref().map(|e| (i, e)))
+            .collect();
+        let plain: Vec<Execution> = drawn.iter().map(|&(_, e)| *e).collect();
+        let regions = generated.begin_frame(&plain)?;
+        for ((index, execution), region) in drawn.into_iter().zip(regions) {
+            record::bind_pass(&self.gpu, record, &passes[index]);
+            generated.execute(record.command_buffer(), execution, region)?;
+            let sequences = u64::from(execution.max_sequences);
+            let from_list = record.gpu_draws().is_none();
+            record.count(|s| {
+                s.draw_calls += 1;
+                if from_list {
+                    s.draws += sequences;
+                }
+            });
         }
         Ok(())
     }
@@ -276,13 +368,16 @@ impl<const S: u8, const A: u8, const M: u8> Submission for Submit<S, A, M> {
             return Ok(());
         }
         self.refresh_lists(record);
-        if matches!(api(A), Api::Indirect | Api::IndirectCount) {
+        if matches!(api(A), Api::Indirect | Api::IndirectCount | Api::Generated) {
             self.write_indirect(record)?;
         }
         Ok(())
     }
 
     fn record(&mut self, record: &Record<'_>) -> Result<(), String> {
+        if api(A) == Api::Generated {
+            return self.record_generated(record);
+        }
         if let Some(draws) = record.gpu_draws() {
             if api(A) != Api::IndirectCount || mode(M) != Mode::Inline {
                 return Err("this submission cannot draw GPU-written commands".into());
@@ -361,6 +456,9 @@ const SECONDARY: u64 = abi::CADR_TRAIT_SECONDARY_COMMAND_BUFFERS;
 const MDI_FEATURES: u64 =
     abi::CADR_FEATURE_MULTI_DRAW_INDIRECT | abi::CADR_FEATURE_DRAW_INDIRECT_FIRST_INSTANCE;
 const COUNT_FEATURES: u64 = MDI_FEATURES | abi::CADR_FEATURE_DRAW_INDIRECT_COUNT;
+const DGC_FEATURES: u64 = abi::CADR_FEATURE_DRAW_INDIRECT_FIRST_INSTANCE
+    | abi::CADR_FEATURE_BUFFER_DEVICE_ADDRESS
+    | abi::CADR_FEATURE_DEVICE_GENERATED_COMMANDS_EXT;
 
 technique_library! {
     pub fn entry;
@@ -425,6 +523,11 @@ technique_library! {
             name: "groups-indirect-count",
             description: "Material-group ranges, indirect with the count read from a buffer.",
             features: COUNT_FEATURES, provides: REPLAYABLE, needs: GPU_DRAWS,
+        },
+        submission Submit<INDIVIDUAL, GENERATED, INLINE> {
+            name: "dgc",
+            description: "Device-generated commands (VK_EXT_device_generated_commands): each pass's indirect commands, written by a gpu- culler or from the part list, run as a generated command stream whose length the GPU reads.",
+            features: DGC_FEATURES, provides: abi::CADR_TRAIT_DRAWS_GPU_COMMANDS | REPLAYABLE, needs: GPU_DRAWS,
         },
         submission Submit<INDIVIDUAL, DIRECT, REPLAY> {
             name: "individual-replay",

@@ -22,6 +22,8 @@ pub enum Api {
     Indirect,
     /// `vkCmdDrawIndexedIndirectCount` per pass.
     IndirectCount,
+    /// `vkCmdExecuteGeneratedCommandsEXT` per pass ([`super::generated`]).
+    Generated,
 }
 
 /// What one pass draws: its list, and the list's indirect commands where the API draws them.
@@ -215,41 +217,52 @@ impl Recorder<'_> {
     }
 }
 
+/// Binds what every draw of `pass` needs: its pipeline, the frame's set, and the vertex and
+/// parameter paths' pass bindings; counts the binds.
+pub fn bind_pass(gpu: &Gpu, record: &Record<'_>, pass: &abi::CadrPass) {
+    let device = &gpu.device;
+    let command_buffer = record.command_buffer();
+    let stats = record.stats();
+    let bind = record.bind_context(command_buffer, pass.kind, stats);
+    // SAFETY: recording inside rendering; the pipeline, layout and set outlive the frame.
+    unsafe {
+        device.cmd_bind_pipeline(
+            command_buffer,
+            vk::PipelineBindPoint::GRAPHICS,
+            vk::Pipeline::from_raw(pass.pipeline),
+        );
+        device.cmd_bind_descriptor_sets(
+            command_buffer,
+            vk::PipelineBindPoint::GRAPHICS,
+            record.layout(),
+            0,
+            &[record.frame_set()],
+            &[],
+        );
+    }
+    let mut vertex_state = CadrBindState::default();
+    let mut parameter_state = CadrBindState::default();
+    record.vertex().bind_pass(&bind, &mut vertex_state);
+    record.parameters().bind_pass(&bind, &mut parameter_state);
+    record.count(|s| {
+        s.pipeline_binds += 1;
+        s.parameter_binds += 1;
+    });
+}
+
 /// Records each pass's draws from the commands a GPU culler wrote (`draws`, one per pass):
 /// the pass's pipeline and bindings, then one `vkCmdDrawIndexedIndirectCount`.
 pub fn record_gpu_draws(gpu: &Gpu, record: &Record<'_>, draws: &[abi::CadrGpuDraws]) {
-    let device = &gpu.device;
     let command_buffer = record.command_buffer();
     for (pass, source) in record.passes().iter().zip(draws) {
         if source.commands == 0 || source.max_draws == 0 {
             continue;
         }
-        let stats = record.stats();
-        let bind = record.bind_context(command_buffer, pass.kind, stats);
-        // SAFETY: recording inside rendering; the pipeline, layout and set outlive the frame.
-        unsafe {
-            device.cmd_bind_pipeline(
-                command_buffer,
-                vk::PipelineBindPoint::GRAPHICS,
-                vk::Pipeline::from_raw(pass.pipeline),
-            );
-            device.cmd_bind_descriptor_sets(
-                command_buffer,
-                vk::PipelineBindPoint::GRAPHICS,
-                record.layout(),
-                0,
-                &[record.frame_set()],
-                &[],
-            );
-        }
-        let mut vertex_state = CadrBindState::default();
-        let mut parameter_state = CadrBindState::default();
-        record.vertex().bind_pass(&bind, &mut vertex_state);
-        record.parameters().bind_pass(&bind, &mut parameter_state);
+        bind_pass(gpu, record, pass);
         // SAFETY: recording; the culler's buffers hold `max_draws` commands of `stride`
         // bytes and the count, written before rendering began.
         unsafe {
-            device.cmd_draw_indexed_indirect_count(
+            gpu.device.cmd_draw_indexed_indirect_count(
                 command_buffer,
                 vk::Buffer::from_raw(source.commands),
                 source.commands_offset,
@@ -259,11 +272,7 @@ pub fn record_gpu_draws(gpu: &Gpu, record: &Record<'_>, draws: &[abi::CadrGpuDra
                 source.stride,
             )
         };
-        record.count(|s| {
-            s.pipeline_binds += 1;
-            s.parameter_binds += 1;
-            s.draw_calls += 1;
-        });
+        record.count(|s| s.draw_calls += 1);
     }
 }
 

@@ -1,0 +1,309 @@
+//! Drawing through `VK_EXT_device_generated_commands`: the commands of a pass (written by a
+//! GPU culler, or by the submission from its list) are a stream of sequences that
+//! `vkCmdExecuteGeneratedCommandsEXT` runs, as many as the `u32` count in GPU memory says.
+//!
+//! Every pass binds one pipeline (its kind's), so a sequence holds only its indexed draw: the
+//! indirect commands layout is one `DRAW_INDEXED` token at offset 0, one sequence every
+//! `stride` bytes, the stream the cullers already write. The implementation preprocesses the
+//! stream into memory of its own ("preprocess" memory, sized by
+//! `vkGetGeneratedCommandsMemoryRequirementsEXT`); each execution of a frame gets a region of
+//! it, and frames rotate through [`FRAMES`] sets of regions so that a frame never writes what
+//! an earlier one still reads.
+
+use std::sync::Arc;
+
+use cadr_plugin_sdk::dgc;
+use cadr_plugin_sdk::vk;
+use cadr_plugin_sdk::{vulkan_failure, Gpu};
+
+/// Frames whose preprocess regions are kept apart (the host has at most this many in flight).
+const FRAMES: u64 = 3;
+
+/// One execution: the pass's pipeline and where its sequences and count are.
+#[derive(Clone, Copy)]
+pub struct Execution {
+    pub pipeline: vk::Pipeline,
+    pub commands: vk::Buffer,
+    pub commands_offset: u64,
+    pub count: vk::Buffer,
+    pub count_offset: u64,
+    pub max_sequences: u32,
+    pub stride: u32,
+}
+
+/// Preprocess memory: a buffer with its own allocation and device address.
+struct Preprocess {
+    buffer: vk::Buffer,
+    memory: vk::DeviceMemory,
+    address: vk::DeviceAddress,
+    /// Bytes of one frame's regions.
+    frame_bytes: u64,
+}
+
+/// The layout, the preprocess memory and the frame rotation of a `dgc` submission.
+pub struct GeneratedCommands {
+    gpu: Arc<Gpu>,
+    functions: dgc::Device,
+    /// The layout and the stride it was made for.
+    layout: Option<(u32, dgc::IndirectCommandsLayout)>,
+    preprocess: Option<Preprocess>,
+    frame: u64,
+    /// Preprocess bytes the last frame's executions needed.
+    pub last_preprocess_bytes: u64,
+}
+
+/// The stages the sequences' state reaches (the draw token's pipelines).
+const STAGES: vk::ShaderStageFlags = vk::ShaderStageFlags::from_raw(
+    vk::ShaderStageFlags::VERTEX.as_raw() | vk::ShaderStageFlags::FRAGMENT.as_raw(),
+);
+
+impl GeneratedCommands {
+    /// Refused where the host did not enable the extension.
+    pub fn new(gpu: &Arc<Gpu>) -> Result<Self, String> {
+        let functions = gpu
+            .generated_commands
+            .clone()
+            .ok_or("the device has no VK_EXT_device_generated_commands")?;
+        Ok(Self {
+            gpu: Arc::clone(gpu),
+            functions,
+            layout: None,
+            preprocess: None,
+            frame: 0,
+            last_preprocess_bytes: 0,
+        })
+    }
+
+    fn layout(&mut self, stride: u32) -> Result<dgc::IndirectCommandsLayout, String> {
+        if let Some((made_for, layout)) = self.layout {
+            if made_for == stride {
+                return Ok(layout);
+            }
+            // SAFETY: a layout is referenced only while recording; the host waits for the
+            // frames that used it before a stride change can come (a new culler).
+            unsafe { self.functions.destroy_layout(layout, self.gpu.allocator()) };
+            self.layout = None;
+        }
+        let tokens = [dgc::LayoutToken::draw_indexed(0)];
+        let info = dgc::LayoutCreateInfo::new(
+            dgc::LayoutUsageFlags::default(),
+            STAGES,
+            stride,
+            vk::PipelineLayout::null(),
+            &tokens,
+        );
+        // SAFETY: the info and its tokens live for the call.
+        let layout = unsafe { self.functions.create_layout(&info, self.gpu.allocator()) }
+            .map_err(vulkan_failure("vkCreateIndirectCommandsLayoutEXT"))?;
+        self.layout = Some((stride, layout));
+        Ok(layout)
+    }
+
+    /// Bytes of preprocess memory, and their alignment and memory types, that `execution`
+    /// needs.
+    fn requirements(
+        &self,
+        layout: dgc::IndirectCommandsLayout,
+        execution: &Execution,
+    ) -> vk::MemoryRequirements {
+        let pipeline = dgc::GeneratedCommandsPipelineInfo::new(execution.pipeline);
+        let info = dgc::MemoryRequirementsInfo::new(
+            layout,
+            dgc::IndirectExecutionSet::null(),
+            Some(&pipeline),
+            execution.max_sequences,
+        );
+        // SAFETY: the layout and the pipeline are alive.
+        unsafe { self.functions.memory_requirements(&info) }
+    }
+
+    /// Makes sure one frame's regions hold `frame_bytes` of memory of `types`.
+    fn reserve(&mut self, frame_bytes: u64, types: u32) -> Result<&Preprocess, String> {
+        if self
+            .preprocess
+            .as_ref()
+            .is_some_and(|p| p.frame_bytes >= frame_bytes)
+        {
+            return self.preprocess.as_ref().ok_or_else(String::new);
+        }
+        if let Some(old) = self.preprocess.take() {
+            // Earlier frames may still read it: growing is rare (a larger scene).
+            // SAFETY: the device is the host's, alive.
+            unsafe { self.gpu.device.device_wait_idle() }
+                .map_err(vulkan_failure("vkDeviceWaitIdle"))?;
+            self.free(old);
+        }
+        let frame_bytes = frame_bytes.next_power_of_two().max(256);
+        let preprocess = self.allocate(frame_bytes, types)?;
+        Ok(self.preprocess.insert(preprocess))
+    }
+
+    fn allocate(&self, frame_bytes: u64, types: u32) -> Result<Preprocess, String> {
+        let device = &self.gpu.device;
+        let mut usage = vk::BufferUsageFlags2CreateInfoKHR::default().usage(
+            dgc::BUFFER_USAGE_2_PREPROCESS_BUFFER | vk::BufferUsageFlags2KHR::SHADER_DEVICE_ADDRESS,
+        );
+        // The usage given in VkBufferUsageFlags2CreateInfoKHR is the buffer's; the legacy
+        // field, which the driver then ignores, repeats what it can for validation layers
+        // older than VK_KHR_maintenance5.
+        let info = vk::BufferCreateInfo::default()
+            .size(frame_bytes * FRAMES)
+            .usage(vk::BufferUsageFlags::SHADER_DEVICE_ADDRESS)
+            .push_next(&mut usage);
+        // SAFETY: the info lives for the call; the buffer is destroyed in `free`.
+        let buffer = unsafe { device.create_buffer(&info, self.gpu.allocator()) }
+            .map_err(vulkan_failure("vkCreateBuffer (preprocess)"))?;
+        // SAFETY: the buffer was just made on this device.
+        let needs = unsafe { device.get_buffer_memory_requirements(buffer) };
+        // SAFETY: the physical device is the one the host's device was made on.
+        let properties = unsafe {
+            self.gpu
+                .instance
+                .get_physical_device_memory_properties(self.gpu.physical_device)
+        };
+        let allowed = needs.memory_type_bits & types;
+        let pick = |wanted: vk::MemoryPropertyFlags| {
+            (0..properties.memory_type_count).find(|&i| {
+                allowed & (1 << i) != 0
+                    && properties.memory_types[i as usize]
+                        .property_flags
+                        .contains(wanted)
+            })
+        };
+        let Some(memory_type) =
+            pick(vk::MemoryPropertyFlags::DEVICE_LOCAL).or_else(|| pick(Default::default()))
+        else {
+            // SAFETY: nothing uses the buffer yet.
+            unsafe { device.destroy_buffer(buffer, self.gpu.allocator()) };
+            return Err("no memory type holds preprocess buffers".into());
+        };
+        let mut flags =
+            vk::MemoryAllocateFlagsInfo::default().flags(vk::MemoryAllocateFlags::DEVICE_ADDRESS);
+        let allocate = vk::MemoryAllocateInfo::default()
+            .allocation_size(needs.size)
+            .memory_type_index(memory_type)
+            .push_next(&mut flags);
+        // SAFETY: the info lives for the call; the memory is freed in `free`.
+        let memory = match unsafe { device.allocate_memory(&allocate, self.gpu.allocator()) } {
+            Ok(memory) => memory,
+            Err(result) => {
+                // SAFETY: nothing uses the buffer yet.
+                unsafe { device.destroy_buffer(buffer, self.gpu.allocator()) };
+                return Err(vulkan_failure("vkAllocateMemory (preprocess)")(result));
+            }
+        };
+        let preprocess = Preprocess {
+            buffer,
+            memory,
+            address: 0,
+            frame_bytes,
+        };
+        // SAFETY: the memory is of a type the buffer allows, large enough, not bound yet.
+        if let Err(result) = unsafe { device.bind_buffer_memory(buffer, memory, 0) } {
+            self.free(preprocess);
+            return Err(vulkan_failure("vkBindBufferMemory (preprocess)")(result));
+        }
+        let address_info = vk::BufferDeviceAddressInfo::default().buffer(buffer);
+        // SAFETY: the buffer is bound and has the device address usage.
+        let address = unsafe { device.get_buffer_device_address(&address_info) };
+        Ok(Preprocess {
+            address,
+            ..preprocess
+        })
+    }
+
+    fn free(&self, preprocess: Preprocess) {
+        // SAFETY: no pending frame uses it (the caller waited, or the submission is dropped
+        // after the host's wait).
+        unsafe {
+            self.gpu
+                .device
+                .destroy_buffer(preprocess.buffer, self.gpu.allocator());
+            self.gpu
+                .device
+                .free_memory(preprocess.memory, self.gpu.allocator());
+        }
+    }
+
+    fn address(&self, buffer: vk::Buffer, offset: u64) -> vk::DeviceAddress {
+        let info = vk::BufferDeviceAddressInfo::default().buffer(buffer);
+        // SAFETY: the buffer is alive and was made with the device address usage (the host
+        // adds nothing; the cullers and the lists ask for it).
+        unsafe { self.gpu.device.get_buffer_device_address(&info) + offset }
+    }
+
+    /// Prepares a frame of `executions`: the layout and every execution's preprocess region.
+    /// Returns the regions' addresses and sizes, in order.
+    pub fn begin_frame(
+        &mut self,
+        executions: &[Execution],
+    ) -> Result<Vec<(vk::DeviceAddress, u64)>, String> {
+        let Some(stride) = executions.first().map(|e| e.stride) else {
+            return Ok(Vec::new());
+        };
+        if executions.iter().any(|e| e.stride != stride) {
+            return Err("the passes' commands have different strides".into());
+        }
+        let layout = self.layout(stride)?;
+        let mut regions = Vec::with_capacity(executions.len());
+        let mut frame_bytes: u64 = 0;
+        let mut types = u32::MAX;
+        for execution in executions {
+            let needs = self.requirements(layout, execution);
+            let alignment = needs.alignment.max(1);
+            frame_bytes = frame_bytes.next_multiple_of(alignment);
+            regions.push((frame_bytes, needs.size));
+            frame_bytes += needs.size;
+            types &= needs.memory_type_bits;
+        }
+        self.last_preprocess_bytes = frame_bytes;
+        self.frame = (self.frame + 1) % FRAMES;
+        let frame = self.frame;
+        let preprocess = self.reserve(frame_bytes, types)?;
+        let base = preprocess.address + frame * preprocess.frame_bytes;
+        Ok(regions
+            .into_iter()
+            .map(|(offset, size)| (base + offset, size))
+            .collect())
+    }
+
+    /// Records `execution` (its pipeline and bindings already bound, inside rendering) with
+    /// the preprocess `region` [`Self::begin_frame`] gave it.
+    pub fn execute(
+        &self,
+        command_buffer: vk::CommandBuffer,
+        execution: &Execution,
+        region: (vk::DeviceAddress, u64),
+    ) -> Result<(), String> {
+        let (_, layout) = self.layout.ok_or("no indirect commands layout")?;
+        let pipeline = dgc::GeneratedCommandsPipelineInfo::new(execution.pipeline);
+        let info = dgc::GeneratedCommandsInfo {
+            p_next: (&pipeline as *const dgc::GeneratedCommandsPipelineInfo<'_>).cast(),
+            shader_stages: STAGES,
+            indirect_commands_layout: layout,
+            indirect_address: self.address(execution.commands, execution.commands_offset),
+            indirect_address_size: u64::from(execution.max_sequences) * u64::from(execution.stride),
+            preprocess_address: region.0,
+            preprocess_size: region.1,
+            max_sequence_count: execution.max_sequences,
+            sequence_count_address: self.address(execution.count, execution.count_offset),
+            ..Default::default()
+        };
+        // SAFETY: recording inside rendering with the pass's pipeline bound; the stream, the
+        // count and the preprocess region stay alive until the frame has run.
+        unsafe { self.functions.cmd_execute(command_buffer, false, &info) };
+        Ok(())
+    }
+}
+
+impl Drop for GeneratedCommands {
+    fn drop(&mut self) {
+        if let Some(preprocess) = self.preprocess.take() {
+            self.free(preprocess);
+        }
+        if let Some((_, layout)) = self.layout.take() {
+            // SAFETY: the host drops techniques after the GPU finished their frames.
+            unsafe { self.functions.destroy_layout(layout, self.gpu.allocator()) };
+        }
+    }
+}

@@ -1369,3 +1369,57 @@ fn a_panic_while_reading_a_file_is_an_error_without_a_backtrace() {
         );
     }
 }
+
+/// `scripts/bench-gpu.sh --dry-run`, the GPU benchmark at a small size on this machine's
+/// driver: it starts, writes every table's JSON and plot and the device's description, and
+/// the device-generated-commands tables hold `dgc` beside `groups-mdi-replay`.
+#[test]
+fn the_gpu_benchmark_script_dry_runs_and_writes_its_files() {
+    let exe = std::path::Path::new(env!("CARGO_BIN_EXE_cadr"));
+    let repository = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
+    let out = std::env::temp_dir().join(format!("cadr-bench-gpu-{}", std::process::id()));
+    let output = Command::new("bash")
+        .arg(repository.join("scripts/bench-gpu.sh"))
+        .arg("--dry-run")
+        .arg(&out)
+        .env("CADR_BIN", exe)
+        .env("CADR_PLUGIN_PATH", exe.parent().unwrap().join("deps"))
+        .output()
+        .expect("run scripts/bench-gpu.sh");
+    let log = format!("{}{}", stdout(&output), stderr(&output));
+    assert!(output.status.success(), "{log}");
+    assert!(log.contains("0 of 8 tables failed"), "{log}");
+    let devices = std::fs::read_to_string(out.join("devices.txt")).unwrap();
+    assert!(devices.contains("Vulkan"), "{devices}");
+    for table in [
+        "graphicscard-static",
+        "graphicscard-orbit",
+        "cabinet-orbit",
+        "graphicscard-display-all",
+        "triangle-heavy",
+        "grid-10m",
+        "dgc-graphicscard",
+        "dgc-racecar",
+    ] {
+        let plot = std::fs::metadata(out.join(format!("{table}.png"))).unwrap();
+        assert!(plot.len() > 0, "{table}.png is empty");
+        let json: serde_json::Value =
+            serde_json::from_slice(&std::fs::read(out.join(format!("{table}.json"))).unwrap())
+                .unwrap();
+        let rows = json["rows"].as_array().unwrap();
+        assert!(rows.len() >= 2, "{table}: {json}");
+        if table.starts_with("dgc-") {
+            let names: Vec<&str> = rows
+                .iter()
+                .map(|row| row["technique"].as_str().unwrap())
+                .collect();
+            for submission in ["/ dgc /", "/ groups-mdi-replay /"] {
+                assert!(
+                    names.iter().any(|name| name.contains(submission)),
+                    "{table}: no {submission} row: {names:?}"
+                );
+            }
+        }
+    }
+    std::fs::remove_dir_all(&out).unwrap();
+}

@@ -147,13 +147,16 @@ fn device_on_driver(
     device
 }
 
-/// A device with validation on SwiftShader's driver (see [`device_on_driver`]);
-/// `texture_array_only` as in [`DeviceOptions`].
+/// A device with validation on SwiftShader's driver, which this process's Vulkan loader is
+/// pointed at alone (`VK_ICD_FILENAMES`, set once before the first instance: a test binary
+/// calling this must create no device on another driver); `texture_array_only` as in
+/// [`DeviceOptions`].
 pub fn swiftshader_device(texture_array_only: bool) -> Arc<Device> {
     device_on_driver(&swiftshader_manifest(), "SwiftShader", texture_array_only)
 }
 
-/// A device with validation on Mesa 22.3's lavapipe (see [`device_on_driver`]).
+/// A device with validation on Mesa 22.3's lavapipe, which this process's Vulkan loader is
+/// pointed at alone (as for [`swiftshader_device`]).
 pub fn mesa22_device() -> Arc<Device> {
     device_on_driver(&mesa22_manifest(), "llvmpipe", false)
 }

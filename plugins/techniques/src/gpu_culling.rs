@@ -782,6 +782,23 @@ impl<const OCCLUSION: bool> GpuCulling for GpuCuller<OCCLUSION> {
             unsafe {
                 device.cmd_fill_buffer(command_buffer, self.counts.raw(), 0, vk::WHOLE_SIZE, 0);
             }
+            // Where device-generated commands may draw them (the `dgc` submission runs a pass
+            // in chunks that each read the pass's count), what lies past the count must draw
+            // nothing: commands of zero instances.
+            if self.gpu.features & abi::CADR_FEATURE_DEVICE_GENERATED_COMMANDS_EXT != 0 {
+                if let Some(commands) = &self.commands {
+                    // SAFETY: recording outside rendering; the buffer allows transfer writes.
+                    unsafe {
+                        device.cmd_fill_buffer(
+                            command_buffer,
+                            commands.raw(),
+                            0,
+                            vk::WHOLE_SIZE,
+                            0,
+                        );
+                    }
+                }
+            }
             barrier(
                 &self.gpu,
                 command_buffer,

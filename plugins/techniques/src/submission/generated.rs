@@ -9,6 +9,13 @@
 //! `vkGetGeneratedCommandsMemoryRequirementsEXT`); each execution of a frame gets a region of
 //! it, and frames rotate through [`FRAMES`] sets of regions so that a frame never writes what
 //! an earlier one still reads.
+//!
+//! A pass runs as chunks of at most as many sequences as keep one chunk's preprocess memory
+//! under [`CHUNK_BYTES`]: Mesa 25.0's lavapipe asks for memory that grows with the square of
+//! the sequences (and wraps at 4 GiB: 394 MB for 1 654 sequences, 3.6 MB for 16 384), where a
+//! GPU driver asks for tens of bytes a sequence and runs a pass in one chunk. Every chunk
+//! reads the pass's count and runs at most its own share; what lies past the count in the
+//! stream is zeroed by the GPU cullers (a draw of no instances) or never there (the lists).
 
 use std::sync::Arc;
 
@@ -18,6 +25,10 @@ use cadr_plugin_sdk::{vulkan_failure, Gpu};
 
 /// Frames whose preprocess regions are kept apart (the host has at most this many in flight).
 const FRAMES: u64 = 3;
+/// The most preprocess memory one chunk of a pass may ask for.
+const CHUNK_BYTES: u64 = 16 << 20;
+/// The most sequences one chunk runs.
+const MAX_CHUNK: u32 = 1 << 20;
 
 /// One execution: the pass's pipeline and where its sequences and count are.
 #[derive(Clone, Copy)]
@@ -48,6 +59,8 @@ pub struct GeneratedCommands {
     layout: Option<(u32, dgc::IndirectCommandsLayout)>,
     preprocess: Option<Preprocess>,
     frame: u64,
+    /// Per pipeline, the most sequences a chunk runs.
+    chunk_sizes: Vec<(vk::Pipeline, u32)>,
     /// Preprocess bytes the last frame's executions needed.
     pub last_preprocess_bytes: u64,
 }
@@ -70,6 +83,7 @@ impl GeneratedCommands {
             layout: None,
             preprocess: None,
             frame: 0,
+            chunk_sizes: Vec::new(),
             last_preprocess_bytes: 0,
         })
     }
@@ -83,6 +97,7 @@ impl GeneratedCommands {
             // frames that used it before a stride change can come (a new culler).
             unsafe { self.functions.destroy_layout(layout, self.gpu.allocator()) };
             self.layout = None;
+            self.chunk_sizes.clear();
         }
         let tokens = [dgc::LayoutToken::draw_indexed(0)];
         let info = dgc::LayoutCreateInfo::new(
@@ -104,17 +119,38 @@ impl GeneratedCommands {
     fn requirements(
         &self,
         layout: dgc::IndirectCommandsLayout,
-        execution: &Execution,
+        pipeline: vk::Pipeline,
+        sequences: u32,
     ) -> vk::MemoryRequirements {
-        let pipeline = dgc::GeneratedCommandsPipelineInfo::new(execution.pipeline);
+        let pipeline = dgc::GeneratedCommandsPipelineInfo::new(pipeline);
         let info = dgc::MemoryRequirementsInfo::new(
             layout,
             dgc::IndirectExecutionSet::null(),
             Some(&pipeline),
-            execution.max_sequences,
+            sequences,
         );
         // SAFETY: the layout and the pipeline are alive.
         unsafe { self.functions.memory_requirements(&info) }
+    }
+
+    /// The most sequences one chunk of `pipeline`'s passes runs: doubled from 1 while the
+    /// driver's preprocess memory stays under [`CHUNK_BYTES`] and does not shrink (a size
+    /// that wrapped).
+    fn chunk_size(&mut self, layout: dgc::IndirectCommandsLayout, pipeline: vk::Pipeline) -> u32 {
+        if let Some(&(_, size)) = self.chunk_sizes.iter().find(|(p, _)| *p == pipeline) {
+            return size;
+        }
+        let mut size = 1;
+        let mut bytes = self.requirements(layout, pipeline, 1).size;
+        while size < MAX_CHUNK {
+            let next = self.requirements(layout, pipeline, size * 2).size;
+            if next > CHUNK_BYTES || next < bytes {
+                break;
+            }
+            (size, bytes) = (size * 2, next);
+        }
+        self.chunk_sizes.push((pipeline, size));
+        size
     }
 
     /// Makes sure one frame's regions hold `frame_bytes` of memory of `types`.
@@ -151,8 +187,14 @@ impl GeneratedCommands {
             .usage(vk::BufferUsageFlags::SHADER_DEVICE_ADDRESS)
             .push_next(&mut usage);
         // SAFETY: the info lives for the call; the buffer is destroyed in `free`.
-        let buffer = unsafe { device.create_buffer(&info, self.gpu.allocator()) }
-            .map_err(vulkan_failure("vkCreateBuffer (preprocess)"))?;
+        let buffer =
+            unsafe { device.create_buffer(&info, self.gpu.allocator()) }.map_err(|result| {
+                format!(
+                    "{} ({} bytes of preprocess memory)",
+                    vulkan_failure("vkCreateBuffer")(result),
+                    frame_bytes * FRAMES
+                )
+            })?;
         // SAFETY: the buffer was just made on this device.
         let needs = unsafe { device.get_buffer_memory_requirements(buffer) };
         // SAFETY: the physical device is the one the host's device was made on.
@@ -232,12 +274,12 @@ impl GeneratedCommands {
         unsafe { self.gpu.device.get_buffer_device_address(&info) + offset }
     }
 
-    /// Prepares a frame of `executions`: the layout and every execution's preprocess region.
-    /// Returns the regions' addresses and sizes, in order.
+    /// Prepares a frame of `executions`: the layout, and every execution split into chunks,
+    /// each with its preprocess region (address and size), in order.
     pub fn begin_frame(
         &mut self,
         executions: &[Execution],
-    ) -> Result<Vec<(vk::DeviceAddress, u64)>, String> {
+    ) -> Result<Vec<Vec<(Execution, vk::DeviceAddress, u64)>>, String> {
         let Some(stride) = executions.first().map(|e| e.stride) else {
             return Ok(Vec::new());
         };
@@ -245,25 +287,46 @@ impl GeneratedCommands {
             return Err("the passes' commands have different strides".into());
         }
         let layout = self.layout(stride)?;
-        let mut regions = Vec::with_capacity(executions.len());
+        let mut chunked = Vec::with_capacity(executions.len());
         let mut frame_bytes: u64 = 0;
         let mut types = u32::MAX;
         for execution in executions {
-            let needs = self.requirements(layout, execution);
-            let alignment = needs.alignment.max(1);
-            frame_bytes = frame_bytes.next_multiple_of(alignment);
-            regions.push((frame_bytes, needs.size));
-            frame_bytes += needs.size;
-            types &= needs.memory_type_bits;
+            let chunk = self.chunk_size(layout, execution.pipeline);
+            let mut chunks = Vec::new();
+            let mut first = 0;
+            while first < execution.max_sequences {
+                let sequences = chunk.min(execution.max_sequences - first);
+                let needs = self.requirements(layout, execution.pipeline, sequences);
+                frame_bytes = frame_bytes.next_multiple_of(needs.alignment.max(1));
+                chunks.push((
+                    Execution {
+                        commands_offset: execution.commands_offset
+                            + u64::from(first) * u64::from(stride),
+                        max_sequences: sequences,
+                        ..*execution
+                    },
+                    frame_bytes,
+                    needs.size,
+                ));
+                frame_bytes += needs.size;
+                types &= needs.memory_type_bits;
+                first += sequences;
+            }
+            chunked.push(chunks);
         }
         self.last_preprocess_bytes = frame_bytes;
         self.frame = (self.frame + 1) % FRAMES;
         let frame = self.frame;
         let preprocess = self.reserve(frame_bytes, types)?;
         let base = preprocess.address + frame * preprocess.frame_bytes;
-        Ok(regions
+        Ok(chunked
             .into_iter()
-            .map(|(offset, size)| (base + offset, size))
+            .map(|chunks| {
+                chunks
+                    .into_iter()
+                    .map(|(execution, offset, size)| (execution, base + offset, size))
+                    .collect()
+            })
             .collect())
     }
 

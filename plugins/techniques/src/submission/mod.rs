@@ -316,14 +316,17 @@ impl<const S: u8, const A: u8, const M: u8> Submit<S, A, M> {
             .filter_map(|(i, e)| e.as_ref().map(|e| (i, e)))
             .collect();
         let plain: Vec<Execution> = drawn.iter().map(|&(_, e)| *e).collect();
-        let regions = generated.begin_frame(&plain)?;
-        for ((index, execution), region) in drawn.into_iter().zip(regions) {
+        let chunked = generated.begin_frame(&plain)?;
+        for ((index, execution), chunks) in drawn.into_iter().zip(chunked) {
             record::bind_pass(&self.gpu, record, &passes[index]);
-            generated.execute(record.command_buffer(), execution, region)?;
+            for (chunk, address, size) in &chunks {
+                generated.execute(record.command_buffer(), chunk, (*address, *size))?;
+            }
             let sequences = u64::from(execution.max_sequences);
+            let calls = chunks.len() as u64;
             let from_list = record.gpu_draws().is_none();
             record.count(|s| {
-                s.draw_calls += 1;
+                s.draw_calls += calls;
                 if from_list {
                     s.draws += sequences;
                 }

@@ -1,0 +1,103 @@
+#!/usr/bin/env bash
+# The GPU benchmark for a lent machine (one NVIDIA H100 or H200): every table of
+# docs/BENCHMARKS.md's GPU section, as bench JSON and PNG plots, at 1920x1080, in under 8
+# minutes. That machine reaches no package registry, so nothing is built there: run it from a
+# copy of the repository that carries a release build (target/release: cadr and the plugin
+# libraries, made here with `cargo build --release --workspace`) and, where the machine has no
+# Vulkan loader, the loader packages in .gl/ (the device tool's README says how to fetch
+# them); NVIDIA's Vulkan driver is found where that machine keeps it.
+#   scripts/bench-gpu.sh [--dry-run] [OUT-DIR]
+# --dry-run measures the same rows at a small size and scene on whatever Vulkan driver is
+# present (lavapipe here): the test that the script starts and writes its files. Files go to
+# OUT-DIR (default target/bench-gpu); the device's name and driver are in devices.txt.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+
+dry_run=0
+if [[ "${1:-}" == "--dry-run" ]]; then
+  dry_run=1
+  shift
+fi
+out="${1:-target/bench-gpu}"
+mkdir -p "$out"
+
+cadr="${CADR_BIN:-target/release/cadr}"
+if [[ ! -x "$cadr" ]]; then
+  echo "bench-gpu: $cadr is missing: build it first (cargo build --release --workspace)" >&2
+  exit 1
+fi
+export CADR_PLUGIN_PATH="${CADR_PLUGIN_PATH:-$(dirname "$cadr")}"
+
+# The Vulkan loader: carried as packages where the machine has none.
+if ! ldconfig -p 2>/dev/null | grep -q 'libvulkan\.so\.1'; then
+  if compgen -G ".gl/*.deb" >/dev/null; then
+    for package in .gl/*.deb; do dpkg -x "$package" /; done
+    ldconfig
+  else
+    echo "bench-gpu: no Vulkan loader (libvulkan1) and no .gl/*.deb to unpack" >&2
+    exit 1
+  fi
+fi
+nvidia_icd=/usr/local/nvidia/share/vulkan/icd.d/nvidia_icd.json
+if [[ -z "${VK_DRIVER_FILES:-}${VK_ICD_FILENAMES:-}" && -f "$nvidia_icd" ]]; then
+  export VK_DRIVER_FILES="$nvidia_icd"
+fi
+
+if (( dry_run )); then
+  size=320x240 frames=2 few_frames=1 big="gen:grid:parts=2000" heavy="gen:grid:parts=200,tris=400"
+  card="gen:demo" racecar="gen:demo" cabinet="gen:cabinet:cabinets=2"
+  per_run=120
+else
+  size=1920x1080 frames=20 few_frames=3 big="gen:grid:parts=10000000" heavy="gen:grid:parts=100000,tris=400"
+  card="gen:graphicscard" racecar="gen:racecar" cabinet="gen:cabinet"
+  per_run=150
+fi
+
+{
+  date -u +"%Y-%m-%dT%H:%M:%SZ"
+  "$cadr" devices
+  if command -v nvidia-smi >/dev/null 2>&1; then
+    nvidia-smi --query-gpu=name,driver_version,memory.total --format=csv,noheader
+  fi
+} | tee "$out/devices.txt"
+
+failures=0
+# One table: NAME, measured frames per row, then cadr bench's arguments. Each table has its time
+# limit, so that one slow table cannot eat the others' time.
+bench() {
+  local name=$1 table_frames=$2
+  shift 2
+  echo "bench-gpu: $name"
+  if ! timeout "$per_run" "$cadr" bench "$@" --size "$size" --frames "$table_frames" \
+    --json "$out/$name.json" --plot "$out/$name.png" >"$out/$name.txt" 2>&1; then
+    echo "bench-gpu: $name failed or ran past ${per_run} s (see $out/$name.txt)" >&2
+    failures=$((failures + 1))
+  fi
+  tail -n +1 "$out/$name.txt" | sed 's/^/  /'
+}
+
+scene_wide=(--vertex arena --params ssbo-index)
+# Every submission technique, still camera.
+bench graphicscard-static "$frames" "$card" --camera static
+# The cullers while the camera orbits (the frustum cuts the scene).
+bench graphicscard-orbit "$frames" "$card" --camera orbit "${scene_wide[@]}" \
+  --submit individual-indirect-count --cull none,frustum,gpu-frustum,gpu-occlusion
+# Occlusion: machines in closed housings.
+bench cabinet-orbit "$frames" "$cabinet" --camera orbit "${scene_wide[@]}" \
+  --submit individual-indirect-count --cull none,gpu-frustum,gpu-occlusion
+# Every display mode.
+bench graphicscard-display-all "$frames" "$card" --display all "${scene_wide[@]}" --submit groups-mdi-replay
+# 400 triangles a part, 32 million in all (41 a pixel): rasterization, not the CPU, bounds the frame.
+bench triangle-heavy "$frames" "$heavy" "${scene_wide[@]}" --submit individual-indirect-count,dgc \
+  --cull none,gpu-frustum
+# Ten million parts.
+bench grid-10m "$few_frames" "$big" "${scene_wide[@]}" --submit individual-indirect-count,dgc \
+  --cull gpu-frustum --camera orbit
+# Device-generated commands against the recorded multi-draw-indirect replay.
+bench dgc-graphicscard "$frames" "$card" "${scene_wide[@]}" --submit dgc,groups-mdi-replay \
+  --cull none,gpu-frustum --camera orbit
+bench dgc-racecar "$frames" "$racecar" "${scene_wide[@]}" --submit dgc,groups-mdi-replay \
+  --cull none,gpu-frustum --camera orbit
+
+echo "bench-gpu: wrote $out ($failures of 8 tables failed)"
+exit $(( failures > 0 ))

@@ -42,6 +42,9 @@ pub struct Execution {
     pub stride: u32,
 }
 
+/// One chunk of an execution, with its preprocess region's address and size.
+pub type Chunk = (Execution, vk::DeviceAddress, u64);
+
 /// Preprocess memory: a buffer with its own allocation and device address.
 struct Preprocess {
     buffer: vk::Buffer,
@@ -276,10 +279,7 @@ impl GeneratedCommands {
 
     /// Prepares a frame of `executions`: the layout, and every execution split into chunks,
     /// each with its preprocess region (address and size), in order.
-    pub fn begin_frame(
-        &mut self,
-        executions: &[Execution],
-    ) -> Result<Vec<Vec<(Execution, vk::DeviceAddress, u64)>>, String> {
+    pub fn begin_frame(&mut self, executions: &[Execution]) -> Result<Vec<Vec<Chunk>>, String> {
         let Some(stride) = executions.first().map(|e| e.stride) else {
             return Ok(Vec::new());
         };

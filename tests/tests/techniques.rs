@@ -302,11 +302,11 @@ fn failing_techniques_are_refused_and_the_renderer_keeps_working() {
     );
     let registry = Arc::new(registry);
     let lacking = registry
-        .find(TechniqueKind::Vertex, "needs-mesh-shaders")
+        .find(TechniqueKind::Vertex, "needs-nv-generated-commands")
         .unwrap();
     assert_eq!(
         lacking.support,
-        Err("the device lacks VK_EXT_mesh_shader".to_owned())
+        Err("the device lacks VK_NV_device_generated_commands".to_owned())
     );
     f.techniques = Techniques::new(
         &f.device,
@@ -318,12 +318,12 @@ fn failing_techniques_are_refused_and_the_renderer_keeps_working() {
 
     let error = f
         .techniques
-        .swap(TechniqueKind::Vertex, "needs-mesh-shaders")
+        .swap(TechniqueKind::Vertex, "needs-nv-generated-commands")
         .unwrap_err()
         .to_string();
     assert!(
         error.contains(
-            "vertex 'needs-mesh-shaders' is not supported: the device lacks VK_EXT_mesh_shader"
+            "vertex 'needs-nv-generated-commands' is not supported: the device lacks VK_NV_device_generated_commands"
         ),
         "{error}"
     );

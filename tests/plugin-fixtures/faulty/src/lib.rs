@@ -30,16 +30,16 @@ impl VertexPath for PanicsOnCreate {
     }
 }
 
-/// Needs mesh shaders (which the host never reports).
-pub struct NeedsMeshShaders;
+/// Needs `VK_NV_device_generated_commands`, a feature bit no host sets.
+pub struct NeedsNvGeneratedCommands;
 
-impl Technique for NeedsMeshShaders {
+impl Technique for NeedsNvGeneratedCommands {
     fn create(_gpu: Arc<Gpu>) -> Result<Self, String> {
         Ok(Self)
     }
 }
 
-impl VertexPath for NeedsMeshShaders {
+impl VertexPath for NeedsNvGeneratedCommands {
     fn shader_snippet(&self) -> &CStr {
         c""
     }
@@ -95,10 +95,10 @@ export_plugin! {
             description: "Panics in create.",
             features: 0, provides: abi::CADR_TRAIT_GEOMETRY_SHARES_BINDING, needs: 0,
         },
-        vertex NeedsMeshShaders {
-            name: "needs-mesh-shaders",
-            description: "Needs VK_EXT_mesh_shader.",
-            features: abi::CADR_FEATURE_MESH_SHADER, provides: 0, needs: 0,
+        vertex NeedsNvGeneratedCommands {
+            name: "needs-nv-generated-commands",
+            description: "Needs VK_NV_device_generated_commands.",
+            features: abi::CADR_FEATURE_DEVICE_GENERATED_COMMANDS, provides: 0, needs: 0,
         },
         culling PanicsOnCull {
             name: "panics-on-cull",

@@ -6,12 +6,29 @@
 # libraries, made here with `cargo build --release --workspace`) and, where the machine has no
 # Vulkan loader, the loader packages in .gl/ (the device tool's README says how to fetch
 # them); NVIDIA's Vulkan driver is found where that machine keeps it.
+#   scripts/bench-gpu.sh --pack [DIR]       here, after `cargo build --release --workspace`
 #   scripts/bench-gpu.sh [--dry-run] [OUT-DIR]
-# --dry-run measures the same rows at a small size and scene on whatever Vulkan driver is
+# --pack copies what the machine needs into DIR (default target/bench-gpu-build): cadr and the
+# plugin libraries, stripped (about 15 MB), and the plot labels' font; name DIR (and .gl) in the
+# device tool's `carry`, and the script finds it there. --dry-run measures the same rows at a small size and scene on whatever Vulkan driver is
 # present (lavapipe here): the test that the script starts and writes its files. Files go to
 # OUT-DIR (default target/bench-gpu); the device's name and driver are in devices.txt.
 set -euo pipefail
 cd "$(dirname "$0")/.."
+
+packed=target/bench-gpu-build
+if [[ "${1:-}" == "--pack" ]]; then
+  pack="${2:-$packed}"
+  mkdir -p "$pack"
+  for file in target/release/cadr target/release/libcadr_plugin_*.so; do
+    [[ -f "$file" ]] || { echo "bench-gpu: $file is missing: cargo build --release --workspace" >&2; exit 1; }
+    strip -o "$pack/$(basename "$file")" "$file"
+  done
+  font=/usr/share/fonts/truetype/dejavu/DejaVuSans.ttf
+  if [[ -f "$font" ]]; then cp "$font" "$pack/"; fi
+  echo "bench-gpu: packed $(du -sh "$pack" | cut -f1) into $pack: carry it (and .gl) to the machine"
+  exit 0
+fi
 
 dry_run=0
 if [[ "${1:-}" == "--dry-run" ]]; then
@@ -21,18 +38,28 @@ fi
 out="${1:-target/bench-gpu}"
 mkdir -p "$out"
 
+if [[ -z "${CADR_BIN:-}" && -x "$packed/cadr" ]]; then
+  CADR_BIN="$packed/cadr"
+fi
 cadr="${CADR_BIN:-target/release/cadr}"
 if [[ ! -x "$cadr" ]]; then
   echo "bench-gpu: $cadr is missing: build it first (cargo build --release --workspace)" >&2
   exit 1
 fi
 export CADR_PLUGIN_PATH="${CADR_PLUGIN_PATH:-$(dirname "$cadr")}"
+# The plot labels' font, where the machine has no DejaVu Sans of its own.
+if [[ -z "${CADR_PLOT_FONT:-}" && ! -f /usr/share/fonts/truetype/dejavu/DejaVuSans.ttf \
+      && -f "$(dirname "$cadr")/DejaVuSans.ttf" ]]; then
+  export CADR_PLOT_FONT="$(dirname "$cadr")/DejaVuSans.ttf"
+fi
 
-# The Vulkan loader: carried as packages where the machine has none.
-if ! ldconfig -p 2>/dev/null | grep -q 'libvulkan\.so\.1'; then
+# The Vulkan loader: carried as packages where the machine has none. (ldconfig lives in /sbin,
+# which an unprivileged PATH may lack.)
+ldconfig=$(command -v ldconfig || echo /sbin/ldconfig)
+if ! "$ldconfig" -p 2>/dev/null | grep -q 'libvulkan\.so\.1'; then
   if compgen -G ".gl/*.deb" >/dev/null; then
     for package in .gl/*.deb; do dpkg -x "$package" /; done
-    ldconfig
+    "$ldconfig"
   else
     echo "bench-gpu: no Vulkan loader (libvulkan1) and no .gl/*.deb to unpack" >&2
     exit 1

@@ -10,12 +10,12 @@
 //! it, and frames rotate through [`FRAMES`] sets of regions so that a frame never writes what
 //! an earlier one still reads.
 //!
-//! A pass runs as chunks of at most as many sequences as keep one chunk's preprocess memory
-//! under [`CHUNK_BYTES`]: Mesa 25.0's lavapipe asks for memory that grows with the square of
-//! the sequences (and wraps at 4 GiB: 394 MB for 1 654 sequences, 3.6 MB for 16 384), where a
-//! GPU driver asks for tens of bytes a sequence and runs a pass in one chunk. Every chunk
-//! reads the pass's count and runs at most its own share; what lies past the count in the
-//! stream is zeroed by the GPU cullers (a draw of no instances) or never there (the lists).
+//! A pass runs as chunks, as large as keep the pass's preprocess memory (all its chunks) under
+//! [`PASS_BYTES`]: Mesa 25.0's lavapipe asks for memory that grows with the square of the
+//! sequences (and wraps at 4 GiB: 394 MB for 1 654 sequences, 3.6 MB for 16 384), where a GPU
+//! driver asks for tens of bytes a sequence and runs a pass in one chunk. Every chunk reads
+//! the pass's count and runs at most its own share; what lies past the count in the stream is
+//! zeroed by the GPU cullers (a draw of no instances) or never there (the lists).
 
 use std::sync::Arc;
 
@@ -25,10 +25,13 @@ use cadr_plugin_sdk::{vulkan_failure, Gpu};
 
 /// Frames whose preprocess regions are kept apart (the host has at most this many in flight).
 const FRAMES: u64 = 3;
-/// The most preprocess memory one chunk of a pass may ask for.
-const CHUNK_BYTES: u64 = 16 << 20;
+/// The most preprocess memory the chunks of one pass may ask for together, unless a chunk of
+/// one sequence asks for more.
+const PASS_BYTES: u64 = 64 << 20;
 /// The most sequences one chunk runs.
 const MAX_CHUNK: u32 = 1 << 20;
+/// The most (pipeline, sequences) pairs whose chunk size is remembered.
+const KEPT_CHUNK_SIZES: usize = 64;
 
 /// One execution: the pass's pipeline and where its sequences and count are.
 #[derive(Clone, Copy)]
@@ -62,8 +65,8 @@ pub struct GeneratedCommands {
     layout: Option<(u32, dgc::IndirectCommandsLayout)>,
     preprocess: Option<Preprocess>,
     frame: u64,
-    /// Per pipeline, the most sequences a chunk runs.
-    chunk_sizes: Vec<(vk::Pipeline, u32)>,
+    /// Per pipeline and sequences of a pass, the most sequences a chunk runs.
+    chunk_sizes: Vec<((vk::Pipeline, u32), u32)>,
     /// Preprocess bytes the last frame's executions needed.
     pub last_preprocess_bytes: u64,
 }
@@ -136,23 +139,35 @@ impl GeneratedCommands {
         unsafe { self.functions.memory_requirements(&info) }
     }
 
-    /// The most sequences one chunk of `pipeline`'s passes runs: doubled from 1 while the
-    /// driver's preprocess memory stays under [`CHUNK_BYTES`] and does not shrink (a size
-    /// that wrapped).
-    fn chunk_size(&mut self, layout: dgc::IndirectCommandsLayout, pipeline: vk::Pipeline) -> u32 {
-        if let Some(&(_, size)) = self.chunk_sizes.iter().find(|(p, _)| *p == pipeline) {
+    /// The most sequences one chunk of a pass of `sequences` drawn with `pipeline` runs:
+    /// doubled from 1 while all the pass's chunks together ask for at most [`PASS_BYTES`] and
+    /// a chunk's memory does not shrink as it grows (a size that wrapped).
+    fn chunk_size(
+        &mut self,
+        layout: dgc::IndirectCommandsLayout,
+        pipeline: vk::Pipeline,
+        sequences: u32,
+    ) -> u32 {
+        let key = (pipeline, sequences);
+        if let Some(&(_, size)) = self.chunk_sizes.iter().find(|(k, _)| *k == key) {
             return size;
         }
+        let pass_bytes = |size: u32, chunk_bytes: u64| {
+            u64::from(sequences.div_ceil(size)).saturating_mul(chunk_bytes)
+        };
         let mut size = 1;
         let mut bytes = self.requirements(layout, pipeline, 1).size;
-        while size < MAX_CHUNK {
+        while size < MAX_CHUNK.min(sequences) {
             let next = self.requirements(layout, pipeline, size * 2).size;
-            if next > CHUNK_BYTES || next < bytes {
+            if next < bytes || pass_bytes(size * 2, next) > PASS_BYTES {
                 break;
             }
             (size, bytes) = (size * 2, next);
         }
-        self.chunk_sizes.push((pipeline, size));
+        if self.chunk_sizes.len() >= KEPT_CHUNK_SIZES {
+            self.chunk_sizes.clear();
+        }
+        self.chunk_sizes.push((key, size));
         size
     }
 
@@ -291,7 +306,7 @@ impl GeneratedCommands {
         let mut frame_bytes: u64 = 0;
         let mut types = u32::MAX;
         for execution in executions {
-            let chunk = self.chunk_size(layout, execution.pipeline);
+            let chunk = self.chunk_size(layout, execution.pipeline, execution.max_sequences);
             let mut chunks = Vec::new();
             let mut first = 0;
             while first < execution.max_sequences {

@@ -21,9 +21,14 @@ fi
 # shaders on SwiftShader) draw the reference pictures. Debian 12's own driver, Mesa 22.3's
 # lavapipe, is unpacked under target/ by setup.sh, as is SwiftShader; VK_ICD_FILENAMES points the
 # Vulkan loader at one alone. (The tests that need a driver of their own point themselves at it.)
+mesa22_manifest="${CADR_MESA22_DIR:-$PWD/target/mesa-22.3}/lvp_icd.json"
 mesa22_subset=(rendering display_modes gpu_culling textures vulkan_layer transparency sections
   antialiasing frame_replay)
-swiftshader_subset=(rendering textures transparency vulkan_layer antialiasing)
+# SwiftShader draws the reference pictures of these; it rasterizes and filters differently from
+# lavapipe (by more than the references' tolerance on some textured, translucent and MSAA
+# pictures), which cli/tests/swiftshader.rs judges with a tolerance of its own, and it lacks
+# drawIndirectCount, which the gpu- cullers need.
+swiftshader_subset=(rendering vulkan_layer)
 run_subset() { # MANIFEST TEST-BINARY...
   local manifest=$1
   shift
@@ -38,19 +43,25 @@ run_subset() { # MANIFEST TEST-BINARY...
       $(printf -- '--test %s ' "$@")
   fi
 }
-run_subset "${CADR_MESA22_DIR:-$PWD/target/mesa-22.3}/lvp_icd.json" "${mesa22_subset[@]}"
+run_subset "$mesa22_manifest" "${mesa22_subset[@]}"
 run_subset "${CADR_SWIFTSHADER_DIR:-$PWD/target/swiftshader}/vk_swiftshader_icd.json" \
   "${swiftshader_subset[@]}"
 
 # Injected Vulkan failures need cadr-core built with the fault-injection feature: every
 # allocation, submission and device loss of a render is made to fail in turn. The same feature
 # injects a panic into file reading, which the load's panic boundary must turn into an error
-# (through the Rust API, the C API and the command line).
+# (through the Rust API, the C API and the command line). The injected host-memory failures
+# run on Mesa 22.3's lavapipe, whose unchecked and leaking allocations core/src/vk/fault.rs
+# keeps out of them; Mesa 25 leaks after other failed allocations, not yet mapped.
 cargo clippy -p cadr-tests -p cadr-cli --features fault-injection --all-targets --locked -- -D warnings
 if cargo nextest --version >/dev/null 2>&1; then
-  cargo nextest run -p cadr-tests --features fault-injection --locked --test fault_injection --test reader_panic
+  VK_ICD_FILENAMES="$mesa22_manifest" cargo nextest run -p cadr-tests --features fault-injection \
+    --locked --test fault_injection
+  cargo nextest run -p cadr-tests --features fault-injection --locked --test reader_panic
   cargo nextest run -p cadr-cli --features fault-injection --locked --test cli panic_while_reading
 else
-  cargo test -p cadr-tests --features fault-injection --locked --test fault_injection --test reader_panic
+  VK_ICD_FILENAMES="$mesa22_manifest" cargo test -p cadr-tests --features fault-injection \
+    --locked --test fault_injection
+  cargo test -p cadr-tests --features fault-injection --locked --test reader_panic
   cargo test -p cadr-cli --features fault-injection --locked --test cli panic_while_reading
 fi

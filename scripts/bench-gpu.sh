@@ -56,7 +56,8 @@ fi
 # The Vulkan loader: carried as packages where the machine has none. (ldconfig lives in /sbin,
 # which an unprivileged PATH may lack.)
 ldconfig=$(command -v ldconfig || echo /sbin/ldconfig)
-if ! "$ldconfig" -p 2>/dev/null | grep -q 'libvulkan\.so\.1'; then
+# (grep reads all of ldconfig's list: -q would close the pipe early, a SIGPIPE under pipefail.)
+if ! "$ldconfig" -p 2>/dev/null | grep 'libvulkan\.so\.1' >/dev/null; then
   if compgen -G ".gl/*.deb" >/dev/null; then
     for package in .gl/*.deb; do dpkg -x "$package" /; done
     "$ldconfig"

@@ -18,13 +18,20 @@
 //!   failed one) (`without_host_memory_faults`); plugins load Vulkan through a
 //!   `vkGetInstanceProcAddr` that wraps their vkCreatePipelineLayout the same way
 //!   (`plugin_loader`). In vkCreateGraphicsPipelines and vkGetQueryPoolResults, which lavapipe
-//!   survives a failure of the first allocation in but leaks after a later one, only the first
-//!   may fail (`with_first_host_memory_fault_only`);
+//!   survives a failure of the first allocation in but leaks after a later one, and in
+//!   vkCreateDescriptorSetLayout, where Mesa 25's lavapipe does the same, only the first may
+//!   fail (`with_first_host_memory_fault_only`);
 //! - `submit`: a queue submission returns `VK_ERROR_OUT_OF_DEVICE_MEMORY`;
 //! - `device-lost`: a queue submission returns `VK_ERROR_DEVICE_LOST`, and the device is lost
 //!   from then on (every later submission, wait and allocation says so).
 //!
-//! Tests arm faults in-process with `arm` instead (with the feature).
+//! Tests arm faults in-process with `arm` instead (with the feature). With `CADR_FAULT_TRACE`
+//! set, each injected host-memory failure prints where it was raised: the way to find the
+//! driver call behind a leak that a new driver brings (Mesa 25's lavapipe also leaks after a
+//! failed later allocation in vkCreateDescriptorSetLayout).
+
+/// The variable that prints where each injected host-memory failure was raised.
+pub const TRACE_ENV: &str = "CADR_FAULT_TRACE";
 
 /// What fails.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]

@@ -100,6 +100,12 @@ unsafe extern "system" fn allocate<const MAY_FAIL: bool>(
     _scope: vk::SystemAllocationScope,
 ) -> *mut c_void {
     if MAY_FAIL && fault::fails(FaultKind::HostMemory) {
+        if std::env::var_os(fault::TRACE_ENV).is_some() {
+            eprintln!(
+                "injected host-memory failure at\n{}",
+                std::backtrace::Backtrace::force_capture()
+            );
+        }
         return std::ptr::null_mut();
     }
     if size == 0 && alignment <= ZERO_SIZE_LIMIT {

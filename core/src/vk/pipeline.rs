@@ -99,13 +99,14 @@ impl DescriptorSetLayout {
                 .flags(vk::DescriptorSetLayoutCreateFlags::UPDATE_AFTER_BIND_POOL)
                 .push_next(&mut binding_flags);
         }
+        // Mesa 25's lavapipe leaks what it allocated when a later allocation in this call fails.
         // SAFETY: the info and its chain live for the call; indexed arrays are asked for only
         // on a device with descriptor indexing enabled (the caller's contract).
-        let raw = unsafe {
+        let raw = super::fault::with_first_host_memory_fault_only(|| unsafe {
             device
                 .raw()
                 .create_descriptor_set_layout(&info, host_callbacks())
-        }
+        })
         .or_vk("vkCreateDescriptorSetLayout")?;
         device.set_name(raw, name);
         Ok(Self {

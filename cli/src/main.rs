@@ -136,10 +136,13 @@ fn devices() -> Result<(), String> {
         } else {
             "not drawn (no geometry shaders)"
         };
-        let mesh_shaders = if adapter.mesh_shader { "yes" } else { "no" };
+        let yes_no = |has: bool| if has { "yes" } else { "no" };
+        let mesh_shaders = yes_no(adapter.mesh_shader);
+        let generated_commands = yes_no(adapter.device_generated_commands);
         println!(
             "{}: {} ({:?}, Vulkan {}.{}, MSAA {}, textures {textures}, hidden silhouettes \
-             {hidden_silhouettes}, mesh shaders {mesh_shaders})",
+             {hidden_silhouettes}, mesh shaders {mesh_shaders}, device-generated commands \
+             {generated_commands})",
             adapter.index,
             adapter.name,
             adapter.device_type,

@@ -2,9 +2,11 @@
 //! sequences (pipeline switches, push constants, draws) and the command buffer executes it,
 //! with the number of sequences read from GPU memory.
 //!
-//! Bound: the feature and property structs, the indirect commands layout with its token
-//! kinds, the indirect execution set of pipelines, the memory-requirements query, and the
-//! preprocess and execute commands. Not bound: shader objects, vertex and index buffer tokens.
+//! Bound, as the `dgc` submission uses them: the feature struct, an indirect commands layout
+//! of indexed-draw tokens, the memory-requirements query and the execute command (with the
+//! pipeline bound, no execution set; preprocessing implicit). Execution sets, push-constant and
+//! other tokens, explicit preprocessing and shader objects are not bound: bind them with the
+//! technique that uses them.
 
 use std::ffi::{c_void, CStr};
 use std::marker::PhantomData;
@@ -21,40 +23,21 @@ const fn structure_type(offset: i32) -> vk::StructureType {
 
 /// `VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_DEVICE_GENERATED_COMMANDS_FEATURES_EXT`.
 pub const STRUCTURE_TYPE_FEATURES: vk::StructureType = structure_type(0);
-/// `VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_DEVICE_GENERATED_COMMANDS_PROPERTIES_EXT`.
-pub const STRUCTURE_TYPE_PROPERTIES: vk::StructureType = structure_type(1);
 /// `VK_STRUCTURE_TYPE_GENERATED_COMMANDS_MEMORY_REQUIREMENTS_INFO_EXT`.
 pub const STRUCTURE_TYPE_MEMORY_REQUIREMENTS_INFO: vk::StructureType = structure_type(2);
-/// `VK_STRUCTURE_TYPE_INDIRECT_EXECUTION_SET_CREATE_INFO_EXT`.
-pub const STRUCTURE_TYPE_EXECUTION_SET_CREATE_INFO: vk::StructureType = structure_type(3);
 /// `VK_STRUCTURE_TYPE_GENERATED_COMMANDS_INFO_EXT`.
 pub const STRUCTURE_TYPE_GENERATED_COMMANDS_INFO: vk::StructureType = structure_type(4);
 /// `VK_STRUCTURE_TYPE_INDIRECT_COMMANDS_LAYOUT_CREATE_INFO_EXT`.
 pub const STRUCTURE_TYPE_LAYOUT_CREATE_INFO: vk::StructureType = structure_type(6);
 /// `VK_STRUCTURE_TYPE_INDIRECT_COMMANDS_LAYOUT_TOKEN_EXT`.
 pub const STRUCTURE_TYPE_LAYOUT_TOKEN: vk::StructureType = structure_type(7);
-/// `VK_STRUCTURE_TYPE_WRITE_INDIRECT_EXECUTION_SET_PIPELINE_EXT`.
-pub const STRUCTURE_TYPE_WRITE_EXECUTION_SET_PIPELINE: vk::StructureType = structure_type(8);
-/// `VK_STRUCTURE_TYPE_INDIRECT_EXECUTION_SET_PIPELINE_INFO_EXT`.
-pub const STRUCTURE_TYPE_EXECUTION_SET_PIPELINE_INFO: vk::StructureType = structure_type(10);
 /// `VK_STRUCTURE_TYPE_GENERATED_COMMANDS_PIPELINE_INFO_EXT`.
 pub const STRUCTURE_TYPE_GENERATED_COMMANDS_PIPELINE_INFO: vk::StructureType = structure_type(13);
 
-/// `VK_PIPELINE_STAGE_2_COMMAND_PREPROCESS_BIT_EXT` (the same bit as the NV extension's).
-pub const PIPELINE_STAGE_2_COMMAND_PREPROCESS: vk::PipelineStageFlags2 =
-    vk::PipelineStageFlags2::from_raw(1 << 17);
-/// `VK_ACCESS_2_COMMAND_PREPROCESS_READ_BIT_EXT`.
-pub const ACCESS_2_COMMAND_PREPROCESS_READ: vk::AccessFlags2 = vk::AccessFlags2::from_raw(1 << 17);
-/// `VK_ACCESS_2_COMMAND_PREPROCESS_WRITE_BIT_EXT`.
-pub const ACCESS_2_COMMAND_PREPROCESS_WRITE: vk::AccessFlags2 = vk::AccessFlags2::from_raw(1 << 18);
 /// `VK_BUFFER_USAGE_2_PREPROCESS_BUFFER_BIT_EXT` (a `VkBufferUsageFlags2` bit, given through
 /// `VkBufferUsageFlags2CreateInfoKHR` of `VK_KHR_maintenance5`).
 pub const BUFFER_USAGE_2_PREPROCESS_BUFFER: vk::BufferUsageFlags2KHR =
     vk::BufferUsageFlags2KHR::from_raw(1 << 31);
-/// `VK_PIPELINE_CREATE_2_INDIRECT_BINDABLE_BIT_EXT`: a pipeline an execution set may hold.
-pub const PIPELINE_CREATE_2_INDIRECT_BINDABLE: vk::PipelineCreateFlags2KHR =
-    vk::PipelineCreateFlags2KHR::from_raw(1 << 38);
-
 /// `VkIndirectCommandsLayoutEXT`: how one sequence of the stream is laid out.
 #[repr(transparent)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
@@ -65,17 +48,9 @@ impl IndirectCommandsLayout {
     pub const fn null() -> Self {
         Self(0)
     }
-    /// Whether it is the null handle.
-    pub const fn is_null(self) -> bool {
-        self.0 == 0
-    }
-    /// The raw handle value.
-    pub const fn as_raw(self) -> u64 {
-        self.0
-    }
 }
 
-/// `VkIndirectExecutionSetEXT`: the pipelines a stream's execution-set tokens choose from.
+/// `VkIndirectExecutionSetEXT` (cadr passes the null handle: the bound pipeline draws).
 #[repr(transparent)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
 pub struct IndirectExecutionSet(u64);
@@ -85,10 +60,6 @@ impl IndirectExecutionSet {
     pub const fn null() -> Self {
         Self(0)
     }
-    /// Whether it is the null handle.
-    pub const fn is_null(self) -> bool {
-        self.0 == 0
-    }
 }
 
 /// `VkIndirectCommandsTokenTypeEXT` (the kinds cadr uses).
@@ -97,12 +68,6 @@ impl IndirectExecutionSet {
 pub struct TokenType(i32);
 
 impl TokenType {
-    /// `VK_INDIRECT_COMMANDS_TOKEN_TYPE_EXECUTION_SET_EXT`: a `u32` index into the execution set.
-    pub const EXECUTION_SET: Self = Self(0);
-    /// `VK_INDIRECT_COMMANDS_TOKEN_TYPE_PUSH_CONSTANT_EXT`: push constant bytes.
-    pub const PUSH_CONSTANT: Self = Self(1);
-    /// `VK_INDIRECT_COMMANDS_TOKEN_TYPE_SEQUENCE_INDEX_EXT`: the sequence's index, pushed.
-    pub const SEQUENCE_INDEX: Self = Self(2);
     /// `VK_INDIRECT_COMMANDS_TOKEN_TYPE_DRAW_INDEXED_EXT`: a `VkDrawIndexedIndirectCommand`.
     pub const DRAW_INDEXED: Self = Self(5);
     /// The raw value.
@@ -111,27 +76,10 @@ impl TokenType {
     }
 }
 
-/// `VkIndirectExecutionSetInfoTypeEXT`.
-#[repr(transparent)]
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct ExecutionSetInfoType(i32);
-
-impl ExecutionSetInfoType {
-    /// `VK_INDIRECT_EXECUTION_SET_INFO_TYPE_PIPELINES_EXT`.
-    pub const PIPELINES: Self = Self(0);
-}
-
-/// `VkIndirectCommandsLayoutUsageFlagsEXT`.
+/// `VkIndirectCommandsLayoutUsageFlagsEXT` (cadr sets none).
 #[repr(transparent)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct LayoutUsageFlags(u32);
-
-impl LayoutUsageFlags {
-    /// `VK_INDIRECT_COMMANDS_LAYOUT_USAGE_EXPLICIT_PREPROCESS_BIT_EXT`.
-    pub const EXPLICIT_PREPROCESS: Self = Self(1 << 0);
-    /// `VK_INDIRECT_COMMANDS_LAYOUT_USAGE_UNORDERED_SEQUENCES_BIT_EXT`.
-    pub const UNORDERED_SEQUENCES: Self = Self(1 << 1);
-}
 
 /// `VkPhysicalDeviceDeviceGeneratedCommandsFeaturesEXT`.
 #[repr(C)]
@@ -171,98 +119,11 @@ unsafe impl vk::TaggedStructure for PhysicalDeviceFeatures<'_> {
     const STRUCTURE_TYPE: vk::StructureType = STRUCTURE_TYPE_FEATURES;
 }
 
-/// `VkPhysicalDeviceDeviceGeneratedCommandsPropertiesEXT`.
-#[repr(C)]
-#[derive(Clone, Copy, Debug)]
-pub struct PhysicalDeviceProperties<'a> {
-    /// Set by `Default`.
-    pub s_type: vk::StructureType,
-    /// Chain.
-    pub p_next: *mut c_void,
-    /// `maxIndirectPipelineCount`: pipelines in one execution set.
-    pub max_indirect_pipeline_count: u32,
-    /// `maxIndirectShaderObjectCount`.
-    pub max_indirect_shader_object_count: u32,
-    /// `maxIndirectSequenceCount`: sequences in one execution.
-    pub max_indirect_sequence_count: u32,
-    /// `maxIndirectCommandsTokenCount`: tokens in one layout.
-    pub max_indirect_commands_token_count: u32,
-    /// `maxIndirectCommandsTokenOffset`.
-    pub max_indirect_commands_token_offset: u32,
-    /// `maxIndirectCommandsIndirectStride`.
-    pub max_indirect_commands_indirect_stride: u32,
-    /// `supportedIndirectCommandsInputModes`.
-    pub supported_indirect_commands_input_modes: u32,
-    /// `supportedIndirectCommandsShaderStages`.
-    pub supported_indirect_commands_shader_stages: vk::ShaderStageFlags,
-    /// `supportedIndirectCommandsShaderStagesPipelineBinding`.
-    pub supported_indirect_commands_shader_stages_pipeline_binding: vk::ShaderStageFlags,
-    /// `supportedIndirectCommandsShaderStagesShaderBinding`.
-    pub supported_indirect_commands_shader_stages_shader_binding: vk::ShaderStageFlags,
-    /// `deviceGeneratedCommandsTransformFeedback`.
-    pub device_generated_commands_transform_feedback: vk::Bool32,
-    /// `deviceGeneratedCommandsMultiDrawIndirectCount`.
-    pub device_generated_commands_multi_draw_indirect_count: vk::Bool32,
-    /// Ties the struct to the chain it is pushed into.
-    pub _marker: PhantomData<&'a ()>,
-}
-
-impl Default for PhysicalDeviceProperties<'_> {
-    fn default() -> Self {
-        Self {
-            s_type: STRUCTURE_TYPE_PROPERTIES,
-            p_next: std::ptr::null_mut(),
-            max_indirect_pipeline_count: 0,
-            max_indirect_shader_object_count: 0,
-            max_indirect_sequence_count: 0,
-            max_indirect_commands_token_count: 0,
-            max_indirect_commands_token_offset: 0,
-            max_indirect_commands_indirect_stride: 0,
-            supported_indirect_commands_input_modes: 0,
-            supported_indirect_commands_shader_stages: vk::ShaderStageFlags::empty(),
-            supported_indirect_commands_shader_stages_pipeline_binding: vk::ShaderStageFlags::empty(
-            ),
-            supported_indirect_commands_shader_stages_shader_binding: vk::ShaderStageFlags::empty(),
-            device_generated_commands_transform_feedback: vk::FALSE,
-            device_generated_commands_multi_draw_indirect_count: vk::FALSE,
-            _marker: PhantomData,
-        }
-    }
-}
-
-// SAFETY: the struct begins with sType and pNext.
-unsafe impl vk::ExtendsPhysicalDeviceProperties2 for PhysicalDeviceProperties<'_> {}
-// SAFETY: as for PhysicalDeviceFeatures.
-unsafe impl vk::TaggedStructure for PhysicalDeviceProperties<'_> {
-    const STRUCTURE_TYPE: vk::StructureType = STRUCTURE_TYPE_PROPERTIES;
-}
-
-/// `VkIndirectCommandsPushConstantTokenEXT`.
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Default)]
-pub struct PushConstantToken {
-    /// `updateRange`: the bytes of the pipeline layout's push constants the token writes.
-    pub update_range: vk::PushConstantRange,
-}
-
-/// `VkIndirectCommandsExecutionSetTokenEXT`.
-#[repr(C)]
-#[derive(Clone, Copy, Debug)]
-pub struct ExecutionSetToken {
-    /// `type`.
-    pub ty: ExecutionSetInfoType,
-    /// `shaderStages`.
-    pub shader_stages: vk::ShaderStageFlags,
-}
-
-/// `VkIndirectCommandsTokenDataEXT`: what a token needs besides its kind, by kind.
+/// `VkIndirectCommandsTokenDataEXT`: what a token needs besides its kind, by kind; every
+/// member is a pointer, and draw tokens need none.
 #[repr(C)]
 #[derive(Clone, Copy)]
 pub union TokenData<'a> {
-    /// For push constant and sequence index tokens.
-    pub push_constant: *const PushConstantToken,
-    /// For execution set tokens.
-    pub execution_set: *const ExecutionSetToken,
     /// For draw tokens, which need nothing.
     pub none: *const c_void,
     _marker: PhantomData<&'a ()>,
@@ -311,28 +172,6 @@ impl<'a> LayoutToken<'a> {
             offset,
         )
     }
-
-    /// Push constants `range` read from `offset` (`token` must outlive the layout's creation).
-    pub fn push_constant(token: &'a PushConstantToken, offset: u32) -> Self {
-        Self::new(
-            TokenType::PUSH_CONSTANT,
-            TokenData {
-                push_constant: token,
-            },
-            offset,
-        )
-    }
-
-    /// A `u32` index into the execution set at `offset`, binding that pipeline.
-    pub fn execution_set(token: &'a ExecutionSetToken, offset: u32) -> Self {
-        Self::new(
-            TokenType::EXECUTION_SET,
-            TokenData {
-                execution_set: token,
-            },
-            offset,
-        )
-    }
 }
 
 /// `VkIndirectCommandsLayoutCreateInfoEXT`.
@@ -377,94 +216,6 @@ impl<'a> LayoutCreateInfo<'a> {
             pipeline_layout,
             token_count: tokens.len() as u32,
             p_tokens: tokens.as_ptr(),
-            _marker: PhantomData,
-        }
-    }
-}
-
-/// `VkIndirectExecutionSetPipelineInfoEXT`.
-#[repr(C)]
-#[derive(Clone, Copy, Debug)]
-pub struct ExecutionSetPipelineInfo<'a> {
-    /// Set by `new`.
-    pub s_type: vk::StructureType,
-    /// Chain.
-    pub p_next: *const c_void,
-    /// `initialPipeline`: index 0, and the template of every other.
-    pub initial_pipeline: vk::Pipeline,
-    /// `maxPipelineCount`.
-    pub max_pipeline_count: u32,
-    /// Ties the struct to the create info that points to it.
-    pub _marker: PhantomData<&'a ()>,
-}
-
-impl ExecutionSetPipelineInfo<'_> {
-    /// A set of at most `max` pipelines, `initial` at index 0.
-    pub fn new(initial: vk::Pipeline, max: u32) -> Self {
-        Self {
-            s_type: STRUCTURE_TYPE_EXECUTION_SET_PIPELINE_INFO,
-            p_next: std::ptr::null(),
-            initial_pipeline: initial,
-            max_pipeline_count: max,
-            _marker: PhantomData,
-        }
-    }
-}
-
-/// `VkIndirectExecutionSetCreateInfoEXT` (the pipeline kind; `info` is the union
-/// `VkIndirectExecutionSetInfoEXT`, a pointer either way).
-#[repr(C)]
-#[derive(Clone, Copy, Debug)]
-pub struct ExecutionSetCreateInfo<'a> {
-    /// Set by `pipelines`.
-    pub s_type: vk::StructureType,
-    /// Chain.
-    pub p_next: *const c_void,
-    /// `type`.
-    pub ty: ExecutionSetInfoType,
-    /// `info.pPipelineInfo`.
-    pub p_pipeline_info: *const ExecutionSetPipelineInfo<'a>,
-    /// Ties the struct to `info`.
-    pub _marker: PhantomData<&'a ()>,
-}
-
-impl<'a> ExecutionSetCreateInfo<'a> {
-    /// An execution set of pipelines as `info` says.
-    pub fn pipelines(info: &'a ExecutionSetPipelineInfo<'a>) -> Self {
-        Self {
-            s_type: STRUCTURE_TYPE_EXECUTION_SET_CREATE_INFO,
-            p_next: std::ptr::null(),
-            ty: ExecutionSetInfoType::PIPELINES,
-            p_pipeline_info: info,
-            _marker: PhantomData,
-        }
-    }
-}
-
-/// `VkWriteIndirectExecutionSetPipelineEXT`.
-#[repr(C)]
-#[derive(Clone, Copy, Debug)]
-pub struct WriteExecutionSetPipeline<'a> {
-    /// Set by `new`.
-    pub s_type: vk::StructureType,
-    /// Chain.
-    pub p_next: *const c_void,
-    /// `index`.
-    pub index: u32,
-    /// `pipeline`.
-    pub pipeline: vk::Pipeline,
-    /// Lifetime of the chain.
-    pub _marker: PhantomData<&'a ()>,
-}
-
-impl WriteExecutionSetPipeline<'_> {
-    /// Puts `pipeline` at `index`.
-    pub fn new(index: u32, pipeline: vk::Pipeline) -> Self {
-        Self {
-            s_type: STRUCTURE_TYPE_WRITE_EXECUTION_SET_PIPELINE,
-            p_next: std::ptr::null(),
-            index,
-            pipeline,
             _marker: PhantomData,
         }
     }
@@ -596,11 +347,6 @@ type GetMemoryRequirements = unsafe extern "system" fn(
     *const MemoryRequirementsInfo<'_>,
     *mut vk::MemoryRequirements2<'_>,
 );
-type CmdPreprocess = unsafe extern "system" fn(
-    vk::CommandBuffer,
-    *const GeneratedCommandsInfo<'_>,
-    vk::CommandBuffer,
-);
 type CmdExecute =
     unsafe extern "system" fn(vk::CommandBuffer, vk::Bool32, *const GeneratedCommandsInfo<'_>);
 type CreateLayout = unsafe extern "system" fn(
@@ -614,33 +360,15 @@ type DestroyLayout = unsafe extern "system" fn(
     IndirectCommandsLayout,
     *const vk::AllocationCallbacks<'_>,
 );
-type CreateExecutionSet = unsafe extern "system" fn(
-    vk::Device,
-    *const ExecutionSetCreateInfo<'_>,
-    *const vk::AllocationCallbacks<'_>,
-    *mut IndirectExecutionSet,
-) -> vk::Result;
-type DestroyExecutionSet =
-    unsafe extern "system" fn(vk::Device, IndirectExecutionSet, *const vk::AllocationCallbacks<'_>);
-type UpdateExecutionSetPipeline = unsafe extern "system" fn(
-    vk::Device,
-    IndirectExecutionSet,
-    u32,
-    *const WriteExecutionSetPipeline<'_>,
-);
 
 /// The extension's device-level functions, loaded for one device.
 #[derive(Clone)]
 pub struct Device {
     handle: vk::Device,
     get_memory_requirements: GetMemoryRequirements,
-    cmd_preprocess: CmdPreprocess,
     cmd_execute: CmdExecute,
     create_layout: CreateLayout,
     destroy_layout: DestroyLayout,
-    create_execution_set: CreateExecutionSet,
-    destroy_execution_set: DestroyExecutionSet,
-    update_execution_set_pipeline: UpdateExecutionSetPipeline,
 }
 
 impl std::fmt::Debug for Device {
@@ -674,19 +402,9 @@ impl Device {
                 c"vkGetGeneratedCommandsMemoryRequirementsEXT",
                 GetMemoryRequirements
             ),
-            cmd_preprocess: function!(c"vkCmdPreprocessGeneratedCommandsEXT", CmdPreprocess),
             cmd_execute: function!(c"vkCmdExecuteGeneratedCommandsEXT", CmdExecute),
             create_layout: function!(c"vkCreateIndirectCommandsLayoutEXT", CreateLayout),
             destroy_layout: function!(c"vkDestroyIndirectCommandsLayoutEXT", DestroyLayout),
-            create_execution_set: function!(c"vkCreateIndirectExecutionSetEXT", CreateExecutionSet),
-            destroy_execution_set: function!(
-                c"vkDestroyIndirectExecutionSetEXT",
-                DestroyExecutionSet
-            ),
-            update_execution_set_pipeline: function!(
-                c"vkUpdateIndirectExecutionSetPipelineEXT",
-                UpdateExecutionSetPipeline
-            ),
         })
     }
 
@@ -703,21 +421,6 @@ impl Device {
         // SAFETY: the caller's contract; the output struct lives on this frame.
         unsafe { (self.get_memory_requirements)(self.handle, info, &mut requirements) };
         requirements.memory_requirements
-    }
-
-    /// `vkCmdPreprocessGeneratedCommandsEXT`.
-    ///
-    /// # Safety
-    /// As the command's valid usage requires; `state_command_buffer` has the state the
-    /// execution will have.
-    pub unsafe fn cmd_preprocess(
-        &self,
-        command_buffer: vk::CommandBuffer,
-        info: &GeneratedCommandsInfo<'_>,
-        state_command_buffer: vk::CommandBuffer,
-    ) {
-        // SAFETY: the caller's contract.
-        unsafe { (self.cmd_preprocess)(command_buffer, info, state_command_buffer) };
     }
 
     /// `vkCmdExecuteGeneratedCommandsEXT`.
@@ -762,57 +465,6 @@ impl Device {
     ) {
         // SAFETY: the caller's contract.
         unsafe { (self.destroy_layout)(self.handle, layout, as_ptr(allocator)) };
-    }
-
-    /// `vkCreateIndirectExecutionSetEXT`.
-    ///
-    /// # Safety
-    /// `info` and what it points to are valid; the initial pipeline was created with
-    /// [`PIPELINE_CREATE_2_INDIRECT_BINDABLE`].
-    pub unsafe fn create_execution_set(
-        &self,
-        info: &ExecutionSetCreateInfo<'_>,
-        allocator: Option<&vk::AllocationCallbacks<'_>>,
-    ) -> Result<IndirectExecutionSet, vk::Result> {
-        let mut set = IndirectExecutionSet::null();
-        // SAFETY: the caller's contract; the output lives on this frame.
-        let result =
-            unsafe { (self.create_execution_set)(self.handle, info, as_ptr(allocator), &mut set) };
-        result.result_with_success(set)
-    }
-
-    /// `vkDestroyIndirectExecutionSetEXT`.
-    ///
-    /// # Safety
-    /// No pending command uses `set`.
-    pub unsafe fn destroy_execution_set(
-        &self,
-        set: IndirectExecutionSet,
-        allocator: Option<&vk::AllocationCallbacks<'_>>,
-    ) {
-        // SAFETY: the caller's contract.
-        unsafe { (self.destroy_execution_set)(self.handle, set, as_ptr(allocator)) };
-    }
-
-    /// `vkUpdateIndirectExecutionSetPipelineEXT`.
-    ///
-    /// # Safety
-    /// No pending command uses the entries written; the pipelines are compatible with the
-    /// set's initial pipeline.
-    pub unsafe fn update_execution_set_pipelines(
-        &self,
-        set: IndirectExecutionSet,
-        writes: &[WriteExecutionSetPipeline<'_>],
-    ) {
-        // SAFETY: the caller's contract.
-        unsafe {
-            (self.update_execution_set_pipeline)(
-                self.handle,
-                set,
-                writes.len() as u32,
-                writes.as_ptr(),
-            )
-        };
     }
 }
 

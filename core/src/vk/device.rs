@@ -233,12 +233,9 @@ impl Device {
                 });
             }
         }
-        let has_extension = |name: &std::ffi::CStr| {
-            extensions
-                .iter()
-                .any(|e| e.extension_name_as_c_str() == Ok(name))
-        };
-        let has_multi_draw = has_extension(ash::ext::multi_draw::NAME);
+        let has_multi_draw = extensions
+            .iter()
+            .any(|e| e.extension_name_as_c_str() == Ok(ash::ext::multi_draw::NAME));
         let capabilities = Capabilities {
             multi_draw_indirect: core.multi_draw_indirect == vk::TRUE,
             draw_indirect_first_instance: core.draw_indirect_first_instance == vk::TRUE,

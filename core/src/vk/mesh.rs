@@ -7,7 +7,7 @@ use std::sync::Arc;
 
 use ash::vk;
 
-use super::pipeline::RasterState;
+use super::pipeline::{stage, RasterState};
 use super::{
     Buffer, Capabilities, ColorTarget, DepthUse, Device, Pipeline, PipelineLayout, ShaderModule,
     VkError, VkResult,
@@ -57,27 +57,12 @@ impl Pipeline {
         if !mesh_shader {
             return Err(unsupported(device, &format!("pipeline '{}'", desc.name)));
         }
-        let mut stages = Vec::with_capacity(3);
-        if let Some(task) = desc.task {
-            stages.push(
-                vk::PipelineShaderStageCreateInfo::default()
-                    .stage(vk::ShaderStageFlags::TASK_EXT)
-                    .module(task.raw())
-                    .name(c"main"),
-            );
-        }
-        stages.push(
-            vk::PipelineShaderStageCreateInfo::default()
-                .stage(vk::ShaderStageFlags::MESH_EXT)
-                .module(desc.mesh.raw())
-                .name(c"main"),
-        );
-        stages.push(
-            vk::PipelineShaderStageCreateInfo::default()
-                .stage(vk::ShaderStageFlags::FRAGMENT)
-                .module(desc.fragment.raw())
-                .name(c"main"),
-        );
+        let stages: Vec<_> = desc
+            .task
+            .into_iter()
+            .chain([desc.mesh, desc.fragment])
+            .map(stage)
+            .collect();
         Self::rasterizing(
             device,
             &RasterState {

@@ -258,20 +258,8 @@ impl Pipeline {
             .module(desc.vertex.raw())
             .name(c"main")
             .specialization_info(&specialization)];
-        if let Some(geometry) = desc.geometry {
-            stages.push(
-                vk::PipelineShaderStageCreateInfo::default()
-                    .stage(vk::ShaderStageFlags::GEOMETRY)
-                    .module(geometry.raw())
-                    .name(c"main"),
-            );
-        }
-        stages.push(
-            vk::PipelineShaderStageCreateInfo::default()
-                .stage(vk::ShaderStageFlags::FRAGMENT)
-                .module(desc.fragment.raw())
-                .name(c"main"),
-        );
+        stages.extend(desc.geometry.map(stage));
+        stages.push(stage(desc.fragment));
         let layout = desc.vertex_layout.unwrap_or(VertexLayout {
             stride: 0,
             attributes: &[],
@@ -613,6 +601,14 @@ pub struct GraphicsPipelineDesc<'a> {
     pub samples: u32,
     /// The debug name.
     pub name: &'a str,
+}
+
+/// The stage that runs `module`'s `main`, for the stage it was compiled for.
+pub(super) fn stage(module: &ShaderModule) -> vk::PipelineShaderStageCreateInfo<'static> {
+    vk::PipelineShaderStageCreateInfo::default()
+        .stage(module.stage().flag())
+        .module(module.raw())
+        .name(c"main")
 }
 
 /// What every rasterizing pipeline (vertex or mesh shaders) says about its targets.

@@ -36,6 +36,8 @@ const KEPT_CHUNK_SIZES: usize = 64;
 /// One execution: the pass's pipeline and where its sequences and count are.
 #[derive(Clone, Copy)]
 pub struct Execution {
+    /// Which of the record's passes it draws.
+    pub pass: usize,
     pub pipeline: vk::Pipeline,
     pub commands: vk::Buffer,
     pub commands_offset: u64,
@@ -67,8 +69,6 @@ pub struct GeneratedCommands {
     frame: u64,
     /// Per pipeline and sequences of a pass, the most sequences a chunk runs.
     chunk_sizes: Vec<((vk::Pipeline, u32), u32)>,
-    /// Preprocess bytes the last frame's executions needed.
-    pub last_preprocess_bytes: u64,
 }
 
 /// The stages the sequences' state reaches (the draw token's pipelines).
@@ -90,7 +90,6 @@ impl GeneratedCommands {
             preprocess: None,
             frame: 0,
             chunk_sizes: Vec::new(),
-            last_preprocess_bytes: 0,
         })
     }
 
@@ -307,11 +306,17 @@ impl GeneratedCommands {
         let mut types = u32::MAX;
         for execution in executions {
             let chunk = self.chunk_size(layout, execution.pipeline, execution.max_sequences);
+            // Every chunk but the last is full: two queries per pass, whatever the chunks.
+            let full = self.requirements(layout, execution.pipeline, chunk);
             let mut chunks = Vec::new();
             let mut first = 0;
             while first < execution.max_sequences {
                 let sequences = chunk.min(execution.max_sequences - first);
-                let needs = self.requirements(layout, execution.pipeline, sequences);
+                let needs = if sequences == chunk {
+                    full
+                } else {
+                    self.requirements(layout, execution.pipeline, sequences)
+                };
                 frame_bytes = frame_bytes.next_multiple_of(needs.alignment.max(1));
                 chunks.push((
                     Execution {
@@ -329,7 +334,6 @@ impl GeneratedCommands {
             }
             chunked.push(chunks);
         }
-        self.last_preprocess_bytes = frame_bytes;
         self.frame = (self.frame + 1) % FRAMES;
         let frame = self.frame;
         let preprocess = self.reserve(frame_bytes, types)?;

@@ -262,20 +262,21 @@ impl<const S: u8, const A: u8, const M: u8> Submit<S, A, M> {
     /// where one wrote them, else the pass list's indirect commands.
     fn record_generated(&mut self, record: &Record<'_>) -> Result<(), String> {
         let passes = record.passes();
-        let executions: Vec<Option<Execution>> = match record.gpu_draws() {
+        let executions: Vec<Execution> = match record.gpu_draws() {
             Some(draws) => passes
                 .iter()
                 .zip(draws)
-                .map(|(pass, source)| {
-                    (source.commands != 0 && source.max_draws != 0).then(|| Execution {
-                        pipeline: vk::Pipeline::from_raw(pass.pipeline),
-                        commands: vk::Buffer::from_raw(source.commands),
-                        commands_offset: source.commands_offset,
-                        count: vk::Buffer::from_raw(source.count_buffer),
-                        count_offset: source.count_offset,
-                        max_sequences: source.max_draws,
-                        stride: source.stride,
-                    })
+                .enumerate()
+                .filter(|(_, (_, source))| source.commands != 0 && source.max_draws != 0)
+                .map(|(index, (pass, source))| Execution {
+                    pass: index,
+                    pipeline: vk::Pipeline::from_raw(pass.pipeline),
+                    commands: vk::Buffer::from_raw(source.commands),
+                    commands_offset: source.commands_offset,
+                    count: vk::Buffer::from_raw(source.count_buffer),
+                    count_offset: source.count_offset,
+                    max_sequences: source.max_draws,
+                    stride: source.stride,
                 })
                 .collect(),
             None => {
@@ -286,11 +287,13 @@ impl<const S: u8, const A: u8, const M: u8> Submit<S, A, M> {
                 passes
                     .iter()
                     .zip(&self.pass_lists)
-                    .map(|(pass, &index)| {
-                        let indirect = &self.kept[index].indirect;
+                    .enumerate()
+                    .filter_map(|(index, (pass, &kept))| {
+                        let indirect = &self.kept[kept].indirect;
                         match (&indirect.commands, &indirect.count) {
                             (Some(commands), Some(count)) if indirect.draws > 0 => {
                                 Some(Execution {
+                                    pass: index,
                                     pipeline: vk::Pipeline::from_raw(pass.pipeline),
                                     commands: commands.raw(),
                                     commands_offset: 0,
@@ -310,21 +313,20 @@ impl<const S: u8, const A: u8, const M: u8> Submit<S, A, M> {
             .generated
             .as_mut()
             .ok_or("no generated commands state")?;
-        let drawn: Vec<(usize, &Execution)> = executions
-            .iter()
-            .enumerate()
-            .filter_map(|(i, e)| e.as_ref().map(|e| (i, e)))
-            .collect();
-        let plain: Vec<Execution> = drawn.iter().map(|&(_, e)| *e).collect();
-        let chunked = generated.begin_frame(&plain)?;
-        for ((index, execution), chunks) in drawn.into_iter().zip(chunked) {
-            record::bind_pass(&self.gpu, record, &passes[index]);
+        let chunked = generated.begin_frame(&executions)?;
+        let from_list = record.gpu_draws().is_none();
+        for (execution, chunks) in executions.iter().zip(chunked) {
+            record::bind_pass(
+                &self.gpu,
+                record,
+                &passes[execution.pass],
+                (record.command_buffer(), record.stats()),
+            );
             for (chunk, address, size) in &chunks {
                 generated.execute(record.command_buffer(), chunk, (*address, *size))?;
             }
             let sequences = u64::from(execution.max_sequences);
             let calls = chunks.len() as u64;
-            let from_list = record.gpu_draws().is_none();
             record.count(|s| {
                 s.draw_calls += calls;
                 if from_list {

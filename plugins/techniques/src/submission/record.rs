@@ -80,39 +80,15 @@ impl Recorder<'_> {
             {
                 continue;
             }
-            let bind = self.record.bind_context(command_buffer, pass.kind, stats);
+            let (bind, mut vertex_state, mut parameter_state) =
+                bind_pass(self.gpu, self.record, pass, (command_buffer, stats));
+            let (vertex, parameters) = (self.record.vertex(), self.record.parameters());
             let count = |add: &dyn Fn(&mut CadrStats)| {
                 // SAFETY: each recording thread has its own counters.
                 if let Some(stats) = unsafe { stats.as_mut() } {
                     add(stats);
                 }
             };
-            // SAFETY: recording; the pipeline, layout and set outlive the frame.
-            unsafe {
-                device.cmd_bind_pipeline(
-                    command_buffer,
-                    vk::PipelineBindPoint::GRAPHICS,
-                    vk::Pipeline::from_raw(pass.pipeline),
-                );
-                device.cmd_bind_descriptor_sets(
-                    command_buffer,
-                    vk::PipelineBindPoint::GRAPHICS,
-                    self.record.layout(),
-                    0,
-                    &[self.record.frame_set()],
-                    &[],
-                );
-            }
-            count(&|s| {
-                s.pipeline_binds += 1;
-                s.parameter_binds += 1;
-            });
-            let vertex = self.record.vertex();
-            let parameters = self.record.parameters();
-            let mut vertex_state = CadrBindState::default();
-            let mut parameter_state = CadrBindState::default();
-            vertex.bind_pass(&bind, &mut vertex_state);
-            parameters.bind_pass(&bind, &mut parameter_state);
             if gpu_draws {
                 if part.start != 0 || draws.indirect_draws == 0 {
                     continue;
@@ -217,12 +193,17 @@ impl Recorder<'_> {
     }
 }
 
-/// Binds what every draw of `pass` needs: its pipeline, the frame's set, and the vertex and
-/// parameter paths' pass bindings; counts the binds.
-pub fn bind_pass(gpu: &Gpu, record: &Record<'_>, pass: &abi::CadrPass) {
+/// Binds what every draw of `pass` needs into `command_buffer` (the record's, or a worker's
+/// secondary buffer): its pipeline, the frame's set, and the vertex and parameter paths' pass
+/// bindings; counts the binds into `stats` (that thread's counters). Returns the pass's bind
+/// context and the paths' bind states, for the per-draw binds that follow.
+pub fn bind_pass(
+    gpu: &Gpu,
+    record: &Record<'_>,
+    pass: &abi::CadrPass,
+    (command_buffer, stats): (vk::CommandBuffer, *mut CadrStats),
+) -> (abi::CadrBindContext, CadrBindState, CadrBindState) {
     let device = &gpu.device;
-    let command_buffer = record.command_buffer();
-    let stats = record.stats();
     let bind = record.bind_context(command_buffer, pass.kind, stats);
     // SAFETY: recording inside rendering; the pipeline, layout and set outlive the frame.
     unsafe {
@@ -244,10 +225,12 @@ pub fn bind_pass(gpu: &Gpu, record: &Record<'_>, pass: &abi::CadrPass) {
     let mut parameter_state = CadrBindState::default();
     record.vertex().bind_pass(&bind, &mut vertex_state);
     record.parameters().bind_pass(&bind, &mut parameter_state);
-    record.count(|s| {
-        s.pipeline_binds += 1;
-        s.parameter_binds += 1;
-    });
+    // SAFETY: each recording thread has its own counters, valid for the call.
+    if let Some(stats) = unsafe { stats.as_mut() } {
+        stats.pipeline_binds += 1;
+        stats.parameter_binds += 1;
+    }
+    (bind, vertex_state, parameter_state)
 }
 
 /// Records each pass's draws from the commands a GPU culler wrote (`draws`, one per pass):
@@ -258,7 +241,7 @@ pub fn record_gpu_draws(gpu: &Gpu, record: &Record<'_>, draws: &[abi::CadrGpuDra
         if source.commands == 0 || source.max_draws == 0 {
             continue;
         }
-        bind_pass(gpu, record, pass);
+        bind_pass(gpu, record, pass, (command_buffer, record.stats()));
         // SAFETY: recording; the culler's buffers hold `max_draws` commands of `stride`
         // bytes and the count, written before rendering began.
         unsafe {

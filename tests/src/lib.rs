@@ -32,38 +32,29 @@ pub fn first_transform(
 
 /// A device with the validation layers on. Tests never skip: without Vulkan they fail here.
 pub fn test_device() -> Arc<Device> {
-    validated_device(false)
+    validated_device(false, false)
 }
 
 /// A device with the validation layers on that keeps textures as layers of one array image
 /// even where the device has descriptor indexing (the path of devices without it).
 pub fn test_device_with_texture_array_only() -> Arc<Device> {
-    let options = DeviceOptions {
-        instance: InstanceOptions {
-            validation: true,
-            ..InstanceOptions::default()
-        },
-        texture_array_only: true,
-        ..DeviceOptions::default()
-    };
-    Device::new(&options).unwrap_or_else(|error| {
-        panic!("cannot create a Vulkan device with validation (run scripts/setup.sh): {error}")
-    })
+    validated_device(false, true)
 }
 
 /// A device with the validation layers and their synchronization checks on (slower): for
 /// the tests of paths with many barriers, such as transparency.
 pub fn test_device_with_synchronization_checks() -> Arc<Device> {
-    validated_device(true)
+    validated_device(true, false)
 }
 
-fn validated_device(synchronization_validation: bool) -> Arc<Device> {
+fn validated_device(synchronization_validation: bool, texture_array_only: bool) -> Arc<Device> {
     let options = DeviceOptions {
         instance: InstanceOptions {
             validation: true,
             synchronization_validation,
             ..InstanceOptions::default()
         },
+        texture_array_only,
         ..DeviceOptions::default()
     };
     match Device::new(&options) {

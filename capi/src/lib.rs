@@ -179,7 +179,7 @@ pub unsafe extern "C" fn cadr_render_scene_to_png(
         renderer
             .save_png(&PathBuf::from(png_path))
             .map_err(|e| match e {
-                cadr_core::render::SaveError::Write { .. } => {
+                cadr_core::frame::SaveError::Write { .. } => {
                     Failure::new(CadrResult::Io, e.to_string())
                 }
                 other => vulkan(&other),

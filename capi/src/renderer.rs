@@ -1034,10 +1034,10 @@ pub unsafe extern "C" fn cadr_renderer_save_png(
                 .renderer()
                 .save_png(Path::new(path))
                 .map_err(|e| match e {
-                    cadr_core::render::SaveError::Write { .. } => {
+                    cadr_core::frame::SaveError::Write { .. } => {
                         Failure::new(CadrResult::Io, e.to_string())
                     }
-                    cadr_core::render::SaveError::Render(render) => render.into(),
+                    cadr_core::frame::SaveError::Render(render) => render.into(),
                 })
         })
     })

@@ -8,11 +8,11 @@
 
 use std::sync::Arc;
 
+use cadr_core::gpu_scene::Transforms;
 use cadr_core::render::{FrameStats, HighlightStyle, Section};
 use cadr_core::scene::{flatten, Scene, SceneStats};
 use cadr_core::technique::{
-    Combination, PluginRegistry, ShadeMode, TechniqueKind, Techniques, Transforms,
-    DEFAULT_TRANSPARENCY,
+    Combination, PluginRegistry, ShadeMode, TechniqueKind, Techniques, DEFAULT_TRANSPARENCY,
 };
 use cadr_core::vk::Device;
 

@@ -5,11 +5,10 @@
 use std::time::Instant;
 
 use cadr_core::gpu_scene::GpuScene;
+use cadr_core::gpu_scene::Transforms;
 use cadr_core::graph::{NodeFlags, NodeHandle, NodeKind, SceneGraph};
 use cadr_core::load::SceneSource;
-use cadr_core::render::Renderer;
 use cadr_core::scene::Material;
-use cadr_core::technique::Transforms;
 use cadr_core::tree::SceneTree;
 use cadr_core::vk::{Device, DeviceOptions};
 use glam::{DMat4, DVec3};
@@ -71,12 +70,9 @@ pub fn bench_tree(scene_text: &str, runs: usize) -> Result<(), String> {
     let mut tree = SceneTree::build(&mut graph);
     tree.take_changes();
     let device = Device::new(&DeviceOptions::default()).map_err(|e| e.to_string())?;
-    let renderer = Renderer::new(&device, 1, 1).map_err(|e| e.to_string())?;
     let mut gpu_scene =
         GpuScene::new(&device, &graph, &mut tree, Transforms::Host).map_err(|e| e.to_string())?;
-    gpu_scene
-        .flush_uploads(renderer.pipelines())
-        .map_err(|e| e.to_string())?;
+    gpu_scene.flush_uploads().map_err(|e| e.to_string())?;
     let initial_upload = gpu_scene.last_upload();
     let instances = tree.instance_count();
     let placements = part_placements(&graph);
@@ -99,7 +95,7 @@ pub fn bench_tree(scene_text: &str, runs: usize) -> Result<(), String> {
             // What the GPU scene uploads for this edit.
             let synced = gpu_scene
                 .sync(graph, tree, Transforms::Host)
-                .and_then(|()| gpu_scene.flush_uploads(renderer.pipelines()));
+                .and_then(|()| gpu_scene.flush_uploads());
             if let Err(e) = synced {
                 upload_error.get_or_insert(e.to_string());
             }

@@ -2,7 +2,6 @@
 //! failing or being refused, or a renderer being used against its contract. Only the first is
 //! a Vulkan error.
 
-use crate::shaders::ShaderCompileError;
 use crate::vk::VkError;
 
 /// An error of the renderer, its techniques or the Vulkan layer below them.
@@ -26,6 +25,17 @@ pub enum RenderError {
     /// panicking).
     #[error("invalid use: {0}")]
     InvalidUse(String),
+}
+
+/// A shader that failed to compile: a renderer error (a broken source or snippet), not a
+/// Vulkan one.
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+#[error("shader '{name}' failed to compile:\n{log}")]
+pub struct ShaderCompileError {
+    /// The shader's name.
+    pub name: String,
+    /// The compiler's messages.
+    pub log: String,
 }
 
 /// Result of the renderer and its techniques.

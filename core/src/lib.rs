@@ -4,14 +4,16 @@
 //! by [`generate`]) becomes a [`graph::SceneGraph`] (what hosts edit), flattened incrementally
 //! into a [`tree::SceneTree`]; each [`view::View`] keeps a [`gpu_scene::GpuScene`] in step with
 //! the tree and draws it, and its pick pass, with the active [`technique`] combination (the
-//! built-in one or plugins) into a [`render::Renderer`]'s target. [`vk`] is the thin Vulkan
-//! layer under all of it, the only code that calls ash; [`error::RenderError`] is what the
-//! layers above it report.
+//! built-in one or plugins) into a [`frame::Renderer`]'s target, with the pieces of
+//! [`render`]. [`vk`] is the thin Vulkan layer under all of it, the only code that calls ash;
+//! [`error::RenderError`] is what the layers above it report. The modules form layers, each
+//! using only those below it (ARCHITECTURE.md; `core/tests/module_layers.rs` checks it).
 
 mod commands_key;
 pub mod csf;
 pub mod disk_cache;
 pub mod error;
+pub mod frame;
 pub mod generate;
 pub mod gpu_scene;
 pub mod graph;

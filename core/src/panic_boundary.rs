@@ -157,25 +157,6 @@ mod tests {
     }
 
     #[test]
-    fn a_panic_on_a_parallel_worker_is_reported_to_the_boundary_that_started_it() {
-        let caught = catch(|| {
-            crate::parallel::map(&(0..64).collect::<Vec<u32>>(), |&i| {
-                assert!(i != 40, "item {i} is bad");
-                i
-            })
-        })
-        .unwrap_err();
-        assert_eq!(caught.message, "item 40 is bad");
-        assert!(
-            caught
-                .location
-                .as_deref()
-                .is_some_and(|l| l.starts_with(file!())),
-            "{caught}"
-        );
-    }
-
-    #[test]
     fn boundaries_nest_and_end_with_their_scope() {
         let outer = catch(|| {
             let inner = catch(|| panic!("inner")).unwrap_err();

@@ -99,8 +99,28 @@ pub fn collect_indexed<T: Send, A: Default + Send>(
 }
 
 #[cfg(test)]
+#[allow(clippy::unwrap_used)] // Test code: a failed unwrap is a failed test.
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_panic_on_a_parallel_worker_is_reported_to_the_boundary_that_started_it() {
+        let caught = crate::panic_boundary::catch(|| {
+            map(&(0..64).collect::<Vec<u32>>(), |&i| {
+                assert!(i != 40, "item {i} is bad");
+                i
+            })
+        })
+        .unwrap_err();
+        assert_eq!(caught.message, "item 40 is bad");
+        assert!(
+            caught
+                .location
+                .as_deref()
+                .is_some_and(|l| l.starts_with(file!())),
+            "{caught}"
+        );
+    }
 
     #[test]
     fn collect_indexed_makes_every_item_once_in_order_with_aligned_tallies() {

@@ -5,20 +5,12 @@
 //! accessors, vertex fetch) that are assembled into complete shaders when a combination is
 //! chosen, so a build-time compiler could not know every permutation.
 
-use crate::disk_cache::DiskCache;
-use crate::timings::{self, Phase};
-use crate::vk::ShaderStage;
+use std::sync::Arc;
 
-/// A shader that failed to compile: a renderer error (a broken source or snippet), not a
-/// Vulkan one.
-#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
-#[error("shader '{name}' failed to compile:\n{log}")]
-pub struct ShaderCompileError {
-    /// The shader's name.
-    pub name: String,
-    /// The compiler's messages.
-    pub log: String,
-}
+use crate::disk_cache::DiskCache;
+use crate::error::{RenderResult, ShaderCompileError};
+use crate::timings::{self, Phase};
+use crate::vk::{Device, ShaderModule, ShaderStage};
 
 fn shaderc_kind(stage: ShaderStage) -> shaderc::ShaderKind {
     match stage {
@@ -53,6 +45,18 @@ pub fn compile_glsl(
     timings::time(Phase::ShaderCompile, || {
         compile_cached(name, source, stage, includes)
     })
+}
+
+/// The shader module of a built-in `shader` on `device`: compiled with the shared includes
+/// ([`INCLUDES`]), or taken from the disk cache.
+pub fn module(device: &Arc<Device>, shader: &ShaderSource) -> RenderResult<ShaderModule> {
+    let words = compile_glsl(shader.name, shader.source, shader.stage, INCLUDES)?;
+    Ok(ShaderModule::from_spirv(
+        device,
+        shader.name,
+        &words,
+        shader.stage,
+    )?)
 }
 
 /// `source` with `defines` (whole `#define` lines) inserted after its `#version` line.

@@ -9,11 +9,13 @@ use std::sync::Arc;
 use glam::{DVec3, DVec4};
 
 use crate::error::{RenderError, RenderResult};
+use crate::frame::Renderer;
 use crate::gpu_scene::GpuScene;
+use crate::gpu_scene::Transforms;
 use crate::graph::{NodeHandle, SceneGraph};
 use crate::render::pick::{PickSample, PixelRect};
-use crate::render::{Camera, FrameStats, Renderer, Section};
-use crate::technique::{Combination, PluginRegistry, Techniques, Transforms};
+use crate::render::{Camera, FrameStats, Section};
+use crate::technique::{Combination, PluginRegistry, Techniques};
 use crate::timings::{self, Phase};
 use crate::tree::SceneTree;
 use crate::vk::Device;

@@ -7,13 +7,15 @@
 
 use std::sync::Arc;
 
+use cadr_core::frame::Renderer;
 use cadr_core::generate::{generate, GeneratorSpec, GeometryBuilder};
+use cadr_core::gpu_scene::Transforms;
 use cadr_core::gpu_scene::{GpuScene, MATRIX_BYTES};
 use cadr_core::graph::{GeometryHandle, MaterialHandle, NodeFlags, NodeHandle, SceneGraph};
 use cadr_core::render::pick::PixelRect;
-use cadr_core::render::{Camera, Renderer, DEFAULT_DIRECTION};
+use cadr_core::render::{Camera, DEFAULT_DIRECTION};
 use cadr_core::scene::{flatten, Material};
-use cadr_core::technique::{Combination, TechniqueKind, Transforms};
+use cadr_core::technique::{Combination, TechniqueKind};
 use cadr_core::tree::SceneTree;
 use cadr_core::view::View;
 use cadr_core::vk::Device;
@@ -447,7 +449,7 @@ fn staged_and_direct_uploads_fill_the_gpu_scene_alike() {
     for staged in [false, true] {
         device.set_staged_uploads(staged);
         let mut scene = GpuScene::new(&device, &graph, &mut tree, Transforms::Gpu).unwrap();
-        scene.flush_uploads(renderer.pipelines()).unwrap();
+        scene.flush_uploads().unwrap();
         let whole = scene.read_back_arrays().unwrap();
         assert!(
             whole.iter().all(|bytes| bytes.iter().any(|&b| b != 0)),
@@ -528,9 +530,8 @@ proptest! {
             .map(|i| place(&mut graph, root, &format!("t{i}"), DVec3::new(f64::from(i), 0.0, 0.0), shape).0)
             .collect();
         let mut tree = SceneTree::build(&mut graph);
-        let renderer = Renderer::new(&device, 1, 1).unwrap();
         let mut scene = GpuScene::new(&device, &graph, &mut tree, Transforms::Host).unwrap();
-        scene.flush_uploads(renderer.pipelines()).unwrap();
+        scene.flush_uploads().unwrap();
         for (step, edit) in edits.iter().enumerate() {
             let pick = |n: u8| transforms[n as usize % transforms.len()];
             match *edit {
@@ -575,10 +576,10 @@ proptest! {
             }
             tree.update(&mut graph);
             scene.sync(&graph, &mut tree, Transforms::Host).unwrap();
-            scene.flush_uploads(renderer.pipelines()).unwrap();
+            scene.flush_uploads().unwrap();
         }
         let mut fresh = GpuScene::new(&device, &graph, &mut tree, Transforms::Host).unwrap();
-        fresh.flush_uploads(renderer.pipelines()).unwrap();
+        fresh.flush_uploads().unwrap();
         let (synced, expected) = (scene.content(), fresh.content());
         prop_assert_eq!(synced.instances, expected.instances);
         prop_assert_eq!(synced.drawn_bits, expected.drawn_bits);

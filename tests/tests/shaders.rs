@@ -1,7 +1,9 @@
 //! Every shader compiles and validates; the Rust mirrors of shader structs match their layout.
 #![allow(clippy::unwrap_used)] // Test code: a failed unwrap is a failed test.
 
-use cadr_core::render::{FrameUniforms, Renderer, ScatterParameters};
+use cadr_core::frame::Renderer;
+use cadr_core::gpu_scene::{ScatterParameters, ScenePipelines};
+use cadr_core::render::FrameUniforms;
 use cadr_core::shaders::{compile_glsl, with_defines, ALL, INCLUDES, TEMPLATES};
 use cadr_core::technique::fragment_defines;
 use cadr_core::vk::{Capabilities, ShaderStage};
@@ -42,9 +44,17 @@ fn shaders_compile_and_validate() {
     let renderer = Renderer::new(&device, 8, 8).expect("renderer");
     renderer
         .pipelines()
+        .background()
+        .unwrap_or_else(|e| panic!("background pipeline: {e}"));
+    drop(renderer);
+    let scene_pipelines = ScenePipelines::new(&device).expect("scene pipelines");
+    scene_pipelines
         .scatter()
         .unwrap_or_else(|e| panic!("scatter pipeline: {e}"));
-    drop(renderer);
+    scene_pipelines
+        .hierarchy()
+        .unwrap_or_else(|e| panic!("transform hierarchy pipeline: {e}"));
+    drop(scene_pipelines);
     assert_no_validation_errors(&device);
 }
 

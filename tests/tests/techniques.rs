@@ -6,14 +6,15 @@
 use std::path::Path;
 use std::sync::Arc;
 
+use cadr_core::frame::Renderer;
 use cadr_core::generate::{generate, GeneratorSpec};
-use cadr_core::gpu_scene::GpuScene;
+use cadr_core::gpu_scene::{GpuScene, Transforms};
 use cadr_core::graph::SceneGraph;
 use cadr_core::load::load_file;
-use cadr_core::render::{Camera, Renderer, DEFAULT_DIRECTION};
+use cadr_core::render::{Camera, DEFAULT_DIRECTION};
 use cadr_core::scene::{flatten, Scene};
 use cadr_core::technique::{
-    feature_bits, Combination, PluginRegistry, ShadeMode, TechniqueKind, Techniques, Transforms,
+    feature_bits, Combination, PluginRegistry, ShadeMode, TechniqueKind, Techniques,
 };
 use cadr_core::tree::SceneTree;
 use cadr_core::vk::Device;

@@ -7,11 +7,12 @@
 use std::sync::Arc;
 
 use cadr_core::generate::GeometryBuilder;
+use cadr_core::gpu_scene::Transforms;
 use cadr_core::gpu_scene::{GpuScene, HierarchyMethod, LOCAL_BYTES, MATRIX_BYTES};
 use cadr_core::graph::{GeometryHandle, MaterialHandle, NodeFlags, NodeHandle, SceneGraph};
-use cadr_core::render::{Camera, Renderer};
+use cadr_core::render::Camera;
 use cadr_core::scene::Material;
-use cadr_core::technique::{TechniqueKind, Transforms};
+use cadr_core::technique::TechniqueKind;
 use cadr_core::tree::SceneTree;
 use cadr_core::view::View;
 use cadr_tests::{assert_no_validation_errors, images, plugin_registry, scene_wide, test_device};
@@ -218,12 +219,11 @@ proptest! {
         method in method_choice(),
     ) {
         let device = test_device();
-        let renderer = Renderer::new(&device, 1, 1).unwrap();
         let mut assembly = Assembly::new();
         let mut tree = SceneTree::build(&mut assembly.graph);
         let mut scene = GpuScene::new(&device, &assembly.graph, &mut tree, Transforms::Gpu).unwrap();
         scene.force_hierarchy_method(method);
-        scene.flush_uploads(renderer.pipelines()).unwrap();
+        scene.flush_uploads().unwrap();
         let mut passes = 0;
         for edits in &frames {
             for edit in edits {
@@ -231,7 +231,7 @@ proptest! {
             }
             tree.update(&mut assembly.graph);
             scene.sync(&assembly.graph, &mut tree, Transforms::Gpu).unwrap();
-            scene.flush_uploads(renderer.pipelines()).unwrap();
+            scene.flush_uploads().unwrap();
             if let Some(plan) = scene.last_hierarchy() {
                 passes += 1;
                 if let Some(forced) = method {
@@ -255,11 +255,10 @@ proptest! {
 #[test]
 fn a_move_uploads_its_local_matrices_only() {
     let device = test_device();
-    let renderer = Renderer::new(&device, 1, 1).unwrap();
     let mut assembly = Assembly::new();
     let mut tree = SceneTree::build(&mut assembly.graph);
     let mut scene = GpuScene::new(&device, &assembly.graph, &mut tree, Transforms::Gpu).unwrap();
-    scene.flush_uploads(renderer.pipelines()).unwrap();
+    scene.flush_uploads().unwrap();
     // Three assemblies with 6 parts each (and one shared sub-assembly) move.
     for (i, &node) in assembly.assemblies[..3].iter().enumerate() {
         let at = DVec3::new(FAR, i as f64, 2.0);
@@ -272,7 +271,7 @@ fn a_move_uploads_its_local_matrices_only() {
     scene
         .sync(&assembly.graph, &mut tree, Transforms::Gpu)
         .unwrap();
-    let bytes = scene.flush_uploads(renderer.pipelines()).unwrap();
+    let bytes = scene.flush_uploads().unwrap();
     assert_eq!(
         bytes,
         3 * (LOCAL_BYTES as u64 + 4),
@@ -288,7 +287,7 @@ fn a_move_uploads_its_local_matrices_only() {
     check_gpu_worlds(&scene, &tree).unwrap();
     // The same move on the host uploads a world matrix for every part below.
     let mut host = GpuScene::new(&device, &assembly.graph, &mut tree, Transforms::Host).unwrap();
-    host.flush_uploads(renderer.pipelines()).unwrap();
+    host.flush_uploads().unwrap();
     assembly
         .graph
         .set_matrix(assembly.assemblies[0], DMat4::IDENTITY)
@@ -296,7 +295,7 @@ fn a_move_uploads_its_local_matrices_only() {
     tree.update(&mut assembly.graph);
     host.sync(&assembly.graph, &mut tree, Transforms::Host)
         .unwrap();
-    let host_bytes = host.flush_uploads(renderer.pipelines()).unwrap();
+    let host_bytes = host.flush_uploads().unwrap();
     assert_eq!(host_bytes, 6 * (MATRIX_BYTES as u64 + 4), "6 parts' worlds");
     drop((scene, host));
     assert_no_validation_errors(&device);
@@ -385,11 +384,10 @@ fn a_planned_pass_is_dropped_when_the_scene_is_uploaded_afresh() {
     // path (which uploads every matrix): the planned hierarchy pass must not run on what the
     // next upload holds.
     let device = test_device();
-    let renderer = Renderer::new(&device, 1, 1).unwrap();
     let mut assembly = Assembly::new();
     let mut tree = SceneTree::build(&mut assembly.graph);
     let mut scene = GpuScene::new(&device, &assembly.graph, &mut tree, Transforms::Gpu).unwrap();
-    scene.flush_uploads(renderer.pipelines()).unwrap();
+    scene.flush_uploads().unwrap();
     let moved = assembly.assemblies[1];
     let matrix = placement(0.3, 1.5, DVec3::new(FAR, 2.0, 0.0));
     assembly.graph.set_matrix(moved, matrix).unwrap();
@@ -400,7 +398,7 @@ fn a_planned_pass_is_dropped_when_the_scene_is_uploaded_afresh() {
     scene
         .sync(&assembly.graph, &mut tree, Transforms::Host)
         .unwrap();
-    scene.flush_uploads(renderer.pipelines()).unwrap();
+    scene.flush_uploads().unwrap();
     assert_eq!(scene.last_hierarchy(), None);
     check_gpu_worlds(&scene, &tree).unwrap();
     drop(scene);

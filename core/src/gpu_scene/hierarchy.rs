@@ -26,15 +26,25 @@ use std::sync::Arc;
 
 use glam::DMat4;
 
+use super::compute::{HierarchyParameters, HierarchyStage, ScenePipelines};
 use crate::error::RenderResult;
-use crate::render::{HierarchyParameters, HierarchyStage, Pipelines};
 use crate::tree::{BitSet, SceneTree};
 use crate::vk::raw as vk;
 use crate::vk::{memory_barrier, record_dispatch, Buffer, DescriptorSets, Device, MemoryLocation};
 
 use super::geometry::usage;
-use super::split_f64;
 use crate::commands_key::mix;
+use crate::render::split_f64;
+
+/// Where the world matrices of moved subtrees are computed.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Transforms {
+    /// On the host, in f64, and uploaded per changed slot: what techniques that read host
+    /// matrices need.
+    Host,
+    /// On the GPU (the transform hierarchy): a moved node uploads its local matrix only.
+    Gpu,
+}
 
 /// 32-bit words of one local matrix on the GPU: columns 0–2 as rotation and scale with the
 /// translation's low part in w, then the translation's high part.
@@ -276,7 +286,7 @@ impl TransformHierarchy {
     /// carries out, which [`TransformHierarchy::record`] records.
     pub(super) fn prepare(
         &mut self,
-        pipelines: &Pipelines,
+        pipelines: &ScenePipelines,
         updates: vk::Buffer,
         (first_word, local_count): (u32, u32),
         (locals, worlds): (vk::Buffer, vk::Buffer),
@@ -360,7 +370,7 @@ impl TransformHierarchy {
     /// Records the pass made ready (nothing when none is).
     pub(super) fn record(
         &self,
-        pipelines: &Pipelines,
+        pipelines: &ScenePipelines,
         command_buffer: vk::CommandBuffer,
     ) -> RenderResult<()> {
         let (Some(ready), Some(sets)) = (&self.ready, &self.sets) else {

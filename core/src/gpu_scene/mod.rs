@@ -13,12 +13,15 @@
 //! in place when it fits; only the touched instances' entries refreshed). Two scenes of one
 //! tree (two renderers) each see every change.
 
+mod compute;
 mod geometry;
 mod hierarchy;
 mod textures;
 mod upload;
 
-pub use hierarchy::{gpu_local, HierarchyMethod, HierarchyPlan, LOCAL_BYTES, LOCAL_WORDS};
+pub use hierarchy::{
+    gpu_local, HierarchyMethod, HierarchyPlan, Transforms, LOCAL_BYTES, LOCAL_WORDS,
+};
 pub use textures::{
     gpu_material_texture, TextureBindings, ARRAY_BUDGET_BYTES, MATERIAL_TEXTURE_BYTES,
     MAX_LAYER_SIZE, MAX_TABLE_SIDE, TABLE_BUDGET_BYTES,
@@ -35,11 +38,11 @@ use cadr_plugin_abi as abi;
 use glam::DMat4;
 
 use crate::graph::SceneGraph;
-use crate::render::Pipelines;
+use crate::render::split_f64;
 use crate::scene::Vertex;
-use crate::technique::Transforms;
 use crate::tree::{ChangeReader, InstanceRef, SceneTree, TreeChanges};
 use crate::vk::{Device, OneShot};
+pub use compute::{HierarchyParameters, HierarchyStage, ScatterParameters, ScenePipelines};
 use geometry::GeometryArenas;
 use hierarchy::TransformHierarchy;
 use textures::SceneTextures;
@@ -53,15 +56,6 @@ pub const MATERIAL_BYTES: usize = 32;
 pub const RECORD_BYTES: usize = 16;
 /// Bytes of one cull entry on the GPU ([`abi::CadrCullEntry`]).
 pub const CULL_ENTRY_BYTES: usize = 48;
-
-/// Splits f64 coordinates into an f32 high part and the f32 remainder: `high + low` equals the
-/// input to about 2^-48 of its size, and the shader subtracts the eye's parts separately so
-/// that positions relative to the eye keep that precision on the GPU.
-pub fn split_f64(v: glam::DVec3) -> ([f32; 3], [f32; 3]) {
-    let high = v.as_vec3();
-    let low = (v - high.as_dvec3()).as_vec3();
-    (high.to_array(), low.to_array())
-}
 
 /// A world matrix as the GPU holds it: rotation and scale in f32, the translation's high part
 /// in column 3 and its low part in the w of columns 0–2.
@@ -179,6 +173,8 @@ pub struct GpuScene {
     last_touched: u64,
     /// The buffers as techniques see them (with device addresses), refreshed when replaced.
     buffer_refs: [abi::CadrBufferRef; 7],
+    /// The scatter and transform hierarchy pipelines.
+    pipelines: ScenePipelines,
 }
 
 impl GpuScene {
@@ -217,6 +213,7 @@ impl GpuScene {
             locals: Vec::new(),
             frame_moved: Vec::new(),
             hierarchy: TransformHierarchy::new(device),
+            pipelines: ScenePipelines::new(device)?,
             last_hierarchy: None,
             matrix_gpu: GpuArray::new(device, "scene matrices", MATRIX_BYTES)?,
             material_gpu: GpuArray::new(device, "scene materials", MATERIAL_BYTES)?,
@@ -693,7 +690,7 @@ impl GpuScene {
     /// Gathers the pending uploads on the host and clears them, making their commands ready
     /// for [`GpuScene::record_uploads`]; returns the bytes sent and what those commands
     /// depend on (equal keys record equal commands, whatever the items moved).
-    pub(crate) fn prepare_uploads(&mut self, pipelines: &Pipelines) -> RenderResult<(u64, u64)> {
+    pub(crate) fn prepare_uploads(&mut self) -> RenderResult<(u64, u64)> {
         let matrices = &self.matrices;
         let materials = &self.materials;
         let matrix_bytes = |slot: u32, out: &mut [u8]| {
@@ -732,7 +729,7 @@ impl GpuScene {
         let ([matrix_count, material_count, _, record_count, _, local_count], first_words, bytes) =
             self.uploader.gather(
                 &self.device,
-                pipelines,
+                &self.pipelines,
                 [
                     (&mut self.matrix_gpu, &matrix_bytes),
                     (&mut self.material_gpu, &material_bytes),
@@ -745,7 +742,7 @@ impl GpuScene {
         self.frame_moved.clear();
         self.last_hierarchy = match self.uploader.updates() {
             Some(updates) if self.transforms == Transforms::Gpu => self.hierarchy.prepare(
-                pipelines,
+                &self.pipelines,
                 updates,
                 (first_words[5], local_count as u32),
                 (self.local_gpu.buffer.raw(), self.matrix_gpu.buffer.raw()),
@@ -771,25 +768,21 @@ impl GpuScene {
     /// Records the commands of the uploads [`GpuScene::prepare_uploads`] gathered: the scatter
     /// and the transform hierarchy's pass (before the frame's pass, whose first barrier makes
     /// their writes visible).
-    pub(crate) fn record_uploads(
-        &self,
-        pipelines: &Pipelines,
-        command_buffer: vk::CommandBuffer,
-    ) -> RenderResult<()> {
+    pub(crate) fn record_uploads(&self, command_buffer: vk::CommandBuffer) -> RenderResult<()> {
         self.uploader
-            .record(&self.device, pipelines, command_buffer)?;
+            .record(&self.device, &self.pipelines, command_buffer)?;
         if self.last_hierarchy.is_some() {
-            self.hierarchy.record(pipelines, command_buffer)?;
+            self.hierarchy.record(&self.pipelines, command_buffer)?;
         }
         Ok(())
     }
 
     /// Uploads what is pending now, outside a frame (one submission, waited for); returns the
     /// bytes sent. Frames upload by themselves; this serves measurements and tests.
-    pub fn flush_uploads(&mut self, pipelines: &Pipelines) -> RenderResult<u64> {
+    pub fn flush_uploads(&mut self) -> RenderResult<u64> {
         let mut one_shot = OneShot::begin(&self.device, "scene upload")?;
-        let (bytes, _) = self.prepare_uploads(pipelines)?;
-        self.record_uploads(pipelines, one_shot.command_buffer())?;
+        let (bytes, _) = self.prepare_uploads()?;
+        self.record_uploads(one_shot.command_buffer())?;
         one_shot.submit_and_wait()?;
         Ok(bytes)
     }

@@ -10,9 +10,9 @@ use crate::commands_key::mix;
 use crate::error::RenderResult;
 use crate::vk::raw as vk;
 
+use super::compute::{ScatterParameters, ScenePipelines};
 use super::geometry::usage;
 use super::hierarchy::MOVED_ROOT_MARK;
-use crate::render::{Pipelines, ScatterParameters};
 use crate::vk::{record_dispatch, Buffer, DescriptorSets, Device, MemoryLocation};
 
 /// One array of the GPU scene: fixed-size items in a device buffer, following a CPU copy.
@@ -195,7 +195,7 @@ impl SparseUploader {
     pub(super) fn gather(
         &mut self,
         device: &Arc<Device>,
-        pipelines: &Pipelines,
+        pipelines: &ScenePipelines,
         mut arrays: [ArrayItems<'_>; ARRAYS],
     ) -> RenderResult<([u64; ARRAYS], [u32; ARRAYS], u64)> {
         let mut counts = [0u64; ARRAYS];
@@ -268,7 +268,7 @@ impl SparseUploader {
     fn write_updates(
         &mut self,
         device: &Arc<Device>,
-        pipelines: &Pipelines,
+        pipelines: &ScenePipelines,
         arrays: &[ArrayItems<'_>; ARRAYS],
         gathered: &[u8],
     ) -> RenderResult<()> {
@@ -318,7 +318,7 @@ impl SparseUploader {
     pub(super) fn record(
         &self,
         device: &Device,
-        pipelines: &Pipelines,
+        pipelines: &ScenePipelines,
         command_buffer: vk::CommandBuffer,
     ) -> RenderResult<()> {
         let Some(sets) = &self.sets else {

@@ -137,9 +137,9 @@ fn encoded_bytes<'b>(
             )
         }
         gltf::image::Source::Uri { uri, .. } => {
-            let file = base_dir.join(super::gltf::percent_decode(uri));
+            let file = base_dir.join(super::gltf_files::percent_decode(uri));
             Cow::Owned(
-                super::gltf::read_buffer_file(&file, usize::MAX)
+                super::gltf_files::read_buffer_file(&file, usize::MAX)
                     .map_err(|e| format!("'{}' cannot be read: {e}", file.display()))?,
             )
         }

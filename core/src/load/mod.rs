@@ -4,6 +4,7 @@
 //! for a built-in generator (see [`crate::generate`]).
 
 mod gltf;
+mod gltf_files;
 mod gltf_textures;
 
 pub use self::gltf::load_gltf_bytes;

@@ -19,7 +19,27 @@ pub const DEFAULT_DIRECTION: DVec3 = DVec3::new(0.8, 0.7, 1.2);
 /// Vertical field of view of fitted cameras, in degrees.
 pub const DEFAULT_FOV_DEGREES: f64 = 40.0;
 
+/// Splits f64 coordinates into an f32 high part and the f32 remainder: `high + low` equals the
+/// input to about 2^-48 of its size, and the shader subtracts the eye's parts separately so
+/// that positions relative to the eye keep that precision on the GPU.
+pub fn split_f64(v: glam::DVec3) -> ([f32; 3], [f32; 3]) {
+    let high = v.as_vec3();
+    let low = (v - high.as_dvec3()).as_vec3();
+    (high.to_array(), low.to_array())
+}
+
 impl Camera {
+    /// World-space frustum planes (normals point inside; Vulkan depth 0..1).
+    pub fn frustum_planes(&self) -> [[f64; 4]; 6] {
+        let m: DMat4 = self.projection * self.view;
+        let (r0, r1, r2, r3) = (m.row(0), m.row(1), m.row(2), m.row(3));
+        [r3 + r0, r3 - r0, r3 + r1, r3 - r1, r2, r3 - r2].map(|p| {
+            let length = p.truncate().length();
+            let p = if length > 0.0 { p / length } else { p };
+            p.to_array()
+        })
+    }
+
     /// Where the eye is, in world space.
     pub fn eye(&self) -> DVec3 {
         self.view.inverse().w_axis.truncate()

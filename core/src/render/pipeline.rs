@@ -1,5 +1,6 @@
 //! Pipelines and their layouts: the per-frame descriptor set shared by every technique and the
-//! GPU scene's compute pipelines (the scatter of sparse uploads, the transform hierarchy).
+//! full-screen passes over the picture (background, outline, ambient occlusion, silhouettes,
+//! cap ties).
 
 use std::sync::{Arc, OnceLock};
 
@@ -9,7 +10,6 @@ use crate::vk::raw as vk;
 use crate::shaders::{self, ShaderSource};
 use crate::vk::{
     Blend, Capabilities, DescriptorSetLayout, Device, LayoutBinding, Pipeline, PipelineLayout,
-    ShaderModule,
 };
 
 /// Format of the pick target: one instance id (+1) per pixel.
@@ -70,50 +70,6 @@ pub const DISPLAY_NEAREST_SURFACES: u32 = 32;
 /// it).
 pub const DISPLAY_CAP_KEYS: u32 = 64;
 
-/// Push constants of `scatter.comp`: one dispatch scatters the items of one array.
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, bytemuck::Pod, bytemuck::Zeroable)]
-pub struct ScatterParameters {
-    /// Items in the dispatch.
-    pub item_count: u32,
-    /// 32-bit words per item, without its slot.
-    pub item_words: u32,
-    /// The index of the dispatch's first word in the update buffer.
-    pub first_word: u32,
-}
-
-/// The stages of `transforms.comp` (see `gpu_scene::hierarchy`).
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum HierarchyStage {
-    /// Moved roots mark themselves.
-    Stamp = 0,
-    /// Ranges of the roots not below another, laid end to end.
-    Roots = 1,
-    /// Every node multiplies the locals up to its root.
-    Leaves = 2,
-    /// The nodes one depth below their roots multiply their parent's world matrix.
-    Level = 3,
-}
-
-/// Push constants of `transforms.comp`.
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, bytemuck::Pod, bytemuck::Zeroable)]
-pub struct HierarchyParameters {
-    /// A [`HierarchyStage`].
-    pub stage: u32,
-    /// The index of the first local matrix's slot word in the update buffer.
-    pub first_word: u32,
-    /// Local matrices uploaded this frame (the moved roots among them are marked): the
-    /// entries of the roots list.
-    pub root_count: u32,
-    /// This frame's stamp (never 0).
-    pub stamp: u32,
-    /// Nodes in the moved ranges.
-    pub total: u32,
-    /// The depth below the roots a `Level` dispatch updates.
-    pub level: u32,
-}
-
 /// The frame set's bindings (see [`Pipelines::frame_set_layout`]) on a device with
 /// `capabilities`: the bindless texture table where it binds textures so
 /// ([`Capabilities::bindless_textures`]), the frame uniforms seen by geometry shaders where it
@@ -165,16 +121,6 @@ pub struct Pipelines {
     frame_set_layout: DescriptorSetLayout,
     /// Set 1 of the transparency merge: the method's targets as sampled images.
     merge_set_layout: DescriptorSetLayout,
-    /// The scatter pipeline's set: the compact updates and the array they go into.
-    scatter_set_layout: DescriptorSetLayout,
-    scatter_layout: PipelineLayout,
-    /// Made on first use (each pipeline costs a shader compile and, on lavapipe, a JIT compile
-    /// of 60–150 ms, so only what a renderer uses is made).
-    scatter: OnceLock<Pipeline>,
-    /// The transform hierarchy's set: updates, locals, nodes, order, stamps, roots, worlds.
-    hierarchy_set_layout: DescriptorSetLayout,
-    hierarchy_layout: PipelineLayout,
-    hierarchy: OnceLock<Pipeline>,
     /// The layout of the passes over the picture that read only the frame set.
     frame_overlay_layout: PipelineLayout,
     /// The background, made on first use.
@@ -208,26 +154,6 @@ impl Pipelines {
                 vk::DescriptorType::SAMPLED_IMAGE,
                 vk::ShaderStageFlags::FRAGMENT,
             ); 2],
-        )?;
-        let compute = vk::ShaderStageFlags::COMPUTE;
-        let compute_storage = (vk::DescriptorType::STORAGE_BUFFER, compute);
-        let scatter_set_layout =
-            DescriptorSetLayout::new(device, "scatter set layout", &[compute_storage; 2])?;
-        let scatter_layout = PipelineLayout::new(
-            device,
-            "scatter layout",
-            &[scatter_set_layout.raw()],
-            std::mem::size_of::<ScatterParameters>() as u32,
-            compute,
-        )?;
-        let hierarchy_set_layout =
-            DescriptorSetLayout::new(device, "hierarchy set layout", &[compute_storage; 7])?;
-        let hierarchy_layout = PipelineLayout::new(
-            device,
-            "hierarchy layout",
-            &[hierarchy_set_layout.raw()],
-            std::mem::size_of::<HierarchyParameters>() as u32,
-            compute,
         )?;
         let frame_overlay_layout = PipelineLayout::new(
             device,
@@ -263,12 +189,6 @@ impl Pipelines {
             outline: OnceLock::new(),
             frame_set_layout,
             merge_set_layout,
-            scatter_set_layout,
-            scatter_layout,
-            scatter: OnceLock::new(),
-            hierarchy_set_layout,
-            hierarchy_layout,
-            hierarchy: OnceLock::new(),
         })
     }
 
@@ -296,40 +216,6 @@ impl Pipelines {
     /// The layouts technique pipelines are built with: the frame set's and the merge's.
     pub fn technique_set_layouts(&self) -> (vk::DescriptorSetLayout, vk::DescriptorSetLayout) {
         (self.frame_set_layout.raw(), self.merge_set_layout.raw())
-    }
-
-    /// The scatter pipeline's set layout.
-    pub fn scatter_set_layout(&self) -> &DescriptorSetLayout {
-        &self.scatter_set_layout
-    }
-
-    /// The scatter pipeline's layout.
-    pub fn scatter_layout(&self) -> vk::PipelineLayout {
-        self.scatter_layout.raw()
-    }
-
-    /// The scatter compute pipeline.
-    pub fn scatter(&self) -> RenderResult<vk::Pipeline> {
-        self.compute(&self.scatter, &self.scatter_layout, &shaders::SCATTER_COMP)
-    }
-
-    /// The transform hierarchy's set layout.
-    pub fn hierarchy_set_layout(&self) -> &DescriptorSetLayout {
-        &self.hierarchy_set_layout
-    }
-
-    /// The transform hierarchy's pipeline layout.
-    pub fn hierarchy_layout(&self) -> vk::PipelineLayout {
-        self.hierarchy_layout.raw()
-    }
-
-    /// The transform hierarchy's compute pipeline.
-    pub fn hierarchy(&self) -> RenderResult<vk::Pipeline> {
-        self.compute(
-            &self.hierarchy,
-            &self.hierarchy_layout,
-            &shaders::TRANSFORMS_COMP,
-        )
     }
 
     /// The background: a full-screen triangle under what the picture leaves uncovered (its
@@ -404,8 +290,8 @@ impl Pipelines {
         if let Some(pipeline) = slot.get() {
             return Ok((pipeline.raw(), layout.raw()));
         }
-        let vertex = module(&self.device, &shaders::MERGE_VERT)?;
-        let fragment_module = module(&self.device, fragment)?;
+        let vertex = shaders::module(&self.device, &shaders::MERGE_VERT)?;
+        let fragment_module = shaders::module(&self.device, fragment)?;
         let made = Pipeline::fullscreen(
             &self.device,
             layout,
@@ -416,30 +302,4 @@ impl Pipelines {
         // Another thread may have made one meanwhile: the first is kept, `made` is dropped.
         Ok((slot.get_or_init(|| made).raw(), layout.raw()))
     }
-
-    /// The compute pipeline in `slot`, made from `shader` on first use.
-    fn compute(
-        &self,
-        slot: &OnceLock<Pipeline>,
-        layout: &PipelineLayout,
-        shader: &ShaderSource,
-    ) -> RenderResult<vk::Pipeline> {
-        if let Some(pipeline) = slot.get() {
-            return Ok(pipeline.raw());
-        }
-        let module = module(&self.device, shader)?;
-        let made = Pipeline::compute(&self.device, layout, &module, shader.name)?;
-        // Another thread may have made one meanwhile: the first is kept, `made` is dropped.
-        Ok(slot.get_or_init(|| made).raw())
-    }
-}
-
-fn module(device: &Arc<Device>, shader: &ShaderSource) -> RenderResult<ShaderModule> {
-    let words = shaders::compile_glsl(shader.name, shader.source, shader.stage, shaders::INCLUDES)?;
-    Ok(ShaderModule::from_spirv(
-        device,
-        shader.name,
-        &words,
-        shader.stage,
-    )?)
 }

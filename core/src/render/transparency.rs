@@ -6,9 +6,66 @@
 use std::sync::Arc;
 
 use crate::error::RenderResult;
-use crate::technique::TransparencyMethod;
+use crate::shaders;
 use crate::vk::raw as vk;
 use crate::vk::{Buffer, DescriptorSetLayout, DescriptorSets, Device, Image, MemoryLocation};
+use cadr_plugin_abi as abi;
+
+/// A transparency method as its technique described it (`CadrTransparencyMethod`), owned.
+#[derive(Clone, Debug, PartialEq)]
+pub struct TransparencyMethod {
+    /// The technique's name (shaders are compiled once per method).
+    pub name: String,
+    /// Its colour targets.
+    pub targets: Vec<abi::CadrTransparencyTarget>,
+    /// Storage words at the start, zeroed every frame.
+    pub storage_header_words: u32,
+    /// Storage words per pixel.
+    pub storage_words_per_pixel: u32,
+    /// Of those, zeroed every frame.
+    pub storage_cleared_words_per_pixel: u32,
+    /// Defines `cadr_transparent_fragment`.
+    pub fragment_snippet: String,
+    /// Defines `cadr_merge`.
+    pub merge_snippet: String,
+}
+
+impl TransparencyMethod {
+    /// `template` with the method's declarations, the device's `defines` and `snippet`
+    /// pasted in.
+    pub(crate) fn assemble(
+        &self,
+        template: &shaders::ShaderSource,
+        snippet: &str,
+        defines: &str,
+    ) -> String {
+        let mut defines = format!(
+            "{defines}#define CADR_TARGET_COUNT {}\n",
+            self.targets.len()
+        );
+        if self.storage_words_per_pixel > 0 || self.storage_header_words > 0 {
+            defines.push_str("#define CADR_STORAGE\n");
+        }
+        shaders::with_defines(template.source, &defines)
+            .replace(shaders::TRANSPARENCY_MARKER, snippet)
+    }
+
+    /// Bytes of storage for `pixels`, and of those the bytes zeroed every frame.
+    pub fn storage_bytes(&self, pixels: u64) -> (u64, u64) {
+        let header = u64::from(self.storage_header_words);
+        let total = header + u64::from(self.storage_words_per_pixel) * pixels;
+        let cleared = header + u64::from(self.storage_cleared_words_per_pixel) * pixels;
+        (total * 4, cleared.min(total) * 4)
+    }
+
+    /// The targets' formats.
+    pub fn target_formats(&self) -> Vec<vk::Format> {
+        self.targets
+            .iter()
+            .map(|t| vk::Format::from_raw(t.format))
+            .collect()
+    }
+}
 
 /// The smallest storage buffer: what binding 1 of the frame set holds when no method needs
 /// storage (a binding must name a buffer).

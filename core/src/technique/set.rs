@@ -12,9 +12,10 @@ use cadr_plugin_abi as abi;
 use super::host_api::{AllocationCounts, HostServices};
 use super::pipeline::{
     assemble_vertex_shader, PassSet, PipelineInputs, ShadeMode, ShaderCache, TechniquePipelines,
-    TransparencyMethod,
 };
 use super::registry::{feature_bits, PluginRegistry, TechniqueEntry, TechniqueKind};
+use crate::gpu_scene::Transforms;
+use crate::render::TransparencyMethod;
 use crate::vk::{Device, COLOR_FORMAT, DEPTH_FORMAT};
 
 /// Technique names, one per kind.
@@ -110,16 +111,6 @@ fn trait_name(bit: u64) -> &'static str {
         abi::CADR_TRAIT_READS_HOST_MATRICES => "a technique that reads world matrices on the host",
         _ => "an unknown trait",
     }
-}
-
-/// Where the world matrices of moved subtrees are computed.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Transforms {
-    /// On the host, in f64, and uploaded per changed slot: what techniques that read host
-    /// matrices need.
-    Host,
-    /// On the GPU (the transform hierarchy): a moved node uploads its local matrix only.
-    Gpu,
 }
 
 /// Why a combination cannot work, or `Ok` when it can.
@@ -406,7 +397,12 @@ impl Techniques {
 
     /// Whether the active culler culls on the GPU (and so applies the sub-pixel threshold).
     pub fn culls_on_gpu(&self) -> bool {
-        super::gpu_cull::GpuCuller::is_active(self)
+        self.get(TechniqueKind::Culling).is_ok_and(|active| {
+            active
+                .vtable::<abi::CadrCullingVtable>()
+                .record_gpu
+                .is_some()
+        })
     }
 
     /// Sets the sub-pixel culling threshold in pixels (0 turns it off). It applies to GPU

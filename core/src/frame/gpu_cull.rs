@@ -9,11 +9,8 @@ use crate::error::RenderResult;
 use crate::vk::raw::{self as vk, Handle};
 use cadr_plugin_abi as abi;
 
-use super::pipeline::PassFilters;
-use super::registry::TechniqueKind;
-use super::set::{status, Active, Message, Techniques};
-use crate::gpu_scene::split_f64;
-use crate::render::{Camera, Section};
+use crate::render::{split_f64, Camera, Section};
+use crate::technique::{status, Active, Message, PassFilters, TechniqueKind, Techniques};
 
 /// The active GPU culler of a frame and the draw sources it wrote for the current phase.
 pub(crate) struct GpuCuller<'a> {
@@ -44,7 +41,7 @@ pub(crate) fn cull_view(
 ) -> abi::CadrGpuCullView {
     let eye = camera.eye();
     let (high, low) = split_f64(eye);
-    let planes = super::frame::frustum_planes(camera).map(|[x, y, z, d]| {
+    let planes = camera.frustum_planes().map(|[x, y, z, d]| {
         let shifted = d + x * eye.x + y * eye.y + z * eye.z;
         [x as f32, y as f32, z as f32, shifted as f32]
     });
@@ -121,15 +118,6 @@ impl<'a> GpuCuller<'a> {
     }
 
     /// Whether the active culler culls on the GPU.
-    pub(crate) fn is_active(techniques: &Techniques) -> bool {
-        techniques.get(TechniqueKind::Culling).is_ok_and(|active| {
-            active
-                .vtable::<abi::CadrCullingVtable>()
-                .record_gpu
-                .is_some()
-        })
-    }
-
     /// Records `phase` of the culling into `command_buffer` (outside rendering), for `passes`
     /// with their filters (one each).
     #[allow(clippy::too_many_arguments)]

@@ -12,30 +12,16 @@ use crate::commands_key::mix;
 use crate::error::{RenderError, RenderResult};
 use crate::vk::raw::{self as vk, Handle};
 use cadr_plugin_abi as abi;
-use glam::DMat4;
 
 use super::gpu_cull::{cull_view, cull_view_bytes, GpuCuller, PhaseDepth};
-use super::pipeline::{PassSet, ShadeMode};
-use super::registry::{announces, TechniqueKind};
-use super::set::{status, Message, Techniques};
 use crate::gpu_scene::GpuScene;
 use crate::render::pick::{PickSample, PixelRect};
-use crate::render::{
-    Camera, FramePlan, FrameRecorders, FrameStats, PassTarget, Renderer, Section,
-    MAX_SECTION_PLANES, SUSPENDED_DEPTH_LAYOUT,
-};
-use crate::vk::memory_barrier;
+use crate::render::{Camera, FrameStats, Section, MAX_SECTION_PLANES};
+use crate::technique::{announces, status, Message, PassSet, ShadeMode, TechniqueKind, Techniques};
+use crate::vk::{memory_barrier, SUSPENDED_DEPTH_LAYOUT};
 
-/// World-space frustum planes of `camera` (normals point inside; Vulkan depth 0..1).
-pub fn frustum_planes(camera: &Camera) -> [[f64; 4]; 6] {
-    let m: DMat4 = camera.projection * camera.view;
-    let (r0, r1, r2, r3) = (m.row(0), m.row(1), m.row(2), m.row(3));
-    [r3 + r0, r3 - r0, r3 + r1, r3 - r1, r2, r3 - r2].map(|p| {
-        let length = p.truncate().length();
-        let p = if length > 0.0 { p / length } else { p };
-        p.to_array()
-    })
-}
+use super::record::{FramePlan, FrameRecorders, PassTarget};
+use super::Renderer;
 
 impl Renderer {
     /// Renders one frame of `scene` with the active techniques and reports its cost. The CPU
@@ -239,23 +225,18 @@ impl Renderer {
                 depth,
             )
         };
-        let mut gather_uploads =
-            |renderer: &Renderer, stats: &mut FrameStats| -> RenderResult<u64> {
-                let mut guard = shared.borrow_mut();
-                let (bytes, key) = guard.0.prepare_uploads(renderer.pipelines())?;
-                stats.bytes_uploaded = bytes;
-                Ok(key)
-            };
-        let mut uploads = |renderer: &Renderer,
-                           command_buffer: vk::CommandBuffer,
-                           _: u32,
-                           _: &mut FrameStats|
-         -> RenderResult<()> {
-            shared
-                .borrow()
-                .0
-                .record_uploads(renderer.pipelines(), command_buffer)
+        let mut gather_uploads = |stats: &mut FrameStats| -> RenderResult<u64> {
+            let mut guard = shared.borrow_mut();
+            let (bytes, key) = guard.0.prepare_uploads()?;
+            stats.bytes_uploaded = bytes;
+            Ok(key)
         };
+        let mut uploads =
+            |_: &Renderer,
+             command_buffer: vk::CommandBuffer,
+             _: u32,
+             _: &mut FrameStats|
+             -> RenderResult<()> { shared.borrow().0.record_uploads(command_buffer) };
         let mut before = |renderer: &Renderer,
                           command_buffer: vk::CommandBuffer,
                           _: u32,
@@ -530,7 +511,7 @@ fn cull(
     camera: &Camera,
     section: &Section,
 ) -> RenderResult<()> {
-    if GpuCuller::is_active(techniques) {
+    if techniques.culls_on_gpu() {
         // The GPU decides: every candidate stays in the drawn set (once per culler and
         // scene layout, so a moving camera costs the CPU nothing here).
         let key = mix(techniques.epoch, scene.view().buffers_generation);
@@ -542,7 +523,7 @@ fn cull(
         }
         return Ok(());
     }
-    let planes = frustum_planes(camera);
+    let planes = camera.frustum_planes();
     let mut section_planes = [[0.0; 4]; MAX_SECTION_PLANES];
     for (slot, plane) in section_planes.iter_mut().zip(section.planes()) {
         *slot = plane.to_array();

@@ -1,0 +1,543 @@
+//! The frame: a [`Renderer`] (an offscreen target, the frame uniforms and set, command
+//! buffers, timers, frames in flight and the settings a host changes between frames) and the
+//! frames drawn into it. `techniques.rs` plans a frame of the GPU scene with the active
+//! techniques (`Renderer::render_techniques`, `Renderer::pick_techniques`): CPU culling, the
+//! pass set, uploads, the recorders each technique contributes; `gpu_cull.rs` drives a GPU
+//! culler's phases; `record.rs` records and submits the plan (or replays an unchanged frame's
+//! recording) with the passes over the picture; `output.rs` reads the image back and writes
+//! PNGs. The pieces it draws with (camera, sections, targets, pipelines over the picture)
+//! are in [`crate::render`].
+
+mod gpu_cull;
+mod output;
+mod record;
+mod techniques;
+
+pub use output::SaveError;
+pub use record::MAX_FRAMES_IN_FLIGHT;
+
+use std::sync::Arc;
+
+use crate::error::{RenderError, RenderResult};
+use crate::vk::raw as vk;
+
+use crate::gpu_scene::{FrameResources, TextureBindings};
+use crate::render::pick::{self, PickTarget, PixelRect};
+use crate::render::pixel_keys::PixelKeys;
+use crate::render::transparency::{storage_buffer, TransparencyTargets};
+use crate::render::{
+    Background, FrameStats, FrameUniforms, HighlightStyle, Palette, Pipelines, Section,
+    TEXTURE_TABLE_BINDING,
+};
+use crate::vk::{
+    Buffer, CommandContext, DescriptorSets, Device, GpuTimer, Image, MemoryLocation,
+    OffscreenTarget,
+};
+
+/// Renders scenes into an offscreen color + depth target.
+pub struct Renderer {
+    device: Arc<Device>,
+    target: OffscreenTarget,
+    frame_uniforms: Buffer,
+    pipelines: Pipelines,
+    frame_sets: DescriptorSets,
+    /// What GPU cullers read of the view (`CadrGpuCullView`), host-written every frame.
+    cull_view: Buffer,
+    commands: CommandContext,
+    /// The GPU time of a frame's pass (the main command buffer).
+    timer: Option<GpuTimer>,
+    /// The GPU time of a frame's uploads (the prologue submitted ahead of the main buffer).
+    upload_timer: Option<GpuTimer>,
+    /// Whether the last submission carried an upload prologue (its GPU time is the frame's
+    /// too).
+    last_submission_uploaded: bool,
+    /// The id target and its readback, created on the first pick.
+    pick: Option<PickTarget>,
+    /// The replay key of the last recorded frame, if it had one.
+    last_recorded: Option<u64>,
+    /// The frame in the command buffer, if it may be submitted again as it is: its replay
+    /// key and what it drew.
+    replayable: Option<(u64, FrameStats)>,
+    /// Frames the GPU may work on while the CPU prepares the next (see
+    /// [`Renderer::set_frames_in_flight`]).
+    frames_in_flight: u32,
+    /// The section planes and caps every pass applies.
+    section: Section,
+    /// What the transparency method of the last frame with translucent surfaces drew into.
+    transparency: Option<TransparencyTargets>,
+    /// The storage the frame set names while no method's storage is made.
+    placeholder_storage: Buffer,
+    /// The background every picture is drawn over.
+    background: Background,
+    /// The colours of edge lines and highlights.
+    palette: Palette,
+    /// Whether frames that fill surfaces get screen-space ambient occlusion.
+    ssao: bool,
+    /// Whether the edge display modes draw silhouette edges with the feature edges.
+    silhouettes: bool,
+    /// The set naming the target's depth for the passes over the picture that read it
+    /// (ambient occlusion, silhouettes); made on first use, dropped when the target is remade.
+    depth_set: Option<DescriptorSets>,
+    /// Whether materials' textures are sampled (vertex colours apply either way).
+    textures: bool,
+    /// How highlighted parts are drawn.
+    highlight_style: HighlightStyle,
+    /// The pixel keys at the target's size (made by the first frame that needs them: with the
+    /// outline style, the silhouettes' nearest surfaces or the cap keys), which binding 7 of
+    /// the frame set names; otherwise the placeholder storage is named there.
+    pixel_keys: Option<PixelKeys>,
+    /// The generation of the GPU scene resources the frame set names, if any.
+    bound_scene: Option<u64>,
+}
+
+impl Renderer {
+    /// Creates a renderer with a `width` × `height` target.
+    pub fn new(device: &Arc<Device>, width: u32, height: u32) -> RenderResult<Self> {
+        let target = OffscreenTarget::new(device, width, height, 1)?;
+        let frame_uniforms = Buffer::new(
+            device,
+            "frame uniforms",
+            std::mem::size_of::<FrameUniforms>() as u64,
+            vk::BufferUsageFlags::UNIFORM_BUFFER,
+            MemoryLocation::CpuToGpu,
+        )?;
+        let pipelines = Pipelines::new(device)?;
+        let frame_sets = DescriptorSets::new(device, "frame", &[pipelines.frame_set_layout()])?;
+        frame_sets.write_buffer(
+            0,
+            0,
+            vk::DescriptorType::UNIFORM_BUFFER,
+            frame_uniforms.raw(),
+            vk::WHOLE_SIZE,
+        );
+        let placeholder_storage = storage_buffer(device, 0)?;
+        name_storage(&frame_sets, &placeholder_storage);
+        name_pixel_keys(&frame_sets, &placeholder_storage);
+        let cull_view = Buffer::new(
+            device,
+            "gpu cull view",
+            std::mem::size_of::<cadr_plugin_abi::CadrGpuCullView>() as u64,
+            vk::BufferUsageFlags::UNIFORM_BUFFER,
+            MemoryLocation::CpuToGpu,
+        )?;
+        let commands = CommandContext::new(device, "frame commands")?;
+        let timer = GpuTimer::new(device, "frame timer")?;
+        let upload_timer = GpuTimer::new(device, "frame upload timer")?;
+        Ok(Self {
+            device: Arc::clone(device),
+            target,
+            frame_uniforms,
+            pipelines,
+            frame_sets,
+            cull_view,
+            commands,
+            timer,
+            upload_timer,
+            last_submission_uploaded: false,
+            pick: None,
+            last_recorded: None,
+            replayable: None,
+            frames_in_flight: 1,
+            section: Section::none(),
+            transparency: None,
+            placeholder_storage,
+            textures: true,
+            highlight_style: HighlightStyle::default(),
+            pixel_keys: None,
+            bound_scene: None,
+            background: Background::default(),
+            palette: Palette::default(),
+            ssao: false,
+            silhouettes: true,
+            depth_set: None,
+        })
+    }
+
+    /// The background pictures are drawn over ([`Background::GRADIENT`] by default).
+    pub fn background(&self) -> Background {
+        self.background
+    }
+
+    /// Sets the background; the next frame draws it (through the frame's uniforms, so a
+    /// recorded frame replays with it).
+    pub fn set_background(&mut self, background: Background) -> RenderResult<()> {
+        background.validate().map_err(RenderError::InvalidUse)?;
+        self.background = background;
+        Ok(())
+    }
+
+    /// The colours of edge lines and highlights and the outline band's width
+    /// ([`Palette::DEFAULT`] by default).
+    pub fn palette(&self) -> Palette {
+        self.palette
+    }
+
+    /// Sets the colours of edge lines and highlights and the outline band's width; the next
+    /// frame draws with them (through the frame's uniforms, so a recorded frame replays with
+    /// them). Refuses colours outside 0..1 and widths outside 1 to
+    /// [`Palette::MAX_OUTLINE_WIDTH`], keeping the palette it had.
+    pub fn set_palette(&mut self, palette: Palette) -> RenderResult<()> {
+        palette.validate().map_err(RenderError::InvalidUse)?;
+        self.palette = palette;
+        Ok(())
+    }
+
+    /// Whether frames that fill surfaces (solid, edges, X-ray) get screen-space ambient
+    /// occlusion: creases, corners and gaps between parts darkened from the depth (off by
+    /// default).
+    pub fn ssao(&self) -> bool {
+        self.ssao
+    }
+
+    /// Turns screen-space ambient occlusion on or off (see [`Renderer::ssao`]); the next frame
+    /// draws with it.
+    pub fn set_ssao(&mut self, on: bool) -> RenderResult<()> {
+        if on != self.ssao {
+            self.commands.wait()?;
+            // The recorded frame has (or lacks) the occlusion pass.
+            self.forget_recording();
+            self.ssao = on;
+        }
+        Ok(())
+    }
+
+    /// Whether the display modes that draw feature edges (edges, hidden-line, X-ray) draw
+    /// silhouette edges with them: the outlines of curved surfaces where the depth breaks,
+    /// which no feature edge marks (on by default), in the edge lines' colour, or a
+    /// highlighted part's in the highlight's line colour as its edges. X-ray finds them in the
+    /// nearest surfaces its surfaces record, and the highlight's colour is found there too,
+    /// which needs the device's `fragmentStoresAndAtomics`: without it, X-ray draws none and
+    /// the others draw every silhouette in the edge lines' colour.
+    pub fn silhouettes(&self) -> bool {
+        self.silhouettes
+    }
+
+    /// Turns silhouette edges on or off (see [`Renderer::silhouettes`]); the next frame
+    /// draws with it.
+    pub fn set_silhouettes(&mut self, on: bool) -> RenderResult<()> {
+        if on != self.silhouettes {
+            self.commands.wait()?;
+            // The recorded frame has (or lacks) the silhouettes pass.
+            self.forget_recording();
+            self.silhouettes = on;
+        }
+        Ok(())
+    }
+
+    /// How highlighted parts are drawn ([`HighlightStyle::Tint`] by default).
+    pub fn highlight_style(&self) -> HighlightStyle {
+        self.highlight_style
+    }
+
+    /// Sets how highlighted parts are drawn; the next frame draws so. The outline style is
+    /// refused on a device without `fragmentStoresAndAtomics` (its surfaces record the
+    /// outline keys from their fragment shaders).
+    pub fn set_highlight_style(&mut self, style: HighlightStyle) -> RenderResult<()> {
+        if style == HighlightStyle::Outline
+            && !self.device.capabilities().fragment_stores_and_atomics
+        {
+            return Err(RenderError::InvalidUse(format!(
+                "the outline highlight style needs fragmentStoresAndAtomics, which {} lacks",
+                self.device.adapter().name
+            )));
+        }
+        if style != self.highlight_style {
+            self.commands.wait()?;
+            // The recorded frame has (or lacks) the outline's clear and pass.
+            self.forget_recording();
+            self.highlight_style = style;
+            self.drop_pixel_keys();
+        }
+        Ok(())
+    }
+
+    /// Whether materials' textures are sampled (on by default). Vertex colours apply either way.
+    pub fn textures(&self) -> bool {
+        self.textures
+    }
+
+    /// Turns the sampling of materials' textures on or off (`cadr render --no-textures`); the
+    /// next frame draws with it (it reaches the shaders through the frame uniforms, so a
+    /// replayed frame follows too). A BLEND material that is translucent only through its
+    /// texture still goes through the translucent pass, where it comes out opaque.
+    pub fn set_textures(&mut self, on: bool) {
+        self.textures = on;
+    }
+
+    /// Points the frame set's scene bindings (2–6, 8 and the texture table 9) at `resources`
+    /// unless it names them already. A recorded frame names the old ones: the GPU is waited
+    /// for and the recording forgotten.
+    pub(crate) fn bind_scene(&mut self, resources: &FrameResources) -> RenderResult<()> {
+        if self.bound_scene == Some(resources.generation) {
+            return Ok(());
+        }
+        self.finish()?;
+        self.forget_recording();
+        let storage = vk::DescriptorType::STORAGE_BUFFER;
+        let sets = &self.frame_sets;
+        sets.write_buffer(0, 2, storage, resources.records, vk::WHOLE_SIZE);
+        sets.write_buffer(0, 3, storage, resources.material_textures, vk::WHOLE_SIZE);
+        sets.write_buffer(0, 4, storage, resources.vertex_attributes, vk::WHOLE_SIZE);
+        match resources.textures {
+            TextureBindings::Array(view) => {
+                sets.write_combined_image(0, 5, view, resources.linear_sampler);
+                sets.write_combined_image(0, 6, view, resources.nearest_sampler);
+            }
+            TextureBindings::Table(views) => {
+                sets.write_sampler(0, 5, resources.linear_sampler);
+                sets.write_sampler(0, 6, resources.nearest_sampler);
+                // Runs of filled slots, one write each; empty slots stay unwritten (the
+                // table is partially bound, and no material names them).
+                let mut first = 0;
+                for run in views.split(|view| *view == vk::ImageView::null()) {
+                    sets.write_sampled_images(0, TEXTURE_TABLE_BINDING, first, run);
+                    first += run.len() as u32 + 1;
+                }
+            }
+        }
+        sets.write_buffer(0, 8, storage, resources.cull_entries, vk::WHOLE_SIZE);
+        self.bound_scene = Some(resources.generation);
+        Ok(())
+    }
+
+    /// Forgets the frame in the command buffer: the next frame is recorded afresh, whatever
+    /// its replay key (it would draw what no longer holds: other passes, bindings or targets).
+    fn forget_recording(&mut self) {
+        self.replayable = None;
+        self.last_recorded = None;
+    }
+
+    /// The depth set of the passes over the picture for the current target (the GPU is
+    /// idle: the caller waited for the last frame).
+    fn ensure_depth_set(&mut self) -> RenderResult<vk::DescriptorSet> {
+        if self.depth_set.is_none() {
+            let sets = DescriptorSets::new(
+                &self.device,
+                "picture depth",
+                &[self.pipelines.depth_set_layout()],
+            )?;
+            sets.write_sampled_image(0, 0, self.target.depth.view());
+            self.depth_set = Some(sets);
+        }
+        Ok(self
+            .depth_set
+            .as_ref()
+            .map_or(vk::DescriptorSet::null(), |s| s.sets[0]))
+    }
+
+    /// The section planes and caps (none by default).
+    pub fn section(&self) -> &Section {
+        &self.section
+    }
+
+    /// Sets the section planes and caps; the next frame applies them (a recorded frame may be
+    /// replayed: they reach the GPU through the frame's uniforms).
+    pub fn set_section(&mut self, section: Section) {
+        self.section = section;
+    }
+
+    /// The device.
+    pub fn device(&self) -> &Arc<Device> {
+        &self.device
+    }
+
+    /// The pipelines (to create resident scenes with).
+    pub fn pipelines(&self) -> &Pipelines {
+        &self.pipelines
+    }
+
+    /// Width and height of the target.
+    pub fn size(&self) -> (u32, u32) {
+        let extent = self.target.extent();
+        (extent.width, extent.height)
+    }
+
+    /// Gives the target a new size (a window was resized); the next frame draws at that size.
+    pub fn resize(&mut self, width: u32, height: u32) -> RenderResult<()> {
+        if (width, height) == self.size() {
+            return Ok(());
+        }
+        self.commands.wait()?;
+        // The recorded frame draws into the old target: never submit it again.
+        self.forget_recording();
+        self.target = OffscreenTarget::new(&self.device, width, height, self.msaa())?;
+        self.depth_set = None;
+        self.pick = None;
+        self.drop_transparency_targets();
+        self.drop_pixel_keys();
+        Ok(())
+    }
+
+    /// Samples per pixel of the colour pass: 1 (the default) draws one, 2, 4 or 8 anti-alias
+    /// edges (MSAA), resolved into the picture at the end of the pass. The pick pass always
+    /// draws one sample, so picking stays exact.
+    pub fn msaa(&self) -> u32 {
+        self.target.samples()
+    }
+
+    /// Sets the samples per pixel of the colour pass (see [`Renderer::msaa`]); the next frame
+    /// draws with them. A count the device does not offer for colour and depth attachments
+    /// ([`Device::sample_counts`]) is refused with the counts it offers.
+    pub fn set_msaa(&mut self, samples: u32) -> RenderResult<()> {
+        if samples == self.msaa() {
+            return Ok(());
+        }
+        let offered = self.device.sample_counts();
+        if !offered.contains(&samples) {
+            let offered: Vec<String> = offered.iter().map(u32::to_string).collect();
+            return Err(RenderError::InvalidUse(format!(
+                "MSAA {samples}x: {} offers {} samples per pixel",
+                self.device.adapter().name,
+                offered.join(", ")
+            )));
+        }
+        // Not only this renderer's frames use the target: a window's present blits from it.
+        self.device.wait_idle()?;
+        // The recorded frame draws into the old target: never submit it again.
+        self.forget_recording();
+        let (width, height) = self.size();
+        self.target = OffscreenTarget::new(&self.device, width, height, samples)?;
+        self.depth_set = None;
+        self.pick = None;
+        self.drop_transparency_targets();
+        Ok(())
+    }
+
+    /// How many frames the GPU may have: 1 (the default) waits for each frame before
+    /// returning from it, so its GPU time is known and its picture ready; 2 returns as soon as
+    /// the frame is submitted and waits for it when the next frame begins (or when its picture
+    /// or pick is read), so the host's work, scene updates and CPU culling for the next frame
+    /// overlap the GPU's drawing. With 2, [`FrameStats::gpu_us`] is the previous frame's.
+    pub fn set_frames_in_flight(&mut self, frames: u32) -> RenderResult<()> {
+        if !(1..=MAX_FRAMES_IN_FLIGHT).contains(&frames) {
+            return Err(RenderError::InvalidUse(format!(
+                "{frames} frames in flight: expected 1 to {MAX_FRAMES_IN_FLIGHT}"
+            )));
+        }
+        if frames == 1 {
+            self.finish()?;
+        }
+        self.frames_in_flight = frames;
+        Ok(())
+    }
+
+    /// How many frames the GPU may have (see [`Renderer::set_frames_in_flight`]).
+    pub fn frames_in_flight(&self) -> u32 {
+        self.frames_in_flight
+    }
+
+    /// Waits until the GPU has finished the last frame (its picture, pick results and
+    /// buffers are then the host's to read or change).
+    pub fn finish(&self) -> RenderResult<()> {
+        Ok(self.commands.wait()?)
+    }
+
+    /// The color image of the last frame (in TRANSFER_SRC_OPTIMAL between frames), for
+    /// presenting it.
+    pub fn color_image(&self) -> &Image {
+        &self.target.color
+    }
+
+    /// Makes the pick target ready to read back `rect` (inside the target) after the next pick
+    /// pass.
+    pub(crate) fn prepare_pick(&mut self, rect: PixelRect) -> RenderResult<()> {
+        let (width, height) = self.size();
+        if rect.width == 0
+            || rect.height == 0
+            || u64::from(rect.x) + u64::from(rect.width) > u64::from(width)
+            || u64::from(rect.y) + u64::from(rect.height) > u64::from(height)
+        {
+            return Err(RenderError::InvalidUse(format!(
+                "pixels {rect} are not inside the {width}x{height} target"
+            )));
+        }
+        match &mut self.pick {
+            Some(target) => target.prepare(rect),
+            None => {
+                self.pick = Some(PickTarget::new(&self.device, self.target.extent(), rect)?);
+                Ok(())
+            }
+        }
+    }
+
+    /// Records the copy of the prepared rectangle's ids and depths (after the pick pass).
+    pub(crate) fn record_pick_readback(&self, command_buffer: vk::CommandBuffer) {
+        if let Some(target) = &self.pick {
+            target.record_readback(&self.device, command_buffer, &self.target.depth);
+        }
+    }
+
+    /// The prepared rectangle's samples from the last pick pass: the pixels covered by a
+    /// pickable instance.
+    pub(crate) fn pick_samples(&self) -> RenderResult<Vec<pick::PickSample>> {
+        self.finish()?;
+        match &self.pick {
+            Some(target) => target.samples(),
+            None => Ok(Vec::new()),
+        }
+    }
+
+    /// The buffer GPU cullers read the view from (`CadrGpuCullView` at offset 0).
+    pub(crate) fn cull_view_buffer(&self) -> vk::Buffer {
+        self.cull_view.raw()
+    }
+
+    /// Forgets the pixel keys; the frame set names the placeholder storage there again.
+    fn drop_pixel_keys(&mut self) {
+        if self.pixel_keys.take().is_some() {
+            name_pixel_keys(&self.frame_sets, &self.placeholder_storage);
+        }
+    }
+
+    /// Forgets the transparency targets; the frame set names the placeholder storage again.
+    fn drop_transparency_targets(&mut self) {
+        if self.transparency.take().is_some() {
+            name_storage(&self.frame_sets, &self.placeholder_storage);
+        }
+    }
+
+    /// The frame uniforms' descriptor set (set 0 of every pipeline).
+    pub(crate) fn frame_set(&self) -> vk::DescriptorSet {
+        self.frame_sets.sets[0]
+    }
+
+    /// The frame's depth image, as a later phase reads it (in [`SUSPENDED_DEPTH_LAYOUT`]).
+    pub(crate) fn depth_image(&self) -> &Image {
+        &self.target.depth
+    }
+}
+
+/// Points the frame set's binding 1 at `storage`, the transparency method's storage (the
+/// caller makes sure no submitted frame uses the set).
+fn name_storage(frame_sets: &DescriptorSets, storage: &Buffer) {
+    frame_sets.write_buffer(
+        0,
+        1,
+        vk::DescriptorType::STORAGE_BUFFER,
+        storage.raw(),
+        vk::WHOLE_SIZE,
+    );
+}
+
+/// Names `storage` as the pixel keys (binding 7 of the frame set).
+fn name_pixel_keys(frame_sets: &DescriptorSets, storage: &Buffer) {
+    frame_sets.write_buffer(
+        0,
+        7,
+        vk::DescriptorType::STORAGE_BUFFER,
+        storage.raw(),
+        vk::WHOLE_SIZE,
+    );
+}
+
+impl Drop for Renderer {
+    fn drop(&mut self) {
+        // Resources are destroyed by their own Drop; make sure the GPU is done with them.
+        let _ = self.commands.wait();
+    }
+}
+
+/// A background colour as the uniforms carry it.
+fn opaque(color: [f32; 3]) -> [f32; 4] {
+    [color[0], color[1], color[2], 1.0]
+}

@@ -21,7 +21,7 @@ pub struct ScatterParameters {
     pub first_word: u32,
 }
 
-/// The stages of `transforms.comp` (see [`super::hierarchy`]).
+/// The stages of `transforms.comp` (see `gpu_scene/hierarchy.rs`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum HierarchyStage {
     /// Moved roots mark themselves.

@@ -205,7 +205,7 @@ impl PassScope {
 }
 
 /// The instances each pass of a frame needs, one filter and one exclusion per pass, in the
-/// order of [`TechniquePipelines::passes`] (see [`PassScope::filter`]).
+/// order of `TechniquePipelines::passes` (see `PassScope::filter`).
 #[derive(Clone, Debug, Default)]
 pub struct PassFilters {
     /// What each pass keeps.

@@ -101,6 +101,24 @@ if ! command -v cargo >/dev/null 2>&1; then
   exit 1
 fi
 
+# The toolchain rust-toolchain.toml pins. Where rustup lacks it but its stable toolchain is that
+# very release (a machine that cannot download toolchains), stable is made to answer to the
+# pinned name as well (rustup refuses to `link` a custom toolchain under a release's name, so
+# the link is made in rustup's toolchains folder, as rustup names installed releases);
+# otherwise rustup installs it.
+pinned_toolchain="$(sed -n 's/^channel = "\(.*\)"$/\1/p' "$repository/rust-toolchain.toml")"
+if command -v rustup >/dev/null 2>&1 && ! rustup toolchain list | grep -q "^$pinned_toolchain-"; then
+  if [[ "$(rustc +stable --version 2>/dev/null | cut -d' ' -f2)" == "$pinned_toolchain" ]]; then
+    host="$(rustc +stable -vV | sed -n 's/^host: //p')"
+    toolchains="$(rustup show home)/toolchains"
+    echo "setup: the stable toolchain answers to Rust $pinned_toolchain (rust-toolchain.toml) too"
+    ln -s "$toolchains/stable-$host" "$toolchains/$pinned_toolchain-$host"
+  else
+    echo "setup: installing Rust $pinned_toolchain (rust-toolchain.toml)"
+    rustup toolchain install "$pinned_toolchain" --profile minimal --component rustfmt,clippy
+  fi
+fi
+
 # SwiftShader, Google's CPU Vulkan driver, as a second Vulkan implementation for the
 # portability test (cli/tests/swiftshader.rs): it keeps to the specification where lavapipe is
 # lenient. Debian does not package it; the npm package @sparticuz/chromium carries a build

@@ -1,6 +1,12 @@
 /* A technique plugin written in C: a culler that lets every candidate through. It shows that
  * include/cadr_plugin.h is all a C or C++ author needs. Built and loaded by
- * tests/tests/techniques.rs; compiled as strict C99 and C++ by plugins/abi/tests/header.rs. */
+ * tests/tests/techniques.rs; compiled as strict C99 and C++ by plugins/abi/tests/header.rs.
+ *
+ * Built with CADR_FIXTURE_NEWER_MINOR, it is what a library of the next minor version looks
+ * like to this host: it says it was built for one minor more, its technique description is
+ * longer than this header's (as if the next minor had added a field), and it offers an
+ * extension no host knows yet. With CADR_FIXTURE_REQUIRES_UNKNOWN it also requires that
+ * extension, and a host must refuse it. */
 #include "cadr_plugin.h"
 
 #include <string.h>
@@ -46,10 +52,32 @@ static CadrStatus cull(void *instance, const CadrCullInput *input, CadrCullOutpu
 }
 
 static CadrCullingVtable vtable;
+
+#if defined(CADR_FIXTURE_NEWER_MINOR)
+#define FIXTURE_ABI_MINOR (CADR_PLUGIN_ABI_MINOR + 1)
+/* The extension kind the fixture offers (and may require): no host defines it. */
+#define FIXTURE_EXTENSION_KIND 0x7fff0001u
+typedef struct FixtureExtension {
+    CadrExtension header;
+    uint32_t value;
+} FixtureExtension;
+typedef struct NewerTechniqueInfo {
+    CadrTechniqueInfo known;
+    uint64_t added_by_the_next_minor;
+} NewerTechniqueInfo;
+static FixtureExtension offered;
+#if defined(CADR_FIXTURE_REQUIRES_UNKNOWN)
+static const CadrExtensionKind required[1] = {FIXTURE_EXTENSION_KIND};
+#endif
+static NewerTechniqueInfo newer;
+#define technique (newer.known)
+#else
+#define FIXTURE_ABI_MINOR CADR_PLUGIN_ABI_MINOR
 static CadrTechniqueInfo technique;
+#endif
 
 CADR_EXPORT uint32_t cadr_plugin_abi_version(void) {
-    return CADR_PLUGIN_ABI_VERSION;
+    return ((uint32_t)CADR_PLUGIN_ABI_MAJOR << 16) | FIXTURE_ABI_MINOR;
 }
 
 CADR_EXPORT CadrStatus cadr_plugin_entry(CadrPluginLibrary *library) {
@@ -69,10 +97,23 @@ CADR_EXPORT CadrStatus cadr_plugin_entry(CadrPluginLibrary *library) {
     technique.name = "c-candidates";
     technique.description = "Written in C: draws every candidate.";
     technique.vtable = &vtable;
+#if defined(CADR_FIXTURE_NEWER_MINOR)
+    newer.added_by_the_next_minor = 0xffffffffffffffffu;
+    technique.size = sizeof newer;
+    memset(&offered, 0, sizeof offered);
+    offered.header.size = sizeof offered;
+    offered.header.kind = FIXTURE_EXTENSION_KIND;
+    offered.value = 42;
+    technique.extensions = &offered.header;
+#if defined(CADR_FIXTURE_REQUIRES_UNKNOWN)
+    technique.required_extensions = required;
+    technique.required_extension_count = 1;
+#endif
+#endif
     memset(&filled, 0, sizeof filled);
     filled.size = sizeof filled;
     filled.abi_major = CADR_PLUGIN_ABI_MAJOR;
-    filled.abi_minor = CADR_PLUGIN_ABI_MINOR;
+    filled.abi_minor = FIXTURE_ABI_MINOR;
     filled.name = "cadr C example";
     filled.technique_count = 1;
     filled.techniques = &technique;

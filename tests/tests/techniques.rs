@@ -549,6 +549,17 @@ fn frustum_culling_draws_only_what_the_camera_sees() {
 /// Builds `tests/c-plugin/{source}` against the plugin header in `include` as the plugin
 /// library `name` in `dir` (strict C99, warnings as errors) and returns its path.
 fn build_c_plugin(dir: &Path, name: &str, include: &Path, source: &str) -> std::path::PathBuf {
+    build_c_plugin_defining(dir, name, include, source, &[])
+}
+
+/// [`build_c_plugin`] with the preprocessor symbols `defines` defined.
+fn build_c_plugin_defining(
+    dir: &Path,
+    name: &str,
+    include: &Path,
+    source: &str,
+    defines: &[&str],
+) -> std::path::PathBuf {
     let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
     let library = dir.join(format!(
         "{}{name}{}",
@@ -567,6 +578,7 @@ fn build_c_plugin(dir: &Path, name: &str, include: &Path, source: &str) -> std::
             "-I",
         ])
         .arg(include)
+        .args(defines.iter().map(|symbol| format!("-D{symbol}")))
         .arg(root.join("tests/c-plugin").join(source))
         .arg("-o")
         .arg(&library)
@@ -580,35 +592,45 @@ fn build_c_plugin(dir: &Path, name: &str, include: &Path, source: &str) -> std::
     library
 }
 
+/// The plugin ABI's compatibility matrix: a C technique built for this minor, for the oldest
+/// (1.0, against the header as released) and for a newer one (one minor more, a longer
+/// technique description, an extension this host does not know) loads and draws what the
+/// baseline draws; built for the newer minor and requiring that extension, it is refused,
+/// naming the extension.
 #[test]
-fn a_technique_written_in_c_plugs_in_also_built_for_an_older_abi_minor() {
+fn c_techniques_of_older_and_newer_abi_minors_plug_in_unless_they_require_the_unknown() {
     let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
-    // The current header, and the header as released for ABI 1.0: a library built for an
-    // older minor version is loaded and run, not refused.
-    let builds = [
-        (
-            "cadr_fixture_c",
-            root.join("include"),
-            (
-                cadr_plugin_abi::CADR_PLUGIN_ABI_MAJOR,
-                cadr_plugin_abi::CADR_PLUGIN_ABI_MINOR,
-            ),
-        ),
-        (
-            "cadr_fixture_c_abi_1_0",
-            root.join("tests/c-plugin/abi-1.0"),
-            (1, 0),
-        ),
-    ];
+    let (major, minor) = (
+        cadr_plugin_abi::CADR_PLUGIN_ABI_MAJOR,
+        cadr_plugin_abi::CADR_PLUGIN_ABI_MINOR,
+    );
     const {
         assert!(
             cadr_plugin_abi::CADR_PLUGIN_ABI_MINOR > 0,
             "1.0 is an older minor"
         )
     };
+    // Library name, header folder, preprocessor symbols, the ABI version it says it has.
+    type Build<'a> = (&'a str, std::path::PathBuf, &'a [&'a str], (u32, u32));
+    let builds: [Build; 3] = [
+        ("cadr_fixture_c", root.join("include"), &[], (major, minor)),
+        (
+            "cadr_fixture_c_abi_1_0",
+            root.join("tests/c-plugin/abi-1.0"),
+            &[],
+            (1, 0),
+        ),
+        (
+            "cadr_fixture_c_newer_minor",
+            root.join("include"),
+            &["CADR_FIXTURE_NEWER_MINOR"],
+            (major, minor + 1),
+        ),
+    ];
     let dir = cadr_tests::fixtures::scratch_dir("c-plugin");
-    for (name, include, version) in builds {
-        let library = build_c_plugin(&dir, name, &include, "cull_everything_visible.c");
+    for (name, include, defines, version) in builds {
+        let library =
+            build_c_plugin_defining(&dir, name, &include, "cull_everything_visible.c", defines);
         let mut f = Fixture::with_size(&generate(&GeneratorSpec::Demo), (96, 72));
         let features = feature_bits(f.device.capabilities());
         let mut registry = PluginRegistry::discover(&[cadr_tests::test_binary_dir()], features);
@@ -637,6 +659,35 @@ fn a_technique_written_in_c_plugs_in_also_built_for_an_older_abi_minor() {
         drop(f.techniques);
         assert_no_validation_errors(&f.device);
     }
+
+    let library = build_c_plugin_defining(
+        &dir,
+        "cadr_fixture_c_requires_unknown",
+        &root.join("include"),
+        "cull_everything_visible.c",
+        &["CADR_FIXTURE_NEWER_MINOR", "CADR_FIXTURE_REQUIRES_UNKNOWN"],
+    );
+    let features = feature_bits(test_device().capabilities());
+    let mut registry = PluginRegistry::default();
+    registry.load(&library, features);
+    assert!(
+        registry
+            .find(TechniqueKind::Culling, "c-candidates")
+            .is_none(),
+        "a technique requiring an unknown extension is not offered"
+    );
+    let reasons: Vec<String> = registry
+        .refusals()
+        .iter()
+        .map(ToString::to_string)
+        .collect();
+    assert_eq!(reasons.len(), 1, "{reasons:?}");
+    assert!(
+        reasons[0].contains("c-candidates")
+            && reasons[0].contains("requires plugin ABI extension 0x7fff0001")
+            && reasons[0].contains(&format!("plugin ABI {major}.{minor}")),
+        "{reasons:?}"
+    );
 }
 
 #[test]

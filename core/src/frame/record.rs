@@ -172,13 +172,9 @@ impl Renderer {
         &mut self,
         camera: &Camera,
         plan: FramePlan<'_>,
-        recorders: FrameRecorders<'_, '_>,
+        mut recorders: FrameRecorders<'_, '_>,
     ) -> RenderResult<FrameStats> {
-        // The eye in f64, split for relative-to-eye positions on the GPU.
         let eye = camera.eye();
-        let (eye_high, eye_low) = split_f64(eye);
-        let mut view_rotation = camera.view;
-        view_rotation.w_axis = glam::DVec4::W;
         let color = plan.pass == PassTarget::Color;
         let outline = self.highlight_style == HighlightStyle::Outline && color;
         let silhouettes = self.silhouette_source(&plan);
@@ -205,27 +201,7 @@ impl Renderer {
         let replay_key = plan
             .replay_key
             .map(|key| crate::commands_key::mix(key, u64::from(cap_keys)));
-        let uniforms = FrameUniforms {
-            projection: camera.projection.as_mat4().to_cols_array_2d(),
-            view_rotation: view_rotation.as_mat4().to_cols_array_2d(),
-            eye_high: [eye_high[0], eye_high[1], eye_high[2], 0.0],
-            eye_low: [eye_low[0], eye_low[1], eye_low[2], 0.0],
-            light: [0.22, 0.68, 0.35, 0.0],
-            section_planes: self.section.eye_relative(eye),
-            section_colors: self.section.colors(),
-            section: [self.section.flags(), 0, 0, 0],
-            target: {
-                let (width, height) = self.size();
-                [width, height, display, 0]
-            },
-            background_top: opaque(self.background.top),
-            background_bottom: opaque(self.background.bottom),
-            edge_color: opaque(self.palette.edges),
-            highlight: {
-                let [r, g, b] = self.palette.highlight;
-                [r, g, b, self.palette.outline_width as f32]
-            },
-        };
+        let uniforms = self.uniforms(camera, eye, display);
         self.commands.wait()?;
         if let Some((method, _)) = plan.translucency {
             self.ensure_transparency_targets(method)?;
@@ -257,18 +233,7 @@ impl Renderer {
         }
         let mut stats = FrameStats::default();
         if plan.uploads_pending {
-            let key = (recorders.gather_uploads)(&mut stats)?;
-            if !self.commands.reuse_prologue(key) {
-                let command_buffer = self.commands.begin_prologue()?;
-                if let Some(timer) = &mut self.upload_timer {
-                    timer.begin(command_buffer);
-                }
-                (recorders.uploads)(self, command_buffer, 0, &mut stats)?;
-                if let Some(timer) = &mut self.upload_timer {
-                    timer.end(command_buffer);
-                }
-                self.commands.end_prologue(key)?;
-            }
+            self.record_upload_prologue(&mut recorders, &mut stats)?;
         }
         match (replay_key, self.replayable) {
             (Some(key), Some((recorded, recorded_stats))) if key == recorded => {
@@ -296,6 +261,116 @@ impl Renderer {
             .translucency
             .and(self.transparency.as_ref())
             .filter(|_| plan.pass == PassTarget::Color);
+        let pass = (&plan, transparency, key_use, depth_set.is_some());
+        self.record_pass(command_buffer, pass, &mut recorders, &mut stats)?;
+        if plan.pass == PassTarget::Color {
+            let merge = transparency.zip(plan.translucency.map(|(_, merge)| merge));
+            let depth_overlays = depth_set.map(|set| (depth_overlays, set));
+            let keyed = KeyedOverlays {
+                outline,
+                cap_ties: cap_keys,
+            };
+            self.record_overlay(command_buffer, merge, depth_overlays, keyed)?;
+        }
+        (recorders.after)(self, command_buffer, phases - 1, &mut stats)?;
+        if let Some(timer) = &mut self.timer {
+            timer.end(command_buffer);
+        }
+        stats.cpu_record_us = record_start.elapsed().as_secs_f64() * 1e6;
+        self.submit_recorded(stats, replay_key, plan.uploads_pending, previous_gpu_us)
+    }
+
+    /// Submits the frame just recorded (after its prologue when it `uploaded`), keeps it for
+    /// replays when it is the steady recording of `replay_key`, and with one frame in flight
+    /// waits for it.
+    fn submit_recorded(
+        &mut self,
+        mut stats: FrameStats,
+        replay_key: Option<u64>,
+        uploaded: bool,
+        previous_gpu_us: Option<f64>,
+    ) -> RenderResult<FrameStats> {
+        let submit_start = Instant::now();
+        self.commands.submit()?;
+        self.last_submission_uploaded = uploaded;
+        stats.cpu_submit_us = submit_start.elapsed().as_secs_f64() * 1e6;
+        // The first recording after a change may do one-time work (new buffers cleared);
+        // the second with the same key is the steady frame. Uploads are not part of it: they
+        // go in the prologue.
+        if replay_key.is_some() && replay_key == self.last_recorded {
+            self.replayable = replay_key.map(|key| (key, stats));
+        }
+        self.last_recorded = replay_key;
+        stats.gpu_us = self.finish_or_keep_in_flight(previous_gpu_us)?;
+        Ok(stats)
+    }
+
+    /// The frame uniforms of a frame seen by `camera` from `eye` with `display` bits: the eye
+    /// in f64 split for relative-to-eye positions on the GPU, the section, background and
+    /// palette.
+    fn uniforms(&self, camera: &Camera, eye: glam::DVec3, display: u32) -> FrameUniforms {
+        let (eye_high, eye_low) = split_f64(eye);
+        let mut view_rotation = camera.view;
+        view_rotation.w_axis = glam::DVec4::W;
+        let (width, height) = self.size();
+        let [r, g, b] = self.palette.highlight;
+        FrameUniforms {
+            projection: camera.projection.as_mat4().to_cols_array_2d(),
+            view_rotation: view_rotation.as_mat4().to_cols_array_2d(),
+            eye_high: [eye_high[0], eye_high[1], eye_high[2], 0.0],
+            eye_low: [eye_low[0], eye_low[1], eye_low[2], 0.0],
+            light: [0.22, 0.68, 0.35, 0.0],
+            section_planes: self.section.eye_relative(eye),
+            section_colors: self.section.colors(),
+            section: [self.section.flags(), 0, 0, 0],
+            target: [width, height, display, 0],
+            background_top: opaque(self.background.top),
+            background_bottom: opaque(self.background.bottom),
+            edge_color: opaque(self.palette.edges),
+            highlight: [r, g, b, self.palette.outline_width as f32],
+        }
+    }
+
+    /// Gathers the frame's uploads and records their commands into the prologue, unless the
+    /// last prologue holds the same commands (then it is submitted again as it is).
+    fn record_upload_prologue(
+        &mut self,
+        recorders: &mut FrameRecorders<'_, '_>,
+        stats: &mut FrameStats,
+    ) -> RenderResult<()> {
+        let key = (recorders.gather_uploads)(stats)?;
+        if self.commands.reuse_prologue(key) {
+            return Ok(());
+        }
+        let command_buffer = self.commands.begin_prologue()?;
+        if let Some(timer) = &mut self.upload_timer {
+            timer.begin(command_buffer);
+        }
+        (recorders.uploads)(self, command_buffer, 0, stats)?;
+        if let Some(timer) = &mut self.upload_timer {
+            timer.end(command_buffer);
+        }
+        Ok(self.commands.end_prologue(key)?)
+    }
+
+    /// Records the pass of `plan` into `command_buffer`: the clears of the transparency
+    /// method's storage and of the pixel keys the frame uses (`key_use`), then each phase's
+    /// rendering with the techniques' commands inside it and, from phase 1 on, what they record
+    /// between phases (the pass suspended, its depth readable). `shade_from_depth`: a pass
+    /// over the picture reads the depth afterwards.
+    fn record_pass(
+        &self,
+        command_buffer: vk::CommandBuffer,
+        (plan, transparency, key_use, shade_from_depth): (
+            &FramePlan<'_>,
+            Option<&TransparencyTargets>,
+            KeyUse,
+            bool,
+        ),
+        recorders: &mut FrameRecorders<'_, '_>,
+        stats: &mut FrameStats,
+    ) -> RenderResult<()> {
+        let phases = plan.phases.max(1);
         if let Some(targets) = transparency {
             self.record_storage_clear(
                 command_buffer,
@@ -321,7 +396,7 @@ impl Renderer {
             let target = self.pass_target(plan.pass, (plan.secondary, phase > 0, phases > 1));
             let target = RenderingTarget {
                 extra_colors: &extra_colors,
-                shade_from_depth: depth_set.is_some(),
+                shade_from_depth,
                 multisampled: target.multisampled.map(|m| Multisampled {
                     extra_colors: &multisampled_extra_colors,
                     ..m
@@ -329,43 +404,17 @@ impl Renderer {
                 ..target
             };
             if phase > 0 {
-                (recorders.between)(self, command_buffer, phase, &mut stats)?;
+                (recorders.between)(self, command_buffer, phase, stats)?;
             }
             begin_rendering(&self.device, command_buffer, &target);
-            (recorders.inside)(self, command_buffer, phase, &mut stats)?;
+            (recorders.inside)(self, command_buffer, phase, stats)?;
             if phase + 1 < phases {
                 suspend_rendering(&self.device, command_buffer, &target);
             } else {
                 end_rendering(&self.device, command_buffer, &target);
             }
         }
-        if plan.pass == PassTarget::Color {
-            let merge = transparency.zip(plan.translucency.map(|(_, merge)| merge));
-            let depth_overlays = depth_set.map(|set| (depth_overlays, set));
-            let keyed = KeyedOverlays {
-                outline,
-                cap_ties: cap_keys,
-            };
-            self.record_overlay(command_buffer, merge, depth_overlays, keyed)?;
-        }
-        (recorders.after)(self, command_buffer, phases - 1, &mut stats)?;
-        if let Some(timer) = &mut self.timer {
-            timer.end(command_buffer);
-        }
-        let submit_start = Instant::now();
-        stats.cpu_record_us = (submit_start - record_start).as_secs_f64() * 1e6;
-        self.commands.submit()?;
-        self.last_submission_uploaded = plan.uploads_pending;
-        stats.cpu_submit_us = submit_start.elapsed().as_secs_f64() * 1e6;
-        // The first recording after a change may do one-time work (new buffers cleared);
-        // the second with the same key is the steady frame. Uploads are not part of it: they
-        // go in the prologue.
-        if replay_key.is_some() && replay_key == self.last_recorded {
-            self.replayable = replay_key.map(|key| (key, stats));
-        }
-        self.last_recorded = replay_key;
-        stats.gpu_us = self.finish_or_keep_in_flight(previous_gpu_us)?;
-        Ok(stats)
+        Ok(())
     }
 
     /// With one frame in flight, waits for the frame just submitted and returns its GPU time;

@@ -16,8 +16,11 @@ use cadr_plugin_abi as abi;
 use super::gpu_cull::{cull_view, cull_view_bytes, GpuCuller, PhaseDepth};
 use crate::gpu_scene::GpuScene;
 use crate::render::pick::{PickSample, PixelRect};
-use crate::render::{Camera, FrameStats, Section, MAX_SECTION_PLANES};
-use crate::technique::{announces, status, Message, PassSet, ShadeMode, TechniqueKind, Techniques};
+use crate::render::{Camera, FrameStats, Section, TransparencyMethod, MAX_SECTION_PLANES};
+use crate::technique::{
+    announces, status, Message, PassFilters, PassSet, ShadeMode, TechniqueKind, TechniquePipelines,
+    Techniques,
+};
 use crate::vk::{memory_barrier, SUSPENDED_DEPTH_LAYOUT};
 
 use super::record::{FramePlan, FrameRecorders, PassTarget};
@@ -68,6 +71,9 @@ impl Renderer {
         self.pick_samples()
     }
 
+    /// Draws `passes` of `scene` with the active techniques: culling, the plan of the frame
+    /// (its commands key, replay key, display bits, GPU culler phases) and the recorders each
+    /// technique contributes, which [`Renderer::frame`] runs.
     fn draw_techniques(
         &mut self,
         scene: &mut GpuScene,
@@ -82,282 +88,70 @@ impl Renderer {
         let techniques = &*techniques;
         let cull_us = cull_start.elapsed().as_secs_f64() * 1e6;
 
-        let submission = techniques.get(TechniqueKind::Submission)?;
-        let parameters = techniques.get(TechniqueKind::Parameters)?;
-        let secondary = submission.entry.provides & abi::CADR_TRAIT_SECONDARY_COMMAND_BUFFERS != 0;
-        if secondary && passes.samples() > 1 && submission.entry.abi_version < (1, 8) {
-            // Its secondary command buffers would inherit one sample per pixel.
-            return Err(RenderError::Technique {
-                technique: format!("submission '{}'", submission.entry.name),
-                message: format!(
-                    "it records secondary command buffers and was built for ABI {}.{}, which \
-                     cannot draw with MSAA ({}x asked; ABI 1.8 or later can)",
-                    submission.entry.abi_version.0,
-                    submission.entry.abi_version.1,
-                    passes.samples()
-                ),
-            });
-        }
-        let values_in_commands =
-            parameters.entry.provides & abi::CADR_TRAIT_PARAMETERS_IN_COMMANDS != 0;
-        let (width, height) = self.size();
-        let view = scene.view();
+        let secondary = secondary_buffers_allowed(techniques, passes.samples())?;
         let pipelines = techniques.pipelines_for(passes)?;
-        let color_format = pipelines.color_format;
-        let mut extra_color_formats = [0i32; 2];
-        for (slot, format) in extra_color_formats
-            .iter_mut()
-            .zip(&pipelines.extra_color_formats)
-        {
-            *slot = format.as_raw();
-        }
-        let extra_color_count = pipelines.extra_color_formats.len().min(2) as u32;
-        let mut key = mix(techniques.epoch, view.draws_generation);
-        key = mix(key, view.buffers_generation);
-        key = mix(key, u64::from(width) << 32 | u64::from(height));
-        key = mix(key, color_format.as_raw() as u64);
-        key = mix(key, u64::from(extra_color_count));
-        key = mix(key, u64::from(passes.samples()));
-        // The pass set (with or without translucent surfaces) changes the pipelines drawn.
-        for pass in &pipelines.passes {
-            key = mix(key, pass.pipeline);
-        }
         // Which instances each pass needs: without textures, parts translucent by their
         // texture only are opaque.
         let pass_filters = pipelines.pass_filters(self.textures());
-        for (filter, exclusion) in pass_filters.filters.iter().zip(&pass_filters.exclusions) {
-            key = mix(key, u64::from(filter.mask) << 32 | u64::from(filter.value));
-            key = mix(key, u64::from(filter.section_cut));
-            key = mix(
-                key,
-                u64::from(exclusion.mask) << 32 | u64::from(exclusion.value),
-            );
-        }
-        if values_in_commands {
-            key = mix(key, view.parameters_generation);
-        }
-        let frame_set = self.frame_set().as_raw();
+        let view = scene.view();
+        let key = commands_key(
+            techniques,
+            &view,
+            self.size(),
+            passes,
+            pipelines,
+            pass_filters,
+        )?;
+        let recording = FrameRecording {
+            techniques,
+            pipelines,
+            pass_filters,
+            frame_set: self.frame_set().as_raw(),
+            size: self.size(),
+            samples: passes.samples(),
+            key,
+        };
         let culler = GpuCuller::of(techniques, pipelines.passes.len())?;
         let phases = culler.as_ref().map_or(1, |c| c.phases);
         // Only a GPU culler needs the view relative to the eye.
-        let gpu_view = culler.as_ref().map(|_| {
-            cull_view(
-                camera,
-                (width, height),
-                techniques.min_pixels(),
-                self.section(),
-            )
-        });
+        let gpu_view = culler
+            .as_ref()
+            .map(|_| cull_view(camera, self.size(), techniques.min_pixels(), self.section()));
         let cull_view_bytes = gpu_view.as_ref().map(cull_view_bytes);
-        // A frame records the same commands as the last one when the techniques allow it and
-        // nothing they depend on changed (the camera reaches the GPU through uniforms, moved
-        // parts and new material values through the uploads, when no technique reads them on
-        // the host).
-        let replay_key = (matches!(passes, PassSet::Shaded { .. }) && techniques.replayable())
-            .then(|| {
-                if techniques.replays_parameter_changes() {
-                    key
-                } else {
-                    mix(key, view.parameters_generation)
-                }
-            });
+        let replay_key = replay_key(techniques, passes, key, &view);
         let uploads_pending = scene.has_pending_uploads();
-        let shared = RefCell::new((scene, abi::CadrStats::default(), culler));
-        let context = |command_buffer: vk::CommandBuffer,
-                       view: &abi::CadrSceneView,
-                       stats: *mut abi::CadrStats,
-                       (gpu_draws, phase): (*const abi::CadrGpuDraws, u32)|
-         -> RenderResult<abi::CadrRecordContext> {
-            let vertex = techniques.get(TechniqueKind::Vertex)?;
-            let parameters = techniques.get(TechniqueKind::Parameters)?;
-            Ok(abi::CadrRecordContext {
-                size: std::mem::size_of::<abi::CadrRecordContext>() as u32,
-                command_buffer: command_buffer.as_raw() as *mut c_void,
-                pipeline_layout: pipelines.layout.raw().as_raw(),
-                frame_set,
-                pass_count: pipelines.passes.len() as u32,
-                passes: pipelines.passes.as_ptr(),
-                width,
-                height,
-                scene: view,
-                vertex: abi::CadrPathRef {
-                    instance: vertex.instance,
-                    vtable: vertex.vtable(),
-                },
-                parameters: abi::CadrPathRef {
-                    instance: parameters.instance,
-                    vtable: parameters.vtable(),
-                },
-                commands_key: key,
-                stats,
-                color_format: color_format.as_raw(),
-                gpu_draws,
-                phase,
-                extra_color_count,
-                extra_color_formats,
-                rasterization_samples: passes.samples(),
-                pass_filters: pass_filters.filters.as_ptr(),
-                pass_exclusions: pass_filters.exclusions.as_ptr(),
-            })
-        };
-        // Records a phase of the GPU culler (if any) outside rendering.
-        let record_culling = |renderer: &Renderer,
-                              command_buffer: vk::CommandBuffer,
-                              phase: u32,
-                              scene: &GpuScene,
-                              culler: &mut Option<GpuCuller<'_>>|
-         -> RenderResult<()> {
-            let (Some(culler), Some(gpu_view)) = (culler.as_mut(), gpu_view.as_ref()) else {
-                return Ok(());
-            };
-            let depth = (phase > 0).then(|| PhaseDepth {
-                image: renderer.depth_image().raw(),
-                view: renderer.depth_image().view(),
-                layout: SUSPENDED_DEPTH_LAYOUT,
-            });
-            culler.record(
-                phase,
-                command_buffer,
-                &scene.view(),
-                (&pipelines.passes, pass_filters),
-                gpu_view,
-                renderer.cull_view_buffer(),
-                depth,
-            )
-        };
-        let mut gather_uploads = |stats: &mut FrameStats| -> RenderResult<u64> {
-            let mut guard = shared.borrow_mut();
-            let (bytes, key) = guard.0.prepare_uploads()?;
-            stats.bytes_uploaded = bytes;
-            Ok(key)
-        };
-        let mut uploads =
-            |_: &Renderer,
-             command_buffer: vk::CommandBuffer,
-             _: u32,
-             _: &mut FrameStats|
-             -> RenderResult<()> { shared.borrow().0.record_uploads(command_buffer) };
-        let mut before = |renderer: &Renderer,
-                          command_buffer: vk::CommandBuffer,
-                          _: u32,
-                          _: &mut FrameStats|
-         -> RenderResult<()> {
-            let mut guard = shared.borrow_mut();
-            let (scene, counters, culler) = &mut *guard;
-            // The uploads went ahead in the prologue (this frame's, or a replayed one's).
-            barrier(renderer, command_buffer);
-            let view = scene.view();
-            let raw_command_buffer = command_buffer.as_raw() as *mut c_void;
-            for kind in [TechniqueKind::Vertex, TechniqueKind::Parameters] {
-                let active = techniques.get(kind)?;
-                let prepare = match kind {
-                    TechniqueKind::Vertex => active.vtable::<abi::CadrVertexPathVtable>().prepare,
-                    _ => active.vtable::<abi::CadrParameterPathVtable>().prepare,
-                };
-                if let Some(prepare) = prepare {
-                    let mut message = Message::new();
-                    // SAFETY: a live instance; the view and command buffer are valid for the call.
-                    let result = unsafe {
-                        prepare(active.instance, &view, raw_command_buffer, message.raw())
-                    };
-                    status(&active.entry, "prepare", result, &message)?;
-                }
-            }
-            let submission = techniques.get(TechniqueKind::Submission)?;
-            if let Some(prepare) = submission.vtable::<abi::CadrSubmissionVtable>().prepare {
-                let gpu_draws = culler
-                    .as_ref()
-                    .map_or(std::ptr::null(), |c| c.draws.as_ptr());
-                let record = context(command_buffer, &view, counters, (gpu_draws, 0))?;
-                let mut message = Message::new();
-                // SAFETY: as above.
-                let result = unsafe { prepare(submission.instance, &record, message.raw()) };
-                status(&submission.entry, "prepare", result, &message)?;
-            }
-            barrier(renderer, command_buffer);
-            record_culling(renderer, command_buffer, 0, scene, culler)
-        };
-        let mut between = |renderer: &Renderer,
-                           command_buffer: vk::CommandBuffer,
-                           phase: u32,
-                           _: &mut FrameStats|
-         -> RenderResult<()> {
-            let mut guard = shared.borrow_mut();
-            let (scene, _, culler) = &mut *guard;
-            record_culling(renderer, command_buffer, phase, scene, culler)
-        };
-        let mut inside = |_: &Renderer,
-                          command_buffer: vk::CommandBuffer,
-                          phase: u32,
-                          _: &mut FrameStats|
-         -> RenderResult<()> {
-            let mut guard = shared.borrow_mut();
-            let (scene, counters, culler) = &mut *guard;
-            let view = scene.view();
-            let submission = techniques.get(TechniqueKind::Submission)?;
-            let record_fn = submission
-                .vtable::<abi::CadrSubmissionVtable>()
-                .record
-                .ok_or_else(|| RenderError::Technique {
-                    technique: format!("submit '{}'", submission.entry.name),
-                    message: "its vtable has no record function".into(),
-                })?;
-            let gpu_draws = culler
-                .as_ref()
-                .map_or(std::ptr::null(), |c| c.draws.as_ptr());
-            let record = context(command_buffer, &view, counters, (gpu_draws, phase))?;
-            let mut message = Message::new();
-            // SAFETY: a live instance; the context is valid for the call.
-            let result = unsafe { record_fn(submission.instance, &record, message.raw()) };
-            status(&submission.entry, "record", result, &message)
-        };
+        let display = self.display_bits(passes, scene);
+        let highlights = scene.has_highlighted();
         let target = match passes {
             PassSet::Shaded { .. } => PassTarget::Color,
             PassSet::Pick { .. } => PassTarget::Pick,
         };
-        let translucency = match (&pipelines.merge, &pipelines.merge_layout) {
-            (Some(merge), Some(layout)) => techniques
-                .transparency_method()
-                .map(|method| (method, (merge.raw(), layout.raw()))),
-            _ => None,
+        let translucency = translucency(techniques, pipelines);
+        let drawing = FrameDrawing {
+            recording,
+            gpu_view,
+            target,
+            shared: RefCell::new((scene, abi::CadrStats::default(), culler)),
         };
-        let mut display = match passes {
-            PassSet::Shaded {
-                mode: ShadeMode::XRay,
-                ..
-            } => crate::render::DISPLAY_XRAY,
-            _ => 0,
+        let mut gather_uploads = |stats: &mut FrameStats| drawing.gather_uploads(stats);
+        let mut uploads = |_: &Renderer, cb: vk::CommandBuffer, _: u32, _: &mut FrameStats| {
+            drawing.record_uploads(cb)
         };
-        if shared.borrow().0.has_vertex_attributes() {
-            display |= crate::render::DISPLAY_VERTEX_ATTRIBUTES;
-        }
-        if self.textures() && shared.borrow().0.has_textures() {
-            display |= crate::render::DISPLAY_TEXTURES;
-        }
-        if shared.borrow().0.has_material_descriptions() {
-            display |= crate::render::DISPLAY_MATERIAL_DESCRIPTIONS;
-        }
-        if self.highlight_style() == crate::render::HighlightStyle::Outline {
-            display |= crate::render::DISPLAY_HIGHLIGHT_OUTLINE;
-        }
-        let mut after = |renderer: &Renderer,
-                         command_buffer: vk::CommandBuffer,
-                         _: u32,
-                         stats: &mut FrameStats| {
-            if target == PassTarget::Pick {
-                renderer.record_pick_readback(command_buffer);
-            }
-            // What the recording issued (a replay of it issues the same).
-            let guard = shared.borrow();
-            let counters = &guard.1;
-            stats.draw_calls = counters.draw_calls;
-            stats.draws = counters.draws;
-            stats.pipeline_binds = counters.pipeline_binds;
-            stats.vertex_binds = counters.vertex_binds;
-            stats.parameter_updates = counters.parameter_binds;
-            Ok(())
+        let mut before =
+            |renderer: &Renderer, cb: vk::CommandBuffer, _: u32, _: &mut FrameStats| {
+                drawing.before(renderer, cb)
+            };
+        let mut between =
+            |renderer: &Renderer, cb: vk::CommandBuffer, phase: u32, _: &mut FrameStats| {
+                drawing.between(renderer, cb, phase)
+            };
+        let mut inside = |_: &Renderer, cb: vk::CommandBuffer, phase: u32, _: &mut FrameStats| {
+            drawing.inside(cb, phase)
         };
-        let highlights = shared.borrow().0.has_highlighted();
+        let mut after =
+            |renderer: &Renderer, cb: vk::CommandBuffer, _: u32, stats: &mut FrameStats| {
+                drawing.after(renderer, cb, stats)
+            };
         let mut stats = self.frame(
             camera,
             FramePlan {
@@ -369,17 +163,8 @@ impl Renderer {
                 uploads_pending,
                 display,
                 translucency,
-                fills_surfaces: matches!(
-                    passes,
-                    PassSet::Shaded {
-                        mode: ShadeMode::Solid | ShadeMode::Edges | ShadeMode::XRay,
-                        ..
-                    }
-                ),
-                draws_edges: matches!(
-                    passes,
-                    PassSet::Shaded { mode, .. } if mode.draws_silhouettes()
-                ),
+                fills_surfaces: passes.fills_surfaces(),
+                draws_edges: passes.draws_edges(),
                 highlights,
             },
             FrameRecorders {
@@ -391,7 +176,7 @@ impl Renderer {
                 after: &mut after,
             },
         )?;
-        let (scene, counters, culler) = shared.into_inner();
+        let (scene, counters, culler) = drawing.shared.into_inner();
         if counters.failures > 0 {
             return Err(RenderError::Technique {
                 technique: techniques.combination().to_string(),
@@ -407,6 +192,364 @@ impl Renderer {
             stats.triangles = drawn.primitives;
         }
         Ok(stats)
+    }
+
+    /// The `DISPLAY_*` bits of a frame of `passes` over `scene`.
+    fn display_bits(&self, passes: PassSet, scene: &GpuScene) -> u32 {
+        let mut display = match passes {
+            PassSet::Shaded {
+                mode: ShadeMode::XRay,
+                ..
+            } => crate::render::DISPLAY_XRAY,
+            _ => 0,
+        };
+        if scene.has_vertex_attributes() {
+            display |= crate::render::DISPLAY_VERTEX_ATTRIBUTES;
+        }
+        if self.textures() && scene.has_textures() {
+            display |= crate::render::DISPLAY_TEXTURES;
+        }
+        if scene.has_material_descriptions() {
+            display |= crate::render::DISPLAY_MATERIAL_DESCRIPTIONS;
+        }
+        if self.highlight_style() == crate::render::HighlightStyle::Outline {
+            display |= crate::render::DISPLAY_HIGHLIGHT_OUTLINE;
+        }
+        display
+    }
+}
+
+/// Whether the submission records secondary command buffers. One that does and was built
+/// before ABI 1.8 is refused when the pass has several `samples`: its buffers would inherit
+/// one sample per pixel.
+fn secondary_buffers_allowed(techniques: &Techniques, samples: u32) -> RenderResult<bool> {
+    let submission = techniques.get(TechniqueKind::Submission)?;
+    let secondary = submission.entry.provides & abi::CADR_TRAIT_SECONDARY_COMMAND_BUFFERS != 0;
+    if !secondary || samples <= 1 || submission.entry.abi_version >= (1, 8) {
+        return Ok(secondary);
+    }
+    Err(RenderError::Technique {
+        technique: format!("submission '{}'", submission.entry.name),
+        message: format!(
+            "it records secondary command buffers and was built for ABI {}.{}, which cannot \
+             draw with MSAA ({samples}x asked; ABI 1.8 or later can)",
+            submission.entry.abi_version.0, submission.entry.abi_version.1,
+        ),
+    })
+}
+
+/// The replay key of a frame of `passes` whose commands key is `key`, when the techniques allow
+/// a replay: a frame records the same commands as the last one when nothing they depend on
+/// changed (the camera reaches the GPU through uniforms, moved parts and new material values
+/// through the uploads, when no technique reads them on the host). The pick pass never
+/// replays.
+fn replay_key(
+    techniques: &Techniques,
+    passes: PassSet,
+    key: u64,
+    view: &abi::CadrSceneView,
+) -> Option<u64> {
+    (matches!(passes, PassSet::Shaded { .. }) && techniques.replayable()).then(|| {
+        if techniques.replays_parameter_changes() {
+            key
+        } else {
+            mix(key, view.parameters_generation)
+        }
+    })
+}
+
+/// What a frame's commands depend on: equal keys record equal commands. The techniques'
+/// epoch, the scene's draws and buffers, the target, the pipelines drawn (the pass set, with
+/// or without translucent surfaces, and its sample count), each pass's filter, and the
+/// parameter values where the parameter path writes them into the commands.
+fn commands_key(
+    techniques: &Techniques,
+    view: &abi::CadrSceneView,
+    (width, height): (u32, u32),
+    passes: PassSet,
+    pipelines: &TechniquePipelines,
+    pass_filters: &PassFilters,
+) -> RenderResult<u64> {
+    let parameters = techniques.get(TechniqueKind::Parameters)?;
+    let values_in_commands =
+        parameters.entry.provides & abi::CADR_TRAIT_PARAMETERS_IN_COMMANDS != 0;
+    let mut key = mix(techniques.epoch, view.draws_generation);
+    key = mix(key, view.buffers_generation);
+    key = mix(key, u64::from(width) << 32 | u64::from(height));
+    key = mix(key, pipelines.color_format.as_raw() as u64);
+    key = mix(key, pipelines.extra_color_formats.len().min(2) as u64);
+    key = mix(key, u64::from(passes.samples()));
+    for pass in &pipelines.passes {
+        key = mix(key, pass.pipeline);
+    }
+    for (filter, exclusion) in pass_filters.filters.iter().zip(&pass_filters.exclusions) {
+        key = mix(key, u64::from(filter.mask) << 32 | u64::from(filter.value));
+        key = mix(key, u64::from(filter.section_cut));
+        key = mix(
+            key,
+            u64::from(exclusion.mask) << 32 | u64::from(exclusion.value),
+        );
+    }
+    if values_in_commands {
+        key = mix(key, view.parameters_generation);
+    }
+    Ok(key)
+}
+
+/// The transparency method and its merge (pipeline, layout), when `pipelines` draw
+/// translucent surfaces.
+fn translucency<'a>(
+    techniques: &'a Techniques,
+    pipelines: &TechniquePipelines,
+) -> Option<(&'a TransparencyMethod, (vk::Pipeline, vk::PipelineLayout))> {
+    match (&pipelines.merge, &pipelines.merge_layout) {
+        (Some(merge), Some(layout)) => techniques
+            .transparency_method()
+            .map(|method| (method, (merge.raw(), layout.raw()))),
+        _ => None,
+    }
+}
+
+/// Where the GPU culler (if any) wrote this phase's draws, for the submission.
+fn gpu_draws(culler: &Option<GpuCuller<'_>>) -> *const abi::CadrGpuDraws {
+    culler
+        .as_ref()
+        .map_or(std::ptr::null(), |c| c.draws.as_ptr())
+}
+
+/// Copies what the recording issued into a frame's stats.
+fn count_recorded(stats: &mut FrameStats, counters: &abi::CadrStats) {
+    stats.draw_calls = counters.draw_calls;
+    stats.draws = counters.draws;
+    stats.pipeline_binds = counters.pipeline_binds;
+    stats.vertex_binds = counters.vertex_binds;
+    stats.parameter_updates = counters.parameter_binds;
+}
+
+/// What every technique call of one frame's recording shares: the pipelines and pass filters
+/// drawn, the frame set, the target's size and the commands key.
+struct FrameRecording<'a> {
+    techniques: &'a Techniques,
+    pipelines: &'a TechniquePipelines,
+    pass_filters: &'a PassFilters,
+    frame_set: u64,
+    size: (u32, u32),
+    /// Samples per pixel of the pass.
+    samples: u32,
+    key: u64,
+}
+
+impl FrameRecording<'_> {
+    /// The record context of a submission call into `command_buffer`, with the GPU culler's
+    /// draws of `phase`.
+    fn context(
+        &self,
+        command_buffer: vk::CommandBuffer,
+        view: &abi::CadrSceneView,
+        stats: *mut abi::CadrStats,
+        (gpu_draws, phase): (*const abi::CadrGpuDraws, u32),
+    ) -> RenderResult<abi::CadrRecordContext> {
+        let vertex = self.techniques.get(TechniqueKind::Vertex)?;
+        let parameters = self.techniques.get(TechniqueKind::Parameters)?;
+        let pipelines = self.pipelines;
+        let mut extra_color_formats = [0i32; 2];
+        for (slot, format) in extra_color_formats
+            .iter_mut()
+            .zip(&pipelines.extra_color_formats)
+        {
+            *slot = format.as_raw();
+        }
+        Ok(abi::CadrRecordContext {
+            size: std::mem::size_of::<abi::CadrRecordContext>() as u32,
+            command_buffer: command_buffer.as_raw() as *mut c_void,
+            pipeline_layout: pipelines.layout.raw().as_raw(),
+            frame_set: self.frame_set,
+            pass_count: pipelines.passes.len() as u32,
+            passes: pipelines.passes.as_ptr(),
+            width: self.size.0,
+            height: self.size.1,
+            scene: view,
+            vertex: abi::CadrPathRef {
+                instance: vertex.instance,
+                vtable: vertex.vtable(),
+            },
+            parameters: abi::CadrPathRef {
+                instance: parameters.instance,
+                vtable: parameters.vtable(),
+            },
+            commands_key: self.key,
+            stats,
+            color_format: pipelines.color_format.as_raw(),
+            gpu_draws,
+            phase,
+            extra_color_count: pipelines.extra_color_formats.len().min(2) as u32,
+            extra_color_formats,
+            rasterization_samples: self.samples,
+            pass_filters: self.pass_filters.filters.as_ptr(),
+            pass_exclusions: self.pass_filters.exclusions.as_ptr(),
+        })
+    }
+
+    /// The paths' and the submission's preparation, before the pass.
+    fn prepare(
+        &self,
+        command_buffer: vk::CommandBuffer,
+        view: &abi::CadrSceneView,
+        counters: &mut abi::CadrStats,
+        gpu_draws: *const abi::CadrGpuDraws,
+    ) -> RenderResult<()> {
+        let raw_command_buffer = command_buffer.as_raw() as *mut c_void;
+        for kind in [TechniqueKind::Vertex, TechniqueKind::Parameters] {
+            let active = self.techniques.get(kind)?;
+            let prepare = match kind {
+                TechniqueKind::Vertex => active.vtable::<abi::CadrVertexPathVtable>().prepare,
+                _ => active.vtable::<abi::CadrParameterPathVtable>().prepare,
+            };
+            if let Some(prepare) = prepare {
+                let mut message = Message::new();
+                // SAFETY: a live instance; the view and command buffer are valid for the call.
+                let result =
+                    unsafe { prepare(active.instance, view, raw_command_buffer, message.raw()) };
+                status(&active.entry, "prepare", result, &message)?;
+            }
+        }
+        let submission = self.techniques.get(TechniqueKind::Submission)?;
+        if let Some(prepare) = submission.vtable::<abi::CadrSubmissionVtable>().prepare {
+            let record = self.context(command_buffer, view, counters, (gpu_draws, 0))?;
+            let mut message = Message::new();
+            // SAFETY: a live instance; the context is valid for the call.
+            let result = unsafe { prepare(submission.instance, &record, message.raw()) };
+            status(&submission.entry, "prepare", result, &message)?;
+        }
+        Ok(())
+    }
+
+    /// The submission's recording of one phase, inside the pass.
+    fn record(
+        &self,
+        command_buffer: vk::CommandBuffer,
+        view: &abi::CadrSceneView,
+        counters: &mut abi::CadrStats,
+        draws: (*const abi::CadrGpuDraws, u32),
+    ) -> RenderResult<()> {
+        let submission = self.techniques.get(TechniqueKind::Submission)?;
+        let record_fn = submission
+            .vtable::<abi::CadrSubmissionVtable>()
+            .record
+            .ok_or_else(|| RenderError::Technique {
+                technique: format!("submit '{}'", submission.entry.name),
+                message: "its vtable has no record function".into(),
+            })?;
+        let record = self.context(command_buffer, view, counters, draws)?;
+        let mut message = Message::new();
+        // SAFETY: a live instance; the context is valid for the call.
+        let result = unsafe { record_fn(submission.instance, &record, message.raw()) };
+        status(&submission.entry, "record", result, &message)
+    }
+}
+
+/// What a frame's recorders share while the renderer runs them: the recording's common
+/// inputs, the GPU cullers' view, the pass's target, and (borrowed by one recorder at a time)
+/// the scene, the counters of what was recorded and the GPU culler.
+struct FrameDrawing<'s, 'a> {
+    recording: FrameRecording<'a>,
+    gpu_view: Option<abi::CadrGpuCullView>,
+    target: PassTarget,
+    shared: RefCell<(&'s mut GpuScene, abi::CadrStats, Option<GpuCuller<'a>>)>,
+}
+
+impl FrameDrawing<'_, '_> {
+    /// Gathers the frame's uploads on the host; returns what their commands depend on.
+    fn gather_uploads(&self, stats: &mut FrameStats) -> RenderResult<u64> {
+        let mut guard = self.shared.borrow_mut();
+        let (bytes, key) = guard.0.prepare_uploads()?;
+        stats.bytes_uploaded = bytes;
+        Ok(key)
+    }
+
+    /// Records the uploads' commands (into the prologue).
+    fn record_uploads(&self, command_buffer: vk::CommandBuffer) -> RenderResult<()> {
+        self.shared.borrow().0.record_uploads(command_buffer)
+    }
+
+    /// Before the pass: the techniques' preparation, then phase 0 of the GPU culler.
+    fn before(&self, renderer: &Renderer, command_buffer: vk::CommandBuffer) -> RenderResult<()> {
+        let mut guard = self.shared.borrow_mut();
+        let (scene, counters, culler) = &mut *guard;
+        // The uploads went ahead in the prologue (this frame's, or a replayed one's).
+        barrier(renderer, command_buffer);
+        let view = scene.view();
+        self.recording
+            .prepare(command_buffer, &view, counters, gpu_draws(culler))?;
+        barrier(renderer, command_buffer);
+        self.record_culling(renderer, command_buffer, 0, scene, culler)
+    }
+
+    /// Between phases: the GPU culler's next phase, the depth so far readable.
+    fn between(
+        &self,
+        renderer: &Renderer,
+        command_buffer: vk::CommandBuffer,
+        phase: u32,
+    ) -> RenderResult<()> {
+        let mut guard = self.shared.borrow_mut();
+        let (scene, _, culler) = &mut *guard;
+        self.record_culling(renderer, command_buffer, phase, scene, culler)
+    }
+
+    /// Inside the pass: the submission's recording of `phase`.
+    fn inside(&self, command_buffer: vk::CommandBuffer, phase: u32) -> RenderResult<()> {
+        let mut guard = self.shared.borrow_mut();
+        let (scene, counters, culler) = &mut *guard;
+        let draws = (gpu_draws(culler), phase);
+        self.recording
+            .record(command_buffer, &scene.view(), counters, draws)
+    }
+
+    /// After the pass: the pick readback, and what the recording issued (a replay of it
+    /// issues the same).
+    fn after(
+        &self,
+        renderer: &Renderer,
+        command_buffer: vk::CommandBuffer,
+        stats: &mut FrameStats,
+    ) -> RenderResult<()> {
+        if self.target == PassTarget::Pick {
+            renderer.record_pick_readback(command_buffer);
+        }
+        count_recorded(stats, &self.shared.borrow().1);
+        Ok(())
+    }
+
+    /// Records `phase` of the GPU culler (if any) outside rendering.
+    fn record_culling(
+        &self,
+        renderer: &Renderer,
+        command_buffer: vk::CommandBuffer,
+        phase: u32,
+        scene: &GpuScene,
+        culler: &mut Option<GpuCuller<'_>>,
+    ) -> RenderResult<()> {
+        let (Some(culler), Some(gpu_view)) = (culler.as_mut(), self.gpu_view.as_ref()) else {
+            return Ok(());
+        };
+        let depth = (phase > 0).then(|| PhaseDepth {
+            image: renderer.depth_image().raw(),
+            view: renderer.depth_image().view(),
+            layout: SUSPENDED_DEPTH_LAYOUT,
+        });
+        culler.record(
+            phase,
+            command_buffer,
+            &scene.view(),
+            (
+                &self.recording.pipelines.passes,
+                self.recording.pass_filters,
+            ),
+            gpu_view,
+            renderer.cull_view_buffer(),
+            depth,
+        )
     }
 }
 

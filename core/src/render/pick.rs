@@ -6,7 +6,7 @@ use std::sync::Arc;
 use crate::error::RenderResult;
 use crate::vk::raw as vk;
 
-use super::pipeline::PICK_FORMAT;
+use super::frame_pipelines::PICK_FORMAT;
 use crate::vk::{record_image_copy, Buffer, Device, Image, MemoryLocation};
 
 /// A rectangle of pixels, x to the right and y down from the top-left corner.

@@ -1,15 +1,20 @@
 //! Technique plugins on the host side: finding and loading them ([`PluginRegistry`]), the
-//! active combination with its pipelines ([`Techniques`]), the pipelines of each pass set
-//! (`pipeline.rs`) and what plugins may call back (`host_api.rs`). [`crate::frame`] drives
-//! them over the GPU scene each frame.
+//! active combination with its pipelines ([`Techniques`]), what a frame draws (`passes.rs`),
+//! the shaders and pipelines of each pass set (`shader_assembly.rs`, `pass_pipelines.rs`) and
+//! what plugins may call back (`host_api.rs`). [`crate::frame`] drives them over the GPU
+//! scene each frame.
 
 mod host_api;
-mod pipeline;
+mod pass_pipelines;
+mod passes;
 mod registry;
 mod set;
+mod shader_assembly;
 
 pub use host_api::AllocationCounts;
-pub use pipeline::{assemble_vertex_shader, fragment_defines, PassFilters, PassSet, ShadeMode};
+pub use pass_pipelines::PassFilters;
+pub(crate) use pass_pipelines::TechniquePipelines;
+pub use passes::{PassSet, ShadeMode};
 pub(crate) use registry::announces;
 pub use registry::{
     default_plugin_dirs, feature_bits, feature_names, PluginRegistry, Refusal, TechniqueEntry,
@@ -17,3 +22,4 @@ pub use registry::{
 };
 pub use set::{check_combination, Combination, Techniques, DEFAULT_TRANSPARENCY};
 pub(crate) use set::{status, Active, Message};
+pub use shader_assembly::{assemble_vertex_shader, fragment_defines};

@@ -106,6 +106,42 @@ fn first_library_size() -> usize {
     size_through!(abi::CadrPluginLibrary, techniques)
 }
 
+/// The extension kinds this host knows (`CADR_EXTENSION_*`): none yet, ABI 1.13 defines none.
+const KNOWN_EXTENSIONS: &[abi::CadrExtensionKind] = &[];
+
+/// Refuses a technique that requires an extension this host does not know, naming it.
+fn check_required_extensions(info: &abi::CadrTechniqueInfo) -> Result<(), String> {
+    if info.required_extension_count == 0 {
+        return Ok(());
+    }
+    if info.required_extensions.is_null() {
+        return Err(format!(
+            "it requires {} extensions but does not say which",
+            info.required_extension_count
+        ));
+    }
+    // SAFETY: checked non-null; the library promises `required_extension_count` kinds that
+    // live as long as the process.
+    let required = unsafe {
+        std::slice::from_raw_parts(
+            info.required_extensions,
+            info.required_extension_count as usize,
+        )
+    };
+    match required
+        .iter()
+        .find(|kind| !KNOWN_EXTENSIONS.contains(kind))
+    {
+        None => Ok(()),
+        Some(unknown) => Err(format!(
+            "it requires plugin ABI extension {unknown:#x}, which this cadr (plugin ABI {}.{}) \
+             does not know",
+            abi::CADR_PLUGIN_ABI_MAJOR,
+            abi::CADR_PLUGIN_ABI_MINOR
+        )),
+    }
+}
+
 /// The size of [`abi::CadrTechniqueInfo`] in ABI 1.0.
 fn first_info_size() -> usize {
     size_through!(abi::CadrTechniqueInfo, vtable)
@@ -488,8 +524,11 @@ impl PluginRegistry {
             technique: None,
             reason,
         };
+        // Any minor of this major: an older one's structs are read by their size, a newer
+        // one's by the prefix this host knows (its techniques may require extensions, checked
+        // below).
         let (major, minor) = (version >> 16, version & 0xffff);
-        if major != abi::CADR_PLUGIN_ABI_MAJOR || minor > abi::CADR_PLUGIN_ABI_MINOR {
+        if major != abi::CADR_PLUGIN_ABI_MAJOR {
             self.refusals.push(refuse(format!(
                 "was built for plugin ABI {major}.{minor}; this cadr speaks {}.{}",
                 abi::CADR_PLUGIN_ABI_MAJOR,
@@ -550,81 +589,98 @@ impl PluginRegistry {
                 );
                 info
             };
-            let name = c_text(info.name).unwrap_or_default();
-            let refuse_technique = |reason: String| Refusal {
-                library: file.to_owned(),
-                technique: Some(name.clone()),
-                reason,
-            };
-            if info.size as usize != stride {
-                self.refusals.push(refuse_technique(
-                    "its description's size differs from the library's first one".into(),
-                ));
-                continue;
-            }
-            let Some(kind) = TechniqueKind::from_abi(info.kind) else {
-                self.refusals
-                    .push(refuse_technique(format!("unknown kind {}", info.kind)));
-                continue;
-            };
-            if name.is_empty() {
-                self.refusals
-                    .push(refuse_technique("it has no name".into()));
-                continue;
-            }
-            // SAFETY: checked non-null before reading its size.
-            let vtable_size = (!info.vtable.is_null())
-                .then(|| unsafe { (*info.vtable.cast::<abi::CadrCommonVtable>()).size });
-            let Some(vtable_size) =
-                vtable_size.filter(|&size| size as usize >= kind.first_vtable_size())
-            else {
-                self.refusals.push(refuse_technique(format!(
-                    "its {} vtable is missing or truncated",
-                    kind.name()
-                )));
-                continue;
-            };
-            // Before ABI 1.3 the culling vtable's `record_gpu` was reserved: not read.
-            let readable = if kind == TechniqueKind::Culling && minor < 3 {
-                (vtable_size as usize).min(kind.first_vtable_size())
-            } else {
-                vtable_size as usize
-            };
-            // SAFETY: the vtable's size says how many bytes the library wrote.
-            let vtable = unsafe { VtableCopy::new(info.vtable, readable, kind.vtable_size()) };
-            if self
-                .techniques
-                .iter()
-                .any(|t| t.kind == kind && t.name == name)
-            {
-                self.refusals.push(refuse_technique(format!(
-                    "another library already offers a {} technique named '{name}'",
-                    kind.name()
-                )));
-                continue;
-            }
-            let missing = info.required_features & !device_features;
-            let support = if missing == 0 {
-                Ok(())
-            } else {
-                Err(format!(
-                    "the device lacks {}",
-                    feature_names(missing).join(", ")
-                ))
-            };
-            self.techniques.push(Arc::new(TechniqueEntry {
-                kind,
-                name,
-                description: c_text(info.description).unwrap_or_default(),
-                library: file.to_owned(),
-                abi_version: (major, minor),
-                required_features: info.required_features,
-                provides: info.provides,
-                needs: info.needs,
-                support,
-                vtable,
-            }));
+            self.register_technique(file, (major, minor), (&info, stride), device_features);
         }
+    }
+
+    /// Registers one technique of a library of ABI `(major, minor)` from its description
+    /// (copied into this host's layout from entries `stride` bytes apart, the size of the
+    /// library's first description), or records why it is refused.
+    fn register_technique(
+        &mut self,
+        file: &Path,
+        (major, minor): (u32, u32),
+        (info, stride): (&abi::CadrTechniqueInfo, usize),
+        device_features: u64,
+    ) {
+        let name = c_text(info.name).unwrap_or_default();
+        let refuse_technique = |reason: String| Refusal {
+            library: file.to_owned(),
+            technique: Some(name.clone()),
+            reason,
+        };
+        if info.size as usize != stride {
+            self.refusals.push(refuse_technique(
+                "its description's size differs from the library's first one".into(),
+            ));
+            return;
+        }
+        let Some(kind) = TechniqueKind::from_abi(info.kind) else {
+            self.refusals
+                .push(refuse_technique(format!("unknown kind {}", info.kind)));
+            return;
+        };
+        if name.is_empty() {
+            self.refusals
+                .push(refuse_technique("it has no name".into()));
+            return;
+        }
+        if let Err(why) = check_required_extensions(info) {
+            self.refusals.push(refuse_technique(why));
+            return;
+        }
+        // SAFETY: checked non-null before reading its size.
+        let vtable_size = (!info.vtable.is_null())
+            .then(|| unsafe { (*info.vtable.cast::<abi::CadrCommonVtable>()).size });
+        let Some(vtable_size) =
+            vtable_size.filter(|&size| size as usize >= kind.first_vtable_size())
+        else {
+            self.refusals.push(refuse_technique(format!(
+                "its {} vtable is missing or truncated",
+                kind.name()
+            )));
+            return;
+        };
+        // Before ABI 1.3 the culling vtable's `record_gpu` was reserved: not read.
+        let readable = if kind == TechniqueKind::Culling && minor < 3 {
+            (vtable_size as usize).min(kind.first_vtable_size())
+        } else {
+            vtable_size as usize
+        };
+        // SAFETY: the vtable's size says how many bytes the library wrote.
+        let vtable = unsafe { VtableCopy::new(info.vtable, readable, kind.vtable_size()) };
+        if self
+            .techniques
+            .iter()
+            .any(|t| t.kind == kind && t.name == name)
+        {
+            self.refusals.push(refuse_technique(format!(
+                "another library already offers a {} technique named '{name}'",
+                kind.name()
+            )));
+            return;
+        }
+        let missing = info.required_features & !device_features;
+        let support = if missing == 0 {
+            Ok(())
+        } else {
+            Err(format!(
+                "the device lacks {}",
+                feature_names(missing).join(", ")
+            ))
+        };
+        self.techniques.push(Arc::new(TechniqueEntry {
+            kind,
+            name,
+            description: c_text(info.description).unwrap_or_default(),
+            library: file.to_owned(),
+            abi_version: (major, minor),
+            required_features: info.required_features,
+            provides: info.provides,
+            needs: info.needs,
+            support,
+            vtable,
+        }));
     }
 
     /// Every technique found (supported or not), in discovery order.
@@ -666,6 +722,58 @@ mod tests {
         assert!(!is_plugin_file(Path::new(
             "/x/libcadr_plugin_vertex.so.txt"
         )));
+    }
+
+    /// An entry point describing two culling techniques, `first` and `second`, whose
+    /// descriptions lie `size_of::<CadrTechniqueInfo>()` bytes apart; `second` says it is 8
+    /// bytes shorter.
+    unsafe extern "C" fn two_descriptions(library: *mut abi::CadrPluginLibrary) -> abi::CadrStatus {
+        // SAFETY: every field of a vtable is an integer or an optional function: zero is none.
+        let vtable: &'static mut abi::CadrCullingVtable =
+            Box::leak(Box::new(unsafe { std::mem::zeroed() }));
+        vtable.common.size = std::mem::size_of::<abi::CadrCullingVtable>() as u32;
+        let vtable = (vtable as *const abi::CadrCullingVtable).cast();
+        let size = std::mem::size_of::<abi::CadrTechniqueInfo>() as u32;
+        let info = |name: &'static CStr, size| abi::CadrTechniqueInfo {
+            size,
+            kind: abi::CADR_KIND_CULLING,
+            name: name.as_ptr(),
+            description: c"".as_ptr(),
+            required_features: 0,
+            provides: 0,
+            needs: 0,
+            vtable,
+            extensions: std::ptr::null(),
+            required_extensions: std::ptr::null(),
+            required_extension_count: 0,
+        };
+        let infos = Box::leak(Box::new([info(c"first", size), info(c"second", size - 8)]));
+        // SAFETY: the host passes its own writable, sized struct.
+        let library = unsafe { &mut *library };
+        library.abi_major = abi::CADR_PLUGIN_ABI_MAJOR;
+        library.abi_minor = abi::CADR_PLUGIN_ABI_MINOR;
+        library.name = c"two".as_ptr();
+        library.technique_count = 2;
+        library.techniques = infos.as_ptr();
+        abi::CADR_STATUS_OK
+    }
+
+    #[test]
+    fn a_description_whose_size_differs_from_the_first_is_refused() {
+        let mut registry = PluginRegistry::default();
+        registry.register(
+            Path::new("two"),
+            abi::CADR_PLUGIN_ABI_VERSION,
+            two_descriptions,
+            0,
+        );
+        let names: Vec<&str> = registry.techniques().iter().map(|t| &*t.name).collect();
+        assert_eq!(names, ["first"]);
+        let refusal = registry.refusals().first().expect("a refusal").to_string();
+        assert!(
+            refusal.contains("second") && refusal.contains("size differs"),
+            "{refusal}"
+        );
     }
 
     #[test]

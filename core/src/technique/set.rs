@@ -10,10 +10,10 @@ use crate::vk::raw::{self as vk, Handle};
 use cadr_plugin_abi as abi;
 
 use super::host_api::{AllocationCounts, HostServices};
-use super::pipeline::{
-    assemble_vertex_shader, PassSet, PipelineInputs, ShadeMode, ShaderCache, TechniquePipelines,
-};
+use super::pass_pipelines::{PipelineInputs, TechniquePipelines};
+use super::passes::{PassSet, ShadeMode};
 use super::registry::{feature_bits, PluginRegistry, TechniqueEntry, TechniqueKind};
+use super::shader_assembly::{assemble_vertex_shader, ShaderCache};
 use crate::gpu_scene::Transforms;
 use crate::render::TransparencyMethod;
 use crate::vk::{Device, COLOR_FORMAT, DEPTH_FORMAT};
@@ -502,6 +502,7 @@ impl Techniques {
             vulkan: &*self.vulkan,
             host: self.services.api(),
             worker_threads: self.worker_threads,
+            extensions: std::ptr::null(),
         };
         let mut instance: *mut c_void = std::ptr::null_mut();
         let mut message = Message::new();

@@ -5,8 +5,9 @@
 //!
 //! 1. The host opens a library and calls [`CADR_PLUGIN_VERSION_SYMBOL`]
 //!    (a [`CadrPluginVersionFn`]) before reading any struct. A library whose major version
-//!    differs from [`CADR_PLUGIN_ABI_MAJOR`], or whose minor version is newer than the host's,
-//!    is refused.
+//!    differs from [`CADR_PLUGIN_ABI_MAJOR`] is refused. A library of a newer minor is loaded
+//!    by hosts of ABI 1.13 and later (older hosts refuse it) unless one of its techniques
+//!    requires an extension the host does not know (see "Versions" below).
 //! 2. The host calls [`CADR_PLUGIN_ENTRY_SYMBOL`] (a [`CadrPluginEntryFn`]), which fills a
 //!    [`CadrPluginLibrary`]: the techniques it offers, each a [`CadrTechniqueInfo`] with the
 //!    device features it needs and a vtable for its kind.
@@ -28,6 +29,23 @@
 //! across the boundary (the SDK's shims catch panics and return [`CADR_STATUS_PANICKED`]);
 //! libraries are never unloaded. Functions marked "thread-safe" may be called from several
 //! threads at once on the same instance; all others are called from one thread at a time.
+//!
+//! # Versions
+//!
+//! - A new **major** version is the only way to remove or change anything: a struct's layout
+//!   below its size, a function's signature, the meaning of a constant or a flag. Flags and
+//!   constants keep their meaning for the whole of a major version.
+//! - A new **minor** version adds; readers of the older minor are not disturbed. Up to 1.13,
+//!   minors added fields at the end of size-prefixed structs. From 1.13 on, features are
+//!   added as **extensions** instead: structs that start with a [`CadrExtension`] header
+//!   (`size`, `kind`, `next`) and are chained from a struct's `extensions` pointer, as Vulkan
+//!   chains `pNext`. The core structs stay as 1.13 left them, a reader skips the kinds it does
+//!   not know, and a technique lists in `required_extensions` the kinds it cannot work
+//!   without.
+//! - The host accepts a library of any minor of its major: an older one's structs are read by
+//!   their size (what a later minor added takes its default); a newer one's by the prefix the
+//!   host knows. A technique that requires an extension the host does not know is refused,
+//!   naming the extension.
 
 #![allow(non_camel_case_types)]
 
@@ -36,7 +54,7 @@ use std::ffi::{c_char, c_void};
 /// Major version of this ABI: a library built for another major version is refused.
 pub const CADR_PLUGIN_ABI_MAJOR: u32 = 1;
 /// Minor version of this ABI: additions that older readers may ignore.
-pub const CADR_PLUGIN_ABI_MINOR: u32 = 12;
+pub const CADR_PLUGIN_ABI_MINOR: u32 = 13;
 /// `(major << 16) | minor`, what [`CadrPluginVersionFn`] returns.
 pub const CADR_PLUGIN_ABI_VERSION: u32 = (CADR_PLUGIN_ABI_MAJOR << 16) | CADR_PLUGIN_ABI_MINOR;
 
@@ -203,6 +221,27 @@ impl CadrMessage {
     }
 }
 
+/// What an extension is: one of the `CADR_EXTENSION_*` kinds. Kinds are never reused within a
+/// major version.
+pub type CadrExtensionKind = u32;
+
+/// Since ABI 1.13: the header every extension struct starts with. Extensions are chained
+/// through `next` from a struct's `extensions` pointer; a reader walks the chain and skips the
+/// kinds it does not know (`size` says how long the whole extension struct is). Whoever writes
+/// a chain owns it and keeps it valid as long as the struct it hangs from. No extension kind
+/// is defined yet: hosts of ABI 1.13 know none, so they skip every extension a technique
+/// offers and refuse a technique that requires one.
+#[repr(C)]
+#[derive(Debug)]
+pub struct CadrExtension {
+    /// Size of the whole extension struct, this header included.
+    pub size: u32,
+    /// Which extension this is (`CADR_EXTENSION_*`).
+    pub kind: CadrExtensionKind,
+    /// The next extension of the chain, or null.
+    pub next: *const CadrExtension,
+}
+
 /// What a library offers, filled by [`CadrPluginEntryFn`]. The host owns the struct; the
 /// library owns everything it points at, which lives as long as the process.
 #[repr(C)]
@@ -246,6 +285,15 @@ pub struct CadrTechniqueInfo {
     /// The kind's vtable: [`CadrVertexPathVtable`], [`CadrParameterPathVtable`],
     /// [`CadrSubmissionVtable`], [`CadrCullingVtable`] or [`CadrTransparencyVtable`].
     pub vtable: *const c_void,
+    /// Since ABI 1.13: the technique's extension structs for the host (a chain of
+    /// [`CadrExtension`]s, or null), owned by the library and living as long as the process.
+    pub extensions: *const CadrExtension,
+    /// Since ABI 1.13: `required_extension_count` extension kinds the technique cannot work
+    /// without (null when the count is 0). A host that does not know one of them refuses the
+    /// technique, naming it.
+    pub required_extensions: *const CadrExtensionKind,
+    /// Since ABI 1.13: the number of kinds at `required_extensions`.
+    pub required_extension_count: u32,
 }
 
 /// `vkGetInstanceProcAddr`, from which a plugin loads every other Vulkan function.
@@ -371,6 +419,30 @@ pub struct CadrCreateInfo {
     pub host: *const CadrHostApi,
     /// Worker threads the technique may use (at least 1).
     pub worker_threads: u32,
+    /// Since ABI 1.13: the host's extension structs for this instance (a chain of
+    /// [`CadrExtension`]s, or null), valid for the call. Hosts of ABI 1.13 offer none.
+    pub extensions: *const CadrExtension,
+}
+
+/// The extension of `kind` in the chain that starts at `chain`, if there is one.
+///
+/// # Safety
+/// `chain` is null or the first of a chain of valid extension structs, as the ABI's
+/// `extensions` pointers are.
+pub unsafe fn find_extension<'chain>(
+    chain: *const CadrExtension,
+    kind: CadrExtensionKind,
+) -> Option<&'chain CadrExtension> {
+    let mut next = chain;
+    while !next.is_null() {
+        // SAFETY: the caller promises a chain of valid extension structs, alive for 'chain.
+        let extension = unsafe { &*next };
+        if extension.kind == kind {
+            return Some(extension);
+        }
+        next = extension.next;
+    }
+    None
 }
 
 /// A buffer of the scene the host keeps on the GPU.
@@ -1331,6 +1403,34 @@ mod tests {
         assert_eq!(std::mem::size_of::<CadrPassFilter>(), 12);
         assert_eq!(std::mem::size_of::<CadrPassExclusion>(), 8);
         assert_eq!(CADR_PLUGIN_ABI_VERSION >> 16, CADR_PLUGIN_ABI_MAJOR);
+        assert_eq!(std::mem::size_of::<CadrExtension>(), 16);
+    }
+
+    #[test]
+    fn an_extension_is_found_by_its_kind_anywhere_in_its_chain() {
+        let last = CadrExtension {
+            size: 16,
+            kind: 7,
+            next: std::ptr::null(),
+        };
+        let first = CadrExtension {
+            size: 16,
+            kind: 3,
+            next: &last,
+        };
+        // SAFETY: a chain of two live extensions, then the empty chain.
+        unsafe {
+            assert_eq!(find_extension(&first, 7).map(|e| e.kind), Some(7));
+            assert_eq!(find_extension(&first, 3).map(|e| e.kind), Some(3));
+            assert!(
+                find_extension(&first, 5).is_none(),
+                "a kind not in the chain"
+            );
+            assert!(
+                find_extension(std::ptr::null(), 3).is_none(),
+                "the empty chain"
+            );
+        }
     }
 
     #[test]

@@ -129,6 +129,9 @@ fn info<V>(kind: abi::CadrTechniqueKind, describe: Describe, vtable: V) -> abi::
         provides: describe.provides,
         needs: describe.needs,
         vtable: Box::leak(Box::new(vtable)) as *const V as *const c_void,
+        extensions: std::ptr::null(),
+        required_extensions: std::ptr::null(),
+        required_extension_count: 0,
     }
 }
 

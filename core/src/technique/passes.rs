@@ -1,0 +1,133 @@
+//! What a frame draws: the display modes a host chooses ([`ShadeMode`]) and the set of passes
+//! a frame of them draws ([`PassSet`]), which keys the pipelines built for it.
+
+/// The display modes: how surfaces and edges are drawn.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Default)]
+pub enum ShadeMode {
+    /// Shaded triangles.
+    #[default]
+    Solid,
+    /// Shaded triangles (pushed back by a depth bias) with edge lines over them.
+    Edges,
+    /// Edge lines only, those hidden behind opaque surfaces removed: the opaque surfaces fill
+    /// the depth buffer (pushed back by a depth bias) but not the picture; translucent ones
+    /// hide no lines. Section caps are filled, over the lines behind them.
+    HiddenLine,
+    /// Every triangle's edges, hidden ones included (no surface is filled).
+    Wireframe,
+    /// Every part translucent with its edges, except highlighted parts, which stay opaque: what
+    /// is inside an assembly shows through its housing.
+    XRay,
+}
+
+impl ShadeMode {
+    /// Every mode.
+    pub const ALL: [ShadeMode; 5] = [
+        ShadeMode::Solid,
+        ShadeMode::Edges,
+        ShadeMode::HiddenLine,
+        ShadeMode::Wireframe,
+        ShadeMode::XRay,
+    ];
+
+    /// Its name on the command line.
+    pub fn name(self) -> &'static str {
+        match self {
+            ShadeMode::Solid => "solid",
+            ShadeMode::Edges => "edges",
+            ShadeMode::HiddenLine => "hidden-line",
+            ShadeMode::Wireframe => "wireframe",
+            ShadeMode::XRay => "xray",
+        }
+    }
+
+    /// Whether translucent surfaces are drawn as such in this mode (in the line modes no
+    /// surface is drawn: in hidden-line the opaque ones hide lines, the translucent ones do
+    /// not). X-ray always draws some.
+    pub fn shows_translucency(self) -> bool {
+        matches!(self, ShadeMode::Solid | ShadeMode::Edges | ShadeMode::XRay)
+    }
+
+    /// Whether this mode draws feature edges, which silhouette edges join when they are on
+    /// (`Renderer::set_silhouettes`): edges, hidden-line and X-ray. Wireframe draws every
+    /// triangle's edges, which need none.
+    pub fn draws_silhouettes(self) -> bool {
+        matches!(
+            self,
+            ShadeMode::Edges | ShadeMode::HiddenLine | ShadeMode::XRay
+        )
+    }
+
+    /// Parses a command-line name.
+    pub fn parse(name: &str) -> Option<Self> {
+        Self::ALL.into_iter().find(|m| m.name() == name)
+    }
+}
+
+/// The passes a set of pipelines draws: the shaded frame in a shade mode, or the pick pass.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum PassSet {
+    /// Shaded triangles (and edges in the edge modes) into the colour target; with
+    /// `translucent`, opaque surfaces first, then the translucent ones with the transparency
+    /// method (its targets join the rendering) and its merge after the rendering.
+    Shaded {
+        /// The display mode.
+        mode: ShadeMode,
+        /// Whether the frame draws translucent surfaces.
+        translucent: bool,
+        /// Samples per pixel (1, or the MSAA level the renderer draws with).
+        samples: u32,
+        /// In the hidden-line mode, whether hidden edges are drawn too, dashed and lighter
+        /// (always false in the other modes).
+        dashed_hidden: bool,
+        /// In the hidden-line mode, whether the scene has translucent surfaces, which then
+        /// hide no lines: what is behind glass shows through it (always false in the other
+        /// modes, which draw translucency as such).
+        lines_through_translucent: bool,
+        /// In the edges and hidden-line modes, whether section caps can show (caps are on and
+        /// the eye is on the cut side of a plane): the lines then write no depth, and after
+        /// them a caps pass (`shaders/caps.frag`, depth EQUAL on the surfaces' depth) paints
+        /// the visible caps again over the lines of the far faces they are painted on (always
+        /// false in the other modes).
+        caps_over_lines: bool,
+        /// With `dashed_hidden`, whether the silhouettes of hidden curved surfaces are dashed
+        /// too: a pass over the triangles whose geometry shader
+        /// (`shaders/silhouette_lines.geom`) turns each into the segment where its surface
+        /// turns away from the eye, drawn only behind the surfaces (silhouettes on, and the
+        /// device has geometry shaders; always false otherwise).
+        hidden_silhouettes: bool,
+    },
+    /// Triangles of pickable instances, their ids into the pick target.
+    Pick {
+        /// Whether translucent parts let the click through to what is behind them.
+        through_translucent: bool,
+    },
+}
+
+impl PassSet {
+    /// Samples per pixel of the pass's attachments (the pick pass is always exact: one).
+    pub fn samples(self) -> u32 {
+        match self {
+            PassSet::Shaded { samples, .. } => samples,
+            PassSet::Pick { .. } => 1,
+        }
+    }
+
+    /// Whether the passes fill surfaces (solid, edges, X-ray), so that ambient occlusion, when
+    /// on, applies.
+    pub fn fills_surfaces(self) -> bool {
+        matches!(
+            self,
+            PassSet::Shaded {
+                mode: ShadeMode::Solid | ShadeMode::Edges | ShadeMode::XRay,
+                ..
+            }
+        )
+    }
+
+    /// Whether the passes draw feature edges (edges, hidden-line, X-ray), so that silhouettes,
+    /// when on, join them.
+    pub fn draws_edges(self) -> bool {
+        matches!(self, PassSet::Shaded { mode, .. } if mode.draws_silhouettes())
+    }
+}

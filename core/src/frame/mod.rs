@@ -44,29 +44,23 @@ pub struct Renderer {
     /// What GPU cullers read of the view (`CadrGpuCullView`), host-written every frame.
     cull_view: Buffer,
     commands: CommandContext,
-    /// The GPU time of a frame's pass (the main command buffer).
-    timer: Option<GpuTimer>,
-    /// The GPU time of a frame's uploads (the prologue submitted ahead of the main buffer).
-    upload_timer: Option<GpuTimer>,
-    /// Whether the last submission carried an upload prologue (its GPU time is the frame's
-    /// too).
-    last_submission_uploaded: bool,
-    /// The id target and its readback, created on the first pick.
-    pick: Option<PickTarget>,
-    /// The replay key of the last recorded frame, if it had one.
-    last_recorded: Option<u64>,
-    /// The frame in the command buffer, if it may be submitted again as it is: its replay
-    /// key and what it drew.
-    replayable: Option<(u64, FrameStats)>,
+    timers: FrameTimers,
+    replay: ReplayState,
     /// Frames the GPU may work on while the CPU prepares the next (see
     /// [`Renderer::set_frames_in_flight`]).
     frames_in_flight: u32,
-    /// The section planes and caps every pass applies.
-    section: Section,
-    /// What the transparency method of the last frame with translucent surfaces drew into.
-    transparency: Option<TransparencyTargets>,
     /// The storage the frame set names while no method's storage is made.
     placeholder_storage: Buffer,
+    /// The generation of the GPU scene resources the frame set names, if any.
+    bound_scene: Option<u64>,
+    settings: FrameSettings,
+    on_demand: OnDemandTargets,
+}
+
+/// What a host sets on a renderer and every later frame draws with.
+struct FrameSettings {
+    /// The section planes and caps every pass applies.
+    section: Section,
     /// The background every picture is drawn over.
     background: Background,
     /// The colours of edge lines and highlights.
@@ -75,19 +69,48 @@ pub struct Renderer {
     ssao: bool,
     /// Whether the edge display modes draw silhouette edges with the feature edges.
     silhouettes: bool,
-    /// The set naming the target's depth for the passes over the picture that read it
-    /// (ambient occlusion, silhouettes); made on first use, dropped when the target is remade.
-    depth_set: Option<DescriptorSets>,
     /// Whether materials' textures are sampled (vertex colours apply either way).
     textures: bool,
     /// How highlighted parts are drawn.
     highlight_style: HighlightStyle,
+}
+
+/// The GPU timers of a frame.
+struct FrameTimers {
+    /// The GPU time of a frame's pass (the main command buffer).
+    pass: Option<GpuTimer>,
+    /// The GPU time of a frame's uploads (the prologue submitted ahead of the main buffer).
+    uploads: Option<GpuTimer>,
+}
+
+/// What lets an unchanged frame be submitted again instead of recorded.
+#[derive(Default)]
+struct ReplayState {
+    /// Whether the last submission carried an upload prologue (its GPU time is the frame's
+    /// too).
+    last_submission_uploaded: bool,
+    /// The replay key of the last recorded frame, if it had one.
+    last_recorded: Option<u64>,
+    /// The frame in the command buffer, if it may be submitted again as it is: its replay
+    /// key and what it drew.
+    replayable: Option<(u64, FrameStats)>,
+}
+
+/// What frames make on first need besides the picture, kept while the size (and method)
+/// stays the same.
+#[derive(Default)]
+struct OnDemandTargets {
+    /// What the transparency method of the last frame with translucent surfaces drew into.
+    transparency: Option<TransparencyTargets>,
     /// The pixel keys at the target's size (made by the first frame that needs them: with the
     /// outline style, the silhouettes' nearest surfaces or the cap keys), which binding 7 of
     /// the frame set names; otherwise the placeholder storage is named there.
     pixel_keys: Option<PixelKeys>,
-    /// The generation of the GPU scene resources the frame set names, if any.
-    bound_scene: Option<u64>,
+    /// The set naming the target's depth for the passes over the picture that read it
+    /// (ambient occlusion, silhouettes); made on first use, dropped when the target is remade.
+    depth_set: Option<DescriptorSets>,
+    /// The id target and its readback, created on the first pick.
+    pick: Option<PickTarget>,
 }
 
 impl Renderer {
@@ -131,45 +154,44 @@ impl Renderer {
             frame_sets,
             cull_view,
             commands,
-            timer,
-            upload_timer,
-            last_submission_uploaded: false,
-            pick: None,
-            last_recorded: None,
-            replayable: None,
+            timers: FrameTimers {
+                pass: timer,
+                uploads: upload_timer,
+            },
+            replay: ReplayState::default(),
             frames_in_flight: 1,
-            section: Section::none(),
-            transparency: None,
             placeholder_storage,
-            textures: true,
-            highlight_style: HighlightStyle::default(),
-            pixel_keys: None,
             bound_scene: None,
-            background: Background::default(),
-            palette: Palette::default(),
-            ssao: false,
-            silhouettes: true,
-            depth_set: None,
+            settings: FrameSettings {
+                section: Section::none(),
+                background: Background::default(),
+                palette: Palette::default(),
+                ssao: false,
+                silhouettes: true,
+                textures: true,
+                highlight_style: HighlightStyle::default(),
+            },
+            on_demand: OnDemandTargets::default(),
         })
     }
 
     /// The background pictures are drawn over ([`Background::GRADIENT`] by default).
     pub fn background(&self) -> Background {
-        self.background
+        self.settings.background
     }
 
     /// Sets the background; the next frame draws it (through the frame's uniforms, so a
     /// recorded frame replays with it).
     pub fn set_background(&mut self, background: Background) -> RenderResult<()> {
         background.validate().map_err(RenderError::InvalidUse)?;
-        self.background = background;
+        self.settings.background = background;
         Ok(())
     }
 
     /// The colours of edge lines and highlights and the outline band's width
     /// ([`Palette::DEFAULT`] by default).
     pub fn palette(&self) -> Palette {
-        self.palette
+        self.settings.palette
     }
 
     /// Sets the colours of edge lines and highlights and the outline band's width; the next
@@ -178,7 +200,7 @@ impl Renderer {
     /// [`Palette::MAX_OUTLINE_WIDTH`], keeping the palette it had.
     pub fn set_palette(&mut self, palette: Palette) -> RenderResult<()> {
         palette.validate().map_err(RenderError::InvalidUse)?;
-        self.palette = palette;
+        self.settings.palette = palette;
         Ok(())
     }
 
@@ -186,17 +208,17 @@ impl Renderer {
     /// occlusion: creases, corners and gaps between parts darkened from the depth (off by
     /// default).
     pub fn ssao(&self) -> bool {
-        self.ssao
+        self.settings.ssao
     }
 
     /// Turns screen-space ambient occlusion on or off (see [`Renderer::ssao`]); the next frame
     /// draws with it.
     pub fn set_ssao(&mut self, on: bool) -> RenderResult<()> {
-        if on != self.ssao {
+        if on != self.settings.ssao {
             self.commands.wait()?;
             // The recorded frame has (or lacks) the occlusion pass.
             self.forget_recording();
-            self.ssao = on;
+            self.settings.ssao = on;
         }
         Ok(())
     }
@@ -209,24 +231,24 @@ impl Renderer {
     /// which needs the device's `fragmentStoresAndAtomics`: without it, X-ray draws none and
     /// the others draw every silhouette in the edge lines' colour.
     pub fn silhouettes(&self) -> bool {
-        self.silhouettes
+        self.settings.silhouettes
     }
 
     /// Turns silhouette edges on or off (see [`Renderer::silhouettes`]); the next frame
     /// draws with it.
     pub fn set_silhouettes(&mut self, on: bool) -> RenderResult<()> {
-        if on != self.silhouettes {
+        if on != self.settings.silhouettes {
             self.commands.wait()?;
             // The recorded frame has (or lacks) the silhouettes pass.
             self.forget_recording();
-            self.silhouettes = on;
+            self.settings.silhouettes = on;
         }
         Ok(())
     }
 
     /// How highlighted parts are drawn ([`HighlightStyle::Tint`] by default).
     pub fn highlight_style(&self) -> HighlightStyle {
-        self.highlight_style
+        self.settings.highlight_style
     }
 
     /// Sets how highlighted parts are drawn; the next frame draws so. The outline style is
@@ -241,11 +263,11 @@ impl Renderer {
                 self.device.adapter().name
             )));
         }
-        if style != self.highlight_style {
+        if style != self.settings.highlight_style {
             self.commands.wait()?;
             // The recorded frame has (or lacks) the outline's clear and pass.
             self.forget_recording();
-            self.highlight_style = style;
+            self.settings.highlight_style = style;
             self.drop_pixel_keys();
         }
         Ok(())
@@ -253,7 +275,7 @@ impl Renderer {
 
     /// Whether materials' textures are sampled (on by default). Vertex colours apply either way.
     pub fn textures(&self) -> bool {
-        self.textures
+        self.settings.textures
     }
 
     /// Turns the sampling of materials' textures on or off (`cadr render --no-textures`); the
@@ -261,7 +283,7 @@ impl Renderer {
     /// replayed frame follows too). A BLEND material that is translucent only through its
     /// texture still goes through the translucent pass, where it comes out opaque.
     pub fn set_textures(&mut self, on: bool) {
-        self.textures = on;
+        self.settings.textures = on;
     }
 
     /// Points the frame set's scene bindings (2–6, 8 and the texture table 9) at `resources`
@@ -303,23 +325,24 @@ impl Renderer {
     /// Forgets the frame in the command buffer: the next frame is recorded afresh, whatever
     /// its replay key (it would draw what no longer holds: other passes, bindings or targets).
     fn forget_recording(&mut self) {
-        self.replayable = None;
-        self.last_recorded = None;
+        self.replay.replayable = None;
+        self.replay.last_recorded = None;
     }
 
     /// The depth set of the passes over the picture for the current target (the GPU is
     /// idle: the caller waited for the last frame).
     fn ensure_depth_set(&mut self) -> RenderResult<vk::DescriptorSet> {
-        if self.depth_set.is_none() {
+        if self.on_demand.depth_set.is_none() {
             let sets = DescriptorSets::new(
                 &self.device,
                 "picture depth",
                 &[self.pipelines.depth_set_layout()],
             )?;
             sets.write_sampled_image(0, 0, self.target.depth.view());
-            self.depth_set = Some(sets);
+            self.on_demand.depth_set = Some(sets);
         }
         Ok(self
+            .on_demand
             .depth_set
             .as_ref()
             .map_or(vk::DescriptorSet::null(), |s| s.sets[0]))
@@ -327,13 +350,13 @@ impl Renderer {
 
     /// The section planes and caps (none by default).
     pub fn section(&self) -> &Section {
-        &self.section
+        &self.settings.section
     }
 
     /// Sets the section planes and caps; the next frame applies them (a recorded frame may be
     /// replayed: they reach the GPU through the frame's uniforms).
     pub fn set_section(&mut self, section: Section) {
-        self.section = section;
+        self.settings.section = section;
     }
 
     /// The device.
@@ -361,8 +384,8 @@ impl Renderer {
         // The recorded frame draws into the old target: never submit it again.
         self.forget_recording();
         self.target = OffscreenTarget::new(&self.device, width, height, self.msaa())?;
-        self.depth_set = None;
-        self.pick = None;
+        self.on_demand.depth_set = None;
+        self.on_demand.pick = None;
         self.drop_transparency_targets();
         self.drop_pixel_keys();
         Ok(())
@@ -397,8 +420,8 @@ impl Renderer {
         self.forget_recording();
         let (width, height) = self.size();
         self.target = OffscreenTarget::new(&self.device, width, height, samples)?;
-        self.depth_set = None;
-        self.pick = None;
+        self.on_demand.depth_set = None;
+        self.on_demand.pick = None;
         self.drop_transparency_targets();
         Ok(())
     }
@@ -451,10 +474,11 @@ impl Renderer {
                 "pixels {rect} are not inside the {width}x{height} target"
             )));
         }
-        match &mut self.pick {
+        match &mut self.on_demand.pick {
             Some(target) => target.prepare(rect),
             None => {
-                self.pick = Some(PickTarget::new(&self.device, self.target.extent(), rect)?);
+                self.on_demand.pick =
+                    Some(PickTarget::new(&self.device, self.target.extent(), rect)?);
                 Ok(())
             }
         }
@@ -462,7 +486,7 @@ impl Renderer {
 
     /// Records the copy of the prepared rectangle's ids and depths (after the pick pass).
     pub(crate) fn record_pick_readback(&self, command_buffer: vk::CommandBuffer) {
-        if let Some(target) = &self.pick {
+        if let Some(target) = &self.on_demand.pick {
             target.record_readback(&self.device, command_buffer, &self.target.depth);
         }
     }
@@ -471,7 +495,7 @@ impl Renderer {
     /// pickable instance.
     pub(crate) fn pick_samples(&self) -> RenderResult<Vec<pick::PickSample>> {
         self.finish()?;
-        match &self.pick {
+        match &self.on_demand.pick {
             Some(target) => target.samples(),
             None => Ok(Vec::new()),
         }
@@ -484,14 +508,14 @@ impl Renderer {
 
     /// Forgets the pixel keys; the frame set names the placeholder storage there again.
     fn drop_pixel_keys(&mut self) {
-        if self.pixel_keys.take().is_some() {
+        if self.on_demand.pixel_keys.take().is_some() {
             name_pixel_keys(&self.frame_sets, &self.placeholder_storage);
         }
     }
 
     /// Forgets the transparency targets; the frame set names the placeholder storage again.
     fn drop_transparency_targets(&mut self) {
-        if self.transparency.take().is_some() {
+        if self.on_demand.transparency.take().is_some() {
             name_storage(&self.frame_sets, &self.placeholder_storage);
         }
     }

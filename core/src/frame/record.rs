@@ -134,7 +134,7 @@ pub(crate) struct FrameRecorders<'r, 'a> {
 impl Renderer {
     /// Where the silhouettes of a frame planned as `plan` are found, if it draws them.
     fn silhouette_source(&self, plan: &FramePlan<'_>) -> Option<SilhouetteSource> {
-        if !(self.silhouettes && plan.draws_edges && plan.pass == PassTarget::Color) {
+        if !(self.settings.silhouettes && plan.draws_edges && plan.pass == PassTarget::Color) {
             return None;
         }
         if plan.display & DISPLAY_XRAY == 0 {
@@ -176,10 +176,10 @@ impl Renderer {
     ) -> RenderResult<FrameStats> {
         let eye = camera.eye();
         let color = plan.pass == PassTarget::Color;
-        let outline = self.highlight_style == HighlightStyle::Outline && color;
+        let outline = self.settings.highlight_style == HighlightStyle::Outline && color;
         let silhouettes = self.silhouette_source(&plan);
         let depth_overlays = DepthOverlays {
-            ssao: self.ssao && plan.fills_surfaces && color,
+            ssao: self.settings.ssao && plan.fills_surfaces && color,
             silhouettes,
             nearest_surfaces: self.records_nearest_surfaces(&plan, silhouettes),
         };
@@ -189,7 +189,7 @@ impl Renderer {
         let cap_keys = color
             && (plan.fills_surfaces || plan.draws_edges)
             && self.device.capabilities().fragment_stores_and_atomics
-            && self.section.caps_seen_from(eye);
+            && self.settings.section.caps_seen_from(eye);
         let display = plan.display
             | if nearest_surfaces {
                 DISPLAY_NEAREST_SURFACES
@@ -235,7 +235,7 @@ impl Renderer {
         if plan.uploads_pending {
             self.record_upload_prologue(&mut recorders, &mut stats)?;
         }
-        match (replay_key, self.replayable) {
+        match (replay_key, self.replay.replayable) {
             (Some(key), Some((recorded, recorded_stats))) if key == recorded => {
                 let replayed = FrameStats {
                     bytes_uploaded: stats.bytes_uploaded,
@@ -248,18 +248,18 @@ impl Renderer {
                     previous_gpu_us,
                 );
             }
-            _ => self.replayable = None,
+            _ => self.replay.replayable = None,
         }
 
         let command_buffer = self.commands.begin()?;
-        if let Some(timer) = &mut self.timer {
+        if let Some(timer) = &mut self.timers.pass {
             timer.begin(command_buffer);
         }
         let phases = plan.phases.max(1);
         (recorders.before)(self, command_buffer, 0, &mut stats)?;
         let transparency = plan
             .translucency
-            .and(self.transparency.as_ref())
+            .and(self.on_demand.transparency.as_ref())
             .filter(|_| plan.pass == PassTarget::Color);
         let pass = (&plan, transparency, key_use, depth_set.is_some());
         self.record_pass(command_buffer, pass, &mut recorders, &mut stats)?;
@@ -273,7 +273,7 @@ impl Renderer {
             self.record_overlay(command_buffer, merge, depth_overlays, keyed)?;
         }
         (recorders.after)(self, command_buffer, phases - 1, &mut stats)?;
-        if let Some(timer) = &mut self.timer {
+        if let Some(timer) = &mut self.timers.pass {
             timer.end(command_buffer);
         }
         stats.cpu_record_us = record_start.elapsed().as_secs_f64() * 1e6;
@@ -292,15 +292,15 @@ impl Renderer {
     ) -> RenderResult<FrameStats> {
         let submit_start = Instant::now();
         self.commands.submit()?;
-        self.last_submission_uploaded = uploaded;
+        self.replay.last_submission_uploaded = uploaded;
         stats.cpu_submit_us = submit_start.elapsed().as_secs_f64() * 1e6;
         // The first recording after a change may do one-time work (new buffers cleared);
         // the second with the same key is the steady frame. Uploads are not part of it: they
         // go in the prologue.
-        if replay_key.is_some() && replay_key == self.last_recorded {
-            self.replayable = replay_key.map(|key| (key, stats));
+        if replay_key.is_some() && replay_key == self.replay.last_recorded {
+            self.replay.replayable = replay_key.map(|key| (key, stats));
         }
-        self.last_recorded = replay_key;
+        self.replay.last_recorded = replay_key;
         stats.gpu_us = self.finish_or_keep_in_flight(previous_gpu_us)?;
         Ok(stats)
     }
@@ -313,21 +313,21 @@ impl Renderer {
         let mut view_rotation = camera.view;
         view_rotation.w_axis = glam::DVec4::W;
         let (width, height) = self.size();
-        let [r, g, b] = self.palette.highlight;
+        let [r, g, b] = self.settings.palette.highlight;
         FrameUniforms {
             projection: camera.projection.as_mat4().to_cols_array_2d(),
             view_rotation: view_rotation.as_mat4().to_cols_array_2d(),
             eye_high: [eye_high[0], eye_high[1], eye_high[2], 0.0],
             eye_low: [eye_low[0], eye_low[1], eye_low[2], 0.0],
             light: [0.22, 0.68, 0.35, 0.0],
-            section_planes: self.section.eye_relative(eye),
-            section_colors: self.section.colors(),
-            section: [self.section.flags(), 0, 0, 0],
+            section_planes: self.settings.section.eye_relative(eye),
+            section_colors: self.settings.section.colors(),
+            section: [self.settings.section.flags(), 0, 0, 0],
             target: [width, height, display, 0],
-            background_top: opaque(self.background.top),
-            background_bottom: opaque(self.background.bottom),
-            edge_color: opaque(self.palette.edges),
-            highlight: [r, g, b, self.palette.outline_width as f32],
+            background_top: opaque(self.settings.background.top),
+            background_bottom: opaque(self.settings.background.bottom),
+            edge_color: opaque(self.settings.palette.edges),
+            highlight: [r, g, b, self.settings.palette.outline_width as f32],
         }
     }
 
@@ -343,11 +343,11 @@ impl Renderer {
             return Ok(());
         }
         let command_buffer = self.commands.begin_prologue()?;
-        if let Some(timer) = &mut self.upload_timer {
+        if let Some(timer) = &mut self.timers.uploads {
             timer.begin(command_buffer);
         }
         (recorders.uploads)(self, command_buffer, 0, stats)?;
-        if let Some(timer) = &mut self.upload_timer {
+        if let Some(timer) = &mut self.timers.uploads {
             timer.end(command_buffer);
         }
         Ok(self.commands.end_prologue(key)?)
@@ -380,6 +380,7 @@ impl Renderer {
             );
         }
         if let Some((keys, span)) = self
+            .on_demand
             .pixel_keys
             .as_ref()
             .and_then(|keys| Some((keys, keys.span(key_use)?)))
@@ -438,7 +439,7 @@ impl Renderer {
     ) -> RenderResult<FrameStats> {
         let submit_start = Instant::now();
         self.commands.resubmit()?;
-        self.last_submission_uploaded = uploaded;
+        self.replay.last_submission_uploaded = uploaded;
         let stats = FrameStats {
             cpu_record_us: (submit_start - start).as_secs_f64() * 1e6,
             cpu_submit_us: submit_start.elapsed().as_secs_f64() * 1e6,
@@ -454,11 +455,11 @@ impl Renderer {
     /// The GPU time of the last finished frame (its uploads and its pass), if timestamps
     /// work.
     fn gpu_time(&self) -> RenderResult<Option<f64>> {
-        let pass = match &self.timer {
+        let pass = match &self.timers.pass {
             Some(timer) => timer.elapsed_us()?,
             None => None,
         };
-        let uploads = match (&self.upload_timer, self.last_submission_uploaded) {
+        let uploads = match (&self.timers.uploads, self.replay.last_submission_uploaded) {
             (Some(timer), true) => timer.elapsed_us()?,
             _ => None,
         };
@@ -467,7 +468,7 @@ impl Renderer {
 
     /// The image and clear value of a pass target.
     fn pass_image(&self, pass: PassTarget) -> (&Image, vk::ClearColorValue) {
-        match (pass, &self.pick) {
+        match (pass, &self.on_demand.pick) {
             (PassTarget::Pick, Some(target)) => {
                 (target.ids(), vk::ClearColorValue { uint32: [0; 4] })
             }
@@ -485,6 +486,7 @@ impl Renderer {
         let extent = self.target.extent();
         let samples = self.msaa();
         if self
+            .on_demand
             .transparency
             .as_ref()
             .is_some_and(|t| t.fit(method, extent, samples))
@@ -501,7 +503,7 @@ impl Renderer {
             self.pipelines.merge_set_layout(),
         )?;
         name_storage(&self.frame_sets, &targets.storage);
-        self.transparency = Some(targets);
+        self.on_demand.transparency = Some(targets);
         Ok(())
     }
 
@@ -511,7 +513,7 @@ impl Renderer {
     /// last frame; the recorded frame named the old binding and is forgotten).
     fn ensure_pixel_keys(&mut self, planes: u64) -> RenderResult<()> {
         let extent = self.target.extent();
-        let made = self.pixel_keys.as_ref();
+        let made = self.on_demand.pixel_keys.as_ref();
         if made.is_some_and(|k| k.holds(extent, planes)) {
             return Ok(());
         }
@@ -522,7 +524,7 @@ impl Renderer {
         self.forget_recording();
         let keys = PixelKeys::new(&self.device, extent, planes)?;
         name_pixel_keys(&self.frame_sets, &keys.buffer);
-        self.pixel_keys = Some(keys);
+        self.on_demand.pixel_keys = Some(keys);
         Ok(())
     }
 

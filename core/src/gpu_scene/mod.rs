@@ -124,27 +124,53 @@ pub struct GpuScene {
     reader: ChangeReader,
     arenas: GeometryArenas,
     instances: Vec<abi::CadrInstance>,
-    candidate_bits: Vec<u64>,
-    culled_bits: Vec<u64>,
-    drawn_bits: Vec<u64>,
+    bits: InstanceBits,
     matrices: Vec<abi::CadrMatrix>,
-    /// World matrices in f64 per matrix slot, for techniques that read them on the host; empty
-    /// while the transform hierarchy is on the GPU ([`Transforms::Gpu`]), where none does.
-    worlds: Vec<[f64; 16]>,
     materials: Vec<abi::CadrMaterial>,
+    material_info: MaterialInfo,
+    /// The textures, rebuilt when the graph's change.
+    textures: SceneTextures,
+    moves: TransformState,
+    /// The arrays' GPU copies, their sparse uploader and its pipelines.
+    gpu: GpuCopies,
+    frame_dirty: FrameDirty,
+    generations: Generations,
+    counts: SceneCounts,
+    /// The buffers as techniques see them (with device addresses), refreshed when replaced.
+    buffer_refs: [abi::CadrBufferRef; 7],
+}
+
+/// Per instance id, one bit each: what may be drawn, what culling kept, what is drawn.
+struct InstanceBits {
+    /// Candidates for culling: alive, visible, with triangles.
+    candidate: Vec<u64>,
+    /// Culling's result as last applied: set where the culler keeps the id (all set until a
+    /// culler says otherwise).
+    culled: Vec<u64>,
+    /// Drawn this frame: a candidate that culling keeps.
+    drawn: Vec<u64>,
+}
+
+/// What the scene knows of each material slot besides its values.
+struct MaterialInfo {
     /// Per material slot: its texture description (`textures::gpu_material_texture`).
-    material_textures: Vec<[u32; 12]>,
+    textures: Vec<[u32; 12]>,
     /// Per material slot: the translucency flags of its parts (see [`translucency`]).
     translucency: Vec<abi::CadrInstanceFlags>,
     /// Material slots whose parts are translucent: with textures off (`[0]`) and on (`[1]`).
-    translucent_materials: [usize; 2],
+    translucent: [usize; 2],
     /// Material slots whose texture description is not the default (a texture, or an alpha
     /// mode other than BLEND): while there are none, the vertex shader skips reading them.
-    described_materials: usize,
-    /// The textures, rebuilt when the graph's change.
-    textures: SceneTextures,
+    described: usize,
+}
+
+/// How moved subtrees get their world matrices, and what the last move left to upload.
+struct TransformState {
     /// Where moved subtrees' world matrices are computed.
     transforms: Transforms,
+    /// World matrices in f64 per matrix slot, for techniques that read them on the host; empty
+    /// while the transform hierarchy is on the GPU ([`Transforms::Gpu`]), where none does.
+    worlds: Vec<[f64; 16]>,
     /// Local matrices per tree node (with [`Transforms::Gpu`] only).
     locals: Vec<[f32; LOCAL_WORDS]>,
     /// Tree nodes moved since the last upload (with [`Transforms::Gpu`]).
@@ -152,18 +178,37 @@ pub struct GpuScene {
     hierarchy: TransformHierarchy,
     /// What the last upload's hierarchy pass did.
     last_hierarchy: Option<HierarchyPlan>,
-    matrix_gpu: GpuArray,
-    material_gpu: GpuArray,
-    material_texture_gpu: GpuArray,
-    record_gpu: GpuArray,
-    cull_gpu: GpuArray,
-    local_gpu: GpuArray,
+}
+
+/// The GPU copies of the scene's arrays, the uploader that gathers their changed items and the
+/// compute pipelines that scatter them and run the transform hierarchy.
+struct GpuCopies {
+    matrices: GpuArray,
+    materials: GpuArray,
+    material_textures: GpuArray,
+    records: GpuArray,
+    cull_entries: GpuArray,
+    locals: GpuArray,
     uploader: SparseUploader,
-    frame_dirty_matrices: Vec<u32>,
-    frame_dirty_materials: Vec<u32>,
-    draws_generation: u64,
-    parameters_generation: u64,
-    buffers_generation: u64,
+    pipelines: ScenePipelines,
+}
+
+/// Slots changed since the last upload.
+struct FrameDirty {
+    matrices: Vec<u32>,
+    materials: Vec<u32>,
+}
+
+/// Generations that tell techniques what changed (see the plugin ABI's `CadrSceneView`).
+struct Generations {
+    draws: u64,
+    parameters: u64,
+    buffers: u64,
+}
+
+/// What the scene counts for statistics.
+struct SceneCounts {
+    /// Triangles of the drawn instances.
     triangles: u64,
     /// Live instances flagged highlighted.
     highlighted: usize,
@@ -171,10 +216,6 @@ pub struct GpuScene {
     last_upload: UploadStats,
     /// Instance entries refreshed by the last sync.
     last_touched: u64,
-    /// The buffers as techniques see them (with device addresses), refreshed when replaced.
-    buffer_refs: [abi::CadrBufferRef; 7],
-    /// The scatter and transform hierarchy pipelines.
-    pipelines: ScenePipelines,
 }
 
 impl GpuScene {
@@ -198,48 +239,62 @@ impl GpuScene {
             reader,
             arenas,
             instances: Vec::new(),
-            candidate_bits: Vec::new(),
-            culled_bits: Vec::new(),
-            drawn_bits: Vec::new(),
-            matrices: Vec::new(),
-            worlds: Vec::new(),
-            materials: Vec::new(),
-            material_textures: Vec::new(),
-            translucency: Vec::new(),
-            translucent_materials: [0; 2],
-            described_materials: 0,
-            textures,
-            transforms,
-            locals: Vec::new(),
-            frame_moved: Vec::new(),
-            hierarchy: TransformHierarchy::new(device),
-            pipelines: ScenePipelines::new(device)?,
-            last_hierarchy: None,
-            matrix_gpu: GpuArray::new(device, "scene matrices", MATRIX_BYTES)?,
-            material_gpu: GpuArray::new(device, "scene materials", MATERIAL_BYTES)?,
-            material_texture_gpu: GpuArray::new(
-                device,
-                "scene material textures",
-                MATERIAL_TEXTURE_BYTES,
-            )?,
-            record_gpu: GpuArray::new(device, "scene instance records", RECORD_BYTES)?,
-            cull_gpu: GpuArray::new(device, "scene cull entries", CULL_ENTRY_BYTES)?,
-            local_gpu: GpuArray::new(device, "scene local matrices", LOCAL_BYTES)?,
-            uploader: SparseUploader::default(),
-            frame_dirty_matrices: Vec::new(),
-            frame_dirty_materials: Vec::new(),
-            draws_generation: first_generation,
-            parameters_generation: first_generation,
-            buffers_generation: first_generation,
-            triangles: 0,
-            highlighted: 0,
-            last_upload: UploadStats {
-                geometry_bytes,
-                texture_bytes,
-                bytes: geometry_bytes + texture_bytes,
-                ..UploadStats::default()
+            bits: InstanceBits {
+                candidate: Vec::new(),
+                culled: Vec::new(),
+                drawn: Vec::new(),
             },
-            last_touched: 0,
+            matrices: Vec::new(),
+            materials: Vec::new(),
+            material_info: MaterialInfo {
+                textures: Vec::new(),
+                translucency: Vec::new(),
+                translucent: [0; 2],
+                described: 0,
+            },
+            textures,
+            moves: TransformState {
+                transforms,
+                worlds: Vec::new(),
+                locals: Vec::new(),
+                frame_moved: Vec::new(),
+                hierarchy: TransformHierarchy::new(device),
+                last_hierarchy: None,
+            },
+            gpu: GpuCopies {
+                matrices: GpuArray::new(device, "scene matrices", MATRIX_BYTES)?,
+                materials: GpuArray::new(device, "scene materials", MATERIAL_BYTES)?,
+                material_textures: GpuArray::new(
+                    device,
+                    "scene material textures",
+                    MATERIAL_TEXTURE_BYTES,
+                )?,
+                records: GpuArray::new(device, "scene instance records", RECORD_BYTES)?,
+                cull_entries: GpuArray::new(device, "scene cull entries", CULL_ENTRY_BYTES)?,
+                locals: GpuArray::new(device, "scene local matrices", LOCAL_BYTES)?,
+                uploader: SparseUploader::default(),
+                pipelines: ScenePipelines::new(device)?,
+            },
+            frame_dirty: FrameDirty {
+                matrices: Vec::new(),
+                materials: Vec::new(),
+            },
+            generations: Generations {
+                draws: first_generation,
+                parameters: first_generation,
+                buffers: first_generation,
+            },
+            counts: SceneCounts {
+                triangles: 0,
+                highlighted: 0,
+                last_upload: UploadStats {
+                    geometry_bytes,
+                    texture_bytes,
+                    bytes: geometry_bytes + texture_bytes,
+                    ..UploadStats::default()
+                },
+                last_touched: 0,
+            },
             buffer_refs: Default::default(),
         };
         scene.refresh_all(graph, tree)?;
@@ -252,10 +307,10 @@ impl GpuScene {
             &self.arenas.vertices,
             &self.arenas.indices,
             &self.arenas.wire_indices,
-            &self.matrix_gpu.buffer,
-            &self.material_gpu.buffer,
-            &self.record_gpu.buffer,
-            &self.cull_gpu.buffer,
+            &self.gpu.matrices.buffer,
+            &self.gpu.materials.buffer,
+            &self.gpu.records.buffer,
+            &self.gpu.cull_entries.buffer,
         ]
         .map(|buffer| abi::CadrBufferRef {
             buffer: buffer.raw().as_raw(),
@@ -272,9 +327,9 @@ impl GpuScene {
     fn refresh_all(&mut self, graph: &SceneGraph, tree: &mut SceneTree) -> RenderResult<()> {
         tree.refresh_worlds();
         let nodes = tree.node_capacity();
-        let on_gpu = self.transforms == Transforms::Gpu;
-        self.frame_moved.clear();
-        self.hierarchy.cancel();
+        let on_gpu = self.moves.transforms == Transforms::Gpu;
+        self.moves.frame_moved.clear();
+        self.moves.hierarchy.cancel();
         // Each array is made on a thread per core, every item written once (see
         // `parallel::collect_indexed`); slots that keep no matrix stay zero.
         let kept = |t: u32| self.keeps_matrix(tree, t);
@@ -289,71 +344,77 @@ impl GpuScene {
         } else {
             Vec::new()
         };
-        (self.matrices, self.worlds, self.locals) = (matrices, worlds, locals);
+        (self.matrices, self.moves.worlds, self.moves.locals) = (matrices, worlds, locals);
         let (_, _, material_slots) = graph.capacities();
         self.materials = (0..material_slots as u32)
             .map(|slot| gpu_material(graph, slot))
             .collect();
-        self.material_textures = (0..material_slots as u32)
+        self.material_info.textures = (0..material_slots as u32)
             .map(|slot| gpu_material_texture(graph, slot))
             .collect();
-        self.translucency = (0..material_slots as u32)
+        self.material_info.translucency = (0..material_slots as u32)
             .map(|slot| translucency(graph, slot))
             .collect();
-        self.translucent_materials = self
+        self.material_info.translucent = self
+            .material_info
             .translucency
             .iter()
             .map(|&flags| translucent_with_and_without_textures(flags))
             .fold([0; 2], |[a, b], [c, d]| [a + c, b + d]);
-        self.described_materials = self
-            .material_textures
+        self.material_info.described = self
+            .material_info
+            .textures
             .iter()
             .filter(|words| textures::is_described(words))
             .count();
         let count = tree.instance_capacity();
-        let (instances, tallies) = make_instances(&self.arenas, &self.translucency, tree, count);
+        let (instances, tallies) =
+            make_instances(&self.arenas, &self.material_info.translucency, tree, count);
         self.instances = instances;
-        self.candidate_bits = tallies
+        self.bits.candidate = tallies
             .iter()
             .flat_map(|tally| tally.candidate_bits.iter().copied())
             .collect();
         // Every culled bit is set: a candidate is drawn.
-        self.drawn_bits = self.candidate_bits.clone();
-        self.culled_bits = vec![u64::MAX; count.div_ceil(64)];
-        self.triangles = tallies.iter().map(|tally| tally.triangles).sum();
-        self.highlighted = tallies.iter().map(|tally| tally.highlighted).sum();
+        self.bits.drawn = self.bits.candidate.clone();
+        self.bits.culled = vec![u64::MAX; count.div_ceil(64)];
+        self.counts.triangles = tallies.iter().map(|tally| tally.triangles).sum();
+        self.counts.highlighted = tallies.iter().map(|tally| tally.highlighted).sum();
         let device = Arc::clone(&self.device);
-        self.matrix_gpu.reserve(&device, nodes.max(1))?;
-        self.material_gpu.reserve(&device, material_slots.max(1))?;
-        self.material_texture_gpu
+        self.gpu.matrices.reserve(&device, nodes.max(1))?;
+        self.gpu.materials.reserve(&device, material_slots.max(1))?;
+        self.gpu
+            .material_textures
             .reserve(&device, material_slots.max(1))?;
-        self.record_gpu.reserve(&device, count.max(1))?;
-        self.cull_gpu.reserve(&device, count.max(1))?;
-        self.local_gpu.reserve(&device, self.locals.len().max(1))?;
+        self.gpu.records.reserve(&device, count.max(1))?;
+        self.gpu.cull_entries.reserve(&device, count.max(1))?;
+        self.gpu
+            .locals
+            .reserve(&device, self.moves.locals.len().max(1))?;
         for array in [
-            &mut self.matrix_gpu,
-            &mut self.material_gpu,
-            &mut self.material_texture_gpu,
-            &mut self.record_gpu,
-            &mut self.cull_gpu,
-            &mut self.local_gpu,
+            &mut self.gpu.matrices,
+            &mut self.gpu.materials,
+            &mut self.gpu.material_textures,
+            &mut self.gpu.records,
+            &mut self.gpu.cull_entries,
+            &mut self.gpu.locals,
         ] {
             array.queue_all();
         }
-        self.frame_dirty_matrices = (0..nodes as u32)
+        self.frame_dirty.matrices = (0..nodes as u32)
             .filter(|&t| self.keeps_matrix(tree, t))
             .collect();
-        self.frame_dirty_materials = (0..material_slots as u32).collect();
-        self.last_touched = count as u64;
-        self.buffers_generation += 1;
-        self.draws_generation += 1;
-        self.parameters_generation += 1;
+        self.frame_dirty.materials = (0..material_slots as u32).collect();
+        self.counts.last_touched = count as u64;
+        self.generations.buffers += 1;
+        self.generations.draws += 1;
+        self.generations.parameters += 1;
         self.refresh_buffer_refs();
         Ok(())
     }
 
     fn is_drawn(&self, id: u32) -> bool {
-        self.drawn_bits[id as usize / 64] >> (id % 64) & 1 == 1
+        self.bits.drawn[id as usize / 64] >> (id % 64) & 1 == 1
     }
 
     /// Sets instance `id`'s drawn bit, keeping the drawn triangle count in step.
@@ -361,18 +422,18 @@ impl GpuScene {
         if self.is_drawn(id) != drawn {
             let triangles = u64::from(self.instances[id as usize].index_count / 3);
             if drawn {
-                self.triangles += triangles;
+                self.counts.triangles += triangles;
             } else {
-                self.triangles -= triangles;
+                self.counts.triangles -= triangles;
             }
-            set_bit(&mut self.drawn_bits, id, drawn);
+            set_bit(&mut self.bits.drawn, id, drawn);
         }
     }
 
     /// Whether matrix slot `t` holds a world matrix: a Geo path's, or with the GPU transform
     /// hierarchy any live path's (the hierarchy starts from the parents of moved nodes).
     fn keeps_matrix(&self, tree: &SceneTree, t: u32) -> bool {
-        match self.transforms {
+        match self.moves.transforms {
             Transforms::Host => tree.has_instances(t),
             Transforms::Gpu => tree.is_node_alive(t),
         }
@@ -380,18 +441,18 @@ impl GpuScene {
 
     fn set_matrix(&mut self, tree: &SceneTree, t: u32) {
         let world = tree.world(t);
-        if let Some(kept) = self.worlds.get_mut(t as usize) {
+        if let Some(kept) = self.moves.worlds.get_mut(t as usize) {
             *kept = world.to_cols_array();
         }
         self.matrices[t as usize] = gpu_matrix(&world);
-        if let Some(local) = self.locals.get_mut(t as usize) {
+        if let Some(local) = self.moves.locals.get_mut(t as usize) {
             *local = gpu_local(&tree.local(t));
         }
     }
 
     /// The entry of a live instance whose geometry and part are in the arenas.
     fn entry_of(&self, instance: &InstanceRef) -> Option<(abi::CadrInstance, bool)> {
-        entry_in(&self.arenas, &self.translucency, instance)
+        entry_in(&self.arenas, &self.material_info.translucency, instance)
     }
 
     /// Sets or clears the translucency flags ([`translucency`]) on the instances of the material
@@ -407,10 +468,12 @@ impl GpuScene {
             if entry.flags & abi::CADR_INSTANCE_ALIVE == 0 || !flipped.contains(&entry.material) {
                 continue;
             }
-            entry.flags =
-                with_translucency(entry.flags, self.translucency[entry.material as usize]);
-            self.record_gpu.queue(id as u32);
-            self.cull_gpu.queue(id as u32);
+            entry.flags = with_translucency(
+                entry.flags,
+                self.material_info.translucency[entry.material as usize],
+            );
+            self.gpu.records.queue(id as u32);
+            self.gpu.cull_entries.queue(id as u32);
             any = true;
         }
         any
@@ -424,11 +487,11 @@ impl GpuScene {
         let i = id as usize;
         // Out of the drawn set with its old entry, back in with the new one.
         self.set_drawn(id, false);
-        self.highlighted -= usize::from(is_highlighted(&self.instances[i]));
-        self.highlighted += usize::from(is_highlighted(&entry));
+        self.counts.highlighted -= usize::from(is_highlighted(&self.instances[i]));
+        self.counts.highlighted += usize::from(is_highlighted(&entry));
         self.instances[i] = entry;
-        set_bit(&mut self.candidate_bits, id, candidate);
-        let culled_in = self.culled_bits[i / 64] >> (i % 64) & 1 == 1;
+        set_bit(&mut self.bits.candidate, id, candidate);
+        let culled_in = self.bits.culled[i / 64] >> (i % 64) & 1 == 1;
         self.set_drawn(id, candidate && culled_in);
     }
 
@@ -454,20 +517,20 @@ impl GpuScene {
         transforms: Transforms,
         settle: &mut dyn FnMut() -> RenderResult<()>,
     ) -> RenderResult<()> {
-        self.frame_dirty_matrices.clear();
-        self.frame_dirty_materials.clear();
-        self.last_upload = UploadStats::default();
-        self.last_touched = 0;
+        self.frame_dirty.matrices.clear();
+        self.frame_dirty.materials.clear();
+        self.counts.last_upload = UploadStats::default();
+        self.counts.last_touched = 0;
         let Some(changes) = tree.changes_for(&self.reader) else {
             // A tree this scene does not read: start over from it.
             settle()?;
             self.reader = tree.subscribe();
-            self.transforms = transforms;
+            self.moves.transforms = transforms;
             return self.relayout(graph, tree);
         };
-        if transforms != self.transforms {
+        if transforms != self.moves.transforms {
             settle()?;
-            self.transforms = transforms;
+            self.moves.transforms = transforms;
             return self.refresh_all(graph, tree);
         }
         if changes.is_empty() {
@@ -487,8 +550,8 @@ impl GpuScene {
         for &slot in &changes.dirty_geometries {
             match self.arenas.replace_in_place(graph, slot)? {
                 Some(bytes) => {
-                    self.last_upload.geometry_bytes += bytes;
-                    self.last_upload.bytes += bytes;
+                    self.counts.last_upload.geometry_bytes += bytes;
+                    self.counts.last_upload.bytes += bytes;
                 }
                 None => {
                     replaced_in_place = false;
@@ -504,36 +567,36 @@ impl GpuScene {
             return self.refresh_all(graph, tree);
         }
         self.apply(graph, tree, &changes);
-        if self.transforms == Transforms::Gpu && !self.local_gpu.is_whole() {
-            self.frame_moved.sort_unstable();
-            self.frame_moved.dedup();
-            self.hierarchy.plan(tree, &self.frame_moved)?;
+        if self.moves.transforms == Transforms::Gpu && !self.gpu.locals.is_whole() {
+            self.moves.frame_moved.sort_unstable();
+            self.moves.frame_moved.dedup();
+            self.moves.hierarchy.plan(tree, &self.moves.frame_moved)?;
         }
         Ok(())
     }
 
     /// Where world matrices of moved subtrees are computed now.
     pub fn transforms(&self) -> Transforms {
-        self.transforms
+        self.moves.transforms
     }
 
     /// Makes the transform hierarchy use `method` whatever the shape of the moved subtrees
     /// (`None`: chosen from it, the default). For comparing the methods.
     pub fn force_hierarchy_method(&mut self, method: Option<HierarchyMethod>) {
-        self.hierarchy.forced = method;
+        self.moves.hierarchy.forced = method;
     }
 
     /// What the last upload's transform hierarchy pass did (none when nothing moved, or with
     /// [`Transforms::Host`]).
     pub fn last_hierarchy(&self) -> Option<HierarchyPlan> {
-        self.last_hierarchy
+        self.moves.last_hierarchy
     }
 
     /// Builds the textures again from the graph's (see [`SceneTextures::rebuild`]).
     fn rebuild_textures(&mut self, graph: &SceneGraph) -> RenderResult<()> {
         let bytes = self.textures.rebuild(&self.device, graph)?;
-        self.last_upload.texture_bytes += bytes;
-        self.last_upload.bytes += bytes;
+        self.counts.last_upload.texture_bytes += bytes;
+        self.counts.last_upload.bytes += bytes;
         Ok(())
     }
 
@@ -541,8 +604,8 @@ impl GpuScene {
     fn relayout(&mut self, graph: &SceneGraph, tree: &mut SceneTree) -> RenderResult<()> {
         let (arenas, bytes) = GeometryArenas::upload(&self.device, graph)?;
         self.arenas = arenas;
-        self.last_upload.geometry_bytes += bytes;
-        self.last_upload.bytes += bytes;
+        self.counts.last_upload.geometry_bytes += bytes;
+        self.counts.last_upload.bytes += bytes;
         if graph.textures_generation() != self.textures.generation {
             self.rebuild_textures(graph)?;
         }
@@ -554,11 +617,11 @@ impl GpuScene {
         for &t in &changes.dirty_matrices {
             if self.keeps_matrix(tree, t) {
                 self.set_matrix(tree, t);
-                self.matrix_gpu.queue(t);
-                if self.transforms == Transforms::Gpu {
-                    self.local_gpu.queue(t);
+                self.gpu.matrices.queue(t);
+                if self.moves.transforms == Transforms::Gpu {
+                    self.gpu.locals.queue(t);
                 }
-                self.frame_dirty_matrices.push(t);
+                self.frame_dirty.matrices.push(t);
             }
         }
         self.apply_moves(tree, &changes.moved);
@@ -566,7 +629,8 @@ impl GpuScene {
         for &slot in &changes.dirty_materials {
             if (slot as usize) < self.materials.len() {
                 let flags = translucency(graph, slot);
-                let was = std::mem::replace(&mut self.translucency[slot as usize], flags);
+                let was =
+                    std::mem::replace(&mut self.material_info.translucency[slot as usize], flags);
                 if was != flags {
                     flipped.push(slot);
                 }
@@ -574,29 +638,31 @@ impl GpuScene {
                     translucent_with_and_without_textures(flags),
                     translucent_with_and_without_textures(was),
                 );
-                for ((count, now), was) in self.translucent_materials.iter_mut().zip(now).zip(was) {
+                for ((count, now), was) in
+                    self.material_info.translucent.iter_mut().zip(now).zip(was)
+                {
                     *count = *count + now - was;
                 }
                 self.materials[slot as usize] = gpu_material(graph, slot);
                 let description = gpu_material_texture(graph, slot);
                 let was =
-                    std::mem::replace(&mut self.material_textures[slot as usize], description);
-                self.described_materials = self.described_materials
+                    std::mem::replace(&mut self.material_info.textures[slot as usize], description);
+                self.material_info.described = self.material_info.described
                     + usize::from(textures::is_described(&description))
                     - usize::from(textures::is_described(&was));
-                self.material_gpu.queue(slot);
-                self.material_texture_gpu.queue(slot);
-                self.frame_dirty_materials.push(slot);
+                self.gpu.materials.queue(slot);
+                self.gpu.material_textures.queue(slot);
+                self.frame_dirty.materials.push(slot);
             }
         }
         if !changes.dirty_matrices.is_empty()
             || !changes.moved.is_empty()
             || !changes.dirty_materials.is_empty()
         {
-            self.parameters_generation += 1;
+            self.generations.parameters += 1;
         }
         if self.reflag_translucency(&flipped) {
-            self.draws_generation += 1;
+            self.generations.draws += 1;
         }
         let touched: Vec<u32> = changes
             .removed
@@ -608,24 +674,24 @@ impl GpuScene {
             .collect();
         for &id in &touched {
             self.refresh_instance(tree, id);
-            self.record_gpu.queue(id);
-            self.cull_gpu.queue(id);
+            self.gpu.records.queue(id);
+            self.gpu.cull_entries.queue(id);
         }
-        self.last_touched = touched.len() as u64;
+        self.counts.last_touched = touched.len() as u64;
         if !touched.is_empty() {
-            self.draws_generation += 1;
+            self.generations.draws += 1;
         }
     }
 
     /// Applies moved paths: on the GPU, their local matrices go up marked as moved roots;
     /// on the host, the world matrices of their subtrees are brought up to date and uploaded.
     fn apply_moves(&mut self, tree: &mut SceneTree, moved: &[u32]) {
-        match self.transforms {
+        match self.moves.transforms {
             Transforms::Gpu => {
                 for &t in moved {
-                    self.locals[t as usize] = gpu_local(&tree.local(t));
-                    self.local_gpu.queue_marked(t);
-                    self.frame_moved.push(t);
+                    self.moves.locals[t as usize] = gpu_local(&tree.local(t));
+                    self.gpu.locals.queue_marked(t);
+                    self.moves.frame_moved.push(t);
                 }
             }
             Transforms::Host => {
@@ -637,13 +703,13 @@ impl GpuScene {
                 while let Some(t) = stack.pop() {
                     if tree.has_instances(t) {
                         self.set_matrix(tree, t);
-                        self.matrix_gpu.queue(t);
-                        self.frame_dirty_matrices.push(t);
+                        self.gpu.matrices.queue(t);
+                        self.frame_dirty.matrices.push(t);
                     }
                     stack.extend_from_slice(tree.children(t));
                 }
-                self.frame_dirty_matrices.sort_unstable();
-                self.frame_dirty_matrices.dedup();
+                self.frame_dirty.matrices.sort_unstable();
+                self.frame_dirty.matrices.dedup();
             }
         }
     }
@@ -662,26 +728,26 @@ impl GpuScene {
                     continue;
                 }
                 let on = visible.get(word).is_some_and(|w| w >> bit & 1 == 1);
-                set_bit(&mut self.culled_bits, id, on);
-                let candidate = self.candidate_bits[word] >> bit & 1 == 1;
+                set_bit(&mut self.bits.culled, id, on);
+                let candidate = self.bits.candidate[word] >> bit & 1 == 1;
                 self.set_drawn(id, candidate && on);
                 any = true;
             }
         }
         if any {
-            self.draws_generation += 1;
+            self.generations.draws += 1;
         }
     }
 
     /// Whether the next frame uploads anything (a changed slot or a whole array).
     pub(crate) fn has_pending_uploads(&self) -> bool {
         [
-            &self.matrix_gpu,
-            &self.material_gpu,
-            &self.material_texture_gpu,
-            &self.record_gpu,
-            &self.cull_gpu,
-            &self.local_gpu,
+            &self.gpu.matrices,
+            &self.gpu.materials,
+            &self.gpu.material_textures,
+            &self.gpu.records,
+            &self.gpu.cull_entries,
+            &self.gpu.locals,
         ]
         .iter()
         .any(|array| array.has_pending())
@@ -701,7 +767,7 @@ impl GpuScene {
             let item = materials.get(slot as usize).copied().unwrap_or_default();
             out.copy_from_slice(&item.to_le_bytes());
         };
-        let material_textures = &self.material_textures;
+        let material_textures = &self.material_info.textures;
         let material_texture_bytes = |slot: u32, out: &mut [u8]| {
             let item = material_textures
                 .get(slot as usize)
@@ -709,7 +775,7 @@ impl GpuScene {
                 .unwrap_or_default();
             out.copy_from_slice(bytemuck::cast_slice(&item));
         };
-        let (instances, candidates) = (&self.instances, &self.candidate_bits);
+        let (instances, candidates) = (&self.instances, &self.bits.candidate);
         let record_bytes = |slot: u32, out: &mut [u8]| {
             let item = instances
                 .get(slot as usize)
@@ -720,48 +786,50 @@ impl GpuScene {
             let item = cull_entry(instances, candidates, slot);
             out.copy_from_slice(&item.to_le_bytes());
         };
-        let locals = &self.locals;
+        let locals = &self.moves.locals;
         let local_bytes = |slot: u32, out: &mut [u8]| {
             let item = locals.get(slot as usize).copied().unwrap_or_default();
             out.copy_from_slice(bytemuck::cast_slice(&item));
         };
-        let last_slots = self.uploader.commands_key();
+        let last_slots = self.gpu.uploader.commands_key();
         let ([matrix_count, material_count, _, record_count, _, local_count], first_words, bytes) =
-            self.uploader.gather(
+            self.gpu.uploader.gather(
                 &self.device,
-                &self.pipelines,
+                &self.gpu.pipelines,
                 [
-                    (&mut self.matrix_gpu, &matrix_bytes),
-                    (&mut self.material_gpu, &material_bytes),
-                    (&mut self.material_texture_gpu, &material_texture_bytes),
-                    (&mut self.record_gpu, &record_bytes),
-                    (&mut self.cull_gpu, &cull_entry_bytes),
-                    (&mut self.local_gpu, &local_bytes),
+                    (&mut self.gpu.matrices, &matrix_bytes),
+                    (&mut self.gpu.materials, &material_bytes),
+                    (&mut self.gpu.material_textures, &material_texture_bytes),
+                    (&mut self.gpu.records, &record_bytes),
+                    (&mut self.gpu.cull_entries, &cull_entry_bytes),
+                    (&mut self.gpu.locals, &local_bytes),
                 ],
             )?;
-        self.frame_moved.clear();
-        self.last_hierarchy = match self.uploader.updates() {
-            Some(updates) if self.transforms == Transforms::Gpu => self.hierarchy.prepare(
-                &self.pipelines,
-                updates,
-                (first_words[5], local_count as u32),
-                (self.local_gpu.buffer.raw(), self.matrix_gpu.buffer.raw()),
-                self.uploader.commands_key() == last_slots,
-            )?,
+        self.moves.frame_moved.clear();
+        self.moves.last_hierarchy = match self.gpu.uploader.updates() {
+            Some(updates) if self.moves.transforms == Transforms::Gpu => {
+                self.moves.hierarchy.prepare(
+                    &self.gpu.pipelines,
+                    updates,
+                    (first_words[5], local_count as u32),
+                    (self.gpu.locals.buffer.raw(), self.gpu.matrices.buffer.raw()),
+                    self.gpu.uploader.commands_key() == last_slots,
+                )?
+            }
             _ => {
-                self.hierarchy.cancel();
+                self.moves.hierarchy.cancel();
                 None
             }
         };
-        self.last_upload.matrices += matrix_count;
-        self.last_upload.materials += material_count;
-        self.last_upload.records += record_count;
-        self.last_upload.bytes += bytes;
+        self.counts.last_upload.matrices += matrix_count;
+        self.counts.last_upload.materials += material_count;
+        self.counts.last_upload.records += record_count;
+        self.counts.last_upload.bytes += bytes;
         // The buffers generation is unique across scenes: a prologue recorded for another
         // scene (its sets gone with it) never matches.
-        let mut key = mix(self.buffers_generation, self.uploader.commands_key());
-        key = mix(key, self.hierarchy.commands_key());
-        key = mix(key, u64::from(self.last_hierarchy.is_some()));
+        let mut key = mix(self.generations.buffers, self.gpu.uploader.commands_key());
+        key = mix(key, self.moves.hierarchy.commands_key());
+        key = mix(key, u64::from(self.moves.last_hierarchy.is_some()));
         Ok((bytes, key))
     }
 
@@ -769,10 +837,13 @@ impl GpuScene {
     /// and the transform hierarchy's pass (before the frame's pass, whose first barrier makes
     /// their writes visible).
     pub(crate) fn record_uploads(&self, command_buffer: vk::CommandBuffer) -> RenderResult<()> {
-        self.uploader
-            .record(&self.device, &self.pipelines, command_buffer)?;
-        if self.last_hierarchy.is_some() {
-            self.hierarchy.record(&self.pipelines, command_buffer)?;
+        self.gpu
+            .uploader
+            .record(&self.device, &self.gpu.pipelines, command_buffer)?;
+        if self.moves.last_hierarchy.is_some() {
+            self.moves
+                .hierarchy
+                .record(&self.gpu.pipelines, command_buffer)?;
         }
         Ok(())
     }
@@ -789,12 +860,12 @@ impl GpuScene {
 
     /// What the last sync and the frame after it uploaded.
     pub fn last_upload(&self) -> UploadStats {
-        self.last_upload
+        self.counts.last_upload
     }
 
     /// Instance entries the last sync refreshed.
     pub fn last_touched(&self) -> u64 {
-        self.last_touched
+        self.counts.last_touched
     }
 
     /// The view techniques read this frame. Valid while `self` is not changed.
@@ -805,18 +876,18 @@ impl GpuScene {
             size: std::mem::size_of::<abi::CadrSceneView>() as u32,
             instance_count: self.instances.len() as u32,
             instances: self.instances.as_ptr(),
-            drawn_bits: self.drawn_bits.as_ptr(),
-            draws_generation: self.draws_generation,
-            parameters_generation: self.parameters_generation,
+            drawn_bits: self.bits.drawn.as_ptr(),
+            draws_generation: self.generations.draws,
+            parameters_generation: self.generations.parameters,
             matrix_count: self.matrices.len() as u32,
             matrices: self.matrices.as_ptr(),
             material_count: self.materials.len() as u32,
             materials: self.materials.as_ptr(),
-            dirty_matrices: self.frame_dirty_matrices.as_ptr(),
-            dirty_matrix_count: self.frame_dirty_matrices.len() as u32,
-            dirty_materials: self.frame_dirty_materials.as_ptr(),
-            dirty_material_count: self.frame_dirty_materials.len() as u32,
-            buffers_generation: self.buffers_generation,
+            dirty_matrices: self.frame_dirty.matrices.as_ptr(),
+            dirty_matrix_count: self.frame_dirty.matrices.len() as u32,
+            dirty_materials: self.frame_dirty.materials.as_ptr(),
+            dirty_material_count: self.frame_dirty.materials.len() as u32,
+            buffers_generation: self.generations.buffers,
             vertex_buffer,
             vertex_stride: std::mem::size_of::<Vertex>() as u32,
             index_buffer,
@@ -830,22 +901,23 @@ impl GpuScene {
 
     /// Culling's bits as last applied.
     pub(crate) fn culled_bits(&self) -> &[u64] {
-        &self.culled_bits
+        &self.bits.culled
     }
 
     /// Candidate bits (alive, visible, with triangles) for culling.
     pub(crate) fn candidate_bits(&self) -> &[u64] {
-        &self.candidate_bits
+        &self.bits.candidate
     }
 
     /// World matrices (f64) per matrix slot.
     pub(crate) fn worlds(&self) -> &[[f64; 16]] {
-        &self.worlds
+        &self.moves.worlds
     }
 
     /// Instances drawn this frame.
     pub fn drawn_count(&self) -> usize {
-        self.drawn_bits
+        self.bits
+            .drawn
             .iter()
             .map(|w| w.count_ones() as usize)
             .sum()
@@ -855,13 +927,13 @@ impl GpuScene {
     /// BLEND texture with translucent texels): frames then draw translucent surfaces with the
     /// transparency method.
     pub fn has_translucency(&self, textures: bool) -> bool {
-        self.translucent_materials[usize::from(textures)] > 0
+        self.material_info.translucent[usize::from(textures)] > 0
     }
 
     /// Whether some live instance is highlighted (the silhouettes of the edge display modes
     /// then take the highlight's line colour where they outline one).
     pub fn has_highlighted(&self) -> bool {
-        self.highlighted > 0
+        self.counts.highlighted > 0
     }
 
     /// Whether some geometry has texture coordinates or colours (the vertex shader reads them
@@ -878,26 +950,26 @@ impl GpuScene {
     /// Whether some material slot has a texture or an alpha mode other than BLEND (the
     /// vertex shader reads the descriptions only then).
     pub fn has_material_descriptions(&self) -> bool {
-        self.described_materials > 0
+        self.material_info.described > 0
     }
 
     /// The buffers, image and samplers the frame set names for the shared shaders.
     pub fn frame_resources(&self) -> FrameResources<'_> {
         FrameResources {
-            records: self.record_gpu.buffer.raw(),
-            material_textures: self.material_texture_gpu.buffer.raw(),
+            records: self.gpu.records.buffer.raw(),
+            material_textures: self.gpu.material_textures.buffer.raw(),
             vertex_attributes: self.arenas.attributes.raw(),
             textures: self.textures.bindings(),
             linear_sampler: self.textures.linear.raw(),
             nearest_sampler: self.textures.nearest.raw(),
-            cull_entries: self.cull_gpu.buffer.raw(),
-            generation: self.buffers_generation,
+            cull_entries: self.gpu.cull_entries.buffer.raw(),
+            generation: self.generations.buffers,
         }
     }
 
     /// Triangles of the drawn instances.
     pub fn drawn_triangles(&self) -> u64 {
-        self.triangles
+        self.counts.triangles
     }
 
     /// Instance ids in use are below this.
@@ -913,7 +985,7 @@ impl GpuScene {
             instances: &self.instances,
             matrices: &self.matrices,
             materials: &self.materials,
-            drawn_bits: &self.drawn_bits,
+            drawn_bits: &self.bits.drawn,
         }
     }
 
@@ -922,10 +994,13 @@ impl GpuScene {
     pub fn read_back_arrays(&self) -> RenderResult<[Vec<u8>; 4]> {
         let read = |array: &GpuArray, bytes: usize| array.buffer.download(0, bytes as u64);
         Ok([
-            read(&self.matrix_gpu, self.matrices.len() * MATRIX_BYTES)?,
-            read(&self.material_gpu, self.materials.len() * MATERIAL_BYTES)?,
-            read(&self.record_gpu, self.instances.len() * RECORD_BYTES)?,
-            read(&self.cull_gpu, self.instances.len() * CULL_ENTRY_BYTES)?,
+            read(&self.gpu.matrices, self.matrices.len() * MATRIX_BYTES)?,
+            read(&self.gpu.materials, self.materials.len() * MATERIAL_BYTES)?,
+            read(&self.gpu.records, self.instances.len() * RECORD_BYTES)?,
+            read(
+                &self.gpu.cull_entries,
+                self.instances.len() * CULL_ENTRY_BYTES,
+            )?,
         ])
     }
 }

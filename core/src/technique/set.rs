@@ -113,6 +113,20 @@ fn trait_name(bit: u64) -> &'static str {
     }
 }
 
+/// How the active techniques draw: what a host chooses besides the techniques themselves.
+struct DrawOptions {
+    /// The display mode.
+    shade: ShadeMode,
+    /// Whether picking goes through translucent parts.
+    pick_through_translucent: bool,
+    /// Whether the hidden-line mode shows hidden edges dashed.
+    dashed_hidden_lines: bool,
+    /// Sub-pixel culling threshold of GPU cullers, in pixels (0: off).
+    min_pixels: f32,
+    /// Whether unchanged frames may be resubmitted rather than recorded.
+    frame_replay: bool,
+}
+
 /// Why a combination cannot work, or `Ok` when it can.
 pub fn check_combination(entries: &[&TechniqueEntry]) -> Result<(), String> {
     for entry in entries {
@@ -220,15 +234,7 @@ pub struct Techniques {
     pub(crate) active: [Option<Active>; 5],
     /// The active transparency method's description.
     method: Option<TransparencyMethod>,
-    shade: ShadeMode,
-    /// Whether picking goes through translucent parts.
-    pick_through_translucent: bool,
-    /// Whether the hidden-line mode shows hidden edges dashed.
-    dashed_hidden_lines: bool,
-    /// Sub-pixel culling threshold of GPU cullers, in pixels (0: off).
-    min_pixels: f32,
-    /// Whether unchanged frames may be resubmitted rather than recorded.
-    frame_replay: bool,
+    options: DrawOptions,
     /// The pipelines of the pass sets drawn since the vertex path, parameter path or
     /// transparency method changed (each display mode's shaded frame with and without
     /// translucent surfaces, at each MSAA level, the pick pass), built on first use, at most
@@ -305,11 +311,13 @@ impl Techniques {
             vulkan,
             active: [None, None, None, None, None],
             method: None,
-            shade: ShadeMode::Solid,
-            pick_through_translucent: false,
-            dashed_hidden_lines: false,
-            min_pixels: 0.0,
-            frame_replay: true,
+            options: DrawOptions {
+                shade: ShadeMode::Solid,
+                pick_through_translucent: false,
+                dashed_hidden_lines: false,
+                min_pixels: 0.0,
+                frame_replay: true,
+            },
             pipelines: Vec::new(),
             shaders: ShaderCache::new(device.capabilities()),
             frame_set_layout,
@@ -344,14 +352,14 @@ impl Techniques {
 
     /// The shade mode.
     pub fn shade_mode(&self) -> ShadeMode {
-        self.shade
+        self.options.shade
     }
 
     /// Sets the shade mode (its pipelines are built before the next frame unless a frame
     /// drew in it before and they are kept).
     pub fn set_shade_mode(&mut self, mode: ShadeMode) -> RenderResult<()> {
-        if mode != self.shade {
-            self.shade = mode;
+        if mode != self.options.shade {
+            self.options.shade = mode;
             self.epoch += 1;
         }
         Ok(())
@@ -360,7 +368,7 @@ impl Techniques {
     /// Whether the hidden-line display mode also draws the hidden edges, dashed and in a
     /// lighter shade of the edge colour (off by default: hidden edges are removed).
     pub fn dashed_hidden_lines(&self) -> bool {
-        self.dashed_hidden_lines
+        self.options.dashed_hidden_lines
     }
 
     /// Shows hidden edges dashed in the hidden-line mode, or removes them (the default); from
@@ -368,31 +376,34 @@ impl Techniques {
     /// hidden curved surfaces are dashed too where the device has geometry shaders; where it
     /// has none, turning dashes on logs a warning that says they are left out.
     pub fn set_dashed_hidden_lines(&mut self, dashed: bool) {
-        if dashed && !self.dashed_hidden_lines && !self.device.capabilities().geometry_shader {
+        if dashed
+            && !self.options.dashed_hidden_lines
+            && !self.device.capabilities().geometry_shader
+        {
             log::warn!(
                 "dashed hidden lines on {}: the silhouettes of hidden curved surfaces are not \
                  drawn, the device has no geometry shaders (geometryShader)",
                 self.device.adapter().name
             );
         }
-        self.dashed_hidden_lines = dashed;
+        self.options.dashed_hidden_lines = dashed;
     }
 
     /// Whether picking goes through translucent parts (materials of opacity under 1) to what
     /// is behind them; off by default: what is seen is what is picked.
     pub fn pick_through_translucent(&self) -> bool {
-        self.pick_through_translucent
+        self.options.pick_through_translucent
     }
 
     /// Lets picking go through translucent parts, or not (the default); from the next pick.
     pub fn set_pick_through_translucent(&mut self, through: bool) {
-        self.pick_through_translucent = through;
+        self.options.pick_through_translucent = through;
     }
 
     /// The sub-pixel culling threshold: GPU cullers drop parts whose bounding sphere projects
     /// smaller than this many pixels across (0, the default, keeps every part).
     pub fn min_pixels(&self) -> f32 {
-        self.min_pixels
+        self.options.min_pixels
     }
 
     /// Whether the active culler culls on the GPU (and so applies the sub-pixel threshold).
@@ -414,27 +425,27 @@ impl Techniques {
                 "sub-pixel threshold {pixels}: expected a finite number of pixels >= 0"
             )));
         }
-        self.min_pixels = pixels;
+        self.options.min_pixels = pixels;
         Ok(())
     }
 
     /// Whether frames that would record what the last one recorded resubmit it instead (on by
     /// default; see [`Techniques::replayable`]).
     pub fn frame_replay(&self) -> bool {
-        self.frame_replay
+        self.options.frame_replay
     }
 
     /// Turns frame replay on or off. Off, every frame is recorded: the seeds' baseline, and
     /// what `cadr bench` measures its reference row with.
     pub fn set_frame_replay(&mut self, enabled: bool) {
-        self.frame_replay = enabled;
+        self.options.frame_replay = enabled;
     }
 
     /// Whether frames may be replayed: frame replay is on and every active technique lets the
     /// host resubmit a frame whose recording would not change (`CADR_TRAIT_REPLAYABLE`,
     /// libraries of ABI 1.5 or later).
     pub fn replayable(&self) -> bool {
-        self.frame_replay
+        self.options.frame_replay
             && self.active.iter().all(|active| {
                 active
                     .as_ref()

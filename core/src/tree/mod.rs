@@ -55,6 +55,10 @@ pub struct InstanceRef {
 }
 
 /// The scene tree.
+///
+/// Structure of arrays, one `Vec` per column of a node or an instance (hence its many fields):
+/// the update loops touch one or two columns over many ids, which stay dense in memory this
+/// way; grouping columns into structs would interleave what the loops read with what they skip.
 #[derive(Default)]
 pub struct SceneTree {
     node_graph: Vec<NodeHandle>,

@@ -189,48 +189,8 @@ fn product(structure: &str, field: &'static str, factors: &[u64]) -> Result<u64,
 
 /// Parses a CSF file of version 2 to 6 (already decompressed).
 pub fn read_csf(data: &[u8]) -> Result<CsfFile, CsfError> {
-    if data.len() < HEADER_SIZE_V4 {
-        return Err(error(
-            "header",
-            "size",
-            format!(
-                "the file has {} bytes; a header needs {HEADER_SIZE_V4}",
-                data.len()
-            ),
-        ));
-    }
+    let (version, header_size) = check_header(data)?;
     let header = Fields(data);
-    let magic = header.i32(0);
-    if magic != MAGIC {
-        return Err(error(
-            "header",
-            "magic",
-            format!("{:#010x} is not the CSF magic {MAGIC:#010x}", magic as u32),
-        ));
-    }
-    let version = header.i32(4);
-    if !(VERSION_COMPAT..=VERSION).contains(&version) {
-        return Err(error(
-            "header",
-            "version",
-            format!("{version} is not supported (versions {VERSION_COMPAT} to {VERSION})"),
-        ));
-    }
-    let header_size = if version >= 5 {
-        HEADER_SIZE_V5
-    } else {
-        HEADER_SIZE_V4
-    };
-    if data.len() < header_size {
-        return Err(error(
-            "header",
-            "size",
-            format!(
-                "the file has {} bytes; a version {version} header needs {header_size}",
-                data.len()
-            ),
-        ));
-    }
     let raw_flags = header.u32(8);
     let file_flags = if version < 3 {
         if raw_flags != 0 {
@@ -280,24 +240,7 @@ pub fn read_csf(data: &[u8]) -> Result<CsfFile, CsfError> {
     let materials = material_bytes
         .chunks_exact(MATERIAL_SIZE)
         .enumerate()
-        .map(|(index, bytes)| {
-            let fields = Fields(bytes);
-            let structure = format!("material {index}");
-            let payload = reader.array(
-                &structure,
-                "bytesOFFSET",
-                fields.u64(152),
-                u64::from(fields.u32(148)),
-                1,
-                1,
-            )?;
-            Ok(CsfMaterial {
-                name: fields.name(0),
-                color: std::array::from_fn(|i| fields.f32(128 + 4 * i)),
-                kind: fields.i32(144),
-                bytes: payload.to_vec(),
-            })
-        })
+        .map(|(index, bytes)| read_material(&reader, index, Fields(bytes)))
         .collect::<Result<Vec<_>, CsfError>>()?;
 
     let node_bytes = reader.array(
@@ -359,6 +302,76 @@ pub fn read_csf(data: &[u8]) -> Result<CsfFile, CsfError> {
     })
 }
 
+/// The file's version and header size, once its size, magic and version are checked.
+fn check_header(data: &[u8]) -> Result<(i32, usize), CsfError> {
+    if data.len() < HEADER_SIZE_V4 {
+        return Err(error(
+            "header",
+            "size",
+            format!(
+                "the file has {} bytes; a header needs {HEADER_SIZE_V4}",
+                data.len()
+            ),
+        ));
+    }
+    let header = Fields(data);
+    let magic = header.i32(0);
+    if magic != MAGIC {
+        return Err(error(
+            "header",
+            "magic",
+            format!("{:#010x} is not the CSF magic {MAGIC:#010x}", magic as u32),
+        ));
+    }
+    let version = header.i32(4);
+    if !(VERSION_COMPAT..=VERSION).contains(&version) {
+        return Err(error(
+            "header",
+            "version",
+            format!("{version} is not supported (versions {VERSION_COMPAT} to {VERSION})"),
+        ));
+    }
+    let header_size = if version >= 5 {
+        HEADER_SIZE_V5
+    } else {
+        HEADER_SIZE_V4
+    };
+    if data.len() < header_size {
+        return Err(error(
+            "header",
+            "size",
+            format!(
+                "the file has {} bytes; a version {version} header needs {header_size}",
+                data.len()
+            ),
+        ));
+    }
+    Ok((version, header_size))
+}
+
+/// Material `index`, from its fields: name, colour, kind and payload bytes.
+fn read_material(
+    reader: &Reader<'_>,
+    index: usize,
+    fields: Fields<'_>,
+) -> Result<CsfMaterial, CsfError> {
+    let structure = format!("material {index}");
+    let payload = reader.array(
+        &structure,
+        "bytesOFFSET",
+        fields.u64(152),
+        u64::from(fields.u32(148)),
+        1,
+        1,
+    )?;
+    Ok(CsfMaterial {
+        name: fields.name(0),
+        color: std::array::from_fn(|i| fields.f32(128 + 4 * i)),
+        kind: fields.i32(144),
+        bytes: payload.to_vec(),
+    })
+}
+
 fn read_metas(
     reader: &Reader<'_>,
     field: &'static str,
@@ -408,34 +421,8 @@ fn read_geometry(
     let num_index_wire = count(s, "numIndexWire", fields.i32(76))?;
     let (vertex_offset, normal_offset, tex_offset) =
         (fields.u64(80), fields.u64(88), fields.u64(96));
-    // Before version 6, bytes 16..63 held a deprecated matrix: derive the channels instead.
-    let (normal_channels, tex_channels, aux_channels, part_channels) = if version >= 6 {
-        (
-            count(s, "numNormalChannels", fields.i32(16))?,
-            count(s, "numTexChannels", fields.i32(20))?,
-            count(s, "numAuxChannels", fields.i32(24))?,
-            count(s, "numPartChannels", fields.i32(28))?,
-        )
-    } else {
-        (
-            u64::from(normal_offset != 0),
-            u64::from(tex_offset != 0),
-            0,
-            0,
-        )
-    };
-    // A null data offset means the channels are absent, whatever the count says; so do
-    // channels of no vertices (or parts), which hold no data (and are written back as null).
-    let normal_channels = if normal_offset == 0 || num_vertices == 0 {
-        0
-    } else {
-        normal_channels
-    };
-    let tex_channels = if tex_offset == 0 || num_vertices == 0 {
-        0
-    } else {
-        tex_channels
-    };
+    let [normal_channels, tex_channels, aux_channels, part_channels] =
+        channel_counts(s, version, &fields, num_vertices)?;
     if num_vertices > 0 && vertex_offset == 0 {
         return Err(error(
             s,
@@ -467,65 +454,18 @@ fn read_geometry(
         4,
         4,
     )?);
-    let (mut aux, mut aux_storage_order, mut perpart, mut perpart_storage_order) =
-        (Vec::new(), Vec::new(), Vec::new(), Vec::new());
-    if version >= 6 {
-        let aux_channels = if fields.u64(40) == 0 || num_vertices == 0 {
-            0
-        } else {
-            aux_channels
-        };
-        aux = floats(reader.array(
+    // Version 6 added auxiliary vertex channels and per-part channels.
+    let extra = if version >= 6 {
+        read_extra_channels(
+            reader,
             s,
-            "auxOFFSET",
-            fields.u64(40),
-            product(s, "numAuxChannels", &[num_vertices, 4, aux_channels])?,
-            4,
-            4,
-        )?);
-        aux_storage_order = i32s(reader.array(
-            s,
-            "auxStorageOrderOFFSET",
-            fields.u64(32),
-            aux_channels,
-            4,
-            4,
-        )?);
-        let part_channels = if fields.u64(56) == 0 || num_parts == 0 {
-            0
-        } else {
-            part_channels
-        };
-        perpart_storage_order = i32s(reader.array(
-            s,
-            "perpartStorageOrderOFFSET",
-            fields.u64(48),
-            part_channels,
-            4,
-            4,
-        )?);
-        let mut per_part_size = 0_u64;
-        for (i, &channel) in perpart_storage_order.iter().enumerate() {
-            let size = part_channel_size(channel).ok_or_else(|| {
-                error(
-                    s,
-                    "perpartStorageOrderOFFSET",
-                    format!("entry {i} is the unknown part channel {channel}"),
-                )
-            })?;
-            per_part_size += size as u64;
-        }
-        perpart = reader
-            .array(
-                s,
-                "perpartOFFSET",
-                fields.u64(56),
-                product(s, "numPartChannels", &[per_part_size, num_parts])?,
-                1,
-                4,
-            )?
-            .to_vec();
-    }
+            &fields,
+            (num_vertices, num_parts),
+            (aux_channels, part_channels),
+        )?
+    } else {
+        ExtraChannels::default()
+    };
     let index_solid = u32s(reader.array(
         s,
         "indexSolidOFFSET",
@@ -561,16 +501,138 @@ fn read_geometry(
         normal_channels: normal_channels as i32,
         tex,
         tex_channels: tex_channels as i32,
-        aux,
-        aux_storage_order,
-        perpart,
-        perpart_storage_order,
+        aux: extra.aux,
+        aux_storage_order: extra.aux_storage_order,
+        perpart: extra.perpart,
+        perpart_storage_order: extra.perpart_storage_order,
         index_solid,
         index_wire,
         parts,
     };
     check_parts(s, &geometry, file_flags)?;
     Ok(geometry)
+}
+
+/// A geometry's channel counts: normals, texture coordinates, auxiliary and per-part
+/// channels. Before version 6, bytes 16..63 held a deprecated matrix: the counts are derived
+/// from the data offsets instead.
+fn channel_counts(
+    s: &str,
+    version: i32,
+    fields: &Fields<'_>,
+    num_vertices: u64,
+) -> Result<[u64; 4], CsfError> {
+    let (normal_offset, tex_offset) = (fields.u64(88), fields.u64(96));
+    let (normal_channels, tex_channels, aux_channels, part_channels) = if version >= 6 {
+        (
+            count(s, "numNormalChannels", fields.i32(16))?,
+            count(s, "numTexChannels", fields.i32(20))?,
+            count(s, "numAuxChannels", fields.i32(24))?,
+            count(s, "numPartChannels", fields.i32(28))?,
+        )
+    } else {
+        (
+            u64::from(normal_offset != 0),
+            u64::from(tex_offset != 0),
+            0,
+            0,
+        )
+    };
+    // A null data offset means the channels are absent, whatever the count says; so do
+    // channels of no vertices (or parts), which hold no data (and are written back as null).
+    let normal_channels = if normal_offset == 0 || num_vertices == 0 {
+        0
+    } else {
+        normal_channels
+    };
+    let tex_channels = if tex_offset == 0 || num_vertices == 0 {
+        0
+    } else {
+        tex_channels
+    };
+    Ok([normal_channels, tex_channels, aux_channels, part_channels])
+}
+
+/// The auxiliary vertex channels and per-part channels a version 6 geometry adds: the aux
+/// values and their storage order, the per-part values and theirs. A null offset means the
+/// channels are absent whatever the count says, as do channels of no vertices (or parts).
+fn read_extra_channels(
+    reader: &Reader<'_>,
+    s: &str,
+    fields: &Fields<'_>,
+    (num_vertices, num_parts): (u64, u64),
+    (aux_channels, part_channels): (u64, u64),
+) -> Result<ExtraChannels, CsfError> {
+    let aux_channels = if fields.u64(40) == 0 || num_vertices == 0 {
+        0
+    } else {
+        aux_channels
+    };
+    let aux = floats(reader.array(
+        s,
+        "auxOFFSET",
+        fields.u64(40),
+        product(s, "numAuxChannels", &[num_vertices, 4, aux_channels])?,
+        4,
+        4,
+    )?);
+    let aux_storage_order = i32s(reader.array(
+        s,
+        "auxStorageOrderOFFSET",
+        fields.u64(32),
+        aux_channels,
+        4,
+        4,
+    )?);
+    let part_channels = if fields.u64(56) == 0 || num_parts == 0 {
+        0
+    } else {
+        part_channels
+    };
+    let perpart_storage_order = i32s(reader.array(
+        s,
+        "perpartStorageOrderOFFSET",
+        fields.u64(48),
+        part_channels,
+        4,
+        4,
+    )?);
+    let mut per_part_size = 0_u64;
+    for (i, &channel) in perpart_storage_order.iter().enumerate() {
+        let size = part_channel_size(channel).ok_or_else(|| {
+            error(
+                s,
+                "perpartStorageOrderOFFSET",
+                format!("entry {i} is the unknown part channel {channel}"),
+            )
+        })?;
+        per_part_size += size as u64;
+    }
+    let perpart = reader
+        .array(
+            s,
+            "perpartOFFSET",
+            fields.u64(56),
+            product(s, "numPartChannels", &[per_part_size, num_parts])?,
+            1,
+            4,
+        )?
+        .to_vec();
+    Ok(ExtraChannels {
+        aux,
+        aux_storage_order,
+        perpart,
+        perpart_storage_order,
+    })
+}
+
+/// What [`read_extra_channels`] reads, in [`CsfGeometry`]'s terms.
+#[derive(Default)]
+struct ExtraChannels {
+    aux: Vec<f32>,
+    aux_storage_order: Vec<i32>,
+    perpart: Vec<u8>,
+    perpart_storage_order: Vec<i32>,
 }
 
 /// Part ranges lie within the index buffers and indices within the vertices.

@@ -2,7 +2,7 @@
 //! data its elements point to, with the reference alignments, and the pointer table (the file
 //! locations of every non-null offset field, in writing order) at the end.
 
-use super::{CsfFile, CsfMeta, FLAG_UNIQUE_NODES, MAGIC};
+use super::{CsfFile, CsfGeometry, CsfMeta, FLAG_UNIQUE_NODES, MAGIC};
 
 struct Out {
     bytes: Vec<u8>,
@@ -94,55 +94,8 @@ pub fn write_csf(file: &CsfFile, version: i32) -> Vec<u8> {
     if !file.geometries.is_empty() {
         let array = out.reserve(file.geometries.len() * 128, 8);
         out.link(40, array);
-        for (i, g) in file.geometries.iter().enumerate() {
-            let at = array + 128 * i;
-            if version >= 6 {
-                out.put_i32(at + 16, g.normal_channels);
-                out.put_i32(at + 20, g.tex_channels);
-                out.put_i32(at + 24, g.aux_storage_order.len() as i32);
-                out.put_i32(at + 28, g.perpart_storage_order.len() as i32);
-            } else {
-                // The deprecated geometry matrix of older versions: identity.
-                out.put_f32s(
-                    at,
-                    &[
-                        1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0,
-                        1.0,
-                    ],
-                );
-            }
-            out.put_i32(at + 64, g.parts.len() as i32);
-            out.put_i32(at + 68, g.vertex_count() as i32);
-            out.put_i32(at + 72, g.index_solid.len() as i32);
-            out.put_i32(at + 76, g.index_wire.len() as i32);
-            out.block(at + 80, &le(&g.vertices, f32::to_le_bytes), 4);
-            let normals = if version >= 6 {
-                &g.normals[..]
-            } else {
-                &g.normals[..g.normals.len().min(g.vertices.len())]
-            };
-            out.block(at + 88, &le(normals, f32::to_le_bytes), 4);
-            let tex = if version >= 6 {
-                &g.tex[..]
-            } else {
-                &g.tex[..g.tex.len().min(g.vertex_count() * 2)]
-            };
-            out.block(at + 96, &le(tex, f32::to_le_bytes), 4);
-            out.block(at + 104, &le(&g.index_solid, u32::to_le_bytes), 4);
-            out.block(at + 112, &le(&g.index_wire, u32::to_le_bytes), 4);
-            let parts: Vec<u8> = g
-                .parts
-                .iter()
-                .flat_map(|p| [p.deprecated, p.num_index_solid, p.num_index_wire])
-                .flat_map(i32::to_le_bytes)
-                .collect();
-            out.block(at + 120, &parts, 4);
-            if version >= 6 {
-                out.block(at + 40, &le(&g.aux, f32::to_le_bytes), 4);
-                out.block(at + 32, &le(&g.aux_storage_order, i32::to_le_bytes), 4);
-                out.block(at + 48, &le(&g.perpart_storage_order, i32::to_le_bytes), 4);
-                out.block(at + 56, &g.perpart, 16);
-            }
+        for (i, geometry) in file.geometries.iter().enumerate() {
+            write_geometry(&mut out, array + 128 * i, geometry, version);
         }
     }
 
@@ -194,6 +147,58 @@ pub fn write_csf(file: &CsfFile, version: i32) -> Vec<u8> {
     out.put_i32(12, locations.len() as i32);
     out.put(32, &(table as u64).to_le_bytes());
     out.bytes
+}
+
+/// Writes geometry `g`'s 128-byte record at `at` (its arrays as blocks appended to `out`), as
+/// `version` lays it out: before version 6 an identity matrix where the channel counts go, one
+/// normal and texture coordinate channel at most, and no auxiliary or per-part channels.
+fn write_geometry(out: &mut Out, at: usize, g: &CsfGeometry, version: i32) {
+    if version >= 6 {
+        out.put_i32(at + 16, g.normal_channels);
+        out.put_i32(at + 20, g.tex_channels);
+        out.put_i32(at + 24, g.aux_storage_order.len() as i32);
+        out.put_i32(at + 28, g.perpart_storage_order.len() as i32);
+    } else {
+        // The deprecated geometry matrix of older versions: identity.
+        out.put_f32s(
+            at,
+            &[
+                1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0,
+            ],
+        );
+    }
+    out.put_i32(at + 64, g.parts.len() as i32);
+    out.put_i32(at + 68, g.vertex_count() as i32);
+    out.put_i32(at + 72, g.index_solid.len() as i32);
+    out.put_i32(at + 76, g.index_wire.len() as i32);
+    out.block(at + 80, &le(&g.vertices, f32::to_le_bytes), 4);
+    let normals = if version >= 6 {
+        &g.normals[..]
+    } else {
+        &g.normals[..g.normals.len().min(g.vertices.len())]
+    };
+    out.block(at + 88, &le(normals, f32::to_le_bytes), 4);
+    let tex = if version >= 6 {
+        &g.tex[..]
+    } else {
+        &g.tex[..g.tex.len().min(g.vertex_count() * 2)]
+    };
+    out.block(at + 96, &le(tex, f32::to_le_bytes), 4);
+    out.block(at + 104, &le(&g.index_solid, u32::to_le_bytes), 4);
+    out.block(at + 112, &le(&g.index_wire, u32::to_le_bytes), 4);
+    let parts: Vec<u8> = g
+        .parts
+        .iter()
+        .flat_map(|p| [p.deprecated, p.num_index_solid, p.num_index_wire])
+        .flat_map(i32::to_le_bytes)
+        .collect();
+    out.block(at + 120, &parts, 4);
+    if version >= 6 {
+        out.block(at + 40, &le(&g.aux, f32::to_le_bytes), 4);
+        out.block(at + 32, &le(&g.aux_storage_order, i32::to_le_bytes), 4);
+        out.block(at + 48, &le(&g.perpart_storage_order, i32::to_le_bytes), 4);
+        out.block(at + 56, &g.perpart, 16);
+    }
 }
 
 fn write_metas(out: &mut Out, location: usize, metas: &[CsfMeta]) {

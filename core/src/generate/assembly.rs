@@ -7,7 +7,7 @@ use glam::{DMat4, DVec3};
 use super::component::component;
 use super::rng::Rng;
 use super::shapes::GeometryBuilder;
-use crate::scene::{Material, MeshRef, Node, Scene};
+use crate::scene::{Geometry, Material, MeshRef, Node, Scene};
 
 /// What an assembly generator produces.
 #[derive(Clone, Debug, PartialEq)]
@@ -69,6 +69,31 @@ fn palette(count: usize, rng: &mut Rng) -> Vec<Material> {
         .collect()
 }
 
+/// The assembly's geometries: geometry 0 is the machine bed every module stands on, the others
+/// are components whose part counts vary between half and one and a half times the average.
+fn geometries(spec: &AssemblySpec, rng: &mut Rng) -> Vec<Geometry> {
+    let mut bed = GeometryBuilder::new("machine bed");
+    bed.cuboid(
+        DVec3::new(0.0, -0.12, 0.0),
+        DVec3::new(1.0, 0.0, 1.0),
+        DMat4::IDENTITY,
+    );
+    let mut geometries = vec![bed.finish()];
+    let geometry_count = spec.geometries.clamp(2, spec.objects.max(1) + 1);
+    for g in 1..geometry_count {
+        let parts = (spec.parts_per_geometry * rng.range(0.5, 1.5))
+            .round()
+            .max(1.0) as usize;
+        geometries.push(component(
+            format!("component {g}"),
+            parts,
+            spec.triangles_per_part,
+            rng,
+        ));
+    }
+    geometries
+}
+
 /// Generates the assembly.
 pub fn assembly(spec: &AssemblySpec) -> Scene {
     let mut rng = Rng::new(spec.seed);
@@ -77,27 +102,8 @@ pub fn assembly(spec: &AssemblySpec) -> Scene {
         ..Scene::default()
     };
     scene.materials = palette(spec.materials.max(1), &mut rng);
-    // Geometry 0 is the machine bed every module stands on; the others are components.
-    let mut bed = GeometryBuilder::new("machine bed");
-    bed.cuboid(
-        DVec3::new(0.0, -0.12, 0.0),
-        DVec3::new(1.0, 0.0, 1.0),
-        DMat4::IDENTITY,
-    );
-    scene.geometries.push(bed.finish());
-    let geometry_count = spec.geometries.clamp(2, spec.objects.max(1) + 1);
-    for g in 1..geometry_count {
-        // Part counts vary between half and one and a half times the average.
-        let parts = (spec.parts_per_geometry * rng.range(0.5, 1.5))
-            .round()
-            .max(1.0) as usize;
-        scene.geometries.push(component(
-            format!("component {g}"),
-            parts,
-            spec.triangles_per_part,
-            &mut rng,
-        ));
-    }
+    scene.geometries = geometries(spec, &mut rng);
+    let geometry_count = scene.geometries.len();
 
     let root = push_node(&mut scene, Node::new(spec.name.clone()));
     scene.roots.push(root);

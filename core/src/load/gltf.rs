@@ -118,34 +118,8 @@ pub fn load_gltf_bytes(bytes: &[u8], path: &Path) -> Result<Scene, LoadError> {
             scene.textures.len() as u32 - 1
         }));
     }
-    // The texture-coordinate set each material's base-colour texture samples.
-    let mut uv_sets = Vec::new();
-    scene.materials = gltf
-        .document
-        .materials()
-        .enumerate()
-        .map(|(i, m)| {
-            let pbr = m.pbr_metallic_roughness();
-            let (base_color_texture, uv_set) = base_color_texture(&pbr, &texture_index);
-            uv_sets.push(uv_set);
-            let alpha_mode = alpha_mode(&m);
-            let mut base_color = pbr.base_color_factor();
-            if alpha_mode == AlphaMode::Opaque {
-                // Fully opaque, wherever the colour goes (a CSF keeps it as opacity).
-                base_color[3] = 1.0;
-            }
-            Material {
-                name: m
-                    .name()
-                    .map_or_else(|| format!("material {i}"), str::to_owned),
-                base_color,
-                metallic: pbr.metallic_factor(),
-                roughness: pbr.roughness_factor(),
-                base_color_texture,
-                alpha_mode,
-            }
-        })
-        .collect();
+    let (materials, uv_sets) = materials_of(&gltf.document, &texture_index);
+    scene.materials = materials;
     let mut default_material = None;
     let mut mesh_refs: Vec<Option<MeshRef>> = Vec::new();
     // Meshes made of the same accessors (the same geometry under other materials, as cadr and
@@ -194,27 +168,67 @@ pub fn load_gltf_bytes(bytes: &[u8], path: &Path) -> Result<Scene, LoadError> {
             mesh: node.mesh().and_then(|m| mesh_refs[m.index()].clone()),
         });
     }
-    let chosen_scene = gltf
-        .document
+    scene.roots = roots_of(&gltf.document, &scene.nodes);
+    scene.validate().map_err(|e| invalid(e.0))?;
+    Ok(scene)
+}
+
+/// The document's materials, and per material the texture-coordinate set its base-colour
+/// texture samples; `texture_index` maps glTF textures to the scene's (none where one did not
+/// decode).
+fn materials_of(
+    document: &gltf::Document,
+    texture_index: &[Option<u32>],
+) -> (Vec<Material>, Vec<Option<u32>>) {
+    let mut uv_sets = Vec::new();
+    let materials = document
+        .materials()
+        .enumerate()
+        .map(|(i, m)| {
+            let pbr = m.pbr_metallic_roughness();
+            let (base_color_texture, uv_set) = base_color_texture(&pbr, texture_index);
+            uv_sets.push(uv_set);
+            let alpha_mode = alpha_mode(&m);
+            let mut base_color = pbr.base_color_factor();
+            if alpha_mode == AlphaMode::Opaque {
+                // Fully opaque, wherever the colour goes (a CSF keeps it as opacity).
+                base_color[3] = 1.0;
+            }
+            Material {
+                name: m
+                    .name()
+                    .map_or_else(|| format!("material {i}"), str::to_owned),
+                base_color,
+                metallic: pbr.metallic_factor(),
+                roughness: pbr.roughness_factor(),
+                base_color_texture,
+                alpha_mode,
+            }
+        })
+        .collect();
+    (materials, uv_sets)
+}
+
+/// The roots drawn: the default scene's nodes, or the first scene's; without a scene, every
+/// node that is nobody's child.
+fn roots_of(document: &gltf::Document, nodes: &[Node]) -> Vec<u32> {
+    let chosen_scene = document
         .default_scene()
-        .or_else(|| gltf.document.scenes().next());
-    scene.roots = match chosen_scene {
+        .or_else(|| document.scenes().next());
+    match chosen_scene {
         Some(s) => s.nodes().map(|n| n.index() as u32).collect(),
         None => {
-            // No scene: draw every node that is nobody's child.
-            let mut is_child = vec![false; scene.nodes.len()];
-            for node in &scene.nodes {
+            let mut is_child = vec![false; nodes.len()];
+            for node in nodes {
                 for &c in &node.children {
                     is_child[c as usize] = true;
                 }
             }
-            (0..scene.nodes.len() as u32)
+            (0..nodes.len() as u32)
                 .filter(|&n| !is_child[n as usize])
                 .collect()
         }
-    };
-    scene.validate().map_err(|e| invalid(e.0))?;
-    Ok(scene)
+    }
 }
 
 /// What a mesh's geometry is made of: per triangle primitive, its POSITION, NORMAL, index,
@@ -475,29 +489,7 @@ fn load_mesh(
             );
             continue;
         }
-        let positions_accessor = primitive
-            .get(&gltf::Semantic::Positions)
-            .ok_or_else(|| format!("{at} has no POSITION"))?;
-        check_accessor(
-            &positions_accessor,
-            "POSITION",
-            &[DataType::F32],
-            Dimensions::Vec3,
-        )
-        .map_err(|e| format!("{at}: {e}"))?;
-        if let Some(normals) = primitive.get(&gltf::Semantic::Normals) {
-            check_accessor(&normals, "NORMAL", &[DataType::F32], Dimensions::Vec3)
-                .map_err(|e| format!("{at}: {e}"))?;
-        }
-        if let Some(indices) = primitive.indices() {
-            check_accessor(
-                &indices,
-                "indices",
-                &[DataType::U8, DataType::U16, DataType::U32],
-                Dimensions::Scalar,
-            )
-            .map_err(|e| format!("{at}: {e}"))?;
-        }
+        let positions_accessor = checked_accessors(&primitive, &at)?;
         let attributes = read_attributes(
             &primitive,
             &format!("{}: {at}", file.display()),
@@ -543,65 +535,111 @@ fn load_mesh(
             ));
         }
         let triangles = triangle_list(&raw_indices, mode);
-        let base = geometry.vertices.len() as u32;
-        if attributes.is_some() && geometry.attributes.is_empty() {
-            geometry
-                .attributes
-                .resize(geometry.vertices.len(), VertexAttributes::default());
-        }
-        let first_index = geometry.indices.len() as u32;
-        match normals {
-            Some(normals) => {
-                geometry.vertices.extend(
-                    positions
-                        .iter()
-                        .zip(&normals)
-                        .map(|(&position, &normal)| Vertex { position, normal }),
-                );
-                geometry.indices.extend(triangles.iter().map(|&i| base + i));
-                if let Some(attributes) = &attributes {
-                    geometry.attributes.extend_from_slice(attributes);
-                }
-            }
-            None => {
-                // glTF: without normals, flat shading. Each triangle gets its own vertices.
-                for (t, triangle) in triangles.chunks_exact(3).enumerate() {
-                    let [a, b, c] = [0, 1, 2]
-                        .map(|k| DVec3::from(positions[triangle[k] as usize].map(f64::from)));
-                    let normal = (b - a)
-                        .cross(c - a)
-                        .normalize_or_zero()
-                        .as_vec3()
-                        .to_array();
-                    for &index in triangle {
-                        geometry.vertices.push(Vertex {
-                            position: positions[index as usize],
-                            normal,
-                        });
-                        if let Some(attributes) = &attributes {
-                            geometry.attributes.push(attributes[index as usize]);
-                        }
-                    }
-                    geometry
-                        .indices
-                        .extend((0..3).map(|k| base + 3 * t as u32 + k));
-                }
-            }
-        }
-        if attributes.is_none() && !geometry.attributes.is_empty() {
-            geometry
-                .attributes
-                .resize(geometry.vertices.len(), VertexAttributes::default());
-        }
-        let index_count = geometry.indices.len() as u32 - first_index;
-        geometry.parts.push(Part {
-            first_index,
-            index_count,
-            ..Part::default()
-        });
+        append_primitive(&mut geometry, &positions, normals, &triangles, attributes);
         materials.push(primitive.material().index().map(|m| m as u32));
     }
     Ok((geometry, materials))
+}
+
+/// Checks a primitive's POSITION, NORMAL and index accessors (their types, and that they lie
+/// in their buffers), before the glTF crate reads them; returns the POSITION accessor. `at`
+/// names the primitive in errors.
+fn checked_accessors<'a>(
+    primitive: &gltf::Primitive<'a>,
+    at: &str,
+) -> Result<gltf::Accessor<'a>, String> {
+    let positions_accessor = primitive
+        .get(&gltf::Semantic::Positions)
+        .ok_or_else(|| format!("{at} has no POSITION"))?;
+    check_accessor(
+        &positions_accessor,
+        "POSITION",
+        &[DataType::F32],
+        Dimensions::Vec3,
+    )
+    .map_err(|e| format!("{at}: {e}"))?;
+    if let Some(normals) = primitive.get(&gltf::Semantic::Normals) {
+        check_accessor(&normals, "NORMAL", &[DataType::F32], Dimensions::Vec3)
+            .map_err(|e| format!("{at}: {e}"))?;
+    }
+    if let Some(indices) = primitive.indices() {
+        check_accessor(
+            &indices,
+            "indices",
+            &[DataType::U8, DataType::U16, DataType::U32],
+            Dimensions::Scalar,
+        )
+        .map_err(|e| format!("{at}: {e}"))?;
+    }
+    Ok(positions_accessor)
+}
+
+/// Appends a primitive to `geometry` as one part: its vertices (with `normals`, or without
+/// them flat-shaded, each triangle with vertices of its own), its `triangles`' indices, and its
+/// vertex attributes (the geometry's other primitives get defaults where only some have them).
+fn append_primitive(
+    geometry: &mut Geometry,
+    positions: &[[f32; 3]],
+    normals: Option<Vec<[f32; 3]>>,
+    triangles: &[u32],
+    attributes: Option<Vec<VertexAttributes>>,
+) {
+    let base = geometry.vertices.len() as u32;
+    if attributes.is_some() && geometry.attributes.is_empty() {
+        geometry
+            .attributes
+            .resize(geometry.vertices.len(), VertexAttributes::default());
+    }
+    let first_index = geometry.indices.len() as u32;
+    match normals {
+        Some(normals) => {
+            geometry.vertices.extend(
+                positions
+                    .iter()
+                    .zip(&normals)
+                    .map(|(&position, &normal)| Vertex { position, normal }),
+            );
+            geometry.indices.extend(triangles.iter().map(|&i| base + i));
+            if let Some(attributes) = &attributes {
+                geometry.attributes.extend_from_slice(attributes);
+            }
+        }
+        None => {
+            // glTF: without normals, flat shading. Each triangle gets its own vertices.
+            for (t, triangle) in triangles.chunks_exact(3).enumerate() {
+                let [a, b, c] =
+                    [0, 1, 2].map(|k| DVec3::from(positions[triangle[k] as usize].map(f64::from)));
+                let normal = (b - a)
+                    .cross(c - a)
+                    .normalize_or_zero()
+                    .as_vec3()
+                    .to_array();
+                for &index in triangle {
+                    geometry.vertices.push(Vertex {
+                        position: positions[index as usize],
+                        normal,
+                    });
+                    if let Some(attributes) = &attributes {
+                        geometry.attributes.push(attributes[index as usize]);
+                    }
+                }
+                geometry
+                    .indices
+                    .extend((0..3).map(|k| base + 3 * t as u32 + k));
+            }
+        }
+    }
+    if attributes.is_none() && !geometry.attributes.is_empty() {
+        geometry
+            .attributes
+            .resize(geometry.vertices.len(), VertexAttributes::default());
+    }
+    let index_count = geometry.indices.len() as u32 - first_index;
+    geometry.parts.push(Part {
+        first_index,
+        index_count,
+        ..Part::default()
+    });
 }
 
 /// The primitive's texture coordinates (the set its material samples) and vertex colours

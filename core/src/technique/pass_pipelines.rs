@@ -102,6 +102,38 @@ pub struct PassFilters {
     pub exclusions: Vec<abi::CadrPassExclusion>,
 }
 
+/// The pipeline layout of a combination's pipelines: the frame set, then the paths' sets up to
+/// the last one used (an empty set standing for a path without one), and 128 bytes of push
+/// constants for the vertex stage. Returns the empty set's layout too, which must live as long.
+fn technique_layout(
+    device: &Arc<Device>,
+    inputs: &PipelineInputs<'_>,
+) -> RenderResult<(PipelineLayout, DescriptorSetLayout)> {
+    let empty_set_layout = DescriptorSetLayout::new(device, "empty set layout", &[])?;
+    let used = inputs
+        .path_set_layouts
+        .iter()
+        .rposition(|l| *l != vk::DescriptorSetLayout::null())
+        .map_or(1, |i| i + 2);
+    let mut sets = vec![inputs.frame_set_layout];
+    sets.extend(inputs.path_set_layouts.iter().map(|&l| {
+        if l == vk::DescriptorSetLayout::null() {
+            empty_set_layout.raw()
+        } else {
+            l
+        }
+    }));
+    sets.truncate(used);
+    let layout = PipelineLayout::new(
+        device,
+        "technique layout",
+        &sets,
+        128,
+        vk::ShaderStageFlags::VERTEX,
+    )?;
+    Ok((layout, empty_set_layout))
+}
+
 /// How a pass rasterizes, beyond its shaders and topology.
 #[derive(Clone, Copy, Debug, Default)]
 struct Raster {
@@ -180,28 +212,7 @@ pub struct PipelineInputs<'a> {
 impl TechniquePipelines {
     /// Creates the layout and the passes' pipelines.
     pub fn new(device: &Arc<Device>, inputs: &PipelineInputs<'_>) -> RenderResult<Self> {
-        let empty_set_layout = DescriptorSetLayout::new(device, "empty set layout", &[])?;
-        let used = inputs
-            .path_set_layouts
-            .iter()
-            .rposition(|l| *l != vk::DescriptorSetLayout::null())
-            .map_or(1, |i| i + 2);
-        let mut sets = vec![inputs.frame_set_layout];
-        sets.extend(inputs.path_set_layouts.iter().map(|&l| {
-            if l == vk::DescriptorSetLayout::null() {
-                empty_set_layout.raw()
-            } else {
-                l
-            }
-        }));
-        sets.truncate(used);
-        let layout = PipelineLayout::new(
-            device,
-            "technique layout",
-            &sets,
-            128,
-            vk::ShaderStageFlags::VERTEX,
-        )?;
+        let (layout, empty_set_layout) = technique_layout(device, inputs)?;
         let translucent_method = match (inputs.passes, inputs.method) {
             (
                 PassSet::Shaded {
@@ -230,12 +241,7 @@ impl TechniquePipelines {
         };
         let fragment = |shader: PassShader| inputs.shaders.shader(shader);
         let triangles = vk::PrimitiveTopology::TRIANGLE_LIST;
-        let lines = vk::PrimitiveTopology::LINE_LIST;
         let plain = Raster::default();
-        let under_lines = Raster {
-            depth_bias: true,
-            ..plain
-        };
         match inputs.passes {
             PassSet::Shaded {
                 mode: ShadeMode::Solid,
@@ -248,67 +254,7 @@ impl TechniquePipelines {
             PassSet::Shaded {
                 mode: mode @ (ShadeMode::Edges | ShadeMode::HiddenLine | ShadeMode::XRay),
                 ..
-            } => {
-                let surfaces = Raster {
-                    depth_only: mode == ShadeMode::HiddenLine,
-                    ..under_lines
-                };
-                let solid = fragment(PassShader::Solid)?;
-                let pipeline = this.pipeline(inputs, solid, triangles, surfaces)?;
-                this.add(pipeline, abi::CADR_PASS_TRIANGLES);
-                if let PassSet::Shaded {
-                    dashed_hidden: true,
-                    ..
-                } = inputs.passes
-                {
-                    // Before the visible lines, which win where the two cross.
-                    let hidden = Raster {
-                        behind: true,
-                        ..plain
-                    };
-                    let dashed = fragment(PassShader::HiddenEdges)?;
-                    let pipeline = this.pipeline(inputs, dashed, lines, hidden)?;
-                    this.add(pipeline, abi::CADR_PASS_EDGES);
-                    if let PassSet::Shaded {
-                        hidden_silhouettes: true,
-                        ..
-                    } = inputs.passes
-                    {
-                        // The triangles, each turned into its silhouette segment, if any.
-                        let silhouettes = Raster {
-                            silhouette_lines: true,
-                            ..hidden
-                        };
-                        let pipeline = this.pipeline(inputs, dashed, triangles, silhouettes)?;
-                        this.add(pipeline, abi::CADR_PASS_TRIANGLES);
-                    }
-                }
-                let caps_over_lines = matches!(
-                    inputs.passes,
-                    PassSet::Shaded {
-                        caps_over_lines: true,
-                        ..
-                    }
-                );
-                let visible_lines = Raster {
-                    keeps_depth: caps_over_lines,
-                    ..plain
-                };
-                let edges = fragment(PassShader::Edges)?;
-                let pipeline = this.pipeline(inputs, edges, lines, visible_lines)?;
-                this.add(pipeline, abi::CADR_PASS_EDGES);
-                if caps_over_lines {
-                    // The surfaces' own vertex shader, role and depth bias: depth EQUAL finds
-                    // the surface each pixel shows.
-                    let caps = Raster {
-                        on_surfaces: true,
-                        ..under_lines
-                    };
-                    let caps_fragment = fragment(PassShader::Caps)?;
-                    let pipeline = this.pipeline(inputs, caps_fragment, triangles, caps)?;
-                    this.add(pipeline, abi::CADR_PASS_TRIANGLES);
-                }
-            }
+            } => this.add_edge_mode_passes(inputs, mode)?,
             PassSet::Shaded {
                 mode: ShadeMode::Wireframe,
                 ..
@@ -337,6 +283,84 @@ impl TechniquePipelines {
             this.add_merge(inputs, shaders)?;
         }
         Ok(this)
+    }
+
+    /// The passes of the modes that draw feature edges (edges, hidden-line, X-ray): the
+    /// surfaces pushed back under the lines (depth only in hidden-line), with dashed hidden
+    /// edges the hidden lines and hidden silhouettes, the visible lines, and while section caps
+    /// show the caps painted again over the lines.
+    fn add_edge_mode_passes(
+        &mut self,
+        inputs: &PipelineInputs<'_>,
+        mode: ShadeMode,
+    ) -> RenderResult<()> {
+        let triangles = vk::PrimitiveTopology::TRIANGLE_LIST;
+        let lines = vk::PrimitiveTopology::LINE_LIST;
+        let plain = Raster::default();
+        let under_lines = Raster {
+            depth_bias: true,
+            ..plain
+        };
+        let surfaces = Raster {
+            depth_only: mode == ShadeMode::HiddenLine,
+            ..under_lines
+        };
+        let solid = inputs.shaders.shader(PassShader::Solid)?;
+        let pipeline = self.pipeline(inputs, solid, triangles, surfaces)?;
+        self.add(pipeline, abi::CADR_PASS_TRIANGLES);
+        if let PassSet::Shaded {
+            dashed_hidden: true,
+            ..
+        } = inputs.passes
+        {
+            // Before the visible lines, which win where the two cross.
+            let hidden = Raster {
+                behind: true,
+                ..plain
+            };
+            let dashed = inputs.shaders.shader(PassShader::HiddenEdges)?;
+            let pipeline = self.pipeline(inputs, dashed, lines, hidden)?;
+            self.add(pipeline, abi::CADR_PASS_EDGES);
+            if let PassSet::Shaded {
+                hidden_silhouettes: true,
+                ..
+            } = inputs.passes
+            {
+                // The triangles, each turned into its silhouette segment, if any.
+                let silhouettes = Raster {
+                    silhouette_lines: true,
+                    ..hidden
+                };
+                let pipeline = self.pipeline(inputs, dashed, triangles, silhouettes)?;
+                self.add(pipeline, abi::CADR_PASS_TRIANGLES);
+            }
+        }
+        let caps_over_lines = matches!(
+            inputs.passes,
+            PassSet::Shaded {
+                caps_over_lines: true,
+                ..
+            }
+        );
+        let visible_lines = Raster {
+            keeps_depth: caps_over_lines,
+            ..plain
+        };
+        let edges = inputs.shaders.shader(PassShader::Edges)?;
+        let pipeline = self.pipeline(inputs, edges, lines, visible_lines)?;
+        self.add(pipeline, abi::CADR_PASS_EDGES);
+        if caps_over_lines {
+            // The surfaces' own vertex shader, role and depth bias: depth EQUAL finds
+            // the surface each pixel shows.
+            let caps = Raster {
+                on_surfaces: true,
+                ..under_lines
+            };
+            let caps_fragment = inputs.shaders.shader(PassShader::Caps)?;
+            let pipeline = self.pipeline(inputs, caps_fragment, triangles, caps)?;
+            self.add(pipeline, abi::CADR_PASS_TRIANGLES);
+        }
+        Ok(())
     }
 
     fn add(&mut self, (pipeline, scope): (Pipeline, PassScope), kind: abi::CadrPassKind) {

@@ -158,57 +158,8 @@ impl Device {
                 .get_physical_device_features2(physical, &mut supported)
         };
         let core = supported.features;
-        let mut depth_resolve = vk::PhysicalDeviceDepthStencilResolveProperties::default();
-        let mut properties2 =
-            vk::PhysicalDeviceProperties2::default().push_next(&mut depth_resolve);
-        // SAFETY: physical comes from this instance; the chain lives on this stack frame.
-        unsafe {
-            instance
-                .raw
-                .get_physical_device_properties2(physical, &mut properties2)
-        };
-        let depth_resolve_mode = if depth_resolve
-            .supported_depth_resolve_modes
-            .contains(vk::ResolveModeFlags::MAX)
-        {
-            vk::ResolveModeFlags::MAX
-        } else {
-            vk::ResolveModeFlags::SAMPLE_ZERO
-        };
-        let (dynamic_rendering, synchronization2) = (
-            supported13.dynamic_rendering == vk::TRUE,
-            supported13.synchronization2 == vk::TRUE,
-        );
-        if !dynamic_rendering || !synchronization2 {
-            return Err(VkError::Unsupported {
-                device: adapter.name.clone(),
-                reason: "Vulkan 1.3 dynamicRendering and synchronization2 are required".into(),
-            });
-        }
-        // Section planes clip in the vertex shader every technique shares; the wireframe
-        // display mode draws triangles as lines; translucent surfaces blend into the
-        // transparency method's targets, differently from the picture.
-        for (supported, name) in [
-            (
-                core.shader_clip_distance,
-                "shaderClipDistance (section planes)",
-            ),
-            (
-                core.fill_mode_non_solid,
-                "fillModeNonSolid (the wireframe display mode)",
-            ),
-            (
-                core.independent_blend,
-                "independentBlend (the transparency methods' targets)",
-            ),
-        ] {
-            if supported != vk::TRUE {
-                return Err(VkError::Unsupported {
-                    device: adapter.name.clone(),
-                    reason: format!("{name} is required"),
-                });
-            }
-        }
+        let depth_resolve_mode = depth_resolve_mode(&instance, physical);
+        check_required_features(&adapter.name, &supported13, &core)?;
         // SAFETY: physical comes from this instance.
         let families = unsafe {
             instance
@@ -219,20 +170,7 @@ impl Device {
         // SAFETY: physical comes from this instance.
         let extensions = unsafe { instance.raw.enumerate_device_extension_properties(physical) }
             .or_vk("vkEnumerateDeviceExtensionProperties")?;
-        for wanted in extra_extensions {
-            let present = extensions
-                .iter()
-                .any(|e| e.extension_name_as_c_str() == Ok(wanted.as_c_str()));
-            if !present {
-                return Err(VkError::Unsupported {
-                    device: adapter.name.clone(),
-                    reason: format!(
-                        "device extension {} is not supported",
-                        wanted.to_string_lossy()
-                    ),
-                });
-            }
-        }
+        check_extra_extensions(&adapter.name, &extensions, extra_extensions)?;
         let has_multi_draw = extensions
             .iter()
             .any(|e| e.extension_name_as_c_str() == Ok(ash::ext::multi_draw::NAME));
@@ -256,97 +194,13 @@ impl Device {
             device_generated_commands: adapter.device_generated_commands,
         };
 
-        let enabled_core = vk::PhysicalDeviceFeatures::default()
-            .multi_draw_indirect(capabilities.multi_draw_indirect)
-            .draw_indirect_first_instance(capabilities.draw_indirect_first_instance)
-            .pipeline_statistics_query(capabilities.pipeline_statistics_query)
-            .fragment_stores_and_atomics(capabilities.fragment_stores_and_atomics)
-            .geometry_shader(capabilities.geometry_shader)
-            .shader_clip_distance(true)
-            .fill_mode_non_solid(true)
-            .independent_blend(true);
-        let mut enabled13 = vk::PhysicalDeviceVulkan13Features::default()
-            .dynamic_rendering(true)
-            .synchronization2(true)
-            // Required by Vulkan 1.3; shaderc emits LocalSizeId for 1.3 targets, which needs it.
-            .maintenance4(supported13.maintenance4 == vk::TRUE);
-
-        let mut enabled12 = vk::PhysicalDeviceVulkan12Features::default()
-            .buffer_device_address(capabilities.buffer_device_address)
-            .draw_indirect_count(capabilities.draw_indirect_count)
-            .host_query_reset(supported12.host_query_reset == vk::TRUE);
-        if capabilities.bindless_textures > 0 {
-            enabled12 = enabled12
-                .runtime_descriptor_array(true)
-                .shader_sampled_image_array_non_uniform_indexing(true)
-                .descriptor_binding_partially_bound(true)
-                .descriptor_binding_sampled_image_update_after_bind(true);
-        }
-        let mut enabled11 = vk::PhysicalDeviceVulkan11Features::default()
-            .shader_draw_parameters(capabilities.shader_draw_parameters);
-        let priorities = [1.0_f32];
-        let queue_info = [vk::DeviceQueueCreateInfo::default()
-            .queue_family_index(adapter.queue_family)
-            .queue_priorities(&priorities)];
-        let mut enabled = vk::PhysicalDeviceFeatures2::default()
-            .features(enabled_core)
-            .push_next(&mut enabled13)
-            .push_next(&mut enabled12)
-            .push_next(&mut enabled11);
-        let mut multi_draw = vk::PhysicalDeviceMultiDrawFeaturesEXT::default().multi_draw(true);
-        let mut mesh_shader_features = vk::PhysicalDeviceMeshShaderFeaturesEXT::default()
-            .task_shader(true)
-            .mesh_shader(true);
-        let mut generated_commands_features =
-            cadr_vk_ext::device_generated_commands::PhysicalDeviceFeatures {
-                device_generated_commands: vk::TRUE,
-                ..Default::default()
-            };
-        let mut maintenance5_features =
-            vk::PhysicalDeviceMaintenance5FeaturesKHR::default().maintenance5(true);
-        let mut enabled_extensions: Vec<&std::ffi::CStr> = Vec::new();
-        if capabilities.device_generated_commands {
-            enabled_extensions.push(cadr_vk_ext::device_generated_commands::NAME);
-            enabled_extensions.push(ash::khr::maintenance5::NAME);
-        }
-        if capabilities.multi_draw {
-            enabled_extensions.push(ash::ext::multi_draw::NAME);
-        }
-        if capabilities.mesh_shader {
-            enabled_extensions.push(ash::ext::mesh_shader::NAME);
-        }
-        for wanted in extra_extensions {
-            if !enabled_extensions.contains(&wanted.as_c_str()) {
-                enabled_extensions.push(wanted);
-            }
-        }
-        let extension_names: Vec<*const std::ffi::c_char> = enabled_extensions
-            .iter()
-            .map(|name| name.as_ptr())
-            .collect();
-        let mut create_info = vk::DeviceCreateInfo::default()
-            .queue_create_infos(&queue_info)
-            .enabled_extension_names(&extension_names)
-            .push_next(&mut enabled);
-        if capabilities.multi_draw {
-            create_info = create_info.push_next(&mut multi_draw);
-        }
-        if capabilities.mesh_shader {
-            create_info = create_info.push_next(&mut mesh_shader_features);
-        }
-        if capabilities.device_generated_commands {
-            create_info = create_info
-                .push_next(&mut generated_commands_features)
-                .push_next(&mut maintenance5_features);
-        }
-        // SAFETY: create_info and its chain live until the call returns; only supported
-        // features are enabled.
-        let raw = unsafe {
-            instance
-                .raw
-                .create_device(physical, &create_info, host_callbacks())
-        }
-        .or_vk("vkCreateDevice")?;
+        let raw = create_logical_device(
+            &instance,
+            (physical, adapter.queue_family),
+            &capabilities,
+            (&supported13, &supported12),
+            extra_extensions,
+        )?;
         // SAFETY: the family and index 0 were requested in create_info.
         let queue = unsafe { raw.get_device_queue(adapter.queue_family, 0) };
 
@@ -680,4 +534,198 @@ pub struct DeviceMemoryUsage {
     /// Bytes of the memory blocks the allocations are carved from: what the driver has given
     /// cadr, unused room included.
     pub reserved_bytes: u64,
+}
+
+/// How multisampled depth is resolved on `physical`: MAX (the farthest sample) where the
+/// device offers it, else SAMPLE_ZERO, which every device offers.
+fn depth_resolve_mode(instance: &Instance, physical: vk::PhysicalDevice) -> vk::ResolveModeFlags {
+    let mut depth_resolve = vk::PhysicalDeviceDepthStencilResolveProperties::default();
+    let mut properties2 = vk::PhysicalDeviceProperties2::default().push_next(&mut depth_resolve);
+    // SAFETY: physical comes from this instance; the chain lives on this stack frame.
+    unsafe {
+        instance
+            .raw
+            .get_physical_device_properties2(physical, &mut properties2)
+    };
+    if depth_resolve
+        .supported_depth_resolve_modes
+        .contains(vk::ResolveModeFlags::MAX)
+    {
+        vk::ResolveModeFlags::MAX
+    } else {
+        vk::ResolveModeFlags::SAMPLE_ZERO
+    }
+}
+
+/// Refuses a device that lacks what cadr cannot draw without: Vulkan 1.3's dynamic rendering
+/// and synchronization2, clip distances (section planes), non-solid fill (the wireframe mode)
+/// and independent blending (the transparency methods' targets).
+fn check_required_features(
+    device_name: &str,
+    supported13: &vk::PhysicalDeviceVulkan13Features<'_>,
+    core: &vk::PhysicalDeviceFeatures,
+) -> VkResult<()> {
+    let (dynamic_rendering, synchronization2) = (
+        supported13.dynamic_rendering == vk::TRUE,
+        supported13.synchronization2 == vk::TRUE,
+    );
+    if !dynamic_rendering || !synchronization2 {
+        return Err(VkError::Unsupported {
+            device: device_name.to_owned(),
+            reason: "Vulkan 1.3 dynamicRendering and synchronization2 are required".into(),
+        });
+    }
+    // Section planes clip in the vertex shader every technique shares; the wireframe
+    // display mode draws triangles as lines; translucent surfaces blend into the
+    // transparency method's targets, differently from the picture.
+    for (supported, name) in [
+        (
+            core.shader_clip_distance,
+            "shaderClipDistance (section planes)",
+        ),
+        (
+            core.fill_mode_non_solid,
+            "fillModeNonSolid (the wireframe display mode)",
+        ),
+        (
+            core.independent_blend,
+            "independentBlend (the transparency methods' targets)",
+        ),
+    ] {
+        if supported != vk::TRUE {
+            return Err(VkError::Unsupported {
+                device: device_name.to_owned(),
+                reason: format!("{name} is required"),
+            });
+        }
+    }
+    Ok(())
+}
+
+/// Refuses a device that lacks one of the host's `extra_extensions`, naming it.
+fn check_extra_extensions(
+    device_name: &str,
+    extensions: &[vk::ExtensionProperties],
+    extra_extensions: &[std::ffi::CString],
+) -> VkResult<()> {
+    for wanted in extra_extensions {
+        let present = extensions
+            .iter()
+            .any(|e| e.extension_name_as_c_str() == Ok(wanted.as_c_str()));
+        if !present {
+            return Err(VkError::Unsupported {
+                device: device_name.to_owned(),
+                reason: format!(
+                    "device extension {} is not supported",
+                    wanted.to_string_lossy()
+                ),
+            });
+        }
+    }
+    Ok(())
+}
+
+/// Creates the logical device with one queue of `queue_family`, the features `capabilities`
+/// say (and those cadr requires), and the extensions they need plus the host's extra ones.
+fn create_logical_device(
+    instance: &Instance,
+    (physical, queue_family): (vk::PhysicalDevice, u32),
+    capabilities: &Capabilities,
+    (supported13, supported12): (
+        &vk::PhysicalDeviceVulkan13Features<'_>,
+        &vk::PhysicalDeviceVulkan12Features<'_>,
+    ),
+    extra_extensions: &[std::ffi::CString],
+) -> VkResult<ash::Device> {
+    let enabled_core = vk::PhysicalDeviceFeatures::default()
+        .multi_draw_indirect(capabilities.multi_draw_indirect)
+        .draw_indirect_first_instance(capabilities.draw_indirect_first_instance)
+        .pipeline_statistics_query(capabilities.pipeline_statistics_query)
+        .fragment_stores_and_atomics(capabilities.fragment_stores_and_atomics)
+        .geometry_shader(capabilities.geometry_shader)
+        .shader_clip_distance(true)
+        .fill_mode_non_solid(true)
+        .independent_blend(true);
+    let mut enabled13 = vk::PhysicalDeviceVulkan13Features::default()
+        .dynamic_rendering(true)
+        .synchronization2(true)
+        // Required by Vulkan 1.3; shaderc emits LocalSizeId for 1.3 targets, which needs it.
+        .maintenance4(supported13.maintenance4 == vk::TRUE);
+
+    let mut enabled12 = vk::PhysicalDeviceVulkan12Features::default()
+        .buffer_device_address(capabilities.buffer_device_address)
+        .draw_indirect_count(capabilities.draw_indirect_count)
+        .host_query_reset(supported12.host_query_reset == vk::TRUE);
+    if capabilities.bindless_textures > 0 {
+        enabled12 = enabled12
+            .runtime_descriptor_array(true)
+            .shader_sampled_image_array_non_uniform_indexing(true)
+            .descriptor_binding_partially_bound(true)
+            .descriptor_binding_sampled_image_update_after_bind(true);
+    }
+    let mut enabled11 = vk::PhysicalDeviceVulkan11Features::default()
+        .shader_draw_parameters(capabilities.shader_draw_parameters);
+    let priorities = [1.0_f32];
+    let queue_info = [vk::DeviceQueueCreateInfo::default()
+        .queue_family_index(queue_family)
+        .queue_priorities(&priorities)];
+    let mut enabled = vk::PhysicalDeviceFeatures2::default()
+        .features(enabled_core)
+        .push_next(&mut enabled13)
+        .push_next(&mut enabled12)
+        .push_next(&mut enabled11);
+    let mut multi_draw = vk::PhysicalDeviceMultiDrawFeaturesEXT::default().multi_draw(true);
+    let mut mesh_shader_features = vk::PhysicalDeviceMeshShaderFeaturesEXT::default()
+        .task_shader(true)
+        .mesh_shader(true);
+    let mut generated_commands_features =
+        cadr_vk_ext::device_generated_commands::PhysicalDeviceFeatures {
+            device_generated_commands: vk::TRUE,
+            ..Default::default()
+        };
+    let mut maintenance5_features =
+        vk::PhysicalDeviceMaintenance5FeaturesKHR::default().maintenance5(true);
+    let mut enabled_extensions: Vec<&std::ffi::CStr> = Vec::new();
+    if capabilities.device_generated_commands {
+        enabled_extensions.push(cadr_vk_ext::device_generated_commands::NAME);
+        enabled_extensions.push(ash::khr::maintenance5::NAME);
+    }
+    if capabilities.multi_draw {
+        enabled_extensions.push(ash::ext::multi_draw::NAME);
+    }
+    if capabilities.mesh_shader {
+        enabled_extensions.push(ash::ext::mesh_shader::NAME);
+    }
+    for wanted in extra_extensions {
+        if !enabled_extensions.contains(&wanted.as_c_str()) {
+            enabled_extensions.push(wanted);
+        }
+    }
+    let extension_names: Vec<*const std::ffi::c_char> = enabled_extensions
+        .iter()
+        .map(|name| name.as_ptr())
+        .collect();
+    let mut create_info = vk::DeviceCreateInfo::default()
+        .queue_create_infos(&queue_info)
+        .enabled_extension_names(&extension_names)
+        .push_next(&mut enabled);
+    if capabilities.multi_draw {
+        create_info = create_info.push_next(&mut multi_draw);
+    }
+    if capabilities.mesh_shader {
+        create_info = create_info.push_next(&mut mesh_shader_features);
+    }
+    if capabilities.device_generated_commands {
+        create_info = create_info
+            .push_next(&mut generated_commands_features)
+            .push_next(&mut maintenance5_features);
+    }
+    // SAFETY: create_info and its chain live until the call returns; only supported
+    // features are enabled.
+    unsafe {
+        instance
+            .raw
+            .create_device(physical, &create_info, host_callbacks())
+    }
+    .or_vk("vkCreateDevice")
 }

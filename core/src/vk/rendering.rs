@@ -80,6 +80,44 @@ pub fn begin_rendering(
     command_buffer: vk::CommandBuffer,
     target: &RenderingTarget<'_>,
 ) {
+    transition_for_rendering(device, command_buffer, target);
+    let load_op = if target.resume {
+        vk::AttachmentLoadOp::LOAD
+    } else {
+        vk::AttachmentLoadOp::CLEAR
+    };
+    let color_attachment = color_attachments(target, load_op);
+    let depth_attachment = depth_attachment(target, load_op);
+    let area = vk::Rect2D {
+        offset: vk::Offset2D::default(),
+        extent: target.extent,
+    };
+    let flags = if target.secondary {
+        vk::RenderingFlags::CONTENTS_SECONDARY_COMMAND_BUFFERS
+    } else {
+        vk::RenderingFlags::empty()
+    };
+    let rendering = vk::RenderingInfo::default()
+        .flags(flags)
+        .render_area(area)
+        .layer_count(1)
+        .color_attachments(&color_attachment)
+        .depth_attachment(&depth_attachment);
+    // SAFETY: command_buffer is recording; the target's images outlive the submission.
+    unsafe { device.raw().cmd_begin_rendering(command_buffer, &rendering) };
+    if !target.secondary {
+        cover(device, command_buffer, area);
+    }
+}
+
+/// Transitions the target's images (colour, depth, the multisampled ones and the extra
+/// colours) for rendering: freshly, or when the pass resumes, after what it drew before its
+/// suspension.
+fn transition_for_rendering(
+    device: &Device,
+    command_buffer: vk::CommandBuffer,
+    target: &RenderingTarget<'_>,
+) {
     let color_before = if target.resume {
         (
             vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL,
@@ -164,45 +202,55 @@ pub fn begin_rendering(
             );
         }
     }
-    let load_op = if target.resume {
-        vk::AttachmentLoadOp::LOAD
-    } else {
-        vk::AttachmentLoadOp::CLEAR
-    };
-    let color_attachment: Vec<vk::RenderingAttachmentInfo<'_>> =
-        std::iter::once((target.color, target.clear_color))
-            .chain(target.extra_colors.iter().copied())
-            .enumerate()
-            .map(|(i, (image, clear))| {
-                let info = vk::RenderingAttachmentInfo::default()
-                    .image_layout(vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL)
-                    .load_op(load_op)
-                    .clear_value(vk::ClearValue { color: clear });
-                let drawn = target.multisampled.as_ref().and_then(|m| {
-                    if i == 0 {
-                        Some(m.color)
-                    } else {
-                        m.extra_colors.get(i - 1).copied()
-                    }
-                });
-                match drawn {
-                    // A multisampled colour is kept only while the pass is resumed later.
-                    Some(drawn) => info
-                        .image_view(drawn.view())
-                        .resolve_mode(vk::ResolveModeFlags::AVERAGE)
-                        .resolve_image_view(image.view())
-                        .resolve_image_layout(vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL)
-                        .store_op(if target.store_depth {
-                            vk::AttachmentStoreOp::STORE
-                        } else {
-                            vk::AttachmentStoreOp::DONT_CARE
-                        }),
-                    None => info
-                        .image_view(image.view())
-                        .store_op(vk::AttachmentStoreOp::STORE),
+}
+
+/// The colour attachments of a rendering into `target`: the picture and the extra colours,
+/// drawn into their multisampled images and resolved into them where the target has those.
+fn color_attachments<'a>(
+    target: &RenderingTarget<'a>,
+    load_op: vk::AttachmentLoadOp,
+) -> Vec<vk::RenderingAttachmentInfo<'a>> {
+    std::iter::once((target.color, target.clear_color))
+        .chain(target.extra_colors.iter().copied())
+        .enumerate()
+        .map(|(i, (image, clear))| {
+            let info = vk::RenderingAttachmentInfo::default()
+                .image_layout(vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL)
+                .load_op(load_op)
+                .clear_value(vk::ClearValue { color: clear });
+            let drawn = target.multisampled.as_ref().and_then(|m| {
+                if i == 0 {
+                    Some(m.color)
+                } else {
+                    m.extra_colors.get(i - 1).copied()
                 }
-            })
-            .collect();
+            });
+            match drawn {
+                // A multisampled colour is kept only while the pass is resumed later.
+                Some(drawn) => info
+                    .image_view(drawn.view())
+                    .resolve_mode(vk::ResolveModeFlags::AVERAGE)
+                    .resolve_image_view(image.view())
+                    .resolve_image_layout(vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL)
+                    .store_op(if target.store_depth {
+                        vk::AttachmentStoreOp::STORE
+                    } else {
+                        vk::AttachmentStoreOp::DONT_CARE
+                    }),
+                None => info
+                    .image_view(image.view())
+                    .store_op(vk::AttachmentStoreOp::STORE),
+            }
+        })
+        .collect()
+}
+
+/// The depth attachment of a rendering into `target` (the multisampled depth, resolved into
+/// the one-sample one where a later phase or pass reads it).
+fn depth_attachment<'a>(
+    target: &RenderingTarget<'a>,
+    load_op: vk::AttachmentLoadOp,
+) -> vk::RenderingAttachmentInfo<'a> {
     let mut depth_attachment = vk::RenderingAttachmentInfo::default()
         .image_view(target.depth.view())
         .image_layout(vk::ImageLayout::DEPTH_ATTACHMENT_OPTIMAL)
@@ -232,26 +280,7 @@ pub fn begin_rendering(
                 .resolve_image_layout(vk::ImageLayout::DEPTH_ATTACHMENT_OPTIMAL);
         }
     }
-    let area = vk::Rect2D {
-        offset: vk::Offset2D::default(),
-        extent: target.extent,
-    };
-    let flags = if target.secondary {
-        vk::RenderingFlags::CONTENTS_SECONDARY_COMMAND_BUFFERS
-    } else {
-        vk::RenderingFlags::empty()
-    };
-    let rendering = vk::RenderingInfo::default()
-        .flags(flags)
-        .render_area(area)
-        .layer_count(1)
-        .color_attachments(&color_attachment)
-        .depth_attachment(&depth_attachment);
-    // SAFETY: command_buffer is recording; the target's images outlive the submission.
-    unsafe { device.raw().cmd_begin_rendering(command_buffer, &rendering) };
-    if !target.secondary {
-        cover(device, command_buffer, area);
-    }
+    depth_attachment
 }
 
 /// Makes the multisampled attachments ready to draw into: freshly (the last frame's pass may

@@ -366,70 +366,7 @@ impl Swapchain {
         let ready = self.ready_to_present[index as usize];
         let command_buffer = self.commands.begin()?;
         let device = &*self.device;
-        transition(
-            device,
-            command_buffer,
-            image,
-            vk::ImageAspectFlags::COLOR,
-            (
-                vk::ImageLayout::UNDEFINED,
-                vk::PipelineStageFlags2::BLIT,
-                vk::AccessFlags2::NONE,
-            ),
-            (
-                vk::ImageLayout::TRANSFER_DST_OPTIMAL,
-                vk::PipelineStageFlags2::BLIT,
-                vk::AccessFlags2::TRANSFER_WRITE,
-            ),
-        );
-        let source = frame.extent();
-        let corner = |e: vk::Extent2D| vk::Offset3D {
-            x: e.width as i32,
-            y: e.height as i32,
-            z: 1,
-        };
-        let layers = vk::ImageSubresourceLayers::default()
-            .aspect_mask(vk::ImageAspectFlags::COLOR)
-            .layer_count(1);
-        let region = [vk::ImageBlit::default()
-            .src_subresource(layers)
-            .src_offsets([vk::Offset3D::default(), corner(source)])
-            .dst_subresource(layers)
-            .dst_offsets([vk::Offset3D::default(), corner(self.extent)])];
-        let filter = if source == self.extent {
-            vk::Filter::NEAREST
-        } else {
-            vk::Filter::LINEAR
-        };
-        // SAFETY: recording; the frame is in TRANSFER_SRC_OPTIMAL, the swapchain image was
-        // just moved to TRANSFER_DST_OPTIMAL; both outlive the submission, which is waited for.
-        unsafe {
-            device.raw.cmd_blit_image(
-                command_buffer,
-                frame.raw(),
-                vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
-                image,
-                vk::ImageLayout::TRANSFER_DST_OPTIMAL,
-                &region,
-                filter,
-            )
-        };
-        transition(
-            device,
-            command_buffer,
-            image,
-            vk::ImageAspectFlags::COLOR,
-            (
-                vk::ImageLayout::TRANSFER_DST_OPTIMAL,
-                vk::PipelineStageFlags2::BLIT,
-                vk::AccessFlags2::TRANSFER_WRITE,
-            ),
-            (
-                vk::ImageLayout::PRESENT_SRC_KHR,
-                vk::PipelineStageFlags2::BOTTOM_OF_PIPE,
-                vk::AccessFlags2::NONE,
-            ),
-        );
+        record_blit(device, command_buffer, frame, (image, self.extent));
         self.commands.submit_with_semaphores(
             &[(self.image_acquired, vk::PipelineStageFlags::TRANSFER)],
             &[ready],
@@ -459,6 +396,80 @@ impl Swapchain {
         };
         Ok(outcome)
     }
+}
+
+/// Records the blit of `frame` (in TRANSFER_SRC_OPTIMAL) into the swapchain `image` of
+/// `extent`, scaled if their sizes differ, leaving the image ready to present.
+fn record_blit(
+    device: &Device,
+    command_buffer: vk::CommandBuffer,
+    frame: &Image,
+    (image, extent): (vk::Image, vk::Extent2D),
+) {
+    transition(
+        device,
+        command_buffer,
+        image,
+        vk::ImageAspectFlags::COLOR,
+        (
+            vk::ImageLayout::UNDEFINED,
+            vk::PipelineStageFlags2::BLIT,
+            vk::AccessFlags2::NONE,
+        ),
+        (
+            vk::ImageLayout::TRANSFER_DST_OPTIMAL,
+            vk::PipelineStageFlags2::BLIT,
+            vk::AccessFlags2::TRANSFER_WRITE,
+        ),
+    );
+    let source = frame.extent();
+    let corner = |e: vk::Extent2D| vk::Offset3D {
+        x: e.width as i32,
+        y: e.height as i32,
+        z: 1,
+    };
+    let layers = vk::ImageSubresourceLayers::default()
+        .aspect_mask(vk::ImageAspectFlags::COLOR)
+        .layer_count(1);
+    let region = [vk::ImageBlit::default()
+        .src_subresource(layers)
+        .src_offsets([vk::Offset3D::default(), corner(source)])
+        .dst_subresource(layers)
+        .dst_offsets([vk::Offset3D::default(), corner(extent)])];
+    let filter = if source == extent {
+        vk::Filter::NEAREST
+    } else {
+        vk::Filter::LINEAR
+    };
+    // SAFETY: recording; the frame is in TRANSFER_SRC_OPTIMAL, the swapchain image was
+    // just moved to TRANSFER_DST_OPTIMAL; both outlive the submission, which is waited for.
+    unsafe {
+        device.raw.cmd_blit_image(
+            command_buffer,
+            frame.raw(),
+            vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
+            image,
+            vk::ImageLayout::TRANSFER_DST_OPTIMAL,
+            &region,
+            filter,
+        )
+    };
+    transition(
+        device,
+        command_buffer,
+        image,
+        vk::ImageAspectFlags::COLOR,
+        (
+            vk::ImageLayout::TRANSFER_DST_OPTIMAL,
+            vk::PipelineStageFlags2::BLIT,
+            vk::AccessFlags2::TRANSFER_WRITE,
+        ),
+        (
+            vk::ImageLayout::PRESENT_SRC_KHR,
+            vk::PipelineStageFlags2::BOTTOM_OF_PIPE,
+            vk::AccessFlags2::NONE,
+        ),
+    );
 }
 
 impl Drop for Swapchain {

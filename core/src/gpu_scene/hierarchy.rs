@@ -167,8 +167,8 @@ pub(super) struct TransformHierarchy {
     roots: Option<Buffer>,
     stamp: u32,
     sets: Option<DescriptorSets>,
-    /// The buffers the set was written for.
-    written: [vk::Buffer; 7],
+    /// The serials of the buffers the set was written for.
+    written: [u64; 7],
     /// Counts the writes of the set (a recording that uses it is stale after one).
     sets_generation: u64,
     /// The moved roots while a plan is made (empty between plans).
@@ -192,7 +192,7 @@ impl TransformHierarchy {
             roots: None,
             stamp: 0,
             sets: None,
-            written: [vk::Buffer::null(); 7],
+            written: [0; 7],
             sets_generation: 0,
             marked: BitSet::default(),
             plan: None,
@@ -287,9 +287,9 @@ impl TransformHierarchy {
     pub(super) fn prepare(
         &mut self,
         pipelines: &ScenePipelines,
-        updates: vk::Buffer,
+        updates: &Buffer,
         (first_word, local_count): (u32, u32),
-        (locals, worlds): (vk::Buffer, vk::Buffer),
+        (locals, worlds): (&Buffer, &Buffer),
         same_roots: bool,
     ) -> RenderResult<Option<HierarchyPlan>> {
         self.ready = None;
@@ -304,15 +304,8 @@ impl TransformHierarchy {
         else {
             return Ok(None);
         };
-        let targets = [
-            updates,
-            locals,
-            nodes.raw(),
-            order.raw(),
-            stamps.raw(),
-            roots.raw(),
-            worlds,
-        ];
+        let targets = [updates, locals, nodes, order, stamps, roots, worlds];
+        let serials = targets.map(Buffer::serial);
         if self.sets.is_none() {
             self.sets = Some(DescriptorSets::new(
                 &self.device,
@@ -324,17 +317,17 @@ impl TransformHierarchy {
         let Some(sets) = &self.sets else {
             return Ok(None);
         };
-        if self.written != targets {
-            for (binding, &buffer) in targets.iter().enumerate() {
+        if self.written != serials {
+            for (binding, buffer) in targets.iter().enumerate() {
                 sets.write_buffer(
                     0,
                     binding as u32,
                     vk::DescriptorType::STORAGE_BUFFER,
-                    buffer,
+                    buffer.raw(),
                     vk::WHOLE_SIZE,
                 );
             }
-            self.written = targets;
+            self.written = serials;
             self.sets_generation += 1;
         }
         // A new stamp tells this frame's roots from the last one's; with the same roots, the

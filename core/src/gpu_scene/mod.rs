@@ -812,7 +812,7 @@ impl GpuScene {
                     &self.gpu.pipelines,
                     updates,
                     (first_words[5], local_count as u32),
-                    (self.gpu.locals.buffer.raw(), self.gpu.matrices.buffer.raw()),
+                    (&self.gpu.locals.buffer, &self.gpu.matrices.buffer),
                     self.gpu.uploader.commands_key() == last_slots,
                 )?
             }

@@ -133,8 +133,8 @@ pub(super) const ARRAYS: usize = 6;
 pub(super) struct SparseUploader {
     updates: Option<Buffer>,
     sets: Option<DescriptorSets>,
-    /// The buffers the sets were written for (updates, then each array).
-    written: [vk::Buffer; ARRAYS + 1],
+    /// The serials of the buffers the sets were written for (updates, then each array).
+    written: [u64; ARRAYS + 1],
     /// Counts the writes of the sets (a recording that uses them is stale after one).
     sets_generation: u64,
     /// The compact updates of a frame, kept to be refilled without allocating.
@@ -259,8 +259,8 @@ impl SparseUploader {
     }
 
     /// The buffer the last upload's compact items went through, if any.
-    pub(super) fn updates(&self) -> Option<vk::Buffer> {
-        self.updates.as_ref().map(Buffer::raw)
+    pub(super) fn updates(&self) -> Option<&Buffer> {
+        self.updates.as_ref()
     }
 
     /// Writes `gathered` into the update buffer (grown if need be) and points the sets at it
@@ -290,8 +290,12 @@ impl SparseUploader {
         };
         updates.write(0, gathered)?;
         let mut targets = [updates.raw(); ARRAYS + 1];
-        for (target, (array, _)) in targets[1..].iter_mut().zip(arrays) {
+        let mut serials = [updates.serial(); ARRAYS + 1];
+        for ((target, serial), (array, _)) in
+            targets[1..].iter_mut().zip(&mut serials[1..]).zip(arrays)
+        {
             *target = array.buffer.raw();
+            *serial = array.buffer.serial();
         }
         if self.sets.is_none() {
             let layouts = [pipelines.scatter_set_layout(); ARRAYS];
@@ -301,13 +305,13 @@ impl SparseUploader {
         let Some(sets) = &self.sets else {
             return Ok(());
         };
-        if self.written != targets {
+        if self.written != serials {
             let ssbo = vk::DescriptorType::STORAGE_BUFFER;
             for set in 0..ARRAYS {
                 sets.write_buffer(set, 0, ssbo, targets[0], vk::WHOLE_SIZE);
                 sets.write_buffer(set, 1, ssbo, targets[set + 1], vk::WHOLE_SIZE);
             }
-            self.written = targets;
+            self.written = serials;
             self.sets_generation += 1;
         }
         Ok(())

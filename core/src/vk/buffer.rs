@@ -21,12 +21,16 @@ const STAGING_CHUNKS: usize = 3;
 /// big, spread over the cores.
 const FILL_PIECE_BYTES: usize = 4 << 20;
 
+/// Serials of buffers, counted process-wide (see [`Buffer::serial`]).
+static NEXT_BUFFER_SERIAL: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(1);
+
 /// A buffer and its memory; freed on drop.
 pub struct Buffer {
     device: Arc<Device>,
     raw: vk::Buffer,
     allocation: Option<Allocation>,
     size: u64,
+    serial: u64,
 }
 
 impl Buffer {
@@ -51,6 +55,7 @@ impl Buffer {
             raw,
             allocation: None,
             size,
+            serial: NEXT_BUFFER_SERIAL.fetch_add(1, std::sync::atomic::Ordering::Relaxed),
         };
         // SAFETY: raw is a live buffer of this device.
         let requirements = unsafe { device.raw.get_buffer_memory_requirements(raw) };
@@ -273,6 +278,13 @@ impl Buffer {
     /// The Vulkan handle.
     pub fn raw(&self) -> vk::Buffer {
         self.raw
+    }
+
+    /// A number no other buffer of the process has had: a driver may give a new buffer the
+    /// handle of one destroyed before, so a descriptor written for the old one is known stale
+    /// by its serial, not by its handle.
+    pub fn serial(&self) -> u64 {
+        self.serial
     }
 
     /// Size in bytes.

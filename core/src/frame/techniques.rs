@@ -109,6 +109,7 @@ impl Renderer {
             frame_set: self.frame_set().as_raw(),
             size: self.size(),
             samples: passes.samples(),
+            extra_color_formats: extra_color_formats(pipelines),
             key,
         };
         let culler = GpuCuller::of(techniques, pipelines.passes.len())?;
@@ -310,6 +311,16 @@ fn translucency<'a>(
     }
 }
 
+/// The transparency targets' formats of `pipelines` as the record context carries them: the
+/// first two, zero where there are fewer.
+fn extra_color_formats(pipelines: &TechniquePipelines) -> [i32; 2] {
+    let mut formats = [0i32; 2];
+    for (slot, format) in formats.iter_mut().zip(&pipelines.extra_color_formats) {
+        *slot = format.as_raw();
+    }
+    formats
+}
+
 /// Where the GPU culler (if any) wrote this phase's draws, for the submission.
 fn gpu_draws(culler: &Option<GpuCuller<'_>>) -> *const abi::CadrGpuDraws {
     culler
@@ -336,6 +347,8 @@ struct FrameRecording<'a> {
     size: (u32, u32),
     /// Samples per pixel of the pass.
     samples: u32,
+    /// The transparency targets' formats as the record context carries them (at most 2).
+    extra_color_formats: [i32; 2],
     key: u64,
 }
 
@@ -352,13 +365,6 @@ impl FrameRecording<'_> {
         let vertex = self.techniques.get(TechniqueKind::Vertex)?;
         let parameters = self.techniques.get(TechniqueKind::Parameters)?;
         let pipelines = self.pipelines;
-        let mut extra_color_formats = [0i32; 2];
-        for (slot, format) in extra_color_formats
-            .iter_mut()
-            .zip(&pipelines.extra_color_formats)
-        {
-            *slot = format.as_raw();
-        }
         Ok(abi::CadrRecordContext {
             size: std::mem::size_of::<abi::CadrRecordContext>() as u32,
             command_buffer: command_buffer.as_raw() as *mut c_void,
@@ -383,7 +389,7 @@ impl FrameRecording<'_> {
             gpu_draws,
             phase,
             extra_color_count: pipelines.extra_color_formats.len().min(2) as u32,
-            extra_color_formats,
+            extra_color_formats: self.extra_color_formats,
             rasterization_samples: self.samples,
             pass_filters: self.pass_filters.filters.as_ptr(),
             pass_exclusions: self.pass_filters.exclusions.as_ptr(),

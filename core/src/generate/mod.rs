@@ -6,18 +6,21 @@
 //! | `gen:graphicscard` | the seeds' "Graphicscard" statistics: ~68 000 parts of ~10 triangles, 2 500 objects, 110 geometries, 66 materials |
 //! | `gen:racecar` | ~98 000 parts of ~37 triangles |
 //! | `gen:grid:parts=N[,tris=T]` | exactly N parts (T triangles each, default 12) in a cube of objects |
+//! | `gen:fine[:units=N,detail=D]` | machined parts with curved faces (flanges, gears, shafts, threaded bolts): 10³–10⁵ triangles per part |
 //!
 //! Generators are deterministic: the same source gives the same scene on every run.
 
 mod assembly;
 mod cabinet;
 mod component;
+mod fine;
 mod grid;
 mod rng;
 mod shapes;
 
 pub use assembly::{assembly, AssemblySpec};
 pub use cabinet::cabinet;
+pub use fine::fine;
 pub use grid::grid;
 pub use rng::Rng;
 pub use shapes::{prism_triangles, GeometryBuilder};
@@ -48,11 +51,24 @@ pub enum GeneratorSpec {
         /// Average triangles per part.
         triangles_per_part: f64,
     },
+    /// `gen:fine[:units=N,detail=D]`: units of machined parts with curved faces, 19 parts
+    /// each (a flange, a gear, a shaft, eight bolts and their washers, fasteners instanced).
+    Fine {
+        /// Number of units.
+        units: u32,
+        /// Tessellation: about 10³ triangles per part at 1, 10⁵ at 10.
+        detail: u32,
+    },
 }
+
+/// The most units `gen:fine` makes.
+pub const MAX_FINE_UNITS: u32 = 1_000_000;
+/// The finest `gen:fine` tessellation.
+pub const MAX_FINE_DETAIL: u32 = 32;
 
 /// The generator names, for help texts.
 pub const GENERATOR_NAMES: &str =
-    "demo, graphicscard, racecar, cabinet[:cabinets=N], grid:parts=N[,tris=T]";
+    "demo, graphicscard, racecar, cabinet[:cabinets=N], grid:parts=N[,tris=T], fine[:units=N,detail=D]";
 
 /// The most cabinets `gen:cabinet` makes (about 11 million parts).
 const MAX_CABINETS: u32 = 30_000;
@@ -136,6 +152,33 @@ impl GeneratorSpec {
                     triangles_per_part,
                 })
             }
+            "fine" => {
+                let (mut units, mut detail) = (16, 2);
+                for (key, value) in params {
+                    let (target, range) = match key {
+                        "units" => (&mut units, 1..=MAX_FINE_UNITS),
+                        "detail" => (&mut detail, 1..=MAX_FINE_DETAIL),
+                        other => {
+                            return Err(format!(
+                                "gen:fine: unknown parameter '{other}' (known: units, detail)"
+                            ))
+                        }
+                    };
+                    *target = value
+                        .replace('_', "")
+                        .parse()
+                        .ok()
+                        .filter(|n| range.contains(n))
+                        .ok_or_else(|| {
+                            format!(
+                                "gen:fine: {key}={value} is not a number from {} to {}",
+                                range.start(),
+                                range.end()
+                            )
+                        })?;
+                }
+                Ok(Self::Fine { units, detail })
+            }
             other => Err(format!(
                 "unknown generator 'gen:{other}' (known: {GENERATOR_NAMES})"
             )),
@@ -183,5 +226,6 @@ pub fn generate(spec: &GeneratorSpec) -> Scene {
             parts,
             triangles_per_part,
         } => grid(*parts, *triangles_per_part),
+        GeneratorSpec::Fine { units, detail } => fine(*units, *detail),
     }
 }

@@ -20,10 +20,14 @@
 #define CADR_PLUGIN_ABI_MAJOR 1
 
 // Minor version of this ABI: additions that older readers may ignore.
-#define CADR_PLUGIN_ABI_MINOR 13
+#define CADR_PLUGIN_ABI_MINOR 14
 
 // `(major << 16) | minor`, what [`CadrPluginVersionFn`] returns.
 #define CADR_PLUGIN_ABI_VERSION ((CADR_PLUGIN_ABI_MAJOR << 16) | CADR_PLUGIN_ABI_MINOR)
+
+// [`CadrCluster::refined`] of a part's original clusters: its own triangles, made by no
+// simplification.
+#define CADR_CLUSTER_ORIGINAL UINT32_MAX
 
 // Result of a plugin function: one of the `CADR_STATUS_*` constants.
 typedef int32_t CadrStatus;
@@ -46,6 +50,10 @@ typedef uint32_t CadrMemoryLocation;
 // Flag bits of [`CadrInstance::flags`].
 typedef uint32_t CadrInstanceFlags;
 
+// What an extension is: one of the `CADR_EXTENSION_*` kinds. Kinds are never reused within a
+// major version.
+typedef uint32_t CadrExtensionKind;
+
 // What a draw pass draws.
 typedef uint32_t CadrPassKind;
 
@@ -53,16 +61,13 @@ typedef uint32_t CadrPassKind;
 // before any struct is exchanged.
 typedef uint32_t (*CadrPluginVersionFn)(void);
 
-// What an extension is: one of the `CADR_EXTENSION_*` kinds. Kinds are never reused within a
-// major version.
-typedef uint32_t CadrExtensionKind;
-
 // Since ABI 1.13: the header every extension struct starts with. Extensions are chained
 // through `next` from a struct's `extensions` pointer; a reader walks the chain and skips the
 // kinds it does not know (`size` says how long the whole extension struct is). Whoever writes
-// a chain owns it and keeps it valid as long as the struct it hangs from. No extension kind
-// is defined yet: hosts of ABI 1.13 know none, so they skip every extension a technique
-// offers and refuse a technique that requires one.
+// a chain owns it and keeps it valid as long as the struct it hangs from. Hosts of ABI 1.13
+// know no kind, so they skip every extension a technique offers and refuse a technique that
+// requires one; ABI 1.14 defines [`CADR_EXTENSION_SCENE_CLUSTERS`] and
+// [`CADR_EXTENSION_CLUSTER_CULL`].
 typedef struct CadrExtension {
   // Size of the whole extension struct, this header included.
   uint32_t size;
@@ -347,6 +352,10 @@ typedef struct CadrSceneView {
   struct CadrBufferRef instance_buffer;
   // Since ABI 1.3 (read it only when `size` covers it): [`CadrCullEntry`] per instance id.
   struct CadrBufferRef cull_buffer;
+  // Since ABI 1.14 (read it only when `size` covers it): the host's extension structs for
+  // this view (a chain of [`CadrExtension`]s, or null), valid as long as the view:
+  // [`CadrSceneClusters`] where the scene has clusters.
+  const struct CadrExtension *extensions;
 } CadrSceneView;
 
 // The per-instance record in [`CadrSceneView::instance_buffer`], indexed by instance id
@@ -776,6 +785,10 @@ typedef struct CadrGpuCullContext {
   // one per pass ([`CadrPassExclusion`]); a culler that honours them writes no commands for
   // the instances they exclude.
   const struct CadrPassExclusion *pass_exclusions;
+  // Since ABI 1.14 (read it only when `size` covers it): the host's extension structs for
+  // this call (a chain of [`CadrExtension`]s, or null), valid for the call:
+  // [`CadrClusterCull`] where the scene has clusters.
+  const struct CadrExtension *extensions;
 } CadrGpuCullContext;
 
 // Culling vtable ([`CADR_KIND_CULLING`]).
@@ -1092,6 +1105,13 @@ typedef struct CadrTransparencyVtable {
 // mode's hidden silhouettes pass needs only such parts: a part whose every triangle has one
 // normal yields no silhouette segment there.
 #define CADR_INSTANCE_CURVED (1 << 8)
+
+// Since ABI 1.14: the kind of [`CadrSceneClusters`], chained on [`CadrSceneView::extensions`].
+#define CADR_EXTENSION_SCENE_CLUSTERS 1
+
+// Since ABI 1.14: the kind of [`CadrClusterCull`], chained on
+// [`CadrGpuCullContext::extensions`].
+#define CADR_EXTENSION_CLUSTER_CULL 2
 
 // Triangles (solid shading).
 #define CADR_PASS_TRIANGLES 0

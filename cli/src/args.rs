@@ -177,6 +177,11 @@ pub struct TechniqueArgs {
     /// off by default, as CAD users count small parts).
     #[arg(long, value_name = "PX", value_parser = parse_min_pixels, allow_negative_numbers = true)]
     pub min_pixels: Option<f32>,
+    /// The level of detail of --cull gpu-clusters: each part is drawn with the coarsest
+    /// clusters whose simplification error projects at or under PX pixels (default 1; 0 draws
+    /// full detail).
+    #[arg(long, value_name = "PX", value_parser = parse_min_pixels, allow_negative_numbers = true)]
+    pub lod_error: Option<f32>,
 }
 
 impl TechniqueArgs {
@@ -216,6 +221,7 @@ impl TechniqueArgs {
             || self.transparency.is_some()
             || self.shade.is_some()
             || self.min_pixels.is_some()
+            || self.lod_error.is_some()
     }
 }
 

@@ -198,6 +198,7 @@ fn render(args: &RenderArgs, process_start: Instant) -> Result<(), String> {
         techniques::TechniqueSession::from_graph(&device, graph, registry, (width, height))?;
     session.choose(&combination, shade)?;
     session.set_min_pixels(min_pixels)?;
+    session.set_lod_error(args.techniques.lod_error)?;
     let section_line = args::describe_section(&section);
     session.set_section(section);
     session.set_background(args.background)?;
@@ -234,6 +235,12 @@ fn render(args: &RenderArgs, process_start: Instant) -> Result<(), String> {
     let mut technique_line = format!("{combination}, {}", shade.name());
     if min_pixels > 0.0 {
         technique_line += &format!(", parts under {min_pixels} px culled");
+    }
+    if combination.culling == "gpu-clusters" {
+        technique_line += &format!(
+            ", level of detail {} px",
+            session.view.techniques().lod_error()
+        );
     }
     if let Some(section) = section_line {
         technique_line += &format!(", {section}");

@@ -76,6 +76,7 @@ pub fn pick(args: &PickArgs) -> Result<(), String> {
     let mut session = TechniqueSession::new(&device, &scene, registry, (width, height), &[])?;
     session.choose(&combination, shade)?;
     session.set_min_pixels(min_pixels)?;
+    session.set_lod_error(args.techniques.lod_error)?;
     session.set_section(section);
     session
         .techniques()

@@ -178,6 +178,24 @@ impl TechniqueSession {
             .map_err(|e| e.to_string())
     }
 
+    /// Sets the level-of-detail threshold (`--lod-error`) of a cluster culler; refused with a
+    /// culler that draws every part whole (it would be ignored).
+    pub fn set_lod_error(&mut self, lod_error: Option<f32>) -> Result<(), String> {
+        let Some(lod_error) = lod_error else {
+            return Ok(());
+        };
+        let techniques = self.view.techniques_mut();
+        let culling = techniques.combination().culling.clone();
+        if culling != "gpu-clusters" {
+            return Err(format!(
+                "--lod-error chooses the level of detail of the clusters: choose --cull gpu-clusters (the culler is '{culling}')"
+            ));
+        }
+        techniques
+            .set_lod_error(lod_error)
+            .map_err(|e| e.to_string())
+    }
+
     /// Draws frame `frame` of `motion`: moves its nodes, brings the tree and the GPU scene up
     /// to date (timed: the scene update, in microseconds) and draws with its camera.
     pub fn render_moving(

@@ -24,6 +24,8 @@ pub(crate) struct GpuCuller<'a> {
     pub(crate) phases: u32,
     /// Per pass, where this phase's commands lie (zeroed before each phase).
     pub(crate) draws: Vec<abi::CadrGpuDraws>,
+    /// The level-of-detail threshold in pixels, for cluster cullers.
+    lod_error: f32,
 }
 
 /// Bytes of a [`abi::CadrGpuCullView`] as shaders read it (std140: it has no padding).
@@ -114,6 +116,7 @@ impl<'a> GpuCuller<'a> {
             record_gpu,
             phases,
             draws: vec![abi::CadrGpuDraws::default(); pass_count],
+            lod_error: techniques.lod_error(),
         }))
     }
 
@@ -134,6 +137,17 @@ impl<'a> GpuCuller<'a> {
         self.draws.fill(abi::CadrGpuDraws::default());
         debug_assert_eq!(passes.len(), filters.filters.len());
         debug_assert_eq!(passes.len(), filters.exclusions.len());
+        debug_assert_eq!(passes.len(), filters.back_faces_hidden.len());
+        let clusters = abi::CadrClusterCull {
+            header: abi::CadrExtension {
+                size: std::mem::size_of::<abi::CadrClusterCull>() as u32,
+                kind: abi::CADR_EXTENSION_CLUSTER_CULL,
+                next: std::ptr::null(),
+            },
+            lod_error: self.lod_error,
+            pass_count: passes.len() as u32,
+            back_faces_hidden: filters.back_faces_hidden.as_ptr(),
+        };
         let context = abi::CadrGpuCullContext {
             size: std::mem::size_of::<abi::CadrGpuCullContext>() as u32,
             phase,
@@ -158,6 +172,7 @@ impl<'a> GpuCuller<'a> {
             section_plane_count: gpu_view.section[0],
             section_planes: gpu_view.section_planes,
             pass_exclusions: filters.exclusions.as_ptr(),
+            extensions: &clusters.header,
         };
         let mut message = Message::new();
         // SAFETY: a live instance; the context and the arrays it points at are valid for the

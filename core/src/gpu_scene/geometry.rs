@@ -10,6 +10,7 @@ use std::sync::Arc;
 use crate::error::RenderResult;
 use crate::vk::raw as vk;
 
+use super::clusters::{self, GeometryClusters};
 use crate::graph::SceneGraph;
 use crate::scene::closure::{closure, Closure};
 use crate::scene::edges::{feature_edges, DEFAULT_CREASE_DEGREES};
@@ -23,39 +24,102 @@ pub(super) struct GeometryPlace {
     pub(super) vertex_base: u32,
     pub(super) first_index: u32,
     pub(super) first_wire_index: u32,
-    /// Vertices, indices and wire indices the place can hold (its size when laid out).
-    room: [u32; 3],
+    pub(super) first_cluster: u32,
+    pub(super) first_group: u32,
+    /// Vertices, indices (the coarser clusters' too), wire indices, clusters and groups the
+    /// place can hold (its size when laid out).
+    room: [u32; 5],
     /// Per part: first index, count, first wire index, wire count (relative), bounding sphere,
     /// and its shape as instance flags (`CADR_INSTANCE_CLOSED`, `CADR_INSTANCE_INSIDE_OUT`,
     /// `CADR_INSTANCE_CURVED`).
     pub(super) parts: Vec<([u32; 4], [f32; 4], u32)>,
+    /// Per part: its first cluster (relative to `first_cluster`) and how many it has.
+    pub(super) part_clusters: Vec<[u32; 2]>,
+}
+
+impl GeometryPlace {
+    /// Part `part`'s first cluster in the cluster arena and how many it has.
+    pub(super) fn clusters_of(&self, part: u32) -> Option<[u32; 2]> {
+        let [first, count] = *self.part_clusters.get(part as usize)?;
+        Some([self.first_cluster + first, count])
+    }
 }
 
 /// A geometry's data as the arenas hold it: edge indices derived by crease angle when the
-/// geometry has none of its own.
+/// geometry has none of its own, and the parts' clusters (whose order the triangle indices
+/// take).
 struct ArenaData<'g> {
     vertices: &'g [Vertex],
-    indices: &'g [u32],
     wire: std::borrow::Cow<'g, [u32]>,
     parts: std::borrow::Cow<'g, [Part]>,
+    clusters: GeometryClusters,
 }
 
 fn arena_data(geometry: &Geometry) -> ArenaData<'_> {
-    if geometry.wire_indices.is_empty() {
-        let (wire, parts) = feature_edges(geometry, DEFAULT_CREASE_DEGREES);
-        ArenaData {
-            vertices: &geometry.vertices,
-            indices: &geometry.indices,
-            wire: wire.into(),
-            parts: parts.into(),
-        }
-    } else {
-        ArenaData {
-            vertices: &geometry.vertices,
-            indices: &geometry.indices,
-            wire: geometry.wire_indices.as_slice().into(),
-            parts: geometry.parts.as_slice().into(),
-        }
+    let (wire, parts): (std::borrow::Cow<'_, [u32]>, std::borrow::Cow<'_, [Part]>) =
+        if geometry.wire_indices.is_empty() {
+            let (wire, parts) = feature_edges(geometry, DEFAULT_CREASE_DEGREES);
+            (wire.into(), parts.into())
+        } else {
+            (
+                geometry.wire_indices.as_slice().into(),
+                geometry.parts.as_slice().into(),
+            )
+        };
+    let clusters = clusters::build(&geometry.vertices, &geometry.indices, &parts);
+    ArenaData {
+        vertices: &geometry.vertices,
+        wire,
+        parts,
+        clusters,
+    }
+}
+
+impl ArenaData<'_> {
+    /// How much of each arena the geometry takes (see [`GeometryPlace::room`]).
+    fn sizes(&self) -> [u32; 5] {
+        let clusters = &self.clusters;
+        [
+            self.vertices.len(),
+            clusters.indices.len() + clusters.lod_indices.len(),
+            self.wire.len(),
+            clusters.clusters.len(),
+            clusters.groups.len(),
+        ]
+        .map(|n| n as u32)
+    }
+
+    /// The clusters' bytes as the arena holds them: indices made absolute from the geometry's
+    /// `first_index`, groups from its `first_group`.
+    fn cluster_bytes(&self, first_index: u32, first_group: u32) -> Vec<u8> {
+        let absolute = |group: u32| {
+            if group == abi::CADR_CLUSTER_ORIGINAL {
+                group
+            } else {
+                first_group + group
+            }
+        };
+        self.clusters
+            .clusters
+            .iter()
+            .flat_map(|c| {
+                abi::CadrCluster {
+                    first_index: first_index + c.first_index,
+                    group: absolute(c.group),
+                    refined: absolute(c.refined),
+                    ..*c
+                }
+                .to_le_bytes()
+            })
+            .collect()
+    }
+
+    fn group_bytes(&self) -> Vec<u8> {
+        self.clusters
+            .groups
+            .iter()
+            .flat_map(abi::CadrClusterGroup::to_le_bytes)
+            .collect()
     }
 }
 
@@ -111,11 +175,12 @@ fn is_curved(vertices: &[Vertex], indices: &[u32]) -> bool {
 }
 
 fn part_entries(data: &ArenaData<'_>) -> Vec<([u32; 4], [f32; 4], u32)> {
+    let indices = &data.clusters.indices;
     data.parts
         .iter()
         .map(|p| {
-            let start = (p.first_index as usize).min(data.indices.len());
-            let end = (start + p.index_count as usize).min(data.indices.len());
+            let start = (p.first_index as usize).min(indices.len());
+            let end = (start + p.index_count as usize).min(indices.len());
             (
                 [
                     p.first_index,
@@ -123,12 +188,17 @@ fn part_entries(data: &ArenaData<'_>) -> Vec<([u32; 4], [f32; 4], u32)> {
                     p.first_wire_index,
                     p.wire_index_count,
                 ],
-                part_sphere(data.vertices, &data.indices[start..end]),
-                shape_flags(data.vertices, &data.indices[start..end]),
+                part_sphere(data.vertices, &indices[start..end]),
+                shape_flags(data.vertices, &indices[start..end]),
             )
         })
         .collect()
 }
+
+/// Bytes of one cluster in the cluster arena ([`abi::CadrCluster`]).
+const CLUSTER_BYTES: usize = 64;
+/// Bytes of one group in the group arena ([`abi::CadrClusterGroup`]).
+const GROUP_BYTES: usize = 32;
 
 /// Buffer usage of the arenas and of every GPU scene array.
 pub(super) fn usage(device: &Device, base: vk::BufferUsageFlags) -> vk::BufferUsageFlags {
@@ -147,6 +217,12 @@ pub(super) struct GeometryArenas {
     pub(super) vertices: Buffer,
     pub(super) indices: Buffer,
     pub(super) wire_indices: Buffer,
+    /// [`abi::CadrCluster`] per cluster of every part.
+    pub(super) clusters: Buffer,
+    /// [`abi::CadrClusterGroup`] per group of every part's level-of-detail DAG.
+    pub(super) groups: Buffer,
+    /// Clusters and groups in use.
+    pub(super) cluster_counts: [u32; 2],
     /// One [`VertexAttributes`] per vertex when `has_attributes`, else 16 unused bytes.
     pub(super) attributes: Buffer,
     /// Whether some geometry has texture coordinates or colours.
@@ -161,23 +237,33 @@ impl GeometryArenas {
         let mut vertices: Vec<Vertex> = Vec::new();
         let mut indices: Vec<u32> = Vec::new();
         let mut wire: Vec<u32> = Vec::new();
-        let places = (0..geometry_slots as u32)
-            .map(|slot| {
-                let data = arena_data(graph.geometry_at(slot)?);
+        let mut clusters: Vec<u8> = Vec::new();
+        let mut groups: Vec<u8> = Vec::new();
+        // The clusters are built on a thread per core, the geometries laid out in slot order.
+        let slots: Vec<u32> = (0..geometry_slots as u32).collect();
+        let data = crate::parallel::map(&slots, |&slot| graph.geometry_at(slot).map(arena_data));
+        let places = data
+            .iter()
+            .map(|data| {
+                let data = data.as_ref()?;
+                let first_group = (groups.len() / GROUP_BYTES) as u32;
+                let first_index = indices.len() as u32;
                 let place = GeometryPlace {
                     vertex_base: vertices.len() as u32,
                     first_index: indices.len() as u32,
                     first_wire_index: wire.len() as u32,
-                    room: [
-                        data.vertices.len() as u32,
-                        data.indices.len() as u32,
-                        data.wire.len() as u32,
-                    ],
-                    parts: part_entries(&data),
+                    first_cluster: (clusters.len() / CLUSTER_BYTES) as u32,
+                    first_group,
+                    room: data.sizes(),
+                    parts: part_entries(data),
+                    part_clusters: data.clusters.part_ranges.clone(),
                 };
                 vertices.extend_from_slice(data.vertices);
-                indices.extend_from_slice(data.indices);
+                indices.extend_from_slice(&data.clusters.indices);
+                indices.extend_from_slice(&data.clusters.lod_indices);
                 wire.extend_from_slice(&data.wire);
+                clusters.extend(data.cluster_bytes(first_index, first_group));
+                groups.extend(data.group_bytes());
                 Some(place)
             })
             .collect();
@@ -200,7 +286,13 @@ impl GeometryArenas {
         let bytes = (std::mem::size_of_val(vertices.as_slice())
             + std::mem::size_of_val(indices.as_slice())
             + std::mem::size_of_val(wire.as_slice())
-            + std::mem::size_of_val(attributes.as_slice())) as u64;
+            + std::mem::size_of_val(attributes.as_slice())
+            + clusters.len()
+            + groups.len()) as u64;
+        let cluster_counts = [
+            (clusters.len() / CLUSTER_BYTES) as u32,
+            (groups.len() / GROUP_BYTES) as u32,
+        ];
         let arenas = Self {
             vertices: upload(
                 "scene vertices",
@@ -222,6 +314,13 @@ impl GeometryArenas {
                 bytemuck::cast_slice(&attributes),
                 vk::BufferUsageFlags::empty(),
             )?,
+            clusters: upload("scene clusters", &clusters, vk::BufferUsageFlags::empty())?,
+            groups: upload(
+                "scene cluster groups",
+                &groups,
+                vk::BufferUsageFlags::empty(),
+            )?,
+            cluster_counts,
             has_attributes,
             places,
         };
@@ -248,24 +347,40 @@ impl GeometryArenas {
             return Ok(None);
         };
         let data = arena_data(geometry);
-        let sizes = [data.vertices.len(), data.indices.len(), data.wire.len()];
-        if sizes
+        if data
+            .sizes()
             .iter()
             .zip(place.room)
-            .any(|(&n, room)| n > room as usize)
+            .any(|(&n, room)| n > room)
         {
             return Ok(None);
         }
         let vertex_bytes: &[u8] = bytemuck::cast_slice(data.vertices);
-        let index_bytes: &[u8] = bytemuck::cast_slice(data.indices);
+        let index_bytes: Vec<u8> = data
+            .clusters
+            .indices
+            .iter()
+            .chain(&data.clusters.lod_indices)
+            .flat_map(|i| i.to_le_bytes())
+            .collect();
         let wire_bytes: &[u8] = bytemuck::cast_slice(&data.wire);
+        let cluster_bytes = data.cluster_bytes(place.first_index, place.first_group);
+        let group_bytes = data.group_bytes();
         let vertex_size = std::mem::size_of::<Vertex>() as u64;
         self.vertices
             .upload_at(u64::from(place.vertex_base) * vertex_size, vertex_bytes)?;
         self.indices
-            .upload_at(u64::from(place.first_index) * 4, index_bytes)?;
+            .upload_at(u64::from(place.first_index) * 4, &index_bytes)?;
         self.wire_indices
             .upload_at(u64::from(place.first_wire_index) * 4, wire_bytes)?;
+        self.clusters.upload_at(
+            u64::from(place.first_cluster) * CLUSTER_BYTES as u64,
+            &cluster_bytes,
+        )?;
+        self.groups.upload_at(
+            u64::from(place.first_group) * GROUP_BYTES as u64,
+            &group_bytes,
+        )?;
         let mut attribute_bytes = 0;
         if self.has_attributes {
             let mut attributes = Vec::with_capacity(data.vertices.len());
@@ -277,8 +392,14 @@ impl GeometryArenas {
             attribute_bytes = bytes.len();
         }
         place.parts = part_entries(&data);
+        place.part_clusters = data.clusters.part_ranges;
         Ok(Some(
-            (vertex_bytes.len() + index_bytes.len() + wire_bytes.len() + attribute_bytes) as u64,
+            (vertex_bytes.len()
+                + index_bytes.len()
+                + wire_bytes.len()
+                + attribute_bytes
+                + cluster_bytes.len()
+                + group_bytes.len()) as u64,
         ))
     }
 }

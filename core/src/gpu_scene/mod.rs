@@ -13,6 +13,7 @@
 //! in place when it fits; only the touched instances' entries refreshed). Two scenes of one
 //! tree (two renderers) each see every change.
 
+mod clusters;
 mod compute;
 mod geometry;
 mod hierarchy;
@@ -137,8 +138,19 @@ pub struct GpuScene {
     generations: Generations,
     counts: SceneCounts,
     /// The buffers as techniques see them (with device addresses), refreshed when replaced.
-    buffer_refs: [abi::CadrBufferRef; 7],
+    buffer_refs: [abi::CadrBufferRef; 9],
+    /// The clusters as techniques see them, chained on the view.
+    clusters_extension: ClustersExtension,
 }
+
+/// The scene view's [`abi::CadrSceneClusters`], kept with the scene it describes.
+struct ClustersExtension(abi::CadrSceneClusters);
+
+// SAFETY: the struct's one pointer, its header's `next`, is always null: nothing is reached
+// through it, so it may move to and be read from any thread like the plain values it holds.
+unsafe impl Send for ClustersExtension {}
+// SAFETY: as above; it is only written through `&mut GpuScene`.
+unsafe impl Sync for ClustersExtension {}
 
 /// Per instance id, one bit each: what may be drawn, what culling kept, what is drawn.
 struct InstanceBits {
@@ -216,6 +228,10 @@ struct SceneCounts {
     last_upload: UploadStats,
     /// Instance entries refreshed by the last sync.
     last_touched: u64,
+    /// The clusters of the candidates' parts, summed (see [`abi::CadrSceneClusters`]), and
+    /// whether an instance changed since they were.
+    candidate_clusters: u64,
+    clusters_stale: bool,
 }
 
 impl GpuScene {
@@ -294,8 +310,22 @@ impl GpuScene {
                     ..UploadStats::default()
                 },
                 last_touched: 0,
+                candidate_clusters: 0,
+                clusters_stale: true,
             },
             buffer_refs: Default::default(),
+            clusters_extension: ClustersExtension(abi::CadrSceneClusters {
+                header: abi::CadrExtension {
+                    size: std::mem::size_of::<abi::CadrSceneClusters>() as u32,
+                    kind: abi::CADR_EXTENSION_SCENE_CLUSTERS,
+                    next: std::ptr::null(),
+                },
+                cluster_buffer: abi::CadrBufferRef::default(),
+                cluster_count: 0,
+                group_count: 0,
+                group_buffer: abi::CadrBufferRef::default(),
+                candidate_clusters: 0,
+            }),
         };
         scene.refresh_all(graph, tree)?;
         Ok(scene)
@@ -311,6 +341,8 @@ impl GpuScene {
             &self.gpu.materials.buffer,
             &self.gpu.records.buffer,
             &self.gpu.cull_entries.buffer,
+            &self.arenas.clusters,
+            &self.arenas.groups,
         ]
         .map(|buffer| abi::CadrBufferRef {
             buffer: buffer.raw().as_raw(),
@@ -321,6 +353,33 @@ impl GpuScene {
                 0
             },
         });
+        let [.., clusters, groups] = self.buffer_refs;
+        let extension = &mut self.clusters_extension.0;
+        extension.cluster_buffer = clusters;
+        extension.group_buffer = groups;
+        [extension.cluster_count, extension.group_count] = self.arenas.cluster_counts;
+    }
+
+    /// Sums the clusters of the candidates' parts again when an instance changed since the
+    /// last time: a scan of every instance, for edits (moves never change them).
+    fn count_candidate_clusters(&mut self) {
+        if !self.counts.clusters_stale {
+            return;
+        }
+        let arenas = &self.arenas;
+        self.counts.candidate_clusters = self
+            .instances
+            .iter()
+            .enumerate()
+            .filter(|&(id, _)| self.bits.candidate[id / 64] >> (id % 64) & 1 == 1)
+            .filter_map(|(_, instance)| {
+                let place = arenas.places.get(instance.geometry as usize)?.as_ref()?;
+                place.clusters_of(instance.part)
+            })
+            .map(|[_, count]| u64::from(count))
+            .sum();
+        self.clusters_extension.0.candidate_clusters = self.counts.candidate_clusters;
+        self.counts.clusters_stale = false;
     }
 
     /// Rebuilds every entry from the tree and graph and queues every array for upload.
@@ -410,6 +469,8 @@ impl GpuScene {
         self.generations.draws += 1;
         self.generations.parameters += 1;
         self.refresh_buffer_refs();
+        self.counts.clusters_stale = true;
+        self.count_candidate_clusters();
         Ok(())
     }
 
@@ -491,6 +552,7 @@ impl GpuScene {
         self.counts.highlighted += usize::from(is_highlighted(&entry));
         self.instances[i] = entry;
         set_bit(&mut self.bits.candidate, id, candidate);
+        self.counts.clusters_stale = true;
         let culled_in = self.bits.culled[i / 64] >> (i % 64) & 1 == 1;
         self.set_drawn(id, candidate && culled_in);
     }
@@ -567,6 +629,7 @@ impl GpuScene {
             return self.refresh_all(graph, tree);
         }
         self.apply(graph, tree, &changes);
+        self.count_candidate_clusters();
         if self.moves.transforms == Transforms::Gpu && !self.gpu.locals.is_whole() {
             self.moves.frame_moved.sort_unstable();
             self.moves.frame_moved.dedup();
@@ -775,7 +838,7 @@ impl GpuScene {
                 .unwrap_or_default();
             out.copy_from_slice(bytemuck::cast_slice(&item));
         };
-        let (instances, candidates) = (&self.instances, &self.bits.candidate);
+        let (instances, candidates, arenas) = (&self.instances, &self.bits.candidate, &self.arenas);
         let record_bytes = |slot: u32, out: &mut [u8]| {
             let item = instances
                 .get(slot as usize)
@@ -783,7 +846,7 @@ impl GpuScene {
             out.copy_from_slice(&item.to_le_bytes());
         };
         let cull_entry_bytes = |slot: u32, out: &mut [u8]| {
-            let item = cull_entry(instances, candidates, slot);
+            let item = cull_entry(arenas, instances, candidates, slot);
             out.copy_from_slice(&item.to_le_bytes());
         };
         let locals = &self.moves.locals;
@@ -870,7 +933,7 @@ impl GpuScene {
 
     /// The view techniques read this frame. Valid while `self` is not changed.
     pub(crate) fn view(&self) -> abi::CadrSceneView {
-        let [vertex_buffer, index_buffer, wire_index_buffer, matrix_buffer, material_buffer, instance_buffer, cull_buffer] =
+        let [vertex_buffer, index_buffer, wire_index_buffer, matrix_buffer, material_buffer, instance_buffer, cull_buffer, _, _] =
             self.buffer_refs;
         abi::CadrSceneView {
             size: std::mem::size_of::<abi::CadrSceneView>() as u32,
@@ -896,6 +959,7 @@ impl GpuScene {
             material_buffer,
             instance_buffer,
             cull_buffer,
+            extensions: &self.clusters_extension.0.header,
         }
     }
 
@@ -1018,9 +1082,10 @@ pub struct SceneContent<'a> {
     pub drawn_bits: &'a [u64],
 }
 
-/// The cull entry of instance `slot`: its sphere and ranges, flagged as a candidate when it is
-/// drawn unless culled.
+/// The cull entry of instance `slot`: its sphere, ranges and first cluster, flagged as a
+/// candidate when it is drawn unless culled.
 fn cull_entry(
+    arenas: &GeometryArenas,
     instances: &[abi::CadrInstance],
     candidates: &[u64],
     slot: u32,
@@ -1045,7 +1110,12 @@ fn cull_entry(
             } else {
                 0
             },
-        reserved: 0,
+        first_cluster: arenas
+            .places
+            .get(instance.geometry as usize)
+            .and_then(Option::as_ref)
+            .and_then(|place| place.clusters_of(instance.part))
+            .map_or(0, |[first, _]| first),
     }
 }
 

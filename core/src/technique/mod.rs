@@ -20,6 +20,8 @@ pub use registry::{
     default_plugin_dirs, feature_bits, feature_names, PluginRegistry, Refusal, TechniqueEntry,
     TechniqueKind, BUILT_IN_LIBRARY, PLUGIN_PATH_VARIABLE,
 };
-pub use set::{check_combination, Combination, Techniques, DEFAULT_TRANSPARENCY};
+pub use set::{
+    check_combination, Combination, Techniques, DEFAULT_LOD_ERROR, DEFAULT_TRANSPARENCY,
+};
 pub(crate) use set::{status, Active, Message};
 pub use shader_assembly::{assemble_vertex_shader, fragment_defines};

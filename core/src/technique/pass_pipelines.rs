@@ -37,6 +37,9 @@ struct PassScope {
     role: DrawRole,
     caps: bool,
     silhouettes: bool,
+    /// Surfaces drawn with depth test and depth writes: a closed opaque part's back faces
+    /// never show in it (the plugin ABI's `CadrClusterCull::back_faces_hidden`).
+    hides_back_faces: bool,
 }
 
 impl PassScope {
@@ -100,6 +103,8 @@ pub struct PassFilters {
     pub filters: Vec<abi::CadrPassFilter>,
     /// Of those, what each pass does not need.
     pub exclusions: Vec<abi::CadrPassExclusion>,
+    /// Per pass, 1 where the back faces of closed opaque parts never show in it.
+    pub back_faces_hidden: Vec<u32>,
 }
 
 /// The pipeline layout of a combination's pipelines: the frame set, then the paths' sets up to
@@ -380,6 +385,9 @@ impl TechniquePipelines {
             let (filter, exclusion) = scope.filter(xray, textures);
             filters.filters.push(filter);
             filters.exclusions.push(exclusion);
+            filters
+                .back_faces_hidden
+                .push(u32::from(scope.hides_back_faces));
         }
         self.pipelines.push(pipeline);
     }
@@ -515,10 +523,22 @@ impl TechniquePipelines {
             (true, false, false) => DrawRole::All,
         };
         let colors = self.colors(raster);
+        let depth = if raster.behind {
+            DepthUse::TestBehind
+        } else if raster.on_surfaces {
+            DepthUse::TestEqual
+        } else if raster.translucent || raster.keeps_depth {
+            DepthUse::Test
+        } else {
+            DepthUse::TestAndWrite
+        };
         let scope = PassScope {
             role,
             caps: raster.on_surfaces,
             silhouettes: raster.silhouette_lines,
+            hides_back_faces: surfaces
+                && role != DrawRole::Translucent
+                && depth == DepthUse::TestAndWrite,
         };
         let pipeline = Pipeline::graphics(
             &self.device,
@@ -535,15 +555,7 @@ impl TechniquePipelines {
                 depth_bias: raster.depth_bias,
                 triangle_outlines: raster.triangle_outlines,
                 colors: &colors,
-                depth: if raster.behind {
-                    DepthUse::TestBehind
-                } else if raster.on_surfaces {
-                    DepthUse::TestEqual
-                } else if raster.translucent || raster.keeps_depth {
-                    DepthUse::Test
-                } else {
-                    DepthUse::TestAndWrite
-                },
+                depth,
                 vertex_constants: &[role as u32, u32::from(raster.on_surfaces)],
                 samples: self.pass_set.samples(),
                 name: if raster.translucent {
@@ -614,6 +626,7 @@ mod tests {
                     role,
                     caps,
                     silhouettes,
+                    hides_back_faces: false,
                 };
                 for (xray, textures) in [(false, false), (false, true), (true, false), (true, true)]
                 {
@@ -644,7 +657,8 @@ mod tests {
                 PassScope {
                     role: DrawRole::Translucent,
                     caps,
-                    silhouettes
+                    silhouettes,
+                    hides_back_faces: false,
                 },
                 true,
                 false,
@@ -656,11 +670,13 @@ mod tests {
             role: DrawRole::All,
             caps: true,
             silhouettes: false,
+            hides_back_faces: false,
         };
         let opaque = PassScope {
             role: DrawRole::Opaque,
             caps: false,
             silhouettes: false,
+            hides_back_faces: false,
         };
         assert_eq!(caps.filter(false, true).0.section_cut, 1);
         assert_eq!(opaque.filter(false, true).0.section_cut, 0);

@@ -106,8 +106,11 @@ fn first_library_size() -> usize {
     size_through!(abi::CadrPluginLibrary, techniques)
 }
 
-/// The extension kinds this host knows (`CADR_EXTENSION_*`): none yet, ABI 1.13 defines none.
-const KNOWN_EXTENSIONS: &[abi::CadrExtensionKind] = &[];
+/// The extension kinds this host knows (`CADR_EXTENSION_*`): those of ABI 1.14.
+const KNOWN_EXTENSIONS: &[abi::CadrExtensionKind] = &[
+    abi::CADR_EXTENSION_SCENE_CLUSTERS,
+    abi::CADR_EXTENSION_CLUSTER_CULL,
+];
 
 /// Refuses a technique that requires an extension this host does not know, naming it.
 fn check_required_extensions(info: &abi::CadrTechniqueInfo) -> Result<(), String> {

@@ -113,6 +113,10 @@ fn trait_name(bit: u64) -> &'static str {
     }
 }
 
+/// The default level-of-detail threshold, in pixels: a simplification that moves the surface
+/// by less than a pixel on screen is not seen.
+pub const DEFAULT_LOD_ERROR: f32 = 1.0;
+
 /// How the active techniques draw: what a host chooses besides the techniques themselves.
 struct DrawOptions {
     /// The display mode.
@@ -123,6 +127,8 @@ struct DrawOptions {
     dashed_hidden_lines: bool,
     /// Sub-pixel culling threshold of GPU cullers, in pixels (0: off).
     min_pixels: f32,
+    /// Level-of-detail threshold of cluster cullers, in pixels (0: full detail).
+    lod_error: f32,
     /// Whether unchanged frames may be resubmitted rather than recorded.
     frame_replay: bool,
 }
@@ -316,6 +322,7 @@ impl Techniques {
                 pick_through_translucent: false,
                 dashed_hidden_lines: false,
                 min_pixels: 0.0,
+                lod_error: DEFAULT_LOD_ERROR,
                 frame_replay: true,
             },
             pipelines: Vec::new(),
@@ -426,6 +433,28 @@ impl Techniques {
             )));
         }
         self.options.min_pixels = pixels;
+        Ok(())
+    }
+
+    /// The level-of-detail threshold of cluster cullers (`gpu-clusters`), in pixels: each part
+    /// is drawn with the coarsest clusters whose simplification error projects at or under
+    /// it. 0 draws full detail; the default is [`DEFAULT_LOD_ERROR`].
+    pub fn lod_error(&self) -> f32 {
+        self.options.lod_error
+    }
+
+    /// Sets the level-of-detail threshold from the next frame (see [`Techniques::lod_error`]).
+    pub fn set_lod_error(&mut self, pixels: f32) -> RenderResult<()> {
+        if !pixels.is_finite() || pixels < 0.0 {
+            return Err(RenderError::InvalidUse(format!(
+                "level-of-detail error {pixels}: expected a finite number of pixels >= 0"
+            )));
+        }
+        if pixels != self.options.lod_error {
+            self.options.lod_error = pixels;
+            // Cullers record the threshold into their commands.
+            self.epoch += 1;
+        }
         Ok(())
     }
 

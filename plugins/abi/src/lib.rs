@@ -39,7 +39,9 @@
 //!   minors added fields at the end of size-prefixed structs. From 1.13 on, features are
 //!   added as **extensions** instead: structs that start with a [`CadrExtension`] header
 //!   (`size`, `kind`, `next`) and are chained from a struct's `extensions` pointer, as Vulkan
-//!   chains `pNext`. The core structs stay as 1.13 left them, a reader skips the kinds it does
+//!   chains `pNext`. The core structs stay as 1.13 left them (1.14 gave the two per-frame
+//!   structs that lacked one, [`CadrSceneView`] and [`CadrGpuCullContext`], their
+//!   `extensions` pointer, the last field added by size), a reader skips the kinds it does
 //!   not know, and a technique lists in `required_extensions` the kinds it cannot work
 //!   without.
 //! - The host accepts a library of any minor of its major: an older one's structs are read by
@@ -54,7 +56,7 @@ use std::ffi::{c_char, c_void};
 /// Major version of this ABI: a library built for another major version is refused.
 pub const CADR_PLUGIN_ABI_MAJOR: u32 = 1;
 /// Minor version of this ABI: additions that older readers may ignore.
-pub const CADR_PLUGIN_ABI_MINOR: u32 = 13;
+pub const CADR_PLUGIN_ABI_MINOR: u32 = 14;
 /// `(major << 16) | minor`, what [`CadrPluginVersionFn`] returns.
 pub const CADR_PLUGIN_ABI_VERSION: u32 = (CADR_PLUGIN_ABI_MAJOR << 16) | CADR_PLUGIN_ABI_MINOR;
 
@@ -228,11 +230,12 @@ pub type CadrExtensionKind = u32;
 /// Since ABI 1.13: the header every extension struct starts with. Extensions are chained
 /// through `next` from a struct's `extensions` pointer; a reader walks the chain and skips the
 /// kinds it does not know (`size` says how long the whole extension struct is). Whoever writes
-/// a chain owns it and keeps it valid as long as the struct it hangs from. No extension kind
-/// is defined yet: hosts of ABI 1.13 know none, so they skip every extension a technique
-/// offers and refuse a technique that requires one.
+/// a chain owns it and keeps it valid as long as the struct it hangs from. Hosts of ABI 1.13
+/// know no kind, so they skip every extension a technique offers and refuse a technique that
+/// requires one; ABI 1.14 defines [`CADR_EXTENSION_SCENE_CLUSTERS`] and
+/// [`CADR_EXTENSION_CLUSTER_CULL`].
 #[repr(C)]
-#[derive(Debug)]
+#[derive(Clone, Copy, Debug)]
 pub struct CadrExtension {
     /// Size of the whole extension struct, this header included.
     pub size: u32,
@@ -604,8 +607,9 @@ pub struct CadrCullEntry {
     pub matrix: u32,
     /// `CADR_INSTANCE_*` bits, with [`CADR_INSTANCE_CANDIDATE`].
     pub flags: u32,
-    /// Zero.
-    pub reserved: u32,
+    /// Since ABI 1.14, where the scene view has [`CadrSceneClusters`]: the part's first
+    /// cluster in its cluster buffer (before, zero).
+    pub first_cluster: u32,
 }
 
 impl CadrCullEntry {
@@ -620,7 +624,7 @@ impl CadrCullEntry {
             self.vertex_base,
             self.matrix,
             self.flags,
-            self.reserved,
+            self.first_cluster,
         ]);
         for (i, word) in words.enumerate() {
             bytes[i * 4..i * 4 + 4].copy_from_slice(&word.to_le_bytes());
@@ -684,6 +688,161 @@ pub struct CadrSceneView {
     pub instance_buffer: CadrBufferRef,
     /// Since ABI 1.3 (read it only when `size` covers it): [`CadrCullEntry`] per instance id.
     pub cull_buffer: CadrBufferRef,
+    /// Since ABI 1.14 (read it only when `size` covers it): the host's extension structs for
+    /// this view (a chain of [`CadrExtension`]s, or null), valid as long as the view:
+    /// [`CadrSceneClusters`] where the scene has clusters.
+    pub extensions: *const CadrExtension,
+}
+
+/// Since ABI 1.14: the kind of [`CadrSceneClusters`], chained on [`CadrSceneView::extensions`].
+pub const CADR_EXTENSION_SCENE_CLUSTERS: CadrExtensionKind = 1;
+/// Since ABI 1.14: the kind of [`CadrClusterCull`], chained on
+/// [`CadrGpuCullContext::extensions`].
+pub const CADR_EXTENSION_CLUSTER_CULL: CadrExtensionKind = 2;
+
+/// Since ABI 1.14 ([`CADR_EXTENSION_SCENE_CLUSTERS`]): every part's triangles as clusters of
+/// at most 128 triangles and 128 vertices, with the coarser clusters of its level-of-detail
+/// DAG. A part's clusters are contiguous in `cluster_buffer` from its cull entry's
+/// [`CadrCullEntry::first_cluster`]; its original clusters ([`CADR_CLUSTER_ORIGINAL`]) come
+/// first, and their index ranges tile the part's own range (`first_index`, `index_count` of the
+/// instance) in order, so drawing them all draws exactly the part's triangles. The coarser
+/// clusters' indices lie after the geometry's own, in the same index buffer, and name the
+/// same vertices. Written by the host with the geometry; owned by the host.
+#[repr(C)]
+#[derive(Clone, Copy, Debug)]
+pub struct CadrSceneClusters {
+    /// `kind` = [`CADR_EXTENSION_SCENE_CLUSTERS`].
+    pub header: CadrExtension,
+    /// [`CadrCluster`] per cluster (storage buffer).
+    pub cluster_buffer: CadrBufferRef,
+    /// Number of clusters in `cluster_buffer`.
+    pub cluster_count: u32,
+    /// Number of groups in `group_buffer`.
+    pub group_count: u32,
+    /// [`CadrClusterGroup`] per group of the level-of-detail DAGs (storage buffer).
+    pub group_buffer: CadrBufferRef,
+    /// The clusters of the candidate instances, summed ([`CadrCluster::part_clusters`] of each
+    /// candidate's part): a bound on the cluster draws one pass of a frame can need.
+    pub candidate_clusters: u64,
+}
+
+/// [`CadrCluster::refined`] of a part's original clusters: its own triangles, made by no
+/// simplification.
+pub const CADR_CLUSTER_ORIGINAL: u32 = u32::MAX;
+
+/// Since ABI 1.14: one cluster of [`CadrSceneClusters::cluster_buffer`] (64 bytes,
+/// little-endian, std430-compatible). Which clusters make a picture at a given error: those
+/// whose own group's error ([`CadrCluster::group`]) projects over the threshold and whose
+/// `refined` group's error projects at or under it (an original cluster's error is 0); each
+/// group's error and sphere are the same for all its clusters, and errors only grow from the
+/// refined to the coarser, so the chosen clusters tile the surface without cracks or overlaps.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct CadrCluster {
+    /// Bounding sphere of the cluster's triangles in object space: centre xyz, radius w.
+    pub sphere: [f32; 4],
+    /// Apex of the normal cone (object space).
+    pub cone_apex: [f32; 3],
+    /// The cone's cutoff: seen from an eye at `e`, every triangle faces away when
+    /// `dot(normalize(cone_apex - e), cone_axis) >= cone_cutoff` (orthographic views:
+    /// `dot(view_direction, cone_axis) >= cone_cutoff`). Above 1 when the triangles face too
+    /// many ways for any test. Valid only for a transform that keeps angles (a rotation, a
+    /// uniform scale, a mirror) and a part whose back faces cannot show.
+    pub cone_cutoff: f32,
+    /// Axis of the normal cone (object space, unit length; triangles wound counter-clockwise).
+    pub cone_axis: [f32; 3],
+    /// First triangle index (absolute in the index buffer).
+    pub first_index: u32,
+    /// Triangle index count (a multiple of 3).
+    pub index_count: u32,
+    /// The group the cluster belongs to (an index into the group buffer): its error is what
+    /// drawing the coarser clusters instead would cost.
+    pub group: u32,
+    /// The group whose simplification made this cluster (its error is this cluster's), or
+    /// [`CADR_CLUSTER_ORIGINAL`].
+    pub refined: u32,
+    /// How many clusters the part has (the same in each of its clusters).
+    pub part_clusters: u32,
+}
+
+impl CadrCluster {
+    /// The GPU layout: 16 little-endian 32-bit words.
+    pub fn to_le_bytes(&self) -> [u8; 64] {
+        let floats = self
+            .sphere
+            .into_iter()
+            .chain(self.cone_apex)
+            .chain([self.cone_cutoff])
+            .chain(self.cone_axis)
+            .map(f32::to_bits);
+        let words = floats.chain([
+            self.first_index,
+            self.index_count,
+            self.group,
+            self.refined,
+            self.part_clusters,
+        ]);
+        let mut bytes = [0; 64];
+        for (i, word) in words.enumerate() {
+            bytes[i * 4..i * 4 + 4].copy_from_slice(&word.to_le_bytes());
+        }
+        bytes
+    }
+}
+
+/// Since ABI 1.14: one group of a level-of-detail DAG in [`CadrSceneClusters::group_buffer`]
+/// (32 bytes, std430-compatible): neighbouring clusters simplified together, their shared
+/// border kept.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct CadrClusterGroup {
+    /// The sphere the error is measured from (object space): centre xyz, radius w. It holds
+    /// the spheres of the groups it was made from.
+    pub sphere: [f32; 4],
+    /// The object-space error of the coarser clusters made from this group (the largest
+    /// distance their surface may lie from the original); `f32::MAX` for a group that was
+    /// not simplified further (its clusters are the part's coarsest).
+    pub error: f32,
+    /// Level in the DAG: 0 for groups of original clusters.
+    pub depth: u32,
+    /// Zero.
+    pub reserved: [u32; 2],
+}
+
+impl CadrClusterGroup {
+    /// The GPU layout: 8 little-endian 32-bit words.
+    pub fn to_le_bytes(&self) -> [u8; 32] {
+        let words = self
+            .sphere
+            .into_iter()
+            .chain([self.error])
+            .map(f32::to_bits)
+            .chain([self.depth, self.reserved[0], self.reserved[1]]);
+        let mut bytes = [0; 32];
+        for (i, word) in words.enumerate() {
+            bytes[i * 4..i * 4 + 4].copy_from_slice(&word.to_le_bytes());
+        }
+        bytes
+    }
+}
+
+/// Since ABI 1.14 ([`CADR_EXTENSION_CLUSTER_CULL`]): what a cluster culler needs of the frame
+/// beyond [`CadrGpuCullContext`]. Owned by the host, valid for the call.
+#[repr(C)]
+#[derive(Clone, Copy, Debug)]
+pub struct CadrClusterCull {
+    /// `kind` = [`CADR_EXTENSION_CLUSTER_CULL`].
+    pub header: CadrExtension,
+    /// The level-of-detail threshold in pixels: the clusters drawn are the coarsest whose error
+    /// projects at or under it. 0 draws every part at full detail (its original clusters).
+    pub lod_error: f32,
+    /// Number of entries at `back_faces_hidden` (the cull context's `pass_count`).
+    pub pass_count: u32,
+    /// Per pass, nonzero when the pass draws surfaces with depth test and depth writes, so
+    /// that the back faces of a closed opaque part never show in it: the culler may drop
+    /// clusters that face away from the eye, for closed parts
+    /// ([`CADR_INSTANCE_CLOSED`]) that are not translucent and that no section plane cuts.
+    pub back_faces_hidden: *const u32,
 }
 
 /// What a draw pass draws.
@@ -1202,6 +1361,10 @@ pub struct CadrGpuCullContext {
     /// one per pass ([`CadrPassExclusion`]); a culler that honours them writes no commands for
     /// the instances they exclude.
     pub pass_exclusions: *const CadrPassExclusion,
+    /// Since ABI 1.14 (read it only when `size` covers it): the host's extension structs for
+    /// this call (a chain of [`CadrExtension`]s, or null), valid for the call:
+    /// [`CadrClusterCull`] where the scene has clusters.
+    pub extensions: *const CadrExtension,
 }
 
 /// Since ABI 1.5: the view of a GPU-culled frame as shaders read it (std140: vec4s, then a

@@ -490,17 +490,26 @@ pub fn gpu_culling<T: GpuCulling>(describe: Describe) -> abi::CadrTechniqueInfo 
             stats.primitives += counts.primitives;
         }
     }
-    info(
-        abi::CADR_KIND_CULLING,
-        describe,
-        abi::CadrCullingVtable {
-            common: common::<T, abi::CadrCullingVtable>(),
-            cull: None,
-            record_gpu: Some(record_gpu::<T>),
-            phase_count: Some(phase_count::<T>),
-            gpu_counts: Some(gpu_counts::<T>),
+    let required = T::REQUIRED_EXTENSIONS;
+    abi::CadrTechniqueInfo {
+        required_extensions: if required.is_empty() {
+            std::ptr::null()
+        } else {
+            required.as_ptr()
         },
-    )
+        required_extension_count: required.len() as u32,
+        ..info(
+            abi::CADR_KIND_CULLING,
+            describe,
+            abi::CadrCullingVtable {
+                common: common::<T, abi::CadrCullingVtable>(),
+                cull: None,
+                record_gpu: Some(record_gpu::<T>),
+                phase_count: Some(phase_count::<T>),
+                gpu_counts: Some(gpu_counts::<T>),
+            },
+        )
+    }
 }
 
 /// The technique info of a transparency method (ABI 1.7).

@@ -108,14 +108,18 @@ pub trait Culling: Technique {
 /// instances and writes each pass's indirect commands and count, which a submission providing
 /// `CADR_TRAIT_DRAWS_GPU_COMMANDS` draws. Listed as kind `gpu_culling`.
 pub trait GpuCulling: Technique {
+    /// The plugin ABI extensions (`CADR_EXTENSION_*`) the culler cannot work without: a host
+    /// that does not know one refuses the technique, naming it. None by default.
+    const REQUIRED_EXTENSIONS: &'static [abi::CadrExtensionKind] = &[];
     /// Phases of a frame (between them the host ends rendering and hands over the depth).
     fn phase_count(&self) -> u32 {
         1
     }
     /// Records phase `cull.phase()`: tests, writes the commands, sets each pass's draws.
     fn record(&mut self, cull: &GpuCull<'_>) -> Result<(), String>;
-    /// What the GPU drew in the last finished frame: `draws` (commands, all passes) and
-    /// `primitives` (triangles of the triangle and pick passes).
+    /// What the GPU drew in the last finished frame: `draws` (ranges drawn, all passes: parts,
+    /// or a cluster culler's clusters) and `primitives` (triangles of the triangle and pick
+    /// passes).
     fn counts(&self) -> abi::CadrStats {
         abi::CadrStats::default()
     }

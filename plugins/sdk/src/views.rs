@@ -101,6 +101,25 @@ impl<'a> Scene<'a> {
         self.raw
     }
 
+    /// The scene's clusters ([`abi::CadrSceneClusters`]), from a host of ABI 1.14 or later.
+    pub fn clusters(&self) -> Option<&'a abi::CadrSceneClusters> {
+        let end =
+            std::mem::offset_of!(abi::CadrSceneView, extensions) + std::mem::size_of::<usize>();
+        if (self.raw.size as usize) < end {
+            return None;
+        }
+        // SAFETY: the host's chain is valid as long as the view.
+        let header = unsafe {
+            abi::find_extension(self.raw.extensions, abi::CADR_EXTENSION_SCENE_CLUSTERS)
+        }?;
+        if (header.size as usize) < std::mem::size_of::<abi::CadrSceneClusters>() {
+            return None;
+        }
+        // SAFETY: an extension of this kind is a `CadrSceneClusters` (its header first) of at
+        // least that size.
+        Some(unsafe { &*(header as *const abi::CadrExtension).cast::<abi::CadrSceneClusters>() })
+    }
+
     /// Every instance id's instance.
     pub fn instances(&self) -> &'a [abi::CadrInstance] {
         slice(self.raw.instances, self.raw.instance_count as usize)
@@ -556,6 +575,43 @@ impl<'a> GpuCull<'a> {
     /// The phase being recorded.
     pub fn phase(&self) -> u32 {
         self.raw.phase
+    }
+
+    /// The cluster culling options ([`abi::CadrClusterCull`]), from a host of ABI 1.14 or
+    /// later whose scene has clusters.
+    pub fn cluster_cull(&self) -> Option<&'a abi::CadrClusterCull> {
+        let end = std::mem::offset_of!(abi::CadrGpuCullContext, extensions)
+            + std::mem::size_of::<usize>();
+        if (self.raw.size as usize) < end {
+            return None;
+        }
+        // SAFETY: the host's chain is valid for the call.
+        let header =
+            unsafe { abi::find_extension(self.raw.extensions, abi::CADR_EXTENSION_CLUSTER_CULL) }?;
+        if (header.size as usize) < std::mem::size_of::<abi::CadrClusterCull>() {
+            return None;
+        }
+        // SAFETY: an extension of this kind is a `CadrClusterCull` (its header first) of at
+        // least that size.
+        Some(unsafe { &*(header as *const abi::CadrExtension).cast::<abi::CadrClusterCull>() })
+    }
+
+    /// Per pass, whether the back faces of closed opaque parts cannot show in it (see
+    /// [`abi::CadrClusterCull::back_faces_hidden`]); all false without the extension.
+    pub fn back_faces_hidden(&self) -> Vec<bool> {
+        let passes = self.passes().len();
+        match self.cluster_cull() {
+            Some(cull)
+                if !cull.back_faces_hidden.is_null() && cull.pass_count as usize == passes =>
+            {
+                // SAFETY: the host's array of `pass_count` entries, valid for the call.
+                unsafe { std::slice::from_raw_parts(cull.back_faces_hidden, passes) }
+                    .iter()
+                    .map(|&hidden| hidden != 0)
+                    .collect()
+            }
+            _ => vec![false; passes],
+        }
     }
 
     /// The sub-pixel threshold (projected diameter in pixels below which a part is culled);

@@ -7,12 +7,22 @@
 // threshold (off by default) and parts a section plane cuts away whole are culled too, and a
 // pass gets no commands for the parts its filter leaves out (the X-ray mode's opaque pass
 // draws only highlighted parts, the section caps' pass only closed parts a plane cuts).
+//
+// With CLUSTERS defined (gpu-clusters), a part that passes gets, in the triangle passes, its
+// clusters instead of one command: those of its level-of-detail cut (the coarsest whose error
+// projects at or under the threshold), each tested against the frustum, the section planes,
+// its normal cone where back faces cannot show, and in phase 1 the depth pyramid; clusters
+// that follow each other in the index buffer are drawn by one command. Edge passes draw the
+// part whole.
 layout(local_size_x = 64) in;
 
 const uint PASS_EDGES = 1u;
 const uint PASS_PICK = 2u;
 const uint INSTANCE_PICKABLE = 2u;
 const uint INSTANCE_CANDIDATE = 8u;
+const uint INSTANCE_CLOSED = 16u;
+const uint INSTANCE_INSIDE_OUT = 32u;
+const uint INSTANCE_TRANSLUCENT = 64u;
 
 // What this dispatch does.
 const uint MODE_FRUSTUM = 0u;          // frustum only
@@ -28,7 +38,7 @@ struct CullEntry {
     uint vertex_base;
     uint matrix;
     uint flags;
-    uint reserved;
+    uint first_cluster;
 };
 
 struct Matrix {
@@ -38,7 +48,8 @@ struct Matrix {
 layout(set = 0, binding = 0, std430) readonly buffer Entries { CullEntry entries[]; };
 layout(set = 0, binding = 1, std430) readonly buffer Matrices { Matrix matrices[]; };
 layout(set = 0, binding = 2, std430) writeonly buffer Commands { uint commands[]; };
-// [0..8): commands per pass slot; [8]: commands in all; [9]: triangles drawn.
+// [0..8): commands per pass slot; [8]: commands in all; [9]: triangles drawn; [10]: clusters
+// drawn (gpu-clusters).
 layout(set = 0, binding = 3, std430) buffer Counts { uint counts[]; };
 // The host's CadrGpuCullView, written before every submission of the frame.
 layout(set = 0, binding = 4, std140) uniform View {
@@ -64,6 +75,31 @@ layout(set = 0, binding = 6, std430) buffer NowVisible { uint now_visible[]; };
 // depth texels, the levels one after the other.
 layout(set = 0, binding = 7, std430) readonly buffer Pyramid { float pyramid[]; };
 
+#ifdef CLUSTERS
+// The plugin ABI's CadrCluster and CadrClusterGroup (CadrSceneClusters).
+struct Cluster {
+    vec4 sphere;
+    vec3 cone_apex;
+    float cone_cutoff;
+    vec3 cone_axis;
+    uint first_index;
+    uint index_count;
+    uint group;
+    uint refined;
+    uint part_clusters;
+};
+struct Group {
+    vec4 sphere;
+    float error;
+    uint depth;
+    uint reserved0;
+    uint reserved1;
+};
+const uint CLUSTER_ORIGINAL = 0xffffffffu;
+layout(set = 0, binding = 8, std430) readonly buffer Clusters { Cluster clusters[]; };
+layout(set = 0, binding = 9, std430) readonly buffer Groups { Group groups[]; };
+#endif
+
 layout(push_constant) uniform Dispatch {
     uint instance_count;
     uint pass_kind;
@@ -81,6 +117,11 @@ layout(push_constant) uniform Dispatch {
     // value are not drawn (mask 0 excludes none).
     uint exclude_mask;
     uint exclude_value;
+    // gpu-clusters: the level-of-detail threshold in pixels (0: full detail), whether this
+    // pass hides the back faces of closed opaque parts, and the commands a pass slot holds.
+    float lod_error;
+    uint back_faces_hidden;
+    uint command_capacity;
 } dispatch;
 
 // Inside the frustum.
@@ -179,6 +220,118 @@ bool large_enough(vec3 center, float radius) {
     return 2.0 * radius * view.sub_pixel.y >= view.sub_pixel.x * nearest;
 }
 
+// Appends an indirect command for `count` indices from `first`, instance `id`.
+void append(uint first, uint count, uint vertex_base, uint id) {
+    uint slot = atomicAdd(counts[dispatch.pass_slot], 1u);
+    if (slot >= dispatch.command_capacity) {
+        return; // never, with the capacity the culler reserves; the count stays past it
+    }
+    uint base = (dispatch.first_command + slot) * 5u;
+    commands[base] = count;
+    commands[base + 1u] = 1u;
+    commands[base + 2u] = first;
+    commands[base + 3u] = vertex_base;
+    commands[base + 4u] = id;
+    atomicAdd(counts[8], 1u);
+    if (dispatch.pass_kind != PASS_EDGES) {
+        atomicAdd(counts[9], count / 3u);
+    }
+}
+
+#ifdef CLUSTERS
+// Where the instance's matrix puts things, relative to the eye.
+struct Placement {
+    mat3 rotation;
+    vec3 translation;
+    float scale;
+    // A rotation, uniform scale and maybe a mirror: angles are kept, so normal cones hold.
+    bool keeps_angles;
+};
+
+// The error of `group` in pixels, as seen from the eye (at least the true projection: the
+// group's sphere is measured at its nearest depth). A sphere holding the eye projects without
+// bound; a group never simplified further has infinite error.
+float projected_error(Group group, Placement place) {
+    if (group.error >= 3.0e38) {
+        return 1.0 / 0.0;
+    }
+    vec3 center = place.translation + place.rotation * group.sphere.xyz;
+    vec4 w_row = vec4(view.view_projection[0][3], view.view_projection[1][3],
+                      view.view_projection[2][3], view.view_projection[3][3]);
+    float w = dot(w_row, vec4(center, 1.0));
+    bool perspective = w_row.w == 0.0;
+    float nearest = perspective ? w - group.sphere.w * place.scale : w;
+    if (nearest <= 1e-6) {
+        return 1.0 / 0.0;
+    }
+    return group.error * place.scale * view.sub_pixel.y / nearest;
+}
+
+// Whether the cluster belongs to the level-of-detail cut: its group's coarser clusters would
+// be too coarse, and its own error is small enough. Threshold 0: the original clusters.
+bool in_cut(Cluster cluster, Placement place) {
+    if (dispatch.lod_error <= 0.0) {
+        return cluster.refined == CLUSTER_ORIGINAL;
+    }
+    if (projected_error(groups[cluster.group], place) <= dispatch.lod_error) {
+        return false;
+    }
+    return cluster.refined == CLUSTER_ORIGINAL
+        || projected_error(groups[cluster.refined], place) <= dispatch.lod_error;
+}
+
+// Whether every triangle of the cluster faces away from the eye.
+bool faces_away(Cluster cluster, Placement place) {
+    if (cluster.cone_cutoff >= 1.0) {
+        return false;
+    }
+    vec3 axis = normalize(place.rotation * cluster.cone_axis);
+    vec4 w_row = vec4(view.view_projection[0][3], view.view_projection[1][3],
+                      view.view_projection[2][3], view.view_projection[3][3]);
+    if (w_row.w != 0.0) {
+        // Orthographic: every ray runs along the view direction, the near plane's normal.
+        return dot(normalize(view.planes[4].xyz), axis) >= cluster.cone_cutoff;
+    }
+    vec3 apex = place.translation + place.rotation * cluster.cone_apex;
+    return dot(normalize(apex), axis) >= cluster.cone_cutoff;
+}
+
+// Appends the commands of the instance's clusters in the cut that pass the cluster tests.
+void append_clusters(CullEntry entry, uint id, Placement place, bool back_faces_may_go) {
+    uint count = clusters[entry.first_cluster].part_clusters;
+    uint run_first = 0u;
+    uint run_count = 0u;
+    for (uint k = 0u; k < count; ++k) {
+        Cluster cluster = clusters[entry.first_cluster + k];
+        if (!in_cut(cluster, place)) {
+            continue;
+        }
+        vec3 center = place.translation + place.rotation * cluster.sphere.xyz;
+        float radius = cluster.sphere.w * place.scale;
+        bool drawn = in_frustum(center, radius) && !against_sections(center, radius).x
+            && !(back_faces_may_go && faces_away(cluster, place))
+            && (dispatch.mode != MODE_NEWLY_VISIBLE || passes_pyramid(center, radius));
+        if (!drawn) {
+            continue;
+        }
+        atomicAdd(counts[10], 1u);
+        uint first = cluster.first_index;
+        if (run_count > 0u && run_first + run_count == first) {
+            run_count += cluster.index_count;
+            continue;
+        }
+        if (run_count > 0u) {
+            append(run_first, run_count, entry.vertex_base, id);
+        }
+        run_first = first;
+        run_count = cluster.index_count;
+    }
+    if (run_count > 0u) {
+        append(run_first, run_count, entry.vertex_base, id);
+    }
+}
+#endif
+
 bool bit(uint id) {
     return (last_visible[id >> 5] >> (id & 31u) & 1u) != 0u;
 }
@@ -228,15 +381,27 @@ void main() {
         || excluded || (dispatch.filter_section_cut != 0u && !sections.y)) {
         return;
     }
-    uint slot = atomicAdd(counts[dispatch.pass_slot], 1u);
-    uint base = (dispatch.first_command + slot) * 5u;
-    commands[base] = count;
-    commands[base + 1u] = 1u;
-    commands[base + 2u] = first;
-    commands[base + 3u] = entry.vertex_base;
-    commands[base + 4u] = id;
-    atomicAdd(counts[8], 1u);
+#ifdef CLUSTERS
     if (dispatch.pass_kind != PASS_EDGES) {
-        atomicAdd(counts[9], count / 3u);
+        vec3 c0 = rotation[0];
+        vec3 c1 = rotation[1];
+        vec3 c2 = rotation[2];
+        float l0 = dot(c0, c0);
+        float tolerance = 1e-4 * l0;
+        bool keeps_angles = abs(dot(c1, c1) - l0) <= tolerance && abs(dot(c2, c2) - l0) <= tolerance
+            && abs(dot(c0, c1)) <= tolerance && abs(dot(c0, c2)) <= tolerance
+            && abs(dot(c1, c2)) <= tolerance;
+        Placement place = Placement(rotation, center - rotation * entry.sphere.xyz, scale,
+                                    keeps_angles);
+        // Back faces may go where the pass hides them and the part shows none: closed, wound
+        // counter-clockwise outside, opaque, and cut by no section plane.
+        bool back_faces_may_go = dispatch.back_faces_hidden != 0u && keeps_angles
+            && (entry.flags & (INSTANCE_CLOSED | INSTANCE_INSIDE_OUT | INSTANCE_TRANSLUCENT))
+                == INSTANCE_CLOSED
+            && !sections.y;
+        append_clusters(entry, id, place, back_faces_may_go);
+        return;
     }
+#endif
+    append(first, count, entry.vertex_base, id);
 }

@@ -5,7 +5,8 @@
 //!   the view frustum and the section planes (a part wholly cut away is culled) on worker
 //!   threads; the result and its XOR with the last frame's bits go back, so the host applies
 //!   only what changed (seed 000's visibility deltas);
-//! - `gpu-frustum`, `gpu-occlusion`: culling on the GPU ([`crate::gpu_culling`]).
+//! - `gpu-frustum`, `gpu-occlusion`, `gpu-clusters`: culling on the GPU
+//!   ([`crate::gpu_culling`]).
 
 use std::sync::Arc;
 
@@ -160,6 +161,11 @@ technique_library! {
         gpu_culling crate::gpu_culling::GpuOcclusion {
             name: "gpu-occlusion",
             description: "GPU frustum and two-phase occlusion culling: draws what was visible last frame, tests the rest against a depth pyramid of it, draws what became visible in the same frame.",
+            features: GPU_CULLING_FEATURES, provides: REPLAYABLE, needs: GPU_CULLING_NEEDS,
+        },
+        gpu_culling crate::gpu_culling::GpuClusters {
+            name: "gpu-clusters",
+            description: "GPU cluster culling and level of detail: gpu-occlusion per part, then per cluster of the part's level-of-detail cut (frustum, normal cone, depth pyramid), so the triangles drawn follow the pixels covered.",
             features: GPU_CULLING_FEATURES, provides: REPLAYABLE, needs: GPU_CULLING_NEEDS,
         },
     ]

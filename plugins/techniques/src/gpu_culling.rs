@@ -10,7 +10,16 @@
 //!   is built from that depth (`shaders/hiz.comp`); phase 1 tests every instance against it,
 //!   draws what became visible, and keeps the visibility for the next frame. A part that
 //!   comes into view is drawn in the frame it does.
-//! - Both cull parts smaller than the host's sub-pixel threshold (ABI 1.5, off by default):
+//! - `gpu-clusters` (ABI 1.14, the scene's clusters): `gpu-occlusion` per part, then per
+//!   cluster. A part that passes draws, in the triangle passes, the clusters of its
+//!   level-of-detail cut (the coarsest whose simplification error projects at or under the
+//!   host's threshold, `lod_error` pixels; 0 draws the original clusters, exactly the part's
+//!   triangles), each tested against the frustum, the section planes, the depth pyramid (in
+//!   phase 1) and, in passes that hide back faces, its normal cone (closed opaque parts that
+//!   no plane cuts, under transforms that keep angles). Clusters that follow each other in the
+//!   index buffer are drawn by one command, so a part in full view costs what it did. Edge
+//!   passes draw parts whole, at full detail: edges are the features a CAD user measures.
+//! - All cull parts smaller than the host's sub-pixel threshold (ABI 1.5, off by default):
 //!   a part whose bounding sphere projects under `min_pixels` across is drawn in no pass.
 //!
 //! The submission draws the commands with `vkCmdDrawIndexedIndirectCount` (a submission
@@ -25,11 +34,12 @@ use cadr_plugin_sdk::vk::{self, Handle};
 use cadr_plugin_sdk::vulkan_failure;
 use cadr_plugin_sdk::{buffer, Gpu, GpuCull, GpuCulling, HostBuffer, PassFilter, Technique};
 
-/// Words of the counts buffer: commands per (phase, pass) slot, then commands in all and
-/// triangles drawn.
-const COUNT_WORDS: usize = 10;
+/// Words of the counts buffer: commands per (phase, pass) slot, then commands in all,
+/// triangles drawn and clusters drawn.
+const COUNT_WORDS: usize = 11;
 const TOTAL_COMMANDS: usize = 8;
 const TOTAL_TRIANGLES: usize = 9;
+const TOTAL_CLUSTERS: usize = 10;
 /// Passes per phase the counts have room for.
 const PASSES_PER_PHASE: usize = 4;
 /// How the commands and counts are read: as indirect buffers, and by device address where the
@@ -64,10 +74,20 @@ struct CullDispatch {
     pyramid_levels: u32,
     /// The pass's filter and exclusion: only the instances it keeps get a command.
     filter: PassFilter,
+    /// Level-of-detail threshold in pixels (cluster culling).
+    lod_error: f32,
+    /// Whether the pass hides the back faces of closed opaque parts (cluster culling).
+    back_faces_hidden: bool,
+    /// Commands a pass slot holds.
+    command_capacity: u32,
 }
 
 /// Bytes of [`CullDispatch`] as pushed.
-const CULL_PUSH_BYTES: u32 = 48;
+const CULL_PUSH_BYTES: u32 = 60;
+/// Storage buffers of the cull set besides the view uniform: the scene's cull entries and
+/// matrices, the commands and counts, both visibility buffers, the pyramid, and with clusters
+/// the scene's clusters and groups.
+const CULL_STORAGE_BUFFERS: u32 = 9;
 
 /// Push constants of one pyramid level.
 #[derive(Clone, Copy)]
@@ -210,7 +230,7 @@ impl Objects {
         }
     }
 
-    fn new(gpu: &Arc<Gpu>, occlusion: bool) -> Result<Self, String> {
+    fn new(gpu: &Arc<Gpu>, occlusion: bool, clusters: bool) -> Result<Self, String> {
         let mut objects = Self {
             gpu: Arc::clone(gpu),
             cull_set_layout: vk::DescriptorSetLayout::null(),
@@ -225,7 +245,7 @@ impl Objects {
             pyramid_set: vk::DescriptorSet::null(),
         };
         let storage = vk::DescriptorType::STORAGE_BUFFER;
-        let cull_bindings = [
+        let mut cull_bindings = vec![
             (storage, 0),
             (storage, 1),
             (storage, 2),
@@ -235,10 +255,17 @@ impl Objects {
             (storage, 6),
             (storage, 7),
         ];
+        let source = include_str!("../shaders/gpu_cull.comp");
+        let source = if clusters {
+            cull_bindings.extend([(storage, 8), (storage, 9)]);
+            source.replacen("#version 460\n", "#version 460\n#define CLUSTERS 1\n", 1)
+        } else {
+            source.to_owned()
+        };
         objects.cull_set_layout = objects.set_layout(&cull_bindings)?;
         (objects.cull_layout, objects.cull_pipeline) = objects.pipeline(
             "gpu_cull.comp",
-            include_str!("../shaders/gpu_cull.comp"),
+            &source,
             objects.cull_set_layout,
             CULL_PUSH_BYTES,
         )?;
@@ -266,7 +293,7 @@ impl Objects {
         let sizes = [
             vk::DescriptorPoolSize::default()
                 .ty(storage)
-                .descriptor_count(8),
+                .descriptor_count(CULL_STORAGE_BUFFERS + 1),
             vk::DescriptorPoolSize::default()
                 .ty(vk::DescriptorType::UNIFORM_BUFFER)
                 .descriptor_count(1),
@@ -296,8 +323,9 @@ impl Objects {
     }
 }
 
-/// A GPU culler: `gpu-frustum` without occlusion, `gpu-occlusion` with it.
-pub struct GpuCuller<const OCCLUSION: bool> {
+/// A GPU culler: `gpu-frustum` without occlusion, `gpu-occlusion` with it, `gpu-clusters`
+/// with occlusion and clusters.
+pub struct GpuCuller<const OCCLUSION: bool, const CLUSTERS: bool> {
     gpu: Arc<Gpu>,
     objects: Objects,
     /// Commands per (phase, pass) slot and the totals; host-visible for the frame's counts.
@@ -316,13 +344,13 @@ pub struct GpuCuller<const OCCLUSION: bool> {
     /// Levels of the pyramid of the current target size (a push constant of the culls).
     pyramid_levels: u32,
     /// What the descriptor sets were last written with.
-    cull_written: Option<([u64; 8], u64)>,
+    cull_written: Option<([u64; 10], u64)>,
     pyramid_written: Option<[u64; 2]>,
 }
 
-impl<const OCCLUSION: bool> Technique for GpuCuller<OCCLUSION> {
+impl<const OCCLUSION: bool, const CLUSTERS: bool> Technique for GpuCuller<OCCLUSION, CLUSTERS> {
     fn create(gpu: Arc<Gpu>) -> Result<Self, String> {
-        let objects = Objects::new(&gpu, OCCLUSION)?;
+        let objects = Objects::new(&gpu, OCCLUSION, CLUSTERS)?;
         let storage = vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_DST;
         let counts = gpu.create_buffer(
             "gpu cull counts",
@@ -366,7 +394,7 @@ fn barrier(
     unsafe { gpu.device.cmd_pipeline_barrier2(command_buffer, &info) };
 }
 
-impl<const OCCLUSION: bool> GpuCuller<OCCLUSION> {
+impl<const OCCLUSION: bool, const CLUSTERS: bool> GpuCuller<OCCLUSION, CLUSTERS> {
     fn phases(&self) -> u32 {
         if OCCLUSION {
             2
@@ -375,11 +403,16 @@ impl<const OCCLUSION: bool> GpuCuller<OCCLUSION> {
         }
     }
 
-    /// Makes the commands (a region per phase and pass slot) and visibility buffers big
-    /// enough for `instances`; new visibility buffers are cleared in `command_buffer`.
-    fn reserve(&mut self, instances: u32, command_buffer: vk::CommandBuffer) -> Result<(), String> {
+    /// Makes the commands (a region per phase and pass slot, each room for `commands`) and
+    /// visibility buffers big enough for `instances`; new visibility buffers are cleared in
+    /// `command_buffer`.
+    fn reserve(
+        &mut self,
+        (instances, commands): (u32, u32),
+        command_buffer: vk::CommandBuffer,
+    ) -> Result<(), String> {
         let storage = vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_DST;
-        let needed = instances.max(1);
+        let needed = commands.max(instances).max(1);
         if self.commands.is_none() || needed > self.capacity {
             let capacity = needed.next_power_of_two();
             let slots = (self.phases() as usize * PASSES_PER_PHASE) as u64;
@@ -391,6 +424,7 @@ impl<const OCCLUSION: bool> GpuCuller<OCCLUSION> {
             )?);
             self.capacity = capacity;
         }
+        let needed = instances.max(1);
         if OCCLUSION && needed.div_ceil(32) > self.visibility_words {
             let words = needed.div_ceil(32).next_power_of_two();
             for buffer in &mut self.visibility {
@@ -441,12 +475,13 @@ impl<const OCCLUSION: bool> GpuCuller<OCCLUSION> {
     fn write_cull_set(
         &mut self,
         scene: &abi::CadrSceneView,
+        clusters: Option<&abi::CadrSceneClusters>,
         (view, view_offset): (vk::Buffer, u64),
     ) {
         let Some(commands) = &self.commands else {
             return;
         };
-        let buffers = [
+        let mut buffers = vec![
             buffer(&scene.cull_buffer),
             buffer(&scene.matrix_buffer),
             commands.raw(),
@@ -456,7 +491,17 @@ impl<const OCCLUSION: bool> GpuCuller<OCCLUSION> {
             self.visibility[NOW].raw(),
             self.pyramid.raw(),
         ];
-        let key = (buffers.map(|b| b.as_raw()), view_offset);
+        if let Some(clusters) = clusters {
+            buffers.extend([
+                buffer(&clusters.cluster_buffer),
+                buffer(&clusters.group_buffer),
+            ]);
+        }
+        let mut raw = [0u64; 10];
+        for (slot, b) in raw.iter_mut().zip(&buffers) {
+            *slot = b.as_raw();
+        }
+        let key = (raw, view_offset);
         if self.cull_written == Some(key) {
             return;
         }
@@ -497,6 +542,14 @@ impl<const OCCLUSION: bool> GpuCuller<OCCLUSION> {
 
     /// Records the cull dispatches of `phase` for every pass, in `mode`.
     fn dispatch_cull(&self, cull: &GpuCull<'_>, instances: u32, mode: u32) {
+        let back_faces_hidden = cull.back_faces_hidden();
+        let lod_error = cull.cluster_cull().map_or(0.0, |c| {
+            if c.lod_error.is_finite() {
+                c.lod_error.max(0.0)
+            } else {
+                0.0
+            }
+        });
         let device = &self.gpu.device;
         let command_buffer = cull.command_buffer();
         // SAFETY: recording outside rendering; the pipeline, layout and set are live.
@@ -533,6 +586,9 @@ impl<const OCCLUSION: bool> GpuCuller<OCCLUSION> {
                 writes_visibility: u32::from(index == 0),
                 pyramid_levels: self.pyramid_levels,
                 filter,
+                lod_error,
+                back_faces_hidden: back_faces_hidden.get(index).copied().unwrap_or(false),
+                command_capacity: self.capacity,
             };
             let constants = words(&[
                 dispatch.instance_count,
@@ -547,8 +603,11 @@ impl<const OCCLUSION: bool> GpuCuller<OCCLUSION> {
                 dispatch.filter.keep.section_cut,
                 dispatch.filter.exclude.mask,
                 dispatch.filter.exclude.value,
+                dispatch.lod_error.to_bits(),
+                u32::from(dispatch.back_faces_hidden),
+                dispatch.command_capacity,
             ]);
-            // SAFETY: recording; the constants fit the layout's 48 bytes.
+            // SAFETY: recording; the constants fit the layout's 60 bytes.
             unsafe {
                 device.cmd_push_constants(
                     command_buffer,
@@ -567,7 +626,7 @@ impl<const OCCLUSION: bool> GpuCuller<OCCLUSION> {
                         commands_offset: u64::from(dispatch.first_command) * COMMAND_BYTES,
                         count_buffer: self.counts.raw().as_raw(),
                         count_offset: slot as u64 * 4,
-                        max_draws: instances,
+                        max_draws: self.capacity,
                         stride: COMMAND_BYTES as u32,
                     },
                 );
@@ -707,7 +766,16 @@ impl<const OCCLUSION: bool> GpuCuller<OCCLUSION> {
     }
 }
 
-impl<const OCCLUSION: bool> GpuCulling for GpuCuller<OCCLUSION> {
+impl<const OCCLUSION: bool, const CLUSTERS: bool> GpuCulling for GpuCuller<OCCLUSION, CLUSTERS> {
+    const REQUIRED_EXTENSIONS: &'static [abi::CadrExtensionKind] = if CLUSTERS {
+        &[
+            abi::CADR_EXTENSION_SCENE_CLUSTERS,
+            abi::CADR_EXTENSION_CLUSTER_CULL,
+        ]
+    } else {
+        &[]
+    };
+
     fn phase_count(&self) -> u32 {
         self.phases()
     }
@@ -716,6 +784,19 @@ impl<const OCCLUSION: bool> GpuCulling for GpuCuller<OCCLUSION> {
         let scene = cull.scene().ok_or("no scene")?;
         let raw = cull.raw();
         let instances = scene.raw().instance_count;
+        let clusters = if CLUSTERS {
+            Some(
+                scene
+                    .clusters()
+                    .ok_or("the host passed no clusters (a host of ABI 1.14 or later does)")?,
+            )
+        } else {
+            None
+        };
+        // Each cluster of a candidate may need its own command; a part drawn whole needs one.
+        let commands = clusters.map_or(instances, |c| {
+            u32::try_from(c.candidate_clusters).unwrap_or(u32::MAX)
+        });
         let command_buffer = cull.command_buffer();
         let view = cull
             .view_buffer()
@@ -742,7 +823,7 @@ impl<const OCCLUSION: bool> GpuCulling for GpuCuller<OCCLUSION> {
                 ));
             }
             // New buffers are cleared first (nothing else uses them yet).
-            self.reserve(instances, command_buffer)?;
+            self.reserve((instances, commands), command_buffer)?;
             // The previous frame's reads of our buffers (indirect draws, culls, the visibility
             // copy) and those clears come before this frame's clears.
             barrier(
@@ -805,7 +886,7 @@ impl<const OCCLUSION: bool> GpuCulling for GpuCuller<OCCLUSION> {
                 transfer_to_compute.0,
                 transfer_to_compute.1,
             );
-            self.write_cull_set(scene.raw(), view);
+            self.write_cull_set(scene.raw(), clusters, view);
             let mode = if OCCLUSION {
                 MODE_LAST_VISIBLE
             } else {
@@ -814,7 +895,7 @@ impl<const OCCLUSION: bool> GpuCulling for GpuCuller<OCCLUSION> {
             self.dispatch_cull(cull, instances, mode);
         } else {
             self.build_pyramid(cull)?;
-            self.write_cull_set(scene.raw(), view);
+            self.write_cull_set(scene.raw(), clusters, view);
             self.dispatch_cull(cull, instances, MODE_NEWLY_VISIBLE);
             if cull.phase() + 1 == self.phases() {
                 self.keep_visibility(command_buffer);
@@ -850,7 +931,13 @@ impl<const OCCLUSION: bool> GpuCulling for GpuCuller<OCCLUSION> {
                 .map_or(0, u32::from_le_bytes)
         };
         abi::CadrStats {
-            draws: u64::from(read(TOTAL_COMMANDS)),
+            // A cluster culler's ranges are its clusters (and the parts its edge passes draw
+            // whole, one command each, which the cluster count leaves out).
+            draws: u64::from(read(if CLUSTERS {
+                TOTAL_CLUSTERS
+            } else {
+                TOTAL_COMMANDS
+            })),
             primitives: u64::from(read(TOTAL_TRIANGLES)),
             ..abi::CadrStats::default()
         }
@@ -858,6 +945,8 @@ impl<const OCCLUSION: bool> GpuCulling for GpuCuller<OCCLUSION> {
 }
 
 /// `gpu-frustum`.
-pub type GpuFrustum = GpuCuller<false>;
+pub type GpuFrustum = GpuCuller<false, false>;
 /// `gpu-occlusion`.
-pub type GpuOcclusion = GpuCuller<true>;
+pub type GpuOcclusion = GpuCuller<true, false>;
+/// `gpu-clusters`.
+pub type GpuClusters = GpuCuller<true, true>;

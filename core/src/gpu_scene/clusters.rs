@@ -1,0 +1,424 @@
+//! Clusters and their level-of-detail DAG, per part of a geometry, built with meshoptimizer's
+//! cluster LOD library (`meshopt::clod_build`, the same method as Nanite and vk_lod_clusters):
+//! the part's triangles are split into clusters of at most [`MAX_CLUSTER_TRIANGLES`]
+//! triangles and vertices; neighbouring clusters are grouped, each group simplified to half
+//! its triangles with its outer border locked, and split again, level after level, each group
+//! recording the error of its simplification (which only grows toward the coarse levels).
+//!
+//! The part's original clusters keep exactly its triangles: they are written back over the
+//! part's own index range, cluster after cluster, so every technique that draws the part whole
+//! draws the same triangles as before, in cluster order. The coarser clusters' indices go after
+//! the geometry's own indices and name the same vertices (simplification only removes them).
+
+use meshopt::{ClodCluster, ClodGroup, ClodMesh, VertexDataAdapter};
+
+use crate::scene::{Part, Vertex};
+use cadr_plugin_abi as abi;
+
+/// The most triangles (and vertices) in one cluster: within what mesh shaders emit on every
+/// device cadr runs on, and small enough for culling to pay.
+pub const MAX_CLUSTER_TRIANGLES: usize = 128;
+
+/// A cone cutoff no test passes: triangles that face too many ways (or a cluster whose cone
+/// could not be trusted) are never culled as back-facing.
+const NO_CONE: f32 = 2.0;
+
+/// A geometry's clusters, as the arenas hold them.
+#[derive(Debug, Default)]
+pub(super) struct GeometryClusters {
+    /// The geometry's triangle indices with each part's range reordered cluster by cluster.
+    pub(super) indices: Vec<u32>,
+    /// The coarser clusters' indices, which follow `indices` in the index arena.
+    pub(super) lod_indices: Vec<u32>,
+    /// Every part's clusters, the parts one after the other; `first_index` relative to the
+    /// geometry's first index, `group` relative to the geometry's first group.
+    pub(super) clusters: Vec<abi::CadrCluster>,
+    /// The DAGs' groups, the parts one after the other.
+    pub(super) groups: Vec<abi::CadrClusterGroup>,
+    /// Per part: its first cluster in `clusters` and how many it has.
+    pub(super) part_ranges: Vec<[u32; 2]>,
+}
+
+/// One part's DAG as `clod_build` hands it over, before it is laid out.
+#[derive(Default)]
+struct PartDag {
+    /// Per cluster: its indices (into the geometry's vertices), its group and refined group.
+    clusters: Vec<(Vec<u32>, u32, u32)>,
+    groups: Vec<abi::CadrClusterGroup>,
+}
+
+/// Builds the clusters of every part of a geometry. Parts whose ranges overlap another's, or
+/// that lie outside the indices, keep their order and are cut into consecutive runs of
+/// triangles without coarser levels (a scene that passed validation has neither).
+pub(super) fn build(vertices: &[Vertex], indices: &[u32], parts: &[Part]) -> GeometryClusters {
+    let mut out = GeometryClusters {
+        indices: indices.to_vec(),
+        ..GeometryClusters::default()
+    };
+    let bytes: &[u8] = bytemuck::cast_slice(vertices);
+    let adapter = VertexDataAdapter::new(bytes, std::mem::size_of::<Vertex>(), 0).ok();
+    let normals: Vec<f32> = vertices.iter().flat_map(|v| v.normal).collect();
+    let disjoint = parts_are_disjoint(parts, indices.len());
+    for part in parts {
+        let start = part.first_index as usize;
+        let range = start..start + part.index_count as usize;
+        let own = indices.get(range.clone()).unwrap_or(&[]);
+        let first_cluster = out.clusters.len() as u32;
+        let dag = match &adapter {
+            Some(adapter) if disjoint && !own.is_empty() && own.len() % 3 == 0 => {
+                part_dag(adapter, &normals, own)
+            }
+            _ => None,
+        };
+        match (dag, &adapter) {
+            (Some(dag), Some(adapter)) => lay_out(&mut out, adapter, dag, part.first_index),
+            (_, adapter) => runs_of_triangles(&mut out, adapter.as_ref(), own, part.first_index),
+        }
+        let count = out.clusters.len() as u32 - first_cluster;
+        for cluster in &mut out.clusters[first_cluster as usize..] {
+            cluster.part_clusters = count;
+        }
+        out.part_ranges.push([first_cluster, count]);
+    }
+    out
+}
+
+/// Whether the parts' index ranges lie within `index_count` and share no index.
+fn parts_are_disjoint(parts: &[Part], index_count: usize) -> bool {
+    let mut ranges: Vec<(usize, usize)> = parts
+        .iter()
+        .map(|p| {
+            let start = p.first_index as usize;
+            (start, start + p.index_count as usize)
+        })
+        .collect();
+    ranges.sort_unstable();
+    ranges.iter().all(|&(_, end)| end <= index_count)
+        && ranges.windows(2).all(|pair| pair[0].1 <= pair[1].0)
+}
+
+/// The DAG of one part (`indices`, a multiple of 3), or `None` when its original clusters do
+/// not hold exactly its triangles.
+fn part_dag(adapter: &VertexDataAdapter<'_>, normals: &[f32], indices: &[u32]) -> Option<PartDag> {
+    let mut mesh = ClodMesh::new(indices, adapter);
+    // Normals steer the simplification (a crease stays a crease) and their discontinuities
+    // (split vertices along hard edges) are kept as seams.
+    mesh.vertex_attributes = normals;
+    mesh.vertex_attributes_stride = 3 * std::mem::size_of::<f32>();
+    mesh.attribute_weights = &[0.5, 0.5, 0.5];
+    mesh.attribute_protect_mask = 0b111;
+    let mut config = meshopt::clod_default_config(MAX_CLUSTER_TRIANGLES);
+    // Where the careful simplification is stuck, the library may fall back to a sloppy one
+    // that ignores normals and seams: faceted CAD features (prisms, fins) came out as smooth
+    // blobs within the error bound. Stuck groups stay as they are instead.
+    config.simplify_fallback_sloppy = false;
+    let mut dag = PartDag::default();
+    meshopt::clod_build(
+        config,
+        &mesh,
+        |group: ClodGroup, clusters: &[ClodCluster<'_>]| {
+            let id = dag.groups.len() as u32;
+            let bounds = group.simplified;
+            dag.groups.push(abi::CadrClusterGroup {
+                sphere: [
+                    bounds.center[0],
+                    bounds.center[1],
+                    bounds.center[2],
+                    bounds.radius,
+                ],
+                error: if bounds.error.is_finite() {
+                    bounds.error.max(0.0)
+                } else {
+                    f32::MAX
+                },
+                depth: group.depth.max(0) as u32,
+                reserved: [0; 2],
+            });
+            for cluster in clusters {
+                let refined = u32::try_from(cluster.refined).unwrap_or(abi::CADR_CLUSTER_ORIGINAL);
+                dag.clusters.push((cluster.indices.to_vec(), id, refined));
+            }
+            id as i32
+        },
+    );
+    let original: usize = dag
+        .clusters
+        .iter()
+        .filter(|(_, _, refined)| *refined == abi::CADR_CLUSTER_ORIGINAL)
+        .map(|(cluster, _, _)| cluster.len())
+        .sum();
+    (original == indices.len()).then_some(dag)
+}
+
+/// The culling bounds and normal cone of the triangles `indices` (at most
+/// [`MAX_CLUSTER_TRIANGLES`]).
+fn cluster_bounds(adapter: Option<&VertexDataAdapter<'_>>, indices: &[u32]) -> abi::CadrCluster {
+    let Some(adapter) = adapter else {
+        return abi::CadrCluster {
+            cone_cutoff: NO_CONE,
+            ..abi::CadrCluster::default()
+        };
+    };
+    let bounds = meshopt::compute_cluster_bounds(indices, adapter);
+    let finite = bounds.cone_axis.iter().all(|a| a.is_finite()) && bounds.cone_cutoff.is_finite();
+    abi::CadrCluster {
+        // Rounding slack, as the parts' spheres have.
+        sphere: [
+            bounds.center[0],
+            bounds.center[1],
+            bounds.center[2],
+            bounds.radius * (1.0 + 1e-5),
+        ],
+        cone_apex: bounds.cone_apex,
+        cone_cutoff: if finite { bounds.cone_cutoff } else { NO_CONE },
+        cone_axis: bounds.cone_axis,
+        index_count: indices.len() as u32,
+        ..abi::CadrCluster::default()
+    }
+}
+
+/// Writes a part's DAG into `out`: its original clusters over the part's range (starting at
+/// `part_first`), the coarser ones after the geometry's indices.
+fn lay_out(
+    out: &mut GeometryClusters,
+    adapter: &VertexDataAdapter<'_>,
+    dag: PartDag,
+    part_first: u32,
+) {
+    let first_group = out.groups.len() as u32;
+    out.groups.extend(dag.groups);
+    let (original, coarser): (Vec<_>, Vec<_>) = dag
+        .clusters
+        .into_iter()
+        .partition(|(_, _, refined)| *refined == abi::CADR_CLUSTER_ORIGINAL);
+    let mut next = part_first as usize;
+    for (indices, group, _) in original {
+        out.indices[next..next + indices.len()].copy_from_slice(&indices);
+        out.clusters.push(abi::CadrCluster {
+            first_index: next as u32,
+            group: first_group + group,
+            refined: abi::CADR_CLUSTER_ORIGINAL,
+            ..cluster_bounds(Some(adapter), &indices)
+        });
+        next += indices.len();
+    }
+    for (indices, group, refined) in coarser {
+        let first = (out.indices.len() + out.lod_indices.len()) as u32;
+        out.clusters.push(abi::CadrCluster {
+            first_index: first,
+            group: first_group + group,
+            refined: first_group + refined,
+            ..cluster_bounds(Some(adapter), &indices)
+        });
+        out.lod_indices.extend_from_slice(&indices);
+    }
+}
+
+/// A part kept in its order: consecutive runs of [`MAX_CLUSTER_TRIANGLES`] triangles, each its
+/// own coarsest cluster (one terminal group for the part).
+fn runs_of_triangles(
+    out: &mut GeometryClusters,
+    adapter: Option<&VertexDataAdapter<'_>>,
+    indices: &[u32],
+    part_first: u32,
+) {
+    let group = out.groups.len() as u32;
+    out.groups.push(abi::CadrClusterGroup {
+        error: f32::MAX,
+        ..abi::CadrClusterGroup::default()
+    });
+    let whole = indices.len() - indices.len() % 3;
+    for (k, run) in indices[..whole]
+        .chunks(MAX_CLUSTER_TRIANGLES * 3)
+        .enumerate()
+    {
+        let in_range = adapter.filter(|a| run.iter().all(|&i| (i as usize) < a.vertex_count));
+        out.clusters.push(abi::CadrCluster {
+            first_index: part_first + (k * MAX_CLUSTER_TRIANGLES * 3) as u32,
+            group,
+            refined: abi::CADR_CLUSTER_ORIGINAL,
+            ..cluster_bounds(in_range, run)
+        });
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn sorted_triangles(indices: &[u32]) -> Vec<[u32; 3]> {
+        let mut triangles: Vec<[u32; 3]> = indices
+            .chunks_exact(3)
+            .map(|t| {
+                // The same triangle, whichever vertex it starts from.
+                let k = (0..3).min_by_key(|&k| t[k]).unwrap_or(0);
+                [t[k], t[(k + 1) % 3], t[(k + 2) % 3]]
+            })
+            .collect();
+        triangles.sort_unstable();
+        triangles
+    }
+
+    /// A smooth UV sphere of radius 1 at `center` (shared vertices and normals), appended to
+    /// `geometry` as one part.
+    fn add_sphere(geometry: &mut crate::scene::Geometry, segments: u32, center: [f32; 3]) {
+        let rings = segments / 2;
+        let base = geometry.vertices.len() as u32;
+        for r in 0..=rings {
+            let polar = std::f32::consts::PI * r as f32 / rings as f32;
+            for s in 0..=segments {
+                let azimuth = std::f32::consts::TAU * s as f32 / segments as f32;
+                let normal = [
+                    polar.sin() * azimuth.cos(),
+                    polar.cos(),
+                    polar.sin() * azimuth.sin(),
+                ];
+                let position = [0, 1, 2].map(|a| center[a] + normal[a]);
+                geometry.vertices.push(Vertex { position, normal });
+            }
+        }
+        let first_index = geometry.indices.len() as u32;
+        let row = segments + 1;
+        for r in 0..rings {
+            for s in 0..segments {
+                let a = base + r * row + s;
+                let (b, c, d) = (a + 1, a + row, a + row + 1);
+                geometry.indices.extend([a, b, c, b, d, c]);
+            }
+        }
+        geometry.parts.push(Part {
+            first_index,
+            index_count: geometry.indices.len() as u32 - first_index,
+            ..Part::default()
+        });
+    }
+
+    /// Two smooth spheres of thousands of triangles, one part each.
+    fn fine_geometry() -> crate::scene::Geometry {
+        let mut geometry = crate::scene::Geometry::default();
+        add_sphere(&mut geometry, 64, [0.0; 3]);
+        add_sphere(&mut geometry, 48, [4.0, 0.0, 0.0]);
+        geometry
+    }
+
+    #[test]
+    fn original_clusters_tile_each_part_with_its_own_triangles() {
+        let geometry = fine_geometry();
+        let built = build(&geometry.vertices, &geometry.indices, &geometry.parts);
+        assert_eq!(built.part_ranges.len(), geometry.parts.len());
+        for (part, &[first, count]) in geometry.parts.iter().zip(&built.part_ranges) {
+            let range = part.first_index as usize..(part.first_index + part.index_count) as usize;
+            assert_eq!(
+                sorted_triangles(&built.indices[range.clone()]),
+                sorted_triangles(&geometry.indices[range.clone()]),
+                "the same triangles, reordered"
+            );
+            let clusters = &built.clusters[first as usize..(first + count) as usize];
+            let mut next = part.first_index;
+            for cluster in clusters
+                .iter()
+                .filter(|c| c.refined == abi::CADR_CLUSTER_ORIGINAL)
+            {
+                assert_eq!(cluster.first_index, next, "original clusters tile the part");
+                assert!(cluster.index_count as usize <= MAX_CLUSTER_TRIANGLES * 3);
+                next += cluster.index_count;
+            }
+            assert_eq!(next, part.first_index + part.index_count);
+            assert!(clusters.iter().all(|c| c.part_clusters == count));
+            assert!(
+                clusters
+                    .iter()
+                    .any(|c| c.refined != abi::CADR_CLUSTER_ORIGINAL),
+                "a part of thousands of triangles has coarser levels"
+            );
+        }
+    }
+
+    #[test]
+    fn errors_grow_toward_the_coarse_levels_and_every_part_ends_in_a_terminal_group() {
+        let geometry = fine_geometry();
+        let built = build(&geometry.vertices, &geometry.indices, &geometry.parts);
+        for &[first, count] in &built.part_ranges {
+            let clusters = &built.clusters[first as usize..(first + count) as usize];
+            for cluster in clusters {
+                let own_group = &built.groups[cluster.group as usize];
+                if cluster.refined != abi::CADR_CLUSTER_ORIGINAL {
+                    let refined = &built.groups[cluster.refined as usize];
+                    assert!(refined.error <= own_group.error, "errors are monotonic");
+                    assert!(refined.depth < own_group.depth || own_group.error == f32::MAX);
+                    // The coarse cluster's indices name the part's vertices.
+                    let start = cluster.first_index as usize - built.indices.len();
+                    let lod = &built.lod_indices[start..start + cluster.index_count as usize];
+                    assert!(lod.iter().all(|&i| (i as usize) < geometry.vertices.len()));
+                }
+            }
+            assert!(
+                clusters
+                    .iter()
+                    .any(|c| built.groups[c.group as usize].error == f32::MAX),
+                "a part never vanishes: its coarsest clusters are always over any threshold"
+            );
+        }
+    }
+
+    #[test]
+    fn the_cones_cull_the_far_side_of_a_sphere_only() {
+        let mut geometry = crate::scene::Geometry::default();
+        add_sphere(&mut geometry, 64, [0.0; 3]);
+        let built = build(&geometry.vertices, &geometry.indices, &geometry.parts);
+        let original: Vec<_> = built
+            .clusters
+            .iter()
+            .filter(|c| c.refined == abi::CADR_CLUSTER_ORIGINAL)
+            .collect();
+        assert!(!original.is_empty());
+        // An eye far along +Z sees the +Z face and none of the faces pointing away.
+        let eye = [0.0f32, 0.0, 10.0];
+        let facing_away = |c: &abi::CadrCluster| {
+            let to_apex: Vec<f32> = (0..3).map(|a| c.cone_apex[a] - eye[a]).collect();
+            let length = to_apex.iter().map(|d| d * d).sum::<f32>().sqrt();
+            let dot: f32 = (0..3).map(|a| to_apex[a] / length * c.cone_axis[a]).sum();
+            dot >= c.cone_cutoff
+        };
+        let culled = original.iter().filter(|c| facing_away(c)).count();
+        assert!(
+            culled * 5 > original.len(),
+            "{culled} of {} clusters face away",
+            original.len()
+        );
+        assert!(
+            culled * 5 < original.len() * 3,
+            "{culled} of {} clusters face away",
+            original.len()
+        );
+        for cluster in original.iter().filter(|c| facing_away(c)) {
+            assert!(
+                cluster.sphere[2] < 0.5,
+                "a culled cluster lies on the far side"
+            );
+        }
+    }
+
+    #[test]
+    fn overlapping_parts_keep_their_order_in_runs() {
+        let geometry = fine_geometry();
+        let all = geometry.indices.len() as u32;
+        let parts = [
+            Part {
+                first_index: 0,
+                index_count: all,
+                ..Part::default()
+            },
+            Part {
+                first_index: 0,
+                index_count: 3 * 200,
+                ..Part::default()
+            },
+        ];
+        let built = build(&geometry.vertices, &geometry.indices, &parts);
+        assert_eq!(built.indices, geometry.indices, "nothing reordered");
+        assert!(built.lod_indices.is_empty());
+        let [_, second] = built.part_ranges[1];
+        assert_eq!(second, 2, "200 triangles in runs of 128");
+    }
+}

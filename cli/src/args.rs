@@ -539,6 +539,21 @@ pub struct BenchArgs {
     /// The gpu- cullers' sub-pixel threshold (CPU cullers ignore it).
     #[arg(long, value_name = "PX", value_parser = parse_min_pixels, allow_negative_numbers = true)]
     pub min_pixels: Option<f32>,
+    /// Level-of-detail thresholds of the gpu-clusters rows, in pixels (comma-separated: 0,1
+    /// measures each such row at full detail and at 1 px; default 1).
+    #[arg(long, value_name = "PX,PX", value_delimiter = ',', default_value = "1",
+          value_parser = parse_min_pixels, allow_negative_numbers = true)]
+    pub lod_error: Vec<f32>,
+    /// Measure gpu-occlusion and gpu-clusters over gen:fine of these tessellation details (at
+    /// --sweep-units units), to show how the GPU cost follows the scene's triangles.
+    #[arg(long, value_name = "D,D,...", value_delimiter = ',',
+          value_parser = clap::value_parser!(u32).range(1..=32),
+          conflicts_with_all = ["sweep", "sweep_parts"])]
+    pub sweep_detail: Option<Vec<u32>>,
+    /// Units of gen:fine in the --sweep-detail scenes.
+    #[arg(long, value_name = "N", default_value_t = 16,
+          value_parser = clap::value_parser!(u32).range(1..=1_000_000))]
+    pub sweep_units: u32,
     /// Record every frame instead of replaying unchanged ones.
     #[arg(long)]
     pub no_replay: bool,
@@ -605,6 +620,11 @@ impl BenchArgs {
     /// Whether this run is a sweep.
     pub fn sweeping(&self) -> bool {
         self.sweep || self.sweep_parts.is_some()
+    }
+
+    /// Whether a sweep over scene triangles was asked for.
+    pub fn sweeping_detail(&self) -> bool {
+        self.sweep_detail.is_some()
     }
 }
 

@@ -26,7 +26,7 @@ use crate::techniques::{load_registry, TechniqueSession};
 const DEFAULT_PATHS: [(&str, &str); 2] = [("per-geometry", "push"), ("arena", "ssbo-index")];
 
 /// What the sweep measures by default.
-const SWEEP_SET: [(&str, &str, &str); 7] = [
+pub(crate) const SWEEP_SET: [(&str, &str, &str); 7] = [
     ("per-geometry", "push", "individual"),
     ("per-geometry", "push", "groups"),
     ("per-geometry", "push", "individual-replay"),
@@ -38,8 +38,8 @@ const SWEEP_SET: [(&str, &str, &str); 7] = [
 
 /// Medians over the measured frames of one row.
 #[derive(Clone, Debug)]
-struct Row {
-    label: String,
+pub(crate) struct Row {
+    pub(crate) label: String,
     shade: &'static str,
     /// Samples per pixel of the colour pass (1: no MSAA).
     msaa: u32,
@@ -51,11 +51,11 @@ struct Row {
     dashed: bool,
     /// How highlighted parts were drawn.
     highlight_style: HighlightStyle,
-    cpu_us: f64,
+    pub(crate) cpu_us: f64,
     /// Of `cpu_us`, the median time spent handing the recording to the queue (the driver's
     /// submission call); the rest is cadr's own work.
     cpu_submit_us: f64,
-    gpu_us: Option<f64>,
+    pub(crate) gpu_us: Option<f64>,
     /// Moving nodes and bringing the tree and GPU scene up to date.
     scene_update_us: f64,
     /// Median bytes uploaded per frame.
@@ -65,7 +65,11 @@ struct Row {
     /// Measured frames that resubmitted the last recording, and frames measured.
     replayed: (usize, usize),
     /// The first measured frame's counters.
-    stats: FrameStats,
+    pub(crate) stats: FrameStats,
+    /// The level-of-detail threshold of a cluster culler's row (none for other rows).
+    pub(crate) lod_error: Option<f32>,
+    /// Bytes the GPU scene keeps resident.
+    resident_bytes: u64,
 }
 
 /// What one row measured: medians of CPU, GPU, scene update and upload, and the first
@@ -145,9 +149,19 @@ impl Row {
             bytes_uploaded: measured.bytes_uploaded,
             replayed: measured.replayed,
             stats: measured.first,
+            lod_error: None,
+            resident_bytes: 0,
         }
     }
+
+    /// Clusters the row drew: a cluster culler's ranges.
+    fn clusters_drawn(&self) -> Option<u64> {
+        self.lod_error.map(|_| self.stats.draws)
+    }
 }
+
+/// The culler that draws clusters, whose rows are measured per level-of-detail threshold.
+const CLUSTER_CULLER: &str = "gpu-clusters";
 
 /// The combinations to measure: every supported one with `--all`; those the options name
 /// (each option a comma-separated list, others defaulting to every technique); or the default
@@ -241,11 +255,11 @@ fn selection(args: &BenchArgs, techniques: &Techniques) -> Result<Vec<Combinatio
         .collect())
 }
 
-struct Bench {
-    device: Arc<Device>,
+pub(crate) struct Bench {
+    pub(crate) device: Arc<Device>,
     registry: Arc<PluginRegistry>,
     size: Size,
-    frames: usize,
+    pub(crate) frames: usize,
     motion: Motion,
     /// The `gpu-` cullers' sub-pixel threshold (`--min-pixels`; 0: off).
     min_pixels: f32,
@@ -253,17 +267,40 @@ struct Bench {
     frame_replay: bool,
     /// The section every row cuts the scene with (`--section`, `--caps`, `--no-caps`,
     /// `--hatch`).
-    section: Section,
+    pub(crate) section: Section,
+    /// The level-of-detail thresholds cluster rows are measured at (`--lod-error`).
+    lod_errors: Vec<f32>,
+}
+
+/// Each combination once, a cluster culler's once per level-of-detail threshold.
+fn with_lod_errors<'c>(
+    combinations: &'c [Combination],
+    lod_errors: &[f32],
+) -> Vec<(&'c Combination, Option<f32>)> {
+    combinations
+        .iter()
+        .flat_map(|combination| {
+            if combination.culling == CLUSTER_CULLER {
+                lod_errors
+                    .iter()
+                    .map(|&pixels| (combination, Some(pixels)))
+                    .collect::<Vec<_>>()
+            } else {
+                vec![(combination, None)]
+            }
+        })
+        .collect()
 }
 
 impl Bench {
-    /// Measures the baseline and `combinations` (per shade mode) on `scene`.
-    fn run(
+    /// Measures the baseline (when `with_baseline`) and `combinations` (per shade mode) on
+    /// `scene`; the first row is the reference of the speedups.
+    pub(crate) fn run(
         &self,
         scene: &Scene,
         combinations: Option<&[Combination]>,
         args: &BenchArgs,
-        quiet: bool,
+        (quiet, with_baseline): (bool, bool),
     ) -> Result<(SceneStats, Vec<Row>), String> {
         let flat = flatten(scene).map_err(|e| e.to_string())?;
         let stats = SceneStats::new(scene, &flat);
@@ -328,28 +365,36 @@ impl Bench {
             .iter()
             .flat_map(|s| modes.iter().filter(|&&mode| measured_in(s, mode)))
             .count()
-            * combinations.len();
-        let mut steps = Steps::new(1 + rows_to_measure as u64, &format!("bench {scene_name}"));
+            * with_lod_errors(&combinations, &self.lod_errors).len();
+        let mut steps = Steps::new(
+            u64::from(with_baseline) + rows_to_measure as u64,
+            &format!("bench {scene_name}"),
+        );
         let show = |steps: &Steps, line: String| {
             if !quiet {
                 steps.println(&line);
             }
         };
         let view = (&stats.bounds, aspect);
-        steps.start("baseline");
-        session.choose(&Combination::built_in(), ShadeMode::Solid)?;
-        // The reference records every frame, as the seeds' baseline does.
-        session.techniques().set_frame_replay(false);
-        let measured = measure(self.frames, |frame| {
-            session.render_moving(&motion, view, frame)
-        })?;
-        let transforms = session.techniques().transforms();
-        let baseline = Row::new("baseline (built-in)".into(), "solid", transforms, measured);
-        session.techniques().set_frame_replay(self.frame_replay);
         show(&steps, header_line());
-        show(&steps, row_line(&baseline, baseline.cpu_us));
-        steps.done();
-        rows.push(baseline);
+        if with_baseline {
+            steps.start("baseline");
+            session.choose(&Combination::built_in(), ShadeMode::Solid)?;
+            // The reference records every frame, as the seeds' baseline does.
+            session.techniques().set_frame_replay(false);
+            let measured = measure(self.frames, |frame| {
+                session.render_moving(&motion, view, frame)
+            })?;
+            let transforms = session.techniques().transforms();
+            let baseline = Row {
+                resident_bytes: session.resident_bytes(),
+                ..Row::new("baseline (built-in)".into(), "solid", transforms, measured)
+            };
+            session.techniques().set_frame_replay(self.frame_replay);
+            show(&steps, row_line(&baseline, baseline.cpu_us));
+            steps.done();
+            rows.push(baseline);
+        }
         for setting in &settings {
             session.set_msaa(setting.msaa)?;
             let renderer = session.view.renderer_mut();
@@ -359,7 +404,7 @@ impl Bench {
                 .and_then(|()| renderer.set_highlight_style(setting.highlight_style))
                 .map_err(|e| e.to_string())?;
             for &mode in modes.iter().filter(|&&mode| measured_in(setting, mode)) {
-                for combination in &combinations {
+                for (combination, lod_error) in with_lod_errors(&combinations, &self.lod_errors) {
                     steps.start(&format!(
                         "{combination} [{}, {}x]",
                         mode.name(),
@@ -370,6 +415,12 @@ impl Bench {
                         .techniques()
                         .set_min_pixels(self.min_pixels)
                         .map_err(|e| e.to_string())?;
+                    if let Some(pixels) = lod_error {
+                        session
+                            .techniques()
+                            .set_lod_error(pixels)
+                            .map_err(|e| e.to_string())?;
+                    }
                     session.techniques().set_dashed_hidden_lines(setting.dashed);
                     let measured = measure(self.frames, |frame| {
                         session.render_moving(&motion, view, frame)
@@ -381,9 +432,12 @@ impl Bench {
                         silhouettes: setting.silhouettes,
                         dashed: setting.dashed && mode == ShadeMode::HiddenLine,
                         highlight_style: setting.highlight_style,
+                        lod_error,
+                        resident_bytes: session.resident_bytes(),
                         ..Row::new(combination.to_string(), mode.name(), transforms, measured)
                     };
-                    show(&steps, row_line(&row, rows[0].cpu_us));
+                    let reference = rows.first().map_or(row.cpu_us, |first| first.cpu_us);
+                    show(&steps, row_line(&row, reference));
                     steps.done();
                     rows.push(row);
                 }
@@ -394,7 +448,7 @@ impl Bench {
 }
 
 /// The display mode of a row, with its MSAA level when it has one ("edges, 4x").
-fn row_mode(row: &Row) -> String {
+pub(crate) fn row_mode(row: &Row) -> String {
     let mut mode = shade_label(row);
     if row.msaa > 1 {
         mode += &format!(", {}x", row.msaa);
@@ -427,6 +481,9 @@ fn shade_label(row: &Row) -> String {
     }
     if !row.silhouettes && ShadeMode::parse(row.shade).is_some_and(ShadeMode::draws_silhouettes) {
         label += "-sil";
+    }
+    if let Some(pixels) = row.lod_error {
+        label += &format!(" lod {pixels}px");
     }
     label
 }
@@ -472,7 +529,7 @@ fn row_line(row: &Row, baseline_cpu: f64) -> String {
         s.pipeline_binds,
         s.vertex_binds,
         s.parameter_updates,
-        s.triangles,
+        s.triangles_rasterized,
         baseline_cpu / row.cpu_us.max(0.001)
     )
 }
@@ -500,11 +557,17 @@ fn row_json(row: &Row, baseline_cpu: f64) -> serde_json::Value {
         "vertex_binds": s.vertex_binds,
         "parameter_binds": s.parameter_updates,
         "triangles": s.triangles,
+        "triangles_rasterized": s.triangles_rasterized,
+        "clusters_drawn": row.clusters_drawn(),
+        "lod_error": row.lod_error,
+        "resident_bytes": row.resident_bytes,
+        // Nothing is streamed yet: every cluster stays resident.
+        "streamed_bytes": 0,
         "speedup": baseline_cpu / row.cpu_us.max(0.001),
     })
 }
 
-fn stats_json(name: &str, stats: &SceneStats) -> serde_json::Value {
+pub(crate) fn stats_json(name: &str, stats: &SceneStats) -> serde_json::Value {
     serde_json::json!({
         "name": name,
         "nodes": stats.nodes,
@@ -516,14 +579,14 @@ fn stats_json(name: &str, stats: &SceneStats) -> serde_json::Value {
     })
 }
 
-fn rows_json(rows: &[Row]) -> Vec<serde_json::Value> {
+pub(crate) fn rows_json(rows: &[Row]) -> Vec<serde_json::Value> {
     let baseline_cpu = rows.first().map_or(1.0, |r| r.cpu_us);
     rows.iter().map(|r| row_json(r, baseline_cpu)).collect()
 }
 
 /// The section of every row: its planes (unit normals, `[nx, ny, nz, d]`), whether cuts are
 /// capped and hatched; null without planes.
-fn section_json(section: &Section) -> serde_json::Value {
+pub(crate) fn section_json(section: &Section) -> serde_json::Value {
     if section.planes().is_empty() {
         return serde_json::Value::Null;
     }
@@ -544,9 +607,14 @@ pub fn bench(args: &BenchArgs) -> Result<(), String> {
     }
     let motion = Motion::new(args.camera, args.animate);
     let sweep = args.sweeping();
-    let frames = args
-        .frames
-        .map_or(if sweep { 5 } else { 10 }, |n| n as usize);
+    let frames = args.frames.map_or(
+        if sweep || args.sweeping_detail() {
+            5
+        } else {
+            10
+        },
+        |n| n as usize,
+    );
     let size = args.size;
     let device = crate::open_device(&args.validation)?;
     let offered = device.sample_counts();
@@ -567,6 +635,7 @@ pub fn bench(args: &BenchArgs) -> Result<(), String> {
         min_pixels: args.min_pixels.unwrap_or(0.0),
         frame_replay: !args.no_replay,
         section,
+        lod_errors: args.lod_error.clone(),
     };
     println!(
         "device: {} — {} measured frames after 2 warm-up frames, {}x{}, medians; camera {}, {} animated nodes{}{}{}",
@@ -589,12 +658,14 @@ pub fn bench(args: &BenchArgs) -> Result<(), String> {
             format!("; highlighted: {}", args.highlight.join(", "))
         },
     );
-    let json = if sweep {
-        run_sweep(&bench, args)?
+    let json = if let Some(details) = &args.sweep_detail {
+        crate::bench_sweep::run_detail_sweep(&bench, args, details)?
+    } else if sweep {
+        crate::bench_sweep::run_sweep(&bench, args)?
     } else {
         let name = args.scene.as_str();
         let scene = crate::load_scene(name)?;
-        let (stats, rows) = bench.run(&scene, None, args, false)?;
+        let (stats, rows) = bench.run(&scene, None, args, (false, true))?;
         println!(
             "scene: {name}: {} parts, {} triangles, {} materials, {} geometries",
             stats.instances, stats.triangles, stats.materials, stats.geometries
@@ -649,87 +720,4 @@ pub fn bench(args: &BenchArgs) -> Result<(), String> {
         return Err(format!("{errors} Vulkan validation errors"));
     }
     Ok(())
-}
-
-/// Measures the sweep set over gen:grid scenes of growing size.
-fn run_sweep(bench: &Bench, args: &BenchArgs) -> Result<serde_json::Value, String> {
-    let parts: Vec<u64> = args
-        .sweep_parts
-        .clone()
-        .unwrap_or_else(|| vec![10_000, 100_000, 1_000_000]);
-    let combinations: Vec<Combination> = SWEEP_SET
-        .iter()
-        .map(|&(vertex, parameters, submission)| Combination {
-            vertex: vertex.into(),
-            parameters: parameters.into(),
-            submission: submission.into(),
-            culling: "none".into(),
-            ..Combination::built_in()
-        })
-        .collect();
-    let mut columns: Vec<(u64, SceneStats, Vec<Row>)> = Vec::new();
-    for &n in &parts {
-        let name = format!("gen:grid:parts={n}");
-        println!("measuring {name} ...");
-        let scene = crate::load_scene(&name)?;
-        let (stats, rows) = bench.run(&scene, Some(&combinations), args, true)?;
-        columns.push((n, stats, rows));
-    }
-    let Some((_, _, first_rows)) = columns.first() else {
-        return Err("no sweep sizes".into());
-    };
-    print!(
-        "{:<58}",
-        "CPU µs per frame (vertex / params / submit / cull)"
-    );
-    for (n, _, _) in &columns {
-        print!(" {:>12}", format!("{n} parts"));
-    }
-    println!(" {:>10}", "last/first");
-    for (i, row) in first_rows.iter().enumerate() {
-        print!("{:<58}", format!("{} [{}]", row.label, row_mode(row)));
-        for (_, _, rows) in &columns {
-            print!(" {:>12.1}", rows[i].cpu_us);
-        }
-        let (first, last) = (
-            columns[0].2[i].cpu_us,
-            columns[columns.len() - 1].2[i].cpu_us,
-        );
-        println!(" {:>9.2}x", last / first.max(0.001));
-    }
-    if let Some(path) = &args.plot {
-        let series: Vec<crate::plot::Series> = first_rows
-            .iter()
-            .enumerate()
-            .map(|(i, row)| crate::plot::Series {
-                label: format!("{} [{}]", row.label, row_mode(row)),
-                points: columns
-                    .iter()
-                    .map(|(n, _, rows)| (*n, rows[i].cpu_us))
-                    .collect(),
-            })
-            .collect();
-        let title = format!(
-            "gen:grid sweep on {} — CPU µs per frame",
-            bench.device.adapter().name
-        );
-        crate::plot::lines(path, &title, &series)?;
-        println!("wrote {}", path.display());
-    }
-    let sizes: Vec<serde_json::Value> = columns
-        .iter()
-        .map(|(n, stats, rows)| {
-            serde_json::json!({
-                "parts": n,
-                "scene": stats_json(&format!("gen:grid:parts={n}"), stats),
-                "rows": rows_json(rows),
-            })
-        })
-        .collect();
-    Ok(serde_json::json!({
-        "device": bench.device.adapter().name,
-        "frames": bench.frames,
-        "section": section_json(&bench.section),
-        "sweep": sizes,
-    }))
 }

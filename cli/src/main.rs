@@ -2,6 +2,7 @@
 
 mod args;
 mod bench;
+mod bench_sweep;
 mod bench_tree;
 mod motion;
 mod pick;

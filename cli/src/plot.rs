@@ -92,6 +92,8 @@ enum Chart<'a> {
     /// One line per technique over scene sizes.
     Lines {
         title: &'a str,
+        /// The x and y axes' names.
+        axes: (&'a str, &'a str),
         series: &'a [Series],
     },
 }
@@ -103,9 +105,23 @@ pub fn bars(path: &Path, title: &str, rows: &[(String, f64)]) -> Result<(), Stri
     write(path, (1400, height), &Chart::Bars { title, rows })
 }
 
-/// Writes a sweep as lines of CPU µs per frame against scene size (both log scales).
-pub fn lines(path: &Path, title: &str, series: &[Series]) -> Result<(), String> {
-    write(path, (1100, 700), &Chart::Lines { title, series })
+/// Writes a sweep as lines of a cost against scene size (both log scales), the axes named
+/// by `axes` (x, y; "(log scale)" is added).
+pub fn lines(
+    path: &Path,
+    title: &str,
+    axes: (&str, &str),
+    series: &[Series],
+) -> Result<(), String> {
+    write(
+        path,
+        (1100, 700),
+        &Chart::Lines {
+            title,
+            axes,
+            series,
+        },
+    )
 }
 
 fn write(path: &Path, size: (u32, u32), chart: &Chart<'_>) -> Result<(), String> {
@@ -206,7 +222,11 @@ where
                 }))
                 .map_err(err)?;
         }
-        Chart::Lines { title, series } => {
+        Chart::Lines {
+            title,
+            axes,
+            series,
+        } => {
             let x_range = log_range(
                 series
                     .iter()
@@ -222,8 +242,8 @@ where
                 .map_err(err)?;
             chart
                 .configure_mesh()
-                .x_desc("parts (log scale)")
-                .y_desc("CPU µs per frame (log scale)")
+                .x_desc(format!("{} (log scale)", axes.0))
+                .y_desc(format!("{} (log scale)", axes.1))
                 .label_style(("sans-serif", 13))
                 .draw()
                 .map_err(err)?;

@@ -178,6 +178,11 @@ impl TechniqueSession {
             .map_err(|e| e.to_string())
     }
 
+    /// Bytes the GPU scene keeps resident (0 before it is built).
+    pub fn resident_bytes(&self) -> u64 {
+        self.view.scene().map_or(0, |scene| scene.resident_bytes())
+    }
+
     /// Sets the level-of-detail threshold (`--lod-error`) of a cluster culler; refused with a
     /// culler that draws every part whole (it would be ignored).
     pub fn set_lod_error(&mut self, lod_error: Option<f32>) -> Result<(), String> {

@@ -1423,3 +1423,104 @@ fn the_gpu_benchmark_script_dry_runs_and_writes_its_files() {
     }
     std::fs::remove_dir_all(&out).unwrap();
 }
+
+/// `bench` measures gpu-clusters once per `--lod-error`, its JSON rows say what the GPU
+/// rasterised, how many clusters and what stays resident; `--sweep-detail` measures the GPU
+/// cost over gen:fine of growing tessellation; `--lod-error` without a cluster culler is
+/// refused.
+#[test]
+fn bench_measures_clusters_per_lod_error_and_sweeps_the_detail() {
+    let dir = std::env::temp_dir().join(format!("cadr-cli-clusters-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let json_path = dir.join("b.json");
+    let scene_wide = [
+        "--vertex",
+        "arena",
+        "--params",
+        "ssbo-index",
+        "--submit",
+        "individual-indirect-count",
+    ];
+    let mut args = vec![
+        "bench",
+        "gen:fine:units=2,detail=1",
+        "--frames",
+        "2",
+        "--size",
+        "160x120",
+        "--cull",
+        "gpu-occlusion,gpu-clusters",
+        "--lod-error",
+        "0,1",
+        "--json",
+        json_path.to_str().unwrap(),
+    ];
+    args.extend_from_slice(&scene_wide);
+    let output = cadr(&args);
+    assert!(output.status.success(), "{}", stderr(&output));
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&json_path).unwrap()).unwrap();
+    let rows = json["rows"].as_array().unwrap();
+    assert_eq!(rows.len(), 4, "baseline, per part, clusters at 0 and 1 px");
+    let rasterized = |row: &serde_json::Value| row["triangles_rasterized"].as_u64().unwrap();
+    let (parts, full, lod) = (&rows[1], &rows[2], &rows[3]);
+    assert_eq!(parts["clusters_drawn"], serde_json::Value::Null, "{parts}");
+    assert_eq!(full["lod_error"], 0.0);
+    assert_eq!(lod["lod_error"], 1.0);
+    assert!(full["clusters_drawn"].as_u64().unwrap() > lod["clusters_drawn"].as_u64().unwrap());
+    assert!(rasterized(full) <= rasterized(parts), "{full} {parts}");
+    assert!(rasterized(lod) * 2 < rasterized(full), "{lod} {full}");
+    for row in rows {
+        assert!(row["resident_bytes"].as_u64().unwrap() > 0, "{row}");
+        assert_eq!(row["streamed_bytes"], 0, "{row}");
+    }
+    assert!(
+        stdout(&output).contains("solid lod 1px"),
+        "{}",
+        stdout(&output)
+    );
+
+    let plot = dir.join("d.svg");
+    let output = cadr(&[
+        "bench",
+        "--sweep-detail",
+        "1,2",
+        "--sweep-units",
+        "1",
+        "--frames",
+        "1",
+        "--size",
+        "64x48",
+        "--plot",
+        plot.to_str().unwrap(),
+        "--json",
+        json_path.to_str().unwrap(),
+    ]);
+    assert!(output.status.success(), "{}", stderr(&output));
+    let text = std::fs::read_to_string(&plot).unwrap();
+    assert!(text.contains("scene triangles (log scale)") && text.contains("gpu-clusters"));
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&json_path).unwrap()).unwrap();
+    let sizes = json["detail_sweep"].as_array().unwrap();
+    assert_eq!(sizes.len(), 2);
+    assert!(
+        sizes[1]["scene"]["triangles"].as_u64() > sizes[0]["scene"]["triangles"].as_u64(),
+        "{json}"
+    );
+
+    let output = cadr(&[
+        "render",
+        "gen:demo",
+        "--cull",
+        "frustum",
+        "--lod-error",
+        "2",
+    ]);
+    assert_eq!(output.status.code(), Some(1));
+    assert!(
+        stderr(&output).contains("--lod-error chooses the level of detail of the clusters"),
+        "{}",
+        stderr(&output)
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -191,6 +191,7 @@ impl Renderer {
             let drawn = culler.counts();
             stats.draws = drawn.draws;
             stats.triangles = drawn.primitives;
+            stats.triangles_rasterized = drawn.primitives;
         }
         Ok(stats)
     }
@@ -335,6 +336,7 @@ fn count_recorded(stats: &mut FrameStats, counters: &abi::CadrStats) {
     stats.pipeline_binds = counters.pipeline_binds;
     stats.vertex_binds = counters.vertex_binds;
     stats.parameter_updates = counters.parameter_binds;
+    stats.triangles_rasterized = counters.primitives;
 }
 
 /// What every technique call of one frame's recording shares: the pipelines and pass filters

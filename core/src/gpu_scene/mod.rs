@@ -232,6 +232,8 @@ struct SceneCounts {
     /// whether an instance changed since they were.
     candidate_clusters: u64,
     clusters_stale: bool,
+    /// Bytes of the textures as last built.
+    texture_bytes: u64,
 }
 
 impl GpuScene {
@@ -312,6 +314,7 @@ impl GpuScene {
                 last_touched: 0,
                 candidate_clusters: 0,
                 clusters_stale: true,
+                texture_bytes,
             },
             buffer_refs: Default::default(),
             clusters_extension: ClustersExtension(abi::CadrSceneClusters {
@@ -638,6 +641,31 @@ impl GpuScene {
         Ok(())
     }
 
+    /// Bytes the scene keeps on the GPU: the geometry arenas (clusters included), the
+    /// instance, matrix and material arrays with their spare room, and the textures.
+    pub fn resident_bytes(&self) -> u64 {
+        let arenas = &self.arenas;
+        let gpu = &self.gpu;
+        [
+            &arenas.vertices,
+            &arenas.indices,
+            &arenas.wire_indices,
+            &arenas.attributes,
+            &arenas.clusters,
+            &arenas.groups,
+            &gpu.matrices.buffer,
+            &gpu.materials.buffer,
+            &gpu.material_textures.buffer,
+            &gpu.records.buffer,
+            &gpu.cull_entries.buffer,
+            &gpu.locals.buffer,
+        ]
+        .iter()
+        .map(|buffer| buffer.size())
+        .sum::<u64>()
+            + self.counts.texture_bytes
+    }
+
     /// Where world matrices of moved subtrees are computed now.
     pub fn transforms(&self) -> Transforms {
         self.moves.transforms
@@ -658,6 +686,7 @@ impl GpuScene {
     /// Builds the textures again from the graph's (see [`SceneTextures::rebuild`]).
     fn rebuild_textures(&mut self, graph: &SceneGraph) -> RenderResult<()> {
         let bytes = self.textures.rebuild(&self.device, graph)?;
+        self.counts.texture_bytes = bytes;
         self.counts.last_upload.texture_bytes += bytes;
         self.counts.last_upload.bytes += bytes;
         Ok(())

@@ -15,8 +15,13 @@ pub struct FrameStats {
     pub draw_calls: u64,
     /// Parts or index ranges those calls drew.
     pub draws: u64,
-    /// Triangles drawn.
+    /// Triangles drawn: of the parts drawn, once each; with a GPU culler, what it let through
+    /// in every surface pass.
     pub triangles: u64,
+    /// Triangles the surface passes handed to the rasteriser, each pass counted (edge passes
+    /// draw lines, not counted), the same way for every culler: what submissions recorded
+    /// from their lists, or what a GPU culler let through.
+    pub triangles_rasterized: u64,
     /// Pipeline binds.
     pub pipeline_binds: u64,
     /// Vertex/index buffer binds.

@@ -316,6 +316,13 @@ impl<const S: u8, const A: u8, const M: u8> Submit<S, A, M> {
         let chunked = generated.begin_frame(&executions)?;
         let from_list = record.gpu_draws().is_none();
         for (execution, chunks) in executions.iter().zip(chunked) {
+            let triangles = if from_list {
+                self.pass_lists.get(execution.pass).map_or(0, |&kept| {
+                    record::surface_triangles(&passes[execution.pass], &self.kept[kept].list.ranges)
+                })
+            } else {
+                0
+            };
             record::bind_pass(
                 &self.gpu,
                 record,
@@ -331,6 +338,7 @@ impl<const S: u8, const A: u8, const M: u8> Submit<S, A, M> {
                 s.draw_calls += calls;
                 if from_list {
                     s.draws += sequences;
+                    s.primitives += triangles;
                 }
             });
         }

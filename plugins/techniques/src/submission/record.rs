@@ -116,9 +116,11 @@ impl Recorder<'_> {
                         );
                     }
                 }
+                let triangles = surface_triangles(pass, &list.ranges);
                 count(&|s| {
                     s.draw_calls += 1;
                     s.draws += u64::from(draws.indirect_draws);
+                    s.primitives += triangles;
                 });
                 continue;
             }
@@ -158,9 +160,11 @@ impl Recorder<'_> {
                                 )
                             };
                         }
+                        let triangles = surface_triangles(pass, ranges);
                         count(&|s| {
                             s.draw_calls += 1;
                             s.draws += ranges.len() as u64;
+                            s.primitives += triangles;
                         });
                     }
                     _ => {
@@ -182,15 +186,27 @@ impl Recorder<'_> {
                                 )
                             };
                         }
+                        let triangles = surface_triangles(pass, ranges);
                         count(&|s| {
                             s.draw_calls += ranges.len() as u64;
                             s.draws += ranges.len() as u64;
+                            s.primitives += triangles;
                         });
                     }
                 }
             }
         }
     }
+}
+
+/// The triangles `ranges` draw in `pass`: none in an edge pass (lines), each range's third
+/// otherwise. Counted where the ranges are recorded, so that a frame's triangles are those
+/// its surface passes rasterise, as GPU cullers count them.
+pub fn surface_triangles(pass: &abi::CadrPass, ranges: &[super::lists::Range]) -> u64 {
+    if pass.kind == abi::CADR_PASS_EDGES {
+        return 0;
+    }
+    ranges.iter().map(|r| u64::from(r.count / 3)).sum()
 }
 
 /// Binds what every draw of `pass` needs into `command_buffer` (the record's, or a worker's

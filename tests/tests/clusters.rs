@@ -8,8 +8,10 @@ use std::sync::Arc;
 
 use cadr_core::generate::{generate, GeneratorSpec};
 use cadr_core::graph::SceneGraph;
+use cadr_core::render::pick::PixelRect;
 use cadr_core::render::{Camera, FrameStats, DEFAULT_DIRECTION};
 use cadr_core::scene::{flatten, Aabb, Scene};
+use cadr_core::technique::ShadeMode;
 use cadr_core::tree::SceneTree;
 use cadr_core::view::View;
 use cadr_core::vk::Device;
@@ -50,9 +52,7 @@ impl Drawing {
         lod_error: f32,
         camera: &Camera,
     ) -> (image::RgbaImage, FrameStats) {
-        let combination = scene_wide("individual-indirect-count", culler);
-        self.view.techniques_mut().select(&combination).unwrap();
-        self.view.techniques_mut().set_lod_error(lod_error).unwrap();
+        self.choose(culler, lod_error);
         let mut stats = None;
         for _ in 0..3 {
             stats = Some(
@@ -62,6 +62,21 @@ impl Drawing {
             );
         }
         (self.view.renderer().read_rgba8().unwrap(), stats.unwrap())
+    }
+
+    fn choose(&mut self, culler: &str, lod_error: f32) {
+        let combination = scene_wide("individual-indirect-count", culler);
+        self.view.techniques_mut().select(&combination).unwrap();
+        self.view.techniques_mut().set_lod_error(lod_error).unwrap();
+    }
+
+    /// The instance picked at pixel (`x`, `y`), if any.
+    fn pick(&mut self, camera: &Camera, (x, y): (u32, u32)) -> Option<u32> {
+        let hits = self
+            .view
+            .pick(&self.graph, &mut self.tree, camera, PixelRect::pixel(x, y))
+            .unwrap();
+        hits.first().map(|hit| hit.instance)
     }
 }
 
@@ -101,6 +116,83 @@ fn at_full_detail_clusters_draw_the_per_part_picture_without_back_faces() {
             assert_eq!(fewer, 4, "the cones cull over a tenth in every frame");
         }
     }
+    assert_no_validation_errors(&device);
+}
+
+#[test]
+fn every_display_mode_draws_its_per_part_picture_with_clusters_at_full_detail() {
+    // Back faces go only in passes that hide them: the translucent surfaces of X-ray, the
+    // silhouettes and the section caps keep theirs.
+    let device = test_device();
+    let scene = fine(2, 1);
+    let bounds = bounds(&scene);
+    let camera = Camera::orbit(&bounds, aspect(), 0.15, 1.3);
+    let mut drawing = Drawing::new(&device, &scene);
+    let mut section = cadr_core::render::Section::none();
+    section
+        .set_planes(&[glam::DVec4::new(1.0, 0.0, 0.0, -bounds.center().x)])
+        .unwrap();
+    for cut in [false, true] {
+        if cut {
+            drawing.view.set_section(section.clone());
+        }
+        for mode in ShadeMode::ALL {
+            drawing.view.techniques_mut().set_shade_mode(mode).unwrap();
+            let (reference, _) = drawing.draw("gpu-occlusion", 0.0, &camera);
+            drawing.view.techniques_mut().set_shade_mode(mode).unwrap();
+            let (image, _) = drawing.draw("gpu-clusters", 0.0, &camera);
+            let difference = compare(&image, &reference).unwrap();
+            assert!(
+                difference.within(SAME_PICTURE),
+                "{} (cut {cut}): {difference:?}",
+                mode.name()
+            );
+        }
+    }
+    drop(drawing);
+    assert_no_validation_errors(&device);
+}
+
+#[test]
+fn picking_finds_the_part_drawn_at_every_pixel_of_a_grid() {
+    let device = test_device();
+    let scene = fine(1, 2);
+    let bounds = bounds(&scene);
+    let camera = Camera::fit(&bounds, aspect(), DEFAULT_DIRECTION);
+    let mut drawing = Drawing::new(&device, &scene);
+    // Over the middle of the view, where the unit is.
+    let grid: Vec<(u32, u32)> = (0..10)
+        .flat_map(|i| {
+            (0..7).map(move |j| (SIZE.0 / 4 + i * SIZE.0 / 20, SIZE.1 / 4 + j * SIZE.1 / 14))
+        })
+        .collect();
+    drawing.choose("gpu-clusters", 0.0);
+    // Pixels inside a part at full detail: the part there is also the part two pixels away
+    // on every side (a simplified outline may move by the threshold, a pixel).
+    let mut inside: Vec<((u32, u32), Option<u32>)> = Vec::new();
+    for &(x, y) in &grid {
+        let part = drawing.pick(&camera, (x, y));
+        if part.is_none() {
+            continue;
+        }
+        let around = [(x - 2, y), (x + 2, y), (x, y - 2), (x, y + 2)];
+        if around
+            .iter()
+            .all(|&pixel| drawing.pick(&camera, pixel) == part)
+        {
+            inside.push(((x, y), part));
+        }
+    }
+    let parts: std::collections::HashSet<_> = inside.iter().map(|(_, part)| part).collect();
+    assert!(
+        inside.len() >= 12 && parts.len() >= 4,
+        "the grid crosses parts: {inside:?}"
+    );
+    drawing.choose("gpu-clusters", 1.0);
+    for &(pixel, part) in &inside {
+        assert_eq!(drawing.pick(&camera, pixel), part, "pixel {pixel:?}");
+    }
+    drop(drawing);
     assert_no_validation_errors(&device);
 }
 

@@ -9,11 +9,25 @@
 //! part's own index range, cluster after cluster, so every technique that draws the part whole
 //! draws the same triangles as before, in cluster order. The coarser clusters' indices go after
 //! the geometry's own indices and name the same vertices (simplification only removes them).
+//!
+//! Building is the slow part of putting a large geometry on the GPU (seconds for millions of
+//! triangles), so a geometry of [`CACHED_TRIANGLES`] or more keeps its clusters in the disk
+//! cache, keyed by its content; an entry is checked through before it is used.
 
 use meshopt::{ClodCluster, ClodGroup, ClodMesh, VertexDataAdapter};
 
+use crate::disk_cache::{self, DiskCache};
 use crate::scene::{Part, Vertex};
 use cadr_plugin_abi as abi;
+
+/// Geometries with at least this many triangles keep their clusters in the disk cache; below,
+/// building them is quicker than reading a file.
+pub const CACHED_TRIANGLES: usize = 8192;
+
+/// What a cache entry's key starts with: bump it when the clusters a geometry gets change.
+const CACHE_VERSION: &[u8] = b"clusters 1: clod 128, normals protected, no sloppy fallback";
+/// The disk cache's kind of entry.
+const CACHE_KIND: &str = "clusters";
 
 /// The most triangles (and vertices) in one cluster: within what mesh shaders emit on every
 /// device cadr runs on, and small enough for culling to pay.
@@ -45,6 +59,151 @@ struct PartDag {
     /// Per cluster: its indices (into the geometry's vertices), its group and refined group.
     clusters: Vec<(Vec<u32>, u32, u32)>,
     groups: Vec<abi::CadrClusterGroup>,
+}
+
+/// [`build`], through the user's disk cache for a geometry of [`CACHED_TRIANGLES`] or more.
+pub(super) fn build_cached(
+    vertices: &[Vertex],
+    indices: &[u32],
+    parts: &[Part],
+) -> GeometryClusters {
+    let cache = (indices.len() / 3 >= CACHED_TRIANGLES)
+        .then(DiskCache::user)
+        .flatten();
+    let Some(cache) = cache else {
+        return build(vertices, indices, parts);
+    };
+    let part_words: Vec<u32> = parts
+        .iter()
+        .flat_map(|p| [p.first_index, p.index_count])
+        .collect();
+    let key = disk_cache::key(&[
+        CACHE_VERSION,
+        bytemuck::cast_slice(vertices),
+        bytemuck::cast_slice(indices),
+        bytemuck::cast_slice(&part_words),
+    ]);
+    if let Some(clusters) = cache.read(CACHE_KIND, &key).and_then(|bytes| {
+        GeometryClusters::from_bytes(&bytes, vertices.len(), indices.len(), parts.len())
+    }) {
+        return clusters;
+    }
+    let clusters = build(vertices, indices, parts);
+    cache.write(CACHE_KIND, &key, &clusters.to_bytes());
+    clusters
+}
+
+impl GeometryClusters {
+    /// The cache entry's bytes: the five lengths, then each array in little-endian words.
+    fn to_bytes(&self) -> Vec<u8> {
+        let lengths = [
+            self.indices.len(),
+            self.lod_indices.len(),
+            self.clusters.len(),
+            self.groups.len(),
+            self.part_ranges.len(),
+        ];
+        let mut bytes: Vec<u8> = lengths
+            .iter()
+            .flat_map(|&n| (n as u64).to_le_bytes())
+            .collect();
+        for word in self.indices.iter().chain(&self.lod_indices) {
+            bytes.extend_from_slice(&word.to_le_bytes());
+        }
+        for cluster in &self.clusters {
+            bytes.extend_from_slice(&cluster.to_le_bytes());
+        }
+        for group in &self.groups {
+            bytes.extend_from_slice(&group.to_le_bytes());
+        }
+        for word in self.part_ranges.iter().flatten() {
+            bytes.extend_from_slice(&word.to_le_bytes());
+        }
+        bytes
+    }
+
+    /// Reads a cache entry back for a geometry of `vertex_count` vertices, `index_count`
+    /// indices and `part_count` parts; `None` unless everything in it is in range.
+    fn from_bytes(
+        bytes: &[u8],
+        vertex_count: usize,
+        index_count: usize,
+        part_count: usize,
+    ) -> Option<Self> {
+        let mut words = bytes
+            .chunks_exact(4)
+            .map(|w| u32::from_le_bytes([w[0], w[1], w[2], w[3]]));
+        let mut length = || -> Option<usize> {
+            let low = words.next()?;
+            let high = words.next()?;
+            usize::try_from(u64::from(low) | u64::from(high) << 32).ok()
+        };
+        let lengths = [length()?, length()?, length()?, length()?, length()?];
+        let [indices, lod, clusters, groups, parts] = lengths;
+        let expected = 40 + 4 * (indices + lod) + 64 * clusters + 32 * groups + 8 * parts;
+        if bytes.len() != expected || indices != index_count || parts != part_count {
+            return None;
+        }
+        let mut take = |n: usize| -> Vec<u32> { words.by_ref().take(n).collect() };
+        let all_indices = take(indices + lod);
+        let cluster_words = take(16 * clusters);
+        let group_words = take(8 * groups);
+        let range_words = take(2 * parts);
+        let float = f32::from_bits;
+        let out = Self {
+            indices: all_indices[..indices].to_vec(),
+            lod_indices: all_indices[indices..].to_vec(),
+            clusters: cluster_words
+                .chunks_exact(16)
+                .map(|w| abi::CadrCluster {
+                    sphere: [float(w[0]), float(w[1]), float(w[2]), float(w[3])],
+                    cone_apex: [float(w[4]), float(w[5]), float(w[6])],
+                    cone_cutoff: float(w[7]),
+                    cone_axis: [float(w[8]), float(w[9]), float(w[10])],
+                    first_index: w[11],
+                    index_count: w[12],
+                    group: w[13],
+                    refined: w[14],
+                    part_clusters: w[15],
+                })
+                .collect(),
+            groups: group_words
+                .chunks_exact(8)
+                .map(|w| abi::CadrClusterGroup {
+                    sphere: [float(w[0]), float(w[1]), float(w[2]), float(w[3])],
+                    error: float(w[4]),
+                    depth: w[5],
+                    reserved: [w[6], w[7]],
+                })
+                .collect(),
+            part_ranges: range_words.chunks_exact(2).map(|w| [w[0], w[1]]).collect(),
+        };
+        out.is_consistent(vertex_count).then_some(out)
+    }
+
+    /// Whether every index names a vertex, every cluster's indices and groups exist and every
+    /// part's clusters are in range: what the GPU may trust of an entry read from disk.
+    fn is_consistent(&self, vertex_count: usize) -> bool {
+        let total = self.indices.len() + self.lod_indices.len();
+        let groups = self.groups.len();
+        let group_ok = |g: u32| (g as usize) < groups;
+        self.indices
+            .iter()
+            .chain(&self.lod_indices)
+            .all(|&i| (i as usize) < vertex_count)
+            && self.clusters.iter().all(|c| {
+                (c.first_index as usize).saturating_add(c.index_count as usize) <= total
+                    && c.index_count % 3 == 0
+                    && group_ok(c.group)
+                    && (c.refined == abi::CADR_CLUSTER_ORIGINAL || group_ok(c.refined))
+            })
+            && self.part_ranges.iter().all(|&[first, count]| {
+                (first as usize).saturating_add(count as usize) <= self.clusters.len()
+                    && self.clusters[first as usize..(first + count) as usize]
+                        .iter()
+                        .all(|c| c.part_clusters == count)
+            })
+    }
 }
 
 /// Builds the clusters of every part of a geometry. Parts whose ranges overlap another's, or
@@ -397,6 +556,38 @@ mod tests {
                 "a culled cluster lies on the far side"
             );
         }
+    }
+
+    #[test]
+    fn clusters_come_back_from_the_cache_as_they_were_built_and_damage_is_refused() {
+        let geometry = fine_geometry();
+        let built = build(&geometry.vertices, &geometry.indices, &geometry.parts);
+        let bytes = built.to_bytes();
+        let (v, i, p) = (
+            geometry.vertices.len(),
+            geometry.indices.len(),
+            geometry.parts.len(),
+        );
+        let back = GeometryClusters::from_bytes(&bytes, v, i, p).unwrap();
+        assert_eq!(back.indices, built.indices);
+        assert_eq!(back.lod_indices, built.lod_indices);
+        assert_eq!(back.clusters, built.clusters);
+        assert_eq!(back.groups, built.groups);
+        assert_eq!(back.part_ranges, built.part_ranges);
+        assert!(GeometryClusters::from_bytes(&bytes[..bytes.len() - 4], v, i, p).is_none());
+        assert!(
+            GeometryClusters::from_bytes(&bytes, v, i + 3, p).is_none(),
+            "another geometry"
+        );
+        // An index past the vertices (a checksum would catch it first; this is the last line).
+        let mut damaged = bytes.clone();
+        damaged[40..44].copy_from_slice(&u32::MAX.to_le_bytes());
+        assert!(GeometryClusters::from_bytes(&damaged, v, i, p).is_none());
+        // A cluster naming a group that is not there.
+        let cluster_at = 40 + 4 * (built.indices.len() + built.lod_indices.len());
+        let mut damaged = bytes;
+        damaged[cluster_at + 52..cluster_at + 56].copy_from_slice(&9_999_999u32.to_le_bytes());
+        assert!(GeometryClusters::from_bytes(&damaged, v, i, p).is_none());
     }
 
     #[test]

@@ -66,7 +66,7 @@ fn arena_data(geometry: &Geometry) -> ArenaData<'_> {
                 geometry.parts.as_slice().into(),
             )
         };
-    let clusters = clusters::build(&geometry.vertices, &geometry.indices, &parts);
+    let clusters = clusters::build_cached(&geometry.vertices, &geometry.indices, &parts);
     ArenaData {
         vertices: &geometry.vertices,
         wire,

@@ -25,7 +25,8 @@ use cadr_plugin_abi as abi;
 pub const CACHED_TRIANGLES: usize = 8192;
 
 /// What a cache entry's key starts with: bump it when the clusters a geometry gets change.
-const CACHE_VERSION: &[u8] = b"clusters 1: clod 128, normals protected, no sloppy fallback";
+const CACHE_VERSION: &[u8] =
+    b"clusters 2: clod 128, normals protected, no sloppy fallback, small parts whole";
 /// The disk cache's kind of entry.
 const CACHE_KIND: &str = "clusters";
 
@@ -216,16 +217,17 @@ pub(super) fn build(vertices: &[Vertex], indices: &[u32], parts: &[Part]) -> Geo
     };
     let bytes: &[u8] = bytemuck::cast_slice(vertices);
     let adapter = VertexDataAdapter::new(bytes, std::mem::size_of::<Vertex>(), 0).ok();
-    let normals: Vec<f32> = vertices.iter().flat_map(|v| v.normal).collect();
     let disjoint = parts_are_disjoint(parts, indices.len());
     for part in parts {
         let start = part.first_index as usize;
         let range = start..start + part.index_count as usize;
         let own = indices.get(range.clone()).unwrap_or(&[]);
         let first_cluster = out.clusters.len() as u32;
+        // A part that fits one cluster has no coarser level to build (and most CAD parts
+        // are that small): it is its own cluster, in its own order.
         let dag = match &adapter {
-            Some(adapter) if disjoint && !own.is_empty() && own.len() % 3 == 0 => {
-                part_dag(adapter, &normals, own)
+            Some(_) if disjoint && own.len() % 3 == 0 && !fits_one_cluster(own) => {
+                part_dag(vertices, own)
             }
             _ => None,
         };
@@ -256,13 +258,42 @@ fn parts_are_disjoint(parts: &[Part], index_count: usize) -> bool {
         && ranges.windows(2).all(|pair| pair[0].1 <= pair[1].0)
 }
 
-/// The DAG of one part (`indices`, a multiple of 3), or `None` when its original clusters do
-/// not hold exactly its triangles.
-fn part_dag(adapter: &VertexDataAdapter<'_>, normals: &[f32], indices: &[u32]) -> Option<PartDag> {
-    let mut mesh = ClodMesh::new(indices, adapter);
+/// Whether the triangles `indices` fit one cluster: at most [`MAX_CLUSTER_TRIANGLES`]
+/// triangles and as many distinct vertices.
+fn fits_one_cluster(indices: &[u32]) -> bool {
+    if indices.len() > MAX_CLUSTER_TRIANGLES * 3 {
+        return false;
+    }
+    let mut distinct = indices.to_vec();
+    distinct.sort_unstable();
+    distinct.dedup();
+    distinct.len() <= MAX_CLUSTER_TRIANGLES
+}
+
+/// The DAG of one part (`indices` into `vertices`, a multiple of 3), or `None` when its
+/// original clusters do not hold exactly its triangles. The library is given the part's own
+/// vertices only (its work per call grows with the vertices it is given: a geometry of many
+/// parts would otherwise cost parts × vertices).
+fn part_dag(vertices: &[Vertex], indices: &[u32]) -> Option<PartDag> {
+    let mut used = indices.to_vec();
+    used.sort_unstable();
+    used.dedup();
+    let local_of = |global: u32| used.binary_search(&global).ok().map(|i| i as u32);
+    let local_indices: Vec<u32> = indices
+        .iter()
+        .map(|&i| local_of(i))
+        .collect::<Option<_>>()?;
+    let local: Vec<Vertex> = used
+        .iter()
+        .map(|&i| vertices.get(i as usize).copied())
+        .collect::<Option<_>>()?;
+    let normals: Vec<f32> = local.iter().flat_map(|v| v.normal).collect();
+    let bytes: &[u8] = bytemuck::cast_slice(&local);
+    let adapter = VertexDataAdapter::new(bytes, std::mem::size_of::<Vertex>(), 0).ok()?;
+    let mut mesh = ClodMesh::new(&local_indices, &adapter);
     // Normals steer the simplification (a crease stays a crease) and their discontinuities
     // (split vertices along hard edges) are kept as seams.
-    mesh.vertex_attributes = normals;
+    mesh.vertex_attributes = &normals;
     mesh.vertex_attributes_stride = 3 * std::mem::size_of::<f32>();
     mesh.attribute_weights = &[0.5, 0.5, 0.5];
     mesh.attribute_protect_mask = 0b111;
@@ -295,7 +326,12 @@ fn part_dag(adapter: &VertexDataAdapter<'_>, normals: &[f32], indices: &[u32]) -
             });
             for cluster in clusters {
                 let refined = u32::try_from(cluster.refined).unwrap_or(abi::CADR_CLUSTER_ORIGINAL);
-                dag.clusters.push((cluster.indices.to_vec(), id, refined));
+                let global = cluster
+                    .indices
+                    .iter()
+                    .map(|&i| used.get(i as usize).copied().unwrap_or(0))
+                    .collect();
+                dag.clusters.push((global, id, refined));
             }
             id as i32
         },

@@ -250,3 +250,26 @@ fn level_of_detail_follows_the_pixels_and_keeps_the_picture() {
     drop(drawing);
     assert_no_validation_errors(&device);
 }
+
+#[test]
+fn a_real_cad_model_keeps_its_picture_at_the_default_threshold() {
+    let device = test_device();
+    let scene =
+        cadr_core::load::load_file(std::path::Path::new(cadr_tests::CYLINDER_ENGINE_GLB)).unwrap();
+    let bounds = bounds(&scene);
+    let mut drawing = Drawing::new(&device, &scene);
+    for turn in [0.0, 0.3] {
+        let camera = Camera::orbit(&bounds, aspect(), turn, 1.6);
+        let (full, full_stats) = drawing.draw("gpu-clusters", 0.0, &camera);
+        let (lod, lod_stats) = drawing.draw("gpu-clusters", 1.0, &camera);
+        let difference = compare(&lod, &full).unwrap();
+        println!(
+            "turn {turn}: {} of {} triangles at 1 px: {difference:?}",
+            lod_stats.triangles, full_stats.triangles
+        );
+        assert!(difference.mean <= 0.02, "turn {turn}: {difference:?}");
+        assert!(lod_stats.triangles < full_stats.triangles, "turn {turn}");
+    }
+    drop(drawing);
+    assert_no_validation_errors(&device);
+}

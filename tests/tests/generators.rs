@@ -90,6 +90,21 @@ fn generators_are_deterministic_and_share_geometry() {
 #[test]
 fn generator_sources_parse_and_bad_ones_say_why() {
     assert_eq!(
+        SceneSource::parse("gen:fine:units=3,detail=4").unwrap(),
+        SceneSource::Generator(GeneratorSpec::Fine {
+            units: 3,
+            detail: 4
+        })
+    );
+    let fine = load_scene("gen:grid:parts=20,tris=5000").unwrap();
+    let triangles: usize = fine.geometries.iter().map(|g| g.indices.len() / 3).sum();
+    let parts: usize = fine.geometries.iter().map(|g| g.parts.len()).sum();
+    assert!(
+        (3000..8000).contains(&(triangles / parts)),
+        "about 5000 triangles per part: {}",
+        triangles / parts
+    );
+    assert_eq!(
         SceneSource::parse("gen:grid:parts=1_000,tris=20").unwrap(),
         SceneSource::Generator(GeneratorSpec::Grid {
             parts: 1000,
@@ -103,6 +118,22 @@ fn generator_sources_parse_and_bad_ones_say_why() {
         ("gen:grid:parts=0", "out of range"),
         ("gen:grid:parts=10,color=red", "unknown parameter 'color'"),
         ("gen:demo:parts=3", "gen:demo takes no parameters"),
+        (
+            "gen:grid:parts=10,tris=200000",
+            "tris=200000 is out of range (8 to 100000)",
+        ),
+        (
+            "gen:fine:units=0",
+            "units=0 is not a number from 1 to 1000000",
+        ),
+        (
+            "gen:fine:detail=33",
+            "detail=33 is not a number from 1 to 32",
+        ),
+        (
+            "gen:fine:teeth=3",
+            "unknown parameter 'teeth' (known: units, detail)",
+        ),
     ] {
         let error = load_scene(text)
             .err()

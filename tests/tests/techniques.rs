@@ -140,9 +140,12 @@ fn the_built_in_combination_needs_no_library_and_draws_each_part_once() {
 /// Every combination of the registry's techniques, in a stable order.
 /// Renders every valid combination in both shade modes and compares it with the reference
 /// (the baseline for solid; the simplest combination for edges, checked against the baseline
-/// where no edges are drawn). Invalid combinations must be refused with a reason.
+/// where no edges are drawn), clusters at full detail. Invalid combinations must be refused
+/// with a reason.
 fn every_combination_matches(source: &Scene, what: &str) {
     let mut f = Fixture::new(source);
+    // The same picture at full detail: gpu-clusters' level of detail is judged in clusters.rs.
+    f.techniques.set_lod_error(0.0).unwrap();
     // Highlight the geo node of every third instance, so that every combination must show
     // highlighted and plain parts side by side.
     let geo_nodes: Vec<_> = f

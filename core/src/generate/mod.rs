@@ -29,6 +29,9 @@ use crate::scene::Scene;
 
 /// The most parts `gen:grid` generates.
 pub const MAX_GRID_PARTS: u64 = 50_000_000;
+/// The most triangles per part `gen:grid` generates (its 16 components then hold 16 million
+/// triangles, drawn up to 50 million times).
+pub const MAX_GRID_TRIANGLES_PER_PART: f64 = 100_000.0;
 
 /// A built-in generator and its parameters.
 #[derive(Clone, Debug, PartialEq)]
@@ -132,9 +135,9 @@ impl GeneratorSpec {
                             let t: f64 = value
                                 .parse()
                                 .map_err(|_| format!("gen:grid: tris={value} is not a number"))?;
-                            if !(8.0..=400.0).contains(&t) {
+                            if !(8.0..=MAX_GRID_TRIANGLES_PER_PART).contains(&t) {
                                 return Err(format!(
-                                    "gen:grid: tris={t} is out of range (8 to 400)"
+                                    "gen:grid: tris={t} is out of range (8 to {MAX_GRID_TRIANGLES_PER_PART})"
                                 ));
                             }
                             triangles_per_part = t;

@@ -439,6 +439,8 @@ fn runs_of_triangles(
 
 #[cfg(test)]
 mod tests {
+    #![allow(clippy::unwrap_used)] // Test code: a failed unwrap is a failed test.
+
     use super::*;
 
     fn sorted_triangles(indices: &[u32]) -> Vec<[u32; 3]> {

@@ -26,7 +26,7 @@ pub const CACHED_TRIANGLES: usize = 8192;
 
 /// What a cache entry's key starts with: bump it when the clusters a geometry gets change.
 const CACHE_VERSION: &[u8] =
-    b"clusters 2: clod 128, normals protected, no sloppy fallback, small parts whole";
+    b"clusters 4: clod 128, normals protected, no sloppy fallback, small parts whole, spans";
 /// The disk cache's kind of entry.
 const CACHE_KIND: &str = "clusters";
 
@@ -50,8 +50,9 @@ pub(super) struct GeometryClusters {
     pub(super) clusters: Vec<abi::CadrCluster>,
     /// The DAGs' groups, the parts one after the other.
     pub(super) groups: Vec<abi::CadrClusterGroup>,
-    /// Per part: its first cluster in `clusters` and how many it has.
-    pub(super) part_ranges: Vec<[u32; 2]>,
+    /// Per part: its first cluster in `clusters`, how many it has, and how many of them are
+    /// in groups never simplified further (its coarsest cut).
+    pub(super) part_ranges: Vec<[u32; 3]>,
 }
 
 /// One part's DAG as `clod_build` hands it over, before it is laid out.
@@ -141,7 +142,7 @@ impl GeometryClusters {
         };
         let lengths = [length()?, length()?, length()?, length()?, length()?];
         let [indices, lod, clusters, groups, parts] = lengths;
-        let expected = 40 + 4 * (indices + lod) + 64 * clusters + 32 * groups + 8 * parts;
+        let expected = 40 + 4 * (indices + lod) + 64 * clusters + 32 * groups + 12 * parts;
         if bytes.len() != expected || indices != index_count || parts != part_count {
             return None;
         }
@@ -149,7 +150,7 @@ impl GeometryClusters {
         let all_indices = take(indices + lod);
         let cluster_words = take(16 * clusters);
         let group_words = take(8 * groups);
-        let range_words = take(2 * parts);
+        let range_words = take(3 * parts);
         let float = f32::from_bits;
         let out = Self {
             indices: all_indices[..indices].to_vec(),
@@ -174,10 +175,14 @@ impl GeometryClusters {
                     sphere: [float(w[0]), float(w[1]), float(w[2]), float(w[3])],
                     error: float(w[4]),
                     depth: w[5],
-                    reserved: [w[6], w[7]],
+                    first_cluster: w[6],
+                    cluster_count: w[7],
                 })
                 .collect(),
-            part_ranges: range_words.chunks_exact(2).map(|w| [w[0], w[1]]).collect(),
+            part_ranges: range_words
+                .chunks_exact(3)
+                .map(|w| [w[0], w[1], w[2]])
+                .collect(),
         };
         out.is_consistent(vertex_count).then_some(out)
     }
@@ -198,8 +203,16 @@ impl GeometryClusters {
                     && group_ok(c.group)
                     && (c.refined == abi::CADR_CLUSTER_ORIGINAL || group_ok(c.refined))
             })
-            && self.part_ranges.iter().all(|&[first, count]| {
+            && self.groups.iter().all(|g| {
+                (g.first_cluster as usize).saturating_add(g.cluster_count as usize)
+                    <= self.clusters.len()
+                    && self.clusters[g.first_cluster as usize..][..g.cluster_count as usize]
+                        .iter()
+                        .all(|c| self.groups.get(c.group as usize) == Some(g))
+            })
+            && self.part_ranges.iter().all(|&[first, count, coarsest]| {
                 (first as usize).saturating_add(count as usize) <= self.clusters.len()
+                    && coarsest <= count
                     && self.clusters[first as usize..(first + count) as usize]
                         .iter()
                         .all(|c| c.part_clusters == count)
@@ -239,9 +252,32 @@ pub(super) fn build(vertices: &[Vertex], indices: &[u32], parts: &[Part]) -> Geo
         for cluster in &mut out.clusters[first_cluster as usize..] {
             cluster.part_clusters = count;
         }
-        out.part_ranges.push([first_cluster, count]);
+        set_group_spans(&mut out, first_cluster);
+        let coarsest = out.clusters[first_cluster as usize..]
+            .iter()
+            .filter(|c| {
+                out.groups
+                    .get(c.group as usize)
+                    .is_some_and(|g| g.error == f32::MAX)
+            })
+            .count() as u32;
+        out.part_ranges.push([first_cluster, count, coarsest]);
     }
     out
+}
+
+/// Sets the first cluster and the cluster count of the groups of the part whose clusters start
+/// at `first_cluster` (each group's clusters are contiguous: see `lay_out`).
+fn set_group_spans(out: &mut GeometryClusters, first_cluster: u32) {
+    for k in first_cluster as usize..out.clusters.len() {
+        let group = out.clusters[k].group as usize;
+        if let Some(group) = out.groups.get_mut(group) {
+            if group.cluster_count == 0 {
+                group.first_cluster = k as u32;
+            }
+            group.cluster_count += 1;
+        }
+    }
 }
 
 /// Whether the parts' index ranges lie within `index_count` and share no index.
@@ -322,7 +358,8 @@ fn part_dag(vertices: &[Vertex], indices: &[u32]) -> Option<PartDag> {
                     f32::MAX
                 },
                 depth: group.depth.max(0) as u32,
-                reserved: [0; 2],
+                first_cluster: 0,
+                cluster_count: 0,
             });
             for cluster in clusters {
                 let refined = u32::try_from(cluster.refined).unwrap_or(abi::CADR_CLUSTER_ORIGINAL);
@@ -382,8 +419,11 @@ fn lay_out(
 ) {
     let first_group = out.groups.len() as u32;
     out.groups.extend(dag.groups);
-    let (original, coarser): (Vec<_>, Vec<_>) = dag
-        .clusters
+    // Each group's clusters together (the library hands them over so; the sort keeps that
+    // order), the original ones first.
+    let mut clusters = dag.clusters;
+    clusters.sort_by_key(|&(_, group, _)| group);
+    let (original, coarser): (Vec<_>, Vec<_>) = clusters
         .into_iter()
         .partition(|(_, _, refined)| *refined == abi::CADR_CLUSTER_ORIGINAL);
     let mut next = part_first as usize;
@@ -503,7 +543,7 @@ mod tests {
         let geometry = fine_geometry();
         let built = build(&geometry.vertices, &geometry.indices, &geometry.parts);
         assert_eq!(built.part_ranges.len(), geometry.parts.len());
-        for (part, &[first, count]) in geometry.parts.iter().zip(&built.part_ranges) {
+        for (part, &[first, count, _]) in geometry.parts.iter().zip(&built.part_ranges) {
             let range = part.first_index as usize..(part.first_index + part.index_count) as usize;
             assert_eq!(
                 sorted_triangles(&built.indices[range.clone()]),
@@ -535,7 +575,7 @@ mod tests {
     fn errors_grow_toward_the_coarse_levels_and_every_part_ends_in_a_terminal_group() {
         let geometry = fine_geometry();
         let built = build(&geometry.vertices, &geometry.indices, &geometry.parts);
-        for &[first, count] in &built.part_ranges {
+        for &[first, count, coarsest] in &built.part_ranges {
             let clusters = &built.clusters[first as usize..(first + count) as usize];
             for cluster in clusters {
                 let own_group = &built.groups[cluster.group as usize];
@@ -549,12 +589,16 @@ mod tests {
                     assert!(lod.iter().all(|&i| (i as usize) < geometry.vertices.len()));
                 }
             }
+            let terminal = clusters
+                .iter()
+                .filter(|c| built.groups[c.group as usize].error == f32::MAX)
+                .count();
             assert!(
-                clusters
-                    .iter()
-                    .any(|c| built.groups[c.group as usize].error == f32::MAX),
+                terminal > 0,
                 "a part never vanishes: its coarsest clusters are always over any threshold"
             );
+            assert_eq!(terminal as u32, coarsest, "the coarsest cut's size");
+            assert!(coarsest * 4 < count, "the coarsest cut is a few clusters");
         }
     }
 
@@ -647,7 +691,8 @@ mod tests {
         let built = build(&geometry.vertices, &geometry.indices, &parts);
         assert_eq!(built.indices, geometry.indices, "nothing reordered");
         assert!(built.lod_indices.is_empty());
-        let [_, second] = built.part_ranges[1];
+        let [_, second, coarsest] = built.part_ranges[1];
         assert_eq!(second, 2, "200 triangles in runs of 128");
+        assert_eq!(coarsest, 2, "runs are their part's coarsest");
     }
 }

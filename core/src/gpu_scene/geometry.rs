@@ -33,15 +33,17 @@ pub(super) struct GeometryPlace {
     /// and its shape as instance flags (`CADR_INSTANCE_CLOSED`, `CADR_INSTANCE_INSIDE_OUT`,
     /// `CADR_INSTANCE_CURVED`).
     pub(super) parts: Vec<([u32; 4], [f32; 4], u32)>,
-    /// Per part: its first cluster (relative to `first_cluster`) and how many it has.
-    pub(super) part_clusters: Vec<[u32; 2]>,
+    /// Per part: its first cluster (relative to `first_cluster`), how many it has, and how
+    /// many its coarsest cut has.
+    pub(super) part_clusters: Vec<[u32; 3]>,
 }
 
 impl GeometryPlace {
-    /// Part `part`'s first cluster in the cluster arena and how many it has.
-    pub(super) fn clusters_of(&self, part: u32) -> Option<[u32; 2]> {
-        let [first, count] = *self.part_clusters.get(part as usize)?;
-        Some([self.first_cluster + first, count])
+    /// Part `part`'s first cluster in the cluster arena, how many it has, and how many its
+    /// coarsest cut has.
+    pub(super) fn clusters_of(&self, part: u32) -> Option<[u32; 3]> {
+        let [first, count, coarsest] = *self.part_clusters.get(part as usize)?;
+        Some([self.first_cluster + first, count, coarsest])
     }
 }
 
@@ -114,11 +116,19 @@ impl ArenaData<'_> {
             .collect()
     }
 
-    fn group_bytes(&self) -> Vec<u8> {
+    /// The groups' bytes as the arena holds them: their clusters made absolute from the
+    /// geometry's `first_cluster`.
+    fn group_bytes(&self, first_cluster: u32) -> Vec<u8> {
         self.clusters
             .groups
             .iter()
-            .flat_map(abi::CadrClusterGroup::to_le_bytes)
+            .flat_map(|g| {
+                abi::CadrClusterGroup {
+                    first_cluster: first_cluster + g.first_cluster,
+                    ..*g
+                }
+                .to_le_bytes()
+            })
             .collect()
     }
 }
@@ -262,8 +272,8 @@ impl GeometryArenas {
                 indices.extend_from_slice(&data.clusters.indices);
                 indices.extend_from_slice(&data.clusters.lod_indices);
                 wire.extend_from_slice(&data.wire);
+                groups.extend(data.group_bytes(place.first_cluster));
                 clusters.extend(data.cluster_bytes(first_index, first_group));
-                groups.extend(data.group_bytes());
                 Some(place)
             })
             .collect();
@@ -365,7 +375,7 @@ impl GeometryArenas {
             .collect();
         let wire_bytes: &[u8] = bytemuck::cast_slice(&data.wire);
         let cluster_bytes = data.cluster_bytes(place.first_index, place.first_group);
-        let group_bytes = data.group_bytes();
+        let group_bytes = data.group_bytes(place.first_cluster);
         let vertex_size = std::mem::size_of::<Vertex>() as u64;
         self.vertices
             .upload_at(u64::from(place.vertex_base) * vertex_size, vertex_bytes)?;

@@ -328,6 +328,7 @@ impl GpuScene {
                 group_count: 0,
                 group_buffer: abi::CadrBufferRef::default(),
                 candidate_clusters: 0,
+                candidate_coarsest_clusters: 0,
             }),
         };
         scene.refresh_all(graph, tree)?;
@@ -370,7 +371,7 @@ impl GpuScene {
             return;
         }
         let arenas = &self.arenas;
-        self.counts.candidate_clusters = self
+        let [all, coarsest] = self
             .instances
             .iter()
             .enumerate()
@@ -379,9 +380,12 @@ impl GpuScene {
                 let place = arenas.places.get(instance.geometry as usize)?.as_ref()?;
                 place.clusters_of(instance.part)
             })
-            .map(|[_, count]| u64::from(count))
-            .sum();
-        self.clusters_extension.0.candidate_clusters = self.counts.candidate_clusters;
+            .fold([0u64; 2], |[all, coarsest], [_, count, coarse]| {
+                [all + u64::from(count), coarsest + u64::from(coarse)]
+            });
+        self.counts.candidate_clusters = all;
+        self.clusters_extension.0.candidate_clusters = all;
+        self.clusters_extension.0.candidate_coarsest_clusters = coarsest;
         self.counts.clusters_stale = false;
     }
 
@@ -1144,7 +1148,7 @@ fn cull_entry(
             .get(instance.geometry as usize)
             .and_then(Option::as_ref)
             .and_then(|place| place.clusters_of(instance.part))
-            .map_or(0, |[first, _]| first),
+            .map_or(0, |[first, _, _]| first),
     }
 }
 

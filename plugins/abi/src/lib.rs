@@ -724,6 +724,11 @@ pub struct CadrSceneClusters {
     /// The clusters of the candidate instances, summed ([`CadrCluster::part_clusters`] of each
     /// candidate's part): a bound on the cluster draws one pass of a frame can need.
     pub candidate_clusters: u64,
+    /// The clusters of the candidates' coarsest cuts (those in groups of error `f32::MAX`),
+    /// summed: the room that draws every candidate at its coarsest. A culler with less room
+    /// than `candidate_clusters` keeps this much for parts whose cut does not fit its budget,
+    /// so that no part is left out.
+    pub candidate_coarsest_clusters: u64,
 }
 
 /// [`CadrCluster::refined`] of a part's original clusters: its own triangles, made by no
@@ -805,8 +810,12 @@ pub struct CadrClusterGroup {
     pub error: f32,
     /// Level in the DAG: 0 for groups of original clusters.
     pub depth: u32,
-    /// Zero.
-    pub reserved: [u32; 2],
+    /// The group's first cluster in the cluster buffer: a group's clusters are contiguous,
+    /// and a part's groups, in the group buffer, cover its clusters in order (a culler may
+    /// walk a part group by group, skipping the clusters of a group its cut leaves out).
+    pub first_cluster: u32,
+    /// How many clusters the group has.
+    pub cluster_count: u32,
 }
 
 impl CadrClusterGroup {
@@ -817,7 +826,7 @@ impl CadrClusterGroup {
             .into_iter()
             .chain([self.error])
             .map(f32::to_bits)
-            .chain([self.depth, self.reserved[0], self.reserved[1]]);
+            .chain([self.depth, self.first_cluster, self.cluster_count]);
         let mut bytes = [0; 32];
         for (i, word) in words.enumerate() {
             bytes[i * 4..i * 4 + 4].copy_from_slice(&word.to_le_bytes());

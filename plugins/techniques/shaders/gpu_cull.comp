@@ -49,8 +49,10 @@ layout(set = 0, binding = 0, std430) readonly buffer Entries { CullEntry entries
 layout(set = 0, binding = 1, std430) readonly buffer Matrices { Matrix matrices[]; };
 layout(set = 0, binding = 2, std430) writeonly buffer Commands { uint commands[]; };
 // [0..8): commands per pass slot; [8]: commands in all; [9]: triangles drawn; [10]: clusters
-// drawn (gpu-clusters).
+// drawn (gpu-clusters); [11..19): per pass slot, the cluster commands asked for (gpu-clusters'
+// budget).
 layout(set = 0, binding = 3, std430) buffer Counts { uint counts[]; };
+const uint ASKED = 11u;
 // The host's CadrGpuCullView, written before every submission of the frame.
 layout(set = 0, binding = 4, std140) uniform View {
     vec4 eye_high;
@@ -92,8 +94,8 @@ struct Group {
     vec4 sphere;
     float error;
     uint depth;
-    uint reserved0;
-    uint reserved1;
+    uint first_cluster;
+    uint cluster_count;
 };
 const uint CLUSTER_ORIGINAL = 0xffffffffu;
 layout(set = 0, binding = 8, std430) readonly buffer Clusters { Cluster clusters[]; };
@@ -122,6 +124,9 @@ layout(push_constant) uniform Dispatch {
     float lod_error;
     uint back_faces_hidden;
     uint command_capacity;
+    // Of a pass slot's commands, how many the cuts at `lod_error` may take; past it, a part is
+    // drawn at its coarsest, which the rest of the slot always has room for.
+    uint cluster_budget;
 } dispatch;
 
 // Inside the frustum.
@@ -220,9 +225,9 @@ bool large_enough(vec3 center, float radius) {
     return 2.0 * radius * view.sub_pixel.y >= view.sub_pixel.x * nearest;
 }
 
-// Appends an indirect command for `count` indices from `first`, instance `id`.
-void append(uint first, uint count, uint vertex_base, uint id) {
-    uint slot = atomicAdd(counts[dispatch.pass_slot], 1u);
+// Writes an indirect command for `count` indices from `first`, instance `id`, at `slot` of the
+// pass's commands.
+void write_command(uint slot, uint first, uint count, uint vertex_base, uint id) {
     if (slot >= dispatch.command_capacity) {
         return; // never, with the capacity the culler reserves; the count stays past it
     }
@@ -236,6 +241,11 @@ void append(uint first, uint count, uint vertex_base, uint id) {
     if (dispatch.pass_kind != PASS_EDGES) {
         atomicAdd(counts[9], count / 3u);
     }
+}
+
+// Appends an indirect command for `count` indices from `first`, instance `id`.
+void append(uint first, uint count, uint vertex_base, uint id) {
+    write_command(atomicAdd(counts[dispatch.pass_slot], 1u), first, count, vertex_base, id);
 }
 
 #ifdef CLUSTERS
@@ -267,18 +277,23 @@ float projected_error(Group group, Placement place) {
     return group.error * place.scale * view.sub_pixel.y / nearest;
 }
 
-// Whether the cluster belongs to the level-of-detail cut: its group's coarser clusters would
-// be too coarse, and its own error is small enough. Threshold 0: the original clusters.
-bool in_cut(Cluster cluster, Placement place) {
-    if (dispatch.lod_error <= 0.0) {
-        return cluster.refined == CLUSTER_ORIGINAL;
+// Whether the clusters of `group` may belong to the level-of-detail cut at `threshold` pixels:
+// the coarser clusters made from the group would be too coarse. Threshold 0: the groups of
+// original clusters; COARSEST: the groups never simplified further.
+bool group_in_cut(Group group, Placement place, float threshold) {
+    if (threshold <= 0.0) {
+        return group.depth == 0u;
     }
-    if (projected_error(groups[cluster.group], place) <= dispatch.lod_error) {
-        return false;
-    }
-    return cluster.refined == CLUSTER_ORIGINAL
-        || projected_error(groups[cluster.refined], place) <= dispatch.lod_error;
+    return projected_error(group, place) > threshold;
 }
+
+// Whether a cluster of a group in the cut belongs to it: its own error is small enough.
+bool in_cut(Cluster cluster, Placement place, float threshold) {
+    return threshold <= 0.0 || cluster.refined == CLUSTER_ORIGINAL
+        || projected_error(groups[cluster.refined], place) <= threshold;
+}
+
+const float COARSEST = 3.0e38;
 
 // Whether every triangle of the cluster faces away from the eye.
 bool faces_away(Cluster cluster, Placement place) {
@@ -296,14 +311,33 @@ bool faces_away(Cluster cluster, Placement place) {
     return dot(normalize(apex), axis) >= cluster.cone_cutoff;
 }
 
-// Appends the commands of the instance's clusters in the cut that pass the cluster tests.
-void append_clusters(CullEntry entry, uint id, Placement place, bool back_faces_may_go) {
+// Walks the instance's clusters in the cut at `threshold` that pass the cluster tests, merging
+// those that follow each other in the index buffer into one command: counts the commands, and
+// writes them from `slot` on when `write`.
+uint walk_clusters(CullEntry entry, uint id, Placement place, bool back_faces_may_go,
+                   float threshold, bool write, uint slot) {
     uint count = clusters[entry.first_cluster].part_clusters;
+    uint commands_made = 0u;
     uint run_first = 0u;
     uint run_count = 0u;
-    for (uint k = 0u; k < count; ++k) {
-        Cluster cluster = clusters[entry.first_cluster + k];
-        if (!in_cut(cluster, place)) {
+    // Group by group (a part's groups cover its clusters in order): a group the cut leaves
+    // out costs one test, not one per cluster.
+    uint group_index = clusters[entry.first_cluster].group;
+    uint group_end = 0u;
+    bool group_kept = false;
+    for (uint k = entry.first_cluster; k < entry.first_cluster + count; ++k) {
+        if (k >= group_end) {
+            Group group = groups[group_index];
+            group_index += 1u;
+            group_end = group.first_cluster + max(group.cluster_count, 1u);
+            group_kept = group_in_cut(group, place, threshold);
+            if (!group_kept) {
+                k = max(k, group_end - 1u);
+                continue;
+            }
+        }
+        Cluster cluster = clusters[k];
+        if (!in_cut(cluster, place, threshold)) {
             continue;
         }
         vec3 center = place.translation + place.rotation * cluster.sphere.xyz;
@@ -314,21 +348,43 @@ void append_clusters(CullEntry entry, uint id, Placement place, bool back_faces_
         if (!drawn) {
             continue;
         }
-        atomicAdd(counts[10], 1u);
+        if (write) {
+            atomicAdd(counts[10], 1u);
+        }
         uint first = cluster.first_index;
         if (run_count > 0u && run_first + run_count == first) {
             run_count += cluster.index_count;
             continue;
         }
-        if (run_count > 0u) {
-            append(run_first, run_count, entry.vertex_base, id);
+        if (run_count > 0u && write) {
+            write_command(slot + commands_made - 1u, run_first, run_count, entry.vertex_base, id);
         }
+        commands_made += 1u;
         run_first = first;
         run_count = cluster.index_count;
     }
-    if (run_count > 0u) {
-        append(run_first, run_count, entry.vertex_base, id);
+    if (run_count > 0u && write) {
+        write_command(slot + commands_made - 1u, run_first, run_count, entry.vertex_base, id);
     }
+    return commands_made;
+}
+
+// Appends the commands of the instance's clusters in the cut: at the host's threshold while
+// the pass's budget lasts, else at the part's coarsest (a part is never left out for want of
+// room).
+void append_clusters(CullEntry entry, uint id, Placement place, bool back_faces_may_go) {
+    float threshold = dispatch.lod_error;
+    uint wanted = walk_clusters(entry, id, place, back_faces_may_go, threshold, false, 0u);
+    uint asked = atomicAdd(counts[ASKED + dispatch.pass_slot], wanted);
+    if (asked + wanted > dispatch.cluster_budget) {
+        threshold = COARSEST;
+        wanted = walk_clusters(entry, id, place, back_faces_may_go, threshold, false, 0u);
+    }
+    if (wanted == 0u) {
+        return;
+    }
+    uint slot = atomicAdd(counts[dispatch.pass_slot], wanted);
+    walk_clusters(entry, id, place, back_faces_may_go, threshold, true, slot);
 }
 #endif
 

@@ -35,8 +35,8 @@ use cadr_plugin_sdk::vulkan_failure;
 use cadr_plugin_sdk::{buffer, Gpu, GpuCull, GpuCulling, HostBuffer, PassFilter, Technique};
 
 /// Words of the counts buffer: commands per (phase, pass) slot, then commands in all,
-/// triangles drawn and clusters drawn.
-const COUNT_WORDS: usize = 11;
+/// triangles drawn and clusters drawn, then per slot the cluster commands asked for.
+const COUNT_WORDS: usize = 19;
 const TOTAL_COMMANDS: usize = 8;
 const TOTAL_TRIANGLES: usize = 9;
 const TOTAL_CLUSTERS: usize = 10;
@@ -80,10 +80,31 @@ struct CullDispatch {
     back_faces_hidden: bool,
     /// Commands a pass slot holds.
     command_capacity: u32,
+    /// Of those, how many the cuts at `lod_error` may take (cluster culling); past that, parts
+    /// are drawn at their coarsest, which the rest always holds.
+    cluster_budget: u32,
 }
 
 /// Bytes of [`CullDispatch`] as pushed.
-const CULL_PUSH_BYTES: u32 = 60;
+const CULL_PUSH_BYTES: u32 = 64;
+/// The most cluster commands a pass slot gives the cuts at the host's threshold, unless
+/// [`CLUSTER_BUDGET_VARIABLE`] says otherwise: 262 144 (5 MiB a slot), some hundred times what a
+/// 4K view's cut needs at 1 px. Full detail of a scene of billions of triangles needs more:
+/// past it, parts are drawn at their coarsest instead.
+const CLUSTER_COMMAND_BUDGET: u64 = 1 << 18;
+/// The environment variable that sets the cluster command budget (a count, at least 1): more
+/// memory for full detail of larger scenes, or less.
+const CLUSTER_BUDGET_VARIABLE: &str = "CADR_CLUSTER_COMMAND_BUDGET";
+
+/// The cluster command budget: [`CLUSTER_BUDGET_VARIABLE`] when it holds a count of at least
+/// 1, else [`CLUSTER_COMMAND_BUDGET`].
+fn cluster_command_budget() -> u64 {
+    std::env::var(CLUSTER_BUDGET_VARIABLE)
+        .ok()
+        .and_then(|text| text.trim().parse::<u64>().ok())
+        .filter(|&n| n >= 1)
+        .unwrap_or(CLUSTER_COMMAND_BUDGET)
+}
 /// Storage buffers of the cull set besides the view uniform: the scene's cull entries and
 /// matrices, the commands and counts, both visibility buffers, the pyramid, and with clusters
 /// the scene's clusters and groups.
@@ -338,6 +359,10 @@ pub struct GpuCuller<const OCCLUSION: bool, const CLUSTERS: bool> {
     /// commands); 4 bytes each for `gpu-frustum`, which reads none.
     visibility: [HostBuffer; 2],
     visibility_words: u32,
+    /// The cluster commands a slot gives the cuts at the host's threshold (this frame's), and
+    /// the most it may give (see [`CLUSTER_COMMAND_BUDGET`]).
+    cluster_budget: u32,
+    max_cluster_budget: u64,
     /// The depth pyramid (occlusion) and the depth size it was made for.
     pyramid: HostBuffer,
     pyramid_size: (u32, u32),
@@ -368,6 +393,8 @@ impl<const OCCLUSION: bool, const CLUSTERS: bool> Technique for GpuCuller<OCCLUS
             counts,
             commands: None,
             capacity: 0,
+            cluster_budget: 0,
+            max_cluster_budget: cluster_command_budget(),
             visibility_words: 0,
             pyramid_size: (0, 0),
             pyramid_levels: 1,
@@ -589,6 +616,7 @@ impl<const OCCLUSION: bool, const CLUSTERS: bool> GpuCuller<OCCLUSION, CLUSTERS>
                 lod_error,
                 back_faces_hidden: back_faces_hidden.get(index).copied().unwrap_or(false),
                 command_capacity: self.capacity,
+                cluster_budget: self.cluster_budget,
             };
             let constants = words(&[
                 dispatch.instance_count,
@@ -606,8 +634,9 @@ impl<const OCCLUSION: bool, const CLUSTERS: bool> GpuCuller<OCCLUSION, CLUSTERS>
                 dispatch.lod_error.to_bits(),
                 u32::from(dispatch.back_faces_hidden),
                 dispatch.command_capacity,
+                dispatch.cluster_budget,
             ]);
-            // SAFETY: recording; the constants fit the layout's 60 bytes.
+            // SAFETY: recording; the constants fit the layout's 64 bytes.
             unsafe {
                 device.cmd_push_constants(
                     command_buffer,
@@ -793,10 +822,17 @@ impl<const OCCLUSION: bool, const CLUSTERS: bool> GpuCulling for GpuCuller<OCCLU
         } else {
             None
         };
-        // Each cluster of a candidate may need its own command; a part drawn whole needs one.
-        let commands = clusters.map_or(instances, |c| {
-            u32::try_from(c.candidate_clusters).unwrap_or(u32::MAX)
+        // A part drawn whole needs one command; with clusters, the cuts get a budget and
+        // every part room for its coarsest cut.
+        let (commands, cluster_budget) = clusters.map_or((instances, 0), |c| {
+            let budget = c.candidate_clusters.min(self.max_cluster_budget);
+            let room = budget.saturating_add(c.candidate_coarsest_clusters);
+            (
+                u32::try_from(room).unwrap_or(u32::MAX),
+                u32::try_from(budget).unwrap_or(u32::MAX),
+            )
         });
+        self.cluster_budget = cluster_budget;
         let command_buffer = cull.command_buffer();
         let view = cull
             .view_buffer()

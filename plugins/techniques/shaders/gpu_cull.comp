@@ -100,6 +100,16 @@ struct Group {
 const uint CLUSTER_ORIGINAL = 0xffffffffu;
 layout(set = 0, binding = 8, std430) readonly buffer Clusters { Cluster clusters[]; };
 layout(set = 0, binding = 9, std430) readonly buffer Groups { Group groups[]; };
+// Cluster visibility at the end of the last frame (read) and of this one (written by the first
+// pass of phase 1): one bit per (instance, cluster) pair, found by hashing it into a table of
+// cluster_bit_mask + 1 bits. Two pairs may share a bit: phase 0 then draws a hidden cluster,
+// which costs time, never a cluster that phase 1 would then leave out (both phases read the
+// same bits).
+layout(set = 0, binding = 10, std430) readonly buffer LastClusters { uint last_clusters[]; };
+layout(set = 0, binding = 11, std430) buffer NowClusters { uint now_clusters[]; };
+// One bit per instance id, cleared every frame: phase 0 found no room for the part's cut in its
+// budget and drew none of it, so phase 1 draws all of it that is visible.
+layout(set = 0, binding = 12, std430) buffer Phase0Skipped { uint phase0_skipped[]; };
 #endif
 
 layout(push_constant) uniform Dispatch {
@@ -127,6 +137,8 @@ layout(push_constant) uniform Dispatch {
     // Of a pass slot's commands, how many the cuts at `lod_error` may take; past it, a part is
     // drawn at its coarsest, which the rest of the slot always has room for.
     uint cluster_budget;
+    // The cluster visibility table's bits less one.
+    uint cluster_bit_mask;
 } dispatch;
 
 // Inside the frustum.
@@ -243,6 +255,11 @@ void write_command(uint slot, uint first, uint count, uint vertex_base, uint id)
     }
 }
 
+// Whether instance `id` was visible at the end of the last frame.
+bool bit(uint id) {
+    return (last_visible[id >> 5] >> (id & 31u) & 1u) != 0u;
+}
+
 // Appends an indirect command for `count` indices from `first`, instance `id`.
 void append(uint first, uint count, uint vertex_base, uint id) {
     write_command(atomicAdd(counts[dispatch.pass_slot], 1u), first, count, vertex_base, id);
@@ -311,11 +328,23 @@ bool faces_away(Cluster cluster, Placement place) {
     return dot(normalize(apex), axis) >= cluster.cone_cutoff;
 }
 
+// The bit of cluster `k` of instance `id` in the cluster visibility tables.
+uint cluster_bit(uint id, uint k) {
+    uint h = id * 0x9e3779b1u ^ (k + 0x7f4a7c15u) * 0x85ebca77u;
+    h ^= h >> 15;
+    h *= 0x2c1b3c6du;
+    h ^= h >> 12;
+    return h & dispatch.cluster_bit_mask;
+}
+
 // Walks the instance's clusters in the cut at `threshold` that pass the cluster tests, merging
 // those that follow each other in the index buffer into one command: counts the commands, and
-// writes them from `slot` on when `write`.
+// writes them from `slot` on when `write`. With occlusion, phase 0 takes the clusters visible
+// at the end of the last frame (of an instance that was: `was_visible`), phase 1 the others
+// that pass the depth pyramid, and records every cluster that passes it.
 uint walk_clusters(CullEntry entry, uint id, Placement place, bool back_faces_may_go,
-                   float threshold, bool write, uint slot) {
+                   float threshold, bool write, uint slot, bool phase0_drew_none) {
+    bool was_visible = dispatch.mode != MODE_FRUSTUM && bit(id) && !phase0_drew_none;
     uint count = clusters[entry.first_cluster].part_clusters;
     uint commands_made = 0u;
     uint run_first = 0u;
@@ -342,11 +371,27 @@ uint walk_clusters(CullEntry entry, uint id, Placement place, bool back_faces_ma
         }
         vec3 center = place.translation + place.rotation * cluster.sphere.xyz;
         float radius = cluster.sphere.w * place.scale;
-        bool drawn = in_frustum(center, radius) && !against_sections(center, radius).x
-            && !(back_faces_may_go && faces_away(cluster, place))
-            && (dispatch.mode != MODE_NEWLY_VISIBLE || passes_pyramid(center, radius));
-        if (!drawn) {
+        bool tested = in_frustum(center, radius) && !against_sections(center, radius).x
+            && !(back_faces_may_go && faces_away(cluster, place));
+        if (!tested) {
             continue;
+        }
+        uint visibility_bit = cluster_bit(id, k - entry.first_cluster);
+        bool was = was_visible && dispatch.back_faces_hidden != 0u
+            && (last_clusters[visibility_bit >> 5] >> (visibility_bit & 31u) & 1u) != 0u;
+        if (dispatch.mode == MODE_LAST_VISIBLE && !was) {
+            continue;
+        }
+        if (dispatch.mode == MODE_NEWLY_VISIBLE) {
+            bool visible = passes_pyramid(center, radius);
+            // Recorded by the counting walk, which every part passes through (the writing
+            // one runs only when there is something left to draw).
+            if (visible && !write && dispatch.writes_visibility != 0u) {
+                atomicOr(now_clusters[visibility_bit >> 5], 1u << (visibility_bit & 31u));
+            }
+            if (!visible || was) {
+                continue;
+            }
         }
         if (write) {
             atomicAdd(counts[10], 1u);
@@ -371,26 +416,36 @@ uint walk_clusters(CullEntry entry, uint id, Placement place, bool back_faces_ma
 
 // Appends the commands of the instance's clusters in the cut: at the host's threshold while
 // the pass's budget lasts, else at the part's coarsest (a part is never left out for want of
-// room).
+// room). Phase 0 past the budget draws none of the part, and says so to phase 1, which then
+// draws all of it that is visible (the two phases must agree on what phase 0 drew).
 void append_clusters(CullEntry entry, uint id, Placement place, bool back_faces_may_go) {
     float threshold = dispatch.lod_error;
-    uint wanted = walk_clusters(entry, id, place, back_faces_may_go, threshold, false, 0u);
+    uint skipped_word = id >> 5;
+    uint skipped_bit = 1u << (id & 31u);
+    bool phase0_drew_none = dispatch.mode == MODE_NEWLY_VISIBLE
+        && (phase0_skipped[skipped_word] & skipped_bit) != 0u;
+    uint wanted = walk_clusters(entry, id, place, back_faces_may_go, threshold, false, 0u,
+                                phase0_drew_none);
     uint asked = atomicAdd(counts[ASKED + dispatch.pass_slot], wanted);
     if (asked + wanted > dispatch.cluster_budget) {
+        if (dispatch.mode == MODE_LAST_VISIBLE) {
+            atomicOr(phase0_skipped[skipped_word], skipped_bit);
+            return;
+        }
+        // Phase 0's clusters of this part are of the threshold's cut, the coarsest ones are
+        // not: they are all drawn (over phase 0's, where the part had any there).
         threshold = COARSEST;
-        wanted = walk_clusters(entry, id, place, back_faces_may_go, threshold, false, 0u);
+        phase0_drew_none = true;
+        wanted = walk_clusters(entry, id, place, back_faces_may_go, threshold, false, 0u,
+                               phase0_drew_none);
     }
     if (wanted == 0u) {
         return;
     }
     uint slot = atomicAdd(counts[dispatch.pass_slot], wanted);
-    walk_clusters(entry, id, place, back_faces_may_go, threshold, true, slot);
+    walk_clusters(entry, id, place, back_faces_may_go, threshold, true, slot, phase0_drew_none);
 }
 #endif
-
-bool bit(uint id) {
-    return (last_visible[id >> 5] >> (id & 31u) & 1u) != 0u;
-}
 
 void main() {
     uint id = gl_GlobalInvocationID.x;
@@ -415,11 +470,25 @@ void main() {
     bvec2 sections = against_sections(center, radius);
     bool visible = in_frustum(center, radius) && !sections.x && large_enough(center, radius);
     bool draw = visible;
+#ifdef CLUSTERS
+    // Phase 0 fills the depth that phase 1 is tested against: with clusters it draws only the
+    // passes that write it (opaque surfaces), what was visible of them. Every other pass (lines,
+    // translucent surfaces, caps) waits for phase 1, when the surfaces are whole: a part's lines
+    // drawn before all its surfaces would show through them.
+    if (dispatch.mode == MODE_LAST_VISIBLE && dispatch.back_faces_hidden == 0u) {
+        return;
+    }
+#endif
     if (dispatch.mode == MODE_LAST_VISIBLE) {
         draw = visible && bit(id);
     } else if (dispatch.mode == MODE_NEWLY_VISIBLE) {
         visible = visible && passes_pyramid(center, radius);
         draw = visible && !bit(id);
+#ifdef CLUSTERS
+        // Phase 0 drew only clusters, and only in the passes that fill the depth: every
+        // visible part goes on to phase 1 (its clusters that phase 0 left out, its lines).
+        draw = visible;
+#endif
         if (dispatch.writes_visibility != 0u && visible) {
             atomicOr(now_visible[id >> 5], 1u << (id & 31u));
         }

@@ -83,10 +83,15 @@ struct CullDispatch {
     /// Of those, how many the cuts at `lod_error` may take (cluster culling); past that, parts
     /// are drawn at their coarsest, which the rest always holds.
     cluster_budget: u32,
+    /// Bits of the cluster visibility table, less one (a power of two less one).
+    cluster_bit_mask: u32,
 }
 
 /// Bytes of [`CullDispatch`] as pushed.
-const CULL_PUSH_BYTES: u32 = 64;
+const CULL_PUSH_BYTES: u32 = 68;
+/// The most bits of the cluster visibility table (32 MiB a copy): past it, clusters share
+/// bits, which only makes phase 0 draw a few hidden clusters.
+const MAX_CLUSTER_BITS: u64 = 1 << 28;
 /// The most cluster commands a pass slot gives the cuts at the host's threshold, unless
 /// [`CLUSTER_BUDGET_VARIABLE`] says otherwise: 262 144 (5 MiB a slot), some hundred times what a
 /// 4K view's cut needs at 1 px. Full detail of a scene of billions of triangles needs more:
@@ -107,8 +112,8 @@ fn cluster_command_budget() -> u64 {
 }
 /// Storage buffers of the cull set besides the view uniform: the scene's cull entries and
 /// matrices, the commands and counts, both visibility buffers, the pyramid, and with clusters
-/// the scene's clusters and groups.
-const CULL_STORAGE_BUFFERS: u32 = 9;
+/// the scene's clusters and groups, both cluster visibility tables and the parts phase 0 skipped.
+const CULL_STORAGE_BUFFERS: u32 = 12;
 
 /// Push constants of one pyramid level.
 #[derive(Clone, Copy)]
@@ -278,7 +283,13 @@ impl Objects {
         ];
         let source = include_str!("../shaders/gpu_cull.comp");
         let source = if clusters {
-            cull_bindings.extend([(storage, 8), (storage, 9)]);
+            cull_bindings.extend([
+                (storage, 8),
+                (storage, 9),
+                (storage, 10),
+                (storage, 11),
+                (storage, 12),
+            ]);
             source.replacen("#version 460\n", "#version 460\n#define CLUSTERS 1\n", 1)
         } else {
             source.to_owned()
@@ -359,6 +370,13 @@ pub struct GpuCuller<const OCCLUSION: bool, const CLUSTERS: bool> {
     /// commands); 4 bytes each for `gpu-frustum`, which reads none.
     visibility: [HostBuffer; 2],
     visibility_words: u32,
+    /// The same for clusters (gpu-clusters): a table of bits that an instance's cluster finds
+    /// by hashing the pair, last frame's and this one's; 4 bytes each for other cullers.
+    cluster_visibility: [HostBuffer; 2],
+    cluster_visibility_words: u32,
+    /// One bit per instance id, cleared every frame: the parts whose cut phase 0 found no room
+    /// for, which phase 1 then draws whole (gpu-clusters; as big as the visibility buffers).
+    phase0_skipped: HostBuffer,
     /// The cluster commands a slot gives the cuts at the host's threshold (this frame's), and
     /// the most it may give (see [`CLUSTER_COMMAND_BUDGET`]).
     cluster_budget: u32,
@@ -369,7 +387,7 @@ pub struct GpuCuller<const OCCLUSION: bool, const CLUSTERS: bool> {
     /// Levels of the pyramid of the current target size (a push constant of the culls).
     pyramid_levels: u32,
     /// What the descriptor sets were last written with.
-    cull_written: Option<([u64; 10], u64)>,
+    cull_written: Option<([u64; 13], u64)>,
     pyramid_written: Option<[u64; 2]>,
 }
 
@@ -387,6 +405,12 @@ impl<const OCCLUSION: bool, const CLUSTERS: bool> Technique for GpuCuller<OCCLUS
         let tiny = |name| gpu.create_buffer(name, 4, visibility_usage, abi::CADR_MEMORY_GPU_ONLY);
         Ok(Self {
             visibility: [tiny("gpu cull visibility")?, tiny("gpu cull visibility")?],
+            cluster_visibility: [
+                tiny("gpu cull cluster visibility")?,
+                tiny("gpu cull cluster visibility")?,
+            ],
+            cluster_visibility_words: 1,
+            phase0_skipped: tiny("gpu cull phase 0 skipped")?,
             pyramid: tiny("gpu cull pyramid")?,
             gpu,
             objects,
@@ -435,7 +459,7 @@ impl<const OCCLUSION: bool, const CLUSTERS: bool> GpuCuller<OCCLUSION, CLUSTERS>
     /// `command_buffer`.
     fn reserve(
         &mut self,
-        (instances, commands): (u32, u32),
+        (instances, commands, clusters): (u32, u32, u64),
         command_buffer: vk::CommandBuffer,
     ) -> Result<(), String> {
         let storage = vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_DST;
@@ -473,6 +497,37 @@ impl<const OCCLUSION: bool, const CLUSTERS: bool> GpuCuller<OCCLUSION, CLUSTERS>
                 };
             }
             self.visibility_words = words;
+            if CLUSTERS {
+                self.phase0_skipped = self.gpu.create_buffer(
+                    "gpu cull phase 0 skipped",
+                    u64::from(words) * 4,
+                    storage,
+                    abi::CADR_MEMORY_GPU_ONLY,
+                )?;
+            }
+        }
+        let bits = clusters.clamp(32, MAX_CLUSTER_BITS).next_power_of_two();
+        if CLUSTERS && bits / 32 > u64::from(self.cluster_visibility_words) {
+            let words = (bits / 32) as u32;
+            for buffer in &mut self.cluster_visibility {
+                *buffer = self.gpu.create_buffer(
+                    "gpu cull cluster visibility",
+                    u64::from(words) * 4,
+                    storage | vk::BufferUsageFlags::TRANSFER_SRC,
+                    abi::CADR_MEMORY_GPU_ONLY,
+                )?;
+                // SAFETY: recording outside rendering; the buffer allows transfer writes.
+                unsafe {
+                    self.gpu.device.cmd_fill_buffer(
+                        command_buffer,
+                        buffer.raw(),
+                        0,
+                        vk::WHOLE_SIZE,
+                        0,
+                    )
+                };
+            }
+            self.cluster_visibility_words = words;
         }
         Ok(())
     }
@@ -522,9 +577,12 @@ impl<const OCCLUSION: bool, const CLUSTERS: bool> GpuCuller<OCCLUSION, CLUSTERS>
             buffers.extend([
                 buffer(&clusters.cluster_buffer),
                 buffer(&clusters.group_buffer),
+                self.cluster_visibility[LAST].raw(),
+                self.cluster_visibility[NOW].raw(),
+                self.phase0_skipped.raw(),
             ]);
         }
-        let mut raw = [0u64; 10];
+        let mut raw = [0u64; 13];
         for (slot, b) in raw.iter_mut().zip(&buffers) {
             *slot = b.as_raw();
         }
@@ -617,6 +675,7 @@ impl<const OCCLUSION: bool, const CLUSTERS: bool> GpuCuller<OCCLUSION, CLUSTERS>
                 back_faces_hidden: back_faces_hidden.get(index).copied().unwrap_or(false),
                 command_capacity: self.capacity,
                 cluster_budget: self.cluster_budget,
+                cluster_bit_mask: self.cluster_visibility_words * 32 - 1,
             };
             let constants = words(&[
                 dispatch.instance_count,
@@ -635,8 +694,9 @@ impl<const OCCLUSION: bool, const CLUSTERS: bool> GpuCuller<OCCLUSION, CLUSTERS>
                 u32::from(dispatch.back_faces_hidden),
                 dispatch.command_capacity,
                 dispatch.cluster_budget,
+                dispatch.cluster_bit_mask,
             ]);
-            // SAFETY: recording; the constants fit the layout's 64 bytes.
+            // SAFETY: recording; the constants fit the layout's 68 bytes.
             unsafe {
                 device.cmd_push_constants(
                     command_buffer,
@@ -689,6 +749,19 @@ impl<const OCCLUSION: bool, const CLUSTERS: bool> GpuCuller<OCCLUSION, CLUSTERS>
                 &region,
             )
         };
+        if CLUSTERS {
+            let region =
+                [vk::BufferCopy::default().size(u64::from(self.cluster_visibility_words) * 4)];
+            // SAFETY: as above, for the cluster tables of `cluster_visibility_words` words.
+            unsafe {
+                self.gpu.device.cmd_copy_buffer(
+                    command_buffer,
+                    self.cluster_visibility[NOW].raw(),
+                    self.cluster_visibility[LAST].raw(),
+                    &region,
+                )
+            };
+        }
     }
 
     /// Builds the depth pyramid from the depth drawn in phase 0.
@@ -859,7 +932,8 @@ impl<const OCCLUSION: bool, const CLUSTERS: bool> GpuCulling for GpuCuller<OCCLU
                 ));
             }
             // New buffers are cleared first (nothing else uses them yet).
-            self.reserve((instances, commands), command_buffer)?;
+            let cluster_bits = clusters.map_or(0, |c| c.candidate_clusters);
+            self.reserve((instances, commands, cluster_bits), command_buffer)?;
             // The previous frame's reads of our buffers (indirect draws, culls, the visibility
             // copy) and those clears come before this frame's clears.
             barrier(
@@ -894,6 +968,20 @@ impl<const OCCLUSION: bool, const CLUSTERS: bool> GpuCulling for GpuCuller<OCCLU
                         0,
                     )
                 };
+                if CLUSTERS {
+                    for buffer in [&self.cluster_visibility[NOW], &self.phase0_skipped] {
+                        // SAFETY: as above.
+                        unsafe {
+                            device.cmd_fill_buffer(
+                                command_buffer,
+                                buffer.raw(),
+                                0,
+                                vk::WHOLE_SIZE,
+                                0,
+                            )
+                        };
+                    }
+                }
             }
             // SAFETY: recording outside rendering; the buffer allows transfer writes.
             unsafe {

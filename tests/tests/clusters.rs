@@ -16,7 +16,7 @@ use cadr_core::technique::ShadeMode;
 use cadr_core::tree::SceneTree;
 use cadr_core::view::View;
 use cadr_core::vk::Device;
-use cadr_tests::images::{compare, SAME_PICTURE};
+use cadr_tests::images::{compare, is_background, SAME_PICTURE};
 use cadr_tests::{assert_no_validation_errors, plugin_registry, scene_wide, test_device};
 
 const SIZE: (u32, u32) = (240, 180);
@@ -286,6 +286,73 @@ fn a_real_cad_model_keeps_its_picture_at_the_default_threshold() {
         assert!(difference.mean <= 0.02, "turn {turn}: {difference:?}");
         assert!(lod_stats.triangles < full_stats.triangles, "turn {turn}");
     }
+    drop(drawing);
+    assert_no_validation_errors(&device);
+}
+
+#[test]
+fn where_the_cut_switches_levels_no_crack_shows_the_background() {
+    // Seen close and at a slant, the near clusters of a part are fine and the far ones coarse:
+    // groups simplified with their borders locked meet without gaps, so no pixel farther
+    // inside a part's full-detail outline than the threshold shows the background (the
+    // outline itself may move by the threshold).
+    let device = test_device();
+    let scene = fine(1, 6);
+    let bounds = bounds(&scene);
+    let mut drawing = Drawing::new(&device, &scene);
+    let camera = Camera::orbit(&bounds, aspect(), 0.05, 0.7);
+    let (full, full_stats) = drawing.draw("gpu-clusters", 0.0, &camera);
+    // Covered pixels of the full-detail picture, summed over every rectangle from the origin.
+    let (w, h) = (SIZE.0 as usize, SIZE.1 as usize);
+    let mut sums = vec![0u32; (w + 1) * (h + 1)];
+    for y in 0..h {
+        for x in 0..w {
+            let covered = u32::from(!is_background(&full, x as u32, y as u32));
+            sums[(y + 1) * (w + 1) + x + 1] =
+                covered + sums[y * (w + 1) + x + 1] + sums[(y + 1) * (w + 1) + x]
+                    - sums[y * (w + 1) + x];
+        }
+    }
+    // Pixels whose every neighbour within `d` is covered at full detail.
+    let inside = |d: usize| -> Vec<(u32, u32)> {
+        let mut pixels = Vec::new();
+        for y in d..h.saturating_sub(d) {
+            for x in d..w.saturating_sub(d) {
+                let (x0, y0, x1, y1) = (x - d, y - d, x + d + 1, y + d + 1);
+                let covered = sums[y1 * (w + 1) + x1] + sums[y0 * (w + 1) + x0]
+                    - sums[y0 * (w + 1) + x1]
+                    - sums[y1 * (w + 1) + x0];
+                if covered as usize == (2 * d + 1) * (2 * d + 1) {
+                    pixels.push((x as u32, y as u32));
+                }
+            }
+        }
+        pixels
+    };
+    let mut triangles = vec![full_stats.triangles];
+    for pixels in [1.0f32, 4.0, 16.0] {
+        let (image, stats) = drawing.draw("gpu-clusters", pixels, &camera);
+        triangles.push(stats.triangles);
+        let inner = inside(pixels.ceil() as usize + 1);
+        assert!(
+            inner.len() > 3_000,
+            "{pixels} px: {} pixels inside",
+            inner.len()
+        );
+        let holes: Vec<_> = inner
+            .iter()
+            .filter(|&&(x, y)| is_background(&image, x, y))
+            .collect();
+        assert!(
+            holes.is_empty(),
+            "{pixels} px: background at {:?}",
+            &holes[..holes.len().min(10)]
+        );
+    }
+    assert!(
+        triangles.windows(2).all(|pair| pair[1] < pair[0]),
+        "each threshold draws a coarser cut: {triangles:?}"
+    );
     drop(drawing);
     assert_no_validation_errors(&device);
 }

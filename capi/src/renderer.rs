@@ -845,6 +845,48 @@ pub unsafe extern "C" fn cadr_renderer_min_pixels(
     })
 }
 
+/// Sets the level-of-detail threshold of the cluster culler (`gpu-clusters`), in pixels: each
+/// part is drawn with the coarsest clusters whose simplification error projects at or under
+/// `pixels` on screen (a part never vanishes for being far: it keeps its coarsest clusters).
+/// 0 draws every part at full detail; the default is 1. Other cullers draw parts whole and
+/// ignore it. Applies from the next frame.
+///
+/// Returns `CADR_RESULT_OK`, `CADR_RESULT_INVALID_ARGUMENT` (negative, infinite or NaN) or a
+/// handle error. Ownership: nothing changes hands. Thread-safety: as `cadr_renderer_create`.
+#[no_mangle]
+pub extern "C" fn cadr_renderer_set_lod_error(renderer: CadrRenderer, pixels: f32) -> CadrResult {
+    guard(|| {
+        if !pixels.is_finite() || pixels < 0.0 {
+            return Err(Failure::invalid(format!(
+                "level-of-detail error {pixels}: expected a finite number of pixels >= 0"
+            )));
+        }
+        with_renderer(renderer, |state| {
+            Ok(state.view.techniques_mut().set_lod_error(pixels)?)
+        })
+    })
+}
+
+/// Writes the level-of-detail threshold of the cluster culler in pixels (0: full detail).
+///
+/// Returns `CADR_RESULT_OK`, `CADR_RESULT_NULL_ARGUMENT` or a handle error.
+/// Ownership: the output is the caller's; cadr keeps no pointer to it.
+/// Thread-safety: as `cadr_renderer_create`.
+///
+/// # Safety
+/// `pixels` is null or writable.
+#[no_mangle]
+pub unsafe extern "C" fn cadr_renderer_lod_error(
+    renderer: CadrRenderer,
+    pixels: *mut f32,
+) -> CadrResult {
+    guard(|| {
+        let value = with_renderer(renderer, |state| Ok(state.view.techniques().lod_error()))?;
+        // SAFETY: pixels is null or writable (the caller's contract).
+        unsafe { deliver(pixels, "pixels", value) }
+    })
+}
+
 /// Turns frame replay on (the default) or off. With it on, a frame that would record what the
 /// renderer's last frame recorded (only the camera moved, or nothing changed; also parts moved
 /// or material values changed, when every active technique reads parameter values on the

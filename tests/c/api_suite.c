@@ -833,6 +833,32 @@ static void test_renderer(CadrContext context, struct Built *b) {
     EXPECT(cadr_renderer_min_pixels(renderer, NULL), CADR_RESULT_NULL_ARGUMENT);
   }
 
+  /* Level of detail (gpu-clusters; 1 px by default): the coarsest cut draws no more than full
+   * detail and never nothing; bad thresholds are refused. */
+  {
+    float pixels = -1.0f;
+    uint64_t full;
+    struct CadrTechniqueSelection clusters = {"arena", "ssbo-index", "individual-indirect-count",
+                                              "gpu-clusters"};
+    OK(cadr_renderer_lod_error(renderer, &pixels));
+    CHECK(pixels == 1.0f);
+    OK(cadr_renderer_set_techniques(renderer, &clusters));
+    OK(cadr_renderer_set_lod_error(renderer, 0.0f));
+    OK(cadr_renderer_render(renderer, b->scene, &camera, &stats));
+    full = stats.triangles;
+    CHECK(full > 0);
+    OK(cadr_renderer_set_lod_error(renderer, 1.0e6f));
+    OK(cadr_renderer_lod_error(renderer, &pixels));
+    CHECK(pixels == 1.0e6f);
+    OK(cadr_renderer_render(renderer, b->scene, &camera, &stats));
+    CHECK(stats.triangles > 0 && stats.triangles <= full);
+    OK(cadr_renderer_set_lod_error(renderer, 1.0f));
+    EXPECT(cadr_renderer_set_lod_error(renderer, -1.0f), CADR_RESULT_INVALID_ARGUMENT);
+    MESSAGE_HAS("level-of-detail error");
+    EXPECT(cadr_renderer_set_lod_error(renderer, INFINITY), CADR_RESULT_INVALID_ARGUMENT);
+    EXPECT(cadr_renderer_lod_error(renderer, NULL), CADR_RESULT_NULL_ARGUMENT);
+  }
+
   /* Frame replay (on by default): an unchanged second frame resubmits the first's recording
    * and shows the same picture; off, every frame is recorded. */
   {

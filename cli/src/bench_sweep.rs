@@ -8,6 +8,26 @@ use cadr_core::technique::Combination;
 use crate::args::BenchArgs;
 use crate::bench::{row_mode, rows_json, section_json, stats_json, Bench, Row, SWEEP_SET};
 
+/// Measures `combinations` (and the baseline, `with_baseline`) on each scene of `scenes`
+/// (`(key, source)` pairs): per scene its key, statistics and rows.
+fn measure_scenes<K>(
+    bench: &Bench,
+    args: &BenchArgs,
+    scenes: impl Iterator<Item = (K, String)>,
+    combinations: &[Combination],
+    with_baseline: bool,
+) -> Result<Vec<(K, SceneStats, Vec<Row>)>, String> {
+    scenes
+        .map(|(key, source)| {
+            println!("measuring {source} ...");
+            let scene = crate::load_scene(&source)?;
+            let (stats, rows) =
+                bench.run(&scene, Some(combinations), args, (true, with_baseline))?;
+            Ok((key, stats, rows))
+        })
+        .collect()
+}
+
 /// Measures the sweep set over gen:grid scenes of growing size.
 pub(crate) fn run_sweep(bench: &Bench, args: &BenchArgs) -> Result<serde_json::Value, String> {
     let parts: Vec<u64> = args
@@ -24,14 +44,8 @@ pub(crate) fn run_sweep(bench: &Bench, args: &BenchArgs) -> Result<serde_json::V
             ..Combination::built_in()
         })
         .collect();
-    let mut columns: Vec<(u64, SceneStats, Vec<Row>)> = Vec::new();
-    for &n in &parts {
-        let name = format!("gen:grid:parts={n}");
-        println!("measuring {name} ...");
-        let scene = crate::load_scene(&name)?;
-        let (stats, rows) = bench.run(&scene, Some(&combinations), args, (true, true))?;
-        columns.push((n, stats, rows));
-    }
+    let scenes = parts.iter().map(|&n| (n, format!("gen:grid:parts={n}")));
+    let columns = measure_scenes(bench, args, scenes, &combinations, true)?;
     let Some((_, _, first_rows)) = columns.first() else {
         return Err("no sweep sizes".into());
     };
@@ -114,15 +128,12 @@ pub(crate) fn run_detail_sweep(
     details: &[u32],
 ) -> Result<serde_json::Value, String> {
     let combinations = detail_combinations();
-    let mut columns: Vec<(String, SceneStats, Vec<Row>)> = Vec::new();
-    for &detail in details {
+    let scenes = details.iter().map(|&detail| {
         let name = format!("gen:fine:units={},detail={detail}", args.sweep_units);
-        println!("measuring {name} ...");
-        let scene = crate::load_scene(&name)?;
-        // The GPU rows are the subject: the baseline's CPU reference is left out.
-        let (stats, rows) = bench.run(&scene, Some(&combinations), args, (true, false))?;
-        columns.push((name, stats, rows));
-    }
+        (name.clone(), name)
+    });
+    // The GPU rows are the subject: the baseline's CPU reference is left out.
+    let columns = measure_scenes(bench, args, scenes, &combinations, false)?;
     let Some((_, _, first_rows)) = columns.first() else {
         return Err("no sweep details".into());
     };

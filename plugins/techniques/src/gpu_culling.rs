@@ -428,6 +428,15 @@ impl<const OCCLUSION: bool, const CLUSTERS: bool> Technique for GpuCuller<OCCLUS
     }
 }
 
+/// Records filling `buffer` with zeros (outside rendering; the buffer allows transfer writes).
+fn clear(gpu: &Gpu, command_buffer: vk::CommandBuffer, buffer: &HostBuffer) {
+    // SAFETY: recording outside rendering; every buffer cleared here has transfer-dst usage.
+    unsafe {
+        gpu.device
+            .cmd_fill_buffer(command_buffer, buffer.raw(), 0, vk::WHOLE_SIZE, 0)
+    };
+}
+
 /// A barrier from `src` to `dst` (stages and accesses) on all memory.
 fn barrier(
     gpu: &Gpu,
@@ -478,58 +487,46 @@ impl<const OCCLUSION: bool, const CLUSTERS: bool> GpuCuller<OCCLUSION, CLUSTERS>
         let needed = instances.max(1);
         if OCCLUSION && needed.div_ceil(32) > self.visibility_words {
             let words = needed.div_ceil(32).next_power_of_two();
-            for buffer in &mut self.visibility {
-                *buffer = self.gpu.create_buffer(
-                    "gpu cull visibility",
-                    u64::from(words) * 4,
-                    storage | vk::BufferUsageFlags::TRANSFER_SRC,
-                    abi::CADR_MEMORY_GPU_ONLY,
-                )?;
-                // SAFETY: recording outside rendering; the buffer allows transfer writes.
-                unsafe {
-                    self.gpu.device.cmd_fill_buffer(
-                        command_buffer,
-                        buffer.raw(),
-                        0,
-                        vk::WHOLE_SIZE,
-                        0,
-                    )
-                };
-            }
+            self.visibility = [
+                self.zeroed_bits("gpu cull visibility", words, command_buffer)?,
+                self.zeroed_bits("gpu cull visibility", words, command_buffer)?,
+            ];
             self.visibility_words = words;
             if CLUSTERS {
-                self.phase0_skipped = self.gpu.create_buffer(
-                    "gpu cull phase 0 skipped",
-                    u64::from(words) * 4,
-                    storage,
-                    abi::CADR_MEMORY_GPU_ONLY,
-                )?;
+                self.phase0_skipped =
+                    self.zeroed_bits("gpu cull phase 0 skipped", words, command_buffer)?;
             }
         }
         let bits = clusters.clamp(32, MAX_CLUSTER_BITS).next_power_of_two();
         if CLUSTERS && bits / 32 > u64::from(self.cluster_visibility_words) {
             let words = (bits / 32) as u32;
-            for buffer in &mut self.cluster_visibility {
-                *buffer = self.gpu.create_buffer(
-                    "gpu cull cluster visibility",
-                    u64::from(words) * 4,
-                    storage | vk::BufferUsageFlags::TRANSFER_SRC,
-                    abi::CADR_MEMORY_GPU_ONLY,
-                )?;
-                // SAFETY: recording outside rendering; the buffer allows transfer writes.
-                unsafe {
-                    self.gpu.device.cmd_fill_buffer(
-                        command_buffer,
-                        buffer.raw(),
-                        0,
-                        vk::WHOLE_SIZE,
-                        0,
-                    )
-                };
-            }
+            self.cluster_visibility = [
+                self.zeroed_bits("gpu cull cluster visibility", words, command_buffer)?,
+                self.zeroed_bits("gpu cull cluster visibility", words, command_buffer)?,
+            ];
             self.cluster_visibility_words = words;
         }
         Ok(())
+    }
+
+    /// A GPU buffer of `words` words of bits (storage, copied from and to), cleared in
+    /// `command_buffer` before anything reads it.
+    fn zeroed_bits(
+        &self,
+        name: &str,
+        words: u32,
+        command_buffer: vk::CommandBuffer,
+    ) -> Result<HostBuffer, String> {
+        let buffer = self.gpu.create_buffer(
+            name,
+            u64::from(words) * 4,
+            vk::BufferUsageFlags::STORAGE_BUFFER
+                | vk::BufferUsageFlags::TRANSFER_DST
+                | vk::BufferUsageFlags::TRANSFER_SRC,
+            abi::CADR_MEMORY_GPU_ONLY,
+        )?;
+        clear(&self.gpu, command_buffer, &buffer);
+        Ok(buffer)
     }
 
     /// Makes the pyramid buffer fit a `width` × `height` depth image (before the frame's
@@ -910,8 +907,6 @@ impl<const OCCLUSION: bool, const CLUSTERS: bool> GpuCulling for GpuCuller<OCCLU
         let view = cull
             .view_buffer()
             .ok_or("the host passed no view buffer (a host of ABI 1.5 or later does)")?;
-        let gpu = Arc::clone(&self.gpu);
-        let device = &gpu.device;
         let transfer_to_compute = (
             (
                 vk::PipelineStageFlags2::ALL_TRANSFER,
@@ -958,50 +953,19 @@ impl<const OCCLUSION: bool, const CLUSTERS: bool> GpuCulling for GpuCuller<OCCLU
             if OCCLUSION {
                 self.reserve_pyramid(width, height)?;
                 // This frame reads what the last one found visible and writes afresh.
-                // SAFETY: recording outside rendering; the buffer allows transfer writes.
-                unsafe {
-                    device.cmd_fill_buffer(
-                        command_buffer,
-                        self.visibility[NOW].raw(),
-                        0,
-                        vk::WHOLE_SIZE,
-                        0,
-                    )
-                };
+                clear(&self.gpu, command_buffer, &self.visibility[NOW]);
                 if CLUSTERS {
-                    for buffer in [&self.cluster_visibility[NOW], &self.phase0_skipped] {
-                        // SAFETY: as above.
-                        unsafe {
-                            device.cmd_fill_buffer(
-                                command_buffer,
-                                buffer.raw(),
-                                0,
-                                vk::WHOLE_SIZE,
-                                0,
-                            )
-                        };
-                    }
+                    clear(&self.gpu, command_buffer, &self.cluster_visibility[NOW]);
+                    clear(&self.gpu, command_buffer, &self.phase0_skipped);
                 }
             }
-            // SAFETY: recording outside rendering; the buffer allows transfer writes.
-            unsafe {
-                device.cmd_fill_buffer(command_buffer, self.counts.raw(), 0, vk::WHOLE_SIZE, 0);
-            }
+            clear(&self.gpu, command_buffer, &self.counts);
             // Where device-generated commands may draw them (the `dgc` submission runs a pass
             // in chunks that each read the pass's count), what lies past the count must draw
             // nothing: commands of zero instances.
             if self.gpu.features & abi::CADR_FEATURE_DEVICE_GENERATED_COMMANDS_EXT != 0 {
                 if let Some(commands) = &self.commands {
-                    // SAFETY: recording outside rendering; the buffer allows transfer writes.
-                    unsafe {
-                        device.cmd_fill_buffer(
-                            command_buffer,
-                            commands.raw(),
-                            0,
-                            vk::WHOLE_SIZE,
-                            0,
-                        );
-                    }
+                    clear(&self.gpu, command_buffer, commands);
                 }
             }
             barrier(

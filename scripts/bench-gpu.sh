@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # The GPU benchmark for a lent machine (one NVIDIA H100 or H200): every table of
-# docs/BENCHMARKS.md's GPU section, as bench JSON and PNG plots, at 1920x1080, in under 8
+# docs/BENCHMARKS.md's GPU section, as bench JSON and PNG plots, at 1920x1080, in under 9
 # minutes. That machine reaches no package registry, so nothing is built there: run it from a
 # copy of the repository that carries a release build (target/release: cadr and the plugin
 # libraries, made here with `cargo build --release --workspace`) and, where the machine has no
@@ -74,10 +74,12 @@ fi
 if (( dry_run )); then
   size=320x240 frames=2 few_frames=1 big="gen:grid:parts=2000" heavy="gen:grid:parts=200,tris=400"
   card="gen:demo" racecar="gen:demo" cabinet="gen:cabinet:cabinets=2"
+  fine="gen:fine:units=1,detail=1" details=1,2 units=1
   per_run=120
 else
   size=1920x1080 frames=20 few_frames=3 big="gen:grid:parts=10000000" heavy="gen:grid:parts=100000,tris=400"
   card="gen:graphicscard" racecar="gen:racecar" cabinet="gen:cabinet"
+  fine="gen:fine:units=16,detail=4" details=1,2,4,8 units=16
   per_run=150
 fi
 
@@ -126,6 +128,11 @@ bench dgc-graphicscard "$frames" "$card" "${scene_wide[@]}" --submit dgc,groups-
   --cull none,gpu-frustum --camera orbit
 bench dgc-racecar "$frames" "$racecar" "${scene_wide[@]}" --submit dgc,groups-mdi-replay \
   --cull none,gpu-frustum --camera orbit
+# Clusters and level of detail: per-part occlusion against clusters at full detail and at 1 px,
+# orbiting; then the GPU time over gen:fine's tessellations (scene triangles).
+bench clusters-fine "$frames" "$fine" "${scene_wide[@]}" --submit individual-indirect-count \
+  --cull gpu-occlusion,gpu-clusters --lod-error 0,1 --camera orbit --no-replay
+bench clusters-sweep "$few_frames" --sweep-detail "$details" --sweep-units "$units" --no-replay
 
-echo "bench-gpu: wrote $out ($failures of 8 tables failed)"
+echo "bench-gpu: wrote $out ($failures of 10 tables failed)"
 exit $(( failures > 0 ))

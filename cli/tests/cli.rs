@@ -1388,7 +1388,7 @@ fn the_gpu_benchmark_script_dry_runs_and_writes_its_files() {
         .expect("run scripts/bench-gpu.sh");
     let log = format!("{}{}", stdout(&output), stderr(&output));
     assert!(output.status.success(), "{log}");
-    assert!(log.contains("0 of 8 tables failed"), "{log}");
+    assert!(log.contains("0 of 10 tables failed"), "{log}");
     let devices = std::fs::read_to_string(out.join("devices.txt")).unwrap();
     assert!(devices.contains("Vulkan"), "{devices}");
     for table in [
@@ -1400,6 +1400,7 @@ fn the_gpu_benchmark_script_dry_runs_and_writes_its_files() {
         "grid-10m",
         "dgc-graphicscard",
         "dgc-racecar",
+        "clusters-fine",
     ] {
         let plot = std::fs::metadata(out.join(format!("{table}.png"))).unwrap();
         assert!(plot.len() > 0, "{table}.png is empty");
@@ -1421,6 +1422,19 @@ fn the_gpu_benchmark_script_dry_runs_and_writes_its_files() {
             }
         }
     }
+    let sweep: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(out.join("clusters-sweep.json")).unwrap()).unwrap();
+    assert_eq!(
+        sweep["detail_sweep"].as_array().unwrap().len(),
+        2,
+        "{sweep}"
+    );
+    assert!(
+        std::fs::metadata(out.join("clusters-sweep.png"))
+            .unwrap()
+            .len()
+            > 0
+    );
     std::fs::remove_dir_all(&out).unwrap();
 }
 

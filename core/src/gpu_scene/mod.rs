@@ -228,9 +228,8 @@ struct SceneCounts {
     last_upload: UploadStats,
     /// Instance entries refreshed by the last sync.
     last_touched: u64,
-    /// The clusters of the candidates' parts, summed (see [`abi::CadrSceneClusters`]), and
-    /// whether an instance changed since they were.
-    candidate_clusters: u64,
+    /// Whether an instance changed since the clusters of the candidates' parts were summed
+    /// (into the view's [`abi::CadrSceneClusters`]).
     clusters_stale: bool,
     /// Bytes of the textures as last built.
     texture_bytes: u64,
@@ -312,7 +311,6 @@ impl GpuScene {
                     ..UploadStats::default()
                 },
                 last_touched: 0,
-                candidate_clusters: 0,
                 clusters_stale: true,
                 texture_bytes,
             },
@@ -383,7 +381,6 @@ impl GpuScene {
             .fold([0u64; 2], |[all, coarsest], [_, count, coarse]| {
                 [all + u64::from(count), coarsest + u64::from(coarse)]
             });
-        self.counts.candidate_clusters = all;
         self.clusters_extension.0.candidate_clusters = all;
         self.clusters_extension.0.candidate_coarsest_clusters = coarsest;
         self.counts.clusters_stale = false;

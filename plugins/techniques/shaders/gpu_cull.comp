@@ -271,8 +271,6 @@ struct Placement {
     mat3 rotation;
     vec3 translation;
     float scale;
-    // A rotation, uniform scale and maybe a mirror: angles are kept, so normal cones hold.
-    bool keeps_angles;
 };
 
 // The error of `group` in pixels, as seen from the eye (at least the true projection: the
@@ -353,14 +351,12 @@ uint walk_clusters(CullEntry entry, uint id, Placement place, bool back_faces_ma
     // out costs one test, not one per cluster.
     uint group_index = clusters[entry.first_cluster].group;
     uint group_end = 0u;
-    bool group_kept = false;
     for (uint k = entry.first_cluster; k < entry.first_cluster + count; ++k) {
         if (k >= group_end) {
             Group group = groups[group_index];
             group_index += 1u;
             group_end = group.first_cluster + max(group.cluster_count, 1u);
-            group_kept = group_in_cut(group, place, threshold);
-            if (!group_kept) {
+            if (!group_in_cut(group, place, threshold)) {
                 k = max(k, group_end - 1u);
                 continue;
             }
@@ -516,8 +512,7 @@ void main() {
         bool keeps_angles = abs(dot(c1, c1) - l0) <= tolerance && abs(dot(c2, c2) - l0) <= tolerance
             && abs(dot(c0, c1)) <= tolerance && abs(dot(c0, c2)) <= tolerance
             && abs(dot(c1, c2)) <= tolerance;
-        Placement place = Placement(rotation, center - rotation * entry.sphere.xyz, scale,
-                                    keeps_angles);
+        Placement place = Placement(rotation, center - rotation * entry.sphere.xyz, scale);
         // Back faces may go where the pass hides them and the part shows none: closed, wound
         // counter-clockwise outside, opaque, and cut by no section plane.
         bool back_faces_may_go = dispatch.back_faces_hidden != 0u && keeps_angles

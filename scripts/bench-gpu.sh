@@ -13,6 +13,9 @@
 # device tool's `carry`, and the script finds it there. --dry-run measures the same rows at a small size and scene on whatever Vulkan driver is
 # present (lavapipe here): the test that the script starts and writes its files. Files go to
 # OUT-DIR (default target/bench-gpu); the device's name and driver are in devices.txt.
+# The whole run keeps inside CADR_BENCH_GPU_SECONDS (default 450): a table that would start with
+# under 20 s left is skipped and counted as failed, and a table's limit is cut to what is left,
+# so the caller's archive step always runs inside the device tool's time limit.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
@@ -92,15 +95,23 @@ fi
 } | tee "$out/devices.txt"
 
 failures=0
+deadline=$((SECONDS + ${CADR_BENCH_GPU_SECONDS:-450}))
 # One table: NAME, measured frames per row, then cadr bench's arguments. Each table has its time
 # limit, so that one slow table cannot eat the others' time.
 bench() {
   local name=$1 table_frames=$2
   shift 2
-  echo "bench-gpu: $name"
-  if ! timeout "$per_run" "$cadr" bench "$@" --size "$size" --frames "$table_frames" \
+  local left=$((deadline - SECONDS))
+  if (( left < 20 )); then
+    echo "bench-gpu: $name skipped: the run's ${CADR_BENCH_GPU_SECONDS:-450} s are spent" >&2
+    failures=$((failures + 1))
+    return
+  fi
+  local limit=$(( left < per_run ? left : per_run ))
+  echo "bench-gpu: $name (at most $limit s)"
+  if ! timeout "$limit" "$cadr" bench "$@" --size "$size" --frames "$table_frames" \
     --json "$out/$name.json" --plot "$out/$name.png" >"$out/$name.txt" 2>&1; then
-    echo "bench-gpu: $name failed or ran past ${per_run} s (see $out/$name.txt)" >&2
+    echo "bench-gpu: $name failed or ran past ${limit} s (see $out/$name.txt)" >&2
     failures=$((failures + 1))
   fi
   tail -n +1 "$out/$name.txt" | sed 's/^/  /'

@@ -138,9 +138,8 @@ impl GeneratedCommands {
         unsafe { self.functions.memory_requirements(&info) }
     }
 
-    /// The most sequences one chunk of a pass of `sequences` drawn with `pipeline` runs:
-    /// doubled from 1 while all the pass's chunks together ask for at most [`PASS_BYTES`] and
-    /// a chunk's memory does not shrink as it grows (a size that wrapped).
+    /// The most sequences one chunk of a pass of `sequences` drawn with `pipeline` runs (see
+    /// [`chunk_size_for`]), remembered per pipeline and pass size.
     fn chunk_size(
         &mut self,
         layout: dgc::IndirectCommandsLayout,
@@ -151,18 +150,9 @@ impl GeneratedCommands {
         if let Some(&(_, size)) = self.chunk_sizes.iter().find(|(k, _)| *k == key) {
             return size;
         }
-        let pass_bytes = |size: u32, chunk_bytes: u64| {
-            u64::from(sequences.div_ceil(size)).saturating_mul(chunk_bytes)
-        };
-        let mut size = 1;
-        let mut bytes = self.requirements(layout, pipeline, 1).size;
-        while size < MAX_CHUNK.min(sequences) {
-            let next = self.requirements(layout, pipeline, size * 2).size;
-            if next < bytes || pass_bytes(size * 2, next) > PASS_BYTES {
-                break;
-            }
-            (size, bytes) = (size * 2, next);
-        }
+        let size = chunk_size_for(sequences, |chunk| {
+            self.requirements(layout, pipeline, chunk).size
+        });
         if self.chunk_sizes.len() >= KEPT_CHUNK_SIZES {
             self.chunk_sizes.clear();
         }
@@ -378,6 +368,47 @@ impl GeneratedCommands {
     }
 }
 
+/// The most sequences one chunk of a pass of `sequences` runs, given `chunk_bytes`, the
+/// preprocess memory the driver asks for a chunk of so many sequences. Sizes are tried from 1,
+/// doubling up to the pass's sequences or [`MAX_CHUNK`], and stop where a chunk's memory shrinks as it grows (a size
+/// that wrapped). Of those, the largest whose chunks together (the pass) ask for at most
+/// [`PASS_BYTES`]; where none fits, the largest whose pass asks for at most an eighth more than
+/// the least any size asks for.
+///
+/// The two shapes of driver this serves: a GPU driver asks for a constant (tens of kilobytes on
+/// NVIDIA) plus tens of bytes a sequence, so the pass is cheapest as one chunk, and many small
+/// chunks would cost an execution each (68 462 of them on gen:graphicscard: 0.8 s a frame);
+/// Mesa 25.0's lavapipe asks for memory that grows with the square of the sequences, so a
+/// large pass needs many small chunks.
+fn chunk_size_for(sequences: u32, mut chunk_bytes: impl FnMut(u32) -> u64) -> u32 {
+    let pass_bytes =
+        |size: u32, bytes: u64| u64::from(sequences.div_ceil(size)).saturating_mul(bytes);
+    let mut bytes = chunk_bytes(1);
+    let mut tried = vec![(1, pass_bytes(1, bytes))];
+    let mut size = 1;
+    while size < MAX_CHUNK.min(sequences) {
+        let next_size = (size * 2).min(MAX_CHUNK).min(sequences);
+        let next = chunk_bytes(next_size);
+        if next < bytes {
+            break;
+        }
+        (size, bytes) = (next_size, next);
+        tried.push((size, pass_bytes(size, bytes)));
+    }
+    let largest_within = |limit: u64| {
+        tried
+            .iter()
+            .filter(|&&(_, pass)| pass <= limit)
+            .map(|&(size, _)| size)
+            .max()
+    };
+    let least = tried.iter().map(|&(_, pass)| pass).min().unwrap_or(0);
+    // Where the budget cannot be met, fewer executions are worth an eighth more memory.
+    largest_within(PASS_BYTES)
+        .or_else(|| largest_within(least.saturating_add(least / 8)))
+        .unwrap_or(1)
+}
+
 impl Drop for GeneratedCommands {
     fn drop(&mut self) {
         if let Some(preprocess) = self.preprocess.take() {
@@ -387,5 +418,51 @@ impl Drop for GeneratedCommands {
             // SAFETY: the host drops techniques after the GPU finished their frames.
             unsafe { self.functions.destroy_layout(layout, self.gpu.allocator()) };
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A GPU driver's shape: a constant plus a little per sequence.
+    fn constant_plus_linear(sequences: u32) -> u64 {
+        32_768 + 40 * u64::from(sequences)
+    }
+
+    /// Mesa 25.0 lavapipe's shape: the square of the sequences, wrapping at 4 GiB.
+    fn square_wrapping(sequences: u32) -> u64 {
+        (144 * u64::from(sequences) * u64::from(sequences)) % (1 << 32)
+    }
+
+    #[test]
+    fn a_driver_with_a_constant_per_execution_runs_a_pass_as_one_chunk() {
+        // 68 462 chunks of one would ask for 2.2 GB; one chunk asks for 2.8 MB.
+        assert_eq!(chunk_size_for(68_462, constant_plus_linear), 68_462);
+        assert_eq!(chunk_size_for(1_000, constant_plus_linear), 1_000);
+        assert_eq!(chunk_size_for(1, constant_plus_linear), 1);
+    }
+
+    #[test]
+    fn a_pass_over_the_budget_takes_the_chunks_that_ask_for_least() {
+        // Ten million sequences: 400 MB at best, more than PASS_BYTES; still chunks of the
+        // most sequences one chunk may run.
+        assert_eq!(chunk_size_for(10_000_000, constant_plus_linear), MAX_CHUNK);
+    }
+
+    #[test]
+    fn a_driver_whose_memory_grows_with_the_square_runs_small_chunks() {
+        let size = chunk_size_for(68_462, square_wrapping);
+        let pass = u64::from(68_462u32.div_ceil(size)) * square_wrapping(size);
+        assert!(pass <= PASS_BYTES, "{size} sequences a chunk ask for {pass} bytes");
+        assert!(square_wrapping(size * 2) * u64::from(68_462u32.div_ceil(size * 2)) > PASS_BYTES);
+        assert!(size > 1 && size < 1 << 12, "{size}");
+    }
+
+    #[test]
+    fn a_size_that_wrapped_is_never_chosen() {
+        // At 4 096 sequences a chunk's size wraps to 32 KiB, which would look cheapest.
+        let wrapping = |sequences: u32| (32_768 + 4_096 * u64::from(sequences)) % (1 << 24);
+        assert_eq!(chunk_size_for(100_000, wrapping), 2_048);
     }
 }

@@ -10,10 +10,11 @@
 //! it, and frames rotate through [`FRAMES`] sets of regions so that a frame never writes what
 //! an earlier one still reads.
 //!
-//! A pass runs as chunks, as large as keep the pass's preprocess memory (all its chunks) under
-//! [`PASS_BYTES`]: Mesa 25.0's lavapipe asks for memory that grows with the square of the
-//! sequences (and wraps at 4 GiB: 394 MB for 1 654 sequences, 3.6 MB for 16 384), where a GPU
-//! driver asks for tens of bytes a sequence and runs a pass in one chunk. Every chunk reads
+//! A pass runs as chunks ([`chunk_size_for`] picks their size): Mesa 25.0's lavapipe asks for
+//! memory that grows with the square of the sequences (and wraps at 4 GiB: 394 MB for 1 654
+//! sequences, 3.6 MB for 16 384), so a large pass runs as many small chunks; NVIDIA's driver
+//! (580 on an H200) asks for tens of kilobytes an execution plus a little a sequence, so a pass
+//! runs as one chunk (chunks of one sequence cost it 0.8 s a frame). Every chunk reads
 //! the pass's count and runs at most its own share; what lies past the count in the stream is
 //! zeroed by the GPU cullers (a draw of no instances) or never there (the lists).
 

@@ -10,7 +10,7 @@ use std::sync::Arc;
 
 use cadr_core::gpu_scene::Transforms;
 use cadr_core::render::{FrameStats, HighlightStyle, Section};
-use cadr_core::scene::{flatten, Scene, SceneStats};
+use cadr_core::scene::{flatten, Aabb, Scene, SceneStats};
 use cadr_core::technique::{
     Combination, PluginRegistry, ShadeMode, TechniqueKind, Techniques, DEFAULT_TRANSPARENCY,
 };
@@ -330,31 +330,7 @@ impl Bench {
             None => selection(args, session.techniques())?,
         };
         let modes = BenchShade::modes_of(&args.shade);
-        let ssao_levels: &[bool] = if args.ssao { &[false, true] } else { &[false] };
-        // Every setting a row is measured with, its settings varied from the last (fastest).
-        let settings: Vec<RowSettings> = ssao_levels
-            .iter()
-            .flat_map(|&ssao| args.msaa.iter().map(move |&msaa| (ssao, msaa)))
-            .flat_map(|(ssao, msaa)| {
-                args.highlight_style
-                    .iter()
-                    .map(move |&highlight_style| (ssao, msaa, highlight_style))
-            })
-            .flat_map(|(ssao, msaa, highlight_style)| {
-                args.silhouettes
-                    .iter()
-                    .map(move |&silhouettes| (ssao, msaa, highlight_style, silhouettes))
-            })
-            .flat_map(|(ssao, msaa, highlight_style, silhouettes)| {
-                args.dashed.iter().map(move |&dashed| RowSettings {
-                    ssao,
-                    msaa,
-                    highlight_style,
-                    silhouettes,
-                    dashed,
-                })
-            })
-            .collect();
+        let settings = row_settings(args);
         // Silhouettes change only the modes that draw them, dashes only hidden-line: other
         // modes get one row for the first setting listed.
         let measured_in = |settings: &RowSettings, mode: ShadeMode| {
@@ -379,18 +355,7 @@ impl Bench {
         show(&steps, header_line());
         if with_baseline {
             steps.start("baseline");
-            session.choose(&Combination::built_in(), ShadeMode::Solid)?;
-            // The reference records every frame, as the seeds' baseline does.
-            session.techniques().set_frame_replay(false);
-            let measured = measure(self.frames, |frame| {
-                session.render_moving(&motion, view, frame)
-            })?;
-            let transforms = session.techniques().transforms();
-            let baseline = Row {
-                resident_bytes: session.resident_bytes(),
-                ..Row::new("baseline (built-in)".into(), "solid", transforms, measured)
-            };
-            session.techniques().set_frame_replay(self.frame_replay);
+            let baseline = self.measure_baseline(&mut session, &motion, view)?;
             show(&steps, row_line(&baseline, baseline.cpu_us));
             steps.done();
             rows.push(baseline);
@@ -410,32 +375,12 @@ impl Bench {
                         mode.name(),
                         setting.msaa
                     ));
-                    session.choose(combination, mode)?;
-                    session
-                        .techniques()
-                        .set_min_pixels(self.min_pixels)
-                        .map_err(|e| e.to_string())?;
-                    if let Some(pixels) = lod_error {
-                        session
-                            .techniques()
-                            .set_lod_error(pixels)
-                            .map_err(|e| e.to_string())?;
-                    }
-                    session.techniques().set_dashed_hidden_lines(setting.dashed);
-                    let measured = measure(self.frames, |frame| {
-                        session.render_moving(&motion, view, frame)
-                    })?;
-                    let transforms = session.techniques().transforms();
-                    let row = Row {
-                        msaa: setting.msaa,
-                        ssao: setting.ssao,
-                        silhouettes: setting.silhouettes,
-                        dashed: setting.dashed && mode == ShadeMode::HiddenLine,
-                        highlight_style: setting.highlight_style,
-                        lod_error,
-                        resident_bytes: session.resident_bytes(),
-                        ..Row::new(combination.to_string(), mode.name(), transforms, measured)
-                    };
+                    let row = self.measure_row(
+                        &mut session,
+                        (&motion, view),
+                        (setting, mode),
+                        (combination, lod_error),
+                    )?;
                     let reference = rows.first().map_or(row.cpu_us, |first| first.cpu_us);
                     show(&steps, row_line(&row, reference));
                     steps.done();
@@ -445,6 +390,96 @@ impl Bench {
         }
         Ok((stats, rows))
     }
+}
+
+impl Bench {
+    /// The reference row: the built-in combination, recording every frame as the seeds'
+    /// baseline does.
+    fn measure_baseline(
+        &self,
+        session: &mut TechniqueSession,
+        motion: &Motion,
+        view: (&Aabb, f64),
+    ) -> Result<Row, String> {
+        session.choose(&Combination::built_in(), ShadeMode::Solid)?;
+        session.techniques().set_frame_replay(false);
+        let measured = measure(self.frames, |frame| {
+            session.render_moving(motion, view, frame)
+        })?;
+        let transforms = session.techniques().transforms();
+        let baseline = Row {
+            resident_bytes: session.resident_bytes(),
+            ..Row::new("baseline (built-in)".into(), "solid", transforms, measured)
+        };
+        session.techniques().set_frame_replay(self.frame_replay);
+        Ok(baseline)
+    }
+
+    /// One row: `combination` in display `mode` with the renderer already set to `setting`,
+    /// at `lod_error` where it is a cluster culler's row.
+    fn measure_row(
+        &self,
+        session: &mut TechniqueSession,
+        (motion, view): (&Motion, (&Aabb, f64)),
+        (setting, mode): (&RowSettings, ShadeMode),
+        (combination, lod_error): (&Combination, Option<f32>),
+    ) -> Result<Row, String> {
+        session.choose(combination, mode)?;
+        session
+            .techniques()
+            .set_min_pixels(self.min_pixels)
+            .map_err(|e| e.to_string())?;
+        if let Some(pixels) = lod_error {
+            session
+                .techniques()
+                .set_lod_error(pixels)
+                .map_err(|e| e.to_string())?;
+        }
+        session.techniques().set_dashed_hidden_lines(setting.dashed);
+        let measured = measure(self.frames, |frame| {
+            session.render_moving(motion, view, frame)
+        })?;
+        let transforms = session.techniques().transforms();
+        Ok(Row {
+            msaa: setting.msaa,
+            ssao: setting.ssao,
+            silhouettes: setting.silhouettes,
+            dashed: setting.dashed && mode == ShadeMode::HiddenLine,
+            highlight_style: setting.highlight_style,
+            lod_error,
+            resident_bytes: session.resident_bytes(),
+            ..Row::new(combination.to_string(), mode.name(), transforms, measured)
+        })
+    }
+}
+
+/// Every setting a row is measured with (`--ssao`, `--msaa`, `--highlight-style`,
+/// `--silhouettes`, `--dashed`), the last varied fastest.
+fn row_settings(args: &BenchArgs) -> Vec<RowSettings> {
+    let ssao_levels: &[bool] = if args.ssao { &[false, true] } else { &[false] };
+    ssao_levels
+        .iter()
+        .flat_map(|&ssao| args.msaa.iter().map(move |&msaa| (ssao, msaa)))
+        .flat_map(|(ssao, msaa)| {
+            args.highlight_style
+                .iter()
+                .map(move |&highlight_style| (ssao, msaa, highlight_style))
+        })
+        .flat_map(|(ssao, msaa, highlight_style)| {
+            args.silhouettes
+                .iter()
+                .map(move |&silhouettes| (ssao, msaa, highlight_style, silhouettes))
+        })
+        .flat_map(|(ssao, msaa, highlight_style, silhouettes)| {
+            args.dashed.iter().map(move |&dashed| RowSettings {
+                ssao,
+                msaa,
+                highlight_style,
+                silhouettes,
+                dashed,
+            })
+        })
+        .collect()
 }
 
 /// The display mode of a row, with its MSAA level when it has one ("edges, 4x").

@@ -59,6 +59,135 @@ struct Row {
     bytes: u64,
 }
 
+/// The scene under edit, the GPU scene that follows it, and the rows measured so far.
+struct EditBench {
+    graph: SceneGraph,
+    tree: SceneTree,
+    gpu_scene: GpuScene,
+    runs: usize,
+    rows: Vec<Row>,
+    /// The first upload that failed, reported once every edit was measured.
+    upload_error: Option<String>,
+}
+
+impl EditBench {
+    /// Applies `apply` `runs` times (with the run's index), each followed by the tree's
+    /// update and the GPU scene's upload, and keeps the medians and the last upload as a row.
+    fn measure(&mut self, edit: String, mut apply: impl FnMut(&mut SceneGraph, usize)) {
+        let (mut edit_samples, mut update_samples) = (Vec::new(), Vec::new());
+        let (mut matrices, mut records, mut bytes) = (0, 0, 0);
+        for run in 0..self.runs {
+            let start = Instant::now();
+            apply(&mut self.graph, run);
+            edit_samples.push(start.elapsed().as_secs_f64() * 1e3);
+            let start = Instant::now();
+            self.tree.update(&mut self.graph);
+            self.tree.take_changes();
+            update_samples.push(start.elapsed().as_secs_f64() * 1e3);
+            // What the GPU scene uploads for this edit.
+            let synced = self
+                .gpu_scene
+                .sync(&self.graph, &mut self.tree, Transforms::Host)
+                .and_then(|()| self.gpu_scene.flush_uploads());
+            if let Err(e) = synced {
+                self.upload_error.get_or_insert(e.to_string());
+            }
+            let upload = self.gpu_scene.last_upload();
+            (matrices, records, bytes) = (upload.matrices, upload.records, upload.bytes);
+        }
+        edit_samples.sort_by(f64::total_cmp);
+        update_samples.sort_by(f64::total_cmp);
+        self.rows.push(Row {
+            edit,
+            edit_ms: edit_samples[self.runs / 2],
+            update_ms: update_samples[self.runs / 2],
+            matrices,
+            records,
+            bytes,
+        });
+    }
+
+    /// Moves one part placement, 1 % of them and all of them.
+    fn measure_transforms(&mut self, placements: &[NodeHandle]) {
+        let n = placements.len();
+        for (label, count) in [
+            ("1 transform", 1),
+            ("1% of transforms", n.div_ceil(100)),
+            ("100% of transforms", n),
+        ] {
+            let sample = spread(placements, count);
+            let originals: Vec<DMat4> = sample
+                .iter()
+                .map(|&h| {
+                    self.graph
+                        .node(h)
+                        .map(|n| n.local_matrix())
+                        .unwrap_or_default()
+                })
+                .collect();
+            self.measure(format!("{label} ({})", sample.len()), |graph, run| {
+                let lift = DMat4::from_translation(DVec3::new(0.0, 0.01 * (run + 1) as f64, 0.0));
+                for (&h, original) in sample.iter().zip(&originals) {
+                    let _ = graph.set_matrix(h, lift * *original);
+                }
+            });
+        }
+    }
+
+    /// Changes the colour of the first material a part uses.
+    fn measure_material(&mut self) {
+        let material = self.graph.nodes().find_map(|(_, n)| match &n.kind {
+            NodeKind::Geo { part_materials, .. } => part_materials.first().copied(),
+            _ => None,
+        });
+        let Some(material) = material else { return };
+        self.measure("1 material".into(), |graph, run| {
+            let shade = 0.2 + 0.1 * (run % 5) as f32;
+            let _ = graph.set_material(
+                material,
+                Material {
+                    name: "bench".into(),
+                    base_color: [shade, 0.3, 0.4, 1.0],
+                    ..Material::default()
+                },
+            );
+        });
+    }
+
+    /// Replaces the first geometry with a copy of itself.
+    fn measure_geometry(&mut self) {
+        let geometry = self
+            .graph
+            .geometry_handle_at(0)
+            .and_then(|h| Some((h, self.graph.geometry(h).ok()?.clone())));
+        let Some((handle, original)) = geometry else {
+            return;
+        };
+        self.measure(
+            format!("1 geometry ({} triangles)", original.indices.len() / 3),
+            |graph, _| {
+                let _ = graph.replace_geometry(handle, original.clone());
+            },
+        );
+    }
+
+    /// Hides and shows 1 % of the part placements in turn.
+    fn measure_hiding(&mut self, placements: &[NodeHandle]) {
+        let hidden = spread(placements, placements.len().div_ceil(100));
+        self.measure(format!("hide/show 1% ({})", hidden.len()), |graph, run| {
+            for &h in &hidden {
+                let _ = graph.set_flags(
+                    h,
+                    NodeFlags {
+                        visible: run % 2 == 1,
+                        ..NodeFlags::default()
+                    },
+                );
+            }
+        });
+    }
+}
+
 pub fn bench_tree(scene_text: &str, runs: usize) -> Result<(), String> {
     let scene = SceneSource::parse(scene_text)
         .and_then(|s| s.load())
@@ -74,131 +203,31 @@ pub fn bench_tree(scene_text: &str, runs: usize) -> Result<(), String> {
         GpuScene::new(&device, &graph, &mut tree, Transforms::Host).map_err(|e| e.to_string())?;
     gpu_scene.flush_uploads().map_err(|e| e.to_string())?;
     let initial_upload = gpu_scene.last_upload();
-    let instances = tree.instance_count();
     let placements = part_placements(&graph);
-    let mut rows = Vec::new();
-    let mut upload_error = None;
-    let mut measure = |edit: String,
-                       graph: &mut SceneGraph,
-                       tree: &mut SceneTree,
-                       apply: &mut dyn FnMut(&mut SceneGraph, usize)| {
-        let (mut edit_samples, mut update_samples) = (Vec::new(), Vec::new());
-        let (mut matrices, mut records, mut bytes) = (0, 0, 0);
-        for run in 0..runs {
-            let start = Instant::now();
-            apply(graph, run);
-            edit_samples.push(start.elapsed().as_secs_f64() * 1e3);
-            let start = Instant::now();
-            tree.update(graph);
-            tree.take_changes();
-            update_samples.push(start.elapsed().as_secs_f64() * 1e3);
-            // What the GPU scene uploads for this edit.
-            let synced = gpu_scene
-                .sync(graph, tree, Transforms::Host)
-                .and_then(|()| gpu_scene.flush_uploads());
-            if let Err(e) = synced {
-                upload_error.get_or_insert(e.to_string());
-            }
-            let upload = gpu_scene.last_upload();
-            (matrices, records, bytes) = (upload.matrices, upload.records, upload.bytes);
-        }
-        edit_samples.sort_by(f64::total_cmp);
-        update_samples.sort_by(f64::total_cmp);
-        rows.push(Row {
-            edit,
-            edit_ms: edit_samples[runs / 2],
-            update_ms: update_samples[runs / 2],
-            matrices,
-            records,
-            bytes,
-        });
+    let mut bench = EditBench {
+        graph,
+        tree,
+        gpu_scene,
+        runs,
+        rows: Vec::new(),
+        upload_error: None,
     };
-    let n = placements.len();
-    for (label, count) in [
-        ("1 transform", 1),
-        ("1% of transforms", n.div_ceil(100)),
-        ("100% of transforms", n),
-    ] {
-        let sample = spread(&placements, count);
-        let originals: Vec<DMat4> = sample
-            .iter()
-            .map(|&h| graph.node(h).map(|n| n.local_matrix()).unwrap_or_default())
-            .collect();
-        measure(
-            format!("{label} ({})", sample.len()),
-            &mut graph,
-            &mut tree,
-            &mut |graph, run| {
-                let lift = DMat4::from_translation(DVec3::new(0.0, 0.01 * (run + 1) as f64, 0.0));
-                for (&h, original) in sample.iter().zip(&originals) {
-                    let _ = graph.set_matrix(h, lift * *original);
-                }
-            },
-        );
-    }
-    let material = graph.nodes().find_map(|(_, n)| match &n.kind {
-        NodeKind::Geo { part_materials, .. } => part_materials.first().copied(),
-        _ => None,
-    });
-    if let Some(material) = material {
-        measure(
-            "1 material".into(),
-            &mut graph,
-            &mut tree,
-            &mut |graph, run| {
-                let shade = 0.2 + 0.1 * (run % 5) as f32;
-                let _ = graph.set_material(
-                    material,
-                    Material {
-                        name: "bench".into(),
-                        base_color: [shade, 0.3, 0.4, 1.0],
-                        ..Material::default()
-                    },
-                );
-            },
-        );
-    }
-    let geometry = graph
-        .geometry_handle_at(0)
-        .and_then(|h| Some((h, graph.geometry(h).ok()?.clone())));
-    if let Some((handle, original)) = geometry {
-        measure(
-            format!("1 geometry ({} triangles)", original.indices.len() / 3),
-            &mut graph,
-            &mut tree,
-            &mut |graph, _| {
-                let _ = graph.replace_geometry(handle, original.clone());
-            },
-        );
-    }
-    let hidden = spread(&placements, n.div_ceil(100));
-    measure(
-        format!("hide/show 1% ({})", hidden.len()),
-        &mut graph,
-        &mut tree,
-        &mut |graph, run| {
-            for &h in &hidden {
-                let _ = graph.set_flags(
-                    h,
-                    NodeFlags {
-                        visible: run % 2 == 1,
-                        ..NodeFlags::default()
-                    },
-                );
-            }
-        },
-    );
-
-    if let Some(error) = upload_error {
+    bench.measure_transforms(&placements);
+    bench.measure_material();
+    bench.measure_geometry();
+    bench.measure_hiding(&placements);
+    if let Some(error) = bench.upload_error {
         return Err(format!("uploading to the GPU scene: {error}"));
     }
+    let tree = &bench.tree;
+    let instances = tree.instance_count();
     let (matrix_bytes, other_bytes) = tree.memory_bytes();
     println!(
         "scene:        {} ({} instances on {} paths, {} part placements)",
         scene.name,
         instances,
         tree.node_count(),
-        n
+        placements.len()
     );
     println!("build tree:   {build_ms:.2} ms (median of {runs})");
     println!(
@@ -212,12 +241,28 @@ pub fn bench_tree(scene_text: &str, runs: usize) -> Result<(), String> {
         other_bytes as f64 / instances.max(1) as f64,
         matrix_bytes as f64 / instances.max(1) as f64
     );
+    print_rows(&bench.rows, build_ms);
+    println!(
+        "goal <= 64 bytes per instance besides matrices: {:.1} ({})",
+        other_bytes as f64 / instances.max(1) as f64,
+        if other_bytes <= 64 * instances.max(1) {
+            "met"
+        } else {
+            "missed"
+        }
+    );
+    Ok(())
+}
+
+/// The table of edits against a rebuild taking `build_ms`, and the goal for 1 % of the
+/// transforms.
+fn print_rows(rows: &[Row], build_ms: f64) {
     println!();
     println!(
         "{:<26} {:>10} {:>11} {:>10} {:>10} {:>12} {:>10}",
         "edit", "edit ms", "update ms", "/ rebuild", "matrices", "records", "bytes/frame"
     );
-    for row in &rows {
+    for row in rows {
         println!(
             "{:<26} {:>10.3} {:>11.3} {:>9.2}% {:>10} {:>12} {:>10}",
             row.edit,
@@ -241,14 +286,4 @@ pub fn bench_tree(scene_text: &str, runs: usize) -> Result<(), String> {
             }
         );
     }
-    println!(
-        "goal <= 64 bytes per instance besides matrices: {:.1} ({})",
-        other_bytes as f64 / instances.max(1) as f64,
-        if other_bytes <= 64 * instances.max(1) {
-            "met"
-        } else {
-            "missed"
-        }
-    );
-    Ok(())
 }

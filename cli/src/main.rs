@@ -18,7 +18,7 @@ use cadr_core::graph::SceneGraph;
 use cadr_core::load::SceneSource;
 use cadr_core::render::{Camera, FrameStats, DEFAULT_DIRECTION};
 use cadr_core::scene::{flatten, SceneStats};
-use cadr_core::technique::ShadeMode;
+use cadr_core::technique::{Combination, ShadeMode};
 use cadr_core::timings::{self, Phase};
 use cadr_core::vk::{self as cvk, Device, DeviceOptions, InstanceOptions};
 
@@ -202,72 +202,13 @@ fn render(args: &RenderArgs, process_start: Instant) -> Result<(), String> {
     session.set_lod_error(args.techniques.lod_error)?;
     let section_line = args::describe_section(&section);
     session.set_section(section);
-    session.set_background(args.background)?;
-    session.set_msaa(args.msaa)?;
-    session
-        .view
-        .renderer_mut()
-        .set_ssao(args.ssao)
-        .map_err(|e| e.to_string())?;
-    session.view.renderer_mut().set_textures(!args.no_textures);
-    session
-        .view
-        .renderer_mut()
-        .set_highlight_style(args.highlight_style)
-        .map_err(|e| e.to_string())?;
-    session
-        .view
-        .renderer_mut()
-        .set_palette(args.palette())
-        .map_err(|e| e.to_string())?;
-    session
-        .view
-        .renderer_mut()
-        .set_silhouettes(!args.no_silhouettes)
-        .map_err(|e| e.to_string())?;
-    if args.dashed && shade != ShadeMode::HiddenLine {
-        return Err("--dashed shows hidden edges dashed in --display hidden-line only".into());
-    }
-    session.techniques().set_dashed_hidden_lines(args.dashed);
-    // The baseline records every frame, as the seeds' does.
-    session
-        .techniques()
-        .set_frame_replay(!args.no_replay && !args.baseline);
-    let mut technique_line = format!("{combination}, {}", shade.name());
-    if min_pixels > 0.0 {
-        technique_line += &format!(", parts under {min_pixels} px culled");
-    }
-    if combination.culling == "gpu-clusters" {
-        technique_line += &format!(
-            ", level of detail {} px",
-            session.view.techniques().lod_error()
-        );
-    }
-    if let Some(section) = section_line {
-        technique_line += &format!(", {section}");
-    }
-    if args.dashed {
-        technique_line += ", hidden edges dashed";
-    }
-    if args.ssao {
-        technique_line += ", ambient occlusion";
-    }
-    if args.no_textures {
-        technique_line += ", no textures";
-    }
-    if !args.highlight.is_empty() {
-        technique_line += &format!(
-            ", {} highlighted ({})",
-            args.highlight.join(", "),
-            args.highlight_style.name()
-        );
-    }
-    if args.no_silhouettes && shade.draws_silhouettes() {
-        technique_line += ", no silhouettes";
-    }
-    if args.msaa > 1 {
-        technique_line += &format!(", MSAA {}x", args.msaa);
-    }
+    apply_render_settings(&mut session, args, shade)?;
+    let technique_line = describe_render(
+        args,
+        &combination,
+        session.view.techniques().lod_error(),
+        section_line,
+    );
     let camera = Camera::fit(
         &stats.bounds,
         f64::from(width) / f64::from(height),
@@ -275,16 +216,14 @@ fn render(args: &RenderArgs, process_start: Instant) -> Result<(), String> {
     );
 
     // One warm-up frame when measuring several, so that first-use costs do not count.
-    let mut first = session.render(&camera)?;
-    let mut samples: Vec<FrameStats> = Vec::with_capacity(frames);
-    if frames == 1 {
-        samples.push(first);
+    let first = session.render(&camera)?;
+    let samples: Vec<FrameStats> = if frames == 1 {
+        vec![first]
     } else {
-        for _ in 0..frames {
-            samples.push(session.render(&camera)?);
-        }
-        first = samples[0];
-    }
+        (0..frames)
+            .map(|_| session.render(&camera))
+            .collect::<Result<_, _>>()?
+    };
     session
         .view
         .renderer()
@@ -299,34 +238,7 @@ fn render(args: &RenderArgs, process_start: Instant) -> Result<(), String> {
     );
     println!("device:      {} ({:?})", adapter.name, adapter.device_type);
     println!("techniques:  {technique_line}");
-    println!(
-        "drawn:       {} parts, {} triangles, {} draw calls ({} ranges)",
-        stats.instances, first.triangles, first.draw_calls, first.draws
-    );
-    println!(
-        "state:       {} pipeline binds, {} vertex/index binds, {} parameter updates",
-        first.pipeline_binds, first.vertex_binds, first.parameter_updates
-    );
-    let mut record: Vec<f64> = samples.iter().map(|s| s.cpu_record_us).collect();
-    let mut cpu: Vec<f64> = samples.iter().map(FrameStats::cpu_us).collect();
-    let mut gpu: Vec<f64> = samples.iter().filter_map(|s| s.gpu_us).collect();
-    let label = if frames == 1 {
-        "frame:      ".to_owned()
-    } else {
-        format!("frame:       median of {frames},")
-    };
-    let gpu_text = if gpu.is_empty() {
-        "n/a (no timestamps)".to_owned()
-    } else {
-        format!("{:.0} µs", median(&mut gpu))
-    };
-    let replayed = samples.iter().filter(|s| s.replayed).count();
-    println!(
-        "{label} CPU {:.0} µs (recording {:.0} µs), GPU {gpu_text}, {replayed} of {} replayed",
-        median(&mut cpu),
-        median(&mut record),
-        samples.len()
-    );
+    print_frames(stats.instances, &samples);
     let spent = timings::snapshot();
     println!(
         "setup:       load {:.1} ms, upload {:.1} ms",
@@ -351,6 +263,116 @@ fn render(args: &RenderArgs, process_start: Instant) -> Result<(), String> {
         ));
     }
     Ok(())
+}
+
+/// The renderer's settings that `render` takes from its options besides the techniques.
+fn apply_render_settings(
+    session: &mut techniques::TechniqueSession,
+    args: &RenderArgs,
+    shade: ShadeMode,
+) -> Result<(), String> {
+    session.set_background(args.background)?;
+    session.set_msaa(args.msaa)?;
+    let renderer = session.view.renderer_mut();
+    renderer.set_ssao(args.ssao).map_err(|e| e.to_string())?;
+    renderer.set_textures(!args.no_textures);
+    renderer
+        .set_highlight_style(args.highlight_style)
+        .map_err(|e| e.to_string())?;
+    renderer
+        .set_palette(args.palette())
+        .map_err(|e| e.to_string())?;
+    renderer
+        .set_silhouettes(!args.no_silhouettes)
+        .map_err(|e| e.to_string())?;
+    if args.dashed && shade != ShadeMode::HiddenLine {
+        return Err("--dashed shows hidden edges dashed in --display hidden-line only".into());
+    }
+    session.techniques().set_dashed_hidden_lines(args.dashed);
+    // The baseline records every frame, as the seeds' does.
+    session
+        .techniques()
+        .set_frame_replay(!args.no_replay && !args.baseline);
+    Ok(())
+}
+
+/// The `techniques:` line of `render`: the combination, the display mode and every option that
+/// changes the picture.
+fn describe_render(
+    args: &RenderArgs,
+    combination: &Combination,
+    lod_error: f32,
+    section_line: Option<String>,
+) -> String {
+    let shade = args.techniques.shade_mode();
+    let min_pixels = args.techniques.min_pixels();
+    let mut line = format!("{combination}, {}", shade.name());
+    if min_pixels > 0.0 {
+        line += &format!(", parts under {min_pixels} px culled");
+    }
+    if combination.culling == "gpu-clusters" {
+        line += &format!(", level of detail {lod_error} px");
+    }
+    if let Some(section) = section_line {
+        line += &format!(", {section}");
+    }
+    if args.dashed {
+        line += ", hidden edges dashed";
+    }
+    if args.ssao {
+        line += ", ambient occlusion";
+    }
+    if args.no_textures {
+        line += ", no textures";
+    }
+    if !args.highlight.is_empty() {
+        line += &format!(
+            ", {} highlighted ({})",
+            args.highlight.join(", "),
+            args.highlight_style.name()
+        );
+    }
+    if args.no_silhouettes && shade.draws_silhouettes() {
+        line += ", no silhouettes";
+    }
+    if args.msaa > 1 {
+        line += &format!(", MSAA {}x", args.msaa);
+    }
+    line
+}
+
+/// The `drawn:`, `state:` and `frame:` lines of `render`: what the first measured frame drew
+/// of `instances` parts, and the medians of the measured frames.
+fn print_frames(instances: usize, samples: &[FrameStats]) {
+    let Some(first) = samples.first() else { return };
+    println!(
+        "drawn:       {} parts, {} triangles, {} draw calls ({} ranges)",
+        instances, first.triangles, first.draw_calls, first.draws
+    );
+    println!(
+        "state:       {} pipeline binds, {} vertex/index binds, {} parameter updates",
+        first.pipeline_binds, first.vertex_binds, first.parameter_updates
+    );
+    let mut record: Vec<f64> = samples.iter().map(|s| s.cpu_record_us).collect();
+    let mut cpu: Vec<f64> = samples.iter().map(FrameStats::cpu_us).collect();
+    let mut gpu: Vec<f64> = samples.iter().filter_map(|s| s.gpu_us).collect();
+    let label = if samples.len() == 1 {
+        "frame:      ".to_owned()
+    } else {
+        format!("frame:       median of {},", samples.len())
+    };
+    let gpu_text = if gpu.is_empty() {
+        "n/a (no timestamps)".to_owned()
+    } else {
+        format!("{:.0} µs", median(&mut gpu))
+    };
+    let replayed = samples.iter().filter(|s| s.replayed).count();
+    println!(
+        "{label} CPU {:.0} µs (recording {:.0} µs), GPU {gpu_text}, {replayed} of {} replayed",
+        median(&mut cpu),
+        median(&mut record),
+        samples.len()
+    );
 }
 
 /// The most memory this process held resident so far (Linux), in bytes.

@@ -177,23 +177,9 @@ impl Renderer {
                 after: &mut after,
             },
         )?;
-        let (scene, counters, culler) = drawing.shared.into_inner();
-        if counters.failures > 0 {
-            return Err(RenderError::Technique {
-                technique: techniques.combination().to_string(),
-                message: format!("{} bind calls panicked while recording", counters.failures),
-            });
-        }
         stats.cpu_record_us += cull_us;
-        stats.triangles = scene.drawn_triangles();
-        if let Some(culler) = culler {
-            // The frame has finished: what the GPU decided to draw.
-            let drawn = culler.counts();
-            stats.draws = drawn.draws;
-            stats.triangles = drawn.primitives;
-            stats.triangles_rasterized = drawn.primitives;
-        }
-        Ok(stats)
+        let (scene, counters, culler) = drawing.shared.into_inner();
+        drawn_stats(stats, techniques, (scene, counters, culler.as_ref()))
     }
 
     /// The `DISPLAY_*` bits of a frame of `passes` over `scene`.
@@ -726,6 +712,30 @@ fn cull(
         depends,
     ));
     Ok(())
+}
+
+/// A finished frame's `stats` with what it drew: the scene's triangles, or what a GPU
+/// `culler` decided to draw; an error where bind calls panicked while recording.
+fn drawn_stats(
+    mut stats: FrameStats,
+    techniques: &Techniques,
+    (scene, counters, culler): (&GpuScene, abi::CadrStats, Option<&GpuCuller>),
+) -> RenderResult<FrameStats> {
+    if counters.failures > 0 {
+        return Err(RenderError::Technique {
+            technique: techniques.combination().to_string(),
+            message: format!("{} bind calls panicked while recording", counters.failures),
+        });
+    }
+    stats.triangles = scene.drawn_triangles();
+    if let Some(culler) = culler {
+        // The frame has finished: what the GPU decided to draw.
+        let drawn = culler.counts();
+        stats.draws = drawn.draws;
+        stats.triangles = drawn.primitives;
+        stats.triangles_rasterized = drawn.primitives;
+    }
+    Ok(stats)
 }
 
 #[cfg(test)]

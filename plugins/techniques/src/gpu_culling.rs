@@ -865,6 +865,101 @@ impl<const OCCLUSION: bool, const CLUSTERS: bool> GpuCuller<OCCLUSION, CLUSTERS>
     }
 }
 
+impl<const OCCLUSION: bool, const CLUSTERS: bool> GpuCuller<OCCLUSION, CLUSTERS> {
+    /// Room for the indirect commands of `instances` parts: one each drawn whole; with
+    /// clusters, the cuts get a budget and every part room for its coarsest cut. Returns the
+    /// room and the budget.
+    fn command_room(
+        &self,
+        instances: u32,
+        clusters: Option<&abi::CadrSceneClusters>,
+    ) -> (u32, u32) {
+        clusters.map_or((instances, 0), |c| {
+            let budget = c.candidate_clusters.min(self.max_cluster_budget);
+            let room = budget.saturating_add(c.candidate_coarsest_clusters);
+            (
+                u32::try_from(room).unwrap_or(u32::MAX),
+                u32::try_from(budget).unwrap_or(u32::MAX),
+            )
+        })
+    }
+
+    /// The first phase's preparation: buffers of `sizes` (instances, commands, cluster
+    /// visibility bits) and the depth pyramid made or grown, this frame's counts and
+    /// visibility cleared after the last frame's reads, and the clears made visible to the
+    /// culling shader.
+    fn prepare_buffers(
+        &mut self,
+        cull: &GpuCull<'_>,
+        sizes: (u32, u32, u64),
+    ) -> Result<(), String> {
+        let raw = cull.raw();
+        let command_buffer = cull.command_buffer();
+        if cull.passes().len() > PASSES_PER_PHASE {
+            return Err(format!(
+                "{} passes; GPU culling handles at most {PASSES_PER_PHASE}",
+                cull.passes().len()
+            ));
+        }
+        // New buffers are cleared first (nothing else uses them yet).
+        self.reserve(sizes, command_buffer)?;
+        // The previous frame's reads of our buffers (indirect draws, culls, the visibility
+        // copy) and those clears come before this frame's clears.
+        barrier(
+            &self.gpu,
+            command_buffer,
+            (
+                vk::PipelineStageFlags2::DRAW_INDIRECT
+                    | vk::PipelineStageFlags2::COMPUTE_SHADER
+                    | vk::PipelineStageFlags2::ALL_TRANSFER,
+                vk::AccessFlags2::INDIRECT_COMMAND_READ
+                    | vk::AccessFlags2::SHADER_READ
+                    | vk::AccessFlags2::TRANSFER_READ
+                    | vk::AccessFlags2::TRANSFER_WRITE,
+            ),
+            (
+                vk::PipelineStageFlags2::ALL_TRANSFER,
+                vk::AccessFlags2::TRANSFER_WRITE,
+            ),
+        );
+        let (width, height) = (raw.width.max(1), raw.height.max(1));
+        self.pyramid_levels = pyramid_levels(width, height).len() as u32;
+        if OCCLUSION {
+            self.reserve_pyramid(width, height)?;
+            // This frame reads what the last one found visible and writes afresh.
+            clear(&self.gpu, command_buffer, &self.visibility[NOW]);
+            if CLUSTERS {
+                clear(&self.gpu, command_buffer, &self.cluster_visibility[NOW]);
+                clear(&self.gpu, command_buffer, &self.phase0_skipped);
+            }
+        }
+        clear(&self.gpu, command_buffer, &self.counts);
+        // Where device-generated commands may draw them (the `dgc` submission runs a pass
+        // in chunks that each read the pass's count), what lies past the count must draw
+        // nothing: commands of zero instances.
+        if self.gpu.features & abi::CADR_FEATURE_DEVICE_GENERATED_COMMANDS_EXT != 0 {
+            if let Some(commands) = &self.commands {
+                clear(&self.gpu, command_buffer, commands);
+            }
+        }
+        barrier(
+            &self.gpu,
+            command_buffer,
+            (
+                vk::PipelineStageFlags2::ALL_TRANSFER,
+                vk::AccessFlags2::TRANSFER_WRITE,
+            ),
+            (
+                vk::PipelineStageFlags2::COMPUTE_SHADER,
+                vk::AccessFlags2::SHADER_READ
+                    | vk::AccessFlags2::SHADER_WRITE
+                    | vk::AccessFlags2::UNIFORM_READ,
+            ),
+        );
+        Ok(())
+    }
+}
+
 impl<const OCCLUSION: bool, const CLUSTERS: bool> GpuCulling for GpuCuller<OCCLUSION, CLUSTERS> {
     const REQUIRED_EXTENSIONS: &'static [abi::CadrExtensionKind] = if CLUSTERS {
         &[
@@ -881,7 +976,6 @@ impl<const OCCLUSION: bool, const CLUSTERS: bool> GpuCulling for GpuCuller<OCCLU
 
     fn record(&mut self, cull: &GpuCull<'_>) -> Result<(), String> {
         let scene = cull.scene().ok_or("no scene")?;
-        let raw = cull.raw();
         let instances = scene.raw().instance_count;
         let clusters = if CLUSTERS {
             Some(
@@ -892,88 +986,15 @@ impl<const OCCLUSION: bool, const CLUSTERS: bool> GpuCulling for GpuCuller<OCCLU
         } else {
             None
         };
-        // A part drawn whole needs one command; with clusters, the cuts get a budget and
-        // every part room for its coarsest cut.
-        let (commands, cluster_budget) = clusters.map_or((instances, 0), |c| {
-            let budget = c.candidate_clusters.min(self.max_cluster_budget);
-            let room = budget.saturating_add(c.candidate_coarsest_clusters);
-            (
-                u32::try_from(room).unwrap_or(u32::MAX),
-                u32::try_from(budget).unwrap_or(u32::MAX),
-            )
-        });
+        let (commands, cluster_budget) = self.command_room(instances, clusters);
         self.cluster_budget = cluster_budget;
         let command_buffer = cull.command_buffer();
         let view = cull
             .view_buffer()
             .ok_or("the host passed no view buffer (a host of ABI 1.5 or later does)")?;
-        let transfer_to_compute = (
-            (
-                vk::PipelineStageFlags2::ALL_TRANSFER,
-                vk::AccessFlags2::TRANSFER_WRITE,
-            ),
-            (
-                vk::PipelineStageFlags2::COMPUTE_SHADER,
-                vk::AccessFlags2::SHADER_READ
-                    | vk::AccessFlags2::SHADER_WRITE
-                    | vk::AccessFlags2::UNIFORM_READ,
-            ),
-        );
         if cull.phase() == 0 {
-            if cull.passes().len() > PASSES_PER_PHASE {
-                return Err(format!(
-                    "{} passes; GPU culling handles at most {PASSES_PER_PHASE}",
-                    cull.passes().len()
-                ));
-            }
-            // New buffers are cleared first (nothing else uses them yet).
             let cluster_bits = clusters.map_or(0, |c| c.candidate_clusters);
-            self.reserve((instances, commands, cluster_bits), command_buffer)?;
-            // The previous frame's reads of our buffers (indirect draws, culls, the visibility
-            // copy) and those clears come before this frame's clears.
-            barrier(
-                &self.gpu,
-                command_buffer,
-                (
-                    vk::PipelineStageFlags2::DRAW_INDIRECT
-                        | vk::PipelineStageFlags2::COMPUTE_SHADER
-                        | vk::PipelineStageFlags2::ALL_TRANSFER,
-                    vk::AccessFlags2::INDIRECT_COMMAND_READ
-                        | vk::AccessFlags2::SHADER_READ
-                        | vk::AccessFlags2::TRANSFER_READ
-                        | vk::AccessFlags2::TRANSFER_WRITE,
-                ),
-                (
-                    vk::PipelineStageFlags2::ALL_TRANSFER,
-                    vk::AccessFlags2::TRANSFER_WRITE,
-                ),
-            );
-            let (width, height) = (raw.width.max(1), raw.height.max(1));
-            self.pyramid_levels = pyramid_levels(width, height).len() as u32;
-            if OCCLUSION {
-                self.reserve_pyramid(width, height)?;
-                // This frame reads what the last one found visible and writes afresh.
-                clear(&self.gpu, command_buffer, &self.visibility[NOW]);
-                if CLUSTERS {
-                    clear(&self.gpu, command_buffer, &self.cluster_visibility[NOW]);
-                    clear(&self.gpu, command_buffer, &self.phase0_skipped);
-                }
-            }
-            clear(&self.gpu, command_buffer, &self.counts);
-            // Where device-generated commands may draw them (the `dgc` submission runs a pass
-            // in chunks that each read the pass's count), what lies past the count must draw
-            // nothing: commands of zero instances.
-            if self.gpu.features & abi::CADR_FEATURE_DEVICE_GENERATED_COMMANDS_EXT != 0 {
-                if let Some(commands) = &self.commands {
-                    clear(&self.gpu, command_buffer, commands);
-                }
-            }
-            barrier(
-                &self.gpu,
-                command_buffer,
-                transfer_to_compute.0,
-                transfer_to_compute.1,
-            );
+            self.prepare_buffers(cull, (instances, commands, cluster_bits))?;
             self.write_cull_set(scene.raw(), clusters, view);
             let mode = if OCCLUSION {
                 MODE_LAST_VISIBLE

@@ -455,7 +455,10 @@ mod tests {
     fn a_driver_whose_memory_grows_with_the_square_runs_small_chunks() {
         let size = chunk_size_for(68_462, square_wrapping);
         let pass = u64::from(68_462u32.div_ceil(size)) * square_wrapping(size);
-        assert!(pass <= PASS_BYTES, "{size} sequences a chunk ask for {pass} bytes");
+        assert!(
+            pass <= PASS_BYTES,
+            "{size} sequences a chunk ask for {pass} bytes"
+        );
         assert!(square_wrapping(size * 2) * u64::from(68_462u32.div_ceil(size * 2)) > PASS_BYTES);
         assert!(size > 1 && size < 1 << 12, "{size}");
     }

@@ -54,9 +54,17 @@ unsafe impl Send for Shared<'_> {}
 // SAFETY: see above.
 unsafe impl Sync for Shared<'_> {}
 
+/// Adds to a recording thread's own counters (null: not counted).
+fn count(stats: *mut CadrStats, add: impl FnOnce(&mut CadrStats)) {
+    // SAFETY: each recording thread has its own counters.
+    if let Some(stats) = unsafe { stats.as_mut() } {
+        add(stats);
+    }
+}
+
 impl Recorder<'_> {
     /// Records every pass's share `part` of `parts` (of its batches) into `command_buffer`,
-    /// counting into `stats`.
+    /// counting into `stats`. Indirect draws are one call per pass, recorded by the first part.
     pub fn record_passes(
         &self,
         command_buffer: vk::CommandBuffer,
@@ -64,137 +72,153 @@ impl Recorder<'_> {
         passes: Range<usize>,
         stats: *mut CadrStats,
     ) {
-        let device = &self.gpu.device;
         let all = self.record.passes();
         let passes = passes.start.min(all.len())..passes.end.min(all.len());
+        let gpu_draws = matches!(self.api, Api::Indirect | Api::IndirectCount);
         for (pass, draws) in all[passes.clone()].iter().zip(&self.passes[passes]) {
-            let list = draws.list;
-            let batch_range = if part.end == usize::MAX {
-                0..list.batches.len()
-            } else {
-                let per = list.batches.len().div_ceil(parts.max(1));
-                (part.start * per).min(list.batches.len())..(part.end * per).min(list.batches.len())
-            };
-            let gpu_draws = matches!(self.api, Api::Indirect | Api::IndirectCount);
-            if batch_range.is_empty() && !(gpu_draws && part.start == 0 && draws.indirect_draws > 0)
-            {
-                continue;
-            }
-            let (bind, mut vertex_state, mut parameter_state) =
-                bind_pass(self.gpu, self.record, pass, (command_buffer, stats));
-            let (vertex, parameters) = (self.record.vertex(), self.record.parameters());
-            let count = |add: &dyn Fn(&mut CadrStats)| {
-                // SAFETY: each recording thread has its own counters.
-                if let Some(stats) = unsafe { stats.as_mut() } {
-                    add(stats);
-                }
-            };
             if gpu_draws {
-                if part.start != 0 || draws.indirect_draws == 0 {
-                    continue;
+                if part.start == 0 && draws.indirect_draws > 0 {
+                    self.record_indirect(command_buffer, pass, draws, stats);
                 }
-                // SAFETY: recording; the indirect buffers hold `draws.indirect_draws` commands of
-                // 20 bytes.
-                unsafe {
-                    if self.api == Api::Indirect {
-                        device.cmd_draw_indexed_indirect(
-                            command_buffer,
-                            draws.commands,
-                            0,
-                            draws.indirect_draws,
-                            20,
-                        );
-                    } else {
-                        device.cmd_draw_indexed_indirect_count(
-                            command_buffer,
-                            draws.commands,
-                            0,
-                            draws.count,
-                            0,
-                            draws.indirect_draws,
-                            20,
-                        );
-                    }
-                }
-                let triangles = surface_triangles(pass, &list.ranges);
-                count(&|s| {
-                    s.draw_calls += 1;
-                    s.draws += u64::from(draws.indirect_draws);
-                    s.primitives += triangles;
-                });
                 continue;
             }
-            let instances = self.record.scene().instances();
-            let mut multi: Vec<vk::MultiDrawIndexedInfoEXT> = Vec::new();
-            for batch in &list.batches[batch_range] {
-                let Some(first) = instances.get(batch.instance as usize) else {
-                    continue;
-                };
-                let first_instance =
-                    parameters.bind_draw(&bind, batch.instance, first, &mut parameter_state);
-                let ranges = &list.ranges[batch.ranges.clone()];
-                match self.api {
-                    Api::MultiDraw => {
-                        let base = vertex.bind_draw(&bind, first, &mut vertex_state);
-                        if base.ok == 0 {
-                            continue;
-                        }
-                        multi.clear();
-                        multi.extend(ranges.iter().map(|r| vk::MultiDrawIndexedInfoEXT {
-                            first_index: r.first - base.index_base,
-                            index_count: r.count,
-                            vertex_offset: instances[r.instance as usize].vertex_base as i32
-                                - base.vertex_base as i32,
-                        }));
-                        if let Some(multi_draw) = &self.gpu.multi_draw {
-                            // SAFETY: recording; `multi` holds `len` tightly packed entries.
-                            unsafe {
-                                (multi_draw.fp().cmd_draw_multi_indexed_ext)(
-                                    command_buffer,
-                                    multi.len() as u32,
-                                    multi.as_ptr(),
-                                    1,
-                                    first_instance,
-                                    std::mem::size_of::<vk::MultiDrawIndexedInfoEXT>() as u32,
-                                    std::ptr::null(),
-                                )
-                            };
-                        }
-                        let triangles = surface_triangles(pass, ranges);
-                        count(&|s| {
-                            s.draw_calls += 1;
-                            s.draws += ranges.len() as u64;
-                            s.primitives += triangles;
-                        });
-                    }
-                    _ => {
-                        for range in ranges {
-                            let instance = &instances[range.instance as usize];
-                            let base = vertex.bind_draw(&bind, instance, &mut vertex_state);
-                            if base.ok == 0 {
-                                continue;
-                            }
-                            // SAFETY: recording; the range lies in the bound buffers.
-                            unsafe {
-                                device.cmd_draw_indexed(
-                                    command_buffer,
-                                    range.count,
-                                    1,
-                                    range.first - base.index_base,
-                                    instance.vertex_base as i32 - base.vertex_base as i32,
-                                    first_instance,
-                                )
-                            };
-                        }
-                        let triangles = surface_triangles(pass, ranges);
-                        count(&|s| {
-                            s.draw_calls += ranges.len() as u64;
-                            s.draws += ranges.len() as u64;
-                            s.primitives += triangles;
-                        });
-                    }
-                }
+            let batches = draws.list.batches.len();
+            let batch_range = if part.end == usize::MAX {
+                0..batches
+            } else {
+                let per = batches.div_ceil(parts.max(1));
+                (part.start * per).min(batches)..(part.end * per).min(batches)
+            };
+            if !batch_range.is_empty() {
+                self.record_batches(command_buffer, pass, (draws.list, batch_range), stats);
             }
+        }
+    }
+
+    /// Binds `pass` and draws its indirect commands with one call.
+    fn record_indirect(
+        &self,
+        command_buffer: vk::CommandBuffer,
+        pass: &abi::CadrPass,
+        draws: &PassDraws<'_>,
+        stats: *mut CadrStats,
+    ) {
+        let device = &self.gpu.device;
+        bind_pass(self.gpu, self.record, pass, (command_buffer, stats));
+        // SAFETY: recording; the indirect buffers hold `draws.indirect_draws` commands of 20
+        // bytes.
+        unsafe {
+            if self.api == Api::Indirect {
+                device.cmd_draw_indexed_indirect(
+                    command_buffer,
+                    draws.commands,
+                    0,
+                    draws.indirect_draws,
+                    20,
+                );
+            } else {
+                device.cmd_draw_indexed_indirect_count(
+                    command_buffer,
+                    draws.commands,
+                    0,
+                    draws.count,
+                    0,
+                    draws.indirect_draws,
+                    20,
+                );
+            }
+        }
+        let triangles = surface_triangles(pass, &draws.list.ranges);
+        count(stats, |s| {
+            s.draw_calls += 1;
+            s.draws += u64::from(draws.indirect_draws);
+            s.primitives += triangles;
+        });
+    }
+
+    /// Binds `pass` and draws the `batches` of `list`, each with its instance's parameters.
+    fn record_batches(
+        &self,
+        command_buffer: vk::CommandBuffer,
+        pass: &abi::CadrPass,
+        (list, batches): (&PassList, Range<usize>),
+        stats: *mut CadrStats,
+    ) {
+        let (bind, mut vertex_state, mut parameter_state) =
+            bind_pass(self.gpu, self.record, pass, (command_buffer, stats));
+        let instances = self.record.scene().instances();
+        let mut multi: Vec<vk::MultiDrawIndexedInfoEXT> = Vec::new();
+        for batch in &list.batches[batches] {
+            let Some(first) = instances.get(batch.instance as usize) else {
+                continue;
+            };
+            let first_instance = self.record.parameters().bind_draw(
+                &bind,
+                batch.instance,
+                first,
+                &mut parameter_state,
+            );
+            let ranges = &list.ranges[batch.ranges.clone()];
+            let calls = if self.api == Api::MultiDraw {
+                let base = self
+                    .record
+                    .vertex()
+                    .bind_draw(&bind, first, &mut vertex_state);
+                if base.ok == 0 {
+                    continue;
+                }
+                multi.clear();
+                multi.extend(ranges.iter().map(|r| vk::MultiDrawIndexedInfoEXT {
+                    first_index: r.first - base.index_base,
+                    index_count: r.count,
+                    vertex_offset: instances[r.instance as usize].vertex_base as i32
+                        - base.vertex_base as i32,
+                }));
+                if let Some(multi_draw) = &self.gpu.multi_draw {
+                    // SAFETY: recording; `multi` holds `len` tightly packed entries.
+                    unsafe {
+                        (multi_draw.fp().cmd_draw_multi_indexed_ext)(
+                            command_buffer,
+                            multi.len() as u32,
+                            multi.as_ptr(),
+                            1,
+                            first_instance,
+                            std::mem::size_of::<vk::MultiDrawIndexedInfoEXT>() as u32,
+                            std::ptr::null(),
+                        )
+                    };
+                }
+                1
+            } else {
+                for range in ranges {
+                    let instance = &instances[range.instance as usize];
+                    let base = self
+                        .record
+                        .vertex()
+                        .bind_draw(&bind, instance, &mut vertex_state);
+                    if base.ok == 0 {
+                        continue;
+                    }
+                    // SAFETY: recording; the range lies in the bound buffers.
+                    unsafe {
+                        self.gpu.device.cmd_draw_indexed(
+                            command_buffer,
+                            range.count,
+                            1,
+                            range.first - base.index_base,
+                            instance.vertex_base as i32 - base.vertex_base as i32,
+                            first_instance,
+                        )
+                    };
+                }
+                ranges.len() as u64
+            };
+            let triangles = surface_triangles(pass, ranges);
+            count(stats, |s| {
+                s.draw_calls += calls;
+                s.draws += ranges.len() as u64;
+                s.primitives += triangles;
+            });
         }
     }
 }

@@ -147,17 +147,14 @@ impl Recorder<'_> {
         let (bind, mut vertex_state, mut parameter_state) =
             bind_pass(self.gpu, self.record, pass, (command_buffer, stats));
         let instances = self.record.scene().instances();
+        let (vertex, parameters) = (self.record.vertex(), self.record.parameters());
         let mut multi: Vec<vk::MultiDrawIndexedInfoEXT> = Vec::new();
         for batch in &list.batches[batches] {
             let Some(first) = instances.get(batch.instance as usize) else {
                 continue;
             };
-            let first_instance = self.record.parameters().bind_draw(
-                &bind,
-                batch.instance,
-                first,
-                &mut parameter_state,
-            );
+            let first_instance =
+                parameters.bind_draw(&bind, batch.instance, first, &mut parameter_state);
             let ranges = &list.ranges[batch.ranges.clone()];
             let calls = if self.api == Api::MultiDraw {
                 let base = self
@@ -192,10 +189,7 @@ impl Recorder<'_> {
             } else {
                 for range in ranges {
                     let instance = &instances[range.instance as usize];
-                    let base = self
-                        .record
-                        .vertex()
-                        .bind_draw(&bind, instance, &mut vertex_state);
+                    let base = vertex.bind_draw(&bind, instance, &mut vertex_state);
                     if base.ok == 0 {
                         continue;
                     }

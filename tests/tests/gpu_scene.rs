@@ -1,8 +1,10 @@
 //! The one GPU scene and picking through the technique path: picks agree with what is drawn in
 //! every valid combination, occurrences of a shared part are told apart, unpickable and hidden
 //! parts let the click through, world positions are exact far from the origin; several
-//! readers of one tree upload only what changed; a replaced geometry is written in place; any
-//! sequence of edits leaves the GPU scene equal to a fresh upload.
+//! readers of one tree upload only what changed; a replaced geometry is written in place;
+//! geometries created after the first frame are placed without laying the arenas out again,
+//! and destroyed ones leave their room to the next; any sequence of edits leaves the GPU scene
+//! drawing what a fresh upload draws.
 #![allow(clippy::unwrap_used)] // Test code: a failed unwrap is a failed test.
 
 use std::sync::Arc;
@@ -505,6 +507,78 @@ enum Edit {
     Add(u8),
     Remove(u8),
     Replace(bool),
+    /// A geometry of 1 + n % 4 boxes, new after the first frame, placed once.
+    NewGeometry(u8),
+    /// The n-th geometry made by `NewGeometry` still alive: its node and it destroyed.
+    DestroyGeometry(u8),
+}
+
+/// A box geometry of `boxes` boxes side by side, one part.
+fn boxes(boxes: u8) -> cadr_core::scene::Geometry {
+    let mut builder = GeometryBuilder::new("boxes");
+    for i in 0..boxes {
+        let x = f64::from(i);
+        builder.cuboid(DVec3::new(x, 0.0, 0.0), DVec3::new(x + 0.5, 0.5, 0.5), DMat4::IDENTITY);
+    }
+    let mut geometry = builder.finish();
+    let whole = geometry.indices.len() as u32;
+    geometry.parts.truncate(1);
+    geometry.parts[0].index_count = whole;
+    geometry.parts[0].wire_index_count = 0;
+    geometry
+}
+
+/// An instance entry without where its geometry lies in the arenas (which depends on the
+/// order geometries were placed in).
+fn without_place(entry: &cadr_plugin_abi::CadrInstance) -> cadr_plugin_abi::CadrInstance {
+    cadr_plugin_abi::CadrInstance {
+        vertex_base: 0,
+        geometry_first_index: 0,
+        geometry_first_wire_index: 0,
+        first_index: 0,
+        first_wire_index: 0,
+        ..*entry
+    }
+}
+
+/// The cull entries' bytes without where the geometry lies (first index, first wire index,
+/// vertex base, first cluster: words 4, 6, 8 and 11 of each 48-byte entry).
+fn cull_entries_without_place(bytes: &[u8]) -> Vec<u8> {
+    let mut bytes = bytes.to_vec();
+    for entry in bytes.chunks_mut(48) {
+        for word in [4, 6, 8, 11] {
+            entry[word * 4..word * 4 + 4].fill(0);
+        }
+    }
+    bytes
+}
+
+/// The object-space corners of every triangle each live instance of `scene` draws, read back
+/// from its arenas.
+fn drawn_triangles(scene: &GpuScene) -> Vec<Vec<[f32; 3]>> {
+    let [vertices, indices] = scene.read_back_geometry().unwrap();
+    let float = |at: &[u8]| f32::from_le_bytes([at[0], at[1], at[2], at[3]]);
+    // A vertex is 24 bytes: position, then normal.
+    let vertices: Vec<[f32; 3]> = vertices
+        .chunks_exact(24)
+        .map(|v| [float(&v[0..]), float(&v[4..]), float(&v[8..])])
+        .collect();
+    let indices: Vec<u32> = indices
+        .chunks_exact(4)
+        .map(|i| u32::from_le_bytes([i[0], i[1], i[2], i[3]]))
+        .collect();
+    scene
+        .content()
+        .instances
+        .iter()
+        .map(|entry| {
+            let first = entry.first_index as usize;
+            indices[first..first + entry.index_count as usize]
+                .iter()
+                .map(|&i| vertices[(entry.vertex_base + i) as usize])
+                .collect()
+        })
+        .collect()
 }
 
 fn edit() -> impl Strategy<Value = Edit> {
@@ -515,6 +589,8 @@ fn edit() -> impl Strategy<Value = Edit> {
         2 => any::<u8>().prop_map(Edit::Add),
         2 => any::<u8>().prop_map(Edit::Remove),
         1 => any::<bool>().prop_map(Edit::Replace),
+        2 => any::<u8>().prop_map(Edit::NewGeometry),
+        1 => any::<u8>().prop_map(Edit::DestroyGeometry),
     ]
 }
 
@@ -532,6 +608,7 @@ proptest! {
         let mut tree = SceneTree::build(&mut graph);
         let mut scene = GpuScene::new(&device, &graph, &mut tree, Transforms::Host).unwrap();
         scene.flush_uploads().unwrap();
+        let mut created: Vec<(GeometryHandle, NodeHandle)> = Vec::new();
         for (step, edit) in edits.iter().enumerate() {
             let pick = |n: u8| transforms[n as usize % transforms.len()];
             match *edit {
@@ -573,6 +650,20 @@ proptest! {
                         graph.replace_geometry(shape.0, builder.finish()).unwrap();
                     }
                 }
+                Edit::NewGeometry(n) => {
+                    let geometry = graph.create_geometry(boxes(1 + n % 4)).unwrap();
+                    let at = DVec3::new(0.0, -f64::from(n % 5), 0.0);
+                    let (t, geo) = place(&mut graph, root, &format!("new {step}"), at, (geometry, shape.1));
+                    transforms.push(t);
+                    created.push((geometry, geo));
+                }
+                Edit::DestroyGeometry(n) => {
+                    if !created.is_empty() {
+                        let (geometry, geo) = created.remove(usize::from(n) % created.len());
+                        graph.destroy_node(geo).unwrap();
+                        graph.destroy_geometry(geometry).unwrap();
+                    }
+                }
             }
             tree.update(&mut graph);
             scene.sync(&graph, &mut tree, Transforms::Host).unwrap();
@@ -581,7 +672,11 @@ proptest! {
         let mut fresh = GpuScene::new(&device, &graph, &mut tree, Transforms::Host).unwrap();
         fresh.flush_uploads().unwrap();
         let (synced, expected) = (scene.content(), fresh.content());
-        prop_assert_eq!(synced.instances, expected.instances);
+        let places = |entries: &[cadr_plugin_abi::CadrInstance]| {
+            entries.iter().map(without_place).collect::<Vec<_>>()
+        };
+        prop_assert_eq!(places(synced.instances), places(expected.instances));
+        prop_assert_eq!(drawn_triangles(&scene), drawn_triangles(&fresh));
         prop_assert_eq!(synced.drawn_bits, expected.drawn_bits);
         prop_assert_eq!(synced.materials, expected.materials);
         for (slot, (a, b)) in synced.matrices.iter().zip(expected.matrices).enumerate() {
@@ -594,7 +689,10 @@ proptest! {
         let [fresh_matrices, fresh_materials, fresh_records, fresh_cull_entries] =
             fresh.read_back_arrays().unwrap();
         prop_assert_eq!(records, fresh_records);
-        prop_assert_eq!(cull_entries, fresh_cull_entries);
+        prop_assert_eq!(
+            cull_entries_without_place(&cull_entries),
+            cull_entries_without_place(&fresh_cull_entries)
+        );
         prop_assert_eq!(materials, fresh_materials);
         for slot in 0..synced.matrices.len() {
             if tree.has_instances(slot as u32) {
@@ -650,5 +748,66 @@ fn views_on_two_threads_share_one_device_and_its_queue() {
         difference.within(cadr_tests::images::SAME_PICTURE),
         "{difference:?}"
     );
+    assert_no_validation_errors(&device);
+}
+
+/// A CAD tool's day: a file loaded into a scene already drawn, unloaded, loaded again. The
+/// file's parts draw after the first frame; the first load lays the arenas out again with room
+/// to spare, and from then on a load takes the rooms the last unload freed: it uploads only
+/// its own geometry and the arenas keep their size.
+#[test]
+fn files_loaded_after_the_first_frame_draw_and_reuse_the_room_of_those_unloaded() {
+    let device = test_device();
+    let base = generate(&GeneratorSpec::parse("grid:parts=200").unwrap());
+    let file = generate(&GeneratorSpec::Demo);
+    let (mut graph, _) = SceneGraph::from_scene(&base).unwrap();
+    let mut tree = SceneTree::build(&mut graph);
+    let mut view = view(&device, &Combination::built_in());
+    let camera = camera_at(DVec3::new(0.0, 0.0, 50.0), DVec3::ZERO);
+    let alone = view.render(&graph, &mut tree, &camera).unwrap();
+    let view_triangles = view.scene().unwrap().drawn_triangles();
+    let base_bytes = view.scene().unwrap().resident_bytes();
+    let file_triangles =
+        cadr_core::scene::SceneStats::new(&file, &flatten(&file).unwrap()).triangles;
+    let mut sizes = Vec::new();
+    for round in 0..3 {
+        let root = graph.root();
+        let imported = graph.import(&file, root).unwrap();
+        tree.update(&mut graph);
+        let drawn = view.render(&graph, &mut tree, &camera).unwrap();
+        let scene = view.scene().unwrap();
+        assert_eq!(
+            scene.drawn_triangles(),
+            view_triangles + file_triangles,
+            "round {round}: every triangle of the file is drawn besides the scene's"
+        );
+        assert!(drawn.triangles > alone.triangles, "round {round}");
+        let upload = scene.last_upload();
+        sizes.push(scene.resident_bytes());
+        if round > 0 {
+            assert!(
+                upload.geometry_bytes < 2 * (sizes[0] - base_bytes),
+                "round {round}: {} bytes of geometry uploaded, the arenas were laid out again",
+                upload.geometry_bytes
+            );
+        }
+        // Unload: the nodes, then the geometries and materials they used.
+        for &node in imported.nodes.iter().rev() {
+            graph.destroy_node(node).unwrap();
+        }
+        for &geometry in &imported.geometries {
+            graph.destroy_geometry(geometry).unwrap();
+        }
+        for &material in &imported.materials {
+            graph.destroy_material(material).unwrap();
+        }
+        tree.update(&mut graph);
+        let after = view.render(&graph, &mut tree, &camera).unwrap();
+        assert_eq!(after.triangles, alone.triangles, "round {round}: unloaded");
+    }
+    assert!(sizes[0] > base_bytes, "the first load grew the arenas");
+    assert_eq!(sizes[1], sizes[0], "the second load fits the room the first left");
+    assert_eq!(sizes[2], sizes[0], "and so does the third");
+    drop(view);
     assert_no_validation_errors(&device);
 }

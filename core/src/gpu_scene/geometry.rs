@@ -1,9 +1,13 @@
 //! The GPU scene's geometry: every geometry's vertices, triangle indices and edge indices in
-//! three shared arenas (usable as vertex, index and storage buffers), with each geometry's place
-//! and room there. A replaced geometry that fits its room is written in place: only its bytes
-//! are uploaded and only its users' instance entries change. Texture coordinates and colours
-//! go in a fourth arena laid out like the vertices (the same index finds a vertex's
-//! attributes), made only when some geometry has them.
+//! three shared arenas (usable as vertex, index and storage buffers), with its clusters and
+//! groups in two more, and each geometry's place and room there. Geometries come and go
+//! without the arenas being laid out again: a replaced geometry that fits its room is written
+//! in place (only its bytes are uploaded and only its users' instance entries change); a new
+//! one takes the room a destroyed one left, or the room at the arenas' end; a destroyed one
+//! leaves its room free. Only when no room is left are the arenas laid out again, then with
+//! room to spare. Texture coordinates and colours go in a sixth arena laid out like the
+//! vertices (the same index finds a vertex's attributes), made only when some geometry has
+//! them.
 
 use std::sync::Arc;
 
@@ -11,24 +15,29 @@ use crate::error::RenderResult;
 use crate::vk::raw as vk;
 
 use super::clusters::{self, GeometryClusters};
-use crate::graph::SceneGraph;
+use crate::graph::{GeometryHandle, SceneGraph};
 use crate::scene::closure::{closure, Closure};
 use crate::scene::edges::{feature_edges, DEFAULT_CREASE_DEGREES};
 use crate::scene::{Geometry, Part, Vertex, VertexAttributes};
 use crate::vk::{Buffer, Device};
 use cadr_plugin_abi as abi;
 
+/// Elements of each arena, in the order vertices, indices (the coarser clusters' too), wire
+/// indices, clusters, groups.
+type Extent = [u32; 5];
+
 /// Where one geometry lies in the arenas and how much room it has there.
 #[derive(Clone, Debug)]
 pub(super) struct GeometryPlace {
+    /// The geometry placed there: a slot reused by another geometry is placed again.
+    handle: GeometryHandle,
     pub(super) vertex_base: u32,
     pub(super) first_index: u32,
     pub(super) first_wire_index: u32,
     pub(super) first_cluster: u32,
     pub(super) first_group: u32,
-    /// Vertices, indices (the coarser clusters' too), wire indices, clusters and groups the
-    /// place can hold (its size when laid out).
-    room: [u32; 5],
+    /// What the place can hold (the size of the geometry it was made for).
+    room: Extent,
     /// Per part: first index, count, first wire index, wire count (relative), bounding sphere,
     /// and its shape as instance flags (`CADR_INSTANCE_CLOSED`, `CADR_INSTANCE_INSIDE_OUT`,
     /// `CADR_INSTANCE_CURVED`).
@@ -39,6 +48,17 @@ pub(super) struct GeometryPlace {
 }
 
 impl GeometryPlace {
+    /// Where the place starts in each arena.
+    fn starts(&self) -> Extent {
+        [
+            self.vertex_base,
+            self.first_index,
+            self.first_wire_index,
+            self.first_cluster,
+            self.first_group,
+        ]
+    }
+
     /// Part `part`'s first cluster in the cluster arena, how many it has, and how many its
     /// coarsest cut has.
     pub(super) fn clusters_of(&self, part: u32) -> Option<[u32; 3]> {
@@ -78,8 +98,8 @@ fn arena_data(geometry: &Geometry) -> ArenaData<'_> {
 }
 
 impl ArenaData<'_> {
-    /// How much of each arena the geometry takes (see [`GeometryPlace::room`]).
-    fn sizes(&self) -> [u32; 5] {
+    /// How much of each arena the geometry takes.
+    fn sizes(&self) -> Extent {
         let clusters = &self.clusters;
         [
             self.vertices.len(),
@@ -231,8 +251,15 @@ pub(super) struct GeometryArenas {
     pub(super) clusters: Buffer,
     /// [`abi::CadrClusterGroup`] per group of every part's level-of-detail DAG.
     pub(super) groups: Buffer,
-    /// Clusters and groups in use.
+    /// Clusters and groups in use (up to the end of the last place).
     pub(super) cluster_counts: [u32; 2],
+    /// Where the arenas' unused end starts, and how much each holds.
+    tails: Extent,
+    capacity: Extent,
+    /// The rooms destroyed geometries left: (starts, room).
+    free: Vec<(Extent, Extent)>,
+    /// The graph's geometries generation the places follow.
+    generation: u64,
     /// One [`VertexAttributes`] per vertex when `has_attributes`, else 16 unused bytes.
     pub(super) attributes: Buffer,
     /// Whether some geometry has texture coordinates or colours.
@@ -241,8 +268,14 @@ pub(super) struct GeometryArenas {
 }
 
 impl GeometryArenas {
-    /// Lays out and uploads every geometry of `graph`; returns the arenas and the bytes uploaded.
-    pub(super) fn upload(device: &Arc<Device>, graph: &SceneGraph) -> RenderResult<(Self, u64)> {
+    /// Lays out and uploads every geometry of `graph`, with room to spare at the end of each
+    /// arena when `spare` (a layout made because the room ran out); returns the arenas and
+    /// the bytes uploaded.
+    pub(super) fn upload(
+        device: &Arc<Device>,
+        graph: &SceneGraph,
+        spare: bool,
+    ) -> RenderResult<(Self, u64)> {
         let (_, geometry_slots, _) = graph.capacities();
         let mut vertices: Vec<Vertex> = Vec::new();
         let mut indices: Vec<u32> = Vec::new();
@@ -251,14 +284,18 @@ impl GeometryArenas {
         let mut groups: Vec<u8> = Vec::new();
         // The clusters are built on a thread per core, the geometries laid out in slot order.
         let slots: Vec<u32> = (0..geometry_slots as u32).collect();
-        let data = crate::parallel::map(&slots, |&slot| graph.geometry_at(slot).map(arena_data));
+        let data = crate::parallel::map(&slots, |&slot| {
+            let handle = graph.geometry_handle_at(slot)?;
+            Some((handle, arena_data(graph.geometry_at(slot)?)))
+        });
         let places = data
             .iter()
             .map(|data| {
-                let data = data.as_ref()?;
+                let (handle, data) = data.as_ref()?;
                 let first_group = (groups.len() / GROUP_BYTES) as u32;
                 let first_index = indices.len() as u32;
                 let place = GeometryPlace {
+                    handle: *handle,
                     vertex_base: vertices.len() as u32,
                     first_index: indices.len() as u32,
                     first_wire_index: wire.len() as u32,
@@ -277,10 +314,15 @@ impl GeometryArenas {
                 Some(place)
             })
             .collect();
-        let upload = |name: &str, data: &[u8], base: vk::BufferUsageFlags| {
-            let bytes: &[u8] = if data.is_empty() { &[0; 16] } else { data };
-            Buffer::with_data(device, name, bytes, usage(device, base))
-        };
+        let tails = [
+            vertices.len(),
+            indices.len(),
+            wire.len(),
+            clusters.len() / CLUSTER_BYTES,
+            groups.len() / GROUP_BYTES,
+        ]
+        .map(|n| n as u32);
+        let capacity = if spare { tails.map(with_spare_room) } else { tails };
         let has_attributes = (0..geometry_slots as u32)
             .filter_map(|slot| graph.geometry_at(slot))
             .any(|g| !g.attributes.is_empty());
@@ -299,72 +341,175 @@ impl GeometryArenas {
             + std::mem::size_of_val(attributes.as_slice())
             + clusters.len()
             + groups.len()) as u64;
-        let cluster_counts = [
-            (clusters.len() / CLUSTER_BYTES) as u32,
-            (groups.len() / GROUP_BYTES) as u32,
-        ];
+        // Each arena holds `capacity` elements of its size (16 bytes at least).
+        let arena = |name: &str, data: &[u8], elements: u32, size: usize, base| {
+            let room = (u64::from(elements) * size as u64).max(data.len() as u64).max(16);
+            let mut buffer = Buffer::new(
+                device,
+                name,
+                room,
+                usage(device, base),
+                crate::vk::MemoryLocation::GpuOnly,
+            )?;
+            buffer.upload_at(0, data)?;
+            RenderResult::Ok(buffer)
+        };
+        let index = vk::BufferUsageFlags::INDEX_BUFFER;
+        let none = vk::BufferUsageFlags::empty();
+        let attribute_elements = if has_attributes { capacity[0] } else { 0 };
         let arenas = Self {
-            vertices: upload(
+            vertices: arena(
                 "scene vertices",
                 bytemuck::cast_slice(&vertices),
+                capacity[0],
+                std::mem::size_of::<Vertex>(),
                 vk::BufferUsageFlags::VERTEX_BUFFER,
             )?,
-            indices: upload(
+            indices: arena(
                 "scene indices",
                 bytemuck::cast_slice(&indices),
-                vk::BufferUsageFlags::INDEX_BUFFER,
+                capacity[1],
+                4,
+                index,
             )?,
-            wire_indices: upload(
+            wire_indices: arena(
                 "scene wire indices",
                 bytemuck::cast_slice(&wire),
-                vk::BufferUsageFlags::INDEX_BUFFER,
+                capacity[2],
+                4,
+                index,
             )?,
-            attributes: upload(
+            attributes: arena(
                 "scene vertex attributes",
                 bytemuck::cast_slice(&attributes),
-                vk::BufferUsageFlags::empty(),
+                attribute_elements,
+                std::mem::size_of::<VertexAttributes>(),
+                none,
             )?,
-            clusters: upload("scene clusters", &clusters, vk::BufferUsageFlags::empty())?,
-            groups: upload(
-                "scene cluster groups",
-                &groups,
-                vk::BufferUsageFlags::empty(),
+            clusters: arena(
+                "scene clusters",
+                &clusters,
+                capacity[3],
+                CLUSTER_BYTES,
+                none,
             )?,
-            cluster_counts,
+            groups: arena("scene cluster groups", &groups, capacity[4], GROUP_BYTES, none)?,
+            cluster_counts: [tails[3], tails[4]],
+            tails,
+            capacity,
+            free: Vec::new(),
+            generation: graph.geometries_generation(),
             has_attributes,
             places,
         };
         Ok((arenas, bytes))
     }
 
-    /// Writes geometry slot `slot` of `graph` over its place when it fits the room there;
-    /// returns the bytes uploaded, or `None` when it does not fit (or the slot is new), so the
-    /// arenas must be laid out again. The GPU must not be drawing from the arenas meanwhile
-    /// (frames are waited for before the next one syncs).
-    pub(super) fn replace_in_place(
+    /// Brings the places up to date with the geometries `graph` created and destroyed since
+    /// the last time: a destroyed geometry's room is freed, a new one placed and written.
+    /// Returns the bytes uploaded, or `None` when some new geometry found no room (the arenas
+    /// must be laid out again).
+    pub(super) fn follow_created_and_destroyed(
         &mut self,
         graph: &SceneGraph,
-        slot: u32,
     ) -> RenderResult<Option<u64>> {
-        let Some(geometry) = graph.geometry_at(slot) else {
-            return Ok(None);
+        if graph.geometries_generation() == self.generation {
+            return Ok(Some(0));
+        }
+        let (_, geometry_slots, _) = graph.capacities();
+        let slots = geometry_slots.max(self.places.len()) as u32;
+        let stale = |places: &[Option<GeometryPlace>], slot: u32| {
+            let placed = places.get(slot as usize).and_then(|p| p.as_ref().map(|p| p.handle));
+            placed != graph.geometry_handle_at(slot)
+        };
+        // Free first, so that new geometries can take the rooms.
+        for slot in 0..slots {
+            if stale(&self.places, slot) {
+                self.release(slot);
+            }
+        }
+        let mut uploaded = 0;
+        for slot in 0..slots {
+            if stale(&self.places, slot) {
+                match self.place(graph, slot)? {
+                    Some(bytes) => uploaded += bytes,
+                    None => return Ok(None),
+                }
+            }
+        }
+        self.generation = graph.geometries_generation();
+        Ok(Some(uploaded))
+    }
+
+    /// Frees the room of slot `slot`'s place, if it has one.
+    fn release(&mut self, slot: u32) {
+        if let Some(place) = self.places.get_mut(slot as usize).and_then(Option::take) {
+            self.free.push((place.starts(), place.room));
+        }
+    }
+
+    /// Where a geometry of `sizes` can go: the first free room that holds it (taken whole), or
+    /// the arenas' unused end. Returns the starts and the room.
+    fn allocate(&mut self, sizes: Extent) -> Option<(Extent, Extent)> {
+        let fits = |room: &Extent| room.iter().zip(sizes).all(|(&room, n)| n <= room);
+        if let Some(i) = self.free.iter().position(|(_, room)| fits(room)) {
+            return Some(self.free.swap_remove(i));
+        }
+        let ends: Extent = std::array::from_fn(|i| self.tails[i].saturating_add(sizes[i]));
+        if ends.iter().zip(self.capacity).any(|(&end, capacity)| end > capacity) {
+            return None;
+        }
+        let starts = self.tails;
+        self.tails = ends;
+        self.cluster_counts = [self.tails[3], self.tails[4]];
+        Some((starts, sizes))
+    }
+
+    /// Writes geometry slot `slot` of `graph` (new, or replaced) into the arenas: over its
+    /// place when it fits the room there, else into a free room or the arenas' end (its old
+    /// room freed). Returns the bytes uploaded, or `None` when no room holds it (or it is the
+    /// first geometry with attributes), so the arenas must be laid out again. A slot whose
+    /// geometry is gone has its room freed. The GPU must not be drawing from the arenas
+    /// meanwhile (frames are waited for before the next one syncs).
+    pub(super) fn place(&mut self, graph: &SceneGraph, slot: u32) -> RenderResult<Option<u64>> {
+        let (Some(handle), Some(geometry)) =
+            (graph.geometry_handle_at(slot), graph.geometry_at(slot))
+        else {
+            self.release(slot);
+            return Ok(Some(0));
         };
         if !geometry.attributes.is_empty() && !self.has_attributes {
             // The first geometry with attributes: the attribute arena is made by a new layout.
             return Ok(None);
         }
-        let Some(Some(place)) = self.places.get_mut(slot as usize) else {
+        let data = arena_data(geometry);
+        let sizes = data.sizes();
+        if self.places.len() <= slot as usize {
+            self.places.resize(slot as usize + 1, None);
+        }
+        let fits = |place: &GeometryPlace| place.room.iter().zip(sizes).all(|(&r, n)| n <= r);
+        if !self.places[slot as usize].as_ref().is_some_and(fits) {
+            self.release(slot);
+            let Some((starts, room)) = self.allocate(sizes) else {
+                return Ok(None);
+            };
+            let [vertex_base, first_index, first_wire_index, first_cluster, first_group] = starts;
+            self.places[slot as usize] = Some(GeometryPlace {
+                handle,
+                vertex_base,
+                first_index,
+                first_wire_index,
+                first_cluster,
+                first_group,
+                room,
+                parts: Vec::new(),
+                part_clusters: Vec::new(),
+            });
+        }
+        let Some(place) = self.places[slot as usize].as_mut() else {
             return Ok(None);
         };
-        let data = arena_data(geometry);
-        if data
-            .sizes()
-            .iter()
-            .zip(place.room)
-            .any(|(&n, room)| n > room)
-        {
-            return Ok(None);
-        }
+        place.handle = handle;
         let vertex_bytes: &[u8] = bytemuck::cast_slice(data.vertices);
         let index_bytes: Vec<u8> = data
             .clusters
@@ -412,6 +557,12 @@ impl GeometryArenas {
                 + group_bytes.len()) as u64,
         ))
     }
+}
+
+/// The elements an arena laid out again holds for `used`: a quarter more, and at least a few
+/// thousand, so that the geometries loaded next fit without another layout.
+fn with_spare_room(used: u32) -> u32 {
+    used.saturating_add(used / 4).saturating_add(4096)
 }
 
 /// Appends the geometry's attributes, or white at (0, 0) for each vertex when it has none.

@@ -249,7 +249,7 @@ impl GpuScene {
         let first_generation =
             NEXT_GENERATIONS.fetch_add(1 << 32, std::sync::atomic::Ordering::Relaxed);
         let reader = tree.subscribe();
-        let (arenas, geometry_bytes) = GeometryArenas::upload(device, graph)?;
+        let (arenas, geometry_bytes) = GeometryArenas::upload(device, graph, false)?;
         let (textures, texture_bytes) = SceneTextures::new(device, graph)?;
         let mut scene = Self {
             device: Arc::clone(device),
@@ -597,6 +597,9 @@ impl GpuScene {
         if transforms != self.moves.transforms {
             settle()?;
             self.moves.transforms = transforms;
+            if !self.place_geometries(graph, &changes.dirty_geometries)? {
+                return self.relayout(graph, tree);
+            }
             return self.refresh_all(graph, tree);
         }
         if changes.is_empty() {
@@ -612,21 +615,7 @@ impl GpuScene {
         let grown = tree.node_capacity() > self.matrices.len()
             || tree.instance_capacity() > self.instances.len()
             || graph.capacities().2 > self.materials.len();
-        let mut replaced_in_place = true;
-        for &slot in &changes.dirty_geometries {
-            match self.arenas.replace_in_place(graph, slot)? {
-                Some(bytes) => {
-                    self.counts.last_upload.geometry_bytes += bytes;
-                    self.counts.last_upload.bytes += bytes;
-                }
-                None => {
-                    replaced_in_place = false;
-                    break;
-                }
-            }
-        }
-        if !replaced_in_place {
-            // Grown past its room (or new): lay the arenas out again.
+        if !self.place_geometries(graph, &changes.dirty_geometries)? {
             return self.relayout(graph, tree);
         }
         if grown || textures_changed {
@@ -693,9 +682,28 @@ impl GpuScene {
         Ok(())
     }
 
+    /// Gives the geometries created, destroyed and replaced (`replaced` slots) since the last
+    /// sync their places, and frees those left; false where the room ran out, so that the
+    /// arenas must be laid out again.
+    fn place_geometries(&mut self, graph: &SceneGraph, replaced: &[u32]) -> RenderResult<bool> {
+        let mut placed = self.arenas.follow_created_and_destroyed(graph)?;
+        for &slot in replaced {
+            placed = match (placed, self.arenas.place(graph, slot)?) {
+                (Some(before), Some(bytes)) => Some(before + bytes),
+                _ => None,
+            };
+        }
+        let Some(bytes) = placed else {
+            return Ok(false);
+        };
+        self.counts.last_upload.geometry_bytes += bytes;
+        self.counts.last_upload.bytes += bytes;
+        Ok(true)
+    }
+
     /// Lays the arenas out again and rebuilds every entry.
     fn relayout(&mut self, graph: &SceneGraph, tree: &mut SceneTree) -> RenderResult<()> {
-        let (arenas, bytes) = GeometryArenas::upload(&self.device, graph)?;
+        let (arenas, bytes) = GeometryArenas::upload(&self.device, graph, true)?;
         self.arenas = arenas;
         self.counts.last_upload.geometry_bytes += bytes;
         self.counts.last_upload.bytes += bytes;
@@ -1081,6 +1089,13 @@ impl GpuScene {
             materials: &self.materials,
             drawn_bits: &self.bits.drawn,
         }
+    }
+
+    /// Reads back the vertex and index arenas (for tests: geometries placed one by one must
+    /// draw what a fresh layout draws). Waits for the device.
+    pub fn read_back_geometry(&self) -> RenderResult<[Vec<u8>; 2]> {
+        let read = |buffer: &crate::vk::Buffer| buffer.download(0, buffer.size());
+        Ok([read(&self.arenas.vertices)?, read(&self.arenas.indices)?])
     }
 
     /// Reads back the GPU's matrix, material, record and cull-entry arrays (for tests: the

@@ -324,6 +324,8 @@ pub struct SceneGraph {
     textures: Slots<TextureEntry>,
     /// Changes whenever a texture is created or destroyed.
     textures_generation: u64,
+    /// Changes whenever a geometry is created or destroyed.
+    geometries_generation: u64,
     root: NodeHandle,
     events: Vec<GraphEvent>,
 }
@@ -379,6 +381,7 @@ impl SceneGraph {
             materials: Slots::default(),
             textures: Slots::default(),
             textures_generation: 0,
+            geometries_generation: 0,
             root,
             events: Vec::new(),
         }
@@ -460,6 +463,12 @@ impl SceneGraph {
     /// then).
     pub fn textures_generation(&self) -> u64 {
         self.textures_generation
+    }
+
+    /// Changes whenever a geometry is created or destroyed (the GPU scene places new
+    /// geometries and frees the room of destroyed ones then).
+    pub fn geometries_generation(&self) -> u64 {
+        self.geometries_generation
     }
 
     /// Whether a material drawn with `material` is translucent (see
@@ -654,6 +663,7 @@ impl SceneGraph {
     /// A new geometry; its data is validated (indices, parts, finite values).
     pub fn create_geometry(&mut self, geometry: Geometry) -> Result<GeometryHandle, GraphError> {
         check_geometry(&geometry)?;
+        self.geometries_generation += 1;
         Ok(self.geometries.insert(GeometryEntry {
             geometry,
             users: Vec::new(),
@@ -673,6 +683,7 @@ impl SceneGraph {
             });
         }
         self.geometries.remove(geometry);
+        self.geometries_generation += 1;
         Ok(())
     }
 

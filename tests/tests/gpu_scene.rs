@@ -518,7 +518,11 @@ fn boxes(boxes: u8) -> cadr_core::scene::Geometry {
     let mut builder = GeometryBuilder::new("boxes");
     for i in 0..boxes {
         let x = f64::from(i);
-        builder.cuboid(DVec3::new(x, 0.0, 0.0), DVec3::new(x + 0.5, 0.5, 0.5), DMat4::IDENTITY);
+        builder.cuboid(
+            DVec3::new(x, 0.0, 0.0),
+            DVec3::new(x + 0.5, 0.5, 0.5),
+            DMat4::IDENTITY,
+        );
     }
     let mut geometry = builder.finish();
     let whole = geometry.indices.len() as u32;
@@ -806,7 +810,10 @@ fn files_loaded_after_the_first_frame_draw_and_reuse_the_room_of_those_unloaded(
         assert_eq!(after.triangles, alone.triangles, "round {round}: unloaded");
     }
     assert!(sizes[0] > base_bytes, "the first load grew the arenas");
-    assert_eq!(sizes[1], sizes[0], "the second load fits the room the first left");
+    assert_eq!(
+        sizes[1], sizes[0],
+        "the second load fits the room the first left"
+    );
     assert_eq!(sizes[2], sizes[0], "and so does the third");
     drop(view);
     assert_no_validation_errors(&device);

@@ -267,15 +267,19 @@ pub(super) struct GeometryArenas {
     pub(super) places: Vec<Option<GeometryPlace>>,
 }
 
-impl GeometryArenas {
-    /// Lays out and uploads every geometry of `graph`, with room to spare at the end of each
-    /// arena when `spare` (a layout made because the room ran out); returns the arenas and
-    /// the bytes uploaded.
-    pub(super) fn upload(
-        device: &Arc<Device>,
-        graph: &SceneGraph,
-        spare: bool,
-    ) -> RenderResult<(Self, u64)> {
+/// Every geometry of a graph one after the other, in slot order: the arenas' contents and
+/// the places.
+struct Layout {
+    vertices: Vec<Vertex>,
+    indices: Vec<u32>,
+    wire: Vec<u32>,
+    clusters: Vec<u8>,
+    groups: Vec<u8>,
+    places: Vec<Option<GeometryPlace>>,
+}
+
+impl Layout {
+    fn of(graph: &SceneGraph) -> Self {
         let (_, geometry_slots, _) = graph.capacities();
         let mut vertices: Vec<Vertex> = Vec::new();
         let mut indices: Vec<u32> = Vec::new();
@@ -314,6 +318,35 @@ impl GeometryArenas {
                 Some(place)
             })
             .collect();
+        Self {
+            vertices,
+            indices,
+            wire,
+            clusters,
+            groups,
+            places,
+        }
+    }
+}
+
+impl GeometryArenas {
+    /// Lays out and uploads every geometry of `graph`, with room to spare at the end of each
+    /// arena when `spare` (a layout made because the room ran out); returns the arenas and
+    /// the bytes uploaded.
+    pub(super) fn upload(
+        device: &Arc<Device>,
+        graph: &SceneGraph,
+        spare: bool,
+    ) -> RenderResult<(Self, u64)> {
+        let (_, geometry_slots, _) = graph.capacities();
+        let Layout {
+            vertices,
+            indices,
+            wire,
+            clusters,
+            groups,
+            places,
+        } = Layout::of(graph);
         let tails = [
             vertices.len(),
             indices.len(),
@@ -322,7 +355,11 @@ impl GeometryArenas {
             groups.len() / GROUP_BYTES,
         ]
         .map(|n| n as u32);
-        let capacity = if spare { tails.map(with_spare_room) } else { tails };
+        let capacity = if spare {
+            tails.map(with_spare_room)
+        } else {
+            tails
+        };
         let has_attributes = (0..geometry_slots as u32)
             .filter_map(|slot| graph.geometry_at(slot))
             .any(|g| !g.attributes.is_empty());
@@ -343,7 +380,9 @@ impl GeometryArenas {
             + groups.len()) as u64;
         // Each arena holds `capacity` elements of its size (16 bytes at least).
         let arena = |name: &str, data: &[u8], elements: u32, size: usize, base| {
-            let room = (u64::from(elements) * size as u64).max(data.len() as u64).max(16);
+            let room = (u64::from(elements) * size as u64)
+                .max(data.len() as u64)
+                .max(16);
             let mut buffer = Buffer::new(
                 device,
                 name,
@@ -393,7 +432,13 @@ impl GeometryArenas {
                 CLUSTER_BYTES,
                 none,
             )?,
-            groups: arena("scene cluster groups", &groups, capacity[4], GROUP_BYTES, none)?,
+            groups: arena(
+                "scene cluster groups",
+                &groups,
+                capacity[4],
+                GROUP_BYTES,
+                none,
+            )?,
             cluster_counts: [tails[3], tails[4]],
             tails,
             capacity,
@@ -419,7 +464,9 @@ impl GeometryArenas {
         let (_, geometry_slots, _) = graph.capacities();
         let slots = geometry_slots.max(self.places.len()) as u32;
         let stale = |places: &[Option<GeometryPlace>], slot: u32| {
-            let placed = places.get(slot as usize).and_then(|p| p.as_ref().map(|p| p.handle));
+            let placed = places
+                .get(slot as usize)
+                .and_then(|p| p.as_ref().map(|p| p.handle));
             placed != graph.geometry_handle_at(slot)
         };
         // Free first, so that new geometries can take the rooms.
@@ -448,15 +495,30 @@ impl GeometryArenas {
         }
     }
 
-    /// Where a geometry of `sizes` can go: the first free room that holds it (taken whole), or
-    /// the arenas' unused end. Returns the starts and the room.
+    /// Where a geometry of `sizes` can go: the smallest free room that holds it (taken
+    /// whole: a file loaded again finds the rooms its geometries left), or the arenas' unused
+    /// end. Returns the starts and the room.
     fn allocate(&mut self, sizes: Extent) -> Option<(Extent, Extent)> {
         let fits = |room: &Extent| room.iter().zip(sizes).all(|(&room, n)| n <= room);
-        if let Some(i) = self.free.iter().position(|(_, room)| fits(room)) {
+        let waste = |room: &Extent| -> u64 {
+            room.iter()
+                .zip(sizes)
+                .map(|(&room, n)| u64::from(room - n))
+                .sum()
+        };
+        let best = (self.free.iter().enumerate())
+            .filter(|(_, (_, room))| fits(room))
+            .min_by_key(|(_, (_, room))| waste(room))
+            .map(|(i, _)| i);
+        if let Some(i) = best {
             return Some(self.free.swap_remove(i));
         }
         let ends: Extent = std::array::from_fn(|i| self.tails[i].saturating_add(sizes[i]));
-        if ends.iter().zip(self.capacity).any(|(&end, capacity)| end > capacity) {
+        if ends
+            .iter()
+            .zip(self.capacity)
+            .any(|(&end, capacity)| end > capacity)
+        {
             return None;
         }
         let starts = self.tails;

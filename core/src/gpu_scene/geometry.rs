@@ -251,8 +251,6 @@ pub(super) struct GeometryArenas {
     pub(super) clusters: Buffer,
     /// [`abi::CadrClusterGroup`] per group of every part's level-of-detail DAG.
     pub(super) groups: Buffer,
-    /// Clusters and groups in use (up to the end of the last place).
-    pub(super) cluster_counts: [u32; 2],
     /// Where the arenas' unused end starts, and how much each holds.
     tails: Extent,
     capacity: Extent,
@@ -439,7 +437,6 @@ impl GeometryArenas {
                 GROUP_BYTES,
                 none,
             )?,
-            cluster_counts: [tails[3], tails[4]],
             tails,
             capacity,
             free: Vec::new(),
@@ -488,6 +485,11 @@ impl GeometryArenas {
         Ok(Some(uploaded))
     }
 
+    /// Clusters and groups in use (up to the end of the last place).
+    pub(super) fn cluster_counts(&self) -> [u32; 2] {
+        [self.tails[3], self.tails[4]]
+    }
+
     /// Frees the room of slot `slot`'s place, if it has one.
     fn release(&mut self, slot: u32) {
         if let Some(place) = self.places.get_mut(slot as usize).and_then(Option::take) {
@@ -523,7 +525,6 @@ impl GeometryArenas {
         }
         let starts = self.tails;
         self.tails = ends;
-        self.cluster_counts = [self.tails[3], self.tails[4]];
         Some((starts, sizes))
     }
 

@@ -359,7 +359,7 @@ impl GpuScene {
         let extension = &mut self.clusters_extension.0;
         extension.cluster_buffer = clusters;
         extension.group_buffer = groups;
-        [extension.cluster_count, extension.group_count] = self.arenas.cluster_counts;
+        [extension.cluster_count, extension.group_count] = self.arenas.cluster_counts();
     }
 
     /// Sums the clusters of the candidates' parts again when an instance changed since the
@@ -698,6 +698,9 @@ impl GpuScene {
         };
         self.counts.last_upload.geometry_bytes += bytes;
         self.counts.last_upload.bytes += bytes;
+        // A geometry placed at the arenas' end adds clusters the extension must count.
+        let extension = &mut self.clusters_extension.0;
+        [extension.cluster_count, extension.group_count] = self.arenas.cluster_counts();
         Ok(true)
     }
 

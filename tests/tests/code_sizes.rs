@@ -78,10 +78,15 @@ fn functions(text: &str) -> Vec<(String, usize, usize)> {
     found
 }
 
-/// The line where a file's `#[cfg(test)]` module starts (its functions are test code).
+/// The line where a file's `#[cfg(test)] mod …` starts (its functions are test code); a
+/// `#[cfg(test)]` on any other item exempts nothing.
 fn test_module_start(text: &str) -> usize {
-    text.lines()
-        .position(|line| line.trim() == "#[cfg(test)]")
+    let lines: Vec<&str> = text.lines().collect();
+    lines
+        .windows(2)
+        .position(|pair| {
+            pair[0].trim() == "#[cfg(test)]" && pair[1].trim_start().starts_with("mod ")
+        })
         .map_or(usize::MAX, |i| i + 1)
 }
 

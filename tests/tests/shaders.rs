@@ -43,9 +43,8 @@ fn shaders_compile_and_validate() {
     let device = test_device();
     let renderer = Renderer::new(&device, 8, 8).expect("renderer");
     renderer
-        .pipelines()
-        .background()
-        .unwrap_or_else(|e| panic!("background pipeline: {e}"));
+        .make_overlay_pipelines()
+        .unwrap_or_else(|e| panic!("pipelines over the picture: {e}"));
     drop(renderer);
     let scene_pipelines = ScenePipelines::new(&device).expect("scene pipelines");
     scene_pipelines

@@ -10,6 +10,7 @@
 
 mod gpu_cull;
 mod output;
+mod passes;
 mod record;
 mod techniques;
 
@@ -124,7 +125,7 @@ impl Renderer {
             vk::BufferUsageFlags::UNIFORM_BUFFER,
             MemoryLocation::CpuToGpu,
         )?;
-        let pipelines = Pipelines::new(device)?;
+        let pipelines = Pipelines::new(device, passes::OVERLAY_PASSES.len())?;
         let frame_sets = DescriptorSets::new(device, "frame", &[pipelines.frame_set_layout()])?;
         frame_sets.write_buffer(
             0,
@@ -362,6 +363,18 @@ impl Renderer {
     /// The device.
     pub fn device(&self) -> &Arc<Device> {
         &self.device
+    }
+
+    /// Makes every pipeline of the renderer's own passes over the picture now, which are
+    /// otherwise made on the first frame that draws them: a host may call it ahead of its first
+    /// frame to take their compilation out of it.
+    pub fn make_overlay_pipelines(&self) -> RenderResult<()> {
+        for (index, pass) in passes::OVERLAY_PASSES.iter().enumerate() {
+            if let passes::OverlayDraw::Fullscreen(shader) = pass.draw {
+                self.pipelines.overlay(index, &shader)?;
+            }
+        }
+        Ok(())
     }
 
     /// The pipelines (to create resident scenes with).

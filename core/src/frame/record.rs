@@ -1,16 +1,16 @@
-//! Recording and submitting a frame: its plan ([`FramePlan`]), the recorders techniques
-//! contribute at each point of it ([`FrameRecorders`]), the pass and its phases, the passes
-//! over the picture (merge, ambient occlusion, silhouettes, outline, cap ties, background),
+//! Recording and submitting a frame: its plan ([`FramePlan`]), the shape it takes from the
+//! renderer's settings, the list of passes that follows from it (`passes.rs`), the recorders
+//! techniques contribute to those passes ([`FrameRecorders`]), the recording of each pass,
 //! the replay of an unchanged frame's recording, and frames in flight.
 
 use std::time::Instant;
 
-use crate::error::RenderResult;
-use crate::render::pixel_keys::{self, KeyUse, PixelKeys};
+use crate::error::{RenderError, RenderResult};
+use crate::render::pixel_keys::{self, PixelKeys};
 use crate::render::transparency::TransparencyTargets;
 use crate::render::{
-    split_f64, Camera, FrameStats, FrameUniforms, HighlightStyle, TransparencyMethod,
-    DISPLAY_CAP_KEYS, DISPLAY_NEAREST_SURFACES, DISPLAY_XRAY,
+    split_f64, Camera, FrameStats, FrameUniforms, HighlightStyle, OverlaySets, TransparencyMethod,
+    DISPLAY_XRAY,
 };
 use crate::vk::raw as vk;
 use crate::vk::{
@@ -18,6 +18,10 @@ use crate::vk::{
     suspend_rendering, Buffer, Image, Multisampled, RenderingTarget,
 };
 
+use super::passes::{
+    FramePass, FramePasses, FrameShape, OverlayDraw, PassTarget, Resources, SilhouetteSource,
+    OVERLAY_PASSES,
+};
 use super::{name_pixel_keys, name_storage, opaque, Renderer};
 
 /// What the colour pass clears to: nothing drawn, no coverage (the background goes under
@@ -62,45 +66,30 @@ pub(crate) struct FramePlan<'a> {
     pub highlights: bool,
 }
 
-/// The passes over a colour frame's picture that read its depth.
+/// What the recording of a frame's passes takes besides the list.
+struct PassInputs<'a> {
+    /// The frame's command buffer.
+    command_buffer: vk::CommandBuffer,
+    /// Whether the surfaces' contents come from secondary command buffers.
+    secondary: bool,
+    /// The transparency method's targets and its merge (pipeline, layout), when the frame
+    /// draws translucent surfaces.
+    merge: Option<(&'a TransparencyTargets, (vk::Pipeline, vk::PipelineLayout))>,
+    /// The set naming the picture's depth, when a pass over the picture reads it.
+    depth_set: Option<vk::DescriptorSet>,
+}
+
+/// One phase of the surfaces' rendering.
 #[derive(Clone, Copy, Debug)]
-struct DepthOverlays {
-    /// Ambient occlusion.
-    ssao: bool,
-    /// Silhouette edges, and the depth they are found in.
-    silhouettes: Option<SilhouetteSource>,
-    /// Whether the surfaces record the nearest surfaces (pixel keys plane 1), which the
-    /// silhouettes read: X-ray's depth, and which of them outline highlighted parts.
-    nearest_surfaces: bool,
-}
-
-/// The passes over a colour frame's picture that read only the pixel keys.
-#[derive(Clone, Copy, Debug)]
-struct KeyedOverlays {
-    /// The band around highlighted parts (the outline highlight style).
-    outline: bool,
-    /// The caps that tie with another part's surface (caps seen, with the cap keys).
-    cap_ties: bool,
-}
-
-/// The depth a frame's silhouettes are found in.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-enum SilhouetteSource {
-    /// The depth buffer: the surfaces fill it (edges, hidden-line). The silhouettes go under
-    /// the translucent surfaces merged over the picture, as the edge lines do.
-    DepthBuffer,
-    /// The nearest surfaces every surface records in the pixel keys (X-ray, whose translucent
-    /// surfaces write no depth). They outline the nearest surfaces, so they go over the merge.
-    NearestSurfaces,
-}
-
-/// Which image a pass draws into.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub(crate) enum PassTarget {
-    /// The colour target (shaded image).
-    Color,
-    /// The R32_UINT pick target (instance id + 1, 0 for nothing).
-    Pick,
+struct SurfacesRendering {
+    /// The image drawn into.
+    target: PassTarget,
+    /// The phase.
+    phase: u32,
+    /// Whether it is the last.
+    last: bool,
+    /// Whether the surfaces have several phases (the depth is then stored between them).
+    phased: bool,
 }
 
 /// What a technique records at one point of the frame: before the pass, inside it (once per
@@ -163,11 +152,34 @@ impl Renderer {
         }
     }
 
-    /// Runs a frame: uniforms, command buffer, target transitions, the technique's commands
-    /// before the pass, inside it in `plan.phases` phases (the pass suspended between them, its
-    /// depth readable) and after it, submission, timings, and with one frame in flight the
-    /// wait for it (with two, the next frame waits instead). A frame whose replay key is
-    /// that of the recording in the command buffer submits it again instead.
+    /// The shape of a frame planned as `plan` seen from `eye`: what the display mode, the
+    /// settings, the section and the device make it draw. The one place that decides which
+    /// passes a frame has.
+    fn frame_shape(&self, plan: &FramePlan<'_>, eye: glam::DVec3) -> FrameShape {
+        let color = plan.pass == PassTarget::Color;
+        let silhouettes = self.silhouette_source(plan);
+        FrameShape {
+            target: plan.pass,
+            phases: plan.phases.max(1),
+            translucent: color && plan.translucency.is_some(),
+            ssao: self.settings.ssao && plan.fills_surfaces && color,
+            silhouettes,
+            nearest_surfaces: self.records_nearest_surfaces(plan, silhouettes),
+            // Caps that tie with another part's surface are painted from the cap keys,
+            // which the surfaces record (every mode but wireframe, which draws none).
+            cap_ties: color
+                && (plan.fills_surfaces || plan.draws_edges)
+                && self.device.capabilities().fragment_stores_and_atomics
+                && self.settings.section.caps_seen_from(eye),
+            outline: self.settings.highlight_style == HighlightStyle::Outline && color,
+        }
+    }
+
+    /// Runs a frame: its passes planned from its shape, uniforms, command buffer, each pass
+    /// recorded in order (the techniques' where they contribute), submission, timings, and
+    /// with one frame in flight the wait for it (with two, the next frame waits instead). A
+    /// frame whose replay key is that of the recording in the command buffer submits it again
+    /// instead.
     pub(crate) fn frame(
         &mut self,
         camera: &Camera,
@@ -175,46 +187,25 @@ impl Renderer {
         mut recorders: FrameRecorders<'_, '_>,
     ) -> RenderResult<FrameStats> {
         let eye = camera.eye();
-        let color = plan.pass == PassTarget::Color;
-        let outline = self.settings.highlight_style == HighlightStyle::Outline && color;
-        let silhouettes = self.silhouette_source(&plan);
-        let depth_overlays = DepthOverlays {
-            ssao: self.settings.ssao && plan.fills_surfaces && color,
-            silhouettes,
-            nearest_surfaces: self.records_nearest_surfaces(&plan, silhouettes),
-        };
-        let nearest_surfaces = depth_overlays.nearest_surfaces;
-        // Caps that tie with another part's surface are painted from the cap keys, which the
-        // surfaces record (every mode but wireframe, which draws none).
-        let cap_keys = color
-            && (plan.fills_surfaces || plan.draws_edges)
-            && self.device.capabilities().fragment_stores_and_atomics
-            && self.settings.section.caps_seen_from(eye);
-        let display = plan.display
-            | if nearest_surfaces {
-                DISPLAY_NEAREST_SURFACES
-            } else {
-                0
-            }
-            | if cap_keys { DISPLAY_CAP_KEYS } else { 0 };
-        // The recording has (or lacks) the cap keys' clear and pass, which the camera decides.
+        let passes = FramePasses::plan(&self.frame_shape(&plan, eye));
+        let display = plan.display | passes.display_bits();
+        // The recording holds these passes and no others.
         let replay_key = plan
             .replay_key
-            .map(|key| crate::commands_key::mix(key, u64::from(cap_keys)));
+            .map(|key| crate::commands_key::mix(key, passes.key()));
         let uniforms = self.uniforms(camera, eye, display);
         self.commands.wait()?;
-        if let Some((method, _)) = plan.translucency {
+        let surface_writes = passes.surface_writes();
+        let translucency = plan
+            .translucency
+            .filter(|_| surface_writes.has(Resources::TRANSPARENCY));
+        if let Some((method, _)) = translucency {
             self.ensure_transparency_targets(method)?;
         }
-        let key_use = KeyUse {
-            outline,
-            nearest_surfaces,
-            cap_keys,
-        };
-        if let Some(planes) = key_use.plane_count() {
+        if let Some(planes) = surface_writes.key_use().plane_count() {
             self.ensure_pixel_keys(planes)?;
         }
-        let depth_set = if depth_overlays.ssao || depth_overlays.silhouettes.is_some() {
+        let depth_set = if passes.overlay_reads().has(Resources::DEPTH) {
             Some(self.ensure_depth_set()?)
         } else {
             None
@@ -255,29 +246,74 @@ impl Renderer {
         if let Some(timer) = &mut self.timers.pass {
             timer.begin(command_buffer);
         }
-        let phases = plan.phases.max(1);
-        (recorders.before)(self, command_buffer, 0, &mut stats)?;
-        let transparency = plan
-            .translucency
-            .and(self.on_demand.transparency.as_ref())
-            .filter(|_| plan.pass == PassTarget::Color);
-        let pass = (&plan, transparency, key_use, depth_set.is_some());
-        self.record_pass(command_buffer, pass, &mut recorders, &mut stats)?;
-        if plan.pass == PassTarget::Color {
-            let merge = transparency.zip(plan.translucency.map(|(_, merge)| merge));
-            let depth_overlays = depth_set.map(|set| (depth_overlays, set));
-            let keyed = KeyedOverlays {
-                outline,
-                cap_ties: cap_keys,
-            };
-            self.record_overlay(command_buffer, merge, depth_overlays, keyed)?;
-        }
-        (recorders.after)(self, command_buffer, phases - 1, &mut stats)?;
+        let inputs = PassInputs {
+            command_buffer,
+            secondary: plan.secondary,
+            merge: translucency
+                .and(self.on_demand.transparency.as_ref())
+                .zip(translucency.map(|(_, merge)| merge)),
+            depth_set,
+        };
+        self.record_passes(&passes, &inputs, &mut recorders, &mut stats)?;
+        let last_phase = passes.surface_phases().max(1) - 1;
+        (recorders.after)(self, command_buffer, last_phase, &mut stats)?;
         if let Some(timer) = &mut self.timers.pass {
             timer.end(command_buffer);
         }
         stats.cpu_record_us = record_start.elapsed().as_secs_f64() * 1e6;
         self.submit_recorded(stats, replay_key, plan.uploads_pending, previous_gpu_us)
+    }
+
+    /// Records `passes` in order into `inputs.command_buffer`: the techniques' where they
+    /// contribute (preparation, culling phases, the surfaces), the renderer's own (the clears
+    /// before the surfaces, the passes over the picture, the pick readback).
+    fn record_passes(
+        &self,
+        passes: &FramePasses,
+        inputs: &PassInputs<'_>,
+        recorders: &mut FrameRecorders<'_, '_>,
+        stats: &mut FrameStats,
+    ) -> RenderResult<()> {
+        let command_buffer = inputs.command_buffer;
+        let phased = passes.surface_phases() > 1;
+        let mut over_picture = false;
+        for pass in passes.iter() {
+            match *pass {
+                FramePass::Prepare => (recorders.before)(self, command_buffer, 0, stats)?,
+                FramePass::Cull { phase } => {
+                    (recorders.between)(self, command_buffer, phase, stats)?;
+                }
+                FramePass::Surfaces {
+                    phase,
+                    last,
+                    target,
+                    writes,
+                } => {
+                    if phase == 0 {
+                        self.record_surface_clears(command_buffer, writes, inputs);
+                    }
+                    let rendering = SurfacesRendering {
+                        target,
+                        phase,
+                        last,
+                        phased,
+                    };
+                    self.record_surfaces(rendering, inputs, recorders, stats)?;
+                }
+                FramePass::Overlay { index, reads } => {
+                    if !over_picture {
+                        self.begin_over_picture(command_buffer, passes);
+                        over_picture = true;
+                    }
+                    self.record_overlay(index, reads, inputs)?;
+                }
+                FramePass::PickReadback => self.record_pick_readback(command_buffer),
+            }
+        }
+        if over_picture {
+            end_overlay(&self.device, command_buffer, &self.target.color);
+        }
+        Ok(())
     }
 
     /// Submits the frame just recorded (after its prologue when it `uploaded`), keeps it for
@@ -353,25 +389,15 @@ impl Renderer {
         Ok(self.commands.end_prologue(key)?)
     }
 
-    /// Records the pass of `plan` into `command_buffer`: the clears of the transparency
-    /// method's storage and of the pixel keys the frame uses (`key_use`), then each phase's
-    /// rendering with the techniques' commands inside it and, from phase 1 on, what they record
-    /// between phases (the pass suspended, its depth readable). `shade_from_depth`: a pass
-    /// over the picture reads the depth afterwards.
-    fn record_pass(
+    /// Before the surfaces: clears the transparency method's storage and the pixel keys'
+    /// planes they `write`.
+    fn record_surface_clears(
         &self,
         command_buffer: vk::CommandBuffer,
-        (plan, transparency, key_use, shade_from_depth): (
-            &FramePlan<'_>,
-            Option<&TransparencyTargets>,
-            KeyUse,
-            bool,
-        ),
-        recorders: &mut FrameRecorders<'_, '_>,
-        stats: &mut FrameStats,
-    ) -> RenderResult<()> {
-        let phases = plan.phases.max(1);
-        if let Some(targets) = transparency {
+        writes: Resources,
+        inputs: &PassInputs<'_>,
+    ) {
+        if let Some((targets, _)) = inputs.merge {
             self.record_storage_clear(
                 command_buffer,
                 &targets.storage,
@@ -383,37 +409,50 @@ impl Renderer {
             .on_demand
             .pixel_keys
             .as_ref()
-            .and_then(|keys| Some((keys, keys.span(key_use)?)))
+            .and_then(|keys| Some((keys, keys.span(writes.key_use())?)))
         {
             self.record_storage_clear(command_buffer, &keys.buffer, span, pixel_keys::NO_SURFACE);
         }
+    }
+
+    /// Records one phase of the surfaces: the rendering begun (or resumed), the techniques'
+    /// commands inside it, and the rendering suspended (the depth so far readable by the next
+    /// culling phase) or, after the last phase, ended.
+    fn record_surfaces(
+        &self,
+        rendering: SurfacesRendering,
+        inputs: &PassInputs<'_>,
+        recorders: &mut FrameRecorders<'_, '_>,
+        stats: &mut FrameStats,
+    ) -> RenderResult<()> {
+        let command_buffer = inputs.command_buffer;
+        let transparency = inputs.merge.map(|(targets, _)| targets);
         let extra_colors: Vec<(&Image, vk::ClearColorValue)> = transparency
             .map(|t| t.images.iter().zip(t.clears.iter().copied()).collect())
             .unwrap_or_default();
         let multisampled_extra_colors: Vec<&Image> = transparency
             .map(|t| t.multisampled_images.iter().collect())
             .unwrap_or_default();
-        for phase in 0..phases {
-            let target = self.pass_target(plan.pass, (plan.secondary, phase > 0, phases > 1));
-            let target = RenderingTarget {
-                extra_colors: &extra_colors,
-                shade_from_depth,
-                multisampled: target.multisampled.map(|m| Multisampled {
-                    extra_colors: &multisampled_extra_colors,
-                    ..m
-                }),
-                ..target
-            };
-            if phase > 0 {
-                (recorders.between)(self, command_buffer, phase, stats)?;
-            }
-            begin_rendering(&self.device, command_buffer, &target);
-            (recorders.inside)(self, command_buffer, phase, stats)?;
-            if phase + 1 < phases {
-                suspend_rendering(&self.device, command_buffer, &target);
-            } else {
-                end_rendering(&self.device, command_buffer, &target);
-            }
+        let phase = rendering.phase;
+        let target = self.pass_target(
+            rendering.target,
+            (inputs.secondary, phase > 0, rendering.phased),
+        );
+        let target = RenderingTarget {
+            extra_colors: &extra_colors,
+            shade_from_depth: inputs.depth_set.is_some(),
+            multisampled: target.multisampled.map(|m| Multisampled {
+                extra_colors: &multisampled_extra_colors,
+                ..m
+            }),
+            ..target
+        };
+        begin_rendering(&self.device, command_buffer, &target);
+        (recorders.inside)(self, command_buffer, phase, stats)?;
+        if rendering.last {
+            end_rendering(&self.device, command_buffer, &target);
+        } else {
+            suspend_rendering(&self.device, command_buffer, &target);
         }
         Ok(())
     }
@@ -570,56 +609,11 @@ impl Renderer {
         );
     }
 
-    /// What goes over the finished rendering: the section caps that tie with another part's
-    /// surface (caps seen), ambient occlusion darkening the opaque picture and silhouette
-    /// edges over it (each when on, with the set naming the depth), the transparency method's
-    /// result at each pixel blended over the picture (with translucent surfaces), X-ray's
-    /// silhouettes over that, the band around highlighted parts (with the outline style), then
-    /// the background under whatever the picture leaves uncovered.
-    fn record_overlay(
-        &self,
-        command_buffer: vk::CommandBuffer,
-        merge: Option<(&TransparencyTargets, (vk::Pipeline, vk::PipelineLayout))>,
-        depth_overlays: Option<(DepthOverlays, vk::DescriptorSet)>,
-        keyed: KeyedOverlays,
-    ) -> RenderResult<()> {
-        let background = self.pipelines.background()?;
-        let outline = keyed
-            .outline
-            .then(|| self.pipelines.outline())
-            .transpose()?;
-        let cap_ties = keyed
-            .cap_ties
-            .then(|| self.pipelines.cap_ties())
-            .transpose()?;
-        // Occlusion darkens the opaque surfaces, before lines go over them and translucent
-        // surfaces are merged over both.
-        let reads_pixel_keys =
-            keyed.cap_ties || depth_overlays.is_some_and(|(overlays, _)| overlays.nearest_surfaces);
-        let (ssao, silhouettes) = match depth_overlays {
-            Some((overlays, set)) => (
-                (overlays.ssao)
-                    .then(|| self.pipelines.ssao().map(|pipeline| (pipeline, set)))
-                    .transpose()?,
-                overlays
-                    .silhouettes
-                    .map(|source| {
-                        self.pipelines
-                            .silhouettes()
-                            .map(|pipeline| (pipeline, set, source))
-                    })
-                    .transpose()?,
-            ),
-            None => (None, None),
-        };
-        let silhouettes_from = |wanted: SilhouetteSource| {
-            silhouettes
-                .filter(|&(_, _, source)| source == wanted)
-                .map(|(pipeline, set, _)| (pipeline, set))
-        };
-        if merge.is_some() || outline.is_some() || reads_pixel_keys {
-            // The fragments' storage writes (translucent ones, pixel keys), read by the
-            // merge, the outline and the silhouettes.
+    /// Before the first pass over the picture: a barrier where they read what the surfaces
+    /// wrote through storage (translucent fragments, pixel keys), then the picture made a
+    /// colour attachment again.
+    fn begin_over_picture(&self, command_buffer: vk::CommandBuffer, passes: &FramePasses) {
+        if passes.overlays_read_storage() {
             memory_barrier(
                 &self.device,
                 command_buffer,
@@ -634,43 +628,48 @@ impl Renderer {
             );
         }
         begin_overlay(&self.device, command_buffer, &self.target.color);
-        // The caps are part of the opaque picture: first.
-        if let Some(cap_ties) = cap_ties {
-            record_fullscreen(&self.device, command_buffer, cap_ties, &[self.frame_set()]);
-        }
-        let record_depth_overlay = |(pipeline, set): ((vk::Pipeline, vk::PipelineLayout), _)| {
-            record_fullscreen(
-                &self.device,
-                command_buffer,
-                pipeline,
-                &[self.frame_set(), set],
-            );
+    }
+
+    /// Records the pass over the picture at `index` of [`OVERLAY_PASSES`], binding the frame
+    /// set and what it `reads` beside it: the depth set, or the transparency method's targets.
+    fn record_overlay(
+        &self,
+        index: usize,
+        reads: Resources,
+        inputs: &PassInputs<'_>,
+    ) -> RenderResult<()> {
+        let overlay = OVERLAY_PASSES.get(index).ok_or_else(|| {
+            RenderError::InvalidUse(format!("no pass over the picture at index {index}"))
+        })?;
+        let (pipeline, second_set) = match overlay.draw {
+            OverlayDraw::Fullscreen(shader) => {
+                let second_set = match shader.sets {
+                    OverlaySets::Frame => None,
+                    OverlaySets::FrameAndDepth => Some(inputs.depth_set.ok_or_else(|| {
+                        RenderError::InvalidUse(format!(
+                            "{} reads {reads:?} without the picture's depth",
+                            overlay.name
+                        ))
+                    })?),
+                };
+                (self.pipelines.overlay(index, &shader)?, second_set)
+            }
+            OverlayDraw::TransparencyMerge => {
+                let (targets, merge) = inputs.merge.ok_or_else(|| {
+                    RenderError::InvalidUse(format!(
+                        "{} without the transparency method's targets",
+                        overlay.name
+                    ))
+                })?;
+                (merge, Some(targets.merge_set.sets[0]))
+            }
         };
-        [ssao, silhouettes_from(SilhouetteSource::DepthBuffer)]
-            .into_iter()
-            .flatten()
-            .for_each(record_depth_overlay);
-        if let Some((targets, merge)) = merge {
-            record_fullscreen(
-                &self.device,
-                command_buffer,
-                merge,
-                &[self.frame_set(), targets.merge_set.sets[0]],
-            );
-        }
-        silhouettes_from(SilhouetteSource::NearestSurfaces)
-            .into_iter()
-            .for_each(record_depth_overlay);
-        if let Some(outline) = outline {
-            record_fullscreen(&self.device, command_buffer, outline, &[self.frame_set()]);
-        }
-        record_fullscreen(
-            &self.device,
-            command_buffer,
-            background,
-            &[self.frame_set()],
-        );
-        end_overlay(&self.device, command_buffer, &self.target.color);
+        let frame_set = self.frame_set();
+        let sets: &[vk::DescriptorSet] = match &second_set {
+            Some(set) => &[frame_set, *set],
+            None => &[frame_set],
+        };
+        record_fullscreen(&self.device, inputs.command_buffer, pipeline, sets);
         Ok(())
     }
 

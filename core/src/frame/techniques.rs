@@ -23,7 +23,8 @@ use crate::technique::{
 };
 use crate::vk::{memory_barrier, SUSPENDED_DEPTH_LAYOUT};
 
-use super::record::{FramePlan, FrameRecorders, PassTarget};
+use super::passes::PassTarget;
+use super::record::{FramePlan, FrameRecorders};
 use super::Renderer;
 
 impl Renderer {
@@ -131,7 +132,6 @@ impl Renderer {
         let drawing = FrameDrawing {
             recording,
             gpu_view,
-            target,
             shared: RefCell::new((scene, abi::CadrStats::default(), culler)),
         };
         let mut gather_uploads = |stats: &mut FrameStats| drawing.gather_uploads(stats);
@@ -149,10 +149,9 @@ impl Renderer {
         let mut inside = |_: &Renderer, cb: vk::CommandBuffer, phase: u32, _: &mut FrameStats| {
             drawing.inside(cb, phase)
         };
-        let mut after =
-            |renderer: &Renderer, cb: vk::CommandBuffer, _: u32, stats: &mut FrameStats| {
-                drawing.after(renderer, cb, stats)
-            };
+        let mut after = |_: &Renderer, _: vk::CommandBuffer, _: u32, stats: &mut FrameStats| {
+            drawing.after(stats)
+        };
         let mut stats = self.frame(
             camera,
             FramePlan {
@@ -443,12 +442,11 @@ impl FrameRecording<'_> {
 }
 
 /// What a frame's recorders share while the renderer runs them: the recording's common
-/// inputs, the GPU cullers' view, the pass's target, and (borrowed by one recorder at a time)
+/// inputs, the GPU cullers' view, and (borrowed by one recorder at a time)
 /// the scene, the counters of what was recorded and the GPU culler.
 struct FrameDrawing<'s, 'a> {
     recording: FrameRecording<'a>,
     gpu_view: Option<abi::CadrGpuCullView>,
-    target: PassTarget,
     shared: RefCell<(&'s mut GpuScene, abi::CadrStats, Option<GpuCuller<'a>>)>,
 }
 
@@ -500,17 +498,8 @@ impl FrameDrawing<'_, '_> {
             .record(command_buffer, &scene.view(), counters, draws)
     }
 
-    /// After the pass: the pick readback, and what the recording issued (a replay of it
-    /// issues the same).
-    fn after(
-        &self,
-        renderer: &Renderer,
-        command_buffer: vk::CommandBuffer,
-        stats: &mut FrameStats,
-    ) -> RenderResult<()> {
-        if self.target == PassTarget::Pick {
-            renderer.record_pick_readback(command_buffer);
-        }
+    /// After the passes: what the recording issued (a replay of it issues the same).
+    fn after(&self, stats: &mut FrameStats) -> RenderResult<()> {
         count_recorded(stats, &self.shared.borrow().1);
         Ok(())
     }

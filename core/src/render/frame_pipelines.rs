@@ -1,6 +1,6 @@
 //! Pipelines and their layouts: the per-frame descriptor set shared by every technique and the
-//! full-screen passes over the picture (background, outline, ambient occlusion, silhouettes,
-//! cap ties).
+//! full-screen passes over the picture (which ones, and in what order, the frame's list of
+//! passes says: `frame/passes.rs`).
 
 use std::sync::{Arc, OnceLock};
 
@@ -114,6 +114,27 @@ fn frame_set_bindings(capabilities: Capabilities) -> Vec<LayoutBinding> {
 /// The frame set's binding of the bindless texture table.
 pub const TEXTURE_TABLE_BINDING: u32 = 9;
 
+/// Which descriptor sets a pass over the picture binds beside the frame set (set 0).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum OverlaySets {
+    /// The frame set alone.
+    Frame,
+    /// The frame set and the picture's depth (set 1, [`Pipelines::depth_set_layout`]).
+    FrameAndDepth,
+}
+
+/// A pass over the picture as its pipeline is made: a full-screen triangle with this fragment
+/// shader and blend, binding these sets.
+#[derive(Clone, Copy, Debug)]
+pub struct OverlayShader {
+    /// The fragment shader.
+    pub fragment: &'static ShaderSource,
+    /// How its colour goes over the picture.
+    pub blend: Blend,
+    /// The sets it binds.
+    pub sets: OverlaySets,
+}
+
 /// Every pipeline and layout the renderer uses.
 pub struct Pipelines {
     device: Arc<Device>,
@@ -123,25 +144,18 @@ pub struct Pipelines {
     merge_set_layout: DescriptorSetLayout,
     /// The layout of the passes over the picture that read only the frame set.
     frame_overlay_layout: PipelineLayout,
-    /// The background, made on first use.
-    background: OnceLock<Pipeline>,
-    /// The outline highlight style's band.
-    outline: OnceLock<Pipeline>,
     /// Set 1 of the passes over the picture that read its depth: the depth as a sampled image.
     depth_set_layout: DescriptorSetLayout,
     /// Their layout (the frame set, the depth set).
     depth_overlay_layout: PipelineLayout,
-    /// Ambient occlusion.
-    ssao: OnceLock<Pipeline>,
-    /// Silhouette edges.
-    silhouettes: OnceLock<Pipeline>,
-    /// The caps that tie with another part's surface.
-    cap_ties: OnceLock<Pipeline>,
+    /// The passes over the picture, each made on first use, by the index the frame gives it.
+    overlays: Vec<OnceLock<Pipeline>>,
 }
 
 impl Pipelines {
-    /// Creates the layouts; pipelines are made on first use.
-    pub fn new(device: &Arc<Device>) -> RenderResult<Self> {
+    /// Creates the layouts and room for `overlay_count` passes over the picture; pipelines are
+    /// made on first use.
+    pub fn new(device: &Arc<Device>, overlay_count: usize) -> RenderResult<Self> {
         let frame_set_layout = DescriptorSetLayout::with_bindings(
             device,
             "frame set layout",
@@ -181,14 +195,10 @@ impl Pipelines {
             device: Arc::clone(device),
             depth_set_layout,
             depth_overlay_layout,
-            ssao: OnceLock::new(),
-            silhouettes: OnceLock::new(),
-            cap_ties: OnceLock::new(),
             frame_overlay_layout,
-            background: OnceLock::new(),
-            outline: OnceLock::new(),
             frame_set_layout,
             merge_set_layout,
+            overlays: (0..overlay_count).map(|_| OnceLock::new()).collect(),
         })
     }
 
@@ -218,65 +228,31 @@ impl Pipelines {
         (self.frame_set_layout.raw(), self.merge_set_layout.raw())
     }
 
-    /// The background: a full-screen triangle under what the picture leaves uncovered (its
-    /// alpha is its coverage), with its layout.
-    pub fn background(&self) -> RenderResult<(vk::Pipeline, vk::PipelineLayout)> {
-        self.fullscreen(
-            &self.background,
-            &self.frame_overlay_layout,
-            &shaders::BACKGROUND_FRAG,
-            Blend::UNDER,
-        )
-    }
-
-    /// The outline highlight style's band around highlighted parts, from the outline keys,
-    /// over the picture, with its layout.
-    pub fn outline(&self) -> RenderResult<(vk::Pipeline, vk::PipelineLayout)> {
-        self.fullscreen(
-            &self.outline,
-            &self.frame_overlay_layout,
-            &shaders::OUTLINE_FRAG,
-            Blend::PREMULTIPLIED_OVER,
-        )
-    }
-
     /// Set 1 of the passes over the picture that read its depth (ambient occlusion,
     /// silhouettes): the frame's depth (binding 0).
     pub fn depth_set_layout(&self) -> &DescriptorSetLayout {
         &self.depth_set_layout
     }
 
-    /// Screen-space ambient occlusion: a full-screen triangle darkening the picture where the
-    /// depth around a pixel rises above its surface, with its layout.
-    pub fn ssao(&self) -> RenderResult<(vk::Pipeline, vk::PipelineLayout)> {
-        self.fullscreen(
-            &self.ssao,
-            &self.depth_overlay_layout,
-            &shaders::SSAO_FRAG,
-            Blend::DARKEN,
-        )
-    }
-
-    /// Silhouette edges: a full-screen triangle drawing lines over the picture where its
-    /// depth breaks (in X-ray, the nearest surfaces of the pixel keys), with its layout.
-    pub fn silhouettes(&self) -> RenderResult<(vk::Pipeline, vk::PipelineLayout)> {
-        self.fullscreen(
-            &self.silhouettes,
-            &self.depth_overlay_layout,
-            &shaders::SILHOUETTES_FRAG,
-            Blend::PREMULTIPLIED_OVER,
-        )
-    }
-
-    /// Section caps painted where the face a cap is found on ties with another part's
-    /// surface, from the cap keys, over the picture, with its layout.
-    pub fn cap_ties(&self) -> RenderResult<(vk::Pipeline, vk::PipelineLayout)> {
-        self.fullscreen(
-            &self.cap_ties,
-            &self.frame_overlay_layout,
-            &shaders::CAP_TIES_FRAG,
-            Blend::PREMULTIPLIED_OVER,
-        )
+    /// The pipeline of the pass over the picture at `index` (of the `overlay_count` this was
+    /// made with), made from `shader` on first use, with its layout.
+    pub fn overlay(
+        &self,
+        index: usize,
+        shader: &OverlayShader,
+    ) -> RenderResult<(vk::Pipeline, vk::PipelineLayout)> {
+        let layout = match shader.sets {
+            OverlaySets::Frame => &self.frame_overlay_layout,
+            OverlaySets::FrameAndDepth => &self.depth_overlay_layout,
+        };
+        let slot = self.overlays.get(index).ok_or_else(|| {
+            crate::error::RenderError::InvalidUse(format!(
+                "pass over the picture {index} ({}): the renderer has room for {}",
+                shader.fragment.name,
+                self.overlays.len()
+            ))
+        })?;
+        self.fullscreen(slot, layout, shader.fragment, shader.blend)
     }
 
     /// The full-screen pipeline in `slot`, made from `fragment` on first use.

@@ -15,8 +15,8 @@ use crate::vk::{
     PipelineLayout, ShaderModule, ShaderStage, VertexLayout, COLOR_FORMAT,
 };
 
-use super::passes::{PassSet, ShadeMode};
 use super::shader_assembly::{MethodShaders, PassShader, PassShaders};
+use super::surface_passes::{PassSet, ShadeMode};
 
 /// Which surfaces a technique pipeline draws (the vertex shader's `CADR_DRAW_ROLE`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

@@ -11,9 +11,9 @@ use cadr_plugin_abi as abi;
 
 use super::host_api::{AllocationCounts, HostServices};
 use super::pass_pipelines::{PipelineInputs, TechniquePipelines};
-use super::passes::{PassSet, ShadeMode};
 use super::registry::{feature_bits, PluginRegistry, TechniqueEntry, TechniqueKind};
 use super::shader_assembly::{assemble_vertex_shader, ShaderCache};
+use super::surface_passes::{PassSet, ShadeMode};
 use crate::gpu_scene::Transforms;
 use crate::render::TransparencyMethod;
 use crate::vk::{Device, COLOR_FORMAT, DEPTH_FORMAT};

@@ -11,7 +11,7 @@ use crate::render::TransparencyMethod;
 use crate::shaders;
 use crate::vk::{Capabilities, ShaderStage};
 
-use super::passes::{PassSet, ShadeMode};
+use super::surface_passes::{PassSet, ShadeMode};
 
 /// The SPIR-V of a transparency method: its translucent fragment shader, and the merge's
 /// vertex and fragment shaders.

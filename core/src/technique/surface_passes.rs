@@ -1,5 +1,6 @@
-//! What a frame draws: the display modes a host chooses ([`ShadeMode`]) and the set of passes
-//! a frame of them draws ([`PassSet`]), which keys the pipelines built for it.
+//! What the surfaces of a frame draw: the display modes a host chooses ([`ShadeMode`]) and the
+//! set of surface passes a frame of them draws ([`PassSet`]), which keys the pipelines built
+//! for it. (The frame's whole list of passes is `frame/passes.rs`.)
 
 /// The display modes: how surfaces and edges are drawn.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Default)]

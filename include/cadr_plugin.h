@@ -302,6 +302,9 @@ typedef struct CadrMaterial {
 // The scene as techniques see it during one frame. Owned by the host, read-only for plugins;
 // everything it points at stays valid and unchanged until the frame's last call (copy what
 // must outlive the frame).
+//
+// Its many fields are the ABI as it stood before extension chains: it keeps them, and grows
+// only through `extensions`.
 typedef struct CadrSceneView {
   // Size of this struct.
   uint32_t size;
@@ -592,6 +595,9 @@ typedef struct CadrPassExclusion {
 
 // What a submission records with. Owned by the host, valid for the call; the command
 // buffer is the host's (secondary command buffers the submission records are its own).
+//
+// Its many fields are the ABI as it stood before extension chains: it keeps them, and what
+// is new reaches the submission through the scene view's chain (`scene.extensions`).
 typedef struct CadrRecordContext {
   // Size of this struct.
   uint32_t size;
@@ -715,6 +721,9 @@ typedef struct CadrCullOutput {
 // Positions are relative to the eye so that precision holds far from the origin: the GPU
 // matrices keep their translation as an f32 high part and remainder ([`CadrMatrix`]), and a
 // point `p` relative to the eye is `(t_high - eye_high) + (t_low - eye_low) + R * x`.
+//
+// Its many fields are the ABI as it stood before extension chains: it keeps them, and grows
+// only through `extensions`.
 typedef struct CadrGpuCullContext {
   // Size of this struct.
   uint32_t size;

@@ -289,6 +289,8 @@ pub fn describe_section(section: &Section) -> Option<String> {
 }
 
 /// `cadr render`.
+///
+/// Its many fields are the command's options, one each, as clap parses them.
 #[derive(Debug, Args)]
 pub struct RenderArgs {
     /// The scene: a file or a generator.
@@ -469,6 +471,8 @@ impl BenchShade {
 }
 
 /// `cadr bench`.
+///
+/// Its many fields are the command's options, one each, as clap parses them.
 #[derive(Debug, Args)]
 pub struct BenchArgs {
     /// The scene: a file or a generator.

@@ -37,6 +37,9 @@ pub(crate) const SWEEP_SET: [(&str, &str, &str); 7] = [
 ];
 
 /// Medians over the measured frames of one row.
+///
+/// Its many fields are the figures of a row of the table and of `--json` (whose field names
+/// tools outside the project read), one each.
 #[derive(Clone, Debug)]
 pub(crate) struct Row {
     pub(crate) label: String,

@@ -137,9 +137,16 @@ pub struct GpuScene {
     frame_dirty: FrameDirty,
     generations: Generations,
     counts: SceneCounts,
-    /// The buffers as techniques see them (with device addresses), refreshed when replaced.
+    /// What techniques see of the buffers and clusters, which the view points into.
+    seen: SeenByTechniques,
+}
+
+/// What techniques see of the scene's buffers and clusters, kept with the scene so that the
+/// view's pointers stay valid as long as it does.
+struct SeenByTechniques {
+    /// The buffers (with device addresses), refreshed when replaced.
     buffer_refs: [abi::CadrBufferRef; 9],
-    /// The clusters as techniques see them, chained on the view.
+    /// The clusters, chained on the view.
     clusters_extension: ClustersExtension,
 }
 
@@ -314,20 +321,22 @@ impl GpuScene {
                 clusters_stale: true,
                 texture_bytes,
             },
-            buffer_refs: Default::default(),
-            clusters_extension: ClustersExtension(abi::CadrSceneClusters {
-                header: abi::CadrExtension {
-                    size: std::mem::size_of::<abi::CadrSceneClusters>() as u32,
-                    kind: abi::CADR_EXTENSION_SCENE_CLUSTERS,
-                    next: std::ptr::null(),
-                },
-                cluster_buffer: abi::CadrBufferRef::default(),
-                cluster_count: 0,
-                group_count: 0,
-                group_buffer: abi::CadrBufferRef::default(),
-                candidate_clusters: 0,
-                candidate_coarsest_clusters: 0,
-            }),
+            seen: SeenByTechniques {
+                buffer_refs: Default::default(),
+                clusters_extension: ClustersExtension(abi::CadrSceneClusters {
+                    header: abi::CadrExtension {
+                        size: std::mem::size_of::<abi::CadrSceneClusters>() as u32,
+                        kind: abi::CADR_EXTENSION_SCENE_CLUSTERS,
+                        next: std::ptr::null(),
+                    },
+                    cluster_buffer: abi::CadrBufferRef::default(),
+                    cluster_count: 0,
+                    group_count: 0,
+                    group_buffer: abi::CadrBufferRef::default(),
+                    candidate_clusters: 0,
+                    candidate_coarsest_clusters: 0,
+                }),
+            },
         };
         scene.refresh_all(graph, tree)?;
         Ok(scene)
@@ -335,7 +344,7 @@ impl GpuScene {
 
     fn refresh_buffer_refs(&mut self) {
         let with_address = self.device.capabilities().buffer_device_address;
-        self.buffer_refs = [
+        self.seen.buffer_refs = [
             &self.arenas.vertices,
             &self.arenas.indices,
             &self.arenas.wire_indices,
@@ -355,8 +364,8 @@ impl GpuScene {
                 0
             },
         });
-        let [.., clusters, groups] = self.buffer_refs;
-        let extension = &mut self.clusters_extension.0;
+        let [.., clusters, groups] = self.seen.buffer_refs;
+        let extension = &mut self.seen.clusters_extension.0;
         extension.cluster_buffer = clusters;
         extension.group_buffer = groups;
         [extension.cluster_count, extension.group_count] = self.arenas.cluster_counts();
@@ -381,8 +390,8 @@ impl GpuScene {
             .fold([0u64; 2], |[all, coarsest], [_, count, coarse]| {
                 [all + u64::from(count), coarsest + u64::from(coarse)]
             });
-        self.clusters_extension.0.candidate_clusters = all;
-        self.clusters_extension.0.candidate_coarsest_clusters = coarsest;
+        self.seen.clusters_extension.0.candidate_clusters = all;
+        self.seen.clusters_extension.0.candidate_coarsest_clusters = coarsest;
         self.counts.clusters_stale = false;
     }
 
@@ -699,7 +708,7 @@ impl GpuScene {
         self.counts.last_upload.geometry_bytes += bytes;
         self.counts.last_upload.bytes += bytes;
         // A geometry placed at the arenas' end adds clusters the extension must count.
-        let extension = &mut self.clusters_extension.0;
+        let extension = &mut self.seen.clusters_extension.0;
         [extension.cluster_count, extension.group_count] = self.arenas.cluster_counts();
         Ok(true)
     }
@@ -975,7 +984,7 @@ impl GpuScene {
     /// The view techniques read this frame. Valid while `self` is not changed.
     pub(crate) fn view(&self) -> abi::CadrSceneView {
         let [vertex_buffer, index_buffer, wire_index_buffer, matrix_buffer, material_buffer, instance_buffer, cull_buffer, _, _] =
-            self.buffer_refs;
+            self.seen.buffer_refs;
         abi::CadrSceneView {
             size: std::mem::size_of::<abi::CadrSceneView>() as u32,
             instance_count: self.instances.len() as u32,
@@ -1000,7 +1009,7 @@ impl GpuScene {
             material_buffer,
             instance_buffer,
             cull_buffer,
-            extensions: &self.clusters_extension.0.header,
+            extensions: &self.seen.clusters_extension.0.header,
         }
     }
 

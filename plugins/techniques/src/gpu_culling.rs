@@ -355,6 +355,16 @@ impl Objects {
     }
 }
 
+/// Visibility bits at the end of the last frame ([`LAST`], read) and of this one ([`NOW`],
+/// written, then copied over the first at the end of the frame, so that every frame records
+/// the same commands).
+struct VisibilityBits {
+    /// Last frame's and this one's.
+    buffers: [HostBuffer; 2],
+    /// Words in each.
+    words: u32,
+}
+
 /// A GPU culler: `gpu-frustum` without occlusion, `gpu-occlusion` with it, `gpu-clusters`
 /// with occlusion and clusters.
 pub struct GpuCuller<const OCCLUSION: bool, const CLUSTERS: bool> {
@@ -365,15 +375,11 @@ pub struct GpuCuller<const OCCLUSION: bool, const CLUSTERS: bool> {
     /// The commands: one region of `capacity` per (phase, pass) slot.
     commands: Option<HostBuffer>,
     capacity: u32,
-    /// Visibility bits at the end of the last frame (read) and of this one (written, then
-    /// copied over the first at the end of the frame, so that every frame records the same
-    /// commands); 4 bytes each for `gpu-frustum`, which reads none.
-    visibility: [HostBuffer; 2],
-    visibility_words: u32,
+    /// Visibility bits of instances; 4 bytes each for `gpu-frustum`, which reads none.
+    visibility: VisibilityBits,
     /// The same for clusters (gpu-clusters): a table of bits that an instance's cluster finds
-    /// by hashing the pair, last frame's and this one's; 4 bytes each for other cullers.
-    cluster_visibility: [HostBuffer; 2],
-    cluster_visibility_words: u32,
+    /// by hashing the pair; 4 bytes each for other cullers.
+    cluster_visibility: VisibilityBits,
     /// One bit per instance id, cleared every frame: the parts whose cut phase 0 found no room
     /// for, which phase 1 then draws whole (gpu-clusters; as big as the visibility buffers).
     phase0_skipped: HostBuffer,
@@ -404,12 +410,17 @@ impl<const OCCLUSION: bool, const CLUSTERS: bool> Technique for GpuCuller<OCCLUS
         let visibility_usage = storage | vk::BufferUsageFlags::TRANSFER_SRC;
         let tiny = |name| gpu.create_buffer(name, 4, visibility_usage, abi::CADR_MEMORY_GPU_ONLY);
         Ok(Self {
-            visibility: [tiny("gpu cull visibility")?, tiny("gpu cull visibility")?],
-            cluster_visibility: [
-                tiny("gpu cull cluster visibility")?,
-                tiny("gpu cull cluster visibility")?,
-            ],
-            cluster_visibility_words: 1,
+            visibility: VisibilityBits {
+                buffers: [tiny("gpu cull visibility")?, tiny("gpu cull visibility")?],
+                words: 0,
+            },
+            cluster_visibility: VisibilityBits {
+                buffers: [
+                    tiny("gpu cull cluster visibility")?,
+                    tiny("gpu cull cluster visibility")?,
+                ],
+                words: 1,
+            },
             phase0_skipped: tiny("gpu cull phase 0 skipped")?,
             pyramid: tiny("gpu cull pyramid")?,
             gpu,
@@ -419,7 +430,6 @@ impl<const OCCLUSION: bool, const CLUSTERS: bool> Technique for GpuCuller<OCCLUS
             capacity: 0,
             cluster_budget: 0,
             max_cluster_budget: cluster_command_budget(),
-            visibility_words: 0,
             pyramid_size: (0, 0),
             pyramid_levels: 1,
             cull_written: None,
@@ -485,26 +495,30 @@ impl<const OCCLUSION: bool, const CLUSTERS: bool> GpuCuller<OCCLUSION, CLUSTERS>
             self.capacity = capacity;
         }
         let needed = instances.max(1);
-        if OCCLUSION && needed.div_ceil(32) > self.visibility_words {
+        if OCCLUSION && needed.div_ceil(32) > self.visibility.words {
             let words = needed.div_ceil(32).next_power_of_two();
-            self.visibility = [
-                self.zeroed_bits("gpu cull visibility", words, command_buffer)?,
-                self.zeroed_bits("gpu cull visibility", words, command_buffer)?,
-            ];
-            self.visibility_words = words;
+            self.visibility = VisibilityBits {
+                buffers: [
+                    self.zeroed_bits("gpu cull visibility", words, command_buffer)?,
+                    self.zeroed_bits("gpu cull visibility", words, command_buffer)?,
+                ],
+                words,
+            };
             if CLUSTERS {
                 self.phase0_skipped =
                     self.zeroed_bits("gpu cull phase 0 skipped", words, command_buffer)?;
             }
         }
         let bits = clusters.clamp(32, MAX_CLUSTER_BITS).next_power_of_two();
-        if CLUSTERS && bits / 32 > u64::from(self.cluster_visibility_words) {
+        if CLUSTERS && bits / 32 > u64::from(self.cluster_visibility.words) {
             let words = (bits / 32) as u32;
-            self.cluster_visibility = [
-                self.zeroed_bits("gpu cull cluster visibility", words, command_buffer)?,
-                self.zeroed_bits("gpu cull cluster visibility", words, command_buffer)?,
-            ];
-            self.cluster_visibility_words = words;
+            self.cluster_visibility = VisibilityBits {
+                buffers: [
+                    self.zeroed_bits("gpu cull cluster visibility", words, command_buffer)?,
+                    self.zeroed_bits("gpu cull cluster visibility", words, command_buffer)?,
+                ],
+                words,
+            };
         }
         Ok(())
     }
@@ -566,16 +580,16 @@ impl<const OCCLUSION: bool, const CLUSTERS: bool> GpuCuller<OCCLUSION, CLUSTERS>
             commands.raw(),
             self.counts.raw(),
             view,
-            self.visibility[LAST].raw(),
-            self.visibility[NOW].raw(),
+            self.visibility.buffers[LAST].raw(),
+            self.visibility.buffers[NOW].raw(),
             self.pyramid.raw(),
         ];
         if let Some(clusters) = clusters {
             buffers.extend([
                 buffer(&clusters.cluster_buffer),
                 buffer(&clusters.group_buffer),
-                self.cluster_visibility[LAST].raw(),
-                self.cluster_visibility[NOW].raw(),
+                self.cluster_visibility.buffers[LAST].raw(),
+                self.cluster_visibility.buffers[NOW].raw(),
                 self.phase0_skipped.raw(),
             ]);
         }
@@ -672,7 +686,7 @@ impl<const OCCLUSION: bool, const CLUSTERS: bool> GpuCuller<OCCLUSION, CLUSTERS>
                 back_faces_hidden: back_faces_hidden.get(index).copied().unwrap_or(false),
                 command_capacity: self.capacity,
                 cluster_budget: self.cluster_budget,
-                cluster_bit_mask: self.cluster_visibility_words * 32 - 1,
+                cluster_bit_mask: self.cluster_visibility.words * 32 - 1,
             };
             let constants = words(&[
                 dispatch.instance_count,
@@ -735,26 +749,26 @@ impl<const OCCLUSION: bool, const CLUSTERS: bool> GpuCuller<OCCLUSION, CLUSTERS>
                 vk::AccessFlags2::TRANSFER_READ | vk::AccessFlags2::TRANSFER_WRITE,
             ),
         );
-        let region = [vk::BufferCopy::default().size(u64::from(self.visibility_words) * 4)];
-        // SAFETY: recording outside rendering; both buffers hold `visibility_words` words and
+        let region = [vk::BufferCopy::default().size(u64::from(self.visibility.words) * 4)];
+        // SAFETY: recording outside rendering; both buffers hold `visibility.words` words and
         // allow the transfer; the barrier above ordered the culls' accesses before it.
         unsafe {
             self.gpu.device.cmd_copy_buffer(
                 command_buffer,
-                self.visibility[NOW].raw(),
-                self.visibility[LAST].raw(),
+                self.visibility.buffers[NOW].raw(),
+                self.visibility.buffers[LAST].raw(),
                 &region,
             )
         };
         if CLUSTERS {
             let region =
-                [vk::BufferCopy::default().size(u64::from(self.cluster_visibility_words) * 4)];
-            // SAFETY: as above, for the cluster tables of `cluster_visibility_words` words.
+                [vk::BufferCopy::default().size(u64::from(self.cluster_visibility.words) * 4)];
+            // SAFETY: as above, for the cluster tables of `cluster_visibility.words` words.
             unsafe {
                 self.gpu.device.cmd_copy_buffer(
                     command_buffer,
-                    self.cluster_visibility[NOW].raw(),
-                    self.cluster_visibility[LAST].raw(),
+                    self.cluster_visibility.buffers[NOW].raw(),
+                    self.cluster_visibility.buffers[LAST].raw(),
                     &region,
                 )
             };
@@ -927,9 +941,13 @@ impl<const OCCLUSION: bool, const CLUSTERS: bool> GpuCuller<OCCLUSION, CLUSTERS>
         if OCCLUSION {
             self.reserve_pyramid(width, height)?;
             // This frame reads what the last one found visible and writes afresh.
-            clear(&self.gpu, command_buffer, &self.visibility[NOW]);
+            clear(&self.gpu, command_buffer, &self.visibility.buffers[NOW]);
             if CLUSTERS {
-                clear(&self.gpu, command_buffer, &self.cluster_visibility[NOW]);
+                clear(
+                    &self.gpu,
+                    command_buffer,
+                    &self.cluster_visibility.buffers[NOW],
+                );
                 clear(&self.gpu, command_buffer, &self.phase0_skipped);
             }
         }

@@ -16,6 +16,8 @@ packages=(
   build-essential pkg-config
   # Windows for the GLFW sample programs, run under Xvfb; xwd grabs the viewer's window.
   xvfb libglfw3-dev x11-apps
+  # The C API's ABI is compared with its committed baseline (abidw, abidiff).
+  abigail-tools
   # The installed package is tested from a C++ host with CMake and with pkg-config.
   cmake
   # The font of `cadr bench --plot`'s labels.

@@ -175,6 +175,22 @@ typedef enum CadrTechniqueKind {
   CADR_TECHNIQUE_KIND_TRANSPARENCY = 4,
 } CadrTechniqueKind;
 
+// What a node does (see the `cadr_scene_create_*` function of each).
+typedef enum CadrNodeKind {
+  // Groups its children.
+  CADR_NODE_KIND_GROUP = 0,
+  // Places its children with a matrix.
+  CADR_NODE_KIND_TRANSFORM = 1,
+  // Draws a geometry with one material per part.
+  CADR_NODE_KIND_GEO = 2,
+  // Shows only its active children.
+  CADR_NODE_KIND_SWITCH = 3,
+  // Shows one child chosen by distance or size on screen.
+  CADR_NODE_KIND_LOD = 4,
+  // Turns its children to face the eye.
+  CADR_NODE_KIND_BILLBOARD = 5,
+} CadrNodeKind;
+
 // Opaque type behind [`CadrContext`]; never dereferenced by the host or by cadr.
 typedef struct CadrContextObject CadrContextObject;
 
@@ -1125,6 +1141,33 @@ enum CadrResult cadr_scene_child_count(CadrScene scene, CadrNode node, uint32_t 
 // # Safety
 // `child` is null or writable.
 enum CadrResult cadr_scene_child(CadrScene scene, CadrNode node, uint32_t index, CadrNode *child);
+
+// Copies `node`'s name (as it was created; empty when none was given) into `buffer` as a
+// NUL-terminated UTF-8 string, and its length without the NUL into `*length`. With `buffer`
+// NULL or `capacity` too small, writes only the capacity it needs (length + 1) into `*length`
+// and returns `CADR_RESULT_BUFFER_TOO_SMALL`: a host asks once for the size, then again.
+//
+// Returns `CADR_RESULT_OK`, `CADR_RESULT_BUFFER_TOO_SMALL`, `CADR_RESULT_NULL_ARGUMENT`
+// (`length` NULL) or a handle error.
+// Ownership: `buffer` is the caller's; cadr keeps no pointer to it.
+// Thread-safety: as `cadr_scene_create`.
+//
+// # Safety
+// `buffer` is null or writable for `capacity` bytes; `length` is null or writable.
+enum CadrResult cadr_scene_node_name(CadrScene scene,
+                                     CadrNode node,
+                                     char *buffer,
+                                     size_t capacity,
+                                     size_t *length);
+
+// Writes what `node` does into `*kind`.
+//
+// Returns `CADR_RESULT_OK`, `CADR_RESULT_NULL_ARGUMENT` or a handle error.
+// Ownership: the output is the caller's. Thread-safety: as `cadr_scene_create`.
+//
+// # Safety
+// `kind` is null or writable.
+enum CadrResult cadr_scene_node_kind(CadrScene scene, CadrNode node, enum CadrNodeKind *kind);
 
 // Sets a Transform's 4×4 column-major double matrix.
 //

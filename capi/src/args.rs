@@ -92,6 +92,38 @@ pub(crate) unsafe fn deliver<T>(out: *mut T, name: &str, value: T) -> Result<(),
     Ok(())
 }
 
+/// Copies `text` into the caller's `buffer` of `capacity` bytes as a NUL-terminated string and
+/// its length without the NUL into `*length`. With `buffer` NULL or `capacity` too small,
+/// writes only the capacity it needs (length + 1) into `*length` and returns
+/// `CADR_RESULT_BUFFER_TOO_SMALL`; with `length` NULL, `CADR_RESULT_NULL_ARGUMENT`.
+///
+/// # Safety
+/// `buffer` is null or writable for `capacity` bytes; `length` is null or writable.
+pub(crate) unsafe fn copy_string_out(
+    text: &str,
+    buffer: *mut c_char,
+    capacity: usize,
+    length: *mut usize,
+) -> CadrResult {
+    if length.is_null() {
+        return CadrResult::NullArgument;
+    }
+    let bytes = text.as_bytes();
+    if buffer.is_null() || capacity < bytes.len() + 1 {
+        // SAFETY: length is non-null and writable (the caller's contract).
+        unsafe { *length = bytes.len() + 1 };
+        return CadrResult::BufferTooSmall;
+    }
+    // SAFETY: buffer is writable for capacity >= len + 1 bytes; the regions cannot overlap
+    // (`text` is cadr's own).
+    unsafe {
+        std::ptr::copy_nonoverlapping(bytes.as_ptr(), buffer.cast::<u8>(), bytes.len());
+        *buffer.add(bytes.len()) = 0;
+        *length = bytes.len();
+    }
+    CadrResult::Ok
+}
+
 /// Writes an out-parameter that was checked to be non-null.
 ///
 /// # Safety

@@ -172,25 +172,10 @@ pub unsafe extern "C" fn cadr_last_error_message(
     capacity: usize,
     length: *mut usize,
 ) -> CadrResult {
-    if length.is_null() {
-        return CadrResult::NullArgument;
-    }
     let outcome = catch_unwind(|| LAST_ERROR.with(|last| last.borrow().clone()));
     let message = outcome.unwrap_or_default();
-    let bytes = message.as_bytes();
-    if buffer.is_null() || capacity < bytes.len() + 1 {
-        // SAFETY: length is non-null and writable (the caller's contract).
-        unsafe { *length = bytes.len() + 1 };
-        return CadrResult::BufferTooSmall;
-    }
-    // SAFETY: buffer is writable for capacity >= len + 1 bytes; the regions cannot overlap
-    // (ours is a private String).
-    unsafe {
-        std::ptr::copy_nonoverlapping(bytes.as_ptr(), buffer.cast::<u8>(), bytes.len());
-        *buffer.add(bytes.len()) = 0;
-        *length = bytes.len();
-    }
-    CadrResult::Ok
+    // SAFETY: the caller's contract, passed on.
+    unsafe { crate::args::copy_string_out(&message, buffer, capacity, length) }
 }
 
 #[cfg(test)]

@@ -3,9 +3,9 @@
 
 use std::ffi::c_char;
 
-use cadr_core::graph::NodeFlags;
+use cadr_core::graph::{NodeFlags, NodeKind};
 
-use crate::args::{deliver, matrix, optional_str, slice};
+use crate::args::{copy_string_out, deliver, matrix, optional_str, slice};
 use crate::error::{guard, CadrResult, Failure};
 use crate::scene::{
     geometry_of, graph_failure, material_of, node_of, node_value, with_scene, CadrGeometry,
@@ -367,6 +367,97 @@ pub unsafe extern "C" fn cadr_scene_child(
         })?;
         // SAFETY: child is null or writable (the caller's contract).
         unsafe { deliver(child, "child", value) }
+    })
+}
+
+/// What a node does (see the `cadr_scene_create_*` function of each).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum CadrNodeKind {
+    /// Groups its children.
+    Group = 0,
+    /// Places its children with a matrix.
+    Transform = 1,
+    /// Draws a geometry with one material per part.
+    Geo = 2,
+    /// Shows only its active children.
+    Switch = 3,
+    /// Shows one child chosen by distance or size on screen.
+    Lod = 4,
+    /// Turns its children to face the eye.
+    Billboard = 5,
+}
+
+/// Copies `node`'s name (as it was created; empty when none was given) into `buffer` as a
+/// NUL-terminated UTF-8 string, and its length without the NUL into `*length`. With `buffer`
+/// NULL or `capacity` too small, writes only the capacity it needs (length + 1) into `*length`
+/// and returns `CADR_RESULT_BUFFER_TOO_SMALL`: a host asks once for the size, then again.
+///
+/// Returns `CADR_RESULT_OK`, `CADR_RESULT_BUFFER_TOO_SMALL`, `CADR_RESULT_NULL_ARGUMENT`
+/// (`length` NULL) or a handle error.
+/// Ownership: `buffer` is the caller's; cadr keeps no pointer to it.
+/// Thread-safety: as `cadr_scene_create`.
+///
+/// # Safety
+/// `buffer` is null or writable for `capacity` bytes; `length` is null or writable.
+#[no_mangle]
+pub unsafe extern "C" fn cadr_scene_node_name(
+    scene: CadrScene,
+    node: CadrNode,
+    buffer: *mut c_char,
+    capacity: usize,
+    length: *mut usize,
+) -> CadrResult {
+    guard(|| {
+        let name = with_scene(scene, |s| {
+            let node = node_of(&s.graph, node, "node")?;
+            Ok(s.graph.node(node).map_err(graph_failure)?.name.clone())
+        })?;
+        // SAFETY: the caller's contract, passed on.
+        match unsafe { copy_string_out(&name, buffer, capacity, length) } {
+            CadrResult::Ok => Ok(()),
+            CadrResult::NullArgument => Err(Failure::new(
+                CadrResult::NullArgument,
+                "length is NULL".to_owned(),
+            )),
+            other => Err(Failure::new(
+                other,
+                format!(
+                    "the name needs {} bytes, the buffer has {capacity}",
+                    name.len() + 1
+                ),
+            )),
+        }
+    })
+}
+
+/// Writes what `node` does into `*kind`.
+///
+/// Returns `CADR_RESULT_OK`, `CADR_RESULT_NULL_ARGUMENT` or a handle error.
+/// Ownership: the output is the caller's. Thread-safety: as `cadr_scene_create`.
+///
+/// # Safety
+/// `kind` is null or writable.
+#[no_mangle]
+pub unsafe extern "C" fn cadr_scene_node_kind(
+    scene: CadrScene,
+    node: CadrNode,
+    kind: *mut CadrNodeKind,
+) -> CadrResult {
+    guard(|| {
+        let value = with_scene(scene, |s| {
+            let node = node_of(&s.graph, node, "node")?;
+            Ok(match s.graph.node(node).map_err(graph_failure)?.kind {
+                NodeKind::Group => CadrNodeKind::Group,
+                NodeKind::Transform { .. } => CadrNodeKind::Transform,
+                NodeKind::Geo { .. } => CadrNodeKind::Geo,
+                NodeKind::Switch => CadrNodeKind::Switch,
+                NodeKind::Lod { .. } => CadrNodeKind::Lod,
+                NodeKind::Billboard => CadrNodeKind::Billboard,
+            })
+        })?;
+        // SAFETY: kind is null or writable (the caller's contract).
+        unsafe { deliver(kind, "kind", value) }
     })
 }
 

@@ -314,6 +314,36 @@ static struct Built test_scene(void) {
   CHECK(child == second);
   EXPECT(cadr_scene_child(b.scene, b.switch_node, 2, &child), CADR_RESULT_NOT_FOUND);
   EXPECT(cadr_scene_child_count(b.scene, b.switch_node, NULL), CADR_RESULT_NULL_ARGUMENT);
+  {
+    /* Names and kinds, for a host's model tree: the size first, then the name. */
+    char name[16];
+    size_t length = 0;
+    enum CadrNodeKind kind = CADR_NODE_KIND_GROUP;
+    EXPECT(cadr_scene_node_name(b.scene, b.switch_node, NULL, 0, &length),
+           CADR_RESULT_BUFFER_TOO_SMALL);
+    CHECK(length == strlen("switch") + 1);
+    EXPECT(cadr_scene_node_name(b.scene, b.switch_node, name, 3, &length),
+           CADR_RESULT_BUFFER_TOO_SMALL);
+    MESSAGE_HAS("needs 7 bytes");
+    OK(cadr_scene_node_name(b.scene, b.switch_node, name, sizeof name, &length));
+    CHECK(strcmp(name, "switch") == 0 && length == 6);
+    EXPECT(cadr_scene_node_name(b.scene, b.switch_node, name, sizeof name, NULL),
+           CADR_RESULT_NULL_ARGUMENT);
+    OK(cadr_scene_node_kind(b.scene, b.switch_node, &kind));
+    CHECK(kind == CADR_NODE_KIND_SWITCH);
+    OK(cadr_scene_node_kind(b.scene, b.mover, &kind));
+    CHECK(kind == CADR_NODE_KIND_TRANSFORM);
+    OK(cadr_scene_node_kind(b.scene, b.geo, &kind));
+    CHECK(kind == CADR_NODE_KIND_GEO);
+    OK(cadr_scene_node_kind(b.scene, lod, &kind));
+    CHECK(kind == CADR_NODE_KIND_LOD);
+    OK(cadr_scene_node_kind(b.scene, billboard, &kind));
+    CHECK(kind == CADR_NODE_KIND_BILLBOARD);
+    EXPECT(cadr_scene_node_kind(b.scene, b.geo, NULL), CADR_RESULT_NULL_ARGUMENT);
+    EXPECT(cadr_scene_node_kind(b.scene, 0x1234, &kind), CADR_RESULT_FOREIGN_HANDLE);
+    EXPECT(cadr_scene_node_name(b.scene, 0x1234, name, sizeof name, &length),
+           CADR_RESULT_FOREIGN_HANDLE);
+  }
 
   /* Edits. */
   OK(cadr_scene_set_switch_mask(b.scene, b.switch_node, mask, 2));
@@ -366,6 +396,12 @@ static struct Built test_scene(void) {
   /* Destroyed and foreign handles. */
   EXPECT(cadr_scene_add_child(b.scene, group, second), CADR_RESULT_DESTROYED_HANDLE);
   EXPECT(cadr_scene_destroy_node(b.scene, second), CADR_RESULT_DESTROYED_HANDLE);
+  {
+    enum CadrNodeKind kind;
+    size_t length = 0;
+    EXPECT(cadr_scene_node_kind(b.scene, second, &kind), CADR_RESULT_DESTROYED_HANDLE);
+    EXPECT(cadr_scene_node_name(b.scene, second, NULL, 0, &length), CADR_RESULT_DESTROYED_HANDLE);
+  }
   EXPECT(cadr_scene_add_child(b.scene, group, 0x1234), CADR_RESULT_FOREIGN_HANDLE);
   EXPECT(cadr_scene_add_child(b.scene, group, 0), CADR_RESULT_NULL_ARGUMENT);
   EXPECT(cadr_scene_destroy_geometry(b.scene, b.red), CADR_RESULT_FOREIGN_HANDLE);

@@ -80,6 +80,6 @@ sed -e "s|@VERSION@|$version|g" -e "s|@MAJOR@|$major|g" packaging/cadrConfigVers
 sed -e "s|@PREFIX@|$prefix|g" -e "s|@VERSION@|$version|g" -e "s|@STATIC_LIBS@|$static_libs|g" \
   packaging/cadr.pc.in > "$lib/pkgconfig/cadr.pc"
 
-install -m 644 samples/*.c samples/CMakeLists.txt samples/README.md "$prefix/share/cadr/samples/"
+install -m 644 samples/*.c samples/*.cpp samples/CMakeLists.txt samples/README.md "$prefix/share/cadr/samples/"
 install -m 644 samples/common/* "$prefix/share/cadr/samples/common/"
 echo "installed cadr $version under $prefix"

@@ -18,6 +18,8 @@ packages=(
   xvfb libglfw3-dev x11-apps
   # The C API's ABI is compared with its committed baseline (abidw, abidiff).
   abigail-tools
+  # The Qt 6 sample (samples/qt_viewer.cpp) and the xcb headers of its X11 surface.
+  qt6-base-dev libxcb1-dev
   # The installed package is tested from a C++ host with CMake and with pkg-config.
   cmake
   # The font of `cadr bench --plot`'s labels.

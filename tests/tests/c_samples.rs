@@ -1,7 +1,9 @@
-//! The C sample programs, built with the strict flags and run: `headless` writes its PNG,
+//! The sample programs, built with the strict flags and run: `headless` writes its PNG,
 //! `animate` explodes a scene and reports its costs, and `viewer` runs under Xvfb on lavapipe:
 //! it opens, renders, swaps every technique kind, resizes, and a screenshot of its window
-//! matches the offscreen render of the same view.
+//! matches the offscreen render of the same view. The Qt sample `qt_viewer`, built with CMake
+//! against the installed package, picks into its model tree, highlights from it, and its view
+//! matches the offscreen render too.
 #![allow(clippy::unwrap_used)] // Test code: a failed unwrap is a failed test.
 
 use std::io::{BufRead, BufReader, Write};
@@ -139,16 +141,16 @@ impl Drop for VirtualDisplay {
     }
 }
 
-/// The top-left `width` × `height` pixels of an XWD screen dump (ZPixmap, 24-bit colour, as
-/// Xvfb's `xwd -root` writes them).
-fn xwd_region(bytes: &[u8], width: u32, height: u32) -> image::RgbaImage {
+/// The `width` × `height` pixels at `(left, top)` of an XWD screen dump (ZPixmap, 24-bit
+/// colour, as Xvfb's `xwd -root` writes them).
+fn xwd_region(bytes: &[u8], (left, top): (u32, u32), width: u32, height: u32) -> image::RgbaImage {
     let field = |i: usize| u32::from_be_bytes(bytes[i * 4..i * 4 + 4].try_into().unwrap());
     let (header_size, format, screen_width, screen_height) =
         (field(0), field(2), field(4), field(5));
     let (byte_order, bytes_per_line, colors) = (field(7), field(12), field(19));
     let (red_mask, green_mask, blue_mask) = (field(14), field(15), field(16));
     assert_eq!(format, 2, "XWD is not a ZPixmap");
-    assert!(width <= screen_width && height <= screen_height);
+    assert!(left + width <= screen_width && top + height <= screen_height);
     // Xvfb's depth-24 dumps say 24 bits per pixel (packed) with 32-bit-padded line lengths.
     let bytes_per_pixel = (field(11) / 8) as usize;
     assert!(
@@ -158,7 +160,8 @@ fn xwd_region(bytes: &[u8], width: u32, height: u32) -> image::RgbaImage {
     let pixels = &bytes[(header_size + colors * 12) as usize..];
     let channel = |value: u32, mask: u32| ((value & mask) >> mask.trailing_zeros()) as u8;
     image::RgbaImage::from_fn(width, height, |x, y| {
-        let at = y as usize * bytes_per_line as usize + x as usize * bytes_per_pixel;
+        let at =
+            (top + y) as usize * bytes_per_line as usize + (left + x) as usize * bytes_per_pixel;
         let raw = &pixels[at..at + bytes_per_pixel];
         let value = if byte_order == 0 {
             raw.iter().rev().fold(0, |v, &b| v << 8 | u32::from(b))
@@ -267,7 +270,7 @@ fn viewer_under_xvfb_swaps_techniques_resizes_and_shows_the_offscreen_image() {
         rest.join("\n")
     );
 
-    let window = xwd_region(&dump.stdout, size.0, size.1);
+    let window = xwd_region(&dump.stdout, (0, 0), size.0, size.1);
     window.save(dir.join("window.png")).unwrap();
     let offscreen = image::open(dir.join("offscreen.png")).unwrap().to_rgba8();
     assert_eq!(offscreen.dimensions(), size);
@@ -316,4 +319,128 @@ fn viewer_orbits_with_frames_in_flight_and_reports_frames_per_second() {
         .unwrap();
     assert_eq!(output.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&output.stderr).contains("expected fifo, mailbox or immediate"));
+}
+
+/// Runs a command to its end, panicking with its output when it fails.
+fn run_to_end(command: &mut Command) {
+    let output = command.output().unwrap();
+    assert!(
+        output.status.success(),
+        "{command:?}: {}",
+        describe(&output)
+    );
+}
+
+#[test]
+fn qt_viewer_picks_into_its_model_tree_highlights_from_it_and_shows_the_offscreen_image() {
+    let dir = scratch_dir("sample-qt-viewer");
+    let prefix = dir.join("prefix");
+    run_to_end(
+        Command::new(repository().join("scripts/install.sh"))
+            .args(["--prefix", prefix.to_str().unwrap(), "--from"])
+            .arg(cadr_tests::c_programs::library_dir()),
+    );
+    let build = dir.join("build");
+    run_to_end(
+        Command::new("cmake")
+            .arg("-S")
+            .arg(prefix.join("share/cadr/samples"))
+            .arg("-B")
+            .arg(&build)
+            .arg(format!("-DCMAKE_PREFIX_PATH={}", prefix.display())),
+    );
+    run_to_end(
+        Command::new("cmake")
+            .arg("--build")
+            .arg(&build)
+            .args(["--target", "qt_viewer"]),
+    );
+    let display = VirtualDisplay::start();
+    let mut viewer = Command::new(build.join("qt_viewer"))
+        .args(["gen:demo", "--self-test", dir.to_str().unwrap()])
+        .env("DISPLAY", &display.name)
+        .env("QT_QPA_PLATFORM", "xcb")
+        .env("XDG_RUNTIME_DIR", &dir)
+        .env_remove("CADR_PLUGIN_PATH")
+        .stdin(Stdio::piped())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let mut lines = BufReader::new(viewer.stdout.take().unwrap()).lines();
+    let mut transcript = Vec::new();
+    let (size, origin) = loop {
+        let Some(Ok(line)) = lines.next() else {
+            let status = viewer.wait().unwrap();
+            let mut stderr = String::new();
+            std::io::Read::read_to_string(&mut viewer.stderr.take().unwrap(), &mut stderr).unwrap();
+            panic!(
+                "qt_viewer ended early ({status}):\n{}\n{stderr}",
+                transcript.join("\n")
+            );
+        };
+        transcript.push(line.clone());
+        if let Some(rest) = line.strip_prefix("screenshot ready ") {
+            let (size, origin) = rest.split_once(" at ").unwrap();
+            let pair = |text: &str, separator| {
+                let (a, b) = text.split_once(separator).unwrap();
+                (a.parse::<u32>().unwrap(), b.parse::<u32>().unwrap())
+            };
+            break (pair(size, 'x'), pair(origin, ','));
+        }
+    };
+    let text = transcript.join("\n");
+    for expected in [
+        "rendered ",
+        "tree selected ",
+        "highlighted in the view: yes",
+        "display mode: edges",
+        "display mode: hidden-line",
+        "display mode: wireframe",
+        "display mode: xray",
+        "display mode: solid",
+        "section: on",
+        "section: off",
+        "highlighted after clearing: no",
+    ] {
+        assert!(text.contains(expected), "no '{expected}' in:\n{text}");
+    }
+    // The picked node is a part of the scene: its tree item is a Geo node.
+    assert!(
+        text.contains("(Geo)"),
+        "the pick selected no Geo node:\n{text}"
+    );
+    let dump = Command::new("xwd")
+        .args(["-root", "-silent", "-display", &display.name])
+        .output()
+        .expect("run xwd (scripts/setup.sh installs x11-apps)");
+    assert!(dump.status.success(), "{}", describe(&dump));
+    viewer.stdin.take().unwrap().write_all(b"done\n").unwrap();
+    let rest: Vec<String> = lines.map_while(Result::ok).collect();
+    let status = viewer.wait().unwrap();
+    assert!(
+        status.success(),
+        "qt_viewer failed ({status}):\n{text}\n{}",
+        rest.join("\n")
+    );
+    assert!(
+        rest.iter().any(|l| l == "validation errors: 0"),
+        "{}",
+        rest.join("\n")
+    );
+
+    let window = xwd_region(&dump.stdout, origin, size.0, size.1);
+    window.save(dir.join("window.png")).unwrap();
+    let offscreen = image::open(dir.join("offscreen.png")).unwrap().to_rgba8();
+    assert_eq!(offscreen.dimensions(), size);
+    assert!(
+        foreground_fraction(&offscreen) > 0.05,
+        "the offscreen view shows nothing"
+    );
+    let difference = cadr_tests::images::compare(&window, &offscreen).unwrap();
+    assert!(
+        difference.within(cadr_tests::images::DEFAULT_TOLERANCE),
+        "the Qt view and the offscreen render differ: {difference:?} (images in {})",
+        dir.display()
+    );
 }

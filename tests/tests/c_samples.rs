@@ -8,7 +8,7 @@
 
 use std::io::{BufRead, BufReader, Write};
 use std::path::{Path, PathBuf};
-use std::process::{Child, Command, Stdio};
+use std::process::{Child, ChildStdout, Command, Stdio};
 use std::time::{Duration, Instant};
 
 use cadr_tests::c_programs::{build_c_program, describe, repository, scratch_dir};
@@ -177,45 +177,141 @@ fn xwd_region(bytes: &[u8], (left, top): (u32, u32), width: u32, height: u32) ->
     })
 }
 
+/// A window sample in its self-test: started, and read until it says
+/// `screenshot ready WxH[ at X,Y]` (its view's size and place on the screen).
+struct WindowSample {
+    name: &'static str,
+    child: Child,
+    lines: std::io::Lines<BufReader<ChildStdout>>,
+    /// What it printed up to then.
+    transcript: String,
+    size: (u32, u32),
+    origin: (u32, u32),
+}
+
+impl WindowSample {
+    /// Starts `command` (the sample `name`) with piped standard streams and reads its output
+    /// until the screenshot is ready; panics with what it printed when it ends before.
+    fn start(name: &'static str, command: &mut Command) -> Self {
+        let mut child = command
+            .stdin(Stdio::piped())
+            .stdout(Stdio::piped())
+            .stderr(Stdio::piped())
+            .spawn()
+            .unwrap();
+        let mut lines = BufReader::new(child.stdout.take().unwrap()).lines();
+        let mut transcript = Vec::new();
+        let pair = |text: &str, separator| {
+            let (a, b) = text.split_once(separator).unwrap();
+            (a.parse::<u32>().unwrap(), b.parse::<u32>().unwrap())
+        };
+        let (size, origin) = loop {
+            let Some(Ok(line)) = lines.next() else {
+                let status = child.wait().unwrap();
+                let mut stderr = String::new();
+                std::io::Read::read_to_string(&mut child.stderr.take().unwrap(), &mut stderr)
+                    .unwrap();
+                panic!(
+                    "{name} ended early ({status}):\n{}\n{stderr}",
+                    transcript.join("\n")
+                );
+            };
+            transcript.push(line.clone());
+            if let Some(rest) = line.strip_prefix("screenshot ready ") {
+                break match rest.split_once(" at ") {
+                    Some((size, origin)) => (pair(size, 'x'), pair(origin, ',')),
+                    None => (pair(rest, 'x'), (0, 0)),
+                };
+            }
+        };
+        Self {
+            name,
+            child,
+            lines,
+            transcript: transcript.join("\n"),
+            size,
+            origin,
+        }
+    }
+
+    /// Fails unless the sample printed each of `expected`.
+    fn assert_printed(&self, expected: &[&str]) {
+        for line in expected {
+            assert!(
+                self.transcript.contains(line),
+                "no '{line}' in:\n{}",
+                self.transcript
+            );
+        }
+    }
+
+    /// Grabs the screen of `display` while the sample keeps its view presented, lets it
+    /// finish (it must report no validation error), and compares its view in the grab with
+    /// the offscreen render of the same camera it wrote into `dir`/offscreen.png.
+    fn grab_finish_and_compare(mut self, display: &VirtualDisplay, dir: &Path) {
+        let dump = Command::new("xwd")
+            .args(["-root", "-silent", "-display", &display.name])
+            .output()
+            .expect("run xwd (scripts/setup.sh installs x11-apps)");
+        assert!(dump.status.success(), "{}", describe(&dump));
+        self.child
+            .stdin
+            .take()
+            .unwrap()
+            .write_all(b"done\n")
+            .unwrap();
+        let rest: Vec<String> = self.lines.map_while(Result::ok).collect();
+        let status = self.child.wait().unwrap();
+        assert!(
+            status.success(),
+            "{} failed ({status}):\n{}\n{}",
+            self.name,
+            self.transcript,
+            rest.join("\n")
+        );
+        assert!(
+            rest.iter().any(|l| l == "validation errors: 0"),
+            "{}",
+            rest.join("\n")
+        );
+        let (width, height) = self.size;
+        let window = xwd_region(&dump.stdout, self.origin, width, height);
+        window.save(dir.join("window.png")).unwrap();
+        let offscreen = image::open(dir.join("offscreen.png")).unwrap().to_rgba8();
+        assert_eq!(offscreen.dimensions(), self.size);
+        assert!(
+            foreground_fraction(&offscreen) > 0.05,
+            "the offscreen view shows nothing"
+        );
+        let difference = cadr_tests::images::compare(&window, &offscreen).unwrap();
+        assert!(
+            difference.within(cadr_tests::images::DEFAULT_TOLERANCE),
+            "{}'s window and the offscreen render differ: {difference:?} (images in {})",
+            self.name,
+            dir.display()
+        );
+    }
+}
+
 #[test]
 fn viewer_under_xvfb_swaps_techniques_resizes_and_shows_the_offscreen_image() {
     let dir = scratch_dir("sample-viewer");
     let program = sample("viewer", &dir, &["-lglfw"]);
     let display = VirtualDisplay::start();
-    let mut viewer = Command::new(&program)
-        .args(["gen:demo", "--self-test", dir.to_str().unwrap()])
-        .env("DISPLAY", &display.name)
-        // Frames overlap the window's blits (two in flight): the validation layer's
-        // synchronization checks look for a missing barrier, which lavapipe would not show.
-        .env(
-            "VK_LAYER_ENABLES",
-            "VK_VALIDATION_FEATURE_ENABLE_SYNCHRONIZATION_VALIDATION_EXT",
-        )
-        .stdin(Stdio::piped())
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped())
-        .spawn()
-        .unwrap();
-    let mut lines = BufReader::new(viewer.stdout.take().unwrap()).lines();
-    let mut transcript = Vec::new();
-    let size = loop {
-        let Some(Ok(line)) = lines.next() else {
-            let status = viewer.wait().unwrap();
-            let mut stderr = String::new();
-            std::io::Read::read_to_string(&mut viewer.stderr.take().unwrap(), &mut stderr).unwrap();
-            panic!(
-                "viewer ended early ({status}):\n{}\n{stderr}",
-                transcript.join("\n")
-            );
-        };
-        transcript.push(line.clone());
-        if let Some(size) = line.strip_prefix("screenshot ready ") {
-            let (w, h) = size.split_once('x').unwrap();
-            break (w.parse::<u32>().unwrap(), h.parse::<u32>().unwrap());
-        }
-    };
-    let text = transcript.join("\n");
-    for expected in [
+    let viewer = WindowSample::start(
+        "viewer",
+        Command::new(&program)
+            .args(["gen:demo", "--self-test", dir.to_str().unwrap()])
+            .env("DISPLAY", &display.name)
+            // Frames overlap the window's blits (two in flight): the validation layer's
+            // synchronization checks look for a missing barrier, which lavapipe would not
+            // show.
+            .env(
+                "VK_LAYER_ENABLES",
+                "VK_VALIDATION_FEATURE_ENABLE_SYNCHRONIZATION_VALIDATION_EXT",
+            ),
+    );
+    viewer.assert_printed(&[
         "rendered 3 frames",
         "vertex technique: ",
         "params technique: ",
@@ -243,47 +339,14 @@ fn viewer_under_xvfb_swaps_techniques_resizes_and_shows_the_offscreen_image() {
         "selection cleared",
         "present modes offered: fifo",
         "resized to 480x360",
-    ] {
-        assert!(text.contains(expected), "no '{expected}' in:\n{text}");
-    }
+    ]);
     assert!(
-        !text.contains("no other one fits"),
-        "a kind could not be swapped:\n{text}"
+        !viewer.transcript.contains("no other one fits"),
+        "a kind could not be swapped:\n{}",
+        viewer.transcript
     );
-    // Grab the screen while the viewer keeps its window (at 0,0, no window manager) presented.
-    let dump = Command::new("xwd")
-        .args(["-root", "-silent", "-display", &display.name])
-        .output()
-        .expect("run xwd (scripts/setup.sh installs x11-apps)");
-    assert!(dump.status.success(), "{}", describe(&dump));
-    viewer.stdin.take().unwrap().write_all(b"done\n").unwrap();
-    let rest: Vec<String> = lines.map_while(Result::ok).collect();
-    let status = viewer.wait().unwrap();
-    assert!(
-        status.success(),
-        "viewer failed ({status}):\n{text}\n{}",
-        rest.join("\n")
-    );
-    assert!(
-        rest.iter().any(|l| l == "validation errors: 0"),
-        "{}",
-        rest.join("\n")
-    );
-
-    let window = xwd_region(&dump.stdout, (0, 0), size.0, size.1);
-    window.save(dir.join("window.png")).unwrap();
-    let offscreen = image::open(dir.join("offscreen.png")).unwrap().to_rgba8();
-    assert_eq!(offscreen.dimensions(), size);
-    assert!(
-        foreground_fraction(&offscreen) > 0.05,
-        "the offscreen view shows nothing"
-    );
-    let difference = cadr_tests::images::compare(&window, &offscreen).unwrap();
-    assert!(
-        difference.within(cadr_tests::images::DEFAULT_TOLERANCE),
-        "window and offscreen render differ: {difference:?} (images in {})",
-        dir.display()
-    );
+    // The viewer's window is at 0,0 (no window manager).
+    viewer.grab_finish_and_compare(&display, &dir);
 }
 
 #[test]
@@ -356,41 +419,16 @@ fn qt_viewer_picks_into_its_model_tree_highlights_from_it_and_shows_the_offscree
             .args(["--target", "qt_viewer"]),
     );
     let display = VirtualDisplay::start();
-    let mut viewer = Command::new(build.join("qt_viewer"))
-        .args(["gen:demo", "--self-test", dir.to_str().unwrap()])
-        .env("DISPLAY", &display.name)
-        .env("QT_QPA_PLATFORM", "xcb")
-        .env("XDG_RUNTIME_DIR", &dir)
-        .env_remove("CADR_PLUGIN_PATH")
-        .stdin(Stdio::piped())
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped())
-        .spawn()
-        .unwrap();
-    let mut lines = BufReader::new(viewer.stdout.take().unwrap()).lines();
-    let mut transcript = Vec::new();
-    let (size, origin) = loop {
-        let Some(Ok(line)) = lines.next() else {
-            let status = viewer.wait().unwrap();
-            let mut stderr = String::new();
-            std::io::Read::read_to_string(&mut viewer.stderr.take().unwrap(), &mut stderr).unwrap();
-            panic!(
-                "qt_viewer ended early ({status}):\n{}\n{stderr}",
-                transcript.join("\n")
-            );
-        };
-        transcript.push(line.clone());
-        if let Some(rest) = line.strip_prefix("screenshot ready ") {
-            let (size, origin) = rest.split_once(" at ").unwrap();
-            let pair = |text: &str, separator| {
-                let (a, b) = text.split_once(separator).unwrap();
-                (a.parse::<u32>().unwrap(), b.parse::<u32>().unwrap())
-            };
-            break (pair(size, 'x'), pair(origin, ','));
-        }
-    };
-    let text = transcript.join("\n");
-    for expected in [
+    let viewer = WindowSample::start(
+        "qt_viewer",
+        Command::new(build.join("qt_viewer"))
+            .args(["gen:demo", "--self-test", dir.to_str().unwrap()])
+            .env("DISPLAY", &display.name)
+            .env("QT_QPA_PLATFORM", "xcb")
+            .env("XDG_RUNTIME_DIR", &dir)
+            .env_remove("CADR_PLUGIN_PATH"),
+    );
+    viewer.assert_printed(&[
         "rendered ",
         "tree selected ",
         "highlighted in the view: yes",
@@ -402,45 +440,8 @@ fn qt_viewer_picks_into_its_model_tree_highlights_from_it_and_shows_the_offscree
         "section: on",
         "section: off",
         "highlighted after clearing: no",
-    ] {
-        assert!(text.contains(expected), "no '{expected}' in:\n{text}");
-    }
-    // The picked node is a part of the scene: its tree item is a Geo node.
-    assert!(
-        text.contains("(Geo)"),
-        "the pick selected no Geo node:\n{text}"
-    );
-    let dump = Command::new("xwd")
-        .args(["-root", "-silent", "-display", &display.name])
-        .output()
-        .expect("run xwd (scripts/setup.sh installs x11-apps)");
-    assert!(dump.status.success(), "{}", describe(&dump));
-    viewer.stdin.take().unwrap().write_all(b"done\n").unwrap();
-    let rest: Vec<String> = lines.map_while(Result::ok).collect();
-    let status = viewer.wait().unwrap();
-    assert!(
-        status.success(),
-        "qt_viewer failed ({status}):\n{text}\n{}",
-        rest.join("\n")
-    );
-    assert!(
-        rest.iter().any(|l| l == "validation errors: 0"),
-        "{}",
-        rest.join("\n")
-    );
-
-    let window = xwd_region(&dump.stdout, origin, size.0, size.1);
-    window.save(dir.join("window.png")).unwrap();
-    let offscreen = image::open(dir.join("offscreen.png")).unwrap().to_rgba8();
-    assert_eq!(offscreen.dimensions(), size);
-    assert!(
-        foreground_fraction(&offscreen) > 0.05,
-        "the offscreen view shows nothing"
-    );
-    let difference = cadr_tests::images::compare(&window, &offscreen).unwrap();
-    assert!(
-        difference.within(cadr_tests::images::DEFAULT_TOLERANCE),
-        "the Qt view and the offscreen render differ: {difference:?} (images in {})",
-        dir.display()
-    );
+        // The node picked in the middle of the view is a part: a Geo node.
+        "(Geo)",
+    ]);
+    viewer.grab_finish_and_compare(&display, &dir);
 }

@@ -11,7 +11,10 @@
 
 use crate::commands_key::mix;
 use crate::render::pixel_keys::KeyUse;
-use crate::render::{OverlaySets, OverlayShader, DISPLAY_CAP_KEYS, DISPLAY_NEAREST_SURFACES};
+use crate::render::{
+    OverlaySets, OverlayShader, DISPLAY_CAP_KEYS, DISPLAY_HIGHLIGHT_OUTLINE,
+    DISPLAY_NEAREST_SURFACES,
+};
 use crate::shaders;
 use crate::vk::Blend;
 
@@ -369,11 +372,14 @@ impl FramePasses {
             .count() as u32
     }
 
-    /// The display bits the surfaces' shaders need for what they write: the nearest surfaces
-    /// and the cap keys.
+    /// The display bits the surfaces' shaders need for what they write: the outline keys,
+    /// the nearest surfaces and the cap keys.
     pub fn display_bits(&self) -> u32 {
         let writes = self.surface_writes();
         let mut bits = 0;
+        if writes.has(Resources::OUTLINE_KEYS) {
+            bits |= DISPLAY_HIGHLIGHT_OUTLINE;
+        }
         if writes.has(Resources::NEAREST_SURFACES) {
             bits |= DISPLAY_NEAREST_SURFACES;
         }
@@ -468,7 +474,7 @@ mod tests {
         assert!(passes.overlays_read_storage());
         assert_eq!(
             passes.display_bits(),
-            DISPLAY_NEAREST_SURFACES | DISPLAY_CAP_KEYS
+            DISPLAY_HIGHLIGHT_OUTLINE | DISPLAY_NEAREST_SURFACES | DISPLAY_CAP_KEYS
         );
         let keys = writes.key_use();
         assert!(keys.outline && keys.nearest_surfaces && keys.cap_keys);

@@ -199,9 +199,6 @@ impl Renderer {
         if scene.has_material_descriptions() {
             display |= crate::render::DISPLAY_MATERIAL_DESCRIPTIONS;
         }
-        if self.highlight_style() == crate::render::HighlightStyle::Outline {
-            display |= crate::render::DISPLAY_HIGHLIGHT_OUTLINE;
-        }
         display
     }
 }

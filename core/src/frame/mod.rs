@@ -2,10 +2,11 @@
 //! buffers, timers, frames in flight and the settings a host changes between frames) and the
 //! frames drawn into it. `techniques.rs` plans a frame of the GPU scene with the active
 //! techniques (`Renderer::render_techniques`, `Renderer::pick_techniques`): CPU culling, the
-//! pass set, uploads, the recorders each technique contributes; `gpu_cull.rs` drives a GPU
-//! culler's phases; `record.rs` records and submits the plan (or replays an unchanged frame's
-//! recording) with the passes over the picture; `output.rs` reads the image back and writes
-//! PNGs. The pieces it draws with (camera, sections, targets, pipelines over the picture)
+//! surface pass set, uploads, the recorders each technique contributes; `gpu_cull.rs` drives a
+//! GPU culler's phases; `passes.rs` turns the frame's shape into its ordered list of passes
+//! (preparation, culling phases, surfaces, the passes over the picture, the pick readback);
+//! `record.rs` records each pass and submits the frame (or replays an unchanged frame's
+//! recording); `output.rs` reads the image back and writes PNGs. The pieces it draws with (camera, sections, targets, pipelines over the picture)
 //! are in [`crate::render`].
 
 mod gpu_cull;

@@ -131,7 +131,7 @@ fn is_field(line: &str, indent: &str) -> bool {
         .find(|c: char| !(c.is_ascii_alphanumeric() || c == '_'))
         .unwrap_or(0);
     name_end > 0
-        && rest.as_bytes()[0].is_ascii_lowercase() | (rest.as_bytes()[0] == b'_')
+        && (rest.as_bytes()[0].is_ascii_lowercase() || rest.as_bytes()[0] == b'_')
         && rest[name_end..].starts_with(": ")
 }
 

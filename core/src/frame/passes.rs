@@ -300,25 +300,27 @@ impl FramePasses {
     /// phase before each but the first, the passes over the picture the shape draws, and after
     /// a pick pass its readback.
     pub fn plan(shape: &FrameShape) -> Self {
-        let overlays: Vec<FramePass> = OVERLAY_PASSES
-            .iter()
-            .enumerate()
-            .filter_map(|(index, pass)| {
-                (pass.reads)(shape).map(|reads| FramePass::Overlay { index, reads })
-            })
-            .collect();
+        // The passes over the picture this frame draws, with what each reads (the table's
+        // predicates are plain functions: asking twice costs nothing, unlike a second list).
+        let overlays = || {
+            OVERLAY_PASSES
+                .iter()
+                .enumerate()
+                .filter_map(|(index, pass)| {
+                    (pass.reads)(shape).map(|reads| FramePass::Overlay { index, reads })
+                })
+        };
         // The surfaces write what the passes over the picture read of them.
         let drawn = match shape.target {
             PassTarget::Color => Resources::COLOR,
             PassTarget::Pick => Resources::PICK_IDS,
         };
-        let writes = overlays
-            .iter()
-            .fold(drawn.with(Resources::DEPTH), |writes, pass| {
-                writes.with(Resources(pass.reads().0 & Resources::STORAGE.0))
-            });
+        let writes = overlays().fold(drawn.with(Resources::DEPTH), |writes, pass| {
+            writes.with(Resources(pass.reads().0 & Resources::STORAGE.0))
+        });
         let phases = shape.phases.max(1);
-        let mut passes = vec![FramePass::Prepare];
+        let mut passes = Vec::with_capacity(2 * phases as usize + OVERLAY_PASSES.len() + 1);
+        passes.push(FramePass::Prepare);
         for phase in 0..phases {
             if phase > 0 {
                 passes.push(FramePass::Cull { phase });
@@ -330,7 +332,7 @@ impl FramePasses {
                 writes,
             });
         }
-        passes.extend(overlays);
+        passes.extend(overlays());
         if shape.target == PassTarget::Pick {
             passes.push(FramePass::PickReadback);
         }

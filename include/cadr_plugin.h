@@ -20,7 +20,7 @@
 #define CADR_PLUGIN_ABI_MAJOR 1
 
 // Minor version of this ABI: additions that older readers may ignore.
-#define CADR_PLUGIN_ABI_MINOR 14
+#define CADR_PLUGIN_ABI_MINOR 15
 
 // `(major << 16) | minor`, what [`CadrPluginVersionFn`] returns.
 #define CADR_PLUGIN_ABI_VERSION ((CADR_PLUGIN_ABI_MAJOR << 16) | CADR_PLUGIN_ABI_MINOR)
@@ -67,7 +67,7 @@ typedef uint32_t (*CadrPluginVersionFn)(void);
 // a chain owns it and keeps it valid as long as the struct it hangs from. Hosts of ABI 1.13
 // know no kind, so they skip every extension a technique offers and refuse a technique that
 // requires one; ABI 1.14 defines [`CADR_EXTENSION_SCENE_CLUSTERS`] and
-// [`CADR_EXTENSION_CLUSTER_CULL`].
+// [`CADR_EXTENSION_CLUSTER_CULL`], ABI 1.15 [`CADR_EXTENSION_FRAME_SLOT`].
 typedef struct CadrExtension {
   // Size of the whole extension struct, this header included.
   uint32_t size;
@@ -1070,6 +1070,16 @@ typedef struct CadrTransparencyVtable {
 // every frame of an orbiting camera (`none`, which draws every candidate, sets it).
 #define CADR_TRAIT_CULLS_WHATEVER_THE_VIEW (1 << 9)
 
+// Since ABI 1.15. Any kind, an announcement: the technique keeps what it writes for a frame
+// once per frame slot ([`CadrFrameSlot`]). In a frame whose
+// [`CadrFrameSlot::earlier_frames_finished`] is 0 it writes no host-visible memory, updates no
+// descriptor set and records no secondary command buffer that a frame of another slot may
+// still read on the GPU, except its copies for [`CadrFrameSlot::slot`] (a technique that writes
+// nothing per frame announces it as it is). Where an active technique does not announce it,
+// the host waits for every earlier frame before each frame (one frame's work at a time, as
+// hosts before 1.15 did), so it never has more than one frame to keep.
+#define CADR_TRAIT_FRAME_SLOTS (1 << 10)
+
 // Device-local; written by transfers or shaders.
 #define CADR_MEMORY_GPU_ONLY 0
 
@@ -1121,6 +1131,10 @@ typedef struct CadrTransparencyVtable {
 // Since ABI 1.14: the kind of [`CadrClusterCull`], chained on
 // [`CadrGpuCullContext::extensions`].
 #define CADR_EXTENSION_CLUSTER_CULL 2
+
+// Since ABI 1.15: the kind of [`CadrFrameSlot`], chained on [`CadrSceneView::extensions`] of
+// the views the host gives to `prepare`, `record` and a GPU culler's `record`.
+#define CADR_EXTENSION_FRAME_SLOT 3
 
 // Triangles (solid shading).
 #define CADR_PASS_TRIANGLES 0

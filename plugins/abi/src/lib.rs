@@ -56,7 +56,7 @@ use std::ffi::{c_char, c_void};
 /// Major version of this ABI: a library built for another major version is refused.
 pub const CADR_PLUGIN_ABI_MAJOR: u32 = 1;
 /// Minor version of this ABI: additions that older readers may ignore.
-pub const CADR_PLUGIN_ABI_MINOR: u32 = 14;
+pub const CADR_PLUGIN_ABI_MINOR: u32 = 15;
 /// `(major << 16) | minor`, what [`CadrPluginVersionFn`] returns.
 pub const CADR_PLUGIN_ABI_VERSION: u32 = (CADR_PLUGIN_ABI_MAJOR << 16) | CADR_PLUGIN_ABI_MINOR;
 
@@ -185,6 +185,15 @@ pub const CADR_TRAIT_REPLAYS_PARAMETER_CHANGES: CadrTraitBits = 1 << 8;
 /// [`CadrCullInput::section_planes`]): the host calls it again only when the scene changed, not
 /// every frame of an orbiting camera (`none`, which draws every candidate, sets it).
 pub const CADR_TRAIT_CULLS_WHATEVER_THE_VIEW: CadrTraitBits = 1 << 9;
+/// Since ABI 1.15. Any kind, an announcement: the technique keeps what it writes for a frame
+/// once per frame slot ([`CadrFrameSlot`]). In a frame whose
+/// [`CadrFrameSlot::earlier_frames_finished`] is 0 it writes no host-visible memory, updates no
+/// descriptor set and records no secondary command buffer that a frame of another slot may
+/// still read on the GPU, except its copies for [`CadrFrameSlot::slot`] (a technique that writes
+/// nothing per frame announces it as it is). Where an active technique does not announce it,
+/// the host waits for every earlier frame before each frame (one frame's work at a time, as
+/// hosts before 1.15 did), so it never has more than one frame to keep.
+pub const CADR_TRAIT_FRAME_SLOTS: CadrTraitBits = 1 << 10;
 
 /// A message buffer the host hands to functions that can fail: the plugin writes a
 /// NUL-terminated UTF-8 message of at most `capacity` bytes (including the NUL).
@@ -233,7 +242,7 @@ pub type CadrExtensionKind = u32;
 /// a chain owns it and keeps it valid as long as the struct it hangs from. Hosts of ABI 1.13
 /// know no kind, so they skip every extension a technique offers and refuse a technique that
 /// requires one; ABI 1.14 defines [`CADR_EXTENSION_SCENE_CLUSTERS`] and
-/// [`CADR_EXTENSION_CLUSTER_CULL`].
+/// [`CADR_EXTENSION_CLUSTER_CULL`], ABI 1.15 [`CADR_EXTENSION_FRAME_SLOT`].
 #[repr(C)]
 #[derive(Clone, Copy, Debug)]
 pub struct CadrExtension {
@@ -702,6 +711,38 @@ pub const CADR_EXTENSION_SCENE_CLUSTERS: CadrExtensionKind = 1;
 /// Since ABI 1.14: the kind of [`CadrClusterCull`], chained on
 /// [`CadrGpuCullContext::extensions`].
 pub const CADR_EXTENSION_CLUSTER_CULL: CadrExtensionKind = 2;
+/// Since ABI 1.15: the kind of [`CadrFrameSlot`], chained on [`CadrSceneView::extensions`] of
+/// the views the host gives to `prepare`, `record` and a GPU culler's `record`.
+pub const CADR_EXTENSION_FRAME_SLOT: CadrExtensionKind = 3;
+
+/// Since ABI 1.15 ([`CADR_EXTENSION_FRAME_SLOT`]): which of the host's frames in flight is being
+/// recorded. The host lets the GPU work on up to `slot_count` frames while it records the next;
+/// frame `n` uses slot `n % slot_count`, and a recording made for a slot is submitted again
+/// (replayed) only by later frames of the same slot. A technique that announces
+/// [`CADR_TRAIT_FRAME_SLOTS`] keeps one copy per slot of what it writes for a frame on the host
+/// (host-visible buffers, descriptor sets, secondary command buffers) and writes only the
+/// copy of `slot` while `earlier_frames_finished` is 0. Owned by the host; valid as long as
+/// the view it hangs from.
+#[repr(C)]
+#[derive(Clone, Copy, Debug)]
+pub struct CadrFrameSlot {
+    /// `kind` = [`CADR_EXTENSION_FRAME_SLOT`].
+    pub header: CadrExtension,
+    /// The slot of the frame being recorded, `0..slot_count`.
+    pub slot: u32,
+    /// How many frames the host may have in flight (1 to 3): the copies a technique keeps.
+    pub slot_count: u32,
+    /// 1 when the GPU has finished every earlier frame, so that the technique may write any of
+    /// its memory and descriptor sets; 0 when frames of other slots may still run. (A
+    /// recording made for another slot is submitted again only while every frame since has
+    /// recorded the same commands, as a host of one slot replays its one recording.) The host waits, and sets 1, whenever the
+    /// scene view's generations, the frame's passes, the active techniques or the target
+    /// changed since the last frame, when the frame uploads scene data, for pick frames, and
+    /// in every frame where an active technique does not announce [`CADR_TRAIT_FRAME_SLOTS`].
+    pub earlier_frames_finished: u32,
+    /// Zero.
+    pub reserved: u32,
+}
 
 /// Since ABI 1.14 ([`CADR_EXTENSION_SCENE_CLUSTERS`]): every part's triangles as clusters of
 /// at most 128 triangles and 128 vertices, with the coarser clusters of its level-of-detail

@@ -120,6 +120,26 @@ impl<'a> Scene<'a> {
         Some(unsafe { &*(header as *const abi::CadrExtension).cast::<abi::CadrSceneClusters>() })
     }
 
+    /// Which frame slot is being recorded ([`abi::CadrFrameSlot`]), from a host of ABI 1.15 or
+    /// later; `None` from an older host, which records one frame at a time (slot 0 of 1, every
+    /// earlier frame finished).
+    pub fn frame_slot(&self) -> Option<&'a abi::CadrFrameSlot> {
+        let end =
+            std::mem::offset_of!(abi::CadrSceneView, extensions) + std::mem::size_of::<usize>();
+        if (self.raw.size as usize) < end {
+            return None;
+        }
+        // SAFETY: the host's chain is valid as long as the view.
+        let header =
+            unsafe { abi::find_extension(self.raw.extensions, abi::CADR_EXTENSION_FRAME_SLOT) }?;
+        if (header.size as usize) < std::mem::size_of::<abi::CadrFrameSlot>() {
+            return None;
+        }
+        // SAFETY: an extension of this kind is a `CadrFrameSlot` (its header first) of at least
+        // that size.
+        Some(unsafe { &*(header as *const abi::CadrExtension).cast::<abi::CadrFrameSlot>() })
+    }
+
     /// Every instance id's instance.
     pub fn instances(&self) -> &'a [abi::CadrInstance] {
         slice(self.raw.instances, self.raw.instance_count as usize)

@@ -10,7 +10,7 @@
 
 use std::sync::Arc;
 
-use crate::REPLAYABLE;
+use crate::{KEEPS_FRAME_SLOTS, REPLAYABLE};
 use cadr_plugin_sdk::abi::{self, CadrInstance};
 use cadr_plugin_sdk::{technique_library, CullInput, CullOutput, Culling, Gpu, Technique};
 
@@ -151,22 +151,22 @@ technique_library! {
         culling Frustum {
             name: "frustum",
             description: "CPU frustum culling of part bounding spheres on worker threads; only changed visibility bits are applied.",
-            features: 0, provides: abi::CADR_TRAIT_READS_HOST_MATRICES | REPLAYABLE, needs: 0,
+            features: 0, provides: abi::CADR_TRAIT_READS_HOST_MATRICES | REPLAYABLE | KEEPS_FRAME_SLOTS, needs: 0,
         },
         gpu_culling crate::gpu_culling::GpuFrustum {
             name: "gpu-frustum",
             description: "GPU frustum culling: a compute shader tests every part's sphere and writes the indirect draws and their count; the CPU does nothing per part, moving or not.",
-            features: GPU_CULLING_FEATURES, provides: REPLAYABLE, needs: GPU_CULLING_NEEDS,
+            features: GPU_CULLING_FEATURES, provides: REPLAYABLE | KEEPS_FRAME_SLOTS, needs: GPU_CULLING_NEEDS,
         },
         gpu_culling crate::gpu_culling::GpuOcclusion {
             name: "gpu-occlusion",
             description: "GPU frustum and two-phase occlusion culling: draws what was visible last frame, tests the rest against a depth pyramid of it, draws what became visible in the same frame.",
-            features: GPU_CULLING_FEATURES, provides: REPLAYABLE, needs: GPU_CULLING_NEEDS,
+            features: GPU_CULLING_FEATURES, provides: REPLAYABLE | KEEPS_FRAME_SLOTS, needs: GPU_CULLING_NEEDS,
         },
         gpu_culling crate::gpu_culling::GpuClusters {
             name: "gpu-clusters",
             description: "GPU cluster culling and level of detail: gpu-occlusion per part, then per cluster of the part's level-of-detail cut (frustum, normal cone, depth pyramid), so the triangles drawn follow the pixels covered.",
-            features: GPU_CULLING_FEATURES, provides: REPLAYABLE, needs: GPU_CULLING_NEEDS,
+            features: GPU_CULLING_FEATURES, provides: REPLAYABLE | KEEPS_FRAME_SLOTS, needs: GPU_CULLING_NEEDS,
         },
     ]
 }

@@ -114,6 +114,8 @@ fn cluster_command_budget() -> u64 {
 /// matrices, the commands and counts, both visibility buffers, the pyramid, and with clusters
 /// the scene's clusters and groups, both cluster visibility tables and the parts phase 0 skipped.
 const CULL_STORAGE_BUFFERS: u32 = 12;
+/// The frame slots a host may have ([`abi::CadrFrameSlot::slot_count`] is at most 3).
+const FRAME_SLOTS: usize = 3;
 
 /// Push constants of one pyramid level.
 #[derive(Clone, Copy)]
@@ -152,7 +154,9 @@ struct Objects {
     pyramid_pipeline: vk::Pipeline,
     sampler: vk::Sampler,
     pool: vk::DescriptorPool,
-    cull_set: vk::DescriptorSet,
+    /// One cull set per frame slot: a slot's set names its part of the host's view buffer, and
+    /// a frame recorded for one slot never sees another's rewritten while it runs.
+    cull_sets: [vk::DescriptorSet; FRAME_SLOTS],
     pyramid_set: vk::DescriptorSet,
 }
 
@@ -267,7 +271,7 @@ impl Objects {
             pyramid_pipeline: vk::Pipeline::null(),
             sampler: vk::Sampler::null(),
             pool: vk::DescriptorPool::null(),
-            cull_set: vk::DescriptorSet::null(),
+            cull_sets: [vk::DescriptorSet::null(); FRAME_SLOTS],
             pyramid_set: vk::DescriptorSet::null(),
         };
         let storage = vk::DescriptorType::STORAGE_BUFFER;
@@ -325,21 +329,21 @@ impl Objects {
         let sizes = [
             vk::DescriptorPoolSize::default()
                 .ty(storage)
-                .descriptor_count(CULL_STORAGE_BUFFERS + 1),
+                .descriptor_count(CULL_STORAGE_BUFFERS * FRAME_SLOTS as u32 + 1),
             vk::DescriptorPoolSize::default()
                 .ty(vk::DescriptorType::UNIFORM_BUFFER)
-                .descriptor_count(1),
+                .descriptor_count(FRAME_SLOTS as u32),
             vk::DescriptorPoolSize::default()
                 .ty(vk::DescriptorType::COMBINED_IMAGE_SAMPLER)
                 .descriptor_count(1),
         ];
         let info = vk::DescriptorPoolCreateInfo::default()
-            .max_sets(2)
+            .max_sets(FRAME_SLOTS as u32 + 1)
             .pool_sizes(&sizes);
         // SAFETY: the info lives for the call.
         objects.pool = unsafe { device.create_descriptor_pool(&info, allocator) }
             .map_err(vulkan_failure("vkCreateDescriptorPool"))?;
-        let mut layouts = vec![objects.cull_set_layout];
+        let mut layouts = vec![objects.cull_set_layout; FRAME_SLOTS];
         if occlusion {
             layouts.push(objects.pyramid_set_layout);
         }
@@ -349,8 +353,8 @@ impl Objects {
         // SAFETY: the pool has room for these sets.
         let sets = unsafe { device.allocate_descriptor_sets(&info) }
             .map_err(vulkan_failure("vkAllocateDescriptorSets"))?;
-        objects.cull_set = sets[0];
-        objects.pyramid_set = sets.get(1).copied().unwrap_or_default();
+        objects.cull_sets.copy_from_slice(&sets[..FRAME_SLOTS]);
+        objects.pyramid_set = sets.get(FRAME_SLOTS).copied().unwrap_or_default();
         Ok(objects)
     }
 }
@@ -393,7 +397,7 @@ pub struct GpuCuller<const OCCLUSION: bool, const CLUSTERS: bool> {
     /// Levels of the pyramid of the current target size (a push constant of the culls).
     pyramid_levels: u32,
     /// What the descriptor sets were last written with.
-    cull_written: Option<([u64; 13], u64)>,
+    cull_written: [Option<([u64; 13], u64)>; FRAME_SLOTS],
     pyramid_written: Option<[u64; 2]>,
 }
 
@@ -432,7 +436,7 @@ impl<const OCCLUSION: bool, const CLUSTERS: bool> Technique for GpuCuller<OCCLUS
             max_cluster_budget: cluster_command_budget(),
             pyramid_size: (0, 0),
             pyramid_levels: 1,
-            cull_written: None,
+            cull_written: [None; FRAME_SLOTS],
             pyramid_written: None,
         })
     }
@@ -563,10 +567,11 @@ impl<const OCCLUSION: bool, const CLUSTERS: bool> GpuCuller<OCCLUSION, CLUSTERS>
         Ok(())
     }
 
-    /// Points the cull set at the scene's buffers, the host's view and ours (when any
-    /// changed).
+    /// Points the cull set of frame `slot` at the scene's buffers, the host's view and ours
+    /// (when any changed).
     fn write_cull_set(
         &mut self,
+        slot: usize,
         scene: &abi::CadrSceneView,
         clusters: Option<&abi::CadrSceneClusters>,
         (view, view_offset): (vk::Buffer, u64),
@@ -598,7 +603,7 @@ impl<const OCCLUSION: bool, const CLUSTERS: bool> GpuCuller<OCCLUSION, CLUSTERS>
             *slot = b.as_raw();
         }
         let key = (raw, view_offset);
-        if self.cull_written == Some(key) {
+        if self.cull_written[slot] == Some(key) {
             return;
         }
         let infos: Vec<[vk::DescriptorBufferInfo; 1]> = buffers
@@ -624,20 +629,21 @@ impl<const OCCLUSION: bool, const CLUSTERS: bool> GpuCuller<OCCLUSION, CLUSTERS>
                     vk::DescriptorType::STORAGE_BUFFER
                 };
                 vk::WriteDescriptorSet::default()
-                    .dst_set(self.objects.cull_set)
+                    .dst_set(self.objects.cull_sets[slot])
                     .dst_binding(binding as u32)
                     .descriptor_type(ty)
                     .buffer_info(info)
             })
             .collect();
-        // SAFETY: the set is not in use (the host waits for the last frame before recording
-        // the next); the buffers are live.
+        // SAFETY: the set is not in use: frames of other slots use their own sets, and the
+        // host waited for this slot's last frame before recording it; the buffers are live.
         unsafe { self.gpu.device.update_descriptor_sets(&writes, &[]) };
-        self.cull_written = Some(key);
+        self.cull_written[slot] = Some(key);
     }
 
-    /// Records the cull dispatches of `phase` for every pass, in `mode`.
-    fn dispatch_cull(&self, cull: &GpuCull<'_>, instances: u32, mode: u32) {
+    /// Records the cull dispatches of `phase` for every pass, in `mode`, with the cull set of
+    /// frame `slot`.
+    fn dispatch_cull(&self, cull: &GpuCull<'_>, slot: usize, instances: u32, mode: u32) {
         let back_faces_hidden = cull.back_faces_hidden();
         let lod_error = cull.cluster_cull().map_or(0.0, |c| {
             if c.lod_error.is_finite() {
@@ -660,7 +666,7 @@ impl<const OCCLUSION: bool, const CLUSTERS: bool> GpuCuller<OCCLUSION, CLUSTERS>
                 vk::PipelineBindPoint::COMPUTE,
                 self.objects.cull_layout,
                 0,
-                &[self.objects.cull_set],
+                &[self.objects.cull_sets[slot]],
                 &[],
             );
         }
@@ -1004,6 +1010,12 @@ impl<const OCCLUSION: bool, const CLUSTERS: bool> GpuCulling for GpuCuller<OCCLU
         } else {
             None
         };
+        let slot = scene.frame_slot().map_or(0, |frame| frame.slot as usize);
+        if slot >= FRAME_SLOTS {
+            return Err(format!(
+                "frame slot {slot}: this culler keeps sets for {FRAME_SLOTS} frames in flight"
+            ));
+        }
         let (commands, cluster_budget) = self.command_room(instances, clusters);
         self.cluster_budget = cluster_budget;
         let command_buffer = cull.command_buffer();
@@ -1013,17 +1025,17 @@ impl<const OCCLUSION: bool, const CLUSTERS: bool> GpuCulling for GpuCuller<OCCLU
         if cull.phase() == 0 {
             let cluster_bits = clusters.map_or(0, |c| c.candidate_clusters);
             self.prepare_buffers(cull, (instances, commands, cluster_bits))?;
-            self.write_cull_set(scene.raw(), clusters, view);
+            self.write_cull_set(slot, scene.raw(), clusters, view);
             let mode = if OCCLUSION {
                 MODE_LAST_VISIBLE
             } else {
                 MODE_FRUSTUM
             };
-            self.dispatch_cull(cull, instances, mode);
+            self.dispatch_cull(cull, slot, instances, mode);
         } else {
             self.build_pyramid(cull)?;
-            self.write_cull_set(scene.raw(), clusters, view);
-            self.dispatch_cull(cull, instances, MODE_NEWLY_VISIBLE);
+            self.write_cull_set(slot, scene.raw(), clusters, view);
+            self.dispatch_cull(cull, slot, instances, MODE_NEWLY_VISIBLE);
             if cull.phase() + 1 == self.phases() {
                 self.keep_visibility(command_buffer);
             }

@@ -19,3 +19,10 @@ use cadr_plugin_sdk::abi;
 /// changed (moved parts, new material values).
 pub(crate) const REPLAYABLE: abi::CadrTraitBits =
     abi::CADR_TRAIT_REPLAYABLE | abi::CADR_TRAIT_REPLAYS_PARAMETER_CHANGES;
+
+/// What cadr's techniques announce unless they record secondary command buffers every frame
+/// (`individual-threads`, `groups-threads`): they write host memory and descriptor sets only
+/// when the scene or the frame's passes changed (the host then waits for every frame in
+/// flight) or into the copy of the frame's slot (the GPU cullers' cull sets), and their
+/// secondary buffers, recorded once, may be pending in several frames at once.
+pub(crate) const KEEPS_FRAME_SLOTS: abi::CadrTraitBits = abi::CADR_TRAIT_FRAME_SLOTS;

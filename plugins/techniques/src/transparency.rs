@@ -14,7 +14,7 @@
 use std::ffi::CStr;
 use std::sync::Arc;
 
-use crate::REPLAYABLE;
+use crate::{KEEPS_FRAME_SLOTS, REPLAYABLE};
 use cadr_plugin_sdk::abi::{self, CadrBlend, CadrTransparencyTarget};
 use cadr_plugin_sdk::{technique_library, vk, Gpu, Technique, Transparency};
 
@@ -181,7 +181,7 @@ technique_library! {
             name: "per-pixel-lists",
             description: "Exact: translucent fragments in a linked list per pixel, sorted by depth and composited front to back (up to 32 layers).",
             features: abi::CADR_FEATURE_FRAGMENT_STORES_AND_ATOMICS,
-            provides: REPLAYABLE,
+            provides: REPLAYABLE | KEEPS_FRAME_SLOTS,
             needs: 0,
         },
     ]

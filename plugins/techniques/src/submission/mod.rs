@@ -14,7 +14,7 @@ mod record;
 
 use std::sync::Arc;
 
-use crate::REPLAYABLE;
+use crate::{KEEPS_FRAME_SLOTS, REPLAYABLE};
 use cadr_plugin_sdk::abi;
 use cadr_plugin_sdk::vk::{self, Handle};
 use cadr_plugin_sdk::{
@@ -480,82 +480,82 @@ technique_library! {
         submission Submit<SORTED, DIRECT, INLINE> {
             name: "individual-sorted",
             description: "One draw per part, globally sorted by geometry and material so bindings change least.",
-            features: 0, provides: REPLAYABLE, needs: 0,
+            features: 0, provides: REPLAYABLE | KEEPS_FRAME_SLOTS, needs: 0,
         },
         submission Submit<JOIN, DIRECT, INLINE> {
             name: "join",
             description: "Adjacent parts of an object with equal state joined into one draw.",
-            features: 0, provides: REPLAYABLE, needs: 0,
+            features: 0, provides: REPLAYABLE | KEEPS_FRAME_SLOTS, needs: 0,
         },
         submission Submit<GROUPS, DIRECT, INLINE> {
             name: "groups",
             description: "Per object, one parameter binding per material group; one draw per range.",
-            features: 0, provides: REPLAYABLE, needs: 0,
+            features: 0, provides: REPLAYABLE | KEEPS_FRAME_SLOTS, needs: 0,
         },
         submission Submit<INDIVIDUAL, MULTI_DRAW, INLINE> {
             name: "individual-multidraw",
             description: "One vkCmdDrawMultiIndexedEXT per part (the call shape of glMultiDrawElements, one range each).",
-            features: abi::CADR_FEATURE_MULTI_DRAW, provides: REPLAYABLE, needs: GEOMETRY,
+            features: abi::CADR_FEATURE_MULTI_DRAW, provides: REPLAYABLE | KEEPS_FRAME_SLOTS, needs: GEOMETRY,
         },
         submission Submit<JOIN, MULTI_DRAW, INLINE> {
             name: "join-multidraw",
             description: "Joined ranges, each through VK_EXT_multi_draw.",
-            features: abi::CADR_FEATURE_MULTI_DRAW, provides: REPLAYABLE, needs: GEOMETRY,
+            features: abi::CADR_FEATURE_MULTI_DRAW, provides: REPLAYABLE | KEEPS_FRAME_SLOTS, needs: GEOMETRY,
         },
         submission Submit<GROUPS, MULTI_DRAW, INLINE> {
             name: "groups-multidraw",
             description: "Material groups: every range of a group in one vkCmdDrawMultiIndexedEXT (the seeds' glMultiDrawElements).",
-            features: abi::CADR_FEATURE_MULTI_DRAW, provides: REPLAYABLE, needs: GEOMETRY,
+            features: abi::CADR_FEATURE_MULTI_DRAW, provides: REPLAYABLE | KEEPS_FRAME_SLOTS, needs: GEOMETRY,
         },
         submission Submit<INDIVIDUAL, INDIRECT, INLINE> {
             name: "individual-mdi",
             description: "Every part as an indirect command; one vkCmdDrawIndexedIndirect per pass (the seeds' indexedmdi).",
-            features: MDI_FEATURES, provides: REPLAYABLE, needs: GPU_DRAWS,
+            features: MDI_FEATURES, provides: REPLAYABLE | KEEPS_FRAME_SLOTS, needs: GPU_DRAWS,
         },
         submission Submit<JOIN, INDIRECT, INLINE> {
             name: "join-mdi",
             description: "Joined ranges as indirect commands; one multi-draw-indirect call per pass.",
-            features: MDI_FEATURES, provides: REPLAYABLE, needs: GPU_DRAWS,
+            features: MDI_FEATURES, provides: REPLAYABLE | KEEPS_FRAME_SLOTS, needs: GPU_DRAWS,
         },
         submission Submit<GROUPS, INDIRECT, INLINE> {
             name: "groups-mdi",
             description: "Material-group ranges as indirect commands; one multi-draw-indirect call per pass.",
-            features: MDI_FEATURES, provides: REPLAYABLE, needs: GPU_DRAWS,
+            features: MDI_FEATURES, provides: REPLAYABLE | KEEPS_FRAME_SLOTS, needs: GPU_DRAWS,
         },
         submission Submit<INDIVIDUAL, INDIRECT_COUNT, INLINE> {
             name: "individual-indirect-count",
             description: "Indirect commands with the count read from a buffer; with a gpu- culler, one vkCmdDrawIndexedIndirectCount per pass of the commands the GPU wrote.",
-            features: COUNT_FEATURES, provides: abi::CADR_TRAIT_DRAWS_GPU_COMMANDS | REPLAYABLE, needs: GPU_DRAWS,
+            features: COUNT_FEATURES, provides: abi::CADR_TRAIT_DRAWS_GPU_COMMANDS | REPLAYABLE | KEEPS_FRAME_SLOTS, needs: GPU_DRAWS,
         },
         submission Submit<JOIN, INDIRECT_COUNT, INLINE> {
             name: "join-indirect-count",
             description: "Joined ranges, indirect with the count read from a buffer.",
-            features: COUNT_FEATURES, provides: REPLAYABLE, needs: GPU_DRAWS,
+            features: COUNT_FEATURES, provides: REPLAYABLE | KEEPS_FRAME_SLOTS, needs: GPU_DRAWS,
         },
         submission Submit<GROUPS, INDIRECT_COUNT, INLINE> {
             name: "groups-indirect-count",
             description: "Material-group ranges, indirect with the count read from a buffer.",
-            features: COUNT_FEATURES, provides: REPLAYABLE, needs: GPU_DRAWS,
+            features: COUNT_FEATURES, provides: REPLAYABLE | KEEPS_FRAME_SLOTS, needs: GPU_DRAWS,
         },
         submission Submit<INDIVIDUAL, GENERATED, INLINE> {
             name: "dgc",
             description: "Device-generated commands (VK_EXT_device_generated_commands): each pass's indirect commands, written by a gpu- culler or from the part list, run as a generated command stream whose length the GPU reads.",
-            features: DGC_FEATURES, provides: abi::CADR_TRAIT_DRAWS_GPU_COMMANDS | REPLAYABLE, needs: GPU_DRAWS,
+            features: DGC_FEATURES, provides: abi::CADR_TRAIT_DRAWS_GPU_COMMANDS | REPLAYABLE | KEEPS_FRAME_SLOTS, needs: GPU_DRAWS,
         },
         submission Submit<INDIVIDUAL, DIRECT, REPLAY> {
             name: "individual-replay",
             description: "One draw per part recorded once into a secondary command buffer and replayed while nothing changes (the seeds' token buffer).",
-            features: 0, provides: SECONDARY | REPLAYABLE, needs: 0,
+            features: 0, provides: SECONDARY | REPLAYABLE | KEEPS_FRAME_SLOTS, needs: 0,
         },
         submission Submit<GROUPS, DIRECT, REPLAY> {
             name: "groups-replay",
             description: "Material groups recorded once and replayed while nothing changes.",
-            features: 0, provides: SECONDARY | REPLAYABLE, needs: 0,
+            features: 0, provides: SECONDARY | REPLAYABLE | KEEPS_FRAME_SLOTS, needs: 0,
         },
         submission Submit<GROUPS, INDIRECT, REPLAY> {
             name: "groups-mdi-replay",
             description: "Material-group multi-draw-indirect recorded once and replayed; changes rewrite only the indirect buffer's contents.",
-            features: MDI_FEATURES, provides: SECONDARY | REPLAYABLE, needs: GPU_DRAWS,
+            features: MDI_FEATURES, provides: SECONDARY | REPLAYABLE | KEEPS_FRAME_SLOTS, needs: GPU_DRAWS,
         },
         submission Submit<INDIVIDUAL, DIRECT, THREADS> {
             name: "individual-threads",

@@ -450,8 +450,13 @@ fn begin_secondary(
         .depth_attachment_format(gpu.formats.1)
         .rasterization_samples(samples);
     let inheritance = vk::CommandBufferInheritanceInfo::default().push_next(&mut rendering);
+    // Simultaneous use: a recording replayed while nothing changes is executed by the primary
+    // buffers of several frames in flight at once.
     let begin = vk::CommandBufferBeginInfo::default()
-        .flags(vk::CommandBufferUsageFlags::RENDER_PASS_CONTINUE)
+        .flags(
+            vk::CommandBufferUsageFlags::RENDER_PASS_CONTINUE
+                | vk::CommandBufferUsageFlags::SIMULTANEOUS_USE,
+        )
         .inheritance_info(&inheritance);
     let area = vk::Rect2D {
         offset: vk::Offset2D::default(),

@@ -1368,13 +1368,16 @@ enum CadrResult cadr_renderer_pick_rect(CadrRenderer renderer,
 void cadr_pick_result_free(struct CadrPickResult *result);
 
 // Sets how many frames the GPU may have: 1 waits for each frame before
-// `cadr_renderer_render` returns (its GPU time is then that frame's); 2 returns once the frame
-// is submitted and waits for it when the next frame begins, or when its pixels or a pick are
-// read, so the host's work and the next frame's scene update overlap the GPU's drawing (the
-// statistics' GPU time is then the previous frame's). Window renderers start with 2,
-// offscreen ones with 1.
+// `cadr_renderer_render` returns (its GPU time is then that frame's). 2 or 3 return once the
+// frame is submitted, so the host's work and the next frames' scene updates overlap the GPU's
+// drawing; its pixels or a pick wait for it when read. Each frame in flight has its own
+// command buffers and uniforms: a frame waits only for the one that used its slot before
+// when nothing but the camera changed since the last frame and every active technique keeps
+// its per-frame data per slot (cadr's own do, but the `-threads` submissions); otherwise it
+// waits for every earlier frame. The statistics' GPU time is then that of the latest frame
+// known to have finished. Window renderers start with 2, offscreen ones with 1.
 //
-// Returns `CADR_RESULT_OK`, `CADR_RESULT_INVALID_ARGUMENT` (not 1 or 2), `CADR_RESULT_VULKAN`
+// Returns `CADR_RESULT_OK`, `CADR_RESULT_INVALID_ARGUMENT` (not 1 to 3), `CADR_RESULT_VULKAN`
 // or a handle error. Ownership: nothing changes hands. Thread-safety: as
 // `cadr_renderer_create`.
 enum CadrResult cadr_renderer_set_frames_in_flight(CadrRenderer renderer, uint32_t frames);

@@ -2,14 +2,14 @@
  *
  *   viewer [scene]                   (default gen:demo; .gltf/.glb/.csf/.csf.gz or gen:NAME)
  *   viewer [scene] --self-test DIR   scripted run for the tests (see below)
- *   viewer [scene] [--frames-in-flight 1|2] [--present fifo|mailbox|immediate]
+ *   viewer [scene] [--frames-in-flight 1|2|3] [--present fifo|mailbox|immediate]
  *                  [--msaa N] [--orbit-frames N]
  *
  * Mouse: left drag orbits, right or middle drag pans, the wheel zooms; a left click selects
  *        the part under the cursor (highlighted; a click on the background clears it).
  * Keys:  V, P, S, C cycle the vertex path, parameter path, submission and culling technique;
  *        E cycles the display modes (solid, edges, hidden-line, wireframe, xray); T cycles the
- *        transparency methods; F fits the view; I toggles 1 / 2 frames in flight;
+ *        transparency methods; F fits the view; I cycles 1 / 2 / 3 frames in flight;
  *        M cycles the present modes the window offers; X cycles a section plane through the
  *        view's centre across x, y, z and off; K toggles its caps, H their hatching;
  *        D toggles dashed hidden edges in hidden-line; O toggles ambient occlusion;
@@ -279,8 +279,9 @@ static void toggle_ssao(struct Viewer *v) {
 static void toggle_frames_in_flight(struct Viewer *v) {
   uint32_t frames = 1;
   CADR_CHECK(cadr_renderer_frames_in_flight(v->renderer, &frames));
-  CADR_CHECK(cadr_renderer_set_frames_in_flight(v->renderer, frames == 1 ? 2 : 1));
-  printf("frames in flight: %u\n", frames == 1 ? 2 : 1);
+  frames = frames % 3 + 1;
+  CADR_CHECK(cadr_renderer_set_frames_in_flight(v->renderer, frames));
+  printf("frames in flight: %u\n", frames);
 }
 
 /* The next present mode the window offers after the current one. */
@@ -516,7 +517,7 @@ static int self_test(struct Viewer *v, const char *dir) {
       CADR_CHECK(cadr_renderer_msaa(v->renderer, &samples, NULL));
     } while (samples > 1);
   }
-  /* Every present mode the window offers, with one and two frames in flight. */
+  /* Every present mode the window offers, with one, two and three frames in flight. */
   {
     uint32_t mode, offered = 0, frames;
     CADR_CHECK(cadr_renderer_present_mode(v->renderer, NULL, &offered));
@@ -524,7 +525,7 @@ static int self_test(struct Viewer *v, const char *dir) {
     for (mode = 0; mode < 3; ++mode) {
       if (offered & (1u << mode)) {
         printf(" %s", present_names[mode]);
-        for (frames = 1; frames <= 2; ++frames) {
+        for (frames = 1; frames <= 3; ++frames) {
           CADR_CHECK(cadr_renderer_set_frames_in_flight(v->renderer, frames));
           CADR_CHECK(cadr_renderer_set_present_mode(v->renderer, mode));
           render(v);

@@ -97,6 +97,14 @@ CADR_EXPORT CadrStatus cadr_plugin_entry(CadrPluginLibrary *library) {
     technique.name = "c-candidates";
     technique.description = "Written in C: draws every candidate.";
     technique.vtable = &vtable;
+    /* It writes nothing the GPU reads, so it keeps its per-frame data per frame slot as it is.
+     * Built against the 1.0 header, the same bit is set by the number it has today: in 1.0 it
+     * meant nothing, and a host must not take it as the announcement 1.15 introduced. */
+#if defined(CADR_TRAIT_FRAME_SLOTS)
+    technique.provides = CADR_TRAIT_FRAME_SLOTS;
+#else
+    technique.provides = (CadrTraitBits)1 << 10;
+#endif
 #if defined(CADR_FIXTURE_NEWER_MINOR)
     newer.added_by_the_next_minor = 0xffffffffffffffffu;
     technique.size = sizeof newer;

@@ -932,7 +932,13 @@ static void test_renderer(CadrContext context, struct Built *b) {
     OK(cadr_renderer_render(renderer, b->scene, &camera, &stats));
     OK(cadr_renderer_read_pixels(renderer, second, W * H * 4));
     CHECK(pixel_difference(first, second, W * H * 4) == 0);
-    EXPECT(cadr_renderer_set_frames_in_flight(renderer, 3), CADR_RESULT_INVALID_ARGUMENT);
+    OK(cadr_renderer_set_frames_in_flight(renderer, 3));
+    OK(cadr_renderer_render(renderer, b->scene, &camera, &stats));
+    OK(cadr_renderer_render(renderer, b->scene, &camera, &stats));
+    OK(cadr_renderer_render(renderer, b->scene, &camera, &stats));
+    OK(cadr_renderer_read_pixels(renderer, second, W * H * 4));
+    CHECK(pixel_difference(first, second, W * H * 4) == 0);
+    EXPECT(cadr_renderer_set_frames_in_flight(renderer, 4), CADR_RESULT_INVALID_ARGUMENT);
     MESSAGE_HAS("frames in flight");
     EXPECT(cadr_renderer_set_frames_in_flight(renderer, 0), CADR_RESULT_INVALID_ARGUMENT);
     OK(cadr_renderer_set_frames_in_flight(renderer, 1));

@@ -360,14 +360,14 @@ fn viewer_orbits_with_frames_in_flight_and_reports_frames_per_second() {
             "--orbit-frames",
             "12",
             "--frames-in-flight",
-            "2",
+            "3",
         ])
         .env("DISPLAY", &display.name)
         .output()
         .unwrap();
     assert!(output.status.success(), "{}", describe(&output));
     let text = String::from_utf8_lossy(&output.stdout);
-    assert!(text.contains("| 2 in flight, fifo |"), "{text}");
+    assert!(text.contains("| 3 in flight, fifo |"), "{text}");
     let fps: f64 = text
         .lines()
         .find_map(|l| l.strip_prefix("orbit: 12 frames, "))

@@ -1,6 +1,8 @@
-//! Frames in flight: with two, a frame returns once submitted and the next one (or a readback,
-//! a pick, an edit) waits for it. The pictures must be those of waiting for every frame, edits
-//! included, with GPU times read a frame late and no validation error.
+//! Frames in flight: with two or three, a frame returns once submitted; the next one waits only
+//! for the frame that last used its slot when nothing but the view changed and every technique
+//! keeps frame slots, for every earlier frame otherwise (and so do a readback, a pick, an
+//! edit). The pictures must be those of waiting for every frame, edits included, with GPU
+//! times read late, frames that overlap where they may, and no validation error.
 #![allow(clippy::unwrap_used)] // Test code: a failed unwrap is a failed test.
 
 use cadr_core::generate::{generate, GeneratorSpec};
@@ -19,11 +21,12 @@ use glam::{DMat4, DVec3};
 
 const SIZE: (u32, u32) = (128, 96);
 
-/// What a run showed: the picture after every third frame, each frame's GPU time, and what the
-/// pick at the centre hit at the end.
+/// What a run showed: the picture after every third frame, each frame's GPU time and whether
+/// it overlapped earlier frames, and what the pick at the centre hit at the end.
 struct Run {
     pictures: Vec<image::RgbaImage>,
     gpu_us: Vec<Option<f64>>,
+    overlapped: Vec<bool>,
     picked: Option<u32>,
 }
 
@@ -46,6 +49,7 @@ fn orbit(combination: &Combination, frames_in_flight: u32) -> Run {
     let mut run = Run {
         pictures: Vec::new(),
         gpu_us: Vec::new(),
+        overlapped: Vec::new(),
         picked: None,
     };
     let mut camera = Camera::fit(&bounds, aspect, cadr_core::render::DEFAULT_DIRECTION);
@@ -58,6 +62,7 @@ fn orbit(combination: &Combination, frames_in_flight: u32) -> Run {
         camera = Camera::orbit(&bounds, aspect, frame as f64 / 30.0, 1.3);
         let stats = view.render(&graph, &mut tree, &camera).unwrap();
         run.gpu_us.push(stats.gpu_us);
+        run.overlapped.push(stats.overlapped);
         if frame % 3 == 2 {
             run.pictures.push(view.renderer().read_rgba8().unwrap());
         }
@@ -72,15 +77,19 @@ fn orbit(combination: &Combination, frames_in_flight: u32) -> Run {
         .unwrap();
     run.picked = hits.first().map(|hit| hit.instance);
     assert!(
-        view.renderer_mut().set_frames_in_flight(3).is_err(),
-        "at most 2 frames in flight"
+        view.renderer_mut().set_frames_in_flight(4).is_err(),
+        "at most 3 frames in flight"
     );
     assert_no_validation_errors(&device);
     run
 }
 
+/// Frames of a run that never overlap earlier ones: the first (there is none) and the lift's
+/// (frame 5 uploads the moved matrices, and the scene changed).
+const WAITING_FRAMES: [usize; 2] = [0, 5];
+
 #[test]
-fn two_frames_in_flight_draw_and_pick_what_waiting_for_each_frame_does() {
+fn frames_in_flight_draw_and_pick_what_waiting_for_each_frame_does() {
     // Lavapipe runs submissions one after another, so a missing barrier between overlapping
     // frames would not show in the pictures: the synchronization checks of the validation
     // layer look for them (this test runs in a process of its own).
@@ -88,29 +97,58 @@ fn two_frames_in_flight_draw_and_pick_what_waiting_for_each_frame_does() {
         "VK_LAYER_ENABLES",
         "VK_VALIDATION_FEATURE_ENABLE_SYNCHRONIZATION_VALIDATION_EXT",
     );
-    for combination in [
-        Combination::built_in(),
-        scene_wide("individual-indirect-count", "gpu-occlusion"),
-        scene_wide("groups-mdi-replay", "frustum"),
+    for (combination, keeps_frame_slots) in [
+        (Combination::built_in(), true),
+        (
+            scene_wide("individual-indirect-count", "gpu-occlusion"),
+            true,
+        ),
+        (scene_wide("groups-mdi-replay", "frustum"), true),
+        // Records its secondary buffers every frame: one frame at a time.
+        (scene_wide("individual-threads", "none"), false),
     ] {
         let waited = orbit(&combination, 1);
-        let overlapped = orbit(&combination, 2);
-        for (index, (a, b)) in waited.pictures.iter().zip(&overlapped.pictures).enumerate() {
-            let difference = compare(b, a).unwrap();
+        assert!(!waited.overlapped.iter().any(|&o| o), "{combination}");
+        for frames in [2, 3] {
+            let overlapped = orbit(&combination, frames);
+            for (index, (a, b)) in waited.pictures.iter().zip(&overlapped.pictures).enumerate() {
+                let difference = compare(b, a).unwrap();
+                assert!(
+                    difference.within(SAME_PICTURE),
+                    "{combination}, {frames} in flight, picture {index}: {difference:?}"
+                );
+            }
+            assert_eq!(waited.picked, overlapped.picked, "{combination}");
             assert!(
-                difference.within(SAME_PICTURE),
-                "{combination}, picture {index}: {difference:?}"
+                waited.picked.is_some(),
+                "{combination}: the centre shows a part"
             );
-        }
-        assert_eq!(waited.picked, overlapped.picked, "{combination}");
-        assert!(
-            waited.picked.is_some(),
-            "{combination}: the centre shows a part"
-        );
-        // Waiting, each frame knows its own GPU time; in flight, the one before's.
-        if waited.gpu_us.iter().all(Option::is_some) {
-            assert_eq!(overlapped.gpu_us[0], None, "{combination}");
-            assert!(overlapped.gpu_us[1..].iter().all(Option::is_some));
+            // Waiting, each frame knows its own GPU time; in flight, that of an earlier one
+            // known to have finished: none before the first frame has, which takes at most as
+            // many frames as are in flight.
+            if waited.gpu_us.iter().all(Option::is_some) {
+                assert_eq!(overlapped.gpu_us[0], None, "{combination}");
+                assert!(
+                    overlapped.gpu_us[frames as usize..]
+                        .iter()
+                        .all(Option::is_some),
+                    "{combination}, {frames} in flight: {:?}",
+                    overlapped.gpu_us
+                );
+            }
+            // Frustum culling on the CPU changes what is drawn as the camera turns, so its
+            // frames overlap only where the drawn parts stay the same.
+            let culls_on_the_cpu = combination.to_string().contains("frustum");
+            for (frame, &overlaps) in overlapped.overlapped.iter().enumerate() {
+                if WAITING_FRAMES.contains(&frame) || !keeps_frame_slots {
+                    assert!(
+                        !overlaps,
+                        "{combination}, {frames} in flight, frame {frame}"
+                    );
+                } else if !culls_on_the_cpu {
+                    assert!(overlaps, "{combination}, {frames} in flight, frame {frame}");
+                }
+            }
         }
     }
 }

@@ -598,8 +598,8 @@ fn build_c_plugin_defining(
 /// The plugin ABI's compatibility matrix: a C technique built for this minor, for the oldest
 /// (1.0, against the header as released) and for a newer one (one minor more, a longer
 /// technique description, an extension this host does not know) loads and draws what the
-/// baseline draws; built for the newer minor and requiring that extension, it is refused,
-/// naming the extension.
+/// baseline draws, and lets frames overlap when its minor has frame slots; built for the newer
+/// minor and requiring that extension, it is refused, naming the extension.
 #[test]
 fn c_techniques_of_older_and_newer_abi_minors_plug_in_unless_they_require_the_unknown() {
     let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
@@ -659,6 +659,17 @@ fn c_techniques_of_older_and_newer_abi_minors_plug_in_unless_they_require_the_un
         };
         f.techniques.select(&combination).unwrap();
         f.assert_matches_baseline(name);
+        // Frames overlap earlier ones only where every technique keeps frame slots: the
+        // fixture announces it from 1.15 on; at 1.0 the same bit meant nothing.
+        f.renderer.set_frames_in_flight(3).unwrap();
+        let overlapped: Vec<bool> = (0..4).map(|_| f.try_render().unwrap().overlapped).collect();
+        f.renderer.set_frames_in_flight(1).unwrap();
+        let announces = version.1 >= 15;
+        assert_eq!(
+            overlapped,
+            [false, announces, announces, announces],
+            "{name}"
+        );
         drop(f.techniques);
         assert_no_validation_errors(&f.device);
     }

@@ -131,7 +131,7 @@ impl<'a> GpuCuller<'a> {
         scene: &abi::CadrSceneView,
         (passes, filters): (&[abi::CadrPass], &PassFilters),
         gpu_view: &abi::CadrGpuCullView,
-        view_buffer: vk::Buffer,
+        (view_buffer, view_offset): (vk::Buffer, u64),
         depth: Option<PhaseDepth>,
     ) -> RenderResult<()> {
         self.draws.fill(abi::CadrGpuDraws::default());
@@ -167,7 +167,7 @@ impl<'a> GpuCuller<'a> {
             depth_layout: depth.map_or(0, |d| d.layout.as_raw()),
             min_pixels: gpu_view.sub_pixel[0],
             view_buffer: view_buffer.as_raw(),
-            view_offset: 0,
+            view_offset,
             pass_filters: filters.filters.as_ptr(),
             section_plane_count: gpu_view.section[0],
             section_planes: gpu_view.section_planes,

@@ -6,17 +6,19 @@
 //! GPU culler's phases; `passes.rs` turns the frame's shape into its ordered list of passes
 //! (preparation, culling phases, surfaces, the passes over the picture, the pick readback);
 //! `record.rs` records each pass and submits the frame (or replays an unchanged frame's
-//! recording); `output.rs` reads the image back and writes PNGs. The pieces it draws with (camera, sections, targets, pipelines over the picture)
+//! recording); `slots.rs` keeps what each frame in flight owns and decides how long a frame
+//! waits for earlier ones; `output.rs` reads the image back and writes PNGs. The pieces it draws with (camera, sections, targets, pipelines over the picture)
 //! are in [`crate::render`].
 
 mod gpu_cull;
 mod output;
 mod passes;
 mod record;
+mod slots;
 mod techniques;
 
 pub use output::SaveError;
-pub use record::MAX_FRAMES_IN_FLIGHT;
+pub use slots::MAX_FRAMES_IN_FLIGHT;
 
 use std::sync::Arc;
 
@@ -28,29 +30,24 @@ use crate::render::pick::{self, PickTarget, PixelRect};
 use crate::render::pixel_keys::PixelKeys;
 use crate::render::transparency::{storage_buffer, TransparencyTargets};
 use crate::render::{
-    Background, FrameStats, FrameUniforms, HighlightStyle, Palette, Pipelines, Section,
-    TEXTURE_TABLE_BINDING,
+    Background, HighlightStyle, Palette, Pipelines, Section, TEXTURE_TABLE_BINDING,
 };
-use crate::vk::{
-    Buffer, CommandContext, DescriptorSets, Device, GpuTimer, Image, MemoryLocation,
-    OffscreenTarget,
-};
+use crate::vk::{Buffer, DescriptorSets, Device, Image, MemoryLocation, OffscreenTarget};
+use slots::{FrameSlots, CULL_VIEW_STRIDE};
 
 /// Renders scenes into an offscreen color + depth target.
 pub struct Renderer {
     device: Arc<Device>,
     target: OffscreenTarget,
-    frame_uniforms: Buffer,
     pipelines: Pipelines,
+    /// One frame set per frame slot (set `i` names slot `i`'s uniforms at binding 0; every
+    /// other binding names the same resources in all of them).
     frame_sets: DescriptorSets,
-    /// What GPU cullers read of the view (`CadrGpuCullView`), host-written every frame.
+    /// What GPU cullers read of the view (`CadrGpuCullView`), host-written every frame, one
+    /// per frame slot [`CULL_VIEW_STRIDE`] bytes apart.
     cull_view: Buffer,
-    commands: CommandContext,
-    timers: FrameTimers,
-    replay: ReplayState,
-    /// Frames the GPU may work on while the CPU prepares the next (see
-    /// [`Renderer::set_frames_in_flight`]).
-    frames_in_flight: u32,
+    /// The frames in flight and what each owns.
+    slots: FrameSlots,
     /// The storage the frame set names while no method's storage is made.
     placeholder_storage: Buffer,
     /// The generation of the GPU scene resources the frame set names, if any.
@@ -77,27 +74,6 @@ struct FrameSettings {
     highlight_style: HighlightStyle,
 }
 
-/// The GPU timers of a frame.
-struct FrameTimers {
-    /// The GPU time of a frame's pass (the main command buffer).
-    pass: Option<GpuTimer>,
-    /// The GPU time of a frame's uploads (the prologue submitted ahead of the main buffer).
-    uploads: Option<GpuTimer>,
-}
-
-/// What lets an unchanged frame be submitted again instead of recorded.
-#[derive(Default)]
-struct ReplayState {
-    /// Whether the last submission carried an upload prologue (its GPU time is the frame's
-    /// too).
-    last_submission_uploaded: bool,
-    /// The replay key of the last recorded frame, if it had one.
-    last_recorded: Option<u64>,
-    /// The frame in the command buffer, if it may be submitted again as it is: its replay
-    /// key and what it drew.
-    replayable: Option<(u64, FrameStats)>,
-}
-
 /// What frames make on first need besides the picture, kept while the size (and method)
 /// stays the same.
 #[derive(Default)]
@@ -119,49 +95,36 @@ impl Renderer {
     /// Creates a renderer with a `width` × `height` target.
     pub fn new(device: &Arc<Device>, width: u32, height: u32) -> RenderResult<Self> {
         let target = OffscreenTarget::new(device, width, height, 1)?;
-        let frame_uniforms = Buffer::new(
-            device,
-            "frame uniforms",
-            std::mem::size_of::<FrameUniforms>() as u64,
-            vk::BufferUsageFlags::UNIFORM_BUFFER,
-            MemoryLocation::CpuToGpu,
-        )?;
         let pipelines = Pipelines::new(device, passes::OVERLAY_PASSES.len())?;
-        let frame_sets = DescriptorSets::new(device, "frame", &[pipelines.frame_set_layout()])?;
-        frame_sets.write_buffer(
-            0,
-            0,
-            vk::DescriptorType::UNIFORM_BUFFER,
-            frame_uniforms.raw(),
-            vk::WHOLE_SIZE,
-        );
+        let slots = FrameSlots::new(device)?;
+        let layouts = vec![pipelines.frame_set_layout(); slots.all().len()];
+        let frame_sets = DescriptorSets::new(device, "frame", &layouts)?;
+        for (index, slot) in slots.all().iter().enumerate() {
+            frame_sets.write_buffer(
+                index,
+                0,
+                vk::DescriptorType::UNIFORM_BUFFER,
+                slot.uniforms.raw(),
+                vk::WHOLE_SIZE,
+            );
+        }
         let placeholder_storage = storage_buffer(device, 0)?;
         name_storage(&frame_sets, &placeholder_storage);
         name_pixel_keys(&frame_sets, &placeholder_storage);
         let cull_view = Buffer::new(
             device,
             "gpu cull view",
-            std::mem::size_of::<cadr_plugin_abi::CadrGpuCullView>() as u64,
+            CULL_VIEW_STRIDE * slots.all().len() as u64,
             vk::BufferUsageFlags::UNIFORM_BUFFER,
             MemoryLocation::CpuToGpu,
         )?;
-        let commands = CommandContext::new(device, "frame commands")?;
-        let timer = GpuTimer::new(device, "frame timer")?;
-        let upload_timer = GpuTimer::new(device, "frame upload timer")?;
         Ok(Self {
             device: Arc::clone(device),
             target,
-            frame_uniforms,
             pipelines,
             frame_sets,
             cull_view,
-            commands,
-            timers: FrameTimers {
-                pass: timer,
-                uploads: upload_timer,
-            },
-            replay: ReplayState::default(),
-            frames_in_flight: 1,
+            slots,
             placeholder_storage,
             bound_scene: None,
             settings: FrameSettings {
@@ -217,7 +180,7 @@ impl Renderer {
     /// draws with it.
     pub fn set_ssao(&mut self, on: bool) -> RenderResult<()> {
         if on != self.settings.ssao {
-            self.commands.wait()?;
+            self.finish()?;
             // The recorded frame has (or lacks) the occlusion pass.
             self.forget_recording();
             self.settings.ssao = on;
@@ -240,7 +203,7 @@ impl Renderer {
     /// draws with it.
     pub fn set_silhouettes(&mut self, on: bool) -> RenderResult<()> {
         if on != self.settings.silhouettes {
-            self.commands.wait()?;
+            self.finish()?;
             // The recorded frame has (or lacks) the silhouettes pass.
             self.forget_recording();
             self.settings.silhouettes = on;
@@ -266,7 +229,7 @@ impl Renderer {
             )));
         }
         if style != self.settings.highlight_style {
-            self.commands.wait()?;
+            self.finish()?;
             // The recorded frame has (or lacks) the outline's clear and pass.
             self.forget_recording();
             self.settings.highlight_style = style;
@@ -297,29 +260,9 @@ impl Renderer {
         }
         self.finish()?;
         self.forget_recording();
-        let storage = vk::DescriptorType::STORAGE_BUFFER;
-        let sets = &self.frame_sets;
-        sets.write_buffer(0, 2, storage, resources.records, vk::WHOLE_SIZE);
-        sets.write_buffer(0, 3, storage, resources.material_textures, vk::WHOLE_SIZE);
-        sets.write_buffer(0, 4, storage, resources.vertex_attributes, vk::WHOLE_SIZE);
-        match resources.textures {
-            TextureBindings::Array(view) => {
-                sets.write_combined_image(0, 5, view, resources.linear_sampler);
-                sets.write_combined_image(0, 6, view, resources.nearest_sampler);
-            }
-            TextureBindings::Table(views) => {
-                sets.write_sampler(0, 5, resources.linear_sampler);
-                sets.write_sampler(0, 6, resources.nearest_sampler);
-                // Runs of filled slots, one write each; empty slots stay unwritten (the
-                // table is partially bound, and no material names them).
-                let mut first = 0;
-                for run in views.split(|view| *view == vk::ImageView::null()) {
-                    sets.write_sampled_images(0, TEXTURE_TABLE_BINDING, first, run);
-                    first += run.len() as u32 + 1;
-                }
-            }
+        for set in 0..self.frame_sets.sets.len() {
+            name_scene(&self.frame_sets, set, resources);
         }
-        sets.write_buffer(0, 8, storage, resources.cull_entries, vk::WHOLE_SIZE);
         self.bound_scene = Some(resources.generation);
         Ok(())
     }
@@ -327,8 +270,7 @@ impl Renderer {
     /// Forgets the frame in the command buffer: the next frame is recorded afresh, whatever
     /// its replay key (it would draw what no longer holds: other passes, bindings or targets).
     fn forget_recording(&mut self) {
-        self.replay.replayable = None;
-        self.replay.last_recorded = None;
+        self.slots.forget_recordings();
     }
 
     /// The depth set of the passes over the picture for the current target (the GPU is
@@ -394,7 +336,7 @@ impl Renderer {
         if (width, height) == self.size() {
             return Ok(());
         }
-        self.commands.wait()?;
+        self.finish()?;
         // The recorded frame draws into the old target: never submit it again.
         self.forget_recording();
         self.target = OffscreenTarget::new(&self.device, width, height, self.msaa())?;
@@ -441,32 +383,35 @@ impl Renderer {
     }
 
     /// How many frames the GPU may have: 1 (the default) waits for each frame before
-    /// returning from it, so its GPU time is known and its picture ready; 2 returns as soon as
-    /// the frame is submitted and waits for it when the next frame begins (or when its picture
-    /// or pick is read), so the host's work, scene updates and CPU culling for the next frame
-    /// overlap the GPU's drawing. With 2, [`FrameStats::gpu_us`] is the previous frame's.
+    /// returning from it, so its GPU time is known and its picture ready. With 2 or 3 a frame
+    /// returns as soon as it is submitted (its picture or pick is waited for when read), so
+    /// the host's work for the next frames overlaps the GPU's drawing; each frame has its own
+    /// command buffers, uniforms and timers (a frame slot), and a frame waits only for the
+    /// one that used its slot before, `frames` frames ago, when nothing but the view changed
+    /// since the last frame and every active technique keeps its per-frame data per slot
+    /// (`CADR_TRAIT_FRAME_SLOTS`, which cadr's own techniques announce, but the `-threads`
+    /// submissions). Otherwise (the scene or the passes changed, the frame uploads moved
+    /// parts, picks, or a technique keeps one copy) it waits for every earlier frame, as
+    /// with 1. With more than 1, [`FrameStats::gpu_us`] is the GPU time of the latest frame
+    /// known to have finished. Lowering the count waits for every frame.
     pub fn set_frames_in_flight(&mut self, frames: u32) -> RenderResult<()> {
         if !(1..=MAX_FRAMES_IN_FLIGHT).contains(&frames) {
             return Err(RenderError::InvalidUse(format!(
                 "{frames} frames in flight: expected 1 to {MAX_FRAMES_IN_FLIGHT}"
             )));
         }
-        if frames == 1 {
-            self.finish()?;
-        }
-        self.frames_in_flight = frames;
-        Ok(())
+        Ok(self.slots.set_in_flight(frames)?)
     }
 
     /// How many frames the GPU may have (see [`Renderer::set_frames_in_flight`]).
     pub fn frames_in_flight(&self) -> u32 {
-        self.frames_in_flight
+        self.slots.in_flight()
     }
 
-    /// Waits until the GPU has finished the last frame (its picture, pick results and
+    /// Waits until the GPU has finished every frame (their pictures, pick results and
     /// buffers are then the host's to read or change).
     pub fn finish(&self) -> RenderResult<()> {
-        Ok(self.commands.wait()?)
+        Ok(self.slots.wait_all()?)
     }
 
     /// The color image of the last frame (in TRANSFER_SRC_OPTIMAL between frames), for
@@ -515,9 +460,26 @@ impl Renderer {
         }
     }
 
-    /// The buffer GPU cullers read the view from (`CadrGpuCullView` at offset 0).
-    pub(crate) fn cull_view_buffer(&self) -> vk::Buffer {
-        self.cull_view.raw()
+    /// The buffer GPU cullers read the view from and the offset of the current frame's
+    /// `CadrGpuCullView` in it.
+    pub(crate) fn cull_view_buffer(&self) -> (vk::Buffer, u64) {
+        let offset = CULL_VIEW_STRIDE * self.slots.current_index() as u64;
+        (self.cull_view.raw(), offset)
+    }
+
+    /// The frame slot of the frame being recorded, as techniques see it on the scene view.
+    pub(crate) fn frame_slot(&self) -> cadr_plugin_abi::CadrFrameSlot {
+        cadr_plugin_abi::CadrFrameSlot {
+            header: cadr_plugin_abi::CadrExtension {
+                size: std::mem::size_of::<cadr_plugin_abi::CadrFrameSlot>() as u32,
+                kind: cadr_plugin_abi::CADR_EXTENSION_FRAME_SLOT,
+                next: std::ptr::null(),
+            },
+            slot: self.slots.current_index() as u32,
+            slot_count: self.slots.in_flight(),
+            earlier_frames_finished: u32::from(self.slots.earlier_frames_finished()),
+            reserved: 0,
+        }
     }
 
     /// Forgets the pixel keys; the frame set names the placeholder storage there again.
@@ -534,9 +496,9 @@ impl Renderer {
         }
     }
 
-    /// The frame uniforms' descriptor set (set 0 of every pipeline).
+    /// The frame set of the frame being recorded (set 0 of every pipeline).
     pub(crate) fn frame_set(&self) -> vk::DescriptorSet {
-        self.frame_sets.sets[0]
+        self.frame_sets.sets[self.slots.current_index()]
     }
 
     /// The frame's depth image, as a later phase reads it (in [`SUSPENDED_DEPTH_LAYOUT`]).
@@ -545,33 +507,61 @@ impl Renderer {
     }
 }
 
-/// Points the frame set's binding 1 at `storage`, the transparency method's storage (the
-/// caller makes sure no submitted frame uses the set).
-fn name_storage(frame_sets: &DescriptorSets, storage: &Buffer) {
-    frame_sets.write_buffer(
-        0,
-        1,
-        vk::DescriptorType::STORAGE_BUFFER,
-        storage.raw(),
-        vk::WHOLE_SIZE,
-    );
+/// Points set `set` of the frame sets at the scene's `resources` (bindings 2–6, 8 and the
+/// texture table 9).
+fn name_scene(frame_sets: &DescriptorSets, set: usize, resources: &FrameResources) {
+    let storage = vk::DescriptorType::STORAGE_BUFFER;
+    frame_sets.write_buffer(set, 2, storage, resources.records, vk::WHOLE_SIZE);
+    frame_sets.write_buffer(set, 3, storage, resources.material_textures, vk::WHOLE_SIZE);
+    frame_sets.write_buffer(set, 4, storage, resources.vertex_attributes, vk::WHOLE_SIZE);
+    match resources.textures {
+        TextureBindings::Array(view) => {
+            frame_sets.write_combined_image(set, 5, view, resources.linear_sampler);
+            frame_sets.write_combined_image(set, 6, view, resources.nearest_sampler);
+        }
+        TextureBindings::Table(views) => {
+            frame_sets.write_sampler(set, 5, resources.linear_sampler);
+            frame_sets.write_sampler(set, 6, resources.nearest_sampler);
+            // Runs of filled slots, one write each; empty slots stay unwritten (the table is
+            // partially bound, and no material names them).
+            let mut first = 0;
+            for run in views.split(|view| *view == vk::ImageView::null()) {
+                frame_sets.write_sampled_images(set, TEXTURE_TABLE_BINDING, first, run);
+                first += run.len() as u32 + 1;
+            }
+        }
+    }
+    frame_sets.write_buffer(set, 8, storage, resources.cull_entries, vk::WHOLE_SIZE);
 }
 
-/// Names `storage` as the pixel keys (binding 7 of the frame set).
+/// Points binding 1 of every frame set at `storage`, the transparency method's storage (the
+/// caller makes sure no submitted frame uses the sets).
+fn name_storage(frame_sets: &DescriptorSets, storage: &Buffer) {
+    name_in_every_set(frame_sets, 1, storage);
+}
+
+/// Names `storage` as the pixel keys (binding 7 of every frame set).
 fn name_pixel_keys(frame_sets: &DescriptorSets, storage: &Buffer) {
-    frame_sets.write_buffer(
-        0,
-        7,
-        vk::DescriptorType::STORAGE_BUFFER,
-        storage.raw(),
-        vk::WHOLE_SIZE,
-    );
+    name_in_every_set(frame_sets, 7, storage);
+}
+
+/// Points storage-buffer `binding` of every frame set at `storage` (whole range).
+fn name_in_every_set(frame_sets: &DescriptorSets, binding: u32, storage: &Buffer) {
+    for set in 0..frame_sets.sets.len() {
+        frame_sets.write_buffer(
+            set,
+            binding,
+            vk::DescriptorType::STORAGE_BUFFER,
+            storage.raw(),
+            vk::WHOLE_SIZE,
+        );
+    }
 }
 
 impl Drop for Renderer {
     fn drop(&mut self) {
         // Resources are destroyed by their own Drop; make sure the GPU is done with them.
-        let _ = self.commands.wait();
+        let _ = self.slots.wait_all();
     }
 }
 

@@ -1,7 +1,7 @@
 //! Recording and submitting a frame: its plan ([`FramePlan`]), the shape it takes from the
 //! renderer's settings, the list of passes that follows from it (`passes.rs`), the recorders
 //! techniques contribute to those passes ([`FrameRecorders`]), the recording of each pass,
-//! the replay of an unchanged frame's recording, and frames in flight.
+//! the replay of an unchanged frame's recording, in the frame slot `slots.rs` hands it.
 
 use std::time::Instant;
 
@@ -22,16 +22,12 @@ use super::passes::{
     FramePass, FramePasses, FrameShape, OverlayDraw, PassTarget, Resources, SilhouetteSource,
     OVERLAY_PASSES,
 };
+use super::slots::{FrameWait, CULL_VIEW_STRIDE};
 use super::{name_pixel_keys, name_storage, opaque, Renderer};
 
 /// What the colour pass clears to: nothing drawn, no coverage (the background goes under
 /// it after the rendering).
 const UNCOVERED: [f32; 4] = [0.0; 4];
-
-/// The most frames a renderer lets the GPU work on while it prepares the next: techniques
-/// keep one copy of what they write on the host per frame, so the next frame's recording
-/// waits for the last one.
-pub const MAX_FRAMES_IN_FLIGHT: u32 = 2;
 
 /// How a frame is drawn: into which target, from which command buffers, in how many phases,
 /// and whether it may be replayed.
@@ -48,6 +44,12 @@ pub(crate) struct FramePlan<'a> {
     /// What the recording depends on, when the techniques allow a replay: a frame with the
     /// key of the last recorded one, recorded twice in a row, resubmits it.
     pub replay_key: Option<u64>,
+    /// What the frame's recording and the techniques' host writes depend on besides the view
+    /// (the commands key with the parameter values), none for a pick: a frame with the key of
+    /// the last one may run on the GPU while the next is recorded (see `slots.rs`).
+    pub frame_key: Option<u64>,
+    /// Whether every active technique keeps its per-frame data per frame slot.
+    pub keeps_frame_slots: bool,
     /// Whether the frame uploads scene data (recorded into the prologue, whether the frame
     /// is recorded or replayed).
     pub uploads_pending: bool,
@@ -175,11 +177,11 @@ impl Renderer {
         }
     }
 
-    /// Runs a frame: its passes planned from its shape, uniforms, command buffer, each pass
-    /// recorded in order (the techniques' where they contribute), submission, timings, and
-    /// with one frame in flight the wait for it (with two, the next frame waits instead). A
-    /// frame whose replay key is that of the recording in the command buffer submits it again
-    /// instead.
+    /// Runs a frame in the next frame slot: its passes planned from its shape, the wait for
+    /// earlier frames (`slots.rs`), uniforms, command buffer, each pass recorded in order (the
+    /// techniques' where they contribute), submission, timings, and with one frame in flight
+    /// the wait for it. A frame whose replay key is that of the recording in its slot's
+    /// command buffer submits it again instead.
     pub(crate) fn frame(
         &mut self,
         camera: &Camera,
@@ -194,7 +196,16 @@ impl Renderer {
             .replay_key
             .map(|key| crate::commands_key::mix(key, passes.key()));
         let uniforms = self.uniforms(camera, eye, display);
-        self.commands.wait()?;
+        let frame_key = plan
+            .frame_key
+            .map(|key| crate::commands_key::mix(key, passes.key()));
+        // The latest finished frame's GPU time, read now that it is done anyway.
+        let (slot, previous_gpu_us) = self.slots.begin_frame(FrameWait {
+            frame_key,
+            replay_key,
+            keeps_slots: plan.keeps_frame_slots,
+            uploads: plan.uploads_pending,
+        })?;
         let surface_writes = passes.surface_writes();
         let translucency = plan
             .translucency
@@ -210,23 +221,23 @@ impl Renderer {
         } else {
             None
         };
-        // With a frame in flight, the last one's GPU time is read now that it is done anyway.
-        let previous_gpu_us = if self.frames_in_flight > 1 {
-            self.gpu_time()?
-        } else {
-            None
-        };
         let record_start = Instant::now();
-        self.frame_uniforms
+        self.slots
+            .current_mut()
+            .uniforms
             .write(0, bytemuck::bytes_of(&uniforms))?;
         if let Some(bytes) = plan.cull_view {
-            self.cull_view.write(0, bytes)?;
+            self.cull_view
+                .write(CULL_VIEW_STRIDE * slot as u64, bytes)?;
         }
-        let mut stats = FrameStats::default();
+        let mut stats = FrameStats {
+            overlapped: !self.slots.earlier_frames_finished(),
+            ..FrameStats::default()
+        };
         if plan.uploads_pending {
             self.record_upload_prologue(&mut recorders, &mut stats)?;
         }
-        match (replay_key, self.replay.replayable) {
+        match (replay_key, self.slots.current().replayable) {
             (Some(key), Some((recorded, recorded_stats))) if key == recorded => {
                 let replayed = FrameStats {
                     bytes_uploaded: stats.bytes_uploaded,
@@ -239,13 +250,15 @@ impl Renderer {
                     previous_gpu_us,
                 );
             }
-            _ => self.replay.replayable = None,
+            _ => self.slots.current_mut().replayable = None,
         }
 
-        let command_buffer = self.commands.begin()?;
-        if let Some(timer) = &mut self.timers.pass {
+        let slot = self.slots.current_mut();
+        let command_buffer = slot.commands.begin()?;
+        if let Some(timer) = &mut slot.pass_timer {
             timer.begin(command_buffer);
         }
+        after_earlier_frames(&self.device, command_buffer);
         let inputs = PassInputs {
             command_buffer,
             secondary: plan.secondary,
@@ -257,7 +270,7 @@ impl Renderer {
         self.record_passes(&passes, &inputs, &mut recorders, &mut stats)?;
         let last_phase = passes.surface_phases().max(1) - 1;
         (recorders.after)(self, command_buffer, last_phase, &mut stats)?;
-        if let Some(timer) = &mut self.timers.pass {
+        if let Some(timer) = &mut self.slots.current_mut().pass_timer {
             timer.end(command_buffer);
         }
         stats.cpu_record_us = record_start.elapsed().as_secs_f64() * 1e6;
@@ -327,16 +340,12 @@ impl Renderer {
         previous_gpu_us: Option<f64>,
     ) -> RenderResult<FrameStats> {
         let submit_start = Instant::now();
-        self.commands.submit()?;
-        self.replay.last_submission_uploaded = uploaded;
+        let slot = self.slots.current_mut();
+        slot.commands.submit()?;
+        slot.submission_uploaded = uploaded;
         stats.cpu_submit_us = submit_start.elapsed().as_secs_f64() * 1e6;
-        // The first recording after a change may do one-time work (new buffers cleared);
-        // the second with the same key is the steady frame. Uploads are not part of it: they
-        // go in the prologue.
-        if replay_key.is_some() && replay_key == self.replay.last_recorded {
-            self.replay.replayable = replay_key.map(|key| (key, stats));
-        }
-        self.replay.last_recorded = replay_key;
+        // Uploads are not part of the recording: they go in the prologue.
+        self.slots.keep_recording(replay_key, stats);
         stats.gpu_us = self.finish_or_keep_in_flight(previous_gpu_us)?;
         Ok(stats)
     }
@@ -375,18 +384,21 @@ impl Renderer {
         stats: &mut FrameStats,
     ) -> RenderResult<()> {
         let key = (recorders.gather_uploads)(stats)?;
-        if self.commands.reuse_prologue(key) {
+        let slot = self.slots.current_mut();
+        if slot.commands.reuse_prologue(key) {
             return Ok(());
         }
-        let command_buffer = self.commands.begin_prologue()?;
-        if let Some(timer) = &mut self.timers.uploads {
+        let command_buffer = slot.commands.begin_prologue()?;
+        if let Some(timer) = &mut slot.upload_timer {
             timer.begin(command_buffer);
         }
+        after_earlier_frames(&self.device, command_buffer);
         (recorders.uploads)(self, command_buffer, 0, stats)?;
-        if let Some(timer) = &mut self.timers.uploads {
+        let slot = self.slots.current_mut();
+        if let Some(timer) = &mut slot.upload_timer {
             timer.end(command_buffer);
         }
-        Ok(self.commands.end_prologue(key)?)
+        Ok(slot.commands.end_prologue(key)?)
     }
 
     /// Before the surfaces: clears the transparency method's storage and the pixel keys'
@@ -460,11 +472,11 @@ impl Renderer {
     /// With one frame in flight, waits for the frame just submitted and returns its GPU time;
     /// with more, leaves it running and returns `previous_gpu_us`, the frame before's.
     fn finish_or_keep_in_flight(&self, previous_gpu_us: Option<f64>) -> RenderResult<Option<f64>> {
-        if self.frames_in_flight > 1 {
+        if self.slots.in_flight() > 1 {
             return Ok(previous_gpu_us);
         }
         self.finish()?;
-        self.gpu_time()
+        Ok(self.slots.current().gpu_time()?)
     }
 
     /// Submits the recorded frame again, after the prologue with this frame's uploads when
@@ -477,32 +489,20 @@ impl Renderer {
         previous_gpu_us: Option<f64>,
     ) -> RenderResult<FrameStats> {
         let submit_start = Instant::now();
-        self.commands.resubmit()?;
-        self.replay.last_submission_uploaded = uploaded;
+        let slot = self.slots.current_mut();
+        slot.commands.resubmit()?;
+        slot.submission_uploaded = uploaded;
         let stats = FrameStats {
             cpu_record_us: (submit_start - start).as_secs_f64() * 1e6,
             cpu_submit_us: submit_start.elapsed().as_secs_f64() * 1e6,
             replayed: true,
+            overlapped: !self.slots.earlier_frames_finished(),
             ..recorded
         };
         Ok(FrameStats {
             gpu_us: self.finish_or_keep_in_flight(previous_gpu_us)?,
             ..stats
         })
-    }
-
-    /// The GPU time of the last finished frame (its uploads and its pass), if timestamps
-    /// work.
-    fn gpu_time(&self) -> RenderResult<Option<f64>> {
-        let pass = match &self.timers.pass {
-            Some(timer) => timer.elapsed_us()?,
-            None => None,
-        };
-        let uploads = match (&self.timers.uploads, self.replay.last_submission_uploaded) {
-            (Some(timer), true) => timer.elapsed_us()?,
-            _ => None,
-        };
-        Ok(pass.map(|pass| pass + uploads.unwrap_or(0.0)))
     }
 
     /// The image and clear value of a pass target.
@@ -532,7 +532,8 @@ impl Renderer {
         {
             return Ok(());
         }
-        // The recorded frame names the old targets.
+        // Frames in flight and the recorded ones name the old targets.
+        self.finish()?;
         self.forget_recording();
         self.drop_transparency_targets();
         let targets = TransparencyTargets::new(
@@ -560,6 +561,8 @@ impl Renderer {
             Some(keys) if keys.extent == extent => planes.max(keys.planes()),
             _ => planes,
         };
+        // Frames in flight and the recorded ones name the old keys.
+        self.finish()?;
         self.forget_recording();
         let keys = PixelKeys::new(&self.device, extent, planes)?;
         name_pixel_keys(&self.frame_sets, &keys.buffer);
@@ -707,4 +710,23 @@ impl Renderer {
             },
         }
     }
+}
+
+/// Orders this frame's work after every earlier frame's on the queue (the first command of
+/// the frame's buffers): with frames in flight, the next frame is submitted while the last
+/// still runs, and its uploads, clears, culling and attachments must not overtake the last
+/// frame's reads and writes of the same buffers and images.
+fn after_earlier_frames(device: &crate::vk::Device, command_buffer: vk::CommandBuffer) {
+    memory_barrier(
+        device,
+        command_buffer,
+        (
+            vk::PipelineStageFlags2::ALL_COMMANDS,
+            vk::AccessFlags2::MEMORY_WRITE,
+        ),
+        (
+            vk::PipelineStageFlags2::ALL_COMMANDS,
+            vk::AccessFlags2::MEMORY_READ | vk::AccessFlags2::MEMORY_WRITE,
+        ),
+    );
 }

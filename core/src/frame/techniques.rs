@@ -107,7 +107,6 @@ impl Renderer {
             techniques,
             pipelines,
             pass_filters,
-            frame_set: self.frame_set().as_raw(),
             size: self.size(),
             samples: passes.samples(),
             extra_color_formats: extra_color_formats(pipelines),
@@ -121,6 +120,7 @@ impl Renderer {
             .map(|_| cull_view(camera, self.size(), techniques.min_pixels(), self.section()));
         let cull_view_bytes = gpu_view.as_ref().map(cull_view_bytes);
         let replay_key = replay_key(techniques, passes, key, &view);
+        let frame_key = frame_key(passes, key, &view);
         let uploads_pending = scene.has_pending_uploads();
         let display = self.display_bits(passes, scene);
         let highlights = scene.has_highlighted();
@@ -146,9 +146,10 @@ impl Renderer {
             |renderer: &Renderer, cb: vk::CommandBuffer, phase: u32, _: &mut FrameStats| {
                 drawing.between(renderer, cb, phase)
             };
-        let mut inside = |_: &Renderer, cb: vk::CommandBuffer, phase: u32, _: &mut FrameStats| {
-            drawing.inside(cb, phase)
-        };
+        let mut inside =
+            |renderer: &Renderer, cb: vk::CommandBuffer, phase: u32, _: &mut FrameStats| {
+                drawing.inside(renderer, cb, phase)
+            };
         let mut after = |_: &Renderer, _: vk::CommandBuffer, _: u32, stats: &mut FrameStats| {
             drawing.after(stats)
         };
@@ -160,6 +161,8 @@ impl Renderer {
                 phases,
                 cull_view: cull_view_bytes.as_ref().map(|bytes| &bytes[..]),
                 replay_key,
+                frame_key,
+                keeps_frame_slots: techniques.keep_frame_slots(),
                 uploads_pending,
                 display,
                 translucency,
@@ -240,6 +243,13 @@ fn replay_key(
             mix(key, view.parameters_generation)
         }
     })
+}
+
+/// What the recording and the techniques' host writes of a frame of `passes` whose commands
+/// key is `key` depend on besides the view, none for a pick: frames with equal keys may run on
+/// the GPU while the next is recorded.
+fn frame_key(passes: PassSet, key: u64, view: &abi::CadrSceneView) -> Option<u64> {
+    matches!(passes, PassSet::Shaded { .. }).then(|| mix(key, view.parameters_generation))
 }
 
 /// What a frame's commands depend on: equal keys record equal commands. The techniques'
@@ -327,7 +337,6 @@ struct FrameRecording<'a> {
     techniques: &'a Techniques,
     pipelines: &'a TechniquePipelines,
     pass_filters: &'a PassFilters,
-    frame_set: u64,
     size: (u32, u32),
     /// Samples per pixel of the pass.
     samples: u32,
@@ -341,6 +350,7 @@ impl FrameRecording<'_> {
     /// draws of `phase`.
     fn context(
         &self,
+        frame_set: vk::DescriptorSet,
         command_buffer: vk::CommandBuffer,
         view: &abi::CadrSceneView,
         stats: *mut abi::CadrStats,
@@ -353,7 +363,7 @@ impl FrameRecording<'_> {
             size: std::mem::size_of::<abi::CadrRecordContext>() as u32,
             command_buffer: command_buffer.as_raw() as *mut c_void,
             pipeline_layout: pipelines.layout.raw().as_raw(),
-            frame_set: self.frame_set,
+            frame_set: frame_set.as_raw(),
             pass_count: pipelines.passes.len() as u32,
             passes: pipelines.passes.as_ptr(),
             width: self.size.0,
@@ -383,6 +393,7 @@ impl FrameRecording<'_> {
     /// The paths' and the submission's preparation, before the pass.
     fn prepare(
         &self,
+        frame_set: vk::DescriptorSet,
         command_buffer: vk::CommandBuffer,
         view: &abi::CadrSceneView,
         counters: &mut abi::CadrStats,
@@ -405,7 +416,7 @@ impl FrameRecording<'_> {
         }
         let submission = self.techniques.get(TechniqueKind::Submission)?;
         if let Some(prepare) = submission.vtable::<abi::CadrSubmissionVtable>().prepare {
-            let record = self.context(command_buffer, view, counters, (gpu_draws, 0))?;
+            let record = self.context(frame_set, command_buffer, view, counters, (gpu_draws, 0))?;
             let mut message = Message::new();
             // SAFETY: a live instance; the context is valid for the call.
             let result = unsafe { prepare(submission.instance, &record, message.raw()) };
@@ -417,6 +428,7 @@ impl FrameRecording<'_> {
     /// The submission's recording of one phase, inside the pass.
     fn record(
         &self,
+        frame_set: vk::DescriptorSet,
         command_buffer: vk::CommandBuffer,
         view: &abi::CadrSceneView,
         counters: &mut abi::CadrStats,
@@ -430,7 +442,7 @@ impl FrameRecording<'_> {
                 technique: format!("submit '{}'", submission.entry.name),
                 message: "its vtable has no record function".into(),
             })?;
-        let record = self.context(command_buffer, view, counters, draws)?;
+        let record = self.context(frame_set, command_buffer, view, counters, draws)?;
         let mut message = Message::new();
         // SAFETY: a live instance; the context is valid for the call.
         let result = unsafe { record_fn(submission.instance, &record, message.raw()) };
@@ -467,9 +479,15 @@ impl FrameDrawing<'_, '_> {
         let (scene, counters, culler) = &mut *guard;
         // The uploads went ahead in the prologue (this frame's, or a replayed one's).
         barrier(renderer, command_buffer);
-        let view = scene.view();
-        self.recording
-            .prepare(command_buffer, &view, counters, gpu_draws(culler))?;
+        let mut frame_slot = renderer.frame_slot();
+        let view = slotted_view(scene, &mut frame_slot);
+        self.recording.prepare(
+            renderer.frame_set(),
+            command_buffer,
+            &view,
+            counters,
+            gpu_draws(culler),
+        )?;
         barrier(renderer, command_buffer);
         self.record_culling(renderer, command_buffer, 0, scene, culler)
     }
@@ -487,12 +505,19 @@ impl FrameDrawing<'_, '_> {
     }
 
     /// Inside the pass: the submission's recording of `phase`.
-    fn inside(&self, command_buffer: vk::CommandBuffer, phase: u32) -> RenderResult<()> {
+    fn inside(
+        &self,
+        renderer: &Renderer,
+        command_buffer: vk::CommandBuffer,
+        phase: u32,
+    ) -> RenderResult<()> {
         let mut guard = self.shared.borrow_mut();
         let (scene, counters, culler) = &mut *guard;
         let draws = (gpu_draws(culler), phase);
+        let mut frame_slot = renderer.frame_slot();
+        let view = slotted_view(scene, &mut frame_slot);
         self.recording
-            .record(command_buffer, &scene.view(), counters, draws)
+            .record(renderer.frame_set(), command_buffer, &view, counters, draws)
     }
 
     /// After the passes: what the recording issued (a replay of it issues the same).
@@ -518,10 +543,11 @@ impl FrameDrawing<'_, '_> {
             view: renderer.depth_image().view(),
             layout: SUSPENDED_DEPTH_LAYOUT,
         });
+        let mut frame_slot = renderer.frame_slot();
         culler.record(
             phase,
             command_buffer,
-            &scene.view(),
+            &slotted_view(scene, &mut frame_slot),
             (
                 &self.recording.pipelines.passes,
                 self.recording.pass_filters,
@@ -531,6 +557,15 @@ impl FrameDrawing<'_, '_> {
             depth,
         )
     }
+}
+
+/// The scene's view for a technique's call during a frame, with `frame_slot` chained ahead of
+/// the scene's own extensions (the view points at it: keep it while the view is used).
+fn slotted_view(scene: &GpuScene, frame_slot: &mut abi::CadrFrameSlot) -> abi::CadrSceneView {
+    let mut view = scene.view();
+    frame_slot.header.next = view.extensions;
+    view.extensions = &frame_slot.header;
+    view
 }
 
 /// Makes transfer, compute and host writes before the pass visible to vertex input, shaders

@@ -8,8 +8,8 @@ pub struct FrameStats {
     /// CPU time of the queue submission, in microseconds.
     pub cpu_submit_us: f64,
     /// GPU time between the frame's first and last command, in microseconds (if timestamps work);
-    /// with two frames in flight, the previous frame's (read without waiting; `None` for the
-    /// first).
+    /// with more than one frame in flight, the latest finished frame's (read without waiting;
+    /// `None` for the first).
     pub gpu_us: Option<f64>,
     /// Draw calls issued (an indirect or multi-draw call counts once).
     pub draw_calls: u64,
@@ -33,6 +33,11 @@ pub struct FrameStats {
     /// Whether the frame resubmitted the last recorded command buffer (nothing had changed
     /// but the camera, and the techniques allow it): recording cost nothing.
     pub replayed: bool,
+    /// Whether the frame was recorded while earlier frames could still run on the GPU: more
+    /// than one frame in flight, nothing but the view changed since the last frame, and every
+    /// active technique keeps its per-frame data per frame slot. It waited only for the frame
+    /// that last used its slot.
+    pub overlapped: bool,
 }
 
 impl FrameStats {

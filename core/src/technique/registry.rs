@@ -110,6 +110,7 @@ fn first_library_size() -> usize {
 const KNOWN_EXTENSIONS: &[abi::CadrExtensionKind] = &[
     abi::CADR_EXTENSION_SCENE_CLUSTERS,
     abi::CADR_EXTENSION_CLUSTER_CULL,
+    abi::CADR_EXTENSION_FRAME_SLOT,
 ];
 
 /// Refuses a technique that requires an extension this host does not know, naming it.

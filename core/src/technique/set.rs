@@ -497,6 +497,17 @@ impl Techniques {
             })
     }
 
+    /// Whether every active technique keeps its per-frame data per frame slot
+    /// (`CADR_TRAIT_FRAME_SLOTS`, libraries of ABI 1.15 or later), so that a frame may be
+    /// recorded while earlier ones still run on the GPU.
+    pub fn keep_frame_slots(&self) -> bool {
+        self.active.iter().all(|active| {
+            active
+                .as_ref()
+                .is_some_and(|active| active.entry.announces(abi::CADR_TRAIT_FRAME_SLOTS, 15))
+        })
+    }
+
     /// What plugins hold now (objects through the allocation callbacks, buffers).
     pub fn plugin_allocations(&self) -> AllocationCounts {
         self.services.snapshot()

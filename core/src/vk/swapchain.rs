@@ -76,10 +76,54 @@ pub struct Swapchain {
     stale: bool,
     /// How frames reach the window.
     present_mode: PresentMode,
-    image_acquired: vk::Semaphore,
     /// One per swapchain image: signalled by the blit, waited for by the presentation.
     ready_to_present: Vec<vk::Semaphore>,
+    /// The blits of the last [`PRESENTS_IN_FLIGHT`] presents, used in turn.
+    presents: Vec<PresentSlot>,
+    /// The slot of the next present.
+    next_present: usize,
+}
+
+/// How many presents' blits may be on the GPU at once: as many as a renderer's frames in
+/// flight, so that presenting never makes a frame wait for more than its frame slot does
+/// (the swapchain's images may still hold the host back: acquiring one waits while the
+/// presentation engine holds them all).
+const PRESENTS_IN_FLIGHT: usize = 3;
+
+/// What one present's blit uses until the GPU has finished it: its command buffer and the
+/// semaphore the acquisition of its image signals.
+struct PresentSlot {
+    device: Arc<Device>,
     commands: CommandContext,
+    image_acquired: vk::Semaphore,
+}
+
+impl PresentSlot {
+    /// The command buffer and semaphore of present slot `index`.
+    fn new(device: &Arc<Device>, index: usize) -> VkResult<Self> {
+        let commands = CommandContext::new(device, &format!("present {index} commands"))?;
+        let image_acquired =
+            create_semaphore(device, &format!("present {index} swapchain image acquired"))?;
+        Ok(Self {
+            device: Arc::clone(device),
+            commands,
+            image_acquired,
+        })
+    }
+}
+
+impl Drop for PresentSlot {
+    fn drop(&mut self) {
+        // The command context waits for its submission when dropped; the semaphore's last
+        // use, that submission's wait, is then over too.
+        let _ = self.commands.wait();
+        // SAFETY: no pending submission waits on the semaphore (above); destroyed once.
+        unsafe {
+            self.device
+                .raw
+                .destroy_semaphore(self.image_acquired, host_callbacks())
+        };
+    }
 }
 
 fn create_semaphore(device: &Device, name: &str) -> VkResult<vk::Semaphore> {
@@ -123,8 +167,9 @@ impl Swapchain {
             });
         }
         let swapchain_fn = ash::khr::swapchain::Device::new(instance.raw(), device.raw());
-        let commands = CommandContext::new(device, "present commands")?;
-        let image_acquired = create_semaphore(device, "swapchain image acquired")?;
+        let presents = (0..PRESENTS_IN_FLIGHT)
+            .map(|index| PresentSlot::new(device, index))
+            .collect::<VkResult<Vec<_>>>()?;
         let mut swapchain = Self {
             device: Arc::clone(device),
             surface_fn,
@@ -137,9 +182,9 @@ impl Swapchain {
             wanted: vk::Extent2D { width, height },
             stale: false,
             present_mode: PresentMode::Fifo,
-            image_acquired,
             ready_to_present: Vec::new(),
-            commands,
+            presents,
+            next_present: 0,
         };
         if let Err(error) = swapchain.recreate() {
             // The caller keeps the surface: Drop must not destroy it.
@@ -327,10 +372,11 @@ impl Swapchain {
     /// Blits `frame` (a color image in TRANSFER_SRC_OPTIMAL, as a frame leaves it) into the
     /// next swapchain image and presents it, without waiting for the GPU: the blit follows the
     /// frame on the queue, and the next frame's drawing into `frame` waits for the blit there.
-    /// Only the previous present's blit is waited for, as its command buffer and semaphore are
-    /// reused (it ran before this frame's drawing, so it is done by now in practice).
+    /// Only the blit of the present [`PRESENTS_IN_FLIGHT`] presents ago is waited for, as its
+    /// command buffer and semaphore are reused.
     pub fn present(&mut self, frame: &Image) -> VkResult<PresentOutcome> {
-        self.commands.wait()?;
+        let slot = self.next_present;
+        self.presents[slot].commands.wait()?;
         if self.stale {
             self.recreate()?;
         }
@@ -341,13 +387,14 @@ impl Swapchain {
                 return Ok(PresentOutcome::Skipped);
             }
         }
+        let image_acquired = self.presents[slot].image_acquired;
         // SAFETY: the swapchain is live; the semaphore is unsignalled (its last wait, the
-        // previous blit, completed: it was waited for above).
+        // slot's last blit, completed: it was waited for above).
         let acquired = unsafe {
             self.swapchain_fn.acquire_next_image(
                 self.raw,
                 u64::MAX,
-                self.image_acquired,
+                image_acquired,
                 vk::Fence::null(),
             )
         };
@@ -364,13 +411,15 @@ impl Swapchain {
         };
         let image = self.images[index as usize];
         let ready = self.ready_to_present[index as usize];
-        let command_buffer = self.commands.begin()?;
+        let commands = &mut self.presents[slot].commands;
+        let command_buffer = commands.begin()?;
         let device = &*self.device;
         record_blit(device, command_buffer, frame, (image, self.extent));
-        self.commands.submit_with_semaphores(
-            &[(self.image_acquired, vk::PipelineStageFlags::TRANSFER)],
+        commands.submit_with_semaphores(
+            &[(image_acquired, vk::PipelineStageFlags::TRANSFER)],
             &[ready],
         )?;
+        self.next_present = (slot + 1) % PRESENTS_IN_FLIGHT;
         let swapchains = [self.raw];
         let indices = [index];
         let waits = [ready];
@@ -483,9 +532,6 @@ impl Drop for Swapchain {
                     .raw
                     .destroy_semaphore(semaphore, host_callbacks());
             }
-            self.device
-                .raw
-                .destroy_semaphore(self.image_acquired, host_callbacks());
             self.swapchain_fn
                 .destroy_swapchain(self.raw, host_callbacks());
             // The host created the surface without allocation callbacks (glfwCreateWindowSurface

@@ -426,6 +426,78 @@ typedef struct CadrMaterialDesc {
 // A material of a scene (0 is never valid).
 typedef uint64_t CadrMaterial;
 
+// What cadr needs of a host's Vulkan instance and device, and what it uses where the host
+// enabled it (`cadr_vulkan_requirements`). Every string is cadr's, static, NUL-terminated;
+// features are named `Struct::member` as the Vulkan headers spell them (for example
+// `VkPhysicalDeviceVulkan13Features::dynamicRendering`).
+typedef struct CadrVulkanRequirements {
+  // `sizeof(CadrVulkanRequirements)`, set by the host: cadr fills the fields that fit and
+  // zeroes the ones a newer host knows and this library does not.
+  uint32_t size;
+  // The lowest `VK_API_VERSION` of the instance and the physical device (1.3).
+  uint32_t api_version;
+  // Device extensions cadr uses where the host enabled them (multi-draw, mesh shaders,
+  // device-generated commands, `VK_KHR_swapchain` for windows). None is required.
+  const char *const *optional_extensions;
+  // Number of `optional_extensions`.
+  uint32_t optional_extension_count;
+  // Features the host must enable on its device.
+  const char *const *required_features;
+  // Number of `required_features`.
+  uint32_t required_feature_count;
+  // Features cadr uses where the host enabled them; cadr falls back without them.
+  const char *const *optional_features;
+  // Number of `optional_features`.
+  uint32_t optional_feature_count;
+} CadrVulkanRequirements;
+
+// Vulkan's `vkGetInstanceProcAddr` as the host loaded it (a `PFN_vkGetInstanceProcAddr`,
+// cast to this type: `VkInstance` is a pointer).
+typedef void (*(*CadrGetInstanceProcAddr)(void *instance, const char *name))(void);
+
+// Takes (or gives back) the host's lock on the queue it shares with cadr.
+typedef void (*CadrQueueLockFn)(void *user);
+
+// A host's Vulkan objects that cadr uses without owning them
+// (`cadr_context_create_from_vulkan`). Dispatchable handles are pointers, as Vulkan's are.
+typedef struct CadrHostVulkan {
+  // `sizeof(CadrHostVulkan)`.
+  uint32_t size;
+  // The `vkGetInstanceProcAddr` the host loaded Vulkan with.
+  CadrGetInstanceProcAddr get_instance_proc_addr;
+  // The host's `VkInstance`, created for Vulkan 1.3 or later.
+  void *instance;
+  // The instance extensions the host enabled: with `VK_EXT_debug_utils` cadr logs what the
+  // validation layer (if the host enabled it) reports, which
+  // `cadr_context_validation_error_count` counts; with `VK_KHR_surface` and the device's
+  // `VK_KHR_swapchain`, renderers can present to the host's windows.
+  const char *const *instance_extensions;
+  // Number of `instance_extensions`.
+  uint32_t instance_extension_count;
+  // The `VkPhysicalDevice` of `device`.
+  void *physical_device;
+  // The host's `VkDevice`.
+  void *device;
+  // The `VkDeviceCreateInfo` the host created `device` with, read during the call only:
+  // its extensions, queues and features (`pEnabledFeatures`, or a
+  // `VkPhysicalDeviceFeatures2` and the Vulkan 1.1–1.3 feature structs in its chain) say
+  // what cadr may use.
+  const void *device_create_info;
+  // The queue family cadr submits to: graphics and compute.
+  uint32_t queue_family;
+  // The queue's index in its family.
+  uint32_t queue_index;
+  // NULL when cadr alone uses the queue; otherwise called (with `queue_user`) before cadr
+  // submits to, presents on or waits for the queue, from whichever thread renders, so that
+  // the host's own use of the queue waits meanwhile (Vulkan wants a queue's use externally
+  // synchronised).
+  CadrQueueLockFn lock_queue;
+  // Called after cadr's use of the queue; set with `lock_queue` or not at all.
+  CadrQueueLockFn unlock_queue;
+  // Passed to `lock_queue` and `unlock_queue`.
+  void *queue_user;
+} CadrHostVulkan;
+
 // What `cadr_scene_load` created. Free the arrays with `cadr_load_result_free`.
 typedef struct CadrLoadResult {
   // The new Group, named after the file, that holds the file's content.
@@ -951,6 +1023,47 @@ enum CadrResult cadr_scene_set_material(CadrScene scene,
 // Ownership: the handle (or item) is given back to cadr and invalid afterwards.
 // Thread-safety: as `cadr_scene_create`.
 enum CadrResult cadr_scene_destroy_material(CadrScene scene, CadrMaterial material);
+
+// Writes what cadr needs of a host's Vulkan into `*requirements`, up to
+// `requirements->size` bytes (see `CadrVulkanRequirements`): the host enables the required
+// features (and the optional ones and extensions its device has) when it creates the device
+// it hands to `cadr_context_create_from_vulkan`.
+//
+// Returns `CADR_RESULT_OK`, `CADR_RESULT_NULL_ARGUMENT` or `CADR_RESULT_INVALID_ARGUMENT` (a
+// size too small to hold the size). Ownership: the struct is the caller's; the strings it
+// points at are cadr's, static. Thread-safety: callable from any thread.
+//
+// # Safety
+// `requirements` is null or points at `requirements->size` writable bytes.
+enum CadrResult cadr_vulkan_requirements(struct CadrVulkanRequirements *requirements);
+
+// Creates a context on a host's Vulkan instance, device and queue (see `CadrHostVulkan`),
+// which cadr uses without destroying them: the host keeps them alive, and its loader
+// loaded, until every renderer and the context are destroyed. cadr allocates its own memory,
+// pipelines and command pools on the device, and submits only to the queue given. `options`
+// may be NULL; of it only the plugin directories count (validation, device choice and
+// extensions are the host's, on its own objects).
+//
+// Returns `CADR_RESULT_OK` and writes `*context`, or `CADR_RESULT_NULL_ARGUMENT`,
+// `CADR_RESULT_INVALID_ARGUMENT` (a bad size, null handles, a lock without an unlock, a
+// device create info that is not one), `CADR_RESULT_UNSUPPORTED` (the physical device lacks
+// Vulkan 1.3, the queue family graphics and compute, or the host did not enable a feature
+// cadr requires: the message names it; see `cadr_vulkan_requirements`) or
+// `CADR_RESULT_VULKAN`.
+//
+// Ownership: `host`, its strings and the create info are read during the call only; the
+// Vulkan objects stay the host's; the context is the caller's until `cadr_context_destroy`.
+// Thread-safety: as `cadr_context_create`; with `lock_queue` set, cadr's renderers and the
+// host's own code may use the queue from any threads.
+//
+// # Safety
+// `host` is null or a valid `CadrHostVulkan` whose handles are live objects of one instance
+// and device, made with the loader whose `vkGetInstanceProcAddr` it gives, and whose
+// pointers are null or valid for their counts; `options` is null or valid; `context` is null
+// or writable.
+enum CadrResult cadr_context_create_from_vulkan(const struct CadrHostVulkan *host,
+                                                const struct CadrContextOptions *options,
+                                                CadrContext *context);
 
 // Loads a scene file (`.gltf`, `.glb`, `.csf`, `.csf.gz`) or a built-in generator
 // (`gen:demo`, `gen:grid:parts=N`, …) and adds it below `parent` under a new Group named after

@@ -163,3 +163,45 @@ pub(crate) unsafe fn vector3(values: *const f64, name: &str) -> Result<glam::DVe
     }
     Ok(glam::DVec3::new(values[0], values[1], values[2]))
 }
+
+/// Writes `value` into the host's struct at `out` up to the size the host gave in its first
+/// field (a `uint32_t size`): the fields after the size that fit, and zeros in whatever the host
+/// knows beyond this library's struct, as a struct that grows is filled for an older or newer
+/// host. The host's size stays as it is. `name` names the struct in the error about a size too
+/// small to hold even the size.
+///
+/// # Safety
+/// `out` is null or points at `size` writable bytes, the first four holding `size`; `T` is a
+/// `#[repr(C)]` struct of plain data whose first field is its `u32` size.
+pub(crate) unsafe fn deliver_sized<T: Copy>(
+    out: *mut T,
+    name: &str,
+    value: T,
+) -> Result<(), Failure> {
+    non_null(out, name)?;
+    // SAFETY: non-null; the caller's contract makes at least the size readable.
+    let size = unsafe { out.cast::<u32>().read_unaligned() } as usize;
+    let header = std::mem::size_of::<u32>();
+    if size < header {
+        return Err(Failure::invalid(format!(
+            "{name}->size is {size}; set it to the struct's size (sizeof)"
+        )));
+    }
+    let known = std::mem::size_of::<T>();
+    let copied = size.min(known);
+    let source = std::ptr::from_ref(&value).cast::<u8>();
+    // SAFETY: bytes `header..copied` lie within both `value` and the `size` bytes the caller
+    // made writable, and the two do not overlap.
+    unsafe {
+        std::ptr::copy_nonoverlapping(
+            source.add(header),
+            out.cast::<u8>().add(header),
+            copied - header,
+        )
+    };
+    if size > known {
+        // SAFETY: bytes `known..size` lie within the `size` bytes the caller made writable.
+        unsafe { std::ptr::write_bytes(out.cast::<u8>().add(known), 0, size - known) };
+    }
+    Ok(())
+}

@@ -7,7 +7,7 @@ use std::sync::Arc;
 use cadr_core::technique::{default_plugin_dirs, feature_bits, PluginRegistry, TechniqueKind};
 use cadr_core::vk::{raw::Handle, Device, DeviceChoice, DeviceOptions, InstanceOptions};
 
-use crate::args::{deliver, non_null, optional_str, string_list};
+use crate::args::{deliver, deliver_sized, non_null, optional_str, string_list};
 use crate::error::{guard, CadrResult, Failure};
 use crate::handles::{lock, Registry};
 
@@ -378,48 +378,62 @@ pub unsafe extern "C" fn cadr_context_create(
             extra_extensions: device_extensions,
             ..DeviceOptions::default()
         })?;
-        let mut dirs: Vec<PathBuf> = plugin_dirs.into_iter().map(PathBuf::from).collect();
-        if options.default_plugin_dirs {
-            dirs.extend(default_plugin_dirs());
-        }
-        let registry = PluginRegistry::discover(&dirs, feature_bits(device.capabilities()));
-        let techniques = registry
-            .techniques()
-            .iter()
-            .map(|t| TechniqueText {
-                kind: t.kind,
-                name: c_string(&t.name),
-                description: c_string(&t.description),
-                library: c_string(&t.library.display().to_string()),
-                supported: t.support.is_ok(),
-                reason: c_string(t.support.as_ref().err().map_or("", String::as_str)),
-            })
-            .collect();
-        let refusals = registry
-            .refusals()
-            .iter()
-            .map(|r| {
-                let reason = match &r.technique {
-                    Some(name) => format!("{name}: {}", r.reason),
-                    None => r.reason.clone(),
-                };
-                (
-                    c_string(&r.library.display().to_string()),
-                    c_string(&reason),
-                )
-            })
-            .collect();
-        let state = ContextState {
+        let handle = insert_context(
             device,
-            registry: Arc::new(registry),
-            techniques,
-            refusals,
+            (plugin_dirs, options.default_plugin_dirs),
             presentation,
-        };
-        let handle = CONTEXTS.insert(Arc::new(state))?;
+        )?;
         // SAFETY: context is null or writable (the caller's contract).
         unsafe { deliver(context, "context", handle as CadrContext) }
     })
+}
+
+/// Registers a context of `device` with the technique plugins found in `plugin_dirs` (and the
+/// default directories when asked); returns its handle.
+pub(crate) fn insert_context(
+    device: Arc<Device>,
+    (plugin_dirs, default_dirs): (Vec<String>, bool),
+    presentation: bool,
+) -> Result<u64, Failure> {
+    let mut dirs: Vec<PathBuf> = plugin_dirs.into_iter().map(PathBuf::from).collect();
+    if default_dirs {
+        dirs.extend(default_plugin_dirs());
+    }
+    let registry = PluginRegistry::discover(&dirs, feature_bits(device.capabilities()));
+    let techniques = registry
+        .techniques()
+        .iter()
+        .map(|t| TechniqueText {
+            kind: t.kind,
+            name: c_string(&t.name),
+            description: c_string(&t.description),
+            library: c_string(&t.library.display().to_string()),
+            supported: t.support.is_ok(),
+            reason: c_string(t.support.as_ref().err().map_or("", String::as_str)),
+        })
+        .collect();
+    let refusals = registry
+        .refusals()
+        .iter()
+        .map(|r| {
+            let reason = match &r.technique {
+                Some(name) => format!("{name}: {}", r.reason),
+                None => r.reason.clone(),
+            };
+            (
+                c_string(&r.library.display().to_string()),
+                c_string(&reason),
+            )
+        })
+        .collect();
+    let state = ContextState {
+        device,
+        registry: Arc::new(registry),
+        techniques,
+        refusals,
+        presentation,
+    };
+    CONTEXTS.insert(Arc::new(state))
 }
 
 /// Destroys a context handle. Renderers made from it keep the device alive until they are
@@ -574,44 +588,14 @@ pub unsafe extern "C" fn cadr_context_memory_usage(
 ) -> CadrResult {
     guard(|| {
         let state = context_state(context)?;
-        non_null(usage, "usage")?;
-        // SAFETY: non-null; the caller's contract makes at least `size` readable.
-        let size = unsafe { usage.cast::<u32>().read_unaligned() } as usize;
-        if size < std::mem::size_of::<u32>() {
-            return Err(Failure::new(
-                CadrResult::InvalidArgument,
-                format!("usage->size is {size}; set it to sizeof(CadrMemoryUsage)"),
-            ));
-        }
         let memory = state.device.memory_usage();
-        let fields = [
-            (
-                std::mem::offset_of!(CadrMemoryUsage, device_allocated_bytes),
-                memory.allocated_bytes,
-            ),
-            (
-                std::mem::offset_of!(CadrMemoryUsage, device_reserved_bytes),
-                memory.reserved_bytes,
-            ),
-        ];
-        for (offset, value) in fields {
-            if offset + std::mem::size_of::<u64>() <= size {
-                // SAFETY: the field lies within the `size` bytes the caller made writable.
-                unsafe {
-                    usage
-                        .cast::<u8>()
-                        .add(offset)
-                        .cast::<u64>()
-                        .write_unaligned(value)
-                };
-            }
-        }
-        let known = std::mem::size_of::<CadrMemoryUsage>();
-        if size > known {
-            // SAFETY: bytes `known..size` lie within the `size` bytes the caller made writable.
-            unsafe { std::ptr::write_bytes(usage.cast::<u8>().add(known), 0, size - known) };
-        }
-        Ok(())
+        let value = CadrMemoryUsage {
+            size: std::mem::size_of::<CadrMemoryUsage>() as u32,
+            device_allocated_bytes: memory.allocated_bytes,
+            device_reserved_bytes: memory.reserved_bytes,
+        };
+        // SAFETY: usage is null or holds `usage->size` writable bytes (the caller's contract).
+        unsafe { deliver_sized(usage, "usage", value) }
     })
 }
 

@@ -26,6 +26,18 @@ fn every_function_and_error_path_from_c() {
     run_suite("c-api", &["tests/c/api_suite.c"], &[], &[]);
 }
 
+/// A host that creates the Vulkan instance and device itself and lends them to cadr
+/// (`cadr_context_create_from_vulkan`): see `tests/c/host_vulkan.c`.
+#[test]
+fn a_context_on_the_hosts_vulkan_draws_what_one_on_its_own_device_draws() {
+    run_suite(
+        "c-host-vulkan",
+        &["tests/c/host_vulkan.c"],
+        &["-lvulkan", "-lpthread"],
+        &[],
+    );
+}
+
 /// The same suite with AddressSanitizer: no invalid access anywhere in the C program, and no
 /// leak anywhere in the process (cadr's Rust code allocates through the same malloc). Leaks of
 /// the Vulkan driver and layers, which cadr does not own, are suppressed by library name.

@@ -12,6 +12,7 @@ use gpu_allocator::MemoryLocation;
 
 use super::adapter::{self, Adapter, DeviceChoice};
 use super::error::{VkError, VkResult, VkResultExt};
+use super::host_vulkan::{HostDevice, HostVulkan, QueueLock};
 use super::instance::{Instance, InstanceOptions, ValidationLog};
 use super::pipeline_cache::PersistentPipelineCache;
 
@@ -107,14 +108,31 @@ pub struct Device {
     /// The commands of `VK_EXT_mesh_shader`, where [`Capabilities::mesh_shader`] is set.
     pub(super) mesh_shader: Option<ash::ext::mesh_shader::Device>,
     capabilities: Capabilities,
+    facts: DeviceFacts,
+    /// Every pipeline is created through it; kept on disk between runs.
+    pipeline_cache: PersistentPipelineCache,
+    /// Whether cadr made the device (and destroys it) or a host lent it.
+    owner: Owner,
+}
+
+/// What a device is, read once when it is made.
+struct DeviceFacts {
     limits: vk::PhysicalDeviceLimits,
     /// How a multisampled depth is resolved into the one-sample depth that GPU cullers read
     /// between phases: the farthest sample where the device offers it (conservative for
     /// occlusion), else sample 0 (every Vulkan 1.2 device offers it).
     depth_resolve_mode: vk::ResolveModeFlags,
+    /// Valid bits of the render queue's timestamps.
     queue_timestamp_bits: u32,
-    /// Every pipeline is created through it; kept on disk between runs.
-    pipeline_cache: PersistentPipelineCache,
+}
+
+/// Who made a [`Device`].
+enum Owner {
+    /// cadr: it waits for the whole device and destroys it.
+    Cadr,
+    /// A host ([`Device::from_host`]): cadr waits only for its queue, takes the host's lock on
+    /// it where there is one, and leaves the device (and instance) to the host.
+    Host(Option<QueueLock>),
 }
 
 impl Device {
@@ -201,9 +219,110 @@ impl Device {
             (&supported13, &supported12),
             extra_extensions,
         )?;
-        // SAFETY: the family and index 0 were requested in create_info.
-        let queue = unsafe { raw.get_device_queue(adapter.queue_family, 0) };
+        let facts = DeviceFacts {
+            limits: properties.limits,
+            depth_resolve_mode,
+            queue_timestamp_bits,
+        };
+        let queue = (adapter.queue_family, 0);
+        Self::assemble(
+            (instance, adapter),
+            raw,
+            queue,
+            (capabilities, facts),
+            Owner::Cadr,
+        )
+    }
 
+    /// A device on a host's Vulkan objects, which cadr uses without destroying them: the
+    /// host's instance, physical device, device and queue, with what the host enabled. Refused
+    /// with the reason where the physical device lacks Vulkan 1.3, the queue family graphics
+    /// and compute, or the host did not enable a feature cadr needs
+    /// ([`super::host_vulkan::REQUIREMENTS`]).
+    pub fn from_host(host: HostVulkan) -> VkResult<Arc<Self>> {
+        let instance = Arc::new(Instance::from_host(&host)?);
+        let physical = host.physical_device;
+        let mut adapter = adapter::enumerate(&instance)?
+            .into_iter()
+            .find(|adapter| adapter.physical == physical)
+            .ok_or_else(|| VkError::Unsupported {
+                device: "the host's physical device".into(),
+                reason: "it lacks Vulkan 1.3 or a queue family with graphics and compute".into(),
+            })?;
+        let unsupported = |reason: String| VkError::Unsupported {
+            device: adapter.name.clone(),
+            reason,
+        };
+        let (family, index) = host.queue;
+        // SAFETY: physical comes from this instance.
+        let families = unsafe {
+            instance
+                .raw
+                .get_physical_device_queue_family_properties(physical)
+        };
+        let wanted = vk::QueueFlags::GRAPHICS | vk::QueueFlags::COMPUTE;
+        if !families
+            .get(family as usize)
+            .is_some_and(|f| f.queue_flags.contains(wanted))
+        {
+            return Err(unsupported(format!(
+                "queue family {family} lacks graphics and compute"
+            )));
+        }
+        if !host
+            .enabled
+            .queues
+            .iter()
+            .any(|&(f, count)| f == family && index < count)
+        {
+            return Err(unsupported(format!(
+                "the host's device has no queue {index} of family {family}"
+            )));
+        }
+        if let Some(missing) = host.enabled.missing_required() {
+            return Err(unsupported(format!(
+                "the host did not enable {}, which cadr needs (see cadr_vulkan_requirements)",
+                missing.to_string_lossy()
+            )));
+        }
+        adapter.queue_family = family;
+        // SAFETY: physical comes from this instance.
+        let properties = unsafe { instance.raw.get_physical_device_properties(physical) };
+        let capabilities = host_capabilities(
+            &host.enabled,
+            &adapter,
+            &families[family as usize],
+            &properties,
+        );
+        let facts = DeviceFacts {
+            limits: properties.limits,
+            depth_resolve_mode: depth_resolve_mode(&instance, physical),
+            queue_timestamp_bits: families[family as usize].timestamp_valid_bits,
+        };
+        // SAFETY: the host's live device, made on this instance's physical device.
+        let raw = unsafe { ash::Device::load(instance.raw.fp_v1_0(), host.device) };
+        let owner = Owner::Host(host.queue_lock);
+        Self::assemble(
+            (instance, adapter),
+            raw,
+            host.queue,
+            (capabilities, facts),
+            owner,
+        )
+    }
+
+    /// The device around `raw`: its queue, allocator, debug names, mesh-shader commands and
+    /// pipeline cache.
+    fn assemble(
+        (instance, adapter): (Arc<Instance>, Adapter),
+        raw: ash::Device,
+        (family, index): (u32, u32),
+        (capabilities, facts): (Capabilities, DeviceFacts),
+        owner: Owner,
+    ) -> VkResult<Arc<Self>> {
+        // SAFETY: the device was created with this queue.
+        let queue = unsafe { raw.get_device_queue(family, index) };
+        let physical = adapter.physical;
         let allocator = Allocator::new(&AllocatorCreateDesc {
             instance: instance.raw.clone(),
             device: raw.clone(),
@@ -225,6 +344,8 @@ impl Device {
             .mesh_shader
             .then(|| ash::ext::mesh_shader::Device::new(&instance.raw, &raw));
 
+        // SAFETY: physical comes from this instance.
+        let properties = unsafe { instance.raw.get_physical_device_properties(physical) };
         let pipeline_cache = PersistentPipelineCache::load(&raw, &properties);
         let device = Arc::new(Self {
             instance,
@@ -238,10 +359,9 @@ impl Device {
             debug_utils,
             mesh_shader,
             capabilities,
-            limits: properties.limits,
-            depth_resolve_mode,
-            queue_timestamp_bits,
+            facts,
             pipeline_cache,
+            owner,
         });
         device.set_name(queue, "cadr render queue");
         Ok(device)
@@ -275,19 +395,19 @@ impl Device {
 
     /// How a multisampled depth attachment is resolved (see the field).
     pub fn depth_resolve_mode(&self) -> vk::ResolveModeFlags {
-        self.depth_resolve_mode
+        self.facts.depth_resolve_mode
     }
 
     /// The device limits.
     pub fn limits(&self) -> &vk::PhysicalDeviceLimits {
-        &self.limits
+        &self.facts.limits
     }
 
     /// Nanoseconds per timestamp tick, and the number of valid timestamp bits.
     pub fn timestamp_info(&self) -> (f64, u32) {
         (
-            f64::from(self.limits.timestamp_period),
-            self.queue_timestamp_bits,
+            f64::from(self.facts.limits.timestamp_period),
+            self.facts.queue_timestamp_bits,
         )
     }
 
@@ -427,7 +547,15 @@ impl Device {
     /// presents or waits for the device meanwhile.
     pub(crate) fn with_queue<R>(&self, use_queue: impl FnOnce(vk::Queue) -> R) -> R {
         let queue = self.queue.lock().unwrap_or_else(PoisonError::into_inner);
-        use_queue(*queue)
+        match &self.owner {
+            Owner::Host(Some(lock)) => {
+                lock(true);
+                let result = use_queue(*queue);
+                lock(false);
+                result
+            }
+            _ => use_queue(*queue),
+        }
     }
 
     /// Submits `submits` to the render queue, signalling `fence` when they are done.
@@ -497,10 +625,14 @@ impl Device {
         // inside vkDeviceWaitIdle: no host-memory fault is injected there (a leak of the
         // driver's would hide one of cadr's).
         super::fault::without_host_memory_faults(|| {
-            self.with_queue(|_| {
+            self.with_queue(|queue| match self.owner {
                 // SAFETY: the device is alive and its only queue is reserved for the wait (a
                 // lost device answers at once).
-                unsafe { self.raw.device_wait_idle() }
+                Owner::Cadr => unsafe { self.raw.device_wait_idle() },
+                // A host's device has the host's queues too, which cadr does not hold: it
+                // waits for its own.
+                // SAFETY: the queue is reserved for the wait.
+                Owner::Host(_) => unsafe { self.raw.queue_wait_idle(queue) },
             })
         })
         .or_vk("vkDeviceWaitIdle")?;
@@ -513,16 +645,16 @@ impl Device {
 
 impl Drop for Device {
     fn drop(&mut self) {
-        // SAFETY: every child object holds an Arc<Device>, so none is alive any more; waiting
-        // makes sure the GPU is done before memory and the device go away.
-        unsafe {
-            let _ = super::fault::without_host_memory_faults(|| self.raw.device_wait_idle());
-        }
+        // Every child object holds an Arc<Device>, so none is alive any more; waiting makes
+        // sure the GPU is done before memory and the device go away.
+        let _ = self.wait_idle();
         // The allocator frees its memory blocks through the device: drop it first.
         drop(self.allocator().take());
         self.pipeline_cache.save_and_destroy(&self.raw);
-        // SAFETY: no child object remains (see above).
-        unsafe { self.raw.destroy_device(host_callbacks()) };
+        if let Owner::Cadr = self.owner {
+            // SAFETY: no child object remains (see above).
+            unsafe { self.raw.destroy_device(host_callbacks()) };
+        }
     }
 }
 
@@ -623,6 +755,38 @@ fn check_extra_extensions(
         }
     }
     Ok(())
+}
+
+/// What cadr may use of a host's device: what the host enabled, where the device has it.
+fn host_capabilities(
+    enabled: &HostDevice,
+    adapter: &Adapter,
+    family: &vk::QueueFamilyProperties,
+    properties: &vk::PhysicalDeviceProperties,
+) -> Capabilities {
+    let core = &enabled.core;
+    let on = |value: vk::Bool32| value == vk::TRUE;
+    Capabilities {
+        multi_draw_indirect: on(core.multi_draw_indirect),
+        draw_indirect_first_instance: on(core.draw_indirect_first_instance),
+        shader_draw_parameters: enabled.shader_draw_parameters,
+        buffer_device_address: enabled.buffer_device_address,
+        draw_indirect_count: enabled.draw_indirect_count,
+        multi_draw: enabled.multi_draw,
+        pipeline_statistics_query: on(core.pipeline_statistics_query),
+        timestamps: family.timestamp_valid_bits > 0 && properties.limits.timestamp_period > 0.0,
+        fragment_stores_and_atomics: on(core.fragment_stores_and_atomics),
+        bindless_textures: if enabled.bindless {
+            adapter.bindless_textures
+        } else {
+            0
+        },
+        geometry_shader: on(core.geometry_shader),
+        mesh_shader: enabled.mesh_shader && adapter.mesh_shader,
+        device_generated_commands: enabled.device_generated_commands
+            && enabled.buffer_device_address
+            && adapter.device_generated_commands,
+    }
 }
 
 /// Creates the logical device with one queue of `queue_family`, the features `capabilities`

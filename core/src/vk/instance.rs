@@ -8,6 +8,7 @@ use std::sync::{Arc, Mutex};
 use ash::vk;
 
 use super::error::{VkError, VkResult, VkResultExt};
+use super::host_vulkan::HostVulkan;
 
 const VALIDATION_LAYER: &CStr = c"VK_LAYER_KHRONOS_validation";
 
@@ -75,6 +76,8 @@ pub struct Instance {
     validation_log: Arc<ValidationLog>,
     /// Keeps the callback's user data alive as long as the messenger exists.
     _callback_data: Option<Arc<ValidationLog>>,
+    /// Whether cadr made the instance (and destroys it) rather than a host lending it.
+    owned: bool,
 }
 
 impl Instance {
@@ -166,9 +169,47 @@ impl Instance {
             messenger: vk::DebugUtilsMessengerEXT::null(),
             validation_log,
             _callback_data: None,
+            owned: true,
         };
-        if let (true, Some(debug_utils)) = (options.validation, &instance.debug_utils) {
-            let validation_log = &instance.validation_log;
+        if options.validation {
+            instance.log_validation()?;
+        }
+        Ok(instance)
+    }
+
+    /// A host's instance, which cadr uses without destroying it. Where the host enabled
+    /// `VK_EXT_debug_utils`, cadr's own messenger records what the validation layer (if the
+    /// host enabled it) reports into [`Instance::validation_log`].
+    pub fn from_host(host: &HostVulkan) -> VkResult<Self> {
+        let static_fn = ash::StaticFn {
+            get_instance_proc_addr: host.get_instance_proc_addr,
+        };
+        // SAFETY: the host's `vkGetInstanceProcAddr`, valid as long as the host keeps its
+        // loader (the host's contract: longer than cadr's context).
+        let entry = unsafe { ash::Entry::from_static_fn(static_fn) };
+        // SAFETY: the host's live instance, made through that loader.
+        let raw = unsafe { ash::Instance::load(entry.static_fn(), host.instance) };
+        let debug_utils = host
+            .has_instance_extension(ash::ext::debug_utils::NAME)
+            .then(|| ash::ext::debug_utils::Instance::new(&entry, &raw));
+        let mut instance = Self {
+            entry,
+            raw,
+            debug_utils,
+            messenger: vk::DebugUtilsMessengerEXT::null(),
+            validation_log: Arc::new(ValidationLog::default()),
+            _callback_data: None,
+            owned: false,
+        };
+        instance.log_validation()?;
+        Ok(instance)
+    }
+
+    /// Records the validation layer's errors and warnings into the log through a messenger of
+    /// cadr's own, where the instance has `VK_EXT_debug_utils`.
+    fn log_validation(&mut self) -> VkResult<()> {
+        if let Some(debug_utils) = &self.debug_utils {
+            let validation_log = &self.validation_log;
             let user_data = Arc::clone(validation_log);
             let messenger_info = vk::DebugUtilsMessengerCreateInfoEXT::default()
                 .message_severity(
@@ -188,10 +229,10 @@ impl Instance {
                 debug_utils.create_debug_utils_messenger(&messenger_info, host_callbacks())
             }
             .or_vk("vkCreateDebugUtilsMessengerEXT")?;
-            instance.messenger = messenger;
-            instance._callback_data = Some(user_data);
+            self.messenger = messenger;
+            self._callback_data = Some(user_data);
         }
-        Ok(instance)
+        Ok(())
     }
 
     /// Whether the validation layer reports into the log (validation was asked for).
@@ -225,9 +266,11 @@ impl Drop for Instance {
                 };
             }
         }
-        // SAFETY: every child object (devices) is dropped before the instance: Device holds
-        // an Arc<Instance>.
-        unsafe { self.raw.destroy_instance(host_callbacks()) };
+        if self.owned {
+            // SAFETY: every child object (devices) is dropped before the instance: Device
+            // holds an Arc<Instance>.
+            unsafe { self.raw.destroy_instance(host_callbacks()) };
+        }
     }
 }
 

@@ -14,6 +14,7 @@ mod device;
 mod error;
 pub mod fault;
 pub mod host_memory;
+pub mod host_vulkan;
 mod image;
 mod instance;
 mod mesh;

@@ -426,6 +426,41 @@ typedef struct CadrMaterialDesc {
 // A material of a scene (0 is never valid).
 typedef uint64_t CadrMaterial;
 
+// A host's image that every frame of a renderer is blitted into, and how the blit
+// synchronises with the host (`cadr_renderer_create_for_image`). The image is the host's: a
+// 2D `VkImage` of one layer and level on the context's device, created with
+// `VK_IMAGE_USAGE_TRANSFER_DST_BIT`, usable on cadr's queue family (exclusive to it, or
+// concurrent), in a format the device can blit into with optimal tiling (for example
+// `VK_FORMAT_R8G8B8A8_UNORM` or `VK_FORMAT_B8G8R8A8_SRGB`; frames are scaled with linear
+// filtering to the image's size, which is the renderer's).
+typedef struct CadrHostImage {
+  // `sizeof(CadrHostImage)`.
+  uint32_t size;
+  // The `VkImage`.
+  uint64_t image;
+  // Its `VkFormat`.
+  int32_t format;
+  // Its width in pixels (1 to 16384).
+  uint32_t width;
+  // Its height in pixels (1 to 16384).
+  uint32_t height;
+  // The `VkImageLayout` the image is in when a frame's blit starts
+  // (`VK_IMAGE_LAYOUT_UNDEFINED` discards what it held).
+  int32_t old_layout;
+  // The `VkImageLayout` the blit leaves it in, for the host's next use (for example
+  // `VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL`).
+  int32_t new_layout;
+  // 0, or a binary `VkSemaphore` the host signals when the image may be written: each
+  // frame's blit waits for it (at the transfer stage), so the host signals it once per
+  // frame. With 0 the blit follows the host's earlier submissions to the queue only in
+  // submission order.
+  uint64_t wait_semaphore;
+  // 0, or a binary `VkSemaphore` signalled when the image holds the frame (and its writes
+  // are available): the host's work that reads the image waits for it. With 0 the host's
+  // later submissions to the queue need a barrier from the transfer stage's writes.
+  uint64_t signal_semaphore;
+} CadrHostImage;
+
 // What cadr needs of a host's Vulkan instance and device, and what it uses where the host
 // enabled it (`cadr_vulkan_requirements`). Every string is cadr's, static, NUL-terminated;
 // features are named `Struct::member` as the Vulkan headers spell them (for example
@@ -1023,6 +1058,40 @@ enum CadrResult cadr_scene_set_material(CadrScene scene,
 // Ownership: the handle (or item) is given back to cadr and invalid afterwards.
 // Thread-safety: as `cadr_scene_create`.
 enum CadrResult cadr_scene_destroy_material(CadrScene scene, CadrMaterial material);
+
+// Creates a renderer whose every frame (`cadr_renderer_render`) is drawn at the size of the
+// host's image and then blitted into it, waiting for and signalling the host's semaphores
+// (see `CadrHostImage`), so that the host composites cadr's picture into its own passes. The
+// blit is submitted to cadr's queue before `cadr_renderer_render` returns; the renderer
+// starts with 2 frames in flight. `cadr_renderer_read_pixels` still reads the picture.
+//
+// Returns as `cadr_renderer_create`, and `CADR_RESULT_INVALID_ARGUMENT` (a bad size, a null
+// image, an undefined final layout) or `CADR_RESULT_UNSUPPORTED` (a format the device cannot
+// blit into, named).
+//
+// Ownership: the image and semaphores stay the host's, and must outlive the renderer (or
+// the next `cadr_renderer_set_image`) and every frame submitted into them; `image` is read
+// during the call. Thread-safety: as `cadr_renderer_create`.
+//
+// # Safety
+// `image` is null or a valid `CadrHostImage` whose handles are live objects of the context's
+// device; `renderer` is null or writable.
+enum CadrResult cadr_renderer_create_for_image(CadrContext context,
+                                               const struct CadrHostImage *image,
+                                               CadrRenderer *renderer);
+
+// Sends the next frames of a renderer made by `cadr_renderer_create_for_image` to another
+// image (the host rotates images, or its image was resized: the renderer takes the new
+// size), with its semaphores and layouts. Frames already submitted keep the image they had.
+//
+// Returns `CADR_RESULT_OK`, `CADR_RESULT_NULL_ARGUMENT`, `CADR_RESULT_INVALID_ARGUMENT` (as
+// `cadr_renderer_create_for_image`, or a renderer made otherwise), `CADR_RESULT_UNSUPPORTED`
+// (the format), `CADR_RESULT_VULKAN` or a handle error. Ownership and thread-safety: as
+// `cadr_renderer_create_for_image`.
+//
+// # Safety
+// As `cadr_renderer_create_for_image`.
+enum CadrResult cadr_renderer_set_image(CadrRenderer renderer, const struct CadrHostImage *image);
 
 // Writes what cadr needs of a host's Vulkan into `*requirements`, up to
 // `requirements->size` bytes (see `CadrVulkanRequirements`): the host enables the required

@@ -24,6 +24,7 @@ mod context;
 mod error;
 mod geometry;
 mod handles;
+mod host_image;
 mod host_vulkan;
 mod load;
 mod messages;

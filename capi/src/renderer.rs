@@ -9,7 +9,7 @@ use std::time::Instant;
 use cadr_core::render::HighlightStyle;
 use cadr_core::technique::{Combination, ShadeMode, TechniqueKind};
 use cadr_core::view::View;
-use cadr_core::vk::{raw, raw::Handle, PresentOutcome, Swapchain};
+use cadr_core::vk::{raw, raw::Handle, HostImage, ImageOutput, PresentOutcome, Swapchain};
 
 use crate::args::{deliver, non_null, optional_str, required_str, write};
 use crate::camera::CadrCamera;
@@ -97,10 +97,14 @@ pub struct CadrFrameStats {
 }
 
 /// What a renderer holds: the view (its GPU scene, techniques and target), the window's
-/// swapchain, and the context that keeps the device alive.
+/// swapchain or the host's image its frames go to, and the context that keeps the device
+/// alive. The outputs come first: dropped first, they wait for their blits, which read the
+/// view's picture.
 pub(crate) struct RendererState {
-    pub(crate) view: View,
     pub(crate) swapchain: Option<Swapchain>,
+    /// The host's image every frame is blitted into (`cadr_renderer_create_for_image`).
+    pub(crate) image_output: Option<ImageOutput>,
+    pub(crate) view: View,
     context: Arc<ContextState>,
     /// Whether the last frame resubmitted the recording before it.
     last_frame_replayed: bool,
@@ -145,17 +149,26 @@ fn check_size(width: u32, height: u32) -> Result<(), Failure> {
     Ok(())
 }
 
-fn new_renderer(
+/// Where a new renderer's frames go besides its own picture.
+pub(crate) enum Output {
+    /// Nowhere: the host reads them back.
+    Offscreen,
+    /// A window: a swapchain on the host's surface.
+    Surface(raw::SurfaceKHR),
+    /// A host's image.
+    Image(HostImage),
+}
+
+pub(crate) fn new_renderer(
     context: CadrContext,
-    width: u32,
-    height: u32,
-    surface: Option<raw::SurfaceKHR>,
+    (width, height): (u32, u32),
+    output: Output,
     renderer: *mut CadrRenderer,
 ) -> Result<(), Failure> {
     let context = context_state(context)?;
     non_null(renderer, "renderer")?;
     check_size(width, height)?;
-    if surface.is_some() && !context.presentation {
+    if matches!(output, Output::Surface(_)) && !context.presentation {
         return Err(Failure::new(
             CadrResult::Unsupported,
             "the context cannot present: create it with the window system's instance extensions (VK_KHR_surface and the platform's, e.g. from glfwGetRequiredInstanceExtensions)".into(),
@@ -173,18 +186,21 @@ fn new_renderer(
     {
         techniques.select(&faster)?;
     }
-    let swapchain = match surface {
-        Some(surface) => Some(Swapchain::new(device, surface, width, height)?),
-        None => None,
+    let (swapchain, image_output) = match output {
+        Output::Offscreen => (None, None),
+        Output::Surface(surface) => (Some(Swapchain::new(device, surface, width, height)?), None),
+        Output::Image(image) => (None, Some(ImageOutput::new(device, image)?)),
     };
-    if swapchain.is_some() {
-        // A window's frames go to the GPU without waiting for the last one (see
-        // cadr_renderer_set_frames_in_flight); offscreen frames are read back at once anyway.
+    if swapchain.is_some() || image_output.is_some() {
+        // A window's or a host image's frames go to the GPU without waiting for the last one
+        // (see cadr_renderer_set_frames_in_flight); offscreen frames are read back at once
+        // anyway.
         view.renderer_mut().set_frames_in_flight(2)?;
     }
     let state = RendererState {
-        view,
         swapchain,
+        image_output,
+        view,
         context: Arc::clone(&context),
         last_frame_replayed: false,
     };
@@ -223,7 +239,7 @@ pub unsafe extern "C" fn cadr_renderer_create(
     height: u32,
     renderer: *mut CadrRenderer,
 ) -> CadrResult {
-    guard(|| new_renderer(context, width, height, None, renderer))
+    guard(|| new_renderer(context, (width, height), Output::Offscreen, renderer))
 }
 
 /// Creates a renderer that presents into a host window: `surface` is a `VkSurfaceKHR` the host
@@ -257,9 +273,8 @@ pub unsafe extern "C" fn cadr_renderer_create_for_surface(
         }
         new_renderer(
             context,
-            width,
-            height,
-            Some(raw::SurfaceKHR::from_raw(surface)),
+            (width, height),
+            Output::Surface(raw::SurfaceKHR::from_raw(surface)),
             renderer,
         )
     })
@@ -299,6 +314,11 @@ pub extern "C" fn cadr_renderer_resize(
 ) -> CadrResult {
     guard(|| {
         with_renderer(renderer, |state| {
+            if state.image_output.is_some() {
+                return Err(Failure::invalid(
+                    "the renderer draws at the size of the host's image: give it another image with cadr_renderer_set_image",
+                ));
+            }
             match &mut state.swapchain {
                 Some(swapchain) => {
                     if width > 16384 || height > 16384 {
@@ -995,6 +1015,11 @@ pub unsafe extern "C" fn cadr_renderer_render(
                 frame.presented = swapchain.present(state.view.renderer().color_image())?
                     == PresentOutcome::Presented;
                 frame.present_us = present_start.elapsed().as_secs_f64() * 1e6;
+            }
+            if let Some(output) = &mut state.image_output {
+                let copy_start = Instant::now();
+                output.copy(state.view.renderer().color_image())?;
+                frame.present_us = copy_start.elapsed().as_secs_f64() * 1e6;
             }
             frame.cpu_us = drawn.cpu_us();
             frame.cpu_record_us = drawn.cpu_record_us;

@@ -146,6 +146,156 @@ static unsigned pixel_difference(const uint8_t *a, const uint8_t *b, size_t size
   return differing;
 }
 
+/* A memory type of `physical` among `bits` with `flags`. */
+static uint32_t memory_type(VkPhysicalDevice physical, uint32_t bits, VkMemoryPropertyFlags flags) {
+  VkPhysicalDeviceMemoryProperties memory;
+  uint32_t i;
+  vkGetPhysicalDeviceMemoryProperties(physical, &memory);
+  for (i = 0; i < memory.memoryTypeCount; ++i) {
+    if ((bits & (1u << i)) && (memory.memoryTypes[i].propertyFlags & flags) == flags) {
+      return i;
+    }
+  }
+  fprintf(stderr, "no memory type with flags %x\n", (unsigned)flags);
+  exit(1);
+}
+
+/* The host's side of a frame handed over in its own image: the image, a buffer to read it back,
+ * the semaphores around cadr's blit and the host's copy. */
+struct Handover {
+  VkImage image;
+  VkDeviceMemory image_memory;
+  VkBuffer buffer;
+  VkDeviceMemory buffer_memory;
+  VkSemaphore ready, done;
+  VkCommandPool pool;
+  VkCommandBuffer copy;
+  VkFence fence;
+};
+
+static void handover_create(struct Handover *h, VkPhysicalDevice physical, VkDevice device,
+                            uint32_t family) {
+  VkImageCreateInfo image_info;
+  VkBufferCreateInfo buffer_info;
+  VkMemoryRequirements needs;
+  VkMemoryAllocateInfo allocation;
+  VkSemaphoreCreateInfo semaphore_info;
+  VkCommandPoolCreateInfo pool_info;
+  VkCommandBufferAllocateInfo buffer_allocation;
+  VkFenceCreateInfo fence_info;
+  memset(&image_info, 0, sizeof image_info);
+  image_info.sType = VK_STRUCTURE_TYPE_IMAGE_CREATE_INFO;
+  image_info.imageType = VK_IMAGE_TYPE_2D;
+  image_info.format = VK_FORMAT_R8G8B8A8_UNORM;
+  image_info.extent.width = W;
+  image_info.extent.height = H;
+  image_info.extent.depth = 1;
+  image_info.mipLevels = 1;
+  image_info.arrayLayers = 1;
+  image_info.samples = VK_SAMPLE_COUNT_1_BIT;
+  image_info.tiling = VK_IMAGE_TILING_OPTIMAL;
+  image_info.usage = VK_IMAGE_USAGE_TRANSFER_DST_BIT | VK_IMAGE_USAGE_TRANSFER_SRC_BIT;
+  VK_OK(vkCreateImage(device, &image_info, NULL, &h->image));
+  vkGetImageMemoryRequirements(device, h->image, &needs);
+  memset(&allocation, 0, sizeof allocation);
+  allocation.sType = VK_STRUCTURE_TYPE_MEMORY_ALLOCATE_INFO;
+  allocation.allocationSize = needs.size;
+  allocation.memoryTypeIndex =
+      memory_type(physical, needs.memoryTypeBits, VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT);
+  VK_OK(vkAllocateMemory(device, &allocation, NULL, &h->image_memory));
+  VK_OK(vkBindImageMemory(device, h->image, h->image_memory, 0));
+  memset(&buffer_info, 0, sizeof buffer_info);
+  buffer_info.sType = VK_STRUCTURE_TYPE_BUFFER_CREATE_INFO;
+  buffer_info.size = W * H * 4;
+  buffer_info.usage = VK_BUFFER_USAGE_TRANSFER_DST_BIT;
+  VK_OK(vkCreateBuffer(device, &buffer_info, NULL, &h->buffer));
+  vkGetBufferMemoryRequirements(device, h->buffer, &needs);
+  allocation.allocationSize = needs.size;
+  allocation.memoryTypeIndex =
+      memory_type(physical, needs.memoryTypeBits,
+                  VK_MEMORY_PROPERTY_HOST_VISIBLE_BIT | VK_MEMORY_PROPERTY_HOST_COHERENT_BIT);
+  VK_OK(vkAllocateMemory(device, &allocation, NULL, &h->buffer_memory));
+  VK_OK(vkBindBufferMemory(device, h->buffer, h->buffer_memory, 0));
+  memset(&semaphore_info, 0, sizeof semaphore_info);
+  semaphore_info.sType = VK_STRUCTURE_TYPE_SEMAPHORE_CREATE_INFO;
+  VK_OK(vkCreateSemaphore(device, &semaphore_info, NULL, &h->ready));
+  VK_OK(vkCreateSemaphore(device, &semaphore_info, NULL, &h->done));
+  memset(&pool_info, 0, sizeof pool_info);
+  pool_info.sType = VK_STRUCTURE_TYPE_COMMAND_POOL_CREATE_INFO;
+  pool_info.queueFamilyIndex = family;
+  VK_OK(vkCreateCommandPool(device, &pool_info, NULL, &h->pool));
+  memset(&buffer_allocation, 0, sizeof buffer_allocation);
+  buffer_allocation.sType = VK_STRUCTURE_TYPE_COMMAND_BUFFER_ALLOCATE_INFO;
+  buffer_allocation.commandPool = h->pool;
+  buffer_allocation.level = VK_COMMAND_BUFFER_LEVEL_PRIMARY;
+  buffer_allocation.commandBufferCount = 1;
+  VK_OK(vkAllocateCommandBuffers(device, &buffer_allocation, &h->copy));
+  memset(&fence_info, 0, sizeof fence_info);
+  fence_info.sType = VK_STRUCTURE_TYPE_FENCE_CREATE_INFO;
+  VK_OK(vkCreateFence(device, &fence_info, NULL, &h->fence));
+}
+
+/* Signals `ready` (the image may be written), as a host does when it is done with the image. */
+static void handover_release(struct Handover *h, VkQueue queue, struct QueueLock *lock) {
+  VkSubmitInfo submit;
+  memset(&submit, 0, sizeof submit);
+  submit.sType = VK_STRUCTURE_TYPE_SUBMIT_INFO;
+  submit.signalSemaphoreCount = 1;
+  submit.pSignalSemaphores = &h->ready;
+  lock_queue(lock);
+  VK_OK(vkQueueSubmit(queue, 1, &submit, VK_NULL_HANDLE));
+  unlock_queue(lock);
+}
+
+/* Copies the image (in TRANSFER_SRC_OPTIMAL once `done` is signalled) into the buffer, waits,
+ * and returns the mapped pixels. */
+static const uint8_t *handover_read(struct Handover *h, VkDevice device, VkQueue queue,
+                                    struct QueueLock *lock) {
+  VkCommandBufferBeginInfo begin;
+  VkBufferImageCopy region;
+  VkSubmitInfo submit;
+  VkPipelineStageFlags stage = VK_PIPELINE_STAGE_TRANSFER_BIT;
+  void *mapped = NULL;
+  memset(&begin, 0, sizeof begin);
+  begin.sType = VK_STRUCTURE_TYPE_COMMAND_BUFFER_BEGIN_INFO;
+  begin.flags = VK_COMMAND_BUFFER_USAGE_ONE_TIME_SUBMIT_BIT;
+  VK_OK(vkBeginCommandBuffer(h->copy, &begin));
+  memset(&region, 0, sizeof region);
+  region.imageSubresource.aspectMask = VK_IMAGE_ASPECT_COLOR_BIT;
+  region.imageSubresource.layerCount = 1;
+  region.imageExtent.width = W;
+  region.imageExtent.height = H;
+  region.imageExtent.depth = 1;
+  vkCmdCopyImageToBuffer(h->copy, h->image, VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL, h->buffer, 1,
+                         &region);
+  VK_OK(vkEndCommandBuffer(h->copy));
+  memset(&submit, 0, sizeof submit);
+  submit.sType = VK_STRUCTURE_TYPE_SUBMIT_INFO;
+  submit.waitSemaphoreCount = 1;
+  submit.pWaitSemaphores = &h->done;
+  submit.pWaitDstStageMask = &stage;
+  submit.commandBufferCount = 1;
+  submit.pCommandBuffers = &h->copy;
+  lock_queue(lock);
+  VK_OK(vkQueueSubmit(queue, 1, &submit, h->fence));
+  unlock_queue(lock);
+  VK_OK(vkWaitForFences(device, 1, &h->fence, VK_TRUE, UINT64_MAX));
+  VK_OK(vkMapMemory(device, h->buffer_memory, 0, VK_WHOLE_SIZE, 0, &mapped));
+  return mapped;
+}
+
+static void handover_destroy(struct Handover *h, VkDevice device) {
+  vkUnmapMemory(device, h->buffer_memory);
+  vkDestroyFence(device, h->fence, NULL);
+  vkDestroyCommandPool(device, h->pool, NULL);
+  vkDestroySemaphore(device, h->ready, NULL);
+  vkDestroySemaphore(device, h->done, NULL);
+  vkDestroyBuffer(device, h->buffer, NULL);
+  vkFreeMemory(device, h->buffer_memory, NULL);
+  vkDestroyImage(device, h->image, NULL);
+  vkFreeMemory(device, h->image_memory, NULL);
+}
+
 /* Draws gen:demo with a renderer of `context` into `pixels`. */
 static void draw_demo(CadrContext context, CadrScene scene, uint8_t *pixels) {
   CadrRenderer renderer = 0;
@@ -317,6 +467,49 @@ int main(void) {
   draw_demo(lent, scene, lent_pixels);
   CHECK(lock.taken > 0);
   CHECK(lock.held == 0);
+  {
+    /* Frames into the host's own image: cadr's blit waits for the host's `ready` and signals
+     * `done`, which the host's copy waits for; the image holds the renderer's picture. */
+    struct Handover h;
+    struct CadrHostImage image;
+    static uint8_t picture[W * H * 4];
+    const uint8_t *handed;
+    CadrRenderer renderer = 0;
+    struct CadrBounds bounds;
+    struct CadrCamera camera;
+    struct CadrFrameStats stats;
+    VkQueue queue;
+    vkGetDeviceQueue(device, family, 0, &queue);
+    handover_create(&h, physical, device, family);
+    memset(&image, 0, sizeof image);
+    image.size = sizeof image;
+    image.image = (uint64_t)(uintptr_t)h.image;
+    image.format = VK_FORMAT_BC1_RGB_UNORM_BLOCK; /* compressed: never a blit destination */
+    image.width = W;
+    image.height = H;
+    image.old_layout = VK_IMAGE_LAYOUT_UNDEFINED;
+    image.new_layout = VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL;
+    image.wait_semaphore = (uint64_t)(uintptr_t)h.ready;
+    image.signal_semaphore = (uint64_t)(uintptr_t)h.done;
+    CHECK(cadr_renderer_create_for_image(lent, &image, &renderer) == CADR_RESULT_UNSUPPORTED);
+    CHECK(strstr(last_error(), "BC1_RGB_UNORM_BLOCK") != NULL);
+    image.format = VK_FORMAT_R8G8B8A8_UNORM;
+    image.new_layout = VK_IMAGE_LAYOUT_UNDEFINED;
+    CHECK(cadr_renderer_create_for_image(lent, &image, &renderer) == CADR_RESULT_INVALID_ARGUMENT);
+    image.new_layout = VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL;
+    OK(cadr_renderer_create_for_image(lent, &image, &renderer));
+    CHECK(cadr_renderer_resize(renderer, 10, 10) == CADR_RESULT_INVALID_ARGUMENT);
+    OK(cadr_scene_bounds(scene, &bounds));
+    OK(cadr_camera_fit(&bounds, (double)W / H, NULL, &camera));
+    handover_release(&h, queue, &lock);
+    OK(cadr_renderer_render(renderer, scene, &camera, &stats));
+    handed = handover_read(&h, device, queue, &lock);
+    OK(cadr_renderer_read_pixels(renderer, picture, sizeof picture));
+    CHECK(memcmp(handed, picture, sizeof picture) == 0);
+    CHECK(pixel_difference(picture, lent_pixels, sizeof picture) == 0);
+    OK(cadr_renderer_destroy(renderer));
+    handover_destroy(&h, device);
+  }
   OK(cadr_context_validation_error_count(lent, &errors));
   CHECK(errors == 0);
   OK(cadr_context_destroy(lent));

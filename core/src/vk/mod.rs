@@ -13,6 +13,7 @@ mod command;
 mod device;
 mod error;
 pub mod fault;
+mod frame_blit;
 pub mod host_memory;
 pub mod host_vulkan;
 mod image;
@@ -34,6 +35,7 @@ pub use buffer::{Buffer, MemoryLocation};
 pub use command::{record_dispatch, record_fullscreen, resubmit_times_us, CommandContext, OneShot};
 pub use device::{Capabilities, Device, DeviceMemoryUsage, DeviceOptions, RawHandles};
 pub use error::{map_result, VkError, VkResult, VkResultExt};
+pub use frame_blit::{BlitTarget, HostImage, ImageOutput};
 pub use image::{
     memory_barrier, read_rgba8, record_image_copy, subresource_range, transition, transition_range,
     Image, ImageShape, MultisampledTarget, OffscreenTarget, TexelImage, COLOR_FORMAT, DEPTH_FORMAT,

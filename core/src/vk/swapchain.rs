@@ -12,10 +12,10 @@ use std::sync::Arc;
 
 use ash::vk;
 
-use super::command::CommandContext;
 use super::device::Device;
 use super::error::{VkError, VkResult, VkResultExt};
-use super::image::{transition, Image};
+use super::frame_blit::{BlitRing, BlitTarget, BLITS_IN_FLIGHT};
+use super::image::Image;
 
 /// What happened to a frame handed to [`Swapchain::present`].
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -78,52 +78,10 @@ pub struct Swapchain {
     present_mode: PresentMode,
     /// One per swapchain image: signalled by the blit, waited for by the presentation.
     ready_to_present: Vec<vk::Semaphore>,
-    /// The blits of the last [`PRESENTS_IN_FLIGHT`] presents, used in turn.
-    presents: Vec<PresentSlot>,
-    /// The slot of the next present.
-    next_present: usize,
-}
-
-/// How many presents' blits may be on the GPU at once: as many as a renderer's frames in
-/// flight, so that presenting never makes a frame wait for more than its frame slot does
-/// (the swapchain's images may still hold the host back: acquiring one waits while the
-/// presentation engine holds them all).
-const PRESENTS_IN_FLIGHT: usize = 3;
-
-/// What one present's blit uses until the GPU has finished it: its command buffer and the
-/// semaphore the acquisition of its image signals.
-struct PresentSlot {
-    device: Arc<Device>,
-    commands: CommandContext,
-    image_acquired: vk::Semaphore,
-}
-
-impl PresentSlot {
-    /// The command buffer and semaphore of present slot `index`.
-    fn new(device: &Arc<Device>, index: usize) -> VkResult<Self> {
-        let commands = CommandContext::new(device, &format!("present {index} commands"))?;
-        let image_acquired =
-            create_semaphore(device, &format!("present {index} swapchain image acquired"))?;
-        Ok(Self {
-            device: Arc::clone(device),
-            commands,
-            image_acquired,
-        })
-    }
-}
-
-impl Drop for PresentSlot {
-    fn drop(&mut self) {
-        // The command context waits for its submission when dropped; the semaphore's last
-        // use, that submission's wait, is then over too.
-        let _ = self.commands.wait();
-        // SAFETY: no pending submission waits on the semaphore (above); destroyed once.
-        unsafe {
-            self.device
-                .raw
-                .destroy_semaphore(self.image_acquired, host_callbacks())
-        };
-    }
+    /// The blits of the last presents.
+    blits: BlitRing,
+    /// Per slot of the ring: the semaphore the acquisition of that blit's image signals.
+    image_acquired: Vec<vk::Semaphore>,
 }
 
 fn create_semaphore(device: &Device, name: &str) -> VkResult<vk::Semaphore> {
@@ -167,9 +125,7 @@ impl Swapchain {
             });
         }
         let swapchain_fn = ash::khr::swapchain::Device::new(instance.raw(), device.raw());
-        let presents = (0..PRESENTS_IN_FLIGHT)
-            .map(|index| PresentSlot::new(device, index))
-            .collect::<VkResult<Vec<_>>>()?;
+        let blits = BlitRing::new(device, "present")?;
         let mut swapchain = Self {
             device: Arc::clone(device),
             surface_fn,
@@ -183,9 +139,14 @@ impl Swapchain {
             stale: false,
             present_mode: PresentMode::Fifo,
             ready_to_present: Vec::new(),
-            presents,
-            next_present: 0,
+            blits,
+            image_acquired: Vec::new(),
         };
+        for index in 0..BLITS_IN_FLIGHT {
+            // Dropped with the swapchain on a failure.
+            let semaphore = create_semaphore(device, &format!("present {index} image acquired"))?;
+            swapchain.image_acquired.push(semaphore);
+        }
         if let Err(error) = swapchain.recreate() {
             // The caller keeps the surface: Drop must not destroy it.
             swapchain.surface = vk::SurfaceKHR::null();
@@ -372,11 +333,10 @@ impl Swapchain {
     /// Blits `frame` (a color image in TRANSFER_SRC_OPTIMAL, as a frame leaves it) into the
     /// next swapchain image and presents it, without waiting for the GPU: the blit follows the
     /// frame on the queue, and the next frame's drawing into `frame` waits for the blit there.
-    /// Only the blit of the present [`PRESENTS_IN_FLIGHT`] presents ago is waited for, as its
+    /// Only the blit of the present [`BLITS_IN_FLIGHT`] presents ago is waited for, as its
     /// command buffer and semaphore are reused.
     pub fn present(&mut self, frame: &Image) -> VkResult<PresentOutcome> {
-        let slot = self.next_present;
-        self.presents[slot].commands.wait()?;
+        let slot = self.blits.next_slot()?;
         if self.stale {
             self.recreate()?;
         }
@@ -387,7 +347,7 @@ impl Swapchain {
                 return Ok(PresentOutcome::Skipped);
             }
         }
-        let image_acquired = self.presents[slot].image_acquired;
+        let image_acquired = self.image_acquired[slot];
         // SAFETY: the swapchain is live; the semaphore is unsignalled (its last wait, the
         // slot's last blit, completed: it was waited for above).
         let acquired = unsafe {
@@ -411,15 +371,19 @@ impl Swapchain {
         };
         let image = self.images[index as usize];
         let ready = self.ready_to_present[index as usize];
-        let commands = &mut self.presents[slot].commands;
-        let command_buffer = commands.begin()?;
-        let device = &*self.device;
-        record_blit(device, command_buffer, frame, (image, self.extent));
-        commands.submit_with_semaphores(
+        let target = BlitTarget {
+            image,
+            extent: self.extent,
+            old_layout: vk::ImageLayout::UNDEFINED,
+            new_layout: vk::ImageLayout::PRESENT_SRC_KHR,
+        };
+        self.blits.blit(
+            frame,
+            &target,
             &[(image_acquired, vk::PipelineStageFlags::TRANSFER)],
             &[ready],
         )?;
-        self.next_present = (slot + 1) % PRESENTS_IN_FLIGHT;
+        let device = &*self.device;
         let swapchains = [self.raw];
         let indices = [index];
         let waits = [ready];
@@ -447,87 +411,17 @@ impl Swapchain {
     }
 }
 
-/// Records the blit of `frame` (in TRANSFER_SRC_OPTIMAL) into the swapchain `image` of
-/// `extent`, scaled if their sizes differ, leaving the image ready to present.
-fn record_blit(
-    device: &Device,
-    command_buffer: vk::CommandBuffer,
-    frame: &Image,
-    (image, extent): (vk::Image, vk::Extent2D),
-) {
-    transition(
-        device,
-        command_buffer,
-        image,
-        vk::ImageAspectFlags::COLOR,
-        (
-            vk::ImageLayout::UNDEFINED,
-            vk::PipelineStageFlags2::BLIT,
-            vk::AccessFlags2::NONE,
-        ),
-        (
-            vk::ImageLayout::TRANSFER_DST_OPTIMAL,
-            vk::PipelineStageFlags2::BLIT,
-            vk::AccessFlags2::TRANSFER_WRITE,
-        ),
-    );
-    let source = frame.extent();
-    let corner = |e: vk::Extent2D| vk::Offset3D {
-        x: e.width as i32,
-        y: e.height as i32,
-        z: 1,
-    };
-    let layers = vk::ImageSubresourceLayers::default()
-        .aspect_mask(vk::ImageAspectFlags::COLOR)
-        .layer_count(1);
-    let region = [vk::ImageBlit::default()
-        .src_subresource(layers)
-        .src_offsets([vk::Offset3D::default(), corner(source)])
-        .dst_subresource(layers)
-        .dst_offsets([vk::Offset3D::default(), corner(extent)])];
-    let filter = if source == extent {
-        vk::Filter::NEAREST
-    } else {
-        vk::Filter::LINEAR
-    };
-    // SAFETY: recording; the frame is in TRANSFER_SRC_OPTIMAL, the swapchain image was
-    // just moved to TRANSFER_DST_OPTIMAL; both outlive the submission, which is waited for.
-    unsafe {
-        device.raw.cmd_blit_image(
-            command_buffer,
-            frame.raw(),
-            vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
-            image,
-            vk::ImageLayout::TRANSFER_DST_OPTIMAL,
-            &region,
-            filter,
-        )
-    };
-    transition(
-        device,
-        command_buffer,
-        image,
-        vk::ImageAspectFlags::COLOR,
-        (
-            vk::ImageLayout::TRANSFER_DST_OPTIMAL,
-            vk::PipelineStageFlags2::BLIT,
-            vk::AccessFlags2::TRANSFER_WRITE,
-        ),
-        (
-            vk::ImageLayout::PRESENT_SRC_KHR,
-            vk::PipelineStageFlags2::BOTTOM_OF_PIPE,
-            vk::AccessFlags2::NONE,
-        ),
-    );
-}
-
 impl Drop for Swapchain {
     fn drop(&mut self) {
         let _ = self.device.wait_idle();
         // SAFETY: the device is idle; every handle is destroyed once, the surface last (after
         // the swapchain made on it).
         unsafe {
-            for semaphore in self.ready_to_present.drain(..) {
+            for semaphore in self
+                .ready_to_present
+                .drain(..)
+                .chain(self.image_acquired.drain(..))
+            {
                 self.device
                     .raw
                     .destroy_semaphore(semaphore, host_callbacks());

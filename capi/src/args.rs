@@ -205,3 +205,20 @@ pub(crate) unsafe fn deliver_sized<T: Copy>(
     }
     Ok(())
 }
+
+/// Refuses an input struct whose `size` is not this library's `T`'s: `name` is the argument
+/// (`options`), `type_name` the struct's C name, `hint` how to fill it, if there is a function
+/// for it.
+pub(crate) fn check_input_size<T>(
+    (name, type_name): (&str, &str),
+    size: u32,
+    hint: &str,
+) -> Result<(), Failure> {
+    let expected = std::mem::size_of::<T>() as u32;
+    if size == expected {
+        return Ok(());
+    }
+    Err(Failure::invalid(format!(
+        "{name}.size is {size} but this library's {type_name} has {expected} bytes{hint}"
+    )))
+}

@@ -7,7 +7,7 @@ use std::sync::Arc;
 use cadr_core::technique::{default_plugin_dirs, feature_bits, PluginRegistry, TechniqueKind};
 use cadr_core::vk::{raw::Handle, Device, DeviceChoice, DeviceOptions, InstanceOptions};
 
-use crate::args::{deliver, deliver_sized, non_null, optional_str, string_list};
+use crate::args::{check_input_size, deliver, deliver_sized, non_null, optional_str, string_list};
 use crate::error::{guard, CadrResult, Failure};
 use crate::handles::{lock, Registry};
 
@@ -284,6 +284,9 @@ pub unsafe extern "C" fn cadr_context_options_default(
     })
 }
 
+/// How a host fills `CadrContextOptions`, for the message about a wrong size.
+pub(crate) const OPTIONS_HINT: &str = " (fill it with cadr_context_options_default)";
+
 fn c_strings(names: Vec<String>, what: &str) -> Result<Vec<CString>, Failure> {
     names
         .into_iter()
@@ -326,13 +329,11 @@ pub unsafe extern "C" fn cadr_context_create(
             // SAFETY: non-null and valid by contract.
             unsafe { *options }
         };
-        let expected = std::mem::size_of::<CadrContextOptions>() as u32;
-        if options.size != expected {
-            return Err(Failure::invalid(format!(
-                "options.size is {} but this library's CadrContextOptions has {expected} bytes (fill it with cadr_context_options_default)",
-                options.size
-            )));
-        }
+        check_input_size::<CadrContextOptions>(
+            ("options", "CadrContextOptions"),
+            options.size,
+            OPTIONS_HINT,
+        )?;
         // SAFETY: the pointers are valid for their counts (the caller's contract).
         let (instance_extensions, device_extensions, plugin_dirs, device_name) = unsafe {
             (

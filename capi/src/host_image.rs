@@ -5,7 +5,7 @@
 use cadr_core::vk::raw::{self as vk, Handle};
 use cadr_core::vk::{BlitTarget, HostImage};
 
-use crate::args::non_null;
+use crate::args::{check_input_size, non_null};
 use crate::context::CadrContext;
 use crate::error::{guard, CadrResult, Failure};
 use crate::renderer::{new_renderer, with_renderer, CadrRenderer, Output};
@@ -55,13 +55,7 @@ unsafe fn host_image(image: *const CadrHostImage) -> Result<HostImage, Failure> 
     non_null(image, "image")?;
     // SAFETY: non-null and readable (the caller's contract).
     let image = unsafe { *image };
-    let expected = std::mem::size_of::<CadrHostImage>() as u32;
-    if image.size != expected {
-        return Err(Failure::invalid(format!(
-            "image.size is {} but this library's CadrHostImage has {expected} bytes",
-            image.size
-        )));
-    }
+    check_input_size::<CadrHostImage>(("image", "CadrHostImage"), image.size, "")?;
     if image.image == 0 {
         return Err(Failure::invalid("image.image is VK_NULL_HANDLE"));
     }

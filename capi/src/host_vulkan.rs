@@ -9,8 +9,8 @@ use cadr_core::vk::host_vulkan::{HostDevice, HostVulkan, QueueLock, REQUIREMENTS
 use cadr_core::vk::raw::{self as vk, Handle};
 use cadr_core::vk::Device;
 
-use crate::args::{deliver, deliver_sized, non_null, string_list};
-use crate::context::{insert_context, CadrContext, CadrContextOptions};
+use crate::args::{check_input_size, deliver, deliver_sized, non_null, string_list};
+use crate::context::{insert_context, CadrContext, CadrContextOptions, OPTIONS_HINT};
 use crate::error::{guard, CadrResult, Failure};
 
 /// What cadr needs of a host's Vulkan instance and device, and what it uses where the host
@@ -211,13 +211,7 @@ pub unsafe extern "C" fn cadr_context_create_from_vulkan(
         non_null(host, "host")?;
         // SAFETY: non-null; valid by the caller's contract.
         let host = unsafe { *host };
-        let expected = std::mem::size_of::<CadrHostVulkan>() as u32;
-        if host.size != expected {
-            return Err(Failure::invalid(format!(
-                "host.size is {} but this library's CadrHostVulkan has {expected} bytes",
-                host.size
-            )));
-        }
+        check_input_size::<CadrHostVulkan>(("host", "CadrHostVulkan"), host.size, "")?;
         // SAFETY: valid by the caller's contract.
         let lent = unsafe { lent_vulkan(&host) }?;
         // SAFETY: null or valid by the caller's contract.
@@ -305,13 +299,11 @@ unsafe fn plugin_dirs(options: *const CadrContextOptions) -> Result<(Vec<String>
     }
     // SAFETY: non-null and valid (the caller's contract).
     let options = unsafe { &*options };
-    let expected = std::mem::size_of::<CadrContextOptions>() as u32;
-    if options.size != expected {
-        return Err(Failure::invalid(format!(
-            "options.size is {} but this library's CadrContextOptions has {expected} bytes (fill it with cadr_context_options_default)",
-            options.size
-        )));
-    }
+    check_input_size::<CadrContextOptions>(
+        ("options", "CadrContextOptions"),
+        options.size,
+        OPTIONS_HINT,
+    )?;
     // SAFETY: valid for its count (the caller's contract).
     let dirs = unsafe {
         string_list(

@@ -9,6 +9,7 @@
  * failed check. */
 #define _POSIX_C_SOURCE 200809L
 #include "cadr.h"
+#include "checks.h"
 
 #include <pthread.h>
 #include <stdio.h>
@@ -17,33 +18,6 @@
 #include <vulkan/vulkan.h>
 
 enum { W = 96, H = 72 };
-
-static const char *last_error(void) {
-  static char text[4096];
-  size_t length = 0;
-  if (cadr_last_error_message(text, sizeof text, &length) != CADR_RESULT_OK) {
-    return "(message too long)";
-  }
-  return text;
-}
-
-#define OK(call)                                                                               \
-  do {                                                                                         \
-    enum CadrResult result_ = (call);                                                          \
-    if (result_ != CADR_RESULT_OK) {                                                           \
-      fprintf(stderr, "%s:%d: %s gave %s: %s\n", __FILE__, __LINE__, #call,                    \
-              cadr_result_string((int32_t)result_), last_error());                            \
-      exit(1);                                                                                 \
-    }                                                                                          \
-  } while (0)
-
-#define CHECK(condition)                                                           \
-  do {                                                                             \
-    if (!(condition)) {                                                            \
-      fprintf(stderr, "%s:%d: check failed: %s\n", __FILE__, __LINE__, #condition); \
-      exit(1);                                                                     \
-    }                                                                              \
-  } while (0)
 
 #define VK_OK(call)                                                                  \
   do {                                                                               \
@@ -133,17 +107,6 @@ static VkBool32 *flag(struct Features *f, const char *name) {
     }
   }
   return NULL;
-}
-
-static unsigned pixel_difference(const uint8_t *a, const uint8_t *b, size_t size) {
-  unsigned differing = 0;
-  size_t i;
-  for (i = 0; i < size; i += 4) {
-    if (abs(a[i] - b[i]) + abs(a[i + 1] - b[i + 1]) + abs(a[i + 2] - b[i + 2]) > 30) {
-      ++differing;
-    }
-  }
-  return differing;
 }
 
 /* A memory type of `physical` among `bits` with `flags`. */

@@ -8,6 +8,7 @@
  * non-zero on the first failed call. */
 #define _POSIX_C_SOURCE 200809L
 #include "cadr.h"
+#include "checks.h"
 
 #include <math.h>
 #include <pthread.h>
@@ -17,33 +18,6 @@
 #include <string.h>
 
 enum { FRAMES = 40, EDITS = 400, LOADS = 8, MOVERS = 6, W = 64, H = 48 };
-
-static const char *last_error(void) {
-  static _Thread_local char text[4096];
-  size_t length = 0;
-  if (cadr_last_error_message(text, sizeof text, &length) != CADR_RESULT_OK) {
-    return "(message too long)";
-  }
-  return text;
-}
-
-#define OK(call)                                                                               \
-  do {                                                                                         \
-    enum CadrResult result_ = (call);                                                          \
-    if (result_ != CADR_RESULT_OK) {                                                           \
-      fprintf(stderr, "%s:%d: %s gave %s: %s\n", __FILE__, __LINE__, #call,                    \
-              cadr_result_string((int32_t)result_), last_error());                            \
-      exit(1);                                                                                 \
-    }                                                                                          \
-  } while (0)
-
-#define CHECK(condition)                                                           \
-  do {                                                                             \
-    if (!(condition)) {                                                            \
-      fprintf(stderr, "%s:%d: check failed: %s\n", __FILE__, __LINE__, #condition); \
-      exit(1);                                                                     \
-    }                                                                              \
-  } while (0)
 
 static const double identity[16] = {1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1};
 

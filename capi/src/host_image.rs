@@ -12,11 +12,12 @@ use crate::renderer::{new_renderer, with_renderer, CadrRenderer, Output};
 
 /// A host's image that every frame of a renderer is blitted into, and how the blit
 /// synchronises with the host (`cadr_renderer_create_for_image`). The image is the host's: a
-/// 2D `VkImage` of one layer and level on the context's device, created with
-/// `VK_IMAGE_USAGE_TRANSFER_DST_BIT`, usable on cadr's queue family (exclusive to it, or
-/// concurrent), in a format the device can blit into with optimal tiling (for example
-/// `VK_FORMAT_R8G8B8A8_UNORM` or `VK_FORMAT_B8G8R8A8_SRGB`; frames are scaled with linear
-/// filtering to the image's size, which is the renderer's).
+/// 2D `VkImage` of one layer and level on the context's device (the host's own, lent with
+/// `cadr_context_create_from_vulkan`), created with `VK_IMAGE_USAGE_TRANSFER_DST_BIT`, usable
+/// on cadr's queue family (exclusive to it, or concurrent), in a format the device can blit
+/// into with optimal tiling (for example `VK_FORMAT_R8G8B8A8_UNORM` or
+/// `VK_FORMAT_B8G8R8A8_SRGB`, into which the frame's RGBA8 is converted). Its size is the
+/// renderer's.
 #[repr(C)]
 #[derive(Clone, Copy, Debug)]
 pub struct CadrHostImage {

@@ -392,7 +392,7 @@ impl Renderer {
     /// (`CADR_TRAIT_FRAME_SLOTS`, which cadr's own techniques announce, but the `-threads`
     /// submissions). Otherwise (the scene or the passes changed, the frame uploads moved
     /// parts, picks, or a technique keeps one copy) it waits for every earlier frame, as
-    /// with 1. With more than 1, [`FrameStats::gpu_us`] is the GPU time of the latest frame
+    /// with 1. With more than 1, [`crate::render::FrameStats::gpu_us`] is the GPU time of the latest frame
     /// known to have finished. Lowering the count waits for every frame.
     pub fn set_frames_in_flight(&mut self, frames: u32) -> RenderResult<()> {
         if !(1..=MAX_FRAMES_IN_FLIGHT).contains(&frames) {

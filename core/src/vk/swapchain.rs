@@ -333,7 +333,7 @@ impl Swapchain {
     /// Blits `frame` (a color image in TRANSFER_SRC_OPTIMAL, as a frame leaves it) into the
     /// next swapchain image and presents it, without waiting for the GPU: the blit follows the
     /// frame on the queue, and the next frame's drawing into `frame` waits for the blit there.
-    /// Only the blit of the present [`BLITS_IN_FLIGHT`] presents ago is waited for, as its
+    /// Only the blit of the present three presents ago is waited for, as its
     /// command buffer and semaphore are reused.
     pub fn present(&mut self, frame: &Image) -> VkResult<PresentOutcome> {
         let slot = self.blits.next_slot()?;

@@ -80,6 +80,25 @@ macro_rules! pass_filters_method {
     };
 }
 
+/// The extension of `kind` in `chain` as a `T` (which starts with its header), where the
+/// writer's struct is at least as long as `T`.
+///
+/// # Safety
+/// `chain` is null or a valid chain of extension structs alive for `'a`, and an extension of
+/// `kind` is a `T`.
+unsafe fn extension<'a, T>(
+    chain: *const abi::CadrExtension,
+    kind: abi::CadrExtensionKind,
+) -> Option<&'a T> {
+    // SAFETY: the caller's contract.
+    let header = unsafe { abi::find_extension(chain, kind) }?;
+    if (header.size as usize) < std::mem::size_of::<T>() {
+        return None;
+    }
+    // SAFETY: an extension of this kind is a `T` (its header first) of at least that size.
+    Some(unsafe { &*std::ptr::from_ref(header).cast::<T>() })
+}
+
 /// The scene during one frame.
 #[derive(Clone, Copy, Debug)]
 pub struct Scene<'a> {
@@ -108,16 +127,9 @@ impl<'a> Scene<'a> {
         if (self.raw.size as usize) < end {
             return None;
         }
-        // SAFETY: the host's chain is valid as long as the view.
-        let header = unsafe {
-            abi::find_extension(self.raw.extensions, abi::CADR_EXTENSION_SCENE_CLUSTERS)
-        }?;
-        if (header.size as usize) < std::mem::size_of::<abi::CadrSceneClusters>() {
-            return None;
-        }
-        // SAFETY: an extension of this kind is a `CadrSceneClusters` (its header first) of at
-        // least that size.
-        Some(unsafe { &*(header as *const abi::CadrExtension).cast::<abi::CadrSceneClusters>() })
+        // SAFETY: the host's chain is valid as long as the view; an extension of this kind is a
+        // `CadrSceneClusters`.
+        unsafe { extension(self.raw.extensions, abi::CADR_EXTENSION_SCENE_CLUSTERS) }
     }
 
     /// Which frame slot is being recorded ([`abi::CadrFrameSlot`]), from a host of ABI 1.15 or
@@ -129,15 +141,9 @@ impl<'a> Scene<'a> {
         if (self.raw.size as usize) < end {
             return None;
         }
-        // SAFETY: the host's chain is valid as long as the view.
-        let header =
-            unsafe { abi::find_extension(self.raw.extensions, abi::CADR_EXTENSION_FRAME_SLOT) }?;
-        if (header.size as usize) < std::mem::size_of::<abi::CadrFrameSlot>() {
-            return None;
-        }
-        // SAFETY: an extension of this kind is a `CadrFrameSlot` (its header first) of at least
-        // that size.
-        Some(unsafe { &*(header as *const abi::CadrExtension).cast::<abi::CadrFrameSlot>() })
+        // SAFETY: the host's chain is valid as long as the view; an extension of this kind is a
+        // `CadrFrameSlot`.
+        unsafe { extension(self.raw.extensions, abi::CADR_EXTENSION_FRAME_SLOT) }
     }
 
     /// Every instance id's instance.
@@ -605,15 +611,9 @@ impl<'a> GpuCull<'a> {
         if (self.raw.size as usize) < end {
             return None;
         }
-        // SAFETY: the host's chain is valid for the call.
-        let header =
-            unsafe { abi::find_extension(self.raw.extensions, abi::CADR_EXTENSION_CLUSTER_CULL) }?;
-        if (header.size as usize) < std::mem::size_of::<abi::CadrClusterCull>() {
-            return None;
-        }
-        // SAFETY: an extension of this kind is a `CadrClusterCull` (its header first) of at
-        // least that size.
-        Some(unsafe { &*(header as *const abi::CadrExtension).cast::<abi::CadrClusterCull>() })
+        // SAFETY: the host's chain is valid for the call; an extension of this kind is a
+        // `CadrClusterCull`.
+        unsafe { extension(self.raw.extensions, abi::CADR_EXTENSION_CLUSTER_CULL) }
     }
 
     /// Per pass, whether the back faces of closed opaque parts cannot show in it (see

@@ -284,10 +284,7 @@ pub unsafe extern "C" fn cadr_context_options_default(
     })
 }
 
-/// How a host fills `CadrContextOptions`, for the message about a wrong size.
-pub(crate) const OPTIONS_HINT: &str = " (fill it with cadr_context_options_default)";
-
-fn c_strings(names: Vec<String>, what: &str) -> Result<Vec<CString>, Failure> {
+pub(crate) fn c_strings(names: Vec<String>, what: &str) -> Result<Vec<CString>, Failure> {
     names
         .into_iter()
         .enumerate()
@@ -319,21 +316,8 @@ pub unsafe extern "C" fn cadr_context_create(
 ) -> CadrResult {
     guard(|| {
         non_null(context, "context")?;
-        let mut defaults = std::mem::MaybeUninit::<CadrContextOptions>::uninit();
-        let options = if options.is_null() {
-            // SAFETY: the pointer is a local, writable MaybeUninit.
-            unsafe { cadr_context_options_default(defaults.as_mut_ptr()) };
-            // SAFETY: just initialised by cadr_context_options_default.
-            unsafe { defaults.assume_init() }
-        } else {
-            // SAFETY: non-null and valid by contract.
-            unsafe { *options }
-        };
-        check_input_size::<CadrContextOptions>(
-            ("options", "CadrContextOptions"),
-            options.size,
-            OPTIONS_HINT,
-        )?;
+        // SAFETY: null or valid (the caller's contract).
+        let options = unsafe { options_or_default(options) }?;
         // SAFETY: the pointers are valid for their counts (the caller's contract).
         let (instance_extensions, device_extensions, plugin_dirs, device_name) = unsafe {
             (
@@ -347,11 +331,7 @@ pub unsafe extern "C" fn cadr_context_create(
                     options.device_extension_count as usize,
                     "options.device_extensions",
                 )?,
-                string_list(
-                    options.plugin_dirs,
-                    options.plugin_dir_count as usize,
-                    "options.plugin_dirs",
-                )?,
+                plugin_dirs(&options)?,
                 optional_str(options.device_name, "options.device_name")?,
             )
         };
@@ -379,14 +359,54 @@ pub unsafe extern "C" fn cadr_context_create(
             extra_extensions: device_extensions,
             ..DeviceOptions::default()
         })?;
-        let handle = insert_context(
-            device,
-            (plugin_dirs, options.default_plugin_dirs),
-            presentation,
-        )?;
+        let handle = insert_context(device, plugin_dirs, presentation)?;
         // SAFETY: context is null or writable (the caller's contract).
         unsafe { deliver(context, "context", handle as CadrContext) }
     })
+}
+
+/// The host's options, or the defaults for null, refused when their size is not this
+/// library's.
+///
+/// # Safety
+/// `options` is null or a valid options struct.
+pub(crate) unsafe fn options_or_default(
+    options: *const CadrContextOptions,
+) -> Result<CadrContextOptions, Failure> {
+    let options = if options.is_null() {
+        let mut defaults = std::mem::MaybeUninit::<CadrContextOptions>::uninit();
+        // SAFETY: the pointer is a local, writable MaybeUninit.
+        unsafe { cadr_context_options_default(defaults.as_mut_ptr()) };
+        // SAFETY: just initialised by cadr_context_options_default.
+        unsafe { defaults.assume_init() }
+    } else {
+        // SAFETY: non-null and valid by contract.
+        unsafe { *options }
+    };
+    check_input_size::<CadrContextOptions>(
+        ("options", "CadrContextOptions"),
+        options.size,
+        " (fill it with cadr_context_options_default)",
+    )?;
+    Ok(options)
+}
+
+/// The plugin directories `options` names, and whether the default ones are searched too.
+///
+/// # Safety
+/// The options' plugin directory list is null or valid for its count.
+pub(crate) unsafe fn plugin_dirs(
+    options: &CadrContextOptions,
+) -> Result<(Vec<String>, bool), Failure> {
+    // SAFETY: valid for its count (the caller's contract).
+    let dirs = unsafe {
+        string_list(
+            options.plugin_dirs,
+            options.plugin_dir_count as usize,
+            "options.plugin_dirs",
+        )
+    }?;
+    Ok((dirs, options.default_plugin_dirs))
 }
 
 /// Registers a context of `device` with the technique plugins found in `plugin_dirs` (and the

@@ -2,7 +2,7 @@
 //! (`cadr_vulkan_requirements`), and a context on the host's instance, device and queue
 //! (`cadr_context_create_from_vulkan`).
 
-use std::ffi::{c_char, c_void, CStr, CString};
+use std::ffi::{c_char, c_void, CStr};
 use std::sync::{Arc, OnceLock};
 
 use cadr_core::vk::host_vulkan::{HostDevice, HostVulkan, QueueLock, REQUIREMENTS};
@@ -10,7 +10,9 @@ use cadr_core::vk::raw::{self as vk, Handle};
 use cadr_core::vk::Device;
 
 use crate::args::{check_input_size, deliver, deliver_sized, non_null, string_list};
-use crate::context::{insert_context, CadrContext, CadrContextOptions, OPTIONS_HINT};
+use crate::context::{
+    c_strings, insert_context, options_or_default, plugin_dirs, CadrContext, CadrContextOptions,
+};
 use crate::error::{guard, CadrResult, Failure};
 
 /// What cadr needs of a host's Vulkan instance and device, and what it uses where the host
@@ -215,11 +217,13 @@ pub unsafe extern "C" fn cadr_context_create_from_vulkan(
         // SAFETY: valid by the caller's contract.
         let lent = unsafe { lent_vulkan(&host) }?;
         // SAFETY: null or valid by the caller's contract.
-        let (plugin_dirs, default_dirs) = unsafe { plugin_dirs(options) }?;
+        let options = unsafe { options_or_default(options) }?;
+        // SAFETY: its list is valid for its count (the caller's contract).
+        let plugin_dirs = unsafe { plugin_dirs(&options) }?;
         let presentation =
             lent.has_instance_extension(c"VK_KHR_surface") && lent.enabled.has(c"VK_KHR_swapchain");
         let device = Device::from_host(lent)?;
-        let handle = insert_context(device, (plugin_dirs, default_dirs), presentation)?;
+        let handle = insert_context(device, plugin_dirs, presentation)?;
         // SAFETY: context is writable (the caller's contract).
         unsafe { deliver(context, "context", handle as CadrContext) }
     })
@@ -254,10 +258,8 @@ unsafe fn lent_vulkan(host: &CadrHostVulkan) -> Result<HostVulkan, Failure> {
             host.instance_extension_count as usize,
             "host.instance_extensions",
         )
-    }?
-    .into_iter()
-    .map(|name| CString::new(name).unwrap_or_default())
-    .collect();
+    }?;
+    let instance_extensions = c_strings(instance_extensions, "host.instance_extensions")?;
     // SAFETY: a valid VkDeviceCreateInfo (the caller's contract).
     let enabled = unsafe { HostDevice::from_create_info(host.device_create_info) }
         .map_err(|reason| Failure::invalid(format!("host.device_create_info: {reason}")))?;
@@ -287,30 +289,4 @@ unsafe fn lent_vulkan(host: &CadrHostVulkan) -> Result<HostVulkan, Failure> {
         queue: (host.queue_family, host.queue_index),
         queue_lock,
     })
-}
-
-/// The plugin directories of `options` (none and the defaults when it is null).
-///
-/// # Safety
-/// `options` is null or a valid options struct.
-unsafe fn plugin_dirs(options: *const CadrContextOptions) -> Result<(Vec<String>, bool), Failure> {
-    if options.is_null() {
-        return Ok((Vec::new(), true));
-    }
-    // SAFETY: non-null and valid (the caller's contract).
-    let options = unsafe { &*options };
-    check_input_size::<CadrContextOptions>(
-        ("options", "CadrContextOptions"),
-        options.size,
-        OPTIONS_HINT,
-    )?;
-    // SAFETY: valid for its count (the caller's contract).
-    let dirs = unsafe {
-        string_list(
-            options.plugin_dirs,
-            options.plugin_dir_count as usize,
-            "options.plugin_dirs",
-        )
-    }?;
-    Ok((dirs, options.default_plugin_dirs))
 }

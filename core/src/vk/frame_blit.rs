@@ -200,16 +200,13 @@ impl ImageOutput {
     pub fn copy(&mut self, frame: &Image) -> VkResult<()> {
         self.ring.next_slot()?;
         let image = self.image;
-        let wait: Vec<(vk::Semaphore, vk::PipelineStageFlags)> = [image.wait]
-            .into_iter()
-            .filter(|s| *s != vk::Semaphore::null())
-            .map(|s| (s, vk::PipelineStageFlags::TRANSFER))
-            .collect();
-        let signal: Vec<vk::Semaphore> = [image.signal]
-            .into_iter()
-            .filter(|s| *s != vk::Semaphore::null())
-            .collect();
-        self.ring.blit(frame, &image.target, &wait, &signal)
+        let wait = [(image.wait, vk::PipelineStageFlags::TRANSFER)];
+        let signal = [image.signal];
+        // A null semaphore is none: an empty list (no allocation per frame).
+        let given = |present: bool| usize::from(present);
+        let wait = &wait[..given(image.wait != vk::Semaphore::null())];
+        let signal = &signal[..given(image.signal != vk::Semaphore::null())];
+        self.ring.blit(frame, &image.target, wait, signal)
     }
 }
 

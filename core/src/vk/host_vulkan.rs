@@ -3,7 +3,7 @@
 //! it created its device with) and the handles it lends ([`HostVulkan`]), which
 //! `Device::from_host` uses without owning them.
 
-use std::ffi::{c_char, c_void, CStr, CString};
+use std::ffi::{c_void, CStr, CString};
 use std::sync::Arc;
 
 use ash::vk;
@@ -14,8 +14,8 @@ use cadr_vk_ext::device_generated_commands as dgc;
 pub struct Requirements {
     /// The lowest Vulkan version of the instance and the physical device.
     pub api_version: u32,
-    /// Device extensions cadr uses where the host enabled them (faster paths), as
-    /// [`REQUIRED_FEATURES`] says of features.
+    /// Device extensions cadr uses where the host enabled them (faster paths, windows); none
+    /// is required.
     pub optional_extensions: &'static [&'static CStr],
     /// Device features the host must enable, as `Struct::member`.
     pub required_features: &'static [&'static CStr],
@@ -163,16 +163,18 @@ impl HostDevice {
     unsafe fn read_feature_struct(&mut self, feature: *const c_void, s_type: vk::StructureType) {
         use vk::StructureType as S;
         let on = |value: vk::Bool32| value == vk::TRUE;
-        // SAFETY (each arm): the caller's contract: the struct is of the type sType names.
         match s_type {
             S::PHYSICAL_DEVICE_FEATURES_2 => {
+                // SAFETY: the struct is of the type its sType names (the caller's contract).
                 self.core = unsafe { &*feature.cast::<vk::PhysicalDeviceFeatures2>() }.features;
             }
             S::PHYSICAL_DEVICE_VULKAN_1_1_FEATURES => {
+                // SAFETY: the struct is of the type its sType names (the caller's contract).
                 let f = unsafe { &*feature.cast::<vk::PhysicalDeviceVulkan11Features>() };
                 self.shader_draw_parameters = on(f.shader_draw_parameters);
             }
             S::PHYSICAL_DEVICE_VULKAN_1_2_FEATURES => {
+                // SAFETY: the struct is of the type its sType names (the caller's contract).
                 let f = unsafe { &*feature.cast::<vk::PhysicalDeviceVulkan12Features>() };
                 self.buffer_device_address = on(f.buffer_device_address);
                 self.draw_indirect_count = on(f.draw_indirect_count);
@@ -183,28 +185,34 @@ impl HostDevice {
                     && on(f.descriptor_binding_sampled_image_update_after_bind);
             }
             S::PHYSICAL_DEVICE_VULKAN_1_3_FEATURES => {
+                // SAFETY: the struct is of the type its sType names (the caller's contract).
                 let f = unsafe { &*feature.cast::<vk::PhysicalDeviceVulkan13Features>() };
                 self.dynamic_rendering = on(f.dynamic_rendering);
                 self.synchronization2 = on(f.synchronization2);
                 self.maintenance4 = on(f.maintenance4);
             }
             S::PHYSICAL_DEVICE_DYNAMIC_RENDERING_FEATURES => {
+                // SAFETY: the struct is of the type its sType names (the caller's contract).
                 let f = unsafe { &*feature.cast::<vk::PhysicalDeviceDynamicRenderingFeatures>() };
                 self.dynamic_rendering = on(f.dynamic_rendering);
             }
             S::PHYSICAL_DEVICE_SYNCHRONIZATION_2_FEATURES => {
+                // SAFETY: the struct is of the type its sType names (the caller's contract).
                 let f = unsafe { &*feature.cast::<vk::PhysicalDeviceSynchronization2Features>() };
                 self.synchronization2 = on(f.synchronization2);
             }
             S::PHYSICAL_DEVICE_MULTI_DRAW_FEATURES_EXT => {
+                // SAFETY: the struct is of the type its sType names (the caller's contract).
                 let f = unsafe { &*feature.cast::<vk::PhysicalDeviceMultiDrawFeaturesEXT>() };
                 self.multi_draw = on(f.multi_draw);
             }
             S::PHYSICAL_DEVICE_MESH_SHADER_FEATURES_EXT => {
+                // SAFETY: the struct is of the type its sType names (the caller's contract).
                 let f = unsafe { &*feature.cast::<vk::PhysicalDeviceMeshShaderFeaturesEXT>() };
                 self.mesh_shader = on(f.task_shader) && on(f.mesh_shader);
             }
             _ if s_type == dgc::STRUCTURE_TYPE_FEATURES => {
+                // SAFETY: the struct is of the type its sType names (the caller's contract).
                 let f = unsafe { &*feature.cast::<dgc::PhysicalDeviceFeatures>() };
                 self.device_generated_commands = on(f.device_generated_commands);
             }
@@ -268,9 +276,4 @@ impl HostVulkan {
             .iter()
             .any(|e| e.as_c_str() == name)
     }
-}
-
-/// A NUL-terminated list's pointers, for hosts that read [`REQUIREMENTS`] through C.
-pub fn name_pointers(names: &[&'static CStr]) -> Vec<*const c_char> {
-    names.iter().map(|name| name.as_ptr()).collect()
 }

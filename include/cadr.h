@@ -2,10 +2,15 @@
  *
  * Versions: semantic versioning; the shared library's SONAME is libcadr.so.MAJOR. A host
  * compiled against this header keeps working with every later library of the same major:
- * functions and enum values are only added, a struct that starts with `size` grows only at
- * its end (cadr reads and fills no more than the host's `size`), and other structs do not
- * change. A change that would break compiled hosts moves the major version, and the SONAME
- * with it; CI compares the library's ABI with the baseline of its major (capi/abi/). */
+ * functions, enum values and flag bits are only added, and structs grow by one rule. Every
+ * struct that crosses the API starts with `uint32_t size`, which the host sets to the
+ * struct's sizeof before the call, and grows only at its end: cadr fills an output struct no
+ * further than the host's size (zeroing a newer host's fields it does not know) and reads an
+ * input struct up to the host's size (the fields an older host does not know keep their old
+ * behaviour, which a field added after 1.0 has at 0; a newer host's fields this library does
+ * not know must be 0). Structs without `size` say that they are frozen (a box, a camera, an
+ * array element). A change that would break compiled hosts moves the major version, and the
+ * SONAME with it; CI compares the library's ABI with the baseline of its major (capi/abi/). */
 
 #ifndef CADR_H
 #define CADR_H
@@ -15,13 +20,37 @@
 #include <stdint.h>
 
 // The library's major version (from the crate's metadata).
-#define CADR_VERSION_MAJOR 0
+#define CADR_VERSION_MAJOR 1
 
 // The library's minor version.
-#define CADR_VERSION_MINOR 1
+#define CADR_VERSION_MINOR 0
 
 // The library's patch version.
 #define CADR_VERSION_PATCH 0
+
+// Device feature: many indirect draws in one call (`multiDrawIndirect`).
+#define CADR_DEVICE_FEATURE_MULTI_DRAW_INDIRECT 1
+
+// Device feature: per-draw indices through firstInstance in indirect draws.
+#define CADR_DEVICE_FEATURE_DRAW_INDIRECT_FIRST_INSTANCE (1 << 1)
+
+// Device feature: `gl_DrawID` and `gl_BaseInstance` in shaders.
+#define CADR_DEVICE_FEATURE_SHADER_DRAW_PARAMETERS (1 << 2)
+
+// Device feature: GPU pointers to buffers.
+#define CADR_DEVICE_FEATURE_BUFFER_DEVICE_ADDRESS (1 << 3)
+
+// Device feature: indirect draws whose count the GPU reads.
+#define CADR_DEVICE_FEATURE_DRAW_INDIRECT_COUNT (1 << 4)
+
+// Device feature: `VK_EXT_multi_draw`.
+#define CADR_DEVICE_FEATURE_MULTI_DRAW (1 << 5)
+
+// Device feature: GPU timestamps on the render queue (frame GPU times).
+#define CADR_DEVICE_FEATURE_TIMESTAMPS (1 << 6)
+
+// Device feature: renderers can present to windows (`VK_KHR_swapchain` enabled).
+#define CADR_DEVICE_FEATURE_PRESENTATION (1 << 7)
 
 // Message severity: something failed (a Vulkan validation error, for instance).
 #define CADR_MESSAGE_ERROR 1
@@ -34,39 +63,6 @@
 
 // Message severity: details for whoever debugs cadr.
 #define CADR_MESSAGE_DEBUG 4
-
-// Frames paced to the display, never torn; every window offers it (the default).
-#define CADR_PRESENT_FIFO 0
-
-// The newest frame replaces one waiting to be shown: not torn, not paced.
-#define CADR_PRESENT_MAILBOX 1
-
-// Frames shown as soon as they are drawn, possibly torn.
-#define CADR_PRESENT_IMMEDIATE 2
-
-// Shaded triangles only.
-#define CADR_SHADE_SOLID 0
-
-// Shaded triangles with their edges drawn as lines.
-#define CADR_SHADE_EDGES 1
-
-// Display mode: edge lines only, those hidden behind opaque surfaces removed (translucent
-// surfaces hide no lines); section caps are filled and hide the lines behind them.
-#define CADR_SHADE_HIDDEN_LINE 2
-
-// Display mode: every triangle's edges, hidden ones included.
-#define CADR_SHADE_WIREFRAME 3
-
-// Display mode: every part translucent with its edges, highlighted parts opaque (what is
-// inside an assembly shows through its housing).
-#define CADR_SHADE_XRAY 4
-
-// Highlight style: highlighted parts' colours mixed towards orange (the default).
-#define CADR_HIGHLIGHT_TINT 0
-
-// Highlight style: highlighted parts keep their colours, with an orange band two pixels wide
-// around them. Needs the device's `fragmentStoresAndAtomics`.
-#define CADR_HIGHLIGHT_OUTLINE 1
 
 // Node flag: the node and its subtree are drawn.
 #define CADR_NODE_VISIBLE 1
@@ -85,6 +81,41 @@
 
 // Section flag: hatch the caps (off by default).
 #define CADR_SECTION_HATCHED 2
+
+// Shaded triangles only.
+#define CADR_SHADE_SOLID 0
+
+// Shaded triangles with their edges drawn as lines.
+#define CADR_SHADE_EDGES 1
+
+// Display mode: edge lines only, those hidden behind opaque surfaces removed (translucent
+// surfaces hide no lines); section caps are filled and hide the lines behind them.
+#define CADR_SHADE_HIDDEN_LINE 2
+
+// Display mode: every triangle's edges, hidden ones included.
+#define CADR_SHADE_WIREFRAME 3
+
+// Display mode: every part translucent with its edges, highlighted parts opaque (what is
+// inside an assembly shows through its housing).
+#define CADR_SHADE_XRAY 4
+
+// Highlight style: highlighted parts' colours mixed towards the highlight colour (the
+// default).
+#define CADR_HIGHLIGHT_TINT 0
+
+// Highlight style: highlighted parts keep their colours, with a band in the highlight colour
+// around them. Needs the device's `fragmentStoresAndAtomics`
+// (`CadrRendererCapabilities::highlight_outline`).
+#define CADR_HIGHLIGHT_OUTLINE 1
+
+// Frames paced to the display, never torn; every window offers it (the default).
+#define CADR_PRESENT_FIFO 0
+
+// The newest frame replaces one waiting to be shown: not torn, not paced.
+#define CADR_PRESENT_MAILBOX 1
+
+// Frames shown as soon as they are drawn, possibly torn.
+#define CADR_PRESENT_IMMEDIATE 2
 
 // Texture wrap: the image repeats (glTF REPEAT; the default).
 #define CADR_WRAP_REPEAT 0
@@ -200,17 +231,14 @@ typedef struct CadrRendererObject CadrRendererObject;
 // Opaque type behind [`CadrScene`].
 typedef struct CadrSceneObject CadrSceneObject;
 
-// A renderer: draws scenes with the chosen techniques into an offscreen image, or into a host
-// window through a swapchain. Created by `cadr_renderer_create` or
-// `cadr_renderer_create_for_surface`, released by `cadr_renderer_destroy`.
-typedef struct CadrRendererObject *CadrRenderer;
-
 // A scene: a scene graph with one root Group, and the scene tree flattened from it.
 // Created by `cadr_scene_create`, released by `cadr_scene_destroy`. A scene needs no context:
 // any renderer can draw it.
 typedef struct CadrSceneObject *CadrScene;
 
 // An axis-aligned box in world space; `min` > `max` when empty.
+//
+// Frozen: a box is its two corners, and stays so within a major version.
 typedef struct CadrBounds {
   // Smallest corner.
   double min[3];
@@ -219,7 +247,12 @@ typedef struct CadrBounds {
 } CadrBounds;
 
 // Counts of a scene.
+//
+// The struct grows by appending fields: the host sets `size` to `sizeof(CadrSceneStatistics)`; cadr fills
+// the fields within it and zeroes those of a newer header it does not know.
 typedef struct CadrSceneStatistics {
+  // `sizeof(CadrSceneStatistics)`, set by the host.
+  uint32_t size;
   // Live nodes, the root included.
   uint64_t nodes;
   // Live geometries.
@@ -241,6 +274,8 @@ typedef uint64_t CadrNode;
 // A camera: world-to-view and view-to-clip matrices, column-major doubles. The view looks
 // down -Z (right-handed); the projection follows Vulkan (y down, depth 0..1). Hosts may fill
 // it with their own matrices.
+//
+// Frozen: a camera is its two matrices, and stays so within a major version.
 typedef struct CadrCamera {
   // World to view space.
   double view[16];
@@ -248,10 +283,13 @@ typedef struct CadrCamera {
   double projection[16];
 } CadrCamera;
 
-// How to create a context. Fill it with `cadr_context_options_default` first, then change
-// what you need; `size` lets later versions add fields.
+// How to create a context. Set `size`, fill it with `cadr_context_options_default`, then
+// change what you need.
+//
+// The struct grows by appending fields: an older host's options take the defaults of the
+// fields it does not know; a newer host's fields this library does not know must be 0.
 typedef struct CadrContextOptions {
-  // `sizeof(CadrContextOptions)`, set by `cadr_context_options_default`.
+  // `sizeof(CadrContextOptions)`, set by the host.
   uint32_t size;
   // Enables the Vulkan validation layer (`VK_LAYER_KHRONOS_validation`); its error messages
   // are counted by `cadr_context_validation_error_count`. Default: false.
@@ -284,28 +322,13 @@ typedef struct CadrContextOptions {
 // Created by `cadr_context_create`, released by `cadr_context_destroy`.
 typedef struct CadrContextObject *CadrContext;
 
-// Optional device features the techniques use.
-typedef struct CadrDeviceFeatures {
-  // Many indirect draws in one call (`multiDrawIndirect`).
-  bool multi_draw_indirect;
-  // Per-draw indices through firstInstance in indirect draws.
-  bool draw_indirect_first_instance;
-  // `gl_DrawID` and `gl_BaseInstance` in shaders.
-  bool shader_draw_parameters;
-  // GPU pointers to buffers.
-  bool buffer_device_address;
-  // Indirect draws whose count the GPU reads.
-  bool draw_indirect_count;
-  // `VK_EXT_multi_draw`.
-  bool multi_draw;
-  // GPU timestamps on the render queue (frame GPU times).
-  bool timestamps;
-  // Renderers can present to windows (`VK_KHR_swapchain` enabled).
-  bool presentation;
-} CadrDeviceFeatures;
-
 // The device a context renders with.
+//
+// The struct grows by appending fields: the host sets `size` to `sizeof(CadrDeviceInfo)`; cadr fills
+// the fields within it and zeroes those of a newer header it does not know.
 typedef struct CadrDeviceInfo {
+  // `sizeof(CadrDeviceInfo)`, set by the host.
+  uint32_t size;
   // The driver's device name, NUL-terminated (cut to fit).
   char name[256];
   // Its kind.
@@ -316,8 +339,8 @@ typedef struct CadrDeviceInfo {
   uint32_t index;
   // The queue family cadr renders and presents on.
   uint32_t queue_family;
-  // Optional features.
-  struct CadrDeviceFeatures features;
+  // Optional features: `CADR_DEVICE_FEATURE_*` bits (later versions add bits).
+  uint64_t features;
   // Whether the validation layer is on.
   bool validation;
 } CadrDeviceInfo;
@@ -343,7 +366,12 @@ typedef struct CadrMemoryUsage {
 
 // One technique offered by the plugins. The strings belong to the context and stay valid
 // until it is destroyed.
+//
+// The struct grows by appending fields: the host sets `size` to `sizeof(CadrTechniqueInfo)`; cadr fills
+// the fields within it and zeroes those of a newer header it does not know.
 typedef struct CadrTechniqueInfo {
+  // `sizeof(CadrTechniqueInfo)`, set by the host.
+  uint32_t size;
   // Its kind.
   enum CadrTechniqueKind kind;
   // Its name, unique within the kind (e.g. "groups-mdi-replay").
@@ -361,7 +389,12 @@ typedef struct CadrTechniqueInfo {
 
 // A plugin library (or one of its techniques) that was refused. The strings belong to the
 // context.
+//
+// The struct grows by appending fields: the host sets `size` to `sizeof(CadrPluginRefusal)`; cadr fills
+// the fields within it and zeroes those of a newer header it does not know.
 typedef struct CadrPluginRefusal {
+  // `sizeof(CadrPluginRefusal)`, set by the host.
+  uint32_t size;
   // The library.
   const char *library;
   // Why (another ABI version, a missing symbol, a panic, …), with the technique's name when
@@ -370,6 +403,9 @@ typedef struct CadrPluginRefusal {
 } CadrPluginRefusal;
 
 // A range of a geometry's indices drawn with one material, and its range of edge indices.
+//
+// Frozen: parts lie in an array the host indexes with its own `sizeof(CadrPart)`, so this
+// struct never changes within a major version.
 typedef struct CadrPart {
   // First index in `indices`.
   uint32_t first_index;
@@ -383,7 +419,13 @@ typedef struct CadrPart {
 
 // Geometry in the host's arrays. Everything is copied; the arrays can be freed after the
 // call.
+//
+// The struct grows by appending fields: the host sets `size` to `sizeof(CadrGeometryDesc)`. A field an
+// older host does not know keeps its old behaviour (read as 0); a newer host's fields this
+// library does not know must be 0.
 typedef struct CadrGeometryDesc {
+  // `sizeof(CadrGeometryDesc)`, set by the host.
+  uint32_t size;
   // Name (NULL: empty).
   const char *name;
   // `vertex_count` × 3 floats: object-space positions.
@@ -412,7 +454,13 @@ typedef struct CadrGeometryDesc {
 typedef uint64_t CadrGeometry;
 
 // Material parameters (metallic-roughness, as glTF).
+//
+// The struct grows by appending fields: the host sets `size` to `sizeof(CadrMaterialDesc)`. A field an
+// older host does not know keeps its old behaviour (read as 0); a newer host's fields this
+// library does not know must be 0.
 typedef struct CadrMaterialDesc {
+  // `sizeof(CadrMaterialDesc)`, set by the host.
+  uint32_t size;
   // Name (NULL: empty).
   const char *name;
   // Linear RGBA base color, each 0..1.
@@ -461,6 +509,11 @@ typedef struct CadrHostImage {
   // later submissions to the queue need a barrier from the transfer stage's writes.
   uint64_t signal_semaphore;
 } CadrHostImage;
+
+// A renderer: draws scenes with the chosen techniques into an offscreen image, or into a host
+// window through a swapchain. Created by `cadr_renderer_create` or
+// `cadr_renderer_create_for_surface`, released by `cadr_renderer_destroy`.
+typedef struct CadrRendererObject *CadrRenderer;
 
 // What cadr needs of a host's Vulkan instance and device, and what it uses where the host
 // enabled it (`cadr_vulkan_requirements`). Every string is cadr's, static, NUL-terminated;
@@ -535,7 +588,12 @@ typedef struct CadrHostVulkan {
 } CadrHostVulkan;
 
 // What `cadr_scene_load` created. Free the arrays with `cadr_load_result_free`.
+//
+// The struct grows by appending fields: the host sets `size` to `sizeof(CadrLoadResult)`;
+// cadr fills the fields within it and zeroes those of a newer header it does not know.
 typedef struct CadrLoadResult {
+  // `sizeof(CadrLoadResult)`, set by the host.
+  uint32_t size;
   // The new Group, named after the file, that holds the file's content.
   CadrNode root;
   // Every node created, `root` first.
@@ -563,6 +621,10 @@ typedef struct CadrLoadResult {
 typedef void (*CadrMessageCallback)(uint32_t severity, const char *message, void *user_data);
 
 // One picked occurrence of a part.
+//
+// Frozen: hits lie in an array the host indexes with its own `sizeof(CadrPickHit)`, so this
+// struct never changes within a major version; facts a later version adds about each hit come
+// as arrays of their own in `CadrPickResult`.
 typedef struct CadrPickHit {
   // The geo node drawn.
   CadrNode node;
@@ -587,7 +649,12 @@ typedef struct CadrPickHit {
 // What a pick found: hits nearest first (none where only background or parts that cannot be
 // picked are). Filled by `cadr_renderer_pick` or `cadr_renderer_pick_rect`, released by
 // `cadr_pick_result_free`.
+//
+// The struct grows by appending fields: the host sets `size` to `sizeof(CadrPickResult)`;
+// cadr fills the fields within it and zeroes those of a newer header it does not know.
 typedef struct CadrPickResult {
+  // `sizeof(CadrPickResult)`, set by the host.
+  uint32_t size;
   // The hits, nearest first.
   struct CadrPickHit *hits;
   // Number of `hits`.
@@ -595,7 +662,13 @@ typedef struct CadrPickResult {
 } CadrPickResult;
 
 // One technique name per kind; NULL keeps the renderer's current technique of that kind.
+//
+// The struct grows by appending fields (a kind added later, NULL when an older host does not
+// know it): the host sets `size` to `sizeof(CadrTechniqueSelection)`; a newer host's fields
+// this library does not know must be NULL.
 typedef struct CadrTechniqueSelection {
+  // `sizeof(CadrTechniqueSelection)`, set by the host.
+  uint32_t size;
   // Vertex path, e.g. "arena".
   const char *vertex;
   // Parameter path, e.g. "ssbo-index".
@@ -607,7 +680,15 @@ typedef struct CadrTechniqueSelection {
 } CadrTechniqueSelection;
 
 // What one frame cost and drew: the figures `cadr bench` prints.
+//
+// The struct grows by appending fields (`size` first, set by the host to
+// `sizeof(CadrFrameStats)`): cadr fills the fields within the host's `size` and zeroes those
+// of a newer header it does not know.
+//
+// Its many fields: one per figure, as `cadr bench` prints them.
 typedef struct CadrFrameStats {
+  // `sizeof(CadrFrameStats)`, set by the host.
+  uint32_t size;
   // Whether the frame was drawn and, for a window, presented (false while minimized or
   // while the swapchain was being recreated).
   bool presented;
@@ -627,8 +708,12 @@ typedef struct CadrFrameStats {
   uint64_t draw_calls;
   // Parts or index ranges drawn.
   uint64_t draws;
-  // Triangles drawn.
+  // Triangles drawn: of the parts drawn, once each; with a GPU culler, what it let through
+  // in every surface pass.
   uint64_t triangles;
+  // Triangles the surface passes handed to the rasteriser, each pass counted (edge passes
+  // draw lines and are not counted), the same way for every culler.
+  uint64_t triangles_rasterized;
   // Pipeline binds.
   uint64_t pipeline_binds;
   // Vertex and index buffer binds.
@@ -637,11 +722,141 @@ typedef struct CadrFrameStats {
   uint64_t parameter_updates;
   // Bytes uploaded for this frame.
   uint64_t bytes_uploaded;
+  // Whether the frame resubmitted the renderer's last recording (frame replay): recording
+  // cost nothing.
+  bool replayed;
+  // Whether the frame was recorded while earlier frames could still run on the GPU (more
+  // than one frame in flight, only the view changed, every active technique keeps its
+  // per-frame data per slot): it waited only for the frame that last used its slot.
+  bool overlapped;
 } CadrFrameStats;
+
+// A renderer's settings: how it draws, picks and presents. Read them with
+// `cadr_renderer_settings`, change the fields you need, and apply them with
+// `cadr_renderer_apply_settings`; a new renderer starts with the defaults each field names.
+// Colours are display values in 0..1 (what a PNG stores) unless a field says otherwise.
+//
+// The struct grows by appending fields (`size` first, set by the host to
+// `sizeof(CadrRendererSettings)`); a field added later keeps its old behaviour at 0.
+//
+// Its many fields: one per setting, so that a C host sets them one by one; nested structs
+// would freeze each group's size.
+typedef struct CadrRendererSettings {
+  // `sizeof(CadrRendererSettings)`, set by the host.
+  uint32_t size;
+  // Display mode (`CADR_SHADE_*`; default `CADR_SHADE_SOLID`).
+  uint32_t shade_mode;
+  // How highlighted parts (`CADR_NODE_HIGHLIGHTED`) are drawn, in every display mode
+  // (`CADR_HIGHLIGHT_*`; default `CADR_HIGHLIGHT_TINT`).
+  uint32_t highlight_style;
+  // What highlighted parts are tinted towards or outlined in, and their edge lines' colour
+  // (a darker shade). Default orange: 1.0, 0.55, 0.05.
+  float highlight_color[3];
+  // Width in pixels, 1 to 8, of the band `CADR_HIGHLIGHT_OUTLINE` draws (default 2).
+  uint32_t outline_width;
+  // Colour of edge lines and silhouettes in every display mode that draws them (edges,
+  // hidden-line, wireframe, X-ray; dashed hidden lines take a lighter shade of it).
+  // Default near-black: 0.06, 0.07, 0.09.
+  float edge_color[3];
+  // Silhouette edges (default true): in the display modes with feature edges (edges,
+  // hidden-line, X-ray), the outlines of curved surfaces, which no feature edge marks, are
+  // drawn where the frame's depth breaks (in X-ray, where the nearest surface's depth
+  // breaks, translucent surfaces included). On a device without `fragmentStoresAndAtomics`
+  // X-ray draws none and the other modes draw every silhouette in the edge colour. Costs one
+  // full-screen pass in those modes.
+  bool silhouettes;
+  // Hidden edges of `CADR_SHADE_HIDDEN_LINE` drawn dashed in a lighter shade of the edge
+  // colour (true), or removed (false, the default). With silhouettes on, hidden curved
+  // surfaces' silhouettes are dashed too where the device has geometry shaders. Parts the
+  // `gpu-occlusion` culler finds entirely hidden are not drawn, so their dashed edges do not
+  // show.
+  bool dashed_hidden_lines;
+  // Screen-space ambient occlusion (default false): in the modes that fill surfaces (solid,
+  // edges, X-ray), creases, corners and gaps between parts are darkened from the frame's
+  // depth; the background and translucent surfaces are not. Costs one full-screen pass.
+  bool ssao;
+  // Materials' base-colour textures sampled (default true); off, materials show their base
+  // colour (times vertex colours, which stay).
+  bool textures;
+  // The background's colour at the picture's top row, blending to `background_bottom` at
+  // its bottom row (the same colour twice is a flat background). Default 0.93, 0.95, 0.97.
+  float background_top[3];
+  // The background's colour at the picture's bottom row. Default 0.64, 0.69, 0.76.
+  float background_bottom[3];
+  // Samples per pixel of the colour pass: 1 (the default), or 2, 4 or 8 to smooth the edges
+  // of triangles and lines (MSAA), where the device offers the count
+  // (`CadrRendererCapabilities::msaa_sample_counts`). The pick pass always draws one sample.
+  // A change remakes the renderer's targets and pipelines; a submission that records
+  // secondary command buffers and was built before plugin ABI 1.8 then fails at the next
+  // frame with `CADR_RESULT_PLUGIN_FAILED`.
+  uint32_t msaa_samples;
+  // Section flags: `CADR_SECTION_CAPS` (fill cuts through closed parts; without it the
+  // inside shows) and `CADR_SECTION_HATCHED` (hatch the caps). Default `CADR_SECTION_CAPS`.
+  // The planes themselves change with `cadr_renderer_set_section_planes`.
+  uint32_t section_flags;
+  // Cap colour of each section plane, linear RGBA (finite values, clamped to 0..1), whether
+  // or not the plane is set.
+  float section_cap_colors[CADR_MAX_SECTION_PLANES][4];
+  // Sub-pixel culling threshold in pixels (default 0: keep every part, as CAD users count
+  // small parts): with a GPU culler (`gpu-frustum`, `gpu-occlusion`), parts whose bounding
+  // sphere projects smaller than this across are not drawn, in any pass (picking included).
+  // CPU cullers ignore it.
+  float min_pixels;
+  // Level-of-detail threshold of the cluster culler (`gpu-clusters`) in pixels (default 1):
+  // each part is drawn with the coarsest clusters whose simplification error projects at or
+  // under it (a part keeps at least its coarsest clusters); 0 draws full detail. Other
+  // cullers draw parts whole and ignore it.
+  float lod_error;
+  // Frame replay (default true): a frame that would record what the last frame recorded
+  // (only the camera moved, or nothing changed; also parts moved or material values
+  // changed, when every active technique reads parameter values on the GPU) resubmits that
+  // recording, when every active technique allows it; the picture is the same. Off, every
+  // frame is recorded afresh (to measure recording, or to compare).
+  bool frame_replay;
+  // Picking goes through translucent parts to what lies behind them (true), or picks them
+  // like opaque ones (false, the default: what is seen in front is picked). X-ray's
+  // see-through look is a display mode and does not count.
+  bool pick_through_translucent;
+  // Frames the GPU may have, 1 to 3. 1 waits for each frame before `cadr_renderer_render`
+  // returns (its GPU time is then that frame's); 2 or 3 return once the frame is submitted,
+  // so the host's work and the next frames' scene updates overlap the GPU's drawing (pixels
+  // and picks wait for the frame when read). A frame waits only for the one that used its
+  // slot before when nothing but the camera changed and every active technique keeps its
+  // per-frame data per slot (cadr's own do, but the `-threads` submissions); otherwise for
+  // every earlier frame. Default: 2 for window and host-image renderers, 1 offscreen.
+  uint32_t frames_in_flight;
+  // How a window renderer's frames reach its window (`CADR_PRESENT_*`; default
+  // `CADR_PRESENT_FIFO`), among those its surface offers
+  // (`CadrRendererCapabilities::present_modes`); a change recreates the swapchain. Other
+  // renderers present nothing and take only `CADR_PRESENT_FIFO`.
+  uint32_t present_mode;
+} CadrRendererSettings;
+
+// What a renderer's device and output offer, for the choices of `CadrRendererSettings`.
+// The struct grows by appending fields (`size` first, set by the host).
+typedef struct CadrRendererCapabilities {
+  // `sizeof(CadrRendererCapabilities)`, set by the host.
+  uint32_t size;
+  // The MSAA sample counts offered: bit value N set for each count N, as
+  // `VkSampleCountFlags` (1 always; 0x5 for 1 and 4).
+  uint32_t msaa_sample_counts;
+  // The present modes a window renderer's surface offers: bit `1 << CADR_PRESENT_*` for
+  // each; 0 for a renderer without a window.
+  uint32_t present_modes;
+  // Whether the device can draw `CADR_HIGHLIGHT_OUTLINE` and X-ray's silhouettes
+  // (`fragmentStoresAndAtomics`).
+  bool highlight_outline;
+} CadrRendererCapabilities;
 
 // An image in the host's memory. The texels are copied; the host may free them after the
 // call.
+//
+// The struct grows by appending fields: the host sets `size` to `sizeof(CadrTextureDesc)`. A field an
+// older host does not know keeps its old behaviour (read as 0); a newer host's fields this
+// library does not know must be 0.
 typedef struct CadrTextureDesc {
+  // `sizeof(CadrTextureDesc)`, set by the host.
+  uint32_t size;
   // Name (NULL: empty); messages name the texture by it.
   const char *name;
   // Width in texels (at least 1).
@@ -666,7 +881,12 @@ typedef uint64_t CadrTexture;
 // Milliseconds cadr spent in each phase of its work in this process, since it was loaded or
 // since `cadr_timings_reset`, over every context, scene and renderer. A phase that runs
 // inside another (pipelines built during a first frame) counts only for itself.
+//
+// The struct grows by appending fields: the host sets `size` to `sizeof(CadrTimings)`; cadr
+// fills the fields within it and zeroes those of a newer header it does not know.
 typedef struct CadrTimings {
+  // `sizeof(CadrTimings)`, set by the host.
+  uint32_t size;
   // Vulkan instance and device creation (`cadr_context_create`).
   double device_ms;
   // Reading and parsing scene files, or generating scenes (`cadr_scene_load`).
@@ -691,7 +911,7 @@ typedef struct CadrTimings {
 extern "C" {
 #endif // __cplusplus
 
-// The version as a static NUL-terminated string such as "0.1.0".
+// The version as a static NUL-terminated string such as "1.0.0".
 //
 // Ownership: the string is static; do not free it. Thread-safety: callable from any thread.
 const char *cadr_version_string(void);
@@ -725,57 +945,6 @@ enum CadrResult cadr_render_scene_to_png(const char *scene,
                                          uint32_t height,
                                          bool validation);
 
-// Sets the samples per pixel of the renderer's colour pass: 1 (the default) draws one, 2, 4
-// or 8 smooth the edges of triangles and lines (MSAA), resolved into the picture at the end of
-// the pass, for offscreen and window renderers alike. Picking is unchanged: the pick pass
-// always draws one sample per pixel. The next frame draws with it; the renderer's targets and
-// pipelines are remade for the new count.
-//
-// Returns `CADR_RESULT_OK`, `CADR_RESULT_INVALID_ARGUMENT` (a count the device does not offer:
-// the message lists those it does; `cadr_renderer_msaa` gives them as a mask),
-// `CADR_RESULT_PLUGIN_FAILED` at the next frame when the active submission records secondary
-// command buffers and was built before plugin ABI 1.8, `CADR_RESULT_VULKAN` or a handle error.
-// Ownership: nothing changes hands. Thread-safety: as `cadr_renderer_create`.
-enum CadrResult cadr_renderer_set_msaa(CadrRenderer renderer, uint32_t samples);
-
-// Writes the samples per pixel the colour pass draws (`*samples`: 1 without MSAA) and the
-// counts this renderer's device offers (`*offered`: a mask with bit value N set for each
-// offered count N, as `VkSampleCountFlags`: 1 always, 0x5 for 1 and 4). Either output may be
-// NULL.
-//
-// Returns `CADR_RESULT_OK` or a handle error. Ownership: the outputs are the caller's; cadr
-// keeps no pointer to them. Thread-safety: as `cadr_renderer_create`.
-//
-// # Safety
-// `samples` and `offered` are each null or writable.
-enum CadrResult cadr_renderer_msaa(CadrRenderer renderer, uint32_t *samples, uint32_t *offered);
-
-// Sets the background: `top_rgb` at the picture's top row blending to `bottom_rgb` at its
-// bottom row, three floats each, as display values in 0..1 (what a PNG stores; the default
-// is a light grey-blue gradient). Pass the same colour twice for a flat background. The
-// next frame draws it, in every display mode, under translucent parts too.
-//
-// Returns `CADR_RESULT_OK`, `CADR_RESULT_NULL_ARGUMENT`, `CADR_RESULT_INVALID_ARGUMENT` (a
-// value outside 0..1 or not finite) or a handle error. Ownership: both arrays are read during
-// the call only. Thread-safety: as `cadr_renderer_create`.
-//
-// # Safety
-// `top_rgb` and `bottom_rgb` are null or point to three readable floats each.
-enum CadrResult cadr_renderer_set_background(CadrRenderer renderer,
-                                             const float *top_rgb,
-                                             const float *bottom_rgb);
-
-// Writes the background's top and bottom colours (three floats each, display values in
-// 0..1; see `cadr_renderer_set_background`).
-//
-// Returns `CADR_RESULT_OK`, `CADR_RESULT_NULL_ARGUMENT` or a handle error. Ownership: the
-// arrays are the caller's; cadr keeps no pointer to them. Thread-safety: as
-// `cadr_renderer_create`.
-//
-// # Safety
-// `top_rgb` and `bottom_rgb` are null or point to three writable floats each.
-enum CadrResult cadr_renderer_background(CadrRenderer renderer, float *top_rgb, float *bottom_rgb);
-
 // Writes the world-space bounds of everything the scene shows (empty: `min` > `max`).
 //
 // Returns `CADR_RESULT_OK`, `CADR_RESULT_NULL_ARGUMENT` or a handle error.
@@ -793,7 +962,7 @@ enum CadrResult cadr_scene_bounds(CadrScene scene, struct CadrBounds *bounds);
 // Thread-safety: as `cadr_scene_create`.
 //
 // # Safety
-// `statistics` is null or writable.
+// `statistics` is null or writable for its `size`.
 enum CadrResult cadr_scene_statistics(CadrScene scene, struct CadrSceneStatistics *statistics);
 
 // Writes the world-space bounds of what `node` shows, over every path it is reached by
@@ -840,14 +1009,16 @@ enum CadrResult cadr_camera_fit(const struct CadrBounds *bounds,
                                 const double *direction,
                                 struct CadrCamera *camera);
 
-// Fills `*options` with the defaults: no validation, automatic device choice, no extra
+// Fills `*options` with the defaults, up to the `options->size` the host set
+// (`sizeof(CadrContextOptions)`): no validation, automatic device choice, no extra
 // extensions, default plugin directories.
 //
-// Returns `CADR_RESULT_NULL_ARGUMENT` when `options` is NULL.
-// Ownership: `options` is the caller's. Thread-safety: callable from any thread.
+// Returns `CADR_RESULT_OK`, `CADR_RESULT_NULL_ARGUMENT` or `CADR_RESULT_INVALID_ARGUMENT` (a
+// `size` below 4). Ownership: `options` is the caller's. Thread-safety: callable from any
+// thread.
 //
 // # Safety
-// `options` is null or writable.
+// `options` is null or writable for its `size`.
 enum CadrResult cadr_context_options_default(struct CadrContextOptions *options);
 
 // Creates a context: the Vulkan instance (with the host's extensions), the device, and the
@@ -881,7 +1052,7 @@ enum CadrResult cadr_context_destroy(CadrContext context);
 // Ownership: `*info` is the caller's. Thread-safety: callable from any thread.
 //
 // # Safety
-// `info` is null or writable.
+// `info` is null or writable for its `size`.
 enum CadrResult cadr_context_device_info(CadrContext context, struct CadrDeviceInfo *info);
 
 // Writes the context's `VkInstance` into `*instance`, for creating a window surface on it
@@ -937,7 +1108,7 @@ enum CadrResult cadr_context_technique_count(CadrContext context, uint32_t *coun
 // renderers are destroyed. Thread-safety: callable from any thread.
 //
 // # Safety
-// `info` is null or writable.
+// `info` is null or writable for its `size`.
 enum CadrResult cadr_context_technique(CadrContext context,
                                        uint32_t index,
                                        struct CadrTechniqueInfo *info);
@@ -959,7 +1130,7 @@ enum CadrResult cadr_context_refusal_count(CadrContext context, uint32_t *count)
 // Ownership: the strings belong to the context. Thread-safety: callable from any thread.
 //
 // # Safety
-// `refusal` is null or writable.
+// `refusal` is null or writable for its `size`.
 enum CadrResult cadr_context_refusal(CadrContext context,
                                      uint32_t index,
                                      struct CadrPluginRefusal *refusal);
@@ -1149,7 +1320,7 @@ enum CadrResult cadr_context_create_from_vulkan(const struct CadrHostVulkan *hos
 // scene is not locked.
 //
 // # Safety
-// `path` is null or a valid string; `result` is null or writable.
+// `path` is null or a valid string; `result` is null or writable for its `size`.
 enum CadrResult cadr_scene_load(CadrScene scene,
                                 const char *path,
                                 CadrNode parent,
@@ -1414,76 +1585,12 @@ enum CadrResult cadr_scene_set_part_visible(CadrScene scene,
                                             uint32_t part,
                                             bool visible);
 
-// Sets the colour of edge lines and silhouettes in every display mode that draws them
-// (edges, hidden-line, wireframe, X-ray; dashed hidden lines take a lighter shade of it):
-// three floats, display values in 0..1 (what a PNG stores; the default is near-black,
-// 0.06, 0.07, 0.09). The next frame draws with it.
-//
-// Returns `CADR_RESULT_OK`, `CADR_RESULT_NULL_ARGUMENT`, `CADR_RESULT_INVALID_ARGUMENT` (a
-// value outside 0..1 or not finite; the colour is kept) or a handle error. Ownership: `rgb`
-// is read during the call only. Thread-safety: as `cadr_renderer_create`.
-//
-// # Safety
-// `rgb` is null or points to three readable floats.
-enum CadrResult cadr_renderer_set_edge_color(CadrRenderer renderer, const float *rgb);
-
-// Writes the colour of edge lines (three floats; see `cadr_renderer_set_edge_color`).
-//
-// Returns `CADR_RESULT_OK`, `CADR_RESULT_NULL_ARGUMENT` or a handle error. Ownership: the
-// array is the caller's; cadr keeps no pointer to it. Thread-safety: as
-// `cadr_renderer_create`.
-//
-// # Safety
-// `rgb` is null or points to three writable floats.
-enum CadrResult cadr_renderer_edge_color(CadrRenderer renderer, float *rgb);
-
-// Sets the highlight colour: what highlighted parts are tinted towards
-// (`CADR_HIGHLIGHT_TINT`) or outlined in (`CADR_HIGHLIGHT_OUTLINE`), and the colour of their
-// edge lines (a darker shade): three floats, display values in 0..1 (the default is orange,
-// 1.0, 0.55, 0.05). The next frame draws with it.
-//
-// Returns `CADR_RESULT_OK`, `CADR_RESULT_NULL_ARGUMENT`, `CADR_RESULT_INVALID_ARGUMENT` (a
-// value outside 0..1 or not finite; the colour is kept) or a handle error. Ownership: `rgb`
-// is read during the call only. Thread-safety: as `cadr_renderer_create`.
-//
-// # Safety
-// `rgb` is null or points to three readable floats.
-enum CadrResult cadr_renderer_set_highlight_color(CadrRenderer renderer, const float *rgb);
-
-// Writes the highlight colour (three floats; see `cadr_renderer_set_highlight_color`).
-//
-// Returns `CADR_RESULT_OK`, `CADR_RESULT_NULL_ARGUMENT` or a handle error. Ownership: the
-// array is the caller's; cadr keeps no pointer to it. Thread-safety: as
-// `cadr_renderer_create`.
-//
-// # Safety
-// `rgb` is null or points to three writable floats.
-enum CadrResult cadr_renderer_highlight_color(CadrRenderer renderer, float *rgb);
-
-// Sets the width in pixels, 1 to 8 (default 2), of the band the `CADR_HIGHLIGHT_OUTLINE`
-// style draws around highlighted parts. The next frame draws with it.
-//
-// Returns `CADR_RESULT_OK`, `CADR_RESULT_INVALID_ARGUMENT` (outside 1 to 8; the width is
-// kept) or a handle error. Ownership: nothing changes hands. Thread-safety: as
-// `cadr_renderer_create`.
-enum CadrResult cadr_renderer_set_outline_width(CadrRenderer renderer, uint32_t pixels);
-
-// Writes the outline band's width in pixels (see `cadr_renderer_set_outline_width`).
-//
-// Returns `CADR_RESULT_OK`, `CADR_RESULT_NULL_ARGUMENT` or a handle error. Ownership: the
-// output is the caller's; cadr keeps no pointer to it. Thread-safety: as
-// `cadr_renderer_create`.
-//
-// # Safety
-// `pixels` is null or writable.
-enum CadrResult cadr_renderer_outline_width(CadrRenderer renderer, uint32_t *pixels);
-
 // Picks what lies under pixel (`x`, `y`) of the renderer's image (column, row from the top
 // left) when drawing `scene` seen by `camera` with the current techniques: at most one hit,
 // with the geo node, part, occurrence path, depth and world position. Parts that are hidden
 // are not drawn; parts that are not pickable (`CADR_NODE_PICKABLE` cleared on a node of their
 // path) let the click through to what is behind them; so do translucent parts (material
-// opacity under 1) while `cadr_renderer_set_pick_through_translucent` is on.
+// opacity under 1) while the renderer's `pick_through_translucent` setting is on.
 //
 // Returns `CADR_RESULT_OK` and writes `*result` (no hits over background),
 // `CADR_RESULT_NULL_ARGUMENT`, `CADR_RESULT_INVALID_ARGUMENT` (a pixel outside the image, a
@@ -1493,34 +1600,13 @@ enum CadrResult cadr_renderer_outline_width(CadrRenderer renderer, uint32_t *pix
 // during the call).
 //
 // # Safety
-// `camera` is null or readable; `result` is null or writable.
+// `camera` is null or readable; `result` is null or writable for its `size`.
 enum CadrResult cadr_renderer_pick(CadrRenderer renderer,
                                    CadrScene scene,
                                    const struct CadrCamera *camera,
                                    uint32_t x,
                                    uint32_t y,
                                    struct CadrPickResult *result);
-
-// Lets picking go through translucent parts (materials of opacity under 1) to what is behind
-// them (`through` true), or picks them like opaque ones (false, the default: what is seen
-// in front is what is picked). Applies to `cadr_renderer_pick` and `cadr_renderer_pick_rect`
-// from the next call; the picture is unchanged. X-ray's see-through look is a display mode
-// and does not count: parts it shows translucent are picked as their material says.
-//
-// Returns `CADR_RESULT_OK` or a handle error. Ownership: nothing changes hands.
-// Thread-safety: as `cadr_renderer_create`.
-enum CadrResult cadr_renderer_set_pick_through_translucent(CadrRenderer renderer, bool through);
-
-// Writes whether picking goes through translucent parts (see
-// `cadr_renderer_set_pick_through_translucent`).
-//
-// Returns `CADR_RESULT_OK`, `CADR_RESULT_NULL_ARGUMENT` or a handle error. Ownership: the
-// output is the caller's; cadr keeps no pointer to it. Thread-safety: as
-// `cadr_renderer_create`.
-//
-// # Safety
-// `through` is null or writable.
-enum CadrResult cadr_renderer_pick_through_translucent(CadrRenderer renderer, bool *through);
 
 // Box selection: every pickable part with a visible pixel in the `width` × `height`
 // rectangle whose top-left pixel is (`x`, `y`), one hit per occurrence and part (at its
@@ -1549,54 +1635,6 @@ enum CadrResult cadr_renderer_pick_rect(CadrRenderer renderer,
 // # Safety
 // `result` is null or a result filled by a pick (or zeroed).
 void cadr_pick_result_free(struct CadrPickResult *result);
-
-// Sets how many frames the GPU may have: 1 waits for each frame before
-// `cadr_renderer_render` returns (its GPU time is then that frame's). 2 or 3 return once the
-// frame is submitted, so the host's work and the next frames' scene updates overlap the GPU's
-// drawing; its pixels or a pick wait for it when read. Each frame in flight has its own
-// command buffers and uniforms: a frame waits only for the one that used its slot before
-// when nothing but the camera changed since the last frame and every active technique keeps
-// its per-frame data per slot (cadr's own do, but the `-threads` submissions); otherwise it
-// waits for every earlier frame. The statistics' GPU time is then that of the latest frame
-// known to have finished. Window renderers start with 2, offscreen ones with 1.
-//
-// Returns `CADR_RESULT_OK`, `CADR_RESULT_INVALID_ARGUMENT` (not 1 to 3), `CADR_RESULT_VULKAN`
-// or a handle error. Ownership: nothing changes hands. Thread-safety: as
-// `cadr_renderer_create`.
-enum CadrResult cadr_renderer_set_frames_in_flight(CadrRenderer renderer, uint32_t frames);
-
-// Writes how many frames the GPU may have (see `cadr_renderer_set_frames_in_flight`).
-//
-// Returns `CADR_RESULT_OK`, `CADR_RESULT_NULL_ARGUMENT` or a handle error.
-// Ownership: the output is the caller's; cadr keeps no pointer to it.
-// Thread-safety: as `cadr_renderer_create`.
-//
-// # Safety
-// `frames` is null or writable.
-enum CadrResult cadr_renderer_frames_in_flight(CadrRenderer renderer, uint32_t *frames);
-
-// Sets how a window renderer's frames reach its window: `CADR_PRESENT_FIFO` (the default),
-// `CADR_PRESENT_MAILBOX` or `CADR_PRESENT_IMMEDIATE`. The swapchain is recreated; a mode the
-// window's surface does not offer is refused, naming those it does.
-//
-// Returns `CADR_RESULT_OK`, `CADR_RESULT_INVALID_ARGUMENT` (unknown mode),
-// `CADR_RESULT_UNSUPPORTED` (not offered, or an offscreen renderer), `CADR_RESULT_VULKAN` or a
-// handle error. Ownership: nothing changes hands. Thread-safety: as `cadr_renderer_create`.
-enum CadrResult cadr_renderer_set_present_mode(CadrRenderer renderer, uint32_t mode);
-
-// Writes a window renderer's present mode (`*mode`) and the modes its surface offers
-// (`*offered`: bit `1 << CADR_PRESENT_*` set for each). Either output may be NULL.
-//
-// Returns `CADR_RESULT_OK`, `CADR_RESULT_UNSUPPORTED` (an offscreen renderer),
-// `CADR_RESULT_VULKAN` or a handle error.
-// Ownership: the outputs are the caller's; cadr keeps no pointer to them.
-// Thread-safety: as `cadr_renderer_create`.
-//
-// # Safety
-// `mode` and `offered` are each null or writable.
-enum CadrResult cadr_renderer_present_mode(CadrRenderer renderer,
-                                           uint32_t *mode,
-                                           uint32_t *offered);
 
 // Creates a renderer that draws into an offscreen `width` × `height` image, with the fastest
 // technique combination the device and plugins allow, or the built-in combination when no
@@ -1712,193 +1750,9 @@ enum CadrResult cadr_renderer_set_technique(CadrRenderer renderer, uint32_t kind
 // `name` is null or writable.
 enum CadrResult cadr_renderer_technique(CadrRenderer renderer, uint32_t kind, const char **name);
 
-// Sets the display mode: `CADR_SHADE_SOLID`, `CADR_SHADE_EDGES`, `CADR_SHADE_HIDDEN_LINE`,
-// `CADR_SHADE_WIREFRAME` or `CADR_SHADE_XRAY`.
-//
-// Returns `CADR_RESULT_OK`, `CADR_RESULT_INVALID_ARGUMENT` (unknown mode), `CADR_RESULT_VULKAN`
-// or a handle error. Ownership: nothing changes hands; the arguments are read during the call
-// only. Thread-safety: as `cadr_renderer_create`.
-enum CadrResult cadr_renderer_set_shade_mode(CadrRenderer renderer, uint32_t mode);
-
-// Writes the display mode (`CADR_SHADE_*`).
-//
-// Returns `CADR_RESULT_OK`, `CADR_RESULT_NULL_ARGUMENT` or a handle error.
-// Ownership: the outputs are the caller's; cadr keeps no pointer to them.
-// Thread-safety: as `cadr_renderer_create`.
-//
-// # Safety
-// `mode` is null or writable.
-enum CadrResult cadr_renderer_shade_mode(CadrRenderer renderer, uint32_t *mode);
-
-// Turns screen-space ambient occlusion on or off (off by default): in the modes that fill
-// surfaces (solid, edges, X-ray), creases, corners and gaps between parts are darkened from
-// the frame's depth; the background and translucent surfaces are not. Applies from the next
-// frame; its cost is one full-screen pass.
-//
-// Returns `CADR_RESULT_OK`, `CADR_RESULT_VULKAN` or a handle error. Ownership: nothing
-// changes hands. Thread-safety: as `cadr_renderer_create`.
-enum CadrResult cadr_renderer_set_ssao(CadrRenderer renderer, bool on);
-
-// Writes whether screen-space ambient occlusion is on (see `cadr_renderer_set_ssao`).
-//
-// Returns `CADR_RESULT_OK`, `CADR_RESULT_NULL_ARGUMENT` or a handle error.
-// Ownership: the output is the caller's; cadr keeps no pointer to it.
-// Thread-safety: as `cadr_renderer_create`.
-//
-// # Safety
-// `on` is null or writable.
-enum CadrResult cadr_renderer_ssao(CadrRenderer renderer, bool *on);
-
-// Sets how highlighted parts (`CADR_NODE_HIGHLIGHTED`) are drawn: `CADR_HIGHLIGHT_TINT` (the
-// default) or `CADR_HIGHLIGHT_OUTLINE`, in every display mode. Applies from the next frame.
-//
-// Returns `CADR_RESULT_OK`, `CADR_RESULT_INVALID_ARGUMENT` (an unknown style, or the outline
-// on a device without `fragmentStoresAndAtomics`; the message says which),
-// `CADR_RESULT_VULKAN` or a handle error. Ownership: nothing changes hands.
-// Thread-safety: as `cadr_renderer_create`.
-enum CadrResult cadr_renderer_set_highlight_style(CadrRenderer renderer, uint32_t style);
-
-// Writes the highlight style (`CADR_HIGHLIGHT_*`).
-//
-// Returns `CADR_RESULT_OK`, `CADR_RESULT_NULL_ARGUMENT` or a handle error.
-// Ownership: the output is the caller's; cadr keeps no pointer to it.
-// Thread-safety: as `cadr_renderer_create`.
-//
-// # Safety
-// `style` is null or writable.
-enum CadrResult cadr_renderer_highlight_style(CadrRenderer renderer, uint32_t *style);
-
-// Turns silhouette edges on (`on` true, the default) or off: in the display modes with
-// feature edges (edges, hidden-line, X-ray), the outlines of curved surfaces, which no
-// feature edge marks, are drawn with the feature edges, found where the frame's depth breaks
-// (in X-ray, where the nearest surface's depth breaks, translucent surfaces included), in the
-// edge lines' colour, or a highlighted part's in the highlight's line colour, as its feature
-// edges. On a device without `fragmentStoresAndAtomics` X-ray draws none and the other modes
-// draw every silhouette in the edge lines' colour. Applies from the next frame; its cost is
-// one full-screen pass in those modes, and in X-ray, or while some part is highlighted, an
-// atomic write per surface fragment.
-//
-// Returns `CADR_RESULT_OK`, `CADR_RESULT_VULKAN` or a handle error. Ownership: nothing
-// changes hands. Thread-safety: as `cadr_renderer_create`.
-enum CadrResult cadr_renderer_set_silhouettes(CadrRenderer renderer, bool on);
-
-// Writes whether silhouette edges are on (see `cadr_renderer_set_silhouettes`).
-//
-// Returns `CADR_RESULT_OK`, `CADR_RESULT_NULL_ARGUMENT` or a handle error.
-// Ownership: the output is the caller's; cadr keeps no pointer to it.
-// Thread-safety: as `cadr_renderer_create`.
-//
-// # Safety
-// `on` is null or writable.
-enum CadrResult cadr_renderer_silhouettes(CadrRenderer renderer, bool *on);
-
-// Turns the sampling of materials' base-colour textures on (`on` true, the default) or off:
-// off, materials show their base colour (times vertex colours, which stay). Applies from the
-// next frame; nothing is rebuilt.
-//
-// Returns `CADR_RESULT_OK` or a handle error. Ownership: nothing changes hands.
-// Thread-safety: as `cadr_renderer_create`.
-enum CadrResult cadr_renderer_set_textures(CadrRenderer renderer, bool on);
-
-// Writes whether materials' textures are sampled (see `cadr_renderer_set_textures`).
-//
-// Returns `CADR_RESULT_OK`, `CADR_RESULT_NULL_ARGUMENT` or a handle error.
-// Ownership: the output is the caller's; cadr keeps no pointer to it.
-// Thread-safety: as `cadr_renderer_create`.
-//
-// # Safety
-// `on` is null or writable.
-enum CadrResult cadr_renderer_textures(CadrRenderer renderer, bool *on);
-
-// Shows the hidden edges in the `CADR_SHADE_HIDDEN_LINE` mode dashed, in a lighter shade of
-// the visible ones' colour (`dashed` true), or removes them (false, the default). With
-// silhouettes on (`cadr_renderer_set_silhouettes`), the silhouettes of hidden curved
-// surfaces (tessellated with shared vertex normals) are dashed too where the device has
-// geometry shaders. Other modes are not affected. Applies from the next frame. With the `gpu-occlusion` culler, parts it finds
-// entirely hidden are not drawn, so their dashed edges do not show.
-//
-// Returns `CADR_RESULT_OK` or a handle error. Ownership: nothing changes hands.
-// Thread-safety: as `cadr_renderer_create`.
-enum CadrResult cadr_renderer_set_dashed_hidden_lines(CadrRenderer renderer,
-                                                      bool dashed);
-
-// Writes whether the hidden-line mode shows hidden edges dashed (see
-// `cadr_renderer_set_dashed_hidden_lines`).
-//
-// Returns `CADR_RESULT_OK`, `CADR_RESULT_NULL_ARGUMENT` or a handle error.
-// Ownership: the output is the caller's; cadr keeps no pointer to it.
-// Thread-safety: as `cadr_renderer_create`.
-//
-// # Safety
-// `dashed` is null or writable.
-enum CadrResult cadr_renderer_dashed_hidden_lines(CadrRenderer renderer, bool *dashed);
-
-// Sets the sub-pixel culling threshold: with a GPU culler (`gpu-frustum`, `gpu-occlusion`)
-// active, parts whose bounding sphere projects smaller than `pixels` across are not drawn, in
-// any pass (picking included). 0, the default, keeps every part (CAD users count small parts);
-// CPU cullers ignore the threshold. Applies from the next frame.
-//
-// Returns `CADR_RESULT_OK`, `CADR_RESULT_INVALID_ARGUMENT` (negative, infinite or NaN) or a
-// handle error. Ownership: nothing changes hands. Thread-safety: as `cadr_renderer_create`.
-enum CadrResult cadr_renderer_set_min_pixels(CadrRenderer renderer, float pixels);
-
-// Writes the sub-pixel culling threshold in pixels (0: off).
-//
-// Returns `CADR_RESULT_OK`, `CADR_RESULT_NULL_ARGUMENT` or a handle error.
-// Ownership: the output is the caller's; cadr keeps no pointer to it.
-// Thread-safety: as `cadr_renderer_create`.
-//
-// # Safety
-// `pixels` is null or writable.
-enum CadrResult cadr_renderer_min_pixels(CadrRenderer renderer, float *pixels);
-
-// Sets the level-of-detail threshold of the cluster culler (`gpu-clusters`), in pixels: each
-// part is drawn with the coarsest clusters whose simplification error projects at or under
-// `pixels` on screen (a part never vanishes for being far: it keeps its coarsest clusters).
-// 0 draws every part at full detail; the default is 1. Other cullers draw parts whole and
-// ignore it. Applies from the next frame.
-//
-// Returns `CADR_RESULT_OK`, `CADR_RESULT_INVALID_ARGUMENT` (negative, infinite or NaN) or a
-// handle error. Ownership: nothing changes hands. Thread-safety: as `cadr_renderer_create`.
-enum CadrResult cadr_renderer_set_lod_error(CadrRenderer renderer, float pixels);
-
-// Writes the level-of-detail threshold of the cluster culler in pixels (0: full detail).
-//
-// Returns `CADR_RESULT_OK`, `CADR_RESULT_NULL_ARGUMENT` or a handle error.
-// Ownership: the output is the caller's; cadr keeps no pointer to it.
-// Thread-safety: as `cadr_renderer_create`.
-//
-// # Safety
-// `pixels` is null or writable.
-enum CadrResult cadr_renderer_lod_error(CadrRenderer renderer, float *pixels);
-
-// Turns frame replay on (the default) or off. With it on, a frame that would record what the
-// renderer's last frame recorded (only the camera moved, or nothing changed; also parts moved
-// or material values changed, when every active technique reads parameter values on the
-// GPU) resubmits that recording instead, after the frame's uploads, when every active
-// technique allows it; the picture is the same. Off,
-// every frame is recorded afresh (to measure recording, or to compare).
-//
-// Returns `CADR_RESULT_OK` or a handle error. Ownership: nothing changes hands.
-// Thread-safety: as `cadr_renderer_create`.
-enum CadrResult cadr_renderer_set_frame_replay(CadrRenderer renderer, bool enabled);
-
-// Writes whether frame replay is on (`*enabled`) and whether the renderer's last frame was
-// a replay (`*last_frame_replayed`; false before the first frame). Either output may be NULL.
-//
-// Returns `CADR_RESULT_OK` or a handle error.
-// Ownership: the outputs are the caller's; cadr keeps no pointer to them.
-// Thread-safety: as `cadr_renderer_create`.
-//
-// # Safety
-// `enabled` and `last_frame_replayed` are each null or writable.
-enum CadrResult cadr_renderer_frame_replay(CadrRenderer renderer,
-                                           bool *enabled,
-                                           bool *last_frame_replayed);
-
 // Renders one frame of `scene` seen by `camera`: applies the host's edits since the last
 // frame (incrementally), culls, draws with the current techniques and, for a window, presents.
-// `stats` may be NULL.
+// `stats` may be NULL; otherwise its `size` says how much of it the host has.
 //
 // Returns `CADR_RESULT_OK`, `CADR_RESULT_NULL_ARGUMENT`, `CADR_RESULT_INVALID_ARGUMENT`
 // (non-finite camera), `CADR_RESULT_VULKAN`, `CADR_RESULT_PLUGIN_FAILED` or a handle error.
@@ -1907,7 +1761,7 @@ enum CadrResult cadr_renderer_frame_replay(CadrRenderer renderer,
 // afresh at each change of renderer.
 //
 // # Safety
-// `camera` is null or readable; `stats` null or writable.
+// `camera` is null or readable; `stats` null or writable for its `size`.
 enum CadrResult cadr_renderer_render(CadrRenderer renderer,
                                      CadrScene scene,
                                      const struct CadrCamera *camera,
@@ -1992,35 +1846,51 @@ enum CadrResult cadr_renderer_section_planes(CadrRenderer renderer,
                                              uint32_t capacity,
                                              uint32_t *count);
 
-// Sets the section flags: `CADR_SECTION_CAPS` (fill cuts through closed parts; without it the
-// inside shows) and `CADR_SECTION_HATCHED` (hatch the caps). The default is
-// `CADR_SECTION_CAPS`.
+// Writes the renderer's settings into `*settings`, up to the `settings->size` the host set
+// (`sizeof(CadrRendererSettings)`; a newer host's fields this library does not know are
+// zeroed).
 //
-// Returns `CADR_RESULT_OK`, `CADR_RESULT_INVALID_ARGUMENT` (unknown bits) or a handle error.
-// Ownership: nothing changes hands. Thread-safety: as `cadr_renderer_create`.
-enum CadrResult cadr_renderer_set_section_flags(CadrRenderer renderer, uint32_t flags);
-
-// Writes the section flags (`CADR_SECTION_*`).
-//
-// Returns `CADR_RESULT_OK`, `CADR_RESULT_NULL_ARGUMENT` or a handle error.
-// Ownership: the output is the caller's. Thread-safety: as `cadr_renderer_create`.
+// Returns `CADR_RESULT_OK`, `CADR_RESULT_NULL_ARGUMENT`, `CADR_RESULT_INVALID_ARGUMENT` (a
+// `size` below 4) or a handle error. Ownership: the struct is the caller's; cadr keeps no
+// pointer to it. Thread-safety: as `cadr_renderer_create`.
 //
 // # Safety
-// `flags` is null or writable.
-enum CadrResult cadr_renderer_section_flags(CadrRenderer renderer, uint32_t *flags);
+// `settings` is null or points to `settings->size` writable bytes.
+enum CadrResult cadr_renderer_settings(CadrRenderer renderer,
+                                       struct CadrRendererSettings *settings);
 
-// Sets the cap colour of section plane `index` (0 to `CADR_MAX_SECTION_PLANES - 1`, whether
-// or not that plane is set) to the linear RGBA `rgba` (four floats, clamped to 0..1).
+// Applies `*settings` to the renderer; the next frame and pick follow them. Read the
+// settings first with `cadr_renderer_settings` and change what you need. A host compiled
+// against an older header (a smaller `size`) keeps the renderer's current values of the
+// fields it does not know; a newer host's fields this library does not know must be 0.
 //
-// Returns `CADR_RESULT_OK`, `CADR_RESULT_NULL_ARGUMENT`, `CADR_RESULT_INVALID_ARGUMENT` (index
-// out of range or a value that is not finite) or a handle error. Ownership: `rgba` is read
-// during the call only. Thread-safety: as `cadr_renderer_create`.
+// All or nothing: a refused value (the message names the field) leaves every setting as it
+// was.
+//
+// Returns `CADR_RESULT_OK`, `CADR_RESULT_NULL_ARGUMENT`, `CADR_RESULT_INVALID_ARGUMENT` (a
+// value out of range, a sample count or highlight style the device does not offer, a
+// non-zero field this library does not know), `CADR_RESULT_UNSUPPORTED` (a present mode the
+// window does not offer, or another than FIFO without a window), `CADR_RESULT_VULKAN` or a
+// handle error. Ownership: `settings` is read during the call only. Thread-safety: as
+// `cadr_renderer_create`.
 //
 // # Safety
-// `rgba` is null or points to four readable floats.
-enum CadrResult cadr_renderer_set_section_cap_color(CadrRenderer renderer,
-                                                    uint32_t index,
-                                                    const float *rgba);
+// `settings` is null or points to `settings->size` readable bytes.
+enum CadrResult cadr_renderer_apply_settings(CadrRenderer renderer,
+                                             const struct CadrRendererSettings *settings);
+
+// Writes what the renderer's device and output offer into `*capabilities`, up to the
+// `capabilities->size` the host set.
+//
+// Returns `CADR_RESULT_OK`, `CADR_RESULT_NULL_ARGUMENT`, `CADR_RESULT_INVALID_ARGUMENT` (a
+// `size` below 4), `CADR_RESULT_VULKAN` (the window's surface could not be asked) or a
+// handle error. Ownership: the struct is the caller's. Thread-safety: as
+// `cadr_renderer_create`.
+//
+// # Safety
+// `capabilities` is null or points to `capabilities->size` writable bytes.
+enum CadrResult cadr_renderer_capabilities(CadrRenderer renderer,
+                                           struct CadrRendererCapabilities *capabilities);
 
 // Creates a texture from the host's texels (copied). Materials use it through
 // `cadr_scene_set_material_texture`, with the texture coordinates of their geometry
@@ -2107,7 +1977,7 @@ enum CadrResult cadr_scene_set_geometry_attributes(CadrScene scene,
 // Thread-safety: any thread, at any time; phases still running are not yet counted.
 //
 // # Safety
-// `timings` is null or writable.
+// `timings` is null or writable for its `size`.
 enum CadrResult cadr_timings(struct CadrTimings *timings);
 
 // Sets every phase's total to zero, for a host that measures one stretch of its run.

@@ -33,10 +33,10 @@ int main(int argc, char **argv) {
   CadrScene scene;
   CadrRenderer renderer;
   CadrNode root, parent;
-  struct CadrLoadResult loaded;
+  struct CadrLoadResult loaded = {.size = sizeof(struct CadrLoadResult)};
   struct CadrBounds bounds, piece_bounds;
   struct CadrCamera camera;
-  struct CadrFrameStats stats;
+  struct CadrFrameStats stats = {.size = sizeof(struct CadrFrameStats)};
   struct Piece *pieces;
   uint32_t count = 0, i;
   double center[3], radius, identity[16], matrix[16];

@@ -20,10 +20,11 @@ int main(int argc, char **argv) {
   CadrGeometry plate_box, shaft, head, cover_a, cover_b;
   CadrMaterial steel, paint, brass, glass;
   CadrMaterial plate_materials[3], shaft_materials[2], head_materials[2], cover_materials[3];
-  struct CadrSceneStatistics statistics;
+  struct CadrSceneStatistics statistics = {.size = sizeof(struct CadrSceneStatistics)};
   struct CadrBounds bounds;
   struct CadrCamera camera;
-  struct CadrFrameStats stats;
+  struct CadrFrameStats stats = {.size = sizeof(struct CadrFrameStats)};
+  CadrRendererSettings settings;
   const char *submission = NULL;
   bool cover_mask[2] = {false, true};
   double matrix[16];
@@ -103,7 +104,11 @@ int main(int argc, char **argv) {
     const double direction[3] = {0.9, -1.3, 1.1};
     CADR_CHECK(cadr_camera_fit(&bounds, (double)width / height, direction, &camera));
   }
-  CADR_CHECK(cadr_renderer_set_shade_mode(renderer, CADR_SHADE_EDGES));
+  /* Settings are one struct: read the renderer's, change what you need, apply them. */
+  settings.size = sizeof settings;
+  CADR_CHECK(cadr_renderer_settings(renderer, &settings));
+  settings.shade_mode = CADR_SHADE_EDGES;
+  CADR_CHECK(cadr_renderer_apply_settings(renderer, &settings));
   CADR_CHECK(cadr_renderer_render(renderer, scene, &camera, &stats));
   CADR_CHECK(cadr_renderer_save_png(renderer, output));
   CADR_CHECK(cadr_renderer_technique(renderer, CADR_TECHNIQUE_KIND_SUBMISSION, &submission));

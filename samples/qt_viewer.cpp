@@ -109,9 +109,7 @@ public:
 
   void setShadeMode(uint32_t mode) {
     shade_ = mode;
-    if (renderer_ != nullptr) {
-      CHECK(cadr_renderer_set_shade_mode(renderer_, shade_));
-    }
+    applyShadeMode();
     render();
   }
 
@@ -149,6 +147,7 @@ public:
     }
     CadrCamera view = camera();
     CadrPickResult result = {};
+    result.size = sizeof result;
     CHECK(cadr_renderer_pick(renderer_, scene_, &view, uint32_t(x), uint32_t(y), &result));
     CadrNode node = result.hit_count > 0 ? result.hits[0].node : 0;
     cadr_pick_result_free(&result);
@@ -217,7 +216,7 @@ private:
     /* The renderer owns the surface from here on. */
     CHECK(cadr_renderer_create_for_surface(context_, uint64_t(surface), uint32_t(width()),
                                            uint32_t(height()), &renderer_));
-    CHECK(cadr_renderer_set_shade_mode(renderer_, shade_));
+    applyShadeMode();
     applySection();
   }
 
@@ -226,6 +225,18 @@ private:
       CHECK(cadr_renderer_destroy(renderer_));
       renderer_ = nullptr;
     }
+  }
+
+  /* Settings are one struct: the renderer's, with the display mode changed. */
+  void applyShadeMode() {
+    if (renderer_ == nullptr) {
+      return;
+    }
+    CadrRendererSettings settings = {};
+    settings.size = sizeof settings;
+    CHECK(cadr_renderer_settings(renderer_, &settings));
+    settings.shade_mode = shade_;
+    CHECK(cadr_renderer_apply_settings(renderer_, &settings));
   }
 
   void applySection() {
@@ -237,8 +248,8 @@ private:
       return;
     }
     const double plane[4] = {-1.0, 0.0, 0.0, 0.5 * (bounds_.min[0] + bounds_.max[0])};
+    /* Caps are on by default (CadrRendererSettings::section_flags). */
     CHECK(cadr_renderer_set_section_planes(renderer_, plane, 1));
-    CHECK(cadr_renderer_set_section_flags(renderer_, CADR_SECTION_CAPS));
   }
 
   void setHighlighted(CadrNode node, bool on) {
@@ -490,7 +501,8 @@ int main(int argc, char **argv) {
 
   /* cadr's context with the instance extensions of an X11 window. */
   const char *extensions[] = {"VK_KHR_surface", "VK_KHR_xcb_surface"};
-  CadrContextOptions options;
+  CadrContextOptions options = {};
+  options.size = sizeof options;
   CHECK(cadr_context_options_default(&options));
   options.instance_extensions = extensions;
   options.instance_extension_count = 2;
@@ -512,6 +524,7 @@ int main(int argc, char **argv) {
   CHECK(cadr_scene_create(&scene));
   CHECK(cadr_scene_root(scene, &root));
   CadrLoadResult loaded = {};
+  loaded.size = sizeof loaded;
   CHECK(cadr_scene_load(scene, source.c_str(), root, &loaded));
   cadr_load_result_free(&loaded);
 

@@ -54,9 +54,8 @@ struct Viewer {
   int dragging; /* 0 none, 1 orbit, 2 pan */
   double press_x, press_y; /* where the left button went down: a click if it comes up there */
   CadrNode selected;       /* the highlighted geo node, 0 for none */
-  uint32_t shade;
+  CadrRendererSettings settings; /* what the keys change, applied with apply_settings */
   int section_axis;      /* -1: no section; 0, 1, 2: a plane across x, y or z */
-  uint32_t section_flags; /* CADR_SECTION_* */
   uint32_t background;    /* index into backgrounds */
   struct CadrFrameStats stats;
   double frames_per_second;
@@ -99,7 +98,7 @@ static void camera_of(const struct Viewer *v, uint32_t width, uint32_t height,
 static void cycle_technique(struct Viewer *v, uint32_t kind) {
   const char *current = NULL;
   uint32_t count = 0, i, start = 0, step;
-  struct CadrTechniqueInfo info;
+  struct CadrTechniqueInfo info = {.size = sizeof(struct CadrTechniqueInfo)};
   CADR_CHECK(cadr_renderer_technique(v->renderer, kind, &current));
   CADR_CHECK(cadr_context_technique_count(v->context, &count));
   for (i = 0; i < count; ++i) {
@@ -123,10 +122,27 @@ static void cycle_technique(struct Viewer *v, uint32_t kind) {
 
 static const char *const shade_names[5] = {"solid", "edges", "hidden-line", "wireframe", "xray"};
 
+/* Applies the viewer's settings; a refused one is printed and the renderer's are read back
+ * (cadr applies all of them or none). Returns whether they were applied. */
+static int apply_settings(struct Viewer *v) {
+  if (cadr_renderer_apply_settings(v->renderer, &v->settings) != CADR_RESULT_OK) {
+    char message[512];
+    size_t length = 0;
+    if (cadr_last_error_message(message, sizeof message, &length) != CADR_RESULT_OK) {
+      strcpy(message, "(message too long)");
+    }
+    printf("refused: %s\n", message);
+    CADR_CHECK(cadr_renderer_settings(v->renderer, &v->settings));
+    return 0;
+  }
+  return 1;
+}
+
 static void toggle_shade(struct Viewer *v) {
-  v->shade = (v->shade + 1) % 5;
-  CADR_CHECK(cadr_renderer_set_shade_mode(v->renderer, v->shade));
-  printf("display mode: %s\n", shade_names[v->shade]);
+  v->settings.shade_mode = (v->settings.shade_mode + 1) % 5;
+  if (apply_settings(v)) {
+    printf("display mode: %s\n", shade_names[v->settings.shade_mode]);
+  }
 }
 
 static const char *const axis_names[3] = {"x", "y", "z"};
@@ -141,7 +157,6 @@ static void apply_section(struct Viewer *v) {
     plane[3] = v->target[v->section_axis];
     CADR_CHECK(cadr_renderer_set_section_planes(v->renderer, plane, 1));
   }
-  CADR_CHECK(cadr_renderer_set_section_flags(v->renderer, v->section_flags));
 }
 
 static void cycle_section(struct Viewer *v) {
@@ -151,9 +166,10 @@ static void cycle_section(struct Viewer *v) {
 }
 
 static void toggle_section_flag(struct Viewer *v, uint32_t flag, const char *name) {
-  v->section_flags ^= flag;
-  apply_section(v);
-  printf("section %s: %s\n", name, (v->section_flags & flag) ? "on" : "off");
+  v->settings.section_flags ^= flag;
+  if (apply_settings(v)) {
+    printf("section %s: %s\n", name, (v->settings.section_flags & flag) ? "on" : "off");
+  }
 }
 
 /* The backgrounds B cycles through: cadr's default gradient first (read from the renderer).
@@ -163,72 +179,75 @@ static const char *const background_names[3] = {"gradient", "white", "dark"};
 static void cycle_background(struct Viewer *v) {
   static float default_top[3], default_bottom[3], default_edges[3];
   static int have_default = 0;
-  const float white[3] = {1.0f, 1.0f, 1.0f};
-  const float dark_top[3] = {0.20f, 0.22f, 0.26f}, dark_bottom[3] = {0.05f, 0.06f, 0.08f};
-  const float light_edges[3] = {0.85f, 0.87f, 0.90f};
+  static const float white[3] = {1.0f, 1.0f, 1.0f};
+  static const float dark_top[3] = {0.20f, 0.22f, 0.26f}, dark_bottom[3] = {0.05f, 0.06f, 0.08f};
+  static const float light_edges[3] = {0.85f, 0.87f, 0.90f};
+  const float *top, *bottom;
   if (!have_default) {
-    CADR_CHECK(cadr_renderer_background(v->renderer, default_top, default_bottom));
-    CADR_CHECK(cadr_renderer_edge_color(v->renderer, default_edges));
+    memcpy(default_top, v->settings.background_top, sizeof default_top);
+    memcpy(default_bottom, v->settings.background_bottom, sizeof default_bottom);
+    memcpy(default_edges, v->settings.edge_color, sizeof default_edges);
     have_default = 1;
   }
   v->background = (v->background + 1) % 3;
-  switch (v->background) {
-  case 0: CADR_CHECK(cadr_renderer_set_background(v->renderer, default_top, default_bottom)); break;
-  case 1: CADR_CHECK(cadr_renderer_set_background(v->renderer, white, white)); break;
-  default: CADR_CHECK(cadr_renderer_set_background(v->renderer, dark_top, dark_bottom)); break;
+  top = v->background == 0 ? default_top : v->background == 1 ? white : dark_top;
+  bottom = v->background == 0 ? default_bottom : v->background == 1 ? white : dark_bottom;
+  memcpy(v->settings.background_top, top, sizeof v->settings.background_top);
+  memcpy(v->settings.background_bottom, bottom, sizeof v->settings.background_bottom);
+  memcpy(v->settings.edge_color, v->background == 2 ? light_edges : default_edges,
+         sizeof v->settings.edge_color);
+  if (apply_settings(v)) {
+    printf("background: %s\n", background_names[v->background]);
   }
-  CADR_CHECK(cadr_renderer_set_edge_color(v->renderer, v->background == 2 ? light_edges : default_edges));
-  printf("background: %s\n", background_names[v->background]);
 }
 
 /* The next anti-aliasing level the device offers after the current one, off after the highest. */
 static void cycle_msaa(struct Viewer *v) {
-  uint32_t samples = 1, offered = 1, next;
-  CADR_CHECK(cadr_renderer_msaa(v->renderer, &samples, &offered));
-  for (next = samples * 2; next <= 64 && !(offered & next); next *= 2) {
+  CadrRendererCapabilities capabilities = {.size = sizeof(struct CadrRendererCapabilities)};
+  uint32_t next;
+  memset(&capabilities, 0, sizeof capabilities);
+  capabilities.size = sizeof capabilities;
+  capabilities.size = sizeof capabilities;
+  CADR_CHECK(cadr_renderer_capabilities(v->renderer, &capabilities));
+  for (next = v->settings.msaa_samples * 2;
+       next <= 64 && !(capabilities.msaa_sample_counts & next); next *= 2) {
   }
-  if (next > 64) {
-    next = 1;
+  v->settings.msaa_samples = next > 64 ? 1 : next;
+  if (apply_settings(v)) {
+    next = v->settings.msaa_samples;
+    printf("anti-aliasing: %s%u%s\n", next > 1 ? "MSAA " : "", next, next > 1 ? "x" : " sample (off)");
   }
-  CADR_CHECK(cadr_renderer_set_msaa(v->renderer, next));
-  printf("anti-aliasing: %s%u%s\n", next > 1 ? "MSAA " : "", next, next > 1 ? "x" : " sample (off)");
+}
+
+/* Flips a yes/no setting and prints its new state. */
+static void toggle(struct Viewer *v, bool *setting, const char *name, const char *on,
+                   const char *off) {
+  *setting = !*setting;
+  if (apply_settings(v)) {
+    printf("%s: %s\n", name, *setting ? on : off);
+  }
 }
 
 static void toggle_dashed(struct Viewer *v) {
-  bool dashed = false;
-  CADR_CHECK(cadr_renderer_dashed_hidden_lines(v->renderer, &dashed));
-  CADR_CHECK(cadr_renderer_set_dashed_hidden_lines(v->renderer, !dashed));
-  printf("hidden edges: %s\n", dashed ? "removed" : "dashed");
+  toggle(v, &v->settings.dashed_hidden_lines, "hidden edges", "dashed", "removed");
 }
 
 static void toggle_textures(struct Viewer *v) {
-  bool on = true;
-  CADR_CHECK(cadr_renderer_textures(v->renderer, &on));
-  CADR_CHECK(cadr_renderer_set_textures(v->renderer, !on));
-  printf("textures: %s\n", on ? "off" : "on");
+  toggle(v, &v->settings.textures, "textures", "on", "off");
 }
 
 static void toggle_silhouettes(struct Viewer *v) {
-  bool on = true;
-  CADR_CHECK(cadr_renderer_silhouettes(v->renderer, &on));
-  CADR_CHECK(cadr_renderer_set_silhouettes(v->renderer, !on));
-  printf("silhouettes: %s\n", on ? "off" : "on");
+  toggle(v, &v->settings.silhouettes, "silhouettes", "on", "off");
 }
 
 static void cycle_highlight_style(struct Viewer *v) {
-  uint32_t style = CADR_HIGHLIGHT_TINT;
-  CADR_CHECK(cadr_renderer_highlight_style(v->renderer, &style));
-  style = style == CADR_HIGHLIGHT_TINT ? CADR_HIGHLIGHT_OUTLINE : CADR_HIGHLIGHT_TINT;
-  if (cadr_renderer_set_highlight_style(v->renderer, style) != CADR_RESULT_OK) {
-    char message[512];
-    size_t length = 0;
-    if (cadr_last_error_message(message, sizeof message, &length) != CADR_RESULT_OK) {
-      strcpy(message, "(message too long)");
-    }
-    printf("highlight style: %s\n", message);
-    return;
+  v->settings.highlight_style = v->settings.highlight_style == CADR_HIGHLIGHT_TINT
+                                    ? CADR_HIGHLIGHT_OUTLINE
+                                    : CADR_HIGHLIGHT_TINT;
+  if (apply_settings(v)) {
+    printf("highlight style: %s\n",
+           v->settings.highlight_style == CADR_HIGHLIGHT_TINT ? "tint" : "outline");
   }
-  printf("highlight style: %s\n", style == CADR_HIGHLIGHT_TINT ? "tint" : "outline");
 }
 
 /* Selects the part under the window point (x, y) in screen coordinates: its geo node is
@@ -237,7 +256,7 @@ static void select_at(struct Viewer *v, double x, double y) {
   int window_width, window_height, fb_width, fb_height;
   uint32_t width = 0, height = 0, flags = 0;
   struct CadrCamera camera;
-  CadrPickResult picked = {NULL, 0};
+  CadrPickResult picked = {sizeof(struct CadrPickResult), NULL, 0};
   double px, py;
   glfwGetWindowSize(v->window, &window_width, &window_height);
   glfwGetFramebufferSize(v->window, &fb_width, &fb_height);
@@ -270,29 +289,36 @@ static void select_at(struct Viewer *v, double x, double y) {
 }
 
 static void toggle_ssao(struct Viewer *v) {
-  bool on = false;
-  CADR_CHECK(cadr_renderer_ssao(v->renderer, &on));
-  CADR_CHECK(cadr_renderer_set_ssao(v->renderer, !on));
-  printf("ambient occlusion: %s\n", on ? "off" : "on");
+  toggle(v, &v->settings.ssao, "ambient occlusion", "on", "off");
 }
 
 static void toggle_frames_in_flight(struct Viewer *v) {
-  uint32_t frames = 1;
-  CADR_CHECK(cadr_renderer_frames_in_flight(v->renderer, &frames));
-  frames = frames % 3 + 1;
-  CADR_CHECK(cadr_renderer_set_frames_in_flight(v->renderer, frames));
-  printf("frames in flight: %u\n", frames);
+  v->settings.frames_in_flight = v->settings.frames_in_flight % 3 + 1;
+  if (apply_settings(v)) {
+    printf("frames in flight: %u\n", v->settings.frames_in_flight);
+  }
+}
+
+/* The present modes the window offers: bit 1 << CADR_PRESENT_* for each. */
+static uint32_t offered_present_modes(struct Viewer *v) {
+  CadrRendererCapabilities capabilities = {.size = sizeof(struct CadrRendererCapabilities)};
+  memset(&capabilities, 0, sizeof capabilities);
+  capabilities.size = sizeof capabilities;
+  capabilities.size = sizeof capabilities;
+  CADR_CHECK(cadr_renderer_capabilities(v->renderer, &capabilities));
+  return capabilities.present_modes;
 }
 
 /* The next present mode the window offers after the current one. */
 static void cycle_present_mode(struct Viewer *v) {
-  uint32_t mode = 0, offered = 0, step;
-  CADR_CHECK(cadr_renderer_present_mode(v->renderer, &mode, &offered));
+  uint32_t offered = offered_present_modes(v), step;
   for (step = 1; step <= 3; ++step) {
-    uint32_t next = (mode + step) % 3;
+    uint32_t next = (v->settings.present_mode + step) % 3;
     if (offered & (1u << next)) {
-      CADR_CHECK(cadr_renderer_set_present_mode(v->renderer, next));
-      printf("present mode: %s\n", present_names[next]);
+      v->settings.present_mode = next;
+      if (apply_settings(v)) {
+        printf("present mode: %s\n", present_names[next]);
+      }
       return;
     }
   }
@@ -301,38 +327,31 @@ static void cycle_present_mode(struct Viewer *v) {
 static void describe(struct Viewer *v, char *text, size_t size) {
   const char *names[5];
   char section[64];
-  char antialiasing[16];
-  uint32_t kind, frames = 1, mode = 0, samples = 1;
-  bool textures = true, silhouettes = true;
-  uint32_t highlight = CADR_HIGHLIGHT_TINT;
+  char antialiasing[24];
+  const CadrRendererSettings *settings = &v->settings;
+  uint32_t kind, samples = settings->msaa_samples, shade = settings->shade_mode;
   for (kind = 0; kind < 5; ++kind) {
     CADR_CHECK(cadr_renderer_technique(v->renderer, kind, &names[kind]));
   }
-  CADR_CHECK(cadr_renderer_msaa(v->renderer, &samples, NULL));
   if (samples > 1) {
     snprintf(antialiasing, sizeof antialiasing, "MSAA %ux", samples);
   } else {
     snprintf(antialiasing, sizeof antialiasing, "no AA");
   }
-  CADR_CHECK(cadr_renderer_frames_in_flight(v->renderer, &frames));
-  CADR_CHECK(cadr_renderer_present_mode(v->renderer, &mode, NULL));
-  CADR_CHECK(cadr_renderer_textures(v->renderer, &textures));
-  CADR_CHECK(cadr_renderer_silhouettes(v->renderer, &silhouettes));
-  CADR_CHECK(cadr_renderer_highlight_style(v->renderer, &highlight));
   snprintf(section, sizeof section, "%s%s%s",
            v->section_axis < 0 ? "no section" : "section ",
            v->section_axis < 0 ? "" : axis_names[v->section_axis],
            v->section_axis < 0 ? ""
-           : (v->section_flags & CADR_SECTION_CAPS)
-               ? ((v->section_flags & CADR_SECTION_HATCHED) ? " capped, hatched" : " capped")
+           : (settings->section_flags & CADR_SECTION_CAPS)
+               ? ((settings->section_flags & CADR_SECTION_HATCHED) ? " capped, hatched" : " capped")
                : " uncapped");
   snprintf(text, size,
            "cadr viewer | %s / %s / %s / %s | %s%s, %s highlight, %s | %s | %s | %s | %s background | %u in flight, %s | %llu draws in %llu calls | CPU %.0f us, GPU %.0f us | %.0f frames/s",
-           names[0], names[1], names[2], names[3], shade_names[v->shade % 5],
-           silhouettes || (v->shade != CADR_SHADE_EDGES && v->shade != CADR_SHADE_HIDDEN_LINE && v->shade != CADR_SHADE_XRAY) ? "" : " without silhouettes",
-           highlight == CADR_HIGHLIGHT_OUTLINE ? "outline" : "tint",
+           names[0], names[1], names[2], names[3], shade_names[shade % 5],
+           settings->silhouettes || (shade != CADR_SHADE_EDGES && shade != CADR_SHADE_HIDDEN_LINE && shade != CADR_SHADE_XRAY) ? "" : " without silhouettes",
+           settings->highlight_style == CADR_HIGHLIGHT_OUTLINE ? "outline" : "tint",
            names[4],
-           antialiasing, textures ? "textures" : "no textures", section, background_names[v->background % 3], frames, present_names[mode % 3], (unsigned long long)v->stats.draws,
+           antialiasing, settings->textures ? "textures" : "no textures", section, background_names[v->background % 3], settings->frames_in_flight, present_names[settings->present_mode % 3], (unsigned long long)v->stats.draws,
            (unsigned long long)v->stats.draw_calls, v->stats.cpu_us, v->stats.gpu_us,
            v->frames_per_second);
 }
@@ -497,7 +516,7 @@ static int self_test(struct Viewer *v, const char *dir) {
       cycle_msaa(v);
       for (mode = 0; mode < 5; ++mode) {
         toggle_shade(v);
-        if (v->shade == CADR_SHADE_EDGES || v->shade == CADR_SHADE_XRAY) {
+        if (v->settings.shade_mode == CADR_SHADE_EDGES || v->settings.shade_mode == CADR_SHADE_XRAY) {
           render(v);
           toggle_ssao(v);
           render(v);
@@ -505,7 +524,7 @@ static int self_test(struct Viewer *v, const char *dir) {
           toggle_textures(v);
           render(v);
           toggle_textures(v);
-        } else if (v->shade == CADR_SHADE_HIDDEN_LINE) {
+        } else if (v->settings.shade_mode == CADR_SHADE_HIDDEN_LINE) {
           toggle_dashed(v);
           render(v);
           toggle_dashed(v);
@@ -514,27 +533,28 @@ static int self_test(struct Viewer *v, const char *dir) {
           toggle_silhouettes(v);
         }
       }
-      CADR_CHECK(cadr_renderer_msaa(v->renderer, &samples, NULL));
+      samples = v->settings.msaa_samples;
     } while (samples > 1);
   }
   /* Every present mode the window offers, with one, two and three frames in flight. */
   {
-    uint32_t mode, offered = 0, frames;
-    CADR_CHECK(cadr_renderer_present_mode(v->renderer, NULL, &offered));
+    uint32_t mode, offered = offered_present_modes(v), frames;
     printf("present modes offered:");
     for (mode = 0; mode < 3; ++mode) {
       if (offered & (1u << mode)) {
         printf(" %s", present_names[mode]);
         for (frames = 1; frames <= 3; ++frames) {
-          CADR_CHECK(cadr_renderer_set_frames_in_flight(v->renderer, frames));
-          CADR_CHECK(cadr_renderer_set_present_mode(v->renderer, mode));
+          v->settings.frames_in_flight = frames;
+          v->settings.present_mode = mode;
+          CADR_CHECK(cadr_renderer_apply_settings(v->renderer, &v->settings));
           render(v);
           render(v);
         }
       }
     }
     printf("\n");
-    CADR_CHECK(cadr_renderer_set_present_mode(v->renderer, CADR_PRESENT_FIFO));
+    v->settings.present_mode = CADR_PRESENT_FIFO;
+    CADR_CHECK(cadr_renderer_apply_settings(v->renderer, &v->settings));
   }
   glfwSetWindowSize(v->window, 480, 360);
   for (frame = 0; frame < 200 && (fb_width != 480 || fb_height != 360); ++frame) {
@@ -572,8 +592,8 @@ static int self_test(struct Viewer *v, const char *dir) {
 
 int main(int argc, char **argv) {
   struct Viewer v;
-  struct CadrContextOptions options;
-  struct CadrLoadResult loaded;
+  struct CadrContextOptions options = {.size = sizeof(struct CadrContextOptions)};
+  struct CadrLoadResult loaded = {.size = sizeof(struct CadrLoadResult)};
   const char *source = "gen:demo", *test_dir = NULL, **extensions;
   uint32_t extension_count = 0;
   void *instance = NULL;
@@ -608,9 +628,8 @@ int main(int argc, char **argv) {
     }
   }
   memset(&v, 0, sizeof v);
-  v.shade = CADR_SHADE_SOLID;
+  v.stats.size = sizeof v.stats;
   v.section_axis = -1;
-  v.section_flags = CADR_SECTION_CAPS;
   if (!glfwInit()) {
     fprintf(stderr, "viewer: GLFW cannot open a display (is DISPLAY set?)\n");
     return 1;
@@ -643,15 +662,18 @@ int main(int argc, char **argv) {
   glfwGetFramebufferSize(v.window, &width, &height);
   CADR_CHECK(cadr_renderer_create_for_surface(v.context, (uint64_t)surface, (uint32_t)width,
                                               (uint32_t)height, &v.renderer));
+  v.settings.size = sizeof v.settings;
+  CADR_CHECK(cadr_renderer_settings(v.renderer, &v.settings));
   if (frames_in_flight != 0) {
-    CADR_CHECK(cadr_renderer_set_frames_in_flight(v.renderer, (uint32_t)frames_in_flight));
+    v.settings.frames_in_flight = (uint32_t)frames_in_flight;
   }
   if (present >= 0) {
-    CADR_CHECK(cadr_renderer_set_present_mode(v.renderer, (uint32_t)present));
+    v.settings.present_mode = (uint32_t)present;
   }
   if (msaa != 0) {
-    CADR_CHECK(cadr_renderer_set_msaa(v.renderer, (uint32_t)msaa));
+    v.settings.msaa_samples = (uint32_t)msaa;
   }
+  CADR_CHECK(cadr_renderer_apply_settings(v.renderer, &v.settings));
 
   CADR_CHECK(cadr_scene_create(&v.scene));
   CADR_CHECK(cadr_scene_root(v.scene, &root));

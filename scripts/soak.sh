@@ -31,10 +31,10 @@ cargo build --release --locked -p cadr-capi -p cadr-plugin-vertex -p cadr-plugin
 out=target/soak
 mkdir -p "$out"
 # Linked against this build's libcadr.so; the technique plugins lie beside it.
-# The library's SONAME (libcadr.so.0) is linked from target/soak/lib to this build's file.
+# The library's SONAME (libcadr.so.MAJOR) is linked from target/soak/lib to this build's file.
 mkdir -p "$out/lib"
 ln -sf "$PWD/target/release/libcadr.so" "$out/lib/libcadr.so"
-ln -sf "$PWD/target/release/libcadr.so" "$out/lib/libcadr.so.0"
+ln -sf "$PWD/target/release/libcadr.so" "$out/lib/libcadr.so.$(sed -n 's/^version = "\([0-9]*\)\..*/\1/p' Cargo.toml | head -1)"
 cc -std=c99 -O2 -Wall -Wextra -Wpedantic -Werror -Iinclude -Isamples tests/c/soak.c \
   samples/common/sample.c -o "$out/soak" \
   -L"$out/lib" -Wl,-rpath,"$PWD/$out/lib" -lcadr -lm

@@ -188,6 +188,11 @@ pub(crate) unsafe fn deliver_sized<T: Copy>(
         )));
     }
     let known = std::mem::size_of::<T>();
+    if size > known + MAX_NEWER_BYTES {
+        return Err(Failure::invalid(format!(
+            "{name}->size is {size}, more than a newer header's struct can have ({known} bytes in this library); set it to the struct's size (sizeof)"
+        )));
+    }
     let copied = size.min(known);
     let source = std::ptr::from_ref(&value).cast::<u8>();
     // SAFETY: bytes `header..copied` lie within both `value` and the `size` bytes the caller
@@ -206,19 +211,88 @@ pub(crate) unsafe fn deliver_sized<T: Copy>(
     Ok(())
 }
 
-/// Refuses an input struct whose `size` is not this library's `T`'s: `name` is the argument
-/// (`options`), `type_name` the struct's C name, `hint` how to fill it, if there is a function
-/// for it.
-pub(crate) fn check_input_size<T>(
+/// Refuses an output struct that will own cadr's allocations when its host `size` is below
+/// `first_size`, the struct's size in its first version (which every later header's size
+/// reaches): a smaller struct would lose arrays cadr hands out.
+///
+/// # Safety
+/// `out` is null or points at least at a readable `u32` size.
+pub(crate) unsafe fn check_owning_size<T>(
+    out: *const T,
     (name, type_name): (&str, &str),
-    size: u32,
-    hint: &str,
+    first_size: usize,
 ) -> Result<(), Failure> {
-    let expected = std::mem::size_of::<T>() as u32;
-    if size == expected {
-        return Ok(());
+    non_null(out, name)?;
+    // SAFETY: non-null; the caller's contract makes the size readable.
+    let size = unsafe { out.cast::<u32>().read_unaligned() } as usize;
+    if size < first_size {
+        return Err(Failure::invalid(format!(
+            "{name}->size is {size}; set it to sizeof({type_name}) (at least {first_size} bytes)"
+        )));
     }
-    Err(Failure::invalid(format!(
-        "{name}.size is {size} but this library's {type_name} has {expected} bytes{hint}"
-    )))
+    Ok(())
+}
+
+/// The most bytes a host's input struct may have beyond this library's: a newer header's
+/// additions, well above what a minor version adds, and a guard against a `size` the host left
+/// uninitialised.
+const MAX_NEWER_BYTES: usize = 4096;
+
+/// Reads the host's input struct at `input` whose first field is its `u32` size, as a struct
+/// that grows is read: a host compiled against an older header gives a smaller `size`, and the
+/// fields it does not know take their values from `defaults`; a newer host gives a larger one,
+/// accepted when the bytes this library does not know are all zero (a field added later keeps
+/// its old behaviour at 0) and refused, naming them, otherwise. `name` is the argument and
+/// `type_name` the struct's C name, for the errors. The result's size is this library's.
+///
+/// # Safety
+/// `input` is null or points at `size` readable bytes, the first four holding `size`; `T` is a
+/// `#[repr(C)]` struct of plain data whose first field is its `u32` size.
+pub(crate) unsafe fn read_sized<T: Copy>(
+    input: *const T,
+    (name, type_name): (&str, &str),
+    defaults: T,
+) -> Result<T, Failure> {
+    non_null(input, name)?;
+    // SAFETY: non-null; the caller's contract makes at least the size readable.
+    let size = unsafe { input.cast::<u32>().read_unaligned() } as usize;
+    let header = std::mem::size_of::<u32>();
+    let known = std::mem::size_of::<T>();
+    if size < header || size > known + MAX_NEWER_BYTES {
+        return Err(Failure::invalid(format!(
+            "{name}->size is {size}; set it to sizeof({type_name}) ({known} bytes in this library)"
+        )));
+    }
+    let bytes = input.cast::<u8>();
+    if size > known {
+        // SAFETY: bytes `known..size` lie within the `size` readable bytes.
+        let newer = unsafe { std::slice::from_raw_parts(bytes.add(known), size - known) };
+        if let Some(first) = newer.iter().position(|&b| b != 0) {
+            return Err(Failure::invalid(format!(
+                "{name} sets byte {} of {type_name}, which this library ({} bytes, version {}) does not know: link a newer libcadr or leave the newer fields 0",
+                known + first,
+                known,
+                env!("CARGO_PKG_VERSION")
+            )));
+        }
+    }
+    let mut value = defaults;
+    let copied = size.min(known);
+    // SAFETY: bytes `header..copied` lie within both the host's `size` readable bytes and
+    // `value`, which do not overlap; `T` is plain data laid out as the header's struct, so the
+    // host's bytes form a value (a C `bool` holds 0 or 1, as Rust's does).
+    unsafe {
+        std::ptr::copy_nonoverlapping(
+            bytes.add(header),
+            std::ptr::from_mut(&mut value).cast::<u8>().add(header),
+            copied - header,
+        )
+    };
+    // SAFETY: `value` is a `T` whose first field is its u32 size.
+    unsafe {
+        std::ptr::from_mut(&mut value)
+            .cast::<u32>()
+            .write(known as u32)
+    };
+    Ok(value)
 }

@@ -3,11 +3,13 @@
 use cadr_core::graph::NodeHandle;
 use cadr_core::scene::Aabb;
 
-use crate::args::deliver;
+use crate::args::{deliver, deliver_sized};
 use crate::error::{guard, CadrResult};
 use crate::scene::{node_of, with_scene, CadrNode, CadrScene, SceneState};
 
 /// An axis-aligned box in world space; `min` > `max` when empty.
+///
+/// Frozen: a box is its two corners, and stays so within a major version.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default)]
 pub struct CadrBounds {
@@ -27,9 +29,14 @@ impl From<Aabb> for CadrBounds {
 }
 
 /// Counts of a scene.
+///
+/// The struct grows by appending fields: the host sets `size` to `sizeof(CadrSceneStatistics)`; cadr fills
+/// the fields within it and zeroes those of a newer header it does not know.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default)]
 pub struct CadrSceneStatistics {
+    /// `sizeof(CadrSceneStatistics)`, set by the host.
+    pub size: u32,
     /// Live nodes, the root included.
     pub nodes: u64,
     /// Live geometries.
@@ -112,7 +119,7 @@ pub unsafe extern "C" fn cadr_scene_bounds(
 /// Thread-safety: as `cadr_scene_create`.
 ///
 /// # Safety
-/// `statistics` is null or writable.
+/// `statistics` is null or writable for its `size`.
 #[no_mangle]
 pub unsafe extern "C" fn cadr_scene_statistics(
     scene: CadrScene,
@@ -120,8 +127,8 @@ pub unsafe extern "C" fn cadr_scene_statistics(
 ) -> CadrResult {
     guard(|| {
         let value = with_scene(scene, |s| Ok(shown(s, None).1))?;
-        // SAFETY: statistics is null or writable (the caller's contract).
-        unsafe { deliver(statistics, "statistics", value) }
+        // SAFETY: statistics is null or writable for its size (the caller's contract).
+        unsafe { deliver_sized(statistics, "statistics", value) }
     })
 }
 

@@ -12,6 +12,8 @@ use crate::error::{guard, CadrResult, Failure};
 /// A camera: world-to-view and view-to-clip matrices, column-major doubles. The view looks
 /// down -Z (right-handed); the projection follows Vulkan (y down, depth 0..1). Hosts may fill
 /// it with their own matrices.
+///
+/// Frozen: a camera is its two matrices, and stays so within a major version.
 #[repr(C)]
 #[derive(Clone, Copy, Debug)]
 pub struct CadrCamera {

@@ -7,7 +7,7 @@ use std::sync::Arc;
 use cadr_core::technique::{default_plugin_dirs, feature_bits, PluginRegistry, TechniqueKind};
 use cadr_core::vk::{raw::Handle, Device, DeviceChoice, DeviceOptions, InstanceOptions};
 
-use crate::args::{check_input_size, deliver, deliver_sized, non_null, optional_str, string_list};
+use crate::args::{deliver, deliver_sized, non_null, optional_str, read_sized, string_list};
 use crate::error::{guard, CadrResult, Failure};
 use crate::handles::{lock, Registry};
 
@@ -20,12 +20,15 @@ pub struct CadrContextObject {
 /// Created by `cadr_context_create`, released by `cadr_context_destroy`.
 pub type CadrContext = *mut CadrContextObject;
 
-/// How to create a context. Fill it with `cadr_context_options_default` first, then change
-/// what you need; `size` lets later versions add fields.
+/// How to create a context. Set `size`, fill it with `cadr_context_options_default`, then
+/// change what you need.
+///
+/// The struct grows by appending fields: an older host's options take the defaults of the
+/// fields it does not know; a newer host's fields this library does not know must be 0.
 #[repr(C)]
 #[derive(Clone, Copy, Debug)]
 pub struct CadrContextOptions {
-    /// `sizeof(CadrContextOptions)`, set by `cadr_context_options_default`.
+    /// `sizeof(CadrContextOptions)`, set by the host.
     pub size: u32,
     /// Enables the Vulkan validation layer (`VK_LAYER_KHRONOS_validation`); its error messages
     /// are counted by `cadr_context_validation_error_count`. Default: false.
@@ -70,32 +73,32 @@ pub enum CadrDeviceType {
     Cpu = 4,
 }
 
-/// Optional device features the techniques use.
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Default)]
-pub struct CadrDeviceFeatures {
-    /// Many indirect draws in one call (`multiDrawIndirect`).
-    pub multi_draw_indirect: bool,
-    /// Per-draw indices through firstInstance in indirect draws.
-    pub draw_indirect_first_instance: bool,
-    /// `gl_DrawID` and `gl_BaseInstance` in shaders.
-    pub shader_draw_parameters: bool,
-    /// GPU pointers to buffers.
-    pub buffer_device_address: bool,
-    /// Indirect draws whose count the GPU reads.
-    pub draw_indirect_count: bool,
-    /// `VK_EXT_multi_draw`.
-    pub multi_draw: bool,
-    /// GPU timestamps on the render queue (frame GPU times).
-    pub timestamps: bool,
-    /// Renderers can present to windows (`VK_KHR_swapchain` enabled).
-    pub presentation: bool,
-}
+/// Device feature: many indirect draws in one call (`multiDrawIndirect`).
+pub const CADR_DEVICE_FEATURE_MULTI_DRAW_INDIRECT: u64 = 1;
+/// Device feature: per-draw indices through firstInstance in indirect draws.
+pub const CADR_DEVICE_FEATURE_DRAW_INDIRECT_FIRST_INSTANCE: u64 = 1 << 1;
+/// Device feature: `gl_DrawID` and `gl_BaseInstance` in shaders.
+pub const CADR_DEVICE_FEATURE_SHADER_DRAW_PARAMETERS: u64 = 1 << 2;
+/// Device feature: GPU pointers to buffers.
+pub const CADR_DEVICE_FEATURE_BUFFER_DEVICE_ADDRESS: u64 = 1 << 3;
+/// Device feature: indirect draws whose count the GPU reads.
+pub const CADR_DEVICE_FEATURE_DRAW_INDIRECT_COUNT: u64 = 1 << 4;
+/// Device feature: `VK_EXT_multi_draw`.
+pub const CADR_DEVICE_FEATURE_MULTI_DRAW: u64 = 1 << 5;
+/// Device feature: GPU timestamps on the render queue (frame GPU times).
+pub const CADR_DEVICE_FEATURE_TIMESTAMPS: u64 = 1 << 6;
+/// Device feature: renderers can present to windows (`VK_KHR_swapchain` enabled).
+pub const CADR_DEVICE_FEATURE_PRESENTATION: u64 = 1 << 7;
 
 /// The device a context renders with.
+///
+/// The struct grows by appending fields: the host sets `size` to `sizeof(CadrDeviceInfo)`; cadr fills
+/// the fields within it and zeroes those of a newer header it does not know.
 #[repr(C)]
 #[derive(Clone, Copy, Debug)]
 pub struct CadrDeviceInfo {
+    /// `sizeof(CadrDeviceInfo)`, set by the host.
+    pub size: u32,
     /// The driver's device name, NUL-terminated (cut to fit).
     pub name: [c_char; 256],
     /// Its kind.
@@ -106,8 +109,8 @@ pub struct CadrDeviceInfo {
     pub index: u32,
     /// The queue family cadr renders and presents on.
     pub queue_family: u32,
-    /// Optional features.
-    pub features: CadrDeviceFeatures,
+    /// Optional features: `CADR_DEVICE_FEATURE_*` bits (later versions add bits).
+    pub features: u64,
     /// Whether the validation layer is on.
     pub validation: bool,
 }
@@ -169,9 +172,14 @@ impl CadrTechniqueKind {
 
 /// One technique offered by the plugins. The strings belong to the context and stay valid
 /// until it is destroyed.
+///
+/// The struct grows by appending fields: the host sets `size` to `sizeof(CadrTechniqueInfo)`; cadr fills
+/// the fields within it and zeroes those of a newer header it does not know.
 #[repr(C)]
 #[derive(Clone, Copy, Debug)]
 pub struct CadrTechniqueInfo {
+    /// `sizeof(CadrTechniqueInfo)`, set by the host.
+    pub size: u32,
     /// Its kind.
     pub kind: CadrTechniqueKind,
     /// Its name, unique within the kind (e.g. "groups-mdi-replay").
@@ -189,9 +197,14 @@ pub struct CadrTechniqueInfo {
 
 /// A plugin library (or one of its techniques) that was refused. The strings belong to the
 /// context.
+///
+/// The struct grows by appending fields: the host sets `size` to `sizeof(CadrPluginRefusal)`; cadr fills
+/// the fields within it and zeroes those of a newer header it does not know.
 #[repr(C)]
 #[derive(Clone, Copy, Debug)]
 pub struct CadrPluginRefusal {
+    /// `sizeof(CadrPluginRefusal)`, set by the host.
+    pub size: u32,
     /// The library.
     pub library: *const c_char,
     /// Why (another ABI version, a missing symbol, a panic, …), with the technique's name when
@@ -252,36 +265,40 @@ fn c_string(text: &str) -> CString {
     CString::new(text.replace('\0', " ")).unwrap_or_default()
 }
 
-/// Fills `*options` with the defaults: no validation, automatic device choice, no extra
+/// The default options: no validation, automatic device choice, no extra extensions, default
+/// plugin directories.
+fn default_options() -> CadrContextOptions {
+    CadrContextOptions {
+        size: std::mem::size_of::<CadrContextOptions>() as u32,
+        validation: false,
+        device_index: -1,
+        device_name: std::ptr::null(),
+        instance_extensions: std::ptr::null(),
+        instance_extension_count: 0,
+        device_extensions: std::ptr::null(),
+        device_extension_count: 0,
+        plugin_dirs: std::ptr::null(),
+        plugin_dir_count: 0,
+        default_plugin_dirs: true,
+    }
+}
+
+/// Fills `*options` with the defaults, up to the `options->size` the host set
+/// (`sizeof(CadrContextOptions)`): no validation, automatic device choice, no extra
 /// extensions, default plugin directories.
 ///
-/// Returns `CADR_RESULT_NULL_ARGUMENT` when `options` is NULL.
-/// Ownership: `options` is the caller's. Thread-safety: callable from any thread.
+/// Returns `CADR_RESULT_OK`, `CADR_RESULT_NULL_ARGUMENT` or `CADR_RESULT_INVALID_ARGUMENT` (a
+/// `size` below 4). Ownership: `options` is the caller's. Thread-safety: callable from any
+/// thread.
 ///
 /// # Safety
-/// `options` is null or writable.
+/// `options` is null or writable for its `size`.
 #[no_mangle]
 pub unsafe extern "C" fn cadr_context_options_default(
     options: *mut CadrContextOptions,
 ) -> CadrResult {
-    guard(|| {
-        non_null(options, "options")?;
-        let defaults = CadrContextOptions {
-            size: std::mem::size_of::<CadrContextOptions>() as u32,
-            validation: false,
-            device_index: -1,
-            device_name: std::ptr::null(),
-            instance_extensions: std::ptr::null(),
-            instance_extension_count: 0,
-            device_extensions: std::ptr::null(),
-            device_extension_count: 0,
-            plugin_dirs: std::ptr::null(),
-            plugin_dir_count: 0,
-            default_plugin_dirs: true,
-        };
-        // SAFETY: options is null or writable (the caller's contract).
-        unsafe { deliver(options, "options", defaults) }
-    })
+    // SAFETY: options is null or writable for its size (the caller's contract).
+    guard(|| unsafe { deliver_sized(options, "options", default_options()) })
 }
 
 pub(crate) fn c_strings(names: Vec<String>, what: &str) -> Result<Vec<CString>, Failure> {
@@ -365,30 +382,20 @@ pub unsafe extern "C" fn cadr_context_create(
     })
 }
 
-/// The host's options, or the defaults for null, refused when their size is not this
-/// library's.
+/// The host's options, or the defaults for null; an older host's options take the defaults
+/// of the fields it does not know.
 ///
 /// # Safety
 /// `options` is null or a valid options struct.
 pub(crate) unsafe fn options_or_default(
     options: *const CadrContextOptions,
 ) -> Result<CadrContextOptions, Failure> {
-    let options = if options.is_null() {
-        let mut defaults = std::mem::MaybeUninit::<CadrContextOptions>::uninit();
-        // SAFETY: the pointer is a local, writable MaybeUninit.
-        unsafe { cadr_context_options_default(defaults.as_mut_ptr()) };
-        // SAFETY: just initialised by cadr_context_options_default.
-        unsafe { defaults.assume_init() }
-    } else {
-        // SAFETY: non-null and valid by contract.
-        unsafe { *options }
-    };
-    check_input_size::<CadrContextOptions>(
-        ("options", "CadrContextOptions"),
-        options.size,
-        " (fill it with cadr_context_options_default)",
-    )?;
-    Ok(options)
+    let defaults = default_options();
+    if options.is_null() {
+        return Ok(defaults);
+    }
+    // SAFETY: non-null and valid for its size by contract.
+    unsafe { read_sized(options, ("options", "CadrContextOptions"), defaults) }
 }
 
 /// The plugin directories `options` names, and whether the default ones are searched too.
@@ -489,7 +496,7 @@ fn device_type(raw: cadr_core::vk::raw::PhysicalDeviceType) -> CadrDeviceType {
 /// Ownership: `*info` is the caller's. Thread-safety: callable from any thread.
 ///
 /// # Safety
-/// `info` is null or writable.
+/// `info` is null or writable for its `size`.
 #[no_mangle]
 pub unsafe extern "C" fn cadr_context_device_info(
     context: CadrContext,
@@ -504,25 +511,44 @@ pub unsafe extern "C" fn cadr_context_device_info(
             *slot = byte as c_char;
         }
         let value = CadrDeviceInfo {
+            size: std::mem::size_of::<CadrDeviceInfo>() as u32,
             name,
             device_type: device_type(adapter.device_type),
             api_version: adapter.api_version,
             index: adapter.index as u32,
             queue_family: adapter.queue_family,
-            features: CadrDeviceFeatures {
-                multi_draw_indirect: capabilities.multi_draw_indirect,
-                draw_indirect_first_instance: capabilities.draw_indirect_first_instance,
-                shader_draw_parameters: capabilities.shader_draw_parameters,
-                buffer_device_address: capabilities.buffer_device_address,
-                draw_indirect_count: capabilities.draw_indirect_count,
-                multi_draw: capabilities.multi_draw,
-                timestamps: capabilities.timestamps,
-                presentation: state.presentation,
-            },
+            features: [
+                (
+                    capabilities.multi_draw_indirect,
+                    CADR_DEVICE_FEATURE_MULTI_DRAW_INDIRECT,
+                ),
+                (
+                    capabilities.draw_indirect_first_instance,
+                    CADR_DEVICE_FEATURE_DRAW_INDIRECT_FIRST_INSTANCE,
+                ),
+                (
+                    capabilities.shader_draw_parameters,
+                    CADR_DEVICE_FEATURE_SHADER_DRAW_PARAMETERS,
+                ),
+                (
+                    capabilities.buffer_device_address,
+                    CADR_DEVICE_FEATURE_BUFFER_DEVICE_ADDRESS,
+                ),
+                (
+                    capabilities.draw_indirect_count,
+                    CADR_DEVICE_FEATURE_DRAW_INDIRECT_COUNT,
+                ),
+                (capabilities.multi_draw, CADR_DEVICE_FEATURE_MULTI_DRAW),
+                (capabilities.timestamps, CADR_DEVICE_FEATURE_TIMESTAMPS),
+                (state.presentation, CADR_DEVICE_FEATURE_PRESENTATION),
+            ]
+            .into_iter()
+            .filter(|(has, _)| *has)
+            .fold(0, |mask, (_, bit)| mask | bit),
             validation: state.device.instance().validation_enabled(),
         };
-        // SAFETY: info is null or writable (the caller's contract).
-        unsafe { deliver(info, "info", value) }
+        // SAFETY: info is null or writable for its size (the caller's contract).
+        unsafe { deliver_sized(info, "info", value) }
     })
 }
 
@@ -648,7 +674,7 @@ pub unsafe extern "C" fn cadr_context_technique_count(
 /// renderers are destroyed. Thread-safety: callable from any thread.
 ///
 /// # Safety
-/// `info` is null or writable.
+/// `info` is null or writable for its `size`.
 #[no_mangle]
 pub unsafe extern "C" fn cadr_context_technique(
     context: CadrContext,
@@ -659,6 +685,7 @@ pub unsafe extern "C" fn cadr_context_technique(
         let state = context_state(context)?;
         let technique = list_item(&state.techniques, index, "technique")?;
         let value = CadrTechniqueInfo {
+            size: std::mem::size_of::<CadrTechniqueInfo>() as u32,
             kind: CadrTechniqueKind::from_core(technique.kind),
             name: technique.name.as_ptr(),
             description: technique.description.as_ptr(),
@@ -666,8 +693,8 @@ pub unsafe extern "C" fn cadr_context_technique(
             supported: technique.supported,
             unsupported_reason: technique.reason.as_ptr(),
         };
-        // SAFETY: info is null or writable (the caller's contract).
-        unsafe { deliver(info, "info", value) }
+        // SAFETY: info is null or writable for its size (the caller's contract).
+        unsafe { deliver_sized(info, "info", value) }
     })
 }
 
@@ -698,7 +725,7 @@ pub unsafe extern "C" fn cadr_context_refusal_count(
 /// Ownership: the strings belong to the context. Thread-safety: callable from any thread.
 ///
 /// # Safety
-/// `refusal` is null or writable.
+/// `refusal` is null or writable for its `size`.
 #[no_mangle]
 pub unsafe extern "C" fn cadr_context_refusal(
     context: CadrContext,
@@ -709,10 +736,11 @@ pub unsafe extern "C" fn cadr_context_refusal(
         let state = context_state(context)?;
         let (library, reason) = list_item(&state.refusals, index, "refusal")?;
         let value = CadrPluginRefusal {
+            size: std::mem::size_of::<CadrPluginRefusal>() as u32,
             library: library.as_ptr(),
             reason: reason.as_ptr(),
         };
-        // SAFETY: refusal is null or writable (the caller's contract).
-        unsafe { deliver(refusal, "refusal", value) }
+        // SAFETY: refusal is null or writable for its size (the caller's contract).
+        unsafe { deliver_sized(refusal, "refusal", value) }
     })
 }

@@ -61,6 +61,11 @@ impl Failure {
         Self { code, message }
     }
 
+    /// The same failure, its message prefixed with what it concerns (`settings.msaa_samples`).
+    pub(crate) fn named(self, what: &str) -> Self {
+        Self::new(self.code, format!("{what}: {}", self.message))
+    }
+
     /// A failure with `CADR_RESULT_INVALID_ARGUMENT`.
     pub(crate) fn invalid(message: impl Into<String>) -> Self {
         Self::new(CadrResult::InvalidArgument, message.into())

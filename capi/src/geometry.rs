@@ -4,7 +4,7 @@ use std::ffi::c_char;
 
 use cadr_core::scene::{Geometry, Material, Part, Vertex};
 
-use crate::args::{deliver, non_null, optional_str, slice};
+use crate::args::{deliver, optional_str, read_sized, slice};
 use crate::bounds::CadrBounds;
 use crate::error::{guard, Failure};
 use crate::scene::{
@@ -13,6 +13,9 @@ use crate::scene::{
 };
 
 /// A range of a geometry's indices drawn with one material, and its range of edge indices.
+///
+/// Frozen: parts lie in an array the host indexes with its own `sizeof(CadrPart)`, so this
+/// struct never changes within a major version.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default)]
 pub struct CadrPart {
@@ -28,9 +31,15 @@ pub struct CadrPart {
 
 /// Geometry in the host's arrays. Everything is copied; the arrays can be freed after the
 /// call.
+///
+/// The struct grows by appending fields: the host sets `size` to `sizeof(CadrGeometryDesc)`. A field an
+/// older host does not know keeps its old behaviour (read as 0); a newer host's fields this
+/// library does not know must be 0.
 #[repr(C)]
 #[derive(Clone, Copy, Debug)]
 pub struct CadrGeometryDesc {
+    /// `sizeof(CadrGeometryDesc)`, set by the host.
+    pub size: u32,
     /// Name (NULL: empty).
     pub name: *const c_char,
     /// `vertex_count` × 3 floats: object-space positions.
@@ -56,9 +65,15 @@ pub struct CadrGeometryDesc {
 }
 
 /// Material parameters (metallic-roughness, as glTF).
+///
+/// The struct grows by appending fields: the host sets `size` to `sizeof(CadrMaterialDesc)`. A field an
+/// older host does not know keeps its old behaviour (read as 0); a newer host's fields this
+/// library does not know must be 0.
 #[repr(C)]
 #[derive(Clone, Copy, Debug)]
 pub struct CadrMaterialDesc {
+    /// `sizeof(CadrMaterialDesc)`, set by the host.
+    pub size: u32,
     /// Name (NULL: empty).
     pub name: *const c_char,
     /// Linear RGBA base color, each 0..1.
@@ -94,9 +109,9 @@ fn smooth_normals(positions: &[[f32; 3]], indices: &[u32]) -> Vec<[f32; 3]> {
 /// # Safety
 /// Every pointer in `desc` is null or valid for its count.
 unsafe fn geometry_from(desc: *const CadrGeometryDesc) -> Result<Geometry, Failure> {
-    non_null(desc, "desc")?;
-    // SAFETY: non-null and valid by contract.
-    let desc = unsafe { *desc };
+    // SAFETY: null or valid for its size (the caller's contract); zero bytes are a
+    // CadrGeometryDesc (null arrays, zero counts).
+    let desc = unsafe { read_sized(desc, ("desc", "CadrGeometryDesc"), std::mem::zeroed()) }?;
     let vertices = desc.vertex_count as usize;
     // SAFETY: the pointers are valid for their counts (the caller's contract).
     let (name, positions, normals, indices, wire_indices, parts) = unsafe {
@@ -178,10 +193,10 @@ unsafe fn geometry_from(desc: *const CadrGeometryDesc) -> Result<Geometry, Failu
 /// # Safety
 /// `desc` is null or valid, its name null or a valid string.
 unsafe fn material_from(desc: *const CadrMaterialDesc) -> Result<Material, Failure> {
-    non_null(desc, "desc")?;
-    // SAFETY: non-null and valid by contract.
-    let desc = unsafe { *desc };
-    // SAFETY: as above.
+    // SAFETY: null or valid for its size (the caller's contract); zero bytes are a
+    // CadrMaterialDesc.
+    let desc = unsafe { read_sized(desc, ("desc", "CadrMaterialDesc"), std::mem::zeroed()) }?;
+    // SAFETY: the name is null or a valid string (the caller's contract).
     let name = unsafe { optional_str(desc.name, "desc.name") }?.unwrap_or("");
     let values = [
         ("base_color[0]", desc.base_color[0]),

@@ -5,7 +5,7 @@
 use cadr_core::vk::raw::{self as vk, Handle};
 use cadr_core::vk::{BlitTarget, HostImage};
 
-use crate::args::{check_input_size, non_null};
+use crate::args::read_sized;
 use crate::context::CadrContext;
 use crate::error::{guard, CadrResult, Failure};
 use crate::renderer::{new_renderer, with_renderer, CadrRenderer, Output};
@@ -53,10 +53,9 @@ pub struct CadrHostImage {
 /// # Safety
 /// `image` is null or readable.
 unsafe fn host_image(image: *const CadrHostImage) -> Result<HostImage, Failure> {
-    non_null(image, "image")?;
-    // SAFETY: non-null and readable (the caller's contract).
-    let image = unsafe { *image };
-    check_input_size::<CadrHostImage>(("image", "CadrHostImage"), image.size, "")?;
+    // SAFETY: null or readable for its size (the caller's contract); zero bytes are a
+    // CadrHostImage (numbers and null handles).
+    let image = unsafe { read_sized(image, ("image", "CadrHostImage"), std::mem::zeroed()) }?;
     if image.image == 0 {
         return Err(Failure::invalid("image.image is VK_NULL_HANDLE"));
     }

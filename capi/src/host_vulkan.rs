@@ -9,7 +9,7 @@ use cadr_core::vk::host_vulkan::{HostDevice, HostVulkan, QueueLock, REQUIREMENTS
 use cadr_core::vk::raw::{self as vk, Handle};
 use cadr_core::vk::Device;
 
-use crate::args::{check_input_size, deliver, deliver_sized, non_null, string_list};
+use crate::args::{deliver, deliver_sized, non_null, read_sized, string_list};
 use crate::context::{
     c_strings, insert_context, options_or_default, plugin_dirs, CadrContext, CadrContextOptions,
 };
@@ -210,10 +210,9 @@ pub unsafe extern "C" fn cadr_context_create_from_vulkan(
 ) -> CadrResult {
     guard(|| {
         non_null(context, "context")?;
-        non_null(host, "host")?;
-        // SAFETY: non-null; valid by the caller's contract.
-        let host = unsafe { *host };
-        check_input_size::<CadrHostVulkan>(("host", "CadrHostVulkan"), host.size, "")?;
+        // SAFETY: null or valid for its size by the caller's contract; zero bytes are a
+        // CadrHostVulkan (null pointers, no callbacks, numbers).
+        let host = unsafe { read_sized(host, ("host", "CadrHostVulkan"), std::mem::zeroed()) }?;
         // SAFETY: valid by the caller's contract.
         let lent = unsafe { lent_vulkan(&host) }?;
         // SAFETY: null or valid by the caller's contract.

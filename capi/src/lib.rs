@@ -15,9 +15,7 @@
 //! - Every function's documentation states who owns what and from which threads it may be
 //!   called.
 
-mod antialiasing;
 mod args;
-mod background;
 mod bounds;
 mod camera;
 mod context;
@@ -29,16 +27,14 @@ mod host_vulkan;
 mod load;
 mod messages;
 mod nodes;
-mod palette;
 mod pick;
-mod presentation;
 mod renderer;
 mod scene;
 mod section;
+mod settings;
 mod textures;
 mod timings;
 
-pub use background::*;
 pub use bounds::*;
 pub use camera::{cadr_camera_fit, cadr_camera_look_at, CadrCamera};
 pub use context::*;
@@ -47,12 +43,11 @@ pub use geometry::*;
 pub use load::*;
 pub use messages::*;
 pub use nodes::*;
-pub use palette::*;
 pub use pick::*;
-pub use presentation::*;
 pub use renderer::*;
 pub use scene::*;
 pub use section::*;
+pub use settings::*;
 pub use textures::*;
 pub use timings::*;
 
@@ -74,13 +69,13 @@ use args::required_str;
 use error::{guard, Failure};
 
 /// The library's major version (from the crate's metadata).
-pub const CADR_VERSION_MAJOR: u32 = 0;
+pub const CADR_VERSION_MAJOR: u32 = 1;
 /// The library's minor version.
-pub const CADR_VERSION_MINOR: u32 = 1;
+pub const CADR_VERSION_MINOR: u32 = 0;
 /// The library's patch version.
 pub const CADR_VERSION_PATCH: u32 = 0;
 
-/// The version as a static NUL-terminated string such as "0.1.0".
+/// The version as a static NUL-terminated string such as "1.0.0".
 ///
 /// Ownership: the string is static; do not free it. Thread-safety: callable from any thread.
 #[no_mangle]

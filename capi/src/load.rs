@@ -4,17 +4,27 @@ use std::ffi::c_char;
 
 use cadr_core::load::SceneSource;
 
-use crate::args::{deliver, non_null, required_str};
+use crate::args::{check_owning_size, deliver_sized, read_sized, required_str};
 use crate::error::{guard, CadrResult, Failure};
 use crate::scene::{
     geometry_value, material_value, node_of, node_value, with_scene, CadrGeometry, CadrMaterial,
     CadrNode, CadrScene,
 };
 
+/// The size of `CadrLoadResult` in version 1.0: every later header's is at least this, and
+/// holds its arrays.
+const FIRST_SIZE: usize = 64;
+const _: () = assert!(std::mem::size_of::<CadrLoadResult>() >= FIRST_SIZE);
+
 /// What `cadr_scene_load` created. Free the arrays with `cadr_load_result_free`.
+///
+/// The struct grows by appending fields: the host sets `size` to `sizeof(CadrLoadResult)`;
+/// cadr fills the fields within it and zeroes those of a newer header it does not know.
 #[repr(C)]
 #[derive(Clone, Copy, Debug)]
 pub struct CadrLoadResult {
+    /// `sizeof(CadrLoadResult)`, set by the host.
+    pub size: u32,
     /// The new Group, named after the file, that holds the file's content.
     pub root: CadrNode,
     /// Every node created, `root` first.
@@ -45,7 +55,7 @@ pub struct CadrLoadResult {
 /// scene is not locked.
 ///
 /// # Safety
-/// `path` is null or a valid string; `result` is null or writable.
+/// `path` is null or a valid string; `result` is null or writable for its `size`.
 #[no_mangle]
 pub unsafe extern "C" fn cadr_scene_load(
     scene: CadrScene,
@@ -56,7 +66,8 @@ pub unsafe extern "C" fn cadr_scene_load(
     guard(|| {
         // SAFETY: forwarded contract.
         let path = unsafe { required_str(path, "path") }?;
-        non_null(result, "result")?;
+        // SAFETY: null or writable for its size (the caller's contract).
+        unsafe { check_owning_size(result, ("result", "CadrLoadResult"), FIRST_SIZE) }?;
         // Check the handles before the (possibly long) load.
         with_scene(scene, |s| node_of(&s.graph, parent, "parent").map(|_| ()))?;
         let load =
@@ -94,6 +105,7 @@ pub unsafe extern "C" fn cadr_scene_load(
                 .collect(),
         );
         let value = CadrLoadResult {
+            size: std::mem::size_of::<CadrLoadResult>() as u32,
             root: node_value(imported.root),
             nodes,
             node_count,
@@ -102,8 +114,9 @@ pub unsafe extern "C" fn cadr_scene_load(
             materials,
             material_count,
         };
-        // SAFETY: result is null or writable (the caller's contract).
-        unsafe { deliver(result, "result", value) }
+        // SAFETY: result is writable for its size, checked to hold every array (the caller's
+        // contract).
+        unsafe { deliver_sized(result, "result", value) }
     })
 }
 
@@ -119,8 +132,14 @@ pub unsafe extern "C" fn cadr_load_result_free(result: *mut CadrLoadResult) {
     if result.is_null() {
         return;
     }
-    // SAFETY: non-null and filled by cadr_scene_load or zeroed (the caller's contract).
-    let taken = unsafe { result.read() };
+    // SAFETY: non-null, readable for its size and filled by cadr_scene_load or zeroed (the
+    // caller's contract); zero bytes are a CadrLoadResult (null arrays).
+    let Ok(taken) =
+        (unsafe { read_sized(result, ("result", "CadrLoadResult"), std::mem::zeroed()) })
+    else {
+        log::error!("cadr_load_result_free: the result's size is not one cadr_scene_load filled; nothing freed");
+        return;
+    };
     let free = |items: *mut u64, count: usize| {
         if !items.is_null() {
             // SAFETY: made by Box::into_raw of a boxed slice of `count` items in
@@ -131,16 +150,6 @@ pub unsafe extern "C" fn cadr_load_result_free(result: *mut CadrLoadResult) {
     free(taken.nodes, taken.node_count);
     free(taken.geometries, taken.geometry_count);
     free(taken.materials, taken.material_count);
-    // SAFETY: non-null and writable.
-    unsafe {
-        result.write(CadrLoadResult {
-            root: 0,
-            nodes: std::ptr::null_mut(),
-            node_count: 0,
-            geometries: std::ptr::null_mut(),
-            geometry_count: 0,
-            materials: std::ptr::null_mut(),
-            material_count: 0,
-        })
-    };
+    // SAFETY: non-null and writable for its size; zero bytes are a CadrLoadResult.
+    let _ = unsafe { deliver_sized(result, "result", std::mem::zeroed()) };
 }

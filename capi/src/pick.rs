@@ -4,14 +4,23 @@
 use cadr_core::render::pick::PixelRect;
 use cadr_core::view::PickHit;
 
-use crate::args::{deliver, non_null};
+use crate::args::{check_owning_size, deliver_sized, non_null, read_sized};
 use crate::camera::CadrCamera;
 use crate::error::{guard, CadrResult, Failure};
 use crate::handles::lock;
 use crate::renderer::{with_renderer, CadrRenderer};
 use crate::scene::{node_value, CadrNode, CadrScene, SCENES};
 
+/// The size of `CadrPickResult` in version 1.0: every later header's is at least this, and
+/// holds its arrays.
+const FIRST_SIZE: usize = 24;
+const _: () = assert!(std::mem::size_of::<CadrPickResult>() >= FIRST_SIZE);
+
 /// One picked occurrence of a part.
+///
+/// Frozen: hits lie in an array the host indexes with its own `sizeof(CadrPickHit)`, so this
+/// struct never changes within a major version; facts a later version adds about each hit come
+/// as arrays of their own in `CadrPickResult`.
 #[repr(C)]
 #[derive(Clone, Copy, Debug)]
 pub struct CadrPickHit {
@@ -38,9 +47,14 @@ pub struct CadrPickHit {
 /// What a pick found: hits nearest first (none where only background or parts that cannot be
 /// picked are). Filled by `cadr_renderer_pick` or `cadr_renderer_pick_rect`, released by
 /// `cadr_pick_result_free`.
+///
+/// The struct grows by appending fields: the host sets `size` to `sizeof(CadrPickResult)`;
+/// cadr fills the fields within it and zeroes those of a newer header it does not know.
 #[repr(C)]
 #[derive(Clone, Copy, Debug)]
 pub struct CadrPickResult {
+    /// `sizeof(CadrPickResult)`, set by the host.
+    pub size: u32,
     /// The hits, nearest first.
     pub hits: *mut CadrPickHit,
     /// Number of `hits`.
@@ -50,6 +64,7 @@ pub struct CadrPickResult {
 fn result_of(hits: Vec<PickHit>) -> CadrPickResult {
     if hits.is_empty() {
         return CadrPickResult {
+            size: std::mem::size_of::<CadrPickResult>() as u32,
             hits: std::ptr::null_mut(),
             hit_count: 0,
         };
@@ -73,6 +88,7 @@ fn result_of(hits: Vec<PickHit>) -> CadrPickResult {
         .collect();
     let hit_count = hits.len();
     CadrPickResult {
+        size: std::mem::size_of::<CadrPickResult>() as u32,
         hits: Box::into_raw(hits).cast::<CadrPickHit>(),
         hit_count,
     }
@@ -81,7 +97,7 @@ fn result_of(hits: Vec<PickHit>) -> CadrPickResult {
 /// Picks `rect` of `scene` seen by `camera` and delivers the result.
 ///
 /// # Safety
-/// `camera` is null or readable; `result` is null or writable.
+/// `camera` is null or readable; `result` is null or writable for its `size`.
 unsafe fn pick(
     renderer: CadrRenderer,
     scene: CadrScene,
@@ -90,7 +106,8 @@ unsafe fn pick(
     result: *mut CadrPickResult,
 ) -> Result<(), Failure> {
     non_null(camera, "camera")?;
-    non_null(result, "result")?;
+    // SAFETY: null or writable for its size (the caller's contract).
+    unsafe { check_owning_size(result, ("result", "CadrPickResult"), FIRST_SIZE) }?;
     // SAFETY: non-null and readable by contract.
     let camera = unsafe { *camera }.to_core()?;
     let scene_object = SCENES.get(scene as u64, "scene")?;
@@ -113,8 +130,9 @@ unsafe fn pick(
             .pick(&s.graph, &mut s.tree, &camera, rect)
             .map_err(Failure::from)
     })?;
-    // SAFETY: result is non-null and writable (the caller's contract).
-    unsafe { deliver(result, "result", result_of(hits)) }
+    // SAFETY: result is writable for its size, checked to hold the hits (the caller's
+    // contract).
+    unsafe { deliver_sized(result, "result", result_of(hits)) }
 }
 
 /// Picks what lies under pixel (`x`, `y`) of the renderer's image (column, row from the top
@@ -122,7 +140,7 @@ unsafe fn pick(
 /// with the geo node, part, occurrence path, depth and world position. Parts that are hidden
 /// are not drawn; parts that are not pickable (`CADR_NODE_PICKABLE` cleared on a node of their
 /// path) let the click through to what is behind them; so do translucent parts (material
-/// opacity under 1) while `cadr_renderer_set_pick_through_translucent` is on.
+/// opacity under 1) while the renderer's `pick_through_translucent` setting is on.
 ///
 /// Returns `CADR_RESULT_OK` and writes `*result` (no hits over background),
 /// `CADR_RESULT_NULL_ARGUMENT`, `CADR_RESULT_INVALID_ARGUMENT` (a pixel outside the image, a
@@ -132,7 +150,7 @@ unsafe fn pick(
 /// during the call).
 ///
 /// # Safety
-/// `camera` is null or readable; `result` is null or writable.
+/// `camera` is null or readable; `result` is null or writable for its `size`.
 #[no_mangle]
 pub unsafe extern "C" fn cadr_renderer_pick(
     renderer: CadrRenderer,
@@ -144,53 +162,6 @@ pub unsafe extern "C" fn cadr_renderer_pick(
 ) -> CadrResult {
     // SAFETY: forwarded contract.
     guard(|| unsafe { pick(renderer, scene, camera, PixelRect::pixel(x, y), result) })
-}
-
-/// Lets picking go through translucent parts (materials of opacity under 1) to what is behind
-/// them (`through` true), or picks them like opaque ones (false, the default: what is seen
-/// in front is what is picked). Applies to `cadr_renderer_pick` and `cadr_renderer_pick_rect`
-/// from the next call; the picture is unchanged. X-ray's see-through look is a display mode
-/// and does not count: parts it shows translucent are picked as their material says.
-///
-/// Returns `CADR_RESULT_OK` or a handle error. Ownership: nothing changes hands.
-/// Thread-safety: as `cadr_renderer_create`.
-#[no_mangle]
-pub extern "C" fn cadr_renderer_set_pick_through_translucent(
-    renderer: CadrRenderer,
-    through: bool,
-) -> CadrResult {
-    guard(|| {
-        with_renderer(renderer, |state| {
-            state
-                .view
-                .techniques_mut()
-                .set_pick_through_translucent(through);
-            Ok(())
-        })
-    })
-}
-
-/// Writes whether picking goes through translucent parts (see
-/// `cadr_renderer_set_pick_through_translucent`).
-///
-/// Returns `CADR_RESULT_OK`, `CADR_RESULT_NULL_ARGUMENT` or a handle error. Ownership: the
-/// output is the caller's; cadr keeps no pointer to it. Thread-safety: as
-/// `cadr_renderer_create`.
-///
-/// # Safety
-/// `through` is null or writable.
-#[no_mangle]
-pub unsafe extern "C" fn cadr_renderer_pick_through_translucent(
-    renderer: CadrRenderer,
-    through: *mut bool,
-) -> CadrResult {
-    guard(|| {
-        let value = with_renderer(renderer, |state| {
-            Ok(state.view.techniques().pick_through_translucent())
-        })?;
-        // SAFETY: through is null or writable (the caller's contract).
-        unsafe { deliver(through, "through", value) }
-    })
 }
 
 /// Box selection: every pickable part with a visible pixel in the `width` × `height`
@@ -237,8 +208,16 @@ pub unsafe extern "C" fn cadr_pick_result_free(result: *mut CadrPickResult) {
     if result.is_null() {
         return;
     }
-    // SAFETY: non-null and filled by a pick or zeroed (the caller's contract).
-    let taken = unsafe { result.read() };
+    // SAFETY: non-null, readable for its size and filled by a pick or zeroed (the caller's
+    // contract); zero bytes are a CadrPickResult (no hits).
+    let Ok(taken) =
+        (unsafe { read_sized(result, ("result", "CadrPickResult"), std::mem::zeroed()) })
+    else {
+        log::error!(
+            "cadr_pick_result_free: the result's size is not one a pick filled; nothing freed"
+        );
+        return;
+    };
     if !taken.hits.is_null() {
         // SAFETY: made by Box::into_raw of a boxed slice of `hit_count` hits in `result_of`,
         // freed once (the result is zeroed below).
@@ -260,11 +239,6 @@ pub unsafe extern "C" fn cadr_pick_result_free(result: *mut CadrPickResult) {
             }
         }
     }
-    // SAFETY: non-null and writable.
-    unsafe {
-        result.write(CadrPickResult {
-            hits: std::ptr::null_mut(),
-            hit_count: 0,
-        })
-    };
+    // SAFETY: non-null and writable for its size; zero bytes are a CadrPickResult.
+    let _ = unsafe { deliver_sized(result, "result", std::mem::zeroed()) };
 }

@@ -6,12 +6,13 @@ use std::path::Path;
 use std::sync::Arc;
 use std::time::Instant;
 
-use cadr_core::render::HighlightStyle;
-use cadr_core::technique::{Combination, ShadeMode, TechniqueKind};
+use cadr_core::technique::{Combination, TechniqueKind};
 use cadr_core::view::View;
 use cadr_core::vk::{raw, raw::Handle, HostImage, ImageOutput, PresentOutcome, Swapchain};
 
-use crate::args::{deliver, non_null, optional_str, required_str, write};
+use crate::args::{
+    deliver, deliver_sized, non_null, optional_str, read_sized, required_str, write,
+};
 use crate::camera::CadrCamera;
 use crate::context::{context_state, CadrContext, CadrTechniqueKind, ContextState};
 use crate::error::{guard, CadrResult, Failure};
@@ -28,29 +29,16 @@ pub struct CadrRendererObject {
 /// `cadr_renderer_create_for_surface`, released by `cadr_renderer_destroy`.
 pub type CadrRenderer = *mut CadrRendererObject;
 
-/// Shaded triangles only.
-pub const CADR_SHADE_SOLID: u32 = 0;
-/// Shaded triangles with their edges drawn as lines.
-pub const CADR_SHADE_EDGES: u32 = 1;
-/// Display mode: edge lines only, those hidden behind opaque surfaces removed (translucent
-/// surfaces hide no lines); section caps are filled and hide the lines behind them.
-pub const CADR_SHADE_HIDDEN_LINE: u32 = 2;
-/// Display mode: every triangle's edges, hidden ones included.
-pub const CADR_SHADE_WIREFRAME: u32 = 3;
-/// Display mode: every part translucent with its edges, highlighted parts opaque (what is
-/// inside an assembly shows through its housing).
-pub const CADR_SHADE_XRAY: u32 = 4;
-
-/// Highlight style: highlighted parts' colours mixed towards orange (the default).
-pub const CADR_HIGHLIGHT_TINT: u32 = 0;
-/// Highlight style: highlighted parts keep their colours, with an orange band two pixels wide
-/// around them. Needs the device's `fragmentStoresAndAtomics`.
-pub const CADR_HIGHLIGHT_OUTLINE: u32 = 1;
-
 /// One technique name per kind; NULL keeps the renderer's current technique of that kind.
+///
+/// The struct grows by appending fields (a kind added later, NULL when an older host does not
+/// know it): the host sets `size` to `sizeof(CadrTechniqueSelection)`; a newer host's fields
+/// this library does not know must be NULL.
 #[repr(C)]
 #[derive(Clone, Copy, Debug)]
 pub struct CadrTechniqueSelection {
+    /// `sizeof(CadrTechniqueSelection)`, set by the host.
+    pub size: u32,
     /// Vertex path, e.g. "arena".
     pub vertex: *const c_char,
     /// Parameter path, e.g. "ssbo-index".
@@ -62,9 +50,17 @@ pub struct CadrTechniqueSelection {
 }
 
 /// What one frame cost and drew: the figures `cadr bench` prints.
+///
+/// The struct grows by appending fields (`size` first, set by the host to
+/// `sizeof(CadrFrameStats)`): cadr fills the fields within the host's `size` and zeroes those
+/// of a newer header it does not know.
+///
+/// Its many fields: one per figure, as `cadr bench` prints them.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default)]
 pub struct CadrFrameStats {
+    /// `sizeof(CadrFrameStats)`, set by the host.
+    pub size: u32,
     /// Whether the frame was drawn and, for a window, presented (false while minimized or
     /// while the swapchain was being recreated).
     pub presented: bool,
@@ -84,8 +80,12 @@ pub struct CadrFrameStats {
     pub draw_calls: u64,
     /// Parts or index ranges drawn.
     pub draws: u64,
-    /// Triangles drawn.
+    /// Triangles drawn: of the parts drawn, once each; with a GPU culler, what it let through
+    /// in every surface pass.
     pub triangles: u64,
+    /// Triangles the surface passes handed to the rasteriser, each pass counted (edge passes
+    /// draw lines and are not counted), the same way for every culler.
+    pub triangles_rasterized: u64,
     /// Pipeline binds.
     pub pipeline_binds: u64,
     /// Vertex and index buffer binds.
@@ -94,6 +94,13 @@ pub struct CadrFrameStats {
     pub parameter_updates: u64,
     /// Bytes uploaded for this frame.
     pub bytes_uploaded: u64,
+    /// Whether the frame resubmitted the renderer's last recording (frame replay): recording
+    /// cost nothing.
+    pub replayed: bool,
+    /// Whether the frame was recorded while earlier frames could still run on the GPU (more
+    /// than one frame in flight, only the view changed, every active technique keeps its
+    /// per-frame data per slot): it waited only for the frame that last used its slot.
+    pub overlapped: bool,
 }
 
 /// What a renderer holds: the view (its GPU scene, techniques and target), the window's
@@ -106,8 +113,6 @@ pub(crate) struct RendererState {
     pub(crate) image_output: Option<ImageOutput>,
     pub(crate) view: View,
     context: Arc<ContextState>,
-    /// Whether the last frame resubmitted the recording before it.
-    last_frame_replayed: bool,
 }
 
 /// A renderer's state, movable between threads.
@@ -193,7 +198,7 @@ pub(crate) fn new_renderer(
     };
     if swapchain.is_some() || image_output.is_some() {
         // A window's or a host image's frames go to the GPU without waiting for the last one
-        // (see cadr_renderer_set_frames_in_flight); offscreen frames are read back at once
+        // (see CadrRendererSettings::frames_in_flight); offscreen frames are read back at once
         // anyway.
         view.renderer_mut().set_frames_in_flight(2)?;
     }
@@ -202,7 +207,6 @@ pub(crate) fn new_renderer(
         image_output,
         view,
         context: Arc::clone(&context),
-        last_frame_replayed: false,
     };
     let handle = RENDERERS.insert(ThreadBound(state))?;
     // SAFETY: renderer is null or writable (the caller's contract).
@@ -384,9 +388,15 @@ unsafe fn requested(
     state: &RendererState,
     selection: *const CadrTechniqueSelection,
 ) -> Result<Combination, Failure> {
-    non_null(selection, "selection")?;
-    // SAFETY: non-null and valid by contract.
-    let selection = unsafe { *selection };
+    // SAFETY: null or valid for its size (the caller's contract); zero bytes are a
+    // CadrTechniqueSelection (every kind NULL).
+    let selection = unsafe {
+        read_sized(
+            selection,
+            ("selection", "CadrTechniqueSelection"),
+            std::mem::zeroed(),
+        )
+    }?;
     let mut wanted = state.view.techniques().combination();
     for (kind, pointer, name) in [
         (TechniqueKind::Vertex, selection.vertex, "selection.vertex"),
@@ -561,409 +571,9 @@ pub unsafe extern "C" fn cadr_renderer_technique(
     })
 }
 
-/// Sets the display mode: `CADR_SHADE_SOLID`, `CADR_SHADE_EDGES`, `CADR_SHADE_HIDDEN_LINE`,
-/// `CADR_SHADE_WIREFRAME` or `CADR_SHADE_XRAY`.
-///
-/// Returns `CADR_RESULT_OK`, `CADR_RESULT_INVALID_ARGUMENT` (unknown mode), `CADR_RESULT_VULKAN`
-/// or a handle error. Ownership: nothing changes hands; the arguments are read during the call
-/// only. Thread-safety: as `cadr_renderer_create`.
-#[no_mangle]
-pub extern "C" fn cadr_renderer_set_shade_mode(renderer: CadrRenderer, mode: u32) -> CadrResult {
-    guard(|| {
-        let mode = match mode {
-            CADR_SHADE_SOLID => ShadeMode::Solid,
-            CADR_SHADE_EDGES => ShadeMode::Edges,
-            CADR_SHADE_HIDDEN_LINE => ShadeMode::HiddenLine,
-            CADR_SHADE_WIREFRAME => ShadeMode::Wireframe,
-            CADR_SHADE_XRAY => ShadeMode::XRay,
-            other => {
-                return Err(Failure::invalid(format!(
-                "shade mode {other} is not 0 (solid), 1 (edges), 2 (hidden line), 3 (wireframe) or 4 (X-ray)"
-            )))
-            }
-        };
-        with_renderer(renderer, |state| {
-            Ok(state.view.techniques_mut().set_shade_mode(mode)?)
-        })
-    })
-}
-
-/// Writes the display mode (`CADR_SHADE_*`).
-///
-/// Returns `CADR_RESULT_OK`, `CADR_RESULT_NULL_ARGUMENT` or a handle error.
-/// Ownership: the outputs are the caller's; cadr keeps no pointer to them.
-/// Thread-safety: as `cadr_renderer_create`.
-///
-/// # Safety
-/// `mode` is null or writable.
-#[no_mangle]
-pub unsafe extern "C" fn cadr_renderer_shade_mode(
-    renderer: CadrRenderer,
-    mode: *mut u32,
-) -> CadrResult {
-    guard(|| {
-        let value = with_renderer(renderer, |state| {
-            Ok(match state.view.techniques().shade_mode() {
-                ShadeMode::Solid => CADR_SHADE_SOLID,
-                ShadeMode::Edges => CADR_SHADE_EDGES,
-                ShadeMode::HiddenLine => CADR_SHADE_HIDDEN_LINE,
-                ShadeMode::Wireframe => CADR_SHADE_WIREFRAME,
-                ShadeMode::XRay => CADR_SHADE_XRAY,
-            })
-        })?;
-        // SAFETY: mode is null or writable (the caller's contract).
-        unsafe { deliver(mode, "mode", value) }
-    })
-}
-
-/// Turns screen-space ambient occlusion on or off (off by default): in the modes that fill
-/// surfaces (solid, edges, X-ray), creases, corners and gaps between parts are darkened from
-/// the frame's depth; the background and translucent surfaces are not. Applies from the next
-/// frame; its cost is one full-screen pass.
-///
-/// Returns `CADR_RESULT_OK`, `CADR_RESULT_VULKAN` or a handle error. Ownership: nothing
-/// changes hands. Thread-safety: as `cadr_renderer_create`.
-#[no_mangle]
-pub extern "C" fn cadr_renderer_set_ssao(renderer: CadrRenderer, on: bool) -> CadrResult {
-    guard(|| {
-        with_renderer(renderer, |state| {
-            Ok(state.view.renderer_mut().set_ssao(on)?)
-        })
-    })
-}
-
-/// Writes whether screen-space ambient occlusion is on (see `cadr_renderer_set_ssao`).
-///
-/// Returns `CADR_RESULT_OK`, `CADR_RESULT_NULL_ARGUMENT` or a handle error.
-/// Ownership: the output is the caller's; cadr keeps no pointer to it.
-/// Thread-safety: as `cadr_renderer_create`.
-///
-/// # Safety
-/// `on` is null or writable.
-#[no_mangle]
-pub unsafe extern "C" fn cadr_renderer_ssao(renderer: CadrRenderer, on: *mut bool) -> CadrResult {
-    guard(|| {
-        let value = with_renderer(renderer, |state| Ok(state.view.renderer().ssao()))?;
-        // SAFETY: on is null or writable (the caller's contract).
-        unsafe { deliver(on, "on", value) }
-    })
-}
-
-/// Sets how highlighted parts (`CADR_NODE_HIGHLIGHTED`) are drawn: `CADR_HIGHLIGHT_TINT` (the
-/// default) or `CADR_HIGHLIGHT_OUTLINE`, in every display mode. Applies from the next frame.
-///
-/// Returns `CADR_RESULT_OK`, `CADR_RESULT_INVALID_ARGUMENT` (an unknown style, or the outline
-/// on a device without `fragmentStoresAndAtomics`; the message says which),
-/// `CADR_RESULT_VULKAN` or a handle error. Ownership: nothing changes hands.
-/// Thread-safety: as `cadr_renderer_create`.
-#[no_mangle]
-pub extern "C" fn cadr_renderer_set_highlight_style(
-    renderer: CadrRenderer,
-    style: u32,
-) -> CadrResult {
-    guard(|| {
-        let style = match style {
-            CADR_HIGHLIGHT_TINT => HighlightStyle::Tint,
-            CADR_HIGHLIGHT_OUTLINE => HighlightStyle::Outline,
-            other => {
-                return Err(Failure::invalid(format!(
-                    "highlight style {other} is not 0 (tint) or 1 (outline)"
-                )))
-            }
-        };
-        with_renderer(renderer, |state| {
-            Ok(state.view.renderer_mut().set_highlight_style(style)?)
-        })
-    })
-}
-
-/// Writes the highlight style (`CADR_HIGHLIGHT_*`).
-///
-/// Returns `CADR_RESULT_OK`, `CADR_RESULT_NULL_ARGUMENT` or a handle error.
-/// Ownership: the output is the caller's; cadr keeps no pointer to it.
-/// Thread-safety: as `cadr_renderer_create`.
-///
-/// # Safety
-/// `style` is null or writable.
-#[no_mangle]
-pub unsafe extern "C" fn cadr_renderer_highlight_style(
-    renderer: CadrRenderer,
-    style: *mut u32,
-) -> CadrResult {
-    guard(|| {
-        let value = with_renderer(renderer, |state| {
-            Ok(match state.view.renderer().highlight_style() {
-                HighlightStyle::Tint => CADR_HIGHLIGHT_TINT,
-                HighlightStyle::Outline => CADR_HIGHLIGHT_OUTLINE,
-            })
-        })?;
-        // SAFETY: style is null or writable (the caller's contract).
-        unsafe { deliver(style, "style", value) }
-    })
-}
-
-/// Turns silhouette edges on (`on` true, the default) or off: in the display modes with
-/// feature edges (edges, hidden-line, X-ray), the outlines of curved surfaces, which no
-/// feature edge marks, are drawn with the feature edges, found where the frame's depth breaks
-/// (in X-ray, where the nearest surface's depth breaks, translucent surfaces included), in the
-/// edge lines' colour, or a highlighted part's in the highlight's line colour, as its feature
-/// edges. On a device without `fragmentStoresAndAtomics` X-ray draws none and the other modes
-/// draw every silhouette in the edge lines' colour. Applies from the next frame; its cost is
-/// one full-screen pass in those modes, and in X-ray, or while some part is highlighted, an
-/// atomic write per surface fragment.
-///
-/// Returns `CADR_RESULT_OK`, `CADR_RESULT_VULKAN` or a handle error. Ownership: nothing
-/// changes hands. Thread-safety: as `cadr_renderer_create`.
-#[no_mangle]
-pub extern "C" fn cadr_renderer_set_silhouettes(renderer: CadrRenderer, on: bool) -> CadrResult {
-    guard(|| {
-        with_renderer(renderer, |state| {
-            Ok(state.view.renderer_mut().set_silhouettes(on)?)
-        })
-    })
-}
-
-/// Writes whether silhouette edges are on (see `cadr_renderer_set_silhouettes`).
-///
-/// Returns `CADR_RESULT_OK`, `CADR_RESULT_NULL_ARGUMENT` or a handle error.
-/// Ownership: the output is the caller's; cadr keeps no pointer to it.
-/// Thread-safety: as `cadr_renderer_create`.
-///
-/// # Safety
-/// `on` is null or writable.
-#[no_mangle]
-pub unsafe extern "C" fn cadr_renderer_silhouettes(
-    renderer: CadrRenderer,
-    on: *mut bool,
-) -> CadrResult {
-    guard(|| {
-        let value = with_renderer(renderer, |state| Ok(state.view.renderer().silhouettes()))?;
-        // SAFETY: on is null or writable (the caller's contract).
-        unsafe { deliver(on, "on", value) }
-    })
-}
-
-/// Turns the sampling of materials' base-colour textures on (`on` true, the default) or off:
-/// off, materials show their base colour (times vertex colours, which stay). Applies from the
-/// next frame; nothing is rebuilt.
-///
-/// Returns `CADR_RESULT_OK` or a handle error. Ownership: nothing changes hands.
-/// Thread-safety: as `cadr_renderer_create`.
-#[no_mangle]
-pub extern "C" fn cadr_renderer_set_textures(renderer: CadrRenderer, on: bool) -> CadrResult {
-    guard(|| {
-        with_renderer(renderer, |state| {
-            state.view.renderer_mut().set_textures(on);
-            Ok(())
-        })
-    })
-}
-
-/// Writes whether materials' textures are sampled (see `cadr_renderer_set_textures`).
-///
-/// Returns `CADR_RESULT_OK`, `CADR_RESULT_NULL_ARGUMENT` or a handle error.
-/// Ownership: the output is the caller's; cadr keeps no pointer to it.
-/// Thread-safety: as `cadr_renderer_create`.
-///
-/// # Safety
-/// `on` is null or writable.
-#[no_mangle]
-pub unsafe extern "C" fn cadr_renderer_textures(
-    renderer: CadrRenderer,
-    on: *mut bool,
-) -> CadrResult {
-    guard(|| {
-        let value = with_renderer(renderer, |state| Ok(state.view.renderer().textures()))?;
-        // SAFETY: on is null or writable (the caller's contract).
-        unsafe { deliver(on, "on", value) }
-    })
-}
-
-/// Shows the hidden edges in the `CADR_SHADE_HIDDEN_LINE` mode dashed, in a lighter shade of
-/// the visible ones' colour (`dashed` true), or removes them (false, the default). With
-/// silhouettes on (`cadr_renderer_set_silhouettes`), the silhouettes of hidden curved
-/// surfaces (tessellated with shared vertex normals) are dashed too where the device has
-/// geometry shaders. Other modes are not affected. Applies from the next frame. With the `gpu-occlusion` culler, parts it finds
-/// entirely hidden are not drawn, so their dashed edges do not show.
-///
-/// Returns `CADR_RESULT_OK` or a handle error. Ownership: nothing changes hands.
-/// Thread-safety: as `cadr_renderer_create`.
-#[no_mangle]
-pub extern "C" fn cadr_renderer_set_dashed_hidden_lines(
-    renderer: CadrRenderer,
-    dashed: bool,
-) -> CadrResult {
-    guard(|| {
-        with_renderer(renderer, |state| {
-            state.view.techniques_mut().set_dashed_hidden_lines(dashed);
-            Ok(())
-        })
-    })
-}
-
-/// Writes whether the hidden-line mode shows hidden edges dashed (see
-/// `cadr_renderer_set_dashed_hidden_lines`).
-///
-/// Returns `CADR_RESULT_OK`, `CADR_RESULT_NULL_ARGUMENT` or a handle error.
-/// Ownership: the output is the caller's; cadr keeps no pointer to it.
-/// Thread-safety: as `cadr_renderer_create`.
-///
-/// # Safety
-/// `dashed` is null or writable.
-#[no_mangle]
-pub unsafe extern "C" fn cadr_renderer_dashed_hidden_lines(
-    renderer: CadrRenderer,
-    dashed: *mut bool,
-) -> CadrResult {
-    guard(|| {
-        let value = with_renderer(renderer, |state| {
-            Ok(state.view.techniques().dashed_hidden_lines())
-        })?;
-        // SAFETY: dashed is null or writable (the caller's contract).
-        unsafe { deliver(dashed, "dashed", value) }
-    })
-}
-
-/// Sets the sub-pixel culling threshold: with a GPU culler (`gpu-frustum`, `gpu-occlusion`)
-/// active, parts whose bounding sphere projects smaller than `pixels` across are not drawn, in
-/// any pass (picking included). 0, the default, keeps every part (CAD users count small parts);
-/// CPU cullers ignore the threshold. Applies from the next frame.
-///
-/// Returns `CADR_RESULT_OK`, `CADR_RESULT_INVALID_ARGUMENT` (negative, infinite or NaN) or a
-/// handle error. Ownership: nothing changes hands. Thread-safety: as `cadr_renderer_create`.
-#[no_mangle]
-pub extern "C" fn cadr_renderer_set_min_pixels(renderer: CadrRenderer, pixels: f32) -> CadrResult {
-    guard(|| {
-        if !pixels.is_finite() || pixels < 0.0 {
-            return Err(Failure::invalid(format!(
-                "sub-pixel threshold {pixels}: expected a finite number of pixels >= 0"
-            )));
-        }
-        with_renderer(renderer, |state| {
-            Ok(state.view.techniques_mut().set_min_pixels(pixels)?)
-        })
-    })
-}
-
-/// Writes the sub-pixel culling threshold in pixels (0: off).
-///
-/// Returns `CADR_RESULT_OK`, `CADR_RESULT_NULL_ARGUMENT` or a handle error.
-/// Ownership: the output is the caller's; cadr keeps no pointer to it.
-/// Thread-safety: as `cadr_renderer_create`.
-///
-/// # Safety
-/// `pixels` is null or writable.
-#[no_mangle]
-pub unsafe extern "C" fn cadr_renderer_min_pixels(
-    renderer: CadrRenderer,
-    pixels: *mut f32,
-) -> CadrResult {
-    guard(|| {
-        let value = with_renderer(renderer, |state| Ok(state.view.techniques().min_pixels()))?;
-        // SAFETY: pixels is null or writable (the caller's contract).
-        unsafe { deliver(pixels, "pixels", value) }
-    })
-}
-
-/// Sets the level-of-detail threshold of the cluster culler (`gpu-clusters`), in pixels: each
-/// part is drawn with the coarsest clusters whose simplification error projects at or under
-/// `pixels` on screen (a part never vanishes for being far: it keeps its coarsest clusters).
-/// 0 draws every part at full detail; the default is 1. Other cullers draw parts whole and
-/// ignore it. Applies from the next frame.
-///
-/// Returns `CADR_RESULT_OK`, `CADR_RESULT_INVALID_ARGUMENT` (negative, infinite or NaN) or a
-/// handle error. Ownership: nothing changes hands. Thread-safety: as `cadr_renderer_create`.
-#[no_mangle]
-pub extern "C" fn cadr_renderer_set_lod_error(renderer: CadrRenderer, pixels: f32) -> CadrResult {
-    guard(|| {
-        if !pixels.is_finite() || pixels < 0.0 {
-            return Err(Failure::invalid(format!(
-                "level-of-detail error {pixels}: expected a finite number of pixels >= 0"
-            )));
-        }
-        with_renderer(renderer, |state| {
-            Ok(state.view.techniques_mut().set_lod_error(pixels)?)
-        })
-    })
-}
-
-/// Writes the level-of-detail threshold of the cluster culler in pixels (0: full detail).
-///
-/// Returns `CADR_RESULT_OK`, `CADR_RESULT_NULL_ARGUMENT` or a handle error.
-/// Ownership: the output is the caller's; cadr keeps no pointer to it.
-/// Thread-safety: as `cadr_renderer_create`.
-///
-/// # Safety
-/// `pixels` is null or writable.
-#[no_mangle]
-pub unsafe extern "C" fn cadr_renderer_lod_error(
-    renderer: CadrRenderer,
-    pixels: *mut f32,
-) -> CadrResult {
-    guard(|| {
-        let value = with_renderer(renderer, |state| Ok(state.view.techniques().lod_error()))?;
-        // SAFETY: pixels is null or writable (the caller's contract).
-        unsafe { deliver(pixels, "pixels", value) }
-    })
-}
-
-/// Turns frame replay on (the default) or off. With it on, a frame that would record what the
-/// renderer's last frame recorded (only the camera moved, or nothing changed; also parts moved
-/// or material values changed, when every active technique reads parameter values on the
-/// GPU) resubmits that recording instead, after the frame's uploads, when every active
-/// technique allows it; the picture is the same. Off,
-/// every frame is recorded afresh (to measure recording, or to compare).
-///
-/// Returns `CADR_RESULT_OK` or a handle error. Ownership: nothing changes hands.
-/// Thread-safety: as `cadr_renderer_create`.
-#[no_mangle]
-pub extern "C" fn cadr_renderer_set_frame_replay(
-    renderer: CadrRenderer,
-    enabled: bool,
-) -> CadrResult {
-    guard(|| {
-        with_renderer(renderer, |state| {
-            state.view.techniques_mut().set_frame_replay(enabled);
-            Ok(())
-        })
-    })
-}
-
-/// Writes whether frame replay is on (`*enabled`) and whether the renderer's last frame was
-/// a replay (`*last_frame_replayed`; false before the first frame). Either output may be NULL.
-///
-/// Returns `CADR_RESULT_OK` or a handle error.
-/// Ownership: the outputs are the caller's; cadr keeps no pointer to them.
-/// Thread-safety: as `cadr_renderer_create`.
-///
-/// # Safety
-/// `enabled` and `last_frame_replayed` are each null or writable.
-#[no_mangle]
-pub unsafe extern "C" fn cadr_renderer_frame_replay(
-    renderer: CadrRenderer,
-    enabled: *mut bool,
-    last_frame_replayed: *mut bool,
-) -> CadrResult {
-    guard(|| {
-        let (on, replayed) = with_renderer(renderer, |state| {
-            Ok((
-                state.view.techniques().frame_replay(),
-                state.last_frame_replayed,
-            ))
-        })?;
-        for (out, value) in [(enabled, on), (last_frame_replayed, replayed)] {
-            if !out.is_null() {
-                // SAFETY: non-null; writable by contract.
-                unsafe { write(out, value) };
-            }
-        }
-        Ok(())
-    })
-}
-
 /// Renders one frame of `scene` seen by `camera`: applies the host's edits since the last
 /// frame (incrementally), culls, draws with the current techniques and, for a window, presents.
-/// `stats` may be NULL.
+/// `stats` may be NULL; otherwise its `size` says how much of it the host has.
 ///
 /// Returns `CADR_RESULT_OK`, `CADR_RESULT_NULL_ARGUMENT`, `CADR_RESULT_INVALID_ARGUMENT`
 /// (non-finite camera), `CADR_RESULT_VULKAN`, `CADR_RESULT_PLUGIN_FAILED` or a handle error.
@@ -972,7 +582,7 @@ pub unsafe extern "C" fn cadr_renderer_frame_replay(
 /// afresh at each change of renderer.
 ///
 /// # Safety
-/// `camera` is null or readable; `stats` null or writable.
+/// `camera` is null or readable; `stats` null or writable for its `size`.
 #[no_mangle]
 pub unsafe extern "C" fn cadr_renderer_render(
     renderer: CadrRenderer,
@@ -1028,18 +638,20 @@ pub unsafe extern "C" fn cadr_renderer_render(
             frame.draw_calls = drawn.draw_calls;
             frame.draws = drawn.draws;
             frame.triangles = drawn.triangles;
+            frame.triangles_rasterized = drawn.triangles_rasterized;
             frame.pipeline_binds = drawn.pipeline_binds;
             frame.vertex_binds = drawn.vertex_binds;
             frame.parameter_updates = drawn.parameter_updates;
             frame.bytes_uploaded = drawn.bytes_uploaded;
-            state.last_frame_replayed = drawn.replayed;
+            frame.replayed = drawn.replayed;
+            frame.overlapped = drawn.overlapped;
             Ok(frame)
         })?;
-        if !stats.is_null() {
-            // SAFETY: non-null; writable by contract.
-            unsafe { write(stats, value) };
+        if stats.is_null() {
+            return Ok(());
         }
-        Ok(())
+        // SAFETY: non-null and writable for its size (the caller's contract).
+        unsafe { deliver_sized(stats, "stats", value) }
     })
 }
 

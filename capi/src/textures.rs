@@ -11,7 +11,7 @@ use cadr_core::scene::{
     AlphaMode, Material, Sampler, Texture, TextureRef, UvTransform, VertexAttributes, Wrap,
 };
 
-use crate::args::{deliver, non_null, optional_str, slice};
+use crate::args::{deliver, optional_str, read_sized, slice};
 use crate::error::{guard, CadrResult, Failure};
 use crate::scene::{
     geometry_of, graph_failure, material_of, texture_of, texture_value, with_scene, CadrGeometry,
@@ -37,9 +37,15 @@ pub const CADR_ALPHA_BLEND: u32 = 2;
 
 /// An image in the host's memory. The texels are copied; the host may free them after the
 /// call.
+///
+/// The struct grows by appending fields: the host sets `size` to `sizeof(CadrTextureDesc)`. A field an
+/// older host does not know keeps its old behaviour (read as 0); a newer host's fields this
+/// library does not know must be 0.
 #[repr(C)]
 #[derive(Clone, Copy, Debug)]
 pub struct CadrTextureDesc {
+    /// `sizeof(CadrTextureDesc)`, set by the host.
+    pub size: u32,
     /// Name (NULL: empty); messages name the texture by it.
     pub name: *const c_char,
     /// Width in texels (at least 1).
@@ -76,10 +82,10 @@ fn wrap_from(code: u32, field: &str) -> Result<Wrap, Failure> {
 /// `desc` is null or valid; its name null or a valid string; its texels null or valid for
 /// `width × height × 4` bytes.
 unsafe fn texture_from(desc: *const CadrTextureDesc) -> Result<Texture, Failure> {
-    non_null(desc, "desc")?;
-    // SAFETY: non-null and valid by contract.
-    let desc = unsafe { *desc };
-    // SAFETY: as above.
+    // SAFETY: null or valid for its size (the caller's contract); zero bytes are a
+    // CadrTextureDesc (null name and texels, zero sizes).
+    let desc = unsafe { read_sized(desc, ("desc", "CadrTextureDesc"), std::mem::zeroed()) }?;
+    // SAFETY: the name is null or a valid string (the caller's contract).
     let name = unsafe { optional_str(desc.name, "desc.name") }?.unwrap_or("");
     if desc.width == 0 || desc.height == 0 {
         return Err(Failure::invalid(format!(

@@ -3,15 +3,20 @@
 
 use cadr_core::timings::{self, Phase};
 
-use crate::args::deliver;
+use crate::args::deliver_sized;
 use crate::error::{guard, CadrResult};
 
 /// Milliseconds cadr spent in each phase of its work in this process, since it was loaded or
 /// since `cadr_timings_reset`, over every context, scene and renderer. A phase that runs
 /// inside another (pipelines built during a first frame) counts only for itself.
+///
+/// The struct grows by appending fields: the host sets `size` to `sizeof(CadrTimings)`; cadr
+/// fills the fields within it and zeroes those of a newer header it does not know.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct CadrTimings {
+    /// `sizeof(CadrTimings)`, set by the host.
+    pub size: u32,
     /// Vulkan instance and device creation (`cadr_context_create`).
     pub device_ms: f64,
     /// Reading and parsing scene files, or generating scenes (`cadr_scene_load`).
@@ -36,6 +41,7 @@ impl CadrTimings {
     fn now() -> Self {
         let spent = timings::snapshot();
         Self {
+            size: std::mem::size_of::<Self>() as u32,
             device_ms: spent.ms(Phase::Device),
             load_ms: spent.ms(Phase::Load),
             scene_build_ms: spent.ms(Phase::SceneBuild),
@@ -56,13 +62,13 @@ impl CadrTimings {
 /// Thread-safety: any thread, at any time; phases still running are not yet counted.
 ///
 /// # Safety
-/// `timings` is null or writable.
+/// `timings` is null or writable for its `size`.
 #[no_mangle]
 pub unsafe extern "C" fn cadr_timings(timings: *mut CadrTimings) -> CadrResult {
     guard(|| {
         let value = CadrTimings::now();
-        // SAFETY: timings is null or writable (the caller's contract).
-        unsafe { deliver(timings, "timings", value) }
+        // SAFETY: timings is null or writable for its size (the caller's contract).
+        unsafe { deliver_sized(timings, "timings", value) }
     })
 }
 

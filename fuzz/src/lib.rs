@@ -148,6 +148,13 @@ pub fn scene_load(data: &[u8]) {
     // SAFETY: `root` is writable; `scene` was just created.
     assert_eq!(unsafe { cadr_scene_root(scene, &mut root) }, CadrResult::Ok);
     let mut loaded = std::mem::MaybeUninit::<CadrLoadResult>::zeroed();
+    // SAFETY: zero bytes are a CadrLoadResult; its size, the first field, is the host's to set.
+    unsafe {
+        loaded
+            .as_mut_ptr()
+            .cast::<u32>()
+            .write(std::mem::size_of::<CadrLoadResult>() as u32)
+    };
     // SAFETY: `c_path` is a NUL-terminated string; `loaded` is writable.
     let result = unsafe { cadr_scene_load(scene, c_path.as_ptr(), root, loaded.as_mut_ptr()) };
     let message = last_error();

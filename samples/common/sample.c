@@ -55,7 +55,7 @@ CadrGeometry sample_box(CadrScene scene, const char *name, float hx, float hy, f
   float positions[24 * 3], normals[24 * 3];
   uint32_t indices[36];
   struct CadrPart parts[3];
-  struct CadrGeometryDesc desc;
+  struct CadrGeometryDesc desc = {.size = sizeof(struct CadrGeometryDesc)};
   CadrGeometry geometry;
   int face, corner, axis;
   for (face = 0; face < 6; ++face) {
@@ -92,6 +92,7 @@ CadrGeometry sample_box(CadrScene scene, const char *name, float hx, float hy, f
     parts[axis].wire_index_count = 0;
   }
   memset(&desc, 0, sizeof desc);
+  desc.size = sizeof desc;
   desc.name = name;
   desc.positions = positions;
   desc.normals = normals;
@@ -114,7 +115,7 @@ CadrGeometry sample_cylinder(CadrScene scene, const char *name, float radius, fl
   uint32_t *indices = (uint32_t *)malloc(sizeof(uint32_t) * (size_t)(12 * n));
   uint32_t index = 0, top_centre = (uint32_t)(4 * n), bottom_centre = top_centre + 1;
   struct CadrPart parts[2];
-  struct CadrGeometryDesc desc;
+  struct CadrGeometryDesc desc = {.size = sizeof(struct CadrGeometryDesc)};
   CadrGeometry geometry;
   if (positions == NULL || normals == NULL || indices == NULL) {
     fprintf(stderr, "out of memory\n");
@@ -170,6 +171,7 @@ CadrGeometry sample_cylinder(CadrScene scene, const char *name, float radius, fl
   parts[0].first_wire_index = parts[1].first_wire_index = 0;
   parts[0].wire_index_count = parts[1].wire_index_count = 0;
   memset(&desc, 0, sizeof desc);
+  desc.size = sizeof desc;
   desc.name = name;
   desc.positions = positions;
   desc.normals = normals;
@@ -187,7 +189,7 @@ CadrGeometry sample_cylinder(CadrScene scene, const char *name, float radius, fl
 
 CadrMaterial sample_material(CadrScene scene, const char *name, float r, float g, float b,
                              float metallic, float roughness) {
-  struct CadrMaterialDesc desc;
+  struct CadrMaterialDesc desc = {.size = sizeof(struct CadrMaterialDesc)};
   CadrMaterial material;
   desc.name = name;
   desc.base_color[0] = r;

@@ -82,6 +82,7 @@ static struct CadrGeometryDesc geometry_desc(const char *name, const float *posi
                                              uint32_t index_count) {
   struct CadrGeometryDesc desc;
   memset(&desc, 0, sizeof desc);
+  desc.size = sizeof desc;
   desc.name = name;
   desc.positions = positions;
   desc.vertex_count = vertex_count;
@@ -150,23 +151,24 @@ static void test_camera(void) {
 }
 
 static CadrContext test_context(void) {
-  struct CadrContextOptions options;
+  struct CadrContextOptions options = {.size = sizeof(struct CadrContextOptions)};
   CadrContext context = NULL;
-  struct CadrDeviceInfo info;
+  struct CadrDeviceInfo info = {.size = sizeof(struct CadrDeviceInfo)};
   void *instance = NULL;
   uint32_t count = 0, i;
-  struct CadrTechniqueInfo technique;
-  struct CadrPluginRefusal refusal;
+  struct CadrTechniqueInfo technique = {.size = sizeof(struct CadrTechniqueInfo)};
+  struct CadrPluginRefusal refusal = {.size = sizeof(struct CadrPluginRefusal)};
   const char *bad_extension[1] = {"VK_cadr_no_such_extension"};
 
   EXPECT(cadr_context_options_default(NULL), CADR_RESULT_NULL_ARGUMENT);
   OK(cadr_context_options_default(&options));
   CHECK(options.size == sizeof options && options.device_index == -1 && options.default_plugin_dirs);
   EXPECT(cadr_context_create(&options, NULL), CADR_RESULT_NULL_ARGUMENT);
-  options.size = 8;
+  options.size = 2;
   EXPECT(cadr_context_create(&options, &context), CADR_RESULT_INVALID_ARGUMENT);
-  MESSAGE_HAS("options.size");
+  MESSAGE_HAS("options->size is 2");
   CHECK(context == NULL); /* nothing written on failure */
+  options.size = sizeof options;
   OK(cadr_context_options_default(&options));
   options.device_extensions = bad_extension;
   options.device_extension_count = 1;
@@ -184,7 +186,8 @@ static CadrContext test_context(void) {
   CHECK(context != NULL);
 
   OK(cadr_context_device_info(context, &info));
-  CHECK(strlen(info.name) > 0 && info.validation && !info.features.presentation);
+  CHECK(strlen(info.name) > 0 && info.validation &&
+        (info.features & CADR_DEVICE_FEATURE_PRESENTATION) == 0);
   CHECK(info.api_version >= ((1u << 22) | (3u << 12)));
   EXPECT(cadr_context_device_info(context, NULL), CADR_RESULT_NULL_ARGUMENT);
   OK(cadr_context_vulkan_instance(context, &instance));
@@ -225,8 +228,8 @@ struct Built {
 static struct Built test_scene(void) {
   struct Built b;
   struct CadrGeometryDesc desc = cube_desc();
-  struct CadrMaterialDesc red = {"red", {0.8f, 0.1f, 0.1f, 1.0f}, 0.0f, 0.5f};
-  struct CadrMaterialDesc blue = {"blue", {0.1f, 0.2f, 0.9f, 1.0f}, 0.5f, 0.3f};
+  struct CadrMaterialDesc red = {sizeof(struct CadrMaterialDesc), "red", {0.8f, 0.1f, 0.1f, 1.0f}, 0.0f, 0.5f};
+  struct CadrMaterialDesc blue = {sizeof(struct CadrMaterialDesc), "blue", {0.1f, 0.2f, 0.9f, 1.0f}, 0.5f, 0.3f};
   CadrMaterial parts[2];
   CadrNode group, lod, lod_screen, billboard, child, second;
   double matrix[16];
@@ -234,7 +237,7 @@ static struct Built test_scene(void) {
   bool mask[2] = {true, false};
   uint32_t count = 0, flags = 0;
   uint32_t bad_indices[3] = {0, 1, 8};
-  struct CadrSceneStatistics statistics;
+  struct CadrSceneStatistics statistics = {.size = sizeof(struct CadrSceneStatistics)};
   struct CadrBounds bounds;
 
   OK(cadr_scene_create(&b.scene));
@@ -271,6 +274,24 @@ static struct Built test_scene(void) {
   EXPECT(cadr_scene_set_material(b.scene, b.red, &red), CADR_RESULT_INVALID_ARGUMENT);
   red.base_color[1] = 0.1f;
   OK(cadr_scene_set_material(b.scene, b.red, &red));
+  /* Input structs of other versions: a newer host's zeroed extra field is accepted, a set one
+   * refused by name; a size that cannot be a struct's is refused. */
+  {
+    struct {
+      struct CadrMaterialDesc desc;
+      uint64_t field_of_a_later_version;
+    } newer;
+    memset(&newer, 0, sizeof newer);
+    newer.desc = red;
+    newer.desc.size = sizeof newer;
+    OK(cadr_scene_set_material(b.scene, b.red, &newer.desc));
+    newer.field_of_a_later_version = 7;
+    EXPECT(cadr_scene_set_material(b.scene, b.red, &newer.desc), CADR_RESULT_INVALID_ARGUMENT);
+    MESSAGE_HAS("CadrMaterialDesc, which this library");
+    newer.desc.size = 3;
+    EXPECT(cadr_scene_set_material(b.scene, b.red, &newer.desc), CADR_RESULT_INVALID_ARGUMENT);
+    MESSAGE_HAS("desc->size is 3");
+  }
 
   /* Nodes of every kind. */
   parts[0] = b.red;
@@ -412,10 +433,11 @@ static struct Built test_scene(void) {
 }
 
 static void test_loading(CadrScene scene, CadrNode root) {
-  struct CadrLoadResult loaded;
-  struct CadrSceneStatistics statistics;
+  struct CadrLoadResult loaded = {.size = sizeof(struct CadrLoadResult)};
+  struct CadrSceneStatistics statistics = {.size = sizeof(struct CadrSceneStatistics)};
   const char *missing = "/nonexistent/cadr/engine.gltf";
   memset(&loaded, 0, sizeof loaded);
+  loaded.size = sizeof loaded;
   EXPECT(cadr_scene_load(scene, missing, root, &loaded), CADR_RESULT_LOAD_FAILED);
   MESSAGE_HAS(missing);
   EXPECT(cadr_scene_load(scene, "model.obj", root, &loaded), CADR_RESULT_LOAD_FAILED);
@@ -473,8 +495,9 @@ static const char *points_gltf =
 
 /* Loads `path` under `root` and drops what it made. */
 static void load_and_drop(CadrScene scene, CadrNode root, const char *path) {
-  struct CadrLoadResult loaded;
+  struct CadrLoadResult loaded = {.size = sizeof(struct CadrLoadResult)};
   memset(&loaded, 0, sizeof loaded);
+  loaded.size = sizeof loaded;
   OK(cadr_scene_load(scene, path, root, &loaded));
   CHECK(loaded.geometry_count == 1);
   OK(cadr_scene_destroy_node(scene, loaded.root));
@@ -521,6 +544,77 @@ static void test_messages(CadrScene scene, CadrNode root) {
   remove(path);
 }
 
+/* The renderer's settings, as a host reads them. */
+static CadrRendererSettings settings_of(CadrRenderer renderer) {
+  CadrRendererSettings settings = {.size = sizeof(struct CadrRendererSettings)};
+  memset(&settings, 0, sizeof settings);
+  settings.size = sizeof settings;
+  settings.size = sizeof settings;
+  OK(cadr_renderer_settings(renderer, &settings));
+  return settings;
+}
+
+/* What the renderer's device and window offer. */
+static CadrRendererCapabilities capabilities_of(CadrRenderer renderer) {
+  CadrRendererCapabilities capabilities = {.size = sizeof(struct CadrRendererCapabilities)};
+  memset(&capabilities, 0, sizeof capabilities);
+  capabilities.size = sizeof capabilities;
+  capabilities.size = sizeof capabilities;
+  OK(cadr_renderer_capabilities(renderer, &capabilities));
+  return capabilities;
+}
+
+/* Whether two settings agree field by field (the struct has padding, which memcmp would
+ * compare). */
+static bool settings_equal(const CadrRendererSettings *a, const CadrRendererSettings *b) {
+  return a->size == b->size && a->shade_mode == b->shade_mode &&
+         a->highlight_style == b->highlight_style &&
+         memcmp(a->highlight_color, b->highlight_color, sizeof a->highlight_color) == 0 &&
+         a->outline_width == b->outline_width &&
+         memcmp(a->edge_color, b->edge_color, sizeof a->edge_color) == 0 &&
+         a->silhouettes == b->silhouettes && a->dashed_hidden_lines == b->dashed_hidden_lines &&
+         a->ssao == b->ssao && a->textures == b->textures &&
+         memcmp(a->background_top, b->background_top, sizeof a->background_top) == 0 &&
+         memcmp(a->background_bottom, b->background_bottom, sizeof a->background_bottom) == 0 &&
+         a->msaa_samples == b->msaa_samples && a->section_flags == b->section_flags &&
+         memcmp(a->section_cap_colors, b->section_cap_colors, sizeof a->section_cap_colors) == 0 &&
+         a->min_pixels == b->min_pixels && a->lod_error == b->lod_error &&
+         a->frame_replay == b->frame_replay &&
+         a->pick_through_translucent == b->pick_through_translucent &&
+         a->frames_in_flight == b->frames_in_flight && a->present_mode == b->present_mode;
+}
+
+/* The settings last applied by SET and SET_RGB. */
+static CadrRendererSettings applied;
+
+/* Changes one setting as a host does (read, change, apply); gives the result of applying. */
+#define SET(renderer, field, value)                                    \
+  (applied = settings_of(renderer), applied.field = (value),           \
+   cadr_renderer_apply_settings((renderer), &applied))
+#define SET_RGB(renderer, field, rgb)                                  \
+  (applied = settings_of(renderer), memcpy(applied.field, (rgb), sizeof applied.field), \
+   cadr_renderer_apply_settings((renderer), &applied))
+
+/* Reads the colour at `offset` of the settings. */
+static void get_rgb(CadrRenderer renderer, size_t offset, float rgb[3]) {
+  CadrRendererSettings settings = settings_of(renderer);
+  memcpy(rgb, (const char *)&settings + offset, 3 * sizeof(float));
+}
+
+static enum CadrResult set_background(CadrRenderer renderer, const float top[3],
+                                      const float bottom[3]) {
+  applied = settings_of(renderer);
+  memcpy(applied.background_top, top, sizeof applied.background_top);
+  memcpy(applied.background_bottom, bottom, sizeof applied.background_bottom);
+  return cadr_renderer_apply_settings(renderer, &applied);
+}
+
+static void get_background(CadrRenderer renderer, float top[3], float bottom[3]) {
+  CadrRendererSettings settings = settings_of(renderer);
+  memcpy(top, settings.background_top, sizeof settings.background_top);
+  memcpy(bottom, settings.background_bottom, sizeof settings.background_bottom);
+}
+
 static unsigned pixel_difference(const uint8_t *a, const uint8_t *b, size_t size) {
   unsigned differing = 0;
   size_t i;
@@ -565,9 +659,9 @@ static void test_host_textures(CadrRenderer renderer, uint32_t width, uint32_t h
   static const float mirrored[6] = {-1, 0, 1, 0, 1, 0};
   static const float not_finite_transform[6] = {1, 0, INFINITY, 0, 1, 0};
   static const double front[3] = {0, 0, 1};
-  struct CadrGeometryDesc desc;
-  struct CadrMaterialDesc white = {"white", {1.0f, 1.0f, 1.0f, 1.0f}, 0.0f, 0.8f};
-  struct CadrTextureDesc texture_desc;
+  struct CadrGeometryDesc desc = {.size = sizeof(struct CadrGeometryDesc)};
+  struct CadrMaterialDesc white = {sizeof(struct CadrMaterialDesc), "white", {1.0f, 1.0f, 1.0f, 1.0f}, 0.0f, 0.8f};
+  struct CadrTextureDesc texture_desc = {.size = sizeof(struct CadrTextureDesc)};
   struct CadrBounds bounds;
   struct CadrCamera camera;
   CadrScene scene = NULL;
@@ -588,6 +682,8 @@ static void test_host_textures(CadrRenderer renderer, uint32_t width, uint32_t h
   OK(cadr_scene_add_child(scene, root, geo));
 
   memset(&texture_desc, 0, sizeof texture_desc);
+
+  texture_desc.size = sizeof texture_desc;
   texture_desc.name = "red|blue";
   texture_desc.width = 2;
   texture_desc.height = 1;
@@ -620,7 +716,7 @@ static void test_host_textures(CadrRenderer renderer, uint32_t width, uint32_t h
   CHECK(reddish(PIXEL(picture, width, left, row)));
   CHECK(memcmp(PIXEL(picture, width, right, row), PIXEL(picture, width, 0, row), 3) == 0);
   {
-    CadrPickResult picked = {NULL, 0};
+    CadrPickResult picked = {sizeof(struct CadrPickResult), NULL, 0};
     OK(cadr_renderer_pick(renderer, scene, &camera, left, row, &picked));
     CHECK(picked.hit_count == 1);
     cadr_pick_result_free(&picked);
@@ -701,14 +797,14 @@ static void test_renderer(CadrContext context, struct Built *b) {
   enum { W = 96, H = 64 };
   CadrRenderer renderer = NULL, other = NULL;
   struct CadrCamera camera;
-  struct CadrFrameStats stats;
+  struct CadrFrameStats stats = {.size = sizeof(struct CadrFrameStats)};
   struct CadrBounds bounds;
   uint8_t *first = (uint8_t *)malloc(W * H * 4), *second = (uint8_t *)malloc(W * H * 4);
   uint32_t width = 0, height = 0, mode = 99, kind;
   int step;
   const char *name = NULL;
   double matrix[16];
-  struct CadrTechniqueSelection selection = {NULL, NULL, NULL, NULL};
+  struct CadrTechniqueSelection selection = {sizeof(struct CadrTechniqueSelection), NULL, NULL, NULL, NULL};
   const char *kinds[4][2] = {{"arena", "per-geometry"},
                              {"ssbo-index", "push"},
                              {"groups-mdi-replay", "individual"},
@@ -752,7 +848,7 @@ static void test_renderer(CadrContext context, struct Built *b) {
   /* Picking: the cube under the centre with its occurrence path, background in the corner,
      box selection, and every error path. */
   {
-    CadrPickResult picked = {NULL, 0};
+    CadrPickResult picked = {sizeof(struct CadrPickResult), NULL, 0};
     OK(cadr_renderer_pick(renderer, b->scene, &camera, W / 2, H / 2, &picked));
     CHECK(picked.hit_count == 1 && picked.hits != NULL);
     CHECK(picked.hits[0].node != 0 && picked.hits[0].path_length >= 2);
@@ -847,26 +943,25 @@ static void test_renderer(CadrContext context, struct Built *b) {
   {
     float pixels = -1.0f;
     uint64_t all;
-    struct CadrTechniqueSelection gpu = {"arena", "ssbo-index", "individual-indirect-count",
+    struct CadrTechniqueSelection gpu = {sizeof(struct CadrTechniqueSelection), "arena", "ssbo-index", "individual-indirect-count",
                                          "gpu-frustum"};
-    OK(cadr_renderer_min_pixels(renderer, &pixels));
+    pixels = settings_of(renderer).min_pixels;
     CHECK(pixels == 0.0f);
     OK(cadr_renderer_set_techniques(renderer, &gpu));
     OK(cadr_renderer_render(renderer, b->scene, &camera, &stats));
     all = stats.triangles;
     CHECK(all > 0);
-    OK(cadr_renderer_set_min_pixels(renderer, 1.0e6f));
-    OK(cadr_renderer_min_pixels(renderer, &pixels));
+    OK(SET(renderer, min_pixels, 1.0e6f));
+    pixels = settings_of(renderer).min_pixels;
     CHECK(pixels == 1.0e6f);
     OK(cadr_renderer_render(renderer, b->scene, &camera, &stats));
     CHECK(stats.triangles == 0);
-    OK(cadr_renderer_set_min_pixels(renderer, 0.0f));
+    OK(SET(renderer, min_pixels, 0.0f));
     OK(cadr_renderer_render(renderer, b->scene, &camera, &stats));
     CHECK(stats.triangles == all);
-    EXPECT(cadr_renderer_set_min_pixels(renderer, -1.0f), CADR_RESULT_INVALID_ARGUMENT);
-    MESSAGE_HAS("sub-pixel threshold");
-    EXPECT(cadr_renderer_set_min_pixels(renderer, NAN), CADR_RESULT_INVALID_ARGUMENT);
-    EXPECT(cadr_renderer_min_pixels(renderer, NULL), CADR_RESULT_NULL_ARGUMENT);
+    EXPECT(SET(renderer, min_pixels, -1.0f), CADR_RESULT_INVALID_ARGUMENT);
+    MESSAGE_HAS("settings.min_pixels");
+    EXPECT(SET(renderer, min_pixels, NAN), CADR_RESULT_INVALID_ARGUMENT);
   }
 
   /* Level of detail (gpu-clusters; 1 px by default): the coarsest cut draws no more than full
@@ -874,97 +969,157 @@ static void test_renderer(CadrContext context, struct Built *b) {
   {
     float pixels = -1.0f;
     uint64_t full;
-    struct CadrTechniqueSelection clusters = {"arena", "ssbo-index", "individual-indirect-count",
+    struct CadrTechniqueSelection clusters = {sizeof(struct CadrTechniqueSelection), "arena", "ssbo-index", "individual-indirect-count",
                                               "gpu-clusters"};
-    OK(cadr_renderer_lod_error(renderer, &pixels));
+    pixels = settings_of(renderer).lod_error;
     CHECK(pixels == 1.0f);
     OK(cadr_renderer_set_techniques(renderer, &clusters));
-    OK(cadr_renderer_set_lod_error(renderer, 0.0f));
+    OK(SET(renderer, lod_error, 0.0f));
     OK(cadr_renderer_render(renderer, b->scene, &camera, &stats));
     full = stats.triangles;
     CHECK(full > 0);
-    OK(cadr_renderer_set_lod_error(renderer, 1.0e6f));
-    OK(cadr_renderer_lod_error(renderer, &pixels));
+    OK(SET(renderer, lod_error, 1.0e6f));
+    pixels = settings_of(renderer).lod_error;
     CHECK(pixels == 1.0e6f);
     OK(cadr_renderer_render(renderer, b->scene, &camera, &stats));
     CHECK(stats.triangles > 0 && stats.triangles <= full);
-    OK(cadr_renderer_set_lod_error(renderer, 1.0f));
-    EXPECT(cadr_renderer_set_lod_error(renderer, -1.0f), CADR_RESULT_INVALID_ARGUMENT);
-    MESSAGE_HAS("level-of-detail error");
-    EXPECT(cadr_renderer_set_lod_error(renderer, INFINITY), CADR_RESULT_INVALID_ARGUMENT);
-    EXPECT(cadr_renderer_lod_error(renderer, NULL), CADR_RESULT_NULL_ARGUMENT);
+    OK(SET(renderer, lod_error, 1.0f));
+    EXPECT(SET(renderer, lod_error, -1.0f), CADR_RESULT_INVALID_ARGUMENT);
+    MESSAGE_HAS("settings.lod_error");
+    EXPECT(SET(renderer, lod_error, INFINITY), CADR_RESULT_INVALID_ARGUMENT);
   }
 
   /* Frame replay (on by default): an unchanged second frame resubmits the first's recording
    * and shows the same picture; off, every frame is recorded. */
   {
-    bool enabled = false, replayed = true;
-    OK(cadr_renderer_frame_replay(renderer, &enabled, &replayed));
-    CHECK(enabled);
+    CHECK(settings_of(renderer).frame_replay);
     OK(cadr_renderer_render(renderer, b->scene, &camera, &stats));
     OK(cadr_renderer_render(renderer, b->scene, &camera, &stats));
     OK(cadr_renderer_read_pixels(renderer, first, W * H * 4));
     OK(cadr_renderer_render(renderer, b->scene, &camera, &stats));
-    OK(cadr_renderer_frame_replay(renderer, NULL, &replayed));
-    CHECK(replayed);
+    CHECK(stats.replayed);
     OK(cadr_renderer_read_pixels(renderer, second, W * H * 4));
     CHECK(pixel_difference(first, second, W * H * 4) == 0);
-    OK(cadr_renderer_set_frame_replay(renderer, false));
+    OK(SET(renderer, frame_replay, false));
     OK(cadr_renderer_render(renderer, b->scene, &camera, &stats));
-    OK(cadr_renderer_frame_replay(renderer, &enabled, &replayed));
-    CHECK(!enabled && !replayed);
-    OK(cadr_renderer_set_frame_replay(renderer, true));
-    EXPECT(cadr_renderer_set_frame_replay((CadrRenderer)b->scene, true), CADR_RESULT_FOREIGN_HANDLE);
+    CHECK(!settings_of(renderer).frame_replay && !stats.replayed);
+    OK(SET(renderer, frame_replay, true));
+    EXPECT(cadr_renderer_apply_settings((CadrRenderer)b->scene, &applied), CADR_RESULT_FOREIGN_HANDLE);
   }
 
   /* Frames in flight (offscreen renderers start with 1): with 2, a frame returns once it is
    * submitted and its pixels are read after it finishes; offscreen renderers present nothing. */
   {
-    uint32_t frames = 0, mode = 9;
-    OK(cadr_renderer_frames_in_flight(renderer, &frames));
+    uint32_t frames = 0;
+    frames = settings_of(renderer).frames_in_flight;
     CHECK(frames == 1);
     OK(cadr_renderer_render(renderer, b->scene, &camera, &stats));
     OK(cadr_renderer_read_pixels(renderer, first, W * H * 4));
-    OK(cadr_renderer_set_frames_in_flight(renderer, 2));
-    OK(cadr_renderer_frames_in_flight(renderer, &frames));
+    OK(SET(renderer, frames_in_flight, 2));
+    frames = settings_of(renderer).frames_in_flight;
     CHECK(frames == 2);
     OK(cadr_renderer_render(renderer, b->scene, &camera, &stats));
     OK(cadr_renderer_render(renderer, b->scene, &camera, &stats));
     OK(cadr_renderer_read_pixels(renderer, second, W * H * 4));
     CHECK(pixel_difference(first, second, W * H * 4) == 0);
-    OK(cadr_renderer_set_frames_in_flight(renderer, 3));
+    OK(SET(renderer, frames_in_flight, 3));
     OK(cadr_renderer_render(renderer, b->scene, &camera, &stats));
     OK(cadr_renderer_render(renderer, b->scene, &camera, &stats));
     OK(cadr_renderer_render(renderer, b->scene, &camera, &stats));
     OK(cadr_renderer_read_pixels(renderer, second, W * H * 4));
     CHECK(pixel_difference(first, second, W * H * 4) == 0);
-    EXPECT(cadr_renderer_set_frames_in_flight(renderer, 4), CADR_RESULT_INVALID_ARGUMENT);
+    EXPECT(SET(renderer, frames_in_flight, 4), CADR_RESULT_INVALID_ARGUMENT);
     MESSAGE_HAS("frames in flight");
-    EXPECT(cadr_renderer_set_frames_in_flight(renderer, 0), CADR_RESULT_INVALID_ARGUMENT);
-    OK(cadr_renderer_set_frames_in_flight(renderer, 1));
-    EXPECT(cadr_renderer_frames_in_flight(renderer, NULL), CADR_RESULT_NULL_ARGUMENT);
-    EXPECT(cadr_renderer_set_present_mode(renderer, CADR_PRESENT_MAILBOX), CADR_RESULT_UNSUPPORTED);
-    MESSAGE_HAS("offscreen");
-    EXPECT(cadr_renderer_present_mode(renderer, &mode, NULL), CADR_RESULT_UNSUPPORTED);
-    CHECK(mode == 9);
-    EXPECT(cadr_renderer_set_present_mode(renderer, 7), CADR_RESULT_INVALID_ARGUMENT);
+    EXPECT(SET(renderer, frames_in_flight, 0), CADR_RESULT_INVALID_ARGUMENT);
+    OK(SET(renderer, frames_in_flight, 1));
+    EXPECT(SET(renderer, present_mode, CADR_PRESENT_MAILBOX), CADR_RESULT_UNSUPPORTED);
+    MESSAGE_HAS("without a window");
+    CHECK(capabilities_of(renderer).present_modes == 0);
+    EXPECT(SET(renderer, present_mode, 7), CADR_RESULT_INVALID_ARGUMENT);
+  }
+
+  /* Settings as one sized struct: read, changed, applied; all or nothing; an older host's
+   * smaller struct and a newer host's larger one both ways; what the renderer offers. */
+  {
+    CadrRendererSettings before = settings_of(renderer), older, canary;
+    struct {
+      CadrRendererSettings settings;
+      uint32_t field_of_a_later_version;
+    } newer;
+    struct CadrFrameStats short_stats;
+    CadrRendererCapabilities capabilities = capabilities_of(renderer);
+    CHECK(before.size == sizeof before && before.shade_mode == CADR_SHADE_SOLID);
+    CHECK(before.frames_in_flight == 1 && before.msaa_samples == 1 && before.lod_error == 1.0f);
+    CHECK(before.section_flags == CADR_SECTION_CAPS && before.frame_replay && before.textures);
+    CHECK(capabilities.size == sizeof capabilities && (capabilities.msaa_sample_counts & 1u) != 0);
+    EXPECT(cadr_renderer_settings(renderer, NULL), CADR_RESULT_NULL_ARGUMENT);
+    EXPECT(cadr_renderer_apply_settings(renderer, NULL), CADR_RESULT_NULL_ARGUMENT);
+    EXPECT(cadr_renderer_capabilities(renderer, NULL), CADR_RESULT_NULL_ARGUMENT);
+    EXPECT(cadr_renderer_settings((CadrRenderer)b->scene, &applied), CADR_RESULT_FOREIGN_HANDLE);
+    /* All or nothing: a refused field (here the last one applied) undoes the others. */
+    applied = before;
+    applied.shade_mode = CADR_SHADE_EDGES;
+    applied.ssao = true;
+    applied.msaa_samples = 3;
+    EXPECT(cadr_renderer_apply_settings(renderer, &applied), CADR_RESULT_INVALID_ARGUMENT);
+    MESSAGE_HAS("settings.msaa_samples");
+    canary = settings_of(renderer);
+    CHECK(settings_equal(&before, &canary));
+    applied.size = 2;
+    EXPECT(cadr_renderer_apply_settings(renderer, &applied), CADR_RESULT_INVALID_ARGUMENT);
+    MESSAGE_HAS("settings->size is 2");
+    /* An older host knows the fields up to highlight_style: the rest keep their values. */
+    older = before;
+    older.size = (uint32_t)offsetof(CadrRendererSettings, highlight_style);
+    older.shade_mode = CADR_SHADE_EDGES;
+    older.ssao = true; /* beyond its size: not read */
+    OK(cadr_renderer_apply_settings(renderer, &older));
+    canary = settings_of(renderer);
+    CHECK(canary.shade_mode == CADR_SHADE_EDGES && !canary.ssao);
+    /* ...and reads only what it knows. */
+    memset(&older, 0xAB, sizeof older);
+    older.size = (uint32_t)offsetof(CadrRendererSettings, highlight_style);
+    OK(cadr_renderer_settings(renderer, &older));
+    CHECK(older.shade_mode == CADR_SHADE_EDGES && older.highlight_style == 0xABABABABu);
+    /* A newer host: its unknown field zeroed when read, accepted at 0, refused otherwise. */
+    memset(&newer, 0xCD, sizeof newer);
+    newer.settings.size = sizeof newer;
+    OK(cadr_renderer_settings(renderer, &newer.settings));
+    CHECK(newer.field_of_a_later_version == 0 && newer.settings.size == sizeof newer);
+    newer.settings.shade_mode = CADR_SHADE_SOLID;
+    OK(cadr_renderer_apply_settings(renderer, &newer.settings));
+    canary = settings_of(renderer);
+    CHECK(settings_equal(&before, &canary));
+    newer.field_of_a_later_version = 1;
+    EXPECT(cadr_renderer_apply_settings(renderer, &newer.settings), CADR_RESULT_INVALID_ARGUMENT);
+    MESSAGE_HAS("does not know");
+    /* Output structs of older hosts: frame statistics up to `size` only. */
+    memset(&short_stats, 0xEE, sizeof short_stats);
+    short_stats.size = (uint32_t)offsetof(struct CadrFrameStats, cpu_record_us);
+    OK(cadr_renderer_render(renderer, b->scene, &camera, &short_stats));
+    CHECK(short_stats.presented && short_stats.cpu_us > 0.0);
+    CHECK(short_stats.draw_calls == 0xEEEEEEEEEEEEEEEEull);
+    short_stats.size = 0;
+    EXPECT(cadr_renderer_render(renderer, b->scene, &camera, &short_stats),
+           CADR_RESULT_INVALID_ARGUMENT);
+    MESSAGE_HAS("stats->size is 0");
   }
 
   /* Shade modes. */
-  OK(cadr_renderer_shade_mode(renderer, &mode));
+  mode = settings_of(renderer).shade_mode;
   CHECK(mode == CADR_SHADE_SOLID);
-  OK(cadr_renderer_set_shade_mode(renderer, CADR_SHADE_EDGES));
-  OK(cadr_renderer_shade_mode(renderer, &mode));
+  OK(SET(renderer, shade_mode, CADR_SHADE_EDGES));
+  mode = settings_of(renderer).shade_mode;
   CHECK(mode == CADR_SHADE_EDGES);
   OK(cadr_renderer_render(renderer, b->scene, &camera, &stats));
-  OK(cadr_renderer_set_shade_mode(renderer, CADR_SHADE_HIDDEN_LINE));
+  OK(SET(renderer, shade_mode, CADR_SHADE_HIDDEN_LINE));
   OK(cadr_renderer_render(renderer, b->scene, &camera, &stats));
-  OK(cadr_renderer_set_shade_mode(renderer, CADR_SHADE_WIREFRAME));
+  OK(SET(renderer, shade_mode, CADR_SHADE_WIREFRAME));
   OK(cadr_renderer_render(renderer, b->scene, &camera, &stats));
-  OK(cadr_renderer_shade_mode(renderer, &mode));
+  mode = settings_of(renderer).shade_mode;
   CHECK(mode == CADR_SHADE_WIREFRAME);
   /* X-ray with either transparency method: the fast one (the default) and the exact one. */
-  OK(cadr_renderer_set_shade_mode(renderer, CADR_SHADE_XRAY));
+  OK(SET(renderer, shade_mode, CADR_SHADE_XRAY));
   OK(cadr_renderer_render(renderer, b->scene, &camera, &stats));
   OK(cadr_renderer_technique(renderer, CADR_TECHNIQUE_KIND_TRANSPARENCY, &name));
   CHECK(strcmp(name, "weighted-blended") == 0);
@@ -972,13 +1127,12 @@ static void test_renderer(CadrContext context, struct Built *b) {
   OK(cadr_renderer_render(renderer, b->scene, &camera, &stats));
   OK(cadr_renderer_technique(renderer, CADR_TECHNIQUE_KIND_TRANSPARENCY, &name));
   CHECK(strcmp(name, "per-pixel-lists") == 0);
-  OK(cadr_renderer_shade_mode(renderer, &mode));
+  mode = settings_of(renderer).shade_mode;
   CHECK(mode == CADR_SHADE_XRAY);
   OK(cadr_renderer_set_technique(renderer, CADR_TECHNIQUE_KIND_TRANSPARENCY, "weighted-blended"));
-  EXPECT(cadr_renderer_set_shade_mode(renderer, 5), CADR_RESULT_INVALID_ARGUMENT);
+  EXPECT(SET(renderer, shade_mode, 5), CADR_RESULT_INVALID_ARGUMENT);
   MESSAGE_HAS("4 (X-ray)");
-  EXPECT(cadr_renderer_shade_mode(renderer, NULL), CADR_RESULT_NULL_ARGUMENT);
-  OK(cadr_renderer_set_shade_mode(renderer, CADR_SHADE_SOLID));
+  OK(SET(renderer, shade_mode, CADR_SHADE_SOLID));
 
   /* Section planes: a plane keeping only z >= 1e6 cuts the whole scene away, so nothing is
    * drawn or picked; planes are refused with the reason and kept; no planes cut nothing. */
@@ -988,10 +1142,10 @@ static void test_renderer(CadrContext context, struct Built *b) {
     double seven[28] = {0};
     float blue[4] = {0.1f, 0.2f, 0.9f, 1.0f}, not_finite[4] = {NAN, 0.0f, 0.0f, 1.0f};
     uint32_t count = 9, flags = 0;
-    CadrPickResult picked = {NULL, 0};
+    CadrPickResult picked = {sizeof(struct CadrPickResult), NULL, 0};
     OK(cadr_renderer_section_planes(renderer, NULL, 0, &count));
     CHECK(count == 0);
-    OK(cadr_renderer_section_flags(renderer, &flags));
+    flags = settings_of(renderer).section_flags;
     CHECK(flags == CADR_SECTION_CAPS);
     OK(cadr_renderer_render(renderer, b->scene, &camera, &stats));
     OK(cadr_renderer_read_pixels(renderer, first, W * H * 4));
@@ -1013,18 +1167,20 @@ static void test_renderer(CadrContext context, struct Built *b) {
     OK(cadr_renderer_section_planes(renderer, NULL, 0, &count));
     CHECK(count == 1); /* refused planes leave the planes as they were */
     EXPECT(cadr_renderer_section_planes(renderer, read, 2, NULL), CADR_RESULT_NULL_ARGUMENT);
-    OK(cadr_renderer_set_section_flags(renderer, CADR_SECTION_CAPS | CADR_SECTION_HATCHED));
-    OK(cadr_renderer_section_flags(renderer, &flags));
+    OK(SET(renderer, section_flags, CADR_SECTION_CAPS | CADR_SECTION_HATCHED));
+    flags = settings_of(renderer).section_flags;
     CHECK(flags == (CADR_SECTION_CAPS | CADR_SECTION_HATCHED));
-    EXPECT(cadr_renderer_set_section_flags(renderer, 8), CADR_RESULT_INVALID_ARGUMENT);
+    EXPECT(SET(renderer, section_flags, 8), CADR_RESULT_INVALID_ARGUMENT);
     MESSAGE_HAS("unknown bits");
-    OK(cadr_renderer_set_section_cap_color(renderer, 5, blue));
-    EXPECT(cadr_renderer_set_section_cap_color(renderer, CADR_MAX_SECTION_PLANES, blue),
-           CADR_RESULT_INVALID_ARGUMENT);
-    EXPECT(cadr_renderer_set_section_cap_color(renderer, 0, not_finite), CADR_RESULT_INVALID_ARGUMENT);
-    EXPECT(cadr_renderer_set_section_cap_color(renderer, 0, NULL), CADR_RESULT_NULL_ARGUMENT);
+    applied = settings_of(renderer);
+    memcpy(applied.section_cap_colors[5], blue, sizeof blue);
+    OK(cadr_renderer_apply_settings(renderer, &applied));
+    CHECK(settings_of(renderer).section_cap_colors[5][2] == 0.9f);
+    memcpy(applied.section_cap_colors[0], not_finite, sizeof not_finite);
+    EXPECT(cadr_renderer_apply_settings(renderer, &applied), CADR_RESULT_INVALID_ARGUMENT);
+    MESSAGE_HAS("section_cap_colors[0]");
     OK(cadr_renderer_set_section_planes(renderer, NULL, 0));
-    OK(cadr_renderer_set_section_flags(renderer, CADR_SECTION_CAPS));
+    OK(SET(renderer, section_flags, CADR_SECTION_CAPS));
     OK(cadr_renderer_pick(renderer, b->scene, &camera, W / 2, H / 2, &picked));
     CHECK(picked.hit_count == 1);
     cadr_pick_result_free(&picked);
@@ -1040,25 +1196,22 @@ static void test_renderer(CadrContext context, struct Built *b) {
     float too_bright[3] = {1.5f, 0.0f, 0.0f}, not_finite[3] = {NAN, 0.0f, 0.0f};
     float default_top[3], default_bottom[3], read_top[3], read_bottom[3];
     const uint8_t *corner;
-    OK(cadr_renderer_background(renderer, default_top, default_bottom));
+    get_background(renderer, default_top, default_bottom);
     CHECK(default_top[0] > 0.5f && default_top[0] <= 1.0f && default_bottom[2] > 0.5f);
-    OK(cadr_renderer_set_background(renderer, top, bottom));
+    OK(set_background(renderer, top, bottom));
     OK(cadr_renderer_render(renderer, b->scene, &camera, &stats));
     OK(cadr_renderer_read_pixels(renderer, second, W * H * 4));
     corner = second; /* top-left */
     CHECK(corner[0] > 240 && corner[1] < 10 && corner[2] < 15);
     corner = second + 4 * (W * (H - 1)); /* bottom-left */
     CHECK(corner[0] < 15 && corner[1] < 10 && corner[2] > 240);
-    EXPECT(cadr_renderer_set_background(renderer, too_bright, bottom), CADR_RESULT_INVALID_ARGUMENT);
+    EXPECT(set_background(renderer, too_bright, bottom), CADR_RESULT_INVALID_ARGUMENT);
     MESSAGE_HAS("background top colour");
-    EXPECT(cadr_renderer_set_background(renderer, top, not_finite), CADR_RESULT_INVALID_ARGUMENT);
+    EXPECT(set_background(renderer, top, not_finite), CADR_RESULT_INVALID_ARGUMENT);
     MESSAGE_HAS("background bottom colour");
-    EXPECT(cadr_renderer_set_background(renderer, NULL, bottom), CADR_RESULT_NULL_ARGUMENT);
-    MESSAGE_HAS("top_rgb");
-    EXPECT(cadr_renderer_background(renderer, read_top, NULL), CADR_RESULT_NULL_ARGUMENT);
-    OK(cadr_renderer_background(renderer, read_top, read_bottom));
+    get_background(renderer, read_top, read_bottom);
     CHECK(read_top[0] == 1.0f && read_top[2] == 0.0f && read_bottom[2] == 1.0f);
-    OK(cadr_renderer_set_background(renderer, default_top, default_bottom));
+    OK(set_background(renderer, default_top, default_bottom));
     OK(cadr_renderer_render(renderer, b->scene, &camera, &stats));
     OK(cadr_renderer_read_pixels(renderer, second, W * H * 4));
     CHECK(pixel_difference(first, second, W * H * 4) == 0);
@@ -1069,22 +1222,22 @@ static void test_renderer(CadrContext context, struct Built *b) {
    * the rest of the picture and picks exactly; one sample again draws the first picture. */
   {
     uint32_t samples = 0, offered = 0, highest = 1, bit, differing;
-    CadrPickResult picked = {NULL, 0};
-    OK(cadr_renderer_msaa(renderer, &samples, &offered));
+    CadrPickResult picked = {sizeof(struct CadrPickResult), NULL, 0};
+    samples = settings_of(renderer).msaa_samples;
+    offered = capabilities_of(renderer).msaa_sample_counts;
     CHECK(samples == 1 && (offered & 1u) != 0);
-    OK(cadr_renderer_msaa(renderer, NULL, NULL));
     for (bit = 2; bit <= 64; bit <<= 1) {
       if (offered & bit) {
         highest = bit;
       }
     }
     CHECK(highest >= 4); /* lavapipe offers 4x, GPUs more */
-    EXPECT(cadr_renderer_set_msaa(renderer, 3), CADR_RESULT_INVALID_ARGUMENT);
+    EXPECT(SET(renderer, msaa_samples, 3), CADR_RESULT_INVALID_ARGUMENT);
     MESSAGE_HAS("MSAA 3x");
-    OK(cadr_renderer_msaa(renderer, &samples, NULL));
+    samples = settings_of(renderer).msaa_samples;
     CHECK(samples == 1);
-    OK(cadr_renderer_set_msaa(renderer, highest));
-    OK(cadr_renderer_msaa(renderer, &samples, NULL));
+    OK(SET(renderer, msaa_samples, highest));
+    samples = settings_of(renderer).msaa_samples;
     CHECK(samples == highest);
     OK(cadr_renderer_render(renderer, b->scene, &camera, &stats));
     OK(cadr_renderer_read_pixels(renderer, second, W * H * 4));
@@ -1093,7 +1246,7 @@ static void test_renderer(CadrContext context, struct Built *b) {
     OK(cadr_renderer_pick(renderer, b->scene, &camera, W / 2, H / 2, &picked));
     CHECK(picked.hit_count == 1);
     cadr_pick_result_free(&picked);
-    OK(cadr_renderer_set_msaa(renderer, 1));
+    OK(SET(renderer, msaa_samples, 1));
     OK(cadr_renderer_render(renderer, b->scene, &camera, &stats));
     OK(cadr_renderer_read_pixels(renderer, second, W * H * 4));
     CHECK(pixel_difference(first, second, W * H * 4) == 0);
@@ -1102,20 +1255,19 @@ static void test_renderer(CadrContext context, struct Built *b) {
   /* Dashed hidden lines: off by default; on, the hidden-line picture gains dashes. */
   {
     bool dashed = true;
-    OK(cadr_renderer_dashed_hidden_lines(renderer, &dashed));
+    dashed = settings_of(renderer).dashed_hidden_lines;
     CHECK(!dashed);
-    EXPECT(cadr_renderer_dashed_hidden_lines(renderer, NULL), CADR_RESULT_NULL_ARGUMENT);
-    OK(cadr_renderer_set_shade_mode(renderer, CADR_SHADE_HIDDEN_LINE));
+    OK(SET(renderer, shade_mode, CADR_SHADE_HIDDEN_LINE));
     OK(cadr_renderer_render(renderer, b->scene, &camera, &stats));
     OK(cadr_renderer_read_pixels(renderer, first, W * H * 4));
-    OK(cadr_renderer_set_dashed_hidden_lines(renderer, true));
-    OK(cadr_renderer_dashed_hidden_lines(renderer, &dashed));
+    OK(SET(renderer, dashed_hidden_lines, true));
+    dashed = settings_of(renderer).dashed_hidden_lines;
     CHECK(dashed);
     OK(cadr_renderer_render(renderer, b->scene, &camera, &stats));
     OK(cadr_renderer_read_pixels(renderer, second, W * H * 4));
     CHECK(pixel_difference(first, second, W * H * 4) > 0);
-    OK(cadr_renderer_set_dashed_hidden_lines(renderer, false));
-    OK(cadr_renderer_set_shade_mode(renderer, CADR_SHADE_SOLID));
+    OK(SET(renderer, dashed_hidden_lines, false));
+    OK(SET(renderer, shade_mode, CADR_SHADE_SOLID));
     OK(cadr_renderer_render(renderer, b->scene, &camera, &stats));
     OK(cadr_renderer_read_pixels(renderer, first, W * H * 4));
   }
@@ -1125,7 +1277,7 @@ static void test_renderer(CadrContext context, struct Built *b) {
   {
     CadrScene engine = NULL;
     CadrNode engine_root = 0;
-    struct CadrLoadResult loaded;
+    struct CadrLoadResult loaded = {.size = sizeof(struct CadrLoadResult)};
     struct CadrBounds bounds;
     struct CadrCamera engine_camera;
     const double front[3] = {0.4, 0.5, 1.0};
@@ -1133,28 +1285,28 @@ static void test_renderer(CadrContext context, struct Built *b) {
     OK(cadr_scene_create(&engine));
     OK(cadr_scene_root(engine, &engine_root));
     memset(&loaded, 0, sizeof loaded);
+    loaded.size = sizeof loaded;
     OK(cadr_scene_load(engine,
                        "/usr/share/assimp/models/glTF2/2CylinderEngine-glTF-Binary/2CylinderEngine.glb",
                        engine_root, &loaded));
     cadr_load_result_free(&loaded);
     OK(cadr_scene_bounds(engine, &bounds));
     OK(cadr_camera_fit(&bounds, (double)W / H, front, &engine_camera));
-    OK(cadr_renderer_silhouettes(renderer, &on));
+    on = settings_of(renderer).silhouettes;
     CHECK(on);
-    EXPECT(cadr_renderer_silhouettes(renderer, NULL), CADR_RESULT_NULL_ARGUMENT);
-    OK(cadr_renderer_set_shade_mode(renderer, CADR_SHADE_HIDDEN_LINE));
+    OK(SET(renderer, shade_mode, CADR_SHADE_HIDDEN_LINE));
     OK(cadr_renderer_render(renderer, engine, &engine_camera, &stats));
     OK(cadr_renderer_read_pixels(renderer, second, W * H * 4));
-    OK(cadr_renderer_set_silhouettes(renderer, false));
-    OK(cadr_renderer_silhouettes(renderer, &on));
+    OK(SET(renderer, silhouettes, false));
+    on = settings_of(renderer).silhouettes;
     CHECK(!on);
     OK(cadr_renderer_render(renderer, engine, &engine_camera, &stats));
     OK(cadr_renderer_read_pixels(renderer, first, W * H * 4));
     CHECK(pixel_difference(first, second, W * H * 4) > 20);
-    OK(cadr_renderer_set_shade_mode(renderer, CADR_SHADE_SOLID));
+    OK(SET(renderer, shade_mode, CADR_SHADE_SOLID));
     OK(cadr_renderer_render(renderer, engine, &engine_camera, &stats));
     OK(cadr_renderer_read_pixels(renderer, first, W * H * 4));
-    OK(cadr_renderer_set_silhouettes(renderer, true));
+    OK(SET(renderer, silhouettes, true));
     OK(cadr_renderer_render(renderer, engine, &engine_camera, &stats));
     OK(cadr_renderer_read_pixels(renderer, second, W * H * 4));
     CHECK(pixel_difference(first, second, W * H * 4) == 0);
@@ -1172,18 +1324,17 @@ static void test_renderer(CadrContext context, struct Built *b) {
     int orange = 0;
     uint8_t *tinted = (uint8_t *)malloc(W * H * 4);
     CHECK(tinted != NULL);
-    OK(cadr_renderer_highlight_style(renderer, &style));
+    style = settings_of(renderer).highlight_style;
     CHECK(style == CADR_HIGHLIGHT_TINT);
-    EXPECT(cadr_renderer_highlight_style(renderer, NULL), CADR_RESULT_NULL_ARGUMENT);
-    EXPECT(cadr_renderer_set_highlight_style(renderer, 7), CADR_RESULT_INVALID_ARGUMENT);
-    MESSAGE_HAS("highlight style 7");
+    EXPECT(SET(renderer, highlight_style, 7), CADR_RESULT_INVALID_ARGUMENT);
+    MESSAGE_HAS("settings.highlight_style 7");
     OK(cadr_scene_set_flags(b->scene, b->geo,
                             CADR_NODE_VISIBLE | CADR_NODE_PICKABLE | CADR_NODE_HIGHLIGHTED));
     OK(cadr_renderer_render(renderer, b->scene, &camera, &stats));
     OK(cadr_renderer_read_pixels(renderer, tinted, W * H * 4));
     CHECK(pixel_difference(first, tinted, W * H * 4) > 0);
-    OK(cadr_renderer_set_highlight_style(renderer, CADR_HIGHLIGHT_OUTLINE));
-    OK(cadr_renderer_highlight_style(renderer, &style));
+    OK(SET(renderer, highlight_style, CADR_HIGHLIGHT_OUTLINE));
+    style = settings_of(renderer).highlight_style;
     CHECK(style == CADR_HIGHLIGHT_OUTLINE);
     OK(cadr_renderer_render(renderer, b->scene, &camera, &stats));
     OK(cadr_renderer_read_pixels(renderer, second, W * H * 4));
@@ -1197,7 +1348,7 @@ static void test_renderer(CadrContext context, struct Built *b) {
     OK(cadr_renderer_render(renderer, b->scene, &camera, &stats));
     OK(cadr_renderer_read_pixels(renderer, second, W * H * 4));
     CHECK(pixel_difference(first, second, W * H * 4) == 0);
-    OK(cadr_renderer_set_highlight_style(renderer, CADR_HIGHLIGHT_TINT));
+    OK(SET(renderer, highlight_style, CADR_HIGHLIGHT_TINT));
     free(tinted);
   }
 
@@ -1211,47 +1362,44 @@ static void test_renderer(CadrContext context, struct Built *b) {
     uint32_t width = 0;
     size_t i;
     int blue_pixels = 0, narrow = 0, wide = 0;
-    OK(cadr_renderer_edge_color(renderer, rgb));
+    get_rgb(renderer, offsetof(CadrRendererSettings, edge_color), rgb);
     CHECK(rgb[0] > 0.05f && rgb[0] < 0.07f && rgb[2] > 0.08f && rgb[2] < 0.1f);
-    OK(cadr_renderer_highlight_color(renderer, rgb));
+    get_rgb(renderer, offsetof(CadrRendererSettings, highlight_color), rgb);
     CHECK(rgb[0] == 1.0f && rgb[1] > 0.5f && rgb[1] < 0.6f);
-    OK(cadr_renderer_outline_width(renderer, &width));
+    width = settings_of(renderer).outline_width;
     CHECK(width == 2);
-    EXPECT(cadr_renderer_edge_color(renderer, NULL), CADR_RESULT_NULL_ARGUMENT);
-    EXPECT(cadr_renderer_set_highlight_color(renderer, NULL), CADR_RESULT_NULL_ARGUMENT);
-    EXPECT(cadr_renderer_outline_width(renderer, NULL), CADR_RESULT_NULL_ARGUMENT);
-    EXPECT(cadr_renderer_set_edge_color(renderer, too_bright), CADR_RESULT_INVALID_ARGUMENT);
+    EXPECT(SET_RGB(renderer, edge_color, too_bright), CADR_RESULT_INVALID_ARGUMENT);
     MESSAGE_HAS("edge colour");
-    EXPECT(cadr_renderer_set_outline_width(renderer, 9), CADR_RESULT_INVALID_ARGUMENT);
+    EXPECT(SET(renderer, outline_width, 9), CADR_RESULT_INVALID_ARGUMENT);
     MESSAGE_HAS("outline width 9");
-    EXPECT(cadr_renderer_set_outline_width(renderer, 0), CADR_RESULT_INVALID_ARGUMENT);
-    OK(cadr_renderer_outline_width(renderer, &width));
+    EXPECT(SET(renderer, outline_width, 0), CADR_RESULT_INVALID_ARGUMENT);
+    width = settings_of(renderer).outline_width;
     CHECK(width == 2);
 
-    OK(cadr_renderer_set_edge_color(renderer, blue));
-    OK(cadr_renderer_edge_color(renderer, rgb));
+    OK(SET_RGB(renderer, edge_color, blue));
+    get_rgb(renderer, offsetof(CadrRendererSettings, edge_color), rgb);
     CHECK(rgb[0] == 0.0f && rgb[1] == 0.0f && rgb[2] == 1.0f);
-    OK(cadr_renderer_set_shade_mode(renderer, CADR_SHADE_EDGES));
+    OK(SET(renderer, shade_mode, CADR_SHADE_EDGES));
     OK(cadr_renderer_render(renderer, b->scene, &camera, &stats));
     OK(cadr_renderer_read_pixels(renderer, second, W * H * 4));
     for (i = 0; i < (size_t)W * H * 4; i += 4) {
       blue_pixels += second[i] == 0 && second[i + 1] == 0 && second[i + 2] == 255;
     }
     CHECK(blue_pixels > 10);
-    OK(cadr_renderer_set_shade_mode(renderer, CADR_SHADE_SOLID));
+    OK(SET(renderer, shade_mode, CADR_SHADE_SOLID));
 
-    OK(cadr_renderer_set_highlight_color(renderer, green));
-    OK(cadr_renderer_set_highlight_style(renderer, CADR_HIGHLIGHT_OUTLINE));
+    OK(SET_RGB(renderer, highlight_color, green));
+    OK(SET(renderer, highlight_style, CADR_HIGHLIGHT_OUTLINE));
     OK(cadr_scene_set_flags(b->scene, b->geo,
                             CADR_NODE_VISIBLE | CADR_NODE_PICKABLE | CADR_NODE_HIGHLIGHTED));
-    OK(cadr_renderer_set_outline_width(renderer, 1));
+    OK(SET(renderer, outline_width, 1));
     OK(cadr_renderer_render(renderer, b->scene, &camera, &stats));
     OK(cadr_renderer_read_pixels(renderer, second, W * H * 4));
     for (i = 0; i < (size_t)W * H * 4; i += 4) {
       narrow += second[i] == 0 && second[i + 1] == 255 && second[i + 2] == 0;
     }
-    OK(cadr_renderer_set_outline_width(renderer, 4));
-    OK(cadr_renderer_outline_width(renderer, &width));
+    OK(SET(renderer, outline_width, 4));
+    width = settings_of(renderer).outline_width;
     CHECK(width == 4);
     OK(cadr_renderer_render(renderer, b->scene, &camera, &stats));
     OK(cadr_renderer_read_pixels(renderer, second, W * H * 4));
@@ -1265,11 +1413,11 @@ static void test_renderer(CadrContext context, struct Built *b) {
     {
       const float edges[3] = {0.06f, 0.07f, 0.09f};
       const float orange[3] = {1.0f, 0.55f, 0.05f};
-      OK(cadr_renderer_set_edge_color(renderer, edges));
-      OK(cadr_renderer_set_highlight_color(renderer, orange));
+      OK(SET_RGB(renderer, edge_color, edges));
+      OK(SET_RGB(renderer, highlight_color, orange));
     }
-    OK(cadr_renderer_set_outline_width(renderer, 2));
-    OK(cadr_renderer_set_highlight_style(renderer, CADR_HIGHLIGHT_TINT));
+    OK(SET(renderer, outline_width, 2));
+    OK(SET(renderer, highlight_style, CADR_HIGHLIGHT_TINT));
     OK(cadr_scene_set_flags(b->scene, b->geo, CADR_NODE_VISIBLE | CADR_NODE_PICKABLE));
     OK(cadr_renderer_render(renderer, b->scene, &camera, &stats));
     OK(cadr_renderer_read_pixels(renderer, second, W * H * 4));
@@ -1281,11 +1429,10 @@ static void test_renderer(CadrContext context, struct Built *b) {
     bool on = true;
     size_t i;
     int lighter = 0;
-    OK(cadr_renderer_ssao(renderer, &on));
+    on = settings_of(renderer).ssao;
     CHECK(!on);
-    EXPECT(cadr_renderer_ssao(renderer, NULL), CADR_RESULT_NULL_ARGUMENT);
-    OK(cadr_renderer_set_ssao(renderer, true));
-    OK(cadr_renderer_ssao(renderer, &on));
+    OK(SET(renderer, ssao, true));
+    on = settings_of(renderer).ssao;
     CHECK(on);
     OK(cadr_renderer_render(renderer, b->scene, &camera, &stats));
     OK(cadr_renderer_read_pixels(renderer, second, W * H * 4));
@@ -1295,7 +1442,7 @@ static void test_renderer(CadrContext context, struct Built *b) {
       lighter += after > before + 3;
     }
     CHECK(lighter == 0);
-    OK(cadr_renderer_set_ssao(renderer, false));
+    OK(SET(renderer, ssao, false));
     OK(cadr_renderer_render(renderer, b->scene, &camera, &stats));
     OK(cadr_renderer_read_pixels(renderer, second, W * H * 4));
     CHECK(pixel_difference(first, second, W * H * 4) == 0);
@@ -1306,7 +1453,7 @@ static void test_renderer(CadrContext context, struct Built *b) {
   {
     CadrScene textured = NULL;
     CadrNode textured_root = 0;
-    struct CadrLoadResult loaded;
+    struct CadrLoadResult loaded = {.size = sizeof(struct CadrLoadResult)};
     struct CadrBounds box;
     struct CadrCamera box_camera;
     const double front[3] = {0.4, 0.5, 1.0};
@@ -1316,24 +1463,24 @@ static void test_renderer(CadrContext context, struct Built *b) {
     OK(cadr_scene_create(&textured));
     OK(cadr_scene_root(textured, &textured_root));
     memset(&loaded, 0, sizeof loaded);
+    loaded.size = sizeof loaded;
     OK(cadr_scene_load(textured,
                        "/usr/share/assimp/models/glTF2/BoxTextured-glTF-Binary/BoxTextured.glb",
                        textured_root, &loaded));
     cadr_load_result_free(&loaded);
     OK(cadr_scene_bounds(textured, &box));
     OK(cadr_camera_fit(&box, (double)W / H, front, &box_camera));
-    OK(cadr_renderer_textures(renderer, &on));
+    on = settings_of(renderer).textures;
     CHECK(on);
-    EXPECT(cadr_renderer_textures(renderer, NULL), CADR_RESULT_NULL_ARGUMENT);
     OK(cadr_renderer_render(renderer, textured, &box_camera, &stats));
     OK(cadr_renderer_read_pixels(renderer, with, W * H * 4));
-    OK(cadr_renderer_set_textures(renderer, false));
-    OK(cadr_renderer_textures(renderer, &on));
+    OK(SET(renderer, textures, false));
+    on = settings_of(renderer).textures;
     CHECK(!on);
     OK(cadr_renderer_render(renderer, textured, &box_camera, &stats));
     OK(cadr_renderer_read_pixels(renderer, without, W * H * 4));
     CHECK(pixel_difference(with, without, W * H * 4) > 200);
-    OK(cadr_renderer_set_textures(renderer, true));
+    OK(SET(renderer, textures, true));
     OK(cadr_renderer_render(renderer, textured, &box_camera, &stats));
     OK(cadr_renderer_read_pixels(renderer, without, W * H * 4));
     CHECK(pixel_difference(with, without, W * H * 4) == 0);
@@ -1347,17 +1494,16 @@ static void test_renderer(CadrContext context, struct Built *b) {
   /* Picking through translucent parts: off by default; on, the opaque cubes still stop it. */
   {
     bool through = true;
-    CadrPickResult picked = {NULL, 0};
-    OK(cadr_renderer_pick_through_translucent(renderer, &through));
+    CadrPickResult picked = {sizeof(struct CadrPickResult), NULL, 0};
+    through = settings_of(renderer).pick_through_translucent;
     CHECK(!through);
-    EXPECT(cadr_renderer_pick_through_translucent(renderer, NULL), CADR_RESULT_NULL_ARGUMENT);
-    OK(cadr_renderer_set_pick_through_translucent(renderer, true));
-    OK(cadr_renderer_pick_through_translucent(renderer, &through));
+    OK(SET(renderer, pick_through_translucent, true));
+    through = settings_of(renderer).pick_through_translucent;
     CHECK(through);
     OK(cadr_renderer_pick(renderer, b->scene, &camera, W / 2, H / 2, &picked));
     CHECK(picked.hit_count == 1);
     cadr_pick_result_free(&picked);
-    OK(cadr_renderer_set_pick_through_translucent(renderer, false));
+    OK(SET(renderer, pick_through_translucent, false));
   }
 
   /* Resizing. */
@@ -1390,7 +1536,7 @@ static void test_renderer(CadrContext context, struct Built *b) {
 /* Without any plugin library a context still has the built-in techniques, and a renderer
    draws with them. */
 static void test_without_plugins(void) {
-  struct CadrContextOptions options;
+  struct CadrContextOptions options = {.size = sizeof(struct CadrContextOptions)};
   CadrContext context = NULL;
   CadrRenderer renderer = NULL;
   uint32_t count = 0;
@@ -1433,7 +1579,7 @@ int main(void) {
   /* The one-call path, with the time of each of its phases counted from a reset. */
   snprintf(path, sizeof path, "%s/one-call.png", out_dir ? out_dir : "/tmp");
   {
-    struct CadrTimings timings;
+    struct CadrTimings timings = {.size = sizeof(struct CadrTimings)};
     cadr_timings_reset();
     OK(cadr_timings(&timings));
     CHECK(timings.device_ms == 0.0 && timings.first_frame_ms == 0.0 && timings.png_encode_ms == 0.0);
@@ -1457,7 +1603,7 @@ int main(void) {
      * destroyed; with this header's struct, an older host's smaller one (only the fields it
      * knows are written) and a newer host's larger one (what this library does not know is
      * zeroed). */
-    struct CadrMemoryUsage usage;
+    struct CadrMemoryUsage usage = {.size = sizeof(struct CadrMemoryUsage)};
     struct {
       struct CadrMemoryUsage usage;
       uint64_t field_of_a_later_version;

@@ -1,6 +1,7 @@
 /* What the C test programs (threads.c, host_vulkan.c) check cadr's calls with: OK for a call
  * that must succeed, CHECK for a condition, both exiting non-zero with the place and cadr's last
- * error message on the first failure; and pixel_difference to compare pictures. */
+ * error message on the first failure; set_frames_in_flight; and pixel_difference to compare
+ * pictures. */
 #ifndef CADR_TEST_CHECKS_H
 #define CADR_TEST_CHECKS_H
 
@@ -44,6 +45,20 @@ static inline const char *last_error(void) {
       exit(1);                                                                     \
     }                                                                              \
   } while (0)
+
+/* Sets a renderer's frames in flight as a host does: reads its settings, changes the one,
+ * applies them. */
+static inline enum CadrResult set_frames_in_flight(CadrRenderer renderer, uint32_t frames) {
+  CadrRendererSettings settings;
+  enum CadrResult result;
+  settings.size = sizeof settings;
+  result = cadr_renderer_settings(renderer, &settings);
+  if (result != CADR_RESULT_OK) {
+    return result;
+  }
+  settings.frames_in_flight = frames;
+  return cadr_renderer_apply_settings(renderer, &settings);
+}
 
 /* How many pixels of two RGBA8 pictures of `size` bytes differ by more than 30 in R + G + B. */
 static inline unsigned pixel_difference(const uint8_t *a, const uint8_t *b, size_t size) {

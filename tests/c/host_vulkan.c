@@ -264,12 +264,12 @@ static void draw_demo(CadrContext context, CadrScene scene, uint8_t *pixels) {
   CadrRenderer renderer = 0;
   struct CadrBounds bounds;
   struct CadrCamera camera;
-  struct CadrFrameStats stats;
+  struct CadrFrameStats stats = {.size = sizeof(struct CadrFrameStats)};
   int frame;
   OK(cadr_scene_bounds(scene, &bounds));
   OK(cadr_camera_fit(&bounds, (double)W / H, NULL, &camera));
   OK(cadr_renderer_create(context, W, H, &renderer));
-  OK(cadr_renderer_set_frames_in_flight(renderer, 3));
+  OK(set_frames_in_flight(renderer, 3));
   for (frame = 0; frame < 4; ++frame) {
     OK(cadr_renderer_render(renderer, scene, &camera, &stats));
   }
@@ -287,18 +287,18 @@ int main(void) {
   VkPhysicalDevice physicals[8], physical = VK_NULL_HANDLE;
   uint32_t physical_count = 8, family = 0, i;
   struct Features supported, enabled;
-  struct CadrVulkanRequirements requirements;
+  struct CadrVulkanRequirements requirements = {.size = sizeof(struct CadrVulkanRequirements)};
   float priority = 1.0f;
   VkDeviceQueueCreateInfo queue_info;
   VkDeviceCreateInfo device_info;
   VkDevice device;
   struct QueueLock lock;
-  struct CadrHostVulkan host;
-  struct CadrContextOptions options;
+  struct CadrHostVulkan host = {.size = sizeof(struct CadrHostVulkan)};
+  struct CadrContextOptions options = {.size = sizeof(struct CadrContextOptions)};
   CadrContext lent = 0, own = 0;
   CadrScene scene = 0;
   CadrNode root = 0;
-  struct CadrLoadResult loaded;
+  struct CadrLoadResult loaded = {.size = sizeof(struct CadrLoadResult)};
   uint64_t errors = 99;
 
   memset(&app, 0, sizeof app);
@@ -339,6 +339,7 @@ int main(void) {
   /* Every required feature (the host must know each), and the optional ones it knows where the
    * device has them. */
   memset(&requirements, 0, sizeof requirements);
+  requirements.size = sizeof requirements;
   requirements.size = sizeof requirements;
   OK(cadr_vulkan_requirements(&requirements));
   CHECK(requirements.api_version == VK_API_VERSION_1_3);
@@ -394,6 +395,7 @@ int main(void) {
   lock.held = 0;
   memset(&host, 0, sizeof host);
   host.size = sizeof host;
+  host.size = sizeof host;
   host.get_instance_proc_addr = (CadrGetInstanceProcAddr)vkGetInstanceProcAddr;
   host.instance = instance;
   host.instance_extensions = instance_extensions;
@@ -434,17 +436,18 @@ int main(void) {
     /* Frames into the host's own image: cadr's blit waits for the host's `ready` and signals
      * `done`, which the host's copy waits for; the image holds the renderer's picture. */
     struct Handover h;
-    struct CadrHostImage image;
+    struct CadrHostImage image = {.size = sizeof(struct CadrHostImage)};
     static uint8_t picture[W * H * 4];
     const uint8_t *handed;
     CadrRenderer renderer = 0;
     struct CadrBounds bounds;
     struct CadrCamera camera;
-    struct CadrFrameStats stats;
+    struct CadrFrameStats stats = {.size = sizeof(struct CadrFrameStats)};
     VkQueue queue;
     vkGetDeviceQueue(device, family, 0, &queue);
     handover_create(&h, physical, device, family);
     memset(&image, 0, sizeof image);
+    image.size = sizeof image;
     image.size = sizeof image;
     image.image = (uint64_t)(uintptr_t)h.image;
     image.format = VK_FORMAT_BC1_RGB_UNORM_BLOCK; /* compressed: never a blit destination */

@@ -135,7 +135,7 @@ static size_t supported(CadrContext context, enum CadrTechniqueKind kind, const 
   size_t found = 0;
   CADR_CHECK(cadr_context_technique_count(context, &count));
   for (i = 0; i < count && found < capacity; ++i) {
-    struct CadrTechniqueInfo info;
+    struct CadrTechniqueInfo info = {.size = sizeof(struct CadrTechniqueInfo)};
     CADR_CHECK(cadr_context_technique(context, i, &info));
     if (info.kind == kind && info.supported) {
       names[found++] = info.name;
@@ -159,7 +159,7 @@ static size_t valid_selections(CadrContext context, CadrRenderer renderer,
       continue;
     }
     for (j = 0; j < culler_count; ++j) {
-      struct CadrTechniqueSelection selection = {NULL, NULL, submissions[i], cullers[j]};
+      struct CadrTechniqueSelection selection = {sizeof(struct CadrTechniqueSelection), NULL, NULL, submissions[i], cullers[j]};
       if (cadr_renderer_check_techniques(renderer, &selection) == CADR_RESULT_OK) {
         valid[count++] = selection;
       }
@@ -191,14 +191,14 @@ static double growth_percent(unsigned long long before, unsigned long long after
 
 int main(int argc, char **argv) {
   struct Options o = parse(argc, argv);
-  struct CadrContextOptions context_options;
+  struct CadrContextOptions context_options = {.size = sizeof(struct CadrContextOptions)};
   CadrContext context;
   CadrScene scene;
   CadrRenderer renderer;
   CadrNode root, place;
-  struct CadrLoadResult base;
+  struct CadrLoadResult base = {.size = sizeof(struct CadrLoadResult)};
   struct CadrBounds bounds;
-  struct CadrDeviceInfo device;
+  struct CadrDeviceInfo device = {.size = sizeof(struct CadrDeviceInfo)};
   int dgc_left_out;
   struct CadrTechniqueSelection *selections;
   size_t selection_count;
@@ -262,11 +262,11 @@ int main(int argc, char **argv) {
     bool warming = (size_t)iteration < selection_count ||
                    (o.warmup_iterations >= 0 ? iteration < o.warmup_iterations
                                              : elapsed < o.warmup_seconds);
-    struct CadrLoadResult loaded;
+    struct CadrLoadResult loaded = {.size = sizeof(struct CadrLoadResult)};
     struct CadrCamera camera;
-    struct CadrFrameStats stats;
-    struct CadrPickResult picked;
-    struct CadrMemoryUsage usage;
+    struct CadrFrameStats stats = {.size = sizeof(struct CadrFrameStats)};
+    struct CadrPickResult picked = {.size = sizeof(struct CadrPickResult)};
+    struct CadrMemoryUsage usage = {.size = sizeof(struct CadrMemoryUsage)};
     double angle = 0.37 * (double)iteration, matrix[16];
     const double direction[3] = {cos(angle), sin(angle), 0.6};
     unsigned long long resident, heap;

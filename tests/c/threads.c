@@ -58,8 +58,8 @@ static void *draw(void *argument) {
   struct Shared *s = drawer->shared;
   CadrRenderer renderer = s->renderers[drawer->index];
   struct CadrCamera camera;
-  struct CadrFrameStats stats;
-  CadrPickResult picked = {NULL, 0};
+  struct CadrFrameStats stats = {.size = sizeof(struct CadrFrameStats)};
+  CadrPickResult picked = {sizeof(struct CadrPickResult), NULL, 0};
   int frame;
   for (frame = 0; frame < FRAMES; ++frame) {
     orbit_camera(&s->bounds, frame + 17 * drawer->index, &camera);
@@ -112,8 +112,8 @@ static void *edit(void *argument) {
 static void *load(void *argument) {
   struct Shared *s = (struct Shared *)argument;
   CadrNode root = 0;
-  struct CadrLoadResult loaded;
-  struct CadrSceneStatistics statistics;
+  struct CadrLoadResult loaded = {.size = sizeof(struct CadrLoadResult)};
+  struct CadrSceneStatistics statistics = {.size = sizeof(struct CadrSceneStatistics)};
   struct CadrBounds bounds;
   uint64_t instances = 0;
   int step;
@@ -138,9 +138,10 @@ static CadrGeometry cube(CadrScene scene) {
   static const uint32_t indices[] = {0, 2, 1, 0, 3, 2, 4, 5, 6, 4, 6, 7, 0, 1, 5, 0, 5, 4,
                                      2, 3, 7, 2, 7, 6, 1, 2, 6, 1, 6, 5, 0, 4, 7, 0, 7, 3};
   static const struct CadrPart parts[] = {{0, 36, 0, 0}};
-  struct CadrGeometryDesc desc;
+  struct CadrGeometryDesc desc = {.size = sizeof(struct CadrGeometryDesc)};
   CadrGeometry geometry = 0;
   memset(&desc, 0, sizeof desc);
+  desc.size = sizeof desc;
   desc.positions = positions;
   desc.vertex_count = 8;
   desc.indices = indices;
@@ -169,7 +170,7 @@ static void *draw_until_destroyed(void *argument) {
 
 int main(void) {
   struct Shared s;
-  struct CadrContextOptions options;
+  struct CadrContextOptions options = {.size = sizeof(struct CadrContextOptions)};
   struct Drawer drawers[2];
   pthread_t threads[4];
   CadrNode root = 0, geo = 0;
@@ -177,7 +178,7 @@ int main(void) {
   CadrMaterial material = 0;
   uint64_t errors = 99;
   int i;
-  struct CadrMaterialDesc red;
+  struct CadrMaterialDesc red = {.size = sizeof(struct CadrMaterialDesc)};
 
   memset(&s, 0, sizeof s);
   atomic_init(&s.frames_drawn, 0);
@@ -189,6 +190,7 @@ int main(void) {
   OK(cadr_scene_root(s.scene, &root));
   geometry = cube(s.scene);
   memset(&red, 0, sizeof red);
+  red.size = sizeof red;
   red.base_color[0] = 0.8f;
   red.base_color[1] = 0.2f;
   red.base_color[2] = 0.1f;
@@ -210,7 +212,7 @@ int main(void) {
     drawers[i].shared = &s;
     drawers[i].index = i;
   }
-  OK(cadr_renderer_set_frames_in_flight(s.renderers[1], 2));
+  OK(set_frames_in_flight(s.renderers[1], 2));
 
   CHECK(pthread_create(&threads[0], NULL, draw, &drawers[0]) == 0);
   CHECK(pthread_create(&threads[1], NULL, draw, &drawers[1]) == 0);

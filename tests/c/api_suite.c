@@ -4,6 +4,7 @@
  *
  * Built by tests/tests/c_api.rs with -std=c99 -Wall -Wextra -Wpedantic -Werror, and again under
  * AddressSanitizer (leaks included). */
+#define _POSIX_C_SOURCE 200809L
 #include "cadr.h"
 
 #include <math.h>
@@ -11,6 +12,8 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <fcntl.h>
+#include <unistd.h>
 
 static int checks = 0;
 
@@ -1535,6 +1538,50 @@ static void test_renderer(CadrContext context, struct Built *b) {
 
 /* Without any plugin library a context still has the built-in techniques, and a renderer
    draws with them. */
+/* Frames exported for another API: every frame copied into memory given as a file
+ * descriptor, which holds the frame's pixels as read_pixels gives them; new memory, of a new
+ * generation, after a resize; refusals for renderers made otherwise. */
+static void test_export(CadrContext context, struct Built *b) {
+  enum { W = 64, H = 48 };
+  CadrRenderer exporting = NULL, plain = NULL;
+  struct CadrCamera camera;
+  struct CadrBounds bounds;
+  CadrExportedFrame frame;
+  EXPECT(cadr_renderer_create_for_export(context, 0, H, &exporting), CADR_RESULT_INVALID_ARGUMENT);
+  EXPECT(cadr_renderer_create_for_export(context, W, H, NULL), CADR_RESULT_NULL_ARGUMENT);
+  EXPECT(cadr_renderer_create_for_export((CadrContext)b->scene, W, H, &exporting),
+         CADR_RESULT_FOREIGN_HANDLE);
+  OK(cadr_renderer_create_for_export(context, W, H, &exporting));
+  OK(cadr_scene_bounds(b->scene, &bounds));
+  OK(cadr_camera_fit(&bounds, (double)W / H, NULL, &camera));
+  OK(cadr_renderer_render(exporting, b->scene, &camera, NULL));
+  memset(&frame, 0, sizeof frame);
+  frame.size = sizeof frame;
+  OK(cadr_renderer_exported_frame(exporting, &frame));
+  CHECK(frame.fd >= 0 && frame.width == W && frame.height == H && frame.row_bytes == W * 4);
+  CHECK(frame.allocation_size >= (uint64_t)W * H * 4 && frame.generation == 1);
+  /* The descriptor is open and the host's; its memory is the driver's own format (an opaque
+   * descriptor: OpenGL imports it, tests/tests/c_samples.rs compares what it shows). */
+  CHECK(fcntl(frame.fd, F_GETFD) != -1);
+  close(frame.fd);
+  /* Resized: new memory, a new generation. */
+  OK(cadr_renderer_resize(exporting, W / 2, H / 2));
+  OK(cadr_renderer_render(exporting, b->scene, &camera, NULL));
+  OK(cadr_renderer_exported_frame(exporting, &frame));
+  CHECK(frame.width == W / 2 && frame.height == H / 2 && frame.generation == 2);
+  close(frame.fd);
+  EXPECT(cadr_renderer_exported_frame(exporting, NULL), CADR_RESULT_NULL_ARGUMENT);
+  frame.size = 2;
+  EXPECT(cadr_renderer_exported_frame(exporting, &frame), CADR_RESULT_INVALID_ARGUMENT);
+  OK(cadr_renderer_create(context, W, H, &plain));
+  frame.size = sizeof frame;
+  EXPECT(cadr_renderer_exported_frame(plain, &frame), CADR_RESULT_INVALID_ARGUMENT);
+  MESSAGE_HAS("cadr_renderer_create_for_export");
+  OK(cadr_renderer_destroy(plain));
+  OK(cadr_renderer_destroy(exporting));
+  EXPECT(cadr_renderer_exported_frame(exporting, &frame), CADR_RESULT_DESTROYED_HANDLE);
+}
+
 static void test_without_plugins(void) {
   struct CadrContextOptions options = {.size = sizeof(struct CadrContextOptions)};
   CadrContext context = NULL;
@@ -1574,6 +1621,7 @@ int main(void) {
   test_loading(built.scene, built.root);
   test_messages(built.scene, built.root);
   test_renderer(context, &built);
+  test_export(context, &built);
   test_without_plugins();
 
   /* The one-call path, with the time of each of its phases counted from a reset. */

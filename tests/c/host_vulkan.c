@@ -433,6 +433,13 @@ int main(void) {
   CHECK(lock.taken > 0);
   CHECK(lock.held == 0);
   {
+    /* The host did not enable VK_KHR_external_memory_fd: frames cannot be exported. */
+    CadrRenderer exporting = NULL;
+    CHECK(cadr_renderer_create_for_export(lent, W, H, &exporting) == CADR_RESULT_UNSUPPORTED);
+    CHECK(strstr(last_error(), "VK_KHR_external_memory_fd") != NULL);
+    CHECK(exporting == NULL);
+  }
+  {
     /* Frames into the host's own image: cadr's blit waits for the host's `ready` and signals
      * `done`, which the host's copy waits for; the image holds the renderer's picture. */
     struct Handover h;

@@ -1,9 +1,10 @@
 //! The sample programs, built with the strict flags and run: `headless` writes its PNG,
 //! `animate` explodes a scene and reports its costs, and `viewer` runs under Xvfb on lavapipe:
 //! it opens, renders, swaps every technique kind, resizes, and a screenshot of its window
-//! matches the offscreen render of the same view. The Qt sample `qt_viewer`, built with CMake
-//! against the installed package, picks into its model tree, highlights from it, and its view
-//! matches the offscreen render too.
+//! matches the offscreen render of the same view; `gl_view` shows the frames in an OpenGL
+//! window through shared memory (or read back), and its window matches too. The Qt sample
+//! `qt_viewer`, built with CMake against the installed package, picks into its model tree,
+//! highlights from it, and its view matches the offscreen render too.
 #![allow(clippy::unwrap_used)] // Test code: a failed unwrap is a failed test.
 
 use std::io::{BufRead, BufReader, Write};
@@ -347,6 +348,58 @@ fn viewer_under_xvfb_swaps_techniques_resizes_and_shows_the_offscreen_image() {
     );
     // The viewer's window is at 0,0 (no window manager).
     viewer.grab_finish_and_compare(&display, &dir);
+}
+
+/// The OpenGL host takes cadr's frames through memory the two drivers share (Mesa 25's
+/// lavapipe exports it, its llvmpipe imports it): no byte is read back through the CPU, and
+/// its window shows what the offscreen render of the same camera shows.
+#[test]
+fn gl_view_shows_cadrs_frames_in_opengl_through_shared_memory() {
+    let dir = scratch_dir("sample-gl-view");
+    let program = sample("gl_view", &dir, &["-lglfw", "-lGL"]);
+    let display = VirtualDisplay::start();
+    let view = WindowSample::start(
+        "gl_view",
+        Command::new(&program)
+            .args([
+                "gen:demo",
+                "--frames",
+                "8",
+                "--self-test",
+                dir.to_str().unwrap(),
+            ])
+            .env("DISPLAY", &display.name),
+    );
+    view.assert_printed(&[
+        "path: shared memory",
+        "8 frames",
+        "bytes read back per frame: 0",
+    ]);
+    view.grab_finish_and_compare(&display, &dir);
+}
+
+/// Where memory cannot be shared (asked for here), the OpenGL host reads frames back and says
+/// how many bytes that costs; the picture is the same.
+#[test]
+fn gl_view_falls_back_to_reading_frames_back() {
+    let dir = scratch_dir("sample-gl-view-read-back");
+    let program = sample("gl_view", &dir, &["-lglfw", "-lGL"]);
+    let display = VirtualDisplay::start();
+    let view = WindowSample::start(
+        "gl_view",
+        Command::new(&program)
+            .args([
+                "gen:demo",
+                "--frames",
+                "4",
+                "--read-back",
+                "--self-test",
+                dir.to_str().unwrap(),
+            ])
+            .env("DISPLAY", &display.name),
+    );
+    view.assert_printed(&["path: read-back", "bytes read back per frame: 307200"]);
+    view.grab_finish_and_compare(&display, &dir);
 }
 
 #[test]

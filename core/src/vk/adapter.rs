@@ -41,6 +41,9 @@ pub struct Adapter {
     /// buffer device addresses, which it needs); see
     /// [`super::Capabilities::device_generated_commands`].
     pub device_generated_commands: bool,
+    /// Whether it has `VK_KHR_external_memory_fd`; see
+    /// [`super::Capabilities::external_memory_fd`].
+    pub external_memory_fd: bool,
 }
 
 /// The most textures the bindless path binds, whatever the device allows (the frame set
@@ -150,6 +153,9 @@ pub fn enumerate(instance: &Instance) -> VkResult<Vec<Adapter>> {
             geometry_shader: features.geometry_shader == vk::TRUE,
             mesh_shader,
             device_generated_commands: generated_commands,
+            external_memory_fd: super::fault::without_host_memory_faults(|| {
+                has_extension(instance, physical, ash::khr::external_memory_fd::NAME)
+            }),
         });
     }
     Ok(adapters)

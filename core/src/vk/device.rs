@@ -56,6 +56,9 @@ pub struct Capabilities {
     /// `VK_EXT_device_generated_commands` (with `VK_KHR_maintenance5`): the GPU writes
     /// command sequences that a command buffer executes ([`super::dgc`]).
     pub device_generated_commands: bool,
+    /// `VK_KHR_external_memory_fd`: frames can be shared with another API (OpenGL) through
+    /// memory exported as a file descriptor ([`super::FrameExport`]).
+    pub external_memory_fd: bool,
 }
 
 /// How to create a [`Device`].
@@ -107,6 +110,9 @@ pub struct Device {
     debug_utils: Option<ash::ext::debug_utils::Device>,
     /// The commands of `VK_EXT_mesh_shader`, where [`Capabilities::mesh_shader`] is set.
     pub(super) mesh_shader: Option<ash::ext::mesh_shader::Device>,
+    /// The commands of `VK_KHR_external_memory_fd`, where
+    /// [`Capabilities::external_memory_fd`] is set.
+    pub(super) external_memory_fd: Option<ash::khr::external_memory_fd::Device>,
     capabilities: Capabilities,
     facts: DeviceFacts,
     /// Every pipeline is created through it; kept on disk between runs.
@@ -210,6 +216,7 @@ impl Device {
             geometry_shader: core.geometry_shader == vk::TRUE,
             mesh_shader: adapter.mesh_shader,
             device_generated_commands: adapter.device_generated_commands,
+            external_memory_fd: adapter.external_memory_fd,
         };
 
         let raw = create_logical_device(
@@ -343,6 +350,9 @@ impl Device {
         let mesh_shader = capabilities
             .mesh_shader
             .then(|| ash::ext::mesh_shader::Device::new(&instance.raw, &raw));
+        let external_memory_fd = capabilities
+            .external_memory_fd
+            .then(|| ash::khr::external_memory_fd::Device::new(&instance.raw, &raw));
 
         // SAFETY: physical comes from this instance.
         let properties = unsafe { instance.raw.get_physical_device_properties(physical) };
@@ -358,6 +368,7 @@ impl Device {
             lost: Default::default(),
             debug_utils,
             mesh_shader,
+            external_memory_fd,
             capabilities,
             facts,
             pipeline_cache,
@@ -786,6 +797,7 @@ fn host_capabilities(
         device_generated_commands: enabled.device_generated_commands
             && enabled.buffer_device_address
             && adapter.device_generated_commands,
+        external_memory_fd: enabled.has(c"VK_KHR_external_memory_fd") && adapter.external_memory_fd,
     }
 }
 
@@ -859,6 +871,9 @@ fn create_logical_device(
     }
     if capabilities.mesh_shader {
         enabled_extensions.push(ash::ext::mesh_shader::NAME);
+    }
+    if capabilities.external_memory_fd {
+        enabled_extensions.push(ash::khr::external_memory_fd::NAME);
     }
     for wanted in extra_extensions {
         if !enabled_extensions.contains(&wanted.as_c_str()) {

@@ -41,6 +41,7 @@ pub const REQUIREMENTS: Requirements = Requirements {
         c"VK_EXT_device_generated_commands",
         c"VK_KHR_maintenance5",
         c"VK_KHR_swapchain",
+        c"VK_KHR_external_memory_fd",
     ],
     required_features: REQUIRED_FEATURES,
     optional_features: &[

@@ -14,6 +14,7 @@ mod device;
 mod error;
 pub mod fault;
 mod frame_blit;
+mod frame_export;
 pub mod host_memory;
 pub mod host_vulkan;
 mod image;
@@ -36,6 +37,7 @@ pub use command::{record_dispatch, record_fullscreen, resubmit_times_us, Command
 pub use device::{Capabilities, Device, DeviceMemoryUsage, DeviceOptions, RawHandles};
 pub use error::{map_result, VkError, VkResult, VkResultExt};
 pub use frame_blit::{BlitTarget, HostImage, ImageOutput};
+pub use frame_export::FrameExport;
 pub use image::{
     memory_barrier, read_rgba8, record_image_copy, subresource_range, transition, transition_range,
     Image, ImageShape, MultisampledTarget, OffscreenTarget, TexelImage, COLOR_FORMAT, DEPTH_FORMAT,

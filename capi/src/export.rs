@@ -1,0 +1,148 @@
+//! Frames shared with an OpenGL host without a copy through the CPU: a renderer whose every
+//! frame is copied on the GPU into memory exported as a file descriptor, which the host imports
+//! (`GL_EXT_memory_object_fd`) and reads as a pixel buffer.
+
+use cadr_core::vk::{raw, FrameExport, Image};
+
+use crate::args::deliver_sized;
+use crate::context::CadrContext;
+use crate::error::{guard, CadrResult, Failure};
+use crate::renderer::{new_renderer, with_renderer, CadrRenderer, Output};
+
+/// Where a renderer's frames are exported (`cadr_renderer_create_for_export`): the memory
+/// exported, and a count that moves whenever it is replaced by memory of another size.
+pub(crate) struct ExportOutput {
+    export: FrameExport,
+    generation: u64,
+}
+
+impl ExportOutput {
+    /// An export of frames of `width` × `height` pixels.
+    pub(crate) fn new(
+        device: &std::sync::Arc<cadr_core::vk::Device>,
+        (width, height): (u32, u32),
+    ) -> Result<Self, Failure> {
+        Ok(Self {
+            export: FrameExport::new(device, raw::Extent2D { width, height })?,
+            generation: 1,
+        })
+    }
+
+    /// Copies `frame` into the exported memory (new memory, and a new generation, when the
+    /// frame's size changed) and waits for the copy.
+    pub(crate) fn copy(
+        &mut self,
+        device: &std::sync::Arc<cadr_core::vk::Device>,
+        frame: &Image,
+    ) -> Result<(), Failure> {
+        if frame.extent() != self.export.extent() {
+            self.export = FrameExport::new(device, frame.extent())?;
+            self.generation += 1;
+        }
+        Ok(self.export.copy(frame)?)
+    }
+}
+
+/// The memory a renderer's frames are exported into (`cadr_renderer_exported_frame`). After
+/// each `cadr_renderer_render` it holds that frame: `height` rows of `row_bytes` bytes, the top
+/// row first, 4 bytes per pixel (R, G, B, A, 8 bits each, as `cadr_renderer_read_pixels` gives
+/// them), from offset 0.
+///
+/// The struct grows by appending fields: the host sets `size` to `sizeof(CadrExportedFrame)`;
+/// cadr fills the fields within it and zeroes those of a newer header it does not know.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default)]
+pub struct CadrExportedFrame {
+    /// `sizeof(CadrExportedFrame)`, set by the host.
+    pub size: u32,
+    /// A new POSIX file descriptor of the memory (`VK_EXTERNAL_MEMORY_HANDLE_TYPE_OPAQUE_FD_BIT`),
+    /// the host's: import it (`glImportMemoryFdEXT` with `GL_HANDLE_TYPE_OPAQUE_FD_EXT` takes
+    /// it) or close it.
+    pub fd: i32,
+    /// The memory's size in bytes, as the importer is told it (at least
+    /// `row_bytes × height`).
+    pub allocation_size: u64,
+    /// The frame's width in pixels.
+    pub width: u32,
+    /// The frame's height in pixels.
+    pub height: u32,
+    /// Bytes from one row to the next (`width × 4`).
+    pub row_bytes: u32,
+    /// Counts the memories exported so far: it moves when the renderer's size changed and its
+    /// frames went to new memory, which the host then imports in place of the old one (whose
+    /// frames no longer change).
+    pub generation: u64,
+}
+
+/// Creates an offscreen renderer of `width` × `height` pixels whose every frame
+/// (`cadr_renderer_render`) is copied on the GPU into memory exported as a file descriptor
+/// (`VK_KHR_external_memory_fd`), for an OpenGL host to import once and read as a pixel
+/// buffer: no frame passes through the CPU. `cadr_renderer_render` returns once the copy is
+/// done, so the host reads the frame after it without a semaphore; the renderer starts with 1
+/// frame in flight. `cadr_renderer_exported_frame` gives the memory.
+///
+/// Returns as `cadr_renderer_create`, and `CADR_RESULT_UNSUPPORTED` where the device (or the
+/// host that lent it) lacks `VK_KHR_external_memory_fd` or cannot export a buffer's memory:
+/// read frames back with `cadr_renderer_read_pixels` instead.
+/// Ownership: as `cadr_renderer_create`. Thread-safety: as `cadr_renderer_create`.
+///
+/// # Safety
+/// `renderer` is null or writable.
+#[no_mangle]
+pub unsafe extern "C" fn cadr_renderer_create_for_export(
+    context: CadrContext,
+    width: u32,
+    height: u32,
+    renderer: *mut CadrRenderer,
+) -> CadrResult {
+    guard(|| new_renderer(context, (width, height), Output::Export, renderer))
+}
+
+/// Writes the memory the renderer's frames are exported into, with a new file descriptor of
+/// it, into `*frame` (up to the `frame->size` the host set). Call it once, import the memory,
+/// and again when a frame's `generation` differs from the imported one (after a resize).
+///
+/// Returns `CADR_RESULT_OK`, `CADR_RESULT_NULL_ARGUMENT`, `CADR_RESULT_INVALID_ARGUMENT` (a
+/// renderer not made by `cadr_renderer_create_for_export`, or a `size` below 4),
+/// `CADR_RESULT_VULKAN` or a handle error. Ownership: the file descriptor is the host's; the
+/// memory stays cadr's until the renderer is destroyed or resized (an imported copy of it
+/// stays valid for the importer). Thread-safety: as `cadr_renderer_create`.
+///
+/// # Safety
+/// `frame` is null or writable for its `size`.
+#[no_mangle]
+pub unsafe extern "C" fn cadr_renderer_exported_frame(
+    renderer: CadrRenderer,
+    frame: *mut CadrExportedFrame,
+) -> CadrResult {
+    guard(|| {
+        crate::args::non_null(frame, "frame")?;
+        let value = with_renderer(renderer, |state| {
+            let Some(output) = &state.frame_export else {
+                return Err(Failure::invalid(
+                    "the renderer was not made to export its frames (cadr_renderer_create_for_export)",
+                ));
+            };
+            let extent = output.export.extent();
+            Ok(CadrExportedFrame {
+                size: std::mem::size_of::<CadrExportedFrame>() as u32,
+                fd: output.export.file_descriptor()?,
+                allocation_size: output.export.allocation_size(),
+                width: extent.width,
+                height: extent.height,
+                row_bytes: extent.width * 4,
+                generation: output.generation,
+            })
+        })?;
+        // SAFETY: null or writable for its size (the caller's contract).
+        let delivered = unsafe { deliver_sized(frame, "frame", value) };
+        if delivered.is_err() {
+            // The descriptor never reached the host: close it here.
+            // SAFETY: the descriptor was just made for this call and is owned by no one else.
+            drop(unsafe {
+                <std::os::fd::OwnedFd as std::os::fd::FromRawFd>::from_raw_fd(value.fd)
+            });
+        }
+        delivered
+    })
+}

@@ -1,0 +1,237 @@
+//! Sharing finished frames with another graphics API on the same device (an OpenGL host)
+//! without a copy through the CPU: every frame is copied on the GPU into a buffer whose memory
+//! is exported as a file descriptor (`VK_KHR_external_memory_fd`), which the host imports once
+//! (`GL_EXT_memory_object_fd`) and reads as a pixel buffer. The copy is waited for before the
+//! frame is handed over, so the host needs no semaphore (drivers such as lavapipe offer none
+//! to share); its pixels are tightly packed RGBA8 rows, the top row first, as
+//! `Renderer::read_rgba8` gives them.
+
+use std::sync::Arc;
+
+use ash::vk;
+
+use super::command::CommandContext;
+use super::device::Device;
+use super::error::{VkError, VkResult, VkResultExt};
+use super::host_memory::core_callbacks as host_callbacks;
+use super::image::{Image, COLOR_FORMAT};
+
+/// The handle type of the exported memory: a POSIX file descriptor of the driver's own kind,
+/// which another API of the same driver family imports.
+const HANDLE_TYPE: vk::ExternalMemoryHandleTypeFlags = vk::ExternalMemoryHandleTypeFlags::OPAQUE_FD;
+
+/// Bytes the buffer has beyond the picture: an importer may want a buffer's memory to reach
+/// past its end (llvmpipe reads buffers in blocks and wants 48 bytes more).
+const IMPORTER_SLACK: u64 = 4096;
+
+/// A buffer in memory of its own that can be exported, with the frame copied into it.
+pub struct FrameExport {
+    device: Arc<Device>,
+    buffer: vk::Buffer,
+    memory: vk::DeviceMemory,
+    /// The memory's size (what an importer is told; at least the picture's bytes).
+    allocation_size: u64,
+    extent: vk::Extent2D,
+    commands: CommandContext,
+}
+
+impl FrameExport {
+    /// A buffer for frames of `extent`, refused where the device cannot export memory as a file
+    /// descriptor.
+    pub fn new(device: &Arc<Device>, extent: vk::Extent2D) -> VkResult<Self> {
+        let unsupported = |reason: &str| VkError::Unsupported {
+            device: device.adapter().name.clone(),
+            reason: reason.to_owned(),
+        };
+        if device.external_memory_fd.is_none() {
+            return Err(unsupported(
+                "exporting frames needs VK_KHR_external_memory_fd, which this device lacks (or the host did not enable)",
+            ));
+        }
+        let usage = vk::BufferUsageFlags::TRANSFER_DST;
+        if !exportable(device, usage) {
+            return Err(unsupported(
+                "the driver cannot export a transfer buffer's memory as a file descriptor",
+            ));
+        }
+        let size = u64::from(extent.width) * u64::from(extent.height) * 4 + IMPORTER_SLACK;
+        let mut external = vk::ExternalMemoryBufferCreateInfo::default().handle_types(HANDLE_TYPE);
+        let info = vk::BufferCreateInfo::default()
+            .size(size)
+            .usage(usage)
+            .sharing_mode(vk::SharingMode::EXCLUSIVE)
+            .push_next(&mut external);
+        // SAFETY: info and its chain are valid and live until the call returns.
+        let buffer =
+            unsafe { device.raw.create_buffer(&info, host_callbacks()) }.or_vk("vkCreateBuffer")?;
+        let (memory, allocation_size) = match allocate_exportable(device, buffer) {
+            Ok(allocated) => allocated,
+            Err(error) => {
+                // SAFETY: the buffer was just created, is unused and bound to nothing.
+                unsafe { device.raw.destroy_buffer(buffer, host_callbacks()) };
+                return Err(error);
+            }
+        };
+        let export = Self {
+            device: Arc::clone(device),
+            buffer,
+            memory,
+            allocation_size,
+            extent,
+            commands: CommandContext::new(device, "frame export commands")?,
+        };
+        device.set_name(buffer, "exported frame");
+        // SAFETY: the memory was allocated for this buffer (dedicated) and is bound to nothing.
+        unsafe { device.raw.bind_buffer_memory(buffer, memory, 0) }.or_vk("vkBindBufferMemory")?;
+        Ok(export)
+    }
+
+    /// The size of the frames it holds.
+    pub fn extent(&self) -> vk::Extent2D {
+        self.extent
+    }
+
+    /// The exported memory's size in bytes.
+    pub fn allocation_size(&self) -> u64 {
+        self.allocation_size
+    }
+
+    /// A new file descriptor of the exported memory, the caller's to import (which takes it)
+    /// or close.
+    pub fn file_descriptor(&self) -> VkResult<i32> {
+        let Some(loader) = &self.device.external_memory_fd else {
+            return Err(VkError::Unsupported {
+                device: self.device.adapter().name.clone(),
+                reason: "VK_KHR_external_memory_fd".into(),
+            });
+        };
+        let info = vk::MemoryGetFdInfoKHR::default()
+            .memory(self.memory)
+            .handle_type(HANDLE_TYPE);
+        // SAFETY: the memory was allocated exportable as this handle type.
+        unsafe { loader.get_memory_fd(&info) }.or_vk("vkGetMemoryFdKHR")
+    }
+
+    /// Copies `frame` (in TRANSFER_SRC_OPTIMAL, of this export's extent and colour format) into
+    /// the exported buffer and waits for the copy: when it returns, the memory holds the frame.
+    pub fn copy(&mut self, frame: &Image) -> VkResult<()> {
+        debug_assert_eq!(frame.format(), COLOR_FORMAT);
+        debug_assert_eq!(frame.extent(), self.extent);
+        let command_buffer = self.commands.begin()?;
+        let region = [vk::BufferImageCopy::default()
+            .image_subresource(
+                vk::ImageSubresourceLayers::default()
+                    .aspect_mask(vk::ImageAspectFlags::COLOR)
+                    .layer_count(1),
+            )
+            .image_extent(vk::Extent3D {
+                width: self.extent.width,
+                height: self.extent.height,
+                depth: 1,
+            })];
+        // SAFETY: recording outside rendering; the frame is in TRANSFER_SRC_OPTIMAL (made
+        // readable by the frame's own barrier, earlier in submission order) and as large as
+        // the buffer holds; both outlive the submission, which is waited for below.
+        unsafe {
+            self.device.raw.cmd_copy_image_to_buffer(
+                command_buffer,
+                frame.raw(),
+                vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
+                self.buffer,
+                &region,
+            )
+        };
+        // The writes made available to the host's API once the copy is waited for.
+        let barrier = [vk::MemoryBarrier2::default()
+            .src_stage_mask(vk::PipelineStageFlags2::COPY)
+            .src_access_mask(vk::AccessFlags2::TRANSFER_WRITE)
+            .dst_stage_mask(vk::PipelineStageFlags2::HOST)
+            .dst_access_mask(vk::AccessFlags2::HOST_READ)];
+        let dependency = vk::DependencyInfo::default().memory_barriers(&barrier);
+        // SAFETY: recording; the barrier is valid.
+        unsafe {
+            self.device
+                .raw
+                .cmd_pipeline_barrier2(command_buffer, &dependency)
+        };
+        self.commands.submit()?;
+        self.commands.wait()
+    }
+}
+
+impl Drop for FrameExport {
+    fn drop(&mut self) {
+        // The last copy may still run; after an error the buffer goes anyway.
+        let _ = self.commands.wait();
+        // SAFETY: no submission uses the buffer any more (waited for above); an importer keeps
+        // its own reference to the memory, which the driver frees when both let go.
+        unsafe {
+            self.device
+                .raw
+                .destroy_buffer(self.buffer, host_callbacks());
+            self.device.raw.free_memory(self.memory, host_callbacks());
+        }
+    }
+}
+
+/// Whether the driver can export the memory of a buffer of `usage` as [`HANDLE_TYPE`].
+fn exportable(device: &Device, usage: vk::BufferUsageFlags) -> bool {
+    let info = vk::PhysicalDeviceExternalBufferInfo::default()
+        .usage(usage)
+        .handle_type(HANDLE_TYPE);
+    let mut properties = vk::ExternalBufferProperties::default();
+    // SAFETY: the physical device belongs to the device's instance; both structs are valid.
+    unsafe {
+        device
+            .instance
+            .raw
+            .get_physical_device_external_buffer_properties(
+                device.adapter().physical,
+                &info,
+                &mut properties,
+            )
+    };
+    properties
+        .external_memory_properties
+        .external_memory_features
+        .contains(vk::ExternalMemoryFeatureFlags::EXPORTABLE)
+}
+
+/// Memory of its own for `buffer`, exportable as [`HANDLE_TYPE`], device-local where the
+/// device has such a type; its size.
+fn allocate_exportable(device: &Device, buffer: vk::Buffer) -> VkResult<(vk::DeviceMemory, u64)> {
+    // SAFETY: the buffer belongs to this device.
+    let requirements = unsafe { device.raw.get_buffer_memory_requirements(buffer) };
+    // SAFETY: the physical device belongs to the device's instance.
+    let types = unsafe {
+        device
+            .instance
+            .raw
+            .get_physical_device_memory_properties(device.adapter().physical)
+    };
+    let allowed = |index: usize| requirements.memory_type_bits & (1 << index) != 0;
+    let candidates = types.memory_types_as_slice();
+    let type_index = (0..candidates.len())
+        .filter(|&i| allowed(i))
+        .find(|&i| {
+            candidates[i]
+                .property_flags
+                .contains(vk::MemoryPropertyFlags::DEVICE_LOCAL)
+        })
+        .or_else(|| (0..candidates.len()).find(|&i| allowed(i)))
+        .ok_or_else(|| VkError::Unsupported {
+            device: device.adapter().name.clone(),
+            reason: "no memory type for an exported frame".into(),
+        })?;
+    let mut export = vk::ExportMemoryAllocateInfo::default().handle_types(HANDLE_TYPE);
+    let mut dedicated = vk::MemoryDedicatedAllocateInfo::default().buffer(buffer);
+    let info = vk::MemoryAllocateInfo::default()
+        .allocation_size(requirements.size)
+        .memory_type_index(type_index as u32)
+        .push_next(&mut export)
+        .push_next(&mut dedicated);
+    // SAFETY: info and its chain are valid; the memory type exists and suits the buffer.
+    let memory =
+        unsafe { device.raw.allocate_memory(&info, host_callbacks()) }.or_vk("vkAllocateMemory")?;
+    Ok((memory, requirements.size))
+}

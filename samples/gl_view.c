@@ -14,9 +14,9 @@
  * (DIR/offscreen.png), prints "screenshot ready WxH" and keeps showing that frame until a line
  * arrives on stdin, so that a test can grab the window and compare. */
 #define _POSIX_C_SOURCE 199309L
-#define GLFW_INCLUDE_GLEXT
 #include <GLFW/glfw3.h>
 
+#include "common/gl_frames.h"
 #include "common/sample.h"
 
 #include <math.h>
@@ -26,115 +26,6 @@
 #include <time.h>
 
 enum { WIDTH = 320, HEIGHT = 240 };
-
-/* The OpenGL functions beyond 1.1, loaded through GLFW. */
-struct Gl {
-  PFNGLGENBUFFERSPROC GenBuffers;
-  PFNGLBINDBUFFERPROC BindBuffer;
-  PFNGLDELETEBUFFERSPROC DeleteBuffers;
-  PFNGLGENFRAMEBUFFERSPROC GenFramebuffers;
-  PFNGLBINDFRAMEBUFFERPROC BindFramebuffer;
-  PFNGLFRAMEBUFFERTEXTURE2DPROC FramebufferTexture2D;
-  PFNGLBLITFRAMEBUFFERPROC BlitFramebuffer;
-  PFNGLDELETEFRAMEBUFFERSPROC DeleteFramebuffers;
-  PFNGLTEXSTORAGE2DPROC TexStorage2D;
-  /* GL_EXT_memory_object(_fd); NULL where the driver lacks them. */
-  PFNGLCREATEMEMORYOBJECTSEXTPROC CreateMemoryObjectsEXT;
-  PFNGLDELETEMEMORYOBJECTSEXTPROC DeleteMemoryObjectsEXT;
-  PFNGLIMPORTMEMORYFDEXTPROC ImportMemoryFdEXT;
-  PFNGLBUFFERSTORAGEMEMEXTPROC BufferStorageMemEXT;
-};
-
-#define LOAD(gl, name, type) ((gl)->name = (type)glfwGetProcAddress("gl" #name))
-
-static int load_gl(struct Gl *gl) {
-  LOAD(gl, GenBuffers, PFNGLGENBUFFERSPROC);
-  LOAD(gl, BindBuffer, PFNGLBINDBUFFERPROC);
-  LOAD(gl, DeleteBuffers, PFNGLDELETEBUFFERSPROC);
-  LOAD(gl, GenFramebuffers, PFNGLGENFRAMEBUFFERSPROC);
-  LOAD(gl, BindFramebuffer, PFNGLBINDFRAMEBUFFERPROC);
-  LOAD(gl, FramebufferTexture2D, PFNGLFRAMEBUFFERTEXTURE2DPROC);
-  LOAD(gl, BlitFramebuffer, PFNGLBLITFRAMEBUFFERPROC);
-  LOAD(gl, DeleteFramebuffers, PFNGLDELETEFRAMEBUFFERSPROC);
-  LOAD(gl, TexStorage2D, PFNGLTEXSTORAGE2DPROC);
-  if (glfwExtensionSupported("GL_EXT_memory_object") &&
-      glfwExtensionSupported("GL_EXT_memory_object_fd")) {
-    LOAD(gl, CreateMemoryObjectsEXT, PFNGLCREATEMEMORYOBJECTSEXTPROC);
-    LOAD(gl, DeleteMemoryObjectsEXT, PFNGLDELETEMEMORYOBJECTSEXTPROC);
-    LOAD(gl, ImportMemoryFdEXT, PFNGLIMPORTMEMORYFDEXTPROC);
-    LOAD(gl, BufferStorageMemEXT, PFNGLBUFFERSTORAGEMEMEXTPROC);
-  }
-  return gl->GenBuffers && gl->BindBuffer && gl->GenFramebuffers && gl->BlitFramebuffer &&
-         gl->FramebufferTexture2D && gl->TexStorage2D;
-}
-
-/* What the window shows: a texture the frames are uploaded into, and where they come from. */
-struct Host {
-  struct Gl gl;
-  GLuint texture, framebuffer;
-  /* The shared path: cadr's exported memory as a buffer; 0 on the read-back path. */
-  GLuint memory_object, pixel_buffer;
-  uint64_t generation;
-  /* The read-back path: the frame in host memory. */
-  uint8_t *pixels;
-};
-
-/* Imports the renderer's exported memory as a pixel buffer; 0 when the driver refuses it. */
-static int import_frames(struct Host *host, CadrRenderer renderer) {
-  CadrExportedFrame frame;
-  memset(&frame, 0, sizeof frame);
-  frame.size = sizeof frame;
-  CADR_CHECK(cadr_renderer_exported_frame(renderer, &frame));
-  if (host->memory_object != 0) {
-    host->gl.DeleteBuffers(1, &host->pixel_buffer);
-    host->gl.DeleteMemoryObjectsEXT(1, &host->memory_object);
-  }
-  while (glGetError() != GL_NO_ERROR) {
-    /* Earlier errors are not the import's. */
-  }
-  host->gl.CreateMemoryObjectsEXT(1, &host->memory_object);
-  /* The import takes the file descriptor. */
-  host->gl.ImportMemoryFdEXT(host->memory_object, frame.allocation_size,
-                             GL_HANDLE_TYPE_OPAQUE_FD_EXT, frame.fd);
-  host->gl.GenBuffers(1, &host->pixel_buffer);
-  host->gl.BindBuffer(GL_PIXEL_UNPACK_BUFFER, host->pixel_buffer);
-  host->gl.BufferStorageMemEXT(GL_PIXEL_UNPACK_BUFFER, (GLsizeiptr)frame.row_bytes * frame.height,
-                               host->memory_object, 0);
-  host->gl.BindBuffer(GL_PIXEL_UNPACK_BUFFER, 0);
-  host->generation = frame.generation;
-  if (glGetError() != GL_NO_ERROR) {
-    host->gl.DeleteBuffers(1, &host->pixel_buffer);
-    host->gl.DeleteMemoryObjectsEXT(1, &host->memory_object);
-    host->memory_object = 0;
-    host->pixel_buffer = 0;
-    return 0;
-  }
-  return 1;
-}
-
-/* Puts the renderer's last frame on the window: from the shared buffer on the GPU, or from the
- * bytes read back. Returns the bytes read back through the CPU. */
-static size_t show_frame(struct Host *host, CadrRenderer renderer) {
-  size_t read_back = 0;
-  glBindTexture(GL_TEXTURE_2D, host->texture);
-  if (host->pixel_buffer != 0) {
-    host->gl.BindBuffer(GL_PIXEL_UNPACK_BUFFER, host->pixel_buffer);
-    glTexSubImage2D(GL_TEXTURE_2D, 0, 0, 0, WIDTH, HEIGHT, GL_RGBA, GL_UNSIGNED_BYTE, NULL);
-    host->gl.BindBuffer(GL_PIXEL_UNPACK_BUFFER, 0);
-  } else {
-    read_back = (size_t)WIDTH * HEIGHT * 4;
-    CADR_CHECK(cadr_renderer_read_pixels(renderer, host->pixels, read_back));
-    glTexSubImage2D(GL_TEXTURE_2D, 0, 0, 0, WIDTH, HEIGHT, GL_RGBA, GL_UNSIGNED_BYTE,
-                    host->pixels);
-  }
-  /* Row 0 of a frame is its top row: blit it to the window's top (GL counts rows upwards). */
-  host->gl.BindFramebuffer(GL_READ_FRAMEBUFFER, host->framebuffer);
-  host->gl.BindFramebuffer(GL_DRAW_FRAMEBUFFER, 0);
-  host->gl.BlitFramebuffer(0, 0, WIDTH, HEIGHT, 0, HEIGHT, WIDTH, 0, GL_COLOR_BUFFER_BIT,
-                           GL_NEAREST);
-  host->gl.BindFramebuffer(GL_READ_FRAMEBUFFER, 0);
-  return read_back;
-}
 
 static double now_seconds(void) {
   struct timespec t;
@@ -151,15 +42,13 @@ static void orbit_camera(const struct CadrBounds *bounds, double angle, struct C
 int main(int argc, char **argv) {
   const char *source = "gen:demo", *test_dir = NULL;
   int frames = 60, read_back_only = 0, frame, i;
-  struct Host host;
+  struct GlFrames view;
   struct CadrContextOptions options;
   struct CadrLoadResult loaded;
   struct CadrBounds bounds;
   struct CadrCamera camera;
-  struct CadrFrameStats stats;
   CadrContext context;
   CadrScene scene;
-  CadrRenderer renderer = NULL;
   CadrNode root;
   GLFWwindow *window;
   size_t read_back = 0;
@@ -177,7 +66,6 @@ int main(int argc, char **argv) {
       source = argv[i];
     }
   }
-  memset(&host, 0, sizeof host);
   if (!glfwInit()) {
     fprintf(stderr, "gl_view: GLFW could not start (no display?)\n");
     return 1;
@@ -192,7 +80,7 @@ int main(int argc, char **argv) {
     return 1;
   }
   glfwMakeContextCurrent(window);
-  if (!load_gl(&host.gl)) {
+  if (!gl_frames_load()) {
     fprintf(stderr, "gl_view: the OpenGL driver lacks framebuffer blits or texture storage\n");
     return 1;
   }
@@ -213,47 +101,13 @@ int main(int argc, char **argv) {
   cadr_load_result_free(&loaded);
   CADR_CHECK(cadr_scene_bounds(scene, &bounds));
 
-  /* The texture the frames go into, and a framebuffer to blit it from. */
-  glGenTextures(1, &host.texture);
-  glBindTexture(GL_TEXTURE_2D, host.texture);
-  host.gl.TexStorage2D(GL_TEXTURE_2D, 1, GL_RGBA8, WIDTH, HEIGHT);
-  host.gl.GenFramebuffers(1, &host.framebuffer);
-  host.gl.BindFramebuffer(GL_READ_FRAMEBUFFER, host.framebuffer);
-  host.gl.FramebufferTexture2D(GL_READ_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_TEXTURE_2D,
-                               host.texture, 0);
-  host.gl.BindFramebuffer(GL_READ_FRAMEBUFFER, 0);
-
-  /* The shared path where both drivers allow it, else reading back. */
-  if (!read_back_only && host.gl.ImportMemoryFdEXT != NULL &&
-      cadr_renderer_create_for_export(context, WIDTH, HEIGHT, &renderer) == CADR_RESULT_OK) {
-    if (!import_frames(&host, renderer)) {
-      printf("the OpenGL driver refused cadr's memory: reading frames back instead\n");
-      CADR_CHECK(cadr_renderer_destroy(renderer));
-      renderer = NULL;
-    }
-  } else if (!read_back_only) {
-    printf("shared memory unavailable (%s): reading frames back instead\n",
-           host.gl.ImportMemoryFdEXT == NULL ? "no GL_EXT_memory_object_fd"
-                                              : "cadr cannot export frames on this device");
-  }
-  if (renderer == NULL) {
-    CADR_CHECK(cadr_renderer_create(context, WIDTH, HEIGHT, &renderer));
-    host.pixels = (uint8_t *)malloc((size_t)WIDTH * HEIGHT * 4);
-    if (host.pixels == NULL) {
-      return 1;
-    }
-  }
-  printf("path: %s\n", host.pixel_buffer != 0 ? "shared memory" : "read-back");
-
-  memset(&stats, 0, sizeof stats);
-  stats.size = sizeof stats;
+  gl_frames_create(&view, context, WIDTH, HEIGHT, !read_back_only);
+  printf("path: %s\n", gl_frames_shared(&view) ? "shared memory" : "read-back");
   start = now_seconds();
-  /* The window does not resize; a host whose view does calls cadr_renderer_resize and then
-   * import_frames again (the frames go to new memory, of a new generation). */
   for (frame = 0; frame < frames && !glfwWindowShouldClose(window); ++frame) {
     orbit_camera(&bounds, 6.2831853 * frame / (frames > 0 ? frames : 1), &camera);
-    CADR_CHECK(cadr_renderer_render(renderer, scene, &camera, &stats));
-    read_back += show_frame(&host, renderer);
+    CADR_CHECK(cadr_renderer_render(view.renderer, scene, &camera, NULL));
+    read_back += gl_frames_show(&view, 0, 0, HEIGHT);
     glfwSwapBuffers(window);
     glfwPollEvents();
   }
@@ -269,25 +123,19 @@ int main(int argc, char **argv) {
     CADR_CHECK(cadr_renderer_render(offscreen, scene, &camera, NULL));
     CADR_CHECK(cadr_renderer_save_png(offscreen, path));
     CADR_CHECK(cadr_renderer_destroy(offscreen));
-    show_frame(&host, renderer);
+    gl_frames_show(&view, 0, 0, HEIGHT);
     glfwSwapBuffers(window);
     glFinish();
     printf("screenshot ready %dx%d\n", WIDTH, HEIGHT);
     fflush(stdout);
     /* Keep the frame on the window until the test has grabbed it. */
-    while (fgets(line, sizeof line, stdin) == NULL && !feof(stdin)) {
+    if (fgets(line, sizeof line, stdin) == NULL) {
+      line[0] = 0;
     }
   }
   CADR_CHECK(cadr_context_validation_error_count(context, &validation_errors));
   printf("validation errors: %llu\n", (unsigned long long)validation_errors);
-  if (host.pixel_buffer != 0) {
-    host.gl.DeleteBuffers(1, &host.pixel_buffer);
-    host.gl.DeleteMemoryObjectsEXT(1, &host.memory_object);
-  }
-  host.gl.DeleteFramebuffers(1, &host.framebuffer);
-  glDeleteTextures(1, &host.texture);
-  free(host.pixels);
-  CADR_CHECK(cadr_renderer_destroy(renderer));
+  gl_frames_destroy(&view);
   CADR_CHECK(cadr_scene_destroy(scene));
   CADR_CHECK(cadr_context_destroy(context));
   glfwDestroyWindow(window);

@@ -16,10 +16,14 @@ use cadr_tests::c_programs::{build_c_program, describe, repository, scratch_dir}
 
 fn sample(name: &str, dir: &Path, extra: &[&str]) -> PathBuf {
     let program = dir.join(name);
-    let sources = [
+    let mut sources = vec![
         repository().join(format!("samples/{name}.c")),
         repository().join("samples/common/sample.c"),
     ];
+    if extra.contains(&"-lGL") {
+        // The OpenGL samples bring cadr's frames into their windows through it.
+        sources.push(repository().join("samples/common/gl_frames.c"));
+    }
     let include = format!("-I{}", repository().join("samples").display());
     let mut flags = vec![include.as_str()];
     flags.extend_from_slice(extra);
@@ -249,7 +253,23 @@ impl WindowSample {
     /// Grabs the screen of `display` while the sample keeps its view presented, lets it
     /// finish (it must report no validation error), and compares its view in the grab with
     /// the offscreen render of the same camera it wrote into `dir`/offscreen.png.
-    fn grab_finish_and_compare(mut self, display: &VirtualDisplay, dir: &Path) {
+    fn grab_finish_and_compare(self, display: &VirtualDisplay, dir: &Path) {
+        let (width, height) = self.size;
+        let origin = self.origin;
+        let name = self.name;
+        let dump = self.grab_and_finish(display);
+        compare_region(
+            name,
+            &dump,
+            (origin, (width, height)),
+            (dir, "offscreen.png"),
+            0.05,
+        );
+    }
+
+    /// Grabs the screen of `display` (an `xwd -root` dump) while the sample keeps its window
+    /// shown, then lets it finish; it must report no validation error.
+    fn grab_and_finish(mut self, display: &VirtualDisplay) -> Vec<u8> {
         let dump = Command::new("xwd")
             .args(["-root", "-silent", "-display", &display.name])
             .output()
@@ -275,23 +295,38 @@ impl WindowSample {
             "{}",
             rest.join("\n")
         );
-        let (width, height) = self.size;
-        let window = xwd_region(&dump.stdout, self.origin, width, height);
-        window.save(dir.join("window.png")).unwrap();
-        let offscreen = image::open(dir.join("offscreen.png")).unwrap().to_rgba8();
-        assert_eq!(offscreen.dimensions(), self.size);
-        assert!(
-            foreground_fraction(&offscreen) > 0.05,
-            "the offscreen view shows nothing"
-        );
-        let difference = cadr_tests::images::compare(&window, &offscreen).unwrap();
-        assert!(
-            difference.within(cadr_tests::images::DEFAULT_TOLERANCE),
-            "{}'s window and the offscreen render differ: {difference:?} (images in {})",
-            self.name,
-            dir.display()
-        );
+        dump.stdout
     }
+}
+
+/// Compares the region `((left, top), (width, height))` of the screen `dump` with the
+/// offscreen render `reference` of the same camera that sample `name` wrote into `dir`
+/// (saving the region beside it as `window-REFERENCE`); the reference must show something,
+/// more than `least` of its pixels.
+fn compare_region(
+    name: &str,
+    dump: &[u8],
+    (origin, (width, height)): ((u32, u32), (u32, u32)),
+    (dir, reference): (&Path, &str),
+    least: f64,
+) {
+    let window = xwd_region(dump, origin, width, height);
+    window
+        .save(dir.join(format!("window-{reference}")))
+        .unwrap();
+    let offscreen = image::open(dir.join(reference)).unwrap().to_rgba8();
+    assert_eq!(offscreen.dimensions(), (width, height));
+    let shown = foreground_fraction(&offscreen);
+    assert!(
+        shown > least,
+        "{reference} shows too little: {shown:.4} of its pixels"
+    );
+    let difference = cadr_tests::images::compare(&window, &offscreen).unwrap();
+    assert!(
+        difference.within(cadr_tests::images::DEFAULT_TOLERANCE),
+        "{name}'s window and {reference} differ: {difference:?} (images in {})",
+        dir.display()
+    );
 }
 
 #[test]
@@ -376,6 +411,64 @@ fn gl_view_shows_cadrs_frames_in_opengl_through_shared_memory() {
         "bytes read back per frame: 0",
     ]);
     view.grab_finish_and_compare(&display, &dir);
+}
+
+/// Four views of one scene (top, front, side, perspective) in one OpenGL window: a click picks
+/// in the view under it and highlights in all four, every view shows what the offscreen render
+/// of its camera shows, and the frames come through shared memory.
+#[test]
+fn quad_view_shows_four_views_of_one_scene_and_picks_in_each() {
+    let dir = scratch_dir("sample-quad-view");
+    let program = sample("quad_view", &dir, &["-lglfw", "-lGL"]);
+    let display = VirtualDisplay::start();
+    let view = WindowSample::start(
+        "quad_view",
+        Command::new(&program)
+            .args([
+                "gen:graphicscard",
+                "--frames",
+                "4",
+                "--self-test",
+                dir.to_str().unwrap(),
+            ])
+            .env("DISPLAY", &display.name),
+    );
+    view.assert_printed(&[
+        "path: shared memory",
+        "bytes read back per frame: 0",
+        "front view: ",
+        "top view: picked node ",
+        "side view: picked node ",
+        "perspective view: picked node ",
+        "device memory: one view ",
+    ]);
+    let regions: Vec<((u32, u32), (u32, u32))> = (0..4)
+        .map(|index| {
+            let prefix = format!("view {index} at ");
+            let line = view
+                .transcript
+                .lines()
+                .find_map(|l| l.strip_prefix(&prefix))
+                .unwrap_or_else(|| panic!("no '{prefix}' in:\n{}", view.transcript));
+            let (origin, size) = line.split_once(' ').unwrap();
+            let pair = |text: &str, separator| {
+                let (a, b) = text.split_once(separator).unwrap();
+                (a.parse::<u32>().unwrap(), b.parse::<u32>().unwrap())
+            };
+            (pair(origin, ','), pair(size, 'x'))
+        })
+        .collect();
+    let dump = view.grab_and_finish(&display);
+    for (index, region) in regions.into_iter().enumerate() {
+        // A board seen edge-on (front and side) is a thin line.
+        compare_region(
+            "quad_view",
+            &dump,
+            region,
+            (&dir, &format!("view{index}.png")),
+            0.002,
+        );
+    }
 }
 
 /// Where memory cannot be shared (asked for here), the OpenGL host reads frames back and says

@@ -1,0 +1,167 @@
+/* cadr's frames in an OpenGL host: see gl_frames.h. */
+#define GLFW_INCLUDE_GLEXT
+#include <GLFW/glfw3.h>
+
+#include "common/gl_frames.h"
+#include "common/sample.h"
+
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+/* The OpenGL functions beyond 1.1, loaded through GLFW. */
+static struct {
+  PFNGLGENBUFFERSPROC GenBuffers;
+  PFNGLBINDBUFFERPROC BindBuffer;
+  PFNGLDELETEBUFFERSPROC DeleteBuffers;
+  PFNGLGENFRAMEBUFFERSPROC GenFramebuffers;
+  PFNGLBINDFRAMEBUFFERPROC BindFramebuffer;
+  PFNGLFRAMEBUFFERTEXTURE2DPROC FramebufferTexture2D;
+  PFNGLBLITFRAMEBUFFERPROC BlitFramebuffer;
+  PFNGLDELETEFRAMEBUFFERSPROC DeleteFramebuffers;
+  PFNGLTEXSTORAGE2DPROC TexStorage2D;
+  /* GL_EXT_memory_object(_fd); NULL where the driver lacks them. */
+  PFNGLCREATEMEMORYOBJECTSEXTPROC CreateMemoryObjectsEXT;
+  PFNGLDELETEMEMORYOBJECTSEXTPROC DeleteMemoryObjectsEXT;
+  PFNGLIMPORTMEMORYFDEXTPROC ImportMemoryFdEXT;
+  PFNGLBUFFERSTORAGEMEMEXTPROC BufferStorageMemEXT;
+} gl;
+
+#define LOAD(name, type) (gl.name = (type)glfwGetProcAddress("gl" #name))
+
+int gl_frames_load(void) {
+  LOAD(GenBuffers, PFNGLGENBUFFERSPROC);
+  LOAD(BindBuffer, PFNGLBINDBUFFERPROC);
+  LOAD(DeleteBuffers, PFNGLDELETEBUFFERSPROC);
+  LOAD(GenFramebuffers, PFNGLGENFRAMEBUFFERSPROC);
+  LOAD(BindFramebuffer, PFNGLBINDFRAMEBUFFERPROC);
+  LOAD(FramebufferTexture2D, PFNGLFRAMEBUFFERTEXTURE2DPROC);
+  LOAD(BlitFramebuffer, PFNGLBLITFRAMEBUFFERPROC);
+  LOAD(DeleteFramebuffers, PFNGLDELETEFRAMEBUFFERSPROC);
+  LOAD(TexStorage2D, PFNGLTEXSTORAGE2DPROC);
+  if (glfwExtensionSupported("GL_EXT_memory_object") &&
+      glfwExtensionSupported("GL_EXT_memory_object_fd")) {
+    LOAD(CreateMemoryObjectsEXT, PFNGLCREATEMEMORYOBJECTSEXTPROC);
+    LOAD(DeleteMemoryObjectsEXT, PFNGLDELETEMEMORYOBJECTSEXTPROC);
+    LOAD(ImportMemoryFdEXT, PFNGLIMPORTMEMORYFDEXTPROC);
+    LOAD(BufferStorageMemEXT, PFNGLBUFFERSTORAGEMEMEXTPROC);
+  }
+  return gl.GenBuffers && gl.BindBuffer && gl.DeleteBuffers && gl.GenFramebuffers &&
+         gl.BindFramebuffer && gl.FramebufferTexture2D && gl.BlitFramebuffer &&
+         gl.DeleteFramebuffers && gl.TexStorage2D;
+}
+
+int gl_frames_can_import(void) {
+  return gl.ImportMemoryFdEXT != NULL && gl.CreateMemoryObjectsEXT != NULL &&
+         gl.BufferStorageMemEXT != NULL && gl.DeleteMemoryObjectsEXT != NULL;
+}
+
+/* Imports the renderer's exported memory as a pixel buffer; 0 when the driver refuses it. A
+ * host whose view resizes calls it again after cadr_renderer_resize (the frames then go to new
+ * memory, of a new generation). */
+static int import_frames(struct GlFrames *frames) {
+  CadrExportedFrame exported;
+  memset(&exported, 0, sizeof exported);
+  exported.size = sizeof exported;
+  CADR_CHECK(cadr_renderer_exported_frame(frames->renderer, &exported));
+  while (glGetError() != GL_NO_ERROR) {
+    /* Earlier errors are not the import's. */
+  }
+  gl.CreateMemoryObjectsEXT(1, &frames->memory_object);
+  /* The import takes the file descriptor. */
+  gl.ImportMemoryFdEXT(frames->memory_object, exported.allocation_size,
+                       GL_HANDLE_TYPE_OPAQUE_FD_EXT, exported.fd);
+  gl.GenBuffers(1, &frames->pixel_buffer);
+  gl.BindBuffer(GL_PIXEL_UNPACK_BUFFER, frames->pixel_buffer);
+  gl.BufferStorageMemEXT(GL_PIXEL_UNPACK_BUFFER, (GLsizeiptr)exported.row_bytes * exported.height,
+                         frames->memory_object, 0);
+  gl.BindBuffer(GL_PIXEL_UNPACK_BUFFER, 0);
+  if (glGetError() != GL_NO_ERROR) {
+    gl.DeleteBuffers(1, &frames->pixel_buffer);
+    gl.DeleteMemoryObjectsEXT(1, &frames->memory_object);
+    frames->memory_object = 0;
+    frames->pixel_buffer = 0;
+    return 0;
+  }
+  return 1;
+}
+
+void gl_frames_create(struct GlFrames *frames, CadrContext context, uint32_t width,
+                      uint32_t height, int allow_sharing) {
+  memset(frames, 0, sizeof *frames);
+  frames->width = width;
+  frames->height = height;
+  glGenTextures(1, &frames->texture);
+  glBindTexture(GL_TEXTURE_2D, frames->texture);
+  gl.TexStorage2D(GL_TEXTURE_2D, 1, GL_RGBA8, (GLsizei)width, (GLsizei)height);
+  gl.GenFramebuffers(1, &frames->framebuffer);
+  gl.BindFramebuffer(GL_READ_FRAMEBUFFER, frames->framebuffer);
+  gl.FramebufferTexture2D(GL_READ_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_TEXTURE_2D,
+                          frames->texture, 0);
+  gl.BindFramebuffer(GL_READ_FRAMEBUFFER, 0);
+  if (allow_sharing && !gl_frames_can_import()) {
+    printf("shared memory unavailable (no GL_EXT_memory_object_fd): reading frames back\n");
+  } else if (allow_sharing) {
+    if (cadr_renderer_create_for_export(context, width, height, &frames->renderer) !=
+        CADR_RESULT_OK) {
+      printf("shared memory unavailable (cadr cannot export frames on this device): reading "
+             "frames back\n");
+      frames->renderer = NULL;
+    } else if (!import_frames(frames)) {
+      printf("the OpenGL driver refused cadr's memory: reading frames back\n");
+      CADR_CHECK(cadr_renderer_destroy(frames->renderer));
+      frames->renderer = NULL;
+    }
+  }
+  if (frames->renderer == NULL) {
+    CADR_CHECK(cadr_renderer_create(context, width, height, &frames->renderer));
+    frames->pixels = (uint8_t *)malloc((size_t)width * height * 4);
+    if (frames->pixels == NULL) {
+      fprintf(stderr, "out of memory\n");
+      exit(1);
+    }
+  }
+}
+
+int gl_frames_shared(const struct GlFrames *frames) {
+  return frames->pixel_buffer != 0;
+}
+
+size_t gl_frames_show(struct GlFrames *frames, int x, int y, int window_height) {
+  size_t read_back = 0;
+  const GLsizei width = (GLsizei)frames->width, height = (GLsizei)frames->height;
+  const GLint bottom = window_height - y - height;
+  glBindTexture(GL_TEXTURE_2D, frames->texture);
+  if (frames->pixel_buffer != 0) {
+    /* From the shared memory to the texture, on the GPU. */
+    gl.BindBuffer(GL_PIXEL_UNPACK_BUFFER, frames->pixel_buffer);
+    glTexSubImage2D(GL_TEXTURE_2D, 0, 0, 0, width, height, GL_RGBA, GL_UNSIGNED_BYTE, NULL);
+    gl.BindBuffer(GL_PIXEL_UNPACK_BUFFER, 0);
+  } else {
+    read_back = (size_t)width * height * 4;
+    CADR_CHECK(cadr_renderer_read_pixels(frames->renderer, frames->pixels, read_back));
+    glTexSubImage2D(GL_TEXTURE_2D, 0, 0, 0, width, height, GL_RGBA, GL_UNSIGNED_BYTE,
+                    frames->pixels);
+  }
+  /* Row 0 of a frame is its top row: blit it to the rectangle's top (GL counts rows up). */
+  gl.BindFramebuffer(GL_READ_FRAMEBUFFER, frames->framebuffer);
+  gl.BindFramebuffer(GL_DRAW_FRAMEBUFFER, 0);
+  gl.BlitFramebuffer(0, 0, width, height, x, bottom + height, x + width, bottom,
+                     GL_COLOR_BUFFER_BIT, GL_NEAREST);
+  gl.BindFramebuffer(GL_READ_FRAMEBUFFER, 0);
+  return read_back;
+}
+
+void gl_frames_destroy(struct GlFrames *frames) {
+  if (frames->pixel_buffer != 0) {
+    gl.DeleteBuffers(1, &frames->pixel_buffer);
+    gl.DeleteMemoryObjectsEXT(1, &frames->memory_object);
+  }
+  gl.DeleteFramebuffers(1, &frames->framebuffer);
+  glDeleteTextures(1, &frames->texture);
+  free(frames->pixels);
+  if (frames->renderer != NULL) {
+    CADR_CHECK(cadr_renderer_destroy(frames->renderer));
+  }
+  memset(frames, 0, sizeof *frames);
+}

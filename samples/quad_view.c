@@ -1,0 +1,305 @@
+/* Four views of one scene in one window, as a CAD tool shows them: top, front and side
+ * (orthographic) and a perspective view, each a cadr renderer of the same scene on one context,
+ * their frames brought into the OpenGL window through shared memory (common/gl_frames.c). A
+ * click in a view picks there and highlights the part in all four; a click on the background
+ * clears the selection.
+ *
+ *   quad_view [scene] [--frames N] [--self-test DIR]
+ *
+ * It orbits the perspective view for N frames (default 120) and prints each view's CPU time per
+ * frame, the frames per second and cadr's device memory. --self-test DIR picks in the middle of
+ * each view (printing what it found), writes the offscreen render of each view's camera
+ * (DIR/view0.png ... view3.png), prints where each view lies in the window ("view N at X,Y
+ * WxH") and "screenshot ready WxH", and keeps showing the views until a line arrives on stdin,
+ * so that a test can grab the window and compare. */
+#define _POSIX_C_SOURCE 199309L
+#include <GLFW/glfw3.h>
+
+#include "common/gl_frames.h"
+#include "common/sample.h"
+
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+
+enum { VIEW_WIDTH = 320, VIEW_HEIGHT = 240, VIEWS = 4 };
+enum { WINDOW_WIDTH = 2 * VIEW_WIDTH, WINDOW_HEIGHT = 2 * VIEW_HEIGHT };
+
+static const char *const view_names[VIEWS] = {"top", "front", "side", "perspective"};
+
+struct QuadView {
+  CadrScene scene;
+  struct CadrBounds bounds;
+  struct GlFrames views[VIEWS];
+  struct CadrCamera cameras[VIEWS];
+  double orbit;            /* the perspective view's angle about the up axis */
+  CadrNode selected;       /* the highlighted geo node, 0 for none */
+  double cpu_us[VIEWS];    /* each view's CPU time, summed over the frames after the first */
+  int timed_frames;        /* how many frames cpu_us sums */
+};
+
+static double now_seconds(void) {
+  struct timespec t;
+  clock_gettime(CLOCK_MONOTONIC, &t);
+  return (double)t.tv_sec + (double)t.tv_nsec / 1e9;
+}
+
+/* An orthographic camera looking at the bounds' centre from `direction` (a unit axis; cadr's
+ * look-at keeps +Y up, or +Z looking along Y), fitting the bounds: Vulkan's clip space (y down,
+ * depth 0..1), as cadr's cameras. */
+static void orthographic(const struct CadrBounds *b, const double direction[3],
+                         struct CadrCamera *camera) {
+  double center[3], eye[3], extent = 0.0, half_w, half_h, depth;
+  int i;
+  struct CadrCamera look;
+  for (i = 0; i < 3; ++i) {
+    double size = b->max[i] - b->min[i];
+    center[i] = 0.5 * (b->min[i] + b->max[i]);
+    extent += size * size;
+  }
+  extent = sqrt(extent) * 0.5 + 1e-9; /* the bounding sphere's radius */
+  for (i = 0; i < 3; ++i) {
+    eye[i] = center[i] + direction[i] * extent * 2.0;
+  }
+  /* The view matrix from cadr's look-at (its projection is replaced below). */
+  CADR_CHECK(cadr_camera_look_at(eye, center, 45.0, (double)VIEW_WIDTH / VIEW_HEIGHT, 0.1, 1.0, &look));
+  memcpy(camera->view, look.view, sizeof camera->view);
+  half_h = extent * 1.05;
+  half_w = half_h * VIEW_WIDTH / VIEW_HEIGHT;
+  depth = extent * 4.0;
+  memset(camera->projection, 0, sizeof camera->projection);
+  camera->projection[0] = 1.0 / half_w;
+  camera->projection[5] = -1.0 / half_h; /* y down */
+  camera->projection[10] = -1.0 / depth; /* view -z from 0 to depth -> 0..1 */
+  camera->projection[14] = 0.0;
+  camera->projection[15] = 1.0;
+}
+
+/* The four views' cameras: top (looking down), front, side (from +X), and the orbiting
+ * perspective view. */
+static void place_cameras(struct QuadView *q) {
+  const double top[3] = {0.0, 1.0, 0.0}, front[3] = {0.0, 0.0, 1.0}, side[3] = {1.0, 0.0, 0.0};
+  const double around[3] = {cos(q->orbit), 0.6, sin(q->orbit)};
+  orthographic(&q->bounds, top, &q->cameras[0]);
+  orthographic(&q->bounds, front, &q->cameras[1]);
+  orthographic(&q->bounds, side, &q->cameras[2]);
+  CADR_CHECK(cadr_camera_fit(&q->bounds, (double)VIEW_WIDTH / VIEW_HEIGHT, around, &q->cameras[3]));
+}
+
+/* Where view `index` lies in the window: its top-left corner. */
+static void view_origin(int index, int *x, int *y) {
+  *x = (index % 2) * VIEW_WIDTH;
+  *y = (index / 2) * VIEW_HEIGHT;
+}
+
+/* Renders every view and puts it in its quarter, adding each view's CPU time to `cpu_us` when
+ * `timed`; returns the bytes read back. */
+static size_t draw(struct QuadView *q, int timed) {
+  size_t read_back = 0;
+  int i;
+  for (i = 0; i < VIEWS; ++i) {
+    struct CadrFrameStats stats;
+    int x, y;
+    memset(&stats, 0, sizeof stats);
+    stats.size = sizeof stats;
+    CADR_CHECK(cadr_renderer_render(q->views[i].renderer, q->scene, &q->cameras[i], &stats));
+    if (timed) {
+      q->cpu_us[i] += stats.cpu_us;
+    }
+    view_origin(i, &x, &y);
+    read_back += gl_frames_show(&q->views[i], x, y, WINDOW_HEIGHT);
+  }
+  return read_back;
+}
+
+/* Picks at window pixel (x, y) in the view under it; highlights the part found in every view
+ * (the highlight is the scene's) and returns its node, 0 over the background. */
+static CadrNode select_at(struct QuadView *q, int x, int y) {
+  int index = (y >= VIEW_HEIGHT ? 2 : 0) + (x >= VIEW_WIDTH ? 1 : 0), origin_x, origin_y;
+  uint32_t flags = 0;
+  CadrPickResult picked;
+  memset(&picked, 0, sizeof picked);
+  picked.size = sizeof picked;
+  view_origin(index, &origin_x, &origin_y);
+  CADR_CHECK(cadr_renderer_pick(q->views[index].renderer, q->scene, &q->cameras[index],
+                                (uint32_t)(x - origin_x), (uint32_t)(y - origin_y), &picked));
+  if (q->selected != 0) {
+    CADR_CHECK(cadr_scene_flags(q->scene, q->selected, &flags));
+    CADR_CHECK(cadr_scene_set_flags(q->scene, q->selected, flags & ~CADR_NODE_HIGHLIGHTED));
+    q->selected = 0;
+  }
+  if (picked.hit_count > 0) {
+    q->selected = picked.hits[0].node;
+    CADR_CHECK(cadr_scene_flags(q->scene, q->selected, &flags));
+    CADR_CHECK(cadr_scene_set_flags(q->scene, q->selected, flags | CADR_NODE_HIGHLIGHTED));
+  }
+  printf("%s view: %s node %llu\n", view_names[index],
+         picked.hit_count > 0 ? "picked" : "nothing under the cursor, cleared",
+         (unsigned long long)q->selected);
+  cadr_pick_result_free(&picked);
+  return q->selected;
+}
+
+static void on_click(GLFWwindow *window, int button, int action, int mods) {
+  struct QuadView *q = (struct QuadView *)glfwGetWindowUserPointer(window);
+  double x, y;
+  (void)mods;
+  if (button == GLFW_MOUSE_BUTTON_LEFT && action == GLFW_PRESS) {
+    glfwGetCursorPos(window, &x, &y);
+    if (x >= 0 && y >= 0 && x < WINDOW_WIDTH && y < WINDOW_HEIGHT) {
+      select_at(q, (int)x, (int)y);
+    }
+  }
+}
+
+static uint64_t device_bytes(CadrContext context) {
+  struct CadrMemoryUsage usage;
+  memset(&usage, 0, sizeof usage);
+  usage.size = sizeof usage;
+  CADR_CHECK(cadr_context_memory_usage(context, &usage));
+  return usage.device_allocated_bytes;
+}
+
+/* Picks in the middle of each view, writes each view's offscreen render and keeps the window
+ * until stdin says the test has grabbed it. */
+static void self_test(struct QuadView *q, CadrContext context, GLFWwindow *window,
+                      const char *dir) {
+  char path[4096], line[64];
+  int i;
+  for (i = 0; i < VIEWS; ++i) {
+    int x, y;
+    view_origin(i, &x, &y);
+    select_at(q, x + VIEW_WIDTH / 2, y + VIEW_HEIGHT / 2);
+  }
+  /* The last pick's part stays highlighted in every view. */
+  draw(q, 0);
+  for (i = 0; i < VIEWS; ++i) {
+    CadrRenderer offscreen;
+    int x, y;
+    snprintf(path, sizeof path, "%s/view%d.png", dir, i);
+    CADR_CHECK(cadr_renderer_create(context, VIEW_WIDTH, VIEW_HEIGHT, &offscreen));
+    CADR_CHECK(cadr_renderer_render(offscreen, q->scene, &q->cameras[i], NULL));
+    CADR_CHECK(cadr_renderer_save_png(offscreen, path));
+    CADR_CHECK(cadr_renderer_destroy(offscreen));
+    view_origin(i, &x, &y);
+    printf("view %d at %d,%d %dx%d\n", i, x, y, VIEW_WIDTH, VIEW_HEIGHT);
+  }
+  glfwSwapBuffers(window);
+  glFinish();
+  printf("screenshot ready %dx%d\n", WINDOW_WIDTH, WINDOW_HEIGHT);
+  fflush(stdout);
+  if (fgets(line, sizeof line, stdin) == NULL) {
+    line[0] = 0;
+  }
+}
+
+int main(int argc, char **argv) {
+  const char *source = "gen:demo", *test_dir = NULL;
+  int frames = 120, frame, i, shared = 1;
+  struct QuadView q;
+  struct CadrContextOptions options;
+  struct CadrLoadResult loaded;
+  CadrContext context;
+  CadrNode root;
+  GLFWwindow *window;
+  size_t read_back = 0;
+  double start;
+  uint64_t scene_bytes, one_view_bytes, validation_errors = 0;
+
+  for (i = 1; i < argc; ++i) {
+    if (strcmp(argv[i], "--frames") == 0 && i + 1 < argc) {
+      frames = atoi(argv[++i]);
+    } else if (strcmp(argv[i], "--self-test") == 0 && i + 1 < argc) {
+      test_dir = argv[++i];
+    } else {
+      source = argv[i];
+    }
+  }
+  memset(&q, 0, sizeof q);
+  if (!glfwInit()) {
+    fprintf(stderr, "quad_view: GLFW could not start (no display?)\n");
+    return 1;
+  }
+  glfwWindowHint(GLFW_CLIENT_API, GLFW_OPENGL_API);
+  glfwWindowHint(GLFW_CONTEXT_VERSION_MAJOR, 3);
+  glfwWindowHint(GLFW_CONTEXT_VERSION_MINOR, 0);
+  glfwWindowHint(GLFW_RESIZABLE, GLFW_FALSE);
+  window = glfwCreateWindow(WINDOW_WIDTH, WINDOW_HEIGHT, "cadr: top, front, side, perspective",
+                            NULL, NULL);
+  if (window == NULL) {
+    fprintf(stderr, "quad_view: no OpenGL 3.0 window\n");
+    return 1;
+  }
+  glfwMakeContextCurrent(window);
+  if (!gl_frames_load()) {
+    fprintf(stderr, "quad_view: the OpenGL driver lacks framebuffer blits or texture storage\n");
+    return 1;
+  }
+  glfwSetWindowUserPointer(window, &q);
+  glfwSetMouseButtonCallback(window, on_click);
+
+  memset(&options, 0, sizeof options);
+  options.size = sizeof options;
+  CADR_CHECK(cadr_context_options_default(&options));
+  options.validation = test_dir != NULL;
+  sample_print_messages();
+  CADR_CHECK(cadr_context_create(&options, &context));
+  CADR_CHECK(cadr_scene_create(&q.scene));
+  CADR_CHECK(cadr_scene_root(q.scene, &root));
+  memset(&loaded, 0, sizeof loaded);
+  loaded.size = sizeof loaded;
+  CADR_CHECK(cadr_scene_load(q.scene, source, root, &loaded));
+  cadr_load_result_free(&loaded);
+  CADR_CHECK(cadr_scene_bounds(q.scene, &q.bounds));
+  place_cameras(&q);
+
+  scene_bytes = device_bytes(context);
+  one_view_bytes = 0;
+  for (i = 0; i < VIEWS; ++i) {
+    gl_frames_create(&q.views[i], context, VIEW_WIDTH, VIEW_HEIGHT, 1);
+    shared = shared && gl_frames_shared(&q.views[i]);
+    if (i == 0) {
+      struct CadrFrameStats stats;
+      memset(&stats, 0, sizeof stats);
+      stats.size = sizeof stats;
+      CADR_CHECK(cadr_renderer_render(q.views[0].renderer, q.scene, &q.cameras[0], &stats));
+      one_view_bytes = device_bytes(context) - scene_bytes;
+    }
+  }
+  printf("path: %s\n", shared ? "shared memory" : "read-back");
+
+  start = now_seconds();
+  for (frame = 0; frame < frames && !glfwWindowShouldClose(window); ++frame) {
+    q.orbit = 6.2831853 * frame / (frames > 0 ? frames : 1);
+    place_cameras(&q);
+    /* The first frame builds pipelines and uploads the scene: the CPU times leave it out. */
+    read_back += draw(&q, frame > 0);
+    q.timed_frames += frame > 0;
+    glfwSwapBuffers(window);
+    glfwPollEvents();
+  }
+  for (i = 0; i < VIEWS; ++i) {
+    printf("%s view: %.1f us of CPU per frame\n", view_names[i],
+           q.timed_frames > 0 ? q.cpu_us[i] / q.timed_frames : 0.0);
+  }
+  printf("%d frames of four views, %.1f frames/s, bytes read back per frame: %zu\n", frame,
+         frame / (now_seconds() - start), frame > 0 ? read_back / (size_t)frame : 0);
+  printf("device memory: one view %.1f MB, four views %.1f MB\n", one_view_bytes / 1e6,
+         (device_bytes(context) - scene_bytes) / 1e6);
+
+  if (test_dir != NULL) {
+    self_test(&q, context, window, test_dir);
+  }
+  CADR_CHECK(cadr_context_validation_error_count(context, &validation_errors));
+  printf("validation errors: %llu\n", (unsigned long long)validation_errors);
+  for (i = 0; i < VIEWS; ++i) {
+    gl_frames_destroy(&q.views[i]);
+  }
+  CADR_CHECK(cadr_scene_destroy(q.scene));
+  CADR_CHECK(cadr_context_destroy(context));
+  glfwDestroyWindow(window);
+  glfwTerminate();
+  return validation_errors == 0 ? 0 : 1;
+}

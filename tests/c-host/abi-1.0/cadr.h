@@ -402,6 +402,40 @@ typedef struct CadrPluginRefusal {
   const char *reason;
 } CadrPluginRefusal;
 
+// A renderer: draws scenes with the chosen techniques into an offscreen image, or into a host
+// window through a swapchain. Created by `cadr_renderer_create` or
+// `cadr_renderer_create_for_surface`, released by `cadr_renderer_destroy`.
+typedef struct CadrRendererObject *CadrRenderer;
+
+// The memory a renderer's frames are exported into (`cadr_renderer_exported_frame`). After
+// each `cadr_renderer_render` it holds that frame: `height` rows of `row_bytes` bytes, the top
+// row first, 4 bytes per pixel (R, G, B, A, 8 bits each, as `cadr_renderer_read_pixels` gives
+// them), from offset 0.
+//
+// The struct grows by appending fields: the host sets `size` to `sizeof(CadrExportedFrame)`;
+// cadr fills the fields within it and zeroes those of a newer header it does not know.
+typedef struct CadrExportedFrame {
+  // `sizeof(CadrExportedFrame)`, set by the host.
+  uint32_t size;
+  // A new POSIX file descriptor of the memory (`VK_EXTERNAL_MEMORY_HANDLE_TYPE_OPAQUE_FD_BIT`),
+  // the host's: import it (`glImportMemoryFdEXT` with `GL_HANDLE_TYPE_OPAQUE_FD_EXT` takes
+  // it) or close it.
+  int32_t fd;
+  // The memory's size in bytes, as the importer is told it (at least
+  // `row_bytes × height`).
+  uint64_t allocation_size;
+  // The frame's width in pixels.
+  uint32_t width;
+  // The frame's height in pixels.
+  uint32_t height;
+  // Bytes from one row to the next (`width × 4`).
+  uint32_t row_bytes;
+  // Counts the memories exported so far: it moves when the renderer's size changed and its
+  // frames went to new memory, which the host then imports in place of the old one (whose
+  // frames no longer change).
+  uint64_t generation;
+} CadrExportedFrame;
+
 // A range of a geometry's indices drawn with one material, and its range of edge indices.
 //
 // Frozen: parts lie in an array the host indexes with its own `sizeof(CadrPart)`, so this
@@ -509,11 +543,6 @@ typedef struct CadrHostImage {
   // later submissions to the queue need a barrier from the transfer stage's writes.
   uint64_t signal_semaphore;
 } CadrHostImage;
-
-// A renderer: draws scenes with the chosen techniques into an offscreen image, or into a host
-// window through a swapchain. Created by `cadr_renderer_create` or
-// `cadr_renderer_create_for_surface`, released by `cadr_renderer_destroy`.
-typedef struct CadrRendererObject *CadrRenderer;
 
 // What cadr needs of a host's Vulkan instance and device, and what it uses where the host
 // enabled it (`cadr_vulkan_requirements`). Every string is cadr's, static, NUL-terminated;
@@ -1152,6 +1181,40 @@ const char *cadr_result_string(int32_t result);
 // # Safety
 // `buffer` is null or writable for `capacity` bytes; `length` is null or writable.
 enum CadrResult cadr_last_error_message(char *buffer, size_t capacity, size_t *length);
+
+// Creates an offscreen renderer of `width` × `height` pixels whose every frame
+// (`cadr_renderer_render`) is copied on the GPU into memory exported as a file descriptor
+// (`VK_KHR_external_memory_fd`), for an OpenGL host to import once and read as a pixel
+// buffer: no frame passes through the CPU. `cadr_renderer_render` returns once the copy is
+// done, so the host reads the frame after it without a semaphore; the renderer starts with 1
+// frame in flight. `cadr_renderer_exported_frame` gives the memory.
+//
+// Returns as `cadr_renderer_create`, and `CADR_RESULT_UNSUPPORTED` where the device (or the
+// host that lent it) lacks `VK_KHR_external_memory_fd` or cannot export a buffer's memory:
+// read frames back with `cadr_renderer_read_pixels` instead.
+// Ownership: as `cadr_renderer_create`. Thread-safety: as `cadr_renderer_create`.
+//
+// # Safety
+// `renderer` is null or writable.
+enum CadrResult cadr_renderer_create_for_export(CadrContext context,
+                                                uint32_t width,
+                                                uint32_t height,
+                                                CadrRenderer *renderer);
+
+// Writes the memory the renderer's frames are exported into, with a new file descriptor of
+// it, into `*frame` (up to the `frame->size` the host set). Call it once, import the memory,
+// and again when a frame's `generation` differs from the imported one (after a resize).
+//
+// Returns `CADR_RESULT_OK`, `CADR_RESULT_NULL_ARGUMENT`, `CADR_RESULT_INVALID_ARGUMENT` (a
+// renderer not made by `cadr_renderer_create_for_export`, or a `size` below 4),
+// `CADR_RESULT_VULKAN` or a handle error. Ownership: the file descriptor is the host's; the
+// memory stays cadr's until the renderer is destroyed or resized (an imported copy of it
+// stays valid for the importer). Thread-safety: as `cadr_renderer_create`.
+//
+// # Safety
+// `frame` is null or writable for its `size`.
+enum CadrResult cadr_renderer_exported_frame(CadrRenderer renderer,
+                                             struct CadrExportedFrame *frame);
 
 // Creates a geometry from the host's arrays (copied).
 //

@@ -66,26 +66,7 @@ int main(int argc, char **argv) {
       source = argv[i];
     }
   }
-  if (!glfwInit()) {
-    fprintf(stderr, "gl_view: GLFW could not start (no display?)\n");
-    return 1;
-  }
-  glfwWindowHint(GLFW_CLIENT_API, GLFW_OPENGL_API);
-  glfwWindowHint(GLFW_CONTEXT_VERSION_MAJOR, 3);
-  glfwWindowHint(GLFW_CONTEXT_VERSION_MINOR, 0);
-  glfwWindowHint(GLFW_RESIZABLE, GLFW_FALSE);
-  window = glfwCreateWindow(WIDTH, HEIGHT, "cadr in OpenGL", NULL, NULL);
-  if (window == NULL) {
-    fprintf(stderr, "gl_view: no OpenGL 3.0 window\n");
-    return 1;
-  }
-  glfwMakeContextCurrent(window);
-  if (!gl_frames_load()) {
-    fprintf(stderr, "gl_view: the OpenGL driver lacks framebuffer blits or texture storage\n");
-    return 1;
-  }
-  printf("OpenGL: %s, %s\n", (const char *)glGetString(GL_VERSION),
-         (const char *)glGetString(GL_RENDERER));
+  window = gl_frames_window("gl_view", WIDTH, HEIGHT, "cadr in OpenGL");
 
   memset(&options, 0, sizeof options);
   options.size = sizeof options;

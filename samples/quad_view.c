@@ -218,25 +218,8 @@ int main(int argc, char **argv) {
     }
   }
   memset(&q, 0, sizeof q);
-  if (!glfwInit()) {
-    fprintf(stderr, "quad_view: GLFW could not start (no display?)\n");
-    return 1;
-  }
-  glfwWindowHint(GLFW_CLIENT_API, GLFW_OPENGL_API);
-  glfwWindowHint(GLFW_CONTEXT_VERSION_MAJOR, 3);
-  glfwWindowHint(GLFW_CONTEXT_VERSION_MINOR, 0);
-  glfwWindowHint(GLFW_RESIZABLE, GLFW_FALSE);
-  window = glfwCreateWindow(WINDOW_WIDTH, WINDOW_HEIGHT, "cadr: top, front, side, perspective",
-                            NULL, NULL);
-  if (window == NULL) {
-    fprintf(stderr, "quad_view: no OpenGL 3.0 window\n");
-    return 1;
-  }
-  glfwMakeContextCurrent(window);
-  if (!gl_frames_load()) {
-    fprintf(stderr, "quad_view: the OpenGL driver lacks framebuffer blits or texture storage\n");
-    return 1;
-  }
+  window = gl_frames_window("quad_view", WINDOW_WIDTH, WINDOW_HEIGHT,
+                            "cadr: top, front, side, perspective");
   glfwSetWindowUserPointer(window, &q);
   glfwSetMouseButtonCallback(window, on_click);
 

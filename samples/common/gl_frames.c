@@ -29,7 +29,9 @@ static struct {
 
 #define LOAD(name, type) (gl.name = (type)glfwGetProcAddress("gl" #name))
 
-int gl_frames_load(void) {
+/* Loads the OpenGL functions the frames need; 0 when the driver lacks framebuffer blits or
+ * texture storage. */
+static int load_functions(void) {
   LOAD(GenBuffers, PFNGLGENBUFFERSPROC);
   LOAD(BindBuffer, PFNGLBINDBUFFERPROC);
   LOAD(DeleteBuffers, PFNGLDELETEBUFFERSPROC);
@@ -49,6 +51,32 @@ int gl_frames_load(void) {
   return gl.GenBuffers && gl.BindBuffer && gl.DeleteBuffers && gl.GenFramebuffers &&
          gl.BindFramebuffer && gl.FramebufferTexture2D && gl.BlitFramebuffer &&
          gl.DeleteFramebuffers && gl.TexStorage2D;
+}
+
+GLFWwindow *gl_frames_window(const char *program, int width, int height, const char *title) {
+  GLFWwindow *window;
+  if (!glfwInit()) {
+    fprintf(stderr, "%s: GLFW could not start (no display?)\n", program);
+    exit(1);
+  }
+  glfwWindowHint(GLFW_CLIENT_API, GLFW_OPENGL_API);
+  glfwWindowHint(GLFW_CONTEXT_VERSION_MAJOR, 3);
+  glfwWindowHint(GLFW_CONTEXT_VERSION_MINOR, 0);
+  glfwWindowHint(GLFW_RESIZABLE, GLFW_FALSE);
+  window = glfwCreateWindow(width, height, title, NULL, NULL);
+  if (window == NULL) {
+    fprintf(stderr, "%s: no OpenGL 3.0 window\n", program);
+    exit(1);
+  }
+  glfwMakeContextCurrent(window);
+  if (!load_functions()) {
+    fprintf(stderr, "%s: the OpenGL driver lacks framebuffer blits or texture storage\n",
+            program);
+    exit(1);
+  }
+  printf("OpenGL: %s, %s\n", (const char *)glGetString(GL_VERSION),
+         (const char *)glGetString(GL_RENDERER));
+  return window;
 }
 
 int gl_frames_can_import(void) {

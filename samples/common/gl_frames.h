@@ -23,9 +23,11 @@ struct GlFrames {
   uint8_t *pixels;
 };
 
-/* Loads the OpenGL functions the frames need; 0 when the driver lacks framebuffer blits or
- * texture storage. Call once, with the context current. */
-int gl_frames_load(void);
+/* A window of `width` x `height` that does not resize, with a current OpenGL 3.0 context and
+ * the functions the frames need loaded; `program` names the caller in the message when GLFW,
+ * the window or the driver fails (the process then exits). */
+struct GLFWwindow *gl_frames_window(const char *program, int width, int height,
+                                    const char *title);
 
 /* Whether the driver can import memory from a file descriptor (GL_EXT_memory_object_fd). */
 int gl_frames_can_import(void);

@@ -385,32 +385,39 @@ fn viewer_under_xvfb_swaps_techniques_resizes_and_shows_the_offscreen_image() {
     viewer.grab_finish_and_compare(&display, &dir);
 }
 
-/// The OpenGL host takes cadr's frames through memory the two drivers share (Mesa 25's
-/// lavapipe exports it, its llvmpipe imports it): no byte is read back through the CPU, and
-/// its window shows what the offscreen render of the same camera shows.
-#[test]
-fn gl_view_shows_cadrs_frames_in_opengl_through_shared_memory() {
-    let dir = scratch_dir("sample-gl-view");
+/// Runs `gl_view` on gen:demo for `frames` frames with `extra` arguments in its self-test,
+/// checks that it printed each of `expected`, and compares its window with the offscreen render.
+fn run_gl_view(name: &str, frames: &str, extra: &[&str], expected: &[&str]) {
+    let dir = scratch_dir(name);
     let program = sample("gl_view", &dir, &["-lglfw", "-lGL"]);
     let display = VirtualDisplay::start();
     let view = WindowSample::start(
         "gl_view",
         Command::new(&program)
-            .args([
-                "gen:demo",
-                "--frames",
-                "8",
-                "--self-test",
-                dir.to_str().unwrap(),
-            ])
+            .args(["gen:demo", "--frames", frames])
+            .args(extra)
+            .args(["--self-test", dir.to_str().unwrap()])
             .env("DISPLAY", &display.name),
     );
-    view.assert_printed(&[
-        "path: shared memory",
-        "8 frames",
-        "bytes read back per frame: 0",
-    ]);
+    view.assert_printed(expected);
     view.grab_finish_and_compare(&display, &dir);
+}
+
+/// The OpenGL host takes cadr's frames through memory the two drivers share (Mesa 25's
+/// lavapipe exports it, its llvmpipe imports it): no byte is read back through the CPU, and
+/// its window shows what the offscreen render of the same camera shows.
+#[test]
+fn gl_view_shows_cadrs_frames_in_opengl_through_shared_memory() {
+    run_gl_view(
+        "sample-gl-view",
+        "8",
+        &[],
+        &[
+            "path: shared memory",
+            "8 frames",
+            "bytes read back per frame: 0",
+        ],
+    );
 }
 
 /// Four views of one scene (top, front, side, perspective) in one OpenGL window: a click picks
@@ -475,24 +482,12 @@ fn quad_view_shows_four_views_of_one_scene_and_picks_in_each() {
 /// how many bytes that costs; the picture is the same.
 #[test]
 fn gl_view_falls_back_to_reading_frames_back() {
-    let dir = scratch_dir("sample-gl-view-read-back");
-    let program = sample("gl_view", &dir, &["-lglfw", "-lGL"]);
-    let display = VirtualDisplay::start();
-    let view = WindowSample::start(
-        "gl_view",
-        Command::new(&program)
-            .args([
-                "gen:demo",
-                "--frames",
-                "4",
-                "--read-back",
-                "--self-test",
-                dir.to_str().unwrap(),
-            ])
-            .env("DISPLAY", &display.name),
+    run_gl_view(
+        "sample-gl-view-read-back",
+        "4",
+        &["--read-back"],
+        &["path: read-back", "bytes read back per frame: 307200"],
     );
-    view.assert_printed(&["path: read-back", "bytes read back per frame: 307200"]);
-    view.grab_finish_and_compare(&display, &dir);
 }
 
 #[test]

@@ -4,10 +4,11 @@
  * click in a view picks there and highlights the part in all four; a click on the background
  * clears the selection.
  *
- *   quad_view [scene] [--frames N] [--self-test DIR]
+ *   quad_view [scene] [--frames N] [--views N] [--self-test DIR]
  *
  * It orbits the perspective view for N frames (default 120) and prints each view's CPU time per
- * frame, the frames per second and cadr's device memory. --self-test DIR picks in the middle of
+ * frame, the frames per second and cadr's device memory. --views N shows only the first N views
+ * (top, front, side, perspective), to compare one view's costs with four's. --self-test DIR picks in the middle of
  * each view (printing what it found), writes the offscreen render of each view's camera
  * (DIR/view0.png ... view3.png), prints where each view lies in the window ("view N at X,Y
  * WxH") and "screenshot ready WxH", and keeps showing the views until a line arrives on stdin,
@@ -36,6 +37,7 @@ struct QuadView {
   struct CadrCamera cameras[VIEWS];
   double orbit;            /* the perspective view's angle about the up axis */
   CadrNode selected;       /* the highlighted geo node, 0 for none */
+  int count;               /* the views shown: the first `count` of top, front, side, perspective */
   double cpu_us[VIEWS];    /* each view's CPU time, summed over the frames after the first */
   int timed_frames;        /* how many frames cpu_us sums */
 };
@@ -99,7 +101,7 @@ static void view_origin(int index, int *x, int *y) {
 static size_t draw(struct QuadView *q, int timed) {
   size_t read_back = 0;
   int i;
-  for (i = 0; i < VIEWS; ++i) {
+  for (i = 0; i < q->count; ++i) {
     struct CadrFrameStats stats;
     int x, y;
     memset(&stats, 0, sizeof stats);
@@ -120,6 +122,9 @@ static CadrNode select_at(struct QuadView *q, int x, int y) {
   int index = (y >= VIEW_HEIGHT ? 2 : 0) + (x >= VIEW_WIDTH ? 1 : 0), origin_x, origin_y;
   uint32_t flags = 0;
   CadrPickResult picked;
+  if (index >= q->count) {
+    return q->selected; /* an empty quarter */
+  }
   memset(&picked, 0, sizeof picked);
   picked.size = sizeof picked;
   view_origin(index, &origin_x, &origin_y);
@@ -168,14 +173,14 @@ static void self_test(struct QuadView *q, CadrContext context, GLFWwindow *windo
                       const char *dir) {
   char path[4096], line[64];
   int i;
-  for (i = 0; i < VIEWS; ++i) {
+  for (i = 0; i < q->count; ++i) {
     int x, y;
     view_origin(i, &x, &y);
     select_at(q, x + VIEW_WIDTH / 2, y + VIEW_HEIGHT / 2);
   }
   /* The last pick's part stays highlighted in every view. */
   draw(q, 0);
-  for (i = 0; i < VIEWS; ++i) {
+  for (i = 0; i < q->count; ++i) {
     CadrRenderer offscreen;
     int x, y;
     snprintf(path, sizeof path, "%s/view%d.png", dir, i);
@@ -197,7 +202,7 @@ static void self_test(struct QuadView *q, CadrContext context, GLFWwindow *windo
 
 int main(int argc, char **argv) {
   const char *source = "gen:demo", *test_dir = NULL;
-  int frames = 120, frame, i, shared = 1;
+  int frames = 120, views = VIEWS, frame, i, shared = 1;
   struct QuadView q;
   struct CadrContextOptions options;
   struct CadrLoadResult loaded;
@@ -213,11 +218,18 @@ int main(int argc, char **argv) {
       frames = atoi(argv[++i]);
     } else if (strcmp(argv[i], "--self-test") == 0 && i + 1 < argc) {
       test_dir = argv[++i];
+    } else if (strcmp(argv[i], "--views") == 0 && i + 1 < argc) {
+      views = atoi(argv[++i]);
     } else {
       source = argv[i];
     }
   }
   memset(&q, 0, sizeof q);
+  if (views < 1 || views > VIEWS) {
+    fprintf(stderr, "quad_view: --views takes 1 to %d\n", VIEWS);
+    return 2;
+  }
+  q.count = views;
   window = gl_frames_window("quad_view", WINDOW_WIDTH, WINDOW_HEIGHT,
                             "cadr: top, front, side, perspective");
   glfwSetWindowUserPointer(window, &q);
@@ -240,7 +252,7 @@ int main(int argc, char **argv) {
 
   scene_bytes = device_bytes(context);
   one_view_bytes = 0;
-  for (i = 0; i < VIEWS; ++i) {
+  for (i = 0; i < q.count; ++i) {
     gl_frames_create(&q.views[i], context, VIEW_WIDTH, VIEW_HEIGHT, 1);
     shared = shared && gl_frames_shared(&q.views[i]);
     if (i == 0) {
@@ -263,13 +275,13 @@ int main(int argc, char **argv) {
     glfwSwapBuffers(window);
     glfwPollEvents();
   }
-  for (i = 0; i < VIEWS; ++i) {
+  for (i = 0; i < q.count; ++i) {
     printf("%s view: %.1f us of CPU per frame\n", view_names[i],
            q.timed_frames > 0 ? q.cpu_us[i] / q.timed_frames : 0.0);
   }
   printf("%d frames of four views, %.1f frames/s, bytes read back per frame: %zu\n", frame,
          frame / (now_seconds() - start), frame > 0 ? read_back / (size_t)frame : 0);
-  printf("device memory: one view %.1f MB, four views %.1f MB\n", one_view_bytes / 1e6,
+  printf("device memory: one view %.1f MB, %d views %.1f MB\n", one_view_bytes / 1e6, q.count,
          (device_bytes(context) - scene_bytes) / 1e6);
 
   if (test_dir != NULL) {
@@ -277,7 +289,7 @@ int main(int argc, char **argv) {
   }
   CADR_CHECK(cadr_context_validation_error_count(context, &validation_errors));
   printf("validation errors: %llu\n", (unsigned long long)validation_errors);
-  for (i = 0; i < VIEWS; ++i) {
+  for (i = 0; i < q.count; ++i) {
     gl_frames_destroy(&q.views[i]);
   }
   CADR_CHECK(cadr_scene_destroy(q.scene));

@@ -1820,8 +1820,9 @@ enum CadrResult cadr_renderer_technique(CadrRenderer renderer, uint32_t kind, co
 // Returns `CADR_RESULT_OK`, `CADR_RESULT_NULL_ARGUMENT`, `CADR_RESULT_INVALID_ARGUMENT`
 // (non-finite camera), `CADR_RESULT_VULKAN`, `CADR_RESULT_PLUGIN_FAILED` or a handle error.
 // Ownership: the camera is read during the call. Thread-safety: as `cadr_renderer_create`; the
-// scene is locked during the call. A scene drawn alternately by two renderers is uploaded
-// afresh at each change of renderer.
+// scene is locked during the call. Each renderer keeps its own copy of the scene on the GPU
+// (made at its first frame, then brought up to date with the edits since its last one), so
+// renderers drawing one scene alternately upload only what changed, each once.
 //
 // # Safety
 // `camera` is null or readable; `stats` null or writable for its `size`.

@@ -72,6 +72,12 @@ pub struct CadrExportedFrame {
     /// frames went to new memory, which the host then imports in place of the old one (whose
     /// frames no longer change).
     pub generation: u64,
+    /// The Vulkan device's UUID (`VkPhysicalDeviceIDProperties::deviceUUID`): import only where
+    /// the OpenGL driver's `GL_DEVICE_UUID_EXT` is the same.
+    pub device_uuid: [u8; 16],
+    /// The Vulkan driver's UUID (`driverUUID`): import only where `GL_DRIVER_UUID_EXT` is the
+    /// same.
+    pub driver_uuid: [u8; 16],
 }
 
 /// Creates an offscreen renderer of `width` × `height` pixels whose every frame
@@ -124,6 +130,7 @@ pub unsafe extern "C" fn cadr_renderer_exported_frame(
                 ));
             };
             let extent = output.export.extent();
+            let (device_uuid, driver_uuid) = output.export.uuids();
             Ok(CadrExportedFrame {
                 size: std::mem::size_of::<CadrExportedFrame>() as u32,
                 fd: output.export.file_descriptor()?,
@@ -132,6 +139,8 @@ pub unsafe extern "C" fn cadr_renderer_exported_frame(
                 height: extent.height,
                 row_bytes: extent.width * 4,
                 generation: output.generation,
+                device_uuid,
+                driver_uuid,
             })
         })?;
         // SAFETY: null or writable for its size (the caller's contract).

@@ -1,4 +1,5 @@
 /* cadr's frames in an OpenGL host: see gl_frames.h. */
+#define _POSIX_C_SOURCE 200809L
 #define GLFW_INCLUDE_GLEXT
 #include <GLFW/glfw3.h>
 
@@ -8,6 +9,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <unistd.h>
 
 /* The OpenGL functions beyond 1.1, loaded through GLFW. */
 static struct {
@@ -25,6 +27,8 @@ static struct {
   PFNGLDELETEMEMORYOBJECTSEXTPROC DeleteMemoryObjectsEXT;
   PFNGLIMPORTMEMORYFDEXTPROC ImportMemoryFdEXT;
   PFNGLBUFFERSTORAGEMEMEXTPROC BufferStorageMemEXT;
+  PFNGLGETUNSIGNEDBYTEVEXTPROC GetUnsignedBytevEXT;
+  PFNGLGETUNSIGNEDBYTEI_VEXTPROC GetUnsignedBytei_vEXT;
 } gl;
 
 #define LOAD(name, type) (gl.name = (type)glfwGetProcAddress("gl" #name))
@@ -47,6 +51,8 @@ static int load_functions(void) {
     LOAD(DeleteMemoryObjectsEXT, PFNGLDELETEMEMORYOBJECTSEXTPROC);
     LOAD(ImportMemoryFdEXT, PFNGLIMPORTMEMORYFDEXTPROC);
     LOAD(BufferStorageMemEXT, PFNGLBUFFERSTORAGEMEMEXTPROC);
+    LOAD(GetUnsignedBytevEXT, PFNGLGETUNSIGNEDBYTEVEXTPROC);
+    LOAD(GetUnsignedBytei_vEXT, PFNGLGETUNSIGNEDBYTEI_VEXTPROC);
   }
   return gl.GenBuffers && gl.BindBuffer && gl.DeleteBuffers && gl.GenFramebuffers &&
          gl.BindFramebuffer && gl.FramebufferTexture2D && gl.BlitFramebuffer &&
@@ -81,7 +87,28 @@ GLFWwindow *gl_frames_window(const char *program, int width, int height, const c
 
 int gl_frames_can_import(void) {
   return gl.ImportMemoryFdEXT != NULL && gl.CreateMemoryObjectsEXT != NULL &&
-         gl.BufferStorageMemEXT != NULL && gl.DeleteMemoryObjectsEXT != NULL;
+         gl.BufferStorageMemEXT != NULL && gl.DeleteMemoryObjectsEXT != NULL &&
+         gl.GetUnsignedBytevEXT != NULL && gl.GetUnsignedBytei_vEXT != NULL;
+}
+
+/* Whether the OpenGL driver is the one cadr's memory comes from: the same driver UUID and one
+ * of its devices with the same device UUID (what GL_EXT_external_objects asks an importer to
+ * check). */
+static int same_device(const CadrExportedFrame *exported) {
+  GLubyte driver[GL_UUID_SIZE_EXT], device[GL_UUID_SIZE_EXT];
+  GLint devices = 0, i;
+  gl.GetUnsignedBytevEXT(GL_DRIVER_UUID_EXT, driver);
+  if (memcmp(driver, exported->driver_uuid, GL_UUID_SIZE_EXT) != 0) {
+    return 0;
+  }
+  glGetIntegerv(GL_NUM_DEVICE_UUIDS_EXT, &devices);
+  for (i = 0; i < devices; ++i) {
+    gl.GetUnsignedBytei_vEXT(GL_DEVICE_UUID_EXT, (GLuint)i, device);
+    if (memcmp(device, exported->device_uuid, GL_UUID_SIZE_EXT) == 0) {
+      return 1;
+    }
+  }
+  return 0;
 }
 
 /* Imports the renderer's exported memory as a pixel buffer; 0 when the driver refuses it. A
@@ -92,6 +119,11 @@ static int import_frames(struct GlFrames *frames) {
   memset(&exported, 0, sizeof exported);
   exported.size = sizeof exported;
   CADR_CHECK(cadr_renderer_exported_frame(frames->renderer, &exported));
+  if (!same_device(&exported)) {
+    close(exported.fd);
+    printf("the OpenGL driver is not the one cadr renders with (their UUIDs differ)\n");
+    return 0;
+  }
   while (glGetError() != GL_NO_ERROR) {
     /* Earlier errors are not the import's. */
   }

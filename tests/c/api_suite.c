@@ -1560,6 +1560,11 @@ static void test_export(CadrContext context, struct Built *b) {
   OK(cadr_renderer_exported_frame(exporting, &frame));
   CHECK(frame.fd >= 0 && frame.width == W && frame.height == H && frame.row_bytes == W * 4);
   CHECK(frame.allocation_size >= (uint64_t)W * H * 4 && frame.generation == 1);
+  {
+    /* The UUIDs an importer compares with its own: the device's and the driver's. */
+    static const uint8_t zero[16] = {0};
+    CHECK(memcmp(frame.device_uuid, zero, 16) != 0 && memcmp(frame.driver_uuid, zero, 16) != 0);
+  }
   /* The descriptor is open and the host's; its memory is the driver's own format (an opaque
    * descriptor: OpenGL imports it, tests/tests/c_samples.rs compares what it shows). */
   CHECK(fcntl(frame.fd, F_GETFD) != -1);

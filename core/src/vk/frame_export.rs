@@ -33,6 +33,9 @@ pub struct FrameExport {
     allocation_size: u64,
     extent: vk::Extent2D,
     commands: CommandContext,
+    /// The device's and the driver's UUIDs (`VkPhysicalDeviceIDProperties`): an importer
+    /// shares memory only with a device and driver of the same UUIDs.
+    uuids: ([u8; vk::UUID_SIZE], [u8; vk::UUID_SIZE]),
 }
 
 impl FrameExport {
@@ -79,6 +82,7 @@ impl FrameExport {
             allocation_size,
             extent,
             commands: CommandContext::new(device, "frame export commands")?,
+            uuids: uuids(device),
         };
         device.set_name(buffer, "exported frame");
         // SAFETY: the memory was allocated for this buffer (dedicated) and is bound to nothing.
@@ -89,6 +93,12 @@ impl FrameExport {
     /// The size of the frames it holds.
     pub fn extent(&self) -> vk::Extent2D {
         self.extent
+    }
+
+    /// The device's UUID and the driver's, which an importer compares with its own
+    /// (`GL_DEVICE_UUID_EXT`, `GL_DRIVER_UUID_EXT`) before importing.
+    pub fn uuids(&self) -> ([u8; vk::UUID_SIZE], [u8; vk::UUID_SIZE]) {
+        self.uuids
     }
 
     /// The exported memory's size in bytes.
@@ -172,6 +182,21 @@ impl Drop for FrameExport {
             self.device.raw.free_memory(self.memory, host_callbacks());
         }
     }
+}
+
+/// The device's and the driver's UUIDs.
+fn uuids(device: &Device) -> ([u8; vk::UUID_SIZE], [u8; vk::UUID_SIZE]) {
+    let mut ids = vk::PhysicalDeviceIDProperties::default();
+    let mut properties = vk::PhysicalDeviceProperties2::default().push_next(&mut ids);
+    // SAFETY: the physical device belongs to the device's instance (Vulkan 1.3, where the query
+    // is core); the chain lives on this stack frame.
+    unsafe {
+        device
+            .instance
+            .raw
+            .get_physical_device_properties2(device.adapter().physical, &mut properties)
+    };
+    (ids.device_uuid, ids.driver_uuid)
 }
 
 /// Whether the driver can export the memory of a buffer of `usage` as [`HANDLE_TYPE`].

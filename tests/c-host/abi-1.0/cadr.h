@@ -434,6 +434,12 @@ typedef struct CadrExportedFrame {
   // frames went to new memory, which the host then imports in place of the old one (whose
   // frames no longer change).
   uint64_t generation;
+  // The Vulkan device's UUID (`VkPhysicalDeviceIDProperties::deviceUUID`): import only where
+  // the OpenGL driver's `GL_DEVICE_UUID_EXT` is the same.
+  uint8_t device_uuid[16];
+  // The Vulkan driver's UUID (`driverUUID`): import only where `GL_DRIVER_UUID_EXT` is the
+  // same.
+  uint8_t driver_uuid[16];
 } CadrExportedFrame;
 
 // A range of a geometry's indices drawn with one material, and its range of edge indices.

@@ -1583,6 +1583,20 @@ static void test_export(CadrContext context, struct Built *b) {
   EXPECT(cadr_renderer_exported_frame(plain, &frame), CADR_RESULT_INVALID_ARGUMENT);
   MESSAGE_HAS("cadr_renderer_create_for_export");
   OK(cadr_renderer_destroy(plain));
+  {
+    /* The settings' functions on a destroyed renderer. */
+    CadrRendererSettings settings;
+    CadrRendererCapabilities capabilities;
+    memset(&settings, 0, sizeof settings);
+    settings.size = sizeof settings;
+    memset(&capabilities, 0, sizeof capabilities);
+    capabilities.size = sizeof capabilities;
+    EXPECT(cadr_renderer_settings(plain, &settings), CADR_RESULT_DESTROYED_HANDLE);
+    EXPECT(cadr_renderer_apply_settings(plain, &settings), CADR_RESULT_DESTROYED_HANDLE);
+    EXPECT(cadr_renderer_capabilities(plain, &capabilities), CADR_RESULT_DESTROYED_HANDLE);
+    EXPECT(cadr_renderer_capabilities((CadrRenderer)b->scene, &capabilities),
+           CADR_RESULT_FOREIGN_HANDLE);
+  }
   OK(cadr_renderer_destroy(exporting));
   EXPECT(cadr_renderer_exported_frame(exporting, &frame), CADR_RESULT_DESTROYED_HANDLE);
 }

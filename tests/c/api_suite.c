@@ -1551,7 +1551,25 @@ static void test_export(CadrContext context, struct Built *b) {
   EXPECT(cadr_renderer_create_for_export(context, W, H, NULL), CADR_RESULT_NULL_ARGUMENT);
   EXPECT(cadr_renderer_create_for_export((CadrContext)b->scene, W, H, &exporting),
          CADR_RESULT_FOREIGN_HANDLE);
-  OK(cadr_renderer_create_for_export(context, W, H, &exporting));
+  {
+    /* The exported memory counts in the context's device memory: an exporting renderer holds
+     * at least a frame's bytes more than a plain one of its size. */
+    struct CadrMemoryUsage usage;
+    uint64_t before, with_export, with_plain;
+    memset(&usage, 0, sizeof usage);
+    usage.size = sizeof usage;
+    OK(cadr_context_memory_usage(context, &usage));
+    before = usage.device_allocated_bytes;
+    OK(cadr_renderer_create_for_export(context, W, H, &exporting));
+    OK(cadr_context_memory_usage(context, &usage));
+    with_export = usage.device_allocated_bytes;
+    OK(cadr_renderer_create(context, W, H, &plain));
+    OK(cadr_context_memory_usage(context, &usage));
+    with_plain = usage.device_allocated_bytes;
+    CHECK(with_export - before >= (with_plain - with_export) + (uint64_t)W * H * 4);
+    OK(cadr_renderer_destroy(plain));
+    plain = NULL;
+  }
   OK(cadr_scene_bounds(b->scene, &bounds));
   OK(cadr_camera_fit(&bounds, (double)W / H, NULL, &camera));
   OK(cadr_renderer_render(exporting, b->scene, &camera, NULL));

@@ -103,7 +103,7 @@ pub struct Device {
     /// submission, wait and allocation is refused with [`VkError::DeviceLost`].
     lost: std::sync::atomic::AtomicBool,
     /// Bytes of device memory allocated now and at most (see [`Device::memory_in_use`]).
-    memory_bytes: (std::sync::atomic::AtomicU64, std::sync::atomic::AtomicU64),
+    memory_bytes: MemoryCounters,
     /// Set by [`Device::set_staged_uploads`]: uploads go through staging buffers even into
     /// host-visible memory.
     staged_uploads: std::sync::atomic::AtomicBool,
@@ -119,6 +119,17 @@ pub struct Device {
     pipeline_cache: PersistentPipelineCache,
     /// Whether cadr made the device (and destroys it) or a host lent it.
     owner: Owner,
+}
+
+/// Bytes of device memory cadr holds, counted as it allocates and frees.
+#[derive(Default)]
+struct MemoryCounters {
+    /// Through the allocator, now.
+    now: std::sync::atomic::AtomicU64,
+    /// Through the allocator, at most so far.
+    peak: std::sync::atomic::AtomicU64,
+    /// In dedicated allocations outside the allocator (exported frames), now.
+    dedicated: std::sync::atomic::AtomicU64,
 }
 
 /// What a device is, read once when it is made.
@@ -437,18 +448,33 @@ impl Device {
         self.adapter.queue_family
     }
 
-    /// The device memory cadr holds now, through its allocator (plugins' buffers included:
-    /// they allocate through the host).
+    /// The device memory cadr holds now: through its allocator (plugins' buffers included:
+    /// they allocate through the host) and in dedicated allocations (exported frames).
     pub fn memory_usage(&self) -> DeviceMemoryUsage {
-        match self.allocator().as_ref() {
+        let dedicated = self
+            .memory_bytes
+            .dedicated
+            .load(std::sync::atomic::Ordering::Relaxed);
+        let (allocated_bytes, reserved_bytes) = match self.allocator().as_ref() {
             Some(allocator) => {
                 let report = allocator.generate_report();
-                DeviceMemoryUsage {
-                    allocated_bytes: report.total_allocated_bytes,
-                    reserved_bytes: report.total_capacity_bytes,
-                }
+                (report.total_allocated_bytes, report.total_capacity_bytes)
             }
-            None => DeviceMemoryUsage::default(),
+            None => (0, 0),
+        };
+        DeviceMemoryUsage {
+            allocated_bytes: allocated_bytes + dedicated,
+            reserved_bytes: reserved_bytes + dedicated,
+        }
+    }
+
+    /// Counts `bytes` of a dedicated allocation made (`made`) or freed outside the allocator.
+    pub(crate) fn count_dedicated(&self, bytes: u64, made: bool) {
+        use std::sync::atomic::Ordering::Relaxed;
+        if made {
+            self.memory_bytes.dedicated.fetch_add(bytes, Relaxed);
+        } else {
+            self.memory_bytes.dedicated.fetch_sub(bytes, Relaxed);
         }
     }
 
@@ -489,9 +515,9 @@ impl Device {
             })
             .map_err(|source| super::error::allocation_error(name, source))?;
         use std::sync::atomic::Ordering::Relaxed;
-        let (now, peak) = &self.memory_bytes;
-        let in_use = now.fetch_add(allocation.size(), Relaxed) + allocation.size();
-        peak.fetch_max(in_use, Relaxed);
+        let counters = &self.memory_bytes;
+        let in_use = counters.now.fetch_add(allocation.size(), Relaxed) + allocation.size();
+        counters.peak.fetch_max(in_use, Relaxed);
         Ok(allocation)
     }
 
@@ -501,7 +527,7 @@ impl Device {
         if let Some(allocator) = self.allocator().as_mut() {
             if allocator.free(allocation).is_ok() {
                 self.memory_bytes
-                    .0
+                    .now
                     .fetch_sub(size, std::sync::atomic::Ordering::Relaxed);
             }
         }
@@ -512,8 +538,8 @@ impl Device {
     pub fn memory_in_use(&self) -> (u64, u64) {
         use std::sync::atomic::Ordering::Relaxed;
         (
-            self.memory_bytes.0.load(Relaxed),
-            self.memory_bytes.1.load(Relaxed),
+            self.memory_bytes.now.load(Relaxed),
+            self.memory_bytes.peak.load(Relaxed),
         )
     }
 

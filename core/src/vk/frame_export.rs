@@ -57,6 +57,8 @@ impl FrameExport {
                 "the driver cannot export a transfer buffer's memory as a file descriptor",
             ));
         }
+        // Made first: nothing to undo when it fails.
+        let commands = CommandContext::new(device, "frame export commands")?;
         let size = u64::from(extent.width) * u64::from(extent.height) * 4 + IMPORTER_SLACK;
         let mut external = vk::ExternalMemoryBufferCreateInfo::default().handle_types(HANDLE_TYPE);
         let info = vk::BufferCreateInfo::default()
@@ -81,11 +83,12 @@ impl FrameExport {
             memory,
             allocation_size,
             extent,
-            commands: CommandContext::new(device, "frame export commands")?,
+            commands,
             uuids: uuids(device),
         };
         device.set_name(buffer, "exported frame");
         // SAFETY: the memory was allocated for this buffer (dedicated) and is bound to nothing.
+        // On failure `export` is dropped, which frees both.
         unsafe { device.raw.bind_buffer_memory(buffer, memory, 0) }.or_vk("vkBindBufferMemory")?;
         Ok(export)
     }
@@ -181,6 +184,7 @@ impl Drop for FrameExport {
                 .destroy_buffer(self.buffer, host_callbacks());
             self.device.raw.free_memory(self.memory, host_callbacks());
         }
+        self.device.count_dedicated(self.allocation_size, false);
     }
 }
 
@@ -258,5 +262,6 @@ fn allocate_exportable(device: &Device, buffer: vk::Buffer) -> VkResult<(vk::Dev
     // SAFETY: info and its chain are valid; the memory type exists and suits the buffer.
     let memory =
         unsafe { device.raw.allocate_memory(&info, host_callbacks()) }.or_vk("vkAllocateMemory")?;
+    device.count_dedicated(requirements.size, true);
     Ok((memory, requirements.size))
 }

@@ -97,22 +97,13 @@ int main(int argc, char **argv) {
 
   if (test_dir != NULL) {
     char path[4096];
-    char line[64];
-    CadrRenderer offscreen;
     snprintf(path, sizeof path, "%s/offscreen.png", test_dir);
-    CADR_CHECK(cadr_renderer_create(context, WIDTH, HEIGHT, &offscreen));
-    CADR_CHECK(cadr_renderer_render(offscreen, scene, &camera, NULL));
-    CADR_CHECK(cadr_renderer_save_png(offscreen, path));
-    CADR_CHECK(cadr_renderer_destroy(offscreen));
+    sample_save_offscreen(context, scene, &camera, WIDTH, HEIGHT, path);
+    /* The frame stays on the window until the test has grabbed it. */
     gl_frames_show(&view, 0, 0, HEIGHT);
     glfwSwapBuffers(window);
     glFinish();
-    printf("screenshot ready %dx%d\n", WIDTH, HEIGHT);
-    fflush(stdout);
-    /* Keep the frame on the window until the test has grabbed it. */
-    if (fgets(line, sizeof line, stdin) == NULL) {
-      line[0] = 0;
-    }
+    sample_screenshot_ready(WIDTH, HEIGHT);
   }
   CADR_CHECK(cadr_context_validation_error_count(context, &validation_errors));
   printf("validation errors: %llu\n", (unsigned long long)validation_errors);

@@ -171,7 +171,7 @@ static uint64_t device_bytes(CadrContext context) {
  * until stdin says the test has grabbed it. */
 static void self_test(struct QuadView *q, CadrContext context, GLFWwindow *window,
                       const char *dir) {
-  char path[4096], line[64];
+  char path[4096];
   int i;
   for (i = 0; i < q->count; ++i) {
     int x, y;
@@ -181,23 +181,15 @@ static void self_test(struct QuadView *q, CadrContext context, GLFWwindow *windo
   /* The last pick's part stays highlighted in every view. */
   draw(q, 0);
   for (i = 0; i < q->count; ++i) {
-    CadrRenderer offscreen;
     int x, y;
     snprintf(path, sizeof path, "%s/view%d.png", dir, i);
-    CADR_CHECK(cadr_renderer_create(context, VIEW_WIDTH, VIEW_HEIGHT, &offscreen));
-    CADR_CHECK(cadr_renderer_render(offscreen, q->scene, &q->cameras[i], NULL));
-    CADR_CHECK(cadr_renderer_save_png(offscreen, path));
-    CADR_CHECK(cadr_renderer_destroy(offscreen));
+    sample_save_offscreen(context, q->scene, &q->cameras[i], VIEW_WIDTH, VIEW_HEIGHT, path);
     view_origin(i, &x, &y);
     printf("view %d at %d,%d %dx%d\n", i, x, y, VIEW_WIDTH, VIEW_HEIGHT);
   }
   glfwSwapBuffers(window);
   glFinish();
-  printf("screenshot ready %dx%d\n", WINDOW_WIDTH, WINDOW_HEIGHT);
-  fflush(stdout);
-  if (fgets(line, sizeof line, stdin) == NULL) {
-    line[0] = 0;
-  }
+  sample_screenshot_ready(WINDOW_WIDTH, WINDOW_HEIGHT);
 }
 
 int main(int argc, char **argv) {

@@ -453,8 +453,7 @@ static void on_framebuffer_size(GLFWwindow *window, int width, int height) {
 static int self_test(struct Viewer *v, const char *dir) {
   uint32_t kind, width = 0, height = 0;
   int frame, fb_width = 0, fb_height = 0;
-  char path[1024], line[64];
-  CadrRenderer offscreen;
+  char path[1024];
   struct CadrCamera camera;
   uint64_t errors = 0;
   for (frame = 0; frame < 3; ++frame) {
@@ -573,18 +572,11 @@ static int self_test(struct Viewer *v, const char *dir) {
   render(v);
   /* The same view, offscreen. */
   camera_of(v, width, height, &camera);
-  CADR_CHECK(cadr_renderer_create(v->context, width, height, &offscreen));
-  CADR_CHECK(cadr_renderer_render(offscreen, v->scene, &camera, NULL));
   snprintf(path, sizeof path, "%s/offscreen.png", dir);
-  CADR_CHECK(cadr_renderer_save_png(offscreen, path));
-  CADR_CHECK(cadr_renderer_destroy(offscreen));
-  render(v);
-  printf("screenshot ready %ux%u\n", width, height);
-  fflush(stdout);
+  sample_save_offscreen(v->context, v->scene, &camera, width, height, path);
   /* Keep the window's content current while the test grabs it. */
-  if (fgets(line, sizeof line, stdin) == NULL) {
-    line[0] = '\0';
-  }
+  render(v);
+  sample_screenshot_ready(width, height);
   CADR_CHECK(cadr_context_validation_error_count(v->context, &errors));
   printf("validation errors: %llu\n", (unsigned long long)errors);
   return errors == 0 ? 0 : 1;

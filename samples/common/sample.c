@@ -28,6 +28,24 @@ void sample_print_messages(void) {
   CADR_CHECK(cadr_set_message_callback(print_message, NULL, CADR_MESSAGE_WARNING));
 }
 
+void sample_save_offscreen(CadrContext context, CadrScene scene, const struct CadrCamera *camera,
+                           uint32_t width, uint32_t height, const char *path) {
+  CadrRenderer offscreen;
+  CADR_CHECK(cadr_renderer_create(context, width, height, &offscreen));
+  CADR_CHECK(cadr_renderer_render(offscreen, scene, camera, NULL));
+  CADR_CHECK(cadr_renderer_save_png(offscreen, path));
+  CADR_CHECK(cadr_renderer_destroy(offscreen));
+}
+
+void sample_screenshot_ready(uint32_t width, uint32_t height) {
+  char line[64];
+  printf("screenshot ready %ux%u\n", width, height);
+  fflush(stdout);
+  if (fgets(line, sizeof line, stdin) == NULL) {
+    line[0] = '\0';
+  }
+}
+
 void sample_identity(double m[16]) {
   int i;
   for (i = 0; i < 16; ++i) {

@@ -13,6 +13,15 @@ void sample_check(enum CadrResult result, const char *call, const char *file, in
 /* Prints cadr's warnings and errors (what a load left out, validation errors) to stderr. */
 void sample_print_messages(void);
 
+/* For the samples' self-tests: renders `scene` seen by `camera` offscreen at `width` x `height`
+ * into the PNG `path`, the reference a test compares a window with. */
+void sample_save_offscreen(CadrContext context, CadrScene scene, const struct CadrCamera *camera,
+                           uint32_t width, uint32_t height, const char *path);
+
+/* For the samples' self-tests: prints "screenshot ready WxH" and waits until a line arrives on
+ * stdin (the test has grabbed the window). */
+void sample_screenshot_ready(uint32_t width, uint32_t height);
+
 /* Column-major 4x4 matrices. */
 void sample_identity(double m[16]);
 void sample_translation(double m[16], double x, double y, double z);

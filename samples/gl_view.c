@@ -44,12 +44,10 @@ int main(int argc, char **argv) {
   int frames = 60, read_back_only = 0, frame, i;
   struct GlFrames view;
   struct CadrContextOptions options;
-  struct CadrLoadResult loaded;
   struct CadrBounds bounds;
   struct CadrCamera camera;
   CadrContext context;
   CadrScene scene;
-  CadrNode root;
   GLFWwindow *window;
   size_t read_back = 0;
   double start;
@@ -74,13 +72,7 @@ int main(int argc, char **argv) {
   options.validation = test_dir != NULL;
   sample_print_messages();
   CADR_CHECK(cadr_context_create(&options, &context));
-  CADR_CHECK(cadr_scene_create(&scene));
-  CADR_CHECK(cadr_scene_root(scene, &root));
-  memset(&loaded, 0, sizeof loaded);
-  loaded.size = sizeof loaded;
-  CADR_CHECK(cadr_scene_load(scene, source, root, &loaded));
-  cadr_load_result_free(&loaded);
-  CADR_CHECK(cadr_scene_bounds(scene, &bounds));
+  scene = sample_load(source, &bounds);
 
   gl_frames_create(&view, context, WIDTH, HEIGHT, !read_back_only);
   printf("path: %s\n", gl_frames_shared(&view) ? "shared memory" : "read-back");

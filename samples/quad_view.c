@@ -120,7 +120,6 @@ static size_t draw(struct QuadView *q, int timed) {
  * (the highlight is the scene's) and returns its node, 0 over the background. */
 static CadrNode select_at(struct QuadView *q, int x, int y) {
   int index = (y >= VIEW_HEIGHT ? 2 : 0) + (x >= VIEW_WIDTH ? 1 : 0), origin_x, origin_y;
-  uint32_t flags = 0;
   CadrPickResult picked;
   if (index >= q->count) {
     return q->selected; /* an empty quarter */
@@ -130,16 +129,9 @@ static CadrNode select_at(struct QuadView *q, int x, int y) {
   view_origin(index, &origin_x, &origin_y);
   CADR_CHECK(cadr_renderer_pick(q->views[index].renderer, q->scene, &q->cameras[index],
                                 (uint32_t)(x - origin_x), (uint32_t)(y - origin_y), &picked));
-  if (q->selected != 0) {
-    CADR_CHECK(cadr_scene_flags(q->scene, q->selected, &flags));
-    CADR_CHECK(cadr_scene_set_flags(q->scene, q->selected, flags & ~CADR_NODE_HIGHLIGHTED));
-    q->selected = 0;
-  }
-  if (picked.hit_count > 0) {
-    q->selected = picked.hits[0].node;
-    CADR_CHECK(cadr_scene_flags(q->scene, q->selected, &flags));
-    CADR_CHECK(cadr_scene_set_flags(q->scene, q->selected, flags | CADR_NODE_HIGHLIGHTED));
-  }
+  sample_set_highlighted(q->scene, q->selected, 0);
+  q->selected = picked.hit_count > 0 ? picked.hits[0].node : 0;
+  sample_set_highlighted(q->scene, q->selected, 1);
   printf("%s view: %s node %llu\n", view_names[index],
          picked.hit_count > 0 ? "picked" : "nothing under the cursor, cleared",
          (unsigned long long)q->selected);
@@ -197,9 +189,7 @@ int main(int argc, char **argv) {
   int frames = 120, views = VIEWS, frame, i, shared = 1;
   struct QuadView q;
   struct CadrContextOptions options;
-  struct CadrLoadResult loaded;
   CadrContext context;
-  CadrNode root;
   GLFWwindow *window;
   size_t read_back = 0;
   double start;
@@ -233,13 +223,7 @@ int main(int argc, char **argv) {
   options.validation = test_dir != NULL;
   sample_print_messages();
   CADR_CHECK(cadr_context_create(&options, &context));
-  CADR_CHECK(cadr_scene_create(&q.scene));
-  CADR_CHECK(cadr_scene_root(q.scene, &root));
-  memset(&loaded, 0, sizeof loaded);
-  loaded.size = sizeof loaded;
-  CADR_CHECK(cadr_scene_load(q.scene, source, root, &loaded));
-  cadr_load_result_free(&loaded);
-  CADR_CHECK(cadr_scene_bounds(q.scene, &q.bounds));
+  q.scene = sample_load(source, &q.bounds);
   place_cameras(&q);
 
   scene_bytes = device_bytes(context);

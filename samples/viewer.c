@@ -254,7 +254,7 @@ static void cycle_highlight_style(struct Viewer *v) {
  * highlighted and the one selected before is not; over the background, nothing is selected. */
 static void select_at(struct Viewer *v, double x, double y) {
   int window_width, window_height, fb_width, fb_height;
-  uint32_t width = 0, height = 0, flags = 0;
+  uint32_t width = 0, height = 0;
   struct CadrCamera camera;
   CadrPickResult picked = {sizeof(struct CadrPickResult), NULL, 0};
   double px, py;
@@ -272,15 +272,10 @@ static void select_at(struct Viewer *v, double x, double y) {
   }
   camera_of(v, width, height, &camera);
   CADR_CHECK(cadr_renderer_pick(v->renderer, v->scene, &camera, (uint32_t)px, (uint32_t)py, &picked));
-  if (v->selected != 0) {
-    CADR_CHECK(cadr_scene_flags(v->scene, v->selected, &flags));
-    CADR_CHECK(cadr_scene_set_flags(v->scene, v->selected, flags & ~CADR_NODE_HIGHLIGHTED));
-    v->selected = 0;
-  }
+  sample_set_highlighted(v->scene, v->selected, 0);
+  v->selected = picked.hit_count > 0 ? picked.hits[0].node : 0;
+  sample_set_highlighted(v->scene, v->selected, 1);
   if (picked.hit_count > 0) {
-    v->selected = picked.hits[0].node;
-    CADR_CHECK(cadr_scene_flags(v->scene, v->selected, &flags));
-    CADR_CHECK(cadr_scene_set_flags(v->scene, v->selected, flags | CADR_NODE_HIGHLIGHTED));
     printf("selected node %llu, part %u\n", (unsigned long long)v->selected, picked.hits[0].part);
   } else {
     printf("selection cleared\n");

@@ -14,8 +14,9 @@ packages=(
   assimp-testmodels
   # Build tools for crates with C parts.
   build-essential pkg-config
-  # Windows for the GLFW sample programs, run under Xvfb; xwd grabs the viewer's window.
-  xvfb libglfw3-dev x11-apps
+  # Windows for the GLFW sample programs, run under Xvfb; xwd grabs the viewer's window. The
+  # OpenGL samples (gl_view, quad_view) link libGL.
+  xvfb libglfw3-dev libgl-dev x11-apps
   # The C API's ABI is compared with its committed baseline (abidw, abidiff).
   abigail-tools
   # The Qt 6 sample (samples/qt_viewer.cpp) and the xcb headers of its X11 surface.

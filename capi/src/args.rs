@@ -178,21 +178,10 @@ pub(crate) unsafe fn deliver_sized<T: Copy>(
     name: &str,
     value: T,
 ) -> Result<(), Failure> {
-    non_null(out, name)?;
-    // SAFETY: non-null; the caller's contract makes at least the size readable.
-    let size = unsafe { out.cast::<u32>().read_unaligned() } as usize;
+    // SAFETY: null or at least its size readable (the caller's contract).
+    let size = unsafe { host_size(out, name) }?;
     let header = std::mem::size_of::<u32>();
-    if size < header {
-        return Err(Failure::invalid(format!(
-            "{name}->size is {size}; set it to the struct's size (sizeof)"
-        )));
-    }
     let known = std::mem::size_of::<T>();
-    if size > known + MAX_NEWER_BYTES {
-        return Err(Failure::invalid(format!(
-            "{name}->size is {size}, more than a newer header's struct can have ({known} bytes in this library); set it to the struct's size (sizeof)"
-        )));
-    }
     let copied = size.min(known);
     let source = std::ptr::from_ref(&value).cast::<u8>();
     // SAFETY: bytes `header..copied` lie within both `value` and the `size` bytes the caller
@@ -222,9 +211,8 @@ pub(crate) unsafe fn check_owning_size<T>(
     (name, type_name): (&str, &str),
     first_size: usize,
 ) -> Result<(), Failure> {
-    non_null(out, name)?;
-    // SAFETY: non-null; the caller's contract makes the size readable.
-    let size = unsafe { out.cast::<u32>().read_unaligned() } as usize;
+    // SAFETY: null or at least its size readable (the caller's contract).
+    let size = unsafe { host_size(out, name) }?;
     if size < first_size {
         return Err(Failure::invalid(format!(
             "{name}->size is {size}; set it to sizeof({type_name}) (at least {first_size} bytes)"
@@ -237,6 +225,28 @@ pub(crate) unsafe fn check_owning_size<T>(
 /// additions, well above what a minor version adds, and a guard against a `size` the host left
 /// uninitialised.
 const MAX_NEWER_BYTES: usize = 4096;
+
+/// The `size` a host gave in the first field of its struct `T` at `pointer`, refused when it
+/// cannot be one: below the size field itself, or more than [`MAX_NEWER_BYTES`] beyond this
+/// library's `T`. `name` is the argument, for the errors, which name the struct as C does.
+///
+/// # Safety
+/// `pointer` is null or points at least at a readable `u32`.
+unsafe fn host_size<T>(pointer: *const T, name: &str) -> Result<usize, Failure> {
+    non_null(pointer, name)?;
+    // SAFETY: non-null; the caller's contract makes the size readable.
+    let size = unsafe { pointer.cast::<u32>().read_unaligned() } as usize;
+    let known = std::mem::size_of::<T>();
+    if size < std::mem::size_of::<u32>() || size > known + MAX_NEWER_BYTES {
+        // The C name: the Rust type's, without its module path.
+        let full = std::any::type_name::<T>();
+        let type_name = full.rsplit("::").next().unwrap_or(full);
+        return Err(Failure::invalid(format!(
+            "{name}->size is {size}; set it to sizeof({type_name}) ({known} bytes in this library)"
+        )));
+    }
+    Ok(size)
+}
 
 /// Reads the host's input struct at `input` whose first field is its `u32` size, as a struct
 /// that grows is read: a host compiled against an older header gives a smaller `size`, and the
@@ -253,16 +263,10 @@ pub(crate) unsafe fn read_sized<T: Copy>(
     (name, type_name): (&str, &str),
     defaults: T,
 ) -> Result<T, Failure> {
-    non_null(input, name)?;
-    // SAFETY: non-null; the caller's contract makes at least the size readable.
-    let size = unsafe { input.cast::<u32>().read_unaligned() } as usize;
+    // SAFETY: null or at least its size readable (the caller's contract).
+    let size = unsafe { host_size(input, name) }?;
     let header = std::mem::size_of::<u32>();
     let known = std::mem::size_of::<T>();
-    if size < header || size > known + MAX_NEWER_BYTES {
-        return Err(Failure::invalid(format!(
-            "{name}->size is {size}; set it to sizeof({type_name}) ({known} bytes in this library)"
-        )));
-    }
     let bytes = input.cast::<u8>();
     if size > known {
         // SAFETY: bytes `known..size` lie within the `size` readable bytes.

@@ -347,11 +347,11 @@ fn apply_changes(
     if palette(to) != palette(from) {
         named("palette", renderer.set_palette(palette(to)))?;
     }
-    let background = Background {
-        top: to.background_top,
-        bottom: to.background_bottom,
-    };
-    if background != renderer.background() {
+    if (to.background_top, to.background_bottom) != (from.background_top, from.background_bottom) {
+        let background = Background {
+            top: to.background_top,
+            bottom: to.background_bottom,
+        };
         named("background", renderer.set_background(background))?;
     }
     if to.silhouettes != from.silhouettes {

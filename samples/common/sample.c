@@ -28,6 +28,30 @@ void sample_print_messages(void) {
   CADR_CHECK(cadr_set_message_callback(print_message, NULL, CADR_MESSAGE_WARNING));
 }
 
+CadrScene sample_load(const char *source, struct CadrBounds *bounds) {
+  CadrScene scene;
+  CadrNode root;
+  struct CadrLoadResult loaded;
+  CADR_CHECK(cadr_scene_create(&scene));
+  CADR_CHECK(cadr_scene_root(scene, &root));
+  memset(&loaded, 0, sizeof loaded);
+  loaded.size = sizeof loaded;
+  CADR_CHECK(cadr_scene_load(scene, source, root, &loaded));
+  cadr_load_result_free(&loaded);
+  CADR_CHECK(cadr_scene_bounds(scene, bounds));
+  return scene;
+}
+
+void sample_set_highlighted(CadrScene scene, CadrNode node, int on) {
+  uint32_t flags = 0;
+  if (node == 0) {
+    return;
+  }
+  CADR_CHECK(cadr_scene_flags(scene, node, &flags));
+  flags = on ? flags | CADR_NODE_HIGHLIGHTED : flags & ~CADR_NODE_HIGHLIGHTED;
+  CADR_CHECK(cadr_scene_set_flags(scene, node, flags));
+}
+
 void sample_save_offscreen(CadrContext context, CadrScene scene, const struct CadrCamera *camera,
                            uint32_t width, uint32_t height, const char *path) {
   CadrRenderer offscreen;

@@ -13,6 +13,13 @@ void sample_check(enum CadrResult result, const char *call, const char *file, in
 /* Prints cadr's warnings and errors (what a load left out, validation errors) to stderr. */
 void sample_print_messages(void);
 
+/* A new scene holding `source` (a file or a generator such as "gen:demo") under its root, and
+ * its bounds. */
+CadrScene sample_load(const char *source, struct CadrBounds *bounds);
+
+/* Highlights geo node `node` of `scene` (`on`) or takes its highlight away; 0 is no node. */
+void sample_set_highlighted(CadrScene scene, CadrNode node, int on);
+
 /* For the samples' self-tests: renders `scene` seen by `camera` offscreen at `width` x `height`
  * into the PNG `path`, the reference a test compares a window with. */
 void sample_save_offscreen(CadrContext context, CadrScene scene, const struct CadrCamera *camera,

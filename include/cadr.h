@@ -1826,9 +1826,10 @@ enum CadrResult cadr_renderer_technique(CadrRenderer renderer, uint32_t kind, co
 // Returns `CADR_RESULT_OK`, `CADR_RESULT_NULL_ARGUMENT`, `CADR_RESULT_INVALID_ARGUMENT`
 // (non-finite camera), `CADR_RESULT_VULKAN`, `CADR_RESULT_PLUGIN_FAILED` or a handle error.
 // Ownership: the camera is read during the call. Thread-safety: as `cadr_renderer_create`; the
-// scene is locked during the call. Each renderer keeps its own copy of the scene on the GPU
-// (made at its first frame, then brought up to date with the edits since its last one), so
-// renderers drawing one scene alternately upload only what changed, each once.
+// scene is locked while the host's edits are applied. The renderers of one context drawing
+// one scene share its copy on the GPU (geometry, instances, matrices, materials; made at the
+// first frame, then brought up to date with the edits once, by whichever renderer draws
+// next); each keeps only its own target, culling and uniforms.
 //
 // # Safety
 // `camera` is null or readable; `stats` null or writable for its `size`.

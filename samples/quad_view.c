@@ -19,6 +19,7 @@
 #include "common/gl_frames.h"
 #include "common/sample.h"
 
+#include <malloc.h>
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -151,6 +152,12 @@ static void on_click(GLFWwindow *window, int button, int action, int mods) {
   }
 }
 
+/* Bytes of the process's heap in use (on lavapipe, the "device" memory lives there too). */
+static uint64_t host_bytes(void) {
+  struct mallinfo2 info = mallinfo2();
+  return (uint64_t)info.uordblks + (uint64_t)info.hblkhd;
+}
+
 static uint64_t device_bytes(CadrContext context) {
   struct CadrMemoryUsage usage;
   memset(&usage, 0, sizeof usage);
@@ -193,7 +200,7 @@ int main(int argc, char **argv) {
   GLFWwindow *window;
   size_t read_back = 0;
   double start;
-  uint64_t scene_bytes, one_view_bytes, validation_errors = 0;
+  uint64_t device_before, host_before, one_view_device, one_view_host, validation_errors = 0;
 
   for (i = 1; i < argc; ++i) {
     if (strcmp(argv[i], "--frames") == 0 && i + 1 < argc) {
@@ -226,8 +233,11 @@ int main(int argc, char **argv) {
   q.scene = sample_load(source, &q.bounds);
   place_cameras(&q);
 
-  scene_bytes = device_bytes(context);
-  one_view_bytes = 0;
+  /* What the views cost: the scene on the GPU (shared by the renderers of one scene) and each
+   * view's targets, measured from before the first renderer. */
+  device_before = device_bytes(context);
+  host_before = host_bytes();
+  one_view_device = one_view_host = 0;
   for (i = 0; i < q.count; ++i) {
     gl_frames_create(&q.views[i], context, VIEW_WIDTH, VIEW_HEIGHT, 1);
     shared = shared && gl_frames_shared(&q.views[i]);
@@ -236,7 +246,8 @@ int main(int argc, char **argv) {
       memset(&stats, 0, sizeof stats);
       stats.size = sizeof stats;
       CADR_CHECK(cadr_renderer_render(q.views[0].renderer, q.scene, &q.cameras[0], &stats));
-      one_view_bytes = device_bytes(context) - scene_bytes;
+      one_view_device = device_bytes(context) - device_before;
+      one_view_host = host_bytes() - host_before;
     }
   }
   printf("path: %s\n", shared ? "shared memory" : "read-back");
@@ -257,8 +268,10 @@ int main(int argc, char **argv) {
   }
   printf("%d frames of four views, %.1f frames/s, bytes read back per frame: %zu\n", frame,
          frame / (now_seconds() - start), frame > 0 ? read_back / (size_t)frame : 0);
-  printf("device memory: one view %.1f MB, %d views %.1f MB\n", one_view_bytes / 1e6, q.count,
-         (device_bytes(context) - scene_bytes) / 1e6);
+  printf("device memory: one view %.1f MB, %d views %.1f MB\n", one_view_device / 1e6, q.count,
+         (device_bytes(context) - device_before) / 1e6);
+  printf("host memory: one view %.1f MB, %d views %.1f MB\n", one_view_host / 1e6, q.count,
+         (host_bytes() - host_before) / 1e6);
 
   if (test_dir != NULL) {
     self_test(&q, context, window, test_dir);

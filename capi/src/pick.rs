@@ -123,11 +123,10 @@ unsafe fn pick(
             )));
         }
         let mut scene_state = lock(&scene_object);
-        scene_state.update();
-        let s = &mut *scene_state;
+        scene_state.sync(&mut state.view)?;
         state
             .view
-            .pick(&s.graph, &mut s.tree, &camera, rect)
+            .pick(&scene_state.tree, &camera, rect)
             .map_err(Failure::from)
     })?;
     // SAFETY: result is writable for its size, checked to hold the hits (the caller's

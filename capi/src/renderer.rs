@@ -588,9 +588,10 @@ pub unsafe extern "C" fn cadr_renderer_technique(
 /// Returns `CADR_RESULT_OK`, `CADR_RESULT_NULL_ARGUMENT`, `CADR_RESULT_INVALID_ARGUMENT`
 /// (non-finite camera), `CADR_RESULT_VULKAN`, `CADR_RESULT_PLUGIN_FAILED` or a handle error.
 /// Ownership: the camera is read during the call. Thread-safety: as `cadr_renderer_create`; the
-/// scene is locked during the call. Each renderer keeps its own copy of the scene on the GPU
-/// (made at its first frame, then brought up to date with the edits since its last one), so
-/// renderers drawing one scene alternately upload only what changed, each once.
+/// scene is locked while the host's edits are applied. The renderers of one context drawing
+/// one scene share its copy on the GPU (geometry, instances, matrices, materials; made at the
+/// first frame, then brought up to date with the edits once, by whichever renderer draws
+/// next); each keeps only its own target, culling and uniforms.
 ///
 /// # Safety
 /// `camera` is null or readable; `stats` null or writable for its `size`.
@@ -624,9 +625,7 @@ pub unsafe extern "C" fn cadr_renderer_render(
             }
             let mut scene_state = lock(&scene_object);
             let update_start = Instant::now();
-            scene_state.update();
-            let s = &mut *scene_state;
-            state.view.sync(&s.graph, &mut s.tree)?;
+            scene_state.sync(&mut state.view)?;
             frame.scene_update_us = update_start.elapsed().as_secs_f64() * 1e6;
             drop(scene_state);
             let drawn = state.view.draw(&camera).map_err(Failure::from)?;

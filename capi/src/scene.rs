@@ -7,6 +7,7 @@ use cadr_core::graph::{
     GeometryHandle, GraphError, MaterialHandle, NodeHandle, SceneGraph, TextureHandle,
 };
 use cadr_core::tree::SceneTree;
+use cadr_core::view::{SharedScenes, View};
 
 use crate::args::deliver;
 use crate::error::{guard, CadrResult, Failure};
@@ -45,15 +46,25 @@ pub const CADR_NODE_HIGHLIGHTED: u32 = 4;
 /// What a scene holds.
 pub(crate) struct SceneState {
     pub(crate) graph: SceneGraph,
-    /// The scene tree; each renderer that draws the scene reads its changes as a reader of
-    /// its own, so renderers drawing one scene alternately upload only what changed.
+    /// The scene tree, whose changes the GPU scenes read.
     pub(crate) tree: SceneTree,
+    /// The scene on the GPU, one per context (and place of world matrices), shared by the
+    /// renderers drawing it: each keeps only its target, culling and uniforms.
+    pub(crate) gpu_scenes: SharedScenes,
 }
 
 impl SceneState {
     /// Brings the tree up to date with the graph's edits.
     pub(crate) fn update(&mut self) {
         self.tree.update(&mut self.graph);
+    }
+
+    /// Brings the tree and `view`'s GPU scene (the one the scene's renderers share) up to date
+    /// with the graph's edits.
+    pub(crate) fn sync(&mut self, view: &mut View) -> Result<(), Failure> {
+        self.update();
+        view.sync_shared(&self.graph, &mut self.tree, &mut self.gpu_scenes)?;
+        Ok(())
     }
 }
 
@@ -202,7 +213,11 @@ pub unsafe extern "C" fn cadr_scene_create(scene: *mut CadrScene) -> CadrResult 
     guard(|| {
         let mut graph = SceneGraph::new();
         let tree = SceneTree::build(&mut graph);
-        let state = SceneState { graph, tree };
+        let state = SceneState {
+            graph,
+            tree,
+            gpu_scenes: SharedScenes::default(),
+        };
         let handle = SCENES.insert(state)?;
         // SAFETY: scene is null or writable (the caller's contract).
         unsafe { deliver(scene, "scene", handle as CadrScene) }

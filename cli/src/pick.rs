@@ -87,9 +87,13 @@ pub fn pick(args: &PickArgs) -> Result<(), String> {
         f64::from(width) / f64::from(height),
         DEFAULT_DIRECTION,
     );
+    session
+        .view
+        .sync(&session.graph, &mut session.tree)
+        .map_err(|e| e.to_string())?;
     let hits = session
         .view
-        .pick(&session.graph, &mut session.tree, &camera, rect)
+        .pick(&session.tree, &camera, rect)
         .map_err(|e| e.to_string())?;
     let validation_errors = device.validation_log().errors().len();
     if validation_errors > 0 {

@@ -1,17 +1,17 @@
-//! The one frame loop: a [`View`] owns a renderer (its target and frames), the active
-//! techniques and the GPU scene they draw, and takes a scene graph with its tree each frame.
+//! The one frame loop: a [`View`] owns a renderer (its target and frames) and the active
+//! techniques, draws a GPU scene (its own, or one shared with the other views of the same
+//! tree through [`SharedScenes`]), and takes a scene graph with its tree each frame.
 //! The command line, the C API and the tests draw and pick through it, so a scene reaches the
 //! GPU by one road: graph → tree → [`GpuScene`] → techniques → Vulkan.
 
 use std::collections::HashMap;
-use std::sync::Arc;
+use std::sync::{Arc, Mutex, MutexGuard, PoisonError, Weak};
 
 use glam::{DVec3, DVec4};
 
 use crate::error::{RenderError, RenderResult};
 use crate::frame::Renderer;
-use crate::gpu_scene::GpuScene;
-use crate::gpu_scene::Transforms;
+use crate::gpu_scene::{GpuScene, Transforms, ViewState, ViewedScene};
 use crate::graph::{NodeHandle, SceneGraph};
 use crate::render::pick::{PickSample, PixelRect};
 use crate::render::{Camera, FrameStats, Section};
@@ -93,11 +93,59 @@ fn surface_point(
     }
 }
 
-/// A renderer with its techniques and GPU scene.
+/// A GPU scene that views may share.
+type SceneCell = Arc<Mutex<GpuScene>>;
+
+/// The scene in `cell`, locked (a frame that panicked left it as far as it got: the next
+/// sync brings it up to date).
+fn lock(cell: &Mutex<GpuScene>) -> MutexGuard<'_, GpuScene> {
+    cell.lock().unwrap_or_else(PoisonError::into_inner)
+}
+
+/// The GPU scenes of one scene tree that its views share: one per device and place of world
+/// matrices ([`Transforms`]). Keep one beside the tree and hand it to [`View::sync_shared`]
+/// with that tree. It holds the scenes weakly: a scene goes with the last view drawing it.
+#[derive(Default)]
+pub struct SharedScenes(Vec<Weak<Mutex<GpuScene>>>);
+
+impl SharedScenes {
+    /// The live scene on `device` with world matrices kept where `transforms` says.
+    fn find(&mut self, device: &Arc<Device>, transforms: Transforms) -> Option<SceneCell> {
+        self.0.retain(|scene| scene.strong_count() > 0);
+        self.0.iter().filter_map(Weak::upgrade).find(|cell| {
+            let scene = lock(cell);
+            Arc::ptr_eq(scene.device(), device) && scene.transforms() == transforms
+        })
+    }
+
+    /// Whether `cell` is one of these scenes.
+    fn holds(&self, cell: &SceneCell) -> bool {
+        self.0
+            .iter()
+            .any(|scene| std::ptr::eq(scene.as_ptr(), Arc::as_ptr(cell)))
+    }
+
+    /// GPU scenes alive.
+    pub fn len(&self) -> usize {
+        self.0
+            .iter()
+            .filter(|scene| scene.strong_count() > 0)
+            .count()
+    }
+
+    /// Whether no GPU scene is alive.
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+}
+
+/// A renderer with its techniques and the GPU scene it draws.
 pub struct View {
     // Dropped in this order: the scene and the techniques before the renderer whose layouts
     // they use.
-    scene: Option<GpuScene>,
+    scene: Option<SceneCell>,
+    /// What this view keeps of its own of the scene: culling, drawn set, changed slots.
+    own: ViewState,
     techniques: Techniques,
     renderer: Renderer,
     /// Whether a frame was drawn (the first counts as [`Phase::FirstFrame`]).
@@ -130,6 +178,7 @@ impl View {
         techniques.select(&Combination::built_in())?;
         Ok(Self {
             scene: None,
+            own: ViewState::new(),
             techniques,
             renderer,
             drawn: false,
@@ -167,27 +216,114 @@ impl View {
         self.renderer.set_section(section);
     }
 
-    /// The GPU scene last drawn, if any.
-    pub fn scene(&self) -> Option<&GpuScene> {
-        self.scene.as_ref()
+    /// The GPU scene last drawn, if any (locked while the guard lives: other views of it wait).
+    pub fn scene(&self) -> Option<MutexGuard<'_, GpuScene>> {
+        self.scene.as_deref().map(lock)
     }
 
-    /// Brings the GPU scene up to date with `tree` (which must be up to date with `graph`):
-    /// created on first use, then synced with the changes since this view's last frame (a
-    /// tree this view has not read before is uploaded afresh). World matrices of moved
-    /// subtrees are computed where the active techniques need them
-    /// ([`Techniques::transforms`]).
+    /// Instances this view drew in its last frame.
+    pub fn drawn_count(&self) -> usize {
+        self.own.drawn_count()
+    }
+
+    /// Triangles of the instances this view drew in its last frame (before a GPU culler's
+    /// decisions).
+    pub fn drawn_triangles(&self) -> u64 {
+        self.own.drawn_triangles()
+    }
+
+    /// Brings this view's own GPU scene up to date with `tree` (which must be up to date with
+    /// `graph`): created on first use, then synced with the changes since its last sync (a
+    /// tree it has not read before is uploaded afresh). World matrices of moved subtrees are
+    /// computed where the active techniques need them ([`Techniques::transforms`]).
     pub fn sync(&mut self, graph: &SceneGraph, tree: &mut SceneTree) -> RenderResult<()> {
+        self.sync_with(graph, tree, None)
+    }
+
+    /// [`View::sync`] with the GPU scene shared by the views of `tree` that keep their scenes
+    /// in `scenes` (the one on this view's device whose world matrices are kept where its
+    /// techniques need them; made when there is none). Each view keeps only its target, its
+    /// culling and its uniforms; the geometry, instances, matrices and materials are on the
+    /// GPU once.
+    pub fn sync_shared(
+        &mut self,
+        graph: &SceneGraph,
+        tree: &mut SceneTree,
+        scenes: &mut SharedScenes,
+    ) -> RenderResult<()> {
+        self.sync_with(graph, tree, Some(scenes))
+    }
+
+    fn sync_with(
+        &mut self,
+        graph: &SceneGraph,
+        tree: &mut SceneTree,
+        scenes: Option<&mut SharedScenes>,
+    ) -> RenderResult<()> {
         let transforms = self.techniques.transforms();
-        let renderer = &self.renderer;
-        timings::time(Phase::Upload, || match &mut self.scene {
-            Some(scene) => scene.sync_after(graph, tree, transforms, &mut || renderer.finish()),
-            None => {
-                let device = renderer.device();
-                self.scene = Some(GpuScene::new(device, graph, tree, transforms)?);
+        timings::time(Phase::Upload, || {
+            let cell = self.choose_scene(graph, tree, transforms, scenes)?;
+            // Other views' frames may read a shared scene too: a change waits for them all.
+            let shared = Arc::strong_count(&cell) > 1;
+            let renderer = &self.renderer;
+            let mut settle = || {
+                renderer.finish()?;
+                if shared {
+                    renderer.device().wait_idle()?;
+                }
                 Ok(())
-            }
+            };
+            let synced = lock(&cell).sync_after(graph, tree, transforms, &mut settle);
+            synced
         })
+    }
+
+    /// The scene this view syncs: from `scenes` when given (made there when it has none for
+    /// this device and `transforms`), else its own (made when it has none, or when the one it
+    /// has is shared with other views).
+    fn choose_scene(
+        &mut self,
+        graph: &SceneGraph,
+        tree: &mut SceneTree,
+        transforms: Transforms,
+        mut scenes: Option<&mut SharedScenes>,
+    ) -> RenderResult<SceneCell> {
+        let device = Arc::clone(self.renderer.device());
+        // This view's scene, when no other view draws it.
+        let alone = self
+            .scene
+            .as_ref()
+            .filter(|cell| Arc::strong_count(cell) == 1)
+            .cloned();
+        let found = match scenes.as_deref_mut() {
+            Some(scenes) => match scenes.find(&device, transforms) {
+                Some(cell) => Some(cell),
+                // None keeps world matrices where these techniques need them: a scene of the
+                // tree's that only this view draws changes where it keeps them (in the sync).
+                None => alone.filter(|cell| scenes.holds(cell)),
+            },
+            None => alone,
+        };
+        if let (Some(current), Some(found)) = (&self.scene, &found) {
+            if Arc::ptr_eq(current, found) {
+                return Ok(Arc::clone(found));
+            }
+        }
+        // Leaving a scene: frames in flight may still read it, and it may be the last view.
+        self.renderer.finish()?;
+        self.scene = None;
+        let cell = match found {
+            Some(cell) => cell,
+            None => {
+                let cell = Arc::new(Mutex::new(GpuScene::new(&device, graph, tree, transforms)?));
+                if let Some(scenes) = scenes {
+                    scenes.0.push(Arc::downgrade(&cell));
+                }
+                cell
+            }
+        };
+        self.scene = Some(Arc::clone(&cell));
+        Ok(cell)
     }
 
     /// Draws one frame of `tree` seen by `camera` with the active techniques (syncing the GPU
@@ -205,48 +341,46 @@ impl View {
     /// Draws one frame of the GPU scene as last synced (see [`View::sync`]).
     pub fn draw(&mut self, camera: &Camera) -> RenderResult<FrameStats> {
         let first = !self.drawn;
-        let (scene, techniques, renderer) = self.parts()?;
+        let cell = self.current_scene()?;
+        let mut scene = lock(&cell);
+        let mut viewed = caught_up(&self.techniques, &mut scene, &mut self.own)?;
+        let (techniques, renderer) = (&mut self.techniques, &mut self.renderer);
         let stats = if first {
             timings::time(Phase::FirstFrame, || {
-                renderer.render_techniques(scene, techniques, camera)
+                renderer.render_techniques(&mut viewed, techniques, camera)
             })?
         } else {
-            renderer.render_techniques(scene, techniques, camera)?
+            renderer.render_techniques(&mut viewed, techniques, camera)?
         };
         self.drawn = true;
         Ok(stats)
     }
 
-    /// The GPU scene, the techniques and the renderer, borrowed together for a frame.
-    fn parts(&mut self) -> RenderResult<(&mut GpuScene, &mut Techniques, &mut Renderer)> {
-        let scene = self
-            .scene
-            .as_mut()
-            .ok_or_else(|| RenderError::InvalidUse("no GPU scene: sync first".into()))?;
-        if scene.transforms() == Transforms::Gpu && self.techniques.transforms() == Transforms::Host
-        {
-            // The host's copies of moved matrices lag behind: only a sync brings them back.
-            return Err(RenderError::InvalidUse(
-                "the techniques now read world matrices on the host: sync before drawing".into(),
-            ));
-        }
-        Ok((scene, &mut self.techniques, &mut self.renderer))
+    /// The GPU scene this view draws: none before its first sync.
+    fn current_scene(&self) -> RenderResult<SceneCell> {
+        self.scene
+            .clone()
+            .ok_or_else(|| RenderError::InvalidUse("no GPU scene: sync first".into()))
     }
 
-    /// Picks the pickable parts with visible pixels in `rect`, seen by `camera`: one hit per
-    /// occurrence and part (its nearest pixel), nearest first. For one pixel, at most one hit.
+    /// Picks the pickable parts with visible pixels in `rect`, seen by `camera`, in the GPU
+    /// scene as last synced from `tree` (see [`View::sync`]): one hit per occurrence and part
+    /// (its nearest pixel), nearest first. For one pixel, at most one hit.
     pub fn pick(
         &mut self,
-        graph: &SceneGraph,
-        tree: &mut SceneTree,
+        tree: &SceneTree,
         camera: &Camera,
         rect: PixelRect,
     ) -> RenderResult<Vec<PickHit>> {
-        self.sync(graph, tree)?;
-        let (scene, techniques, renderer) = self.parts()?;
-        let samples = renderer.pick_techniques(scene, techniques, camera, rect)?;
-        let size = renderer.size();
-        let section = renderer.section();
+        let cell = self.current_scene()?;
+        let mut scene = lock(&cell);
+        let mut viewed = caught_up(&self.techniques, &mut scene, &mut self.own)?;
+        let samples =
+            self.renderer
+                .pick_techniques(&mut viewed, &mut self.techniques, camera, rect)?;
+        drop(scene);
+        let size = self.renderer.size();
+        let section = self.renderer.section();
         let mut nearest: HashMap<u32, (PickSample, DVec3)> = HashMap::new();
         for sample in samples {
             let (sample, position) = surface_point(sample, section, camera, size);
@@ -278,4 +412,20 @@ impl View {
         });
         Ok(hits)
     }
+}
+
+/// `scene` with `own` (a view's state) caught up with it, ready for a frame of `techniques`.
+fn caught_up<'a>(
+    techniques: &Techniques,
+    scene: &'a mut GpuScene,
+    own: &'a mut ViewState,
+) -> RenderResult<ViewedScene<'a>> {
+    if scene.transforms() == Transforms::Gpu && techniques.transforms() == Transforms::Host {
+        // The host's copies of moved matrices lag behind: only a sync brings them back.
+        return Err(RenderError::InvalidUse(
+            "the techniques now read world matrices on the host: sync before drawing".into(),
+        ));
+    }
+    scene.catch_up(own);
+    Ok(ViewedScene { scene, own })
 }

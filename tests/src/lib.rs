@@ -239,10 +239,10 @@ impl SceneView {
     pub fn pick_at(&mut self, point: glam::DVec3) -> Vec<cadr_core::view::PickHit> {
         let size = self.view.renderer().size();
         let (x, y) = images::pixel_of(&self.camera, size, point);
+        self.view.sync(&self.graph, &mut self.tree).expect("sync");
         self.view
             .pick(
-                &self.graph,
-                &mut self.tree,
+                &self.tree,
                 &self.camera,
                 cadr_core::render::pick::PixelRect::pixel(x, y),
             )

@@ -141,8 +141,9 @@ fn picking_stays_exact_with_msaa() {
         height: 60,
     };
     let pick = |f: &mut SceneView| {
+        f.view.sync(&f.graph, &mut f.tree).unwrap();
         f.view
-            .pick(&f.graph, &mut f.tree, &f.camera, rect)
+            .pick(&f.tree, &f.camera, rect)
             .unwrap()
             .into_iter()
             .map(|hit| (hit.instance, hit.pixel, hit.depth.to_bits()))

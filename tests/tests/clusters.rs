@@ -74,9 +74,10 @@ impl Drawing {
 
     /// The instance picked at pixel (`x`, `y`), if any.
     fn pick(&mut self, camera: &Camera, (x, y): (u32, u32)) -> Option<u32> {
+        self.view.sync(&self.graph, &mut self.tree).unwrap();
         let hits = self
             .view
-            .pick(&self.graph, &mut self.tree, camera, PixelRect::pixel(x, y))
+            .pick(&self.tree, camera, PixelRect::pixel(x, y))
             .unwrap();
         hits.first().map(|hit| hit.instance)
     }

@@ -67,13 +67,9 @@ fn orbit(combination: &Combination, frames_in_flight: u32) -> Run {
             run.pictures.push(view.renderer().read_rgba8().unwrap());
         }
     }
+    view.sync(&graph, &mut tree).unwrap();
     let hits = view
-        .pick(
-            &graph,
-            &mut tree,
-            &camera,
-            PixelRect::pixel(SIZE.0 / 2, SIZE.1 / 2),
-        )
+        .pick(&tree, &camera, PixelRect::pixel(SIZE.0 / 2, SIZE.1 / 2))
         .unwrap();
     run.picked = hits.first().map(|hit| hit.instance);
     assert!(

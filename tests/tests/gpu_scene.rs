@@ -12,14 +12,14 @@ use std::sync::Arc;
 use cadr_core::frame::Renderer;
 use cadr_core::generate::{generate, GeneratorSpec, GeometryBuilder};
 use cadr_core::gpu_scene::Transforms;
-use cadr_core::gpu_scene::{GpuScene, MATRIX_BYTES};
+use cadr_core::gpu_scene::{GpuScene, ViewState, MATRIX_BYTES};
 use cadr_core::graph::{GeometryHandle, MaterialHandle, NodeFlags, NodeHandle, SceneGraph};
 use cadr_core::render::pick::PixelRect;
 use cadr_core::render::{Camera, DEFAULT_DIRECTION};
 use cadr_core::scene::{flatten, Material};
 use cadr_core::technique::{Combination, TechniqueKind};
 use cadr_core::tree::SceneTree;
-use cadr_core::view::View;
+use cadr_core::view::{SharedScenes, View};
 use cadr_core::vk::Device;
 use cadr_tests::{
     assert_no_validation_errors, plugin_registry, scene_wide, test_device, CYLINDER_ENGINE_GLB,
@@ -124,7 +124,8 @@ fn every_valid_combination_picks_what_it_draws(source: &cadr_core::scene::Scene,
     // The reference: the simplest combination's box selection of the whole image, checked
     // against its own drawing: a covered pixel is never background, and every hit's world
     // position lies on its part (within its bounding sphere).
-    let reference = view.pick(&graph, &mut tree, &camera, whole).unwrap();
+    view.sync(&graph, &mut tree).unwrap();
+    let reference = view.pick(&tree, &camera, whole).unwrap();
     assert!(reference.len() >= 10, "{} parts picked", reference.len());
     view.render(&graph, &mut tree, &camera).unwrap();
     let image = view.renderer().read_rgba8().unwrap();
@@ -186,7 +187,8 @@ fn every_valid_combination_picks_what_it_draws(source: &cadr_core::scene::Scene,
                     continue;
                 }
                 view.techniques_mut().select(&combination).unwrap();
-                let hits = view.pick(&graph, &mut tree, &camera, whole).unwrap();
+                view.sync(&graph, &mut tree).unwrap();
+                let hits = view.pick(&tree, &camera, whole).unwrap();
                 let mut parts: Vec<(u32, u32)> =
                     hits.iter().map(|h| (h.instance, h.part)).collect();
                 parts.sort_unstable();
@@ -235,7 +237,8 @@ fn occurrences_pickable_flags_and_hidden_parts() {
 
     let pick_at = |view: &mut View, graph: &SceneGraph, tree: &mut SceneTree, target: DVec3| {
         let camera = camera_at(target + DVec3::new(0.0, 0.0, 6.0), target);
-        view.pick(graph, tree, &camera, centre()).unwrap()
+        view.sync(graph, tree).unwrap();
+        view.pick(tree, &camera, centre()).unwrap()
     };
     let on_left = pick_at(&mut view, &graph, &mut tree, DVec3::new(-1.0, 0.0, 0.0));
     let on_right = pick_at(&mut view, &graph, &mut tree, DVec3::new(1.0, 0.0, 0.0));
@@ -277,10 +280,10 @@ fn occurrences_pickable_flags_and_hidden_parts() {
 
     // Box selection over the two bolts: exactly the two occurrences.
     let camera = camera_at(DVec3::new(0.0, 0.0, 8.0), DVec3::ZERO);
+    view.sync(&graph, &mut tree).unwrap();
     let boxed = view
         .pick(
-            &graph,
-            &mut tree,
+            &tree,
             &camera,
             PixelRect::spanning((0, SIZE.1 / 2 - 2), (SIZE.0 - 1, SIZE.1 / 2 + 2)),
         )
@@ -310,9 +313,8 @@ fn world_positions_stay_exact_100_km_from_the_origin() {
     let eye = far + DVec3::new(0.0, 0.0, 4.0);
     let camera = camera_at(eye, far);
     for (x, y) in [(SIZE.0 / 2, SIZE.1 / 2), (SIZE.0 / 2 + 7, SIZE.1 / 2 - 5)] {
-        let hits = view
-            .pick(&graph, &mut tree, &camera, PixelRect::pixel(x, y))
-            .unwrap();
+        view.sync(&graph, &mut tree).unwrap();
+        let hits = view.pick(&tree, &camera, PixelRect::pixel(x, y)).unwrap();
         let hit = hits.first().expect("the cube is under the pixel");
         // The true surface is the cube's front face, z = far.z + 0.5; a pixel there spans
         // 2 * 3.5 * tan(20°) / 72 ≈ 0.035 units.
@@ -612,6 +614,10 @@ proptest! {
         let mut tree = SceneTree::build(&mut graph);
         let mut scene = GpuScene::new(&device, &graph, &mut tree, Transforms::Host).unwrap();
         scene.flush_uploads().unwrap();
+        // Two views of the scene: one catches up after every sync, one after every third.
+        let (mut every, mut late) = (ViewState::new(), ViewState::new());
+        scene.catch_up(&mut every);
+        scene.catch_up(&mut late);
         let mut created: Vec<(GeometryHandle, NodeHandle)> = Vec::new();
         for (step, edit) in edits.iter().enumerate() {
             let pick = |n: u8| transforms[n as usize % transforms.len()];
@@ -672,16 +678,27 @@ proptest! {
             tree.update(&mut graph);
             scene.sync(&graph, &mut tree, Transforms::Host).unwrap();
             scene.flush_uploads().unwrap();
+            scene.catch_up(&mut every);
+            if step % 3 == 0 {
+                scene.catch_up(&mut late);
+            }
         }
+        scene.catch_up(&mut late);
         let mut fresh = GpuScene::new(&device, &graph, &mut tree, Transforms::Host).unwrap();
         fresh.flush_uploads().unwrap();
+        let mut first = ViewState::new();
+        fresh.catch_up(&mut first);
+        for view in [&every, &late] {
+            prop_assert_eq!(view.drawn_bits(), first.drawn_bits());
+            prop_assert_eq!(view.drawn_triangles(), first.drawn_triangles());
+        }
         let (synced, expected) = (scene.content(), fresh.content());
         let places = |entries: &[cadr_plugin_abi::CadrInstance]| {
             entries.iter().map(without_place).collect::<Vec<_>>()
         };
         prop_assert_eq!(places(synced.instances), places(expected.instances));
         prop_assert_eq!(drawn_triangles(&scene), drawn_triangles(&fresh));
-        prop_assert_eq!(synced.drawn_bits, expected.drawn_bits);
+        prop_assert_eq!(synced.candidate_bits, expected.candidate_bits);
         prop_assert_eq!(synced.materials, expected.materials);
         for (slot, (a, b)) in synced.matrices.iter().zip(expected.matrices).enumerate() {
             if tree.has_instances(slot as u32) {
@@ -708,6 +725,151 @@ proptest! {
         drop(fresh);
         assert_no_validation_errors(&device);
     }
+}
+
+/// Views of one tree sharing its GPU scene ([`SharedScenes`]) draw what views with scenes of
+/// their own draw, through edits of every kind, whichever view draws first after an edit and
+/// when a view skips frames (it catches up with every change it missed); views whose
+/// techniques keep world matrices in the same place share one scene.
+#[test]
+fn views_sharing_a_gpu_scene_draw_what_views_of_their_own_draw() {
+    let device = test_device();
+    let mut graph = SceneGraph::new();
+    let root = graph.root();
+    let shape = cube(&mut graph);
+    let cubes: Vec<(NodeHandle, NodeHandle)> = (0..24)
+        .map(|i| {
+            let at = DVec3::new(
+                f64::from(i % 6) * 1.5 - 3.75,
+                f64::from(i / 6) * 1.5 - 2.25,
+                0.0,
+            );
+            place(&mut graph, root, &format!("cube {i}"), at, shape)
+        })
+        .collect();
+    let mut tree = SceneTree::build(&mut graph);
+    // Built-in, uniforms updated from the changed slots and CPU frustum culling (the second
+    // camera sees only part of the scene), and a GPU culler.
+    let combinations = [
+        Combination::built_in(),
+        Combination {
+            parameters: "ubo-dynamic".into(),
+            submission: "individual".into(),
+            culling: "frustum".into(),
+            ..Combination::built_in()
+        },
+        scene_wide("individual-indirect-count", "gpu-frustum"),
+    ];
+    let cameras = [
+        camera_at(DVec3::new(0.0, 0.0, 12.0), DVec3::ZERO),
+        camera_at(DVec3::new(-2.0, 0.0, 8.0), DVec3::new(-2.0, 0.0, 0.0)),
+        camera_at(DVec3::new(1.0, 0.0, 9.0), DVec3::new(1.0, 0.0, 0.0)),
+    ];
+    let mut scenes = SharedScenes::default();
+    let mut shared: Vec<View> = combinations.iter().map(|c| view(&device, c)).collect();
+    let mut own: Vec<View> = combinations.iter().map(|c| view(&device, c)).collect();
+    shared[0].renderer_mut().set_frames_in_flight(2).unwrap();
+    own[0].renderer_mut().set_frames_in_flight(2).unwrap();
+    let red = graph
+        .create_material(Material {
+            base_color: [0.8, 0.1, 0.1, 1.0],
+            ..Material::default()
+        })
+        .unwrap();
+    for step in 0..10u32 {
+        match step {
+            1 | 7 => graph
+                .set_matrix(
+                    cubes[3].0,
+                    DMat4::from_translation(DVec3::new(-3.0, f64::from(step) * 0.3, 1.0)),
+                )
+                .unwrap(),
+            2 => graph
+                .set_flags(
+                    cubes[5].0,
+                    NodeFlags {
+                        visible: false,
+                        ..NodeFlags::default()
+                    },
+                )
+                .unwrap(),
+            3 => graph
+                .set_flags(
+                    cubes[7].1,
+                    NodeFlags {
+                        highlighted: true,
+                        ..NodeFlags::default()
+                    },
+                )
+                .unwrap(),
+            4 => graph.set_part_material(cubes[8].1, 0, red).unwrap(),
+            5 => {
+                place(&mut graph, root, "new", DVec3::new(-3.0, -1.0, 1.0), shape);
+            }
+            6 => graph.destroy_node(cubes[0].0).unwrap(),
+            8 => graph
+                .set_material(
+                    shape.1,
+                    Material {
+                        base_color: [0.2, 0.6, 0.3, 1.0],
+                        ..Material::default()
+                    },
+                )
+                .unwrap(),
+            _ => {}
+        }
+        tree.update(&mut graph);
+        // A different view draws first after each edit; on odd steps the last one skips.
+        let count = shared.len();
+        for k in 0..count {
+            let i = (k + step as usize) % count;
+            if step % 2 == 1 && i == count - 1 {
+                continue;
+            }
+            let mut view = &mut shared[i];
+            view.sync_shared(&graph, &mut tree, &mut scenes).unwrap();
+            let drawn = view.draw(&cameras[i]).unwrap();
+            let image = view.renderer().read_rgba8().unwrap();
+            view = &mut own[i];
+            let expected = view.render(&graph, &mut tree, &cameras[i]).unwrap();
+            let expected_image = view.renderer().read_rgba8().unwrap();
+            assert!(
+                image == expected_image,
+                "step {step}, view {i} ({}): the shared scene draws another picture",
+                combinations[i]
+            );
+            assert_eq!(
+                (drawn.draws, drawn.triangles),
+                (expected.draws, expected.triangles),
+                "step {step}, view {i}"
+            );
+            assert_eq!(shared[i].drawn_triangles(), own[i].drawn_triangles());
+        }
+    }
+    let on_host = shared
+        .iter()
+        .filter(|view| view.techniques().transforms() == Transforms::Host)
+        .count();
+    let places = usize::from(on_host > 0) + usize::from(on_host < shared.len());
+    assert_eq!(scenes.len(), places, "one scene per place of matrices");
+    // The sharing views hold one scene per place of matrices, the others one each.
+    let scene_bytes = shared
+        .iter()
+        .map(|view| view.scene().unwrap().resident_bytes())
+        .min()
+        .unwrap();
+    let with_all = device.memory_usage().allocated_bytes;
+    drop(own);
+    let with_shared = device.memory_usage().allocated_bytes;
+    drop(shared);
+    assert!(scenes.is_empty(), "the scenes go with the last view");
+    let with_none = device.memory_usage().allocated_bytes;
+    let (own_bytes, shared_bytes) = (with_all - with_shared, with_shared - with_none);
+    assert!(
+        own_bytes >= shared_bytes + (3 - places as u64) * scene_bytes * 9 / 10,
+        "views of their own {own_bytes} bytes, sharing views {shared_bytes}, a scene {scene_bytes}"
+    );
+    assert_no_validation_errors(&device);
 }
 
 #[test]
@@ -769,7 +931,7 @@ fn files_loaded_after_the_first_frame_draw_and_reuse_the_room_of_those_unloaded(
     let mut view = view(&device, &Combination::built_in());
     let camera = camera_at(DVec3::new(0.0, 0.0, 50.0), DVec3::ZERO);
     let alone = view.render(&graph, &mut tree, &camera).unwrap();
-    let view_triangles = view.scene().unwrap().drawn_triangles();
+    let view_triangles = view.drawn_triangles();
     let base_bytes = view.scene().unwrap().resident_bytes();
     let file_triangles =
         cadr_core::scene::SceneStats::new(&file, &flatten(&file).unwrap()).triangles;
@@ -779,15 +941,17 @@ fn files_loaded_after_the_first_frame_draw_and_reuse_the_room_of_those_unloaded(
         let imported = graph.import(&file, root).unwrap();
         tree.update(&mut graph);
         let drawn = view.render(&graph, &mut tree, &camera).unwrap();
-        let scene = view.scene().unwrap();
         assert_eq!(
-            scene.drawn_triangles(),
+            view.drawn_triangles(),
             view_triangles + file_triangles,
             "round {round}: every triangle of the file is drawn besides the scene's"
         );
         assert!(drawn.triangles > alone.triangles, "round {round}");
-        let upload = scene.last_upload();
-        sizes.push(scene.resident_bytes());
+        let (upload, resident) = {
+            let scene = view.scene().unwrap();
+            (scene.last_upload(), scene.resident_bytes())
+        };
+        sizes.push(resident);
         if round > 0 {
             assert!(
                 upload.geometry_bytes < 2 * (sizes[0] - base_bytes),

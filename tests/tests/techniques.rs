@@ -8,7 +8,7 @@ use std::sync::Arc;
 
 use cadr_core::frame::Renderer;
 use cadr_core::generate::{generate, GeneratorSpec};
-use cadr_core::gpu_scene::{GpuScene, Transforms};
+use cadr_core::gpu_scene::{GpuScene, Transforms, ViewState, ViewedScene};
 use cadr_core::graph::SceneGraph;
 use cadr_core::load::load_file;
 use cadr_core::render::{Camera, DEFAULT_DIRECTION};
@@ -32,6 +32,7 @@ struct Fixture {
     graph: SceneGraph,
     tree: SceneTree,
     scene: GpuScene,
+    own: ViewState,
     techniques: Techniques,
     camera: Camera,
     baseline: image::RgbaImage,
@@ -60,8 +61,14 @@ impl Fixture {
             renderer.pipelines().technique_set_layouts(),
         );
         techniques.select(&Combination::built_in()).unwrap();
+        let mut own = ViewState::new();
+        scene.catch_up(&mut own);
+        let mut viewed = ViewedScene {
+            scene: &mut scene,
+            own: &mut own,
+        };
         renderer
-            .render_techniques(&mut scene, &mut techniques, &camera)
+            .render_techniques(&mut viewed, &mut techniques, &camera)
             .unwrap();
         let baseline = renderer.read_rgba8().unwrap();
         Self {
@@ -70,6 +77,7 @@ impl Fixture {
             graph,
             tree,
             scene,
+            own,
             techniques,
             camera,
             baseline,
@@ -83,8 +91,13 @@ impl Fixture {
         self.scene
             .sync(&self.graph, &mut self.tree, Transforms::Host)
             .unwrap();
+        self.scene.catch_up(&mut self.own);
+        let mut viewed = ViewedScene {
+            scene: &mut self.scene,
+            own: &mut self.own,
+        };
         self.renderer
-            .render_techniques(&mut self.scene, &mut self.techniques, &self.camera)
+            .render_techniques(&mut viewed, &mut self.techniques, &self.camera)
     }
 
     fn render(&mut self) -> (image::RgbaImage, cadr_core::render::FrameStats) {

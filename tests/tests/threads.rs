@@ -62,7 +62,8 @@ fn views_edits_and_loads_on_four_threads_at_once() {
                         view.render(graph, tree, camera).unwrap();
                         if frame % 5 == 0 {
                             let centre = PixelRect::pixel(SIZE.0 / 2, SIZE.1 / 2);
-                            view.pick(graph, tree, camera, centre).unwrap();
+                            view.sync(graph, tree).unwrap();
+                            view.pick(tree, camera, centre).unwrap();
                         }
                     }
                     edits_over.wait();

@@ -14,7 +14,7 @@ use crate::vk::raw::{self as vk, Handle};
 use cadr_plugin_abi as abi;
 
 use super::gpu_cull::{cull_view, cull_view_bytes, GpuCuller, PhaseDepth};
-use crate::gpu_scene::GpuScene;
+use crate::gpu_scene::ViewedScene;
 use crate::render::pick::{PickSample, PixelRect};
 use crate::render::{Camera, FrameStats, Section, TransparencyMethod, MAX_SECTION_PLANES};
 use crate::technique::{
@@ -32,12 +32,12 @@ impl Renderer {
     /// time covers culling, the techniques' preparation, recording and submission.
     pub fn render_techniques(
         &mut self,
-        scene: &mut GpuScene,
+        scene: &mut ViewedScene<'_>,
         techniques: &mut Techniques,
         camera: &Camera,
     ) -> RenderResult<FrameStats> {
         let mode = techniques.shade_mode();
-        let translucency = scene.has_translucency(self.textures());
+        let translucency = scene.scene.has_translucency(self.textures());
         let dashed_hidden = mode == ShadeMode::HiddenLine && techniques.dashed_hidden_lines();
         let passes = PassSet::Shaded {
             mode,
@@ -59,7 +59,7 @@ impl Renderer {
     /// are not drawn and instances that are not pickable let the click through.
     pub fn pick_techniques(
         &mut self,
-        scene: &mut GpuScene,
+        scene: &mut ViewedScene<'_>,
         techniques: &mut Techniques,
         camera: &Camera,
         rect: PixelRect,
@@ -77,13 +77,13 @@ impl Renderer {
     /// technique contributes, which [`Renderer::frame`] runs.
     fn draw_techniques(
         &mut self,
-        scene: &mut GpuScene,
+        scene: &mut ViewedScene<'_>,
         techniques: &mut Techniques,
         camera: &Camera,
         passes: PassSet,
     ) -> RenderResult<FrameStats> {
         techniques.ensure_pipelines(passes)?;
-        self.bind_scene(&scene.frame_resources())?;
+        self.bind_scene(&scene.scene.frame_resources())?;
         let cull_start = Instant::now();
         cull(scene, techniques, camera, self.section())?;
         let techniques = &*techniques;
@@ -121,9 +121,9 @@ impl Renderer {
         let cull_view_bytes = gpu_view.as_ref().map(cull_view_bytes);
         let replay_key = replay_key(techniques, passes, key, &view);
         let frame_key = frame_key(passes, key, &view);
-        let uploads_pending = scene.has_pending_uploads();
-        let display = self.display_bits(passes, scene);
-        let highlights = scene.has_highlighted();
+        let uploads_pending = scene.scene.has_pending_uploads();
+        let display = self.display_bits(passes, scene.scene);
+        let highlights = scene.scene.has_highlighted();
         let target = match passes {
             PassSet::Shaded { .. } => PassTarget::Color,
             PassSet::Pick { .. } => PassTarget::Pick,
@@ -132,7 +132,14 @@ impl Renderer {
         let drawing = FrameDrawing {
             recording,
             gpu_view,
-            shared: RefCell::new((scene, abi::CadrStats::default(), culler)),
+            shared: RefCell::new((
+                ViewedScene {
+                    scene: &mut *scene.scene,
+                    own: &mut *scene.own,
+                },
+                abi::CadrStats::default(),
+                culler,
+            )),
         };
         let mut gather_uploads = |stats: &mut FrameStats| drawing.gather_uploads(stats);
         let mut uploads = |_: &Renderer, cb: vk::CommandBuffer, _: u32, _: &mut FrameStats| {
@@ -181,11 +188,11 @@ impl Renderer {
         )?;
         stats.cpu_record_us += cull_us;
         let (scene, counters, culler) = drawing.shared.into_inner();
-        drawn_stats(stats, techniques, (scene, counters, culler.as_ref()))
+        drawn_stats(stats, techniques, (&scene, counters, culler.as_ref()))
     }
 
     /// The `DISPLAY_*` bits of a frame of `passes` over `scene`.
-    fn display_bits(&self, passes: PassSet, scene: &GpuScene) -> u32 {
+    fn display_bits(&self, passes: PassSet, scene: &crate::gpu_scene::GpuScene) -> u32 {
         let mut display = match passes {
             PassSet::Shaded {
                 mode: ShadeMode::XRay,
@@ -456,21 +463,21 @@ impl FrameRecording<'_> {
 struct FrameDrawing<'s, 'a> {
     recording: FrameRecording<'a>,
     gpu_view: Option<abi::CadrGpuCullView>,
-    shared: RefCell<(&'s mut GpuScene, abi::CadrStats, Option<GpuCuller<'a>>)>,
+    shared: RefCell<(ViewedScene<'s>, abi::CadrStats, Option<GpuCuller<'a>>)>,
 }
 
 impl FrameDrawing<'_, '_> {
     /// Gathers the frame's uploads on the host; returns what their commands depend on.
     fn gather_uploads(&self, stats: &mut FrameStats) -> RenderResult<u64> {
         let mut guard = self.shared.borrow_mut();
-        let (bytes, key) = guard.0.prepare_uploads()?;
+        let (bytes, key) = guard.0.scene.prepare_uploads()?;
         stats.bytes_uploaded = bytes;
         Ok(key)
     }
 
     /// Records the uploads' commands (into the prologue).
     fn record_uploads(&self, command_buffer: vk::CommandBuffer) -> RenderResult<()> {
-        self.shared.borrow().0.record_uploads(command_buffer)
+        self.shared.borrow().0.scene.record_uploads(command_buffer)
     }
 
     /// Before the pass: the techniques' preparation, then phase 0 of the GPU culler.
@@ -532,7 +539,7 @@ impl FrameDrawing<'_, '_> {
         renderer: &Renderer,
         command_buffer: vk::CommandBuffer,
         phase: u32,
-        scene: &GpuScene,
+        scene: &ViewedScene<'_>,
         culler: &mut Option<GpuCuller<'_>>,
     ) -> RenderResult<()> {
         let (Some(culler), Some(gpu_view)) = (culler.as_mut(), self.gpu_view.as_ref()) else {
@@ -561,7 +568,10 @@ impl FrameDrawing<'_, '_> {
 
 /// The scene's view for a technique's call during a frame, with `frame_slot` chained ahead of
 /// the scene's own extensions (the view points at it: keep it while the view is used).
-fn slotted_view(scene: &GpuScene, frame_slot: &mut abi::CadrFrameSlot) -> abi::CadrSceneView {
+fn slotted_view(
+    scene: &ViewedScene<'_>,
+    frame_slot: &mut abi::CadrFrameSlot,
+) -> abi::CadrSceneView {
     let mut view = scene.view();
     frame_slot.header.next = view.extensions;
     view.extensions = &frame_slot.header;
@@ -664,7 +674,7 @@ fn cull_key_of(
 /// view (with its section) and the scene, so it runs again only when one of them (or the
 /// culler) changed.
 fn cull(
-    scene: &mut GpuScene,
+    scene: &mut ViewedScene<'_>,
     techniques: &mut Techniques,
     camera: &Camera,
     section: &Section,
@@ -674,8 +684,8 @@ fn cull(
         // scene layout, so a moving camera costs the CPU nothing here).
         let key = mix(techniques.epoch, scene.view().buffers_generation);
         if techniques.cull_key != Some(key) {
-            let visible = vec![u64::MAX; scene.culled_bits().len()];
-            let changed: Vec<u64> = scene.culled_bits().iter().map(|w| !w).collect();
+            let visible = vec![u64::MAX; scene.own.culled_bits().len()];
+            let changed: Vec<u64> = scene.own.culled_bits().iter().map(|w| !w).collect();
             scene.apply_culling(&visible, &changed);
             techniques.cull_key = Some(key);
         }
@@ -700,13 +710,13 @@ fn cull(
         return Ok(());
     };
     let view = scene.view();
-    let mut visible = scene.culled_bits().to_vec();
+    let mut visible = scene.own.culled_bits().to_vec();
     let mut changed = vec![0u64; visible.len()];
     let input = abi::CadrCullInput {
         size: std::mem::size_of::<abi::CadrCullInput>() as u32,
         scene: &view,
-        candidate_bits: scene.candidate_bits().as_ptr(),
-        world_matrices: match scene.worlds() {
+        candidate_bits: scene.scene.candidate_bits().as_ptr(),
+        world_matrices: match scene.scene.worlds() {
             [] => std::ptr::null(),
             worlds => worlds.as_ptr().cast(),
         },
@@ -740,7 +750,7 @@ fn cull(
 fn drawn_stats(
     mut stats: FrameStats,
     techniques: &Techniques,
-    (scene, counters, culler): (&GpuScene, abi::CadrStats, Option<&GpuCuller>),
+    (scene, counters, culler): (&ViewedScene<'_>, abi::CadrStats, Option<&GpuCuller>),
 ) -> RenderResult<FrameStats> {
     if counters.failures > 0 {
         return Err(RenderError::Technique {
@@ -748,7 +758,7 @@ fn drawn_stats(
             message: format!("{} bind calls panicked while recording", counters.failures),
         });
     }
-    stats.triangles = scene.drawn_triangles();
+    stats.triangles = scene.own.drawn_triangles();
     if let Some(culler) = culler {
         // The frame has finished: what the GPU decided to draw.
         let drawn = culler.counts();

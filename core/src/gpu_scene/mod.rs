@@ -11,7 +11,11 @@
 //! changed since this scene's own last sync, with work and uploads in proportion to the change
 //! (changed slots gathered and scattered on the GPU by `upload.rs`; a replaced geometry written
 //! in place when it fits; only the touched instances' entries refreshed). Two scenes of one
-//! tree (two renderers) each see every change.
+//! tree each see every change.
+//!
+//! Several views (renderers of one scene) may draw one GPU scene: each keeps only its own
+//! culling, drawn set and the slots changed since its last frame (`view_state.rs`,
+//! [`ViewState`]), and catches up with the scene before each frame ([`GpuScene::catch_up`]).
 
 mod clusters;
 mod compute;
@@ -19,6 +23,7 @@ mod geometry;
 mod hierarchy;
 mod textures;
 mod upload;
+mod view_state;
 
 pub use hierarchy::{
     gpu_local, HierarchyMethod, HierarchyPlan, Transforms, LOCAL_BYTES, LOCAL_WORDS,
@@ -28,6 +33,7 @@ pub use textures::{
     MAX_LAYER_SIZE, MAX_TABLE_SIDE, TABLE_BUDGET_BYTES,
 };
 pub use upload::UploadStats;
+pub use view_state::ViewState;
 
 use std::sync::Arc;
 
@@ -48,6 +54,7 @@ use geometry::GeometryArenas;
 use hierarchy::TransformHierarchy;
 use textures::SceneTextures;
 use upload::{GpuArray, SparseUploader};
+use view_state::{Followers, SceneFacts, Unseen};
 
 /// Bytes of one matrix on the GPU ([`abi::CadrMatrix`]).
 pub const MATRIX_BYTES: usize = 64;
@@ -125,7 +132,8 @@ pub struct GpuScene {
     reader: ChangeReader,
     arenas: GeometryArenas,
     instances: Vec<abi::CadrInstance>,
-    bits: InstanceBits,
+    /// Per instance id, one bit: a candidate for drawing (alive, visible, with triangles).
+    candidate: Vec<u64>,
     matrices: Vec<abi::CadrMatrix>,
     materials: Vec<abi::CadrMaterial>,
     material_info: MaterialInfo,
@@ -134,7 +142,8 @@ pub struct GpuScene {
     moves: TransformState,
     /// The arrays' GPU copies, their sparse uploader and its pipelines.
     gpu: GpuCopies,
-    frame_dirty: FrameDirty,
+    /// The views drawing this scene, each with the changes it has not seen.
+    followers: Followers,
     generations: Generations,
     counts: SceneCounts,
     /// What techniques see of the buffers and clusters, which the view points into.
@@ -158,17 +167,6 @@ struct ClustersExtension(abi::CadrSceneClusters);
 unsafe impl Send for ClustersExtension {}
 // SAFETY: as above; it is only written through `&mut GpuScene`.
 unsafe impl Sync for ClustersExtension {}
-
-/// Per instance id, one bit each: what may be drawn, what culling kept, what is drawn.
-struct InstanceBits {
-    /// Candidates for culling: alive, visible, with triangles.
-    candidate: Vec<u64>,
-    /// Culling's result as last applied: set where the culler keeps the id (all set until a
-    /// culler says otherwise).
-    culled: Vec<u64>,
-    /// Drawn this frame: a candidate that culling keeps.
-    drawn: Vec<u64>,
-}
 
 /// What the scene knows of each material slot besides its values.
 struct MaterialInfo {
@@ -212,14 +210,11 @@ struct GpuCopies {
     pipelines: ScenePipelines,
 }
 
-/// Slots changed since the last upload.
-struct FrameDirty {
-    matrices: Vec<u32>,
-    materials: Vec<u32>,
-}
-
-/// Generations that tell techniques what changed (see the plugin ABI's `CadrSceneView`).
+/// Generations that tell techniques what changed (see the plugin ABI's `CadrSceneView`; a
+/// view's draws generation also moves with its culling, see [`ViewState`]).
 struct Generations {
+    /// The scene's identity: its first generation.
+    identity: u64,
     draws: u64,
     parameters: u64,
     buffers: u64,
@@ -227,8 +222,8 @@ struct Generations {
 
 /// What the scene counts for statistics.
 struct SceneCounts {
-    /// Triangles of the drawn instances.
-    triangles: u64,
+    /// Triangles of the candidates.
+    candidate_triangles: u64,
     /// Live instances flagged highlighted.
     highlighted: usize,
     /// What the last sync and upload wrote.
@@ -263,11 +258,7 @@ impl GpuScene {
             reader,
             arenas,
             instances: Vec::new(),
-            bits: InstanceBits {
-                candidate: Vec::new(),
-                culled: Vec::new(),
-                drawn: Vec::new(),
-            },
+            candidate: Vec::new(),
             matrices: Vec::new(),
             materials: Vec::new(),
             material_info: MaterialInfo {
@@ -299,17 +290,15 @@ impl GpuScene {
                 uploader: SparseUploader::default(),
                 pipelines: ScenePipelines::new(device)?,
             },
-            frame_dirty: FrameDirty {
-                matrices: Vec::new(),
-                materials: Vec::new(),
-            },
+            followers: Followers::default(),
             generations: Generations {
+                identity: first_generation,
                 draws: first_generation,
                 parameters: first_generation,
                 buffers: first_generation,
             },
             counts: SceneCounts {
-                triangles: 0,
+                candidate_triangles: 0,
                 highlighted: 0,
                 last_upload: UploadStats {
                     geometry_bytes,
@@ -382,7 +371,7 @@ impl GpuScene {
             .instances
             .iter()
             .enumerate()
-            .filter(|&(id, _)| self.bits.candidate[id / 64] >> (id % 64) & 1 == 1)
+            .filter(|&(id, _)| self.candidate[id / 64] >> (id % 64) & 1 == 1)
             .filter_map(|(_, instance)| {
                 let place = arenas.places.get(instance.geometry as usize)?.as_ref()?;
                 place.clusters_of(instance.part)
@@ -443,14 +432,11 @@ impl GpuScene {
         let (instances, tallies) =
             make_instances(&self.arenas, &self.material_info.translucency, tree, count);
         self.instances = instances;
-        self.bits.candidate = tallies
+        self.candidate = tallies
             .iter()
             .flat_map(|tally| tally.candidate_bits.iter().copied())
             .collect();
-        // Every culled bit is set: a candidate is drawn.
-        self.bits.drawn = self.bits.candidate.clone();
-        self.bits.culled = vec![u64::MAX; count.div_ceil(64)];
-        self.counts.triangles = tallies.iter().map(|tally| tally.triangles).sum();
+        self.counts.candidate_triangles = tallies.iter().map(|tally| tally.triangles).sum();
         self.counts.highlighted = tallies.iter().map(|tally| tally.highlighted).sum();
         let device = Arc::clone(&self.device);
         self.gpu.matrices.reserve(&device, nodes.max(1))?;
@@ -473,10 +459,11 @@ impl GpuScene {
         ] {
             array.queue_all();
         }
-        self.frame_dirty.matrices = (0..nodes as u32)
-            .filter(|&t| self.keeps_matrix(tree, t))
-            .collect();
-        self.frame_dirty.materials = (0..material_slots as u32).collect();
+        // Every view starts over: its culling, drawn set and uniform copies.
+        self.followers.changes = Unseen {
+            all: true,
+            ..Unseen::default()
+        };
         self.counts.last_touched = count as u64;
         self.generations.buffers += 1;
         self.generations.draws += 1;
@@ -485,23 +472,6 @@ impl GpuScene {
         self.counts.clusters_stale = true;
         self.count_candidate_clusters();
         Ok(())
-    }
-
-    fn is_drawn(&self, id: u32) -> bool {
-        self.bits.drawn[id as usize / 64] >> (id % 64) & 1 == 1
-    }
-
-    /// Sets instance `id`'s drawn bit, keeping the drawn triangle count in step.
-    fn set_drawn(&mut self, id: u32, drawn: bool) {
-        if self.is_drawn(id) != drawn {
-            let triangles = u64::from(self.instances[id as usize].index_count / 3);
-            if drawn {
-                self.counts.triangles += triangles;
-            } else {
-                self.counts.triangles -= triangles;
-            }
-            set_bit(&mut self.bits.drawn, id, drawn);
-        }
     }
 
     /// Whether matrix slot `t` holds a world matrix: a Geo path's, or with the GPU transform
@@ -559,15 +529,22 @@ impl GpuScene {
             .and_then(|instance| self.entry_of(&instance))
             .unwrap_or((abi::CadrInstance::default(), false));
         let i = id as usize;
-        // Out of the drawn set with its old entry, back in with the new one.
-        self.set_drawn(id, false);
-        self.counts.highlighted -= usize::from(is_highlighted(&self.instances[i]));
+        let old = &self.instances[i];
+        let old_triangles = old.index_count / 3;
+        // Each view takes the instance out of its drawn set with the old entry's triangles
+        // and back in with the new one's.
+        self.followers.changes.touched.push((id, old_triangles));
+        if self.candidate[i / 64] >> (i % 64) & 1 == 1 {
+            self.counts.candidate_triangles -= u64::from(old_triangles);
+        }
+        if candidate {
+            self.counts.candidate_triangles += u64::from(entry.index_count / 3);
+        }
+        self.counts.highlighted -= usize::from(is_highlighted(old));
         self.counts.highlighted += usize::from(is_highlighted(&entry));
         self.instances[i] = entry;
-        set_bit(&mut self.bits.candidate, id, candidate);
+        set_bit(&mut self.candidate, id, candidate);
         self.counts.clusters_stale = true;
-        let culled_in = self.bits.culled[i / 64] >> (i % 64) & 1 == 1;
-        self.set_drawn(id, candidate && culled_in);
     }
 
     /// Applies the tree's changes since this scene's last sync, with world matrices kept where
@@ -592,8 +569,43 @@ impl GpuScene {
         transforms: Transforms,
         settle: &mut dyn FnMut() -> RenderResult<()>,
     ) -> RenderResult<()> {
-        self.frame_dirty.matrices.clear();
-        self.frame_dirty.materials.clear();
+        self.followers.changes = Unseen::default();
+        let result = self.apply_tree_changes(graph, tree, transforms, settle);
+        if result.is_err() {
+            // Half applied: every view starts over from what the scene holds.
+            self.followers.changes.all = true;
+        }
+        self.followers.deliver();
+        result
+    }
+
+    /// The views that follow this scene (drew it and are alive).
+    pub fn follower_count(&self) -> usize {
+        self.followers.count()
+    }
+
+    /// Applies what `view` has not seen of this scene yet (everything, for a view that drew
+    /// another scene or none): before each of its frames.
+    pub fn catch_up(&mut self, view: &mut ViewState) {
+        let facts = SceneFacts {
+            identity: self.generations.identity,
+            draws: self.generations.draws,
+            candidate: &self.candidate,
+            candidate_triangles: self.counts.candidate_triangles,
+            instances: &self.instances,
+            slots: (self.matrices.len(), self.materials.len()),
+        };
+        view.catch_up(&mut self.followers, &facts);
+    }
+
+    /// The body of [`GpuScene::sync_after`], which hands what it changed to the views.
+    fn apply_tree_changes(
+        &mut self,
+        graph: &SceneGraph,
+        tree: &mut SceneTree,
+        transforms: Transforms,
+        settle: &mut dyn FnMut() -> RenderResult<()>,
+    ) -> RenderResult<()> {
         self.counts.last_upload = UploadStats::default();
         self.counts.last_touched = 0;
         let Some(changes) = tree.changes_for(&self.reader) else {
@@ -665,6 +677,11 @@ impl GpuScene {
             + self.counts.texture_bytes
     }
 
+    /// The device the scene lives on.
+    pub fn device(&self) -> &Arc<Device> {
+        &self.device
+    }
+
     /// Where world matrices of moved subtrees are computed now.
     pub fn transforms(&self) -> Transforms {
         self.moves.transforms
@@ -734,7 +751,7 @@ impl GpuScene {
                 if self.moves.transforms == Transforms::Gpu {
                     self.gpu.locals.queue(t);
                 }
-                self.frame_dirty.matrices.push(t);
+                self.followers.changes.matrices.push(t);
             }
         }
         self.apply_moves(tree, &changes.moved);
@@ -765,7 +782,7 @@ impl GpuScene {
                     - usize::from(textures::is_described(&was));
                 self.gpu.materials.queue(slot);
                 self.gpu.material_textures.queue(slot);
-                self.frame_dirty.materials.push(slot);
+                self.followers.changes.materials.push(slot);
             }
         }
         if !changes.dirty_matrices.is_empty()
@@ -817,39 +834,18 @@ impl GpuScene {
                     if tree.has_instances(t) {
                         self.set_matrix(tree, t);
                         self.gpu.matrices.queue(t);
-                        self.frame_dirty.matrices.push(t);
+                        self.followers.changes.matrices.push(t);
                     }
                     stack.extend_from_slice(tree.children(t));
                 }
-                self.frame_dirty.matrices.sort_unstable();
-                self.frame_dirty.matrices.dedup();
             }
         }
     }
 
-    /// Applies culling's result: `visible` bits and the bits that `changed` since last frame;
-    /// only changed ids are touched.
-    pub(crate) fn apply_culling(&mut self, visible: &[u64], changed: &[u64]) {
-        let mut any = false;
-        for (word, &bits) in changed.iter().enumerate() {
-            let mut bits = bits;
-            while bits != 0 {
-                let bit = bits.trailing_zeros();
-                bits &= bits - 1;
-                let id = word as u32 * 64 + bit;
-                if id as usize >= self.instances.len() {
-                    continue;
-                }
-                let on = visible.get(word).is_some_and(|w| w >> bit & 1 == 1);
-                set_bit(&mut self.bits.culled, id, on);
-                let candidate = self.bits.candidate[word] >> bit & 1 == 1;
-                self.set_drawn(id, candidate && on);
-                any = true;
-            }
-        }
-        if any {
-            self.generations.draws += 1;
-        }
+    /// Applies culling's result to `view`: `visible` bits and the bits that `changed` since
+    /// its last frame; only changed ids are touched.
+    pub(crate) fn apply_culling(&self, view: &mut ViewState, visible: &[u64], changed: &[u64]) {
+        view.apply_culling((&self.candidate, &self.instances), visible, changed);
     }
 
     /// Whether the next frame uploads anything (a changed slot or a whole array).
@@ -888,7 +884,7 @@ impl GpuScene {
                 .unwrap_or_default();
             out.copy_from_slice(bytemuck::cast_slice(&item));
         };
-        let (instances, candidates, arenas) = (&self.instances, &self.bits.candidate, &self.arenas);
+        let (instances, candidates, arenas) = (&self.instances, &self.candidate, &self.arenas);
         let record_bytes = |slot: u32, out: &mut [u8]| {
             let item = instances
                 .get(slot as usize)
@@ -981,25 +977,27 @@ impl GpuScene {
         self.counts.last_touched
     }
 
-    /// The view techniques read this frame. Valid while `self` is not changed.
-    pub(crate) fn view(&self) -> abi::CadrSceneView {
+    /// The scene as techniques see it in a frame of `view` (caught up first). Valid while
+    /// neither is changed.
+    pub(crate) fn view(&self, view: &ViewState) -> abi::CadrSceneView {
+        let (dirty_matrices, dirty_materials) = view.dirty_slots();
         let [vertex_buffer, index_buffer, wire_index_buffer, matrix_buffer, material_buffer, instance_buffer, cull_buffer, _, _] =
             self.seen.buffer_refs;
         abi::CadrSceneView {
             size: std::mem::size_of::<abi::CadrSceneView>() as u32,
             instance_count: self.instances.len() as u32,
             instances: self.instances.as_ptr(),
-            drawn_bits: self.bits.drawn.as_ptr(),
-            draws_generation: self.generations.draws,
+            drawn_bits: view.drawn_bits().as_ptr(),
+            draws_generation: view.draws_generation(),
             parameters_generation: self.generations.parameters,
             matrix_count: self.matrices.len() as u32,
             matrices: self.matrices.as_ptr(),
             material_count: self.materials.len() as u32,
             materials: self.materials.as_ptr(),
-            dirty_matrices: self.frame_dirty.matrices.as_ptr(),
-            dirty_matrix_count: self.frame_dirty.matrices.len() as u32,
-            dirty_materials: self.frame_dirty.materials.as_ptr(),
-            dirty_material_count: self.frame_dirty.materials.len() as u32,
+            dirty_matrices: dirty_matrices.as_ptr(),
+            dirty_matrix_count: dirty_matrices.len() as u32,
+            dirty_materials: dirty_materials.as_ptr(),
+            dirty_material_count: dirty_materials.len() as u32,
             buffers_generation: self.generations.buffers,
             vertex_buffer,
             vertex_stride: std::mem::size_of::<Vertex>() as u32,
@@ -1013,28 +1011,14 @@ impl GpuScene {
         }
     }
 
-    /// Culling's bits as last applied.
-    pub(crate) fn culled_bits(&self) -> &[u64] {
-        &self.bits.culled
-    }
-
     /// Candidate bits (alive, visible, with triangles) for culling.
     pub(crate) fn candidate_bits(&self) -> &[u64] {
-        &self.bits.candidate
+        &self.candidate
     }
 
     /// World matrices (f64) per matrix slot.
     pub(crate) fn worlds(&self) -> &[[f64; 16]] {
         &self.moves.worlds
-    }
-
-    /// Instances drawn this frame.
-    pub fn drawn_count(&self) -> usize {
-        self.bits
-            .drawn
-            .iter()
-            .map(|w| w.count_ones() as usize)
-            .sum()
     }
 
     /// Whether some material is translucent (opacity under 1, or, with `textures` drawn, a
@@ -1081,9 +1065,9 @@ impl GpuScene {
         }
     }
 
-    /// Triangles of the drawn instances.
-    pub fn drawn_triangles(&self) -> u64 {
-        self.counts.triangles
+    /// Triangles of the candidates (what a view draws before culling).
+    pub fn candidate_triangles(&self) -> u64 {
+        self.counts.candidate_triangles
     }
 
     /// Instance ids in use are below this.
@@ -1099,7 +1083,7 @@ impl GpuScene {
             instances: &self.instances,
             matrices: &self.matrices,
             materials: &self.materials,
-            drawn_bits: &self.bits.drawn,
+            candidate_bits: &self.candidate,
         }
     }
 
@@ -1126,6 +1110,27 @@ impl GpuScene {
     }
 }
 
+/// A GPU scene as one view draws it: the scene (perhaps shared with other views) and what the
+/// view keeps of its own, caught up ([`GpuScene::catch_up`]) before the frame.
+pub struct ViewedScene<'a> {
+    /// The scene.
+    pub scene: &'a mut GpuScene,
+    /// The view's own culling, drawn set and changed slots.
+    pub own: &'a mut ViewState,
+}
+
+impl ViewedScene<'_> {
+    /// The scene as techniques see it in this view's frame.
+    pub(crate) fn view(&self) -> abi::CadrSceneView {
+        self.scene.view(self.own)
+    }
+
+    /// Applies culling's result (see [`GpuScene::apply_culling`]).
+    pub(crate) fn apply_culling(&mut self, visible: &[u64], changed: &[u64]) {
+        self.scene.apply_culling(self.own, visible, changed);
+    }
+}
+
 /// The CPU copy of a GPU scene's content (see [`GpuScene::content`]).
 #[derive(Debug)]
 pub struct SceneContent<'a> {
@@ -1135,8 +1140,8 @@ pub struct SceneContent<'a> {
     pub matrices: &'a [abi::CadrMatrix],
     /// Materials by slot.
     pub materials: &'a [abi::CadrMaterial],
-    /// Drawn bits by instance id.
-    pub drawn_bits: &'a [u64],
+    /// Candidate bits (alive, visible, with triangles) by instance id.
+    pub candidate_bits: &'a [u64],
 }
 
 /// The cull entry of instance `slot`: its sphere, ranges and first cluster, flagged as a

@@ -465,6 +465,21 @@ fn quad_view_shows_four_views_of_one_scene_and_picks_in_each() {
             (pair(origin, ','), pair(size, 'x'))
         })
         .collect();
+    // The renderers share the scene on the GPU: four views hold it once, beside their
+    // targets (with a copy each, four views held four times one view's memory).
+    let memory = view
+        .transcript
+        .lines()
+        .find_map(|l| l.strip_prefix("device memory: one view "))
+        .unwrap();
+    let megabytes: Vec<f64> = memory
+        .split(' ')
+        .filter_map(|word| word.parse().ok())
+        .collect();
+    let [one, _, four] = megabytes[..] else {
+        panic!("device memory line: {memory}");
+    };
+    assert!(four < 2.0 * one, "four views {four} MB, one view {one} MB");
     let dump = view.grab_and_finish(&display);
     for (index, region) in regions.into_iter().enumerate() {
         // A board seen edge-on (front and side) is a thin line.

@@ -23,7 +23,7 @@
 #define CADR_VERSION_MAJOR 1
 
 // The library's minor version.
-#define CADR_VERSION_MINOR 0
+#define CADR_VERSION_MINOR 1
 
 // The library's patch version.
 #define CADR_VERSION_PATCH 0
@@ -410,7 +410,8 @@ typedef struct CadrRendererObject *CadrRenderer;
 // The memory a renderer's frames are exported into (`cadr_renderer_exported_frame`). After
 // each `cadr_renderer_render` it holds that frame: `height` rows of `row_bytes` bytes, the top
 // row first, 4 bytes per pixel (R, G, B, A, 8 bits each, as `cadr_renderer_read_pixels` gives
-// them), from offset 0.
+// them), from offset 0; with `CadrRendererSettings::export_depth`, the frame's depth follows
+// from `depth_offset`.
 //
 // The struct grows by appending fields: the host sets `size` to `sizeof(CadrExportedFrame)`;
 // cadr fills the fields within it and zeroes those of a newer header it does not know.
@@ -440,6 +441,16 @@ typedef struct CadrExportedFrame {
   // The Vulkan driver's UUID (`driverUUID`): import only where `GL_DRIVER_UUID_EXT` is the
   // same.
   uint8_t driver_uuid[16];
+  // Where the frame's depth starts in the memory, 0 when it holds none (the renderer's
+  // `export_depth` setting is off); after each `cadr_renderer_render` it holds that frame's
+  // depth: `height`
+  // rows of `depth_row_bytes` bytes, the top row first, one 32-bit float per pixel, 0 at the
+  // near plane and 1 at the far plane and where nothing is drawn (an OpenGL window depth
+  // with the default depth range; the projection is the camera's). It is the opaque
+  // surfaces' depth: translucent surfaces, and X-ray's, write none. Since 1.1.
+  uint64_t depth_offset;
+  // Bytes from one row of the depth to the next (`width × 4`), 0 without depth. Since 1.1.
+  uint32_t depth_row_bytes;
 } CadrExportedFrame;
 
 // A range of a geometry's indices drawn with one material, and its range of edge indices.
@@ -865,6 +876,12 @@ typedef struct CadrRendererSettings {
   // (`CadrRendererCapabilities::present_modes`); a change recreates the swapchain. Other
   // renderers present nothing and take only `CADR_PRESENT_FIFO`.
   uint32_t present_mode;
+  // Each frame's depth exported after its colour (default false), for a host that draws
+  // its own geometry into cadr's frame with a depth test (a grid, a manipulator, its own
+  // annotations): see `CadrExportedFrame::depth_offset`. Only for renderers made by
+  // `cadr_renderer_create_for_export`; it costs a depth store and copy per frame. Applying a
+  // change gives the frames new memory (a new `generation`): import it again. Since 1.1.
+  bool export_depth;
 } CadrRendererSettings;
 
 // What a renderer's device and output offer, for the choices of `CadrRendererSettings`.

@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Installs cadr for C and C++ hosts under a prefix:
 #   include/cadr/cadr.h, include/cadr/cadr_plugin.h   the C API and the plugin ABI
-#   lib/libcadr.so(.1, .1.0.0), lib/libcadr.a          shared and static libraries
+#   lib/libcadr.so(.1, .1.x.y), lib/libcadr.a          shared and static libraries
 #   lib/cadr/plugins/libcadr_plugin_*.so               the technique plugins (found by libcadr.so)
 #   lib/cmake/cadr/cadrConfig*.cmake                   find_package(cadr): cadr::cadr, cadr::cadr_static
 #   lib/pkgconfig/cadr.pc                              pkg-config --cflags --libs cadr

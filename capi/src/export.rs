@@ -1,6 +1,7 @@
 //! Frames shared with an OpenGL host without a copy through the CPU: a renderer whose every
 //! frame is copied on the GPU into memory exported as a file descriptor, which the host imports
-//! (`GL_EXT_memory_object_fd`) and reads as a pixel buffer.
+//! (`GL_EXT_memory_object_fd`) and reads as a pixel buffer; with the frame's depth after it
+//! when the host asks (`CadrRendererSettings::export_depth`), for compositing.
 
 use cadr_core::vk::{raw, FrameExport, Image};
 
@@ -17,36 +18,52 @@ pub(crate) struct ExportOutput {
 }
 
 impl ExportOutput {
-    /// An export of frames of `width` × `height` pixels.
+    /// An export of frames of `width` × `height` pixels (without their depth until a frame
+    /// brings one).
     pub(crate) fn new(
         device: &std::sync::Arc<cadr_core::vk::Device>,
         (width, height): (u32, u32),
     ) -> Result<Self, Failure> {
         Ok(Self {
-            export: FrameExport::new(device, raw::Extent2D { width, height })?,
+            export: FrameExport::new(device, raw::Extent2D { width, height }, false)?,
             generation: 1,
         })
     }
 
-    /// Copies `frame` into the exported memory (new memory, and a new generation, when the
-    /// frame's size changed) and waits for the copy.
+    /// Makes the exported memory hold frames of `extent`, with their depth or without: new
+    /// memory, and a new generation, when either changed.
+    pub(crate) fn reshape(
+        &mut self,
+        device: &std::sync::Arc<cadr_core::vk::Device>,
+        extent: raw::Extent2D,
+        with_depth: bool,
+    ) -> Result<(), Failure> {
+        if extent != self.export.extent() || with_depth != self.export.depth_offset().is_some() {
+            self.export = FrameExport::new(device, extent, with_depth)?;
+            self.generation += 1;
+        }
+        Ok(())
+    }
+
+    /// Copies `frame`, and its `depth` when the renderer keeps it for the host, into the
+    /// exported memory (reshaped first when the frame's size changed or the depth came or
+    /// went) and waits for the copy.
     pub(crate) fn copy(
         &mut self,
         device: &std::sync::Arc<cadr_core::vk::Device>,
         frame: &Image,
+        depth: Option<&Image>,
     ) -> Result<(), Failure> {
-        if frame.extent() != self.export.extent() {
-            self.export = FrameExport::new(device, frame.extent())?;
-            self.generation += 1;
-        }
-        Ok(self.export.copy(frame)?)
+        self.reshape(device, frame.extent(), depth.is_some())?;
+        Ok(self.export.copy(frame, depth)?)
     }
 }
 
 /// The memory a renderer's frames are exported into (`cadr_renderer_exported_frame`). After
 /// each `cadr_renderer_render` it holds that frame: `height` rows of `row_bytes` bytes, the top
 /// row first, 4 bytes per pixel (R, G, B, A, 8 bits each, as `cadr_renderer_read_pixels` gives
-/// them), from offset 0.
+/// them), from offset 0; with `CadrRendererSettings::export_depth`, the frame's depth follows
+/// from `depth_offset`.
 ///
 /// The struct grows by appending fields: the host sets `size` to `sizeof(CadrExportedFrame)`;
 /// cadr fills the fields within it and zeroes those of a newer header it does not know.
@@ -78,6 +95,16 @@ pub struct CadrExportedFrame {
     /// The Vulkan driver's UUID (`driverUUID`): import only where `GL_DRIVER_UUID_EXT` is the
     /// same.
     pub driver_uuid: [u8; 16],
+    /// Where the frame's depth starts in the memory, 0 when it holds none (the renderer's
+    /// `export_depth` setting is off); after each `cadr_renderer_render` it holds that frame's
+    /// depth: `height`
+    /// rows of `depth_row_bytes` bytes, the top row first, one 32-bit float per pixel, 0 at the
+    /// near plane and 1 at the far plane and where nothing is drawn (an OpenGL window depth
+    /// with the default depth range; the projection is the camera's). It is the opaque
+    /// surfaces' depth: translucent surfaces, and X-ray's, write none. Since 1.1.
+    pub depth_offset: u64,
+    /// Bytes from one row of the depth to the next (`width × 4`), 0 without depth. Since 1.1.
+    pub depth_row_bytes: u32,
 }
 
 /// Creates an offscreen renderer of `width` × `height` pixels whose every frame
@@ -131,6 +158,7 @@ pub unsafe extern "C" fn cadr_renderer_exported_frame(
             };
             let extent = output.export.extent();
             let (device_uuid, driver_uuid) = output.export.uuids();
+            let depth_offset = output.export.depth_offset();
             Ok(CadrExportedFrame {
                 size: std::mem::size_of::<CadrExportedFrame>() as u32,
                 fd: output.export.file_descriptor()?,
@@ -141,6 +169,8 @@ pub unsafe extern "C" fn cadr_renderer_exported_frame(
                 generation: output.generation,
                 device_uuid,
                 driver_uuid,
+                depth_offset: depth_offset.unwrap_or(0),
+                depth_row_bytes: depth_offset.map_or(0, |_| extent.width * 4),
             })
         })?;
         // SAFETY: null or writable for its size (the caller's contract).

@@ -644,7 +644,11 @@ pub unsafe extern "C" fn cadr_renderer_render(
             if let Some(output) = &mut state.frame_export {
                 let copy_start = Instant::now();
                 let renderer = state.view.renderer();
-                output.copy(renderer.device(), renderer.color_image())?;
+                output.copy(
+                    renderer.device(),
+                    renderer.color_image(),
+                    renderer.depth_for_host(),
+                )?;
                 frame.present_us = copy_start.elapsed().as_secs_f64() * 1e6;
             }
             frame.cpu_us = drawn.cpu_us();

@@ -22,6 +22,7 @@ static struct {
   PFNGLBLITFRAMEBUFFERPROC BlitFramebuffer;
   PFNGLDELETEFRAMEBUFFERSPROC DeleteFramebuffers;
   PFNGLTEXSTORAGE2DPROC TexStorage2D;
+  PFNGLGETBUFFERSUBDATAPROC GetBufferSubData;
   /* GL_EXT_memory_object(_fd); NULL where the driver lacks them. */
   PFNGLCREATEMEMORYOBJECTSEXTPROC CreateMemoryObjectsEXT;
   PFNGLDELETEMEMORYOBJECTSEXTPROC DeleteMemoryObjectsEXT;
@@ -45,6 +46,7 @@ static int load_functions(void) {
   LOAD(BlitFramebuffer, PFNGLBLITFRAMEBUFFERPROC);
   LOAD(DeleteFramebuffers, PFNGLDELETEFRAMEBUFFERSPROC);
   LOAD(TexStorage2D, PFNGLTEXSTORAGE2DPROC);
+  LOAD(GetBufferSubData, PFNGLGETBUFFERSUBDATAPROC);
   if (glfwExtensionSupported("GL_EXT_memory_object") &&
       glfwExtensionSupported("GL_EXT_memory_object_fd")) {
     LOAD(CreateMemoryObjectsEXT, PFNGLCREATEMEMORYOBJECTSEXTPROC);
@@ -56,7 +58,7 @@ static int load_functions(void) {
   }
   return gl.GenBuffers && gl.BindBuffer && gl.DeleteBuffers && gl.GenFramebuffers &&
          gl.BindFramebuffer && gl.FramebufferTexture2D && gl.BlitFramebuffer &&
-         gl.DeleteFramebuffers && gl.TexStorage2D;
+         gl.DeleteFramebuffers && gl.TexStorage2D && gl.GetBufferSubData;
 }
 
 GLFWwindow *gl_frames_window(const char *program, int width, int height, const char *title) {
@@ -133,7 +135,13 @@ static int import_frames(struct GlFrames *frames) {
                        GL_HANDLE_TYPE_OPAQUE_FD_EXT, exported.fd);
   gl.GenBuffers(1, &frames->pixel_buffer);
   gl.BindBuffer(GL_PIXEL_UNPACK_BUFFER, frames->pixel_buffer);
-  gl.BufferStorageMemEXT(GL_PIXEL_UNPACK_BUFFER, (GLsizeiptr)exported.row_bytes * exported.height,
+  /* The colour, and the depth after it where the renderer exports it. */
+  frames->depth_offset = exported.depth_offset;
+  gl.BufferStorageMemEXT(GL_PIXEL_UNPACK_BUFFER,
+                         exported.depth_offset != 0
+                             ? (GLsizeiptr)(exported.depth_offset +
+                                            (uint64_t)exported.depth_row_bytes * exported.height)
+                             : (GLsizeiptr)exported.row_bytes * exported.height,
                          frames->memory_object, 0);
   gl.BindBuffer(GL_PIXEL_UNPACK_BUFFER, 0);
   if (glGetError() != GL_NO_ERROR) {
@@ -146,8 +154,31 @@ static int import_frames(struct GlFrames *frames) {
   return 1;
 }
 
+/* Asks the renderer to export each frame's depth after its colour. */
+static void export_depth(CadrRenderer renderer) {
+  struct CadrRendererSettings settings;
+  memset(&settings, 0, sizeof settings);
+  settings.size = sizeof settings;
+  CADR_CHECK(cadr_renderer_settings(renderer, &settings));
+  settings.export_depth = true;
+  CADR_CHECK(cadr_renderer_apply_settings(renderer, &settings));
+}
+
+/* A depth texture of the frames' size beside the colour in their framebuffer. */
+static void attach_depth(struct GlFrames *frames) {
+  glGenTextures(1, &frames->depth_texture);
+  glBindTexture(GL_TEXTURE_2D, frames->depth_texture);
+  gl.TexStorage2D(GL_TEXTURE_2D, 1, GL_DEPTH_COMPONENT32F, (GLsizei)frames->width,
+                  (GLsizei)frames->height);
+  gl.BindFramebuffer(GL_READ_FRAMEBUFFER, frames->framebuffer);
+  gl.FramebufferTexture2D(GL_READ_FRAMEBUFFER, GL_DEPTH_ATTACHMENT, GL_TEXTURE_2D,
+                          frames->depth_texture, 0);
+  gl.BindFramebuffer(GL_READ_FRAMEBUFFER, 0);
+}
+
 void gl_frames_create(struct GlFrames *frames, CadrContext context, uint32_t width,
-                      uint32_t height, int allow_sharing) {
+                      uint32_t height, int flags) {
+  const int allow_sharing = (flags & GL_FRAMES_SHARE) != 0;
   memset(frames, 0, sizeof *frames);
   frames->width = width;
   frames->height = height;
@@ -167,11 +198,21 @@ void gl_frames_create(struct GlFrames *frames, CadrContext context, uint32_t wid
       printf("shared memory unavailable (cadr cannot export frames on this device): reading "
              "frames back\n");
       frames->renderer = NULL;
-    } else if (!import_frames(frames)) {
-      printf("the OpenGL driver refused cadr's memory: reading frames back\n");
-      CADR_CHECK(cadr_renderer_destroy(frames->renderer));
-      frames->renderer = NULL;
+    } else {
+      if (flags & GL_FRAMES_DEPTH) {
+        export_depth(frames->renderer);
+      }
+      if (!import_frames(frames)) {
+        printf("the OpenGL driver refused cadr's memory: reading frames back\n");
+        CADR_CHECK(cadr_renderer_destroy(frames->renderer));
+        frames->renderer = NULL;
+      } else if (frames->depth_offset != 0) {
+        attach_depth(frames);
+      }
     }
+  }
+  if ((flags & GL_FRAMES_DEPTH) && frames->depth_texture == 0) {
+    printf("no depth: the frames' depth comes only through shared memory\n");
   }
   if (frames->renderer == NULL) {
     CADR_CHECK(cadr_renderer_create(context, width, height, &frames->renderer));
@@ -187,15 +228,23 @@ int gl_frames_shared(const struct GlFrames *frames) {
   return frames->pixel_buffer != 0;
 }
 
-size_t gl_frames_show(struct GlFrames *frames, int x, int y, int window_height) {
+int gl_frames_has_depth(const struct GlFrames *frames) {
+  return frames->depth_texture != 0;
+}
+
+size_t gl_frames_update(struct GlFrames *frames) {
   size_t read_back = 0;
   const GLsizei width = (GLsizei)frames->width, height = (GLsizei)frames->height;
-  const GLint bottom = window_height - y - height;
   glBindTexture(GL_TEXTURE_2D, frames->texture);
   if (frames->pixel_buffer != 0) {
-    /* From the shared memory to the texture, on the GPU. */
+    /* From the shared memory to the textures, on the GPU. */
     gl.BindBuffer(GL_PIXEL_UNPACK_BUFFER, frames->pixel_buffer);
     glTexSubImage2D(GL_TEXTURE_2D, 0, 0, 0, width, height, GL_RGBA, GL_UNSIGNED_BYTE, NULL);
+    if (frames->depth_texture != 0) {
+      glBindTexture(GL_TEXTURE_2D, frames->depth_texture);
+      glTexSubImage2D(GL_TEXTURE_2D, 0, 0, 0, width, height, GL_DEPTH_COMPONENT, GL_FLOAT,
+                      (const void *)(uintptr_t)frames->depth_offset);
+    }
     gl.BindBuffer(GL_PIXEL_UNPACK_BUFFER, 0);
   } else {
     read_back = (size_t)width * height * 4;
@@ -203,12 +252,61 @@ size_t gl_frames_show(struct GlFrames *frames, int x, int y, int window_height) 
     glTexSubImage2D(GL_TEXTURE_2D, 0, 0, 0, width, height, GL_RGBA, GL_UNSIGNED_BYTE,
                     frames->pixels);
   }
+  return read_back;
+}
+
+void gl_frames_read_depth(struct GlFrames *frames, float *depth) {
+  gl.BindBuffer(GL_PIXEL_UNPACK_BUFFER, frames->pixel_buffer);
+  gl.GetBufferSubData(GL_PIXEL_UNPACK_BUFFER, (GLintptr)frames->depth_offset,
+                      (GLsizeiptr)frames->width * frames->height * 4, depth);
+  gl.BindBuffer(GL_PIXEL_UNPACK_BUFFER, 0);
+}
+
+void gl_frames_begin_drawing(struct GlFrames *frames) {
+  gl.BindFramebuffer(GL_FRAMEBUFFER, frames->framebuffer);
+  glViewport(0, 0, (GLsizei)frames->width, (GLsizei)frames->height);
+  glEnable(GL_DEPTH_TEST);
+  glDepthFunc(GL_LESS);
+}
+
+void gl_frames_load_camera(const CadrCamera *camera) {
+  /* Vulkan's clip depth is z/w in 0..1, OpenGL's (z/w + 1) / 2 from -1..1: z' = 2z - w makes
+   * OpenGL's window depth the frame's. */
+  double projection[16];
+  int column;
+  for (column = 0; column < 4; ++column) {
+    const double *from = &camera->projection[column * 4];
+    double *to = &projection[column * 4];
+    to[0] = from[0];
+    to[1] = from[1];
+    to[2] = 2.0 * from[2] - from[3];
+    to[3] = from[3];
+  }
+  glMatrixMode(GL_PROJECTION);
+  glLoadMatrixd(projection);
+  glMatrixMode(GL_MODELVIEW);
+  glLoadMatrixd(camera->view);
+}
+
+void gl_frames_end_drawing(void) {
+  glDisable(GL_DEPTH_TEST);
+  gl.BindFramebuffer(GL_FRAMEBUFFER, 0);
+}
+
+void gl_frames_blit(struct GlFrames *frames, int x, int y, int window_height) {
+  const GLsizei width = (GLsizei)frames->width, height = (GLsizei)frames->height;
+  const GLint bottom = window_height - y - height;
   /* Row 0 of a frame is its top row: blit it to the rectangle's top (GL counts rows up). */
   gl.BindFramebuffer(GL_READ_FRAMEBUFFER, frames->framebuffer);
   gl.BindFramebuffer(GL_DRAW_FRAMEBUFFER, 0);
   gl.BlitFramebuffer(0, 0, width, height, x, bottom + height, x + width, bottom,
                      GL_COLOR_BUFFER_BIT, GL_NEAREST);
   gl.BindFramebuffer(GL_READ_FRAMEBUFFER, 0);
+}
+
+size_t gl_frames_show(struct GlFrames *frames, int x, int y, int window_height) {
+  const size_t read_back = gl_frames_update(frames);
+  gl_frames_blit(frames, x, y, window_height);
   return read_back;
 }
 
@@ -219,6 +317,9 @@ void gl_frames_destroy(struct GlFrames *frames) {
   }
   gl.DeleteFramebuffers(1, &frames->framebuffer);
   glDeleteTextures(1, &frames->texture);
+  if (frames->depth_texture != 0) {
+    glDeleteTextures(1, &frames->depth_texture);
+  }
   free(frames->pixels);
   if (frames->renderer != NULL) {
     CADR_CHECK(cadr_renderer_destroy(frames->renderer));

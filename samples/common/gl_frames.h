@@ -2,7 +2,9 @@
  * (cadr_renderer_create_for_export), imported as an OpenGL pixel buffer
  * (GL_EXT_memory_object_fd) and uploaded into a texture on the GPU; or, where the drivers cannot
  * share memory, frames read back through the CPU. Either way the texture is blitted into a
- * rectangle of the window. Used by gl_view.c and quad_view.c; needs a current OpenGL 3.0
+ * rectangle of the window. With the frames' depth (exported after the colour,
+ * CadrRendererSettings::export_depth), the host draws its own geometry into cadr's frame with
+ * a depth test before the blit. Used by gl_view.c and quad_view.c; needs a current OpenGL 3.0
  * context (GLFW's). */
 #ifndef CADR_SAMPLE_GL_FRAMES_H
 #define CADR_SAMPLE_GL_FRAMES_H
@@ -19,6 +21,10 @@ struct GlFrames {
   unsigned texture, framebuffer;
   /* The shared path: the exported memory as a buffer (0 on the read-back path). */
   unsigned memory_object, pixel_buffer;
+  /* With depth: the depth texture beside the colour in the framebuffer, and where the depth
+   * starts in the exported memory (0 without depth). */
+  unsigned depth_texture;
+  uint64_t depth_offset;
   /* The read-back path: the frame in host memory. */
   uint8_t *pixels;
 };
@@ -32,18 +38,52 @@ struct GLFWwindow *gl_frames_window(const char *program, int width, int height,
 /* Whether the driver can import memory from a file descriptor (GL_EXT_memory_object_fd). */
 int gl_frames_can_import(void);
 
+/* What gl_frames_create is asked for. */
+enum {
+  /* Frames through shared memory where both drivers allow it (else read back). */
+  GL_FRAMES_SHARE = 1,
+  /* The frames' depth too (shared memory only), for gl_frames_begin_drawing. */
+  GL_FRAMES_DEPTH = 2
+};
+
 /* A renderer of `width` x `height` on `context` with its way to the window: exported frames
- * where `allow_sharing` and both drivers can share memory, else an offscreen renderer read
- * back. Prints the reason when it falls back. */
+ * where `flags` has GL_FRAMES_SHARE and both drivers can share memory, else an offscreen
+ * renderer read back; with GL_FRAMES_DEPTH, the exported frames bring their depth. Prints the
+ * reason when it falls back. */
 void gl_frames_create(struct GlFrames *frames, CadrContext context, uint32_t width,
-                      uint32_t height, int allow_sharing);
+                      uint32_t height, int flags);
 
 /* Whether the frames come through shared memory. */
 int gl_frames_shared(const struct GlFrames *frames);
 
-/* Puts the renderer's last frame into the window's rectangle at (x, y) (from the window's
- * top-left corner) of the frame's size, `window_height` rows tall in all. Returns the bytes
- * read back through the CPU (0 on the shared path). */
+/* Whether the frames bring their depth (GL_FRAMES_DEPTH, on the shared path). */
+int gl_frames_has_depth(const struct GlFrames *frames);
+
+/* Brings the renderer's last frame (and its depth) into the frames' textures. Returns the
+ * bytes read back through the CPU (0 on the shared path). */
+size_t gl_frames_update(struct GlFrames *frames);
+
+/* Reads the last frame's depth (width x height floats, the top row first) back through the
+ * CPU: for checks, not for drawing. Only with depth. */
+void gl_frames_read_depth(struct GlFrames *frames, float *depth);
+
+/* Makes the frames' framebuffer (the last frame's colour, and its depth) the target of the
+ * host's drawing, with the viewport over it and the depth test on: geometry drawn with cadr's
+ * camera (gl_frames_load_camera) is hidden where cadr's parts are in front of it. */
+void gl_frames_begin_drawing(struct GlFrames *frames);
+
+/* Loads `camera` (cadr's Vulkan-style matrices) as OpenGL's projection and model-view
+ * matrices, adjusted so that OpenGL's depth matches the frame's (0 near, 1 far). */
+void gl_frames_load_camera(const CadrCamera *camera);
+
+/* Ends the host's drawing into the frames' framebuffer. */
+void gl_frames_end_drawing(void);
+
+/* Blits the frames' colour texture into the window's rectangle at (x, y) (from the window's
+ * top-left corner) of the frame's size, `window_height` rows tall in all. */
+void gl_frames_blit(struct GlFrames *frames, int x, int y, int window_height);
+
+/* gl_frames_update and gl_frames_blit; returns the bytes read back. */
 size_t gl_frames_show(struct GlFrames *frames, int x, int y, int window_height);
 
 /* Releases the OpenGL objects and the renderer. */

@@ -584,7 +584,8 @@ static bool settings_equal(const CadrRendererSettings *a, const CadrRendererSett
          a->min_pixels == b->min_pixels && a->lod_error == b->lod_error &&
          a->frame_replay == b->frame_replay &&
          a->pick_through_translucent == b->pick_through_translucent &&
-         a->frames_in_flight == b->frames_in_flight && a->present_mode == b->present_mode;
+         a->frames_in_flight == b->frames_in_flight && a->present_mode == b->present_mode &&
+         a->export_depth == b->export_depth;
 }
 
 /* The settings last applied by SET and SET_RGB. */
@@ -1592,6 +1593,31 @@ static void test_export(CadrContext context, struct Built *b) {
   OK(cadr_renderer_render(exporting, b->scene, &camera, NULL));
   OK(cadr_renderer_exported_frame(exporting, &frame));
   CHECK(frame.width == W / 2 && frame.height == H / 2 && frame.generation == 2);
+  CHECK(frame.depth_offset == 0 && frame.depth_row_bytes == 0);
+  close(frame.fd);
+  /* The depth after the colour (1.1): new memory as soon as it is asked for, of a new
+   * generation, with room for the depth at an aligned offset; rendering goes on into it. */
+  OK(SET(exporting, export_depth, true));
+  CHECK(settings_of(exporting).export_depth);
+  OK(cadr_renderer_exported_frame(exporting, &frame));
+  CHECK(frame.generation == 3 && frame.depth_offset % 256 == 0 &&
+        frame.depth_offset >= (uint64_t)frame.row_bytes * frame.height &&
+        frame.depth_row_bytes == frame.width * 4);
+  CHECK(frame.allocation_size >= frame.depth_offset + (uint64_t)frame.depth_row_bytes * frame.height);
+  close(frame.fd);
+  OK(cadr_renderer_render(exporting, b->scene, &camera, NULL));
+  {
+    /* A 1.0 host's struct ends before the depth's fields: they are not written. */
+    CadrExportedFrame older;
+    memset(&older, 0xAB, sizeof older);
+    older.size = (uint32_t)offsetof(CadrExportedFrame, depth_offset);
+    OK(cadr_renderer_exported_frame(exporting, &older));
+    CHECK(older.generation == 3 && older.depth_offset == 0xABABABABABABABABull);
+    close(older.fd);
+  }
+  OK(SET(exporting, export_depth, false));
+  OK(cadr_renderer_exported_frame(exporting, &frame));
+  CHECK(frame.generation == 4 && frame.depth_offset == 0);
   close(frame.fd);
   EXPECT(cadr_renderer_exported_frame(exporting, NULL), CADR_RESULT_NULL_ARGUMENT);
   frame.size = 2;
@@ -1600,6 +1626,9 @@ static void test_export(CadrContext context, struct Built *b) {
   frame.size = sizeof frame;
   EXPECT(cadr_renderer_exported_frame(plain, &frame), CADR_RESULT_INVALID_ARGUMENT);
   MESSAGE_HAS("cadr_renderer_create_for_export");
+  EXPECT(SET(plain, export_depth, true), CADR_RESULT_UNSUPPORTED);
+  MESSAGE_HAS("settings.export_depth");
+  CHECK(!settings_of(plain).export_depth);
   OK(cadr_renderer_destroy(plain));
   {
     /* The settings' functions on a destroyed renderer. */

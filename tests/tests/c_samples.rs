@@ -119,9 +119,16 @@ impl VirtualDisplay {
                 .spawn()
                 .expect("run Xvfb (scripts/setup.sh installs xvfb)");
             let socket = format!("/tmp/.X11-unix/X{number}");
+            // The display is ours once its lock names our server: another test's server may
+            // have taken the number meanwhile (its socket exists, and ours exits).
+            let lock = format!("/tmp/.X{number}-lock");
+            let ours = |server: &Child| {
+                std::fs::read_to_string(&lock)
+                    .is_ok_and(|pid| pid.trim().parse::<u32>().ok() == Some(server.id()))
+            };
             let start = Instant::now();
             while start.elapsed() < Duration::from_secs(10) {
-                if Path::new(&socket).exists() {
+                if Path::new(&socket).exists() && ours(&server) {
                     return Self {
                         server,
                         name: format!(":{number}"),
@@ -386,8 +393,9 @@ fn viewer_under_xvfb_swaps_techniques_resizes_and_shows_the_offscreen_image() {
 }
 
 /// Runs `gl_view` on gen:demo for `frames` frames with `extra` arguments in its self-test,
-/// checks that it printed each of `expected`, and compares its window with the offscreen render.
-fn run_gl_view(name: &str, frames: &str, extra: &[&str], expected: &[&str]) {
+/// checks that it printed each of `expected`, compares its window with the offscreen render and
+/// returns what it printed.
+fn run_gl_view(name: &str, frames: &str, extra: &[&str], expected: &[&str]) -> String {
     let dir = scratch_dir(name);
     let program = sample("gl_view", &dir, &["-lglfw", "-lGL"]);
     let display = VirtualDisplay::start();
@@ -400,7 +408,9 @@ fn run_gl_view(name: &str, frames: &str, extra: &[&str], expected: &[&str]) {
             .env("DISPLAY", &display.name),
     );
     view.assert_printed(expected);
+    let transcript = view.transcript.clone();
     view.grab_finish_and_compare(&display, &dir);
+    transcript
 }
 
 /// The OpenGL host takes cadr's frames through memory the two drivers share (Mesa 25's
@@ -417,6 +427,35 @@ fn gl_view_shows_cadrs_frames_in_opengl_through_shared_memory() {
             "8 frames",
             "bytes read back per frame: 0",
         ],
+    );
+}
+
+/// An OpenGL host draws its own geometry into cadr's frames with a depth test against their
+/// exported depth (`CadrRendererSettings::export_depth`): a rectangle at the scene's median
+/// depth covers exactly the pixels whose depth lies behind it, background included, and none
+/// in front; the frames still come through shared memory alone.
+#[test]
+fn gl_view_draws_its_own_geometry_into_cadrs_frames_by_their_depth() {
+    let transcript = run_gl_view(
+        "sample-gl-view-depth",
+        "4",
+        &["--depth"],
+        &[
+            "path: shared memory, with depth",
+            "bytes read back per frame: 0",
+            "depth compositing: 76800 of 76800 pixels agree, ",
+        ],
+    );
+    let drawn_over: u32 = transcript
+        .lines()
+        .find_map(|line| line.split(" pixels agree, ").nth(1))
+        .and_then(|rest| rest.split(' ').next())
+        .and_then(|count| count.parse().ok())
+        .unwrap();
+    // The background (depth 1) and the farther half of the parts, not the nearer half.
+    assert!(
+        (76_800 / 2..76_800 - 1_000).contains(&drawn_over),
+        "{drawn_over} pixels drawn over:\n{transcript}"
     );
 }
 

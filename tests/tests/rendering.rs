@@ -1,4 +1,5 @@
 //! Image tests against references made on lavapipe, with validation on.
+#![allow(clippy::unwrap_used)] // Test code: a failed unwrap is a failed test.
 
 use std::path::Path;
 
@@ -146,4 +147,81 @@ fn far_from_origin_scene_renders_like_one_at_the_origin() {
     let far_image = render_scene(&far, 160, 120);
     let difference = compare(&near_image, &far_image).expect("same size");
     assert!(difference.within(DEFAULT_TOLERANCE), "{difference:?}");
+}
+
+/// A host compositing its own drawing with cadr's frames gets each colour frame's depth
+/// (`Renderer::depth_for_host`): where a part shows, the depth picking finds there, and 1 where
+/// nothing is drawn; with plain frames, with ambient occlusion (whose pass reads the depth as
+/// a shader does), with the two-phase occlusion culler (whose passes are suspended) and with
+/// MSAA (resolved from one sample, so that pixels on a part's outline may differ). It is
+/// refused while frames do not keep it.
+#[test]
+fn colour_frames_hand_their_depth_to_the_host() {
+    use cadr_core::render::pick::PixelRect;
+    let device = test_device();
+    let scene = load_file(Path::new(CYLINDER_ENGINE_GLB)).unwrap();
+    let mut f = cadr_tests::SceneView::fitted(Arc::clone(&device), &scene, (96, 72));
+    f.render();
+    assert!(f.view.renderer().read_depth().is_err());
+    // What picking finds on a grid of pixels: the depth of the nearest part, or nothing.
+    f.view.sync(&f.graph, &mut f.tree).unwrap();
+    let grid: Vec<(u32, u32)> = (0..12)
+        .flat_map(|i| (0..9).map(move |j| (4 + 8 * i, 4 + 8 * j)))
+        .collect();
+    let picked: Vec<Option<f32>> = grid
+        .iter()
+        .map(|&(x, y)| {
+            let hits = f
+                .view
+                .pick(&f.tree, &f.camera, PixelRect::pixel(x, y))
+                .unwrap();
+            hits.first().map(|hit| hit.depth)
+        })
+        .collect();
+    assert!(picked.iter().filter(|d| d.is_some()).count() > 20);
+    assert!(picked.iter().filter(|d| d.is_none()).count() > 10);
+    f.view.renderer_mut().set_depth_to_host(true).unwrap();
+    let occlusion = cadr_tests::scene_wide("individual-indirect-count", "gpu-occlusion");
+    let msaa = f.view.renderer().device().sample_counts().contains(&4);
+    for case in ["plain", "ambient occlusion", "occlusion culler", "msaa"] {
+        match case {
+            "ambient occlusion" => f.view.renderer_mut().set_ssao(true).unwrap(),
+            "occlusion culler" => {
+                f.view.renderer_mut().set_ssao(false).unwrap();
+                f.view.techniques_mut().select(&occlusion).unwrap();
+            }
+            "msaa" if msaa => f.view.renderer_mut().set_msaa(4).unwrap(),
+            "msaa" => continue,
+            _ => {}
+        }
+        f.render();
+        let depth = f.view.renderer().read_depth().unwrap();
+        assert_eq!(depth.len(), 96 * 72, "{case}");
+        // The multisampled depth resolves to one sample, off the pixel's centre.
+        let tolerance = if case == "msaa" { 0.02 } else { 1e-4 };
+        let agreeing = grid
+            .iter()
+            .zip(&picked)
+            .filter(|&(&(x, y), expected)| {
+                let value = depth[(y * 96 + x) as usize];
+                match expected {
+                    Some(expected) => (value - expected).abs() < tolerance,
+                    None => value == 1.0,
+                }
+            })
+            .count();
+        let needed = if case == "msaa" {
+            grid.len() * 9 / 10
+        } else {
+            grid.len()
+        };
+        assert!(
+            agreeing >= needed,
+            "{case}: {agreeing} of {} pixels hold the depth picking finds",
+            grid.len()
+        );
+    }
+    f.view.renderer_mut().set_depth_to_host(false).unwrap();
+    assert!(f.view.renderer().read_depth().is_err());
+    f.assert_no_validation_errors();
 }

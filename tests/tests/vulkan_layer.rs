@@ -2,7 +2,7 @@
 //! images, all with validation on.
 
 use cadr_core::vk::{
-    raw as vk, read_rgba8, Buffer, DeviceChoice, Image, MemoryLocation, OffscreenTarget,
+    raw as vk, read_image, Buffer, DeviceChoice, Image, MemoryLocation, OffscreenTarget,
 };
 use cadr_tests::{assert_no_validation_errors, test_device};
 
@@ -25,7 +25,7 @@ fn image_upload_and_readback_round_trip() {
     )
     .expect("upload");
     let back =
-        read_rgba8(&device, &image, vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL).expect("read back");
+        read_image(&device, &image, vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL).expect("read back");
     assert_eq!(back, pixels);
     let error = Image::with_rgba8(
         &device,

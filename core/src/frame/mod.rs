@@ -72,6 +72,8 @@ struct FrameSettings {
     textures: bool,
     /// How highlighted parts are drawn.
     highlight_style: HighlightStyle,
+    /// Whether colour frames leave their depth for the host ([`Renderer::depth_for_host`]).
+    depth_to_host: bool,
 }
 
 /// What frames make on first need besides the picture, kept while the size (and method)
@@ -135,6 +137,7 @@ impl Renderer {
                 silhouettes: true,
                 textures: true,
                 highlight_style: HighlightStyle::default(),
+                depth_to_host: false,
             },
             on_demand: OnDemandTargets::default(),
         })
@@ -174,6 +177,33 @@ impl Renderer {
     /// default).
     pub fn ssao(&self) -> bool {
         self.settings.ssao
+    }
+
+    /// Whether colour frames keep their depth for the host (see [`Renderer::depth_for_host`]).
+    pub fn depth_to_host(&self) -> bool {
+        self.settings.depth_to_host
+    }
+
+    /// Makes colour frames store their depth and leave it in `TRANSFER_SRC_OPTIMAL` for the
+    /// host to copy (a host compositing its own drawing with cadr's frames), or not (the
+    /// default: the depth is then not stored, which costs nothing).
+    pub fn set_depth_to_host(&mut self, on: bool) -> RenderResult<()> {
+        if on != self.settings.depth_to_host {
+            self.finish()?;
+            // The recorded frame has (or lacks) the pass that hands the depth over.
+            self.forget_recording();
+            self.settings.depth_to_host = on;
+        }
+        Ok(())
+    }
+
+    /// The depth of the last colour frame when frames keep it for the host
+    /// ([`Renderer::set_depth_to_host`]): one-sample `D32_SFLOAT` (resolved from the
+    /// multisampled depth with MSAA), 0 at the near plane and 1 at the far plane and where
+    /// nothing is drawn, in `TRANSFER_SRC_OPTIMAL` until the next frame. It is the opaque
+    /// surfaces' depth: translucent surfaces (and X-ray's) write none.
+    pub fn depth_for_host(&self) -> Option<&Image> {
+        self.settings.depth_to_host.then_some(&self.target.depth)
     }
 
     /// Turns screen-space ambient occlusion on or off (see [`Renderer::ssao`]); the next frame

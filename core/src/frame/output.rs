@@ -17,6 +17,23 @@ impl Renderer {
         })
     }
 
+    /// The depth of the last colour frame ([`Renderer::depth_for_host`]), row by row from the
+    /// top, one value per pixel; refused unless frames keep it ([`Renderer::set_depth_to_host`]).
+    pub fn read_depth(&self) -> RenderResult<Vec<f32>> {
+        let depth = self.depth_for_host().ok_or_else(|| {
+            RenderError::InvalidUse("frames do not keep their depth for the host".into())
+        })?;
+        self.finish()?;
+        let bytes = timings::time(Phase::Readback, || {
+            crate::vk::read_image(
+                &self.device,
+                depth,
+                crate::vk::raw::ImageLayout::TRANSFER_SRC_OPTIMAL,
+            )
+        })?;
+        Ok(bytemuck::pod_collect_to_vec(&bytes))
+    }
+
     /// Writes the last frame to a PNG file.
     pub fn save_png(&self, path: &Path) -> Result<(), SaveError> {
         let image = self.read_rgba8()?;

@@ -109,6 +109,8 @@ pub(crate) struct FrameShape {
     pub cap_ties: bool,
     /// A band goes around highlighted parts (the outline highlight style).
     pub outline: bool,
+    /// The depth is handed to the host after the frame.
+    pub depth_to_host: bool,
 }
 
 /// How a pass over the picture draws.
@@ -213,7 +215,7 @@ fn silhouette_reads(shape: &FrameShape) -> Resources {
 }
 
 /// One pass of a frame.
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Copy, Debug, PartialEq)]
 pub(crate) enum FramePass {
     /// Outside rendering, first: the vertex and parameter paths' and the submission's
     /// preparation, then the GPU culler's phase 0 (when one is active). Writes the draws.
@@ -246,6 +248,8 @@ pub(crate) enum FramePass {
     },
     /// After the pick pass: the renderer copies the picked rectangle's ids and depths back.
     PickReadback,
+    /// Last: the depth left for the host to copy (`Renderer::depth_for_host`).
+    DepthToHost,
 }
 
 impl FramePass {
@@ -257,6 +261,7 @@ impl FramePass {
             FramePass::Surfaces { .. } => Resources::DRAWS,
             FramePass::Overlay { reads, .. } => reads,
             FramePass::PickReadback => Resources::PICK_IDS.with(Resources::DEPTH),
+            FramePass::DepthToHost => Resources::DEPTH,
         }
     }
 
@@ -266,7 +271,7 @@ impl FramePass {
             FramePass::Prepare | FramePass::Cull { .. } => Resources::DRAWS,
             FramePass::Surfaces { writes, .. } => writes,
             FramePass::Overlay { .. } => Resources::COLOR,
-            FramePass::PickReadback => Resources::NONE,
+            FramePass::PickReadback | FramePass::DepthToHost => Resources::NONE,
         }
     }
 
@@ -285,6 +290,7 @@ impl FramePass {
                 4 | (index as u64) << 8 | u64::from(reads.0) << 48
             }
             FramePass::PickReadback => 5,
+            FramePass::DepthToHost => 6,
         }
     }
 }
@@ -335,6 +341,9 @@ impl FramePasses {
         passes.extend(overlays());
         if shape.target == PassTarget::Pick {
             passes.push(FramePass::PickReadback);
+        }
+        if shape.depth_to_host {
+            passes.push(FramePass::DepthToHost);
         }
         Self { passes }
     }
@@ -415,6 +424,7 @@ mod tests {
             nearest_surfaces: false,
             cap_ties: false,
             outline: false,
+            depth_to_host: false,
         }
     }
 
@@ -515,6 +525,7 @@ mod tests {
                 FramePass::Surfaces { phase, last, .. } => format!("surfaces {phase} {last}"),
                 FramePass::Overlay { .. } => "overlay".to_string(),
                 FramePass::PickReadback => "readback".to_string(),
+                FramePass::DepthToHost => "depth to host".to_string(),
             })
             .collect();
         assert_eq!(
@@ -543,6 +554,25 @@ mod tests {
         ));
         assert!(passes.surface_writes().has(Resources::PICK_IDS));
         assert!(!passes.surface_writes().has(Resources::COLOR));
+    }
+
+    #[test]
+    fn a_frame_that_hands_its_depth_over_does_so_last() {
+        let passes = FramePasses::plan(&FrameShape {
+            depth_to_host: true,
+            ssao: true,
+            ..shaded()
+        });
+        assert_eq!(passes.iter().last(), Some(&FramePass::DepthToHost));
+        assert!(passes.surface_writes().has(Resources::DEPTH));
+        assert_ne!(
+            passes.key(),
+            FramePasses::plan(&FrameShape {
+                ssao: true,
+                ..shaded()
+            })
+            .key()
+        );
     }
 
     #[test]

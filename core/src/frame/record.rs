@@ -15,7 +15,7 @@ use crate::render::{
 use crate::vk::raw as vk;
 use crate::vk::{
     begin_overlay, begin_rendering, end_overlay, end_rendering, memory_barrier, record_fullscreen,
-    suspend_rendering, Buffer, Image, Multisampled, RenderingTarget,
+    suspend_rendering, transition, Buffer, Image, Multisampled, RenderingTarget,
 };
 
 use super::passes::{
@@ -79,6 +79,8 @@ struct PassInputs<'a> {
     merge: Option<(&'a TransparencyTargets, (vk::Pipeline, vk::PipelineLayout))>,
     /// The set naming the picture's depth, when a pass over the picture reads it.
     depth_set: Option<vk::DescriptorSet>,
+    /// Whether the frame hands its depth to the host: the surfaces store it.
+    depth_to_host: bool,
 }
 
 /// One phase of the surfaces' rendering.
@@ -174,6 +176,7 @@ impl Renderer {
                 && self.device.capabilities().fragment_stores_and_atomics
                 && self.settings.section.caps_seen_from(eye),
             outline: self.settings.highlight_style == HighlightStyle::Outline && color,
+            depth_to_host: self.settings.depth_to_host && color,
         }
     }
 
@@ -266,6 +269,7 @@ impl Renderer {
                 .and(self.on_demand.transparency.as_ref())
                 .zip(translucency.map(|(_, merge)| merge)),
             depth_set,
+            depth_to_host: passes.iter().any(|pass| *pass == FramePass::DepthToHost),
         };
         self.record_passes(&passes, &inputs, &mut recorders, &mut stats)?;
         let last_phase = passes.surface_phases().max(1) - 1;
@@ -321,6 +325,14 @@ impl Renderer {
                     self.record_overlay(index, reads, inputs)?;
                 }
                 FramePass::PickReadback => self.record_pick_readback(command_buffer),
+                FramePass::DepthToHost => {
+                    if over_picture {
+                        // A barrier may not stand inside the passes' rendering.
+                        end_overlay(&self.device, command_buffer, &self.target.color);
+                        over_picture = false;
+                    }
+                    self.record_depth_to_host(command_buffer, inputs.depth_set.is_some());
+                }
             }
         }
         if over_picture {
@@ -453,6 +465,7 @@ impl Renderer {
         let target = RenderingTarget {
             extra_colors: &extra_colors,
             shade_from_depth: inputs.depth_set.is_some(),
+            keep_depth: target.keep_depth || inputs.depth_to_host,
             multisampled: target.multisampled.map(|m| Multisampled {
                 extra_colors: &multisampled_extra_colors,
                 ..m
@@ -467,6 +480,30 @@ impl Renderer {
             suspend_rendering(&self.device, command_buffer, &target);
         }
         Ok(())
+    }
+
+    /// Leaves the depth in `TRANSFER_SRC_OPTIMAL` for the host to copy: the surfaces' end did
+    /// so already unless passes over the picture `read_depth` as shaders do.
+    fn record_depth_to_host(&self, command_buffer: vk::CommandBuffer, read_depth: bool) {
+        if !read_depth {
+            return;
+        }
+        transition(
+            &self.device,
+            command_buffer,
+            self.target.depth.raw(),
+            vk::ImageAspectFlags::DEPTH,
+            (
+                vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL,
+                vk::PipelineStageFlags2::FRAGMENT_SHADER,
+                vk::AccessFlags2::SHADER_SAMPLED_READ,
+            ),
+            (
+                vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
+                vk::PipelineStageFlags2::COPY,
+                vk::AccessFlags2::TRANSFER_READ,
+            ),
+        );
     }
 
     /// With one frame in flight, waits for the frame just submitted and returns its GPU time;

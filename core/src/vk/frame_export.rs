@@ -4,7 +4,8 @@
 //! (`GL_EXT_memory_object_fd`) and reads as a pixel buffer. The copy is waited for before the
 //! frame is handed over, so the host needs no semaphore (drivers such as lavapipe offer none
 //! to share); its pixels are tightly packed RGBA8 rows, the top row first, as
-//! `Renderer::read_rgba8` gives them.
+//! `Renderer::read_rgba8` gives them, followed where asked by the frame's depth (32-bit floats
+//! in rows of the same order) for a host compositing its own drawing with the frame.
 
 use std::sync::Arc;
 
@@ -14,7 +15,7 @@ use super::command::CommandContext;
 use super::device::Device;
 use super::error::{VkError, VkResult, VkResultExt};
 use super::host_memory::core_callbacks as host_callbacks;
-use super::image::{Image, COLOR_FORMAT};
+use super::image::{Image, COLOR_FORMAT, DEPTH_FORMAT};
 
 /// The handle type of the exported memory: a POSIX file descriptor of the driver's own kind,
 /// which another API of the same driver family imports.
@@ -24,6 +25,10 @@ const HANDLE_TYPE: vk::ExternalMemoryHandleTypeFlags = vk::ExternalMemoryHandleT
 /// past its end (llvmpipe reads buffers in blocks and wants 48 bytes more).
 const IMPORTER_SLACK: u64 = 4096;
 
+/// Where the depth starts after the colour: a multiple of this (a texel of every format, and
+/// what pixel-buffer offsets of any API accept).
+const DEPTH_ALIGNMENT: u64 = 256;
+
 /// A buffer in memory of its own that can be exported, with the frame copied into it.
 pub struct FrameExport {
     device: Arc<Device>,
@@ -32,6 +37,8 @@ pub struct FrameExport {
     /// The memory's size (what an importer is told; at least the picture's bytes).
     allocation_size: u64,
     extent: vk::Extent2D,
+    /// Where the depth starts, when the buffer holds it after the colour.
+    depth_offset: Option<u64>,
     commands: CommandContext,
     /// The device's and the driver's UUIDs (`VkPhysicalDeviceIDProperties`): an importer
     /// shares memory only with a device and driver of the same UUIDs.
@@ -39,9 +46,9 @@ pub struct FrameExport {
 }
 
 impl FrameExport {
-    /// A buffer for frames of `extent`, refused where the device cannot export memory as a file
-    /// descriptor.
-    pub fn new(device: &Arc<Device>, extent: vk::Extent2D) -> VkResult<Self> {
+    /// A buffer for frames of `extent`, with room for their depth after the colour when
+    /// `with_depth`; refused where the device cannot export memory as a file descriptor.
+    pub fn new(device: &Arc<Device>, extent: vk::Extent2D, with_depth: bool) -> VkResult<Self> {
         let unsupported = |reason: &str| VkError::Unsupported {
             device: device.adapter().name.clone(),
             reason: reason.to_owned(),
@@ -59,7 +66,9 @@ impl FrameExport {
         }
         // Made first: nothing to undo when it fails.
         let commands = CommandContext::new(device, "frame export commands")?;
-        let size = u64::from(extent.width) * u64::from(extent.height) * 4 + IMPORTER_SLACK;
+        let picture = u64::from(extent.width) * u64::from(extent.height) * 4;
+        let depth_offset = with_depth.then(|| picture.next_multiple_of(DEPTH_ALIGNMENT));
+        let size = depth_offset.map_or(picture, |offset| offset + picture) + IMPORTER_SLACK;
         let mut external = vk::ExternalMemoryBufferCreateInfo::default().handle_types(HANDLE_TYPE);
         let info = vk::BufferCreateInfo::default()
             .size(size)
@@ -83,6 +92,7 @@ impl FrameExport {
             memory,
             allocation_size,
             extent,
+            depth_offset,
             commands,
             uuids: uuids(device),
         };
@@ -102,6 +112,12 @@ impl FrameExport {
     /// (`GL_DEVICE_UUID_EXT`, `GL_DRIVER_UUID_EXT`) before importing.
     pub fn uuids(&self) -> ([u8; vk::UUID_SIZE], [u8; vk::UUID_SIZE]) {
         self.uuids
+    }
+
+    /// Where the depth starts in the buffer (rows of 32-bit floats, `width × 4` bytes each),
+    /// when it holds the depth.
+    pub fn depth_offset(&self) -> Option<u64> {
+        self.depth_offset
     }
 
     /// The exported memory's size in bytes.
@@ -126,34 +142,45 @@ impl FrameExport {
     }
 
     /// Copies `frame` (in TRANSFER_SRC_OPTIMAL, of this export's extent and colour format) into
-    /// the exported buffer and waits for the copy: when it returns, the memory holds the frame.
-    pub fn copy(&mut self, frame: &Image) -> VkResult<()> {
+    /// the exported buffer, and its `depth` (the same, of the depth format) after it where the
+    /// buffer has room for it, and waits for the copy: when it returns, the memory holds the
+    /// frame.
+    pub fn copy(&mut self, frame: &Image, depth: Option<&Image>) -> VkResult<()> {
         debug_assert_eq!(frame.format(), COLOR_FORMAT);
         debug_assert_eq!(frame.extent(), self.extent);
         let command_buffer = self.commands.begin()?;
-        let region = [vk::BufferImageCopy::default()
-            .image_subresource(
-                vk::ImageSubresourceLayers::default()
-                    .aspect_mask(vk::ImageAspectFlags::COLOR)
-                    .layer_count(1),
-            )
-            .image_extent(vk::Extent3D {
-                width: self.extent.width,
-                height: self.extent.height,
-                depth: 1,
-            })];
-        // SAFETY: recording outside rendering; the frame is in TRANSFER_SRC_OPTIMAL (made
-        // readable by the frame's own barrier, earlier in submission order) and as large as
-        // the buffer holds; both outlive the submission, which is waited for below.
-        unsafe {
-            self.device.raw.cmd_copy_image_to_buffer(
-                command_buffer,
-                frame.raw(),
-                vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
-                self.buffer,
-                &region,
-            )
-        };
+        let mut images = vec![(frame, vk::ImageAspectFlags::COLOR, 0)];
+        if let (Some(depth), Some(offset)) = (depth, self.depth_offset) {
+            debug_assert_eq!(depth.format(), DEPTH_FORMAT);
+            debug_assert_eq!(depth.extent(), self.extent);
+            images.push((depth, vk::ImageAspectFlags::DEPTH, offset));
+        }
+        for (image, aspect, offset) in images {
+            let region = [vk::BufferImageCopy::default()
+                .buffer_offset(offset)
+                .image_subresource(
+                    vk::ImageSubresourceLayers::default()
+                        .aspect_mask(aspect)
+                        .layer_count(1),
+                )
+                .image_extent(vk::Extent3D {
+                    width: self.extent.width,
+                    height: self.extent.height,
+                    depth: 1,
+                })];
+            // SAFETY: recording outside rendering; the image is in TRANSFER_SRC_OPTIMAL (made
+            // readable by the frame's own barrier, earlier in submission order) and fits the
+            // buffer from `offset`; both outlive the submission, which is waited for below.
+            unsafe {
+                self.device.raw.cmd_copy_image_to_buffer(
+                    command_buffer,
+                    image.raw(),
+                    vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
+                    self.buffer,
+                    &region,
+                )
+            };
+        }
         // The writes made available to the host's API once the copy is waited for.
         let barrier = [vk::MemoryBarrier2::default()
             .src_stage_mask(vk::PipelineStageFlags2::COPY)

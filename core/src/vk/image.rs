@@ -434,11 +434,7 @@ pub fn record_image_copy(
     buffer: &Buffer,
     offset: u64,
 ) {
-    let aspect = if image.format() == DEPTH_FORMAT {
-        vk::ImageAspectFlags::DEPTH
-    } else {
-        vk::ImageAspectFlags::COLOR
-    };
+    let aspect = copied_aspect(image.format());
     let region = [vk::BufferImageCopy::default()
         .buffer_offset(offset)
         .image_subresource(
@@ -575,7 +571,7 @@ impl OffscreenTarget {
 
     /// Copies the color image (in TRANSFER_SRC_OPTIMAL) to the host as tightly packed RGBA8 rows.
     pub fn read_rgba8(&self, device: &Arc<Device>) -> VkResult<Vec<u8>> {
-        read_rgba8(device, &self.color, vk::ImageLayout::TRANSFER_SRC_OPTIMAL)
+        read_image(device, &self.color, vk::ImageLayout::TRANSFER_SRC_OPTIMAL)
     }
 }
 
@@ -640,11 +636,20 @@ impl ImageShape {
     }
 }
 
-fn full_copy_region(extent: vk::Extent2D) -> vk::BufferImageCopy {
+/// The aspect a copy of `format`'s texels reads: the depth of the depth format, else colour.
+fn copied_aspect(format: vk::Format) -> vk::ImageAspectFlags {
+    if format == DEPTH_FORMAT {
+        vk::ImageAspectFlags::DEPTH
+    } else {
+        vk::ImageAspectFlags::COLOR
+    }
+}
+
+fn full_copy_region(extent: vk::Extent2D, aspect: vk::ImageAspectFlags) -> vk::BufferImageCopy {
     vk::BufferImageCopy::default()
         .image_subresource(
             vk::ImageSubresourceLayers::default()
-                .aspect_mask(vk::ImageAspectFlags::COLOR)
+                .aspect_mask(aspect)
                 .layer_count(1),
         )
         .image_extent(vk::Extent3D {
@@ -654,14 +659,16 @@ fn full_copy_region(extent: vk::Extent2D) -> vk::BufferImageCopy {
         })
 }
 
-/// Copies an RGBA8 `image` that is in `layout` (and has TRANSFER_SRC usage) to the host as
-/// tightly packed rows; the image is back in `layout` afterwards.
-pub fn read_rgba8(
+/// Copies a one-sample `image` of 4 bytes per texel (RGBA8, or the depth format's 32-bit
+/// floats) that is in `layout` (and has TRANSFER_SRC usage) to the host as tightly packed
+/// rows; the image is back in `layout` afterwards.
+pub fn read_image(
     device: &Arc<Device>,
     image: &Image,
     layout: vk::ImageLayout,
 ) -> VkResult<Vec<u8>> {
     let extent = image.extent();
+    let aspect = copied_aspect(image.format());
     let size = u64::from(extent.width) * u64::from(extent.height) * 4;
     let readback = Buffer::new(
         device,
@@ -682,7 +689,7 @@ pub fn read_rgba8(
             device,
             command_buffer,
             image.raw(),
-            vk::ImageAspectFlags::COLOR,
+            aspect,
             (layout, all.0, all.1),
             (
                 source_layout,
@@ -691,7 +698,7 @@ pub fn read_rgba8(
             ),
         );
     }
-    let region = [full_copy_region(extent)];
+    let region = [full_copy_region(extent, aspect)];
     // SAFETY: the image is in TRANSFER_SRC_OPTIMAL; both resources outlive the submission,
     // which is waited for below.
     unsafe {
@@ -708,7 +715,7 @@ pub fn read_rgba8(
             device,
             command_buffer,
             image.raw(),
-            vk::ImageAspectFlags::COLOR,
+            aspect,
             (
                 source_layout,
                 vk::PipelineStageFlags2::COPY,

@@ -39,7 +39,7 @@ pub use error::{map_result, VkError, VkResult, VkResultExt};
 pub use frame_blit::{BlitTarget, HostImage, ImageOutput};
 pub use frame_export::FrameExport;
 pub use image::{
-    memory_barrier, read_rgba8, record_image_copy, subresource_range, transition, transition_range,
+    memory_barrier, read_image, record_image_copy, subresource_range, transition, transition_range,
     Image, ImageShape, MultisampledTarget, OffscreenTarget, TexelImage, COLOR_FORMAT, DEPTH_FORMAT,
 };
 pub use instance::{Instance, InstanceOptions, ValidationLog, ValidationMessage};

@@ -271,9 +271,9 @@ fn depth_attachment<'a>(
         });
     if let Some(multisampled) = &target.multisampled {
         depth_attachment = depth_attachment.image_view(multisampled.depth.view());
-        if target.store_depth || target.shade_from_depth {
-            // GPU cullers read the depth between phases, ambient occlusion after the pass:
-            // the one-sample depth receives it.
+        if target.store_depth || target.shade_from_depth || target.keep_depth {
+            // GPU cullers read the depth between phases, ambient occlusion after the pass, a
+            // host after the frame: the one-sample depth receives it.
             depth_attachment = depth_attachment
                 .resolve_mode(multisampled.depth_resolve)
                 .resolve_image_view(target.depth.view())

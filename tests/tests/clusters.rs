@@ -2,7 +2,8 @@
 //! per-part culling draws with at most half the triangles on curved parts (the back faces of
 //! closed parts go, and the clusters hidden behind what was visible last frame); at the
 //! default threshold the picture stays within FLIP 0.02 of full detail while the triangles
-//! drawn follow the pixels covered, and no part ever vanishes for being far.
+//! drawn follow the pixels covered, far faceted parts are drawn as their proxies, and no part
+//! ever vanishes for being far.
 #![allow(clippy::unwrap_used)] // Test code: a failed unwrap is a failed test.
 
 use std::sync::Arc;
@@ -208,6 +209,49 @@ fn picking_finds_the_part_drawn_at_every_pixel_of_a_grid() {
     drawing.choose("gpu-clusters", 1.0);
     for &(pixel, part) in &inside {
         assert_eq!(drawing.pick(&camera, pixel), part, "pixel {pixel:?}");
+    }
+    drop(drawing);
+    assert_no_validation_errors(&device);
+}
+
+/// Far faceted parts (gen:grid's prisms of 400 triangles, every vertex on a crease, which the
+/// simplification keeps) are drawn as their proxies, a few triangles each instead of hundreds:
+/// no part goes missing and the picture stays close to full detail.
+#[test]
+fn far_faceted_parts_are_drawn_as_their_proxies_and_none_goes_missing() {
+    let device = test_device();
+    let scene = generate(&GeneratorSpec::parse("grid:parts=8000,tris=400").unwrap());
+    let parts = flatten(&scene).unwrap().instances.len() as u64;
+    let mut drawing = Drawing::new(&device, &scene);
+    // Seen from 16 times the scene's radius, every part is a pixel or two across: proxies;
+    // from 4 times, a few pixels: mostly the parts' coarsest clusters.
+    for (distance, fewer) in [(16.0, 10), (4.0, 1)] {
+        let far = Camera::orbit(&bounds(&scene), aspect(), 0.1, distance);
+        let (full, full_stats) = drawing.draw("gpu-clusters", 0.0, &far);
+        let (lod, lod_stats) = drawing.draw("gpu-clusters", 1.0, &far);
+        let difference = compare(&lod, &full).unwrap();
+        let (covered_full, covered) = (
+            cadr_tests::images::covered_fraction(&full),
+            cadr_tests::images::covered_fraction(&lod),
+        );
+        println!(
+            "distance {distance}: full detail {} triangles, at 1 px {} triangles in {} clusters for {parts} parts; covered {covered_full} and {covered}: {difference:?}",
+            full_stats.triangles, lod_stats.triangles, lod_stats.draws
+        );
+        assert!(
+            lod_stats.triangles * fewer <= full_stats.triangles,
+            "distance {distance}: {} of {} triangles at 1 px",
+            lod_stats.triangles,
+            full_stats.triangles
+        );
+        assert!(
+            (covered - covered_full).abs() < 0.01,
+            "distance {distance}: no part goes missing: {covered} of the picture covered against {covered_full}"
+        );
+        assert!(
+            difference.mean <= 0.05,
+            "distance {distance}: FLIP at 1 px: {difference:?}"
+        );
     }
     drop(drawing);
     assert_no_validation_errors(&device);

@@ -5,6 +5,12 @@
 //! its triangles with its outer border locked, and split again, level after level, each group
 //! recording the error of its simplification (which only grows toward the coarse levels).
 //!
+//! A part whose coarsest simplification still has many triangles (faceted parts, whose every
+//! vertex is on a crease the simplification keeps) ends its DAG in a proxy
+//! ([`abi::CADR_CLUSTER_PROXY_DEPTH`]): an octahedron through its extreme vertices, drawn in
+//! place of the part only when the whole part projects within about twice the threshold, so
+//! that a far part costs a few triangles instead of hundreds (and never vanishes).
+//!
 //! The part's original clusters keep exactly its triangles: they are written back over the
 //! part's own index range, cluster after cluster, so every technique that draws the part whole
 //! draws the same triangles as before, in cluster order. The coarser clusters' indices go after
@@ -26,13 +32,16 @@ pub const CACHED_TRIANGLES: usize = 8192;
 
 /// What a cache entry's key starts with: bump it when the clusters a geometry gets change.
 const CACHE_VERSION: &[u8] =
-    b"clusters 4: clod 128, normals protected, no sloppy fallback, small parts whole, spans";
+    b"clusters 8: clod 128, normals protected, no sloppy fallback, small parts whole, spans, proxies";
 /// The disk cache's kind of entry.
 const CACHE_KIND: &str = "clusters";
 
 /// The most triangles (and vertices) in one cluster: within what mesh shaders emit on every
 /// device cadr runs on, and small enough for culling to pay.
 pub const MAX_CLUSTER_TRIANGLES: usize = 128;
+
+/// A part's coarsest cut with more triangles than this gets a proxy (8 triangles) after it.
+const PROXY_AFTER_TRIANGLES: usize = 32;
 
 /// A cone cutoff no test passes: triangles that face too many ways (or a cluster whose cone
 /// could not be trusted) are never culled as back-facing.
@@ -379,7 +388,122 @@ fn part_dag(vertices: &[Vertex], indices: &[u32]) -> Option<PartDag> {
         .filter(|(_, _, refined)| *refined == abi::CADR_CLUSTER_ORIGINAL)
         .map(|(cluster, _, _)| cluster.len())
         .sum();
-    (original == indices.len()).then_some(dag)
+    if original != indices.len() {
+        return None;
+    }
+    add_proxy(&mut dag, &local, &used);
+    Some(dag)
+}
+
+/// Ends the part's DAG with a proxy where its coarsest cut has more than
+/// [`PROXY_AFTER_TRIANGLES`]: an octahedron through the part's extreme vertices along each axis
+/// (`local`, named in the geometry as `used` says) in a group of its own
+/// ([`abi::CADR_CLUSTER_PROXY_DEPTH`]), whose error is half the diagonal of the part's box (and
+/// no less than any error below it), measured from a sphere around every group's: it shows
+/// when the whole part projects within about twice the threshold.
+fn add_proxy(dag: &mut PartDag, local: &[Vertex], used: &[u32]) {
+    let terminal = |group: u32| dag.groups[group as usize].error == f32::MAX;
+    let coarsest: usize = dag
+        .clusters
+        .iter()
+        .filter(|(_, group, _)| terminal(*group))
+        .map(|(indices, _, _)| indices.len() / 3)
+        .sum();
+    let Some(&(_, stands_for, _)) = dag.clusters.iter().find(|(_, group, _)| terminal(*group))
+    else {
+        return;
+    };
+    if coarsest <= PROXY_AFTER_TRIANGLES {
+        return;
+    }
+    let Some(octahedron) = extreme_octahedron(local) else {
+        return;
+    };
+    let (min, max) = local
+        .iter()
+        .fold(([f32::MAX; 3], [f32::MIN; 3]), |(min, max), v| {
+            (
+                std::array::from_fn(|a| min[a].min(v.position[a])),
+                std::array::from_fn(|a| max[a].max(v.position[a])),
+            )
+        });
+    let half_diagonal = (0..3)
+        .map(|a| (max[a] - min[a]) * (max[a] - min[a]))
+        .sum::<f32>()
+        .sqrt()
+        * 0.5;
+    let below = dag
+        .groups
+        .iter()
+        .map(|g| g.error)
+        .filter(|&e| e < f32::MAX)
+        .fold(0.0f32, f32::max);
+    // The box's sphere, grown over every group's: the proxy's error then projects at least as
+    // large as any group's, seen from anywhere.
+    let centre = glam::Vec3::from(std::array::from_fn(|a| 0.5 * (min[a] + max[a])));
+    let radius = dag.groups.iter().fold(half_diagonal, |radius, g| {
+        let [x, y, z, r] = g.sphere;
+        radius.max(centre.distance(glam::Vec3::new(x, y, z)) + r)
+    });
+    let proxy_group = dag.groups.len() as u32;
+    dag.groups.push(abi::CadrClusterGroup {
+        // Rounding slack, as the clusters' spheres have.
+        sphere: [centre.x, centre.y, centre.z, radius * (1.0 + 1e-5)],
+        error: half_diagonal.max(below),
+        depth: abi::CADR_CLUSTER_PROXY_DEPTH,
+        first_cluster: 0,
+        cluster_count: 0,
+    });
+    let global = octahedron.iter().map(|&i| used[i as usize]).collect();
+    dag.clusters.push((global, proxy_group, stands_for));
+}
+
+/// The triangles (indices into `vertices`, wound counter-clockwise seen from outside) of the
+/// octahedron through the vertices at the least and the most of each axis, leaving out those
+/// that collapse; `None` when fewer than four remain.
+fn extreme_octahedron(vertices: &[Vertex]) -> Option<Vec<u32>> {
+    let extreme = |axis: usize, most: bool| -> Option<u32> {
+        let key = |v: &&Vertex| v.position[axis];
+        let found = if most {
+            vertices
+                .iter()
+                .enumerate()
+                .max_by(|a, b| key(&a.1).total_cmp(&key(&b.1)))
+        } else {
+            vertices
+                .iter()
+                .enumerate()
+                .min_by(|a, b| key(&a.1).total_cmp(&key(&b.1)))
+        };
+        found.map(|(i, _)| i as u32)
+    };
+    let ends: Vec<[u32; 2]> = (0..3)
+        .map(|axis| Some([extreme(axis, false)?, extreme(axis, true)?]))
+        .collect::<Option<_>>()?;
+    let position = |i: u32| glam::Vec3::from(vertices[i as usize].position);
+    let mut triangles = Vec::new();
+    for corner in 0..8usize {
+        let side = |axis: usize| (corner >> axis) & 1;
+        let [a, b, c] = [ends[0][side(0)], ends[1][side(1)], ends[2][side(2)]];
+        let normal = (position(b) - position(a)).cross(position(c) - position(a));
+        if a == b || b == c || a == c || normal.length_squared() == 0.0 {
+            continue;
+        }
+        // Outward: toward the corner's side on every axis.
+        let outward = glam::Vec3::from(std::array::from_fn(|axis| {
+            if side(axis) == 1 {
+                1.0
+            } else {
+                -1.0
+            }
+        }));
+        triangles.extend(if normal.dot(outward) >= 0.0 {
+            [a, b, c]
+        } else {
+            [a, c, b]
+        });
+    }
+    (triangles.len() >= 12).then_some(triangles)
 }
 
 /// The culling bounds and normal cone of the triangles `indices` (at most
@@ -579,7 +703,9 @@ mod tests {
             let clusters = &built.clusters[first as usize..(first + count) as usize];
             for cluster in clusters {
                 let own_group = &built.groups[cluster.group as usize];
-                if cluster.refined != abi::CADR_CLUSTER_ORIGINAL {
+                if cluster.refined != abi::CADR_CLUSTER_ORIGINAL
+                    && own_group.depth != abi::CADR_CLUSTER_PROXY_DEPTH
+                {
                     let refined = &built.groups[cluster.refined as usize];
                     assert!(refined.error <= own_group.error, "errors are monotonic");
                     assert!(refined.depth < own_group.depth || own_group.error == f32::MAX);
@@ -599,6 +725,79 @@ mod tests {
             );
             assert_eq!(terminal as u32, coarsest, "the coarsest cut's size");
             assert!(coarsest * 4 < count, "the coarsest cut is a few clusters");
+        }
+    }
+
+    #[test]
+    fn faceted_parts_end_in_a_proxy_of_an_error_over_the_whole_part() {
+        // gen:grid's parts: faceted prisms of 400 triangles, every vertex on a crease.
+        let scene = crate::generate::generate(
+            &crate::generate::GeneratorSpec::parse("grid:parts=1,tris=400").unwrap(),
+        );
+        let geometry = &scene.geometries[0];
+        let built = build(&geometry.vertices, &geometry.indices, &geometry.parts);
+        let &[first, count, coarsest] = built.part_ranges.first().unwrap();
+        let clusters = &built.clusters[first as usize..(first + count) as usize];
+        let proxy = clusters.last().unwrap();
+        let group = &built.groups[proxy.group as usize];
+        assert_eq!(
+            group.depth,
+            abi::CADR_CLUSTER_PROXY_DEPTH,
+            "the part's last cluster"
+        );
+        assert_eq!(group.cluster_count, 1);
+        assert!((12..=24).contains(&proxy.index_count), "4 to 8 triangles");
+        assert!(proxy.cone_cutoff >= 1.0, "an octahedron faces every way");
+        // It stands for a terminal group, which a culler that knows no proxy never leaves.
+        assert_eq!(built.groups[proxy.refined as usize].error, f32::MAX);
+        let terminal = clusters
+            .iter()
+            .filter(|c| built.groups[c.group as usize].error == f32::MAX)
+            .count();
+        assert_eq!(
+            coarsest as usize, terminal,
+            "the proxy is not the coarsest cut"
+        );
+        assert!(terminal > 0);
+        // Its error covers the part (half its box's diagonal) and every error below it, from
+        // a sphere around every group's.
+        let part = &geometry.parts[0];
+        let own = &geometry.indices[part.first_index as usize..][..part.index_count as usize];
+        let (min, max) = own.iter().map(|&i| &geometry.vertices[i as usize]).fold(
+            ([f32::MAX; 3], [f32::MIN; 3]),
+            |(min, max), v| {
+                (
+                    std::array::from_fn(|a| min[a].min(v.position[a])),
+                    std::array::from_fn(|a| max[a].max(v.position[a])),
+                )
+            },
+        );
+        let diagonal = (0..3)
+            .map(|a| (max[a] - min[a]).powi(2))
+            .sum::<f32>()
+            .sqrt();
+        assert!(group.error >= 0.5 * diagonal && group.error < f32::MAX);
+        let centre = glam::Vec3::new(group.sphere[0], group.sphere[1], group.sphere[2]);
+        for c in clusters.iter().filter(|c| c.group != proxy.group) {
+            let other = &built.groups[c.group as usize];
+            assert!(other.error == f32::MAX || other.error <= group.error);
+            let [x, y, z, r] = other.sphere;
+            assert!(centre.distance(glam::Vec3::new(x, y, z)) + r <= group.sphere[3] * 1.0001);
+        }
+        // A part whose coarsest cut is already a few triangles gets none.
+        let smooth = fine_geometry();
+        let built = build(&smooth.vertices, &smooth.indices, &smooth.parts);
+        for &[first, count, _] in &built.part_ranges {
+            let clusters = &built.clusters[first as usize..(first + count) as usize];
+            let has_proxy = clusters
+                .iter()
+                .any(|c| built.groups[c.group as usize].depth == abi::CADR_CLUSTER_PROXY_DEPTH);
+            let coarsest: usize = clusters
+                .iter()
+                .filter(|c| built.groups[c.group as usize].error == f32::MAX)
+                .map(|c| c.index_count as usize / 3)
+                .sum();
+            assert_eq!(has_proxy, coarsest > PROXY_AFTER_TRIANGLES);
         }
     }
 

@@ -98,6 +98,8 @@ struct Group {
     uint cluster_count;
 };
 const uint CLUSTER_ORIGINAL = 0xffffffffu;
+// The depth of a part's proxy group (CADR_CLUSTER_PROXY_DEPTH): its last.
+const uint PROXY_DEPTH = 0xffffffffu;
 layout(set = 0, binding = 8, std430) readonly buffer Clusters { Cluster clusters[]; };
 layout(set = 0, binding = 9, std430) readonly buffer Groups { Group groups[]; };
 // Cluster visibility at the end of the last frame (read) and of this one (written by the first
@@ -347,22 +349,38 @@ uint walk_clusters(CullEntry entry, uint id, Placement place, bool back_faces_ma
     uint commands_made = 0u;
     uint run_first = 0u;
     uint run_count = 0u;
+    // A part's proxy, its last cluster, is drawn alone in place of its cut when the proxy's
+    // error projects at or under the threshold; otherwise it is not drawn (nor at full detail,
+    // nor in place of the coarsest clusters when the budget ran out).
+    uint first = entry.first_cluster;
+    uint end = entry.first_cluster + count;
+    Group last_group = groups[clusters[end - 1u].group];
+    bool proxy_alone = false;
+    if (last_group.depth == PROXY_DEPTH) {
+        proxy_alone = threshold > 0.0 && threshold < COARSEST
+            && projected_error(last_group, place) <= threshold;
+        if (proxy_alone) {
+            first = end - 1u;
+        } else {
+            end -= 1u;
+        }
+    }
     // Group by group (a part's groups cover its clusters in order): a group the cut leaves
     // out costs one test, not one per cluster.
-    uint group_index = clusters[entry.first_cluster].group;
+    uint group_index = clusters[first].group;
     uint group_end = 0u;
-    for (uint k = entry.first_cluster; k < entry.first_cluster + count; ++k) {
+    for (uint k = first; k < end; ++k) {
         if (k >= group_end) {
             Group group = groups[group_index];
             group_index += 1u;
             group_end = group.first_cluster + max(group.cluster_count, 1u);
-            if (!group_in_cut(group, place, threshold)) {
+            if (!proxy_alone && !group_in_cut(group, place, threshold)) {
                 k = max(k, group_end - 1u);
                 continue;
             }
         }
         Cluster cluster = clusters[k];
-        if (!in_cut(cluster, place, threshold)) {
+        if (!proxy_alone && !in_cut(cluster, place, threshold)) {
             continue;
         }
         vec3 center = place.translation + place.rotation * cluster.sphere.xyz;

@@ -54,7 +54,7 @@ use geometry::GeometryArenas;
 use hierarchy::TransformHierarchy;
 use textures::SceneTextures;
 use upload::{GpuArray, SparseUploader};
-use view_state::{Followers, SceneFacts, Unseen};
+use view_state::{bit, set_bit, Followers, SceneFacts, Unseen};
 
 /// Bytes of one matrix on the GPU ([`abi::CadrMatrix`]).
 pub const MATRIX_BYTES: usize = 64;
@@ -371,7 +371,7 @@ impl GpuScene {
             .instances
             .iter()
             .enumerate()
-            .filter(|&(id, _)| self.candidate[id / 64] >> (id % 64) & 1 == 1)
+            .filter(|&(id, _)| bit(&self.candidate, id as u32))
             .filter_map(|(_, instance)| {
                 let place = arenas.places.get(instance.geometry as usize)?.as_ref()?;
                 place.clusters_of(instance.part)
@@ -534,7 +534,7 @@ impl GpuScene {
         // Each view takes the instance out of its drawn set with the old entry's triangles
         // and back in with the new one's.
         self.followers.changes.touched.push((id, old_triangles));
-        if self.candidate[i / 64] >> (i % 64) & 1 == 1 {
+        if bit(&self.candidate, id) {
             self.counts.candidate_triangles -= u64::from(old_triangles);
         }
         if candidate {
@@ -577,11 +577,6 @@ impl GpuScene {
         }
         self.followers.deliver();
         result
-    }
-
-    /// The views that follow this scene (drew it and are alive).
-    pub fn follower_count(&self) -> usize {
-        self.followers.count()
     }
 
     /// Applies what `view` has not seen of this scene yet (everything, for a view that drew
@@ -1155,9 +1150,7 @@ fn cull_entry(
     let Some(instance) = instances.get(slot as usize) else {
         return abi::CadrCullEntry::default();
     };
-    let candidate = candidates
-        .get(slot as usize / 64)
-        .is_some_and(|word| word >> (slot % 64) & 1 == 1);
+    let candidate = bit(candidates, slot);
     abi::CadrCullEntry {
         sphere: instance.sphere,
         first_index: instance.first_index,
@@ -1322,13 +1315,4 @@ fn make_instances(
 fn is_highlighted(entry: &abi::CadrInstance) -> bool {
     const BITS: u32 = abi::CADR_INSTANCE_ALIVE | abi::CADR_INSTANCE_HIGHLIGHTED;
     entry.flags & BITS == BITS
-}
-
-fn set_bit(bits: &mut [u64], id: u32, on: bool) {
-    let (word, bit) = (id as usize / 64, id % 64);
-    if on {
-        bits[word] |= 1 << bit;
-    } else {
-        bits[word] &= !(1 << bit);
-    }
 }

@@ -99,14 +99,6 @@ impl Followers {
         }
     }
 
-    /// The views following the scene now.
-    pub fn count(&self) -> usize {
-        self.views
-            .iter()
-            .filter(|follower| follower.token.strong_count() > 0)
-            .count()
-    }
-
     /// Takes what `view` has not seen: everything for a view that did not follow yet (it
     /// follows from now on).
     fn take(&mut self, view: &ViewState) -> Unseen {
@@ -147,12 +139,14 @@ pub(super) struct SceneFacts<'a> {
     pub slots: (usize, usize),
 }
 
-fn bit(bits: &[u64], id: u32) -> bool {
+/// Whether bit `id` of `bits` is set (false past the end).
+pub(super) fn bit(bits: &[u64], id: u32) -> bool {
     bits.get(id as usize / 64)
         .is_some_and(|word| word >> (id % 64) & 1 == 1)
 }
 
-fn set_bit(bits: &mut [u64], id: u32, on: bool) {
+/// Sets or clears bit `id` of `bits`.
+pub(super) fn set_bit(bits: &mut [u64], id: u32, on: bool) {
     let (word, bit) = (id as usize / 64, id % 64);
     if on {
         bits[word] |= 1 << bit;

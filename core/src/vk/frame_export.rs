@@ -15,7 +15,7 @@ use super::command::CommandContext;
 use super::device::Device;
 use super::error::{VkError, VkResult, VkResultExt};
 use super::host_memory::core_callbacks as host_callbacks;
-use super::image::{Image, COLOR_FORMAT, DEPTH_FORMAT};
+use super::image::{record_image_copy_into, Image, COLOR_FORMAT, DEPTH_FORMAT};
 
 /// The handle type of the exported memory: a POSIX file descriptor of the driver's own kind,
 /// which another API of the same driver family imports.
@@ -149,37 +149,24 @@ impl FrameExport {
         debug_assert_eq!(frame.format(), COLOR_FORMAT);
         debug_assert_eq!(frame.extent(), self.extent);
         let command_buffer = self.commands.begin()?;
-        let mut images = vec![(frame, vk::ImageAspectFlags::COLOR, 0)];
+        let mut images = vec![(frame, 0)];
         if let (Some(depth), Some(offset)) = (depth, self.depth_offset) {
             debug_assert_eq!(depth.format(), DEPTH_FORMAT);
             debug_assert_eq!(depth.extent(), self.extent);
-            images.push((depth, vk::ImageAspectFlags::DEPTH, offset));
+            images.push((depth, offset));
         }
-        for (image, aspect, offset) in images {
-            let region = [vk::BufferImageCopy::default()
-                .buffer_offset(offset)
-                .image_subresource(
-                    vk::ImageSubresourceLayers::default()
-                        .aspect_mask(aspect)
-                        .layer_count(1),
-                )
-                .image_extent(vk::Extent3D {
-                    width: self.extent.width,
-                    height: self.extent.height,
-                    depth: 1,
-                })];
-            // SAFETY: recording outside rendering; the image is in TRANSFER_SRC_OPTIMAL (made
-            // readable by the frame's own barrier, earlier in submission order) and fits the
-            // buffer from `offset`; both outlive the submission, which is waited for below.
-            unsafe {
-                self.device.raw.cmd_copy_image_to_buffer(
-                    command_buffer,
-                    image.raw(),
-                    vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
-                    self.buffer,
-                    &region,
-                )
-            };
+        for (image, offset) in images {
+            // The image is in TRANSFER_SRC_OPTIMAL (made readable by the frame's own barrier,
+            // earlier in submission order) and fits the buffer from `offset`; both outlive the
+            // submission, which is waited for below.
+            record_image_copy_into(
+                &self.device,
+                command_buffer,
+                image,
+                (0, 0, self.extent.width, self.extent.height),
+                self.buffer,
+                offset,
+            );
         }
         // The writes made available to the host's API once the copy is waited for.
         let barrier = [vk::MemoryBarrier2::default()

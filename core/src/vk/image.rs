@@ -434,6 +434,25 @@ pub fn record_image_copy(
     buffer: &Buffer,
     offset: u64,
 ) {
+    record_image_copy_into(
+        device,
+        command_buffer,
+        image,
+        (x, y, width, height),
+        buffer.raw(),
+        offset,
+    );
+}
+
+/// [`record_image_copy`] into a buffer made outside cadr's allocator (an exported one).
+pub(super) fn record_image_copy_into(
+    device: &Device,
+    command_buffer: vk::CommandBuffer,
+    image: &Image,
+    (x, y, width, height): (u32, u32, u32, u32),
+    buffer: vk::Buffer,
+    offset: u64,
+) {
     let aspect = copied_aspect(image.format());
     let region = [vk::BufferImageCopy::default()
         .buffer_offset(offset)
@@ -460,7 +479,7 @@ pub fn record_image_copy(
             command_buffer,
             image.raw(),
             vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
-            buffer.raw(),
+            buffer,
             &region,
         )
     };

@@ -410,7 +410,7 @@ typedef struct CadrRendererObject *CadrRenderer;
 // The memory a renderer's frames are exported into (`cadr_renderer_exported_frame`). After
 // each `cadr_renderer_render` it holds that frame: `height` rows of `row_bytes` bytes, the top
 // row first, 4 bytes per pixel (R, G, B, A, 8 bits each, as `cadr_renderer_read_pixels` gives
-// them), from offset 0; with `CadrRendererSettings::export_depth`, the frame's depth follows
+// them), from offset 0; with `CadrRendererSettings::depth_to_host`, the frame's depth follows
 // from `depth_offset`.
 //
 // The struct grows by appending fields: the host sets `size` to `sizeof(CadrExportedFrame)`;
@@ -442,7 +442,7 @@ typedef struct CadrExportedFrame {
   // same.
   uint8_t driver_uuid[16];
   // Where the frame's depth starts in the memory, 0 when it holds none (the renderer's
-  // `export_depth` setting is off); after each `cadr_renderer_render` it holds that frame's
+  // `depth_to_host` setting is off); after each `cadr_renderer_render` it holds that frame's
   // depth: `height`
   // rows of `depth_row_bytes` bytes, the top row first, one 32-bit float per pixel, 0 at the
   // near plane and 1 at the far plane and where nothing is drawn (an OpenGL window depth
@@ -876,12 +876,14 @@ typedef struct CadrRendererSettings {
   // (`CadrRendererCapabilities::present_modes`); a change recreates the swapchain. Other
   // renderers present nothing and take only `CADR_PRESENT_FIFO`.
   uint32_t present_mode;
-  // Each frame's depth exported after its colour (default false), for a host that draws
-  // its own geometry into cadr's frame with a depth test (a grid, a manipulator, its own
-  // annotations): see `CadrExportedFrame::depth_offset`. Only for renderers made by
-  // `cadr_renderer_create_for_export`; it costs a depth store and copy per frame. Applying a
-  // change gives the frames new memory (a new `generation`): import it again. Since 1.1.
-  bool export_depth;
+  // Each frame's depth kept for the host (default false), for a host that draws its own
+  // geometry into cadr's frame with a depth test (a grid, a manipulator, its own
+  // annotations): a renderer made by `cadr_renderer_create_for_export` exports it after the
+  // colour (`CadrExportedFrame::depth_offset`; applying a change gives the frames new
+  // memory, of a new `generation`: import it again), and any renderer's can be read back
+  // with `cadr_renderer_read_depth`. It costs a depth store (and a copy) per frame. Since
+  // 1.1.
+  bool depth_to_host;
 } CadrRendererSettings;
 
 // What a renderer's device and output offer, for the choices of `CadrRendererSettings`.
@@ -1865,6 +1867,22 @@ enum CadrResult cadr_renderer_render(CadrRenderer renderer,
 // # Safety
 // `rgba` is null or writable for `capacity` bytes.
 enum CadrResult cadr_renderer_read_pixels(CadrRenderer renderer, uint8_t *rgba, size_t capacity);
+
+// Copies the depth of the last frame into `depth`: width × height 32-bit floats (4 bytes
+// each), top row first, 0 at the near plane and 1 at the far plane and where nothing is drawn
+// (the opaque surfaces' depth: translucent surfaces, and X-ray's, write none). The renderer
+// keeps its frames' depth only with `CadrRendererSettings::depth_to_host` on; a host that
+// shares memory gets it in the exported frame instead (`CadrExportedFrame::depth_offset`).
+// Since 1.1.
+//
+// Returns `CADR_RESULT_OK`, `CADR_RESULT_NULL_ARGUMENT`, `CADR_RESULT_INVALID_ARGUMENT` (the
+// setting is off), `CADR_RESULT_BUFFER_TOO_SMALL` (nothing is written; the message gives the
+// size needed), `CADR_RESULT_VULKAN` or a handle error. Ownership: `depth` is the caller's.
+// Thread-safety: as `cadr_renderer_create`.
+//
+// # Safety
+// `depth` is null or writable for `capacity` bytes, aligned for `float`.
+enum CadrResult cadr_renderer_read_depth(CadrRenderer renderer, float *depth, size_t capacity);
 
 // Writes the last frame to a PNG file.
 //

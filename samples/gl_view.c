@@ -10,7 +10,8 @@
  *
  * It orbits the scene for N frames (default 60) and prints which path it took, the bytes read
  * back through the CPU per frame and the frames per second. --read-back takes the read-back path
- * on purpose. --depth has cadr export each frame's depth too, and the host draws the world's
+ * on purpose. --depth has cadr keep each frame's depth too (exported after the colour, or read
+ * back with cadr_renderer_read_depth on the read-back path), and the host draws the world's
  * axes through the scene's centre into cadr's frame with OpenGL, hidden where cadr's parts are
  * in front of them (what a CAD tool does with its manipulators and grids). --self-test DIR
  * also writes the offscreen render of the last frame's camera (DIR/offscreen.png), prints

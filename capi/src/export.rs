@@ -1,7 +1,9 @@
 //! Frames shared with an OpenGL host without a copy through the CPU: a renderer whose every
 //! frame is copied on the GPU into memory exported as a file descriptor, which the host imports
 //! (`GL_EXT_memory_object_fd`) and reads as a pixel buffer; with the frame's depth after it
-//! when the host asks (`CadrRendererSettings::export_depth`), for compositing.
+//! when the host asks (`CadrRendererSettings::depth_to_host`), for compositing. Hosts that
+//! cannot share memory read frames back (`cadr_renderer_read_pixels`, and the depth with
+//! `cadr_renderer_read_depth`).
 
 use cadr_core::vk::{raw, FrameExport, Image};
 
@@ -62,7 +64,7 @@ impl ExportOutput {
 /// The memory a renderer's frames are exported into (`cadr_renderer_exported_frame`). After
 /// each `cadr_renderer_render` it holds that frame: `height` rows of `row_bytes` bytes, the top
 /// row first, 4 bytes per pixel (R, G, B, A, 8 bits each, as `cadr_renderer_read_pixels` gives
-/// them), from offset 0; with `CadrRendererSettings::export_depth`, the frame's depth follows
+/// them), from offset 0; with `CadrRendererSettings::depth_to_host`, the frame's depth follows
 /// from `depth_offset`.
 ///
 /// The struct grows by appending fields: the host sets `size` to `sizeof(CadrExportedFrame)`;
@@ -96,7 +98,7 @@ pub struct CadrExportedFrame {
     /// same.
     pub driver_uuid: [u8; 16],
     /// Where the frame's depth starts in the memory, 0 when it holds none (the renderer's
-    /// `export_depth` setting is off); after each `cadr_renderer_render` it holds that frame's
+    /// `depth_to_host` setting is off); after each `cadr_renderer_render` it holds that frame's
     /// depth: `height`
     /// rows of `depth_row_bytes` bytes, the top row first, one 32-bit float per pixel, 0 at the
     /// near plane and 1 at the far plane and where nothing is drawn (an OpenGL window depth

@@ -711,6 +711,53 @@ pub unsafe extern "C" fn cadr_renderer_read_pixels(
     })
 }
 
+/// Copies the depth of the last frame into `depth`: width × height 32-bit floats (4 bytes
+/// each), top row first, 0 at the near plane and 1 at the far plane and where nothing is drawn
+/// (the opaque surfaces' depth: translucent surfaces, and X-ray's, write none). The renderer
+/// keeps its frames' depth only with `CadrRendererSettings::depth_to_host` on; a host that
+/// shares memory gets it in the exported frame instead (`CadrExportedFrame::depth_offset`).
+/// Since 1.1.
+///
+/// Returns `CADR_RESULT_OK`, `CADR_RESULT_NULL_ARGUMENT`, `CADR_RESULT_INVALID_ARGUMENT` (the
+/// setting is off), `CADR_RESULT_BUFFER_TOO_SMALL` (nothing is written; the message gives the
+/// size needed), `CADR_RESULT_VULKAN` or a handle error. Ownership: `depth` is the caller's.
+/// Thread-safety: as `cadr_renderer_create`.
+///
+/// # Safety
+/// `depth` is null or writable for `capacity` bytes, aligned for `float`.
+#[no_mangle]
+pub unsafe extern "C" fn cadr_renderer_read_depth(
+    renderer: CadrRenderer,
+    depth: *mut f32,
+    capacity: usize,
+) -> CadrResult {
+    guard(|| {
+        non_null(depth, "depth")?;
+        with_renderer(renderer, |state| {
+            let renderer = state.view.renderer();
+            if !renderer.depth_to_host() {
+                return Err(Failure::invalid(
+                    "the renderer keeps no depth: turn CadrRendererSettings::depth_to_host on",
+                ));
+            }
+            let (width, height) = renderer.size();
+            let needed = width as usize * height as usize * 4;
+            if capacity < needed {
+                return Err(Failure::new(
+                    CadrResult::BufferTooSmall,
+                    format!("capacity {capacity} is below the {needed} bytes of a {width}x{height} depth (4 bytes a pixel)"),
+                ));
+            }
+            let values = renderer.read_depth()?;
+            let count = values.len().min(needed / 4);
+            // SAFETY: depth is writable for capacity >= needed bytes, that is `count` floats;
+            // the values are our own allocation, so the regions do not overlap.
+            unsafe { std::ptr::copy_nonoverlapping(values.as_ptr(), depth, count) };
+            Ok(())
+        })
+    })
+}
+
 /// Writes the last frame to a PNG file.
 ///
 /// Returns `CADR_RESULT_OK`, `CADR_RESULT_NULL_ARGUMENT`, `CADR_RESULT_IO` (the message names

@@ -140,12 +140,14 @@ pub struct CadrRendererSettings {
     /// (`CadrRendererCapabilities::present_modes`); a change recreates the swapchain. Other
     /// renderers present nothing and take only `CADR_PRESENT_FIFO`.
     pub present_mode: u32,
-    /// Each frame's depth exported after its colour (default false), for a host that draws
-    /// its own geometry into cadr's frame with a depth test (a grid, a manipulator, its own
-    /// annotations): see `CadrExportedFrame::depth_offset`. Only for renderers made by
-    /// `cadr_renderer_create_for_export`; it costs a depth store and copy per frame. Applying a
-    /// change gives the frames new memory (a new `generation`): import it again. Since 1.1.
-    pub export_depth: bool,
+    /// Each frame's depth kept for the host (default false), for a host that draws its own
+    /// geometry into cadr's frame with a depth test (a grid, a manipulator, its own
+    /// annotations): a renderer made by `cadr_renderer_create_for_export` exports it after the
+    /// colour (`CadrExportedFrame::depth_offset`; applying a change gives the frames new
+    /// memory, of a new `generation`: import it again), and any renderer's can be read back
+    /// with `cadr_renderer_read_depth`. It costs a depth store (and a copy) per frame. Since
+    /// 1.1.
+    pub depth_to_host: bool,
 }
 
 /// What a renderer's device and output offer, for the choices of `CadrRendererSettings`.
@@ -284,7 +286,7 @@ fn current(state: &RendererState) -> CadrRendererSettings {
             .swapchain
             .as_ref()
             .map_or(CADR_PRESENT_FIFO, |s| present_code(s.present_mode())),
-        export_depth: renderer.depth_to_host(),
+        depth_to_host: renderer.depth_to_host(),
     }
 }
 
@@ -344,23 +346,20 @@ fn apply_changes(
     if to.lod_error != from.lod_error {
         named("lod_error", techniques.set_lod_error(to.lod_error))?;
     }
-    if to.export_depth != from.export_depth {
-        if to.export_depth && state.frame_export.is_none() {
-            return Err(Failure::new(
-                CadrResult::Unsupported,
-                "settings.export_depth: only a renderer made by cadr_renderer_create_for_export exports its frames".into(),
-            ));
-        }
+    if to.depth_to_host != from.depth_to_host {
         named(
-            "export_depth",
-            state.view.renderer_mut().set_depth_to_host(to.export_depth),
+            "depth_to_host",
+            state
+                .view
+                .renderer_mut()
+                .set_depth_to_host(to.depth_to_host),
         )?;
         // The memory is made for the depth now, so that the host imports it once.
         let renderer = state.view.renderer();
         let (width, height) = renderer.size();
         if let Some(output) = &mut state.frame_export {
             let extent = cadr_core::vk::raw::Extent2D { width, height };
-            output.reshape(renderer.device(), extent, to.export_depth)?;
+            output.reshape(renderer.device(), extent, to.depth_to_host)?;
         }
     }
     let renderer = state.view.renderer_mut();

@@ -154,13 +154,14 @@ static int import_frames(struct GlFrames *frames) {
   return 1;
 }
 
-/* Asks the renderer to export each frame's depth after its colour. */
-static void export_depth(CadrRenderer renderer) {
+/* Asks the renderer to keep each frame's depth for the host (exported after the colour, or
+ * read back). */
+static void depth_to_host(CadrRenderer renderer) {
   struct CadrRendererSettings settings;
   memset(&settings, 0, sizeof settings);
   settings.size = sizeof settings;
   CADR_CHECK(cadr_renderer_settings(renderer, &settings));
-  settings.export_depth = true;
+  settings.depth_to_host = true;
   CADR_CHECK(cadr_renderer_apply_settings(renderer, &settings));
 }
 
@@ -200,19 +201,14 @@ void gl_frames_create(struct GlFrames *frames, CadrContext context, uint32_t wid
       frames->renderer = NULL;
     } else {
       if (flags & GL_FRAMES_DEPTH) {
-        export_depth(frames->renderer);
+        depth_to_host(frames->renderer);
       }
       if (!import_frames(frames)) {
         printf("the OpenGL driver refused cadr's memory: reading frames back\n");
         CADR_CHECK(cadr_renderer_destroy(frames->renderer));
         frames->renderer = NULL;
-      } else if (frames->depth_offset != 0) {
-        attach_depth(frames);
       }
     }
-  }
-  if ((flags & GL_FRAMES_DEPTH) && frames->depth_texture == 0) {
-    printf("no depth: the frames' depth comes only through shared memory\n");
   }
   if (frames->renderer == NULL) {
     CADR_CHECK(cadr_renderer_create(context, width, height, &frames->renderer));
@@ -221,6 +217,17 @@ void gl_frames_create(struct GlFrames *frames, CadrContext context, uint32_t wid
       fprintf(stderr, "out of memory\n");
       exit(1);
     }
+    if (flags & GL_FRAMES_DEPTH) {
+      depth_to_host(frames->renderer);
+      frames->depth_values = (float *)malloc((size_t)width * height * sizeof(float));
+      if (frames->depth_values == NULL) {
+        fprintf(stderr, "out of memory\n");
+        exit(1);
+      }
+    }
+  }
+  if (frames->depth_offset != 0 || frames->depth_values != NULL) {
+    attach_depth(frames);
   }
 }
 
@@ -247,18 +254,31 @@ size_t gl_frames_update(struct GlFrames *frames) {
     }
     gl.BindBuffer(GL_PIXEL_UNPACK_BUFFER, 0);
   } else {
-    read_back = (size_t)width * height * 4;
-    CADR_CHECK(cadr_renderer_read_pixels(frames->renderer, frames->pixels, read_back));
+    const size_t bytes = (size_t)width * height * 4;
+    read_back = bytes;
+    CADR_CHECK(cadr_renderer_read_pixels(frames->renderer, frames->pixels, bytes));
     glTexSubImage2D(GL_TEXTURE_2D, 0, 0, 0, width, height, GL_RGBA, GL_UNSIGNED_BYTE,
                     frames->pixels);
+    if (frames->depth_values != NULL) {
+      read_back += bytes;
+      CADR_CHECK(cadr_renderer_read_depth(frames->renderer, frames->depth_values, bytes));
+      glBindTexture(GL_TEXTURE_2D, frames->depth_texture);
+      glTexSubImage2D(GL_TEXTURE_2D, 0, 0, 0, width, height, GL_DEPTH_COMPONENT, GL_FLOAT,
+                      frames->depth_values);
+    }
   }
   return read_back;
 }
 
 void gl_frames_read_depth(struct GlFrames *frames, float *depth) {
+  const size_t bytes = (size_t)frames->width * frames->height * 4;
+  if (frames->depth_values != NULL) {
+    memcpy(depth, frames->depth_values, bytes);
+    return;
+  }
   gl.BindBuffer(GL_PIXEL_UNPACK_BUFFER, frames->pixel_buffer);
   gl.GetBufferSubData(GL_PIXEL_UNPACK_BUFFER, (GLintptr)frames->depth_offset,
-                      (GLsizeiptr)frames->width * frames->height * 4, depth);
+                      (GLsizeiptr)bytes, depth);
   gl.BindBuffer(GL_PIXEL_UNPACK_BUFFER, 0);
 }
 
@@ -321,6 +341,7 @@ void gl_frames_destroy(struct GlFrames *frames) {
     glDeleteTextures(1, &frames->depth_texture);
   }
   free(frames->pixels);
+  free(frames->depth_values);
   if (frames->renderer != NULL) {
     CADR_CHECK(cadr_renderer_destroy(frames->renderer));
   }

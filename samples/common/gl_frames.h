@@ -3,7 +3,7 @@
  * (GL_EXT_memory_object_fd) and uploaded into a texture on the GPU; or, where the drivers cannot
  * share memory, frames read back through the CPU. Either way the texture is blitted into a
  * rectangle of the window. With the frames' depth (exported after the colour,
- * CadrRendererSettings::export_depth), the host draws its own geometry into cadr's frame with
+ * CadrRendererSettings::depth_to_host), the host draws its own geometry into cadr's frame with
  * a depth test before the blit. Used by gl_view.c and quad_view.c; needs a current OpenGL 3.0
  * context (GLFW's). */
 #ifndef CADR_SAMPLE_GL_FRAMES_H
@@ -25,8 +25,9 @@ struct GlFrames {
    * starts in the exported memory (0 without depth). */
   unsigned depth_texture;
   uint64_t depth_offset;
-  /* The read-back path: the frame in host memory. */
+  /* The read-back path: the frame in host memory (and its depth, with depth). */
   uint8_t *pixels;
+  float *depth_values;
 };
 
 /* A window of `width` x `height` that does not resize, with a current OpenGL 3.0 context and
@@ -42,7 +43,7 @@ int gl_frames_can_import(void);
 enum {
   /* Frames through shared memory where both drivers allow it (else read back). */
   GL_FRAMES_SHARE = 1,
-  /* The frames' depth too (shared memory only), for gl_frames_begin_drawing. */
+  /* The frames' depth too, for gl_frames_begin_drawing. */
   GL_FRAMES_DEPTH = 2
 };
 
@@ -56,15 +57,15 @@ void gl_frames_create(struct GlFrames *frames, CadrContext context, uint32_t wid
 /* Whether the frames come through shared memory. */
 int gl_frames_shared(const struct GlFrames *frames);
 
-/* Whether the frames bring their depth (GL_FRAMES_DEPTH, on the shared path). */
+/* Whether the frames bring their depth (GL_FRAMES_DEPTH). */
 int gl_frames_has_depth(const struct GlFrames *frames);
 
 /* Brings the renderer's last frame (and its depth) into the frames' textures. Returns the
  * bytes read back through the CPU (0 on the shared path). */
 size_t gl_frames_update(struct GlFrames *frames);
 
-/* Reads the last frame's depth (width x height floats, the top row first) back through the
- * CPU: for checks, not for drawing. Only with depth. */
+/* The last frame's depth (width x height floats, the top row first) in host memory: read
+ * from the shared memory through the CPU, for checks, not for drawing. Only with depth. */
 void gl_frames_read_depth(struct GlFrames *frames, float *depth);
 
 /* Makes the frames' framebuffer (the last frame's colour, and its depth) the target of the

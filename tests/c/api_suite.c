@@ -585,7 +585,7 @@ static bool settings_equal(const CadrRendererSettings *a, const CadrRendererSett
          a->frame_replay == b->frame_replay &&
          a->pick_through_translucent == b->pick_through_translucent &&
          a->frames_in_flight == b->frames_in_flight && a->present_mode == b->present_mode &&
-         a->export_depth == b->export_depth;
+         a->depth_to_host == b->depth_to_host;
 }
 
 /* The settings last applied by SET and SET_RGB. */
@@ -1597,8 +1597,8 @@ static void test_export(CadrContext context, struct Built *b) {
   close(frame.fd);
   /* The depth after the colour (1.1): new memory as soon as it is asked for, of a new
    * generation, with room for the depth at an aligned offset; rendering goes on into it. */
-  OK(SET(exporting, export_depth, true));
-  CHECK(settings_of(exporting).export_depth);
+  OK(SET(exporting, depth_to_host, true));
+  CHECK(settings_of(exporting).depth_to_host);
   OK(cadr_renderer_exported_frame(exporting, &frame));
   CHECK(frame.generation == 3 && frame.depth_offset % 256 == 0 &&
         frame.depth_offset >= (uint64_t)frame.row_bytes * frame.height &&
@@ -1615,7 +1615,7 @@ static void test_export(CadrContext context, struct Built *b) {
     CHECK(older.generation == 3 && older.depth_offset == 0xABABABABABABABABull);
     close(older.fd);
   }
-  OK(SET(exporting, export_depth, false));
+  OK(SET(exporting, depth_to_host, false));
   OK(cadr_renderer_exported_frame(exporting, &frame));
   CHECK(frame.generation == 4 && frame.depth_offset == 0);
   close(frame.fd);
@@ -1626,18 +1626,45 @@ static void test_export(CadrContext context, struct Built *b) {
   frame.size = sizeof frame;
   EXPECT(cadr_renderer_exported_frame(plain, &frame), CADR_RESULT_INVALID_ARGUMENT);
   MESSAGE_HAS("cadr_renderer_create_for_export");
-  EXPECT(SET(plain, export_depth, true), CADR_RESULT_UNSUPPORTED);
-  MESSAGE_HAS("settings.export_depth");
-  CHECK(!settings_of(plain).export_depth);
+  {
+    /* Any renderer keeps its frames' depth on request, read back with
+     * cadr_renderer_read_depth (1.1): none while the setting is off or before a frame kept
+     * it; then 0..1, the background at 1. */
+    const size_t bytes = (size_t)W * H * sizeof(float);
+    float *depth = (float *)malloc(bytes);
+    size_t i, near = 0, background = 0, outside = 0;
+    CHECK(depth != NULL);
+    EXPECT(cadr_renderer_read_depth(plain, depth, bytes), CADR_RESULT_INVALID_ARGUMENT);
+    MESSAGE_HAS("depth_to_host");
+    OK(SET(plain, depth_to_host, true));
+    CHECK(settings_of(plain).depth_to_host);
+    EXPECT(cadr_renderer_read_depth(plain, depth, bytes), CADR_RESULT_INVALID_ARGUMENT);
+    MESSAGE_HAS("no frame kept its depth");
+    OK(cadr_renderer_render(plain, b->scene, &camera, NULL));
+    EXPECT(cadr_renderer_read_depth(plain, NULL, bytes), CADR_RESULT_NULL_ARGUMENT);
+    EXPECT(cadr_renderer_read_depth(plain, depth, bytes - 1), CADR_RESULT_BUFFER_TOO_SMALL);
+    EXPECT(cadr_renderer_read_depth((CadrRenderer)b->scene, depth, bytes),
+           CADR_RESULT_FOREIGN_HANDLE);
+    OK(cadr_renderer_read_depth(plain, depth, bytes));
+    for (i = 0; i < (size_t)W * H; ++i) {
+      near += depth[i] < 1.0f;
+      background += depth[i] == 1.0f;
+      outside += !(depth[i] >= 0.0f && depth[i] <= 1.0f);
+    }
+    CHECK(near > 0 && background > 0 && outside == 0);
+    free(depth);
+  }
   OK(cadr_renderer_destroy(plain));
   {
     /* The settings' functions on a destroyed renderer. */
     CadrRendererSettings settings;
     CadrRendererCapabilities capabilities;
+    float depth[4];
     memset(&settings, 0, sizeof settings);
     settings.size = sizeof settings;
     memset(&capabilities, 0, sizeof capabilities);
     capabilities.size = sizeof capabilities;
+    EXPECT(cadr_renderer_read_depth(plain, depth, sizeof depth), CADR_RESULT_DESTROYED_HANDLE);
     EXPECT(cadr_renderer_settings(plain, &settings), CADR_RESULT_DESTROYED_HANDLE);
     EXPECT(cadr_renderer_apply_settings(plain, &settings), CADR_RESULT_DESTROYED_HANDLE);
     EXPECT(cadr_renderer_capabilities(plain, &capabilities), CADR_RESULT_DESTROYED_HANDLE);

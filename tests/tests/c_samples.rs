@@ -431,12 +431,13 @@ fn gl_view_shows_cadrs_frames_in_opengl_through_shared_memory() {
 }
 
 /// An OpenGL host draws its own geometry into cadr's frames with a depth test against their
-/// exported depth (`CadrRendererSettings::export_depth`): a rectangle at the scene's median
-/// depth covers exactly the pixels whose depth lies behind it, background included, and none
-/// in front; the frames still come through shared memory alone.
+/// depth (`CadrRendererSettings::depth_to_host`): a rectangle at the scene's median depth
+/// covers exactly the pixels whose depth lies behind it, background included, and none in
+/// front; through shared memory nothing is read back, and where memory is not shared the depth
+/// is read back beside the colour (`cadr_renderer_read_depth`) to the same effect.
 #[test]
 fn gl_view_draws_its_own_geometry_into_cadrs_frames_by_their_depth() {
-    let transcript = run_gl_view(
+    assert_composites(run_gl_view(
         "sample-gl-view-depth",
         "4",
         &["--depth"],
@@ -445,7 +446,22 @@ fn gl_view_draws_its_own_geometry_into_cadrs_frames_by_their_depth() {
             "bytes read back per frame: 0",
             "depth compositing: 76800 of 76800 pixels agree, ",
         ],
-    );
+    ));
+    assert_composites(run_gl_view(
+        "sample-gl-view-depth-read-back",
+        "4",
+        &["--depth", "--read-back"],
+        &[
+            "path: read-back, with depth",
+            "bytes read back per frame: 614400",
+            "depth compositing: 76800 of 76800 pixels agree, ",
+        ],
+    ));
+}
+
+/// Checks gl_view's depth compositing line in `transcript`: the rectangle covers the farther
+/// half of the parts and the background, not the whole picture.
+fn assert_composites(transcript: String) {
     let drawn_over: u32 = transcript
         .lines()
         .find_map(|line| line.split(" pixels agree, ").nth(1))

@@ -225,6 +225,9 @@ fn colour_frames_hand_their_depth_to_the_host() {
             grid.len()
         );
     }
+    // A new size has no depth until a frame draws one.
+    f.view.renderer_mut().resize(48, 36).unwrap();
+    assert!(f.view.renderer().read_depth().is_err());
     f.view.renderer_mut().set_depth_to_host(false).unwrap();
     assert!(f.view.renderer().read_depth().is_err());
     f.assert_no_validation_errors();

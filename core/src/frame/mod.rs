@@ -54,6 +54,9 @@ pub struct Renderer {
     bound_scene: Option<u64>,
     settings: FrameSettings,
     on_demand: OnDemandTargets,
+    /// Whether the depth image holds the last frame's depth in `TRANSFER_SRC_OPTIMAL` (that
+    /// frame kept it for the host, or was a pick).
+    depth_readable: bool,
 }
 
 /// What a host sets on a renderer and every later frame draws with.
@@ -140,6 +143,7 @@ impl Renderer {
                 depth_to_host: false,
             },
             on_demand: OnDemandTargets::default(),
+            depth_readable: false,
         })
     }
 
@@ -370,6 +374,7 @@ impl Renderer {
         // The recorded frame draws into the old target: never submit it again.
         self.forget_recording();
         self.target = OffscreenTarget::new(&self.device, width, height, self.msaa())?;
+        self.depth_readable = false;
         self.on_demand.depth_set = None;
         self.on_demand.pick = None;
         self.drop_transparency_targets();
@@ -406,6 +411,7 @@ impl Renderer {
         self.forget_recording();
         let (width, height) = self.size();
         self.target = OffscreenTarget::new(&self.device, width, height, samples)?;
+        self.depth_readable = false;
         self.on_demand.depth_set = None;
         self.on_demand.pick = None;
         self.drop_transparency_targets();

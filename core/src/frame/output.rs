@@ -17,12 +17,19 @@ impl Renderer {
         })
     }
 
-    /// The depth of the last colour frame ([`Renderer::depth_for_host`]), row by row from the
-    /// top, one value per pixel; refused unless frames keep it ([`Renderer::set_depth_to_host`]).
+    /// The depth of the last frame ([`Renderer::depth_for_host`]; a pick draws a frame too),
+    /// row by row from the top, one value per pixel; refused unless frames keep it
+    /// ([`Renderer::set_depth_to_host`]) and one was drawn since (and since the last resize).
     pub fn read_depth(&self) -> RenderResult<Vec<f32>> {
         let depth = self.depth_for_host().ok_or_else(|| {
             RenderError::InvalidUse("frames do not keep their depth for the host".into())
         })?;
+        if !self.depth_readable {
+            return Err(RenderError::InvalidUse(
+                "no frame kept its depth since depth_to_host was turned on or the size changed"
+                    .into(),
+            ));
+        }
         self.finish()?;
         let bytes = timings::time(Phase::Readback, || {
             crate::vk::read_image(

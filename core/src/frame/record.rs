@@ -193,6 +193,10 @@ impl Renderer {
     ) -> RenderResult<FrameStats> {
         let eye = camera.eye();
         let passes = FramePasses::plan(&self.frame_shape(&plan, eye));
+        // What the depth image holds once this frame is recorded.
+        self.depth_readable = passes
+            .iter()
+            .any(|pass| matches!(pass, FramePass::DepthToHost | FramePass::PickReadback));
         let display = plan.display | passes.display_bits();
         // The recording holds these passes and no others.
         let replay_key = plan

@@ -4,11 +4,13 @@
  * click in a view picks there and highlights the part in all four; a click on the background
  * clears the selection.
  *
- *   quad_view [scene] [--frames N] [--views N] [--self-test DIR]
+ *   quad_view [scene] [--frames N] [--views N] [--view-size WxH] [--self-test DIR]
  *
  * It orbits the perspective view for N frames (default 120) and prints each view's CPU time per
  * frame, the frames per second and cadr's device memory. --views N shows only the first N views
- * (top, front, side, perspective), to compare one view's costs with four's. --self-test DIR picks in the middle of
+ * (top, front, side, perspective), to compare one view's costs with four's; --view-size WxH
+ * sets each view's size (default 320x240; the window holds two by two), so that one view of a
+ * window's whole size can be compared with four quarters of it. --self-test DIR picks in the middle of
  * each view (printing what it found), writes the offscreen render of each view's camera
  * (DIR/view0.png ... view3.png), prints where each view lies in the window ("view N at X,Y
  * WxH") and "screenshot ready WxH", and keeps showing the views until a line arrives on stdin,
@@ -26,8 +28,9 @@
 #include <string.h>
 #include <time.h>
 
-enum { VIEW_WIDTH = 320, VIEW_HEIGHT = 240, VIEWS = 4 };
-enum { WINDOW_WIDTH = 2 * VIEW_WIDTH, WINDOW_HEIGHT = 2 * VIEW_HEIGHT };
+enum { VIEWS = 4 };
+/* Each view's size (--view-size); the window holds two by two. */
+static int view_width = 320, view_height = 240;
 
 static const char *const view_names[VIEWS] = {"top", "front", "side", "perspective"};
 
@@ -67,10 +70,10 @@ static void orthographic(const struct CadrBounds *b, const double direction[3],
     eye[i] = center[i] + direction[i] * extent * 2.0;
   }
   /* The view matrix from cadr's look-at (its projection is replaced below). */
-  CADR_CHECK(cadr_camera_look_at(eye, center, 45.0, (double)VIEW_WIDTH / VIEW_HEIGHT, 0.1, 1.0, &look));
+  CADR_CHECK(cadr_camera_look_at(eye, center, 45.0, (double)view_width / view_height, 0.1, 1.0, &look));
   memcpy(camera->view, look.view, sizeof camera->view);
   half_h = extent * 1.05;
-  half_w = half_h * VIEW_WIDTH / VIEW_HEIGHT;
+  half_w = half_h * view_width / view_height;
   depth = extent * 4.0;
   memset(camera->projection, 0, sizeof camera->projection);
   camera->projection[0] = 1.0 / half_w;
@@ -88,13 +91,13 @@ static void place_cameras(struct QuadView *q) {
   orthographic(&q->bounds, top, &q->cameras[0]);
   orthographic(&q->bounds, front, &q->cameras[1]);
   orthographic(&q->bounds, side, &q->cameras[2]);
-  CADR_CHECK(cadr_camera_fit(&q->bounds, (double)VIEW_WIDTH / VIEW_HEIGHT, around, &q->cameras[3]));
+  CADR_CHECK(cadr_camera_fit(&q->bounds, (double)view_width / view_height, around, &q->cameras[3]));
 }
 
 /* Where view `index` lies in the window: its top-left corner. */
 static void view_origin(int index, int *x, int *y) {
-  *x = (index % 2) * VIEW_WIDTH;
-  *y = (index / 2) * VIEW_HEIGHT;
+  *x = (index % 2) * view_width;
+  *y = (index / 2) * view_height;
 }
 
 /* Renders every view and puts it in its quarter, adding each view's CPU time to `cpu_us` when
@@ -112,7 +115,7 @@ static size_t draw(struct QuadView *q, int timed) {
       q->cpu_us[i] += stats.cpu_us;
     }
     view_origin(i, &x, &y);
-    read_back += gl_frames_show(&q->views[i], x, y, WINDOW_HEIGHT);
+    read_back += gl_frames_show(&q->views[i], x, y, (2 * view_height));
   }
   return read_back;
 }
@@ -120,7 +123,7 @@ static size_t draw(struct QuadView *q, int timed) {
 /* Picks at window pixel (x, y) in the view under it; highlights the part found in every view
  * (the highlight is the scene's) and returns its node, 0 over the background. */
 static CadrNode select_at(struct QuadView *q, int x, int y) {
-  int index = (y >= VIEW_HEIGHT ? 2 : 0) + (x >= VIEW_WIDTH ? 1 : 0), origin_x, origin_y;
+  int index = (y >= view_height ? 2 : 0) + (x >= view_width ? 1 : 0), origin_x, origin_y;
   CadrPickResult picked;
   if (index >= q->count) {
     return q->selected; /* an empty quarter */
@@ -146,7 +149,7 @@ static void on_click(GLFWwindow *window, int button, int action, int mods) {
   (void)mods;
   if (button == GLFW_MOUSE_BUTTON_LEFT && action == GLFW_PRESS) {
     glfwGetCursorPos(window, &x, &y);
-    if (x >= 0 && y >= 0 && x < WINDOW_WIDTH && y < WINDOW_HEIGHT) {
+    if (x >= 0 && y >= 0 && x < (2 * view_width) && y < (2 * view_height)) {
       select_at(q, (int)x, (int)y);
     }
   }
@@ -175,20 +178,20 @@ static void self_test(struct QuadView *q, CadrContext context, GLFWwindow *windo
   for (i = 0; i < q->count; ++i) {
     int x, y;
     view_origin(i, &x, &y);
-    select_at(q, x + VIEW_WIDTH / 2, y + VIEW_HEIGHT / 2);
+    select_at(q, x + view_width / 2, y + view_height / 2);
   }
   /* The last pick's part stays highlighted in every view. */
   draw(q, 0);
   for (i = 0; i < q->count; ++i) {
     int x, y;
     snprintf(path, sizeof path, "%s/view%d.png", dir, i);
-    sample_save_offscreen(context, q->scene, &q->cameras[i], VIEW_WIDTH, VIEW_HEIGHT, path);
+    sample_save_offscreen(context, q->scene, &q->cameras[i], view_width, view_height, path);
     view_origin(i, &x, &y);
-    printf("view %d at %d,%d %dx%d\n", i, x, y, VIEW_WIDTH, VIEW_HEIGHT);
+    printf("view %d at %d,%d %dx%d\n", i, x, y, view_width, view_height);
   }
   glfwSwapBuffers(window);
   glFinish();
-  sample_screenshot_ready(WINDOW_WIDTH, WINDOW_HEIGHT);
+  sample_screenshot_ready((2 * view_width), (2 * view_height));
 }
 
 int main(int argc, char **argv) {
@@ -209,6 +212,12 @@ int main(int argc, char **argv) {
       test_dir = argv[++i];
     } else if (strcmp(argv[i], "--views") == 0 && i + 1 < argc) {
       views = atoi(argv[++i]);
+    } else if (strcmp(argv[i], "--view-size") == 0 && i + 1 < argc) {
+      if (sscanf(argv[++i], "%dx%d", &view_width, &view_height) != 2 || view_width < 16 ||
+          view_height < 16 || view_width > 4096 || view_height > 4096) {
+        fprintf(stderr, "quad_view: --view-size takes WxH, each 16 to 4096\n");
+        return 2;
+      }
     } else {
       source = argv[i];
     }
@@ -219,7 +228,7 @@ int main(int argc, char **argv) {
     return 2;
   }
   q.count = views;
-  window = gl_frames_window("quad_view", WINDOW_WIDTH, WINDOW_HEIGHT,
+  window = gl_frames_window("quad_view", (2 * view_width), (2 * view_height),
                             "cadr: top, front, side, perspective");
   glfwSetWindowUserPointer(window, &q);
   glfwSetMouseButtonCallback(window, on_click);
@@ -239,7 +248,7 @@ int main(int argc, char **argv) {
   host_before = host_bytes();
   one_view_device = one_view_host = 0;
   for (i = 0; i < q.count; ++i) {
-    gl_frames_create(&q.views[i], context, VIEW_WIDTH, VIEW_HEIGHT, 1);
+    gl_frames_create(&q.views[i], context, view_width, view_height, 1);
     shared = shared && gl_frames_shared(&q.views[i]);
     if (i == 0) {
       struct CadrFrameStats stats;

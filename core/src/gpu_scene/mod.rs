@@ -575,7 +575,8 @@ impl GpuScene {
             // Half applied: every view starts over from what the scene holds.
             self.followers.changes.all = true;
         }
-        self.followers.deliver();
+        let slots = self.instances.len() + self.matrices.len() + self.materials.len();
+        self.followers.deliver(slots.max(1024));
         result
     }
 

@@ -58,9 +58,12 @@ pub(super) struct Unseen {
 }
 
 impl Unseen {
-    /// Adds `later` to what is unseen.
-    fn extend(&mut self, later: &Unseen) {
-        if self.all || later.all {
+    /// Adds `later` to what is unseen; past `limit` entries, everything is (a view that does
+    /// not draw while parts move every frame would otherwise gather lists without end).
+    fn extend(&mut self, later: &Unseen, limit: usize) {
+        let entries = self.matrices.len() + self.materials.len() + self.touched.len();
+        let later_entries = later.matrices.len() + later.materials.len() + later.touched.len();
+        if self.all || later.all || entries + later_entries > limit {
             *self = Unseen {
                 all: true,
                 ..Unseen::default()
@@ -89,13 +92,14 @@ pub(super) struct Followers {
 
 impl Followers {
     /// Hands what the sync changed to every following view, forgetting views that are gone,
-    /// and starts the next sync's list.
-    pub fn deliver(&mut self) {
+    /// and starts the next sync's list. A view's unseen changes past `limit` entries (the
+    /// scene's slots: catching up with everything costs no more) become "everything".
+    pub fn deliver(&mut self, limit: usize) {
         let changes = std::mem::take(&mut self.changes);
         self.views
             .retain(|follower| follower.token.strong_count() > 0);
         for follower in &mut self.views {
-            follower.unseen.extend(&changes);
+            follower.unseen.extend(&changes, limit);
         }
     }
 
@@ -284,5 +288,37 @@ impl ViewState {
     /// Matrix and material slots changed since this view's last frame.
     pub(super) fn dirty_slots(&self) -> (&[u32], &[u32]) {
         (&self.dirty_matrices, &self.dirty_materials)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_view_that_does_not_draw_gathers_no_more_than_the_scene_has_slots() {
+        let view = ViewState::new();
+        let mut followers = Followers::default();
+        assert!(
+            followers.take(&view).all,
+            "a new follower starts from everything"
+        );
+        // Below the limit the lists are kept as they are.
+        followers.changes.matrices.push(7);
+        followers.deliver(64);
+        let unseen = followers.take(&view);
+        assert!(!unseen.all && unseen.matrices == [7]);
+        // A view that never draws while parts move: bounded, then everything.
+        for step in 0..100u32 {
+            followers.changes.matrices.extend([step, step + 1]);
+            followers.deliver(64);
+            let unseen = &followers.views[0].unseen;
+            assert!(unseen.all || unseen.matrices.len() <= 64, "step {step}");
+        }
+        assert!(followers.take(&view).all);
+        // A view that is gone is forgotten at the next delivery.
+        drop(view);
+        followers.deliver(64);
+        assert!(followers.views.is_empty());
     }
 }

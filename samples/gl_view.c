@@ -136,7 +136,6 @@ int main(int argc, char **argv) {
   const char *source = "gen:demo", *test_dir = NULL;
   int frames = 60, read_back_only = 0, with_depth = 0, frame, i;
   struct GlFrames view;
-  struct CadrContextOptions options;
   struct CadrBounds bounds;
   struct CadrCamera camera;
   CadrContext context;
@@ -161,12 +160,7 @@ int main(int argc, char **argv) {
   }
   window = gl_frames_window("gl_view", WIDTH, HEIGHT, "cadr in OpenGL");
 
-  memset(&options, 0, sizeof options);
-  options.size = sizeof options;
-  CADR_CHECK(cadr_context_options_default(&options));
-  options.validation = test_dir != NULL;
-  sample_print_messages();
-  CADR_CHECK(cadr_context_create(&options, &context));
+  context = sample_context(NULL, 0, test_dir != NULL);
   scene = sample_load(source, &bounds);
 
   gl_frames_create(&view, context, WIDTH, HEIGHT,

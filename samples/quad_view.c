@@ -198,7 +198,6 @@ int main(int argc, char **argv) {
   const char *source = "gen:demo", *test_dir = NULL;
   int frames = 120, views = VIEWS, frame, i, shared = 1;
   struct QuadView q;
-  struct CadrContextOptions options;
   CadrContext context;
   GLFWwindow *window;
   size_t read_back = 0;
@@ -233,12 +232,7 @@ int main(int argc, char **argv) {
   glfwSetWindowUserPointer(window, &q);
   glfwSetMouseButtonCallback(window, on_click);
 
-  memset(&options, 0, sizeof options);
-  options.size = sizeof options;
-  CADR_CHECK(cadr_context_options_default(&options));
-  options.validation = test_dir != NULL;
-  sample_print_messages();
-  CADR_CHECK(cadr_context_create(&options, &context));
+  context = sample_context(NULL, 0, test_dir != NULL);
   q.scene = sample_load(source, &q.bounds);
   place_cameras(&q);
 

@@ -579,7 +579,6 @@ static int self_test(struct Viewer *v, const char *dir) {
 
 int main(int argc, char **argv) {
   struct Viewer v;
-  struct CadrContextOptions options = {.size = sizeof(struct CadrContextOptions)};
   struct CadrLoadResult loaded = {.size = sizeof(struct CadrLoadResult)};
   const char *source = "gen:demo", *test_dir = NULL, **extensions;
   uint32_t extension_count = 0;
@@ -635,12 +634,7 @@ int main(int argc, char **argv) {
 
   /* A context with the window system's instance extensions. */
   extensions = glfwGetRequiredInstanceExtensions(&extension_count);
-  CADR_CHECK(cadr_context_options_default(&options));
-  options.instance_extensions = extensions;
-  options.instance_extension_count = extension_count;
-  options.validation = test_dir != NULL;
-  sample_print_messages();
-  CADR_CHECK(cadr_context_create(&options, &v.context));
+  v.context = sample_context(extensions, extension_count, test_dir != NULL);
   CADR_CHECK(cadr_context_vulkan_instance(v.context, &instance));
   if (glfwCreateWindowSurface((VkInstance)instance, v.window, NULL, &surface) != VK_SUCCESS) {
     fprintf(stderr, "viewer: cannot create a Vulkan surface for the window\n");

@@ -28,6 +28,21 @@ void sample_print_messages(void) {
   CADR_CHECK(cadr_set_message_callback(print_message, NULL, CADR_MESSAGE_WARNING));
 }
 
+CadrContext sample_context(const char *const *extensions, uint32_t extension_count,
+                           int validation) {
+  struct CadrContextOptions options;
+  CadrContext context;
+  memset(&options, 0, sizeof options);
+  options.size = sizeof options;
+  CADR_CHECK(cadr_context_options_default(&options));
+  options.instance_extensions = extensions;
+  options.instance_extension_count = extension_count;
+  options.validation = validation != 0;
+  sample_print_messages();
+  CADR_CHECK(cadr_context_create(&options, &context));
+  return context;
+}
+
 CadrScene sample_load(const char *source, struct CadrBounds *bounds) {
   CadrScene scene;
   CadrNode root;

@@ -13,6 +13,11 @@ void sample_check(enum CadrResult result, const char *call, const char *file, in
 /* Prints cadr's warnings and errors (what a load left out, validation errors) to stderr. */
 void sample_print_messages(void);
 
+/* A context with the default options, the window system's instance `extensions` (NULL and 0
+ * for none) and, for self-tests, `validation`; cadr's warnings and errors printed. */
+CadrContext sample_context(const char *const *extensions, uint32_t extension_count,
+                           int validation);
+
 /* A new scene holding `source` (a file or a generator such as "gen:demo") under its root, and
  * its bounds. */
 CadrScene sample_load(const char *source, struct CadrBounds *bounds);

@@ -549,9 +549,8 @@ static void test_messages(CadrScene scene, CadrNode root) {
 
 /* The renderer's settings, as a host reads them. */
 static CadrRendererSettings settings_of(CadrRenderer renderer) {
-  CadrRendererSettings settings = {.size = sizeof(struct CadrRendererSettings)};
+  CadrRendererSettings settings;
   memset(&settings, 0, sizeof settings);
-  settings.size = sizeof settings;
   settings.size = sizeof settings;
   OK(cadr_renderer_settings(renderer, &settings));
   return settings;
@@ -559,9 +558,8 @@ static CadrRendererSettings settings_of(CadrRenderer renderer) {
 
 /* What the renderer's device and window offer. */
 static CadrRendererCapabilities capabilities_of(CadrRenderer renderer) {
-  CadrRendererCapabilities capabilities = {.size = sizeof(struct CadrRendererCapabilities)};
+  CadrRendererCapabilities capabilities;
   memset(&capabilities, 0, sizeof capabilities);
-  capabilities.size = sizeof capabilities;
   capabilities.size = sizeof capabilities;
   OK(cadr_renderer_capabilities(renderer, &capabilities));
   return capabilities;

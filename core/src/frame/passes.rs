@@ -1,7 +1,7 @@
 //! A frame as an ordered list of passes ([`FramePasses`]): the techniques' preparation and
 //! the GPU culler's phases, the surfaces in one or more phases, the passes over the finished
-//! picture ([`OVERLAY_PASSES`]) and the pick readback. Each pass says what it reads and writes
-//! ([`Resources`]) and who records it. What a frame draws is decided once, in
+//! picture ([`OVERLAY_PASSES`]), the pick readback and the depth handed to the host. Each pass
+//! says what it reads and writes ([`Resources`]) and who records it. What a frame draws is decided once, in
 //! [`FramePasses::plan`] from the frame's [`FrameShape`]; the recording, the clears, the
 //! barriers, the pixel-key planes, the display bits and the replay key all follow from the
 //! list.

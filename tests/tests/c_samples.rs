@@ -102,7 +102,13 @@ struct VirtualDisplay {
 impl VirtualDisplay {
     fn start() -> Self {
         for number in (60 + std::process::id() % 200)..(60 + std::process::id() % 200 + 40) {
-            if Path::new(&format!("/tmp/.X{number}-lock")).exists() {
+            // A display is taken while the server its lock names runs; a lock left by a killed
+            // server (these tests kill theirs) is stale, and Xvfb takes it over.
+            let taken = std::fs::read_to_string(format!("/tmp/.X{number}-lock"))
+                .ok()
+                .and_then(|pid| pid.trim().parse::<u32>().ok())
+                .is_some_and(|pid| Path::new(&format!("/proc/{pid}")).exists());
+            if taken {
                 continue;
             }
             let mut server = Command::new("Xvfb")

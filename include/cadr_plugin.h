@@ -20,7 +20,7 @@
 #define CADR_PLUGIN_ABI_MAJOR 1
 
 // Minor version of this ABI: additions that older readers may ignore.
-#define CADR_PLUGIN_ABI_MINOR 16
+#define CADR_PLUGIN_ABI_MINOR 17
 
 // `(major << 16) | minor`, what [`CadrPluginVersionFn`] returns.
 #define CADR_PLUGIN_ABI_VERSION ((CADR_PLUGIN_ABI_MAJOR << 16) | CADR_PLUGIN_ABI_MINOR)
@@ -29,15 +29,16 @@
 // simplification.
 #define CADR_CLUSTER_ORIGINAL UINT32_MAX
 
-// Since ABI 1.16: [`CadrClusterGroup::depth`] of a part's proxy group, its last. The group
-// holds one cluster, a few triangles standing for the whole part (an octahedron through its
-// extreme vertices), and a finite `error` (at least half the diagonal of the part's box, and
-// no less than any other group's of the part) measured from a sphere that holds every other
-// group's: a culler that knows proxies draws the proxy alone, in place of the part's cut,
-// when that error projects at or under its threshold (and never at threshold 0, nor in place
-// of a part's coarsest clusters when a budget runs out). The proxy cluster's `refined` names
-// one of the part's terminal groups (error `f32::MAX`), so that a culler that does not know
-// proxies never draws it.
+// Since ABI 1.16: [`CadrClusterGroup::depth`] of a part's proxy groups, its last. Each such
+// group holds one cluster standing for the whole part (since 1.17 a part may have several:
+// simplifications of the whole part, coarser one after the other, the last often an
+// octahedron through its extreme vertices) and a finite `error` (no less than any error
+// before it in the part) measured from one sphere that holds every other group's. A culler
+// that knows proxies draws the last proxy whose error projects at or under its threshold,
+// alone, in place of the part's cut (and none at threshold 0, nor in place of a part's
+// coarsest clusters when a budget runs out). A proxy cluster's `refined` names one of the
+// part's terminal groups (error `f32::MAX`), so that a culler that does not know proxies
+// never draws it; a 1.16 culler draws only the last proxy, as before.
 #define CADR_CLUSTER_PROXY_DEPTH UINT32_MAX
 
 // Result of a plugin function: one of the `CADR_STATUS_*` constants.

@@ -215,17 +215,17 @@ fn picking_finds_the_part_drawn_at_every_pixel_of_a_grid() {
 }
 
 /// Far faceted parts (gen:grid's prisms of 400 triangles, every vertex on a crease, which the
-/// simplification keeps) are drawn as their proxies, a few triangles each instead of hundreds:
-/// no part goes missing and the picture stays close to full detail.
+/// simplification keeps) are drawn as their stand-ins, tens of triangles each instead of
+/// hundreds: no part goes missing and the picture stays close to full detail.
 #[test]
-fn far_faceted_parts_are_drawn_as_their_proxies_and_none_goes_missing() {
+fn far_faceted_parts_are_drawn_as_their_stand_ins_and_none_goes_missing() {
     let device = test_device();
     let scene = generate(&GeneratorSpec::parse("grid:parts=8000,tris=400").unwrap());
     let parts = flatten(&scene).unwrap().instances.len() as u64;
     let mut drawing = Drawing::new(&device, &scene);
-    // Seen from 16 times the scene's radius, every part is a pixel or two across: proxies;
-    // from 4 times, a few pixels: mostly the parts' coarsest clusters.
-    for (distance, fewer) in [(16.0, 10), (4.0, 1)] {
+    // Seen from 16 times the scene's radius, every part is a pixel or two across; from 4
+    // times, a few pixels: the coarser stand-ins, then the finer ones.
+    for (distance, fewer) in [(16.0, 20), (4.0, 15)] {
         let far = Camera::orbit(&bounds(&scene), aspect(), 0.1, distance);
         let (full, full_stats) = drawing.draw("gpu-clusters", 0.0, &far);
         let (lod, lod_stats) = drawing.draw("gpu-clusters", 1.0, &far);
@@ -249,7 +249,7 @@ fn far_faceted_parts_are_drawn_as_their_proxies_and_none_goes_missing() {
             "distance {distance}: no part goes missing: {covered} of the picture covered against {covered_full}"
         );
         assert!(
-            difference.mean <= 0.05,
+            difference.mean <= 0.03,
             "distance {distance}: FLIP at 1 px: {difference:?}"
         );
     }

@@ -6,10 +6,11 @@
 //! recording the error of its simplification (which only grows toward the coarse levels).
 //!
 //! A part whose coarsest simplification still has many triangles (faceted parts, whose every
-//! vertex is on a crease the simplification keeps) ends its DAG in a proxy
-//! ([`abi::CADR_CLUSTER_PROXY_DEPTH`]): an octahedron through its extreme vertices, drawn in
-//! place of the part only when the whole part projects within about twice the threshold, so
-//! that a far part costs a few triangles instead of hundreds (and never vanishes).
+//! vertex is on a crease the simplification keeps) ends its DAG in stand-ins
+//! ([`abi::CADR_CLUSTER_PROXY_DEPTH`], made in `stand_ins.rs`): whole-part simplifications,
+//! coarser one after the other, one of which is drawn in place of the whole part where its
+//! error projects under the threshold, so that a far part costs tens of triangles instead of
+//! hundreds (and never vanishes).
 //!
 //! The part's original clusters keep exactly its triangles: they are written back over the
 //! part's own index range, cluster after cluster, so every technique that draws the part whole
@@ -22,6 +23,7 @@
 
 use meshopt::{ClodCluster, ClodGroup, ClodMesh, VertexDataAdapter};
 
+use super::stand_ins;
 use crate::disk_cache::{self, DiskCache};
 use crate::scene::{Part, Vertex};
 use cadr_plugin_abi as abi;
@@ -32,7 +34,7 @@ pub const CACHED_TRIANGLES: usize = 8192;
 
 /// What a cache entry's key starts with: bump it when the clusters a geometry gets change.
 const CACHE_VERSION: &[u8] =
-    b"clusters 8: clod 128, normals protected, no sloppy fallback, small parts whole, spans, proxies";
+    b"clusters 9: clod 128, normals protected, no sloppy fallback, small parts whole, spans, welded stand-ins";
 /// The disk cache's kind of entry.
 const CACHE_KIND: &str = "clusters";
 
@@ -40,7 +42,7 @@ const CACHE_KIND: &str = "clusters";
 /// device cadr runs on, and small enough for culling to pay.
 pub const MAX_CLUSTER_TRIANGLES: usize = 128;
 
-/// A part's coarsest cut with more triangles than this gets a proxy (8 triangles) after it.
+/// A part's coarsest cut with more triangles than this gets stand-ins after it.
 const PROXY_AFTER_TRIANGLES: usize = 32;
 
 /// A cone cutoff no test passes: triangles that face too many ways (or a cluster whose cone
@@ -391,17 +393,18 @@ fn part_dag(vertices: &[Vertex], indices: &[u32]) -> Option<PartDag> {
     if original != indices.len() {
         return None;
     }
-    add_proxy(&mut dag, &local, &used);
+    add_stand_ins(&mut dag, &local, &local_indices, &used);
     Some(dag)
 }
 
-/// Ends the part's DAG with a proxy where its coarsest cut has more than
-/// [`PROXY_AFTER_TRIANGLES`]: an octahedron through the part's extreme vertices along each axis
-/// (`local`, named in the geometry as `used` says) in a group of its own
-/// ([`abi::CADR_CLUSTER_PROXY_DEPTH`]), whose error is half the diagonal of the part's box (and
-/// no less than any error below it), measured from a sphere around every group's: it shows
-/// when the whole part projects within about twice the threshold.
-fn add_proxy(dag: &mut PartDag, local: &[Vertex], used: &[u32]) {
+/// Ends the part's DAG with its stand-ins (`stand_ins.rs`) where its coarsest cut has more
+/// than [`PROXY_AFTER_TRIANGLES`]: each in a group of its own
+/// ([`abi::CADR_CLUSTER_PROXY_DEPTH`]), from the finest to the coarsest, with errors no less
+/// than any error below them, measured from one sphere around the part's box and every
+/// group's. A stand-in's `refined` names a terminal group, so that a culler that does not know
+/// stand-ins never draws it. `local` are the part's own vertices, `local_indices` its
+/// triangles among them, `used` their indices in the geometry.
+fn add_stand_ins(dag: &mut PartDag, local: &[Vertex], local_indices: &[u32], used: &[u32]) {
     let terminal = |group: u32| dag.groups[group as usize].error == f32::MAX;
     let coarsest: usize = dag
         .clusters
@@ -416,94 +419,42 @@ fn add_proxy(dag: &mut PartDag, local: &[Vertex], used: &[u32]) {
     if coarsest <= PROXY_AFTER_TRIANGLES {
         return;
     }
-    let Some(octahedron) = extreme_octahedron(local) else {
-        return;
-    };
-    let (min, max) = local
-        .iter()
-        .fold(([f32::MAX; 3], [f32::MIN; 3]), |(min, max), v| {
-            (
-                std::array::from_fn(|a| min[a].min(v.position[a])),
-                std::array::from_fn(|a| max[a].max(v.position[a])),
-            )
-        });
-    let half_diagonal = (0..3)
-        .map(|a| (max[a] - min[a]) * (max[a] - min[a]))
-        .sum::<f32>()
-        .sqrt()
-        * 0.5;
     let below = dag
         .groups
         .iter()
         .map(|g| g.error)
         .filter(|&e| e < f32::MAX)
         .fold(0.0f32, f32::max);
-    // The box's sphere, grown over every group's: the proxy's error then projects at least as
+    let levels = stand_ins::stand_ins(
+        local,
+        local_indices,
+        (coarsest, MAX_CLUSTER_TRIANGLES),
+        below,
+    );
+    // The box's sphere, grown over every group's: a stand-in's error then projects at least as
     // large as any group's, seen from anywhere.
+    let (min, max) = stand_ins::box_of(local);
     let centre = glam::Vec3::from(std::array::from_fn(|a| 0.5 * (min[a] + max[a])));
-    let radius = dag.groups.iter().fold(half_diagonal, |radius, g| {
-        let [x, y, z, r] = g.sphere;
-        radius.max(centre.distance(glam::Vec3::new(x, y, z)) + r)
-    });
-    let proxy_group = dag.groups.len() as u32;
-    dag.groups.push(abi::CadrClusterGroup {
-        // Rounding slack, as the clusters' spheres have.
-        sphere: [centre.x, centre.y, centre.z, radius * (1.0 + 1e-5)],
-        error: half_diagonal.max(below),
-        depth: abi::CADR_CLUSTER_PROXY_DEPTH,
-        first_cluster: 0,
-        cluster_count: 0,
-    });
-    let global = octahedron.iter().map(|&i| used[i as usize]).collect();
-    dag.clusters.push((global, proxy_group, stands_for));
-}
-
-/// The triangles (indices into `vertices`, wound counter-clockwise seen from outside) of the
-/// octahedron through the vertices at the least and the most of each axis, leaving out those
-/// that collapse; `None` when fewer than four remain.
-fn extreme_octahedron(vertices: &[Vertex]) -> Option<Vec<u32>> {
-    let extreme = |axis: usize, most: bool| -> Option<u32> {
-        let key = |v: &&Vertex| v.position[axis];
-        let found = if most {
-            vertices
-                .iter()
-                .enumerate()
-                .max_by(|a, b| key(&a.1).total_cmp(&key(&b.1)))
-        } else {
-            vertices
-                .iter()
-                .enumerate()
-                .min_by(|a, b| key(&a.1).total_cmp(&key(&b.1)))
-        };
-        found.map(|(i, _)| i as u32)
-    };
-    let ends: Vec<[u32; 2]> = (0..3)
-        .map(|axis| Some([extreme(axis, false)?, extreme(axis, true)?]))
-        .collect::<Option<_>>()?;
-    let position = |i: u32| glam::Vec3::from(vertices[i as usize].position);
-    let mut triangles = Vec::new();
-    for corner in 0..8usize {
-        let side = |axis: usize| (corner >> axis) & 1;
-        let [a, b, c] = [ends[0][side(0)], ends[1][side(1)], ends[2][side(2)]];
-        let normal = (position(b) - position(a)).cross(position(c) - position(a));
-        if a == b || b == c || a == c || normal.length_squared() == 0.0 {
-            continue;
-        }
-        // Outward: toward the corner's side on every axis.
-        let outward = glam::Vec3::from(std::array::from_fn(|axis| {
-            if side(axis) == 1 {
-                1.0
-            } else {
-                -1.0
-            }
-        }));
-        triangles.extend(if normal.dot(outward) >= 0.0 {
-            [a, b, c]
-        } else {
-            [a, c, b]
+    let radius = dag
+        .groups
+        .iter()
+        .fold(stand_ins::half_box_diagonal(local), |radius, g| {
+            let [x, y, z, r] = g.sphere;
+            radius.max(centre.distance(glam::Vec3::new(x, y, z)) + r)
         });
+    for level in levels {
+        let group = dag.groups.len() as u32;
+        dag.groups.push(abi::CadrClusterGroup {
+            // Rounding slack, as the clusters' spheres have.
+            sphere: [centre.x, centre.y, centre.z, radius * (1.0 + 1e-5)],
+            error: level.error,
+            depth: abi::CADR_CLUSTER_PROXY_DEPTH,
+            first_cluster: 0,
+            cluster_count: 0,
+        });
+        let global = level.indices.iter().map(|&i| used[i as usize]).collect();
+        dag.clusters.push((global, group, stands_for));
     }
-    (triangles.len() >= 12).then_some(triangles)
 }
 
 /// The culling bounds and normal cone of the triangles `indices` (at most
@@ -729,7 +680,7 @@ mod tests {
     }
 
     #[test]
-    fn faceted_parts_end_in_a_proxy_of_an_error_over_the_whole_part() {
+    fn faceted_parts_end_in_stand_ins_coarser_one_after_the_other() {
         // gen:grid's parts: faceted prisms of 400 triangles, every vertex on a crease.
         let scene = crate::generate::generate(
             &crate::generate::GeneratorSpec::parse("grid:parts=1,tris=400").unwrap(),
@@ -738,58 +689,95 @@ mod tests {
         let built = build(&geometry.vertices, &geometry.indices, &geometry.parts);
         let &[first, count, coarsest] = built.part_ranges.first().unwrap();
         let clusters = &built.clusters[first as usize..(first + count) as usize];
-        let proxy = clusters.last().unwrap();
-        let group = &built.groups[proxy.group as usize];
-        assert_eq!(
-            group.depth,
-            abi::CADR_CLUSTER_PROXY_DEPTH,
-            "the part's last cluster"
+        let is_stand_in = |c: &abi::CadrCluster| {
+            built.groups[c.group as usize].depth == abi::CADR_CLUSTER_PROXY_DEPTH
+        };
+        let stand_ins: Vec<&abi::CadrCluster> =
+            clusters.iter().skip_while(|c| !is_stand_in(c)).collect();
+        assert!(
+            stand_ins.len() >= 3,
+            "levels between the part and its coarsest"
         );
-        assert_eq!(group.cluster_count, 1);
-        assert!((12..=24).contains(&proxy.index_count), "4 to 8 triangles");
-        assert!(proxy.cone_cutoff >= 1.0, "an octahedron faces every way");
-        // It stands for a terminal group, which a culler that knows no proxy never leaves.
-        assert_eq!(built.groups[proxy.refined as usize].error, f32::MAX);
+        assert!(
+            stand_ins.iter().all(|c| is_stand_in(c)),
+            "the part's last clusters"
+        );
+        let triangles: Vec<u32> = stand_ins.iter().map(|c| c.index_count / 3).collect();
+        assert!(
+            triangles[0] <= MAX_CLUSTER_TRIANGLES as u32,
+            "{triangles:?}"
+        );
+        assert!(*triangles.last().unwrap() <= 8, "{triangles:?}");
+        assert!(triangles.windows(2).all(|t| t[1] < t[0]), "{triangles:?}");
+        let first_sphere = built.groups[stand_ins[0].group as usize].sphere;
+        let mut error_before = 0.0;
+        for stand_in in &stand_ins {
+            let group = &built.groups[stand_in.group as usize];
+            assert_eq!(group.cluster_count, 1);
+            assert_eq!(group.sphere, first_sphere, "one sphere for every stand-in");
+            assert!(group.error >= error_before && group.error < f32::MAX);
+            error_before = group.error;
+            // It stands for a terminal group, which a culler that knows no stand-in never
+            // leaves.
+            assert_eq!(built.groups[stand_in.refined as usize].error, f32::MAX);
+            // Made of the part's own vertices.
+            let start = stand_in.first_index as usize - built.indices.len();
+            let lod = &built.lod_indices[start..start + stand_in.index_count as usize];
+            let own = &geometry.indices[geometry.parts[0].first_index as usize..]
+                [..geometry.parts[0].index_count as usize];
+            assert!(lod.iter().all(|i| own.contains(i)));
+        }
         let terminal = clusters
             .iter()
             .filter(|c| built.groups[c.group as usize].error == f32::MAX)
             .count();
         assert_eq!(
             coarsest as usize, terminal,
-            "the proxy is not the coarsest cut"
+            "the stand-ins are not the coarsest cut"
         );
         assert!(terminal > 0);
-        // Its error covers the part (half its box's diagonal) and every error below it, from
-        // a sphere around every group's.
+        // Errors: each at least twice the farthest the part's vertices are from it (the part's
+        // prism is round: its few-sided levels are off by their sagitta), and no error below
+        // them larger, from a sphere around every group's.
         let part = &geometry.parts[0];
         let own = &geometry.indices[part.first_index as usize..][..part.index_count as usize];
-        let (min, max) = own.iter().map(|&i| &geometry.vertices[i as usize]).fold(
-            ([f32::MAX; 3], [f32::MIN; 3]),
-            |(min, max), v| {
-                (
-                    std::array::from_fn(|a| min[a].min(v.position[a])),
-                    std::array::from_fn(|a| max[a].max(v.position[a])),
-                )
-            },
-        );
-        let diagonal = (0..3)
-            .map(|a| (max[a] - min[a]).powi(2))
-            .sum::<f32>()
-            .sqrt();
-        assert!(group.error >= 0.5 * diagonal && group.error < f32::MAX);
-        let centre = glam::Vec3::new(group.sphere[0], group.sphere[1], group.sphere[2]);
-        for c in clusters.iter().filter(|c| c.group != proxy.group) {
+        let positions: Vec<[f32; 3]> = geometry.vertices.iter().map(|v| v.position).collect();
+        for stand_in in &stand_ins {
+            let start = stand_in.first_index as usize - built.indices.len();
+            let lod = &built.lod_indices[start..start + stand_in.index_count as usize];
+            let farthest = own
+                .iter()
+                .map(|&i| {
+                    let p = glam::Vec3::from(positions[i as usize]);
+                    lod.chunks_exact(3)
+                        .map(|t| {
+                            let [a, b, c] =
+                                [t[0], t[1], t[2]].map(|k| glam::Vec3::from(positions[k as usize]));
+                            p.distance(stand_ins::closest_on_triangle(p, a, b, c))
+                        })
+                        .fold(f32::MAX, f32::min)
+                })
+                .fold(0.0, f32::max);
+            let error = built.groups[stand_in.group as usize].error;
+            assert!(
+                error >= 2.0 * farthest * 0.999,
+                "{error} against {farthest}"
+            );
+        }
+        let centre = glam::Vec3::new(first_sphere[0], first_sphere[1], first_sphere[2]);
+        for c in clusters.iter().filter(|c| !is_stand_in(c)) {
             let other = &built.groups[c.group as usize];
-            assert!(other.error == f32::MAX || other.error <= group.error);
+            let finest = built.groups[stand_ins[0].group as usize].error;
+            assert!(other.error == f32::MAX || other.error <= finest);
             let [x, y, z, r] = other.sphere;
-            assert!(centre.distance(glam::Vec3::new(x, y, z)) + r <= group.sphere[3] * 1.0001);
+            assert!(centre.distance(glam::Vec3::new(x, y, z)) + r <= first_sphere[3] * 1.0001);
         }
         // A part whose coarsest cut is already a few triangles gets none.
         let smooth = fine_geometry();
         let built = build(&smooth.vertices, &smooth.indices, &smooth.parts);
         for &[first, count, _] in &built.part_ranges {
             let clusters = &built.clusters[first as usize..(first + count) as usize];
-            let has_proxy = clusters
+            let has_stand_ins = clusters
                 .iter()
                 .any(|c| built.groups[c.group as usize].depth == abi::CADR_CLUSTER_PROXY_DEPTH);
             let coarsest: usize = clusters
@@ -797,7 +785,7 @@ mod tests {
                 .filter(|c| built.groups[c.group as usize].error == f32::MAX)
                 .map(|c| c.index_count as usize / 3)
                 .sum();
-            assert_eq!(has_proxy, coarsest > PROXY_AFTER_TRIANGLES);
+            assert_eq!(has_stand_ins, coarsest > PROXY_AFTER_TRIANGLES);
         }
     }
 

@@ -21,6 +21,7 @@ mod clusters;
 mod compute;
 mod geometry;
 mod hierarchy;
+mod stand_ins;
 mod textures;
 mod upload;
 mod view_state;

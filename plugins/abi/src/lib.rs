@@ -56,7 +56,7 @@ use std::ffi::{c_char, c_void};
 /// Major version of this ABI: a library built for another major version is refused.
 pub const CADR_PLUGIN_ABI_MAJOR: u32 = 1;
 /// Minor version of this ABI: additions that older readers may ignore.
-pub const CADR_PLUGIN_ABI_MINOR: u32 = 16;
+pub const CADR_PLUGIN_ABI_MINOR: u32 = 17;
 /// `(major << 16) | minor`, what [`CadrPluginVersionFn`] returns.
 pub const CADR_PLUGIN_ABI_VERSION: u32 = (CADR_PLUGIN_ABI_MAJOR << 16) | CADR_PLUGIN_ABI_MINOR;
 
@@ -779,15 +779,16 @@ pub struct CadrSceneClusters {
 /// simplification.
 pub const CADR_CLUSTER_ORIGINAL: u32 = u32::MAX;
 
-/// Since ABI 1.16: [`CadrClusterGroup::depth`] of a part's proxy group, its last. The group
-/// holds one cluster, a few triangles standing for the whole part (an octahedron through its
-/// extreme vertices), and a finite `error` (at least half the diagonal of the part's box, and
-/// no less than any other group's of the part) measured from a sphere that holds every other
-/// group's: a culler that knows proxies draws the proxy alone, in place of the part's cut,
-/// when that error projects at or under its threshold (and never at threshold 0, nor in place
-/// of a part's coarsest clusters when a budget runs out). The proxy cluster's `refined` names
-/// one of the part's terminal groups (error `f32::MAX`), so that a culler that does not know
-/// proxies never draws it.
+/// Since ABI 1.16: [`CadrClusterGroup::depth`] of a part's proxy groups, its last. Each such
+/// group holds one cluster standing for the whole part (since 1.17 a part may have several:
+/// simplifications of the whole part, coarser one after the other, the last often an
+/// octahedron through its extreme vertices) and a finite `error` (no less than any error
+/// before it in the part) measured from one sphere that holds every other group's. A culler
+/// that knows proxies draws the last proxy whose error projects at or under its threshold,
+/// alone, in place of the part's cut (and none at threshold 0, nor in place of a part's
+/// coarsest clusters when a budget runs out). A proxy cluster's `refined` names one of the
+/// part's terminal groups (error `f32::MAX`), so that a culler that does not know proxies
+/// never draws it; a 1.16 culler draws only the last proxy, as before.
 pub const CADR_CLUSTER_PROXY_DEPTH: u32 = u32::MAX;
 
 /// Since ABI 1.14: one cluster of [`CadrSceneClusters::cluster_buffer`] (64 bytes,
@@ -864,7 +865,7 @@ pub struct CadrClusterGroup {
     /// not simplified further (its clusters are the part's coarsest).
     pub error: f32,
     /// Level in the DAG: 0 for groups of original clusters; [`CADR_CLUSTER_PROXY_DEPTH`] for a
-    /// part's proxy (since 1.16).
+    /// part's proxies (since 1.16).
     pub depth: u32,
     /// The group's first cluster in the cluster buffer: a group's clusters are contiguous,
     /// and a part's groups, in the group buffer, cover its clusters in order (a culler may

@@ -98,7 +98,7 @@ struct Group {
     uint cluster_count;
 };
 const uint CLUSTER_ORIGINAL = 0xffffffffu;
-// The depth of a part's proxy group (CADR_CLUSTER_PROXY_DEPTH): its last.
+// The depth of a part's stand-in groups (CADR_CLUSTER_PROXY_DEPTH): its last.
 const uint PROXY_DEPTH = 0xffffffffu;
 layout(set = 0, binding = 8, std430) readonly buffer Clusters { Cluster clusters[]; };
 layout(set = 0, binding = 9, std430) readonly buffer Groups { Group groups[]; };
@@ -349,21 +349,32 @@ uint walk_clusters(CullEntry entry, uint id, Placement place, bool back_faces_ma
     uint commands_made = 0u;
     uint run_first = 0u;
     uint run_count = 0u;
-    // A part's proxy, its last cluster, is drawn alone in place of its cut when the proxy's
-    // error projects at or under the threshold; otherwise it is not drawn (nor at full detail,
-    // nor in place of the coarsest clusters when the budget ran out).
+    // A part's stand-ins, its last clusters (each alone in a group of PROXY_DEPTH, errors
+    // growing toward the last), replace its whole cut: the coarsest whose error projects at or
+    // under the threshold is drawn alone. Otherwise none is drawn (nor at full detail, nor in
+    // place of the coarsest clusters when the budget ran out).
     uint first = entry.first_cluster;
     uint end = entry.first_cluster + count;
-    Group last_group = groups[clusters[end - 1u].group];
-    bool proxy_alone = false;
-    if (last_group.depth == PROXY_DEPTH) {
-        proxy_alone = threshold > 0.0 && threshold < COARSEST
-            && projected_error(last_group, place) <= threshold;
-        if (proxy_alone) {
-            first = end - 1u;
-        } else {
-            end -= 1u;
+    bool may_stand_in = threshold > 0.0 && threshold < COARSEST;
+    uint stand_ins = end;
+    uint chosen = end;
+    while (stand_ins > first + 1u) {
+        Group group = groups[clusters[stand_ins - 1u].group];
+        if (group.depth != PROXY_DEPTH) {
+            break;
         }
+        stand_ins -= 1u;
+        if (may_stand_in && projected_error(group, place) <= threshold) {
+            chosen = stand_ins;
+            break;
+        }
+    }
+    bool stand_in_alone = chosen != end;
+    if (stand_in_alone) {
+        first = chosen;
+        end = chosen + 1u;
+    } else {
+        end = stand_ins;
     }
     // Group by group (a part's groups cover its clusters in order): a group the cut leaves
     // out costs one test, not one per cluster.
@@ -374,13 +385,13 @@ uint walk_clusters(CullEntry entry, uint id, Placement place, bool back_faces_ma
             Group group = groups[group_index];
             group_index += 1u;
             group_end = group.first_cluster + max(group.cluster_count, 1u);
-            if (!proxy_alone && !group_in_cut(group, place, threshold)) {
+            if (!stand_in_alone && !group_in_cut(group, place, threshold)) {
                 k = max(k, group_end - 1u);
                 continue;
             }
         }
         Cluster cluster = clusters[k];
-        if (!proxy_alone && !in_cut(cluster, place, threshold)) {
+        if (!stand_in_alone && !in_cut(cluster, place, threshold)) {
             continue;
         }
         vec3 center = place.translation + place.rotation * cluster.sphere.xyz;

@@ -413,7 +413,11 @@ mod tests {
         // where the level still has many sides, within about 70 while it has 16 triangles or
         // more (past that, a triangle may cross the prism where no facet faces its way).
         for level in levels.iter().filter(|l| l.indices.len() / 3 >= 16) {
-            let least = if level.indices.len() / 3 >= 100 { 0.95 } else { 0.3 };
+            let least = if level.indices.len() / 3 >= 100 {
+                0.95
+            } else {
+                0.3
+            };
             for t in level.indices.chunks_exact(3) {
                 let [a, b, c] =
                     [t[0], t[1], t[2]].map(|i| Vec3::from(vertices[i as usize].position));

@@ -8,8 +8,9 @@ use std::sync::Arc;
 use cadr_core::shaders::compile_glsl;
 use cadr_core::vk::{
     begin_rendering, draw_mesh_tasks, draw_mesh_tasks_indirect_count, end_rendering, raw as vk,
-    Buffer, ColorTarget, DepthUse, Device, MemoryLocation, MeshPipelineDesc, OffscreenTarget,
-    OneShot, Pipeline, PipelineLayout, RenderingTarget, ShaderModule, ShaderStage, COLOR_FORMAT,
+    Buffer, ColorTarget, DepthSharing, DepthUse, Device, MemoryLocation, MeshPipelineDesc,
+    OffscreenTarget, OneShot, Pipeline, PipelineLayout, RenderingTarget, ShaderModule, ShaderStage,
+    COLOR_FORMAT,
 };
 use cadr_tests::{assert_no_validation_errors, test_device};
 
@@ -85,7 +86,7 @@ fn covered_columns(
     pipeline: &Pipeline,
     draw: impl FnOnce(vk::CommandBuffer),
 ) -> Vec<bool> {
-    let target = OffscreenTarget::new(device, SIZE, SIZE, 1).expect("target");
+    let target = OffscreenTarget::new(device, (SIZE, SIZE), 1, DepthSharing::Own).expect("target");
     let extent = vk::Extent2D {
         width: SIZE,
         height: SIZE,

@@ -149,6 +149,73 @@ fn far_from_origin_scene_renders_like_one_at_the_origin() {
     assert!(difference.within(DEFAULT_TOLERANCE), "{difference:?}");
 }
 
+/// Renderers of one size on one device share their depth (a frame's depth is of no use after
+/// it), so several views hold one: each still draws the picture it draws alone, frames in
+/// flight interleaved, and a renderer whose frames hand the depth to the host keeps its own,
+/// which another renderer's frame leaves as it was.
+#[test]
+fn renderers_of_one_size_share_their_depth_and_a_kept_depth_stays_their_own() {
+    use cadr_core::render::pick::PixelRect;
+    let device = test_device();
+    let scene = load_file(Path::new(CYLINDER_ENGINE_GLB)).unwrap();
+    let allocated = || device.memory_usage().allocated_bytes;
+    let mut front = cadr_tests::SceneView::fitted(Arc::clone(&device), &scene, (96, 72));
+    let alone_front = front.render();
+    let mut side = cadr_tests::SceneView::fitted(Arc::clone(&device), &scene, (96, 72));
+    side.camera = Camera::orbit(&flatten(&scene).unwrap().bounds, 96.0 / 72.0, 0.25, 1.5);
+    let alone_side = side.render();
+    let depth_bytes = 96 * 72 * 4_u64;
+    assert_ne!(alone_front, alone_side, "two different pictures");
+    // Interleaved, frames in flight: each its own picture.
+    for view in [&mut front, &mut side] {
+        view.view.renderer_mut().set_frames_in_flight(3).unwrap();
+    }
+    for _ in 0..3 {
+        assert_eq!(front.render(), alone_front);
+        assert_eq!(side.render(), alone_side);
+    }
+    // A kept depth is the renderer's own: another renderer's frame between the frame and the
+    // read leaves it as picking finds it.
+    for view in [&mut front, &mut side] {
+        view.view.renderer_mut().set_frames_in_flight(1).unwrap();
+    }
+    let sharing = allocated();
+    front.view.renderer_mut().set_depth_to_host(true).unwrap();
+    let own_depth = allocated() - sharing;
+    assert!(
+        own_depth >= depth_bytes,
+        "a depth of its own: {own_depth} bytes"
+    );
+    front.render();
+    side.render();
+    let depth = front.view.renderer().read_depth().unwrap();
+    front.view.sync(&front.graph, &mut front.tree).unwrap();
+    let mut hits = 0;
+    for (x, y) in (0..12).flat_map(|i| (0..9).map(move |j| (4 + 8 * i, 4 + 8 * j))) {
+        let picked = front
+            .view
+            .pick(&front.tree, &front.camera, PixelRect::pixel(x, y))
+            .unwrap();
+        let value = depth[(y * 96 + x) as usize];
+        match picked.first() {
+            Some(hit) => {
+                assert!((value - hit.depth).abs() < 1e-4, "({x}, {y})");
+                hits += 1;
+            }
+            None => assert_eq!(value, 1.0, "({x}, {y})"),
+        }
+    }
+    assert!(hits > 20);
+    // Back to sharing: the own depth is given up (with the pick target, made again on the
+    // next pick).
+    let kept = allocated();
+    front.view.renderer_mut().set_depth_to_host(false).unwrap();
+    assert!(allocated() + own_depth <= kept);
+    assert_eq!(front.render(), alone_front);
+    side.assert_no_validation_errors();
+    front.assert_no_validation_errors();
+}
+
 /// A host compositing its own drawing with cadr's frames gets each colour frame's depth
 /// (`Renderer::depth_for_host`): where a part shows, the depth picking finds there, and 1 where
 /// nothing is drawn; with plain frames, with ambient occlusion (whose pass reads the depth as

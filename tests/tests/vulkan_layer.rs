@@ -2,7 +2,8 @@
 //! images, all with validation on.
 
 use cadr_core::vk::{
-    raw as vk, read_image, Buffer, DeviceChoice, Image, MemoryLocation, OffscreenTarget,
+    raw as vk, read_image, Buffer, DepthSharing, DeviceChoice, Image, MemoryLocation,
+    OffscreenTarget,
 };
 use cadr_tests::{assert_no_validation_errors, test_device};
 
@@ -113,21 +114,23 @@ fn device_choice_by_name_and_index() {
 #[test]
 fn offscreen_target_sizes_are_checked() {
     let device = test_device();
-    let error = OffscreenTarget::new(&device, 0, 10, 1)
+    let error = OffscreenTarget::new(&device, (0, 10), 1, DepthSharing::Own)
         .err()
         .expect("zero width is refused");
     assert!(error.to_string().contains("0x10"), "{error}");
-    let target = OffscreenTarget::new(&device, 3, 2, 1).expect("a tiny target");
+    let target =
+        OffscreenTarget::new(&device, (3, 2), 1, DepthSharing::Own).expect("a tiny target");
     assert_eq!((target.extent().width, target.extent().height), (3, 2));
     assert_eq!(target.samples(), 1);
     // Every device offers one sample; 3 is no sample count at all.
     assert_eq!(device.sample_counts().first(), Some(&1));
-    let error = OffscreenTarget::new(&device, 4, 4, 3)
+    let error = OffscreenTarget::new(&device, (4, 4), 3, DepthSharing::Own)
         .err()
         .expect("3 samples per pixel are refused");
     assert!(error.to_string().contains("3 samples per pixel"), "{error}");
     for &samples in device.sample_counts().iter().skip(1) {
-        let target = OffscreenTarget::new(&device, 4, 4, samples).expect("an MSAA target");
+        let target = OffscreenTarget::new(&device, (4, 4), samples, DepthSharing::Own)
+            .expect("an MSAA target");
         assert_eq!(target.samples(), samples);
     }
     assert_no_validation_errors(&device);

@@ -32,7 +32,9 @@ use crate::render::transparency::{storage_buffer, TransparencyTargets};
 use crate::render::{
     Background, HighlightStyle, Palette, Pipelines, Section, TEXTURE_TABLE_BINDING,
 };
-use crate::vk::{Buffer, DescriptorSets, Device, Image, MemoryLocation, OffscreenTarget};
+use crate::vk::{
+    Buffer, DepthSharing, DescriptorSets, Device, Image, MemoryLocation, OffscreenTarget,
+};
 use slots::{FrameSlots, CULL_VIEW_STRIDE};
 
 /// Renders scenes into an offscreen color + depth target.
@@ -99,7 +101,8 @@ struct OnDemandTargets {
 impl Renderer {
     /// Creates a renderer with a `width` × `height` target.
     pub fn new(device: &Arc<Device>, width: u32, height: u32) -> RenderResult<Self> {
-        let target = OffscreenTarget::new(device, width, height, 1)?;
+        // A new renderer hands no depth to the host: it shares the device's depth.
+        let target = OffscreenTarget::new(device, (width, height), 1, DepthSharing::Shared)?;
         let pipelines = Pipelines::new(device, passes::OVERLAY_PASSES.len())?;
         let slots = FrameSlots::new(device)?;
         let layouts = vec![pipelines.frame_set_layout(); slots.all().len()];
@@ -194,11 +197,26 @@ impl Renderer {
     pub fn set_depth_to_host(&mut self, on: bool) -> RenderResult<()> {
         if on != self.settings.depth_to_host {
             self.finish()?;
-            // The recorded frame has (or lacks) the pass that hands the depth over.
+            // The recorded frame has (or lacks) the pass that hands the depth over, and draws
+            // into the depth this renderer is about to leave.
             self.forget_recording();
             self.settings.depth_to_host = on;
+            self.target.set_depth_sharing(self.depth_sharing())?;
+            self.depth_readable = false;
+            self.on_demand.depth_set = None;
+            self.on_demand.pick = None;
         }
         Ok(())
+    }
+
+    /// Whether the target's depth is shared with the device's other renderers of its size:
+    /// unless frames hand it to the host, a frame's depth is of no use after the frame.
+    fn depth_sharing(&self) -> DepthSharing {
+        if self.settings.depth_to_host {
+            DepthSharing::Own
+        } else {
+            DepthSharing::Shared
+        }
     }
 
     /// The depth of the last colour frame when frames keep it for the host
@@ -373,7 +391,12 @@ impl Renderer {
         self.finish()?;
         // The recorded frame draws into the old target: never submit it again.
         self.forget_recording();
-        self.target = OffscreenTarget::new(&self.device, width, height, self.msaa())?;
+        self.target = OffscreenTarget::new(
+            &self.device,
+            (width, height),
+            self.msaa(),
+            self.depth_sharing(),
+        )?;
         self.depth_readable = false;
         self.on_demand.depth_set = None;
         self.on_demand.pick = None;
@@ -410,7 +433,8 @@ impl Renderer {
         // The recorded frame draws into the old target: never submit it again.
         self.forget_recording();
         let (width, height) = self.size();
-        self.target = OffscreenTarget::new(&self.device, width, height, samples)?;
+        self.target =
+            OffscreenTarget::new(&self.device, (width, height), samples, self.depth_sharing())?;
         self.depth_readable = false;
         self.on_demand.depth_set = None;
         self.on_demand.pick = None;

@@ -1,4 +1,4 @@
-//! Images and the offscreen color + depth target, with readback to RGBA8.
+//! Images: attachments, textures, their layout transitions and readback.
 
 use super::host_memory::core_callbacks as host_callbacks;
 use std::sync::Arc;
@@ -489,110 +489,6 @@ pub(super) fn record_image_copy_into(
 pub const COLOR_FORMAT: vk::Format = vk::Format::R8G8B8A8_UNORM;
 /// The depth format of offscreen targets.
 pub const DEPTH_FORMAT: vk::Format = vk::Format::D32_SFLOAT;
-
-/// An offscreen color + depth target that can be read back.
-pub struct OffscreenTarget {
-    /// The color attachment (left in TRANSFER_SRC_OPTIMAL after a frame): the picture, into
-    /// which a multisampled colour pass resolves.
-    pub color: Image,
-    /// The depth attachment: the pick pass's, and what a multisampled colour pass resolves
-    /// its depth into for GPU cullers to read between phases.
-    pub depth: Image,
-    /// With MSAA, what the colour pass draws into before it is resolved.
-    pub multisampled: Option<MultisampledTarget>,
-}
-
-/// The multisampled colour and depth attachments of an MSAA colour pass.
-pub struct MultisampledTarget {
-    /// Resolved (averaged) into [`OffscreenTarget::color`].
-    pub color: Image,
-    /// Resolved into [`OffscreenTarget::depth`] with [`Device::depth_resolve_mode`].
-    pub depth: Image,
-}
-
-impl OffscreenTarget {
-    /// Creates a target of `width` × `height` pixels whose colour pass draws `samples` samples
-    /// per pixel (1: no multisampling; others must be in [`Device::sample_counts`]).
-    pub fn new(device: &Arc<Device>, width: u32, height: u32, samples: u32) -> VkResult<Self> {
-        let limit = device.limits().max_image_dimension2_d;
-        if width == 0 || height == 0 || width > limit || height > limit {
-            return Err(VkError::Unsupported {
-                device: device.adapter().name.clone(),
-                reason: format!("a {width}x{height} target (each side must be 1 to {limit})"),
-            });
-        }
-        let offered = device.sample_counts();
-        if !offered.contains(&samples) {
-            return Err(VkError::Unsupported {
-                device: device.adapter().name.clone(),
-                reason: format!("{samples} samples per pixel (this device offers {offered:?})"),
-            });
-        }
-        let extent = vk::Extent2D { width, height };
-        let color = Image::new(
-            device,
-            "offscreen color",
-            extent,
-            COLOR_FORMAT,
-            vk::ImageUsageFlags::COLOR_ATTACHMENT | vk::ImageUsageFlags::TRANSFER_SRC,
-            vk::ImageAspectFlags::COLOR,
-        )?;
-        let depth = Image::new(
-            device,
-            "offscreen depth",
-            extent,
-            DEPTH_FORMAT,
-            // Read back under the cursor by the pick pass; sampled by GPU occlusion culling
-            // between the phases of a frame.
-            vk::ImageUsageFlags::DEPTH_STENCIL_ATTACHMENT
-                | vk::ImageUsageFlags::TRANSFER_SRC
-                | vk::ImageUsageFlags::SAMPLED,
-            vk::ImageAspectFlags::DEPTH,
-        )?;
-        let multisampled = if samples > 1 {
-            Some(MultisampledTarget {
-                color: Image::multisampled(
-                    device,
-                    "offscreen color (multisampled)",
-                    (extent, samples),
-                    COLOR_FORMAT,
-                    vk::ImageUsageFlags::COLOR_ATTACHMENT,
-                    vk::ImageAspectFlags::COLOR,
-                )?,
-                depth: Image::multisampled(
-                    device,
-                    "offscreen depth (multisampled)",
-                    (extent, samples),
-                    DEPTH_FORMAT,
-                    vk::ImageUsageFlags::DEPTH_STENCIL_ATTACHMENT,
-                    vk::ImageAspectFlags::DEPTH,
-                )?,
-            })
-        } else {
-            None
-        };
-        Ok(Self {
-            color,
-            depth,
-            multisampled,
-        })
-    }
-
-    /// Samples per pixel of the colour pass.
-    pub fn samples(&self) -> u32 {
-        self.multisampled.as_ref().map_or(1, |m| m.color.samples())
-    }
-
-    /// Width and height in pixels.
-    pub fn extent(&self) -> vk::Extent2D {
-        self.color.extent()
-    }
-
-    /// Copies the color image (in TRANSFER_SRC_OPTIMAL) to the host as tightly packed RGBA8 rows.
-    pub fn read_rgba8(&self, device: &Arc<Device>) -> VkResult<Vec<u8>> {
-        read_image(device, &self.color, vk::ImageLayout::TRANSFER_SRC_OPTIMAL)
-    }
-}
 
 /// One image for [`Image::many_with_texels`].
 #[derive(Clone, Copy, Debug)]

@@ -20,6 +20,7 @@ pub mod host_vulkan;
 mod image;
 mod instance;
 mod mesh;
+mod offscreen;
 mod pipeline;
 mod pipeline_cache;
 mod rendering;
@@ -40,13 +41,14 @@ pub use frame_blit::{BlitTarget, HostImage, ImageOutput};
 pub use frame_export::FrameExport;
 pub use image::{
     memory_barrier, read_image, record_image_copy, subresource_range, transition, transition_range,
-    Image, ImageShape, MultisampledTarget, OffscreenTarget, TexelImage, COLOR_FORMAT, DEPTH_FORMAT,
+    Image, ImageShape, TexelImage, COLOR_FORMAT, DEPTH_FORMAT,
 };
 pub use instance::{Instance, InstanceOptions, ValidationLog, ValidationMessage};
 pub use mesh::{
     draw_mesh_tasks, draw_mesh_tasks_indirect_count, MeshPipelineDesc,
     DRAW_MESH_TASKS_COMMAND_BYTES,
 };
+pub use offscreen::{DepthSharing, MultisampledTarget, OffscreenTarget};
 pub use pipeline::{
     Blend, ColorTarget, DepthUse, DescriptorSetLayout, DescriptorSets, GraphicsPipelineDesc,
     LayoutBinding, Pipeline, PipelineLayout, VertexLayout,

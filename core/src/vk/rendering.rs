@@ -152,14 +152,18 @@ fn transition_for_rendering(
             vk::AccessFlags2::SHADER_SAMPLED_READ,
         )
     } else {
-        // The last pick's depth readback may still be running, or the last frame's resolve
-        // or ambient occlusion.
+        // Whatever used the depth last, this target's frame or another's that shares it
+        // (`offscreen.rs`), may still be running: its depth tests and writes, its resolve, a
+        // pick's readback, a GPU culler's pyramid or ambient occlusion reading it.
         (
             vk::ImageLayout::UNDEFINED,
             vk::PipelineStageFlags2::COPY
                 | vk::PipelineStageFlags2::FRAGMENT_SHADER
+                | vk::PipelineStageFlags2::COMPUTE_SHADER
+                | vk::PipelineStageFlags2::EARLY_FRAGMENT_TESTS
+                | vk::PipelineStageFlags2::LATE_FRAGMENT_TESTS
                 | DEPTH_RESOLVE_WRITE.0,
-            vk::AccessFlags2::NONE,
+            vk::AccessFlags2::DEPTH_STENCIL_ATTACHMENT_WRITE | DEPTH_RESOLVE_WRITE.1,
         )
     };
     let depth_attachment_use = (

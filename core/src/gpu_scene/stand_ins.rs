@@ -146,10 +146,14 @@ fn welded_levels(
     let scale = meshopt::simplify_scale(&welded_adapter);
     let mut target = coarsest / 2;
     let mut levels = Vec::new();
+    // Each level is simplified from the one before (the part itself costs one
+    // simplification, not one per level); its error is measured against the part.
+    let mut current = welded;
+    let mut simplification_error = 0.0;
     while target >= 8 {
         let mut relative_error = 0.0;
         let simplified = meshopt::simplify(
-            &welded,
+            &current,
             &welded_adapter,
             target * 3,
             1.0,
@@ -166,8 +170,10 @@ fn welded_levels(
         // cut down to a few sides is off by its sagitta, which only the part's own vertices
         // show. A level made of the part's own vertices lies within its outline, which then
         // loses that distance on each side: the error counts it twice.
+        simplification_error += relative_error * scale;
         let strayed = farthest_from(&welded_positions, &simplified);
-        levels.push((level, (relative_error * scale).max(2.0 * strayed)));
+        levels.push((level, simplification_error.max(2.0 * strayed)));
+        current = simplified;
         target = target.min(reached) / 2;
     }
     levels
@@ -175,7 +181,7 @@ fn welded_levels(
 
 /// The most part positions whose distance to a level is measured: past it, evenly spaced ones
 /// (large parts cost a distance per position and triangle).
-const MEASURED_POSITIONS: usize = 4096;
+const MEASURED_POSITIONS: usize = 2048;
 
 /// How far the farthest of `positions` (up to [`MEASURED_POSITIONS`] of them, evenly spaced) is
 /// from the triangles `indices` (into `positions`).

@@ -881,7 +881,8 @@ typedef struct CadrRendererSettings {
   // annotations): a renderer made by `cadr_renderer_create_for_export` exports it after the
   // colour (`CadrExportedFrame::depth_offset`; applying a change gives the frames new
   // memory, of a new `generation`: import it again), and any renderer's can be read back
-  // with `cadr_renderer_read_depth`. It costs a depth store (and a copy) per frame. Since
+  // with `cadr_renderer_read_depth`. It costs a depth store (and a copy) per frame, and a
+  // depth image of the renderer's own (renderers of one size otherwise share one). Since
   // 1.1.
   bool depth_to_host;
 } CadrRendererSettings;

@@ -11,14 +11,14 @@
 //!   vertex at that position whose normal best matches the triangle's: the facets keep their
 //!   own normals, and no vertex is added.
 //! - **The octahedron** through the part's extreme vertices along each axis, last, where it
-//!   has fewer triangles than the last welded level. Its error is half the diagonal of the
-//!   part's box.
+//!   has fewer triangles than the last welded level. Its error is at least half the diagonal
+//!   of the part's box.
 //!
 //! Each stand-in's error (in the part's units) is twice the farthest any of the part's
 //! positions is from it (the outline loses that much on each side), at least the
-//! simplification's own estimate and no less than the errors before it, all measured from one sphere around every group of the part: so a culler
-//! that draws the coarsest stand-in whose error projects under its threshold picks one level,
-//! seen from anywhere.
+//! simplification's own estimate, and no less than the errors before it; all are measured
+//! from one sphere around every group of the part. So a culler that draws the coarsest
+//! stand-in whose error projects under its threshold picks one level, seen from anywhere.
 
 use meshopt::{SimplifyOptions, VertexDataAdapter};
 

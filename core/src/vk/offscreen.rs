@@ -19,7 +19,8 @@ use super::image::{read_image, Image, COLOR_FORMAT, DEPTH_FORMAT};
 /// Whether a target's depth is its own or shared with the other targets of its device and size.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum DepthSharing {
-    /// Shared: what a frame draws into it lasts until the next frame of any target shares it.
+    /// Shared: what a frame draws into it lasts until the next frame of any target that
+    /// shares it.
     Shared,
     /// Its own: it keeps a frame's depth until the target's next frame (for the host to read).
     Own,

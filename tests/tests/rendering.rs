@@ -149,12 +149,13 @@ fn far_from_origin_scene_renders_like_one_at_the_origin() {
     assert!(difference.within(DEFAULT_TOLERANCE), "{difference:?}");
 }
 
-/// Renderers of one size on one device share their depth (a frame's depth is of no use after
-/// it), so several views hold one: each still draws the picture it draws alone, frames in
-/// flight interleaved, and a renderer whose frames hand the depth to the host keeps its own,
-/// which another renderer's frame leaves as it was.
+/// Renderers of one size on one device share their depth and, with MSAA, their multisampled
+/// attachments (what a frame draws there is of no use after it), so several views hold one
+/// set: each still draws the picture it draws alone, frames in flight interleaved, and a
+/// renderer whose frames hand the depth to the host keeps its own, which another renderer's
+/// frame leaves as it was.
 #[test]
-fn renderers_of_one_size_share_their_depth_and_a_kept_depth_stays_their_own() {
+fn renderers_of_one_size_share_their_depth_and_msaa_and_a_kept_depth_stays_their_own() {
     use cadr_core::render::pick::PixelRect;
     let device = test_device();
     let scene = load_file(Path::new(CYLINDER_ENGINE_GLB)).unwrap();
@@ -173,6 +174,27 @@ fn renderers_of_one_size_share_their_depth_and_a_kept_depth_stays_their_own() {
     for _ in 0..3 {
         assert_eq!(front.render(), alone_front);
         assert_eq!(side.render(), alone_side);
+    }
+    // With MSAA they share the multisampled attachments too: the second renderer's come at
+    // no cost, and the pictures stay each renderer's own.
+    if device.sample_counts().contains(&4) {
+        front.view.renderer_mut().set_msaa(4).unwrap();
+        let msaa_front = front.render();
+        let before_msaa = allocated();
+        side.view.renderer_mut().set_msaa(4).unwrap();
+        let grew = allocated().saturating_sub(before_msaa);
+        assert!(
+            grew < 4 * depth_bytes,
+            "the second renderer's MSAA took {grew} bytes, a multisampled image's worth or more"
+        );
+        let msaa_side = side.render();
+        for _ in 0..3 {
+            assert_eq!(front.render(), msaa_front);
+            assert_eq!(side.render(), msaa_side);
+        }
+        for view in [&mut front, &mut side] {
+            view.view.renderer_mut().set_msaa(1).unwrap();
+        }
     }
     // A kept depth is the renderer's own: another renderer's frame between the frame and the
     // read leaves it as picking finds it.

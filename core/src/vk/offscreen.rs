@@ -1,12 +1,14 @@
-//! The offscreen colour + depth target a renderer draws into, and the depth images that
+//! The offscreen colour + depth target a renderer draws into, and the attachments that
 //! targets of one device share.
 //!
 //! A frame clears its depth and uses it only until it ends (the pick pass, the GPU cullers'
-//! phases, ambient occlusion and the edges read it inside the frame), so the targets of one
-//! size on one device can share one depth image: frames are submitted to the device's one
-//! queue, and each frame's first use of the depth waits for every earlier depth test and
-//! write (`rendering.rs`). Four views of one scene then hold one depth, not four. A target
-//! whose depth outlives its frame (handed to the host, `DepthSharing::Own`) keeps its own.
+//! phases, ambient occlusion and the edges read it inside the frame), and the same holds for
+//! the multisampled colour and depth an MSAA colour pass draws into before it resolves them.
+//! So the targets of one size (and samples) on one device share them: frames are submitted to
+//! the device's one queue, and each frame's first use of an attachment waits for everything
+//! earlier frames did with it (`rendering.rs`). Four views of one scene then hold one depth,
+//! not four. A target whose depth outlives its frame (handed to the host,
+//! `DepthSharing::Own`) keeps its own; only its colour, the picture, is always its own.
 
 use std::sync::{Arc, Mutex, PoisonError, Weak};
 
@@ -30,21 +32,71 @@ pub enum DepthSharing {
 /// holds it.
 static SHARED_DEPTHS: Mutex<Vec<Weak<Image>>> = Mutex::new(Vec::new());
 
+/// The shared multisampled attachments of every device, as [`SHARED_DEPTHS`].
+static SHARED_MULTISAMPLED: Mutex<Vec<Weak<MultisampledTarget>>> = Mutex::new(Vec::new());
+
+/// What `registry` holds that `fits`, or what `make` makes, registered.
+fn shared<T>(
+    registry: &Mutex<Vec<Weak<T>>>,
+    fits: impl Fn(&T) -> bool,
+    make: impl FnOnce() -> VkResult<T>,
+) -> VkResult<Arc<T>> {
+    let mut held = registry.lock().unwrap_or_else(PoisonError::into_inner);
+    held.retain(|item| item.strong_count() > 0);
+    if let Some(item) = held
+        .iter()
+        .filter_map(Weak::upgrade)
+        .find(|item| fits(item))
+    {
+        return Ok(item);
+    }
+    let item = Arc::new(make()?);
+    held.push(Arc::downgrade(&item));
+    Ok(item)
+}
+
 /// The one-sample depth image of `extent` that targets of `device` share, made when none
 /// is held.
 fn shared_depth(device: &Arc<Device>, extent: vk::Extent2D) -> VkResult<Arc<Image>> {
-    let mut shared = SHARED_DEPTHS.lock().unwrap_or_else(PoisonError::into_inner);
-    shared.retain(|image| image.strong_count() > 0);
-    let held = shared
-        .iter()
-        .filter_map(Weak::upgrade)
-        .find(|image| Arc::ptr_eq(image.device(), device) && image.extent() == extent);
-    if let Some(image) = held {
-        return Ok(image);
-    }
-    let image = Arc::new(depth_image(device, "offscreen depth (shared)", extent)?);
-    shared.push(Arc::downgrade(&image));
-    Ok(image)
+    shared(
+        &SHARED_DEPTHS,
+        |image| Arc::ptr_eq(image.device(), device) && image.extent() == extent,
+        || depth_image(device, "offscreen depth (shared)", extent),
+    )
+}
+
+/// The multisampled attachments of `extent` and `samples` that targets of `device` share,
+/// made when none are held.
+fn shared_multisampled(
+    device: &Arc<Device>,
+    extent: vk::Extent2D,
+    samples: u32,
+) -> VkResult<Arc<MultisampledTarget>> {
+    let fits = |target: &MultisampledTarget| {
+        Arc::ptr_eq(target.color.device(), device)
+            && target.color.extent() == extent
+            && target.color.samples() == samples
+    };
+    shared(&SHARED_MULTISAMPLED, fits, || {
+        Ok(MultisampledTarget {
+            color: Image::multisampled(
+                device,
+                "offscreen color (multisampled, shared)",
+                (extent, samples),
+                COLOR_FORMAT,
+                vk::ImageUsageFlags::COLOR_ATTACHMENT,
+                vk::ImageAspectFlags::COLOR,
+            )?,
+            depth: Image::multisampled(
+                device,
+                "offscreen depth (multisampled, shared)",
+                (extent, samples),
+                DEPTH_FORMAT,
+                vk::ImageUsageFlags::DEPTH_STENCIL_ATTACHMENT,
+                vk::ImageAspectFlags::DEPTH,
+            )?,
+        })
+    })
 }
 
 /// A one-sample depth attachment of `extent` as targets use it.
@@ -84,8 +136,9 @@ pub struct OffscreenTarget {
     /// its depth into for GPU cullers to read between phases; shared with the device's other
     /// targets of its size unless made with [`DepthSharing::Own`].
     pub depth: Arc<Image>,
-    /// With MSAA, what the colour pass draws into before it is resolved.
-    pub multisampled: Option<MultisampledTarget>,
+    /// With MSAA, what the colour pass draws into before it is resolved; shared with the
+    /// device's other targets of its size and samples.
+    pub multisampled: Option<Arc<MultisampledTarget>>,
 }
 
 /// The multisampled colour and depth attachments of an MSAA colour pass.
@@ -131,24 +184,7 @@ impl OffscreenTarget {
         )?;
         let depth = target_depth(device, extent, sharing)?;
         let multisampled = if samples > 1 {
-            Some(MultisampledTarget {
-                color: Image::multisampled(
-                    device,
-                    "offscreen color (multisampled)",
-                    (extent, samples),
-                    COLOR_FORMAT,
-                    vk::ImageUsageFlags::COLOR_ATTACHMENT,
-                    vk::ImageAspectFlags::COLOR,
-                )?,
-                depth: Image::multisampled(
-                    device,
-                    "offscreen depth (multisampled)",
-                    (extent, samples),
-                    DEPTH_FORMAT,
-                    vk::ImageUsageFlags::DEPTH_STENCIL_ATTACHMENT,
-                    vk::ImageAspectFlags::DEPTH,
-                )?,
-            })
+            Some(shared_multisampled(device, extent, samples)?)
         } else {
             None
         };

@@ -301,13 +301,15 @@ fn begin_multisampled(
         color_stage,
         vk::AccessFlags2::COLOR_ATTACHMENT_WRITE | vk::AccessFlags2::COLOR_ATTACHMENT_READ,
     );
+    // Fresh: after whatever drew into or resolved from them last, this target's frame or
+    // another's that shares them (`offscreen.rs`).
     let color_before = if resume {
         color_use
     } else {
         (
             vk::ImageLayout::UNDEFINED,
             color_stage,
-            vk::AccessFlags2::NONE,
+            vk::AccessFlags2::COLOR_ATTACHMENT_WRITE,
         )
     };
     for image in
@@ -337,7 +339,7 @@ fn begin_multisampled(
         (
             vk::ImageLayout::UNDEFINED,
             depth_stages,
-            vk::AccessFlags2::NONE,
+            vk::AccessFlags2::DEPTH_STENCIL_ATTACHMENT_WRITE,
         )
     };
     transition(

@@ -10,7 +10,7 @@ use std::sync::Arc;
 use cadr_core::graph::SceneGraph;
 use cadr_core::render::{Background, Camera, DEFAULT_DIRECTION};
 use cadr_core::scene::{flatten, Scene};
-use cadr_core::technique::{feature_bits, PluginRegistry};
+use cadr_core::technique::{feature_bits, PluginRegistry, ShadeMode};
 use cadr_core::tree::SceneTree;
 use cadr_core::view::View;
 use cadr_tests::fixtures::{scratch_dir, CubeGltf};
@@ -149,13 +149,13 @@ fn far_from_origin_scene_renders_like_one_at_the_origin() {
     assert!(difference.within(DEFAULT_TOLERANCE), "{difference:?}");
 }
 
-/// Renderers of one size on one device share their depth and, with MSAA, their multisampled
-/// attachments (what a frame draws there is of no use after it), so several views hold one
-/// set: each still draws the picture it draws alone, frames in flight interleaved, and a
+/// Renderers of one size on one device share their depth, with MSAA their multisampled
+/// attachments, and the transparency method's targets and storage (what a frame draws there is
+/// of no use after it), so several views hold one set: each still draws the picture it draws alone, frames in flight interleaved, and a
 /// renderer whose frames hand the depth to the host keeps its own, which another renderer's
 /// frame leaves as it was.
 #[test]
-fn renderers_of_one_size_share_their_depth_and_msaa_and_a_kept_depth_stays_their_own() {
+fn renderers_of_one_size_share_their_frame_attachments_and_a_kept_depth_stays_their_own() {
     use cadr_core::render::pick::PixelRect;
     let device = test_device();
     let scene = load_file(Path::new(CYLINDER_ENGINE_GLB)).unwrap();
@@ -196,6 +196,28 @@ fn renderers_of_one_size_share_their_depth_and_msaa_and_a_kept_depth_stays_their
             view.view.renderer_mut().set_msaa(1).unwrap();
         }
     }
+    // Translucent surfaces (X-ray: every part) share the transparency method's targets and
+    // storage the same way.
+    let xray = |view: &mut cadr_tests::SceneView, mode| {
+        view.view.techniques_mut().set_shade_mode(mode).unwrap();
+        let before = allocated();
+        let picture = view.render();
+        (picture, allocated().saturating_sub(before))
+    };
+    let (xray_front, front_grew) = xray(&mut front, ShadeMode::XRay);
+    let (xray_side, side_grew) = xray(&mut side, ShadeMode::XRay);
+    // Weighted blended: RGBA16F and R16F targets.
+    let targets_bytes = 96 * 72 * (8 + 2);
+    assert!(
+        side_grew + targets_bytes <= front_grew,
+        "the second renderer's X-ray took {side_grew} bytes, the first's {front_grew}"
+    );
+    for _ in 0..3 {
+        assert_eq!(front.render(), xray_front);
+        assert_eq!(side.render(), xray_side);
+    }
+    xray(&mut front, ShadeMode::Solid);
+    xray(&mut side, ShadeMode::Solid);
     // A kept depth is the renderer's own: another renderer's frame between the frame and the
     // read leaves it as picking finds it.
     for view in [&mut front, &mut side] {

@@ -428,8 +428,8 @@ impl Renderer {
         if let Some((targets, _)) = inputs.merge {
             self.record_storage_clear(
                 command_buffer,
-                &targets.storage,
-                (0, targets.cleared_bytes),
+                &targets.attachments.storage,
+                (0, targets.attachments.cleared_bytes),
                 0,
             );
         }
@@ -456,10 +456,17 @@ impl Renderer {
         let command_buffer = inputs.command_buffer;
         let transparency = inputs.merge.map(|(targets, _)| targets);
         let extra_colors: Vec<(&Image, vk::ClearColorValue)> = transparency
-            .map(|t| t.images.iter().zip(t.clears.iter().copied()).collect())
+            .map(|t| {
+                let shared = &t.attachments;
+                shared
+                    .images
+                    .iter()
+                    .zip(shared.clears.iter().copied())
+                    .collect()
+            })
             .unwrap_or_default();
         let multisampled_extra_colors: Vec<&Image> = transparency
-            .map(|t| t.multisampled_images.iter().collect())
+            .map(|t| t.attachments.multisampled_images.iter().collect())
             .unwrap_or_default();
         let phase = rendering.phase;
         let target = self.pass_target(
@@ -583,7 +590,7 @@ impl Renderer {
             (extent, samples),
             self.pipelines.merge_set_layout(),
         )?;
-        name_storage(&self.frame_sets, &targets.storage);
+        name_storage(&self.frame_sets, &targets.attachments.storage);
         self.on_demand.transparency = Some(targets);
         Ok(())
     }

@@ -1,14 +1,18 @@
 //! What a frame with translucent surfaces needs besides its picture: the transparency method's
 //! colour targets at the frame's size, its storage buffer (part of the frame set, binding 1)
 //! and the merge's descriptor set that reads the targets. Made when a method or size first
-//! needs them, kept while both stay the same.
+//! needs them, kept while both stay the same; the targets and storage are shared by the
+//! renderers of one device that draw with the same method at the same size, as the depth is
+//! (`vk/offscreen.rs`).
 
 use std::sync::Arc;
 
 use crate::error::RenderResult;
 use crate::shaders;
 use crate::vk::raw as vk;
-use crate::vk::{Buffer, DescriptorSetLayout, DescriptorSets, Device, Image, MemoryLocation};
+use crate::vk::{
+    Buffer, DescriptorSetLayout, DescriptorSets, Device, Image, MemoryLocation, Shared,
+};
 use cadr_plugin_abi as abi;
 
 /// A transparency method as its technique described it (`CadrTransparencyMethod`), owned.
@@ -71,8 +75,13 @@ impl TransparencyMethod {
 /// storage (a binding must name a buffer).
 pub(crate) const PLACEHOLDER_STORAGE_BYTES: u64 = 16;
 
-/// The targets, storage and merge set of one transparency method at one size.
-pub(crate) struct TransparencyTargets {
+/// The targets and storage of one transparency method at one size and sample count: what
+/// the renderers of one device that draw with that method at that size share (a frame clears
+/// the targets and zeroes the storage before it draws translucent surfaces, and is done with
+/// them when it ends).
+pub(crate) struct TransparencyAttachments {
+    /// The device they are on.
+    device: Arc<Device>,
     /// What they were made for: the method's name (a kind's names are unique, and a method
     /// describes itself once), the target size and its samples per pixel.
     made_for: (String, vk::Extent2D, u32),
@@ -87,23 +96,35 @@ pub(crate) struct TransparencyTargets {
     pub storage: Buffer,
     /// The bytes of it zeroed every frame.
     pub cleared_bytes: u64,
-    /// The merge's set 1: the targets.
-    pub merge_set: DescriptorSets,
 }
 
-impl TransparencyTargets {
+/// The shared attachments of every device.
+static SHARED_ATTACHMENTS: Shared<TransparencyAttachments> = Shared::new();
+
+impl TransparencyAttachments {
     /// Whether these were made for `method` at `extent` with `samples` per pixel.
-    pub fn fit(&self, method: &TransparencyMethod, extent: vk::Extent2D, samples: u32) -> bool {
+    fn fit(&self, method: &TransparencyMethod, extent: vk::Extent2D, samples: u32) -> bool {
         self.made_for.0 == method.name && self.made_for.1 == extent && self.made_for.2 == samples
     }
 
-    /// Makes the targets, storage and merge set of `method` at `extent` with `samples` per
-    /// pixel.
-    pub fn new(
+    /// The device's attachments of `method` at `extent` with `samples` per pixel, made unless
+    /// another renderer holds them.
+    fn shared(
         device: &Arc<Device>,
         method: &TransparencyMethod,
         (extent, samples): (vk::Extent2D, u32),
-        merge_set_layout: &DescriptorSetLayout,
+    ) -> RenderResult<Arc<Self>> {
+        SHARED_ATTACHMENTS.get_or_make(
+            |held| Arc::ptr_eq(&held.device, device) && held.fit(method, extent, samples),
+            || Self::new(device, method, (extent, samples)),
+        )
+    }
+
+    /// Makes the targets and storage of `method` at `extent` with `samples` per pixel.
+    fn new(
+        device: &Arc<Device>,
+        method: &TransparencyMethod,
+        (extent, samples): (vk::Extent2D, u32),
     ) -> RenderResult<Self> {
         let images = method
             .target_formats()
@@ -146,18 +167,49 @@ impl TransparencyTargets {
             .collect();
         let pixels = u64::from(extent.width) * u64::from(extent.height);
         let (bytes, cleared_bytes) = method.storage_bytes(pixels);
-        let storage = storage_buffer(device, bytes)?;
-        let merge_set = DescriptorSets::new(device, "transparency merge", &[merge_set_layout])?;
-        for (binding, image) in images.iter().enumerate() {
-            merge_set.write_sampled_image(0, binding as u32, image.view());
-        }
         Ok(Self {
+            device: Arc::clone(device),
             made_for: (method.name.clone(), extent, samples),
             images,
             multisampled_images,
             clears,
-            storage,
+            storage: storage_buffer(device, bytes)?,
             cleared_bytes,
+        })
+    }
+}
+
+/// What a renderer draws translucent surfaces with: the shared attachments of its method and
+/// size, and its own merge set naming them.
+pub(crate) struct TransparencyTargets {
+    /// The targets and storage, shared with the device's other renderers of the same method,
+    /// size and samples.
+    pub attachments: Arc<TransparencyAttachments>,
+    /// The merge's set 1: the targets.
+    pub merge_set: DescriptorSets,
+}
+
+impl TransparencyTargets {
+    /// Whether these were made for `method` at `extent` with `samples` per pixel.
+    pub fn fit(&self, method: &TransparencyMethod, extent: vk::Extent2D, samples: u32) -> bool {
+        self.attachments.fit(method, extent, samples)
+    }
+
+    /// The targets and storage of `method` at `extent` with `samples` per pixel (the device's
+    /// shared ones) and a merge set naming them.
+    pub fn new(
+        device: &Arc<Device>,
+        method: &TransparencyMethod,
+        (extent, samples): (vk::Extent2D, u32),
+        merge_set_layout: &DescriptorSetLayout,
+    ) -> RenderResult<Self> {
+        let attachments = TransparencyAttachments::shared(device, method, (extent, samples))?;
+        let merge_set = DescriptorSets::new(device, "transparency merge", &[merge_set_layout])?;
+        for (binding, image) in attachments.images.iter().enumerate() {
+            merge_set.write_sampled_image(0, binding as u32, image.view());
+        }
+        Ok(Self {
+            attachments,
             merge_set,
         })
     }

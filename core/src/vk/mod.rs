@@ -26,6 +26,7 @@ mod pipeline_cache;
 mod rendering;
 mod sampler;
 mod shader;
+mod sharing;
 mod swapchain;
 mod timer;
 
@@ -59,6 +60,7 @@ pub use rendering::{
 };
 pub use sampler::Sampler;
 pub use shader::{create_unowned_shader_module, ShaderModule, ShaderStage};
+pub use sharing::Shared;
 pub use swapchain::{PresentMode, PresentOutcome, Swapchain};
 pub use timer::GpuTimer;
 

@@ -10,13 +10,14 @@
 //! not four. A target whose depth outlives its frame (handed to the host,
 //! `DepthSharing::Own`) keeps its own; only its colour, the picture, is always its own.
 
-use std::sync::{Arc, Mutex, PoisonError, Weak};
+use std::sync::Arc;
 
 use ash::vk;
 
 use super::device::Device;
 use super::error::{VkError, VkResult};
 use super::image::{read_image, Image, COLOR_FORMAT, DEPTH_FORMAT};
+use super::sharing::Shared;
 
 /// Whether a target's depth is its own or shared with the other targets of its device and size.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -28,38 +29,16 @@ pub enum DepthSharing {
     Own,
 }
 
-/// The shared depth images of every device: weak, so an image lives as long as a target
-/// holds it.
-static SHARED_DEPTHS: Mutex<Vec<Weak<Image>>> = Mutex::new(Vec::new());
+/// The shared depth images of every device.
+static SHARED_DEPTHS: Shared<Image> = Shared::new();
 
-/// The shared multisampled attachments of every device, as [`SHARED_DEPTHS`].
-static SHARED_MULTISAMPLED: Mutex<Vec<Weak<MultisampledTarget>>> = Mutex::new(Vec::new());
-
-/// What `registry` holds that `fits`, or what `make` makes, registered.
-fn shared<T>(
-    registry: &Mutex<Vec<Weak<T>>>,
-    fits: impl Fn(&T) -> bool,
-    make: impl FnOnce() -> VkResult<T>,
-) -> VkResult<Arc<T>> {
-    let mut held = registry.lock().unwrap_or_else(PoisonError::into_inner);
-    held.retain(|item| item.strong_count() > 0);
-    if let Some(item) = held
-        .iter()
-        .filter_map(Weak::upgrade)
-        .find(|item| fits(item))
-    {
-        return Ok(item);
-    }
-    let item = Arc::new(make()?);
-    held.push(Arc::downgrade(&item));
-    Ok(item)
-}
+/// The shared multisampled attachments of every device.
+static SHARED_MULTISAMPLED: Shared<MultisampledTarget> = Shared::new();
 
 /// The one-sample depth image of `extent` that targets of `device` share, made when none
 /// is held.
 fn shared_depth(device: &Arc<Device>, extent: vk::Extent2D) -> VkResult<Arc<Image>> {
-    shared(
-        &SHARED_DEPTHS,
+    SHARED_DEPTHS.get_or_make(
         |image| Arc::ptr_eq(image.device(), device) && image.extent() == extent,
         || depth_image(device, "offscreen depth (shared)", extent),
     )
@@ -77,7 +56,7 @@ fn shared_multisampled(
             && target.color.extent() == extent
             && target.color.samples() == samples
     };
-    shared(&SHARED_MULTISAMPLED, fits, || {
+    SHARED_MULTISAMPLED.get_or_make(fits, || {
         Ok(MultisampledTarget {
             color: Image::multisampled(
                 device,

@@ -186,7 +186,8 @@ fn transition_for_rendering(
     }
     if !target.resume {
         for (image, _) in target.extra_colors {
-            // The last frame's merge may still read them.
+            // The last frame's merge may still read them, and its translucent pass (this
+            // target's or another's that shares them) write them.
             transition(
                 device,
                 command_buffer,
@@ -194,8 +195,9 @@ fn transition_for_rendering(
                 vk::ImageAspectFlags::COLOR,
                 (
                     vk::ImageLayout::UNDEFINED,
-                    vk::PipelineStageFlags2::FRAGMENT_SHADER,
-                    vk::AccessFlags2::NONE,
+                    vk::PipelineStageFlags2::FRAGMENT_SHADER
+                        | vk::PipelineStageFlags2::COLOR_ATTACHMENT_OUTPUT,
+                    vk::AccessFlags2::COLOR_ATTACHMENT_WRITE,
                 ),
                 (
                     vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL,

@@ -1849,7 +1849,9 @@ enum CadrResult cadr_renderer_technique(CadrRenderer renderer, uint32_t kind, co
 // scene is locked while the host's edits are applied. The renderers of one context drawing
 // one scene share its copy on the GPU (geometry, instances, matrices, materials; made at the
 // first frame, then brought up to date with the edits once, by whichever renderer draws
-// next); each keeps only its own target, culling and uniforms.
+// next); each keeps only its own picture, culling and uniforms (renderers of one size share
+// their depth, MSAA and transparency attachments, which a frame uses only until it ends,
+// unless `CadrRendererSettings::depth_to_host` keeps the depth their own).
 //
 // # Safety
 // `camera` is null or readable; `stats` null or writable for its `size`.

@@ -5,7 +5,7 @@
 //! GPU by one road: graph → tree → [`GpuScene`] → techniques → Vulkan.
 
 use std::collections::HashMap;
-use std::sync::{Arc, Mutex, MutexGuard, PoisonError, Weak};
+use std::sync::{Arc, Mutex, MutexGuard, PoisonError};
 
 use glam::{DVec3, DVec4};
 
@@ -18,7 +18,7 @@ use crate::render::{Camera, FrameStats, Section};
 use crate::technique::{Combination, PluginRegistry, Techniques};
 use crate::timings::{self, Phase};
 use crate::tree::SceneTree;
-use crate::vk::Device;
+use crate::vk::{Device, Shared};
 
 /// What a pick found under one pixel (or, for a rectangle, the nearest pixel of one part).
 #[derive(Clone, Debug, PartialEq)]
@@ -106,36 +106,25 @@ fn lock(cell: &Mutex<GpuScene>) -> MutexGuard<'_, GpuScene> {
 /// matrices ([`Transforms`]). Keep one beside the tree and hand it to [`View::sync_shared`]
 /// with that tree. It holds the scenes weakly: a scene goes with the last view drawing it.
 #[derive(Default)]
-pub struct SharedScenes(Vec<Weak<Mutex<GpuScene>>>);
+pub struct SharedScenes(Shared<Mutex<GpuScene>>);
 
 impl SharedScenes {
     /// The live scene on `device` with world matrices kept where `transforms` says.
-    fn find(&mut self, device: &Arc<Device>, transforms: Transforms) -> Option<SceneCell> {
-        self.0.retain(|scene| scene.strong_count() > 0);
-        self.0.iter().filter_map(Weak::upgrade).find(|cell| {
+    fn find(&self, device: &Arc<Device>, transforms: Transforms) -> Option<SceneCell> {
+        self.0.find(|cell| {
             let scene = lock(cell);
             Arc::ptr_eq(scene.device(), device) && scene.transforms() == transforms
         })
     }
 
-    /// Whether `cell` is one of these scenes.
-    fn holds(&self, cell: &SceneCell) -> bool {
-        self.0
-            .iter()
-            .any(|scene| std::ptr::eq(scene.as_ptr(), Arc::as_ptr(cell)))
-    }
-
     /// GPU scenes alive.
     pub fn len(&self) -> usize {
-        self.0
-            .iter()
-            .filter(|scene| scene.strong_count() > 0)
-            .count()
+        self.0.len()
     }
 
     /// Whether no GPU scene is alive.
     pub fn is_empty(&self) -> bool {
-        self.len() == 0
+        self.0.is_empty()
     }
 }
 
@@ -300,7 +289,7 @@ impl View {
                 Some(cell) => Some(cell),
                 // None keeps world matrices where these techniques need them: a scene of the
                 // tree's that only this view draws changes where it keeps them (in the sync).
-                None => alone.filter(|cell| scenes.holds(cell)),
+                None => alone.filter(|cell| scenes.0.holds(cell)),
             },
             None => alone,
         };
@@ -317,7 +306,7 @@ impl View {
             None => {
                 let cell = Arc::new(Mutex::new(GpuScene::new(&device, graph, tree, transforms)?));
                 if let Some(scenes) = scenes {
-                    scenes.0.push(Arc::downgrade(&cell));
+                    scenes.0.hold(&cell);
                 }
                 cell
             }

@@ -169,6 +169,13 @@ static uint64_t device_bytes(CadrContext context) {
   return usage.device_allocated_bytes;
 }
 
+/* Prints what one view and all the views hold, and their ratio. */
+static void print_memory(const char *what, uint64_t one_view, int views, uint64_t all_views) {
+  printf("%s memory: one view %.2f MB, %d views %.2f MB (%.3fx one view)\n", what,
+         one_view / 1e6, views, all_views / 1e6,
+         one_view > 0 ? (double)all_views / (double)one_view : 0.0);
+}
+
 /* Picks in the middle of each view, writes each view's offscreen render and keeps the window
  * until stdin says the test has grabbed it. */
 static void self_test(struct QuadView *q, CadrContext context, GLFWwindow *window,
@@ -271,10 +278,8 @@ int main(int argc, char **argv) {
   }
   printf("%d frames of four views, %.1f frames/s, bytes read back per frame: %zu\n", frame,
          frame / (now_seconds() - start), frame > 0 ? read_back / (size_t)frame : 0);
-  printf("device memory: one view %.1f MB, %d views %.1f MB\n", one_view_device / 1e6, q.count,
-         (device_bytes(context) - device_before) / 1e6);
-  printf("host memory: one view %.1f MB, %d views %.1f MB\n", one_view_host / 1e6, q.count,
-         (host_bytes() - host_before) / 1e6);
+  print_memory("device", one_view_device, q.count, device_bytes(context) - device_before);
+  print_memory("host", one_view_host, q.count, host_bytes() - host_before);
 
   if (test_dir != NULL) {
     self_test(&q, context, window, test_dir);

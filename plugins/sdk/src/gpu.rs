@@ -52,6 +52,19 @@ impl std::fmt::Debug for Gpu {
     }
 }
 
+/// How many elements (or bytes) a growing buffer should hold when `needed` no longer fits in
+/// the `held` it has: exactly `needed` the first time (`held` 0), else at least half again as
+/// many as it held, so that a scene growing one part at a time reallocates a logarithmic number
+/// of times while a buffer made once wastes nothing (a power of two would waste up to half:
+/// every view of a scene keeps its own command buffers).
+pub fn grown_capacity(held: u64, needed: u64) -> u64 {
+    if held == 0 {
+        needed
+    } else {
+        needed.max(held.saturating_add(held / 2))
+    }
+}
+
 impl Gpu {
     /// Loads the function tables from what `create` received.
     ///
@@ -297,5 +310,27 @@ impl Drop for HostBuffer {
                 unsafe { destroy(host.user, &self.raw) };
             }
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::grown_capacity;
+
+    #[test]
+    fn a_buffer_made_once_fits_exactly_and_a_growing_one_grows_by_half() {
+        assert_eq!(grown_capacity(0, 235_140), 235_140);
+        assert_eq!(grown_capacity(1_000, 1_001), 1_500);
+        assert_eq!(grown_capacity(1_000, 4_000), 4_000, "never less than needed");
+        // Growing one element at a time from 1 reallocates a logarithmic number of times.
+        let (mut held, mut reallocations) = (1_u64, 0);
+        for needed in 2..=1_000_000 {
+            if needed > held {
+                held = grown_capacity(held, needed);
+                reallocations += 1;
+            }
+        }
+        assert!(reallocations < 40, "{reallocations} reallocations");
+        assert_eq!(grown_capacity(u64::MAX - 1, u64::MAX), u64::MAX);
     }
 }

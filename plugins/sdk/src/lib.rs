@@ -17,7 +17,7 @@ pub use ash;
 pub use ash::vk;
 pub use cadr_plugin_abi as abi;
 pub use cadr_vk_ext::device_generated_commands as dgc;
-pub use gpu::{Gpu, HostBuffer};
+pub use gpu::{grown_capacity, Gpu, HostBuffer};
 pub use views::{buffer, Bind, CullInput, CullOutput, GpuCull, PassFilter, Path, Record, Scene};
 
 use std::ffi::CStr;

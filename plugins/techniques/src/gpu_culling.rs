@@ -32,7 +32,9 @@ use std::sync::Arc;
 use cadr_plugin_sdk::abi;
 use cadr_plugin_sdk::vk::{self, Handle};
 use cadr_plugin_sdk::vulkan_failure;
-use cadr_plugin_sdk::{buffer, Gpu, GpuCull, GpuCulling, HostBuffer, PassFilter, Technique};
+use cadr_plugin_sdk::{
+    buffer, grown_capacity, Gpu, GpuCull, GpuCulling, HostBuffer, PassFilter, Technique,
+};
 
 /// Words of the counts buffer: commands per (phase, pass) slot, then commands in all,
 /// triangles drawn and clusters drawn, then per slot the cluster commands asked for.
@@ -488,7 +490,9 @@ impl<const OCCLUSION: bool, const CLUSTERS: bool> GpuCuller<OCCLUSION, CLUSTERS>
         let storage = vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_DST;
         let needed = commands.max(instances).max(1);
         if self.commands.is_none() || needed > self.capacity {
-            let capacity = needed.next_power_of_two();
+            let capacity =
+                u32::try_from(grown_capacity(u64::from(self.capacity), u64::from(needed)))
+                    .unwrap_or(u32::MAX);
             let slots = (self.phases() as usize * PASSES_PER_PHASE) as u64;
             self.commands = Some(self.gpu.create_buffer(
                 "gpu cull commands",

@@ -18,7 +18,7 @@ use crate::{KEEPS_FRAME_SLOTS, REPLAYABLE};
 use cadr_plugin_sdk::abi;
 use cadr_plugin_sdk::vk::{self, Handle};
 use cadr_plugin_sdk::{
-    technique_library, Gpu, HostBuffer, PassFilter, Record, Submission, Technique,
+    grown_capacity, technique_library, Gpu, HostBuffer, PassFilter, Record, Submission, Technique,
 };
 
 use generated::{Execution, GeneratedCommands};
@@ -228,10 +228,11 @@ impl<const S: u8, const A: u8, const M: u8> Submit<S, A, M> {
             } else {
                 vk::BufferUsageFlags::INDIRECT_BUFFER
             };
-            if indirect.commands.as_ref().is_none_or(|b| b.size() < needed) {
+            let held = indirect.commands.as_ref().map_or(0, HostBuffer::size);
+            if held < needed {
                 indirect.commands = Some(self.gpu.create_buffer(
                     "indirect commands",
-                    needed.next_power_of_two(),
+                    grown_capacity(held, needed),
                     usage,
                     abi::CADR_MEMORY_CPU_TO_GPU,
                 )?);

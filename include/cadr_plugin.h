@@ -20,7 +20,7 @@
 #define CADR_PLUGIN_ABI_MAJOR 1
 
 // Minor version of this ABI: additions that older readers may ignore.
-#define CADR_PLUGIN_ABI_MINOR 17
+#define CADR_PLUGIN_ABI_MINOR 18
 
 // `(major << 16) | minor`, what [`CadrPluginVersionFn`] returns.
 #define CADR_PLUGIN_ABI_VERSION ((CADR_PLUGIN_ABI_MAJOR << 16) | CADR_PLUGIN_ABI_MINOR)
@@ -66,6 +66,10 @@ typedef uint32_t CadrInstanceFlags;
 // major version.
 typedef uint32_t CadrExtensionKind;
 
+// Since ABI 1.18: which instances a pass takes by whether the rasterizer may cull their back
+// faces ([`CadrBackFacePasses`]).
+typedef uint32_t CadrFaceRoute;
+
 // What a draw pass draws.
 typedef uint32_t CadrPassKind;
 
@@ -79,7 +83,8 @@ typedef uint32_t (*CadrPluginVersionFn)(void);
 // a chain owns it and keeps it valid as long as the struct it hangs from. Hosts of ABI 1.13
 // know no kind, so they skip every extension a technique offers and refuse a technique that
 // requires one; ABI 1.14 defines [`CADR_EXTENSION_SCENE_CLUSTERS`] and
-// [`CADR_EXTENSION_CLUSTER_CULL`], ABI 1.15 [`CADR_EXTENSION_FRAME_SLOT`].
+// [`CADR_EXTENSION_CLUSTER_CULL`], ABI 1.15 [`CADR_EXTENSION_FRAME_SLOT`], ABI 1.18
+// [`CADR_EXTENSION_BACK_FACE_PASSES`].
 typedef struct CadrExtension {
   // Size of the whole extension struct, this header included.
   uint32_t size;
@@ -808,7 +813,8 @@ typedef struct CadrGpuCullContext {
   const struct CadrPassExclusion *pass_exclusions;
   // Since ABI 1.14 (read it only when `size` covers it): the host's extension structs for
   // this call (a chain of [`CadrExtension`]s, or null), valid for the call:
-  // [`CadrClusterCull`] where the scene has clusters.
+  // [`CadrClusterCull`] where the scene has clusters; since ABI 1.18 [`CadrBackFacePasses`]
+  // where the culler announces [`CADR_TRAIT_ROUTES_BACK_FACES`].
   const struct CadrExtension *extensions;
 } CadrGpuCullContext;
 
@@ -1092,6 +1098,13 @@ typedef struct CadrTransparencyVtable {
 // hosts before 1.15 did), so it never has more than one frame to keep.
 #define CADR_TRAIT_FRAME_SLOTS (1 << 10)
 
+// Since ABI 1.18. Culling on the GPU, an announcement: the culler honours
+// [`CadrBackFacePasses`], writing each instance into only the passes whose route takes it. The
+// host draws closed parts in passes whose rasterizer culls back faces only for a culler that
+// announces it: one that ignored the routes would draw open parts with their back faces culled
+// (holes), and the other parts twice.
+#define CADR_TRAIT_ROUTES_BACK_FACES (1 << 11)
+
 // Device-local; written by transfers or shaders.
 #define CADR_MEMORY_GPU_ONLY 0
 
@@ -1137,6 +1150,10 @@ typedef struct CadrTransparencyVtable {
 // normal yields no silhouette segment there.
 #define CADR_INSTANCE_CURVED (1 << 8)
 
+// Since ABI 1.18: the part's material cuts texels out (the alpha mode MASK with a base-colour
+// texture): through the holes its inside, its back faces, may show.
+#define CADR_INSTANCE_CUTOUT (1 << 9)
+
 // Since ABI 1.14: the kind of [`CadrSceneClusters`], chained on [`CadrSceneView::extensions`].
 #define CADR_EXTENSION_SCENE_CLUSTERS 1
 
@@ -1147,6 +1164,25 @@ typedef struct CadrTransparencyVtable {
 // Since ABI 1.15: the kind of [`CadrFrameSlot`], chained on [`CadrSceneView::extensions`] of
 // the views the host gives to `prepare`, `record` and a GPU culler's `record`.
 #define CADR_EXTENSION_FRAME_SLOT 3
+
+// Since ABI 1.18: the kind of [`CadrBackFacePasses`], chained on
+// [`CadrGpuCullContext::extensions`].
+#define CADR_EXTENSION_BACK_FACE_PASSES 4
+
+// Every instance the pass's filter keeps (what passes without a route draw).
+#define CADR_FACES_ANY 0
+
+// Only the instances whose back faces can never show, which the pass's pipeline culls: closed
+// ([`CADR_INSTANCE_CLOSED`]), wound counter-clockwise seen from outside (not
+// [`CADR_INSTANCE_INSIDE_OUT`]), neither [`CADR_INSTANCE_TRANSLUCENT`] nor
+// [`CADR_INSTANCE_CUTOUT`], placed by a matrix that
+// keeps handedness (a positive determinant: a mirroring matrix turns the winding), with the
+// bounding sphere wholly on the inner side of the near plane (the eye cannot look into the
+// part) and crossed by no section plane (a cut part shows its inside).
+#define CADR_FACES_CULLED 1
+
+// Only the instances [`CADR_FACES_CULLED`] does not take.
+#define CADR_FACES_KEPT 2
 
 // Triangles (solid shading).
 #define CADR_PASS_TRIANGLES 0

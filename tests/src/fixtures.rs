@@ -8,6 +8,7 @@ use cadr_core::csf::{
     CsfFile, CsfGeometry, CsfGeometryPart, CsfMaterial, CsfMeta, CsfNode, CsfNodePart,
     FLAG_UNIQUE_NODES,
 };
+use cadr_core::scene::{Geometry, Part, Vertex};
 
 /// Byte offsets in the cube's binary buffer.
 pub const POSITIONS_OFFSET: usize = 0;
@@ -560,4 +561,45 @@ pub fn give_texture(
     graph
         .set_material(material, textured)
         .expect("set the material");
+}
+
+/// A box from -1 to 1 on each axis, wound counter-clockwise seen from outside; without its top
+/// (+z) face when `open`.
+pub fn unit_box(open: bool) -> Geometry {
+    let vertices: Vec<Vertex> = (0..8)
+        .map(|i| {
+            let p = [i & 1, i >> 1 & 1, i >> 2 & 1].map(|b| if b == 1 { 1.0 } else { -1.0 });
+            Vertex {
+                position: p,
+                normal: p.map(|c| c / 3f32.sqrt()),
+            }
+        })
+        .collect();
+    // Faces as quads (a, b, c, d), counter-clockwise from outside.
+    let faces: [[u32; 4]; 6] = [
+        [0, 2, 3, 1], // -z
+        [0, 1, 5, 4], // -y
+        [0, 4, 6, 2], // -x
+        [1, 3, 7, 5], // +x
+        [2, 6, 7, 3], // +y
+        [4, 5, 7, 6], // +z
+    ];
+    let kept = if open { &faces[..5] } else { &faces[..] };
+    let indices: Vec<u32> = kept
+        .iter()
+        .flat_map(|[a, b, c, d]| [*a, *b, *c, *a, *c, *d])
+        .collect();
+    Geometry {
+        name: if open { "open box" } else { "box" }.into(),
+        parts: vec![Part {
+            first_index: 0,
+            index_count: indices.len() as u32,
+            first_wire_index: 0,
+            wire_index_count: 0,
+        }],
+        vertices,
+        indices,
+        wire_indices: Vec::new(),
+        attributes: Vec::new(),
+    }
 }

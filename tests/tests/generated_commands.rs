@@ -115,6 +115,7 @@ fn the_preprocess_memory_query_answers_for_every_scene_size() {
             topology: vk::PrimitiveTopology::TRIANGLE_LIST,
             depth_bias: false,
             triangle_outlines: false,
+            cull_back_faces: false,
             colors: &[ColorTarget::replaced(COLOR_FORMAT)],
             depth: DepthUse::TestAndWrite,
             vertex_constants: &[],

@@ -986,3 +986,61 @@ fn files_loaded_after_the_first_frame_draw_and_reuse_the_room_of_those_unloaded(
     drop(view);
     assert_no_validation_errors(&device);
 }
+
+/// A material that cuts texels out (MASK with a texture) flags its parts `CADR_INSTANCE_CUTOUT`,
+/// which keeps their back faces drawn (the holes may show the inside): set when the material
+/// becomes one, cleared when it stops being one, without a rebuild.
+#[test]
+fn parts_of_a_cutout_material_are_flagged_and_unflagged_as_the_material_changes() {
+    use cadr_core::scene::{AlphaMode, Texture, TextureRef, UvTransform};
+    let device = test_device();
+    let scene = generate(&GeneratorSpec::Demo);
+    let (mut graph, _) = SceneGraph::from_scene(&scene).unwrap();
+    let mut tree = SceneTree::build(&mut graph);
+    let mut gpu = GpuScene::new(&device, &graph, &mut tree, Transforms::Gpu).unwrap();
+    let cutouts = |gpu: &GpuScene| {
+        let instances = gpu.content().instances;
+        let flagged = instances
+            .iter()
+            .filter(|e| e.flags & cadr_plugin_abi::CADR_INSTANCE_CUTOUT != 0)
+            .map(|e| e.material)
+            .collect::<Vec<_>>();
+        (flagged, instances.len())
+    };
+    assert!(cutouts(&gpu).0.is_empty(), "no cutout material yet");
+
+    let texture = graph
+        .create_texture(Texture {
+            name: "holes".into(),
+            width: 2,
+            height: 2,
+            texels: Arc::new([255u8, 255, 255, 255, 255, 255, 255, 0].repeat(2)),
+            sampler: Default::default(),
+        })
+        .unwrap();
+    let handle = graph.material_handle_at(0).unwrap();
+    let plain = graph.material(handle).unwrap().clone();
+    let mut cut_out = plain.clone();
+    cut_out.alpha_mode = AlphaMode::Mask { cutoff: 0.5 };
+    cut_out.base_color_texture = Some(TextureRef {
+        texture: texture.index(),
+        transform: UvTransform::IDENTITY,
+    });
+    graph.set_material(handle, cut_out).unwrap();
+    tree.update(&mut graph);
+    gpu.sync(&graph, &mut tree, Transforms::Gpu).unwrap();
+    let (flagged, instances) = cutouts(&gpu);
+    assert!(!flagged.is_empty(), "the parts of material 0 are flagged");
+    assert!(flagged.iter().all(|&m| m == 0), "only material 0's parts");
+    assert!(flagged.len() < instances);
+
+    graph.set_material(handle, plain).unwrap();
+    tree.update(&mut graph);
+    gpu.sync(&graph, &mut tree, Transforms::Gpu).unwrap();
+    assert!(
+        cutouts(&gpu).0.is_empty(),
+        "unflagged with the plain material"
+    );
+    drop(gpu);
+    assert_no_validation_errors(&device);
+}

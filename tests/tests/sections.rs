@@ -6,56 +6,16 @@
 
 use cadr_core::generate::{generate, GeneratorSpec};
 use cadr_core::render::{Camera, Section, DEFAULT_DIRECTION};
-use cadr_core::scene::{flatten, Geometry, Material, MeshRef, Node, Part, Scene, Vertex};
+use cadr_core::scene::{flatten, Material, MeshRef, Node, Scene};
 use cadr_core::technique::ShadeMode;
 use cadr_core::view::unproject;
+use cadr_tests::fixtures::unit_box;
 use cadr_tests::images::{assert_matches_reference, compare, DEFAULT_TOLERANCE, SAME_PICTURE};
 use cadr_tests::{all_combinations, scene_wide, test_device, SceneView};
 use glam::{DMat4, DVec3, DVec4};
 
 const SIZE: (u32, u32) = (160, 120);
 const EYE: DVec3 = DVec3::new(3.0, 2.5, 4.0);
-
-/// A box from -1 to 1 on each axis, wound counter-clockwise seen from outside; without its top
-/// (+z) face when `open`.
-fn unit_box(open: bool) -> Geometry {
-    let vertices: Vec<Vertex> = (0..8)
-        .map(|i| {
-            let p = [i & 1, i >> 1 & 1, i >> 2 & 1].map(|b| if b == 1 { 1.0 } else { -1.0 });
-            Vertex {
-                position: p,
-                normal: p.map(|c| c / 3f32.sqrt()),
-            }
-        })
-        .collect();
-    // Faces as quads (a, b, c, d), counter-clockwise from outside.
-    let faces: [[u32; 4]; 6] = [
-        [0, 2, 3, 1], // -z
-        [0, 1, 5, 4], // -y
-        [0, 4, 6, 2], // -x
-        [1, 3, 7, 5], // +x
-        [2, 6, 7, 3], // +y
-        [4, 5, 7, 6], // +z
-    ];
-    let kept = if open { &faces[..5] } else { &faces[..] };
-    let indices: Vec<u32> = kept
-        .iter()
-        .flat_map(|[a, b, c, d]| [*a, *b, *c, *a, *c, *d])
-        .collect();
-    Geometry {
-        name: if open { "open box" } else { "box" }.into(),
-        parts: vec![Part {
-            first_index: 0,
-            index_count: indices.len() as u32,
-            first_wire_index: 0,
-            wire_index_count: 0,
-        }],
-        vertices,
-        indices,
-        wire_indices: Vec::new(),
-        attributes: Vec::new(),
-    }
-}
 
 /// Boxes at `places`, gray, the first geometry closed or open.
 fn boxes(open: bool, places: &[DVec3]) -> Scene {

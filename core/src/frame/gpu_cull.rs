@@ -138,11 +138,26 @@ impl<'a> GpuCuller<'a> {
         debug_assert_eq!(passes.len(), filters.filters.len());
         debug_assert_eq!(passes.len(), filters.exclusions.len());
         debug_assert_eq!(passes.len(), filters.back_faces_hidden.len());
+        debug_assert_eq!(passes.len(), filters.face_routes.len());
+        let back_face_passes = abi::CadrBackFacePasses {
+            header: abi::CadrExtension {
+                size: std::mem::size_of::<abi::CadrBackFacePasses>() as u32,
+                kind: abi::CADR_EXTENSION_BACK_FACE_PASSES,
+                next: std::ptr::null(),
+            },
+            pass_count: passes.len() as u32,
+            routes: filters.face_routes.as_ptr(),
+        };
         let clusters = abi::CadrClusterCull {
             header: abi::CadrExtension {
                 size: std::mem::size_of::<abi::CadrClusterCull>() as u32,
                 kind: abi::CADR_EXTENSION_CLUSTER_CULL,
-                next: std::ptr::null(),
+                // Only where the passes are split: pass set planning asked the culler first.
+                next: if filters.routes_faces() {
+                    &back_face_passes.header
+                } else {
+                    std::ptr::null()
+                },
             },
             lod_error: self.lod_error,
             pass_count: passes.len() as u32,

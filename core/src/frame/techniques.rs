@@ -39,17 +39,22 @@ impl Renderer {
         let mode = techniques.shade_mode();
         let translucency = scene.scene.has_translucency(self.textures());
         let dashed_hidden = mode == ShadeMode::HiddenLine && techniques.dashed_hidden_lines();
+        let caps_over_lines = matches!(mode, ShadeMode::Edges | ShadeMode::HiddenLine)
+            && self.section().caps_seen_from(camera.eye());
         let passes = PassSet::Shaded {
             mode,
             translucent: mode == ShadeMode::XRay || (mode.shows_translucency() && translucency),
             samples: self.msaa(),
             dashed_hidden,
             lines_through_translucent: mode == ShadeMode::HiddenLine && translucency,
-            caps_over_lines: matches!(mode, ShadeMode::Edges | ShadeMode::HiddenLine)
-                && self.section().caps_seen_from(camera.eye()),
+            caps_over_lines,
             hidden_silhouettes: dashed_hidden
                 && self.silhouettes()
                 && self.device().capabilities().geometry_shader,
+            // The shaded modes whose surfaces show colour; not under caps painted over lines,
+            // which keeps the frame within the four passes a culler may handle.
+            back_faces_culled: techniques.culler_routes_back_faces()
+                && (mode == ShadeMode::Solid || (mode == ShadeMode::Edges && !caps_over_lines)),
         };
         self.draw_techniques(scene, techniques, camera, passes)
     }

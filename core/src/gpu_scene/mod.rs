@@ -47,7 +47,7 @@ use glam::DMat4;
 
 use crate::graph::SceneGraph;
 use crate::render::split_f64;
-use crate::scene::Vertex;
+use crate::scene::{AlphaMode, Vertex};
 use crate::tree::{ChangeReader, InstanceRef, SceneTree, TreeChanges};
 use crate::vk::{Device, OneShot};
 pub use compute::{HierarchyParameters, HierarchyStage, ScatterParameters, ScenePipelines};
@@ -89,19 +89,30 @@ pub fn gpu_material(graph: &SceneGraph, slot: u32) -> abi::CadrMaterial {
         .unwrap_or_default()
 }
 
-/// The translucency flags of parts drawn with material slot `slot`:
-/// [`abi::CADR_INSTANCE_TRANSLUCENT`] when they are, with
+/// The flags of parts drawn with material slot `slot` that say what can be seen through them:
+/// [`abi::CADR_INSTANCE_TRANSLUCENT`] when they are translucent, with
 /// [`abi::CADR_INSTANCE_TRANSLUCENT_BY_TEXTURE`] when only their texture makes them so (the
 /// vertex shader decides the same from the base colour's alpha and the material's texture
-/// description).
+/// description), and [`abi::CADR_INSTANCE_CUTOUT`] when their texture cuts holes.
 fn translucency(graph: &SceneGraph, slot: u32) -> abi::CadrInstanceFlags {
-    match graph.material_at(slot) {
-        Some(m) if m.is_translucent_without_textures() => abi::CADR_INSTANCE_TRANSLUCENT,
-        Some(m) if graph.is_translucent(m) => {
-            abi::CADR_INSTANCE_TRANSLUCENT | abi::CADR_INSTANCE_TRANSLUCENT_BY_TEXTURE
-        }
-        _ => 0,
-    }
+    let Some(material) = graph.material_at(slot) else {
+        return 0;
+    };
+    let cutout = if matches!(material.alpha_mode, AlphaMode::Mask { .. })
+        && material.base_color_texture.is_some()
+    {
+        abi::CADR_INSTANCE_CUTOUT
+    } else {
+        0
+    };
+    let translucent = if material.is_translucent_without_textures() {
+        abi::CADR_INSTANCE_TRANSLUCENT
+    } else if graph.is_translucent(material) {
+        abi::CADR_INSTANCE_TRANSLUCENT | abi::CADR_INSTANCE_TRANSLUCENT_BY_TEXTURE
+    } else {
+        0
+    };
+    translucent | cutout
 }
 
 /// What the frame set's scene bindings name (see [`GpuScene::frame_resources`]).
@@ -1224,6 +1235,7 @@ fn entry_in(
 /// Whether a material slot of `translucency` flags counts as translucent with textures off
 /// (`[0]`) and on (`[1]`), as 0 or 1.
 fn translucent_with_and_without_textures(translucency: abi::CadrInstanceFlags) -> [usize; 2] {
+    let translucency = translucency & !abi::CADR_INSTANCE_CUTOUT;
     [
         usize::from(translucency == abi::CADR_INSTANCE_TRANSLUCENT),
         usize::from(translucency != 0),
@@ -1235,7 +1247,9 @@ fn with_translucency(
     flags: abi::CadrInstanceFlags,
     translucency: abi::CadrInstanceFlags,
 ) -> abi::CadrInstanceFlags {
-    const BITS: u32 = abi::CADR_INSTANCE_TRANSLUCENT | abi::CADR_INSTANCE_TRANSLUCENT_BY_TEXTURE;
+    const BITS: u32 = abi::CADR_INSTANCE_TRANSLUCENT
+        | abi::CADR_INSTANCE_TRANSLUCENT_BY_TEXTURE
+        | abi::CADR_INSTANCE_CUTOUT;
     flags & !BITS | translucency
 }
 

@@ -40,6 +40,8 @@ struct PassScope {
     /// Surfaces drawn with depth test and depth writes: a closed opaque part's back faces
     /// never show in it (the plugin ABI's `CadrClusterCull::back_faces_hidden`).
     hides_back_faces: bool,
+    /// The parts it takes by whether their back faces are culled (`CADR_FACES_*`).
+    faces: abi::CadrFaceRoute,
 }
 
 impl PassScope {
@@ -105,6 +107,18 @@ pub struct PassFilters {
     pub exclusions: Vec<abi::CadrPassExclusion>,
     /// Per pass, 1 where the back faces of closed opaque parts never show in it.
     pub back_faces_hidden: Vec<u32>,
+    /// Per pass, the parts it takes by whether their back faces are culled (`CADR_FACES_*`).
+    pub face_routes: Vec<abi::CadrFaceRoute>,
+}
+
+impl PassFilters {
+    /// Whether some pass takes only part of the instances by their faces: the culler must
+    /// route them.
+    pub fn routes_faces(&self) -> bool {
+        self.face_routes
+            .iter()
+            .any(|&route| route != abi::CADR_FACES_ANY)
+    }
 }
 
 /// The pipeline layout of a combination's pipelines: the frame set, then the paths' sets up to
@@ -162,6 +176,9 @@ struct Raster {
     /// Triangles turned into their silhouette segments by the geometry shader
     /// (`shaders/silhouette_lines.geom`): lines, not surfaces.
     silhouette_lines: bool,
+    /// The parts it takes by their faces (`CADR_FACES_*`): with [`abi::CADR_FACES_CULLED`]
+    /// its rasterizer culls back faces.
+    faces: abi::CadrFaceRoute,
 }
 
 /// The pipelines and layout of one combination and pass set; destroyed together.
@@ -253,8 +270,7 @@ impl TechniquePipelines {
                 ..
             } => {
                 let solid = fragment(PassShader::Solid)?;
-                let pipeline = this.pipeline(inputs, solid, triangles, plain)?;
-                this.add(pipeline, abi::CADR_PASS_TRIANGLES);
+                this.add_surfaces(inputs, solid, plain)?;
             }
             PassSet::Shaded {
                 mode: mode @ (ShadeMode::Edges | ShadeMode::HiddenLine | ShadeMode::XRay),
@@ -311,8 +327,7 @@ impl TechniquePipelines {
             ..under_lines
         };
         let solid = inputs.shaders.shader(PassShader::Solid)?;
-        let pipeline = self.pipeline(inputs, solid, triangles, surfaces)?;
-        self.add(pipeline, abi::CADR_PASS_TRIANGLES);
+        self.add_surfaces(inputs, solid, surfaces)?;
         if let PassSet::Shaded {
             dashed_hidden: true,
             ..
@@ -368,6 +383,30 @@ impl TechniquePipelines {
         Ok(())
     }
 
+    /// The surfaces' pass of `raster`: where the pass set culls back faces, two passes, the
+    /// closed parts' with their back faces culled, then the others'.
+    fn add_surfaces(
+        &mut self,
+        inputs: &PipelineInputs<'_>,
+        fragment: &[u32],
+        raster: Raster,
+    ) -> RenderResult<()> {
+        let triangles = vk::PrimitiveTopology::TRIANGLE_LIST;
+        let routes: &[abi::CadrFaceRoute] = match self.pass_set {
+            PassSet::Shaded {
+                back_faces_culled: true,
+                ..
+            } => &[abi::CADR_FACES_CULLED, abi::CADR_FACES_KEPT],
+            _ => &[abi::CADR_FACES_ANY],
+        };
+        for &faces in routes {
+            let pipeline =
+                self.pipeline(inputs, fragment, triangles, Raster { faces, ..raster })?;
+            self.add(pipeline, abi::CADR_PASS_TRIANGLES);
+        }
+        Ok(())
+    }
+
     fn add(&mut self, (pipeline, scope): (Pipeline, PassScope), kind: abi::CadrPassKind) {
         use crate::vk::raw::Handle;
         self.passes.push(abi::CadrPass {
@@ -388,6 +427,7 @@ impl TechniquePipelines {
             filters
                 .back_faces_hidden
                 .push(u32::from(scope.hides_back_faces));
+            filters.face_routes.push(scope.faces);
         }
         self.pipelines.push(pipeline);
     }
@@ -539,6 +579,7 @@ impl TechniquePipelines {
             hides_back_faces: surfaces
                 && role != DrawRole::Translucent
                 && depth == DepthUse::TestAndWrite,
+            faces: raster.faces,
         };
         let pipeline = Pipeline::graphics(
             &self.device,
@@ -554,6 +595,7 @@ impl TechniquePipelines {
                 topology,
                 depth_bias: raster.depth_bias,
                 triangle_outlines: raster.triangle_outlines,
+                cull_back_faces: raster.faces == abi::CADR_FACES_CULLED,
                 colors: &colors,
                 depth,
                 vertex_constants: &[role as u32, u32::from(raster.on_surfaces)],
@@ -627,6 +669,7 @@ mod tests {
                     caps,
                     silhouettes,
                     hides_back_faces: false,
+                    faces: abi::CADR_FACES_ANY,
                 };
                 for (xray, textures) in [(false, false), (false, true), (true, false), (true, true)]
                 {
@@ -659,6 +702,7 @@ mod tests {
                     caps,
                     silhouettes,
                     hides_back_faces: false,
+                    faces: abi::CADR_FACES_ANY,
                 },
                 true,
                 false,
@@ -671,12 +715,14 @@ mod tests {
             caps: true,
             silhouettes: false,
             hides_back_faces: false,
+            faces: abi::CADR_FACES_ANY,
         };
         let opaque = PassScope {
             role: DrawRole::Opaque,
             caps: false,
             silhouettes: false,
             hides_back_faces: false,
+            faces: abi::CADR_FACES_ANY,
         };
         assert_eq!(caps.filter(false, true).0.section_cut, 1);
         assert_eq!(opaque.filter(false, true).0.section_cut, 0);

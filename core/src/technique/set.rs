@@ -508,6 +508,17 @@ impl Techniques {
         })
     }
 
+    /// Whether the active culler routes parts into passes by whether their back faces are
+    /// culled (`CADR_TRAIT_ROUTES_BACK_FACES`, libraries of ABI 1.18 or later), so that the
+    /// opaque surfaces of closed parts may be drawn with their back faces culled.
+    pub fn culler_routes_back_faces(&self) -> bool {
+        self.get(TechniqueKind::Culling).is_ok_and(|active| {
+            active
+                .entry
+                .announces(abi::CADR_TRAIT_ROUTES_BACK_FACES, 18)
+        })
+    }
+
     /// What plugins hold now (objects through the allocation callbacks, buffers).
     pub fn plugin_allocations(&self) -> AllocationCounts {
         self.services.snapshot()

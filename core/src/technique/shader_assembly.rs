@@ -358,6 +358,7 @@ mod tests {
             lines_through_translucent: false,
             caps_over_lines: false,
             hidden_silhouettes: false,
+            back_faces_culled: false,
         };
         prepare(&mut cache, solid()).expect("solid");
         assert_eq!(
@@ -375,6 +376,7 @@ mod tests {
                 lines_through_translucent: false,
                 caps_over_lines: false,
                 hidden_silhouettes: false,
+                back_faces_culled: false,
             },
         )
         .expect("edges");
@@ -399,6 +401,7 @@ mod tests {
             lines_through_translucent: false,
             caps_over_lines: false,
             hidden_silhouettes,
+            back_faces_culled: false,
         };
         prepare(&mut cache, dashed(false)).expect("dashed");
         assert_eq!(cache.pass_shaders.len(), 4, "the dashes' fragment shader");

@@ -97,6 +97,11 @@ pub enum PassSet {
         /// turns away from the eye, drawn only behind the surfaces (silhouettes on, and the
         /// device has geometry shaders; always false otherwise).
         hidden_silhouettes: bool,
+        /// Whether the opaque surfaces are drawn in two passes: the closed parts' with their
+        /// back faces culled by the rasterizer, then the others' (the GPU culler routes each
+        /// part, the plugin ABI's `CadrBackFacePasses`; only with a culler that announces
+        /// `CADR_TRAIT_ROUTES_BACK_FACES`).
+        back_faces_culled: bool,
     },
     /// Triangles of pickable instances, their ids into the pick target.
     Pick {

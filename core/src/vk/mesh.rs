@@ -69,6 +69,7 @@ impl Pipeline {
                 layout: desc.layout,
                 depth_bias: desc.depth_bias,
                 triangle_outlines: desc.triangle_outlines,
+                cull_back_faces: false,
                 colors: desc.colors,
                 depth: desc.depth,
                 samples: desc.samples,

@@ -225,6 +225,7 @@ impl Pipeline {
                 topology: vk::PrimitiveTopology::TRIANGLE_LIST,
                 depth_bias: false,
                 triangle_outlines: false,
+                cull_back_faces: false,
                 colors: &colors,
                 depth: DepthUse::None,
                 vertex_constants: &[],
@@ -294,6 +295,7 @@ impl Pipeline {
                 layout: desc.layout,
                 depth_bias: desc.depth_bias,
                 triangle_outlines: desc.triangle_outlines,
+                cull_back_faces: desc.cull_back_faces,
                 colors: desc.colors,
                 depth: desc.depth,
                 samples: desc.samples,
@@ -326,7 +328,11 @@ impl Pipeline {
             } else {
                 vk::PolygonMode::FILL
             })
-            .cull_mode(vk::CullModeFlags::NONE)
+            .cull_mode(if desc.cull_back_faces {
+                vk::CullModeFlags::BACK
+            } else {
+                vk::CullModeFlags::NONE
+            })
             .front_face(vk::FrontFace::COUNTER_CLOCKWISE)
             .depth_bias_enable(desc.depth_bias)
             .depth_bias_constant_factor(1.0)
@@ -590,6 +596,9 @@ pub struct GraphicsPipelineDesc<'a> {
     pub depth_bias: bool,
     /// Draws triangles as their three edges (polygon mode LINE: the wireframe display mode).
     pub triangle_outlines: bool,
+    /// Culls the triangles wound clockwise on screen: the back faces of parts wound
+    /// counter-clockwise seen from outside.
+    pub cull_back_faces: bool,
     /// The colour attachments, in order (a pipeline that writes none of them draws depth
     /// only: the hidden-line display mode's surfaces).
     pub colors: &'a [ColorTarget],
@@ -616,6 +625,7 @@ pub(super) struct RasterState<'a> {
     pub(super) layout: &'a PipelineLayout,
     pub(super) depth_bias: bool,
     pub(super) triangle_outlines: bool,
+    pub(super) cull_back_faces: bool,
     pub(super) colors: &'a [ColorTarget],
     pub(super) depth: DepthUse,
     pub(super) samples: u32,

@@ -56,7 +56,7 @@ use std::ffi::{c_char, c_void};
 /// Major version of this ABI: a library built for another major version is refused.
 pub const CADR_PLUGIN_ABI_MAJOR: u32 = 1;
 /// Minor version of this ABI: additions that older readers may ignore.
-pub const CADR_PLUGIN_ABI_MINOR: u32 = 17;
+pub const CADR_PLUGIN_ABI_MINOR: u32 = 18;
 /// `(major << 16) | minor`, what [`CadrPluginVersionFn`] returns.
 pub const CADR_PLUGIN_ABI_VERSION: u32 = (CADR_PLUGIN_ABI_MAJOR << 16) | CADR_PLUGIN_ABI_MINOR;
 
@@ -194,6 +194,12 @@ pub const CADR_TRAIT_CULLS_WHATEVER_THE_VIEW: CadrTraitBits = 1 << 9;
 /// the host waits for every earlier frame before each frame (one frame's work at a time, as
 /// hosts before 1.15 did), so it never has more than one frame to keep.
 pub const CADR_TRAIT_FRAME_SLOTS: CadrTraitBits = 1 << 10;
+/// Since ABI 1.18. Culling on the GPU, an announcement: the culler honours
+/// [`CadrBackFacePasses`], writing each instance into only the passes whose route takes it. The
+/// host draws closed parts in passes whose rasterizer culls back faces only for a culler that
+/// announces it: one that ignored the routes would draw open parts with their back faces culled
+/// (holes), and the other parts twice.
+pub const CADR_TRAIT_ROUTES_BACK_FACES: CadrTraitBits = 1 << 11;
 
 /// A message buffer the host hands to functions that can fail: the plugin writes a
 /// NUL-terminated UTF-8 message of at most `capacity` bytes (including the NUL).
@@ -242,7 +248,8 @@ pub type CadrExtensionKind = u32;
 /// a chain owns it and keeps it valid as long as the struct it hangs from. Hosts of ABI 1.13
 /// know no kind, so they skip every extension a technique offers and refuse a technique that
 /// requires one; ABI 1.14 defines [`CADR_EXTENSION_SCENE_CLUSTERS`] and
-/// [`CADR_EXTENSION_CLUSTER_CULL`], ABI 1.15 [`CADR_EXTENSION_FRAME_SLOT`].
+/// [`CADR_EXTENSION_CLUSTER_CULL`], ABI 1.15 [`CADR_EXTENSION_FRAME_SLOT`], ABI 1.18
+/// [`CADR_EXTENSION_BACK_FACE_PASSES`].
 #[repr(C)]
 #[derive(Clone, Copy, Debug)]
 pub struct CadrExtension {
@@ -501,6 +508,9 @@ pub const CADR_INSTANCE_TRANSLUCENT_BY_TEXTURE: CadrInstanceFlags = 1 << 7;
 /// mode's hidden silhouettes pass needs only such parts: a part whose every triangle has one
 /// normal yields no silhouette segment there.
 pub const CADR_INSTANCE_CURVED: CadrInstanceFlags = 1 << 8;
+/// Since ABI 1.18: the part's material cuts texels out (the alpha mode MASK with a base-colour
+/// texture): through the holes its inside, its back faces, may show.
+pub const CADR_INSTANCE_CUTOUT: CadrInstanceFlags = 1 << 9;
 
 /// One drawable part on one path of the scene tree (the unit of "individual" drawing). Index
 /// positions are absolute element offsets in the scene's index buffers; indices are relative
@@ -714,6 +724,9 @@ pub const CADR_EXTENSION_CLUSTER_CULL: CadrExtensionKind = 2;
 /// Since ABI 1.15: the kind of [`CadrFrameSlot`], chained on [`CadrSceneView::extensions`] of
 /// the views the host gives to `prepare`, `record` and a GPU culler's `record`.
 pub const CADR_EXTENSION_FRAME_SLOT: CadrExtensionKind = 3;
+/// Since ABI 1.18: the kind of [`CadrBackFacePasses`], chained on
+/// [`CadrGpuCullContext::extensions`].
+pub const CADR_EXTENSION_BACK_FACE_PASSES: CadrExtensionKind = 4;
 
 /// Since ABI 1.15 ([`CADR_EXTENSION_FRAME_SLOT`]): which of the host's frames in flight is being
 /// recorded. The host lets the GPU work on up to `slot_count` frames while it records the next;
@@ -909,6 +922,39 @@ pub struct CadrClusterCull {
     /// clusters that face away from the eye, for closed parts
     /// ([`CADR_INSTANCE_CLOSED`]) that are not translucent and that no section plane cuts.
     pub back_faces_hidden: *const u32,
+}
+
+/// Since ABI 1.18: which instances a pass takes by whether the rasterizer may cull their back
+/// faces ([`CadrBackFacePasses`]).
+pub type CadrFaceRoute = u32;
+/// Every instance the pass's filter keeps (what passes without a route draw).
+pub const CADR_FACES_ANY: CadrFaceRoute = 0;
+/// Only the instances whose back faces can never show, which the pass's pipeline culls: closed
+/// ([`CADR_INSTANCE_CLOSED`]), wound counter-clockwise seen from outside (not
+/// [`CADR_INSTANCE_INSIDE_OUT`]), neither [`CADR_INSTANCE_TRANSLUCENT`] nor
+/// [`CADR_INSTANCE_CUTOUT`], placed by a matrix that
+/// keeps handedness (a positive determinant: a mirroring matrix turns the winding), with the
+/// bounding sphere wholly on the inner side of the near plane (the eye cannot look into the
+/// part) and crossed by no section plane (a cut part shows its inside).
+pub const CADR_FACES_CULLED: CadrFaceRoute = 1;
+/// Only the instances [`CADR_FACES_CULLED`] does not take.
+pub const CADR_FACES_KEPT: CadrFaceRoute = 2;
+
+/// Since ABI 1.18 ([`CADR_EXTENSION_BACK_FACE_PASSES`]): the host draws opaque surfaces in two
+/// passes, one whose pipeline culls back faces for the closed parts and one that draws both
+/// faces for the rest; the route of each pass says which instances it takes. The host chains
+/// it only for a culler that announces [`CADR_TRAIT_ROUTES_BACK_FACES`], and such a culler
+/// writes every instance into exactly one of the two passes (the route is decided per
+/// instance, the same way in every phase of a frame). Owned by the host, valid for the call.
+#[repr(C)]
+#[derive(Clone, Copy, Debug)]
+pub struct CadrBackFacePasses {
+    /// `kind` = [`CADR_EXTENSION_BACK_FACE_PASSES`].
+    pub header: CadrExtension,
+    /// Number of entries at `routes` (the cull context's `pass_count`).
+    pub pass_count: u32,
+    /// Per pass, a `CADR_FACES_*` route.
+    pub routes: *const CadrFaceRoute,
 }
 
 /// What a draw pass draws.
@@ -1435,7 +1481,8 @@ pub struct CadrGpuCullContext {
     pub pass_exclusions: *const CadrPassExclusion,
     /// Since ABI 1.14 (read it only when `size` covers it): the host's extension structs for
     /// this call (a chain of [`CadrExtension`]s, or null), valid for the call:
-    /// [`CadrClusterCull`] where the scene has clusters.
+    /// [`CadrClusterCull`] where the scene has clusters; since ABI 1.18 [`CadrBackFacePasses`]
+    /// where the culler announces [`CADR_TRAIT_ROUTES_BACK_FACES`].
     pub extensions: *const CadrExtension,
 }
 

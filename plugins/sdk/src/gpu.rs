@@ -321,7 +321,11 @@ mod tests {
     fn a_buffer_made_once_fits_exactly_and_a_growing_one_grows_by_half() {
         assert_eq!(grown_capacity(0, 235_140), 235_140);
         assert_eq!(grown_capacity(1_000, 1_001), 1_500);
-        assert_eq!(grown_capacity(1_000, 4_000), 4_000, "never less than needed");
+        assert_eq!(
+            grown_capacity(1_000, 4_000),
+            4_000,
+            "never less than needed"
+        );
         // Growing one element at a time from 1 reallocates a logarithmic number of times.
         let (mut held, mut reallocations) = (1_u64, 0);
         for needed in 2..=1_000_000 {

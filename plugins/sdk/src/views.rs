@@ -634,6 +634,31 @@ impl<'a> GpuCull<'a> {
         }
     }
 
+    /// Per pass, which instances it takes by whether their back faces are culled
+    /// ([`abi::CadrBackFacePasses`], `CADR_FACES_*`); all [`abi::CADR_FACES_ANY`] without the
+    /// extension (a host that splits no pass).
+    pub fn face_routes(&self) -> Vec<abi::CadrFaceRoute> {
+        let passes = self.passes().len();
+        let end = std::mem::offset_of!(abi::CadrGpuCullContext, extensions)
+            + std::mem::size_of::<usize>();
+        let chain = if (self.raw.size as usize) < end {
+            std::ptr::null()
+        } else {
+            self.raw.extensions
+        };
+        // SAFETY: the host's chain (or null) is valid for the call; an extension of this kind
+        // is a `CadrBackFacePasses`.
+        let split: Option<&abi::CadrBackFacePasses> =
+            unsafe { extension(chain, abi::CADR_EXTENSION_BACK_FACE_PASSES) };
+        match split {
+            Some(split) if !split.routes.is_null() && split.pass_count as usize == passes => {
+                // SAFETY: the host's array of `pass_count` entries, valid for the call.
+                unsafe { std::slice::from_raw_parts(split.routes, passes) }.to_vec()
+            }
+            _ => vec![abi::CADR_FACES_ANY; passes],
+        }
+    }
+
     /// The sub-pixel threshold (projected diameter in pixels below which a part is culled);
     /// 0, culling nothing for its size, from a host older than ABI 1.5.
     pub fn min_pixels(&self) -> f32 {

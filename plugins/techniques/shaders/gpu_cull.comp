@@ -8,6 +8,10 @@
 // pass gets no commands for the parts its filter leaves out (the X-ray mode's opaque pass
 // draws only highlighted parts, the section caps' pass only closed parts a plane cuts).
 //
+// Where the host splits the opaque surfaces by their back faces (CadrBackFacePasses), each part
+// goes to one of the two passes: the closed parts whose back faces cannot show to the pass whose
+// rasterizer culls them, the others to the pass that draws both faces.
+//
 // With CLUSTERS defined (gpu-clusters), a part that passes gets, in the triangle passes, its
 // clusters instead of one command: those of its level-of-detail cut (the coarsest whose error
 // projects at or under the threshold), each tested against the frustum, the section planes,
@@ -23,6 +27,11 @@ const uint INSTANCE_CANDIDATE = 8u;
 const uint INSTANCE_CLOSED = 16u;
 const uint INSTANCE_INSIDE_OUT = 32u;
 const uint INSTANCE_TRANSLUCENT = 64u;
+const uint INSTANCE_CUTOUT = 512u;
+
+// Which parts a pass takes by their back faces (CADR_FACES_*).
+const uint FACES_ANY = 0u;
+const uint FACES_CULLED = 1u;
 
 // What this dispatch does.
 const uint MODE_FRUSTUM = 0u;          // frustum only
@@ -141,6 +150,8 @@ layout(push_constant) uniform Dispatch {
     uint cluster_budget;
     // The cluster visibility table's bits less one.
     uint cluster_bit_mask;
+    // Which parts the pass takes by whether the rasterizer culls their back faces.
+    uint face_route;
 } dispatch;
 
 // Inside the frustum.
@@ -237,6 +248,18 @@ bool large_enough(vec3 center, float radius) {
         return true;
     }
     return 2.0 * radius * view.sub_pixel.y >= view.sub_pixel.x * nearest;
+}
+
+// Whether the rasterizer may cull the part's back faces (CADR_FACES_CULLED): closed, wound
+// counter-clockwise outside, neither translucent nor cut out, placed without mirroring (which
+// turns the winding), wholly on the inner side of the near plane (the eye cannot look into it)
+// and crossed by no section plane (`cut`). Decided per part, the same in every phase.
+bool back_faces_culled(uint flags, mat3 rotation, vec3 center, float radius, bool cut) {
+    const uint SEEN_INSIDE = INSTANCE_INSIDE_OUT | INSTANCE_TRANSLUCENT | INSTANCE_CUTOUT;
+    float slack = radius + 1e-5 * length(center);
+    return (flags & (INSTANCE_CLOSED | SEEN_INSIDE)) == INSTANCE_CLOSED
+        && determinant(rotation) > 0.0 && !cut
+        && dot(view.planes[4].xyz, center) + view.planes[4].w > slack;
 }
 
 // Writes an indirect command for `count` indices from `first`, instance `id`, at `slot` of the
@@ -529,6 +552,11 @@ void main() {
         && (entry.flags & dispatch.exclude_mask) == dispatch.exclude_value;
     if (!draw || count == 0u || (entry.flags & dispatch.filter_mask) != dispatch.filter_value
         || excluded || (dispatch.filter_section_cut != 0u && !sections.y)) {
+        return;
+    }
+    if (dispatch.face_route != FACES_ANY
+        && back_faces_culled(entry.flags, rotation, center, radius, sections.y)
+            != (dispatch.face_route == FACES_CULLED)) {
         return;
     }
 #ifdef CLUSTERS

@@ -87,10 +87,12 @@ struct CullDispatch {
     cluster_budget: u32,
     /// Bits of the cluster visibility table, less one (a power of two less one).
     cluster_bit_mask: u32,
+    /// Which parts the pass takes by whether their back faces are culled (`CADR_FACES_*`).
+    face_route: abi::CadrFaceRoute,
 }
 
 /// Bytes of [`CullDispatch`] as pushed.
-const CULL_PUSH_BYTES: u32 = 68;
+const CULL_PUSH_BYTES: u32 = 72;
 /// The most bits of the cluster visibility table (32 MiB a copy): past it, clusters share
 /// bits, which only makes phase 0 draw a few hidden clusters.
 const MAX_CLUSTER_BITS: u64 = 1 << 28;
@@ -675,6 +677,7 @@ impl<const OCCLUSION: bool, const CLUSTERS: bool> GpuCuller<OCCLUSION, CLUSTERS>
             );
         }
         let filters = cull.pass_filters();
+        let face_routes = cull.face_routes();
         for (index, (pass, filter)) in cull
             .passes()
             .iter()
@@ -689,7 +692,11 @@ impl<const OCCLUSION: bool, const CLUSTERS: bool> GpuCuller<OCCLUSION, CLUSTERS>
                 pass_slot: slot as u32,
                 first_command: slot as u32 * self.capacity,
                 mode,
-                writes_visibility: u32::from(index == 0),
+                // The first pass, and where the surfaces are split, the first of the other
+                // parts: between them they see every part once.
+                writes_visibility: u32::from(
+                    index == 0 || face_routes.get(index) == Some(&abi::CADR_FACES_KEPT),
+                ),
                 pyramid_levels: self.pyramid_levels,
                 filter,
                 lod_error,
@@ -697,6 +704,10 @@ impl<const OCCLUSION: bool, const CLUSTERS: bool> GpuCuller<OCCLUSION, CLUSTERS>
                 command_capacity: self.capacity,
                 cluster_budget: self.cluster_budget,
                 cluster_bit_mask: self.cluster_visibility.words * 32 - 1,
+                face_route: face_routes
+                    .get(index)
+                    .copied()
+                    .unwrap_or(abi::CADR_FACES_ANY),
             };
             let constants = words(&[
                 dispatch.instance_count,
@@ -716,8 +727,9 @@ impl<const OCCLUSION: bool, const CLUSTERS: bool> GpuCuller<OCCLUSION, CLUSTERS>
                 dispatch.command_capacity,
                 dispatch.cluster_budget,
                 dispatch.cluster_bit_mask,
+                dispatch.face_route,
             ]);
-            // SAFETY: recording; the constants fit the layout's 68 bytes.
+            // SAFETY: recording; the constants fit the layout's 72 bytes.
             unsafe {
                 device.cmd_push_constants(
                     command_buffer,

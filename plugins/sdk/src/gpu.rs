@@ -245,6 +245,13 @@ impl HostBuffer {
         self.raw.size_bytes
     }
 
+    /// The host's id for it: never given to another buffer, unlike the `VkBuffer` handle, which
+    /// a driver may hand out again for a buffer made after this one is destroyed. What a cache
+    /// of descriptor writes should key on.
+    pub fn id(&self) -> u64 {
+        self.raw.id
+    }
+
     /// Device address (0 without the usage).
     pub fn address(&self) -> u64 {
         self.raw.address

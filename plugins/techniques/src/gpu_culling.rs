@@ -64,6 +64,10 @@ const MODE_FRUSTUM: u32 = 0;
 const MODE_LAST_VISIBLE: u32 = 1;
 const MODE_NEWLY_VISIBLE: u32 = 2;
 
+/// What a frame slot's cull set was last written with: the host's buffers' handles, the ids of
+/// ours, the scene's buffers generation and the view's offset.
+type CullSetKey = ([u64; 13], [u64; 8], u64, u64);
+
 /// Push constants of one cull dispatch.
 #[derive(Clone, Copy)]
 struct CullDispatch {
@@ -401,8 +405,8 @@ pub struct GpuCuller<const OCCLUSION: bool, const CLUSTERS: bool> {
     /// Levels of the pyramid of the current target size (a push constant of the culls).
     pyramid_levels: u32,
     /// What the descriptor sets were last written with.
-    cull_written: [Option<([u64; 13], u64)>; FRAME_SLOTS],
-    pyramid_written: Option<[u64; 2]>,
+    cull_written: [Option<CullSetKey>; FRAME_SLOTS],
+    pyramid_written: Option<(u64, u64)>,
 }
 
 impl<const OCCLUSION: bool, const CLUSTERS: bool> Technique for GpuCuller<OCCLUSION, CLUSTERS> {
@@ -604,11 +608,25 @@ impl<const OCCLUSION: bool, const CLUSTERS: bool> GpuCuller<OCCLUSION, CLUSTERS>
                 self.phase0_skipped.raw(),
             ]);
         }
+        // Keyed on what cannot come back: the host's scene buffers by handle and generation
+        // (it bumps the generation when it replaces one), ours by id. A destroyed buffer's
+        // handle may be given to the next one made (lavapipe's are addresses), and a set still
+        // pointing at the old one's memory then reads and writes what lives there now.
+        let own = [
+            self.visibility.buffers[LAST].id(),
+            self.visibility.buffers[NOW].id(),
+            self.pyramid.id(),
+            self.cluster_visibility.buffers[LAST].id(),
+            self.cluster_visibility.buffers[NOW].id(),
+            self.phase0_skipped.id(),
+            commands.id(),
+            self.counts.id(),
+        ];
         let mut raw = [0u64; 13];
         for (slot, b) in raw.iter_mut().zip(&buffers) {
             *slot = b.as_raw();
         }
-        let key = (raw, view_offset);
+        let key = (raw, own, scene.buffers_generation, view_offset);
         if self.cull_written[slot] == Some(key) {
             return;
         }
@@ -809,7 +827,9 @@ impl<const OCCLUSION: bool, const CLUSTERS: bool> GpuCuller<OCCLUSION, CLUSTERS>
         if depth_view == vk::ImageView::null() {
             return Err("the host passed no depth for phase 1".into());
         }
-        let key = [raw.depth_view, self.pyramid.raw().as_raw()];
+        // The host's depth view by handle (it changes with the target), our pyramid by id (see
+        // `write_cull_set`).
+        let key = (raw.depth_view, self.pyramid.id());
         let device = &self.gpu.device;
         if self.pyramid_written != Some(key) {
             let image = [vk::DescriptorImageInfo::default()

@@ -1,6 +1,6 @@
-//! Closed parts drawn with their back faces culled by the rasterizer: the GPU cullers that can
-//! (`gpu-frustum`, `gpu-occlusion`) route them into a pass of their own (`CadrBackFacePasses`),
-//! and the picture is the one drawing both faces of every part shows, also where back faces can show: an open part seen from
+//! Closed parts drawn with their back faces culled by the rasterizer: the GPU cullers route
+//! them into a pass of their own (`CadrBackFacePasses`), and the picture is the one drawing
+//! both faces of every part shows, also where back faces can show: an open part seen from
 //! inside, an inside-out mesh, a mirrored copy, a part a section plane cuts, a part holding the
 //! eye, and with edges drawn over the surfaces.
 #![allow(clippy::unwrap_used)] // Test code: a failed unwrap is a failed test.
@@ -143,7 +143,7 @@ fn closed_parts_drawn_without_back_faces_look_as_with_them_and_the_others_keep_t
     for case in &CASES {
         // No culler: every part in one pass, both faces drawn.
         let (reference, all) = draw(case, "none");
-        for culling in ["gpu-frustum", "gpu-occlusion"] {
+        for culling in ["gpu-frustum", "gpu-occlusion", "gpu-clusters"] {
             let (image, stats) = draw(case, culling);
             let difference = compare(&image, &reference).unwrap();
             assert!(
@@ -152,7 +152,7 @@ fn closed_parts_drawn_without_back_faces_look_as_with_them_and_the_others_keep_t
                 case.name
             );
             // The solid surfaces are split in two passes, each with its own pipeline, in every
-            // phase of the culler (gpu-occlusion draws in two).
+            // phase of the culler (gpu-occlusion and gpu-clusters draw in two).
             if case.mode == ShadeMode::Solid {
                 let phases = if culling == "gpu-frustum" { 1 } else { 2 };
                 assert_eq!(

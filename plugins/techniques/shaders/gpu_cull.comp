@@ -180,6 +180,13 @@ bvec2 against_sections(vec3 center, float radius) {
     return bvec2(cut_away, crossed);
 }
 
+// The size of level `level` of the depth pyramid: the target halved level + 1 times, rounding
+// up, at least 1 (as the host's levels are made).
+uvec2 pyramid_level_size(uint level) {
+    uint shift = level + 1u;
+    return max((view.target.xy + (1u << shift) - 1u) >> shift, uvec2(1u));
+}
+
 // Whether the sphere may be visible over the depth drawn so far (conservative: the nearest
 // depth of its box against the farthest depth of the pyramid texels under its screen rect).
 bool passes_pyramid(vec3 center, float radius) {
@@ -212,13 +219,15 @@ bool passes_pyramid(vec3 center, float radius) {
     // The level where the rect spans at most 3 texels per axis: fine enough that a part
     // hidden near a silhouette is still found hidden.
     uint level = uint(clamp(ceil(log2(max(extent.x, extent.y))) - 2.0, 0.0, float(levels - 1u)));
-    // Where the level starts and how wide it is.
-    uvec2 dims = (view.target.xy + 1u) / 2u;
+    // Where the level starts and how wide it is. Each level's size is computed whole, not
+    // carried from one iteration to the next: Mesa 22.3's lavapipe, with this function inlined
+    // into the cluster walk, left `dims` one level further on than `offset`.
     uint offset = 0u;
-    for (uint k = 0u; k < level; ++k) {
-        offset += dims.x * dims.y;
-        dims = max((dims + 1u) / 2u, uvec2(1u));
+    for (uint finer = 0u; finer < level; ++finer) {
+        uvec2 finer_dims = pyramid_level_size(finer);
+        offset += finer_dims.x * finer_dims.y;
     }
+    uvec2 dims = pyramid_level_size(level);
     float scale = exp2(-float(level + 1u));
     uvec2 a = uvec2(clamp(ivec2(floor(texel_lo * scale)), ivec2(0), ivec2(dims) - 1));
     uvec2 b = uvec2(clamp(ivec2(floor(texel_hi * scale)), ivec2(0), ivec2(dims) - 1));

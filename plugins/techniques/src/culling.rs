@@ -166,10 +166,7 @@ technique_library! {
         gpu_culling crate::gpu_culling::GpuClusters {
             name: "gpu-clusters",
             description: "GPU cluster culling and level of detail: gpu-occlusion per part, then per cluster of the part's level-of-detail cut (frustum, normal cone, depth pyramid), so the triangles drawn follow the pixels covered.",
-            // Not yet CADR_TRAIT_ROUTES_BACK_FACES: on Mesa 22.3's lavapipe, with back faces
-            // culled, a cluster at a concave crease of a 1 px cut fails the depth pyramid where
-            // it shows (clusters.rs, where_the_cut_switches_levels_no_crack_shows_the_background).
-            features: GPU_CULLING_FEATURES, provides: REPLAYABLE | KEEPS_FRAME_SLOTS, needs: GPU_CULLING_NEEDS,
+            features: GPU_CULLING_FEATURES, provides: GPU_CULLING_PROVIDES, needs: GPU_CULLING_NEEDS,
         },
     ]
 }

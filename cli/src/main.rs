@@ -89,6 +89,11 @@ fn info(args: &InfoArgs) -> Result<(), String> {
     let stats = SceneStats::new(&scene, &flat);
     println!("scene:            {}", scene.name);
     print!("{stats}");
+    let (closed, inside_out, parts) = cadr_core::scene::closure::count_closed_parts(&scene);
+    println!(
+        "closed parts:     {closed} of {parts}, {inside_out} more inside out (section cuts \
+         through them are capped; GPU cullers skip their back faces)"
+    );
     println!(
         "loaded in:        {:.1} ms",
         started.elapsed().as_secs_f64() * 1e3

@@ -83,6 +83,11 @@ fn info_prints_the_statistics() {
         text.contains("instances:        1000 (paths to drawable parts)"),
         "{text}"
     );
+    // gen:grid's parts are closed prisms.
+    assert!(
+        text.contains("closed parts:     160 of 160, 0 more inside out"),
+        "{text}"
+    );
 }
 
 #[test]

@@ -72,6 +72,28 @@ pub fn closure(vertices: &[Vertex], indices: &[u32]) -> Closure {
     }
 }
 
+/// How the parts of `scene`'s geometries close: (closed, inside out, parts in all). Parts
+/// whose index range lies outside their geometry count as open.
+pub fn count_closed_parts(scene: &super::Scene) -> (usize, usize, usize) {
+    let mut counts = (0, 0, 0);
+    for geometry in &scene.geometries {
+        for part in &geometry.parts {
+            let start = part.first_index as usize;
+            let indices = geometry
+                .indices
+                .get(start..start.saturating_add(part.index_count as usize))
+                .unwrap_or(&[]);
+            match closure(&geometry.vertices, indices) {
+                Closure::Closed => counts.0 += 1,
+                Closure::InsideOut => counts.1 += 1,
+                Closure::Open => {}
+            }
+            counts.2 += 1;
+        }
+    }
+    counts
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -124,5 +146,32 @@ mod tests {
         assert_eq!(closure(&vertices, &one_flipped), Closure::Open);
         assert_eq!(closure(&vertices, &[]), Closure::Open);
         assert_eq!(closure(&vertices, &[0, 1, 9]), Closure::Open);
+    }
+
+    #[test]
+    fn a_scene_counts_its_closed_inside_out_and_open_parts() {
+        let (vertices, closed) = tetrahedron();
+        let flipped: Vec<u32> = closed.iter().rev().copied().collect();
+        let indices: Vec<u32> = [&closed[..], &flipped[..], &closed[..9]].concat();
+        let part = |first_index: u32, index_count: u32| super::super::Part {
+            first_index,
+            index_count,
+            first_wire_index: 0,
+            wire_index_count: 0,
+        };
+        let geometry = super::super::Geometry {
+            name: "tetrahedra".into(),
+            vertices,
+            indices,
+            wire_indices: Vec::new(),
+            // Closed, inside out, open, and a range past the indices (open).
+            parts: vec![part(0, 12), part(12, 12), part(24, 9), part(30, 12)],
+            attributes: Vec::new(),
+        };
+        let scene = super::super::Scene {
+            geometries: vec![geometry],
+            ..super::super::Scene::default()
+        };
+        assert_eq!(count_closed_parts(&scene), (1, 1, 4));
     }
 }

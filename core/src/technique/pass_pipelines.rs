@@ -1,7 +1,7 @@
 //! The pipelines of a technique combination and pass set ([`TechniquePipelines`]): one per
 //! pass, from the assembled shaders ([`super::shader_assembly`]), with the pipeline layout that
 //! joins the host's frame set with the paths' sets, and each pass's filter of the instances it
-//! draws ([`PassFilters`]).
+//! draws and, where the opaque surfaces are split by back faces, its route ([`PassFilters`]).
 
 use std::sync::Arc;
 

@@ -603,17 +603,24 @@ impl<'a> GpuCull<'a> {
         self.raw.phase
     }
 
-    /// The cluster culling options ([`abi::CadrClusterCull`]), from a host of ABI 1.14 or
-    /// later whose scene has clusters.
-    pub fn cluster_cull(&self) -> Option<&'a abi::CadrClusterCull> {
+    /// The host's extension chain for this call: null from a host older than ABI 1.14, whose
+    /// context ends before `extensions`.
+    fn extensions(&self) -> *const abi::CadrExtension {
         let end = std::mem::offset_of!(abi::CadrGpuCullContext, extensions)
             + std::mem::size_of::<usize>();
         if (self.raw.size as usize) < end {
-            return None;
+            std::ptr::null()
+        } else {
+            self.raw.extensions
         }
-        // SAFETY: the host's chain is valid for the call; an extension of this kind is a
-        // `CadrClusterCull`.
-        unsafe { extension(self.raw.extensions, abi::CADR_EXTENSION_CLUSTER_CULL) }
+    }
+
+    /// The cluster culling options ([`abi::CadrClusterCull`]), from a host of ABI 1.14 or
+    /// later whose scene has clusters.
+    pub fn cluster_cull(&self) -> Option<&'a abi::CadrClusterCull> {
+        // SAFETY: the host's chain (or null) is valid for the call; an extension of this kind
+        // is a `CadrClusterCull`.
+        unsafe { extension(self.extensions(), abi::CADR_EXTENSION_CLUSTER_CULL) }
     }
 
     /// Per pass, whether the back faces of closed opaque parts cannot show in it (see
@@ -639,17 +646,10 @@ impl<'a> GpuCull<'a> {
     /// extension (a host that splits no pass).
     pub fn face_routes(&self) -> Vec<abi::CadrFaceRoute> {
         let passes = self.passes().len();
-        let end = std::mem::offset_of!(abi::CadrGpuCullContext, extensions)
-            + std::mem::size_of::<usize>();
-        let chain = if (self.raw.size as usize) < end {
-            std::ptr::null()
-        } else {
-            self.raw.extensions
-        };
         // SAFETY: the host's chain (or null) is valid for the call; an extension of this kind
         // is a `CadrBackFacePasses`.
         let split: Option<&abi::CadrBackFacePasses> =
-            unsafe { extension(chain, abi::CADR_EXTENSION_BACK_FACE_PASSES) };
+            unsafe { extension(self.extensions(), abi::CADR_EXTENSION_BACK_FACE_PASSES) };
         match split {
             Some(split) if !split.routes.is_null() && split.pass_count as usize == passes => {
                 // SAFETY: the host's array of `pass_count` entries, valid for the call.

@@ -21,6 +21,9 @@
 //!   passes draw parts whole, at full detail: edges are the features a CAD user measures.
 //! - All cull parts smaller than the host's sub-pixel threshold (ABI 1.5, off by default):
 //!   a part whose bounding sphere projects under `min_pixels` across is drawn in no pass.
+//! - All route each part by its back faces where the host splits the opaque surfaces (ABI
+//!   1.18, `CadrBackFacePasses`): closed parts whose back faces cannot show go to the pass
+//!   whose rasterizer culls them, the rest to the pass that draws both faces.
 //!
 //! The submission draws the commands with `vkCmdDrawIndexedIndirectCount` (a submission
 //! providing `CADR_TRAIT_DRAWS_GPU_COMMANDS`); commands use absolute ranges and `firstInstance`

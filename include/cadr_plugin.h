@@ -20,7 +20,7 @@
 #define CADR_PLUGIN_ABI_MAJOR 1
 
 // Minor version of this ABI: additions that older readers may ignore.
-#define CADR_PLUGIN_ABI_MINOR 18
+#define CADR_PLUGIN_ABI_MINOR 19
 
 // `(major << 16) | minor`, what [`CadrPluginVersionFn`] returns.
 #define CADR_PLUGIN_ABI_VERSION ((CADR_PLUGIN_ABI_MAJOR << 16) | CADR_PLUGIN_ABI_MINOR)
@@ -84,7 +84,7 @@ typedef uint32_t (*CadrPluginVersionFn)(void);
 // know no kind, so they skip every extension a technique offers and refuse a technique that
 // requires one; ABI 1.14 defines [`CADR_EXTENSION_SCENE_CLUSTERS`] and
 // [`CADR_EXTENSION_CLUSTER_CULL`], ABI 1.15 [`CADR_EXTENSION_FRAME_SLOT`], ABI 1.18
-// [`CADR_EXTENSION_BACK_FACE_PASSES`].
+// [`CADR_EXTENSION_BACK_FACE_PASSES`], ABI 1.19 [`CADR_EXTENSION_SHARED_FACE_STREAMS`].
 typedef struct CadrExtension {
   // Size of the whole extension struct, this header included.
   uint32_t size;
@@ -562,7 +562,10 @@ typedef struct CadrPathRef_CadrParameterPathVtable {
 
 // Since ABI 1.3: where the indirect commands of one pass lie, written by a GPU culler
 // during the frame: `VkDrawIndexedIndirectCommand`s (20 bytes each, `firstInstance` the
-// instance id) and their count (a u32). The culler owns the buffers.
+// instance id) and their count (a u32). The culler owns the buffers. Since ABI 1.19, two
+// consecutive passes with equal draws share one stream whose commands each start with the
+// word that names their pass ([`CadrSharedFaceStreams`]); only a submission that
+// announces [`CADR_TRAIT_SWITCHES_PIPELINES`] is given such draws.
 typedef struct CadrGpuDraws {
   // `VkBuffer` of the commands (0: the pass draws nothing).
   uint64_t commands;
@@ -814,7 +817,9 @@ typedef struct CadrGpuCullContext {
   // Since ABI 1.14 (read it only when `size` covers it): the host's extension structs for
   // this call (a chain of [`CadrExtension`]s, or null), valid for the call:
   // [`CadrClusterCull`] where the scene has clusters; since ABI 1.18 [`CadrBackFacePasses`]
-  // where the culler announces [`CADR_TRAIT_ROUTES_BACK_FACES`].
+  // where the culler announces [`CADR_TRAIT_ROUTES_BACK_FACES`]; since ABI 1.19
+  // [`CadrSharedFaceStreams`] beside it where the submission announces
+  // [`CADR_TRAIT_SWITCHES_PIPELINES`].
   const struct CadrExtension *extensions;
 } CadrGpuCullContext;
 
@@ -1105,6 +1110,15 @@ typedef struct CadrTransparencyVtable {
 // (holes), and the other parts twice.
 #define CADR_TRAIT_ROUTES_BACK_FACES (1 << 11)
 
+// Since ABI 1.19. Submission, an announcement: it draws a shared stream of GPU-written
+// commands in which each command names the pass whose pipeline draws it
+// ([`CadrSharedFaceStreams`]; the `dgc` submission does it with an execution set
+// of the two passes' pipelines, the GPU picking one per command). Where the active submission
+// announces it and the culler routes back faces ([`CADR_TRAIT_ROUTES_BACK_FACES`], ABI 1.19 or
+// later), the host asks the culler for shared streams and makes the two passes' pipelines
+// bindable by the GPU (`VK_PIPELINE_CREATE_2_INDIRECT_BINDABLE_BIT_EXT`).
+#define CADR_TRAIT_SWITCHES_PIPELINES (1 << 12)
+
 // Device-local; written by transfers or shaders.
 #define CADR_MEMORY_GPU_ONLY 0
 
@@ -1168,6 +1182,10 @@ typedef struct CadrTransparencyVtable {
 // Since ABI 1.18: the kind of [`CadrBackFacePasses`], chained on
 // [`CadrGpuCullContext::extensions`].
 #define CADR_EXTENSION_BACK_FACE_PASSES 4
+
+// Since ABI 1.19: the kind of [`CadrSharedFaceStreams`], chained on
+// [`CadrGpuCullContext::extensions`].
+#define CADR_EXTENSION_SHARED_FACE_STREAMS 5
 
 // Every instance the pass's filter keeps (what passes without a route draw).
 #define CADR_FACES_ANY 0

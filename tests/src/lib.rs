@@ -1,6 +1,7 @@
 //! Helpers shared by cadr's integration tests: a device with validation on, reference images
 //! compared with a perceptual metric, and small glTF files to break on purpose.
 
+pub mod back_face_cases;
 pub mod c_programs;
 pub mod fixtures;
 pub mod images;

@@ -1,6 +1,7 @@
 //! The `dgc` submission (`VK_EXT_device_generated_commands`, Mesa 25's lavapipe): under every
 //! culler it draws the picture `groups-mdi-replay` draws, frame by frame while the camera
-//! orbits, as one generated-commands execution per pass. Validation is on; the messages the
+//! orbits, as one generated-commands execution per pass (one for both passes of the opaque
+//! surfaces where a GPU culler splits them by back faces). Validation is on; the messages the
 //! 1.3.239 layer gives about the extension, which it predates, are the only ones excused
 //! (`cadr_core::vk` instance module).
 #![allow(clippy::unwrap_used)] // Test code: a failed unwrap is a failed test.
@@ -11,9 +12,10 @@ use cadr_core::generate::{generate, GeneratorSpec};
 use cadr_core::graph::SceneGraph;
 use cadr_core::render::{Camera, FrameStats, DEFAULT_DIRECTION};
 use cadr_core::scene::flatten;
-use cadr_core::technique::Combination;
+use cadr_core::technique::{Combination, ShadeMode};
 use cadr_core::tree::SceneTree;
 use cadr_core::view::View;
+use cadr_tests::back_face_cases::{draw, CASES};
 use cadr_tests::images::{compare, SAME_PICTURE};
 use cadr_tests::{assert_no_validation_errors, plugin_registry, scene_wide, test_device};
 
@@ -116,6 +118,7 @@ fn the_preprocess_memory_query_answers_for_every_scene_size() {
             depth_bias: false,
             triangle_outlines: false,
             cull_back_faces: false,
+            indirect_bindable: false,
             colors: &[ColorTarget::replaced(COLOR_FORMAT)],
             depth: DepthUse::TestAndWrite,
             vertex_constants: &[],
@@ -164,4 +167,48 @@ fn the_preprocess_memory_query_answers_for_every_scene_size() {
     unsafe { functions.destroy_layout(commands_layout, None) };
     drop(pipeline);
     assert_no_validation_errors(&device);
+}
+
+/// Where a GPU culler splits the opaque surfaces into closed parts drawn with their back faces
+/// culled and the others drawn with both, `dgc` draws the two passes from one stream in which
+/// the GPU picks each part's pipeline from an execution set: the picture is the one drawing
+/// both faces of every part shows (an open box seen from inside, an inside-out box, a mirrored
+/// copy, a cut, the eye inside a box), and each phase binds one pipeline and runs one execution
+/// for its surfaces where the split's two passes would bind two.
+#[test]
+fn dgc_draws_the_split_surfaces_from_one_stream_whose_pipelines_the_gpu_picks() {
+    assert!(
+        test_device().capabilities().device_generated_commands,
+        "the default driver has no VK_EXT_device_generated_commands: run scripts/setup.sh"
+    );
+    for case in &CASES {
+        let (reference, _) = draw(case, "individual-indirect-count", "none");
+        for culling in ["gpu-frustum", "gpu-occlusion", "gpu-clusters"] {
+            let (image, stats) = draw(case, "dgc", culling);
+            let difference = compare(&image, &reference).unwrap();
+            assert!(
+                difference.within(SAME_PICTURE),
+                "{}, dgc / {culling}: {difference:?}",
+                case.name
+            );
+            // The same combination drawing the split as two streams binds one pipeline more
+            // per phase; with one stream, every bound pipeline runs one execution.
+            let (_, two_streams) = draw(case, "individual-indirect-count", culling);
+            if case.mode == ShadeMode::Solid {
+                let phases = if culling == "gpu-frustum" { 1 } else { 2 };
+                assert_eq!(
+                    stats.pipeline_binds + phases,
+                    two_streams.pipeline_binds,
+                    "{}, dgc / {culling}: one surface pipeline bound in each phase",
+                    case.name
+                );
+                assert_eq!(
+                    stats.draw_calls, stats.pipeline_binds,
+                    "{}, dgc / {culling}: one execution per bound pipeline",
+                    case.name
+                );
+            }
+            assert_eq!(stats.triangles, two_streams.triangles, "{}", case.name);
+        }
+    }
 }

@@ -3,10 +3,11 @@
 //! with the number of sequences read from GPU memory.
 //!
 //! Bound, as the `dgc` submission uses them: the feature struct, an indirect commands layout
-//! of indexed-draw tokens, the memory-requirements query and the execute command (with the
-//! pipeline bound, no execution set; preprocessing implicit). Execution sets, push-constant and
-//! other tokens, explicit preprocessing and shader objects are not bound: bind them with the
-//! technique that uses them.
+//! of indexed-draw tokens, with or without an execution-set token before them, execution sets
+//! of pipelines (made, updated, destroyed; their pipelines made indirect-bindable), the
+//! memory-requirements query and the execute command (preprocessing implicit). Push-constant
+//! and other tokens, explicit preprocessing and shader objects are not bound: bind them with
+//! the technique that uses them.
 
 use std::ffi::{c_void, CStr};
 use std::marker::PhantomData;
@@ -25,12 +26,18 @@ const fn structure_type(offset: i32) -> vk::StructureType {
 pub const STRUCTURE_TYPE_FEATURES: vk::StructureType = structure_type(0);
 /// `VK_STRUCTURE_TYPE_GENERATED_COMMANDS_MEMORY_REQUIREMENTS_INFO_EXT`.
 pub const STRUCTURE_TYPE_MEMORY_REQUIREMENTS_INFO: vk::StructureType = structure_type(2);
+/// `VK_STRUCTURE_TYPE_INDIRECT_EXECUTION_SET_CREATE_INFO_EXT`.
+pub const STRUCTURE_TYPE_EXECUTION_SET_CREATE_INFO: vk::StructureType = structure_type(3);
 /// `VK_STRUCTURE_TYPE_GENERATED_COMMANDS_INFO_EXT`.
 pub const STRUCTURE_TYPE_GENERATED_COMMANDS_INFO: vk::StructureType = structure_type(4);
 /// `VK_STRUCTURE_TYPE_INDIRECT_COMMANDS_LAYOUT_CREATE_INFO_EXT`.
 pub const STRUCTURE_TYPE_LAYOUT_CREATE_INFO: vk::StructureType = structure_type(6);
 /// `VK_STRUCTURE_TYPE_INDIRECT_COMMANDS_LAYOUT_TOKEN_EXT`.
 pub const STRUCTURE_TYPE_LAYOUT_TOKEN: vk::StructureType = structure_type(7);
+/// `VK_STRUCTURE_TYPE_WRITE_INDIRECT_EXECUTION_SET_PIPELINE_EXT`.
+pub const STRUCTURE_TYPE_WRITE_EXECUTION_SET_PIPELINE: vk::StructureType = structure_type(8);
+/// `VK_STRUCTURE_TYPE_INDIRECT_EXECUTION_SET_PIPELINE_INFO_EXT`.
+pub const STRUCTURE_TYPE_EXECUTION_SET_PIPELINE_INFO: vk::StructureType = structure_type(10);
 /// `VK_STRUCTURE_TYPE_GENERATED_COMMANDS_PIPELINE_INFO_EXT`.
 pub const STRUCTURE_TYPE_GENERATED_COMMANDS_PIPELINE_INFO: vk::StructureType = structure_type(13);
 
@@ -38,6 +45,15 @@ pub const STRUCTURE_TYPE_GENERATED_COMMANDS_PIPELINE_INFO: vk::StructureType = s
 /// `VkBufferUsageFlags2CreateInfoKHR` of `VK_KHR_maintenance5`).
 pub const BUFFER_USAGE_2_PREPROCESS_BUFFER: vk::BufferUsageFlags2KHR =
     vk::BufferUsageFlags2KHR::from_raw(1 << 31);
+/// `VK_PIPELINE_CREATE_2_INDIRECT_BINDABLE_BIT_EXT` (a `VkPipelineCreateFlags2` bit, given
+/// through `VkPipelineCreateFlags2CreateInfoKHR` of `VK_KHR_maintenance5`): the pipeline may
+/// be put into an execution set.
+pub const PIPELINE_CREATE_2_INDIRECT_BINDABLE: vk::PipelineCreateFlags2KHR =
+    vk::PipelineCreateFlags2KHR::from_raw(1 << 38);
+/// `VK_INDIRECT_EXECUTION_SET_INFO_TYPE_PIPELINES_EXT`: an execution set of pipelines (the
+/// only kind cadr makes; `VkIndirectExecutionSetInfoTypeEXT`).
+pub const EXECUTION_SET_OF_PIPELINES: i32 = 0;
+
 /// `VkIndirectCommandsLayoutEXT`: how one sequence of the stream is laid out.
 #[repr(transparent)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
@@ -50,7 +66,8 @@ impl IndirectCommandsLayout {
     }
 }
 
-/// `VkIndirectExecutionSetEXT` (cadr passes the null handle: the bound pipeline draws).
+/// `VkIndirectExecutionSetEXT`: pipelines a sequence picks by index (null: the bound pipeline
+/// draws every sequence).
 #[repr(transparent)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
 pub struct IndirectExecutionSet(u64);
@@ -68,6 +85,9 @@ impl IndirectExecutionSet {
 pub struct TokenType(i32);
 
 impl TokenType {
+    /// `VK_INDIRECT_COMMANDS_TOKEN_TYPE_EXECUTION_SET_EXT`: a `u32`, the index in the execution
+    /// set of the pipeline that draws the sequence.
+    pub const EXECUTION_SET: Self = Self(0);
     /// `VK_INDIRECT_COMMANDS_TOKEN_TYPE_DRAW_INDEXED_EXT`: a `VkDrawIndexedIndirectCommand`.
     pub const DRAW_INDEXED: Self = Self(5);
     /// The raw value.
@@ -126,6 +146,8 @@ unsafe impl vk::TaggedStructure for PhysicalDeviceFeatures<'_> {
 pub union TokenData<'a> {
     /// For draw tokens, which need nothing.
     pub none: *const c_void,
+    /// `pExecutionSet`, for [`TokenType::EXECUTION_SET`].
+    pub execution_set: *const ExecutionSetToken,
     _marker: PhantomData<&'a ()>,
 }
 
@@ -171,6 +193,130 @@ impl<'a> LayoutToken<'a> {
             },
             offset,
         )
+    }
+}
+
+impl<'a> LayoutToken<'a> {
+    /// A `u32` at `offset` that picks the sequence's pipeline from the execution set: `token`
+    /// says which stages the set's pipelines have.
+    pub fn execution_set(token: &'a ExecutionSetToken, offset: u32) -> Self {
+        Self::new(
+            TokenType::EXECUTION_SET,
+            TokenData {
+                execution_set: token,
+            },
+            offset,
+        )
+    }
+}
+
+/// `VkIndirectCommandsExecutionSetTokenEXT`: what an execution-set token switches.
+#[repr(C)]
+#[derive(Clone, Copy, Debug)]
+pub struct ExecutionSetToken {
+    /// `type`: [`EXECUTION_SET_OF_PIPELINES`].
+    pub ty: i32,
+    /// `shaderStages`: the stages the set's pipelines have.
+    pub shader_stages: vk::ShaderStageFlags,
+}
+
+/// `VkIndirectExecutionSetPipelineInfoEXT`: a set of pipelines like `initial_pipeline`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug)]
+pub struct ExecutionSetPipelineInfo<'a> {
+    /// Set by `new`.
+    pub s_type: vk::StructureType,
+    /// Chain.
+    pub p_next: *const c_void,
+    /// `initialPipeline`: index 0 of the set, and what every pipeline put in it must match.
+    pub initial_pipeline: vk::Pipeline,
+    /// `maxPipelineCount`.
+    pub max_pipeline_count: u32,
+    /// Lifetime of the chain.
+    pub _marker: PhantomData<&'a ()>,
+}
+
+impl ExecutionSetPipelineInfo<'_> {
+    /// A set of at most `max_pipelines`, `initial` at index 0.
+    pub fn new(initial: vk::Pipeline, max_pipelines: u32) -> Self {
+        Self {
+            s_type: STRUCTURE_TYPE_EXECUTION_SET_PIPELINE_INFO,
+            p_next: std::ptr::null(),
+            initial_pipeline: initial,
+            max_pipeline_count: max_pipelines,
+            _marker: PhantomData,
+        }
+    }
+}
+
+/// `VkIndirectExecutionSetInfoEXT`: what a set holds, by its type.
+#[repr(C)]
+#[derive(Clone, Copy)]
+pub union ExecutionSetInfo<'a> {
+    /// `pPipelineInfo`, for [`EXECUTION_SET_OF_PIPELINES`].
+    pub pipeline_info: *const ExecutionSetPipelineInfo<'a>,
+}
+
+impl std::fmt::Debug for ExecutionSetInfo<'_> {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str("ExecutionSetInfo")
+    }
+}
+
+/// `VkIndirectExecutionSetCreateInfoEXT`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug)]
+pub struct ExecutionSetCreateInfo<'a> {
+    /// Set by `pipelines`.
+    pub s_type: vk::StructureType,
+    /// Chain.
+    pub p_next: *const c_void,
+    /// `type`: [`EXECUTION_SET_OF_PIPELINES`].
+    pub ty: i32,
+    /// `info`, as `ty` says.
+    pub info: ExecutionSetInfo<'a>,
+}
+
+impl<'a> ExecutionSetCreateInfo<'a> {
+    /// A set of pipelines as `info` says.
+    pub fn pipelines(info: &'a ExecutionSetPipelineInfo<'a>) -> Self {
+        Self {
+            s_type: STRUCTURE_TYPE_EXECUTION_SET_CREATE_INFO,
+            p_next: std::ptr::null(),
+            ty: EXECUTION_SET_OF_PIPELINES,
+            info: ExecutionSetInfo {
+                pipeline_info: info,
+            },
+        }
+    }
+}
+
+/// `VkWriteIndirectExecutionSetPipelineEXT`: puts `pipeline` at `index` of a set.
+#[repr(C)]
+#[derive(Clone, Copy, Debug)]
+pub struct WriteExecutionSetPipeline<'a> {
+    /// Set by `new`.
+    pub s_type: vk::StructureType,
+    /// Chain.
+    pub p_next: *const c_void,
+    /// `index`.
+    pub index: u32,
+    /// `pipeline` (made indirect-bindable, like the set's initial pipeline).
+    pub pipeline: vk::Pipeline,
+    /// Lifetime of the chain.
+    pub _marker: PhantomData<&'a ()>,
+}
+
+impl WriteExecutionSetPipeline<'_> {
+    /// Puts `pipeline` at `index`.
+    pub fn new(index: u32, pipeline: vk::Pipeline) -> Self {
+        Self {
+            s_type: STRUCTURE_TYPE_WRITE_EXECUTION_SET_PIPELINE,
+            p_next: std::ptr::null(),
+            index,
+            pipeline,
+            _marker: PhantomData,
+        }
     }
 }
 
@@ -361,6 +507,21 @@ type DestroyLayout = unsafe extern "system" fn(
     *const vk::AllocationCallbacks<'_>,
 );
 
+type CreateExecutionSet = unsafe extern "system" fn(
+    vk::Device,
+    *const ExecutionSetCreateInfo<'_>,
+    *const vk::AllocationCallbacks<'_>,
+    *mut IndirectExecutionSet,
+) -> vk::Result;
+type DestroyExecutionSet =
+    unsafe extern "system" fn(vk::Device, IndirectExecutionSet, *const vk::AllocationCallbacks<'_>);
+type UpdateExecutionSetPipeline = unsafe extern "system" fn(
+    vk::Device,
+    IndirectExecutionSet,
+    u32,
+    *const WriteExecutionSetPipeline<'_>,
+);
+
 /// The extension's device-level functions, loaded for one device.
 #[derive(Clone)]
 pub struct Device {
@@ -369,6 +530,9 @@ pub struct Device {
     cmd_execute: CmdExecute,
     create_layout: CreateLayout,
     destroy_layout: DestroyLayout,
+    create_execution_set: CreateExecutionSet,
+    destroy_execution_set: DestroyExecutionSet,
+    update_execution_set_pipeline: UpdateExecutionSetPipeline,
 }
 
 impl std::fmt::Debug for Device {
@@ -405,6 +569,15 @@ impl Device {
             cmd_execute: function!(c"vkCmdExecuteGeneratedCommandsEXT", CmdExecute),
             create_layout: function!(c"vkCreateIndirectCommandsLayoutEXT", CreateLayout),
             destroy_layout: function!(c"vkDestroyIndirectCommandsLayoutEXT", DestroyLayout),
+            create_execution_set: function!(c"vkCreateIndirectExecutionSetEXT", CreateExecutionSet),
+            destroy_execution_set: function!(
+                c"vkDestroyIndirectExecutionSetEXT",
+                DestroyExecutionSet
+            ),
+            update_execution_set_pipeline: function!(
+                c"vkUpdateIndirectExecutionSetPipelineEXT",
+                UpdateExecutionSetPipeline
+            ),
         })
     }
 
@@ -465,6 +638,59 @@ impl Device {
     ) {
         // SAFETY: the caller's contract.
         unsafe { (self.destroy_layout)(self.handle, layout, as_ptr(allocator)) };
+    }
+}
+
+impl Device {
+    /// `vkCreateIndirectExecutionSetEXT`.
+    ///
+    /// # Safety
+    /// `info` and what it points to are valid (its initial pipeline made indirect-bindable);
+    /// `allocator` as for any Vulkan object.
+    pub unsafe fn create_execution_set(
+        &self,
+        info: &ExecutionSetCreateInfo<'_>,
+        allocator: Option<&vk::AllocationCallbacks<'_>>,
+    ) -> Result<IndirectExecutionSet, vk::Result> {
+        let mut set = IndirectExecutionSet::null();
+        // SAFETY: the caller's contract; the output lives on this frame.
+        let result =
+            unsafe { (self.create_execution_set)(self.handle, info, as_ptr(allocator), &mut set) };
+        result.result_with_success(set)
+    }
+
+    /// `vkUpdateIndirectExecutionSetPipelineEXT`.
+    ///
+    /// # Safety
+    /// The set is alive and no pending command uses the indices written; each pipeline is
+    /// indirect-bindable and matches the set's initial pipeline.
+    pub unsafe fn update_execution_set_pipelines(
+        &self,
+        set: IndirectExecutionSet,
+        writes: &[WriteExecutionSetPipeline<'_>],
+    ) {
+        // SAFETY: the caller's contract; `writes` lives for the call.
+        unsafe {
+            (self.update_execution_set_pipeline)(
+                self.handle,
+                set,
+                writes.len() as u32,
+                writes.as_ptr(),
+            )
+        };
+    }
+
+    /// `vkDestroyIndirectExecutionSetEXT`.
+    ///
+    /// # Safety
+    /// No pending command uses `set`; `allocator` as at creation.
+    pub unsafe fn destroy_execution_set(
+        &self,
+        set: IndirectExecutionSet,
+        allocator: Option<&vk::AllocationCallbacks<'_>>,
+    ) {
+        // SAFETY: the caller's contract.
+        unsafe { (self.destroy_execution_set)(self.handle, set, as_ptr(allocator)) };
     }
 }
 

@@ -61,7 +61,8 @@ fn c_layout(ty: &str, pointer: bool) -> (usize, usize) {
         | "VkStructureType"
         | "VkShaderStageFlags"
         | "VkIndirectCommandsLayoutUsageFlagsEXT"
-        | "VkIndirectCommandsTokenTypeEXT" => (4, 4),
+        | "VkIndirectCommandsTokenTypeEXT"
+        | "VkIndirectExecutionSetInfoTypeEXT" => (4, 4),
         "uint64_t"
         | "VkDeviceAddress"
         | "VkDeviceSize"
@@ -69,7 +70,7 @@ fn c_layout(ty: &str, pointer: bool) -> (usize, usize) {
         | "VkPipelineLayout"
         | "VkIndirectExecutionSetEXT"
         | "VkIndirectCommandsLayoutEXT" => (8, 8),
-        "VkIndirectCommandsTokenDataEXT" => {
+        "VkIndirectCommandsTokenDataEXT" | "VkIndirectExecutionSetInfoEXT" => {
             let fields = struct_layout(ty);
             (fields.size, fields.align)
         }
@@ -237,12 +238,45 @@ fn every_bound_struct_has_the_registry_layout() {
             [s_type, p_next, pipeline]
         ),
     );
-    // The union: as large and aligned as a pointer, each member a pointer.
+    check(
+        "VkIndirectCommandsExecutionSetTokenEXT",
+        rust_layout!(dgc::ExecutionSetToken, [ty, shader_stages]),
+    );
+    check(
+        "VkIndirectExecutionSetPipelineInfoEXT",
+        rust_layout!(
+            dgc::ExecutionSetPipelineInfo<'static>,
+            [s_type, p_next, initial_pipeline, max_pipeline_count]
+        ),
+    );
+    check(
+        "VkIndirectExecutionSetCreateInfoEXT",
+        rust_layout!(
+            dgc::ExecutionSetCreateInfo<'static>,
+            [s_type, p_next, ty, info]
+        ),
+    );
+    check(
+        "VkWriteIndirectExecutionSetPipelineEXT",
+        rust_layout!(
+            dgc::WriteExecutionSetPipeline<'static>,
+            [s_type, p_next, index, pipeline]
+        ),
+    );
+    // The unions: as large and aligned as a pointer, each member a pointer.
     let union = struct_layout("VkIndirectCommandsTokenDataEXT");
     assert_eq!(
         (
             size_of::<dgc::TokenData<'static>>(),
             align_of::<dgc::TokenData<'static>>()
+        ),
+        (union.size, union.align)
+    );
+    let union = struct_layout("VkIndirectExecutionSetInfoEXT");
+    assert_eq!(
+        (
+            size_of::<dgc::ExecutionSetInfo<'static>>(),
+            align_of::<dgc::ExecutionSetInfo<'static>>()
         ),
         (union.size, union.align)
     );
@@ -305,6 +339,18 @@ fn every_bound_constant_has_the_registry_value() {
             "VK_STRUCTURE_TYPE_GENERATED_COMMANDS_PIPELINE_INFO_EXT",
             dgc::STRUCTURE_TYPE_GENERATED_COMMANDS_PIPELINE_INFO,
         ),
+        (
+            "VK_STRUCTURE_TYPE_INDIRECT_EXECUTION_SET_CREATE_INFO_EXT",
+            dgc::STRUCTURE_TYPE_EXECUTION_SET_CREATE_INFO,
+        ),
+        (
+            "VK_STRUCTURE_TYPE_WRITE_INDIRECT_EXECUTION_SET_PIPELINE_EXT",
+            dgc::STRUCTURE_TYPE_WRITE_EXECUTION_SET_PIPELINE,
+        ),
+        (
+            "VK_STRUCTURE_TYPE_INDIRECT_EXECUTION_SET_PIPELINE_INFO_EXT",
+            dgc::STRUCTURE_TYPE_EXECUTION_SET_PIPELINE_INFO,
+        ),
     ] {
         assert_eq!(i64::from(value.as_raw()), extension_enum(name), "{name}");
     }
@@ -313,8 +359,21 @@ fn every_bound_constant_has_the_registry_value() {
         extension_enum("VK_BUFFER_USAGE_2_PREPROCESS_BUFFER_BIT_EXT")
     );
     assert_eq!(
-        i64::from(dgc::TokenType::DRAW_INDEXED.as_raw()),
-        extension_enum("VK_INDIRECT_COMMANDS_TOKEN_TYPE_DRAW_INDEXED_EXT")
+        dgc::PIPELINE_CREATE_2_INDIRECT_BINDABLE.as_raw() as i64,
+        extension_enum("VK_PIPELINE_CREATE_2_INDIRECT_BINDABLE_BIT_EXT")
+    );
+    for (token, name) in [
+        (dgc::TokenType::DRAW_INDEXED, "DRAW_INDEXED"),
+        (dgc::TokenType::EXECUTION_SET, "EXECUTION_SET"),
+    ] {
+        assert_eq!(
+            i64::from(token.as_raw()),
+            extension_enum(&format!("VK_INDIRECT_COMMANDS_TOKEN_TYPE_{name}_EXT"))
+        );
+    }
+    assert_eq!(
+        i64::from(dgc::EXECUTION_SET_OF_PIPELINES),
+        extension_enum("VK_INDIRECT_EXECUTION_SET_INFO_TYPE_PIPELINES_EXT")
     );
     // The structures of VK_KHR_maintenance5 cadr chains, as ash 0.38 numbers them.
     assert_eq!(
@@ -324,6 +383,10 @@ fn every_bound_constant_has_the_registry_value() {
     assert_eq!(
         i64::from(vk::StructureType::BUFFER_USAGE_FLAGS_2_CREATE_INFO_KHR.as_raw()),
         extension_enum("VK_STRUCTURE_TYPE_BUFFER_USAGE_FLAGS_2_CREATE_INFO")
+    );
+    assert_eq!(
+        i64::from(vk::StructureType::PIPELINE_CREATE_FLAGS_2_CREATE_INFO_KHR.as_raw()),
+        extension_enum("VK_STRUCTURE_TYPE_PIPELINE_CREATE_FLAGS_2_CREATE_INFO")
     );
     assert_eq!(dgc::NAME.to_str(), Ok("VK_EXT_device_generated_commands"));
 }

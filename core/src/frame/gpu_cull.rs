@@ -139,11 +139,24 @@ impl<'a> GpuCuller<'a> {
         debug_assert_eq!(passes.len(), filters.exclusions.len());
         debug_assert_eq!(passes.len(), filters.back_faces_hidden.len());
         debug_assert_eq!(passes.len(), filters.face_routes.len());
+        // Where the submission picks the pipeline per command, the split's passes share a
+        // stream.
+        let shared_streams = abi::CadrSharedFaceStreams {
+            header: abi::CadrExtension {
+                size: std::mem::size_of::<abi::CadrSharedFaceStreams>() as u32,
+                kind: abi::CADR_EXTENSION_SHARED_FACE_STREAMS,
+                next: std::ptr::null(),
+            },
+        };
         let back_face_passes = abi::CadrBackFacePasses {
             header: abi::CadrExtension {
                 size: std::mem::size_of::<abi::CadrBackFacePasses>() as u32,
                 kind: abi::CADR_EXTENSION_BACK_FACE_PASSES,
-                next: std::ptr::null(),
+                next: if filters.shared_face_stream {
+                    &shared_streams.header
+                } else {
+                    std::ptr::null()
+                },
             },
             pass_count: passes.len() as u32,
             routes: filters.face_routes.as_ptr(),

@@ -41,6 +41,10 @@ impl Renderer {
         let dashed_hidden = mode == ShadeMode::HiddenLine && techniques.dashed_hidden_lines();
         let caps_over_lines = matches!(mode, ShadeMode::Edges | ShadeMode::HiddenLine)
             && self.section().caps_seen_from(camera.eye());
+        // The shaded modes whose surfaces show colour; not under caps painted over lines,
+        // which keeps the frame within the four passes a culler may handle.
+        let back_faces_culled = techniques.culler_routes_back_faces()
+            && (mode == ShadeMode::Solid || (mode == ShadeMode::Edges && !caps_over_lines));
         let passes = PassSet::Shaded {
             mode,
             translucent: mode == ShadeMode::XRay || (mode.shows_translucency() && translucency),
@@ -51,10 +55,9 @@ impl Renderer {
             hidden_silhouettes: dashed_hidden
                 && self.silhouettes()
                 && self.device().capabilities().geometry_shader,
-            // The shaded modes whose surfaces show colour; not under caps painted over lines,
-            // which keeps the frame within the four passes a culler may handle.
-            back_faces_culled: techniques.culler_routes_back_faces()
-                && (mode == ShadeMode::Solid || (mode == ShadeMode::Edges && !caps_over_lines)),
+            back_faces_culled,
+            face_pipelines_picked_by_gpu: back_faces_culled
+                && techniques.submission_switches_pipelines(),
         };
         self.draw_techniques(scene, techniques, camera, passes)
     }

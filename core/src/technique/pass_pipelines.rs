@@ -109,6 +109,9 @@ pub struct PassFilters {
     pub back_faces_hidden: Vec<u32>,
     /// Per pass, the parts it takes by whether their back faces are culled (`CADR_FACES_*`).
     pub face_routes: Vec<abi::CadrFaceRoute>,
+    /// Whether the two passes of a split share one stream whose commands name their pass
+    /// (the plugin ABI's `CadrSharedFaceStreams`).
+    pub shared_face_stream: bool,
 }
 
 impl PassFilters {
@@ -383,6 +386,18 @@ impl TechniquePipelines {
         Ok(())
     }
 
+    /// Whether the GPU picks between the two surface pipelines of a split, per part.
+    fn face_pipelines_picked_by_gpu(&self) -> bool {
+        matches!(
+            self.pass_set,
+            PassSet::Shaded {
+                back_faces_culled: true,
+                face_pipelines_picked_by_gpu: true,
+                ..
+            }
+        )
+    }
+
     /// The surfaces' pass of `raster`: where the pass set culls back faces, two passes, the
     /// closed parts' with their back faces culled, then the others'.
     fn add_surfaces(
@@ -420,6 +435,7 @@ impl TechniquePipelines {
                 ..
             }
         );
+        let shared_face_stream = self.face_pipelines_picked_by_gpu();
         for (filters, textures) in self.filters.iter_mut().zip([false, true]) {
             let (filter, exclusion) = scope.filter(xray, textures);
             filters.filters.push(filter);
@@ -428,6 +444,7 @@ impl TechniquePipelines {
                 .back_faces_hidden
                 .push(u32::from(scope.hides_back_faces));
             filters.face_routes.push(scope.faces);
+            filters.shared_face_stream = shared_face_stream;
         }
         self.pipelines.push(pipeline);
     }
@@ -596,6 +613,8 @@ impl TechniquePipelines {
                 depth_bias: raster.depth_bias,
                 triangle_outlines: raster.triangle_outlines,
                 cull_back_faces: raster.faces == abi::CADR_FACES_CULLED,
+                indirect_bindable: raster.faces != abi::CADR_FACES_ANY
+                    && self.face_pipelines_picked_by_gpu(),
                 colors: &colors,
                 depth,
                 vertex_constants: &[role as u32, u32::from(raster.on_surfaces)],

@@ -519,6 +519,17 @@ impl Techniques {
         })
     }
 
+    /// Whether the active submission draws shared streams whose commands name their pass's
+    /// pipeline (`CADR_TRAIT_SWITCHES_PIPELINES`, libraries of ABI 1.19 or later), so that the
+    /// two surface passes of closed and other parts may share one stream.
+    pub fn submission_switches_pipelines(&self) -> bool {
+        self.get(TechniqueKind::Submission).is_ok_and(|active| {
+            active
+                .entry
+                .announces(abi::CADR_TRAIT_SWITCHES_PIPELINES, 19)
+        })
+    }
+
     /// What plugins hold now (objects through the allocation callbacks, buffers).
     pub fn plugin_allocations(&self) -> AllocationCounts {
         self.services.snapshot()

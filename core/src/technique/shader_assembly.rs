@@ -359,6 +359,7 @@ mod tests {
             caps_over_lines: false,
             hidden_silhouettes: false,
             back_faces_culled: false,
+            face_pipelines_picked_by_gpu: false,
         };
         prepare(&mut cache, solid()).expect("solid");
         assert_eq!(
@@ -377,6 +378,7 @@ mod tests {
                 caps_over_lines: false,
                 hidden_silhouettes: false,
                 back_faces_culled: false,
+                face_pipelines_picked_by_gpu: false,
             },
         )
         .expect("edges");
@@ -402,6 +404,7 @@ mod tests {
             caps_over_lines: false,
             hidden_silhouettes,
             back_faces_culled: false,
+            face_pipelines_picked_by_gpu: false,
         };
         prepare(&mut cache, dashed(false)).expect("dashed");
         assert_eq!(cache.pass_shaders.len(), 4, "the dashes' fragment shader");

@@ -102,6 +102,10 @@ pub enum PassSet {
         /// part, the plugin ABI's `CadrBackFacePasses`; only with a culler that announces
         /// `CADR_TRAIT_ROUTES_BACK_FACES`).
         back_faces_culled: bool,
+        /// Whether, where `back_faces_culled`, the GPU picks one of the two surface pipelines
+        /// per part from one stream of commands (a submission that announces
+        /// `CADR_TRAIT_SWITCHES_PIPELINES`): both pipelines are made bindable by the GPU.
+        face_pipelines_picked_by_gpu: bool,
     },
     /// Triangles of pickable instances, their ids into the pick target.
     Pick {

@@ -277,12 +277,15 @@ impl Drop for Instance {
 /// Structure types of extensions newer than Debian 12's validation layer (1.3.239) that cadr
 /// chains where the driver has them: `VkPhysicalDeviceMaintenance5FeaturesKHR` (Vulkan
 /// 1.3.268) and `VkPhysicalDeviceDeviceGeneratedCommandsFeaturesEXT` (1.3.296) into
-/// `vkCreateDevice`, and `VkBufferUsageFlags2CreateInfoKHR` (1.3.268) into the `dgc`
-/// submission's `vkCreateBuffer` of preprocess memory. The layer calls any
-/// structure it does not know an error (`VUID-…-pNext-pNext`, "unknown VkStructureType"),
-/// though the driver knows it: for these two structures, and that message alone, the message
-/// is a warning. A newer layer knows them and validates them.
-const STRUCTURES_NEWER_THAN_THE_LAYER: [i32; 3] = [1_000_470_000, 1_000_470_006, 1_000_572_000];
+/// `vkCreateDevice`, `VkBufferUsageFlags2CreateInfoKHR` (1.3.268) into the `dgc`
+/// submission's `vkCreateBuffer` of preprocess memory, and `VkPipelineCreateFlags2CreateInfoKHR`
+/// (1.3.268) into `vkCreateGraphicsPipelines` of the pipelines that `dgc` puts into an
+/// execution set. The layer calls any structure it does not know an error
+/// (`VUID-…-pNext-pNext`, "unknown VkStructureType"), though the driver knows it: for these
+/// four structures, and that message alone, the message is a warning. A newer layer knows
+/// them and validates them.
+const STRUCTURES_NEWER_THAN_THE_LAYER: [i32; 4] =
+    [1_000_470_000, 1_000_470_005, 1_000_470_006, 1_000_572_000];
 
 /// Whether `text` is the layer's "unknown structure" message about one of
 /// [`STRUCTURES_NEWER_THAN_THE_LAYER`].

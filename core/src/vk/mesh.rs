@@ -70,6 +70,7 @@ impl Pipeline {
                 depth_bias: desc.depth_bias,
                 triangle_outlines: desc.triangle_outlines,
                 cull_back_faces: false,
+                indirect_bindable: false,
                 colors: desc.colors,
                 depth: desc.depth,
                 samples: desc.samples,

@@ -226,6 +226,7 @@ impl Pipeline {
                 depth_bias: false,
                 triangle_outlines: false,
                 cull_back_faces: false,
+                indirect_bindable: false,
                 colors: &colors,
                 depth: DepthUse::None,
                 vertex_constants: &[],
@@ -296,6 +297,7 @@ impl Pipeline {
                 depth_bias: desc.depth_bias,
                 triangle_outlines: desc.triangle_outlines,
                 cull_back_faces: desc.cull_back_faces,
+                indirect_bindable: desc.indirect_bindable,
                 colors: desc.colors,
                 depth: desc.depth,
                 samples: desc.samples,
@@ -384,6 +386,9 @@ impl Pipeline {
             } else {
                 DEPTH_FORMAT
             });
+        // Given, the flags replace the create info's own (which cadr leaves empty).
+        let mut flags = vk::PipelineCreateFlags2CreateInfoKHR::default()
+            .flags(super::dgc::PIPELINE_CREATE_2_INDIRECT_BINDABLE);
         let mut info = vk::GraphicsPipelineCreateInfo::default()
             .stages(stages)
             .viewport_state(&viewport)
@@ -394,6 +399,9 @@ impl Pipeline {
             .dynamic_state(&dynamic)
             .layout(desc.layout.raw())
             .push_next(&mut rendering);
+        if desc.indirect_bindable {
+            info = info.push_next(&mut flags);
+        }
         if let Some((vertex_input, input_assembly)) = vertex_input {
             info = info
                 .vertex_input_state(vertex_input)
@@ -599,6 +607,10 @@ pub struct GraphicsPipelineDesc<'a> {
     /// Culls the triangles wound clockwise on screen: the back faces of parts wound
     /// counter-clockwise seen from outside.
     pub cull_back_faces: bool,
+    /// May be put into an execution set of device-generated commands, for the GPU to pick
+    /// per sequence (`VK_PIPELINE_CREATE_2_INDIRECT_BINDABLE_BIT_EXT`; only where
+    /// [`super::Capabilities::device_generated_commands`]).
+    pub indirect_bindable: bool,
     /// The colour attachments, in order (a pipeline that writes none of them draws depth
     /// only: the hidden-line display mode's surfaces).
     pub colors: &'a [ColorTarget],
@@ -626,6 +638,7 @@ pub(super) struct RasterState<'a> {
     pub(super) depth_bias: bool,
     pub(super) triangle_outlines: bool,
     pub(super) cull_back_faces: bool,
+    pub(super) indirect_bindable: bool,
     pub(super) colors: &'a [ColorTarget],
     pub(super) depth: DepthUse,
     pub(super) samples: u32,

@@ -56,7 +56,7 @@ use std::ffi::{c_char, c_void};
 /// Major version of this ABI: a library built for another major version is refused.
 pub const CADR_PLUGIN_ABI_MAJOR: u32 = 1;
 /// Minor version of this ABI: additions that older readers may ignore.
-pub const CADR_PLUGIN_ABI_MINOR: u32 = 18;
+pub const CADR_PLUGIN_ABI_MINOR: u32 = 19;
 /// `(major << 16) | minor`, what [`CadrPluginVersionFn`] returns.
 pub const CADR_PLUGIN_ABI_VERSION: u32 = (CADR_PLUGIN_ABI_MAJOR << 16) | CADR_PLUGIN_ABI_MINOR;
 
@@ -200,6 +200,14 @@ pub const CADR_TRAIT_FRAME_SLOTS: CadrTraitBits = 1 << 10;
 /// announces it: one that ignored the routes would draw open parts with their back faces culled
 /// (holes), and the other parts twice.
 pub const CADR_TRAIT_ROUTES_BACK_FACES: CadrTraitBits = 1 << 11;
+/// Since ABI 1.19. Submission, an announcement: it draws a shared stream of GPU-written
+/// commands in which each command names the pass whose pipeline draws it
+/// ([`CadrSharedFaceStreams`]; the `dgc` submission does it with an execution set
+/// of the two passes' pipelines, the GPU picking one per command). Where the active submission
+/// announces it and the culler routes back faces ([`CADR_TRAIT_ROUTES_BACK_FACES`], ABI 1.19 or
+/// later), the host asks the culler for shared streams and makes the two passes' pipelines
+/// bindable by the GPU (`VK_PIPELINE_CREATE_2_INDIRECT_BINDABLE_BIT_EXT`).
+pub const CADR_TRAIT_SWITCHES_PIPELINES: CadrTraitBits = 1 << 12;
 
 /// A message buffer the host hands to functions that can fail: the plugin writes a
 /// NUL-terminated UTF-8 message of at most `capacity` bytes (including the NUL).
@@ -249,7 +257,7 @@ pub type CadrExtensionKind = u32;
 /// know no kind, so they skip every extension a technique offers and refuse a technique that
 /// requires one; ABI 1.14 defines [`CADR_EXTENSION_SCENE_CLUSTERS`] and
 /// [`CADR_EXTENSION_CLUSTER_CULL`], ABI 1.15 [`CADR_EXTENSION_FRAME_SLOT`], ABI 1.18
-/// [`CADR_EXTENSION_BACK_FACE_PASSES`].
+/// [`CADR_EXTENSION_BACK_FACE_PASSES`], ABI 1.19 [`CADR_EXTENSION_SHARED_FACE_STREAMS`].
 #[repr(C)]
 #[derive(Clone, Copy, Debug)]
 pub struct CadrExtension {
@@ -727,6 +735,9 @@ pub const CADR_EXTENSION_FRAME_SLOT: CadrExtensionKind = 3;
 /// Since ABI 1.18: the kind of [`CadrBackFacePasses`], chained on
 /// [`CadrGpuCullContext::extensions`].
 pub const CADR_EXTENSION_BACK_FACE_PASSES: CadrExtensionKind = 4;
+/// Since ABI 1.19: the kind of [`CadrSharedFaceStreams`], chained on
+/// [`CadrGpuCullContext::extensions`].
+pub const CADR_EXTENSION_SHARED_FACE_STREAMS: CadrExtensionKind = 5;
 
 /// Since ABI 1.15 ([`CADR_EXTENSION_FRAME_SLOT`]): which of the host's frames in flight is being
 /// recorded. The host lets the GPU work on up to `slot_count` frames while it records the next;
@@ -942,9 +953,10 @@ pub const CADR_FACES_KEPT: CadrFaceRoute = 2;
 
 /// Since ABI 1.18 ([`CADR_EXTENSION_BACK_FACE_PASSES`]): the host draws opaque surfaces in two
 /// passes, one whose pipeline culls back faces for the closed parts and one that draws both
-/// faces for the rest; the route of each pass says which instances it takes. The host chains
-/// it only for a culler that announces [`CADR_TRAIT_ROUTES_BACK_FACES`], and such a culler
-/// writes every instance into exactly one of the two passes (the route is decided per
+/// faces for the rest; the route of each pass says which instances it takes. A
+/// [`CADR_FACES_CULLED`] pass is always followed by its [`CADR_FACES_KEPT`] pass. The host
+/// chains it only for a culler that announces [`CADR_TRAIT_ROUTES_BACK_FACES`], and such a
+/// culler writes every instance into exactly one of the two passes (the route is decided per
 /// instance, the same way in every phase of a frame). Owned by the host, valid for the call.
 #[repr(C)]
 #[derive(Clone, Copy, Debug)]
@@ -955,6 +967,25 @@ pub struct CadrBackFacePasses {
     pub pass_count: u32,
     /// Per pass, a `CADR_FACES_*` route.
     pub routes: *const CadrFaceRoute,
+}
+
+/// Since ABI 1.19 ([`CADR_EXTENSION_SHARED_FACE_STREAMS`], chained beside
+/// [`CadrBackFacePasses`] where the active submission announces
+/// [`CADR_TRAIT_SWITCHES_PIPELINES`]): the submission draws each split's two passes from one
+/// stream. A culler that honours it writes the commands of each [`CADR_FACES_CULLED`] pass
+/// and of the [`CADR_FACES_KEPT`] pass after it into one stream with one count, each command
+/// preceded by a `u32` naming its pass (0 the culled pass, whose pipeline culls back faces; 1
+/// the kept pass): commands 24 bytes apart (`stride` 24 or more), the word at each command's
+/// start, the `VkDrawIndexedIndirectCommand` 4 bytes after it. It sets the draws of both
+/// passes to that same stream ([`CadrGpuDraws`] equal field for field, `commands_offset` at the
+/// first command's word): a submission sees a shared stream as two consecutive passes with
+/// equal draws. A culler that does not know the kind writes two streams as in ABI 1.18, which
+/// a submission that announces the trait draws as two. Owned by the host, valid for the call.
+#[repr(C)]
+#[derive(Clone, Copy, Debug)]
+pub struct CadrSharedFaceStreams {
+    /// `kind` = [`CADR_EXTENSION_SHARED_FACE_STREAMS`]; the kind says it all.
+    pub header: CadrExtension,
 }
 
 /// What a draw pass draws.
@@ -1380,7 +1411,10 @@ pub struct CadrCullOutput {
 
 /// Since ABI 1.3: where the indirect commands of one pass lie, written by a GPU culler
 /// during the frame: `VkDrawIndexedIndirectCommand`s (20 bytes each, `firstInstance` the
-/// instance id) and their count (a u32). The culler owns the buffers.
+/// instance id) and their count (a u32). The culler owns the buffers. Since ABI 1.19, two
+/// consecutive passes with equal draws share one stream whose commands each start with the
+/// word that names their pass ([`CadrSharedFaceStreams`]); only a submission that
+/// announces [`CADR_TRAIT_SWITCHES_PIPELINES`] is given such draws.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct CadrGpuDraws {
@@ -1482,7 +1516,9 @@ pub struct CadrGpuCullContext {
     /// Since ABI 1.14 (read it only when `size` covers it): the host's extension structs for
     /// this call (a chain of [`CadrExtension`]s, or null), valid for the call:
     /// [`CadrClusterCull`] where the scene has clusters; since ABI 1.18 [`CadrBackFacePasses`]
-    /// where the culler announces [`CADR_TRAIT_ROUTES_BACK_FACES`].
+    /// where the culler announces [`CADR_TRAIT_ROUTES_BACK_FACES`]; since ABI 1.19
+    /// [`CadrSharedFaceStreams`] beside it where the submission announces
+    /// [`CADR_TRAIT_SWITCHES_PIPELINES`].
     pub extensions: *const CadrExtension,
 }
 

@@ -659,6 +659,16 @@ impl<'a> GpuCull<'a> {
         }
     }
 
+    /// Whether the host asks that each split's two passes share one stream whose commands name
+    /// their pass ([`abi::CadrSharedFaceStreams`], since ABI 1.19).
+    pub fn shares_face_streams(&self) -> bool {
+        // SAFETY: the host's chain (or null) is valid for the call; an extension of this kind
+        // is a `CadrSharedFaceStreams`.
+        let shared: Option<&abi::CadrSharedFaceStreams> =
+            unsafe { extension(self.extensions(), abi::CADR_EXTENSION_SHARED_FACE_STREAMS) };
+        shared.is_some()
+    }
+
     /// The sub-pixel threshold (projected diameter in pixels below which a part is culled);
     /// 0, culling nothing for its size, from a host older than ABI 1.5.
     pub fn min_pixels(&self) -> f32 {

@@ -10,7 +10,9 @@
 //
 // Where the host splits the opaque surfaces by their back faces (CadrBackFacePasses), each part
 // goes to one of the two passes: the closed parts whose back faces cannot show to the pass whose
-// rasterizer culls them, the others to the pass that draws both faces.
+// rasterizer culls them, the others to the pass that draws both faces. Where the submission
+// picks the pipeline per command (dgc), both passes write one stream, each command naming its
+// pass.
 //
 // With CLUSTERS defined (gpu-clusters), a part that passes gets, in the triangle passes, its
 // clusters instead of one command: those of its level-of-detail cut (the coarsest whose error
@@ -32,6 +34,7 @@ const uint INSTANCE_CUTOUT = 512u;
 // Which parts a pass takes by their back faces (CADR_FACES_*).
 const uint FACES_ANY = 0u;
 const uint FACES_CULLED = 1u;
+const uint FACES_KEPT = 2u;
 
 // What this dispatch does.
 const uint MODE_FRUSTUM = 0u;          // frustum only
@@ -152,6 +155,10 @@ layout(push_constant) uniform Dispatch {
     uint cluster_bit_mask;
     // Which parts the pass takes by whether the rasterizer culls their back faces.
     uint face_route;
+    // Words of each command: 5, or 6 where each starts with the word naming its pass (1 for
+    // the pass that keeps back faces, else 0), the two passes of a split sharing one stream
+    // (CadrBackFacePasses::shared_stream: one slot, one count).
+    uint command_words;
 } dispatch;
 
 // Inside the frustum.
@@ -277,7 +284,11 @@ void write_command(uint slot, uint first, uint count, uint vertex_base, uint id)
     if (slot >= dispatch.command_capacity) {
         return; // never, with the capacity the culler reserves; the count stays past it
     }
-    uint base = (dispatch.first_command + slot) * 5u;
+    uint base = (dispatch.first_command + slot) * dispatch.command_words;
+    if (dispatch.command_words == 6u) {
+        commands[base] = dispatch.face_route == FACES_KEPT ? 1u : 0u;
+        base += 1u;
+    }
     commands[base] = count;
     commands[base + 1u] = 1u;
     commands[base + 2u] = first;

@@ -23,7 +23,10 @@
 //!   a part whose bounding sphere projects under `min_pixels` across is drawn in no pass.
 //! - All route each part by its back faces where the host splits the opaque surfaces (ABI
 //!   1.18, `CadrBackFacePasses`): closed parts whose back faces cannot show go to the pass
-//!   whose rasterizer culls them, the rest to the pass that draws both faces.
+//!   whose rasterizer culls them, the rest to the pass that draws both faces. Where the host
+//!   asks for shared streams (ABI 1.19, for a submission that picks pipelines per command:
+//!   `dgc`), both passes write one stream in one slot, each command after a word naming its
+//!   pass (0 culled, 1 kept).
 //!
 //! The submission draws the commands with `vkCmdDrawIndexedIndirectCount` (a submission
 //! providing `CADR_TRAIT_DRAWS_GPU_COMMANDS`); commands use absolute ranges and `firstInstance`
@@ -54,8 +57,11 @@ const DRAWN_FROM: vk::BufferUsageFlags = vk::BufferUsageFlags::from_raw(
     vk::BufferUsageFlags::INDIRECT_BUFFER.as_raw()
         | vk::BufferUsageFlags::SHADER_DEVICE_ADDRESS.as_raw(),
 );
-/// Bytes of one `VkDrawIndexedIndirectCommand`.
-const COMMAND_BYTES: u64 = 20;
+/// Words of one `VkDrawIndexedIndirectCommand`.
+const COMMAND_WORDS: u32 = 5;
+/// Words of a command in a frame whose split surface passes share streams: the word naming the
+/// command's pass, then the command (`CadrSharedFaceStreams`).
+const NAMED_COMMAND_WORDS: u32 = 6;
 
 /// The visibility buffers: last frame's (read) and this frame's (written).
 const LAST: usize = 0;
@@ -96,10 +102,13 @@ struct CullDispatch {
     cluster_bit_mask: u32,
     /// Which parts the pass takes by whether their back faces are culled (`CADR_FACES_*`).
     face_route: abi::CadrFaceRoute,
+    /// Words of each command: [`COMMAND_WORDS`], or [`NAMED_COMMAND_WORDS`] where each command
+    /// starts with the word naming its pass (1 for a [`abi::CADR_FACES_KEPT`] pass, else 0).
+    command_words: u32,
 }
 
 /// Bytes of [`CullDispatch`] as pushed.
-const CULL_PUSH_BYTES: u32 = 72;
+const CULL_PUSH_BYTES: u32 = 76;
 /// The most bits of the cluster visibility table (32 MiB a copy): past it, clusters share
 /// bits, which only makes phase 0 draw a few hidden clusters.
 const MAX_CLUSTER_BITS: u64 = 1 << 28;
@@ -387,9 +396,13 @@ pub struct GpuCuller<const OCCLUSION: bool, const CLUSTERS: bool> {
     objects: Objects,
     /// Commands per (phase, pass) slot and the totals; host-visible for the frame's counts.
     counts: HostBuffer,
-    /// The commands: one region of `capacity` per (phase, pass) slot.
+    /// The commands: one region of `capacity` per (phase, pass) slot, each command at most
+    /// `command_words` long.
     commands: Option<HostBuffer>,
     capacity: u32,
+    command_words: u32,
+    /// Words of each command this frame (see [`CullDispatch::command_words`]).
+    frame_command_words: u32,
     /// Visibility bits of instances; 4 bytes each for `gpu-frustum`, which reads none.
     visibility: VisibilityBits,
     /// The same for clusters (gpu-clusters): a table of bits that an instance's cluster finds
@@ -443,6 +456,8 @@ impl<const OCCLUSION: bool, const CLUSTERS: bool> Technique for GpuCuller<OCCLUS
             counts,
             commands: None,
             capacity: 0,
+            command_words: COMMAND_WORDS,
+            frame_command_words: COMMAND_WORDS,
             cluster_budget: 0,
             max_cluster_budget: cluster_command_budget(),
             pyramid_size: (0, 0),
@@ -498,18 +513,20 @@ impl<const OCCLUSION: bool, const CLUSTERS: bool> GpuCuller<OCCLUSION, CLUSTERS>
     ) -> Result<(), String> {
         let storage = vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_DST;
         let needed = commands.max(instances).max(1);
-        if self.commands.is_none() || needed > self.capacity {
+        let words = self.frame_command_words;
+        if self.commands.is_none() || needed > self.capacity || words > self.command_words {
             let capacity =
                 u32::try_from(grown_capacity(u64::from(self.capacity), u64::from(needed)))
                     .unwrap_or(u32::MAX);
             let slots = (self.phases() as usize * PASSES_PER_PHASE) as u64;
             self.commands = Some(self.gpu.create_buffer(
                 "gpu cull commands",
-                u64::from(capacity) * COMMAND_BYTES * slots,
+                u64::from(capacity) * u64::from(words) * 4 * slots,
                 storage | DRAWN_FROM,
                 abi::CADR_MEMORY_GPU_ONLY,
             )?);
             self.capacity = capacity;
+            self.command_words = words;
         }
         let needed = instances.max(1);
         if OCCLUSION && needed.div_ceil(32) > self.visibility.words {
@@ -699,6 +716,8 @@ impl<const OCCLUSION: bool, const CLUSTERS: bool> GpuCuller<OCCLUSION, CLUSTERS>
         }
         let filters = cull.pass_filters();
         let face_routes = cull.face_routes();
+        let command_words = self.frame_command_words;
+        let shares = command_words == NAMED_COMMAND_WORDS;
         for (index, (pass, filter)) in cull
             .passes()
             .iter()
@@ -706,7 +725,17 @@ impl<const OCCLUSION: bool, const CLUSTERS: bool> GpuCuller<OCCLUSION, CLUSTERS>
             .enumerate()
             .take(PASSES_PER_PHASE)
         {
-            let slot = cull.phase() as usize * PASSES_PER_PHASE + index;
+            let route = face_routes
+                .get(index)
+                .copied()
+                .unwrap_or(abi::CADR_FACES_ANY);
+            // A kept pass shares the stream (slot) of the culled pass before it.
+            let shares_previous = shares
+                && route == abi::CADR_FACES_KEPT
+                && index > 0
+                && face_routes.get(index - 1) == Some(&abi::CADR_FACES_CULLED);
+            let slot =
+                cull.phase() as usize * PASSES_PER_PHASE + index - usize::from(shares_previous);
             let dispatch = CullDispatch {
                 instance_count: instances,
                 pass_kind: pass.kind,
@@ -715,9 +744,7 @@ impl<const OCCLUSION: bool, const CLUSTERS: bool> GpuCuller<OCCLUSION, CLUSTERS>
                 mode,
                 // The first pass, and where the surfaces are split, the first of the other
                 // parts: between them they see every part once.
-                writes_visibility: u32::from(
-                    index == 0 || face_routes.get(index) == Some(&abi::CADR_FACES_KEPT),
-                ),
+                writes_visibility: u32::from(index == 0 || route == abi::CADR_FACES_KEPT),
                 pyramid_levels: self.pyramid_levels,
                 filter,
                 lod_error,
@@ -725,10 +752,8 @@ impl<const OCCLUSION: bool, const CLUSTERS: bool> GpuCuller<OCCLUSION, CLUSTERS>
                 command_capacity: self.capacity,
                 cluster_budget: self.cluster_budget,
                 cluster_bit_mask: self.cluster_visibility.words * 32 - 1,
-                face_route: face_routes
-                    .get(index)
-                    .copied()
-                    .unwrap_or(abi::CADR_FACES_ANY),
+                face_route: route,
+                command_words,
             };
             let constants = words(&[
                 dispatch.instance_count,
@@ -749,8 +774,9 @@ impl<const OCCLUSION: bool, const CLUSTERS: bool> GpuCuller<OCCLUSION, CLUSTERS>
                 dispatch.cluster_budget,
                 dispatch.cluster_bit_mask,
                 dispatch.face_route,
+                dispatch.command_words,
             ]);
-            // SAFETY: recording; the constants fit the layout's 72 bytes.
+            // SAFETY: recording; the constants fit the layout's 76 bytes.
             unsafe {
                 device.cmd_push_constants(
                     command_buffer,
@@ -766,11 +792,22 @@ impl<const OCCLUSION: bool, const CLUSTERS: bool> GpuCuller<OCCLUSION, CLUSTERS>
                     index,
                     abi::CadrGpuDraws {
                         commands: commands.raw().as_raw(),
-                        commands_offset: u64::from(dispatch.first_command) * COMMAND_BYTES,
+                        // A shared stream starts at its first command's word, any other at
+                        // the command itself.
+                        commands_offset: u64::from(dispatch.first_command)
+                            * u64::from(command_words)
+                            * 4
+                            + u64::from(
+                                command_words == NAMED_COMMAND_WORDS
+                                    && !matches!(
+                                        route,
+                                        abi::CADR_FACES_CULLED | abi::CADR_FACES_KEPT
+                                    ),
+                            ) * 4,
                         count_buffer: self.counts.raw().as_raw(),
                         count_offset: slot as u64 * 4,
                         max_draws: self.capacity,
-                        stride: COMMAND_BYTES as u32,
+                        stride: command_words * 4,
                     },
                 );
             }
@@ -1057,6 +1094,11 @@ impl<const OCCLUSION: bool, const CLUSTERS: bool> GpuCulling for GpuCuller<OCCLU
         }
         let (commands, cluster_budget) = self.command_room(instances, clusters);
         self.cluster_budget = cluster_budget;
+        self.frame_command_words = if cull.shares_face_streams() {
+            NAMED_COMMAND_WORDS
+        } else {
+            COMMAND_WORDS
+        };
         let command_buffer = cull.command_buffer();
         let view = cull
             .view_buffer()

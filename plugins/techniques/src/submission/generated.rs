@@ -2,9 +2,15 @@
 //! GPU culler, or by the submission from its list) are a stream of sequences that
 //! `vkCmdExecuteGeneratedCommandsEXT` runs, as many as the `u32` count in GPU memory says.
 //!
-//! Every pass binds one pipeline (its kind's), so a sequence holds only its indexed draw: the
-//! indirect commands layout is one `DRAW_INDEXED` token at offset 0, one sequence every
-//! `stride` bytes, the stream the cullers already write. The implementation preprocesses the
+//! A pass's stream holds only indexed draws, drawn with the pass's pipeline: the indirect
+//! commands layout is one `DRAW_INDEXED` token at offset 0, one sequence every `stride` bytes,
+//! the stream the cullers already write. Where the host splits the opaque surfaces into a pass
+//! whose pipeline culls back faces and one that keeps them, the GPU culler writes both passes
+//! into one stream whose commands each start with a word naming their pass
+//! (`CadrSharedFaceStreams`): the layout is then an `EXECUTION_SET` token at offset
+//! 0 and the draw at 4, and an execution set holding the two pipelines (index 0 the culled
+//! pass's, 1 the kept pass's) lets the GPU switch pipeline per sequence, the whole split drawn
+//! by one execution. The implementation preprocesses the
 //! stream into memory of its own ("preprocess" memory, sized by
 //! `vkGetGeneratedCommandsMemoryRequirementsEXT`); each execution of a frame gets a region of
 //! it, and frames rotate through [`FRAMES`] sets of regions so that a frame never writes what
@@ -33,13 +39,19 @@ const PASS_BYTES: u64 = 64 << 20;
 const MAX_CHUNK: u32 = 1 << 20;
 /// The most (pipeline, sequences) pairs whose chunk size is remembered.
 const KEPT_CHUNK_SIZES: usize = 64;
+/// Bytes before the draw of a sequence that names its pipeline (the execution-set index).
+const PIPELINE_INDEX_BYTES: u32 = 4;
 
 /// One execution: the pass's pipeline and where its sequences and count are.
 #[derive(Clone, Copy)]
 pub struct Execution {
-    /// Which of the record's passes it draws.
+    /// Which of the record's passes it draws (the first, where it draws two).
     pub pass: usize,
+    /// The pass's pipeline (bound before the execution).
     pub pipeline: vk::Pipeline,
+    /// Where the stream is shared with the next pass, that pass's pipeline: each sequence
+    /// starts with the index of its pipeline, 0 for `pipeline`, 1 for this one.
+    pub next_pass_pipeline: Option<vk::Pipeline>,
     pub commands: vk::Buffer,
     pub commands_offset: u64,
     pub count: vk::Buffer,
@@ -50,6 +62,21 @@ pub struct Execution {
 
 /// One chunk of an execution, with its preprocess region's address and size.
 pub type Chunk = (Execution, vk::DeviceAddress, u64);
+
+/// What draws an execution's sequences: the bound pipeline, or an execution set the sequences
+/// pick from.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Drawer {
+    Pipeline(vk::Pipeline),
+    Set(dgc::IndirectExecutionSet),
+}
+
+/// An execution set of two pipelines, and the frame that last used it.
+struct PipelinePair {
+    pipelines: [vk::Pipeline; 2],
+    set: dgc::IndirectExecutionSet,
+    last_used: u64,
+}
 
 /// Preprocess memory: a buffer with its own allocation and device address.
 struct Preprocess {
@@ -64,12 +91,16 @@ struct Preprocess {
 pub struct GeneratedCommands {
     gpu: Arc<Gpu>,
     functions: dgc::Device,
-    /// The layout and the stride it was made for.
-    layout: Option<(u32, dgc::IndirectCommandsLayout)>,
+    /// The layouts made, each with the stride it was made for and whether its sequences name
+    /// their pipeline.
+    layouts: Vec<((u32, bool), dgc::IndirectCommandsLayout)>,
+    /// The execution sets of the pipeline pairs of shared streams.
+    pairs: Vec<PipelinePair>,
     preprocess: Option<Preprocess>,
+    /// Frames begun.
     frame: u64,
-    /// Per pipeline and sequences of a pass, the most sequences a chunk runs.
-    chunk_sizes: Vec<((vk::Pipeline, u32), u32)>,
+    /// Per drawer and sequences of a pass, the most sequences a chunk runs.
+    chunk_sizes: Vec<((Drawer, u32), u32)>,
 }
 
 /// The stages the sequences' state reaches (the draw token's pipelines).
@@ -87,37 +118,98 @@ impl GeneratedCommands {
         Ok(Self {
             gpu: Arc::clone(gpu),
             functions,
-            layout: None,
+            layouts: Vec::new(),
+            pairs: Vec::new(),
             preprocess: None,
             frame: 0,
             chunk_sizes: Vec::new(),
         })
     }
 
-    fn layout(&mut self, stride: u32) -> Result<dgc::IndirectCommandsLayout, String> {
-        if let Some((made_for, layout)) = self.layout {
-            if made_for == stride {
-                return Ok(layout);
-            }
-            // SAFETY: a layout is referenced only while recording; the host waits for the
-            // frames that used it before a stride change can come (a new culler).
-            unsafe { self.functions.destroy_layout(layout, self.gpu.allocator()) };
-            self.layout = None;
-            self.chunk_sizes.clear();
+    /// The layout of sequences `stride` bytes apart, each a draw or, where `names_pipeline`,
+    /// the index of its pipeline in the execution set and then the draw. Layouts are kept
+    /// until the submission is dropped (there are at most a few: one per stride and kind).
+    fn layout(
+        &mut self,
+        stride: u32,
+        names_pipeline: bool,
+    ) -> Result<dgc::IndirectCommandsLayout, String> {
+        let key = (stride, names_pipeline);
+        if let Some(&(_, layout)) = self.layouts.iter().find(|(made_for, _)| *made_for == key) {
+            return Ok(layout);
         }
-        let tokens = [dgc::LayoutToken::draw_indexed(0)];
+        let set_token = dgc::ExecutionSetToken {
+            ty: dgc::EXECUTION_SET_OF_PIPELINES,
+            shader_stages: STAGES,
+        };
+        let tokens: &[dgc::LayoutToken<'_>] = if names_pipeline {
+            &[
+                dgc::LayoutToken::execution_set(&set_token, 0),
+                dgc::LayoutToken::draw_indexed(PIPELINE_INDEX_BYTES),
+            ]
+        } else {
+            &[dgc::LayoutToken::draw_indexed(0)]
+        };
         let info = dgc::LayoutCreateInfo::new(
             dgc::LayoutUsageFlags::default(),
             STAGES,
             stride,
             vk::PipelineLayout::null(),
-            &tokens,
+            tokens,
         );
         // SAFETY: the info and its tokens live for the call.
         let layout = unsafe { self.functions.create_layout(&info, self.gpu.allocator()) }
             .map_err(vulkan_failure("vkCreateIndirectCommandsLayoutEXT"))?;
-        self.layout = Some((stride, layout));
+        self.layouts.push((key, layout));
         Ok(layout)
+    }
+
+    /// The execution set of `pipelines` (index 0 and 1), made on first use. Sets unused for
+    /// more frames than can be in flight are destroyed: their pipelines may be gone.
+    fn pipeline_pair(
+        &mut self,
+        pipelines: [vk::Pipeline; 2],
+    ) -> Result<dgc::IndirectExecutionSet, String> {
+        let frame = self.frame;
+        if let Some(pair) = self.pairs.iter_mut().find(|p| p.pipelines == pipelines) {
+            pair.last_used = frame;
+            return Ok(pair.set);
+        }
+        let info = dgc::ExecutionSetPipelineInfo::new(pipelines[0], 2);
+        let create = dgc::ExecutionSetCreateInfo::pipelines(&info);
+        // SAFETY: the info lives for the call; the host made both pipelines indirect-bindable
+        // (CADR_TRAIT_SWITCHES_PIPELINES) and they are alive.
+        let set = unsafe {
+            self.functions
+                .create_execution_set(&create, self.gpu.allocator())
+        }
+        .map_err(vulkan_failure("vkCreateIndirectExecutionSetEXT"))?;
+        let write = [dgc::WriteExecutionSetPipeline::new(1, pipelines[1])];
+        // SAFETY: the set was just made; index 1 is within its two and used by no command.
+        unsafe { self.functions.update_execution_set_pipelines(set, &write) };
+        self.pairs.push(PipelinePair {
+            pipelines,
+            set,
+            last_used: frame,
+        });
+        Ok(set)
+    }
+
+    /// Destroys the execution sets no frame in flight can use.
+    fn forget_old_pairs(&mut self) {
+        let frame = self.frame;
+        let (old, kept): (Vec<_>, Vec<_>) = std::mem::take(&mut self.pairs)
+            .into_iter()
+            .partition(|pair| pair.last_used + FRAMES < frame);
+        self.pairs = kept;
+        for pair in old {
+            // SAFETY: the frames that used it have finished (the host keeps at most FRAMES in
+            // flight).
+            unsafe {
+                self.functions
+                    .destroy_execution_set(pair.set, self.gpu.allocator())
+            };
+        }
     }
 
     /// Bytes of preprocess memory, and their alignment and memory types, that `execution`
@@ -125,34 +217,35 @@ impl GeneratedCommands {
     fn requirements(
         &self,
         layout: dgc::IndirectCommandsLayout,
-        pipeline: vk::Pipeline,
+        drawer: Drawer,
         sequences: u32,
     ) -> vk::MemoryRequirements {
-        let pipeline = dgc::GeneratedCommandsPipelineInfo::new(pipeline);
-        let info = dgc::MemoryRequirementsInfo::new(
-            layout,
-            dgc::IndirectExecutionSet::null(),
-            Some(&pipeline),
-            sequences,
-        );
-        // SAFETY: the layout and the pipeline are alive.
+        let (set, pipeline) = match drawer {
+            Drawer::Pipeline(pipeline) => (
+                dgc::IndirectExecutionSet::null(),
+                Some(dgc::GeneratedCommandsPipelineInfo::new(pipeline)),
+            ),
+            Drawer::Set(set) => (set, None),
+        };
+        let info = dgc::MemoryRequirementsInfo::new(layout, set, pipeline.as_ref(), sequences);
+        // SAFETY: the layout and the pipeline or set are alive.
         unsafe { self.functions.memory_requirements(&info) }
     }
 
-    /// The most sequences one chunk of a pass of `sequences` drawn with `pipeline` runs (see
-    /// [`chunk_size_for`]), remembered per pipeline and pass size.
+    /// The most sequences one chunk of a pass of `sequences` drawn by `drawer` runs (see
+    /// [`chunk_size_for`]), remembered per drawer and pass size.
     fn chunk_size(
         &mut self,
         layout: dgc::IndirectCommandsLayout,
-        pipeline: vk::Pipeline,
+        drawer: Drawer,
         sequences: u32,
     ) -> u32 {
-        let key = (pipeline, sequences);
+        let key = (drawer, sequences);
         if let Some(&(_, size)) = self.chunk_sizes.iter().find(|(k, _)| *k == key) {
             return size;
         }
         let size = chunk_size_for(sequences, |chunk| {
-            self.requirements(layout, pipeline, chunk).size
+            self.requirements(layout, drawer, chunk).size
         });
         if self.chunk_sizes.len() >= KEPT_CHUNK_SIZES {
             self.chunk_sizes.clear();
@@ -282,23 +375,19 @@ impl GeneratedCommands {
         unsafe { self.gpu.device.get_buffer_device_address(&info) + offset }
     }
 
-    /// Prepares a frame of `executions`: the layout, and every execution split into chunks,
-    /// each with its preprocess region (address and size), in order.
+    /// Prepares a frame of `executions`: the layouts and execution sets, and every execution
+    /// split into chunks, each with its preprocess region (address and size), in order.
     pub fn begin_frame(&mut self, executions: &[Execution]) -> Result<Vec<Vec<Chunk>>, String> {
-        let Some(stride) = executions.first().map(|e| e.stride) else {
-            return Ok(Vec::new());
-        };
-        if executions.iter().any(|e| e.stride != stride) {
-            return Err("the passes' commands have different strides".into());
-        }
-        let layout = self.layout(stride)?;
+        self.frame += 1;
+        self.forget_old_pairs();
         let mut chunked = Vec::with_capacity(executions.len());
         let mut frame_bytes: u64 = 0;
         let mut types = u32::MAX;
         for execution in executions {
-            let chunk = self.chunk_size(layout, execution.pipeline, execution.max_sequences);
+            let (layout, drawer) = self.drawn_by(execution)?;
+            let chunk = self.chunk_size(layout, drawer, execution.max_sequences);
             // Every chunk but the last is full: two queries per pass, whatever the chunks.
-            let full = self.requirements(layout, execution.pipeline, chunk);
+            let full = self.requirements(layout, drawer, chunk);
             let mut chunks = Vec::new();
             let mut first = 0;
             while first < execution.max_sequences {
@@ -306,13 +395,13 @@ impl GeneratedCommands {
                 let needs = if sequences == chunk {
                     full
                 } else {
-                    self.requirements(layout, execution.pipeline, sequences)
+                    self.requirements(layout, drawer, sequences)
                 };
                 frame_bytes = frame_bytes.next_multiple_of(needs.alignment.max(1));
                 chunks.push((
                     Execution {
                         commands_offset: execution.commands_offset
-                            + u64::from(first) * u64::from(stride),
+                            + u64::from(first) * u64::from(execution.stride),
                         max_sequences: sequences,
                         ..*execution
                     },
@@ -325,8 +414,10 @@ impl GeneratedCommands {
             }
             chunked.push(chunks);
         }
-        self.frame = (self.frame + 1) % FRAMES;
-        let frame = self.frame;
+        if chunked.is_empty() {
+            return Ok(chunked);
+        }
+        let frame = self.frame % FRAMES;
         let preprocess = self.reserve(frame_bytes, types)?;
         let base = preprocess.address + frame * preprocess.frame_bytes;
         Ok(chunked
@@ -340,6 +431,31 @@ impl GeneratedCommands {
             .collect())
     }
 
+    /// The layout of `execution`'s sequences and what draws them: its pipeline, or where the
+    /// stream is shared with the next pass, the execution set of both passes' pipelines.
+    fn drawn_by(
+        &mut self,
+        execution: &Execution,
+    ) -> Result<(dgc::IndirectCommandsLayout, Drawer), String> {
+        match execution.next_pass_pipeline {
+            Some(next) => {
+                if execution.stride < PIPELINE_INDEX_BYTES + 20 {
+                    return Err(format!(
+                        "a shared stream of {}-byte commands: each needs its pipeline's index and a draw",
+                        execution.stride
+                    ));
+                }
+                let layout = self.layout(execution.stride, true)?;
+                let set = self.pipeline_pair([execution.pipeline, next])?;
+                Ok((layout, Drawer::Set(set)))
+            }
+            None => Ok((
+                self.layout(execution.stride, false)?,
+                Drawer::Pipeline(execution.pipeline),
+            )),
+        }
+    }
+
     /// Records `execution` (its pipeline and bindings already bound, inside rendering) with
     /// the preprocess `region` [`Self::begin_frame`] gave it.
     pub fn execute(
@@ -348,12 +464,33 @@ impl GeneratedCommands {
         execution: &Execution,
         region: (vk::DeviceAddress, u64),
     ) -> Result<(), String> {
-        let (_, layout) = self.layout.ok_or("no indirect commands layout")?;
+        let names_pipeline = execution.next_pass_pipeline.is_some();
+        let (_, layout) = self
+            .layouts
+            .iter()
+            .find(|(made_for, _)| *made_for == (execution.stride, names_pipeline))
+            .ok_or("no indirect commands layout")?;
+        let set = match execution.next_pass_pipeline {
+            Some(next) => {
+                self.pairs
+                    .iter()
+                    .find(|pair| pair.pipelines == [execution.pipeline, next])
+                    .ok_or("no execution set")?
+                    .set
+            }
+            None => dgc::IndirectExecutionSet::null(),
+        };
         let pipeline = dgc::GeneratedCommandsPipelineInfo::new(execution.pipeline);
         let info = dgc::GeneratedCommandsInfo {
-            p_next: (&pipeline as *const dgc::GeneratedCommandsPipelineInfo<'_>).cast(),
+            // The bound pipeline draws a stream without an execution set.
+            p_next: if names_pipeline {
+                std::ptr::null()
+            } else {
+                (&pipeline as *const dgc::GeneratedCommandsPipelineInfo<'_>).cast()
+            },
             shader_stages: STAGES,
-            indirect_commands_layout: layout,
+            indirect_execution_set: set,
+            indirect_commands_layout: *layout,
             indirect_address: self.address(execution.commands, execution.commands_offset),
             indirect_address_size: u64::from(execution.max_sequences) * u64::from(execution.stride),
             preprocess_address: region.0,
@@ -362,8 +499,9 @@ impl GeneratedCommands {
             sequence_count_address: self.address(execution.count, execution.count_offset),
             ..Default::default()
         };
-        // SAFETY: recording inside rendering with the pass's pipeline bound; the stream, the
-        // count and the preprocess region stay alive until the frame has run.
+        // SAFETY: recording inside rendering with the pass's pipeline (the set's initial one)
+        // bound; the stream, the count and the preprocess region stay alive until the frame
+        // has run.
         unsafe { self.functions.cmd_execute(command_buffer, false, &info) };
         Ok(())
     }
@@ -415,9 +553,15 @@ impl Drop for GeneratedCommands {
         if let Some(preprocess) = self.preprocess.take() {
             self.free(preprocess);
         }
-        if let Some((_, layout)) = self.layout.take() {
-            // SAFETY: the host drops techniques after the GPU finished their frames.
-            unsafe { self.functions.destroy_layout(layout, self.gpu.allocator()) };
+        // SAFETY: the host drops techniques after the GPU finished their frames.
+        unsafe {
+            for pair in self.pairs.drain(..) {
+                self.functions
+                    .destroy_execution_set(pair.set, self.gpu.allocator());
+            }
+            for (_, layout) in self.layouts.drain(..) {
+                self.functions.destroy_layout(layout, self.gpu.allocator());
+            }
         }
     }
 }

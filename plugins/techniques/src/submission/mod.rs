@@ -264,22 +264,7 @@ impl<const S: u8, const A: u8, const M: u8> Submit<S, A, M> {
     fn record_generated(&mut self, record: &Record<'_>) -> Result<(), String> {
         let passes = record.passes();
         let executions: Vec<Execution> = match record.gpu_draws() {
-            Some(draws) => passes
-                .iter()
-                .zip(draws)
-                .enumerate()
-                .filter(|(_, (_, source))| source.commands != 0 && source.max_draws != 0)
-                .map(|(index, (pass, source))| Execution {
-                    pass: index,
-                    pipeline: vk::Pipeline::from_raw(pass.pipeline),
-                    commands: vk::Buffer::from_raw(source.commands),
-                    commands_offset: source.commands_offset,
-                    count: vk::Buffer::from_raw(source.count_buffer),
-                    count_offset: source.count_offset,
-                    max_sequences: source.max_draws,
-                    stride: source.stride,
-                })
-                .collect(),
+            Some(draws) => gpu_executions(passes, draws),
             None => {
                 // A host that skipped prepare still gets the right lists.
                 if self.refresh_lists(record) {
@@ -302,6 +287,7 @@ impl<const S: u8, const A: u8, const M: u8> Submit<S, A, M> {
                                     count_offset: 0,
                                     max_sequences: indirect.draws,
                                     stride: 20,
+                                    next_pass_pipeline: None,
                                 })
                             }
                             _ => None,
@@ -373,6 +359,35 @@ impl<const S: u8, const A: u8, const M: u8> Submit<S, A, M> {
                 .collect(),
         }
     }
+}
+
+/// The executions of the GPU culler's `draws` for `passes`: one per pass that draws, and one
+/// for two consecutive passes whose draws are equal, a shared stream whose commands each name
+/// their pass's pipeline (`CadrSharedFaceStreams`, which the host asks for because
+/// `dgc` announces `CADR_TRAIT_SWITCHES_PIPELINES`).
+fn gpu_executions(passes: &[abi::CadrPass], draws: &[abi::CadrGpuDraws]) -> Vec<Execution> {
+    let mut executions = Vec::new();
+    let mut index = 0;
+    while index < passes.len().min(draws.len()) {
+        let source = &draws[index];
+        let shared_with_next = draws.get(index + 1) == Some(source) && index + 1 < passes.len();
+        if source.commands != 0 && source.max_draws != 0 {
+            executions.push(Execution {
+                pass: index,
+                pipeline: vk::Pipeline::from_raw(passes[index].pipeline),
+                commands: vk::Buffer::from_raw(source.commands),
+                commands_offset: source.commands_offset,
+                count: vk::Buffer::from_raw(source.count_buffer),
+                count_offset: source.count_offset,
+                max_sequences: source.max_draws,
+                stride: source.stride,
+                next_pass_pipeline: shared_with_next
+                    .then(|| vk::Pipeline::from_raw(passes[index + 1].pipeline)),
+            });
+        }
+        index += 1 + usize::from(shared_with_next);
+    }
+    executions
 }
 
 impl<const S: u8, const A: u8, const M: u8> Submission for Submit<S, A, M> {
@@ -540,8 +555,8 @@ technique_library! {
         },
         submission Submit<INDIVIDUAL, GENERATED, INLINE> {
             name: "dgc",
-            description: "Device-generated commands (VK_EXT_device_generated_commands): each pass's indirect commands, written by a gpu- culler or from the part list, run as a generated command stream whose length the GPU reads.",
-            features: DGC_FEATURES, provides: abi::CADR_TRAIT_DRAWS_GPU_COMMANDS | REPLAYABLE | KEEPS_FRAME_SLOTS, needs: GPU_DRAWS,
+            description: "Device-generated commands (VK_EXT_device_generated_commands): each pass's indirect commands, written by a gpu- culler or from the part list, run as a generated command stream whose length the GPU reads; where a gpu- culler splits the surfaces by their back faces, one stream draws both, the GPU picking each part's pipeline from an execution set.",
+            features: DGC_FEATURES, provides: abi::CADR_TRAIT_DRAWS_GPU_COMMANDS | abi::CADR_TRAIT_SWITCHES_PIPELINES | REPLAYABLE | KEEPS_FRAME_SLOTS, needs: GPU_DRAWS,
         },
         submission Submit<INDIVIDUAL, DIRECT, REPLAY> {
             name: "individual-replay",

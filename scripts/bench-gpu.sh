@@ -139,9 +139,11 @@ bench triangle-heavy "$frames" "$heavy" "${scene_wide[@]}" --submit individual-i
 # Ten million parts.
 bench grid-10m "$few_frames" "$big" "${scene_wide[@]}" --submit individual-indirect-count,dgc \
   --cull gpu-frustum --camera orbit
-# Device-generated commands against the recorded multi-draw-indirect replay.
-bench dgc-graphicscard "$frames" "$card" "${scene_wide[@]}" --submit dgc,groups-mdi-replay \
-  --cull none,gpu-frustum --camera orbit
+# Device-generated commands against the recorded multi-draw-indirect replay, and (with a GPU
+# culler, whose two back-face passes dgc draws as one stream switching pipelines per sequence)
+# against the two indirect-count draws of the same passes.
+bench dgc-graphicscard "$frames" "$card" "${scene_wide[@]}" \
+  --submit dgc,groups-mdi-replay,individual-indirect-count --cull none,gpu-frustum --camera orbit
 bench dgc-racecar "$frames" "$racecar" "${scene_wide[@]}" --submit dgc,groups-mdi-replay \
   --cull none,gpu-frustum --camera orbit
 # Clusters and level of detail: per-part occlusion against clusters at full detail and at 1 px,

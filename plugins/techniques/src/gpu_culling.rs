@@ -107,6 +107,33 @@ struct CullDispatch {
     command_words: u32,
 }
 
+impl CullDispatch {
+    /// The push constants, in the order `gpu_cull.comp` declares them.
+    fn constants(&self) -> Vec<u8> {
+        words(&[
+            self.instance_count,
+            self.pass_kind,
+            self.pass_slot,
+            self.first_command,
+            self.mode,
+            self.writes_visibility,
+            self.pyramid_levels,
+            self.filter.keep.mask,
+            self.filter.keep.value,
+            self.filter.keep.section_cut,
+            self.filter.exclude.mask,
+            self.filter.exclude.value,
+            self.lod_error.to_bits(),
+            u32::from(self.back_faces_hidden),
+            self.command_capacity,
+            self.cluster_budget,
+            self.cluster_bit_mask,
+            self.face_route,
+            self.command_words,
+        ])
+    }
+}
+
 /// Bytes of [`CullDispatch`] as pushed.
 const CULL_PUSH_BYTES: u32 = 76;
 /// The most bits of the cluster visibility table (32 MiB a copy): past it, clusters share
@@ -389,6 +416,16 @@ struct VisibilityBits {
     words: u32,
 }
 
+/// The indirect commands: one region of `capacity` per (phase, pass) slot, each command at most
+/// `words` long.
+struct CommandRegions {
+    buffer: Option<HostBuffer>,
+    capacity: u32,
+    words: u32,
+    /// Words of each command this frame (see [`CullDispatch::command_words`]).
+    frame_words: u32,
+}
+
 /// A GPU culler: `gpu-frustum` without occlusion, `gpu-occlusion` with it, `gpu-clusters`
 /// with occlusion and clusters.
 pub struct GpuCuller<const OCCLUSION: bool, const CLUSTERS: bool> {
@@ -396,13 +433,8 @@ pub struct GpuCuller<const OCCLUSION: bool, const CLUSTERS: bool> {
     objects: Objects,
     /// Commands per (phase, pass) slot and the totals; host-visible for the frame's counts.
     counts: HostBuffer,
-    /// The commands: one region of `capacity` per (phase, pass) slot, each command at most
-    /// `command_words` long.
-    commands: Option<HostBuffer>,
-    capacity: u32,
-    command_words: u32,
-    /// Words of each command this frame (see [`CullDispatch::command_words`]).
-    frame_command_words: u32,
+    /// The commands' regions.
+    commands: CommandRegions,
     /// Visibility bits of instances; 4 bytes each for `gpu-frustum`, which reads none.
     visibility: VisibilityBits,
     /// The same for clusters (gpu-clusters): a table of bits that an instance's cluster finds
@@ -454,10 +486,12 @@ impl<const OCCLUSION: bool, const CLUSTERS: bool> Technique for GpuCuller<OCCLUS
             gpu,
             objects,
             counts,
-            commands: None,
-            capacity: 0,
-            command_words: COMMAND_WORDS,
-            frame_command_words: COMMAND_WORDS,
+            commands: CommandRegions {
+                buffer: None,
+                capacity: 0,
+                words: COMMAND_WORDS,
+                frame_words: COMMAND_WORDS,
+            },
             cluster_budget: 0,
             max_cluster_budget: cluster_command_budget(),
             pyramid_size: (0, 0),
@@ -513,20 +547,25 @@ impl<const OCCLUSION: bool, const CLUSTERS: bool> GpuCuller<OCCLUSION, CLUSTERS>
     ) -> Result<(), String> {
         let storage = vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_DST;
         let needed = commands.max(instances).max(1);
-        let words = self.frame_command_words;
-        if self.commands.is_none() || needed > self.capacity || words > self.command_words {
-            let capacity =
-                u32::try_from(grown_capacity(u64::from(self.capacity), u64::from(needed)))
-                    .unwrap_or(u32::MAX);
+        let words = self.commands.frame_words;
+        if self.commands.buffer.is_none()
+            || needed > self.commands.capacity
+            || words > self.commands.words
+        {
+            let capacity = u32::try_from(grown_capacity(
+                u64::from(self.commands.capacity),
+                u64::from(needed),
+            ))
+            .unwrap_or(u32::MAX);
             let slots = (self.phases() as usize * PASSES_PER_PHASE) as u64;
-            self.commands = Some(self.gpu.create_buffer(
+            self.commands.buffer = Some(self.gpu.create_buffer(
                 "gpu cull commands",
                 u64::from(capacity) * u64::from(words) * 4 * slots,
                 storage | DRAWN_FROM,
                 abi::CADR_MEMORY_GPU_ONLY,
             )?);
-            self.capacity = capacity;
-            self.command_words = words;
+            self.commands.capacity = capacity;
+            self.commands.words = words;
         }
         let needed = instances.max(1);
         if OCCLUSION && needed.div_ceil(32) > self.visibility.words {
@@ -606,7 +645,7 @@ impl<const OCCLUSION: bool, const CLUSTERS: bool> GpuCuller<OCCLUSION, CLUSTERS>
         clusters: Option<&abi::CadrSceneClusters>,
         (view, view_offset): (vk::Buffer, u64),
     ) {
-        let Some(commands) = &self.commands else {
+        let Some(commands) = &self.commands.buffer else {
             return;
         };
         let mut buffers = vec![
@@ -716,7 +755,7 @@ impl<const OCCLUSION: bool, const CLUSTERS: bool> GpuCuller<OCCLUSION, CLUSTERS>
         }
         let filters = cull.pass_filters();
         let face_routes = cull.face_routes();
-        let command_words = self.frame_command_words;
+        let command_words = self.commands.frame_words;
         let shares = command_words == NAMED_COMMAND_WORDS;
         for (index, (pass, filter)) in cull
             .passes()
@@ -740,7 +779,7 @@ impl<const OCCLUSION: bool, const CLUSTERS: bool> GpuCuller<OCCLUSION, CLUSTERS>
                 instance_count: instances,
                 pass_kind: pass.kind,
                 pass_slot: slot as u32,
-                first_command: slot as u32 * self.capacity,
+                first_command: slot as u32 * self.commands.capacity,
                 mode,
                 // The first pass, and where the surfaces are split, the first of the other
                 // parts: between them they see every part once.
@@ -749,33 +788,13 @@ impl<const OCCLUSION: bool, const CLUSTERS: bool> GpuCuller<OCCLUSION, CLUSTERS>
                 filter,
                 lod_error,
                 back_faces_hidden: back_faces_hidden.get(index).copied().unwrap_or(false),
-                command_capacity: self.capacity,
+                command_capacity: self.commands.capacity,
                 cluster_budget: self.cluster_budget,
                 cluster_bit_mask: self.cluster_visibility.words * 32 - 1,
                 face_route: route,
                 command_words,
             };
-            let constants = words(&[
-                dispatch.instance_count,
-                dispatch.pass_kind,
-                dispatch.pass_slot,
-                dispatch.first_command,
-                dispatch.mode,
-                dispatch.writes_visibility,
-                dispatch.pyramid_levels,
-                dispatch.filter.keep.mask,
-                dispatch.filter.keep.value,
-                dispatch.filter.keep.section_cut,
-                dispatch.filter.exclude.mask,
-                dispatch.filter.exclude.value,
-                dispatch.lod_error.to_bits(),
-                u32::from(dispatch.back_faces_hidden),
-                dispatch.command_capacity,
-                dispatch.cluster_budget,
-                dispatch.cluster_bit_mask,
-                dispatch.face_route,
-                dispatch.command_words,
-            ]);
+            let constants = dispatch.constants();
             // SAFETY: recording; the constants fit the layout's 76 bytes.
             unsafe {
                 device.cmd_push_constants(
@@ -787,31 +806,29 @@ impl<const OCCLUSION: bool, const CLUSTERS: bool> GpuCuller<OCCLUSION, CLUSTERS>
                 );
                 device.cmd_dispatch(command_buffer, instances.div_ceil(64), 1, 1);
             }
-            if let Some(commands) = &self.commands {
-                cull.set_draws(
-                    index,
-                    abi::CadrGpuDraws {
-                        commands: commands.raw().as_raw(),
-                        // A shared stream starts at its first command's word, any other at
-                        // the command itself.
-                        commands_offset: u64::from(dispatch.first_command)
-                            * u64::from(command_words)
-                            * 4
-                            + u64::from(
-                                command_words == NAMED_COMMAND_WORDS
-                                    && !matches!(
-                                        route,
-                                        abi::CADR_FACES_CULLED | abi::CADR_FACES_KEPT
-                                    ),
-                            ) * 4,
-                        count_buffer: self.counts.raw().as_raw(),
-                        count_offset: slot as u64 * 4,
-                        max_draws: self.capacity,
-                        stride: command_words * 4,
-                    },
-                );
+            if let Some(draws) = self.draws(slot, route) {
+                cull.set_draws(index, draws);
             }
         }
+    }
+
+    /// Where the commands of pass slot `slot` (a pass of `route`) lie this frame. In a frame
+    /// of named commands a shared stream starts at its first command's word, any other stream
+    /// at its first command itself.
+    fn draws(&self, slot: usize, route: abi::CadrFaceRoute) -> Option<abi::CadrGpuDraws> {
+        let commands = self.commands.buffer.as_ref()?;
+        let words = self.commands.frame_words;
+        let region_start = slot as u64 * u64::from(self.commands.capacity) * u64::from(words) * 4;
+        let shared = matches!(route, abi::CADR_FACES_CULLED | abi::CADR_FACES_KEPT);
+        let word_skipped = words == NAMED_COMMAND_WORDS && !shared;
+        Some(abi::CadrGpuDraws {
+            commands: commands.raw().as_raw(),
+            commands_offset: region_start + u64::from(word_skipped) * 4,
+            count_buffer: self.counts.raw().as_raw(),
+            count_offset: slot as u64 * 4,
+            max_draws: self.commands.capacity,
+            stride: words * 4,
+        })
     }
 
     /// Copies this frame's visibility over the last frame's, for the next frame to read: the
@@ -1038,7 +1055,7 @@ impl<const OCCLUSION: bool, const CLUSTERS: bool> GpuCuller<OCCLUSION, CLUSTERS>
         // in chunks that each read the pass's count), what lies past the count must draw
         // nothing: commands of zero instances.
         if self.gpu.features & abi::CADR_FEATURE_DEVICE_GENERATED_COMMANDS_EXT != 0 {
-            if let Some(commands) = &self.commands {
+            if let Some(commands) = &self.commands.buffer {
                 clear(&self.gpu, command_buffer, commands);
             }
         }
@@ -1094,7 +1111,7 @@ impl<const OCCLUSION: bool, const CLUSTERS: bool> GpuCulling for GpuCuller<OCCLU
         }
         let (commands, cluster_budget) = self.command_room(instances, clusters);
         self.cluster_budget = cluster_budget;
-        self.frame_command_words = if cull.shares_face_streams() {
+        self.commands.frame_words = if cull.shares_face_streams() {
             NAMED_COMMAND_WORDS
         } else {
             COMMAND_WORDS

@@ -14,6 +14,7 @@ pub mod csf;
 pub mod disk_cache;
 pub mod error;
 pub mod frame;
+pub mod freed_memory;
 pub mod generate;
 pub mod gpu_scene;
 pub mod graph;

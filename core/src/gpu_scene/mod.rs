@@ -264,6 +264,7 @@ impl GpuScene {
             NEXT_GENERATIONS.fetch_add(1 << 32, std::sync::atomic::Ordering::Relaxed);
         let reader = tree.subscribe();
         let (arenas, geometry_bytes) = GeometryArenas::upload(device, graph, false)?;
+        crate::freed_memory::after_sync(geometry_bytes, 0);
         let (textures, texture_bytes) = SceneTextures::new(device, graph)?;
         let mut scene = Self {
             device: Arc::clone(device),
@@ -587,6 +588,11 @@ impl GpuScene {
             // Half applied: every view starts over from what the scene holds.
             self.followers.changes.all = true;
         }
+        // A load or an unload frees its transient buffers by now.
+        crate::freed_memory::after_sync(
+            self.counts.last_upload.geometry_bytes,
+            self.counts.last_touched,
+        );
         let slots = self.instances.len() + self.matrices.len() + self.materials.len();
         self.followers.deliver(slots.max(1024));
         result

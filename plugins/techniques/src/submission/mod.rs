@@ -361,6 +361,9 @@ impl<const S: u8, const A: u8, const M: u8> Submit<S, A, M> {
     }
 }
 
+/// Bytes of a command of a shared stream: the word naming its pass, then the draw.
+const NAMED_COMMAND_BYTES: u32 = 24;
+
 /// The executions of the GPU culler's `draws` for `passes`: one per pass that draws, and one
 /// for two consecutive passes whose draws are equal, a shared stream whose commands each name
 /// their pass's pipeline (`CadrSharedFaceStreams`, which the host asks for because
@@ -370,7 +373,10 @@ fn gpu_executions(passes: &[abi::CadrPass], draws: &[abi::CadrGpuDraws]) -> Vec<
     let mut index = 0;
     while index < passes.len().min(draws.len()) {
         let source = &draws[index];
-        let shared_with_next = draws.get(index + 1) == Some(source) && index + 1 < passes.len();
+        // A stream shared by two passes has room for the word before each command.
+        let shared_with_next = draws.get(index + 1) == Some(source)
+            && index + 1 < passes.len()
+            && source.stride >= NAMED_COMMAND_BYTES;
         if source.commands != 0 && source.max_draws != 0 {
             executions.push(Execution {
                 pass: index,
@@ -584,4 +590,60 @@ technique_library! {
             features: 0, provides: SECONDARY | REPLAYABLE, needs: 0,
         },
     ]
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn pass(pipeline: u64) -> abi::CadrPass {
+        abi::CadrPass {
+            pipeline,
+            kind: abi::CADR_PASS_TRIANGLES,
+        }
+    }
+
+    fn stream(offset: u64, stride: u32) -> abi::CadrGpuDraws {
+        abi::CadrGpuDraws {
+            commands: 7,
+            commands_offset: offset,
+            count_buffer: 8,
+            count_offset: offset / 100,
+            max_draws: 100,
+            stride,
+        }
+    }
+
+    #[test]
+    fn two_passes_with_one_stream_of_named_commands_are_one_execution() {
+        let passes = [pass(1), pass(2), pass(3)];
+        // The split's two passes share a stream; the third (edges) has its own.
+        let draws = [stream(0, 24), stream(0, 24), stream(2400, 24)];
+        let executions = gpu_executions(&passes, &draws);
+        assert_eq!(executions.len(), 2);
+        assert_eq!(
+            (executions[0].pass, executions[0].next_pass_pipeline),
+            (0, Some(vk::Pipeline::from_raw(2)))
+        );
+        assert_eq!(
+            (executions[1].pass, executions[1].next_pass_pipeline),
+            (2, None)
+        );
+    }
+
+    #[test]
+    fn passes_with_streams_of_their_own_or_without_room_for_names_stay_apart() {
+        let passes = [pass(1), pass(2)];
+        // Two streams: as a culler of ABI 1.18 writes the split.
+        let apart = gpu_executions(&passes, &[stream(0, 20), stream(2000, 20)]);
+        assert_eq!(apart.len(), 2);
+        assert!(apart.iter().all(|e| e.next_pass_pipeline.is_none()));
+        // One 20-byte stream given to both: no word to name a pass, so each pass draws it.
+        let same = gpu_executions(&passes, &[stream(0, 20), stream(0, 20)]);
+        assert_eq!(same.len(), 2);
+        // A pass without commands runs nothing.
+        let mut empty = stream(0, 24);
+        empty.commands = 0;
+        assert_eq!(gpu_executions(&passes, &[empty, stream(2400, 24)]).len(), 1);
+    }
 }

@@ -22,6 +22,7 @@ const LAYERS: &[(&str, &[&str])] = &[
             "memory_budget",
             "disk_cache",
             "panic_boundary",
+            "freed_memory",
         ],
     ),
     ("threads", &["parallel"]),

@@ -71,9 +71,14 @@ enum Drawer {
     Set(dgc::IndirectExecutionSet),
 }
 
-/// An execution set of two pipelines, and the frame that last used it.
+/// An execution set of two pipelines, the commands key of the recordings it may serve, and
+/// the frame that last used it.
 struct PipelinePair {
     pipelines: [vk::Pipeline; 2],
+    /// The host's commands key when it was made: a pipeline handle is only known to name the
+    /// same pipeline while the key stays (the host may destroy pipelines and make others, with
+    /// the handles of the old, when the key changes).
+    commands_key: u64,
     set: dgc::IndirectExecutionSet,
     last_used: u64,
 }
@@ -99,8 +104,8 @@ pub struct GeneratedCommands {
     preprocess: Option<Preprocess>,
     /// Frames begun.
     frame: u64,
-    /// Per drawer and sequences of a pass, the most sequences a chunk runs.
-    chunk_sizes: Vec<((Drawer, u32), u32)>,
+    /// Per layout, drawer and sequences of a pass, the most sequences a chunk runs.
+    chunk_sizes: Vec<((dgc::IndirectCommandsLayout, Drawer, u32), u32)>,
 }
 
 /// The stages the sequences' state reaches (the draw token's pipelines).
@@ -164,14 +169,19 @@ impl GeneratedCommands {
         Ok(layout)
     }
 
-    /// The execution set of `pipelines` (index 0 and 1), made on first use. Sets unused for
-    /// more frames than can be in flight are destroyed: their pipelines may be gone.
+    /// The execution set of `pipelines` (index 0 and 1) for recordings of `commands_key`, made
+    /// on first use. Sets unused for more frames than can be in flight are destroyed.
     fn pipeline_pair(
         &mut self,
         pipelines: [vk::Pipeline; 2],
+        commands_key: u64,
     ) -> Result<dgc::IndirectExecutionSet, String> {
         let frame = self.frame;
-        if let Some(pair) = self.pairs.iter_mut().find(|p| p.pipelines == pipelines) {
+        if let Some(pair) = self
+            .pairs
+            .iter_mut()
+            .find(|p| p.pipelines == pipelines && p.commands_key == commands_key)
+        {
             pair.last_used = frame;
             return Ok(pair.set);
         }
@@ -189,6 +199,7 @@ impl GeneratedCommands {
         unsafe { self.functions.update_execution_set_pipelines(set, &write) };
         self.pairs.push(PipelinePair {
             pipelines,
+            commands_key,
             set,
             last_used: frame,
         });
@@ -233,14 +244,14 @@ impl GeneratedCommands {
     }
 
     /// The most sequences one chunk of a pass of `sequences` drawn by `drawer` runs (see
-    /// [`chunk_size_for`]), remembered per drawer and pass size.
+    /// [`chunk_size_for`]), remembered per layout, drawer and pass size.
     fn chunk_size(
         &mut self,
         layout: dgc::IndirectCommandsLayout,
         drawer: Drawer,
         sequences: u32,
     ) -> u32 {
-        let key = (drawer, sequences);
+        let key = (layout, drawer, sequences);
         if let Some(&(_, size)) = self.chunk_sizes.iter().find(|(k, _)| *k == key) {
             return size;
         }
@@ -375,16 +386,21 @@ impl GeneratedCommands {
         unsafe { self.gpu.device.get_buffer_device_address(&info) + offset }
     }
 
-    /// Prepares a frame of `executions`: the layouts and execution sets, and every execution
-    /// split into chunks, each with its preprocess region (address and size), in order.
-    pub fn begin_frame(&mut self, executions: &[Execution]) -> Result<Vec<Vec<Chunk>>, String> {
+    /// Prepares a frame of `executions`, recorded under the host's `commands_key`: the layouts
+    /// and execution sets, and every execution split into chunks, each with its preprocess
+    /// region (address and size), in order.
+    pub fn begin_frame(
+        &mut self,
+        executions: &[Execution],
+        commands_key: u64,
+    ) -> Result<Vec<Vec<Chunk>>, String> {
         self.frame += 1;
         self.forget_old_pairs();
         let mut chunked = Vec::with_capacity(executions.len());
         let mut frame_bytes: u64 = 0;
         let mut types = u32::MAX;
         for execution in executions {
-            let (layout, drawer) = self.drawn_by(execution)?;
+            let (layout, drawer) = self.drawn_by(execution, commands_key)?;
             let chunk = self.chunk_size(layout, drawer, execution.max_sequences);
             // Every chunk but the last is full: two queries per pass, whatever the chunks.
             let full = self.requirements(layout, drawer, chunk);
@@ -436,6 +452,7 @@ impl GeneratedCommands {
     fn drawn_by(
         &mut self,
         execution: &Execution,
+        commands_key: u64,
     ) -> Result<(dgc::IndirectCommandsLayout, Drawer), String> {
         match execution.next_pass_pipeline {
             Some(next) => {
@@ -446,7 +463,7 @@ impl GeneratedCommands {
                     ));
                 }
                 let layout = self.layout(execution.stride, true)?;
-                let set = self.pipeline_pair([execution.pipeline, next])?;
+                let set = self.pipeline_pair([execution.pipeline, next], commands_key)?;
                 Ok((layout, Drawer::Set(set)))
             }
             None => Ok((
@@ -457,11 +474,11 @@ impl GeneratedCommands {
     }
 
     /// Records `execution` (its pipeline and bindings already bound, inside rendering) with
-    /// the preprocess `region` [`Self::begin_frame`] gave it.
+    /// the preprocess `region` [`Self::begin_frame`] gave it for `commands_key`.
     pub fn execute(
         &self,
         command_buffer: vk::CommandBuffer,
-        execution: &Execution,
+        (execution, commands_key): (&Execution, u64),
         region: (vk::DeviceAddress, u64),
     ) -> Result<(), String> {
         let names_pipeline = execution.next_pass_pipeline.is_some();
@@ -474,7 +491,10 @@ impl GeneratedCommands {
             Some(next) => {
                 self.pairs
                     .iter()
-                    .find(|pair| pair.pipelines == [execution.pipeline, next])
+                    .find(|pair| {
+                        pair.pipelines == [execution.pipeline, next]
+                            && pair.commands_key == commands_key
+                    })
                     .ok_or("no execution set")?
                     .set
             }

@@ -300,7 +300,7 @@ impl<const S: u8, const A: u8, const M: u8> Submit<S, A, M> {
             .generated
             .as_mut()
             .ok_or("no generated commands state")?;
-        let chunked = generated.begin_frame(&executions)?;
+        let chunked = generated.begin_frame(&executions, record.commands_key())?;
         let from_list = record.gpu_draws().is_none();
         for (execution, chunks) in executions.iter().zip(chunked) {
             let triangles = if from_list {
@@ -317,7 +317,11 @@ impl<const S: u8, const A: u8, const M: u8> Submit<S, A, M> {
                 (record.command_buffer(), record.stats()),
             );
             for (chunk, address, size) in &chunks {
-                generated.execute(record.command_buffer(), chunk, (*address, *size))?;
+                generated.execute(
+                    record.command_buffer(),
+                    (chunk, record.commands_key()),
+                    (*address, *size),
+                )?;
             }
             let sequences = u64::from(execution.max_sequences);
             let calls = chunks.len() as u64;

@@ -15,9 +15,11 @@ use cadr_core::scene::flatten;
 use cadr_core::technique::{Combination, ShadeMode};
 use cadr_core::tree::SceneTree;
 use cadr_core::view::View;
-use cadr_tests::back_face_cases::{draw, CASES};
+use cadr_tests::back_face_cases::{draw, four_boxes, CASES, SIZE as SIZE_OF_CASES};
 use cadr_tests::images::{compare, SAME_PICTURE};
-use cadr_tests::{assert_no_validation_errors, plugin_registry, scene_wide, test_device};
+use cadr_tests::{
+    assert_no_validation_errors, plugin_registry, scene_wide, test_device, SceneView,
+};
 
 const SIZE: (u32, u32) = (200, 150);
 
@@ -211,4 +213,56 @@ fn dgc_draws_the_split_surfaces_from_one_stream_whose_pipelines_the_gpu_picks() 
             assert_eq!(stats.triangles, two_streams.triangles, "{}", case.name);
         }
     }
+}
+
+/// One view swapping cullers and display modes back and forth under `dgc`: each swap may make
+/// new pipelines (at the handles of destroyed ones), and the execution sets of the split must
+/// follow, so every frame draws its mode's picture.
+#[test]
+fn dgc_follows_swapped_cullers_and_display_modes_in_one_view() {
+    let case = &CASES[0];
+    let aspect = f64::from(SIZE_OF_CASES.0) / f64::from(SIZE_OF_CASES.1);
+    let camera = Camera::look_at(case.eye, case.target, 60.0, aspect, 0.05, 100.0);
+    let references: Vec<image::RgbaImage> = [ShadeMode::Solid, ShadeMode::Edges]
+        .iter()
+        .map(|&mode| {
+            let mut f = SceneView::new(test_device(), &four_boxes(), SIZE_OF_CASES, camera);
+            f.view
+                .techniques_mut()
+                .select(&scene_wide("individual-indirect-count", "none"))
+                .unwrap();
+            f.view.techniques_mut().set_shade_mode(mode).unwrap();
+            f.render()
+        })
+        .collect();
+    let mut f = SceneView::new(test_device(), &four_boxes(), SIZE_OF_CASES, camera);
+    let steps = [
+        ("gpu-frustum", 0),
+        ("gpu-occlusion", 0),
+        ("gpu-occlusion", 1),
+        ("gpu-clusters", 1),
+        ("gpu-clusters", 0),
+        ("gpu-frustum", 1),
+        ("gpu-frustum", 0),
+    ];
+    for (step, &(culling, mode)) in steps.iter().enumerate() {
+        f.view
+            .techniques_mut()
+            .select(&scene_wide("dgc", culling))
+            .unwrap();
+        f.view
+            .techniques_mut()
+            .set_shade_mode([ShadeMode::Solid, ShadeMode::Edges][mode])
+            .unwrap();
+        // The first frame after a swap records; the second may replay.
+        for frame in 0..2 {
+            let image = f.render();
+            let difference = compare(&image, &references[mode]).unwrap();
+            assert!(
+                difference.within(SAME_PICTURE),
+                "step {step} ({culling}, mode {mode}), frame {frame}: {difference:?}"
+            );
+        }
+    }
+    f.assert_no_validation_errors();
 }

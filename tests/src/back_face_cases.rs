@@ -74,45 +74,84 @@ pub struct Case {
     pub target: DVec3,
     /// The section planes (none: no section).
     pub planes: &'static [DVec4],
+    /// Whether the section's caps are painted.
+    pub caps: bool,
     /// The display mode.
     pub mode: ShadeMode,
+    /// Whether hidden lines are drawn dashed (hidden-line mode).
+    pub dashed: bool,
+    /// Whether a GPU culler's frame splits the surfaces by back faces (the frame keeps within
+    /// the four passes a phase that cadr's cullers handle).
+    pub split: bool,
 }
 
-pub const CASES: [Case; 5] = [
+/// A case of the solid mode without caps or dashes.
+const fn solid(name: &'static str, eye: DVec3, target: DVec3, planes: &'static [DVec4]) -> Case {
     Case {
-        name: "outside",
-        eye: DVec3::new(4.0, 5.0, 9.0),
-        target: DVec3::ZERO,
-        planes: &[],
+        name,
+        eye,
+        target,
+        planes,
+        caps: false,
         mode: ShadeMode::Solid,
-    },
+        dashed: false,
+        split: true,
+    }
+}
+
+/// The plane that cuts every box through its middle, keeping y <= 0.
+const MIDDLE: &[DVec4] = &[DVec4::new(0.0, -1.0, 0.0, 0.0)];
+
+/// The cases: where back faces show in the solid mode, and the edge modes.
+pub const CASES: [Case; 8] = [
+    solid("outside", DVec3::new(4.0, 5.0, 9.0), DVec3::ZERO, &[]),
+    solid(
+        "into the open box",
+        DVec3::new(3.3, 0.4, 3.0),
+        DVec3::new(3.0, 0.0, 0.0),
+        &[],
+    ),
+    solid(
+        "inside the closed box",
+        DVec3::new(0.2, 0.1, 0.3),
+        DVec3::new(-1.0, 0.0, 0.0),
+        &[],
+    ),
+    solid(
+        "a cut through every box",
+        DVec3::new(2.0, 6.0, 7.0),
+        DVec3::new(0.0, 0.0, -1.0),
+        MIDDLE,
+    ),
     Case {
-        name: "into the open box",
-        eye: DVec3::new(3.3, 0.4, 3.0),
-        target: DVec3::new(3.0, 0.0, 0.0),
-        planes: &[],
-        mode: ShadeMode::Solid,
-    },
-    Case {
-        name: "inside the closed box",
-        eye: DVec3::new(0.2, 0.1, 0.3),
-        target: DVec3::new(-1.0, 0.0, 0.0),
-        planes: &[],
-        mode: ShadeMode::Solid,
-    },
-    Case {
-        name: "a cut through every box",
-        eye: DVec3::new(2.0, 6.0, 7.0),
-        target: DVec3::new(0.0, 0.0, -1.0),
-        planes: &[DVec4::new(0.0, -1.0, 0.0, 0.0)],
-        mode: ShadeMode::Solid,
-    },
-    Case {
-        name: "edges",
-        eye: DVec3::new(-4.0, 3.0, 8.0),
-        target: DVec3::ZERO,
-        planes: &[],
         mode: ShadeMode::Edges,
+        ..solid("edges", DVec3::new(-4.0, 3.0, 8.0), DVec3::ZERO, &[])
+    },
+    Case {
+        mode: ShadeMode::Edges,
+        caps: true,
+        ..solid(
+            "edges, caps painted over the lines of a cut",
+            DVec3::new(2.0, 6.0, 7.0),
+            DVec3::new(0.0, 0.0, -1.0),
+            MIDDLE,
+        )
+    },
+    Case {
+        mode: ShadeMode::HiddenLine,
+        ..solid("hidden-line", DVec3::new(-4.0, 3.0, 8.0), DVec3::ZERO, &[])
+    },
+    // Surfaces, dashed hidden lines, hidden silhouettes and visible lines: four passes already.
+    Case {
+        mode: ShadeMode::HiddenLine,
+        dashed: true,
+        split: false,
+        ..solid(
+            "hidden-line, dashed",
+            DVec3::new(-4.0, 3.0, 8.0),
+            DVec3::ZERO,
+            &[],
+        )
     },
 ];
 
@@ -130,10 +169,11 @@ pub fn draw(case: &Case, submission: &str, culling: &str) -> (image::RgbaImage, 
         .techniques_mut()
         .set_shade_mode(case.mode)
         .expect("a display mode");
+    f.view.techniques_mut().set_dashed_hidden_lines(case.dashed);
     if !case.planes.is_empty() {
         let mut section = Section::none();
         section.set_planes(case.planes).expect("valid planes");
-        section.set_caps(false);
+        section.set_caps(case.caps);
         f.view.set_section(section);
     }
     f.render();

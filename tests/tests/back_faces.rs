@@ -2,7 +2,9 @@
 //! them into a pass of their own (`CadrBackFacePasses`), and the picture is the one drawing
 //! both faces of every part shows, also where back faces can show: an open part seen from
 //! inside, an inside-out mesh, a mirrored copy, a part a section plane cuts, a part holding the
-//! eye, and with edges drawn over the surfaces.
+//! eye, and in the edge modes: edges over the surfaces, caps painted over the lines of a cut,
+//! hidden-line (depth-only surfaces), and hidden-line with dashed hidden lines, whose frame has
+//! no room for the split.
 #![allow(clippy::unwrap_used)] // Test code: a failed unwrap is a failed test.
 
 use cadr_core::technique::ShadeMode;
@@ -31,6 +33,16 @@ fn closed_parts_drawn_without_back_faces_look_as_with_them_and_the_others_keep_t
                     phases * (all.pipeline_binds + 1),
                     "{}, {culling}: two surface pipelines in each phase",
                     case.name
+                );
+            } else if culling == "gpu-frustum" {
+                // One phase, and the passes over the picture bound once: the split's pass is
+                // one bind more, where the frame has room for it.
+                assert_eq!(
+                    stats.pipeline_binds,
+                    all.pipeline_binds + u64::from(case.split),
+                    "{}, {culling}: the surfaces split {}",
+                    case.name,
+                    if case.split { "in two" } else { "not at all" }
                 );
             }
         }

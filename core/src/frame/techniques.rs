@@ -41,11 +41,7 @@ impl Renderer {
         let dashed_hidden = mode == ShadeMode::HiddenLine && techniques.dashed_hidden_lines();
         let caps_over_lines = matches!(mode, ShadeMode::Edges | ShadeMode::HiddenLine)
             && self.section().caps_seen_from(camera.eye());
-        // The shaded modes whose surfaces show colour; not under caps painted over lines,
-        // which keeps the frame within the four passes a culler may handle.
-        let back_faces_culled = techniques.culler_routes_back_faces()
-            && (mode == ShadeMode::Solid || (mode == ShadeMode::Edges && !caps_over_lines));
-        let passes = PassSet::Shaded {
+        let shaded = |back_faces_culled: bool| PassSet::Shaded {
             mode,
             translucent: mode == ShadeMode::XRay || (mode.shows_translucency() && translucency),
             samples: self.msaa(),
@@ -59,6 +55,9 @@ impl Renderer {
             face_pipelines_picked_by_gpu: back_faces_culled
                 && techniques.submission_switches_pipelines(),
         };
+        let back_faces_culled =
+            techniques.culler_routes_back_faces() && shaded(false).may_split_back_faces();
+        let passes = shaded(back_faces_culled);
         self.draw_techniques(scene, techniques, camera, passes)
     }
 

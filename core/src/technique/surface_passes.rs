@@ -140,4 +140,45 @@ impl PassSet {
     pub fn draws_edges(self) -> bool {
         matches!(self, PassSet::Shaded { mode, .. } if mode.draws_silhouettes())
     }
+
+    /// Whether the opaque surfaces may be split by back faces (`back_faces_culled`): the modes
+    /// whose surfaces are opaque (solid, edges, hidden-line, whose surfaces write depth only),
+    /// where the split's one more pass keeps the frame within the four passes a phase that
+    /// cadr's GPU cullers handle. Not X-ray (its surfaces are translucent) or wireframe (no
+    /// surfaces).
+    pub fn may_split_back_faces(self) -> bool {
+        match self {
+            PassSet::Shaded {
+                mode: ShadeMode::Solid | ShadeMode::Edges | ShadeMode::HiddenLine,
+                ..
+            } => self.culler_passes() < 4,
+            _ => false,
+        }
+    }
+
+    /// The draw passes a GPU culler sees in each phase, without a split by back faces (which
+    /// adds one): the surfaces, the visible lines of the edge modes, the dashed hidden lines
+    /// and hidden silhouettes, the caps painted over the lines and the translucent surfaces,
+    /// as `TechniquePipelines` makes them (`tests/tests/back_faces.rs` draws every
+    /// combination: a culler given more passes than it handles refuses the frame).
+    pub fn culler_passes(self) -> usize {
+        match self {
+            PassSet::Shaded {
+                mode,
+                translucent,
+                dashed_hidden,
+                caps_over_lines,
+                hidden_silhouettes,
+                ..
+            } => match mode {
+                ShadeMode::Wireframe => 1 + usize::from(translucent),
+                _ => {
+                    let lines = usize::from(mode.draws_silhouettes());
+                    let hidden = usize::from(dashed_hidden) * (1 + usize::from(hidden_silhouettes));
+                    1 + lines + hidden + usize::from(caps_over_lines) + usize::from(translucent)
+                }
+            },
+            PassSet::Pick { .. } => 1,
+        }
+    }
 }

@@ -182,3 +182,80 @@ impl PassSet {
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn shaded(mode: ShadeMode) -> PassSet {
+        PassSet::Shaded {
+            mode,
+            translucent: false,
+            samples: 1,
+            dashed_hidden: false,
+            lines_through_translucent: false,
+            caps_over_lines: false,
+            hidden_silhouettes: false,
+            back_faces_culled: false,
+            face_pipelines_picked_by_gpu: false,
+        }
+    }
+
+    /// `passes` with the fields a closure sets.
+    fn with(
+        passes: PassSet,
+        change: impl FnOnce(&mut bool, &mut bool, &mut bool, &mut bool),
+    ) -> PassSet {
+        let mut passes = passes;
+        if let PassSet::Shaded {
+            translucent,
+            dashed_hidden,
+            caps_over_lines,
+            hidden_silhouettes,
+            ..
+        } = &mut passes
+        {
+            change(
+                translucent,
+                dashed_hidden,
+                caps_over_lines,
+                hidden_silhouettes,
+            );
+        }
+        passes
+    }
+
+    #[test]
+    fn the_surfaces_split_where_the_frame_keeps_within_four_culled_passes() {
+        let solid = shaded(ShadeMode::Solid);
+        assert_eq!(solid.culler_passes(), 1);
+        assert!(solid.may_split_back_faces());
+        let translucent_solid = with(solid, |t, _, _, _| *t = true);
+        assert_eq!(translucent_solid.culler_passes(), 2);
+        assert!(translucent_solid.may_split_back_faces());
+
+        let edges_with_caps = with(shaded(ShadeMode::Edges), |_, _, c, _| *c = true);
+        assert_eq!(edges_with_caps.culler_passes(), 3);
+        assert!(edges_with_caps.may_split_back_faces());
+        let crowded = with(edges_with_caps, |t, _, _, _| *t = true);
+        assert_eq!(crowded.culler_passes(), 4);
+        assert!(!crowded.may_split_back_faces());
+
+        let hidden_line = shaded(ShadeMode::HiddenLine);
+        assert!(hidden_line.may_split_back_faces());
+        let dashed = with(hidden_line, |_, d, _, _| *d = true);
+        assert_eq!(dashed.culler_passes(), 3);
+        assert!(dashed.may_split_back_faces());
+        let dashed_silhouettes = with(dashed, |_, _, _, s| *s = true);
+        assert_eq!(dashed_silhouettes.culler_passes(), 4);
+        assert!(!dashed_silhouettes.may_split_back_faces());
+
+        // Translucent surfaces show their back faces; wireframe draws no surfaces.
+        assert!(!with(shaded(ShadeMode::XRay), |t, _, _, _| *t = true).may_split_back_faces());
+        assert!(!shaded(ShadeMode::Wireframe).may_split_back_faces());
+        assert!(!PassSet::Pick {
+            through_translucent: false
+        }
+        .may_split_back_faces());
+    }
+}

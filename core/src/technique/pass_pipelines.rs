@@ -264,6 +264,10 @@ impl TechniquePipelines {
             extra_color_formats: translucent_method.map_or_else(Vec::new, |m| m.target_formats()),
             targets: translucent_method.map_or_else(Vec::new, |m| m.targets.clone()),
         };
+        let shared_face_stream = this.face_pipelines_picked_by_gpu();
+        for filters in &mut this.filters {
+            filters.shared_face_stream = shared_face_stream;
+        }
         let fragment = |shader: PassShader| inputs.shaders.shader(shader);
         let triangles = vk::PrimitiveTopology::TRIANGLE_LIST;
         let plain = Raster::default();
@@ -435,7 +439,6 @@ impl TechniquePipelines {
                 ..
             }
         );
-        let shared_face_stream = self.face_pipelines_picked_by_gpu();
         for (filters, textures) in self.filters.iter_mut().zip([false, true]) {
             let (filter, exclusion) = scope.filter(xray, textures);
             filters.filters.push(filter);
@@ -444,7 +447,6 @@ impl TechniquePipelines {
                 .back_faces_hidden
                 .push(u32::from(scope.hides_back_faces));
             filters.face_routes.push(scope.faces);
-            filters.shared_face_stream = shared_face_stream;
         }
         self.pipelines.push(pipeline);
     }

@@ -157,7 +157,7 @@ layout(push_constant) uniform Dispatch {
     uint face_route;
     // Words of each command: 5, or 6 where each starts with the word naming its pass (1 for
     // the pass that keeps back faces, else 0), the two passes of a split sharing one stream
-    // (CadrBackFacePasses::shared_stream: one slot, one count).
+    // (CadrSharedFaceStreams: one slot, one count).
     uint command_words;
 } dispatch;
 

@@ -61,7 +61,7 @@ const DRAWN_FROM: vk::BufferUsageFlags = vk::BufferUsageFlags::from_raw(
 const COMMAND_WORDS: u32 = 5;
 /// Words of a command in a frame whose split surface passes share streams: the word naming the
 /// command's pass, then the command (`CadrSharedFaceStreams`).
-const NAMED_COMMAND_WORDS: u32 = 6;
+const NAMED_COMMAND_WORDS: u32 = crate::NAMED_COMMAND_BYTES / 4;
 
 /// The visibility buffers: last frame's (read) and this frame's (written).
 const LAST: usize = 0;
@@ -552,11 +552,16 @@ impl<const OCCLUSION: bool, const CLUSTERS: bool> GpuCuller<OCCLUSION, CLUSTERS>
             || needed > self.commands.capacity
             || words > self.commands.words
         {
-            let capacity = u32::try_from(grown_capacity(
-                u64::from(self.commands.capacity),
-                u64::from(needed),
-            ))
-            .unwrap_or(u32::MAX);
+            // Longer commands alone (a submission that shares streams) keep the capacity.
+            let capacity = if needed > self.commands.capacity {
+                u32::try_from(grown_capacity(
+                    u64::from(self.commands.capacity),
+                    u64::from(needed),
+                ))
+                .unwrap_or(u32::MAX)
+            } else {
+                self.commands.capacity
+            };
             let slots = (self.phases() as usize * PASSES_PER_PHASE) as u64;
             self.commands.buffer = Some(self.gpu.create_buffer(
                 "gpu cull commands",

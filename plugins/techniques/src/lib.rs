@@ -26,3 +26,7 @@ pub(crate) const REPLAYABLE: abi::CadrTraitBits =
 /// flight) or into the copy of the frame's slot (the GPU cullers' cull sets), and their
 /// secondary buffers, recorded once, may be pending in several frames at once.
 pub(crate) const KEEPS_FRAME_SLOTS: abi::CadrTraitBits = abi::CADR_TRAIT_FRAME_SLOTS;
+/// Bytes of a command of a stream two passes share (`CadrSharedFaceStreams`): the word naming
+/// the command's pass, then its `VkDrawIndexedIndirectCommand`. The GPU cullers write such
+/// commands, `dgc` reads them.
+pub(crate) const NAMED_COMMAND_BYTES: u32 = 24;

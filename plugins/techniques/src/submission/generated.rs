@@ -40,7 +40,7 @@ const MAX_CHUNK: u32 = 1 << 20;
 /// The most (pipeline, sequences) pairs whose chunk size is remembered.
 const KEPT_CHUNK_SIZES: usize = 64;
 /// Bytes before the draw of a sequence that names its pipeline (the execution-set index).
-const PIPELINE_INDEX_BYTES: u32 = 4;
+const PIPELINE_INDEX_BYTES: u32 = crate::NAMED_COMMAND_BYTES - 20;
 
 /// One execution: the pass's pipeline and where its sequences and count are.
 #[derive(Clone, Copy)]
@@ -60,8 +60,17 @@ pub struct Execution {
     pub stride: u32,
 }
 
-/// One chunk of an execution, with its preprocess region's address and size.
-pub type Chunk = (Execution, vk::DeviceAddress, u64);
+/// One chunk of an execution, as [`GeneratedCommands::begin_frame`] prepared it.
+pub struct Chunk {
+    /// The sequences it runs (a part of its execution's).
+    pub execution: Execution,
+    /// Its preprocess region: address and size.
+    region: (vk::DeviceAddress, u64),
+    /// The layout of its sequences.
+    layout: dgc::IndirectCommandsLayout,
+    /// What draws them.
+    drawer: Drawer,
+}
 
 /// What draws an execution's sequences: the bound pipeline, or an execution set the sequences
 /// pick from.
@@ -414,16 +423,17 @@ impl GeneratedCommands {
                     self.requirements(layout, drawer, sequences)
                 };
                 frame_bytes = frame_bytes.next_multiple_of(needs.alignment.max(1));
-                chunks.push((
-                    Execution {
+                chunks.push(Chunk {
+                    execution: Execution {
                         commands_offset: execution.commands_offset
                             + u64::from(first) * u64::from(execution.stride),
                         max_sequences: sequences,
                         ..*execution
                     },
-                    frame_bytes,
-                    needs.size,
-                ));
+                    region: (frame_bytes, needs.size),
+                    layout,
+                    drawer,
+                });
                 frame_bytes += needs.size;
                 types &= needs.memory_type_bits;
                 first += sequences;
@@ -436,15 +446,10 @@ impl GeneratedCommands {
         let frame = self.frame % FRAMES;
         let preprocess = self.reserve(frame_bytes, types)?;
         let base = preprocess.address + frame * preprocess.frame_bytes;
-        Ok(chunked
-            .into_iter()
-            .map(|chunks| {
-                chunks
-                    .into_iter()
-                    .map(|(execution, offset, size)| (execution, base + offset, size))
-                    .collect()
-            })
-            .collect())
+        for chunk in chunked.iter_mut().flatten() {
+            chunk.region.0 += base;
+        }
+        Ok(chunked)
     }
 
     /// The layout of `execution`'s sequences and what draws them: its pipeline, or where the
@@ -456,7 +461,7 @@ impl GeneratedCommands {
     ) -> Result<(dgc::IndirectCommandsLayout, Drawer), String> {
         match execution.next_pass_pipeline {
             Some(next) => {
-                if execution.stride < PIPELINE_INDEX_BYTES + 20 {
+                if execution.stride < crate::NAMED_COMMAND_BYTES {
                     return Err(format!(
                         "a shared stream of {}-byte commands: each needs its pipeline's index and a draw",
                         execution.stride
@@ -473,48 +478,30 @@ impl GeneratedCommands {
         }
     }
 
-    /// Records `execution` (its pipeline and bindings already bound, inside rendering) with
-    /// the preprocess `region` [`Self::begin_frame`] gave it for `commands_key`.
-    pub fn execute(
-        &self,
-        command_buffer: vk::CommandBuffer,
-        (execution, commands_key): (&Execution, u64),
-        region: (vk::DeviceAddress, u64),
-    ) -> Result<(), String> {
-        let names_pipeline = execution.next_pass_pipeline.is_some();
-        let (_, layout) = self
-            .layouts
-            .iter()
-            .find(|(made_for, _)| *made_for == (execution.stride, names_pipeline))
-            .ok_or("no indirect commands layout")?;
-        let set = match execution.next_pass_pipeline {
-            Some(next) => {
-                self.pairs
-                    .iter()
-                    .find(|pair| {
-                        pair.pipelines == [execution.pipeline, next]
-                            && pair.commands_key == commands_key
-                    })
-                    .ok_or("no execution set")?
-                    .set
-            }
-            None => dgc::IndirectExecutionSet::null(),
-        };
-        let pipeline = dgc::GeneratedCommandsPipelineInfo::new(execution.pipeline);
-        let info = dgc::GeneratedCommandsInfo {
+    /// Records `chunk` (its execution's pipeline and bindings already bound, inside rendering).
+    pub fn execute(&self, command_buffer: vk::CommandBuffer, chunk: &Chunk) -> Result<(), String> {
+        let execution = &chunk.execution;
+        let pipeline;
+        let (set, p_next) = match chunk.drawer {
+            Drawer::Set(set) => (set, std::ptr::null()),
             // The bound pipeline draws a stream without an execution set.
-            p_next: if names_pipeline {
-                std::ptr::null()
-            } else {
-                (&pipeline as *const dgc::GeneratedCommandsPipelineInfo<'_>).cast()
-            },
+            Drawer::Pipeline(bound) => {
+                pipeline = dgc::GeneratedCommandsPipelineInfo::new(bound);
+                (
+                    dgc::IndirectExecutionSet::null(),
+                    (&pipeline as *const dgc::GeneratedCommandsPipelineInfo<'_>).cast(),
+                )
+            }
+        };
+        let info = dgc::GeneratedCommandsInfo {
+            p_next,
             shader_stages: STAGES,
             indirect_execution_set: set,
-            indirect_commands_layout: *layout,
+            indirect_commands_layout: chunk.layout,
             indirect_address: self.address(execution.commands, execution.commands_offset),
             indirect_address_size: u64::from(execution.max_sequences) * u64::from(execution.stride),
-            preprocess_address: region.0,
-            preprocess_size: region.1,
+            preprocess_address: chunk.region.0,
+            preprocess_size: chunk.region.1,
             max_sequence_count: execution.max_sequences,
             sequence_count_address: self.address(execution.count, execution.count_offset),
             ..Default::default()

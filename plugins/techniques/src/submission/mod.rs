@@ -316,12 +316,8 @@ impl<const S: u8, const A: u8, const M: u8> Submit<S, A, M> {
                 &passes[execution.pass],
                 (record.command_buffer(), record.stats()),
             );
-            for (chunk, address, size) in &chunks {
-                generated.execute(
-                    record.command_buffer(),
-                    (chunk, record.commands_key()),
-                    (*address, *size),
-                )?;
+            for chunk in &chunks {
+                generated.execute(record.command_buffer(), chunk)?;
             }
             let sequences = u64::from(execution.max_sequences);
             let calls = chunks.len() as u64;
@@ -365,9 +361,6 @@ impl<const S: u8, const A: u8, const M: u8> Submit<S, A, M> {
     }
 }
 
-/// Bytes of a command of a shared stream: the word naming its pass, then the draw.
-const NAMED_COMMAND_BYTES: u32 = 24;
-
 /// The executions of the GPU culler's `draws` for `passes`: one per pass that draws, and one
 /// for two consecutive passes whose draws are equal, a shared stream whose commands each name
 /// their pass's pipeline (`CadrSharedFaceStreams`, which the host asks for because
@@ -380,7 +373,7 @@ fn gpu_executions(passes: &[abi::CadrPass], draws: &[abi::CadrGpuDraws]) -> Vec<
         // A stream shared by two passes has room for the word before each command.
         let shared_with_next = draws.get(index + 1) == Some(source)
             && index + 1 < passes.len()
-            && source.stride >= NAMED_COMMAND_BYTES;
+            && source.stride >= crate::NAMED_COMMAND_BYTES;
         if source.commands != 0 && source.max_draws != 0 {
             executions.push(Execution {
                 pass: index,

@@ -194,16 +194,41 @@ uvec2 pyramid_level_size(uint level) {
     return max((view.target.xy + (1u << shift) - 1u) >> shift, uvec2(1u));
 }
 
+// An orthonormal frame of the view's axes (right, up, along the view), read off the
+// projection's rows: a cube around a sphere with these axes projects to a smaller rect, with a
+// nearer depth no nearer than the sphere's own, than one with the world's axes. Any orthonormal
+// frame holds the sphere, so the test stays conservative whatever the projection.
+mat3 view_axes() {
+    mat4 m = view.view_projection;
+    vec3 row0 = vec3(m[0][0], m[1][0], m[2][0]);
+    vec3 row2 = vec3(m[0][2], m[1][2], m[2][2]);
+    vec3 row3 = vec3(m[0][3], m[1][3], m[2][3]);
+    // Perspective: the bottom row is the view direction; orthographic: it is (0, 0, 0, 1) and
+    // the depth row is.
+    vec3 along = dot(row3, row3) > 1e-12 ? row3 : row2;
+    if (dot(along, along) <= 1e-24) {
+        return mat3(1.0);
+    }
+    along = normalize(along);
+    vec3 right = row0 - dot(row0, along) * along;
+    if (dot(right, right) <= 1e-24) {
+        return mat3(1.0);
+    }
+    right = normalize(right);
+    return mat3(right, cross(along, right), along);
+}
+
 // Whether the sphere may be visible over the depth drawn so far (conservative: the nearest
 // depth of its box against the farthest depth of the pyramid texels under its screen rect).
 bool passes_pyramid(vec3 center, float radius) {
     vec2 lo = vec2(1.0);
     vec2 hi = vec2(-1.0);
     float nearest = 1.0;
+    mat3 axes = view_axes();
     for (int corner = 0; corner < 8; ++corner) {
-        vec3 offset = vec3((corner & 1) != 0 ? radius : -radius,
-                           (corner & 2) != 0 ? radius : -radius,
-                           (corner & 4) != 0 ? radius : -radius);
+        vec3 offset = axes * vec3((corner & 1) != 0 ? radius : -radius,
+                                  (corner & 2) != 0 ? radius : -radius,
+                                  (corner & 4) != 0 ? radius : -radius);
         vec4 clip = view.view_projection * vec4(center + offset, 1.0);
         if (clip.w <= 1e-6) {
             return true; // reaches behind the eye: cannot be judged
@@ -223,9 +248,11 @@ bool passes_pyramid(vec3 center, float radius) {
     vec2 texel_hi = (hi * 0.5 + 0.5) * size;
     vec2 extent = max(texel_hi - texel_lo, vec2(1.0));
     uint levels = max(dispatch.pyramid_levels, 1u);
-    // The level where the rect spans at most 3 texels per axis: fine enough that a part
-    // hidden near a silhouette is still found hidden.
-    uint level = uint(clamp(ceil(log2(max(extent.x, extent.y))) - 2.0, 0.0, float(levels - 1u)));
+    // The level where the rect is at most 4 texels wide (so spans at most 5 per axis): fine
+    // enough that a part hidden near a silhouette, or behind a row of parts with gaps between
+    // them, is still found hidden. (At half that width, 3 texels spanned, gen:grid's 100 000
+    // parts left 10 % more parts and 8 % more triangles to draw; at twice it, 2 % fewer.)
+    uint level = uint(clamp(ceil(log2(max(extent.x, extent.y))) - 3.0, 0.0, float(levels - 1u)));
     // Where the level starts and how wide it is. Each level's size is computed whole, not
     // carried from one iteration to the next: Mesa 22.3's lavapipe, with this function inlined
     // into the cluster walk, left `dims` one level further on than `offset`.
@@ -238,7 +265,7 @@ bool passes_pyramid(vec3 center, float radius) {
     float scale = exp2(-float(level + 1u));
     uvec2 a = uvec2(clamp(ivec2(floor(texel_lo * scale)), ivec2(0), ivec2(dims) - 1));
     uvec2 b = uvec2(clamp(ivec2(floor(texel_hi * scale)), ivec2(0), ivec2(dims) - 1));
-    b = min(b, a + 3u);
+    b = min(b, a + 4u);
     float farthest = 0.0;
     for (uint y = a.y; y <= b.y; ++y) {
         for (uint x = a.x; x <= b.x; ++x) {

@@ -6,6 +6,14 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 scripts/setup.sh
 export CARGO_TERM_COLOR=never
+# A clean build of the checks and tests peaks at about 2.5 GB under target/ (measured
+# 2026-11-29); with less room the linker dies of a bus error or "No space left on device", which
+# says nothing about why. Say it first.
+mkdir -p target
+free_mb=$(df -Pm target | awk 'NR == 2 { print $4 }')
+if [[ -n "$free_mb" && "$free_mb" -lt 3072 ]]; then
+  echo "test: warning: only ${free_mb} MB free for target/; a clean build of the tests needs about 2 500 MB" >&2
+fi
 cargo fmt --all -- --check
 cargo clippy --workspace --all-targets --locked -- -D warnings
 RUSTDOCFLAGS="-D warnings" cargo doc --workspace --no-deps --locked

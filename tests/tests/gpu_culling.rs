@@ -1,9 +1,12 @@
 //! GPU culling (`gpu-frustum`, `gpu-occlusion`): an orbit of several frames draws what no
-//! culling draws, frame by frame, with fewer triangles where the frustum cuts or housings hide;
+//! culling draws, frame by frame, with fewer triangles where the frustum cuts or housings hide
+//! (parts seen only through gaps included);
 //! combinations that cannot draw the GPU's commands are refused with the reason.
 #![allow(clippy::unwrap_used)] // Test code: a failed unwrap is a failed test.
 
 use std::sync::Arc;
+
+use glam::DMat4;
 
 use cadr_core::generate::{generate, GeneratorSpec};
 use cadr_core::graph::SceneGraph;
@@ -124,6 +127,66 @@ fn gpu_occlusion_skips_what_housings_hide() {
             assert!(
                 occluded.triangles * 5 <= all.triangles,
                 "frame {frame}: {} triangles drawn of {}",
+                occluded.triangles,
+                all.triangles
+            );
+        }
+    }
+}
+
+/// The grid's parts stand in a cube with gaps between them, so many of the parts behind are
+/// seen only through those gaps: the depth-pyramid test must keep every part that shows a
+/// pixel, seen in perspective from an orbit and through a host's orthographic projection, and
+/// still skip some.
+#[test]
+fn gpu_occlusion_keeps_what_shows_through_the_gaps_of_a_grid() {
+    let scene = generate(&GeneratorSpec::Grid {
+        parts: 4000,
+        triangles_per_part: 12.0,
+    });
+    let bounds = bounds(&scene);
+    // Each view twice: the first frame has the last view's visibility history, the second its
+    // own.
+    let mut cameras: Vec<Camera> = (0..3)
+        .map(|i| Camera::orbit(&bounds, aspect(), 0.1 + f64::from(i) * 0.13, 2.2))
+        .flat_map(|camera| [camera, camera])
+        .collect();
+    let fitted = Camera::fit(&bounds, aspect(), DEFAULT_DIRECTION);
+    let (radius, distance) = (bounds.radius(), fitted.eye().distance(bounds.center()));
+    let mut orthographic = DMat4::orthographic_rh(
+        -radius * aspect(),
+        radius * aspect(),
+        -radius,
+        radius,
+        distance - radius * 1.1,
+        distance + radius * 1.1,
+    );
+    orthographic.y_axis.y *= -1.0;
+    let parallel = Camera {
+        view: fitted.view,
+        projection: orthographic,
+    };
+    cameras.extend([parallel, parallel]);
+
+    let results = render_frames(&scene, &["none", "gpu-occlusion"], &cameras);
+    for (frame, ((reference, all), (image, occluded))) in
+        results[0].iter().zip(&results[1]).enumerate()
+    {
+        let difference = compare(image, reference).unwrap();
+        assert!(
+            difference.within(SAME_PICTURE),
+            "frame {frame}: {difference:?}"
+        );
+        println!(
+            "frame {frame}: {} of {} triangles",
+            occluded.triangles, all.triangles
+        );
+        // Most of the cube shows through its gaps; what is hidden, from a view's second frame
+        // on, is skipped.
+        if frame % 2 == 1 {
+            assert!(
+                occluded.triangles < all.triangles,
+                "frame {frame}: {} of {} triangles",
                 occluded.triangles,
                 all.triangles
             );

@@ -251,7 +251,7 @@ bool passes_pyramid(vec3 center, float radius) {
     // The level where the rect is at most 4 texels wide (so spans at most 5 per axis): fine
     // enough that a part hidden near a silhouette, or behind a row of parts with gaps between
     // them, is still found hidden. (At half that width, 3 texels spanned, gen:grid's 100 000
-    // parts left 10 % more parts and 8 % more triangles to draw; at twice it, 2 % fewer.)
+    // parts left 8 % more parts and 9 % more triangles to draw; at twice it, 2 % fewer.)
     uint level = uint(clamp(ceil(log2(max(extent.x, extent.y))) - 3.0, 0.0, float(levels - 1u)));
     // Where the level starts and how wide it is. Each level's size is computed whole, not
     // carried from one iteration to the next: Mesa 22.3's lavapipe, with this function inlined

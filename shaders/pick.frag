@@ -23,11 +23,11 @@ layout(location = 0) out uint out_id;
 
 void main() {
     // Sampled before any discard: the texture's derivatives need the whole quad.
-    vec4 surface = cadr_surface_color(in_base_color, in_vertex_color, in_uv, in_texture);
+    vec4 surface = cadr_surface_color(in_base_color, CADR_SURFACE_VERTEX_COLOR, CADR_SURFACE_UV, in_texture);
     if (in_pick_id == 0u || cadr_masked_out(surface, in_texture)) {
         discard;
     }
-    bool cap = section_cap_of(in_closure, in_eye_offset) >= 0;
+    bool cap = section_cap_of(in_closure, CADR_SURFACE_EYE_OFFSET) >= 0;
     out_id = cap ? in_pick_id | CADR_PICK_CAP : in_pick_id;
     gl_FragDepth = cap
         ? cadr_depth_at(cadr_view_distance(gl_FragCoord.z) * (1.0 - CADR_CAP_TIE))

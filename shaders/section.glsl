@@ -47,6 +47,15 @@ float cadr_depth_at(float distance) {
     return clip.z / clip.w;
 }
 
+// The world offset from the eye the surface and pick shaders give section_cap_of: interpolated
+// only where caps can show (the host defines CADR_SURFACE_CAPS: caps on and some plane active);
+// elsewhere section_cap_of finds no plane whatever the offset.
+#ifdef CADR_SURFACE_CAPS
+#define CADR_SURFACE_EYE_OFFSET in_eye_offset
+#else
+#define CADR_SURFACE_EYE_OFFSET vec3(0.0)
+#endif
+
 // The plane whose cap a fragment of a part closing as `closure` (in_closure) shows at world
 // offset `eye_offset` from the eye: with caps on, a closed part seen from inside through a cut
 // (-1 for every other fragment).

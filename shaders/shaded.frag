@@ -25,7 +25,7 @@ layout(location = 11) flat in uint in_highlighted;
 layout(location = 0) out vec4 out_color;
 
 void main() {
-    vec4 surface = cadr_surface_color(in_base_color, in_vertex_color, in_uv, in_texture);
+    vec4 surface = cadr_surface_color(in_base_color, CADR_SURFACE_VERTEX_COLOR, CADR_SURFACE_UV, in_texture);
     if (cadr_masked_out(surface, in_texture)) {
         discard;
     }
@@ -35,7 +35,7 @@ void main() {
     if ((frame.target.z & CADR_DISPLAY_NEAREST_SURFACES) != 0u) {
         cadr_record_surface(CADR_NEAREST_SURFACES_PLANE, in_highlighted != 0u);
     }
-    int cap_plane = section_cap_of(in_closure, in_eye_offset);
+    int cap_plane = section_cap_of(in_closure, CADR_SURFACE_EYE_OFFSET);
     if ((frame.target.z & CADR_DISPLAY_CAP_KEYS) != 0u) {
         if (cap_plane >= 0) {
             cadr_record_cap(cap_plane);
@@ -44,7 +44,7 @@ void main() {
         }
     }
     if (cap_plane >= 0) {
-        out_color = vec4(section_cap_color(cap_plane, in_eye_offset), 1.0);
+        out_color = vec4(section_cap_color(cap_plane, CADR_SURFACE_EYE_OFFSET), 1.0);
         return;
     }
     out_color = vec4(shade_headlight(in_view_position, in_view_normal, surface, in_surface, frame.light,

@@ -68,6 +68,19 @@ vec4 cadr_surface_color(vec4 base, vec4 vertex_color, vec2 uv, uvec4 texture_inf
     return color;
 }
 
+// The vertex colour and texture coordinate the surface and pick shaders read: interpolated only
+// where the frame shows vertex colours or textures (the host defines CADR_SURFACE_ATTRIBUTES);
+// elsewhere the vertex shader writes white and no texture is sampled, so constants stand in and
+// the rasterizer interpolates six values fewer per triangle (lavapipe spends 7-10 % of a large
+// frame's GPU time on them).
+#ifdef CADR_SURFACE_ATTRIBUTES
+#define CADR_SURFACE_VERTEX_COLOR in_vertex_color
+#define CADR_SURFACE_UV in_uv
+#else
+#define CADR_SURFACE_VERTEX_COLOR vec4(1.0)
+#define CADR_SURFACE_UV vec2(0.0)
+#endif
+
 // Whether a fragment of this colour is cut away by its material's alpha mask.
 bool cadr_masked_out(vec4 color, uvec4 texture_info) {
     return texture_info.z == CADR_ALPHA_MASK && color.a < uintBitsToFloat(texture_info.w);

@@ -18,8 +18,8 @@ use crate::gpu_scene::ViewedScene;
 use crate::render::pick::{PickSample, PixelRect};
 use crate::render::{Camera, FrameStats, Section, TransparencyMethod, MAX_SECTION_PLANES};
 use crate::technique::{
-    announces, status, Message, PassFilters, PassSet, ShadeMode, TechniqueKind, TechniquePipelines,
-    Techniques,
+    announces, status, Message, PassFilters, PassSet, ShadeMode, SurfaceInputs, TechniqueKind,
+    TechniquePipelines, Techniques,
 };
 use crate::vk::{memory_barrier, SUSPENDED_DEPTH_LAYOUT};
 
@@ -54,6 +54,7 @@ impl Renderer {
             back_faces_culled,
             face_pipelines_picked_by_gpu: back_faces_culled
                 && techniques.submission_switches_pipelines(),
+            inputs: self.surface_inputs(&*scene.scene),
         };
         let back_faces_culled =
             techniques.culler_routes_back_faces() && shaded(false).may_split_back_faces();
@@ -74,6 +75,7 @@ impl Renderer {
         self.prepare_pick(rect)?;
         let passes = PassSet::Pick {
             through_translucent: techniques.pick_through_translucent(),
+            inputs: self.surface_inputs(&*scene.scene),
         };
         self.draw_techniques(scene, techniques, camera, passes)?;
         self.pick_samples()
@@ -198,15 +200,34 @@ impl Renderer {
         drawn_stats(stats, techniques, (&scene, counters, culler.as_ref()))
     }
 
+    /// What the surface and pick shaders interpolate in a frame of `scene`: vertex colours and
+    /// texture coordinates where [`Self::display_bits`] shows either, the offset that finds a
+    /// cap where caps are on and some plane is active.
+    fn surface_inputs(&self, scene: &crate::gpu_scene::GpuScene) -> SurfaceInputs {
+        let display = self.display_bits_of_scene(scene);
+        SurfaceInputs {
+            attributes: display
+                & (crate::render::DISPLAY_VERTEX_ATTRIBUTES | crate::render::DISPLAY_TEXTURES)
+                != 0,
+            caps: self.section().caps() && !self.section().planes().is_empty(),
+        }
+    }
+
     /// The `DISPLAY_*` bits of a frame of `passes` over `scene`.
     fn display_bits(&self, passes: PassSet, scene: &crate::gpu_scene::GpuScene) -> u32 {
-        let mut display = match passes {
+        let xray = match passes {
             PassSet::Shaded {
                 mode: ShadeMode::XRay,
                 ..
             } => crate::render::DISPLAY_XRAY,
             _ => 0,
         };
+        xray | self.display_bits_of_scene(scene)
+    }
+
+    /// The `DISPLAY_*` bits that follow from `scene` and the renderer's settings alone.
+    fn display_bits_of_scene(&self, scene: &crate::gpu_scene::GpuScene) -> u32 {
+        let mut display = 0;
         if scene.has_vertex_attributes() {
             display |= crate::render::DISPLAY_VERTEX_ATTRIBUTES;
         }

@@ -24,4 +24,4 @@ pub use set::{
 };
 pub(crate) use set::{status, Active, Message};
 pub use shader_assembly::{assemble_vertex_shader, fragment_defines};
-pub use surface_passes::{PassSet, ShadeMode};
+pub use surface_passes::{PassSet, ShadeMode, SurfaceInputs};

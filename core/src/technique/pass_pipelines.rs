@@ -563,7 +563,8 @@ impl TechniquePipelines {
         let through_translucent = matches!(
             self.pass_set,
             PassSet::Pick {
-                through_translucent: true
+                through_translucent: true,
+                ..
             }
         );
         let lines_through_translucent = matches!(

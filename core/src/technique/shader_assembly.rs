@@ -11,7 +11,7 @@ use crate::render::TransparencyMethod;
 use crate::shaders;
 use crate::vk::{Capabilities, ShaderStage};
 
-use super::surface_passes::{PassSet, ShadeMode};
+use super::surface_passes::{PassSet, ShadeMode, SurfaceInputs};
 
 /// The SPIR-V of a transparency method: its translucent fragment shader, and the merge's
 /// vertex and fragment shaders.
@@ -78,6 +78,12 @@ impl PassShader {
         }
     }
 
+    /// Whether the shader reads [`SurfaceInputs`] (the surface and pick shaders): it has a
+    /// variant for each.
+    fn reads_surface_inputs(self) -> bool {
+        matches!(self, Self::Solid | Self::Pick)
+    }
+
     /// Those `passes` draw with.
     fn needed_by(passes: PassSet) -> Vec<PassShader> {
         let mut shaders = Self::needed_without_silhouette_lines(passes).to_vec();
@@ -141,7 +147,9 @@ pub fn fragment_defines(capabilities: Capabilities) -> String {
 #[derive(Default)]
 pub struct ShaderCache {
     vertex: HashMap<(String, String), Arc<Vec<u32>>>,
-    pass_shaders: HashMap<PassShader, Arc<Vec<u32>>>,
+    /// By shader and the inputs it interpolates (always the default for the shaders that do
+    /// not read [`SurfaceInputs`]).
+    pass_shaders: HashMap<(PassShader, SurfaceInputs), Arc<Vec<u32>>>,
     methods: HashMap<String, MethodShaders>,
     /// `#define` lines every fragment (and geometry) shader is compiled with: what the device
     /// allows.
@@ -195,8 +203,23 @@ impl ShaderCache {
         passes: PassSet,
         method: Option<&TransparencyMethod>,
     ) -> RenderResult<PassShaders> {
-        let wanted = PassShader::needed_by(passes);
-        let missing: Vec<PassShader> = wanted
+        let inputs = passes.surface_inputs();
+        let variant = |shader: PassShader| {
+            let read = shader.reads_surface_inputs();
+            (
+                shader,
+                if read {
+                    inputs
+                } else {
+                    SurfaceInputs::default()
+                },
+            )
+        };
+        let wanted: Vec<(PassShader, SurfaceInputs)> = PassShader::needed_by(passes)
+            .into_iter()
+            .map(variant)
+            .collect();
+        let missing: Vec<(PassShader, SurfaceInputs)> = wanted
             .iter()
             .copied()
             .filter(|f| !self.pass_shaders.contains_key(f))
@@ -205,12 +228,15 @@ impl ShaderCache {
         let vertex_source = (!self.vertex.contains_key(&key)).then(source);
         let pass_sources: Vec<String> = missing
             .iter()
-            .map(|f| shaders::with_defines(f.source().source, &self.fragment_defines))
+            .map(|(f, inputs)| {
+                let defines = format!("{}{}", self.fragment_defines, inputs.defines());
+                shaders::with_defines(f.source().source, &defines)
+            })
             .collect();
         let mut requests: Vec<shaders::CompileRequest<'_>> = missing
             .iter()
             .zip(&pass_sources)
-            .map(|(f, source)| {
+            .map(|((f, _), source)| {
                 let shader = f.source();
                 shaders::CompileRequest {
                     name: shader.name,
@@ -257,7 +283,7 @@ impl ShaderCache {
                 .iter()
                 .map(|f| {
                     Ok((
-                        *f,
+                        f.0,
                         Arc::clone(self.pass_shaders.get(f).ok_or_else(not_compiled)?),
                     ))
                 })
@@ -360,6 +386,7 @@ mod tests {
             hidden_silhouettes: false,
             back_faces_culled: false,
             face_pipelines_picked_by_gpu: false,
+            inputs: SurfaceInputs::default(),
         };
         prepare(&mut cache, solid()).expect("solid");
         assert_eq!(
@@ -379,6 +406,7 @@ mod tests {
                 hidden_silhouettes: false,
                 back_faces_culled: false,
                 face_pipelines_picked_by_gpu: false,
+                inputs: SurfaceInputs::default(),
             },
         )
         .expect("edges");
@@ -391,6 +419,7 @@ mod tests {
             &mut cache,
             PassSet::Pick {
                 through_translucent: false,
+                inputs: SurfaceInputs::default(),
             },
         )
         .expect("pick");
@@ -405,20 +434,49 @@ mod tests {
             hidden_silhouettes,
             back_faces_culled: false,
             face_pipelines_picked_by_gpu: false,
+            inputs: SurfaceInputs::default(),
         };
         prepare(&mut cache, dashed(false)).expect("dashed");
         assert_eq!(cache.pass_shaders.len(), 4, "the dashes' fragment shader");
-        assert!(!cache
-            .pass_shaders
-            .contains_key(&PassShader::SilhouetteLines));
+        let silhouette_lines = (PassShader::SilhouetteLines, SurfaceInputs::default());
+        assert!(!cache.pass_shaders.contains_key(&silhouette_lines));
         prepare(&mut cache, dashed(true)).expect("dashed silhouettes");
         assert!(
-            cache
-                .pass_shaders
-                .contains_key(&PassShader::SilhouetteLines),
+            cache.pass_shaders.contains_key(&silhouette_lines),
             "the hidden silhouettes' geometry shader"
         );
         assert_eq!(cache.pass_shaders.len(), 5);
+
+        // Vertex colours, textures or caps shown: the surface shader again, with those inputs;
+        // every other shader, and the vertex shader, as they were.
+        let capped = |attributes, caps| PassSet::Shaded {
+            mode: ShadeMode::Edges,
+            translucent: false,
+            samples: 1,
+            dashed_hidden: false,
+            lines_through_translucent: false,
+            caps_over_lines: false,
+            hidden_silhouettes: false,
+            back_faces_culled: false,
+            face_pipelines_picked_by_gpu: false,
+            inputs: SurfaceInputs { attributes, caps },
+        };
+        prepare(&mut cache, capped(false, true)).expect("caps");
+        assert_eq!(
+            cache.pass_shaders.len(),
+            6,
+            "the surface shader reading the eye offset"
+        );
+        prepare(&mut cache, capped(true, true)).expect("caps and textures");
+        assert_eq!(cache.pass_shaders.len(), 7);
+        assert!(cache.pass_shaders.contains_key(&(
+            PassShader::Solid,
+            SurfaceInputs {
+                attributes: true,
+                caps: true
+            }
+        )));
+
         prepare(&mut cache, solid()).expect("again");
         assert_eq!(
             assembled, 1,

@@ -106,12 +106,44 @@ pub enum PassSet {
         /// per part from one stream of commands (a submission that announces
         /// `CADR_TRAIT_SWITCHES_PIPELINES`): both pipelines are made bindable by the GPU.
         face_pipelines_picked_by_gpu: bool,
+        /// What the surface shader interpolates beyond what every frame needs.
+        inputs: SurfaceInputs,
     },
     /// Triangles of pickable instances, their ids into the pick target.
     Pick {
         /// Whether translucent parts let the click through to what is behind them.
         through_translucent: bool,
+        /// What the pick shader interpolates beyond what every frame needs.
+        inputs: SurfaceInputs,
     },
+}
+
+/// What the surface and pick shaders (`shaded.frag`, `pick.frag`) interpolate beyond what every
+/// frame needs. Each is left out where the frame cannot show it, so that the rasterizer
+/// interpolates fewer values per triangle (lavapipe spends 7-10 % of a large frame's GPU time
+/// on them); each combination is its own shader.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub struct SurfaceInputs {
+    /// The vertex colours and texture coordinates: the scene has vertex attributes, or shows
+    /// textures (`CADR_SURFACE_ATTRIBUTES`, `shaders/texturing.glsl`).
+    pub attributes: bool,
+    /// The offset from the eye that finds a section cap: caps are on and some plane is active
+    /// (`CADR_SURFACE_CAPS`, `shaders/section.glsl`).
+    pub caps: bool,
+}
+
+impl SurfaceInputs {
+    /// The `#define` lines that ask the shaders for these inputs.
+    pub fn defines(self) -> String {
+        let mut defines = String::new();
+        if self.attributes {
+            defines.push_str("#define CADR_SURFACE_ATTRIBUTES\n");
+        }
+        if self.caps {
+            defines.push_str("#define CADR_SURFACE_CAPS\n");
+        }
+        defines
+    }
 }
 
 impl PassSet {
@@ -120,6 +152,13 @@ impl PassSet {
         match self {
             PassSet::Shaded { samples, .. } => samples,
             PassSet::Pick { .. } => 1,
+        }
+    }
+
+    /// What the surface or pick shader interpolates.
+    pub fn surface_inputs(self) -> SurfaceInputs {
+        match self {
+            PassSet::Shaded { inputs, .. } | PassSet::Pick { inputs, .. } => inputs,
         }
     }
 
@@ -198,6 +237,7 @@ mod tests {
             hidden_silhouettes: false,
             back_faces_culled: false,
             face_pipelines_picked_by_gpu: false,
+            inputs: SurfaceInputs::default(),
         }
     }
 
@@ -254,7 +294,8 @@ mod tests {
         assert!(!with(shaded(ShadeMode::XRay), |t, _, _, _| *t = true).may_split_back_faces());
         assert!(!shaded(ShadeMode::Wireframe).may_split_back_faces());
         assert!(!PassSet::Pick {
-            through_translucent: false
+            through_translucent: false,
+            inputs: SurfaceInputs::default(),
         }
         .may_split_back_faces());
     }

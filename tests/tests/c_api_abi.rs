@@ -19,7 +19,7 @@
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
-use cadr_tests::c_programs::{build_c_program, describe, repository, scratch_dir};
+use cadr_tests::c_programs::{build_c_program, describe, repository, scratch_dir, ScratchDir};
 
 /// The committed baseline of this major version.
 fn baseline() -> PathBuf {
@@ -75,8 +75,8 @@ fn run_abigail(tool: &str, args: &[&Path]) -> Output {
 }
 
 /// The ABI of this build as the probe describes it, written by `abidw` into the scratch
-/// directory.
-fn current_abi() -> PathBuf {
+/// directory (which lives as long as the first value).
+fn current_abi() -> (ScratchDir, PathBuf) {
     let dir = scratch_dir("c-api-abi");
     let header = std::fs::read_to_string(repository().join("include/cadr.h")).unwrap();
     let names = function_names(&header);
@@ -99,7 +99,7 @@ fn current_abi() -> PathBuf {
             panic!("abidw (Debian's abigail-tools, which scripts/setup.sh installs): {e}")
         });
     assert!(output.status.success(), "abidw: {}", describe(&output));
-    abi
+    (dir, abi)
 }
 
 #[test]
@@ -110,7 +110,7 @@ fn the_function_scanner_finds_declarations_not_mentions() {
 
 #[test]
 fn the_c_api_keeps_the_abi_of_its_baseline() {
-    let current = current_abi();
+    let (_dir, current) = current_abi();
     let baseline = baseline();
     if std::env::var_os("CADR_UPDATE_ABI").is_some() {
         if baseline.exists() {

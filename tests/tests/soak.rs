@@ -11,7 +11,7 @@
 use std::path::PathBuf;
 use std::process::{Command, Output};
 
-use cadr_tests::c_programs::{build_c_program, describe, repository, scratch_dir};
+use cadr_tests::c_programs::{build_c_program, describe, repository, scratch_dir, ScratchDir};
 use cadr_tests::{swiftshader_manifest, CYLINDER_ENGINE_GLB};
 
 /// Iterations in all, and of them the warm-up's (at least the 8 technique combinations the
@@ -23,7 +23,8 @@ const WARMUP_ITERATIONS: &str = "12";
 /// leak of one 2CylinderEngine per iteration would still pass it within a few iterations.
 const MAX_GROWTH_PERCENT: &str = "3";
 
-fn soak_program() -> PathBuf {
+/// The soak host, built into a scratch directory (which lives as long as the first value).
+fn soak_program() -> (ScratchDir, PathBuf) {
     let dir = scratch_dir("soak");
     let program = dir.join("soak");
     let samples = repository().join("samples");
@@ -36,7 +37,7 @@ fn soak_program() -> PathBuf {
         &program,
         &[&include_samples],
     );
-    program
+    (dir, program)
 }
 
 fn soak(program: &PathBuf, (iterations, warmup): (&str, &str), extra: &[&str]) -> Output {
@@ -65,7 +66,7 @@ fn soak(program: &PathBuf, (iterations, warmup): (&str, &str), extra: &[&str]) -
 
 #[test]
 fn memory_stays_flat_while_a_host_loads_edits_renders_picks_and_swaps() {
-    let program = soak_program();
+    let (_dir, program) = soak_program();
     let flat = soak(&program, (ITERATIONS, WARMUP_ITERATIONS), &[]);
     let stdout = String::from_utf8_lossy(&flat.stdout);
     println!("{stdout}");

@@ -184,13 +184,9 @@ impl CubeGltf {
     }
 }
 
-/// A fresh empty directory for one test's files (under the system temporary directory).
-pub fn scratch_dir(test: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("cadr-tests-{}-{test}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).expect("create scratch dir");
-    dir
-}
+/// A fresh empty directory for one test's files, removed when the test passes (one kind of
+/// scratch directory for every test: [`crate::c_programs::ScratchDir`]).
+pub use crate::c_programs::scratch_dir;
 
 /// A file using what cadr does not draw: texture, aux and per-part channels, metas, payloads,
 /// a hidden part, a part placed by a child's matrix, a geometry without normals.

@@ -198,7 +198,7 @@ uvec2 pyramid_level_size(uint level) {
 // projection's rows: a cube around a sphere with these axes projects to a smaller rect, with a
 // nearer depth no nearer than the sphere's own, than one with the world's axes. Any orthonormal
 // frame holds the sphere, so the test stays conservative whatever the projection.
-mat3 view_axes() {
+mat3 view_axes_of_projection() {
     mat4 m = view.view_projection;
     vec3 row0 = vec3(m[0][0], m[1][0], m[2][0]);
     vec3 row2 = vec3(m[0][2], m[1][2], m[2][2]);
@@ -218,15 +218,18 @@ mat3 view_axes() {
     return mat3(right, cross(along, right), along);
 }
 
+// view_axes_of_projection(), the same for the whole dispatch: set once per invocation in
+// main(), before any pyramid test (one per part, one per cluster of the walk).
+mat3 view_axes;
+
 // Whether the sphere may be visible over the depth drawn so far (conservative: the nearest
 // depth of its box against the farthest depth of the pyramid texels under its screen rect).
 bool passes_pyramid(vec3 center, float radius) {
     vec2 lo = vec2(1.0);
     vec2 hi = vec2(-1.0);
     float nearest = 1.0;
-    mat3 axes = view_axes();
     for (int corner = 0; corner < 8; ++corner) {
-        vec3 offset = axes * vec3((corner & 1) != 0 ? radius : -radius,
+        vec3 offset = view_axes * vec3((corner & 1) != 0 ? radius : -radius,
                                   (corner & 2) != 0 ? radius : -radius,
                                   (corner & 4) != 0 ? radius : -radius);
         vec4 clip = view.view_projection * vec4(center + offset, 1.0);
@@ -551,6 +554,7 @@ void main() {
     if ((entry.flags & INSTANCE_CANDIDATE) == 0u) {
         return;
     }
+    view_axes = view_axes_of_projection();
     if (dispatch.pass_kind == PASS_PICK && (entry.flags & INSTANCE_PICKABLE) == 0u) {
         return;
     }

@@ -376,40 +376,18 @@ mod tests {
                 None,
             )
         };
-        let solid = || PassSet::Shaded {
-            mode: ShadeMode::Solid,
-            translucent: false,
-            samples: 1,
-            dashed_hidden: false,
-            lines_through_translucent: false,
-            caps_over_lines: false,
-            hidden_silhouettes: false,
-            back_faces_culled: false,
-            face_pipelines_picked_by_gpu: false,
-            inputs: SurfaceInputs::default(),
-        };
+        let solid = || PassSet::plain(ShadeMode::Solid);
         prepare(&mut cache, solid()).expect("solid");
         assert_eq!(
             cache.pass_shaders.len(),
             1,
             "solid needs one fragment shader"
         );
-        prepare(
-            &mut cache,
-            PassSet::Shaded {
-                mode: ShadeMode::Edges,
-                translucent: false,
-                samples: 4,
-                dashed_hidden: false,
-                lines_through_translucent: false,
-                caps_over_lines: false,
-                hidden_silhouettes: false,
-                back_faces_culled: false,
-                face_pipelines_picked_by_gpu: false,
-                inputs: SurfaceInputs::default(),
-            },
-        )
-        .expect("edges");
+        let mut multisampled_edges = PassSet::plain(ShadeMode::Edges);
+        if let PassSet::Shaded { samples, .. } = &mut multisampled_edges {
+            *samples = 4;
+        }
+        prepare(&mut cache, multisampled_edges).expect("edges");
         assert_eq!(
             cache.pass_shaders.len(),
             2,
@@ -424,17 +402,18 @@ mod tests {
         )
         .expect("pick");
         assert_eq!(cache.pass_shaders.len(), 3);
-        let dashed = |hidden_silhouettes| PassSet::Shaded {
-            mode: ShadeMode::HiddenLine,
-            translucent: false,
-            samples: 1,
-            dashed_hidden: true,
-            lines_through_translucent: false,
-            caps_over_lines: false,
-            hidden_silhouettes,
-            back_faces_culled: false,
-            face_pipelines_picked_by_gpu: false,
-            inputs: SurfaceInputs::default(),
+        let dashed = |silhouettes| {
+            let mut passes = PassSet::plain(ShadeMode::HiddenLine);
+            if let PassSet::Shaded {
+                dashed_hidden,
+                hidden_silhouettes,
+                ..
+            } = &mut passes
+            {
+                *dashed_hidden = true;
+                *hidden_silhouettes = silhouettes;
+            }
+            passes
         };
         prepare(&mut cache, dashed(false)).expect("dashed");
         assert_eq!(cache.pass_shaders.len(), 4, "the dashes' fragment shader");
@@ -449,17 +428,12 @@ mod tests {
 
         // Vertex colours, textures or caps shown: the surface shader again, with those inputs;
         // every other shader, and the vertex shader, as they were.
-        let capped = |attributes, caps| PassSet::Shaded {
-            mode: ShadeMode::Edges,
-            translucent: false,
-            samples: 1,
-            dashed_hidden: false,
-            lines_through_translucent: false,
-            caps_over_lines: false,
-            hidden_silhouettes: false,
-            back_faces_culled: false,
-            face_pipelines_picked_by_gpu: false,
-            inputs: SurfaceInputs { attributes, caps },
+        let capped = |attributes, caps| {
+            let mut passes = PassSet::plain(ShadeMode::Edges);
+            if let PassSet::Shaded { inputs, .. } = &mut passes {
+                *inputs = SurfaceInputs { attributes, caps };
+            }
+            passes
         };
         prepare(&mut cache, capped(false, true)).expect("caps");
         assert_eq!(

@@ -223,10 +223,10 @@ impl PassSet {
 }
 
 #[cfg(test)]
-mod tests {
-    use super::*;
-
-    fn shaded(mode: ShadeMode) -> PassSet {
+impl PassSet {
+    /// The shaded pass set of `mode` with every option off and one sample (tests start from it
+    /// and set what they vary).
+    pub(crate) fn plain(mode: ShadeMode) -> Self {
         PassSet::Shaded {
             mode,
             translucent: false,
@@ -240,6 +240,11 @@ mod tests {
             inputs: SurfaceInputs::default(),
         }
     }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
 
     /// `passes` with the fields a closure sets.
     fn with(
@@ -267,21 +272,21 @@ mod tests {
 
     #[test]
     fn the_surfaces_split_where_the_frame_keeps_within_four_culled_passes() {
-        let solid = shaded(ShadeMode::Solid);
+        let solid = PassSet::plain(ShadeMode::Solid);
         assert_eq!(solid.culler_passes(), 1);
         assert!(solid.may_split_back_faces());
         let translucent_solid = with(solid, |t, _, _, _| *t = true);
         assert_eq!(translucent_solid.culler_passes(), 2);
         assert!(translucent_solid.may_split_back_faces());
 
-        let edges_with_caps = with(shaded(ShadeMode::Edges), |_, _, c, _| *c = true);
+        let edges_with_caps = with(PassSet::plain(ShadeMode::Edges), |_, _, c, _| *c = true);
         assert_eq!(edges_with_caps.culler_passes(), 3);
         assert!(edges_with_caps.may_split_back_faces());
         let crowded = with(edges_with_caps, |t, _, _, _| *t = true);
         assert_eq!(crowded.culler_passes(), 4);
         assert!(!crowded.may_split_back_faces());
 
-        let hidden_line = shaded(ShadeMode::HiddenLine);
+        let hidden_line = PassSet::plain(ShadeMode::HiddenLine);
         assert!(hidden_line.may_split_back_faces());
         let dashed = with(hidden_line, |_, d, _, _| *d = true);
         assert_eq!(dashed.culler_passes(), 3);
@@ -291,8 +296,10 @@ mod tests {
         assert!(!dashed_silhouettes.may_split_back_faces());
 
         // Translucent surfaces show their back faces; wireframe draws no surfaces.
-        assert!(!with(shaded(ShadeMode::XRay), |t, _, _, _| *t = true).may_split_back_faces());
-        assert!(!shaded(ShadeMode::Wireframe).may_split_back_faces());
+        assert!(
+            !with(PassSet::plain(ShadeMode::XRay), |t, _, _, _| *t = true).may_split_back_faces()
+        );
+        assert!(!PassSet::plain(ShadeMode::Wireframe).may_split_back_faces());
         assert!(!PassSet::Pick {
             through_translucent: false,
             inputs: SurfaceInputs::default(),

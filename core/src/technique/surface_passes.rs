@@ -120,8 +120,8 @@ pub enum PassSet {
 
 /// What the surface and pick shaders (`shaded.frag`, `pick.frag`) interpolate beyond what every
 /// frame needs. Each is left out where the frame cannot show it, so that the rasterizer
-/// interpolates fewer values per triangle (lavapipe spends 7-10 % of a large frame's GPU time
-/// on them); each combination is its own shader.
+/// interpolates fewer values per triangle (on lavapipe, leaving them out saved 6-17 % of a large
+/// frame's GPU time, `docs/BENCHMARKS.md`); each combination is its own shader.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
 pub struct SurfaceInputs {
     /// The vertex colours and texture coordinates: the scene has vertex attributes, or shows

@@ -41,7 +41,7 @@ use slots::{FrameSlots, CULL_VIEW_STRIDE};
 pub struct Renderer {
     device: Arc<Device>,
     target: OffscreenTarget,
-    pipelines: Pipelines,
+    pipelines: Arc<Pipelines>,
     /// One frame set per frame slot (set `i` names slot `i`'s uniforms at binding 0; every
     /// other binding names the same resources in all of them).
     frame_sets: DescriptorSets,
@@ -103,7 +103,7 @@ impl Renderer {
     pub fn new(device: &Arc<Device>, width: u32, height: u32) -> RenderResult<Self> {
         // A new renderer hands no depth to the host: it shares the device's depth.
         let target = OffscreenTarget::new(device, (width, height), 1, DepthSharing::Shared)?;
-        let pipelines = Pipelines::new(device, passes::OVERLAY_PASSES.len())?;
+        let pipelines = Pipelines::shared(device, passes::OVERLAY_PASSES.len())?;
         let slots = FrameSlots::new(device)?;
         let layouts = vec![pipelines.frame_set_layout(); slots.all().len()];
         let frame_sets = DescriptorSets::new(device, "frame", &layouts)?;

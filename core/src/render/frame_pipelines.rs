@@ -10,6 +10,7 @@ use crate::vk::raw as vk;
 use crate::shaders::{self, ShaderSource};
 use crate::vk::{
     Blend, Capabilities, DescriptorSetLayout, Device, LayoutBinding, Pipeline, PipelineLayout,
+    Shared,
 };
 
 /// Format of the pick target: one instance id (+1) per pixel.
@@ -135,7 +136,11 @@ pub struct OverlayShader {
     pub sets: OverlaySets,
 }
 
-/// Every pipeline and layout the renderer uses.
+/// The sets of [`Pipelines::shared`], one per device and overlay count.
+static SHARED_PIPELINES: Shared<Pipelines> = Shared::new();
+
+/// The frame's layouts and the pipelines of the passes over the picture: made from the device
+/// alone, so the renderers of one device share one set ([`Pipelines::shared`]).
 pub struct Pipelines {
     device: Arc<Device>,
     /// Set 0: the frame uniform buffer and the transparency method's storage.
@@ -153,6 +158,16 @@ pub struct Pipelines {
 }
 
 impl Pipelines {
+    /// The set the renderers of `device` share, made with room for `overlay_count` passes over
+    /// the picture when none is alive: a further view neither makes its layouts nor compiles
+    /// its full-screen pipelines again.
+    pub fn shared(device: &Arc<Device>, overlay_count: usize) -> RenderResult<Arc<Self>> {
+        SHARED_PIPELINES.get_or_make(
+            |held| Arc::ptr_eq(&held.device, device) && held.overlays.len() == overlay_count,
+            || Self::new(device, overlay_count),
+        )
+    }
+
     /// Creates the layouts and room for `overlay_count` passes over the picture; pipelines are
     /// made on first use.
     pub fn new(device: &Arc<Device>, overlay_count: usize) -> RenderResult<Self> {

@@ -20,7 +20,7 @@
 #define CADR_PLUGIN_ABI_MAJOR 1
 
 // Minor version of this ABI: additions that older readers may ignore.
-#define CADR_PLUGIN_ABI_MINOR 19
+#define CADR_PLUGIN_ABI_MINOR 20
 
 // `(major << 16) | minor`, what [`CadrPluginVersionFn`] returns.
 #define CADR_PLUGIN_ABI_VERSION ((CADR_PLUGIN_ABI_MAJOR << 16) | CADR_PLUGIN_ABI_MINOR)
@@ -1118,6 +1118,15 @@ typedef struct CadrTransparencyVtable {
 // later), the host asks the culler for shared streams and makes the two passes' pipelines
 // bindable by the GPU (`VK_PIPELINE_CREATE_2_INDIRECT_BINDABLE_BIT_EXT`).
 #define CADR_TRAIT_SWITCHES_PIPELINES (1 << 12)
+
+// Since ABI 1.20. Vertex or parameter path, a promise: every instance of the technique on one
+// device gives the same shader snippet, vertex input and push-constant bytes, and set layouts
+// of the same definition (the same bindings, types, counts, stages and flags). The renderers of
+// one device then draw with the pipelines built once, from the layouts of whichever instance
+// was first (Vulkan's "identically defined" layouts are compatible): a second view of a scene
+// neither compiles its pipelines again nor holds a copy of them. Without it, each renderer
+// builds its own.
+#define CADR_TRAIT_SHARES_PIPELINES (1 << 13)
 
 // Device-local; written by transfers or shaders.
 #define CADR_MEMORY_GPU_ONLY 0

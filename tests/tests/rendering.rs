@@ -149,6 +149,86 @@ fn far_from_origin_scene_renders_like_one_at_the_origin() {
     assert!(difference.within(DEFAULT_TOLERANCE), "{difference:?}");
 }
 
+/// Renderers of one device build each pass set's pipelines once: a second view of a scene draws
+/// with the first one's (each path promises layouts of one definition) and with the same
+/// passes over the picture, draws the picture it draws with its own, and keeps drawing after the
+/// renderer that built them is gone.
+#[test]
+fn renderers_of_one_device_share_their_pipelines_and_outlive_the_one_that_built_them() {
+    let device = test_device();
+    let scene = load_file(Path::new(CYLINDER_ENGINE_GLB)).unwrap();
+    let orbit = |view: &mut cadr_tests::SceneView| {
+        view.camera = Camera::orbit(&flatten(&scene).unwrap().bounds, 96.0 / 72.0, 0.25, 1.5);
+    };
+    // Alone: the picture a renderer draws with pipelines it built itself.
+    let mut alone = cadr_tests::SceneView::fitted(Arc::clone(&device), &scene, (96, 72));
+    orbit(&mut alone);
+    let own_pipelines = alone.render();
+    alone
+        .view
+        .techniques_mut()
+        .set_shade_mode(ShadeMode::Edges)
+        .unwrap();
+    let own_edges = alone.render();
+    drop(alone);
+
+    let mut first = cadr_tests::SceneView::fitted(Arc::clone(&device), &scene, (96, 72));
+    first.render();
+    let mut second = cadr_tests::SceneView::fitted(Arc::clone(&device), &scene, (96, 72));
+    orbit(&mut second);
+    assert_eq!(second.render(), own_pipelines);
+    let (mine, theirs) = (second.view.techniques(), first.view.techniques());
+    assert_eq!(
+        (mine.kept_pass_sets(), mine.pass_sets_shared_with(theirs)),
+        (1, 1),
+        "the second renderer built its solid pass set again"
+    );
+    // The frame's layouts and the passes over the picture are the device's, made once.
+    assert!(std::ptr::eq(
+        first.view.renderer().pipelines(),
+        second.view.renderer().pipelines()
+    ));
+    // A pass set only one of them draws is its own until the other draws it too.
+    second
+        .view
+        .techniques_mut()
+        .set_shade_mode(ShadeMode::Edges)
+        .unwrap();
+    assert_eq!(second.render(), own_edges);
+    assert_eq!(
+        second
+            .view
+            .techniques()
+            .pass_sets_shared_with(first.view.techniques()),
+        1
+    );
+    first
+        .view
+        .techniques_mut()
+        .set_shade_mode(ShadeMode::Edges)
+        .unwrap();
+    first.render();
+    assert_eq!(
+        second
+            .view
+            .techniques()
+            .pass_sets_shared_with(first.view.techniques()),
+        2
+    );
+    // The renderer that built them goes; the other keeps drawing with them.
+    drop(first);
+    for _ in 0..2 {
+        assert_eq!(second.render(), own_edges);
+    }
+    second
+        .view
+        .techniques_mut()
+        .set_shade_mode(ShadeMode::Solid)
+        .unwrap();
+    assert_eq!(second.render(), own_pipelines);
+    assert_no_validation_errors(&device);
+}
+
 /// Renderers of one size on one device share their depth, with MSAA their multisampled
 /// attachments, and the transparency method's targets and storage (what a frame draws there is
 /// of no use after it), so several views hold one set: each still draws the picture it draws alone, frames in flight interleaved, and a

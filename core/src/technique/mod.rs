@@ -1,7 +1,7 @@
 //! Technique plugins on the host side: finding and loading them ([`PluginRegistry`]), the
 //! active combination with its pipelines ([`Techniques`]), what a frame's surfaces draw
 //! (`surface_passes.rs`), the shaders and pipelines of each pass set (`shader_assembly.rs`,
-//! `pass_pipelines.rs`) and what plugins may call back (`host_api.rs`). [`crate::frame`] drives them over the GPU
+//! `pass_pipelines.rs`; shared by the renderers of one device, `shared_pipelines.rs`) and what plugins may call back (`host_api.rs`). [`crate::frame`] drives them over the GPU
 //! scene each frame.
 
 mod host_api;
@@ -9,6 +9,7 @@ mod pass_pipelines;
 mod registry;
 mod set;
 mod shader_assembly;
+mod shared_pipelines;
 mod surface_passes;
 
 pub use host_api::AllocationCounts;

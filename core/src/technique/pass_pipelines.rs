@@ -235,6 +235,11 @@ pub struct PipelineInputs<'a> {
 }
 
 impl TechniquePipelines {
+    /// The device they were built on.
+    pub(crate) fn device(&self) -> &Arc<Device> {
+        &self.device
+    }
+
     /// Creates the layout and the passes' pipelines.
     pub fn new(device: &Arc<Device>, inputs: &PipelineInputs<'_>) -> RenderResult<Self> {
         let (layout, empty_set_layout) = technique_layout(device, inputs)?;

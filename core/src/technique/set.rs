@@ -13,6 +13,7 @@ use super::host_api::{AllocationCounts, HostServices};
 use super::pass_pipelines::{PipelineInputs, TechniquePipelines};
 use super::registry::{feature_bits, PluginRegistry, TechniqueEntry, TechniqueKind};
 use super::shader_assembly::{assemble_vertex_shader, ShaderCache};
+use super::shared_pipelines::{shared_or_built, KeptPipelines, KeyInputs, PipelineKey};
 use super::surface_passes::{PassSet, ShadeMode};
 use crate::gpu_scene::Transforms;
 use crate::render::TransparencyMethod;
@@ -245,8 +246,9 @@ pub struct Techniques {
     /// transparency method changed (each display mode's shaded frame with and without
     /// translucent surfaces, at each MSAA level, the pick pass), built on first use, at most
     /// [`KEPT_PASS_SETS`]: a display mode or option turned on again finds them built. The
-    /// last drawn is last, so the first is the one unused longest.
-    pipelines: Vec<TechniquePipelines>,
+    /// last drawn is last, so the first is the one unused longest. Shared with the other
+    /// renderers of the device where the paths allow it (`shared_pipelines.rs`).
+    pipelines: Vec<Arc<KeptPipelines>>,
     shaders: ShaderCache,
     frame_set_layout: vk::DescriptorSetLayout,
     /// The transparency merge's set layout (its targets).
@@ -699,6 +701,7 @@ impl Techniques {
         self.pipelines
             .iter()
             .find(|p| p.pass_set == passes)
+            .map(|kept| &***kept)
             .ok_or_else(|| RenderError::InvalidUse("technique pipelines were not built".into()))
     }
 
@@ -706,6 +709,21 @@ impl Techniques {
     /// goes).
     pub fn kept_pass_sets(&self) -> usize {
         self.pipelines.len()
+    }
+
+    /// How many of the pass sets kept here are drawn with the very pipelines `other` keeps:
+    /// built once and shared by the renderers of one device (`CADR_TRAIT_SHARES_PIPELINES`),
+    /// not built again.
+    pub fn pass_sets_shared_with(&self, other: &Techniques) -> usize {
+        self.pipelines
+            .iter()
+            .filter(|mine| {
+                other
+                    .pipelines
+                    .iter()
+                    .any(|theirs| Arc::ptr_eq(mine, theirs))
+            })
+            .count()
     }
 
     /// The active transparency method.
@@ -729,7 +747,7 @@ impl Techniques {
         }
     }
 
-    fn build_pipelines(&mut self, passes: PassSet) -> RenderResult<TechniquePipelines> {
+    fn build_pipelines(&mut self, passes: PassSet) -> RenderResult<Arc<KeptPipelines>> {
         let vertex = self.get(TechniqueKind::Vertex)?;
         let parameters = self.get(TechniqueKind::Parameters)?;
         let vertex_table: &abi::CadrVertexPathVtable = vertex.vtable();
@@ -772,28 +790,46 @@ impl Techniques {
                 )
             };
         }
-        let key = (vertex.entry.name.clone(), parameters.entry.name.clone());
-        let shaders = self.shaders.prepare(
-            key,
-            || assemble_vertex_shader(&vertex_snippet, &parameter_snippet),
+        let pick_kind = self.pick_pass_kind();
+        let shared_key = PipelineKey::new(&KeyInputs {
+            paths: (&vertex.entry, &parameters.entry),
+            snippets: (&vertex_snippet, &parameter_snippet),
+            vertex_input: &input,
             passes,
-            self.method.as_ref(),
-        )?;
-        let inputs = PipelineInputs {
-            frame_set_layout: self.frame_set_layout,
-            merge_set_layout: self.merge_set_layout,
-            path_set_layouts: [
-                vk::DescriptorSetLayout::from_raw(parameter_sets[0]),
-                vk::DescriptorSetLayout::from_raw(parameter_sets[1]),
-                vk::DescriptorSetLayout::from_raw(vertex_set),
-            ],
-            vertex_input: input,
-            shaders: &shaders,
-            passes,
-            pick_kind: self.pick_pass_kind(),
+            pick_kind,
             method: self.method.as_ref(),
-        };
-        TechniquePipelines::new(&self.device, &inputs)
+        });
+        let shader_key = (vertex.entry.name.clone(), parameters.entry.name.clone());
+        let device = Arc::clone(&self.device);
+        let (shader_cache, frame_set_layout, merge_set_layout) = (
+            &mut self.shaders,
+            self.frame_set_layout,
+            self.merge_set_layout,
+        );
+        let method = self.method.as_ref();
+        shared_or_built(&device, shared_key, || {
+            let shaders = shader_cache.prepare(
+                shader_key,
+                || assemble_vertex_shader(&vertex_snippet, &parameter_snippet),
+                passes,
+                method,
+            )?;
+            let inputs = PipelineInputs {
+                frame_set_layout,
+                merge_set_layout,
+                path_set_layouts: [
+                    vk::DescriptorSetLayout::from_raw(parameter_sets[0]),
+                    vk::DescriptorSetLayout::from_raw(parameter_sets[1]),
+                    vk::DescriptorSetLayout::from_raw(vertex_set),
+                ],
+                vertex_input: input,
+                shaders: &shaders,
+                passes,
+                pick_kind,
+                method,
+            };
+            TechniquePipelines::new(&device, &inputs)
+        })
     }
 }
 

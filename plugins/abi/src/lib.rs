@@ -56,7 +56,7 @@ use std::ffi::{c_char, c_void};
 /// Major version of this ABI: a library built for another major version is refused.
 pub const CADR_PLUGIN_ABI_MAJOR: u32 = 1;
 /// Minor version of this ABI: additions that older readers may ignore.
-pub const CADR_PLUGIN_ABI_MINOR: u32 = 19;
+pub const CADR_PLUGIN_ABI_MINOR: u32 = 20;
 /// `(major << 16) | minor`, what [`CadrPluginVersionFn`] returns.
 pub const CADR_PLUGIN_ABI_VERSION: u32 = (CADR_PLUGIN_ABI_MAJOR << 16) | CADR_PLUGIN_ABI_MINOR;
 
@@ -208,6 +208,14 @@ pub const CADR_TRAIT_ROUTES_BACK_FACES: CadrTraitBits = 1 << 11;
 /// later), the host asks the culler for shared streams and makes the two passes' pipelines
 /// bindable by the GPU (`VK_PIPELINE_CREATE_2_INDIRECT_BINDABLE_BIT_EXT`).
 pub const CADR_TRAIT_SWITCHES_PIPELINES: CadrTraitBits = 1 << 12;
+/// Since ABI 1.20. Vertex or parameter path, a promise: every instance of the technique on one
+/// device gives the same shader snippet, vertex input and push-constant bytes, and set layouts
+/// of the same definition (the same bindings, types, counts, stages and flags). The renderers of
+/// one device then draw with the pipelines built once, from the layouts of whichever instance
+/// was first (Vulkan's "identically defined" layouts are compatible): a second view of a scene
+/// neither compiles its pipelines again nor holds a copy of them. Without it, each renderer
+/// builds its own.
+pub const CADR_TRAIT_SHARES_PIPELINES: CadrTraitBits = 1 << 13;
 
 /// A message buffer the host hands to functions that can fail: the plugin writes a
 /// NUL-terminated UTF-8 message of at most `capacity` bytes (including the NUL).

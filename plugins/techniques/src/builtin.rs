@@ -3,7 +3,7 @@
 //! draw, no culling). Hosts register it statically, so it works without any plugin library;
 //! every other technique is measured against it.
 
-use crate::{KEEPS_FRAME_SLOTS, REPLAYABLE};
+use crate::{KEEPS_FRAME_SLOTS, REPLAYABLE, SHARES_PIPELINES};
 use cadr_plugin_sdk::abi;
 use cadr_plugin_sdk::technique_library;
 
@@ -23,13 +23,13 @@ technique_library! {
         vertex PerGeometry {
             name: "per-geometry",
             description: "Vertex and index buffers bound per geometry, re-bound only when the geometry changes.",
-            features: 0, provides: GEOMETRY | REPLAYABLE | KEEPS_FRAME_SLOTS, needs: 0,
+            features: 0, provides: GEOMETRY | REPLAYABLE | KEEPS_FRAME_SLOTS | SHARES_PIPELINES, needs: 0,
         },
         parameters Push {
             name: "push",
             description: "Matrix and material values pushed with every draw (push constants; the seeds' glUniform/ubosub).",
             features: 0,
-            provides: abi::CADR_TRAIT_PARAMETERS_IN_COMMANDS | abi::CADR_TRAIT_READS_HOST_MATRICES | abi::CADR_TRAIT_REPLAYABLE | KEEPS_FRAME_SLOTS,
+            provides: abi::CADR_TRAIT_PARAMETERS_IN_COMMANDS | abi::CADR_TRAIT_READS_HOST_MATRICES | abi::CADR_TRAIT_REPLAYABLE | KEEPS_FRAME_SLOTS | SHARES_PIPELINES,
             needs: 0,
         },
         submission Individual {

@@ -26,6 +26,10 @@ pub(crate) const REPLAYABLE: abi::CadrTraitBits =
 /// flight) or into the copy of the frame's slot (the GPU cullers' cull sets), and their
 /// secondary buffers, recorded once, may be pending in several frames at once.
 pub(crate) const KEEPS_FRAME_SLOTS: abi::CadrTraitBits = abi::CADR_TRAIT_FRAME_SLOTS;
+/// What cadr's vertex and parameter paths promise: their snippets, vertex input, push bytes and
+/// set layouts are constants, the same for every instance, so renderers of one device share the
+/// pipelines built with them.
+pub(crate) const SHARES_PIPELINES: abi::CadrTraitBits = abi::CADR_TRAIT_SHARES_PIPELINES;
 /// Bytes of a command of a stream two passes share (`CadrSharedFaceStreams`): the word naming
 /// the command's pass, then its `VkDrawIndexedIndirectCommand`. The GPU cullers write such
 /// commands, `dgc` reads them.

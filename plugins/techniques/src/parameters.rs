@@ -10,7 +10,7 @@
 use std::ffi::CStr;
 use std::sync::Arc;
 
-use crate::{KEEPS_FRAME_SLOTS, REPLAYABLE};
+use crate::{KEEPS_FRAME_SLOTS, REPLAYABLE, SHARES_PIPELINES};
 use cadr_plugin_sdk::abi::{self, CadrBindState, CadrInstance};
 use cadr_plugin_sdk::vk;
 use cadr_plugin_sdk::vulkan_failure;
@@ -521,18 +521,18 @@ technique_library! {
         parameters UboDynamic {
             name: "ubo-dynamic",
             description: "Uniform buffers bound with dynamic offsets, one set per update frequency: matrix per object, material per batch (the seeds' uborange).",
-            features: 0, provides: abi::CADR_TRAIT_READS_HOST_MATRICES | abi::CADR_TRAIT_REPLAYABLE | KEEPS_FRAME_SLOTS, needs: 0,
+            features: 0, provides: abi::CADR_TRAIT_READS_HOST_MATRICES | abi::CADR_TRAIT_REPLAYABLE | KEEPS_FRAME_SLOTS | SHARES_PIPELINES, needs: 0,
         },
         parameters SsboIndex {
             name: "ssbo-index",
             description: "Records, matrices and materials in storage buffers, found through firstInstance; nothing per draw (the seeds' indexed/indexedmdi).",
-            features: 0, provides: abi::CADR_TRAIT_PARAMETERS_FROM_INSTANCE_INDEX | REPLAYABLE | KEEPS_FRAME_SLOTS, needs: 0,
+            features: 0, provides: abi::CADR_TRAIT_PARAMETERS_FROM_INSTANCE_INDEX | REPLAYABLE | KEEPS_FRAME_SLOTS | SHARES_PIPELINES, needs: 0,
         },
         parameters Address {
             name: "address",
             description: "The same arrays through buffer device addresses pushed once per pass (the seeds' bindless).",
             features: abi::CADR_FEATURE_BUFFER_DEVICE_ADDRESS,
-            provides: abi::CADR_TRAIT_PARAMETERS_FROM_INSTANCE_INDEX | REPLAYABLE | KEEPS_FRAME_SLOTS, needs: 0,
+            provides: abi::CADR_TRAIT_PARAMETERS_FROM_INSTANCE_INDEX | REPLAYABLE | KEEPS_FRAME_SLOTS | SHARES_PIPELINES, needs: 0,
         },
     ]
 }

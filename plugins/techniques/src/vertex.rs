@@ -10,7 +10,7 @@
 use std::ffi::CStr;
 use std::sync::Arc;
 
-use crate::{KEEPS_FRAME_SLOTS, REPLAYABLE};
+use crate::{KEEPS_FRAME_SLOTS, REPLAYABLE, SHARES_PIPELINES};
 use cadr_plugin_sdk::abi::{self, CadrBindState, CadrDrawBase, CadrInstance, CadrVertexInput};
 use cadr_plugin_sdk::vk;
 use cadr_plugin_sdk::vulkan_failure;
@@ -428,22 +428,22 @@ technique_library! {
         vertex Bound<true> {
             name: "per-part",
             description: "Vertex and index buffers bound at every part's offsets (the seeds' VBO, no state reuse).",
-            features: 0, provides: REPLAYABLE | KEEPS_FRAME_SLOTS, needs: 0,
+            features: 0, provides: REPLAYABLE | KEEPS_FRAME_SLOTS | SHARES_PIPELINES, needs: 0,
         },
         vertex Arena {
             name: "arena",
             description: "The scene's vertex and index arenas bound once; offsets travel in each draw.",
-            features: 0, provides: SCENE | REPLAYABLE | KEEPS_FRAME_SLOTS, needs: 0,
+            features: 0, provides: SCENE | REPLAYABLE | KEEPS_FRAME_SLOTS | SHARES_PIPELINES, needs: 0,
         },
         vertex Pulling {
             name: "pulling",
             description: "No vertex input: the shader pulls vertices from a storage buffer by gl_VertexIndex.",
-            features: 0, provides: SCENE | REPLAYABLE | KEEPS_FRAME_SLOTS, needs: 0,
+            features: 0, provides: SCENE | REPLAYABLE | KEEPS_FRAME_SLOTS | SHARES_PIPELINES, needs: 0,
         },
         vertex PullingAddress {
             name: "pulling-address",
             description: "Vertex pulling through a buffer device address pushed once per pass (bindless).",
-            features: abi::CADR_FEATURE_BUFFER_DEVICE_ADDRESS, provides: SCENE | REPLAYABLE | KEEPS_FRAME_SLOTS, needs: 0,
+            features: abi::CADR_FEATURE_BUFFER_DEVICE_ADDRESS, provides: SCENE | REPLAYABLE | KEEPS_FRAME_SLOTS | SHARES_PIPELINES, needs: 0,
         },
     ]
 }

@@ -374,7 +374,8 @@ typedef struct CadrSceneView {
   struct CadrBufferRef cull_buffer;
   // Since ABI 1.14 (read it only when `size` covers it): the host's extension structs for
   // this view (a chain of [`CadrExtension`]s, or null), valid as long as the view:
-  // [`CadrSceneClusters`] where the scene has clusters.
+  // [`CadrSceneClusters`] where the scene has clusters, and since 1.20 their
+  // [`CadrSceneClusterBoxes`].
   const struct CadrExtension *extensions;
 } CadrSceneView;
 
@@ -1195,6 +1196,10 @@ typedef struct CadrTransparencyVtable {
 // Since ABI 1.19: the kind of [`CadrSharedFaceStreams`], chained on
 // [`CadrGpuCullContext::extensions`].
 #define CADR_EXTENSION_SHARED_FACE_STREAMS 5
+
+// Since ABI 1.20: the kind of [`CadrSceneClusterBoxes`], chained on
+// [`CadrSceneView::extensions`] beside [`CadrSceneClusters`].
+#define CADR_EXTENSION_SCENE_CLUSTER_BOXES 6
 
 // Every instance the pass's filter keeps (what passes without a route draw).
 #define CADR_FACES_ANY 0

@@ -120,6 +120,63 @@ fn gpu_occlusion_skips_what_housings_hide() {
     }
 }
 
+/// gen:cabinet's parts are thin panels in closed housings: a sphere around a panel is as wide as
+/// the panel, so a test of spheres against the depth pyramid finds few of the parts inside
+/// hidden, and clusters gain nothing over whole parts. The clusters' boxes (plugin ABI 1.20),
+/// placed by each part's matrix, find them: at full detail `gpu-clusters` draws the pictures
+/// `gpu-occlusion` draws with at most half its triangles over a still view and an orbit.
+#[test]
+fn cluster_boxes_find_the_parts_housings_hide_where_spheres_cannot() {
+    let scene = generate(&GeneratorSpec::Cabinet { cabinets: 12 });
+    let bounds = bounds(&scene);
+    let still = Camera::fit(&bounds, aspect(), DEFAULT_DIRECTION);
+    let mut cameras = vec![still; 3];
+    cameras
+        .extend((0..3).map(|i| Camera::orbit(&bounds, aspect(), 0.1 + f64::from(i) * 0.05, 1.6)));
+    let device = test_device();
+    let (mut graph, _) = SceneGraph::from_scene(&scene).unwrap();
+    let mut tree = SceneTree::build(&mut graph);
+    let mut view = View::new(&device, plugin_registry(&device), SIZE.0, SIZE.1).unwrap();
+    view.techniques_mut().set_lod_error(0.0).unwrap();
+    let mut frames = |culler: &str| -> Vec<(image::RgbaImage, u64)> {
+        view.techniques_mut().select(&combination(culler)).unwrap();
+        cameras
+            .iter()
+            .map(|camera| {
+                let stats = view.render(&graph, &mut tree, camera).unwrap();
+                (
+                    view.renderer().read_rgba8().unwrap(),
+                    stats.triangles_rasterized,
+                )
+            })
+            .collect()
+    };
+    let parts = frames("gpu-occlusion");
+    let clusters = frames("gpu-clusters");
+    // From the third frame on, both know what the last frame showed.
+    let (mut by_parts, mut by_clusters) = (0, 0);
+    for (frame, ((part_image, part_triangles), (cluster_image, cluster_triangles))) in
+        parts.iter().zip(&clusters).enumerate()
+    {
+        let difference = compare(cluster_image, part_image).unwrap();
+        assert!(
+            difference.within(SAME_PICTURE),
+            "frame {frame}: {difference:?}"
+        );
+        println!("frame {frame}: clusters {cluster_triangles} triangles, parts {part_triangles}");
+        if frame >= 2 {
+            by_parts += part_triangles;
+            by_clusters += cluster_triangles;
+        }
+    }
+    assert!(
+        by_clusters * 2 <= by_parts,
+        "clusters drew {by_clusters} triangles, whole parts {by_parts}"
+    );
+    drop(view);
+    assert_no_validation_errors(&device);
+}
+
 /// Renders `cameras` without culling and with `gpu-occlusion`, checks that every frame draws
 /// the same picture both ways, and gives each frame's triangles: occlusion's, then all.
 fn occluded_frames(scene: &Scene, cameras: &[Camera]) -> Vec<(u64, u64)> {

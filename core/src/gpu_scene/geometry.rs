@@ -1,6 +1,7 @@
 //! The GPU scene's geometry: every geometry's vertices, triangle indices and edge indices in
 //! three shared arenas (usable as vertex, index and storage buffers), with its clusters and
-//! groups in two more, and each geometry's place and room there. Geometries come and go
+//! groups in two more (and the clusters' boxes beside them, laid out like the clusters), and
+//! each geometry's place and room there. Geometries come and go
 //! without the arenas being laid out again: a replaced geometry that fits its room is written
 //! in place (only its bytes are uploaded and only its users' instance entries change); a new
 //! one takes the room a destroyed one left, or the room at the arenas' end; a destroyed one
@@ -136,6 +137,31 @@ impl ArenaData<'_> {
             .collect()
     }
 
+    /// The clusters' boxes ([`abi::CadrClusterBox`]), in cluster order: each the smallest
+    /// box along the object's axes around the vertices its indices name.
+    fn cluster_box_bytes(&self) -> Vec<u8> {
+        let clusters = &self.clusters;
+        let own = clusters.indices.len();
+        let index = |i: usize| {
+            if i < own {
+                clusters.indices.get(i)
+            } else {
+                clusters.lod_indices.get(i - own)
+            }
+        };
+        clusters
+            .clusters
+            .iter()
+            .flat_map(|c| {
+                let first = c.first_index as usize;
+                let vertices = (first..first + c.index_count as usize)
+                    .filter_map(index)
+                    .filter_map(|&i| self.vertices.get(i as usize));
+                cluster_box(vertices).to_le_bytes()
+            })
+            .collect()
+    }
+
     /// The groups' bytes as the arena holds them: their clusters made absolute from the
     /// geometry's `first_cluster`.
     fn group_bytes(&self, first_cluster: u32) -> Vec<u8> {
@@ -150,6 +176,31 @@ impl ArenaData<'_> {
                 .to_le_bytes()
             })
             .collect()
+    }
+}
+
+/// The smallest box along the object's axes around `vertices`, a hair larger so that rounding
+/// never leaves a corner outside (an empty box at the origin for none).
+fn cluster_box<'v>(vertices: impl Iterator<Item = &'v Vertex>) -> abi::CadrClusterBox {
+    let mut min = [f32::INFINITY; 3];
+    let mut max = [f32::NEG_INFINITY; 3];
+    for v in vertices {
+        for axis in 0..3 {
+            min[axis] = min[axis].min(v.position[axis]);
+            max[axis] = max[axis].max(v.position[axis]);
+        }
+    }
+    if min[0] > max[0] {
+        return abi::CadrClusterBox::default();
+    }
+    let center = [0, 1, 2].map(|a| 0.5 * (min[a] + max[a]));
+    abi::CadrClusterBox {
+        center,
+        half_extent: [0, 1, 2].map(|a| {
+            let half = 0.5 * (max[a] - min[a]);
+            half + (half + center[a].abs()) * 1e-6
+        }),
+        ..abi::CadrClusterBox::default()
     }
 }
 
@@ -227,6 +278,8 @@ fn part_entries(data: &ArenaData<'_>) -> Vec<([u32; 4], [f32; 4], u32)> {
 
 /// Bytes of one cluster in the cluster arena ([`abi::CadrCluster`]).
 const CLUSTER_BYTES: usize = 64;
+/// Bytes of one cluster's box in the box arena ([`abi::CadrClusterBox`]).
+const CLUSTER_BOX_BYTES: usize = 32;
 /// Bytes of one group in the group arena ([`abi::CadrClusterGroup`]).
 const GROUP_BYTES: usize = 32;
 
@@ -249,6 +302,8 @@ pub(super) struct GeometryArenas {
     pub(super) wire_indices: Buffer,
     /// [`abi::CadrCluster`] per cluster of every part.
     pub(super) clusters: Buffer,
+    /// [`abi::CadrClusterBox`] per cluster, at the cluster's index.
+    pub(super) cluster_boxes: Buffer,
     /// [`abi::CadrClusterGroup`] per group of every part's level-of-detail DAG.
     pub(super) groups: Buffer,
     /// Where the arenas' unused end starts, and how much each holds.
@@ -272,6 +327,7 @@ struct Layout {
     indices: Vec<u32>,
     wire: Vec<u32>,
     clusters: Vec<u8>,
+    cluster_boxes: Vec<u8>,
     groups: Vec<u8>,
     places: Vec<Option<GeometryPlace>>,
 }
@@ -283,6 +339,7 @@ impl Layout {
         let mut indices: Vec<u32> = Vec::new();
         let mut wire: Vec<u32> = Vec::new();
         let mut clusters: Vec<u8> = Vec::new();
+        let mut cluster_boxes: Vec<u8> = Vec::new();
         let mut groups: Vec<u8> = Vec::new();
         // The clusters are built on a thread per core, the geometries laid out in slot order.
         let slots: Vec<u32> = (0..geometry_slots as u32).collect();
@@ -313,6 +370,7 @@ impl Layout {
                 wire.extend_from_slice(&data.wire);
                 groups.extend(data.group_bytes(place.first_cluster));
                 clusters.extend(data.cluster_bytes(first_index, first_group));
+                cluster_boxes.extend(data.cluster_box_bytes());
                 Some(place)
             })
             .collect();
@@ -321,6 +379,7 @@ impl Layout {
             indices,
             wire,
             clusters,
+            cluster_boxes,
             groups,
             places,
         }
@@ -336,12 +395,12 @@ impl GeometryArenas {
         graph: &SceneGraph,
         spare: bool,
     ) -> RenderResult<(Self, u64)> {
-        let (_, geometry_slots, _) = graph.capacities();
         let Layout {
             vertices,
             indices,
             wire,
             clusters,
+            cluster_boxes,
             groups,
             places,
         } = Layout::of(graph);
@@ -358,23 +417,13 @@ impl GeometryArenas {
         } else {
             tails
         };
-        let has_attributes = (0..geometry_slots as u32)
-            .filter_map(|slot| graph.geometry_at(slot))
-            .any(|g| !g.attributes.is_empty());
-        let mut attributes: Vec<VertexAttributes> = Vec::new();
-        if has_attributes {
-            attributes.reserve(vertices.len());
-            for slot in 0..geometry_slots as u32 {
-                if let Some(geometry) = graph.geometry_at(slot) {
-                    extend_attributes(&mut attributes, geometry);
-                }
-            }
-        }
+        let (has_attributes, attributes) = attributes_of(graph, vertices.len());
         let bytes = (std::mem::size_of_val(vertices.as_slice())
             + std::mem::size_of_val(indices.as_slice())
             + std::mem::size_of_val(wire.as_slice())
             + std::mem::size_of_val(attributes.as_slice())
             + clusters.len()
+            + cluster_boxes.len()
             + groups.len()) as u64;
         // Each arena holds `capacity` elements of its size (16 bytes at least).
         let arena = |name: &str, data: &[u8], elements: u32, size: usize, base| {
@@ -428,6 +477,13 @@ impl GeometryArenas {
                 &clusters,
                 capacity[3],
                 CLUSTER_BYTES,
+                none,
+            )?,
+            cluster_boxes: arena(
+                "scene cluster boxes",
+                &cluster_boxes,
+                capacity[3],
+                CLUSTER_BOX_BYTES,
                 none,
             )?,
             groups: arena(
@@ -583,6 +639,7 @@ impl GeometryArenas {
             .collect();
         let wire_bytes: &[u8] = bytemuck::cast_slice(&data.wire);
         let cluster_bytes = data.cluster_bytes(place.first_index, place.first_group);
+        let box_bytes = data.cluster_box_bytes();
         let group_bytes = data.group_bytes(place.first_cluster);
         let vertex_size = std::mem::size_of::<Vertex>() as u64;
         self.vertices
@@ -594,6 +651,10 @@ impl GeometryArenas {
         self.clusters.upload_at(
             u64::from(place.first_cluster) * CLUSTER_BYTES as u64,
             &cluster_bytes,
+        )?;
+        self.cluster_boxes.upload_at(
+            u64::from(place.first_cluster) * CLUSTER_BOX_BYTES as u64,
+            &box_bytes,
         )?;
         self.groups.upload_at(
             u64::from(place.first_group) * GROUP_BYTES as u64,
@@ -617,6 +678,7 @@ impl GeometryArenas {
                 + wire_bytes.len()
                 + attribute_bytes
                 + cluster_bytes.len()
+                + box_bytes.len()
                 + group_bytes.len()) as u64,
         ))
     }
@@ -626,6 +688,22 @@ impl GeometryArenas {
 /// thousand, so that the geometries loaded next fit without another layout.
 fn with_spare_room(used: u32) -> u32 {
     used.saturating_add(used / 4).saturating_add(4096)
+}
+
+/// Whether some geometry of `graph` has texture coordinates or colours, and then every
+/// geometry's attributes in slot order (`vertex_count` of them, laid out like the vertices).
+fn attributes_of(graph: &SceneGraph, vertex_count: usize) -> (bool, Vec<VertexAttributes>) {
+    let (_, geometry_slots, _) = graph.capacities();
+    let geometries = || (0..geometry_slots as u32).filter_map(|slot| graph.geometry_at(slot));
+    let has_attributes = geometries().any(|g| !g.attributes.is_empty());
+    let mut attributes: Vec<VertexAttributes> = Vec::new();
+    if has_attributes {
+        attributes.reserve(vertex_count);
+        for geometry in geometries() {
+            extend_attributes(&mut attributes, geometry);
+        }
+    }
+    (has_attributes, attributes)
 }
 
 /// Appends the geometry's attributes, or white at (0, 0) for each vertex when it has none.
@@ -645,6 +723,51 @@ mod tests {
     use super::*;
     use crate::generate::GeometryBuilder;
     use glam::DMat4;
+
+    #[test]
+    fn each_clusters_box_holds_its_vertices_and_touches_them_on_every_side() {
+        let mut builder = GeometryBuilder::new("prisms");
+        builder.prism(200, DMat4::from_scale(glam::DVec3::new(4.0, 0.5, 1.0)));
+        let geometry = builder.finish();
+        let data = arena_data(&geometry);
+        let bytes = data.cluster_box_bytes();
+        let clusters = &data.clusters;
+        assert_eq!(bytes.len(), clusters.clusters.len() * CLUSTER_BOX_BYTES);
+        assert!(clusters.clusters.len() > 1, "a part of several clusters");
+        let all: Vec<u32> = clusters
+            .indices
+            .iter()
+            .chain(&clusters.lod_indices)
+            .copied()
+            .collect();
+        for (cluster, bytes) in clusters.clusters.iter().zip(bytes.chunks_exact(32)) {
+            let word = |i: usize| {
+                f32::from_le_bytes([
+                    bytes[4 * i],
+                    bytes[4 * i + 1],
+                    bytes[4 * i + 2],
+                    bytes[4 * i + 3],
+                ])
+            };
+            let (center, half) = ([word(0), word(1), word(2)], [word(4), word(5), word(6)]);
+            let first = cluster.first_index as usize;
+            let mut reached = [[false; 2]; 3];
+            for &i in &all[first..first + cluster.index_count as usize] {
+                let p = geometry.vertices[i as usize].position;
+                for axis in 0..3 {
+                    let offset = p[axis] - center[axis];
+                    assert!(
+                        offset.abs() <= half[axis],
+                        "vertex {i} outside on axis {axis}"
+                    );
+                    let slack = 1e-5 * (1.0 + half[axis]);
+                    reached[axis][0] |= offset <= -half[axis] + slack;
+                    reached[axis][1] |= offset >= half[axis] - slack;
+                }
+            }
+            assert_eq!(reached, [[true; 2]; 3], "the box is the smallest");
+        }
+    }
 
     #[test]
     fn a_part_is_curved_where_a_triangle_has_normals_that_differ() {

@@ -166,16 +166,56 @@ pub struct GpuScene {
 /// view's pointers stay valid as long as it does.
 struct SeenByTechniques {
     /// The buffers (with device addresses), refreshed when replaced.
-    buffer_refs: [abi::CadrBufferRef; 9],
-    /// The clusters, chained on the view.
+    buffer_refs: [abi::CadrBufferRef; 10],
+    /// The clusters and their boxes, chained on the view.
     clusters_extension: ClustersExtension,
 }
 
-/// The scene view's [`abi::CadrSceneClusters`], kept with the scene it describes.
-struct ClustersExtension(abi::CadrSceneClusters);
+/// The scene view's extensions, kept with the scene they describe: the clusters
+/// ([`abi::CadrSceneClusters`]), whose header's `next` names their boxes
+/// ([`abi::CadrSceneClusterBoxes`]), the end of the chain.
+struct ClusterExtensions {
+    clusters: abi::CadrSceneClusters,
+    boxes: abi::CadrSceneClusterBoxes,
+}
 
-// SAFETY: the struct's one pointer, its header's `next`, is always null: nothing is reached
-// through it, so it may move to and be read from any thread like the plain values it holds.
+/// [`ClusterExtensions`] on the heap, where the pointer from the first to the second stays
+/// valid however the scene moves.
+struct ClustersExtension(Box<ClusterExtensions>);
+
+impl ClustersExtension {
+    fn new() -> Self {
+        let mut extensions = Box::new(ClusterExtensions {
+            clusters: abi::CadrSceneClusters {
+                header: abi::CadrExtension {
+                    size: std::mem::size_of::<abi::CadrSceneClusters>() as u32,
+                    kind: abi::CADR_EXTENSION_SCENE_CLUSTERS,
+                    next: std::ptr::null(),
+                },
+                cluster_buffer: abi::CadrBufferRef::default(),
+                cluster_count: 0,
+                group_count: 0,
+                group_buffer: abi::CadrBufferRef::default(),
+                candidate_clusters: 0,
+                candidate_coarsest_clusters: 0,
+            },
+            boxes: abi::CadrSceneClusterBoxes {
+                header: abi::CadrExtension {
+                    size: std::mem::size_of::<abi::CadrSceneClusterBoxes>() as u32,
+                    kind: abi::CADR_EXTENSION_SCENE_CLUSTER_BOXES,
+                    next: std::ptr::null(),
+                },
+                box_buffer: abi::CadrBufferRef::default(),
+            },
+        });
+        extensions.clusters.header.next = &extensions.boxes.header;
+        Self(extensions)
+    }
+}
+
+// SAFETY: the structs' pointers are the clusters' `next`, which names the boxes in the same
+// heap allocation (moving the scene moves only the box), and the boxes' `next`, always null; so
+// the chain may move to and be read from any thread like the plain values it holds.
 unsafe impl Send for ClustersExtension {}
 // SAFETY: as above; it is only written through `&mut GpuScene`.
 unsafe impl Sync for ClustersExtension {}
@@ -325,19 +365,7 @@ impl GpuScene {
             },
             seen: SeenByTechniques {
                 buffer_refs: Default::default(),
-                clusters_extension: ClustersExtension(abi::CadrSceneClusters {
-                    header: abi::CadrExtension {
-                        size: std::mem::size_of::<abi::CadrSceneClusters>() as u32,
-                        kind: abi::CADR_EXTENSION_SCENE_CLUSTERS,
-                        next: std::ptr::null(),
-                    },
-                    cluster_buffer: abi::CadrBufferRef::default(),
-                    cluster_count: 0,
-                    group_count: 0,
-                    group_buffer: abi::CadrBufferRef::default(),
-                    candidate_clusters: 0,
-                    candidate_coarsest_clusters: 0,
-                }),
+                clusters_extension: ClustersExtension::new(),
             },
         };
         scene.refresh_all(graph, tree)?;
@@ -356,6 +384,7 @@ impl GpuScene {
             &self.gpu.cull_entries.buffer,
             &self.arenas.clusters,
             &self.arenas.groups,
+            &self.arenas.cluster_boxes,
         ]
         .map(|buffer| abi::CadrBufferRef {
             buffer: buffer.raw().as_raw(),
@@ -366,8 +395,10 @@ impl GpuScene {
                 0
             },
         });
-        let [.., clusters, groups] = self.seen.buffer_refs;
-        let extension = &mut self.seen.clusters_extension.0;
+        let [.., clusters, groups, boxes] = self.seen.buffer_refs;
+        let extensions = &mut *self.seen.clusters_extension.0;
+        extensions.boxes.box_buffer = boxes;
+        let extension = &mut extensions.clusters;
         extension.cluster_buffer = clusters;
         extension.group_buffer = groups;
         [extension.cluster_count, extension.group_count] = self.arenas.cluster_counts();
@@ -392,8 +423,9 @@ impl GpuScene {
             .fold([0u64; 2], |[all, coarsest], [_, count, coarse]| {
                 [all + u64::from(count), coarsest + u64::from(coarse)]
             });
-        self.seen.clusters_extension.0.candidate_clusters = all;
-        self.seen.clusters_extension.0.candidate_coarsest_clusters = coarsest;
+        let extension = &mut self.seen.clusters_extension.0.clusters;
+        extension.candidate_clusters = all;
+        extension.candidate_coarsest_clusters = coarsest;
         self.counts.clusters_stale = false;
     }
 
@@ -739,7 +771,7 @@ impl GpuScene {
         self.counts.last_upload.geometry_bytes += bytes;
         self.counts.last_upload.bytes += bytes;
         // A geometry placed at the arenas' end adds clusters the extension must count.
-        let extension = &mut self.seen.clusters_extension.0;
+        let extension = &mut self.seen.clusters_extension.0.clusters;
         [extension.cluster_count, extension.group_count] = self.arenas.cluster_counts();
         Ok(true)
     }
@@ -995,7 +1027,7 @@ impl GpuScene {
     /// neither is changed.
     pub(crate) fn view(&self, view: &ViewState) -> abi::CadrSceneView {
         let (dirty_matrices, dirty_materials) = view.dirty_slots();
-        let [vertex_buffer, index_buffer, wire_index_buffer, matrix_buffer, material_buffer, instance_buffer, cull_buffer, _, _] =
+        let [vertex_buffer, index_buffer, wire_index_buffer, matrix_buffer, material_buffer, instance_buffer, cull_buffer, _, _, _] =
             self.seen.buffer_refs;
         abi::CadrSceneView {
             size: std::mem::size_of::<abi::CadrSceneView>() as u32,
@@ -1021,7 +1053,7 @@ impl GpuScene {
             material_buffer,
             instance_buffer,
             cull_buffer,
-            extensions: &self.seen.clusters_extension.0.header,
+            extensions: &self.seen.clusters_extension.0.clusters.header,
         }
     }
 

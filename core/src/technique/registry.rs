@@ -106,14 +106,15 @@ fn first_library_size() -> usize {
     size_through!(abi::CadrPluginLibrary, techniques)
 }
 
-/// The extension kinds this host knows (`CADR_EXTENSION_*`): those of ABI 1.14, 1.15, 1.18
-/// and 1.19.
+/// The extension kinds this host knows (`CADR_EXTENSION_*`): those of ABI 1.14, 1.15, 1.18,
+/// 1.19 and 1.20.
 const KNOWN_EXTENSIONS: &[abi::CadrExtensionKind] = &[
     abi::CADR_EXTENSION_SCENE_CLUSTERS,
     abi::CADR_EXTENSION_CLUSTER_CULL,
     abi::CADR_EXTENSION_FRAME_SLOT,
     abi::CADR_EXTENSION_BACK_FACE_PASSES,
     abi::CADR_EXTENSION_SHARED_FACE_STREAMS,
+    abi::CADR_EXTENSION_SCENE_CLUSTER_BOXES,
 ];
 
 /// Refuses a technique that requires an extension this host does not know, naming it.

@@ -728,7 +728,8 @@ pub struct CadrSceneView {
     pub cull_buffer: CadrBufferRef,
     /// Since ABI 1.14 (read it only when `size` covers it): the host's extension structs for
     /// this view (a chain of [`CadrExtension`]s, or null), valid as long as the view:
-    /// [`CadrSceneClusters`] where the scene has clusters.
+    /// [`CadrSceneClusters`] where the scene has clusters, and since 1.20 their
+    /// [`CadrSceneClusterBoxes`].
     pub extensions: *const CadrExtension,
 }
 
@@ -746,6 +747,9 @@ pub const CADR_EXTENSION_BACK_FACE_PASSES: CadrExtensionKind = 4;
 /// Since ABI 1.19: the kind of [`CadrSharedFaceStreams`], chained on
 /// [`CadrGpuCullContext::extensions`].
 pub const CADR_EXTENSION_SHARED_FACE_STREAMS: CadrExtensionKind = 5;
+/// Since ABI 1.20: the kind of [`CadrSceneClusterBoxes`], chained on
+/// [`CadrSceneView::extensions`] beside [`CadrSceneClusters`].
+pub const CADR_EXTENSION_SCENE_CLUSTER_BOXES: CadrExtensionKind = 6;
 
 /// Since ABI 1.15 ([`CADR_EXTENSION_FRAME_SLOT`]): which of the host's frames in flight is being
 /// recorded. The host lets the GPU work on up to `slot_count` frames while it records the next;
@@ -805,6 +809,55 @@ pub struct CadrSceneClusters {
     /// than `candidate_clusters` keeps this much for parts whose cut does not fit its budget,
     /// so that no part is left out.
     pub candidate_coarsest_clusters: u64,
+}
+
+/// Since ABI 1.20 ([`CADR_EXTENSION_SCENE_CLUSTER_BOXES`]): every cluster's box, one
+/// [`CadrClusterBox`] per cluster of [`CadrSceneClusters::cluster_buffer`], at the same index.
+/// The box holds the cluster's triangles in object space, as the sphere does; placed by the
+/// instance's matrix it is an oriented box, much tighter than the sphere around flat or long
+/// clusters (panels, plates, shafts), so a culler that tests it against a depth pyramid finds
+/// more of them hidden. Written by the host with the geometry; owned by the host.
+#[repr(C)]
+#[derive(Clone, Copy, Debug)]
+pub struct CadrSceneClusterBoxes {
+    /// `kind` = [`CADR_EXTENSION_SCENE_CLUSTER_BOXES`].
+    pub header: CadrExtension,
+    /// [`CadrClusterBox`] per cluster (storage buffer), as many as
+    /// [`CadrSceneClusters::cluster_count`].
+    pub box_buffer: CadrBufferRef,
+}
+
+/// Since ABI 1.20: one cluster's box in [`CadrSceneClusterBoxes::box_buffer`] (32 bytes,
+/// little-endian, std430-compatible: two `vec4`s): the smallest box along the object's axes
+/// that holds the cluster's vertices.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct CadrClusterBox {
+    /// The box's centre in object space.
+    pub center: [f32; 3],
+    /// Zero.
+    pub reserved0: f32,
+    /// Half its size along each object axis (zero or more).
+    pub half_extent: [f32; 3],
+    /// Zero.
+    pub reserved1: f32,
+}
+
+impl CadrClusterBox {
+    /// The GPU layout: 8 little-endian f32.
+    pub fn to_le_bytes(&self) -> [u8; 32] {
+        let mut bytes = [0; 32];
+        let words = self
+            .center
+            .iter()
+            .chain([&self.reserved0])
+            .chain(&self.half_extent)
+            .chain([&self.reserved1]);
+        for (i, value) in words.enumerate() {
+            bytes[i * 4..i * 4 + 4].copy_from_slice(&value.to_le_bytes());
+        }
+        bytes
+    }
 }
 
 /// [`CadrCluster::refined`] of a part's original clusters: its own triangles, made by no

@@ -132,6 +132,15 @@ impl<'a> Scene<'a> {
         unsafe { extension(self.raw.extensions, abi::CADR_EXTENSION_SCENE_CLUSTERS) }
     }
 
+    /// The boxes of the scene's clusters ([`abi::CadrSceneClusterBoxes`]), from a host of ABI
+    /// 1.20 or later; `None` from an older host, whose clusters have only their spheres.
+    pub fn cluster_boxes(&self) -> Option<&'a abi::CadrSceneClusterBoxes> {
+        self.clusters()?;
+        // SAFETY: the host's chain (checked to be there by `clusters`) is valid as long as the
+        // view; an extension of this kind is a `CadrSceneClusterBoxes`.
+        unsafe { extension(self.raw.extensions, abi::CADR_EXTENSION_SCENE_CLUSTER_BOXES) }
+    }
+
     /// Which frame slot is being recorded ([`abi::CadrFrameSlot`]), from a host of ABI 1.15 or
     /// later; `None` from an older host, which records one frame at a time (slot 0 of 1, every
     /// earlier frame finished).

@@ -124,6 +124,16 @@ layout(set = 0, binding = 11, std430) buffer NowClusters { uint now_clusters[]; 
 // One bit per instance id, cleared every frame: phase 0 found no room for the part's cut in its
 // budget and drew none of it, so phase 1 draws all of it that is visible.
 layout(set = 0, binding = 12, std430) buffer Phase0Skipped { uint phase0_skipped[]; };
+// The plugin ABI's CadrClusterBox per cluster (CadrSceneClusterBoxes, ABI 1.20): the box along
+// the object's axes that holds the cluster. An older host has none: then a 4-byte buffer is
+// bound here, holding fewer boxes than there are clusters, and the spheres are tested.
+struct ClusterBox {
+    vec4 center;
+    vec4 half_extent;
+};
+layout(set = 0, binding = 13, std430) readonly buffer ClusterBoxes { ClusterBox cluster_boxes[]; };
+// Whether the boxes are there (set once per invocation in main()).
+bool boxes_bound;
 #endif
 
 layout(push_constant) uniform Dispatch {
@@ -222,16 +232,17 @@ mat3 view_axes_of_projection() {
 // main(), before any pyramid test (one per part, one per cluster of the walk).
 mat3 view_axes;
 
-// Whether the sphere may be visible over the depth drawn so far (conservative: the nearest
-// depth of its box against the farthest depth of the pyramid texels under its screen rect).
-bool passes_pyramid(vec3 center, float radius) {
+// Whether the box of `center` and half axes `half_axes` (its corners are center ± each column)
+// may be visible over the depth drawn so far (conservative: the nearest depth of its corners
+// against the farthest depth of the pyramid texels under their screen rect).
+bool passes_pyramid_box(vec3 center, mat3 half_axes) {
     vec2 lo = vec2(1.0);
     vec2 hi = vec2(-1.0);
     float nearest = 1.0;
     for (int corner = 0; corner < 8; ++corner) {
-        vec3 offset = view_axes * vec3((corner & 1) != 0 ? radius : -radius,
-                                  (corner & 2) != 0 ? radius : -radius,
-                                  (corner & 4) != 0 ? radius : -radius);
+        vec3 offset = half_axes * vec3((corner & 1) != 0 ? 1.0 : -1.0,
+                                       (corner & 2) != 0 ? 1.0 : -1.0,
+                                       (corner & 4) != 0 ? 1.0 : -1.0);
         vec4 clip = view.view_projection * vec4(center + offset, 1.0);
         if (clip.w <= 1e-6) {
             return true; // reaches behind the eye: cannot be judged
@@ -276,6 +287,11 @@ bool passes_pyramid(vec3 center, float radius) {
         }
     }
     return nearest <= farthest;
+}
+
+// Whether the sphere may be visible over the depth drawn so far: its cube on the view's axes.
+bool passes_pyramid(vec3 center, float radius) {
+    return passes_pyramid_box(center, view_axes * radius);
 }
 
 // Whether the sphere projects at least the sub-pixel threshold across. A perspective view
@@ -481,7 +497,17 @@ uint walk_clusters(CullEntry entry, uint id, Placement place, bool back_faces_ma
             continue;
         }
         if (dispatch.mode == MODE_NEWLY_VISIBLE) {
-            bool visible = passes_pyramid(center, radius);
+            // The cluster's box where the host gives it: placed by the instance's matrix it is
+            // an oriented box, far tighter than the sphere around flat or long clusters.
+            bool visible;
+            if (boxes_bound) {
+                ClusterBox box = cluster_boxes[k];
+                vec3 h = box.half_extent.xyz;
+                visible = passes_pyramid_box(place.translation + place.rotation * box.center.xyz,
+                    mat3(place.rotation[0] * h.x, place.rotation[1] * h.y, place.rotation[2] * h.z));
+            } else {
+                visible = passes_pyramid(center, radius);
+            }
             // Recorded by the counting walk, which every part passes through (the writing
             // one runs only when there is something left to draw).
             if (visible && !write && dispatch.writes_visibility != 0u) {
@@ -555,6 +581,9 @@ void main() {
         return;
     }
     view_axes = view_axes_of_projection();
+#ifdef CLUSTERS
+    boxes_bound = cluster_boxes.length() >= clusters.length();
+#endif
     if (dispatch.pass_kind == PASS_PICK && (entry.flags & INSTANCE_PICKABLE) == 0u) {
         return;
     }

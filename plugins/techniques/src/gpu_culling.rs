@@ -75,7 +75,7 @@ const MODE_NEWLY_VISIBLE: u32 = 2;
 
 /// What a frame slot's cull set was last written with: the host's buffers' handles, the ids of
 /// ours, the scene's buffers generation and the view's offset.
-type CullSetKey = ([u64; 13], [u64; 8], u64, u64);
+type CullSetKey = ([u64; 14], [u64; 9], u64, u64);
 
 /// Push constants of one cull dispatch.
 #[derive(Clone, Copy)]
@@ -160,7 +160,7 @@ fn cluster_command_budget() -> u64 {
 /// Storage buffers of the cull set besides the view uniform: the scene's cull entries and
 /// matrices, the commands and counts, both visibility buffers, the pyramid, and with clusters
 /// the scene's clusters and groups, both cluster visibility tables and the parts phase 0 skipped.
-const CULL_STORAGE_BUFFERS: u32 = 12;
+const CULL_STORAGE_BUFFERS: u32 = 13;
 /// The frame slots a host may have ([`abi::CadrFrameSlot::slot_count`] is at most 3).
 const FRAME_SLOTS: usize = 3;
 
@@ -340,6 +340,7 @@ impl Objects {
                 (storage, 10),
                 (storage, 11),
                 (storage, 12),
+                (storage, 13),
             ]);
             source.replacen("#version 460\n", "#version 460\n#define CLUSTERS 1\n", 1)
         } else {
@@ -443,6 +444,8 @@ pub struct GpuCuller<const OCCLUSION: bool, const CLUSTERS: bool> {
     /// One bit per instance id, cleared every frame: the parts whose cut phase 0 found no room
     /// for, which phase 1 then draws whole (gpu-clusters; as big as the visibility buffers).
     phase0_skipped: HostBuffer,
+    /// Bound in place of the clusters' boxes where the host has none (ABI 1.19 or older).
+    no_cluster_boxes: HostBuffer,
     /// The cluster commands a slot gives the cuts at the host's threshold (this frame's), and
     /// the most it may give (see [`CLUSTER_COMMAND_BUDGET`]).
     cluster_budget: u32,
@@ -482,6 +485,7 @@ impl<const OCCLUSION: bool, const CLUSTERS: bool> Technique for GpuCuller<OCCLUS
                 words: 1,
             },
             phase0_skipped: tiny("gpu cull phase 0 skipped")?,
+            no_cluster_boxes: tiny("gpu cull no cluster boxes")?,
             pyramid: tiny("gpu cull pyramid")?,
             gpu,
             objects,
@@ -648,6 +652,7 @@ impl<const OCCLUSION: bool, const CLUSTERS: bool> GpuCuller<OCCLUSION, CLUSTERS>
         slot: usize,
         scene: &abi::CadrSceneView,
         clusters: Option<&abi::CadrSceneClusters>,
+        boxes: Option<&abi::CadrSceneClusterBoxes>,
         (view, view_offset): (vk::Buffer, u64),
     ) {
         let Some(commands) = &self.commands.buffer else {
@@ -670,6 +675,9 @@ impl<const OCCLUSION: bool, const CLUSTERS: bool> GpuCuller<OCCLUSION, CLUSTERS>
                 self.cluster_visibility.buffers[LAST].raw(),
                 self.cluster_visibility.buffers[NOW].raw(),
                 self.phase0_skipped.raw(),
+                // From an older host, 4 bytes: fewer boxes than clusters tells the shader to
+                // test the clusters' spheres.
+                boxes.map_or(self.no_cluster_boxes.raw(), |b| buffer(&b.box_buffer)),
             ]);
         }
         // Keyed on what cannot come back: the host's scene buffers by handle and generation
@@ -683,10 +691,11 @@ impl<const OCCLUSION: bool, const CLUSTERS: bool> GpuCuller<OCCLUSION, CLUSTERS>
             self.cluster_visibility.buffers[LAST].id(),
             self.cluster_visibility.buffers[NOW].id(),
             self.phase0_skipped.id(),
+            self.no_cluster_boxes.id(),
             commands.id(),
             self.counts.id(),
         ];
-        let mut raw = [0u64; 13];
+        let mut raw = [0u64; 14];
         for (slot, b) in raw.iter_mut().zip(&buffers) {
             *slot = b.as_raw();
         }
@@ -1108,6 +1117,7 @@ impl<const OCCLUSION: bool, const CLUSTERS: bool> GpuCulling for GpuCuller<OCCLU
         } else {
             None
         };
+        let boxes = scene.cluster_boxes().filter(|_| CLUSTERS);
         let slot = scene.frame_slot().map_or(0, |frame| frame.slot as usize);
         if slot >= FRAME_SLOTS {
             return Err(format!(
@@ -1128,7 +1138,7 @@ impl<const OCCLUSION: bool, const CLUSTERS: bool> GpuCulling for GpuCuller<OCCLU
         if cull.phase() == 0 {
             let cluster_bits = clusters.map_or(0, |c| c.candidate_clusters);
             self.prepare_buffers(cull, (instances, commands, cluster_bits))?;
-            self.write_cull_set(slot, scene.raw(), clusters, view);
+            self.write_cull_set(slot, scene.raw(), clusters, boxes, view);
             let mode = if OCCLUSION {
                 MODE_LAST_VISIBLE
             } else {
@@ -1137,7 +1147,7 @@ impl<const OCCLUSION: bool, const CLUSTERS: bool> GpuCulling for GpuCuller<OCCLU
             self.dispatch_cull(cull, slot, instances, mode);
         } else {
             self.build_pyramid(cull)?;
-            self.write_cull_set(slot, scene.raw(), clusters, view);
+            self.write_cull_set(slot, scene.raw(), clusters, boxes, view);
             self.dispatch_cull(cull, slot, instances, MODE_NEWLY_VISIBLE);
             if cull.phase() + 1 == self.phases() {
                 self.keep_visibility(command_buffer);

@@ -68,11 +68,12 @@ vec4 cadr_surface_color(vec4 base, vec4 vertex_color, vec2 uv, uvec4 texture_inf
     return color;
 }
 
-// The vertex colour and texture coordinate the surface and pick shaders read: interpolated only
-// where the frame shows vertex colours or textures (the host defines CADR_SURFACE_ATTRIBUTES);
-// elsewhere the vertex shader writes white and no texture is sampled, so constants stand in and
-// the rasterizer interpolates six values fewer per triangle (with the cap offset left out too,
-// 6-17 % less GPU time for a large frame on lavapipe; docs/BENCHMARKS.md).
+// The vertex colour and texture coordinate the surface, pick and translucent shaders read:
+// interpolated only where the frame shows vertex colours or textures (the host defines
+// CADR_SURFACE_ATTRIBUTES); elsewhere the vertex shader writes white and no texture is sampled,
+// so constants stand in and the rasterizer interpolates six values fewer per triangle (with the
+// cap offset left out too, 6-17 % less GPU time for a large frame on lavapipe;
+// docs/BENCHMARKS.md).
 #ifdef CADR_SURFACE_ATTRIBUTES
 #define CADR_SURFACE_VERTEX_COLOR in_vertex_color
 #define CADR_SURFACE_UV in_uv

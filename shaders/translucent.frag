@@ -35,7 +35,7 @@ layout(location = 2) out vec4 cadr_target_1;
 //@TRANSPARENCY@
 
 void main() {
-    vec4 surface = cadr_surface_color(in_base_color, in_vertex_color, in_uv, in_texture);
+    vec4 surface = cadr_surface_color(in_base_color, CADR_SURFACE_VERTEX_COLOR, CADR_SURFACE_UV, in_texture);
     if (cadr_masked_out(surface, in_texture)) {
         discard;
     }

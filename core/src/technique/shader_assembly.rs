@@ -150,7 +150,9 @@ pub struct ShaderCache {
     /// By shader and the inputs it interpolates (always the default for the shaders that do
     /// not read [`SurfaceInputs`]).
     pass_shaders: HashMap<(PassShader, SurfaceInputs), Arc<Vec<u32>>>,
-    methods: HashMap<String, MethodShaders>,
+    /// By method name and whether the translucent shader interpolates the vertex colours and
+    /// texture coordinates ([`SurfaceInputs::attributes`]; it never draws caps).
+    methods: HashMap<(String, bool), MethodShaders>,
     /// `#define` lines every fragment (and geometry) shader is compiled with: what the device
     /// allows.
     fragment_defines: String,
@@ -273,7 +275,7 @@ impl ShaderCache {
                     translucent: true, ..
                 },
                 Some(method),
-            ) => Some(self.method_shaders(method)?),
+            ) => Some(self.method_shaders(method, inputs.attributes)?),
             _ => None,
         };
         Ok(PassShaders {
@@ -293,16 +295,26 @@ impl ShaderCache {
 }
 
 impl ShaderCache {
-    /// The shaders of `method`, compiled together the first time.
-    fn method_shaders(&mut self, method: &TransparencyMethod) -> RenderResult<MethodShaders> {
-        if let Some(shaders) = self.methods.get(&method.name) {
+    /// The shaders of `method`, its translucent shader interpolating the vertex colours and
+    /// texture coordinates where `attributes`, compiled together the first time.
+    fn method_shaders(
+        &mut self,
+        method: &TransparencyMethod,
+        attributes: bool,
+    ) -> RenderResult<MethodShaders> {
+        let key = (method.name.clone(), attributes);
+        if let Some(shaders) = self.methods.get(&key) {
             return Ok(shaders.clone());
         }
         let defines = &self.fragment_defines;
+        let inputs = SurfaceInputs {
+            attributes,
+            caps: false,
+        };
         let translucent = method.assemble(
             &shaders::TRANSLUCENT_FRAG,
             &method.fragment_snippet,
-            defines,
+            &format!("{defines}{}", inputs.defines()),
         );
         let merge = method.assemble(&shaders::MERGE_FRAG, &method.merge_snippet, defines);
         let translucent_name = format!("translucent.frag [{}]", method.name);
@@ -336,7 +348,7 @@ impl ShaderCache {
             merge_vertex: next()?,
             merge: next()?,
         };
-        self.methods.insert(method.name.clone(), shaders.clone());
+        self.methods.insert(key, shaders.clone());
         Ok(shaders)
     }
 }

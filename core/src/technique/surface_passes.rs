@@ -118,10 +118,11 @@ pub enum PassSet {
     },
 }
 
-/// What the surface and pick shaders (`shaded.frag`, `pick.frag`) interpolate beyond what every
-/// frame needs. Each is left out where the frame cannot show it, so that the rasterizer
-/// interpolates fewer values per triangle (on lavapipe, leaving them out saved 6-17 % of a large
-/// frame's GPU time, `docs/BENCHMARKS.md`); each combination is its own shader.
+/// What the surface, pick and translucent shaders (`shaded.frag`, `pick.frag`, and
+/// `translucent.frag`, which reads only the attributes) interpolate beyond what every frame
+/// needs. Each is left out where the frame cannot show it, so that the rasterizer interpolates
+/// fewer values per triangle (on lavapipe, leaving them out saved 6-17 % of a large frame's GPU
+/// time, `docs/BENCHMARKS.md`); each combination is its own shader.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
 pub struct SurfaceInputs {
     /// The vertex colours and texture coordinates: the scene has vertex attributes, or shows

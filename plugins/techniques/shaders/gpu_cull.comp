@@ -181,6 +181,38 @@ bool in_frustum(vec3 center, float radius) {
     return true;
 }
 
+// How far the box of half axes `half_axes` reaches along the unit normal `normal`.
+float box_reach(mat3 half_axes, vec3 normal) {
+    return abs(dot(normal, half_axes[0])) + abs(dot(normal, half_axes[1]))
+        + abs(dot(normal, half_axes[2]));
+}
+
+// Whether the box of `center` and half axes `half_axes` reaches into the frustum (as a plane's
+// distance, its reach scales with the plane's normal: the test holds for unit normals or not).
+bool box_in_frustum(vec3 center, mat3 half_axes) {
+    for (int i = 0; i < 6; ++i) {
+        vec4 plane = view.planes[i];
+        if (dot(plane.xyz, center) + plane.w < -box_reach(half_axes, plane.xyz)) {
+            return false;
+        }
+    }
+    return true;
+}
+
+// Whether some section plane cuts the box away whole (with the slack `against_sections`
+// gives spheres).
+bool box_cut_away(vec3 center, mat3 half_axes) {
+    uint sections = min(view.section.x, 6u);
+    for (uint i = 0u; i < sections; ++i) {
+        vec4 plane = view.section_planes[i];
+        float slack = box_reach(half_axes, plane.xyz) + 1e-5 * length(center);
+        if (dot(plane.xyz, center) + plane.w < -slack) {
+            return true;
+        }
+    }
+    return false;
+}
+
 // Where the sphere lies against the section planes: x, some plane cuts it away whole; y, some
 // plane passes through it. With the rounding of f32 eye-relative positions as slack: the
 // vertex shader clips against the same planes, and what it keeps must not be culled.
@@ -487,6 +519,17 @@ uint walk_clusters(CullEntry entry, uint id, Placement place, bool back_faces_ma
         float radius = cluster.sphere.w * place.scale;
         bool tested = in_frustum(center, radius) && !against_sections(center, radius).x
             && !(back_faces_may_go && faces_away(cluster, place));
+        // The cluster's box where the host gives it: placed by the instance's matrix it is an
+        // oriented box, far tighter than the sphere around flat or long clusters.
+        vec3 box_center = center;
+        mat3 box_axes = mat3(radius);
+        if (tested && boxes_bound) {
+            ClusterBox box = cluster_boxes[k];
+            vec3 h = box.half_extent.xyz;
+            box_center = place.translation + place.rotation * box.center.xyz;
+            box_axes = mat3(place.rotation[0] * h.x, place.rotation[1] * h.y, place.rotation[2] * h.z);
+            tested = box_in_frustum(box_center, box_axes) && !box_cut_away(box_center, box_axes);
+        }
         if (!tested) {
             continue;
         }
@@ -497,17 +540,8 @@ uint walk_clusters(CullEntry entry, uint id, Placement place, bool back_faces_ma
             continue;
         }
         if (dispatch.mode == MODE_NEWLY_VISIBLE) {
-            // The cluster's box where the host gives it: placed by the instance's matrix it is
-            // an oriented box, far tighter than the sphere around flat or long clusters.
-            bool visible;
-            if (boxes_bound) {
-                ClusterBox box = cluster_boxes[k];
-                vec3 h = box.half_extent.xyz;
-                visible = passes_pyramid_box(place.translation + place.rotation * box.center.xyz,
-                    mat3(place.rotation[0] * h.x, place.rotation[1] * h.y, place.rotation[2] * h.z));
-            } else {
-                visible = passes_pyramid(center, radius);
-            }
+            bool visible = boxes_bound ? passes_pyramid_box(box_center, box_axes)
+                                       : passes_pyramid(center, radius);
             // Recorded by the counting walk, which every part passes through (the writing
             // one runs only when there is something left to draw).
             if (visible && !write && dispatch.writes_visibility != 0u) {

@@ -375,7 +375,7 @@ typedef struct CadrSceneView {
   // Since ABI 1.14 (read it only when `size` covers it): the host's extension structs for
   // this view (a chain of [`CadrExtension`]s, or null), valid as long as the view:
   // [`CadrSceneClusters`] where the scene has clusters, and since 1.20 their
-  // [`CadrSceneClusterBoxes`].
+  // [`CadrSceneClusterBoxes`] and the parts' [`CadrScenePartBoxes`].
   const struct CadrExtension *extensions;
 } CadrSceneView;
 
@@ -1200,6 +1200,10 @@ typedef struct CadrTransparencyVtable {
 // Since ABI 1.20: the kind of [`CadrSceneClusterBoxes`], chained on
 // [`CadrSceneView::extensions`] beside [`CadrSceneClusters`].
 #define CADR_EXTENSION_SCENE_CLUSTER_BOXES 6
+
+// Since ABI 1.20: the kind of [`CadrScenePartBoxes`], chained on
+// [`CadrSceneView::extensions`].
+#define CADR_EXTENSION_SCENE_PART_BOXES 7
 
 // Every instance the pass's filter keeps (what passes without a route draw).
 #define CADR_FACES_ANY 0

@@ -127,9 +127,10 @@ bench graphicscard-static "$frames" "$card" --camera static
 # The cullers while the camera orbits (the frustum cuts the scene).
 bench graphicscard-orbit "$frames" "$card" --camera orbit "${scene_wide[@]}" \
   --submit individual-indirect-count --cull none,frustum,gpu-frustum,gpu-occlusion
-# Occlusion: machines in closed housings.
+# Occlusion: machines in closed housings, whose panels' boxes find far more of them hidden than
+# their spheres would; whole parts against clusters.
 bench cabinet-orbit "$frames" "$cabinet" --camera orbit "${scene_wide[@]}" \
-  --submit individual-indirect-count --cull none,gpu-frustum,gpu-occlusion
+  --submit individual-indirect-count --cull none,gpu-frustum,gpu-occlusion,gpu-clusters
 # Every display mode.
 bench graphicscard-display-all "$frames" "$card" --display all "${scene_wide[@]}" --submit groups-mdi-replay
 # 400 triangles a part, 32 million in all (41 a pixel): rasterization, not the CPU, bounds the

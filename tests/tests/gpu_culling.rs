@@ -6,12 +6,12 @@
 
 use std::sync::Arc;
 
-use glam::DMat4;
+use glam::{DMat4, DQuat, DVec3};
 
-use cadr_core::generate::{generate, GeneratorSpec};
+use cadr_core::generate::{generate, GeneratorSpec, GeometryBuilder};
 use cadr_core::graph::SceneGraph;
 use cadr_core::render::{Camera, FrameStats, DEFAULT_DIRECTION};
-use cadr_core::scene::{flatten, Aabb, Scene};
+use cadr_core::scene::{flatten, Aabb, Material, MeshRef, Node, Scene};
 use cadr_core::technique::{Combination, Techniques};
 use cadr_core::tree::SceneTree;
 use cadr_core::view::View;
@@ -100,16 +100,21 @@ fn gpu_culling_follows_an_orbit_frame_by_frame() {
     );
 }
 
+/// `still_frames` frames of the fitted view, then three of an orbit close around `bounds`. The
+/// first frame knows nothing of the last; from the third on, what was visible is what phase 0
+/// draws. Then the camera moves: what comes into view is drawn in the same frame.
+fn still_then_orbiting(bounds: &Aabb, still_frames: usize) -> Vec<Camera> {
+    let still = Camera::fit(bounds, aspect(), DEFAULT_DIRECTION);
+    let orbit = (0..3).map(|i| Camera::orbit(bounds, aspect(), 0.1 + f64::from(i) * 0.05, 1.6));
+    std::iter::repeat_n(still, still_frames)
+        .chain(orbit)
+        .collect()
+}
+
 #[test]
 fn gpu_occlusion_skips_what_housings_hide() {
     let scene = generate(&GeneratorSpec::Cabinet { cabinets: 12 });
-    let bounds = bounds(&scene);
-    let still = Camera::fit(&bounds, aspect(), DEFAULT_DIRECTION);
-    // The first frame knows nothing of the last; from the third on, what was visible is what
-    // phase 0 draws. Then the camera moves: what comes into view is drawn in the same frame.
-    let mut cameras = vec![still; 4];
-    cameras
-        .extend((0..3).map(|i| Camera::orbit(&bounds, aspect(), 0.1 + f64::from(i) * 0.05, 1.6)));
+    let cameras = still_then_orbiting(&bounds(&scene), 4);
     for (frame, (occluded, all)) in occluded_frames(&scene, &cameras).into_iter().enumerate() {
         if frame >= 2 {
             assert!(
@@ -120,61 +125,68 @@ fn gpu_occlusion_skips_what_housings_hide() {
     }
 }
 
-/// gen:cabinet's parts are thin panels in closed housings: a sphere around a panel is as wide as
-/// the panel, so a test of spheres against the depth pyramid finds few of the parts inside
-/// hidden, and clusters gain nothing over whole parts. The clusters' boxes (plugin ABI 1.20),
-/// placed by each part's matrix, find them: at full detail `gpu-clusters` draws the pictures
-/// `gpu-occlusion` draws with at most half its triangles over a still view and an orbit.
+/// A wall, and behind it a long thin rod lying along it: both are a unit cube placed by a
+/// scaling matrix. The rod's sphere reaches far in front of the wall, its box does not. With the
+/// parts' and clusters' boxes (plugin ABI 1.20), `gpu-occlusion` and `gpu-clusters` find the rod
+/// hidden and draw only the wall, once they know what the last frame showed, and the picture is
+/// what no culling draws.
 #[test]
-fn cluster_boxes_find_the_parts_housings_hide_where_spheres_cannot() {
-    let scene = generate(&GeneratorSpec::Cabinet { cabinets: 12 });
-    let bounds = bounds(&scene);
-    let still = Camera::fit(&bounds, aspect(), DEFAULT_DIRECTION);
-    let mut cameras = vec![still; 3];
-    cameras
-        .extend((0..3).map(|i| Camera::orbit(&bounds, aspect(), 0.1 + f64::from(i) * 0.05, 1.6)));
-    let device = test_device();
-    let (mut graph, _) = SceneGraph::from_scene(&scene).unwrap();
-    let mut tree = SceneTree::build(&mut graph);
-    let mut view = View::new(&device, plugin_registry(&device), SIZE.0, SIZE.1).unwrap();
-    view.techniques_mut().set_lod_error(0.0).unwrap();
-    let mut frames = |culler: &str| -> Vec<(image::RgbaImage, u64)> {
-        view.techniques_mut().select(&combination(culler)).unwrap();
-        cameras
-            .iter()
-            .map(|camera| {
-                let stats = view.render(&graph, &mut tree, camera).unwrap();
-                (
-                    view.renderer().read_rgba8().unwrap(),
-                    stats.triangles_rasterized,
-                )
-            })
-            .collect()
+fn boxes_find_a_rod_hidden_behind_a_wall_where_spheres_cannot() {
+    let mut builder = GeometryBuilder::new("unit cube");
+    builder.cuboid(DVec3::splat(-0.5), DVec3::splat(0.5), DMat4::IDENTITY);
+    let cube = builder.finish();
+    let cube_triangles = cube.indices.len() as u64 / 3;
+    let placed = |name: &str, scale: DVec3, at: DVec3| {
+        let mut node = Node::new(name);
+        node.mesh = Some(MeshRef::new(0, vec![0]));
+        node.local = DMat4::from_scale_rotation_translation(scale, DQuat::IDENTITY, at);
+        node
     };
-    let parts = frames("gpu-occlusion");
-    let clusters = frames("gpu-clusters");
-    // From the third frame on, both know what the last frame showed.
-    let (mut by_parts, mut by_clusters) = (0, 0);
-    for (frame, ((part_image, part_triangles), (cluster_image, cluster_triangles))) in
-        parts.iter().zip(&clusters).enumerate()
-    {
-        let difference = compare(cluster_image, part_image).unwrap();
-        assert!(
-            difference.within(SAME_PICTURE),
-            "frame {frame}: {difference:?}"
-        );
-        println!("frame {frame}: clusters {cluster_triangles} triangles, parts {part_triangles}");
-        if frame >= 2 {
-            by_parts += part_triangles;
-            by_clusters += cluster_triangles;
+    let mut root = Node::new("wall and rod");
+    root.children = vec![1, 2];
+    let scene = Scene {
+        name: "wall and rod".into(),
+        geometries: vec![cube],
+        materials: vec![Material::default()],
+        nodes: vec![
+            root,
+            placed("wall", DVec3::new(40.0, 40.0, 0.2), DVec3::ZERO),
+            placed("rod", DVec3::new(3.0, 0.1, 0.1), DVec3::new(0.0, 0.0, -0.6)),
+        ],
+        roots: vec![0],
+        ..Scene::default()
+    };
+    let camera = Camera::look_at(
+        DVec3::new(0.0, 0.0, 6.0),
+        DVec3::ZERO,
+        45.0,
+        aspect(),
+        0.1,
+        50.0,
+    );
+    let results = render_frames(
+        &scene,
+        &["none", "gpu-occlusion", "gpu-clusters"],
+        &[camera; 4],
+    );
+    for (culler, frames) in ["gpu-occlusion", "gpu-clusters"].iter().zip(&results[1..]) {
+        for (frame, ((reference, all), (image, culled))) in
+            results[0].iter().zip(frames).enumerate()
+        {
+            assert_eq!(all.triangles_rasterized, 2 * cube_triangles);
+            let difference = compare(image, reference).unwrap();
+            assert!(
+                difference.within(SAME_PICTURE),
+                "{culler}, frame {frame}: {difference:?}"
+            );
+            if frame >= 2 {
+                assert_eq!(
+                    culled.triangles_rasterized, cube_triangles,
+                    "{culler}, frame {frame}: only the wall's triangles"
+                );
+            }
         }
     }
-    assert!(
-        by_clusters * 2 <= by_parts,
-        "clusters drew {by_clusters} triangles, whole parts {by_parts}"
-    );
-    drop(view);
-    assert_no_validation_errors(&device);
 }
 
 /// Renders `cameras` without culling and with `gpu-occlusion`, checks that every frame draws

@@ -39,10 +39,8 @@ pub(super) struct GeometryPlace {
     pub(super) first_group: u32,
     /// What the place can hold (the size of the geometry it was made for).
     room: Extent,
-    /// Per part: first index, count, first wire index, wire count (relative), bounding sphere,
-    /// and its shape as instance flags (`CADR_INSTANCE_CLOSED`, `CADR_INSTANCE_INSIDE_OUT`,
-    /// `CADR_INSTANCE_CURVED`).
-    pub(super) parts: Vec<([u32; 4], [f32; 4], u32)>,
+    /// Per part: its ranges, bounds and shape.
+    pub(super) parts: Vec<PartEntry>,
     /// Per part: its first cluster (relative to `first_cluster`), how many it has, and how
     /// many its coarsest cut has.
     pub(super) part_clusters: Vec<[u32; 3]>,
@@ -137,7 +135,7 @@ impl ArenaData<'_> {
             .collect()
     }
 
-    /// The clusters' boxes ([`abi::CadrClusterBox`]), in cluster order: each the smallest
+    /// The clusters' boxes ([`abi::CadrBox`]), in cluster order: each the smallest
     /// box along the object's axes around the vertices its indices name.
     fn cluster_box_bytes(&self) -> Vec<u8> {
         let clusters = &self.clusters;
@@ -157,7 +155,7 @@ impl ArenaData<'_> {
                 let vertices = (first..first + c.index_count as usize)
                     .filter_map(index)
                     .filter_map(|&i| self.vertices.get(i as usize));
-                cluster_box(vertices).to_le_bytes()
+                bounding_box(vertices).to_le_bytes()
             })
             .collect()
     }
@@ -181,7 +179,7 @@ impl ArenaData<'_> {
 
 /// The smallest box along the object's axes around `vertices`, a hair larger so that rounding
 /// never leaves a corner outside (an empty box at the origin for none).
-fn cluster_box<'v>(vertices: impl Iterator<Item = &'v Vertex>) -> abi::CadrClusterBox {
+fn bounding_box<'v>(vertices: impl Iterator<Item = &'v Vertex>) -> abi::CadrBox {
     let mut min = [f32::INFINITY; 3];
     let mut max = [f32::NEG_INFINITY; 3];
     for v in vertices {
@@ -191,16 +189,16 @@ fn cluster_box<'v>(vertices: impl Iterator<Item = &'v Vertex>) -> abi::CadrClust
         }
     }
     if min[0] > max[0] {
-        return abi::CadrClusterBox::default();
+        return abi::CadrBox::default();
     }
     let center = [0, 1, 2].map(|a| 0.5 * (min[a] + max[a]));
-    abi::CadrClusterBox {
+    abi::CadrBox {
         center,
         half_extent: [0, 1, 2].map(|a| {
             let half = 0.5 * (max[a] - min[a]);
             half + (half + center[a].abs()) * 1e-6
         }),
-        ..abi::CadrClusterBox::default()
+        ..abi::CadrBox::default()
     }
 }
 
@@ -255,30 +253,46 @@ fn is_curved(vertices: &[Vertex], indices: &[u32]) -> bool {
     })
 }
 
-fn part_entries(data: &ArenaData<'_>) -> Vec<([u32; 4], [f32; 4], u32)> {
+/// What the instances of a part are made from.
+#[derive(Clone, Copy, Debug)]
+pub(super) struct PartEntry {
+    /// First index, count, first wire index, wire count (relative to the geometry's).
+    pub(super) ranges: [u32; 4],
+    /// Bounding sphere (centre, radius) in object space.
+    pub(super) sphere: [f32; 4],
+    /// The smallest box along the object's axes around its triangles' vertices.
+    pub(super) bounds: abi::CadrBox,
+    /// Its shape as instance flags (`CADR_INSTANCE_CLOSED`, `CADR_INSTANCE_INSIDE_OUT`,
+    /// `CADR_INSTANCE_CURVED`).
+    pub(super) shape: u32,
+}
+
+fn part_entries(data: &ArenaData<'_>) -> Vec<PartEntry> {
     let indices = &data.clusters.indices;
     data.parts
         .iter()
         .map(|p| {
             let start = (p.first_index as usize).min(indices.len());
             let end = (start + p.index_count as usize).min(indices.len());
-            (
-                [
+            let own = &indices[start..end];
+            PartEntry {
+                ranges: [
                     p.first_index,
                     p.index_count,
                     p.first_wire_index,
                     p.wire_index_count,
                 ],
-                part_sphere(data.vertices, &indices[start..end]),
-                shape_flags(data.vertices, &indices[start..end]),
-            )
+                sphere: part_sphere(data.vertices, own),
+                bounds: bounding_box(own.iter().filter_map(|&i| data.vertices.get(i as usize))),
+                shape: shape_flags(data.vertices, own),
+            }
         })
         .collect()
 }
 
 /// Bytes of one cluster in the cluster arena ([`abi::CadrCluster`]).
 const CLUSTER_BYTES: usize = 64;
-/// Bytes of one cluster's box in the box arena ([`abi::CadrClusterBox`]).
+/// Bytes of one cluster's box in the box arena ([`abi::CadrBox`]).
 const CLUSTER_BOX_BYTES: usize = 32;
 /// Bytes of one group in the group arena ([`abi::CadrClusterGroup`]).
 const GROUP_BYTES: usize = 32;
@@ -302,7 +316,7 @@ pub(super) struct GeometryArenas {
     pub(super) wire_indices: Buffer,
     /// [`abi::CadrCluster`] per cluster of every part.
     pub(super) clusters: Buffer,
-    /// [`abi::CadrClusterBox`] per cluster, at the cluster's index.
+    /// [`abi::CadrBox`] per cluster, at the cluster's index.
     pub(super) cluster_boxes: Buffer,
     /// [`abi::CadrClusterGroup`] per group of every part's level-of-detail DAG.
     pub(super) groups: Buffer,

@@ -65,6 +65,8 @@ pub const MATERIAL_BYTES: usize = 32;
 pub const RECORD_BYTES: usize = 16;
 /// Bytes of one cull entry on the GPU ([`abi::CadrCullEntry`]).
 pub const CULL_ENTRY_BYTES: usize = 48;
+/// Bytes of one part box ([`abi::CadrBox`]) in the part box array, by instance id.
+const PART_BOX_BYTES: usize = 32;
 
 /// A world matrix as the GPU holds it: rotation and scale in f32, the translation's high part
 /// in column 3 and its low part in the w of columns 0–2.
@@ -166,17 +168,19 @@ pub struct GpuScene {
 /// view's pointers stay valid as long as it does.
 struct SeenByTechniques {
     /// The buffers (with device addresses), refreshed when replaced.
-    buffer_refs: [abi::CadrBufferRef; 10],
-    /// The clusters and their boxes, chained on the view.
+    buffer_refs: [abi::CadrBufferRef; 11],
+    /// The clusters, their boxes and the parts' boxes, chained on the view.
     clusters_extension: ClustersExtension,
 }
 
 /// The scene view's extensions, kept with the scene they describe: the clusters
 /// ([`abi::CadrSceneClusters`]), whose header's `next` names their boxes
-/// ([`abi::CadrSceneClusterBoxes`]), the end of the chain.
+/// ([`abi::CadrSceneClusterBoxes`]), whose `next` names the parts' boxes
+/// ([`abi::CadrScenePartBoxes`]), the end of the chain.
 struct ClusterExtensions {
     clusters: abi::CadrSceneClusters,
     boxes: abi::CadrSceneClusterBoxes,
+    part_boxes: abi::CadrScenePartBoxes,
 }
 
 /// [`ClusterExtensions`] on the heap, where the pointer from the first to the second stays
@@ -207,15 +211,24 @@ impl ClustersExtension {
                 },
                 box_buffer: abi::CadrBufferRef::default(),
             },
+            part_boxes: abi::CadrScenePartBoxes {
+                header: abi::CadrExtension {
+                    size: std::mem::size_of::<abi::CadrScenePartBoxes>() as u32,
+                    kind: abi::CADR_EXTENSION_SCENE_PART_BOXES,
+                    next: std::ptr::null(),
+                },
+                box_buffer: abi::CadrBufferRef::default(),
+            },
         });
         extensions.clusters.header.next = &extensions.boxes.header;
+        extensions.boxes.header.next = &extensions.part_boxes.header;
         Self(extensions)
     }
 }
 
-// SAFETY: the structs' pointers are the clusters' `next`, which names the boxes in the same
-// heap allocation (moving the scene moves only the box), and the boxes' `next`, always null; so
-// the chain may move to and be read from any thread like the plain values it holds.
+// SAFETY: the structs' pointers are their headers' `next`, each naming the next struct in the
+// same heap allocation (moving the scene moves only the box), the last null; so the chain may
+// move to and be read from any thread like the plain values it holds.
 unsafe impl Send for ClustersExtension {}
 // SAFETY: as above; it is only written through `&mut GpuScene`.
 unsafe impl Sync for ClustersExtension {}
@@ -257,6 +270,8 @@ struct GpuCopies {
     material_textures: GpuArray,
     records: GpuArray,
     cull_entries: GpuArray,
+    /// [`abi::CadrBox`] of each instance's part, by instance id, beside its cull entry.
+    part_boxes: GpuArray,
     locals: GpuArray,
     uploader: SparseUploader,
     pipelines: ScenePipelines,
@@ -339,6 +354,7 @@ impl GpuScene {
                 )?,
                 records: GpuArray::new(device, "scene instance records", RECORD_BYTES)?,
                 cull_entries: GpuArray::new(device, "scene cull entries", CULL_ENTRY_BYTES)?,
+                part_boxes: GpuArray::new(device, "scene part boxes", PART_BOX_BYTES)?,
                 locals: GpuArray::new(device, "scene local matrices", LOCAL_BYTES)?,
                 uploader: SparseUploader::default(),
                 pipelines: ScenePipelines::new(device)?,
@@ -385,6 +401,7 @@ impl GpuScene {
             &self.arenas.clusters,
             &self.arenas.groups,
             &self.arenas.cluster_boxes,
+            &self.gpu.part_boxes.buffer,
         ]
         .map(|buffer| abi::CadrBufferRef {
             buffer: buffer.raw().as_raw(),
@@ -395,9 +412,10 @@ impl GpuScene {
                 0
             },
         });
-        let [.., clusters, groups, boxes] = self.seen.buffer_refs;
+        let [.., clusters, groups, boxes, part_boxes] = self.seen.buffer_refs;
         let extensions = &mut *self.seen.clusters_extension.0;
         extensions.boxes.box_buffer = boxes;
+        extensions.part_boxes.box_buffer = part_boxes;
         let extension = &mut extensions.clusters;
         extension.cluster_buffer = clusters;
         extension.group_buffer = groups;
@@ -491,6 +509,7 @@ impl GpuScene {
             .reserve(&device, material_slots.max(1))?;
         self.gpu.records.reserve(&device, count.max(1))?;
         self.gpu.cull_entries.reserve(&device, count.max(1))?;
+        self.gpu.part_boxes.reserve(&device, count.max(1))?;
         self.gpu
             .locals
             .reserve(&device, self.moves.locals.len().max(1))?;
@@ -500,6 +519,7 @@ impl GpuScene {
             &mut self.gpu.material_textures,
             &mut self.gpu.records,
             &mut self.gpu.cull_entries,
+            &mut self.gpu.part_boxes,
             &mut self.gpu.locals,
         ] {
             array.queue_all();
@@ -563,6 +583,7 @@ impl GpuScene {
             );
             self.gpu.records.queue(id as u32);
             self.gpu.cull_entries.queue(id as u32);
+            self.gpu.part_boxes.queue(id as u32);
             any = true;
         }
         any
@@ -709,12 +730,14 @@ impl GpuScene {
             &arenas.wire_indices,
             &arenas.attributes,
             &arenas.clusters,
+            &arenas.cluster_boxes,
             &arenas.groups,
             &gpu.matrices.buffer,
             &gpu.materials.buffer,
             &gpu.material_textures.buffer,
             &gpu.records.buffer,
             &gpu.cull_entries.buffer,
+            &gpu.part_boxes.buffer,
             &gpu.locals.buffer,
         ]
         .iter()
@@ -852,6 +875,7 @@ impl GpuScene {
             self.refresh_instance(tree, id);
             self.gpu.records.queue(id);
             self.gpu.cull_entries.queue(id);
+            self.gpu.part_boxes.queue(id);
         }
         self.counts.last_touched = touched.len() as u64;
         if !touched.is_empty() {
@@ -902,6 +926,7 @@ impl GpuScene {
             &self.gpu.material_textures,
             &self.gpu.records,
             &self.gpu.cull_entries,
+            &self.gpu.part_boxes,
             &self.gpu.locals,
         ]
         .iter()
@@ -941,32 +966,39 @@ impl GpuScene {
             let item = cull_entry(arenas, instances, candidates, slot);
             out.copy_from_slice(&item.to_le_bytes());
         };
+        let part_box_bytes = |slot: u32, out: &mut [u8]| {
+            out.copy_from_slice(&part_box(arenas, instances, slot).to_le_bytes());
+        };
         let locals = &self.moves.locals;
         let local_bytes = |slot: u32, out: &mut [u8]| {
             let item = locals.get(slot as usize).copied().unwrap_or_default();
             out.copy_from_slice(bytemuck::cast_slice(&item));
         };
         let last_slots = self.gpu.uploader.commands_key();
-        let ([matrix_count, material_count, _, record_count, _, local_count], first_words, bytes) =
-            self.gpu.uploader.gather(
-                &self.device,
-                &self.gpu.pipelines,
-                [
-                    (&mut self.gpu.matrices, &matrix_bytes),
-                    (&mut self.gpu.materials, &material_bytes),
-                    (&mut self.gpu.material_textures, &material_texture_bytes),
-                    (&mut self.gpu.records, &record_bytes),
-                    (&mut self.gpu.cull_entries, &cull_entry_bytes),
-                    (&mut self.gpu.locals, &local_bytes),
-                ],
-            )?;
+        let (
+            [matrix_count, material_count, _, record_count, _, _, local_count],
+            first_words,
+            bytes,
+        ) = self.gpu.uploader.gather(
+            &self.device,
+            &self.gpu.pipelines,
+            [
+                (&mut self.gpu.matrices, &matrix_bytes),
+                (&mut self.gpu.materials, &material_bytes),
+                (&mut self.gpu.material_textures, &material_texture_bytes),
+                (&mut self.gpu.records, &record_bytes),
+                (&mut self.gpu.cull_entries, &cull_entry_bytes),
+                (&mut self.gpu.part_boxes, &part_box_bytes),
+                (&mut self.gpu.locals, &local_bytes),
+            ],
+        )?;
         self.moves.frame_moved.clear();
         self.moves.last_hierarchy = match self.gpu.uploader.updates() {
             Some(updates) if self.moves.transforms == Transforms::Gpu => {
                 self.moves.hierarchy.prepare(
                     &self.gpu.pipelines,
                     updates,
-                    (first_words[5], local_count as u32),
+                    (first_words[6], local_count as u32),
                     (&self.gpu.locals.buffer, &self.gpu.matrices.buffer),
                     self.gpu.uploader.commands_key() == last_slots,
                 )?
@@ -1027,7 +1059,7 @@ impl GpuScene {
     /// neither is changed.
     pub(crate) fn view(&self, view: &ViewState) -> abi::CadrSceneView {
         let (dirty_matrices, dirty_materials) = view.dirty_slots();
-        let [vertex_buffer, index_buffer, wire_index_buffer, matrix_buffer, material_buffer, instance_buffer, cull_buffer, _, _, _] =
+        let [vertex_buffer, index_buffer, wire_index_buffer, matrix_buffer, material_buffer, instance_buffer, cull_buffer, _, _, _, _] =
             self.seen.buffer_refs;
         abi::CadrSceneView {
             size: std::mem::size_of::<abi::CadrSceneView>() as u32,
@@ -1190,6 +1222,17 @@ pub struct SceneContent<'a> {
     pub candidate_bits: &'a [u64],
 }
 
+/// The box of instance `slot`'s part (zero for an id not in use).
+fn part_box(arenas: &GeometryArenas, instances: &[abi::CadrInstance], slot: u32) -> abi::CadrBox {
+    instances
+        .get(slot as usize)
+        .and_then(|instance| {
+            let place = arenas.places.get(instance.geometry as usize)?.as_ref()?;
+            Some(place.parts.get(instance.part as usize)?.bounds)
+        })
+        .unwrap_or_default()
+}
+
 /// The cull entry of instance `slot`: its sphere, ranges and first cluster, flagged as a
 /// candidate when it is drawn unless culled.
 fn cull_entry(
@@ -1234,8 +1277,9 @@ fn entry_in(
     instance: &InstanceRef,
 ) -> Option<(abi::CadrInstance, bool)> {
     let place = arenas.places.get(instance.geometry as usize)?.as_ref()?;
+    let part = *place.parts.get(instance.part as usize)?;
     let ([first, count, first_wire, wire_count], sphere, shape) =
-        *place.parts.get(instance.part as usize)?;
+        (part.ranges, part.sphere, part.shape);
     let translucency = translucency
         .get(instance.material as usize)
         .copied()

@@ -123,9 +123,9 @@ pub struct UploadStats {
     pub bytes: u64,
 }
 
-/// How many arrays the GPU scene keeps: matrices, materials, instance records, cull entries,
-/// local matrices.
-pub(super) const ARRAYS: usize = 6;
+/// How many arrays the GPU scene keeps: matrices, materials, material textures, instance
+/// records, cull entries, part boxes, local matrices.
+pub(super) const ARRAYS: usize = 7;
 
 /// The compact update buffer and the descriptor sets that point the scatter pipeline at it and
 /// at each array.

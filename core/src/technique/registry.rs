@@ -115,6 +115,7 @@ const KNOWN_EXTENSIONS: &[abi::CadrExtensionKind] = &[
     abi::CADR_EXTENSION_BACK_FACE_PASSES,
     abi::CADR_EXTENSION_SHARED_FACE_STREAMS,
     abi::CADR_EXTENSION_SCENE_CLUSTER_BOXES,
+    abi::CADR_EXTENSION_SCENE_PART_BOXES,
 ];
 
 /// Refuses a technique that requires an extension this host does not know, naming it.

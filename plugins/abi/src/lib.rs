@@ -729,7 +729,7 @@ pub struct CadrSceneView {
     /// Since ABI 1.14 (read it only when `size` covers it): the host's extension structs for
     /// this view (a chain of [`CadrExtension`]s, or null), valid as long as the view:
     /// [`CadrSceneClusters`] where the scene has clusters, and since 1.20 their
-    /// [`CadrSceneClusterBoxes`].
+    /// [`CadrSceneClusterBoxes`] and the parts' [`CadrScenePartBoxes`].
     pub extensions: *const CadrExtension,
 }
 
@@ -750,6 +750,9 @@ pub const CADR_EXTENSION_SHARED_FACE_STREAMS: CadrExtensionKind = 5;
 /// Since ABI 1.20: the kind of [`CadrSceneClusterBoxes`], chained on
 /// [`CadrSceneView::extensions`] beside [`CadrSceneClusters`].
 pub const CADR_EXTENSION_SCENE_CLUSTER_BOXES: CadrExtensionKind = 6;
+/// Since ABI 1.20: the kind of [`CadrScenePartBoxes`], chained on
+/// [`CadrSceneView::extensions`].
+pub const CADR_EXTENSION_SCENE_PART_BOXES: CadrExtensionKind = 7;
 
 /// Since ABI 1.15 ([`CADR_EXTENSION_FRAME_SLOT`]): which of the host's frames in flight is being
 /// recorded. The host lets the GPU work on up to `slot_count` frames while it records the next;
@@ -812,7 +815,7 @@ pub struct CadrSceneClusters {
 }
 
 /// Since ABI 1.20 ([`CADR_EXTENSION_SCENE_CLUSTER_BOXES`]): every cluster's box, one
-/// [`CadrClusterBox`] per cluster of [`CadrSceneClusters::cluster_buffer`], at the same index.
+/// [`CadrBox`] per cluster of [`CadrSceneClusters::cluster_buffer`], at the same index.
 /// The box holds the cluster's triangles in object space, as the sphere does; placed by the
 /// instance's matrix it is an oriented box, much tighter than the sphere around flat or long
 /// clusters (panels, plates, shafts), so a culler that tests it against a depth pyramid finds
@@ -822,17 +825,34 @@ pub struct CadrSceneClusters {
 pub struct CadrSceneClusterBoxes {
     /// `kind` = [`CADR_EXTENSION_SCENE_CLUSTER_BOXES`].
     pub header: CadrExtension,
-    /// [`CadrClusterBox`] per cluster (storage buffer), as many as
+    /// [`CadrBox`] per cluster (storage buffer), as many as
     /// [`CadrSceneClusters::cluster_count`].
     pub box_buffer: CadrBufferRef,
 }
 
-/// Since ABI 1.20: one cluster's box in [`CadrSceneClusterBoxes::box_buffer`] (32 bytes,
-/// little-endian, std430-compatible: two `vec4`s): the smallest box along the object's axes
-/// that holds the cluster's vertices.
+/// Since ABI 1.20 ([`CADR_EXTENSION_SCENE_PART_BOXES`]): the box of every instance's part, one
+/// [`CadrBox`] per instance id, beside its cull entry ([`CadrSceneView::cull_buffer`]), in the
+/// same object space as the entry's sphere and as tight as the part's triangles allow. Placed by
+/// the instance's matrix it is an oriented box, far tighter than the sphere around a panel, a
+/// plate or a shaft: a culler that tests it against the frustum, the section planes and a depth
+/// pyramid finds more of them outside or hidden. Written by the host with the cull entries (the
+/// entries of ids not in use are zero); owned by the host.
+#[repr(C)]
+#[derive(Clone, Copy, Debug)]
+pub struct CadrScenePartBoxes {
+    /// `kind` = [`CADR_EXTENSION_SCENE_PART_BOXES`].
+    pub header: CadrExtension,
+    /// [`CadrBox`] per instance id (storage buffer), as many as the cull buffer has entries.
+    pub box_buffer: CadrBufferRef,
+}
+
+/// Since ABI 1.20: a box in object space, as [`CadrSceneClusterBoxes::box_buffer`] and
+/// [`CadrScenePartBoxes::box_buffer`] hold them (32 bytes, little-endian, std430-compatible: two
+/// `vec4`s): the smallest box along the object's axes that holds a cluster's or a part's
+/// vertices, a hair larger so that rounding leaves none outside.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
-pub struct CadrClusterBox {
+pub struct CadrBox {
     /// The box's centre in object space.
     pub center: [f32; 3],
     /// Zero.
@@ -843,7 +863,7 @@ pub struct CadrClusterBox {
     pub reserved1: f32,
 }
 
-impl CadrClusterBox {
+impl CadrBox {
     /// The GPU layout: 8 little-endian f32.
     pub fn to_le_bytes(&self) -> [u8; 32] {
         let mut bytes = [0; 32];

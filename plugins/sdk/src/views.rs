@@ -141,6 +141,15 @@ impl<'a> Scene<'a> {
         unsafe { extension(self.raw.extensions, abi::CADR_EXTENSION_SCENE_CLUSTER_BOXES) }
     }
 
+    /// The boxes of the instances' parts ([`abi::CadrScenePartBoxes`]), from a host of ABI 1.20
+    /// or later; `None` from an older host, whose parts have only their spheres.
+    pub fn part_boxes(&self) -> Option<&'a abi::CadrScenePartBoxes> {
+        self.clusters()?;
+        // SAFETY: the host's chain (checked to be there by `clusters`) is valid as long as the
+        // view; an extension of this kind is a `CadrScenePartBoxes`.
+        unsafe { extension(self.raw.extensions, abi::CADR_EXTENSION_SCENE_PART_BOXES) }
+    }
+
     /// Which frame slot is being recorded ([`abi::CadrFrameSlot`]), from a host of ABI 1.15 or
     /// later; `None` from an older host, which records one frame at a time (slot 0 of 1, every
     /// earlier frame finished).

@@ -89,6 +89,21 @@ layout(set = 0, binding = 6, std430) buffer NowVisible { uint now_visible[]; };
 // depth texels, the levels one after the other.
 layout(set = 0, binding = 7, std430) readonly buffer Pyramid { float pyramid[]; };
 
+// The plugin ABI's CadrBox (ABI 1.20): a box along the object's axes.
+struct ObjectBox {
+    vec4 center;
+    vec4 half_extent;
+};
+// The box of each instance's part (CadrScenePartBoxes), by instance id, after the cluster
+// bindings. An older host has none: then a 4-byte buffer is bound here, holding fewer boxes
+// than there are instances, and the spheres are tested.
+#ifdef CLUSTERS
+#define PART_BOX_BINDING 14
+#else
+#define PART_BOX_BINDING 8
+#endif
+layout(set = 0, binding = PART_BOX_BINDING, std430) readonly buffer PartBoxes { ObjectBox part_boxes[]; };
+
 #ifdef CLUSTERS
 // The plugin ABI's CadrCluster and CadrClusterGroup (CadrSceneClusters).
 struct Cluster {
@@ -124,14 +139,10 @@ layout(set = 0, binding = 11, std430) buffer NowClusters { uint now_clusters[]; 
 // One bit per instance id, cleared every frame: phase 0 found no room for the part's cut in its
 // budget and drew none of it, so phase 1 draws all of it that is visible.
 layout(set = 0, binding = 12, std430) buffer Phase0Skipped { uint phase0_skipped[]; };
-// The plugin ABI's CadrClusterBox per cluster (CadrSceneClusterBoxes, ABI 1.20): the box along
+// The plugin ABI's CadrBox per cluster (CadrSceneClusterBoxes, ABI 1.20): the box along
 // the object's axes that holds the cluster. An older host has none: then a 4-byte buffer is
 // bound here, holding fewer boxes than there are clusters, and the spheres are tested.
-struct ClusterBox {
-    vec4 center;
-    vec4 half_extent;
-};
-layout(set = 0, binding = 13, std430) readonly buffer ClusterBoxes { ClusterBox cluster_boxes[]; };
+layout(set = 0, binding = 13, std430) readonly buffer ClusterBoxes { ObjectBox cluster_boxes[]; };
 // Whether the boxes are there (set once per invocation in main()).
 bool boxes_bound;
 #endif
@@ -524,7 +535,7 @@ uint walk_clusters(CullEntry entry, uint id, Placement place, bool back_faces_ma
         vec3 box_center = center;
         mat3 box_axes = mat3(radius);
         if (tested && boxes_bound) {
-            ClusterBox box = cluster_boxes[k];
+            ObjectBox box = cluster_boxes[k];
             vec3 h = box.half_extent.xyz;
             box_center = place.translation + place.rotation * box.center.xyz;
             box_axes = mat3(place.rotation[0] * h.x, place.rotation[1] * h.y, place.rotation[2] * h.z);
@@ -628,9 +639,23 @@ void main() {
         + rotation * entry.sphere.xyz;
     float scale = max(length(rotation[0]), max(length(rotation[1]), length(rotation[2])));
     float radius = entry.sphere.w * scale;
+    // The part's box where the host gives it: placed by the instance's matrix it is an oriented
+    // box, far tighter than the sphere around a panel, a plate or a shaft.
+    bool part_box_bound = part_boxes.length() >= dispatch.instance_count;
+    vec3 box_center = center;
+    mat3 box_axes = mat3(radius);
+    if (part_box_bound) {
+        ObjectBox box = part_boxes[id];
+        vec3 h = box.half_extent.xyz;
+        box_center = center + rotation * (box.center.xyz - entry.sphere.xyz);
+        box_axes = mat3(rotation[0] * h.x, rotation[1] * h.y, rotation[2] * h.z);
+    }
 
     bvec2 sections = against_sections(center, radius);
     bool visible = in_frustum(center, radius) && !sections.x && large_enough(center, radius);
+    if (visible && part_box_bound) {
+        visible = box_in_frustum(box_center, box_axes) && !box_cut_away(box_center, box_axes);
+    }
     bool draw = visible;
 #ifdef CLUSTERS
     // Phase 0 fills the depth that phase 1 is tested against: with clusters it draws only the
@@ -644,7 +669,8 @@ void main() {
     if (dispatch.mode == MODE_LAST_VISIBLE) {
         draw = visible && bit(id);
     } else if (dispatch.mode == MODE_NEWLY_VISIBLE) {
-        visible = visible && passes_pyramid(center, radius);
+        visible = visible && (part_box_bound ? passes_pyramid_box(box_center, box_axes)
+                                             : passes_pyramid(center, radius));
         draw = visible && !bit(id);
 #ifdef CLUSTERS
         // Phase 0 drew only clusters, and only in the passes that fill the depth: every

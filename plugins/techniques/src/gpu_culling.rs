@@ -75,7 +75,7 @@ const MODE_NEWLY_VISIBLE: u32 = 2;
 
 /// What a frame slot's cull set was last written with: the host's buffers' handles, the ids of
 /// ours, the scene's buffers generation and the view's offset.
-type CullSetKey = ([u64; 14], [u64; 9], u64, u64);
+type CullSetKey = ([u64; 15], [u64; 9], u64, u64);
 
 /// Push constants of one cull dispatch.
 #[derive(Clone, Copy)]
@@ -160,7 +160,7 @@ fn cluster_command_budget() -> u64 {
 /// Storage buffers of the cull set besides the view uniform: the scene's cull entries and
 /// matrices, the commands and counts, both visibility buffers, the pyramid, and with clusters
 /// the scene's clusters and groups, both cluster visibility tables and the parts phase 0 skipped.
-const CULL_STORAGE_BUFFERS: u32 = 13;
+const CULL_STORAGE_BUFFERS: u32 = 14;
 /// The frame slots a host may have ([`abi::CadrFrameSlot::slot_count`] is at most 3).
 const FRAME_SLOTS: usize = 3;
 
@@ -341,9 +341,11 @@ impl Objects {
                 (storage, 11),
                 (storage, 12),
                 (storage, 13),
+                (storage, 14),
             ]);
             source.replacen("#version 460\n", "#version 460\n#define CLUSTERS 1\n", 1)
         } else {
+            cull_bindings.push((storage, 8));
             source.to_owned()
         };
         objects.cull_set_layout = objects.set_layout(&cull_bindings)?;
@@ -444,8 +446,9 @@ pub struct GpuCuller<const OCCLUSION: bool, const CLUSTERS: bool> {
     /// One bit per instance id, cleared every frame: the parts whose cut phase 0 found no room
     /// for, which phase 1 then draws whole (gpu-clusters; as big as the visibility buffers).
     phase0_skipped: HostBuffer,
-    /// Bound in place of the clusters' boxes where the host has none (ABI 1.19 or older).
-    no_cluster_boxes: HostBuffer,
+    /// Bound in place of the clusters' and the parts' boxes where the host has none (ABI 1.19 or
+    /// older).
+    no_boxes: HostBuffer,
     /// The cluster commands a slot gives the cuts at the host's threshold (this frame's), and
     /// the most it may give (see [`CLUSTER_COMMAND_BUDGET`]).
     cluster_budget: u32,
@@ -485,7 +488,7 @@ impl<const OCCLUSION: bool, const CLUSTERS: bool> Technique for GpuCuller<OCCLUS
                 words: 1,
             },
             phase0_skipped: tiny("gpu cull phase 0 skipped")?,
-            no_cluster_boxes: tiny("gpu cull no cluster boxes")?,
+            no_boxes: tiny("gpu cull no boxes")?,
             pyramid: tiny("gpu cull pyramid")?,
             gpu,
             objects,
@@ -652,7 +655,10 @@ impl<const OCCLUSION: bool, const CLUSTERS: bool> GpuCuller<OCCLUSION, CLUSTERS>
         slot: usize,
         scene: &abi::CadrSceneView,
         clusters: Option<&abi::CadrSceneClusters>,
-        boxes: Option<&abi::CadrSceneClusterBoxes>,
+        (boxes, part_boxes): (
+            Option<&abi::CadrSceneClusterBoxes>,
+            Option<&abi::CadrScenePartBoxes>,
+        ),
         (view, view_offset): (vk::Buffer, u64),
     ) {
         let Some(commands) = &self.commands.buffer else {
@@ -677,9 +683,12 @@ impl<const OCCLUSION: bool, const CLUSTERS: bool> GpuCuller<OCCLUSION, CLUSTERS>
                 self.phase0_skipped.raw(),
                 // From an older host, 4 bytes: fewer boxes than clusters tells the shader to
                 // test the clusters' spheres.
-                boxes.map_or(self.no_cluster_boxes.raw(), |b| buffer(&b.box_buffer)),
+                boxes.map_or(self.no_boxes.raw(), |b| buffer(&b.box_buffer)),
             ]);
         }
+        // The parts' boxes, after the clusters' bindings (binding 14, or 8 without clusters);
+        // from an older host 4 bytes, which the shader tells from a box per entry.
+        buffers.push(part_boxes.map_or(self.no_boxes.raw(), |b| buffer(&b.box_buffer)));
         // Keyed on what cannot come back: the host's scene buffers by handle and generation
         // (it bumps the generation when it replaces one), ours by id. A destroyed buffer's
         // handle may be given to the next one made (lavapipe's are addresses), and a set still
@@ -691,11 +700,11 @@ impl<const OCCLUSION: bool, const CLUSTERS: bool> GpuCuller<OCCLUSION, CLUSTERS>
             self.cluster_visibility.buffers[LAST].id(),
             self.cluster_visibility.buffers[NOW].id(),
             self.phase0_skipped.id(),
-            self.no_cluster_boxes.id(),
+            self.no_boxes.id(),
             commands.id(),
             self.counts.id(),
         ];
-        let mut raw = [0u64; 14];
+        let mut raw = [0u64; 15];
         for (slot, b) in raw.iter_mut().zip(&buffers) {
             *slot = b.as_raw();
         }
@@ -1117,7 +1126,10 @@ impl<const OCCLUSION: bool, const CLUSTERS: bool> GpuCulling for GpuCuller<OCCLU
         } else {
             None
         };
-        let boxes = scene.cluster_boxes().filter(|_| CLUSTERS);
+        let boxes = (
+            scene.cluster_boxes().filter(|_| CLUSTERS),
+            scene.part_boxes(),
+        );
         let slot = scene.frame_slot().map_or(0, |frame| frame.slot as usize);
         if slot >= FRAME_SLOTS {
             return Err(format!(

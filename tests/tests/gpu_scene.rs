@@ -470,7 +470,7 @@ fn staged_and_direct_uploads_fill_the_gpu_scene_alike() {
     // with what the entries say.
     let scene = GpuScene::new(&device, &graph, &mut tree, Transforms::Gpu).unwrap();
     let instances = scene.content().instances;
-    let [_, _, records, cull_entries] = &arrays[0];
+    let [_, _, records, cull_entries, part_boxes] = &arrays[0];
     let words = |bytes: &[u8]| -> Vec<u32> {
         bytes
             .chunks_exact(4)
@@ -494,6 +494,28 @@ fn staged_and_direct_uploads_fill_the_gpu_scene_alike() {
             entry.matrix,
         ];
         assert_eq!(cull_entries[id * 12..id * 12 + 10], cull, "cull entry {id}");
+        // The part's box holds what the sphere holds, so it lies inside the sphere's cube; an
+        // id not in use has none.
+        let float = |w: usize| f32::from_le_bytes(part_boxes[w * 4..w * 4 + 4].try_into().unwrap());
+        let (center, half) = (
+            [0, 1, 2].map(|a| float(id * 8 + a)),
+            [0, 1, 2].map(|a| float(id * 8 + 4 + a)),
+        );
+        if entry.flags & cadr_plugin_abi::CADR_INSTANCE_ALIVE == 0 {
+            assert_eq!(
+                (center, half),
+                ([0.0; 3], [0.0; 3]),
+                "box of unused id {id}"
+            );
+            continue;
+        }
+        for axis in 0..3 {
+            let reach = (center[axis] - entry.sphere[axis]).abs() + half[axis];
+            assert!(
+                reach <= entry.sphere[3] * 1.0001 + 1e-5,
+                "part box of instance {id} leaves its sphere on axis {axis}"
+            );
+        }
     }
     drop(scene);
     drop(renderer);
@@ -706,10 +728,12 @@ proptest! {
             }
         }
         // What the GPU holds equals the CPU copy (the scatter put every item in place).
-        let [matrices, materials, records, cull_entries] = scene.read_back_arrays().unwrap();
-        let [fresh_matrices, fresh_materials, fresh_records, fresh_cull_entries] =
+        let [matrices, materials, records, cull_entries, part_boxes] =
+            scene.read_back_arrays().unwrap();
+        let [fresh_matrices, fresh_materials, fresh_records, fresh_cull_entries, fresh_part_boxes] =
             fresh.read_back_arrays().unwrap();
         prop_assert_eq!(records, fresh_records);
+        prop_assert_eq!(part_boxes, fresh_part_boxes);
         prop_assert_eq!(
             cull_entries_without_place(&cull_entries),
             cull_entries_without_place(&fresh_cull_entries)

@@ -1174,7 +1174,7 @@ impl GpuScene {
 
     /// Reads back the GPU's matrix, material, record and cull-entry arrays (for tests: the
     /// sparse uploads must leave them equal to the CPU copy). Waits for the device.
-    pub fn read_back_arrays(&self) -> RenderResult<[Vec<u8>; 4]> {
+    pub fn read_back_arrays(&self) -> RenderResult<[Vec<u8>; 5]> {
         let read = |array: &GpuArray, bytes: usize| array.buffer.download(0, bytes as u64);
         Ok([
             read(&self.gpu.matrices, self.matrices.len() * MATRIX_BYTES)?,
@@ -1184,6 +1184,7 @@ impl GpuScene {
                 &self.gpu.cull_entries,
                 self.instances.len() * CULL_ENTRY_BYTES,
             )?,
+            read(&self.gpu.part_boxes, self.instances.len() * PART_BOX_BYTES)?,
         ])
     }
 }
@@ -1222,10 +1223,12 @@ pub struct SceneContent<'a> {
     pub candidate_bits: &'a [u64],
 }
 
-/// The box of instance `slot`'s part (zero for an id not in use).
+/// The box of instance `slot`'s part (zero for an id not in use: a dead instance's entry names
+/// geometry 0, whose box would go stale when that geometry changes).
 fn part_box(arenas: &GeometryArenas, instances: &[abi::CadrInstance], slot: u32) -> abi::CadrBox {
     instances
         .get(slot as usize)
+        .filter(|instance| instance.flags & abi::CADR_INSTANCE_ALIVE != 0)
         .and_then(|instance| {
             let place = arenas.places.get(instance.geometry as usize)?.as_ref()?;
             Some(place.parts.get(instance.part as usize)?.bounds)

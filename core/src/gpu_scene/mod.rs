@@ -1,6 +1,6 @@
 //! The one GPU scene, fed by the scene tree, that every technique, the pick pass and every
 //! product path draws from ([`abi::CadrSceneView`] is how plugins see it): geometry in shared
-//! arenas (`geometry.rs`), per-instance entries and records, matrices (f64 on the CPU for
+//! arenas (`geometry.rs`), per-instance entries, records and part boxes, matrices (f64 on the CPU for
 //! culling; on the GPU with translations split into f32 high and low parts) and materials.
 //!
 //! World matrices of moved subtrees are computed where the active techniques need them

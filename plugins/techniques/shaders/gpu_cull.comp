@@ -192,6 +192,13 @@ bool in_frustum(vec3 center, float radius) {
     return true;
 }
 
+// The half axes of `box` placed by `rotation`, the linear part of an instance's matrix (an
+// oriented box, also under non-uniform scale).
+mat3 placed_half_axes(ObjectBox box, mat3 rotation) {
+    vec3 h = box.half_extent.xyz;
+    return mat3(rotation[0] * h.x, rotation[1] * h.y, rotation[2] * h.z);
+}
+
 // How far the box of half axes `half_axes` reaches along the unit normal `normal`.
 float box_reach(mat3 half_axes, vec3 normal) {
     return abs(dot(normal, half_axes[0])) + abs(dot(normal, half_axes[1]))
@@ -330,11 +337,6 @@ bool passes_pyramid_box(vec3 center, mat3 half_axes) {
         }
     }
     return nearest <= farthest;
-}
-
-// Whether the sphere may be visible over the depth drawn so far: its cube on the view's axes.
-bool passes_pyramid(vec3 center, float radius) {
-    return passes_pyramid_box(center, view_axes * radius);
 }
 
 // Whether the sphere projects at least the sub-pixel threshold across. A perspective view
@@ -530,15 +532,15 @@ uint walk_clusters(CullEntry entry, uint id, Placement place, bool back_faces_ma
         float radius = cluster.sphere.w * place.scale;
         bool tested = in_frustum(center, radius) && !against_sections(center, radius).x
             && !(back_faces_may_go && faces_away(cluster, place));
-        // The cluster's box where the host gives it: placed by the instance's matrix it is an
-        // oriented box, far tighter than the sphere around flat or long clusters.
+        // The box the cluster is tested by: its own where the host gives it, placed by the
+        // instance's matrix (far tighter than the sphere around flat or long clusters), else the
+        // sphere's cube on the view's axes.
         vec3 box_center = center;
-        mat3 box_axes = mat3(radius);
+        mat3 box_axes = view_axes * radius;
         if (tested && boxes_bound) {
             ObjectBox box = cluster_boxes[k];
-            vec3 h = box.half_extent.xyz;
             box_center = place.translation + place.rotation * box.center.xyz;
-            box_axes = mat3(place.rotation[0] * h.x, place.rotation[1] * h.y, place.rotation[2] * h.z);
+            box_axes = placed_half_axes(box, place.rotation);
             tested = box_in_frustum(box_center, box_axes) && !box_cut_away(box_center, box_axes);
         }
         if (!tested) {
@@ -551,8 +553,7 @@ uint walk_clusters(CullEntry entry, uint id, Placement place, bool back_faces_ma
             continue;
         }
         if (dispatch.mode == MODE_NEWLY_VISIBLE) {
-            bool visible = boxes_bound ? passes_pyramid_box(box_center, box_axes)
-                                       : passes_pyramid(center, radius);
+            bool visible = passes_pyramid_box(box_center, box_axes);
             // Recorded by the counting walk, which every part passes through (the writing
             // one runs only when there is something left to draw).
             if (visible && !write && dispatch.writes_visibility != 0u) {
@@ -639,16 +640,16 @@ void main() {
         + rotation * entry.sphere.xyz;
     float scale = max(length(rotation[0]), max(length(rotation[1]), length(rotation[2])));
     float radius = entry.sphere.w * scale;
-    // The part's box where the host gives it: placed by the instance's matrix it is an oriented
-    // box, far tighter than the sphere around a panel, a plate or a shaft.
+    // The box the part is tested by: its own where the host gives it, placed by the
+    // instance's matrix (far tighter than the sphere around a panel, a plate or a shaft), else
+    // the sphere's cube on the view's axes.
     bool part_box_bound = part_boxes.length() >= dispatch.instance_count;
     vec3 box_center = center;
-    mat3 box_axes = mat3(radius);
+    mat3 box_axes = view_axes * radius;
     if (part_box_bound) {
         ObjectBox box = part_boxes[id];
-        vec3 h = box.half_extent.xyz;
         box_center = center + rotation * (box.center.xyz - entry.sphere.xyz);
-        box_axes = mat3(rotation[0] * h.x, rotation[1] * h.y, rotation[2] * h.z);
+        box_axes = placed_half_axes(box, rotation);
     }
 
     bvec2 sections = against_sections(center, radius);
@@ -669,8 +670,7 @@ void main() {
     if (dispatch.mode == MODE_LAST_VISIBLE) {
         draw = visible && bit(id);
     } else if (dispatch.mode == MODE_NEWLY_VISIBLE) {
-        visible = visible && (part_box_bound ? passes_pyramid_box(box_center, box_axes)
-                                             : passes_pyramid(center, radius));
+        visible = visible && passes_pyramid_box(box_center, box_axes);
         draw = visible && !bit(id);
 #ifdef CLUSTERS
         // Phase 0 drew only clusters, and only in the passes that fill the depth: every

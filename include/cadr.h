@@ -23,7 +23,7 @@
 #define CADR_VERSION_MAJOR 1
 
 // The library's minor version.
-#define CADR_VERSION_MINOR 1
+#define CADR_VERSION_MINOR 2
 
 // The library's patch version.
 #define CADR_VERSION_PATCH 0
@@ -452,6 +452,38 @@ typedef struct CadrExportedFrame {
   // Bytes from one row of the depth to the next (`width × 4`), 0 without depth. Since 1.1.
   uint32_t depth_row_bytes;
 } CadrExportedFrame;
+
+// The two semaphores a renderer's exported frames are handed over by
+// (`cadr_renderer_export_semaphores`), as new POSIX file descriptors
+// (`VK_EXTERNAL_SEMAPHORE_HANDLE_TYPE_OPAQUE_FD_BIT`), the host's: import each once
+// (`glImportSemaphoreFdEXT` with `GL_HANDLE_TYPE_OPAQUE_FD_EXT` takes it) or close it. Both are
+// binary semaphores. For every frame, after `cadr_renderer_render`:
+// 1. the host waits for `ready` (`glWaitSemaphoreEXT`, naming the pixel buffer) before reading
+//    the exported memory;
+// 2. having issued its reads of the frame, the host signals `released`
+//    (`glSignalSemaphoreEXT`) and flushes (`glFlush`), before the next
+//    `cadr_renderer_render`: that frame's copy waits for it before overwriting the memory.
+//
+// Exactly once each per frame: a frame whose `ready` is not waited for leaves the semaphore
+// signalled, which the next frame's signal may not find. A host that does not release a frame
+// gets `CADR_RESULT_INVALID_ARGUMENT` from the render after next, which waits 10 s for the
+// release before it draws anything; the host then releases the frame, waits for `ready` of the
+// frame after it (whose copy was waiting), and goes on. Destroying the renderer waits for its
+// last copy: release every frame you were handed first. The semaphores stay the same across
+// resizes.
+//
+// The struct grows by appending fields: the host sets `size` to
+// `sizeof(CadrExportedSemaphores)`; cadr fills the fields within it and zeroes those of a
+// newer header it does not know. Since 1.2.
+typedef struct CadrExportedSemaphores {
+  // `sizeof(CadrExportedSemaphores)`, set by the host.
+  uint32_t size;
+  // Signalled by cadr when the exported memory holds the frame of the last
+  // `cadr_renderer_render` (and its writes are visible to the importer).
+  int32_t ready_fd;
+  // Signalled by the host when it has read the frame; the next frame's copy waits for it.
+  int32_t released_fd;
+} CadrExportedSemaphores;
 
 // A range of a geometry's indices drawn with one material, and its range of edge indices.
 //
@@ -1212,8 +1244,9 @@ enum CadrResult cadr_last_error_message(char *buffer, size_t capacity, size_t *l
 // (`cadr_renderer_render`) is copied on the GPU into memory exported as a file descriptor
 // (`VK_KHR_external_memory_fd`), for an OpenGL host to import once and read as a pixel
 // buffer: no frame passes through the CPU. `cadr_renderer_render` returns once the copy is
-// done, so the host reads the frame after it without a semaphore; the renderer starts with 1
-// frame in flight. `cadr_renderer_exported_frame` gives the memory.
+// done, so the host reads the frame after it without a semaphore, until the host asks for
+// semaphores (`cadr_renderer_export_semaphores`); the renderer starts with 1 frame in
+// flight. `cadr_renderer_exported_frame` gives the memory.
 //
 // Returns as `cadr_renderer_create`, and `CADR_RESULT_UNSUPPORTED` where the device (or the
 // host that lent it) lacks `VK_KHR_external_memory_fd` or cannot export a buffer's memory:
@@ -1241,6 +1274,25 @@ enum CadrResult cadr_renderer_create_for_export(CadrContext context,
 // `frame` is null or writable for its `size`.
 enum CadrResult cadr_renderer_exported_frame(CadrRenderer renderer,
                                              struct CadrExportedFrame *frame);
+
+// Hands the renderer's exported frames over by two semaphores from the next
+// `cadr_renderer_render` on, instead of waiting for each frame's copy on the CPU, and writes
+// new file descriptors of them into `*semaphores` (see `CadrExportedSemaphores` for the
+// protocol). The first call makes them; a later call gives new descriptors of the same two.
+//
+// Returns `CADR_RESULT_OK`, `CADR_RESULT_NULL_ARGUMENT`, `CADR_RESULT_INVALID_ARGUMENT` (a
+// renderer not made by `cadr_renderer_create_for_export`, or a `size` below that of 1.2's
+// struct), `CADR_RESULT_UNSUPPORTED` where the device (or the host that lent it) lacks
+// `VK_KHR_external_semaphore_fd` or cannot export a binary semaphore (lavapipe): frames stay
+// waited for, as before the call; `CADR_RESULT_VULKAN` or a handle error.
+// Ownership: the file descriptors are the host's; the semaphores stay cadr's until the
+// renderer is destroyed (an imported copy stays valid for the importer). Thread-safety: as
+// `cadr_renderer_create`.
+//
+// # Safety
+// `semaphores` is null or writable for its `size`.
+enum CadrResult cadr_renderer_export_semaphores(CadrRenderer renderer,
+                                                struct CadrExportedSemaphores *semaphores);
 
 // Creates a geometry from the host's arrays (copied).
 //

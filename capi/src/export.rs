@@ -7,7 +7,9 @@
 
 use cadr_core::vk::{raw, FrameExport, Image};
 
-use crate::args::deliver_sized;
+use std::os::fd::IntoRawFd;
+
+use crate::args::{check_owning_size, deliver_sized};
 use crate::context::CadrContext;
 use crate::error::{guard, CadrResult, Failure};
 use crate::renderer::{new_renderer, with_renderer, CadrRenderer, Output};
@@ -41,15 +43,26 @@ impl ExportOutput {
         with_depth: bool,
     ) -> Result<(), Failure> {
         if extent != self.export.extent() || with_depth != self.export.depth_offset().is_some() {
-            self.export = FrameExport::new(device, extent, with_depth)?;
+            let mut export = FrameExport::new(device, extent, with_depth)?;
+            // The host keeps the semaphores it imported.
+            export.take_semaphores_from(&mut self.export);
+            self.export = export;
             self.generation += 1;
         }
         Ok(())
     }
 
+    /// Waits until the host has released the frame before the last one, where frames are
+    /// handed over by semaphores: the next frame's drawing must not queue behind a copy that
+    /// waits for a release that never comes.
+    pub(crate) fn wait_for_release(&mut self) -> Result<(), Failure> {
+        self.export.wait_for_release().map_err(host_rule_broken)
+    }
+
     /// Copies `frame`, and its `depth` when the renderer keeps it for the host, into the
     /// exported memory (reshaped first when the frame's size changed or the depth came or
-    /// went) and waits for the copy.
+    /// went) and waits for the copy, or, once the host has the semaphores, submits it between
+    /// them.
     pub(crate) fn copy(
         &mut self,
         device: &std::sync::Arc<cadr_core::vk::Device>,
@@ -57,7 +70,16 @@ impl ExportOutput {
         depth: Option<&Image>,
     ) -> Result<(), Failure> {
         self.reshape(device, frame.extent(), depth.is_some())?;
-        Ok(self.export.copy(frame, depth)?)
+        self.export.copy(frame, depth).map_err(host_rule_broken)
+    }
+}
+
+/// A failure of the export, `CADR_RESULT_INVALID_ARGUMENT` where the host broke the hand-over's
+/// rule (a frame never released).
+fn host_rule_broken(error: cadr_core::vk::VkError) -> Failure {
+    match error {
+        cadr_core::vk::VkError::InvalidUse(message) => Failure::invalid(message),
+        error => error.into(),
     }
 }
 
@@ -109,12 +131,47 @@ pub struct CadrExportedFrame {
     pub depth_row_bytes: u32,
 }
 
+/// The two semaphores a renderer's exported frames are handed over by
+/// (`cadr_renderer_export_semaphores`), as new POSIX file descriptors
+/// (`VK_EXTERNAL_SEMAPHORE_HANDLE_TYPE_OPAQUE_FD_BIT`), the host's: import each once
+/// (`glImportSemaphoreFdEXT` with `GL_HANDLE_TYPE_OPAQUE_FD_EXT` takes it) or close it. Both are
+/// binary semaphores. For every frame, after `cadr_renderer_render`:
+/// 1. the host waits for `ready` (`glWaitSemaphoreEXT`, naming the pixel buffer) before reading
+///    the exported memory;
+/// 2. having issued its reads of the frame, the host signals `released`
+///    (`glSignalSemaphoreEXT`) and flushes (`glFlush`), before the next
+///    `cadr_renderer_render`: that frame's copy waits for it before overwriting the memory.
+///
+/// Exactly once each per frame: a frame whose `ready` is not waited for leaves the semaphore
+/// signalled, which the next frame's signal may not find. A host that does not release a frame
+/// gets `CADR_RESULT_INVALID_ARGUMENT` from the render after next, which waits 10 s for the
+/// release before it draws anything; the host then releases the frame, waits for `ready` of the
+/// frame after it (whose copy was waiting), and goes on. Destroying the renderer waits for its
+/// last copy: release every frame you were handed first. The semaphores stay the same across
+/// resizes.
+///
+/// The struct grows by appending fields: the host sets `size` to
+/// `sizeof(CadrExportedSemaphores)`; cadr fills the fields within it and zeroes those of a
+/// newer header it does not know. Since 1.2.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default)]
+pub struct CadrExportedSemaphores {
+    /// `sizeof(CadrExportedSemaphores)`, set by the host.
+    pub size: u32,
+    /// Signalled by cadr when the exported memory holds the frame of the last
+    /// `cadr_renderer_render` (and its writes are visible to the importer).
+    pub ready_fd: i32,
+    /// Signalled by the host when it has read the frame; the next frame's copy waits for it.
+    pub released_fd: i32,
+}
+
 /// Creates an offscreen renderer of `width` × `height` pixels whose every frame
 /// (`cadr_renderer_render`) is copied on the GPU into memory exported as a file descriptor
 /// (`VK_KHR_external_memory_fd`), for an OpenGL host to import once and read as a pixel
 /// buffer: no frame passes through the CPU. `cadr_renderer_render` returns once the copy is
-/// done, so the host reads the frame after it without a semaphore; the renderer starts with 1
-/// frame in flight. `cadr_renderer_exported_frame` gives the memory.
+/// done, so the host reads the frame after it without a semaphore, until the host asks for
+/// semaphores (`cadr_renderer_export_semaphores`); the renderer starts with 1 frame in
+/// flight. `cadr_renderer_exported_frame` gives the memory.
 ///
 /// Returns as `cadr_renderer_create`, and `CADR_RESULT_UNSUPPORTED` where the device (or the
 /// host that lent it) lacks `VK_KHR_external_memory_fd` or cannot export a buffer's memory:
@@ -185,5 +242,54 @@ pub unsafe extern "C" fn cadr_renderer_exported_frame(
             });
         }
         delivered
+    })
+}
+
+/// Hands the renderer's exported frames over by two semaphores from the next
+/// `cadr_renderer_render` on, instead of waiting for each frame's copy on the CPU, and writes
+/// new file descriptors of them into `*semaphores` (see `CadrExportedSemaphores` for the
+/// protocol). The first call makes them; a later call gives new descriptors of the same two.
+///
+/// Returns `CADR_RESULT_OK`, `CADR_RESULT_NULL_ARGUMENT`, `CADR_RESULT_INVALID_ARGUMENT` (a
+/// renderer not made by `cadr_renderer_create_for_export`, or a `size` below that of 1.2's
+/// struct), `CADR_RESULT_UNSUPPORTED` where the device (or the host that lent it) lacks
+/// `VK_KHR_external_semaphore_fd` or cannot export a binary semaphore (lavapipe): frames stay
+/// waited for, as before the call; `CADR_RESULT_VULKAN` or a handle error.
+/// Ownership: the file descriptors are the host's; the semaphores stay cadr's until the
+/// renderer is destroyed (an imported copy stays valid for the importer). Thread-safety: as
+/// `cadr_renderer_create`.
+///
+/// # Safety
+/// `semaphores` is null or writable for its `size`.
+#[no_mangle]
+pub unsafe extern "C" fn cadr_renderer_export_semaphores(
+    renderer: CadrRenderer,
+    semaphores: *mut CadrExportedSemaphores,
+) -> CadrResult {
+    guard(|| {
+        // SAFETY: null or readable for its size (the caller's contract). Every field of 1.2's
+        // struct carries a descriptor: a smaller one would leak them.
+        unsafe {
+            check_owning_size(
+                semaphores,
+                ("semaphores", "CadrExportedSemaphores"),
+                std::mem::size_of::<CadrExportedSemaphores>(),
+            )
+        }?;
+        let (ready, released) = with_renderer(renderer, |state| {
+            let Some(output) = &mut state.frame_export else {
+                return Err(Failure::invalid(
+                    "the renderer was not made to export its frames (cadr_renderer_create_for_export)",
+                ));
+            };
+            Ok(output.export.share_semaphores()?)
+        })?;
+        let value = CadrExportedSemaphores {
+            size: std::mem::size_of::<CadrExportedSemaphores>() as u32,
+            ready_fd: ready.into_raw_fd(),
+            released_fd: released.into_raw_fd(),
+        };
+        // SAFETY: writable for its size (checked above, the caller's contract).
+        unsafe { deliver_sized(semaphores, "semaphores", value) }
     })
 }

@@ -352,6 +352,12 @@ pub extern "C" fn cadr_renderer_resize(
                     state.view.renderer_mut().resize(width, height)?;
                 }
             }
+            if let Some(output) = &mut state.frame_export {
+                // New memory now, so that the host imports it right after this call.
+                let renderer = state.view.renderer();
+                let extent = cadr_core::vk::raw::Extent2D { width, height };
+                output.reshape(renderer.device(), extent, renderer.depth_to_host())?;
+            }
             Ok(())
         })
     })
@@ -624,6 +630,9 @@ pub unsafe extern "C" fn cadr_renderer_render(
                     .view
                     .renderer_mut()
                     .resize(extent.width, extent.height)?;
+            }
+            if let Some(output) = &mut state.frame_export {
+                output.wait_for_release()?;
             }
             let mut scene_state = lock(&scene_object);
             let update_start = Instant::now();

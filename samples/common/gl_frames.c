@@ -30,6 +30,12 @@ static struct {
   PFNGLBUFFERSTORAGEMEMEXTPROC BufferStorageMemEXT;
   PFNGLGETUNSIGNEDBYTEVEXTPROC GetUnsignedBytevEXT;
   PFNGLGETUNSIGNEDBYTEI_VEXTPROC GetUnsignedBytei_vEXT;
+  /* GL_EXT_semaphore(_fd); NULL where the driver lacks them. */
+  PFNGLGENSEMAPHORESEXTPROC GenSemaphoresEXT;
+  PFNGLDELETESEMAPHORESEXTPROC DeleteSemaphoresEXT;
+  PFNGLIMPORTSEMAPHOREFDEXTPROC ImportSemaphoreFdEXT;
+  PFNGLWAITSEMAPHOREEXTPROC WaitSemaphoreEXT;
+  PFNGLSIGNALSEMAPHOREEXTPROC SignalSemaphoreEXT;
 } gl;
 
 #define LOAD(name, type) (gl.name = (type)glfwGetProcAddress("gl" #name))
@@ -55,6 +61,14 @@ static int load_functions(void) {
     LOAD(BufferStorageMemEXT, PFNGLBUFFERSTORAGEMEMEXTPROC);
     LOAD(GetUnsignedBytevEXT, PFNGLGETUNSIGNEDBYTEVEXTPROC);
     LOAD(GetUnsignedBytei_vEXT, PFNGLGETUNSIGNEDBYTEI_VEXTPROC);
+  }
+  if (glfwExtensionSupported("GL_EXT_semaphore") &&
+      glfwExtensionSupported("GL_EXT_semaphore_fd")) {
+    LOAD(GenSemaphoresEXT, PFNGLGENSEMAPHORESEXTPROC);
+    LOAD(DeleteSemaphoresEXT, PFNGLDELETESEMAPHORESEXTPROC);
+    LOAD(ImportSemaphoreFdEXT, PFNGLIMPORTSEMAPHOREFDEXTPROC);
+    LOAD(WaitSemaphoreEXT, PFNGLWAITSEMAPHOREEXTPROC);
+    LOAD(SignalSemaphoreEXT, PFNGLSIGNALSEMAPHOREEXTPROC);
   }
   return gl.GenBuffers && gl.BindBuffer && gl.DeleteBuffers && gl.GenFramebuffers &&
          gl.BindFramebuffer && gl.FramebufferTexture2D && gl.BlitFramebuffer &&
@@ -154,6 +168,34 @@ static int import_frames(struct GlFrames *frames) {
   return 1;
 }
 
+/* Hands the frames over by the renderer's two semaphores, imported into OpenGL, where both
+ * drivers can share them: each update then waits for cadr's copy on the GPU instead of cadr
+ * waiting for it on the CPU. Says which way the frames come. */
+static void import_semaphores(struct GlFrames *frames) {
+  CadrExportedSemaphores semaphores;
+  if (gl.GenSemaphoresEXT == NULL || gl.DeleteSemaphoresEXT == NULL ||
+      gl.ImportSemaphoreFdEXT == NULL || gl.WaitSemaphoreEXT == NULL ||
+      gl.SignalSemaphoreEXT == NULL) {
+    printf("no shared semaphores (no GL_EXT_semaphore_fd): cadr waits for each frame's copy\n");
+    return;
+  }
+  memset(&semaphores, 0, sizeof semaphores);
+  semaphores.size = sizeof semaphores;
+  if (cadr_renderer_export_semaphores(frames->renderer, &semaphores) != CADR_RESULT_OK) {
+    printf("no shared semaphores (cadr cannot export them on this device): cadr waits for each "
+           "frame's copy\n");
+    return;
+  }
+  gl.GenSemaphoresEXT(1, &frames->ready_semaphore);
+  gl.GenSemaphoresEXT(1, &frames->released_semaphore);
+  /* The imports take the file descriptors. */
+  gl.ImportSemaphoreFdEXT(frames->ready_semaphore, GL_HANDLE_TYPE_OPAQUE_FD_EXT,
+                          semaphores.ready_fd);
+  gl.ImportSemaphoreFdEXT(frames->released_semaphore, GL_HANDLE_TYPE_OPAQUE_FD_EXT,
+                          semaphores.released_fd);
+  printf("frames handed over by semaphores\n");
+}
+
 /* Asks the renderer to keep each frame's depth for the host (exported after the colour, or
  * read back). */
 static void depth_to_host(CadrRenderer renderer) {
@@ -207,6 +249,8 @@ void gl_frames_create(struct GlFrames *frames, CadrContext context, uint32_t wid
         printf("the OpenGL driver refused cadr's memory: reading frames back\n");
         CADR_CHECK(cadr_renderer_destroy(frames->renderer));
         frames->renderer = NULL;
+      } else {
+        import_semaphores(frames);
       }
     }
   }
@@ -244,7 +288,11 @@ size_t gl_frames_update(struct GlFrames *frames) {
   const GLsizei width = (GLsizei)frames->width, height = (GLsizei)frames->height;
   glBindTexture(GL_TEXTURE_2D, frames->texture);
   if (frames->pixel_buffer != 0) {
-    /* From the shared memory to the textures, on the GPU. */
+    /* From the shared memory to the textures, on the GPU: after cadr's copy where the frames
+     * come by semaphores, releasing the memory to cadr's next copy after the uploads. */
+    if (frames->ready_semaphore != 0) {
+      gl.WaitSemaphoreEXT(frames->ready_semaphore, 1, &frames->pixel_buffer, 0, NULL, NULL);
+    }
     gl.BindBuffer(GL_PIXEL_UNPACK_BUFFER, frames->pixel_buffer);
     glTexSubImage2D(GL_TEXTURE_2D, 0, 0, 0, width, height, GL_RGBA, GL_UNSIGNED_BYTE, NULL);
     if (frames->depth_texture != 0) {
@@ -253,6 +301,10 @@ size_t gl_frames_update(struct GlFrames *frames) {
                       (const void *)(uintptr_t)frames->depth_offset);
     }
     gl.BindBuffer(GL_PIXEL_UNPACK_BUFFER, 0);
+    if (frames->released_semaphore != 0) {
+      gl.SignalSemaphoreEXT(frames->released_semaphore, 1, &frames->pixel_buffer, 0, NULL, NULL);
+      glFlush(); /* cadr's next copy waits for the signal: it must reach the GPU first */
+    }
   } else {
     const size_t bytes = (size_t)width * height * 4;
     read_back = bytes;
@@ -334,6 +386,10 @@ void gl_frames_destroy(struct GlFrames *frames) {
   if (frames->pixel_buffer != 0) {
     gl.DeleteBuffers(1, &frames->pixel_buffer);
     gl.DeleteMemoryObjectsEXT(1, &frames->memory_object);
+  }
+  if (frames->ready_semaphore != 0) {
+    gl.DeleteSemaphoresEXT(1, &frames->ready_semaphore);
+    gl.DeleteSemaphoresEXT(1, &frames->released_semaphore);
   }
   gl.DeleteFramebuffers(1, &frames->framebuffer);
   glDeleteTextures(1, &frames->texture);

@@ -1,7 +1,9 @@
 /* cadr's frames in an OpenGL host: the memory a renderer exports its frames into
  * (cadr_renderer_create_for_export), imported as an OpenGL pixel buffer
  * (GL_EXT_memory_object_fd) and uploaded into a texture on the GPU; or, where the drivers cannot
- * share memory, frames read back through the CPU. Either way the texture is blitted into a
+ * share memory, frames read back through the CPU. Where both drivers share semaphores too
+ * (GL_EXT_semaphore_fd), the frames are handed over by them (cadr_renderer_export_semaphores),
+ * so that neither side waits for the other on the CPU. Either way the texture is blitted into a
  * rectangle of the window. With the frames' depth (exported after the colour,
  * CadrRendererSettings::depth_to_host), the host draws its own geometry into cadr's frame with
  * a depth test before the blit. Used by gl_view.c and quad_view.c; needs a current OpenGL 3.0
@@ -21,6 +23,9 @@ struct GlFrames {
   unsigned texture, framebuffer;
   /* The shared path: the exported memory as a buffer (0 on the read-back path). */
   unsigned memory_object, pixel_buffer;
+  /* Where both drivers share semaphores: cadr's `ready` and the host's `released`, imported
+   * (0 when cadr waits for each frame's copy instead). */
+  unsigned ready_semaphore, released_semaphore;
   /* With depth: the depth texture beside the colour in the framebuffer, and where the depth
    * starts in the exported memory (0 without depth). */
   unsigned depth_texture;
@@ -60,8 +65,9 @@ int gl_frames_shared(const struct GlFrames *frames);
 /* Whether the frames bring their depth (GL_FRAMES_DEPTH). */
 int gl_frames_has_depth(const struct GlFrames *frames);
 
-/* Brings the renderer's last frame (and its depth) into the frames' textures. Returns the
- * bytes read back through the CPU (0 on the shared path). */
+/* Brings the renderer's last frame (and its depth) into the frames' textures; call it once
+ * after every cadr_renderer_render (with semaphores, each frame is waited for and released
+ * once). Returns the bytes read back through the CPU (0 on the shared path). */
 size_t gl_frames_update(struct GlFrames *frames);
 
 /* The last frame's depth (width x height floats, the top row first) in host memory: read

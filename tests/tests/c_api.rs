@@ -7,6 +7,12 @@ use std::process::Command;
 use cadr_tests::c_programs::{build_c_program, describe, repository, scratch_dir};
 
 fn run_suite(name: &str, sources: &[&str], extra: &[&str], env: &[(&str, String)]) {
+    run_program(name, sources, extra, env);
+}
+
+/// Builds `sources` into a program, runs it and returns its standard output, failing the test
+/// unless it succeeded and said its checks passed.
+fn run_program(name: &str, sources: &[&str], extra: &[&str], env: &[(&str, String)]) -> String {
     let dir = scratch_dir(name);
     let program = dir.join("program");
     let sources: Vec<_> = sources.iter().map(|s| repository().join(s)).collect();
@@ -17,8 +23,9 @@ fn run_suite(name: &str, sources: &[&str], extra: &[&str], env: &[(&str, String)
         .output()
         .unwrap();
     assert!(output.status.success(), "{}", describe(&output));
-    let stdout = String::from_utf8_lossy(&output.stdout);
+    let stdout = String::from_utf8_lossy(&output.stdout).into_owned();
     assert!(stdout.contains("checks passed"), "{}", describe(&output));
+    stdout
 }
 
 #[test]
@@ -35,6 +42,28 @@ fn a_context_on_the_hosts_vulkan_draws_what_one_on_its_own_device_draws() {
         &["tests/c/host_vulkan.c"],
         &["-lvulkan", "-lpthread"],
         &[],
+    );
+}
+
+/// An OpenGL host's hand-over of exported frames by semaphores, played by a second Vulkan
+/// device (`tests/c/export_semaphores.c`): on SwiftShader, which exports semaphores as file
+/// descriptors, every frame the host reads is the renderer's; on lavapipe, which cannot, the
+/// call is refused naming the extension.
+#[test]
+fn exported_frames_are_handed_over_by_semaphores_where_the_driver_shares_them() {
+    let program = "tests/c/export_semaphores.c";
+    let output = run_program("c-export-semaphores", &[program], &["-lvulkan"], &[]);
+    assert!(output.contains("semaphores unsupported"), "{output}");
+    let icd = cadr_tests::swiftshader_manifest().display().to_string();
+    let output = run_program(
+        "c-export-semaphores-swiftshader",
+        &[program],
+        &["-lvulkan"],
+        &[("VK_ICD_FILENAMES", icd)],
+    );
+    assert!(
+        output.contains("9 frames handed over by semaphores"),
+        "{output}"
     );
 }
 

@@ -421,7 +421,9 @@ fn run_gl_view(name: &str, frames: &str, extra: &[&str], expected: &[&str]) -> S
 
 /// The OpenGL host takes cadr's frames through memory the two drivers share (Mesa 25's
 /// lavapipe exports it, its llvmpipe imports it): no byte is read back through the CPU, and
-/// its window shows what the offscreen render of the same camera shows.
+/// its window shows what the offscreen render of the same camera shows. Neither driver shares
+/// semaphores (lavapipe has no `VK_KHR_external_semaphore_fd`, llvmpipe no
+/// `GL_EXT_semaphore_fd`), so cadr waits for each frame's copy, and says so.
 #[test]
 fn gl_view_shows_cadrs_frames_in_opengl_through_shared_memory() {
     run_gl_view(
@@ -430,6 +432,7 @@ fn gl_view_shows_cadrs_frames_in_opengl_through_shared_memory() {
         &[],
         &[
             "path: shared memory",
+            "cadr waits for each frame's copy",
             "8 frames",
             "bytes read back per frame: 0",
         ],

@@ -44,6 +44,9 @@ pub struct Adapter {
     /// Whether it has `VK_KHR_external_memory_fd`; see
     /// [`super::Capabilities::external_memory_fd`].
     pub external_memory_fd: bool,
+    /// Whether it has `VK_KHR_external_semaphore_fd`; see
+    /// [`super::Capabilities::external_semaphore_fd`].
+    pub external_semaphore_fd: bool,
 }
 
 /// The most textures the bindless path binds, whatever the device allows (the frame set
@@ -155,6 +158,9 @@ pub fn enumerate(instance: &Instance) -> VkResult<Vec<Adapter>> {
             device_generated_commands: generated_commands,
             external_memory_fd: super::fault::without_host_memory_faults(|| {
                 has_extension(instance, physical, ash::khr::external_memory_fd::NAME)
+            }),
+            external_semaphore_fd: super::fault::without_host_memory_faults(|| {
+                has_extension(instance, physical, ash::khr::external_semaphore_fd::NAME)
             }),
         });
     }

@@ -262,6 +262,29 @@ impl CommandContext {
         Ok(())
     }
 
+    /// Waits at most `timeout` for the last submission: whether it has finished (an error
+    /// when the device was lost). For a submission that waits on a semaphore another API
+    /// signals, which may never come.
+    pub fn wait_at_most(&self, timeout: std::time::Duration) -> VkResult<bool> {
+        if self.in_flight {
+            let nanoseconds = u64::try_from(timeout.as_nanos()).unwrap_or(u64::MAX);
+            // SAFETY: the fence belongs to this device. A lost device answers at once.
+            match unsafe {
+                self.device
+                    .raw
+                    .wait_for_fences(&[self.fence], true, nanoseconds)
+            } {
+                Ok(()) => {}
+                Err(vk::Result::TIMEOUT) => return Ok(false),
+                Err(result) => return Err(super::error::map_result("vkWaitForFences", result)),
+            }
+        }
+        if self.device.is_lost() {
+            return Err(VkError::DeviceLost("vkWaitForFences"));
+        }
+        Ok(true)
+    }
+
     /// The command buffer being recorded.
     pub fn command_buffer(&self) -> vk::CommandBuffer {
         self.command_buffer

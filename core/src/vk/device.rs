@@ -59,6 +59,9 @@ pub struct Capabilities {
     /// `VK_KHR_external_memory_fd`: frames can be shared with another API (OpenGL) through
     /// memory exported as a file descriptor ([`super::FrameExport`]).
     pub external_memory_fd: bool,
+    /// `VK_KHR_external_semaphore_fd`: the copies of shared frames synchronise with the other
+    /// API through semaphores exported as file descriptors ([`super::ExportSemaphores`]).
+    pub external_semaphore_fd: bool,
 }
 
 /// How to create a [`Device`].
@@ -89,6 +92,15 @@ pub struct RawHandles {
     pub get_instance_proc_addr: vk::PFN_vkGetInstanceProcAddr,
 }
 
+/// The commands of the extensions that share memory and semaphores with another API through
+/// file descriptors, each where the device has it enabled.
+pub(super) struct ExternalFdCommands {
+    /// `VK_KHR_external_memory_fd`.
+    pub(super) memory: Option<ash::khr::external_memory_fd::Device>,
+    /// `VK_KHR_external_semaphore_fd`.
+    pub(super) semaphore: Option<ash::khr::external_semaphore_fd::Device>,
+}
+
 /// The Vulkan device everything else is created on. Child objects hold an `Arc<Device>`.
 pub struct Device {
     pub(crate) instance: Arc<Instance>,
@@ -110,9 +122,9 @@ pub struct Device {
     debug_utils: Option<ash::ext::debug_utils::Device>,
     /// The commands of `VK_EXT_mesh_shader`, where [`Capabilities::mesh_shader`] is set.
     pub(super) mesh_shader: Option<ash::ext::mesh_shader::Device>,
-    /// The commands of `VK_KHR_external_memory_fd`, where
-    /// [`Capabilities::external_memory_fd`] is set.
-    pub(super) external_memory_fd: Option<ash::khr::external_memory_fd::Device>,
+    /// The commands of `VK_KHR_external_memory_fd` and `VK_KHR_external_semaphore_fd`, where
+    /// the capabilities have them.
+    pub(super) external_fd: ExternalFdCommands,
     capabilities: Capabilities,
     facts: DeviceFacts,
     /// Every pipeline is created through it; kept on disk between runs.
@@ -228,6 +240,7 @@ impl Device {
             mesh_shader: adapter.mesh_shader,
             device_generated_commands: adapter.device_generated_commands,
             external_memory_fd: adapter.external_memory_fd,
+            external_semaphore_fd: adapter.external_semaphore_fd,
         };
 
         let raw = create_logical_device(
@@ -361,9 +374,14 @@ impl Device {
         let mesh_shader = capabilities
             .mesh_shader
             .then(|| ash::ext::mesh_shader::Device::new(&instance.raw, &raw));
-        let external_memory_fd = capabilities
-            .external_memory_fd
-            .then(|| ash::khr::external_memory_fd::Device::new(&instance.raw, &raw));
+        let external_fd = ExternalFdCommands {
+            memory: capabilities
+                .external_memory_fd
+                .then(|| ash::khr::external_memory_fd::Device::new(&instance.raw, &raw)),
+            semaphore: capabilities
+                .external_semaphore_fd
+                .then(|| ash::khr::external_semaphore_fd::Device::new(&instance.raw, &raw)),
+        };
 
         // SAFETY: physical comes from this instance.
         let properties = unsafe { instance.raw.get_physical_device_properties(physical) };
@@ -379,7 +397,7 @@ impl Device {
             lost: Default::default(),
             debug_utils,
             mesh_shader,
-            external_memory_fd,
+            external_fd,
             capabilities,
             facts,
             pipeline_cache,
@@ -824,6 +842,8 @@ fn host_capabilities(
             && enabled.buffer_device_address
             && adapter.device_generated_commands,
         external_memory_fd: enabled.has(c"VK_KHR_external_memory_fd") && adapter.external_memory_fd,
+        external_semaphore_fd: enabled.has(c"VK_KHR_external_semaphore_fd")
+            && adapter.external_semaphore_fd,
     }
 }
 
@@ -900,6 +920,9 @@ fn create_logical_device(
     }
     if capabilities.external_memory_fd {
         enabled_extensions.push(ash::khr::external_memory_fd::NAME);
+    }
+    if capabilities.external_semaphore_fd {
+        enabled_extensions.push(ash::khr::external_semaphore_fd::NAME);
     }
     for wanted in extra_extensions {
         if !enabled_extensions.contains(&wanted.as_c_str()) {

@@ -1,13 +1,24 @@
 //! Sharing finished frames with another graphics API on the same device (an OpenGL host)
 //! without a copy through the CPU: every frame is copied on the GPU into a buffer whose memory
 //! is exported as a file descriptor (`VK_KHR_external_memory_fd`), which the host imports once
-//! (`GL_EXT_memory_object_fd`) and reads as a pixel buffer. The copy is waited for before the
-//! frame is handed over, so the host needs no semaphore (drivers such as lavapipe offer none
-//! to share); its pixels are tightly packed RGBA8 rows, the top row first, as
-//! `Renderer::read_rgba8` gives them, followed where asked by the frame's depth (32-bit floats
-//! in rows of the same order) for a host compositing its own drawing with the frame.
+//! (`GL_EXT_memory_object_fd`) and reads as a pixel buffer. Its pixels are tightly packed RGBA8
+//! rows, the top row first, as `Renderer::read_rgba8` gives them, followed where asked by the
+//! frame's depth (32-bit floats in rows of the same order) for a host compositing its own
+//! drawing with the frame.
+//!
+//! Two ways to hand a frame over:
+//! - **Waited for** (the default, and where the device cannot share semaphores, as lavapipe
+//!   cannot): the copy is waited for on the CPU before the frame is handed over, so the host
+//!   needs no semaphore.
+//! - **By semaphores** ([`ExportSemaphores`], `VK_KHR_external_semaphore_fd`): the copy
+//!   signals `ready`, which the host's API waits for on its GPU timeline
+//!   (`glWaitSemaphoreEXT`), and the host signals `released` once it has read the frame
+//!   (`glSignalSemaphoreEXT`), which the next copy waits for before it overwrites the memory.
+//!   Neither side waits on the CPU.
 
+use std::os::fd::{FromRawFd, OwnedFd};
 use std::sync::Arc;
+use std::time::Duration;
 
 use ash::vk;
 
@@ -24,6 +35,16 @@ const HANDLE_TYPE: vk::ExternalMemoryHandleTypeFlags = vk::ExternalMemoryHandleT
 /// Bytes the buffer has beyond the picture: an importer may want a buffer's memory to reach
 /// past its end (llvmpipe reads buffers in blocks and wants 48 bytes more).
 const IMPORTER_SLACK: u64 = 4096;
+
+/// The handle type of the exported semaphores: a POSIX file descriptor (reference transference:
+/// the host's imported semaphore and cadr's share one payload for as long as both live).
+const SEMAPHORE_HANDLE_TYPE: vk::ExternalSemaphoreHandleTypeFlags =
+    vk::ExternalSemaphoreHandleTypeFlags::OPAQUE_FD;
+
+/// How long a frame waits on the CPU, before it is drawn, for the last copy, which waits for the
+/// host's `released` signal: past it, the host is taken not to have released the frame (its
+/// error, reported, not a hang).
+const RELEASE_TIMEOUT: Duration = Duration::from_secs(10);
 
 /// Where the depth starts after the colour: a multiple of this (a texel of every format, and
 /// what pixel-buffer offsets of any API accept).
@@ -43,6 +64,9 @@ pub struct FrameExport {
     /// The device's and the driver's UUIDs (`VkPhysicalDeviceIDProperties`): an importer
     /// shares memory only with a device and driver of the same UUIDs.
     uuids: ([u8; vk::UUID_SIZE], [u8; vk::UUID_SIZE]),
+    /// The semaphores the copies synchronise with the host by, once it has asked for them;
+    /// without, each copy is waited for on the CPU.
+    semaphores: Option<ExportSemaphores>,
 }
 
 impl FrameExport {
@@ -53,7 +77,7 @@ impl FrameExport {
             device: device.adapter().name.clone(),
             reason: reason.to_owned(),
         };
-        if device.external_memory_fd.is_none() {
+        if device.external_fd.memory.is_none() {
             return Err(unsupported(
                 "exporting frames needs VK_KHR_external_memory_fd, which this device lacks (or the host did not enable)",
             ));
@@ -95,6 +119,7 @@ impl FrameExport {
             depth_offset,
             commands,
             uuids: uuids(device),
+            semaphores: None,
         };
         device.set_name(buffer, "exported frame");
         // SAFETY: the memory was allocated for this buffer (dedicated) and is bound to nothing.
@@ -128,7 +153,7 @@ impl FrameExport {
     /// A new file descriptor of the exported memory, the caller's to import (which takes it)
     /// or close.
     pub fn file_descriptor(&self) -> VkResult<i32> {
-        let Some(loader) = &self.device.external_memory_fd else {
+        let Some(loader) = &self.device.external_fd.memory else {
             return Err(VkError::Unsupported {
                 device: self.device.adapter().name.clone(),
                 reason: "VK_KHR_external_memory_fd".into(),
@@ -141,13 +166,58 @@ impl FrameExport {
         unsafe { loader.get_memory_fd(&info) }.or_vk("vkGetMemoryFdKHR")
     }
 
+    /// Moves the semaphores of `earlier` (an export this one replaces, after a resize) to this
+    /// one, so that the host keeps the semaphores it imported.
+    pub fn take_semaphores_from(&mut self, earlier: &mut FrameExport) {
+        self.semaphores = earlier.semaphores.take();
+    }
+
+    /// Hands the frames over by semaphores from the next copy on (made at the first call; the
+    /// same semaphores after): new file descriptors of them, `(ready, released)`, the caller's
+    /// to import or close. Refused where the device cannot export semaphores as file
+    /// descriptors.
+    pub fn share_semaphores(&mut self) -> VkResult<(OwnedFd, OwnedFd)> {
+        let semaphores = match self.semaphores {
+            Some(ref semaphores) => semaphores,
+            None => self.semaphores.insert(ExportSemaphores::new(&self.device)?),
+        };
+        Ok((
+            semaphores.file_descriptor(semaphores.ready)?,
+            semaphores.file_descriptor(semaphores.released)?,
+        ))
+    }
+
+    /// Waits (at most 10 s) for the last copy, which waits for the host's
+    /// release of the frame before it when frames are handed over by semaphores: call it before
+    /// drawing the next frame, which a driver's queue may otherwise hold behind that copy.
+    /// Refused when the host has not released that frame by then.
+    pub fn wait_for_release(&mut self) -> VkResult<()> {
+        if self.semaphores.is_none() {
+            return Ok(());
+        }
+        if !self.commands.wait_at_most(RELEASE_TIMEOUT)? {
+            return Err(VkError::InvalidUse(format!(
+                "the host has not signalled the `released` semaphore of the frame before the last one within {} s (signal it once for every frame it waits for `ready`, and flush)",
+                RELEASE_TIMEOUT.as_secs()
+            )));
+        }
+        Ok(())
+    }
+
+    /// Whether frames are handed over by semaphores ([`Self::share_semaphores`]).
+    pub fn shares_semaphores(&self) -> bool {
+        self.semaphores.is_some()
+    }
+
     /// Copies `frame` (in TRANSFER_SRC_OPTIMAL, of this export's extent and colour format) into
     /// the exported buffer, and its `depth` (the same, of the depth format) after it where the
-    /// buffer has room for it, and waits for the copy: when it returns, the memory holds the
-    /// frame.
+    /// buffer has room for it. Without semaphores it waits for the copy: when it returns, the
+    /// memory holds the frame. With them the copy waits for the host's release of the frame
+    /// before (if one was handed over) and signals `ready`; it returns once it is submitted.
     pub fn copy(&mut self, frame: &Image, depth: Option<&Image>) -> VkResult<()> {
         debug_assert_eq!(frame.format(), COLOR_FORMAT);
         debug_assert_eq!(frame.extent(), self.extent);
+        self.wait_for_release()?;
         let command_buffer = self.commands.begin()?;
         let mut images = vec![(frame, 0)];
         if let (Some(depth), Some(offset)) = (depth, self.depth_offset) {
@@ -158,7 +228,8 @@ impl FrameExport {
         for (image, offset) in images {
             // The image is in TRANSFER_SRC_OPTIMAL (made readable by the frame's own barrier,
             // earlier in submission order) and fits the buffer from `offset`; both outlive the
-            // submission, which is waited for below.
+            // submission (the next frame's barrier orders its writes after this copy, and the
+            // buffer is destroyed only after waiting for it).
             record_image_copy_into(
                 &self.device,
                 command_buffer,
@@ -168,7 +239,8 @@ impl FrameExport {
                 offset,
             );
         }
-        // The writes made available to the host's API once the copy is waited for.
+        // The writes made available to the host's API once the copy is waited for (or its
+        // semaphore, whose signal makes them available too).
         let barrier = [vk::MemoryBarrier2::default()
             .src_stage_mask(vk::PipelineStageFlags2::COPY)
             .src_access_mask(vk::AccessFlags2::TRANSFER_WRITE)
@@ -181,14 +253,28 @@ impl FrameExport {
                 .raw
                 .cmd_pipeline_barrier2(command_buffer, &dependency)
         };
-        self.commands.submit()?;
-        self.commands.wait()
+        match &mut self.semaphores {
+            None => {
+                self.commands.submit()?;
+                self.commands.wait()
+            }
+            Some(semaphores) => {
+                let released = [(semaphores.released, vk::PipelineStageFlags::TRANSFER)];
+                let wait = &released[..usize::from(semaphores.handed_over)];
+                self.commands
+                    .submit_with_semaphores(wait, &[semaphores.ready])?;
+                semaphores.handed_over = true;
+                Ok(())
+            }
+        }
     }
 }
 
 impl Drop for FrameExport {
     fn drop(&mut self) {
-        // The last copy may still run; after an error the buffer goes anyway.
+        // The last copy may still run; after an error the buffer goes anyway. (A copy waiting
+        // for a release the host never gives is waited for: the host's rule is to release
+        // every frame it was handed before destroying the renderer.)
         let _ = self.commands.wait();
         // SAFETY: no submission uses the buffer any more (waited for above); an importer keeps
         // its own reference to the memory, which the driver frees when both let go.
@@ -200,6 +286,116 @@ impl Drop for FrameExport {
         }
         self.device.count_dedicated(self.allocation_size, false);
     }
+}
+
+/// The two binary semaphores frames are handed over by, exported as file descriptors
+/// (`VK_KHR_external_semaphore_fd`): each copy signals `ready`, which the host waits for before
+/// it reads the frame; the host signals `released` when it has read it, which the next copy
+/// waits for before it overwrites the memory.
+pub struct ExportSemaphores {
+    device: Arc<Device>,
+    /// Signalled by each copy when the memory holds its frame.
+    ready: vk::Semaphore,
+    /// Signalled by the host when it has read the frame it was handed.
+    released: vk::Semaphore,
+    /// Whether a frame was handed over (a `ready` signalled): the next copy waits for the
+    /// host's `released` first.
+    handed_over: bool,
+}
+
+impl ExportSemaphores {
+    /// Creates both, refused where the device cannot export semaphores as file descriptors.
+    pub fn new(device: &Arc<Device>) -> VkResult<Self> {
+        let unsupported = |reason: &str| VkError::Unsupported {
+            device: device.adapter().name.clone(),
+            reason: reason.to_owned(),
+        };
+        if device.external_fd.semaphore.is_none() {
+            return Err(unsupported(
+                "sharing semaphores needs VK_KHR_external_semaphore_fd, which this device lacks (or the host did not enable): each frame's copy is waited for instead",
+            ));
+        }
+        if !semaphore_exportable(device) {
+            return Err(unsupported(
+                "the driver cannot export a binary semaphore as a file descriptor",
+            ));
+        }
+        let mut semaphores = Self {
+            device: Arc::clone(device),
+            ready: vk::Semaphore::null(),
+            released: vk::Semaphore::null(),
+            handed_over: false,
+        };
+        // Dropped on a failure below, destroying what was made (null handles are ignored).
+        semaphores.ready = exportable_semaphore(device, "exported frame ready")?;
+        semaphores.released = exportable_semaphore(device, "exported frame released")?;
+        Ok(semaphores)
+    }
+
+    /// A new file descriptor of `semaphore` (one of this pair's).
+    fn file_descriptor(&self, semaphore: vk::Semaphore) -> VkResult<OwnedFd> {
+        let Some(loader) = &self.device.external_fd.semaphore else {
+            return Err(VkError::Unsupported {
+                device: self.device.adapter().name.clone(),
+                reason: "VK_KHR_external_semaphore_fd".into(),
+            });
+        };
+        let info = vk::SemaphoreGetFdInfoKHR::default()
+            .semaphore(semaphore)
+            .handle_type(SEMAPHORE_HANDLE_TYPE);
+        // SAFETY: the semaphore was created exportable as this handle type.
+        let fd = unsafe { loader.get_semaphore_fd(&info) }.or_vk("vkGetSemaphoreFdKHR")?;
+        // SAFETY: the call made a new descriptor, owned by no one else.
+        Ok(unsafe { OwnedFd::from_raw_fd(fd) })
+    }
+}
+
+impl Drop for ExportSemaphores {
+    fn drop(&mut self) {
+        // SAFETY: the frame export that used them waited for its last copy before (it drops
+        // them after its own drop); the host's imported semaphores keep their own references
+        // to the payload.
+        unsafe {
+            self.device
+                .raw
+                .destroy_semaphore(self.ready, host_callbacks());
+            self.device
+                .raw
+                .destroy_semaphore(self.released, host_callbacks());
+        }
+    }
+}
+
+/// A binary semaphore exportable as [`SEMAPHORE_HANDLE_TYPE`], named `name`.
+fn exportable_semaphore(device: &Device, name: &str) -> VkResult<vk::Semaphore> {
+    let mut export = vk::ExportSemaphoreCreateInfo::default().handle_types(SEMAPHORE_HANDLE_TYPE);
+    let info = vk::SemaphoreCreateInfo::default().push_next(&mut export);
+    // SAFETY: info and its chain are valid and live until the call returns.
+    let semaphore = unsafe { device.raw.create_semaphore(&info, host_callbacks()) }
+        .or_vk("vkCreateSemaphore")?;
+    device.set_name(semaphore, name);
+    Ok(semaphore)
+}
+
+/// Whether the driver can export a binary semaphore as [`SEMAPHORE_HANDLE_TYPE`].
+fn semaphore_exportable(device: &Device) -> bool {
+    let info =
+        vk::PhysicalDeviceExternalSemaphoreInfo::default().handle_type(SEMAPHORE_HANDLE_TYPE);
+    let mut properties = vk::ExternalSemaphoreProperties::default();
+    // SAFETY: the physical device belongs to the device's instance; both structs are valid.
+    unsafe {
+        device
+            .instance
+            .raw
+            .get_physical_device_external_semaphore_properties(
+                device.adapter().physical,
+                &info,
+                &mut properties,
+            )
+    };
+    properties
+        .external_semaphore_features
+        .contains(vk::ExternalSemaphoreFeatureFlags::EXPORTABLE)
 }
 
 /// The device's and the driver's UUIDs.

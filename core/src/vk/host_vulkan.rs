@@ -42,6 +42,7 @@ pub const REQUIREMENTS: Requirements = Requirements {
         c"VK_KHR_maintenance5",
         c"VK_KHR_swapchain",
         c"VK_KHR_external_memory_fd",
+        c"VK_KHR_external_semaphore_fd",
     ],
     required_features: REQUIRED_FEATURES,
     optional_features: &[

@@ -345,9 +345,9 @@ typedef struct CadrDeviceInfo {
   bool validation;
 } CadrDeviceInfo;
 
-// The device memory a context's cadr holds, filled by `cadr_context_memory_usage`. Hosts
-// watch it over a session (a CAD tool stays open for days) to see that cadr's share of the
-// GPU does not grow.
+// The device memory a context's cadr holds, and the host memory libcadr holds, filled by
+// `cadr_context_memory_usage`. Hosts watch them over a session (a CAD tool stays open for
+// days) to see that cadr's share of the GPU and of the host does not grow.
 //
 // The struct grows by appending fields: set `size` to `sizeof(CadrMemoryUsage)` before the
 // call. cadr writes only the fields that lie within `size` bytes, so a host compiled against
@@ -362,6 +362,14 @@ typedef struct CadrMemoryUsage {
   // Bytes of device memory cadr has taken from the driver: the blocks its buffers and
   // images are carved from, unused room included (at least `device_allocated_bytes`).
   uint64_t device_reserved_bytes;
+  // Bytes of host memory libcadr holds in the whole process (every context): its own heap
+  // allocations and the host memory of the Vulkan objects it creates, which drivers
+  // allocate through cadr's allocation callbacks. Not the driver's memory allocated without
+  // them (on a CPU driver such as lavapipe, its "device" memory, compiled shaders and
+  // rasterizer memory live in the process's heap too), nor the technique plugins' own
+  // heaps, nor the host's: the measure of what cadr itself keeps on the host, where the
+  // process's heap or resident size mixes in the driver's. Since 1.2.
+  uint64_t host_allocated_bytes;
 } CadrMemoryUsage;
 
 // One technique offered by the plugins. The strings belong to the context and stay valid
@@ -1164,9 +1172,9 @@ enum CadrResult cadr_context_vulkan_instance(CadrContext context, void **instanc
 // `count` is null or writable.
 enum CadrResult cadr_context_validation_error_count(CadrContext context, uint64_t *count);
 
-// Writes the device memory the context's cadr holds now into `*usage`, up to `usage->size`
-// bytes (see `CadrMemoryUsage`). Host memory is the host's to measure (the process's
-// resident size); `scripts/soak.sh` watches both.
+// Writes the device memory the context's cadr holds now, and the host memory libcadr holds,
+// into `*usage`, up to `usage->size` bytes (see `CadrMemoryUsage`). The process's resident
+// size is the host's to measure; `scripts/soak.sh` watches it beside these.
 //
 // Returns `CADR_RESULT_OK`, `CADR_RESULT_NULL_ARGUMENT`, `CADR_RESULT_INVALID_ARGUMENT`
 // (`usage->size` smaller than its own field) or a handle error.

@@ -7,7 +7,8 @@
  *   quad_view [scene] [--frames N] [--views N] [--view-size WxH] [--self-test DIR]
  *
  * It orbits the perspective view for N frames (default 120) and prints each view's CPU time per
- * frame, the frames per second and cadr's device memory. --views N shows only the first N views
+ * frame, the frames per second, cadr's device memory, its own host memory and the process's
+ * heap. --views N shows only the first N views
  * (top, front, side, perspective), to compare one view's costs with four's; --view-size WxH
  * sets each view's size (default 320x240; the window holds two by two), so that one view of a
  * window's whole size can be compared with four quarters of it. --self-test DIR picks in the middle of
@@ -155,18 +156,20 @@ static void on_click(GLFWwindow *window, int button, int action, int mods) {
   }
 }
 
-/* Bytes of the process's heap in use (on lavapipe, the "device" memory lives there too). */
-static uint64_t host_bytes(void) {
+/* Bytes of the process's heap in use: cadr's, the drivers' (on lavapipe the "device" memory,
+ * compiled shaders and the rasterizer's working memory live there too) and this program's. */
+static uint64_t heap_bytes(void) {
   struct mallinfo2 info = mallinfo2();
   return (uint64_t)info.uordblks + (uint64_t)info.hblkhd;
 }
 
-static uint64_t device_bytes(CadrContext context) {
+/* The memory cadr holds: device memory, and its own host memory (without the drivers'). */
+static struct CadrMemoryUsage memory_usage(CadrContext context) {
   struct CadrMemoryUsage usage;
   memset(&usage, 0, sizeof usage);
   usage.size = sizeof usage;
   CADR_CHECK(cadr_context_memory_usage(context, &usage));
-  return usage.device_allocated_bytes;
+  return usage;
 }
 
 /* Prints what one view and all the views hold, and their ratio. */
@@ -209,7 +212,8 @@ int main(int argc, char **argv) {
   GLFWwindow *window;
   size_t read_back = 0;
   double start;
-  uint64_t device_before, host_before, one_view_device, one_view_host, validation_errors = 0;
+  struct CadrMemoryUsage before, one_view, all_views;
+  uint64_t heap_before, one_view_heap, validation_errors = 0;
 
   for (i = 1; i < argc; ++i) {
     if (strcmp(argv[i], "--frames") == 0 && i + 1 < argc) {
@@ -245,9 +249,10 @@ int main(int argc, char **argv) {
 
   /* What the views cost: the scene on the GPU (shared by the renderers of one scene) and each
    * view's targets, measured from before the first renderer. */
-  device_before = device_bytes(context);
-  host_before = host_bytes();
-  one_view_device = one_view_host = 0;
+  before = memory_usage(context);
+  heap_before = heap_bytes();
+  memset(&one_view, 0, sizeof one_view);
+  one_view_heap = 0;
   for (i = 0; i < q.count; ++i) {
     gl_frames_create(&q.views[i], context, view_width, view_height, 1);
     shared = shared && gl_frames_shared(&q.views[i]);
@@ -256,8 +261,8 @@ int main(int argc, char **argv) {
       memset(&stats, 0, sizeof stats);
       stats.size = sizeof stats;
       CADR_CHECK(cadr_renderer_render(q.views[0].renderer, q.scene, &q.cameras[0], &stats));
-      one_view_device = device_bytes(context) - device_before;
-      one_view_host = host_bytes() - host_before;
+      one_view = memory_usage(context);
+      one_view_heap = heap_bytes() - heap_before;
     }
   }
   printf("path: %s\n", shared ? "shared memory" : "read-back");
@@ -278,8 +283,12 @@ int main(int argc, char **argv) {
   }
   printf("%d frames of four views, %.1f frames/s, bytes read back per frame: %zu\n", frame,
          frame / (now_seconds() - start), frame > 0 ? read_back / (size_t)frame : 0);
-  print_memory("device", one_view_device, q.count, device_bytes(context) - device_before);
-  print_memory("host", one_view_host, q.count, host_bytes() - host_before);
+  all_views = memory_usage(context);
+  print_memory("device", one_view.device_allocated_bytes - before.device_allocated_bytes, q.count,
+               all_views.device_allocated_bytes - before.device_allocated_bytes);
+  print_memory("cadr's host", one_view.host_allocated_bytes - before.host_allocated_bytes,
+               q.count, all_views.host_allocated_bytes - before.host_allocated_bytes);
+  print_memory("process heap", one_view_heap, q.count, heap_bytes() - heap_before);
 
   if (test_dir != NULL) {
     self_test(&q, context, window, test_dir);

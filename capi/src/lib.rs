@@ -15,6 +15,10 @@
 //! - Every function's documentation states who owns what and from which threads it may be
 //!   called.
 
+/// Every allocation of libcadr is counted (`CadrMemoryUsage::host_allocated_bytes`).
+#[global_allocator]
+static HEAP: cadr_core::host_heap::CountingAllocator = cadr_core::host_heap::CountingAllocator;
+
 mod args;
 mod bounds;
 mod camera;

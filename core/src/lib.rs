@@ -18,6 +18,7 @@ pub mod freed_memory;
 pub mod generate;
 pub mod gpu_scene;
 pub mod graph;
+pub mod host_heap;
 pub mod load;
 pub mod memory_budget;
 pub mod panic_boundary;

@@ -23,6 +23,7 @@ const LAYERS: &[(&str, &[&str])] = &[
             "disk_cache",
             "panic_boundary",
             "freed_memory",
+            "host_heap",
         ],
     ),
     ("threads", &["parallel"]),

@@ -1739,7 +1739,8 @@ int main(void) {
 
   {
     /* Device memory: what a renderer's targets take, and back to the figure before once it is
-     * destroyed; with this header's struct, an older host's smaller one (only the fields it
+     * destroyed; cadr's own host memory: more with the renderer, less again without it; with
+     * this header's struct, an older host's smaller one (only the fields it
      * knows are written) and a newer host's larger one (what this library does not know is
      * zeroed). */
     struct CadrMemoryUsage usage = {.size = sizeof(struct CadrMemoryUsage)};
@@ -1747,22 +1748,27 @@ int main(void) {
       struct CadrMemoryUsage usage;
       uint64_t field_of_a_later_version;
     } newer;
-    uint64_t before;
+    uint64_t before, host_before, host_with_renderer;
     CadrRenderer memory_renderer;
     memset(&usage, 0xAB, sizeof usage);
     usage.size = sizeof usage;
     OK(cadr_context_memory_usage(context, &usage));
     CHECK(usage.size == sizeof usage && usage.device_allocated_bytes != 0xABABABABABABABABull);
+    CHECK(usage.host_allocated_bytes > 0 && usage.host_allocated_bytes != 0xABABABABABABABABull);
     before = usage.device_allocated_bytes;
+    host_before = usage.host_allocated_bytes;
     OK(cadr_renderer_create(context, 64, 48, &memory_renderer));
     OK(cadr_context_memory_usage(context, &usage));
     CHECK(usage.device_allocated_bytes > before);
     CHECK(usage.device_reserved_bytes >= usage.device_allocated_bytes);
+    CHECK(usage.host_allocated_bytes > host_before);
+    host_with_renderer = usage.host_allocated_bytes;
     memset(&usage, 0xAB, sizeof usage);
     usage.size = (uint32_t)offsetof(struct CadrMemoryUsage, device_reserved_bytes);
     OK(cadr_context_memory_usage(context, &usage));
     CHECK(usage.device_allocated_bytes > before);
     CHECK(usage.device_reserved_bytes == 0xABABABABABABABABull);
+    CHECK(usage.host_allocated_bytes == 0xABABABABABABABABull);
     memset(&newer, 0xCD, sizeof newer);
     newer.usage.size = sizeof newer;
     OK(cadr_context_memory_usage(context, &newer.usage));
@@ -1772,6 +1778,7 @@ int main(void) {
     usage.size = sizeof usage;
     OK(cadr_context_memory_usage(context, &usage));
     CHECK(usage.device_allocated_bytes == before);
+    CHECK(usage.host_allocated_bytes < host_with_renderer);
     usage.size = 2;
     EXPECT(cadr_context_memory_usage(context, &usage), CADR_RESULT_INVALID_ARGUMENT);
     MESSAGE_HAS("usage->size is 2");

@@ -512,6 +512,7 @@ fn quad_view_shows_four_views_of_one_scene_and_picks_in_each() {
         "side view: picked node ",
         "perspective view: picked node ",
         "device memory: one view ",
+        "cadr's host memory: one view ",
     ]);
     let regions: Vec<((u32, u32), (u32, u32))> = (0..4)
         .map(|index| {
@@ -529,21 +530,29 @@ fn quad_view_shows_four_views_of_one_scene_and_picks_in_each() {
             (pair(origin, ','), pair(size, 'x'))
         })
         .collect();
-    // The renderers share the scene on the GPU: four views hold it once, beside their
-    // targets (with a copy each, four views held four times one view's memory).
-    let memory = view
-        .transcript
-        .lines()
-        .find_map(|l| l.strip_prefix("device memory: one view "))
-        .unwrap();
-    let megabytes: Vec<f64> = memory
-        .split(' ')
-        .filter_map(|word| word.parse().ok())
-        .collect();
-    let [one, _, four] = megabytes[..] else {
-        panic!("device memory line: {memory}");
-    };
-    assert!(four < 2.0 * one, "four views {four} MB, one view {one} MB");
+    // The renderers share the scene on the GPU and its mirror on the host: four views hold it
+    // once, beside their targets (with a copy each, four views held four times one view's
+    // memory). Host memory is cadr's own (`CadrMemoryUsage::host_allocated_bytes`), which the
+    // drivers' allocations do not blur as they blur the process's heap.
+    for kind in ["device", "cadr's host"] {
+        let prefix = format!("{kind} memory: one view ");
+        let memory = view
+            .transcript
+            .lines()
+            .find_map(|l| l.strip_prefix(prefix.as_str()))
+            .unwrap_or_else(|| panic!("no '{prefix}' in:\n{}", view.transcript));
+        let megabytes: Vec<f64> = memory
+            .split(' ')
+            .filter_map(|word| word.parse().ok())
+            .collect();
+        let [one, _, four] = megabytes[..] else {
+            panic!("{kind} memory line: {memory}");
+        };
+        assert!(
+            one > 0.0 && four < 2.0 * one,
+            "{kind}: four views {four} MB, one view {one} MB"
+        );
+    }
     let dump = view.grab_and_finish(&display);
     for (index, region) in regions.into_iter().enumerate() {
         // A board seen edge-on (front and side) is a thin line.

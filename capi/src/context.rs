@@ -617,7 +617,8 @@ pub struct CadrMemoryUsage {
     pub device_reserved_bytes: u64,
     /// Bytes of host memory libcadr holds in the whole process (every context): its own heap
     /// allocations and the host memory of the Vulkan objects it creates, which drivers
-    /// allocate through cadr's allocation callbacks. Not the driver's memory allocated without
+    /// allocate through cadr's allocation callbacks (with validation on, the validation
+    /// layer's records of them too). Not the driver's memory allocated without
     /// them (on a CPU driver such as lavapipe, its "device" memory, compiled shaders and
     /// rasterizer memory live in the process's heap too), nor the technique plugins' own
     /// heaps, nor the host's: the measure of what cadr itself keeps on the host, where the

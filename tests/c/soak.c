@@ -1,7 +1,9 @@
 /* soak: a C host that does, over and over, what a CAD tool does all day through the C API --
  * loads a file into the scene, edits it (moves, hides and shows parts), renders, picks, swaps
  * technique plugins, then unloads the file -- and watches its memory: the process's resident
- * size (/proc/self/statm) and the device memory cadr holds (cadr_context_memory_usage).
+ * size (/proc/self/statm), and the device memory and host memory cadr holds
+ * (cadr_context_memory_usage: its host memory is what its own code holds, which the drivers'
+ * allocations do not blur).
  *
  *   soak [--scene SCENE] [--load FILE] [--size WxH] [--validation]
  *        [--seconds S | --iterations N] [--warmup-seconds S | --warmup-iterations N]
@@ -11,11 +13,12 @@
  * generator; default gen:demo) is loaded and unloaded every iteration. Memory is sampled once
  * an iteration, at the same point (after the pick, before the unload). After the warm-up, the
  * highest sample of each kind is compared with the highest of the warm-up: the run fails (exit
- * 1) when either grew by more than P percent (default 1). Each sample is a line of FILE
- * (seconds,iteration,resident_bytes,device_allocated_bytes,device_reserved_bytes,
- * heap_in_use_bytes). The heap in use (glibc's mallinfo2: what is allocated and not freed)
- * is reported beside the resident size, not judged: where resident memory grows and the heap
- * in use does not, the allocator is keeping memory that was freed, not cadr.
+ * 1) when any of the three grew by more than P percent (default 1). Each sample is a line of
+ * FILE (seconds,iteration,resident_bytes,device_allocated_bytes,device_reserved_bytes,
+ * heap_in_use_bytes,cadr_host_bytes). The heap in use (glibc's mallinfo2: what is allocated
+ * and not freed, by cadr, the drivers and this program) is reported beside the resident size,
+ * not judged: where resident memory grows and the heap in use does not, the allocator is
+ * keeping memory that was freed, not cadr.
  * `--keep-loaded` never unloads FILE, so that memory grows: the check of the check. The
  * techniques cycle through N valid (submission, culling) pairs (default 8, spread over all the
  * valid ones); the warm-up lasts at least one cycle, so that every pair's pipelines exist
@@ -182,7 +185,7 @@ static unsigned long long heap_in_use(void) {
 }
 
 struct Extremes {
-  unsigned long long resident, device, heap;
+  unsigned long long resident, device, heap, cadr_host;
 };
 
 static double growth_percent(unsigned long long before, unsigned long long after) {
@@ -202,7 +205,7 @@ int main(int argc, char **argv) {
   int dgc_left_out;
   struct CadrTechniqueSelection *selections;
   size_t selection_count;
-  struct Extremes warm = {0, 0, 0}, after = {0, 0, 0}, last = {0, 0, 0};
+  struct Extremes warm = {0, 0, 0, 0}, after = {0, 0, 0, 0}, last = {0, 0, 0, 0};
   FILE *csv = NULL;
   double start, elapsed = 0.0;
   long iteration = 0, samples_after = 0;
@@ -245,7 +248,7 @@ int main(int argc, char **argv) {
       return 1;
     }
     fprintf(csv, "seconds,iteration,resident_bytes,device_allocated_bytes,device_reserved_bytes,"
-                 "heap_in_use_bytes\n");
+                 "heap_in_use_bytes,cadr_host_bytes\n");
   }
   printf("soak: on %s: %s stays, %s is loaded and unloaded each iteration; %zu technique "
          "combinations swapped in turn; %ux%u%s\n",
@@ -309,19 +312,22 @@ int main(int argc, char **argv) {
     heap = heap_in_use();
     elapsed = now_seconds() - start;
     if (csv != NULL) {
-      fprintf(csv, "%.3f,%ld,%llu,%llu,%llu,%llu\n", elapsed, iteration, resident,
+      fprintf(csv, "%.3f,%ld,%llu,%llu,%llu,%llu,%llu\n", elapsed, iteration, resident,
               (unsigned long long)usage.device_allocated_bytes,
-              (unsigned long long)usage.device_reserved_bytes, heap);
+              (unsigned long long)usage.device_reserved_bytes, heap,
+              (unsigned long long)usage.host_allocated_bytes);
       fflush(csv);
     }
     last.resident = resident;
     last.device = usage.device_reserved_bytes;
     last.heap = heap;
+    last.cadr_host = usage.host_allocated_bytes;
     {
       struct Extremes *phase = warming ? &warm : &after;
       phase->resident = resident > phase->resident ? resident : phase->resident;
       phase->device = last.device > phase->device ? last.device : phase->device;
       phase->heap = heap > phase->heap ? heap : phase->heap;
+      phase->cadr_host = last.cadr_host > phase->cadr_host ? last.cadr_host : phase->cadr_host;
     }
     samples_after += warming ? 0 : 1;
     for (i = 0; i < loaded.node_count && !o.keep_loaded; ++i) {
@@ -360,6 +366,10 @@ int main(int argc, char **argv) {
          "(%+.2f %%)\n",
          warm.device / 1048576.0, after.device / 1048576.0, last.device / 1048576.0,
          growth_percent(warm.device, after.device));
+  printf("soak: cadr's own host memory: warm-up peak %.1f MiB, later peak %.1f MiB, last "
+         "%.1f MiB (%+.2f %%)\n",
+         warm.cadr_host / 1048576.0, after.cadr_host / 1048576.0, last.cadr_host / 1048576.0,
+         growth_percent(warm.cadr_host, after.cadr_host));
   printf("soak: heap in use (not judged): warm-up peak %.1f MiB, later peak %.1f MiB, last "
          "%.1f MiB (%+.2f %%)\n",
          warm.heap / 1048576.0, after.heap / 1048576.0, last.heap / 1048576.0,
@@ -369,7 +379,8 @@ int main(int argc, char **argv) {
     return 1;
   }
   if (growth_percent(warm.resident, after.resident) > o.max_growth_percent ||
-      growth_percent(warm.device, after.device) > o.max_growth_percent) {
+      growth_percent(warm.device, after.device) > o.max_growth_percent ||
+      growth_percent(warm.cadr_host, after.cadr_host) > o.max_growth_percent) {
     fprintf(stderr, "soak: memory grew by more than %.2f %% after the warm-up\n",
             o.max_growth_percent);
     return 1;

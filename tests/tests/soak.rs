@@ -91,4 +91,12 @@ fn memory_stays_flat_while_a_host_loads_edits_renders_picks_and_swaps() {
         "keeping every loaded file must fail the check: {}",
         describe(&growing)
     );
+    // And cadr's own host memory shows it, whatever the driver's heap does.
+    let growth = String::from_utf8_lossy(&growing.stdout)
+        .lines()
+        .find_map(|line| line.strip_prefix("soak: cadr's own host memory: "))
+        .and_then(|line| line.rsplit_once('(').map(|(_, percent)| percent.to_owned()))
+        .and_then(|percent| percent.trim_end_matches(" %)").parse::<f64>().ok())
+        .unwrap_or_else(|| panic!("no cadr host memory line: {}", describe(&growing)));
+    assert!(growth > 3.0, "cadr's own host memory grew {growth} %");
 }

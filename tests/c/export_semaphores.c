@@ -16,6 +16,7 @@
 #define _POSIX_C_SOURCE 200809L
 #include "cadr.h"
 #include "checks.h"
+#include "vulkan_checks.h"
 
 #include <math.h>
 #include <stdio.h>
@@ -28,15 +29,6 @@ enum { W = 96, H = 72, W2 = 80, H2 = 64, FRAMES = 3 };
 
 /* How long the importer waits for a copy of its own, in nanoseconds: far beyond a frame. */
 static const uint64_t IMPORTER_TIMEOUT = 20ull * 1000 * 1000 * 1000;
-
-#define VK_OK(call)                                                                  \
-  do {                                                                               \
-    VkResult vk_result_ = (call);                                                    \
-    if (vk_result_ != VK_SUCCESS) {                                                  \
-      fprintf(stderr, "%s:%d: %s gave %d\n", __FILE__, __LINE__, #call, vk_result_); \
-      exit(1);                                                                       \
-    }                                                                                \
-  } while (0)
 
 /* The importing side: its own instance and device of the same driver. */
 struct Importer {
@@ -70,24 +62,6 @@ static int has_extension(VkPhysicalDevice physical, const char *name) {
       return 1;
     }
   }
-  return 0;
-}
-
-static uint32_t memory_type(VkPhysicalDevice physical, uint32_t bits, VkMemoryPropertyFlags flags) {
-  VkPhysicalDeviceMemoryProperties memory;
-  uint32_t i;
-  vkGetPhysicalDeviceMemoryProperties(physical, &memory);
-  for (i = 0; i < memory.memoryTypeCount; ++i) {
-    if ((bits & (1u << i)) && (memory.memoryTypes[i].propertyFlags & flags) == flags) {
-      return i;
-    }
-  }
-  for (i = 0; i < memory.memoryTypeCount; ++i) {
-    if (bits & (1u << i)) {
-      return i;
-    }
-  }
-  CHECK(!"no memory type");
   return 0;
 }
 

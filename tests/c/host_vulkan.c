@@ -10,6 +10,7 @@
 #define _POSIX_C_SOURCE 200809L
 #include "cadr.h"
 #include "checks.h"
+#include "vulkan_checks.h"
 
 #include <pthread.h>
 #include <stdio.h>
@@ -18,15 +19,6 @@
 #include <vulkan/vulkan.h>
 
 enum { W = 96, H = 72 };
-
-#define VK_OK(call)                                                                  \
-  do {                                                                               \
-    VkResult vk_result_ = (call);                                                    \
-    if (vk_result_ != VK_SUCCESS) {                                                  \
-      fprintf(stderr, "%s:%d: %s gave %d\n", __FILE__, __LINE__, #call, vk_result_); \
-      exit(1);                                                                       \
-    }                                                                                \
-  } while (0)
 
 /* The host's lock on the queue: a mutex, and how often cadr took it. */
 struct QueueLock {
@@ -107,20 +99,6 @@ static VkBool32 *flag(struct Features *f, const char *name) {
     }
   }
   return NULL;
-}
-
-/* A memory type of `physical` among `bits` with `flags`. */
-static uint32_t memory_type(VkPhysicalDevice physical, uint32_t bits, VkMemoryPropertyFlags flags) {
-  VkPhysicalDeviceMemoryProperties memory;
-  uint32_t i;
-  vkGetPhysicalDeviceMemoryProperties(physical, &memory);
-  for (i = 0; i < memory.memoryTypeCount; ++i) {
-    if ((bits & (1u << i)) && (memory.memoryTypes[i].propertyFlags & flags) == flags) {
-      return i;
-    }
-  }
-  fprintf(stderr, "no memory type with flags %x\n", (unsigned)flags);
-  exit(1);
 }
 
 /* The host's side of a frame handed over in its own image: the image, a buffer to read it back,

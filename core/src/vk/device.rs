@@ -60,7 +60,7 @@ pub struct Capabilities {
     /// memory exported as a file descriptor ([`super::FrameExport`]).
     pub external_memory_fd: bool,
     /// `VK_KHR_external_semaphore_fd`: the copies of shared frames synchronise with the other
-    /// API through semaphores exported as file descriptors ([`super::ExportSemaphores`]).
+    /// API through semaphores exported as file descriptors ([`super::FrameExport::share_semaphores`]).
     pub external_semaphore_fd: bool,
 }
 

@@ -10,8 +10,8 @@
 //! - **Waited for** (the default, and where the device cannot share semaphores, as lavapipe
 //!   cannot): the copy is waited for on the CPU before the frame is handed over, so the host
 //!   needs no semaphore.
-//! - **By semaphores** ([`ExportSemaphores`], `VK_KHR_external_semaphore_fd`): the copy
-//!   signals `ready`, which the host's API waits for on its GPU timeline
+//! - **By semaphores** ([`FrameExport::share_semaphores`], `VK_KHR_external_semaphore_fd`):
+//!   the copy signals `ready`, which the host's API waits for on its GPU timeline
 //!   (`glWaitSemaphoreEXT`), and the host signals `released` once it has read the frame
 //!   (`glSignalSemaphoreEXT`), which the next copy waits for before it overwrites the memory.
 //!   Neither side waits on the CPU.
@@ -204,11 +204,6 @@ impl FrameExport {
         Ok(())
     }
 
-    /// Whether frames are handed over by semaphores ([`Self::share_semaphores`]).
-    pub fn shares_semaphores(&self) -> bool {
-        self.semaphores.is_some()
-    }
-
     /// Copies `frame` (in TRANSFER_SRC_OPTIMAL, of this export's extent and colour format) into
     /// the exported buffer, and its `depth` (the same, of the depth format) after it where the
     /// buffer has room for it. Without semaphores it waits for the copy: when it returns, the
@@ -292,7 +287,7 @@ impl Drop for FrameExport {
 /// (`VK_KHR_external_semaphore_fd`): each copy signals `ready`, which the host waits for before
 /// it reads the frame; the host signals `released` when it has read it, which the next copy
 /// waits for before it overwrites the memory.
-pub struct ExportSemaphores {
+struct ExportSemaphores {
     device: Arc<Device>,
     /// Signalled by each copy when the memory holds its frame.
     ready: vk::Semaphore,
@@ -305,7 +300,7 @@ pub struct ExportSemaphores {
 
 impl ExportSemaphores {
     /// Creates both, refused where the device cannot export semaphores as file descriptors.
-    pub fn new(device: &Arc<Device>) -> VkResult<Self> {
+    fn new(device: &Arc<Device>) -> VkResult<Self> {
         let unsupported = |reason: &str| VkError::Unsupported {
             device: device.adapter().name.clone(),
             reason: reason.to_owned(),

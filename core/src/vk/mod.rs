@@ -39,7 +39,7 @@ pub use command::{record_dispatch, record_fullscreen, resubmit_times_us, Command
 pub use device::{Capabilities, Device, DeviceMemoryUsage, DeviceOptions, RawHandles};
 pub use error::{map_result, VkError, VkResult, VkResultExt};
 pub use frame_blit::{BlitTarget, HostImage, ImageOutput};
-pub use frame_export::{ExportSemaphores, FrameExport};
+pub use frame_export::FrameExport;
 pub use image::{
     memory_barrier, read_image, record_image_copy, subresource_range, transition, transition_range,
     Image, ImageShape, TexelImage, COLOR_FORMAT, DEPTH_FORMAT,

@@ -6,10 +6,6 @@ use std::process::Command;
 
 use cadr_tests::c_programs::{build_c_program, describe, repository, scratch_dir};
 
-fn run_suite(name: &str, sources: &[&str], extra: &[&str], env: &[(&str, String)]) {
-    run_program(name, sources, extra, env);
-}
-
 /// Builds `sources` into a program, runs it and returns its standard output, failing the test
 /// unless it succeeded and said its checks passed.
 fn run_program(name: &str, sources: &[&str], extra: &[&str], env: &[(&str, String)]) -> String {
@@ -30,14 +26,14 @@ fn run_program(name: &str, sources: &[&str], extra: &[&str], env: &[(&str, Strin
 
 #[test]
 fn every_function_and_error_path_from_c() {
-    run_suite("c-api", &["tests/c/api_suite.c"], &[], &[]);
+    run_program("c-api", &["tests/c/api_suite.c"], &[], &[]);
 }
 
 /// A host that creates the Vulkan instance and device itself and lends them to cadr
 /// (`cadr_context_create_from_vulkan`): see `tests/c/host_vulkan.c`.
 #[test]
 fn a_context_on_the_hosts_vulkan_draws_what_one_on_its_own_device_draws() {
-    run_suite(
+    run_program(
         "c-host-vulkan",
         &["tests/c/host_vulkan.c"],
         &["-lvulkan", "-lpthread"],
@@ -73,7 +69,7 @@ fn exported_frames_are_handed_over_by_semaphores_where_the_driver_shares_them() 
 #[test]
 fn the_suite_under_address_sanitizer_finds_no_leak_or_invalid_access() {
     let suppressions = repository().join("tests/c/lsan.supp");
-    run_suite(
+    run_program(
         "c-api-asan",
         // Unloaded drivers and layers would hide who kept memory: see keep_libraries_loaded.c.
         &["tests/c/api_suite.c", "tests/c/keep_libraries_loaded.c"],
@@ -109,7 +105,7 @@ const THREADS: [&str; 2] = ["-std=c11", "-pthread"];
 /// succeeds or is refused with a result, with validation on.
 #[test]
 fn the_api_from_several_threads_at_once() {
-    run_suite("c-api-threads", &["tests/c/threads.c"], &THREADS, &[]);
+    run_program("c-api-threads", &["tests/c/threads.c"], &THREADS, &[]);
 }
 
 /// The same under ThreadSanitizer: no data race on what the C program's threads share and
@@ -123,7 +119,7 @@ fn the_api_from_several_threads_at_once() {
 #[test]
 fn the_threads_test_under_thread_sanitizer_finds_no_race() {
     let suppressions = repository().join("tests/c/tsan.supp");
-    run_suite(
+    run_program(
         "c-api-threads-tsan",
         // Suppressions by library need the libraries mapped until exit.
         &["tests/c/threads.c", "tests/c/keep_libraries_loaded.c"],

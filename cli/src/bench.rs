@@ -73,6 +73,10 @@ pub(crate) struct Row {
     pub(crate) lod_error: Option<f32>,
     /// Bytes the GPU scene keeps resident.
     resident_bytes: u64,
+    /// Bytes of host memory cadr's own code held after the row's frames (the scene, the
+    /// techniques, the host memory of the Vulkan objects; not the driver's own,
+    /// `cadr_core::host_heap`).
+    host_allocated_bytes: u64,
 }
 
 /// What one row measured: medians of CPU, GPU, scene update and upload, and the first
@@ -154,6 +158,7 @@ impl Row {
             stats: measured.first,
             lod_error: None,
             resident_bytes: 0,
+            host_allocated_bytes: cadr_core::host_heap::bytes_in_use(),
         }
     }
 
@@ -599,6 +604,7 @@ fn row_json(row: &Row, baseline_cpu: f64) -> serde_json::Value {
         "clusters_drawn": row.clusters_drawn(),
         "lod_error": row.lod_error,
         "resident_bytes": row.resident_bytes,
+        "host_allocated_bytes": row.host_allocated_bytes,
         // Nothing is streamed yet: every cluster stays resident.
         "streamed_bytes": 0,
         "speedup": baseline_cpu / row.cpu_us.max(0.001),

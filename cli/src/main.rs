@@ -1,5 +1,10 @@
 //! `cadr`: render, inspect and benchmark CAD scenes from the command line.
 
+/// Every allocation of the command is counted, so that `bench` rows report the host memory
+/// cadr holds (`host_allocated_bytes`).
+#[global_allocator]
+static HEAP: cadr_core::host_heap::CountingAllocator = cadr_core::host_heap::CountingAllocator;
+
 mod args;
 mod bench;
 mod bench_sweep;

@@ -1491,6 +1491,7 @@ fn bench_measures_clusters_per_lod_error_and_sweeps_the_detail() {
     assert!(rasterized(lod) * 2 < rasterized(full), "{lod} {full}");
     for row in rows {
         assert!(row["resident_bytes"].as_u64().unwrap() > 0, "{row}");
+        assert!(row["host_allocated_bytes"].as_u64().unwrap() > 0, "{row}");
         assert_eq!(row["streamed_bytes"], 0, "{row}");
     }
     assert!(

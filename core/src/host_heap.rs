@@ -1,6 +1,6 @@
 //! Counting the heap memory cadr's own code holds: a global allocator that forwards to the
 //! system's and keeps the bytes in use. The program that links cadr installs it
-//! (`#[global_allocator]`: `libcadr.so` does, for the C API); then every allocation of
+//! (`#[global_allocator]`: `libcadr.so` and the `cadr` command do); then every allocation of
 //! cadr's Rust code counts, and so does the host memory of every Vulkan object cadr creates,
 //! which the drivers allocate through cadr's allocation callbacks
 //! ([`crate::vk`]'s `host_memory`), themselves allocating here.

@@ -150,10 +150,17 @@ fn devices() -> Result<(), String> {
         let yes_no = |has: bool| if has { "yes" } else { "no" };
         let mesh_shaders = yes_no(adapter.mesh_shader);
         let generated_commands = yes_no(adapter.device_generated_commands);
+        // How an OpenGL host gets the frames (`cadr_renderer_create_for_export`,
+        // `cadr_renderer_export_semaphores`).
+        let frames_to_opengl = match (adapter.external_memory_fd, adapter.external_semaphore_fd) {
+            (true, true) => "shared memory and semaphores",
+            (true, false) => "shared memory, each copy waited for",
+            (false, _) => "read back",
+        };
         println!(
             "{}: {} ({:?}, Vulkan {}.{}, MSAA {}, textures {textures}, hidden silhouettes \
              {hidden_silhouettes}, mesh shaders {mesh_shaders}, device-generated commands \
-             {generated_commands})",
+             {generated_commands}, frames to OpenGL {frames_to_opengl})",
             adapter.index,
             adapter.name,
             adapter.device_type,

@@ -1034,6 +1034,9 @@ fn bench_measures_a_list_of_display_modes_with_highlighted_nodes() {
 fn msaa_anti_aliases_render_and_bench_measures_each_level() {
     let devices = stdout(&cadr(&["devices"]));
     assert!(devices.contains("MSAA "), "{devices}");
+    // How an OpenGL host gets the frames (on Mesa 25's lavapipe: shared memory, each copy
+    // waited for; on SwiftShader: shared memory and semaphores).
+    assert!(devices.contains("frames to OpenGL "), "{devices}");
     let dir = std::env::temp_dir().join(format!("cadr-cli-msaa-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     let render = |samples: &str| {

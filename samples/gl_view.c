@@ -170,7 +170,7 @@ int main(int argc, char **argv) {
   start = now_seconds();
   for (frame = 0; frame < frames && !glfwWindowShouldClose(window); ++frame) {
     orbit_camera(&bounds, 6.2831853 * frame / (frames > 0 ? frames : 1), &camera);
-    CADR_CHECK(cadr_renderer_render(view.renderer, scene, &camera, NULL));
+    gl_frames_render(&view, scene, &camera, NULL);
     read_back += gl_frames_update(&view);
     if (gl_frames_has_depth(&view)) {
       gl_frames_begin_drawing(&view);

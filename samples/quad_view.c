@@ -111,7 +111,7 @@ static size_t draw(struct QuadView *q, int timed) {
     int x, y;
     memset(&stats, 0, sizeof stats);
     stats.size = sizeof stats;
-    CADR_CHECK(cadr_renderer_render(q->views[i].renderer, q->scene, &q->cameras[i], &stats));
+    gl_frames_render(&q->views[i], q->scene, &q->cameras[i], &stats);
     if (timed) {
       q->cpu_us[i] += stats.cpu_us;
     }
@@ -260,7 +260,7 @@ int main(int argc, char **argv) {
       struct CadrFrameStats stats;
       memset(&stats, 0, sizeof stats);
       stats.size = sizeof stats;
-      CADR_CHECK(cadr_renderer_render(q.views[0].renderer, q.scene, &q.cameras[0], &stats));
+      gl_frames_render(&q.views[0], q.scene, &q.cameras[0], &stats);
       one_view = memory_usage(context);
       one_view_heap = heap_bytes() - heap_before;
     }

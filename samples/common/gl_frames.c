@@ -283,9 +283,22 @@ int gl_frames_has_depth(const struct GlFrames *frames) {
   return frames->depth_texture != 0;
 }
 
+void gl_frames_render(struct GlFrames *frames, CadrScene scene, const CadrCamera *camera,
+                      CadrFrameStats *stats) {
+  if (frames->frame_pending && frames->ready_semaphore != 0) {
+    gl_frames_update(frames); /* its semaphores must be spent before the next frame's */
+  }
+  CADR_CHECK(cadr_renderer_render(frames->renderer, scene, camera, stats));
+  frames->frame_pending = 1;
+}
+
 size_t gl_frames_update(struct GlFrames *frames) {
   size_t read_back = 0;
   const GLsizei width = (GLsizei)frames->width, height = (GLsizei)frames->height;
+  if (frames->ready_semaphore != 0 && !frames->frame_pending) {
+    return 0; /* the textures hold the last frame; its semaphores are spent */
+  }
+  frames->frame_pending = 0;
   glBindTexture(GL_TEXTURE_2D, frames->texture);
   if (frames->pixel_buffer != 0) {
     /* From the shared memory to the textures, on the GPU: after cadr's copy where the frames

@@ -26,6 +26,9 @@ struct GlFrames {
   /* Where both drivers share semaphores: cadr's `ready` and the host's `released`, imported
    * (0 when cadr waits for each frame's copy instead). */
   unsigned ready_semaphore, released_semaphore;
+  /* Whether the renderer has rendered a frame that gl_frames_update has not brought in yet:
+   * with semaphores, each frame is waited for and released exactly once. */
+  int frame_pending;
   /* With depth: the depth texture beside the colour in the framebuffer, and where the depth
    * starts in the exported memory (0 without depth). */
   unsigned depth_texture;
@@ -65,9 +68,15 @@ int gl_frames_shared(const struct GlFrames *frames);
 /* Whether the frames bring their depth (GL_FRAMES_DEPTH). */
 int gl_frames_has_depth(const struct GlFrames *frames);
 
-/* Brings the renderer's last frame (and its depth) into the frames' textures; call it once
- * after every cadr_renderer_render (with semaphores, each frame is waited for and released
- * once). Returns the bytes read back through the CPU (0 on the shared path). */
+/* Renders a frame of `scene` from `camera` (cadr_renderer_render, `stats` may be NULL) for
+ * gl_frames_update to bring in. With semaphores, a frame rendered before and never brought in
+ * is brought in first: each frame must be waited for and released before the next. */
+void gl_frames_render(struct GlFrames *frames, CadrScene scene, const CadrCamera *camera,
+                      CadrFrameStats *stats);
+
+/* Brings the renderer's last frame (and its depth) into the frames' textures. Called again
+ * for the same frame, it brings nothing on the semaphore path (the textures hold it already).
+ * Returns the bytes read back through the CPU (0 on the shared path). */
 size_t gl_frames_update(struct GlFrames *frames);
 
 /* The last frame's depth (width x height floats, the top row first) in host memory: read

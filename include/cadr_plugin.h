@@ -20,7 +20,7 @@
 #define CADR_PLUGIN_ABI_MAJOR 1
 
 // Minor version of this ABI: additions that older readers may ignore.
-#define CADR_PLUGIN_ABI_MINOR 20
+#define CADR_PLUGIN_ABI_MINOR 21
 
 // `(major << 16) | minor`, what [`CadrPluginVersionFn`] returns.
 #define CADR_PLUGIN_ABI_VERSION ((CADR_PLUGIN_ABI_MAJOR << 16) | CADR_PLUGIN_ABI_MINOR)
@@ -374,8 +374,9 @@ typedef struct CadrSceneView {
   struct CadrBufferRef cull_buffer;
   // Since ABI 1.14 (read it only when `size` covers it): the host's extension structs for
   // this view (a chain of [`CadrExtension`]s, or null), valid as long as the view:
-  // [`CadrSceneClusters`] where the scene has clusters, and since 1.20 their
-  // [`CadrSceneClusterBoxes`] and the parts' [`CadrScenePartBoxes`].
+  // [`CadrSceneClusters`] where the scene has clusters, since 1.20 their
+  // [`CadrSceneClusterBoxes`] and the parts' [`CadrScenePartBoxes`], and since 1.21
+  // [`CadrSceneStreaming`] where the scene streams its geometry.
   const struct CadrExtension *extensions;
 } CadrSceneView;
 
@@ -968,6 +969,262 @@ typedef struct CadrTransparencyVtable {
                        struct CadrMessage *message);
 } CadrTransparencyVtable;
 
+// Since ABI 1.3: what a GPU culler reads per instance id from [`CadrSceneView::cull_buffer`]
+// (48 bytes, little-endian, std430-compatible): the bounding sphere and the ranges each pass
+// draws, so that a compute shader can test an instance and write its indirect command.
+typedef struct CadrCullEntry {
+  // The part's bounding sphere in object space: centre xyz, radius w.
+  float sphere[4];
+  // First triangle index (absolute in the index buffer).
+  uint32_t first_index;
+  // Triangle index count.
+  uint32_t index_count;
+  // First edge index (absolute in the wire index buffer).
+  uint32_t first_wire_index;
+  // Edge index count.
+  uint32_t wire_index_count;
+  // The geometry's first vertex (the draw's `vertexOffset`).
+  uint32_t vertex_base;
+  // Matrix slot.
+  uint32_t matrix;
+  // `CADR_INSTANCE_*` bits, with [`CADR_INSTANCE_CANDIDATE`].
+  uint32_t flags;
+  // Since ABI 1.14, where the scene view has [`CadrSceneClusters`]: the part's first
+  // cluster in its cluster buffer (before, zero).
+  uint32_t first_cluster;
+} CadrCullEntry;
+
+// Since ABI 1.14 ([`CADR_EXTENSION_SCENE_CLUSTERS`]): every part's triangles as clusters of
+// at most 128 triangles and 128 vertices, with the coarser clusters of its level-of-detail
+// DAG. A part's clusters are contiguous in `cluster_buffer` from its cull entry's
+// [`CadrCullEntry::first_cluster`]; its original clusters ([`CADR_CLUSTER_ORIGINAL`]) come
+// first, and their index ranges tile the part's own range (`first_index`, `index_count` of the
+// instance) in order, so drawing them all draws exactly the part's triangles. The coarser
+// clusters' indices lie after the geometry's own, in the same index buffer, and name the
+// same vertices. Written by the host with the geometry; owned by the host.
+typedef struct CadrSceneClusters {
+  // `kind` = [`CADR_EXTENSION_SCENE_CLUSTERS`].
+  struct CadrExtension header;
+  // [`CadrCluster`] per cluster (storage buffer).
+  struct CadrBufferRef cluster_buffer;
+  // Number of clusters in `cluster_buffer`.
+  uint32_t cluster_count;
+  // Number of groups in `group_buffer`.
+  uint32_t group_count;
+  // [`CadrClusterGroup`] per group of the level-of-detail DAGs (storage buffer).
+  struct CadrBufferRef group_buffer;
+  // The clusters of the candidate instances, summed ([`CadrCluster::part_clusters`] of each
+  // candidate's part): a bound on the cluster draws one pass of a frame can need.
+  uint64_t candidate_clusters;
+  // The clusters of the candidates' coarsest cuts (those in groups of error `f32::MAX`),
+  // summed: the room that draws every candidate at its coarsest. A culler with less room
+  // than `candidate_clusters` keeps this much for parts whose cut does not fit its budget,
+  // so that no part is left out.
+  uint64_t candidate_coarsest_clusters;
+} CadrSceneClusters;
+
+// Since ABI 1.14: one cluster of [`CadrSceneClusters::cluster_buffer`] (64 bytes,
+// little-endian, std430-compatible). Which clusters make a picture at a given error: those
+// whose own group's error ([`CadrCluster::group`]) projects over the threshold and whose
+// `refined` group's error projects at or under it (an original cluster's error is 0); each
+// group's error and sphere are the same for all its clusters, and errors only grow from the
+// refined to the coarser, so the chosen clusters tile the surface without cracks or overlaps.
+typedef struct CadrCluster {
+  // Bounding sphere of the cluster's triangles in object space: centre xyz, radius w.
+  float sphere[4];
+  // Apex of the normal cone (object space).
+  float cone_apex[3];
+  // The cone's cutoff: seen from an eye at `e`, every triangle faces away when
+  // `dot(normalize(cone_apex - e), cone_axis) >= cone_cutoff` (orthographic views:
+  // `dot(view_direction, cone_axis) >= cone_cutoff`). Above 1 when the triangles face too
+  // many ways for any test. Valid only for a transform that keeps angles (a rotation, a
+  // uniform scale, a mirror) and a part whose back faces cannot show.
+  float cone_cutoff;
+  // Axis of the normal cone (object space, unit length; triangles wound counter-clockwise).
+  float cone_axis[3];
+  // First triangle index (absolute in the index buffer).
+  uint32_t first_index;
+  // Triangle index count (a multiple of 3).
+  uint32_t index_count;
+  // The group the cluster belongs to (an index into the group buffer): its error is what
+  // drawing the coarser clusters instead would cost.
+  uint32_t group;
+  // The group whose simplification made this cluster (its error is this cluster's), or
+  // [`CADR_CLUSTER_ORIGINAL`].
+  uint32_t refined;
+  // How many clusters the part has (the same in each of its clusters).
+  uint32_t part_clusters;
+} CadrCluster;
+
+// Since ABI 1.14: one group of a level-of-detail DAG in [`CadrSceneClusters::group_buffer`]
+// (32 bytes, std430-compatible): neighbouring clusters simplified together, their shared
+// border kept.
+typedef struct CadrClusterGroup {
+  // The sphere the error is measured from (object space): centre xyz, radius w. It holds
+  // the spheres of the groups it was made from.
+  float sphere[4];
+  // The object-space error of the coarser clusters made from this group (the largest
+  // distance their surface may lie from the original); `f32::MAX` for a group that was
+  // not simplified further (its clusters are the part's coarsest).
+  float error;
+  // Level in the DAG: 0 for groups of original clusters; [`CADR_CLUSTER_PROXY_DEPTH`] for a
+  // part's proxies (since 1.16).
+  uint32_t depth;
+  // The group's first cluster in the cluster buffer: a group's clusters are contiguous,
+  // and a part's groups, in the group buffer, cover its clusters in order (a culler may
+  // walk a part group by group, skipping the clusters of a group its cut leaves out).
+  uint32_t first_cluster;
+  // How many clusters the group has.
+  uint32_t cluster_count;
+} CadrClusterGroup;
+
+// Since ABI 1.14 ([`CADR_EXTENSION_CLUSTER_CULL`]): what a cluster culler needs of the frame
+// beyond [`CadrGpuCullContext`]. Owned by the host, valid for the call.
+typedef struct CadrClusterCull {
+  // `kind` = [`CADR_EXTENSION_CLUSTER_CULL`].
+  struct CadrExtension header;
+  // The level-of-detail threshold in pixels: the clusters drawn are the coarsest whose error
+  // projects at or under it. 0 draws every part at full detail (its original clusters).
+  float lod_error;
+  // Number of entries at `back_faces_hidden` (the cull context's `pass_count`).
+  uint32_t pass_count;
+  // Per pass, nonzero when the pass draws surfaces with depth test and depth writes, so
+  // that the back faces of a closed opaque part never show in it: the culler may drop
+  // clusters that face away from the eye, for closed parts
+  // ([`CADR_INSTANCE_CLOSED`]) that are not translucent and that no section plane cuts.
+  const uint32_t *back_faces_hidden;
+} CadrClusterCull;
+
+// Since ABI 1.15 ([`CADR_EXTENSION_FRAME_SLOT`]): which of the host's frames in flight is being
+// recorded. The host lets the GPU work on up to `slot_count` frames while it records the next;
+// frame `n` uses slot `n % slot_count`, and a recording made for a slot is submitted again
+// (replayed) only by later frames of the same slot. A technique that announces
+// [`CADR_TRAIT_FRAME_SLOTS`] keeps one copy per slot of what it writes for a frame on the host
+// (host-visible buffers, descriptor sets, secondary command buffers) and writes only the
+// copy of `slot` while `earlier_frames_finished` is 0. Owned by the host; valid as long as
+// the view it hangs from.
+typedef struct CadrFrameSlot {
+  // `kind` = [`CADR_EXTENSION_FRAME_SLOT`].
+  struct CadrExtension header;
+  // The slot of the frame being recorded, `0..slot_count`.
+  uint32_t slot;
+  // How many frames the host may have in flight (1 to 3): the copies a technique keeps.
+  uint32_t slot_count;
+  // 1 when the GPU has finished every earlier frame, so that the technique may write any of
+  // its memory and descriptor sets; 0 when frames of other slots may still run. (A
+  // recording made for another slot is submitted again only while every frame since has
+  // recorded the same commands, as a host of one slot replays its one recording.) The host waits, and sets 1, whenever the
+  // scene view's generations, the frame's passes, the active techniques or the target
+  // changed since the last frame, when the frame uploads scene data, for pick frames, and
+  // in every frame where an active technique does not announce [`CADR_TRAIT_FRAME_SLOTS`].
+  uint32_t earlier_frames_finished;
+  // Zero.
+  uint32_t reserved;
+} CadrFrameSlot;
+
+// Since ABI 1.18 ([`CADR_EXTENSION_BACK_FACE_PASSES`]): the host draws opaque surfaces in two
+// passes, one whose pipeline culls back faces for the closed parts and one that draws both
+// faces for the rest; the route of each pass says which instances it takes. A
+// [`CADR_FACES_CULLED`] pass is always followed by its [`CADR_FACES_KEPT`] pass. The host
+// chains it only for a culler that announces [`CADR_TRAIT_ROUTES_BACK_FACES`], and such a
+// culler writes every instance into exactly one of the two passes (the route is decided per
+// instance, the same way in every phase of a frame). Owned by the host, valid for the call.
+typedef struct CadrBackFacePasses {
+  // `kind` = [`CADR_EXTENSION_BACK_FACE_PASSES`].
+  struct CadrExtension header;
+  // Number of entries at `routes` (the cull context's `pass_count`).
+  uint32_t pass_count;
+  // Per pass, a `CADR_FACES_*` route.
+  const CadrFaceRoute *routes;
+} CadrBackFacePasses;
+
+// Since ABI 1.19 ([`CADR_EXTENSION_SHARED_FACE_STREAMS`], chained beside
+// [`CadrBackFacePasses`] where the active submission announces
+// [`CADR_TRAIT_SWITCHES_PIPELINES`]): the submission draws each split's two passes from one
+// stream. A culler that honours it writes the commands of each [`CADR_FACES_CULLED`] pass
+// and of the [`CADR_FACES_KEPT`] pass after it into one stream with one count, each command
+// preceded by a `u32` naming its pass (0 the culled pass, whose pipeline culls back faces; 1
+// the kept pass): commands 24 bytes apart (`stride` 24 or more), the word at each command's
+// start, the `VkDrawIndexedIndirectCommand` 4 bytes after it. It sets the draws of both
+// passes to that same stream ([`CadrGpuDraws`] equal field for field, `commands_offset` at the
+// first command's word): a submission sees a shared stream as two consecutive passes with
+// equal draws. A culler that does not know the kind writes two streams as in ABI 1.18, which
+// a submission that announces the trait draws as two. Owned by the host, valid for the call.
+typedef struct CadrSharedFaceStreams {
+  // `kind` = [`CADR_EXTENSION_SHARED_FACE_STREAMS`]; the kind says it all.
+  struct CadrExtension header;
+} CadrSharedFaceStreams;
+
+// Since ABI 1.20 ([`CADR_EXTENSION_SCENE_CLUSTER_BOXES`]): every cluster's box, one
+// [`CadrBox`] per cluster of [`CadrSceneClusters::cluster_buffer`], at the same index.
+// The box holds the cluster's triangles in object space, as the sphere does; placed by the
+// instance's matrix it is an oriented box, much tighter than the sphere around flat or long
+// clusters (panels, plates, shafts), so a culler that tests it against a depth pyramid finds
+// more of them hidden. Written by the host with the geometry; owned by the host.
+typedef struct CadrSceneClusterBoxes {
+  // `kind` = [`CADR_EXTENSION_SCENE_CLUSTER_BOXES`].
+  struct CadrExtension header;
+  // [`CadrBox`] per cluster (storage buffer), as many as
+  // [`CadrSceneClusters::cluster_count`].
+  struct CadrBufferRef box_buffer;
+} CadrSceneClusterBoxes;
+
+// Since ABI 1.20 ([`CADR_EXTENSION_SCENE_PART_BOXES`]): the box of every instance's part, one
+// [`CadrBox`] per instance id, beside its cull entry ([`CadrSceneView::cull_buffer`]), in the
+// same object space as the entry's sphere and as tight as the part's triangles allow. Placed by
+// the instance's matrix it is an oriented box, far tighter than the sphere around a panel, a
+// plate or a shaft: a culler that tests it against the frustum, the section planes and a depth
+// pyramid finds more of them outside or hidden. Written by the host with the cull entries (the
+// entries of ids not in use are zero); owned by the host.
+typedef struct CadrScenePartBoxes {
+  // `kind` = [`CADR_EXTENSION_SCENE_PART_BOXES`].
+  struct CadrExtension header;
+  // [`CadrBox`] per instance id (storage buffer), as many as the cull buffer has entries.
+  struct CadrBufferRef box_buffer;
+} CadrScenePartBoxes;
+
+// Since ABI 1.20: a box in object space, as [`CadrSceneClusterBoxes::box_buffer`] and
+// [`CadrScenePartBoxes::box_buffer`] hold them (32 bytes, little-endian, std430-compatible: two
+// `vec4`s): the smallest box along the object's axes that holds a cluster's or a part's
+// vertices, a hair larger so that rounding leaves none outside.
+typedef struct CadrBox {
+  // The box's centre in object space.
+  float center[3];
+  // Since ABI 1.21, in part boxes only ([`CadrScenePartBoxes`]), where the scene streams
+  // ([`CadrSceneStreaming`]): the object-space error of the part's coarse form against its
+  // full detail, positive while the GPU holds the coarse form and negated while it holds
+  // the full detail (a culler asks for either where the error projects over its
+  // threshold: to get the full detail, or to keep it); zero where the scene does not stream
+  // (and always zero in cluster boxes).
+  float coarse_error;
+  // Half its size along each object axis (zero or more).
+  float half_extent[3];
+  // Zero.
+  float reserved1;
+} CadrBox;
+
+// Since ABI 1.21 ([`CADR_EXTENSION_SCENE_STREAMING`]): the scene streams its geometry under a
+// memory budget. A geometry whose full detail the GPU does not hold is drawn in a coarse form
+// (a coarse cut of each part's level-of-detail DAG, about an eighth of its triangles), and the part boxes
+// ([`CadrScenePartBoxes`]) of its instances carry that form's error
+// ([`CadrBox::coarse_error`]). A GPU culler that draws an instance whose part box carries an
+// error, and finds it projecting over its threshold in pixels (its level-of-detail
+// threshold, or 0 for a culler without one), sets the instance's bit in `request_buffer`; the
+// host reads the bits after the frame and brings the geometries asked for to full detail (or
+// keeps them there), within its budget, those least recently asked for back to coarse first. Bits are only ever set by the GPU (an atomic or); the host
+// clears the buffer between frames. Owned by the host; the buffer may be replaced, with the
+// view's `buffers_generation` moved.
+typedef struct CadrSceneStreaming {
+  // `kind` = [`CADR_EXTENSION_SCENE_STREAMING`].
+  struct CadrExtension header;
+  // One bit per instance id (bit `id % 32` of 32-bit word `id / 32`), storage buffer.
+  struct CadrBufferRef request_buffer;
+  // Words in `request_buffer`: an id past them asks for nothing.
+  uint32_t request_word_count;
+  // Zero.
+  uint32_t reserved;
+} CadrSceneStreaming;
+
 // Success.
 #define CADR_STATUS_OK 0
 
@@ -1204,6 +1461,9 @@ typedef struct CadrTransparencyVtable {
 // Since ABI 1.20: the kind of [`CadrScenePartBoxes`], chained on
 // [`CadrSceneView::extensions`].
 #define CADR_EXTENSION_SCENE_PART_BOXES 7
+
+// Since ABI 1.21: the kind of [`CadrSceneStreaming`], chained on [`CadrSceneView::extensions`].
+#define CADR_EXTENSION_SCENE_STREAMING 8
 
 // Every instance the pass's filter keeps (what passes without a route draw).
 #define CADR_FACES_ANY 0

@@ -73,6 +73,9 @@ pub(crate) struct Row {
     pub(crate) lod_error: Option<f32>,
     /// Bytes the GPU scene keeps resident.
     resident_bytes: u64,
+    /// Bytes the GPU scene's geometry streaming brought to the GPU during the row's frames (its
+    /// warm-up included).
+    streamed_bytes: u64,
     /// Bytes of host memory cadr's own code held after the row's frames (the scene, the
     /// techniques, the host memory of the Vulkan objects; not the driver's own,
     /// `cadr_core::host_heap`).
@@ -158,6 +161,7 @@ impl Row {
             stats: measured.first,
             lod_error: None,
             resident_bytes: 0,
+            streamed_bytes: 0,
             host_allocated_bytes: cadr_core::host_heap::bytes_in_use(),
         }
     }
@@ -411,12 +415,14 @@ impl Bench {
     ) -> Result<Row, String> {
         session.choose(&Combination::built_in(), ShadeMode::Solid)?;
         session.techniques().set_frame_replay(false);
+        let streamed_before = session.streamed_bytes();
         let measured = measure(self.frames, |frame| {
             session.render_moving(motion, view, frame)
         })?;
         let transforms = session.techniques().transforms();
         let baseline = Row {
             resident_bytes: session.resident_bytes(),
+            streamed_bytes: session.streamed_bytes() - streamed_before,
             ..Row::new("baseline (built-in)".into(), "solid", transforms, measured)
         };
         session.techniques().set_frame_replay(self.frame_replay);
@@ -444,6 +450,7 @@ impl Bench {
                 .map_err(|e| e.to_string())?;
         }
         session.techniques().set_dashed_hidden_lines(setting.dashed);
+        let streamed_before = session.streamed_bytes();
         let measured = measure(self.frames, |frame| {
             session.render_moving(motion, view, frame)
         })?;
@@ -456,6 +463,7 @@ impl Bench {
             highlight_style: setting.highlight_style,
             lod_error,
             resident_bytes: session.resident_bytes(),
+            streamed_bytes: session.streamed_bytes() - streamed_before,
             ..Row::new(combination.to_string(), mode.name(), transforms, measured)
         })
     }
@@ -605,8 +613,7 @@ fn row_json(row: &Row, baseline_cpu: f64) -> serde_json::Value {
         "lod_error": row.lod_error,
         "resident_bytes": row.resident_bytes,
         "host_allocated_bytes": row.host_allocated_bytes,
-        // Nothing is streamed yet: every cluster stays resident.
-        "streamed_bytes": 0,
+        "streamed_bytes": row.streamed_bytes,
         "speedup": baseline_cpu / row.cpu_us.max(0.001),
     })
 }

@@ -262,6 +262,16 @@ fn render(args: &RenderArgs, process_start: Instant) -> Result<(), String> {
         spent.ms(Phase::Load),
         spent.ms(Phase::Upload)
     );
+    if let Some(report) = session.streaming() {
+        let mb = |bytes: u64| bytes as f64 / 1e6;
+        println!(
+            "streaming:   {:.1} of {:.1} MB of full-detail geometry on the GPU (budget {:.1} MB), {:.1} MB streamed",
+            mb(report.full_bytes),
+            mb(report.total_full_bytes),
+            mb(report.budget),
+            mb(report.streamed_bytes)
+        );
+    }
     if args.validation.requested() {
         println!("validation:  {validation_errors} errors");
     }

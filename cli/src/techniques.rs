@@ -183,6 +183,17 @@ impl TechniqueSession {
         self.view.scene().map_or(0, |scene| scene.resident_bytes())
     }
 
+    /// What the scene's geometry streaming holds and has done, where the scene streams under
+    /// the memory budget.
+    pub fn streaming(&self) -> Option<cadr_core::gpu_scene::StreamingReport> {
+        self.view.scene()?.streaming()
+    }
+
+    /// Bytes streamed to the GPU since the scene was made (0 where it does not stream).
+    pub fn streamed_bytes(&self) -> u64 {
+        self.streaming().map_or(0, |report| report.streamed_bytes)
+    }
+
     /// Sets the level-of-detail threshold (`--lod-error`) of a cluster culler; refused with a
     /// culler that draws every part whole (it would be ignored).
     pub fn set_lod_error(&mut self, lod_error: Option<f32>) -> Result<(), String> {

@@ -16,6 +16,7 @@ use crate::error::RenderResult;
 use crate::vk::raw as vk;
 
 use super::clusters::{self, GeometryClusters};
+use super::streaming::{CoarseForm, PartBounds, Streaming, StreamingPlan};
 use crate::graph::{GeometryHandle, SceneGraph};
 use crate::scene::closure::{closure, Closure};
 use crate::scene::edges::{feature_edges, DEFAULT_CREASE_DEGREES};
@@ -94,6 +95,65 @@ fn arena_data(geometry: &Geometry) -> ArenaData<'_> {
         parts,
         clusters,
     }
+}
+
+/// Device bytes of a geometry of `sizes` elements (with texture coordinates and colours per
+/// vertex where `attributes`).
+fn bytes_of(sizes: Extent, attributes: bool) -> u64 {
+    let [vertices, indices, wire, clusters, groups] = sizes.map(u64::from);
+    let vertex_bytes = std::mem::size_of::<Vertex>() as u64
+        + if attributes {
+            std::mem::size_of::<VertexAttributes>() as u64
+        } else {
+            0
+        };
+    vertices * vertex_bytes
+        + (indices + wire) * 4
+        + clusters * (CLUSTER_BYTES + CLUSTER_BOX_BYTES) as u64
+        + groups * GROUP_BYTES as u64
+}
+
+/// The coarse form of the geometry `data` was made from, with its full-detail bytes.
+fn coarse_form(
+    geometry: &Geometry,
+    data: &ArenaData<'_>,
+    attributes: bool,
+) -> (u64, Option<CoarseForm>) {
+    let bytes = bytes_of(data.sizes(), attributes);
+    let parts = part_entries(data)
+        .into_iter()
+        .map(|p| PartBounds {
+            sphere: p.sphere,
+            bounds: p.bounds,
+            shape: p.shape,
+        })
+        .collect();
+    (bytes, CoarseForm::of(geometry, &data.clusters, parts))
+}
+
+/// The entries of a coarse form's parts as placed (`placed`, made from the coarse geometry):
+/// their ranges, with the full detail's bounds and shape and the form's error.
+fn coarse_part_entries(form: &CoarseForm, mut placed: Vec<PartEntry>) -> Vec<PartEntry> {
+    let full = form.full_parts.iter().zip(&form.errors);
+    for (part, (full, &error)) in placed.iter_mut().zip(full) {
+        part.sphere = full.sphere;
+        part.bounds = abi::CadrBox {
+            coarse_error: error.max(f32::MIN_POSITIVE),
+            ..full.bounds
+        };
+        part.shape = full.shape;
+    }
+    placed
+}
+
+/// The entries of a streamed geometry's parts at full detail (`placed`): each part box
+/// carries its coarse form's error negated, so that the cullers keep asking for the full detail
+/// where it is still needed (and it is not put back in its coarse form).
+fn full_part_entries(form: &CoarseForm, mut placed: Vec<PartEntry>) -> Vec<PartEntry> {
+    for (part, &error) in placed.iter_mut().zip(&form.errors) {
+        part.bounds.coarse_error = -error.max(f32::MIN_POSITIVE);
+    }
+    placed
 }
 
 impl ArenaData<'_> {
@@ -332,10 +392,13 @@ pub(super) struct GeometryArenas {
     /// Whether some geometry has texture coordinates or colours.
     pub(super) has_attributes: bool,
     pub(super) places: Vec<Option<GeometryPlace>>,
+    /// Where the scene streams its geometry: which geometries are at full detail.
+    pub(super) streaming: Option<Streaming>,
 }
 
 /// Every geometry of a graph one after the other, in slot order: the arenas' contents and
-/// the places.
+/// the places (each geometry in its coarse form where the scene streams and its full detail
+/// is not on the GPU).
 struct Layout {
     vertices: Vec<Vertex>,
     indices: Vec<u32>,
@@ -343,60 +406,175 @@ struct Layout {
     clusters: Vec<u8>,
     cluster_boxes: Vec<u8>,
     groups: Vec<u8>,
+    /// Texture coordinates and colours laid out like `vertices`, where some geometry has them.
+    attributes: Option<Vec<VertexAttributes>>,
     places: Vec<Option<GeometryPlace>>,
+    /// Elements every geometry's full detail would take, summed, and the most one takes.
+    full_sizes: Extent,
+    largest: Extent,
 }
 
 impl Layout {
-    fn of(graph: &SceneGraph) -> Self {
+    /// Lays `graph` out; starts streaming (`streaming`) where its full detail needs more than
+    /// the memory budget.
+    fn of(
+        device: &Arc<Device>,
+        graph: &SceneGraph,
+        streaming: &mut Option<Streaming>,
+    ) -> RenderResult<Self> {
         let (_, geometry_slots, _) = graph.capacities();
-        let mut vertices: Vec<Vertex> = Vec::new();
-        let mut indices: Vec<u32> = Vec::new();
-        let mut wire: Vec<u32> = Vec::new();
-        let mut clusters: Vec<u8> = Vec::new();
-        let mut cluster_boxes: Vec<u8> = Vec::new();
-        let mut groups: Vec<u8> = Vec::new();
+        let has_attributes = (0..geometry_slots as u32)
+            .filter_map(|slot| graph.geometry_at(slot))
+            .any(|g| !g.attributes.is_empty());
         // The clusters are built on a thread per core, the geometries laid out in slot order.
         let slots: Vec<u32> = (0..geometry_slots as u32).collect();
-        let data = crate::parallel::map(&slots, |&slot| {
+        let full = crate::parallel::map(&slots, |&slot| {
             let handle = graph.geometry_handle_at(slot)?;
             Some((handle, arena_data(graph.geometry_at(slot)?)))
         });
-        let places = data
-            .iter()
-            .map(|data| {
-                let (handle, data) = data.as_ref()?;
-                let first_group = (groups.len() / GROUP_BYTES) as u32;
-                let first_index = indices.len() as u32;
-                let place = GeometryPlace {
-                    handle: *handle,
-                    vertex_base: vertices.len() as u32,
-                    first_index: indices.len() as u32,
-                    first_wire_index: wire.len() as u32,
-                    first_cluster: (clusters.len() / CLUSTER_BYTES) as u32,
-                    first_group,
-                    room: data.sizes(),
-                    parts: part_entries(data),
-                    part_clusters: data.clusters.part_ranges.clone(),
-                };
-                vertices.extend_from_slice(data.vertices);
-                indices.extend_from_slice(&data.clusters.indices);
-                indices.extend_from_slice(&data.clusters.lod_indices);
-                wire.extend_from_slice(&data.wire);
-                groups.extend(data.group_bytes(place.first_cluster));
-                clusters.extend(data.cluster_bytes(first_index, first_group));
-                cluster_boxes.extend(data.cluster_box_bytes());
-                Some(place)
-            })
-            .collect();
-        Self {
-            vertices,
-            indices,
-            wire,
-            clusters,
-            cluster_boxes,
-            groups,
-            places,
+        let mut full_sizes: Extent = [0; 5];
+        let mut largest: Extent = [0; 5];
+        for (_, data) in full.iter().flatten() {
+            for ((total, most), n) in full_sizes.iter_mut().zip(&mut largest).zip(data.sizes()) {
+                *total = total.saturating_add(n);
+                *most = (*most).max(n);
+            }
         }
+        if streaming.is_none() {
+            let budget = crate::memory_budget::budget().unwrap_or(u64::MAX);
+            if bytes_of(full_sizes, has_attributes) > budget {
+                *streaming = Some(Streaming::new(device, budget)?);
+            }
+        }
+        let coarse: Vec<Option<Arc<CoarseForm>>> = match streaming.as_mut() {
+            None => Vec::new(),
+            Some(streaming) => (full.iter().enumerate())
+                .map(|(slot, entry)| {
+                    let (handle, data) = entry.as_ref()?;
+                    let geometry = graph.geometry_at(slot as u32)?;
+                    streaming.form_to_place(slot as u32, *handle, || {
+                        coarse_form(geometry, data, has_attributes)
+                    })
+                })
+                .collect(),
+        };
+        let coarse_data = crate::parallel::map(&slots, |&slot| {
+            let form = coarse.get(slot as usize)?.as_ref()?;
+            Some(arena_data(&form.geometry))
+        });
+        let mut layout = Self {
+            vertices: Vec::new(),
+            indices: Vec::new(),
+            wire: Vec::new(),
+            clusters: Vec::new(),
+            cluster_boxes: Vec::new(),
+            groups: Vec::new(),
+            attributes: has_attributes.then(Vec::new),
+            places: Vec::with_capacity(full.len()),
+            full_sizes,
+            largest,
+        };
+        for (slot, entry) in full.iter().enumerate() {
+            let Some((handle, full_data)) = entry else {
+                layout.places.push(None);
+                continue;
+            };
+            let form = coarse.get(slot).and_then(Option::as_ref);
+            let place = match (form, coarse_data[slot].as_ref()) {
+                (Some(form), Some(data)) => {
+                    let mut place = layout.push(*handle, data, &form.geometry);
+                    place.parts = coarse_part_entries(form, place.parts);
+                    place
+                }
+                _ => match graph.geometry_at(slot as u32) {
+                    Some(geometry) => {
+                        let mut place = layout.push(*handle, full_data, geometry);
+                        let streamed = streaming
+                            .as_ref()
+                            .and_then(|s| s.coarse_form_of(slot as u32));
+                        if let Some(form) = streamed {
+                            place.parts = full_part_entries(&form, place.parts);
+                        }
+                        place
+                    }
+                    None => {
+                        layout.places.push(None);
+                        continue;
+                    }
+                },
+            };
+            layout.places.push(Some(place));
+        }
+        Ok(layout)
+    }
+
+    /// Where each arena's used part ends.
+    fn tails(&self) -> Extent {
+        [
+            self.vertices.len(),
+            self.indices.len(),
+            self.wire.len(),
+            self.clusters.len() / CLUSTER_BYTES,
+            self.groups.len() / GROUP_BYTES,
+        ]
+        .map(|n| n as u32)
+    }
+
+    /// The elements each arena is made for: what the layout uses, with room to spare where
+    /// `spare` (a layout made because the room ran out), and room for the full detail the
+    /// budget allows where the scene `streaming`.
+    fn capacity(&self, spare: bool, streaming: Option<&Streaming>) -> Extent {
+        let tails = self.tails();
+        let capacity = if spare {
+            tails.map(with_spare_room)
+        } else {
+            tails
+        };
+        match streaming {
+            Some(streaming) => {
+                let full_bytes = bytes_of(self.full_sizes, self.attributes.is_some());
+                with_streaming_room(
+                    capacity,
+                    (streaming.budget(), full_bytes),
+                    (self.full_sizes, self.largest),
+                )
+            }
+            None => capacity,
+        }
+    }
+
+    /// Appends `data`, made from `geometry`, and returns its place.
+    fn push(
+        &mut self,
+        handle: GeometryHandle,
+        data: &ArenaData<'_>,
+        geometry: &Geometry,
+    ) -> GeometryPlace {
+        let first_group = (self.groups.len() / GROUP_BYTES) as u32;
+        let first_index = self.indices.len() as u32;
+        let place = GeometryPlace {
+            handle,
+            vertex_base: self.vertices.len() as u32,
+            first_index,
+            first_wire_index: self.wire.len() as u32,
+            first_cluster: (self.clusters.len() / CLUSTER_BYTES) as u32,
+            first_group,
+            room: data.sizes(),
+            parts: part_entries(data),
+            part_clusters: data.clusters.part_ranges.clone(),
+        };
+        self.vertices.extend_from_slice(data.vertices);
+        self.indices.extend_from_slice(&data.clusters.indices);
+        self.indices.extend_from_slice(&data.clusters.lod_indices);
+        self.wire.extend_from_slice(&data.wire);
+        self.groups.extend(data.group_bytes(place.first_cluster));
+        self.clusters
+            .extend(data.cluster_bytes(first_index, first_group));
+        self.cluster_boxes.extend(data.cluster_box_bytes());
+        if let Some(attributes) = &mut self.attributes {
+            extend_attributes(attributes, geometry);
+        }
+        place
     }
 }
 
@@ -408,7 +586,12 @@ impl GeometryArenas {
         device: &Arc<Device>,
         graph: &SceneGraph,
         spare: bool,
+        streaming: Option<Streaming>,
     ) -> RenderResult<(Self, u64)> {
+        let mut streaming = streaming;
+        let layout = Layout::of(device, graph, &mut streaming)?;
+        let tails = layout.tails();
+        let capacity = layout.capacity(spare, streaming.as_ref());
         let Layout {
             vertices,
             indices,
@@ -416,22 +599,12 @@ impl GeometryArenas {
             clusters,
             cluster_boxes,
             groups,
+            attributes,
             places,
-        } = Layout::of(graph);
-        let tails = [
-            vertices.len(),
-            indices.len(),
-            wire.len(),
-            clusters.len() / CLUSTER_BYTES,
-            groups.len() / GROUP_BYTES,
-        ]
-        .map(|n| n as u32);
-        let capacity = if spare {
-            tails.map(with_spare_room)
-        } else {
-            tails
-        };
-        let (has_attributes, attributes) = attributes_of(graph, vertices.len());
+            ..
+        } = layout;
+        let has_attributes = attributes.is_some();
+        let attributes = attributes.unwrap_or_default();
         let bytes = (std::mem::size_of_val(vertices.as_slice())
             + std::mem::size_of_val(indices.as_slice())
             + std::mem::size_of_val(wire.as_slice())
@@ -513,6 +686,7 @@ impl GeometryArenas {
             generation: graph.geometries_generation(),
             has_attributes,
             places,
+            streaming,
         };
         Ok((arenas, bytes))
     }
@@ -540,6 +714,9 @@ impl GeometryArenas {
         for slot in 0..slots {
             if stale(&self.places, slot) {
                 self.release(slot);
+                if let Some(streaming) = &mut self.streaming {
+                    streaming.forget(slot);
+                }
             }
         }
         let mut uploaded = 0;
@@ -553,6 +730,67 @@ impl GeometryArenas {
         }
         self.generation = graph.geometries_generation();
         Ok(Some(uploaded))
+    }
+
+    /// Where the scene streams: reads the frames' requests and brings the geometries they ask
+    /// for to full detail, putting others back in their coarse form to make room (see
+    /// `streaming.rs`), after `settle` (frames in flight must finish before their geometry
+    /// moves). Returns the slots whose form changed and the bytes uploaded.
+    pub(super) fn stream(
+        &mut self,
+        graph: &SceneGraph,
+        geometry_of: impl Fn(u32) -> Option<u32>,
+        settle: &mut dyn FnMut() -> RenderResult<()>,
+    ) -> RenderResult<(Vec<u32>, u64)> {
+        let Some(streaming) = &mut self.streaming else {
+            return Ok((Vec::new(), 0));
+        };
+        let StreamingPlan { load, unload } = streaming.take_requests(geometry_of)?;
+        if load.is_empty() && unload.is_empty() {
+            return Ok((Vec::new(), 0));
+        }
+        settle()?;
+        let mut changed = Vec::new();
+        let mut uploaded = 0;
+        for (slot, full) in unload
+            .iter()
+            .map(|&s| (s, false))
+            .chain(load.iter().map(|&s| (s, true)))
+        {
+            self.set_full(slot, full);
+            // Released first, so that a coarse form does not keep the full detail's room.
+            self.release(slot);
+            let bytes = match self.place(graph, slot)? {
+                Some(bytes) => {
+                    if let (true, Some(streaming)) = (full, &mut self.streaming) {
+                        streaming.count_streamed(bytes);
+                    }
+                    bytes
+                }
+                None => {
+                    // No room for the full detail yet: the coarse form takes its room again.
+                    self.set_full(slot, false);
+                    if let Some(streaming) = &mut self.streaming {
+                        streaming.found_no_room(slot);
+                    }
+                    self.place(graph, slot)?.ok_or_else(|| {
+                        crate::error::RenderError::InvalidUse(format!(
+                            "geometry slot {slot} found no room for its coarse form"
+                        ))
+                    })?
+                }
+            };
+            uploaded += bytes;
+            changed.push(slot);
+        }
+        Ok((changed, uploaded))
+    }
+
+    /// Marks `slot` at full detail or in its coarse form, where the scene streams.
+    fn set_full(&mut self, slot: u32, full: bool) {
+        if let Some(streaming) = &mut self.streaming {
+            streaming.set_full(slot, full);
+        }
     }
 
     /// Clusters and groups in use (up to the end of the last place).
@@ -609,13 +847,29 @@ impl GeometryArenas {
             (graph.geometry_handle_at(slot), graph.geometry_at(slot))
         else {
             self.release(slot);
+            if let Some(streaming) = &mut self.streaming {
+                streaming.forget(slot);
+            }
             return Ok(Some(0));
         };
         if !geometry.attributes.is_empty() && !self.has_attributes {
             // The first geometry with attributes: the attribute arena is made by a new layout.
             return Ok(None);
         }
-        let data = arena_data(geometry);
+        let has_attributes = self.has_attributes;
+        let mut full_data = None;
+        let coarse = self.streaming.as_mut().and_then(|streaming| {
+            streaming.form_to_place(slot, handle, || {
+                let data = arena_data(geometry);
+                let form = coarse_form(geometry, &data, has_attributes);
+                full_data = Some(data);
+                form
+            })
+        });
+        let (data, geometry) = match &coarse {
+            Some(form) => (arena_data(&form.geometry), &form.geometry),
+            None => (full_data.unwrap_or_else(|| arena_data(geometry)), geometry),
+        };
         let sizes = data.sizes();
         if self.places.len() <= slot as usize {
             self.places.resize(slot as usize + 1, None);
@@ -684,7 +938,12 @@ impl GeometryArenas {
                 .upload_at(u64::from(place.vertex_base) * size, bytes)?;
             attribute_bytes = bytes.len();
         }
-        place.parts = part_entries(&data);
+        let streamed = self.streaming.as_ref().and_then(|s| s.coarse_form_of(slot));
+        place.parts = match (&coarse, streamed) {
+            (Some(form), _) => coarse_part_entries(form, part_entries(&data)),
+            (None, Some(form)) => full_part_entries(&form, part_entries(&data)),
+            (None, None) => part_entries(&data),
+        };
         place.part_clusters = data.clusters.part_ranges;
         Ok(Some(
             (vertex_bytes.len()
@@ -698,29 +957,32 @@ impl GeometryArenas {
     }
 }
 
+/// The arenas' `capacity` with room for the full detail a streaming budget allows (`budget`
+/// bytes, of a scene whose full detail takes `full_bytes`, `full` elements in all and
+/// `largest` for its largest geometry): each arena's share of the budget, a quarter more
+/// (geometries differ in how they fill each arena), and the largest geometry.
+fn with_streaming_room(
+    capacity: Extent,
+    (budget, full_bytes): (u64, u64),
+    (full, largest): (Extent, Extent),
+) -> Extent {
+    let share = (1.25 * budget as f64 / full_bytes.max(1) as f64).min(1.0);
+    std::array::from_fn(|i| {
+        let extra = (f64::from(full[i]) * share).ceil() as u32;
+        capacity[i]
+            .saturating_add(extra)
+            .saturating_add(largest[i])
+            .saturating_add(4096)
+    })
+}
+
 /// The elements an arena laid out again holds for `used`: a quarter more, and at least a few
 /// thousand, so that the geometries loaded next fit without another layout.
 fn with_spare_room(used: u32) -> u32 {
     used.saturating_add(used / 4).saturating_add(4096)
 }
 
-/// Whether some geometry of `graph` has texture coordinates or colours, and then every
-/// geometry's attributes in slot order (`vertex_count` of them, laid out like the vertices).
-fn attributes_of(graph: &SceneGraph, vertex_count: usize) -> (bool, Vec<VertexAttributes>) {
-    let (_, geometry_slots, _) = graph.capacities();
-    let geometries = || (0..geometry_slots as u32).filter_map(|slot| graph.geometry_at(slot));
-    let has_attributes = geometries().any(|g| !g.attributes.is_empty());
-    let mut attributes: Vec<VertexAttributes> = Vec::new();
-    if has_attributes {
-        attributes.reserve(vertex_count);
-        for geometry in geometries() {
-            extend_attributes(&mut attributes, geometry);
-        }
-    }
-    (has_attributes, attributes)
-}
-
-/// Appends the geometry's attributes, or white at (0, 0) for each vertex when it has none.
+/// Appends `geometry`'s texture coordinates and colours (white at (0, 0) where it has none).
 fn extend_attributes(attributes: &mut Vec<VertexAttributes>, geometry: &Geometry) {
     if geometry.attributes.len() == geometry.vertices.len() {
         attributes.extend_from_slice(&geometry.attributes);

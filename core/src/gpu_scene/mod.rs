@@ -22,6 +22,7 @@ mod compute;
 mod geometry;
 mod hierarchy;
 mod stand_ins;
+mod streaming;
 mod textures;
 mod upload;
 mod view_state;
@@ -29,6 +30,7 @@ mod view_state;
 pub use hierarchy::{
     gpu_local, HierarchyMethod, HierarchyPlan, Transforms, LOCAL_BYTES, LOCAL_WORDS,
 };
+pub use streaming::StreamingReport;
 pub use textures::{
     gpu_material_texture, TextureBindings, ARRAY_BUDGET_BYTES, MATERIAL_TEXTURE_BYTES,
     MAX_LAYER_SIZE, MAX_TABLE_SIDE, TABLE_BUDGET_BYTES,
@@ -181,6 +183,8 @@ struct ClusterExtensions {
     clusters: abi::CadrSceneClusters,
     boxes: abi::CadrSceneClusterBoxes,
     part_boxes: abi::CadrScenePartBoxes,
+    /// Chained after the parts' boxes only where the scene streams.
+    streaming: abi::CadrSceneStreaming,
 }
 
 /// [`ClusterExtensions`] on the heap, where the pointer from the first to the second stays
@@ -218,6 +222,16 @@ impl ClustersExtension {
                     next: std::ptr::null(),
                 },
                 box_buffer: abi::CadrBufferRef::default(),
+            },
+            streaming: abi::CadrSceneStreaming {
+                header: abi::CadrExtension {
+                    size: std::mem::size_of::<abi::CadrSceneStreaming>() as u32,
+                    kind: abi::CADR_EXTENSION_SCENE_STREAMING,
+                    next: std::ptr::null(),
+                },
+                request_buffer: abi::CadrBufferRef::default(),
+                request_word_count: 0,
+                reserved: 0,
             },
         });
         extensions.clusters.header.next = &extensions.boxes.header;
@@ -318,7 +332,7 @@ impl GpuScene {
         let first_generation =
             NEXT_GENERATIONS.fetch_add(1 << 32, std::sync::atomic::Ordering::Relaxed);
         let reader = tree.subscribe();
-        let (arenas, geometry_bytes) = GeometryArenas::upload(device, graph, false)?;
+        let (arenas, geometry_bytes) = GeometryArenas::upload(device, graph, false, None)?;
         crate::freed_memory::after_sync(geometry_bytes, 0);
         let (textures, texture_bytes) = SceneTextures::new(device, graph)?;
         let mut scene = Self {
@@ -416,6 +430,17 @@ impl GpuScene {
         let extensions = &mut *self.seen.clusters_extension.0;
         extensions.boxes.box_buffer = boxes;
         extensions.part_boxes.box_buffer = part_boxes;
+        extensions.part_boxes.header.next = std::ptr::null();
+        if let Some(streaming) = &self.arenas.streaming {
+            let (requests, words) = streaming.requests();
+            extensions.streaming.request_buffer = abi::CadrBufferRef {
+                buffer: requests.raw().as_raw(),
+                size_bytes: requests.size(),
+                address: 0,
+            };
+            extensions.streaming.request_word_count = words;
+            extensions.part_boxes.header.next = &extensions.streaming.header;
+        }
         let extension = &mut extensions.clusters;
         extension.cluster_buffer = clusters;
         extension.group_buffer = groups;
@@ -636,7 +661,9 @@ impl GpuScene {
         settle: &mut dyn FnMut() -> RenderResult<()>,
     ) -> RenderResult<()> {
         self.followers.changes = Unseen::default();
-        let result = self.apply_tree_changes(graph, tree, transforms, settle);
+        let result = self
+            .apply_tree_changes(graph, tree, transforms, settle)
+            .and_then(|()| self.stream(graph, tree, settle));
         if result.is_err() {
             // Half applied: every view starts over from what the scene holds.
             self.followers.changes.all = true;
@@ -649,6 +676,56 @@ impl GpuScene {
         let slots = self.instances.len() + self.matrices.len() + self.materials.len();
         self.followers.deliver(slots.max(1024));
         result
+    }
+
+    /// Where the scene streams its geometry: reads the last frames' requests and brings the
+    /// geometries asked for to full detail (others back to their coarse form to make room),
+    /// then refreshes the entries of their instances.
+    fn stream(
+        &mut self,
+        graph: &SceneGraph,
+        tree: &mut SceneTree,
+        settle: &mut dyn FnMut() -> RenderResult<()>,
+    ) -> RenderResult<()> {
+        let Some(streaming) = &mut self.arenas.streaming else {
+            return Ok(());
+        };
+        if streaming.reserve_requests(&self.device, self.instances.len())? {
+            self.refresh_buffer_refs();
+            self.generations.buffers += 1;
+        }
+        let instances = &self.instances;
+        let geometry_of = |id: u32| geometry_of_entry(instances.get(id as usize)?);
+        let (changed, bytes) = self.arenas.stream(graph, geometry_of, settle)?;
+        if changed.is_empty() {
+            return Ok(());
+        }
+        self.counts.last_upload.geometry_bytes += bytes;
+        self.counts.last_upload.bytes += bytes;
+        let extension = &mut self.seen.clusters_extension.0.clusters;
+        [extension.cluster_count, extension.group_count] = self.arenas.cluster_counts();
+        let users: Vec<u32> = (0..self.instances.len() as u32)
+            .filter(|&id| {
+                geometry_of_entry(&self.instances[id as usize])
+                    .is_some_and(|g| changed.contains(&g))
+            })
+            .collect();
+        for &id in &users {
+            self.refresh_instance(tree, id);
+            self.gpu.records.queue(id);
+            self.gpu.cull_entries.queue(id);
+            self.gpu.part_boxes.queue(id);
+        }
+        self.counts.last_touched += users.len() as u64;
+        self.generations.draws += 1;
+        self.count_candidate_clusters();
+        Ok(())
+    }
+
+    /// What the scene's geometry streaming holds and has done, where the scene streams (its
+    /// full detail needs more than the memory budget; see `streaming.rs`).
+    pub fn streaming(&self) -> Option<StreamingReport> {
+        self.arenas.streaming.as_ref().map(|s| s.report())
     }
 
     /// Applies what `view` has not seen of this scene yet (everything, for a view that drew
@@ -801,7 +878,8 @@ impl GpuScene {
 
     /// Lays the arenas out again and rebuilds every entry.
     fn relayout(&mut self, graph: &SceneGraph, tree: &mut SceneTree) -> RenderResult<()> {
-        let (arenas, bytes) = GeometryArenas::upload(&self.device, graph, true)?;
+        let streaming = self.arenas.streaming.take();
+        let (arenas, bytes) = GeometryArenas::upload(&self.device, graph, true, streaming)?;
         self.arenas = arenas;
         self.counts.last_upload.geometry_bytes += bytes;
         self.counts.last_upload.bytes += bytes;
@@ -1221,6 +1299,11 @@ pub struct SceneContent<'a> {
     pub materials: &'a [abi::CadrMaterial],
     /// Candidate bits (alive, visible, with triangles) by instance id.
     pub candidate_bits: &'a [u64],
+}
+
+/// The geometry slot of a live instance's entry.
+fn geometry_of_entry(entry: &abi::CadrInstance) -> Option<u32> {
+    (entry.flags & abi::CADR_INSTANCE_ALIVE != 0).then_some(entry.geometry)
 }
 
 /// The box of instance `slot`'s part (zero for an id not in use: a dead instance's entry names

@@ -56,7 +56,7 @@ use std::ffi::{c_char, c_void};
 /// Major version of this ABI: a library built for another major version is refused.
 pub const CADR_PLUGIN_ABI_MAJOR: u32 = 1;
 /// Minor version of this ABI: additions that older readers may ignore.
-pub const CADR_PLUGIN_ABI_MINOR: u32 = 20;
+pub const CADR_PLUGIN_ABI_MINOR: u32 = 21;
 /// `(major << 16) | minor`, what [`CadrPluginVersionFn`] returns.
 pub const CADR_PLUGIN_ABI_VERSION: u32 = (CADR_PLUGIN_ABI_MAJOR << 16) | CADR_PLUGIN_ABI_MINOR;
 
@@ -728,8 +728,9 @@ pub struct CadrSceneView {
     pub cull_buffer: CadrBufferRef,
     /// Since ABI 1.14 (read it only when `size` covers it): the host's extension structs for
     /// this view (a chain of [`CadrExtension`]s, or null), valid as long as the view:
-    /// [`CadrSceneClusters`] where the scene has clusters, and since 1.20 their
-    /// [`CadrSceneClusterBoxes`] and the parts' [`CadrScenePartBoxes`].
+    /// [`CadrSceneClusters`] where the scene has clusters, since 1.20 their
+    /// [`CadrSceneClusterBoxes`] and the parts' [`CadrScenePartBoxes`], and since 1.21
+    /// [`CadrSceneStreaming`] where the scene streams its geometry.
     pub extensions: *const CadrExtension,
 }
 
@@ -753,6 +754,8 @@ pub const CADR_EXTENSION_SCENE_CLUSTER_BOXES: CadrExtensionKind = 6;
 /// Since ABI 1.20: the kind of [`CadrScenePartBoxes`], chained on
 /// [`CadrSceneView::extensions`].
 pub const CADR_EXTENSION_SCENE_PART_BOXES: CadrExtensionKind = 7;
+/// Since ABI 1.21: the kind of [`CadrSceneStreaming`], chained on [`CadrSceneView::extensions`].
+pub const CADR_EXTENSION_SCENE_STREAMING: CadrExtensionKind = 8;
 
 /// Since ABI 1.15 ([`CADR_EXTENSION_FRAME_SLOT`]): which of the host's frames in flight is being
 /// recorded. The host lets the GPU work on up to `slot_count` frames while it records the next;
@@ -846,6 +849,30 @@ pub struct CadrScenePartBoxes {
     pub box_buffer: CadrBufferRef,
 }
 
+/// Since ABI 1.21 ([`CADR_EXTENSION_SCENE_STREAMING`]): the scene streams its geometry under a
+/// memory budget. A geometry whose full detail the GPU does not hold is drawn in a coarse form
+/// (a coarse cut of each part's level-of-detail DAG, about an eighth of its triangles), and the part boxes
+/// ([`CadrScenePartBoxes`]) of its instances carry that form's error
+/// ([`CadrBox::coarse_error`]). A GPU culler that draws an instance whose part box carries an
+/// error, and finds it projecting over its threshold in pixels (its level-of-detail
+/// threshold, or 0 for a culler without one), sets the instance's bit in `request_buffer`; the
+/// host reads the bits after the frame and brings the geometries asked for to full detail (or
+/// keeps them there), within its budget, those least recently asked for back to coarse first. Bits are only ever set by the GPU (an atomic or); the host
+/// clears the buffer between frames. Owned by the host; the buffer may be replaced, with the
+/// view's `buffers_generation` moved.
+#[repr(C)]
+#[derive(Clone, Copy, Debug)]
+pub struct CadrSceneStreaming {
+    /// `kind` = [`CADR_EXTENSION_SCENE_STREAMING`].
+    pub header: CadrExtension,
+    /// One bit per instance id (bit `id % 32` of 32-bit word `id / 32`), storage buffer.
+    pub request_buffer: CadrBufferRef,
+    /// Words in `request_buffer`: an id past them asks for nothing.
+    pub request_word_count: u32,
+    /// Zero.
+    pub reserved: u32,
+}
+
 /// Since ABI 1.20: a box in object space, as [`CadrSceneClusterBoxes::box_buffer`] and
 /// [`CadrScenePartBoxes::box_buffer`] hold them (32 bytes, little-endian, std430-compatible: two
 /// `vec4`s): the smallest box along the object's axes that holds a cluster's or a part's
@@ -855,8 +882,13 @@ pub struct CadrScenePartBoxes {
 pub struct CadrBox {
     /// The box's centre in object space.
     pub center: [f32; 3],
-    /// Zero.
-    pub reserved0: f32,
+    /// Since ABI 1.21, in part boxes only ([`CadrScenePartBoxes`]), where the scene streams
+    /// ([`CadrSceneStreaming`]): the object-space error of the part's coarse form against its
+    /// full detail, positive while the GPU holds the coarse form and negated while it holds
+    /// the full detail (a culler asks for either where the error projects over its
+    /// threshold: to get the full detail, or to keep it); zero where the scene does not stream
+    /// (and always zero in cluster boxes).
+    pub coarse_error: f32,
     /// Half its size along each object axis (zero or more).
     pub half_extent: [f32; 3],
     /// Zero.
@@ -870,7 +902,7 @@ impl CadrBox {
         let words = self
             .center
             .iter()
-            .chain([&self.reserved0])
+            .chain([&self.coarse_error])
             .chain(&self.half_extent)
             .chain([&self.reserved1]);
         for (i, value) in words.enumerate() {

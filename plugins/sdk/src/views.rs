@@ -150,6 +150,15 @@ impl<'a> Scene<'a> {
         unsafe { extension(self.raw.extensions, abi::CADR_EXTENSION_SCENE_PART_BOXES) }
     }
 
+    /// The geometry streaming's requests ([`abi::CadrSceneStreaming`]), from a host of ABI 1.21
+    /// or later whose scene streams; `None` otherwise (every geometry at full detail).
+    pub fn streaming(&self) -> Option<&'a abi::CadrSceneStreaming> {
+        self.clusters()?;
+        // SAFETY: the host's chain (checked to be there by `clusters`) is valid as long as the
+        // view; an extension of this kind is a `CadrSceneStreaming`.
+        unsafe { extension(self.raw.extensions, abi::CADR_EXTENSION_SCENE_STREAMING) }
+    }
+
     /// Which frame slot is being recorded ([`abi::CadrFrameSlot`]), from a host of ABI 1.15 or
     /// later; `None` from an older host, which records one frame at a time (slot 0 of 1, every
     /// earlier frame finished).

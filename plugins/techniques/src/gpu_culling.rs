@@ -75,7 +75,7 @@ const MODE_NEWLY_VISIBLE: u32 = 2;
 
 /// What a frame slot's cull set was last written with: the host's buffers' handles, the ids of
 /// ours, the scene's buffers generation and the view's offset.
-type CullSetKey = ([u64; 15], [u64; 9], u64, u64);
+type CullSetKey = ([u64; 16], [u64; 9], u64, u64);
 
 /// Push constants of one cull dispatch.
 #[derive(Clone, Copy)]
@@ -93,8 +93,10 @@ struct CullDispatch {
     lod_error: f32,
     /// Whether the pass hides the back faces of closed opaque parts (cluster culling).
     back_faces_hidden: bool,
-    /// Commands a pass slot holds.
-    command_capacity: u32,
+    /// Commands a pass slot holds, and words of each: [`COMMAND_WORDS`], or
+    /// [`NAMED_COMMAND_WORDS`] where each command starts with the word naming its pass (1 for a
+    /// [`abi::CADR_FACES_KEPT`] pass, else 0).
+    commands: (u32, u32),
     /// Of those, how many the cuts at `lod_error` may take (cluster culling); past that, parts
     /// are drawn at their coarsest, which the rest always holds.
     cluster_budget: u32,
@@ -102,9 +104,9 @@ struct CullDispatch {
     cluster_bit_mask: u32,
     /// Which parts the pass takes by whether their back faces are culled (`CADR_FACES_*`).
     face_route: abi::CadrFaceRoute,
-    /// Words of each command: [`COMMAND_WORDS`], or [`NAMED_COMMAND_WORDS`] where each command
-    /// starts with the word naming its pass (1 for a [`abi::CADR_FACES_KEPT`] pass, else 0).
-    command_words: u32,
+    /// Words of the scene's streaming requests ([`abi::CadrSceneStreaming`]); 0 where the scene
+    /// does not stream.
+    request_words: u32,
 }
 
 impl CullDispatch {
@@ -125,17 +127,18 @@ impl CullDispatch {
             self.filter.exclude.value,
             self.lod_error.to_bits(),
             u32::from(self.back_faces_hidden),
-            self.command_capacity,
+            self.commands.0,
             self.cluster_budget,
             self.cluster_bit_mask,
             self.face_route,
-            self.command_words,
+            self.commands.1,
+            self.request_words,
         ])
     }
 }
 
 /// Bytes of [`CullDispatch`] as pushed.
-const CULL_PUSH_BYTES: u32 = 76;
+const CULL_PUSH_BYTES: u32 = 80;
 /// The most bits of the cluster visibility table (32 MiB a copy): past it, clusters share
 /// bits, which only makes phase 0 draw a few hidden clusters.
 const MAX_CLUSTER_BITS: u64 = 1 << 28;
@@ -159,8 +162,9 @@ fn cluster_command_budget() -> u64 {
 }
 /// Storage buffers of the cull set besides the view uniform: the scene's cull entries and
 /// matrices, the commands and counts, both visibility buffers, the pyramid, and with clusters
-/// the scene's clusters and groups, both cluster visibility tables and the parts phase 0 skipped.
-const CULL_STORAGE_BUFFERS: u32 = 14;
+/// the scene's clusters and groups, both cluster visibility tables and the parts phase 0 skipped,
+/// the clusters' and the parts' boxes, and the streaming requests.
+const CULL_STORAGE_BUFFERS: u32 = 15;
 /// The frame slots a host may have ([`abi::CadrFrameSlot::slot_count`] is at most 3).
 const FRAME_SLOTS: usize = 3;
 
@@ -342,10 +346,11 @@ impl Objects {
                 (storage, 12),
                 (storage, 13),
                 (storage, 14),
+                (storage, 15),
             ]);
             source.replacen("#version 460\n", "#version 460\n#define CLUSTERS 1\n", 1)
         } else {
-            cull_bindings.push((storage, 8));
+            cull_bindings.extend([(storage, 8), (storage, 9)]);
             source.to_owned()
         };
         objects.cull_set_layout = objects.set_layout(&cull_bindings)?;
@@ -655,9 +660,10 @@ impl<const OCCLUSION: bool, const CLUSTERS: bool> GpuCuller<OCCLUSION, CLUSTERS>
         slot: usize,
         scene: &abi::CadrSceneView,
         clusters: Option<&abi::CadrSceneClusters>,
-        (boxes, part_boxes): (
+        (boxes, part_boxes, streaming): (
             Option<&abi::CadrSceneClusterBoxes>,
             Option<&abi::CadrScenePartBoxes>,
+            Option<&abi::CadrSceneStreaming>,
         ),
         (view, view_offset): (vk::Buffer, u64),
     ) {
@@ -689,6 +695,9 @@ impl<const OCCLUSION: bool, const CLUSTERS: bool> GpuCuller<OCCLUSION, CLUSTERS>
         // The parts' boxes, after the clusters' bindings (binding 14, or 8 without clusters);
         // from an older host 4 bytes, which the shader tells from a box per entry.
         buffers.push(part_boxes.map_or(self.no_boxes.raw(), |b| buffer(&b.box_buffer)));
+        // The streaming requests after them; where the scene does not stream, 4 bytes the
+        // shader never writes (it is told no words).
+        buffers.push(streaming.map_or(self.no_boxes.raw(), |s| buffer(&s.request_buffer)));
         // Keyed on what cannot come back: the host's scene buffers by handle and generation
         // (it bumps the generation when it replaces one), ours by id. A destroyed buffer's
         // handle may be given to the next one made (lavapipe's are addresses), and a set still
@@ -704,7 +713,7 @@ impl<const OCCLUSION: bool, const CLUSTERS: bool> GpuCuller<OCCLUSION, CLUSTERS>
             commands.id(),
             self.counts.id(),
         ];
-        let mut raw = [0u64; 15];
+        let mut raw = [0u64; 16];
         for (slot, b) in raw.iter_mut().zip(&buffers) {
             *slot = b.as_raw();
         }
@@ -758,6 +767,9 @@ impl<const OCCLUSION: bool, const CLUSTERS: bool> GpuCuller<OCCLUSION, CLUSTERS>
                 0.0
             }
         });
+        let request_words = (cull.scene())
+            .and_then(|scene| scene.streaming())
+            .map_or(0, |streaming| streaming.request_word_count);
         let device = &self.gpu.device;
         let command_buffer = cull.command_buffer();
         // SAFETY: recording outside rendering; the pipeline, layout and set are live.
@@ -811,14 +823,14 @@ impl<const OCCLUSION: bool, const CLUSTERS: bool> GpuCuller<OCCLUSION, CLUSTERS>
                 filter,
                 lod_error,
                 back_faces_hidden: back_faces_hidden.get(index).copied().unwrap_or(false),
-                command_capacity: self.commands.capacity,
+                commands: (self.commands.capacity, command_words),
                 cluster_budget: self.cluster_budget,
                 cluster_bit_mask: self.cluster_visibility.words * 32 - 1,
                 face_route: route,
-                command_words,
+                request_words,
             };
             let constants = dispatch.constants();
-            // SAFETY: recording; the constants fit the layout's 76 bytes.
+            // SAFETY: recording; the constants fit the layout's 80 bytes.
             unsafe {
                 device.cmd_push_constants(
                     command_buffer,
@@ -1129,6 +1141,7 @@ impl<const OCCLUSION: bool, const CLUSTERS: bool> GpuCulling for GpuCuller<OCCLU
         let boxes = (
             scene.cluster_boxes().filter(|_| CLUSTERS),
             scene.part_boxes(),
+            scene.streaming(),
         );
         let slot = scene.frame_slot().map_or(0, |frame| frame.slot as usize);
         if slot >= FRAME_SLOTS {

@@ -1,0 +1,473 @@
+//! Geometry streaming under a memory budget: when the full detail of a scene's geometries
+//! needs more device memory than the budget (`CADR_MEMORY_BUDGET`, see `memory_budget.rs`),
+//! each geometry goes on the GPU in a coarse form (for each part the finest cut of its
+//! level-of-detail DAG with at most an eighth of its triangles, with its own compact vertices), and only the geometries the frames ask
+//! for are held at full detail, as many as the budget allows.
+//!
+//! The asking is done on the GPU: the part boxes of a coarse geometry's instances carry the
+//! coarse form's error ([`abi::CadrBox::coarse_error`]), and a GPU culler that draws such an
+//! instance where that error projects over its threshold sets the instance's bit in the
+//! request buffer ([`abi::CadrSceneStreaming`]). Before each frame the scene reads the bits,
+//! brings the geometries asked for to full detail (at most [`UPLOAD_BYTES_PER_FRAME`] a frame),
+//! and, where the budget is spent, puts back in their coarse form those asked for least
+//! recently (never one asked for in the last [`KEEP_FRAMES`] frames, so that a view that needs
+//! more than the budget does not swap geometries back and forth). A geometry is never missing:
+//! until its full detail arrives it is drawn coarse.
+//!
+//! The bits are read while a later frame may be setting them: a request read too early is
+//! simply asked for again by the next frame.
+
+use std::sync::Arc;
+
+use super::clusters::GeometryClusters;
+use crate::error::RenderResult;
+use crate::graph::GeometryHandle;
+use crate::scene::{Geometry, Part};
+use crate::vk::raw as vk;
+use crate::vk::{Buffer, Device};
+use cadr_plugin_abi as abi;
+
+/// Bytes of full-detail geometry brought to the GPU in one frame at most (a geometry larger
+/// than this still comes, alone in its frame).
+pub const UPLOAD_BYTES_PER_FRAME: u64 = 32 << 20;
+
+/// Frames a geometry stays at full detail after it was last asked for, whatever the budget.
+pub const KEEP_FRAMES: u64 = 8;
+
+/// A coarse form of a geometry: what the GPU holds of it while its full detail is not there.
+pub(super) struct CoarseForm {
+    /// A coarse cut of every part ([`COARSE_SHARE`]), parts in the same order, vertices
+    /// compacted.
+    pub(super) geometry: Geometry,
+    /// Per part: the object-space error of its coarse form against its full detail.
+    pub(super) errors: Vec<f32>,
+    /// Per part: its full detail's bounds and shape, which the coarse form's instances keep
+    /// (so that they are culled as the full detail would be).
+    pub(super) full_parts: Vec<PartBounds>,
+}
+
+/// A part's bounding sphere, box and shape flags (see the GPU scene's part entries).
+#[derive(Clone, Copy, Debug)]
+pub(super) struct PartBounds {
+    pub(super) sphere: [f32; 4],
+    pub(super) bounds: abi::CadrBox,
+    pub(super) shape: u32,
+}
+
+/// Whether a coarse form is worth streaming: at most this fraction of the full form's
+/// triangles (else the geometry stays at full detail, counted against the budget).
+const COARSE_AT_MOST: f64 = 0.5;
+
+/// The share of a part's triangles its coarse form aims at: the finest cut of its DAG within
+/// it. Coarser would hold less memory but show more while the full detail is on its way.
+const COARSE_SHARE: f64 = 0.125;
+
+impl CoarseForm {
+    /// The coarse form of `geometry`, whose clusters are `clusters` and parts' entries
+    /// `full_parts`; `None` where it would not save enough ([`COARSE_AT_MOST`]).
+    pub(super) fn of(
+        geometry: &Geometry,
+        clusters: &GeometryClusters,
+        full_parts: Vec<PartBounds>,
+    ) -> Option<Self> {
+        let own = clusters.indices.len();
+        let index_at = |i: usize| {
+            if i < own {
+                clusters.indices.get(i)
+            } else {
+                clusters.lod_indices.get(i - own)
+            }
+        };
+        let mut remap = vec![u32::MAX; geometry.vertices.len()];
+        let mut vertices = Vec::new();
+        let mut attributes = Vec::new();
+        let mut indices = Vec::new();
+        let mut parts = Vec::with_capacity(geometry.parts.len());
+        let mut errors = Vec::with_capacity(geometry.parts.len());
+        for &[first, count, _] in &clusters.part_ranges {
+            let first_index = indices.len() as u32;
+            let part_clusters = (clusters.clusters.iter())
+                .skip(first as usize)
+                .take(count as usize);
+            let (cut_error, error) = coarse_cut(clusters, part_clusters.clone());
+            for cluster in part_clusters.filter(|c| in_cut(clusters, c, cut_error)) {
+                let start = cluster.first_index as usize;
+                for i in start..start + cluster.index_count as usize {
+                    let &vertex = index_at(i)?;
+                    let slot = remap.get_mut(vertex as usize)?;
+                    if *slot == u32::MAX {
+                        *slot = vertices.len() as u32;
+                        vertices.push(*geometry.vertices.get(vertex as usize)?);
+                        if let Some(a) = geometry.attributes.get(vertex as usize) {
+                            attributes.push(*a);
+                        }
+                    }
+                    indices.push(*slot);
+                }
+            }
+            parts.push(Part {
+                first_index,
+                index_count: indices.len() as u32 - first_index,
+                first_wire_index: 0,
+                wire_index_count: 0,
+            });
+            errors.push(error);
+        }
+        let full = geometry.indices.len().max(1) as f64;
+        if parts.len() != full_parts.len() || indices.len() as f64 > COARSE_AT_MOST * full {
+            return None;
+        }
+        Some(Self {
+            geometry: Geometry {
+                name: geometry.name.clone(),
+                vertices,
+                indices,
+                wire_indices: Vec::new(),
+                parts,
+                attributes,
+            },
+            errors,
+            full_parts,
+        })
+    }
+}
+
+/// The error of a cluster's own triangles against the part's (0 for an original cluster).
+fn own_error(clusters: &GeometryClusters, cluster: &abi::CadrCluster) -> f32 {
+    if cluster.refined == abi::CADR_CLUSTER_ORIGINAL {
+        return 0.0;
+    }
+    (clusters.groups.get(cluster.refined as usize)).map_or(f32::MAX, |g| g.error)
+}
+
+/// Whether `cluster` belongs to the part's cut at object-space error `error`: the rule the
+/// cullers apply to projected errors (its group too coarse, its own triangles fine enough),
+/// which tiles the part without cracks as errors only grow toward the coarse levels. Stand-ins
+/// are left out: they stand for the whole part, not a piece of it.
+fn in_cut(clusters: &GeometryClusters, cluster: &abi::CadrCluster, error: f32) -> bool {
+    let Some(group) = clusters.groups.get(cluster.group as usize) else {
+        return false;
+    };
+    group.depth != abi::CADR_CLUSTER_PROXY_DEPTH
+        && group.error > error
+        && own_error(clusters, cluster) <= error
+}
+
+/// The part's coarse cut: the finest whose triangles are at most [`COARSE_SHARE`] of the
+/// part's (or its coarsest); returns the cut's error threshold and the largest error of its
+/// clusters.
+fn coarse_cut<'c>(
+    clusters: &GeometryClusters,
+    part: impl Iterator<Item = &'c abi::CadrCluster> + Clone,
+) -> (f32, f32) {
+    let triangles_at = |error: f32| -> u64 {
+        (part.clone())
+            .filter(|c| in_cut(clusters, c, error))
+            .map(|c| u64::from(c.index_count / 3))
+            .sum()
+    };
+    let mut errors: Vec<f32> = (part.clone())
+        .map(|c| own_error(clusters, c))
+        .filter(|e| *e < f32::MAX)
+        .collect();
+    errors.sort_by(f32::total_cmp);
+    errors.dedup();
+    let full = triangles_at(0.0);
+    let wanted = (full as f64 * COARSE_SHARE).ceil() as u64;
+    // Triangles only fall as the threshold grows: the first threshold within the share.
+    let at = errors.partition_point(|&e| triangles_at(e) > wanted);
+    let threshold = errors.get(at).or(errors.last()).copied().unwrap_or(0.0);
+    let error = (part.clone())
+        .filter(|c| in_cut(clusters, c, threshold))
+        .map(|c| own_error(clusters, c))
+        .fold(0.0, f32::max);
+    (threshold, error)
+}
+
+/// What streaming knows of one geometry slot.
+struct Residency {
+    /// The geometry this is about: a slot given to another geometry starts over.
+    handle: GeometryHandle,
+    /// Its coarse form; `None` where the geometry is always at full detail.
+    coarse: Option<Arc<CoarseForm>>,
+    /// Device bytes of its full detail.
+    full_bytes: u64,
+    /// Whether its full detail is on the GPU.
+    full: bool,
+    /// The last frame that asked for it.
+    last_wanted: u64,
+    /// The first frame that may bring its full detail again after it found no room.
+    retry_after: u64,
+}
+
+/// The streaming state of a GPU scene: the budget, each slot's residency and the requests.
+pub(super) struct Streaming {
+    budget: u64,
+    slots: Vec<Option<Residency>>,
+    /// One bit per instance id, set by the GPU cullers, read and cleared by the host.
+    requests: Buffer,
+    request_words: u32,
+    /// Frames seen (each [`Streaming::take_requests`] is one).
+    frame: u64,
+    /// Full-detail bytes on the GPU, of streamed geometries and of those always at full detail.
+    full_bytes: u64,
+    /// Full-detail bytes of every geometry, on the GPU or not.
+    total_bytes: u64,
+    /// Bytes brought to the GPU by streaming since the scene was made.
+    streamed_bytes: u64,
+}
+
+/// What a streaming scene holds and has done (see [`super::GpuScene::streaming`]).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct StreamingReport {
+    /// The most full-detail geometry bytes the GPU may hold (`CADR_MEMORY_BUDGET`).
+    pub budget: u64,
+    /// Full-detail geometry bytes on the GPU now (coarse forms not counted).
+    pub full_bytes: u64,
+    /// Full-detail bytes of every geometry of the scene.
+    pub total_full_bytes: u64,
+    /// Bytes brought to the GPU by streaming since the scene was made.
+    pub streamed_bytes: u64,
+    /// Frames whose requests were read.
+    pub frames: u64,
+}
+
+/// What a frame's requests decided: the slots to bring to full detail and those to put back
+/// in their coarse form.
+#[derive(Debug, Default)]
+pub(super) struct StreamingPlan {
+    pub(super) load: Vec<u32>,
+    pub(super) unload: Vec<u32>,
+}
+
+impl Streaming {
+    /// Streaming under `budget` bytes of full-detail geometry.
+    pub(super) fn new(device: &Arc<Device>, budget: u64) -> RenderResult<Self> {
+        Ok(Self {
+            budget,
+            slots: Vec::new(),
+            requests: request_buffer(device, 1)?,
+            request_words: 1,
+            frame: 0,
+            full_bytes: 0,
+            total_bytes: 0,
+            streamed_bytes: 0,
+        })
+    }
+
+    /// The coarse form slot `slot` (holding `handle`) goes on the GPU in, where it is not at full
+    /// detail; `None` to place it whole. A geometry new to the slot starts coarse, unless it
+    /// has no coarse form worth the name; `coarse_of` gives its full-detail bytes and its
+    /// coarse form.
+    pub(super) fn form_to_place(
+        &mut self,
+        slot: u32,
+        handle: GeometryHandle,
+        coarse_of: impl FnOnce() -> (u64, Option<CoarseForm>),
+    ) -> Option<Arc<CoarseForm>> {
+        let index = slot as usize;
+        if self.slots.len() <= index {
+            self.slots.resize_with(index + 1, || None);
+        }
+        let known = self.slots[index]
+            .as_ref()
+            .is_some_and(|r| r.handle == handle);
+        if !known {
+            self.forget(slot);
+            let (full_bytes, coarse) = coarse_of();
+            let coarse = coarse.map(Arc::new);
+            let full = coarse.is_none();
+            self.total_bytes += full_bytes;
+            if full {
+                self.full_bytes += full_bytes;
+            }
+            self.slots[index] = Some(Residency {
+                handle,
+                coarse,
+                full_bytes,
+                full,
+                last_wanted: 0,
+                retry_after: 0,
+            });
+        }
+        let residency = self.slots[index].as_ref()?;
+        (!residency.full)
+            .then(|| residency.coarse.clone())
+            .flatten()
+    }
+
+    /// The coarse form of slot `slot`'s geometry, whichever form the GPU holds.
+    pub(super) fn coarse_form_of(&self, slot: u32) -> Option<Arc<CoarseForm>> {
+        self.slots.get(slot as usize)?.as_ref()?.coarse.clone()
+    }
+
+    /// Forgets slot `slot` (its geometry is gone or replaced).
+    pub(super) fn forget(&mut self, slot: u32) {
+        if let Some(residency) = self.slots.get_mut(slot as usize).and_then(Option::take) {
+            self.total_bytes -= residency.full_bytes;
+            if residency.full {
+                self.full_bytes -= residency.full_bytes;
+            }
+        }
+    }
+
+    /// Marks slot `slot` at full detail (`true`) or in its coarse form, counting its bytes.
+    pub(super) fn set_full(&mut self, slot: u32, full: bool) {
+        let Some(residency) = self.slots.get_mut(slot as usize).and_then(Option::as_mut) else {
+            return;
+        };
+        if residency.full != full && residency.coarse.is_some() {
+            residency.full = full;
+            if full {
+                self.full_bytes += residency.full_bytes;
+            } else {
+                self.full_bytes -= residency.full_bytes;
+            }
+        }
+    }
+
+    /// Counts `bytes` brought to the GPU by streaming.
+    pub(super) fn count_streamed(&mut self, bytes: u64) {
+        self.streamed_bytes += bytes;
+    }
+
+    /// Slot `slot`'s full detail found no room in the arenas: it is not tried again for
+    /// [`KEEP_FRAMES`] frames.
+    pub(super) fn found_no_room(&mut self, slot: u32) {
+        if let Some(residency) = self.slots.get_mut(slot as usize).and_then(Option::as_mut) {
+            residency.retry_after = self.frame + KEEP_FRAMES;
+        }
+    }
+
+    /// Makes the request buffer hold a bit for each of `instances` ids (a new buffer clears
+    /// every request); returns whether it was replaced.
+    pub(super) fn reserve_requests(
+        &mut self,
+        device: &Arc<Device>,
+        instances: usize,
+    ) -> RenderResult<bool> {
+        let words = instances.div_ceil(32).max(1) as u32;
+        if words <= self.request_words {
+            return Ok(false);
+        }
+        self.requests = request_buffer(device, words)?;
+        self.request_words = words;
+        Ok(true)
+    }
+
+    /// Reads and clears the requests, a frame passing, and decides which geometries come to full
+    /// detail and which go back to their coarse form. `geometry_of` names the geometry slot of
+    /// an instance id.
+    pub(super) fn take_requests(
+        &mut self,
+        geometry_of: impl Fn(u32) -> Option<u32>,
+    ) -> RenderResult<StreamingPlan> {
+        self.frame += 1;
+        let frame = self.frame;
+        let bits = self.requests.mapped()?.to_vec();
+        if bits.iter().any(|&b| b != 0) {
+            self.requests.write(0, &vec![0; bits.len()])?;
+        }
+        let mut wanted: Vec<u32> = Vec::new();
+        for (word_index, word) in bits.chunks_exact(4).enumerate() {
+            let mut word = u32::from_le_bytes([word[0], word[1], word[2], word[3]]);
+            while word != 0 {
+                let id = word_index as u32 * 32 + word.trailing_zeros();
+                word &= word - 1;
+                wanted.extend(geometry_of(id));
+            }
+        }
+        wanted.sort_unstable();
+        wanted.dedup();
+        for &slot in &wanted {
+            if let Some(r) = self.slots.get_mut(slot as usize).and_then(Option::as_mut) {
+                r.last_wanted = frame;
+            }
+        }
+        let plan = self.plan(&wanted);
+        if std::env::var_os("CADR_STREAM_DEBUG").is_some() {
+            eprintln!(
+                "frame {frame}: wanted {wanted:?} plan {plan:?} full {}",
+                self.full_bytes
+            );
+        }
+        Ok(plan)
+    }
+
+    /// The loads the wanted slots need and the unloads that make room for them.
+    fn plan(&self, wanted: &[u32]) -> StreamingPlan {
+        let mut plan = StreamingPlan::default();
+        let mut full_bytes = self.full_bytes;
+        let mut uploading = 0u64;
+        // Coarse candidates for room, least recently wanted first.
+        let mut evictable: Vec<(u64, u32, u64)> = (self.slots.iter().enumerate())
+            .filter_map(|(slot, r)| {
+                let r = r.as_ref()?;
+                let old = r.last_wanted + KEEP_FRAMES < self.frame;
+                (r.full && r.coarse.is_some() && old).then_some((
+                    r.last_wanted,
+                    slot as u32,
+                    r.full_bytes,
+                ))
+            })
+            .collect();
+        evictable.sort_unstable();
+        let mut evictable = evictable.into_iter();
+        for &slot in wanted {
+            let Some(r) = self.slots.get(slot as usize).and_then(Option::as_ref) else {
+                continue;
+            };
+            if r.full || r.coarse.is_none() || r.retry_after > self.frame {
+                continue;
+            }
+            if uploading > 0 && uploading + r.full_bytes > UPLOAD_BYTES_PER_FRAME {
+                break;
+            }
+            while full_bytes + r.full_bytes > self.budget {
+                let Some((_, unload, bytes)) = evictable.next() else {
+                    return plan;
+                };
+                plan.unload.push(unload);
+                full_bytes -= bytes;
+            }
+            full_bytes += r.full_bytes;
+            uploading += r.full_bytes;
+            plan.load.push(slot);
+        }
+        plan
+    }
+
+    /// The request buffer and its words, for the scene view's extension.
+    pub(super) fn requests(&self) -> (&Buffer, u32) {
+        (&self.requests, self.request_words)
+    }
+
+    /// What streaming holds and has done.
+    pub(super) fn report(&self) -> StreamingReport {
+        StreamingReport {
+            budget: self.budget,
+            full_bytes: self.full_bytes,
+            total_full_bytes: self.total_bytes,
+            streamed_bytes: self.streamed_bytes,
+            frames: self.frame,
+        }
+    }
+
+    /// The budget of full-detail bytes.
+    pub(super) fn budget(&self) -> u64 {
+        self.budget
+    }
+}
+
+/// A host-visible, zeroed request buffer of `words` words.
+fn request_buffer(device: &Arc<Device>, words: u32) -> RenderResult<Buffer> {
+    let mut buffer = Buffer::new(
+        device,
+        "scene streaming requests",
+        u64::from(words) * 4,
+        vk::BufferUsageFlags::STORAGE_BUFFER,
+        crate::vk::MemoryLocation::GpuToCpu,
+    )?;
+    buffer.write(0, &vec![0; words as usize * 4])?;
+    Ok(buffer)
+}

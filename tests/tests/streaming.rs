@@ -1,0 +1,179 @@
+//! Geometry streaming under a memory budget (`CADR_MEMORY_BUDGET`, in a test binary of its own,
+//! as it sets the process's environment): a scene whose full detail needs several times the
+//! budget draws every part from the first frame (coarse forms), never holds more full detail
+//! than the budget, and converges to the full-detail picture where the view needs less.
+#![allow(clippy::unwrap_used)] // Test code: a failed unwrap is a failed test.
+
+use std::sync::Arc;
+
+use cadr_core::generate::{generate, GeneratorSpec};
+use cadr_core::gpu_scene::StreamingReport;
+use cadr_core::graph::SceneGraph;
+use cadr_core::render::Camera;
+use cadr_core::scene::{Aabb, Scene};
+use cadr_core::tree::SceneTree;
+use cadr_core::view::View;
+use cadr_tests::images::{compare, covered_fraction};
+use cadr_tests::{assert_no_validation_errors, plugin_registry, scene_wide, test_device};
+use glam::DVec3;
+
+/// Units of the scene: each with geometries of its own.
+const UNITS: u32 = 16;
+/// The budget is this fraction of the scene's full detail.
+const BUDGET_SHARE: u64 = 6;
+/// Frames the close-up may take to reach full detail.
+const CONVERGENCE_FRAMES: usize = 12;
+const SIZE: (u32, u32) = (240, 180);
+
+/// gen:fine with every unit's parts made geometries of their own (a CAD assembly of unique
+/// parts, which is what streaming works on: a geometry is at full detail or not).
+fn unique_parts() -> Scene {
+    let mut scene = generate(&GeneratorSpec::Fine {
+        units: UNITS,
+        detail: 2,
+    });
+    let originals = scene.geometries.clone();
+    scene.geometries.clear();
+    let units = scene.nodes[0].children.clone();
+    for unit in units {
+        let mut copies: Vec<Option<u32>> = vec![None; originals.len()];
+        for child in scene.nodes[unit as usize].children.clone() {
+            let Some(mesh) = scene.nodes[child as usize].mesh.as_mut() else {
+                continue;
+            };
+            let original = mesh.geometry as usize;
+            mesh.geometry = *copies[original].get_or_insert_with(|| {
+                scene.geometries.push(originals[original].clone());
+                scene.geometries.len() as u32 - 1
+            });
+        }
+    }
+    scene
+}
+
+/// Looks at the first unit from up close, turned by `turn` radians around it.
+fn close_up(turn: f64) -> Camera {
+    let unit = Aabb {
+        min: DVec3::splat(-0.5),
+        max: DVec3::splat(0.5),
+    };
+    let direction = DVec3::new(turn.sin(), -0.6, turn.cos()).normalize();
+    Camera::fit(&unit, f64::from(SIZE.0) / f64::from(SIZE.1), direction)
+}
+
+/// Renders `cameras` one frame each (at 1 px, gpu-clusters) with `budget`; returns the pictures
+/// and the streaming report after each.
+fn render(
+    scene: &Scene,
+    budget: Option<u64>,
+    cameras: &[Camera],
+) -> (Vec<image::RgbaImage>, Vec<Option<StreamingReport>>, u64) {
+    // SAFETY of the environment: this test binary runs one test at a time (nextest: one per
+    // process), and reads the variable only when the scene is put on the GPU.
+    match budget {
+        Some(bytes) => std::env::set_var("CADR_MEMORY_BUDGET", bytes.to_string()),
+        None => std::env::remove_var("CADR_MEMORY_BUDGET"),
+    }
+    let device = test_device();
+    let (mut graph, _) = SceneGraph::from_scene(scene).unwrap();
+    let mut tree = SceneTree::build(&mut graph);
+    let mut view = View::new(
+        &device,
+        Arc::clone(&plugin_registry(&device)),
+        SIZE.0,
+        SIZE.1,
+    )
+    .unwrap();
+    let combination = scene_wide("individual-indirect-count", "gpu-clusters");
+    view.techniques_mut().select(&combination).unwrap();
+    view.techniques_mut().set_lod_error(1.0).unwrap();
+    let mut images = Vec::new();
+    let mut reports = Vec::new();
+    let mut resident = 0;
+    for camera in cameras {
+        view.render(&graph, &mut tree, camera).unwrap();
+        images.push(view.renderer().read_rgba8().unwrap());
+        let scene = view.scene().unwrap();
+        reports.push(scene.streaming());
+        resident = resident.max(scene.resident_bytes());
+    }
+    drop(view);
+    assert_no_validation_errors(&device);
+    std::env::remove_var("CADR_MEMORY_BUDGET");
+    (images, reports, resident)
+}
+
+#[test]
+fn a_scene_over_the_budget_streams_its_full_detail_where_the_view_needs_it() {
+    let scene = unique_parts();
+    let still = vec![close_up(0.0); CONVERGENCE_FRAMES];
+    let (full, none, full_resident) = render(&scene, None, &still[..1]);
+    assert_eq!(none[0], None, "a scene within the budget does not stream");
+    let reference = &full[0];
+
+    // Find the scene's full-detail bytes from a first streaming run, then set the budget.
+    let (_, probe, _) = render(&scene, Some(1 << 20), &still[..1]);
+    let total = probe[0].unwrap().total_full_bytes;
+    let budget = total / BUDGET_SHARE;
+    let (images, reports, resident) = render(&scene, Some(budget), &still);
+    let reports: Vec<StreamingReport> = reports.into_iter().map(Option::unwrap).collect();
+    for report in &reports {
+        assert_eq!(report.budget, budget);
+        assert!(
+            report.full_bytes <= budget,
+            "full detail within the budget: {report:?}"
+        );
+    }
+    // The first frame draws the coarse forms: every part there, none at full detail yet.
+    let first = compare(&images[0], reference).unwrap();
+    assert!(first.mean > 0.0, "the first frame is coarse: {first:?}");
+    let (covered, covered_full) = (covered_fraction(&images[0]), covered_fraction(reference));
+    assert!(
+        (covered - covered_full).abs() < 0.01,
+        "no part missing while coarse: {covered} of the picture covered against {covered_full}"
+    );
+    // Full detail reached: the picture the unbudgeted scene draws (up to rounding).
+    let converged = (images.iter())
+        .position(|image| compare(image, reference).unwrap().mean <= 1e-4)
+        .unwrap_or_else(|| {
+            panic!(
+                "no frame reached full detail: last {:?}, streaming {:?}",
+                compare(images.last().unwrap(), reference).unwrap(),
+                reports.last()
+            )
+        });
+    let last = compare(images.last().unwrap(), reference).unwrap();
+    println!(
+        "full detail {total} bytes, budget {budget}; the picture of full detail after {converged} \
+         frames (first {first:?}, last {last:?}); resident {resident} bytes against \
+         {full_resident} unbudgeted; {:?}",
+        reports.last()
+    );
+    assert!(converged > 0 && last.mean <= 1e-4, "{last:?}");
+    assert!(reports.last().unwrap().streamed_bytes > 0);
+    assert!(
+        resident < full_resident / 2,
+        "the GPU scene holds {resident} bytes against {full_resident} without a budget"
+    );
+}
+
+#[test]
+fn an_orbit_under_the_budget_never_shows_a_hole() {
+    let scene = unique_parts();
+    let orbit: Vec<Camera> = (0..10).map(|i| close_up(f64::from(i) * 0.6)).collect();
+    let (full, _, _) = render(&scene, None, &orbit);
+    let (_, probe, _) = render(&scene, Some(1 << 20), &orbit[..1]);
+    let budget = probe[0].unwrap().total_full_bytes / BUDGET_SHARE;
+    let (images, reports, _) = render(&scene, Some(budget), &orbit);
+    for (frame, (image, reference)) in images.iter().zip(&full).enumerate() {
+        let (covered, covered_full) = (covered_fraction(image), covered_fraction(reference));
+        assert!(
+            (covered - covered_full).abs() < 0.01,
+            "frame {frame}: {covered} of the picture covered against {covered_full} at full detail"
+        );
+        let report = reports[frame].unwrap();
+        assert!(report.full_bytes <= budget, "{report:?}");
+    }
+    let streamed = reports.last().unwrap().unwrap().streamed_bytes;
+    assert!(streamed > 0, "the orbit brought full detail: {reports:?}");
+}

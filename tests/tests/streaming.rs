@@ -68,6 +68,16 @@ fn render(
     budget: Option<u64>,
     cameras: &[Camera],
 ) -> (Vec<image::RgbaImage>, Vec<Option<StreamingReport>>, u64) {
+    render_with(scene, budget, cameras, Some("gpu-clusters"))
+}
+
+/// [`render`] with `culler` (scene-wide techniques), or the built-in combination (`None`).
+fn render_with(
+    scene: &Scene,
+    budget: Option<u64>,
+    cameras: &[Camera],
+    culler: Option<&str>,
+) -> (Vec<image::RgbaImage>, Vec<Option<StreamingReport>>, u64) {
     // SAFETY of the environment: this test binary runs one test at a time (nextest: one per
     // process), and reads the variable only when the scene is put on the GPU.
     match budget {
@@ -84,9 +94,13 @@ fn render(
         SIZE.1,
     )
     .unwrap();
-    let combination = scene_wide("individual-indirect-count", "gpu-clusters");
-    view.techniques_mut().select(&combination).unwrap();
-    view.techniques_mut().set_lod_error(1.0).unwrap();
+    if let Some(culler) = culler {
+        let combination = scene_wide("individual-indirect-count", culler);
+        view.techniques_mut().select(&combination).unwrap();
+        if culler == "gpu-clusters" {
+            view.techniques_mut().set_lod_error(1.0).unwrap();
+        }
+    }
     let mut images = Vec::new();
     let mut reports = Vec::new();
     let mut resident = 0;
@@ -176,4 +190,31 @@ fn an_orbit_under_the_budget_never_shows_a_hole() {
     }
     let streamed = reports.last().unwrap().unwrap().streamed_bytes;
     assert!(streamed > 0, "the orbit brought full detail: {reports:?}");
+}
+
+#[test]
+fn cullers_without_a_threshold_ask_for_what_they_draw() {
+    let scene = unique_parts();
+    let still = vec![close_up(0.0); 4];
+    let (_, probe, _) = render(&scene, Some(1 << 20), &still[..1]);
+    let budget = probe[0].unwrap().total_full_bytes / BUDGET_SHARE;
+    // The built-in combination (CPU, no culling), a CPU frustum culler and a GPU one without a
+    // threshold: each draws full detail, so each asks for the geometries it draws.
+    for culler in [None, Some("frustum"), Some("gpu-occlusion")] {
+        let (reference, _, _) = render_with(&scene, None, &still[..1], culler);
+        let (images, reports, _) = render_with(&scene, Some(budget), &still, culler);
+        let report = reports.last().unwrap().unwrap();
+        let first = compare(&images[0], &reference[0]).unwrap();
+        let last = compare(images.last().unwrap(), &reference[0]).unwrap();
+        println!("{culler:?}: first {first:?}, last {last:?}, {report:?}");
+        assert!(first.mean > 0.0, "{culler:?}: the first frame is coarse");
+        assert!(
+            report.streamed_bytes > 0 && report.full_bytes <= budget,
+            "{report:?}"
+        );
+        assert!(
+            last.mean <= 1e-4,
+            "{culler:?}: the close-up reaches full detail where it fits: {last:?}, {report:?}"
+        );
+    }
 }

@@ -732,9 +732,11 @@ fn cull(
     let depends = CullDepends::of(culling.entry.provides, culling.entry.abi_version.1);
     let key = cull_key(techniques.epoch, &scene.view(), all_planes, depends);
     if techniques.cull_key == Some(key) {
+        scene.ask_for_visible();
         return Ok(());
     }
     let Some(cull_fn) = culling.vtable::<abi::CadrCullingVtable>().cull else {
+        scene.ask_for_visible();
         return Ok(());
     };
     let view = scene.view();
@@ -763,6 +765,7 @@ fn cull(
     let result = unsafe { cull_fn(culling.instance, &input, &mut output, message.raw()) };
     status(&culling.entry, "cull", result, &message)?;
     scene.apply_culling(&visible, &changed);
+    scene.ask_for_visible();
     // The draws generation moved if anything changed: key on what the scene is now.
     techniques.cull_key = Some(cull_key(
         techniques.epoch,

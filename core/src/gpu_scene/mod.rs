@@ -722,6 +722,17 @@ impl GpuScene {
         Ok(())
     }
 
+    /// Where the scene streams its geometry: asks for the full detail of the instances a CPU
+    /// culler drew (`visible`, one bit per instance id) before the next frame.
+    pub(crate) fn ask_for_visible(&mut self, visible: &[u64]) {
+        if let Some(streaming) = &mut self.arenas.streaming {
+            let drawn: Vec<u64> = (visible.iter().zip(&self.candidate))
+                .map(|(visible, candidate)| visible & candidate)
+                .collect();
+            streaming.ask_for(&drawn);
+        }
+    }
+
     /// What the scene's geometry streaming holds and has done, where the scene streams (its
     /// full detail needs more than the memory budget; see `streaming.rs`).
     pub fn streaming(&self) -> Option<StreamingReport> {
@@ -1285,6 +1296,12 @@ impl ViewedScene<'_> {
     /// Applies culling's result (see [`GpuScene::apply_culling`]).
     pub(crate) fn apply_culling(&mut self, visible: &[u64], changed: &[u64]) {
         self.scene.apply_culling(self.own, visible, changed);
+    }
+
+    /// Where the scene streams its geometry, asks for the full detail of what this view's CPU
+    /// culling leaves visible (see [`GpuScene::ask_for_visible`]).
+    pub(crate) fn ask_for_visible(&mut self) {
+        self.scene.ask_for_visible(self.own.culled_bits());
     }
 }
 

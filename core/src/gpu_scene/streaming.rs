@@ -4,7 +4,9 @@
 //! level-of-detail DAG with at most an eighth of its triangles, with its own compact vertices), and only the geometries the frames ask
 //! for are held at full detail, as many as the budget allows.
 //!
-//! The asking is done on the GPU: the part boxes of a coarse geometry's instances carry the
+//! With a CPU culler the host asks for every geometry of the instances it draws (such a culler
+//! has no level-of-detail threshold: full detail is what it draws). Otherwise the asking is
+//! done on the GPU: the part boxes of a coarse geometry's instances carry the
 //! coarse form's error ([`abi::CadrBox::coarse_error`]), and a GPU culler that draws such an
 //! instance where that error projects over its threshold sets the instance's bit in the
 //! request buffer ([`abi::CadrSceneStreaming`]). Before each frame the scene reads the bits,
@@ -207,6 +209,8 @@ pub(super) struct Streaming {
     /// One bit per instance id, set by the GPU cullers, read and cleared by the host.
     requests: Buffer,
     request_words: u32,
+    /// The same asked on the host: the instances a CPU culler left visible.
+    host_requests: Vec<u64>,
     /// Frames seen (each [`Streaming::take_requests`] is one).
     frame: u64,
     /// Full-detail bytes on the GPU, of streamed geometries and of those always at full detail.
@@ -248,6 +252,7 @@ impl Streaming {
             slots: Vec::new(),
             requests: request_buffer(device, 1)?,
             request_words: 1,
+            host_requests: Vec::new(),
             frame: 0,
             full_bytes: 0,
             total_bytes: 0,
@@ -326,6 +331,17 @@ impl Streaming {
         }
     }
 
+    /// Asks for the full detail of the instances set in `visible` (one bit per instance id):
+    /// what a CPU culler, which has no level-of-detail threshold, drew this frame.
+    pub(super) fn ask_for(&mut self, visible: &[u64]) {
+        if self.host_requests.len() < visible.len() {
+            self.host_requests.resize(visible.len(), 0);
+        }
+        for (asked, &bits) in self.host_requests.iter_mut().zip(visible) {
+            *asked |= bits;
+        }
+    }
+
     /// Counts `bytes` brought to the GPU by streaming.
     pub(super) fn count_streamed(&mut self, bytes: u64) {
         self.streamed_bytes += bytes;
@@ -374,6 +390,13 @@ impl Streaming {
             while word != 0 {
                 let id = word_index as u32 * 32 + word.trailing_zeros();
                 word &= word - 1;
+                wanted.extend(geometry_of(id));
+            }
+        }
+        for (word_index, word) in self.host_requests.iter_mut().enumerate() {
+            while *word != 0 {
+                let id = word_index as u32 * 64 + word.trailing_zeros();
+                *word &= *word - 1;
                 wanted.extend(geometry_of(id));
             }
         }

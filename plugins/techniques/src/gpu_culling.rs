@@ -760,7 +760,9 @@ impl<const OCCLUSION: bool, const CLUSTERS: bool> GpuCuller<OCCLUSION, CLUSTERS>
     /// frame `slot`.
     fn dispatch_cull(&self, cull: &GpuCull<'_>, slot: usize, instances: u32, mode: u32) {
         let back_faces_hidden = cull.back_faces_hidden();
-        let lod_error = cull.cluster_cull().map_or(0.0, |c| {
+        // A culler without clusters draws full detail: its threshold (which streaming asks
+        // for full detail by) is 0.
+        let lod_error = cull.cluster_cull().filter(|_| CLUSTERS).map_or(0.0, |c| {
             if c.lod_error.is_finite() {
                 c.lod_error.max(0.0)
             } else {

@@ -44,7 +44,7 @@ pub fn parse_size(text: &str) -> Option<u64> {
 }
 
 /// Total physical memory (Linux: `MemTotal` of `/proc/meminfo`).
-fn physical_memory() -> Option<u64> {
+pub fn physical_memory() -> Option<u64> {
     let info = std::fs::read_to_string("/proc/meminfo").ok()?;
     let line = info.lines().find(|l| l.starts_with("MemTotal:"))?;
     let kib: u64 = line.split_whitespace().nth(1)?.parse().ok()?;

@@ -19,6 +19,7 @@ fn past_the_budget_parts_are_drawn_at_their_coarsest_and_none_is_left_out() {
     let scene = generate(&GeneratorSpec::Fine {
         units: 2,
         detail: 2,
+        unique: false,
     });
     let flat = flatten(&scene).unwrap();
     let parts = flat.instances.len() as u64;

@@ -85,7 +85,11 @@ impl Drawing {
 }
 
 fn fine(units: u32, detail: u32) -> Scene {
-    generate(&GeneratorSpec::Fine { units, detail })
+    generate(&GeneratorSpec::Fine {
+        units,
+        detail,
+        unique: false,
+    })
 }
 
 #[test]

@@ -93,9 +93,26 @@ fn generator_sources_parse_and_bad_ones_say_why() {
         SceneSource::parse("gen:fine:units=3,detail=4").unwrap(),
         SceneSource::Generator(GeneratorSpec::Fine {
             units: 3,
-            detail: 4
+            detail: 4,
+            unique: false,
         })
     );
+    assert_eq!(
+        SceneSource::parse("gen:fine:units=3,unique=1").unwrap(),
+        SceneSource::Generator(GeneratorSpec::Fine {
+            units: 3,
+            detail: 2,
+            unique: true,
+        })
+    );
+    let refused = SceneSource::parse("gen:fine:units=1000000,detail=32,unique=1")
+        .unwrap_err()
+        .to_string();
+    assert!(
+        refused.contains("unique=1") && refused.contains("memory"),
+        "{refused}"
+    );
+    assert!(SceneSource::parse("gen:fine:unique=2").is_err());
     let fine = load_scene("gen:grid:parts=20,tris=5000").unwrap();
     let triangles: usize = fine.geometries.iter().map(|g| g.indices.len() / 3).sum();
     let parts: usize = fine.geometries.iter().map(|g| g.parts.len()).sum();
@@ -132,7 +149,7 @@ fn generator_sources_parse_and_bad_ones_say_why() {
         ),
         (
             "gen:fine:teeth=3",
-            "unknown parameter 'teeth' (known: units, detail)",
+            "unknown parameter 'teeth' (known: units, detail, unique)",
         ),
     ] {
         let error = load_scene(text)

@@ -25,30 +25,14 @@ const BUDGET_SHARE: u64 = 6;
 const CONVERGENCE_FRAMES: usize = 12;
 const SIZE: (u32, u32) = (240, 180);
 
-/// gen:fine with every unit's parts made geometries of their own (a CAD assembly of unique
-/// parts, which is what streaming works on: a geometry is at full detail or not).
+/// gen:fine with every unit's parts geometries of their own (a CAD assembly of unique parts,
+/// which is what streaming works on: a geometry is at full detail or not).
 fn unique_parts() -> Scene {
-    let mut scene = generate(&GeneratorSpec::Fine {
+    generate(&GeneratorSpec::Fine {
         units: UNITS,
         detail: 2,
-    });
-    let originals = scene.geometries.clone();
-    scene.geometries.clear();
-    let units = scene.nodes[0].children.clone();
-    for unit in units {
-        let mut copies: Vec<Option<u32>> = vec![None; originals.len()];
-        for child in scene.nodes[unit as usize].children.clone() {
-            let Some(mesh) = scene.nodes[child as usize].mesh.as_mut() else {
-                continue;
-            };
-            let original = mesh.geometry as usize;
-            mesh.geometry = *copies[original].get_or_insert_with(|| {
-                scene.geometries.push(originals[original].clone());
-                scene.geometries.len() as u32 - 1
-            });
-        }
-    }
-    scene
+        unique: true,
+    })
 }
 
 /// Looks at the first unit from up close, turned by `turn` radians around it.

@@ -274,11 +274,16 @@ fn shaft(detail: u32, variant: u32) -> Geometry {
     one_part(g)
 }
 
-/// `units` units of a flange, gear, shaft and eight bolts with washers, at `detail`.
-pub fn fine(units: u32, detail: u32) -> Scene {
+/// `units` units of a flange, gear, shaft and eight bolts with washers, at `detail`; where
+/// `unique`, every unit with geometries of its own (copies of its variant's).
+pub fn fine(units: u32, detail: u32, unique: bool) -> Scene {
     let detail = detail.max(1);
     let mut scene = Scene {
-        name: format!("fine:units={units},detail={detail}"),
+        name: if unique {
+            format!("fine:units={units},detail={detail},unique=1")
+        } else {
+            format!("fine:units={units},detail={detail}")
+        },
         ..Scene::default()
     };
     scene.materials = (0..6)
@@ -298,6 +303,13 @@ pub fn fine(units: u32, detail: u32) -> Scene {
         scene.geometries.push(gear(detail, variant));
         scene.geometries.push(shaft(detail, variant));
     }
+    // With `unique`, the geometries above are templates each unit copies.
+    let shared_geometries = if unique {
+        std::mem::take(&mut scene.geometries)
+    } else {
+        Vec::new()
+    };
+    let mut unit_geometries: Vec<Geometry> = Vec::new();
     let mesh = |geometry: u32, material: u32| {
         Some(MeshRef {
             geometry,
@@ -332,7 +344,16 @@ pub fn fine(units: u32, detail: u32) -> Scene {
                 mesh: mesh_ref,
             });
         };
-        let first = 2 + 3 * variant;
+        // Bolt, washer, flange, gear, shaft: the shared ones, or copies of its own.
+        let [bolt, washer, first] = if unique {
+            let own = (unit_geometries.len()) as u32;
+            for shared in [0, 1, 2 + 3 * variant, 3 + 3 * variant, 4 + 3 * variant] {
+                unit_geometries.push(shared_geometries[shared as usize].clone());
+            }
+            [own, own + 1, own + 2]
+        } else {
+            [0, 1, 2 + 3 * variant]
+        };
         add("flange".into(), DMat4::IDENTITY, mesh(first, 0));
         add(
             "shaft".into(),
@@ -351,14 +372,17 @@ pub fn fine(units: u32, detail: u32) -> Scene {
             add(
                 format!("washer {b}"),
                 DMat4::from_translation(at),
-                mesh(1, 3),
+                mesh(washer, 3),
             );
             add(
                 format!("bolt {b}"),
                 DMat4::from_translation(at + DVec3::Y * 0.05),
-                mesh(0, 4 + b % 2),
+                mesh(bolt, 4 + b % 2),
             );
         }
+    }
+    if unique {
+        scene.geometries = unit_geometries;
     }
     scene
 }
@@ -370,7 +394,7 @@ mod tests {
     #[test]
     fn parts_have_the_triangles_the_detail_asks_for_and_normals_that_are_unit() {
         for detail in [1, 4] {
-            let scene = fine(2, detail);
+            let scene = fine(2, detail, false);
             for geometry in &scene.geometries {
                 let triangles = geometry.indices.len() / 3;
                 let low = 500 * (detail * detail) as usize;
@@ -385,9 +409,24 @@ mod tests {
                 }
             }
         }
-        assert_eq!(fine(3, 2), fine(3, 2), "deterministic");
+        assert_eq!(fine(3, 2, false), fine(3, 2, false), "deterministic");
+        // Unique units: five geometries each (bolt, washer, flange, gear, shaft), each used by
+        // one unit only, the same shapes as the shared ones.
+        let (shared, unique) = (fine(6, 1, false), fine(6, 1, true));
+        assert_eq!(unique.geometries.len(), 30);
+        let mut users = vec![std::collections::BTreeSet::new(); 30];
+        for (unit, &node) in unique.nodes[0].children.iter().enumerate() {
+            for &child in &unique.nodes[node as usize].children {
+                if let Some(mesh) = &unique.nodes[child as usize].mesh {
+                    users[mesh.geometry as usize].insert(unit);
+                }
+            }
+        }
+        assert!(users.iter().all(|u| u.len() == 1), "{users:?}");
+        let triangles = |s: &Scene| s.geometries.iter().map(|g| g.indices.len()).sum::<usize>();
+        assert!(triangles(&unique) > 2 * triangles(&shared));
         // Watertight and wound outward: cones and section caps apply.
-        for geometry in &fine(1, 1).geometries {
+        for geometry in &fine(1, 1, false).geometries {
             assert_eq!(
                 crate::scene::closure::closure(&geometry.vertices, &geometry.indices),
                 crate::scene::closure::Closure::Closed,

@@ -54,13 +54,17 @@ pub enum GeneratorSpec {
         /// Average triangles per part.
         triangles_per_part: f64,
     },
-    /// `gen:fine[:units=N,detail=D]`: units of machined parts with curved faces, 19 parts
-    /// each (a flange, a gear, a shaft, eight bolts and their washers, fasteners instanced).
+    /// `gen:fine[:units=N,detail=D,unique=1]`: units of machined parts with curved faces, 19
+    /// parts each (a flange, a gear, a shaft, eight bolts and their washers, fasteners
+    /// instanced).
     Fine {
         /// Number of units.
         units: u32,
         /// Tessellation: about 10³ triangles per part at 1, 10⁵ at 10.
         detail: u32,
+        /// Whether every unit has geometries of its own (an assembly of unique parts, as most
+        /// CAD assemblies are) instead of sharing four variants.
+        unique: bool,
     },
 }
 
@@ -69,9 +73,30 @@ pub const MAX_FINE_UNITS: u32 = 1_000_000;
 /// The finest `gen:fine` tessellation.
 pub const MAX_FINE_DETAIL: u32 = 32;
 
+/// Host bytes of one unit's geometries in `gen:fine` at detail 1 (vertices and indices of a
+/// flange, gear, shaft, bolt and washer, measured, rounded up); they grow with the square of the
+/// detail.
+const FINE_UNIT_BYTES: u64 = 400_000;
+
+/// Refuses a `gen:fine` of unique units whose geometries would take more than half the
+/// machine's physical memory (each unit holds its own: the memory grows with the units).
+fn check_unique_fine(units: u32, detail: u32) -> Result<(), String> {
+    let bytes = u64::from(units) * u64::from(detail).pow(2) * FINE_UNIT_BYTES;
+    let room = crate::memory_budget::physical_memory().map_or(u64::MAX, |m| m / 2);
+    if bytes > room {
+        return Err(format!(
+            "gen:fine: unique=1 with units={units} at detail={detail} would make about {} MB of \
+             geometry, more than half this machine's memory ({} MB): fewer units or less detail",
+            bytes >> 20,
+            room >> 20
+        ));
+    }
+    Ok(())
+}
+
 /// The generator names, for help texts.
 pub const GENERATOR_NAMES: &str =
-    "demo, graphicscard, racecar, cabinet[:cabinets=N], grid:parts=N[,tris=T], fine[:units=N,detail=D]";
+    "demo, graphicscard, racecar, cabinet[:cabinets=N], grid:parts=N[,tris=T], fine[:units=N,detail=D,unique=1]";
 
 /// The most cabinets `gen:cabinet` makes (about 11 million parts).
 const MAX_CABINETS: u32 = 30_000;
@@ -156,16 +181,15 @@ impl GeneratorSpec {
                 })
             }
             "fine" => {
-                let (mut units, mut detail) = (16, 2);
+                let (mut units, mut detail, mut unique) = (16, 2, 0);
                 for (key, value) in params {
                     let (target, range) = match key {
                         "units" => (&mut units, 1..=MAX_FINE_UNITS),
                         "detail" => (&mut detail, 1..=MAX_FINE_DETAIL),
-                        other => {
-                            return Err(format!(
-                                "gen:fine: unknown parameter '{other}' (known: units, detail)"
-                            ))
-                        }
+                        "unique" => (&mut unique, 0..=1),
+                        other => return Err(format!(
+                            "gen:fine: unknown parameter '{other}' (known: units, detail, unique)"
+                        )),
                     };
                     *target = value
                         .replace('_', "")
@@ -180,7 +204,15 @@ impl GeneratorSpec {
                             )
                         })?;
                 }
-                Ok(Self::Fine { units, detail })
+                let unique = unique == 1;
+                if unique {
+                    check_unique_fine(units, detail)?;
+                }
+                Ok(Self::Fine {
+                    units,
+                    detail,
+                    unique,
+                })
             }
             other => Err(format!(
                 "unknown generator 'gen:{other}' (known: {GENERATOR_NAMES})"
@@ -229,6 +261,10 @@ pub fn generate(spec: &GeneratorSpec) -> Scene {
             parts,
             triangles_per_part,
         } => grid(*parts, *triangles_per_part),
-        GeneratorSpec::Fine { units, detail } => fine(*units, *detail),
+        GeneratorSpec::Fine {
+            units,
+            detail,
+            unique,
+        } => fine(*units, *detail, *unique),
     }
 }

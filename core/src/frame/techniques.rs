@@ -732,11 +732,12 @@ fn cull(
     let depends = CullDepends::of(culling.entry.provides, culling.entry.abi_version.1);
     let key = cull_key(techniques.epoch, &scene.view(), all_planes, depends);
     if techniques.cull_key == Some(key) {
-        scene.ask_for_visible();
         return Ok(());
     }
     let Some(cull_fn) = culling.vtable::<abi::CadrCullingVtable>().cull else {
+        // Every candidate is drawn: asked for once per change of the drawn set.
         scene.ask_for_visible();
+        techniques.cull_key = Some(key);
         return Ok(());
     };
     let view = scene.view();

@@ -187,9 +187,11 @@ impl GeneratorSpec {
                         "units" => (&mut units, 1..=MAX_FINE_UNITS),
                         "detail" => (&mut detail, 1..=MAX_FINE_DETAIL),
                         "unique" => (&mut unique, 0..=1),
-                        other => return Err(format!(
+                        other => {
+                            return Err(format!(
                             "gen:fine: unknown parameter '{other}' (known: units, detail, unique)"
-                        )),
+                        ))
+                        }
                     };
                     *target = value
                         .replace('_', "")

@@ -131,14 +131,16 @@ fn coarse_form(
     (bytes, CoarseForm::of(geometry, &data.clusters, parts))
 }
 
-/// The entries of a coarse form's parts as placed (`placed`, made from the coarse geometry):
-/// their ranges, with the full detail's bounds and shape and the form's error.
-fn coarse_part_entries(form: &CoarseForm, mut placed: Vec<PartEntry>) -> Vec<PartEntry> {
+/// The entries of a coarse form's parts as placed in geometry slot `slot` (`placed`, made from
+/// the coarse geometry): their ranges, with the full detail's bounds and shape, the form's
+/// error and the slot's request bit.
+fn coarse_part_entries(form: &CoarseForm, slot: u32, mut placed: Vec<PartEntry>) -> Vec<PartEntry> {
     let full = form.full_parts.iter().zip(&form.errors);
     for (part, (full, &error)) in placed.iter_mut().zip(full) {
         part.sphere = full.sphere;
         part.bounds = abi::CadrBox {
             coarse_error: error.max(f32::MIN_POSITIVE),
+            request_bit: slot,
             ..full.bounds
         };
         part.shape = full.shape;
@@ -146,12 +148,13 @@ fn coarse_part_entries(form: &CoarseForm, mut placed: Vec<PartEntry>) -> Vec<Par
     placed
 }
 
-/// The entries of a streamed geometry's parts at full detail (`placed`): each part box
-/// carries its coarse form's error negated, so that the cullers keep asking for the full detail
+/// The entries of a streamed geometry's parts at full detail in geometry slot `slot`
+/// (`placed`): each part box carries the slot's request bit and its coarse form's error negated, so that the cullers keep asking for the full detail
 /// where it is still needed (and it is not put back in its coarse form).
-fn full_part_entries(form: &CoarseForm, mut placed: Vec<PartEntry>) -> Vec<PartEntry> {
+fn full_part_entries(form: &CoarseForm, slot: u32, mut placed: Vec<PartEntry>) -> Vec<PartEntry> {
     for (part, &error) in placed.iter_mut().zip(&form.errors) {
         part.bounds.coarse_error = -error.max(f32::MIN_POSITIVE);
+        part.bounds.request_bit = slot;
     }
     placed
 }
@@ -483,7 +486,7 @@ impl Layout {
             let place = match (form, coarse_data[slot].as_ref()) {
                 (Some(form), Some(data)) => {
                     let mut place = layout.push(*handle, data, &form.geometry);
-                    place.parts = coarse_part_entries(form, place.parts);
+                    place.parts = coarse_part_entries(form, slot as u32, place.parts);
                     place
                 }
                 _ => match graph.geometry_at(slot as u32) {
@@ -493,7 +496,7 @@ impl Layout {
                             .as_ref()
                             .and_then(|s| s.coarse_form_of(slot as u32));
                         if let Some(form) = streamed {
-                            place.parts = full_part_entries(&form, place.parts);
+                            place.parts = full_part_entries(&form, slot as u32, place.parts);
                         }
                         place
                     }
@@ -739,13 +742,12 @@ impl GeometryArenas {
     pub(super) fn stream(
         &mut self,
         graph: &SceneGraph,
-        geometry_of: impl Fn(u32) -> Option<u32>,
         settle: &mut dyn FnMut() -> RenderResult<()>,
     ) -> RenderResult<(Vec<u32>, u64)> {
         let Some(streaming) = &mut self.streaming else {
             return Ok((Vec::new(), 0));
         };
-        let StreamingPlan { load, unload } = streaming.take_requests(geometry_of)?;
+        let StreamingPlan { load, unload } = streaming.take_requests()?;
         if load.is_empty() && unload.is_empty() {
             return Ok((Vec::new(), 0));
         }
@@ -940,8 +942,8 @@ impl GeometryArenas {
         }
         let streamed = self.streaming.as_ref().and_then(|s| s.coarse_form_of(slot));
         place.parts = match (&coarse, streamed) {
-            (Some(form), _) => coarse_part_entries(form, part_entries(&data)),
-            (None, Some(form)) => full_part_entries(&form, part_entries(&data)),
+            (Some(form), _) => coarse_part_entries(form, slot, part_entries(&data)),
+            (None, Some(form)) => full_part_entries(&form, slot, part_entries(&data)),
             (None, None) => part_entries(&data),
         };
         place.part_clusters = data.clusters.part_ranges;

@@ -690,13 +690,11 @@ impl GpuScene {
         let Some(streaming) = &mut self.arenas.streaming else {
             return Ok(());
         };
-        if streaming.reserve_requests(&self.device, self.instances.len())? {
+        if streaming.reserve_requests(&self.device, self.arenas.places.len())? {
             self.refresh_buffer_refs();
             self.generations.buffers += 1;
         }
-        let instances = &self.instances;
-        let geometry_of = |id: u32| geometry_of_entry(instances.get(id as usize)?);
-        let (changed, bytes) = self.arenas.stream(graph, geometry_of, settle)?;
+        let (changed, bytes) = self.arenas.stream(graph, settle)?;
         if changed.is_empty() {
             return Ok(());
         }
@@ -722,15 +720,30 @@ impl GpuScene {
         Ok(())
     }
 
-    /// Where the scene streams its geometry: asks for the full detail of the instances a CPU
-    /// culler drew (`visible`, one bit per instance id) before the next frame.
+    /// Where the scene streams its geometry: asks for the full detail of the geometries of the
+    /// instances a CPU culler leaves visible (`visible`, one bit per instance id), from the next
+    /// frame until asked again. A scan of the visible instances, made when culling ran.
     pub(crate) fn ask_for_visible(&mut self, visible: &[u64]) {
-        if let Some(streaming) = &mut self.arenas.streaming {
-            let drawn: Vec<u64> = (visible.iter().zip(&self.candidate))
-                .map(|(visible, candidate)| visible & candidate)
-                .collect();
-            streaming.ask_for(&drawn);
+        let Some(streaming) = &mut self.arenas.streaming else {
+            return;
+        };
+        let mut asked = vec![false; self.arenas.places.len()];
+        for (word_index, (visible, candidate)) in visible.iter().zip(&self.candidate).enumerate() {
+            let mut word = visible & candidate;
+            while word != 0 {
+                let id = word_index * 64 + word.trailing_zeros() as usize;
+                word &= word - 1;
+                let slot = self.instances.get(id).and_then(geometry_of_entry);
+                if let Some(seen) = slot.and_then(|slot| asked.get_mut(slot as usize)) {
+                    *seen = true;
+                }
+            }
         }
+        let slots = (asked.iter().enumerate())
+            .filter(|(_, &asked)| asked)
+            .map(|(slot, _)| slot as u32)
+            .collect();
+        streaming.ask_for(slots);
     }
 
     /// What the scene's geometry streaming holds and has done, where the scene streams (its

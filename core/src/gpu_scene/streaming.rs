@@ -206,11 +206,11 @@ struct Residency {
 pub(super) struct Streaming {
     budget: u64,
     slots: Vec<Option<Residency>>,
-    /// One bit per instance id, set by the GPU cullers, read and cleared by the host.
+    /// One bit per geometry slot, set by the GPU cullers, read and cleared by the host.
     requests: Buffer,
     request_words: u32,
-    /// The same asked on the host: the instances a CPU culler left visible.
-    host_requests: Vec<u64>,
+    /// The geometry slots asked for on the host: those a CPU culler left visible.
+    host_wanted: Vec<u32>,
     /// Frames seen (each [`Streaming::take_requests`] is one).
     frame: u64,
     /// Full-detail bytes on the GPU, of streamed geometries and of those always at full detail.
@@ -252,7 +252,7 @@ impl Streaming {
             slots: Vec::new(),
             requests: request_buffer(device, 1)?,
             request_words: 1,
-            host_requests: Vec::new(),
+            host_wanted: Vec::new(),
             frame: 0,
             full_bytes: 0,
             total_bytes: 0,
@@ -331,15 +331,10 @@ impl Streaming {
         }
     }
 
-    /// Asks for the full detail of the instances set in `visible` (one bit per instance id):
-    /// what a CPU culler, which has no level-of-detail threshold, drew this frame.
-    pub(super) fn ask_for(&mut self, visible: &[u64]) {
-        if self.host_requests.len() < visible.len() {
-            self.host_requests.resize(visible.len(), 0);
-        }
-        for (asked, &bits) in self.host_requests.iter_mut().zip(visible) {
-            *asked |= bits;
-        }
+    /// Asks, until asked otherwise, for the full detail of the geometry slots `slots`: what a
+    /// CPU culler (which draws full detail) leaves visible.
+    pub(super) fn ask_for(&mut self, slots: Vec<u32>) {
+        self.host_wanted = slots;
     }
 
     /// Counts `bytes` brought to the GPU by streaming.
@@ -355,14 +350,14 @@ impl Streaming {
         }
     }
 
-    /// Makes the request buffer hold a bit for each of `instances` ids (a new buffer clears
-    /// every request); returns whether it was replaced.
+    /// Makes the request buffer hold a bit for each of `slots` geometry slots (a new buffer
+    /// clears every request); returns whether it was replaced.
     pub(super) fn reserve_requests(
         &mut self,
         device: &Arc<Device>,
-        instances: usize,
+        slots: usize,
     ) -> RenderResult<bool> {
-        let words = instances.div_ceil(32).max(1) as u32;
+        let words = slots.div_ceil(32).max(1) as u32;
         if words <= self.request_words {
             return Ok(false);
         }
@@ -372,49 +367,38 @@ impl Streaming {
     }
 
     /// Reads and clears the requests, a frame passing, and decides which geometries come to full
-    /// detail and which go back to their coarse form. `geometry_of` names the geometry slot of
-    /// an instance id.
-    pub(super) fn take_requests(
-        &mut self,
-        geometry_of: impl Fn(u32) -> Option<u32>,
-    ) -> RenderResult<StreamingPlan> {
+    /// detail and which go back to their coarse form.
+    pub(super) fn take_requests(&mut self) -> RenderResult<StreamingPlan> {
         self.frame += 1;
         let frame = self.frame;
-        let bits = self.requests.mapped()?.to_vec();
-        if bits.iter().any(|&b| b != 0) {
-            self.requests.write(0, &vec![0; bits.len()])?;
-        }
-        let mut wanted: Vec<u32> = Vec::new();
+        let mut wanted = self.host_wanted.clone();
+        let bits = self.requests.mapped()?;
+        let mut asked = false;
         for (word_index, word) in bits.chunks_exact(4).enumerate() {
             let mut word = u32::from_le_bytes([word[0], word[1], word[2], word[3]]);
+            asked |= word != 0;
             while word != 0 {
-                let id = word_index as u32 * 32 + word.trailing_zeros();
+                wanted.push(word_index as u32 * 32 + word.trailing_zeros());
                 word &= word - 1;
-                wanted.extend(geometry_of(id));
             }
         }
-        for (word_index, word) in self.host_requests.iter_mut().enumerate() {
-            while *word != 0 {
-                let id = word_index as u32 * 64 + word.trailing_zeros();
-                *word &= *word - 1;
-                wanted.extend(geometry_of(id));
-            }
+        if asked {
+            let zeros = vec![0; self.request_words as usize * 4];
+            self.requests.write(0, &zeros)?;
         }
-        wanted.sort_unstable();
-        wanted.dedup();
+        let mut loads_wanted = false;
         for &slot in &wanted {
             if let Some(r) = self.slots.get_mut(slot as usize).and_then(Option::as_mut) {
                 r.last_wanted = frame;
+                loads_wanted |= !r.full && r.coarse.is_some() && r.retry_after <= frame;
             }
         }
-        let plan = self.plan(&wanted);
-        if std::env::var_os("CADR_STREAM_DEBUG").is_some() {
-            eprintln!(
-                "frame {frame}: wanted {wanted:?} plan {plan:?} full {}",
-                self.full_bytes
-            );
+        if !loads_wanted {
+            return Ok(StreamingPlan::default());
         }
-        Ok(plan)
+        wanted.sort_unstable();
+        wanted.dedup();
+        Ok(self.plan(&wanted))
     }
 
     /// The loads the wanted slots need and the unloads that make room for them.

@@ -851,23 +851,25 @@ pub struct CadrScenePartBoxes {
 
 /// Since ABI 1.21 ([`CADR_EXTENSION_SCENE_STREAMING`]): the scene streams its geometry under a
 /// memory budget. A geometry whose full detail the GPU does not hold is drawn in a coarse form
-/// (a coarse cut of each part's level-of-detail DAG, about an eighth of its triangles), and the part boxes
-/// ([`CadrScenePartBoxes`]) of its instances carry that form's error
-/// ([`CadrBox::coarse_error`]). A GPU culler that draws an instance whose part box carries an
-/// error, and finds it projecting over its threshold in pixels (its level-of-detail
-/// threshold, or 0 for a culler without one), sets the instance's bit in `request_buffer`; the
-/// host reads the bits after the frame and brings the geometries asked for to full detail (or
-/// keeps them there), within its budget, those least recently asked for back to coarse first. Bits are only ever set by the GPU (an atomic or); the host
-/// clears the buffer between frames. Owned by the host; the buffer may be replaced, with the
-/// view's `buffers_generation` moved.
+/// (a coarse cut of each part's level-of-detail DAG, about an eighth of its triangles), and the
+/// part boxes ([`CadrScenePartBoxes`]) of its instances carry that form's error
+/// ([`CadrBox::coarse_error`]) and the geometry's request bit ([`CadrBox::request_bit`]). A
+/// GPU culler that draws an instance whose part box carries an error, and finds it projecting
+/// over its threshold in pixels (its level-of-detail threshold, or 0 for a culler that draws
+/// full detail), sets that bit in `request_buffer` (an atomic or); the host reads the bits after
+/// the frame and brings the geometries asked for to full detail (or keeps them there), within
+/// its budget, those least recently asked for back to coarse first. Only the GPU sets bits;
+/// the host clears them between frames. Owned by the host; the buffer may be replaced, with
+/// the view's `buffers_generation` moved.
 #[repr(C)]
 #[derive(Clone, Copy, Debug)]
 pub struct CadrSceneStreaming {
     /// `kind` = [`CADR_EXTENSION_SCENE_STREAMING`].
     pub header: CadrExtension,
-    /// One bit per instance id (bit `id % 32` of 32-bit word `id / 32`), storage buffer.
+    /// One bit per geometry (bit `b % 32` of 32-bit word `b / 32` for request bit `b`), storage
+    /// buffer.
     pub request_buffer: CadrBufferRef,
-    /// Words in `request_buffer`: an id past them asks for nothing.
+    /// Words in `request_buffer`: a bit past them asks for nothing.
     pub request_word_count: u32,
     /// Zero.
     pub reserved: u32,
@@ -891,12 +893,15 @@ pub struct CadrBox {
     pub coarse_error: f32,
     /// Half its size along each object axis (zero or more).
     pub half_extent: [f32; 3],
-    /// Zero.
-    pub reserved1: f32,
+    /// Since ABI 1.21, in part boxes only, where the scene streams: the bit of
+    /// [`CadrSceneStreaming::request_buffer`] that asks for the part's geometry (one per
+    /// geometry, shared by all its parts and instances); zero elsewhere (the 1.20 `reserved1`,
+    /// always zero).
+    pub request_bit: u32,
 }
 
 impl CadrBox {
-    /// The GPU layout: 8 little-endian f32.
+    /// The GPU layout: 7 little-endian f32 and a little-endian u32.
     pub fn to_le_bytes(&self) -> [u8; 32] {
         let mut bytes = [0; 32];
         let words = self
@@ -904,9 +909,10 @@ impl CadrBox {
             .iter()
             .chain([&self.coarse_error])
             .chain(&self.half_extent)
-            .chain([&self.reserved1]);
-        for (i, value) in words.enumerate() {
-            bytes[i * 4..i * 4 + 4].copy_from_slice(&value.to_le_bytes());
+            .map(|value| value.to_bits())
+            .chain([self.request_bit]);
+        for (i, word) in words.enumerate() {
+            bytes[i * 4..i * 4 + 4].copy_from_slice(&word.to_le_bytes());
         }
         bytes
     }

@@ -103,9 +103,10 @@ struct ObjectBox {
 #define PART_BOX_BINDING 8
 #endif
 layout(set = 0, binding = PART_BOX_BINDING, std430) readonly buffer PartBoxes { ObjectBox part_boxes[]; };
-// The streaming requests (CadrSceneStreaming), one bit per instance id, after the part boxes:
-// set for a part whose coarse form's error (its box's w, object space) projects over the
-// threshold. 4 unused bytes where the scene does not stream.
+// The streaming requests (CadrSceneStreaming), one bit per geometry, after the part boxes: set
+// for a part whose coarse form's error (its box's centre w, object space) projects over the
+// threshold, at the bit its box's half-extent w names (ABI 1.21: the geometry's request bit).
+// 4 unused bytes where the scene does not stream.
 layout(set = 0, binding = PART_BOX_BINDING + 1, std430) buffer Requests { uint requests[]; };
 
 #ifdef CLUSTERS
@@ -624,14 +625,15 @@ void append_clusters(CullEntry entry, uint id, Placement place, bool back_faces_
 }
 #endif
 
-// Asks the host for the full detail of instance `id`'s geometry (or to keep it) where the
-// part's coarse form has an error (`coarse_error`, object space: positive while the coarse form
-// is drawn, negated while the full detail is) that projects over `threshold` pixels: its sphere
-// (`center`, `radius`, relative to the eye) measured at its nearest depth.
-void request_full_detail(uint id, float coarse_error, vec3 center, float radius, float scale,
+// Asks the host for the full detail of a part's geometry (or to keep it), by setting the
+// geometry's bit (`bit`), where the part's coarse form has an error (`coarse_error`, object
+// space: positive while the coarse form is drawn, negated while the full detail is) that
+// projects over `threshold` pixels: its sphere (`center`, `radius`, relative to the eye)
+// measured at its nearest depth.
+void request_full_detail(uint bit, float coarse_error, vec3 center, float radius, float scale,
                          float threshold) {
     coarse_error = abs(coarse_error);
-    if (coarse_error == 0.0 || (id >> 5) >= dispatch.request_words) {
+    if (coarse_error == 0.0 || (bit >> 5) >= dispatch.request_words) {
         return;
     }
     vec4 w_row = vec4(view.view_projection[0][3], view.view_projection[1][3],
@@ -639,7 +641,7 @@ void request_full_detail(uint id, float coarse_error, vec3 center, float radius,
     float w = dot(w_row, vec4(center, 1.0));
     float nearest = w_row.w == 0.0 ? w - radius : w;
     if (nearest <= 1e-6 || coarse_error * scale * view.sub_pixel.y > threshold * nearest) {
-        atomicOr(requests[id >> 5], 1u << (id & 31u));
+        atomicOr(requests[bit >> 5], 1u << (bit & 31u));
     }
 }
 
@@ -708,8 +710,9 @@ void main() {
         }
     }
     if (draw && part_box_bound && dispatch.pass_kind != PASS_EDGES) {
-        request_full_detail(id, part_boxes[id].center.w, center, radius, scale,
-                            dispatch.lod_error);
+        ObjectBox box = part_boxes[id];
+        request_full_detail(floatBitsToUint(box.half_extent.w), box.center.w, center, radius,
+                            scale, dispatch.lod_error);
     }
     uint first = entry.first_index;
     uint count = entry.index_count;

@@ -9,8 +9,8 @@ use std::sync::Arc;
 use cadr_core::generate::{generate, GeneratorSpec};
 use cadr_core::gpu_scene::StreamingReport;
 use cadr_core::graph::SceneGraph;
-use cadr_core::render::Camera;
-use cadr_core::scene::{Aabb, Scene};
+use cadr_core::render::{Camera, DEFAULT_DIRECTION};
+use cadr_core::scene::{flatten, Aabb, Scene};
 use cadr_core::tree::SceneTree;
 use cadr_core::view::View;
 use cadr_tests::images::{compare, covered_fraction};
@@ -201,4 +201,31 @@ fn cullers_without_a_threshold_ask_for_what_they_draw() {
             "{culler:?}: the close-up reaches full detail where it fits: {last:?}, {report:?}"
         );
     }
+}
+
+#[test]
+fn the_whole_scene_under_the_budget_stays_within_the_fidelity_goal() {
+    let scene = unique_parts();
+    let bounds = flatten(&scene).unwrap().bounds;
+    let fitted = Camera::fit(
+        &bounds,
+        f64::from(SIZE.0) / f64::from(SIZE.1),
+        DEFAULT_DIRECTION,
+    );
+    let frames = vec![fitted; 4];
+    let (full, _, _) = render(&scene, None, &frames[..1]);
+    let (_, probe, _) = render(&scene, Some(1 << 20), &frames[..1]);
+    let budget = probe[0].unwrap().total_full_bytes / BUDGET_SHARE;
+    let (images, reports, _) = render(&scene, Some(budget), &frames);
+    let difference = compare(images.last().unwrap(), &full[0]).unwrap();
+    println!("fitted view: {difference:?}, {:?}", reports.last());
+    assert!(difference.mean <= 0.02, "{difference:?}");
+    let (covered, covered_full) = (
+        covered_fraction(images.last().unwrap()),
+        covered_fraction(&full[0]),
+    );
+    assert!(
+        (covered - covered_full).abs() < 0.01,
+        "{covered} against {covered_full}"
+    );
 }

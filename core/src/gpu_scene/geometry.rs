@@ -16,7 +16,7 @@ use crate::error::RenderResult;
 use crate::vk::raw as vk;
 
 use super::clusters::{self, GeometryClusters};
-use super::streaming::{CoarseForm, PartBounds, Streaming, StreamingPlan};
+use super::streaming::{CoarseForm, PartBounds, Preparer, Streaming, StreamingPlan};
 use crate::graph::{GeometryHandle, SceneGraph};
 use crate::scene::closure::{closure, Closure};
 use crate::scene::edges::{feature_edges, DEFAULT_CREASE_DEGREES};
@@ -91,6 +91,32 @@ fn arena_data(geometry: &Geometry) -> ArenaData<'_> {
     let clusters = clusters::build_cached(&geometry.vertices, &geometry.indices, &parts);
     ArenaData {
         vertices: &geometry.vertices,
+        wire,
+        parts,
+        clusters,
+    }
+}
+
+/// A geometry's full detail prepared for the arenas off the frame's thread (streaming): the
+/// geometry, its edge indices and parts, and its clusters.
+pub(super) struct PreparedGeometry {
+    geometry: Geometry,
+    wire: Vec<u32>,
+    parts: Vec<Part>,
+    clusters: GeometryClusters,
+}
+
+/// Prepares `geometry` for the arenas (see [`arena_data`]), owning what it needs.
+fn prepare_geometry(geometry: Geometry) -> PreparedGeometry {
+    let ArenaData {
+        wire,
+        parts,
+        clusters,
+        ..
+    } = arena_data(&geometry);
+    let (wire, parts) = (wire.into_owned(), parts.into_owned());
+    PreparedGeometry {
+        geometry,
         wire,
         parts,
         clusters,
@@ -397,6 +423,8 @@ pub(super) struct GeometryArenas {
     pub(super) places: Vec<Option<GeometryPlace>>,
     /// Where the scene streams its geometry: which geometries are at full detail.
     pub(super) streaming: Option<Streaming>,
+    /// The thread that prepares full detail for streaming, made on first use.
+    preparer: Option<Preparer<PreparedGeometry>>,
 }
 
 /// Every geometry of a graph one after the other, in slot order: the arenas' contents and
@@ -690,6 +718,7 @@ impl GeometryArenas {
             has_attributes,
             places,
             streaming,
+            preparer: None,
         };
         Ok((arenas, bytes))
     }
@@ -735,10 +764,11 @@ impl GeometryArenas {
         Ok(Some(uploaded))
     }
 
-    /// Where the scene streams: reads the frames' requests and brings the geometries they ask
-    /// for to full detail, putting others back in their coarse form to make room (see
-    /// `streaming.rs`), after `settle` (frames in flight must finish before their geometry
-    /// moves). Returns the slots whose form changed and the bytes uploaded.
+    /// Where the scene streams: reads the frames' requests, asks the preparing thread for the
+    /// full detail of the geometries they want, and writes what it has prepared, putting others
+    /// back in their coarse form to make room (see `streaming.rs`), after `settle` (frames in
+    /// flight must finish before their geometry moves). Returns the slots whose form changed
+    /// and the bytes uploaded.
     pub(super) fn stream(
         &mut self,
         graph: &SceneGraph,
@@ -748,51 +778,94 @@ impl GeometryArenas {
             return Ok((Vec::new(), 0));
         };
         let StreamingPlan { load, unload } = streaming.take_requests()?;
-        if load.is_empty() && unload.is_empty() {
+        let preparer = self
+            .preparer
+            .get_or_insert_with(|| Preparer::new(prepare_geometry));
+        for slot in load {
+            let (Some(handle), Some(geometry)) =
+                (graph.geometry_handle_at(slot), graph.geometry_at(slot))
+            else {
+                continue;
+            };
+            streaming.start_loading(slot);
+            if !preparer.ask(slot, handle, geometry.clone()) {
+                streaming.load_failed(slot, false);
+            }
+        }
+        let ready = preparer.finished();
+        if unload.is_empty() && ready.is_empty() {
             return Ok((Vec::new(), 0));
         }
         settle()?;
         let mut changed = Vec::new();
         let mut uploaded = 0;
-        for (slot, full) in unload
-            .iter()
-            .map(|&s| (s, false))
-            .chain(load.iter().map(|&s| (s, true)))
-        {
-            self.set_full(slot, full);
-            // Released first, so that a coarse form does not keep the full detail's room.
+        for slot in unload {
+            if let Some(streaming) = &mut self.streaming {
+                streaming.set_coarse(slot);
+            }
+            // Released first, so that the coarse form does not keep the full detail's room.
             self.release(slot);
-            let bytes = match self.place(graph, slot)? {
-                Some(bytes) => {
-                    if let (true, Some(streaming)) = (full, &mut self.streaming) {
-                        streaming.count_streamed(bytes);
-                    }
-                    bytes
-                }
-                None => {
-                    // No room for the full detail yet: the coarse form takes its room again.
-                    self.set_full(slot, false);
-                    if let Some(streaming) = &mut self.streaming {
-                        streaming.found_no_room(slot);
-                    }
-                    self.place(graph, slot)?.ok_or_else(|| {
-                        crate::error::RenderError::InvalidUse(format!(
-                            "geometry slot {slot} found no room for its coarse form"
-                        ))
-                    })?
-                }
-            };
-            uploaded += bytes;
+            uploaded += self.place(graph, slot)?.unwrap_or(0);
             changed.push(slot);
+        }
+        for (slot, handle, prepared) in ready {
+            if let Some(bytes) = self.place_prepared(graph, slot, handle, prepared)? {
+                uploaded += bytes;
+                changed.push(slot);
+            }
         }
         Ok((changed, uploaded))
     }
 
-    /// Marks `slot` at full detail or in its coarse form, where the scene streams.
-    fn set_full(&mut self, slot: u32, full: bool) {
-        if let Some(streaming) = &mut self.streaming {
-            streaming.set_full(slot, full);
+    /// Writes slot `slot`'s full detail as the preparing thread made it (`None`: it failed),
+    /// where the slot still holds `handle` and waits for it; a full detail that finds no room
+    /// leaves the coarse form in place (tried again later). Returns the bytes uploaded, or
+    /// `None` where nothing changed.
+    fn place_prepared(
+        &mut self,
+        graph: &SceneGraph,
+        slot: u32,
+        handle: GeometryHandle,
+        prepared: Option<PreparedGeometry>,
+    ) -> RenderResult<Option<u64>> {
+        let Some(streaming) = &mut self.streaming else {
+            return Ok(None);
+        };
+        let current = graph.geometry_handle_at(slot) == Some(handle);
+        if !current || !streaming.is_loading(slot, handle) {
+            return Ok(None);
         }
+        let Some(PreparedGeometry {
+            geometry,
+            wire,
+            parts,
+            clusters,
+        }) = prepared
+        else {
+            streaming.load_failed(slot, false);
+            return Ok(None);
+        };
+        let data = ArenaData {
+            vertices: &geometry.vertices,
+            wire: wire.into(),
+            parts: parts.into(),
+            clusters,
+        };
+        // Marked loaded first: the place's part entries then say it is at full detail.
+        streaming.loaded(slot);
+        self.release(slot);
+        if let Some(bytes) = self.write_place(slot, handle, data, &geometry, None)? {
+            if let Some(streaming) = &mut self.streaming {
+                streaming.count_streamed(bytes);
+            }
+            return Ok(Some(bytes));
+        }
+        // No room: back to the coarse form, in the room it had.
+        if let Some(streaming) = &mut self.streaming {
+            streaming.set_coarse(slot);
+            streaming.load_failed(slot, true);
+        }
+        self.place(graph, slot)
     }
 
     /// Clusters and groups in use (up to the end of the last place).
@@ -872,6 +945,21 @@ impl GeometryArenas {
             Some(form) => (arena_data(&form.geometry), &form.geometry),
             None => (full_data.unwrap_or_else(|| arena_data(geometry)), geometry),
         };
+        self.write_place(slot, handle, data, geometry, coarse.as_deref())
+    }
+
+    /// Writes `data` (made from `geometry`, the coarse form `coarse` of slot `slot`'s geometry
+    /// where that is what goes on the GPU) over slot `slot`'s place where it fits the room
+    /// there, else into a free room or the arenas' end. Returns the bytes uploaded, or `None`
+    /// when no room holds it.
+    fn write_place(
+        &mut self,
+        slot: u32,
+        handle: GeometryHandle,
+        data: ArenaData<'_>,
+        geometry: &Geometry,
+        coarse: Option<&CoarseForm>,
+    ) -> RenderResult<Option<u64>> {
         let sizes = data.sizes();
         if self.places.len() <= slot as usize {
             self.places.resize(slot as usize + 1, None);
@@ -941,7 +1029,7 @@ impl GeometryArenas {
             attribute_bytes = bytes.len();
         }
         let streamed = self.streaming.as_ref().and_then(|s| s.coarse_form_of(slot));
-        place.parts = match (&coarse, streamed) {
+        place.parts = match (coarse, streamed) {
             (Some(form), _) => coarse_part_entries(form, slot, part_entries(&data)),
             (None, Some(form)) => full_part_entries(&form, slot, part_entries(&data)),
             (None, None) => part_entries(&data),

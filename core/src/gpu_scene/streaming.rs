@@ -19,7 +19,8 @@
 //! The bits are read while a later frame may be setting them: a request read too early is
 //! simply asked for again by the next frame.
 
-use std::sync::Arc;
+use std::panic::AssertUnwindSafe;
+use std::sync::{mpsc, Arc, Mutex};
 
 use super::clusters::GeometryClusters;
 use crate::error::RenderResult;
@@ -196,6 +197,9 @@ struct Residency {
     full_bytes: u64,
     /// Whether its full detail is on the GPU.
     full: bool,
+    /// Whether its full detail is being prepared (its bytes already counted against the
+    /// budget).
+    loading: bool,
     /// The last frame that asked for it.
     last_wanted: u64,
     /// The first frame that may bring its full detail again after it found no room.
@@ -291,6 +295,7 @@ impl Streaming {
                 coarse,
                 full_bytes,
                 full,
+                loading: false,
                 last_wanted: 0,
                 retry_after: 0,
             });
@@ -310,23 +315,47 @@ impl Streaming {
     pub(super) fn forget(&mut self, slot: u32) {
         if let Some(residency) = self.slots.get_mut(slot as usize).and_then(Option::take) {
             self.total_bytes -= residency.full_bytes;
-            if residency.full {
+            if residency.full || residency.loading {
                 self.full_bytes -= residency.full_bytes;
             }
         }
     }
 
-    /// Marks slot `slot` at full detail (`true`) or in its coarse form, counting its bytes.
-    pub(super) fn set_full(&mut self, slot: u32, full: bool) {
+    /// Puts slot `slot` back in its coarse form (its full detail's bytes freed).
+    pub(super) fn set_coarse(&mut self, slot: u32) {
         let Some(residency) = self.slots.get_mut(slot as usize).and_then(Option::as_mut) else {
             return;
         };
-        if residency.full != full && residency.coarse.is_some() {
-            residency.full = full;
-            if full {
-                self.full_bytes += residency.full_bytes;
-            } else {
-                self.full_bytes -= residency.full_bytes;
+        if residency.full && residency.coarse.is_some() {
+            residency.full = false;
+            self.full_bytes -= residency.full_bytes;
+        }
+    }
+
+    /// Slot `slot`'s full detail is being prepared: its bytes count against the budget.
+    pub(super) fn start_loading(&mut self, slot: u32) {
+        let Some(residency) = self.slots.get_mut(slot as usize).and_then(Option::as_mut) else {
+            return;
+        };
+        if !residency.full && !residency.loading && residency.coarse.is_some() {
+            residency.loading = true;
+            self.full_bytes += residency.full_bytes;
+        }
+    }
+
+    /// Whether slot `slot` still holds `handle` and waits for its full detail.
+    pub(super) fn is_loading(&self, slot: u32, handle: GeometryHandle) -> bool {
+        (self.slots.get(slot as usize))
+            .and_then(Option::as_ref)
+            .is_some_and(|r| r.loading && r.handle == handle)
+    }
+
+    /// Slot `slot`'s full detail is on the GPU.
+    pub(super) fn loaded(&mut self, slot: u32) {
+        if let Some(residency) = self.slots.get_mut(slot as usize).and_then(Option::as_mut) {
+            if residency.loading {
+                residency.loading = false;
+                residency.full = true;
             }
         }
     }
@@ -342,11 +371,17 @@ impl Streaming {
         self.streamed_bytes += bytes;
     }
 
-    /// Slot `slot`'s full detail found no room in the arenas: it is not tried again for
-    /// [`KEEP_FRAMES`] frames.
-    pub(super) fn found_no_room(&mut self, slot: u32) {
+    /// Slot `slot`'s full detail did not come: its bytes are freed, and it is tried again
+    /// after [`KEEP_FRAMES`] frames where `retry` (it found no room), else never (preparing
+    /// it failed).
+    pub(super) fn load_failed(&mut self, slot: u32, retry: bool) {
+        let frame = self.frame;
         if let Some(residency) = self.slots.get_mut(slot as usize).and_then(Option::as_mut) {
-            residency.retry_after = self.frame + KEEP_FRAMES;
+            if residency.loading {
+                residency.loading = false;
+                self.full_bytes -= residency.full_bytes;
+            }
+            residency.retry_after = if retry { frame + KEEP_FRAMES } else { u64::MAX };
         }
     }
 
@@ -390,7 +425,8 @@ impl Streaming {
         for &slot in &wanted {
             if let Some(r) = self.slots.get_mut(slot as usize).and_then(Option::as_mut) {
                 r.last_wanted = frame;
-                loads_wanted |= !r.full && r.coarse.is_some() && r.retry_after <= frame;
+                loads_wanted |=
+                    !r.full && !r.loading && r.coarse.is_some() && r.retry_after <= frame;
             }
         }
         if !loads_wanted {
@@ -411,7 +447,7 @@ impl Streaming {
             .filter_map(|(slot, r)| {
                 let r = r.as_ref()?;
                 let old = r.last_wanted + KEEP_FRAMES < self.frame;
-                (r.full && r.coarse.is_some() && old).then_some((
+                (r.full && !r.loading && r.coarse.is_some() && old).then_some((
                     r.last_wanted,
                     slot as u32,
                     r.full_bytes,
@@ -424,18 +460,24 @@ impl Streaming {
             let Some(r) = self.slots.get(slot as usize).and_then(Option::as_ref) else {
                 continue;
             };
-            if r.full || r.coarse.is_none() || r.retry_after > self.frame {
+            if r.full || r.loading || r.coarse.is_none() || r.retry_after > self.frame {
                 continue;
             }
-            if uploading > 0 && uploading + r.full_bytes > UPLOAD_BYTES_PER_FRAME {
-                break;
+            // One larger than the budget never comes; one past this frame's uploads, or past
+            // the room old geometries leave, may let a smaller one through.
+            let too_much_now = uploading > 0 && uploading + r.full_bytes > UPLOAD_BYTES_PER_FRAME;
+            if r.full_bytes > self.budget || too_much_now {
+                continue;
             }
             while full_bytes + r.full_bytes > self.budget {
                 let Some((_, unload, bytes)) = evictable.next() else {
-                    return plan;
+                    break;
                 };
                 plan.unload.push(unload);
                 full_bytes -= bytes;
+            }
+            if full_bytes + r.full_bytes > self.budget {
+                continue;
             }
             full_bytes += r.full_bytes;
             uploading += r.full_bytes;
@@ -463,6 +505,92 @@ impl Streaming {
     /// The budget of full-detail bytes.
     pub(super) fn budget(&self) -> u64 {
         self.budget
+    }
+}
+
+/// What the preparing thread is asked: a geometry slot, the geometry it holds, and a copy of
+/// that geometry.
+type PrepareJob = (u32, GeometryHandle, Geometry);
+
+/// What the preparing thread answers: the slot, the geometry it held, and its full detail
+/// prepared (`None`: preparing it panicked).
+type Prepared<R> = (u32, GeometryHandle, Option<R>);
+
+/// A thread that prepares geometries' full detail (edges, clusters: the slow part, seconds
+/// for millions of triangles) off the frame's thread, in the order asked; each frame takes
+/// what is ready. A preparation that panics gives `None` (the geometry stays coarse).
+pub(super) struct Preparer<R: Send + 'static> {
+    jobs: Option<mpsc::Sender<PrepareJob>>,
+    /// Behind a lock only so that the scene can be shared between threads (a receiver cannot).
+    done: Mutex<mpsc::Receiver<Prepared<R>>>,
+    thread: Option<std::thread::JoinHandle<()>>,
+    /// The preparation, which the asking thread runs itself where no thread could be made.
+    prepare: fn(Geometry) -> R,
+    /// What the asking thread prepared itself, not yet taken.
+    ready: Vec<Prepared<R>>,
+}
+
+/// Runs `prepare`, a panic turned into `None`.
+fn prepared<R>(prepare: fn(Geometry) -> R, geometry: Geometry) -> Option<R> {
+    std::panic::catch_unwind(AssertUnwindSafe(|| prepare(geometry))).ok()
+}
+
+impl<R: Send + 'static> Preparer<R> {
+    /// A preparing thread running `prepare`.
+    pub(super) fn new(prepare: fn(Geometry) -> R) -> Self {
+        let (jobs, asked) = mpsc::channel::<PrepareJob>();
+        let (finished, done) = mpsc::channel();
+        let thread = std::thread::Builder::new()
+            .name("cadr streaming".into())
+            .spawn(move || {
+                for (slot, handle, geometry) in asked {
+                    let result = prepared(prepare, geometry);
+                    if finished.send((slot, handle, result)).is_err() {
+                        break;
+                    }
+                }
+            })
+            .ok();
+        Self {
+            jobs: Some(jobs),
+            done: Mutex::new(done),
+            thread,
+            prepare,
+            ready: Vec::new(),
+        }
+    }
+
+    /// Asks for slot `slot`'s full detail (`geometry`, which it holds as `handle`); false where
+    /// the thread has gone (it never should: it catches panics), so that the slot does not
+    /// wait for nothing.
+    pub(super) fn ask(&mut self, slot: u32, handle: GeometryHandle, geometry: Geometry) -> bool {
+        if self.thread.is_none() {
+            self.ready
+                .push((slot, handle, prepared(self.prepare, geometry)));
+            return true;
+        }
+        (self.jobs.as_ref()).is_some_and(|jobs| jobs.send((slot, handle, geometry)).is_ok())
+    }
+
+    /// The preparations finished since the last call.
+    pub(super) fn finished(&mut self) -> Vec<Prepared<R>> {
+        let mut ready = std::mem::take(&mut self.ready);
+        let done = self
+            .done
+            .get_mut()
+            .unwrap_or_else(|poisoned| poisoned.into_inner());
+        ready.extend(done.try_iter());
+        ready
+    }
+}
+
+impl<R: Send + 'static> Drop for Preparer<R> {
+    fn drop(&mut self) {
+        // Closing the queue ends the thread after its current preparation.
+        self.jobs = None;
+        if let Some(thread) = self.thread.take() {
+            let _ = thread.join();
+        }
     }
 }
 

@@ -614,6 +614,17 @@ impl GpuScene {
         any
     }
 
+    /// Refreshes the entries of instances `ids` and queues their records, cull entries and
+    /// part boxes for upload.
+    fn refresh_instances(&mut self, tree: &SceneTree, ids: &[u32]) {
+        for &id in ids {
+            self.refresh_instance(tree, id);
+            self.gpu.records.queue(id);
+            self.gpu.cull_entries.queue(id);
+            self.gpu.part_boxes.queue(id);
+        }
+    }
+
     fn refresh_instance(&mut self, tree: &SceneTree, id: u32) {
         let (entry, candidate) = tree
             .instance(id)
@@ -702,18 +713,19 @@ impl GpuScene {
         self.counts.last_upload.bytes += bytes;
         let extension = &mut self.seen.clusters_extension.0.clusters;
         [extension.cluster_count, extension.group_count] = self.arenas.cluster_counts();
+        let mut swapped = vec![false; self.arenas.places.len()];
+        for &slot in &changed {
+            if let Some(flag) = swapped.get_mut(slot as usize) {
+                *flag = true;
+            }
+        }
         let users: Vec<u32> = (0..self.instances.len() as u32)
             .filter(|&id| {
                 geometry_of_entry(&self.instances[id as usize])
-                    .is_some_and(|g| changed.contains(&g))
+                    .is_some_and(|g| swapped.get(g as usize) == Some(&true))
             })
             .collect();
-        for &id in &users {
-            self.refresh_instance(tree, id);
-            self.gpu.records.queue(id);
-            self.gpu.cull_entries.queue(id);
-            self.gpu.part_boxes.queue(id);
-        }
+        self.refresh_instances(tree, &users);
         self.counts.last_touched += users.len() as u64;
         self.generations.draws += 1;
         self.count_candidate_clusters();
@@ -973,12 +985,7 @@ impl GpuScene {
             .chain(&changes.visibility_changed)
             .copied()
             .collect();
-        for &id in &touched {
-            self.refresh_instance(tree, id);
-            self.gpu.records.queue(id);
-            self.gpu.cull_entries.queue(id);
-            self.gpu.part_boxes.queue(id);
-        }
+        self.refresh_instances(tree, &touched);
         self.counts.last_touched = touched.len() as u64;
         if !touched.is_empty() {
             self.generations.draws += 1;

@@ -914,7 +914,11 @@ impl GpuScene {
 
     /// Lays the arenas out again and rebuilds every entry.
     fn relayout(&mut self, graph: &SceneGraph, tree: &mut SceneTree) -> RenderResult<()> {
-        let streaming = self.arenas.streaming.take();
+        let mut streaming = self.arenas.streaming.take();
+        if let Some(streaming) = &mut streaming {
+            // The preparing thread goes with the old arenas.
+            streaming.cancel_loading();
+        }
         let (arenas, bytes) = GeometryArenas::upload(&self.device, graph, true, streaming)?;
         self.arenas = arenas;
         self.counts.last_upload.geometry_bytes += bytes;

@@ -366,6 +366,17 @@ impl Streaming {
         self.host_wanted = slots;
     }
 
+    /// Forgets every preparation asked for (the preparing thread goes with the arenas it
+    /// served): those geometries stay coarse until asked for again.
+    pub(super) fn cancel_loading(&mut self) {
+        for residency in self.slots.iter_mut().flatten() {
+            if residency.loading {
+                residency.loading = false;
+                self.full_bytes -= residency.full_bytes;
+            }
+        }
+    }
+
     /// Counts `bytes` brought to the GPU by streaming.
     pub(super) fn count_streamed(&mut self, bytes: u64) {
         self.streamed_bytes += bytes;

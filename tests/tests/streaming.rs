@@ -266,3 +266,74 @@ fn a_view_that_needs_more_than_the_budget_does_not_swap_geometries_back_and_fort
         "what came stays while the view wants it: {last:?}"
     );
 }
+
+#[test]
+fn a_geometry_replaced_while_the_scene_streams_is_drawn_as_its_new_data() {
+    let scene = unique_parts();
+    let budget = {
+        let (_, probe, _) = render(&scene, Some(1 << 20), &[close_up(0.0)]);
+        probe[0].unwrap().total_full_bytes / BUDGET_SHARE
+    };
+    // The first unit's flange, tessellated finer: its room is too small, and the arenas are
+    // laid out again while full detail is on its way.
+    let finer = generate(&GeneratorSpec::Fine {
+        units: 1,
+        detail: 4,
+        unique: true,
+    });
+    let flange_slot = 2;
+    let finer_flange = finer.geometries[flange_slot].clone();
+    let draw = |budget: Option<u64>| {
+        // SAFETY of the environment: as in `render_with`.
+        match budget {
+            Some(bytes) => std::env::set_var("CADR_MEMORY_BUDGET", bytes.to_string()),
+            None => std::env::remove_var("CADR_MEMORY_BUDGET"),
+        }
+        let device = test_device();
+        let (mut graph, _) = SceneGraph::from_scene(&scene).unwrap();
+        let mut tree = SceneTree::build(&mut graph);
+        let mut view = View::new(
+            &device,
+            Arc::clone(&plugin_registry(&device)),
+            SIZE.0,
+            SIZE.1,
+        )
+        .unwrap();
+        let combination = scene_wide("individual-indirect-count", "gpu-occlusion");
+        view.techniques_mut().select(&combination).unwrap();
+        let camera = close_up(0.0);
+        for _ in 0..2 {
+            view.render(&graph, &mut tree, &camera).unwrap();
+        }
+        let handle = graph.geometry_handle_at(flange_slot as u32).unwrap();
+        graph
+            .replace_geometry(handle, finer_flange.clone())
+            .unwrap();
+        tree.update(&mut graph);
+        let mut images = Vec::new();
+        for _ in 0..CONVERGENCE_FRAMES {
+            view.render(&graph, &mut tree, &camera).unwrap();
+            images.push(view.renderer().read_rgba8().unwrap());
+            if budget.is_none() {
+                break;
+            }
+        }
+        let report = view.scene().unwrap().streaming();
+        drop(view);
+        assert_no_validation_errors(&device);
+        std::env::remove_var("CADR_MEMORY_BUDGET");
+        (images, report)
+    };
+    let (reference, _) = draw(None);
+    let (images, report) = draw(Some(budget));
+    let report = report.unwrap();
+    assert!(report.full_bytes <= budget, "{report:?}");
+    let differences: Vec<f64> = (images.iter())
+        .map(|image| compare(image, &reference[0]).unwrap().mean)
+        .collect();
+    println!("{report:?}; FLIP per frame after the edit: {differences:?}");
+    assert!(
+        differences.iter().any(|&mean| mean <= 1e-4),
+        "the new flange at full detail, as drawn without a budget: {differences:?}"
+    );
+}

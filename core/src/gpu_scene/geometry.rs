@@ -782,13 +782,13 @@ impl GeometryArenas {
             .preparer
             .get_or_insert_with(|| Preparer::new(prepare_geometry));
         for slot in load {
-            let (Some(handle), Some(geometry)) =
-                (graph.geometry_handle_at(slot), graph.geometry_at(slot))
-            else {
+            let Some(geometry) = graph.geometry_at(slot) else {
                 continue;
             };
-            streaming.start_loading(slot);
-            if !preparer.ask(slot, handle, geometry.clone()) {
+            let Some(ticket) = streaming.start_loading(slot) else {
+                continue;
+            };
+            if !preparer.ask(slot, ticket, geometry.clone()) {
                 streaming.load_failed(slot, false);
             }
         }
@@ -808,8 +808,8 @@ impl GeometryArenas {
             uploaded += self.place(graph, slot)?.unwrap_or(0);
             changed.push(slot);
         }
-        for (slot, handle, prepared) in ready {
-            if let Some(bytes) = self.place_prepared(graph, slot, handle, prepared)? {
+        for (slot, ticket, prepared) in ready {
+            if let Some(bytes) = self.place_prepared(graph, slot, ticket, prepared)? {
                 uploaded += bytes;
                 changed.push(slot);
             }
@@ -818,21 +818,23 @@ impl GeometryArenas {
     }
 
     /// Writes slot `slot`'s full detail as the preparing thread made it (`None`: it failed),
-    /// where the slot still holds `handle` and waits for it; a full detail that finds no room
+    /// where the slot still waits for the preparation of `ticket`; a full detail that finds no room
     /// leaves the coarse form in place (tried again later). Returns the bytes uploaded, or
     /// `None` where nothing changed.
     fn place_prepared(
         &mut self,
         graph: &SceneGraph,
         slot: u32,
-        handle: GeometryHandle,
+        ticket: u64,
         prepared: Option<PreparedGeometry>,
     ) -> RenderResult<Option<u64>> {
         let Some(streaming) = &mut self.streaming else {
             return Ok(None);
         };
-        let current = graph.geometry_handle_at(slot) == Some(handle);
-        if !current || !streaming.is_loading(slot, handle) {
+        let Some(handle) = graph.geometry_handle_at(slot) else {
+            return Ok(None);
+        };
+        if !streaming.is_loading(slot, ticket) {
             return Ok(None);
         }
         let Some(PreparedGeometry {

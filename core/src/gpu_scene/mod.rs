@@ -896,6 +896,10 @@ impl GpuScene {
     fn place_geometries(&mut self, graph: &SceneGraph, replaced: &[u32]) -> RenderResult<bool> {
         let mut placed = self.arenas.follow_created_and_destroyed(graph)?;
         for &slot in replaced {
+            // New data under the same handle: streaming makes its coarse form again.
+            if let Some(streaming) = &mut self.arenas.streaming {
+                streaming.forget(slot);
+            }
             placed = match (placed, self.arenas.place(graph, slot)?) {
                 (Some(before), Some(bytes)) => Some(before + bytes),
                 _ => None,

@@ -200,6 +200,8 @@ struct Residency {
     /// Whether its full detail is being prepared (its bytes already counted against the
     /// budget).
     loading: bool,
+    /// The preparation it waits for (see [`Streaming::start_loading`]).
+    ticket: u64,
     /// The last frame that asked for it.
     last_wanted: u64,
     /// The first frame that may bring its full detail again after it found no room.
@@ -217,6 +219,8 @@ pub(super) struct Streaming {
     host_wanted: Vec<u32>,
     /// Frames seen (each [`Streaming::take_requests`] is one).
     frame: u64,
+    /// Preparations asked for, counted: each one's ticket.
+    tickets: u64,
     /// Full-detail bytes on the GPU, of streamed geometries and of those always at full detail.
     full_bytes: u64,
     /// Full-detail bytes of every geometry, on the GPU or not.
@@ -258,6 +262,7 @@ impl Streaming {
             request_words: 1,
             host_wanted: Vec::new(),
             frame: 0,
+            tickets: 0,
             full_bytes: 0,
             total_bytes: 0,
             streamed_bytes: 0,
@@ -296,6 +301,7 @@ impl Streaming {
                 full_bytes,
                 full,
                 loading: false,
+                ticket: 0,
                 last_wanted: 0,
                 retry_after: 0,
             });
@@ -332,22 +338,27 @@ impl Streaming {
         }
     }
 
-    /// Slot `slot`'s full detail is being prepared: its bytes count against the budget.
-    pub(super) fn start_loading(&mut self, slot: u32) {
-        let Some(residency) = self.slots.get_mut(slot as usize).and_then(Option::as_mut) else {
-            return;
-        };
-        if !residency.full && !residency.loading && residency.coarse.is_some() {
-            residency.loading = true;
-            self.full_bytes += residency.full_bytes;
+    /// Slot `slot`'s full detail is being prepared: its bytes count against the budget. Returns
+    /// the preparation's ticket, which its result must show (a geometry replaced meanwhile
+    /// keeps its handle, so the handle cannot tell an old preparation from a new one); `None`
+    /// where the slot does not wait for one.
+    pub(super) fn start_loading(&mut self, slot: u32) -> Option<u64> {
+        let residency = self.slots.get_mut(slot as usize)?.as_mut()?;
+        if residency.full || residency.loading || residency.coarse.is_none() {
+            return None;
         }
+        self.tickets += 1;
+        residency.loading = true;
+        residency.ticket = self.tickets;
+        self.full_bytes += residency.full_bytes;
+        Some(self.tickets)
     }
 
-    /// Whether slot `slot` still holds `handle` and waits for its full detail.
-    pub(super) fn is_loading(&self, slot: u32, handle: GeometryHandle) -> bool {
+    /// Whether slot `slot` still waits for the preparation of `ticket`.
+    pub(super) fn is_loading(&self, slot: u32, ticket: u64) -> bool {
         (self.slots.get(slot as usize))
             .and_then(Option::as_ref)
-            .is_some_and(|r| r.loading && r.handle == handle)
+            .is_some_and(|r| r.loading && r.ticket == ticket)
     }
 
     /// Slot `slot`'s full detail is on the GPU.
@@ -519,13 +530,13 @@ impl Streaming {
     }
 }
 
-/// What the preparing thread is asked: a geometry slot, the geometry it holds, and a copy of
-/// that geometry.
-type PrepareJob = (u32, GeometryHandle, Geometry);
+/// What the preparing thread is asked: a geometry slot, the preparation's ticket (see
+/// [`Streaming::start_loading`]), and a copy of the slot's geometry.
+type PrepareJob = (u32, u64, Geometry);
 
-/// What the preparing thread answers: the slot, the geometry it held, and its full detail
-/// prepared (`None`: preparing it panicked).
-type Prepared<R> = (u32, GeometryHandle, Option<R>);
+/// What the preparing thread answers: the slot, the ticket, and the full detail prepared
+/// (`None`: preparing it panicked).
+type Prepared<R> = (u32, u64, Option<R>);
 
 /// A thread that prepares geometries' full detail (edges, clusters: the slow part, seconds
 /// for millions of triangles) off the frame's thread, in the order asked; each frame takes
@@ -554,9 +565,9 @@ impl<R: Send + 'static> Preparer<R> {
         let thread = std::thread::Builder::new()
             .name("cadr streaming".into())
             .spawn(move || {
-                for (slot, handle, geometry) in asked {
+                for (slot, ticket, geometry) in asked {
                     let result = prepared(prepare, geometry);
-                    if finished.send((slot, handle, result)).is_err() {
+                    if finished.send((slot, ticket, result)).is_err() {
                         break;
                     }
                 }
@@ -571,16 +582,16 @@ impl<R: Send + 'static> Preparer<R> {
         }
     }
 
-    /// Asks for slot `slot`'s full detail (`geometry`, which it holds as `handle`); false where
-    /// the thread has gone (it never should: it catches panics), so that the slot does not
-    /// wait for nothing.
-    pub(super) fn ask(&mut self, slot: u32, handle: GeometryHandle, geometry: Geometry) -> bool {
+    /// Asks for slot `slot`'s full detail (`geometry`), under `ticket`; false where the thread
+    /// has gone (it never should: it catches panics), so that the slot does not wait for
+    /// nothing.
+    pub(super) fn ask(&mut self, slot: u32, ticket: u64, geometry: Geometry) -> bool {
         if self.thread.is_none() {
             self.ready
-                .push((slot, handle, prepared(self.prepare, geometry)));
+                .push((slot, ticket, prepared(self.prepare, geometry)));
             return true;
         }
-        (self.jobs.as_ref()).is_some_and(|jobs| jobs.send((slot, handle, geometry)).is_ok())
+        (self.jobs.as_ref()).is_some_and(|jobs| jobs.send((slot, ticket, geometry)).is_ok())
     }
 
     /// The preparations finished since the last call.

@@ -33,7 +33,7 @@ fi
 # Vulkan loader at one alone. (The tests that need a driver of their own point themselves at it.)
 mesa22_manifest="${CADR_MESA22_DIR:-$PWD/target/mesa-22.3}/lvp_icd.json"
 mesa22_subset=(rendering display_modes gpu_culling textures vulkan_layer transparency sections
-  antialiasing frame_replay clusters frames_in_flight back_faces)
+  antialiasing frame_replay clusters frames_in_flight back_faces streaming)
 # SwiftShader draws the reference pictures of these; it rasterizes and filters differently from
 # lavapipe (by more than the references' tolerance on some textured, translucent and MSAA
 # pictures), which cli/tests/swiftshader.rs judges with a tolerance of its own, and it lacks

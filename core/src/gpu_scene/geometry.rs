@@ -157,6 +157,20 @@ fn coarse_form(
     (bytes, CoarseForm::of(geometry, &data.clusters, parts))
 }
 
+/// A coarse form's data as the arenas hold it: its own DAG's errors raised by the form's error
+/// against the full detail, so that a cut of it at a threshold stays within the threshold of
+/// the full detail (the cut is finer for it), not of the coarse form alone.
+fn coarse_arena_data(form: &CoarseForm) -> ArenaData<'_> {
+    let mut data = arena_data(&form.geometry);
+    let error = form.errors.iter().copied().fold(0.0, f32::max);
+    for group in &mut data.clusters.groups {
+        if group.error < f32::MAX {
+            group.error += error;
+        }
+    }
+    data
+}
+
 /// The entries of a coarse form's parts as placed in geometry slot `slot` (`placed`, made from
 /// the coarse geometry): their ranges, with the full detail's bounds and shape, the form's
 /// error and the slot's request bit.
@@ -491,7 +505,7 @@ impl Layout {
         };
         let coarse_data = crate::parallel::map(&slots, |&slot| {
             let form = coarse.get(slot as usize)?.as_ref()?;
-            Some(arena_data(&form.geometry))
+            Some(coarse_arena_data(form))
         });
         let mut layout = Self {
             vertices: Vec::new(),
@@ -944,7 +958,7 @@ impl GeometryArenas {
             })
         });
         let (data, geometry) = match &coarse {
-            Some(form) => (arena_data(&form.geometry), &form.geometry),
+            Some(form) => (coarse_arena_data(form), &form.geometry),
             None => (full_data.unwrap_or_else(|| arena_data(geometry)), geometry),
         };
         self.write_place(slot, handle, data, geometry, coarse.as_deref())

@@ -46,6 +46,47 @@ fn close_up(turn: f64) -> Camera {
     Camera::fit(&unit, f64::from(SIZE.0) / f64::from(SIZE.1), direction)
 }
 
+/// A view of `scene` on the test device, under `budget`, drawn with `culler` (scene-wide
+/// techniques; `gpu-clusters` at 1 px) or the built-in combination (`None`).
+struct Session {
+    device: Arc<cadr_core::vk::Device>,
+    graph: SceneGraph,
+    tree: SceneTree,
+    view: View,
+}
+
+fn session(scene: &Scene, budget: Option<u64>, culler: Option<&str>) -> Session {
+    // SAFETY of the environment: this test binary runs one test at a time (nextest: one per
+    // process), and reads the variable only when the scene is put on the GPU.
+    match budget {
+        Some(bytes) => std::env::set_var("CADR_MEMORY_BUDGET", bytes.to_string()),
+        None => std::env::remove_var("CADR_MEMORY_BUDGET"),
+    }
+    let device = test_device();
+    let (mut graph, _) = SceneGraph::from_scene(scene).unwrap();
+    let tree = SceneTree::build(&mut graph);
+    let mut view = View::new(
+        &device,
+        Arc::clone(&plugin_registry(&device)),
+        SIZE.0,
+        SIZE.1,
+    )
+    .unwrap();
+    if let Some(culler) = culler {
+        let combination = scene_wide("individual-indirect-count", culler);
+        view.techniques_mut().select(&combination).unwrap();
+        if culler == "gpu-clusters" {
+            view.techniques_mut().set_lod_error(1.0).unwrap();
+        }
+    }
+    Session {
+        device,
+        graph,
+        tree,
+        view,
+    }
+}
+
 /// Renders `cameras` one frame each (at 1 px, gpu-clusters) with `budget`; returns the pictures
 /// and the streaming report after each.
 fn render(
@@ -65,29 +106,12 @@ fn render_with(
     culler: Option<&str>,
     done: &dyn Fn(&image::RgbaImage) -> bool,
 ) -> (Vec<image::RgbaImage>, Vec<Option<StreamingReport>>, u64) {
-    // SAFETY of the environment: this test binary runs one test at a time (nextest: one per
-    // process), and reads the variable only when the scene is put on the GPU.
-    match budget {
-        Some(bytes) => std::env::set_var("CADR_MEMORY_BUDGET", bytes.to_string()),
-        None => std::env::remove_var("CADR_MEMORY_BUDGET"),
-    }
-    let device = test_device();
-    let (mut graph, _) = SceneGraph::from_scene(scene).unwrap();
-    let mut tree = SceneTree::build(&mut graph);
-    let mut view = View::new(
-        &device,
-        Arc::clone(&plugin_registry(&device)),
-        SIZE.0,
-        SIZE.1,
-    )
-    .unwrap();
-    if let Some(culler) = culler {
-        let combination = scene_wide("individual-indirect-count", culler);
-        view.techniques_mut().select(&combination).unwrap();
-        if culler == "gpu-clusters" {
-            view.techniques_mut().set_lod_error(1.0).unwrap();
-        }
-    }
+    let Session {
+        device,
+        graph,
+        mut tree,
+        mut view,
+    } = session(scene, budget, culler);
     let mut images = Vec::new();
     let mut reports = Vec::new();
     let mut resident = 0;
@@ -284,23 +308,12 @@ fn a_geometry_replaced_while_the_scene_streams_is_drawn_as_its_new_data() {
     let flange_slot = 2;
     let finer_flange = finer.geometries[flange_slot].clone();
     let draw = |budget: Option<u64>| {
-        // SAFETY of the environment: as in `render_with`.
-        match budget {
-            Some(bytes) => std::env::set_var("CADR_MEMORY_BUDGET", bytes.to_string()),
-            None => std::env::remove_var("CADR_MEMORY_BUDGET"),
-        }
-        let device = test_device();
-        let (mut graph, _) = SceneGraph::from_scene(&scene).unwrap();
-        let mut tree = SceneTree::build(&mut graph);
-        let mut view = View::new(
-            &device,
-            Arc::clone(&plugin_registry(&device)),
-            SIZE.0,
-            SIZE.1,
-        )
-        .unwrap();
-        let combination = scene_wide("individual-indirect-count", "gpu-occlusion");
-        view.techniques_mut().select(&combination).unwrap();
+        let Session {
+            device,
+            mut graph,
+            mut tree,
+            mut view,
+        } = session(&scene, budget, Some("gpu-occlusion"));
         let camera = close_up(0.0);
         for _ in 0..2 {
             view.render(&graph, &mut tree, &camera).unwrap();

@@ -16,7 +16,9 @@ use crate::error::RenderResult;
 use crate::vk::raw as vk;
 
 use super::clusters::{self, GeometryClusters};
-use super::streaming::{CoarseForm, PartBounds, Preparer, Streaming, StreamingPlan};
+use super::streaming::{
+    CoarseForm, PartBounds, Preparer, Streaming, StreamingPlan, UPLOAD_BYTES_PER_FRAME,
+};
 use crate::graph::{GeometryHandle, SceneGraph};
 use crate::scene::closure::{closure, Closure};
 use crate::scene::edges::{feature_edges, DEFAULT_CREASE_DEGREES};
@@ -806,7 +808,20 @@ impl GeometryArenas {
                 streaming.load_failed(slot, false);
             }
         }
-        let ready = preparer.finished();
+        // At most a frame's worth of bytes is written (at least one geometry); the rest waits
+        // for the next frames, so that preparations finishing together make no long frame.
+        let mut ready = preparer.finished();
+        let mut writing = 0;
+        let mut taken = 0;
+        for (slot, _, _) in &ready {
+            let bytes = streaming.full_bytes_of(*slot);
+            if taken > 0 && writing + bytes > UPLOAD_BYTES_PER_FRAME {
+                break;
+            }
+            writing += bytes;
+            taken += 1;
+        }
+        preparer.put_back(ready.split_off(taken));
         if unload.is_empty() && ready.is_empty() {
             return Ok((Vec::new(), 0));
         }

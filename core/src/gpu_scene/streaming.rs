@@ -30,7 +30,7 @@ use crate::vk::raw as vk;
 use crate::vk::{Buffer, Device};
 use cadr_plugin_abi as abi;
 
-/// Bytes of full-detail geometry brought to the GPU in one frame at most (a geometry larger
+/// Bytes of full-detail geometry asked for, and written, in one frame at most (a geometry larger
 /// than this still comes, alone in its frame).
 pub const UPLOAD_BYTES_PER_FRAME: u64 = 32 << 20;
 
@@ -354,6 +354,13 @@ impl Streaming {
         Some(self.tickets)
     }
 
+    /// Device bytes of slot `slot`'s full detail (0 for a slot it does not know).
+    pub(super) fn full_bytes_of(&self, slot: u32) -> u64 {
+        (self.slots.get(slot as usize))
+            .and_then(Option::as_ref)
+            .map_or(0, |r| r.full_bytes)
+    }
+
     /// Whether slot `slot` still waits for the preparation of `ticket`.
     pub(super) fn is_loading(&self, slot: u32, ticket: u64) -> bool {
         (self.slots.get(slot as usize))
@@ -592,6 +599,12 @@ impl<R: Send + 'static> Preparer<R> {
             return true;
         }
         (self.jobs.as_ref()).is_some_and(|jobs| jobs.send((slot, ticket, geometry)).is_ok())
+    }
+
+    /// Gives back preparations taken but not written (they come first next time).
+    pub(super) fn put_back(&mut self, mut later: Vec<Prepared<R>>) {
+        later.append(&mut self.ready);
+        self.ready = later;
     }
 
     /// The preparations finished since the last call.

@@ -107,6 +107,15 @@ pub(super) fn build_cached(
 }
 
 impl GeometryClusters {
+    /// Index `i` of the geometry's index range as the arenas lay it out: its own indices, then
+    /// the coarser clusters' (what a cluster's `first_index` counts in).
+    pub(super) fn index(&self, i: usize) -> Option<&u32> {
+        match i.checked_sub(self.indices.len()) {
+            None => self.indices.get(i),
+            Some(lod) => self.lod_indices.get(lod),
+        }
+    }
+
     /// The cache entry's bytes: the five lengths, then each array in little-endian words.
     fn to_bytes(&self) -> Vec<u8> {
         let lengths = [

@@ -191,8 +191,9 @@ fn coarse_part_entries(form: &CoarseForm, slot: u32, mut placed: Vec<PartEntry>)
 }
 
 /// The entries of a streamed geometry's parts at full detail in geometry slot `slot`
-/// (`placed`): each part box carries the slot's request bit and its coarse form's error negated, so that the cullers keep asking for the full detail
-/// where it is still needed (and it is not put back in its coarse form).
+/// (`placed`): each part box carries the slot's request bit and its coarse form's error
+/// negated, so that the cullers keep asking for the full detail where it is still needed (and
+/// it is not put back in its coarse form).
 fn full_part_entries(form: &CoarseForm, slot: u32, mut placed: Vec<PartEntry>) -> Vec<PartEntry> {
     for (part, &error) in placed.iter_mut().zip(&form.errors) {
         part.bounds.coarse_error = -error.max(f32::MIN_POSITIVE);
@@ -244,21 +245,13 @@ impl ArenaData<'_> {
     /// box along the object's axes around the vertices its indices name.
     fn cluster_box_bytes(&self) -> Vec<u8> {
         let clusters = &self.clusters;
-        let own = clusters.indices.len();
-        let index = |i: usize| {
-            if i < own {
-                clusters.indices.get(i)
-            } else {
-                clusters.lod_indices.get(i - own)
-            }
-        };
         clusters
             .clusters
             .iter()
             .flat_map(|c| {
                 let first = c.first_index as usize;
                 let vertices = (first..first + c.index_count as usize)
-                    .filter_map(index)
+                    .filter_map(|i| clusters.index(i))
                     .filter_map(|&i| self.vertices.get(i as usize));
                 bounding_box(vertices).to_le_bytes()
             })
@@ -847,8 +840,8 @@ impl GeometryArenas {
     }
 
     /// Writes slot `slot`'s full detail as the preparing thread made it (`None`: it failed),
-    /// where the slot still waits for the preparation of `ticket`; a full detail that finds no room
-    /// leaves the coarse form in place (tried again later). Returns the bytes uploaded, or
+    /// where the slot still waits for the preparation of `ticket`; a full detail that finds no
+    /// room leaves the coarse form in place (tried again later). Returns the bytes uploaded, or
     /// `None` where nothing changed.
     fn place_prepared(
         &mut self,

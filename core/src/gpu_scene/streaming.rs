@@ -1,20 +1,23 @@
 //! Geometry streaming under a memory budget: when the full detail of a scene's geometries
 //! needs more device memory than the budget (`CADR_MEMORY_BUDGET`, see `memory_budget.rs`),
 //! each geometry goes on the GPU in a coarse form (for each part the finest cut of its
-//! level-of-detail DAG with at most an eighth of its triangles, with its own compact vertices), and only the geometries the frames ask
-//! for are held at full detail, as many as the budget allows.
+//! level-of-detail DAG with at most an eighth of its triangles, with its own compact
+//! vertices), and only the geometries the frames ask for are held at full detail, as many as
+//! the budget allows.
 //!
 //! With a CPU culler the host asks for every geometry of the instances it draws (such a culler
 //! has no level-of-detail threshold: full detail is what it draws). Otherwise the asking is
-//! done on the GPU: the part boxes of a coarse geometry's instances carry the
-//! coarse form's error ([`abi::CadrBox::coarse_error`]), and a GPU culler that draws such an
-//! instance where that error projects over its threshold sets the instance's bit in the
-//! request buffer ([`abi::CadrSceneStreaming`]). Before each frame the scene reads the bits,
-//! brings the geometries asked for to full detail (at most [`UPLOAD_BYTES_PER_FRAME`] a frame),
-//! and, where the budget is spent, puts back in their coarse form those asked for least
-//! recently (never one asked for in the last [`KEEP_FRAMES`] frames, so that a view that needs
-//! more than the budget does not swap geometries back and forth). A geometry is never missing:
-//! until its full detail arrives it is drawn coarse.
+//! done on the GPU: the part boxes of a streamed geometry's instances carry its coarse form's
+//! error ([`abi::CadrBox::coarse_error`]) and the geometry's request bit
+//! ([`abi::CadrBox::request_bit`]), and a GPU culler that draws such an instance where that
+//! error projects over its threshold sets the bit in the request buffer
+//! ([`abi::CadrSceneStreaming`]). Before each frame the scene reads the bits, asks a preparing
+//! thread ([`Preparer`]) for the full detail of the geometries asked for (at most
+//! [`UPLOAD_BYTES_PER_FRAME`] a frame) and writes what it has prepared; where the budget is
+//! spent, it puts back in their coarse form those asked for least recently (never one asked for
+//! in the last [`KEEP_FRAMES`] frames, so that a view that needs more than the budget does not
+//! swap geometries back and forth). A geometry is never missing: until its full detail arrives
+//! it is drawn coarse.
 //!
 //! The bits are read while a later frame may be setting them: a request read too early is
 //! simply asked for again by the next frame.
@@ -73,14 +76,6 @@ impl CoarseForm {
         clusters: &GeometryClusters,
         full_parts: Vec<PartBounds>,
     ) -> Option<Self> {
-        let own = clusters.indices.len();
-        let index_at = |i: usize| {
-            if i < own {
-                clusters.indices.get(i)
-            } else {
-                clusters.lod_indices.get(i - own)
-            }
-        };
         let mut remap = vec![u32::MAX; geometry.vertices.len()];
         let mut vertices = Vec::new();
         let mut attributes = Vec::new();
@@ -96,7 +91,7 @@ impl CoarseForm {
             for cluster in part_clusters.filter(|c| in_cut(clusters, c, cut_error)) {
                 let start = cluster.first_index as usize;
                 for i in start..start + cluster.index_count as usize {
-                    let &vertex = index_at(i)?;
+                    let &vertex = clusters.index(i)?;
                     let slot = remap.get_mut(vertex as usize)?;
                     if *slot == u32::MAX {
                         *slot = vertices.len() as u32;
@@ -435,23 +430,21 @@ impl Streaming {
     pub(super) fn take_requests(&mut self) -> RenderResult<StreamingPlan> {
         self.frame += 1;
         let frame = self.frame;
-        let mut wanted = self.host_wanted.clone();
-        let bits = self.requests.mapped()?;
-        let mut asked = false;
-        for (word_index, word) in bits.chunks_exact(4).enumerate() {
+        // The GPU's requests (an allocation only where some bit is set), then the host's.
+        let mut wanted = Vec::new();
+        for (word_index, word) in self.requests.mapped()?.chunks_exact(4).enumerate() {
             let mut word = u32::from_le_bytes([word[0], word[1], word[2], word[3]]);
-            asked |= word != 0;
             while word != 0 {
                 wanted.push(word_index as u32 * 32 + word.trailing_zeros());
                 word &= word - 1;
             }
         }
-        if asked {
+        if !wanted.is_empty() {
             let zeros = vec![0; self.request_words as usize * 4];
             self.requests.write(0, &zeros)?;
         }
         let mut loads_wanted = false;
-        for &slot in &wanted {
+        for &slot in wanted.iter().chain(&self.host_wanted) {
             if let Some(r) = self.slots.get_mut(slot as usize).and_then(Option::as_mut) {
                 r.last_wanted = frame;
                 loads_wanted |=
@@ -461,6 +454,7 @@ impl Streaming {
         if !loads_wanted {
             return Ok(StreamingPlan::default());
         }
+        wanted.extend_from_slice(&self.host_wanted);
         wanted.sort_unstable();
         wanted.dedup();
         Ok(self.plan(&wanted))

@@ -77,16 +77,18 @@ fn shown(state: &mut SceneState, below: Option<NodeHandle>) -> (Aabb, CadrSceneS
         if !instance.visible {
             continue;
         }
-        let Some(geometry) = graph.geometry_at(instance.geometry) else {
+        let Some(geometry) = graph.geometry_info_at(instance.geometry) else {
             continue;
         };
         statistics.visible_instances += 1;
         if let Some(part) = geometry.parts.get(instance.part as usize) {
             statistics.visible_triangles += u64::from(part.triangle_count());
         }
-        let local = *geometry_bounds
-            .entry(instance.geometry)
-            .or_insert_with(|| geometry.bounds());
+        let local = *geometry_bounds.entry(instance.geometry).or_insert_with(|| {
+            graph
+                .geometry_bounds_at(instance.geometry)
+                .unwrap_or_default()
+        });
         bounds.add_box(&local.transformed(&tree.world(instance.tree_node)));
     }
     (bounds, statistics)

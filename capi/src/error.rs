@@ -94,6 +94,7 @@ impl From<cadr_core::error::RenderError> for Failure {
                 Self::new(CadrResult::PluginFailed, error.to_string())
             }
             RenderError::InvalidUse(_) => Self::new(CadrResult::InvalidArgument, error.to_string()),
+            RenderError::SceneData(_) => Self::new(CadrResult::Io, error.to_string()),
         }
     }
 }

@@ -311,7 +311,7 @@ pub unsafe extern "C" fn cadr_scene_geometry_bounds(
     guard(|| {
         let value = with_scene(scene, |s| {
             let handle = geometry_of(&s.graph, geometry, "geometry")?;
-            Ok(s.graph.geometry(handle).map_err(graph_failure)?.bounds())
+            s.graph.geometry_bounds(handle).map_err(graph_failure)
         })?;
         // SAFETY: bounds is null or writable (the caller's contract).
         unsafe { deliver(bounds, "bounds", value.into()) }

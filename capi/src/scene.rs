@@ -184,6 +184,7 @@ pub(crate) fn graph_failure(error: GraphError) -> Failure {
         | GraphError::StaleMaterial { .. }
         | GraphError::StaleTexture { .. } => CadrResult::DestroyedHandle,
         GraphError::InUse { .. } => CadrResult::InUse,
+        GraphError::PageRead(_) => CadrResult::Io,
         _ => CadrResult::InvalidArgument,
     };
     Failure::new(code, error.to_string())

@@ -309,7 +309,11 @@ pub unsafe extern "C" fn cadr_scene_set_geometry_attributes(
         };
         with_scene(scene, |s| {
             let handle = geometry_of(&s.graph, geometry, "geometry")?;
-            let mut data = s.graph.geometry(handle).map_err(graph_failure)?.clone();
+            let mut data = s
+                .graph
+                .geometry(handle)
+                .map_err(graph_failure)?
+                .into_owned();
             if data.vertices.len() != count {
                 return Err(Failure::invalid(format!(
                     "vertex_count is {vertex_count}; geometry '{}' has {} vertices",

@@ -159,7 +159,7 @@ impl EditBench {
         let geometry = self
             .graph
             .geometry_handle_at(0)
-            .and_then(|h| Some((h, self.graph.geometry(h).ok()?.clone())));
+            .and_then(|h| Some((h, self.graph.geometry(h).ok()?.into_owned())));
         let Some((handle, original)) = geometry else {
             return;
         };

@@ -272,6 +272,17 @@ fn render(args: &RenderArgs, process_start: Instant) -> Result<(), String> {
             mb(report.streamed_bytes)
         );
     }
+    let memory = session.graph.geometry_memory();
+    if let Some(page_file) = &memory.page_file {
+        let mb = |bytes: u64| bytes as f64 / 1e6;
+        println!(
+            "paging:      {:.1} MB of geometry in memory, {:.1} MB ({} geometries) in {}",
+            mb(memory.resident_bytes),
+            mb(memory.paged_bytes),
+            memory.paged_geometries,
+            page_file.display()
+        );
+    }
     if args.validation.requested() {
         println!("validation:  {validation_errors} errors");
     }

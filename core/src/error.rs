@@ -1,6 +1,6 @@
 //! What can go wrong while rendering: Vulkan failing, a shader failing to compile, a technique
-//! failing or being refused, or a renderer being used against its contract. Only the first is
-//! a Vulkan error.
+//! failing or being refused, a renderer being used against its contract, or the scene's data
+//! failing to be read back. Only the first is a Vulkan error.
 
 use crate::vk::VkError;
 
@@ -25,6 +25,10 @@ pub enum RenderError {
     /// panicking).
     #[error("invalid use: {0}")]
     InvalidUse(String),
+    /// The scene's data could not be read: a geometry in the scene graph's page file (the
+    /// message names the geometry and the file).
+    #[error("{0}")]
+    SceneData(String),
 }
 
 /// A shader that failed to compile: a renderer error (a broken source or snippet), not a

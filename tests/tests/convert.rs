@@ -112,7 +112,7 @@ fn csf_part_overrides_become_an_editable_graph_that_draws_the_same() {
     // (hidden parts, and a Transform + Geo node of their own) and back.
     let scene = scene_from_csf(&rich_csf_file(), "rich").unwrap();
     let (mut graph, _) = cadr_core::graph::SceneGraph::from_scene(&scene).unwrap();
-    assert_same_drawing(&scene, &graph.to_scene());
+    assert_same_drawing(&scene, &graph.to_scene().unwrap());
     let tree = cadr_core::tree::SceneTree::build(&mut graph);
     let visible = tree
         .instances()

@@ -136,7 +136,7 @@ fn every_valid_combination_picks_what_it_draws(source: &cadr_core::scene::Scene,
         );
         let instance = tree.instance(hit.instance).unwrap();
         let world = tree.world(instance.tree_node);
-        let geometry = graph.geometry_at(instance.geometry).unwrap();
+        let geometry = graph.geometry_at(instance.geometry).unwrap().unwrap();
         let part = geometry.parts[hit.part as usize];
         let local = world.inverse().transform_point3(hit.position);
         let indices = &geometry.indices

@@ -335,7 +335,7 @@ impl World {
             Op::ReplaceGeometry(g, y) => {
                 // Same part count (required while in use), moved vertices.
                 let handle = self.geometries[g as usize % 3];
-                let mut data = self.graph.geometry(handle).unwrap().clone();
+                let mut data = self.graph.geometry(handle).unwrap().into_owned();
                 for v in &mut data.vertices {
                     v.position[1] += f32::from(y) * 0.01;
                 }

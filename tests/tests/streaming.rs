@@ -56,6 +56,17 @@ struct Session {
 }
 
 fn session(scene: &Scene, budget: Option<u64>, culler: Option<&str>) -> Session {
+    session_with(scene, budget, culler, None)
+}
+
+/// [`session`], with the graph keeping at most `memory_limit` bytes of geometry in memory
+/// (the rest in its page file) where given, else half the budget.
+fn session_with(
+    scene: &Scene,
+    budget: Option<u64>,
+    culler: Option<&str>,
+    memory_limit: Option<u64>,
+) -> Session {
     // SAFETY of the environment: this test binary runs one test at a time (nextest: one per
     // process), and reads the variable only when the scene is put on the GPU.
     match budget {
@@ -63,7 +74,11 @@ fn session(scene: &Scene, budget: Option<u64>, culler: Option<&str>) -> Session 
         None => std::env::remove_var("CADR_MEMORY_BUDGET"),
     }
     let device = test_device();
-    let (mut graph, _) = SceneGraph::from_scene(scene).unwrap();
+    let mut graph = SceneGraph::new();
+    if let Some(limit) = memory_limit {
+        graph.set_geometry_memory_limit(limit);
+    }
+    graph.import(scene, graph.root()).unwrap();
     let tree = SceneTree::build(&mut graph);
     let mut view = View::new(
         &device,
@@ -349,4 +364,84 @@ fn a_geometry_replaced_while_the_scene_streams_is_drawn_as_its_new_data() {
         differences.iter().any(|&mean| mean <= 1e-4),
         "the new flange at full detail, as drawn without a budget: {differences:?}"
     );
+}
+
+#[test]
+fn a_page_file_that_cannot_be_read_keeps_the_coarse_form_until_a_retry_reads_it() {
+    let scene = unique_parts();
+    let still = vec![close_up(0.0); CONVERGENCE_FRAMES];
+    let (full, _, _) = render(&scene, None, &still[..1]);
+    let reference = &full[0];
+    let (_, probe, _) = render(&scene, Some(1 << 20), &still[..1]);
+    let budget = probe[0].unwrap().total_full_bytes / BUDGET_SHARE;
+    // The graph keeps every geometry in its page file.
+    let Session {
+        device,
+        graph,
+        mut tree,
+        mut view,
+    } = session_with(&scene, Some(budget), Some("gpu-clusters"), Some(0));
+    let memory = graph.geometry_memory();
+    println!("{memory:?}");
+    assert!(
+        memory.paged_geometries as usize == scene.geometries.len() && memory.resident_bytes == 0
+    );
+    let page_file = memory.page_file.clone().unwrap();
+    let pages = std::fs::read(&page_file).unwrap();
+    assert_eq!(pages.len() as u64, memory.paged_bytes);
+    // The first frame lays the scene out (reading every page) and draws the coarse forms.
+    view.render(&graph, &mut tree, &still[0]).unwrap();
+
+    // The file is cut short under the scene (a full disk, another program): reading fails.
+    std::fs::File::options()
+        .write(true)
+        .open(&page_file)
+        .unwrap()
+        .set_len(0)
+        .unwrap();
+    let paged = (0..scene.geometries.len() as u32)
+        .find(|&slot| graph.geometry_info_at(slot).unwrap().paged)
+        .unwrap();
+    let error = graph.geometry_at(paged).unwrap_err().to_string();
+    assert!(
+        error.contains(&scene.geometries[paged as usize].name)
+            && error.contains(&page_file.display().to_string()),
+        "the error names the geometry and the file: {error}"
+    );
+    let mut failed_reads = 0;
+    for camera in &still {
+        view.render(&graph, &mut tree, camera).unwrap();
+        let image = view.renderer().read_rgba8().unwrap();
+        let (covered, covered_full) = (covered_fraction(&image), covered_fraction(reference));
+        assert!(
+            (covered - covered_full).abs() < 0.01,
+            "no hole while reads fail: {covered} covered against {covered_full}"
+        );
+        failed_reads = view.scene().unwrap().streaming().unwrap().failed_reads;
+        if failed_reads > 0 {
+            break;
+        }
+    }
+    assert!(failed_reads > 0, "the failed reads are counted");
+
+    // The file is whole again: the geometries are read again and reach full detail.
+    std::fs::write(&page_file, &pages).unwrap();
+    let mut converged = None;
+    for (frame, camera) in still.iter().enumerate() {
+        view.render(&graph, &mut tree, camera).unwrap();
+        let image = view.renderer().read_rgba8().unwrap();
+        if compare(&image, reference).unwrap().mean <= 1e-4 {
+            converged = Some(frame);
+            break;
+        }
+    }
+    let report = view.scene().unwrap().streaming().unwrap();
+    println!("{failed_reads} failed reads; full detail {converged:?} frames after the repair; {report:?}");
+    assert!(
+        converged.is_some(),
+        "a retry reads the repaired file: {report:?}"
+    );
+    drop(view);
+    assert_no_validation_errors(&device);
+    std::env::remove_var("CADR_MEMORY_BUDGET");
 }

@@ -142,7 +142,7 @@ fn the_built_in_combination_needs_no_library_and_draws_each_part_once() {
         image, f.baseline,
         "the same techniques from the built-in registry"
     );
-    let parts = flatten(&f.graph.to_scene()).unwrap().draws.len() as u64;
+    let parts = flatten(&f.graph.to_scene().unwrap()).unwrap().draws.len() as u64;
     assert_eq!((stats.draw_calls, stats.draws), (parts, parts));
     assert!(stats.vertex_binds > 0 && stats.vertex_binds < parts);
     assert!(stats.parameter_updates >= parts, "pushed per draw");
@@ -534,7 +534,7 @@ fn frustum_culling_draws_only_what_the_camera_sees() {
     f.techniques.select(&combination).unwrap();
     let (_, all) = f.render();
     // Look at one corner of the scene from close by: most parts fall outside the frustum.
-    let bounds = flatten(&f.graph.to_scene()).unwrap().bounds;
+    let bounds = flatten(&f.graph.to_scene().unwrap()).unwrap().bounds;
     let corner = cadr_core::scene::Aabb {
         min: bounds.min,
         max: bounds.min + (bounds.max - bounds.min) * 0.25,

@@ -17,9 +17,10 @@ use crate::vk::raw as vk;
 
 use super::clusters::{self, GeometryClusters};
 use super::streaming::{
-    CoarseForm, PartBounds, Preparer, Streaming, StreamingPlan, UPLOAD_BYTES_PER_FRAME,
+    CoarseForm, LoadRetry, PartBounds, PrepareFailure, Preparer, Streaming, StreamingPlan,
+    UPLOAD_BYTES_PER_FRAME,
 };
-use crate::graph::{GeometryHandle, SceneGraph};
+use crate::graph::{GeometryHandle, GeometrySource, GraphError, SceneGraph};
 use crate::scene::closure::{closure, Closure};
 use crate::scene::edges::{feature_edges, DEFAULT_CREASE_DEGREES};
 use crate::scene::{Geometry, Part, Vertex, VertexAttributes};
@@ -108,8 +109,10 @@ pub(super) struct PreparedGeometry {
     clusters: GeometryClusters,
 }
 
-/// Prepares `geometry` for the arenas (see [`arena_data`]), owning what it needs.
-fn prepare_geometry(geometry: Geometry) -> PreparedGeometry {
+/// Reads `source` (from the scene graph's page file where it is there) and prepares it for the
+/// arenas (see [`arena_data`]), owning what it needs; fails where it cannot be read.
+fn prepare_geometry(source: GeometrySource) -> Result<PreparedGeometry, String> {
+    let geometry = source.load()?;
     let ArenaData {
         wire,
         parts,
@@ -117,12 +120,12 @@ fn prepare_geometry(geometry: Geometry) -> PreparedGeometry {
         ..
     } = arena_data(&geometry);
     let (wire, parts) = (wire.into_owned(), parts.into_owned());
-    PreparedGeometry {
+    Ok(PreparedGeometry {
         geometry,
         wire,
         parts,
         clusters,
-    }
+    })
 }
 
 /// Device bytes of a geometry of `sizes` elements (with texture coordinates and colours per
@@ -454,6 +457,72 @@ struct Layout {
     largest: Extent,
 }
 
+/// The error a geometry that cannot be read back (from the scene graph's page file) gives.
+fn unreadable(error: GraphError) -> crate::error::RenderError {
+    crate::error::RenderError::SceneData(error.to_string())
+}
+
+/// Slot `slot`'s geometry (`handle`), read back from the page file where it is there.
+fn read_geometry(
+    graph: &SceneGraph,
+    slot: u32,
+    handle: GeometryHandle,
+) -> RenderResult<std::borrow::Cow<'_, Geometry>> {
+    (graph.geometry_at(slot).map_err(unreadable)?).ok_or_else(|| {
+        unreadable(GraphError::StaleGeometry {
+            index: handle.index(),
+            generation: handle.generation(),
+        })
+    })
+}
+
+/// One geometry slot as the layout measured it.
+enum Measured<'g> {
+    /// A geometry the graph keeps in memory, with its full detail's data.
+    Resident(GeometryHandle, &'g Geometry, ArenaData<'g>),
+    /// A geometry read from the graph's page file and let go again (a scene that pages its
+    /// geometry holds no more of it at once than a thread per core reads): its full detail's
+    /// sizes, and its bytes and coarse form in case the scene streams.
+    Paged(GeometryHandle, Extent, Option<(u64, Option<CoarseForm>)>),
+}
+
+impl Measured<'_> {
+    fn handle(&self) -> GeometryHandle {
+        match self {
+            Self::Resident(handle, ..) | Self::Paged(handle, ..) => *handle,
+        }
+    }
+
+    fn sizes(&self) -> Extent {
+        match self {
+            Self::Resident(_, _, data) => data.sizes(),
+            Self::Paged(_, sizes, _) => *sizes,
+        }
+    }
+}
+
+/// Measures slot `slot` of `graph` (see [`Measured`]).
+fn measure(
+    graph: &SceneGraph,
+    slot: u32,
+    has_attributes: bool,
+) -> RenderResult<Option<Measured<'_>>> {
+    let Some(handle) = graph.geometry_handle_at(slot) else {
+        return Ok(None);
+    };
+    Ok(match graph.geometry_at(slot).map_err(unreadable)? {
+        None => None,
+        Some(std::borrow::Cow::Borrowed(geometry)) => {
+            Some(Measured::Resident(handle, geometry, arena_data(geometry)))
+        }
+        Some(std::borrow::Cow::Owned(geometry)) => {
+            let data = arena_data(&geometry);
+            let coarse = coarse_form(&geometry, &data, has_attributes);
+            Some(Measured::Paged(handle, data.sizes(), Some(coarse)))
+        }
+    })
+}
+
 impl Layout {
     /// Lays `graph` out; starts streaming (`streaming`) where its full detail needs more than
     /// the memory budget.
@@ -464,18 +533,18 @@ impl Layout {
     ) -> RenderResult<Self> {
         let (_, geometry_slots, _) = graph.capacities();
         let has_attributes = (0..geometry_slots as u32)
-            .filter_map(|slot| graph.geometry_at(slot))
-            .any(|g| !g.attributes.is_empty());
+            .filter_map(|slot| graph.geometry_info_at(slot))
+            .any(|info| info.has_attributes);
         // The clusters are built on a thread per core, the geometries laid out in slot order.
         let slots: Vec<u32> = (0..geometry_slots as u32).collect();
-        let full = crate::parallel::map(&slots, |&slot| {
-            let handle = graph.geometry_handle_at(slot)?;
-            Some((handle, arena_data(graph.geometry_at(slot)?)))
-        });
+        let mut measured =
+            crate::parallel::map(&slots, |&slot| measure(graph, slot, has_attributes))
+                .into_iter()
+                .collect::<RenderResult<Vec<_>>>()?;
         let mut full_sizes: Extent = [0; 5];
         let mut largest: Extent = [0; 5];
-        for (_, data) in full.iter().flatten() {
-            for ((total, most), n) in full_sizes.iter_mut().zip(&mut largest).zip(data.sizes()) {
+        for sizes in measured.iter().flatten().map(Measured::sizes) {
+            for ((total, most), n) in full_sizes.iter_mut().zip(&mut largest).zip(sizes) {
                 *total = total.saturating_add(n);
                 *most = (*most).max(n);
             }
@@ -488,12 +557,15 @@ impl Layout {
         }
         let coarse: Vec<Option<Arc<CoarseForm>>> = match streaming.as_mut() {
             None => Vec::new(),
-            Some(streaming) => (full.iter().enumerate())
+            Some(streaming) => (measured.iter_mut().enumerate())
                 .map(|(slot, entry)| {
-                    let (handle, data) = entry.as_ref()?;
-                    let geometry = graph.geometry_at(slot as u32)?;
-                    streaming.form_to_place(slot as u32, *handle, || {
-                        coarse_form(geometry, data, has_attributes)
+                    let entry = entry.as_mut()?;
+                    let handle = entry.handle();
+                    streaming.form_to_place(slot as u32, handle, || match entry {
+                        Measured::Resident(_, geometry, data) => {
+                            coarse_form(geometry, data, has_attributes)
+                        }
+                        Measured::Paged(_, _, form) => form.take().unwrap_or_default(),
                     })
                 })
                 .collect(),
@@ -510,42 +582,49 @@ impl Layout {
             cluster_boxes: Vec::new(),
             groups: Vec::new(),
             attributes: has_attributes.then(Vec::new),
-            places: Vec::with_capacity(full.len()),
+            places: Vec::with_capacity(measured.len()),
             full_sizes,
             largest,
         };
-        for (slot, entry) in full.iter().enumerate() {
-            let Some((handle, full_data)) = entry else {
+        for (slot, entry) in measured.into_iter().enumerate() {
+            let Some(entry) = entry else {
                 layout.places.push(None);
                 continue;
             };
             let form = coarse.get(slot).and_then(Option::as_ref);
             let place = match (form, coarse_data[slot].as_ref()) {
                 (Some(form), Some(data)) => {
-                    let mut place = layout.push(*handle, data, &form.geometry);
+                    let mut place = layout.push(entry.handle(), data, &form.geometry);
                     place.parts = coarse_part_entries(form, slot as u32, place.parts);
                     place
                 }
-                _ => match graph.geometry_at(slot as u32) {
-                    Some(geometry) => {
-                        let mut place = layout.push(*handle, full_data, geometry);
-                        let streamed = streaming
-                            .as_ref()
-                            .and_then(|s| s.coarse_form_of(slot as u32));
-                        if let Some(form) = streamed {
-                            place.parts = full_part_entries(&form, slot as u32, place.parts);
-                        }
-                        place
-                    }
-                    None => {
-                        layout.places.push(None);
-                        continue;
-                    }
-                },
+                _ => layout.push_full(graph, slot as u32, entry, streaming.as_ref())?,
             };
             layout.places.push(Some(place));
         }
         Ok(layout)
+    }
+
+    /// Adds slot `slot`'s full detail (read again from the page file where it was paged);
+    /// its part entries say so where the scene streams it.
+    fn push_full(
+        &mut self,
+        graph: &SceneGraph,
+        slot: u32,
+        measured: Measured<'_>,
+        streaming: Option<&Streaming>,
+    ) -> RenderResult<GeometryPlace> {
+        let mut place = match measured {
+            Measured::Resident(handle, geometry, data) => self.push(handle, &data, geometry),
+            Measured::Paged(handle, ..) => {
+                let geometry = read_geometry(graph, slot, handle)?;
+                self.push(handle, &arena_data(&geometry), &geometry)
+            }
+        };
+        if let Some(form) = streaming.and_then(|s| s.coarse_form_of(slot)) {
+            place.parts = full_part_entries(&form, slot, place.parts);
+        }
+        Ok(place)
     }
 
     /// Where each arena's used part ends.
@@ -791,14 +870,16 @@ impl GeometryArenas {
             .preparer
             .get_or_insert_with(|| Preparer::new(prepare_geometry));
         for slot in load {
-            let Some(geometry) = graph.geometry_at(slot) else {
+            if graph.geometry_info_at(slot).is_none() {
                 continue;
-            };
+            }
             let Some(ticket) = streaming.start_loading(slot) else {
                 continue;
             };
-            if !preparer.ask(slot, ticket, geometry.clone()) {
-                streaming.load_failed(slot, false);
+            let asked = (graph.geometry_source_at(slot))
+                .is_some_and(|source| preparer.ask(slot, ticket, source));
+            if !asked {
+                streaming.load_failed(slot, LoadRetry::Never);
             }
         }
         // At most a frame's worth of bytes is written (at least one geometry); the rest waits
@@ -848,7 +929,7 @@ impl GeometryArenas {
         graph: &SceneGraph,
         slot: u32,
         ticket: u64,
-        prepared: Option<PreparedGeometry>,
+        prepared: Result<PreparedGeometry, PrepareFailure>,
     ) -> RenderResult<Option<u64>> {
         let Some(streaming) = &mut self.streaming else {
             return Ok(None);
@@ -859,15 +940,21 @@ impl GeometryArenas {
         if !streaming.is_loading(slot, ticket) {
             return Ok(None);
         }
-        let Some(PreparedGeometry {
+        let PreparedGeometry {
             geometry,
             wire,
             parts,
             clusters,
-        }) = prepared
-        else {
-            streaming.load_failed(slot, false);
-            return Ok(None);
+        } = match prepared {
+            Ok(prepared) => prepared,
+            Err(PrepareFailure::Panicked) => {
+                streaming.load_failed(slot, LoadRetry::Never);
+                return Ok(None);
+            }
+            Err(PrepareFailure::Unreadable(message)) => {
+                streaming.read_failed(slot, &message);
+                return Ok(None);
+            }
         };
         let data = ArenaData {
             vertices: &geometry.vertices,
@@ -887,7 +974,7 @@ impl GeometryArenas {
         // No room: back to the coarse form, in the room it had.
         if let Some(streaming) = &mut self.streaming {
             streaming.set_coarse(slot);
-            streaming.load_failed(slot, true);
+            streaming.load_failed(slot, LoadRetry::Later);
         }
         self.place(graph, slot)
     }
@@ -942,8 +1029,8 @@ impl GeometryArenas {
     /// geometry is gone has its room freed. The GPU must not be drawing from the arenas
     /// meanwhile (frames are waited for before the next one syncs).
     pub(super) fn place(&mut self, graph: &SceneGraph, slot: u32) -> RenderResult<Option<u64>> {
-        let (Some(handle), Some(geometry)) =
-            (graph.geometry_handle_at(slot), graph.geometry_at(slot))
+        let (Some(handle), Some(info)) =
+            (graph.geometry_handle_at(slot), graph.geometry_info_at(slot))
         else {
             self.release(slot);
             if let Some(streaming) = &mut self.streaming {
@@ -951,10 +1038,18 @@ impl GeometryArenas {
             }
             return Ok(Some(0));
         };
-        if !geometry.attributes.is_empty() && !self.has_attributes {
+        if info.has_attributes && !self.has_attributes {
             // The first geometry with attributes: the attribute arena is made by a new layout.
             return Ok(None);
         }
+        // A known geometry going back to its coarse form is not read again.
+        let known = (self.streaming.as_ref()).and_then(|s| s.known_form(slot, handle));
+        if let Some(Some(form)) = known {
+            let data = coarse_arena_data(&form);
+            return self.write_place(slot, handle, data, &form.geometry, Some(&form));
+        }
+        let geometry = read_geometry(graph, slot, handle)?;
+        let geometry = &*geometry;
         let has_attributes = self.has_attributes;
         let mut full_data = None;
         let coarse = self.streaming.as_mut().and_then(|streaming| {

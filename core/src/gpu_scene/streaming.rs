@@ -27,7 +27,7 @@ use std::sync::{mpsc, Arc, Mutex};
 
 use super::clusters::GeometryClusters;
 use crate::error::RenderResult;
-use crate::graph::GeometryHandle;
+use crate::graph::{GeometryHandle, GeometrySource};
 use crate::scene::{Geometry, Part};
 use crate::vk::raw as vk;
 use crate::vk::{Buffer, Device};
@@ -199,9 +199,33 @@ struct Residency {
     ticket: u64,
     /// The last frame that asked for it.
     last_wanted: u64,
-    /// The first frame that may bring its full detail again after it found no room.
+    /// The first frame that may bring its full detail again after it found no room or could
+    /// not be read.
     retry_after: u64,
+    /// Reads of its page that failed in a row.
+    failed_reads: u32,
 }
+
+/// When a geometry whose full detail did not come is tried again.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(super) enum LoadRetry {
+    /// After [`KEEP_FRAMES`] frames (it found no room, or its page could not be read).
+    Later,
+    /// Never (preparing it panicked): it stays coarse.
+    Never,
+}
+
+/// Why a preparation gave no full detail.
+#[derive(Debug)]
+pub(super) enum PrepareFailure {
+    /// The preparation panicked (a bug).
+    Panicked,
+    /// The geometry could not be read from the scene graph's page file (the message says why).
+    Unreadable(String),
+}
+
+/// Reads of a geometry's page that may fail in a row before it stays coarse.
+pub(super) const READ_ATTEMPTS: u32 = 3;
 
 /// The streaming state of a GPU scene: the budget, each slot's residency and the requests.
 pub(super) struct Streaming {
@@ -222,6 +246,8 @@ pub(super) struct Streaming {
     total_bytes: u64,
     /// Bytes brought to the GPU by streaming since the scene was made.
     streamed_bytes: u64,
+    /// Reads of geometries from the scene graph's page file that failed.
+    failed_reads: u64,
 }
 
 /// What a streaming scene holds and has done (see [`super::GpuScene::streaming`]).
@@ -237,6 +263,9 @@ pub struct StreamingReport {
     pub streamed_bytes: u64,
     /// Frames whose requests were read.
     pub frames: u64,
+    /// Reads of full detail from the scene graph's page file that failed (each logged; the
+    /// geometry stays coarse and is read again later, up to 3 times in a row).
+    pub failed_reads: u64,
 }
 
 /// What a frame's requests decided: the slots to bring to full detail and those to put back
@@ -261,6 +290,7 @@ impl Streaming {
             full_bytes: 0,
             total_bytes: 0,
             streamed_bytes: 0,
+            failed_reads: 0,
         })
     }
 
@@ -299,12 +329,28 @@ impl Streaming {
                 ticket: 0,
                 last_wanted: 0,
                 retry_after: 0,
+                failed_reads: 0,
             });
         }
         let residency = self.slots[index].as_ref()?;
         (!residency.full)
             .then(|| residency.coarse.clone())
             .flatten()
+    }
+
+    /// Where slot `slot` is known to hold `handle`: the coarse form it goes on the GPU in, as
+    /// [`Streaming::form_to_place`] would say; `None` where it is not known.
+    pub(super) fn known_form(
+        &self,
+        slot: u32,
+        handle: GeometryHandle,
+    ) -> Option<Option<Arc<CoarseForm>>> {
+        let residency = self.slots.get(slot as usize)?.as_ref()?;
+        (residency.handle == handle).then(|| {
+            (!residency.full)
+                .then(|| residency.coarse.clone())
+                .flatten()
+        })
     }
 
     /// The coarse form of slot `slot`'s geometry, whichever form the GPU holds.
@@ -369,6 +415,7 @@ impl Streaming {
             if residency.loading {
                 residency.loading = false;
                 residency.full = true;
+                residency.failed_reads = 0;
             }
         }
     }
@@ -396,16 +443,36 @@ impl Streaming {
     }
 
     /// Slot `slot`'s full detail did not come: its bytes are freed, and it is tried again
-    /// after [`KEEP_FRAMES`] frames where `retry` (it found no room), else never (preparing
-    /// it failed).
-    pub(super) fn load_failed(&mut self, slot: u32, retry: bool) {
+    /// as `retry` says.
+    pub(super) fn load_failed(&mut self, slot: u32, retry: LoadRetry) {
         let frame = self.frame;
         if let Some(residency) = self.slots.get_mut(slot as usize).and_then(Option::as_mut) {
             if residency.loading {
                 residency.loading = false;
                 self.full_bytes -= residency.full_bytes;
             }
-            residency.retry_after = if retry { frame + KEEP_FRAMES } else { u64::MAX };
+            residency.retry_after = match retry {
+                LoadRetry::Later => frame + KEEP_FRAMES,
+                LoadRetry::Never => u64::MAX,
+            };
+        }
+    }
+
+    /// Slot `slot`'s geometry could not be read (`message` says why): it stays coarse, and is
+    /// tried again later, up to [`READ_ATTEMPTS`] times in a row. Each failure is logged.
+    pub(super) fn read_failed(&mut self, slot: u32, message: &str) {
+        self.failed_reads += 1;
+        let Some(residency) = self.slots.get_mut(slot as usize).and_then(Option::as_mut) else {
+            return;
+        };
+        residency.failed_reads += 1;
+        let attempts = residency.failed_reads;
+        if attempts < READ_ATTEMPTS {
+            log::warn!("{message}; it stays coarse and is read again in {KEEP_FRAMES} frames");
+            self.load_failed(slot, LoadRetry::Later);
+        } else {
+            log::error!("{message}; it failed {attempts} times and stays coarse");
+            self.load_failed(slot, LoadRetry::Never);
         }
     }
 
@@ -522,6 +589,7 @@ impl Streaming {
             total_full_bytes: self.total_bytes,
             streamed_bytes: self.streamed_bytes,
             frames: self.frame,
+            failed_reads: self.failed_reads,
         }
     }
 
@@ -532,42 +600,51 @@ impl Streaming {
 }
 
 /// What the preparing thread is asked: a geometry slot, the preparation's ticket (see
-/// [`Streaming::start_loading`]), and a copy of the slot's geometry.
-type PrepareJob = (u32, u64, Geometry);
+/// [`Streaming::start_loading`]), and where to read the slot's geometry.
+type PrepareJob = (u32, u64, GeometrySource);
 
-/// What the preparing thread answers: the slot, the ticket, and the full detail prepared
-/// (`None`: preparing it panicked).
-type Prepared<R> = (u32, u64, Option<R>);
+/// What the preparing thread answers: the slot, the ticket, and the full detail prepared or
+/// why there is none.
+type Prepared<R> = (u32, u64, Result<R, PrepareFailure>);
 
-/// A thread that prepares geometries' full detail (edges, clusters: the slow part, seconds
-/// for millions of triangles) off the frame's thread, in the order asked; each frame takes
-/// what is ready. A preparation that panics gives `None` (the geometry stays coarse).
+/// How the preparing thread reads (from the scene graph's page file, where the geometry is
+/// there) and prepares one geometry; fails where it cannot be read.
+type Prepare<R> = fn(GeometrySource) -> Result<R, String>;
+
+/// A thread that reads geometries (from the scene graph's page file) and prepares their full
+/// detail (edges, clusters: the slow part, seconds for millions of triangles) off the frame's
+/// thread, in the order asked; each frame takes what is ready. A preparation that panics or
+/// cannot read its geometry says so (the geometry stays coarse).
 pub(super) struct Preparer<R: Send + 'static> {
     jobs: Option<mpsc::Sender<PrepareJob>>,
     /// Behind a lock only so that the scene can be shared between threads (a receiver cannot).
     done: Mutex<mpsc::Receiver<Prepared<R>>>,
     thread: Option<std::thread::JoinHandle<()>>,
     /// The preparation, which the asking thread runs itself where no thread could be made.
-    prepare: fn(Geometry) -> R,
+    prepare: Prepare<R>,
     /// What the asking thread prepared itself, not yet taken.
     ready: Vec<Prepared<R>>,
 }
 
-/// Runs `prepare`, a panic turned into `None`.
-fn prepared<R>(prepare: fn(Geometry) -> R, geometry: Geometry) -> Option<R> {
-    std::panic::catch_unwind(AssertUnwindSafe(|| prepare(geometry))).ok()
+/// Runs `prepare`, a panic turned into [`PrepareFailure::Panicked`].
+fn prepared<R>(prepare: Prepare<R>, source: GeometrySource) -> Result<R, PrepareFailure> {
+    match std::panic::catch_unwind(AssertUnwindSafe(|| prepare(source))) {
+        Ok(Ok(prepared)) => Ok(prepared),
+        Ok(Err(message)) => Err(PrepareFailure::Unreadable(message)),
+        Err(_) => Err(PrepareFailure::Panicked),
+    }
 }
 
 impl<R: Send + 'static> Preparer<R> {
     /// A preparing thread running `prepare`.
-    pub(super) fn new(prepare: fn(Geometry) -> R) -> Self {
+    pub(super) fn new(prepare: Prepare<R>) -> Self {
         let (jobs, asked) = mpsc::channel::<PrepareJob>();
         let (finished, done) = mpsc::channel();
         let thread = std::thread::Builder::new()
             .name("cadr streaming".into())
             .spawn(move || {
-                for (slot, ticket, geometry) in asked {
-                    let result = prepared(prepare, geometry);
+                for (slot, ticket, source) in asked {
+                    let result = prepared(prepare, source);
                     if finished.send((slot, ticket, result)).is_err() {
                         break;
                     }
@@ -583,16 +660,16 @@ impl<R: Send + 'static> Preparer<R> {
         }
     }
 
-    /// Asks for slot `slot`'s full detail (`geometry`), under `ticket`; false where the thread
-    /// has gone (it never should: it catches panics), so that the slot does not wait for
-    /// nothing.
-    pub(super) fn ask(&mut self, slot: u32, ticket: u64, geometry: Geometry) -> bool {
+    /// Asks for slot `slot`'s full detail (read from `source`), under `ticket`; false where
+    /// the thread has gone (it never should: it catches panics), so that the slot does not
+    /// wait for nothing.
+    pub(super) fn ask(&mut self, slot: u32, ticket: u64, source: GeometrySource) -> bool {
         if self.thread.is_none() {
             self.ready
-                .push((slot, ticket, prepared(self.prepare, geometry)));
+                .push((slot, ticket, prepared(self.prepare, source)));
             return true;
         }
-        (self.jobs.as_ref()).is_some_and(|jobs| jobs.send((slot, ticket, geometry)).is_ok())
+        (self.jobs.as_ref()).is_some_and(|jobs| jobs.send((slot, ticket, source)).is_ok())
     }
 
     /// Gives back preparations taken but not written (they come first next time).

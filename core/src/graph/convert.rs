@@ -12,7 +12,7 @@ use crate::scene::{MeshRef, Node, PartOverride, Scene};
 /// The scene the graph shows: hidden nodes and inactive Switch children are left out, a LOD
 /// shows its first (most detailed) child and a Billboard does not turn (both depend on the
 /// eye, which a scene does not have).
-pub(super) fn graph_to_scene(graph: &SceneGraph) -> Scene {
+pub(super) fn graph_to_scene(graph: &SceneGraph) -> Result<Scene, GraphError> {
     let mut scene = Scene {
         name: "scene graph".into(),
         ..Scene::default()
@@ -20,7 +20,7 @@ pub(super) fn graph_to_scene(graph: &SceneGraph) -> Scene {
     let mut geometry_index = HashMap::new();
     for (handle, entry) in graph.geometries.iter() {
         geometry_index.insert(handle, scene.geometries.len() as u32);
-        scene.geometries.push(entry.geometry.clone());
+        scene.geometries.push(entry.stored.load()?.into_owned());
     }
     let mut texture_index = HashMap::new();
     for (handle, entry) in graph.textures.iter() {
@@ -84,7 +84,7 @@ pub(super) fn graph_to_scene(graph: &SceneGraph) -> Scene {
     if graph.node(graph.root).is_ok_and(|r| r.flags.visible) {
         scene.roots.push(node_index[&graph.root]);
     }
-    scene
+    Ok(scene)
 }
 
 /// What [`SceneGraph::import`] created: the Group holding the scene's roots, and every node,

@@ -8,16 +8,21 @@
 //! Local matrices are `f64`: CAD assemblies span kilometres with micrometre detail.
 
 mod convert;
+mod page_file;
+mod paging;
 mod slots;
 
 pub use convert::Imported;
+pub use page_file::Page;
+pub use paging::{GeometryInfo, GeometryMemory, GeometrySource};
 pub use slots::{Handle, Slots};
 
+use std::borrow::Cow;
 use std::collections::HashMap;
 
 use glam::DMat4;
 
-use crate::scene::{Geometry, Material, Scene, Texture};
+use crate::scene::{Aabb, Geometry, Material, Scene, Texture};
 
 /// The most paths (scene tree nodes) one link may add: sharing multiplies paths, and a chain
 /// of nodes each linked twice would otherwise expand to billions.
@@ -168,11 +173,10 @@ impl GraphNode {
     }
 }
 
-/// A geometry and the Geo nodes that use it.
+/// A geometry (in memory or in the page file) and the Geo nodes that use it.
 #[derive(Clone, Debug)]
 pub struct GeometryEntry {
-    /// The data.
-    pub geometry: Geometry,
+    stored: paging::StoredGeometry,
     users: Vec<NodeHandle>,
 }
 
@@ -314,6 +318,10 @@ pub enum GraphError {
     /// Other invalid input (bad geometry data, the root, wrong counts).
     #[error("{0}")]
     Invalid(String),
+    /// A geometry kept in the page file could not be read back (the message names the
+    /// geometry and the file).
+    #[error("{0}")]
+    PageRead(String),
 }
 
 /// The scene graph. It has one root Group, created with it.
@@ -328,6 +336,8 @@ pub struct SceneGraph {
     geometries_generation: u64,
     root: NodeHandle,
     events: Vec<GraphEvent>,
+    /// Which geometries stay in memory and which go to the page file.
+    paging: paging::Paging,
 }
 
 impl Default for SceneGraph {
@@ -384,6 +394,7 @@ impl SceneGraph {
             geometries_generation: 0,
             root,
             events: Vec::new(),
+            paging: paging::Paging::new(),
         }
     }
 
@@ -407,12 +418,30 @@ impl SceneGraph {
         self.nodes.handle_at(index)
     }
 
-    /// The geometry, or an error for a stale handle.
-    pub fn geometry(&self, geometry: GeometryHandle) -> Result<&Geometry, GraphError> {
+    /// The geometry, or an error for a stale handle. A geometry in the page file is read
+    /// back (an error where that fails); [`SceneGraph::geometry_info_at`] says what a geometry
+    /// is without reading it.
+    pub fn geometry(&self, geometry: GeometryHandle) -> Result<Cow<'_, Geometry>, GraphError> {
         self.geometries
             .get(geometry)
-            .map(|e| &e.geometry)
+            .ok_or_else(|| stale_geometry(geometry))?
+            .stored
+            .load()
+    }
+
+    /// The bounds of a geometry's vertices (known without reading a paged geometry), or an
+    /// error for a stale handle.
+    pub fn geometry_bounds(&self, geometry: GeometryHandle) -> Result<Aabb, GraphError> {
+        (self.geometries.get(geometry))
+            .map(|e| e.stored.bounds())
             .ok_or_else(|| stale_geometry(geometry))
+    }
+
+    /// The bounds of the vertices of the geometry in slot `index`.
+    pub fn geometry_bounds_at(&self, index: u32) -> Option<Aabb> {
+        self.geometries
+            .get_by_index(index)
+            .map(|e| e.stored.bounds())
     }
 
     /// The Geo nodes that draw `geometry`.
@@ -423,9 +452,39 @@ impl SceneGraph {
             .ok_or_else(|| stale_geometry(geometry))
     }
 
-    /// The geometry in slot `index`.
-    pub fn geometry_at(&self, index: u32) -> Option<&Geometry> {
-        self.geometries.get_by_index(index).map(|e| &e.geometry)
+    /// The geometry in slot `index` (`None`: the slot is empty), read back where it is in the
+    /// page file.
+    pub fn geometry_at(&self, index: u32) -> Result<Option<Cow<'_, Geometry>>, GraphError> {
+        (self.geometries.get_by_index(index))
+            .map(|e| e.stored.load())
+            .transpose()
+    }
+
+    /// What the geometry in slot `index` is (name, parts, attributes, where it is kept),
+    /// without reading it.
+    pub fn geometry_info_at(&self, index: u32) -> Option<GeometryInfo<'_>> {
+        self.geometries.get_by_index(index).map(|e| e.stored.info())
+    }
+
+    /// The geometry in slot `index` as another thread can read it: a copy where it is in
+    /// memory, its page where it is in the page file (read there, off this thread).
+    pub fn geometry_source_at(&self, index: u32) -> Option<GeometrySource> {
+        self.geometries
+            .get_by_index(index)
+            .map(|e| e.stored.source())
+    }
+
+    /// Where the geometries are kept: bytes in memory, bytes in the page file, and the file.
+    pub fn geometry_memory(&self) -> GeometryMemory {
+        self.paging.memory()
+    }
+
+    /// Sets how many bytes of geometry the graph keeps in memory; geometries created or
+    /// replaced beyond it go to the page file. The default is half the memory budget
+    /// (`CADR_MEMORY_BUDGET`, else the machine's memory). Geometries already made stay where
+    /// they are.
+    pub fn set_geometry_memory_limit(&mut self, bytes: u64) {
+        self.paging.set_limit(bytes);
     }
 
     /// The material, or an error for a stale handle.
@@ -542,7 +601,12 @@ impl SceneGraph {
         geometry: GeometryHandle,
         part_materials: &[MaterialHandle],
     ) -> Result<NodeHandle, GraphError> {
-        let parts = self.geometry(geometry)?.parts.len();
+        let parts = (self.geometries.get(geometry))
+            .ok_or_else(|| stale_geometry(geometry))?
+            .stored
+            .info()
+            .parts
+            .len();
         if part_materials.len() != parts {
             return Err(GraphError::Invalid(format!(
                 "Geo node '{name}': {} part materials for a geometry with {parts} parts",
@@ -664,8 +728,9 @@ impl SceneGraph {
     pub fn create_geometry(&mut self, geometry: Geometry) -> Result<GeometryHandle, GraphError> {
         check_geometry(&geometry)?;
         self.geometries_generation += 1;
+        let stored = self.paging.store(geometry);
         Ok(self.geometries.insert(GeometryEntry {
-            geometry,
+            stored,
             users: Vec::new(),
         }))
     }
@@ -678,11 +743,13 @@ impl SceneGraph {
             .ok_or_else(|| stale_geometry(geometry))?;
         if !entry.users.is_empty() {
             return Err(GraphError::InUse {
-                what: format!("geometry '{}'", entry.geometry.name),
+                what: format!("geometry '{}'", entry.stored.info().name),
                 users: entry.users.len() as u32,
             });
         }
-        self.geometries.remove(geometry);
+        if let Some(entry) = self.geometries.remove(geometry) {
+            self.paging.release(&entry.stored);
+        }
         self.geometries_generation += 1;
         Ok(())
     }
@@ -698,15 +765,17 @@ impl SceneGraph {
             .geometries
             .get_mut(geometry)
             .ok_or_else(|| stale_geometry(geometry))?;
-        if !entry.users.is_empty() && entry.geometry.parts.len() != data.parts.len() {
+        let info = entry.stored.info();
+        if !entry.users.is_empty() && info.parts.len() != data.parts.len() {
             return Err(GraphError::Invalid(format!(
                 "geometry '{}' has {} parts and is in use; its replacement has {}",
-                entry.geometry.name,
-                entry.geometry.parts.len(),
+                info.name,
+                info.parts.len(),
                 data.parts.len()
             )));
         }
-        entry.geometry = data;
+        self.paging.release(&entry.stored);
+        entry.stored = self.paging.store(data);
         self.events.push(GraphEvent::GeometryReplaced(geometry));
         Ok(())
     }
@@ -1129,8 +1198,9 @@ impl SceneGraph {
     }
 
     /// The scene this graph describes, with dense indices (for savers, statistics and
-    /// comparisons). Handles map to indices in slot order.
-    pub fn to_scene(&self) -> Scene {
+    /// comparisons). Handles map to indices in slot order. Fails where a geometry in the page
+    /// file cannot be read back.
+    pub fn to_scene(&self) -> Result<Scene, GraphError> {
         convert::graph_to_scene(self)
     }
 

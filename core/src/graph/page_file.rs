@@ -1,0 +1,381 @@
+//! The page file: where the scene graph keeps the geometries that do not fit its share of the
+//! memory budget, so that a model larger than memory can be loaded and edited. Each geometry is
+//! one record (its vertices, indices, wire indices, parts and attributes), written when the
+//! geometry is created or replaced and read back, whole, when something needs it: the GPU
+//! scene when it lays the geometry out or streams its full detail in (on its preparing thread),
+//! a host that asks for the data. A record carries a CRC-32 of its bytes, so a file that was
+//! changed or cut short under cadr gives a clear error, never wrong geometry.
+//!
+//! The file is made in the temporary directory (`TMPDIR`) when the first geometry goes there,
+//! named `cadr-pages-PID-N.bin`, and removed when the graph is dropped. The room of a destroyed
+//! or replaced geometry is used again.
+
+use std::fs::File;
+use std::io::{Read, Seek, SeekFrom, Write};
+use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicU64, Ordering};
+use std::sync::{Arc, Mutex};
+
+use crate::scene::{Geometry, Part, Vertex, VertexAttributes};
+
+/// What starts every record.
+const MAGIC: [u8; 8] = *b"CADRPG01";
+/// Bytes of a record's header: the magic and six counts.
+const HEADER_BYTES: usize = 8 + 6 * 4;
+
+/// Page files made by this process, counted (for their names).
+static FILES_MADE: AtomicU64 = AtomicU64::new(0);
+
+/// The open file, shared by the graph (which writes) and the readers of its pages (any thread).
+struct OpenFile {
+    file: Mutex<File>,
+    path: PathBuf,
+}
+
+impl Drop for OpenFile {
+    fn drop(&mut self) {
+        // Nothing else uses the file: its pages are gone with the graph.
+        let _ = std::fs::remove_file(&self.path);
+    }
+}
+
+/// One geometry's record in a page file: where it is and what its bytes sum to. Readable from
+/// any thread, also after the graph replaced the geometry (the read then fails its check or
+/// gives the old data, which the asker knows to ignore).
+#[derive(Clone)]
+pub struct Page {
+    file: Arc<OpenFile>,
+    offset: u64,
+    len: u64,
+    crc: u32,
+}
+
+impl std::fmt::Debug for Page {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(
+            f,
+            "Page({} at {}, {} bytes)",
+            self.file.path.display(),
+            self.offset,
+            self.len
+        )
+    }
+}
+
+impl Page {
+    /// Bytes the record takes in the file.
+    pub fn len(&self) -> u64 {
+        self.len
+    }
+
+    /// Whether the record is empty (never: a record has at least its header).
+    pub fn is_empty(&self) -> bool {
+        self.len == 0
+    }
+
+    /// Reads the geometry back. Fails with a message naming the file where it cannot be read
+    /// or its bytes are not what was written.
+    pub fn read(&self) -> Result<Geometry, String> {
+        let failed = |why: String| {
+            format!(
+                "page file {} could not be read at byte {} ({} bytes): {why}",
+                self.file.path.display(),
+                self.offset,
+                self.len
+            )
+        };
+        let len = usize::try_from(self.len).map_err(|_| failed("record too large".into()))?;
+        let mut bytes = vec![0u8; len];
+        {
+            let mut file = (self.file.file.lock()).unwrap_or_else(|p| p.into_inner());
+            file.seek(SeekFrom::Start(self.offset))
+                .and_then(|_| file.read_exact(&mut bytes))
+                .map_err(|e| failed(e.to_string()))?;
+        }
+        let mut crc = flate2::Crc::new();
+        crc.update(&bytes);
+        if crc.sum() != self.crc {
+            return Err(failed(
+                "its bytes are not those written (CRC mismatch)".into(),
+            ));
+        }
+        decode(&bytes).ok_or_else(|| failed("the record is malformed".into()))
+    }
+}
+
+/// A page file and its free room. Only the graph that owns it writes to it.
+pub struct PageFile {
+    file: Arc<OpenFile>,
+    /// Rooms of records no longer used, as (offset, length), in offset order, never adjacent.
+    free: Vec<(u64, u64)>,
+    /// Where the file ends.
+    end: u64,
+}
+
+impl PageFile {
+    /// A new, empty page file in the temporary directory.
+    pub fn create() -> Result<Self, String> {
+        let n = FILES_MADE.fetch_add(1, Ordering::Relaxed);
+        let path = std::env::temp_dir().join(format!("cadr-pages-{}-{n}.bin", std::process::id()));
+        let file = std::fs::OpenOptions::new()
+            .read(true)
+            .write(true)
+            .create_new(true)
+            .open(&path)
+            .map_err(|e| format!("page file {} could not be made: {e}", path.display()))?;
+        Ok(Self {
+            file: Arc::new(OpenFile {
+                file: Mutex::new(file),
+                path,
+            }),
+            free: Vec::new(),
+            end: 0,
+        })
+    }
+
+    /// Where the file is.
+    pub fn path(&self) -> &Path {
+        &self.file.path
+    }
+
+    /// Bytes of the file in use by records.
+    pub fn bytes_in_use(&self) -> u64 {
+        self.end - self.free.iter().map(|&(_, len)| len).sum::<u64>()
+    }
+
+    /// Writes `geometry` as a new record (in the smallest free room it fits, else at the end).
+    /// On failure (a full disk) nothing is taken.
+    pub fn write(&mut self, geometry: &Geometry) -> Result<Page, String> {
+        let bytes = encode(geometry);
+        let len = bytes.len() as u64;
+        let room = (self.free.iter().enumerate())
+            .filter(|(_, &(_, room))| room >= len)
+            .min_by_key(|(_, &(_, room))| room)
+            .map(|(i, _)| i);
+        let offset = room.map_or(self.end, |i| self.free[i].0);
+        {
+            let mut file = (self.file.file.lock()).unwrap_or_else(|p| p.into_inner());
+            file.seek(SeekFrom::Start(offset))
+                .and_then(|_| file.write_all(&bytes))
+                .map_err(|e| {
+                    format!(
+                        "geometry '{}' could not be written to page file {}: {e}",
+                        geometry.name,
+                        self.file.path.display()
+                    )
+                })?;
+        }
+        match room {
+            Some(i) if self.free[i].1 > len => {
+                self.free[i] = (offset + len, self.free[i].1 - len);
+            }
+            Some(i) => {
+                self.free.remove(i);
+            }
+            None => self.end += len,
+        }
+        let mut crc = flate2::Crc::new();
+        crc.update(&bytes);
+        Ok(Page {
+            file: self.file.clone(),
+            offset,
+            len,
+            crc: crc.sum(),
+        })
+    }
+
+    /// Gives the room of `page` (a record of this file) back.
+    pub fn free(&mut self, page: &Page) {
+        let at = self
+            .free
+            .partition_point(|&(offset, _)| offset < page.offset);
+        self.free.insert(at, (page.offset, page.len));
+        // Merged with the following room, then with the preceding one, where they touch.
+        if at + 1 < self.free.len() && self.free[at].0 + self.free[at].1 == self.free[at + 1].0 {
+            self.free[at].1 += self.free[at + 1].1;
+            self.free.remove(at + 1);
+        }
+        if at > 0 && self.free[at - 1].0 + self.free[at - 1].1 == self.free[at].0 {
+            self.free[at - 1].1 += self.free[at].1;
+            self.free.remove(at);
+        }
+        // Room at the end is no room: the file may end there.
+        if let Some(&(offset, len)) = self.free.last() {
+            if offset + len == self.end {
+                self.end = offset;
+                self.free.pop();
+                let file = (self.file.file.lock()).unwrap_or_else(|p| p.into_inner());
+                let _ = file.set_len(self.end);
+            }
+        }
+    }
+}
+
+/// The record of `geometry`: the header, the name (padded to 4 bytes), then each array.
+fn encode(geometry: &Geometry) -> Vec<u8> {
+    let name = geometry.name.as_bytes();
+    let parts: Vec<[u32; 4]> = (geometry.parts.iter())
+        .map(|p| {
+            [
+                p.first_index,
+                p.index_count,
+                p.first_wire_index,
+                p.wire_index_count,
+            ]
+        })
+        .collect();
+    let counts = [
+        name.len(),
+        geometry.vertices.len(),
+        geometry.indices.len(),
+        geometry.wire_indices.len(),
+        parts.len(),
+        geometry.attributes.len(),
+    ];
+    let mut bytes = Vec::with_capacity(
+        HEADER_BYTES
+            + name.len().next_multiple_of(4)
+            + std::mem::size_of_val(&geometry.vertices[..])
+            + 4 * (geometry.indices.len() + geometry.wire_indices.len())
+            + 16 * parts.len()
+            + std::mem::size_of_val(&geometry.attributes[..]),
+    );
+    bytes.extend_from_slice(&MAGIC);
+    for count in counts {
+        bytes.extend_from_slice(&(count as u32).to_le_bytes());
+    }
+    bytes.extend_from_slice(name);
+    bytes.resize(bytes.len().next_multiple_of(4), 0);
+    bytes.extend_from_slice(bytemuck::cast_slice(&geometry.vertices));
+    bytes.extend_from_slice(bytemuck::cast_slice(&geometry.indices));
+    bytes.extend_from_slice(bytemuck::cast_slice(&geometry.wire_indices));
+    bytes.extend_from_slice(bytemuck::cast_slice(&parts));
+    bytes.extend_from_slice(bytemuck::cast_slice(&geometry.attributes));
+    bytes
+}
+
+/// Reads a record made by [`encode`]; `None` where its header or lengths do not add up.
+fn decode(bytes: &[u8]) -> Option<Geometry> {
+    if bytes.get(..8)? != MAGIC {
+        return None;
+    }
+    let count = |i: usize| -> Option<usize> {
+        let at = 8 + 4 * i;
+        let word: [u8; 4] = bytes.get(at..at + 4)?.try_into().ok()?;
+        Some(u32::from_le_bytes(word) as usize)
+    };
+    let mut rest = bytes.get(HEADER_BYTES..)?;
+    let mut take = |len: usize| -> Option<&[u8]> {
+        let (head, tail) = rest.split_at_checked(len)?;
+        rest = tail;
+        Some(head)
+    };
+    let name_len = count(0)?;
+    let name = String::from_utf8(take(name_len.next_multiple_of(4))?[..name_len].to_vec()).ok()?;
+    let vertices: Vec<Vertex> = bytemuck::pod_collect_to_vec(take(count(1)?.checked_mul(24)?)?);
+    let indices: Vec<u32> = bytemuck::pod_collect_to_vec(take(count(2)?.checked_mul(4)?)?);
+    let wire_indices: Vec<u32> = bytemuck::pod_collect_to_vec(take(count(3)?.checked_mul(4)?)?);
+    let parts: Vec<[u32; 4]> = bytemuck::pod_collect_to_vec(take(count(4)?.checked_mul(16)?)?);
+    let attributes: Vec<VertexAttributes> =
+        bytemuck::pod_collect_to_vec(take(count(5)?.checked_mul(12)?)?);
+    if !rest.is_empty() {
+        return None;
+    }
+    Some(Geometry {
+        name,
+        vertices,
+        indices,
+        wire_indices,
+        parts: (parts.into_iter())
+            .map(
+                |[first_index, index_count, first_wire_index, wire_index_count]| Part {
+                    first_index,
+                    index_count,
+                    first_wire_index,
+                    wire_index_count,
+                },
+            )
+            .collect(),
+        attributes,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    #![allow(clippy::unwrap_used)]
+
+    use super::*;
+
+    fn triangle(name: &str, offset: f32) -> Geometry {
+        let vertex = |x: f32, y: f32| Vertex {
+            position: [x + offset, y, 0.0],
+            normal: [0.0, 0.0, 1.0],
+        };
+        Geometry {
+            name: name.into(),
+            vertices: vec![vertex(0.0, 0.0), vertex(1.0, 0.0), vertex(0.0, 1.0)],
+            indices: vec![0, 1, 2],
+            wire_indices: vec![0, 1, 1, 2],
+            parts: vec![Part {
+                first_index: 0,
+                index_count: 3,
+                first_wire_index: 0,
+                wire_index_count: 4,
+            }],
+            attributes: vec![VertexAttributes::default(); 3],
+        }
+    }
+
+    #[test]
+    fn records_read_back_as_written_and_freed_room_is_used_again() {
+        let mut file = PageFile::create().unwrap();
+        let path = file.path().to_path_buf();
+        let a = file.write(&triangle("a", 0.0)).unwrap();
+        let b = file.write(&triangle("b", 1.0)).unwrap();
+        assert_eq!(a.read().unwrap(), triangle("a", 0.0));
+        assert_eq!(b.read().unwrap(), triangle("b", 1.0));
+        file.free(&a);
+        assert_eq!(file.bytes_in_use(), b.len());
+        let c = file.write(&triangle("c", 2.0)).unwrap();
+        assert_eq!(c.offset, a.offset, "the freed room is used again");
+        assert_eq!(c.read().unwrap(), triangle("c", 2.0));
+        file.free(&b);
+        file.free(&c);
+        assert_eq!((file.bytes_in_use(), file.end), (0, 0), "{:?}", file.free);
+        drop((a, b, c, file));
+        assert!(
+            !path.exists(),
+            "the page file is removed with its last page"
+        );
+    }
+
+    #[test]
+    fn a_changed_or_short_file_is_a_clear_error() {
+        let mut file = PageFile::create().unwrap();
+        let page = file.write(&triangle("a", 0.0)).unwrap();
+        let path = file.path().to_path_buf();
+        let mut bytes = std::fs::read(&path).unwrap();
+        bytes[HEADER_BYTES + 8] ^= 1;
+        std::fs::write(&path, &bytes).unwrap();
+        let error = page.read().unwrap_err();
+        assert!(
+            error.contains("CRC mismatch") && error.contains("cadr-pages-"),
+            "{error}"
+        );
+        std::fs::write(&path, &bytes[..10]).unwrap();
+        let error = page.read().unwrap_err();
+        assert!(error.contains("could not be read"), "{error}");
+    }
+
+    #[test]
+    fn malformed_records_decode_to_none() {
+        let bytes = encode(&triangle("a", 0.0));
+        assert!(decode(&bytes[..bytes.len() - 1]).is_none());
+        let mut longer = bytes.clone();
+        longer.push(0);
+        assert!(decode(&longer).is_none());
+        let mut huge = bytes;
+        huge[12..16].copy_from_slice(&u32::MAX.to_le_bytes());
+        assert!(decode(&huge).is_none());
+    }
+}

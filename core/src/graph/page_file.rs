@@ -7,7 +7,8 @@
 //! changed or cut short under cadr gives a clear error, never wrong geometry.
 //!
 //! The file is made in the temporary directory (`TMPDIR`) when the first geometry goes there,
-//! named `cadr-pages-PID-N.bin`, and removed when the graph is dropped. The room of a destroyed
+//! named `cadr-pages-PID-N.bin`, and removed when the graph is dropped (the first file a process
+//! makes removes those of ended processes: a crash leaves its file behind). The room of a destroyed
 //! or replaced geometry is used again.
 
 use std::fs::File;
@@ -113,9 +114,13 @@ pub struct PageFile {
 }
 
 impl PageFile {
-    /// A new, empty page file in the temporary directory.
+    /// A new, empty page file in the temporary directory. The first one of a process removes
+    /// those that processes which ended without removing theirs (a crash) left there.
     pub fn create() -> Result<Self, String> {
         let n = FILES_MADE.fetch_add(1, Ordering::Relaxed);
+        if n == 0 {
+            remove_orphans(&std::env::temp_dir());
+        }
         let path = std::env::temp_dir().join(format!("cadr-pages-{}-{n}.bin", std::process::id()));
         let file = std::fs::OpenOptions::new()
             .read(true)
@@ -206,6 +211,29 @@ impl PageFile {
                 self.free.pop();
                 let file = (self.file.file.lock()).unwrap_or_else(|p| p.into_inner());
                 let _ = file.set_len(self.end);
+            }
+        }
+    }
+}
+
+/// Removes the page files in `directory` whose process has ended (Linux: no `/proc/PID`; on
+/// other systems none is removed).
+fn remove_orphans(directory: &Path) {
+    if !Path::new("/proc/self").exists() {
+        return;
+    }
+    let Ok(entries) = std::fs::read_dir(directory) else {
+        return;
+    };
+    for entry in entries.flatten() {
+        let name = entry.file_name();
+        let pid = (name.to_str())
+            .and_then(|name| name.strip_prefix("cadr-pages-"))
+            .and_then(|rest| rest.split('-').next())
+            .and_then(|pid| pid.parse::<u32>().ok());
+        if let Some(pid) = pid {
+            if !Path::new(&format!("/proc/{pid}")).exists() {
+                let _ = std::fs::remove_file(entry.path());
             }
         }
     }
@@ -365,6 +393,22 @@ mod tests {
         std::fs::write(&path, &bytes[..10]).unwrap();
         let error = page.read().unwrap_err();
         assert!(error.contains("could not be read"), "{error}");
+    }
+
+    #[test]
+    fn files_of_ended_processes_are_removed_and_others_kept() {
+        let directory = std::env::temp_dir().join(format!("cadr-orphans-{}", std::process::id()));
+        std::fs::create_dir_all(&directory).unwrap();
+        // No process has a PID past the kernel's limit (at most 2^22).
+        let orphan = directory.join("cadr-pages-99999999-0.bin");
+        let live = directory.join(format!("cadr-pages-{}-7.bin", std::process::id()));
+        let other = directory.join("notes.bin");
+        for path in [&orphan, &live, &other] {
+            std::fs::write(path, b"x").unwrap();
+        }
+        remove_orphans(&directory);
+        assert!(!orphan.exists() && live.exists() && other.exists());
+        std::fs::remove_dir_all(&directory).unwrap();
     }
 
     #[test]

@@ -23,7 +23,7 @@
 #define CADR_VERSION_MAJOR 1
 
 // The library's minor version.
-#define CADR_VERSION_MINOR 2
+#define CADR_VERSION_MINOR 3
 
 // The library's patch version.
 #define CADR_VERSION_PATCH 0
@@ -265,6 +265,13 @@ typedef struct CadrSceneStatistics {
   uint64_t visible_instances;
   // Triangles of the shown instances.
   uint64_t visible_triangles;
+  // Bytes of geometry the scene keeps in host memory (at most its limit: see
+  // `cadr_scene_set_geometry_memory_limit`).
+  uint64_t resident_geometry_bytes;
+  // Bytes of geometry the scene keeps in its page file.
+  uint64_t paged_geometry_bytes;
+  // Geometries the scene keeps in its page file.
+  uint64_t paged_geometries;
 } CadrSceneStatistics;
 
 // A node of a scene (0 is never a valid node). Generation-checked: a destroyed node's handle
@@ -816,6 +823,23 @@ typedef struct CadrFrameStats {
   // than one frame in flight, only the view changed, every active technique keeps its
   // per-frame data per slot): it waited only for the frame that last used its slot.
   bool overlapped;
+  // Device bytes the scene's copy on the GPU holds (geometry arenas, instances, matrices,
+  // materials, textures).
+  uint64_t resident_bytes;
+  // The most full-detail geometry bytes the GPU may hold where the scene streams under the
+  // memory budget (`CADR_MEMORY_BUDGET`); 0 where it does not stream.
+  uint64_t streaming_budget;
+  // Where the scene streams: full-detail geometry bytes on the GPU now (the rest is drawn in
+  // its coarse form).
+  uint64_t full_detail_bytes;
+  // Where the scene streams: full-detail bytes of every geometry of the scene.
+  uint64_t total_full_detail_bytes;
+  // Where the scene streams: bytes brought to the GPU by streaming since the scene was put
+  // there.
+  uint64_t streamed_bytes;
+  // Where the scene streams: reads of full detail from the scene's page file that failed
+  // (each logged; the geometry stays coarse and is read again later).
+  uint64_t failed_page_reads;
 } CadrFrameStats;
 
 // A renderer's settings: how it draws, picks and presents. Read them with
@@ -1347,6 +1371,18 @@ enum CadrResult cadr_scene_destroy_geometry(CadrScene scene, CadrGeometry geomet
 enum CadrResult cadr_scene_geometry_bounds(CadrScene scene,
                                            CadrGeometry geometry,
                                            struct CadrBounds *bounds);
+
+// Sets how many bytes of geometry the scene keeps in host memory: geometries created or
+// replaced past it go to the scene's page file (`cadr-pages-PID-N.bin` in the temporary
+// directory, removed with the scene) and are read back when the GPU needs them, so that a
+// model larger than memory can be loaded. The default is half the memory budget
+// (`CADR_MEMORY_BUDGET`, else the machine's memory); 0 sends every geometry made from then on
+// to the file. Geometries already made stay where they are. `cadr_scene_statistics` reports
+// what is where.
+//
+// Returns `CADR_RESULT_OK` or a handle error.
+// Ownership: nothing is kept. Thread-safety: as `cadr_scene_create`.
+enum CadrResult cadr_scene_set_geometry_memory_limit(CadrScene scene, uint64_t bytes);
 
 // Creates a material.
 //

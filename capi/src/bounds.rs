@@ -49,6 +49,13 @@ pub struct CadrSceneStatistics {
     pub visible_instances: u64,
     /// Triangles of the shown instances.
     pub visible_triangles: u64,
+    /// Bytes of geometry the scene keeps in host memory (at most its limit: see
+    /// `cadr_scene_set_geometry_memory_limit`).
+    pub resident_geometry_bytes: u64,
+    /// Bytes of geometry the scene keeps in its page file.
+    pub paged_geometry_bytes: u64,
+    /// Geometries the scene keeps in its page file.
+    pub paged_geometries: u64,
 }
 
 /// World bounds of what the scene shows (only below `below` when given), and its statistics.
@@ -58,10 +65,14 @@ fn shown(state: &mut SceneState, below: Option<NodeHandle>) -> (Aabb, CadrSceneS
     let mut geometry_bounds: std::collections::HashMap<u32, Aabb> = Default::default();
     let mut bounds = Aabb::default();
     let (nodes, geometries, materials) = graph.counts();
+    let memory = graph.geometry_memory();
     let mut statistics = CadrSceneStatistics {
         nodes: nodes as u64,
         geometries: geometries as u64,
         materials: materials as u64,
+        resident_geometry_bytes: memory.resident_bytes,
+        paged_geometry_bytes: memory.paged_bytes,
+        paged_geometries: memory.paged_geometries,
         ..CadrSceneStatistics::default()
     };
     for id in tree.instances() {

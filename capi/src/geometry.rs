@@ -318,6 +318,29 @@ pub unsafe extern "C" fn cadr_scene_geometry_bounds(
     })
 }
 
+/// Sets how many bytes of geometry the scene keeps in host memory: geometries created or
+/// replaced past it go to the scene's page file (`cadr-pages-PID-N.bin` in the temporary
+/// directory, removed with the scene) and are read back when the GPU needs them, so that a
+/// model larger than memory can be loaded. The default is half the memory budget
+/// (`CADR_MEMORY_BUDGET`, else the machine's memory); 0 sends every geometry made from then on
+/// to the file. Geometries already made stay where they are. `cadr_scene_statistics` reports
+/// what is where.
+///
+/// Returns `CADR_RESULT_OK` or a handle error.
+/// Ownership: nothing is kept. Thread-safety: as `cadr_scene_create`.
+#[no_mangle]
+pub extern "C" fn cadr_scene_set_geometry_memory_limit(
+    scene: CadrScene,
+    bytes: u64,
+) -> crate::CadrResult {
+    guard(|| {
+        with_scene(scene, |s| {
+            s.graph.set_geometry_memory_limit(bytes);
+            Ok(())
+        })
+    })
+}
+
 /// Creates a material.
 ///
 /// Returns `CADR_RESULT_OK` and writes `*material`, `CADR_RESULT_NULL_ARGUMENT`,

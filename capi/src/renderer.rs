@@ -102,6 +102,23 @@ pub struct CadrFrameStats {
     /// than one frame in flight, only the view changed, every active technique keeps its
     /// per-frame data per slot): it waited only for the frame that last used its slot.
     pub overlapped: bool,
+    /// Device bytes the scene's copy on the GPU holds (geometry arenas, instances, matrices,
+    /// materials, textures).
+    pub resident_bytes: u64,
+    /// The most full-detail geometry bytes the GPU may hold where the scene streams under the
+    /// memory budget (`CADR_MEMORY_BUDGET`); 0 where it does not stream.
+    pub streaming_budget: u64,
+    /// Where the scene streams: full-detail geometry bytes on the GPU now (the rest is drawn in
+    /// its coarse form).
+    pub full_detail_bytes: u64,
+    /// Where the scene streams: full-detail bytes of every geometry of the scene.
+    pub total_full_detail_bytes: u64,
+    /// Where the scene streams: bytes brought to the GPU by streaming since the scene was put
+    /// there.
+    pub streamed_bytes: u64,
+    /// Where the scene streams: reads of full detail from the scene's page file that failed
+    /// (each logged; the geometry stays coarse and is read again later).
+    pub failed_page_reads: u64,
 }
 
 /// What a renderer holds: the view (its GPU scene, techniques and target), the window's
@@ -676,6 +693,16 @@ pub unsafe extern "C" fn cadr_renderer_render(
             frame.bytes_uploaded = drawn.bytes_uploaded;
             frame.replayed = drawn.replayed;
             frame.overlapped = drawn.overlapped;
+            if let Some(gpu_scene) = state.view.scene() {
+                frame.resident_bytes = gpu_scene.resident_bytes();
+                if let Some(report) = gpu_scene.streaming() {
+                    frame.streaming_budget = report.budget;
+                    frame.full_detail_bytes = report.full_bytes;
+                    frame.total_full_detail_bytes = report.total_full_bytes;
+                    frame.streamed_bytes = report.streamed_bytes;
+                    frame.failed_page_reads = report.failed_reads;
+                }
+            }
             Ok(frame)
         })?;
         if stats.is_null() {

@@ -1673,6 +1673,62 @@ static void test_export(CadrContext context, struct Built *b) {
   EXPECT(cadr_renderer_exported_frame(exporting, &frame), CADR_RESULT_DESTROYED_HANDLE);
 }
 
+/* Draws a red cube in a new scene whose geometry memory limit is `limit` (UINT64_MAX: the
+ * default, kept in memory) into `pixels`; returns the statistics after the frame. */
+static struct CadrSceneStatistics draw_cube_with_limit(CadrRenderer renderer, uint64_t limit,
+                                                       uint8_t *pixels, size_t bytes,
+                                                       struct CadrFrameStats *stats) {
+  CadrScene scene;
+  CadrNode root, geo;
+  CadrGeometry cube;
+  CadrMaterial parts[2];
+  struct CadrGeometryDesc desc = cube_desc();
+  struct CadrMaterialDesc red = {sizeof(struct CadrMaterialDesc), "red", {0.8f, 0.1f, 0.1f, 1.0f}, 0.0f, 0.5f};
+  struct CadrSceneStatistics statistics = {.size = sizeof(struct CadrSceneStatistics)};
+  struct CadrBounds bounds;
+  CadrCamera camera;
+
+  OK(cadr_scene_create(&scene));
+  OK(cadr_scene_root(scene, &root));
+  if (limit != UINT64_MAX) OK(cadr_scene_set_geometry_memory_limit(scene, limit));
+  OK(cadr_scene_create_geometry(scene, &desc, &cube));
+  OK(cadr_scene_geometry_bounds(scene, cube, &bounds));
+  CHECK(bounds.min[0] == -0.5 && bounds.max[2] == 0.5);
+  OK(cadr_scene_create_material(scene, &red, &parts[0]));
+  parts[1] = parts[0];
+  OK(cadr_scene_create_geo(scene, "cube", cube, parts, 2, &geo));
+  OK(cadr_scene_add_child(scene, root, geo));
+  OK(cadr_scene_bounds(scene, &bounds));
+  OK(cadr_camera_fit(&bounds, 1.0, NULL, &camera));
+  OK(cadr_renderer_render(renderer, scene, &camera, stats));
+  OK(cadr_renderer_read_pixels(renderer, pixels, bytes));
+  OK(cadr_scene_statistics(scene, &statistics));
+  OK(cadr_scene_destroy(scene));
+  return statistics;
+}
+
+/* A scene that keeps its geometry in its page file (the limit at 0) reports it there, draws
+ * the picture a scene keeping it in memory draws, and says what the GPU holds. */
+static void test_page_file(CadrContext context) {
+  enum { S = 48 };
+  CadrRenderer renderer;
+  uint8_t in_memory[S * S * 4], paged[S * S * 4];
+  struct CadrFrameStats stats = {.size = sizeof(struct CadrFrameStats)};
+  struct CadrSceneStatistics statistics;
+
+  OK(cadr_renderer_create(context, S, S, &renderer));
+  statistics = draw_cube_with_limit(renderer, UINT64_MAX, in_memory, sizeof in_memory, &stats);
+  CHECK(statistics.paged_geometries == 0 && statistics.paged_geometry_bytes == 0);
+  CHECK(statistics.resident_geometry_bytes >= 8 * 24 + 36 * 4);
+  CHECK(stats.resident_bytes > 0 && stats.streaming_budget == 0 && stats.streamed_bytes == 0);
+  statistics = draw_cube_with_limit(renderer, 0, paged, sizeof paged, &stats);
+  CHECK(statistics.paged_geometries == 1 && statistics.paged_geometry_bytes >= 8 * 24 + 36 * 4);
+  CHECK(statistics.resident_geometry_bytes == 0);
+  CHECK(memcmp(in_memory, paged, sizeof paged) == 0);
+  EXPECT(cadr_scene_set_geometry_memory_limit(NULL, 0), CADR_RESULT_NULL_ARGUMENT);
+  OK(cadr_renderer_destroy(renderer));
+}
+
 static void test_without_plugins(void) {
   struct CadrContextOptions options = {.size = sizeof(struct CadrContextOptions)};
   CadrContext context = NULL;
@@ -1713,6 +1769,7 @@ int main(void) {
   test_messages(built.scene, built.root);
   test_renderer(context, &built);
   test_export(context, &built);
+  test_page_file(context);
   test_without_plugins();
 
   /* The one-call path, with the time of each of its phases counted from a reset. */

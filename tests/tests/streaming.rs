@@ -38,9 +38,14 @@ fn unique_parts() -> Scene {
 
 /// Looks at the first unit from up close, turned by `turn` radians around it.
 fn close_up(turn: f64) -> Camera {
+    close_up_at(DVec3::ZERO, turn)
+}
+
+/// Looks from up close at the unit whose origin is `centre`, turned by `turn` radians around it.
+fn close_up_at(centre: DVec3, turn: f64) -> Camera {
     let unit = Aabb {
-        min: DVec3::splat(-0.5),
-        max: DVec3::splat(0.5),
+        min: centre - DVec3::splat(0.5),
+        max: centre + DVec3::splat(0.5),
     };
     let direction = DVec3::new(turn.sin(), -0.6, turn.cos()).normalize();
     Camera::fit(&unit, f64::from(SIZE.0) / f64::from(SIZE.1), direction)
@@ -441,6 +446,86 @@ fn a_page_file_that_cannot_be_read_keeps_the_coarse_form_until_a_retry_reads_it(
         converged.is_some(),
         "a retry reads the repaired file: {report:?}"
     );
+    drop(view);
+    assert_no_validation_errors(&device);
+    std::env::remove_var("CADR_MEMORY_BUDGET");
+}
+
+/// Draws `camera` in `session` until two frames in a row are the same and differ from the
+/// first (`coarse`); returns whether that happened within [`CONVERGENCE_FRAMES`].
+fn draw_until_full_detail(
+    session: &mut Session,
+    camera: &Camera,
+    coarse: &image::RgbaImage,
+) -> bool {
+    let mut last: Option<image::RgbaImage> = None;
+    for _ in 0..CONVERGENCE_FRAMES {
+        let image = draw(session, camera).0;
+        if let Some(last) = &last {
+            if compare(last, &image).unwrap().mean == 0.0
+                && compare(&image, coarse).unwrap().mean > 0.0
+            {
+                return true;
+            }
+        }
+        last = Some(image);
+    }
+    false
+}
+
+/// Draws one frame of `camera` in `session`; returns the picture and the streaming report.
+fn draw(session: &mut Session, camera: &Camera) -> (image::RgbaImage, StreamingReport) {
+    let Session {
+        graph, tree, view, ..
+    } = session;
+    view.render(graph, tree, camera).unwrap();
+    let image = view.renderer().read_rgba8().unwrap();
+    let report = view.scene().unwrap().streaming().unwrap();
+    (image, report)
+}
+
+#[test]
+fn a_geometry_put_back_in_its_coarse_form_draws_it_as_it_first_did() {
+    let scene = unique_parts();
+    let unit = |name: &str| {
+        let node = scene.nodes.iter().find(|n| n.name == name).unwrap();
+        node.local.w_axis.truncate()
+    };
+    let (first, other) = (close_up(0.0), close_up_at(unit("unit 5"), 0.0));
+    // How much full detail the close-up of the first unit brings, under a budget that holds it.
+    let (_, probe, _) = render(&scene, Some(1 << 20), &[first]);
+    let roomy = probe[0].unwrap().total_full_bytes / u64::from(UNITS) * 2;
+    let mut session = session(&scene, Some(roomy), Some("gpu-clusters"));
+    let coarse = draw(&mut session, &first).0;
+    assert!(draw_until_full_detail(&mut session, &first, &coarse));
+    let needed = draw(&mut session, &first).1.full_bytes;
+    drop(session);
+
+    // A budget of just that: looking at another unit of the same size puts every geometry of
+    // the first back in its coarse form.
+    let mut session = self::session(&scene, Some(needed), Some("gpu-clusters"));
+    let coarse = draw(&mut session, &first).0;
+    assert!(draw_until_full_detail(&mut session, &first, &coarse));
+    let mut report = None;
+    for _ in 0..CONVERGENCE_FRAMES {
+        report = Some(draw(&mut session, &other).1);
+    }
+    let report = report.unwrap();
+    // Only the other unit's full detail is held: every geometry of the first went back.
+    assert!(
+        report.streamed_bytes > needed && report.full_bytes == report.streamed_bytes - needed,
+        "the other unit came within the budget: {report:?}"
+    );
+    // The first unit's coarse forms were kept on the GPU: the same picture as its first frame.
+    let back = draw(&mut session, &first).0;
+    let difference = compare(&back, &coarse).unwrap();
+    println!("back to the first unit: {difference:?} against its first frame; {report:?}");
+    assert_eq!(difference.mean, 0.0, "{difference:?}");
+    assert!(
+        draw_until_full_detail(&mut session, &first, &coarse),
+        "and its full detail comes back"
+    );
+    let Session { device, view, .. } = session;
     drop(view);
     assert_no_validation_errors(&device);
     std::env::remove_var("CADR_MEMORY_BUDGET");

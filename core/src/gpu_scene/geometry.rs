@@ -48,6 +48,10 @@ pub(super) struct GeometryPlace {
     /// Per part: its first cluster (relative to `first_cluster`), how many it has, and how
     /// many its coarsest cut has.
     pub(super) part_clusters: Vec<[u32; 3]>,
+    /// Where the scene streams and this place holds the full detail: the coarse form's place,
+    /// kept in the arenas (the coarse forms stay resident), so that going back to it builds and
+    /// uploads nothing.
+    coarse: Option<Box<GeometryPlace>>,
 }
 
 impl GeometryPlace {
@@ -681,6 +685,7 @@ impl Layout {
             room: data.sizes(),
             parts: part_entries(data),
             part_clusters: data.clusters.part_ranges.clone(),
+            coarse: None,
         };
         self.vertices.extend_from_slice(data.vertices);
         self.indices.extend_from_slice(&data.clusters.indices);
@@ -906,9 +911,11 @@ impl GeometryArenas {
             if let Some(streaming) = &mut self.streaming {
                 streaming.set_coarse(slot);
             }
-            // Released first, so that the coarse form does not keep the full detail's room.
-            self.release(slot);
-            uploaded += self.place(graph, slot)?.unwrap_or(0);
+            if !self.restore_coarse(slot) {
+                // Released first, so that the coarse form does not keep the full detail's room.
+                self.release(slot);
+                uploaded += self.place(graph, slot)?.unwrap_or(0);
+            }
             changed.push(slot);
         }
         for (slot, ticket, prepared) in ready {
@@ -964,19 +971,29 @@ impl GeometryArenas {
         };
         // Marked loaded first: the place's part entries then say it is at full detail.
         streaming.loaded(slot);
-        self.release(slot);
+        // The coarse form's place is kept aside (in the arenas) while the full detail gets one.
+        let coarse = self.places.get_mut(slot as usize).and_then(Option::take);
         if let Some(bytes) = self.write_place(slot, handle, data, &geometry, None)? {
+            if let Some(place) = self.places[slot as usize].as_mut() {
+                place.coarse = coarse.map(Box::new);
+            }
             if let Some(streaming) = &mut self.streaming {
                 streaming.count_streamed(bytes);
             }
             return Ok(Some(bytes));
         }
-        // No room: back to the coarse form, in the room it had.
+        // No room: the coarse form stays where it is, and the full detail is tried later.
         if let Some(streaming) = &mut self.streaming {
             streaming.set_coarse(slot);
             streaming.load_failed(slot, LoadRetry::Later);
         }
-        self.place(graph, slot)
+        match coarse {
+            Some(coarse) => {
+                self.places[slot as usize] = Some(coarse);
+                Ok(None)
+            }
+            None => self.place(graph, slot),
+        }
     }
 
     /// Clusters and groups in use (up to the end of the last place).
@@ -984,11 +1001,36 @@ impl GeometryArenas {
         [self.tails[3], self.tails[4]]
     }
 
-    /// Frees the room of slot `slot`'s place, if it has one.
+    /// Frees the room of slot `slot`'s place (and of the coarse form's place it keeps), if it
+    /// has one.
     fn release(&mut self, slot: u32) {
-        if let Some(place) = self.places.get_mut(slot as usize).and_then(Option::take) {
+        if let Some(mut place) = self.places.get_mut(slot as usize).and_then(Option::take) {
+            self.free_kept_coarse(&mut place);
             self.free.push((place.starts(), place.room));
         }
+    }
+
+    /// Frees the room of the coarse form's place `place` keeps, if it keeps one.
+    fn free_kept_coarse(&mut self, place: &mut GeometryPlace) {
+        if let Some(coarse) = place.coarse.take() {
+            self.free.push((coarse.starts(), coarse.room));
+        }
+    }
+
+    /// Puts slot `slot` back in the coarse form its place kept while at full detail (the full
+    /// detail's room freed); false where it kept none (the arenas were laid out while it was
+    /// at full detail), so that the coarse form must be placed anew.
+    fn restore_coarse(&mut self, slot: u32) -> bool {
+        let Some(place) = self.places.get_mut(slot as usize) else {
+            return false;
+        };
+        let Some(coarse) = place.as_mut().and_then(|p| p.coarse.take()) else {
+            return false;
+        };
+        if let Some(full) = place.replace(*coarse) {
+            self.free.push((full.starts(), full.room));
+        }
+        true
     }
 
     /// Where a geometry of `sizes` can go: the smallest free room that holds it (taken
@@ -1083,6 +1125,11 @@ impl GeometryArenas {
         if self.places.len() <= slot as usize {
             self.places.resize(slot as usize + 1, None);
         }
+        // A coarse form kept for other data is no longer the geometry's.
+        if let Some(mut place) = self.places[slot as usize].take() {
+            self.free_kept_coarse(&mut place);
+            self.places[slot as usize] = Some(place);
+        }
         let fits = |place: &GeometryPlace| place.room.iter().zip(sizes).all(|(&r, n)| n <= r);
         if !self.places[slot as usize].as_ref().is_some_and(fits) {
             self.release(slot);
@@ -1100,6 +1147,7 @@ impl GeometryArenas {
                 room,
                 parts: Vec::new(),
                 part_clusters: Vec::new(),
+                coarse: None,
             });
         }
         let Some(place) = self.places[slot as usize].as_mut() else {

@@ -350,6 +350,10 @@ typedef struct CadrDeviceInfo {
   uint64_t features;
   // Whether the validation layer is on.
   bool validation;
+  // Bytes of its largest device-local memory heap: its video memory (on a CPU device, what
+  // the driver offers of the host's). A scene whose full detail needs more than half of it
+  // streams (as past `CADR_MEMORY_BUDGET`).
+  uint64_t video_memory_bytes;
 } CadrDeviceInfo;
 
 // The device memory a context's cadr holds, and the host memory libcadr holds, filled by

@@ -113,6 +113,10 @@ pub struct CadrDeviceInfo {
     pub features: u64,
     /// Whether the validation layer is on.
     pub validation: bool,
+    /// Bytes of its largest device-local memory heap: its video memory (on a CPU device, what
+    /// the driver offers of the host's). A scene whose full detail needs more than half of it
+    /// streams (as past `CADR_MEMORY_BUDGET`).
+    pub video_memory_bytes: u64,
 }
 
 /// A technique kind.
@@ -546,6 +550,7 @@ pub unsafe extern "C" fn cadr_context_device_info(
             .filter(|(has, _)| *has)
             .fold(0, |mask, (_, bit)| mask | bit),
             validation: state.device.instance().validation_enabled(),
+            video_memory_bytes: adapter.video_memory,
         };
         // SAFETY: info is null or writable for its size (the caller's contract).
         unsafe { deliver_sized(info, "info", value) }

@@ -158,14 +158,15 @@ fn devices() -> Result<(), String> {
             (false, _) => "read back",
         };
         println!(
-            "{}: {} ({:?}, Vulkan {}.{}, MSAA {}, textures {textures}, hidden silhouettes \
-             {hidden_silhouettes}, mesh shaders {mesh_shaders}, device-generated commands \
-             {generated_commands}, frames to OpenGL {frames_to_opengl})",
+            "{}: {} ({:?}, Vulkan {}.{}, {:.1} GB of video memory, MSAA {}, textures {textures}, \
+             hidden silhouettes {hidden_silhouettes}, mesh shaders {mesh_shaders}, \
+             device-generated commands {generated_commands}, frames to OpenGL {frames_to_opengl})",
             adapter.index,
             adapter.name,
             adapter.device_type,
             cvk::raw::api_version_major(adapter.api_version),
             cvk::raw::api_version_minor(adapter.api_version),
+            adapter.video_memory as f64 / 1e9,
             if msaa.is_empty() {
                 "none".to_owned()
             } else {

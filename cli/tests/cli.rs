@@ -1037,6 +1037,12 @@ fn msaa_anti_aliases_render_and_bench_measures_each_level() {
     // How an OpenGL host gets the frames (on Mesa 25's lavapipe: shared memory, each copy
     // waited for; on SwiftShader: shared memory and semaphores).
     assert!(devices.contains("frames to OpenGL "), "{devices}");
+    // The video memory, which bounds the full detail the GPU holds before the scene streams
+    // (lavapipe offers the host's memory: more than zero).
+    assert!(
+        devices.contains(" GB of video memory") && !devices.contains(" 0.0 GB of video memory"),
+        "{devices}"
+    );
     let dir = std::env::temp_dir().join(format!("cadr-cli-msaa-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     let render = |samples: &str| {

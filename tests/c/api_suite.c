@@ -192,6 +192,7 @@ static CadrContext test_context(void) {
   CHECK(strlen(info.name) > 0 && info.validation &&
         (info.features & CADR_DEVICE_FEATURE_PRESENTATION) == 0);
   CHECK(info.api_version >= ((1u << 22) | (3u << 12)));
+  CHECK(info.video_memory_bytes > 0); /* lavapipe offers the host's memory */
   EXPECT(cadr_context_device_info(context, NULL), CADR_RESULT_NULL_ARGUMENT);
   OK(cadr_context_vulkan_instance(context, &instance));
   CHECK(instance != NULL);

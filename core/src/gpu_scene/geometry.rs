@@ -480,6 +480,18 @@ fn read_geometry(
     })
 }
 
+/// The most full-detail geometry bytes `device` holds before the scene streams:
+/// `CADR_MEMORY_BUDGET` (else the machine's memory), and at most half the device's video
+/// memory (its largest device-local heap), which also holds the coarse forms, the instances,
+/// textures and the frames' targets.
+fn streaming_budget(device: &Device) -> u64 {
+    let budget = crate::memory_budget::budget().unwrap_or(u64::MAX);
+    match device.adapter().video_memory {
+        0 => budget,
+        video_memory => budget.min(video_memory / 2),
+    }
+}
+
 /// One geometry slot as the layout measured it.
 enum Measured<'g> {
     /// A geometry the graph keeps in memory, with its full detail's data.
@@ -554,7 +566,7 @@ impl Layout {
             }
         }
         if streaming.is_none() {
-            let budget = crate::memory_budget::budget().unwrap_or(u64::MAX);
+            let budget = streaming_budget(device);
             if bytes_of(full_sizes, has_attributes) > budget {
                 *streaming = Some(Streaming::new(device, budget)?);
             }

@@ -47,6 +47,9 @@ pub struct Adapter {
     /// Whether it has `VK_KHR_external_semaphore_fd`; see
     /// [`super::Capabilities::external_semaphore_fd`].
     pub external_semaphore_fd: bool,
+    /// Bytes of its largest device-local memory heap: its video memory (on a CPU device, or
+    /// one sharing the host's memory, what the driver offers of that); 0 where it names none.
+    pub video_memory: u64,
 }
 
 /// The most textures the bindless path binds, whatever the device allows (the frame set
@@ -162,9 +165,23 @@ pub fn enumerate(instance: &Instance) -> VkResult<Vec<Adapter>> {
             external_semaphore_fd: super::fault::without_host_memory_faults(|| {
                 has_extension(instance, physical, ash::khr::external_semaphore_fd::NAME)
             }),
+            video_memory: super::fault::without_host_memory_faults(|| {
+                video_memory(instance, physical)
+            }),
         });
     }
     Ok(adapters)
+}
+
+/// Bytes of `physical`'s largest device-local memory heap (0 where it has none).
+fn video_memory(instance: &Instance, physical: vk::PhysicalDevice) -> u64 {
+    // SAFETY: physical comes from this instance.
+    let properties = unsafe { instance.raw.get_physical_device_memory_properties(physical) };
+    (properties.memory_heaps_as_slice().iter())
+        .filter(|heap| heap.flags.contains(vk::MemoryHeapFlags::DEVICE_LOCAL))
+        .map(|heap| heap.size)
+        .max()
+        .unwrap_or(0)
 }
 
 /// Whether `physical` lists `extension`.

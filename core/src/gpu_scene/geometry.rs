@@ -155,14 +155,7 @@ fn coarse_form(
     attributes: bool,
 ) -> (u64, Option<CoarseForm>) {
     let bytes = bytes_of(data.sizes(), attributes);
-    let parts = part_entries(data)
-        .into_iter()
-        .map(|p| PartBounds {
-            sphere: p.sphere,
-            bounds: p.bounds,
-            shape: p.shape,
-        })
-        .collect();
+    let parts = part_entries(data).into_iter().map(|p| p.extent).collect();
     (bytes, CoarseForm::of(geometry, &data.clusters, parts))
 }
 
@@ -186,13 +179,14 @@ fn coarse_arena_data(form: &CoarseForm) -> ArenaData<'_> {
 fn coarse_part_entries(form: &CoarseForm, slot: u32, mut placed: Vec<PartEntry>) -> Vec<PartEntry> {
     let full = form.full_parts.iter().zip(&form.errors);
     for (part, (full, &error)) in placed.iter_mut().zip(full) {
-        part.sphere = full.sphere;
-        part.bounds = abi::CadrBox {
-            coarse_error: error.max(f32::MIN_POSITIVE),
-            request_bit: slot,
-            ..full.bounds
+        part.extent = PartBounds {
+            bounds: abi::CadrBox {
+                coarse_error: error.max(f32::MIN_POSITIVE),
+                request_bit: slot,
+                ..full.bounds
+            },
+            ..*full
         };
-        part.shape = full.shape;
     }
     placed
 }
@@ -203,8 +197,8 @@ fn coarse_part_entries(form: &CoarseForm, slot: u32, mut placed: Vec<PartEntry>)
 /// it is not put back in its coarse form).
 fn full_part_entries(form: &CoarseForm, slot: u32, mut placed: Vec<PartEntry>) -> Vec<PartEntry> {
     for (part, &error) in placed.iter_mut().zip(&form.errors) {
-        part.bounds.coarse_error = -error.max(f32::MIN_POSITIVE);
-        part.bounds.request_bit = slot;
+        part.extent.bounds.coarse_error = -error.max(f32::MIN_POSITIVE);
+        part.extent.bounds.request_bit = slot;
     }
     placed
 }
@@ -363,13 +357,8 @@ fn is_curved(vertices: &[Vertex], indices: &[u32]) -> bool {
 pub(super) struct PartEntry {
     /// First index, count, first wire index, wire count (relative to the geometry's).
     pub(super) ranges: [u32; 4],
-    /// Bounding sphere (centre, radius) in object space.
-    pub(super) sphere: [f32; 4],
-    /// The smallest box along the object's axes around its triangles' vertices.
-    pub(super) bounds: abi::CadrBox,
-    /// Its shape as instance flags (`CADR_INSTANCE_CLOSED`, `CADR_INSTANCE_INSIDE_OUT`,
-    /// `CADR_INSTANCE_CURVED`).
-    pub(super) shape: u32,
+    /// Its bounding sphere, box and shape.
+    pub(super) extent: PartBounds,
 }
 
 fn part_entries(data: &ArenaData<'_>) -> Vec<PartEntry> {
@@ -387,9 +376,11 @@ fn part_entries(data: &ArenaData<'_>) -> Vec<PartEntry> {
                     p.first_wire_index,
                     p.wire_index_count,
                 ],
-                sphere: part_sphere(data.vertices, own),
-                bounds: bounding_box(own.iter().filter_map(|&i| data.vertices.get(i as usize))),
-                shape: shape_flags(data.vertices, own),
+                extent: PartBounds {
+                    sphere: part_sphere(data.vertices, own),
+                    bounds: bounding_box(own.iter().filter_map(|&i| data.vertices.get(i as usize))),
+                    shape: shape_flags(data.vertices, own),
+                },
             }
         })
         .collect()

@@ -1359,7 +1359,7 @@ fn part_box(arenas: &GeometryArenas, instances: &[abi::CadrInstance], slot: u32)
         .filter(|instance| instance.flags & abi::CADR_INSTANCE_ALIVE != 0)
         .and_then(|instance| {
             let place = arenas.places.get(instance.geometry as usize)?.as_ref()?;
-            Some(place.parts.get(instance.part as usize)?.bounds)
+            Some(place.parts.get(instance.part as usize)?.extent.bounds)
         })
         .unwrap_or_default()
 }
@@ -1410,7 +1410,7 @@ fn entry_in(
     let place = arenas.places.get(instance.geometry as usize)?.as_ref()?;
     let part = *place.parts.get(instance.part as usize)?;
     let ([first, count, first_wire, wire_count], sphere, shape) =
-        (part.ranges, part.sphere, part.shape);
+        (part.ranges, part.extent.sphere, part.extent.shape);
     let translucency = translucency
         .get(instance.material as usize)
         .copied()

@@ -52,11 +52,15 @@ pub(super) struct CoarseForm {
     pub(super) full_parts: Vec<PartBounds>,
 }
 
-/// A part's bounding sphere, box and shape flags (see the GPU scene's part entries).
+/// A part's bounding sphere, box and shape flags, as its part entry in the GPU scene holds them.
 #[derive(Clone, Copy, Debug)]
 pub(super) struct PartBounds {
+    /// Bounding sphere (centre, radius) in object space.
     pub(super) sphere: [f32; 4],
+    /// The smallest box along the object's axes around its triangles' vertices.
     pub(super) bounds: abi::CadrBox,
+    /// Its shape as instance flags (`CADR_INSTANCE_CLOSED`, `CADR_INSTANCE_INSIDE_OUT`,
+    /// `CADR_INSTANCE_CURVED`).
     pub(super) shape: u32,
 }
 

@@ -10,7 +10,7 @@ use cadr_core::generate::{generate, GeneratorSpec};
 use cadr_core::gpu_scene::StreamingReport;
 use cadr_core::graph::SceneGraph;
 use cadr_core::render::{Camera, DEFAULT_DIRECTION};
-use cadr_core::scene::{flatten, Aabb, Scene};
+use cadr_core::scene::{flatten, Aabb, Scene, VertexAttributes};
 use cadr_core::tree::SceneTree;
 use cadr_core::view::View;
 use cadr_tests::images::{compare, covered_fraction};
@@ -525,6 +525,51 @@ fn a_geometry_put_back_in_its_coarse_form_draws_it_as_it_first_did() {
         draw_until_full_detail(&mut session, &first, &coarse),
         "and its full detail comes back"
     );
+    let Session { device, view, .. } = session;
+    drop(view);
+    assert_no_validation_errors(&device);
+    std::env::remove_var("CADR_MEMORY_BUDGET");
+}
+
+#[test]
+fn coarse_forms_laid_out_again_draw_as_they_did() {
+    let scene = unique_parts();
+    let (_, probe, _) = render(&scene, Some(1 << 20), &[close_up(0.0)]);
+    let budget = probe[0].unwrap().total_full_bytes / BUDGET_SHARE;
+    let mut session = session(&scene, Some(budget), Some("gpu-clusters"));
+    // A threshold no coarse form's error reaches: nothing is asked for, all stays coarse.
+    session.view.techniques_mut().set_lod_error(1e9).unwrap();
+    let camera = close_up(0.0);
+    let (before, _) = draw(&mut session, &camera);
+    let resident_before = session.view.scene().unwrap().resident_bytes();
+    // The last unit's flange, far out of view, given texture coordinates and colours (white):
+    // the first geometry with them, so the arenas are laid out again (with an attribute
+    // arena), every coarse form placed anew from the full detail (streaming keeps them
+    // without their arrays once they are on the GPU).
+    let last_flange = (scene.geometries.iter())
+        .rposition(|g| g.name.starts_with("fine flange"))
+        .unwrap();
+    let mut with_attributes = scene.geometries[last_flange].clone();
+    with_attributes.attributes = vec![VertexAttributes::default(); with_attributes.vertices.len()];
+    let handle = session
+        .graph
+        .geometry_handle_at(last_flange as u32)
+        .unwrap();
+    session
+        .graph
+        .replace_geometry(handle, with_attributes)
+        .unwrap();
+    session.tree.update(&mut session.graph);
+    let (after, report) = draw(&mut session, &camera);
+    let resident_after = session.view.scene().unwrap().resident_bytes();
+    assert!(
+        resident_after > resident_before,
+        "the arenas were laid out again: {resident_before} → {resident_after} bytes"
+    );
+    let difference = compare(&after, &before).unwrap();
+    println!("{difference:?}; {report:?}");
+    assert_eq!(difference.mean, 0.0, "{difference:?}");
+    assert_eq!(report.full_bytes, 0, "{report:?}");
     let Session { device, view, .. } = session;
     drop(view);
     assert_no_validation_errors(&device);

@@ -609,6 +609,12 @@ impl Layout {
             };
             layout.places.push(Some(place));
         }
+        // The coarse forms are laid out: streaming keeps them without their arrays.
+        if let Some(streaming) = streaming.as_mut() {
+            for (slot, _) in coarse.iter().enumerate().filter(|(_, form)| form.is_some()) {
+                streaming.placed(slot as u32);
+            }
+        }
         Ok(layout)
     }
 
@@ -1091,7 +1097,8 @@ impl GeometryArenas {
         let known = (self.streaming.as_ref()).and_then(|s| s.known_form(slot, handle));
         if let Some(Some(form)) = known {
             let data = coarse_arena_data(&form);
-            return self.write_place(slot, handle, data, &form.geometry, Some(&form));
+            let written = self.write_place(slot, handle, data, &form.geometry, Some(&form))?;
+            return Ok(self.coarse_placed(slot, written));
         }
         let geometry = read_geometry(graph, slot, handle)?;
         let geometry = &*geometry;
@@ -1109,7 +1116,20 @@ impl GeometryArenas {
             Some(form) => (coarse_arena_data(form), &form.geometry),
             None => (full_data.unwrap_or_else(|| arena_data(geometry)), geometry),
         };
-        self.write_place(slot, handle, data, geometry, coarse.as_deref())
+        let written = self.write_place(slot, handle, data, geometry, coarse.as_deref())?;
+        Ok(match coarse {
+            Some(_) => self.coarse_placed(slot, written),
+            None => written,
+        })
+    }
+
+    /// Where slot `slot`'s coarse form was `written` to the GPU, streaming lets go of its
+    /// arrays; returns `written`.
+    fn coarse_placed(&mut self, slot: u32, written: Option<u64>) -> Option<u64> {
+        if let (Some(_), Some(streaming)) = (written, &mut self.streaming) {
+            streaming.placed(slot);
+        }
+        written
     }
 
     /// Writes `data` (made from `geometry`, the coarse form `coarse` of slot `slot`'s geometry

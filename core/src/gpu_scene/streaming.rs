@@ -43,8 +43,12 @@ pub const KEEP_FRAMES: u64 = 8;
 /// A coarse form of a geometry: what the GPU holds of it while its full detail is not there.
 pub(super) struct CoarseForm {
     /// A coarse cut of every part ([`COARSE_SHARE`]), parts in the same order, vertices
-    /// compacted.
+    /// compacted. Once placed on the GPU (where it stays), streaming keeps the form without
+    /// its arrays ([`CoarseForm::placed`]) and makes them again from the full detail where it
+    /// must place it anew (the arenas laid out again).
     pub(super) geometry: Geometry,
+    /// Whether `geometry` holds the form's arrays.
+    has_arrays: bool,
     /// Per part: the object-space error of its coarse form against its full detail.
     pub(super) errors: Vec<f32>,
     /// Per part: its full detail's bounds and shape, which the coarse form's instances keep
@@ -128,9 +132,25 @@ impl CoarseForm {
                 parts,
                 attributes,
             },
+            has_arrays: true,
             errors,
             full_parts,
         })
+    }
+
+    /// The form as streaming keeps it once it is on the GPU: its errors and the full detail's
+    /// bounds, without its arrays (host memory: about an eighth of the scene's geometry).
+    fn placed(&self) -> Self {
+        Self {
+            geometry: Geometry {
+                name: self.geometry.name.clone(),
+                parts: self.geometry.parts.clone(),
+                ..Geometry::default()
+            },
+            has_arrays: false,
+            errors: self.errors.clone(),
+            full_parts: self.full_parts.clone(),
+        }
     }
 }
 
@@ -315,7 +335,9 @@ impl Streaming {
         let known = self.slots[index]
             .as_ref()
             .is_some_and(|r| r.handle == handle);
-        if !known {
+        if known {
+            self.refill(index, coarse_of);
+        } else {
             self.forget(slot);
             let (full_bytes, coarse) = coarse_of();
             let coarse = coarse.map(Arc::new);
@@ -342,19 +364,46 @@ impl Streaming {
             .flatten()
     }
 
+    /// Gives slot `index`'s coarse form its arrays again (made by `coarse_of`) where it goes
+    /// on the GPU in it and streaming kept it without them.
+    fn refill(&mut self, index: usize, coarse_of: impl FnOnce() -> (u64, Option<CoarseForm>)) {
+        let Some(residency) = self.slots[index].as_mut() else {
+            return;
+        };
+        let without_arrays = residency.coarse.as_ref().is_some_and(|c| !c.has_arrays);
+        if !residency.full && without_arrays {
+            if let (_, Some(form)) = coarse_of() {
+                residency.coarse = Some(Arc::new(form));
+            }
+        }
+    }
+
+    /// Slot `slot`'s coarse form is on the GPU: streaming keeps it without its arrays.
+    pub(super) fn placed(&mut self, slot: u32) {
+        let Some(residency) = self.slots.get_mut(slot as usize).and_then(Option::as_mut) else {
+            return;
+        };
+        if let Some(form) = residency.coarse.as_mut().filter(|c| c.has_arrays) {
+            *form = Arc::new(form.placed());
+        }
+    }
+
     /// Where slot `slot` is known to hold `handle`: the coarse form it goes on the GPU in, as
-    /// [`Streaming::form_to_place`] would say; `None` where it is not known.
+    /// [`Streaming::form_to_place`] would say; `None` where it is not known, or where that
+    /// form must be made again (kept without its arrays).
     pub(super) fn known_form(
         &self,
         slot: u32,
         handle: GeometryHandle,
     ) -> Option<Option<Arc<CoarseForm>>> {
         let residency = self.slots.get(slot as usize)?.as_ref()?;
-        (residency.handle == handle).then(|| {
-            (!residency.full)
-                .then(|| residency.coarse.clone())
-                .flatten()
-        })
+        let form = (!residency.full)
+            .then(|| residency.coarse.clone())
+            .flatten();
+        if form.as_ref().is_some_and(|f| !f.has_arrays) {
+            return None;
+        }
+        (residency.handle == handle).then_some(form)
     }
 
     /// The coarse form of slot `slot`'s geometry, whichever form the GPU holds.

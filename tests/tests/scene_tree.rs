@@ -662,3 +662,82 @@ fn a_large_edit_leaves_no_large_event_storage_behind() {
          {large:?}, {after:?}"
     );
 }
+
+/// An edit of the page file property: create a geometry of a prism with this many sides,
+/// replace the geometry at this index (of those alive) by one, or destroy it.
+#[derive(Clone, Debug)]
+enum PagedEdit {
+    Create(u32),
+    Replace(usize, u32),
+    Destroy(usize),
+}
+
+fn paged_edit() -> impl Strategy<Value = PagedEdit> {
+    prop_oneof![
+        (3u32..40).prop_map(PagedEdit::Create),
+        (0usize..8, 3u32..40).prop_map(|(i, sides)| PagedEdit::Replace(i, sides)),
+        (0usize..8).prop_map(PagedEdit::Destroy),
+    ]
+}
+
+/// A prism geometry of `sides` sides, named after them and `tag`.
+fn prism(sides: u32, tag: usize) -> cadr_core::scene::Geometry {
+    let mut builder = GeometryBuilder::new(format!("prism {sides} #{tag}"));
+    builder.prism(
+        sides,
+        DMat4::from_translation(DVec3::new(tag as f64, 0.0, 0.0)),
+    );
+    builder.finish()
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: cases_from_env(64), ..ProptestConfig::default() })]
+
+    /// Geometries kept in the page file (the limit at 0) read back as they were made after
+    /// any sequence of creations, replacements and destructions, whose rooms are used again,
+    /// and the file is empty once the last is destroyed.
+    #[test]
+    fn paged_geometries_read_back_as_made_after_any_edits(
+        edits in prop::collection::vec(paged_edit(), 1..40)
+    ) {
+        let mut graph = SceneGraph::new();
+        graph.set_geometry_memory_limit(0);
+        let mut alive: Vec<(GeometryHandle, cadr_core::scene::Geometry)> = Vec::new();
+        for (tag, edit) in edits.into_iter().enumerate() {
+            match edit {
+                PagedEdit::Create(sides) => {
+                    let geometry = prism(sides, tag);
+                    alive.push((graph.create_geometry(geometry.clone()).unwrap(), geometry));
+                }
+                PagedEdit::Replace(i, sides) if !alive.is_empty() => {
+                    let i = i % alive.len();
+                    let geometry = prism(sides, tag);
+                    graph.replace_geometry(alive[i].0, geometry.clone()).unwrap();
+                    alive[i].1 = geometry;
+                }
+                PagedEdit::Destroy(i) if !alive.is_empty() => {
+                    let (handle, _) = alive.swap_remove(i % alive.len());
+                    graph.destroy_geometry(handle).unwrap();
+                }
+                _ => {}
+            }
+            for (handle, geometry) in &alive {
+                prop_assert!(graph.geometry_info_at(handle.index()).unwrap().paged);
+                prop_assert_eq!(&*graph.geometry(*handle).unwrap(), geometry);
+                prop_assert_eq!(graph.geometry_bounds(*handle).unwrap(), geometry.bounds());
+            }
+            let memory = graph.geometry_memory();
+            prop_assert_eq!(memory.paged_geometries, alive.len() as u64);
+            prop_assert_eq!(memory.resident_bytes, 0);
+            if let Some(file) = &memory.page_file {
+                // The file holds the records alive and the free rooms between them, never
+                // more than it has to after its end is freed.
+                let length = std::fs::metadata(file).unwrap().len();
+                prop_assert!(length >= memory.paged_bytes);
+                if alive.is_empty() {
+                    prop_assert_eq!(length, 0);
+                }
+            }
+        }
+    }
+}

@@ -1377,8 +1377,8 @@ enum CadrResult cadr_scene_geometry_bounds(CadrScene scene,
                                            struct CadrBounds *bounds);
 
 // Sets how many bytes of geometry the scene keeps in host memory: geometries created or
-// replaced past it go to the scene's page file (`cadr-pages-PID-N.bin` in the temporary
-// directory, removed with the scene) and are read back when the GPU needs them, so that a
+// replaced past it go to the scene's page file (`cadr-pages-PID-N.bin` in `CADR_PAGE_DIR`,
+// else `TMPDIR`, else `/var/tmp`; removed with the scene) and are read back when the GPU needs them, so that a
 // model larger than memory can be loaded. The default is half the memory budget
 // (`CADR_MEMORY_BUDGET`, else the machine's memory); 0 sends every geometry made from then on
 // to the file. Geometries already made stay where they are. `cadr_scene_statistics` reports
@@ -1386,7 +1386,8 @@ enum CadrResult cadr_scene_geometry_bounds(CadrScene scene,
 //
 // Returns `CADR_RESULT_OK` or a handle error.
 // Ownership: nothing is kept. Thread-safety: as `cadr_scene_create`.
-enum CadrResult cadr_scene_set_geometry_memory_limit(CadrScene scene, uint64_t bytes);
+enum CadrResult cadr_scene_set_geometry_memory_limit(CadrScene scene,
+                                                     uint64_t bytes);
 
 // Creates a material.
 //

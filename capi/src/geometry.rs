@@ -319,8 +319,8 @@ pub unsafe extern "C" fn cadr_scene_geometry_bounds(
 }
 
 /// Sets how many bytes of geometry the scene keeps in host memory: geometries created or
-/// replaced past it go to the scene's page file (`cadr-pages-PID-N.bin` in the temporary
-/// directory, removed with the scene) and are read back when the GPU needs them, so that a
+/// replaced past it go to the scene's page file (`cadr-pages-PID-N.bin` in `CADR_PAGE_DIR`,
+/// else `TMPDIR`, else `/var/tmp`; removed with the scene) and are read back when the GPU needs them, so that a
 /// model larger than memory can be loaded. The default is half the memory budget
 /// (`CADR_MEMORY_BUDGET`, else the machine's memory); 0 sends every geometry made from then on
 /// to the file. Geometries already made stay where they are. `cadr_scene_statistics` reports

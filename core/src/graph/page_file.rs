@@ -6,10 +6,10 @@
 //! a host that asks for the data. A record carries a CRC-32 of its bytes, so a file that was
 //! changed or cut short under cadr gives a clear error, never wrong geometry.
 //!
-//! The file is made in the temporary directory (`TMPDIR`) when the first geometry goes there,
-//! named `cadr-pages-PID-N.bin`, and removed when the graph is dropped (the first file a process
-//! makes removes those of ended processes: a crash leaves its file behind). The room of a destroyed
-//! or replaced geometry is used again.
+//! The file is made when the first geometry goes there, named `cadr-pages-PID-N.bin`, in
+//! `CADR_PAGE_DIR`, else `TMPDIR`, else `/var/tmp` (see [`page_directory`]), and removed when
+//! the graph is dropped (the first file a process makes removes those of ended processes: a
+//! crash leaves its file behind). The room of a destroyed or replaced geometry is used again.
 
 use std::fs::File;
 use std::io::{Read, Seek, SeekFrom, Write};
@@ -114,14 +114,14 @@ pub struct PageFile {
 }
 
 impl PageFile {
-    /// A new, empty page file in the temporary directory. The first one of a process removes
+    /// A new, empty page file in the page directory. The first one of a process removes
     /// those that processes which ended without removing theirs (a crash) left there.
     pub fn create() -> Result<Self, String> {
         let n = FILES_MADE.fetch_add(1, Ordering::Relaxed);
         if n == 0 {
-            remove_orphans(&std::env::temp_dir());
+            remove_orphans(&page_directory());
         }
-        let path = std::env::temp_dir().join(format!("cadr-pages-{}-{n}.bin", std::process::id()));
+        let path = page_directory().join(format!("cadr-pages-{}-{n}.bin", std::process::id()));
         let file = std::fs::OpenOptions::new()
             .read(true)
             .write(true)
@@ -214,6 +214,24 @@ impl PageFile {
             }
         }
     }
+}
+
+/// The variable that names the directory page files go to.
+pub const DIRECTORY_VARIABLE: &str = "CADR_PAGE_DIR";
+
+/// Where page files go: `CADR_PAGE_DIR`, else `TMPDIR`, else `/var/tmp` where it exists (on
+/// disk by convention, where `/tmp` is often memory: paging there would save none), else the
+/// system's temporary directory.
+fn page_directory() -> PathBuf {
+    let named = |variable: &str| std::env::var_os(variable).filter(|v| !v.is_empty());
+    if let Some(directory) = named(DIRECTORY_VARIABLE).or_else(|| named("TMPDIR")) {
+        return PathBuf::from(directory);
+    }
+    let var_tmp = Path::new("/var/tmp");
+    if var_tmp.is_dir() {
+        return var_tmp.to_path_buf();
+    }
+    std::env::temp_dir()
 }
 
 /// Removes the page files in `directory` whose process has ended (Linux: no `/proc/PID`; on

@@ -85,22 +85,23 @@ impl Page {
                 self.len
             )
         };
-        let len = usize::try_from(self.len).map_err(|_| failed("record too large".into()))?;
-        let mut bytes = vec![0u8; len];
-        {
+        // Read straight into the geometry's arrays: no copy of the record is held besides.
+        let mut crc = flate2::Crc::new();
+        let decoded = {
             let mut file = (self.file.file.lock()).unwrap_or_else(|p| p.into_inner());
             file.seek(SeekFrom::Start(self.offset))
-                .and_then(|_| file.read_exact(&mut bytes))
-                .map_err(|e| failed(e.to_string()))?;
-        }
-        let mut crc = flate2::Crc::new();
-        crc.update(&bytes);
+                .and_then(|_| decode(&mut *file, self.len, &mut crc))
+                .map_err(|e| failed(e.to_string()))?
+        };
+        let geometry = decoded.ok_or_else(|| {
+            failed("the record is malformed (its counts do not add up to its length)".into())
+        })?;
         if crc.sum() != self.crc {
             return Err(failed(
                 "its bytes are not those written (CRC mismatch)".into(),
             ));
         }
-        decode(&bytes).ok_or_else(|| failed("the record is malformed".into()))
+        Ok(geometry)
     }
 }
 
@@ -300,34 +301,70 @@ fn encode(geometry: &Geometry) -> Vec<u8> {
     bytes
 }
 
-/// Reads a record made by [`encode`]; `None` where its header or lengths do not add up.
-fn decode(bytes: &[u8]) -> Option<Geometry> {
-    if bytes.get(..8)? != MAGIC {
-        return None;
+/// Reads `buffer` whole from `source`, adding its bytes to `crc`.
+fn read_into(
+    source: &mut impl Read,
+    buffer: &mut [u8],
+    crc: &mut flate2::Crc,
+) -> std::io::Result<()> {
+    source.read_exact(buffer)?;
+    crc.update(buffer);
+    Ok(())
+}
+
+/// Reads a record of `len` bytes made by [`encode`] from `source` into the geometry's arrays,
+/// adding its bytes to `crc`; `Ok(None)` where its header is not one or its counts do not add
+/// up to `len` (checked before anything of their size is allocated).
+fn decode(
+    source: &mut impl Read,
+    len: u64,
+    crc: &mut flate2::Crc,
+) -> std::io::Result<Option<Geometry>> {
+    let mut header = [0u8; HEADER_BYTES];
+    if len < HEADER_BYTES as u64 {
+        return Ok(None);
     }
-    let count = |i: usize| -> Option<usize> {
+    read_into(source, &mut header, crc)?;
+    if header[..8] != MAGIC {
+        return Ok(None);
+    }
+    let counts: [u64; 6] = std::array::from_fn(|i| {
         let at = 8 + 4 * i;
-        let word: [u8; 4] = bytes.get(at..at + 4)?.try_into().ok()?;
-        Some(u32::from_le_bytes(word) as usize)
-    };
-    let mut rest = bytes.get(HEADER_BYTES..)?;
-    let mut take = |len: usize| -> Option<&[u8]> {
-        let (head, tail) = rest.split_at_checked(len)?;
-        rest = tail;
-        Some(head)
-    };
-    let name_len = count(0)?;
-    let name = String::from_utf8(take(name_len.next_multiple_of(4))?[..name_len].to_vec()).ok()?;
-    let vertices: Vec<Vertex> = bytemuck::pod_collect_to_vec(take(count(1)?.checked_mul(24)?)?);
-    let indices: Vec<u32> = bytemuck::pod_collect_to_vec(take(count(2)?.checked_mul(4)?)?);
-    let wire_indices: Vec<u32> = bytemuck::pod_collect_to_vec(take(count(3)?.checked_mul(4)?)?);
-    let parts: Vec<[u32; 4]> = bytemuck::pod_collect_to_vec(take(count(4)?.checked_mul(16)?)?);
-    let attributes: Vec<VertexAttributes> =
-        bytemuck::pod_collect_to_vec(take(count(5)?.checked_mul(12)?)?);
-    if !rest.is_empty() {
-        return None;
+        u64::from(u32::from_le_bytes([
+            header[at],
+            header[at + 1],
+            header[at + 2],
+            header[at + 3],
+        ]))
+    });
+    let [name_len, vertex_count, index_count, wire_count, part_count, attribute_count] = counts;
+    // Each count is under 2^32, so this sum cannot overflow.
+    let total = HEADER_BYTES as u64
+        + name_len.next_multiple_of(4)
+        + 24 * vertex_count
+        + 4 * (index_count + wire_count)
+        + 16 * part_count
+        + 12 * attribute_count;
+    if total != len {
+        return Ok(None);
     }
-    Some(Geometry {
+    let mut name = vec![0u8; name_len.next_multiple_of(4) as usize];
+    read_into(source, &mut name, crc)?;
+    name.truncate(name_len as usize);
+    let mut vertices = vec![Vertex::default(); vertex_count as usize];
+    read_into(source, bytemuck::cast_slice_mut(&mut vertices), crc)?;
+    let mut indices = vec![0u32; index_count as usize];
+    read_into(source, bytemuck::cast_slice_mut(&mut indices), crc)?;
+    let mut wire_indices = vec![0u32; wire_count as usize];
+    read_into(source, bytemuck::cast_slice_mut(&mut wire_indices), crc)?;
+    let mut parts = vec![[0u32; 4]; part_count as usize];
+    read_into(source, bytemuck::cast_slice_mut(&mut parts), crc)?;
+    let mut attributes = vec![VertexAttributes::default(); attribute_count as usize];
+    read_into(source, bytemuck::cast_slice_mut(&mut attributes), crc)?;
+    let Ok(name) = String::from_utf8(name) else {
+        return Ok(None);
+    };
+    Ok(Some(Geometry {
         name,
         vertices,
         indices,
@@ -343,7 +380,7 @@ fn decode(bytes: &[u8]) -> Option<Geometry> {
             )
             .collect(),
         attributes,
-    })
+    }))
 }
 
 #[cfg(test)]
@@ -431,13 +468,23 @@ mod tests {
 
     #[test]
     fn malformed_records_decode_to_none() {
+        let decoded =
+            |bytes: &[u8], len: usize| decode(&mut &bytes[..], len as u64, &mut flate2::Crc::new());
         let bytes = encode(&triangle("a", 0.0));
-        assert!(decode(&bytes[..bytes.len() - 1]).is_none());
-        let mut longer = bytes.clone();
-        longer.push(0);
-        assert!(decode(&longer).is_none());
-        let mut huge = bytes;
+        assert_eq!(
+            decoded(&bytes, bytes.len()).unwrap(),
+            Some(triangle("a", 0.0))
+        );
+        assert!(decoded(&bytes, bytes.len() - 1).unwrap().is_none());
+        assert!(decoded(&bytes, bytes.len() + 1).unwrap().is_none());
+        assert!(decoded(&bytes, 3).unwrap().is_none());
+        let mut huge = bytes.clone();
         huge[12..16].copy_from_slice(&u32::MAX.to_le_bytes());
-        assert!(decode(&huge).is_none());
+        assert!(decoded(&huge, huge.len()).unwrap().is_none());
+        let mut not_a_record = bytes.clone();
+        not_a_record[0] = b'X';
+        assert!(decoded(&not_a_record, bytes.len()).unwrap().is_none());
+        // A source shorter than the length it claims: an error of the read.
+        assert!(decoded(&bytes[..bytes.len() - 4], bytes.len()).is_err());
     }
 }

@@ -452,23 +452,9 @@ struct Layout {
     largest: Extent,
 }
 
-/// The error a geometry that cannot be read back (from the scene graph's page file) gives.
+/// The error of a geometry that cannot be read back (from the scene graph's page file).
 fn unreadable(error: GraphError) -> crate::error::RenderError {
     crate::error::RenderError::SceneData(error.to_string())
-}
-
-/// Slot `slot`'s geometry (`handle`), read back from the page file where it is there.
-fn read_geometry(
-    graph: &SceneGraph,
-    slot: u32,
-    handle: GeometryHandle,
-) -> RenderResult<std::borrow::Cow<'_, Geometry>> {
-    (graph.geometry_at(slot).map_err(unreadable)?).ok_or_else(|| {
-        unreadable(GraphError::StaleGeometry {
-            index: handle.index(),
-            generation: handle.generation(),
-        })
-    })
 }
 
 /// The most full-detail geometry bytes `device` holds before the scene streams:
@@ -517,17 +503,16 @@ fn measure(
     let Some(handle) = graph.geometry_handle_at(slot) else {
         return Ok(None);
     };
-    Ok(match graph.geometry_at(slot).map_err(unreadable)? {
-        None => None,
-        Some(std::borrow::Cow::Borrowed(geometry)) => {
-            Some(Measured::Resident(handle, geometry, arena_data(geometry)))
+    Ok(Some(match graph.geometry(handle).map_err(unreadable)? {
+        std::borrow::Cow::Borrowed(geometry) => {
+            Measured::Resident(handle, geometry, arena_data(geometry))
         }
-        Some(std::borrow::Cow::Owned(geometry)) => {
+        std::borrow::Cow::Owned(geometry) => {
             let data = arena_data(&geometry);
             let coarse = coarse_form(&geometry, &data, has_attributes);
-            Some(Measured::Paged(handle, data.sizes(), Some(coarse)))
+            Measured::Paged(handle, data.sizes(), Some(coarse))
         }
-    })
+    }))
 }
 
 impl Layout {
@@ -630,7 +615,7 @@ impl Layout {
         let mut place = match measured {
             Measured::Resident(handle, geometry, data) => self.push(handle, &data, geometry),
             Measured::Paged(handle, ..) => {
-                let geometry = read_geometry(graph, slot, handle)?;
+                let geometry = graph.geometry(handle).map_err(unreadable)?;
                 self.push(handle, &arena_data(&geometry), &geometry)
             }
         };
@@ -1100,7 +1085,7 @@ impl GeometryArenas {
             let written = self.write_place(slot, handle, data, &form.geometry, Some(&form))?;
             return Ok(self.coarse_placed(slot, written));
         }
-        let geometry = read_geometry(graph, slot, handle)?;
+        let geometry = graph.geometry(handle).map_err(unreadable)?;
         let geometry = &*geometry;
         let has_attributes = self.has_attributes;
         let mut full_data = None;

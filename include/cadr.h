@@ -1500,6 +1500,9 @@ enum CadrResult cadr_context_create_from_vulkan(const struct CadrHostVulkan *hos
 // Loads a scene file (`.gltf`, `.glb`, `.csf`, `.csf.gz`) or a built-in generator
 // (`gen:demo`, `gen:grid:parts=N`, …) and adds it below `parent` under a new Group named after
 // it. On success `*result` lists what was created; free it with `cadr_load_result_free`.
+// Each geometry goes to the scene's page file as soon as it is read where the scene's
+// geometry memory limit (`cadr_scene_set_geometry_memory_limit`) is reached, so that a model
+// larger than memory loads.
 //
 // Returns `CADR_RESULT_OK`, `CADR_RESULT_NULL_ARGUMENT`, `CADR_RESULT_LOAD_FAILED` (the
 // message names the file and the bad item; nothing is added) or a handle error. A panic while

@@ -61,48 +61,23 @@ pub struct CadrSceneStatistics {
 /// World bounds of what the scene shows (only below `below` when given), and its statistics.
 fn shown(state: &mut SceneState, below: Option<NodeHandle>) -> (Aabb, CadrSceneStatistics) {
     state.update();
-    let (graph, tree) = (&state.graph, &state.tree);
-    let mut geometry_bounds: std::collections::HashMap<u32, Aabb> = Default::default();
-    let mut bounds = Aabb::default();
+    let graph = &state.graph;
+    let shown = cadr_core::tree::shown(graph, &state.tree, below);
     let (nodes, geometries, materials) = graph.counts();
     let memory = graph.geometry_memory();
-    let mut statistics = CadrSceneStatistics {
+    let statistics = CadrSceneStatistics {
         nodes: nodes as u64,
         geometries: geometries as u64,
         materials: materials as u64,
+        instances: shown.instances,
+        visible_instances: shown.visible_instances,
+        visible_triangles: shown.visible_triangles,
         resident_geometry_bytes: memory.resident_bytes,
         paged_geometry_bytes: memory.paged_bytes,
         paged_geometries: memory.paged_geometries,
         ..CadrSceneStatistics::default()
     };
-    for id in tree.instances() {
-        let Some(instance) = tree.instance(id) else {
-            continue;
-        };
-        if let Some(node) = below {
-            if !tree.path(instance.tree_node).contains(&node) {
-                continue;
-            }
-        }
-        statistics.instances += 1;
-        if !instance.visible {
-            continue;
-        }
-        let Some(geometry) = graph.geometry_info_at(instance.geometry) else {
-            continue;
-        };
-        statistics.visible_instances += 1;
-        if let Some(part) = geometry.parts.get(instance.part as usize) {
-            statistics.visible_triangles += u64::from(part.triangle_count());
-        }
-        let local = *geometry_bounds.entry(instance.geometry).or_insert_with(|| {
-            graph
-                .geometry_bounds_at(instance.geometry)
-                .unwrap_or_default()
-        });
-        bounds.add_box(&local.transformed(&tree.world(instance.tree_node)));
-    }
-    (bounds, statistics)
+    (shown.bounds, statistics)
 }
 
 /// Writes the world-space bounds of everything the scene shows (empty: `min` > `max`).

@@ -44,6 +44,9 @@ pub struct CadrLoadResult {
 /// Loads a scene file (`.gltf`, `.glb`, `.csf`, `.csf.gz`) or a built-in generator
 /// (`gen:demo`, `gen:grid:parts=N`, …) and adds it below `parent` under a new Group named after
 /// it. On success `*result` lists what was created; free it with `cadr_load_result_free`.
+/// Each geometry goes to the scene's page file as soon as it is read where the scene's
+/// geometry memory limit (`cadr_scene_set_geometry_memory_limit`) is reached, so that a model
+/// larger than memory loads.
 ///
 /// Returns `CADR_RESULT_OK`, `CADR_RESULT_NULL_ARGUMENT`, `CADR_RESULT_LOAD_FAILED` (the
 /// message names the file and the bad item; nothing is added) or a handle error. A panic while
@@ -68,18 +71,22 @@ pub unsafe extern "C" fn cadr_scene_load(
         let path = unsafe { required_str(path, "path") }?;
         // SAFETY: null or writable for its size (the caller's contract).
         unsafe { check_owning_size(result, ("result", "CadrLoadResult"), FIRST_SIZE) }?;
-        // Check the handles before the (possibly long) load.
-        with_scene(scene, |s| node_of(&s.graph, parent, "parent").map(|_| ()))?;
+        // Check the handles before the (possibly long) load, and take the graph's memory
+        // left: the load keeps that much geometry in memory and pages the rest.
+        let memory_left = with_scene(scene, |s| {
+            node_of(&s.graph, parent, "parent")?;
+            Ok(s.graph.geometry_memory_left())
+        })?;
         let load =
             |e: cadr_core::load::LoadError| Failure::new(CadrResult::LoadFailed, e.to_string());
-        let loaded = SceneSource::parse(path)
+        let (outline, geometries) = SceneSource::parse(path)
             .map_err(load)?
-            .load()
+            .load_for_graph(memory_left)
             .map_err(load)?;
         let imported = with_scene(scene, |s| {
             let parent = node_of(&s.graph, parent, "parent")?;
             s.graph
-                .import(&loaded, parent)
+                .import_loaded(&outline, geometries, parent)
                 .map_err(|e| Failure::new(CadrResult::LoadFailed, format!("{path}: {e}")))
         })?;
         let boxed = |values: Vec<u64>| -> (*mut u64, usize) {

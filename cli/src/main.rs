@@ -69,6 +69,25 @@ fn main() -> ExitCode {
     }
 }
 
+/// Loads the scene `text` names straight into a new graph (with a spinner if it takes over a
+/// second), with the nodes named one of `highlight` highlighted; returns the graph and the
+/// scene's name. Each geometry goes to the graph's page file as soon as it is made where the
+/// graph's memory limit is reached, so that a model larger than memory loads.
+fn load_graph(text: &str, highlight: &[String]) -> Result<(SceneGraph, String), String> {
+    let source = SceneSource::parse(text).map_err(|e| e.to_string())?;
+    let mut graph = SceneGraph::new();
+    let (outline, geometries) = progress::spin(&format!("loading {text}"), || {
+        source.load_for_graph(graph.geometry_memory_left())
+    })
+    .map_err(|e| e.to_string())?;
+    let root = graph.root();
+    graph
+        .import_loaded(&outline, geometries, root)
+        .map_err(|e| e.to_string())?;
+    techniques::highlight_named(&mut graph, highlight)?;
+    Ok((graph, outline.name))
+}
+
 /// Loads or generates the scene `text` names (with a spinner if it takes over a second).
 fn load_scene(text: &str) -> Result<cadr_core::scene::Scene, String> {
     let source = SceneSource::parse(text).map_err(|e| e.to_string())?;
@@ -200,21 +219,16 @@ fn render(args: &RenderArgs, process_start: Instant) -> Result<(), String> {
     let Size { width, height } = args.size;
     let frames = args.frames as usize;
 
-    let scene = load_scene(&args.scene)?;
-
     let device = open_device(&args.validation)?;
-    let flat = flatten(&scene).map_err(|e| e.to_string())?;
-    let stats = SceneStats::new(&scene, &flat);
-    drop(flat);
     let (registry, _) = techniques::load_registry(&device);
-    // The graph holds the scene from here on: the loaded copy goes before the tree and the
-    // GPU scene are built.
-    let (mut graph, nodes) = SceneGraph::from_scene(&scene).map_err(|e| e.to_string())?;
-    techniques::highlight_named(&mut graph, &scene, &nodes, &args.highlight)?;
-    let scene_name = scene.name.clone();
-    drop(scene);
+    let (graph, scene_name) = load_graph(&args.scene, &args.highlight)?;
+    let loading_heap_peak = cadr_core::host_heap::peak_bytes_in_use();
+    cadr_core::host_heap::reset_peak();
     let mut session =
         techniques::TechniqueSession::from_graph(&device, graph, registry, (width, height))?;
+    // What the scene shows as loaded, before the settings hide or move anything.
+    let shown = cadr_core::tree::shown(&session.graph, &session.tree, None);
+    let (node_count, geometry_count, material_count) = session.graph.counts();
     session.choose(&combination, shade)?;
     session.set_min_pixels(min_pixels)?;
     session.set_lod_error(args.techniques.lod_error)?;
@@ -228,7 +242,7 @@ fn render(args: &RenderArgs, process_start: Instant) -> Result<(), String> {
         section_line,
     );
     let camera = Camera::fit(
-        &stats.bounds,
+        &shown.bounds,
         f64::from(width) / f64::from(height),
         DEFAULT_DIRECTION,
     );
@@ -252,11 +266,11 @@ fn render(args: &RenderArgs, process_start: Instant) -> Result<(), String> {
     let adapter = device.adapter();
     println!(
         "scene:       {} ({} nodes, {} geometries, {} materials)",
-        scene_name, stats.nodes, stats.geometries, stats.materials
+        scene_name, node_count, geometry_count, material_count
     );
     println!("device:      {} ({:?})", adapter.name, adapter.device_type);
     println!("techniques:  {technique_line}");
-    print_frames(stats.instances, &samples);
+    print_frames(shown.instances as usize, &samples);
     let spent = timings::snapshot();
     println!(
         "setup:       load {:.1} ms, upload {:.1} ms",
@@ -294,7 +308,7 @@ fn render(args: &RenderArgs, process_start: Instant) -> Result<(), String> {
     );
     if args.timings {
         print_timings(process_start.elapsed());
-        print_memory(&device, stats.instances as u64);
+        print_memory(&device, shown.instances, loading_heap_peak);
     }
     if validation_errors > 0 {
         return Err(format!(
@@ -422,9 +436,10 @@ fn peak_resident_bytes() -> Option<u64> {
     Some(kilobytes * 1024)
 }
 
-/// `--timings`: peak memory, device memory and the host's bytes per part. A CPU device
-/// (lavapipe) keeps device memory in host memory, so it is taken out of the resident peak.
-fn print_memory(device: &Device, parts: u64) {
+/// `--timings`: peak memory, device memory and the host's bytes per part, and cadr's own heap
+/// at its peak while loading (`loading_heap_peak`) and after. A CPU device (lavapipe) keeps
+/// device memory in host memory, so it is taken out of the resident peak.
+fn print_memory(device: &Device, parts: u64, loading_heap_peak: u64) {
     let (_, device_peak) = device.memory_in_use();
     let on_host = device.adapter().device_type == cvk::raw::PhysicalDeviceType::CPU;
     let Some(resident) = peak_resident_bytes() else {
@@ -447,6 +462,12 @@ fn print_memory(device: &Device, parts: u64) {
         },
         mb(host),
         host as f64 / parts.max(1) as f64
+    );
+    println!(
+        "heap:        cadr held {:.0} MB at most while loading, {:.0} MB at most after, {:.0} MB now",
+        mb(loading_heap_peak),
+        mb(cadr_core::host_heap::peak_bytes_in_use()),
+        mb(cadr_core::host_heap::bytes_in_use())
     );
 }
 

@@ -45,30 +45,26 @@ pub fn no_plugins_message(dirs: &[PathBuf]) -> String {
     )
 }
 
-/// Highlights the nodes of `scene` (their handles in `graph`: `nodes`) named one of `names`;
-/// a name that no node has is an error.
-pub fn highlight_named(
-    graph: &mut SceneGraph,
-    scene: &Scene,
-    nodes: &[NodeHandle],
-    names: &[String],
-) -> Result<(), String> {
+/// Highlights the graph's nodes named one of `names` (a scene node keeps its name in the
+/// graph); a name that no node has is an error.
+pub fn highlight_named(graph: &mut SceneGraph, names: &[String]) -> Result<(), String> {
     for name in names {
-        let mut found = false;
-        for (node, handle) in scene.nodes.iter().zip(nodes) {
-            if &node.name == name {
-                let flags = NodeFlags {
-                    highlighted: true,
-                    ..graph.node(*handle).map_err(|e| e.to_string())?.flags
-                };
-                graph.set_flags(*handle, flags).map_err(|e| e.to_string())?;
-                found = true;
-            }
-        }
-        if !found {
+        let named: Vec<NodeHandle> = graph
+            .nodes()
+            .filter(|(_, node)| &node.name == name)
+            .map(|(handle, _)| handle)
+            .collect();
+        if named.is_empty() {
             return Err(format!(
                 "--highlight {name}: no node of the scene is named so"
             ));
+        }
+        for handle in named {
+            let flags = NodeFlags {
+                highlighted: true,
+                ..graph.node(handle).map_err(|e| e.to_string())?.flags
+            };
+            graph.set_flags(handle, flags).map_err(|e| e.to_string())?;
         }
     }
     Ok(())
@@ -92,8 +88,8 @@ impl TechniqueSession {
         (width, height): (u32, u32),
         highlight: &[String],
     ) -> Result<Self, String> {
-        let (mut graph, nodes) = SceneGraph::from_scene(source).map_err(|e| e.to_string())?;
-        highlight_named(&mut graph, source, &nodes, highlight)?;
+        let (mut graph, _) = SceneGraph::from_scene(source).map_err(|e| e.to_string())?;
+        highlight_named(&mut graph, highlight)?;
         Self::from_graph(device, graph, registry, (width, height))
     }
 

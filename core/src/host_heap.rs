@@ -17,6 +17,15 @@ use std::sync::atomic::{AtomicU64, Ordering};
 /// Bytes allocated through [`CountingAllocator`] and not yet freed.
 static BYTES_IN_USE: AtomicU64 = AtomicU64::new(0);
 
+/// The most [`BYTES_IN_USE`] has reached since the start or the last [`reset_peak`].
+static PEAK_BYTES: AtomicU64 = AtomicU64::new(0);
+
+/// Counts `bytes` more in use, and the peak.
+fn count_allocated(bytes: usize) {
+    let now = BYTES_IN_USE.fetch_add(bytes as u64, Ordering::Relaxed) + bytes as u64;
+    PEAK_BYTES.fetch_max(now, Ordering::Relaxed);
+}
+
 /// The system's allocator, counting the bytes in use.
 pub struct CountingAllocator;
 
@@ -27,7 +36,7 @@ unsafe impl GlobalAlloc for CountingAllocator {
         // SAFETY: forwarded under the caller's contract.
         let pointer = unsafe { System.alloc(layout) };
         if !pointer.is_null() {
-            BYTES_IN_USE.fetch_add(layout.size() as u64, Ordering::Relaxed);
+            count_allocated(layout.size());
         }
         pointer
     }
@@ -36,7 +45,7 @@ unsafe impl GlobalAlloc for CountingAllocator {
         // SAFETY: forwarded under the caller's contract.
         let pointer = unsafe { System.alloc_zeroed(layout) };
         if !pointer.is_null() {
-            BYTES_IN_USE.fetch_add(layout.size() as u64, Ordering::Relaxed);
+            count_allocated(layout.size());
         }
         pointer
     }
@@ -51,7 +60,7 @@ unsafe impl GlobalAlloc for CountingAllocator {
         // SAFETY: forwarded under the caller's contract.
         let moved = unsafe { System.realloc(pointer, layout, new_size) };
         if !moved.is_null() {
-            BYTES_IN_USE.fetch_add(new_size as u64, Ordering::Relaxed);
+            count_allocated(new_size);
             BYTES_IN_USE.fetch_sub(layout.size() as u64, Ordering::Relaxed);
         }
         moved
@@ -62,4 +71,15 @@ unsafe impl GlobalAlloc for CountingAllocator {
 /// where the program did not install [`CountingAllocator`].
 pub fn bytes_in_use() -> u64 {
     BYTES_IN_USE.load(Ordering::Relaxed)
+}
+
+/// The most bytes cadr held at once since the program started or since [`reset_peak`]; 0 where
+/// the program did not install [`CountingAllocator`].
+pub fn peak_bytes_in_use() -> u64 {
+    PEAK_BYTES.load(Ordering::Relaxed)
+}
+
+/// Starts measuring the peak again from the bytes in use now.
+pub fn reset_peak() {
+    PEAK_BYTES.store(bytes_in_use(), Ordering::Relaxed);
 }

@@ -14,7 +14,8 @@ use super::{
     VERSION,
 };
 use crate::scene::{
-    Geometry, Material, MeshRef, Node, NodeIndex, Part, PartOverride, Scene, Vertex,
+    Geometry, GeometrySink, KeepInScene, Material, MeshRef, Node, NodeIndex, Part, PartOverride,
+    Scene, Vertex,
 };
 
 /// Size of `CSFMaterialGLTF2Meta`, the glTF 2 material packet.
@@ -22,6 +23,41 @@ const GLTF2_PACKET_SIZE: usize = 940;
 
 /// The scene a CSF file describes; `name` names it.
 pub fn scene_from_csf(file: &CsfFile, name: &str) -> Result<Scene, CsfError> {
+    check_supported(file)?;
+    let mut scene = Scene {
+        name: name.to_owned(),
+        ..Scene::default()
+    };
+    for (g, geometry) in file.geometries.iter().enumerate() {
+        add_csf_geometry(&mut scene, file, g, geometry, &mut KeepInScene)?;
+    }
+    add_csf_nodes(&mut scene, file)?;
+    Ok(scene)
+}
+
+/// The scene of a CSF file's (decompressed) bytes, read and converted one geometry at a time:
+/// each is validated and handed to `sink` (see [`GeometrySink`]) as soon as it is read, so
+/// that its CSF arrays and the converted geometry are the only ones held beyond the sink's.
+pub fn scene_from_csf_bytes(
+    data: &[u8],
+    name: &str,
+    sink: &mut dyn GeometrySink,
+) -> Result<Scene, CsfError> {
+    let mut scene = Scene {
+        name: name.to_owned(),
+        ..Scene::default()
+    };
+    let file = super::read::read_csf_through(data, &mut |file, g, geometry| {
+        check_supported(file)?;
+        add_csf_geometry(&mut scene, file, g, &geometry, sink)
+    })?;
+    check_supported(&file)?;
+    add_csf_nodes(&mut scene, &file)?;
+    Ok(scene)
+}
+
+/// Refuses what cadr does not read: triangle strips.
+fn check_supported(file: &CsfFile) -> Result<(), CsfError> {
     if file.file_flags & FLAG_STRIPS != 0 {
         return Err(error(
             "header",
@@ -29,16 +65,27 @@ pub fn scene_from_csf(file: &CsfFile, name: &str) -> Result<Scene, CsfError> {
             "triangle strips (flag 2) are not supported",
         ));
     }
-    let mut scene = Scene {
-        name: name.to_owned(),
-        ..Scene::default()
-    };
-    for (g, geometry) in file.geometries.iter().enumerate() {
-        let name = meta_name(&file.geometry_metas, g).unwrap_or_else(|| format!("geometry {g}"));
-        scene
-            .geometries
-            .push(geometry_from_csf(geometry, g, name, file.file_flags)?);
-    }
+    Ok(())
+}
+
+/// Converts geometry `g` of `file`, validates it and hands it to `sink` as the scene's next.
+fn add_csf_geometry(
+    scene: &mut Scene,
+    file: &CsfFile,
+    g: usize,
+    geometry: &CsfGeometry,
+    sink: &mut dyn GeometrySink,
+) -> Result<(), CsfError> {
+    let name = meta_name(&file.geometry_metas, g).unwrap_or_else(|| format!("geometry {g}"));
+    let converted = geometry_from_csf(geometry, g, name, file.file_flags)?;
+    scene
+        .add_geometry(sink, converted)
+        .map_err(|e| error(format!("geometry {g}"), "content", e.0))?;
+    Ok(())
+}
+
+/// The scene's materials, nodes and roots from `file`'s.
+fn add_csf_nodes(scene: &mut Scene, file: &CsfFile) -> Result<(), CsfError> {
     scene.materials = file.materials.iter().map(material_from_csf).collect();
     for (n, node) in file.nodes.iter().enumerate() {
         let name = meta_name(&file.node_metas, n).unwrap_or_else(|| format!("node {n}"));
@@ -89,7 +136,7 @@ pub fn scene_from_csf(file: &CsfFile, name: &str) -> Result<Scene, CsfError> {
     } else {
         (0..file.nodes.len() as NodeIndex).collect()
     };
-    Ok(scene)
+    Ok(())
 }
 
 fn meta_name(metas: &[CsfMeta], index: usize) -> Option<String> {

@@ -13,8 +13,8 @@ mod convert;
 mod read;
 mod write;
 
-pub use convert::{csf_from_scene, scene_from_csf};
-pub use read::read_csf;
+pub use convert::{csf_from_scene, scene_from_csf, scene_from_csf_bytes};
+pub use read::{read_csf, read_csf_through, TakeCsfGeometry};
 pub use write::write_csf;
 
 use std::io::Read as _;
@@ -302,6 +302,36 @@ pub fn csf_from_bytes(raw: &[u8], gzip: bool, path: &Path) -> Result<CsfFile, Cs
         raw
     };
     read_csf(bytes).map_err(|source| CsfFileError::Malformed {
+        path: path.to_owned(),
+        source,
+    })
+}
+
+/// The scene of a CSF file's bytes held in memory (gzip-compressed when `gzip` is true), read
+/// and converted one geometry at a time, each handed to `sink` (see [`scene_from_csf_bytes`]);
+/// `path` names the file in errors, and the scene is named after it.
+pub fn csf_scene_from_bytes(
+    raw: &[u8],
+    gzip: bool,
+    path: &Path,
+    sink: &mut dyn crate::scene::GeometrySink,
+) -> Result<crate::scene::Scene, CsfFileError> {
+    let decompressed;
+    let bytes = if gzip {
+        decompressed =
+            gunzip_within(raw, decompression_limit()).map_err(|source| CsfFileError::Io {
+                path: path.to_owned(),
+                source,
+            })?;
+        &decompressed[..]
+    } else {
+        raw
+    };
+    let name = path
+        .file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    scene_from_csf_bytes(bytes, &name, sink).map_err(|source| CsfFileError::Malformed {
         path: path.to_owned(),
         source,
     })

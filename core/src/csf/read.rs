@@ -189,6 +189,23 @@ fn product(structure: &str, field: &'static str, factors: &[u64]) -> Result<u64,
 
 /// Parses a CSF file of version 2 to 6 (already decompressed).
 pub fn read_csf(data: &[u8]) -> Result<CsfFile, CsfError> {
+    let mut geometries = Vec::new();
+    let mut file = read_csf_through(data, &mut |_, _, geometry| {
+        geometries.push(geometry);
+        Ok(())
+    })?;
+    file.geometries = geometries;
+    Ok(file)
+}
+
+/// What takes each geometry of a file [`read_csf_through`] reads: the file read so far (all but
+/// its geometries), the geometry's index, and the geometry.
+pub type TakeCsfGeometry<'t> = dyn FnMut(&CsfFile, usize, CsfGeometry) -> Result<(), CsfError> + 't;
+
+/// [`read_csf`] that hands each geometry to `take` as soon as it is read, in order, after
+/// everything else of the file is read and checked, and returns the file without its
+/// geometries: so that a reader converting them one by one never holds them all.
+pub fn read_csf_through(data: &[u8], take: &mut TakeCsfGeometry<'_>) -> Result<CsfFile, CsfError> {
     let (version, header_size) = check_header(data)?;
     let header = Fields(data);
     let raw_flags = header.u32(8);
@@ -223,10 +240,17 @@ pub fn read_csf(data: &[u8]) -> Result<CsfFile, CsfError> {
         GEOMETRY_SIZE as u64,
         8,
     )?;
-    let geometries = geometry_bytes
+    // The nodes are checked against each geometry's part count, read ahead of its arrays.
+    let geometry_parts = geometry_bytes
         .chunks_exact(GEOMETRY_SIZE)
         .enumerate()
-        .map(|(index, bytes)| read_geometry(&reader, version, file_flags, index, Fields(bytes)))
+        .map(|(index, bytes)| {
+            count(
+                &format!("geometry {index}"),
+                "numParts",
+                Fields(bytes).i32(64),
+            )
+        })
         .collect::<Result<Vec<_>, _>>()?;
 
     let material_bytes = reader.array(
@@ -261,7 +285,7 @@ pub fn read_csf(data: &[u8]) -> Result<CsfFile, CsfError> {
                 root,
                 index,
                 Fields(bytes),
-                &geometries,
+                &geometry_parts,
                 num_materials,
                 num_nodes,
             )
@@ -269,37 +293,57 @@ pub fn read_csf(data: &[u8]) -> Result<CsfFile, CsfError> {
         .collect::<Result<Vec<_>, _>>()?;
     check_acyclic(&nodes)?;
 
-    let (mut node_metas, mut geometry_metas, mut file_meta) = (Vec::new(), Vec::new(), None);
-    if version >= 5 {
-        node_metas = read_metas(
-            &reader,
-            "nodeMetasOFFSET",
-            "node meta",
-            header.u64(64),
-            num_nodes,
-        )?;
-        geometry_metas = read_metas(
-            &reader,
-            "geometryMetasOFFSET",
-            "geometry meta",
-            header.u64(72),
-            num_geometries,
-        )?;
-        file_meta = read_metas(&reader, "fileMetaOFFSET", "file meta", header.u64(80), 1)?
-            .into_iter()
-            .next();
-    }
-    Ok(CsfFile {
+    let (node_metas, geometry_metas, file_meta) = if version >= 5 {
+        read_all_metas(&reader, &header, num_nodes, num_geometries)?
+    } else {
+        (Vec::new(), Vec::new(), None)
+    };
+    let file = CsfFile {
         version,
         file_flags,
         root,
-        geometries,
+        geometries: Vec::new(),
         materials,
         nodes,
         node_metas,
         geometry_metas,
         file_meta,
-    })
+    };
+    for (index, bytes) in geometry_bytes.chunks_exact(GEOMETRY_SIZE).enumerate() {
+        let geometry = read_geometry(&reader, version, file_flags, index, Fields(bytes))?;
+        take(&file, index, geometry)?;
+    }
+    Ok(file)
+}
+
+/// A file's node, geometry and file metas.
+type Metas = (Vec<CsfMeta>, Vec<CsfMeta>, Option<CsfMeta>);
+
+/// The node, geometry and file metas of a file of version 5 or later.
+fn read_all_metas(
+    reader: &Reader<'_>,
+    header: &Fields<'_>,
+    num_nodes: u64,
+    num_geometries: u64,
+) -> Result<Metas, CsfError> {
+    let node_metas = read_metas(
+        reader,
+        "nodeMetasOFFSET",
+        "node meta",
+        header.u64(64),
+        num_nodes,
+    )?;
+    let geometry_metas = read_metas(
+        reader,
+        "geometryMetasOFFSET",
+        "geometry meta",
+        header.u64(72),
+        num_geometries,
+    )?;
+    let file_meta = read_metas(reader, "fileMetaOFFSET", "file meta", header.u64(80), 1)?
+        .into_iter()
+        .next();
+    Ok((node_metas, geometry_metas, file_meta))
 }
 
 /// The file's version and header size, once its size, magic and version are checked.
@@ -735,23 +779,26 @@ fn read_node(
     root: i32,
     index: usize,
     fields: Fields<'_>,
-    geometries: &[CsfGeometry],
+    geometry_parts: &[u64],
     num_materials: u64,
     num_nodes: u64,
 ) -> Result<CsfNode, CsfError> {
     let s = format!("node {index}");
     let s = s.as_str();
     let geometry = fields.i32(128);
-    if geometry < -1 || geometry >= 0 && geometry as usize >= geometries.len() {
+    if geometry < -1 || geometry >= 0 && geometry as usize >= geometry_parts.len() {
         return Err(error(
             s,
             "geometryIDX",
-            format!("{geometry}, but there are {} geometries", geometries.len()),
+            format!(
+                "{geometry}, but there are {} geometries",
+                geometry_parts.len()
+            ),
         ));
     }
     let num_parts = count(s, "numParts", fields.i32(132))?;
     let expected_parts = if geometry >= 0 {
-        geometries[geometry as usize].parts.len() as u64
+        geometry_parts[geometry as usize]
     } else {
         0
     };

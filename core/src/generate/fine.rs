@@ -10,7 +10,9 @@ use std::f64::consts::{PI, TAU};
 use glam::{DMat4, DVec3};
 
 use super::grid::hue_to_rgb;
-use crate::scene::{Geometry, Material, MeshRef, Node, Part, Scene, Vertex};
+use crate::scene::{
+    Geometry, GeometrySink, KeepInScene, Material, MeshRef, Node, Part, Scene, Vertex,
+};
 
 /// Variants of each unique part (sizes and tooth counts), so units differ.
 const VARIANTS: u32 = 4;
@@ -106,6 +108,9 @@ fn line(v: f64, a: (f64, f64), b: (f64, f64)) -> (f64, f64) {
 
 /// Closes a geometry's triangles into one part.
 fn one_part(mut geometry: Geometry) -> Geometry {
+    // Made by pushing: the arrays keep no room beyond what they hold.
+    geometry.vertices.shrink_to_fit();
+    geometry.indices.shrink_to_fit();
     geometry.parts = vec![Part {
         first_index: 0,
         index_count: geometry.indices.len() as u32,
@@ -277,6 +282,13 @@ fn shaft(detail: u32, variant: u32) -> Geometry {
 /// `units` units of a flange, gear, shaft and eight bolts with washers, at `detail`; where
 /// `unique`, every unit with geometries of its own (copies of its variant's).
 pub fn fine(units: u32, detail: u32, unique: bool) -> Scene {
+    fine_through(units, detail, unique, &mut KeepInScene)
+}
+
+/// [`fine`], handing each geometry to `sink` as soon as it is made (see [`GeometrySink`]): with
+/// `unique`, a unit's copies go as the unit is made, so that a sink that pages them never holds
+/// more than one unit's.
+pub fn fine_through(units: u32, detail: u32, unique: bool, sink: &mut dyn GeometrySink) -> Scene {
     let detail = detail.max(1);
     let mut scene = Scene {
         name: if unique {
@@ -295,21 +307,27 @@ pub fn fine(units: u32, detail: u32, unique: bool) -> Scene {
             ..Material::default()
         })
         .collect();
-    // Geometry slots: bolt, washer, then per variant a flange, a gear and a shaft.
-    scene.geometries.push(bolt(detail));
-    scene.geometries.push(washer(detail));
+    // Geometry slots: bolt, washer, then per variant a flange, a gear and a shaft. With
+    // `unique`, they are templates each unit copies.
+    let mut templates = vec![bolt(detail), washer(detail)];
     for variant in 0..VARIANTS {
-        scene.geometries.push(flange(detail, variant));
-        scene.geometries.push(gear(detail, variant));
-        scene.geometries.push(shaft(detail, variant));
+        templates.extend([
+            flange(detail, variant),
+            gear(detail, variant),
+            shaft(detail, variant),
+        ]);
     }
-    // With `unique`, the geometries above are templates each unit copies.
-    let shared_geometries = if unique {
-        std::mem::take(&mut scene.geometries)
-    } else {
-        Vec::new()
+    // Made valid (the tests check it), so they go to the sink unchecked.
+    let mut keep = |scene: &mut Scene, geometry: Geometry| {
+        let index = scene.geometries.len() as u32;
+        let kept = sink.take(index, geometry);
+        scene.geometries.push(kept);
     };
-    let mut unit_geometries: Vec<Geometry> = Vec::new();
+    if !unique {
+        for template in std::mem::take(&mut templates) {
+            keep(&mut scene, template);
+        }
+    }
     let mesh = |geometry: u32, material: u32| {
         Some(MeshRef {
             geometry,
@@ -328,6 +346,16 @@ pub fn fine(units: u32, detail: u32, unique: bool) -> Scene {
             0.0,
             f64::from(unit / side) * PITCH,
         );
+        // Bolt, washer, flange, gear, shaft: the shared ones, or copies of its own.
+        let [bolt, washer, first] = if unique {
+            let own = scene.geometries.len() as u32;
+            for shared in [0, 1, 2 + 3 * variant, 3 + 3 * variant, 4 + 3 * variant] {
+                keep(&mut scene, templates[shared as usize].clone());
+            }
+            [own, own + 1, own + 2]
+        } else {
+            [0, 1, 2 + 3 * variant]
+        };
         let unit_node = scene.nodes.len() as u32;
         scene.nodes[0].children.push(unit_node);
         scene.nodes.push(Node {
@@ -343,16 +371,6 @@ pub fn fine(units: u32, detail: u32, unique: bool) -> Scene {
                 children: Vec::new(),
                 mesh: mesh_ref,
             });
-        };
-        // Bolt, washer, flange, gear, shaft: the shared ones, or copies of its own.
-        let [bolt, washer, first] = if unique {
-            let own = (unit_geometries.len()) as u32;
-            for shared in [0, 1, 2 + 3 * variant, 3 + 3 * variant, 4 + 3 * variant] {
-                unit_geometries.push(shared_geometries[shared as usize].clone());
-            }
-            [own, own + 1, own + 2]
-        } else {
-            [0, 1, 2 + 3 * variant]
         };
         add("flange".into(), DMat4::IDENTITY, mesh(first, 0));
         add(
@@ -381,9 +399,6 @@ pub fn fine(units: u32, detail: u32, unique: bool) -> Scene {
             );
         }
     }
-    if unique {
-        scene.geometries = unit_geometries;
-    }
     scene
 }
 
@@ -395,6 +410,7 @@ mod tests {
     fn parts_have_the_triangles_the_detail_asks_for_and_normals_that_are_unit() {
         for detail in [1, 4] {
             let scene = fine(2, detail, false);
+            scene.validate().expect("generated geometry is valid");
             for geometry in &scene.geometries {
                 let triangles = geometry.indices.len() / 3;
                 let low = 500 * (detail * detail) as usize;

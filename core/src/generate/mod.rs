@@ -20,12 +20,12 @@ mod shapes;
 
 pub use assembly::{assembly, AssemblySpec};
 pub use cabinet::cabinet;
-pub use fine::fine;
+pub use fine::{fine, fine_through};
 pub use grid::grid;
 pub use rng::Rng;
 pub use shapes::{prism_triangles, GeometryBuilder};
 
-use crate::scene::Scene;
+use crate::scene::{GeometrySink, Scene};
 
 /// The most parts `gen:grid` generates.
 pub const MAX_GRID_PARTS: u64 = 50_000_000;
@@ -225,6 +225,28 @@ impl GeneratorSpec {
 
 /// Generates the scene for `spec`.
 pub fn generate(spec: &GeneratorSpec) -> Scene {
+    generate_through(spec, &mut crate::scene::KeepInScene)
+}
+
+/// [`generate`], handing each geometry to `sink` (see [`GeometrySink`]). `gen:fine`, the
+/// generator that reaches models larger than memory, hands each as soon as it is made; the
+/// others make their (small) scenes whole first.
+pub fn generate_through(spec: &GeneratorSpec, sink: &mut dyn GeometrySink) -> Scene {
+    if let GeneratorSpec::Fine {
+        units,
+        detail,
+        unique,
+    } = spec
+    {
+        return fine_through(*units, *detail, *unique, sink);
+    }
+    let mut scene = generate_whole(spec);
+    scene.hand_geometries_to(sink);
+    scene
+}
+
+/// The scene of a generator that makes it whole.
+fn generate_whole(spec: &GeneratorSpec) -> Scene {
     match spec {
         GeneratorSpec::Demo => assembly(&AssemblySpec {
             name: "demo".into(),

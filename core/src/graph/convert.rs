@@ -4,6 +4,7 @@ use std::collections::HashMap;
 
 use glam::DMat4;
 
+use super::paging::StoredGeometry;
 use super::{
     GeometryHandle, GraphError, MaterialHandle, NodeHandle, NodeKind, SceneGraph, TextureHandle,
 };
@@ -109,7 +110,8 @@ pub(super) fn scene_to_graph(scene: &Scene) -> Result<(SceneGraph, Vec<NodeHandl
     scene.validate().map_err(|e| GraphError::Invalid(e.0))?;
     let mut graph = SceneGraph::new();
     let root = graph.root;
-    let (handles, _) = add_scene(&mut graph, scene, root)?;
+    let geometries = create_geometries(&mut graph, scene)?;
+    let (handles, _) = add_scene(&mut graph, scene, geometries, root)?;
     graph.events.clear();
     Ok((graph, handles))
 }
@@ -125,8 +127,46 @@ pub(super) fn import_scene(
 ) -> Result<Imported, GraphError> {
     scene.validate().map_err(|e| GraphError::Invalid(e.0))?;
     graph.node(parent)?;
+    let geometries = create_geometries(graph, scene)?;
+    add_scene_under_group(graph, scene, geometries, parent)
+}
+
+/// [`import_scene`] for the outline a loader made through the graph's
+/// [`super::intake::GeometryIntake`]: `taken` are its geometries, which the graph now owns (the
+/// outline's are stand-ins). The outline and `parent` are checked first.
+pub(super) fn import_outline(
+    graph: &mut SceneGraph,
+    outline: &Scene,
+    taken: Vec<StoredGeometry>,
+    parent: NodeHandle,
+) -> Result<Imported, GraphError> {
+    let geometries = taken
+        .into_iter()
+        .map(|stored| graph.adopt_geometry(stored))
+        .collect();
+    add_scene_under_group(graph, outline, geometries, parent)
+}
+
+/// A copy of each of the scene's geometries in the graph.
+fn create_geometries(
+    graph: &mut SceneGraph,
+    scene: &Scene,
+) -> Result<Vec<GeometryHandle>, GraphError> {
+    (scene.geometries.iter())
+        .map(|g| graph.create_geometry(g.clone()))
+        .collect()
+}
+
+/// Adds the scene (its geometries already in the graph as `geometries`) below `parent` under a
+/// new Group named after it.
+fn add_scene_under_group(
+    graph: &mut SceneGraph,
+    scene: &Scene,
+    geometries: Vec<GeometryHandle>,
+    parent: NodeHandle,
+) -> Result<Imported, GraphError> {
     let root = graph.create_group(&scene.name);
-    let (_, created) = add_scene(graph, scene, root)?;
+    let (_, created) = add_scene(graph, scene, geometries, root)?;
     graph.add_child(parent, root)?;
     Ok(Imported {
         root,
@@ -137,11 +177,13 @@ pub(super) fn import_scene(
     })
 }
 
-/// Creates the scene's objects and hangs its roots under `parent`; returns the handle of each
-/// scene node and everything created.
+/// Creates the scene's objects (its geometries are in the graph already: `geometries`) and
+/// hangs its roots under `parent`; returns the handle of each scene node and everything
+/// created.
 fn add_scene(
     graph: &mut SceneGraph,
     scene: &Scene,
+    geometries: Vec<GeometryHandle>,
     parent: NodeHandle,
 ) -> Result<(Vec<NodeHandle>, Imported), GraphError> {
     let mut created = Imported {
@@ -151,11 +193,6 @@ fn add_scene(
         materials: Vec::new(),
         textures: Vec::new(),
     };
-    let geometries = scene
-        .geometries
-        .iter()
-        .map(|g| graph.create_geometry(g.clone()))
-        .collect::<Result<Vec<_>, _>>()?;
     let textures = scene
         .textures
         .iter()

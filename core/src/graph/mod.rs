@@ -8,11 +8,13 @@
 //! Local matrices are `f64`: CAD assemblies span kilometres with micrometre detail.
 
 mod convert;
+mod intake;
 mod page_file;
 mod paging;
 mod slots;
 
 pub use convert::Imported;
+pub use intake::LoadedGeometries;
 pub use page_file::Page;
 pub use paging::{GeometryInfo, GeometryMemory, GeometrySource};
 pub use slots::{Handle, Slots};
@@ -735,6 +737,15 @@ impl SceneGraph {
         }))
     }
 
+    /// Gives the graph a geometry its paging has already stored (see [`intake`]).
+    fn adopt_geometry(&mut self, stored: paging::StoredGeometry) -> GeometryHandle {
+        self.geometries_generation += 1;
+        self.geometries.insert(GeometryEntry {
+            stored,
+            users: Vec::new(),
+        })
+    }
+
     /// Destroys a geometry no Geo node uses.
     pub fn destroy_geometry(&mut self, geometry: GeometryHandle) -> Result<(), GraphError> {
         let entry = self
@@ -1216,6 +1227,44 @@ impl SceneGraph {
     /// changes nothing.
     pub fn import(&mut self, scene: &Scene, parent: NodeHandle) -> Result<Imported, GraphError> {
         convert::import_scene(self, scene, parent)
+    }
+
+    /// Adds a scene loaded for the graph (`crate::load::SceneSource::load_for_graph`): its
+    /// outline, whose geometries are stand-ins, and the geometries themselves, which the graph
+    /// adopts where they are (in memory or in their page file, which the graph then keeps). As
+    /// [`SceneGraph::import`] does, the scene goes below `parent` under a new Group named
+    /// after it, and `parent` and the outline are checked first: a refused import changes
+    /// nothing (the geometries go, with their page file).
+    pub fn import_loaded(
+        &mut self,
+        outline: &Scene,
+        geometries: LoadedGeometries,
+        parent: NodeHandle,
+    ) -> Result<Imported, GraphError> {
+        self.node(parent)?;
+        outline
+            .validate_outline()
+            .map_err(|e| GraphError::Invalid(e.0))?;
+        if geometries.len() != outline.geometries.len() {
+            return Err(GraphError::Invalid(format!(
+                "the scene '{}' has {} geometries, but {} were loaded for it",
+                outline.name,
+                outline.geometries.len(),
+                geometries.len()
+            )));
+        }
+        crate::timings::time(crate::timings::Phase::SceneBuild, || {
+            let LoadedGeometries { paging, taken } = geometries;
+            self.paging.absorb(paging);
+            convert::import_outline(self, outline, taken, parent)
+        })
+    }
+
+    /// Bytes of geometry the graph can still keep in memory: its memory limit
+    /// ([`SceneGraph::set_geometry_memory_limit`]) less what it keeps there. A load for the
+    /// graph keeps this much in memory and pages the rest.
+    pub fn geometry_memory_left(&self) -> u64 {
+        self.paging.memory_left()
     }
 
     /// The live geometry in slot `index`, if any.

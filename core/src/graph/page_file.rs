@@ -139,6 +139,11 @@ impl PageFile {
         })
     }
 
+    /// Whether `page` is a record of this file.
+    pub fn holds(&self, page: &Page) -> bool {
+        Arc::ptr_eq(&self.file, &page.file)
+    }
+
     /// Where the file is.
     pub fn path(&self) -> &Path {
         &self.file.path
@@ -152,8 +157,8 @@ impl PageFile {
     /// Writes `geometry` as a new record (in the smallest free room it fits, else at the end).
     /// On failure (a full disk) nothing is taken.
     pub fn write(&mut self, geometry: &Geometry) -> Result<Page, String> {
-        let bytes = encode(geometry);
-        let len = bytes.len() as u64;
+        let record = Record::of(geometry);
+        let len = record.len();
         let room = (self.free.iter().enumerate())
             .filter(|(_, &(_, room))| room >= len)
             .min_by_key(|(_, &(_, room))| room)
@@ -162,7 +167,7 @@ impl PageFile {
         {
             let mut file = (self.file.file.lock()).unwrap_or_else(|p| p.into_inner());
             file.seek(SeekFrom::Start(offset))
-                .and_then(|_| file.write_all(&bytes))
+                .and_then(|_| (record.pieces().iter()).try_for_each(|piece| file.write_all(piece)))
                 .map_err(|e| {
                     format!(
                         "geometry '{}' could not be written to page file {}: {e}",
@@ -180,13 +185,11 @@ impl PageFile {
             }
             None => self.end += len,
         }
-        let mut crc = flate2::Crc::new();
-        crc.update(&bytes);
         Ok(Page {
             file: self.file.clone(),
             offset,
             len,
-            crc: crc.sum(),
+            crc: record.crc(),
         })
     }
 
@@ -258,47 +261,73 @@ fn remove_orphans(directory: &Path) {
     }
 }
 
-/// The record of `geometry`: the header, the name (padded to 4 bytes), then each array.
-fn encode(geometry: &Geometry) -> Vec<u8> {
-    let name = geometry.name.as_bytes();
-    let parts: Vec<[u32; 4]> = (geometry.parts.iter())
-        .map(|p| {
-            [
-                p.first_index,
-                p.index_count,
-                p.first_wire_index,
-                p.wire_index_count,
-            ]
-        })
-        .collect();
-    let counts = [
-        name.len(),
-        geometry.vertices.len(),
-        geometry.indices.len(),
-        geometry.wire_indices.len(),
-        parts.len(),
-        geometry.attributes.len(),
-    ];
-    let mut bytes = Vec::with_capacity(
-        HEADER_BYTES
-            + name.len().next_multiple_of(4)
-            + std::mem::size_of_val(&geometry.vertices[..])
-            + 4 * (geometry.indices.len() + geometry.wire_indices.len())
-            + 16 * parts.len()
-            + std::mem::size_of_val(&geometry.attributes[..]),
-    );
-    bytes.extend_from_slice(&MAGIC);
-    for count in counts {
-        bytes.extend_from_slice(&(count as u32).to_le_bytes());
+/// A geometry's record, in the pieces it is written from (so that no copy of its arrays is
+/// made): the magic, the six counts and the padded name, then the vertices, indices, wire
+/// indices, parts and attributes.
+struct Record<'g> {
+    head: Vec<u8>,
+    parts: Vec<[u32; 4]>,
+    geometry: &'g Geometry,
+}
+
+impl<'g> Record<'g> {
+    fn of(geometry: &'g Geometry) -> Self {
+        let name = geometry.name.as_bytes();
+        let parts: Vec<[u32; 4]> = (geometry.parts.iter())
+            .map(|p| {
+                [
+                    p.first_index,
+                    p.index_count,
+                    p.first_wire_index,
+                    p.wire_index_count,
+                ]
+            })
+            .collect();
+        let counts = [
+            name.len(),
+            geometry.vertices.len(),
+            geometry.indices.len(),
+            geometry.wire_indices.len(),
+            parts.len(),
+            geometry.attributes.len(),
+        ];
+        let mut head = Vec::with_capacity(HEADER_BYTES + name.len().next_multiple_of(4));
+        head.extend_from_slice(&MAGIC);
+        for count in counts {
+            head.extend_from_slice(&(count as u32).to_le_bytes());
+        }
+        head.extend_from_slice(name);
+        head.resize(head.len().next_multiple_of(4), 0);
+        Self {
+            head,
+            parts,
+            geometry,
+        }
     }
-    bytes.extend_from_slice(name);
-    bytes.resize(bytes.len().next_multiple_of(4), 0);
-    bytes.extend_from_slice(bytemuck::cast_slice(&geometry.vertices));
-    bytes.extend_from_slice(bytemuck::cast_slice(&geometry.indices));
-    bytes.extend_from_slice(bytemuck::cast_slice(&geometry.wire_indices));
-    bytes.extend_from_slice(bytemuck::cast_slice(&parts));
-    bytes.extend_from_slice(bytemuck::cast_slice(&geometry.attributes));
-    bytes
+
+    /// The record's bytes, piece by piece.
+    fn pieces(&self) -> [&[u8]; 6] {
+        [
+            &self.head,
+            bytemuck::cast_slice(&self.geometry.vertices),
+            bytemuck::cast_slice(&self.geometry.indices),
+            bytemuck::cast_slice(&self.geometry.wire_indices),
+            bytemuck::cast_slice(&self.parts),
+            bytemuck::cast_slice(&self.geometry.attributes),
+        ]
+    }
+
+    fn len(&self) -> u64 {
+        self.pieces().iter().map(|piece| piece.len() as u64).sum()
+    }
+
+    fn crc(&self) -> u32 {
+        let mut crc = flate2::Crc::new();
+        for piece in self.pieces() {
+            crc.update(piece);
+        }
+        crc.sum()
+    }
 }
 
 /// Reads `buffer` whole from `source`, adding its bytes to `crc`.
@@ -312,7 +341,7 @@ fn read_into(
     Ok(())
 }
 
-/// Reads a record of `len` bytes made by [`encode`] from `source` into the geometry's arrays,
+/// Reads a record of `len` bytes (a [`Record`]) from `source` into the geometry's arrays,
 /// adding its bytes to `crc`; `Ok(None)` where its header is not one or its counts do not add
 /// up to `len` (checked before anything of their size is allocated).
 fn decode(
@@ -470,7 +499,8 @@ mod tests {
     fn malformed_records_decode_to_none() {
         let decoded =
             |bytes: &[u8], len: usize| decode(&mut &bytes[..], len as u64, &mut flate2::Crc::new());
-        let bytes = encode(&triangle("a", 0.0));
+        let geometry = triangle("a", 0.0);
+        let bytes = Record::of(&geometry).pieces().concat();
         assert_eq!(
             decoded(&bytes, bytes.len()).unwrap(),
             Some(triangle("a", 0.0))

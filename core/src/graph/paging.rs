@@ -72,7 +72,8 @@ pub struct GeometryMemory {
     pub paged_bytes: u64,
     /// Geometries in the page file.
     pub paged_geometries: u64,
-    /// The page file, once one is made.
+    /// The page file new records go to, once one is made (a graph that adopted loaded
+    /// geometries also keeps the loads' files).
     pub page_file: Option<PathBuf>,
 }
 
@@ -142,7 +143,9 @@ pub(super) struct Paging {
     limit: u64,
     resident_bytes: u64,
     paged_geometries: u64,
-    file: Option<PageFile>,
+    /// Its page files: the one it writes to last; more after it adopted loaded geometries
+    /// ([`Paging::absorb`]). A file whose records are all freed goes, but for the last.
+    files: Vec<PageFile>,
     /// Whether a failure to write the page file was reported (once: the geometries then stay
     /// in memory).
     failure_reported: bool,
@@ -155,7 +158,7 @@ impl Paging {
             limit: crate::memory_budget::budget().unwrap_or(u64::MAX) / 2,
             resident_bytes: 0,
             paged_geometries: 0,
-            file: None,
+            files: Vec::new(),
             failure_reported: false,
         }
     }
@@ -192,11 +195,26 @@ impl Paging {
     }
 
     fn page_out(&mut self, geometry: &Geometry) -> Result<Page, String> {
-        let file = match &mut self.file {
-            Some(file) => file,
-            None => self.file.insert(PageFile::create()?),
-        };
-        file.write(geometry)
+        if self.files.is_empty() {
+            self.files.push(PageFile::create()?);
+        }
+        let last = self.files.len() - 1;
+        self.files[last].write(geometry)
+    }
+
+    /// Takes over what `other` keeps (the geometries it stored now belong to this paging):
+    /// its bytes in memory, its paged geometries and its page files.
+    pub(super) fn absorb(&mut self, other: Paging) {
+        self.resident_bytes += other.resident_bytes;
+        self.paged_geometries += other.paged_geometries;
+        // Ours stays last: new records keep going to it.
+        let ours = std::mem::replace(&mut self.files, other.files);
+        self.files.extend(ours);
+    }
+
+    /// Bytes the limit leaves for geometries kept in memory.
+    pub(super) fn memory_left(&self) -> u64 {
+        self.limit.saturating_sub(self.resident_bytes)
     }
 
     /// Forgets a geometry kept by [`Paging::store`] (destroyed or replaced).
@@ -205,8 +223,12 @@ impl Paging {
             StoredGeometry::Resident(geometry) => self.resident_bytes -= host_bytes(geometry),
             StoredGeometry::Paged { page, .. } => {
                 self.paged_geometries -= 1;
-                if let Some(file) = &mut self.file {
-                    file.free(page);
+                let Some(at) = self.files.iter().position(|f| f.holds(page)) else {
+                    return;
+                };
+                self.files[at].free(page);
+                if self.files[at].bytes_in_use() == 0 && at + 1 < self.files.len() {
+                    self.files.remove(at);
                 }
             }
         }
@@ -215,9 +237,9 @@ impl Paging {
     pub(super) fn memory(&self) -> GeometryMemory {
         GeometryMemory {
             resident_bytes: self.resident_bytes,
-            paged_bytes: self.file.as_ref().map_or(0, PageFile::bytes_in_use),
+            paged_bytes: self.files.iter().map(PageFile::bytes_in_use).sum(),
             paged_geometries: self.paged_geometries,
-            page_file: self.file.as_ref().map(|f| f.path().to_path_buf()),
+            page_file: self.files.last().map(|f| f.path().to_path_buf()),
         }
     }
 }

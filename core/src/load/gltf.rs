@@ -7,6 +7,7 @@
 //! transforms (`KHR_texture_transform`) and alpha modes; primitives keep the texture
 //! coordinates their material samples and their vertex colours.
 
+use std::collections::hash_map::Entry;
 use std::collections::HashMap;
 use std::path::Path;
 
@@ -18,8 +19,8 @@ use gltf::mesh::Mode;
 use super::gltf_files::{percent_decode, read_buffer_file};
 use super::LoadError;
 use crate::scene::{
-    AlphaMode, Geometry, Material, MeshRef, Node, Part, Scene, TextureRef, UvTransform, Vertex,
-    VertexAttributes,
+    AlphaMode, Geometry, GeometrySink, Material, MeshRef, Node, Part, Scene, TextureRef,
+    UvTransform, Vertex, VertexAttributes,
 };
 
 /// The glTF crate's validation reads each primitive's POSITION accessor before it checks that
@@ -80,6 +81,16 @@ fn check_glb_header(bytes: &[u8]) -> Result<(), String> {
 
 /// Loads glTF from `bytes`; `path` names the file in errors and locates external buffers.
 pub fn load_gltf_bytes(bytes: &[u8], path: &Path) -> Result<Scene, LoadError> {
+    load_gltf_bytes_through(bytes, path, &mut crate::scene::KeepInScene)
+}
+
+/// [`load_gltf_bytes`], handing each geometry to `sink` as soon as it is made (see
+/// [`GeometrySink`]).
+pub(super) fn load_gltf_bytes_through(
+    bytes: &[u8],
+    path: &Path,
+    sink: &mut dyn GeometrySink,
+) -> Result<Scene, LoadError> {
     let invalid = |message: String| LoadError::Invalid {
         path: path.to_owned(),
         message,
@@ -143,10 +154,14 @@ pub fn load_gltf_bytes(bytes: &[u8], path: &Path) -> Result<Scene, LoadError> {
                 })
             })
             .collect();
-        let geometry_index = *geometry_by_accessors.entry(key).or_insert_with(|| {
-            scene.geometries.push(geometry);
-            scene.geometries.len() as u32 - 1
-        });
+        let geometry_index = match geometry_by_accessors.entry(key) {
+            Entry::Occupied(entry) => *entry.get(),
+            Entry::Vacant(entry) => *entry.insert(
+                scene
+                    .add_geometry(sink, geometry)
+                    .map_err(|e| invalid(e.0))?,
+            ),
+        };
         mesh_refs.push(Some(MeshRef::new(geometry_index, part_materials)));
     }
 
@@ -169,7 +184,7 @@ pub fn load_gltf_bytes(bytes: &[u8], path: &Path) -> Result<Scene, LoadError> {
         });
     }
     scene.roots = roots_of(&gltf.document, &scene.nodes);
-    scene.validate().map_err(|e| invalid(e.0))?;
+    scene.validate_outline().map_err(|e| invalid(e.0))?;
     Ok(scene)
 }
 

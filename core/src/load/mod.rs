@@ -12,7 +12,10 @@ pub use self::gltf::load_gltf_bytes;
 use std::path::{Path, PathBuf};
 
 use crate::generate::{self, GeneratorSpec};
-use crate::scene::Scene;
+use crate::graph::LoadedGeometries;
+#[cfg(doc)]
+use crate::graph::SceneGraph;
+use crate::scene::{GeometrySink, KeepInScene, Scene};
 
 /// Why a scene could not be loaded. Every variant names the file (or generator) and, for bad
 /// content, the item and field at fault.
@@ -93,10 +96,30 @@ impl SceneSource {
 
     /// Loads or generates the scene.
     pub fn load(&self) -> Result<Scene, LoadError> {
+        self.load_through(&mut KeepInScene)
+    }
+
+    /// [`SceneSource::load`], handing each geometry to `sink` as it is made (see
+    /// [`GeometrySink`]).
+    pub fn load_through(&self, sink: &mut dyn GeometrySink) -> Result<Scene, LoadError> {
         crate::timings::time(crate::timings::Phase::Load, || match self {
-            Self::File(path) => load_file(path),
-            Self::Generator(spec) => Ok(generate::generate(spec)),
+            Self::File(path) => read_file(path, sink),
+            Self::Generator(spec) => Ok(generate::generate_through(spec, sink)),
         })
+    }
+
+    /// Loads the scene for a graph ([`SceneGraph::import_loaded`]): each geometry is taken as
+    /// soon as it is made, kept in memory up to `memory_limit` bytes (the graph's
+    /// [`SceneGraph::geometry_memory_left`]) and written to a page file beyond it, so that a
+    /// model larger than memory loads. Returns the scene's outline (stand-ins for the
+    /// geometries) and the geometries.
+    pub fn load_for_graph(
+        &self,
+        memory_limit: u64,
+    ) -> Result<(Scene, LoadedGeometries), LoadError> {
+        let mut geometries = LoadedGeometries::new(memory_limit);
+        let outline = self.load_through(&mut geometries)?;
+        Ok((outline, geometries))
     }
 }
 
@@ -131,6 +154,11 @@ impl SceneFormat {
 
 /// Loads a scene file, choosing the format by extension.
 pub fn load_file(path: &Path) -> Result<Scene, LoadError> {
+    read_file(path, &mut KeepInScene)
+}
+
+/// [`load_file`], handing each geometry to `sink` as it is made.
+fn read_file(path: &Path, sink: &mut dyn GeometrySink) -> Result<Scene, LoadError> {
     let format = SceneFormat::from_path(path).ok_or_else(|| LoadError::UnknownFormat {
         path: path.to_owned(),
     })?;
@@ -138,7 +166,7 @@ pub fn load_file(path: &Path) -> Result<Scene, LoadError> {
         path: path.to_owned(),
         source,
     })?;
-    load_bytes(&bytes, format, path)
+    read_behind_boundary(&bytes, format, path, sink)
 }
 
 /// Loads a scene from a file's bytes held in memory. `path` names the file in errors and, for
@@ -147,7 +175,17 @@ pub fn load_file(path: &Path) -> Result<Scene, LoadError> {
 /// Runs behind a panic boundary: a panic while the file is read, validated or converted is
 /// logged (as an error, with its location) and returned as [`LoadError::ReaderPanicked`].
 pub fn load_bytes(bytes: &[u8], format: SceneFormat, path: &Path) -> Result<Scene, LoadError> {
-    crate::panic_boundary::catch(|| read_bytes(bytes, format, path)).unwrap_or_else(|panic| {
+    read_behind_boundary(bytes, format, path, &mut KeepInScene)
+}
+
+/// [`read_bytes`] behind the load's panic boundary (see [`load_bytes`]).
+fn read_behind_boundary(
+    bytes: &[u8],
+    format: SceneFormat,
+    path: &Path,
+    sink: &mut dyn GeometrySink,
+) -> Result<Scene, LoadError> {
+    crate::panic_boundary::catch(|| read_bytes(bytes, format, path, sink)).unwrap_or_else(|panic| {
         log::error!("{}: reading it {panic}", path.display());
         Err(LoadError::ReaderPanicked {
             path: path.to_owned(),
@@ -162,8 +200,13 @@ pub fn load_bytes(bytes: &[u8], format: SceneFormat, path: &Path) -> Result<Scen
 #[cfg(feature = "fault-injection")]
 pub const INJECTED_PANIC_VARIABLE: &str = "CADR_FAULT_READER_PANIC";
 
-/// [`load_bytes`] without its panic boundary.
-fn read_bytes(bytes: &[u8], format: SceneFormat, path: &Path) -> Result<Scene, LoadError> {
+/// Reads a scene from a file's bytes, handing each geometry to `sink`.
+fn read_bytes(
+    bytes: &[u8],
+    format: SceneFormat,
+    path: &Path,
+    sink: &mut dyn GeometrySink,
+) -> Result<Scene, LoadError> {
     #[cfg(feature = "fault-injection")]
     if std::env::var_os(INJECTED_PANIC_VARIABLE).is_some() {
         crate::parallel::map(&[false, true], |&injected| {
@@ -171,20 +214,11 @@ fn read_bytes(bytes: &[u8], format: SceneFormat, path: &Path) -> Result<Scene, L
         });
     }
     match format {
-        SceneFormat::Gltf | SceneFormat::Glb => load_gltf_bytes(bytes, path),
+        SceneFormat::Gltf | SceneFormat::Glb => gltf::load_gltf_bytes_through(bytes, path, sink),
         SceneFormat::Csf | SceneFormat::CsfGz => {
-            let file = crate::csf::csf_from_bytes(bytes, format == SceneFormat::CsfGz, path)?;
-            let name = path
-                .file_name()
-                .map(|n| n.to_string_lossy().into_owned())
-                .unwrap_or_default();
-            let scene = crate::csf::scene_from_csf(&file, &name).map_err(|source| {
-                crate::csf::CsfFileError::Malformed {
-                    path: path.to_owned(),
-                    source,
-                }
-            })?;
-            scene.validate().map_err(|e| LoadError::Invalid {
+            let gzip = format == SceneFormat::CsfGz;
+            let scene = crate::csf::csf_scene_from_bytes(bytes, gzip, path, sink)?;
+            scene.validate_outline().map_err(|e| LoadError::Invalid {
                 path: path.to_owned(),
                 message: e.0,
             })?;

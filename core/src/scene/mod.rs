@@ -7,11 +7,13 @@ pub mod closure;
 pub mod edges;
 mod flatten;
 pub mod graph;
+mod sink;
 mod stats;
 mod texture;
 
 pub use bounds::Aabb;
 pub use flatten::{flatten, DrawItem, FlatScene, Instance};
+pub use sink::{GeometrySink, KeepInScene};
 pub use stats::SceneStats;
 pub use texture::{AlphaMode, Sampler, Texture, TextureRef, UvTransform, Wrap};
 
@@ -335,10 +337,23 @@ impl Scene {
 
     /// [`Scene::validate`] without the expansion check.
     pub(super) fn validate_references(&self) -> Result<(), SceneError> {
-        let fail = |text: String| Err(SceneError(text));
         for (g, geometry) in self.geometries.iter().enumerate() {
             geometry.validate(g)?;
         }
+        self.validate_outline_references()
+    }
+
+    /// [`Scene::validate`] for a scene whose geometries were validated as they were made
+    /// ([`Scene::add_geometry`]), so that it may hold stand-ins: everything but the
+    /// geometries' arrays.
+    pub fn validate_outline(&self) -> Result<(), SceneError> {
+        self.validate_outline_references()?;
+        flatten::check_expansion(self).map(|_| ())
+    }
+
+    /// [`Scene::validate_references`] without the geometries' arrays.
+    fn validate_outline_references(&self) -> Result<(), SceneError> {
+        let fail = |text: String| Err(SceneError(text));
         for (m, material) in self.materials.iter().enumerate() {
             let values = material
                 .base_color

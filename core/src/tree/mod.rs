@@ -11,9 +11,11 @@
 
 mod bits;
 mod changes;
+mod shown;
 
 pub use bits::BitSet;
 pub use changes::{ChangeReader, TreeChanges};
+pub use shown::{shown, Shown};
 
 use changes::ChangeLogs;
 

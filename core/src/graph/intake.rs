@@ -1,0 +1,66 @@
+//! Loading for the graph: the geometries a loader makes are taken one by one, kept in memory up
+//! to a limit and written to a page file beyond it at once, so that a model larger than memory
+//! loads with no more of its geometry in memory than the limit; the loader's scene is only an
+//! outline (stand-ins for the geometries). A graph then adopts them, page file and all
+//! ([`super::SceneGraph::import_loaded`]). The load needs no graph, so a host's graph stays
+//! free for other threads while a file is read.
+
+use super::paging::{Paging, StoredGeometry};
+use crate::scene::{Geometry, GeometrySink};
+
+/// The geometries of a scene being loaded for a graph (a [`GeometrySink`]): in memory up to
+/// the limit they were made with, in a page file of their own beyond it. Dropped without being
+/// imported, they take their page file with them.
+pub struct LoadedGeometries {
+    pub(super) paging: Paging,
+    /// The geometries taken, in the scene's order.
+    pub(super) taken: Vec<StoredGeometry>,
+}
+
+impl LoadedGeometries {
+    /// None yet; up to `memory_limit` bytes of them will be kept in memory (see
+    /// [`super::SceneGraph::geometry_memory_left`]).
+    pub fn new(memory_limit: u64) -> Self {
+        let mut paging = Paging::new();
+        paging.set_limit(memory_limit);
+        Self {
+            paging,
+            taken: Vec::new(),
+        }
+    }
+
+    /// How many have been taken.
+    pub fn len(&self) -> usize {
+        self.taken.len()
+    }
+
+    /// Whether none has been taken.
+    pub fn is_empty(&self) -> bool {
+        self.taken.is_empty()
+    }
+
+    /// Bytes in memory, in the page file, and the file.
+    pub fn memory(&self) -> super::GeometryMemory {
+        self.paging.memory()
+    }
+}
+
+impl GeometrySink for LoadedGeometries {
+    fn take(&mut self, index: u32, geometry: Geometry) -> Geometry {
+        debug_assert_eq!(index as usize, self.taken.len(), "geometries come in order");
+        let stand_in = geometry.stand_in();
+        self.taken.push(self.paging.store(geometry));
+        stand_in
+    }
+}
+
+impl std::fmt::Debug for LoadedGeometries {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(
+            f,
+            "LoadedGeometries({} taken, {:?})",
+            self.len(),
+            self.memory()
+        )
+    }
+}

@@ -1,0 +1,171 @@
+//! Loading a scene for a graph (`SceneSource::load_for_graph`, then
+//! `SceneGraph::import_loaded`): each geometry goes to the graph's page file as soon as it is
+//! made, so that loading holds no more geometry than the graph's memory limit, and the graph
+//! made so is the graph an import of the scene loaded whole makes. This binary installs cadr's
+//! counting allocator to see the heap's peak; its tests run one at a time (they share it).
+#![allow(clippy::unwrap_used)] // Test code: a failed unwrap is a failed test.
+
+use std::path::{Path, PathBuf};
+use std::sync::Mutex;
+
+use cadr_core::graph::SceneGraph;
+use cadr_core::host_heap::{bytes_in_use, peak_bytes_in_use, reset_peak, CountingAllocator};
+use cadr_core::load::SceneSource;
+use cadr_core::scene::{Geometry, Scene};
+
+#[global_allocator]
+static HEAP: CountingAllocator = CountingAllocator;
+
+/// The heap's peak is one for the whole process: one test at a time.
+static ONE_AT_A_TIME: Mutex<()> = Mutex::new(());
+
+/// gen:fine with every unit's geometries of its own (what a model larger than memory is).
+const UNIQUE_UNITS: &str = "gen:fine:units=12,detail=2,unique=1";
+
+fn geometry_bytes(geometry: &Geometry) -> u64 {
+    (std::mem::size_of_val(&geometry.vertices[..])
+        + std::mem::size_of_val(&geometry.indices[..])
+        + std::mem::size_of_val(&geometry.wire_indices[..])
+        + std::mem::size_of_val(&geometry.parts[..])
+        + std::mem::size_of_val(&geometry.attributes[..])) as u64
+}
+
+fn scene_bytes(scene: &Scene) -> u64 {
+    scene.geometries.iter().map(geometry_bytes).sum()
+}
+
+/// The most the heap grew over `work`, and its result.
+fn heap_growth<R>(work: impl FnOnce() -> R) -> (u64, R) {
+    let before = bytes_in_use();
+    reset_peak();
+    let result = work();
+    (peak_bytes_in_use().saturating_sub(before), result)
+}
+
+/// The scene a fresh graph holds after importing `scene` whole (the plain road).
+fn imported_whole(scene: &Scene) -> Scene {
+    let mut graph = SceneGraph::new();
+    let root = graph.root();
+    graph.import(scene, root).unwrap();
+    graph.to_scene().unwrap()
+}
+
+/// Loads `source` for a fresh graph with `limit` bytes of geometry in memory and imports it;
+/// returns the graph and the heap's growth while loading.
+fn loaded_for_graph(source: &SceneSource, limit: u64) -> (SceneGraph, u64) {
+    let mut graph = SceneGraph::new();
+    graph.set_geometry_memory_limit(limit);
+    let (growth, loaded) = heap_growth(|| source.load_for_graph(graph.geometry_memory_left()));
+    let (outline, geometries) = loaded.unwrap();
+    let root = graph.root();
+    graph.import_loaded(&outline, geometries, root).unwrap();
+    (graph, growth)
+}
+
+#[test]
+fn a_generated_scene_loaded_for_a_graph_holds_no_more_geometry_than_the_graph_keeps() {
+    let _one = ONE_AT_A_TIME.lock().unwrap_or_else(|p| p.into_inner());
+    let source = SceneSource::parse(UNIQUE_UNITS).unwrap();
+    let (whole_growth, whole) = heap_growth(|| source.load().unwrap());
+    let total = scene_bytes(&whole);
+    assert!(whole_growth >= total, "a whole load holds every geometry");
+    let limit = total / 8;
+    let (graph, growth) = loaded_for_graph(&source, limit);
+
+    // What loading may hold beyond the limit: the generator's templates (one of each part of
+    // each of the four variants, which the units copy), the unit being made (a bolt, a washer
+    // and one variant's parts: under half the templates) and the outline.
+    let templates = SceneSource::parse("gen:fine:units=1,detail=2").unwrap();
+    let templates = scene_bytes(&templates.load().unwrap());
+    let allowance = limit + templates + templates / 2 + (1 << 20);
+    println!(
+        "geometry {:.1} MB; loading grew the heap {:.1} MB whole, {:.1} MB for a graph keeping {:.1} MB",
+        total as f64 / 1e6,
+        whole_growth as f64 / 1e6,
+        growth as f64 / 1e6,
+        limit as f64 / 1e6
+    );
+    assert!(
+        growth <= allowance,
+        "loading for the graph grew the heap {growth} bytes, more than the limit and the templates ({allowance})"
+    );
+    let memory = graph.geometry_memory();
+    assert!(memory.resident_bytes <= limit);
+    assert!(memory.paged_geometries * 2 > whole.geometries.len() as u64);
+    assert_eq!(graph.to_scene().unwrap(), imported_whole(&whole));
+}
+
+/// Writes `scene` to `name` in a directory of its own and returns the path.
+fn saved(scene: &Scene, name: &str) -> PathBuf {
+    let directory =
+        std::env::temp_dir().join(format!("cadr-loading-memory-{}", std::process::id()));
+    std::fs::create_dir_all(&directory).unwrap();
+    let path = directory.join(name);
+    cadr_core::save::save_scene(scene, &path).unwrap();
+    path
+}
+
+#[test]
+fn csf_and_gltf_files_loaded_for_a_graph_page_their_geometries_and_import_as_loaded_whole() {
+    let _one = ONE_AT_A_TIME.lock().unwrap_or_else(|p| p.into_inner());
+    let generated = SceneSource::parse(UNIQUE_UNITS).unwrap().load().unwrap();
+    for name in ["units.csf", "units.glb"] {
+        let path = saved(&generated, name);
+        let source = SceneSource::File(path.clone());
+        let (whole_growth, whole) = heap_growth(|| source.load().unwrap());
+        let limit = scene_bytes(&whole) / 8;
+        let (graph, growth) = loaded_for_graph(&source, limit);
+        println!(
+            "{name}: loading grew the heap {:.1} MB whole, {:.1} MB for a graph keeping {:.1} MB",
+            whole_growth as f64 / 1e6,
+            growth as f64 / 1e6,
+            limit as f64 / 1e6
+        );
+        let memory = graph.geometry_memory();
+        assert!(memory.resident_bytes <= limit, "{name}");
+        assert!(memory.paged_geometries > 0, "{name}");
+        assert_eq!(graph.to_scene().unwrap(), imported_whole(&whole), "{name}");
+        // CSF: the file's bytes go once parsed and each geometry's CSF arrays once converted,
+        // so the file, its parse and the scene are never all whole at once.
+        if name.ends_with(".csf") {
+            assert!(
+                growth * 4 < whole_growth * 3,
+                "{name}: {growth} bytes for the graph against {whole_growth} whole"
+            );
+        }
+        std::fs::remove_file(&path).unwrap();
+    }
+}
+
+#[test]
+fn a_refused_import_of_a_loaded_scene_changes_nothing_and_leaves_no_page_file() {
+    let _one = ONE_AT_A_TIME.lock().unwrap_or_else(|p| p.into_inner());
+    let source = SceneSource::parse("gen:fine:units=2,detail=1,unique=1").unwrap();
+    let mut graph = SceneGraph::new();
+    graph.set_geometry_memory_limit(0);
+    let (outline, geometries) = source.load_for_graph(0).unwrap();
+    let page_file: PathBuf = geometries.memory().page_file.unwrap();
+    assert!(page_file.exists());
+    let before = graph.to_scene().unwrap();
+
+    // A parent that is not a node of this graph: refused before anything is added.
+    let stale = {
+        let mut other = SceneGraph::new();
+        let group = other.create_group("elsewhere");
+        other.destroy_node(group).unwrap();
+        group
+    };
+    let error = graph
+        .import_loaded(&outline, geometries, stale)
+        .unwrap_err();
+    assert!(
+        error.to_string().contains("belongs to another graph"),
+        "{error}"
+    );
+    assert_eq!(graph.to_scene().unwrap(), before);
+    assert_eq!(graph.geometry_memory().paged_geometries, 0);
+    assert!(
+        !Path::new(&page_file).exists(),
+        "the load's page file goes with it"
+    );
+}

@@ -22,16 +22,8 @@ static ONE_AT_A_TIME: Mutex<()> = Mutex::new(());
 /// gen:fine with every unit's geometries of its own (what a model larger than memory is).
 const UNIQUE_UNITS: &str = "gen:fine:units=12,detail=2,unique=1";
 
-fn geometry_bytes(geometry: &Geometry) -> u64 {
-    (std::mem::size_of_val(&geometry.vertices[..])
-        + std::mem::size_of_val(&geometry.indices[..])
-        + std::mem::size_of_val(&geometry.wire_indices[..])
-        + std::mem::size_of_val(&geometry.parts[..])
-        + std::mem::size_of_val(&geometry.attributes[..])) as u64
-}
-
 fn scene_bytes(scene: &Scene) -> u64 {
-    scene.geometries.iter().map(geometry_bytes).sum()
+    scene.geometries.iter().map(Geometry::host_bytes).sum()
 }
 
 /// The most the heap grew over `work`, and its result.

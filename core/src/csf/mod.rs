@@ -287,21 +287,28 @@ pub fn load_csf(path: &Path) -> Result<CsfFile, CsfFileError> {
     csf_from_bytes(&raw, is_gzip_path(path), path)
 }
 
+/// A CSF file's bytes, decompressed (within the decompression limit) when `gzip` is true.
+fn plain_bytes<'r>(
+    raw: &'r [u8],
+    gzip: bool,
+    path: &Path,
+) -> Result<std::borrow::Cow<'r, [u8]>, CsfFileError> {
+    if !gzip {
+        return Ok(std::borrow::Cow::Borrowed(raw));
+    }
+    gunzip_within(raw, decompression_limit())
+        .map(std::borrow::Cow::Owned)
+        .map_err(|source| CsfFileError::Io {
+            path: path.to_owned(),
+            source,
+        })
+}
+
 /// Reads a CSF file's bytes held in memory, gzip-compressed when `gzip` is true; `path` names
 /// the file in errors.
 pub fn csf_from_bytes(raw: &[u8], gzip: bool, path: &Path) -> Result<CsfFile, CsfFileError> {
-    let decompressed;
-    let bytes = if gzip {
-        decompressed =
-            gunzip_within(raw, decompression_limit()).map_err(|source| CsfFileError::Io {
-                path: path.to_owned(),
-                source,
-            })?;
-        &decompressed[..]
-    } else {
-        raw
-    };
-    read_csf(bytes).map_err(|source| CsfFileError::Malformed {
+    let bytes = plain_bytes(raw, gzip, path)?;
+    read_csf(&bytes).map_err(|source| CsfFileError::Malformed {
         path: path.to_owned(),
         source,
     })
@@ -316,22 +323,12 @@ pub fn csf_scene_from_bytes(
     path: &Path,
     sink: &mut dyn crate::scene::GeometrySink,
 ) -> Result<crate::scene::Scene, CsfFileError> {
-    let decompressed;
-    let bytes = if gzip {
-        decompressed =
-            gunzip_within(raw, decompression_limit()).map_err(|source| CsfFileError::Io {
-                path: path.to_owned(),
-                source,
-            })?;
-        &decompressed[..]
-    } else {
-        raw
-    };
+    let bytes = plain_bytes(raw, gzip, path)?;
     let name = path
         .file_name()
         .map(|n| n.to_string_lossy().into_owned())
         .unwrap_or_default();
-    scene_from_csf_bytes(bytes, &name, sink).map_err(|source| CsfFileError::Malformed {
+    scene_from_csf_bytes(&bytes, &name, sink).map_err(|source| CsfFileError::Malformed {
         path: path.to_owned(),
         source,
     })

@@ -128,15 +128,6 @@ impl StoredGeometry {
     }
 }
 
-/// Host bytes of a geometry's arrays.
-fn host_bytes(geometry: &Geometry) -> u64 {
-    (std::mem::size_of_val(&geometry.vertices[..])
-        + std::mem::size_of_val(&geometry.indices[..])
-        + std::mem::size_of_val(&geometry.wire_indices[..])
-        + std::mem::size_of_val(&geometry.parts[..])
-        + std::mem::size_of_val(&geometry.attributes[..])) as u64
-}
-
 /// The graph's paging state: its limit, what is in memory, and the page file.
 pub(super) struct Paging {
     /// The most geometry bytes kept in memory.
@@ -170,7 +161,7 @@ impl Paging {
     /// Keeps `geometry`: in memory while that stays within the limit, else in the page file
     /// (in memory after all where the file cannot be written: no data is lost).
     pub(super) fn store(&mut self, geometry: Geometry) -> StoredGeometry {
-        let bytes = host_bytes(&geometry);
+        let bytes = geometry.host_bytes();
         if self.resident_bytes.saturating_add(bytes) > self.limit {
             match self.page_out(&geometry) {
                 Ok(page) => {
@@ -220,7 +211,7 @@ impl Paging {
     /// Forgets a geometry kept by [`Paging::store`] (destroyed or replaced).
     pub(super) fn release(&mut self, stored: &StoredGeometry) {
         match stored {
-            StoredGeometry::Resident(geometry) => self.resident_bytes -= host_bytes(geometry),
+            StoredGeometry::Resident(geometry) => self.resident_bytes -= geometry.host_bytes(),
             StoredGeometry::Paged { page, .. } => {
                 self.paged_geometries -= 1;
                 let Some(at) = self.files.iter().position(|f| f.holds(page)) else {
@@ -249,7 +240,6 @@ mod tests {
     #![allow(clippy::unwrap_used)]
 
     use super::super::SceneGraph;
-    use super::host_bytes;
     use crate::scene::{Geometry, Part, Vertex};
 
     fn quad(name: &str, size: f32) -> Geometry {
@@ -278,7 +268,7 @@ mod tests {
     #[test]
     fn geometries_past_the_memory_limit_go_to_the_page_file_and_read_back_unchanged() {
         let mut graph = SceneGraph::new();
-        graph.set_geometry_memory_limit(host_bytes(&quad("a", 1.0)));
+        graph.set_geometry_memory_limit(quad("a", 1.0).host_bytes());
         let a = graph.create_geometry(quad("a", 1.0)).unwrap();
         let b = graph.create_geometry(quad("b", 2.0)).unwrap();
         let c = graph.create_geometry(quad("c", 3.0)).unwrap();
@@ -289,7 +279,7 @@ mod tests {
         assert_eq!(*graph.geometry(b).unwrap(), quad("b", 2.0));
         assert_eq!(graph.geometry_bounds(c).unwrap(), quad("c", 3.0).bounds());
         let memory = graph.geometry_memory();
-        assert_eq!(memory.resident_bytes, host_bytes(&quad("a", 1.0)));
+        assert_eq!(memory.resident_bytes, quad("a", 1.0).host_bytes());
         assert_eq!(memory.paged_geometries, 2);
         let page_file = memory.page_file.clone().unwrap();
         assert_eq!(

@@ -96,6 +96,16 @@ impl Geometry {
         Aabb::from_points(self.vertices.iter().map(|v| v.position))
     }
 
+    /// Bytes of its arrays in host memory (vertices, indices, wire indices, parts,
+    /// attributes).
+    pub fn host_bytes(&self) -> u64 {
+        (std::mem::size_of_val(&self.vertices[..])
+            + std::mem::size_of_val(&self.indices[..])
+            + std::mem::size_of_val(&self.wire_indices[..])
+            + std::mem::size_of_val(&self.parts[..])
+            + std::mem::size_of_val(&self.attributes[..])) as u64
+    }
+
     /// Number of triangles over all parts.
     pub fn triangle_count(&self) -> u64 {
         self.parts

@@ -469,6 +469,9 @@ fn streaming_budget(device: &Device) -> u64 {
     }
 }
 
+/// Slots laid out at once: their coarse forms' arena data is made in parallel.
+const LAYOUT_CHUNK: usize = 32;
+
 /// One geometry slot as the layout measured it.
 enum Measured<'g> {
     /// A geometry the graph keeps in memory, with its full detail's data.
@@ -529,10 +532,9 @@ impl Layout {
             .any(|info| info.has_attributes);
         // The clusters are built on a thread per core, the geometries laid out in slot order.
         let slots: Vec<u32> = (0..geometry_slots as u32).collect();
-        let mut measured =
-            crate::parallel::map(&slots, |&slot| measure(graph, slot, has_attributes))
-                .into_iter()
-                .collect::<RenderResult<Vec<_>>>()?;
+        let measured = crate::parallel::map(&slots, |&slot| measure(graph, slot, has_attributes))
+            .into_iter()
+            .collect::<RenderResult<Vec<_>>>()?;
         let mut full_sizes: Extent = [0; 5];
         let mut largest: Extent = [0; 5];
         for sizes in measured.iter().flatten().map(Measured::sizes) {
@@ -547,25 +549,6 @@ impl Layout {
                 *streaming = Some(Streaming::new(device, budget)?);
             }
         }
-        let coarse: Vec<Option<Arc<CoarseForm>>> = match streaming.as_mut() {
-            None => Vec::new(),
-            Some(streaming) => (measured.iter_mut().enumerate())
-                .map(|(slot, entry)| {
-                    let entry = entry.as_mut()?;
-                    let handle = entry.handle();
-                    streaming.form_to_place(slot as u32, handle, || match entry {
-                        Measured::Resident(_, geometry, data) => {
-                            coarse_form(geometry, data, has_attributes)
-                        }
-                        Measured::Paged(_, _, form) => form.take().unwrap_or_default(),
-                    })
-                })
-                .collect(),
-        };
-        let coarse_data = crate::parallel::map(&slots, |&slot| {
-            let form = coarse.get(slot as usize)?.as_ref()?;
-            Some(coarse_arena_data(form))
-        });
         let mut layout = Self {
             vertices: Vec::new(),
             indices: Vec::new(),
@@ -578,29 +561,68 @@ impl Layout {
             full_sizes,
             largest,
         };
-        for (slot, entry) in measured.into_iter().enumerate() {
-            let Some(entry) = entry else {
-                layout.places.push(None);
-                continue;
-            };
-            let form = coarse.get(slot).and_then(Option::as_ref);
-            let place = match (form, coarse_data[slot].as_ref()) {
-                (Some(form), Some(data)) => {
-                    let mut place = layout.push(entry.handle(), data, &form.geometry);
-                    place.parts = coarse_part_entries(form, slot as u32, place.parts);
-                    place
-                }
-                _ => layout.push_full(graph, slot as u32, entry, streaming.as_ref())?,
-            };
-            layout.places.push(Some(place));
-        }
-        // The coarse forms are laid out: streaming keeps them without their arrays.
-        if let Some(streaming) = streaming.as_mut() {
-            for (slot, _) in coarse.iter().enumerate().filter(|(_, form)| form.is_some()) {
-                streaming.placed(slot as u32);
-            }
+        // A chunk of slots at a time: the coarse forms' arena data is made on a thread per
+        // core, appended, and let go (streaming keeps the forms without their arrays), so that
+        // the layout holds each coarse form once, not as a form, its data and its place.
+        let mut measured = measured.into_iter();
+        for chunk in slots.chunks(LAYOUT_CHUNK) {
+            let entries: Vec<Option<Measured<'_>>> = measured.by_ref().take(chunk.len()).collect();
+            layout.add_chunk(graph, chunk, entries, streaming, has_attributes)?;
         }
         Ok(layout)
+    }
+
+    /// Lays out the geometries `entries` of slots `chunk`: in their coarse form where the
+    /// scene streams and streaming says so, else at full detail.
+    fn add_chunk(
+        &mut self,
+        graph: &SceneGraph,
+        chunk: &[u32],
+        mut entries: Vec<Option<Measured<'_>>>,
+        streaming: &mut Option<Streaming>,
+        has_attributes: bool,
+    ) -> RenderResult<()> {
+        let forms: Vec<Option<Arc<CoarseForm>>> = match streaming.as_mut() {
+            None => vec![None; chunk.len()],
+            Some(streaming) => (chunk.iter().zip(&mut entries))
+                .map(|(&slot, entry)| {
+                    let entry = entry.as_mut()?;
+                    let handle = entry.handle();
+                    streaming.form_to_place(slot, handle, || match entry {
+                        Measured::Resident(_, geometry, data) => {
+                            coarse_form(geometry, data, has_attributes)
+                        }
+                        Measured::Paged(_, _, form) => form.take().unwrap_or_default(),
+                    })
+                })
+                .collect(),
+        };
+        let coarse_data = crate::parallel::map(chunk, |&slot| {
+            let at = (slot - chunk[0]) as usize;
+            forms[at].as_deref().map(coarse_arena_data)
+        });
+        for ((&slot, entry), (form, data)) in
+            chunk.iter().zip(entries).zip(forms.iter().zip(coarse_data))
+        {
+            let Some(entry) = entry else {
+                self.places.push(None);
+                continue;
+            };
+            let place = match (form, data) {
+                (Some(form), Some(data)) => {
+                    let mut place = self.push(entry.handle(), &data, &form.geometry);
+                    place.parts = coarse_part_entries(form, slot, place.parts);
+                    place
+                }
+                _ => self.push_full(graph, slot, entry, streaming.as_ref())?,
+            };
+            self.places.push(Some(place));
+            // The coarse form is laid out: streaming keeps it without its arrays.
+            if let (Some(streaming), Some(_)) = (streaming.as_mut(), form) {
+                streaming.placed(slot);
+            }
+        }
+        Ok(())
     }
 
     /// Adds slot `slot`'s full detail (read again from the page file where it was paged);

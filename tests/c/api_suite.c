@@ -1708,6 +1708,32 @@ static struct CadrSceneStatistics draw_cube_with_limit(CadrRenderer renderer, ui
   return statistics;
 }
 
+/* Loads gen:fine (two units of their own parts) into a new scene with the geometry memory
+ * limit given, renders it fitted and reads the pixels; returns its statistics. */
+static struct CadrSceneStatistics draw_loaded_with_limit(CadrRenderer renderer, uint64_t limit,
+                                                         uint8_t *pixels, size_t bytes) {
+  CadrScene scene;
+  CadrNode root;
+  struct CadrLoadResult loaded = {.size = sizeof(struct CadrLoadResult)};
+  struct CadrSceneStatistics statistics = {.size = sizeof(struct CadrSceneStatistics)};
+  struct CadrBounds bounds;
+  CadrCamera camera;
+
+  OK(cadr_scene_create(&scene));
+  OK(cadr_scene_root(scene, &root));
+  if (limit != UINT64_MAX) OK(cadr_scene_set_geometry_memory_limit(scene, limit));
+  OK(cadr_scene_load(scene, "gen:fine:units=2,detail=1,unique=1", root, &loaded));
+  CHECK(loaded.geometry_count == 10);
+  cadr_load_result_free(&loaded);
+  OK(cadr_scene_bounds(scene, &bounds));
+  OK(cadr_camera_fit(&bounds, 1.0, NULL, &camera));
+  OK(cadr_renderer_render(renderer, scene, &camera, NULL));
+  OK(cadr_renderer_read_pixels(renderer, pixels, bytes));
+  OK(cadr_scene_statistics(scene, &statistics));
+  OK(cadr_scene_destroy(scene));
+  return statistics;
+}
+
 /* A scene that keeps its geometry in its page file (the limit at 0) reports it there, draws
  * the picture a scene keeping it in memory draws, and says what the GPU holds. */
 static void test_page_file(CadrContext context) {
@@ -1725,6 +1751,14 @@ static void test_page_file(CadrContext context) {
   statistics = draw_cube_with_limit(renderer, 0, paged, sizeof paged, &stats);
   CHECK(statistics.paged_geometries == 1 && statistics.paged_geometry_bytes >= 8 * 24 + 36 * 4);
   CHECK(statistics.resident_geometry_bytes == 0);
+  CHECK(memcmp(in_memory, paged, sizeof paged) == 0);
+  /* A load pages each geometry as it reads it: with the limit at 0, all ten of gen:fine's
+   * go to the page file, and the picture is the one loading them into memory draws. */
+  statistics = draw_loaded_with_limit(renderer, UINT64_MAX, in_memory, sizeof in_memory);
+  CHECK(statistics.paged_geometries == 0 && statistics.resident_geometry_bytes > 0);
+  statistics = draw_loaded_with_limit(renderer, 0, paged, sizeof paged);
+  CHECK(statistics.paged_geometries == 10 && statistics.resident_geometry_bytes == 0);
+  CHECK(statistics.visible_instances > 0);
   CHECK(memcmp(in_memory, paged, sizeof paged) == 0);
   EXPECT(cadr_scene_set_geometry_memory_limit(NULL, 0), CADR_RESULT_NULL_ARGUMENT);
   OK(cadr_renderer_destroy(renderer));

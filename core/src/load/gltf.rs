@@ -7,6 +7,7 @@
 //! transforms (`KHR_texture_transform`) and alpha modes; primitives keep the texture
 //! coordinates their material samples and their vertex colours.
 
+use std::borrow::Cow;
 use std::collections::hash_map::Entry;
 use std::collections::HashMap;
 use std::path::Path;
@@ -81,13 +82,14 @@ fn check_glb_header(bytes: &[u8]) -> Result<(), String> {
 
 /// Loads glTF from `bytes`; `path` names the file in errors and locates external buffers.
 pub fn load_gltf_bytes(bytes: &[u8], path: &Path) -> Result<Scene, LoadError> {
-    load_gltf_bytes_through(bytes, path, &mut crate::scene::KeepInScene)
+    load_gltf_bytes_through(Cow::Borrowed(bytes), path, &mut crate::scene::KeepInScene)
 }
 
 /// [`load_gltf_bytes`], handing each geometry to `sink` as soon as it is made (see
-/// [`GeometrySink`]).
+/// [`GeometrySink`]). The file's bytes, where owned, go once parsed (the parser keeps its own
+/// copy of a GLB's binary chunk).
 pub(super) fn load_gltf_bytes_through(
-    bytes: &[u8],
+    bytes: Cow<'_, [u8]>,
     path: &Path,
     sink: &mut dyn GeometrySink,
 ) -> Result<Scene, LoadError> {
@@ -99,9 +101,10 @@ pub(super) fn load_gltf_bytes_through(
         path: path.to_owned(),
         message,
     };
-    check_glb_header(bytes).map_err(gltf_error)?;
+    check_glb_header(&bytes).map_err(gltf_error)?;
     let unchecked =
-        gltf::Gltf::from_slice_without_validation(bytes).map_err(|e| gltf_error(e.to_string()))?;
+        gltf::Gltf::from_slice_without_validation(&bytes).map_err(|e| gltf_error(e.to_string()))?;
+    drop(bytes);
     check_position_accessors(unchecked.document.as_json()).map_err(invalid)?;
     check_images(unchecked.document.as_json()).map_err(invalid)?;
     let gltf = gltf::Gltf {

@@ -9,6 +9,7 @@ mod gltf_textures;
 
 pub use self::gltf::load_gltf_bytes;
 
+use std::borrow::Cow;
 use std::path::{Path, PathBuf};
 
 use crate::generate::{self, GeneratorSpec};
@@ -166,7 +167,7 @@ fn read_file(path: &Path, sink: &mut dyn GeometrySink) -> Result<Scene, LoadErro
         path: path.to_owned(),
         source,
     })?;
-    read_behind_boundary(&bytes, format, path, sink)
+    read_behind_boundary(Cow::Owned(bytes), format, path, sink)
 }
 
 /// Loads a scene from a file's bytes held in memory. `path` names the file in errors and, for
@@ -175,12 +176,12 @@ fn read_file(path: &Path, sink: &mut dyn GeometrySink) -> Result<Scene, LoadErro
 /// Runs behind a panic boundary: a panic while the file is read, validated or converted is
 /// logged (as an error, with its location) and returned as [`LoadError::ReaderPanicked`].
 pub fn load_bytes(bytes: &[u8], format: SceneFormat, path: &Path) -> Result<Scene, LoadError> {
-    read_behind_boundary(bytes, format, path, &mut KeepInScene)
+    read_behind_boundary(Cow::Borrowed(bytes), format, path, &mut KeepInScene)
 }
 
 /// [`read_bytes`] behind the load's panic boundary (see [`load_bytes`]).
 fn read_behind_boundary(
-    bytes: &[u8],
+    bytes: Cow<'_, [u8]>,
     format: SceneFormat,
     path: &Path,
     sink: &mut dyn GeometrySink,
@@ -200,9 +201,10 @@ fn read_behind_boundary(
 #[cfg(feature = "fault-injection")]
 pub const INJECTED_PANIC_VARIABLE: &str = "CADR_FAULT_READER_PANIC";
 
-/// Reads a scene from a file's bytes, handing each geometry to `sink`.
+/// Reads a scene from a file's bytes, handing each geometry to `sink`; the bytes, where owned,
+/// go as soon as the reader no longer needs them.
 fn read_bytes(
-    bytes: &[u8],
+    bytes: Cow<'_, [u8]>,
     format: SceneFormat,
     path: &Path,
     sink: &mut dyn GeometrySink,
@@ -217,7 +219,7 @@ fn read_bytes(
         SceneFormat::Gltf | SceneFormat::Glb => gltf::load_gltf_bytes_through(bytes, path, sink),
         SceneFormat::Csf | SceneFormat::CsfGz => {
             let gzip = format == SceneFormat::CsfGz;
-            let scene = crate::csf::csf_scene_from_bytes(bytes, gzip, path, sink)?;
+            let scene = crate::csf::csf_scene_from_bytes(&bytes, gzip, path, sink)?;
             scene.validate_outline().map_err(|e| LoadError::Invalid {
                 path: path.to_owned(),
                 message: e.0,

@@ -10,7 +10,7 @@ use std::sync::Arc;
 
 use cadr_core::gpu_scene::Transforms;
 use cadr_core::render::{FrameStats, HighlightStyle, Section};
-use cadr_core::scene::{flatten, Aabb, Scene, SceneStats};
+use cadr_core::scene::{Aabb, SceneStats};
 use cadr_core::technique::{
     Combination, PluginRegistry, ShadeMode, TechniqueKind, Techniques, DEFAULT_TRANSPARENCY,
 };
@@ -306,26 +306,27 @@ fn with_lod_errors<'c>(
 
 impl Bench {
     /// Measures the baseline (when `with_baseline`) and `combinations` (per shade mode) on
-    /// `scene`; the first row is the reference of the speedups.
+    /// the scene `source` names, loaded straight into the graph (a model larger than memory
+    /// loads: see `crate::load_graph`); the first row is the reference of the speedups.
     pub(crate) fn run(
         &self,
-        scene: &Scene,
+        source: &str,
         combinations: Option<&[Combination]>,
         args: &BenchArgs,
         (quiet, with_baseline): (bool, bool),
     ) -> Result<(SceneStats, Vec<Row>), String> {
-        let flat = flatten(scene).map_err(|e| e.to_string())?;
-        let stats = SceneStats::new(scene, &flat);
-        drop(flat);
+        let crate::LoadedGraph {
+            graph,
+            name: scene_name,
+            stats,
+        } = crate::load_graph(source, &args.highlight)?;
         let aspect = self.size.aspect();
         let mut rows = Vec::new();
-        let scene_name = scene.name.clone();
-        let mut session = TechniqueSession::new(
+        let mut session = TechniqueSession::from_graph(
             &self.device,
-            scene,
+            graph,
             Arc::clone(&self.registry),
             (self.size.width, self.size.height),
-            &args.highlight,
         )?;
         session.set_section(self.section.clone());
         let mut motion = self.motion.clone();
@@ -715,8 +716,7 @@ pub fn bench(args: &BenchArgs) -> Result<(), String> {
         crate::bench_sweep::run_sweep(&bench, args)?
     } else {
         let name = args.scene.as_str();
-        let scene = crate::load_scene(name)?;
-        let (stats, rows) = bench.run(&scene, None, args, (false, true))?;
+        let (stats, rows) = bench.run(name, None, args, (false, true))?;
         println!(
             "scene: {name}: {} parts, {} triangles, {} materials, {} geometries",
             stats.instances, stats.triangles, stats.materials, stats.geometries

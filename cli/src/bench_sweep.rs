@@ -20,9 +20,8 @@ fn measure_scenes<K>(
     scenes
         .map(|(key, source)| {
             println!("measuring {source} ...");
-            let scene = crate::load_scene(&source)?;
             let (stats, rows) =
-                bench.run(&scene, Some(combinations), args, (true, with_baseline))?;
+                bench.run(&source, Some(combinations), args, (true, with_baseline))?;
             Ok((key, stats, rows))
         })
         .collect()

@@ -7,7 +7,6 @@ use std::time::Instant;
 use cadr_core::gpu_scene::GpuScene;
 use cadr_core::gpu_scene::Transforms;
 use cadr_core::graph::{NodeFlags, NodeHandle, NodeKind, SceneGraph};
-use cadr_core::load::SceneSource;
 use cadr_core::scene::Material;
 use cadr_core::tree::SceneTree;
 use cadr_core::vk::{Device, DeviceOptions};
@@ -189,10 +188,11 @@ impl EditBench {
 }
 
 pub fn bench_tree(scene_text: &str, runs: usize) -> Result<(), String> {
-    let scene = SceneSource::parse(scene_text)
-        .and_then(|s| s.load())
-        .map_err(|e| e.to_string())?;
-    let (mut graph, _) = SceneGraph::from_scene(&scene).map_err(|e| e.to_string())?;
+    let crate::LoadedGraph {
+        mut graph,
+        name: scene_name,
+        ..
+    } = crate::load_graph(scene_text, &[])?;
     let build_ms = median_ms(runs, || {
         SceneTree::build(&mut graph);
     });
@@ -224,7 +224,7 @@ pub fn bench_tree(scene_text: &str, runs: usize) -> Result<(), String> {
     let (matrix_bytes, other_bytes) = tree.memory_bytes();
     println!(
         "scene:        {} ({} instances on {} paths, {} part placements)",
-        scene.name,
+        scene_name,
         instances,
         tree.node_count(),
         placements.len()

@@ -22,7 +22,7 @@ use std::time::Instant;
 use cadr_core::graph::SceneGraph;
 use cadr_core::load::SceneSource;
 use cadr_core::render::{Camera, FrameStats, DEFAULT_DIRECTION};
-use cadr_core::scene::{flatten, SceneStats};
+use cadr_core::scene::{flatten, flatten_outline, SceneStats};
 use cadr_core::technique::{Combination, ShadeMode};
 use cadr_core::timings::{self, Phase};
 use cadr_core::vk::{self as cvk, Device, DeviceOptions, InstanceOptions};
@@ -69,23 +69,40 @@ fn main() -> ExitCode {
     }
 }
 
+/// A scene loaded straight into a new graph ([`load_graph`]).
+pub(crate) struct LoadedGraph {
+    /// The graph holding it.
+    pub graph: SceneGraph,
+    /// The scene's name.
+    pub name: String,
+    /// Its statistics, as loaded.
+    pub stats: SceneStats,
+}
+
 /// Loads the scene `text` names straight into a new graph (with a spinner if it takes over a
-/// second), with the nodes named one of `highlight` highlighted; returns the graph and the
-/// scene's name. Each geometry goes to the graph's page file as soon as it is made where the
-/// graph's memory limit is reached, so that a model larger than memory loads.
-fn load_graph(text: &str, highlight: &[String]) -> Result<(SceneGraph, String), String> {
+/// second), with the nodes named one of `highlight` highlighted. Each geometry goes to the
+/// graph's page file as soon as it is made where the graph's memory limit is reached, so that
+/// a model larger than memory loads.
+pub(crate) fn load_graph(text: &str, highlight: &[String]) -> Result<LoadedGraph, String> {
     let source = SceneSource::parse(text).map_err(|e| e.to_string())?;
     let mut graph = SceneGraph::new();
     let (outline, geometries) = progress::spin(&format!("loading {text}"), || {
         source.load_for_graph(graph.geometry_memory_left())
     })
     .map_err(|e| e.to_string())?;
+    let flat = flatten_outline(&outline, geometries.summaries()).map_err(|e| e.to_string())?;
+    let stats = SceneStats::of_outline(&outline, &flat, geometries.summaries());
+    drop(flat);
     let root = graph.root();
     graph
         .import_loaded(&outline, geometries, root)
         .map_err(|e| e.to_string())?;
     techniques::highlight_named(&mut graph, highlight)?;
-    Ok((graph, outline.name))
+    Ok(LoadedGraph {
+        graph,
+        name: outline.name,
+        stats,
+    })
 }
 
 /// Loads or generates the scene `text` names (with a spinner if it takes over a second).
@@ -221,14 +238,15 @@ fn render(args: &RenderArgs, process_start: Instant) -> Result<(), String> {
 
     let device = open_device(&args.validation)?;
     let (registry, _) = techniques::load_registry(&device);
-    let (graph, scene_name) = load_graph(&args.scene, &args.highlight)?;
+    let LoadedGraph {
+        graph,
+        name: scene_name,
+        stats,
+    } = load_graph(&args.scene, &args.highlight)?;
     let loading_heap_peak = cadr_core::host_heap::peak_bytes_in_use();
     cadr_core::host_heap::reset_peak();
     let mut session =
         techniques::TechniqueSession::from_graph(&device, graph, registry, (width, height))?;
-    // What the scene shows as loaded, before the settings hide or move anything.
-    let shown = cadr_core::tree::shown(&session.graph, &session.tree, None);
-    let (node_count, geometry_count, material_count) = session.graph.counts();
     session.choose(&combination, shade)?;
     session.set_min_pixels(min_pixels)?;
     session.set_lod_error(args.techniques.lod_error)?;
@@ -242,7 +260,7 @@ fn render(args: &RenderArgs, process_start: Instant) -> Result<(), String> {
         section_line,
     );
     let camera = Camera::fit(
-        &shown.bounds,
+        &stats.bounds,
         f64::from(width) / f64::from(height),
         DEFAULT_DIRECTION,
     );
@@ -266,11 +284,11 @@ fn render(args: &RenderArgs, process_start: Instant) -> Result<(), String> {
     let adapter = device.adapter();
     println!(
         "scene:       {} ({} nodes, {} geometries, {} materials)",
-        scene_name, node_count, geometry_count, material_count
+        scene_name, stats.nodes, stats.geometries, stats.materials
     );
     println!("device:      {} ({:?})", adapter.name, adapter.device_type);
     println!("techniques:  {technique_line}");
-    print_frames(shown.instances as usize, &samples);
+    print_frames(stats.instances, &samples);
     let spent = timings::snapshot();
     println!(
         "setup:       load {:.1} ms, upload {:.1} ms",
@@ -308,7 +326,7 @@ fn render(args: &RenderArgs, process_start: Instant) -> Result<(), String> {
     );
     if args.timings {
         print_timings(process_start.elapsed());
-        print_memory(&device, shown.instances, loading_heap_peak);
+        print_memory(&device, stats.instances as u64, loading_heap_peak);
     }
     if validation_errors > 0 {
         return Err(format!(

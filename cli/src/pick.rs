@@ -5,7 +5,6 @@
 use cadr_core::graph::{NodeHandle, SceneGraph};
 use cadr_core::render::pick::PixelRect;
 use cadr_core::render::{Camera, DEFAULT_DIRECTION};
-use cadr_core::scene::{flatten, SceneStats};
 use cadr_core::view::PickHit;
 
 use crate::args::{PickArgs, Size};
@@ -67,13 +66,10 @@ pub fn pick(args: &PickArgs) -> Result<(), String> {
     let shade = args.techniques.shade_mode();
     let min_pixels = args.techniques.min_pixels();
     let section = args.section.section()?;
-    let scene = crate::load_scene(&args.scene)?;
-    let flat = flatten(&scene).map_err(|e| e.to_string())?;
-    let stats = SceneStats::new(&scene, &flat);
-    drop(flat);
+    let crate::LoadedGraph { graph, stats, .. } = crate::load_graph(&args.scene, &[])?;
     let device = crate::open_device(&args.validation)?;
     let (registry, _) = techniques::load_registry(&device);
-    let mut session = TechniqueSession::new(&device, &scene, registry, (width, height), &[])?;
+    let mut session = TechniqueSession::from_graph(&device, graph, registry, (width, height))?;
     session.choose(&combination, shade)?;
     session.set_min_pixels(min_pixels)?;
     session.set_lod_error(args.techniques.lod_error)?;

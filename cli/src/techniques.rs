@@ -7,7 +7,6 @@ use std::sync::Arc;
 use cadr_core::graph::{NodeFlags, NodeHandle, SceneGraph};
 use cadr_core::render::{Background, Camera, FrameStats, Section};
 use cadr_core::scene::Aabb;
-use cadr_core::scene::Scene;
 use cadr_core::technique::{
     default_plugin_dirs, feature_bits, feature_names, Combination, PluginRegistry, ShadeMode,
     TechniqueKind, Techniques, PLUGIN_PATH_VARIABLE,
@@ -78,21 +77,6 @@ pub struct TechniqueSession {
 }
 
 impl TechniqueSession {
-    /// Builds the scene's graph, with the nodes named one of `highlight` highlighted (a name
-    /// no node has is an error), its tree and a `width` × `height` view of it (see
-    /// [`TechniqueSession::from_graph`]).
-    pub fn new(
-        device: &Arc<Device>,
-        source: &Scene,
-        registry: Arc<PluginRegistry>,
-        (width, height): (u32, u32),
-        highlight: &[String],
-    ) -> Result<Self, String> {
-        let (mut graph, _) = SceneGraph::from_scene(source).map_err(|e| e.to_string())?;
-        highlight_named(&mut graph, highlight)?;
-        Self::from_graph(device, graph, registry, (width, height))
-    }
-
     /// Builds the tree of `graph` and a `width` × `height` view of it. The GPU scene is
     /// uploaded by the first frame, once the techniques are chosen: techniques that compute
     /// world matrices on the GPU lay it out otherwise than the built-in ones. For a large

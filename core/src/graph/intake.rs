@@ -6,7 +6,7 @@
 //! free for other threads while a file is read.
 
 use super::paging::{Paging, StoredGeometry};
-use crate::scene::{Geometry, GeometrySink};
+use crate::scene::{Geometry, GeometrySink, GeometrySummary};
 
 /// The geometries of a scene being loaded for a graph (a [`GeometrySink`]): in memory up to
 /// the limit they were made with, in a page file of their own beyond it. Dropped without being
@@ -15,6 +15,8 @@ pub struct LoadedGeometries {
     pub(super) paging: Paging,
     /// The geometries taken, in the scene's order.
     pub(super) taken: Vec<StoredGeometry>,
+    /// Their bounds and vertex counts, for statistics before the import.
+    summaries: Vec<GeometrySummary>,
 }
 
 impl LoadedGeometries {
@@ -26,6 +28,7 @@ impl LoadedGeometries {
         Self {
             paging,
             taken: Vec::new(),
+            summaries: Vec::new(),
         }
     }
 
@@ -39,6 +42,12 @@ impl LoadedGeometries {
         self.taken.is_empty()
     }
 
+    /// The bounds and vertex count of each, in the scene's order (for
+    /// `crate::scene::flatten_outline` and `crate::scene::SceneStats::of_outline`).
+    pub fn summaries(&self) -> &[GeometrySummary] {
+        &self.summaries
+    }
+
     /// Bytes in memory, in the page file, and the file.
     pub fn memory(&self) -> super::GeometryMemory {
         self.paging.memory()
@@ -49,6 +58,7 @@ impl GeometrySink for LoadedGeometries {
     fn take(&mut self, index: u32, geometry: Geometry) -> Geometry {
         debug_assert_eq!(index as usize, self.taken.len(), "geometries come in order");
         let stand_in = geometry.stand_in();
+        self.summaries.push(geometry.summary());
         self.taken.push(self.paging.store(geometry));
         stand_in
     }

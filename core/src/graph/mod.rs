@@ -1254,7 +1254,7 @@ impl SceneGraph {
             )));
         }
         crate::timings::time(crate::timings::Phase::SceneBuild, || {
-            let LoadedGeometries { paging, taken } = geometries;
+            let LoadedGeometries { paging, taken, .. } = geometries;
             self.paging.absorb(paging);
             convert::import_outline(self, outline, taken, parent)
         })

@@ -3,7 +3,7 @@
 
 use glam::DMat4;
 
-use super::{Aabb, NodeIndex, Scene, SceneError};
+use super::{Aabb, Geometry, GeometrySummary, NodeIndex, Scene, SceneError};
 
 /// The most draw items a scene may expand to (shared subgraphs multiply paths).
 pub const MAX_DRAW_ITEMS: u64 = 1 << 31;
@@ -107,14 +107,36 @@ fn draw_counts(scene: &Scene) -> Vec<u64> {
 /// Flattens a validated scene (see [`Scene::validate`]).
 pub fn flatten(scene: &Scene) -> Result<FlatScene, SceneError> {
     crate::timings::time(crate::timings::Phase::SceneBuild, || {
-        flatten_validated(scene)
+        scene.validate_references()?;
+        let bounds: Vec<Aabb> = scene.geometries.iter().map(Geometry::bounds).collect();
+        flatten_checked(scene, &bounds)
     })
 }
 
-fn flatten_validated(scene: &Scene) -> Result<FlatScene, SceneError> {
-    scene.validate_references()?;
+/// [`flatten`] for an outline (a scene whose geometries are stand-ins, see
+/// [`super::GeometrySink`]), with what is known of each geometry: `summaries`, in the scene's
+/// order.
+pub fn flatten_outline(
+    outline: &Scene,
+    summaries: &[GeometrySummary],
+) -> Result<FlatScene, SceneError> {
+    crate::timings::time(crate::timings::Phase::SceneBuild, || {
+        outline.validate_outline_references()?;
+        if summaries.len() != outline.geometries.len() {
+            return Err(SceneError(format!(
+                "{} geometry summaries for {} geometries",
+                summaries.len(),
+                outline.geometries.len()
+            )));
+        }
+        let bounds: Vec<Aabb> = summaries.iter().map(|s| s.bounds).collect();
+        flatten_checked(outline, &bounds)
+    })
+}
+
+/// Flattens a scene whose references are checked; `geometry_bounds` are its geometries'.
+fn flatten_checked(scene: &Scene, geometry_bounds: &[Aabb]) -> Result<FlatScene, SceneError> {
     let total = check_expansion(scene)?;
-    let geometry_bounds: Vec<Aabb> = scene.geometries.iter().map(|g| g.bounds()).collect();
     let mut flat = FlatScene {
         draws: Vec::with_capacity(total as usize),
         ..FlatScene::default()

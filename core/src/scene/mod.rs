@@ -12,8 +12,8 @@ mod stats;
 mod texture;
 
 pub use bounds::Aabb;
-pub use flatten::{flatten, DrawItem, FlatScene, Instance};
-pub use sink::{GeometrySink, KeepInScene};
+pub use flatten::{flatten, flatten_outline, DrawItem, FlatScene, Instance};
+pub use sink::{GeometrySink, GeometrySummary, KeepInScene};
 pub use stats::SceneStats;
 pub use texture::{AlphaMode, Sampler, Texture, TextureRef, UvTransform, Wrap};
 
@@ -362,7 +362,7 @@ impl Scene {
     }
 
     /// [`Scene::validate_references`] without the geometries' arrays.
-    fn validate_outline_references(&self) -> Result<(), SceneError> {
+    pub(super) fn validate_outline_references(&self) -> Result<(), SceneError> {
         let fail = |text: String| Err(SceneError(text));
         for (m, material) in self.materials.iter().enumerate() {
             let values = material

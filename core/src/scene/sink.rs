@@ -3,7 +3,7 @@
 //! page file at once (`crate::graph::GeometryIntake`), so that loading a model larger than
 //! memory never holds all of its geometry.
 
-use super::{Geometry, Scene, SceneError};
+use super::{Aabb, Geometry, Scene, SceneError};
 
 /// Takes the geometries of a scene being loaded, one by one.
 pub trait GeometrySink {
@@ -24,7 +24,25 @@ impl GeometrySink for KeepInScene {
     }
 }
 
+/// What flattening and statistics need of a geometry a sink keeps (see
+/// [`super::flatten_outline`], [`super::SceneStats::of_outline`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct GeometrySummary {
+    /// The bounds of its vertices.
+    pub bounds: Aabb,
+    /// Its vertex count.
+    pub vertices: u64,
+}
+
 impl Geometry {
+    /// Its bounds and vertex count.
+    pub fn summary(&self) -> GeometrySummary {
+        GeometrySummary {
+            bounds: self.bounds(),
+            vertices: self.vertices.len() as u64,
+        }
+    }
+
     /// The stand-in a sink leaves in an outline scene for a geometry it keeps (see
     /// [`GeometrySink::take`]): the name and parts, no arrays.
     pub fn stand_in(&self) -> Geometry {

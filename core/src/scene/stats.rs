@@ -2,7 +2,7 @@
 
 use std::fmt;
 
-use super::{Aabb, FlatScene, Scene};
+use super::{Aabb, FlatScene, GeometrySummary, Scene};
 
 /// Counts of what a scene stores and what it draws.
 #[derive(Clone, Debug, PartialEq)]
@@ -34,6 +34,22 @@ pub struct SceneStats {
 impl SceneStats {
     /// Statistics of `scene` and its flattened form.
     pub fn new(scene: &Scene, flat: &FlatScene) -> Self {
+        let vertices: Vec<u64> = (scene.geometries.iter())
+            .map(|g| g.vertices.len() as u64)
+            .collect();
+        Self::with_vertex_counts(scene, flat, &vertices)
+    }
+
+    /// Statistics of an outline (a scene whose geometries are stand-ins, see
+    /// [`super::GeometrySink`]) and its flattened form ([`super::flatten_outline`]), with what
+    /// is known of each geometry: `summaries`, in the scene's order.
+    pub fn of_outline(outline: &Scene, flat: &FlatScene, summaries: &[GeometrySummary]) -> Self {
+        let vertices: Vec<u64> = summaries.iter().map(|s| s.vertices).collect();
+        Self::with_vertex_counts(outline, flat, &vertices)
+    }
+
+    /// Statistics of `scene`, whose geometries have `vertices` vertices each.
+    fn with_vertex_counts(scene: &Scene, flat: &FlatScene, vertices: &[u64]) -> Self {
         Self {
             nodes: scene.nodes.len(),
             geometries: scene.geometries.len(),
@@ -42,11 +58,7 @@ impl SceneStats {
             mesh_instances: flat.instances.len(),
             instances: flat.draws.len(),
             stored_triangles: scene.geometries.iter().map(|g| g.triangle_count()).sum(),
-            stored_vertices: scene
-                .geometries
-                .iter()
-                .map(|g| g.vertices.len() as u64)
-                .sum(),
+            stored_vertices: vertices.iter().sum(),
             triangles: flat
                 .draws
                 .iter()
@@ -55,7 +67,7 @@ impl SceneStats {
             vertices: flat
                 .instances
                 .iter()
-                .map(|i| scene.geometries[i.geometry as usize].vertices.len() as u64)
+                .map(|i| vertices[i.geometry as usize])
                 .sum(),
             bounds: flat.bounds,
         }

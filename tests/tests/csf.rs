@@ -7,7 +7,7 @@ use cadr_core::csf::{
     MAGIC,
 };
 use cadr_core::generate::{generate, GeneratorSpec};
-use cadr_core::load::load_file;
+use cadr_core::load::{load_bytes, load_file, SceneFormat};
 use cadr_core::scene::{flatten, Scene};
 use cadr_tests::assert_same_drawing;
 use cadr_tests::fixtures::{rich_csf_file as rich_file, scratch_dir, CubeGltf};
@@ -450,4 +450,33 @@ fn malformed_csf_files_on_disk_name_the_file() {
     std::fs::write(&gz, b"plain bytes").unwrap();
     let error = load_file(&gz).unwrap_err().to_string();
     assert!(error.contains("notgzip.csf.gz"), "{error}");
+}
+
+/// An uncompressed CSF file on disk is read where each array lies, never whole: it must give
+/// what its bytes give in memory, scene or error, whole, cut anywhere, or malformed.
+#[test]
+fn a_csf_file_read_from_disk_gives_what_its_bytes_give_in_memory() {
+    let dir = scratch_dir("csf_from_disk");
+    let path = dir.join("read.csf");
+    let outcome = |result: Result<Scene, cadr_core::load::LoadError>| match result {
+        Ok(scene) => Ok(scene),
+        Err(error) => Err(error.to_string()),
+    };
+    let same = |bytes: &[u8], what: &str| {
+        std::fs::write(&path, bytes).unwrap();
+        let from_disk = outcome(load_file(&path));
+        let in_memory = outcome(load_bytes(bytes, SceneFormat::Csf, &path));
+        assert_eq!(from_disk, in_memory, "{what}");
+        from_disk.is_ok()
+    };
+    let rich = write_csf(&rich_file(), 6);
+    assert!(same(&rich, "the rich file"));
+    let cube = cube_csf_bytes();
+    assert!(same(&cube, "the cube"));
+    for cut in (0..cube.len()).step_by(5) {
+        same(&cube[..cut], &format!("the cube cut at {cut}"));
+    }
+    let mut far = cube.clone();
+    put_u64(&mut far, 56, 1 << 40);
+    assert!(!same(&far, "nodes beyond the file"));
 }

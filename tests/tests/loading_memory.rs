@@ -124,6 +124,22 @@ fn csf_and_gltf_files_loaded_for_a_graph_page_their_geometries_and_import_as_loa
             growth * 5 < whole_growth * 4,
             "{name}: {growth} bytes for the graph against {whole_growth} whole"
         );
+        // An uncompressed CSF file is read where each array lies, never whole: loading it
+        // holds the limit and the geometry being read (its CSF arrays, the geometry made of
+        // them, and the little the file's structures take).
+        if name.ends_with(".csf") {
+            let largest = whole
+                .geometries
+                .iter()
+                .map(Geometry::host_bytes)
+                .max()
+                .unwrap();
+            let allowance = limit + 3 * largest + (1 << 20);
+            assert!(
+                growth <= allowance,
+                "{name}: {growth} bytes, more than the limit and one geometry ({allowance})"
+            );
+        }
         std::fs::remove_file(&path).unwrap();
     }
 }

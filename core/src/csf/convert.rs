@@ -8,6 +8,7 @@
 
 use glam::{DMat4, DVec3};
 
+use super::read::CsfBytes;
 use super::{
     error, CsfError, CsfFile, CsfGeometry, CsfGeometryPart, CsfMaterial, CsfMeta, CsfNode,
     CsfNodePart, FLAG_PER_PART_VERTICES, FLAG_STRIPS, FLAG_UNIQUE_NODES, GUID_MATERIAL_GLTF2,
@@ -35,11 +36,13 @@ pub fn scene_from_csf(file: &CsfFile, name: &str) -> Result<Scene, CsfError> {
     Ok(scene)
 }
 
-/// The scene of a CSF file's (decompressed) bytes, read and converted one geometry at a time:
-/// each is validated and handed to `sink` (see [`GeometrySink`]) as soon as it is read, so
-/// that its CSF arrays and the converted geometry are the only ones held beyond the sink's.
-pub fn scene_from_csf_bytes(
-    data: &[u8],
+/// The scene of a CSF file's (decompressed) bytes, in memory or read from the file where each
+/// array lies, read and converted one geometry at a time: each is validated and handed to
+/// `sink` (see [`GeometrySink`]) as soon as it is read, so that its CSF arrays and the
+/// converted geometry are the only ones held beyond the sink's (and, from a file, the file is
+/// never held whole).
+pub fn scene_from_csf_source(
+    bytes: CsfBytes<'_>,
     name: &str,
     sink: &mut dyn GeometrySink,
 ) -> Result<Scene, CsfError> {
@@ -47,7 +50,7 @@ pub fn scene_from_csf_bytes(
         name: name.to_owned(),
         ..Scene::default()
     };
-    let file = super::read::read_csf_through(data, &mut |file, g, geometry| {
+    let file = super::read::read_csf_from(bytes, &mut |file, g, geometry| {
         check_supported(file)?;
         add_csf_geometry(&mut scene, file, g, &geometry, sink)
     })?;

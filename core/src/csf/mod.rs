@@ -13,8 +13,8 @@ mod convert;
 mod read;
 mod write;
 
-pub use convert::{csf_from_scene, scene_from_csf, scene_from_csf_bytes};
-pub use read::{read_csf, read_csf_through, TakeCsfGeometry};
+pub use convert::{csf_from_scene, scene_from_csf, scene_from_csf_source};
+pub use read::{read_csf, read_csf_from, read_csf_through, CsfBytes, TakeCsfGeometry};
 pub use write::write_csf;
 
 use std::io::Read as _;
@@ -315,7 +315,7 @@ pub fn csf_from_bytes(raw: &[u8], gzip: bool, path: &Path) -> Result<CsfFile, Cs
 }
 
 /// The scene of a CSF file's bytes held in memory (gzip-compressed when `gzip` is true), read
-/// and converted one geometry at a time, each handed to `sink` (see [`scene_from_csf_bytes`]);
+/// and converted one geometry at a time, each handed to `sink` (see [`scene_from_csf_source`]);
 /// `path` names the file in errors, and the scene is named after it.
 pub fn csf_scene_from_bytes(
     raw: &[u8],
@@ -323,12 +323,41 @@ pub fn csf_scene_from_bytes(
     path: &Path,
     sink: &mut dyn crate::scene::GeometrySink,
 ) -> Result<crate::scene::Scene, CsfFileError> {
-    let bytes = plain_bytes(raw, gzip, path)?;
+    let plain = plain_bytes(raw, gzip, path)?;
+    scene_named_after(path, CsfBytes::Memory(&plain), sink)
+}
+
+/// The scene of an uncompressed CSF file, read from the file where each array lies and
+/// converted one geometry at a time, each handed to `sink` (see [`scene_from_csf_source`]): the
+/// file is never held whole. The scene is named after the file.
+pub fn csf_scene_from_file(
+    path: &Path,
+    sink: &mut dyn crate::scene::GeometrySink,
+) -> Result<crate::scene::Scene, CsfFileError> {
+    let io = |source| CsfFileError::Io {
+        path: path.to_owned(),
+        source,
+    };
+    let file = std::fs::File::open(path).map_err(io)?;
+    let len = file.metadata().map_err(io)?.len();
+    let bytes = CsfBytes::File {
+        file: std::cell::RefCell::new(file),
+        len,
+    };
+    scene_named_after(path, bytes, sink)
+}
+
+/// The scene of the CSF file at `path`, read from `bytes`, named after the file.
+fn scene_named_after(
+    path: &Path,
+    bytes: CsfBytes<'_>,
+    sink: &mut dyn crate::scene::GeometrySink,
+) -> Result<crate::scene::Scene, CsfFileError> {
     let name = path
         .file_name()
         .map(|n| n.to_string_lossy().into_owned())
         .unwrap_or_default();
-    scene_from_csf_bytes(&bytes, &name, sink).map_err(|source| CsfFileError::Malformed {
+    scene_from_csf_source(bytes, &name, sink).map_err(|source| CsfFileError::Malformed {
         path: path.to_owned(),
         source,
     })

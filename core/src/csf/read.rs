@@ -1,6 +1,9 @@
 //! Schema-driven CSF parsing: every offset, count and alignment is checked against the file
 //! before anything is read, so a malformed file gives a [`CsfError`] and never a panic.
 
+use std::borrow::Cow;
+use std::io::{Read as _, Seek as _, SeekFrom};
+
 use crate::scene::graph::first_cycle;
 
 use super::{
@@ -43,30 +46,88 @@ impl Fields<'_> {
     }
 }
 
-fn floats(bytes: &[u8]) -> Vec<f32> {
-    bytes
+fn floats(bytes: impl AsRef<[u8]>) -> Vec<f32> {
+    (bytes.as_ref())
         .chunks_exact(4)
         .map(|c| f32::from_le_bytes([c[0], c[1], c[2], c[3]]))
         .collect()
 }
 
-fn u32s(bytes: &[u8]) -> Vec<u32> {
-    bytes
+fn u32s(bytes: impl AsRef<[u8]>) -> Vec<u32> {
+    (bytes.as_ref())
         .chunks_exact(4)
         .map(|c| u32::from_le_bytes([c[0], c[1], c[2], c[3]]))
         .collect()
 }
 
-fn i32s(bytes: &[u8]) -> Vec<i32> {
+fn i32s(bytes: impl AsRef<[u8]>) -> Vec<i32> {
     u32s(bytes).into_iter().map(|v| v as i32).collect()
 }
 
+/// Where a file's bytes are read from: memory, or the file itself (read where each array
+/// lies, so that the file is never held whole).
+pub enum CsfBytes<'a> {
+    /// The file's bytes, in memory.
+    Memory(&'a [u8]),
+    /// An open file of `len` bytes.
+    File {
+        /// The file.
+        file: std::cell::RefCell<std::fs::File>,
+        /// Its length.
+        len: u64,
+    },
+}
+
+impl<'a> CsfBytes<'a> {
+    /// The file's length.
+    fn len(&self) -> u64 {
+        match self {
+            Self::Memory(data) => data.len() as u64,
+            Self::File { len, .. } => *len,
+        }
+    }
+
+    /// `size` bytes at `offset`, which lie within the file.
+    fn read(&self, offset: u64, size: u64) -> std::io::Result<Cow<'a, [u8]>> {
+        match self {
+            Self::Memory(data) => Ok(Cow::Borrowed(
+                &data[offset as usize..(offset + size) as usize],
+            )),
+            Self::File { file, .. } => {
+                let mut file = file.borrow_mut();
+                let mut bytes = vec![0; size as usize];
+                file.seek(SeekFrom::Start(offset))?;
+                file.read_exact(&mut bytes)?;
+                Ok(Cow::Owned(bytes))
+            }
+        }
+    }
+}
+
 struct Reader<'a> {
-    data: &'a [u8],
+    bytes: CsfBytes<'a>,
     header_size: usize,
 }
 
 impl<'a> Reader<'a> {
+    /// `size` bytes at `offset`, which lie within the file; a file that cannot be read there
+    /// (changed under the reader) names the structure and field read.
+    fn read(
+        &self,
+        structure: &str,
+        field: &'static str,
+        offset: u64,
+        size: u64,
+    ) -> Result<Cow<'a, [u8]>, CsfError> {
+        self.bytes.read(offset, size).map_err(|e| {
+            error(
+                structure,
+                field,
+                format!("bytes {offset}..{} could not be read: {e}", offset + size),
+            )
+        })
+    }
+
     /// The bytes of an array of `count` elements of `element_size` at `offset`.
     fn array(
         &self,
@@ -76,9 +137,9 @@ impl<'a> Reader<'a> {
         count: u64,
         element_size: u64,
         align: u64,
-    ) -> Result<&'a [u8], CsfError> {
+    ) -> Result<Cow<'a, [u8]>, CsfError> {
         if count == 0 {
-            return Ok(&[]); // zero-length arrays are accepted whatever their offset
+            return Ok(Cow::Borrowed(&[])); // zero-length arrays are accepted whatever their offset
         }
         let size = count.checked_mul(element_size).ok_or_else(|| {
             error(
@@ -115,17 +176,17 @@ impl<'a> Reader<'a> {
                 format!("offset {offset} + {size} bytes overflows"),
             )
         })?;
-        if end > self.data.len() as u64 {
+        if end > self.bytes.len() {
             return Err(error(
                 structure,
                 field,
                 format!(
                     "bytes {offset}..{end} lie beyond the end of the file ({} bytes)",
-                    self.data.len()
+                    self.bytes.len()
                 ),
             ));
         }
-        Ok(&self.data[offset as usize..end as usize])
+        self.read(structure, field, offset, size)
     }
 }
 
@@ -133,12 +194,12 @@ impl<'a> Reader<'a> {
 /// table 8-aligned and inside the file, each entry the 8-aligned offset of a pointer field
 /// after the header's first 40 bytes and inside the file. cadr reads by the schema and never
 /// relocates, but a file it accepts must be one the reference loader can read.
-fn check_pointer_table(data: &[u8], num_pointers: i32, table: u64) -> Result<(), CsfError> {
+fn check_pointer_table(reader: &Reader<'_>, num_pointers: i32, table: u64) -> Result<(), CsfError> {
     let entries = count("header", "numPointers", num_pointers)?;
     if entries == 0 {
         return Ok(());
     }
-    let size = data.len() as u64;
+    let size = reader.bytes.len();
     if table % 8 != 0 {
         return Err(error(
             "header",
@@ -159,8 +220,9 @@ fn check_pointer_table(data: &[u8], num_pointers: i32, table: u64) -> Result<(),
                 ),
             )
         })?;
-    let fields = Fields(data);
-    for (index, at) in (table..end).step_by(8).enumerate() {
+    let table_bytes = reader.read("header", "pointersOFFSET", table, end - table)?;
+    let fields = Fields(&table_bytes);
+    for (index, at) in (0..end - table).step_by(8).enumerate() {
         let location = fields.u64(at as usize);
         if location % 8 != 0 || location < 40 || location > size.saturating_sub(8) {
             return Err(error(
@@ -206,8 +268,19 @@ pub type TakeCsfGeometry<'t> = dyn FnMut(&CsfFile, usize, CsfGeometry) -> Result
 /// everything else of the file is read and checked, and returns the file without its
 /// geometries: so that a reader converting them one by one never holds them all.
 pub fn read_csf_through(data: &[u8], take: &mut TakeCsfGeometry<'_>) -> Result<CsfFile, CsfError> {
-    let (version, header_size) = check_header(data)?;
-    let header = Fields(data);
+    read_csf_from(CsfBytes::Memory(data), take)
+}
+
+/// [`read_csf_through`] from `bytes`, in memory or in a file.
+pub fn read_csf_from(
+    bytes: CsfBytes<'_>,
+    take: &mut TakeCsfGeometry<'_>,
+) -> Result<CsfFile, CsfError> {
+    let head = bytes
+        .read(0, bytes.len().min(HEADER_SIZE_V5 as u64))
+        .map_err(|e| error("header", "size", format!("could not be read: {e}")))?;
+    let (version, header_size) = check_header(&head, bytes.len())?;
+    let header = Fields(&head);
     let raw_flags = header.u32(8);
     let file_flags = if version < 3 {
         if raw_flags != 0 {
@@ -229,8 +302,8 @@ pub fn read_csf_through(data: &[u8], take: &mut TakeCsfGeometry<'_>) -> Result<C
             format!("{root}, but there are {num_nodes} nodes"),
         ));
     }
-    check_pointer_table(data, header.i32(12), header.u64(32))?;
-    let reader = Reader { data, header_size };
+    let reader = Reader { bytes, header_size };
+    check_pointer_table(&reader, header.i32(12), header.u64(32))?;
 
     let geometry_bytes = reader.array(
         "header",
@@ -347,18 +420,16 @@ fn read_all_metas(
 }
 
 /// The file's version and header size, once its size, magic and version are checked.
-fn check_header(data: &[u8]) -> Result<(i32, usize), CsfError> {
-    if data.len() < HEADER_SIZE_V4 {
+/// `head` is the file's first bytes (up to a version 5 header's), `len` its length.
+fn check_header(head: &[u8], len: u64) -> Result<(i32, usize), CsfError> {
+    if len < HEADER_SIZE_V4 as u64 {
         return Err(error(
             "header",
             "size",
-            format!(
-                "the file has {} bytes; a header needs {HEADER_SIZE_V4}",
-                data.len()
-            ),
+            format!("the file has {len} bytes; a header needs {HEADER_SIZE_V4}"),
         ));
     }
-    let header = Fields(data);
+    let header = Fields(head);
     let magic = header.i32(0);
     if magic != MAGIC {
         return Err(error(
@@ -380,14 +451,11 @@ fn check_header(data: &[u8]) -> Result<(i32, usize), CsfError> {
     } else {
         HEADER_SIZE_V4
     };
-    if data.len() < header_size {
+    if len < header_size as u64 {
         return Err(error(
             "header",
             "size",
-            format!(
-                "the file has {} bytes; a version {version} header needs {header_size}",
-                data.len()
-            ),
+            format!("the file has {len} bytes; a version {version} header needs {header_size}"),
         ));
     }
     Ok((version, header_size))

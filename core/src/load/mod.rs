@@ -158,16 +158,20 @@ pub fn load_file(path: &Path) -> Result<Scene, LoadError> {
     read_file(path, &mut KeepInScene)
 }
 
-/// [`load_file`], handing each geometry to `sink` as it is made.
+/// [`load_file`], handing each geometry to `sink` as it is made. An uncompressed CSF file is
+/// read where each of its arrays lies, never whole; other files are read whole first.
 fn read_file(path: &Path, sink: &mut dyn GeometrySink) -> Result<Scene, LoadError> {
     let format = SceneFormat::from_path(path).ok_or_else(|| LoadError::UnknownFormat {
         path: path.to_owned(),
     })?;
+    if format == SceneFormat::Csf {
+        return read_behind_boundary(Input::CsfFile, format, path, sink);
+    }
     let bytes = std::fs::read(path).map_err(|source| LoadError::Io {
         path: path.to_owned(),
         source,
     })?;
-    read_behind_boundary(Cow::Owned(bytes), format, path, sink)
+    read_behind_boundary(Input::Bytes(Cow::Owned(bytes)), format, path, sink)
 }
 
 /// Loads a scene from a file's bytes held in memory. `path` names the file in errors and, for
@@ -176,17 +180,30 @@ fn read_file(path: &Path, sink: &mut dyn GeometrySink) -> Result<Scene, LoadErro
 /// Runs behind a panic boundary: a panic while the file is read, validated or converted is
 /// logged (as an error, with its location) and returned as [`LoadError::ReaderPanicked`].
 pub fn load_bytes(bytes: &[u8], format: SceneFormat, path: &Path) -> Result<Scene, LoadError> {
-    read_behind_boundary(Cow::Borrowed(bytes), format, path, &mut KeepInScene)
+    read_behind_boundary(
+        Input::Bytes(Cow::Borrowed(bytes)),
+        format,
+        path,
+        &mut KeepInScene,
+    )
 }
 
-/// [`read_bytes`] behind the load's panic boundary (see [`load_bytes`]).
+/// What a reader reads.
+enum Input<'b> {
+    /// The file's bytes; where owned, they go as soon as the reader no longer needs them.
+    Bytes(Cow<'b, [u8]>),
+    /// The uncompressed CSF file at the path, read where each array lies.
+    CsfFile,
+}
+
+/// [`read_input`] behind the load's panic boundary (see [`load_bytes`]).
 fn read_behind_boundary(
-    bytes: Cow<'_, [u8]>,
+    input: Input<'_>,
     format: SceneFormat,
     path: &Path,
     sink: &mut dyn GeometrySink,
 ) -> Result<Scene, LoadError> {
-    crate::panic_boundary::catch(|| read_bytes(bytes, format, path, sink)).unwrap_or_else(|panic| {
+    crate::panic_boundary::catch(|| read_input(input, format, path, sink)).unwrap_or_else(|panic| {
         log::error!("{}: reading it {panic}", path.display());
         Err(LoadError::ReaderPanicked {
             path: path.to_owned(),
@@ -201,10 +218,9 @@ fn read_behind_boundary(
 #[cfg(feature = "fault-injection")]
 pub const INJECTED_PANIC_VARIABLE: &str = "CADR_FAULT_READER_PANIC";
 
-/// Reads a scene from a file's bytes, handing each geometry to `sink`; the bytes, where owned,
-/// go as soon as the reader no longer needs them.
-fn read_bytes(
-    bytes: Cow<'_, [u8]>,
+/// Reads a scene of `format` from `input`, handing each geometry to `sink`.
+fn read_input(
+    input: Input<'_>,
     format: SceneFormat,
     path: &Path,
     sink: &mut dyn GeometrySink,
@@ -215,18 +231,21 @@ fn read_bytes(
             assert!(!injected, "a panic injected by {INJECTED_PANIC_VARIABLE}");
         });
     }
-    match format {
-        SceneFormat::Gltf | SceneFormat::Glb => gltf::load_gltf_bytes_through(bytes, path, sink),
-        SceneFormat::Csf | SceneFormat::CsfGz => {
-            let gzip = format == SceneFormat::CsfGz;
-            let scene = crate::csf::csf_scene_from_bytes(&bytes, gzip, path, sink)?;
-            scene.validate_outline().map_err(|e| LoadError::Invalid {
-                path: path.to_owned(),
-                message: e.0,
-            })?;
-            Ok(scene)
+    let scene = match (input, format) {
+        (Input::Bytes(bytes), SceneFormat::Gltf | SceneFormat::Glb) => {
+            return gltf::load_gltf_bytes_through(bytes, path, sink);
         }
-    }
+        (Input::Bytes(bytes), SceneFormat::Csf | SceneFormat::CsfGz) => {
+            let gzip = format == SceneFormat::CsfGz;
+            crate::csf::csf_scene_from_bytes(&bytes, gzip, path, sink)?
+        }
+        (Input::CsfFile, _) => crate::csf::csf_scene_from_file(path, sink)?,
+    };
+    scene.validate_outline().map_err(|e| LoadError::Invalid {
+        path: path.to_owned(),
+        message: e.0,
+    })?;
+    Ok(scene)
 }
 
 /// Parses and loads a command-line scene argument.

@@ -17,6 +17,7 @@ pub use convert::{csf_from_scene, scene_from_csf, scene_from_csf_source};
 pub use read::{read_csf, read_csf_from, read_csf_through, CsfBytes, TakeCsfGeometry};
 pub use write::write_csf;
 
+use std::borrow::Cow;
 use std::io::Read as _;
 use std::path::Path;
 
@@ -287,17 +288,18 @@ pub fn load_csf(path: &Path) -> Result<CsfFile, CsfFileError> {
     csf_from_bytes(&raw, is_gzip_path(path), path)
 }
 
-/// A CSF file's bytes, decompressed (within the decompression limit) when `gzip` is true.
+/// A CSF file's bytes, decompressed (within the decompression limit) when `gzip` is true; the
+/// compressed bytes, where owned, go once decompressed.
 fn plain_bytes<'r>(
-    raw: &'r [u8],
+    raw: Cow<'r, [u8]>,
     gzip: bool,
     path: &Path,
-) -> Result<std::borrow::Cow<'r, [u8]>, CsfFileError> {
+) -> Result<Cow<'r, [u8]>, CsfFileError> {
     if !gzip {
-        return Ok(std::borrow::Cow::Borrowed(raw));
+        return Ok(raw);
     }
-    gunzip_within(raw, decompression_limit())
-        .map(std::borrow::Cow::Owned)
+    gunzip_within(&raw, decompression_limit())
+        .map(Cow::Owned)
         .map_err(|source| CsfFileError::Io {
             path: path.to_owned(),
             source,
@@ -307,7 +309,7 @@ fn plain_bytes<'r>(
 /// Reads a CSF file's bytes held in memory, gzip-compressed when `gzip` is true; `path` names
 /// the file in errors.
 pub fn csf_from_bytes(raw: &[u8], gzip: bool, path: &Path) -> Result<CsfFile, CsfFileError> {
-    let bytes = plain_bytes(raw, gzip, path)?;
+    let bytes = plain_bytes(Cow::Borrowed(raw), gzip, path)?;
     read_csf(&bytes).map_err(|source| CsfFileError::Malformed {
         path: path.to_owned(),
         source,
@@ -318,7 +320,7 @@ pub fn csf_from_bytes(raw: &[u8], gzip: bool, path: &Path) -> Result<CsfFile, Cs
 /// and converted one geometry at a time, each handed to `sink` (see [`scene_from_csf_source`]);
 /// `path` names the file in errors, and the scene is named after it.
 pub fn csf_scene_from_bytes(
-    raw: &[u8],
+    raw: Cow<'_, [u8]>,
     gzip: bool,
     path: &Path,
     sink: &mut dyn crate::scene::GeometrySink,

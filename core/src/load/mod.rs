@@ -237,7 +237,7 @@ fn read_input(
         }
         (Input::Bytes(bytes), SceneFormat::Csf | SceneFormat::CsfGz) => {
             let gzip = format == SceneFormat::CsfGz;
-            crate::csf::csf_scene_from_bytes(&bytes, gzip, path, sink)?
+            crate::csf::csf_scene_from_bytes(bytes, gzip, path, sink)?
         }
         (Input::CsfFile, _) => crate::csf::csf_scene_from_file(path, sink)?,
     };

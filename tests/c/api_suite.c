@@ -1676,6 +1676,24 @@ static void test_export(CadrContext context, struct Built *b) {
 
 /* Draws a red cube in a new scene whose geometry memory limit is `limit` (UINT64_MAX: the
  * default, kept in memory) into `pixels`; returns the statistics after the frame. */
+/* Renders `scene` with the camera fitted to it, reads the pixels, and destroys it; returns its
+ * statistics. */
+static struct CadrSceneStatistics draw_fitted_and_destroy(CadrRenderer renderer, CadrScene scene,
+                                                          uint8_t *pixels, size_t bytes,
+                                                          struct CadrFrameStats *stats) {
+  struct CadrSceneStatistics statistics = {.size = sizeof(struct CadrSceneStatistics)};
+  struct CadrBounds bounds;
+  CadrCamera camera;
+
+  OK(cadr_scene_bounds(scene, &bounds));
+  OK(cadr_camera_fit(&bounds, 1.0, NULL, &camera));
+  OK(cadr_renderer_render(renderer, scene, &camera, stats));
+  OK(cadr_renderer_read_pixels(renderer, pixels, bytes));
+  OK(cadr_scene_statistics(scene, &statistics));
+  OK(cadr_scene_destroy(scene));
+  return statistics;
+}
+
 static struct CadrSceneStatistics draw_cube_with_limit(CadrRenderer renderer, uint64_t limit,
                                                        uint8_t *pixels, size_t bytes,
                                                        struct CadrFrameStats *stats) {
@@ -1685,9 +1703,7 @@ static struct CadrSceneStatistics draw_cube_with_limit(CadrRenderer renderer, ui
   CadrMaterial parts[2];
   struct CadrGeometryDesc desc = cube_desc();
   struct CadrMaterialDesc red = {sizeof(struct CadrMaterialDesc), "red", {0.8f, 0.1f, 0.1f, 1.0f}, 0.0f, 0.5f};
-  struct CadrSceneStatistics statistics = {.size = sizeof(struct CadrSceneStatistics)};
   struct CadrBounds bounds;
-  CadrCamera camera;
 
   OK(cadr_scene_create(&scene));
   OK(cadr_scene_root(scene, &root));
@@ -1699,13 +1715,7 @@ static struct CadrSceneStatistics draw_cube_with_limit(CadrRenderer renderer, ui
   parts[1] = parts[0];
   OK(cadr_scene_create_geo(scene, "cube", cube, parts, 2, &geo));
   OK(cadr_scene_add_child(scene, root, geo));
-  OK(cadr_scene_bounds(scene, &bounds));
-  OK(cadr_camera_fit(&bounds, 1.0, NULL, &camera));
-  OK(cadr_renderer_render(renderer, scene, &camera, stats));
-  OK(cadr_renderer_read_pixels(renderer, pixels, bytes));
-  OK(cadr_scene_statistics(scene, &statistics));
-  OK(cadr_scene_destroy(scene));
-  return statistics;
+  return draw_fitted_and_destroy(renderer, scene, pixels, bytes, stats);
 }
 
 /* Loads gen:fine (two units of their own parts) into a new scene with the geometry memory
@@ -1715,9 +1725,6 @@ static struct CadrSceneStatistics draw_loaded_with_limit(CadrRenderer renderer, 
   CadrScene scene;
   CadrNode root;
   struct CadrLoadResult loaded = {.size = sizeof(struct CadrLoadResult)};
-  struct CadrSceneStatistics statistics = {.size = sizeof(struct CadrSceneStatistics)};
-  struct CadrBounds bounds;
-  CadrCamera camera;
 
   OK(cadr_scene_create(&scene));
   OK(cadr_scene_root(scene, &root));
@@ -1725,13 +1732,7 @@ static struct CadrSceneStatistics draw_loaded_with_limit(CadrRenderer renderer, 
   OK(cadr_scene_load(scene, "gen:fine:units=2,detail=1,unique=1", root, &loaded));
   CHECK(loaded.geometry_count == 10);
   cadr_load_result_free(&loaded);
-  OK(cadr_scene_bounds(scene, &bounds));
-  OK(cadr_camera_fit(&bounds, 1.0, NULL, &camera));
-  OK(cadr_renderer_render(renderer, scene, &camera, NULL));
-  OK(cadr_renderer_read_pixels(renderer, pixels, bytes));
-  OK(cadr_scene_statistics(scene, &statistics));
-  OK(cadr_scene_destroy(scene));
-  return statistics;
+  return draw_fitted_and_destroy(renderer, scene, pixels, bytes, NULL);
 }
 
 /* A scene that keeps its geometry in its page file (the limit at 0) reports it there, draws

@@ -729,15 +729,12 @@ impl SceneGraph {
     /// A new geometry; its data is validated (indices, parts, finite values).
     pub fn create_geometry(&mut self, geometry: Geometry) -> Result<GeometryHandle, GraphError> {
         check_geometry(&geometry)?;
-        self.geometries_generation += 1;
         let stored = self.paging.store(geometry);
-        Ok(self.geometries.insert(GeometryEntry {
-            stored,
-            users: Vec::new(),
-        }))
+        Ok(self.adopt_geometry(stored))
     }
 
-    /// Gives the graph a geometry its paging has already stored (see [`intake`]).
+    /// Gives the graph a geometry its paging has already stored (by [`SceneGraph::create_geometry`],
+    /// or by a load for the graph, see [`intake`]).
     fn adopt_geometry(&mut self, stored: paging::StoredGeometry) -> GeometryHandle {
         self.geometries_generation += 1;
         self.geometries.insert(GeometryEntry {

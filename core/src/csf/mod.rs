@@ -268,15 +268,77 @@ pub fn gunzip_within(raw: &[u8], limit: u64) -> std::io::Result<Vec<u8>> {
         .take(limit.saturating_add(1))
         .read_to_end(&mut out)?;
     if out.len() as u64 > limit {
-        return Err(std::io::Error::new(
-            std::io::ErrorKind::InvalidData,
-            format!(
-                "its {} compressed bytes decompress to more than {limit} bytes, the limit ({MAX_DECOMPRESSED_VARIABLE} raises it)",
-                raw.len()
-            ),
-        ));
+        return Err(past_the_limit(raw.len() as u64, limit));
     }
     Ok(out)
+}
+
+/// The error of a gzip file of `compressed` bytes that decompresses past `limit` bytes.
+fn past_the_limit(compressed: u64, limit: u64) -> std::io::Error {
+    std::io::Error::new(
+        std::io::ErrorKind::InvalidData,
+        format!(
+            "its {compressed} compressed bytes decompress to more than {limit} bytes, the limit ({MAX_DECOMPRESSED_VARIABLE} raises it)"
+        ),
+    )
+}
+
+/// Temporary files of unpacked `.csf.gz` files made by this process, counted (for their names).
+static FILES_UNPACKED: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(0);
+
+/// Removes a temporary file when dropped, where it could not be removed while open.
+#[derive(Debug)]
+struct RemovedOnDrop(Option<std::path::PathBuf>);
+
+impl Drop for RemovedOnDrop {
+    fn drop(&mut self) {
+        if let Some(path) = self.0.take() {
+            let _ = std::fs::remove_file(path);
+        }
+    }
+}
+
+/// The gzip file `compressed` decompressed, as it streams, into a temporary file in `directory`
+/// (readers pass the page directory, `CADR_PAGE_DIR`: see `graph::page_file`), within `limit`
+/// bytes (the decompression limit): so that
+/// neither the compressed nor the decompressed bytes are ever held whole. The file is removed
+/// from its directory as soon as it is open (where the system allows; otherwise when the
+/// returned guard is dropped), so that nothing is left behind, even by a crash.
+fn unpacked(
+    compressed: std::fs::File,
+    directory: &Path,
+    limit: u64,
+) -> std::io::Result<(std::fs::File, RemovedOnDrop)> {
+    use std::io::{Seek as _, Write as _};
+    let compressed_bytes = compressed.metadata()?.len();
+    let number = FILES_UNPACKED.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+    let path = directory.join(format!("cadr-unpacked-{}-{number}.csf", std::process::id()));
+    let mut file = std::fs::OpenOptions::new()
+        .read(true)
+        .write(true)
+        .create_new(true)
+        .open(&path)
+        .map_err(|e| {
+            std::io::Error::new(
+                e.kind(),
+                format!(
+                    "a temporary file to unpack it into, {}: {e}",
+                    path.display()
+                ),
+            )
+        })?;
+    let guard = RemovedOnDrop(std::fs::remove_file(&path).is_err().then_some(path));
+    let mut decoder = flate2::read::GzDecoder::new(std::io::BufReader::new(compressed))
+        .take(limit.saturating_add(1));
+    let mut writer = std::io::BufWriter::new(&mut file);
+    let written = std::io::copy(&mut decoder, &mut writer)?;
+    writer.flush()?;
+    drop(writer);
+    if written > limit {
+        return Err(past_the_limit(compressed_bytes, limit));
+    }
+    file.rewind()?;
+    Ok((file, guard))
 }
 
 /// Reads a `.csf` or `.csf.gz` file.
@@ -329,18 +391,27 @@ pub fn csf_scene_from_bytes(
     scene_named_after(path, CsfBytes::Memory(&plain), sink)
 }
 
-/// The scene of an uncompressed CSF file, read from the file where each array lies and
-/// converted one geometry at a time, each handed to `sink` (see [`scene_from_csf_source`]): the
-/// file is never held whole. The scene is named after the file.
+/// The scene of a CSF file, read from the file where each array lies and converted one
+/// geometry at a time, each handed to `sink` (see [`scene_from_csf_source`]): the file is never
+/// held whole. A gzip-compressed one (`gzip`, a `.csf.gz`) is first decompressed as it streams
+/// into a temporary file (see `unpacked`) and read from there. The scene is named after the file.
 pub fn csf_scene_from_file(
     path: &Path,
+    gzip: bool,
     sink: &mut dyn crate::scene::GeometrySink,
 ) -> Result<crate::scene::Scene, CsfFileError> {
     let io = |source| CsfFileError::Io {
         path: path.to_owned(),
         source,
     };
-    let file = std::fs::File::open(path).map_err(io)?;
+    let mut file = std::fs::File::open(path).map_err(io)?;
+    let mut _unpacked = None;
+    if gzip {
+        let directory = crate::graph::page_directory();
+        let (plain, guard) = unpacked(file, &directory, decompression_limit()).map_err(io)?;
+        file = plain;
+        _unpacked = Some(guard);
+    }
     let len = file.metadata().map_err(io)?.len();
     let bytes = CsfBytes::File {
         file: std::cell::RefCell::new(file),
@@ -384,6 +455,7 @@ pub fn save_csf(file: &CsfFile, path: &Path) -> Result<(), CsfFileError> {
 
 #[cfg(test)]
 mod decompression_tests {
+    #![allow(clippy::unwrap_used)] // Test code: a failed unwrap is a failed test.
     use super::*;
     use std::io::Write;
 
@@ -407,5 +479,34 @@ mod decompression_tests {
             gunzip_within(&bomb, 4 << 20).map(|v| v.len()).ok(),
             Some(4 << 20)
         );
+    }
+
+    #[test]
+    fn a_file_unpacks_into_a_temporary_file_that_leaves_nothing_behind() {
+        use std::io::Read as _;
+        let directory =
+            std::env::temp_dir().join(format!("cadr-unpack-test-{}", std::process::id()));
+        std::fs::create_dir_all(&directory).unwrap();
+        let plain: Vec<u8> = (0..3_000_000_u32).map(|i| (i % 251) as u8).collect();
+        let compressed_path = directory.join("plain.gz");
+        std::fs::write(&compressed_path, gzip(&plain)).unwrap();
+        let open = || std::fs::File::open(&compressed_path).unwrap();
+        let entries = || std::fs::read_dir(&directory).unwrap().count();
+
+        let (mut file, guard) = unpacked(open(), &directory, 4 << 20).unwrap();
+        // Removed from the directory while open (Linux allows it): only the gzip file is there.
+        assert_eq!(entries(), 1);
+        let mut unpacked_bytes = Vec::new();
+        file.read_to_end(&mut unpacked_bytes).unwrap();
+        assert!(unpacked_bytes == plain, "the unpacked bytes differ");
+        drop((file, guard));
+
+        let refused = unpacked(open(), &directory, 1 << 20).expect_err("past the limit");
+        assert!(
+            refused.to_string().contains(MAX_DECOMPRESSED_VARIABLE),
+            "{refused}"
+        );
+        assert_eq!(entries(), 1, "a refused unpack leaves nothing behind");
+        std::fs::remove_dir_all(&directory).unwrap();
     }
 }

@@ -225,8 +225,9 @@ pub const DIRECTORY_VARIABLE: &str = "CADR_PAGE_DIR";
 
 /// Where page files go: `CADR_PAGE_DIR`, else `TMPDIR`, else `/var/tmp` where it exists (on
 /// disk by convention, where `/tmp` is often memory: paging there would save none), else the
-/// system's temporary directory.
-fn page_directory() -> PathBuf {
+/// system's temporary directory. Readers that unpack a compressed file to read it in pieces put
+/// their temporary file there too.
+pub(crate) fn page_directory() -> PathBuf {
     let named = |variable: &str| std::env::var_os(variable).filter(|v| !v.is_empty());
     if let Some(directory) = named(DIRECTORY_VARIABLE).or_else(|| named("TMPDIR")) {
         return PathBuf::from(directory);

@@ -158,13 +158,14 @@ pub fn load_file(path: &Path) -> Result<Scene, LoadError> {
     read_file(path, &mut KeepInScene)
 }
 
-/// [`load_file`], handing each geometry to `sink` as it is made. An uncompressed CSF file is
-/// read where each of its arrays lies, never whole; other files are read whole first.
+/// [`load_file`], handing each geometry to `sink` as it is made. A CSF file is read where each
+/// of its arrays lies, never whole (a `.csf.gz` from a temporary file it is unpacked into as it
+/// streams); other files are read whole first.
 fn read_file(path: &Path, sink: &mut dyn GeometrySink) -> Result<Scene, LoadError> {
     let format = SceneFormat::from_path(path).ok_or_else(|| LoadError::UnknownFormat {
         path: path.to_owned(),
     })?;
-    if format == SceneFormat::Csf {
+    if matches!(format, SceneFormat::Csf | SceneFormat::CsfGz) {
         return read_behind_boundary(Input::CsfFile, format, path, sink);
     }
     let bytes = std::fs::read(path).map_err(|source| LoadError::Io {
@@ -192,7 +193,8 @@ pub fn load_bytes(bytes: &[u8], format: SceneFormat, path: &Path) -> Result<Scen
 enum Input<'b> {
     /// The file's bytes; where owned, they go as soon as the reader no longer needs them.
     Bytes(Cow<'b, [u8]>),
-    /// The uncompressed CSF file at the path, read where each array lies.
+    /// The CSF file at the path, read where each array lies (unpacked first where it is
+    /// gzip-compressed).
     CsfFile,
 }
 
@@ -239,7 +241,10 @@ fn read_input(
             let gzip = format == SceneFormat::CsfGz;
             crate::csf::csf_scene_from_bytes(bytes, gzip, path, sink)?
         }
-        (Input::CsfFile, _) => crate::csf::csf_scene_from_file(path, sink)?,
+        (Input::CsfFile, _) => {
+            let gzip = format == SceneFormat::CsfGz;
+            crate::csf::csf_scene_from_file(path, gzip, sink)?
+        }
     };
     scene.validate_outline().map_err(|e| LoadError::Invalid {
         path: path.to_owned(),

@@ -298,11 +298,12 @@ fn render(args: &RenderArgs, process_start: Instant) -> Result<(), String> {
     if let Some(report) = session.streaming() {
         let mb = |bytes: u64| bytes as f64 / 1e6;
         println!(
-            "streaming:   {:.1} of {:.1} MB of full-detail geometry on the GPU (budget {:.1} MB), {:.1} MB streamed",
+            "streaming:   {:.1} of {:.1} MB of full-detail geometry on the GPU (budget {:.1} MB), {:.1} MB streamed, coarse forms {:.1} MB",
             mb(report.full_bytes),
             mb(report.total_full_bytes),
             mb(report.budget),
-            mb(report.streamed_bytes)
+            mb(report.streamed_bytes),
+            mb(session.coarse_form_bytes())
         );
     }
     let memory = session.graph.geometry_memory();

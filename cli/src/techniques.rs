@@ -169,6 +169,13 @@ impl TechniqueSession {
         self.view.scene()?.streaming()
     }
 
+    /// Device bytes of the coarse forms of a streaming scene (0 where it does not stream).
+    pub fn coarse_form_bytes(&self) -> u64 {
+        self.view
+            .scene()
+            .map_or(0, |scene| scene.coarse_form_bytes())
+    }
+
     /// Bytes streamed to the GPU since the scene was made (0 where it does not stream).
     pub fn streamed_bytes(&self) -> u64 {
         self.streaming().map_or(0, |report| report.streamed_bytes)

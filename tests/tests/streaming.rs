@@ -491,7 +491,9 @@ fn a_geometry_put_back_in_its_coarse_form_draws_it_as_it_first_did() {
         let node = scene.nodes.iter().find(|n| n.name == name).unwrap();
         node.local.w_axis.truncate()
     };
-    let (first, other) = (close_up(0.0), close_up_at(unit("unit 5"), 0.0));
+    // The other unit is of the first one's variant (the same geometry bytes), three rows away:
+    // from its close-up the first unit is far enough for its coarse forms.
+    let (first, other) = (close_up(0.0), close_up_at(unit("unit 12"), 0.0));
     // How much full detail the close-up of the first unit brings, under a budget that holds it.
     let (_, probe, _) = render(&scene, Some(1 << 20), &[first]);
     let roomy = probe[0].unwrap().total_full_bytes / u64::from(UNITS) * 2;
@@ -574,4 +576,64 @@ fn coarse_forms_laid_out_again_draw_as_they_did() {
     drop(view);
     assert_no_validation_errors(&device);
     std::env::remove_var("CADR_MEMORY_BUDGET");
+}
+
+/// The coarse forms' device bytes and the first frame's picture of `scene` under `budget`,
+/// seen from `camera` (gpu-clusters at 1 px).
+fn coarse_forms_under(scene: &Scene, budget: u64, camera: &Camera) -> (u64, image::RgbaImage) {
+    let Session {
+        device,
+        graph,
+        mut tree,
+        mut view,
+    } = session(scene, Some(budget), Some("gpu-clusters"));
+    view.render(&graph, &mut tree, camera).unwrap();
+    let image = view.renderer().read_rgba8().unwrap();
+    let bytes = view.scene().unwrap().coarse_form_bytes();
+    drop(view);
+    assert_no_validation_errors(&device);
+    std::env::remove_var("CADR_MEMORY_BUDGET");
+    (bytes, image)
+}
+
+#[test]
+fn the_coarse_forms_of_a_scene_far_over_its_budget_take_about_half_of_it() {
+    let scene = unique_parts();
+    let bounds = flatten(&scene).unwrap().bounds;
+    let fitted = Camera::fit(
+        &bounds,
+        f64::from(SIZE.0) / f64::from(SIZE.1),
+        DEFAULT_DIRECTION,
+    );
+    let (_, probe, _) = render(&scene, Some(1 << 20), &[fitted]);
+    let total = probe[0].unwrap().total_full_bytes;
+    let (full, _, _) = render(&scene, None, &[fitted]);
+    let covered_full = covered_fraction(&full[0]);
+    let mut coarse = Vec::new();
+    for share in [BUDGET_SHARE, 8 * BUDGET_SHARE] {
+        let budget = total / share;
+        let (bytes, image) = coarse_forms_under(&scene, budget, &fitted);
+        let covered = covered_fraction(&image);
+        println!(
+            "budget 1/{share} of {total} bytes: coarse forms {bytes} bytes ({:.2} of the budget), \
+             {covered} of the picture covered against {covered_full}",
+            bytes as f64 / budget as f64
+        );
+        assert!(bytes > 0, "the scene streams: it has coarse forms");
+        assert!(
+            (covered - covered_full).abs() < 0.01,
+            "no part missing while coarse: {covered} against {covered_full}"
+        );
+        coarse.push((budget, bytes));
+    }
+    // Under a sixth, an eighth of each part's triangles would take more than half the budget:
+    // the forms are cut coarser, to about half of it (the share is set from the scene's host
+    // bytes, so within a margin).
+    let (budget, bytes) = coarse[0];
+    assert!(
+        bytes * 10 <= budget * 6,
+        "{bytes} bytes of coarse forms, budget {budget}"
+    );
+    // Under an eighth of that, coarser still, down to the parts' coarsest cuts.
+    assert!(coarse[1].1 * 2 < bytes, "{coarse:?}");
 }

@@ -17,8 +17,8 @@ use crate::vk::raw as vk;
 
 use super::clusters::{self, GeometryClusters};
 use super::streaming::{
-    CoarseForm, LoadRetry, PartBounds, PrepareFailure, Preparer, Streaming, StreamingPlan,
-    UPLOAD_BYTES_PER_FRAME,
+    coarse_share, CoarseForm, LoadRetry, PartBounds, PrepareFailure, Preparer, Streaming,
+    StreamingPlan, UPLOAD_BYTES_PER_FRAME,
 };
 use crate::graph::{GeometryHandle, GeometrySource, GraphError, SceneGraph};
 use crate::scene::closure::{closure, Closure};
@@ -148,15 +148,20 @@ fn bytes_of(sizes: Extent, attributes: bool) -> u64 {
         + groups * GROUP_BYTES as u64
 }
 
-/// The coarse form of the geometry `data` was made from, with its full-detail bytes.
+/// The coarse form of the geometry `data` was made from, its parts cut within `share` of their
+/// triangles (see `streaming::coarse_share`), with its full-detail bytes.
 fn coarse_form(
     geometry: &Geometry,
     data: &ArenaData<'_>,
     attributes: bool,
+    share: f64,
 ) -> (u64, Option<CoarseForm>) {
     let bytes = bytes_of(data.sizes(), attributes);
     let parts = part_entries(data).into_iter().map(|p| p.extent).collect();
-    (bytes, CoarseForm::of(geometry, &data.clusters, parts))
+    (
+        bytes,
+        CoarseForm::of(geometry, &data.clusters, parts, share),
+    )
 }
 
 /// A coarse form's data as the arenas hold it: its own DAG's errors raised by the form's error
@@ -497,11 +502,12 @@ impl Measured<'_> {
     }
 }
 
-/// Measures slot `slot` of `graph` (see [`Measured`]).
+/// Measures slot `slot` of `graph` (see [`Measured`]); a paged geometry's coarse form is cut
+/// within `share` of its parts' triangles.
 fn measure(
     graph: &SceneGraph,
     slot: u32,
-    has_attributes: bool,
+    (has_attributes, share): (bool, f64),
 ) -> RenderResult<Option<Measured<'_>>> {
     let Some(handle) = graph.geometry_handle_at(slot) else {
         return Ok(None);
@@ -512,7 +518,7 @@ fn measure(
         }
         std::borrow::Cow::Owned(geometry) => {
             let data = arena_data(&geometry);
-            let coarse = coarse_form(&geometry, &data, has_attributes);
+            let coarse = coarse_form(&geometry, &data, has_attributes, share);
             Measured::Paged(handle, data.sizes(), Some(coarse))
         }
     }))
@@ -530,11 +536,26 @@ impl Layout {
         let has_attributes = (0..geometry_slots as u32)
             .filter_map(|slot| graph.geometry_info_at(slot))
             .any(|info| info.has_attributes);
+        // How coarse the coarse forms are, where the scene streams: set from its bytes in host
+        // memory, before any geometry is read.
+        let budget = streaming_budget(device);
+        let share = match streaming {
+            Some(streaming) => streaming.coarse_share(),
+            None => {
+                let scene_bytes = (0..geometry_slots as u32)
+                    .filter_map(|slot| graph.geometry_info_at(slot))
+                    .map(|info| info.bytes)
+                    .sum();
+                coarse_share(budget, scene_bytes)
+            }
+        };
         // The clusters are built on a thread per core, the geometries laid out in slot order.
         let slots: Vec<u32> = (0..geometry_slots as u32).collect();
-        let measured = crate::parallel::map(&slots, |&slot| measure(graph, slot, has_attributes))
-            .into_iter()
-            .collect::<RenderResult<Vec<_>>>()?;
+        let measured = crate::parallel::map(&slots, |&slot| {
+            measure(graph, slot, (has_attributes, share))
+        })
+        .into_iter()
+        .collect::<RenderResult<Vec<_>>>()?;
         let mut full_sizes: Extent = [0; 5];
         let mut largest: Extent = [0; 5];
         for sizes in measured.iter().flatten().map(Measured::sizes) {
@@ -543,11 +564,8 @@ impl Layout {
                 *most = (*most).max(n);
             }
         }
-        if streaming.is_none() {
-            let budget = streaming_budget(device);
-            if bytes_of(full_sizes, has_attributes) > budget {
-                *streaming = Some(Streaming::new(device, budget)?);
-            }
+        if streaming.is_none() && bytes_of(full_sizes, has_attributes) > budget {
+            *streaming = Some(Streaming::new(device, budget, share)?);
         }
         let mut layout = Self {
             vertices: Vec::new(),
@@ -588,9 +606,10 @@ impl Layout {
                 .map(|(&slot, entry)| {
                     let entry = entry.as_mut()?;
                     let handle = entry.handle();
+                    let share = streaming.coarse_share();
                     streaming.form_to_place(slot, handle, || match entry {
                         Measured::Resident(_, geometry, data) => {
-                            coarse_form(geometry, data, has_attributes)
+                            coarse_form(geometry, data, has_attributes, share)
                         }
                         Measured::Paged(_, _, form) => form.take().unwrap_or_default(),
                     })
@@ -719,6 +738,23 @@ impl Layout {
 }
 
 impl GeometryArenas {
+    /// Device bytes of the coarse forms' places (see `GpuScene::coarse_form_bytes`).
+    pub(super) fn coarse_form_bytes(&self) -> u64 {
+        let Some(streaming) = &self.streaming else {
+            return 0;
+        };
+        (self.places.iter().enumerate())
+            .filter_map(|(slot, place)| {
+                let place = place.as_ref()?;
+                match &place.coarse {
+                    Some(coarse) => Some(coarse.room),
+                    None => streaming.is_coarse(slot as u32).then_some(place.room),
+                }
+            })
+            .map(|room| bytes_of(room, self.has_attributes))
+            .sum()
+    }
+
     /// Lays out and uploads every geometry of `graph`, with room to spare at the end of each
     /// arena when `spare` (a layout made because the room ran out); returns the arenas and
     /// the bytes uploaded.
@@ -1112,9 +1148,10 @@ impl GeometryArenas {
         let has_attributes = self.has_attributes;
         let mut full_data = None;
         let coarse = self.streaming.as_mut().and_then(|streaming| {
+            let share = streaming.coarse_share();
             streaming.form_to_place(slot, handle, || {
                 let data = arena_data(geometry);
-                let form = coarse_form(geometry, &data, has_attributes);
+                let form = coarse_form(geometry, &data, has_attributes, share);
                 full_data = Some(data);
                 form
             })

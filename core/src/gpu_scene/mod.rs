@@ -764,6 +764,14 @@ impl GpuScene {
         self.arenas.streaming.as_ref().map(|s| s.report())
     }
 
+    /// Device bytes the coarse forms of a streaming scene take in the geometry arenas (their
+    /// places' rooms: vertices, indices, clusters and groups): what it holds beyond its full
+    /// detail's budget, besides the arenas' spare room and the instances; 0 where the scene
+    /// does not stream. Counts every geometry: for tools and tests, not for every frame.
+    pub fn coarse_form_bytes(&self) -> u64 {
+        self.arenas.coarse_form_bytes()
+    }
+
     /// Applies what `view` has not seen of this scene yet (everything, for a view that drew
     /// another scene or none): before each of its frames.
     pub fn catch_up(&mut self, view: &mut ViewState) {

@@ -1,9 +1,11 @@
 //! Geometry streaming under a memory budget: when the full detail of a scene's geometries
 //! needs more device memory than the budget (`CADR_MEMORY_BUDGET`, see `memory_budget.rs`),
 //! each geometry goes on the GPU in a coarse form (for each part the finest cut of its
-//! level-of-detail DAG with at most an eighth of its triangles, with its own compact
-//! vertices), and only the geometries the frames ask for are held at full detail, as many as
-//! the budget allows.
+//! level-of-detail DAG within a share of its triangles, with its own compact vertices: an
+//! eighth, less where the scene is so large against the budget that the coarse forms would
+//! take more than half of it, down to each part's coarsest cut; see [`coarse_share`]), and
+//! only the geometries the frames ask for are held at full detail, as many as the budget
+//! allows.
 //!
 //! With a CPU culler the host asks for every geometry of the instances it draws (such a culler
 //! has no level-of-detail threshold: full detail is what it draws). Otherwise the asking is
@@ -42,7 +44,7 @@ pub const KEEP_FRAMES: u64 = 8;
 
 /// A coarse form of a geometry: what the GPU holds of it while its full detail is not there.
 pub(super) struct CoarseForm {
-    /// A coarse cut of every part ([`COARSE_SHARE`]), parts in the same order, vertices
+    /// A coarse cut of every part ([`coarse_share`]), parts in the same order, vertices
     /// compacted. Once placed on the GPU (where it stays), streaming keeps the form without
     /// its arrays ([`CoarseForm::placed`]) and makes them again from the full detail where it
     /// must place it anew (the arenas laid out again).
@@ -72,17 +74,42 @@ pub(super) struct PartBounds {
 /// triangles (else the geometry stays at full detail, counted against the budget).
 const COARSE_AT_MOST: f64 = 0.5;
 
-/// The share of a part's triangles its coarse form aims at: the finest cut of its DAG within
-/// it. Coarser would hold less memory but show more while the full detail is on its way.
+/// The largest share of a part's triangles its coarse form aims at: the finest cut of its DAG
+/// within it. Coarser would hold less memory but show more while the full detail is on its
+/// way.
 const COARSE_SHARE: f64 = 0.125;
+
+/// The most of the budget the coarse forms aim to take, as a fraction of it (see
+/// [`coarse_share`]).
+const COARSE_BUDGET_FRACTION: f64 = 0.5;
+
+/// Device bytes of a geometry's full detail (vertices, its levels' indices, clusters and
+/// groups) per byte of the geometry in host memory, about: 1.55 for gen:fine. The coarse forms'
+/// share is set from the scene's host bytes, known before any geometry is read (see
+/// [`coarse_share`]).
+const FULL_BYTES_PER_HOST_BYTE: f64 = 1.5;
+
+/// The share of each part's triangles the coarse forms of a scene with `scene_bytes` of
+/// geometry in host memory aim at under a `budget` of full-detail device bytes:
+/// [`COARSE_SHARE`], or less where the forms would then take more than
+/// [`COARSE_BUDGET_FRACTION`] of the budget (their bytes follow their triangles, roughly), so
+/// that what the GPU holds past the budget stays a fraction of it rather than growing with the
+/// scene. A share too small for a part gives its coarsest cut (a part never vanishes), so a
+/// scene very large against its budget still holds its coarsest levels whole.
+pub(super) fn coarse_share(budget: u64, scene_bytes: u64) -> f64 {
+    let full_bytes = FULL_BYTES_PER_HOST_BYTE * scene_bytes.max(1) as f64;
+    (COARSE_BUDGET_FRACTION * budget as f64 / full_bytes).min(COARSE_SHARE)
+}
 
 impl CoarseForm {
     /// The coarse form of `geometry`, whose clusters are `clusters` and parts' entries
-    /// `full_parts`; `None` where it would not save enough ([`COARSE_AT_MOST`]).
+    /// `full_parts`, each part cut within `share` of its triangles ([`coarse_share`]); `None`
+    /// where it would not save enough ([`COARSE_AT_MOST`]).
     pub(super) fn of(
         geometry: &Geometry,
         clusters: &GeometryClusters,
         full_parts: Vec<PartBounds>,
+        share: f64,
     ) -> Option<Self> {
         let mut remap = vec![u32::MAX; geometry.vertices.len()];
         let mut vertices = Vec::new();
@@ -95,7 +122,7 @@ impl CoarseForm {
             let part_clusters = (clusters.clusters.iter())
                 .skip(first as usize)
                 .take(count as usize);
-            let (cut_error, error) = coarse_cut(clusters, part_clusters.clone());
+            let (cut_error, error) = coarse_cut(clusters, part_clusters.clone(), share);
             for cluster in part_clusters.filter(|c| in_cut(clusters, c, cut_error)) {
                 let start = cluster.first_index as usize;
                 for i in start..start + cluster.index_count as usize {
@@ -175,12 +202,12 @@ fn in_cut(clusters: &GeometryClusters, cluster: &abi::CadrCluster, error: f32) -
         && own_error(clusters, cluster) <= error
 }
 
-/// The part's coarse cut: the finest whose triangles are at most [`COARSE_SHARE`] of the
-/// part's (or its coarsest); returns the cut's error threshold and the largest error of its
-/// clusters.
+/// The part's coarse cut: the finest whose triangles are at most `share` of the part's (or its
+/// coarsest); returns the cut's error threshold and the largest error of its clusters.
 fn coarse_cut<'c>(
     clusters: &GeometryClusters,
     part: impl Iterator<Item = &'c abi::CadrCluster> + Clone,
+    share: f64,
 ) -> (f32, f32) {
     let triangles_at = |error: f32| -> u64 {
         (part.clone())
@@ -195,7 +222,7 @@ fn coarse_cut<'c>(
     errors.sort_by(f32::total_cmp);
     errors.dedup();
     let full = triangles_at(0.0);
-    let wanted = (full as f64 * COARSE_SHARE).ceil() as u64;
+    let wanted = (full as f64 * share).ceil() as u64;
     // Triangles only fall as the threshold grows: the first threshold within the share.
     let at = errors.partition_point(|&e| triangles_at(e) > wanted);
     let threshold = errors.get(at).or(errors.last()).copied().unwrap_or(0.0);
@@ -254,6 +281,9 @@ pub(super) const READ_ATTEMPTS: u32 = 3;
 /// The streaming state of a GPU scene: the budget, each slot's residency and the requests.
 pub(super) struct Streaming {
     budget: u64,
+    /// The share of each part's triangles its coarse form aims at ([`coarse_share`]), decided
+    /// when the scene starts streaming.
+    coarse_share: f64,
     slots: Vec<Option<Residency>>,
     /// One bit per geometry slot, set by the GPU cullers, read and cleared by the host.
     requests: Buffer,
@@ -301,10 +331,12 @@ pub(super) struct StreamingPlan {
 }
 
 impl Streaming {
-    /// Streaming under `budget` bytes of full-detail geometry.
-    pub(super) fn new(device: &Arc<Device>, budget: u64) -> RenderResult<Self> {
+    /// Streaming under `budget` bytes of full-detail geometry, the coarse forms cut within
+    /// `coarse_share` of their parts' triangles ([`coarse_share`]).
+    pub(super) fn new(device: &Arc<Device>, budget: u64, coarse_share: f64) -> RenderResult<Self> {
         Ok(Self {
             budget,
+            coarse_share,
             slots: Vec::new(),
             requests: request_buffer(device, 1)?,
             request_words: 1,
@@ -404,6 +436,12 @@ impl Streaming {
             return None;
         }
         (residency.handle == handle).then_some(form)
+    }
+
+    /// Whether slot `slot` is drawn in its coarse form (its full detail not on the GPU).
+    pub(super) fn is_coarse(&self, slot: u32) -> bool {
+        (self.slots.get(slot as usize).and_then(Option::as_ref))
+            .is_some_and(|r| !r.full && r.coarse.is_some())
     }
 
     /// The coarse form of slot `slot`'s geometry, whichever form the GPU holds.
@@ -644,6 +682,11 @@ impl Streaming {
             frames: self.frame,
             failed_reads: self.failed_reads,
         }
+    }
+
+    /// The share of each part's triangles its coarse form aims at ([`coarse_share`]).
+    pub(super) fn coarse_share(&self) -> f64 {
+        self.coarse_share
     }
 
     /// The budget of full-detail bytes.

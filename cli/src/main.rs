@@ -22,6 +22,7 @@ use std::time::Instant;
 use cadr_core::graph::SceneGraph;
 use cadr_core::load::SceneSource;
 use cadr_core::render::{Camera, FrameStats, DEFAULT_DIRECTION};
+use cadr_core::scene::closure::{ClosedPartCounter, ClosedPartCounts};
 use cadr_core::scene::{flatten, flatten_outline, SceneStats};
 use cadr_core::technique::{Combination, ShadeMode};
 use cadr_core::timings::{self, Phase};
@@ -125,12 +126,23 @@ pub(crate) fn open_device(validation: &ValidationArgs) -> Result<std::sync::Arc<
 
 fn info(args: &InfoArgs) -> Result<(), String> {
     let started = Instant::now();
-    let scene = load_scene(&args.scene)?;
-    let flat = flatten(&scene).map_err(|e| e.to_string())?;
-    let stats = SceneStats::new(&scene, &flat);
-    println!("scene:            {}", scene.name);
+    // One geometry at a time: each is counted and summarised as it is read, then let go, so
+    // that a model larger than memory can be described.
+    let source = SceneSource::parse(&args.scene).map_err(|e| e.to_string())?;
+    let mut counter = ClosedPartCounter::default();
+    let outline = progress::spin(&format!("loading {}", args.scene), || {
+        source.load_through(&mut counter)
+    })
+    .map_err(|e| e.to_string())?;
+    let flat = flatten_outline(&outline, &counter.summaries).map_err(|e| e.to_string())?;
+    let stats = SceneStats::of_outline(&outline, &flat, &counter.summaries);
+    println!("scene:            {}", outline.name);
     print!("{stats}");
-    let (closed, inside_out, parts) = cadr_core::scene::closure::count_closed_parts(&scene);
+    let ClosedPartCounts {
+        closed,
+        inside_out,
+        parts,
+    } = counter.counts;
     println!(
         "closed parts:     {closed} of {parts}, {inside_out} more inside out (section cuts \
          through them are capped; GPU cullers skip their back faces)"

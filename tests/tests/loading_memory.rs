@@ -177,3 +177,47 @@ fn a_refused_import_of_a_loaded_scene_changes_nothing_and_leaves_no_page_file() 
         "the load's page file goes with it"
     );
 }
+
+#[test]
+fn a_scene_described_one_geometry_at_a_time_gives_the_whole_loads_figures() {
+    use cadr_core::scene::closure::{count_closed_parts, ClosedPartCounter};
+    use cadr_core::scene::{flatten, flatten_outline, SceneStats};
+    let _one = ONE_AT_A_TIME.lock().unwrap_or_else(|p| p.into_inner());
+    let generated = SceneSource::parse(UNIQUE_UNITS).unwrap().load().unwrap();
+    let path = saved(&generated, "described.csf");
+    let source = SceneSource::File(path.clone());
+    let whole = source.load().unwrap();
+    let whole_stats = SceneStats::new(&whole, &flatten(&whole).unwrap());
+
+    let mut counter = ClosedPartCounter::default();
+    let (growth, outline) = heap_growth(|| source.load_through(&mut counter).unwrap());
+    let flat = flatten_outline(&outline, &counter.summaries).unwrap();
+    assert_eq!(
+        SceneStats::of_outline(&outline, &flat, &counter.summaries),
+        whole_stats
+    );
+    let counts = counter.counts;
+    assert_eq!(
+        (counts.closed, counts.inside_out, counts.parts),
+        count_closed_parts(&whole)
+    );
+    assert!(counts.closed > 0, "gen:fine's parts are closed: {counts:?}");
+    // What `cadr info` holds: the geometry being read (its CSF arrays, the geometry made of
+    // them and its closure's maps), never the scene.
+    let largest = whole
+        .geometries
+        .iter()
+        .map(Geometry::host_bytes)
+        .max()
+        .unwrap();
+    println!(
+        "described with the heap grown {:.1} MB; the scene is {:.1} MB",
+        growth as f64 / 1e6,
+        scene_bytes(&whole) as f64 / 1e6
+    );
+    assert!(
+        growth <= 4 * largest + (1 << 20) && growth * 4 < scene_bytes(&whole),
+        "{growth} bytes to describe the scene, whose largest geometry is {largest}"
+    );
+    std::fs::remove_file(&path).unwrap();
+}

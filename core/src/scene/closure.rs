@@ -10,6 +10,7 @@
 
 use std::collections::HashMap;
 
+use super::sink::{GeometrySink, GeometrySummary};
 use super::Vertex;
 
 /// How a part's triangles close.
@@ -75,8 +76,27 @@ pub fn closure(vertices: &[Vertex], indices: &[u32]) -> Closure {
 /// How the parts of `scene`'s geometries close: (closed, inside out, parts in all). Parts
 /// whose index range lies outside their geometry count as open.
 pub fn count_closed_parts(scene: &super::Scene) -> (usize, usize, usize) {
-    let mut counts = (0, 0, 0);
+    let mut counts = ClosedPartCounts::default();
     for geometry in &scene.geometries {
+        counts.add(geometry);
+    }
+    (counts.closed, counts.inside_out, counts.parts)
+}
+
+/// How many parts close, counted geometry by geometry.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct ClosedPartCounts {
+    /// Parts closed, counter-clockwise seen from outside.
+    pub closed: usize,
+    /// Parts closed but inside out.
+    pub inside_out: usize,
+    /// Parts in all.
+    pub parts: usize,
+}
+
+impl ClosedPartCounts {
+    /// Counts the parts of `geometry` (a part whose index range lies outside it is open).
+    fn add(&mut self, geometry: &super::Geometry) {
         for part in &geometry.parts {
             let start = part.first_index as usize;
             let indices = geometry
@@ -84,14 +104,37 @@ pub fn count_closed_parts(scene: &super::Scene) -> (usize, usize, usize) {
                 .get(start..start.saturating_add(part.index_count as usize))
                 .unwrap_or(&[]);
             match closure(&geometry.vertices, indices) {
-                Closure::Closed => counts.0 += 1,
-                Closure::InsideOut => counts.1 += 1,
+                Closure::Closed => self.closed += 1,
+                Closure::InsideOut => self.inside_out += 1,
                 Closure::Open => {}
             }
-            counts.2 += 1;
+            self.parts += 1;
         }
     }
-    counts
+}
+
+/// The sink that counts how the parts of each geometry close and keeps only its summary,
+/// leaving a stand-in (see [`GeometrySink`]): a scene's statistics and closed parts, read one
+/// geometry at a time, so that a model larger than memory can be described (`cadr info`).
+#[derive(Clone, Debug, Default)]
+pub struct ClosedPartCounter {
+    /// The parts counted so far.
+    pub counts: ClosedPartCounts,
+    /// Each geometry's summary, in the scene's order.
+    pub summaries: Vec<GeometrySummary>,
+}
+
+impl GeometrySink for ClosedPartCounter {
+    fn take(&mut self, index: u32, geometry: super::Geometry) -> super::Geometry {
+        self.counts.add(&geometry);
+        let index = index as usize;
+        if self.summaries.len() <= index {
+            self.summaries
+                .resize_with(index + 1, || super::Geometry::default().summary());
+        }
+        self.summaries[index] = geometry.summary();
+        geometry.stand_in()
+    }
 }
 
 #[cfg(test)]

@@ -26,6 +26,16 @@ fn scene_bytes(scene: &Scene) -> u64 {
     scene.geometries.iter().map(Geometry::host_bytes).sum()
 }
 
+/// The bytes of the scene's largest geometry.
+fn largest_geometry_bytes(scene: &Scene) -> u64 {
+    scene
+        .geometries
+        .iter()
+        .map(Geometry::host_bytes)
+        .max()
+        .unwrap()
+}
+
 /// The most the heap grew over `work`, and its result.
 fn heap_growth<R>(work: impl FnOnce() -> R) -> (u64, R) {
     let before = bytes_in_use();
@@ -129,12 +139,7 @@ fn csf_and_gltf_files_loaded_for_a_graph_page_their_geometries_and_import_as_loa
         // geometry being read (its CSF arrays, the geometry made of them, and the little the
         // file's structures and the decompressor take).
         if !name.ends_with(".glb") {
-            let largest = whole
-                .geometries
-                .iter()
-                .map(Geometry::host_bytes)
-                .max()
-                .unwrap();
+            let largest = largest_geometry_bytes(&whole);
             let allowance = limit + 3 * largest + (1 << 20);
             assert!(
                 growth <= allowance,
@@ -204,12 +209,7 @@ fn a_scene_described_one_geometry_at_a_time_gives_the_whole_loads_figures() {
     assert!(counts.closed > 0, "gen:fine's parts are closed: {counts:?}");
     // What `cadr info` holds: the geometry being read (its CSF arrays, the geometry made of
     // them and its closure's maps), never the scene.
-    let largest = whole
-        .geometries
-        .iter()
-        .map(Geometry::host_bytes)
-        .max()
-        .unwrap();
+    let largest = largest_geometry_bytes(&whole);
     println!(
         "described with the heap grown {:.1} MB; the scene is {:.1} MB",
         growth as f64 / 1e6,

@@ -36,6 +36,16 @@ fn unique_parts() -> Scene {
     })
 }
 
+/// The whole scene, fitted in the default direction.
+fn fitted_view(scene: &Scene) -> Camera {
+    let bounds = flatten(scene).unwrap().bounds;
+    Camera::fit(
+        &bounds,
+        f64::from(SIZE.0) / f64::from(SIZE.1),
+        DEFAULT_DIRECTION,
+    )
+}
+
 /// Looks at the first unit from up close, turned by `turn` radians around it.
 fn close_up(turn: f64) -> Camera {
     close_up_at(DVec3::ZERO, turn)
@@ -267,12 +277,7 @@ fn cullers_without_a_threshold_ask_for_what_they_draw() {
 #[test]
 fn the_whole_scene_under_the_budget_stays_within_the_fidelity_goal() {
     let scene = unique_parts();
-    let bounds = flatten(&scene).unwrap().bounds;
-    let fitted = Camera::fit(
-        &bounds,
-        f64::from(SIZE.0) / f64::from(SIZE.1),
-        DEFAULT_DIRECTION,
-    );
+    let fitted = fitted_view(&scene);
     let frames = vec![fitted; 4];
     let (full, _, _) = render(&scene, None, &frames[..1]);
     let (_, probe, _) = render(&scene, Some(1 << 20), &frames[..1]);
@@ -599,12 +604,7 @@ fn coarse_forms_under(scene: &Scene, budget: u64, camera: &Camera) -> (u64, imag
 #[test]
 fn the_coarse_forms_of_a_scene_far_over_its_budget_take_about_half_of_it() {
     let scene = unique_parts();
-    let bounds = flatten(&scene).unwrap().bounds;
-    let fitted = Camera::fit(
-        &bounds,
-        f64::from(SIZE.0) / f64::from(SIZE.1),
-        DEFAULT_DIRECTION,
-    );
+    let fitted = fitted_view(&scene);
     let (_, probe, _) = render(&scene, Some(1 << 20), &[fitted]);
     let total = probe[0].unwrap().total_full_bytes;
     let (full, _, _) = render(&scene, None, &[fitted]);

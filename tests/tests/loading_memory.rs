@@ -202,10 +202,7 @@ fn a_scene_described_one_geometry_at_a_time_gives_the_whole_loads_figures() {
         whole_stats
     );
     let counts = counter.counts;
-    assert_eq!(
-        (counts.closed, counts.inside_out, counts.parts),
-        count_closed_parts(&whole)
-    );
+    assert_eq!(counts, count_closed_parts(&whole));
     assert!(counts.closed > 0, "gen:fine's parts are closed: {counts:?}");
     // What `cadr info` holds: the geometry being read (its CSF arrays, the geometry made of
     // them and its closure's maps), never the scene.

@@ -404,14 +404,14 @@ pub fn csf_scene_from_file(
         path: path.to_owned(),
         source,
     };
-    let mut file = std::fs::File::open(path).map_err(io)?;
-    let mut _unpacked = None;
-    if gzip {
+    let file = std::fs::File::open(path).map_err(io)?;
+    // The guard, where there is one, lives until the file is read.
+    let (file, _unpacked) = if gzip {
         let directory = crate::graph::page_directory();
-        let (plain, guard) = unpacked(file, &directory, decompression_limit()).map_err(io)?;
-        file = plain;
-        _unpacked = Some(guard);
-    }
+        unpacked(file, &directory, decompression_limit()).map_err(io)?
+    } else {
+        (file, RemovedOnDrop(None))
+    };
     let len = file.metadata().map_err(io)?.len();
     let bytes = CsfBytes::File {
         file: std::cell::RefCell::new(file),

@@ -537,16 +537,14 @@ impl Layout {
             .filter_map(|slot| graph.geometry_info_at(slot))
             .any(|info| info.has_attributes);
         // How coarse the coarse forms are, where the scene streams: set from its bytes in host
-        // memory, before any geometry is read.
+        // memory (in memory and in the page file), which the graph counts, before any geometry
+        // is read.
         let budget = streaming_budget(device);
         let share = match streaming {
             Some(streaming) => streaming.coarse_share(),
             None => {
-                let scene_bytes = (0..geometry_slots as u32)
-                    .filter_map(|slot| graph.geometry_info_at(slot))
-                    .map(|info| info.bytes)
-                    .sum();
-                coarse_share(budget, scene_bytes)
+                let memory = graph.geometry_memory();
+                coarse_share(budget, memory.resident_bytes + memory.paged_bytes)
             }
         };
         // The clusters are built on a thread per core, the geometries laid out in slot order.
@@ -600,13 +598,13 @@ impl Layout {
         streaming: &mut Option<Streaming>,
         has_attributes: bool,
     ) -> RenderResult<()> {
+        let share = streaming.as_ref().map_or(0.0, Streaming::coarse_share);
         let forms: Vec<Option<Arc<CoarseForm>>> = match streaming.as_mut() {
             None => vec![None; chunk.len()],
             Some(streaming) => (chunk.iter().zip(&mut entries))
                 .map(|(&slot, entry)| {
                     let entry = entry.as_mut()?;
                     let handle = entry.handle();
-                    let share = streaming.coarse_share();
                     streaming.form_to_place(slot, handle, || match entry {
                         Measured::Resident(_, geometry, data) => {
                             coarse_form(geometry, data, has_attributes, share)

@@ -41,9 +41,6 @@ pub struct GeometryInfo<'g> {
     pub has_attributes: bool,
     /// Whether it is kept in the page file (reading it costs a file read).
     pub paged: bool,
-    /// Its bytes: in memory ([`Geometry::host_bytes`]), or its record's in the page file
-    /// (about the same).
-    pub bytes: u64,
 }
 
 /// A geometry as another thread can read it (see
@@ -99,10 +96,8 @@ impl StoredGeometry {
                 parts: &geometry.parts,
                 has_attributes: !geometry.attributes.is_empty(),
                 paged: false,
-                bytes: geometry.host_bytes(),
             },
             Self::Paged {
-                page,
                 name,
                 parts,
                 has_attributes,
@@ -112,7 +107,6 @@ impl StoredGeometry {
                 parts,
                 has_attributes: *has_attributes,
                 paged: true,
-                bytes: page.len(),
             },
         }
     }

@@ -73,14 +73,14 @@ pub fn closure(vertices: &[Vertex], indices: &[u32]) -> Closure {
     }
 }
 
-/// How the parts of `scene`'s geometries close: (closed, inside out, parts in all). Parts
-/// whose index range lies outside their geometry count as open.
-pub fn count_closed_parts(scene: &super::Scene) -> (usize, usize, usize) {
+/// How the parts of `scene`'s geometries close. Parts whose index range lies outside their
+/// geometry count as open.
+pub fn count_closed_parts(scene: &super::Scene) -> ClosedPartCounts {
     let mut counts = ClosedPartCounts::default();
     for geometry in &scene.geometries {
         counts.add(geometry);
     }
-    (counts.closed, counts.inside_out, counts.parts)
+    counts
 }
 
 /// How many parts close, counted geometry by geometry.
@@ -126,13 +126,13 @@ pub struct ClosedPartCounter {
 
 impl GeometrySink for ClosedPartCounter {
     fn take(&mut self, index: u32, geometry: super::Geometry) -> super::Geometry {
+        debug_assert_eq!(
+            index as usize,
+            self.summaries.len(),
+            "geometries come in order"
+        );
         self.counts.add(&geometry);
-        let index = index as usize;
-        if self.summaries.len() <= index {
-            self.summaries
-                .resize_with(index + 1, || super::Geometry::default().summary());
-        }
-        self.summaries[index] = geometry.summary();
+        self.summaries.push(geometry.summary());
         geometry.stand_in()
     }
 }
@@ -215,6 +215,13 @@ mod tests {
             geometries: vec![geometry],
             ..super::super::Scene::default()
         };
-        assert_eq!(count_closed_parts(&scene), (1, 1, 4));
+        assert_eq!(
+            count_closed_parts(&scene),
+            ClosedPartCounts {
+                closed: 1,
+                inside_out: 1,
+                parts: 4
+            }
+        );
     }
 }

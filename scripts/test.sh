@@ -74,8 +74,9 @@ for driver in default "$mesa22_manifest"; do
     env "${driver_variable[@]}" cargo nextest run -p cadr-tests --features fault-injection \
       --locked --test fault_injection
   else
+    # One process for the four tests: the armed failure is the process's, so one at a time.
     env "${driver_variable[@]}" cargo test -p cadr-tests --features fault-injection --locked \
-      --test fault_injection
+      --test fault_injection -- --test-threads=1
   fi
 done
 if cargo nextest --version >/dev/null 2>&1; then

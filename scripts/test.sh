@@ -65,24 +65,26 @@ run_subset "${CADR_SWIFTSHADER_DIR:-$PWD/target/swiftshader}/vk_swiftshader_icd.
 # injects a panic into file reading, which the load's panic boundary must turn into an error
 # (through the Rust API, the C API and the command line). The injected failures run on the
 # default driver and again on Mesa 22.3's lavapipe: core/src/vk/fault.rs keeps the allocations
-# each driver uses unchecked or leaks after out of them.
-cargo clippy -p cadr-tests -p cadr-cli --features fault-injection --all-targets --locked -- -D warnings
+# each driver uses unchecked or leaks after out of them. Built for the whole workspace, as the
+# runs above (built for one package alone, the dependencies would get other features and be
+# built again: two minutes), with only the test targets that need the feature.
+fault_injection=(--workspace --features cadr-tests/fault-injection,cadr-cli/fault-injection --locked)
+cargo clippy "${fault_injection[@]}" --all-targets -- -D warnings
 for driver in default "$mesa22_manifest"; do
   if [[ $driver == default ]]; then driver_variable=(); else driver_variable=(VK_ICD_FILENAMES="$driver"); fi
   echo "test: injected failures on the $driver driver"
   if cargo nextest --version >/dev/null 2>&1; then
-    env "${driver_variable[@]}" cargo nextest run -p cadr-tests --features fault-injection \
-      --locked --test fault_injection
+    env "${driver_variable[@]}" cargo nextest run "${fault_injection[@]}" --test fault_injection
   else
-    # One process for the four tests: the armed failure is the process's, so one at a time.
-    env "${driver_variable[@]}" cargo test -p cadr-tests --features fault-injection --locked \
-      --test fault_injection -- --test-threads=1
+    # One process for the five tests: the armed failure is the process's, so one at a time.
+    env "${driver_variable[@]}" cargo test "${fault_injection[@]}" --test fault_injection \
+      -- --test-threads=1
   fi
 done
 if cargo nextest --version >/dev/null 2>&1; then
-  cargo nextest run -p cadr-tests --features fault-injection --locked --test reader_panic
-  cargo nextest run -p cadr-cli --features fault-injection --locked --test cli panic_while_reading
+  cargo nextest run "${fault_injection[@]}" --test reader_panic --test cli \
+    -E 'binary(reader_panic) | test(panic_while_reading)'
 else
-  cargo test -p cadr-tests --features fault-injection --locked --test reader_panic
-  cargo test -p cadr-cli --features fault-injection --locked --test cli panic_while_reading
+  cargo test "${fault_injection[@]}" --test reader_panic
+  cargo test "${fault_injection[@]}" --test cli panic_while_reading
 fi

@@ -1,5 +1,6 @@
-//! Injected Vulkan failures (feature `fault-injection`: `cargo nextest run -p cadr-tests
-//! --features fault-injection`, as `scripts/test.sh` does): device memory allocations, host
+//! Injected Vulkan failures (feature `fault-injection`: `cargo nextest run --workspace
+//! --features cadr-tests/fault-injection --test fault_injection`, as `scripts/test.sh` does;
+//! one test at a time with `cargo test`, `--test-threads=1`): device memory allocations, host
 //! memory allocations (through the allocation callbacks), queue submissions and device losses
 //! of a render of gen:demo with a technique swap in between, from instance creation on, are
 //! made to fail in turn. Each failure must come back as an error with a clear message, never a

@@ -4,6 +4,9 @@
 # then the compatibility subsets on the drivers without Vulkan 1.4's extras.
 set -euo pipefail
 cd "$(dirname "$0")/.."
+# Where the time goes, for whoever shortens CI: the seconds since the start at each step.
+step() { echo "test: at ${SECONDS} s: $*"; }
+step "set-up"
 scripts/setup.sh
 export CARGO_TERM_COLOR=never
 # A clean build of the checks and tests peaks at about 2.5 GB under target/ (measured
@@ -14,12 +17,14 @@ free_mb=$(df -Pm target | awk 'NR == 2 { print $4 }')
 if [[ -n "$free_mb" && "$free_mb" -lt 3072 ]]; then
   echo "test: warning: only ${free_mb} MB free for target/; a clean build of the tests needs about 2 500 MB" >&2
 fi
+step "formatting, clippy and docs"
 cargo fmt --all -- --check
 cargo clippy --workspace --all-targets --locked -- -D warnings
 RUSTDOCFLAGS="-D warnings" cargo doc --workspace --no-deps --locked
 # Only the check matters here; the pages would take disk the test builds need on a clean machine.
 rm -rf target/doc
 
+step "the suite (its build first)"
 if cargo nextest --version >/dev/null 2>&1; then
   cargo nextest run --workspace --locked --no-fail-fast
 else
@@ -42,7 +47,7 @@ swiftshader_subset=(rendering vulkan_layer)
 run_subset() { # MANIFEST TEST-BINARY...
   local manifest=$1
   shift
-  echo "test: the compatibility subset ($*) on $manifest"
+  step "the compatibility subset ($*) on $manifest"
   if cargo nextest --version >/dev/null 2>&1; then
     # --workspace, as the full run above: built for one package alone, cadr-tests would get other
     # features unified into its dependencies and every test binary would be built a second time
@@ -69,10 +74,11 @@ run_subset "${CADR_SWIFTSHADER_DIR:-$PWD/target/swiftshader}/vk_swiftshader_icd.
 # runs above (built for one package alone, the dependencies would get other features and be
 # built again: two minutes), with only the test targets that need the feature.
 fault_injection=(--workspace --features cadr-tests/fault-injection,cadr-cli/fault-injection --locked)
+step "clippy with the fault-injection feature"
 cargo clippy "${fault_injection[@]}" --all-targets -- -D warnings
 for driver in default "$mesa22_manifest"; do
   if [[ $driver == default ]]; then driver_variable=(); else driver_variable=(VK_ICD_FILENAMES="$driver"); fi
-  echo "test: injected failures on the $driver driver"
+  step "injected failures on the $driver driver"
   if cargo nextest --version >/dev/null 2>&1; then
     env "${driver_variable[@]}" cargo nextest run "${fault_injection[@]}" --test fault_injection
   else
@@ -81,6 +87,7 @@ for driver in default "$mesa22_manifest"; do
       -- --test-threads=1
   fi
 done
+step "a panic while reading, through the Rust API, the C API and the command line"
 if cargo nextest --version >/dev/null 2>&1; then
   cargo nextest run "${fault_injection[@]}" --test reader_panic --test cli \
     -E 'binary(reader_panic) | test(panic_while_reading)'
@@ -88,3 +95,4 @@ else
   cargo test "${fault_injection[@]}" --test reader_panic
   cargo test "${fault_injection[@]}" --test cli panic_while_reading
 fi
+step "done"

@@ -38,6 +38,8 @@ fn renders_a_generator_scene_to_png() {
     assert_eq!(last_error(), "", "a success clears the message");
     let image = image_size(&path);
     assert_eq!(image, (96, 64));
+    // Kept where the test fails, for a look.
+    let _ = std::fs::remove_file(&path);
 }
 
 fn image_size(path: &std::path::Path) -> (u32, u32) {

@@ -73,4 +73,6 @@ fn header_compiles_as_strict_c99_and_cpp() {
     std::fs::create_dir_all(&dir).unwrap();
     compile("cc", "-std=c99", "c", &dir);
     compile("c++", "-std=c++17", "cpp", &dir);
+    // Kept where the test fails, for a look.
+    let _ = std::fs::remove_dir_all(&dir);
 }

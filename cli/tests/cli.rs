@@ -3,6 +3,8 @@
 
 use std::process::{Command, Output};
 
+use cadr_tests::c_programs::scratch_dir;
+
 /// Runs `cadr` with the plugins cargo built (in `deps/` beside the binary: the test build makes
 /// them as dependencies of the integration tests).
 fn cadr(args: &[&str]) -> Output {
@@ -92,7 +94,8 @@ fn info_prints_the_statistics() {
 
 #[test]
 fn render_writes_a_png_and_reports_the_frame() {
-    let path = std::env::temp_dir().join(format!("cadr-cli-{}.png", std::process::id()));
+    let scratch = scratch_dir("cli-render");
+    let path = scratch.join("out.png");
     let output = cadr(&[
         "render",
         "gen:grid:parts=300",
@@ -218,8 +221,7 @@ fn completions_name_the_commands_for_each_shell() {
 
 #[test]
 fn convert_writes_csf_and_gltf_that_info_reads() {
-    let dir = std::env::temp_dir().join(format!("cadr-cli-convert-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir = scratch_dir("cli-convert");
     let csf = dir.join("grid.csf.gz");
     let output = cadr(&["convert", "gen:grid:parts=120", csf.to_str().unwrap()]);
     assert!(output.status.success(), "{}", stderr(&output));
@@ -325,7 +327,8 @@ fn techniques_lists_every_kind_with_support() {
 
 #[test]
 fn render_uses_the_chosen_techniques_and_refuses_bad_combinations() {
-    let path = std::env::temp_dir().join(format!("cadr-cli-techniques-{}.png", std::process::id()));
+    let scratch = scratch_dir("cli-techniques");
+    let path = scratch.join("out.png");
     let output = cadr(&[
         "render",
         "gen:demo",
@@ -402,7 +405,8 @@ fn render_uses_the_chosen_techniques_and_refuses_bad_combinations() {
 
 #[test]
 fn bench_prints_the_table_and_writes_json() {
-    let path = std::env::temp_dir().join(format!("cadr-cli-bench-{}.json", std::process::id()));
+    let scratch = scratch_dir("cli-bench");
+    let path = scratch.join("out.json");
     let (output, json) =
         small_bench_of("gen:grid:parts=500", "individual,groups-replay", &path, &[]);
     let text = stdout(&output);
@@ -449,7 +453,8 @@ fn bench_prints_the_table_and_writes_json() {
 /// draws the parts a third time (after the surfaces and the lines), and `--no-caps` drops it.
 #[test]
 fn bench_measures_a_sectioned_scene_with_and_without_caps() {
-    let path = std::env::temp_dir().join(format!("cadr-cli-section-{}.json", std::process::id()));
+    let scratch = scratch_dir("cli-bench-section");
+    let path = scratch.join("out.json");
     // The fitted camera looks from +z: it sees the cut side of a plane keeping z <= 1.6.
     let plane = "--section=0,0,-2,3.2";
     let (output, json) = small_bench("gen:grid:parts=200", &path, &["--display", "edges", plane]);
@@ -486,12 +491,12 @@ fn bench_measures_a_sectioned_scene_with_and_without_caps() {
         "{}",
         stderr(&output)
     );
-    let _ = std::fs::remove_file(&path);
 }
 
 #[test]
 fn bench_animate_moves_assemblies_on_the_gpu_with_64_bytes_per_node() {
-    let path = std::env::temp_dir().join(format!("cadr-cli-animate-{}.json", std::process::id()));
+    let scratch = scratch_dir("cli-animate");
+    let path = scratch.join("out.json");
     let output = cadr(&[
         "bench",
         "gen:cabinet:cabinets=2",
@@ -550,8 +555,7 @@ fn bench_animate_moves_assemblies_on_the_gpu_with_64_bytes_per_node() {
 #[test]
 fn without_plugin_libraries_the_built_in_combination_draws_and_others_are_explained() {
     // A copy of the binary in a directory of its own finds no plugin library.
-    let dir = std::env::temp_dir().join(format!("cadr-cli-alone-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir = scratch_dir("cli-alone");
     let exe = dir.join("cadr");
     std::fs::copy(env!("CARGO_BIN_EXE_cadr"), &exe).unwrap();
     let alone = |args: &[&str]| {
@@ -606,12 +610,12 @@ fn without_plugin_libraries_the_built_in_combination_draws_and_others_are_explai
     assert!(techniques
         .iter()
         .all(|t| t["built_in"] == true && t["library"] == "built-in" && t["supported"] == true));
-    std::fs::remove_dir_all(&dir).unwrap();
 }
 
 #[test]
 fn render_min_pixels_culls_small_parts_on_the_gpu_and_is_refused_elsewhere() {
-    let path = std::env::temp_dir().join(format!("cadr-cli-subpixel-{}.png", std::process::id()));
+    let scratch = scratch_dir("cli-subpixel");
+    let path = scratch.join("out.png");
     let triangles = |extra: &[&str]| {
         let mut arguments = vec![
             "render",
@@ -681,8 +685,7 @@ fn render_min_pixels_culls_small_parts_on_the_gpu_and_is_refused_elsewhere() {
 
 #[test]
 fn the_disk_cache_serves_the_second_run_and_survives_damaged_entries() {
-    let dir = std::env::temp_dir().join(format!("cadr-cli-cache-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
+    let dir = scratch_dir("cli-cache");
     let png = dir.join("frame.png");
     let cache = dir.join("cache");
     let exe = std::path::Path::new(env!("CARGO_BIN_EXE_cadr"));
@@ -786,12 +789,12 @@ fn the_disk_cache_serves_the_second_run_and_survives_damaged_entries() {
     let fourth = render(&untouched, &["--no-cache"]);
     assert_eq!(first, fourth);
     assert!(!untouched.exists(), "--no-cache wrote {untouched:?}");
-    let _ = std::fs::remove_dir_all(&dir);
 }
 
 #[test]
 fn render_timings_split_the_run_into_its_phases() {
-    let path = std::env::temp_dir().join(format!("cadr-cli-timings-{}.png", std::process::id()));
+    let scratch = scratch_dir("cli-timings");
+    let path = scratch.join("out.png");
     let output = cadr(&[
         "render",
         "gen:demo",
@@ -849,13 +852,11 @@ fn render_timings_split_the_run_into_its_phases() {
         (sum - total).abs() <= 0.1 * total + 1.0,
         "{sum} vs {total}:\n{text}"
     );
-    let _ = std::fs::remove_file(&path);
 }
 
 #[test]
 fn bench_plots_the_table_and_the_sweep() {
-    let dir = std::env::temp_dir().join(format!("cadr-cli-plot-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir = scratch_dir("cli-plot");
     let (svg, png, sweep) = (dir.join("t.svg"), dir.join("t.png"), dir.join("s.svg"));
     let table = |plot: &std::path::Path| {
         cadr(&[
@@ -913,13 +914,11 @@ fn bench_plots_the_table_and_the_sweep() {
     let output = table(&dir.join("t.txt"));
     assert_eq!(output.status.code(), Some(1));
     assert!(stderr(&output).contains("expected a file ending in .svg or .png"));
-    let _ = std::fs::remove_dir_all(&dir);
 }
 
 #[test]
 fn sections_cut_what_render_draws_and_pick_hits() {
-    let dir = std::env::temp_dir().join(format!("cadr-cli-section-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir = scratch_dir("cli-section");
     let whole = dir.join("whole.png");
     let cut = dir.join("cut.png");
     let render = |out: &std::path::Path, extra: &[&str]| {
@@ -973,15 +972,13 @@ fn sections_cut_what_render_draws_and_pick_hits() {
         "{}",
         stderr(&many)
     );
-    std::fs::remove_dir_all(&dir).unwrap();
 }
 
 /// `bench --display` takes a list of modes, and `--highlight NAME` selects nodes in every
 /// row, as `render --highlight` does.
 #[test]
 fn bench_measures_a_list_of_display_modes_with_highlighted_nodes() {
-    let dir = std::env::temp_dir().join(format!("cadr-cli-bench-modes-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir = scratch_dir("cli-bench-modes");
     let json_path = dir.join("bench.json");
     // A list of display modes, each measured once in the order given; highlighted nodes
     // (a host's selection) X-ray draws opaque.
@@ -1027,7 +1024,6 @@ fn bench_measures_a_list_of_display_modes_with_highlighted_nodes() {
         "{}",
         stderr(&output)
     );
-    let _ = std::fs::remove_dir_all(&dir);
 }
 
 #[test]
@@ -1043,8 +1039,7 @@ fn msaa_anti_aliases_render_and_bench_measures_each_level() {
         devices.contains(" GB of video memory") && !devices.contains(" 0.0 GB of video memory"),
         "{devices}"
     );
-    let dir = std::env::temp_dir().join(format!("cadr-cli-msaa-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir = scratch_dir("cli-msaa");
     let render = |samples: &str| {
         let path = dir.join(format!("msaa{samples}.png"));
         let output = cadr(&[
@@ -1223,8 +1218,7 @@ fn msaa_anti_aliases_render_and_bench_measures_each_level() {
 /// changes the picture and says so, and an unknown name, style, colour or width is refused.
 #[test]
 fn render_highlights_named_nodes_and_draws_silhouettes_on_request() {
-    let dir = std::env::temp_dir().join(format!("cadr-cli-highlight-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir = scratch_dir("cli-highlight");
     let draw = |name: &str, scene: &str, extra: &[&str]| {
         let path = dir.join(format!("{name}.png"));
         let mut args = vec![
@@ -1312,15 +1306,13 @@ fn render_highlights_named_nodes_and_draws_silhouettes_on_request() {
         "expected a colour #RRGGBB",
     );
     refused("--outline-width", "9", 2, "1..=8");
-    let _ = std::fs::remove_dir_all(&dir);
 }
 
 /// What the library warns of reaches the user: `info` of a glTF whose only image is no image
 /// loads the scene and says the image is left out.
 #[test]
 fn the_librarys_warnings_reach_standard_error() {
-    let dir = std::env::temp_dir().join(format!("cadr-cli-warnings-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir = scratch_dir("cli-warnings");
     let path = dir.join("broken-image.gltf");
     // One triangle whose material's texture image is the text "not an image".
     let gltf = r#"{
@@ -1345,7 +1337,6 @@ fn the_librarys_warnings_reach_standard_error() {
         path.display()
     );
     assert!(stderr(&output).contains(&expected), "{}", stderr(&output));
-    let _ = std::fs::remove_dir_all(&dir);
 }
 
 /// With the `fault-injection` feature (`scripts/test.sh` runs this test so): a panic while a
@@ -1391,7 +1382,7 @@ fn a_panic_while_reading_a_file_is_an_error_without_a_backtrace() {
 fn the_gpu_benchmark_script_dry_runs_and_writes_its_files() {
     let exe = std::path::Path::new(env!("CARGO_BIN_EXE_cadr"));
     let repository = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
-    let out = std::env::temp_dir().join(format!("cadr-bench-gpu-{}", std::process::id()));
+    let out = scratch_dir("bench-gpu");
     let output = Command::new("bash")
         .arg(repository.join("scripts/bench-gpu.sh"))
         .arg("--dry-run")
@@ -1449,7 +1440,6 @@ fn the_gpu_benchmark_script_dry_runs_and_writes_its_files() {
             .len()
             > 0
     );
-    std::fs::remove_dir_all(&out).unwrap();
 }
 
 /// `bench` measures gpu-clusters once per `--lod-error`, its JSON rows say what the GPU
@@ -1458,8 +1448,7 @@ fn the_gpu_benchmark_script_dry_runs_and_writes_its_files() {
 /// refused.
 #[test]
 fn bench_measures_clusters_per_lod_error_and_sweeps_the_detail() {
-    let dir = std::env::temp_dir().join(format!("cadr-cli-clusters-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir = scratch_dir("cli-clusters");
     let json_path = dir.join("b.json");
     let scene_wide = [
         "--vertex",
@@ -1551,5 +1540,4 @@ fn bench_measures_clusters_per_lod_error_and_sweeps_the_detail() {
         "{}",
         stderr(&output)
     );
-    let _ = std::fs::remove_dir_all(&dir);
 }

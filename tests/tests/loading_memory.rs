@@ -12,6 +12,7 @@ use cadr_core::graph::SceneGraph;
 use cadr_core::host_heap::{bytes_in_use, peak_bytes_in_use, reset_peak, CountingAllocator};
 use cadr_core::load::SceneSource;
 use cadr_core::scene::{Geometry, Scene};
+use cadr_tests::c_programs::scratch_dir;
 
 #[global_allocator]
 static HEAP: CountingAllocator = CountingAllocator;
@@ -97,11 +98,8 @@ fn a_generated_scene_loaded_for_a_graph_holds_no_more_geometry_than_the_graph_ke
     assert_eq!(graph.to_scene().unwrap(), imported_whole(&whole));
 }
 
-/// Writes `scene` to `name` in a directory of its own and returns the path.
-fn saved(scene: &Scene, name: &str) -> PathBuf {
-    let directory =
-        std::env::temp_dir().join(format!("cadr-loading-memory-{}", std::process::id()));
-    std::fs::create_dir_all(&directory).unwrap();
+/// Writes `scene` to `name` in `directory` and returns the path.
+fn saved(scene: &Scene, directory: &Path, name: &str) -> PathBuf {
     let path = directory.join(name);
     cadr_core::save::save_scene(scene, &path).unwrap();
     path
@@ -111,8 +109,9 @@ fn saved(scene: &Scene, name: &str) -> PathBuf {
 fn csf_and_gltf_files_loaded_for_a_graph_page_their_geometries_and_import_as_loaded_whole() {
     let _one = ONE_AT_A_TIME.lock().unwrap_or_else(|p| p.into_inner());
     let generated = SceneSource::parse(UNIQUE_UNITS).unwrap().load().unwrap();
+    let scratch = scratch_dir("loading-memory-units");
     for name in ["units.csf", "units.csf.gz", "units.glb"] {
-        let path = saved(&generated, name);
+        let path = saved(&generated, &scratch, name);
         let source = SceneSource::File(path.clone());
         let (whole_growth, whole) = heap_growth(|| source.load().unwrap());
         let limit = scene_bytes(&whole) / 8;
@@ -189,7 +188,8 @@ fn a_scene_described_one_geometry_at_a_time_gives_the_whole_loads_figures() {
     use cadr_core::scene::{flatten, flatten_outline, SceneStats};
     let _one = ONE_AT_A_TIME.lock().unwrap_or_else(|p| p.into_inner());
     let generated = SceneSource::parse(UNIQUE_UNITS).unwrap().load().unwrap();
-    let path = saved(&generated, "described.csf");
+    let scratch = scratch_dir("loading-memory-described");
+    let path = saved(&generated, &scratch, "described.csf");
     let source = SceneSource::File(path.clone());
     let whole = source.load().unwrap();
     let whole_stats = SceneStats::new(&whole, &flatten(&whole).unwrap());

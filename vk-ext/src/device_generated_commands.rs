@@ -3,11 +3,12 @@
 //! with the number of sequences read from GPU memory.
 //!
 //! Bound, as the `dgc` submission uses them: the feature struct, an indirect commands layout
-//! of indexed-draw tokens, with or without an execution-set token before them, execution sets
-//! of pipelines (made, updated, destroyed; their pipelines made indirect-bindable), the
-//! memory-requirements query and the execute command (preprocessing implicit). Push-constant
-//! and other tokens, explicit preprocessing and shader objects are not bound: bind them with
-//! the technique that uses them.
+//! of indexed-draw tokens, with an execution-set token, a push-constant token, both or
+//! neither before them, execution sets of pipelines (made, updated, destroyed; their
+//! pipelines made indirect-bindable), the memory-requirements query and the execute command
+//! (preprocessing implicit). The other tokens (vertex and index buffers, sequence index, push
+//! data), explicit preprocessing and shader objects are not bound: bind them with the
+//! technique that uses them.
 
 use std::ffi::{c_void, CStr};
 use std::marker::PhantomData;
@@ -88,6 +89,9 @@ impl TokenType {
     /// `VK_INDIRECT_COMMANDS_TOKEN_TYPE_EXECUTION_SET_EXT`: a `u32`, the index in the execution
     /// set of the pipeline that draws the sequence.
     pub const EXECUTION_SET: Self = Self(0);
+    /// `VK_INDIRECT_COMMANDS_TOKEN_TYPE_PUSH_CONSTANT_EXT`: the bytes of a push-constant range,
+    /// pushed before the sequence's draw.
+    pub const PUSH_CONSTANT: Self = Self(1);
     /// `VK_INDIRECT_COMMANDS_TOKEN_TYPE_DRAW_INDEXED_EXT`: a `VkDrawIndexedIndirectCommand`.
     pub const DRAW_INDEXED: Self = Self(5);
     /// The raw value.
@@ -148,6 +152,8 @@ pub union TokenData<'a> {
     pub none: *const c_void,
     /// `pExecutionSet`, for [`TokenType::EXECUTION_SET`].
     pub execution_set: *const ExecutionSetToken,
+    /// `pPushConstant`, for [`TokenType::PUSH_CONSTANT`].
+    pub push_constant: *const PushConstantToken,
     _marker: PhantomData<&'a ()>,
 }
 
@@ -208,6 +214,28 @@ impl<'a> LayoutToken<'a> {
             offset,
         )
     }
+}
+
+impl<'a> LayoutToken<'a> {
+    /// The bytes at `offset` pushed as the push-constant range `token` names (its size, from its
+    /// offset in the pipeline layout's push constants).
+    pub fn push_constant(token: &'a PushConstantToken, offset: u32) -> Self {
+        Self::new(
+            TokenType::PUSH_CONSTANT,
+            TokenData {
+                push_constant: token,
+            },
+            offset,
+        )
+    }
+}
+
+/// `VkIndirectCommandsPushConstantTokenEXT`: which push constants a push-constant token sets.
+#[repr(C)]
+#[derive(Clone, Copy, Debug)]
+pub struct PushConstantToken {
+    /// `updateRange`: stages, offset and size, within a range of the layout's pipeline layout.
+    pub update_range: vk::PushConstantRange,
 }
 
 /// `VkIndirectCommandsExecutionSetTokenEXT`: what an execution-set token switches.

@@ -70,7 +70,9 @@ fn c_layout(ty: &str, pointer: bool) -> (usize, usize) {
         | "VkPipelineLayout"
         | "VkIndirectExecutionSetEXT"
         | "VkIndirectCommandsLayoutEXT" => (8, 8),
-        "VkIndirectCommandsTokenDataEXT" | "VkIndirectExecutionSetInfoEXT" => {
+        "VkIndirectCommandsTokenDataEXT"
+        | "VkIndirectExecutionSetInfoEXT"
+        | "VkPushConstantRange" => {
             let fields = struct_layout(ty);
             (fields.size, fields.align)
         }
@@ -243,6 +245,14 @@ fn every_bound_struct_has_the_registry_layout() {
         rust_layout!(dgc::ExecutionSetToken, [ty, shader_stages]),
     );
     check(
+        "VkIndirectCommandsPushConstantTokenEXT",
+        rust_layout!(dgc::PushConstantToken, [update_range]),
+    );
+    check(
+        "VkPushConstantRange",
+        rust_layout!(vk::PushConstantRange, [stage_flags, offset, size]),
+    );
+    check(
         "VkIndirectExecutionSetPipelineInfoEXT",
         rust_layout!(
             dgc::ExecutionSetPipelineInfo<'static>,
@@ -365,6 +375,7 @@ fn every_bound_constant_has_the_registry_value() {
     for (token, name) in [
         (dgc::TokenType::DRAW_INDEXED, "DRAW_INDEXED"),
         (dgc::TokenType::EXECUTION_SET, "EXECUTION_SET"),
+        (dgc::TokenType::PUSH_CONSTANT, "PUSH_CONSTANT"),
     ] {
         assert_eq!(
             i64::from(token.as_raw()),

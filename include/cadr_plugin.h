@@ -20,7 +20,7 @@
 #define CADR_PLUGIN_ABI_MAJOR 1
 
 // Minor version of this ABI: additions that older readers may ignore.
-#define CADR_PLUGIN_ABI_MINOR 21
+#define CADR_PLUGIN_ABI_MINOR 22
 
 // `(major << 16) | minor`, what [`CadrPluginVersionFn`] returns.
 #define CADR_PLUGIN_ABI_VERSION ((CADR_PLUGIN_ABI_MAJOR << 16) | CADR_PLUGIN_ABI_MINOR)
@@ -84,7 +84,9 @@ typedef uint32_t (*CadrPluginVersionFn)(void);
 // know no kind, so they skip every extension a technique offers and refuse a technique that
 // requires one; ABI 1.14 defines [`CADR_EXTENSION_SCENE_CLUSTERS`] and
 // [`CADR_EXTENSION_CLUSTER_CULL`], ABI 1.15 [`CADR_EXTENSION_FRAME_SLOT`], ABI 1.18
-// [`CADR_EXTENSION_BACK_FACE_PASSES`], ABI 1.19 [`CADR_EXTENSION_SHARED_FACE_STREAMS`].
+// [`CADR_EXTENSION_BACK_FACE_PASSES`], ABI 1.19 [`CADR_EXTENSION_SHARED_FACE_STREAMS`], ABI
+// 1.20 the scene's cluster and part boxes, ABI 1.21 [`CADR_EXTENSION_SCENE_STREAMING`], ABI
+// 1.22 [`CADR_EXTENSION_PARAMETER_BLOCKS`].
 typedef struct CadrExtension {
   // Size of the whole extension struct, this header included.
   uint32_t size;
@@ -1230,6 +1232,39 @@ typedef struct CadrSceneStreaming {
   uint32_t reserved;
 } CadrSceneStreaming;
 
+// Since ABI 1.22: every parameter a draw's shaders read, as the vertex stage's push constants
+// hold them from offset 0 under [`CADR_TRAIT_PARAMETER_BLOCKS`] (96 bytes, std430: a
+// column-major mat4, then two vec4s). The values are the instance's: its world matrix
+// ([`CadrSceneView::matrix_buffer`] at its matrix slot), its material's base colour and
+// surface, its `CADR_INSTANCE_*` flags and its instance id (the draw's `firstInstance`), as
+// [`CadrInstanceRecord`] names them.
+typedef struct CadrParameterBlock {
+  // The world matrix.
+  struct CadrMatrix matrix;
+  // The material's linear RGBA base colour.
+  float base_color[4];
+  // The material's metallic and roughness.
+  float surface[2];
+  // `CADR_INSTANCE_*` bits.
+  uint32_t flags;
+  // The instance id.
+  uint32_t instance;
+} CadrParameterBlock;
+
+// Since ABI 1.22 ([`CADR_EXTENSION_PARAMETER_BLOCKS`], chained on the frame's scene views where
+// the active parameter path, submission and GPU culler announce
+// [`CADR_TRAIT_PARAMETER_BLOCKS`]): the draws carry their parameters. The GPU culler writes each
+// command after the [`CadrParameterBlock`] of its instance: the 96-byte block, then the
+// `VkDrawIndexedIndirectCommand` (and, in a shared stream, the word naming the pass before
+// both), `stride` 116 bytes or more (120 or more in a shared stream). [`CadrGpuDraws`] still
+// points at the first command's start (the block, or the word). The submission pushes each
+// block at offset 0 of the vertex stage's push constants before its draw. Owned by the host,
+// valid as long as the view it hangs from.
+typedef struct CadrParameterBlocks {
+  // `kind` = [`CADR_EXTENSION_PARAMETER_BLOCKS`]; the kind says it all.
+  struct CadrExtension header;
+} CadrParameterBlocks;
+
 // Success.
 #define CADR_STATUS_OK 0
 
@@ -1391,6 +1426,21 @@ typedef struct CadrSceneStreaming {
 // builds its own.
 #define CADR_TRAIT_SHARES_PIPELINES (1 << 13)
 
+// Since ABI 1.22. Parameter blocks ([`CadrParameterBlock`]), one announcement per kind:
+// - a parameter path promises that its shaders read a draw's parameters from nothing but the
+//   block pushed at offset 0 of the vertex stage's push constants (it pushes the block per draw
+//   itself; the built-in `push` does);
+// - a submission pushes each GPU-written command's block with its draw where the host asks for
+//   blocks ([`CadrParameterBlocks`]; `dgc` does it with a push-constant token per sequence);
+// - a GPU culler writes each command's block before it where the host asks.
+//
+// Where the active parameter path, submission and GPU culler all announce it, the host asks
+// the culler and the submission for blocks in every frame, and counts
+// [`CADR_TRAIT_PARAMETERS_FROM_INSTANCE_INDEX`] as offered to them: the culler finds each
+// draw's parameters from its instance id on the GPU. A parameter path and submission that
+// announce it with a CPU culler are refused (nothing would write the blocks).
+#define CADR_TRAIT_PARAMETER_BLOCKS (1 << 14)
+
 // Device-local; written by transfers or shaders.
 #define CADR_MEMORY_GPU_ONLY 0
 
@@ -1469,6 +1519,10 @@ typedef struct CadrSceneStreaming {
 
 // Since ABI 1.21: the kind of [`CadrSceneStreaming`], chained on [`CadrSceneView::extensions`].
 #define CADR_EXTENSION_SCENE_STREAMING 8
+
+// Since ABI 1.22: the kind of [`CadrParameterBlocks`], chained on [`CadrSceneView::extensions`]
+// of the views the host gives to a frame's `prepare`, `record` and GPU culler's `record`.
+#define CADR_EXTENSION_PARAMETER_BLOCKS 9
 
 // Every instance the pass's filter keeps (what passes without a route draw).
 #define CADR_FACES_ANY 0

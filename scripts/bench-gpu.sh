@@ -142,8 +142,10 @@ bench grid-10m "$few_frames" "$big" "${scene_wide[@]}" --submit individual-indir
   --cull gpu-frustum --camera orbit
 # Device-generated commands against the recorded multi-draw-indirect replay, and (with a GPU
 # culler, whose two back-face passes dgc draws as one stream switching pipelines per sequence)
-# against the two indirect-count draws of the same passes.
-bench dgc-graphicscard "$frames" "$card" "${scene_wide[@]}" \
+# against the two indirect-count draws of the same passes; with the push parameter path too
+# (the culler writes each draw's parameter block, a push-constant token pushes it: the only
+# valid push row here is dgc / gpu-frustum, the others are left out).
+bench dgc-graphicscard "$frames" "$card" --vertex arena --params ssbo-index,push \
   --submit dgc,groups-mdi-replay,individual-indirect-count --cull none,gpu-frustum --camera orbit
 bench dgc-racecar "$frames" "$racecar" "${scene_wide[@]}" --submit dgc,groups-mdi-replay \
   --cull none,gpu-frustum --camera orbit

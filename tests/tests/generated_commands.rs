@@ -8,8 +8,11 @@
 
 use std::sync::Arc;
 
+use glam::{DMat4, DVec3};
+
 use cadr_core::generate::{generate, GeneratorSpec};
 use cadr_core::graph::SceneGraph;
+use cadr_core::render::pick::PixelRect;
 use cadr_core::render::{Camera, FrameStats, DEFAULT_DIRECTION};
 use cadr_core::scene::flatten;
 use cadr_core::technique::{Combination, ShadeMode};
@@ -265,4 +268,120 @@ fn dgc_follows_swapped_cullers_and_display_modes_in_one_view() {
         }
     }
     f.assert_no_validation_errors();
+}
+
+/// `push` under `dgc` with a GPU culler: the culler writes each draw's parameter block (world
+/// matrix, material, flags, instance id) before its command and a push-constant token pushes
+/// it, so the picture is the one `push` draws from the CPU with the baseline, frame by frame
+/// while the camera orbits and parts move, and picking finds the same parts. With a CPU
+/// culler nothing would write the blocks: the combination is refused, saying why.
+#[test]
+fn dgc_pushes_the_parameter_blocks_a_gpu_culler_writes() {
+    let device = test_device();
+    assert!(
+        device.capabilities().device_generated_commands,
+        "the default driver ({}) has no VK_EXT_device_generated_commands: run scripts/setup.sh",
+        device.adapter().name
+    );
+    let scene = generate(&GeneratorSpec::Cabinet { cabinets: 4 });
+    let bounds = flatten(&scene).unwrap().bounds;
+    let aspect = f64::from(SIZE.0) / f64::from(SIZE.1);
+    let (mut graph, handles) = SceneGraph::from_scene(&scene).unwrap();
+    let moving: Vec<_> = handles
+        .iter()
+        .filter_map(|&node| {
+            let matrix = graph.node(node).ok()?.local_matrix();
+            (matrix != DMat4::IDENTITY).then_some((node, matrix))
+        })
+        .take(6)
+        .collect();
+    assert!(
+        moving.len() > 1,
+        "the cabinets have transform nodes to move"
+    );
+    let mut tree = SceneTree::build(&mut graph);
+    let registry = plugin_registry(&device);
+    let mut view = View::new(&device, Arc::clone(&registry), SIZE.0, SIZE.1).unwrap();
+    let whole = PixelRect {
+        x: 0,
+        y: 0,
+        width: SIZE.0,
+        height: SIZE.1,
+    };
+    // Per frame: the parts moved apart by the frame's step, the camera a step further round.
+    let mut frames = |combination: &Combination| {
+        view.techniques_mut().select(combination).unwrap();
+        (0..4)
+            .map(|frame| {
+                for (i, &(node, original)) in moving.iter().enumerate() {
+                    let apart = bounds.radius() * 0.05 * frame as f64 * (i as f64 - 2.5);
+                    let offset = DMat4::from_translation(DVec3::new(apart, apart * 0.5, 0.0));
+                    graph.set_matrix(node, offset * original).unwrap();
+                }
+                tree.update(&mut graph);
+                let camera = Camera::orbit(&bounds, aspect, 0.25 * f64::from(frame), 1.2);
+                let stats = view.render(&graph, &mut tree, &camera).unwrap();
+                let image = view.renderer().read_rgba8().unwrap();
+                let mut picked: Vec<(u32, u32)> = view
+                    .pick(&tree, &camera, whole)
+                    .unwrap()
+                    .iter()
+                    .map(|hit| (hit.instance, hit.part))
+                    .collect();
+                picked.sort_unstable();
+                (image, stats, picked)
+            })
+            .collect::<Vec<_>>()
+    };
+    let reference = frames(&Combination::built_in());
+    for culling in ["gpu-frustum", "gpu-occlusion", "gpu-clusters"] {
+        let combination = Combination {
+            vertex: "arena".into(),
+            parameters: "push".into(),
+            submission: "dgc".into(),
+            culling: culling.into(),
+            ..Combination::built_in()
+        };
+        for (frame, ((image, stats, picked), (expected, _, expected_picks))) in
+            frames(&combination).iter().zip(&reference).enumerate()
+        {
+            let difference = compare(image, expected).unwrap();
+            assert!(
+                difference.within(SAME_PICTURE),
+                "push / dgc / {culling}, frame {frame}: {difference:?}"
+            );
+            assert_eq!(
+                picked, expected_picks,
+                "push / dgc / {culling}, frame {frame}"
+            );
+            // The blocks come with the commands: no parameter is pushed from the CPU per draw.
+            assert!(
+                stats.parameter_updates <= stats.draw_calls,
+                "push / dgc / {culling}, frame {frame}: {} parameter updates for {} executions",
+                stats.parameter_updates,
+                stats.draw_calls
+            );
+        }
+    }
+    // A CPU culler writes no blocks; the baseline `push` per draw is still there for it.
+    for culling in ["none", "frustum"] {
+        let combination = Combination {
+            vertex: "arena".into(),
+            parameters: "push".into(),
+            submission: "dgc".into(),
+            culling: culling.into(),
+            ..Combination::built_in()
+        };
+        let refusal = view
+            .techniques_mut()
+            .select(&combination)
+            .unwrap_err()
+            .to_string();
+        assert!(
+            refusal.contains("parameter block") && refusal.contains(&format!("'{culling}'")),
+            "{refusal}"
+        );
+    }
+    drop(view);
+    assert_no_validation_errors(&device);
 }

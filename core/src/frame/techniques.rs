@@ -120,6 +120,7 @@ impl Renderer {
             samples: passes.samples(),
             extra_color_formats: extra_color_formats(pipelines),
             key,
+            parameter_blocks: techniques.parameter_blocks(),
         };
         let culler = GpuCuller::of(techniques, pipelines.passes.len())?;
         let phases = culler.as_ref().map_or(1, |c| c.phases);
@@ -290,7 +291,8 @@ fn frame_key(passes: PassSet, key: u64, view: &abi::CadrSceneView) -> Option<u64
 /// What a frame's commands depend on: equal keys record equal commands. The techniques'
 /// epoch, the scene's draws and buffers, the target, the pipelines drawn (the pass set, with
 /// or without translucent surfaces, and its sample count), each pass's filter, and the
-/// parameter values where the parameter path writes them into the commands.
+/// parameter values where the parameter path writes them into the commands (not where the
+/// GPU culler writes them into parameter blocks).
 fn commands_key(
     techniques: &Techniques,
     view: &abi::CadrSceneView,
@@ -300,8 +302,9 @@ fn commands_key(
     pass_filters: &PassFilters,
 ) -> RenderResult<u64> {
     let parameters = techniques.get(TechniqueKind::Parameters)?;
-    let values_in_commands =
-        parameters.entry.provides & abi::CADR_TRAIT_PARAMETERS_IN_COMMANDS != 0;
+    let values_in_commands = parameters.entry.provides & abi::CADR_TRAIT_PARAMETERS_IN_COMMANDS
+        != 0
+        && !techniques.parameter_blocks();
     let mut key = mix(techniques.epoch, view.draws_generation);
     key = mix(key, view.buffers_generation);
     key = mix(key, u64::from(width) << 32 | u64::from(height));
@@ -378,6 +381,8 @@ struct FrameRecording<'a> {
     /// The transparency targets' formats as the record context carries them (at most 2).
     extra_color_formats: [i32; 2],
     key: u64,
+    /// Whether the views carry `CadrParameterBlocks` (see [`Techniques::parameter_blocks`]).
+    parameter_blocks: bool,
 }
 
 impl FrameRecording<'_> {
@@ -514,8 +519,8 @@ impl FrameDrawing<'_, '_> {
         let (scene, counters, culler) = &mut *guard;
         // The uploads went ahead in the prologue (this frame's, or a replayed one's).
         barrier(renderer, command_buffer);
-        let mut frame_slot = renderer.frame_slot();
-        let view = slotted_view(scene, &mut frame_slot);
+        let mut chain = self.chain(renderer);
+        let view = chained_view(scene, &mut chain);
         self.recording.prepare(
             renderer.frame_set(),
             command_buffer,
@@ -549,8 +554,8 @@ impl FrameDrawing<'_, '_> {
         let mut guard = self.shared.borrow_mut();
         let (scene, counters, culler) = &mut *guard;
         let draws = (gpu_draws(culler), phase);
-        let mut frame_slot = renderer.frame_slot();
-        let view = slotted_view(scene, &mut frame_slot);
+        let mut chain = self.chain(renderer);
+        let view = chained_view(scene, &mut chain);
         self.recording
             .record(renderer.frame_set(), command_buffer, &view, counters, draws)
     }
@@ -578,11 +583,11 @@ impl FrameDrawing<'_, '_> {
             view: renderer.depth_image().view(),
             layout: SUSPENDED_DEPTH_LAYOUT,
         });
-        let mut frame_slot = renderer.frame_slot();
+        let mut chain = self.chain(renderer);
         culler.record(
             phase,
             command_buffer,
-            &slotted_view(scene, &mut frame_slot),
+            &chained_view(scene, &mut chain),
             (
                 &self.recording.pipelines.passes,
                 self.recording.pass_filters,
@@ -594,15 +599,44 @@ impl FrameDrawing<'_, '_> {
     }
 }
 
-/// The scene's view for a technique's call during a frame, with `frame_slot` chained ahead of
-/// the scene's own extensions (the view points at it: keep it while the view is used).
-fn slotted_view(
-    scene: &ViewedScene<'_>,
-    frame_slot: &mut abi::CadrFrameSlot,
-) -> abi::CadrSceneView {
+/// What the host chains on the scene's view for a technique's call during a frame, ahead of the
+/// scene's own extensions: the frame slot, and the request for parameter blocks where the
+/// combination passes them.
+struct FrameChain {
+    frame_slot: abi::CadrFrameSlot,
+    parameter_blocks: Option<abi::CadrParameterBlocks>,
+}
+
+impl FrameDrawing<'_, '_> {
+    /// The chain of this frame's calls.
+    fn chain(&self, renderer: &Renderer) -> FrameChain {
+        FrameChain {
+            frame_slot: renderer.frame_slot(),
+            parameter_blocks: self
+                .recording
+                .parameter_blocks
+                .then_some(abi::CadrParameterBlocks {
+                    header: abi::CadrExtension {
+                        size: std::mem::size_of::<abi::CadrParameterBlocks>() as u32,
+                        kind: abi::CADR_EXTENSION_PARAMETER_BLOCKS,
+                        next: std::ptr::null(),
+                    },
+                }),
+        }
+    }
+}
+
+/// The scene's view for a technique's call during a frame, with `chain` ahead of the scene's own
+/// extensions (the view points at it: keep it while the view is used).
+fn chained_view(scene: &ViewedScene<'_>, chain: &mut FrameChain) -> abi::CadrSceneView {
     let mut view = scene.view();
-    frame_slot.header.next = view.extensions;
-    view.extensions = &frame_slot.header;
+    let mut next = view.extensions;
+    if let Some(blocks) = chain.parameter_blocks.as_mut() {
+        blocks.header.next = next;
+        next = &blocks.header;
+    }
+    chain.frame_slot.header.next = next;
+    view.extensions = &chain.frame_slot.header;
     view
 }
 

@@ -106,8 +106,8 @@ fn first_library_size() -> usize {
     size_through!(abi::CadrPluginLibrary, techniques)
 }
 
-/// The extension kinds this host knows (`CADR_EXTENSION_*`): those of ABI 1.14, 1.15, 1.18,
-/// 1.19 and 1.20.
+/// The extension kinds this host knows (`CADR_EXTENSION_*`): those of ABI 1.14, 1.15 and 1.18
+/// to 1.22.
 const KNOWN_EXTENSIONS: &[abi::CadrExtensionKind] = &[
     abi::CADR_EXTENSION_SCENE_CLUSTERS,
     abi::CADR_EXTENSION_CLUSTER_CULL,
@@ -116,6 +116,8 @@ const KNOWN_EXTENSIONS: &[abi::CadrExtensionKind] = &[
     abi::CADR_EXTENSION_SHARED_FACE_STREAMS,
     abi::CADR_EXTENSION_SCENE_CLUSTER_BOXES,
     abi::CADR_EXTENSION_SCENE_PART_BOXES,
+    abi::CADR_EXTENSION_SCENE_STREAMING,
+    abi::CADR_EXTENSION_PARAMETER_BLOCKS,
 ];
 
 /// Refuses a technique that requires an extension this host does not know, naming it.

@@ -134,8 +134,33 @@ struct DrawOptions {
     frame_replay: bool,
 }
 
+/// What the combination's parameter blocks offer (plugin ABI 1.22,
+/// `CADR_TRAIT_PARAMETER_BLOCKS`): where the parameter path, the submission and the culler all
+/// announce them, the culler finds each draw's parameters from its instance id on the GPU, which
+/// is what finding them from the instance index asks; a parameter path and submission that
+/// announce them with a culler that does not are refused, as nothing would write the blocks.
+fn parameter_blocks_offer(entries: &[&TechniqueEntry]) -> Result<u64, String> {
+    let of_kind = |kind| entries.iter().find(|e| e.kind == kind);
+    let announces =
+        |kind| of_kind(kind).is_some_and(|e| e.announces(abi::CADR_TRAIT_PARAMETER_BLOCKS, 22));
+    if !(announces(TechniqueKind::Parameters) && announces(TechniqueKind::Submission)) {
+        return Ok(0);
+    }
+    if announces(TechniqueKind::Culling) {
+        return Ok(abi::CADR_TRAIT_PARAMETERS_FROM_INSTANCE_INDEX);
+    }
+    let name = |kind| of_kind(kind).map_or("", |e| e.name.as_str());
+    Err(format!(
+        "submission '{}' with parameters '{}' needs a GPU culler that writes each draw's parameter block, which culling '{}' is not",
+        name(TechniqueKind::Submission),
+        name(TechniqueKind::Parameters),
+        name(TechniqueKind::Culling)
+    ))
+}
+
 /// Why a combination cannot work, or `Ok` when it can.
 pub fn check_combination(entries: &[&TechniqueEntry]) -> Result<(), String> {
+    let blocks_offer = parameter_blocks_offer(entries);
     for entry in entries {
         entry.support.as_ref().map_err(|why| {
             format!(
@@ -148,7 +173,10 @@ pub fn check_combination(entries: &[&TechniqueEntry]) -> Result<(), String> {
             .iter()
             .filter(|o| o.kind != entry.kind)
             .fold(0, |bits, o| bits | o.provides);
-        let missing = entry.needs & !others;
+        let mut missing = entry.needs & !others;
+        if missing != 0 {
+            missing &= !blocks_offer.clone()?;
+        }
         if missing != 0 {
             let bit = 1u64 << missing.trailing_zeros();
             return Err(format!(
@@ -159,7 +187,7 @@ pub fn check_combination(entries: &[&TechniqueEntry]) -> Result<(), String> {
             ));
         }
     }
-    Ok(())
+    blocks_offer.map(|_| ())
 }
 
 /// A created technique instance; destroyed on drop (after the GPU is done, see `Techniques`).
@@ -529,6 +557,22 @@ impl Techniques {
             active
                 .entry
                 .announces(abi::CADR_TRAIT_SWITCHES_PIPELINES, 19)
+        })
+    }
+
+    /// Whether the active parameter path, submission and culler pass each draw's parameters in
+    /// blocks the culler writes on the GPU (`CADR_TRAIT_PARAMETER_BLOCKS`, libraries of ABI
+    /// 1.22 or later): the host then asks the culler and the submission for them.
+    pub fn parameter_blocks(&self) -> bool {
+        [
+            TechniqueKind::Parameters,
+            TechniqueKind::Submission,
+            TechniqueKind::Culling,
+        ]
+        .into_iter()
+        .all(|kind| {
+            self.get(kind)
+                .is_ok_and(|active| active.entry.announces(abi::CADR_TRAIT_PARAMETER_BLOCKS, 22))
         })
     }
 

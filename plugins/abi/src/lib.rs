@@ -22,9 +22,9 @@
 //! laid out in arrays or passed by value ([`CadrInstance`], [`CadrMatrix`], [`CadrMaterial`],
 //! [`CadrInstanceRecord`], [`CadrCullEntry`], [`CadrPass`], [`CadrPassFilter`],
 //! [`CadrPassExclusion`], [`CadrBuffer`], [`CadrBufferRef`], [`CadrStats`], [`CadrBindState`],
-//! [`CadrDrawBase`], [`CadrGpuDraws`], [`CadrVertexInput`], [`CadrMessage`]) are fixed for a
-//! major version; whoever allocates frees (buffers a plugin asks the host for go back through
-//! the host); strings are NUL-terminated UTF-8 owned by the side that returns them, valid as
+//! [`CadrDrawBase`], [`CadrGpuDraws`], [`CadrVertexInput`], [`CadrMessage`],
+//! [`CadrParameterBlock`]) are fixed for a major version; whoever allocates frees (buffers a
+//! plugin asks the host for go back through the host); strings are NUL-terminated UTF-8 owned by the side that returns them, valid as
 //! long as the library (descriptions) or the instance (shader snippets); no function unwinds
 //! across the boundary (the SDK's shims catch panics and return [`CADR_STATUS_PANICKED`]);
 //! libraries are never unloaded. Functions marked "thread-safe" may be called from several
@@ -56,7 +56,7 @@ use std::ffi::{c_char, c_void};
 /// Major version of this ABI: a library built for another major version is refused.
 pub const CADR_PLUGIN_ABI_MAJOR: u32 = 1;
 /// Minor version of this ABI: additions that older readers may ignore.
-pub const CADR_PLUGIN_ABI_MINOR: u32 = 21;
+pub const CADR_PLUGIN_ABI_MINOR: u32 = 22;
 /// `(major << 16) | minor`, what [`CadrPluginVersionFn`] returns.
 pub const CADR_PLUGIN_ABI_VERSION: u32 = (CADR_PLUGIN_ABI_MAJOR << 16) | CADR_PLUGIN_ABI_MINOR;
 
@@ -216,6 +216,20 @@ pub const CADR_TRAIT_SWITCHES_PIPELINES: CadrTraitBits = 1 << 12;
 /// neither compiles its pipelines again nor holds a copy of them. Without it, each renderer
 /// builds its own.
 pub const CADR_TRAIT_SHARES_PIPELINES: CadrTraitBits = 1 << 13;
+/// Since ABI 1.22. Parameter blocks ([`CadrParameterBlock`]), one announcement per kind:
+/// - a parameter path promises that its shaders read a draw's parameters from nothing but the
+///   block pushed at offset 0 of the vertex stage's push constants (it pushes the block per draw
+///   itself; the built-in `push` does);
+/// - a submission pushes each GPU-written command's block with its draw where the host asks for
+///   blocks ([`CadrParameterBlocks`]; `dgc` does it with a push-constant token per sequence);
+/// - a GPU culler writes each command's block before it where the host asks.
+///
+/// Where the active parameter path, submission and GPU culler all announce it, the host asks
+/// the culler and the submission for blocks in every frame, and counts
+/// [`CADR_TRAIT_PARAMETERS_FROM_INSTANCE_INDEX`] as offered to them: the culler finds each
+/// draw's parameters from its instance id on the GPU. A parameter path and submission that
+/// announce it with a CPU culler are refused (nothing would write the blocks).
+pub const CADR_TRAIT_PARAMETER_BLOCKS: CadrTraitBits = 1 << 14;
 
 /// A message buffer the host hands to functions that can fail: the plugin writes a
 /// NUL-terminated UTF-8 message of at most `capacity` bytes (including the NUL).
@@ -265,7 +279,9 @@ pub type CadrExtensionKind = u32;
 /// know no kind, so they skip every extension a technique offers and refuse a technique that
 /// requires one; ABI 1.14 defines [`CADR_EXTENSION_SCENE_CLUSTERS`] and
 /// [`CADR_EXTENSION_CLUSTER_CULL`], ABI 1.15 [`CADR_EXTENSION_FRAME_SLOT`], ABI 1.18
-/// [`CADR_EXTENSION_BACK_FACE_PASSES`], ABI 1.19 [`CADR_EXTENSION_SHARED_FACE_STREAMS`].
+/// [`CADR_EXTENSION_BACK_FACE_PASSES`], ABI 1.19 [`CADR_EXTENSION_SHARED_FACE_STREAMS`], ABI
+/// 1.20 the scene's cluster and part boxes, ABI 1.21 [`CADR_EXTENSION_SCENE_STREAMING`], ABI
+/// 1.22 [`CADR_EXTENSION_PARAMETER_BLOCKS`].
 #[repr(C)]
 #[derive(Clone, Copy, Debug)]
 pub struct CadrExtension {
@@ -584,6 +600,56 @@ impl CadrMatrix {
     }
 }
 
+/// Since ABI 1.22: every parameter a draw's shaders read, as the vertex stage's push constants
+/// hold them from offset 0 under [`CADR_TRAIT_PARAMETER_BLOCKS`] (96 bytes, std430: a
+/// column-major mat4, then two vec4s). The values are the instance's: its world matrix
+/// ([`CadrSceneView::matrix_buffer`] at its matrix slot), its material's base colour and
+/// surface, its `CADR_INSTANCE_*` flags and its instance id (the draw's `firstInstance`), as
+/// [`CadrInstanceRecord`] names them.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct CadrParameterBlock {
+    /// The world matrix.
+    pub matrix: CadrMatrix,
+    /// The material's linear RGBA base colour.
+    pub base_color: [f32; 4],
+    /// The material's metallic and roughness.
+    pub surface: [f32; 2],
+    /// `CADR_INSTANCE_*` bits.
+    pub flags: u32,
+    /// The instance id.
+    pub instance: u32,
+}
+
+impl CadrParameterBlock {
+    /// The block for `instance` drawn with `matrix`, `material` and `flags`.
+    pub fn new(matrix: &CadrMatrix, material: &CadrMaterial, flags: u32, instance: u32) -> Self {
+        Self {
+            matrix: *matrix,
+            base_color: material.base_color,
+            surface: [material.surface[0], material.surface[1]],
+            flags,
+            instance,
+        }
+    }
+
+    /// The GPU layout: 24 little-endian words.
+    pub fn to_le_bytes(&self) -> [u8; 96] {
+        let mut bytes = [0; 96];
+        bytes[..64].copy_from_slice(&self.matrix.to_le_bytes());
+        let words = self
+            .base_color
+            .iter()
+            .chain(&self.surface)
+            .map(|v| v.to_bits())
+            .chain([self.flags, self.instance]);
+        for (i, word) in words.enumerate() {
+            bytes[64 + i * 4..68 + i * 4].copy_from_slice(&word.to_le_bytes());
+        }
+        bytes
+    }
+}
+
 /// A material slot as kept on the CPU and in [`CadrSceneView::material_buffer`].
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -756,6 +822,9 @@ pub const CADR_EXTENSION_SCENE_CLUSTER_BOXES: CadrExtensionKind = 6;
 pub const CADR_EXTENSION_SCENE_PART_BOXES: CadrExtensionKind = 7;
 /// Since ABI 1.21: the kind of [`CadrSceneStreaming`], chained on [`CadrSceneView::extensions`].
 pub const CADR_EXTENSION_SCENE_STREAMING: CadrExtensionKind = 8;
+/// Since ABI 1.22: the kind of [`CadrParameterBlocks`], chained on [`CadrSceneView::extensions`]
+/// of the views the host gives to a frame's `prepare`, `record` and GPU culler's `record`.
+pub const CADR_EXTENSION_PARAMETER_BLOCKS: CadrExtensionKind = 9;
 
 /// Since ABI 1.15 ([`CADR_EXTENSION_FRAME_SLOT`]): which of the host's frames in flight is being
 /// recorded. The host lets the GPU work on up to `slot_count` frames while it records the next;
@@ -1104,6 +1173,22 @@ pub struct CadrBackFacePasses {
 #[derive(Clone, Copy, Debug)]
 pub struct CadrSharedFaceStreams {
     /// `kind` = [`CADR_EXTENSION_SHARED_FACE_STREAMS`]; the kind says it all.
+    pub header: CadrExtension,
+}
+
+/// Since ABI 1.22 ([`CADR_EXTENSION_PARAMETER_BLOCKS`], chained on the frame's scene views where
+/// the active parameter path, submission and GPU culler announce
+/// [`CADR_TRAIT_PARAMETER_BLOCKS`]): the draws carry their parameters. The GPU culler writes each
+/// command after the [`CadrParameterBlock`] of its instance: the 96-byte block, then the
+/// `VkDrawIndexedIndirectCommand` (and, in a shared stream, the word naming the pass before
+/// both), `stride` 116 bytes or more (120 or more in a shared stream). [`CadrGpuDraws`] still
+/// points at the first command's start (the block, or the word). The submission pushes each
+/// block at offset 0 of the vertex stage's push constants before its draw. Owned by the host,
+/// valid as long as the view it hangs from.
+#[repr(C)]
+#[derive(Clone, Copy, Debug)]
+pub struct CadrParameterBlocks {
+    /// `kind` = [`CADR_EXTENSION_PARAMETER_BLOCKS`]; the kind says it all.
     pub header: CadrExtension,
 }
 
@@ -1836,11 +1921,28 @@ mod tests {
         assert_eq!(std::mem::size_of::<CadrInstanceRecord>(), 16);
         assert_eq!(std::mem::size_of::<CadrBindState>(), 32);
         assert_eq!(std::mem::size_of::<CadrCullEntry>(), 48);
+        assert_eq!(std::mem::size_of::<CadrParameterBlock>(), 96);
         assert_eq!(std::mem::size_of::<CadrGpuDraws>(), 40);
         assert_eq!(std::mem::size_of::<CadrPassFilter>(), 12);
         assert_eq!(std::mem::size_of::<CadrPassExclusion>(), 8);
         assert_eq!(CADR_PLUGIN_ABI_VERSION >> 16, CADR_PLUGIN_ABI_MAJOR);
         assert_eq!(std::mem::size_of::<CadrExtension>(), 16);
+    }
+
+    #[test]
+    fn a_parameter_block_is_laid_out_as_the_push_constants_read_it() {
+        let mut matrix = CadrMatrix::default();
+        matrix.columns[3] = [1.0, 2.0, 3.0, 1.0];
+        let material = CadrMaterial {
+            base_color: [0.1, 0.2, 0.3, 0.4],
+            surface: [0.5, 0.6, 0.7, 0.8],
+        };
+        let bytes = CadrParameterBlock::new(&matrix, &material, 0x12, 77).to_le_bytes();
+        assert_eq!(bytes[..64], matrix.to_le_bytes());
+        // The material's base colour and first two surface values; not the rest of the slot.
+        assert_eq!(bytes[64..88], material.to_le_bytes()[..24]);
+        assert_eq!(bytes[88..92], 0x12u32.to_le_bytes());
+        assert_eq!(bytes[92..], 77u32.to_le_bytes());
     }
 
     #[test]

@@ -173,6 +173,21 @@ impl<'a> Scene<'a> {
         unsafe { extension(self.raw.extensions, abi::CADR_EXTENSION_FRAME_SLOT) }
     }
 
+    /// Whether the host asks for parameter blocks this frame ([`abi::CadrParameterBlocks`],
+    /// from a host of ABI 1.22 or later where the parameter path, the submission and the GPU
+    /// culler announce [`abi::CADR_TRAIT_PARAMETER_BLOCKS`]): the culler writes each command
+    /// after its instance's [`abi::CadrParameterBlock`], and the submission pushes it.
+    pub fn parameter_blocks(&self) -> bool {
+        // The chain is there where the frame slot is (ABI 1.15 or later).
+        self.frame_slot().is_some_and(|_| {
+            // SAFETY: the host's chain is valid as long as the view; an extension of this kind
+            // is a `CadrParameterBlocks`.
+            let blocks: Option<&abi::CadrParameterBlocks> =
+                unsafe { extension(self.raw.extensions, abi::CADR_EXTENSION_PARAMETER_BLOCKS) };
+            blocks.is_some()
+        })
+    }
+
     /// Every instance id's instance.
     pub fn instances(&self) -> &'a [abi::CadrInstance] {
         slice(self.raw.instances, self.raw.instance_count as usize)

@@ -108,6 +108,21 @@ layout(set = 0, binding = PART_BOX_BINDING, std430) readonly buffer PartBoxes { 
 // threshold, at the bit its box's half-extent w names (ABI 1.21: the geometry's request bit).
 // 4 unused bytes where the scene does not stream.
 layout(set = 0, binding = PART_BOX_BINDING + 1, std430) buffer Requests { uint requests[]; };
+// What parameter blocks are made of (CadrParameterBlocks, ABI 1.22): the scene's instance
+// records (CadrInstanceRecord, by instance id) and material slots (CadrMaterial), read only
+// where the host asks for blocks.
+struct InstanceRecord {
+    uint matrix;
+    uint material;
+    uint flags;
+    uint instance;
+};
+struct MaterialValues {
+    vec4 base_color;
+    vec4 surface;
+};
+layout(set = 0, binding = PART_BOX_BINDING + 2, std430) readonly buffer Records { InstanceRecord records[]; };
+layout(set = 0, binding = PART_BOX_BINDING + 3, std430) readonly buffer Materials { MaterialValues materials[]; };
 
 #ifdef CLUSTERS
 // The plugin ABI's CadrCluster and CadrClusterGroup (CadrSceneClusters).
@@ -188,6 +203,10 @@ layout(push_constant) uniform Dispatch {
     // Words of the streaming requests (CadrSceneStreaming, ABI 1.21); 0 where the scene does
     // not stream.
     uint request_words;
+    // Nonzero where each command comes after its instance's parameter block (CadrParameterBlocks,
+    // ABI 1.22: 24 words, after the word naming the pass where there is one); `command_words`
+    // counts them.
+    uint parameter_blocks;
 } dispatch;
 
 // Inside the frustum.
@@ -377,16 +396,42 @@ bool back_faces_culled(uint flags, mat3 rotation, vec3 center, float radius, boo
         && dot(view.planes[4].xyz, center) + view.planes[4].w > slack;
 }
 
+// Writes the parameter block of instance `id` (CadrParameterBlock: world matrix, base colour,
+// surface, flags, instance id) at word `base` of the commands.
+void write_parameter_block(uint base, uint id) {
+    InstanceRecord record = records[id];
+    Matrix world = matrices[record.matrix];
+    for (uint column = 0u; column < 4u; ++column) {
+        for (uint row = 0u; row < 4u; ++row) {
+            commands[base + column * 4u + row] = floatBitsToUint(world.columns[column][row]);
+        }
+    }
+    MaterialValues material = materials[record.material];
+    for (uint i = 0u; i < 4u; ++i) {
+        commands[base + 16u + i] = floatBitsToUint(material.base_color[i]);
+    }
+    commands[base + 20u] = floatBitsToUint(material.surface.x);
+    commands[base + 21u] = floatBitsToUint(material.surface.y);
+    commands[base + 22u] = record.flags;
+    commands[base + 23u] = record.instance;
+}
+
 // Writes an indirect command for `count` indices from `first`, instance `id`, at `slot` of the
-// pass's commands.
+// pass's commands: the word naming the pass where the stream is shared, the instance's
+// parameter block where the host asks for blocks, then the draw.
 void write_command(uint slot, uint first, uint count, uint vertex_base, uint id) {
     if (slot >= dispatch.command_capacity) {
         return; // never, with the capacity the culler reserves; the count stays past it
     }
     uint base = (dispatch.first_command + slot) * dispatch.command_words;
-    if (dispatch.command_words == 6u) {
+    uint block_words = dispatch.parameter_blocks != 0u ? 24u : 0u;
+    if (dispatch.command_words == 6u + block_words) {
         commands[base] = dispatch.face_route == FACES_KEPT ? 1u : 0u;
         base += 1u;
+    }
+    if (block_words != 0u) {
+        write_parameter_block(base, id);
+        base += block_words;
     }
     commands[base] = count;
     commands[base + 1u] = 1u;

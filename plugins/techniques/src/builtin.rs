@@ -27,9 +27,9 @@ technique_library! {
         },
         parameters Push {
             name: "push",
-            description: "Matrix and material values pushed with every draw (push constants; the seeds' glUniform/ubosub).",
+            description: "Matrix and material values pushed with every draw (push constants; the seeds' glUniform/ubosub); with dgc and a gpu- culler, the GPU writes them into the command stream.",
             features: 0,
-            provides: abi::CADR_TRAIT_PARAMETERS_IN_COMMANDS | abi::CADR_TRAIT_READS_HOST_MATRICES | abi::CADR_TRAIT_REPLAYABLE | KEEPS_FRAME_SLOTS | SHARES_PIPELINES,
+            provides: abi::CADR_TRAIT_PARAMETERS_IN_COMMANDS | abi::CADR_TRAIT_PARAMETER_BLOCKS | abi::CADR_TRAIT_READS_HOST_MATRICES | abi::CADR_TRAIT_REPLAYABLE | KEEPS_FRAME_SLOTS | SHARES_PIPELINES,
             needs: 0,
         },
         submission Individual {

@@ -175,9 +175,12 @@ technique_library! {
 const GPU_CULLING_FEATURES: u64 = abi::CADR_FEATURE_MULTI_DRAW_INDIRECT
     | abi::CADR_FEATURE_DRAW_INDIRECT_FIRST_INSTANCE
     | abi::CADR_FEATURE_DRAW_INDIRECT_COUNT;
-/// What GPU culling offers: replay, frame slots, and passes split by the parts' back faces.
-const GPU_CULLING_PROVIDES: u64 =
-    REPLAYABLE | KEEPS_FRAME_SLOTS | abi::CADR_TRAIT_ROUTES_BACK_FACES;
+/// What GPU culling offers: replay, frame slots, passes split by the parts' back faces, and
+/// parameter blocks written before the commands.
+const GPU_CULLING_PROVIDES: u64 = REPLAYABLE
+    | KEEPS_FRAME_SLOTS
+    | abi::CADR_TRAIT_ROUTES_BACK_FACES
+    | abi::CADR_TRAIT_PARAMETER_BLOCKS;
 /// What GPU culling needs of its partners: a submission that draws its commands, absolute
 /// ranges in one scene-wide binding, and parameters found from the instance index.
 const GPU_CULLING_NEEDS: u64 = abi::CADR_TRAIT_DRAWS_GPU_COMMANDS

@@ -27,6 +27,9 @@
 //!   asks for shared streams (ABI 1.19, for a submission that picks pipelines per command:
 //!   `dgc`), both passes write one stream in one slot, each command after a word naming its
 //!   pass (0 culled, 1 kept).
+//! - All write each command after its instance's parameter block where the host asks (ABI
+//!   1.22, `CadrParameterBlocks`, for the `push` parameter path under `dgc`): the world matrix
+//!   from the scene's matrices, the material values, flags and instance id from its records.
 //!
 //! The submission draws the commands with `vkCmdDrawIndexedIndirectCount` (a submission
 //! providing `CADR_TRAIT_DRAWS_GPU_COMMANDS`); commands use absolute ranges and `firstInstance`
@@ -59,9 +62,12 @@ const DRAWN_FROM: vk::BufferUsageFlags = vk::BufferUsageFlags::from_raw(
 );
 /// Words of one `VkDrawIndexedIndirectCommand`.
 const COMMAND_WORDS: u32 = 5;
-/// Words of a command in a frame whose split surface passes share streams: the word naming the
-/// command's pass, then the command (`CadrSharedFaceStreams`).
-const NAMED_COMMAND_WORDS: u32 = crate::NAMED_COMMAND_BYTES / 4;
+/// Words of the word naming a command's pass, in a frame whose split surface passes share
+/// streams (`CadrSharedFaceStreams`).
+const PASS_NAME_WORDS: u32 = crate::NAMED_COMMAND_BYTES / 4 - COMMAND_WORDS;
+/// Words of a parameter block before each command, where the host asks for them
+/// (`CadrParameterBlocks`, a `CadrParameterBlock`).
+const PARAMETER_BLOCK_WORDS: u32 = 24;
 
 /// The visibility buffers: last frame's (read) and this frame's (written).
 const LAST: usize = 0;
@@ -75,7 +81,7 @@ const MODE_NEWLY_VISIBLE: u32 = 2;
 
 /// What a frame slot's cull set was last written with: the host's buffers' handles, the ids of
 /// ours, the scene's buffers generation and the view's offset.
-type CullSetKey = ([u64; 16], [u64; 9], u64, u64);
+type CullSetKey = ([u64; 18], [u64; 9], u64, u64);
 
 /// Push constants of one cull dispatch.
 #[derive(Clone, Copy)]
@@ -93,10 +99,11 @@ struct CullDispatch {
     lod_error: f32,
     /// Whether the pass hides the back faces of closed opaque parts (cluster culling).
     back_faces_hidden: bool,
-    /// Commands a pass slot holds, and words of each: [`COMMAND_WORDS`], or
-    /// [`NAMED_COMMAND_WORDS`] where each command starts with the word naming its pass (1 for a
-    /// [`abi::CADR_FACES_KEPT`] pass, else 0).
-    commands: (u32, u32),
+    /// Commands a pass slot holds, words of each, and whether each carries its parameter block:
+    /// [`COMMAND_WORDS`], [`PASS_NAME_WORDS`] more where each command starts with the word
+    /// naming its pass (1 for a [`abi::CADR_FACES_KEPT`] pass, else 0), and
+    /// [`PARAMETER_BLOCK_WORDS`] more where a block comes before its draw.
+    commands: (u32, u32, bool),
     /// Of those, how many the cuts at `lod_error` may take (cluster culling); past that, parts
     /// are drawn at their coarsest, which the rest always holds.
     cluster_budget: u32,
@@ -133,12 +140,13 @@ impl CullDispatch {
             self.face_route,
             self.commands.1,
             self.request_words,
+            u32::from(self.commands.2),
         ])
     }
 }
 
 /// Bytes of [`CullDispatch`] as pushed.
-const CULL_PUSH_BYTES: u32 = 80;
+const CULL_PUSH_BYTES: u32 = 84;
 /// The most bits of the cluster visibility table (32 MiB a copy): past it, clusters share
 /// bits, which only makes phase 0 draw a few hidden clusters.
 const MAX_CLUSTER_BITS: u64 = 1 << 28;
@@ -163,8 +171,9 @@ fn cluster_command_budget() -> u64 {
 /// Storage buffers of the cull set besides the view uniform: the scene's cull entries and
 /// matrices, the commands and counts, both visibility buffers, the pyramid, and with clusters
 /// the scene's clusters and groups, both cluster visibility tables and the parts phase 0 skipped,
-/// the clusters' and the parts' boxes, and the streaming requests.
-const CULL_STORAGE_BUFFERS: u32 = 15;
+/// the clusters' and the parts' boxes, the streaming requests, and the scene's instance records
+/// and materials (for parameter blocks).
+const CULL_STORAGE_BUFFERS: u32 = 17;
 /// The frame slots a host may have ([`abi::CadrFrameSlot::slot_count`] is at most 3).
 const FRAME_SLOTS: usize = 3;
 
@@ -347,10 +356,12 @@ impl Objects {
                 (storage, 13),
                 (storage, 14),
                 (storage, 15),
+                (storage, 16),
+                (storage, 17),
             ]);
             source.replacen("#version 460\n", "#version 460\n#define CLUSTERS 1\n", 1)
         } else {
-            cull_bindings.extend([(storage, 8), (storage, 9)]);
+            cull_bindings.extend([(storage, 8), (storage, 9), (storage, 10), (storage, 11)]);
             source.to_owned()
         };
         objects.cull_set_layout = objects.set_layout(&cull_bindings)?;
@@ -430,8 +441,11 @@ struct CommandRegions {
     buffer: Option<HostBuffer>,
     capacity: u32,
     words: u32,
-    /// Words of each command this frame (see [`CullDispatch::command_words`]).
+    /// Words of each command this frame (see [`CullDispatch::commands`]).
     frame_words: u32,
+    /// Whether this frame's commands start with the word naming their pass, and whether they
+    /// carry parameter blocks.
+    frame_shape: (bool, bool),
 }
 
 /// A GPU culler: `gpu-frustum` without occlusion, `gpu-occlusion` with it, `gpu-clusters`
@@ -503,6 +517,7 @@ impl<const OCCLUSION: bool, const CLUSTERS: bool> Technique for GpuCuller<OCCLUS
                 capacity: 0,
                 words: COMMAND_WORDS,
                 frame_words: COMMAND_WORDS,
+                frame_shape: (false, false),
             },
             cluster_budget: 0,
             max_cluster_budget: cluster_command_budget(),
@@ -698,6 +713,9 @@ impl<const OCCLUSION: bool, const CLUSTERS: bool> GpuCuller<OCCLUSION, CLUSTERS>
         // The streaming requests after them; where the scene does not stream, 4 bytes the
         // shader never writes (it is told no words).
         buffers.push(streaming.map_or(self.no_boxes.raw(), |s| buffer(&s.request_buffer)));
+        // What parameter blocks are made of, last.
+        buffers.push(buffer(&scene.instance_buffer));
+        buffers.push(buffer(&scene.material_buffer));
         // Keyed on what cannot come back: the host's scene buffers by handle and generation
         // (it bumps the generation when it replaces one), ours by id. A destroyed buffer's
         // handle may be given to the next one made (lavapipe's are addresses), and a set still
@@ -713,7 +731,7 @@ impl<const OCCLUSION: bool, const CLUSTERS: bool> GpuCuller<OCCLUSION, CLUSTERS>
             commands.id(),
             self.counts.id(),
         ];
-        let mut raw = [0u64; 16];
+        let mut raw = [0u64; 18];
         for (slot, b) in raw.iter_mut().zip(&buffers) {
             *slot = b.as_raw();
         }
@@ -793,7 +811,7 @@ impl<const OCCLUSION: bool, const CLUSTERS: bool> GpuCuller<OCCLUSION, CLUSTERS>
         let filters = cull.pass_filters();
         let face_routes = cull.face_routes();
         let command_words = self.commands.frame_words;
-        let shares = command_words == NAMED_COMMAND_WORDS;
+        let (shares, parameter_blocks) = self.commands.frame_shape;
         for (index, (pass, filter)) in cull
             .passes()
             .iter()
@@ -825,14 +843,14 @@ impl<const OCCLUSION: bool, const CLUSTERS: bool> GpuCuller<OCCLUSION, CLUSTERS>
                 filter,
                 lod_error,
                 back_faces_hidden: back_faces_hidden.get(index).copied().unwrap_or(false),
-                commands: (self.commands.capacity, command_words),
+                commands: (self.commands.capacity, command_words, parameter_blocks),
                 cluster_budget: self.cluster_budget,
                 cluster_bit_mask: self.cluster_visibility.words * 32 - 1,
                 face_route: route,
                 request_words,
             };
             let constants = dispatch.constants();
-            // SAFETY: recording; the constants fit the layout's 80 bytes.
+            // SAFETY: recording; the constants fit the layout's 84 bytes.
             unsafe {
                 device.cmd_push_constants(
                     command_buffer,
@@ -857,7 +875,7 @@ impl<const OCCLUSION: bool, const CLUSTERS: bool> GpuCuller<OCCLUSION, CLUSTERS>
         let words = self.commands.frame_words;
         let region_start = slot as u64 * u64::from(self.commands.capacity) * u64::from(words) * 4;
         let shared = matches!(route, abi::CADR_FACES_CULLED | abi::CADR_FACES_KEPT);
-        let word_skipped = words == NAMED_COMMAND_WORDS && !shared;
+        let word_skipped = self.commands.frame_shape.0 && !shared;
         Some(abi::CadrGpuDraws {
             commands: commands.raw().as_raw(),
             commands_offset: region_start + u64::from(word_skipped) * 4,
@@ -1153,11 +1171,11 @@ impl<const OCCLUSION: bool, const CLUSTERS: bool> GpuCulling for GpuCuller<OCCLU
         }
         let (commands, cluster_budget) = self.command_room(instances, clusters);
         self.cluster_budget = cluster_budget;
-        self.commands.frame_words = if cull.shares_face_streams() {
-            NAMED_COMMAND_WORDS
-        } else {
-            COMMAND_WORDS
-        };
+        let shape = (cull.shares_face_streams(), scene.parameter_blocks());
+        self.commands.frame_shape = shape;
+        self.commands.frame_words = COMMAND_WORDS
+            + u32::from(shape.0) * PASS_NAME_WORDS
+            + u32::from(shape.1) * PARAMETER_BLOCK_WORDS;
         let command_buffer = cull.command_buffer();
         let view = cull
             .view_buffer()

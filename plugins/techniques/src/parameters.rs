@@ -1,7 +1,8 @@
 //! Parameter paths: how matrices and materials reach the shaders (the seeds' glUniform /
 //! ubosub, uborange, indexed and bindless rows in Vulkan form).
 //!
-//! - `push`: the matrix and material values pushed per draw (push constants);
+//! - `push`: the matrix and material values pushed per draw (push constants, as the plugin
+//!   ABI's parameter block, which `dgc` pushes from a GPU culler's commands instead);
 //! - `ubo-dynamic`: uniform buffers bound with dynamic offsets, one descriptor set per update
 //!   frequency (set 1 per object matrix, set 2 per material);
 //! - `ssbo-index`: storage-buffer arrays indexed through `firstInstance` (no per-draw commands);
@@ -89,11 +90,8 @@ impl ParameterPath for Push {
             .get(drawn.material as usize)
             .copied()
             .unwrap_or_default();
-        let mut bytes = [0u8; 96];
-        bytes[..64].copy_from_slice(&matrix.to_le_bytes());
-        bytes[64..88].copy_from_slice(&material.to_le_bytes()[..24]);
-        bytes[88..].copy_from_slice(&flags_and_instance(drawn, id));
-        push(&self.gpu, bind, 0, &bytes);
+        let block = abi::CadrParameterBlock::new(&matrix, &material, drawn.flags, id);
+        push(&self.gpu, bind, 0, &block.to_le_bytes());
         state.valid = 1;
         state.words[0] = u64::from(id);
         id

@@ -10,7 +10,11 @@
 //! (`CadrSharedFaceStreams`): the layout is then an `EXECUTION_SET` token at offset
 //! 0 and the draw at 4, and an execution set holding the two pipelines (index 0 the culled
 //! pass's, 1 the kept pass's) lets the GPU switch pipeline per sequence, the whole split drawn
-//! by one execution. The implementation preprocesses the
+//! by one execution. Where the host asks for parameter blocks (plugin ABI 1.22,
+//! `CadrParameterBlocks`: the `push` parameter path with a GPU culler), each draw comes after
+//! its instance's 96-byte block, which a `PUSH_CONSTANT` token pushes at offset 0 of the vertex
+//! stage's push constants: the matrix and material values then reach the shaders as `push`
+//! gives them, written by the GPU. The implementation preprocesses the
 //! stream into memory of its own ("preprocess" memory, sized by
 //! `vkGetGeneratedCommandsMemoryRequirementsEXT`); each execution of a frame gets a region of
 //! it, and frames rotate through [`FRAMES`] sets of regions so that a frame never writes what
@@ -41,6 +45,8 @@ const MAX_CHUNK: u32 = 1 << 20;
 const KEPT_CHUNK_SIZES: usize = 64;
 /// Bytes before the draw of a sequence that names its pipeline (the execution-set index).
 const PIPELINE_INDEX_BYTES: u32 = crate::NAMED_COMMAND_BYTES - 20;
+/// Bytes of a parameter block (`CadrParameterBlock`), before the draw where sequences carry one.
+pub const PARAMETER_BLOCK_BYTES: u32 = 96;
 
 /// One execution: the pass's pipeline and where its sequences and count are.
 #[derive(Clone, Copy)]
@@ -58,6 +64,9 @@ pub struct Execution {
     pub count_offset: u64,
     pub max_sequences: u32,
     pub stride: u32,
+    /// Where each draw comes after its parameter block, the pipeline layout the blocks are
+    /// pushed with.
+    pub parameter_blocks: Option<vk::PipelineLayout>,
 }
 
 /// One chunk of an execution, as [`GeneratedCommands::begin_frame`] prepared it.
@@ -105,9 +114,8 @@ struct Preprocess {
 pub struct GeneratedCommands {
     gpu: Arc<Gpu>,
     functions: dgc::Device,
-    /// The layouts made, each with the stride it was made for and whether its sequences name
-    /// their pipeline.
-    layouts: Vec<((u32, bool), dgc::IndirectCommandsLayout)>,
+    /// The layouts made, each with what it was made for.
+    layouts: Vec<(LayoutKey, dgc::IndirectCommandsLayout)>,
     /// The execution sets of the pipeline pairs of shared streams.
     pairs: Vec<PipelinePair>,
     preprocess: Option<Preprocess>,
@@ -115,6 +123,15 @@ pub struct GeneratedCommands {
     frame: u64,
     /// Per layout, drawer and sequences of a pass, the most sequences a chunk runs.
     chunk_sizes: Vec<((dgc::IndirectCommandsLayout, Drawer, u32), u32)>,
+}
+
+/// What a layout of sequences is made for: their stride, whether they name their pipeline, and
+/// the pipeline layout their parameter blocks are pushed with (null without blocks).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+struct LayoutKey {
+    stride: u32,
+    names_pipeline: bool,
+    parameter_blocks: vk::PipelineLayout,
 }
 
 /// The stages the sequences' state reaches (the draw token's pipelines).
@@ -140,15 +157,11 @@ impl GeneratedCommands {
         })
     }
 
-    /// The layout of sequences `stride` bytes apart, each a draw or, where `names_pipeline`,
-    /// the index of its pipeline in the execution set and then the draw. Layouts are kept
-    /// until the submission is dropped (there are at most a few: one per stride and kind).
-    fn layout(
-        &mut self,
-        stride: u32,
-        names_pipeline: bool,
-    ) -> Result<dgc::IndirectCommandsLayout, String> {
-        let key = (stride, names_pipeline);
+    /// The layout of sequences made for `key`: each the index of its pipeline in the execution
+    /// set where it names its pipeline, then its parameter block where it carries one, then
+    /// the draw. Layouts are kept until the submission is dropped (there are a few: one per
+    /// stride and kind, and per pipeline layout the host drew blocks with).
+    fn layout(&mut self, key: LayoutKey) -> Result<dgc::IndirectCommandsLayout, String> {
         if let Some(&(_, layout)) = self.layouts.iter().find(|(made_for, _)| *made_for == key) {
             return Ok(layout);
         }
@@ -156,20 +169,28 @@ impl GeneratedCommands {
             ty: dgc::EXECUTION_SET_OF_PIPELINES,
             shader_stages: STAGES,
         };
-        let tokens: &[dgc::LayoutToken<'_>] = if names_pipeline {
-            &[
-                dgc::LayoutToken::execution_set(&set_token, 0),
-                dgc::LayoutToken::draw_indexed(PIPELINE_INDEX_BYTES),
-            ]
-        } else {
-            &[dgc::LayoutToken::draw_indexed(0)]
+        let push_token = dgc::PushConstantToken {
+            update_range: vk::PushConstantRange::default()
+                .stage_flags(vk::ShaderStageFlags::VERTEX)
+                .size(PARAMETER_BLOCK_BYTES),
         };
+        let mut tokens = Vec::with_capacity(3);
+        let mut offset = 0;
+        if key.names_pipeline {
+            tokens.push(dgc::LayoutToken::execution_set(&set_token, offset));
+            offset += PIPELINE_INDEX_BYTES;
+        }
+        if key.parameter_blocks != vk::PipelineLayout::null() {
+            tokens.push(dgc::LayoutToken::push_constant(&push_token, offset));
+            offset += PARAMETER_BLOCK_BYTES;
+        }
+        tokens.push(dgc::LayoutToken::draw_indexed(offset));
         let info = dgc::LayoutCreateInfo::new(
             dgc::LayoutUsageFlags::default(),
             STAGES,
-            stride,
-            vk::PipelineLayout::null(),
-            tokens,
+            key.stride,
+            key.parameter_blocks,
+            &tokens,
         );
         // SAFETY: the info and its tokens live for the call.
         let layout = unsafe { self.functions.create_layout(&info, self.gpu.allocator()) }
@@ -459,22 +480,33 @@ impl GeneratedCommands {
         execution: &Execution,
         commands_key: u64,
     ) -> Result<(dgc::IndirectCommandsLayout, Drawer), String> {
+        let parameter_blocks = execution
+            .parameter_blocks
+            .unwrap_or(vk::PipelineLayout::null());
+        let names_pipeline = execution.next_pass_pipeline.is_some();
+        let least_stride = sequence_bytes(names_pipeline, execution.parameter_blocks.is_some());
+        if execution.stride < least_stride {
+            return Err(format!(
+                "a stream of {}-byte commands: each needs {least_stride} bytes ({})",
+                execution.stride,
+                if names_pipeline {
+                    "its pipeline's index, then its parameter block where it has one, then its draw"
+                } else {
+                    "its parameter block, then its draw"
+                }
+            ));
+        }
+        let layout = self.layout(LayoutKey {
+            stride: execution.stride,
+            names_pipeline,
+            parameter_blocks,
+        })?;
         match execution.next_pass_pipeline {
             Some(next) => {
-                if execution.stride < crate::NAMED_COMMAND_BYTES {
-                    return Err(format!(
-                        "a shared stream of {}-byte commands: each needs its pipeline's index and a draw",
-                        execution.stride
-                    ));
-                }
-                let layout = self.layout(execution.stride, true)?;
                 let set = self.pipeline_pair([execution.pipeline, next], commands_key)?;
                 Ok((layout, Drawer::Set(set)))
             }
-            None => Ok((
-                self.layout(execution.stride, false)?,
-                Drawer::Pipeline(execution.pipeline),
-            )),
+            None => Ok((layout, Drawer::Pipeline(execution.pipeline))),
         }
     }
 
@@ -512,6 +544,14 @@ impl GeneratedCommands {
         unsafe { self.functions.cmd_execute(command_buffer, false, &info) };
         Ok(())
     }
+}
+
+/// Bytes of a sequence's tokens: the pipeline's index where it names one, the parameter block
+/// where it carries one, and the draw.
+pub fn sequence_bytes(names_pipeline: bool, parameter_blocks: bool) -> u32 {
+    u32::from(names_pipeline) * PIPELINE_INDEX_BYTES
+        + u32::from(parameter_blocks) * PARAMETER_BLOCK_BYTES
+        + 20
 }
 
 /// The most sequences one chunk of a pass of `sequences` runs, given `chunk_bytes`, the

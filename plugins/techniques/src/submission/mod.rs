@@ -263,8 +263,12 @@ impl<const S: u8, const A: u8, const M: u8> Submit<S, A, M> {
     /// where one wrote them, else the pass list's indirect commands.
     fn record_generated(&mut self, record: &Record<'_>) -> Result<(), String> {
         let passes = record.passes();
+        let blocks = record.scene().parameter_blocks();
         let executions: Vec<Execution> = match record.gpu_draws() {
-            Some(draws) => gpu_executions(passes, draws),
+            Some(draws) => gpu_executions(passes, draws, blocks.then_some(record.layout())),
+            None if blocks => {
+                return Err("the host asks for parameter blocks, which only a GPU culler's commands carry, and this frame has none".into());
+            }
             None => {
                 // A host that skipped prepare still gets the right lists.
                 if self.refresh_lists(record) {
@@ -288,6 +292,7 @@ impl<const S: u8, const A: u8, const M: u8> Submit<S, A, M> {
                                     max_sequences: indirect.draws,
                                     stride: 20,
                                     next_pass_pipeline: None,
+                                    parameter_blocks: None,
                                 })
                             }
                             _ => None,
@@ -364,16 +369,22 @@ impl<const S: u8, const A: u8, const M: u8> Submit<S, A, M> {
 /// The executions of the GPU culler's `draws` for `passes`: one per pass that draws, and one
 /// for two consecutive passes whose draws are equal, a shared stream whose commands each name
 /// their pass's pipeline (`CadrSharedFaceStreams`, which the host asks for because
-/// `dgc` announces `CADR_TRAIT_SWITCHES_PIPELINES`).
-fn gpu_executions(passes: &[abi::CadrPass], draws: &[abi::CadrGpuDraws]) -> Vec<Execution> {
+/// `dgc` announces `CADR_TRAIT_SWITCHES_PIPELINES`). Where the host asks for parameter blocks,
+/// `parameter_blocks` is the pipeline layout they are pushed with.
+fn gpu_executions(
+    passes: &[abi::CadrPass],
+    draws: &[abi::CadrGpuDraws],
+    parameter_blocks: Option<vk::PipelineLayout>,
+) -> Vec<Execution> {
     let mut executions = Vec::new();
     let mut index = 0;
+    let named_bytes = generated::sequence_bytes(true, parameter_blocks.is_some());
     while index < passes.len().min(draws.len()) {
         let source = &draws[index];
         // A stream shared by two passes has room for the word before each command.
         let shared_with_next = draws.get(index + 1) == Some(source)
             && index + 1 < passes.len()
-            && source.stride >= crate::NAMED_COMMAND_BYTES;
+            && source.stride >= named_bytes;
         if source.commands != 0 && source.max_draws != 0 {
             executions.push(Execution {
                 pass: index,
@@ -386,6 +397,7 @@ fn gpu_executions(passes: &[abi::CadrPass], draws: &[abi::CadrGpuDraws]) -> Vec<
                 stride: source.stride,
                 next_pass_pipeline: shared_with_next
                     .then(|| vk::Pipeline::from_raw(passes[index + 1].pipeline)),
+                parameter_blocks,
             });
         }
         index += 1 + usize::from(shared_with_next);
@@ -558,8 +570,8 @@ technique_library! {
         },
         submission Submit<INDIVIDUAL, GENERATED, INLINE> {
             name: "dgc",
-            description: "Device-generated commands (VK_EXT_device_generated_commands): each pass's indirect commands, written by a gpu- culler or from the part list, run as a generated command stream whose length the GPU reads; where a gpu- culler splits the surfaces by their back faces, one stream draws both, the GPU picking each part's pipeline from an execution set.",
-            features: DGC_FEATURES, provides: abi::CADR_TRAIT_DRAWS_GPU_COMMANDS | abi::CADR_TRAIT_SWITCHES_PIPELINES | REPLAYABLE | KEEPS_FRAME_SLOTS, needs: GPU_DRAWS,
+            description: "Device-generated commands (VK_EXT_device_generated_commands): each pass's indirect commands, written by a gpu- culler or from the part list, run as a generated command stream whose length the GPU reads; where a gpu- culler splits the surfaces by their back faces, one stream draws both, the GPU picking each part's pipeline from an execution set; with the push parameter path, each sequence pushes the matrix and material values the gpu- culler wrote.",
+            features: DGC_FEATURES, provides: abi::CADR_TRAIT_DRAWS_GPU_COMMANDS | abi::CADR_TRAIT_SWITCHES_PIPELINES | abi::CADR_TRAIT_PARAMETER_BLOCKS | REPLAYABLE | KEEPS_FRAME_SLOTS, needs: GPU_DRAWS,
         },
         submission Submit<INDIVIDUAL, DIRECT, REPLAY> {
             name: "individual-replay",
@@ -616,7 +628,7 @@ mod tests {
         let passes = [pass(1), pass(2), pass(3)];
         // The split's two passes share a stream; the third (edges) has its own.
         let draws = [stream(0, 24), stream(0, 24), stream(2400, 24)];
-        let executions = gpu_executions(&passes, &draws);
+        let executions = gpu_executions(&passes, &draws, None);
         assert_eq!(executions.len(), 2);
         assert_eq!(
             (executions[0].pass, executions[0].next_pass_pipeline),
@@ -629,18 +641,40 @@ mod tests {
     }
 
     #[test]
+    fn a_shared_stream_of_parameter_blocks_needs_room_for_the_name_the_block_and_the_draw() {
+        let passes = [pass(1), pass(2)];
+        let layout = Some(vk::PipelineLayout::from_raw(9));
+        // 4 + 96 + 20 bytes: one execution of both passes, pushing blocks.
+        let shared = gpu_executions(&passes, &[stream(0, 120), stream(0, 120)], layout);
+        assert_eq!(shared.len(), 1);
+        assert_eq!(shared[0].parameter_blocks, layout);
+        assert_eq!(
+            shared[0].next_pass_pipeline,
+            Some(vk::Pipeline::from_raw(2))
+        );
+        // Named commands without room for the block: each pass draws the stream alone.
+        let short = gpu_executions(&passes, &[stream(0, 24), stream(0, 24)], layout);
+        assert_eq!(short.len(), 2);
+        assert_eq!(generated::sequence_bytes(false, true), 116);
+        assert_eq!(generated::sequence_bytes(true, false), 24);
+    }
+
+    #[test]
     fn passes_with_streams_of_their_own_or_without_room_for_names_stay_apart() {
         let passes = [pass(1), pass(2)];
         // Two streams: as a culler of ABI 1.18 writes the split.
-        let apart = gpu_executions(&passes, &[stream(0, 20), stream(2000, 20)]);
+        let apart = gpu_executions(&passes, &[stream(0, 20), stream(2000, 20)], None);
         assert_eq!(apart.len(), 2);
         assert!(apart.iter().all(|e| e.next_pass_pipeline.is_none()));
         // One 20-byte stream given to both: no word to name a pass, so each pass draws it.
-        let same = gpu_executions(&passes, &[stream(0, 20), stream(0, 20)]);
+        let same = gpu_executions(&passes, &[stream(0, 20), stream(0, 20)], None);
         assert_eq!(same.len(), 2);
         // A pass without commands runs nothing.
         let mut empty = stream(0, 24);
         empty.commands = 0;
-        assert_eq!(gpu_executions(&passes, &[empty, stream(2400, 24)]).len(), 1);
+        assert_eq!(
+            gpu_executions(&passes, &[empty, stream(2400, 24)], None).len(),
+            1
+        );
     }
 }

@@ -273,7 +273,8 @@ fn dgc_follows_swapped_cullers_and_display_modes_in_one_view() {
 /// `push` under `dgc` with a GPU culler: the culler writes each draw's parameter block (world
 /// matrix, material, flags, instance id) before its command and a push-constant token pushes
 /// it, so the picture is the one `push` draws from the CPU with the baseline, frame by frame
-/// while the camera orbits and parts move, and picking finds the same parts. With a CPU
+/// while the camera orbits and parts move (replaying the recorded frame as `ssbo-index` does:
+/// nothing on the CPU follows the moves), and picking finds the same parts. With a CPU
 /// culler nothing would write the blocks: the combination is refused, saying why.
 #[test]
 fn dgc_pushes_the_parameter_blocks_a_gpu_culler_writes() {
@@ -322,12 +323,14 @@ fn dgc_pushes_the_parameter_blocks_a_gpu_culler_writes() {
                 let camera = Camera::orbit(&bounds, aspect, 0.25 * f64::from(frame), 1.2);
                 let stats = view.render(&graph, &mut tree, &camera).unwrap();
                 let image = view.renderer().read_rgba8().unwrap();
-                let mut picked: Vec<(u32, u32)> = view
-                    .pick(&tree, &camera, whole)
-                    .unwrap()
-                    .iter()
-                    .map(|hit| (hit.instance, hit.part))
-                    .collect();
+                // Picked after the last frame (a pick frame between two frames would have the
+                // next one record afresh).
+                let mut picked: Vec<(u32, u32)> = if frame == 3 {
+                    let hits = view.pick(&tree, &camera, whole).unwrap();
+                    hits.iter().map(|hit| (hit.instance, hit.part)).collect()
+                } else {
+                    Vec::new()
+                };
                 picked.sort_unstable();
                 (image, stats, picked)
             })
@@ -342,8 +345,13 @@ fn dgc_pushes_the_parameter_blocks_a_gpu_culler_writes() {
             culling: culling.into(),
             ..Combination::built_in()
         };
-        for (frame, ((image, stats, picked), (expected, _, expected_picks))) in
-            frames(&combination).iter().zip(&reference).enumerate()
+        let indexed = frames(&scene_wide("dgc", culling));
+        for (frame, (((image, stats, picked), (expected, _, expected_picks)), (_, indexed, _))) in
+            frames(&combination)
+                .iter()
+                .zip(&reference)
+                .zip(&indexed)
+                .enumerate()
         {
             let difference = compare(image, expected).unwrap();
             assert!(
@@ -353,6 +361,21 @@ fn dgc_pushes_the_parameter_blocks_a_gpu_culler_writes() {
             assert_eq!(
                 picked, expected_picks,
                 "push / dgc / {culling}, frame {frame}"
+            );
+            // The moved parts' blocks are written on the GPU: the recorded frame is replayed
+            // while parts move, and the moves upload what they do with parameters found from
+            // the instance index (the transform hierarchy stays on the GPU). The first frame
+            // after a swap records; it uploads the whole scene where the swap moved the
+            // hierarchy to the GPU.
+            assert!(
+                frame < 2 || stats.replayed,
+                "push / dgc / {culling}, frame {frame}"
+            );
+            assert!(
+                frame == 0 || stats.bytes_uploaded == indexed.bytes_uploaded,
+                "push / dgc / {culling}, frame {frame}: {} bytes uploaded, {} with ssbo-index",
+                stats.bytes_uploaded,
+                indexed.bytes_uploaded
             );
             // The blocks come with the commands: no parameter is pushed from the CPU per draw.
             assert!(

@@ -302,9 +302,8 @@ fn commands_key(
     pass_filters: &PassFilters,
 ) -> RenderResult<u64> {
     let parameters = techniques.get(TechniqueKind::Parameters)?;
-    let values_in_commands = parameters.entry.provides & abi::CADR_TRAIT_PARAMETERS_IN_COMMANDS
-        != 0
-        && !techniques.parameter_blocks();
+    let values_in_commands =
+        techniques.announces(parameters, abi::CADR_TRAIT_PARAMETERS_IN_COMMANDS, 0);
     let mut key = mix(techniques.epoch, view.draws_generation);
     key = mix(key, view.buffers_generation);
     key = mix(key, u64::from(width) << 32 | u64::from(height));

@@ -520,9 +520,7 @@ impl Techniques {
         self.replayable()
             && self.active.iter().all(|active| {
                 active.as_ref().is_some_and(|active| {
-                    active
-                        .entry
-                        .announces(abi::CADR_TRAIT_REPLAYS_PARAMETER_CHANGES, 10)
+                    self.announces(active, abi::CADR_TRAIT_REPLAYS_PARAMETER_CHANGES, 10)
                 })
             })
     }
@@ -574,6 +572,23 @@ impl Techniques {
             self.get(kind)
                 .is_ok_and(|active| active.entry.announces(abi::CADR_TRAIT_PARAMETER_BLOCKS, 22))
         })
+    }
+
+    /// Whether `active` announces `trait_bit` (from a library of ABI `since` or later) as this
+    /// combination uses it: a parameter path whose blocks the GPU culler writes (see
+    /// [`Self::parameter_blocks`]) pushes nothing, so it puts no values in commands, reads none
+    /// on the host and replays parameter changes, whatever it announces for drawing alone.
+    pub(crate) fn announces(&self, active: &Active, trait_bit: u64, since: u32) -> bool {
+        if active.entry.kind == TechniqueKind::Parameters && self.parameter_blocks() {
+            match trait_bit {
+                abi::CADR_TRAIT_REPLAYS_PARAMETER_CHANGES => return true,
+                abi::CADR_TRAIT_PARAMETERS_IN_COMMANDS | abi::CADR_TRAIT_READS_HOST_MATRICES => {
+                    return false
+                }
+                _ => {}
+            }
+        }
+        active.entry.announces(trait_bit, since)
     }
 
     /// What plugins hold now (objects through the allocation callbacks, buffers).
@@ -705,7 +720,7 @@ impl Techniques {
     /// ABI 1.4, which could not say), otherwise on the GPU only.
     pub fn transforms(&self) -> Transforms {
         let on_host = self.active.iter().flatten().any(|active| {
-            active.entry.provides & abi::CADR_TRAIT_READS_HOST_MATRICES != 0
+            self.announces(active, abi::CADR_TRAIT_READS_HOST_MATRICES, 0)
                 || active.entry.abi_version.1 < 4
         });
         if on_host {

@@ -227,8 +227,13 @@ pub const CADR_TRAIT_SHARES_PIPELINES: CadrTraitBits = 1 << 13;
 /// Where the active parameter path, submission and GPU culler all announce it, the host asks
 /// the culler and the submission for blocks in every frame, and counts
 /// [`CADR_TRAIT_PARAMETERS_FROM_INSTANCE_INDEX`] as offered to them: the culler finds each
-/// draw's parameters from its instance id on the GPU. A parameter path and submission that
-/// announce it with a CPU culler are refused (nothing would write the blocks).
+/// draw's parameters from its instance id on the GPU. The parameter path then pushes nothing
+/// and reads no parameter values on the host: the host counts it as announcing
+/// [`CADR_TRAIT_REPLAYS_PARAMETER_CHANGES`], and neither [`CADR_TRAIT_PARAMETERS_IN_COMMANDS`]
+/// nor [`CADR_TRAIT_READS_HOST_MATRICES`], whatever it announces for drawing alone (so moving
+/// parts replay the recorded frame, and the transform hierarchy may stay on the GPU). A
+/// parameter path and submission that announce it with a CPU culler are refused (nothing would
+/// write the blocks).
 pub const CADR_TRAIT_PARAMETER_BLOCKS: CadrTraitBits = 1 << 14;
 
 /// A message buffer the host hands to functions that can fail: the plugin writes a

@@ -109,8 +109,9 @@ fn the_preprocess_memory_query_answers_for_every_scene_size() {
         "#version 460\nlayout(location = 0) out vec4 c;\nvoid main() { c = vec4(1.0); }\n",
         ShaderStage::Fragment,
     );
+    // The push constants of cadr's pipelines: 128 bytes for the vertex stage.
     let layout =
-        PipelineLayout::new(&device, "none", &[], 0, vk::ShaderStageFlags::empty()).unwrap();
+        PipelineLayout::new(&device, "push", &[], 128, vk::ShaderStageFlags::VERTEX).unwrap();
     let pipeline = Pipeline::graphics(
         &device,
         &GraphicsPipelineDesc {
@@ -133,16 +134,56 @@ fn the_preprocess_memory_query_answers_for_every_scene_size() {
     )
     .unwrap();
     let functions = dgc::Device::new(device.instance().raw(), device.raw()).unwrap();
-    let tokens = [dgc::LayoutToken::draw_indexed(0)];
-    let info = dgc::LayoutCreateInfo::new(
-        dgc::LayoutUsageFlags::default(),
-        vk::ShaderStageFlags::VERTEX | vk::ShaderStageFlags::FRAGMENT,
-        20,
-        vk::PipelineLayout::null(),
-        &tokens,
-    );
-    // SAFETY: the info and its token live for the call.
-    let commands_layout = unsafe { functions.create_layout(&info, None) }.unwrap();
+    // Sequences of a draw, and (the push parameter path's) of a 96-byte parameter block pushed
+    // before the draw.
+    let push_token = dgc::PushConstantToken {
+        update_range: vk::PushConstantRange::default()
+            .stage_flags(vk::ShaderStageFlags::VERTEX)
+            .size(96),
+    };
+    let draws = [dgc::LayoutToken::draw_indexed(0)];
+    let blocks = [
+        dgc::LayoutToken::push_constant(&push_token, 0),
+        dgc::LayoutToken::draw_indexed(96),
+    ];
+    println!("{}:", device.adapter().name);
+    let mut sizes = Vec::new();
+    for (tokens, stride, pipeline_layout, kind) in [
+        (&draws[..], 20, vk::PipelineLayout::null(), "draws"),
+        (&blocks[..], 116, layout.raw(), "parameter blocks and draws"),
+    ] {
+        let info = dgc::LayoutCreateInfo::new(
+            dgc::LayoutUsageFlags::default(),
+            vk::ShaderStageFlags::VERTEX | vk::ShaderStageFlags::FRAGMENT,
+            stride,
+            pipeline_layout,
+            tokens,
+        );
+        // SAFETY: the info and its tokens live for the call.
+        let commands_layout = unsafe { functions.create_layout(&info, None) }.unwrap();
+        sizes.extend(preprocess_sizes(
+            &functions,
+            commands_layout,
+            &pipeline,
+            kind,
+        ));
+        // SAFETY: nothing uses the layout.
+        unsafe { functions.destroy_layout(commands_layout, None) };
+    }
+    assert!(sizes.iter().all(|&size| size > 0), "{sizes:?}");
+    drop(pipeline);
+    assert_no_validation_errors(&device);
+}
+
+/// The preprocess memory `commands_layout` (of sequences of `kind`) asks for with `pipeline`,
+/// printed per scene size.
+fn preprocess_sizes(
+    functions: &cadr_core::vk::dgc::Device,
+    commands_layout: cadr_core::vk::dgc::IndirectCommandsLayout,
+    pipeline: &cadr_core::vk::Pipeline,
+    kind: &str,
+) -> Vec<u64> {
+    use cadr_core::vk::dgc;
     let mut sizes = Vec::new();
     for (scene, sequences) in [
         ("one part", 1),
@@ -160,18 +201,13 @@ fn the_preprocess_memory_query_answers_for_every_scene_size() {
         // SAFETY: the layout and the pipeline are alive.
         let needs = unsafe { functions.memory_requirements(&query) };
         println!(
-            "{}: preprocess memory for {scene} ({sequences} sequences): {} bytes",
-            device.adapter().name,
+            "preprocess memory of {kind} for {scene} ({sequences} sequences): {} bytes",
             needs.size
         );
         assert!(needs.alignment.is_power_of_two(), "{needs:?}");
         sizes.push(needs.size);
     }
-    assert!(sizes[0] > 0, "{sizes:?}");
-    // SAFETY: nothing uses the layout.
-    unsafe { functions.destroy_layout(commands_layout, None) };
-    drop(pipeline);
-    assert_no_validation_errors(&device);
+    sizes
 }
 
 /// Where a GPU culler splits the opaque surfaces into closed parts drawn with their back faces

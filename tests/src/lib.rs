@@ -31,6 +31,23 @@ pub fn first_transform(
     })
 }
 
+/// Up to `count` of `nodes` placed by a matrix other than the identity, with their matrices:
+/// the parts of an assembly to move apart.
+pub fn placed_nodes(
+    graph: &SceneGraph,
+    nodes: &[cadr_core::graph::NodeHandle],
+    count: usize,
+) -> Vec<(cadr_core::graph::NodeHandle, glam::DMat4)> {
+    nodes
+        .iter()
+        .filter_map(|&node| {
+            let matrix = graph.node(node).ok()?.local_matrix();
+            (matrix != glam::DMat4::IDENTITY).then_some((node, matrix))
+        })
+        .take(count)
+        .collect()
+}
+
 /// A device with the validation layers on. Tests never skip: without Vulkan they fail here.
 pub fn test_device() -> Arc<Device> {
     validated_device(false, false)

@@ -17,8 +17,8 @@ use cadr_core::view::View;
 use cadr_core::vk::Device;
 use cadr_tests::images::{compare, SAME_PICTURE, VISIBLE_CHANGE};
 use cadr_tests::{
-    assert_no_validation_errors, first_transform, plugin_registry, scene_wide as combination,
-    test_device,
+    assert_no_validation_errors, first_transform, placed_nodes, plugin_registry,
+    scene_wide as combination, test_device,
 };
 use glam::{DMat4, DVec3};
 
@@ -150,14 +150,7 @@ fn explode(
     let scene = generate(&GeneratorSpec::Demo);
     let bounds = flatten(&scene).unwrap().bounds;
     let (mut graph, handles) = SceneGraph::from_scene(&scene).unwrap();
-    let moving: Vec<_> = handles
-        .iter()
-        .filter_map(|&node| {
-            let matrix = graph.node(node).ok()?.local_matrix();
-            (matrix != DMat4::IDENTITY).then_some((node, matrix))
-        })
-        .take(8)
-        .collect();
+    let moving = placed_nodes(&graph, &handles, 8);
     assert!(moving.len() > 1, "the demo has transform nodes to move");
     let mut tree = SceneTree::build(&mut graph);
     let registry = plugin_registry(&device);

@@ -21,19 +21,25 @@ use cadr_core::view::View;
 use cadr_tests::back_face_cases::{draw, four_boxes, CASES, SIZE as SIZE_OF_CASES};
 use cadr_tests::images::{compare, SAME_PICTURE};
 use cadr_tests::{
-    assert_no_validation_errors, plugin_registry, scene_wide, test_device, SceneView,
+    assert_no_validation_errors, placed_nodes, plugin_registry, scene_wide, test_device, SceneView,
 };
 
 const SIZE: (u32, u32) = (200, 150);
 
-#[test]
-fn dgc_draws_what_groups_mdi_replay_draws_under_every_culler() {
+/// The test device, which must have `VK_EXT_device_generated_commands` (Mesa 25's lavapipe).
+fn dgc_device() -> Arc<cadr_core::vk::Device> {
     let device = test_device();
     assert!(
         device.capabilities().device_generated_commands,
         "the default driver ({}) has no VK_EXT_device_generated_commands: run scripts/setup.sh",
         device.adapter().name
     );
+    device
+}
+
+#[test]
+fn dgc_draws_what_groups_mdi_replay_draws_under_every_culler() {
+    let device = dgc_device();
     let scene = generate(&GeneratorSpec::Cabinet { cabinets: 6 });
     let bounds = flatten(&scene).unwrap().bounds;
     let aspect = f64::from(SIZE.0) / f64::from(SIZE.1);
@@ -218,10 +224,7 @@ fn preprocess_sizes(
 /// for its surfaces where the split's two passes would bind two.
 #[test]
 fn dgc_draws_the_split_surfaces_from_one_stream_whose_pipelines_the_gpu_picks() {
-    assert!(
-        test_device().capabilities().device_generated_commands,
-        "the default driver has no VK_EXT_device_generated_commands: run scripts/setup.sh"
-    );
+    dgc_device();
     for case in &CASES {
         let (reference, _) = draw(case, "individual-indirect-count", "none");
         for culling in ["gpu-frustum", "gpu-occlusion", "gpu-clusters"] {
@@ -314,24 +317,12 @@ fn dgc_follows_swapped_cullers_and_display_modes_in_one_view() {
 /// culler nothing would write the blocks: the combination is refused, saying why.
 #[test]
 fn dgc_pushes_the_parameter_blocks_a_gpu_culler_writes() {
-    let device = test_device();
-    assert!(
-        device.capabilities().device_generated_commands,
-        "the default driver ({}) has no VK_EXT_device_generated_commands: run scripts/setup.sh",
-        device.adapter().name
-    );
+    let device = dgc_device();
     let scene = generate(&GeneratorSpec::Cabinet { cabinets: 4 });
     let bounds = flatten(&scene).unwrap().bounds;
     let aspect = f64::from(SIZE.0) / f64::from(SIZE.1);
     let (mut graph, handles) = SceneGraph::from_scene(&scene).unwrap();
-    let moving: Vec<_> = handles
-        .iter()
-        .filter_map(|&node| {
-            let matrix = graph.node(node).ok()?.local_matrix();
-            (matrix != DMat4::IDENTITY).then_some((node, matrix))
-        })
-        .take(6)
-        .collect();
+    let moving = placed_nodes(&graph, &handles, 6);
     assert!(
         moving.len() > 1,
         "the cabinets have transform nodes to move"

@@ -398,6 +398,13 @@ fn dgc_pushes_the_parameter_blocks_a_gpu_culler_writes() {
                 frame < 2 || stats.replayed,
                 "push / dgc / {culling}, frame {frame}"
             );
+            // One pipeline bound per stream, as with ssbo-index, whose back-face split shares
+            // one stream (see the split test above): two streams would bind one more per phase.
+            // So here each sequence is the pipeline's index, the block and the draw.
+            assert_eq!(
+                stats.pipeline_binds, indexed.pipeline_binds,
+                "push / dgc / {culling}, frame {frame}"
+            );
             assert!(
                 frame == 0 || stats.bytes_uploaded == indexed.bytes_uploaded,
                 "push / dgc / {culling}, frame {frame}: {} bytes uploaded, {} with ssbo-index",

@@ -722,6 +722,16 @@ mod tests {
     use super::*;
 
     #[test]
+    fn every_extension_kind_of_this_abi_is_known() {
+        // Kinds are numbered from 1 without gaps; the newest is ABI 1.22's.
+        let newest = abi::CADR_EXTENSION_PARAMETER_BLOCKS;
+        for kind in 1..=newest {
+            assert!(KNOWN_EXTENSIONS.contains(&kind), "kind {kind}");
+        }
+        assert_eq!(KNOWN_EXTENSIONS.len(), newest as usize);
+    }
+
+    #[test]
     fn plugin_dirs_start_beside_the_binary_and_end_with_the_variable() {
         let dirs = default_plugin_dirs();
         let exe_dir = std::env::current_exe().unwrap_or_default();

@@ -67,7 +67,7 @@ const COMMAND_WORDS: u32 = 5;
 const PASS_NAME_WORDS: u32 = crate::NAMED_COMMAND_BYTES / 4 - COMMAND_WORDS;
 /// Words of a parameter block before each command, where the host asks for them
 /// (`CadrParameterBlocks`, a `CadrParameterBlock`).
-const PARAMETER_BLOCK_WORDS: u32 = 24;
+const PARAMETER_BLOCK_WORDS: u32 = (std::mem::size_of::<abi::CadrParameterBlock>() / 4) as u32;
 
 /// The visibility buffers: last frame's (read) and this frame's (written).
 const LAST: usize = 0;
@@ -441,11 +441,19 @@ struct CommandRegions {
     buffer: Option<HostBuffer>,
     capacity: u32,
     words: u32,
-    /// Words of each command this frame (see [`CullDispatch::commands`]).
-    frame_words: u32,
     /// Whether this frame's commands start with the word naming their pass, and whether they
     /// carry parameter blocks.
     frame_shape: (bool, bool),
+}
+
+impl CommandRegions {
+    /// Words of each command this frame (see [`CullDispatch::commands`]).
+    fn frame_words(&self) -> u32 {
+        let (named, blocks) = self.frame_shape;
+        COMMAND_WORDS
+            + u32::from(named) * PASS_NAME_WORDS
+            + u32::from(blocks) * PARAMETER_BLOCK_WORDS
+    }
 }
 
 /// A GPU culler: `gpu-frustum` without occlusion, `gpu-occlusion` with it, `gpu-clusters`
@@ -516,7 +524,6 @@ impl<const OCCLUSION: bool, const CLUSTERS: bool> Technique for GpuCuller<OCCLUS
                 buffer: None,
                 capacity: 0,
                 words: COMMAND_WORDS,
-                frame_words: COMMAND_WORDS,
                 frame_shape: (false, false),
             },
             cluster_budget: 0,
@@ -574,7 +581,7 @@ impl<const OCCLUSION: bool, const CLUSTERS: bool> GpuCuller<OCCLUSION, CLUSTERS>
     ) -> Result<(), String> {
         let storage = vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_DST;
         let needed = commands.max(instances).max(1);
-        let words = self.commands.frame_words;
+        let words = self.commands.frame_words();
         if self.commands.buffer.is_none()
             || needed > self.commands.capacity
             || words > self.commands.words
@@ -810,7 +817,7 @@ impl<const OCCLUSION: bool, const CLUSTERS: bool> GpuCuller<OCCLUSION, CLUSTERS>
         }
         let filters = cull.pass_filters();
         let face_routes = cull.face_routes();
-        let command_words = self.commands.frame_words;
+        let command_words = self.commands.frame_words();
         let (shares, parameter_blocks) = self.commands.frame_shape;
         for (index, (pass, filter)) in cull
             .passes()
@@ -872,7 +879,7 @@ impl<const OCCLUSION: bool, const CLUSTERS: bool> GpuCuller<OCCLUSION, CLUSTERS>
     /// at its first command itself.
     fn draws(&self, slot: usize, route: abi::CadrFaceRoute) -> Option<abi::CadrGpuDraws> {
         let commands = self.commands.buffer.as_ref()?;
-        let words = self.commands.frame_words;
+        let words = self.commands.frame_words();
         let region_start = slot as u64 * u64::from(self.commands.capacity) * u64::from(words) * 4;
         let shared = matches!(route, abi::CADR_FACES_CULLED | abi::CADR_FACES_KEPT);
         let word_skipped = self.commands.frame_shape.0 && !shared;
@@ -1171,11 +1178,7 @@ impl<const OCCLUSION: bool, const CLUSTERS: bool> GpuCulling for GpuCuller<OCCLU
         }
         let (commands, cluster_budget) = self.command_room(instances, clusters);
         self.cluster_budget = cluster_budget;
-        let shape = (cull.shares_face_streams(), scene.parameter_blocks());
-        self.commands.frame_shape = shape;
-        self.commands.frame_words = COMMAND_WORDS
-            + u32::from(shape.0) * PASS_NAME_WORDS
-            + u32::from(shape.1) * PARAMETER_BLOCK_WORDS;
+        self.commands.frame_shape = (cull.shares_face_streams(), scene.parameter_blocks());
         let command_buffer = cull.command_buffer();
         let view = cull
             .view_buffer()

@@ -30,6 +30,7 @@
 
 use std::sync::Arc;
 
+use cadr_plugin_sdk::abi;
 use cadr_plugin_sdk::dgc;
 use cadr_plugin_sdk::vk;
 use cadr_plugin_sdk::{vulkan_failure, Gpu};
@@ -46,7 +47,7 @@ const KEPT_CHUNK_SIZES: usize = 64;
 /// Bytes before the draw of a sequence that names its pipeline (the execution-set index).
 const PIPELINE_INDEX_BYTES: u32 = crate::NAMED_COMMAND_BYTES - 20;
 /// Bytes of a parameter block (`CadrParameterBlock`), before the draw where sequences carry one.
-pub const PARAMETER_BLOCK_BYTES: u32 = 96;
+const PARAMETER_BLOCK_BYTES: u32 = std::mem::size_of::<abi::CadrParameterBlock>() as u32;
 
 /// One execution: the pass's pipeline and where its sequences and count are.
 #[derive(Clone, Copy)]

@@ -20,10 +20,19 @@
 #define CADR_PLUGIN_ABI_MAJOR 1
 
 // Minor version of this ABI: additions that older readers may ignore.
-#define CADR_PLUGIN_ABI_MINOR 22
+#define CADR_PLUGIN_ABI_MINOR 23
 
 // `(major << 16) | minor`, what [`CadrPluginVersionFn`] returns.
 #define CADR_PLUGIN_ABI_VERSION ((CADR_PLUGIN_ABI_MAJOR << 16) | CADR_PLUGIN_ABI_MINOR)
+
+// Since ABI 1.23: where a mesh-shading submission ([`CADR_TRAIT_MESH_SHADING`]) pushes its
+// [`CadrMeshTaskPush`], for the task and mesh stages (the vertex stage too, as the range is one).
+#define CADR_MESH_TASK_PUSH_OFFSET 128
+
+// Since ABI 1.23: the commands one task workgroup of the host's task shader reads: a pass of
+// at most `max_draws` commands is drawn by `ceil(max_draws / 32)` task workgroups
+// (`vkCmdDrawMeshTasksEXT(groups, 1, 1)`).
+#define CADR_MESH_COMMANDS_PER_TASK 32
 
 // [`CadrCluster::refined`] of a part's original clusters: its own triangles, made by no
 // simplification.
@@ -1265,6 +1274,24 @@ typedef struct CadrParameterBlocks {
   struct CadrExtension header;
 } CadrParameterBlocks;
 
+// Since ABI 1.23: what a mesh-shading submission pushes at [`CADR_MESH_TASK_PUSH_OFFSET`]
+// before drawing a pass of kind [`CADR_PASS_MESH_TRIANGLES`] or [`CADR_PASS_MESH_PICK`] (the
+// host's task and mesh shaders read it). Device addresses of buffers made with `SHADER_DEVICE_ADDRESS` usage: a GPU culler's
+// commands and counts, the scene's index buffer ([`CadrSceneView::index_buffer`]).
+typedef struct CadrMeshTaskPush {
+  // Address of the pass's first command (`VkDrawIndexedIndirectCommand`, `firstInstance` the
+  // instance id): [`CadrGpuDraws::commands`] plus `commands_offset`.
+  uint64_t commands;
+  // Address of the pass's count (a u32): [`CadrGpuDraws::count_buffer`] plus `count_offset`.
+  uint64_t count;
+  // Address of the scene's triangle indices (u32).
+  uint64_t indices;
+  // The most commands the count can say ([`CadrGpuDraws::max_draws`]).
+  uint32_t max_draws;
+  // Words (4 bytes) between commands ([`CadrGpuDraws::stride`] / 4).
+  uint32_t stride_words;
+} CadrMeshTaskPush;
+
 // Success.
 #define CADR_STATUS_OK 0
 
@@ -1446,6 +1473,24 @@ typedef struct CadrParameterBlocks {
 // write the blocks).
 #define CADR_TRAIT_PARAMETER_BLOCKS (1 << 14)
 
+// Since ABI 1.23. Mesh shading (`VK_EXT_mesh_shader`), one announcement per kind:
+// - a vertex or parameter path promises that its snippet also runs in a mesh shader: it reads
+//   the vertex and the instance only through `gl_VertexIndex` and `gl_InstanceIndex` (the host
+//   puts the corner's values in their place there), declares no vertex input and pushes no
+//   constants (`pulling` and `ssbo-index` do so);
+// - a submission draws GPU-written commands ([`CadrGpuDraws`]) with mesh workgroups in the
+//   passes of kinds [`CADR_PASS_MESH_TRIANGLES`] and [`CADR_PASS_MESH_PICK`].
+//
+// Where the active submission announces it, the host builds every triangle pass but the
+// hidden silhouettes' (a geometry shader, which mesh pipelines lack) as a mesh pipeline: the
+// host's task shader reads the pass's commands and count, and its mesh shader draws each
+// command's triangles in chunks, every vertex computed as the vertex shader computes it, so
+// the picture is the vertex pipeline's. The pipeline layout then has one push-constant range
+// of 160 bytes for the vertex, task and mesh stages: the paths' 128, then the submission's
+// [`CadrMeshTaskPush`]. The host refuses such a submission unless both paths announce it, the
+// culler is a GPU culler and the device has mesh shaders and buffer device addresses.
+#define CADR_TRAIT_MESH_SHADING (1 << 15)
+
 // Device-local; written by transfers or shaders.
 #define CADR_MEMORY_GPU_ONLY 0
 
@@ -1556,5 +1601,17 @@ typedef struct CadrParameterBlocks {
 // when every active technique was built for ABI 1.2 or later; older libraries get
 // [`CADR_PASS_TRIANGLES`] for the pick pass instead.
 #define CADR_PASS_PICK 2
+
+// Since ABI 1.23: triangles drawn by a mesh pipeline (the host's task and mesh shaders),
+// given only where the active submission announces [`CADR_TRAIT_MESH_SHADING`], for every
+// triangle pass but the hidden silhouettes' and the pick pass. Bind the pipeline, bind the
+// paths, push [`CadrMeshTaskPush`] and draw `ceil(max_draws / CADR_MESH_COMMANDS_PER_TASK)`
+// task workgroups. Cullers treat it as [`CADR_PASS_TRIANGLES`].
+#define CADR_PASS_MESH_TRIANGLES 3
+
+// Since ABI 1.23: the pick pass drawn by a mesh pipeline, as [`CADR_PASS_MESH_TRIANGLES`]
+// (each command draws its own instance, as [`CADR_PASS_PICK`] asks). Cullers treat it as
+// [`CADR_PASS_PICK`].
+#define CADR_PASS_MESH_PICK 4
 
 #endif  /* CADR_PLUGIN_H */

@@ -154,6 +154,12 @@ bench dgc-racecar "$frames" "$racecar" "${scene_wide[@]}" --submit dgc,groups-md
 bench clusters-fine "$frames" "$fine" "${scene_wide[@]}" --submit individual-indirect-count \
   --cull gpu-occlusion,gpu-clusters --lod-error 0,1 --camera orbit --no-replay
 bench clusters-sweep "$few_frames" --sweep-detail "$details" --sweep-units "$units" --no-replay
+# The GPU cullers' commands drawn by mesh workgroups (VK_EXT_mesh_shader) against the same
+# commands as indexed indirect draws, both with the paths a mesh shader runs (pulling,
+# ssbo-index): per part, per cluster at full detail, per cluster at 1 px.
+bench mesh-fine "$frames" "$fine" --vertex pulling --params ssbo-index \
+  --submit individual-indirect-count,mesh-tasks --cull gpu-occlusion,gpu-clusters --lod-error 0,1 \
+  --camera orbit --no-replay
 
-echo "bench-gpu: wrote $out ($failures of 10 tables failed)"
+echo "bench-gpu: wrote $out ($failures of 11 tables failed)"
 exit $(( failures > 0 ))

@@ -214,6 +214,18 @@ pub const INCLUDES: &[IncludeFile] = &[
         "transparency.glsl",
         include_str!("../../shaders/transparency.glsl"),
     ),
+    (
+        "technique_inputs.glsl",
+        include_str!("../../shaders/technique_inputs.glsl"),
+    ),
+    (
+        "technique_vertex.glsl",
+        include_str!("../../shaders/technique_vertex.glsl"),
+    ),
+    (
+        "mesh_tasks.glsl",
+        include_str!("../../shaders/mesh_tasks.glsl"),
+    ),
 ];
 
 /// A complete shader: name (file name), stage and source.
@@ -259,6 +271,23 @@ pub const TECHNIQUE_VERT: ShaderSource = ShaderSource {
     stage: ShaderStage::Vertex,
     source: include_str!("../../shaders/technique.vert"),
 };
+
+/// The task shader of mesh-shading submissions: launches the mesh workgroups of a pass's
+/// GPU-written commands.
+pub const TECHNIQUE_TASK: ShaderSource = ShaderSource {
+    name: "technique.task",
+    stage: ShaderStage::Task,
+    source: include_str!("../../shaders/technique.task"),
+};
+
+/// The mesh shader of mesh-shading submissions, a template as [`TECHNIQUE_VERT`] is: the
+/// vertex of `technique.vert` computed per triangle corner of a command's chunk.
+pub const TECHNIQUE_MESH: ShaderSource = ShaderSource {
+    name: "technique.mesh",
+    stage: ShaderStage::Mesh,
+    source: include_str!("../../shaders/technique.mesh"),
+};
+
 /// Edge lines of the "solid with edges" shade mode.
 pub const EDGES_FRAG: ShaderSource = ShaderSource {
     name: "edges.frag",
@@ -342,7 +371,8 @@ pub const BACKGROUND_FRAG: ShaderSource = ShaderSource {
 pub const TRANSPARENCY_MARKER: &str = "//@TRANSPARENCY@";
 
 /// Shaders that are templates: plugins' snippets complete them (see `technique::pipeline`).
-pub const TEMPLATES: &[ShaderSource] = &[TECHNIQUE_VERT, TRANSLUCENT_FRAG, MERGE_FRAG];
+pub const TEMPLATES: &[ShaderSource] =
+    &[TECHNIQUE_VERT, TECHNIQUE_MESH, TRANSLUCENT_FRAG, MERGE_FRAG];
 
 /// Every complete shader, for validation.
 pub const ALL: &[ShaderSource] = &[
@@ -360,4 +390,5 @@ pub const ALL: &[ShaderSource] = &[
     CAP_TIES_FRAG,
     MERGE_VERT,
     BACKGROUND_FRAG,
+    TECHNIQUE_TASK,
 ];

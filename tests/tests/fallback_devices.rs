@@ -34,6 +34,8 @@ fn mesh_shaders_are_refused_with_the_reason_on_mesa_22_3() {
             fragment: &fragment,
             depth_bias: false,
             triangle_outlines: false,
+            cull_back_faces: false,
+            mesh_constants: &[],
             colors: &[ColorTarget::replaced(COLOR_FORMAT)],
             depth: DepthUse::TestAndWrite,
             samples: 1,
@@ -62,7 +64,7 @@ fn mesh_shaders_are_refused_with_the_reason_on_mesa_22_3() {
 }
 
 #[test]
-fn the_dgc_submission_is_refused_with_the_reason_on_mesa_22_3() {
+fn the_dgc_and_mesh_tasks_submissions_are_refused_with_the_reason_on_mesa_22_3() {
     let device = mesa22_device();
     assert!(!device.capabilities().device_generated_commands);
     let registry = cadr_tests::plugin_registry(&device);
@@ -75,6 +77,16 @@ fn the_dgc_submission_is_refused_with_the_reason_on_mesa_22_3() {
     let message = error.to_string();
     assert!(
         message.contains("dgc") && message.contains("VK_EXT_device_generated_commands"),
+        "{message}"
+    );
+    // Nor mesh shaders: the submission that draws by mesh workgroups is refused too.
+    let mesh_tasks = cadr_core::technique::Combination {
+        vertex: "pulling".into(),
+        ..cadr_tests::scene_wide("mesh-tasks", "gpu-clusters")
+    };
+    let message = view.techniques().check(&mesh_tasks).expect_err("refused");
+    assert!(
+        message.contains("mesh-tasks") && message.contains("VK_EXT_mesh_shader"),
         "{message}"
     );
     drop(view);

@@ -70,6 +70,8 @@ fn quad_pipeline(device: &Arc<Device>, layout: &PipelineLayout) -> Pipeline {
             fragment: &fragment,
             depth_bias: false,
             triangle_outlines: false,
+            cull_back_faces: false,
+            mesh_constants: &[],
             colors: &[ColorTarget::replaced(COLOR_FORMAT)],
             depth: DepthUse::TestAndWrite,
             samples: 1,

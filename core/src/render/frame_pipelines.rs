@@ -79,11 +79,17 @@ fn frame_set_bindings(capabilities: Capabilities) -> Vec<LayoutBinding> {
     use vk::DescriptorType as Type;
     use vk::ShaderStageFlags as Stage;
     let bindless_textures = capabilities.bindless_textures;
-    let mut uniform_stages = Stage::VERTEX | Stage::FRAGMENT;
+    // The technique mesh shader (mesh-shading submissions) reads what the vertex shader reads.
+    let vertex_stages = if capabilities.mesh_shader {
+        Stage::VERTEX | Stage::MESH_EXT
+    } else {
+        Stage::VERTEX
+    };
+    let mut uniform_stages = vertex_stages | Stage::FRAGMENT;
     if capabilities.geometry_shader {
         uniform_stages |= Stage::GEOMETRY;
     }
-    let vertex_storage = LayoutBinding::one(Type::STORAGE_BUFFER, Stage::VERTEX);
+    let vertex_storage = LayoutBinding::one(Type::STORAGE_BUFFER, vertex_stages);
     let fragment_storage = LayoutBinding::one(Type::STORAGE_BUFFER, Stage::FRAGMENT);
     let texture_sampling = if bindless_textures > 0 {
         LayoutBinding::one(Type::SAMPLER, Stage::FRAGMENT)

@@ -11,11 +11,12 @@ use cadr_plugin_abi as abi;
 
 use crate::render::{TransparencyMethod, PICK_FORMAT};
 use crate::vk::{
-    Blend, ColorTarget, DepthUse, DescriptorSetLayout, Device, GraphicsPipelineDesc, Pipeline,
-    PipelineLayout, ShaderModule, ShaderStage, VertexLayout, COLOR_FORMAT,
+    Blend, ColorTarget, DepthUse, DescriptorSetLayout, Device, GraphicsPipelineDesc,
+    MeshPipelineDesc, Pipeline, PipelineLayout, ShaderModule, ShaderStage, VertexLayout,
+    COLOR_FORMAT,
 };
 
-use super::shader_assembly::{MethodShaders, PassShader, PassShaders};
+use super::shader_assembly::{MeshShaders, MethodShaders, PassShader, PassShaders};
 use super::surface_passes::{PassSet, ShadeMode};
 
 /// Which surfaces a technique pipeline draws (the vertex shader's `CADR_DRAW_ROLE`).
@@ -42,6 +43,8 @@ struct PassScope {
     hides_back_faces: bool,
     /// The parts it takes by whether their back faces are culled (`CADR_FACES_*`).
     faces: abi::CadrFaceRoute,
+    /// Drawn by a mesh pipeline ([`abi::CADR_PASS_MESH_TRIANGLES`], [`abi::CADR_PASS_MESH_PICK`]).
+    mesh: bool,
 }
 
 impl PassScope {
@@ -126,7 +129,7 @@ impl PassFilters {
 
 /// The pipeline layout of a combination's pipelines: the frame set, then the paths' sets up to
 /// the last one used (an empty set standing for a path without one), and 128 bytes of push
-/// constants for the vertex stage. Returns the empty set's layout too, which must live as long.
+/// constants for the vertex stage (160 with mesh shading, see below). Returns the empty set's layout too, which must live as long.
 fn technique_layout(
     device: &Arc<Device>,
     inputs: &PipelineInputs<'_>,
@@ -146,13 +149,19 @@ fn technique_layout(
         }
     }));
     sets.truncate(used);
-    let layout = PipelineLayout::new(
-        device,
-        "technique layout",
-        &sets,
-        128,
-        vk::ShaderStageFlags::VERTEX,
-    )?;
+    // With mesh shading, one range for the vertex, task and mesh stages: the paths' 128 bytes
+    // (paths that announce mesh shading push none), then the submission's CadrMeshTaskPush.
+    let (push_bytes, push_stages) = if inputs.shaders.mesh.is_some() {
+        (
+            abi::CADR_MESH_TASK_PUSH_OFFSET + std::mem::size_of::<abi::CadrMeshTaskPush>() as u32,
+            vk::ShaderStageFlags::VERTEX
+                | vk::ShaderStageFlags::TASK_EXT
+                | vk::ShaderStageFlags::MESH_EXT,
+        )
+    } else {
+        (128, vk::ShaderStageFlags::VERTEX)
+    };
+    let layout = PipelineLayout::new(device, "technique layout", &sets, push_bytes, push_stages)?;
     Ok((layout, empty_set_layout))
 }
 
@@ -435,7 +444,11 @@ impl TechniquePipelines {
         use crate::vk::raw::Handle;
         self.passes.push(abi::CadrPass {
             pipeline: pipeline.raw().as_raw(),
-            kind,
+            kind: match (scope.mesh, kind) {
+                (false, kind) => kind,
+                (true, abi::CADR_PASS_PICK) => abi::CADR_PASS_MESH_PICK,
+                (true, _) => abi::CADR_PASS_MESH_TRIANGLES,
+            },
         });
         let xray = matches!(
             self.pass_set,
@@ -558,6 +571,76 @@ impl TechniquePipelines {
         let surfaces = topology == vk::PrimitiveTopology::TRIANGLE_LIST
             && !raster.triangle_outlines
             && !raster.silhouette_lines;
+        let role = self.draw_role(raster, surfaces);
+        let colors = self.colors(raster);
+        let depth = if raster.behind {
+            DepthUse::TestBehind
+        } else if raster.on_surfaces {
+            DepthUse::TestEqual
+        } else if raster.translucent || raster.keeps_depth {
+            DepthUse::Test
+        } else {
+            DepthUse::TestAndWrite
+        };
+        let mesh = inputs.shaders.mesh.as_ref().filter(|_| {
+            topology == vk::PrimitiveTopology::TRIANGLE_LIST && !raster.silhouette_lines
+        });
+        let scope = PassScope {
+            role,
+            caps: raster.on_surfaces,
+            silhouettes: raster.silhouette_lines,
+            hides_back_faces: surfaces
+                && role != DrawRole::Translucent
+                && depth == DepthUse::TestAndWrite,
+            faces: raster.faces,
+            mesh: mesh.is_some(),
+        };
+        let name = if raster.translucent {
+            "translucent technique pipeline"
+        } else {
+            "technique pipeline"
+        };
+        let constants = [role as u32, u32::from(raster.on_surfaces)];
+        if let Some(shaders) = mesh {
+            let targets = MeshTargets {
+                colors: &colors,
+                depth,
+                constants: &constants,
+                name,
+            };
+            let pipeline = self.mesh_pipeline(shaders, &fragment, raster, &targets)?;
+            return Ok((pipeline, scope));
+        }
+        let pipeline = Pipeline::graphics(
+            &self.device,
+            &GraphicsPipelineDesc {
+                layout: &self.layout,
+                vertex: &vertex,
+                geometry: geometry.as_ref(),
+                fragment: &fragment,
+                vertex_layout: (input.stride != 0).then_some(VertexLayout {
+                    stride: input.stride,
+                    attributes: &attributes,
+                }),
+                topology,
+                depth_bias: raster.depth_bias,
+                triangle_outlines: raster.triangle_outlines,
+                cull_back_faces: raster.faces == abi::CADR_FACES_CULLED,
+                indirect_bindable: raster.faces != abi::CADR_FACES_ANY
+                    && self.face_pipelines_picked_by_gpu(),
+                colors: &colors,
+                depth,
+                vertex_constants: &constants,
+                samples: self.pass_set.samples(),
+                name,
+            },
+        )?;
+        Ok((pipeline, scope))
+    }
+
+    /// Which surfaces a pipeline drawing `raster` lets through (`surfaces`: it draws filled
+    /// triangles, not lines or outlines).
+    fn draw_role(&self, raster: Raster, surfaces: bool) -> DrawRole {
         let translucent_frame = matches!(
             self.pass_set,
             PassSet::Shaded {
@@ -579,62 +662,54 @@ impl TechniquePipelines {
                 ..
             }
         );
-        let role = match (translucent_frame, raster.translucent, surfaces) {
+        match (translucent_frame, raster.translucent, surfaces) {
             (false, _, _) if through_translucent => DrawRole::Opaque,
             (false, _, true) if lines_through_translucent => DrawRole::Opaque,
             (false, _, _) => DrawRole::All,
             (true, true, _) => DrawRole::Translucent,
             (true, false, true) => DrawRole::Opaque,
             (true, false, false) => DrawRole::All,
-        };
-        let colors = self.colors(raster);
-        let depth = if raster.behind {
-            DepthUse::TestBehind
-        } else if raster.on_surfaces {
-            DepthUse::TestEqual
-        } else if raster.translucent || raster.keeps_depth {
-            DepthUse::Test
-        } else {
-            DepthUse::TestAndWrite
-        };
-        let scope = PassScope {
-            role,
-            caps: raster.on_surfaces,
-            silhouettes: raster.silhouette_lines,
-            hides_back_faces: surfaces
-                && role != DrawRole::Translucent
-                && depth == DepthUse::TestAndWrite,
-            faces: raster.faces,
-        };
-        let pipeline = Pipeline::graphics(
+        }
+    }
+
+    /// The mesh pipeline of a triangle pass (a mesh-shading submission draws it): the host's
+    /// task shader, the mesh shader assembled from the paths' snippets, and `fragment`.
+    fn mesh_pipeline(
+        &self,
+        shaders: &MeshShaders,
+        fragment: &ShaderModule,
+        raster: Raster,
+        targets: &MeshTargets<'_>,
+    ) -> RenderResult<Pipeline> {
+        let task = ShaderModule::from_spirv(
             &self.device,
-            &GraphicsPipelineDesc {
+            "technique.task",
+            &shaders.task,
+            ShaderStage::Task,
+        )?;
+        let mesh = ShaderModule::from_spirv(
+            &self.device,
+            "technique.mesh",
+            &shaders.mesh,
+            ShaderStage::Mesh,
+        )?;
+        Ok(Pipeline::mesh(
+            &self.device,
+            &MeshPipelineDesc {
                 layout: &self.layout,
-                vertex: &vertex,
-                geometry: geometry.as_ref(),
-                fragment: &fragment,
-                vertex_layout: (input.stride != 0).then_some(VertexLayout {
-                    stride: input.stride,
-                    attributes: &attributes,
-                }),
-                topology,
+                task: Some(&task),
+                mesh: &mesh,
+                fragment,
                 depth_bias: raster.depth_bias,
                 triangle_outlines: raster.triangle_outlines,
                 cull_back_faces: raster.faces == abi::CADR_FACES_CULLED,
-                indirect_bindable: raster.faces != abi::CADR_FACES_ANY
-                    && self.face_pipelines_picked_by_gpu(),
-                colors: &colors,
-                depth,
-                vertex_constants: &[role as u32, u32::from(raster.on_surfaces)],
+                mesh_constants: targets.constants,
+                colors: targets.colors,
+                depth: targets.depth,
                 samples: self.pass_set.samples(),
-                name: if raster.translucent {
-                    "translucent technique pipeline"
-                } else {
-                    "technique pipeline"
-                },
+                name: targets.name,
             },
-        )?;
-        Ok((pipeline, scope))
+        )?)
     }
 }
 
@@ -648,6 +723,16 @@ fn blend_of(blend: &abi::CadrBlend) -> Blend {
         dst_alpha: vk::BlendFactor::from_raw(blend.dst_alpha),
         alpha_op: vk::BlendOp::from_raw(blend.alpha_op),
     }
+}
+
+/// What a mesh pipeline draws into and is specialised with, as its pass's vertex pipeline
+/// would be.
+struct MeshTargets<'a> {
+    colors: &'a [ColorTarget],
+    depth: DepthUse,
+    /// The draw role and the caps pass (the shaders' constants 0 and 1).
+    constants: &'a [u32],
+    name: &'a str,
 }
 
 #[cfg(test)]
@@ -697,6 +782,7 @@ mod tests {
                     silhouettes,
                     hides_back_faces: false,
                     faces: abi::CADR_FACES_ANY,
+                    mesh: false,
                 };
                 for (xray, textures) in [(false, false), (false, true), (true, false), (true, true)]
                 {
@@ -730,6 +816,7 @@ mod tests {
                     silhouettes,
                     hides_back_faces: false,
                     faces: abi::CADR_FACES_ANY,
+                    mesh: false,
                 },
                 true,
                 false,
@@ -743,6 +830,7 @@ mod tests {
             silhouettes: false,
             hides_back_faces: false,
             faces: abi::CADR_FACES_ANY,
+            mesh: false,
         };
         let opaque = PassScope {
             role: DrawRole::Opaque,
@@ -750,6 +838,7 @@ mod tests {
             silhouettes: false,
             hides_back_faces: false,
             faces: abi::CADR_FACES_ANY,
+            mesh: false,
         };
         assert_eq!(caps.filter(false, true).0.section_cut, 1);
         assert_eq!(opaque.filter(false, true).0.section_cut, 0);

@@ -12,7 +12,9 @@ use cadr_plugin_abi as abi;
 use super::host_api::{AllocationCounts, HostServices};
 use super::pass_pipelines::{PipelineInputs, TechniquePipelines};
 use super::registry::{feature_bits, PluginRegistry, TechniqueEntry, TechniqueKind};
-use super::shader_assembly::{assemble_vertex_shader, ShaderCache};
+use super::shader_assembly::{
+    assemble_mesh_shader, assemble_vertex_shader, ShaderCache, TechniqueShaderSources,
+};
 use super::shared_pipelines::{shared_or_built, KeptPipelines, KeyInputs, PipelineKey};
 use super::surface_passes::{PassSet, ShadeMode};
 use crate::gpu_scene::Transforms;
@@ -158,6 +160,40 @@ fn parameter_blocks_offer(entries: &[&TechniqueEntry]) -> Result<u64, String> {
     ))
 }
 
+/// Whether a mesh-shading submission (plugin ABI 1.23, `CADR_TRAIT_MESH_SHADING`) has what it
+/// draws with: paths whose snippets run in a mesh shader, and a GPU culler (one that needs a
+/// submission drawing GPU-written commands) to write the commands its mesh workgroups read.
+fn mesh_shading_check(entries: &[&TechniqueEntry]) -> Result<(), String> {
+    let of_kind = |kind| entries.iter().find(|e| e.kind == kind);
+    let Some(submission) = of_kind(TechniqueKind::Submission)
+        .filter(|e| e.announces(abi::CADR_TRAIT_MESH_SHADING, 23))
+    else {
+        return Ok(());
+    };
+    for (kind, what) in [
+        (TechniqueKind::Vertex, "vertex path"),
+        (TechniqueKind::Parameters, "parameter path"),
+    ] {
+        if let Some(path) = of_kind(kind) {
+            if !path.announces(abi::CADR_TRAIT_MESH_SHADING, 23) {
+                return Err(format!(
+                    "submission '{}' needs a {what} whose shader also runs in a mesh shader (pulling, ssbo-index), which {} '{}' is not",
+                    submission.name,
+                    kind.name(),
+                    path.name
+                ));
+            }
+        }
+    }
+    match of_kind(TechniqueKind::Culling) {
+        Some(culler) if culler.needs & abi::CADR_TRAIT_DRAWS_GPU_COMMANDS == 0 => Err(format!(
+            "submission '{}' needs a GPU culler to write the commands it draws, which culling '{}' is not",
+            submission.name, culler.name
+        )),
+        _ => Ok(()),
+    }
+}
+
 /// Why a combination cannot work, or `Ok` when it can.
 pub fn check_combination(entries: &[&TechniqueEntry]) -> Result<(), String> {
     let blocks_offer = parameter_blocks_offer(entries);
@@ -187,7 +223,8 @@ pub fn check_combination(entries: &[&TechniqueEntry]) -> Result<(), String> {
             ));
         }
     }
-    blocks_offer.map(|_| ())
+    blocks_offer?;
+    mesh_shading_check(entries)
 }
 
 /// A created technique instance; destroyed on drop (after the GPU is done, see `Techniques`).
@@ -574,6 +611,14 @@ impl Techniques {
         })
     }
 
+    /// Whether the active submission draws with mesh workgroups (`CADR_TRAIT_MESH_SHADING`,
+    /// libraries of ABI 1.23 or later): the host then builds the triangle passes as mesh
+    /// pipelines (the combination check made sure the paths and the culler allow it).
+    pub fn mesh_shading(&self) -> bool {
+        self.get(TechniqueKind::Submission)
+            .is_ok_and(|active| active.entry.announces(abi::CADR_TRAIT_MESH_SHADING, 23))
+    }
+
     /// Whether `active` announces `trait_bit` (from a library of ABI `since` or later) as this
     /// combination uses it: a parameter path whose blocks the GPU culler writes (see
     /// [`Self::parameter_blocks`]) pushes nothing, so it puts no values in commands, reads none
@@ -687,6 +732,7 @@ impl Techniques {
             None => self.method.clone(),
         };
         let pick_kind = self.pick_pass_kind();
+        let mesh_shading = self.mesh_shading();
         let rebuilt = created
             .iter()
             .any(|(slot, _)| PIPELINE_KINDS.map(index).contains(slot));
@@ -703,6 +749,10 @@ impl Techniques {
             // A library of an older ABI came or went: the pick pass is drawn as another kind.
             self.pipelines
                 .retain(|p| !matches!(p.pass_set, PassSet::Pick { .. }));
+        }
+        if self.mesh_shading() != mesh_shading {
+            // The submission draws with or without mesh workgroups: other pipelines.
+            self.pipelines.clear();
         }
         self.epoch += 1;
         Ok(())
@@ -850,6 +900,7 @@ impl Techniques {
             };
         }
         let pick_kind = self.pick_pass_kind();
+        let mesh_shading = self.mesh_shading();
         let shared_key = PipelineKey::new(&KeyInputs {
             paths: (&vertex.entry, &parameters.entry),
             snippets: (&vertex_snippet, &parameter_snippet),
@@ -857,6 +908,7 @@ impl Techniques {
             passes,
             pick_kind,
             method: self.method.as_ref(),
+            mesh_shading,
         });
         let shader_key = (vertex.entry.name.clone(), parameters.entry.name.clone());
         let device = Arc::clone(&self.device);
@@ -869,7 +921,11 @@ impl Techniques {
         shared_or_built(&device, shared_key, || {
             let shaders = shader_cache.prepare(
                 shader_key,
-                || assemble_vertex_shader(&vertex_snippet, &parameter_snippet),
+                TechniqueShaderSources {
+                    vertex: &|| assemble_vertex_shader(&vertex_snippet, &parameter_snippet),
+                    mesh: mesh_shading
+                        .then_some(&|| assemble_mesh_shader(&vertex_snippet, &parameter_snippet)),
+                },
                 passes,
                 method,
             )?;

@@ -25,6 +25,32 @@ pub(super) struct MethodShaders {
 /// Assembles the technique vertex shader from the two snippets. Lines of a snippet starting
 /// with `#extension` are moved to the top, where GLSL wants them.
 pub fn assemble_vertex_shader(vertex_snippet: &str, parameter_snippet: &str) -> String {
+    assemble(&shaders::TECHNIQUE_VERT, vertex_snippet, parameter_snippet)
+}
+
+/// Assembles the technique mesh shader (`technique.mesh`) from the two snippets of paths that
+/// announce mesh shading: as [`assemble_vertex_shader`], with the snippets' `gl_VertexIndex`
+/// and `gl_InstanceIndex` (which a mesh shader lacks) read from the corner being computed.
+pub fn assemble_mesh_shader(vertex_snippet: &str, parameter_snippet: &str) -> String {
+    let in_mesh = |snippet: &str| {
+        snippet
+            .replace("gl_VertexIndex", "cadr_mesh_vertex_index")
+            .replace("gl_InstanceIndex", "cadr_mesh_instance_index")
+    };
+    assemble(
+        &shaders::TECHNIQUE_MESH,
+        &in_mesh(vertex_snippet),
+        &in_mesh(parameter_snippet),
+    )
+}
+
+/// `template` with the vertex and parameter snippets at its two markers, their `#extension`
+/// lines moved to the top.
+fn assemble(
+    template: &shaders::ShaderSource,
+    vertex_snippet: &str,
+    parameter_snippet: &str,
+) -> String {
     let mut extensions = Vec::new();
     let mut strip = |snippet: &str| -> String {
         snippet
@@ -41,11 +67,14 @@ pub fn assemble_vertex_shader(vertex_snippet: &str, parameter_snippet: &str) -> 
     };
     let vertex = strip(vertex_snippet);
     let parameters = strip(parameter_snippet);
-    let body = shaders::TECHNIQUE_VERT
+    let (version, body) = template
         .source
+        .split_once("#version 460\n")
+        .map_or(("", template.source), |(before, after)| (before, after));
+    let body = body
         .replace("//@VERTEX_PATH@", &vertex)
         .replace("//@PARAMETER_PATH@", &parameters);
-    format!("#version 460\n{}\n{body}", extensions.join("\n"))
+    format!("#version 460\n{}\n{version}{body}", extensions.join("\n"))
 }
 
 /// The shaders of the passes after the shared vertex shader: fragment shaders, and the
@@ -142,11 +171,34 @@ pub fn fragment_defines(capabilities: Capabilities) -> String {
     defines
 }
 
-/// SPIR-V of assembled vertex shaders, by (vertex path, parameter path) name, and of the
-/// passes' other shaders, each compiled when a pass first needs it.
+/// How the technique shaders of a (vertex path, parameter path) pair are assembled, when the
+/// cache lacks them: the vertex shader, and the mesh shader where a mesh-shading submission
+/// draws the triangle passes.
+pub struct TechniqueShaderSources<'a> {
+    /// Assembles `technique.vert`.
+    pub vertex: &'a dyn Fn() -> String,
+    /// Assembles `technique.mesh`, or `None` without mesh shading.
+    pub mesh: Option<&'a dyn Fn() -> String>,
+}
+
+/// The task and mesh shaders of a mesh-shading pass set.
+#[derive(Clone)]
+pub struct MeshShaders {
+    /// `technique.task`, the same for every pair of paths.
+    pub task: Arc<Vec<u32>>,
+    /// `technique.mesh` assembled from the paths' snippets.
+    pub mesh: Arc<Vec<u32>>,
+}
+
+/// SPIR-V of assembled vertex (and mesh) shaders, by (vertex path, parameter path) name, and
+/// of the passes' other shaders, each compiled when a pass first needs it.
 #[derive(Default)]
 pub struct ShaderCache {
     vertex: HashMap<(String, String), Arc<Vec<u32>>>,
+    /// The assembled mesh shaders, by the same key.
+    mesh: HashMap<(String, String), Arc<Vec<u32>>>,
+    /// `technique.task`, once a mesh-shading pass set needed it.
+    task: Option<Arc<Vec<u32>>>,
     /// By shader and the inputs it interpolates (always the default for the shaders that do
     /// not read [`SurfaceInputs`]).
     pass_shaders: HashMap<(PassShader, SurfaceInputs), Arc<Vec<u32>>>,
@@ -162,6 +214,9 @@ pub struct ShaderCache {
 pub struct PassShaders {
     /// The assembled vertex shader.
     pub vertex: Arc<Vec<u32>>,
+    /// The task and mesh shaders the triangle passes draw with, where a mesh-shading
+    /// submission draws them.
+    pub mesh: Option<MeshShaders>,
     pass_shaders: Vec<(PassShader, Arc<Vec<u32>>)>,
     /// The transparency method's, for a frame with translucent surfaces.
     pub(super) method: Option<MethodShaders>,
@@ -194,14 +249,15 @@ impl ShaderCache {
         }
     }
 
-    /// The vertex shader of the (vertex path, parameter path) `key` (assembled by `source`)
-    /// and the other shaders `passes` draw with. Those not compiled before are compiled
-    /// now, together, on a thread each (a combination is ready in the time of its slowest
-    /// shader); passes not drawn compile nothing.
+    /// The vertex shader of the (vertex path, parameter path) `key` (assembled by `sources`),
+    /// its mesh shader and the task shader where `sources` has a mesh shader, and the other
+    /// shaders `passes` draw with. Those not compiled before are compiled now, together, on a
+    /// thread each (a combination is ready in the time of its slowest shader); passes not drawn
+    /// compile nothing.
     pub fn prepare(
         &mut self,
         key: (String, String),
-        source: impl FnOnce() -> String,
+        sources: TechniqueShaderSources<'_>,
         passes: PassSet,
         method: Option<&TransparencyMethod>,
     ) -> RenderResult<PassShaders> {
@@ -226,8 +282,15 @@ impl ShaderCache {
             .copied()
             .filter(|f| !self.pass_shaders.contains_key(f))
             .collect();
-        let vertex_name = format!("technique.vert [{} + {}]", key.0, key.1);
-        let vertex_source = (!self.vertex.contains_key(&key)).then(source);
+        let pair = format!("[{} + {}]", key.0, key.1);
+        let vertex_name = format!("technique.vert {pair}");
+        let mesh_name = format!("technique.mesh {pair}");
+        let vertex_source = (!self.vertex.contains_key(&key)).then(sources.vertex);
+        let mesh_source = sources
+            .mesh
+            .filter(|_| !self.mesh.contains_key(&key))
+            .map(|assemble| assemble());
+        let task_needed = sources.mesh.is_some() && self.task.is_none();
         let pass_sources: Vec<String> = missing
             .iter()
             .map(|(f, inputs)| {
@@ -235,26 +298,33 @@ impl ShaderCache {
                 shaders::with_defines(f.source().source, &defines)
             })
             .collect();
+        let request = |name, source, stage| shaders::CompileRequest {
+            name,
+            source,
+            stage,
+            includes: shaders::INCLUDES,
+        };
         let mut requests: Vec<shaders::CompileRequest<'_>> = missing
             .iter()
             .zip(&pass_sources)
             .map(|((f, _), source)| {
                 let shader = f.source();
-                shaders::CompileRequest {
-                    name: shader.name,
-                    source,
-                    stage: shader.stage,
-                    includes: shaders::INCLUDES,
-                }
+                request(shader.name, source, shader.stage)
             })
             .collect();
-        if let Some(source) = &vertex_source {
-            requests.push(shaders::CompileRequest {
-                name: &vertex_name,
-                source,
-                stage: ShaderStage::Vertex,
-                includes: shaders::INCLUDES,
-            });
+        requests.extend(
+            vertex_source
+                .as_ref()
+                .map(|source| request(&vertex_name, source, ShaderStage::Vertex)),
+        );
+        requests.extend(
+            mesh_source
+                .as_ref()
+                .map(|source| request(&mesh_name, source, ShaderStage::Mesh)),
+        );
+        let task = &shaders::TECHNIQUE_TASK;
+        if task_needed {
+            requests.push(request(task.name, task.source, task.stage));
         }
         let mut compiled = shaders::compile_glsl_all(&requests).into_iter();
         for shader in &missing {
@@ -262,13 +332,22 @@ impl ShaderCache {
                 self.pass_shaders.insert(*shader, Arc::new(words?));
             }
         }
-        if vertex_source.is_some() {
-            if let Some(words) = compiled.next() {
-                self.vertex.insert(key.clone(), Arc::new(words?));
+        // In the order requested; only what was requested has a result.
+        for (requested, cache) in [
+            (vertex_source.is_some(), &mut self.vertex),
+            (mesh_source.is_some(), &mut self.mesh),
+        ] {
+            if requested {
+                if let Some(words) = compiled.next() {
+                    cache.insert(key.clone(), Arc::new(words?));
+                }
             }
         }
-        let not_compiled =
-            || crate::error::RenderError::InvalidUse("a technique shader was not compiled".into());
+        if task_needed {
+            if let Some(words) = compiled.next() {
+                self.task = Some(Arc::new(words?));
+            }
+        }
         let method = match (passes, method) {
             (
                 PassSet::Shaded {
@@ -278,9 +357,32 @@ impl ShaderCache {
             ) => Some(self.method_shaders(method, inputs.attributes)?),
             _ => None,
         };
+        self.compiled(&key, sources.mesh.is_some(), &wanted, method)
+    }
+
+    /// The pass set's shaders, compiled before: the pair `key`'s vertex shader (and mesh
+    /// shader with the task shader, where `mesh`), the `wanted` pass shaders, and `method`'s.
+    fn compiled(
+        &self,
+        key: &(String, String),
+        mesh: bool,
+        wanted: &[(PassShader, SurfaceInputs)],
+        method: Option<MethodShaders>,
+    ) -> RenderResult<PassShaders> {
+        let not_compiled =
+            || crate::error::RenderError::InvalidUse("a technique shader was not compiled".into());
+        let mesh = if mesh {
+            Some(MeshShaders {
+                task: Arc::clone(self.task.as_ref().ok_or_else(not_compiled)?),
+                mesh: Arc::clone(self.mesh.get(key).ok_or_else(not_compiled)?),
+            })
+        } else {
+            None
+        };
         Ok(PassShaders {
             method,
-            vertex: Arc::clone(self.vertex.get(&key).ok_or_else(not_compiled)?),
+            vertex: Arc::clone(self.vertex.get(key).ok_or_else(not_compiled)?),
+            mesh,
             pass_shaders: wanted
                 .iter()
                 .map(|f| {
@@ -376,17 +478,17 @@ mod tests {
     fn only_the_shaders_a_pass_set_draws_with_are_compiled_each_once() {
         let mut cache = ShaderCache::default();
         let key = || ("per-geometry".to_owned(), "push".to_owned());
-        let mut assembled = 0;
-        let mut prepare = |cache: &mut ShaderCache, passes| {
-            cache.prepare(
-                key(),
-                || {
-                    assembled += 1;
-                    vertex_source()
-                },
-                passes,
-                None,
-            )
+        let assembled = std::cell::Cell::new(0);
+        let assemble = || {
+            assembled.set(assembled.get() + 1);
+            vertex_source()
+        };
+        let prepare = |cache: &mut ShaderCache, passes| {
+            let sources = TechniqueShaderSources {
+                vertex: &assemble,
+                mesh: None,
+            };
+            cache.prepare(key(), sources, passes, None)
         };
         let solid = || PassSet::plain(ShadeMode::Solid);
         prepare(&mut cache, solid()).expect("solid");
@@ -465,9 +567,47 @@ mod tests {
 
         prepare(&mut cache, solid()).expect("again");
         assert_eq!(
-            assembled, 1,
+            assembled.get(),
+            1,
             "the vertex shader is assembled and compiled once"
         );
         assert_eq!(cache.vertex.len(), 1);
+    }
+
+    /// The mesh shader assembled from paths that pull their vertex and index their instance
+    /// (as `pulling` and `ssbo-index` do) compiles, and reads neither built-in it lacks.
+    #[test]
+    fn the_mesh_shader_assembles_from_pulling_paths_and_compiles() {
+        let vertex = "layout(set = 3, binding = 0, std430) readonly buffer V { float v[]; };\n\
+             vec3 cadr_vertex_position() { uint b = uint(gl_VertexIndex) * 6u; return vec3(v[b], v[b + 1u], v[b + 2u]); }\n\
+             vec3 cadr_vertex_normal() { return vec3(0.0, 0.0, 1.0); }\n\
+             #define CADR_VERTEX_INDEX\n\
+             uint cadr_vertex_index() { return uint(gl_VertexIndex); }";
+        let parameters = "#extension GL_EXT_scalar_block_layout : enable\n\
+             layout(set = 1, binding = 1, std430) readonly buffer M { mat4 m[]; };\n\
+             CadrObject cadr_object() {\n\
+                 return CadrObject(m[gl_InstanceIndex], vec4(1.0), vec2(0.0), 0u, uint(gl_InstanceIndex));\n\
+             }";
+        let source = assemble_mesh_shader(vertex, parameters);
+        // A mesh shader that read gl_VertexIndex or gl_InstanceIndex would not compile.
+        let words = shaders::compile_glsl(
+            "technique.mesh",
+            &source,
+            ShaderStage::Mesh,
+            shaders::INCLUDES,
+        )
+        .unwrap_or_else(|e| panic!("{e}"));
+        assert_eq!(words.first(), Some(&0x0723_0203));
+        let vertex_source = assemble_vertex_shader(vertex, parameters);
+        shaders::compile_glsl(
+            "technique.vert",
+            &vertex_source,
+            ShaderStage::Vertex,
+            shaders::INCLUDES,
+        )
+        .unwrap_or_else(|e| panic!("{e}"));
+        let task = &shaders::TECHNIQUE_TASK;
+        shaders::compile_glsl(task.name, task.source, task.stage, shaders::INCLUDES)
+            .unwrap_or_else(|e| panic!("{e}"));
     }
 }

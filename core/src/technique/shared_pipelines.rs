@@ -53,6 +53,7 @@ pub(crate) struct PipelineKey {
     passes: PassSet,
     pick_kind: abi::CadrPassKind,
     method: Option<TransparencyMethod>,
+    mesh_shading: bool,
 }
 
 /// What [`PipelineKey::new`] is made from.
@@ -69,6 +70,8 @@ pub(crate) struct KeyInputs<'a> {
     pub pick_kind: abi::CadrPassKind,
     /// The transparency method.
     pub method: Option<&'a TransparencyMethod>,
+    /// Whether the triangle passes are mesh pipelines (a mesh-shading submission).
+    pub mesh_shading: bool,
 }
 
 impl PipelineKey {
@@ -100,6 +103,7 @@ impl PipelineKey {
             passes: inputs.passes,
             pick_kind: inputs.pick_kind,
             method: inputs.method.cloned(),
+            mesh_shading: inputs.mesh_shading,
         })
     }
 }

@@ -7,7 +7,7 @@ use std::sync::Arc;
 
 use ash::vk;
 
-use super::pipeline::{stage, RasterState};
+use super::pipeline::{specialization_constants, stage, RasterState};
 use super::{
     Buffer, Capabilities, ColorTarget, DepthUse, Device, Pipeline, PipelineLayout, ShaderModule,
     VkError, VkResult,
@@ -17,8 +17,7 @@ use super::{
 pub const DRAW_MESH_TASKS_COMMAND_BYTES: u32 = 12;
 
 /// What a mesh-shader pipeline differs in; the rest is as for
-/// [`super::GraphicsPipelineDesc`] (dynamic viewport and scissor, no face culling, dynamic
-/// rendering).
+/// [`super::GraphicsPipelineDesc`] (dynamic viewport and scissor, dynamic rendering).
 pub struct MeshPipelineDesc<'a> {
     /// The pipeline layout.
     pub layout: &'a PipelineLayout,
@@ -32,6 +31,10 @@ pub struct MeshPipelineDesc<'a> {
     pub depth_bias: bool,
     /// Draws triangles as their three edges (polygon mode LINE).
     pub triangle_outlines: bool,
+    /// Culls the triangles wound clockwise on screen (as [`super::GraphicsPipelineDesc`]).
+    pub cull_back_faces: bool,
+    /// Values of the mesh shader's specialization constants 0, 1, … (u32 each).
+    pub mesh_constants: &'a [u32],
     /// The colour attachments, in order.
     pub colors: &'a [ColorTarget],
     /// How it uses depth.
@@ -57,19 +60,20 @@ impl Pipeline {
         if !mesh_shader {
             return Err(unsupported(device, &format!("pipeline '{}'", desc.name)));
         }
-        let stages: Vec<_> = desc
-            .task
-            .into_iter()
-            .chain([desc.mesh, desc.fragment])
-            .map(stage)
-            .collect();
+        let (constant_entries, constant_bytes) = specialization_constants(desc.mesh_constants);
+        let specialization = vk::SpecializationInfo::default()
+            .map_entries(&constant_entries)
+            .data(&constant_bytes);
+        let mut stages: Vec<_> = desc.task.into_iter().map(stage).collect();
+        stages.push(stage(desc.mesh).specialization_info(&specialization));
+        stages.push(stage(desc.fragment));
         Self::rasterizing(
             device,
             &RasterState {
                 layout: desc.layout,
                 depth_bias: desc.depth_bias,
                 triangle_outlines: desc.triangle_outlines,
-                cull_back_faces: false,
+                cull_back_faces: desc.cull_back_faces,
                 indirect_bindable: false,
                 colors: desc.colors,
                 depth: desc.depth,

@@ -238,20 +238,7 @@ impl Pipeline {
 
     /// A graphics pipeline as [`GraphicsPipelineDesc`] describes it.
     pub fn graphics(device: &Arc<Device>, desc: &GraphicsPipelineDesc<'_>) -> VkResult<Self> {
-        // Vertex shader constant i (constant_id = i) is `vertex_constants[i]`.
-        let constant_entries: Vec<vk::SpecializationMapEntry> = (0..desc.vertex_constants.len())
-            .map(|i| {
-                vk::SpecializationMapEntry::default()
-                    .constant_id(i as u32)
-                    .offset(4 * i as u32)
-                    .size(4)
-            })
-            .collect();
-        let constant_bytes: Vec<u8> = desc
-            .vertex_constants
-            .iter()
-            .flat_map(|c| c.to_ne_bytes())
-            .collect();
+        let (constant_entries, constant_bytes) = specialization_constants(desc.vertex_constants);
         let specialization = vk::SpecializationInfo::default()
             .map_entries(&constant_entries)
             .data(&constant_bytes);
@@ -630,6 +617,23 @@ pub(super) fn stage(module: &ShaderModule) -> vk::PipelineShaderStageCreateInfo<
         .stage(module.stage().flag())
         .module(module.raw())
         .name(c"main")
+}
+
+/// The map entries and data of specialization constants 0, 1, … (constant_id = i is
+/// `constants[i]`, a u32 each).
+pub(super) fn specialization_constants(
+    constants: &[u32],
+) -> (Vec<vk::SpecializationMapEntry>, Vec<u8>) {
+    let entries = (0..constants.len())
+        .map(|i| {
+            vk::SpecializationMapEntry::default()
+                .constant_id(i as u32)
+                .offset(4 * i as u32)
+                .size(4)
+        })
+        .collect();
+    let bytes = constants.iter().flat_map(|c| c.to_ne_bytes()).collect();
+    (entries, bytes)
 }
 
 /// What every rasterizing pipeline (vertex or mesh shaders) says about its targets.

@@ -56,7 +56,7 @@ use std::ffi::{c_char, c_void};
 /// Major version of this ABI: a library built for another major version is refused.
 pub const CADR_PLUGIN_ABI_MAJOR: u32 = 1;
 /// Minor version of this ABI: additions that older readers may ignore.
-pub const CADR_PLUGIN_ABI_MINOR: u32 = 22;
+pub const CADR_PLUGIN_ABI_MINOR: u32 = 23;
 /// `(major << 16) | minor`, what [`CadrPluginVersionFn`] returns.
 pub const CADR_PLUGIN_ABI_VERSION: u32 = (CADR_PLUGIN_ABI_MAJOR << 16) | CADR_PLUGIN_ABI_MINOR;
 
@@ -235,6 +235,64 @@ pub const CADR_TRAIT_SHARES_PIPELINES: CadrTraitBits = 1 << 13;
 /// parameter path and submission that announce it with a CPU culler are refused (nothing would
 /// write the blocks).
 pub const CADR_TRAIT_PARAMETER_BLOCKS: CadrTraitBits = 1 << 14;
+/// Since ABI 1.23. Mesh shading (`VK_EXT_mesh_shader`), one announcement per kind:
+/// - a vertex or parameter path promises that its snippet also runs in a mesh shader: it reads
+///   the vertex and the instance only through `gl_VertexIndex` and `gl_InstanceIndex` (the host
+///   puts the corner's values in their place there), declares no vertex input and pushes no
+///   constants (`pulling` and `ssbo-index` do so);
+/// - a submission draws GPU-written commands ([`CadrGpuDraws`]) with mesh workgroups in the
+///   passes of kinds [`CADR_PASS_MESH_TRIANGLES`] and [`CADR_PASS_MESH_PICK`].
+///
+/// Where the active submission announces it, the host builds every triangle pass but the
+/// hidden silhouettes' (a geometry shader, which mesh pipelines lack) as a mesh pipeline: the
+/// host's task shader reads the pass's commands and count, and its mesh shader draws each
+/// command's triangles in chunks, every vertex computed as the vertex shader computes it, so
+/// the picture is the vertex pipeline's. The pipeline layout then has one push-constant range
+/// of 160 bytes for the vertex, task and mesh stages: the paths' 128, then the submission's
+/// [`CadrMeshTaskPush`]. The host refuses such a submission unless both paths announce it, the
+/// culler is a GPU culler and the device has mesh shaders and buffer device addresses.
+pub const CADR_TRAIT_MESH_SHADING: CadrTraitBits = 1 << 15;
+
+/// Since ABI 1.23: where a mesh-shading submission ([`CADR_TRAIT_MESH_SHADING`]) pushes its
+/// [`CadrMeshTaskPush`], for the task and mesh stages (the vertex stage too, as the range is one).
+pub const CADR_MESH_TASK_PUSH_OFFSET: u32 = 128;
+/// Since ABI 1.23: the commands one task workgroup of the host's task shader reads: a pass of
+/// at most `max_draws` commands is drawn by `ceil(max_draws / 32)` task workgroups
+/// (`vkCmdDrawMeshTasksEXT(groups, 1, 1)`).
+pub const CADR_MESH_COMMANDS_PER_TASK: u32 = 32;
+
+/// Since ABI 1.23: what a mesh-shading submission pushes at [`CADR_MESH_TASK_PUSH_OFFSET`]
+/// before drawing a pass of kind [`CADR_PASS_MESH_TRIANGLES`] or [`CADR_PASS_MESH_PICK`] (the
+/// host's task and mesh shaders read it). Device addresses of buffers made with `SHADER_DEVICE_ADDRESS` usage: a GPU culler's
+/// commands and counts, the scene's index buffer ([`CadrSceneView::index_buffer`]).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct CadrMeshTaskPush {
+    /// Address of the pass's first command (`VkDrawIndexedIndirectCommand`, `firstInstance` the
+    /// instance id): [`CadrGpuDraws::commands`] plus `commands_offset`.
+    pub commands: u64,
+    /// Address of the pass's count (a u32): [`CadrGpuDraws::count_buffer`] plus `count_offset`.
+    pub count: u64,
+    /// Address of the scene's triangle indices (u32).
+    pub indices: u64,
+    /// The most commands the count can say ([`CadrGpuDraws::max_draws`]).
+    pub max_draws: u32,
+    /// Words (4 bytes) between commands ([`CadrGpuDraws::stride`] / 4).
+    pub stride_words: u32,
+}
+
+impl CadrMeshTaskPush {
+    /// Its bytes as pushed (little-endian, as every Vulkan device cadr runs on).
+    pub fn to_le_bytes(&self) -> [u8; 32] {
+        let mut bytes = [0u8; 32];
+        bytes[0..8].copy_from_slice(&self.commands.to_le_bytes());
+        bytes[8..16].copy_from_slice(&self.count.to_le_bytes());
+        bytes[16..24].copy_from_slice(&self.indices.to_le_bytes());
+        bytes[24..28].copy_from_slice(&self.max_draws.to_le_bytes());
+        bytes[28..32].copy_from_slice(&self.stride_words.to_le_bytes());
+        bytes
+    }
+}
 
 /// A message buffer the host hands to functions that can fail: the plugin writes a
 /// NUL-terminated UTF-8 message of at most `capacity` bytes (including the NUL).
@@ -1209,6 +1267,16 @@ pub const CADR_PASS_EDGES: CadrPassKind = 1;
 /// when every active technique was built for ABI 1.2 or later; older libraries get
 /// [`CADR_PASS_TRIANGLES`] for the pick pass instead.
 pub const CADR_PASS_PICK: CadrPassKind = 2;
+/// Since ABI 1.23: triangles drawn by a mesh pipeline (the host's task and mesh shaders),
+/// given only where the active submission announces [`CADR_TRAIT_MESH_SHADING`], for every
+/// triangle pass but the hidden silhouettes' and the pick pass. Bind the pipeline, bind the
+/// paths, push [`CadrMeshTaskPush`] and draw `ceil(max_draws / CADR_MESH_COMMANDS_PER_TASK)`
+/// task workgroups. Cullers treat it as [`CADR_PASS_TRIANGLES`].
+pub const CADR_PASS_MESH_TRIANGLES: CadrPassKind = 3;
+/// Since ABI 1.23: the pick pass drawn by a mesh pipeline, as [`CADR_PASS_MESH_TRIANGLES`]
+/// (each command draws its own instance, as [`CADR_PASS_PICK`] asks). Cullers treat it as
+/// [`CADR_PASS_PICK`].
+pub const CADR_PASS_MESH_PICK: CadrPassKind = 4;
 
 /// One pass of the frame: its pipeline and what it draws.
 #[repr(C)]
@@ -1918,6 +1986,26 @@ impl CadrInstanceRecord {
 mod tests {
     use super::*;
 
+    /// The push lands where `shaders/mesh_tasks.glsl` reads it: three addresses, then the most
+    /// draws and the stride, after the paths' 128 bytes.
+    #[test]
+    fn the_mesh_task_push_has_the_shaders_layout() {
+        let push = CadrMeshTaskPush {
+            commands: 0x0102_0304_0506_0708,
+            count: 9,
+            indices: 10,
+            max_draws: 11,
+            stride_words: 5,
+        };
+        let bytes = push.to_le_bytes();
+        assert_eq!(bytes[0..8], 0x0102_0304_0506_0708u64.to_le_bytes());
+        assert_eq!(bytes[8], 9);
+        assert_eq!(bytes[16], 10);
+        assert_eq!(bytes[24], 11);
+        assert_eq!(bytes[28], 5);
+        assert_eq!(CADR_MESH_TASK_PUSH_OFFSET as usize + bytes.len(), 160);
+    }
+
     #[test]
     fn structs_have_their_c_sizes() {
         assert_eq!(std::mem::size_of::<CadrInstance>(), 64);
@@ -1928,6 +2016,7 @@ mod tests {
         assert_eq!(std::mem::size_of::<CadrCullEntry>(), 48);
         assert_eq!(std::mem::size_of::<CadrParameterBlock>(), 96);
         assert_eq!(std::mem::size_of::<CadrGpuDraws>(), 40);
+        assert_eq!(std::mem::size_of::<CadrMeshTaskPush>(), 32);
         assert_eq!(std::mem::size_of::<CadrPassFilter>(), 12);
         assert_eq!(std::mem::size_of::<CadrPassExclusion>(), 8);
         assert_eq!(CADR_PLUGIN_ABI_VERSION >> 16, CADR_PLUGIN_ABI_MAJOR);

@@ -20,6 +20,8 @@ pub struct Gpu {
     pub physical_device: vk::PhysicalDevice,
     /// `VK_EXT_multi_draw` functions (present when the feature bit is).
     pub multi_draw: Option<ash::ext::multi_draw::Device>,
+    /// `VK_EXT_mesh_shader` functions (present when `CADR_FEATURE_MESH_SHADER` is).
+    pub mesh_shader: Option<ash::ext::mesh_shader::Device>,
     /// `VK_EXT_device_generated_commands` functions (present when
     /// `CADR_FEATURE_DEVICE_GENERATED_COMMANDS_EXT` is).
     pub generated_commands: Option<crate::dgc::Device>,
@@ -43,6 +45,19 @@ pub struct Gpu {
 unsafe impl Send for Gpu {}
 // SAFETY: as above.
 unsafe impl Sync for Gpu {}
+
+impl Gpu {
+    /// The stages a vertex or parameter path's descriptor bindings are for: the vertex stage,
+    /// and the mesh stage where the device has mesh shaders (the host's technique mesh shader
+    /// runs the snippets of paths that announce `CADR_TRAIT_MESH_SHADING` there).
+    pub fn path_stages(&self) -> vk::ShaderStageFlags {
+        if self.features & abi::CADR_FEATURE_MESH_SHADER != 0 {
+            vk::ShaderStageFlags::VERTEX | vk::ShaderStageFlags::MESH_EXT
+        } else {
+            vk::ShaderStageFlags::VERTEX
+        }
+    }
+}
 
 impl std::fmt::Debug for Gpu {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
@@ -90,6 +105,8 @@ impl Gpu {
         let device = unsafe { ash::Device::load(instance.fp_v1_0(), device_handle) };
         let multi_draw = (vulkan.features & abi::CADR_FEATURE_MULTI_DRAW != 0)
             .then(|| ash::ext::multi_draw::Device::new(&instance, &device));
+        let mesh_shader = (vulkan.features & abi::CADR_FEATURE_MESH_SHADER != 0)
+            .then(|| ash::ext::mesh_shader::Device::new(&instance, &device));
         let generated_commands =
             if vulkan.features & abi::CADR_FEATURE_DEVICE_GENERATED_COMMANDS_EXT != 0 {
                 Some(
@@ -105,6 +122,7 @@ impl Gpu {
             device,
             physical_device: vk::PhysicalDevice::from_raw(vulkan.physical_device as u64),
             multi_draw,
+            mesh_shader,
             generated_commands,
             features: vulkan.features,
             min_uniform_buffer_offset_alignment: vulkan.min_uniform_buffer_offset_alignment.max(1),

@@ -60,6 +60,16 @@ const DRAWN_FROM: vk::BufferUsageFlags = vk::BufferUsageFlags::from_raw(
     vk::BufferUsageFlags::INDIRECT_BUFFER.as_raw()
         | vk::BufferUsageFlags::SHADER_DEVICE_ADDRESS.as_raw(),
 );
+/// What the cull shader takes a pass of `kind` for: a mesh pipeline's pass (plugin ABI 1.23)
+/// draws what the vertex pipeline's would.
+fn drawn_as(kind: abi::CadrPassKind) -> abi::CadrPassKind {
+    match kind {
+        abi::CADR_PASS_MESH_TRIANGLES => abi::CADR_PASS_TRIANGLES,
+        abi::CADR_PASS_MESH_PICK => abi::CADR_PASS_PICK,
+        other => other,
+    }
+}
+
 /// Words of one `VkDrawIndexedIndirectCommand`.
 const COMMAND_WORDS: u32 = 5;
 /// Words of the word naming a command's pass, in a frame whose split surface passes share
@@ -839,7 +849,7 @@ impl<const OCCLUSION: bool, const CLUSTERS: bool> GpuCuller<OCCLUSION, CLUSTERS>
                 cull.phase() as usize * PASSES_PER_PHASE + index - usize::from(shares_previous);
             let dispatch = CullDispatch {
                 instance_count: instances,
-                pass_kind: pass.kind,
+                pass_kind: drawn_as(pass.kind),
                 pass_slot: slot as u32,
                 first_command: slot as u32 * self.commands.capacity,
                 mode,

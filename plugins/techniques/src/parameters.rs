@@ -98,7 +98,8 @@ impl ParameterPath for Push {
     }
 }
 
-/// Creates a descriptor set layout with one binding per type given, for the vertex stage.
+/// Creates a descriptor set layout with one binding per type given, for the stages of paths
+/// (`Gpu::path_stages`).
 fn set_layout(gpu: &Gpu, types: &[vk::DescriptorType]) -> Result<vk::DescriptorSetLayout, String> {
     let bindings: Vec<vk::DescriptorSetLayoutBinding> = types
         .iter()
@@ -108,7 +109,7 @@ fn set_layout(gpu: &Gpu, types: &[vk::DescriptorType]) -> Result<vk::DescriptorS
                 .binding(i as u32)
                 .descriptor_type(ty)
                 .descriptor_count(1)
-                .stage_flags(vk::ShaderStageFlags::VERTEX)
+                .stage_flags(gpu.path_stages())
         })
         .collect();
     let info = vk::DescriptorSetLayoutCreateInfo::default().bindings(&bindings);
@@ -524,7 +525,7 @@ technique_library! {
         parameters SsboIndex {
             name: "ssbo-index",
             description: "Records, matrices and materials in storage buffers, found through firstInstance; nothing per draw (the seeds' indexed/indexedmdi).",
-            features: 0, provides: abi::CADR_TRAIT_PARAMETERS_FROM_INSTANCE_INDEX | REPLAYABLE | KEEPS_FRAME_SLOTS | SHARES_PIPELINES, needs: 0,
+            features: 0, provides: abi::CADR_TRAIT_PARAMETERS_FROM_INSTANCE_INDEX | abi::CADR_TRAIT_MESH_SHADING | REPLAYABLE | KEEPS_FRAME_SLOTS | SHARES_PIPELINES, needs: 0,
         },
         parameters Address {
             name: "address",

@@ -233,7 +233,7 @@ impl Technique for Pulling {
             .binding(0)
             .descriptor_type(vk::DescriptorType::STORAGE_BUFFER)
             .descriptor_count(1)
-            .stage_flags(vk::ShaderStageFlags::VERTEX)];
+            .stage_flags(gpu.path_stages())];
         let info = vk::DescriptorSetLayoutCreateInfo::default().bindings(&binding);
         // SAFETY: the info lives for the call.
         let layout = unsafe { device.create_descriptor_set_layout(&info, gpu.allocator()) }
@@ -438,7 +438,7 @@ technique_library! {
         vertex Pulling {
             name: "pulling",
             description: "No vertex input: the shader pulls vertices from a storage buffer by gl_VertexIndex.",
-            features: 0, provides: SCENE | REPLAYABLE | KEEPS_FRAME_SLOTS | SHARES_PIPELINES, needs: 0,
+            features: 0, provides: SCENE | abi::CADR_TRAIT_MESH_SHADING | REPLAYABLE | KEEPS_FRAME_SLOTS | SHARES_PIPELINES, needs: 0,
         },
         vertex PullingAddress {
             name: "pulling-address",

@@ -10,6 +10,7 @@
 
 mod generated;
 pub mod lists;
+mod mesh_tasks;
 mod record;
 
 use std::sync::Arc;
@@ -23,6 +24,7 @@ use cadr_plugin_sdk::{
 
 use generated::{Execution, GeneratedCommands};
 use lists::{PassList, Strategy};
+use mesh_tasks::MeshTasks;
 use record::{Api, PassDraws, Recorder, SecondaryBuffers};
 
 /// The recording mode.
@@ -500,6 +502,8 @@ const SECONDARY: u64 = abi::CADR_TRAIT_SECONDARY_COMMAND_BUFFERS;
 const MDI_FEATURES: u64 =
     abi::CADR_FEATURE_MULTI_DRAW_INDIRECT | abi::CADR_FEATURE_DRAW_INDIRECT_FIRST_INSTANCE;
 const COUNT_FEATURES: u64 = MDI_FEATURES | abi::CADR_FEATURE_DRAW_INDIRECT_COUNT;
+const MESH_FEATURES: u64 =
+    COUNT_FEATURES | abi::CADR_FEATURE_BUFFER_DEVICE_ADDRESS | abi::CADR_FEATURE_MESH_SHADER;
 const DGC_FEATURES: u64 = abi::CADR_FEATURE_DRAW_INDIRECT_FIRST_INSTANCE
     | abi::CADR_FEATURE_BUFFER_DEVICE_ADDRESS
     | abi::CADR_FEATURE_DEVICE_GENERATED_COMMANDS_EXT;
@@ -572,6 +576,11 @@ technique_library! {
             name: "dgc",
             description: "Device-generated commands (VK_EXT_device_generated_commands): each pass's indirect commands, written by a gpu- culler or from the part list, run as a generated command stream whose length the GPU reads; where a gpu- culler splits the surfaces by their back faces, one stream draws both, the GPU picking each part's pipeline from an execution set; with the push parameter path, each sequence pushes the matrix and material values the gpu- culler wrote.",
             features: DGC_FEATURES, provides: abi::CADR_TRAIT_DRAWS_GPU_COMMANDS | abi::CADR_TRAIT_SWITCHES_PIPELINES | abi::CADR_TRAIT_PARAMETER_BLOCKS | REPLAYABLE | KEEPS_FRAME_SLOTS, needs: GPU_DRAWS,
+        },
+        submission MeshTasks {
+            name: "mesh-tasks",
+            description: "With a gpu- culler and paths that run in mesh shaders (pulling, ssbo-index): each pass's GPU-written commands drawn by mesh workgroups (VK_EXT_mesh_shader), 32 triangles each, the task shader reading the count; edge lines as individual-indirect-count draws them.",
+            features: MESH_FEATURES, provides: abi::CADR_TRAIT_DRAWS_GPU_COMMANDS | abi::CADR_TRAIT_MESH_SHADING | REPLAYABLE | KEEPS_FRAME_SLOTS, needs: GPU_DRAWS,
         },
         submission Submit<INDIVIDUAL, DIRECT, REPLAY> {
             name: "individual-replay",

@@ -270,27 +270,38 @@ pub fn bind_pass(
 /// Records each pass's draws from the commands a GPU culler wrote (`draws`, one per pass):
 /// the pass's pipeline and bindings, then one `vkCmdDrawIndexedIndirectCount`.
 pub fn record_gpu_draws(gpu: &Gpu, record: &Record<'_>, draws: &[abi::CadrGpuDraws]) {
-    let command_buffer = record.command_buffer();
     for (pass, source) in record.passes().iter().zip(draws) {
-        if source.commands == 0 || source.max_draws == 0 {
-            continue;
-        }
-        bind_pass(gpu, record, pass, (command_buffer, record.stats()));
-        // SAFETY: recording; the culler's buffers hold `max_draws` commands of `stride`
-        // bytes and the count, written before rendering began.
-        unsafe {
-            gpu.device.cmd_draw_indexed_indirect_count(
-                command_buffer,
-                vk::Buffer::from_raw(source.commands),
-                source.commands_offset,
-                vk::Buffer::from_raw(source.count_buffer),
-                source.count_offset,
-                source.max_draws,
-                source.stride,
-            )
-        };
-        record.count(|s| s.draw_calls += 1);
+        record_gpu_pass(gpu, record, pass, source);
     }
+}
+
+/// Binds `pass` and draws the commands of `source` with one `vkCmdDrawIndexedIndirectCount`
+/// (nothing where the culler wrote no commands for it).
+pub fn record_gpu_pass(
+    gpu: &Gpu,
+    record: &Record<'_>,
+    pass: &abi::CadrPass,
+    source: &abi::CadrGpuDraws,
+) {
+    if source.commands == 0 || source.max_draws == 0 {
+        return;
+    }
+    let command_buffer = record.command_buffer();
+    bind_pass(gpu, record, pass, (command_buffer, record.stats()));
+    // SAFETY: recording; the culler's buffers hold `max_draws` commands of `stride`
+    // bytes and the count, written before rendering began.
+    unsafe {
+        gpu.device.cmd_draw_indexed_indirect_count(
+            command_buffer,
+            vk::Buffer::from_raw(source.commands),
+            source.commands_offset,
+            vk::Buffer::from_raw(source.count_buffer),
+            source.count_offset,
+            source.max_draws,
+            source.stride,
+        )
+    };
+    record.count(|s| s.draw_calls += 1);
 }
 
 /// The most passes whose shares workers record into buffers of their own.

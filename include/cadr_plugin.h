@@ -29,11 +29,6 @@
 // [`CadrMeshTaskPush`], for the task and mesh stages (the vertex stage too, as the range is one).
 #define CADR_MESH_TASK_PUSH_OFFSET 128
 
-// Since ABI 1.23: the commands one task workgroup of the host's task shader reads: a pass of
-// at most `max_draws` commands is drawn by `ceil(max_draws / 32)` task workgroups
-// (`vkCmdDrawMeshTasksEXT(groups, 1, 1)`).
-#define CADR_MESH_COMMANDS_PER_TASK 32
-
 // [`CadrCluster::refined`] of a part's original clusters: its own triangles, made by no
 // simplification.
 #define CADR_CLUSTER_ORIGINAL UINT32_MAX
@@ -1276,20 +1271,24 @@ typedef struct CadrParameterBlocks {
 
 // Since ABI 1.23: what a mesh-shading submission pushes at [`CADR_MESH_TASK_PUSH_OFFSET`]
 // before drawing a pass of kind [`CADR_PASS_MESH_TRIANGLES`] or [`CADR_PASS_MESH_PICK`] (the
-// host's task and mesh shaders read it). Device addresses of buffers made with `SHADER_DEVICE_ADDRESS` usage: a GPU culler's
-// commands and counts, the scene's index buffer ([`CadrSceneView::index_buffer`]).
+// host's task and mesh shaders read it). It then draws the pass with
+// `vkCmdDrawMeshTasksIndirectCountEXT`: the culler's count ([`CadrGpuDraws::count_buffer`] at
+// `count_offset`), at most [`CadrGpuDraws::max_draws`] draws, each a
+// `VkDrawMeshTasksIndirectCommandEXT` of `{1, 1, 1}` from a buffer of its own: the one task
+// workgroup of draw `i` (`gl_DrawID`) reads the pass's command `i` and launches a mesh
+// workgroup per 32 of its triangles. Device addresses of buffers made with
+// `SHADER_DEVICE_ADDRESS` usage: a GPU culler's commands, the scene's index buffer
+// ([`CadrSceneView::index_buffer`]).
 typedef struct CadrMeshTaskPush {
   // Address of the pass's first command (`VkDrawIndexedIndirectCommand`, `firstInstance` the
   // instance id): [`CadrGpuDraws::commands`] plus `commands_offset`.
   uint64_t commands;
-  // Address of the pass's count (a u32): [`CadrGpuDraws::count_buffer`] plus `count_offset`.
-  uint64_t count;
   // Address of the scene's triangle indices (u32).
   uint64_t indices;
-  // The most commands the count can say ([`CadrGpuDraws::max_draws`]).
-  uint32_t max_draws;
   // Words (4 bytes) between commands ([`CadrGpuDraws::stride`] / 4).
   uint32_t stride_words;
+  // 0.
+  uint32_t reserved;
 } CadrMeshTaskPush;
 
 // Success.
@@ -1483,10 +1482,10 @@ typedef struct CadrMeshTaskPush {
 //
 // Where the active submission announces it, the host builds every triangle pass but the
 // hidden silhouettes' (a geometry shader, which mesh pipelines lack) as a mesh pipeline: the
-// host's task shader reads the pass's commands and count, and its mesh shader draws each
-// command's triangles in chunks, every vertex computed as the vertex shader computes it, so
-// the picture is the vertex pipeline's. The pipeline layout then has one push-constant range
-// of 160 bytes for the vertex, task and mesh stages: the paths' 128, then the submission's
+// host's task shader reads one command per draw, and its mesh shader draws each command's
+// triangles in chunks, every vertex computed as the vertex shader computes it, so the picture
+// is the vertex pipeline's. The pipeline layout then has one push-constant range of 152 bytes
+// for the vertex, task and mesh stages: the paths' 128, then the submission's
 // [`CadrMeshTaskPush`]. The host refuses such a submission unless both paths announce it, the
 // culler is a GPU culler and the device has mesh shaders and buffer device addresses.
 #define CADR_TRAIT_MESH_SHADING (1 << 15)
@@ -1605,8 +1604,8 @@ typedef struct CadrMeshTaskPush {
 // Since ABI 1.23: triangles drawn by a mesh pipeline (the host's task and mesh shaders),
 // given only where the active submission announces [`CADR_TRAIT_MESH_SHADING`], for every
 // triangle pass but the hidden silhouettes' and the pick pass. Bind the pipeline, bind the
-// paths, push [`CadrMeshTaskPush`] and draw `ceil(max_draws / CADR_MESH_COMMANDS_PER_TASK)`
-// task workgroups. Cullers treat it as [`CADR_PASS_TRIANGLES`].
+// paths, push [`CadrMeshTaskPush`] and draw a task workgroup per command (see there). Cullers
+// treat it as [`CADR_PASS_TRIANGLES`].
 #define CADR_PASS_MESH_TRIANGLES 3
 
 // Since ABI 1.23: the pick pass drawn by a mesh pipeline, as [`CADR_PASS_MESH_TRIANGLES`]

@@ -129,7 +129,7 @@ impl PassFilters {
 
 /// The pipeline layout of a combination's pipelines: the frame set, then the paths' sets up to
 /// the last one used (an empty set standing for a path without one), and 128 bytes of push
-/// constants for the vertex stage (160 with mesh shading, see below). Returns the empty set's layout too, which must live as long.
+/// constants for the vertex stage (152 with mesh shading, see below). Returns the empty set's layout too, which must live as long.
 fn technique_layout(
     device: &Arc<Device>,
     inputs: &PipelineInputs<'_>,

@@ -245,10 +245,10 @@ pub const CADR_TRAIT_PARAMETER_BLOCKS: CadrTraitBits = 1 << 14;
 ///
 /// Where the active submission announces it, the host builds every triangle pass but the
 /// hidden silhouettes' (a geometry shader, which mesh pipelines lack) as a mesh pipeline: the
-/// host's task shader reads the pass's commands and count, and its mesh shader draws each
-/// command's triangles in chunks, every vertex computed as the vertex shader computes it, so
-/// the picture is the vertex pipeline's. The pipeline layout then has one push-constant range
-/// of 160 bytes for the vertex, task and mesh stages: the paths' 128, then the submission's
+/// host's task shader reads one command per draw, and its mesh shader draws each command's
+/// triangles in chunks, every vertex computed as the vertex shader computes it, so the picture
+/// is the vertex pipeline's. The pipeline layout then has one push-constant range of 152 bytes
+/// for the vertex, task and mesh stages: the paths' 128, then the submission's
 /// [`CadrMeshTaskPush`]. The host refuses such a submission unless both paths announce it, the
 /// culler is a GPU culler and the device has mesh shaders and buffer device addresses.
 pub const CADR_TRAIT_MESH_SHADING: CadrTraitBits = 1 << 15;
@@ -256,40 +256,39 @@ pub const CADR_TRAIT_MESH_SHADING: CadrTraitBits = 1 << 15;
 /// Since ABI 1.23: where a mesh-shading submission ([`CADR_TRAIT_MESH_SHADING`]) pushes its
 /// [`CadrMeshTaskPush`], for the task and mesh stages (the vertex stage too, as the range is one).
 pub const CADR_MESH_TASK_PUSH_OFFSET: u32 = 128;
-/// Since ABI 1.23: the commands one task workgroup of the host's task shader reads: a pass of
-/// at most `max_draws` commands is drawn by `ceil(max_draws / 32)` task workgroups
-/// (`vkCmdDrawMeshTasksEXT(groups, 1, 1)`).
-pub const CADR_MESH_COMMANDS_PER_TASK: u32 = 32;
 
 /// Since ABI 1.23: what a mesh-shading submission pushes at [`CADR_MESH_TASK_PUSH_OFFSET`]
 /// before drawing a pass of kind [`CADR_PASS_MESH_TRIANGLES`] or [`CADR_PASS_MESH_PICK`] (the
-/// host's task and mesh shaders read it). Device addresses of buffers made with `SHADER_DEVICE_ADDRESS` usage: a GPU culler's
-/// commands and counts, the scene's index buffer ([`CadrSceneView::index_buffer`]).
+/// host's task and mesh shaders read it). It then draws the pass with
+/// `vkCmdDrawMeshTasksIndirectCountEXT`: the culler's count ([`CadrGpuDraws::count_buffer`] at
+/// `count_offset`), at most [`CadrGpuDraws::max_draws`] draws, each a
+/// `VkDrawMeshTasksIndirectCommandEXT` of `{1, 1, 1}` from a buffer of its own: the one task
+/// workgroup of draw `i` (`gl_DrawID`) reads the pass's command `i` and launches a mesh
+/// workgroup per 32 of its triangles. Device addresses of buffers made with
+/// `SHADER_DEVICE_ADDRESS` usage: a GPU culler's commands, the scene's index buffer
+/// ([`CadrSceneView::index_buffer`]).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct CadrMeshTaskPush {
     /// Address of the pass's first command (`VkDrawIndexedIndirectCommand`, `firstInstance` the
     /// instance id): [`CadrGpuDraws::commands`] plus `commands_offset`.
     pub commands: u64,
-    /// Address of the pass's count (a u32): [`CadrGpuDraws::count_buffer`] plus `count_offset`.
-    pub count: u64,
     /// Address of the scene's triangle indices (u32).
     pub indices: u64,
-    /// The most commands the count can say ([`CadrGpuDraws::max_draws`]).
-    pub max_draws: u32,
     /// Words (4 bytes) between commands ([`CadrGpuDraws::stride`] / 4).
     pub stride_words: u32,
+    /// 0.
+    pub reserved: u32,
 }
 
 impl CadrMeshTaskPush {
     /// Its bytes as pushed (little-endian, as every Vulkan device cadr runs on).
-    pub fn to_le_bytes(&self) -> [u8; 32] {
-        let mut bytes = [0u8; 32];
+    pub fn to_le_bytes(&self) -> [u8; 24] {
+        let mut bytes = [0u8; 24];
         bytes[0..8].copy_from_slice(&self.commands.to_le_bytes());
-        bytes[8..16].copy_from_slice(&self.count.to_le_bytes());
-        bytes[16..24].copy_from_slice(&self.indices.to_le_bytes());
-        bytes[24..28].copy_from_slice(&self.max_draws.to_le_bytes());
-        bytes[28..32].copy_from_slice(&self.stride_words.to_le_bytes());
+        bytes[8..16].copy_from_slice(&self.indices.to_le_bytes());
+        bytes[16..20].copy_from_slice(&self.stride_words.to_le_bytes());
+        bytes[20..24].copy_from_slice(&self.reserved.to_le_bytes());
         bytes
     }
 }
@@ -1270,8 +1269,8 @@ pub const CADR_PASS_PICK: CadrPassKind = 2;
 /// Since ABI 1.23: triangles drawn by a mesh pipeline (the host's task and mesh shaders),
 /// given only where the active submission announces [`CADR_TRAIT_MESH_SHADING`], for every
 /// triangle pass but the hidden silhouettes' and the pick pass. Bind the pipeline, bind the
-/// paths, push [`CadrMeshTaskPush`] and draw `ceil(max_draws / CADR_MESH_COMMANDS_PER_TASK)`
-/// task workgroups. Cullers treat it as [`CADR_PASS_TRIANGLES`].
+/// paths, push [`CadrMeshTaskPush`] and draw a task workgroup per command (see there). Cullers
+/// treat it as [`CADR_PASS_TRIANGLES`].
 pub const CADR_PASS_MESH_TRIANGLES: CadrPassKind = 3;
 /// Since ABI 1.23: the pick pass drawn by a mesh pipeline, as [`CADR_PASS_MESH_TRIANGLES`]
 /// (each command draws its own instance, as [`CADR_PASS_PICK`] asks). Cullers treat it as
@@ -1986,24 +1985,22 @@ impl CadrInstanceRecord {
 mod tests {
     use super::*;
 
-    /// The push lands where `shaders/mesh_tasks.glsl` reads it: three addresses, then the most
-    /// draws and the stride, after the paths' 128 bytes.
+    /// The push lands where `shaders/mesh_tasks.glsl` reads it: two addresses, then the
+    /// stride, after the paths' 128 bytes.
     #[test]
     fn the_mesh_task_push_has_the_shaders_layout() {
         let push = CadrMeshTaskPush {
             commands: 0x0102_0304_0506_0708,
-            count: 9,
-            indices: 10,
-            max_draws: 11,
+            indices: 9,
             stride_words: 5,
+            reserved: 0,
         };
         let bytes = push.to_le_bytes();
         assert_eq!(bytes[0..8], 0x0102_0304_0506_0708u64.to_le_bytes());
         assert_eq!(bytes[8], 9);
-        assert_eq!(bytes[16], 10);
-        assert_eq!(bytes[24], 11);
-        assert_eq!(bytes[28], 5);
-        assert_eq!(CADR_MESH_TASK_PUSH_OFFSET as usize + bytes.len(), 160);
+        assert_eq!(bytes[16], 5);
+        assert_eq!(bytes.len(), std::mem::size_of::<CadrMeshTaskPush>());
+        assert_eq!(CADR_MESH_TASK_PUSH_OFFSET as usize + bytes.len(), 152);
     }
 
     #[test]
@@ -2016,7 +2013,7 @@ mod tests {
         assert_eq!(std::mem::size_of::<CadrCullEntry>(), 48);
         assert_eq!(std::mem::size_of::<CadrParameterBlock>(), 96);
         assert_eq!(std::mem::size_of::<CadrGpuDraws>(), 40);
-        assert_eq!(std::mem::size_of::<CadrMeshTaskPush>(), 32);
+        assert_eq!(std::mem::size_of::<CadrMeshTaskPush>(), 24);
         assert_eq!(std::mem::size_of::<CadrPassFilter>(), 12);
         assert_eq!(std::mem::size_of::<CadrPassExclusion>(), 8);
         assert_eq!(CADR_PLUGIN_ABI_VERSION >> 16, CADR_PLUGIN_ABI_MAJOR);

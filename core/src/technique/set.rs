@@ -196,7 +196,6 @@ fn mesh_shading_check(entries: &[&TechniqueEntry]) -> Result<(), String> {
 
 /// Why a combination cannot work, or `Ok` when it can.
 pub fn check_combination(entries: &[&TechniqueEntry]) -> Result<(), String> {
-    let blocks_offer = parameter_blocks_offer(entries);
     for entry in entries {
         entry.support.as_ref().map_err(|why| {
             format!(
@@ -205,6 +204,11 @@ pub fn check_combination(entries: &[&TechniqueEntry]) -> Result<(), String> {
                 entry.name
             )
         })?;
+    }
+    // Before the traits each needs: it names the paths and cullers that would do.
+    mesh_shading_check(entries)?;
+    let blocks_offer = parameter_blocks_offer(entries);
+    for entry in entries {
         let others: u64 = entries
             .iter()
             .filter(|o| o.kind != entry.kind)
@@ -223,8 +227,7 @@ pub fn check_combination(entries: &[&TechniqueEntry]) -> Result<(), String> {
             ));
         }
     }
-    blocks_offer?;
-    mesh_shading_check(entries)
+    blocks_offer.map(|_| ())
 }
 
 /// A created technique instance; destroyed on drop (after the GPU is done, see `Techniques`).

@@ -48,6 +48,57 @@ pub fn placed_nodes(
         .collect()
 }
 
+/// Moves the `moving` nodes (from [`placed_nodes`]) apart for frame `frame`: node `i` by
+/// `step × frame × (i − 2.5)` along x and half that along y, from its original matrix.
+pub fn move_apart(
+    graph: &mut SceneGraph,
+    moving: &[(cadr_core::graph::NodeHandle, glam::DMat4)],
+    step: f64,
+    frame: usize,
+) {
+    for (i, &(node, original)) in moving.iter().enumerate() {
+        let apart = step * frame as f64 * (i as f64 - 2.5);
+        let offset = glam::DMat4::from_translation(glam::DVec3::new(apart, apart * 0.5, 0.0));
+        graph
+            .set_matrix(node, offset * original)
+            .expect("a placed node takes a matrix");
+    }
+}
+
+/// One frame of `view` through `camera`: its picture, its counters and, where `pick`, the
+/// (instance, part) pairs a pick of the whole view finds, sorted (else none: a pick between two
+/// frames has the next one record afresh, so tests of replay pick after their last frame).
+pub fn frame_with_picks(
+    view: &mut View,
+    (graph, tree): (&SceneGraph, &mut SceneTree),
+    camera: &Camera,
+    pick: bool,
+) -> (
+    image::RgbaImage,
+    cadr_core::render::FrameStats,
+    Vec<(u32, u32)>,
+) {
+    let stats = view.render(graph, tree, camera).expect("the frame renders");
+    let image = view
+        .renderer()
+        .read_rgba8()
+        .expect("the picture reads back");
+    let mut picked: Vec<(u32, u32)> = if pick {
+        let whole = cadr_core::render::pick::PixelRect {
+            x: 0,
+            y: 0,
+            width: image.width(),
+            height: image.height(),
+        };
+        let hits = view.pick(tree, camera, whole).expect("the view picks");
+        hits.iter().map(|hit| (hit.instance, hit.part)).collect()
+    } else {
+        Vec::new()
+    };
+    picked.sort_unstable();
+    (image, stats, picked)
+}
+
 /// A device with the validation layers on. Tests never skip: without Vulkan they fail here.
 pub fn test_device() -> Arc<Device> {
     validated_device(false, false)

@@ -8,11 +8,8 @@
 
 use std::sync::Arc;
 
-use glam::{DMat4, DVec3};
-
 use cadr_core::generate::{generate, GeneratorSpec};
 use cadr_core::graph::SceneGraph;
-use cadr_core::render::pick::PixelRect;
 use cadr_core::render::{Camera, FrameStats, DEFAULT_DIRECTION};
 use cadr_core::scene::flatten;
 use cadr_core::technique::{Combination, ShadeMode};
@@ -21,7 +18,8 @@ use cadr_core::view::View;
 use cadr_tests::back_face_cases::{draw, four_boxes, CASES, SIZE as SIZE_OF_CASES};
 use cadr_tests::images::{compare, SAME_PICTURE};
 use cadr_tests::{
-    assert_no_validation_errors, placed_nodes, plugin_registry, scene_wide, test_device, SceneView,
+    assert_no_validation_errors, frame_with_picks, move_apart, placed_nodes, plugin_registry,
+    scene_wide, test_device, SceneView,
 };
 
 const SIZE: (u32, u32) = (200, 150);
@@ -330,36 +328,15 @@ fn dgc_pushes_the_parameter_blocks_a_gpu_culler_writes() {
     let mut tree = SceneTree::build(&mut graph);
     let registry = plugin_registry(&device);
     let mut view = View::new(&device, Arc::clone(&registry), SIZE.0, SIZE.1).unwrap();
-    let whole = PixelRect {
-        x: 0,
-        y: 0,
-        width: SIZE.0,
-        height: SIZE.1,
-    };
     // Per frame: the parts moved apart by the frame's step, the camera a step further round.
     let mut frames = |combination: &Combination| {
         view.techniques_mut().select(combination).unwrap();
         (0..4)
             .map(|frame| {
-                for (i, &(node, original)) in moving.iter().enumerate() {
-                    let apart = bounds.radius() * 0.05 * frame as f64 * (i as f64 - 2.5);
-                    let offset = DMat4::from_translation(DVec3::new(apart, apart * 0.5, 0.0));
-                    graph.set_matrix(node, offset * original).unwrap();
-                }
+                move_apart(&mut graph, &moving, bounds.radius() * 0.05, frame);
                 tree.update(&mut graph);
-                let camera = Camera::orbit(&bounds, aspect, 0.25 * f64::from(frame), 1.2);
-                let stats = view.render(&graph, &mut tree, &camera).unwrap();
-                let image = view.renderer().read_rgba8().unwrap();
-                // Picked after the last frame (a pick frame between two frames would have the
-                // next one record afresh).
-                let mut picked: Vec<(u32, u32)> = if frame == 3 {
-                    let hits = view.pick(&tree, &camera, whole).unwrap();
-                    hits.iter().map(|hit| (hit.instance, hit.part)).collect()
-                } else {
-                    Vec::new()
-                };
-                picked.sort_unstable();
-                (image, stats, picked)
+                let camera = Camera::orbit(&bounds, aspect, 0.25 * frame as f64, 1.2);
+                frame_with_picks(&mut view, (&graph, &mut tree), &camera, frame == 3)
             })
             .collect::<Vec<_>>()
     };

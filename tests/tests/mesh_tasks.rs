@@ -8,18 +8,20 @@
 
 use std::sync::Arc;
 
-use glam::{DMat4, DVec3, DVec4};
+use glam::DVec4;
 
 use cadr_core::generate::{generate, GeneratorSpec};
 use cadr_core::graph::SceneGraph;
-use cadr_core::render::pick::PixelRect;
 use cadr_core::render::{Camera, FrameStats, Section};
 use cadr_core::scene::flatten;
 use cadr_core::technique::{Combination, ShadeMode};
 use cadr_core::tree::SceneTree;
 use cadr_core::view::View;
 use cadr_tests::images::{compare, SAME_PICTURE};
-use cadr_tests::{assert_no_validation_errors, placed_nodes, plugin_registry, test_device};
+use cadr_tests::{
+    assert_no_validation_errors, frame_with_picks, move_apart, placed_nodes, plugin_registry,
+    test_device,
+};
 
 const SIZE: (u32, u32) = (200, 150);
 
@@ -73,12 +75,6 @@ fn mesh_workgroups_draw_the_vertex_pipelines_picture_under_every_gpu_culler() {
     let mut tree = SceneTree::build(&mut graph);
     let registry = plugin_registry(&device);
     let mut view = View::new(&device, Arc::clone(&registry), SIZE.0, SIZE.1).unwrap();
-    let whole = PixelRect {
-        x: 0,
-        y: 0,
-        width: SIZE.0,
-        height: SIZE.1,
-    };
     let looks = [
         SOLID,
         SOLID,
@@ -111,11 +107,7 @@ fn mesh_workgroups_draw_the_vertex_pipelines_picture_under_every_gpu_culler() {
             .iter()
             .enumerate()
             .map(|(frame, look)| {
-                for (i, &(node, original)) in moving.iter().enumerate() {
-                    let apart = bounds.radius() * 0.04 * frame as f64 * (i as f64 - 2.5);
-                    let offset = DMat4::from_translation(DVec3::new(apart, apart * 0.5, 0.0));
-                    graph.set_matrix(node, offset * original).unwrap();
-                }
+                move_apart(&mut graph, &moving, bounds.radius() * 0.04, frame);
                 tree.update(&mut graph);
                 let techniques = view.techniques_mut();
                 techniques.set_shade_mode(look.mode).unwrap();
@@ -130,18 +122,8 @@ fn mesh_workgroups_draw_the_vertex_pipelines_picture_under_every_gpu_culler() {
                 }
                 view.set_section(section);
                 let camera = Camera::orbit(&bounds, aspect, 0.2 * frame as f64, 1.1);
-                let stats = view.render(&graph, &mut tree, &camera).unwrap();
-                let image = view.renderer().read_rgba8().unwrap();
-                // Picked after the solid frames (a pick between two frames has the next one
-                // record afresh, and the replay is checked on the solid frames).
-                let mut picked: Vec<(u32, u32)> = if frame == 3 {
-                    let hits = view.pick(&tree, &camera, whole).unwrap();
-                    hits.iter().map(|hit| (hit.instance, hit.part)).collect()
-                } else {
-                    Vec::new()
-                };
-                picked.sort_unstable();
-                (image, stats, picked)
+                // Picked after the solid frames, whose replay is checked.
+                frame_with_picks(&mut view, (&graph, &mut tree), &camera, frame == 3)
             })
             .collect::<Vec<(image::RgbaImage, FrameStats, Vec<(u32, u32)>)>>();
         (frames, meshed)

@@ -2,7 +2,8 @@
 //! keeps to the specification where lavapipe is lenient (lavapipe allocates descriptor sets
 //! past their pool's sizes, for one; SwiftShader refuses, as GPU drivers may). Each display
 //! mode and feature, and technique plugins of every kind, render there with no validation
-//! error, and look as they do on lavapipe.
+//! error, and look as they do on lavapipe. And Debian 12's Mesa 22.3 lavapipe, which lacks mesh
+//! shaders: it draws with indexed indirect draws what Mesa 25 draws with mesh workgroups.
 //! `scripts/setup.sh` installs the driver into `target/swiftshader` (`CADR_SWIFTSHADER_DIR`
 //! overrides); without it the test fails and says so.
 #![allow(clippy::unwrap_used)] // Test code: a failed unwrap is a failed test.
@@ -203,5 +204,74 @@ fn every_display_mode_renders_on_swiftshader_as_on_lavapipe() {
             drivers.mean
         );
     }
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// Issue 41's "the same image both ways": `gpu-clusters`' commands drawn by mesh workgroups
+/// (`mesh-tasks`) on the default driver, Mesa 25's lavapipe, against the same commands drawn as
+/// indexed indirect draws on Debian 12's Mesa 22.3, which has no mesh shaders; in the solid
+/// and edges modes, at full detail and at the default level of detail.
+#[test]
+fn mesh_workgroups_on_mesa_25_draw_what_indexed_draws_draw_on_mesa_22_3() {
+    let exe = Path::new(env!("CARGO_BIN_EXE_cadr"));
+    let mesa22 = cadr_tests::mesa22_manifest();
+    let dir = std::env::temp_dir().join(format!("cadr-mesh-drivers-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    for (case, display, lod_error) in [(0, "solid", "0"), (1, "edges", "1")] {
+        let [mesh, indexed] = ["mesh-tasks", "individual-indirect-count"].map(|submission| {
+            let png = dir.join(format!("{case}-{submission}.png"));
+            let mut command = Command::new(exe);
+            command
+                .args(["render", "gen:fine:units=1,detail=1", "--size", "240x180"])
+                .args([
+                    "--validation",
+                    "--vertex",
+                    "pulling",
+                    "--params",
+                    "ssbo-index",
+                ])
+                .args(["--submit", submission, "--cull", "gpu-clusters"])
+                .args(["--display", display, "--lod-error", lod_error, "-o"])
+                .arg(&png)
+                .env("CADR_PLUGIN_PATH", exe.parent().unwrap().join("deps"))
+                .env_remove("CADR_DEVICE");
+            if submission != "mesh-tasks" {
+                command.env("VK_ICD_FILENAMES", &mesa22);
+            }
+            let output = command.output().expect("run cadr");
+            let log = text(&output);
+            assert!(output.status.success(), "{submission}, {display}: {log}");
+            assert!(log.contains("validation:  0 errors"), "{submission}: {log}");
+            image::open(&png).unwrap().to_rgba8()
+        });
+        let difference = compare(&mesh, &indexed).unwrap();
+        println!("{display}, LOD {lod_error} px: mesh-tasks on Mesa 25 against Mesa 22.3: {difference:?}");
+        assert!(
+            difference.within(cadr_tests::images::SAME_PICTURE),
+            "{display}, LOD {lod_error} px: {difference:?}"
+        );
+    }
+    // On Mesa 22.3 itself the submission is refused, not crashed into (which also shows that
+    // the indexed pictures above were drawn there).
+    let output = Command::new(exe)
+        .args(["render", "gen:demo", "--size", "64x48", "-o"])
+        .arg(dir.join("refused.png"))
+        .args([
+            "--vertex",
+            "pulling",
+            "--params",
+            "ssbo-index",
+            "--submit",
+            "mesh-tasks",
+        ])
+        .args(["--cull", "gpu-clusters"])
+        .env("CADR_PLUGIN_PATH", exe.parent().unwrap().join("deps"))
+        .env("VK_ICD_FILENAMES", &mesa22)
+        .env_remove("CADR_DEVICE")
+        .output()
+        .expect("run cadr");
+    let log = text(&output);
+    assert!(!output.status.success(), "{log}");
+    assert!(log.contains("VK_EXT_mesh_shader"), "{log}");
     std::fs::remove_dir_all(&dir).unwrap();
 }

@@ -129,7 +129,8 @@ impl PassFilters {
 
 /// The pipeline layout of a combination's pipelines: the frame set, then the paths' sets up to
 /// the last one used (an empty set standing for a path without one), and 128 bytes of push
-/// constants for the vertex stage (152 with mesh shading, see below). Returns the empty set's layout too, which must live as long.
+/// constants for the vertex stage (152 with mesh shading, see below). Returns the empty set's
+/// layout too, which must live as long.
 fn technique_layout(
     device: &Arc<Device>,
     inputs: &PipelineInputs<'_>,
@@ -541,12 +542,6 @@ impl TechniquePipelines {
         topology: vk::PrimitiveTopology,
         raster: Raster,
     ) -> RenderResult<(Pipeline, PassScope)> {
-        let vertex = ShaderModule::from_spirv(
-            &self.device,
-            "technique.vert",
-            &inputs.shaders.vertex,
-            ShaderStage::Vertex,
-        )?;
         let fragment = ShaderModule::from_spirv(
             &self.device,
             "technique fragment",
@@ -611,6 +606,12 @@ impl TechniquePipelines {
             let pipeline = self.mesh_pipeline(shaders, &fragment, raster, &targets)?;
             return Ok((pipeline, scope));
         }
+        let vertex = ShaderModule::from_spirv(
+            &self.device,
+            "technique.vert",
+            &inputs.shaders.vertex,
+            ShaderStage::Vertex,
+        )?;
         let pipeline = Pipeline::graphics(
             &self.device,
             &GraphicsPipelineDesc {

@@ -34,7 +34,7 @@ pub const CACHED_TRIANGLES: usize = 8192;
 
 /// What a cache entry's key starts with: bump it when the clusters a geometry gets change.
 const CACHE_VERSION: &[u8] =
-    b"clusters 10: clod 128, normals protected, no sloppy fallback, small parts whole, spans, chained welded stand-ins";
+    b"clusters 11: clod 128, normals protected, no sloppy fallback, small parts whole, spans, welded stand-ins from one source at 0.7";
 /// The disk cache's kind of entry.
 const CACHE_KIND: &str = "clusters";
 

@@ -229,17 +229,21 @@ fn farthest_from(positions: &[[f32; 3]], indices: &[u32]) -> f32 {
         .map(|t| [t[0], t[1], t[2]].map(|i| glam::Vec3::from(positions[i as usize])))
         .collect();
     let step = positions.len().div_ceil(MEASURED_POSITIONS).max(1);
-    positions
-        .iter()
-        .step_by(step)
-        .map(|&p| {
-            let p = glam::Vec3::from(p);
-            triangles
-                .iter()
-                .map(|&[a, b, c]| p.distance(closest_on_triangle(p, a, b, c)))
-                .fold(f32::MAX, f32::min)
-        })
-        .fold(0.0, f32::max)
+    let mut farthest = 0.0f32;
+    for &p in positions.iter().step_by(step) {
+        let p = glam::Vec3::from(p);
+        // A position within `farthest` of some triangle cannot raise it: the first such
+        // triangle ends its search (most positions lie on the level, at a distance of 0).
+        let mut nearest = f32::MAX;
+        for &[a, b, c] in &triangles {
+            nearest = nearest.min(p.distance(closest_on_triangle(p, a, b, c)));
+            if nearest <= farthest {
+                break;
+            }
+        }
+        farthest = farthest.max(nearest);
+    }
+    farthest
 }
 
 /// The point of the triangle `a b c` closest to `p` (by the triangle's regions: each corner,

@@ -21,6 +21,8 @@
 //! from one sphere around every group of the part. So a culler that draws the coarsest
 //! stand-in whose error projects under its threshold picks one level, seen from anywhere.
 
+use std::borrow::Cow;
+
 use meshopt::{SimplifyOptions, VertexDataAdapter};
 
 use crate::scene::Vertex;
@@ -162,15 +164,7 @@ fn welded_levels(
     // costs one simplification, not one per level. Each error is measured against the part.
     let (source, source_error) = level_source(&welded, &welded_adapter, scale);
     while target >= 8 {
-        let mut relative_error = 0.0;
-        let simplified = meshopt::simplify(
-            &source,
-            &welded_adapter,
-            target * 3,
-            1.0,
-            SimplifyOptions::None,
-            Some(&mut relative_error),
-        );
+        let (simplified, library_error) = simplified_to(&source, &welded_adapter, target, scale);
         if simplified.is_empty() || simplified.len() > target * 3 {
             break;
         }
@@ -182,7 +176,7 @@ fn welded_levels(
         // show. A level made of the part's own vertices lies within its outline, which then
         // loses that distance on each side: the error counts it twice.
         let strayed = farthest_from(&welded_positions, &simplified);
-        let simplification_error = source_error + relative_error * scale;
+        let simplification_error = source_error + library_error;
         levels.push((level, simplification_error.max(2.0 * strayed)));
         target = next_target(target.min(reached));
     }
@@ -194,26 +188,37 @@ const SOURCE_TRIANGLES: usize = 1024;
 
 /// What the welded levels are simplified from, and its error in the part's units: the welded
 /// part, or its simplification to at most [`SOURCE_TRIANGLES`] where it has more.
-fn level_source(
-    welded: &[u32],
+fn level_source<'a>(
+    welded: &'a [u32],
     welded_adapter: &VertexDataAdapter<'_>,
     scale: f32,
-) -> (Vec<u32>, f32) {
-    if welded.len() / 3 <= SOURCE_TRIANGLES {
-        return (welded.to_vec(), 0.0);
+) -> (Cow<'a, [u32]>, f32) {
+    if welded.len() / 3 > SOURCE_TRIANGLES {
+        let (simplified, error) = simplified_to(welded, welded_adapter, SOURCE_TRIANGLES, scale);
+        if !simplified.is_empty() {
+            return (Cow::Owned(simplified), error);
+        }
     }
+    (Cow::Borrowed(welded), 0.0)
+}
+
+/// `indices` simplified towards `triangles` triangles (the library may stop short of them), and
+/// the library's error in the part's units (`scale` is the library's for the part).
+fn simplified_to(
+    indices: &[u32],
+    welded_adapter: &VertexDataAdapter<'_>,
+    triangles: usize,
+    scale: f32,
+) -> (Vec<u32>, f32) {
     let mut relative_error = 0.0;
     let simplified = meshopt::simplify(
-        welded,
+        indices,
         welded_adapter,
-        SOURCE_TRIANGLES * 3,
+        triangles * 3,
         1.0,
         SimplifyOptions::None,
         Some(&mut relative_error),
     );
-    if simplified.is_empty() {
-        return (welded.to_vec(), 0.0);
-    }
     (simplified, relative_error * scale)
 }
 

@@ -189,6 +189,97 @@ fn boxes_find_a_rod_hidden_behind_a_wall_where_spheres_cannot() {
     }
 }
 
+/// A wall with a small square hole, and behind it a rod lying along the wall's diagonal. The
+/// hole off the diagonal lies inside the rod's screen rect but outside its outline: the box
+/// tests find the rod hidden (its hull is tested under each texel, not its rect against the
+/// farthest depth in it) and draw only the wall. The hole on the diagonal shows the rod, and it
+/// is drawn. Either way the picture is what no culling draws.
+#[test]
+fn a_rod_seen_through_no_hole_in_the_wall_is_found_hidden() {
+    let mut builder = GeometryBuilder::new("unit cube");
+    builder.cuboid(DVec3::splat(-0.5), DVec3::splat(0.5), DMat4::IDENTITY);
+    let cube = builder.finish();
+    let cube_triangles = cube.indices.len() as u64 / 3;
+    let placed = |name: &str, scale: DVec3, rotation: DQuat, at: DVec3| {
+        let mut node = Node::new(name);
+        node.mesh = Some(MeshRef::new(0, vec![0]));
+        node.local = DMat4::from_scale_rotation_translation(scale, rotation, at);
+        node
+    };
+    // The wall's four pieces around the hole `hole` ± 0.15 (x, y), 0.2 thick at z = 0.
+    let wall_piece = |name: &str, min: [f64; 2], max: [f64; 2]| {
+        let (min, max) = (
+            DVec3::new(min[0], min[1], -0.1),
+            DVec3::new(max[0], max[1], 0.1),
+        );
+        placed(name, max - min, DQuat::IDENTITY, 0.5 * (min + max))
+    };
+    let camera = Camera::look_at(
+        DVec3::new(0.0, 0.0, 6.0),
+        DVec3::ZERO,
+        45.0,
+        aspect(),
+        0.1,
+        50.0,
+    );
+    // Through the hole off the diagonal the rod lies more than a unit away; through the one on
+    // it, in plain sight.
+    for (hole, rod_shows) in [([-0.8, 0.8], false), ([-0.8, -0.8], true)] {
+        let (x0, x1, y0, y1) = (
+            hole[0] - 0.15,
+            hole[0] + 0.15,
+            hole[1] - 0.15,
+            hole[1] + 0.15,
+        );
+        let mut root = Node::new("wall and rod");
+        root.children = (1..=5).collect();
+        let scene = Scene {
+            name: "wall with a hole, and a rod".into(),
+            geometries: vec![cube.clone()],
+            materials: vec![Material::default()],
+            nodes: vec![
+                root,
+                wall_piece("left", [-20.0, -20.0], [x0, 20.0]),
+                wall_piece("right", [x1, -20.0], [20.0, 20.0]),
+                wall_piece("below", [x0, -20.0], [x1, y0]),
+                wall_piece("above", [x0, y1], [x1, 20.0]),
+                placed(
+                    "rod",
+                    DVec3::new(3.0, 0.1, 0.1),
+                    DQuat::from_rotation_z(std::f64::consts::FRAC_PI_4),
+                    DVec3::new(0.0, 0.0, -0.6),
+                ),
+            ],
+            roots: vec![0],
+            ..Scene::default()
+        };
+        let results = render_frames(
+            &scene,
+            &["none", "gpu-occlusion", "gpu-clusters"],
+            &[camera; 4],
+        );
+        let drawn = if rod_shows { 5 } else { 4 } * cube_triangles;
+        for (culler, frames) in ["gpu-occlusion", "gpu-clusters"].iter().zip(&results[1..]) {
+            for (frame, ((reference, all), (image, culled))) in
+                results[0].iter().zip(frames).enumerate()
+            {
+                assert_eq!(all.triangles_rasterized, 5 * cube_triangles);
+                let difference = compare(image, reference).unwrap();
+                assert!(
+                    difference.within(SAME_PICTURE),
+                    "hole at {hole:?}, {culler}, frame {frame}: {difference:?}"
+                );
+                if frame >= 2 {
+                    assert_eq!(
+                        culled.triangles_rasterized, drawn,
+                        "hole at {hole:?}, {culler}, frame {frame}: the rod drawn: {rod_shows}"
+                    );
+                }
+            }
+        }
+    }
+}
+
 /// Renders `cameras` without culling and with `gpu-occlusion`, checks that every frame draws
 /// the same picture both ways, and gives each frame's triangles: occlusion's, then all.
 fn occluded_frames(scene: &Scene, cameras: &[Camera]) -> Vec<(u64, u64)> {

@@ -1,4 +1,5 @@
 #version 460
+#extension GL_EXT_control_flow_attributes : require
 // GPU culling (gpu-frustum, gpu-occlusion): one invocation per instance id tests the part's
 // bounding sphere, placed by its GPU matrix relative to the eye, against the frustum and, for
 // occlusion, against the depth pyramid of what was drawn first; a part that passes gets an
@@ -309,14 +310,134 @@ mat3 view_axes_of_projection() {
 // main(), before any pyramid test (one per part, one per cluster of the walk).
 mat3 view_axes;
 
+// The planes that may part the screen-space hull of a box from a pyramid texel: for each face
+// of the box, its plane; for each edge, the screen line along it (the hull's outline lies on
+// such lines). Each keeps the range of the hull's corners along it, so the hull lies between
+// those bounds whatever rounding did to the directions.
+struct HullBounds {
+    vec4 faces[6]; // xyz: the direction (NDC); w: the most any corner reaches along it
+    float faces_least[6];
+    vec4 edges[12]; // xy: the direction on screen; z, w: the least and most of the corners
+};
+
+// The hull bounds of the box whose corners lie at `corners` in NDC (corner k is the box's
+// corner with bit a of k set where it lies on the + side of axis a).
+HullBounds hull_bounds(vec3 corners[8]) {
+    HullBounds hull;
+    int edge = 0;
+    [[unroll]] for (int axis = 0; axis < 3; ++axis) {
+        int b = 1 << ((axis + 1) % 3);
+        int c = 1 << ((axis + 2) % 3);
+        [[unroll]] for (int side = 0; side < 2; ++side) {
+            int first = side << axis;
+            // Newell's diagonals: sound on a face that came out slightly warped.
+            vec3 direction = cross(corners[first | b | c] - corners[first],
+                                   corners[first | c] - corners[first | b]);
+            vec2 along = vec2(-1.0 / 0.0, 1.0 / 0.0);
+            [[unroll]] for (int k = 0; k < 8; ++k) {
+                float reach = dot(direction, corners[k]);
+                along = vec2(max(along.x, reach), min(along.y, reach));
+            }
+            hull.faces[2 * axis + side] = vec4(direction, along.x);
+            hull.faces_least[2 * axis + side] = along.y;
+        }
+        [[unroll]] for (int k = 0; k < 8; ++k) {
+            if ((k & (1 << axis)) != 0) {
+                continue;
+            }
+            vec2 e = corners[k | (1 << axis)].xy - corners[k].xy;
+            vec2 direction = vec2(-e.y, e.x);
+            vec2 range = vec2(1.0 / 0.0, -1.0 / 0.0);
+            [[unroll]] for (int j = 0; j < 8; ++j) {
+                float reach = dot(direction, corners[j].xy);
+                range = vec2(min(range.x, reach), max(range.y, reach));
+            }
+            hull.edges[edge++] = vec4(direction, range);
+        }
+    }
+    return hull;
+}
+
+// Whether the NDC box `centre` ± `half_size` (a texel's screen square, from the hull's nearest
+// depth to the farthest depth the texel keeps) lies wholly beyond one of the hull's bounds. A
+// small slack keeps rounding from parting what touches.
+bool parted_from_hull(HullBounds hull, vec3 centre, vec3 half_size) {
+    [[unroll]] for (int face = 0; face < 6; ++face) {
+        vec3 direction = hull.faces[face].xyz;
+        float middle = dot(direction, centre);
+        float spread = dot(abs(direction), half_size);
+        float slack = 1e-5 * (abs(middle) + spread) + 1e-30;
+        if (middle - spread > hull.faces[face].w + slack
+            || middle + spread < hull.faces_least[face] - slack) {
+            return true;
+        }
+    }
+    [[unroll]] for (int edge = 0; edge < 12; ++edge) {
+        vec4 bounds = hull.edges[edge];
+        float middle = dot(bounds.xy, centre.xy);
+        float spread = dot(abs(bounds.xy), half_size.xy);
+        float slack = 1e-5 * (abs(middle) + spread) + 1e-30;
+        if (middle - spread > bounds.w + slack || middle + spread < bounds.z - slack) {
+            return true;
+        }
+    }
+    return false;
+}
+
+// The texels of one pyramid level under a screen rect (`texel_lo`..`texel_hi` in target
+// pixels), at most 9 per axis: where the level starts, its size, its texels per target pixel,
+// and the first and last texel.
+struct PyramidRect {
+    uint offset;
+    uvec2 dims;
+    float scale;
+    uvec2 a;
+    uvec2 b;
+};
+
+PyramidRect pyramid_rect(uint level, vec2 texel_lo, vec2 texel_hi) {
+    PyramidRect rect;
+    // Each level's size is computed whole, not carried from one iteration to the next: Mesa
+    // 22.3's lavapipe, with this inlined into the cluster walk, left the size one level further
+    // on than the offset.
+    rect.offset = 0u;
+    for (uint finer = 0u; finer < level; ++finer) {
+        uvec2 finer_dims = pyramid_level_size(finer);
+        rect.offset += finer_dims.x * finer_dims.y;
+    }
+    rect.dims = pyramid_level_size(level);
+    rect.scale = exp2(-float(level + 1u));
+    rect.a = uvec2(clamp(ivec2(floor(texel_lo * rect.scale)), ivec2(0), ivec2(rect.dims) - 1));
+    rect.b = uvec2(clamp(ivec2(floor(texel_hi * rect.scale)), ivec2(0), ivec2(rect.dims) - 1));
+    rect.b = min(rect.b, rect.a + 8u);
+    return rect;
+}
+
+// Whether any texel of `rect` keeps a depth no nearer than `nearest`.
+bool reaches_in_front(PyramidRect rect, float nearest) {
+    for (uint y = rect.a.y; y <= rect.b.y; ++y) {
+        for (uint x = rect.a.x; x <= rect.b.x; ++x) {
+            if (nearest <= pyramid[rect.offset + y * rect.dims.x + x]) {
+                return true;
+            }
+        }
+    }
+    return false;
+}
+
 // Whether the box of `center` and half axes `half_axes` (its corners are center ± each column)
-// may be visible over the depth drawn so far (conservative: the nearest depth of its corners
-// against the farthest depth of the pyramid texels under their screen rect).
+// may be visible over the depth drawn so far. Conservative: with every corner in front of the
+// eye, the box's image in NDC is the hull of its corners' images (a projection keeps lines
+// straight), and under each pyramid texel of its screen rect that hull is tested against the
+// texel's column, from the nearest corner's depth to the farthest depth kept there. A box seen
+// through a gap that its rect spans but its outline does not, or that only its far side
+// reaches, is found hidden there.
 bool passes_pyramid_box(vec3 center, mat3 half_axes) {
+    vec3 corners[8];
     vec2 lo = vec2(1.0);
     vec2 hi = vec2(-1.0);
     float nearest = 1.0;
-    for (int corner = 0; corner < 8; ++corner) {
+    [[unroll]] for (int corner = 0; corner < 8; ++corner) {
         vec3 offset = half_axes * vec3((corner & 1) != 0 ? 1.0 : -1.0,
                                        (corner & 2) != 0 ? 1.0 : -1.0,
                                        (corner & 4) != 0 ? 1.0 : -1.0);
@@ -325,6 +446,7 @@ bool passes_pyramid_box(vec3 center, mat3 half_axes) {
             return true; // reaches behind the eye: cannot be judged
         }
         vec3 ndc = clip.xyz / clip.w;
+        corners[corner] = ndc;
         lo = min(lo, ndc.xy);
         hi = max(hi, ndc.xy);
         nearest = min(nearest, ndc.z);
@@ -339,31 +461,43 @@ bool passes_pyramid_box(vec3 center, mat3 half_axes) {
     vec2 texel_hi = (hi * 0.5 + 0.5) * size;
     vec2 extent = max(texel_hi - texel_lo, vec2(1.0));
     uint levels = max(dispatch.pyramid_levels, 1u);
-    // The level where the rect is at most 4 texels wide (so spans at most 5 per axis): fine
-    // enough that a part hidden near a silhouette, or behind a row of parts with gaps between
-    // them, is still found hidden. (At half that width, 3 texels spanned, gen:grid's 100 000
-    // parts left 8 % more parts and 9 % more triangles to draw; at twice it, 2 % fewer.)
+    // First the level where the rect is at most 4 texels wide (so spans at most 5 per axis),
+    // against the nearest corner alone: most hidden boxes are found hidden there, in few reads.
     uint level = uint(clamp(ceil(log2(max(extent.x, extent.y))) - 3.0, 0.0, float(levels - 1u)));
-    // Where the level starts and how wide it is. Each level's size is computed whole, not
-    // carried from one iteration to the next: Mesa 22.3's lavapipe, with this function inlined
-    // into the cluster walk, left `dims` one level further on than `offset`.
-    uint offset = 0u;
-    for (uint finer = 0u; finer < level; ++finer) {
-        uvec2 finer_dims = pyramid_level_size(finer);
-        offset += finer_dims.x * finer_dims.y;
+    PyramidRect rect = pyramid_rect(level, texel_lo, texel_hi);
+    if (!reaches_in_front(rect, nearest)) {
+        return false;
     }
-    uvec2 dims = pyramid_level_size(level);
-    float scale = exp2(-float(level + 1u));
-    uvec2 a = uvec2(clamp(ivec2(floor(texel_lo * scale)), ivec2(0), ivec2(dims) - 1));
-    uvec2 b = uvec2(clamp(ivec2(floor(texel_hi * scale)), ivec2(0), ivec2(dims) - 1));
-    b = min(b, a + 4u);
-    float farthest = 0.0;
-    for (uint y = a.y; y <= b.y; ++y) {
-        for (uint x = a.x; x <= b.x; ++x) {
-            farthest = max(farthest, pyramid[offset + y * dims.x + x]);
+    // Then one level finer (at most 8 texels wide), with the hull: fine enough that a part
+    // hidden near a silhouette, or behind a row of parts with gaps between them, is still
+    // found hidden.
+    level = level > 0u ? level - 1u : 0u;
+    rect = pyramid_rect(level, texel_lo, texel_hi);
+    HullBounds hull = hull_bounds(corners);
+    // A texel's half size in NDC.
+    vec2 texel_half = vec2(1.0) / (rect.scale * size);
+    // The texel under the box's centre first: the hull covers it, so a box in sight is most
+    // often found there, at one test. Then every texel of the rect, row by row.
+    vec4 centre_clip = view.view_projection * vec4(center, 1.0);
+    vec2 centre_pixel = (centre_clip.xy / centre_clip.w * 0.5 + 0.5) * size;
+    uvec2 centre_texel = uvec2(clamp(ivec2(floor(centre_pixel * rect.scale)), ivec2(rect.a),
+                                     ivec2(rect.b)));
+    uint columns = rect.b.x - rect.a.x + 1u;
+    int texels = int(columns * (rect.b.y - rect.a.y + 1u));
+    for (int k = -1; k < texels; ++k) {
+        uvec2 texel = k < 0 ? centre_texel : rect.a + uvec2(uint(k) % columns, uint(k) / columns);
+        float farthest = pyramid[rect.offset + texel.y * rect.dims.x + texel.x];
+        if (nearest > farthest) {
+            continue;
+        }
+        vec2 middle = (vec2(texel) + 0.5) * 2.0 * texel_half - 1.0;
+        vec3 column_centre = vec3(middle, 0.5 * (nearest + farthest));
+        vec3 column_half = vec3(texel_half, 0.5 * (farthest - nearest));
+        if (!parted_from_hull(hull, column_centre, column_half)) {
+            return true;
         }
     }
-    return nearest <= farthest;
+    return false;
 }
 
 // Whether the sphere projects at least the sub-pixel threshold across. A perspective view

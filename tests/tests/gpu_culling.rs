@@ -11,7 +11,7 @@ use glam::{DMat4, DQuat, DVec3};
 use cadr_core::generate::{generate, GeneratorSpec, GeometryBuilder};
 use cadr_core::graph::SceneGraph;
 use cadr_core::render::{Camera, FrameStats, DEFAULT_DIRECTION};
-use cadr_core::scene::{flatten, Aabb, Material, MeshRef, Node, Scene};
+use cadr_core::scene::{flatten, Aabb, Geometry, Material, MeshRef, Node, Scene};
 use cadr_core::technique::{Combination, Techniques};
 use cadr_core::tree::SceneTree;
 use cadr_core::view::View;
@@ -125,6 +125,35 @@ fn gpu_occlusion_skips_what_housings_hide() {
     }
 }
 
+/// A camera 6 units in front of a wall at z = 0, looking at its middle.
+fn facing_the_wall() -> Camera {
+    Camera::look_at(
+        DVec3::new(0.0, 0.0, 6.0),
+        DVec3::ZERO,
+        45.0,
+        aspect(),
+        0.1,
+        50.0,
+    )
+}
+
+/// A unit cube around the origin, and its triangles.
+fn unit_cube() -> (Geometry, u64) {
+    let mut builder = GeometryBuilder::new("unit cube");
+    builder.cuboid(DVec3::splat(-0.5), DVec3::splat(0.5), DMat4::IDENTITY);
+    let cube = builder.finish();
+    let triangles = cube.indices.len() as u64 / 3;
+    (cube, triangles)
+}
+
+/// A node drawing the scene's first geometry (a unit cube) scaled, turned and moved.
+fn placed_cube(name: &str, scale: DVec3, rotation: DQuat, at: DVec3) -> Node {
+    let mut node = Node::new(name);
+    node.mesh = Some(MeshRef::new(0, vec![0]));
+    node.local = DMat4::from_scale_rotation_translation(scale, rotation, at);
+    node
+}
+
 /// A wall, and behind it a long thin rod lying along it: both are a unit cube placed by a
 /// scaling matrix. The rod's sphere reaches far in front of the wall, its box does not. With the
 /// parts' and clusters' boxes (plugin ABI 1.20), `gpu-occlusion` and `gpu-clusters` find the rod
@@ -132,16 +161,9 @@ fn gpu_occlusion_skips_what_housings_hide() {
 /// what no culling draws.
 #[test]
 fn boxes_find_a_rod_hidden_behind_a_wall_where_spheres_cannot() {
-    let mut builder = GeometryBuilder::new("unit cube");
-    builder.cuboid(DVec3::splat(-0.5), DVec3::splat(0.5), DMat4::IDENTITY);
-    let cube = builder.finish();
-    let cube_triangles = cube.indices.len() as u64 / 3;
-    let placed = |name: &str, scale: DVec3, at: DVec3| {
-        let mut node = Node::new(name);
-        node.mesh = Some(MeshRef::new(0, vec![0]));
-        node.local = DMat4::from_scale_rotation_translation(scale, DQuat::IDENTITY, at);
-        node
-    };
+    let (cube, cube_triangles) = unit_cube();
+    let placed =
+        |name: &str, scale: DVec3, at: DVec3| placed_cube(name, scale, DQuat::IDENTITY, at);
     let mut root = Node::new("wall and rod");
     root.children = vec![1, 2];
     let scene = Scene {
@@ -156,33 +178,41 @@ fn boxes_find_a_rod_hidden_behind_a_wall_where_spheres_cannot() {
         roots: vec![0],
         ..Scene::default()
     };
-    let camera = Camera::look_at(
-        DVec3::new(0.0, 0.0, 6.0),
-        DVec3::ZERO,
-        45.0,
-        aspect(),
-        0.1,
-        50.0,
-    );
+    let camera = facing_the_wall();
+    assert_box_cullers_draw(&scene, camera, (2, 1), cube_triangles, "only the wall");
+}
+
+/// Renders four frames of `scene` from `camera` without culling and with each culler that
+/// tests boxes, and checks that every frame draws the same picture, that no culling draws
+/// `all` parts of `part_triangles` each, and that the cullers, from the third frame on (once
+/// they know what the last one showed), draw `drawn` of them (`what`: which).
+fn assert_box_cullers_draw(
+    scene: &Scene,
+    camera: Camera,
+    (all, drawn): (u64, u64),
+    part_triangles: u64,
+    what: &str,
+) {
     let results = render_frames(
-        &scene,
+        scene,
         &["none", "gpu-occlusion", "gpu-clusters"],
         &[camera; 4],
     );
     for (culler, frames) in ["gpu-occlusion", "gpu-clusters"].iter().zip(&results[1..]) {
-        for (frame, ((reference, all), (image, culled))) in
+        for (frame, ((reference, unculled), (image, culled))) in
             results[0].iter().zip(frames).enumerate()
         {
-            assert_eq!(all.triangles_rasterized, 2 * cube_triangles);
+            assert_eq!(unculled.triangles_rasterized, all * part_triangles);
             let difference = compare(image, reference).unwrap();
             assert!(
                 difference.within(SAME_PICTURE),
-                "{culler}, frame {frame}: {difference:?}"
+                "{what}: {culler}, frame {frame}: {difference:?}"
             );
             if frame >= 2 {
                 assert_eq!(
-                    culled.triangles_rasterized, cube_triangles,
-                    "{culler}, frame {frame}: only the wall's triangles"
+                    culled.triangles_rasterized,
+                    drawn * part_triangles,
+                    "{what}: {culler}, frame {frame}"
                 );
             }
         }
@@ -196,16 +226,8 @@ fn boxes_find_a_rod_hidden_behind_a_wall_where_spheres_cannot() {
 /// is drawn. Either way the picture is what no culling draws.
 #[test]
 fn a_rod_seen_through_no_hole_in_the_wall_is_found_hidden() {
-    let mut builder = GeometryBuilder::new("unit cube");
-    builder.cuboid(DVec3::splat(-0.5), DVec3::splat(0.5), DMat4::IDENTITY);
-    let cube = builder.finish();
-    let cube_triangles = cube.indices.len() as u64 / 3;
-    let placed = |name: &str, scale: DVec3, rotation: DQuat, at: DVec3| {
-        let mut node = Node::new(name);
-        node.mesh = Some(MeshRef::new(0, vec![0]));
-        node.local = DMat4::from_scale_rotation_translation(scale, rotation, at);
-        node
-    };
+    let (cube, cube_triangles) = unit_cube();
+    let placed = placed_cube;
     // The wall's four pieces around the hole `hole` ± 0.15 (x, y), 0.2 thick at z = 0.
     let wall_piece = |name: &str, min: [f64; 2], max: [f64; 2]| {
         let (min, max) = (
@@ -214,14 +236,7 @@ fn a_rod_seen_through_no_hole_in_the_wall_is_found_hidden() {
         );
         placed(name, max - min, DQuat::IDENTITY, 0.5 * (min + max))
     };
-    let camera = Camera::look_at(
-        DVec3::new(0.0, 0.0, 6.0),
-        DVec3::ZERO,
-        45.0,
-        aspect(),
-        0.1,
-        50.0,
-    );
+    let camera = facing_the_wall();
     // Through the hole off the diagonal the rod lies more than a unit away; through the one on
     // it, in plain sight.
     for (hole, rod_shows) in [([-0.8, 0.8], false), ([-0.8, -0.8], true)] {
@@ -253,30 +268,9 @@ fn a_rod_seen_through_no_hole_in_the_wall_is_found_hidden() {
             roots: vec![0],
             ..Scene::default()
         };
-        let results = render_frames(
-            &scene,
-            &["none", "gpu-occlusion", "gpu-clusters"],
-            &[camera; 4],
-        );
-        let drawn = if rod_shows { 5 } else { 4 } * cube_triangles;
-        for (culler, frames) in ["gpu-occlusion", "gpu-clusters"].iter().zip(&results[1..]) {
-            for (frame, ((reference, all), (image, culled))) in
-                results[0].iter().zip(frames).enumerate()
-            {
-                assert_eq!(all.triangles_rasterized, 5 * cube_triangles);
-                let difference = compare(image, reference).unwrap();
-                assert!(
-                    difference.within(SAME_PICTURE),
-                    "hole at {hole:?}, {culler}, frame {frame}: {difference:?}"
-                );
-                if frame >= 2 {
-                    assert_eq!(
-                        culled.triangles_rasterized, drawn,
-                        "hole at {hole:?}, {culler}, frame {frame}: the rod drawn: {rod_shows}"
-                    );
-                }
-            }
-        }
+        let drawn = if rod_shows { 5 } else { 4 };
+        let what = format!("hole at {hole:?}, the rod drawn: {rod_shows}");
+        assert_box_cullers_draw(&scene, camera, (5, drawn), cube_triangles, &what);
     }
 }
 

@@ -227,14 +227,13 @@ fn assert_box_cullers_draw(
 #[test]
 fn a_rod_seen_through_no_hole_in_the_wall_is_found_hidden() {
     let (cube, cube_triangles) = unit_cube();
-    let placed = placed_cube;
     // The wall's four pieces around the hole `hole` ± 0.15 (x, y), 0.2 thick at z = 0.
     let wall_piece = |name: &str, min: [f64; 2], max: [f64; 2]| {
         let (min, max) = (
             DVec3::new(min[0], min[1], -0.1),
             DVec3::new(max[0], max[1], 0.1),
         );
-        placed(name, max - min, DQuat::IDENTITY, 0.5 * (min + max))
+        placed_cube(name, max - min, DQuat::IDENTITY, 0.5 * (min + max))
     };
     let camera = facing_the_wall();
     // Through the hole off the diagonal the rod lies more than a unit away; through the one on
@@ -258,7 +257,7 @@ fn a_rod_seen_through_no_hole_in_the_wall_is_found_hidden() {
                 wall_piece("right", [x1, -20.0], [20.0, 20.0]),
                 wall_piece("below", [x0, -20.0], [x1, y0]),
                 wall_piece("above", [x0, y1], [x1, 20.0]),
-                placed(
+                placed_cube(
                     "rod",
                     DVec3::new(3.0, 0.1, 0.1),
                     DQuat::from_rotation_z(std::f64::consts::FRAC_PI_4),

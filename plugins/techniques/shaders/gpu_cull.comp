@@ -174,6 +174,7 @@ layout(push_constant) uniform Dispatch {
     uint pass_slot;
     uint first_command;
     uint mode;
+    // What this dispatch records in the visibility tables of phase 1 (RECORDS_*).
     uint writes_visibility;
     uint pyramid_levels;
     // The pass's filter (CadrPassFilter): only instances with flags & mask == value are drawn.
@@ -209,6 +210,12 @@ layout(push_constant) uniform Dispatch {
     // counts them.
     uint parameter_blocks;
 } dispatch;
+
+// The visibility a phase 1 dispatch records: the parts' (one dispatch records every part's, so
+// the others test the pyramid only for the parts their pass takes) and the clusters' of the
+// parts its pass takes.
+const uint RECORDS_PARTS = 1u;
+const uint RECORDS_CLUSTERS = 2u;
 
 // Inside the frustum.
 bool in_frustum(vec3 center, float radius) {
@@ -649,6 +656,31 @@ bool faces_away(Cluster cluster, Placement place) {
     return dot(normalize(apex), axis) >= cluster.cone_cutoff;
 }
 
+// The counting walk's pyramid verdicts (a bit each, in the order it tested its clusters), which
+// the writing walk after it, over the same cut, reads instead of testing again: the first 64.
+uint walk_verdicts_low;
+uint walk_verdicts_high;
+const uint VERDICTS_KEPT = 64u;
+
+// Whether cluster box (`center`, `half_axes`) passes the depth pyramid: the `tests`-th test of
+// a walk, recorded by the counting walk and read back by the writing one (`write`).
+bool walk_passes_pyramid(vec3 center, mat3 half_axes, uint tests, bool write) {
+    uint bit = 1u << (tests & 31u);
+    bool low = tests < 32u;
+    if (write && tests < VERDICTS_KEPT) {
+        return ((low ? walk_verdicts_low : walk_verdicts_high) & bit) != 0u;
+    }
+    bool visible = passes_pyramid_box(center, half_axes);
+    if (!write && visible && tests < VERDICTS_KEPT) {
+        if (low) {
+            walk_verdicts_low |= bit;
+        } else {
+            walk_verdicts_high |= bit;
+        }
+    }
+    return visible;
+}
+
 // The bit of cluster `k` of instance `id` in the cluster visibility tables.
 uint cluster_bit(uint id, uint k) {
     uint h = id * 0x9e3779b1u ^ (k + 0x7f4a7c15u) * 0x85ebca77u;
@@ -670,6 +702,11 @@ uint walk_clusters(CullEntry entry, uint id, Placement place, bool back_faces_ma
     uint commands_made = 0u;
     uint run_first = 0u;
     uint run_count = 0u;
+    uint pyramid_tests = 0u;
+    if (!write) {
+        walk_verdicts_low = 0u;
+        walk_verdicts_high = 0u;
+    }
     // A part's stand-ins, its last clusters (each alone in a group of PROXY_DEPTH, errors
     // growing toward the last), replace its whole cut: the coarsest whose error projects at or
     // under the threshold is drawn alone. Otherwise none is drawn (nor at full detail, nor in
@@ -740,10 +777,11 @@ uint walk_clusters(CullEntry entry, uint id, Placement place, bool back_faces_ma
             continue;
         }
         if (dispatch.mode == MODE_NEWLY_VISIBLE) {
-            bool visible = passes_pyramid_box(box_center, box_axes);
+            bool visible = walk_passes_pyramid(box_center, box_axes, pyramid_tests, write);
+            pyramid_tests += 1u;
             // Recorded by the counting walk, which every part passes through (the writing
             // one runs only when there is something left to draw).
-            if (visible && !write && dispatch.writes_visibility != 0u) {
+            if (visible && !write && (dispatch.writes_visibility & RECORDS_CLUSTERS) != 0u) {
                 atomicOr(now_clusters[visibility_bit >> 5], 1u << (visibility_bit & 31u));
             }
             if (!visible || was) {
@@ -874,9 +912,29 @@ void main() {
         return;
     }
 #endif
+    uint first = entry.first_index;
+    uint count = entry.index_count;
+    if (dispatch.pass_kind == PASS_EDGES) {
+        first = entry.first_wire_index;
+        count = entry.wire_index_count;
+    }
+    // Whether the pass takes the part: its filter decides what it draws, not what is visible
+    // (the visibility bit below is recorded whatever the pass takes).
+    bool excluded = dispatch.exclude_mask != 0u
+        && (entry.flags & dispatch.exclude_mask) == dispatch.exclude_value;
+    bool taken = count != 0u && (entry.flags & dispatch.filter_mask) == dispatch.filter_value
+        && !excluded && (dispatch.filter_section_cut == 0u || sections.y)
+        && (dispatch.face_route == FACES_ANY
+            || back_faces_culled(entry.flags, rotation, center, radius, sections.y)
+                == (dispatch.face_route == FACES_CULLED));
     if (dispatch.mode == MODE_LAST_VISIBLE) {
         draw = visible && bit(id);
     } else if (dispatch.mode == MODE_NEWLY_VISIBLE) {
+        // The pyramid test is the dear one: a dispatch that neither records the part's
+        // visibility nor draws it leaves it out.
+        if (!taken && (dispatch.writes_visibility & RECORDS_PARTS) == 0u) {
+            return;
+        }
         visible = visible && passes_pyramid_box(box_center, box_axes);
         draw = visible && !bit(id);
 #ifdef CLUSTERS
@@ -884,7 +942,7 @@ void main() {
         // visible part goes on to phase 1 (its clusters that phase 0 left out, its lines).
         draw = visible;
 #endif
-        if (dispatch.writes_visibility != 0u && visible) {
+        if ((dispatch.writes_visibility & RECORDS_PARTS) != 0u && visible) {
             atomicOr(now_visible[id >> 5], 1u << (id & 31u));
         }
     }
@@ -893,22 +951,7 @@ void main() {
         request_full_detail(floatBitsToUint(box.half_extent.w), box.center.w, center, radius,
                             scale, dispatch.lod_error);
     }
-    uint first = entry.first_index;
-    uint count = entry.index_count;
-    if (dispatch.pass_kind == PASS_EDGES) {
-        first = entry.first_wire_index;
-        count = entry.wire_index_count;
-    }
-    // After the visibility bit: a pass's filter decides what it draws, not what is visible.
-    bool excluded = dispatch.exclude_mask != 0u
-        && (entry.flags & dispatch.exclude_mask) == dispatch.exclude_value;
-    if (!draw || count == 0u || (entry.flags & dispatch.filter_mask) != dispatch.filter_value
-        || excluded || (dispatch.filter_section_cut != 0u && !sections.y)) {
-        return;
-    }
-    if (dispatch.face_route != FACES_ANY
-        && back_faces_culled(entry.flags, rotation, center, radius, sections.y)
-            != (dispatch.face_route == FACES_CULLED)) {
+    if (!draw || !taken) {
         return;
     }
 #ifdef CLUSTERS

@@ -88,6 +88,10 @@ const VIEW_BINDING: usize = 4;
 const MODE_FRUSTUM: u32 = 0;
 const MODE_LAST_VISIBLE: u32 = 1;
 const MODE_NEWLY_VISIBLE: u32 = 2;
+/// What a phase 1 dispatch records (`writes_visibility`, as `gpu_cull.comp`'s `RECORDS_*`):
+/// every part's visibility, and the clusters' of the parts its pass takes.
+const RECORDS_PARTS: u32 = 1;
+const RECORDS_CLUSTERS: u32 = 2;
 
 /// What a frame slot's cull set was last written with: the host's buffers' handles, the ids of
 /// ours, the scene's buffers generation and the view's offset.
@@ -853,9 +857,16 @@ impl<const OCCLUSION: bool, const CLUSTERS: bool> GpuCuller<OCCLUSION, CLUSTERS>
                 pass_slot: slot as u32,
                 first_command: slot as u32 * self.commands.capacity,
                 mode,
-                // The first pass, and where the surfaces are split, the first of the other
-                // parts: between them they see every part once.
-                writes_visibility: u32::from(index == 0 || route == abi::CADR_FACES_KEPT),
+                // The first pass records every part's visibility (the others test the pyramid
+                // only for the parts they take); the clusters' is recorded by the pass that
+                // draws them: the first, and where the surfaces are split, the other parts'.
+                writes_visibility: if index == 0 {
+                    RECORDS_PARTS | RECORDS_CLUSTERS
+                } else if route == abi::CADR_FACES_KEPT {
+                    RECORDS_CLUSTERS
+                } else {
+                    0
+                },
                 pyramid_levels: self.pyramid_levels,
                 filter,
                 lod_error,

@@ -690,6 +690,60 @@ uint cluster_bit(uint id, uint k) {
     return h & dispatch.cluster_bit_mask;
 }
 
+// The clusters the counting walk found drawn, a bit each by their place in the part, for a part
+// of at most 64 clusters (`walk_drawn_recorded`): the writing walk then writes them without
+// walking the cut and testing them again.
+uint walk_drawn_low;
+uint walk_drawn_high;
+bool walk_drawn_recorded;
+
+// The command a walk is making: clusters that follow each other in the index buffer are drawn
+// by one command.
+struct CommandRun {
+    uint first;
+    uint count;
+    uint made;
+};
+
+// Adds `cluster` to `run`: to its command where it follows the command's last index, else to a
+// new one, the one before written (where `write`, at command `slot` + its number).
+void add_to_run(inout CommandRun run, Cluster cluster, bool write, uint slot, uint vertex_base,
+                uint id) {
+    if (run.count > 0u && run.first + run.count == cluster.first_index) {
+        run.count += cluster.index_count;
+        return;
+    }
+    if (run.count > 0u && write) {
+        write_command(slot + run.made - 1u, run.first, run.count, vertex_base, id);
+    }
+    run.made += 1u;
+    run.first = cluster.first_index;
+    run.count = cluster.index_count;
+}
+
+// Writes the last command of `run`, where `write`; returns how many commands it made.
+uint end_run(CommandRun run, bool write, uint slot, uint vertex_base, uint id) {
+    if (run.count > 0u && write) {
+        write_command(slot + run.made - 1u, run.first, run.count, vertex_base, id);
+    }
+    return run.made;
+}
+
+// Writes the commands of the clusters the counting walk recorded drawn, from `slot` on.
+uint write_recorded_clusters(CullEntry entry, uint id, uint slot) {
+    CommandRun run = CommandRun(0u, 0u, 0u);
+    atomicAdd(counts[10], bitCount(walk_drawn_low) + bitCount(walk_drawn_high));
+    for (uint word = 0u; word < 2u; ++word) {
+        uint bits = word == 0u ? walk_drawn_low : walk_drawn_high;
+        while (bits != 0u) {
+            uint k = entry.first_cluster + word * 32u + uint(findLSB(bits));
+            bits &= bits - 1u;
+            add_to_run(run, clusters[k], true, slot, entry.vertex_base, id);
+        }
+    }
+    return end_run(run, true, slot, entry.vertex_base, id);
+}
+
 // Walks the instance's clusters in the cut at `threshold` that pass the cluster tests, merging
 // those that follow each other in the index buffer into one command: counts the commands, and
 // writes them from `slot` on when `write`. With occlusion, phase 0 takes the clusters visible
@@ -699,13 +753,14 @@ uint walk_clusters(CullEntry entry, uint id, Placement place, bool back_faces_ma
                    float threshold, bool write, uint slot, bool phase0_drew_none) {
     bool was_visible = dispatch.mode != MODE_FRUSTUM && bit(id) && !phase0_drew_none;
     uint count = clusters[entry.first_cluster].part_clusters;
-    uint commands_made = 0u;
-    uint run_first = 0u;
-    uint run_count = 0u;
+    CommandRun run = CommandRun(0u, 0u, 0u);
     uint pyramid_tests = 0u;
     if (!write) {
         walk_verdicts_low = 0u;
         walk_verdicts_high = 0u;
+        walk_drawn_low = 0u;
+        walk_drawn_high = 0u;
+        walk_drawn_recorded = count <= 64u;
     }
     // A part's stand-ins, its last clusters (each alone in a group of PROXY_DEPTH, errors
     // growing toward the last), replace its whole cut: the coarsest whose error projects at or
@@ -790,23 +845,17 @@ uint walk_clusters(CullEntry entry, uint id, Placement place, bool back_faces_ma
         }
         if (write) {
             atomicAdd(counts[10], 1u);
+        } else if (walk_drawn_recorded) {
+            uint place_in_part = k - entry.first_cluster;
+            if (place_in_part < 32u) {
+                walk_drawn_low |= 1u << place_in_part;
+            } else {
+                walk_drawn_high |= 1u << (place_in_part - 32u);
+            }
         }
-        uint first = cluster.first_index;
-        if (run_count > 0u && run_first + run_count == first) {
-            run_count += cluster.index_count;
-            continue;
-        }
-        if (run_count > 0u && write) {
-            write_command(slot + commands_made - 1u, run_first, run_count, entry.vertex_base, id);
-        }
-        commands_made += 1u;
-        run_first = first;
-        run_count = cluster.index_count;
+        add_to_run(run, cluster, write, slot, entry.vertex_base, id);
     }
-    if (run_count > 0u && write) {
-        write_command(slot + commands_made - 1u, run_first, run_count, entry.vertex_base, id);
-    }
-    return commands_made;
+    return end_run(run, write, slot, entry.vertex_base, id);
 }
 
 // Appends the commands of the instance's clusters in the cut: at the host's threshold while
@@ -838,7 +887,11 @@ void append_clusters(CullEntry entry, uint id, Placement place, bool back_faces_
         return;
     }
     uint slot = atomicAdd(counts[dispatch.pass_slot], wanted);
-    walk_clusters(entry, id, place, back_faces_may_go, threshold, true, slot, phase0_drew_none);
+    if (walk_drawn_recorded) {
+        write_recorded_clusters(entry, id, slot);
+    } else {
+        walk_clusters(entry, id, place, back_faces_may_go, threshold, true, slot, phase0_drew_none);
+    }
 }
 #endif
 

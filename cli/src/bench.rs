@@ -19,7 +19,7 @@ use cadr_core::vk::Device;
 use crate::args::{BenchArgs, BenchShade, Size};
 use crate::motion::Motion;
 use crate::progress::Steps;
-use crate::techniques::{load_registry, TechniqueSession};
+use crate::techniques::{load_registry, FrameSample, TechniqueSession};
 
 /// The (vertex, parameter) pairs the default selection tries with every submission: the
 /// classic binds, then the GPU-resident indexed path.
@@ -80,6 +80,8 @@ pub(crate) struct Row {
     /// techniques, the host memory of the Vulkan objects; not the driver's own,
     /// `cadr_core::host_heap`).
     host_allocated_bytes: u64,
+    /// The median GPU time of each pass, in the order drawn (`Renderer::gpu_pass_times`).
+    gpu_passes: crate::PassTimes,
 }
 
 /// What one row measured: medians of CPU, GPU, scene update and upload, and the first
@@ -93,13 +95,15 @@ struct Measured {
     /// Measured frames that were replayed, and frames measured.
     replayed: (usize, usize),
     first: FrameStats,
+    /// The median GPU time of each pass, in the order drawn.
+    gpu_passes: crate::PassTimes,
 }
 
 /// Renders 2 warm-up frames, then `frames` measured ones (frame numbers from 0, so that every
 /// row sees the same motion); medians.
 fn measure(
     frames: usize,
-    mut draw: impl FnMut(usize) -> Result<(FrameStats, f64), String>,
+    mut draw: impl FnMut(usize) -> Result<FrameSample, String>,
 ) -> Result<Measured, String> {
     for frame in 0..2 {
         draw(frame)?;
@@ -108,20 +112,20 @@ fn measure(
     for frame in 0..frames {
         samples.push(draw(frame + 2)?);
     }
-    let cpu = crate::median(&mut samples.iter().map(|s| s.0.cpu_us()).collect::<Vec<_>>());
+    let cpu = crate::median(&mut samples.iter().map(|s| s.stats.cpu_us()).collect::<Vec<_>>());
     let submit = crate::median(
         &mut samples
             .iter()
-            .map(|s| s.0.cpu_submit_us)
+            .map(|s| s.stats.cpu_submit_us)
             .collect::<Vec<_>>(),
     );
-    let mut gpu: Vec<f64> = samples.iter().filter_map(|s| s.0.gpu_us).collect();
+    let mut gpu: Vec<f64> = samples.iter().filter_map(|s| s.stats.gpu_us).collect();
     let gpu = (!gpu.is_empty()).then(|| crate::median(&mut gpu));
-    let update = crate::median(&mut samples.iter().map(|s| s.1).collect::<Vec<_>>());
+    let update = crate::median(&mut samples.iter().map(|s| s.update_us).collect::<Vec<_>>());
     let uploaded = crate::median(
         &mut samples
             .iter()
-            .map(|s| s.0.bytes_uploaded as f64)
+            .map(|s| s.stats.bytes_uploaded as f64)
             .collect::<Vec<_>>(),
     );
     Ok(Measured {
@@ -131,10 +135,11 @@ fn measure(
         scene_update_us: update,
         bytes_uploaded: uploaded as u64,
         replayed: (
-            samples.iter().filter(|s| s.0.replayed).count(),
+            samples.iter().filter(|s| s.stats.replayed).count(),
             samples.len(),
         ),
-        first: samples[0].0,
+        first: samples[0].stats,
+        gpu_passes: crate::median_pass_times(samples.iter().map(|s| s.gpu_passes.as_slice())),
     })
 }
 
@@ -163,6 +168,7 @@ impl Row {
             resident_bytes: 0,
             streamed_bytes: 0,
             host_allocated_bytes: cadr_core::host_heap::bytes_in_use(),
+            gpu_passes: measured.gpu_passes,
         }
     }
 
@@ -599,6 +605,11 @@ fn row_json(row: &Row, baseline_cpu: f64) -> serde_json::Value {
         "cpu_us": row.cpu_us,
         "cpu_submit_us": row.cpu_submit_us,
         "gpu_us": row.gpu_us,
+        "gpu_pass_us": row
+            .gpu_passes
+            .iter()
+            .map(|(pass, us)| serde_json::json!({ "pass": pass, "us": us }))
+            .collect::<Vec<_>>(),
         "scene_update_us": row.scene_update_us,
         "bytes_uploaded": row.bytes_uploaded,
         "transforms": row.transforms,

@@ -277,15 +277,7 @@ fn render(args: &RenderArgs, process_start: Instant) -> Result<(), String> {
         DEFAULT_DIRECTION,
     );
 
-    // One warm-up frame when measuring several, so that first-use costs do not count.
-    let first = session.render(&camera)?;
-    let samples: Vec<FrameStats> = if frames == 1 {
-        vec![first]
-    } else {
-        (0..frames)
-            .map(|_| session.render(&camera))
-            .collect::<Result<_, _>>()?
-    };
+    let (samples, pass_samples) = render_frames(&mut session, &camera, frames)?;
     session
         .view
         .renderer()
@@ -338,6 +330,7 @@ fn render(args: &RenderArgs, process_start: Instant) -> Result<(), String> {
         process_start.elapsed().as_secs_f64() * 1e3
     );
     if args.timings {
+        print_gpu_passes(&pass_samples);
         print_timings(process_start.elapsed());
         print_memory(&device, stats.instances as u64, loading_heap_peak);
     }
@@ -378,6 +371,31 @@ fn apply_render_settings(
         .techniques()
         .set_frame_replay(!args.no_replay && !args.baseline);
     Ok(())
+}
+
+/// The GPU time of each pass of one frame, in the order drawn (`Renderer::gpu_pass_times`).
+pub(crate) type PassTimes = Vec<(&'static str, f64)>;
+
+/// The frames `render` measures: the first alone, or after it (a warm-up frame, so that
+/// first-use costs do not count) `frames` more; each one's counters and GPU time per pass.
+fn render_frames(
+    session: &mut techniques::TechniqueSession,
+    camera: &Camera,
+    frames: usize,
+) -> Result<(Vec<FrameStats>, Vec<PassTimes>), String> {
+    let first = session.render(camera)?;
+    if frames == 1 {
+        return Ok((vec![first], vec![session.gpu_pass_times()?]));
+    }
+    let mut passes = Vec::with_capacity(frames);
+    let samples = (0..frames)
+        .map(|_| {
+            let stats = session.render(camera)?;
+            passes.push(session.gpu_pass_times()?);
+            Ok(stats)
+        })
+        .collect::<Result<_, String>>()?;
+    Ok((samples, passes))
 }
 
 /// The `techniques:` line of `render`: the combination, the display mode and every option that
@@ -457,6 +475,47 @@ fn print_frames(instances: usize, samples: &[FrameStats]) {
         median(&mut record),
         samples.len()
     );
+}
+
+/// `--timings`: the median GPU time of each pass of the measured frames (`samples`, each
+/// frame's passes in the order drawn).
+fn print_gpu_passes(samples: &[PassTimes]) {
+    let passes = median_pass_times(samples.iter().map(Vec::as_slice));
+    if passes.is_empty() {
+        println!("gpu passes:  n/a (no timestamps)");
+        return;
+    }
+    let passes: Vec<String> = passes
+        .iter()
+        .map(|(name, us)| format!("{name} {us:.0} µs"))
+        .collect();
+    println!("gpu passes:  {}", passes.join(", "));
+}
+
+/// The median GPU time of each pass over the frames `samples` (each frame's passes in the order
+/// drawn, `Renderer::gpu_pass_times`), in the order they first appear (a pass some frames lack,
+/// such as the uploads, over the frames that have it).
+pub(crate) fn median_pass_times<'a>(
+    samples: impl Iterator<Item = &'a [(&'static str, f64)]> + Clone,
+) -> PassTimes {
+    let mut names: Vec<&'static str> = Vec::new();
+    for (name, _) in samples.clone().flatten() {
+        if !names.contains(name) {
+            names.push(name);
+        }
+    }
+    names
+        .into_iter()
+        .map(|name| {
+            let mut times: Vec<f64> = samples
+                .clone()
+                .flatten()
+                .filter(|(pass, _)| *pass == name)
+                .map(|(_, us)| *us)
+                .collect();
+            (name, median(&mut times))
+        })
+        .collect()
 }
 
 /// The most memory this process held resident so far (Linux), in bytes.

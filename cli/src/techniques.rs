@@ -206,7 +206,7 @@ impl TechniqueSession {
         motion: &Motion,
         (bounds, aspect): (&Aabb, f64),
         frame: usize,
-    ) -> Result<(FrameStats, f64), String> {
+    ) -> Result<FrameSample, String> {
         let start = std::time::Instant::now();
         motion.animate(&mut self.graph, frame)?;
         self.tree.update(&mut self.graph);
@@ -216,7 +216,19 @@ impl TechniqueSession {
         let update_us = start.elapsed().as_secs_f64() * 1e6;
         let camera = motion.camera(bounds, aspect, frame);
         let stats = self.view.draw(&camera).map_err(|e| e.to_string())?;
-        Ok((stats, update_us))
+        Ok(FrameSample {
+            stats,
+            update_us,
+            gpu_passes: self.gpu_pass_times()?,
+        })
+    }
+
+    /// The GPU time of each pass of the last frame (`Renderer::gpu_pass_times`).
+    pub fn gpu_pass_times(&self) -> Result<crate::PassTimes, String> {
+        self.view
+            .renderer()
+            .gpu_pass_times()
+            .map_err(|e| e.to_string())
     }
 
     /// Draws one frame (the first uploads the GPU scene, with a spinner if it takes long).
@@ -231,6 +243,17 @@ impl TechniqueSession {
             .render(&self.graph, &mut self.tree, camera)
             .map_err(|e| e.to_string())
     }
+}
+
+/// One frame a benchmark measured: what it drew, the time its scene took to update, and the GPU
+/// time of each of its passes.
+pub struct FrameSample {
+    /// The frame's counters and times.
+    pub stats: FrameStats,
+    /// Moving nodes and bringing the tree and GPU scene up to date, in microseconds.
+    pub update_us: f64,
+    /// The GPU time of each pass (`Renderer::gpu_pass_times`).
+    pub gpu_passes: crate::PassTimes,
 }
 
 /// `cadr techniques [--json]`.

@@ -542,6 +542,21 @@ fn bench_animate_moves_assemblies_on_the_gpu_with_64_bytes_per_node() {
             "a slot and a local matrix per moved node: {gpu}"
         );
         assert!(gpu["scene_update_us"].as_f64().unwrap() > 0.0, "{gpu}");
+        // Every frame uploads the moved nodes before its passes.
+        let passes: Vec<&str> = gpu["gpu_pass_us"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|pass| {
+                assert!(pass["us"].as_f64().unwrap() >= 0.0, "{gpu}");
+                pass["pass"].as_str().unwrap()
+            })
+            .collect();
+        assert_eq!(
+            passes[..3],
+            ["uploads", "prepare and cull", "surfaces phase 0"],
+            "{gpu}"
+        );
     }
     // The baseline (push constants) reads matrices on the host.
     let host = row("baseline (built-in)");
@@ -838,6 +853,14 @@ fn render_timings_split_the_run_into_its_phases() {
             assert!(ms > 0.0, "{phase} took no time: {line}");
         }
         sum += ms;
+    }
+    // The frame's GPU time, pass by pass.
+    let gpu_passes = text
+        .lines()
+        .find(|l| l.starts_with("gpu passes:"))
+        .unwrap_or_else(|| panic!("no gpu passes line in:\n{text}"));
+    for pass in ["surfaces phase 0 ", "background "] {
+        assert!(gpu_passes.contains(pass), "no {pass}in {gpu_passes}");
     }
     let memory = text
         .lines()

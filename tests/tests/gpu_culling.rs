@@ -467,3 +467,66 @@ fn sub_pixel_culling_drops_small_parts_only_when_asked() {
     drop(view);
     assert_no_validation_errors(&device);
 }
+
+#[test]
+fn each_pass_of_a_culled_frame_is_timed_and_the_times_make_the_frame() {
+    let scene = generate(&GeneratorSpec::Grid {
+        parts: 300,
+        triangles_per_part: 12.0,
+    });
+    let camera = Camera::fit(&bounds(&scene), aspect(), DEFAULT_DIRECTION);
+    let device = test_device();
+    let (mut graph, _) = SceneGraph::from_scene(&scene).unwrap();
+    let mut tree = SceneTree::build(&mut graph);
+    let registry = plugin_registry(&device);
+    let mut view = View::new(&device, Arc::clone(&registry), SIZE.0, SIZE.1).unwrap();
+    for (culler, passes) in [
+        (
+            "none",
+            &[
+                "prepare and cull",
+                "surfaces phase 0",
+                "background",
+                "techniques after the passes",
+            ][..],
+        ),
+        (
+            "gpu-occlusion",
+            &[
+                "prepare and cull",
+                "surfaces phase 0",
+                "cull phase 1",
+                "surfaces phase 1",
+                "background",
+                "techniques after the passes",
+            ][..],
+        ),
+    ] {
+        view.techniques_mut().select(&combination(culler)).unwrap();
+        // The first frame uploads the scene; the third replays the second's recording.
+        for frame in 0..3 {
+            let stats = view.render(&graph, &mut tree, &camera).unwrap();
+            let times = view.renderer().gpu_pass_times().unwrap();
+            let names: Vec<&str> = times.iter().map(|(name, _)| *name).collect();
+            let drawn = if names.first() == Some(&"uploads") {
+                &names[1..]
+            } else {
+                &names[..]
+            };
+            assert_eq!(drawn, passes, "{culler}, frame {frame}");
+            assert!(
+                times.iter().all(|(_, us)| *us >= 0.0),
+                "{culler}, frame {frame}: {times:?}"
+            );
+            let sum: f64 = times.iter().map(|(_, us)| us).sum();
+            let frame_us = stats.gpu_us.unwrap();
+            assert!(
+                (sum - frame_us).abs() <= 1e-6 * frame_us + 0.01,
+                "{culler}, frame {frame}: {sum} µs in the passes, {frame_us} µs in all"
+            );
+            assert_eq!(stats.replayed, frame == 2, "{culler}, frame {frame}");
+        }
+    }
+    drop(view);
+    assert_no_validation_errors(&device);
+}

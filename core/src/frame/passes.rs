@@ -253,6 +253,31 @@ pub(crate) enum FramePass {
 }
 
 impl FramePass {
+    /// Its name, as the GPU time of each pass is reported (`Renderer::gpu_pass_times`).
+    pub fn name(&self) -> &'static str {
+        match *self {
+            FramePass::Prepare => "prepare and cull",
+            FramePass::Cull { phase } => match phase {
+                1 => "cull phase 1",
+                2 => "cull phase 2",
+                _ => "cull",
+            },
+            FramePass::Surfaces {
+                target: PassTarget::Pick,
+                ..
+            } => "pick surfaces",
+            FramePass::Surfaces { phase, .. } => match phase {
+                0 => "surfaces phase 0",
+                1 => "surfaces phase 1",
+                2 => "surfaces phase 2",
+                _ => "surfaces",
+            },
+            FramePass::Overlay { index, .. } => OVERLAY_PASSES[index].name,
+            FramePass::PickReadback => "pick readback",
+            FramePass::DepthToHost => "depth to host",
+        }
+    }
+
     /// What it reads.
     pub fn reads(&self) -> Resources {
         match *self {

@@ -15,7 +15,7 @@ use crate::render::{
 use crate::vk::raw as vk;
 use crate::vk::{
     begin_overlay, begin_rendering, end_overlay, end_rendering, memory_barrier, record_fullscreen,
-    suspend_rendering, transition, Buffer, Image, Multisampled, RenderingTarget,
+    suspend_rendering, transition, Buffer, GpuTimer, Image, Multisampled, RenderingTarget,
 };
 
 use super::passes::{
@@ -94,6 +94,38 @@ struct SurfacesRendering {
     last: bool,
     /// Whether the surfaces have several phases (the depth is then stored between them).
     phased: bool,
+}
+
+/// The frame's pass timer while its passes are recorded, with what each span it marks
+/// measured.
+struct PassTimeline {
+    /// The slot's timer, taken out of it until the recording ends (none without timestamps).
+    timer: Option<GpuTimer>,
+    /// The name of each span marked so far.
+    span_names: Vec<&'static str>,
+    /// The frame's command buffer.
+    command_buffer: vk::CommandBuffer,
+}
+
+impl PassTimeline {
+    /// Ends the span `name` measured (from the last mark) with a timestamp, where the timer
+    /// has room.
+    fn mark(&mut self, name: &'static str) {
+        if let Some(timer) = &mut self.timer {
+            if timer.mark(self.command_buffer) {
+                self.span_names.push(name);
+            }
+        }
+    }
+
+    /// Ends the last span, `name`, with the frame's last timestamp.
+    fn end(&mut self, name: &'static str) {
+        if let Some(timer) = &mut self.timer {
+            if timer.end(self.command_buffer) {
+                self.span_names.push(name);
+            }
+        }
+    }
 }
 
 /// What a technique records at one point of the frame: before the pass, inside it (once per
@@ -262,7 +294,13 @@ impl Renderer {
 
         let slot = self.slots.current_mut();
         let command_buffer = slot.commands.begin()?;
-        if let Some(timer) = &mut slot.pass_timer {
+        // Taken out of the slot while the passes are recorded, so that they can mark it.
+        let mut timeline = PassTimeline {
+            timer: slot.pass_timer.take(),
+            span_names: Vec::new(),
+            command_buffer,
+        };
+        if let Some(timer) = &mut timeline.timer {
             timer.begin(command_buffer);
         }
         after_earlier_frames(&self.device, command_buffer);
@@ -275,12 +313,18 @@ impl Renderer {
             depth_set,
             depth_to_host: passes.iter().any(|pass| *pass == FramePass::DepthToHost),
         };
-        self.record_passes(&passes, &inputs, &mut recorders, &mut stats)?;
-        let last_phase = passes.surface_phases().max(1) - 1;
-        (recorders.after)(self, command_buffer, last_phase, &mut stats)?;
-        if let Some(timer) = &mut self.slots.current_mut().pass_timer {
-            timer.end(command_buffer);
-        }
+        let recorded = self
+            .record_passes(&passes, &inputs, &mut recorders, &mut stats, &mut timeline)
+            .and_then(|()| {
+                let last_phase = passes.surface_phases().max(1) - 1;
+                (recorders.after)(self, command_buffer, last_phase, &mut stats)?;
+                timeline.end("techniques after the passes");
+                Ok(())
+            });
+        let slot = self.slots.current_mut();
+        slot.pass_timer = timeline.timer;
+        slot.span_names = timeline.span_names;
+        recorded?;
         stats.cpu_record_us = record_start.elapsed().as_secs_f64() * 1e6;
         self.submit_recorded(stats, replay_key, plan.uploads_pending, previous_gpu_us)
     }
@@ -294,6 +338,7 @@ impl Renderer {
         inputs: &PassInputs<'_>,
         recorders: &mut FrameRecorders<'_, '_>,
         stats: &mut FrameStats,
+        timeline: &mut PassTimeline,
     ) -> RenderResult<()> {
         let command_buffer = inputs.command_buffer;
         let phased = passes.surface_phases() > 1;
@@ -338,6 +383,7 @@ impl Renderer {
                     self.record_depth_to_host(command_buffer, inputs.depth_set.is_some());
                 }
             }
+            timeline.mark(pass.name());
         }
         if over_picture {
             end_overlay(&self.device, command_buffer, &self.target.color);

@@ -27,8 +27,11 @@ pub(super) struct FrameSlot {
     /// The frame uniforms, host-written when the frame is recorded or replayed (binding 0 of
     /// this slot's frame set).
     pub uniforms: Buffer,
-    /// The GPU time of the frame's pass (the main command buffer).
+    /// The GPU time of the frame's pass (the main command buffer), and of each of its passes.
     pub pass_timer: Option<GpuTimer>,
+    /// What the pass timer's spans measured in the slot's recording, in order: the frame's
+    /// passes (`FramePass::name`) and the techniques' work after them.
+    pub span_names: Vec<&'static str>,
     /// The GPU time of the frame's uploads (the prologue submitted ahead of the main buffer).
     pub upload_timer: Option<GpuTimer>,
     /// Whether the slot's last submission carried an upload prologue (its GPU time is the
@@ -51,8 +54,9 @@ impl FrameSlot {
                 vk::BufferUsageFlags::UNIFORM_BUFFER,
                 MemoryLocation::CpuToGpu,
             )?,
-            pass_timer: GpuTimer::new(device, &format!("frame {index} timer"))?,
-            upload_timer: GpuTimer::new(device, &format!("frame {index} upload timer"))?,
+            pass_timer: GpuTimer::new(device, &format!("frame {index} timer"), PASS_TIMESTAMPS)?,
+            span_names: Vec::new(),
+            upload_timer: GpuTimer::new(device, &format!("frame {index} upload timer"), 2)?,
             submission_uploaded: false,
             replayable: None,
         })
@@ -71,7 +75,28 @@ impl FrameSlot {
         };
         Ok(pass.map(|pass| pass + uploads.unwrap_or(0.0)))
     }
+
+    /// The GPU time of each pass of the slot's last frame, named, in the order drawn (the
+    /// uploads first where the frame had any), if timestamps work and the frame has finished.
+    pub fn gpu_pass_times(&self) -> VkResult<Vec<(&'static str, f64)>> {
+        let mut times = Vec::new();
+        if let (Some(timer), true) = (&self.upload_timer, self.submission_uploaded) {
+            times.extend(timer.elapsed_us()?.map(|us| ("uploads", us)));
+        }
+        if let Some(spans) = match &self.pass_timer {
+            Some(timer) => timer.spans_us()?,
+            None => None,
+        } {
+            times.extend(self.span_names.iter().copied().zip(spans));
+        }
+        Ok(times)
+    }
 }
+
+/// Timestamps a frame's pass timer holds: its start and one after each pass, more than a frame
+/// has passes (the preparation, two per culler phase, the passes over the picture, the pick
+/// readback, the depth handed over and the techniques' work after them).
+const PASS_TIMESTAMPS: u32 = 32;
 
 /// What decides how long a frame waits for earlier ones (see [`FrameSlots::begin_frame`]).
 #[derive(Clone, Copy, Debug)]

@@ -23,7 +23,7 @@
 #define CADR_VERSION_MAJOR 1
 
 // The library's minor version.
-#define CADR_VERSION_MINOR 3
+#define CADR_VERSION_MINOR 4
 
 // The library's patch version.
 #define CADR_VERSION_PATCH 0
@@ -1030,6 +1030,18 @@ typedef struct CadrTimings {
   // Encoding and writing PNG files.
   double png_encode_ms;
 } CadrTimings;
+
+// The GPU time of one pass of a frame (`cadr_renderer_gpu_pass_times`).
+typedef struct CadrGpuPassTime {
+  // The pass's name, NUL-terminated: "uploads", "prepare and cull" (the techniques'
+  // preparation with a GPU culler's first phase), "surfaces phase N", "cull phase N", each
+  // pass over the picture by its name ("background", "silhouettes", "ambient occlusion",
+  // ...), "pick surfaces", "pick readback", "depth to host", and "techniques after the
+  // passes". Ownership: cadr's, valid until the process ends; do not free.
+  const char *name;
+  // Its GPU time in microseconds.
+  double us;
+} CadrGpuPassTime;
 
 #ifdef __cplusplus
 extern "C" {
@@ -2199,6 +2211,24 @@ enum CadrResult cadr_timings(struct CadrTimings *timings);
 // Ownership: nothing changes hands. Thread-safety: any thread; work running meanwhile may be
 // counted on either side of the reset.
 void cadr_timings_reset(void);
+
+// Writes the GPU time of each pass of the renderer's last frame (rendered, or replayed) into
+// `times`, in the order drawn, and their number into `*count`. Together they make that frame's
+// `CadrFrameStats::gpu_us`. A device whose queue has no timestamps has none (`*count` 0).
+//
+// Returns `CADR_RESULT_OK`; `CADR_RESULT_BUFFER_TOO_SMALL` with `times` NULL or `capacity`
+// under the number of passes, having written only that number into `*count` (call again
+// with room for it); `CADR_RESULT_NULL_ARGUMENT` with `count` NULL; `CADR_RESULT_VULKAN` or
+// a handle error. Ownership: the entries are the caller's; their names are cadr's (see
+// `CadrGpuPassTime::name`). Thread-safety: as `cadr_renderer_render`; with frames in flight
+// it waits for the last frame to finish.
+//
+// # Safety
+// `times` is null or writable for `capacity` entries; `count` is null or writable.
+enum CadrResult cadr_renderer_gpu_pass_times(CadrRenderer renderer,
+                                             struct CadrGpuPassTime *times,
+                                             size_t capacity,
+                                             size_t *count);
 
 #ifdef __cplusplus
 }  // extern "C"

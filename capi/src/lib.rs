@@ -77,7 +77,7 @@ use error::{guard, Failure};
 /// The library's major version (from the crate's metadata).
 pub const CADR_VERSION_MAJOR: u32 = 1;
 /// The library's minor version.
-pub const CADR_VERSION_MINOR: u32 = 3;
+pub const CADR_VERSION_MINOR: u32 = 4;
 /// The library's patch version.
 pub const CADR_VERSION_PATCH: u32 = 0;
 

@@ -1,10 +1,15 @@
-//! Where cadr's time went in this process: the phases of start-up and of first pictures
-//! (`cadr render --timings` reports the same figures).
+//! Where cadr's time went in this process: the phases of start-up and of first pictures, and a
+//! renderer's last frame pass by pass on the GPU (`cadr render --timings` reports the same
+//! figures).
+
+use std::ffi::{c_char, CStr, CString};
+use std::sync::{Mutex, OnceLock};
 
 use cadr_core::timings::{self, Phase};
 
-use crate::args::deliver_sized;
-use crate::error::{guard, CadrResult};
+use crate::args::{deliver, deliver_sized};
+use crate::error::{guard, CadrResult, Failure};
+use crate::renderer::{with_renderer, CadrRenderer};
 
 /// Milliseconds cadr spent in each phase of its work in this process, since it was loaded or
 /// since `cadr_timings_reset`, over every context, scene and renderer. A phase that runs
@@ -79,4 +84,87 @@ pub unsafe extern "C" fn cadr_timings(timings: *mut CadrTimings) -> CadrResult {
 #[no_mangle]
 pub extern "C" fn cadr_timings_reset() {
     timings::reset();
+}
+
+/// The GPU time of one pass of a frame (`cadr_renderer_gpu_pass_times`).
+#[repr(C)]
+#[derive(Clone, Copy, Debug)]
+pub struct CadrGpuPassTime {
+    /// The pass's name, NUL-terminated: "uploads", "prepare and cull" (the techniques'
+    /// preparation with a GPU culler's first phase), "surfaces phase N", "cull phase N", each
+    /// pass over the picture by its name ("background", "silhouettes", "ambient occlusion",
+    /// ...), "pick surfaces", "pick readback", "depth to host", and "techniques after the
+    /// passes". Ownership: cadr's, valid until the process ends; do not free.
+    pub name: *const c_char,
+    /// Its GPU time in microseconds.
+    pub us: f64,
+}
+
+/// The NUL-terminated copy of a pass name, made once per name and kept for the process (the
+/// names are a small fixed set).
+fn pass_name(name: &'static str) -> Result<*const c_char, Failure> {
+    static NAMES: OnceLock<Mutex<Vec<(&'static str, &'static CStr)>>> = OnceLock::new();
+    let mut names = NAMES
+        .get_or_init(|| Mutex::new(Vec::new()))
+        .lock()
+        .unwrap_or_else(std::sync::PoisonError::into_inner);
+    if let Some((_, text)) = names.iter().find(|(known, _)| *known == name) {
+        return Ok(text.as_ptr());
+    }
+    let text: &'static CStr = Box::leak(
+        CString::new(name)
+            .map_err(|_| Failure::invalid(format!("pass name {name:?} holds a NUL")))?
+            .into_boxed_c_str(),
+    );
+    names.push((name, text));
+    Ok(text.as_ptr())
+}
+
+/// Writes the GPU time of each pass of the renderer's last frame (rendered, or replayed) into
+/// `times`, in the order drawn, and their number into `*count`. Together they make that frame's
+/// `CadrFrameStats::gpu_us`. A device whose queue has no timestamps has none (`*count` 0).
+///
+/// Returns `CADR_RESULT_OK`; `CADR_RESULT_BUFFER_TOO_SMALL` with `times` NULL or `capacity`
+/// under the number of passes, having written only that number into `*count` (call again
+/// with room for it); `CADR_RESULT_NULL_ARGUMENT` with `count` NULL; `CADR_RESULT_VULKAN` or
+/// a handle error. Ownership: the entries are the caller's; their names are cadr's (see
+/// `CadrGpuPassTime::name`). Thread-safety: as `cadr_renderer_render`; with frames in flight
+/// it waits for the last frame to finish.
+///
+/// # Safety
+/// `times` is null or writable for `capacity` entries; `count` is null or writable.
+#[no_mangle]
+pub unsafe extern "C" fn cadr_renderer_gpu_pass_times(
+    renderer: CadrRenderer,
+    times: *mut CadrGpuPassTime,
+    capacity: usize,
+    count: *mut usize,
+) -> CadrResult {
+    guard(|| {
+        crate::args::non_null(count, "count")?;
+        let passes = with_renderer(renderer, |state| {
+            Ok(state.view.renderer().gpu_pass_times()?)
+        })?;
+        // SAFETY: count is non-null and writable (the caller's contract).
+        unsafe { deliver(count, "count", passes.len()) }?;
+        if times.is_null() || capacity < passes.len() {
+            return Err(Failure::new(
+                CadrResult::BufferTooSmall,
+                format!(
+                    "the last frame has {} passes, the buffer holds {capacity}",
+                    passes.len()
+                ),
+            ));
+        }
+        for (index, (name, us)) in passes.into_iter().enumerate() {
+            let entry = CadrGpuPassTime {
+                name: pass_name(name)?,
+                us,
+            };
+            // SAFETY: times is writable for capacity >= passes.len() entries (the caller's
+            // contract).
+            unsafe { times.add(index).write(entry) };
+        }
+        Ok(())
+    })
 }

@@ -846,6 +846,33 @@ static void test_renderer(CadrContext context, struct Built *b) {
   OK(cadr_camera_fit(&bounds, (double)W / H, NULL, &camera));
   OK(cadr_renderer_render(renderer, b->scene, &camera, &stats));
   CHECK(stats.presented && stats.draws == 2 && stats.triangles == 12 && stats.cpu_us > 0);
+  /* The GPU time of each pass of that frame, which make its gpu_us: the count is asked for
+     first. */
+  {
+    size_t pass_count = 0;
+    size_t written = 0;
+    CadrGpuPassTime passes[32];
+    double sum = 0.0;
+    int surfaces = 0;
+    EXPECT(cadr_renderer_gpu_pass_times(renderer, NULL, 0, &pass_count),
+           CADR_RESULT_BUFFER_TOO_SMALL);
+    CHECK(pass_count >= 3 && pass_count <= 32);
+    EXPECT(cadr_renderer_gpu_pass_times(renderer, passes, 1, &written),
+           CADR_RESULT_BUFFER_TOO_SMALL);
+    CHECK(written == pass_count);
+    EXPECT(cadr_renderer_gpu_pass_times(renderer, passes, 32, NULL), CADR_RESULT_NULL_ARGUMENT);
+    EXPECT(cadr_renderer_gpu_pass_times((CadrRenderer)b->scene, passes, 32, &written),
+           CADR_RESULT_FOREIGN_HANDLE);
+    OK(cadr_renderer_gpu_pass_times(renderer, passes, 32, &written));
+    CHECK(written == pass_count);
+    for (size_t i = 0; i < written; ++i) {
+      CHECK(passes[i].us >= 0.0 && strlen(passes[i].name) > 0);
+      sum += passes[i].us;
+      surfaces += strcmp(passes[i].name, "surfaces phase 0") == 0;
+    }
+    CHECK(surfaces == 1 && strcmp(passes[written - 1].name, "techniques after the passes") == 0);
+    CHECK(fabs(sum - stats.gpu_us) <= 1e-6 * stats.gpu_us + 0.01);
+  }
   OK(cadr_renderer_render(renderer, b->scene, &camera, NULL));
 
   /* Picking: the cube under the centre with its occurrence path, background in the corner,

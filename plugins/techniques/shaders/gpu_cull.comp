@@ -696,6 +696,8 @@ uint cluster_bit(uint id, uint k) {
 uint walk_drawn_low;
 uint walk_drawn_high;
 bool walk_drawn_recorded;
+// Whether a counting walk of the part found a cluster that passes the depth pyramid.
+bool walk_found_visible;
 
 // The command a walk is making: clusters that follow each other in the index buffer are drawn
 // by one command.
@@ -834,6 +836,7 @@ uint walk_clusters(CullEntry entry, uint id, Placement place, bool back_faces_ma
         if (dispatch.mode == MODE_NEWLY_VISIBLE) {
             bool visible = walk_passes_pyramid(box_center, box_axes, pyramid_tests, write);
             pyramid_tests += 1u;
+            walk_found_visible = walk_found_visible || visible;
             // Recorded by the counting walk, which every part passes through (the writing
             // one runs only when there is something left to draw).
             if (visible && !write && (dispatch.writes_visibility & RECORDS_CLUSTERS) != 0u) {
@@ -861,8 +864,10 @@ uint walk_clusters(CullEntry entry, uint id, Placement place, bool back_faces_ma
 // Appends the commands of the instance's clusters in the cut: at the host's threshold while
 // the pass's budget lasts, else at the part's coarsest (a part is never left out for want of
 // room). Phase 0 past the budget draws none of the part, and says so to phase 1, which then
-// draws all of it that is visible (the two phases must agree on what phase 0 drew).
-void append_clusters(CullEntry entry, uint id, Placement place, bool back_faces_may_go) {
+// draws all of it that is visible (the two phases must agree on what phase 0 drew). Returns
+// whether, in phase 1, a cluster of the part passed the depth pyramid.
+bool append_clusters(CullEntry entry, uint id, Placement place, bool back_faces_may_go) {
+    walk_found_visible = false;
     float threshold = dispatch.lod_error;
     uint skipped_word = id >> 5;
     uint skipped_bit = 1u << (id & 31u);
@@ -874,7 +879,7 @@ void append_clusters(CullEntry entry, uint id, Placement place, bool back_faces_
     if (asked + wanted > dispatch.cluster_budget) {
         if (dispatch.mode == MODE_LAST_VISIBLE) {
             atomicOr(phase0_skipped[skipped_word], skipped_bit);
-            return;
+            return false;
         }
         // Phase 0's clusters of this part are of the threshold's cut, the coarsest ones are
         // not: they are all drawn (over phase 0's, where the part had any there).
@@ -883,15 +888,16 @@ void append_clusters(CullEntry entry, uint id, Placement place, bool back_faces_
         wanted = walk_clusters(entry, id, place, back_faces_may_go, threshold, false, 0u,
                                phase0_drew_none);
     }
-    if (wanted == 0u) {
-        return;
+    if (wanted > 0u) {
+        uint slot = atomicAdd(counts[dispatch.pass_slot], wanted);
+        if (walk_drawn_recorded) {
+            write_recorded_clusters(entry, id, slot);
+        } else {
+            walk_clusters(entry, id, place, back_faces_may_go, threshold, true, slot,
+                          phase0_drew_none);
+        }
     }
-    uint slot = atomicAdd(counts[dispatch.pass_slot], wanted);
-    if (walk_drawn_recorded) {
-        write_recorded_clusters(entry, id, slot);
-    } else {
-        walk_clusters(entry, id, place, back_faces_may_go, threshold, true, slot, phase0_drew_none);
-    }
+    return walk_found_visible;
 }
 #endif
 
@@ -980,22 +986,35 @@ void main() {
         && (dispatch.face_route == FACES_ANY
             || back_faces_culled(entry.flags, rotation, center, radius, sections.y)
                 == (dispatch.face_route == FACES_CULLED));
+    bool records_part = dispatch.mode == MODE_NEWLY_VISIBLE
+        && (dispatch.writes_visibility & RECORDS_PARTS) != 0u;
+#ifdef CLUSTERS
+    // A part visible at the end of the last frame whose clusters this pass walks in phase 1:
+    // their tests decide what is drawn and whether the part is still visible (each cluster's
+    // box lies in the part's), so the part's own test would only repeat them.
+    bool clusters_decide = dispatch.mode == MODE_NEWLY_VISIBLE && taken && bit(id)
+        && dispatch.pass_kind != PASS_EDGES;
+#else
+    bool clusters_decide = false;
+#endif
     if (dispatch.mode == MODE_LAST_VISIBLE) {
         draw = visible && bit(id);
     } else if (dispatch.mode == MODE_NEWLY_VISIBLE) {
         // The pyramid test is the dear one: a dispatch that neither records the part's
         // visibility nor draws it leaves it out.
-        if (!taken && (dispatch.writes_visibility & RECORDS_PARTS) == 0u) {
+        if (!taken && !records_part) {
             return;
         }
-        visible = visible && passes_pyramid_box(box_center, box_axes);
+        if (!clusters_decide) {
+            visible = visible && passes_pyramid_box(box_center, box_axes);
+        }
         draw = visible && !bit(id);
 #ifdef CLUSTERS
         // Phase 0 drew only clusters, and only in the passes that fill the depth: every
         // visible part goes on to phase 1 (its clusters that phase 0 left out, its lines).
         draw = visible;
 #endif
-        if ((dispatch.writes_visibility & RECORDS_PARTS) != 0u && visible) {
+        if (records_part && visible && !clusters_decide) {
             atomicOr(now_visible[id >> 5], 1u << (id & 31u));
         }
     }
@@ -1024,7 +1043,10 @@ void main() {
             && (entry.flags & (INSTANCE_CLOSED | INSTANCE_INSIDE_OUT | INSTANCE_TRANSLUCENT))
                 == INSTANCE_CLOSED
             && !sections.y;
-        append_clusters(entry, id, place, back_faces_may_go);
+        bool some_cluster_visible = append_clusters(entry, id, place, back_faces_may_go);
+        if (records_part && clusters_decide && some_cluster_visible) {
+            atomicOr(now_visible[id >> 5], 1u << (id & 31u));
+        }
         return;
     }
 #endif

@@ -96,34 +96,26 @@ struct SurfacesRendering {
     phased: bool,
 }
 
-/// The frame's pass timer while its passes are recorded, with what each span it marks
-/// measured.
+/// The frame's pass timer while its passes are recorded.
 struct PassTimeline {
     /// The slot's timer, taken out of it until the recording ends (none without timestamps).
     timer: Option<GpuTimer>,
-    /// The name of each span marked so far.
-    span_names: Vec<&'static str>,
     /// The frame's command buffer.
     command_buffer: vk::CommandBuffer,
 }
 
 impl PassTimeline {
-    /// Ends the span `name` measured (from the last mark) with a timestamp, where the timer
-    /// has room.
+    /// Ends the span `name` (from the last mark) with a timestamp, where the timer has room.
     fn mark(&mut self, name: &'static str) {
         if let Some(timer) = &mut self.timer {
-            if timer.mark(self.command_buffer) {
-                self.span_names.push(name);
-            }
+            timer.mark(self.command_buffer, name);
         }
     }
 
     /// Ends the last span, `name`, with the frame's last timestamp.
     fn end(&mut self, name: &'static str) {
         if let Some(timer) = &mut self.timer {
-            if timer.end(self.command_buffer) {
-                self.span_names.push(name);
-            }
+            timer.end(self.command_buffer, name);
         }
     }
 }
@@ -297,7 +289,6 @@ impl Renderer {
         // Taken out of the slot while the passes are recorded, so that they can mark it.
         let mut timeline = PassTimeline {
             timer: slot.pass_timer.take(),
-            span_names: Vec::new(),
             command_buffer,
         };
         if let Some(timer) = &mut timeline.timer {
@@ -321,9 +312,7 @@ impl Renderer {
                 timeline.end("techniques after the passes");
                 Ok(())
             });
-        let slot = self.slots.current_mut();
-        slot.pass_timer = timeline.timer;
-        slot.span_names = timeline.span_names;
+        self.slots.current_mut().pass_timer = timeline.timer;
         recorded?;
         stats.cpu_record_us = record_start.elapsed().as_secs_f64() * 1e6;
         self.submit_recorded(stats, replay_key, plan.uploads_pending, previous_gpu_us)
@@ -404,6 +393,7 @@ impl Renderer {
         let submit_start = Instant::now();
         let slot = self.slots.current_mut();
         slot.commands.submit()?;
+        slot.timers_submitted();
         slot.submission_uploaded = uploaded;
         stats.cpu_submit_us = submit_start.elapsed().as_secs_f64() * 1e6;
         // Uploads are not part of the recording: they go in the prologue.
@@ -458,7 +448,7 @@ impl Renderer {
         (recorders.uploads)(self, command_buffer, 0, stats)?;
         let slot = self.slots.current_mut();
         if let Some(timer) = &mut slot.upload_timer {
-            timer.end(command_buffer);
+            timer.end(command_buffer, "uploads");
         }
         Ok(slot.commands.end_prologue(key)?)
     }
@@ -585,6 +575,7 @@ impl Renderer {
         let submit_start = Instant::now();
         let slot = self.slots.current_mut();
         slot.commands.resubmit()?;
+        slot.timers_submitted();
         slot.submission_uploaded = uploaded;
         let stats = FrameStats {
             cpu_record_us: (submit_start - start).as_secs_f64() * 1e6,

@@ -27,11 +27,9 @@ pub(super) struct FrameSlot {
     /// The frame uniforms, host-written when the frame is recorded or replayed (binding 0 of
     /// this slot's frame set).
     pub uniforms: Buffer,
-    /// The GPU time of the frame's pass (the main command buffer), and of each of its passes.
+    /// The GPU time of the frame's pass (the main command buffer), and of each of its passes
+    /// (a span each, named by `FramePass::name`, then the techniques' work after them).
     pub pass_timer: Option<GpuTimer>,
-    /// What the pass timer's spans measured in the slot's recording, in order: the frame's
-    /// passes (`FramePass::name`) and the techniques' work after them.
-    pub span_names: Vec<&'static str>,
     /// The GPU time of the frame's uploads (the prologue submitted ahead of the main buffer).
     pub upload_timer: Option<GpuTimer>,
     /// Whether the slot's last submission carried an upload prologue (its GPU time is the
@@ -55,11 +53,21 @@ impl FrameSlot {
                 MemoryLocation::CpuToGpu,
             )?,
             pass_timer: GpuTimer::new(device, &format!("frame {index} timer"), PASS_TIMESTAMPS)?,
-            span_names: Vec::new(),
             upload_timer: GpuTimer::new(device, &format!("frame {index} upload timer"), 2)?,
             submission_uploaded: false,
             replayable: None,
         })
+    }
+
+    /// Notes that the slot's recordings (its pass and its upload prologue) were submitted:
+    /// their timers read what those recordings write.
+    pub fn timers_submitted(&mut self) {
+        for timer in [&mut self.pass_timer, &mut self.upload_timer]
+            .into_iter()
+            .flatten()
+        {
+            timer.submitted();
+        }
     }
 
     /// The GPU time of the slot's last frame (its uploads and its pass), if timestamps work
@@ -81,13 +89,10 @@ impl FrameSlot {
     pub fn gpu_pass_times(&self) -> VkResult<Vec<(&'static str, f64)>> {
         let mut times = Vec::new();
         if let (Some(timer), true) = (&self.upload_timer, self.submission_uploaded) {
-            times.extend(timer.elapsed_us()?.map(|us| ("uploads", us)));
+            times.extend(timer.spans_us()?.unwrap_or_default());
         }
-        if let Some(spans) = match &self.pass_timer {
-            Some(timer) => timer.spans_us()?,
-            None => None,
-        } {
-            times.extend(self.span_names.iter().copied().zip(spans));
+        if let Some(timer) = &self.pass_timer {
+            times.extend(timer.spans_us()?.unwrap_or_default());
         }
         Ok(times)
     }

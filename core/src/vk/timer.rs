@@ -10,14 +10,20 @@ use super::device::Device;
 use super::error::{VkResult, VkResultExt};
 
 /// Timestamp queries that measure the GPU time of the commands between the first and the last
-/// written, and of each span between two written one after the other.
+/// written, and of each named span between two written one after the other.
 pub struct GpuTimer {
     device: Arc<Device>,
     pool: vk::QueryPool,
     /// Queries in the pool: the most timestamps one recording writes.
     capacity: u32,
-    /// Timestamps the last recording wrote (0 before one began).
-    written: u32,
+    /// The name of each span the recording being made (or the last one made) measures, in
+    /// order; it writes one timestamp more than it has spans.
+    recorded: Vec<&'static str>,
+    /// Whether a recording began since the timer was made (its start is written).
+    begun: bool,
+    /// The spans of the last submitted recording: those whose timestamps may be read. A
+    /// recording that failed, or was never submitted, writes none of its own.
+    submitted: Vec<&'static str>,
 }
 
 impl GpuTimer {
@@ -39,7 +45,9 @@ impl GpuTimer {
             device: Arc::clone(device),
             pool,
             capacity,
-            written: 0,
+            recorded: Vec::new(),
+            begun: false,
+            submitted: Vec::new(),
         }))
     }
 
@@ -57,62 +65,76 @@ impl GpuTimer {
                 0,
             );
         }
-        self.written = 1;
+        self.recorded.clear();
+        self.begun = true;
     }
 
-    /// Records a timestamp once the commands recorded so far have completed: the end of one
-    /// measured span and the start of the next. Returns whether there was room for it (the
-    /// last query is kept for [`GpuTimer::end`]).
-    pub fn mark(&mut self, command_buffer: vk::CommandBuffer) -> bool {
-        if self.written == 0 || self.written + 1 >= self.capacity {
+    /// Records a timestamp once the commands recorded so far have completed: the end of the
+    /// span `name` (from the last timestamp) and the start of the next. Returns whether there
+    /// was room for it (the last query is kept for [`GpuTimer::end`]).
+    pub fn mark(&mut self, command_buffer: vk::CommandBuffer, name: &'static str) -> bool {
+        if !self.begun || self.written() + 1 >= self.capacity {
             return false;
         }
-        self.write_after_all(command_buffer);
+        self.write_after_all(command_buffer, name);
         true
     }
 
-    /// Records the end timestamp; call after the measured commands. Returns whether it was
-    /// written (always, after [`GpuTimer::begin`]: marks leave room for it).
-    pub fn end(&mut self, command_buffer: vk::CommandBuffer) -> bool {
-        if self.written == 0 || self.written >= self.capacity {
+    /// Records the end timestamp, ending the span `name`; call after the measured commands.
+    /// Returns whether it was written (always, after [`GpuTimer::begin`]: marks leave room for
+    /// it).
+    pub fn end(&mut self, command_buffer: vk::CommandBuffer, name: &'static str) -> bool {
+        if !self.begun || self.written() >= self.capacity {
             return false;
         }
-        self.write_after_all(command_buffer);
+        self.write_after_all(command_buffer, name);
         true
     }
 
-    /// Writes the next query once every command before has completed.
-    fn write_after_all(&mut self, command_buffer: vk::CommandBuffer) {
-        // SAFETY: command_buffer is recording; begin reset every query of the pool, and
-        // `written` stays under the pool's capacity.
+    /// Notes that the recording was submitted: its timestamps are the ones read from now on.
+    pub fn submitted(&mut self) {
+        self.submitted.clone_from(&self.recorded);
+    }
+
+    /// Timestamps the recording writes: its start and the end of each span.
+    fn written(&self) -> u32 {
+        self.recorded.len() as u32 + 1
+    }
+
+    /// Writes the next query once every command before has completed, ending span `name`.
+    fn write_after_all(&mut self, command_buffer: vk::CommandBuffer, name: &'static str) {
+        // SAFETY: command_buffer is recording; begin reset every query of the pool, and the
+        // query written stays under the pool's capacity.
         unsafe {
             self.device.raw.cmd_write_timestamp2(
                 command_buffer,
                 vk::PipelineStageFlags2::BOTTOM_OF_PIPE,
                 self.pool,
-                self.written,
+                self.written(),
             )
         };
-        self.written += 1;
+        self.recorded.push(name);
     }
 
     /// The measured time in microseconds, from the start to the end, once the submission has
     /// completed.
     pub fn elapsed_us(&self) -> VkResult<Option<f64>> {
-        Ok(self.spans_us()?.map(|spans| spans.iter().sum::<f64>()))
+        Ok(self
+            .spans_us()?
+            .map(|spans| spans.iter().map(|(_, us)| us).sum::<f64>()))
     }
 
-    /// The time of each span between two timestamps written one after the other, in
-    /// microseconds, once the submission has completed (`None` before anything was measured).
-    pub fn spans_us(&self) -> VkResult<Option<Vec<f64>>> {
-        if self.written < 2 {
+    /// Each span of the last submitted recording, named, with its time in microseconds, once
+    /// that submission has completed (`None` before anything was measured).
+    pub fn spans_us(&self) -> VkResult<Option<Vec<(&'static str, f64)>>> {
+        if self.submitted.is_empty() {
             return Ok(None);
         }
-        let mut ticks = vec![0_u64; self.written as usize];
+        let mut ticks = vec![0_u64; self.submitted.len() + 1];
         // Lavapipe leaks an allocation when a later one in this call fails.
         super::fault::with_first_host_memory_fault_only(|| {
-            // SAFETY: the queries read were written by a completed submission (the caller
-            // waited).
+            // SAFETY: the queries read were written by the last submission, which completed
+            // (the caller waited).
             unsafe {
                 self.device.raw.get_query_pool_results(
                     self.pool,
@@ -130,11 +152,12 @@ impl GpuTimer {
             (1_u64 << valid_bits) - 1
         };
         Ok(Some(
-            ticks
-                .windows(2)
-                .map(|pair| {
+            self.submitted
+                .iter()
+                .zip(ticks.windows(2))
+                .map(|(name, pair)| {
                     let delta = (pair[1] & mask).wrapping_sub(pair[0] & mask) & mask;
-                    delta as f64 * period_ns / 1000.0
+                    (*name, delta as f64 * period_ns / 1000.0)
                 })
                 .collect(),
         ))

@@ -120,16 +120,18 @@ fn pass_name(name: &'static str) -> Result<*const c_char, Failure> {
     Ok(text.as_ptr())
 }
 
-/// Writes the GPU time of each pass of the renderer's last frame (rendered, or replayed) into
-/// `times`, in the order drawn, and their number into `*count`. Together they make that frame's
-/// `CadrFrameStats::gpu_us`. A device whose queue has no timestamps has none (`*count` 0).
+/// Writes the GPU time of each pass of the frame whose time the renderer's last
+/// `CadrFrameStats::gpu_us` reported (its last frame, rendered or replayed, with one frame in
+/// flight; the latest finished one with more) into `times`, in the order drawn, and their
+/// number into `*count`. Together they make that `gpu_us`. None (`*count` 0) while no frame's
+/// time is known, or where the device's queue has no timestamps.
 ///
 /// Returns `CADR_RESULT_OK`; `CADR_RESULT_BUFFER_TOO_SMALL` with `times` NULL or `capacity`
 /// under the number of passes, having written only that number into `*count` (call again
-/// with room for it); `CADR_RESULT_NULL_ARGUMENT` with `count` NULL; `CADR_RESULT_VULKAN` or
-/// a handle error. Ownership: the entries are the caller's; their names are cadr's (see
-/// `CadrGpuPassTime::name`). Thread-safety: as `cadr_renderer_render`; with frames in flight
-/// it waits for the last frame to finish.
+/// with room for it); `CADR_RESULT_NULL_ARGUMENT` with `count` NULL; or a handle error.
+/// Ownership: the entries are the caller's; their names are cadr's (see
+/// `CadrGpuPassTime::name`). Thread-safety: as `cadr_renderer_render`; it waits for no frame
+/// (the times were read when that frame's were).
 ///
 /// # Safety
 /// `times` is null or writable for `capacity` entries; `count` is null or writable.
@@ -143,7 +145,7 @@ pub unsafe extern "C" fn cadr_renderer_gpu_pass_times(
     guard(|| {
         crate::args::non_null(count, "count")?;
         let passes = with_renderer(renderer, |state| {
-            Ok(state.view.renderer().gpu_pass_times()?)
+            Ok(state.view.renderer().gpu_pass_times().to_vec())
         })?;
         // SAFETY: count is non-null and writable (the caller's contract).
         unsafe { deliver(count, "count", passes.len()) }?;

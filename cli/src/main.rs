@@ -385,13 +385,13 @@ fn render_frames(
 ) -> Result<(Vec<FrameStats>, Vec<PassTimes>), String> {
     let first = session.render(camera)?;
     if frames == 1 {
-        return Ok((vec![first], vec![session.gpu_pass_times()?]));
+        return Ok((vec![first], vec![session.gpu_pass_times()]));
     }
     let mut passes = Vec::with_capacity(frames);
     let samples = (0..frames)
         .map(|_| {
             let stats = session.render(camera)?;
-            passes.push(session.gpu_pass_times()?);
+            passes.push(session.gpu_pass_times());
             Ok(stats)
         })
         .collect::<Result<_, String>>()?;

@@ -219,16 +219,13 @@ impl TechniqueSession {
         Ok(FrameSample {
             stats,
             update_us,
-            gpu_passes: self.gpu_pass_times()?,
+            gpu_passes: self.gpu_pass_times(),
         })
     }
 
     /// The GPU time of each pass of the last frame (`Renderer::gpu_pass_times`).
-    pub fn gpu_pass_times(&self) -> Result<crate::PassTimes, String> {
-        self.view
-            .renderer()
-            .gpu_pass_times()
-            .map_err(|e| e.to_string())
+    pub fn gpu_pass_times(&self) -> crate::PassTimes {
+        self.view.renderer().gpu_pass_times().to_vec()
     }
 
     /// Draws one frame (the first uploads the GPU scene, with a spinner if it takes long).

@@ -61,6 +61,19 @@ fn orbit(combination: &Combination, frames_in_flight: u32) -> Run {
         }
         camera = Camera::orbit(&bounds, aspect, frame as f64 / 30.0, 1.3);
         let stats = view.render(&graph, &mut tree, &camera).unwrap();
+        // The pass times are those of the frame whose GPU time the stats report (with frames
+        // in flight, the latest finished one, none for the first), and add up to it.
+        let passes = view.renderer().gpu_pass_times();
+        match stats.gpu_us {
+            Some(frame_us) => {
+                let sum: f64 = passes.iter().map(|(_, us)| us).sum();
+                assert!(
+                    (sum - frame_us).abs() <= 1e-6 * frame_us + 0.01,
+                    "frame {frame}: {passes:?} against {frame_us} µs"
+                );
+            }
+            None => assert!(passes.is_empty(), "frame {frame}: {passes:?}"),
+        }
         run.gpu_us.push(stats.gpu_us);
         run.overlapped.push(stats.overlapped);
         if frame % 3 == 2 {

@@ -474,14 +474,15 @@ impl Renderer {
         Ok(self.slots.wait_all()?)
     }
 
-    /// The GPU time of each pass of the last frame (recorded or replayed), in microseconds,
-    /// in the order drawn: its uploads where it had any, the preparation with the GPU culler's
-    /// first phase, each culler phase and surfaces phase after, each pass over the picture, and
-    /// the techniques' work after the passes (`FramePass::name` names them). Waits for the frame
-    /// if it is still running; empty where the queue has no timestamps. Together they make
-    /// [`crate::render::FrameStats::gpu_us`] of that frame.
-    pub fn gpu_pass_times(&self) -> RenderResult<Vec<(&'static str, f64)>> {
-        Ok(self.slots.current().gpu_pass_times()?)
+    /// The GPU time of each pass of the frame the last [`crate::render::FrameStats::gpu_us`]
+    /// reported (the last frame with one frame in flight, the latest finished one with more),
+    /// in microseconds, in the order drawn: its uploads where it had any, the preparation with
+    /// the GPU culler's first phase, each culler phase and surfaces phase after, each pass over
+    /// the picture, and the techniques' work after the passes (`FramePass::name` names them).
+    /// Together they make that `gpu_us`. Empty while no time is known, and where the queue has
+    /// no timestamps. Read when the frame's time was: this waits for nothing.
+    pub fn gpu_pass_times(&self) -> &[(&'static str, f64)] {
+        self.slots.pass_times()
     }
 
     /// The color image of the last frame (in TRANSFER_SRC_OPTIMAL between frames), for

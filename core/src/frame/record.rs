@@ -555,12 +555,16 @@ impl Renderer {
 
     /// With one frame in flight, waits for the frame just submitted and returns its GPU time;
     /// with more, leaves it running and returns `previous_gpu_us`, the frame before's.
-    fn finish_or_keep_in_flight(&self, previous_gpu_us: Option<f64>) -> RenderResult<Option<f64>> {
+    fn finish_or_keep_in_flight(
+        &mut self,
+        previous_gpu_us: Option<f64>,
+    ) -> RenderResult<Option<f64>> {
         if self.slots.in_flight() > 1 {
             return Ok(previous_gpu_us);
         }
         self.finish()?;
-        Ok(self.slots.current().gpu_time()?)
+        let current = self.slots.current_index();
+        Ok(self.slots.read_gpu_time(current)?)
     }
 
     /// Submits the recorded frame again, after the prologue with this frame's uploads when

@@ -70,31 +70,22 @@ impl FrameSlot {
         }
     }
 
-    /// The GPU time of the slot's last frame (its uploads and its pass), if timestamps work
-    /// and the frame has finished.
-    pub fn gpu_time(&self) -> VkResult<Option<f64>> {
-        let pass = match &self.pass_timer {
-            Some(timer) => timer.elapsed_us()?,
-            None => None,
-        };
-        let uploads = match (&self.upload_timer, self.submission_uploaded) {
-            (Some(timer), true) => timer.elapsed_us()?,
-            _ => None,
-        };
-        Ok(pass.map(|pass| pass + uploads.unwrap_or(0.0)))
-    }
-
     /// The GPU time of each pass of the slot's last frame, named, in the order drawn (the
-    /// uploads first where the frame had any), if timestamps work and the frame has finished.
-    pub fn gpu_pass_times(&self) -> VkResult<Vec<(&'static str, f64)>> {
-        let mut times = Vec::new();
-        if let (Some(timer), true) = (&self.upload_timer, self.submission_uploaded) {
-            times.extend(timer.spans_us()?.unwrap_or_default());
-        }
-        if let Some(timer) = &self.pass_timer {
-            times.extend(timer.spans_us()?.unwrap_or_default());
-        }
-        Ok(times)
+    /// uploads first where the frame had any), or `None` where timestamps do not work. The
+    /// frame must have finished.
+    fn gpu_times(&self) -> VkResult<Option<Vec<(&'static str, f64)>>> {
+        let Some(passes) = (match &self.pass_timer {
+            Some(timer) => timer.spans_us()?,
+            None => None,
+        }) else {
+            return Ok(None);
+        };
+        let mut times = match (&self.upload_timer, self.submission_uploaded) {
+            (Some(timer), true) => timer.spans_us()?.unwrap_or_default(),
+            _ => Vec::new(),
+        };
+        times.extend(passes);
+        Ok(Some(times))
     }
 }
 
@@ -132,6 +123,9 @@ pub(super) struct FrameSlots {
     last_frame_key: Option<u64>,
     /// Whether the frame being recorded began after every earlier frame had finished.
     earlier_frames_finished: bool,
+    /// The GPU time of each pass of the latest frame whose time was read (the frame the last
+    /// `FrameStats::gpu_us` reports; empty while none is known).
+    pass_times: Vec<(&'static str, f64)>,
 }
 
 impl FrameSlots {
@@ -147,6 +141,7 @@ impl FrameSlots {
             last_recorded: None,
             last_frame_key: None,
             earlier_frames_finished: true,
+            pass_times: Vec::new(),
         })
     }
 
@@ -201,11 +196,26 @@ impl FrameSlots {
         // that last used this slot.
         let finished = if overlaps { slot } else { previous };
         let gpu_us = if self.in_flight > 1 {
-            self.slots[finished].gpu_time()?
+            self.read_gpu_time(finished)?
         } else {
             None
         };
         Ok((slot, gpu_us))
+    }
+
+    /// Reads the GPU time of slot `slot`'s last frame, which has finished: kept pass by pass
+    /// ([`FrameSlots::pass_times`]) and returned whole. A read that fails keeps the times
+    /// read before.
+    pub fn read_gpu_time(&mut self, slot: usize) -> VkResult<Option<f64>> {
+        let times = self.slots[slot].gpu_times()?.unwrap_or_default();
+        let total = (!times.is_empty()).then(|| times.iter().map(|(_, us)| us).sum());
+        self.pass_times = times;
+        Ok(total)
+    }
+
+    /// The GPU time of each pass of the latest frame whose time was read.
+    pub fn pass_times(&self) -> &[(&'static str, f64)] {
+        &self.pass_times
     }
 
     /// Whether the frame being recorded began after every earlier frame had finished.

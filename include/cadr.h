@@ -2218,9 +2218,9 @@ void cadr_timings_reset(void);
 // number into `*count`. Together they make that `gpu_us`. None (`*count` 0) while no frame's
 // time is known, or where the device's queue has no timestamps.
 //
-// Returns `CADR_RESULT_OK`; `CADR_RESULT_BUFFER_TOO_SMALL` with `times` NULL or `capacity`
-// under the number of passes, having written only that number into `*count` (call again
-// with room for it); `CADR_RESULT_NULL_ARGUMENT` with `count` NULL; or a handle error.
+// Returns `CADR_RESULT_OK` (with no passes, whatever `times` and `capacity`);
+// `CADR_RESULT_BUFFER_TOO_SMALL` with `times` NULL or `capacity` under the number of passes,
+// having written only that number into `*count` (call again with room for it); `CADR_RESULT_NULL_ARGUMENT` with `count` NULL; or a handle error.
 // Ownership: the entries are the caller's; their names are cadr's (see
 // `CadrGpuPassTime::name`). Thread-safety: as `cadr_renderer_render`; it waits for no frame
 // (the times were read when that frame's were).

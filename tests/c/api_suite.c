@@ -825,6 +825,12 @@ static void test_renderer(CadrContext context, struct Built *b) {
   OK(cadr_renderer_create(context, W, H, &renderer));
   OK(cadr_renderer_size(renderer, &width, &height));
   CHECK(width == W && height == H);
+  {
+    /* No frame yet: no pass times, and no buffer needed for none. */
+    size_t none = 99;
+    OK(cadr_renderer_gpu_pass_times(renderer, NULL, 0, &none));
+    CHECK(none == 0);
+  }
   EXPECT(cadr_renderer_size(renderer, NULL, &height), CADR_RESULT_NULL_ARGUMENT);
 
   /* The fastest combination the plugins offer is chosen by default. */

@@ -116,14 +116,6 @@ impl GpuTimer {
         self.recorded.push(name);
     }
 
-    /// The measured time in microseconds, from the start to the end, once the submission has
-    /// completed.
-    pub fn elapsed_us(&self) -> VkResult<Option<f64>> {
-        Ok(self
-            .spans_us()?
-            .map(|spans| spans.iter().map(|(_, us)| us).sum::<f64>()))
-    }
-
     /// Each span of the last submitted recording, named, with its time in microseconds, once
     /// that submission has completed (`None` before anything was measured).
     pub fn spans_us(&self) -> VkResult<Option<Vec<(&'static str, f64)>>> {

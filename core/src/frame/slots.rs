@@ -9,7 +9,9 @@ use std::sync::Arc;
 use crate::error::RenderResult;
 use crate::render::{FrameStats, FrameUniforms};
 use crate::vk::raw as vk;
-use crate::vk::{Buffer, CommandContext, Device, GpuTimer, MemoryLocation, VkResult};
+use crate::vk::{
+    Buffer, CommandContext, Device, GpuTimer, MemoryLocation, VkResult, MOST_TIMESTAMPS,
+};
 
 /// The most frames a renderer lets the GPU work on while it records the next.
 pub const MAX_FRAMES_IN_FLIGHT: u32 = 3;
@@ -52,7 +54,10 @@ impl FrameSlot {
                 vk::BufferUsageFlags::UNIFORM_BUFFER,
                 MemoryLocation::CpuToGpu,
             )?,
-            pass_timer: GpuTimer::new(device, &format!("frame {index} timer"), PASS_TIMESTAMPS)?,
+            // As many timestamps as a timer holds: more than a frame has passes (the
+            // preparation, two per culler phase, the passes over the picture, the pick readback,
+            // the depth handed over, the techniques' work after them).
+            pass_timer: GpuTimer::new(device, &format!("frame {index} timer"), MOST_TIMESTAMPS)?,
             upload_timer: GpuTimer::new(device, &format!("frame {index} upload timer"), 2)?,
             submission_uploaded: false,
             replayable: None,
@@ -70,29 +75,24 @@ impl FrameSlot {
         }
     }
 
-    /// The GPU time of each pass of the slot's last frame, named, in the order drawn (the
-    /// uploads first where the frame had any), or `None` where timestamps do not work. The
-    /// frame must have finished.
-    fn gpu_times(&self) -> VkResult<Option<Vec<(&'static str, f64)>>> {
-        let Some(passes) = (match &self.pass_timer {
-            Some(timer) => timer.spans_us()?,
-            None => None,
-        }) else {
-            return Ok(None);
+    /// Writes the GPU time of each pass of the slot's last frame into `times`, named, in the
+    /// order drawn (the uploads first where the frame had any); none where timestamps do not
+    /// work. The frame must have finished.
+    fn gpu_times(&self, times: &mut Vec<(&'static str, f64)>) -> VkResult<()> {
+        times.clear();
+        if let (Some(timer), true) = (&self.upload_timer, self.submission_uploaded) {
+            timer.spans_us(times)?;
+        }
+        let measured = match &self.pass_timer {
+            Some(timer) => timer.spans_us(times)?,
+            None => false,
         };
-        let mut times = match (&self.upload_timer, self.submission_uploaded) {
-            (Some(timer), true) => timer.spans_us()?.unwrap_or_default(),
-            _ => Vec::new(),
-        };
-        times.extend(passes);
-        Ok(Some(times))
+        if !measured {
+            times.clear();
+        }
+        Ok(())
     }
 }
-
-/// Timestamps a frame's pass timer holds: its start and one after each pass, more than a frame
-/// has passes (the preparation, two per culler phase, the passes over the picture, the pick
-/// readback, the depth handed over and the techniques' work after them).
-const PASS_TIMESTAMPS: u32 = 32;
 
 /// What decides how long a frame waits for earlier ones (see [`FrameSlots::begin_frame`]).
 #[derive(Clone, Copy, Debug)]
@@ -126,6 +126,9 @@ pub(super) struct FrameSlots {
     /// The GPU time of each pass of the latest frame whose time was read (the frame the last
     /// `FrameStats::gpu_us` reports; empty while none is known).
     pass_times: Vec<(&'static str, f64)>,
+    /// Where the next read goes, swapped with `pass_times` once it succeeded: reads allocate
+    /// nothing after the first frames.
+    pass_times_read: Vec<(&'static str, f64)>,
 }
 
 impl FrameSlots {
@@ -142,6 +145,7 @@ impl FrameSlots {
             last_frame_key: None,
             earlier_frames_finished: true,
             pass_times: Vec::new(),
+            pass_times_read: Vec::new(),
         })
     }
 
@@ -207,10 +211,10 @@ impl FrameSlots {
     /// ([`FrameSlots::pass_times`]) and returned whole. A read that fails keeps the times
     /// read before.
     pub fn read_gpu_time(&mut self, slot: usize) -> VkResult<Option<f64>> {
-        let times = self.slots[slot].gpu_times()?.unwrap_or_default();
-        let total = (!times.is_empty()).then(|| times.iter().map(|(_, us)| us).sum());
-        self.pass_times = times;
-        Ok(total)
+        self.slots[slot].gpu_times(&mut self.pass_times_read)?;
+        std::mem::swap(&mut self.pass_times, &mut self.pass_times_read);
+        let times = &self.pass_times;
+        Ok((!times.is_empty()).then(|| times.iter().map(|(_, us)| us).sum()))
     }
 
     /// The GPU time of each pass of the latest frame whose time was read.

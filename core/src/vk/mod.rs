@@ -62,7 +62,7 @@ pub use sampler::Sampler;
 pub use shader::{create_unowned_shader_module, ShaderModule, ShaderStage};
 pub use sharing::Shared;
 pub use swapchain::{PresentMode, PresentOutcome, Swapchain};
-pub use timer::GpuTimer;
+pub use timer::{GpuTimer, MOST_TIMESTAMPS};
 
 pub use ash::vk as raw;
 pub use cadr_vk_ext::device_generated_commands as dgc;

@@ -9,6 +9,9 @@ use ash::vk;
 use super::device::Device;
 use super::error::{VkResult, VkResultExt};
 
+/// The most timestamps a timer holds (its pool's queries; the ticks are read onto the stack).
+pub const MOST_TIMESTAMPS: u32 = 32;
+
 /// Timestamp queries that measure the GPU time of the commands between the first and the last
 /// written, and of each named span between two written one after the other.
 pub struct GpuTimer {
@@ -27,13 +30,13 @@ pub struct GpuTimer {
 }
 
 impl GpuTimer {
-    /// Creates the query pool for `capacity` timestamps (at least 2: the start and the end);
-    /// `None` when the queue has no timestamps.
+    /// Creates the query pool for `capacity` timestamps (from 2, the start and the end, to
+    /// [`MOST_TIMESTAMPS`]); `None` when the queue has no timestamps.
     pub fn new(device: &Arc<Device>, name: &str, capacity: u32) -> VkResult<Option<Self>> {
         if !device.capabilities().timestamps {
             return Ok(None);
         }
-        let capacity = capacity.max(2);
+        let capacity = capacity.clamp(2, MOST_TIMESTAMPS);
         let info = vk::QueryPoolCreateInfo::default()
             .query_type(vk::QueryType::TIMESTAMP)
             .query_count(capacity);
@@ -116,13 +119,16 @@ impl GpuTimer {
         self.recorded.push(name);
     }
 
-    /// Each span of the last submitted recording, named, with its time in microseconds, once
-    /// that submission has completed (`None` before anything was measured).
-    pub fn spans_us(&self) -> VkResult<Option<Vec<(&'static str, f64)>>> {
+    /// Appends each span of the last submitted recording to `spans`, named, with its time in
+    /// microseconds, once that submission has completed; returns whether there were any
+    /// (none before anything was measured). Called every frame: it allocates nothing once
+    /// `spans` has room.
+    pub fn spans_us(&self, spans: &mut Vec<(&'static str, f64)>) -> VkResult<bool> {
         if self.submitted.is_empty() {
-            return Ok(None);
+            return Ok(false);
         }
-        let mut ticks = vec![0_u64; self.submitted.len() + 1];
+        let mut all_ticks = [0_u64; MOST_TIMESTAMPS as usize];
+        let ticks = &mut all_ticks[..self.submitted.len() + 1];
         // Lavapipe leaks an allocation when a later one in this call fails.
         super::fault::with_first_host_memory_fault_only(|| {
             // SAFETY: the queries read were written by the last submission, which completed
@@ -131,7 +137,7 @@ impl GpuTimer {
                 self.device.raw.get_query_pool_results(
                     self.pool,
                     0,
-                    &mut ticks,
+                    ticks,
                     vk::QueryResultFlags::TYPE_64 | vk::QueryResultFlags::WAIT,
                 )
             }
@@ -143,16 +149,16 @@ impl GpuTimer {
         } else {
             (1_u64 << valid_bits) - 1
         };
-        Ok(Some(
+        spans.extend(
             self.submitted
                 .iter()
                 .zip(ticks.windows(2))
                 .map(|(name, pair)| {
                     let delta = (pair[1] & mask).wrapping_sub(pair[0] & mask) & mask;
                     (*name, delta as f64 * period_ns / 1000.0)
-                })
-                .collect(),
-        ))
+                }),
+        );
+        Ok(true)
     }
 }
 

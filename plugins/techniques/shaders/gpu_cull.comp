@@ -978,10 +978,11 @@ void main() {
         count = entry.wire_index_count;
     }
     // Whether the pass takes the part: its filter decides what it draws, not what is visible
-    // (the visibility bit below is recorded whatever the pass takes).
+    // (the visibility bit below is recorded whatever the pass takes). Asked only of a part in
+    // view: one out of view is neither drawn nor recorded visible.
     bool excluded = dispatch.exclude_mask != 0u
         && (entry.flags & dispatch.exclude_mask) == dispatch.exclude_value;
-    bool taken = count != 0u && (entry.flags & dispatch.filter_mask) == dispatch.filter_value
+    bool taken = visible && count != 0u && (entry.flags & dispatch.filter_mask) == dispatch.filter_value
         && !excluded && (dispatch.filter_section_cut == 0u || sections.y)
         && (dispatch.face_route == FACES_ANY
             || back_faces_culled(entry.flags, rotation, center, radius, sections.y)

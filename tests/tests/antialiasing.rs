@@ -177,6 +177,7 @@ fn every_kind_of_technique_draws_with_msaa_like_the_built_in_one() {
         .chain([occlusion])
         .collect();
     let mut checked = HashSet::new();
+    let mut refused_mesh_shading = 0;
     for (i, mode) in ShadeMode::ALL.into_iter().enumerate() {
         f.view
             .techniques_mut()
@@ -193,6 +194,21 @@ fn every_kind_of_technique_draws_with_msaa_like_the_built_in_one() {
         {
             f.view.techniques_mut().select(combination).unwrap();
             f.view.techniques_mut().set_shade_mode(mode).unwrap();
+            if f.view.techniques().mesh_shading() && f.device.adapter().name.starts_with("llvmpipe")
+            {
+                // llvmpipe draws multisampled mesh-shader triangles in the wrong place: the
+                // frame is refused with the reason, and the next one draws again.
+                f.tree.update(&mut f.graph);
+                let error = f.view.render(&f.graph, &mut f.tree, &f.camera).unwrap_err();
+                assert!(
+                    error
+                        .to_string()
+                        .contains("mesh-shader triangles in the wrong place"),
+                    "{combination}: {error}"
+                );
+                refused_mesh_shading += 1;
+                continue;
+            }
             let image = render(&mut f);
             let difference = compare(&image, &reference).unwrap();
             assert!(
@@ -204,6 +220,7 @@ fn every_kind_of_technique_draws_with_msaa_like_the_built_in_one() {
         }
     }
     assert!(checked.len() > 10, "{} combinations checked", checked.len());
+    println!("mesh shading refused with MSAA: {refused_mesh_shading} times");
     f.assert_no_validation_errors();
 }
 

@@ -54,11 +54,21 @@ fn unsupported(device: &Device, what: &str) -> VkError {
 
 impl Pipeline {
     /// A mesh-shader pipeline as `desc` describes it; refused where the device lacks
-    /// [`Capabilities::mesh_shader`].
+    /// [`Capabilities::mesh_shader`], and multisampled on llvmpipe, which draws such triangles
+    /// in the wrong place.
     pub fn mesh(device: &Arc<Device>, desc: &MeshPipelineDesc<'_>) -> VkResult<Self> {
         let Capabilities { mesh_shader, .. } = device.capabilities();
         if !mesh_shader {
             return Err(unsupported(device, &format!("pipeline '{}'", desc.name)));
+        }
+        if desc.samples > 1 && device.adapter().name.starts_with("llvmpipe") {
+            return Err(VkError::Unsupported {
+                device: device.adapter().name.clone(),
+                reason: format!(
+                    "pipeline '{}' with {} samples per pixel: llvmpipe rasterizes multisampled mesh-shader triangles in the wrong place (Mesa 25.0: one quad of a quarter of the target covers all of it), so mesh shading draws without MSAA there; turn MSAA off or choose a submission that draws with the vertex pipeline (individual-indirect-count)",
+                    desc.name, desc.samples
+                ),
+            });
         }
         let (constant_entries, constant_bytes) = specialization_constants(desc.mesh_constants);
         let specialization = vk::SpecializationInfo::default()

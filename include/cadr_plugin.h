@@ -20,7 +20,7 @@
 #define CADR_PLUGIN_ABI_MAJOR 1
 
 // Minor version of this ABI: additions that older readers may ignore.
-#define CADR_PLUGIN_ABI_MINOR 23
+#define CADR_PLUGIN_ABI_MINOR 24
 
 // `(major << 16) | minor`, what [`CadrPluginVersionFn`] returns.
 #define CADR_PLUGIN_ABI_VERSION ((CADR_PLUGIN_ABI_MAJOR << 16) | CADR_PLUGIN_ABI_MINOR)
@@ -90,7 +90,7 @@ typedef uint32_t (*CadrPluginVersionFn)(void);
 // [`CADR_EXTENSION_CLUSTER_CULL`], ABI 1.15 [`CADR_EXTENSION_FRAME_SLOT`], ABI 1.18
 // [`CADR_EXTENSION_BACK_FACE_PASSES`], ABI 1.19 [`CADR_EXTENSION_SHARED_FACE_STREAMS`], ABI
 // 1.20 the scene's cluster and part boxes, ABI 1.21 [`CADR_EXTENSION_SCENE_STREAMING`], ABI
-// 1.22 [`CADR_EXTENSION_PARAMETER_BLOCKS`].
+// 1.22 [`CADR_EXTENSION_PARAMETER_BLOCKS`], ABI 1.24 [`CADR_EXTENSION_EMPTY_COMMAND_TAILS`].
 typedef struct CadrExtension {
   // Size of the whole extension struct, this header included.
   uint32_t size;
@@ -827,7 +827,8 @@ typedef struct CadrGpuCullContext {
   // [`CadrClusterCull`] where the scene has clusters; since ABI 1.18 [`CadrBackFacePasses`]
   // where the culler announces [`CADR_TRAIT_ROUTES_BACK_FACES`]; since ABI 1.19
   // [`CadrSharedFaceStreams`] beside it where the submission announces
-  // [`CADR_TRAIT_SWITCHES_PIPELINES`].
+  // [`CADR_TRAIT_SWITCHES_PIPELINES`]; since ABI 1.24 [`CadrEmptyCommandTails`] where the
+  // submission announces [`CADR_TRAIT_EMPTY_COMMAND_TAILS`].
   const struct CadrExtension *extensions;
 } CadrGpuCullContext;
 
@@ -1490,6 +1491,19 @@ typedef struct CadrMeshTaskPush {
 // culler is a GPU culler and the device has mesh shaders and buffer device addresses.
 #define CADR_TRAIT_MESH_SHADING (1 << 15)
 
+// Since ABI 1.24. GPU-written commands drawn by their capacity, without their count (for
+// devices without `drawIndirectCount`, such as SwiftShader), one announcement per kind:
+// - a submission that draws GPU-written commands ([`CADR_TRAIT_DRAWS_GPU_COMMANDS`]) promises
+//   that it draws each pass's [`CadrGpuDraws::max_draws`] commands with
+//   `vkCmdDrawIndexedIndirect` and never reads the count (`individual-mdi` does);
+// - a GPU culler promises to honour [`CadrEmptyCommandTails`].
+//
+// Where the active submission announces it and the culler culls on the GPU, the host chains
+// [`CadrEmptyCommandTails`] on every [`CadrGpuCullContext`] of the frame; a GPU culler that
+// does not announce it is refused with such a submission (what lies past its counts would be
+// drawn).
+#define CADR_TRAIT_EMPTY_COMMAND_TAILS (1 << 16)
+
 // Device-local; written by transfers or shaders.
 #define CADR_MEMORY_GPU_ONLY 0
 
@@ -1572,6 +1586,10 @@ typedef struct CadrMeshTaskPush {
 // Since ABI 1.22: the kind of [`CadrParameterBlocks`], chained on [`CadrSceneView::extensions`]
 // of the views the host gives to a frame's `prepare`, `record` and GPU culler's `record`.
 #define CADR_EXTENSION_PARAMETER_BLOCKS 9
+
+// Since ABI 1.24: the kind of [`CadrEmptyCommandTails`], chained on
+// [`CadrGpuCullContext::extensions`].
+#define CADR_EXTENSION_EMPTY_COMMAND_TAILS 10
 
 // Every instance the pass's filter keeps (what passes without a route draw).
 #define CADR_FACES_ANY 0

@@ -49,7 +49,8 @@ fn text(output: &Output) -> String {
 
 /// The display modes and the features drawn over them, each in one render, then technique
 /// plugins of each kind that SwiftShader runs (it lacks `drawIndirectCount` and
-/// `VK_EXT_multi_draw`), which draw the solid picture again.
+/// `VK_EXT_multi_draw`: a GPU culler's commands are drawn there by their capacity,
+/// `individual-mdi`), which draw the solid picture again.
 const CASES: &[(&str, &[&str])] = &[
     ("solid", &[]),
     ("edges with MSAA", &["--display", "edges", "--msaa", "4"]),
@@ -86,6 +87,19 @@ const CASES: &[(&str, &[&str])] = &[
             "groups-mdi-replay",
             "--cull",
             "frustum",
+        ],
+    ),
+    (
+        "arena / ssbo-index / individual-mdi / gpu-clusters",
+        &[
+            "--vertex",
+            "arena",
+            "--params",
+            "ssbo-index",
+            "--submit",
+            "individual-mdi",
+            "--cull",
+            "gpu-clusters",
         ],
     ),
     (

@@ -356,7 +356,7 @@ fn gpu_cullers_need_a_submission_that_draws_their_commands() {
                     ..combination(culler)
                 },
                 // The culler is what is refused here: the partners suit each other.
-                "draws the GPU-written commands (individual-indirect-count, dgc)",
+                "draws the GPU-written commands (individual-indirect-count, dgc, individual-mdi)",
             ),
             (
                 Combination {

@@ -372,17 +372,26 @@ fn colour_frames_hand_their_depth_to_the_host() {
     assert!(picked.iter().filter(|d| d.is_some()).count() > 20);
     assert!(picked.iter().filter(|d| d.is_none()).count() > 10);
     f.view.renderer_mut().set_depth_to_host(true).unwrap();
-    let occlusion = cadr_tests::scene_wide("individual-indirect-count", "gpu-occlusion");
+    // SwiftShader lacks drawIndirectCount: there the culler's commands are drawn by their
+    // capacity.
+    let submission = if f
+        .view
+        .renderer()
+        .device()
+        .capabilities()
+        .draw_indirect_count
+    {
+        "individual-indirect-count"
+    } else {
+        "individual-mdi"
+    };
+    let occlusion = cadr_tests::scene_wide(submission, "gpu-occlusion");
     let msaa = f.view.renderer().device().sample_counts().contains(&4);
     for case in ["plain", "ambient occlusion", "occlusion culler", "msaa"] {
         match case {
             "ambient occlusion" => f.view.renderer_mut().set_ssao(true).unwrap(),
             "occlusion culler" => {
                 f.view.renderer_mut().set_ssao(false).unwrap();
-                // SwiftShader lacks drawIndirectCount, which the GPU cullers need.
-                if f.view.techniques().check(&occlusion).is_err() {
-                    continue;
-                }
                 f.view.techniques_mut().select(&occlusion).unwrap();
             }
             "msaa" if msaa => f.view.renderer_mut().set_msaa(4).unwrap(),

@@ -26,6 +26,9 @@ pub(crate) struct GpuCuller<'a> {
     pub(crate) draws: Vec<abi::CadrGpuDraws>,
     /// The level-of-detail threshold in pixels, for cluster cullers.
     lod_error: f32,
+    /// Whether the submission draws the commands by their capacity, so that what lies past the
+    /// counts must draw nothing (plugin ABI 1.24, `CadrEmptyCommandTails`).
+    empty_command_tails: bool,
 }
 
 /// Bytes of a [`abi::CadrGpuCullView`] as shaders read it (std140: it has no padding).
@@ -117,6 +120,7 @@ impl<'a> GpuCuller<'a> {
             phases,
             draws: vec![abi::CadrGpuDraws::default(); pass_count],
             lod_error: techniques.lod_error(),
+            empty_command_tails: techniques.empty_command_tails(),
         }))
     }
 
@@ -176,6 +180,13 @@ impl<'a> GpuCuller<'a> {
             pass_count: passes.len() as u32,
             back_faces_hidden: filters.back_faces_hidden.as_ptr(),
         };
+        let empty_tails = abi::CadrEmptyCommandTails {
+            header: abi::CadrExtension {
+                size: std::mem::size_of::<abi::CadrEmptyCommandTails>() as u32,
+                kind: abi::CADR_EXTENSION_EMPTY_COMMAND_TAILS,
+                next: &clusters.header,
+            },
+        };
         let context = abi::CadrGpuCullContext {
             size: std::mem::size_of::<abi::CadrGpuCullContext>() as u32,
             phase,
@@ -200,7 +211,11 @@ impl<'a> GpuCuller<'a> {
             section_plane_count: gpu_view.section[0],
             section_planes: gpu_view.section_planes,
             pass_exclusions: filters.exclusions.as_ptr(),
-            extensions: &clusters.header,
+            extensions: if self.empty_command_tails {
+                &empty_tails.header
+            } else {
+                &clusters.header
+            },
         };
         let mut message = Message::new();
         // SAFETY: a live instance; the context and the arrays it points at are valid for the

@@ -106,8 +106,8 @@ fn first_library_size() -> usize {
     size_through!(abi::CadrPluginLibrary, techniques)
 }
 
-/// The extension kinds this host knows (`CADR_EXTENSION_*`): those of ABI 1.14, 1.15 and 1.18
-/// to 1.22.
+/// The extension kinds this host knows (`CADR_EXTENSION_*`): those of ABI 1.14, 1.15, 1.18 to
+/// 1.22 and 1.24.
 const KNOWN_EXTENSIONS: &[abi::CadrExtensionKind] = &[
     abi::CADR_EXTENSION_SCENE_CLUSTERS,
     abi::CADR_EXTENSION_CLUSTER_CULL,
@@ -118,6 +118,7 @@ const KNOWN_EXTENSIONS: &[abi::CadrExtensionKind] = &[
     abi::CADR_EXTENSION_SCENE_PART_BOXES,
     abi::CADR_EXTENSION_SCENE_STREAMING,
     abi::CADR_EXTENSION_PARAMETER_BLOCKS,
+    abi::CADR_EXTENSION_EMPTY_COMMAND_TAILS,
 ];
 
 /// Refuses a technique that requires an extension this host does not know, naming it.
@@ -220,6 +221,29 @@ unsafe impl Send for TechniqueEntry {}
 unsafe impl Sync for TechniqueEntry {}
 
 impl TechniqueEntry {
+    /// An entry of ABI 1.`minor` with no functions, described only by its traits: what
+    /// combination checks read.
+    #[cfg(test)]
+    pub(crate) fn described(
+        kind: TechniqueKind,
+        name: &str,
+        minor: u32,
+        (provides, needs): (u64, u64),
+    ) -> Self {
+        Self {
+            kind,
+            name: name.into(),
+            description: String::new(),
+            library: PathBuf::from("described.so"),
+            abi_version: (abi::CADR_PLUGIN_ABI_MAJOR, minor),
+            required_features: 0,
+            provides,
+            needs,
+            support: Ok(()),
+            vtable: VtableCopy(Box::new([])),
+        }
+    }
+
     /// Whether it is one of the built-in techniques (no plugin library needed).
     pub fn is_built_in(&self) -> bool {
         self.library.as_os_str() == BUILT_IN_LIBRARY
@@ -723,8 +747,8 @@ mod tests {
 
     #[test]
     fn every_extension_kind_of_this_abi_is_known() {
-        // Kinds are numbered from 1 without gaps; the newest is ABI 1.22's.
-        let newest = abi::CADR_EXTENSION_PARAMETER_BLOCKS;
+        // Kinds are numbered from 1 without gaps; the newest is ABI 1.24's.
+        let newest = abi::CADR_EXTENSION_EMPTY_COMMAND_TAILS;
         for kind in 1..=newest {
             assert!(KNOWN_EXTENSIONS.contains(&kind), "kind {kind}");
         }

@@ -109,7 +109,7 @@ fn trait_name(bit: u64) -> &'static str {
         }
         abi::CADR_TRAIT_SECONDARY_COMMAND_BUFFERS => "secondary command buffers",
         abi::CADR_TRAIT_DRAWS_GPU_COMMANDS => {
-            "a submission that draws the GPU-written commands (individual-indirect-count, dgc)"
+            "a submission that draws the GPU-written commands (individual-indirect-count, dgc, individual-mdi)"
         }
         abi::CADR_TRAIT_READS_HOST_MATRICES => "a technique that reads world matrices on the host",
         _ => "an unknown trait",
@@ -194,6 +194,30 @@ fn mesh_shading_check(entries: &[&TechniqueEntry]) -> Result<(), String> {
     }
 }
 
+/// Whether a submission that draws GPU-written commands by their capacity (plugin ABI 1.24,
+/// `CADR_TRAIT_EMPTY_COMMAND_TAILS`) has a culler that leaves what lies past its counts empty:
+/// a GPU culler (one that needs a submission drawing GPU-written commands) must announce it.
+fn empty_command_tails_check(entries: &[&TechniqueEntry]) -> Result<(), String> {
+    let of_kind = |kind| entries.iter().find(|e| e.kind == kind);
+    let Some(submission) = of_kind(TechniqueKind::Submission)
+        .filter(|e| e.announces(abi::CADR_TRAIT_EMPTY_COMMAND_TAILS, 24))
+    else {
+        return Ok(());
+    };
+    match of_kind(TechniqueKind::Culling) {
+        Some(culler)
+            if culler.needs & abi::CADR_TRAIT_DRAWS_GPU_COMMANDS != 0
+                && !culler.announces(abi::CADR_TRAIT_EMPTY_COMMAND_TAILS, 24) =>
+        {
+            Err(format!(
+                "submission '{}' draws the GPU-written commands without their count, so it needs a GPU culler that leaves the commands past its counts empty, which culling '{}' does not announce",
+                submission.name, culler.name
+            ))
+        }
+        _ => Ok(()),
+    }
+}
+
 /// Why a combination cannot work, or `Ok` when it can.
 pub fn check_combination(entries: &[&TechniqueEntry]) -> Result<(), String> {
     for entry in entries {
@@ -207,6 +231,7 @@ pub fn check_combination(entries: &[&TechniqueEntry]) -> Result<(), String> {
     }
     // Before the traits each needs: it names the paths and cullers that would do.
     mesh_shading_check(entries)?;
+    empty_command_tails_check(entries)?;
     let blocks_offer = parameter_blocks_offer(entries);
     for entry in entries {
         let others: u64 = entries
@@ -622,6 +647,18 @@ impl Techniques {
             .is_ok_and(|active| active.entry.announces(abi::CADR_TRAIT_MESH_SHADING, 23))
     }
 
+    /// Whether the active submission draws GPU-written commands by their capacity, without
+    /// their count (`CADR_TRAIT_EMPTY_COMMAND_TAILS`, libraries of ABI 1.24 or later): the host
+    /// then asks the GPU culler to leave what lies past its counts empty (the combination check
+    /// made sure it announces that it does).
+    pub fn empty_command_tails(&self) -> bool {
+        self.get(TechniqueKind::Submission).is_ok_and(|active| {
+            active
+                .entry
+                .announces(abi::CADR_TRAIT_EMPTY_COMMAND_TAILS, 24)
+        })
+    }
+
     /// Whether `active` announces `trait_bit` (from a library of ABI `since` or later) as this
     /// combination uses it: a parameter path whose blocks the GPU culler writes (see
     /// [`Self::parameter_blocks`]) pushes nothing, so it puts no values in commands, reads none
@@ -1029,4 +1066,67 @@ fn describe_method(active: &Active) -> RenderResult<TransparencyMethod> {
         fragment_snippet: text(raw.fragment_snippet, "fragment snippet")?,
         merge_snippet: text(raw.merge_snippet, "merge snippet")?,
     })
+}
+
+#[cfg(test)]
+mod tests {
+    #![allow(clippy::unwrap_used)] // Test code: a failed unwrap is a failed test.
+    use super::*;
+
+    const GPU_DRAWS: u64 = abi::CADR_TRAIT_DRAWS_GPU_COMMANDS;
+    const TAILS: u64 = abi::CADR_TRAIT_EMPTY_COMMAND_TAILS;
+
+    /// A vertex path, a parameter path and a transparency method that suit any submission and
+    /// culler, with `submission` and `culler`.
+    fn combination(submission: &TechniqueEntry, culler: &TechniqueEntry) -> Result<(), String> {
+        let wide = abi::CADR_TRAIT_SCENE_SHARES_BINDING | abi::CADR_TRAIT_GEOMETRY_SHARES_BINDING;
+        let vertex = TechniqueEntry::described(TechniqueKind::Vertex, "v", 24, (wide, 0));
+        let parameters = TechniqueEntry::described(
+            TechniqueKind::Parameters,
+            "p",
+            24,
+            (abi::CADR_TRAIT_PARAMETERS_FROM_INSTANCE_INDEX, 0),
+        );
+        let transparency = TechniqueEntry::described(TechniqueKind::Transparency, "t", 24, (0, 0));
+        check_combination(&[&vertex, &parameters, submission, culler, &transparency])
+    }
+
+    #[test]
+    fn commands_drawn_by_their_capacity_need_a_culler_that_empties_the_tails() {
+        let by_capacity = TechniqueEntry::described(
+            TechniqueKind::Submission,
+            "by-capacity",
+            24,
+            (GPU_DRAWS | TAILS, 0),
+        );
+        let by_count =
+            TechniqueEntry::described(TechniqueKind::Submission, "by-count", 24, (GPU_DRAWS, 0));
+        let culler = |minor, provides| {
+            TechniqueEntry::described(TechniqueKind::Culling, "gpu", minor, (provides, GPU_DRAWS))
+        };
+        let cpu_culler = TechniqueEntry::described(TechniqueKind::Culling, "cpu", 24, (0, 0));
+        combination(&by_capacity, &culler(24, TAILS)).unwrap();
+        combination(&by_count, &culler(24, 0)).unwrap();
+        // A CPU culler writes no commands: the submission draws its own.
+        combination(&by_capacity, &cpu_culler).unwrap();
+        // A culler that does not announce it, or announces the bit from before ABI 1.24 (when
+        // it meant nothing), would leave last frame's commands past the count.
+        for refused in [culler(24, 0), culler(23, TAILS)] {
+            let why = combination(&by_capacity, &refused).unwrap_err();
+            assert!(
+                why.contains("submission 'by-capacity'")
+                    && why.contains("culling 'gpu'")
+                    && why.contains("past its counts empty"),
+                "{why}"
+            );
+        }
+        // A submission of ABI 1.23 with the bit draws by the count, as then.
+        let older = TechniqueEntry::described(
+            TechniqueKind::Submission,
+            "older",
+            23,
+            (GPU_DRAWS | TAILS, 0),
+        );
+        combination(&older, &culler(24, 0)).unwrap();
+    }
 }

@@ -56,7 +56,7 @@ use std::ffi::{c_char, c_void};
 /// Major version of this ABI: a library built for another major version is refused.
 pub const CADR_PLUGIN_ABI_MAJOR: u32 = 1;
 /// Minor version of this ABI: additions that older readers may ignore.
-pub const CADR_PLUGIN_ABI_MINOR: u32 = 23;
+pub const CADR_PLUGIN_ABI_MINOR: u32 = 24;
 /// `(major << 16) | minor`, what [`CadrPluginVersionFn`] returns.
 pub const CADR_PLUGIN_ABI_VERSION: u32 = (CADR_PLUGIN_ABI_MAJOR << 16) | CADR_PLUGIN_ABI_MINOR;
 
@@ -252,6 +252,18 @@ pub const CADR_TRAIT_PARAMETER_BLOCKS: CadrTraitBits = 1 << 14;
 /// [`CadrMeshTaskPush`]. The host refuses such a submission unless both paths announce it, the
 /// culler is a GPU culler and the device has mesh shaders and buffer device addresses.
 pub const CADR_TRAIT_MESH_SHADING: CadrTraitBits = 1 << 15;
+/// Since ABI 1.24. GPU-written commands drawn by their capacity, without their count (for
+/// devices without `drawIndirectCount`, such as SwiftShader), one announcement per kind:
+/// - a submission that draws GPU-written commands ([`CADR_TRAIT_DRAWS_GPU_COMMANDS`]) promises
+///   that it draws each pass's [`CadrGpuDraws::max_draws`] commands with
+///   `vkCmdDrawIndexedIndirect` and never reads the count (`individual-mdi` does);
+/// - a GPU culler promises to honour [`CadrEmptyCommandTails`].
+///
+/// Where the active submission announces it and the culler culls on the GPU, the host chains
+/// [`CadrEmptyCommandTails`] on every [`CadrGpuCullContext`] of the frame; a GPU culler that
+/// does not announce it is refused with such a submission (what lies past its counts would be
+/// drawn).
+pub const CADR_TRAIT_EMPTY_COMMAND_TAILS: CadrTraitBits = 1 << 16;
 
 /// Since ABI 1.23: where a mesh-shading submission ([`CADR_TRAIT_MESH_SHADING`]) pushes its
 /// [`CadrMeshTaskPush`], for the task and mesh stages (the vertex stage too, as the range is one).
@@ -343,7 +355,7 @@ pub type CadrExtensionKind = u32;
 /// [`CADR_EXTENSION_CLUSTER_CULL`], ABI 1.15 [`CADR_EXTENSION_FRAME_SLOT`], ABI 1.18
 /// [`CADR_EXTENSION_BACK_FACE_PASSES`], ABI 1.19 [`CADR_EXTENSION_SHARED_FACE_STREAMS`], ABI
 /// 1.20 the scene's cluster and part boxes, ABI 1.21 [`CADR_EXTENSION_SCENE_STREAMING`], ABI
-/// 1.22 [`CADR_EXTENSION_PARAMETER_BLOCKS`].
+/// 1.22 [`CADR_EXTENSION_PARAMETER_BLOCKS`], ABI 1.24 [`CADR_EXTENSION_EMPTY_COMMAND_TAILS`].
 #[repr(C)]
 #[derive(Clone, Copy, Debug)]
 pub struct CadrExtension {
@@ -887,6 +899,9 @@ pub const CADR_EXTENSION_SCENE_STREAMING: CadrExtensionKind = 8;
 /// Since ABI 1.22: the kind of [`CadrParameterBlocks`], chained on [`CadrSceneView::extensions`]
 /// of the views the host gives to a frame's `prepare`, `record` and GPU culler's `record`.
 pub const CADR_EXTENSION_PARAMETER_BLOCKS: CadrExtensionKind = 9;
+/// Since ABI 1.24: the kind of [`CadrEmptyCommandTails`], chained on
+/// [`CadrGpuCullContext::extensions`].
+pub const CADR_EXTENSION_EMPTY_COMMAND_TAILS: CadrExtensionKind = 10;
 
 /// Since ABI 1.15 ([`CADR_EXTENSION_FRAME_SLOT`]): which of the host's frames in flight is being
 /// recorded. The host lets the GPU work on up to `slot_count` frames while it records the next;
@@ -1235,6 +1250,19 @@ pub struct CadrBackFacePasses {
 #[derive(Clone, Copy, Debug)]
 pub struct CadrSharedFaceStreams {
     /// `kind` = [`CADR_EXTENSION_SHARED_FACE_STREAMS`]; the kind says it all.
+    pub header: CadrExtension,
+}
+
+/// Since ABI 1.24 ([`CADR_EXTENSION_EMPTY_COMMAND_TAILS`], chained on the cull context of every
+/// phase where the active submission announces [`CADR_TRAIT_EMPTY_COMMAND_TAILS`]): the
+/// submission draws all [`CadrGpuDraws::max_draws`] commands of each pass, whatever the count
+/// says. A culler that honours it leaves every command past a pass's count drawing nothing
+/// (`instanceCount` 0; `vkCmdFillBuffer` with zeros does) by the time the pass's draws read
+/// it, in every phase, and still writes the counts. Owned by the host, valid for the call.
+#[repr(C)]
+#[derive(Clone, Copy, Debug)]
+pub struct CadrEmptyCommandTails {
+    /// `kind` = [`CADR_EXTENSION_EMPTY_COMMAND_TAILS`]; the kind says it all.
     pub header: CadrExtension,
 }
 
@@ -1794,7 +1822,8 @@ pub struct CadrGpuCullContext {
     /// [`CadrClusterCull`] where the scene has clusters; since ABI 1.18 [`CadrBackFacePasses`]
     /// where the culler announces [`CADR_TRAIT_ROUTES_BACK_FACES`]; since ABI 1.19
     /// [`CadrSharedFaceStreams`] beside it where the submission announces
-    /// [`CADR_TRAIT_SWITCHES_PIPELINES`].
+    /// [`CADR_TRAIT_SWITCHES_PIPELINES`]; since ABI 1.24 [`CadrEmptyCommandTails`] where the
+    /// submission announces [`CADR_TRAIT_EMPTY_COMMAND_TAILS`].
     pub extensions: *const CadrExtension,
 }
 

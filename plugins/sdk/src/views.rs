@@ -711,6 +711,17 @@ impl<'a> GpuCull<'a> {
         shared.is_some()
     }
 
+    /// Whether the host asks that every command past each pass's count draw nothing, as the
+    /// submission draws the commands by their capacity ([`abi::CadrEmptyCommandTails`], since
+    /// ABI 1.24).
+    pub fn empties_command_tails(&self) -> bool {
+        // SAFETY: the host's chain (or null) is valid for the call; an extension of this kind
+        // is a `CadrEmptyCommandTails`.
+        let tails: Option<&abi::CadrEmptyCommandTails> =
+            unsafe { extension(self.extensions(), abi::CADR_EXTENSION_EMPTY_COMMAND_TAILS) };
+        tails.is_some()
+    }
+
     /// The sub-pixel threshold (projected diameter in pixels below which a part is culled);
     /// 0, culling nothing for its size, from a host older than ABI 1.5.
     pub fn min_pixels(&self) -> f32 {

@@ -171,16 +171,18 @@ technique_library! {
     ]
 }
 
-/// What GPU culling needs of the device: indirect draws with a count and `firstInstance`.
-const GPU_CULLING_FEATURES: u64 = abi::CADR_FEATURE_MULTI_DRAW_INDIRECT
-    | abi::CADR_FEATURE_DRAW_INDIRECT_FIRST_INSTANCE
-    | abi::CADR_FEATURE_DRAW_INDIRECT_COUNT;
-/// What GPU culling offers: replay, frame slots, passes split by the parts' back faces, and
-/// parameter blocks written before the commands.
+/// What GPU culling needs of the device: indirect draws of many commands with `firstInstance`
+/// (the count the GPU writes is read by `drawIndirectCount` where the submission uses it; a
+/// device without it draws the commands by their capacity, `individual-mdi`).
+const GPU_CULLING_FEATURES: u64 =
+    abi::CADR_FEATURE_MULTI_DRAW_INDIRECT | abi::CADR_FEATURE_DRAW_INDIRECT_FIRST_INSTANCE;
+/// What GPU culling offers: replay, frame slots, passes split by the parts' back faces,
+/// parameter blocks written before the commands, and empty commands past the counts.
 const GPU_CULLING_PROVIDES: u64 = REPLAYABLE
     | KEEPS_FRAME_SLOTS
     | abi::CADR_TRAIT_ROUTES_BACK_FACES
-    | abi::CADR_TRAIT_PARAMETER_BLOCKS;
+    | abi::CADR_TRAIT_PARAMETER_BLOCKS
+    | abi::CADR_TRAIT_EMPTY_COMMAND_TAILS;
 /// What GPU culling needs of its partners: a submission that draws its commands, absolute
 /// ranges in one scene-wide binding, and parameters found from the instance index.
 const GPU_CULLING_NEEDS: u64 = abi::CADR_TRAIT_DRAWS_GPU_COMMANDS

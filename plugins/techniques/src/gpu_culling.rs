@@ -32,7 +32,10 @@
 //!   from the scene's matrices, the material values, flags and instance id from its records.
 //!
 //! The submission draws the commands with `vkCmdDrawIndexedIndirectCount` (a submission
-//! providing `CADR_TRAIT_DRAWS_GPU_COMMANDS`); commands use absolute ranges and `firstInstance`
+//! providing `CADR_TRAIT_DRAWS_GPU_COMMANDS`), or, where it draws them by their capacity
+//! without the count (ABI 1.24, `CadrEmptyCommandTails`: `individual-mdi`, for devices without
+//! drawIndirectCount such as SwiftShader), with `vkCmdDrawIndexedIndirect` over commands this
+//! culler leaves empty past the count; commands use absolute ranges and `firstInstance`
 //! = instance id, so the vertex path must bind the whole scene once and the parameter path
 //! find parameters from the instance index.
 
@@ -1135,9 +1138,12 @@ impl<const OCCLUSION: bool, const CLUSTERS: bool> GpuCuller<OCCLUSION, CLUSTERS>
         }
         clear(&self.gpu, command_buffer, &self.counts);
         // Where device-generated commands may draw them (the `dgc` submission runs a pass
-        // in chunks that each read the pass's count), what lies past the count must draw
-        // nothing: commands of zero instances.
-        if self.gpu.features & abi::CADR_FEATURE_DEVICE_GENERATED_COMMANDS_EXT != 0 {
+        // in chunks that each read the pass's count), or where the submission draws every
+        // command of the capacity (`individual-mdi`, on devices without drawIndirectCount),
+        // what lies past the count must draw nothing: commands of zero instances.
+        if self.gpu.features & abi::CADR_FEATURE_DEVICE_GENERATED_COMMANDS_EXT != 0
+            || cull.empties_command_tails()
+        {
             if let Some(commands) = &self.commands.buffer {
                 clear(&self.gpu, command_buffer, commands);
             }

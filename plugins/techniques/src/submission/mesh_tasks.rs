@@ -13,7 +13,7 @@ use cadr_plugin_sdk::abi;
 use cadr_plugin_sdk::vk::{self, Handle};
 use cadr_plugin_sdk::{grown_capacity, Gpu, HostBuffer, Record, Submission, Technique};
 
-use super::record::{bind_pass, record_gpu_pass};
+use super::record::{bind_pass, record_gpu_pass, GpuDrawCount};
 
 /// Bytes of one `VkDrawMeshTasksIndirectCommandEXT`.
 const TASK_DRAW_BYTES: u64 = 12;
@@ -158,7 +158,7 @@ impl Submission for MeshTasks {
         self.reserve_task_draws(most)?;
         for (pass, source) in record.passes().iter().zip(draws) {
             if !is_mesh_pass(pass) {
-                record_gpu_pass(&self.gpu, record, pass, source);
+                record_gpu_pass(&self.gpu, record, pass, source, GpuDrawCount::Read);
             } else if source.commands != 0 && source.max_draws != 0 {
                 self.record_mesh_pass(record, pass, source, indices)?;
             }

@@ -425,10 +425,12 @@ impl<const S: u8, const A: u8, const M: u8> Submission for Submit<S, A, M> {
             return self.record_generated(record);
         }
         if let Some(draws) = record.gpu_draws() {
-            if api(A) != Api::IndirectCount || mode(M) != Mode::Inline {
-                return Err("this submission cannot draw GPU-written commands".into());
-            }
-            record::record_gpu_draws(&self.gpu, record, draws);
+            let by = match (api(A), mode(M)) {
+                (Api::IndirectCount, Mode::Inline) => record::GpuDrawCount::Read,
+                (Api::Indirect, Mode::Inline) => record::GpuDrawCount::Capacity,
+                _ => return Err("this submission cannot draw GPU-written commands".into()),
+            };
+            record::record_gpu_draws(&self.gpu, record, draws, by);
             return Ok(());
         }
         // A host that skipped prepare still gets the right lists.
@@ -544,8 +546,8 @@ technique_library! {
         },
         submission Submit<INDIVIDUAL, INDIRECT, INLINE> {
             name: "individual-mdi",
-            description: "Every part as an indirect command; one vkCmdDrawIndexedIndirect per pass (the seeds' indexedmdi).",
-            features: MDI_FEATURES, provides: REPLAYABLE | KEEPS_FRAME_SLOTS, needs: GPU_DRAWS,
+            description: "Every part as an indirect command; one vkCmdDrawIndexedIndirect per pass (the seeds' indexedmdi); with a gpu- culler, one per pass over the whole room the culler has for commands, those past its count empty (for devices without drawIndirectCount, such as SwiftShader).",
+            features: MDI_FEATURES, provides: abi::CADR_TRAIT_DRAWS_GPU_COMMANDS | abi::CADR_TRAIT_EMPTY_COMMAND_TAILS | REPLAYABLE | KEEPS_FRAME_SLOTS, needs: GPU_DRAWS,
         },
         submission Submit<JOIN, INDIRECT, INLINE> {
             name: "join-mdi",

@@ -267,39 +267,66 @@ pub fn bind_pass(
     (bind, vertex_state, parameter_state)
 }
 
+/// How many of a pass's GPU-written commands a draw runs.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum GpuDrawCount {
+    /// The count the culler wrote (`vkCmdDrawIndexedIndirectCount`).
+    Read,
+    /// Every command of the culler's room (`vkCmdDrawIndexedIndirect` of `max_draws`), those
+    /// past the count empty: the host asked the culler so (`CadrEmptyCommandTails`, ABI 1.24).
+    Capacity,
+}
+
 /// Records each pass's draws from the commands a GPU culler wrote (`draws`, one per pass):
-/// the pass's pipeline and bindings, then one `vkCmdDrawIndexedIndirectCount`.
-pub fn record_gpu_draws(gpu: &Gpu, record: &Record<'_>, draws: &[abi::CadrGpuDraws]) {
+/// the pass's pipeline and bindings, then one indirect draw, `by` the count or the capacity.
+pub fn record_gpu_draws(
+    gpu: &Gpu,
+    record: &Record<'_>,
+    draws: &[abi::CadrGpuDraws],
+    by: GpuDrawCount,
+) {
     for (pass, source) in record.passes().iter().zip(draws) {
-        record_gpu_pass(gpu, record, pass, source);
+        record_gpu_pass(gpu, record, pass, source, by);
     }
 }
 
-/// Binds `pass` and draws the commands of `source` with one `vkCmdDrawIndexedIndirectCount`
-/// (nothing where the culler wrote no commands for it).
+/// Binds `pass` and draws the commands of `source` with one indirect draw, `by` the count or
+/// the capacity (nothing where the culler wrote no commands for it).
 pub fn record_gpu_pass(
     gpu: &Gpu,
     record: &Record<'_>,
     pass: &abi::CadrPass,
     source: &abi::CadrGpuDraws,
+    by: GpuDrawCount,
 ) {
     if source.commands == 0 || source.max_draws == 0 {
         return;
     }
     let command_buffer = record.command_buffer();
     bind_pass(gpu, record, pass, (command_buffer, record.stats()));
+    let commands = vk::Buffer::from_raw(source.commands);
     // SAFETY: recording; the culler's buffers hold `max_draws` commands of `stride`
-    // bytes and the count, written before rendering began.
+    // bytes and the count, written before rendering began (with `Capacity`, the commands past
+    // the count hold zero instances).
     unsafe {
-        gpu.device.cmd_draw_indexed_indirect_count(
-            command_buffer,
-            vk::Buffer::from_raw(source.commands),
-            source.commands_offset,
-            vk::Buffer::from_raw(source.count_buffer),
-            source.count_offset,
-            source.max_draws,
-            source.stride,
-        )
+        match by {
+            GpuDrawCount::Read => gpu.device.cmd_draw_indexed_indirect_count(
+                command_buffer,
+                commands,
+                source.commands_offset,
+                vk::Buffer::from_raw(source.count_buffer),
+                source.count_offset,
+                source.max_draws,
+                source.stride,
+            ),
+            GpuDrawCount::Capacity => gpu.device.cmd_draw_indexed_indirect(
+                command_buffer,
+                commands,
+                source.commands_offset,
+                source.max_draws,
+                source.stride,
+            ),
+        }
     };
     record.count(|s| s.draw_calls += 1);
 }

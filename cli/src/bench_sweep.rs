@@ -105,14 +105,20 @@ pub(crate) fn run_sweep(bench: &Bench, args: &BenchArgs) -> Result<serde_json::V
 }
 
 /// The culling rows of the detail sweep: per-part occlusion, then clusters at full detail and
-/// at each `--lod-error`.
-fn detail_combinations() -> Vec<Combination> {
+/// at each `--lod-error`; their commands drawn with the count the GPU wrote, or by their
+/// capacity on a device without `drawIndirectCount` (`has_indirect_count` false).
+fn detail_combinations(has_indirect_count: bool) -> Vec<Combination> {
+    let submission = if has_indirect_count {
+        "individual-indirect-count"
+    } else {
+        "individual-mdi"
+    };
     ["gpu-occlusion", "gpu-clusters"]
         .iter()
         .map(|culling| Combination {
             vertex: "arena".into(),
             parameters: "ssbo-index".into(),
-            submission: "individual-indirect-count".into(),
+            submission: submission.into(),
             culling: (*culling).into(),
             ..Combination::built_in()
         })
@@ -126,7 +132,7 @@ pub(crate) fn run_detail_sweep(
     args: &BenchArgs,
     details: &[u32],
 ) -> Result<serde_json::Value, String> {
-    let combinations = detail_combinations();
+    let combinations = detail_combinations(bench.device.capabilities().draw_indirect_count);
     let scenes = details.iter().map(|&detail| {
         let name = format!("gen:fine:units={},detail={detail}", args.sweep_units);
         (name.clone(), name)

@@ -289,3 +289,42 @@ fn mesh_workgroups_on_mesa_25_draw_what_indexed_draws_draw_on_mesa_22_3() {
     assert!(log.contains("VK_EXT_mesh_shader"), "{log}");
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+/// The detail sweep of `cadr bench` on SwiftShader, which lacks `drawIndirectCount`: its GPU
+/// culling rows draw through `individual-mdi` there, with validation on, and count what the GPU
+/// rasterised.
+#[test]
+fn the_detail_sweep_draws_its_gpu_culling_rows_by_capacity_on_swiftshader() {
+    let exe = Path::new(env!("CARGO_BIN_EXE_cadr"));
+    let dir = std::env::temp_dir().join(format!("cadr-swiftshader-sweep-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let json_path = dir.join("sweep.json");
+    let output = Command::new(exe)
+        .args(["bench", "--sweep-detail", "1", "--sweep-units", "1"])
+        .args(["--frames", "1", "--size", "64x48", "--validation", "--json"])
+        .arg(&json_path)
+        .env("CADR_PLUGIN_PATH", exe.parent().unwrap().join("deps"))
+        .env("VK_ICD_FILENAMES", swiftshader_manifest())
+        .env_remove("CADR_DEVICE")
+        .output()
+        .expect("run cadr bench");
+    let log = text(&output);
+    assert!(output.status.success(), "{log}");
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&json_path).unwrap()).unwrap();
+    assert!(
+        json["device"].as_str().unwrap().contains("SwiftShader"),
+        "{json}"
+    );
+    let rows = json["detail_sweep"][0]["rows"].as_array().unwrap();
+    assert!(rows.len() >= 2, "{json}");
+    for row in rows {
+        let technique = row["technique"].as_str().unwrap();
+        assert!(
+            technique.contains("individual-mdi") && technique.contains("gpu-"),
+            "{row}"
+        );
+        assert!(row["triangles_rasterized"].as_u64().unwrap() > 0, "{row}");
+    }
+    std::fs::remove_dir_all(&dir).unwrap();
+}

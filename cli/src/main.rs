@@ -198,6 +198,13 @@ fn devices() -> Result<(), String> {
         let yes_no = |has: bool| if has { "yes" } else { "no" };
         let mesh_shaders = yes_no(adapter.mesh_shader);
         let generated_commands = yes_no(adapter.device_generated_commands);
+        // How a GPU culler's commands are drawn: as many as its count says, or all its room
+        // (`individual-mdi`) where the device cannot read a count.
+        let gpu_culled_draws = if adapter.draw_indirect_count {
+            "by their count"
+        } else {
+            "by their capacity (no drawIndirectCount: --submit individual-mdi)"
+        };
         // How an OpenGL host gets the frames (`cadr_renderer_create_for_export`,
         // `cadr_renderer_export_semaphores`).
         let frames_to_opengl = match (adapter.external_memory_fd, adapter.external_semaphore_fd) {
@@ -208,7 +215,8 @@ fn devices() -> Result<(), String> {
         println!(
             "{}: {} ({:?}, Vulkan {}.{}, {:.1} GB of video memory, MSAA {}, textures {textures}, \
              hidden silhouettes {hidden_silhouettes}, mesh shaders {mesh_shaders}, \
-             device-generated commands {generated_commands}, frames to OpenGL {frames_to_opengl})",
+             device-generated commands {generated_commands}, GPU-culled draws \
+             {gpu_culled_draws}, frames to OpenGL {frames_to_opengl})",
             adapter.index,
             adapter.name,
             adapter.device_type,

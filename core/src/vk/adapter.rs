@@ -41,6 +41,10 @@ pub struct Adapter {
     /// buffer device addresses, which it needs); see
     /// [`super::Capabilities::device_generated_commands`].
     pub device_generated_commands: bool,
+    /// Whether it has `drawIndirectCount` (Vulkan 1.2), with which a GPU culler's commands are
+    /// drawn as many as its count says; without it they are drawn by their capacity
+    /// (`individual-mdi`). See [`super::Capabilities::draw_indirect_count`].
+    pub draw_indirect_count: bool,
     /// Whether it has `VK_KHR_external_memory_fd`; see
     /// [`super::Capabilities::external_memory_fd`].
     pub external_memory_fd: bool,
@@ -159,6 +163,9 @@ pub fn enumerate(instance: &Instance) -> VkResult<Vec<Adapter>> {
             geometry_shader: features.geometry_shader == vk::TRUE,
             mesh_shader,
             device_generated_commands: generated_commands,
+            draw_indirect_count: super::fault::without_host_memory_faults(|| {
+                has_draw_indirect_count(instance, physical)
+            }),
             external_memory_fd: super::fault::without_host_memory_faults(|| {
                 has_extension(instance, physical, ash::khr::external_memory_fd::NAME)
             }),
@@ -171,6 +178,19 @@ pub fn enumerate(instance: &Instance) -> VkResult<Vec<Adapter>> {
         });
     }
     Ok(adapters)
+}
+
+/// Whether `physical` has Vulkan 1.2's `drawIndirectCount`.
+fn has_draw_indirect_count(instance: &Instance, physical: vk::PhysicalDevice) -> bool {
+    let mut vulkan12 = vk::PhysicalDeviceVulkan12Features::default();
+    let mut features = vk::PhysicalDeviceFeatures2::default().push_next(&mut vulkan12);
+    // SAFETY: physical comes from this instance, a Vulkan 1.3 one; the chain lives for the call.
+    unsafe {
+        instance
+            .raw
+            .get_physical_device_features2(physical, &mut features)
+    };
+    vulkan12.draw_indirect_count == vk::TRUE
 }
 
 /// Bytes of `physical`'s largest device-local memory heap (0 where it has none).

@@ -485,6 +485,18 @@ pub fn scene_wide(submission: &str, culling: &str) -> Combination {
     }
 }
 
+/// The scene-wide combination with `culling` whose submission draws a GPU culler's commands on
+/// `device`: by the count the GPU wrote (`individual-indirect-count`), or by their capacity
+/// (`individual-mdi`) where the device lacks `drawIndirectCount`, as SwiftShader does.
+pub fn gpu_culled(device: &Device, culling: &str) -> Combination {
+    let submission = if device.capabilities().draw_indirect_count {
+        "individual-indirect-count"
+    } else {
+        "individual-mdi"
+    };
+    scene_wide(submission, culling)
+}
+
 /// Every combination of the registry's techniques, valid or not, kind by kind in registry order.
 pub fn all_combinations(registry: &PluginRegistry) -> Vec<Combination> {
     let names = |kind| {

@@ -18,7 +18,7 @@ use cadr_core::tree::SceneTree;
 use cadr_core::view::View;
 use cadr_core::vk::Device;
 use cadr_tests::images::{compare, is_background, SAME_PICTURE};
-use cadr_tests::{assert_no_validation_errors, plugin_registry, scene_wide, test_device};
+use cadr_tests::{assert_no_validation_errors, gpu_culled, plugin_registry, test_device};
 
 const SIZE: (u32, u32) = (240, 180);
 
@@ -68,7 +68,7 @@ impl Drawing {
     }
 
     fn choose(&mut self, culler: &str, lod_error: f32) {
-        let combination = scene_wide("individual-indirect-count", culler);
+        let combination = gpu_culled(self.view.renderer().device(), culler);
         self.view.techniques_mut().select(&combination).unwrap();
         self.view.techniques_mut().set_lod_error(lod_error).unwrap();
     }

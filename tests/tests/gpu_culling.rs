@@ -15,13 +15,15 @@ use cadr_core::scene::{flatten, Aabb, Geometry, Material, MeshRef, Node, Scene};
 use cadr_core::technique::{Combination, Techniques};
 use cadr_core::tree::SceneTree;
 use cadr_core::view::View;
+use cadr_core::vk::Device;
 use cadr_tests::images::{compare, SAME_PICTURE};
-use cadr_tests::{assert_no_validation_errors, plugin_registry, scene_wide, test_device};
+use cadr_tests::{assert_no_validation_errors, gpu_culled, plugin_registry, test_device};
 
 const SIZE: (u32, u32) = (200, 150);
 
-fn combination(culling: &str) -> Combination {
-    scene_wide("individual-indirect-count", culling)
+/// `culling` with the partners that draw its commands on `device`.
+fn combination(device: &Device, culling: &str) -> Combination {
+    gpu_culled(device, culling)
 }
 
 /// Renders `cameras` with each culling technique in turn through one view; per culler, the
@@ -39,7 +41,9 @@ fn render_frames(
     let results = cullers
         .iter()
         .map(|culler| {
-            view.techniques_mut().select(&combination(culler)).unwrap();
+            view.techniques_mut()
+                .select(&combination(&device, culler))
+                .unwrap();
             cameras
                 .iter()
                 .map(|camera| {
@@ -348,12 +352,12 @@ fn gpu_cullers_need_a_submission_that_draws_their_commands() {
     let view = View::new(&device, Arc::clone(&registry), SIZE.0, SIZE.1).unwrap();
     let techniques: &Techniques = view.techniques();
     for culler in ["gpu-frustum", "gpu-occlusion"] {
-        techniques.check(&combination(culler)).unwrap();
+        techniques.check(&combination(&device, culler)).unwrap();
         let refusals = [
             (
                 Combination {
                     submission: "groups-mdi".into(),
-                    ..combination(culler)
+                    ..combination(&device, culler)
                 },
                 // The culler is what is refused here: the partners suit each other.
                 "draws the GPU-written commands (individual-indirect-count, dgc, individual-mdi)",
@@ -361,14 +365,14 @@ fn gpu_cullers_need_a_submission_that_draws_their_commands() {
             (
                 Combination {
                     vertex: "per-geometry".into(),
-                    ..combination(culler)
+                    ..combination(&device, culler)
                 },
                 "binds the whole scene",
             ),
             (
                 Combination {
                     parameters: "push".into(),
-                    ..combination(culler)
+                    ..combination(&device, culler)
                 },
                 "instance index",
             ),
@@ -411,12 +415,16 @@ fn sub_pixel_culling_drops_small_parts_only_when_asked() {
     let mut tree = SceneTree::build(&mut graph);
     let registry = plugin_registry(&device);
     let mut view = View::new(&device, Arc::clone(&registry), SIZE.0, SIZE.1).unwrap();
-    view.techniques_mut().select(&combination("none")).unwrap();
+    view.techniques_mut()
+        .select(&combination(&device, "none"))
+        .unwrap();
     let all = view.render(&graph, &mut tree, &far).unwrap().triangles;
     let reference = view.renderer().read_rgba8().unwrap();
     assert_eq!(view.techniques().min_pixels(), 0.0, "off by default");
     for culler in ["gpu-frustum", "gpu-occlusion"] {
-        view.techniques_mut().select(&combination(culler)).unwrap();
+        view.techniques_mut()
+            .select(&combination(&device, culler))
+            .unwrap();
         let mut triangles = |view: &mut View, pixels: f32, camera: &Camera| {
             view.techniques_mut().set_min_pixels(pixels).unwrap();
             // Occlusion's first frames draw without a visibility history; the third is settled.
@@ -502,7 +510,9 @@ fn each_pass_of_a_culled_frame_is_timed_and_the_times_make_the_frame() {
             ][..],
         ),
     ] {
-        view.techniques_mut().select(&combination(culler)).unwrap();
+        view.techniques_mut()
+            .select(&combination(&device, culler))
+            .unwrap();
         // The first frame uploads the scene; the third replays the second's recording.
         for frame in 0..3 {
             let stats = view.render(&graph, &mut tree, &camera).unwrap();

@@ -374,18 +374,7 @@ fn colour_frames_hand_their_depth_to_the_host() {
     f.view.renderer_mut().set_depth_to_host(true).unwrap();
     // SwiftShader lacks drawIndirectCount: there the culler's commands are drawn by their
     // capacity.
-    let submission = if f
-        .view
-        .renderer()
-        .device()
-        .capabilities()
-        .draw_indirect_count
-    {
-        "individual-indirect-count"
-    } else {
-        "individual-mdi"
-    };
-    let occlusion = cadr_tests::scene_wide(submission, "gpu-occlusion");
+    let occlusion = cadr_tests::gpu_culled(f.view.renderer().device(), "gpu-occlusion");
     let msaa = f.view.renderer().device().sample_counts().contains(&4);
     for case in ["plain", "ambient occlusion", "occlusion culler", "msaa"] {
         match case {

@@ -14,7 +14,7 @@ use cadr_core::scene::{flatten, Aabb, Scene, VertexAttributes};
 use cadr_core::tree::SceneTree;
 use cadr_core::view::View;
 use cadr_tests::images::{compare, covered_fraction};
-use cadr_tests::{assert_no_validation_errors, plugin_registry, scene_wide, test_device};
+use cadr_tests::{assert_no_validation_errors, gpu_culled, plugin_registry, test_device};
 use glam::DVec3;
 
 /// Units of the scene: each with geometries of its own.
@@ -103,7 +103,7 @@ fn session_with(
     )
     .unwrap();
     if let Some(culler) = culler {
-        let combination = scene_wide("individual-indirect-count", culler);
+        let combination = gpu_culled(&device, culler);
         view.techniques_mut().select(&combination).unwrap();
         if culler == "gpu-clusters" {
             view.techniques_mut().set_lod_error(1.0).unwrap();

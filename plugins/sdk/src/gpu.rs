@@ -29,6 +29,8 @@ pub struct Gpu {
     pub features: abi::CadrFeatureBits,
     /// `minUniformBufferOffsetAlignment`.
     pub min_uniform_buffer_offset_alignment: u64,
+    /// `maxDrawIndirectCount`: the most commands one indirect draw may run (at least 1).
+    pub max_draw_indirect_count: u32,
     /// Colour and depth formats of the target.
     pub formats: (vk::Format, vk::Format),
     /// Worker threads the technique may use.
@@ -117,10 +119,14 @@ impl Gpu {
             } else {
                 None
             };
+        let physical_device = vk::PhysicalDevice::from_raw(vulkan.physical_device as u64);
+        // SAFETY: the host's physical device, of this instance.
+        let limits = unsafe { instance.get_physical_device_properties(physical_device) }.limits;
         Ok(Arc::new(Self {
+            max_draw_indirect_count: limits.max_draw_indirect_count.max(1),
             instance,
             device,
-            physical_device: vk::PhysicalDevice::from_raw(vulkan.physical_device as u64),
+            physical_device,
             multi_draw,
             mesh_shader,
             generated_commands,

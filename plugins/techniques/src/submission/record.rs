@@ -95,7 +95,8 @@ impl Recorder<'_> {
         }
     }
 
-    /// Binds `pass` and draws its indirect commands with one call.
+    /// Binds `pass` and draws its indirect commands with one call (more where they outnumber
+    /// the device's `maxDrawIndirectCount`, without a count).
     fn record_indirect(
         &self,
         command_buffer: vk::CommandBuffer,
@@ -103,21 +104,24 @@ impl Recorder<'_> {
         draws: &PassDraws<'_>,
         stats: *mut CadrStats,
     ) {
-        let device = &self.gpu.device;
         bind_pass(self.gpu, self.record, pass, (command_buffer, stats));
-        // SAFETY: recording; the indirect buffers hold `draws.indirect_draws` commands of 20
-        // bytes.
-        unsafe {
-            if self.api == Api::Indirect {
-                device.cmd_draw_indexed_indirect(
+        let calls = if self.api == Api::Indirect {
+            // SAFETY: recording; the indirect buffer holds `draws.indirect_draws` commands of
+            // 20 bytes.
+            unsafe {
+                draw_indexed_indirect(
+                    self.gpu,
                     command_buffer,
-                    draws.commands,
-                    0,
+                    (draws.commands, 0),
                     draws.indirect_draws,
                     20,
-                );
-            } else {
-                device.cmd_draw_indexed_indirect_count(
+                )
+            }
+        } else {
+            // SAFETY: recording; the indirect buffers hold `draws.indirect_draws` commands of
+            // 20 bytes and their count.
+            unsafe {
+                self.gpu.device.cmd_draw_indexed_indirect_count(
                     command_buffer,
                     draws.commands,
                     0,
@@ -127,10 +131,11 @@ impl Recorder<'_> {
                     20,
                 );
             }
-        }
+            1
+        };
         let triangles = surface_triangles(pass, &draws.list.ranges);
         count(stats, |s| {
-            s.draw_calls += 1;
+            s.draw_calls += calls;
             s.draws += u64::from(draws.indirect_draws);
             s.primitives += triangles;
         });
@@ -305,30 +310,73 @@ pub fn record_gpu_pass(
     let command_buffer = record.command_buffer();
     bind_pass(gpu, record, pass, (command_buffer, record.stats()));
     let commands = vk::Buffer::from_raw(source.commands);
-    // SAFETY: recording; the culler's buffers hold `max_draws` commands of `stride`
-    // bytes and the count, written before rendering began (with `Capacity`, the commands past
-    // the count hold zero instances).
-    unsafe {
-        match by {
-            GpuDrawCount::Read => gpu.device.cmd_draw_indexed_indirect_count(
-                command_buffer,
-                commands,
-                source.commands_offset,
-                vk::Buffer::from_raw(source.count_buffer),
-                source.count_offset,
-                source.max_draws,
-                source.stride,
-            ),
-            GpuDrawCount::Capacity => gpu.device.cmd_draw_indexed_indirect(
-                command_buffer,
-                commands,
-                source.commands_offset,
-                source.max_draws,
-                source.stride,
-            ),
+    let calls = match by {
+        GpuDrawCount::Read => {
+            // SAFETY: recording; the culler's buffers hold `max_draws` commands of `stride`
+            // bytes and the count, written before rendering began.
+            unsafe {
+                gpu.device.cmd_draw_indexed_indirect_count(
+                    command_buffer,
+                    commands,
+                    source.commands_offset,
+                    vk::Buffer::from_raw(source.count_buffer),
+                    source.count_offset,
+                    source.max_draws,
+                    source.stride,
+                )
+            };
+            1
         }
+        // SAFETY: recording; the culler's buffer holds `max_draws` commands of `stride` bytes,
+        // written before rendering began, those past the count of zero instances.
+        GpuDrawCount::Capacity => unsafe {
+            draw_indexed_indirect(
+                gpu,
+                command_buffer,
+                (commands, source.commands_offset),
+                source.max_draws,
+                source.stride,
+            )
+        },
     };
-    record.count(|s| s.draw_calls += 1);
+    record.count(|s| s.draw_calls += calls);
+}
+
+/// The calls that draw `draws` indirect commands when one call may draw at most `most`: each
+/// call's first command and how many it draws.
+fn indirect_calls(draws: u32, most: u32) -> impl Iterator<Item = (u32, u32)> {
+    let most = most.max(1);
+    (0..draws.div_ceil(most)).map(move |call| {
+        let first = call * most;
+        (first, (draws - first).min(most))
+    })
+}
+
+/// Records `vkCmdDrawIndexedIndirect` of the `draws` commands `stride` bytes apart from `start`
+/// (buffer, byte offset), in as many calls as the device's `maxDrawIndirectCount` asks;
+/// returns the calls.
+///
+/// # Safety
+/// `command_buffer` is recording inside a rendering with a pipeline bound, and the buffer holds
+/// the `draws` commands from the offset on.
+unsafe fn draw_indexed_indirect(
+    gpu: &Gpu,
+    command_buffer: vk::CommandBuffer,
+    (buffer, offset): (vk::Buffer, u64),
+    draws: u32,
+    stride: u32,
+) -> u64 {
+    let mut calls = 0;
+    for (first, count) in indirect_calls(draws, gpu.max_draw_indirect_count) {
+        let at = offset + u64::from(first) * u64::from(stride);
+        // SAFETY: the caller vouches for the recording and the commands.
+        unsafe {
+            gpu.device
+                .cmd_draw_indexed_indirect(command_buffer, buffer, at, count, stride)
+        };
+        calls += 1;
+    }
+    calls
 }
 
 /// The most passes whose shares workers record into buffers of their own.
@@ -530,5 +578,23 @@ impl Drop for SecondaryBuffers {
                     .destroy_command_pool(pool, self.gpu.allocator());
             }
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::indirect_calls;
+
+    #[test]
+    fn indirect_draws_past_the_device_limit_are_split_into_calls() {
+        let calls = |draws, most| indirect_calls(draws, most).collect::<Vec<_>>();
+        assert_eq!(calls(0, 10), []);
+        assert_eq!(calls(7, 10), [(0, 7)]);
+        assert_eq!(calls(10, 10), [(0, 10)]);
+        assert_eq!(calls(25, 10), [(0, 10), (10, 10), (20, 5)]);
+        assert_eq!(calls(3, 1), [(0, 1), (1, 1), (2, 1)]);
+        // A limit of 0 (no driver reports it) is taken as 1.
+        assert_eq!(calls(2, 0), [(0, 1), (1, 1)]);
+        assert_eq!(calls(u32::MAX, u32::MAX), [(0, u32::MAX)]);
     }
 }

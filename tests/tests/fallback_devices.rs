@@ -4,11 +4,6 @@
 //! `individual-mdi`. Each test runs in a process of its own pointed at its driver alone.
 #![allow(clippy::unwrap_used)] // Test code: a failed unwrap is a failed test.
 
-use cadr_core::vk::raw as vk;
-use cadr_core::vk::{
-    draw_mesh_tasks, ColorTarget, DepthUse, MeshPipelineDesc, OneShot, Pipeline, PipelineLayout,
-    ShaderModule, ShaderStage, COLOR_FORMAT,
-};
 use std::sync::Arc;
 
 use cadr_core::generate::{generate, GeneratorSpec};
@@ -17,6 +12,11 @@ use cadr_core::render::{Camera, FrameStats, DEFAULT_DIRECTION};
 use cadr_core::scene::flatten;
 use cadr_core::tree::SceneTree;
 use cadr_core::view::View;
+use cadr_core::vk::raw as vk;
+use cadr_core::vk::{
+    draw_mesh_tasks, ColorTarget, DepthUse, MeshPipelineDesc, OneShot, Pipeline, PipelineLayout,
+    ShaderModule, ShaderStage, COLOR_FORMAT,
+};
 use cadr_tests::images::{compare, SAME_PICTURE, VISIBLE_CHANGE};
 use cadr_tests::{assert_no_validation_errors, mesa22_device, scene_wide, swiftshader_device};
 
@@ -129,7 +129,7 @@ fn frames_then_most_hidden(
         .filter(|(i, _)| i % keep_one_in != 0)
         .map(|(_, node)| node)
         .collect();
-    let set_visible = |graph: &mut SceneGraph, visible: bool| {
+    let set_visible = |graph: &mut SceneGraph, tree: &mut SceneTree, visible: bool| {
         for &node in &hidden {
             let flags = NodeFlags {
                 visible,
@@ -137,9 +137,6 @@ fn frames_then_most_hidden(
             };
             graph.set_flags(node, flags).unwrap();
         }
-    };
-    let set_visible = |graph: &mut SceneGraph, tree: &mut SceneTree, visible: bool| {
-        set_visible(graph, visible);
         tree.update(graph);
     };
     set_visible(graph, tree, false);

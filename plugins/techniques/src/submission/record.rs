@@ -352,9 +352,9 @@ fn indirect_calls(draws: u32, most: u32) -> impl Iterator<Item = (u32, u32)> {
     })
 }
 
-/// Records `vkCmdDrawIndexedIndirect` of the `draws` commands `stride` bytes apart from `start`
-/// (buffer, byte offset), in as many calls as the device's `maxDrawIndirectCount` asks;
-/// returns the calls.
+/// Records `vkCmdDrawIndexedIndirect` of the `draws` commands `stride` bytes apart from byte
+/// `offset` of `buffer`, in as many calls as the device's `maxDrawIndirectCount` asks; returns
+/// the calls.
 ///
 /// # Safety
 /// `command_buffer` is recording inside a rendering with a pipeline bound, and the buffer holds

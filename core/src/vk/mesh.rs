@@ -65,7 +65,7 @@ impl Pipeline {
             return Err(VkError::Unsupported {
                 device: device.adapter().name.clone(),
                 reason: format!(
-                    "pipeline '{}' with {} samples per pixel: llvmpipe rasterizes multisampled mesh-shader triangles in the wrong place (Mesa 25.0: one quad of a quarter of the target covers all of it), so mesh shading draws without MSAA there; turn MSAA off or choose a submission that draws with the vertex pipeline (individual-indirect-count)",
+                    "pipeline '{}' with {} samples per pixel: llvmpipe rasterizes multisampled mesh-shader triangles in the wrong place (Mesa 25.0: one quad of a quarter of the target covers all of it), so cadr does not draw mesh shading with MSAA there; turn MSAA off or choose a submission that draws with the vertex pipeline (individual-indirect-count)",
                     desc.name, desc.samples
                 ),
             });

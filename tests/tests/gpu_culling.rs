@@ -15,16 +15,10 @@ use cadr_core::scene::{flatten, Aabb, Geometry, Material, MeshRef, Node, Scene};
 use cadr_core::technique::{Combination, Techniques};
 use cadr_core::tree::SceneTree;
 use cadr_core::view::View;
-use cadr_core::vk::Device;
 use cadr_tests::images::{compare, SAME_PICTURE};
 use cadr_tests::{assert_no_validation_errors, gpu_culled, plugin_registry, test_device};
 
 const SIZE: (u32, u32) = (200, 150);
-
-/// `culling` with the partners that draw its commands on `device`.
-fn combination(device: &Device, culling: &str) -> Combination {
-    gpu_culled(device, culling)
-}
 
 /// Renders `cameras` with each culling technique in turn through one view; per culler, the
 /// images and frame statistics.
@@ -42,7 +36,7 @@ fn render_frames(
         .iter()
         .map(|culler| {
             view.techniques_mut()
-                .select(&combination(&device, culler))
+                .select(&gpu_culled(&device, culler))
                 .unwrap();
             cameras
                 .iter()
@@ -352,12 +346,12 @@ fn gpu_cullers_need_a_submission_that_draws_their_commands() {
     let view = View::new(&device, Arc::clone(&registry), SIZE.0, SIZE.1).unwrap();
     let techniques: &Techniques = view.techniques();
     for culler in ["gpu-frustum", "gpu-occlusion"] {
-        techniques.check(&combination(&device, culler)).unwrap();
+        techniques.check(&gpu_culled(&device, culler)).unwrap();
         let refusals = [
             (
                 Combination {
                     submission: "groups-mdi".into(),
-                    ..combination(&device, culler)
+                    ..gpu_culled(&device, culler)
                 },
                 // The culler is what is refused here: the partners suit each other.
                 "draws the GPU-written commands (individual-indirect-count, dgc, individual-mdi)",
@@ -365,14 +359,14 @@ fn gpu_cullers_need_a_submission_that_draws_their_commands() {
             (
                 Combination {
                     vertex: "per-geometry".into(),
-                    ..combination(&device, culler)
+                    ..gpu_culled(&device, culler)
                 },
                 "binds the whole scene",
             ),
             (
                 Combination {
                     parameters: "push".into(),
-                    ..combination(&device, culler)
+                    ..gpu_culled(&device, culler)
                 },
                 "instance index",
             ),
@@ -416,14 +410,14 @@ fn sub_pixel_culling_drops_small_parts_only_when_asked() {
     let registry = plugin_registry(&device);
     let mut view = View::new(&device, Arc::clone(&registry), SIZE.0, SIZE.1).unwrap();
     view.techniques_mut()
-        .select(&combination(&device, "none"))
+        .select(&gpu_culled(&device, "none"))
         .unwrap();
     let all = view.render(&graph, &mut tree, &far).unwrap().triangles;
     let reference = view.renderer().read_rgba8().unwrap();
     assert_eq!(view.techniques().min_pixels(), 0.0, "off by default");
     for culler in ["gpu-frustum", "gpu-occlusion"] {
         view.techniques_mut()
-            .select(&combination(&device, culler))
+            .select(&gpu_culled(&device, culler))
             .unwrap();
         let mut triangles = |view: &mut View, pixels: f32, camera: &Camera| {
             view.techniques_mut().set_min_pixels(pixels).unwrap();
@@ -511,7 +505,7 @@ fn each_pass_of_a_culled_frame_is_timed_and_the_times_make_the_frame() {
         ),
     ] {
         view.techniques_mut()
-            .select(&combination(&device, culler))
+            .select(&gpu_culled(&device, culler))
             .unwrap();
         // The first frame uploads the scene; the third replays the second's recording.
         for frame in 0..3 {

@@ -14,6 +14,7 @@ use cadr_core::scene::{Aabb, SceneStats};
 use cadr_core::technique::{
     Combination, PluginRegistry, ShadeMode, TechniqueKind, Techniques, DEFAULT_TRANSPARENCY,
 };
+use cadr_core::view::Coverage;
 use cadr_core::vk::Device;
 
 use crate::args::{BenchArgs, BenchShade, Size};
@@ -82,6 +83,8 @@ pub(crate) struct Row {
     host_allocated_bytes: u64,
     /// The median GPU time of each pass, in the order drawn (`Renderer::gpu_pass_times`).
     gpu_passes: crate::PassTimes,
+    /// What the first measured frame's picture covers (`View::coverage`).
+    coverage: Option<Coverage>,
 }
 
 /// What one row measured: medians of CPU, GPU, scene update and upload, and the first
@@ -99,18 +102,21 @@ struct Measured {
     gpu_passes: crate::PassTimes,
 }
 
+/// The number of the first measured frame of a row: 2 warm-up frames come before it.
+const FIRST_MEASURED_FRAME: usize = 2;
+
 /// Renders 2 warm-up frames, then `frames` measured ones (frame numbers from 0, so that every
 /// row sees the same motion); medians.
 fn measure(
     frames: usize,
     mut draw: impl FnMut(usize) -> Result<FrameSample, String>,
 ) -> Result<Measured, String> {
-    for frame in 0..2 {
+    for frame in 0..FIRST_MEASURED_FRAME {
         draw(frame)?;
     }
     let mut samples = Vec::with_capacity(frames);
     for frame in 0..frames {
-        samples.push(draw(frame + 2)?);
+        samples.push(draw(frame + FIRST_MEASURED_FRAME)?);
     }
     let cpu = crate::median(&mut samples.iter().map(|s| s.stats.cpu_us()).collect::<Vec<_>>());
     let submit = crate::median(
@@ -169,7 +175,14 @@ impl Row {
             streamed_bytes: 0,
             host_allocated_bytes: cadr_core::host_heap::bytes_in_use(),
             gpu_passes: measured.gpu_passes,
+            coverage: None,
         }
+    }
+
+    /// Triangles rasterized per pixel the picture covers (none where it covers none).
+    fn triangles_per_covered_pixel(&self) -> Option<f64> {
+        let covered = self.coverage?.pixels;
+        (covered > 0).then(|| self.stats.triangles_rasterized as f64 / covered as f64)
     }
 
     /// Clusters the row drew: a cluster culler's ranges.
@@ -427,9 +440,12 @@ impl Bench {
             session.render_moving(motion, view, frame)
         })?;
         let transforms = session.techniques().transforms();
+        let streamed_bytes = session.streamed_bytes() - streamed_before;
+        let coverage = session.coverage_at(motion, view, FIRST_MEASURED_FRAME)?;
         let baseline = Row {
             resident_bytes: session.resident_bytes(),
-            streamed_bytes: session.streamed_bytes() - streamed_before,
+            streamed_bytes,
+            coverage: Some(coverage),
             ..Row::new("baseline (built-in)".into(), "solid", transforms, measured)
         };
         session.techniques().set_frame_replay(self.frame_replay);
@@ -462,7 +478,10 @@ impl Bench {
             session.render_moving(motion, view, frame)
         })?;
         let transforms = session.techniques().transforms();
+        let streamed_bytes = session.streamed_bytes() - streamed_before;
+        let coverage = session.coverage_at(motion, view, FIRST_MEASURED_FRAME)?;
         Ok(Row {
+            coverage: Some(coverage),
             msaa: setting.msaa,
             ssao: setting.ssao,
             silhouettes: setting.silhouettes,
@@ -470,7 +489,7 @@ impl Bench {
             highlight_style: setting.highlight_style,
             lod_error,
             resident_bytes: session.resident_bytes(),
-            streamed_bytes: session.streamed_bytes() - streamed_before,
+            streamed_bytes,
             ..Row::new(combination.to_string(), mode.name(), transforms, measured)
         })
     }
@@ -622,6 +641,9 @@ fn row_json(row: &Row, baseline_cpu: f64) -> serde_json::Value {
         "triangles": s.triangles,
         "triangles_rasterized": s.triangles_rasterized,
         "clusters_drawn": row.clusters_drawn(),
+        "covered_pixels": row.coverage.map(|c| c.pixels),
+        "parts_with_pixels": row.coverage.map(|c| c.parts),
+        "triangles_per_covered_pixel": row.triangles_per_covered_pixel(),
         "lod_error": row.lod_error,
         "resident_bytes": row.resident_bytes,
         "host_allocated_bytes": row.host_allocated_bytes,

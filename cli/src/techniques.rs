@@ -14,7 +14,7 @@ use cadr_core::technique::{
 use cadr_core::tree::SceneTree;
 
 use crate::motion::Motion;
-use cadr_core::view::View;
+use cadr_core::view::{Coverage, View};
 use cadr_core::vk::{Device, DeviceOptions, InstanceOptions};
 
 use crate::args::TechniquesArgs;
@@ -221,6 +221,23 @@ impl TechniqueSession {
             update_us,
             gpu_passes: self.gpu_pass_times(),
         })
+    }
+
+    /// What the picture of frame `frame` of `motion` covers (`View::coverage`): its parts moved
+    /// and its camera placed as that frame's, the pixels showing a part and the parts showing.
+    pub fn coverage_at(
+        &mut self,
+        motion: &Motion,
+        (bounds, aspect): (&Aabb, f64),
+        frame: usize,
+    ) -> Result<Coverage, String> {
+        motion.animate(&mut self.graph, frame)?;
+        self.tree.update(&mut self.graph);
+        self.view
+            .sync(&self.graph, &mut self.tree)
+            .map_err(|e| e.to_string())?;
+        let camera = motion.camera(bounds, aspect, frame);
+        self.view.coverage(&camera).map_err(|e| e.to_string())
     }
 
     /// The GPU time of each pass of the last frame (`Renderer::gpu_pass_times`).

@@ -439,6 +439,39 @@ fn bench_prints_the_table_and_writes_json() {
     // The driver's floor under every replayed frame, measured in the same run.
     assert!(json["submit_floor_us"].as_f64().unwrap() > 0.0, "{json}");
     assert!(text.contains("floor: the driver takes"), "{text}");
+    // What the picture covers: every row draws the same one, whose parts with a pixel are those a
+    // pick over the whole view finds, and the triangles are counted against its pixels.
+    let picked = cadr(&[
+        "pick",
+        "gen:grid:parts=500",
+        "0",
+        "0",
+        "--size",
+        "64x48",
+        "--rect",
+        "63,47",
+        "--json",
+    ]);
+    assert!(picked.status.success(), "{}", stderr(&picked));
+    let picked: serde_json::Value = serde_json::from_str(&stdout(&picked)).unwrap();
+    let parts_picked = picked["hits"].as_array().unwrap().len() as u64;
+    assert!(parts_picked > 10, "{picked}");
+    for row in rows {
+        let covered = row["covered_pixels"].as_u64().unwrap();
+        assert!(covered > 0 && covered < 64 * 48, "{row}");
+        assert_eq!(row["covered_pixels"], rows[0]["covered_pixels"], "{row}");
+        assert_eq!(
+            row["parts_with_pixels"].as_u64(),
+            Some(parts_picked),
+            "{row}"
+        );
+        let per_pixel = row["triangles_per_covered_pixel"].as_f64().unwrap();
+        let rasterized = row["triangles_rasterized"].as_f64().unwrap();
+        assert!(
+            (per_pixel - rasterized / covered as f64).abs() < 1e-9,
+            "{row}"
+        );
+    }
 
     let (_, json) = small_bench("gen:grid:parts=500", &path, &["--no-replay"]);
     let rows = json["rows"].as_array().unwrap();

@@ -20,6 +20,15 @@ use crate::timings::{self, Phase};
 use crate::tree::SceneTree;
 use crate::vk::{Device, Shared};
 
+/// What a view's picture covers ([`View::coverage`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Coverage {
+    /// Pixels that show a pickable part.
+    pub pixels: u64,
+    /// Parts (scene tree instances) that show in at least one pixel.
+    pub parts: u64,
+}
+
 /// What a pick found under one pixel (or, for a rectangle, the nearest pixel of one part).
 #[derive(Clone, Debug, PartialEq)]
 pub struct PickHit {
@@ -361,13 +370,7 @@ impl View {
         camera: &Camera,
         rect: PixelRect,
     ) -> RenderResult<Vec<PickHit>> {
-        let cell = self.current_scene()?;
-        let mut scene = lock(&cell);
-        let mut viewed = caught_up(&self.techniques, &mut scene, &mut self.own)?;
-        let samples =
-            self.renderer
-                .pick_techniques(&mut viewed, &mut self.techniques, camera, rect)?;
-        drop(scene);
+        let samples = self.pick_samples(camera, rect)?;
         let size = self.renderer.size();
         let section = self.renderer.section();
         let mut nearest: HashMap<u32, (PickSample, DVec3)> = HashMap::new();
@@ -400,6 +403,38 @@ impl View {
                 .then(a.instance.cmp(&b.instance))
         });
         Ok(hits)
+    }
+
+    /// What the whole view shows of the GPU scene as last synced (see [`View::sync`]), seen by
+    /// `camera` through the active techniques' pick pass: the pixels covered by pickable parts,
+    /// and how many parts cover one. The figure triangles per covered pixel is measured
+    /// against (`cadr bench`).
+    pub fn coverage(&mut self, camera: &Camera) -> RenderResult<Coverage> {
+        let (width, height) = self.renderer.size();
+        let rect = PixelRect {
+            x: 0,
+            y: 0,
+            width,
+            height,
+        };
+        let samples = self.pick_samples(camera, rect)?;
+        let mut parts: Vec<u32> = samples.iter().map(|sample| sample.instance).collect();
+        parts.sort_unstable();
+        parts.dedup();
+        Ok(Coverage {
+            pixels: samples.len() as u64,
+            parts: parts.len() as u64,
+        })
+    }
+
+    /// The pick pass's pixels in `rect`, seen by `camera`: one sample per pixel that shows a
+    /// pickable part.
+    fn pick_samples(&mut self, camera: &Camera, rect: PixelRect) -> RenderResult<Vec<PickSample>> {
+        let cell = self.current_scene()?;
+        let mut scene = lock(&cell);
+        let mut viewed = caught_up(&self.techniques, &mut scene, &mut self.own)?;
+        self.renderer
+            .pick_techniques(&mut viewed, &mut self.techniques, camera, rect)
     }
 }
 

@@ -51,9 +51,10 @@ mesa22_skipped=(a_geometry_replaced_while_the_scene_streams_is_drawn_as_its_new_
 # lavapipe (by more than the references' tolerance on some textured, translucent and MSAA
 # pictures), which cli/tests/swiftshader.rs judges with a tolerance of its own. It lacks
 # drawIndirectCount: the gpu- cullers' commands are drawn there by their capacity
-# (individual-mdi), which the GPU culling and streaming tests check against pictures drawn in
-# the same run (the streaming tests of the host's bookkeeping are skipped, as on Mesa 22.3).
-swiftshader_subset=(rendering vulkan_layer gpu_culling streaming)
+# (individual-mdi), which the GPU culling, cluster and streaming tests check against pictures
+# drawn in the same run (the streaming tests of the host's bookkeeping are skipped, as on Mesa
+# 22.3).
+swiftshader_subset=(rendering vulkan_layer gpu_culling clusters cluster_budget streaming)
 run_subset() { # MANIFEST SKIPPED-TEST-NAMES TEST-BINARY... (the names space-separated)
   local manifest=$1 skipped=$2
   shift 2

@@ -12,7 +12,7 @@ use cadr_core::scene::flatten;
 use cadr_core::tree::SceneTree;
 use cadr_core::view::View;
 use cadr_tests::images::{compare, covered_fraction};
-use cadr_tests::{assert_no_validation_errors, plugin_registry, scene_wide, test_device};
+use cadr_tests::{assert_no_validation_errors, gpu_culled, plugin_registry, test_device};
 
 #[test]
 fn past_the_budget_parts_are_drawn_at_their_coarsest_and_none_is_left_out() {
@@ -34,7 +34,7 @@ fn past_the_budget_parts_are_drawn_at_their_coarsest_and_none_is_left_out() {
         let (mut graph, _) = SceneGraph::from_scene(&scene).unwrap();
         let mut tree = SceneTree::build(&mut graph);
         let mut view = View::new(&device, Arc::clone(&plugin_registry(&device)), 240, 180).unwrap();
-        let combination = scene_wide("individual-indirect-count", "gpu-clusters");
+        let combination = gpu_culled(&device, "gpu-clusters");
         view.techniques_mut().select(&combination).unwrap();
         view.techniques_mut().set_lod_error(0.0).unwrap();
         let mut stats = None;

@@ -20,7 +20,7 @@ use std::process::ExitCode;
 use std::time::Instant;
 
 use cadr_core::graph::SceneGraph;
-use cadr_core::load::SceneSource;
+use cadr_core::load::{SceneFormat, SceneSource};
 use cadr_core::render::{Camera, FrameStats, DEFAULT_DIRECTION};
 use cadr_core::scene::closure::{ClosedPartCounter, ClosedPartCounts};
 use cadr_core::scene::{flatten, flatten_outline, SceneStats};
@@ -156,10 +156,34 @@ fn info(args: &InfoArgs) -> Result<(), String> {
 
 fn convert(args: &ConvertArgs) -> Result<(), String> {
     let started = Instant::now();
-    let scene = load_scene(&args.scene)?;
-    let notes = cadr_core::save::save_scene(&scene, &args.output).map_err(|e| e.to_string())?;
-    let flat = flatten(&scene).map_err(|e| e.to_string())?;
-    let stats = SceneStats::new(&scene, &flat);
+    let (notes, stats) = match SceneFormat::from_path(&args.output) {
+        // One geometry at a time: each loaded geometry stays in memory up to half the memory
+        // budget (CADR_MEMORY_BUDGET) and goes to a page file past it, and is read back as it
+        // is written.
+        Some(SceneFormat::Csf | SceneFormat::CsfGz) => {
+            let source = SceneSource::parse(&args.scene).map_err(|e| e.to_string())?;
+            let limit = cadr_core::memory_budget::budget()?.saturating_div(2);
+            let (outline, geometries) = progress::spin(&format!("loading {}", args.scene), || {
+                source.load_for_graph(limit)
+            })
+            .map_err(|e| e.to_string())?;
+            let flat =
+                flatten_outline(&outline, geometries.summaries()).map_err(|e| e.to_string())?;
+            let stats = SceneStats::of_outline(&outline, &flat, geometries.summaries());
+            drop(flat);
+            let notes = cadr_core::save::save_csf_outline(&outline, &geometries, &args.output)
+                .map_err(|e| e.to_string())?;
+            (notes, stats)
+        }
+        // glTF is made whole in memory.
+        _ => {
+            let scene = load_scene(&args.scene)?;
+            let notes =
+                cadr_core::save::save_scene(&scene, &args.output).map_err(|e| e.to_string())?;
+            let flat = flatten(&scene).map_err(|e| e.to_string())?;
+            (notes, SceneStats::new(&scene, &flat))
+        }
+    };
     println!(
         "wrote {}: {} nodes, {} geometries, {} materials, {} parts drawn, {} triangles ({:.0} ms)",
         args.output.display(),

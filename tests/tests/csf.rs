@@ -3,8 +3,8 @@
 #![allow(clippy::unwrap_used)] // Test code: a failed unwrap is a failed test.
 
 use cadr_core::csf::{
-    csf_from_scene, load_csf, read_csf, save_csf, scene_from_csf, write_csf, FLAG_UNIQUE_NODES,
-    MAGIC,
+    csf_from_scene, load_csf, read_csf, save_csf, scene_from_csf, write_csf, write_csf_file,
+    FLAG_UNIQUE_NODES, MAGIC,
 };
 use cadr_core::generate::{generate, GeneratorSpec};
 use cadr_core::load::{load_bytes, load_file, SceneFormat};
@@ -186,6 +186,36 @@ fn files_longer_than_their_content_and_gzip_files_load() {
     assert_eq!(load_csf(&gz).unwrap(), file);
     let scene = load_file(&gz).unwrap();
     assert_same_drawing(&cube_scene(), &scene);
+}
+
+/// Written to a file, one geometry at a time, with blocks larger than what the writer holds
+/// (a geometry's arrays of several megabytes go straight to the file, the fields before them
+/// are patched in place), a file has the bytes of the same file written in memory.
+#[test]
+fn a_file_written_to_disk_a_geometry_at_a_time_has_the_bytes_written_in_memory() {
+    let scene = generate(&GeneratorSpec::Grid {
+        parts: 2,
+        triangles_per_part: 40_000.0,
+    });
+    let file = csf_from_scene(&scene).unwrap();
+    let largest = file.geometries.iter().map(|g| g.vertices.len() * 4).max();
+    assert!(
+        largest > Some(1 << 20),
+        "{largest:?} bytes of positions at most"
+    );
+    let in_memory = write_csf(&file, 6);
+    let directory = scratch_dir("csf-streamed");
+    std::fs::create_dir_all(&directory).unwrap();
+    let path = directory.join("grid.csf");
+    let mut output = std::fs::File::create(&path).unwrap();
+    write_csf_file(&file, &mut file.geometries.as_slice(), 6, &mut output).unwrap();
+    drop(output);
+    assert!(
+        std::fs::read(&path).unwrap() == in_memory,
+        "the files differ"
+    );
+    assert_eq!(read_csf(&in_memory).unwrap(), file);
+    std::fs::remove_file(&path).unwrap();
 }
 
 #[test]

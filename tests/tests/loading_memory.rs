@@ -149,6 +149,62 @@ fn csf_and_gltf_files_loaded_for_a_graph_page_their_geometries_and_import_as_loa
     }
 }
 
+/// Converting to CSF (`cadr convert`): the scene loaded with its geometries past a limit in a
+/// page file, then written one geometry at a time, makes the very file a save of the whole
+/// scene makes, and the save holds one geometry and the writer's few megabytes, not the scene.
+/// A geometry whose page cannot be read back fails the save with an error that names it.
+#[test]
+fn a_scene_converted_to_csf_from_its_page_file_is_the_file_saved_whole() {
+    let _one = ONE_AT_A_TIME.lock().unwrap_or_else(|p| p.into_inner());
+    let source = SceneSource::parse(UNIQUE_UNITS).unwrap();
+    let whole = source.load().unwrap();
+    let total = scene_bytes(&whole);
+    let scratch = scratch_dir("loading-memory-convert");
+    for name in ["units.csf", "units.csf.gz"] {
+        let expected = std::fs::read(saved(&whole, &scratch, name)).unwrap();
+        let (outline, geometries) = source.load_for_graph(total / 8).unwrap();
+        assert!(geometries.memory().paged_geometries > 0, "{name}");
+        let path = scratch.join(format!("converted-{name}"));
+        let (growth, notes) = heap_growth(|| {
+            cadr_core::save::save_csf_outline(&outline, &geometries, &path).unwrap()
+        });
+        println!(
+            "{name}: the save grew the heap {:.1} MB for a scene of {:.1} MB",
+            growth as f64 / 1e6,
+            total as f64 / 1e6
+        );
+        assert!(notes.is_empty(), "{notes:?}");
+        assert!(
+            std::fs::read(&path).unwrap() == expected,
+            "{name}: the files differ"
+        );
+        // One geometry read back, its CSF arrays and their bytes, and the writer's 1 MiB.
+        let allowance = 4 * largest_geometry_bytes(&whole) + (2 << 20);
+        assert!(
+            growth <= allowance && growth * 2 < total,
+            "{name}: {growth} bytes, more than one geometry and the writer's ({allowance})"
+        );
+        std::fs::remove_file(&path).unwrap();
+
+        // The page file cut short: the first paged geometry cannot be read back.
+        let page_file = geometries.memory().page_file.unwrap();
+        std::fs::OpenOptions::new()
+            .write(true)
+            .open(&page_file)
+            .unwrap()
+            .set_len(16)
+            .unwrap();
+        let error = cadr_core::save::save_csf_outline(&outline, &geometries, &path)
+            .unwrap_err()
+            .to_string();
+        assert!(
+            error.contains(&path.display().to_string()) && error.contains("geometry '"),
+            "{name}: {error}"
+        );
+    }
+    std::fs::remove_dir_all(&scratch).unwrap();
+}
+
 #[test]
 fn a_refused_import_of_a_loaded_scene_changes_nothing_and_leaves_no_page_file() {
     let _one = ONE_AT_A_TIME.lock().unwrap_or_else(|p| p.into_inner());

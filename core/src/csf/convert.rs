@@ -6,17 +6,20 @@
 //! subgraphs into a tree (CSF nodes are unique), stores node and geometry names as metas, and
 //! materials as their colour plus the glTF 2 material packet (metallic, roughness).
 
+use std::borrow::Cow;
+
 use glam::{DMat4, DVec3};
 
 use super::read::CsfBytes;
+use super::write::CsfGeometries;
 use super::{
     error, CsfError, CsfFile, CsfGeometry, CsfGeometryPart, CsfMaterial, CsfMeta, CsfNode,
     CsfNodePart, FLAG_PER_PART_VERTICES, FLAG_STRIPS, FLAG_UNIQUE_NODES, GUID_MATERIAL_GLTF2,
     VERSION,
 };
 use crate::scene::{
-    Geometry, GeometrySink, KeepInScene, Material, MeshRef, Node, NodeIndex, Part, PartOverride,
-    Scene, Vertex,
+    Geometry, GeometrySink, GeometryStore, KeepInScene, Material, MeshRef, Node, NodeIndex, Part,
+    PartOverride, Scene, Vertex,
 };
 
 /// Size of `CSFMaterialGLTF2Meta`, the glTF 2 material packet.
@@ -342,6 +345,17 @@ fn gltf2_packet_for(material: &Material) -> Vec<u8> {
 /// A version 6 CSF file for `scene` (validated). Shared subgraphs are unfolded into a tree.
 pub fn csf_from_scene(scene: &Scene) -> Result<CsfFile, crate::scene::SceneError> {
     scene.validate()?;
+    let mut file = csf_outline_from_scene(scene);
+    file.geometries = scene.geometries.iter().map(geometry_to_csf).collect();
+    Ok(file)
+}
+
+/// What [`csf_from_scene`] makes of `scene`, but for the geometries' arrays: `geometries` is
+/// left empty, the geometries' names are kept as metas. The scene may be an outline (its
+/// geometries stand-ins, see [`crate::scene::GeometrySink`]), validated as it was loaded: the
+/// file's geometries are then converted one at a time as they are written
+/// ([`CsfGeometriesOf`]).
+pub fn csf_outline_from_scene(scene: &Scene) -> CsfFile {
     let mut file = CsfFile {
         version: VERSION,
         file_flags: FLAG_UNIQUE_NODES,
@@ -349,7 +363,6 @@ pub fn csf_from_scene(scene: &Scene) -> Result<CsfFile, crate::scene::SceneError
         ..CsfFile::default()
     };
     for geometry in &scene.geometries {
-        file.geometries.push(geometry_to_csf(geometry));
         file.geometry_metas.push(CsfMeta {
             name: geometry.name.clone(),
             ..CsfMeta::default()
@@ -375,7 +388,40 @@ pub fn csf_from_scene(scene: &Scene) -> Result<CsfFile, crate::scene::SceneError
             file.nodes[root].children.push(child as i32);
         }
     }
-    Ok(file)
+    file
+}
+
+/// A scene's geometries as a CSF file's, each converted from its store as it is written
+/// (see [`csf_outline_from_scene`]).
+pub struct CsfGeometriesOf<'a, S: GeometryStore + ?Sized> {
+    store: &'a S,
+    /// Of the geometries converted so far, those with texture coordinates or vertex colours,
+    /// which the CSF geometry does not keep.
+    pub attributed: usize,
+}
+
+impl<'a, S: GeometryStore + ?Sized> CsfGeometriesOf<'a, S> {
+    /// The geometries of `store`, none converted yet.
+    pub fn new(store: &'a S) -> Self {
+        Self {
+            store,
+            attributed: 0,
+        }
+    }
+}
+
+impl<S: GeometryStore + ?Sized> CsfGeometries for CsfGeometriesOf<'_, S> {
+    type Error = String;
+
+    fn count(&self) -> usize {
+        self.store.geometry_count()
+    }
+
+    fn geometry(&mut self, index: usize) -> Result<Cow<'_, CsfGeometry>, String> {
+        let geometry = self.store.geometry(index)?;
+        self.attributed += usize::from(!geometry.attributes.is_empty());
+        Ok(Cow::Owned(geometry_to_csf(&geometry)))
+    }
 }
 
 fn push_node(file: &mut CsfFile, name: &str, local: DMat4, world: DMat4) -> usize {

@@ -13,9 +13,11 @@ mod convert;
 mod read;
 mod write;
 
-pub use convert::{csf_from_scene, scene_from_csf, scene_from_csf_source};
+pub use convert::{
+    csf_from_scene, csf_outline_from_scene, scene_from_csf, scene_from_csf_source, CsfGeometriesOf,
+};
 pub use read::{read_csf, read_csf_from, read_csf_through, CsfBytes, TakeCsfGeometry};
-pub use write::write_csf;
+pub use write::{write_csf, write_csf_file, CsfGeometries, CsfWriteError};
 
 use std::borrow::Cow;
 use std::io::Read as _;
@@ -283,8 +285,9 @@ fn past_the_limit(compressed: u64, limit: u64) -> std::io::Error {
     )
 }
 
-/// Temporary files of unpacked `.csf.gz` files made by this process, counted (for their names).
-static FILES_UNPACKED: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(0);
+/// Temporary files made by this process for `.csf.gz` files (unpacked to read, or written to
+/// pack), counted (for their names).
+static TEMPORARY_FILES: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(0);
 
 /// Removes a temporary file when dropped, where it could not be removed while open.
 #[derive(Debug)]
@@ -298,22 +301,17 @@ impl Drop for RemovedOnDrop {
     }
 }
 
-/// The gzip file `compressed` decompressed, as it streams, into a temporary file in `directory`
-/// (readers pass the page directory, `CADR_PAGE_DIR`: see `graph::page_file`), within `limit`
-/// bytes (the decompression limit): so that
-/// neither the compressed nor the decompressed bytes are ever held whole. The file is removed
-/// from its directory as soon as it is open (where the system allows; otherwise when the
-/// returned guard is dropped), so that nothing is left behind, even by a crash.
-fn unpacked(
-    compressed: std::fs::File,
+/// A new temporary file in `directory` (the page directory, `CADR_PAGE_DIR`: see
+/// `graph::page_file`), open to read and write, for `purpose` (which its error names). It is
+/// removed from its directory as soon as it is open (where the system allows; otherwise when
+/// the returned guard is dropped), so that nothing is left behind, even by a crash.
+fn temporary_file(
     directory: &Path,
-    limit: u64,
+    purpose: &str,
 ) -> std::io::Result<(std::fs::File, RemovedOnDrop)> {
-    use std::io::{Seek as _, Write as _};
-    let compressed_bytes = compressed.metadata()?.len();
-    let number = FILES_UNPACKED.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
-    let path = directory.join(format!("cadr-unpacked-{}-{number}.csf", std::process::id()));
-    let mut file = std::fs::OpenOptions::new()
+    let number = TEMPORARY_FILES.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+    let path = directory.join(format!("cadr-csf-{}-{number}.csf", std::process::id()));
+    let file = std::fs::OpenOptions::new()
         .read(true)
         .write(true)
         .create_new(true)
@@ -321,13 +319,24 @@ fn unpacked(
         .map_err(|e| {
             std::io::Error::new(
                 e.kind(),
-                format!(
-                    "a temporary file to unpack it into, {}: {e}",
-                    path.display()
-                ),
+                format!("a temporary file {purpose}, {}: {e}", path.display()),
             )
         })?;
     let guard = RemovedOnDrop(std::fs::remove_file(&path).is_err().then_some(path));
+    Ok((file, guard))
+}
+
+/// The gzip file `compressed` decompressed, as it streams, into a temporary file in `directory`
+/// (see [`temporary_file`]), within `limit` bytes (the decompression limit): so that neither
+/// the compressed nor the decompressed bytes are ever held whole.
+fn unpacked(
+    compressed: std::fs::File,
+    directory: &Path,
+    limit: u64,
+) -> std::io::Result<(std::fs::File, RemovedOnDrop)> {
+    use std::io::{Seek as _, Write as _};
+    let compressed_bytes = compressed.metadata()?.len();
+    let (mut file, guard) = temporary_file(directory, "to unpack it into")?;
     let mut decoder = flate2::read::GzDecoder::new(std::io::BufReader::new(compressed))
         .take(limit.saturating_add(1));
     let mut writer = std::io::BufWriter::new(&mut file);
@@ -438,19 +447,60 @@ fn scene_named_after(
 
 /// Writes `file` as version 6 to `path`, gzip-compressed when the name ends in `.gz`.
 pub fn save_csf(file: &CsfFile, path: &Path) -> Result<(), CsfFileError> {
-    let io = |source| CsfFileError::Io {
-        path: path.to_owned(),
-        source,
+    save_csf_from(file, &mut file.geometries.as_slice(), path).map_err(|error| match error {
+        SaveCsfError::File(error) => error,
+        SaveCsfError::Geometry(never) => match never {},
+    })
+}
+
+/// Why [`save_csf_from`] failed.
+#[derive(Debug)]
+pub enum SaveCsfError<E> {
+    /// Writing the file failed.
+    File(CsfFileError),
+    /// A geometry could not be had from its source.
+    Geometry(E),
+}
+
+/// Writes `file` as version 6 to `path`, gzip-compressed when the name ends in `.gz`, its
+/// geometries taken one at a time from `geometries` (`file.geometries` is not read): no more
+/// than one geometry and a few megabytes of the file are held, however large it is. A `.gz`
+/// file is written whole to a temporary file in the page directory first (see
+/// `graph::page_file`), then compressed as it streams from there.
+pub fn save_csf_from<G: CsfGeometries>(
+    file: &CsfFile,
+    geometries: &mut G,
+    path: &Path,
+) -> Result<(), SaveCsfError<G::Error>> {
+    let io = |source| {
+        SaveCsfError::File(CsfFileError::Io {
+            path: path.to_owned(),
+            source,
+        })
     };
-    let bytes = write_csf(file, VERSION);
-    if is_gzip_path(path) {
-        use std::io::Write as _;
-        let mut encoder = flate2::write::GzEncoder::new(Vec::new(), flate2::Compression::default());
-        encoder.write_all(&bytes).map_err(io)?;
-        std::fs::write(path, encoder.finish().map_err(io)?).map_err(io)
-    } else {
-        std::fs::write(path, bytes).map_err(io)
+    let written = |error| match error {
+        CsfWriteError::Geometry(error) => SaveCsfError::Geometry(error),
+        CsfWriteError::Io(source) => io(source),
+    };
+    if !is_gzip_path(path) {
+        let mut output = std::fs::File::create(path).map_err(io)?;
+        return write_csf_file(file, geometries, VERSION, &mut output).map_err(written);
     }
+    use std::io::{Seek as _, Write as _};
+    let directory = crate::graph::page_directory();
+    let (mut unpacked, _guard) = temporary_file(&directory, "to write it into").map_err(io)?;
+    write_csf_file(file, geometries, VERSION, &mut unpacked).map_err(written)?;
+    unpacked.rewind().map_err(io)?;
+    let output = std::fs::File::create(path).map_err(io)?;
+    let mut encoder = flate2::write::GzEncoder::new(
+        std::io::BufWriter::new(output),
+        flate2::Compression::default(),
+    );
+    std::io::copy(&mut std::io::BufReader::new(unpacked), &mut encoder).map_err(io)?;
+    encoder
+        .finish()
+        .and_then(|mut writer| writer.flush())
+        .map_err(io)
 }
 
 #[cfg(test)]

@@ -1,33 +1,113 @@
 //! Writing CSF in the reference layout: header, then each array followed depth-first by the
 //! data its elements point to, with the reference alignments, and the pointer table (the file
 //! locations of every non-null offset field, in writing order) at the end.
+//!
+//! The geometries are written one at a time, each as its source gives it, into memory or a
+//! file: written to a file, no more than one geometry's blocks and the last few megabytes are
+//! held ([`write_csf_file`]), so that a scene larger than memory can be saved.
+
+use std::borrow::Cow;
+use std::convert::Infallible;
+use std::fs::File;
+use std::io::{Seek, SeekFrom, Write};
 
 use super::{CsfFile, CsfGeometry, CsfMeta, FLAG_UNIQUE_NODES, MAGIC};
 
-struct Out {
+/// Bytes a file-backed writer holds before it writes them out: larger blocks go straight to
+/// the file.
+const FLUSH_BYTES: usize = 1 << 20;
+
+/// Where the bytes go, as they are laid out.
+struct Out<'f> {
+    /// The bytes from `base` on, not yet written out.
     bytes: Vec<u8>,
+    /// Where `bytes` starts in the file.
+    base: usize,
+    /// The file the bytes before `base` were written to (none: all are in `bytes`).
+    file: Option<&'f mut File>,
+    /// The first write that failed: nothing is written after it.
+    failed: Option<std::io::Error>,
     /// File locations of the offset fields written so far (the pointer table).
     locations: Vec<u64>,
 }
 
-impl Out {
+impl Out<'_> {
+    /// The file size so far.
+    fn len(&self) -> usize {
+        self.base + self.bytes.len()
+    }
+
     /// Pads with zeros to a multiple of `max(align, 4)`.
     fn align(&mut self, align: usize) {
         let align = align.max(4);
-        let padded = self.bytes.len().div_ceil(align) * align;
-        self.bytes.resize(padded, 0);
+        let padded = self.len().div_ceil(align) * align;
+        self.bytes.resize(padded - self.base, 0);
     }
 
     /// Appends `size` zero bytes at `align` and returns where they start.
     fn reserve(&mut self, size: usize, align: usize) -> usize {
+        self.make_room(size + align);
         self.align(align);
-        let at = self.bytes.len();
-        self.bytes.resize(at + size, 0);
+        let at = self.len();
+        self.bytes.resize(at + size - self.base, 0);
         at
     }
 
+    /// Writes the held bytes out where a file takes them and `more` bytes would take them past
+    /// [`FLUSH_BYTES`].
+    fn make_room(&mut self, more: usize) {
+        if self.bytes.len() + more > FLUSH_BYTES {
+            self.flush();
+        }
+    }
+
+    /// Appends `data` at `align` and returns where it starts: into the held bytes, or, where a
+    /// file takes them and it would not fit [`FLUSH_BYTES`], straight to the file.
+    fn append(&mut self, data: &[u8], align: usize) -> usize {
+        self.make_room(data.len() + align);
+        self.align(align);
+        let at = self.len();
+        if self.file.is_none() || self.bytes.len() + data.len() <= FLUSH_BYTES {
+            self.bytes.extend_from_slice(data);
+            return at;
+        }
+        self.flush();
+        if let (Some(file), None) = (self.file.as_deref_mut(), &self.failed) {
+            self.failed = file.write_all(data).err();
+        }
+        self.base += data.len();
+        at
+    }
+
+    /// Writes the held bytes out to the file, if there is one.
+    fn flush(&mut self) {
+        let Some(file) = self.file.as_deref_mut() else {
+            return;
+        };
+        if self.failed.is_none() {
+            self.failed = file.write_all(&self.bytes).err();
+        }
+        self.base += self.bytes.len();
+        self.bytes.clear();
+    }
+
     fn put(&mut self, at: usize, value: &[u8]) {
-        self.bytes[at..at + value.len()].copy_from_slice(value);
+        if at >= self.base {
+            let at = at - self.base;
+            self.bytes[at..at + value.len()].copy_from_slice(value);
+            return;
+        }
+        // Into what the file already holds: a field of an array written before its data.
+        let Some(file) = self.file.as_deref_mut() else {
+            return;
+        };
+        if self.failed.is_none() {
+            let written = file
+                .seek(SeekFrom::Start(at as u64))
+                .and_then(|_| file.write_all(value))
+                .and_then(|()| file.seek(SeekFrom::End(0)).map(|_| ()));
+            self.failed = written.err();
+        }
     }
 
     fn put_i32(&mut self, at: usize, value: i32) {
@@ -59,10 +139,39 @@ impl Out {
         if data.is_empty() {
             return;
         }
-        let at = self.reserve(data.len(), align);
-        self.put(at, data);
+        let at = self.append(data, align);
         self.link(location, at);
     }
+}
+
+/// The geometries a CSF file is written with, handed over one at a time in order.
+pub trait CsfGeometries {
+    /// Why a geometry could not be had.
+    type Error;
+    /// How many there are.
+    fn count(&self) -> usize;
+    /// Geometry number `index` (each asked for once, in order).
+    fn geometry(&mut self, index: usize) -> Result<Cow<'_, CsfGeometry>, Self::Error>;
+}
+
+/// A file's own geometries, in memory.
+impl CsfGeometries for &[CsfGeometry] {
+    type Error = Infallible;
+    fn count(&self) -> usize {
+        self.len()
+    }
+    fn geometry(&mut self, index: usize) -> Result<Cow<'_, CsfGeometry>, Infallible> {
+        Ok(Cow::Borrowed(&self[index]))
+    }
+}
+
+/// Why [`write_csf_file`] failed.
+#[derive(Debug)]
+pub enum CsfWriteError<E> {
+    /// A geometry could not be had from its source.
+    Geometry(E),
+    /// Writing the file failed.
+    Io(std::io::Error),
 }
 
 fn le<T: Copy>(values: &[T], to_bytes: impl Fn(T) -> [u8; 4]) -> Vec<u8> {
@@ -72,12 +181,51 @@ fn le<T: Copy>(values: &[T], to_bytes: impl Fn(T) -> [u8; 4]) -> Vec<u8> {
 /// Serialises `file` as CSF `version` (6 is current; 2 to 5 write the older layouts, whose
 /// geometries cannot hold channels beyond one normal and one texture channel).
 pub fn write_csf(file: &CsfFile, version: i32) -> Vec<u8> {
-    let version = version.clamp(2, 6);
-    let header_size = if version >= 5 { 88 } else { 64 };
     let mut out = Out {
-        bytes: vec![0; header_size],
+        bytes: Vec::new(),
+        base: 0,
+        file: None,
+        failed: None,
         locations: Vec::new(),
     };
+    let Ok(()) = write_into(&mut out, file, &mut file.geometries.as_slice(), version);
+    out.bytes
+}
+
+/// Writes `file` as CSF `version` to `output` (from its start), its geometries taken from
+/// `geometries` one at a time instead of `file.geometries` (which is not read): a file-backed
+/// write holds one geometry and a few megabytes of the file, however large it grows.
+pub fn write_csf_file<G: CsfGeometries>(
+    file: &CsfFile,
+    geometries: &mut G,
+    version: i32,
+    output: &mut File,
+) -> Result<(), CsfWriteError<G::Error>> {
+    let mut out = Out {
+        bytes: Vec::with_capacity(FLUSH_BYTES),
+        base: 0,
+        file: Some(output),
+        failed: None,
+        locations: Vec::new(),
+    };
+    write_into(&mut out, file, geometries, version).map_err(CsfWriteError::Geometry)?;
+    out.flush();
+    match out.failed {
+        Some(error) => Err(CsfWriteError::Io(error)),
+        None => Ok(()),
+    }
+}
+
+/// Lays `file` out into `out`, its geometries from `geometries`.
+fn write_into<G: CsfGeometries>(
+    out: &mut Out<'_>,
+    file: &CsfFile,
+    geometries: &mut G,
+    version: i32,
+) -> Result<(), G::Error> {
+    let version = version.clamp(2, 6);
+    let header_size = if version >= 5 { 88 } else { 64 };
+    out.reserve(header_size, 8);
     out.put_i32(0, MAGIC);
     out.put_i32(4, version);
     let flags = if version < 3 {
@@ -86,16 +234,18 @@ pub fn write_csf(file: &CsfFile, version: i32) -> Vec<u8> {
         file.file_flags
     };
     out.put(8, &flags.to_le_bytes());
-    out.put_i32(16, file.geometries.len() as i32);
+    let geometry_count = geometries.count();
+    out.put_i32(16, geometry_count as i32);
     out.put_i32(20, file.materials.len() as i32);
     out.put_i32(24, file.nodes.len() as i32);
     out.put_i32(28, file.root);
 
-    if !file.geometries.is_empty() {
-        let array = out.reserve(file.geometries.len() * 128, 8);
+    if geometry_count > 0 {
+        let array = out.reserve(geometry_count * 128, 8);
         out.link(40, array);
-        for (i, geometry) in file.geometries.iter().enumerate() {
-            write_geometry(&mut out, array + 128 * i, geometry, version);
+        for i in 0..geometry_count {
+            let geometry = geometries.geometry(i)?;
+            write_geometry(out, array + 128 * i, &geometry, version);
         }
     }
 
@@ -134,9 +284,9 @@ pub fn write_csf(file: &CsfFile, version: i32) -> Vec<u8> {
     }
 
     if version >= 5 {
-        write_metas(&mut out, 64, &file.node_metas);
-        write_metas(&mut out, 72, &file.geometry_metas);
-        write_metas(&mut out, 80, file.file_meta.as_slice());
+        write_metas(out, 64, &file.node_metas);
+        write_metas(out, 72, &file.geometry_metas);
+        write_metas(out, 80, file.file_meta.as_slice());
     }
 
     let table = out.reserve(out.locations.len() * 8, 8);
@@ -146,7 +296,7 @@ pub fn write_csf(file: &CsfFile, version: i32) -> Vec<u8> {
     }
     out.put_i32(12, locations.len() as i32);
     out.put(32, &(table as u64).to_le_bytes());
-    out.bytes
+    Ok(())
 }
 
 /// Writes geometry `g`'s 128-byte record at `at` (its arrays as blocks appended to `out`), as

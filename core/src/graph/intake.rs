@@ -5,8 +5,10 @@
 //! ([`super::SceneGraph::import_loaded`]). The load needs no graph, so a host's graph stays
 //! free for other threads while a file is read.
 
+use std::borrow::Cow;
+
 use super::paging::{Paging, StoredGeometry};
-use crate::scene::{Geometry, GeometrySink, GeometrySummary};
+use crate::scene::{Geometry, GeometrySink, GeometryStore, GeometrySummary};
 
 /// The geometries of a scene being loaded for a graph (a [`GeometrySink`]): in memory up to
 /// the limit they were made with, in a page file of their own beyond it. Dropped without being
@@ -61,6 +63,19 @@ impl GeometrySink for LoadedGeometries {
         self.summaries.push(geometry.summary());
         self.taken.push(self.paging.store(geometry));
         stand_in
+    }
+}
+
+/// The geometries taken, read back one at a time (from memory, or the page file).
+impl GeometryStore for LoadedGeometries {
+    fn geometry_count(&self) -> usize {
+        self.taken.len()
+    }
+
+    fn geometry(&self, index: usize) -> Result<Cow<'_, Geometry>, String> {
+        let stored =
+            (self.taken.get(index)).ok_or_else(|| format!("the load took no geometry {index}"))?;
+        stored.load().map_err(|e| e.to_string())
     }
 }
 

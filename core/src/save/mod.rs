@@ -5,9 +5,11 @@ mod gltf;
 
 use std::path::{Path, PathBuf};
 
-use crate::csf::{csf_from_scene, save_csf, CsfFileError};
+use crate::csf::{
+    csf_outline_from_scene, save_csf_from, CsfFileError, CsfGeometriesOf, SaveCsfError,
+};
 use crate::load::SceneFormat;
-use crate::scene::{flatten, Scene, SceneError};
+use crate::scene::{flatten, GeometryStore, Scene, SceneError};
 
 pub use self::gltf::{gltf_document, GltfDocument};
 
@@ -29,6 +31,14 @@ pub enum SaveError {
     /// Writing the CSF file failed.
     #[error(transparent)]
     Csf(#[from] CsfFileError),
+    /// A geometry could not be read back to be written (a page file that fails).
+    #[error("{}: {why}", path.display())]
+    Geometry {
+        /// The file being written.
+        path: PathBuf,
+        /// Why, naming the geometry.
+        why: String,
+    },
     /// The extension names no format cadr writes.
     #[error("{}: unknown output format (expected .gltf, .glb, .csf or .csf.gz)", path.display())]
     UnknownFormat {
@@ -38,7 +48,8 @@ pub enum SaveError {
 }
 
 /// Writes `scene` to `path` in the format its extension names; returns notes on what the
-/// format could not keep (empty when nothing was lost).
+/// format could not keep (empty when nothing was lost). glTF is made whole in memory first;
+/// CSF is written one geometry at a time (see [`save_csf_outline`]).
 pub fn save_scene(scene: &Scene, path: &Path) -> Result<Vec<String>, SaveError> {
     let io = |source| SaveError::Io {
         path: path.to_owned(),
@@ -85,36 +96,8 @@ pub fn save_scene(scene: &Scene, path: &Path) -> Result<Vec<String>, SaveError> 
             }
         }
         Some(SceneFormat::Csf | SceneFormat::CsfGz) => {
-            let file = csf_from_scene(scene)?;
-            if file.nodes.len() > scene.nodes.len() + 1 {
-                notes.push(format!(
-                    "CSF nodes are a tree: shared subgraphs were unfolded ({} nodes became {}); geometries stay shared",
-                    scene.nodes.len(),
-                    file.nodes.len()
-                ));
-            }
-            let textured = scene
-                .materials
-                .iter()
-                .filter(|m| m.base_color_texture.is_some())
-                .count();
-            if textured > 0 {
-                notes.push(format!(
-                    "{} textures used by {textured} materials are not written: CSF has no textures",
-                    scene.textures.len()
-                ));
-            }
-            let attributed = scene
-                .geometries
-                .iter()
-                .filter(|g| !g.attributes.is_empty())
-                .count();
-            if attributed > 0 {
-                notes.push(format!(
-                    "the texture coordinates and vertex colours of {attributed} geometries are not written: cadr's CSF writer keeps positions and normals"
-                ));
-            }
-            save_csf(&file, path)?;
+            scene.validate()?;
+            notes = save_csf_outline(scene, scene, path)?;
         }
         None => {
             return Err(SaveError::UnknownFormat {
@@ -126,5 +109,60 @@ pub fn save_scene(scene: &Scene, path: &Path) -> Result<Vec<String>, SaveError> 
         "saved {} ({meshes} mesh nodes, {paths} instances)",
         path.display()
     );
+    Ok(notes)
+}
+
+/// Writes the scene outlined by `outline` to the CSF file `path` (`.csf`, or `.csf.gz`
+/// compressed), its geometries read one at a time from `geometries` (the outline's may be
+/// stand-ins, as a load through a [`crate::scene::GeometrySink`] leaves them): no more than one
+/// geometry and a few megabytes of the file are held, so that a scene larger than memory can be
+/// converted. Returns notes on what CSF could not keep.
+pub fn save_csf_outline(
+    outline: &Scene,
+    geometries: &dyn GeometryStore,
+    path: &Path,
+) -> Result<Vec<String>, SaveError> {
+    outline.validate_outline_references()?;
+    if geometries.geometry_count() != outline.geometries.len() {
+        return Err(SaveError::Scene(SceneError(format!(
+            "{} geometries to write for the {} of the scene",
+            geometries.geometry_count(),
+            outline.geometries.len()
+        ))));
+    }
+    let mut notes = Vec::new();
+    let file = csf_outline_from_scene(outline);
+    if file.nodes.len() > outline.nodes.len() + 1 {
+        notes.push(format!(
+            "CSF nodes are a tree: shared subgraphs were unfolded ({} nodes became {}); geometries stay shared",
+            outline.nodes.len(),
+            file.nodes.len()
+        ));
+    }
+    let textured = outline
+        .materials
+        .iter()
+        .filter(|m| m.base_color_texture.is_some())
+        .count();
+    if textured > 0 {
+        notes.push(format!(
+            "{} textures used by {textured} materials are not written: CSF has no textures",
+            outline.textures.len()
+        ));
+    }
+    let mut source = CsfGeometriesOf::new(geometries);
+    save_csf_from(&file, &mut source, path).map_err(|error| match error {
+        SaveCsfError::File(error) => SaveError::Csf(error),
+        SaveCsfError::Geometry(why) => SaveError::Geometry {
+            path: path.to_owned(),
+            why,
+        },
+    })?;
+    if source.attributed > 0 {
+        notes.push(format!(
+            "the texture coordinates and vertex colours of {} geometries are not written: cadr's CSF writer keeps positions and normals",
+            source.attributed
+        ));
+    }
     Ok(notes)
 }

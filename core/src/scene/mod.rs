@@ -13,7 +13,7 @@ mod texture;
 
 pub use bounds::Aabb;
 pub use flatten::{flatten, flatten_outline, DrawItem, FlatScene, Instance};
-pub use sink::{GeometrySink, GeometrySummary, KeepInScene};
+pub use sink::{GeometrySink, GeometryStore, GeometrySummary, KeepInScene};
 pub use stats::SceneStats;
 pub use texture::{AlphaMode, Sampler, Texture, TextureRef, UvTransform, Wrap};
 
@@ -362,7 +362,7 @@ impl Scene {
     }
 
     /// [`Scene::validate_references`] without the geometries' arrays.
-    pub(super) fn validate_outline_references(&self) -> Result<(), SceneError> {
+    pub(crate) fn validate_outline_references(&self) -> Result<(), SceneError> {
         let fail = |text: String| Err(SceneError(text));
         for (m, material) in self.materials.iter().enumerate() {
             let values = material

@@ -1,9 +1,36 @@
 //! Where a loader puts each geometry as soon as it has made it: kept in the scene (the plain
 //! road, for savers, converters and tests), or handed to a scene graph that may write it to its
 //! page file at once (`crate::graph::GeometryIntake`), so that loading a model larger than
-//! memory never holds all of its geometry.
+//! memory never holds all of its geometry. And where a saver reads them back, one at a time
+//! ([`GeometryStore`]).
+
+use std::borrow::Cow;
 
 use super::{Aabb, Geometry, Scene, SceneError};
+
+/// Where a saver reads a scene's geometries, one at a time: the scene itself, or the sink a
+/// load handed them to (`crate::graph::LoadedGeometries`, whose scene is an outline).
+pub trait GeometryStore {
+    /// How many geometries there are.
+    fn geometry_count(&self) -> usize;
+    /// Geometry number `index` (below [`GeometryStore::geometry_count`]), or why it cannot be
+    /// read (a page file that fails, naming the geometry).
+    fn geometry(&self, index: usize) -> Result<Cow<'_, Geometry>, String>;
+}
+
+/// A scene's own geometries, in memory.
+impl GeometryStore for Scene {
+    fn geometry_count(&self) -> usize {
+        self.geometries.len()
+    }
+
+    fn geometry(&self, index: usize) -> Result<Cow<'_, Geometry>, String> {
+        self.geometries
+            .get(index)
+            .map(Cow::Borrowed)
+            .ok_or_else(|| format!("the scene has no geometry {index}"))
+    }
+}
 
 /// Takes the geometries of a scene being loaded, one by one.
 pub trait GeometrySink {

@@ -20,10 +20,10 @@ use std::process::ExitCode;
 use std::time::Instant;
 
 use cadr_core::graph::SceneGraph;
-use cadr_core::load::{SceneFormat, SceneSource};
+use cadr_core::load::SceneSource;
 use cadr_core::render::{Camera, FrameStats, DEFAULT_DIRECTION};
 use cadr_core::scene::closure::{ClosedPartCounter, ClosedPartCounts};
-use cadr_core::scene::{flatten, flatten_outline, SceneStats};
+use cadr_core::scene::{flatten_outline, SceneStats};
 use cadr_core::technique::{Combination, ShadeMode};
 use cadr_core::timings::{self, Phase};
 use cadr_core::vk::{self as cvk, Device, DeviceOptions, InstanceOptions};
@@ -106,12 +106,6 @@ pub(crate) fn load_graph(text: &str, highlight: &[String]) -> Result<LoadedGraph
     })
 }
 
-/// Loads or generates the scene `text` names (with a spinner if it takes over a second).
-fn load_scene(text: &str) -> Result<cadr_core::scene::Scene, String> {
-    let source = SceneSource::parse(text).map_err(|e| e.to_string())?;
-    progress::spin(&format!("loading {text}"), || source.load()).map_err(|e| e.to_string())
-}
-
 /// The Vulkan device, with the validation layers when the options or the environment ask.
 pub(crate) fn open_device(validation: &ValidationArgs) -> Result<std::sync::Arc<Device>, String> {
     let options = DeviceOptions {
@@ -156,34 +150,19 @@ fn info(args: &InfoArgs) -> Result<(), String> {
 
 fn convert(args: &ConvertArgs) -> Result<(), String> {
     let started = Instant::now();
-    let (notes, stats) = match SceneFormat::from_path(&args.output) {
-        // One geometry at a time: each loaded geometry stays in memory up to half the memory
-        // budget (CADR_MEMORY_BUDGET) and goes to a page file past it, and is read back as it
-        // is written.
-        Some(SceneFormat::Csf | SceneFormat::CsfGz) => {
-            let source = SceneSource::parse(&args.scene).map_err(|e| e.to_string())?;
-            let limit = cadr_core::memory_budget::budget()?.saturating_div(2);
-            let (outline, geometries) = progress::spin(&format!("loading {}", args.scene), || {
-                source.load_for_graph(limit)
-            })
-            .map_err(|e| e.to_string())?;
-            let flat =
-                flatten_outline(&outline, geometries.summaries()).map_err(|e| e.to_string())?;
-            let stats = SceneStats::of_outline(&outline, &flat, geometries.summaries());
-            drop(flat);
-            let notes = cadr_core::save::save_csf_outline(&outline, &geometries, &args.output)
-                .map_err(|e| e.to_string())?;
-            (notes, stats)
-        }
-        // glTF is made whole in memory.
-        _ => {
-            let scene = load_scene(&args.scene)?;
-            let notes =
-                cadr_core::save::save_scene(&scene, &args.output).map_err(|e| e.to_string())?;
-            let flat = flatten(&scene).map_err(|e| e.to_string())?;
-            (notes, SceneStats::new(&scene, &flat))
-        }
-    };
+    // One geometry at a time: each loaded geometry stays in memory up to half the memory budget
+    // (CADR_MEMORY_BUDGET) and goes to a page file past it, and is read back as it is written.
+    let source = SceneSource::parse(&args.scene).map_err(|e| e.to_string())?;
+    let limit = cadr_core::memory_budget::budget()?.saturating_div(2);
+    let (outline, geometries) = progress::spin(&format!("loading {}", args.scene), || {
+        source.load_for_graph(limit)
+    })
+    .map_err(|e| e.to_string())?;
+    let flat = flatten_outline(&outline, geometries.summaries()).map_err(|e| e.to_string())?;
+    let stats = SceneStats::of_outline(&outline, &flat, geometries.summaries());
+    drop(flat);
+    let notes = cadr_core::save::save_outline(&outline, &geometries, &args.output)
+        .map_err(|e| e.to_string())?;
     println!(
         "wrote {}: {} nodes, {} geometries, {} materials, {} parts drawn, {} triangles ({:.0} ms)",
         args.output.display(),

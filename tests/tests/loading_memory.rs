@@ -149,25 +149,36 @@ fn csf_and_gltf_files_loaded_for_a_graph_page_their_geometries_and_import_as_loa
     }
 }
 
-/// Converting to CSF (`cadr convert`): the scene loaded with its geometries past a limit in a
-/// page file, then written one geometry at a time, makes the very file a save of the whole
-/// scene makes, and the save holds one geometry and the writer's few megabytes, not the scene.
-/// A geometry whose page cannot be read back fails the save with an error that names it.
+/// The files `name` in `directory` stands for: itself, and a `.gltf`'s `.bin` beside it.
+fn written_files(directory: &Path, name: &str) -> Vec<Vec<u8>> {
+    let mut files = vec![std::fs::read(directory.join(name)).unwrap()];
+    if let Some(stem) = name.strip_suffix(".gltf") {
+        files.push(std::fs::read(directory.join(format!("{stem}.bin"))).unwrap());
+    }
+    files
+}
+
+/// Converting (`cadr convert`): the scene loaded with its geometries past a limit in a page
+/// file, then written one geometry at a time, makes the very files a save of the whole scene
+/// makes, in every format, and the save holds one geometry and the writer's buffer, not the
+/// scene. A geometry whose page cannot be read back fails the save with an error that names it.
 #[test]
-fn a_scene_converted_to_csf_from_its_page_file_is_the_file_saved_whole() {
+fn a_scene_converted_from_its_page_file_is_the_file_saved_whole() {
     let _one = ONE_AT_A_TIME.lock().unwrap_or_else(|p| p.into_inner());
     let source = SceneSource::parse(UNIQUE_UNITS).unwrap();
     let whole = source.load().unwrap();
     let total = scene_bytes(&whole);
-    let scratch = scratch_dir("loading-memory-convert");
-    for name in ["units.csf", "units.csf.gz"] {
-        let expected = std::fs::read(saved(&whole, &scratch, name)).unwrap();
+    let (expected_directory, converted_directory) = (
+        scratch_dir("loading-memory-saved"),
+        scratch_dir("loading-memory-converted"),
+    );
+    for name in ["units.csf", "units.csf.gz", "units.glb", "units.gltf"] {
+        saved(&whole, &expected_directory, name);
         let (outline, geometries) = source.load_for_graph(total / 8).unwrap();
         assert!(geometries.memory().paged_geometries > 0, "{name}");
-        let path = scratch.join(format!("converted-{name}"));
-        let (growth, notes) = heap_growth(|| {
-            cadr_core::save::save_csf_outline(&outline, &geometries, &path).unwrap()
-        });
+        let path = converted_directory.join(name);
+        let (growth, notes) =
+            heap_growth(|| cadr_core::save::save_outline(&outline, &geometries, &path).unwrap());
         println!(
             "{name}: the save grew the heap {:.1} MB for a scene of {:.1} MB",
             growth as f64 / 1e6,
@@ -175,16 +186,16 @@ fn a_scene_converted_to_csf_from_its_page_file_is_the_file_saved_whole() {
         );
         assert!(notes.is_empty(), "{notes:?}");
         assert!(
-            std::fs::read(&path).unwrap() == expected,
+            written_files(&converted_directory, name) == written_files(&expected_directory, name),
             "{name}: the files differ"
         );
-        // One geometry read back, its CSF arrays and their bytes, and the writer's 1 MiB.
+        // One geometry read back, what it is made into and the writer's buffer (the CSF
+        // writer's 1 MiB; glTF's JSON, which grows with the nodes, not the geometry).
         let allowance = 4 * largest_geometry_bytes(&whole) + (2 << 20);
         assert!(
             growth <= allowance && growth * 2 < total,
             "{name}: {growth} bytes, more than one geometry and the writer's ({allowance})"
         );
-        std::fs::remove_file(&path).unwrap();
 
         // The page file cut short: the first paged geometry cannot be read back.
         let page_file = geometries.memory().page_file.unwrap();
@@ -194,7 +205,7 @@ fn a_scene_converted_to_csf_from_its_page_file_is_the_file_saved_whole() {
             .unwrap()
             .set_len(16)
             .unwrap();
-        let error = cadr_core::save::save_csf_outline(&outline, &geometries, &path)
+        let error = cadr_core::save::save_outline(&outline, &geometries, &path)
             .unwrap_err()
             .to_string();
         assert!(
@@ -202,7 +213,6 @@ fn a_scene_converted_to_csf_from_its_page_file_is_the_file_saved_whole() {
             "{name}: {error}"
         );
     }
-    std::fs::remove_dir_all(&scratch).unwrap();
 }
 
 #[test]

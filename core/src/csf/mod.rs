@@ -23,6 +23,8 @@ use std::borrow::Cow;
 use std::io::Read as _;
 use std::path::Path;
 
+use crate::graph::{temporary_file, RemovedOnDrop};
+
 /// `CADSCENEFILE_MAGIC`.
 pub const MAGIC: i32 = 1_567_262_451;
 /// The newest version, the one [`write_csf`] writes by default.
@@ -285,49 +287,8 @@ fn past_the_limit(compressed: u64, limit: u64) -> std::io::Error {
     )
 }
 
-/// Temporary files made by this process for `.csf.gz` files (unpacked to read, or written to
-/// pack), counted (for their names).
-static TEMPORARY_FILES: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(0);
-
-/// Removes a temporary file when dropped, where it could not be removed while open.
-#[derive(Debug)]
-struct RemovedOnDrop(Option<std::path::PathBuf>);
-
-impl Drop for RemovedOnDrop {
-    fn drop(&mut self) {
-        if let Some(path) = self.0.take() {
-            let _ = std::fs::remove_file(path);
-        }
-    }
-}
-
-/// A new temporary file in `directory` (the page directory, `CADR_PAGE_DIR`: see
-/// `graph::page_file`), open to read and write, for `purpose` (which its error names). It is
-/// removed from its directory as soon as it is open (where the system allows; otherwise when
-/// the returned guard is dropped), so that nothing is left behind, even by a crash.
-fn temporary_file(
-    directory: &Path,
-    purpose: &str,
-) -> std::io::Result<(std::fs::File, RemovedOnDrop)> {
-    let number = TEMPORARY_FILES.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
-    let path = directory.join(format!("cadr-csf-{}-{number}.csf", std::process::id()));
-    let file = std::fs::OpenOptions::new()
-        .read(true)
-        .write(true)
-        .create_new(true)
-        .open(&path)
-        .map_err(|e| {
-            std::io::Error::new(
-                e.kind(),
-                format!("a temporary file {purpose}, {}: {e}", path.display()),
-            )
-        })?;
-    let guard = RemovedOnDrop(std::fs::remove_file(&path).is_err().then_some(path));
-    Ok((file, guard))
-}
-
 /// The gzip file `compressed` decompressed, as it streams, into a temporary file in `directory`
-/// (see [`temporary_file`]), within `limit` bytes (the decompression limit): so that neither
+/// (see [`crate::graph::temporary_file`]), within `limit` bytes (the decompression limit): so that neither
 /// the compressed nor the decompressed bytes are ever held whole.
 fn unpacked(
     compressed: std::fs::File,
@@ -419,7 +380,7 @@ pub fn csf_scene_from_file(
         let directory = crate::graph::page_directory();
         unpacked(file, &directory, decompression_limit()).map_err(io)?
     } else {
-        (file, RemovedOnDrop(None))
+        (file, RemovedOnDrop::nothing())
     };
     let len = file.metadata().map_err(io)?.len();
     let bytes = CsfBytes::File {

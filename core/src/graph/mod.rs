@@ -15,8 +15,8 @@ mod slots;
 
 pub use convert::Imported;
 pub use intake::LoadedGeometries;
-pub(crate) use page_file::page_directory;
 pub use page_file::Page;
+pub(crate) use page_file::{page_directory, temporary_file, RemovedOnDrop};
 pub use paging::{GeometryInfo, GeometryMemory, GeometrySource};
 pub use slots::{Handle, Slots};
 

@@ -239,6 +239,54 @@ pub(crate) fn page_directory() -> PathBuf {
     std::env::temp_dir()
 }
 
+/// Temporary files made by this process (a `.csf.gz` unpacked to be read or written to be
+/// packed, a GLB's buffer), counted (for their names).
+static TEMPORARY_FILES: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(0);
+
+/// Removes a temporary file when dropped, where it could not be removed while open.
+#[derive(Debug)]
+pub(crate) struct RemovedOnDrop(Option<std::path::PathBuf>);
+
+impl RemovedOnDrop {
+    /// A guard with nothing to remove.
+    pub(crate) fn nothing() -> Self {
+        Self(None)
+    }
+}
+
+impl Drop for RemovedOnDrop {
+    fn drop(&mut self) {
+        if let Some(path) = self.0.take() {
+            let _ = std::fs::remove_file(path);
+        }
+    }
+}
+
+/// A new temporary file in `directory` (the page directory, [`page_directory`]), open to read
+/// and write, for `purpose` (which its error names). It is
+/// removed from its directory as soon as it is open (where the system allows; otherwise when
+/// the returned guard is dropped), so that nothing is left behind, even by a crash.
+pub(crate) fn temporary_file(
+    directory: &Path,
+    purpose: &str,
+) -> std::io::Result<(std::fs::File, RemovedOnDrop)> {
+    let number = TEMPORARY_FILES.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+    let path = directory.join(format!("cadr-temporary-{}-{number}", std::process::id()));
+    let file = std::fs::OpenOptions::new()
+        .read(true)
+        .write(true)
+        .create_new(true)
+        .open(&path)
+        .map_err(|e| {
+            std::io::Error::new(
+                e.kind(),
+                format!("a temporary file {purpose}, {}: {e}", path.display()),
+            )
+        })?;
+    let guard = RemovedOnDrop(std::fs::remove_file(&path).is_err().then_some(path));
+    Ok((file, guard))
+}
+
 /// Removes the page files in `directory` whose process has ended (Linux: no `/proc/PID`; on
 /// other systems none is removed).
 fn remove_orphans(directory: &Path) {

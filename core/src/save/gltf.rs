@@ -5,19 +5,99 @@
 //! parts) combination; the node DAG unfolded into trees with matrices at full precision.
 
 use std::collections::HashMap;
+use std::io::Write as _;
 
 use glam::DMat4;
 use serde_json::{json, Value};
 
-use crate::scene::{Aabb, AlphaMode, NodeIndex, Scene, SceneError, UvTransform, Wrap};
+use crate::scene::{
+    Aabb, AlphaMode, GeometryStore, NodeIndex, Scene, SceneError, UvTransform, Wrap,
+};
 
-/// A glTF document in memory: its JSON (without the buffer URI) and binary buffer.
+/// A glTF document: its JSON (without the buffer URI) and binary buffer, in memory or in the
+/// file it was written to as it was made.
 pub struct GltfDocument {
     json: Value,
     /// The binary buffer.
-    pub binary: Vec<u8>,
+    pub binary: Binary,
     /// Number of glTF nodes after unfolding shared subgraphs.
     pub unfolded_nodes: usize,
+}
+
+/// Where a document's binary buffer goes as it is made: memory, or a file, so that a scene
+/// larger than memory is written a geometry at a time.
+pub enum Binary {
+    /// In memory.
+    Memory(Vec<u8>),
+    /// Written to a file (from its start) as it is made.
+    File {
+        /// The file, behind a buffer.
+        writer: std::io::BufWriter<std::fs::File>,
+        /// Bytes written so far.
+        len: u64,
+        /// The first write that failed: nothing is written after it.
+        failed: Option<std::io::Error>,
+    },
+}
+
+impl Binary {
+    /// A buffer written to `file` as it is made.
+    pub fn to_file(file: std::fs::File) -> Self {
+        Self::File {
+            writer: std::io::BufWriter::new(file),
+            len: 0,
+            failed: None,
+        }
+    }
+
+    /// Its length so far.
+    pub fn len(&self) -> u64 {
+        match self {
+            Self::Memory(bytes) => bytes.len() as u64,
+            Self::File { len, .. } => *len,
+        }
+    }
+
+    /// Whether nothing has been written.
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+
+    fn append(&mut self, data: &[u8]) {
+        match self {
+            Self::Memory(bytes) => bytes.extend_from_slice(data),
+            Self::File {
+                writer,
+                len,
+                failed,
+            } => {
+                if failed.is_none() {
+                    *failed = writer.write_all(data).err();
+                }
+                *len += data.len() as u64;
+            }
+        }
+    }
+
+    /// Pads with zeros to a multiple of 4 bytes.
+    fn pad(&mut self) {
+        let padding = (4 - self.len() % 4) % 4;
+        self.append(&[0; 3][..padding as usize]);
+    }
+
+    /// The file, everything written to it (or the first write that failed); none for a buffer
+    /// in memory.
+    pub fn finish(self) -> Option<std::io::Result<std::fs::File>> {
+        match self {
+            Self::Memory(_) => None,
+            Self::File { writer, failed, .. } => Some(match failed {
+                Some(error) => Err(error),
+                None => writer
+                    .into_inner()
+                    .map_err(std::io::IntoInnerError::into_error),
+            }),
+        }
+    }
 }
 
 const ARRAY_BUFFER: u32 = 34962;
@@ -28,7 +108,9 @@ const UNSIGNED_BYTE: u32 = 5121;
 
 struct Builder<'a> {
     scene: &'a Scene,
-    binary: Vec<u8>,
+    /// Where the geometries' arrays are read, one at a time (the scene may be an outline).
+    geometries: &'a dyn GeometryStore,
+    binary: Binary,
     views: Vec<Value>,
     accessors: Vec<Value>,
     meshes: Vec<Value>,
@@ -42,11 +124,9 @@ struct Builder<'a> {
 
 impl Builder<'_> {
     fn push_view(&mut self, bytes: &[u8], target: u32) -> usize {
-        while self.binary.len() % 4 != 0 {
-            self.binary.push(0);
-        }
+        self.binary.pad();
         self.views.push(json!({"buffer": 0, "byteOffset": self.binary.len(), "byteLength": bytes.len(), "target": target}));
-        self.binary.extend_from_slice(bytes);
+        self.binary.append(bytes);
         self.views.len() - 1
     }
 
@@ -55,8 +135,11 @@ impl Builder<'_> {
         self.accessors.len() - 1
     }
 
-    fn add_geometries(&mut self) {
-        for geometry in &self.scene.geometries {
+    /// Every geometry's arrays, read one at a time; the error names a geometry that cannot be
+    /// read back.
+    fn add_geometries(&mut self) -> Result<(), String> {
+        for index in 0..self.geometries.geometry_count() {
+            let geometry = self.geometries.geometry(index)?;
             let positions: Vec<u8> = geometry
                 .vertices
                 .iter()
@@ -122,6 +205,7 @@ impl Builder<'_> {
             });
             self.attribute_accessors.push(attributes);
         }
+        Ok(())
     }
 
     /// Every texture as a PNG image in the buffer, with its sampler: the `images`, `samplers`
@@ -143,14 +227,12 @@ impl Builder<'_> {
             image
                 .write_to(&mut png, image::ImageFormat::Png)
                 .map_err(|e| SceneError(format!("texture {t} ('{}'): {e}", texture.name)))?;
-            while self.binary.len() % 4 != 0 {
-                self.binary.push(0);
-            }
+            self.binary.pad();
             let png = png.into_inner();
             self.views.push(
                 json!({"buffer": 0, "byteOffset": self.binary.len(), "byteLength": png.len()}),
             );
-            self.binary.extend_from_slice(&png);
+            self.binary.append(&png);
             images.push(json!({"name": texture.name, "bufferView": self.views.len() - 1, "mimeType": "image/png"}));
             let sampler = texture.sampler;
             samplers.push(json!({
@@ -243,12 +325,36 @@ impl Builder<'_> {
     }
 }
 
-/// Builds the glTF document of a (validated) scene.
+/// Why a glTF document could not be made.
+#[derive(Debug)]
+pub enum GltfError {
+    /// The scene is invalid (or a texture cannot be encoded).
+    Scene(SceneError),
+    /// A geometry could not be read back from its store (naming it).
+    Geometry(String),
+}
+
+/// Builds the glTF document of a (validated) scene in memory.
 pub fn gltf_document(scene: &Scene) -> Result<GltfDocument, SceneError> {
     scene.validate()?;
+    gltf_document_from(scene, scene, Binary::Memory(Vec::new())).map_err(|error| match error {
+        GltfError::Scene(error) => error,
+        GltfError::Geometry(why) => SceneError(why),
+    })
+}
+
+/// Builds the glTF document of the scene outlined by `scene` (whose references were checked;
+/// its geometries may be stand-ins), its geometries read one at a time from `geometries` and
+/// their arrays written to `binary` as they are read.
+pub fn gltf_document_from(
+    scene: &Scene,
+    geometries: &dyn GeometryStore,
+    binary: Binary,
+) -> Result<GltfDocument, GltfError> {
     let mut builder = Builder {
         scene,
-        binary: Vec::new(),
+        geometries,
+        binary,
         views: Vec::new(),
         accessors: Vec::new(),
         meshes: Vec::new(),
@@ -257,8 +363,8 @@ pub fn gltf_document(scene: &Scene) -> Result<GltfDocument, SceneError> {
         attribute_accessors: Vec::new(),
         mesh_cache: HashMap::new(),
     };
-    builder.add_geometries();
-    let [images, samplers, textures] = builder.add_textures()?;
+    builder.add_geometries().map_err(GltfError::Geometry)?;
+    let [images, samplers, textures] = builder.add_textures().map_err(GltfError::Scene)?;
     let mut transformed = false;
     let roots: Vec<usize> = scene
         .roots
@@ -317,9 +423,7 @@ pub fn gltf_document(scene: &Scene) -> Result<GltfDocument, SceneError> {
             material
         })
         .collect();
-    while builder.binary.len() % 4 != 0 {
-        builder.binary.push(0);
-    }
+    builder.binary.pad();
     let mut json = json!({
         "asset": {"version": "2.0", "generator": concat!("cadr ", env!("CARGO_PKG_VERSION"))},
         "scene": 0,
@@ -366,27 +470,48 @@ impl GltfDocument {
         json.to_string()
     }
 
-    /// The GLB container: JSON chunk and binary chunk.
-    pub fn to_glb(&self) -> Vec<u8> {
+    /// Writes the GLB container to `out`: the JSON chunk, then the binary chunk, copied from
+    /// memory or from the file it was written to. Refuses a document GLB cannot hold: its
+    /// lengths are 32-bit, so 4 GiB in all.
+    pub fn write_glb(self, out: &mut impl std::io::Write) -> std::io::Result<()> {
+        use std::io::Seek as _;
         let mut json = self.json.to_string().into_bytes();
         while json.len() % 4 != 0 {
             json.push(b' ');
         }
-        let has_binary = !self.binary.is_empty();
-        let total = 12 + 8 + json.len() + if has_binary { 8 + self.binary.len() } else { 0 };
-        let mut out = Vec::with_capacity(total);
-        out.extend_from_slice(b"glTF");
-        out.extend_from_slice(&2_u32.to_le_bytes());
-        out.extend_from_slice(&(total as u32).to_le_bytes());
-        out.extend_from_slice(&(json.len() as u32).to_le_bytes());
-        out.extend_from_slice(b"JSON");
-        out.extend_from_slice(&json);
-        if has_binary {
-            out.extend_from_slice(&(self.binary.len() as u32).to_le_bytes());
-            out.extend_from_slice(b"BIN\0");
-            out.extend_from_slice(&self.binary);
+        let binary_len = self.binary.len();
+        let has_binary = binary_len > 0;
+        let total = 12 + 8 + json.len() as u64 + if has_binary { 8 + binary_len } else { 0 };
+        let too_large = || {
+            std::io::Error::new(
+                std::io::ErrorKind::InvalidInput,
+                format!(
+                    "a GLB file holds at most 4 GiB, this scene needs {total} bytes: write .gltf (with its .bin) instead"
+                ),
+            )
+        };
+        let total = u32::try_from(total).map_err(|_| too_large())?;
+        out.write_all(b"glTF")?;
+        out.write_all(&2_u32.to_le_bytes())?;
+        out.write_all(&total.to_le_bytes())?;
+        out.write_all(&(json.len() as u32).to_le_bytes())?;
+        out.write_all(b"JSON")?;
+        out.write_all(&json)?;
+        if !has_binary {
+            return Ok(());
         }
-        out
+        out.write_all(&(binary_len as u32).to_le_bytes())?;
+        out.write_all(b"BIN\0")?;
+        match self.binary {
+            Binary::Memory(bytes) => out.write_all(&bytes),
+            file @ Binary::File { .. } => {
+                let Some(mut file) = file.finish().transpose()? else {
+                    return Ok(());
+                };
+                file.rewind()?;
+                std::io::copy(&mut std::io::BufReader::new(file), out).map(|_| ())
+            }
+        }
     }
 }
 
@@ -400,4 +525,37 @@ fn texture_transform(transform: &UvTransform) -> Value {
     let scale_y = b.hypot(d);
     let rotation = (-c).atan2(a);
     json!({"offset": [offset_u, offset_v], "rotation": rotation, "scale": [scale_x, scale_y]})
+}
+
+#[cfg(test)]
+mod tests {
+    #![allow(clippy::unwrap_used)] // Test code: a failed unwrap is a failed test.
+    use super::*;
+
+    #[test]
+    fn a_glb_past_4_gib_is_refused_before_anything_is_written() {
+        let document = GltfDocument {
+            json: json!({"asset": {"version": "2.0"}}),
+            binary: Binary::File {
+                writer: std::io::BufWriter::new(tempfile_in_target()),
+                len: 5 << 30,
+                failed: None,
+            },
+            unfolded_nodes: 0,
+        };
+        let mut out = Vec::new();
+        let error = document.write_glb(&mut out).unwrap_err().to_string();
+        assert!(
+            error.contains("at most 4 GiB") && error.contains(".gltf"),
+            "{error}"
+        );
+        assert!(out.is_empty());
+    }
+
+    /// A scratch file (removed at once: only its handle is used).
+    fn tempfile_in_target() -> std::fs::File {
+        let (file, _guard) =
+            crate::graph::temporary_file(&std::env::temp_dir(), "for a test").unwrap();
+        file
+    }
 }

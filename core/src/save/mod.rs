@@ -3,6 +3,7 @@
 
 mod gltf;
 
+use std::io::Write as _;
 use std::path::{Path, PathBuf};
 
 use crate::csf::{
@@ -11,7 +12,7 @@ use crate::csf::{
 use crate::load::SceneFormat;
 use crate::scene::{flatten, GeometryStore, Scene, SceneError};
 
-pub use self::gltf::{gltf_document, GltfDocument};
+pub use self::gltf::{gltf_document, gltf_document_from, Binary, GltfDocument, GltfError};
 
 /// Why a scene could not be saved.
 #[derive(Debug, thiserror::Error)]
@@ -48,63 +49,12 @@ pub enum SaveError {
 }
 
 /// Writes `scene` to `path` in the format its extension names; returns notes on what the
-/// format could not keep (empty when nothing was lost). glTF is made whole in memory first;
-/// CSF is written one geometry at a time (see [`save_csf_outline`]).
+/// format could not keep (empty when nothing was lost). See [`save_outline`].
 pub fn save_scene(scene: &Scene, path: &Path) -> Result<Vec<String>, SaveError> {
-    let io = |source| SaveError::Io {
-        path: path.to_owned(),
-        source,
-    };
-    let mut notes = Vec::new();
+    scene.validate()?;
     let paths = flatten(scene)?.instances.len();
     let meshes = scene.nodes.iter().filter(|n| n.mesh.is_some()).count();
-    match SceneFormat::from_path(path) {
-        Some(format @ (SceneFormat::Gltf | SceneFormat::Glb)) => {
-            let document = gltf_document(scene)?;
-            if document.unfolded_nodes > scene.nodes.len() {
-                notes.push(format!(
-                    "glTF nodes have one parent: shared subgraphs were unfolded ({} nodes became {}); meshes stay shared",
-                    scene.nodes.len(),
-                    document.unfolded_nodes
-                ));
-            }
-            let wire: usize = scene
-                .geometries
-                .iter()
-                .map(|g| g.wire_indices.len() / 2)
-                .sum();
-            if wire > 0 {
-                notes.push(format!(
-                    "{wire} edges (wire indices) are not written: glTF has no place for them"
-                ));
-            }
-            if format == SceneFormat::Glb {
-                std::fs::write(path, document.to_glb()).map_err(io)?;
-            } else {
-                let bin_name = format!(
-                    "{}.bin",
-                    path.file_stem()
-                        .map(|s| s.to_string_lossy().into_owned())
-                        .unwrap_or_else(|| "scene".into())
-                );
-                let bin_path = path.with_file_name(&bin_name);
-                std::fs::write(&bin_path, &document.binary).map_err(|source| SaveError::Io {
-                    path: bin_path.clone(),
-                    source,
-                })?;
-                std::fs::write(path, document.json_with_uri(&bin_name)).map_err(io)?;
-            }
-        }
-        Some(SceneFormat::Csf | SceneFormat::CsfGz) => {
-            scene.validate()?;
-            notes = save_csf_outline(scene, scene, path)?;
-        }
-        None => {
-            return Err(SaveError::UnknownFormat {
-                path: path.to_owned(),
-            })
-        }
-    }
+    let notes = save_outline(scene, scene, path)?;
     log::debug!(
         "saved {} ({meshes} mesh nodes, {paths} instances)",
         path.display()
@@ -112,12 +62,14 @@ pub fn save_scene(scene: &Scene, path: &Path) -> Result<Vec<String>, SaveError> 
     Ok(notes)
 }
 
-/// Writes the scene outlined by `outline` to the CSF file `path` (`.csf`, or `.csf.gz`
-/// compressed), its geometries read one at a time from `geometries` (the outline's may be
-/// stand-ins, as a load through a [`crate::scene::GeometrySink`] leaves them): no more than one
-/// geometry and a few megabytes of the file are held, so that a scene larger than memory can be
-/// converted. Returns notes on what CSF could not keep.
-pub fn save_csf_outline(
+/// Writes the scene outlined by `outline` to `path` in the format its extension names, its
+/// geometries read one at a time from `geometries` (the outline's may be stand-ins, as a load
+/// through a [`crate::scene::GeometrySink`] leaves them) and written as they are read: no
+/// more than one geometry and a few megabytes of the file are held, so that a scene larger than
+/// memory can be converted. A GLB's buffer is written to a temporary file in the page
+/// directory first (its length comes before it in the file), then copied after the JSON.
+/// Returns notes on what the format could not keep.
+pub fn save_outline(
     outline: &Scene,
     geometries: &dyn GeometryStore,
     path: &Path,
@@ -130,6 +82,94 @@ pub fn save_csf_outline(
             outline.geometries.len()
         ))));
     }
+    match SceneFormat::from_path(path) {
+        Some(format @ (SceneFormat::Gltf | SceneFormat::Glb)) => {
+            save_gltf_outline(outline, geometries, path, format == SceneFormat::Glb)
+        }
+        Some(SceneFormat::Csf | SceneFormat::CsfGz) => save_csf_outline(outline, geometries, path),
+        None => Err(SaveError::UnknownFormat {
+            path: path.to_owned(),
+        }),
+    }
+}
+
+/// [`save_outline`] to glTF: a `.glb` where `binary_container`, else a `.gltf` with its buffer
+/// in a `.bin` file beside it.
+fn save_gltf_outline(
+    outline: &Scene,
+    geometries: &dyn GeometryStore,
+    path: &Path,
+    binary_container: bool,
+) -> Result<Vec<String>, SaveError> {
+    let io_at = |path: &Path| {
+        let path = path.to_owned();
+        move |source| SaveError::Io { path, source }
+    };
+    let made = |error| match error {
+        GltfError::Scene(error) => SaveError::Scene(error),
+        GltfError::Geometry(why) => SaveError::Geometry {
+            path: path.to_owned(),
+            why,
+        },
+    };
+    let unfolded_nodes = if binary_container {
+        let directory = crate::graph::page_directory();
+        let (buffer, _guard) = crate::graph::temporary_file(&directory, "for the GLB's buffer")
+            .map_err(io_at(path))?;
+        let document =
+            gltf_document_from(outline, geometries, Binary::to_file(buffer)).map_err(made)?;
+        let unfolded_nodes = document.unfolded_nodes;
+        let mut output = std::io::BufWriter::new(std::fs::File::create(path).map_err(io_at(path))?);
+        document
+            .write_glb(&mut output)
+            .and_then(|()| output.flush())
+            .map_err(io_at(path))?;
+        unfolded_nodes
+    } else {
+        let bin_name = format!(
+            "{}.bin",
+            path.file_stem()
+                .map(|s| s.to_string_lossy().into_owned())
+                .unwrap_or_else(|| "scene".into())
+        );
+        let bin_path = path.with_file_name(&bin_name);
+        let buffer = std::fs::File::create(&bin_path).map_err(io_at(&bin_path))?;
+        let document =
+            gltf_document_from(outline, geometries, Binary::to_file(buffer)).map_err(made)?;
+        let json = document.json_with_uri(&bin_name);
+        let unfolded_nodes = document.unfolded_nodes;
+        if let Some(written) = document.binary.finish() {
+            written.map_err(io_at(&bin_path))?;
+        }
+        std::fs::write(path, json).map_err(io_at(path))?;
+        unfolded_nodes
+    };
+    let mut notes = Vec::new();
+    if unfolded_nodes > outline.nodes.len() {
+        notes.push(format!(
+            "glTF nodes have one parent: shared subgraphs were unfolded ({} nodes became {unfolded_nodes}); meshes stay shared",
+            outline.nodes.len(),
+        ));
+    }
+    let wire: usize = (outline.geometries.iter())
+        .flat_map(|g| &g.parts)
+        .map(|part| part.wire_index_count as usize / 2)
+        .sum();
+    if wire > 0 {
+        notes.push(format!(
+            "{wire} edges (wire indices) are not written: glTF has no place for them"
+        ));
+    }
+    Ok(notes)
+}
+
+/// [`save_outline`] to CSF (`.csf`, or `.csf.gz` compressed, first written whole to a temporary
+/// file in the page directory).
+fn save_csf_outline(
+    outline: &Scene,
+    geometries: &dyn GeometryStore,
+    path: &Path,
+) -> Result<Vec<String>, SaveError> {
     let mut notes = Vec::new();
     let file = csf_outline_from_scene(outline);
     if file.nodes.len() > outline.nodes.len() + 1 {

@@ -208,11 +208,7 @@ impl TechniqueSession {
         frame: usize,
     ) -> Result<FrameSample, String> {
         let start = std::time::Instant::now();
-        motion.animate(&mut self.graph, frame)?;
-        self.tree.update(&mut self.graph);
-        self.view
-            .sync(&self.graph, &mut self.tree)
-            .map_err(|e| e.to_string())?;
+        self.move_to(motion, frame)?;
         let update_us = start.elapsed().as_secs_f64() * 1e6;
         let camera = motion.camera(bounds, aspect, frame);
         let stats = self.view.draw(&camera).map_err(|e| e.to_string())?;
@@ -231,13 +227,19 @@ impl TechniqueSession {
         (bounds, aspect): (&Aabb, f64),
         frame: usize,
     ) -> Result<Coverage, String> {
+        self.move_to(motion, frame)?;
+        let camera = motion.camera(bounds, aspect, frame);
+        self.view.coverage(&camera).map_err(|e| e.to_string())
+    }
+
+    /// Moves the nodes of `motion` as in frame `frame` and brings the tree and the GPU scene up
+    /// to date.
+    fn move_to(&mut self, motion: &Motion, frame: usize) -> Result<(), String> {
         motion.animate(&mut self.graph, frame)?;
         self.tree.update(&mut self.graph);
         self.view
             .sync(&self.graph, &mut self.tree)
-            .map_err(|e| e.to_string())?;
-        let camera = motion.camera(bounds, aspect, frame);
-        self.view.coverage(&camera).map_err(|e| e.to_string())
+            .map_err(|e| e.to_string())
     }
 
     /// The GPU time of each pass of the last frame (`Renderer::gpu_pass_times`).

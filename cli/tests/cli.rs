@@ -1450,7 +1450,8 @@ fn the_gpu_benchmark_script_dry_runs_and_writes_its_files() {
         .expect("run scripts/bench-gpu.sh");
     let log = format!("{}{}", stdout(&output), stderr(&output));
     assert!(output.status.success(), "{log}");
-    assert!(log.contains("0 of 11 tables failed"), "{log}");
+    assert!(log.contains("0 of 13 tables failed"), "{log}");
+    assert!(log.contains("scaling goal: GPU time"), "{log}");
     let devices = std::fs::read_to_string(out.join("devices.txt")).unwrap();
     assert!(devices.contains("Vulkan"), "{devices}");
     for table in [
@@ -1464,6 +1465,8 @@ fn the_gpu_benchmark_script_dry_runs_and_writes_its_files() {
         "dgc-racecar",
         "clusters-fine",
         "mesh-fine",
+        "scaling-small",
+        "scaling-large",
     ] {
         let plot = std::fs::metadata(out.join(format!("{table}.png"))).unwrap();
         assert!(plot.len() > 0, "{table}.png is empty");

@@ -213,6 +213,20 @@ fn a_scene_converted_from_its_page_file_is_the_file_saved_whole() {
             "{name}: {error}"
         );
     }
+
+    // Where no temporary file can be made in the page directory, a GLB's buffer and a
+    // `.csf.gz` are made in memory instead: the same files, with a warning.
+    // SAFETY of the environment: nextest runs each test in a process of its own.
+    std::env::set_var("CADR_PAGE_DIR", converted_directory.join("missing"));
+    for name in ["units.glb", "units.csf.gz"] {
+        let path = converted_directory.join(name);
+        cadr_core::save::save_scene(&whole, &path).unwrap();
+        assert!(
+            written_files(&converted_directory, name) == written_files(&expected_directory, name),
+            "{name}: the files made in memory differ"
+        );
+    }
+    std::env::remove_var("CADR_PAGE_DIR");
 }
 
 #[test]

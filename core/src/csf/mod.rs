@@ -17,7 +17,7 @@ pub use convert::{
     csf_from_scene, csf_outline_from_scene, scene_from_csf, scene_from_csf_source, CsfGeometriesOf,
 };
 pub use read::{read_csf, read_csf_from, read_csf_through, CsfBytes, TakeCsfGeometry};
-pub use write::{write_csf, write_csf_file, CsfGeometries, CsfWriteError};
+pub use write::{write_csf, write_csf_bytes, write_csf_file, CsfGeometries, CsfWriteError};
 
 use std::borrow::Cow;
 use std::io::Read as _;
@@ -427,7 +427,8 @@ pub enum SaveCsfError<E> {
 /// geometries taken one at a time from `geometries` (`file.geometries` is not read): no more
 /// than one geometry and a few megabytes of the file are held, however large it is. A `.gz`
 /// file is written whole to a temporary file in the page directory first (see
-/// `graph::page_file`), then compressed as it streams from there.
+/// `graph::page_file`), then compressed as it streams from there (where no temporary file can be
+/// made there, with a warning, it is made whole in memory).
 pub fn save_csf_from<G: CsfGeometries>(
     file: &CsfFile,
     geometries: &mut G,
@@ -449,15 +450,25 @@ pub fn save_csf_from<G: CsfGeometries>(
     }
     use std::io::{Seek as _, Write as _};
     let directory = crate::graph::page_directory();
-    let (mut unpacked, _guard) = temporary_file(&directory, "to write it into").map_err(io)?;
-    write_csf_file(file, geometries, VERSION, &mut unpacked).map_err(written)?;
-    unpacked.rewind().map_err(io)?;
     let output = std::fs::File::create(path).map_err(io)?;
     let mut encoder = flate2::write::GzEncoder::new(
         std::io::BufWriter::new(output),
         flate2::Compression::default(),
     );
-    std::io::copy(&mut std::io::BufReader::new(unpacked), &mut encoder).map_err(io)?;
+    match temporary_file(&directory, "to write it into") {
+        Ok((mut unpacked, _guard)) => {
+            write_csf_file(file, geometries, VERSION, &mut unpacked).map_err(written)?;
+            unpacked.rewind().map_err(io)?;
+            std::io::copy(&mut std::io::BufReader::new(unpacked), &mut encoder).map_err(io)?;
+        }
+        // No room in the page directory: the file is made whole in memory instead.
+        Err(error) => {
+            log::warn!("{}: {error}; the file is made in memory", path.display());
+            let bytes =
+                write_csf_bytes(file, geometries, VERSION).map_err(SaveCsfError::Geometry)?;
+            encoder.write_all(&bytes).map_err(io)?;
+        }
+    }
     encoder
         .finish()
         .and_then(|mut writer| writer.flush())

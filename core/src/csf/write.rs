@@ -181,6 +181,17 @@ fn le<T: Copy>(values: &[T], to_bytes: impl Fn(T) -> [u8; 4]) -> Vec<u8> {
 /// Serialises `file` as CSF `version` (6 is current; 2 to 5 write the older layouts, whose
 /// geometries cannot hold channels beyond one normal and one texture channel).
 pub fn write_csf(file: &CsfFile, version: i32) -> Vec<u8> {
+    let Ok(bytes) = write_csf_bytes(file, &mut file.geometries.as_slice(), version);
+    bytes
+}
+
+/// Serialises `file` as CSF `version` in memory, its geometries taken from `geometries` one at
+/// a time instead of `file.geometries` (which is not read).
+pub fn write_csf_bytes<G: CsfGeometries>(
+    file: &CsfFile,
+    geometries: &mut G,
+    version: i32,
+) -> Result<Vec<u8>, G::Error> {
     let mut out = Out {
         bytes: Vec::new(),
         base: 0,
@@ -188,8 +199,8 @@ pub fn write_csf(file: &CsfFile, version: i32) -> Vec<u8> {
         failed: None,
         locations: Vec::new(),
     };
-    let Ok(()) = write_into(&mut out, file, &mut file.geometries.as_slice(), version);
-    out.bytes
+    write_into(&mut out, file, geometries, version)?;
+    Ok(out.bytes)
 }
 
 /// Writes `file` as CSF `version` to `output` (from its start), its geometries taken from

@@ -67,8 +67,9 @@ pub fn save_scene(scene: &Scene, path: &Path) -> Result<Vec<String>, SaveError> 
 /// through a [`crate::scene::GeometrySink`] leaves them) and written as they are read: no
 /// more than one geometry and a few megabytes of the file are held, so that a scene larger than
 /// memory can be converted. A GLB's buffer is written to a temporary file in the page
-/// directory first (its length comes before it in the file), then copied after the JSON.
-/// Returns notes on what the format could not keep.
+/// directory first (its length comes before it in the file), then copied after the JSON (where
+/// no temporary file can be made there, with a warning, it is made in memory). Returns notes on
+/// what the format could not keep.
 pub fn save_outline(
     outline: &Scene,
     geometries: &dyn GeometryStore,
@@ -114,10 +115,16 @@ fn save_gltf_outline(
     };
     let unfolded_nodes = if binary_container {
         let directory = crate::graph::page_directory();
-        let (buffer, _guard) = crate::graph::temporary_file(&directory, "for the GLB's buffer")
-            .map_err(io_at(path))?;
-        let document =
-            gltf_document_from(outline, geometries, Binary::to_file(buffer)).map_err(made)?;
+        // The buffer in a temporary file, or where the page directory has no room, in memory.
+        let (binary, _guard) =
+            match crate::graph::temporary_file(&directory, "for the GLB's buffer") {
+                Ok((buffer, guard)) => (Binary::to_file(buffer), Some(guard)),
+                Err(error) => {
+                    log::warn!("{}: {error}; the buffer is made in memory", path.display());
+                    (Binary::Memory(Vec::new()), None)
+                }
+            };
+        let document = gltf_document_from(outline, geometries, binary).map_err(made)?;
         let unfolded_nodes = document.unfolded_nodes;
         let mut output = std::io::BufWriter::new(std::fs::File::create(path).map_err(io_at(path))?);
         document

@@ -6,7 +6,8 @@
 //! against the file and naming the structure, index and field of any problem; the file's
 //! pointer table is not needed for that and is ignored. [`write_csf`] writes the reference
 //! layout of version 6 (depth-first, the same alignments, the pointer table at the end), or an
-//! older version's layout for compatibility tests. [`scene_from_csf`] and [`csf_from_scene`]
+//! older version's layout for compatibility tests; [`write_csf_file`] the same to a file, a
+//! geometry at a time, for a scene larger than memory. [`scene_from_csf`] and [`csf_from_scene`]
 //! convert to and from cadr's [`Scene`](crate::scene::Scene).
 
 mod convert;
@@ -288,8 +289,8 @@ fn past_the_limit(compressed: u64, limit: u64) -> std::io::Error {
 }
 
 /// The gzip file `compressed` decompressed, as it streams, into a temporary file in `directory`
-/// (see [`crate::graph::temporary_file`]), within `limit` bytes (the decompression limit): so that neither
-/// the compressed nor the decompressed bytes are ever held whole.
+/// (see [`crate::graph::temporary_file`]), within `limit` bytes (the decompression limit): so
+/// that neither the compressed nor the decompressed bytes are ever held whole.
 fn unpacked(
     compressed: std::fs::File,
     directory: &Path,

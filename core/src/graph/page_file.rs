@@ -263,9 +263,9 @@ impl Drop for RemovedOnDrop {
 }
 
 /// A new temporary file in `directory` (the page directory, [`page_directory`]), open to read
-/// and write, for `purpose` (which its error names). It is
-/// removed from its directory as soon as it is open (where the system allows; otherwise when
-/// the returned guard is dropped), so that nothing is left behind, even by a crash.
+/// and write, for `purpose` (which its error names). It is removed from its directory as soon
+/// as it is open (where the system allows; otherwise when the returned guard is dropped), so
+/// that nothing is left behind, even by a crash.
 pub(crate) fn temporary_file(
     directory: &Path,
     purpose: &str,

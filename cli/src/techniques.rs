@@ -204,13 +204,12 @@ impl TechniqueSession {
     pub fn render_moving(
         &mut self,
         motion: &Motion,
-        (bounds, aspect): (&Aabb, f64),
+        view: (&Aabb, f64),
         frame: usize,
     ) -> Result<FrameSample, String> {
         let start = std::time::Instant::now();
-        self.move_to(motion, frame)?;
+        let camera = self.move_to(motion, view, frame)?;
         let update_us = start.elapsed().as_secs_f64() * 1e6;
-        let camera = motion.camera(bounds, aspect, frame);
         let stats = self.view.draw(&camera).map_err(|e| e.to_string())?;
         Ok(FrameSample {
             stats,
@@ -224,22 +223,27 @@ impl TechniqueSession {
     pub fn coverage_at(
         &mut self,
         motion: &Motion,
-        (bounds, aspect): (&Aabb, f64),
+        view: (&Aabb, f64),
         frame: usize,
     ) -> Result<Coverage, String> {
-        self.move_to(motion, frame)?;
-        let camera = motion.camera(bounds, aspect, frame);
+        let camera = self.move_to(motion, view, frame)?;
         self.view.coverage(&camera).map_err(|e| e.to_string())
     }
 
-    /// Moves the nodes of `motion` as in frame `frame` and brings the tree and the GPU scene up
-    /// to date.
-    fn move_to(&mut self, motion: &Motion, frame: usize) -> Result<(), String> {
+    /// Moves the nodes of `motion` as in frame `frame`, brings the tree and the GPU scene up to
+    /// date, and returns the frame's camera around `bounds` at `aspect`.
+    fn move_to(
+        &mut self,
+        motion: &Motion,
+        (bounds, aspect): (&Aabb, f64),
+        frame: usize,
+    ) -> Result<Camera, String> {
         motion.animate(&mut self.graph, frame)?;
         self.tree.update(&mut self.graph);
         self.view
             .sync(&self.graph, &mut self.tree)
-            .map_err(|e| e.to_string())
+            .map_err(|e| e.to_string())?;
+        Ok(motion.camera(bounds, aspect, frame))
     }
 
     /// The GPU time of each pass of the last frame (`Renderer::gpu_pass_times`).

@@ -136,13 +136,28 @@ struct DrawOptions {
     frame_replay: bool,
 }
 
+/// The combination's technique of `kind`, if it has one.
+fn of_kind<'e>(entries: &[&'e TechniqueEntry], kind: TechniqueKind) -> Option<&'e TechniqueEntry> {
+    entries.iter().copied().find(|e| e.kind == kind)
+}
+
+/// The combination's submission, where it announces `trait_bit` (meaningful since ABI minor
+/// `since`).
+fn submission_announcing<'e>(
+    entries: &[&'e TechniqueEntry],
+    trait_bit: abi::CadrTraitBits,
+    since: u32,
+) -> Option<&'e TechniqueEntry> {
+    of_kind(entries, TechniqueKind::Submission).filter(|e| e.announces(trait_bit, since))
+}
+
 /// What the combination's parameter blocks offer (plugin ABI 1.22,
 /// `CADR_TRAIT_PARAMETER_BLOCKS`): where the parameter path, the submission and the culler all
 /// announce them, the culler finds each draw's parameters from its instance id on the GPU, which
 /// is what finding them from the instance index asks; a parameter path and submission that
 /// announce them with a culler that does not are refused, as nothing would write the blocks.
 fn parameter_blocks_offer(entries: &[&TechniqueEntry]) -> Result<u64, String> {
-    let of_kind = |kind| entries.iter().find(|e| e.kind == kind);
+    let of_kind = |kind| of_kind(entries, kind);
     let announces =
         |kind| of_kind(kind).is_some_and(|e| e.announces(abi::CADR_TRAIT_PARAMETER_BLOCKS, 22));
     if !(announces(TechniqueKind::Parameters) && announces(TechniqueKind::Submission)) {
@@ -164,10 +179,8 @@ fn parameter_blocks_offer(entries: &[&TechniqueEntry]) -> Result<u64, String> {
 /// draws with: paths whose snippets run in a mesh shader, and a GPU culler (one that needs a
 /// submission drawing GPU-written commands) to write the commands its mesh workgroups read.
 fn mesh_shading_check(entries: &[&TechniqueEntry]) -> Result<(), String> {
-    let of_kind = |kind| entries.iter().find(|e| e.kind == kind);
-    let Some(submission) = of_kind(TechniqueKind::Submission)
-        .filter(|e| e.announces(abi::CADR_TRAIT_MESH_SHADING, 23))
-    else {
+    let of_kind = |kind| of_kind(entries, kind);
+    let Some(submission) = submission_announcing(entries, abi::CADR_TRAIT_MESH_SHADING, 23) else {
         return Ok(());
     };
     for (kind, what) in [
@@ -198,13 +211,11 @@ fn mesh_shading_check(entries: &[&TechniqueEntry]) -> Result<(), String> {
 /// `CADR_TRAIT_EMPTY_COMMAND_TAILS`) has a culler that leaves what lies past its counts empty:
 /// a GPU culler (one that needs a submission drawing GPU-written commands) must announce it.
 fn empty_command_tails_check(entries: &[&TechniqueEntry]) -> Result<(), String> {
-    let of_kind = |kind| entries.iter().find(|e| e.kind == kind);
-    let Some(submission) = of_kind(TechniqueKind::Submission)
-        .filter(|e| e.announces(abi::CADR_TRAIT_EMPTY_COMMAND_TAILS, 24))
+    let Some(submission) = submission_announcing(entries, abi::CADR_TRAIT_EMPTY_COMMAND_TAILS, 24)
     else {
         return Ok(());
     };
-    match of_kind(TechniqueKind::Culling) {
+    match of_kind(entries, TechniqueKind::Culling) {
         Some(culler)
             if culler.needs & abi::CADR_TRAIT_DRAWS_GPU_COMMANDS != 0
                 && !culler.announces(abi::CADR_TRAIT_EMPTY_COMMAND_TAILS, 24) =>

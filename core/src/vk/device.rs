@@ -226,7 +226,7 @@ impl Device {
             draw_indirect_first_instance: core.draw_indirect_first_instance == vk::TRUE,
             shader_draw_parameters: supported11.shader_draw_parameters == vk::TRUE,
             buffer_device_address: supported12.buffer_device_address == vk::TRUE,
-            draw_indirect_count: supported12.draw_indirect_count == vk::TRUE,
+            draw_indirect_count: adapter.draw_indirect_count,
             multi_draw: has_multi_draw,
             pipeline_statistics_query: core.pipeline_statistics_query == vk::TRUE,
             timestamps: queue_timestamp_bits > 0 && properties.limits.timestamp_period > 0.0,

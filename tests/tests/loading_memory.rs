@@ -110,7 +110,7 @@ fn csf_and_gltf_files_loaded_for_a_graph_page_their_geometries_and_import_as_loa
     let _one = ONE_AT_A_TIME.lock().unwrap_or_else(|p| p.into_inner());
     let generated = SceneSource::parse(UNIQUE_UNITS).unwrap().load().unwrap();
     let scratch = scratch_dir("loading-memory-units");
-    for name in ["units.csf", "units.csf.gz", "units.glb"] {
+    for name in ["units.csf", "units.csf.gz", "units.glb", "units.gltf"] {
         let path = saved(&generated, &scratch, name);
         let source = SceneSource::File(path.clone());
         let (whole_growth, whole) = heap_growth(|| source.load().unwrap());
@@ -126,26 +126,84 @@ fn csf_and_gltf_files_loaded_for_a_graph_page_their_geometries_and_import_as_loa
         assert!(memory.resident_bytes <= limit, "{name}");
         assert!(memory.paged_geometries > 0, "{name}");
         assert_eq!(graph.to_scene().unwrap(), imported_whole(&whole), "{name}");
-        // CSF: each geometry's CSF arrays go once converted, so the file's parse and the scene
-        // are never both whole (nor a `.csf.gz`'s decompressed bytes); GLB: the file's bytes go once parsed, and each mesh once
-        // converted.
+        // No file is read whole: a CSF file is read where each array lies (a `.csf.gz` from
+        // the temporary file it is unpacked into as it streams), a glTF file and its buffers
+        // are mapped and read a mesh at a time. Loading holds the limit and the geometry being
+        // read (the file's arrays or accessors, the geometry made of them, and the little the
+        // file's structures and the decompressor take).
         assert!(
             growth * 5 < whole_growth * 4,
             "{name}: {growth} bytes for the graph against {whole_growth} whole"
         );
-        // A CSF file is read where each array lies, never whole (a `.csf.gz` from the
-        // temporary file it is unpacked into as it streams): loading it holds the limit and the
-        // geometry being read (its CSF arrays, the geometry made of them, and the little the
-        // file's structures and the decompressor take).
-        if !name.ends_with(".glb") {
-            let largest = largest_geometry_bytes(&whole);
-            let allowance = limit + 3 * largest + (1 << 20);
-            assert!(
-                growth <= allowance,
-                "{name}: {growth} bytes, more than the limit and one geometry ({allowance})"
-            );
-        }
+        let largest = largest_geometry_bytes(&whole);
+        let allowance = limit + 3 * largest + (1 << 20);
+        assert!(
+            growth <= allowance,
+            "{name}: {growth} bytes, more than the limit and one geometry ({allowance})"
+        );
         std::fs::remove_file(&path).unwrap();
+    }
+}
+
+/// A figure of this process's from `/proc/self/status` (`VmRSS`, `VmHWM`), in bytes.
+fn process_status_bytes(field: &str) -> u64 {
+    let status = std::fs::read_to_string("/proc/self/status").unwrap();
+    let line = status
+        .lines()
+        .find_map(|line| line.strip_prefix(field)?.strip_prefix(':'))
+        .unwrap_or_else(|| panic!("/proc/self/status has no {field}"));
+    let kilobytes: u64 = line.trim().trim_end_matches(" kB").parse().unwrap();
+    kilobytes * 1024
+}
+
+/// The most this process's resident memory (heap and mapped files alike) grew over `work`.
+fn resident_growth<R>(work: impl FnOnce() -> R) -> (u64, R) {
+    // Writing 5 to `clear_refs` sets the peak (`VmHWM`) back to what is resident now.
+    std::fs::write("/proc/self/clear_refs", "5")
+        .expect("/proc/self/clear_refs sets back the peak of resident memory");
+    let before = process_status_bytes("VmRSS");
+    let result = work();
+    (process_status_bytes("VmHWM").saturating_sub(before), result)
+}
+
+/// A glTF file much larger than the graph's memory limit is mapped, not read: its pages are
+/// read as its meshes are converted and given back as loading goes on, so that the process's
+/// resident memory grows by the limit, about a mesh and the mapped bytes read between two
+/// releases, not by the file.
+#[test]
+fn a_gltf_file_is_mapped_and_its_pages_given_back_as_its_meshes_are_read() {
+    let _one = ONE_AT_A_TIME.lock().unwrap_or_else(|p| p.into_inner());
+    let generated = SceneSource::parse("gen:fine:units=40,detail=2,unique=1")
+        .unwrap()
+        .load()
+        .unwrap();
+    let scratch = scratch_dir("loading-memory-mapped");
+    let limit = scene_bytes(&generated) / 16;
+    let largest = largest_geometry_bytes(&generated);
+    let allowance =
+        limit + 3 * largest + cadr_core::load::GLTF_MAPPED_BYTES_BETWEEN_RELEASES + (4 << 20);
+    for name in ["large.glb", "large.gltf"] {
+        let path = saved(&generated, &scratch, name);
+        let file_bytes: u64 = written_files(&scratch, name)
+            .iter()
+            .map(|file| file.len() as u64)
+            .sum();
+        // The test tells a file read (or left mapped) whole from one read a mesh at a time.
+        assert!(file_bytes > 2 * allowance, "{name}: {file_bytes} bytes");
+        let source = SceneSource::File(path);
+        let (growth, loaded) = resident_growth(|| source.load_for_graph(limit));
+        let (_, geometries) = loaded.unwrap();
+        println!(
+            "{name}: loading grew resident memory {:.1} MB for a file of {:.1} MB, a limit of {:.1} MB",
+            growth as f64 / 1e6,
+            file_bytes as f64 / 1e6,
+            limit as f64 / 1e6
+        );
+        assert!(geometries.memory().paged_geometries > 0, "{name}");
+        assert!(
+            growth <= allowance,
+            "{name}: resident memory grew {growth} bytes, more than the limit, a mesh and the mapped bytes between releases ({allowance})"
+        );
     }
 }
 

@@ -17,7 +17,10 @@ use glam::{DMat4, DQuat, DVec3};
 use gltf::accessor::{DataType, Dimensions};
 use gltf::mesh::Mode;
 
-use super::gltf_files::{percent_decode, read_buffer_file};
+use super::gltf_buffers::{
+    open_buffer_file, open_document, percent_decode, GltfBuffers, SourceBytes,
+    MAPPED_BYTES_BETWEEN_RELEASES,
+};
 use super::LoadError;
 use crate::scene::{
     AlphaMode, Geometry, GeometrySink, Material, MeshRef, Node, Part, Scene, TextureRef,
@@ -86,10 +89,58 @@ pub fn load_gltf_bytes(bytes: &[u8], path: &Path) -> Result<Scene, LoadError> {
 }
 
 /// [`load_gltf_bytes`], handing each geometry to `sink` as soon as it is made (see
-/// [`GeometrySink`]). The file's bytes, where owned, go once parsed (the parser keeps its own
-/// copy of a GLB's binary chunk).
+/// [`GeometrySink`]).
 pub(super) fn load_gltf_bytes_through(
     bytes: Cow<'_, [u8]>,
+    path: &Path,
+    sink: &mut dyn GeometrySink,
+) -> Result<Scene, LoadError> {
+    load_gltf_through(SourceBytes::Memory(bytes), path, sink)
+}
+
+/// Loads the glTF file at `path` (mapped, not read: see [`super::gltf_buffers`]), handing
+/// each geometry to `sink` as soon as it is made (see [`GeometrySink`]).
+pub(super) fn load_gltf_file_through(
+    path: &Path,
+    sink: &mut dyn GeometrySink,
+) -> Result<Scene, LoadError> {
+    let source = open_document(path).map_err(|source| LoadError::Io {
+        path: path.to_owned(),
+        source,
+    })?;
+    load_gltf_through(source, path, sink)
+}
+
+/// The document of a glTF file or GLB in `source`, and a GLB's binary chunk (kept where it
+/// lies: in the mapping or the caller's bytes).
+fn parse_document<'a>(
+    source: SourceBytes<'a>,
+) -> Result<(gltf::json::Root, Option<SourceBytes<'a>>), String> {
+    let bytes = source.bytes();
+    check_glb_header(bytes)?;
+    let deserialize = |json: &[u8]| {
+        gltf::json::deserialize::from_slice(json)
+            .map_err(|e| gltf::Error::Deserialize(e).to_string())
+    };
+    if !bytes.starts_with(b"glTF") {
+        return Ok((deserialize(bytes)?, None));
+    }
+    let glb = gltf::Glb::from_slice(bytes).map_err(|e| e.to_string())?;
+    let root = deserialize(&glb.json)?;
+    let start = bytes.as_ptr() as usize;
+    let bin = glb.bin.as_deref().map(|bin| {
+        let offset = bin.as_ptr() as usize - start;
+        offset..offset + bin.len()
+    });
+    drop(glb);
+    Ok((root, bin.map(|range| source.narrowed(range))))
+}
+
+/// Loads the glTF document or GLB in `source`, handing each geometry to `sink` as soon as it
+/// is made (see [`GeometrySink`]); `path` names the file in errors and locates external
+/// buffers.
+fn load_gltf_through(
+    source: SourceBytes<'_>,
     path: &Path,
     sink: &mut dyn GeometrySink,
 ) -> Result<Scene, LoadError> {
@@ -101,20 +152,13 @@ pub(super) fn load_gltf_bytes_through(
         path: path.to_owned(),
         message,
     };
-    check_glb_header(&bytes).map_err(gltf_error)?;
-    let unchecked =
-        gltf::Gltf::from_slice_without_validation(&bytes).map_err(|e| gltf_error(e.to_string()))?;
-    drop(bytes);
-    check_position_accessors(unchecked.document.as_json()).map_err(invalid)?;
-    check_images(unchecked.document.as_json()).map_err(invalid)?;
-    let gltf = gltf::Gltf {
-        document: gltf::Document::from_json(unchecked.document.into_json())
-            .map_err(|e| gltf_error(e.to_string()))?,
-        blob: unchecked.blob,
-    };
+    let (root, blob) = parse_document(source).map_err(gltf_error)?;
+    check_position_accessors(&root).map_err(invalid)?;
+    check_images(&root).map_err(invalid)?;
+    let document = gltf::Document::from_json(root).map_err(|e| gltf_error(e.to_string()))?;
     let base_dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
-    let buffers = resolve_buffers(&gltf, &base_dir).map_err(invalid)?;
-    check_views(&gltf.document, &buffers).map_err(invalid)?;
+    let mut buffers = resolve_buffers(&document, blob, &base_dir).map_err(invalid)?;
+    check_views(&document, &buffers).map_err(invalid)?;
 
     let mut scene = Scene {
         name: path
@@ -123,7 +167,8 @@ pub(super) fn load_gltf_bytes_through(
             .unwrap_or_default(),
         ..Scene::default()
     };
-    let textures = super::gltf_textures::load_textures(&gltf.document, &buffers, path);
+    let textures = super::gltf_textures::load_textures(&document, &buffers, path);
+    buffers.release_mapped_pages();
     // Scene textures are the glTF textures that decoded, in order.
     let mut texture_index = Vec::with_capacity(textures.len());
     for texture in textures {
@@ -132,16 +177,23 @@ pub(super) fn load_gltf_bytes_through(
             scene.textures.len() as u32 - 1
         }));
     }
-    let (materials, uv_sets) = materials_of(&gltf.document, &texture_index);
+    let (materials, uv_sets) = materials_of(&document, &texture_index);
     scene.materials = materials;
     let mut default_material = None;
     let mut mesh_refs: Vec<Option<MeshRef>> = Vec::new();
     // Meshes made of the same accessors (the same geometry under other materials, as cadr and
     // CSF exporters write them) share one geometry.
     let mut geometry_by_accessors: HashMap<Vec<[Option<usize>; 6]>, u32> = HashMap::new();
-    for mesh in gltf.document.meshes() {
+    let mut bytes_read_since_release = 0_u64;
+    for mesh in document.meshes() {
         let key = accessor_key(&mesh, &uv_sets);
         let (geometry, materials) = load_mesh(&mesh, &buffers, &uv_sets, path).map_err(invalid)?;
+        // The geometry's bytes stand for the accessors it was read from.
+        bytes_read_since_release += geometry.host_bytes();
+        if bytes_read_since_release >= MAPPED_BYTES_BETWEEN_RELEASES {
+            buffers.release_mapped_pages();
+            bytes_read_since_release = 0;
+        }
         if geometry.parts.is_empty() {
             mesh_refs.push(None);
             continue;
@@ -168,7 +220,8 @@ pub(super) fn load_gltf_bytes_through(
         mesh_refs.push(Some(MeshRef::new(geometry_index, part_materials)));
     }
 
-    for node in gltf.document.nodes() {
+    drop(buffers);
+    for node in document.nodes() {
         let name = node
             .name()
             .map_or_else(|| format!("node {}", node.index()), str::to_owned);
@@ -186,7 +239,7 @@ pub(super) fn load_gltf_bytes_through(
             mesh: node.mesh().and_then(|m| mesh_refs[m.index()].clone()),
         });
     }
-    scene.roots = roots_of(&gltf.document, &scene.nodes);
+    scene.roots = roots_of(&document, &scene.nodes);
     scene.validate_outline().map_err(|e| invalid(e.0))?;
     Ok(scene)
 }
@@ -302,16 +355,20 @@ fn node_matrix(node: &gltf::Node<'_>) -> DMat4 {
 }
 
 /// Reads every buffer: the GLB binary chunk, a data URI or a file beside the glTF.
-fn resolve_buffers(gltf: &gltf::Gltf, base_dir: &Path) -> Result<Vec<Vec<u8>>, String> {
+fn resolve_buffers<'a>(
+    document: &gltf::Document,
+    blob: Option<SourceBytes<'a>>,
+    base_dir: &Path,
+) -> Result<GltfBuffers<'a>, String> {
     let mut buffers = Vec::new();
-    for buffer in gltf.document.buffers() {
+    for buffer in document.buffers() {
         let index = buffer.index();
         let (data, origin) = match buffer.source() {
             gltf::buffer::Source::Bin => {
-                let blob = gltf.blob.as_ref().ok_or_else(|| {
+                let blob = blob.clone().ok_or_else(|| {
                     format!("buffer {index} refers to the GLB binary chunk, but the file has none")
                 })?;
-                (blob.clone(), "the GLB binary chunk".to_owned())
+                (blob, "the GLB binary chunk".to_owned())
             }
             gltf::buffer::Source::Uri(uri) if uri.starts_with("data:") => {
                 let (_, payload) = uri
@@ -320,11 +377,14 @@ fn resolve_buffers(gltf: &gltf::Gltf, base_dir: &Path) -> Result<Vec<Vec<u8>>, S
                 let data = base64::engine::general_purpose::STANDARD
                     .decode(payload)
                     .map_err(|e| format!("buffer {index} has invalid base64 data: {e}"))?;
-                (data, "its data URI".to_owned())
+                (
+                    SourceBytes::Memory(Cow::Owned(data)),
+                    "its data URI".to_owned(),
+                )
             }
             gltf::buffer::Source::Uri(uri) => {
                 let file = base_dir.join(percent_decode(uri));
-                let data = read_buffer_file(&file, buffer.length()).map_err(|e| {
+                let data = open_buffer_file(&file, buffer.length()).map_err(|e| {
                     format!(
                         "buffer {index} refers to '{}', which cannot be read: {e}",
                         file.display()
@@ -333,24 +393,24 @@ fn resolve_buffers(gltf: &gltf::Gltf, base_dir: &Path) -> Result<Vec<Vec<u8>>, S
                 (data, format!("'{}'", file.display()))
             }
         };
-        if data.len() < buffer.length() {
+        let available = data.bytes().len();
+        if available < buffer.length() {
             return Err(format!(
-                "buffer {index} declares {} bytes, but {origin} holds only {} (truncated?)",
+                "buffer {index} declares {} bytes, but {origin} holds only {available} (truncated?)",
                 buffer.length(),
-                data.len()
             ));
         }
         buffers.push(data);
     }
-    Ok(buffers)
+    Ok(GltfBuffers(buffers))
 }
 
 /// Checks that every buffer view lies within its buffer (in `u128`: a view's offset and length
 /// may each be up to `u64::MAX`, and the glTF crate adds them unchecked).
-fn check_views(document: &gltf::Document, buffers: &[Vec<u8>]) -> Result<(), String> {
+fn check_views(document: &gltf::Document, buffers: &GltfBuffers<'_>) -> Result<(), String> {
     for view in document.views() {
         let end = view.offset() as u128 + view.length() as u128;
-        let available = buffers[view.buffer().index()].len() as u128;
+        let available = buffers.get(view.buffer().index()).map_or(0, <[u8]>::len) as u128;
         if end > available {
             return Err(format!(
                 "bufferView {} covers bytes {}..{end} of buffer {}, which has {available}",
@@ -478,7 +538,7 @@ fn check_accessor(
 /// (`None` = the glTF default material). `file` names the file in warnings.
 fn load_mesh(
     mesh: &gltf::Mesh<'_>,
-    buffers: &[Vec<u8>],
+    buffers: &GltfBuffers<'_>,
     uv_sets: &[Option<u32>],
     file: &Path,
 ) -> Result<(Geometry, Vec<Option<u32>>), String> {
@@ -516,7 +576,7 @@ fn load_mesh(
             positions_accessor.count(),
         )
         .map_err(|e| format!("{at}: {e}"))?;
-        let reader = primitive.reader(|b| buffers.get(b.index()).map(Vec::as_slice));
+        let reader = primitive.reader(|b| buffers.get(b.index()));
         let positions: Vec<[f32; 3]> = reader
             .read_positions()
             .ok_or_else(|| format!("{at}: POSITION cannot be read"))?
@@ -666,7 +726,7 @@ fn append_primitive(
 fn read_attributes(
     primitive: &gltf::Primitive<'_>,
     at: &str,
-    buffers: &[Vec<u8>],
+    buffers: &GltfBuffers<'_>,
     uv_sets: &[Option<u32>],
     vertex_count: usize,
 ) -> Result<Option<Vec<VertexAttributes>>, String> {
@@ -722,7 +782,7 @@ fn read_attributes(
     if uv_accessor.is_none() && color_accessor.is_none() {
         return Ok(None);
     }
-    let reader = primitive.reader(|b| buffers.get(b.index()).map(Vec::as_slice));
+    let reader = primitive.reader(|b| buffers.get(b.index()));
     let mut attributes = vec![VertexAttributes::default(); vertex_count];
     if let (Some(set), Some(_)) = (uv_set, &uv_accessor) {
         let uvs = reader

@@ -11,6 +11,7 @@ use std::sync::Arc;
 
 use base64::Engine as _;
 
+use super::gltf_buffers::{GltfBuffers, SourceBytes};
 use crate::scene::{Sampler, Texture, Wrap};
 
 /// A decoded image: width, height and RGBA texels.
@@ -20,18 +21,18 @@ type Decoded = (u32, u32, Arc<Vec<u8>>);
 /// warning naming the glTF `file`, whose folder holds external images).
 pub(super) fn load_textures(
     document: &gltf::Document,
-    buffers: &[Vec<u8>],
+    buffers: &GltfBuffers<'_>,
     file: &Path,
 ) -> Vec<Option<Texture>> {
     let base_dir = file.parent().unwrap_or(Path::new(""));
     let images: Vec<gltf::Image<'_>> = document.images().collect();
     let encoded = crate::parallel::map(&images, |image| {
         let bytes = encoded_bytes(image, buffers, base_dir)?;
-        let (width, height) = dimensions(&bytes)?;
+        let (width, height) = dimensions(bytes.bytes())?;
         Ok((bytes, u64::from(width) * u64::from(height) * 4))
     });
     let admitted = within_memory_budget(encoded);
-    let decoded = crate::parallel::map(&admitted, |bytes| decode(bytes.as_ref()?));
+    let decoded = crate::parallel::map(&admitted, |bytes| decode(bytes.as_ref()?.bytes()));
     let decoded: Vec<Option<Decoded>> = decoded
         .into_iter()
         .zip(&images)
@@ -88,11 +89,11 @@ fn sampler(sampler: &gltf::texture::Sampler<'_>) -> Sampler {
 }
 
 /// An image's encoded bytes and the bytes of its decoded texels, or why it cannot be read.
-type Encoded<'b> = Result<(Cow<'b, [u8]>, u64), String>;
+type Encoded<'b> = Result<(SourceBytes<'b>, u64), String>;
 
 /// The images that fit the memory budget decoded together (in the file's order; each takes
 /// 4 bytes a texel), the others refused saying so.
-fn within_memory_budget(encoded: Vec<Encoded<'_>>) -> Vec<Result<Cow<'_, [u8]>, String>> {
+fn within_memory_budget(encoded: Vec<Encoded<'_>>) -> Vec<Result<SourceBytes<'_>, String>> {
     let budget = crate::memory_budget::budget();
     let mut taken = 0_u64;
     encoded
@@ -117,31 +118,31 @@ fn within_memory_budget(encoded: Vec<Encoded<'_>>) -> Vec<Result<Cow<'_, [u8]>, 
 /// One image's encoded bytes: from its buffer view, its data URI or its file.
 fn encoded_bytes<'b>(
     image: &gltf::Image<'_>,
-    buffers: &'b [Vec<u8>],
+    buffers: &'b GltfBuffers<'_>,
     base_dir: &Path,
-) -> Result<Cow<'b, [u8]>, String> {
+) -> Result<SourceBytes<'b>, String> {
     Ok(match image.source() {
         gltf::image::Source::View { view, .. } => {
-            let buffer = &buffers[view.buffer().index()];
             // The views were checked against their buffers before any image is read.
-            Cow::Borrowed(&buffer[view.offset()..view.offset() + view.length()])
+            let buffer = buffers.get(view.buffer().index()).unwrap_or_default();
+            SourceBytes::Memory(Cow::Borrowed(
+                &buffer[view.offset()..view.offset() + view.length()],
+            ))
         }
         gltf::image::Source::Uri { uri, .. } if uri.starts_with("data:") => {
             let (_, payload) = uri
                 .split_once(";base64,")
                 .ok_or("its data URI is not base64")?;
-            Cow::Owned(
+            SourceBytes::Memory(Cow::Owned(
                 base64::engine::general_purpose::STANDARD
                     .decode(payload)
                     .map_err(|e| format!("its data URI has invalid base64 data: {e}"))?,
-            )
+            ))
         }
         gltf::image::Source::Uri { uri, .. } => {
-            let file = base_dir.join(super::gltf_files::percent_decode(uri));
-            Cow::Owned(
-                super::gltf_files::read_buffer_file(&file, usize::MAX)
-                    .map_err(|e| format!("'{}' cannot be read: {e}", file.display()))?,
-            )
+            let file = base_dir.join(super::gltf_buffers::percent_decode(uri));
+            super::gltf_buffers::open_buffer_file(&file, usize::MAX)
+                .map_err(|e| format!("'{}' cannot be read: {e}", file.display()))?
         }
     })
 }

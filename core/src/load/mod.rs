@@ -4,10 +4,11 @@
 //! for a built-in generator (see [`crate::generate`]).
 
 mod gltf;
-mod gltf_files;
+mod gltf_buffers;
 mod gltf_textures;
 
 pub use self::gltf::load_gltf_bytes;
+pub use self::gltf_buffers::MAPPED_BYTES_BETWEEN_RELEASES as GLTF_MAPPED_BYTES_BETWEEN_RELEASES;
 
 use std::borrow::Cow;
 use std::path::{Path, PathBuf};
@@ -158,21 +159,15 @@ pub fn load_file(path: &Path) -> Result<Scene, LoadError> {
     read_file(path, &mut KeepInScene)
 }
 
-/// [`load_file`], handing each geometry to `sink` as it is made. A CSF file is read where each
-/// of its arrays lies, never whole (a `.csf.gz` from a temporary file it is unpacked into as it
-/// streams); other files are read whole first.
+/// [`load_file`], handing each geometry to `sink` as it is made. The file is never read whole:
+/// a CSF file is read where each of its arrays lies (a `.csf.gz` from a temporary file it is
+/// unpacked into as it streams), a glTF file and its buffers are mapped into memory and read
+/// as its meshes are converted.
 fn read_file(path: &Path, sink: &mut dyn GeometrySink) -> Result<Scene, LoadError> {
     let format = SceneFormat::from_path(path).ok_or_else(|| LoadError::UnknownFormat {
         path: path.to_owned(),
     })?;
-    if matches!(format, SceneFormat::Csf | SceneFormat::CsfGz) {
-        return read_behind_boundary(Input::CsfFile, format, path, sink);
-    }
-    let bytes = std::fs::read(path).map_err(|source| LoadError::Io {
-        path: path.to_owned(),
-        source,
-    })?;
-    read_behind_boundary(Input::Bytes(Cow::Owned(bytes)), format, path, sink)
+    read_behind_boundary(Input::File, format, path, sink)
 }
 
 /// Loads a scene from a file's bytes held in memory. `path` names the file in errors and, for
@@ -193,9 +188,8 @@ pub fn load_bytes(bytes: &[u8], format: SceneFormat, path: &Path) -> Result<Scen
 enum Input<'b> {
     /// The file's bytes; where owned, they go as soon as the reader no longer needs them.
     Bytes(Cow<'b, [u8]>),
-    /// The CSF file at the path, read where each array lies (unpacked first where it is
-    /// gzip-compressed).
-    CsfFile,
+    /// The file at the path, read as its format reads a file (see [`read_file`]).
+    File,
 }
 
 /// [`read_input`] behind the load's panic boundary (see [`load_bytes`]).
@@ -237,11 +231,14 @@ fn read_input(
         (Input::Bytes(bytes), SceneFormat::Gltf | SceneFormat::Glb) => {
             return gltf::load_gltf_bytes_through(bytes, path, sink);
         }
+        (Input::File, SceneFormat::Gltf | SceneFormat::Glb) => {
+            return gltf::load_gltf_file_through(path, sink);
+        }
         (Input::Bytes(bytes), SceneFormat::Csf | SceneFormat::CsfGz) => {
             let gzip = format == SceneFormat::CsfGz;
             crate::csf::csf_scene_from_bytes(bytes, gzip, path, sink)?
         }
-        (Input::CsfFile, _) => {
+        (Input::File, SceneFormat::Csf | SceneFormat::CsfGz) => {
             let gzip = format == SceneFormat::CsfGz;
             crate::csf::csf_scene_from_file(path, gzip, sink)?
         }

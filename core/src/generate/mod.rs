@@ -16,7 +16,7 @@ mod component;
 mod fine;
 mod grid;
 mod rng;
-mod shapes;
+pub(crate) mod shapes;
 
 pub use assembly::{assembly, AssemblySpec};
 pub use cabinet::cabinet;

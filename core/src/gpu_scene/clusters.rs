@@ -34,7 +34,7 @@ pub const CACHED_TRIANGLES: usize = 8192;
 
 /// What a cache entry's key starts with: bump it when the clusters a geometry gets change.
 const CACHE_VERSION: &[u8] =
-    b"clusters 11: clod 128, normals protected, no sloppy fallback, small parts whole, spans, welded stand-ins from one source at 0.7";
+    b"clusters 12: clod 128, normals protected, no sloppy fallback, small parts whole, spans, welded stand-ins from one source at 0.7, spatial clusters for fans";
 /// The disk cache's kind of entry.
 const CACHE_KIND: &str = "clusters";
 
@@ -354,6 +354,7 @@ fn part_dag(vertices: &[Vertex], indices: &[u32]) -> Option<PartDag> {
     mesh.attribute_weights = &[0.5, 0.5, 0.5];
     mesh.attribute_protect_mask = 0b111;
     let mut config = meshopt::clod_default_config(MAX_CLUSTER_TRIANGLES);
+    config.cluster_spatial = fan_work(&local_indices, local.len()) > FLEX_FAN_WORK_LIMIT;
     // Where the careful simplification is stuck, the library may fall back to a sloppy one
     // that ignores normals and seams: faceted CAD features (prisms, fins) came out as smooth
     // blobs within the error bound. Stuck groups stay as they are instead.
@@ -404,6 +405,34 @@ fn part_dag(vertices: &[Vertex], indices: &[u32]) -> Option<PartDag> {
     }
     add_stand_ins(&mut dag, &local, &local_indices, &used);
     Some(dag)
+}
+
+/// Above this [`fan_work`], a part's clusters are made by meshoptimizer's spatial
+/// clusterizer instead of its flexible one: about 70 ms of the flexible one's time.
+const FLEX_FAN_WORK_LIMIT: u64 = 1 << 25;
+
+/// The work meshoptimizer's flexible clusterizer (`meshopt_buildMeshletsFlex`, which grows
+/// clusters through shared vertices) spends on the part's fans: for every triangle it adds,
+/// it scans the live triangles around each vertex of the cluster, so a vertex shared by `v`
+/// triangles costs about `v²` (a disc capped by a fan of 25 000 triangles around one vertex,
+/// as CAD tessellators make of planar faces, took 2.6 s; one of 250 000, minutes). Counted over
+/// the vertices shared by more than 64 triangles (a smooth or faceted surface's vertices are
+/// shared by about 6, whatever its size, and cost it nothing of the kind). The spatial
+/// clusterizer splits the triangles by position, at a cost that grows as `n log n`, for clusters
+/// about as full on such parts (on smooth ones it makes about 40 % more, so it is kept for
+/// fans).
+fn fan_work(local_indices: &[u32], vertex_count: usize) -> u64 {
+    let mut shared_by = vec![0_u32; vertex_count];
+    for &vertex in local_indices {
+        if let Some(count) = shared_by.get_mut(vertex as usize) {
+            *count += 1;
+        }
+    }
+    shared_by
+        .iter()
+        .filter(|&&count| count > 64)
+        .map(|&count| u64::from(count) * u64::from(count))
+        .sum()
 }
 
 /// Ends the part's DAG with its stand-ins (`stand_ins.rs`) where its coarsest cut has more
@@ -890,5 +919,37 @@ mod tests {
         let [_, second, coarsest] = built.part_ranges[1];
         assert_eq!(second, 2, "200 triangles in runs of 128");
         assert_eq!(coarsest, 2, "runs are their part's coarsest");
+    }
+
+    /// A disc capped by one fan (a prism of 5 000 sides: each cap's first vertex is shared by
+    /// 4 998 triangles) would cost the flexible clusterizer the square of that: the part is
+    /// clustered spatially, and its clusters still hold exactly its triangles, each cluster
+    /// within the limits. A smooth sphere's vertices cost nothing of the kind.
+    #[test]
+    fn a_part_capped_by_a_large_fan_is_clustered_by_position_and_keeps_its_triangles() {
+        let mut builder = crate::generate::shapes::GeometryBuilder::new("disc");
+        builder.prism(5000, glam::DMat4::IDENTITY);
+        let disc = builder.finish();
+        assert!(fan_work(&disc.indices, disc.vertices.len()) > FLEX_FAN_WORK_LIMIT);
+        let dag = part_dag(&disc.vertices, &disc.indices).unwrap();
+        let original: Vec<u32> = dag
+            .clusters
+            .iter()
+            .filter(|(_, _, refined)| *refined == abi::CADR_CLUSTER_ORIGINAL)
+            .flat_map(|(indices, _, _)| indices.iter().copied())
+            .collect();
+        assert_eq!(sorted_triangles(&original), sorted_triangles(&disc.indices));
+        for (indices, group, _) in &dag.clusters {
+            let mut vertices = indices.clone();
+            vertices.sort_unstable();
+            vertices.dedup();
+            let stand_in = dag.groups[*group as usize].depth == abi::CADR_CLUSTER_PROXY_DEPTH;
+            assert!(indices.len() / 3 <= MAX_CLUSTER_TRIANGLES, "{}", indices.len() / 3);
+            assert!(stand_in || vertices.len() <= 128, "{}", vertices.len());
+        }
+
+        let mut sphere = crate::scene::Geometry::default();
+        add_sphere(&mut sphere, 256, [0.0; 3]);
+        assert!(fan_work(&sphere.indices, sphere.vertices.len()) < FLEX_FAN_WORK_LIMIT / 100);
     }
 }

@@ -944,7 +944,11 @@ mod tests {
             vertices.sort_unstable();
             vertices.dedup();
             let stand_in = dag.groups[*group as usize].depth == abi::CADR_CLUSTER_PROXY_DEPTH;
-            assert!(indices.len() / 3 <= MAX_CLUSTER_TRIANGLES, "{}", indices.len() / 3);
+            assert!(
+                indices.len() / 3 <= MAX_CLUSTER_TRIANGLES,
+                "{}",
+                indices.len() / 3
+            );
             assert!(stand_in || vertices.len() <= 128, "{}", vertices.len());
         }
 

@@ -10,6 +10,7 @@
 use std::borrow::Cow;
 use std::collections::hash_map::Entry;
 use std::collections::HashMap;
+use std::ops::Range;
 use std::path::Path;
 
 use base64::Engine as _;
@@ -18,8 +19,8 @@ use gltf::accessor::{DataType, Dimensions};
 use gltf::mesh::Mode;
 
 use super::gltf_buffers::{
-    open_buffer_file, open_document, percent_decode, GltfBuffers, SourceBytes,
-    MAPPED_BYTES_BETWEEN_RELEASES,
+    document_in, open_buffer_file, open_document, percent_decode, Document, GltfBuffers,
+    SourceBytes, BYTES_BETWEEN_RELEASES,
 };
 use super::LoadError;
 use crate::scene::{
@@ -65,82 +66,39 @@ fn check_images(root: &gltf::json::Root) -> Result<(), String> {
     Ok(())
 }
 
-/// Size of the GLB header: magic, version, length.
-const GLB_HEADER_SIZE: u32 = 12;
-
-/// The glTF crate subtracts the header's size from the GLB header's `length` unchecked; a
-/// length smaller than the header is refused first.
-fn check_glb_header(bytes: &[u8]) -> Result<(), String> {
-    if !bytes.starts_with(b"glTF") || bytes.len() < GLB_HEADER_SIZE as usize {
-        return Ok(());
-    }
-    let length = u32::from_le_bytes([bytes[8], bytes[9], bytes[10], bytes[11]]);
-    if length < GLB_HEADER_SIZE {
-        return Err(format!(
-            "the GLB header's length is {length} bytes, less than the {GLB_HEADER_SIZE}-byte header itself"
-        ));
-    }
-    Ok(())
-}
-
 /// Loads glTF from `bytes`; `path` names the file in errors and locates external buffers.
 pub fn load_gltf_bytes(bytes: &[u8], path: &Path) -> Result<Scene, LoadError> {
-    load_gltf_bytes_through(Cow::Borrowed(bytes), path, &mut crate::scene::KeepInScene)
+    load_gltf_bytes_through(bytes, path, &mut crate::scene::KeepInScene)
 }
 
 /// [`load_gltf_bytes`], handing each geometry to `sink` as soon as it is made (see
 /// [`GeometrySink`]).
 pub(super) fn load_gltf_bytes_through(
-    bytes: Cow<'_, [u8]>,
+    bytes: &[u8],
     path: &Path,
     sink: &mut dyn GeometrySink,
 ) -> Result<Scene, LoadError> {
-    load_gltf_through(SourceBytes::Memory(bytes), path, sink)
+    let document = document_in(bytes).map_err(|message| LoadError::Gltf {
+        path: path.to_owned(),
+        message,
+    })?;
+    load_gltf_through(document, path, sink)
 }
 
-/// Loads the glTF file at `path` (mapped, not read: see [`super::gltf_buffers`]), handing
+/// Loads the glTF file at `path` (read a mesh at a time: see [`super::gltf_buffers`]), handing
 /// each geometry to `sink` as soon as it is made (see [`GeometrySink`]).
 pub(super) fn load_gltf_file_through(
     path: &Path,
     sink: &mut dyn GeometrySink,
 ) -> Result<Scene, LoadError> {
-    let source = open_document(path).map_err(|source| LoadError::Io {
-        path: path.to_owned(),
-        source,
-    })?;
-    load_gltf_through(source, path, sink)
-}
-
-/// The document of a glTF file or GLB in `source`, and a GLB's binary chunk (kept where it
-/// lies: in the mapping or the caller's bytes).
-fn parse_document<'a>(
-    source: SourceBytes<'a>,
-) -> Result<(gltf::json::Root, Option<SourceBytes<'a>>), String> {
-    let bytes = source.bytes();
-    check_glb_header(bytes)?;
-    let deserialize = |json: &[u8]| {
-        gltf::json::deserialize::from_slice(json)
-            .map_err(|e| gltf::Error::Deserialize(e).to_string())
-    };
-    if !bytes.starts_with(b"glTF") {
-        return Ok((deserialize(bytes)?, None));
-    }
-    let glb = gltf::Glb::from_slice(bytes).map_err(|e| e.to_string())?;
-    let root = deserialize(&glb.json)?;
-    let start = bytes.as_ptr() as usize;
-    let bin = glb.bin.as_deref().map(|bin| {
-        let offset = bin.as_ptr() as usize - start;
-        offset..offset + bin.len()
-    });
-    drop(glb);
-    Ok((root, bin.map(|range| source.narrowed(range))))
+    load_gltf_through(open_document(path)?, path, sink)
 }
 
 /// Loads the glTF document or GLB in `source`, handing each geometry to `sink` as soon as it
 /// is made (see [`GeometrySink`]); `path` names the file in errors and locates external
 /// buffers.
 fn load_gltf_through(
-    source: SourceBytes<'_>,
+    source: Document<'_>,
     path: &Path,
     sink: &mut dyn GeometrySink,
 ) -> Result<Scene, LoadError> {
@@ -152,7 +110,9 @@ fn load_gltf_through(
         path: path.to_owned(),
         message,
     };
-    let (root, blob) = parse_document(source).map_err(gltf_error)?;
+    let root = gltf::json::deserialize::from_slice(&source.json)
+        .map_err(|e| gltf_error(gltf::Error::Deserialize(e).to_string()))?;
+    let blob = source.bin;
     check_position_accessors(&root).map_err(invalid)?;
     check_images(&root).map_err(invalid)?;
     let document = gltf::Document::from_json(root).map_err(|e| gltf_error(e.to_string()))?;
@@ -167,8 +127,9 @@ fn load_gltf_through(
             .unwrap_or_default(),
         ..Scene::default()
     };
+    read_image_views(&document, &mut buffers).map_err(invalid)?;
     let textures = super::gltf_textures::load_textures(&document, &buffers, path);
-    buffers.release_mapped_pages();
+    buffers.release();
     // Scene textures are the glTF textures that decoded, in order.
     let mut texture_index = Vec::with_capacity(textures.len());
     for texture in textures {
@@ -187,11 +148,12 @@ fn load_gltf_through(
     let mut bytes_read_since_release = 0_u64;
     for mesh in document.meshes() {
         let key = accessor_key(&mesh, &uv_sets);
+        read_accessors(&document, &mesh, &mut buffers).map_err(invalid)?;
         let (geometry, materials) = load_mesh(&mesh, &buffers, &uv_sets, path).map_err(invalid)?;
         // The geometry's bytes stand for the accessors it was read from.
         bytes_read_since_release += geometry.host_bytes();
-        if bytes_read_since_release >= MAPPED_BYTES_BETWEEN_RELEASES {
-            buffers.release_mapped_pages();
+        if bytes_read_since_release >= BYTES_BETWEEN_RELEASES {
+            buffers.release();
             bytes_read_since_release = 0;
         }
         if geometry.parts.is_empty() {
@@ -365,8 +327,11 @@ fn resolve_buffers<'a>(
         let index = buffer.index();
         let (data, origin) = match buffer.source() {
             gltf::buffer::Source::Bin => {
-                let blob = blob.clone().ok_or_else(|| {
+                let blob = blob.as_ref().ok_or_else(|| {
                     format!("buffer {index} refers to the GLB binary chunk, but the file has none")
+                })?;
+                let blob = blob.duplicate().ok_or_else(|| {
+                    format!("buffer {index}: no memory can be reserved for the GLB binary chunk")
                 })?;
                 (blob, "the GLB binary chunk".to_owned())
             }
@@ -403,6 +368,80 @@ fn resolve_buffers<'a>(
         buffers.push(data);
     }
     Ok(GltfBuffers(buffers))
+}
+
+/// The bytes of `view` from `offset` within it, for `length` bytes at most: the buffer and
+/// the range, in `u64` (a view's offset and length are each up to `u64::MAX` in the JSON; the
+/// views were checked against their buffers before anything is read).
+fn view_range(view: &gltf::buffer::View<'_>, offset: u128, length: u128) -> (usize, Range<u64>) {
+    let view_start = view.offset() as u128;
+    let view_end = view_start + view.length() as u128;
+    let start = (view_start + offset).min(view_end);
+    let end = start.saturating_add(length).min(view_end);
+    (view.buffer().index(), start as u64..end as u64)
+}
+
+/// Reads from their files the bytes of every accessor `mesh`'s primitives name (attributes,
+/// indices, sparse indices and values), each as far as its elements reach within its view.
+fn read_accessors(
+    document: &gltf::Document,
+    mesh: &gltf::Mesh<'_>,
+    buffers: &mut GltfBuffers<'_>,
+) -> Result<(), String> {
+    let Some(json) = document.as_json().meshes.get(mesh.index()) else {
+        return Ok(());
+    };
+    let named = json.primitives.iter().flat_map(|primitive| {
+        let attributes = primitive.attributes.values().map(|index| index.value());
+        attributes.chain(primitive.indices.map(|index| index.value()))
+    });
+    // Validation has checked every accessor index.
+    for accessor in named.filter_map(|index| document.accessors().nth(index)) {
+        let element = accessor.size() as u128;
+        let count = accessor.count() as u128;
+        if let Some(view) = accessor.view() {
+            let stride = view.stride().map_or(element, |s| s as u128);
+            let (buffer, range) = view_range(&view, accessor.offset() as u128, stride * count);
+            buffers.read(buffer, range)?;
+        }
+        if let Some(sparse) = accessor.sparse() {
+            let sparse_count = sparse.count() as u128;
+            let indices = sparse.indices();
+            let index_size = match indices.index_type() {
+                gltf::accessor::sparse::IndexType::U8 => 1,
+                gltf::accessor::sparse::IndexType::U16 => 2,
+                gltf::accessor::sparse::IndexType::U32 => 4,
+            };
+            let (buffer, range) = view_range(
+                &indices.view(),
+                indices.offset() as u128,
+                index_size * sparse_count,
+            );
+            buffers.read(buffer, range)?;
+            let values = sparse.values();
+            let (buffer, range) = view_range(
+                &values.view(),
+                values.offset() as u128,
+                element * sparse_count,
+            );
+            buffers.read(buffer, range)?;
+        }
+    }
+    Ok(())
+}
+
+/// Reads from their files the bytes of every image that lies in a buffer view.
+fn read_image_views(
+    document: &gltf::Document,
+    buffers: &mut GltfBuffers<'_>,
+) -> Result<(), String> {
+    for image in document.images() {
+        if let gltf::image::Source::View { view, .. } = image.source() {
+            let (buffer, range) = view_range(&view, 0, view.length() as u128);
+            buffers.read(buffer, range)?;
+        }
+    }
+    Ok(())
 }
 
 /// Checks that every buffer view lies within its buffer (in `u128`: a view's offset and length

@@ -1,115 +1,154 @@
-//! The bytes of a glTF document and of its buffers, as the loader reads them, and the files
-//! its URIs name.
+//! The bytes of a glTF document and of the buffers it names, as the loader reads them, and the
+//! files its URIs name.
 //!
-//! A file (the `.gltf` or `.glb` itself, a `.bin` beside it) is mapped into memory, not read:
-//! the operating system reads its pages as the loader touches them, so a model larger than
-//! memory loads. Touched pages count in the process's resident memory until they are given
-//! back; the loader gives them back ([`GltfBuffers::release_mapped_pages`]) every
-//! [`MAPPED_BYTES_BETWEEN_RELEASES`] of geometry converted, so that loading holds the memory
-//! budget's geometry plus about that much of the file.
+//! No file is read whole. Of a GLB, the header and the JSON chunk are read ([`open_document`];
+//! a `.gltf` is its JSON, read whole); its binary chunk, and each `.bin` file the document
+//! names, is a [`FileWindow`]: memory reserved for all of its bytes, which costs nothing until
+//! written, into which the loader reads, before each mesh, the bytes of the accessors the mesh
+//! reads ([`GltfBuffers::read`]), and before the textures those of the images. Every
+//! [`BYTES_BETWEEN_RELEASES`] of geometry converted it gives the pages read back
+//! ([`GltfBuffers::release`]), so that loading holds the memory budget's geometry plus about
+//! that much of the file, and a model larger than memory loads.
 //!
-//! A data URI is decoded into memory, and bytes the caller already holds
-//! ([`super::load_bytes`]) are borrowed. A file that cannot be mapped (a file system without
-//! mappings, a pipe) is read into memory instead.
-//!
-//! A mapped file must not shrink while it is loaded: reading a page past its new end stops the
-//! process (`SIGBUS`), as with every program that maps its input.
+//! The file is read, not mapped: a file changed or cut short while it loads makes a read fail
+//! (an error that names the buffer), where a mapping's lost pages would stop the process.
+//! Bytes the caller already holds ([`super::load_bytes`]) are borrowed; a data URI is decoded
+//! into memory.
 
 use std::borrow::Cow;
 use std::fs::File;
 use std::ops::Range;
+use std::os::unix::fs::FileExt as _;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
-use memmap2::{Mmap, MmapOptions, UncheckedAdvice};
+use memmap2::{MmapMut, MmapOptions, UncheckedAdvice};
 
-/// Bytes of geometry the loader converts between two [`GltfBuffers::release_mapped_pages`]
-/// (standing for the accessors it reads): about what a load holds of a mapped file, beyond the
-/// mesh being converted.
-pub const MAPPED_BYTES_BETWEEN_RELEASES: u64 = 8 << 20;
+use super::LoadError;
 
-/// The bytes of a file or a buffer.
-#[derive(Clone)]
+/// Bytes of geometry the glTF loader converts between two releases of the memory it read its
+/// buffers into (the geometry standing for the accessors it reads): about what a load holds of
+/// a file's buffers, beyond the mesh being converted.
+pub const BYTES_BETWEEN_RELEASES: u64 = 8 << 20;
+
+/// A buffer's bytes (or an image's).
 pub(super) enum SourceBytes<'a> {
-    /// Bytes in memory: borrowed from the caller, or read or decoded by the loader.
+    /// Bytes in memory: borrowed from the caller, or decoded or read by the loader.
     Memory(Cow<'a, [u8]>),
-    /// A range of a file mapped into memory.
-    Mapped {
-        /// The mapping (shared by a GLB's document and its binary chunk).
-        map: Arc<Mmap>,
-        /// The bytes of the mapping that are these.
-        range: Range<usize>,
-    },
+    /// A stretch of a file, read into memory where the loader asks.
+    File(FileWindow),
 }
 
 impl<'a> SourceBytes<'a> {
-    /// The bytes.
+    /// The bytes (of a [`FileWindow`], those read so far; the others are zero).
     pub(super) fn bytes(&self) -> &[u8] {
         match self {
             Self::Memory(bytes) => bytes,
-            Self::Mapped { map, range } => &map[range.clone()],
+            Self::File(window) => &window.memory,
         }
     }
 
-    /// The bytes of `range` within these, keeping a mapping (not copying it).
-    pub(super) fn narrowed(self, range: Range<usize>) -> SourceBytes<'a> {
+    /// The same bytes again (a second buffer naming a GLB's binary chunk): a window of the
+    /// same stretch, none of it read; `None` where no memory can be reserved for it.
+    pub(super) fn duplicate(&self) -> Option<SourceBytes<'a>> {
         match self {
-            Self::Memory(Cow::Borrowed(bytes)) => Self::Memory(Cow::Borrowed(&bytes[range])),
-            Self::Memory(Cow::Owned(mut bytes)) => {
-                bytes.truncate(range.end);
-                bytes.drain(..range.start);
-                Self::Memory(Cow::Owned(bytes))
-            }
-            Self::Mapped { map, range: whole } => Self::Mapped {
-                map,
-                range: whole.start + range.start..whole.start + range.end,
-            },
-        }
-    }
-
-    /// Gives back the pages of a mapping that the process has touched: the next read of them
-    /// reads the file again. Bytes in memory stay.
-    fn release_pages(&mut self) {
-        if let Self::Mapped { map, range } = self {
-            if range.start == range.end {
-                return;
-            }
-            // SAFETY: the mapping is a shared, read-only mapping of a file (`Mmap`); dropping
-            // its pages only unmaps them from this process, and the next read faults them in
-            // from the file again with the same bytes. `&mut self` means no slice of it is
-            // borrowed meanwhile.
-            let released = unsafe {
-                map.unchecked_advise_range(UncheckedAdvice::DontNeed, range.start, range.len())
-            };
-            if let Err(e) = released {
-                log::debug!("giving back the pages of a mapped glTF buffer failed: {e}");
-            }
+            Self::Memory(bytes) => Some(Self::Memory(bytes.clone())),
+            Self::File(window) => FileWindow::new(
+                Arc::clone(&window.file),
+                &window.path,
+                window.start,
+                window.memory.len(),
+            )
+            .map(Self::File),
         }
     }
 }
 
-/// Opens a scene file for reading: a regular file is mapped (read whole where it cannot be),
-/// anything else (a pipe) read whole.
-pub(super) fn open_document(path: &Path) -> std::io::Result<SourceBytes<'static>> {
-    let opened = File::open(path)?;
-    let metadata = opened.metadata()?;
-    if !metadata.is_file() {
-        return std::fs::read(path).map(|bytes| SourceBytes::Memory(Cow::Owned(bytes)));
-    }
-    map_or_read(
-        &opened,
-        path,
-        usize::try_from(metadata.len()).unwrap_or(usize::MAX),
-    )
+/// A stretch of a file, with memory reserved for all of it (anonymous, without swap reserved:
+/// a page costs nothing until written) and read into it range by range.
+pub(super) struct FileWindow {
+    /// The file.
+    file: Arc<File>,
+    /// The file's path, for errors.
+    path: PathBuf,
+    /// Where the stretch begins in the file.
+    start: u64,
+    /// The stretch's bytes, where read.
+    memory: MmapMut,
 }
 
-/// Opens the first `length` bytes of a buffer's (or an image's) file. Only a regular file is opened, and no
-/// more than the buffer declares is mapped: a URI naming a device or a pipe (`/dev/zero`) must
-/// not hang cadr or take all of its memory.
-pub(super) fn open_buffer_file(
-    file: &Path,
+impl FileWindow {
+    /// The `length` bytes of `file` (at `path`) from `start`, none read yet; `None` where no
+    /// memory can be reserved for them.
+    fn new(file: Arc<File>, path: &Path, start: u64, length: usize) -> Option<Self> {
+        let memory = MmapOptions::new()
+            .len(length)
+            .no_reserve_swap()
+            .map_anon()
+            .map_err(|e| {
+                log::debug!(
+                    "{}: no memory reserved for {length} bytes ({e}); read whole",
+                    path.display()
+                )
+            })
+            .ok()?;
+        Some(Self {
+            file,
+            path: path.to_owned(),
+            start,
+            memory,
+        })
+    }
+
+    /// Reads `range` of the stretch from the file (the caller keeps it within the stretch).
+    fn read(&mut self, range: Range<usize>) -> std::io::Result<()> {
+        let at = self.start + range.start as u64;
+        self.file.read_exact_at(&mut self.memory[range], at)
+    }
+
+    /// Gives back the memory of what was read: the stretch reads as zeros again until read.
+    fn release(&mut self) {
+        // SAFETY: the memory is an anonymous private mapping owned by this window; dropping
+        // its pages makes them read as zeros, which is no invalid value for bytes, and `&mut
+        // self` means no slice of it is borrowed meanwhile. The loader reads every range again
+        // before it uses it.
+        let released = unsafe { self.memory.unchecked_advise(UncheckedAdvice::DontNeed) };
+        if let Err(e) = released {
+            log::debug!(
+                "{}: giving back the memory read of it failed: {e}",
+                self.path.display()
+            );
+        }
+    }
+}
+
+/// The `length` bytes of the regular file `file` (at `path`) from `start`: a window read as
+/// asked, or the bytes read whole where no memory can be reserved for a window.
+fn stretch_of(
+    file: File,
+    path: &Path,
+    start: u64,
     length: usize,
 ) -> std::io::Result<SourceBytes<'static>> {
+    if length == 0 {
+        return Ok(SourceBytes::Memory(Cow::Owned(Vec::new())));
+    }
+    let file = Arc::new(file);
+    if let Some(window) = FileWindow::new(Arc::clone(&file), path, start, length) {
+        return Ok(SourceBytes::File(window));
+    }
+    let mut bytes = Vec::new();
+    bytes
+        .try_reserve_exact(length)
+        .map_err(|e| std::io::Error::new(std::io::ErrorKind::OutOfMemory, e))?;
+    bytes.resize(length, 0);
+    file.read_exact_at(&mut bytes, start)?;
+    Ok(SourceBytes::Memory(Cow::Owned(bytes)))
+}
+
+/// Opens `file`, refusing anything but a regular file (a URI naming a device or a pipe, such
+/// as `/dev/zero`, must not hang cadr or take all of its memory); returns it and its length.
+fn open_regular(file: &Path) -> std::io::Result<(File, u64)> {
     let opened = File::open(file)?;
     let metadata = opened.metadata()?;
     if !metadata.is_file() {
@@ -118,48 +157,219 @@ pub(super) fn open_buffer_file(
             "it is not a regular file",
         ));
     }
-    let wanted = (length as u64).min(metadata.len());
-    map_or_read(&opened, file, usize::try_from(wanted).unwrap_or(usize::MAX))
+    Ok((opened, metadata.len()))
 }
 
-/// The first `length` bytes of the regular file `opened` (at `path`), mapped, or read where
-/// the file cannot be mapped.
-fn map_or_read(opened: &File, path: &Path, length: usize) -> std::io::Result<SourceBytes<'static>> {
-    if length == 0 {
-        return Ok(SourceBytes::Memory(Cow::Owned(Vec::new())));
+/// A buffer's file: its first `length` bytes (no more than the file has), read as the loader
+/// asks.
+pub(super) fn open_buffer_file(
+    file: &Path,
+    length: usize,
+) -> std::io::Result<SourceBytes<'static>> {
+    let (opened, file_length) = open_regular(file)?;
+    let length = usize::try_from(file_length).map_or(length, |have| have.min(length));
+    stretch_of(opened, file, 0, length)
+}
+
+/// The whole of an image's file.
+pub(super) fn read_image_file(file: &Path) -> std::io::Result<Vec<u8>> {
+    use std::io::Read as _;
+    let (opened, length) = open_regular(file)?;
+    let mut data = Vec::new();
+    opened.take(length).read_to_end(&mut data)?;
+    Ok(data)
+}
+
+/// A glTF file or GLB as the loader parses it: the JSON, and a GLB's binary chunk.
+pub(super) struct Document<'a> {
+    /// The JSON text.
+    pub(super) json: Cow<'a, [u8]>,
+    /// A GLB's binary chunk, where it has one.
+    pub(super) bin: Option<SourceBytes<'a>>,
+}
+
+/// The glTF file at `path`: a GLB's header and JSON chunk read, its binary chunk a window
+/// read as the loader asks; a `.gltf` (or anything but a regular file) read whole.
+pub(super) fn open_document(path: &Path) -> Result<Document<'static>, LoadError> {
+    let io = |source| LoadError::Io {
+        path: path.to_owned(),
+        source,
+    };
+    let opened = File::open(path).map_err(io)?;
+    let metadata = opened.metadata().map_err(io)?;
+    let mut magic = [0_u8; 4];
+    let is_glb =
+        metadata.is_file() && opened.read_exact_at(&mut magic, 0).is_ok() && magic == *b"glTF";
+    if !is_glb {
+        let json = std::fs::read(path).map_err(io)?;
+        return Ok(Document {
+            json: Cow::Owned(json),
+            bin: None,
+        });
     }
-    // SAFETY: the mapping is read-only and cadr never writes the file. Another process shrinking the file while it is loaded would make a read of the lost
-    // pages stop the process (`SIGBUS`), as the module's documentation says.
-    let mapped = unsafe { MmapOptions::new().len(length).map(opened) };
-    match mapped {
-        Ok(map) => Ok(SourceBytes::Mapped {
-            map: Arc::new(map),
-            range: 0..length,
-        }),
-        Err(e) => {
-            log::debug!(
-                "{}: cannot be mapped ({e}); reading it whole",
-                path.display()
-            );
-            let mut data = Vec::new();
-            std::io::Read::read_to_end(&mut std::io::Read::take(opened, length as u64), &mut data)?;
-            Ok(SourceBytes::Memory(Cow::Owned(data)))
+    let chunks = glb_chunks(metadata.len(), &mut |at, into| {
+        opened.read_exact_at(into, at)
+    })
+    .map_err(|message| LoadError::Gltf {
+        path: path.to_owned(),
+        message,
+    })?;
+    let mut json = vec![0_u8; (chunks.json.end - chunks.json.start) as usize];
+    opened
+        .read_exact_at(&mut json, chunks.json.start)
+        .map_err(io)?;
+    let bin = match chunks.bin {
+        Some(bin) => {
+            Some(stretch_of(opened, path, bin.start, (bin.end - bin.start) as usize).map_err(io)?)
         }
+        None => None,
+    };
+    Ok(Document {
+        json: Cow::Owned(json),
+        bin,
+    })
+}
+
+/// The glTF document or GLB in `bytes`, borrowed.
+pub(super) fn document_in(bytes: &[u8]) -> Result<Document<'_>, String> {
+    if !bytes.starts_with(b"glTF") {
+        return Ok(Document {
+            json: Cow::Borrowed(bytes),
+            bin: None,
+        });
     }
+    let chunks = glb_chunks(bytes.len() as u64, &mut |at, into| {
+        // `glb_chunks` reads only within the length it is given.
+        into.copy_from_slice(&bytes[at as usize..at as usize + into.len()]);
+        Ok(())
+    })?;
+    let range = |r: Range<u64>| r.start as usize..r.end as usize;
+    Ok(Document {
+        json: Cow::Borrowed(&bytes[range(chunks.json)]),
+        bin: chunks
+            .bin
+            .map(|bin| SourceBytes::Memory(Cow::Borrowed(&bytes[range(bin)]))),
+    })
+}
+
+/// Size of the GLB header (magic, version, length) and of a chunk's header (length, type).
+const GLB_HEADER_SIZE: u64 = 12;
+const CHUNK_HEADER_SIZE: u64 = 8;
+
+/// Where a GLB's chunks lie in its file.
+struct GlbChunks {
+    /// The JSON chunk's data.
+    json: Range<u64>,
+    /// The binary chunk's data, where there is one.
+    bin: Option<Range<u64>>,
+}
+
+/// Finds a GLB's chunks in a file of `file_length` bytes, reading its headers with `read_at`
+/// (offset, bytes to fill), never past `file_length`. Every length is checked against the
+/// header's and the file's before anything is read by it.
+fn glb_chunks(
+    file_length: u64,
+    read_at: &mut dyn FnMut(u64, &mut [u8]) -> std::io::Result<()>,
+) -> Result<GlbChunks, String> {
+    let mut read_words = |at: u64, words: &mut [u32]| -> Result<(), String> {
+        let mut bytes = vec![0_u8; 4 * words.len()];
+        read_at(at, &mut bytes).map_err(|e| format!("the GLB cannot be read: {e}"))?;
+        for (word, bytes) in words.iter_mut().zip(bytes.chunks_exact(4)) {
+            *word = u32::from_le_bytes([bytes[0], bytes[1], bytes[2], bytes[3]]);
+        }
+        Ok(())
+    };
+    if file_length < GLB_HEADER_SIZE {
+        return Err(format!(
+            "the file has {file_length} bytes, less than the {GLB_HEADER_SIZE}-byte GLB header"
+        ));
+    }
+    let mut header = [0_u32; 3];
+    read_words(0, &mut header)?;
+    let [_, version, length] = header;
+    let length = u64::from(length);
+    if length < GLB_HEADER_SIZE {
+        return Err(format!(
+            "the GLB header's length is {length} bytes, less than the {GLB_HEADER_SIZE}-byte header itself"
+        ));
+    }
+    if version != 2 {
+        return Err(format!(
+            "GLB version {version} is not supported (only 2 is)"
+        ));
+    }
+    if length > file_length {
+        return Err(format!(
+            "the GLB header's length is {length} bytes, but the file has {file_length} (truncated?)"
+        ));
+    }
+    let mut chunk = |at: u64, expected: &[u8; 4], name: &str| -> Result<Range<u64>, String> {
+        if at + CHUNK_HEADER_SIZE > length {
+            return Err(format!(
+                "the GLB's {name} chunk header at byte {at} lies past its length ({length} bytes)"
+            ));
+        }
+        let mut words = [0_u32; 2];
+        read_words(at, &mut words)?;
+        let [chunk_length, kind] = words;
+        if kind.to_le_bytes() != *expected {
+            return Err(format!(
+                "the GLB's chunk at byte {at} is of type {:?}, not {name}",
+                String::from_utf8_lossy(&kind.to_le_bytes())
+            ));
+        }
+        let data = at + CHUNK_HEADER_SIZE;
+        let end = data + u64::from(chunk_length);
+        if end > length {
+            return Err(format!(
+                "the GLB's {name} chunk declares {chunk_length} bytes, but only {} follow its header",
+                length - data
+            ));
+        }
+        Ok(data..end)
+    };
+    let json = chunk(GLB_HEADER_SIZE, b"JSON", "JSON")?;
+    let bin = (json.end < length)
+        .then(|| chunk(json.end, b"BIN\0", "BIN"))
+        .transpose()?;
+    Ok(GlbChunks { json, bin })
 }
 
 /// A glTF document's buffers, in the document's order.
 pub(super) struct GltfBuffers<'a>(pub(super) Vec<SourceBytes<'a>>);
 
 impl GltfBuffers<'_> {
-    /// Buffer `index`'s bytes.
+    /// Buffer `index`'s bytes (of a file's, those read so far).
     pub(super) fn get(&self, index: usize) -> Option<&[u8]> {
         self.0.get(index).map(SourceBytes::bytes)
     }
 
-    /// Gives back the pages of the mapped buffers that loading has touched so far.
-    pub(super) fn release_mapped_pages(&mut self) {
-        self.0.iter_mut().for_each(SourceBytes::release_pages);
+    /// Reads `range` of buffer `index` from its file, where it has one (bytes in memory are
+    /// there already). The range is clamped to the buffer.
+    pub(super) fn read(&mut self, index: usize, range: Range<u64>) -> Result<(), String> {
+        let Some(SourceBytes::File(window)) = self.0.get_mut(index) else {
+            return Ok(());
+        };
+        let length = window.memory.len() as u64;
+        let (start, end) = (range.start.min(length), range.end.min(length));
+        if start == end {
+            return Ok(());
+        }
+        window.read(start as usize..end as usize).map_err(|e| {
+            format!(
+                "buffer {index}: bytes {start}..{end} of '{}' cannot be read ({e}); was the file changed while it loaded?",
+                window.path.display()
+            )
+        })
+    }
+
+    /// Gives back the memory of every file's bytes read so far.
+    pub(super) fn release(&mut self) {
+        for buffer in &mut self.0 {
+            if let SourceBytes::File(window) = buffer {
+                window.release();
+            }
+        }
     }
 }
 
@@ -181,4 +391,89 @@ pub(super) fn percent_decode(uri: &str) -> PathBuf {
         i += 1;
     }
     PathBuf::from(String::from_utf8_lossy(&out).into_owned())
+}
+
+#[cfg(test)]
+mod tests {
+    #![allow(clippy::unwrap_used)] // Test code: a failed unwrap is a failed test.
+
+    use super::*;
+
+    /// A buffer file cut short after it was opened (another program rewriting it while it
+    /// loads) makes the read of the lost bytes an error naming the buffer and the file, not a
+    /// signal that stops the process, and the bytes read before stay as they were read.
+    #[test]
+    fn a_buffer_file_cut_short_while_it_loads_fails_its_read_with_an_error() {
+        let path = std::env::temp_dir().join(format!("cadr-cut-buffer-{}.bin", std::process::id()));
+        let content: Vec<u8> = (0..1_u32 << 20).map(|i| (i % 251) as u8).collect();
+        std::fs::write(&path, &content).unwrap();
+        let mut buffers = GltfBuffers(vec![open_buffer_file(&path, content.len()).unwrap()]);
+        assert!(matches!(buffers.0[0], SourceBytes::File(_)));
+        buffers.read(0, 100..200).unwrap();
+        assert_eq!(&buffers.get(0).unwrap()[100..200], &content[100..200]);
+        assert!(buffers.get(0).unwrap()[300..400].iter().all(|&b| b == 0));
+
+        std::fs::OpenOptions::new()
+            .write(true)
+            .open(&path)
+            .unwrap()
+            .set_len(4096)
+            .unwrap();
+        let error = buffers.read(0, 8192..16384).unwrap_err();
+        assert!(
+            error.contains("buffer 0") && error.contains(&path.display().to_string()),
+            "{error}"
+        );
+        assert_eq!(&buffers.get(0).unwrap()[100..200], &content[100..200]);
+
+        // Given back, the bytes read are gone until read again.
+        buffers.release();
+        assert!(buffers.get(0).unwrap()[100..200].iter().all(|&b| b == 0));
+        buffers.read(0, 100..200).unwrap();
+        assert_eq!(&buffers.get(0).unwrap()[100..200], &content[100..200]);
+        std::fs::remove_file(&path).unwrap();
+    }
+
+    /// A GLB's chunks are found by their headers, every length checked against the file's.
+    #[test]
+    fn a_glbs_chunks_are_found_and_bad_lengths_refused() {
+        let glb = |length: u32, json_length: u32, bin: Option<&[u8]>| {
+            let mut bytes = b"glTF".to_vec();
+            bytes.extend(2_u32.to_le_bytes());
+            bytes.extend(length.to_le_bytes());
+            bytes.extend(json_length.to_le_bytes());
+            bytes.extend(b"JSON");
+            bytes.extend(b"{}  ");
+            if let Some(bin) = bin {
+                bytes.extend((bin.len() as u32).to_le_bytes());
+                bytes.extend(b"BIN\0");
+                bytes.extend(bin);
+            }
+            bytes
+        };
+        let whole = glb(36, 4, Some(b"abcd"));
+        let document = document_in(&whole).unwrap();
+        assert_eq!(&*document.json, b"{}  ");
+        assert_eq!(document.bin.unwrap().bytes(), b"abcd");
+        assert!(document_in(&glb(24, 4, None)).unwrap().bin.is_none());
+        for (bytes, expected) in [
+            (glb(8, 4, None), "less than the 12-byte header"),
+            (glb(400, 4, None), "but the file has 24"),
+            (
+                glb(24, 40, None),
+                "JSON chunk declares 40 bytes, but only 4",
+            ),
+            (
+                glb(34, 4, Some(b"abcd")),
+                "BIN chunk declares 4 bytes, but only 2",
+            ),
+            (
+                glb(30, 4, Some(b"abcd")),
+                "BIN chunk header at byte 24 lies past",
+            ),
+        ] {
+            let error = document_in(&bytes).err().unwrap();
+            assert!(error.contains(expected), "{error}");
+        }
+    }
 }

@@ -141,8 +141,10 @@ fn encoded_bytes<'b>(
         }
         gltf::image::Source::Uri { uri, .. } => {
             let file = base_dir.join(super::gltf_buffers::percent_decode(uri));
-            super::gltf_buffers::open_buffer_file(&file, usize::MAX)
-                .map_err(|e| format!("'{}' cannot be read: {e}", file.display()))?
+            SourceBytes::Memory(Cow::Owned(
+                super::gltf_buffers::read_image_file(&file)
+                    .map_err(|e| format!("'{}' cannot be read: {e}", file.display()))?,
+            ))
         }
     })
 }

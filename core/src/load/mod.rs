@@ -8,7 +8,7 @@ mod gltf_buffers;
 mod gltf_textures;
 
 pub use self::gltf::load_gltf_bytes;
-pub use self::gltf_buffers::MAPPED_BYTES_BETWEEN_RELEASES as GLTF_MAPPED_BYTES_BETWEEN_RELEASES;
+pub use self::gltf_buffers::BYTES_BETWEEN_RELEASES as GLTF_BYTES_BETWEEN_RELEASES;
 
 use std::borrow::Cow;
 use std::path::{Path, PathBuf};
@@ -161,8 +161,8 @@ pub fn load_file(path: &Path) -> Result<Scene, LoadError> {
 
 /// [`load_file`], handing each geometry to `sink` as it is made. The file is never read whole:
 /// a CSF file is read where each of its arrays lies (a `.csf.gz` from a temporary file it is
-/// unpacked into as it streams), a glTF file and its buffers are mapped into memory and read
-/// as its meshes are converted.
+/// unpacked into as it streams), a glTF file's buffers a mesh's accessors at a time (see
+/// `gltf_buffers.rs`).
 fn read_file(path: &Path, sink: &mut dyn GeometrySink) -> Result<Scene, LoadError> {
     let format = SceneFormat::from_path(path).ok_or_else(|| LoadError::UnknownFormat {
         path: path.to_owned(),
@@ -229,7 +229,7 @@ fn read_input(
     }
     let scene = match (input, format) {
         (Input::Bytes(bytes), SceneFormat::Gltf | SceneFormat::Glb) => {
-            return gltf::load_gltf_bytes_through(bytes, path, sink);
+            return gltf::load_gltf_bytes_through(&bytes, path, sink);
         }
         (Input::File, SceneFormat::Gltf | SceneFormat::Glb) => {
             return gltf::load_gltf_file_through(path, sink);

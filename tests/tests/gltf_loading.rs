@@ -407,3 +407,60 @@ fn each_gltf_finding_is_refused_naming_what_is_wrong() {
         );
     }
 }
+
+/// Packs a GLB of `json` and `bin`, each chunk padded to four bytes.
+fn packed_glb(json: &str, bin: &[u8]) -> Vec<u8> {
+    let pad = |mut bytes: Vec<u8>, with: u8| {
+        bytes.resize(bytes.len().div_ceil(4) * 4, with);
+        bytes
+    };
+    let (json, bin) = (pad(json.as_bytes().to_vec(), b' '), pad(bin.to_vec(), 0));
+    let mut glb = b"glTF".to_vec();
+    glb.extend(2_u32.to_le_bytes());
+    glb.extend((12 + 8 + json.len() as u32 + 8 + bin.len() as u32).to_le_bytes());
+    for (chunk, kind) in [(&json, b"JSON"), (&bin, b"BIN\0")] {
+        glb.extend((chunk.len() as u32).to_le_bytes());
+        glb.extend(kind);
+        glb.extend(chunk);
+    }
+    glb
+}
+
+/// A sparse accessor's indices and values lie in views of their own: a file's buffers are read
+/// a mesh's accessors at a time, and those views are read with the base, whether the buffer is
+/// a `.bin` beside a `.gltf` or a GLB's binary chunk, giving the scene loaded from memory.
+#[test]
+fn sparse_accessors_read_from_files_give_the_scene_read_from_memory() {
+    let mut bin = Vec::new();
+    for position in [[0.0_f32, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]] {
+        position.iter().for_each(|c| bin.extend(c.to_le_bytes()));
+    }
+    bin.extend(2_u16.to_le_bytes());
+    bin.extend([0, 0]);
+    [0.0_f32, 0.0, 1.0]
+        .iter()
+        .for_each(|c| bin.extend(c.to_le_bytes()));
+    let json = |buffer: &str| {
+        format!(
+            r#"{{"asset":{{"version":"2.0"}},"buffers":[{{"byteLength":52{buffer}}}],"bufferViews":[{{"buffer":0,"byteLength":36}},{{"buffer":0,"byteOffset":36,"byteLength":4}},{{"buffer":0,"byteOffset":40,"byteLength":12}}],"accessors":[{{"bufferView":0,"componentType":5126,"count":3,"type":"VEC3","min":[0,0,0],"max":[1,1,1],"sparse":{{"count":1,"indices":{{"bufferView":1,"componentType":5123}},"values":{{"bufferView":2}}}}}}],"meshes":[{{"primitives":[{{"attributes":{{"POSITION":0}}}}]}}],"nodes":[{{"mesh":0}}],"scenes":[{{"nodes":[0]}}]}}"#
+        )
+    };
+    let glb = packed_glb(&json(""), &bin);
+    let from_memory = load_gltf_bytes(&glb, Path::new("sparse.glb")).unwrap();
+    let positions: Vec<[f32; 3]> = from_memory.geometries[0]
+        .vertices
+        .iter()
+        .map(|v| v.position)
+        .collect();
+    assert!(positions.contains(&[0.0, 0.0, 1.0]), "{positions:?}");
+
+    let dir = scratch_dir("sparse-files");
+    std::fs::write(dir.join("sparse.glb"), &glb).unwrap();
+    std::fs::write(dir.join("sparse.bin"), &bin).unwrap();
+    std::fs::write(dir.join("sparse.gltf"), json(r#","uri":"sparse.bin""#)).unwrap();
+    for name in ["sparse.glb", "sparse.gltf"] {
+        let mut from_file = load_file(&dir.join(name)).unwrap();
+        from_file.name = from_memory.name.clone();
+        assert_eq!(from_file, from_memory, "{name}");
+    }
+}

@@ -406,28 +406,40 @@ fn read_accessors(
         }
         if let Some(sparse) = accessor.sparse() {
             let sparse_count = sparse.count() as u128;
-            let indices = sparse.indices();
-            let index_size = match indices.index_type() {
-                gltf::accessor::sparse::IndexType::U8 => 1,
-                gltf::accessor::sparse::IndexType::U16 => 2,
-                gltf::accessor::sparse::IndexType::U32 => 4,
-            };
-            let (buffer, range) = view_range(
-                &indices.view(),
-                indices.offset() as u128,
-                index_size * sparse_count,
-            );
-            buffers.read(buffer, range)?;
-            let values = sparse.values();
-            let (buffer, range) = view_range(
-                &values.view(),
-                values.offset() as u128,
-                element * sparse_count,
-            );
-            buffers.read(buffer, range)?;
+            for (_, view, offset, size) in sparse_parts(&sparse, element) {
+                let (buffer, range) = view_range(&view, offset, size * sparse_count);
+                buffers.read(buffer, range)?;
+            }
         }
     }
     Ok(())
+}
+
+/// A sparse accessor's two arrays: what each is, its view, its offset in the view and the size
+/// of one of its elements (`element`: the accessor's).
+fn sparse_parts<'a>(
+    sparse: &gltf::accessor::sparse::Sparse<'a>,
+    element: u128,
+) -> [(&'static str, gltf::buffer::View<'a>, u128, u128); 2] {
+    let index_size = match sparse.indices().index_type() {
+        gltf::accessor::sparse::IndexType::U8 => 1,
+        gltf::accessor::sparse::IndexType::U16 => 2,
+        gltf::accessor::sparse::IndexType::U32 => 4,
+    };
+    [
+        (
+            "indices",
+            sparse.indices().view(),
+            sparse.indices().offset() as u128,
+            index_size,
+        ),
+        (
+            "values",
+            sparse.values().view(),
+            sparse.values().offset() as u128,
+            element,
+        ),
+    ]
 }
 
 /// Reads from their files the bytes of every image that lies in a buffer view.
@@ -535,25 +547,7 @@ fn check_accessor(
                 "accessor {index} ({usage}) has sparse.count 0; glTF requires at least 1"
             ));
         }
-        let index_size = match sparse.indices().index_type() {
-            gltf::accessor::sparse::IndexType::U8 => 1,
-            gltf::accessor::sparse::IndexType::U16 => 2,
-            gltf::accessor::sparse::IndexType::U32 => 4,
-        };
-        for (what, view, offset, size) in [
-            (
-                "indices",
-                sparse.indices().view(),
-                sparse.indices().offset() as u128,
-                index_size,
-            ),
-            (
-                "values",
-                sparse.values().view(),
-                sparse.values().offset() as u128,
-                element,
-            ),
-        ] {
+        for (what, view, offset, size) in sparse_parts(&sparse, element) {
             // glTF forbids a byteStride here; the glTF crate's reader would step by it (and
             // panic where it is shorter than an element).
             if let Some(stride) = view.stride() {

@@ -6,9 +6,9 @@
 //! names, is a [`FileWindow`]: memory reserved for all of its bytes, which costs nothing until
 //! written, into which the loader reads, before each mesh, the bytes of the accessors the mesh
 //! reads ([`GltfBuffers::read`]), and before the textures those of the images. Every
-//! [`BYTES_BETWEEN_RELEASES`] of geometry converted it gives the pages read back
-//! ([`GltfBuffers::release`]), so that loading holds the memory budget's geometry plus about
-//! that much of the file, and a model larger than memory loads.
+//! [`BYTES_BETWEEN_RELEASES`] of geometry converted it gives the memory read into back,
+//! reserving it anew ([`GltfBuffers::release`]), so that loading holds the memory budget's
+//! geometry plus about that much of the file, and a model larger than memory loads.
 //!
 //! The file is read, not mapped: a file changed or cut short while it loads makes a read fail
 //! (an error that names the buffer), where a mapping's lost pages would stop the process.
@@ -18,11 +18,10 @@
 use std::borrow::Cow;
 use std::fs::File;
 use std::ops::Range;
-use std::os::unix::fs::FileExt as _;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
-use memmap2::{MmapMut, MmapOptions, UncheckedAdvice};
+use memmap2::{MmapMut, MmapOptions};
 
 use super::LoadError;
 
@@ -81,10 +80,7 @@ impl FileWindow {
     /// The `length` bytes of `file` (at `path`) from `start`, none read yet; `None` where no
     /// memory can be reserved for them.
     fn new(file: Arc<File>, path: &Path, start: u64, length: usize) -> Option<Self> {
-        let memory = MmapOptions::new()
-            .len(length)
-            .no_reserve_swap()
-            .map_anon()
+        let memory = reserved(length)
             .map_err(|e| {
                 log::debug!(
                     "{}: no memory reserved for {length} bytes ({e}); read whole",
@@ -103,23 +99,34 @@ impl FileWindow {
     /// Reads `range` of the stretch from the file (the caller keeps it within the stretch).
     fn read(&mut self, range: Range<usize>) -> std::io::Result<()> {
         let at = self.start + range.start as u64;
-        self.file.read_exact_at(&mut self.memory[range], at)
+        read_at(&self.file, at, &mut self.memory[range])
     }
 
-    /// Gives back the memory of what was read: the stretch reads as zeros again until read.
+    /// Gives back the memory of what was read, for memory reserved anew: the stretch reads as
+    /// zeros again until read.
     fn release(&mut self) {
-        // SAFETY: the memory is an anonymous private mapping owned by this window; dropping
-        // its pages makes them read as zeros, which is no invalid value for bytes, and `&mut
-        // self` means no slice of it is borrowed meanwhile. The loader reads every range again
-        // before it uses it.
-        let released = unsafe { self.memory.unchecked_advise(UncheckedAdvice::DontNeed) };
-        if let Err(e) = released {
-            log::debug!(
-                "{}: giving back the memory read of it failed: {e}",
+        match reserved(self.memory.len()) {
+            Ok(fresh) => self.memory = fresh,
+            Err(e) => log::debug!(
+                "{}: the memory read of it is kept, none could be reserved anew: {e}",
                 self.path.display()
-            );
+            ),
         }
     }
+}
+
+/// `length` bytes of anonymous memory, reserved without swap: a page costs nothing until it
+/// is written.
+fn reserved(length: usize) -> std::io::Result<MmapMut> {
+    MmapOptions::new().len(length).no_reserve_swap().map_anon()
+}
+
+/// Fills `into` with the bytes of `file` from `at`.
+fn read_at(file: &File, at: u64, into: &mut [u8]) -> std::io::Result<()> {
+    use std::io::{Read as _, Seek as _};
+    let mut file = file;
+    file.seek(std::io::SeekFrom::Start(at))?;
+    file.read_exact(into)
 }
 
 /// The `length` bytes of the regular file `file` (at `path`) from `start`: a window read as
@@ -142,7 +149,7 @@ fn stretch_of(
         .try_reserve_exact(length)
         .map_err(|e| std::io::Error::new(std::io::ErrorKind::OutOfMemory, e))?;
     bytes.resize(length, 0);
-    file.read_exact_at(&mut bytes, start)?;
+    read_at(&file, start, &mut bytes)?;
     Ok(SourceBytes::Memory(Cow::Owned(bytes)))
 }
 
@@ -198,8 +205,7 @@ pub(super) fn open_document(path: &Path) -> Result<Document<'static>, LoadError>
     let opened = File::open(path).map_err(io)?;
     let metadata = opened.metadata().map_err(io)?;
     let mut magic = [0_u8; 4];
-    let is_glb =
-        metadata.is_file() && opened.read_exact_at(&mut magic, 0).is_ok() && magic == *b"glTF";
+    let is_glb = metadata.is_file() && read_at(&opened, 0, &mut magic).is_ok() && magic == *b"glTF";
     if !is_glb {
         let json = std::fs::read(path).map_err(io)?;
         return Ok(Document {
@@ -207,17 +213,14 @@ pub(super) fn open_document(path: &Path) -> Result<Document<'static>, LoadError>
             bin: None,
         });
     }
-    let chunks = glb_chunks(metadata.len(), &mut |at, into| {
-        opened.read_exact_at(into, at)
-    })
-    .map_err(|message| LoadError::Gltf {
-        path: path.to_owned(),
-        message,
-    })?;
+    let chunks = glb_chunks(metadata.len(), &mut |at, into| read_at(&opened, at, into)).map_err(
+        |message| LoadError::Gltf {
+            path: path.to_owned(),
+            message,
+        },
+    )?;
     let mut json = vec![0_u8; (chunks.json.end - chunks.json.start) as usize];
-    opened
-        .read_exact_at(&mut json, chunks.json.start)
-        .map_err(io)?;
+    read_at(&opened, chunks.json.start, &mut json).map_err(io)?;
     let bin = match chunks.bin {
         Some(bin) => {
             Some(stretch_of(opened, path, bin.start, (bin.end - bin.start) as usize).map_err(io)?)

@@ -3,6 +3,7 @@
 //! by more than the crease angle. Vertices are matched by position, so meshes whose vertices are
 //! split at creases (per-face normals) find their edges too.
 
+use std::collections::hash_map::Entry;
 use std::collections::HashMap;
 
 use super::{Geometry, Part};
@@ -13,8 +14,26 @@ pub const DEFAULT_CREASE_DEGREES: f32 = 30.0;
 
 type PositionKey = [u32; 3];
 
-/// Per edge (its ends' position keys, ordered): its first vertex pair and its faces' normals.
-type EdgeFaces = HashMap<(PositionKey, PositionKey), ((u32, u32), Vec<[f32; 3]>)>;
+/// The faces that meet at an edge, by their normals: one (a border), two (a fold or a flat
+/// seam, by their angle), or more (non-manifold: always a visible edge).
+enum Faces {
+    One([f32; 3]),
+    Two([f32; 3], [f32; 3]),
+    More,
+}
+
+impl Faces {
+    /// These faces and one more, of `normal`.
+    fn and(self, normal: [f32; 3]) -> Self {
+        match self {
+            Self::One(first) => Self::Two(first, normal),
+            Self::Two(..) | Self::More => Self::More,
+        }
+    }
+}
+
+/// Per edge (its ends' position keys, ordered): its first vertex pair and its faces.
+type EdgeFaces = HashMap<(PositionKey, PositionKey), ((u32, u32), Faces)>;
 
 fn key(position: [f32; 3]) -> PositionKey {
     // +0.0 and -0.0 are the same point.
@@ -51,9 +70,10 @@ pub fn feature_edges(geometry: &Geometry, crease_degrees: f32) -> (Vec<u32>, Vec
     };
     for part in &geometry.parts {
         let first_wire_index = wire.len() as u32;
-        let mut edges: EdgeFaces = HashMap::new();
         let start = part.first_index as usize;
         let end = (start + part.index_count as usize).min(geometry.indices.len());
+        // A closed surface has about one and a half edges per triangle.
+        let mut edges: EdgeFaces = HashMap::with_capacity(end.saturating_sub(start) / 2);
         for triangle in geometry.indices[start.min(end)..end].chunks_exact(3) {
             let normal = face_normal(
                 position(triangle[0]),
@@ -73,20 +93,22 @@ pub fn feature_edges(geometry: &Geometry, crease_degrees: f32) -> (Vec<u32>, Vec
                     continue;
                 }
                 let edge = if ka < kb { (ka, kb) } else { (kb, ka) };
-                edges
-                    .entry(edge)
-                    .or_insert_with(|| ((a, b), Vec::new()))
-                    .1
-                    .push(normal);
+                match edges.entry(edge) {
+                    Entry::Occupied(mut entry) => {
+                        let faces = &mut entry.get_mut().1;
+                        *faces = std::mem::replace(faces, Faces::More).and(normal);
+                    }
+                    Entry::Vacant(entry) => {
+                        entry.insert(((a, b), Faces::One(normal)));
+                    }
+                }
             }
         }
         let mut found: Vec<(u32, u32)> = edges
             .into_values()
-            .filter(|(_, normals)| match normals.as_slice() {
-                [_] => true,
-                [n, m] => n[0] * m[0] + n[1] * m[1] + n[2] * m[2] < cos_crease,
-                // Non-manifold: three or more faces meet; always a visible edge.
-                _ => true,
+            .filter(|(_, faces)| match faces {
+                Faces::One(_) | Faces::More => true,
+                Faces::Two(n, m) => n[0] * m[0] + n[1] * m[1] + n[2] * m[2] < cos_crease,
             })
             .map(|(pair, _)| pair)
             .collect();

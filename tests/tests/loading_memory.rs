@@ -127,10 +127,10 @@ fn csf_and_gltf_files_loaded_for_a_graph_page_their_geometries_and_import_as_loa
         assert!(memory.paged_geometries > 0, "{name}");
         assert_eq!(graph.to_scene().unwrap(), imported_whole(&whole), "{name}");
         // No file is read whole: a CSF file is read where each array lies (a `.csf.gz` from
-        // the temporary file it is unpacked into as it streams), a glTF file's buffers a mesh's
-        // accessors at a time. Loading holds the limit and the geometry being
-        // read (the file's arrays or accessors, the geometry made of them, and the little the
-        // file's structures and the decompressor take).
+        // the temporary file it is unpacked into as it streams), a glTF file's buffers a
+        // mesh's accessors at a time. Loading holds the limit and the geometry being read (the
+        // file's arrays or accessors, the geometry made of them, and the little the file's
+        // structures and the decompressor take).
         assert!(
             growth * 5 < whole_growth * 4,
             "{name}: {growth} bytes for the graph against {whole_growth} whole"
@@ -156,7 +156,8 @@ fn process_status_bytes(field: &str) -> u64 {
     kilobytes * 1024
 }
 
-/// The most this process's resident memory (heap and mapped files alike) grew over `work`.
+/// The most this process's resident memory (its heap and every other page it holds) grew over
+/// `work`.
 fn resident_growth<R>(work: impl FnOnce() -> R) -> (u64, R) {
     // Writing 5 to `clear_refs` sets the peak (`VmHWM`) back to what is resident now.
     std::fs::write("/proc/self/clear_refs", "5")
@@ -177,7 +178,7 @@ fn a_gltf_file_is_read_a_mesh_at_a_time_and_its_memory_given_back() {
         .unwrap()
         .load()
         .unwrap();
-    let scratch = scratch_dir("loading-memory-mapped");
+    let scratch = scratch_dir("loading-memory-large");
     let limit = scene_bytes(&generated) / 16;
     let largest = largest_geometry_bytes(&generated);
     let allowance = limit + 3 * largest + cadr_core::load::GLTF_BYTES_BETWEEN_RELEASES + (4 << 20);
@@ -204,6 +205,7 @@ fn a_gltf_file_is_read_a_mesh_at_a_time_and_its_memory_given_back() {
             "{name}: resident memory grew {growth} bytes, more than the limit, a mesh and the bytes read between releases ({allowance})"
         );
     }
+    std::fs::remove_dir_all(&scratch).unwrap();
 }
 
 /// The files `name` in `directory` stands for: itself, and a `.gltf`'s `.bin` beside it.

@@ -414,8 +414,9 @@ const FLEX_FAN_WORK_LIMIT: u64 = 1 << 25;
 /// The work meshoptimizer's flexible clusterizer (`meshopt_buildMeshletsFlex`, which grows
 /// clusters through shared vertices) spends on the part's fans: for every triangle it adds,
 /// it scans the live triangles around each vertex of the cluster, so a vertex shared by `v`
-/// triangles costs about `v²` (a disc capped by a fan of 25 000 triangles around one vertex,
-/// as CAD tessellators make of planar faces, took 2.6 s; one of 250 000, minutes). Counted over
+/// triangles costs about `v²` (a prism of 25 000 triangles, each cap a fan of 6 250 around
+/// one vertex as CAD tessellators make of planar faces, took 163 ms, one of 10 000 27 ms; a
+/// part of a million such triangles would take minutes). Counted over
 /// the vertices shared by more than 64 triangles (a smooth or faceted surface's vertices are
 /// shared by about 6, whatever its size, and cost it nothing of the kind). The spatial
 /// clusterizer splits the triangles by position, at a cost that grows as `n log n`, for clusters

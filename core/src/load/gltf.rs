@@ -323,17 +323,29 @@ fn resolve_buffers<'a>(
     base_dir: &Path,
 ) -> Result<GltfBuffers<'a>, String> {
     let mut buffers = Vec::new();
+    let mut blob = blob;
+    // The last buffer that names the binary chunk takes it; any before it (glTF allows only
+    // the first to) read it through a window of their own.
+    let mut names_of_the_blob = document
+        .buffers()
+        .filter(|buffer| matches!(buffer.source(), gltf::buffer::Source::Bin))
+        .count();
     for buffer in document.buffers() {
         let index = buffer.index();
         let (data, origin) = match buffer.source() {
             gltf::buffer::Source::Bin => {
-                let blob = blob.as_ref().ok_or_else(|| {
+                let missing = || {
                     format!("buffer {index} refers to the GLB binary chunk, but the file has none")
-                })?;
-                let blob = blob.duplicate().ok_or_else(|| {
-                    format!("buffer {index}: no memory can be reserved for the GLB binary chunk")
-                })?;
-                (blob, "the GLB binary chunk".to_owned())
+                };
+                names_of_the_blob -= 1;
+                let data = if names_of_the_blob == 0 {
+                    blob.take().ok_or_else(missing)?
+                } else {
+                    blob.as_ref().ok_or_else(missing)?.duplicate().ok_or_else(|| {
+                        format!("buffer {index}: no memory can be reserved for the GLB binary chunk")
+                    })?
+                };
+                (data, "the GLB binary chunk".to_owned())
             }
             gltf::buffer::Source::Uri(uri) if uri.starts_with("data:") => {
                 let (_, payload) = uri

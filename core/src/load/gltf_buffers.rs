@@ -144,13 +144,19 @@ fn stretch_of(
     if let Some(window) = FileWindow::new(Arc::clone(&file), path, start, length) {
         return Ok(SourceBytes::File(window));
     }
+    read_stretch(&file, start, length).map(|bytes| SourceBytes::Memory(Cow::Owned(bytes)))
+}
+
+/// The `length` bytes of `file` from `start`, read into memory of their own (an error, not an
+/// abort, where there is not that much memory).
+fn read_stretch(file: &File, start: u64, length: usize) -> std::io::Result<Vec<u8>> {
     let mut bytes = Vec::new();
     bytes
         .try_reserve_exact(length)
         .map_err(|e| std::io::Error::new(std::io::ErrorKind::OutOfMemory, e))?;
     bytes.resize(length, 0);
-    read_at(&file, start, &mut bytes)?;
-    Ok(SourceBytes::Memory(Cow::Owned(bytes)))
+    read_at(file, start, &mut bytes)?;
+    Ok(bytes)
 }
 
 /// Opens `file`, refusing anything but a regular file (a URI naming a device or a pipe, such
@@ -219,8 +225,8 @@ pub(super) fn open_document(path: &Path) -> Result<Document<'static>, LoadError>
             message,
         },
     )?;
-    let mut json = vec![0_u8; (chunks.json.end - chunks.json.start) as usize];
-    read_at(&opened, chunks.json.start, &mut json).map_err(io)?;
+    let json_length = (chunks.json.end - chunks.json.start) as usize;
+    let json = read_stretch(&opened, chunks.json.start, json_length).map_err(io)?;
     let bin = match chunks.bin {
         Some(bin) => {
             Some(stretch_of(opened, path, bin.start, (bin.end - bin.start) as usize).map_err(io)?)

@@ -1,10 +1,49 @@
 //! Work spread over the machine's cores: scoped threads, no pool to keep.
 
-/// `work` applied to every item on up to one thread per core (contiguous chunks), the results
-/// in the items' order. A panic in `work` is resumed on the caller's thread (and reported to
-/// the caller's [`crate::panic_boundary`], if it runs inside one).
+/// `work` applied to every item on up to one thread per core, the results in the items' order.
+/// Each thread takes the next item not yet taken, so that items of uneven work (geometries of
+/// every size, images) keep every core busy to the end. A panic in `work` is resumed on the
+/// caller's thread (and reported to the caller's [`crate::panic_boundary`], if it runs inside
+/// one).
 pub fn map<T: Sync, R: Send>(items: &[T], work: impl Fn(&T) -> R + Sync) -> Vec<R> {
-    collect_indexed(items.len(), (1, 1), |i, _: &mut ()| work(&items[i])).0
+    let threads = threads_for(items.len());
+    if threads == 1 {
+        return items.iter().map(work).collect();
+    }
+    let next = std::sync::atomic::AtomicUsize::new(0);
+    let (next, work) = (&next, &work);
+    let boundary = &crate::panic_boundary::inherit();
+    let made: Vec<Vec<(usize, R)>> = std::thread::scope(|scope| {
+        let workers: Vec<_> = (0..threads)
+            .map(|_| {
+                scope.spawn(move || {
+                    let _inside = boundary.enter();
+                    let mut made = Vec::new();
+                    loop {
+                        let index = next.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+                        let Some(item) = items.get(index) else {
+                            return made;
+                        };
+                        made.push((index, work(item)));
+                    }
+                })
+            })
+            .collect();
+        workers
+            .into_iter()
+            .map(|worker| {
+                worker
+                    .join()
+                    .unwrap_or_else(|panic| std::panic::resume_unwind(panic))
+            })
+            .collect()
+    });
+    let mut in_order: Vec<Option<R>> = std::iter::repeat_with(|| None).take(items.len()).collect();
+    for (index, result) in made.into_iter().flatten() {
+        in_order[index] = Some(result);
+    }
+    // Every item was taken once: no slot is left empty.
+    in_order.into_iter().flatten().collect()
 }
 
 /// `work` applied to every item, mutably, on up to one thread per core (contiguous chunks of
@@ -120,6 +159,19 @@ mod tests {
                 .is_some_and(|l| l.starts_with(file!())),
             "{caught}"
         );
+    }
+
+    #[test]
+    fn map_makes_every_item_once_in_order_whatever_its_work() {
+        for len in [0_u64, 1, 2, 3, 17, 1000] {
+            let items: Vec<u64> = (0..len).collect();
+            let made = map(&items, |&i| {
+                // Uneven work: the later items take longer.
+                std::hint::black_box((0..i * 100).map(|k| k % 7).sum::<u64>());
+                i
+            });
+            assert_eq!(made, items);
+        }
     }
 
     #[test]

@@ -251,19 +251,34 @@ pub(super) fn build(vertices: &[Vertex], indices: &[u32], parts: &[Part]) -> Geo
     let bytes: &[u8] = bytemuck::cast_slice(vertices);
     let adapter = VertexDataAdapter::new(bytes, std::mem::size_of::<Vertex>(), 0).ok();
     let disjoint = parts_are_disjoint(parts, indices.len());
-    for part in parts {
+    let own_indices = |part: &Part| {
         let start = part.first_index as usize;
-        let range = start..start + part.index_count as usize;
-        let own = indices.get(range.clone()).unwrap_or(&[]);
+        indices
+            .get(start..start + part.index_count as usize)
+            .unwrap_or(&[])
+    };
+    // A part that fits one cluster has no coarser level to build (and most CAD parts are that
+    // small): it is its own cluster, in its own order.
+    let dag_of = |part: &Part| {
+        let own = own_indices(part);
+        let wanted = adapter.is_some() && disjoint && own.len() % 3 == 0 && !fits_one_cluster(own);
+        wanted.then(|| part_dag(vertices, own)).flatten()
+    };
+    // A large geometry builds its parts' DAGs on every core, a part per core at a time (one
+    // exported as a single mesh of many primitives would otherwise take one core for all of
+    // it, and no more DAGs are held at once than cores); a small one one after the other.
+    let at_once = if indices.len() / 3 >= PARALLEL_PARTS_TRIANGLES {
+        std::thread::available_parallelism().map_or(1, usize::from)
+    } else {
+        1
+    };
+    let dags = parts.chunks(at_once).flat_map(|chunk| match chunk {
+        [part] => vec![dag_of(part)],
+        _ => crate::parallel::map(chunk, dag_of),
+    });
+    for (part, dag) in parts.iter().zip(dags) {
+        let own = own_indices(part);
         let first_cluster = out.clusters.len() as u32;
-        // A part that fits one cluster has no coarser level to build (and most CAD parts
-        // are that small): it is its own cluster, in its own order.
-        let dag = match &adapter {
-            Some(_) if disjoint && own.len() % 3 == 0 && !fits_one_cluster(own) => {
-                part_dag(vertices, own)
-            }
-            _ => None,
-        };
         match (dag, &adapter) {
             (Some(dag), Some(adapter)) => lay_out(&mut out, adapter, dag, part.first_index),
             (_, adapter) => runs_of_triangles(&mut out, adapter.as_ref(), own, part.first_index),
@@ -285,6 +300,9 @@ pub(super) fn build(vertices: &[Vertex], indices: &[u32], parts: &[Part]) -> Geo
     }
     out
 }
+
+/// The triangles of a geometry from which its parts' DAGs are built in parallel.
+const PARALLEL_PARTS_TRIANGLES: usize = 1 << 16;
 
 /// Sets the first cluster and the cluster count of the groups of the part whose clusters start
 /// at `first_cluster` (each group's clusters are contiguous: see `lay_out`).
@@ -956,5 +974,36 @@ mod tests {
         let mut sphere = crate::scene::Geometry::default();
         add_sphere(&mut sphere, 256, [0.0; 3]);
         assert!(fan_work(&sphere.indices, sphere.vertices.len()) < FLEX_FAN_WORK_LIMIT / 100);
+    }
+
+    /// A geometry large enough to build its parts' DAGs on every core gives each part the
+    /// clusters and groups it gets when built alone, in the parts' order.
+    #[test]
+    fn a_large_geometrys_parts_built_together_get_the_dags_they_get_alone() {
+        let mut together = crate::scene::Geometry::default();
+        for (k, segments) in [160, 150, 170].into_iter().enumerate() {
+            add_sphere(&mut together, segments, [3.0 * k as f32, 0.0, 0.0]);
+        }
+        assert!(together.indices.len() / 3 >= PARALLEL_PARTS_TRIANGLES);
+        let built = build(&together.vertices, &together.indices, &together.parts);
+        for (part, &[first_cluster, count, coarsest]) in
+            together.parts.iter().zip(&built.part_ranges)
+        {
+            let start = part.first_index as usize;
+            let own = &together.indices[start..start + part.index_count as usize];
+            let alone_part = Part {
+                first_index: 0,
+                index_count: part.index_count,
+                ..*part
+            };
+            let alone = build(&together.vertices, own, &[alone_part]);
+            assert_eq!([count, coarsest], alone.part_ranges[0][1..]);
+            let clusters =
+                &built.clusters[first_cluster as usize..(first_cluster + count) as usize];
+            let triangles = |clusters: &[abi::CadrCluster]| -> Vec<u32> {
+                clusters.iter().map(|c| c.index_count).collect()
+            };
+            assert_eq!(triangles(clusters), triangles(&alone.clusters));
+        }
     }
 }

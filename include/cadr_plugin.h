@@ -20,7 +20,7 @@
 #define CADR_PLUGIN_ABI_MAJOR 1
 
 // Minor version of this ABI: additions that older readers may ignore.
-#define CADR_PLUGIN_ABI_MINOR 24
+#define CADR_PLUGIN_ABI_MINOR 25
 
 // `(major << 16) | minor`, what [`CadrPluginVersionFn`] returns.
 #define CADR_PLUGIN_ABI_VERSION ((CADR_PLUGIN_ABI_MAJOR << 16) | CADR_PLUGIN_ABI_MINOR)
@@ -44,6 +44,18 @@
 // part's terminal groups (error `f32::MAX`), so that a culler that does not know proxies
 // never draws it; a 1.16 culler draws only the last proxy, as before.
 #define CADR_CLUSTER_PROXY_DEPTH UINT32_MAX
+
+// Since ABI 1.25: [`CadrClusterGroup::depth`] of a group holding one coarser level of a
+// part's feature edges (see [`CADR_INSTANCE_EDGE_LEVELS`]). Its one record in the cluster
+// buffer is a [`CadrCluster`] whose `first_index` and `index_count` name a line list in the
+// wire index buffer (absolute, like [`CadrCullEntry::first_wire_index`]; the same vertices as
+// the part's edges, a subset of them), whose `sphere` holds those lines, whose `refined`
+// is the number of edge levels the part has (the same in each), and whose `part_clusters` is
+// the part's. The group's `error` is the farthest any of the part's edges lies from the
+// level's lines (object space; never less than a finer level's) and its sphere the record's. The
+// levels lie outside every part's clusters, so a culler that does not know them never meets
+// them.
+#define CADR_CLUSTER_EDGE_DEPTH (UINT32_MAX - 1)
 
 // Result of a plugin function: one of the `CADR_STATUS_*` constants.
 typedef int32_t CadrStatus;
@@ -1075,7 +1087,8 @@ typedef struct CadrClusterGroup {
   // not simplified further (its clusters are the part's coarsest).
   float error;
   // Level in the DAG: 0 for groups of original clusters; [`CADR_CLUSTER_PROXY_DEPTH`] for a
-  // part's proxies (since 1.16).
+  // part's proxies (since 1.16); [`CADR_CLUSTER_EDGE_DEPTH`] for a level of its feature
+  // edges (since 1.25).
   uint32_t depth;
   // The group's first cluster in the cluster buffer: a group's clusters are contiguous,
   // and a part's groups, in the group buffer, cover its clusters in order (a culler may
@@ -1552,6 +1565,14 @@ typedef struct CadrMeshTaskPush {
 // Since ABI 1.18: the part's material cuts texels out (the alpha mode MASK with a base-colour
 // texture): through the holes its inside, its back faces, may show.
 #define CADR_INSTANCE_CUTOUT (1 << 9)
+
+// Since ABI 1.25, where the scene view has [`CadrSceneClusters`]: the part's feature edges have
+// coarser levels, records in the cluster buffer right after the part's clusters (from
+// [`CadrCullEntry::first_cluster`] plus [`CadrCluster::part_clusters`]), finest first, each
+// in a group of depth [`CADR_CLUSTER_EDGE_DEPTH`]. A culler with a level-of-detail threshold
+// may draw, in an edge pass, the coarsest level whose error projects at or under it instead
+// of the part's edges (`first_wire_index`, `wire_index_count`).
+#define CADR_INSTANCE_EDGE_LEVELS (1 << 10)
 
 // Since ABI 1.14: the kind of [`CadrSceneClusters`], chained on [`CadrSceneView::extensions`].
 #define CADR_EXTENSION_SCENE_CLUSTERS 1

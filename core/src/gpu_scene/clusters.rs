@@ -64,6 +64,12 @@ pub(super) struct GeometryClusters {
     /// Per part: its first cluster in `clusters`, how many it has, and how many of them are
     /// in groups never simplified further (its coarsest cut).
     pub(super) part_ranges: Vec<[u32; 3]>,
+    /// The coarser levels of the parts' feature edges (`edge_levels.rs`), a line list that
+    /// follows the geometry's own edge indices in the wire index arena; empty until added
+    /// (the disk cache keeps the clusters without them).
+    pub(super) wire_lod: Vec<u32>,
+    /// Per part (where added): how many edge levels follow its clusters.
+    pub(super) edge_levels: Vec<u32>,
 }
 
 /// One part's DAG as `clod_build` hands it over, before it is laid out.
@@ -203,6 +209,8 @@ impl GeometryClusters {
                 .chunks_exact(3)
                 .map(|w| [w[0], w[1], w[2]])
                 .collect(),
+            wire_lod: Vec::new(),
+            edge_levels: Vec::new(),
         };
         out.is_consistent(vertex_count).then_some(out)
     }

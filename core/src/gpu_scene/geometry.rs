@@ -16,6 +16,7 @@ use crate::error::RenderResult;
 use crate::vk::raw as vk;
 
 use super::clusters::{self, GeometryClusters};
+use super::edge_levels;
 use super::streaming::{
     coarse_share, CoarseForm, LoadRetry, PartBounds, PrepareFailure, Preparer, Streaming,
     StreamingPlan, UPLOAD_BYTES_PER_FRAME,
@@ -95,7 +96,8 @@ fn arena_data(geometry: &Geometry) -> ArenaData<'_> {
                 geometry.parts.as_slice().into(),
             )
         };
-    let clusters = clusters::build_cached(&geometry.vertices, &geometry.indices, &parts);
+    let mut clusters = clusters::build_cached(&geometry.vertices, &geometry.indices, &parts);
+    edge_levels::add_edge_levels(&mut clusters, &geometry.vertices, &wire, &parts);
     ArenaData {
         vertices: &geometry.vertices,
         wire,
@@ -215,7 +217,7 @@ impl ArenaData<'_> {
         [
             self.vertices.len(),
             clusters.indices.len() + clusters.lod_indices.len(),
-            self.wire.len(),
+            self.wire.len() + clusters.wire_lod.len(),
             clusters.clusters.len(),
             clusters.groups.len(),
         ]
@@ -223,8 +225,9 @@ impl ArenaData<'_> {
     }
 
     /// The clusters' bytes as the arena holds them: indices made absolute from the geometry's
-    /// `first_index`, groups from its `first_group`.
-    fn cluster_bytes(&self, first_index: u32, first_group: u32) -> Vec<u8> {
+    /// `first_index` (an edge level's from its `first_wire_index`), groups from its
+    /// `first_group`.
+    fn cluster_bytes(&self, first_index: u32, first_wire_index: u32, first_group: u32) -> Vec<u8> {
         let absolute = |group: u32| {
             if group == abi::CADR_CLUSTER_ORIGINAL {
                 group
@@ -236,6 +239,14 @@ impl ArenaData<'_> {
             .clusters
             .iter()
             .flat_map(|c| {
+                if edge_levels::is_edge_level(&self.clusters, c) {
+                    return abi::CadrCluster {
+                        first_index: first_wire_index + c.first_index,
+                        group: absolute(c.group),
+                        ..*c
+                    }
+                    .to_le_bytes();
+                }
                 abi::CadrCluster {
                     first_index: first_index + c.first_index,
                     group: absolute(c.group),
@@ -256,12 +267,25 @@ impl ArenaData<'_> {
             .iter()
             .flat_map(|c| {
                 let first = c.first_index as usize;
-                let vertices = (first..first + c.index_count as usize)
-                    .filter_map(|i| clusters.index(i))
-                    .filter_map(|&i| self.vertices.get(i as usize));
+                let range = first..first + c.index_count as usize;
+                let vertex = |&i: &u32| self.vertices.get(i as usize);
+                if edge_levels::is_edge_level(clusters, c) {
+                    let wire = range.filter_map(|i| self.wire_index(i));
+                    return bounding_box(wire.filter_map(vertex)).to_le_bytes();
+                }
+                let vertices = range.filter_map(|i| clusters.index(i)).filter_map(vertex);
                 bounding_box(vertices).to_le_bytes()
             })
             .collect()
+    }
+
+    /// Index `i` of the geometry's wire index range as the arena lays it out: its own edge
+    /// indices, then its edge levels'.
+    fn wire_index(&self, i: usize) -> Option<&u32> {
+        match i.checked_sub(self.wire.len()) {
+            None => self.wire.get(i),
+            Some(level) => self.clusters.wire_lod.get(level),
+        }
     }
 
     /// The groups' bytes as the arena holds them: their clusters made absolute from the
@@ -364,13 +388,17 @@ pub(super) struct PartEntry {
     pub(super) ranges: [u32; 4],
     /// Its bounding sphere, box and shape.
     pub(super) extent: PartBounds,
+    /// Whether coarser levels of its edges follow its clusters (`edge_levels.rs`).
+    pub(super) edge_levels: bool,
 }
 
 fn part_entries(data: &ArenaData<'_>) -> Vec<PartEntry> {
     let indices = &data.clusters.indices;
+    let edge_levels = &data.clusters.edge_levels;
     data.parts
         .iter()
-        .map(|p| {
+        .enumerate()
+        .map(|(k, p)| {
             let start = (p.first_index as usize).min(indices.len());
             let end = (start + p.index_count as usize).min(indices.len());
             let own = &indices[start..end];
@@ -386,6 +414,7 @@ fn part_entries(data: &ArenaData<'_>) -> Vec<PartEntry> {
                     bounds: bounding_box(own.iter().filter_map(|&i| data.vertices.get(i as usize))),
                     shape: shape_flags(data.vertices, own),
                 },
+                edge_levels: edge_levels.get(k).is_some_and(|&n| n > 0),
             }
         })
         .collect()
@@ -724,9 +753,10 @@ impl Layout {
         self.indices.extend_from_slice(&data.clusters.indices);
         self.indices.extend_from_slice(&data.clusters.lod_indices);
         self.wire.extend_from_slice(&data.wire);
+        self.wire.extend_from_slice(&data.clusters.wire_lod);
         self.groups.extend(data.group_bytes(place.first_cluster));
         self.clusters
-            .extend(data.cluster_bytes(first_index, first_group));
+            .extend(data.cluster_bytes(first_index, place.first_wire_index, first_group));
         self.cluster_boxes.extend(data.cluster_box_bytes());
         if let Some(attributes) = &mut self.attributes {
             extend_attributes(attributes, geometry);
@@ -1227,8 +1257,14 @@ impl GeometryArenas {
             .chain(&data.clusters.lod_indices)
             .flat_map(|i| i.to_le_bytes())
             .collect();
-        let wire_bytes: &[u8] = bytemuck::cast_slice(&data.wire);
-        let cluster_bytes = data.cluster_bytes(place.first_index, place.first_group);
+        let wire_bytes: Vec<u8> = data
+            .wire
+            .iter()
+            .chain(&data.clusters.wire_lod)
+            .flat_map(|i| i.to_le_bytes())
+            .collect();
+        let cluster_bytes =
+            data.cluster_bytes(place.first_index, place.first_wire_index, place.first_group);
         let box_bytes = data.cluster_box_bytes();
         let group_bytes = data.group_bytes(place.first_cluster);
         let vertex_size = std::mem::size_of::<Vertex>() as u64;
@@ -1237,7 +1273,7 @@ impl GeometryArenas {
         self.indices
             .upload_at(u64::from(place.first_index) * 4, &index_bytes)?;
         self.wire_indices
-            .upload_at(u64::from(place.first_wire_index) * 4, wire_bytes)?;
+            .upload_at(u64::from(place.first_wire_index) * 4, &wire_bytes)?;
         self.clusters.upload_at(
             u64::from(place.first_cluster) * CLUSTER_BYTES as u64,
             &cluster_bytes,
@@ -1350,7 +1386,18 @@ mod tests {
             let (center, half) = ([word(0), word(1), word(2)], [word(4), word(5), word(6)]);
             let first = cluster.first_index as usize;
             let mut reached = [[false; 2]; 3];
-            for &i in &all[first..first + cluster.index_count as usize] {
+            // A level of the part's edges names wire indices (the geometry's, then the
+            // levels').
+            let indices: Vec<u32> = (first..first + cluster.index_count as usize)
+                .map(|i| {
+                    if edge_levels::is_edge_level(clusters, cluster) {
+                        *data.wire_index(i).unwrap()
+                    } else {
+                        all[i]
+                    }
+                })
+                .collect();
+            for &i in &indices {
                 let p = geometry.vertices[i as usize].position;
                 for axis in 0..3 {
                     let offset = p[axis] - center[axis];

@@ -19,6 +19,7 @@
 
 mod clusters;
 mod compute;
+mod edge_levels;
 mod geometry;
 mod hierarchy;
 mod stand_ins;
@@ -1425,6 +1426,11 @@ fn entry_in(
         .unwrap_or(0);
     let flags = with_translucency(abi::CADR_INSTANCE_ALIVE, translucency)
         | shape
+        | if part.edge_levels {
+            abi::CADR_INSTANCE_EDGE_LEVELS
+        } else {
+            0
+        }
         | if instance.highlighted {
             abi::CADR_INSTANCE_HIGHLIGHTED
         } else {

@@ -56,7 +56,7 @@ use std::ffi::{c_char, c_void};
 /// Major version of this ABI: a library built for another major version is refused.
 pub const CADR_PLUGIN_ABI_MAJOR: u32 = 1;
 /// Minor version of this ABI: additions that older readers may ignore.
-pub const CADR_PLUGIN_ABI_MINOR: u32 = 24;
+pub const CADR_PLUGIN_ABI_MINOR: u32 = 25;
 /// `(major << 16) | minor`, what [`CadrPluginVersionFn`] returns.
 pub const CADR_PLUGIN_ABI_VERSION: u32 = (CADR_PLUGIN_ABI_MAJOR << 16) | CADR_PLUGIN_ABI_MINOR;
 
@@ -617,6 +617,13 @@ pub const CADR_INSTANCE_CURVED: CadrInstanceFlags = 1 << 8;
 /// Since ABI 1.18: the part's material cuts texels out (the alpha mode MASK with a base-colour
 /// texture): through the holes its inside, its back faces, may show.
 pub const CADR_INSTANCE_CUTOUT: CadrInstanceFlags = 1 << 9;
+/// Since ABI 1.25, where the scene view has [`CadrSceneClusters`]: the part's feature edges have
+/// coarser levels, records in the cluster buffer right after the part's clusters (from
+/// [`CadrCullEntry::first_cluster`] plus [`CadrCluster::part_clusters`]), finest first, each
+/// in a group of depth [`CADR_CLUSTER_EDGE_DEPTH`]. A culler with a level-of-detail threshold
+/// may draw, in an edge pass, the coarsest level whose error projects at or under it instead
+/// of the part's edges (`first_wire_index`, `wire_index_count`).
+pub const CADR_INSTANCE_EDGE_LEVELS: CadrInstanceFlags = 1 << 10;
 
 /// One drawable part on one path of the scene tree (the unit of "individual" drawing). Index
 /// positions are absolute element offsets in the scene's index buffers; indices are relative
@@ -1080,6 +1087,18 @@ pub const CADR_CLUSTER_ORIGINAL: u32 = u32::MAX;
 /// never draws it; a 1.16 culler draws only the last proxy, as before.
 pub const CADR_CLUSTER_PROXY_DEPTH: u32 = u32::MAX;
 
+/// Since ABI 1.25: [`CadrClusterGroup::depth`] of a group holding one coarser level of a
+/// part's feature edges (see [`CADR_INSTANCE_EDGE_LEVELS`]). Its one record in the cluster
+/// buffer is a [`CadrCluster`] whose `first_index` and `index_count` name a line list in the
+/// wire index buffer (absolute, like [`CadrCullEntry::first_wire_index`]; the same vertices as
+/// the part's edges, a subset of them), whose `sphere` holds those lines, whose `refined`
+/// is the number of edge levels the part has (the same in each), and whose `part_clusters` is
+/// the part's. The group's `error` is the farthest any of the part's edges lies from the
+/// level's lines (object space; never less than a finer level's) and its sphere the record's. The
+/// levels lie outside every part's clusters, so a culler that does not know them never meets
+/// them.
+pub const CADR_CLUSTER_EDGE_DEPTH: u32 = u32::MAX - 1;
+
 /// Since ABI 1.14: one cluster of [`CadrSceneClusters::cluster_buffer`] (64 bytes,
 /// little-endian, std430-compatible). Which clusters make a picture at a given error: those
 /// whose own group's error ([`CadrCluster::group`]) projects over the threshold and whose
@@ -1154,7 +1173,8 @@ pub struct CadrClusterGroup {
     /// not simplified further (its clusters are the part's coarsest).
     pub error: f32,
     /// Level in the DAG: 0 for groups of original clusters; [`CADR_CLUSTER_PROXY_DEPTH`] for a
-    /// part's proxies (since 1.16).
+    /// part's proxies (since 1.16); [`CADR_CLUSTER_EDGE_DEPTH`] for a level of its feature
+    /// edges (since 1.25).
     pub depth: u32,
     /// The group's first cluster in the cluster buffer: a group's clusters are contiguous,
     /// and a part's groups, in the group buffer, cover its clusters in order (a culler may

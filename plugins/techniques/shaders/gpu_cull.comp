@@ -20,7 +20,7 @@
 // projects at or under the threshold), each tested against the frustum, the section planes,
 // its normal cone where back faces cannot show, and in phase 1 the depth pyramid; clusters
 // that follow each other in the index buffer are drawn by one command. Edge passes draw the
-// part whole.
+// part's edges whole, or a coarser level of them whose error projects under the threshold.
 layout(local_size_x = 64) in;
 
 const uint PASS_EDGES = 1u;
@@ -31,6 +31,10 @@ const uint INSTANCE_CLOSED = 16u;
 const uint INSTANCE_INSIDE_OUT = 32u;
 const uint INSTANCE_TRANSLUCENT = 64u;
 const uint INSTANCE_CUTOUT = 512u;
+const uint INSTANCE_EDGE_LEVELS = 1024u;
+// Edge levels are chosen at this share of the threshold: a line a pixel off has left its
+// pixels, where a surface a pixel off has only moved its outline.
+const float EDGE_ERROR_SHARE = 0.5;
 
 // Which parts a pass takes by their back faces (CADR_FACES_*).
 const uint FACES_ANY = 0u;
@@ -1049,6 +1053,25 @@ void main() {
             atomicOr(now_visible[id >> 5], 1u << (id & 31u));
         }
         return;
+    }
+    // An edge pass draws a far part's edges at the coarsest of their levels (records after
+    // its clusters, finest first: CADR_INSTANCE_EDGE_LEVELS) whose error projects at or under
+    // the threshold, as its surfaces are drawn at their cut.
+    uint cluster_count = uint(clusters.length());
+    if ((entry.flags & INSTANCE_EDGE_LEVELS) != 0u && dispatch.lod_error > 0.0
+        && dispatch.lod_error < COARSEST && entry.first_cluster < cluster_count) {
+        Placement place = Placement(rotation, center - rotation * entry.sphere.xyz, scale);
+        uint level_record = entry.first_cluster + clusters[entry.first_cluster].part_clusters;
+        uint levels = level_record < cluster_count
+            ? min(clusters[level_record].refined, cluster_count - level_record) : 0u;
+        for (uint i = 0u; i < levels; ++i) {
+            Cluster level = clusters[level_record + i];
+            if (projected_error(groups[level.group], place) > EDGE_ERROR_SHARE * dispatch.lod_error) {
+                break;
+            }
+            first = level.first_index;
+            count = level.index_count;
+        }
     }
 #endif
     append(first, count, entry.vertex_base, id);

@@ -23,7 +23,7 @@
 
 use meshopt::{ClodCluster, ClodGroup, ClodMesh, VertexDataAdapter};
 
-use super::stand_ins;
+use super::{edge_levels, stand_ins};
 use crate::disk_cache::{self, DiskCache};
 use crate::scene::{Part, Vertex};
 use cadr_plugin_abi as abi;
@@ -34,7 +34,7 @@ pub const CACHED_TRIANGLES: usize = 8192;
 
 /// What a cache entry's key starts with: bump it when the clusters a geometry gets change.
 const CACHE_VERSION: &[u8] =
-    b"clusters 12: clod 128, normals protected, no sloppy fallback, small parts whole, spans, welded stand-ins from one source at 0.7, spatial clusters for fans";
+    b"clusters 13: clod 128, normals protected, no sloppy fallback, small parts whole, spans, welded stand-ins from one source at 0.7, spatial clusters for fans, edge levels";
 /// The disk cache's kind of entry.
 const CACHE_KIND: &str = "clusters";
 
@@ -80,34 +80,52 @@ struct PartDag {
     groups: Vec<abi::CadrClusterGroup>,
 }
 
-/// [`build`], through the user's disk cache for a geometry of [`CACHED_TRIANGLES`] or more.
+/// [`build`] with the levels of the parts' edges (`wire`, the geometry's line list; see
+/// `edge_levels.rs`), through the user's disk cache for a geometry of [`CACHED_TRIANGLES`] or
+/// more.
 pub(super) fn build_cached(
     vertices: &[Vertex],
     indices: &[u32],
+    wire: &[u32],
     parts: &[Part],
 ) -> GeometryClusters {
+    let build_all = || {
+        let mut clusters = build(vertices, indices, parts);
+        add_edge_levels(&mut clusters, vertices, wire, parts);
+        clusters
+    };
     let cache = (indices.len() / 3 >= CACHED_TRIANGLES)
         .then(DiskCache::user)
         .flatten();
     let Some(cache) = cache else {
-        return build(vertices, indices, parts);
+        return build_all();
     };
     let part_words: Vec<u32> = parts
         .iter()
-        .flat_map(|p| [p.first_index, p.index_count])
+        .flat_map(|p| {
+            [
+                p.first_index,
+                p.index_count,
+                p.first_wire_index,
+                p.wire_index_count,
+            ]
+        })
         .collect();
     let key = disk_cache::key(&[
         CACHE_VERSION,
         bytemuck::cast_slice(vertices),
         bytemuck::cast_slice(indices),
+        bytemuck::cast_slice(wire),
         bytemuck::cast_slice(&part_words),
     ]);
-    if let Some(clusters) = cache.read(CACHE_KIND, &key).and_then(|bytes| {
-        GeometryClusters::from_bytes(&bytes, vertices.len(), indices.len(), parts.len())
-    }) {
+    let sizes = [vertices.len(), indices.len(), wire.len(), parts.len()];
+    if let Some(clusters) = cache
+        .read(CACHE_KIND, &key)
+        .and_then(|bytes| GeometryClusters::from_bytes(&bytes, sizes))
+    {
         return clusters;
     }
-    let clusters = build(vertices, indices, parts);
+    let clusters = build_all();
     cache.write(CACHE_KIND, &key, &clusters.to_bytes());
     clusters
 }
@@ -122,7 +140,7 @@ impl GeometryClusters {
         }
     }
 
-    /// The cache entry's bytes: the five lengths, then each array in little-endian words.
+    /// The cache entry's bytes: the seven lengths, then each array in little-endian words.
     fn to_bytes(&self) -> Vec<u8> {
         let lengths = [
             self.indices.len(),
@@ -130,6 +148,8 @@ impl GeometryClusters {
             self.clusters.len(),
             self.groups.len(),
             self.part_ranges.len(),
+            self.wire_lod.len(),
+            self.edge_levels.len(),
         ];
         let mut bytes: Vec<u8> = lengths
             .iter()
@@ -144,20 +164,17 @@ impl GeometryClusters {
         for group in &self.groups {
             bytes.extend_from_slice(&group.to_le_bytes());
         }
-        for word in self.part_ranges.iter().flatten() {
+        let words = self.part_ranges.iter().flatten();
+        for word in words.chain(&self.wire_lod).chain(&self.edge_levels) {
             bytes.extend_from_slice(&word.to_le_bytes());
         }
         bytes
     }
 
-    /// Reads a cache entry back for a geometry of `vertex_count` vertices, `index_count`
-    /// indices and `part_count` parts; `None` unless everything in it is in range.
-    fn from_bytes(
-        bytes: &[u8],
-        vertex_count: usize,
-        index_count: usize,
-        part_count: usize,
-    ) -> Option<Self> {
+    /// Reads a cache entry back for a geometry of `[vertices, indices, wire indices, parts]`
+    /// (their counts); `None` unless everything in it is in range.
+    fn from_bytes(bytes: &[u8], sizes: [usize; 4]) -> Option<Self> {
+        let [vertex_count, index_count, wire_count, part_count] = sizes;
         let mut words = bytes
             .chunks_exact(4)
             .map(|w| u32::from_le_bytes([w[0], w[1], w[2], w[3]]));
@@ -166,10 +183,21 @@ impl GeometryClusters {
             let high = words.next()?;
             usize::try_from(u64::from(low) | u64::from(high) << 32).ok()
         };
-        let lengths = [length()?, length()?, length()?, length()?, length()?];
-        let [indices, lod, clusters, groups, parts] = lengths;
-        let expected = 40 + 4 * (indices + lod) + 64 * clusters + 32 * groups + 12 * parts;
-        if bytes.len() != expected || indices != index_count || parts != part_count {
+        let mut lengths = [0_usize; 7];
+        for n in &mut lengths {
+            *n = length()?;
+        }
+        let [indices, lod, clusters, groups, parts, wire_lod, edge_levels] = lengths;
+        let expected = 56
+            + 4 * (indices + lod)
+            + 64 * clusters
+            + 32 * groups
+            + 12 * parts
+            + 4 * (wire_lod + edge_levels);
+        let counts_fit = indices == index_count
+            && parts == part_count
+            && (edge_levels == 0 || edge_levels == parts);
+        if bytes.len() != expected || !counts_fit {
             return None;
         }
         let mut take = |n: usize| -> Vec<u32> { words.by_ref().take(n).collect() };
@@ -177,6 +205,8 @@ impl GeometryClusters {
         let cluster_words = take(16 * clusters);
         let group_words = take(8 * groups);
         let range_words = take(3 * parts);
+        let wire_lod = take(wire_lod);
+        let edge_levels = take(edge_levels);
         let float = f32::from_bits;
         let out = Self {
             indices: all_indices[..indices].to_vec(),
@@ -209,26 +239,37 @@ impl GeometryClusters {
                 .chunks_exact(3)
                 .map(|w| [w[0], w[1], w[2]])
                 .collect(),
-            wire_lod: Vec::new(),
-            edge_levels: Vec::new(),
+            wire_lod,
+            edge_levels,
         };
-        out.is_consistent(vertex_count).then_some(out)
+        out.is_consistent(vertex_count, wire_count).then_some(out)
     }
 
-    /// Whether every index names a vertex, every cluster's indices and groups exist and every
-    /// part's clusters are in range: what the GPU may trust of an entry read from disk.
-    fn is_consistent(&self, vertex_count: usize) -> bool {
+    /// Whether every index names a vertex, every cluster's indices and groups exist (an edge
+    /// level's in the `wire_count` wire indices and its levels), and every part's clusters are
+    /// in range: what the GPU may trust of an entry read from disk.
+    fn is_consistent(&self, vertex_count: usize, wire_count: usize) -> bool {
         let total = self.indices.len() + self.lod_indices.len();
+        let wire_total = wire_count + self.wire_lod.len();
         let groups = self.groups.len();
         let group_ok = |g: u32| (g as usize) < groups;
+        let in_range = |c: &abi::CadrCluster, total: usize| {
+            (c.first_index as usize).saturating_add(c.index_count as usize) <= total
+        };
         self.indices
             .iter()
             .chain(&self.lod_indices)
+            .chain(&self.wire_lod)
             .all(|&i| (i as usize) < vertex_count)
             && self.clusters.iter().all(|c| {
-                (c.first_index as usize).saturating_add(c.index_count as usize) <= total
+                if !group_ok(c.group) {
+                    return false;
+                }
+                if is_edge_level(self, c) {
+                    return in_range(c, wire_total) && c.index_count % 2 == 0;
+                }
+                in_range(c, total)
                     && c.index_count % 3 == 0
-                    && group_ok(c.group)
                     && (c.refined == abi::CADR_CLUSTER_ORIGINAL || group_ok(c.refined))
             })
             && self.groups.iter().all(|g| {
@@ -246,6 +287,84 @@ impl GeometryClusters {
                         .all(|c| c.part_clusters == count)
             })
     }
+}
+
+/// Adds the coarser levels of every part's edges to `clusters` (the clusters of the geometry
+/// of `vertices` and `parts`, whose edges are `wire`): per level a record right after the
+/// part's clusters and a group of depth [`abi::CADR_CLUSTER_EDGE_DEPTH`] after the geometry's
+/// groups, and its lines in [`GeometryClusters::wire_lod`]. The parts' clusters move down to
+/// make room (their groups' spans with them); nothing else changes.
+pub(super) fn add_edge_levels(
+    clusters: &mut GeometryClusters,
+    vertices: &[Vertex],
+    wire: &[u32],
+    parts: &[Part],
+) {
+    let levels_of = |part: &Part| {
+        let start = part.first_wire_index as usize;
+        let end = start.saturating_add(part.wire_index_count as usize);
+        // A part without triangles has no clusters to follow.
+        match wire.get(start..end) {
+            Some(lines) if part.index_count >= 3 => edge_levels::edge_levels(vertices, lines),
+            _ => (Vec::new(), [0.0; 4]),
+        }
+    };
+    let levels: Vec<_> = parts.iter().map(levels_of).collect();
+    if parts.len() != clusters.part_ranges.len() || levels.iter().all(|(l, _)| l.is_empty()) {
+        clusters.edge_levels = vec![0; clusters.part_ranges.len()];
+        return;
+    }
+    let old = std::mem::take(&mut clusters.clusters);
+    clusters.edge_levels.clear();
+    for (range, (part_levels, sphere)) in clusters.part_ranges.iter_mut().zip(levels) {
+        let [first, count, _] = *range;
+        range[0] = clusters.clusters.len() as u32;
+        let own = old
+            .get(first as usize..(first + count) as usize)
+            .unwrap_or(&[]);
+        clusters.clusters.extend_from_slice(own);
+        clusters.edge_levels.push(part_levels.len() as u32);
+        for level in &part_levels {
+            let group = clusters.groups.len() as u32;
+            clusters.groups.push(abi::CadrClusterGroup {
+                sphere,
+                error: level.error,
+                depth: abi::CADR_CLUSTER_EDGE_DEPTH,
+                first_cluster: 0,
+                cluster_count: 0,
+            });
+            clusters.clusters.push(abi::CadrCluster {
+                sphere,
+                cone_cutoff: 2.0,
+                first_index: (wire.len() + clusters.wire_lod.len()) as u32,
+                index_count: level.lines.len() as u32,
+                group,
+                refined: part_levels.len() as u32,
+                part_clusters: count,
+                ..abi::CadrCluster::default()
+            });
+            clusters.wire_lod.extend_from_slice(&level.lines);
+        }
+    }
+    for group in &mut clusters.groups {
+        group.cluster_count = 0;
+    }
+    for (k, cluster) in clusters.clusters.iter().enumerate() {
+        if let Some(group) = clusters.groups.get_mut(cluster.group as usize) {
+            if group.cluster_count == 0 {
+                group.first_cluster = k as u32;
+            }
+            group.cluster_count += 1;
+        }
+    }
+}
+
+/// Whether `cluster` of `clusters` is a level of its part's edges rather than triangles.
+pub(super) fn is_edge_level(clusters: &GeometryClusters, cluster: &abi::CadrCluster) -> bool {
+    clusters
+        .groups
+        .get(cluster.group as usize)
+        .is_some_and(|g| g.depth == abi::CADR_CLUSTER_EDGE_DEPTH)
 }
 
 /// Builds the clusters of every part of a geometry. Parts whose ranges overlap another's, or
@@ -895,33 +1014,45 @@ mod tests {
     #[test]
     fn clusters_come_back_from_the_cache_as_they_were_built_and_damage_is_refused() {
         let geometry = fine_geometry();
-        let built = build(&geometry.vertices, &geometry.indices, &geometry.parts);
+        let (wire, parts) = crate::scene::edges::feature_edges(&geometry, 30.0);
+        let mut built = build(&geometry.vertices, &geometry.indices, &parts);
+        add_edge_levels(&mut built, &geometry.vertices, &wire, &parts);
+        assert!(
+            built.edge_levels.iter().any(|&n| n > 0),
+            "edge levels to keep"
+        );
         let bytes = built.to_bytes();
-        let (v, i, p) = (
+        let (v, i, w, p) = (
             geometry.vertices.len(),
             geometry.indices.len(),
+            wire.len(),
             geometry.parts.len(),
         );
-        let back = GeometryClusters::from_bytes(&bytes, v, i, p).unwrap();
+        let back = GeometryClusters::from_bytes(&bytes, [v, i, w, p]).unwrap();
         assert_eq!(back.indices, built.indices);
         assert_eq!(back.lod_indices, built.lod_indices);
         assert_eq!(back.clusters, built.clusters);
         assert_eq!(back.groups, built.groups);
         assert_eq!(back.part_ranges, built.part_ranges);
-        assert!(GeometryClusters::from_bytes(&bytes[..bytes.len() - 4], v, i, p).is_none());
+        assert_eq!(back.wire_lod, built.wire_lod);
+        assert_eq!(back.edge_levels, built.edge_levels);
+        assert!(GeometryClusters::from_bytes(&bytes[..bytes.len() - 4], [v, i, w, p]).is_none());
         assert!(
-            GeometryClusters::from_bytes(&bytes, v, i + 3, p).is_none(),
+            GeometryClusters::from_bytes(&bytes, [v, i + 3, w, p]).is_none(),
             "another geometry"
         );
         // An index past the vertices (a checksum would catch it first; this is the last line).
         let mut damaged = bytes.clone();
-        damaged[40..44].copy_from_slice(&u32::MAX.to_le_bytes());
-        assert!(GeometryClusters::from_bytes(&damaged, v, i, p).is_none());
+        damaged[56..60].copy_from_slice(&u32::MAX.to_le_bytes());
+        assert!(GeometryClusters::from_bytes(&damaged, [v, i, w, p]).is_none());
         // A cluster naming a group that is not there.
-        let cluster_at = 40 + 4 * (built.indices.len() + built.lod_indices.len());
-        let mut damaged = bytes;
+        let cluster_at = 56 + 4 * (built.indices.len() + built.lod_indices.len());
+        let mut damaged = bytes.clone();
         damaged[cluster_at + 52..cluster_at + 56].copy_from_slice(&9_999_999u32.to_le_bytes());
-        assert!(GeometryClusters::from_bytes(&damaged, v, i, p).is_none());
+        assert!(GeometryClusters::from_bytes(&damaged, [v, i, w, p]).is_none());
+        // An edge level whose lines run past the wire indices (those of a geometry with fewer
+        // edges).
+        assert!(GeometryClusters::from_bytes(&bytes, [v, i, w / 2, p]).is_none());
     }
 
     #[test]
@@ -1012,6 +1143,80 @@ mod tests {
                 clusters.iter().map(|c| c.index_count).collect()
             };
             assert_eq!(triangles(clusters), triangles(&alone.clusters));
+        }
+    }
+
+    #[test]
+    fn each_parts_levels_follow_its_clusters_unchanged() {
+        // Two flat discs of 64 rim points: each part's edges are its rim.
+        let vertex = |position: [f32; 3]| Vertex {
+            position,
+            normal: [0.0, 1.0, 0.0],
+        };
+        let mut geometry = crate::scene::Geometry::default();
+        for center in [[0.0_f32, 0.0, 0.0], [3.0, 0.0, 0.0]] {
+            let first_vertex = geometry.vertices.len() as u32;
+            let first_index = geometry.indices.len() as u32;
+            geometry.vertices.push(vertex(center));
+            geometry.vertices.extend((0..64).map(|k| {
+                let angle = std::f32::consts::TAU * k as f32 / 64.0;
+                vertex([center[0] + angle.cos(), center[1], center[2] + angle.sin()])
+            }));
+            for k in 0..64 {
+                geometry.indices.extend([
+                    first_vertex,
+                    first_vertex + 1 + (k + 1) % 64,
+                    first_vertex + 1 + k,
+                ]);
+            }
+            geometry.parts.push(Part {
+                first_index,
+                index_count: geometry.indices.len() as u32 - first_index,
+                ..Part::default()
+            });
+        }
+        let (wire, parts) = crate::scene::edges::feature_edges(&geometry, 30.0);
+        let built = build(&geometry.vertices, &geometry.indices, &parts);
+        let mut clusters = build(&geometry.vertices, &geometry.indices, &parts);
+        add_edge_levels(&mut clusters, &geometry.vertices, &wire, &parts);
+        assert_eq!(clusters.edge_levels.len(), 2);
+        for (part, (&[first, count, coarsest], &[old_first, old_count, old_coarsest])) in clusters
+            .part_ranges
+            .iter()
+            .zip(&built.part_ranges)
+            .enumerate()
+        {
+            assert_eq!((count, coarsest), (old_count, old_coarsest));
+            let own = |c: &GeometryClusters, first: u32| {
+                c.clusters[first as usize..(first + count) as usize].to_vec()
+            };
+            assert_eq!(own(&clusters, first), own(&built, old_first));
+            let levels = clusters.edge_levels[part];
+            assert!(levels >= 2, "part {part}: {levels} levels");
+            let records = &clusters.clusters[(first + count) as usize..][..levels as usize];
+            let mut error = 0.0;
+            for record in records {
+                assert!(is_edge_level(&clusters, record));
+                assert_eq!((record.refined, record.part_clusters), (levels, count));
+                let group = clusters.groups[record.group as usize];
+                assert!(group.error >= error);
+                error = group.error;
+                let start = record.first_index as usize - wire.len();
+                let lines = &clusters.wire_lod[start..start + record.index_count as usize];
+                assert!(lines.len() % 2 == 0 && !lines.is_empty());
+            }
+        }
+        // Every group's span holds its clusters and only them.
+        for (g, group) in clusters.groups.iter().enumerate() {
+            let span =
+                &clusters.clusters[group.first_cluster as usize..][..group.cluster_count as usize];
+            assert!(span.iter().all(|c| c.group as usize == g));
+            let all = clusters
+                .clusters
+                .iter()
+                .filter(|c| c.group as usize == g)
+                .count();
+            assert_eq!(all, group.cluster_count as usize);
         }
     }
 }

@@ -1,7 +1,7 @@
 //! Coarser levels of a part's feature edges, for the level-of-detail cut (plugin ABI 1.25,
 //! `CADR_CLUSTER_EDGE_DEPTH`): a far part's surfaces are drawn from a few triangles, and its
 //! edges would otherwise still be drawn whole, every segment of every fillet and bore (a part
-//! eight pixels across drew its 200 edge segments where a dozen show the same).
+//! eight pixels across drew its 300 edge segments where a few dozen show the same).
 //!
 //! The edges are joined by position into chains between junctions (where other than two
 //! segments meet) and closed loops; each chain is simplified on its own by Douglas–Peucker, its
@@ -13,10 +13,9 @@
 //! remain. A level's error is the farthest any of the part's edges lies from it.
 
 use std::collections::HashMap;
+use std::rc::Rc;
 
-use super::clusters::GeometryClusters;
-use crate::scene::{Part, Vertex};
-use cadr_plugin_abi as abi;
+use crate::scene::Vertex;
 
 /// A part whose edges have fewer segments gets no coarser level.
 const MIN_SEGMENTS: usize = 16;
@@ -38,84 +37,6 @@ pub(super) struct EdgeLevel {
     pub(super) error: f32,
 }
 
-/// Adds the coarser levels of every part's edges to `clusters` (the clusters of the geometry
-/// of `vertices` and `parts`, whose edges are `wire`): per level a record right after the
-/// part's clusters and a group of depth [`abi::CADR_CLUSTER_EDGE_DEPTH`] after the geometry's
-/// groups, and its lines in [`GeometryClusters::wire_lod`]. The parts' clusters move down to
-/// make room (their groups' spans with them); nothing else changes.
-pub(super) fn add_edge_levels(
-    clusters: &mut GeometryClusters,
-    vertices: &[Vertex],
-    wire: &[u32],
-    parts: &[Part],
-) {
-    let levels_of = |part: &Part| {
-        let start = part.first_wire_index as usize;
-        let end = start.saturating_add(part.wire_index_count as usize);
-        // A part without triangles has no clusters to follow.
-        match wire.get(start..end) {
-            Some(lines) if part.index_count >= 3 => edge_levels(vertices, lines),
-            _ => (Vec::new(), [0.0; 4]),
-        }
-    };
-    let levels: Vec<_> = parts.iter().map(levels_of).collect();
-    if parts.len() != clusters.part_ranges.len() || levels.iter().all(|(l, _)| l.is_empty()) {
-        clusters.edge_levels = vec![0; clusters.part_ranges.len()];
-        return;
-    }
-    let old = std::mem::take(&mut clusters.clusters);
-    clusters.edge_levels.clear();
-    for (range, (part_levels, sphere)) in clusters.part_ranges.iter_mut().zip(levels) {
-        let [first, count, _] = *range;
-        range[0] = clusters.clusters.len() as u32;
-        let own = old
-            .get(first as usize..(first + count) as usize)
-            .unwrap_or(&[]);
-        clusters.clusters.extend_from_slice(own);
-        clusters.edge_levels.push(part_levels.len() as u32);
-        for level in &part_levels {
-            let group = clusters.groups.len() as u32;
-            clusters.groups.push(abi::CadrClusterGroup {
-                sphere,
-                error: level.error,
-                depth: abi::CADR_CLUSTER_EDGE_DEPTH,
-                first_cluster: 0,
-                cluster_count: 0,
-            });
-            clusters.clusters.push(abi::CadrCluster {
-                sphere,
-                cone_cutoff: 2.0,
-                first_index: (wire.len() + clusters.wire_lod.len()) as u32,
-                index_count: level.lines.len() as u32,
-                group,
-                refined: part_levels.len() as u32,
-                part_clusters: count,
-                ..abi::CadrCluster::default()
-            });
-            clusters.wire_lod.extend_from_slice(&level.lines);
-        }
-    }
-    for group in &mut clusters.groups {
-        group.cluster_count = 0;
-    }
-    for (k, cluster) in clusters.clusters.iter().enumerate() {
-        if let Some(group) = clusters.groups.get_mut(cluster.group as usize) {
-            if group.cluster_count == 0 {
-                group.first_cluster = k as u32;
-            }
-            group.cluster_count += 1;
-        }
-    }
-}
-
-/// Whether `cluster` of `clusters` is a level of its part's edges rather than triangles.
-pub(super) fn is_edge_level(clusters: &GeometryClusters, cluster: &abi::CadrCluster) -> bool {
-    clusters
-        .groups
-        .get(cluster.group as usize)
-        .is_some_and(|g| g.depth == abi::CADR_CLUSTER_EDGE_DEPTH)
-}
-
 /// The coarser levels of the edges `lines` (a line list into `vertices`), finest first, and
 /// the sphere holding the edges (centre, radius); none where simplifying saves too little.
 pub(super) fn edge_levels(vertices: &[Vertex], lines: &[u32]) -> (Vec<EdgeLevel>, [f32; 4]) {
@@ -129,24 +50,31 @@ pub(super) fn edge_levels(vertices: &[Vertex], lines: &[u32]) -> (Vec<EdgeLevel>
     }
     let mut last_segments = graph.segments.len();
     let chains = graph.chains();
+    let chains_bend = chains.nodes.len() > 2 * chains.ends.len();
+    let shortest = graph.shortest_segment();
     let mut tolerance = sphere[3] * FIRST_TOLERANCE;
     // Past twice the radius every chain is its two ends: nothing coarser can come.
     while levels.len() < MAX_LEVELS && tolerance <= 2.0 * sphere[3] {
         // The chains simplified within the tolerance; or, where that leaves fewer, the nodes
-        // of each cell merged first (no node moves farther than the cell's diagonal, the
-        // tolerance or half of it: edges closer than that become one, as the facets of a
-        // faceted part's side do, whose every edge ends where three meet) and the chains that
-        // remain simplified within what the merging left of the tolerance.
+        // of each cell merged first (no node moves farther than the cell's diagonal, half the
+        // tolerance: edges closer than that become one, as the facets of a faceted part's
+        // side do, whose every edge ends where three meet) and the chains that remain
+        // simplified within what the merging left of the tolerance. (A chain of one segment
+        // has nothing to simplify; a cell whose diagonal is under half the shortest segment
+        // merges next to nothing.)
         let center = [sphere[0], sphere[1], sphere[2]];
-        let merged = [1.0, 0.5].map(|share| {
-            let (merged, moved) = graph.clustered(share * tolerance / 3.0_f32.sqrt(), center);
-            let (lines, strayed) = simplified(&merged, &merged.chains(), tolerance - moved);
-            (lines, moved + strayed)
-        });
-        let (lines, strayed) = std::iter::once(simplified(&graph, &chains, tolerance))
+        let merged = (tolerance >= shortest)
+            .then(|| graph.clustered(0.5 * tolerance / 3.0_f32.sqrt(), center))
+            .filter(|&(_, moved)| moved > 0.0)
+            .map(|(merged, moved)| {
+                let (lines, strayed) = simplified(&merged, &merged.chains(), tolerance - moved);
+                (lines, moved + strayed)
+            });
+        let (lines, strayed) = (chains_bend.then(|| simplified(&graph, &chains, tolerance)))
+            .into_iter()
             .chain(merged)
             .min_by_key(|(lines, _)| lines.len())
-            .unwrap_or_default();
+            .unwrap_or_else(|| (graph.line_list(), 0.0));
         let count = lines.len() / 2;
         if (count as f32) <= LEVEL_SHARE * last_segments as f32 {
             let floor = levels.last().map_or(0.0, |l| l.error);
@@ -165,8 +93,8 @@ pub(super) fn edge_levels(vertices: &[Vertex], lines: &[u32]) -> (Vec<EdgeLevel>
 /// and the segments between nodes, each once.
 #[derive(Clone)]
 struct EdgeGraph {
-    node_vertex: Vec<u32>,
-    node_position: Vec<[f32; 3]>,
+    node_vertex: Rc<[u32]>,
+    node_position: Rc<[[f32; 3]]>,
     segments: Vec<(u32, u32)>,
 }
 
@@ -190,8 +118,8 @@ impl EdgeGraph {
             segments.push((node(pair[0])?, node(pair[1])?));
         }
         Some(Self {
-            node_vertex,
-            node_position,
+            node_vertex: node_vertex.into(),
+            node_position: node_position.into(),
             segments: distinct_segments(segments),
         })
     }
@@ -206,20 +134,27 @@ impl EdgeGraph {
         let distance = |p: [f32; 3], q: [f32; 3]| distance_to_segment(p, q, q);
         // Each cell's node nearest its centre (the nodes sorted by cell: no hashing, no
         // allocation per cell).
+        // A cell's coordinates packed in one word, 21 bits each (the finest cell is about a
+        // 14 000th of the edges' radius: far within).
+        let packed = |c: [i32; 3]| {
+            c.iter().fold(0_u64, |key, &x| {
+                key << 21 | (i64::from(x) + (1 << 20)).clamp(0, (1 << 21) - 1) as u64
+            })
+        };
         let cells: Vec<[i32; 3]> = self.node_position.iter().map(|&p| cell_of(p)).collect();
-        let mut order: Vec<u32> = (0..cells.len() as u32).collect();
-        order.sort_unstable_by_key(|&n| cells[n as usize]);
+        let mut order: Vec<(u64, u32)> = (cells.iter().enumerate())
+            .map(|(n, &c)| (packed(c), n as u32))
+            .collect();
+        order.sort_unstable();
         let mut merged_into = vec![0_u32; cells.len()];
         let mut moved = 0.0_f32;
-        for run in order.chunk_by(|&a, &b| cells[a as usize] == cells[b as usize]) {
-            let centre = centre_of(cells[run[0] as usize]);
+        for run in order.chunk_by(|a, b| a.0 == b.0) {
+            let centre = centre_of(cells[run[0].1 as usize]);
             let from_centre = |n: u32| distance(self.node_position[n as usize], centre);
-            let kept = run
-                .iter()
-                .copied()
+            let kept = (run.iter().map(|&(_, n)| n))
                 .min_by(|&a, &b| from_centre(a).total_cmp(&from_centre(b)))
-                .unwrap_or(run[0]);
-            for &n in run {
+                .unwrap_or(run[0].1);
+            for &(_, n) in run {
                 merged_into[n as usize] = kept;
                 let p = self.node_position[n as usize];
                 moved = moved.max(distance(p, self.node_position[kept as usize]));
@@ -250,6 +185,26 @@ impl EdgeGraph {
             ..self.clone()
         };
         (merged, moved)
+    }
+
+    /// The segments as a line list of the nodes' vertices.
+    fn line_list(&self) -> Vec<u32> {
+        (self.segments.iter())
+            .flat_map(|&(a, b)| [self.node_vertex[a as usize], self.node_vertex[b as usize]])
+            .collect()
+    }
+
+    /// The length of the shortest segment.
+    fn shortest_segment(&self) -> f32 {
+        (self.segments.iter())
+            .map(|&(a, b)| {
+                let (p, q) = (
+                    self.node_position[a as usize],
+                    self.node_position[b as usize],
+                );
+                distance_to_segment(p, q, q)
+            })
+            .fold(f32::INFINITY, f32::min)
     }
 
     /// The segments joined into chains: from each junction (where other than two segments
@@ -325,14 +280,16 @@ impl Chains {
 }
 
 /// `segments` each once, its lower node first, with none from a node to itself.
-fn distinct_segments(mut segments: Vec<(u32, u32)>) -> Vec<(u32, u32)> {
-    for segment in &mut segments {
-        *segment = (segment.0.min(segment.1), segment.0.max(segment.1));
-    }
-    segments.retain(|&(a, b)| a != b);
-    segments.sort_unstable();
-    segments.dedup();
-    segments
+fn distinct_segments(segments: Vec<(u32, u32)>) -> Vec<(u32, u32)> {
+    let mut keys: Vec<u64> = (segments.into_iter())
+        .filter(|&(a, b)| a != b)
+        .map(|(a, b)| u64::from(a.min(b)) << 32 | u64::from(a.max(b)))
+        .collect();
+    keys.sort_unstable();
+    keys.dedup();
+    keys.into_iter()
+        .map(|key| ((key >> 32) as u32, key as u32))
+        .collect()
 }
 
 /// Every chain simplified within `tolerance`: the line list and the farthest a left-out point
@@ -427,7 +384,6 @@ mod tests {
     #![allow(clippy::unwrap_used)] // Test code: a failed unwrap is a failed test.
 
     use super::*;
-    use crate::scene::{edges::feature_edges, Geometry};
 
     fn vertex(position: [f32; 3]) -> Vertex {
         Vertex {
@@ -632,75 +588,6 @@ mod tests {
                 "{back} > 1.5 × {}",
                 level.error
             );
-        }
-    }
-
-    #[test]
-    fn each_parts_levels_follow_its_clusters_unchanged() {
-        // Two flat discs of 64 rim points: each part's edges are its rim.
-        let mut geometry = Geometry::default();
-        for center in [[0.0, 0.0, 0.0], [3.0, 0.0, 0.0]] {
-            let first_vertex = geometry.vertices.len() as u32;
-            let first_index = geometry.indices.len() as u32;
-            geometry.vertices.push(vertex(center));
-            let (rim, _) = circle(64, center);
-            geometry.vertices.extend(rim.into_iter().step_by(2));
-            for k in 0..64 {
-                geometry.indices.extend([
-                    first_vertex,
-                    first_vertex + 1 + (k + 1) % 64,
-                    first_vertex + 1 + k,
-                ]);
-            }
-            geometry.parts.push(Part {
-                first_index,
-                index_count: geometry.indices.len() as u32 - first_index,
-                ..Part::default()
-            });
-        }
-        let (wire, parts) = feature_edges(&geometry, 30.0);
-        let built = super::super::clusters::build(&geometry.vertices, &geometry.indices, &parts);
-        let mut clusters =
-            super::super::clusters::build(&geometry.vertices, &geometry.indices, &parts);
-        add_edge_levels(&mut clusters, &geometry.vertices, &wire, &parts);
-        assert_eq!(clusters.edge_levels.len(), 2);
-        for (part, (&[first, count, coarsest], &[old_first, old_count, old_coarsest])) in clusters
-            .part_ranges
-            .iter()
-            .zip(&built.part_ranges)
-            .enumerate()
-        {
-            assert_eq!((count, coarsest), (old_count, old_coarsest));
-            let own = |c: &GeometryClusters, first: u32| {
-                c.clusters[first as usize..(first + count) as usize].to_vec()
-            };
-            assert_eq!(own(&clusters, first), own(&built, old_first));
-            let levels = clusters.edge_levels[part];
-            assert!(levels >= 2, "part {part}: {levels} levels");
-            let records = &clusters.clusters[(first + count) as usize..][..levels as usize];
-            let mut error = 0.0;
-            for record in records {
-                assert!(is_edge_level(&clusters, record));
-                assert_eq!((record.refined, record.part_clusters), (levels, count));
-                let group = clusters.groups[record.group as usize];
-                assert!(group.error >= error);
-                error = group.error;
-                let start = record.first_index as usize - wire.len();
-                let lines = &clusters.wire_lod[start..start + record.index_count as usize];
-                assert!(lines.len() % 2 == 0 && !lines.is_empty());
-            }
-        }
-        // Every group's span holds its clusters and only them.
-        for (g, group) in clusters.groups.iter().enumerate() {
-            let span =
-                &clusters.clusters[group.first_cluster as usize..][..group.cluster_count as usize];
-            assert!(span.iter().all(|c| c.group as usize == g));
-            let all = clusters
-                .clusters
-                .iter()
-                .filter(|c| c.group as usize == g)
-                .count();
-            assert_eq!(all, group.cluster_count as usize);
         }
     }
 }

@@ -16,7 +16,6 @@ use crate::error::RenderResult;
 use crate::vk::raw as vk;
 
 use super::clusters::{self, GeometryClusters};
-use super::edge_levels;
 use super::streaming::{
     coarse_share, CoarseForm, LoadRetry, PartBounds, PrepareFailure, Preparer, Streaming,
     StreamingPlan, UPLOAD_BYTES_PER_FRAME,
@@ -96,8 +95,7 @@ fn arena_data(geometry: &Geometry) -> ArenaData<'_> {
                 geometry.parts.as_slice().into(),
             )
         };
-    let mut clusters = clusters::build_cached(&geometry.vertices, &geometry.indices, &parts);
-    edge_levels::add_edge_levels(&mut clusters, &geometry.vertices, &wire, &parts);
+    let clusters = clusters::build_cached(&geometry.vertices, &geometry.indices, &wire, &parts);
     ArenaData {
         vertices: &geometry.vertices,
         wire,
@@ -239,7 +237,7 @@ impl ArenaData<'_> {
             .clusters
             .iter()
             .flat_map(|c| {
-                if edge_levels::is_edge_level(&self.clusters, c) {
+                if clusters::is_edge_level(&self.clusters, c) {
                     return abi::CadrCluster {
                         first_index: first_wire_index + c.first_index,
                         group: absolute(c.group),
@@ -269,7 +267,7 @@ impl ArenaData<'_> {
                 let first = c.first_index as usize;
                 let range = first..first + c.index_count as usize;
                 let vertex = |&i: &u32| self.vertices.get(i as usize);
-                if edge_levels::is_edge_level(clusters, c) {
+                if clusters::is_edge_level(clusters, c) {
                     let wire = range.filter_map(|i| self.wire_index(i));
                     return bounding_box(wire.filter_map(vertex)).to_le_bytes();
                 }
@@ -1390,8 +1388,8 @@ mod tests {
             // levels').
             let indices: Vec<u32> = (first..first + cluster.index_count as usize)
                 .map(|i| {
-                    if edge_levels::is_edge_level(clusters, cluster) {
-                        *data.wire_index(i).unwrap()
+                    if clusters::is_edge_level(clusters, cluster) {
+                        *data.wire_index(i).expect("the level names wire indices")
                     } else {
                         all[i]
                     }

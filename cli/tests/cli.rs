@@ -1452,6 +1452,7 @@ fn the_gpu_benchmark_script_dry_runs_and_writes_its_files() {
     assert!(output.status.success(), "{log}");
     assert!(log.contains("0 of 13 tables failed"), "{log}");
     assert!(log.contains("scaling goal: GPU time"), "{log}");
+    assert!(log.contains("in the edges mode: GPU time"), "{log}");
     let devices = std::fs::read_to_string(out.join("devices.txt")).unwrap();
     assert!(devices.contains("Vulkan"), "{devices}");
     for table in [

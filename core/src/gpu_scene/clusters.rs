@@ -279,13 +279,23 @@ impl GeometryClusters {
                         .iter()
                         .all(|c| self.groups.get(c.group as usize) == Some(g))
             })
-            && self.part_ranges.iter().all(|&[first, count, coarsest]| {
-                (first as usize).saturating_add(count as usize) <= self.clusters.len()
-                    && coarsest <= count
-                    && self.clusters[first as usize..(first + count) as usize]
-                        .iter()
-                        .all(|c| c.part_clusters == count)
-            })
+            && self
+                .part_ranges
+                .iter()
+                .enumerate()
+                .all(|(part, &[first, count, coarsest])| {
+                    // A part's edge levels, right after its clusters, each saying how many there are.
+                    let levels = self.edge_levels.get(part).copied().unwrap_or(0);
+                    let end = (first as usize).saturating_add(count as usize);
+                    end.saturating_add(levels as usize) <= self.clusters.len()
+                        && coarsest <= count
+                        && self.clusters[first as usize..end]
+                            .iter()
+                            .all(|c| c.part_clusters == count && !is_edge_level(self, c))
+                        && self.clusters[end..end + levels as usize]
+                            .iter()
+                            .all(|c| is_edge_level(self, c) && c.refined == levels)
+                })
     }
 }
 
@@ -1053,6 +1063,13 @@ mod tests {
         // An edge level whose lines run past the wire indices (those of a geometry with fewer
         // edges).
         assert!(GeometryClusters::from_bytes(&bytes, [v, i, w / 2, p]).is_none());
+        // A part saying it has more edge levels than follow its clusters.
+        let mut damaged = bytes;
+        let levels_at = damaged.len() - 4 * built.edge_levels.len();
+        let part = built.edge_levels.iter().position(|&n| n > 0).unwrap();
+        let more = built.edge_levels[part] + 1;
+        damaged[levels_at + 4 * part..][..4].copy_from_slice(&more.to_le_bytes());
+        assert!(GeometryClusters::from_bytes(&damaged, [v, i, w, p]).is_none());
     }
 
     #[test]

@@ -345,7 +345,7 @@ pub(super) fn add_edge_levels(
             });
             clusters.clusters.push(abi::CadrCluster {
                 sphere,
-                cone_cutoff: 2.0,
+                cone_cutoff: NO_CONE,
                 first_index: (wire.len() + clusters.wire_lod.len()) as u32,
                 index_count: level.lines.len() as u32,
                 group,
@@ -359,14 +359,7 @@ pub(super) fn add_edge_levels(
     for group in &mut clusters.groups {
         group.cluster_count = 0;
     }
-    for (k, cluster) in clusters.clusters.iter().enumerate() {
-        if let Some(group) = clusters.groups.get_mut(cluster.group as usize) {
-            if group.cluster_count == 0 {
-                group.first_cluster = k as u32;
-            }
-            group.cluster_count += 1;
-        }
-    }
+    set_group_spans(clusters, 0);
 }
 
 /// Whether `cluster` of `clusters` is a level of its part's edges rather than triangles.

@@ -20,7 +20,8 @@
 // projects at or under the threshold), each tested against the frustum, the section planes,
 // its normal cone where back faces cannot show, and in phase 1 the depth pyramid; clusters
 // that follow each other in the index buffer are drawn by one command. Edge passes draw the
-// part's edges whole, or a coarser level of them whose error projects under the threshold.
+// part's edges whole, or a coarser level of them whose error projects under half the
+// threshold.
 layout(local_size_x = 64) in;
 
 const uint PASS_EDGES = 1u;
@@ -1056,7 +1057,7 @@ void main() {
     }
     // An edge pass draws a far part's edges at the coarsest of their levels (records after
     // its clusters, finest first: CADR_INSTANCE_EDGE_LEVELS) whose error projects at or under
-    // the threshold, as its surfaces are drawn at their cut.
+    // EDGE_ERROR_SHARE of the threshold, as its surfaces are drawn at their cut.
     uint cluster_count = uint(clusters.length());
     if ((entry.flags & INSTANCE_EDGE_LEVELS) != 0u && dispatch.lod_error > 0.0
         && dispatch.lod_error < COARSEST && entry.first_cluster < cluster_count) {

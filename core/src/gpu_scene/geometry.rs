@@ -17,8 +17,8 @@ use crate::vk::raw as vk;
 
 use super::clusters::{self, GeometryClusters};
 use super::streaming::{
-    coarse_share, CoarseForm, LoadRetry, PartBounds, PrepareFailure, Preparer, Streaming,
-    StreamingPlan, UPLOAD_BYTES_PER_FRAME,
+    coarse_share, CoarseForm, FullDetail, LoadRetry, PartBounds, PrepareFailure, Preparer,
+    Streaming, StreamingPlan, UPLOAD_BYTES_PER_FRAME,
 };
 use crate::graph::{GeometryHandle, GeometrySource, GraphError, SceneGraph};
 use crate::scene::closure::{closure, Closure};
@@ -85,16 +85,24 @@ struct ArenaData<'g> {
 }
 
 fn arena_data(geometry: &Geometry) -> ArenaData<'_> {
-    let (wire, parts): (std::borrow::Cow<'_, [u32]>, std::borrow::Cow<'_, [Part]>) =
-        if geometry.wire_indices.is_empty() {
-            let (wire, parts) = feature_edges(geometry, DEFAULT_CREASE_DEGREES);
-            (wire.into(), parts.into())
-        } else {
-            (
-                geometry.wire_indices.as_slice().into(),
-                geometry.parts.as_slice().into(),
-            )
-        };
+    if geometry.wire_indices.is_empty() {
+        let (wire, parts) = feature_edges(geometry, DEFAULT_CREASE_DEGREES);
+        arena_data_with_edges(geometry, wire.into(), parts.into())
+    } else {
+        arena_data_with_edges(
+            geometry,
+            (&geometry.wire_indices).into(),
+            (&geometry.parts).into(),
+        )
+    }
+}
+
+/// [`arena_data`] with the edges `wire` (a line list) and the parts with their ranges in it.
+fn arena_data_with_edges<'g>(
+    geometry: &'g Geometry,
+    wire: std::borrow::Cow<'g, [u32]>,
+    parts: std::borrow::Cow<'g, [Part]>,
+) -> ArenaData<'g> {
     let clusters = clusters::build_cached(&geometry.vertices, &geometry.indices, &wire, &parts);
     ArenaData {
         vertices: &geometry.vertices,
@@ -158,21 +166,42 @@ fn coarse_form(
 ) -> (u64, Option<CoarseForm>) {
     let bytes = bytes_of(data.sizes(), attributes);
     let parts = part_entries(data).into_iter().map(|p| p.extent).collect();
-    (
-        bytes,
-        CoarseForm::of(geometry, &data.clusters, parts, share),
-    )
+    let full = FullDetail {
+        geometry,
+        wire: &data.wire,
+        parts: &data.parts,
+        clusters: &data.clusters,
+    };
+    (bytes, CoarseForm::of(&full, parts, share))
 }
 
-/// A coarse form's data as the arenas hold it: its own DAG's errors raised by the form's error
-/// against the full detail, so that a cut of it at a threshold stays within the threshold of
-/// the full detail (the cut is finer for it), not of the coarse form alone.
+/// A coarse form's data as the arenas hold it: its edges those it was given (the full
+/// detail's, even where there are none), and its own DAG's errors raised, part by part, by the
+/// form's error against the full detail, so that a cut of it at a threshold stays within the
+/// threshold of the full detail (the cut is finer for it), not of the coarse form alone.
 fn coarse_arena_data(form: &CoarseForm) -> ArenaData<'_> {
-    let mut data = arena_data(&form.geometry);
-    let error = form.errors.iter().copied().fold(0.0, f32::max);
-    for group in &mut data.clusters.groups {
-        if group.error < f32::MAX {
-            group.error += error;
+    let geometry = &form.geometry;
+    let mut data = arena_data_with_edges(
+        geometry,
+        (&geometry.wire_indices).into(),
+        (&geometry.parts).into(),
+    );
+    let clusters = &mut data.clusters;
+    let mut raised = vec![false; clusters.groups.len()];
+    for (part, &[first, count, _]) in clusters.part_ranges.iter().enumerate() {
+        let error = form.errors.get(part).copied().unwrap_or(0.0);
+        let levels = clusters.edge_levels.get(part).copied().unwrap_or(0);
+        let records = first as usize..(first + count + levels) as usize;
+        for cluster in clusters.clusters.get(records).unwrap_or(&[]) {
+            let group = cluster.group as usize;
+            if let (Some(group), Some(done)) =
+                (clusters.groups.get_mut(group), raised.get_mut(group))
+            {
+                if !*done && group.error < f32::MAX {
+                    group.error += error;
+                }
+                *done = true;
+            }
         }
     }
     data
@@ -1410,6 +1439,101 @@ mod tests {
             }
             assert_eq!(reached, [[true; 2]; 3], "the box is the smallest");
         }
+    }
+
+    /// The positions of the line ends of `wire` among `vertices`.
+    fn line_ends(vertices: &[Vertex], wire: &[u32]) -> Vec<[u32; 3]> {
+        let mut ends: Vec<[u32; 3]> = (wire.iter())
+            .map(|&i| vertices[i as usize].position.map(f32::to_bits))
+            .collect();
+        ends.sort_unstable();
+        ends.dedup();
+        ends
+    }
+
+    #[test]
+    fn a_faceted_parts_coarse_form_is_a_stand_in_drawn_with_the_parts_own_edges() {
+        let mut builder = GeometryBuilder::new("prism");
+        builder.prism(100, DMat4::IDENTITY);
+        let geometry = builder.finish();
+        let data = arena_data(&geometry);
+        let triangles = geometry.indices.len() / 3;
+        let (_, form) = coarse_form(&geometry, &data, false, 0.125);
+        // The DAG keeps every crease of a faceted prism: its coarsest cut is the part.
+        let form = form.expect("a coarse form from the part's stand-ins");
+        let coarse = &form.geometry;
+        assert!(
+            coarse.indices.len() / 3 <= triangles / 8 + 1,
+            "{} of {triangles} triangles",
+            coarse.indices.len() / 3
+        );
+        assert!(form.errors[0] > 0.0, "{:?}", form.errors);
+        // Its edges are the part's, at a level within the form's error: ends at the part's
+        // edge vertices, fewer lines than the 300 the prism has.
+        let full_ends = line_ends(&geometry.vertices, &data.wire);
+        let ends = line_ends(&coarse.vertices, &coarse.wire_indices);
+        assert!(!ends.is_empty() && ends.iter().all(|e| full_ends.binary_search(e).is_ok()));
+        let lines = coarse.wire_indices.len() / 2;
+        assert!(lines < data.wire.len() / 2, "{lines} lines");
+        // Laid out with those edges, not edges found again on the stand-in's triangles.
+        let laid_out = coarse_arena_data(&form);
+        assert_eq!(laid_out.wire.as_ref(), coarse.wire_indices.as_slice());
+    }
+
+    #[test]
+    fn a_smooth_parts_coarse_form_draws_no_edge_where_the_part_has_none() {
+        // A sphere: no crease anywhere, but a coarse form of a few dozen triangles has folds
+        // steeper than the crease angle.
+        let (rings, segments) = (24u32, 48u32);
+        let vertex = |p: [f32; 3]| Vertex {
+            position: p,
+            normal: p,
+        };
+        // The poles, then the rings between them: closed, without seams.
+        let mut vertices = vec![vertex([0.0, 1.0, 0.0]), vertex([0.0, -1.0, 0.0])];
+        for ring in 1..rings {
+            let polar = std::f32::consts::PI * ring as f32 / rings as f32;
+            for segment in 0..segments {
+                let azimuth = std::f32::consts::TAU * segment as f32 / segments as f32;
+                let (x, z) = (polar.sin() * azimuth.cos(), polar.sin() * azimuth.sin());
+                vertices.push(vertex([x, polar.cos(), z]));
+            }
+        }
+        let at = |ring: u32, segment: u32| 2 + (ring - 1) * segments + segment % segments;
+        let mut indices = Vec::new();
+        for segment in 0..segments {
+            indices.extend_from_slice(&[0, at(1, segment + 1), at(1, segment)]);
+            let last = rings - 1;
+            indices.extend_from_slice(&[1, at(last, segment), at(last, segment + 1)]);
+            for ring in 1..last {
+                let (a, b) = (at(ring, segment), at(ring + 1, segment));
+                let (c, d) = (at(ring, segment + 1), at(ring + 1, segment + 1));
+                indices.extend_from_slice(&[a, c, b, c, d, b]);
+            }
+        }
+        let part = Part {
+            first_index: 0,
+            index_count: indices.len() as u32,
+            first_wire_index: 0,
+            wire_index_count: 0,
+        };
+        let geometry = Geometry {
+            name: "sphere".into(),
+            vertices,
+            indices,
+            parts: vec![part],
+            ..Geometry::default()
+        };
+        let data = arena_data(&geometry);
+        assert!(data.wire.is_empty(), "a sphere has no feature edge");
+        let (_, form) = coarse_form(&geometry, &data, false, 0.02);
+        let form = form.expect("a coarse form");
+        let refound = feature_edges(&form.geometry, DEFAULT_CREASE_DEGREES).0;
+        assert!(
+            !refound.is_empty(),
+            "its coarse triangles fold past the crease angle"
+        );
+        assert!(coarse_arena_data(&form).wire.is_empty());
     }
 
     #[test]

@@ -30,7 +30,7 @@ use std::sync::{mpsc, Arc, Mutex};
 use super::clusters::GeometryClusters;
 use crate::error::RenderResult;
 use crate::graph::{GeometryHandle, GeometrySource};
-use crate::scene::{Geometry, Part};
+use crate::scene::{Geometry, Part, Vertex, VertexAttributes};
 use crate::vk::raw as vk;
 use crate::vk::{Buffer, Device};
 use cadr_plugin_abi as abi;
@@ -101,63 +101,111 @@ pub(super) fn coarse_share(budget: u64, scene_bytes: u64) -> f64 {
     (COARSE_BUDGET_FRACTION * budget as f64 / full_bytes).min(COARSE_SHARE)
 }
 
+/// The share of a coarse form's error its edges may stray: the culler draws a part's edges at
+/// the coarsest level within half its threshold (a line a pixel off has left its pixels, where a
+/// surface a pixel off has only moved its outline), so a coarse form takes its part's edges
+/// within half its own error.
+const EDGE_ERROR_SHARE: f32 = 0.5;
+
+/// The full detail a coarse form is made from: the geometry, its edges (a line list: its own, or
+/// those found by crease angle) with its parts' ranges in them, and its clusters.
+pub(super) struct FullDetail<'a> {
+    pub(super) geometry: &'a Geometry,
+    pub(super) wire: &'a [u32],
+    pub(super) parts: &'a [Part],
+    pub(super) clusters: &'a GeometryClusters,
+}
+
+impl FullDetail<'_> {
+    /// Index `i` of the wire arena as the full detail lays it out: its edges, then the levels
+    /// of its parts' edges.
+    fn wire_index(&self, i: usize) -> Option<u32> {
+        match i.checked_sub(self.wire.len()) {
+            None => self.wire.get(i).copied(),
+            Some(level) => self.clusters.wire_lod.get(level).copied(),
+        }
+    }
+}
+
+/// A coarse form's arrays as they are made: the full detail's vertices it uses, renumbered in
+/// the order first used.
+#[derive(Default)]
+struct FormArrays {
+    remap: Vec<u32>,
+    vertices: Vec<Vertex>,
+    attributes: Vec<VertexAttributes>,
+    indices: Vec<u32>,
+    wire: Vec<u32>,
+}
+
+impl FormArrays {
+    /// The form's number for the full detail's vertex `vertex`, taking it in where new; `None`
+    /// for a vertex the full detail does not have.
+    fn vertex(&mut self, full: &Geometry, vertex: u32) -> Option<u32> {
+        let slot = self.remap.get_mut(vertex as usize)?;
+        if *slot == u32::MAX {
+            *slot = self.vertices.len() as u32;
+            self.vertices.push(*full.vertices.get(vertex as usize)?);
+            if let Some(a) = full.attributes.get(vertex as usize) {
+                self.attributes.push(*a);
+            }
+        }
+        Some(*slot)
+    }
+}
+
 impl CoarseForm {
-    /// The coarse form of `geometry`, whose clusters are `clusters` and parts' entries
-    /// `full_parts`, each part cut within `share` of its triangles ([`coarse_share`]); `None`
-    /// where it would not save enough ([`COARSE_AT_MOST`]).
+    /// The coarse form of `full`, whose parts' entries are `full_parts`, each part cut within
+    /// `share` of its triangles ([`coarse_share`]) and drawn with its own edges at about the
+    /// cut's error; `None` where it would not save enough ([`COARSE_AT_MOST`]).
     pub(super) fn of(
-        geometry: &Geometry,
-        clusters: &GeometryClusters,
+        full: &FullDetail<'_>,
         full_parts: Vec<PartBounds>,
         share: f64,
     ) -> Option<Self> {
-        let mut remap = vec![u32::MAX; geometry.vertices.len()];
-        let mut vertices = Vec::new();
-        let mut attributes = Vec::new();
-        let mut indices = Vec::new();
+        let (geometry, clusters) = (full.geometry, full.clusters);
+        let mut form = FormArrays {
+            remap: vec![u32::MAX; geometry.vertices.len()],
+            ..FormArrays::default()
+        };
         let mut parts = Vec::with_capacity(geometry.parts.len());
         let mut errors = Vec::with_capacity(geometry.parts.len());
-        for &[first, count, _] in &clusters.part_ranges {
-            let first_index = indices.len() as u32;
-            let part_clusters = (clusters.clusters.iter())
-                .skip(first as usize)
-                .take(count as usize);
-            let (cut_error, error) = coarse_cut(clusters, part_clusters.clone(), share);
-            for cluster in part_clusters.filter(|c| in_cut(clusters, c, cut_error)) {
+        for (part, &[first, count, _]) in clusters.part_ranges.iter().enumerate() {
+            let own = (clusters.clusters).get(first as usize..(first + count) as usize)?;
+            let (chosen, error) = coarse_triangles(clusters, own, share);
+            let first_index = form.indices.len() as u32;
+            for cluster in chosen {
                 let start = cluster.first_index as usize;
                 for i in start..start + cluster.index_count as usize {
-                    let &vertex = clusters.index(i)?;
-                    let slot = remap.get_mut(vertex as usize)?;
-                    if *slot == u32::MAX {
-                        *slot = vertices.len() as u32;
-                        vertices.push(*geometry.vertices.get(vertex as usize)?);
-                        if let Some(a) = geometry.attributes.get(vertex as usize) {
-                            attributes.push(*a);
-                        }
-                    }
-                    indices.push(*slot);
+                    let vertex = form.vertex(geometry, *clusters.index(i)?)?;
+                    form.indices.push(vertex);
                 }
+            }
+            let first_wire_index = form.wire.len() as u32;
+            for i in coarse_edges(full, part, error)? {
+                let vertex = form.vertex(geometry, full.wire_index(i)?)?;
+                form.wire.push(vertex);
             }
             parts.push(Part {
                 first_index,
-                index_count: indices.len() as u32 - first_index,
-                first_wire_index: 0,
-                wire_index_count: 0,
+                index_count: form.indices.len() as u32 - first_index,
+                first_wire_index,
+                wire_index_count: form.wire.len() as u32 - first_wire_index,
             });
             errors.push(error);
         }
-        let full = geometry.indices.len().max(1) as f64;
-        if parts.len() != full_parts.len() || indices.len() as f64 > COARSE_AT_MOST * full {
+        let whole = geometry.indices.len().max(1) as f64;
+        if parts.len() != full_parts.len() || form.indices.len() as f64 > COARSE_AT_MOST * whole {
             return None;
         }
         Some(Self {
             geometry: Geometry {
                 name: geometry.name.clone(),
-                vertices,
-                indices,
-                wire_indices: Vec::new(),
+                vertices: form.vertices,
+                indices: form.indices,
+                wire_indices: form.wire,
                 parts,
-                attributes,
+                attributes: form.attributes,
             },
             has_arrays: true,
             errors,
@@ -202,35 +250,100 @@ fn in_cut(clusters: &GeometryClusters, cluster: &abi::CadrCluster, error: f32) -
         && own_error(clusters, cluster) <= error
 }
 
-/// The part's coarse cut: the finest whose triangles are at most `share` of the part's (or its
-/// coarsest); returns the cut's error threshold and the largest error of its clusters.
-fn coarse_cut<'c>(
+/// Whether `cluster` is one of its part's stand-ins (whole-part replacements, see
+/// `stand_ins.rs`).
+fn is_stand_in(clusters: &GeometryClusters, cluster: &abi::CadrCluster) -> bool {
+    (clusters.groups.get(cluster.group as usize))
+        .is_some_and(|g| g.depth == abi::CADR_CLUSTER_PROXY_DEPTH)
+}
+
+/// The triangles of a part's coarse form, from its clusters `part` (stand-ins last), and their
+/// error against the part: the finest cut of its DAG whose triangles are at most `share` of the
+/// part's; where the DAG cannot simplify that far (a faceted part, whose creases it keeps), the
+/// finest of its stand-ins within the share, or its coarsest stand-in where that still has
+/// fewer triangles than the DAG's coarsest cut; else that cut.
+fn coarse_triangles<'c>(
     clusters: &GeometryClusters,
-    part: impl Iterator<Item = &'c abi::CadrCluster> + Clone,
+    part: &'c [abi::CadrCluster],
     share: f64,
-) -> (f32, f32) {
+) -> (Vec<&'c abi::CadrCluster>, f32) {
+    let triangles = |c: &abi::CadrCluster| u64::from(c.index_count / 3);
+    let full: u64 = (part.iter())
+        .filter(|c| in_cut(clusters, c, 0.0))
+        .map(triangles)
+        .sum();
+    let wanted = (full as f64 * share).ceil() as u64;
+    let (threshold, error) = coarse_cut(clusters, part, wanted);
+    let cut: Vec<_> = part
+        .iter()
+        .filter(|c| in_cut(clusters, c, threshold))
+        .collect();
+    let cut_triangles: u64 = cut.iter().map(|c| triangles(c)).sum();
+    if cut_triangles <= wanted {
+        return (cut, error);
+    }
+    let stand_ins = || part.iter().filter(|c| is_stand_in(clusters, c));
+    let stand_in = (stand_ins().find(|c| triangles(c) <= wanted))
+        .or_else(|| stand_ins().next_back())
+        .filter(|c| triangles(c) < cut_triangles);
+    match stand_in.and_then(|s| Some((s, clusters.groups.get(s.group as usize)?.error))) {
+        Some((stand_in, stand_in_error)) => (vec![stand_in], stand_in_error.max(error)),
+        None => (cut, error),
+    }
+}
+
+/// The part's coarse cut: the finest whose triangles are at most `wanted` (or its coarsest);
+/// returns the cut's error threshold and the largest error of its clusters.
+fn coarse_cut(clusters: &GeometryClusters, part: &[abi::CadrCluster], wanted: u64) -> (f32, f32) {
     let triangles_at = |error: f32| -> u64 {
-        (part.clone())
+        (part.iter())
             .filter(|c| in_cut(clusters, c, error))
             .map(|c| u64::from(c.index_count / 3))
             .sum()
     };
-    let mut errors: Vec<f32> = (part.clone())
+    let mut errors: Vec<f32> = (part.iter())
         .map(|c| own_error(clusters, c))
         .filter(|e| *e < f32::MAX)
         .collect();
     errors.sort_by(f32::total_cmp);
     errors.dedup();
-    let full = triangles_at(0.0);
-    let wanted = (full as f64 * share).ceil() as u64;
     // Triangles only fall as the threshold grows: the first threshold within the share.
     let at = errors.partition_point(|&e| triangles_at(e) > wanted);
     let threshold = errors.get(at).or(errors.last()).copied().unwrap_or(0.0);
-    let error = (part.clone())
+    let error = (part.iter())
         .filter(|c| in_cut(clusters, c, threshold))
         .map(|c| own_error(clusters, c))
         .fold(0.0, f32::max);
     (threshold, error)
+}
+
+/// The wire indices (as `full` lays them out: its edges, then their levels) of part `part`'s
+/// edges for its coarse form of error `error`: the coarsest level of them within
+/// [`EDGE_ERROR_SHARE`] of it, else the edges whole. The full detail's own edges, not edges
+/// found again on the coarse triangles, which would show the creases a simplification makes
+/// across smooth faces. `None` where the part is not there.
+fn coarse_edges(full: &FullDetail<'_>, part: usize, error: f32) -> Option<std::ops::Range<usize>> {
+    let clusters = full.clusters;
+    let [first, count, _] = *clusters.part_ranges.get(part)?;
+    let levels = clusters.edge_levels.get(part).copied().unwrap_or(0);
+    let level_records = (first + count) as usize..(first + count + levels) as usize;
+    let within = (clusters.clusters.get(level_records)?.iter())
+        .rev()
+        .find(|level| {
+            (clusters.groups.get(level.group as usize))
+                .is_some_and(|g| g.error <= EDGE_ERROR_SHARE * error)
+        });
+    Some(match within {
+        Some(level) => {
+            let start = level.first_index as usize;
+            start..start + level.index_count as usize
+        }
+        None => {
+            let whole = full.parts.get(part)?;
+            let start = whole.first_wire_index as usize;
+            start..start + whole.wire_index_count as usize
+        }
+    })
 }
 
 /// What streaming knows of one geometry slot.

@@ -635,7 +635,7 @@ fn the_coarse_forms_of_a_scene_far_over_its_budget_take_about_half_of_it() {
         bytes * 10 <= budget * 6,
         "{bytes} bytes of coarse forms, budget {budget}"
     );
-    // Under an eighth of that, coarser still, down to the parts' coarsest cuts.
+    // Under an eighth of that, coarser still, down to the parts' coarsest cuts or stand-ins.
     assert!(coarse[1].1 * 2 < bytes, "{coarse:?}");
 }
 

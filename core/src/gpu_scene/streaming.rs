@@ -1,11 +1,12 @@
 //! Geometry streaming under a memory budget: when the full detail of a scene's geometries
 //! needs more device memory than the budget (`CADR_MEMORY_BUDGET`, see `memory_budget.rs`),
 //! each geometry goes on the GPU in a coarse form (for each part the finest cut of its
-//! level-of-detail DAG within a share of its triangles, with its own compact vertices: an
-//! eighth, less where the scene is so large against the budget that the coarse forms would
-//! take more than half of it, down to each part's coarsest cut; see [`coarse_share`]), and
-//! only the geometries the frames ask for are held at full detail, as many as the budget
-//! allows.
+//! level-of-detail DAG within a share of its triangles, or of its stand-ins where the DAG
+//! cannot cut that far, with its own compact vertices and the part's own edges: an eighth,
+//! less where the scene is so large against the budget that the coarse forms would take more
+//! than half of it, down to each part's coarsest cut or stand-in; see [`coarse_share`] and
+//! [`CoarseForm::of`]), and only the geometries the frames ask for are held at full detail, as
+//! many as the budget allows.
 //!
 //! With a CPU culler the host asks for every geometry of the instances it draws (such a culler
 //! has no level-of-detail threshold: full detail is what it draws). Otherwise the asking is
@@ -94,8 +95,8 @@ const FULL_BYTES_PER_HOST_BYTE: f64 = 1.5;
 /// [`COARSE_SHARE`], or less where the forms would then take more than
 /// [`COARSE_BUDGET_FRACTION`] of the budget (their bytes follow their triangles, roughly), so
 /// that what the GPU holds past the budget stays a fraction of it rather than growing with the
-/// scene. A share too small for a part gives its coarsest cut (a part never vanishes), so a
-/// scene very large against its budget still holds its coarsest levels whole.
+/// scene. A share too small for a part gives its coarsest cut or stand-in (a part never
+/// vanishes), so a scene very large against its budget still holds those whole.
 pub(super) fn coarse_share(budget: u64, scene_bytes: u64) -> f64 {
     let full_bytes = FULL_BYTES_PER_HOST_BYTE * scene_bytes.max(1) as f64;
     (COARSE_BUDGET_FRACTION * budget as f64 / full_bytes).min(COARSE_SHARE)

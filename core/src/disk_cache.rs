@@ -18,8 +18,9 @@ pub const CACHE_DIR_VARIABLE: &str = "CADR_CACHE_DIR";
 
 /// The first bytes of every entry.
 const MAGIC: &[u8; 8] = b"CADRCACH";
-/// The envelope's format version.
-const FORMAT: u32 = 1;
+/// The envelope's format version (2: XXH3 checksums and keys, where 1 had FNV-1a; a version 1
+/// entry is not ours and is rewritten).
+const FORMAT: u32 = 2;
 /// Magic, format, payload length, checksum.
 const HEADER_BYTES: usize = 8 + 4 + 8 + 8;
 
@@ -112,7 +113,7 @@ fn envelope(payload: &[u8]) -> Vec<u8> {
     bytes.extend_from_slice(MAGIC);
     bytes.extend_from_slice(&FORMAT.to_le_bytes());
     bytes.extend_from_slice(&(payload.len() as u64).to_le_bytes());
-    bytes.extend_from_slice(&fnv1a(payload, FNV_OFFSET).to_le_bytes());
+    bytes.extend_from_slice(&checksum(payload).to_le_bytes());
     bytes.extend_from_slice(payload);
     bytes
 }
@@ -125,33 +126,28 @@ fn open_envelope(bytes: &[u8]) -> Option<&[u8]> {
         return None;
     }
     let length = u64::from_le_bytes(word(12..20)?.try_into().ok()?);
-    let checksum = u64::from_le_bytes(word(20..28)?.try_into().ok()?);
+    let expected = u64::from_le_bytes(word(20..28)?.try_into().ok()?);
     let payload = &bytes[HEADER_BYTES..];
-    (payload.len() as u64 == length && fnv1a(payload, FNV_OFFSET) == checksum).then_some(payload)
+    (payload.len() as u64 == length && checksum(payload) == expected).then_some(payload)
 }
 
-const FNV_OFFSET: u64 = 0xcbf2_9ce4_8422_2325;
-const FNV_PRIME: u64 = 0x0000_0100_0000_01b3;
-
-/// 64-bit FNV-1a of `bytes` from `state`: the checksum of an entry, and with two starting
-/// states the 128-bit key of what it was made from.
-fn fnv1a(bytes: &[u8], state: u64) -> u64 {
-    bytes.iter().fold(state, |hash, &byte| {
-        (hash ^ u64::from(byte)).wrapping_mul(FNV_PRIME)
-    })
+/// The payload's checksum: XXH3 (64 bits), which reads gigabytes a second, so that checking a
+/// large entry costs little next to reading it.
+fn checksum(payload: &[u8]) -> u64 {
+    xxhash_rust::xxh3::xxh3_64(payload)
 }
 
 /// A 128-bit key (32 hex digits) of `parts`, each length-prefixed so that no two different
-/// lists of parts give the same bytes.
+/// lists of parts give the same bytes. XXH3-128, a fast non-cryptographic hash whose output
+/// its specification fixes (so keys stay valid from one build to the next): the key of a
+/// geometry's clusters reads all its vertices and indices.
 pub fn key(parts: &[&[u8]]) -> String {
-    let mut state = [FNV_OFFSET, FNV_OFFSET ^ 0x9e37_79b9_7f4a_7c15];
+    let mut hasher = xxhash_rust::xxh3::Xxh3::new();
     for part in parts {
-        for hash in &mut state {
-            *hash = fnv1a(&(part.len() as u64).to_le_bytes(), *hash);
-            *hash = fnv1a(part, *hash);
-        }
+        hasher.update(&(part.len() as u64).to_le_bytes());
+        hasher.update(part);
     }
-    format!("{:016x}{:016x}", state[0], state[1])
+    format!("{:032x}", hasher.digest128())
 }
 
 #[cfg(test)]

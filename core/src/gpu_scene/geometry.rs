@@ -21,8 +21,9 @@ use super::streaming::{
     Streaming, StreamingPlan, UPLOAD_BYTES_PER_FRAME,
 };
 use crate::graph::{GeometryHandle, GeometrySource, GraphError, SceneGraph};
-use crate::scene::closure::{closure, Closure};
+use crate::scene::closure::{closure_welded, Closure};
 use crate::scene::edges::{feature_edges, DEFAULT_CREASE_DEGREES};
+use crate::scene::weld::first_at_position;
 use crate::scene::{Geometry, Part, Vertex, VertexAttributes};
 use crate::vk::{Buffer, Device};
 use cadr_plugin_abi as abi;
@@ -383,9 +384,10 @@ fn part_sphere(vertices: &[Vertex], indices: &[u32]) -> [f32; 4] {
     [center[0], center[1], center[2], radius * (1.0 + 1e-5)]
 }
 
-/// The instance flags of a part's shape: its closure, and whether it is curved.
-fn shape_flags(vertices: &[Vertex], indices: &[u32]) -> u32 {
-    let closure = match closure(vertices, indices) {
+/// The instance flags of a part's shape: its closure, and whether it is curved. `welded` are
+/// `vertices` welded by position (`weld::first_at_position`).
+fn shape_flags(vertices: &[Vertex], welded: &[u32], indices: &[u32]) -> u32 {
+    let closure = match closure_welded(vertices, welded, indices) {
         Closure::Open => 0,
         Closure::Closed => abi::CADR_INSTANCE_CLOSED,
         Closure::InsideOut => abi::CADR_INSTANCE_CLOSED | abi::CADR_INSTANCE_INSIDE_OUT,
@@ -422,6 +424,7 @@ pub(super) struct PartEntry {
 fn part_entries(data: &ArenaData<'_>) -> Vec<PartEntry> {
     let indices = &data.clusters.indices;
     let edge_levels = &data.clusters.edge_levels;
+    let welded = first_at_position(data.vertices);
     data.parts
         .iter()
         .enumerate()
@@ -439,7 +442,7 @@ fn part_entries(data: &ArenaData<'_>) -> Vec<PartEntry> {
                 extent: PartBounds {
                     sphere: part_sphere(data.vertices, own),
                     bounds: bounding_box(own.iter().filter_map(|&i| data.vertices.get(i as usize))),
-                    shape: shape_flags(data.vertices, own),
+                    shape: shape_flags(data.vertices, &welded, own),
                 },
                 edge_levels: edge_levels.get(k).is_some_and(|&n| n > 0),
             }
@@ -1542,7 +1545,11 @@ mod tests {
         builder.prism(48, DMat4::IDENTITY);
         let faceted = builder.finish();
         assert_eq!(
-            shape_flags(&faceted.vertices, &faceted.indices) & abi::CADR_INSTANCE_CURVED,
+            shape_flags(
+                &faceted.vertices,
+                &first_at_position(&faceted.vertices),
+                &faceted.indices
+            ) & abi::CADR_INSTANCE_CURVED,
             0,
             "a normal per facet"
         );

@@ -8,9 +8,10 @@
 //! counter-clockwise seen from outside (as glTF wants) or are inside out. Degenerate triangles
 //! are ignored.
 
-use std::collections::HashMap;
+use rustc_hash::FxHashMap;
 
 use super::sink::{GeometrySink, GeometrySummary};
+use super::weld::{edge_key, first_at_position};
 use super::Vertex;
 
 /// How a part's triangles close.
@@ -26,34 +27,30 @@ pub enum Closure {
 
 /// The closure of the triangles `indices` over `vertices` (indices out of range make it open).
 pub fn closure(vertices: &[Vertex], indices: &[u32]) -> Closure {
-    let mut welded: HashMap<[u32; 3], u32> = HashMap::new();
-    let mut weld = |index: u32| -> Option<u32> {
-        let position = vertices.get(index as usize)?.position;
-        // +0.0 and -0.0 are one position.
-        let key = position.map(|c| (c + 0.0).to_bits());
-        let next = welded.len() as u32;
-        Some(*welded.entry(key).or_insert(next))
-    };
-    // Per undirected edge: how many triangles use it, and the sum of their directions.
-    let mut edges: HashMap<(u32, u32), (u32, i32)> = HashMap::new();
+    closure_welded(vertices, &first_at_position(vertices), indices)
+}
+
+/// [`closure`], with `welded` the vertices welded by position
+/// ([`super::weld::first_at_position`] of `vertices`): a geometry's parts weld its vertices
+/// once.
+pub fn closure_welded(vertices: &[Vertex], welded: &[u32], indices: &[u32]) -> Closure {
+    // Per undirected edge: how many triangles use it, and the sum of their directions (sized
+    // for a closed surface: one and a half edges per triangle).
+    let mut edges: FxHashMap<u64, (u32, i32)> =
+        FxHashMap::with_capacity_and_hasher(indices.len() / 2, Default::default());
     let mut volume = 0.0_f64;
     for triangle in indices.chunks_exact(3) {
-        let (Some(a), Some(b), Some(c)) = (weld(triangle[0]), weld(triangle[1]), weld(triangle[2]))
-        else {
+        let weld = |corner: usize| welded.get(triangle[corner] as usize).copied();
+        let (Some(a), Some(b), Some(c)) = (weld(0), weld(1), weld(2)) else {
             return Closure::Open;
         };
         if a == b || b == c || c == a {
             continue;
         }
         for (from, to) in [(a, b), (b, c), (c, a)] {
-            let (key, direction) = if from < to {
-                ((from, to), 1)
-            } else {
-                ((to, from), -1)
-            };
-            let edge = edges.entry(key).or_insert((0, 0));
+            let edge = edges.entry(edge_key(from, to)).or_insert((0, 0));
             edge.0 += 1;
-            edge.1 += direction;
+            edge.1 += if from < to { 1 } else { -1 };
         }
         let [p, q, r] = [0, 1, 2].map(|i| {
             let position = vertices[triangle[i] as usize].position;
@@ -97,13 +94,14 @@ pub struct ClosedPartCounts {
 impl ClosedPartCounts {
     /// Counts the parts of `geometry` (a part whose index range lies outside it is open).
     fn add(&mut self, geometry: &super::Geometry) {
+        let welded = first_at_position(&geometry.vertices);
         for part in &geometry.parts {
             let start = part.first_index as usize;
             let indices = geometry
                 .indices
                 .get(start..start.saturating_add(part.index_count as usize))
                 .unwrap_or(&[]);
-            match closure(&geometry.vertices, indices) {
+            match closure_welded(&geometry.vertices, &welded, indices) {
                 Closure::Closed => self.closed += 1,
                 Closure::InsideOut => self.inside_out += 1,
                 Closure::Open => {}

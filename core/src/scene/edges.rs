@@ -4,15 +4,15 @@
 //! split at creases (per-face normals) find their edges too.
 
 use std::collections::hash_map::Entry;
-use std::collections::HashMap;
 
+use rustc_hash::FxHashMap;
+
+use super::weld::{edge_key, first_at_position};
 use super::{Geometry, Part};
 
 /// The default crease angle in degrees: CAD tessellations bend less than this between
 /// neighbouring facets of a smooth surface.
 pub const DEFAULT_CREASE_DEGREES: f32 = 30.0;
-
-type PositionKey = [u32; 3];
 
 /// The faces that meet at an edge, by their normals: one (a border), two (a fold or a flat
 /// seam, by their angle), or more (non-manifold: always a visible edge).
@@ -32,13 +32,8 @@ impl Faces {
     }
 }
 
-/// Per edge (its ends' position keys, ordered): its first vertex pair and its faces.
-type EdgeFaces = HashMap<(PositionKey, PositionKey), ((u32, u32), Faces)>;
-
-fn key(position: [f32; 3]) -> PositionKey {
-    // +0.0 and -0.0 are the same point.
-    position.map(|c| (c + 0.0).to_bits())
-}
+/// Per edge (between welded vertices, see `weld.rs`): its first vertex pair and its faces.
+type EdgeFaces = FxHashMap<u64, ((u32, u32), Faces)>;
 
 fn face_normal(a: [f32; 3], b: [f32; 3], c: [f32; 3]) -> [f32; 3] {
     let u = [b[0] - a[0], b[1] - a[1], b[2] - a[2]];
@@ -68,12 +63,17 @@ pub fn feature_edges(geometry: &Geometry, crease_degrees: f32) -> (Vec<u32>, Vec
             .get(i as usize)
             .map_or([0.0; 3], |v| v.position)
     };
+    let welded = first_at_position(&geometry.vertices);
+    // A vertex past the geometry's is a point of its own.
+    let weld = |i: u32| welded.get(i as usize).copied().unwrap_or(i);
     for part in &geometry.parts {
         let first_wire_index = wire.len() as u32;
         let start = part.first_index as usize;
         let end = (start + part.index_count as usize).min(geometry.indices.len());
         // A closed surface has about one and a half edges per triangle.
-        let mut edges: EdgeFaces = HashMap::with_capacity(end.saturating_sub(start) / 2);
+        let capacity = end.saturating_sub(start) / 2;
+        let mut edges: EdgeFaces =
+            FxHashMap::with_capacity_and_hasher(capacity, Default::default());
         for triangle in geometry.indices[start.min(end)..end].chunks_exact(3) {
             let normal = face_normal(
                 position(triangle[0]),
@@ -88,12 +88,11 @@ pub fn feature_edges(geometry: &Geometry, crease_degrees: f32) -> (Vec<u32>, Vec
                 (triangle[1], triangle[2]),
                 (triangle[2], triangle[0]),
             ] {
-                let (ka, kb) = (key(position(a)), key(position(b)));
-                if ka == kb {
+                let (wa, wb) = (weld(a), weld(b));
+                if wa == wb {
                     continue;
                 }
-                let edge = if ka < kb { (ka, kb) } else { (kb, ka) };
-                match edges.entry(edge) {
+                match edges.entry(edge_key(wa, wb)) {
                     Entry::Occupied(mut entry) => {
                         let faces = &mut entry.get_mut().1;
                         *faces = std::mem::replace(faces, Faces::More).and(normal);

@@ -10,6 +10,7 @@ pub mod graph;
 mod sink;
 mod stats;
 mod texture;
+pub mod weld;
 
 pub use bounds::Aabb;
 pub use flatten::{flatten, flatten_outline, DrawItem, FlatScene, Instance};

@@ -22,7 +22,7 @@ use super::streaming::{
 };
 use crate::graph::{GeometryHandle, GeometrySource, GraphError, SceneGraph};
 use crate::scene::closure::{closure_welded, Closure};
-use crate::scene::edges::{feature_edges, DEFAULT_CREASE_DEGREES};
+use crate::scene::edges::{feature_edges_welded, DEFAULT_CREASE_DEGREES};
 use crate::scene::weld::first_at_position;
 use crate::scene::{Geometry, Part, Vertex, VertexAttributes};
 use crate::vk::{Buffer, Device};
@@ -80,33 +80,36 @@ impl GeometryPlace {
 /// take).
 struct ArenaData<'g> {
     vertices: &'g [Vertex],
+    /// Its vertices welded by position (`weld::first_at_position`), which feature edges and
+    /// the parts' closure both use.
+    welded: Vec<u32>,
     wire: std::borrow::Cow<'g, [u32]>,
     parts: std::borrow::Cow<'g, [Part]>,
     clusters: GeometryClusters,
 }
 
 fn arena_data(geometry: &Geometry) -> ArenaData<'_> {
+    let welded = first_at_position(&geometry.vertices);
     if geometry.wire_indices.is_empty() {
-        let (wire, parts) = feature_edges(geometry, DEFAULT_CREASE_DEGREES);
-        arena_data_with_edges(geometry, wire.into(), parts.into())
+        let (wire, parts) = feature_edges_welded(geometry, &welded, DEFAULT_CREASE_DEGREES);
+        arena_data_with_edges(geometry, welded, (wire.into(), parts.into()))
     } else {
-        arena_data_with_edges(
-            geometry,
-            (&geometry.wire_indices).into(),
-            (&geometry.parts).into(),
-        )
+        let edges = (&geometry.wire_indices).into();
+        arena_data_with_edges(geometry, welded, (edges, (&geometry.parts).into()))
     }
 }
 
-/// [`arena_data`] with the edges `wire` (a line list) and the parts with their ranges in it.
+/// [`arena_data`] of `geometry` welded as `welded`, with the edges `wire` (a line list) and
+/// the parts with their ranges in it.
 fn arena_data_with_edges<'g>(
     geometry: &'g Geometry,
-    wire: std::borrow::Cow<'g, [u32]>,
-    parts: std::borrow::Cow<'g, [Part]>,
+    welded: Vec<u32>,
+    (wire, parts): (std::borrow::Cow<'g, [u32]>, std::borrow::Cow<'g, [Part]>),
 ) -> ArenaData<'g> {
     let clusters = clusters::build_cached(&geometry.vertices, &geometry.indices, &wire, &parts);
     ArenaData {
         vertices: &geometry.vertices,
+        welded,
         wire,
         parts,
         clusters,
@@ -117,6 +120,7 @@ fn arena_data_with_edges<'g>(
 /// geometry, its edge indices and parts, and its clusters.
 pub(super) struct PreparedGeometry {
     geometry: Geometry,
+    welded: Vec<u32>,
     wire: Vec<u32>,
     parts: Vec<Part>,
     clusters: GeometryClusters,
@@ -127,6 +131,7 @@ pub(super) struct PreparedGeometry {
 fn prepare_geometry(source: GeometrySource) -> Result<PreparedGeometry, String> {
     let geometry = source.load()?;
     let ArenaData {
+        welded,
         wire,
         parts,
         clusters,
@@ -135,6 +140,7 @@ fn prepare_geometry(source: GeometrySource) -> Result<PreparedGeometry, String> 
     let (wire, parts) = (wire.into_owned(), parts.into_owned());
     Ok(PreparedGeometry {
         geometry,
+        welded,
         wire,
         parts,
         clusters,
@@ -182,11 +188,9 @@ fn coarse_form(
 /// threshold of the full detail (the cut is finer for it), not of the coarse form alone.
 fn coarse_arena_data(form: &CoarseForm) -> ArenaData<'_> {
     let geometry = &form.geometry;
-    let mut data = arena_data_with_edges(
-        geometry,
-        (&geometry.wire_indices).into(),
-        (&geometry.parts).into(),
-    );
+    let welded = first_at_position(&geometry.vertices);
+    let edges = ((&geometry.wire_indices).into(), (&geometry.parts).into());
+    let mut data = arena_data_with_edges(geometry, welded, edges);
     let clusters = &mut data.clusters;
     let mut raised = vec![false; clusters.groups.len()];
     for (part, &[first, count, _]) in clusters.part_ranges.iter().enumerate() {
@@ -424,7 +428,7 @@ pub(super) struct PartEntry {
 fn part_entries(data: &ArenaData<'_>) -> Vec<PartEntry> {
     let indices = &data.clusters.indices;
     let edge_levels = &data.clusters.edge_levels;
-    let welded = first_at_position(data.vertices);
+    let welded = &data.welded;
     data.parts
         .iter()
         .enumerate()
@@ -442,7 +446,7 @@ fn part_entries(data: &ArenaData<'_>) -> Vec<PartEntry> {
                 extent: PartBounds {
                     sphere: part_sphere(data.vertices, own),
                     bounds: bounding_box(own.iter().filter_map(|&i| data.vertices.get(i as usize))),
-                    shape: shape_flags(data.vertices, &welded, own),
+                    shape: shape_flags(data.vertices, welded, own),
                 },
                 edge_levels: edge_levels.get(k).is_some_and(|&n| n > 0),
             }
@@ -1059,6 +1063,7 @@ impl GeometryArenas {
         }
         let PreparedGeometry {
             geometry,
+            welded,
             wire,
             parts,
             clusters,
@@ -1075,6 +1080,7 @@ impl GeometryArenas {
         };
         let data = ArenaData {
             vertices: &geometry.vertices,
+            welded,
             wire: wire.into(),
             parts: parts.into(),
             clusters,
@@ -1531,7 +1537,7 @@ mod tests {
         assert!(data.wire.is_empty(), "a sphere has no feature edge");
         let (_, form) = coarse_form(&geometry, &data, false, 0.02);
         let form = form.expect("a coarse form");
-        let refound = feature_edges(&form.geometry, DEFAULT_CREASE_DEGREES).0;
+        let refound = crate::scene::edges::feature_edges(&form.geometry, DEFAULT_CREASE_DEGREES).0;
         assert!(
             !refound.is_empty(),
             "its coarse triangles fold past the crease angle"

@@ -54,6 +54,20 @@ fn face_normal(a: [f32; 3], b: [f32; 3], c: [f32; 3]) -> [f32; 3] {
 /// Derives feature edges per part. Returns the line-list indices and the parts with their
 /// wire ranges set; parts keep their triangle ranges.
 pub fn feature_edges(geometry: &Geometry, crease_degrees: f32) -> (Vec<u32>, Vec<Part>) {
+    feature_edges_welded(
+        geometry,
+        &first_at_position(&geometry.vertices),
+        crease_degrees,
+    )
+}
+
+/// [`feature_edges`], with `welded` the geometry's vertices welded by position
+/// ([`super::weld::first_at_position`]), for a caller that needs them too.
+pub fn feature_edges_welded(
+    geometry: &Geometry,
+    welded: &[u32],
+    crease_degrees: f32,
+) -> (Vec<u32>, Vec<Part>) {
     let cos_crease = crease_degrees.to_radians().cos();
     let mut wire = Vec::new();
     let mut parts = Vec::with_capacity(geometry.parts.len());
@@ -63,7 +77,6 @@ pub fn feature_edges(geometry: &Geometry, crease_degrees: f32) -> (Vec<u32>, Vec
             .get(i as usize)
             .map_or([0.0; 3], |v| v.position)
     };
-    let welded = first_at_position(&geometry.vertices);
     // A vertex past the geometry's is a point of its own.
     let weld = |i: u32| welded.get(i as usize).copied().unwrap_or(i);
     for part in &geometry.parts {

@@ -12,9 +12,11 @@
 //! than the cell become one, and a loop within a cell a dot), then simplifies the chains that
 //! remain. A level's error is the farthest any of the part's edges lies from it.
 
-use std::collections::HashMap;
 use std::rc::Rc;
 
+use rustc_hash::FxHashMap;
+
+use crate::scene::weld::position_key;
 use crate::scene::Vertex;
 
 /// A part whose edges have fewer segments gets no coarser level.
@@ -101,13 +103,13 @@ struct EdgeGraph {
 impl EdgeGraph {
     /// The graph of `lines` (`None` where a line names a vertex that does not exist).
     fn of(vertices: &[Vertex], lines: &[u32]) -> Option<Self> {
-        let mut node_of: HashMap<[u32; 3], u32> = HashMap::with_capacity(lines.len() / 2);
+        let mut node_of: FxHashMap<[u32; 3], u32> =
+            FxHashMap::with_capacity_and_hasher(lines.len() / 2, Default::default());
         let mut node_vertex = Vec::new();
         let mut node_position = Vec::new();
         let mut node = |vertex: u32| -> Option<u32> {
             let position = vertices.get(vertex as usize)?.position;
-            let key = position.map(|c| (c + 0.0).to_bits());
-            Some(*node_of.entry(key).or_insert_with(|| {
+            Some(*node_of.entry(position_key(position)).or_insert_with(|| {
                 node_vertex.push(vertex);
                 node_position.push(position);
                 node_vertex.len() as u32 - 1
@@ -382,6 +384,8 @@ fn sphere_of(points: &[[f32; 3]]) -> [f32; 4] {
 #[cfg(test)]
 mod tests {
     #![allow(clippy::unwrap_used)] // Test code: a failed unwrap is a failed test.
+
+    use std::collections::HashMap;
 
     use super::*;
 

@@ -23,7 +23,7 @@
 
 use meshopt::{ClodCluster, ClodGroup, ClodMesh, VertexDataAdapter};
 
-use super::{edge_levels, stand_ins};
+use super::{bounds, edge_levels, stand_ins};
 use crate::disk_cache::{self, DiskCache};
 use crate::scene::{Part, Vertex};
 use cadr_plugin_abi as abi;
@@ -138,6 +138,29 @@ impl GeometryClusters {
             None => self.indices.get(i),
             Some(lod) => self.lod_indices.get(lod),
         }
+    }
+
+    /// Index `i` of the geometry's wire index range as the arenas lay it out, the geometry's
+    /// own edge indices being `wire`: those, then the levels of its parts' edges (what an edge
+    /// level's `first_index` counts in).
+    pub(super) fn wire_index<'w>(&'w self, wire: &'w [u32], i: usize) -> Option<&'w u32> {
+        match i.checked_sub(wire.len()) {
+            None => wire.get(i),
+            Some(level) => self.wire_lod.get(level),
+        }
+    }
+
+    /// Part `part`'s records: its clusters, then the levels of its edges that follow them;
+    /// `None` for a part it does not have.
+    pub(super) fn part_records(
+        &self,
+        part: usize,
+    ) -> Option<(&[abi::CadrCluster], &[abi::CadrCluster])> {
+        let [first, count, _] = self.part_ranges.get(part)?.map(|n| n as usize);
+        let levels = self.edge_levels.get(part).map_or(0, |&n| n as usize);
+        let end = first.checked_add(count)?;
+        let records = self.clusters.get(first..end.checked_add(levels)?)?;
+        Some(records.split_at(count))
     }
 
     /// The cache entry's bytes: the seven lengths, then each array in little-endian words.
@@ -283,18 +306,18 @@ impl GeometryClusters {
                 .part_ranges
                 .iter()
                 .enumerate()
-                .all(|(part, &[first, count, coarsest])| {
+                .all(|(part, &[_, count, coarsest])| {
                     // A part's edge levels, right after its clusters, each saying how many there are.
-                    let levels = self.edge_levels.get(part).copied().unwrap_or(0);
-                    let end = (first as usize).saturating_add(count as usize);
-                    end.saturating_add(levels as usize) <= self.clusters.len()
-                        && coarsest <= count
-                        && self.clusters[first as usize..end]
+                    let Some((own, levels)) = self.part_records(part) else {
+                        return false;
+                    };
+                    coarsest <= count
+                        && own
                             .iter()
                             .all(|c| c.part_clusters == count && !is_edge_level(self, c))
-                        && self.clusters[end..end + levels as usize]
+                        && levels
                             .iter()
-                            .all(|c| is_edge_level(self, c) && c.refined == levels)
+                            .all(|c| is_edge_level(self, c) && c.refined as usize == levels.len())
                 })
     }
 }
@@ -620,12 +643,13 @@ fn add_stand_ins(dag: &mut PartDag, local: &[Vertex], local_indices: &[u32], use
     );
     // The box's sphere, grown over every group's: a stand-in's error then projects at least as
     // large as any group's, seen from anywhere.
-    let (min, max) = stand_ins::box_of(local);
+    let positions = local.iter().map(|v| v.position);
+    let (min, max) = bounds::box_of(positions.clone());
     let centre = glam::Vec3::from(std::array::from_fn(|a| 0.5 * (min[a] + max[a])));
     let radius = dag
         .groups
         .iter()
-        .fold(stand_ins::half_box_diagonal(local), |radius, g| {
+        .fold(bounds::half_box_diagonal(positions), |radius, g| {
             let [x, y, z, r] = g.sphere;
             radius.max(centre.distance(glam::Vec3::new(x, y, z)) + r)
         });

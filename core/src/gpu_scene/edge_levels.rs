@@ -16,7 +16,8 @@ use std::rc::Rc;
 
 use rustc_hash::FxHashMap;
 
-use crate::scene::weld::position_key;
+use super::bounds;
+use crate::scene::weld::{edge_key, position_key};
 use crate::scene::Vertex;
 
 /// A part whose edges have fewer segments gets no coarser level.
@@ -45,7 +46,7 @@ pub(super) fn edge_levels(vertices: &[Vertex], lines: &[u32]) -> (Vec<EdgeLevel>
     let Some(graph) = EdgeGraph::of(vertices, lines) else {
         return (Vec::new(), [0.0; 4]);
     };
-    let sphere = sphere_of(&graph.node_position);
+    let sphere = bounds::sphere_of(graph.node_position.iter().copied());
     let mut levels: Vec<EdgeLevel> = Vec::new();
     if graph.segments.len() < MIN_SEGMENTS || sphere[3] <= 0.0 {
         return (levels, sphere);
@@ -285,7 +286,7 @@ impl Chains {
 fn distinct_segments(segments: Vec<(u32, u32)>) -> Vec<(u32, u32)> {
     let mut keys: Vec<u64> = (segments.into_iter())
         .filter(|&(a, b)| a != b)
-        .map(|(a, b)| u64::from(a.min(b)) << 32 | u64::from(a.max(b)))
+        .map(|(a, b)| edge_key(a, b))
         .collect();
     keys.sort_unstable();
     keys.dedup();
@@ -358,27 +359,6 @@ fn distance_to_segment(p: [f32; 3], a: [f32; 3], b: [f32; 3]) -> f32 {
     };
     let d = [ap[0] - t * ab[0], ap[1] - t * ab[1], ap[2] - t * ab[2]];
     (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt()
-}
-
-/// A sphere around `points`: the centre of their box, the farthest of them from it.
-fn sphere_of(points: &[[f32; 3]]) -> [f32; 4] {
-    let mut min = [f32::INFINITY; 3];
-    let mut max = [f32::NEG_INFINITY; 3];
-    for p in points {
-        for axis in 0..3 {
-            min[axis] = min[axis].min(p[axis]);
-            max[axis] = max[axis].max(p[axis]);
-        }
-    }
-    if points.is_empty() {
-        return [0.0; 4];
-    }
-    let center = [0, 1, 2].map(|a| 0.5 * (min[a] + max[a]));
-    let radius = points
-        .iter()
-        .map(|p| distance_to_segment(*p, center, center))
-        .fold(0.0_f32, f32::max);
-    [center[0], center[1], center[2], radius]
 }
 
 #[cfg(test)]

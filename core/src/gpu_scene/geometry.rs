@@ -15,6 +15,7 @@ use std::sync::Arc;
 use crate::error::RenderResult;
 use crate::vk::raw as vk;
 
+use super::bounds;
 use super::clusters::{self, GeometryClusters};
 use super::streaming::{
     coarse_share, CoarseForm, FullDetail, LoadRetry, PartBounds, PrepareFailure, Preparer,
@@ -191,22 +192,20 @@ fn coarse_arena_data(form: &CoarseForm) -> ArenaData<'_> {
     let welded = first_at_position(&geometry.vertices);
     let edges = ((&geometry.wire_indices).into(), (&geometry.parts).into());
     let mut data = arena_data_with_edges(geometry, welded, edges);
-    let clusters = &mut data.clusters;
-    let mut raised = vec![false; clusters.groups.len()];
-    for (part, &[first, count, _]) in clusters.part_ranges.iter().enumerate() {
-        let error = form.errors.get(part).copied().unwrap_or(0.0);
-        let levels = clusters.edge_levels.get(part).copied().unwrap_or(0);
-        let records = first as usize..(first + count + levels) as usize;
-        for cluster in clusters.clusters.get(records).unwrap_or(&[]) {
-            let group = cluster.group as usize;
-            if let (Some(group), Some(done)) =
-                (clusters.groups.get_mut(group), raised.get_mut(group))
-            {
-                if !*done && group.error < f32::MAX {
-                    group.error += error;
-                }
-                *done = true;
+    // Each group's raise: its part's error (a part's clusters and edge levels name its groups).
+    let clusters = &data.clusters;
+    let mut raise = vec![0.0_f32; clusters.groups.len()];
+    for (part, &error) in form.errors.iter().enumerate() {
+        let (own, levels) = clusters.part_records(part).unwrap_or_default();
+        for cluster in own.iter().chain(levels) {
+            if let Some(raise) = raise.get_mut(cluster.group as usize) {
+                *raise = error;
             }
+        }
+    }
+    for (group, raise) in data.clusters.groups.iter_mut().zip(raise) {
+        if group.error < f32::MAX {
+            group.error += raise;
         }
     }
     data
@@ -314,10 +313,7 @@ impl ArenaData<'_> {
     /// Index `i` of the geometry's wire index range as the arena lays it out: its own edge
     /// indices, then its edge levels'.
     fn wire_index(&self, i: usize) -> Option<&u32> {
-        match i.checked_sub(self.wire.len()) {
-            None => self.wire.get(i),
-            Some(level) => self.clusters.wire_lod.get(level),
-        }
+        self.clusters.wire_index(&self.wire, i)
     }
 
     /// The groups' bytes as the arena holds them: their clusters made absolute from the
@@ -362,30 +358,12 @@ fn bounding_box<'v>(vertices: impl Iterator<Item = &'v Vertex>) -> abi::CadrBox 
     }
 }
 
+/// The sphere of the part `indices` names among `vertices` ([`bounds::sphere_of`]), with
+/// rounding slack.
 fn part_sphere(vertices: &[Vertex], indices: &[u32]) -> [f32; 4] {
-    let mut min = [f32::INFINITY; 3];
-    let mut max = [f32::NEG_INFINITY; 3];
-    for &i in indices {
-        if let Some(v) = vertices.get(i as usize) {
-            for axis in 0..3 {
-                min[axis] = min[axis].min(v.position[axis]);
-                max[axis] = max[axis].max(v.position[axis]);
-            }
-        }
-    }
-    if min[0] > max[0] {
-        return [0.0; 4];
-    }
-    let center = [0, 1, 2].map(|a| 0.5 * (min[a] + max[a]));
-    let radius = indices
-        .iter()
-        .filter_map(|&i| vertices.get(i as usize))
-        .map(|v| {
-            let d = [0, 1, 2].map(|a| v.position[a] - center[a]);
-            (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt()
-        })
-        .fold(0.0_f32, f32::max);
-    [center[0], center[1], center[2], radius * (1.0 + 1e-5)]
+    let positions = (indices.iter()).filter_map(|&i| Some(vertices.get(i as usize)?.position));
+    let [x, y, z, radius] = bounds::sphere_of(positions);
+    [x, y, z, radius * (1.0 + 1e-5)]
 }
 
 /// The instance flags of a part's shape: its closure, and whether it is curved. `welded` are

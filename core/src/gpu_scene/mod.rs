@@ -17,6 +17,7 @@
 //! culling, drawn set and the slots changed since its last frame (`view_state.rs`,
 //! [`ViewState`]), and catches up with the scene before each frame ([`GpuScene::catch_up`]).
 
+mod bounds;
 mod clusters;
 mod compute;
 mod edge_levels;

@@ -25,6 +25,7 @@ use std::borrow::Cow;
 
 use meshopt::{SimplifyOptions, VertexDataAdapter};
 
+use super::bounds::half_box_diagonal;
 use crate::scene::Vertex;
 
 /// A welded level is kept only when it has at most this share of the triangles of the level
@@ -82,35 +83,13 @@ pub(super) fn stand_ins(
             let strayed = farthest_from(&positions, &octahedron);
             levels.push(StandIn {
                 error: error_floor
-                    .max(half_box_diagonal(vertices))
+                    .max(half_box_diagonal(vertices.iter().map(|v| v.position)))
                     .max(2.0 * strayed),
                 indices: octahedron,
             });
         }
     }
     levels
-}
-
-/// Half the diagonal of the box around `vertices`.
-pub(super) fn half_box_diagonal(vertices: &[Vertex]) -> f32 {
-    let (min, max) = box_of(vertices);
-    (0..3)
-        .map(|a| (max[a] - min[a]) * (max[a] - min[a]))
-        .sum::<f32>()
-        .sqrt()
-        * 0.5
-}
-
-/// The least and most coordinates of `vertices` along each axis.
-pub(super) fn box_of(vertices: &[Vertex]) -> ([f32; 3], [f32; 3]) {
-    vertices
-        .iter()
-        .fold(([f32::MAX; 3], [f32::MIN; 3]), |(min, max), v| {
-            (
-                std::array::from_fn(|a| min[a].min(v.position[a])),
-                std::array::from_fn(|a| max[a].max(v.position[a])),
-            )
-        })
 }
 
 /// The share of `triangles` a level after them aims at.

@@ -117,17 +117,6 @@ pub(super) struct FullDetail<'a> {
     pub(super) clusters: &'a GeometryClusters,
 }
 
-impl FullDetail<'_> {
-    /// Index `i` of the wire arena as the full detail lays it out: its edges, then the levels
-    /// of its parts' edges.
-    fn wire_index(&self, i: usize) -> Option<u32> {
-        match i.checked_sub(self.wire.len()) {
-            None => self.wire.get(i).copied(),
-            Some(level) => self.clusters.wire_lod.get(level).copied(),
-        }
-    }
-}
-
 /// A coarse form's arrays as they are made: the full detail's vertices it uses, renumbered in
 /// the order first used.
 #[derive(Default)]
@@ -171,8 +160,8 @@ impl CoarseForm {
         };
         let mut parts = Vec::with_capacity(geometry.parts.len());
         let mut errors = Vec::with_capacity(geometry.parts.len());
-        for (part, &[first, count, _]) in clusters.part_ranges.iter().enumerate() {
-            let own = (clusters.clusters).get(first as usize..(first + count) as usize)?;
+        for part in 0..clusters.part_ranges.len() {
+            let (own, levels) = clusters.part_records(part)?;
             let (chosen, error) = coarse_triangles(clusters, own, share);
             let first_index = form.indices.len() as u32;
             for cluster in chosen {
@@ -183,8 +172,8 @@ impl CoarseForm {
                 }
             }
             let first_wire_index = form.wire.len() as u32;
-            for i in coarse_edges(full, part, error)? {
-                let vertex = form.vertex(geometry, full.wire_index(i)?)?;
+            for i in coarse_edges(full, part, levels, error)? {
+                let vertex = form.vertex(geometry, *clusters.wire_index(full.wire, i)?)?;
                 form.wire.push(vertex);
             }
             parts.push(Part {
@@ -319,32 +308,28 @@ fn coarse_cut(clusters: &GeometryClusters, part: &[abi::CadrCluster], wanted: u6
 }
 
 /// The wire indices (as `full` lays them out: its edges, then their levels) of part `part`'s
-/// edges for its coarse form of error `error`: the coarsest level of them within
-/// [`EDGE_ERROR_SHARE`] of it, else the edges whole. The full detail's own edges, not edges
-/// found again on the coarse triangles, which would show the creases a simplification makes
-/// across smooth faces. `None` where the part is not there.
-fn coarse_edges(full: &FullDetail<'_>, part: usize, error: f32) -> Option<std::ops::Range<usize>> {
-    let clusters = full.clusters;
-    let [first, count, _] = *clusters.part_ranges.get(part)?;
-    let levels = clusters.edge_levels.get(part).copied().unwrap_or(0);
-    let level_records = (first + count) as usize..(first + count + levels) as usize;
-    let within = (clusters.clusters.get(level_records)?.iter())
-        .rev()
-        .find(|level| {
-            (clusters.groups.get(level.group as usize))
-                .is_some_and(|g| g.error <= EDGE_ERROR_SHARE * error)
-        });
-    Some(match within {
-        Some(level) => {
-            let start = level.first_index as usize;
-            start..start + level.index_count as usize
-        }
+/// edges, whose levels are `levels`, for its coarse form of error `error`: the coarsest level
+/// within [`EDGE_ERROR_SHARE`] of it, else the edges whole. The full detail's own edges, not
+/// edges found again on the coarse triangles, which would show the creases a simplification
+/// makes across smooth faces. `None` where the part is not there.
+fn coarse_edges(
+    full: &FullDetail<'_>,
+    part: usize,
+    levels: &[abi::CadrCluster],
+    error: f32,
+) -> Option<std::ops::Range<usize>> {
+    let within = levels.iter().rev().find(|level| {
+        (full.clusters.groups.get(level.group as usize))
+            .is_some_and(|g| g.error <= EDGE_ERROR_SHARE * error)
+    });
+    let (start, count) = match within {
+        Some(level) => (level.first_index, level.index_count),
         None => {
             let whole = full.parts.get(part)?;
-            let start = whole.first_wire_index as usize;
-            start..start + whole.wire_index_count as usize
+            (whole.first_wire_index, whole.wire_index_count)
         }
-    })
+    };
+    Some(start as usize..start as usize + count as usize)
 }
 
 /// What streaming knows of one geometry slot.

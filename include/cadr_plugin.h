@@ -1504,11 +1504,12 @@ typedef struct CadrMeshTaskPush {
 // culler is a GPU culler and the device has mesh shaders and buffer device addresses.
 #define CADR_TRAIT_MESH_SHADING (1 << 15)
 
-// Since ABI 1.24. GPU-written commands drawn by their capacity, without their count (for
-// devices without `drawIndirectCount`, such as SwiftShader), one announcement per kind:
-// - a submission that draws GPU-written commands ([`CADR_TRAIT_DRAWS_GPU_COMMANDS`]) promises
-//   that it draws each pass's [`CadrGpuDraws::max_draws`] commands with
-//   `vkCmdDrawIndexedIndirect` and never reads the count (`individual-mdi` does);
+// Since ABI 1.24. GPU-written commands drawn past their count, one announcement per kind:
+// - a submission that draws GPU-written commands ([`CADR_TRAIT_DRAWS_GPU_COMMANDS`]) says
+//   that it may draw any of each pass's [`CadrGpuDraws::max_draws`] commands, whatever the
+//   count says: `individual-mdi` draws them all with `vkCmdDrawIndexedIndirect` and never
+//   reads the count (for devices without `drawIndirectCount`, such as SwiftShader); `dgc` runs
+//   a pass in chunks that each read the count from their own first command;
 // - a GPU culler promises to honour [`CadrEmptyCommandTails`].
 //
 // Where the active submission announces it and the culler culls on the GPU, the host chains

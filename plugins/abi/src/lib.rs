@@ -252,11 +252,12 @@ pub const CADR_TRAIT_PARAMETER_BLOCKS: CadrTraitBits = 1 << 14;
 /// [`CadrMeshTaskPush`]. The host refuses such a submission unless both paths announce it, the
 /// culler is a GPU culler and the device has mesh shaders and buffer device addresses.
 pub const CADR_TRAIT_MESH_SHADING: CadrTraitBits = 1 << 15;
-/// Since ABI 1.24. GPU-written commands drawn by their capacity, without their count (for
-/// devices without `drawIndirectCount`, such as SwiftShader), one announcement per kind:
-/// - a submission that draws GPU-written commands ([`CADR_TRAIT_DRAWS_GPU_COMMANDS`]) promises
-///   that it draws each pass's [`CadrGpuDraws::max_draws`] commands with
-///   `vkCmdDrawIndexedIndirect` and never reads the count (`individual-mdi` does);
+/// Since ABI 1.24. GPU-written commands drawn past their count, one announcement per kind:
+/// - a submission that draws GPU-written commands ([`CADR_TRAIT_DRAWS_GPU_COMMANDS`]) says
+///   that it may draw any of each pass's [`CadrGpuDraws::max_draws`] commands, whatever the
+///   count says: `individual-mdi` draws them all with `vkCmdDrawIndexedIndirect` and never
+///   reads the count (for devices without `drawIndirectCount`, such as SwiftShader); `dgc` runs
+///   a pass in chunks that each read the count from their own first command;
 /// - a GPU culler promises to honour [`CadrEmptyCommandTails`].
 ///
 /// Where the active submission announces it and the culler culls on the GPU, the host chains
@@ -1275,10 +1276,10 @@ pub struct CadrSharedFaceStreams {
 
 /// Since ABI 1.24 ([`CADR_EXTENSION_EMPTY_COMMAND_TAILS`], chained on the cull context of every
 /// phase where the active submission announces [`CADR_TRAIT_EMPTY_COMMAND_TAILS`]): the
-/// submission draws all [`CadrGpuDraws::max_draws`] commands of each pass, whatever the count
-/// says. A culler that honours it leaves every command past a pass's count drawing nothing
-/// (`instanceCount` 0; `vkCmdFillBuffer` with zeros does) by the time the pass's draws read
-/// it, in every phase, and still writes the counts. Owned by the host, valid for the call.
+/// submission may draw any of the [`CadrGpuDraws::max_draws`] commands of each pass, whatever
+/// the count says. A culler that honours it leaves every command past a pass's count drawing
+/// nothing (`instanceCount` 0; `vkCmdFillBuffer` with zeros does) by the time the pass's draws
+/// read it, in every phase, and still writes the counts. Owned by the host, valid for the call.
 #[repr(C)]
 #[derive(Clone, Copy, Debug)]
 pub struct CadrEmptyCommandTails {

@@ -26,7 +26,8 @@
 //! (580 on an H200) asks for tens of kilobytes an execution plus a little a sequence, so a pass
 //! runs as one chunk (chunks of one sequence cost it 0.8 s a frame). Every chunk reads
 //! the pass's count and runs at most its own share; what lies past the count in the stream is
-//! zeroed by the GPU cullers (a draw of no instances) or never there (the lists).
+//! zeroed by the GPU cullers (a draw of no instances: `dgc` announces
+//! `CADR_TRAIT_EMPTY_COMMAND_TAILS`, so the host asks them to) or never there (the lists).
 
 use std::sync::Arc;
 

@@ -577,7 +577,7 @@ technique_library! {
         submission Submit<INDIVIDUAL, GENERATED, INLINE> {
             name: "dgc",
             description: "Device-generated commands (VK_EXT_device_generated_commands): each pass's indirect commands, written by a gpu- culler or from the part list, run as a generated command stream whose length the GPU reads; where a gpu- culler splits the surfaces by their back faces, one stream draws both, the GPU picking each part's pipeline from an execution set; with the push parameter path, each sequence pushes the matrix and material values the gpu- culler wrote.",
-            features: DGC_FEATURES, provides: abi::CADR_TRAIT_DRAWS_GPU_COMMANDS | abi::CADR_TRAIT_SWITCHES_PIPELINES | abi::CADR_TRAIT_PARAMETER_BLOCKS | REPLAYABLE | KEEPS_FRAME_SLOTS, needs: GPU_DRAWS,
+            features: DGC_FEATURES, provides: abi::CADR_TRAIT_DRAWS_GPU_COMMANDS | abi::CADR_TRAIT_SWITCHES_PIPELINES | abi::CADR_TRAIT_PARAMETER_BLOCKS | abi::CADR_TRAIT_EMPTY_COMMAND_TAILS | REPLAYABLE | KEEPS_FRAME_SLOTS, needs: GPU_DRAWS,
         },
         submission MeshTasks {
             name: "mesh-tasks",

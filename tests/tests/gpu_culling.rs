@@ -271,6 +271,69 @@ fn a_rod_seen_through_no_hole_in_the_wall_is_found_hidden() {
     }
 }
 
+/// Where, along x at depth `z` (world units; the camera looks down -z at x = 0), `camera` puts
+/// the pixel edge `pixel` (in pixels from the target's left).
+fn x_at_pixel_edge(camera: &Camera, pixel: f64, z: f64) -> f64 {
+    let clip = camera.projection * camera.view;
+    let pixel_of = |x: f64| {
+        let c = clip * DVec3::new(x, 0.0, z).extend(1.0);
+        (c.x / c.w * 0.5 + 0.5) * f64::from(SIZE.0)
+    };
+    let (at_zero, per_unit) = (pixel_of(0.0), pixel_of(1.0) - pixel_of(0.0));
+    (pixel - at_zero) / per_unit
+}
+
+/// Two tiles with a gap of one pixel between them, and behind the left one a cube four pixels
+/// wide whose right edge comes within a pixel of the gap (three quarters of a pixel past the
+/// edge between the pixel column it reaches and the gap's). The cube shows no pixel, yet the
+/// texel of two pixels that holds its last column also holds the gap's: a depth pyramid whose
+/// finest level keeps the farthest depth of 2 × 2 pixels finds it in sight. Its finest level is
+/// the depth image itself, so the culler tests the cube pixel by pixel and draws the tiles
+/// alone.
+#[test]
+fn a_small_part_beside_a_one_pixel_gap_is_found_hidden_pixel_by_pixel() {
+    let (cube, cube_triangles) = unit_cube();
+    let camera = facing_the_wall();
+    // Pixel edges on the tiles' front faces (z = 0.1) and on the cube's (z = -0.5): the gap is
+    // column 101 (an odd one, sharing a 2-pixel texel with column 100), the cube ends at 100.75.
+    let (tile_front, cube_front) = (0.1, -0.5);
+    let left_end = x_at_pixel_edge(&camera, 101.0, tile_front);
+    let right_start = x_at_pixel_edge(&camera, 102.0, tile_front);
+    let cube_end = x_at_pixel_edge(&camera, 100.75, cube_front);
+    let cube_start = x_at_pixel_edge(&camera, 96.75, cube_front);
+    let placed = |name: &str, min: DVec3, max: DVec3| {
+        placed_cube(name, max - min, DQuat::IDENTITY, 0.5 * (min + max))
+    };
+    let mut root = Node::new("tiles and a cube");
+    root.children = vec![1, 2, 3];
+    let scene = Scene {
+        name: "tiles with a gap, and a cube behind".into(),
+        geometries: vec![cube],
+        materials: vec![Material::default()],
+        nodes: vec![
+            root,
+            placed(
+                "left tile",
+                DVec3::new(-3.0, -2.0, -0.1),
+                DVec3::new(left_end, 2.0, tile_front),
+            ),
+            placed(
+                "right tile",
+                DVec3::new(right_start, -2.0, -0.1),
+                DVec3::new(3.0, 2.0, tile_front),
+            ),
+            placed(
+                "cube",
+                DVec3::new(cube_start, -0.07, cube_front - 0.2),
+                DVec3::new(cube_end, 0.07, cube_front),
+            ),
+        ],
+        roots: vec![0],
+        ..Scene::default()
+    };
+    assert_box_cullers_draw(&scene, camera, (3, 2), cube_triangles, "the tiles alone");
+}
+
 /// Renders `cameras` without culling and with `gpu-occlusion`, checks that every frame draws
 /// the same picture both ways, and gives each frame's triangles: occlusion's, then all.
 fn occluded_frames(scene: &Scene, cameras: &[Camera]) -> Vec<(u64, u64)> {

@@ -91,7 +91,7 @@ layout(set = 0, binding = 4, std140) uniform View {
 // (written by the first pass of phase 1).
 layout(set = 0, binding = 5, std430) readonly buffer LastVisible { uint last_visible[]; };
 layout(set = 0, binding = 6, std430) buffer NowVisible { uint now_visible[]; };
-// The depth pyramid (see hiz.comp): level k holds the farthest depth of 2^(k+1) × 2^(k+1)
+// The depth pyramid (see hiz.comp): level k holds the farthest depth of 2^k × 2^k
 // depth texels, the levels one after the other.
 layout(set = 0, binding = 7, std430) readonly buffer Pyramid { float pyramid[]; };
 
@@ -287,11 +287,10 @@ bvec2 against_sections(vec3 center, float radius) {
     return bvec2(cut_away, crossed);
 }
 
-// The size of level `level` of the depth pyramid: the target halved level + 1 times, rounding
+// The size of level `level` of the depth pyramid: the target halved `level` times, rounding
 // up, at least 1 (as the host's levels are made).
 uvec2 pyramid_level_size(uint level) {
-    uint shift = level + 1u;
-    return max((view.target.xy + (1u << shift) - 1u) >> shift, uvec2(1u));
+    return max((view.target.xy + (1u << level) - 1u) >> level, uvec2(1u));
 }
 
 // An orthonormal frame of the view's axes (right, up, along the view), read off the
@@ -418,7 +417,7 @@ PyramidRect pyramid_rect(uint level, vec2 texel_lo, vec2 texel_hi) {
         rect.offset += finer_dims.x * finer_dims.y;
     }
     rect.dims = pyramid_level_size(level);
-    rect.scale = exp2(-float(level + 1u));
+    rect.scale = exp2(-float(level));
     rect.a = uvec2(clamp(ivec2(floor(texel_lo * rect.scale)), ivec2(0), ivec2(rect.dims) - 1));
     rect.b = uvec2(clamp(ivec2(floor(texel_hi * rect.scale)), ivec2(0), ivec2(rect.dims) - 1));
     rect.b = min(rect.b, rect.a + 8u);
@@ -475,7 +474,7 @@ bool passes_pyramid_box(vec3 center, mat3 half_axes) {
     uint levels = max(dispatch.pyramid_levels, 1u);
     // First the level where the rect is at most 4 texels wide (so spans at most 5 per axis),
     // against the nearest corner alone: most hidden boxes are found hidden there, in few reads.
-    uint level = uint(clamp(ceil(log2(max(extent.x, extent.y))) - 3.0, 0.0, float(levels - 1u)));
+    uint level = uint(clamp(ceil(log2(max(extent.x, extent.y))) - 2.0, 0.0, float(levels - 1u)));
     PyramidRect rect = pyramid_rect(level, texel_lo, texel_hi);
     if (!reaches_in_front(rect, nearest)) {
         return false;

@@ -208,9 +208,10 @@ fn words(values: &[u32]) -> Vec<u8> {
     values.iter().flat_map(|v| v.to_le_bytes()).collect()
 }
 
-/// The sizes of the pyramid's levels for a `width` × `height` depth image.
+/// The sizes of the pyramid's levels for a `width` × `height` depth image: the image's own,
+/// then halved (rounding up) down to 1 × 1.
 fn pyramid_levels(width: u32, height: u32) -> Vec<[u32; 2]> {
-    let mut size = [width.div_ceil(2).max(1), height.div_ceil(2).max(1)];
+    let mut size = [width.max(1), height.max(1)];
     let mut levels = vec![size];
     while size != [1, 1] {
         size = [size[0].div_ceil(2).max(1), size[1].div_ceil(2).max(1)];

@@ -848,8 +848,10 @@ fn render_timings_split_the_run_into_its_phases() {
         "gen:demo",
         "-o",
         path.to_str().unwrap(),
+        // Large enough that the readback and the PNG take a measurable time: at 64×48 the
+        // readback (12 KB) once took under the 0.05 ms the report rounds to 0.0.
         "--size",
-        "64x48",
+        "640x480",
         "--timings",
     ]);
     assert!(output.status.success(), "{}", stderr(&output));

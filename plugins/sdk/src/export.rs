@@ -413,15 +413,34 @@ pub fn submission<T: Submission>(describe: Describe) -> abi::CadrTechniqueInfo {
             unsafe { this::<T>(instance) }.record(&record)
         })
     }
-    info(
-        abi::CADR_KIND_SUBMISSION,
-        describe,
-        abi::CadrSubmissionVtable {
-            common: common::<T, abi::CadrSubmissionVtable>(),
-            prepare: Some(prepare::<T>),
-            record: Some(record::<T>),
-        },
+    requiring(
+        T::REQUIRED_EXTENSIONS,
+        info(
+            abi::CADR_KIND_SUBMISSION,
+            describe,
+            abi::CadrSubmissionVtable {
+                common: common::<T, abi::CadrSubmissionVtable>(),
+                prepare: Some(prepare::<T>),
+                record: Some(record::<T>),
+            },
+        ),
     )
+}
+
+/// `info` listing `required` as the extensions its technique cannot work without.
+fn requiring(
+    required: &'static [abi::CadrExtensionKind],
+    info: abi::CadrTechniqueInfo,
+) -> abi::CadrTechniqueInfo {
+    abi::CadrTechniqueInfo {
+        required_extensions: if required.is_empty() {
+            std::ptr::null()
+        } else {
+            required.as_ptr()
+        },
+        required_extension_count: required.len() as u32,
+        ..info
+    }
 }
 
 /// The technique info of a culling technique.
@@ -490,15 +509,9 @@ pub fn gpu_culling<T: GpuCulling>(describe: Describe) -> abi::CadrTechniqueInfo 
             stats.primitives += counts.primitives;
         }
     }
-    let required = T::REQUIRED_EXTENSIONS;
-    abi::CadrTechniqueInfo {
-        required_extensions: if required.is_empty() {
-            std::ptr::null()
-        } else {
-            required.as_ptr()
-        },
-        required_extension_count: required.len() as u32,
-        ..info(
+    requiring(
+        T::REQUIRED_EXTENSIONS,
+        info(
             abi::CADR_KIND_CULLING,
             describe,
             abi::CadrCullingVtable {
@@ -508,8 +521,8 @@ pub fn gpu_culling<T: GpuCulling>(describe: Describe) -> abi::CadrTechniqueInfo 
                 phase_count: Some(phase_count::<T>),
                 gpu_counts: Some(gpu_counts::<T>),
             },
-        )
-    }
+        ),
+    )
 }
 
 /// The technique info of a transparency method (ABI 1.7).

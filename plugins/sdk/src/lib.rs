@@ -90,6 +90,9 @@ pub trait ParameterPath: Technique {
 
 /// A draw submission: which draws are issued and how.
 pub trait Submission: Technique {
+    /// The plugin ABI extensions (`CADR_EXTENSION_*`) the submission cannot work without: a
+    /// host that does not know one refuses the technique, naming it. None by default.
+    const REQUIRED_EXTENSIONS: &'static [abi::CadrExtensionKind] = &[];
     /// Before the pass (outside rendering).
     fn prepare(&mut self, _record: &Record<'_>) -> Result<(), String> {
         Ok(())

@@ -408,6 +408,15 @@ fn gpu_executions(
 }
 
 impl<const S: u8, const A: u8, const M: u8> Submission for Submit<S, A, M> {
+    /// `dgc` runs a pass in chunks that may draw a GPU culler's commands past the count, so it
+    /// needs the host to ask the culler for empty tails (`CadrEmptyCommandTails`, ABI 1.24): a
+    /// host older than that refuses it rather than drawing what lies there.
+    const REQUIRED_EXTENSIONS: &'static [abi::CadrExtensionKind] = if A == GENERATED {
+        &[abi::CADR_EXTENSION_EMPTY_COMMAND_TAILS]
+    } else {
+        &[]
+    };
+
     fn prepare(&mut self, record: &Record<'_>) -> Result<(), String> {
         if record.gpu_draws().is_some() {
             // A GPU culler writes this frame's draws: no lists to keep.
